@@ -1,0 +1,5 @@
+import sys
+
+from ego.cli import main
+
+sys.exit(main())

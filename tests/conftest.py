@@ -1,0 +1,19 @@
+"""Test-wide set-up: keep Rerun's and matplotlib's config out of the user's home."""
+
+import os
+import tempfile
+
+import pytest
+
+_TMP = tempfile.mkdtemp(prefix="ego-tests-")
+for var in ("XDG_CONFIG_HOME", "XDG_DATA_HOME", "MPLCONFIGDIR"):
+    os.environ.setdefault(var, os.path.join(_TMP, var.lower()))
+os.environ.setdefault("RERUN_ANALYTICS", "false")
+
+
+@pytest.fixture(scope="session")
+def fuzzy_ready():
+    """Compile report 000's rule base once (scikit-fuzzy builds its graph slowly)."""
+    from ego.control import fuzzy
+
+    return fuzzy.evaluator()
