@@ -1,0 +1,24 @@
+"""Vehicle models: pure right-hand sides and the shared fixed-step integrator."""
+
+from ego.models.geometry import VehicleGeometry
+from ego.models.integrate import FixedStepIntegrator, rk4_step
+from ego.models.nonlinear_bicycle import (
+    Input,
+    NonlinearBicycle,
+    NonlinearBicycleParams,
+    PacejkaTyre,
+    State,
+    magic_formula,
+)
+
+__all__ = [
+    "FixedStepIntegrator",
+    "Input",
+    "NonlinearBicycle",
+    "NonlinearBicycleParams",
+    "PacejkaTyre",
+    "State",
+    "VehicleGeometry",
+    "magic_formula",
+    "rk4_step",
+]
