@@ -1,0 +1,70 @@
+"""What a controller sees and what it must provide.
+
+Report 000's controllers track two decoupled channels: the longitudinal position along
+the road with the traction force ``Fx`` and the lateral position with the front steer
+angle ``delta``. Both are expressed in the road frame of the lane being tracked:
+``s`` is the arc length along it (m) and ``d`` the signed offset from its centre line
+(m, positive to the left). Errors follow the usual control convention
+``error = reference - actual``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, Callable, Protocol, runtime_checkable
+
+
+@dataclass(slots=True)
+class Observation:
+    """One control step's view of the tracking task (road frame, SI units).
+
+    The simulation loop fills one instance in place every step, so controllers must not
+    keep a reference to it across steps.
+    """
+
+    t: float = 0.0  #: time (s)
+    s_ref: float = 0.0  #: longitudinal reference position (m)
+    ds_ref: float = 0.0  #: its rate (m/s)
+    d_ref: float = 0.0  #: lateral reference offset from the lane centre (m, + left)
+    dd_ref: float = 0.0  #: its rate (m/s)
+    s: float = 0.0  #: longitudinal position of the centre of gravity (m)
+    ds: float = 0.0  #: its rate along the lane (m/s)
+    d: float = 0.0  #: lateral offset of the centre of gravity (m, + left)
+    dd: float = 0.0  #: its rate (m/s, + moving left)
+    speed: float = 0.0  #: body longitudinal speed u (m/s)
+    yaw_rate: float = 0.0  #: r (rad/s)
+
+    @property
+    def e_lon(self) -> float:
+        """Longitudinal error s_ref - s (m)."""
+        return self.s_ref - self.s
+
+    @property
+    def e_lat(self) -> float:
+        """Lateral error d_ref - d (m)."""
+        return self.d_ref - self.d
+
+
+@runtime_checkable
+class Controller(Protocol):
+    """A two-channel tracking controller stepping at a fixed control period."""
+
+    def reset(self, *, seed: int | None = None) -> None:
+        """Clear internal state (integrators, learned weights) before a run."""
+
+    def step(self, obs: Observation) -> tuple[float, float]:
+        """Return (Fx per driven wheel in N, front steer angle in rad)."""
+
+    def signals(self) -> Mapping[str, float]:
+        """Internal signals worth recording (gains, sliding variables); may be empty."""
+
+
+@dataclass(frozen=True)
+class ControllerSpec:
+    """A named controller: its parameter dataclass and how to build it."""
+
+    name: str
+    summary: str
+    params: type
+    build: Callable[[Any, float], Controller]  #: (params, control period dt in s) -> Controller
