@@ -1,0 +1,407 @@
+"""The bridge between ego's own vehicle models and a headless SUMO (through libsumo).
+
+SUMO drives the traffic; every *controlled* vehicle is taken away from SUMO (speed mode 0,
+lane-change mode 0) and placed each step where its own model says, with
+``moveToXY(..., keepRoute=2)``, so SUMO's drivers react to it. Positions are converted
+between the model's centre of gravity / yaw and SUMO's front bumper / navigational angle.
+
+libsumo runs one simulation per process and is not thread-safe; parallel work must use
+processes. :class:`SumoBridge` is a context manager that always closes the simulation,
+also when the body raises.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ego.models.geometry import VehicleGeometry
+from ego.sumo.net import sumo_binary
+
+# libsumo prints a pyarrow version warning to stdout on import unless told to be quiet;
+# stdout is reserved for results (``ego run --json``).
+os.environ.setdefault("LIBSUMO_AS_TRACI", "quiet")
+
+INF = math.inf
+_DEG = 180.0 / math.pi
+
+
+# --- pose conversions (pure) -------------------------------------------------------------
+
+def yaw_to_sumo_angle(psi: float) -> float:
+    """Model yaw (rad, counter-clockwise from +x) -> SUMO angle (deg, clockwise from north)."""
+    return (90.0 - psi * _DEG) % 360.0
+
+
+def sumo_angle_to_yaw(angle: float) -> float:
+    """SUMO angle (deg, clockwise from north) -> yaw (rad, counter-clockwise from +x), in (-pi, pi]."""
+    psi = math.radians(90.0 - angle)
+    return math.atan2(math.sin(psi), math.cos(psi))
+
+
+def cg_to_front_bumper(x: float, y: float, psi: float, cg_to_front: float) -> tuple[float, float]:
+    """Front bumper centre of a vehicle whose centre of gravity is at (x, y) with yaw psi."""
+    return x + cg_to_front * math.cos(psi), y + cg_to_front * math.sin(psi)
+
+
+def front_bumper_to_cg(xf: float, yf: float, psi: float, cg_to_front: float) -> tuple[float, float]:
+    """Inverse of :func:`cg_to_front_bumper`."""
+    return xf - cg_to_front * math.cos(psi), yf - cg_to_front * math.sin(psi)
+
+
+# --- configuration -----------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class SumoConfig:
+    """How to start SUMO. ``step_length`` (s) is SUMO's own step."""
+
+    net: Path
+    step_length: float = 0.1
+    seed: int = 0
+    lateral_resolution: float = 0.875  #: sublane width (m); the sublane model is always on
+    extra_args: tuple[str, ...] = ()
+
+    def command(self) -> list[str]:
+        return [
+            str(sumo_binary("sumo")),
+            "--net-file", str(self.net),
+            "--step-length", repr(float(self.step_length)),
+            "--seed", str(int(self.seed)),
+            "--lateral-resolution", repr(float(self.lateral_resolution)),
+            # report every collision, keep the vehicles (no teleport hides a crash)
+            "--collision.action", "warn",
+            "--collision.mingap-factor", "0",
+            "--collision.check-junctions", "true",
+            "--time-to-teleport", "-1",
+            "--no-step-log", "true",
+            "--no-warnings", "true",
+            "--duration-log.disable", "true",
+            *self.extra_args,
+        ]
+
+
+@dataclass(frozen=True)
+class VehicleType:
+    """A SUMO vehicle type (copied from SUMO's default passenger car, then adjusted)."""
+
+    id: str
+    length: float = 5.0
+    width: float = 1.8
+    min_gap: float = 2.5
+    accel: float = 2.6
+    decel: float = 4.5
+    emergency_decel: float = 9.0
+    max_speed: float = 55.0
+    sigma: float = 0.5  #: Krauss driver imperfection (SUMO's RNG, seeded)
+    tau: float = 1.0  #: desired time headway of SUMO's car-following model (s)
+    color: tuple[int, int, int] = (255, 255, 0)
+
+
+@dataclass(frozen=True)
+class VehicleSpec:
+    """One vehicle to insert: on ``route``, in lane ``lane``, front bumper at ``pos`` (m)."""
+
+    id: str
+    type_id: str
+    route: str
+    lane: int
+    pos: float
+    speed: float
+
+
+@dataclass(frozen=True)
+class Collision:
+    collider: str
+    victim: str
+    kind: str
+    collider_speed: float
+    victim_speed: float
+
+
+@dataclass(slots=True)
+class Neighbour:
+    """The nearest vehicle in one slot; ``gap`` is bumper to bumper (m), inf when none."""
+
+    id: str = ""
+    gap: float = INF
+    speed: float = 0.0
+
+    def clear(self) -> None:
+        self.id = ""
+        self.gap = INF
+        self.speed = 0.0
+
+
+@dataclass(slots=True)
+class Neighbours:
+    """Leader and follower in the vehicle's lane and both adjacent lanes, filled in place."""
+
+    lane: int = 0
+    n_lanes: int = 1
+    leader: Neighbour = field(default_factory=Neighbour)
+    follower: Neighbour = field(default_factory=Neighbour)
+    left_leader: Neighbour = field(default_factory=Neighbour)
+    left_follower: Neighbour = field(default_factory=Neighbour)
+    right_leader: Neighbour = field(default_factory=Neighbour)
+    right_follower: Neighbour = field(default_factory=Neighbour)
+
+    @property
+    def has_left(self) -> bool:
+        return self.lane + 1 < self.n_lanes
+
+    @property
+    def has_right(self) -> bool:
+        return self.lane > 0
+
+
+class SumoError(RuntimeError):
+    """SUMO refused something (a vehicle could not be inserted, a second simulation...)."""
+
+
+class SumoBridge:
+    """One headless SUMO simulation and the vehicles ego controls in it."""
+
+    _running = False  # libsumo: one simulation per process
+
+    def __init__(self, config: SumoConfig, look_ahead: float = 250.0) -> None:
+        self.config = config
+        self.look_ahead = look_ahead
+        self.controlled: dict[str, VehicleGeometry] = {}
+        self._types: dict[str, VehicleType] = {}
+        self._vehicle_type: dict[str, str] = {}
+        self._min_gap: dict[str, float] = {}
+        self._dims: dict[str, tuple[float, float]] = {}
+        self._lanes_of_edge: dict[str, int] = {}
+        self._pending: list[VehicleSpec] = []
+        self.collisions: list[Collision] = []
+        self._ls = None
+
+    # -- lifecycle --------------------------------------------------------------------
+    def __enter__(self) -> SumoBridge:
+        self.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def start(self) -> None:
+        if SumoBridge._running:
+            raise SumoError("a SUMO simulation is already running in this process "
+                            "(libsumo allows one per process; use processes for parallel runs)")
+        import libsumo
+
+        libsumo.start(self.config.command())
+        SumoBridge._running = True
+        self._ls = libsumo
+
+    def close(self) -> None:
+        if self._ls is not None:
+            try:
+                self._ls.close()
+            finally:
+                self._ls = None
+                SumoBridge._running = False
+
+    @property
+    def libsumo(self):
+        if self._ls is None:
+            raise SumoError("the SUMO simulation is not running")
+        return self._ls
+
+    @property
+    def time(self) -> float:
+        """SUMO's clock (s)."""
+        return self.libsumo.simulation.getTime()
+
+    # -- scene set-up -------------------------------------------------------------------
+    def add_type(self, vt: VehicleType) -> None:
+        vtype = self.libsumo.vehicletype
+        vtype.copy("DEFAULT_VEHTYPE", vt.id)
+        vtype.setLength(vt.id, vt.length)
+        vtype.setWidth(vt.id, vt.width)
+        vtype.setMinGap(vt.id, vt.min_gap)
+        vtype.setAccel(vt.id, vt.accel)
+        vtype.setDecel(vt.id, vt.decel)
+        vtype.setEmergencyDecel(vt.id, vt.emergency_decel)
+        vtype.setMaxSpeed(vt.id, vt.max_speed)
+        vtype.setImperfection(vt.id, vt.sigma)
+        vtype.setTau(vt.id, vt.tau)
+        vtype.setColor(vt.id, (*vt.color, 255))
+        self._types[vt.id] = vt
+
+    def add_route(self, route_id: str, edges: Sequence[str]) -> None:
+        self.libsumo.route.add(route_id, list(edges))
+
+    def add_vehicles(self, specs: Iterable[VehicleSpec]) -> None:
+        veh = self.libsumo.vehicle
+        for s in specs:
+            veh.add(s.id, s.route, typeID=s.type_id, departLane=str(s.lane),
+                    departPos=f"{s.pos:.3f}", departSpeed=f"{s.speed:.3f}")
+            self._vehicle_type[s.id] = s.type_id
+            self._pending.append(s)
+
+    def insert(self, required: Iterable[str] = ()) -> list[str]:
+        """Step once so SUMO inserts the added vehicles; returns those it could not place.
+
+        Vehicles it could not place are removed. If any id in ``required`` is among
+        them, raises :class:`SumoError`.
+        """
+        ls = self.libsumo
+        ls.simulationStep()
+        present = set(ls.vehicle.getIDList())
+        missing = [s.id for s in self._pending if s.id not in present]
+        self._pending.clear()
+        for vid in missing:
+            ls.vehicle.remove(vid)
+        lost = sorted(set(required) & set(missing))
+        if lost:
+            raise SumoError(f"SUMO could not insert {', '.join(lost)} (too close to other vehicles?)")
+        return missing
+
+    def control(self, vid: str, geometry: VehicleGeometry) -> None:
+        """Take ``vid`` away from SUMO: its pose comes from :meth:`push` from now on."""
+        veh = self.libsumo.vehicle
+        veh.setSpeedMode(vid, 0)
+        veh.setLaneChangeMode(vid, 0)
+        self.controlled[vid] = geometry
+
+    # -- per step -------------------------------------------------------------------------
+    def push(self, vid: str, x: float, y: float, psi: float, speed: float,
+             accel: float | None = None) -> None:
+        """Place controlled vehicle ``vid`` (centre of gravity x, y in m, yaw psi in rad).
+
+        ``speed`` (m/s) becomes SUMO's idea of its speed, so followers react to the truth.
+        Takes effect in the next :meth:`step`.
+        """
+        geo = self.controlled[vid]
+        c = math.cos(psi)
+        s = math.sin(psi)
+        veh = self._ls.vehicle
+        veh.moveToXY(vid, "", -1, x + geo.cg_to_front * c, y + geo.cg_to_front * s,
+                     (90.0 - psi * _DEG) % 360.0, 2)
+        if accel is None:
+            veh.setPreviousSpeed(vid, speed)
+        else:
+            veh.setPreviousSpeed(vid, speed, accel)
+
+    def step(self) -> list[Collision]:
+        """Advance SUMO one step; returns (and keeps) the collisions of that step."""
+        ls = self._ls
+        ls.simulationStep()
+        if ls.simulation.getCollidingVehiclesNumber():
+            self.collisions = [
+                Collision(c.collider, c.victim, c.type, c.colliderSpeed, c.victimSpeed)
+                for c in ls.simulation.getCollisions()
+            ]
+        elif self.collisions:
+            self.collisions = []
+        return self.collisions
+
+    def _min_gap_of(self, vid: str) -> float:
+        gap = self._min_gap.get(vid)
+        if gap is None:
+            vt = self._types.get(self._vehicle_type.get(vid, ""))
+            gap = vt.min_gap if vt is not None else self._ls.vehicle.getMinGap(vid)
+            self._min_gap[vid] = gap
+        return gap
+
+    def _fill(self, slot: Neighbour, found, follower: bool) -> None:
+        """Store SUMO's (id, dist) answer; follower gaps come back minus the follower's minGap."""
+        if not found:
+            slot.clear()
+            return
+        if isinstance(found[0], str):
+            vid, dist = found
+        else:  # several candidates (sublanes): the closest
+            vid, dist = min(found, key=lambda item: item[1])
+        if not vid:
+            slot.clear()
+            return
+        slot.id = vid
+        slot.gap = dist + self._min_gap_of(vid) if follower else dist
+        slot.speed = self._ls.vehicle.getSpeed(vid)
+
+    def read_neighbours(self, vid: str, out: Neighbours) -> Neighbours:
+        """Fill ``out`` with the leaders and followers around ``vid`` (gaps bumper to bumper).
+
+        Leader gaps are exact because controlled vehicles have minGap 0 (see
+        :func:`ego_type`); follower gaps are corrected by the follower's minGap.
+        """
+        veh = self._ls.vehicle
+        edge = veh.getRoadID(vid)
+        n = self._lanes_of_edge.get(edge)
+        if n is None:
+            n = self._ls.edge.getLaneNumber(edge) if edge and not edge.startswith(":") else 1
+            self._lanes_of_edge[edge] = n
+        out.n_lanes = n
+        out.lane = veh.getLaneIndex(vid)
+        dist = self.look_ahead
+        self._fill(out.leader, veh.getLeader(vid, dist), False)
+        self._fill(out.follower, veh.getFollower(vid, dist), True)
+        if out.has_left:
+            self._fill(out.left_leader, veh.getLeftLeaders(vid), False)
+            self._fill(out.left_follower, veh.getLeftFollowers(vid), True)
+        else:
+            out.left_leader.clear()
+            out.left_follower.clear()
+        if out.has_right:
+            self._fill(out.right_leader, veh.getRightLeaders(vid), False)
+            self._fill(out.right_follower, veh.getRightFollowers(vid), True)
+        else:
+            out.right_leader.clear()
+            out.right_follower.clear()
+        return out
+
+    def dimensions(self, vid: str) -> tuple[float, float]:
+        """(length, width) of any vehicle (m), cached."""
+        dims = self._dims.get(vid)
+        if dims is None:
+            vt = self._types.get(self._vehicle_type.get(vid, ""))
+            if vt is not None:
+                dims = (vt.length, vt.width)
+            else:
+                veh = self._ls.vehicle
+                dims = (veh.getLength(vid), veh.getWidth(vid))
+            self._dims[vid] = dims
+        return dims
+
+    def boxes(self, skip: Iterable[str] = ()) -> tuple[list[str], np.ndarray]:
+        """Every vehicle in the network as an oriented box: ids and rows
+        (centre x, centre y, yaw rad, length, width)."""
+        veh = self._ls.vehicle
+        get_pos, get_angle, dims = veh.getPosition, veh.getAngle, self.dimensions
+        ids = [v for v in veh.getIDList() if v not in skip] if skip else list(veh.getIDList())
+        raw = [(*get_pos(v), get_angle(v), *dims(v)) for v in ids]
+        rows = np.array(raw, dtype=float).reshape(-1, 5)
+        psi = np.radians(90.0 - rows[:, 2])
+        half = 0.5 * rows[:, 3]
+        rows[:, 0] -= half * np.cos(psi)
+        rows[:, 1] -= half * np.sin(psi)
+        rows[:, 2] = np.arctan2(np.sin(psi), np.cos(psi))
+        return ids, rows
+
+    def lane_shapes(self) -> dict[str, tuple[float, list[tuple[float, float]]]]:
+        """Every non-internal lane: id -> (width, centre-line points)."""
+        lane = self.libsumo.lane
+        return {
+            lid: (lane.getWidth(lid), [tuple(p) for p in lane.getShape(lid)])
+            for lid in lane.getIDList()
+            if not lid.startswith(":")
+        }
+
+
+def ego_type(type_id: str, geometry: VehicleGeometry, decel: float = 7.0) -> VehicleType:
+    """SUMO type for a controlled vehicle: its real size, minGap 0 so leader gaps are exact.
+
+    ``decel`` is what other drivers assume it can brake; 7 m/s^2 is report 000's car on
+    its 0.7 friction circle. SUMO never drives it, so its car-following headway only
+    matters for insertion: a short ``tau`` lets a scenario start it close behind a leader.
+    """
+    return VehicleType(type_id, length=geometry.length, width=geometry.width, min_gap=0.0,
+                       decel=decel, emergency_decel=max(9.0, decel), sigma=0.0, tau=0.2,
+                       color=(220, 40, 40))

@@ -1,0 +1,82 @@
+"""SUMO networks shipped with ego: where they are and how they are built.
+
+Each network lives in ``sumo_nets/<name>/`` as plain XML sources (``<name>.nod.xml``,
+``<name>.edg.xml``, ...) plus a netconvert configuration ``<name>.netccfg``; the built
+``<name>.net.xml`` is committed next to them and rebuilt with ``python sumo_nets/build.py``.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+from pathlib import Path
+
+from ego.params import ConfigError
+
+_HEADER = re.compile(r"^<\?xml[^>]*>\s*(<!--.*?-->\s*)?", re.S)
+
+
+def sumo_home() -> Path:
+    """SUMO_HOME of the ``eclipse-sumo`` wheel."""
+    import sumo
+
+    return Path(sumo.SUMO_HOME)
+
+
+def sumo_binary(name: str = "sumo") -> Path:
+    """Path of a SUMO executable (``sumo``, ``netconvert``...) from the wheel."""
+    exe = sumo_home() / "bin" / name
+    if not exe.exists():
+        raise FileNotFoundError(f"{exe} not found: is the eclipse-sumo wheel installed?")
+    return exe
+
+
+def nets_dir() -> Path:
+    """The ``sumo_nets`` folder: $EGO_SUMO_NETS, else the one beside the ``ego`` package."""
+    env = os.environ.get("EGO_SUMO_NETS")
+    path = Path(env) if env else Path(__file__).resolve().parents[2] / "sumo_nets"
+    if not path.is_dir():
+        raise ConfigError(
+            f"SUMO networks folder {path} not found (install ego editable from its checkout, "
+            "or set EGO_SUMO_NETS)"
+        )
+    return path
+
+
+def available_networks() -> list[str]:
+    return sorted(p.parent.name for p in nets_dir().glob("*/*.netccfg"))
+
+
+def net_file(name: str) -> Path:
+    """The built ``.net.xml`` of network ``name``."""
+    path = nets_dir() / name / f"{name}.net.xml"
+    if not path.exists():
+        raise ConfigError(
+            f"unknown network {name!r} (known: {', '.join(available_networks())}); "
+            "build with python sumo_nets/build.py"
+        )
+    return path
+
+
+def build_network(name: str, output: Path | None = None) -> Path:
+    """Run netconvert on ``sumo_nets/<name>/<name>.netccfg``; returns the written file.
+
+    ``output`` overrides the configured output (used by tests to rebuild elsewhere).
+    """
+    folder = nets_dir() / name
+    cfg = folder / f"{name}.netccfg"
+    if not cfg.exists():
+        raise ConfigError(f"no netconvert configuration {cfg}")
+    out = Path(output) if output is not None else folder / f"{name}.net.xml"
+    env = dict(os.environ, SUMO_HOME=str(sumo_home()))
+    subprocess.run(
+        [str(sumo_binary("netconvert")), "-c", cfg.name, "-o", str(out.resolve())],
+        cwd=folder, env=env, check=True, capture_output=True, text=True,
+    )
+    return out
+
+
+def network_body(path: Path) -> str:
+    """A built network without netconvert's header comment (timestamp, paths)."""
+    return _HEADER.sub("", Path(path).read_text(encoding="utf-8"), count=1)
