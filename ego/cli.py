@@ -1,0 +1,179 @@
+"""The ``ego`` command line.
+
+    ego run SCENARIO --controller NAME [--record PATH] [--seed N] [--set key=value ...] [--json]
+    ego list [--json]
+
+Exit status: 0 the run completed; 1 it ended in a collision, diverged or timed out
+(the metrics are still printed); 2 bad input (unknown name, bad value), with one line
+on stderr naming it and what is allowed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+
+from ego import __version__
+from ego.params import ConfigError, describe, parse_overrides
+
+EXIT_OK, EXIT_NOT_COMPLETED, EXIT_USAGE = 0, 1, 2
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that reports bad usage in one line and exits with 2."""
+
+    def error(self, message: str) -> None:  # pragma: no cover - exercised through main()
+        raise ConfigError(message)
+
+
+def _parser() -> argparse.ArgumentParser:
+    from ego.control import CONTROLLERS
+    from ego.scenarios import SCENARIOS
+
+    ap = _Parser(
+        prog="ego",
+        description="Run an ego vehicle's own model and controller inside real SUMO traffic.",
+        epilog="Examples:\n"
+               "  ego list\n"
+               "  ego run emergency-brake --controller fuzzy --record runs/eb.rrd\n"
+               "  ego run emergency-brake --controller pid --set block_left=true --json\n"
+               "  rerun runs/eb.rrd   # review the recording",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    ap.add_argument("--version", action="version", version=f"ego {__version__}")
+    sub = ap.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+
+    run = sub.add_parser(
+        "run", help="run one scenario with one controller",
+        description="Run one scenario with one controller and print its metrics.",
+        epilog="Exit status: 0 completed; 1 collision, diverged or timeout; 2 bad input.\n"
+               "Every parameter, its unit and default: ego list",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    run.add_argument("scenario", metavar="SCENARIO", help=f"one of: {', '.join(SCENARIOS)}")
+    run.add_argument("--controller", "-c", required=True, metavar="NAME",
+                     help=f"one of: {', '.join(CONTROLLERS)}")
+    run.add_argument("--record", metavar="PATH", help="write a Rerun recording (.rrd) here")
+    run.add_argument("--seed", type=int, default=0, metavar="N",
+                     help="seed of the traffic and of SUMO (default 0)")
+    run.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                     help="override a scenario or controller parameter (repeatable)")
+    run.add_argument("--json", action="store_true", help="print one JSON object instead of text")
+
+    lst = sub.add_parser("list", help="scenarios, controllers and every parameter",
+                         description="List scenarios, controllers and every parameter with "
+                                     "its default and unit.")
+    lst.add_argument("--json", action="store_true", help="print JSON instead of text")
+    return ap
+
+
+def _catalogue() -> dict:
+    from ego.control import CONTROLLERS
+    from ego.scenarios import SCENARIOS
+
+    def params(cls) -> list[dict]:
+        return [
+            {"name": i.name, "default": i.default, "unit": i.unit, "allowed": i.allowed(),
+             "description": i.doc}
+            for i in describe(cls)
+        ]
+
+    return {
+        "scenarios": [{"name": n, "summary": c.summary, "parameters": params(c.config_cls)}
+                      for n, c in SCENARIOS.items()],
+        "controllers": [{"name": n, "summary": s.summary, "parameters": params(s.params)}
+                        for n, s in CONTROLLERS.items()],
+    }
+
+
+def _print_catalogue(cat: dict) -> None:
+    def table(rows: list[dict]) -> None:
+        if not rows:
+            print("    (no parameters)")
+            return
+        w = max(len(r["name"]) for r in rows)
+        for r in rows:
+            default = json.dumps(r["default"])
+            unit = "" if r["unit"] in ("", "-") else f" {r['unit']}"
+            print(f"    {r['name']:<{w}}  {default + unit:<14}  {r['description']}")
+
+    print("Scenarios (ego run SCENARIO ...; parameters with --set key=value):")
+    for s in cat["scenarios"]:
+        print(f"\n  {s['name']}: {s['summary']}")
+        table(s["parameters"])
+    print("\nControllers (--controller NAME; parameters with --set key=value):")
+    for c in cat["controllers"]:
+        print(f"\n  {c['name']}: {c['summary']}")
+        table(c["parameters"])
+
+
+def _fmt(value) -> str:
+    if value is None:
+        return "-"
+    if isinstance(value, float):
+        return f"{value:.3f}"
+    return str(value)
+
+
+def _print_result(result) -> None:
+    m = result.metrics
+    print(f"{m['scenario']} with {m['controller']} (seed {m['seed']}): {m['status'].upper()}"
+          f" - {m['status_detail']}")
+    skip = {"scenario", "controller", "seed", "status", "status_detail", "lane_choice"}
+    width = max(len(k) for k in m)
+    for key, value in m.items():
+        if key not in skip:
+            print(f"  {key:<{width}}  {_fmt(value)}")
+    if result.events:
+        print("events:")
+        for e in result.events:
+            print(f"  t={e.t:7.2f} s  [{e.kind}] {e.text}")
+
+
+def _run(args) -> int:
+    from ego.runner import RunSpec, run
+
+    spec = RunSpec(args.scenario, args.controller, seed=args.seed,
+                   overrides=parse_overrides(args.overrides), record=args.record)
+    result = run(spec)
+    if args.json:
+        out = dict(result.metrics)
+        out["events"] = [e.as_dict() for e in result.events]
+        if args.record:
+            out["record"] = args.record
+        print(json.dumps(out))
+    else:
+        _print_result(result)
+        if args.record:
+            print(f"recording: {args.record}  (review with: rerun {args.record})")
+    return EXIT_OK if result.status == "completed" else EXIT_NOT_COMPLETED
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    from ego.sumo.bridge import SumoError
+
+    try:
+        args = _parser().parse_args(argv)
+        if args.command == "run":
+            return _run(args)
+        if args.command == "list":
+            cat = _catalogue()
+            if args.json:
+                print(json.dumps(cat, indent=2))
+            else:
+                _print_catalogue(cat)
+            return EXIT_OK
+        _parser().print_help()
+        return EXIT_USAGE
+    except (ConfigError, SumoError) as exc:
+        print(f"ego: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("ego: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

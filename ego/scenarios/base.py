@@ -1,0 +1,371 @@
+"""The simulation loop shared by every SUMO scenario.
+
+A scenario is steppable (``reset`` / ``step``), not only a closed loop, so it can back a
+Gymnasium environment or be driven by an external policy; :meth:`SumoScenario.run` is the
+closed loop with the scenario's own controller. Each call to :meth:`SumoScenario.step`
+advances one control period ``dt``: the controller's action is held while the ego's model
+integrates (``substeps`` RK4 steps), and every ``sumo_step / dt`` periods the ego's pose is
+pushed into SUMO and SUMO advances one step so the traffic reacts.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import ClassVar
+
+import numpy as np
+
+from ego.control.base import Controller, Observation
+from ego.models import FixedStepIntegrator, NonlinearBicycle, VehicleGeometry
+from ego.params import ConfigError, param
+from ego.record.base import NullRecorder, Recorder, Scene, Series
+from ego.scenarios.metrics import json_number
+from ego.sumo.bridge import Collision, SumoBridge
+
+STATUSES = ("completed", "collision", "diverged", "timeout")
+
+
+@dataclass(frozen=True)
+class CommonConfig:
+    """Timing shared by every scenario."""
+
+    dt: float = param(0.01, "s", "control period: controller and model step", min=0.001, max=0.1)
+    substeps: int = param(1, "-", "RK4 physics sub-steps per control period", min=1, max=100)
+    sumo_step: float = param(0.1, "s", "SUMO step, a whole multiple of dt", min=0.01, max=1.0)
+    duration: float = param(25.0, "s", "simulated time", min=1.0, max=3600.0)
+    lateral_resolution: float = param(0.875, "m", "width of SUMO's sublanes (sublane model)",
+                                      min=0.1, max=3.5)
+
+    def __post_init__(self) -> None:
+        ratio = self.sumo_step / self.dt
+        if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
+            raise ConfigError(
+                f"bad value for sumo_step: {self.sumo_step} (expected a whole multiple of dt={self.dt} s)"
+            )
+
+    @property
+    def control_per_sumo(self) -> int:
+        """Control periods per SUMO step."""
+        return round(self.sumo_step / self.dt)
+
+
+@dataclass(frozen=True)
+class Event:
+    """Something that happened in a run: it goes to the log and to the recording."""
+
+    t: float
+    kind: str
+    text: str
+    level: str = "INFO"
+
+    def as_dict(self) -> dict:
+        return {"t": round(self.t, 4), "kind": self.kind, "text": self.text, "level": self.level}
+
+
+@dataclass
+class RunResult:
+    """Outcome of one run: status, metrics (JSON-ready), events and the full trace."""
+
+    scenario: str
+    controller: str
+    seed: int
+    status: str
+    metrics: dict
+    events: list[Event]
+    columns: tuple[str, ...]
+    trace: np.ndarray
+
+    def column(self, name: str) -> np.ndarray:
+        return self.trace[:, self.columns.index(name)]
+
+
+class EgoVehicle:
+    """An ego car: report 000's model, its body and actuator limits, integrated per period."""
+
+    __slots__ = ("model", "geometry", "integrator", "state", "max_steer", "stop_speed",
+                 "lateral_accel", "applied", "_rhs", "_step")
+
+    def __init__(self, model: NonlinearBicycle, geometry: VehicleGeometry, dt: float,
+                 substeps: int, max_steer: float = 0.5, stop_speed: float = 0.5) -> None:
+        self.model = model
+        self.geometry = geometry
+        self.integrator = FixedStepIntegrator(model.rhs, dt, substeps, n_states=len(model.x0))
+        self.state: tuple[float, ...] = model.x0
+        self.max_steer = max_steer
+        self.stop_speed = stop_speed
+        self.lateral_accel = 0.0
+        self.applied = (0.0, 0.0)
+        self._rhs = model.rhs
+        self._step = self.integrator.step
+
+    def step(self, fx: float, delta: float) -> None:
+        """Apply the actuator limits and integrate one control period.
+
+        Steering saturates at ``max_steer`` (rad). A negative Fx is braking, which fades
+        below ``stop_speed`` (m/s) so it stops the car instead of reversing it (the
+        report's model has no standstill).
+        """
+        ms = self.max_steer
+        if delta > ms:
+            delta = ms
+        elif delta < -ms:
+            delta = -ms
+        x = self.state
+        u = x[1]
+        if fx < 0.0 and u < self.stop_speed:
+            fx *= max(u, 0.0) / self.stop_speed
+        command = (fx, delta)
+        k1 = self._rhs(x, command)
+        self.lateral_accel = k1[3] + u * x[5]
+        self.applied = command
+        self.state = self._step(x, command, k1)
+
+
+def divergence(state: Sequence[float], offset: float, heading_error: float,
+               road_halfwidth: float) -> str | None:
+    """Why the ego's state is beyond anything a controller should produce, or None."""
+    X, u, Y, v, psi, r = state
+    if not all(map(math.isfinite, state)):
+        return "the state is not finite (NaN or infinity)"
+    if abs(offset) > road_halfwidth:
+        return f"left the road: lateral offset {offset:+.2f} m from the reference lane"
+    if u < -1.0:
+        return f"driving backwards at {u:.1f} m/s"
+    if u > 80.0:
+        return f"speed {u:.1f} m/s is absurd"
+    if abs(r) > 2.5:
+        return f"yaw rate {r:+.2f} rad/s: the car is spinning"
+    if abs(heading_error) > math.radians(75.0):
+        return f"heading {math.degrees(heading_error):+.0f} deg off the road direction"
+    return None
+
+
+class SumoScenario:
+    """Base of every scenario that runs the ego in SUMO traffic.
+
+    Subclasses set ``name``/``config_cls`` and implement the ``_setup`` (traffic, ego),
+    ``_before_sumo_step`` (scripted actors), ``_after_sumo_step`` (read the scene) and
+    ``_update`` (events, references, observation and trace row) hooks plus ``_metrics``.
+    """
+
+    name: ClassVar[str] = ""
+    summary: ClassVar[str] = ""
+    config_cls: ClassVar[type] = CommonConfig
+    #: trace columns written every control step; ``t`` first
+    columns: tuple[str, ...] = ("t",)
+
+    def __init__(self, config, controller: Controller, *, seed: int = 0,
+                 recorder: Recorder | None = None, controller_name: str = "") -> None:
+        self.config = config
+        self.controller = controller
+        self.controller_name = controller_name or type(controller).__name__
+        self.seed = int(seed)
+        self.recorder: Recorder = recorder if recorder is not None else NullRecorder()
+        self.bridge: SumoBridge | None = None
+        self.obs = Observation()
+        self.events: list[Event] = []
+        self.trace: list[tuple] = []
+        self.t = 0.0
+        self.k = 0
+        self.status = "running"
+        self.status_detail = ""
+        self.collision: Collision | None = None
+        self._flushed = 0
+        self._next_flush = 1.0
+        self._wall0 = 0.0
+        self._wall = 0.0
+        self._signal_names: tuple[str, ...] = ()
+        self.controlled_ids: tuple[str, ...] = ()
+
+    # -- Gymnasium-style interface -----------------------------------------------------------
+    def reset(self, *, seed: int | None = None) -> Observation:
+        """Start a fresh run (SUMO restarted, traffic regenerated from the seed)."""
+        if seed is not None:
+            self.seed = int(seed)
+        self.close()
+        self._wall0 = time.perf_counter()
+        self.events, self.trace = [], []
+        self.t, self.k = 0.0, 0
+        self.status, self.status_detail, self.collision = "running", "", None
+        self._flushed, self._next_flush = 0, 1.0
+        c = self.config
+        self._dt, self._per_sumo, self._t_end = c.dt, c.control_per_sumo, c.duration - 1e-9
+        self.controller.reset(seed=self.seed)
+        self._signal_names = tuple(self.controller.signals())
+        self.bridge = self._make_bridge()
+        self.bridge.start()
+        self._setup(np.random.default_rng(self.seed))
+        self.recorder.begin(self._scene(), self._series(), self._meta())
+        self._record_boxes()
+        self._update(initial=True)
+        return self.obs
+
+    @property
+    def done(self) -> bool:
+        return self.status != "running"
+
+    def step(self, action: tuple[float, float]) -> Observation:
+        """Apply ``action`` = (Fx in N, delta in rad) for one control period."""
+        if self.status != "running":
+            raise RuntimeError(f"the run has ended ({self.status}); call reset()")
+        self._act(action)
+        k = self.k = self.k + 1
+        t = self.t = k * self._dt
+        if k % self._per_sumo == 0:
+            self._sumo_step()
+        if self.status == "running":
+            reason = self._check_divergence()
+            if reason is not None:
+                self._end("diverged", reason, level="ERROR")
+            else:
+                self._update()
+                if t >= self._t_end:
+                    self._end(*self._final_status())
+        if t >= self._next_flush or self.status != "running":
+            self._flush()
+        return self.obs
+
+    def run(self) -> RunResult:
+        """The closed loop: reset, then the scenario's controller until the run ends."""
+        try:
+            obs = self.reset()
+            controller = self.controller
+            step = self.step
+            while self.status == "running":
+                obs = step(controller.step(obs))
+            return self.result()
+        finally:
+            self.close()
+
+    def close(self) -> None:
+        """Close SUMO and the recording (safe to call twice)."""
+        if self.bridge is not None:
+            self.bridge.close()
+            self.bridge = None
+        if self.trace or self.events:
+            self.recorder.close()
+
+    # -- shared machinery ----------------------------------------------------------------------
+    def _make_bridge(self) -> SumoBridge:
+        raise NotImplementedError
+
+    def _sumo_step(self) -> None:
+        bridge = self.bridge
+        self._before_sumo_step()
+        collisions = bridge.step()
+        self._after_sumo_step()
+        self._record_boxes()
+        if collisions:
+            mine = [c for c in collisions if c.collider in bridge.controlled or c.victim in bridge.controlled]
+            if mine:
+                c = mine[0]
+                self.collision = c
+                self._end("collision",
+                          f"{c.collider} ({c.collider_speed:.1f} m/s) hit {c.victim} "
+                          f"({c.victim_speed:.1f} m/s): {c.kind}", level="ERROR")
+            else:
+                for c in collisions:
+                    self.event("traffic", f"collision in the traffic: {c.collider} hit {c.victim}", "WARN")
+
+    def event(self, kind: str, text: str, level: str = "INFO") -> None:
+        ev = Event(self.t, kind, text, level)
+        self.events.append(ev)
+        self.recorder.event(self.t, f"[{kind}] {text}", level)
+
+    def _end(self, status: str, detail: str, level: str = "INFO") -> None:
+        self.status = status
+        self.status_detail = detail
+        self.event(status, f"run ends: {status} at t = {self.t:.2f} s: {detail}", level)
+        self._wall = time.perf_counter() - self._wall0
+
+    def _flush(self) -> None:
+        rows = self.trace[self._flushed:]
+        if rows:
+            data = np.array(rows, dtype=float)
+            data[np.isinf(data)] = np.nan  # infinite TTC: a gap in the plot
+            self.recorder.write_rows(self.columns + self._signal_names, data)
+            self._flushed = len(self.trace)
+        self.recorder.flush()
+        self._next_flush = math.floor(self.t) + 1.0
+
+    def result(self) -> RunResult:
+        columns = self.columns + self._signal_names
+        trace = np.array(self.trace, dtype=float).reshape(-1, len(columns))
+        metrics = {
+            "scenario": self.name,
+            "controller": self.controller_name,
+            "seed": self.seed,
+            "status": self.status,
+            "status_detail": self.status_detail,
+            "collision": self.collision is not None,
+            "collision_with": self._other_party(),
+        }
+        metrics.update(self._metrics(trace, columns))
+        metrics.update({
+            "sim_time": json_number(self.t, 4),
+            "wall_time": json_number(self._wall, 4),
+            "steps": self.k,
+        })
+        return RunResult(self.name, self.controller_name, self.seed, self.status, metrics,
+                         list(self.events), columns, trace)
+
+    def _other_party(self) -> str | None:
+        c = self.collision
+        if c is None:
+            return None
+        return c.victim if c.collider in self.controlled_ids else c.collider
+
+    # -- hooks -------------------------------------------------------------------------------
+    def _setup(self, rng: np.random.Generator) -> None:
+        raise NotImplementedError
+
+    def _act(self, action: tuple[float, float]) -> None:
+        raise NotImplementedError
+
+    def _before_sumo_step(self) -> None:
+        pass
+
+    def _after_sumo_step(self) -> None:
+        pass
+
+    def _record_boxes(self) -> None:
+        pass
+
+    def _check_divergence(self) -> str | None:
+        return None
+
+    def _update(self, initial: bool = False) -> None:
+        raise NotImplementedError
+
+    def _final_status(self) -> tuple[str, str]:
+        return "completed", "reached the end of the simulated time"
+
+    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
+        return {}
+
+    def _scene(self) -> Scene:
+        return Scene(lanes=())
+
+    def _series(self) -> list[Series]:
+        return []
+
+    def _meta(self) -> dict:
+        return {"scenario": self.name, "controller": self.controller_name, "seed": self.seed}
+
+
+def signal_series(names: Sequence[str]) -> list[Series]:
+    """Recording series for a controller's internal signals."""
+    return [Series(n, f"plots/controller/{n}", "") for n in names]
+
+
+@dataclass
+class Trigger:
+    """When and why a manoeuvre started."""
+
+    t: float | None = None
+    ttc: float | None = None
+    reason: str = ""
+    extra: dict = field(default_factory=dict)

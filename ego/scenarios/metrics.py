@@ -1,0 +1,53 @@
+"""Metrics computed from a run's trace (pure numpy)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def settling_time(t: np.ndarray, error: np.ndarray, band: float, start: float) -> float | None:
+    """Time from ``start`` until |error| stays below ``band`` to the end of the trace (s).
+
+    None when the last sample is still outside the band (not settled).
+    """
+    t = np.asarray(t)
+    error = np.asarray(error)
+    after = t >= start
+    if not after.any():
+        return None
+    outside = np.abs(error[after]) >= band
+    if outside[-1]:
+        return None
+    idx = np.flatnonzero(outside)
+    t_after = t[after]
+    settled_at = t_after[idx[-1] + 1] if idx.size else t_after[0]
+    return float(settled_at - start)
+
+
+def overshoot(offset: np.ndarray, direction: float) -> float:
+    """Largest excursion past the target (m); ``offset`` = position - target, ``direction``
+    the sign of the motion towards the target (+1 moving up/left, -1 down/right)."""
+    if offset.size == 0:
+        return 0.0
+    return float(max(0.0, np.max(direction * offset)))
+
+
+def finite_min(values: np.ndarray) -> float | None:
+    """Smallest finite value, or None when there is none (e.g. a TTC that stayed infinite)."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    return float(v.min()) if v.size else None
+
+
+def max_abs(values: np.ndarray) -> float:
+    v = np.asarray(values, dtype=float)
+    return float(np.max(np.abs(v))) if v.size else 0.0
+
+
+def json_number(x: float | None, digits: int = 6) -> float | None:
+    """Round for JSON; non-finite -> None (JSON has no infinity)."""
+    if x is None or not math.isfinite(x):
+        return None
+    return round(float(x), digits)

@@ -1,0 +1,82 @@
+"""The command line as a user runs it (a subprocess, real SUMO)."""
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+EGO = [sys.executable, "-m", "ego"]
+
+
+def ego(*args, env=None):
+    return subprocess.run([*EGO, *args], capture_output=True, text=True, env=env, timeout=300)
+
+
+def test_list_names_every_parameter_with_default_and_unit():
+    out = ego("list", "--json")
+    assert out.returncode == 0, out.stderr
+    cat = json.loads(out.stdout)
+    scenarios = {s["name"]: s for s in cat["scenarios"]}
+    params = {p["name"]: p for p in scenarios["emergency-brake"]["parameters"]}
+    for name in ("dt", "duration", "ego_speed", "lead_gap", "lead_brake_time", "lead_decel",
+                 "lead_final_speed", "ttc_threshold", "traffic_density"):
+        assert name in params and params[name]["unit"] and params[name]["default"] is not None
+    assert params["lead_decel"]["unit"] == "m/s^2"
+    assert {c["name"] for c in cat["controllers"]} >= {"fuzzy", "pid"}
+    text = ego("list")
+    assert text.returncode == 0 and "lead_decel" in text.stdout and "m/s^2" in text.stdout
+
+
+@pytest.mark.sumo
+def test_run_json_is_one_object_with_the_documented_fields(tmp_path):
+    rec = tmp_path / "runs" / "eb.rrd"
+    out = ego("run", "emergency-brake", "--controller", "pid", "--json", "--record", str(rec),
+              "--set", "duration=15")
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.strip().splitlines()
+    assert len(lines) == 1
+    m = json.loads(lines[0])
+    for key in ("status", "collision", "lane_change_completed", "target_lane", "trigger_time",
+                "lane_change_duration", "max_overshoot", "min_ttc_front", "min_ttc_rear",
+                "max_abs_lateral_accel", "sim_time", "wall_time", "steps"):
+        assert key in m, key
+    assert m["status"] == "completed" and m["sim_time"] == 15.0 and m["steps"] == 1500
+    assert rec.exists() and rec.stat().st_size > 0
+
+
+@pytest.mark.sumo
+def test_a_collision_is_reported_with_exit_status_1():
+    out = ego("run", "emergency-brake", "-c", "none", "--json")
+    assert out.returncode == 1
+    assert json.loads(out.stdout)["status"] == "collision"
+
+
+@pytest.mark.parametrize("args, message", [
+    (["run", "nowhere", "-c", "fuzzy"], "unknown scenario 'nowhere' (known: emergency-brake"),
+    (["run", "emergency-brake", "-c", "magic"], "unknown controller 'magic' (known: fuzzy, pid"),
+    (["run", "emergency-brake", "-c", "fuzzy", "--set", "warp=9"], "unknown parameter 'warp'"),
+    (["run", "emergency-brake", "-c", "fuzzy", "--set", "lead_decel=fast"],
+     "bad value for lead_decel: 'fast' (expected a number from 0.5 to 12 (m/s^2))"),
+    (["run", "emergency-brake", "-c", "fuzzy", "--set", "ttc_threshold=-1"], "bad value for ttc_threshold"),
+    (["run", "emergency-brake", "-c", "fuzzy", "--set", "dt=0.03"], "bad value for sumo_step"),
+    (["run", "emergency-brake", "-c", "pid", "--set", "kp_lat=x"], "bad value for kp_lat"),
+    (["run", "emergency-brake", "-c", "fuzzy", "--record", "x.txt"], "expected a file ending in .rrd"),
+    (["run", "emergency-brake"], "--controller"),
+], ids=["scenario", "controller", "parameter", "value", "range", "timing", "controller-param",
+        "record", "missing"])
+def test_bad_input_is_one_line_and_exit_2(args, message):
+    out = ego(*args)
+    assert out.returncode == 2
+    assert out.stdout == ""
+    err = out.stderr.strip()
+    assert "\n" not in err and "Traceback" not in err
+    assert err.startswith("ego: error: ") and message in err
+
+
+def test_help_explains_the_run_command():
+    out = ego("run", "--help")
+    assert out.returncode == 0
+    for word in ("--controller", "--record", "--seed", "--set", "--json", "Exit status"):
+        assert word in out.stdout
