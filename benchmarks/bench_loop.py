@@ -1,0 +1,99 @@
+"""Speed of the whole loop against bare SUMO stepping of the same traffic, in one run.
+
+    python benchmarks/bench_loop.py [--repeat 5] [--controller fuzzy] [--no-record]
+
+Prints the real-time factor of ``emergency-brake`` (fuzzy, recording on, dt = 0.01 s)
+and the ratio of the loop's cost per SUMO step to ``simulationStep()`` alone on the same
+traffic (same scenario set-up and seed, no ego control, no recording). Targets (issue 2):
+>= 100x real time, loop <= 3x bare SUMO.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from ego.runner import RunSpec, build  # noqa: E402
+
+
+def timed_loop(spec: RunSpec) -> tuple[float, float, int, int]:
+    """(loop seconds, simulated seconds, control steps, SUMO steps) after set-up."""
+    scenario = build(spec)
+    try:
+        obs = scenario.reset()
+        controller = scenario.controller
+        t0 = time.perf_counter()
+        while not scenario.done:
+            obs = scenario.step(controller.step(obs))
+        scenario.recorder.close()
+        elapsed = time.perf_counter() - t0
+        return elapsed, scenario.t, scenario.k, scenario.k // scenario.config.control_per_sumo
+    finally:
+        scenario.close()
+
+
+def timed_bare_sumo(spec: RunSpec, sumo_steps: int) -> float:
+    """Seconds for ``sumo_steps`` bare simulationStep() calls on the scenario's traffic."""
+    scenario = build(RunSpec(spec.scenario, "none", spec.seed, spec.overrides))
+    try:
+        scenario.reset()
+        step = scenario.bridge.libsumo.simulationStep
+        t0 = time.perf_counter()
+        for _ in range(sumo_steps):
+            step()
+        return time.perf_counter() - t0
+    finally:
+        scenario.close()
+
+
+def main(argv: list[str] | None = None) -> dict:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--controller", default="fuzzy")
+    ap.add_argument("--no-record", action="store_true")
+    args = ap.parse_args(argv)
+    os.environ.setdefault("XDG_CONFIG_HOME", tempfile.mkdtemp())
+    os.environ.setdefault("XDG_DATA_HOME", tempfile.mkdtemp())
+    loops, bares = [], []
+    with tempfile.TemporaryDirectory() as tmp:
+        for i in range(args.repeat):
+            record = None if args.no_record else str(Path(tmp) / f"run{i}.rrd")
+            spec = RunSpec("emergency-brake", args.controller, seed=0, record=record)
+            loop, sim, steps, sumo_steps = timed_loop(spec)
+            bare = timed_bare_sumo(spec, sumo_steps)
+            loops.append(loop)
+            bares.append(bare)
+    loop = statistics.median(loops)
+    bare = statistics.median(bares)
+    figures = {
+        "controller": args.controller,
+        "recording": not args.no_record,
+        "sim_time_s": sim,
+        "control_steps": steps,
+        "sumo_steps": sumo_steps,
+        "loop_s": loop,
+        "real_time_factor": sim / loop,
+        "loop_us_per_control_step": 1e6 * loop / steps,
+        "loop_us_per_sumo_step": 1e6 * loop / sumo_steps,
+        "bare_sumo_us_per_step": 1e6 * bare / sumo_steps,
+        "loop_over_bare_sumo": loop / bare,
+    }
+    print(f"emergency-brake, {args.controller}, recording {'on' if figures['recording'] else 'off'}, "
+          f"dt = 0.01 s, SUMO step 0.1 s, median of {args.repeat}")
+    print(f"  simulated {sim:.1f} s ({steps} control steps, {sumo_steps} SUMO steps) in {loop:.3f} s")
+    print(f"  real-time factor           {figures['real_time_factor']:8.1f} x   (target >= 100)")
+    print(f"  loop per SUMO step         {figures['loop_us_per_sumo_step']:8.1f} us")
+    print(f"  bare SUMO per step         {figures['bare_sumo_us_per_step']:8.1f} us")
+    print(f"  loop / bare SUMO           {figures['loop_over_bare_sumo']:8.2f}     (target <= 3)")
+    return figures
+
+
+if __name__ == "__main__":
+    main()

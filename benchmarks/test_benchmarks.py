@@ -1,0 +1,25 @@
+"""The benchmarks as pytest items: ``pytest benchmarks -m benchmark -s`` prints the figures.
+
+They assert nothing about time (CI machines are noisy); only that they ran and that the
+fast paths still agree with their references.
+"""
+
+import pytest
+
+pytestmark = pytest.mark.benchmark
+
+
+def test_fuzzy_speedup():
+    from bench_fuzzy import main
+
+    figures = main(["--points", "200"])
+    assert figures["max_abs_difference"] < 1e-9
+
+
+def test_loop_against_bare_sumo(tmp_path, monkeypatch):
+    from bench_loop import main
+
+    monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path))
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path))
+    figures = main(["--repeat", "5"])
+    assert figures["control_steps"] == 2500
