@@ -58,14 +58,18 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--controller", default="fuzzy")
     ap.add_argument("--no-record", action="store_true")
+    ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                    help="scenario/controller parameter, as for ego run")
     args = ap.parse_args(argv)
+    overrides = dict(item.split("=", 1) for item in args.overrides)
     os.environ.setdefault("XDG_CONFIG_HOME", tempfile.mkdtemp())
     os.environ.setdefault("XDG_DATA_HOME", tempfile.mkdtemp())
     loops, bares = [], []
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(args.repeat):
             record = None if args.no_record else str(Path(tmp) / f"run{i}.rrd")
-            spec = RunSpec("emergency-brake", args.controller, seed=0, record=record)
+            spec = RunSpec("emergency-brake", args.controller, seed=0, overrides=overrides,
+                           record=record)
             loop, sim, steps, sumo_steps = timed_loop(spec)
             bare = timed_bare_sumo(spec, sumo_steps)
             loops.append(loop)

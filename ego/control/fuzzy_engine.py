@@ -24,7 +24,9 @@ at any universe resolution, not just approximately on a fine one.
 from __future__ import annotations
 
 import bisect
+import functools
 import itertools
+import struct
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
@@ -234,8 +236,10 @@ class FastMamdani:
             ]
             self._fuzzify2 = (_fuzzifier(self._peaks[0]), _fuzzifier(self._peaks[1]))
             if len(self.outputs) == 1 and all(len(t[0]) == 1 for row in self._table2 for t in row):
-                #: ``single2(x0, x1) -> float``: the fastest path, for one output
-                self.single2 = _single_output_two_inputs(self)
+                #: ``single2(x0, x1) -> float``: the fastest path, for one output (the C twin
+                #: when built, else :attr:`single2_py`; the same numbers either way)
+                self.single2_py = _single_output_two_inputs(self)
+                self.single2 = _native_single2(self) or self.single2_py
 
     @classmethod
     def from_system(
@@ -403,6 +407,25 @@ def _single_output_two_inputs(engine: FastMamdani):
         return moment / area
 
     return evaluate
+
+
+def _native_single2(engine: FastMamdani):
+    """``single2`` bound to ego._native.mamdani2 and this rule base's packed tables."""
+    from ego.native import NATIVE
+
+    if NATIVE is None:
+        return None
+    out = engine._out[0]
+    table = [row[j][0][0] for row in engine._table2 for j in range(len(row))]
+    return functools.partial(
+        NATIVE.mamdani2,
+        struct.pack(f"{len(engine._peaks[0])}d", *engine._peaks[0]),
+        struct.pack(f"{len(engine._peaks[1])}d", *engine._peaks[1]),
+        struct.pack(f"{len(table)}i", *table),
+        struct.pack(f"{4 * len(out._coef)}d", *(v for c in out._coef for v in c)),
+        struct.pack(f"{len(out.peaks)}d", *out.peaks),
+        struct.pack(f"{len(out.grid)}d", *out.grid),
+    )
 
 
 def _fuzzifier(peaks: Sequence[float]):

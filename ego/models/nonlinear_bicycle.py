@@ -15,11 +15,14 @@ sqrt((Nw*Fx)^2 + F_yr^2) exceeds mu*m*g both are scaled back onto the circle.
 from __future__ import annotations
 
 import math
+import struct
 from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import IntEnum
 
 import numpy as np
+
+from ego.models.integrate import FixedStepIntegrator
 
 _RAD2DEG = 180.0 / math.pi
 
@@ -199,6 +202,33 @@ class NonlinearBicycle:
     def tyre_forces(self, x: Sequence[float], u: Sequence[float]) -> tuple[float, float, float, float, float]:
         """(alpha_f deg, alpha_r deg, F_yf N, F_yr N, Fx N), Fx after the friction circle."""
         return self._forces(x[State.U], x[State.V], x[State.R], u[Input.FX], u[Input.DELTA])
+
+    def stepper(self, h: float, substeps: int = 1):
+        """``step(state, Fx, delta) -> (state, lateral_accel)``: ``substeps`` RK4 steps of
+        ``h`` (s) with the input held; ``lateral_accel`` = dv/dt + u r at the start (m/s^2).
+
+        Uses the C twin of :meth:`rhs` + RK4 when it is built (``ego._native``), else the
+        Python :class:`~ego.models.FixedStepIntegrator`; both give the same numbers.
+        """
+        from ego.native import NATIVE
+
+        if NATIVE is not None:
+            native_step = NATIVE.bicycle_step
+            packed = struct.pack(f"{len(self._c) + 1}d", *self._c, self._floor)
+
+            def step(state, fx, delta):
+                return native_step(state, fx, delta, h, substeps, packed)
+
+            return step
+        integrator = FixedStepIntegrator(self.rhs, h * substeps, substeps, n_states=6)
+        rhs, integrate = self.rhs, integrator.step
+
+        def step(state, fx, delta):
+            command = (fx, delta)
+            k1 = rhs(state, command)
+            return integrate(state, command, k1), k1[3] + state[1] * state[5]
+
+        return step
 
     def derivatives(self, x: Sequence[float], u: Sequence[float]) -> np.ndarray:
         """dx/dt as a float array; ``x = [X, u, Y, v, psi, r]``, ``u = [Fx, delta_f]``."""

@@ -41,10 +41,11 @@ class Recorder(Protocol):
     def write_rows(self, columns: Sequence[str], rows: np.ndarray) -> None:
         """A batch of trace rows; ``columns[0]`` is the time column ``t`` (s)."""
 
-    def boxes(self, t: float, ids: Sequence[str], boxes: np.ndarray,
-              follow: tuple[float, float]) -> None:
-        """Vehicles at time ``t``: rows (centre x, centre y, yaw, length, width); ``follow``
-        is the point (m) the following view keeps in place."""
+    def vehicles(self, t: float, ids: Sequence[str], poses: Sequence[tuple],
+                 follow: tuple[float, float]) -> None:
+        """Vehicles at time ``t`` as SUMO reports them: rows (front bumper x, y in m, SUMO
+        angle in deg, length, width in m); ``follow`` is the point (m) the following view
+        keeps in place. Must be cheap: convert later, off the loop."""
 
     def event(self, t: float, text: str, level: str = "INFO") -> None:
         """A line in the event log at time ``t`` (s)."""
@@ -65,8 +66,8 @@ class NullRecorder:
     def write_rows(self, columns: Sequence[str], rows: np.ndarray) -> None:
         pass
 
-    def boxes(self, t: float, ids: Sequence[str], boxes: np.ndarray,
-              follow: tuple[float, float]) -> None:
+    def vehicles(self, t: float, ids: Sequence[str], poses: Sequence[tuple],
+                 follow: tuple[float, float]) -> None:
         pass
 
     def event(self, t: float, text: str, level: str = "INFO") -> None:

@@ -1,4 +1,4 @@
-"""Rerun recordings (.rrd) with an embedded blueprint, written in batches.
+"""Rerun recordings (.rrd) with an embedded blueprint, written in batches off the loop.
 
 Layout of a recording (entity paths):
 
@@ -11,14 +11,18 @@ Layout of a recording (entity paths):
 * ``plots/<panel>/<series>`` - time series, one plot panel each;
 * ``events`` - the event log; ``run`` - the run's parameters.
 
-Every buffered batch leaves, from a writer thread, as ONE Arrow record batch per timeline: the same columnar
-layout ``send_columns`` produces, but one call for all series instead of one per series,
-which keeps recording to a small fraction of the loop's cost. The scenario flushes at
-least every simulated second.
+:class:`RerunRecorder` is what the simulation loop talks to. By default it hands every
+batch (plain numpy arrays and lists) over a pipe to a writer process that owns the Rerun
+stream, so building Arrow data and encoding the file run on the other core: a thread
+would not help, because the loop holds the GIL nearly all the time (libsumo included).
+Each batch leaves the writer as ONE Arrow record batch per timeline - the columnar
+layout ``send_columns`` produces, but one call for all series instead of one per series.
+The scenario flushes at least every simulated second.
 """
 
 from __future__ import annotations
 
+import multiprocessing
 import queue
 import threading
 from collections import OrderedDict
@@ -39,35 +43,180 @@ FOLLOW = "world/follow"
 
 
 class RerunRecorder:
-    """Writes one ``.rrd`` file per run."""
+    """Writes one ``.rrd`` file per run; ``background=True`` writes from a separate process."""
 
     def __init__(self, path: str | Path, *, application_id: str = "ego",
-                 recording_id: str | None = None) -> None:
+                 recording_id: str | None = None, background: bool = True) -> None:
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._box_t: list[float] = []
+        self._box_n: list[int] = []
+        self._box_rows: list[tuple] = []
+        self._box_labels: list[str] = []
+        self._follow: list[tuple[float, float]] = []
+        self._open = False
+        self._used = False
+        self._error: str | None = None
+        args = (str(self.path), application_id, recording_id)
+        if background:
+            ctx = _writer_context()
+            self._conn, child = ctx.Pipe()
+            self._proc = ctx.Process(target=_writer_main, args=(child, *args), daemon=True,
+                                     name="ego-rerun-writer")
+            self._proc.start()
+            child.close()
+            self._writer = None
+            # The loop only queues; a pump thread does the (blocking) pipe writes, so a writer
+            # still starting up never stalls the simulation.
+            self._outbox: queue.SimpleQueue = queue.SimpleQueue()
+            self._pump = threading.Thread(target=self._pump_main, name="ego-rerun-pump", daemon=True)
+            self._pump.start()
+        else:
+            self._conn = self._proc = None
+            self._writer = RerunWriter(*args)
+
+    # -- what the loop calls ------------------------------------------------------------------
+    def begin(self, scene: Scene, series: Sequence[Series], meta: dict) -> None:
+        if self._used:
+            raise RuntimeError(f"{self.path}: a RerunRecorder records one run; make one per run")
+        self._used = self._open = True
+        self._send("begin", scene, list(series), meta)
+
+    def write_rows(self, columns: Sequence[str], rows: np.ndarray) -> None:
+        if len(rows):
+            self._send("rows", tuple(columns), rows)
+
+    def vehicles(self, t: float, ids: Sequence[str], poses: Sequence[tuple],
+                 follow: tuple[float, float]) -> None:
+        self._box_t.append(t)
+        self._box_n.append(len(ids))
+        self._box_rows.extend(poses)
+        self._box_labels.extend(ids)
+        self._follow.append(follow)
+
+    def event(self, t: float, text: str, level: str = "INFO") -> None:
+        self._send("event", t, text, level)
+
+    def flush(self) -> None:
+        if self._box_t:
+            self._send("vehicles", self._box_t, self._box_n, self._box_rows, self._box_labels,
+                       self._follow)
+            self._box_t, self._box_n, self._box_rows, self._box_labels, self._follow = [], [], [], [], []
+
+    def close(self) -> None:
+        """Flush, let the writer finish the file, and report its failure if it had one."""
+        if not self._open:
+            self._shutdown()
+            return
+        self._open = False
+        self.flush()
+        if self._writer is not None:
+            self._writer.close()
+        else:
+            self._outbox.put(("close",))
+            self._pump.join()
+            if self._error is None:
+                try:
+                    reply = self._conn.recv()
+                    if reply[0] == "error":
+                        self._error = reply[1]
+                except (EOFError, OSError):
+                    self._error = "the writer process died"
+        self._shutdown()
+        if self._error is not None:
+            raise RuntimeError(f"recording to {self.path} failed: {self._error}")
+
+    # -- plumbing ------------------------------------------------------------------------------
+    def _send(self, kind: str, *payload) -> None:
+        if self._writer is not None:
+            self._writer.handle(kind, *payload)
+        else:
+            self._outbox.put((kind, *payload))
+
+    def _pump_main(self) -> None:
+        """Forward queued batches to the writer process until ``close``."""
+        while True:
+            item = self._outbox.get()
+            if self._error is None:
+                try:
+                    if self._conn.poll():  # the writer only speaks to report a failure
+                        reply = self._conn.recv()
+                        self._error = reply[1] if reply[0] == "error" else f"unexpected {reply[0]!r}"
+                    else:
+                        self._conn.send(item)
+                except (EOFError, OSError) as exc:
+                    self._error = f"the writer process died ({exc})"
+            if item[0] == "close":
+                return
+
+    def _shutdown(self) -> None:
+        if self._proc is not None:
+            if self._pump.is_alive():
+                self._outbox.put(("close",))
+                self._pump.join()
+            self._conn.close()  # the writer exits on end-of-file if it is still waiting
+            self._proc.join(timeout=30)
+            if self._proc.is_alive():
+                self._proc.kill()
+            self._proc = None
+
+    def __del__(self) -> None:
+        if getattr(self, "_proc", None) is not None:
+            self._proc.kill()
+
+
+@lru_cache(maxsize=1)
+def _writer_context():
+    """A forkserver context: writers fork from a clean server process (no libsumo, no
+    threads) that has imported Rerun once, so each writer starts in milliseconds."""
+    ctx = multiprocessing.get_context("forkserver")
+    ctx.set_forkserver_preload(["ego.record._writer_warmup"])
+    return ctx
+
+
+def _writer_main(conn, path: str, application_id: str, recording_id: str | None) -> None:
+    """Entry point of the writer process: apply every message until ``close``."""
+    try:
+        writer = RerunWriter(path, application_id, recording_id)
+        while True:
+            kind, *payload = conn.recv()
+            if kind == "close":
+                writer.close()
+                conn.send(("done",))
+                return
+            writer.handle(kind, *payload)
+    except EOFError:  # the simulation process went away
+        return
+    except Exception as exc:  # noqa: BLE001 - reported to the simulation process
+        try:
+            conn.send(("error", f"{type(exc).__name__}: {exc}"))
+        except OSError:
+            pass
+
+
+class RerunWriter:
+    """Does the actual Rerun work, synchronously (in the writer process, or in-process)."""
+
+    def __init__(self, path: str, application_id: str = "ego", recording_id: str | None = None) -> None:
         import rerun as rr
 
         self.path = Path(path)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
         self._rr = rr
         self._rec = rr.RecordingStream(application_id, recording_id=recording_id)
         self._series: dict[str, Series] = {}
         self._row_plans: dict[tuple, tuple] = {}
         self._colors: dict[str, tuple[int, int, int]] = {}
-        self._box_t: list[float] = []
-        self._box_n: list[int] = []
-        self._box_rows: list[np.ndarray] = []
-        self._box_labels: list[str] = []
-        self._follow: list[tuple[float, float]] = []
         self._open = False
-        self._queue: queue.SimpleQueue = queue.SimpleQueue()
-        self._worker: threading.Thread | None = None
-        self._error: Exception | None = None
 
-    # -- set-up -----------------------------------------------------------------------------
+    def handle(self, kind: str, *payload) -> None:
+        {"begin": self.begin, "rows": self.rows, "vehicles": self.vehicles,
+         "event": self.event}[kind](*payload)
+
     def begin(self, scene: Scene, series: Sequence[Series], meta: dict) -> None:
         rr = self._rr
         self._series = {s.column: s for s in series}
         self._colors = dict(meta.get("colors", {}))
-        self._rec.save(self.path, default_blueprint=self._blueprint(scene, series))
+        self._rec.save(self.path, default_blueprint=_blueprint(scene, series))
         self._open = True
         rec = self._rec
         rec.log(MAP, rr.Transform3D(scale=[1.0, -1.0, 1.0]), static=True)
@@ -84,49 +233,18 @@ class RerunRecorder:
         summary = "\n".join(f"{k}: {v}" for k, v in meta.items() if k != "colors")
         rec.log("run", rr.TextDocument(summary, media_type="text/plain"), static=True)
 
-    def _blueprint(self, scene: Scene, series: Sequence[Series]):
-        import rerun.blueprint as rrb
-
-        panels: OrderedDict[str, list[Series]] = OrderedDict()
-        for s in series:
-            panels.setdefault("/".join(s.path.split("/")[:2]), []).append(s)
-        plots = []
-        for panel, members in panels.items():
-            axis = rrb.ScalarAxis(range=(0.0, 10.0)) if panel.endswith("ttc") else None
-            unit = members[0].unit
-            title = panel.split("/")[-1].replace("_", " ") + (f" [{unit}]" if unit else "")
-            plots.append(rrb.TimeSeriesView(origin=panel, name=title, axis_y=axis))
-        follow = rrb.Spatial2DView(
-            origin=FOLLOW, contents="world/**", name="following the ego",
-            visual_bounds=rrb.VisualBounds2D(x_range=(-35.0, 85.0), y_range=(-14.0, 14.0)))
-        x0, x1, y0, y1 = scene.bounds
-        road = rrb.Spatial2DView(origin="world", name="road (top-down)",
-                                 visual_bounds=rrb.VisualBounds2D(x_range=(x0, x1), y_range=(-y1, -y0)))
-        left = rrb.Vertical(follow, road, rrb.TextLogView(origin="events", name="events"),
-                            rrb.TextDocumentView(origin="run", name="run"),
-                            row_shares=[3, 2, 2, 2])
-        return rrb.Blueprint(rrb.Horizontal(left, rrb.Grid(*plots), column_shares=[2, 3]),
-                             collapse_panels=True)
-
-    # -- data -------------------------------------------------------------------------------
-    def write_rows(self, columns: Sequence[str], rows: np.ndarray) -> None:
-        """Every mapped column of ``rows`` as a time series (sent by the writer thread)."""
-        if len(rows):
-            self._submit(self._send_rows, tuple(columns), rows)
-
-    def _send_rows(self, columns: tuple[str, ...], rows: np.ndarray) -> None:
-        """One record batch holding every series of ``rows``."""
+    def rows(self, columns: tuple[str, ...], rows: np.ndarray) -> None:
+        """Every mapped column of ``rows`` as a time series, in one record batch."""
         import pyarrow as pa
 
-        key = tuple(columns)
-        plan = self._row_plans.get(key)
+        plan = self._row_plans.get(columns)
         if plan is None:  # which columns go where, and the schema: built once
             picked = [(j, self._series[name]) for j, name in enumerate(columns) if name in self._series]
             fields = [_index_field()] + [
                 _component_field(s.path, "Scalars", "scalars", "Scalar", pa.list_(pa.float64()))
                 for _, s in picked
             ]
-            plan = self._row_plans[key] = ([j for j, _ in picked], pa.schema(fields))
+            plan = self._row_plans[columns] = ([j for j, _ in picked], pa.schema(fields))
         index, schema = plan
         if not index:
             return
@@ -137,62 +255,17 @@ class RerunRecorder:
         self._rr.send_record_batch(pa.RecordBatch.from_arrays(arrays, schema=schema),
                                    recording=self._rec)
 
-    def boxes(self, t: float, ids: Sequence[str], boxes: np.ndarray,
-              follow: tuple[float, float]) -> None:
-        self._box_t.append(t)
-        self._box_n.append(len(ids))
-        self._box_rows.append(boxes)
-        self._box_labels.extend(ids)
-        self._follow.append(follow)
-
-    def event(self, t: float, text: str, level: str = "INFO") -> None:
-        self._submit(self._send_event, t, text, level)
-
-    def _send_event(self, t: float, text: str, level: str) -> None:
-        rr = self._rr
-        self._rec.set_time(TIMELINE, duration=t)
-        self._rec.log("events", rr.TextLog(text, level=level if level in _LEVELS else "INFO"))
-
-    # -- writer thread ------------------------------------------------------------------------
-    def _submit(self, fn, *args) -> None:
-        """Queue work for the writer thread. Building Arrow batches and encoding them
-        releases the GIL, so on a second core recording costs the loop almost nothing."""
-        if self._error is not None:
-            raise RuntimeError(f"recording to {self.path} failed: {self._error}") from self._error
-        if self._worker is None:
-            self._worker = threading.Thread(target=self._drain, name="rerun-writer", daemon=True)
-            self._worker.start()
-        self._queue.put((fn, args))
-
-    def _drain(self) -> None:
-        while True:
-            item = self._queue.get()
-            if item is None:
-                return
-            fn, args = item
-            try:
-                if self._error is None:
-                    fn(*args)
-            except Exception as exc:  # reported to the loop on the next submit or close
-                self._error = exc
-
-    def flush(self) -> None:
-        """Hand the buffered vehicles and follow points to the writer thread."""
-        if not self._box_t:
-            return
-        self._submit(self._send_boxes, self._box_t, self._box_n, self._box_rows,
-                     self._box_labels, self._follow)
-        self._box_t, self._box_n, self._box_rows, self._box_labels, self._follow = [], [], [], [], []
-
-    def _send_boxes(self, times, counts, box_rows, box_labels, follow_points) -> None:
+    def vehicles(self, times, counts, poses, labels, follow_points) -> None:
         """Vehicle outlines and the follow frame as one record batch."""
         import pyarrow as pa
 
-        outlines = box_outlines(np.concatenate(box_rows)).astype(np.float32)
+        from ego.sumo.bridge import sumo_poses_to_boxes
+
+        outlines = box_outlines(sumo_poses_to_boxes(poses)).astype(np.float32)
         counts = np.asarray(counts, dtype=np.int32)
         row_offsets = pa.array(np.concatenate([[0], np.cumsum(counts)]).astype(np.int32))
-        labels = pa.ListArray.from_arrays(row_offsets, pa.array(box_labels, type=pa.string()))
-        rgb = np.array([self._colors.get(v, _GREY) for v in box_labels], dtype=np.uint32)
+        label_col = pa.ListArray.from_arrays(row_offsets, pa.array(labels, type=pa.string()))
+        rgb = np.array([self._colors.get(v, _GREY) for v in labels], dtype=np.uint32).reshape(-1, 3)
         packed = (rgb[:, 0] << 24) | (rgb[:, 1] << 16) | (rgb[:, 2] << 8) | 0xFF
         colors = pa.ListArray.from_arrays(row_offsets, pa.array(packed, type=pa.uint32()))
         follow = np.zeros((len(follow_points), 3), dtype=np.float32)
@@ -202,14 +275,14 @@ class RerunRecorder:
         fields = [
             _index_field(),
             _component_field(VEHICLES, "LineStrips2D", "strips", "LineStrip2D", _strips_type()),
-            _component_field(VEHICLES, "LineStrips2D", "labels", "Text", labels.type),
+            _component_field(VEHICLES, "LineStrips2D", "labels", "Text", label_col.type),
             _component_field(VEHICLES, "LineStrips2D", "colors", "Color", colors.type),
             _component_field(FOLLOW, "Transform3D", "translation", "Translation3D", _vec3_list_type()),
         ]
         arrays = [
             _durations(np.asarray(times)),
             _strips(outlines, row_offsets),
-            labels,
+            label_col,
             colors,
             pa.ListArray.from_arrays(
                 one_each,
@@ -220,20 +293,40 @@ class RerunRecorder:
         self._rr.send_record_batch(pa.RecordBatch.from_arrays(arrays, schema=pa.schema(fields)),
                                    recording=self._rec)
 
+    def event(self, t: float, text: str, level: str = "INFO") -> None:
+        self._rec.set_time(TIMELINE, duration=t)
+        self._rec.log("events", self._rr.TextLog(text, level=level if level in _LEVELS else "INFO"))
+
     def close(self) -> None:
-        """Flush, wait for the writer thread, and finish the file (safe to call twice)."""
-        if not self._open:
-            return
-        self._open = False
-        self.flush()
-        if self._worker is not None:
-            self._queue.put(None)
-            self._worker.join()
-            self._worker = None
-        self._rec.flush()
-        self._rec.disconnect()
-        if self._error is not None:
-            raise RuntimeError(f"recording to {self.path} failed: {self._error}") from self._error
+        if self._open:
+            self._open = False
+            self._rec.flush()
+            self._rec.disconnect()
+
+
+def _blueprint(scene: Scene, series: Sequence[Series]):
+    import rerun.blueprint as rrb
+
+    panels: OrderedDict[str, list[Series]] = OrderedDict()
+    for s in series:
+        panels.setdefault("/".join(s.path.split("/")[:2]), []).append(s)
+    plots = []
+    for panel, members in panels.items():
+        axis = rrb.ScalarAxis(range=(0.0, 10.0)) if panel.endswith("ttc") else None
+        unit = members[0].unit
+        title = panel.split("/")[-1].replace("_", " ") + (f" [{unit}]" if unit else "")
+        plots.append(rrb.TimeSeriesView(origin=panel, name=title, axis_y=axis))
+    follow = rrb.Spatial2DView(
+        origin=FOLLOW, contents="world/**", name="following the ego",
+        visual_bounds=rrb.VisualBounds2D(x_range=(-35.0, 85.0), y_range=(-14.0, 14.0)))
+    x0, x1, y0, y1 = scene.bounds
+    road = rrb.Spatial2DView(origin="world", name="road (top-down)",
+                             visual_bounds=rrb.VisualBounds2D(x_range=(x0, x1), y_range=(-y1, -y0)))
+    left = rrb.Vertical(follow, road, rrb.TextLogView(origin="events", name="events"),
+                        rrb.TextDocumentView(origin="run", name="run"),
+                        row_shares=[3, 2, 2, 2])
+    return rrb.Blueprint(rrb.Horizontal(left, rrb.Grid(*plots), column_shares=[2, 3]),
+                         collapse_panels=True)
 
 
 # -- Arrow plumbing (the layout Rerun's own send_columns produces) ------------------------

@@ -19,7 +19,7 @@ from typing import ClassVar
 import numpy as np
 
 from ego.control.base import Controller, Observation
-from ego.models import FixedStepIntegrator, NonlinearBicycle, VehicleGeometry
+from ego.models import NonlinearBicycle, VehicleGeometry
 from ego.params import ConfigError, param
 from ego.record.base import NullRecorder, Recorder, Scene, Series
 from ego.scenarios.metrics import json_number
@@ -85,21 +85,19 @@ class RunResult:
 class EgoVehicle:
     """An ego car: report 000's model, its body and actuator limits, integrated per period."""
 
-    __slots__ = ("model", "geometry", "integrator", "state", "max_steer", "stop_speed",
-                 "lateral_accel", "applied", "_rhs", "_step")
+    __slots__ = ("model", "geometry", "state", "max_steer", "stop_speed", "lateral_accel",
+                 "applied", "_step")
 
     def __init__(self, model: NonlinearBicycle, geometry: VehicleGeometry, dt: float,
                  substeps: int, max_steer: float = 0.5, stop_speed: float = 0.5) -> None:
         self.model = model
         self.geometry = geometry
-        self.integrator = FixedStepIntegrator(model.rhs, dt, substeps, n_states=len(model.x0))
         self.state: tuple[float, ...] = model.x0
         self.max_steer = max_steer
         self.stop_speed = stop_speed
         self.lateral_accel = 0.0
         self.applied = (0.0, 0.0)
-        self._rhs = model.rhs
-        self._step = self.integrator.step
+        self._step = model.stepper(dt / substeps, substeps)
 
     def step(self, fx: float, delta: float) -> None:
         """Apply the actuator limits and integrate one control period.
@@ -117,11 +115,8 @@ class EgoVehicle:
         u = x[1]
         if fx < 0.0 and u < self.stop_speed:
             fx *= max(u, 0.0) / self.stop_speed
-        command = (fx, delta)
-        k1 = self._rhs(x, command)
-        self.lateral_accel = k1[3] + u * x[5]
-        self.applied = command
-        self.state = self._step(x, command, k1)
+        self.applied = (fx, delta)
+        self.state, self.lateral_accel = self._step(x, fx, delta)
 
 
 def divergence(state: Sequence[float], offset: float, heading_error: float,
@@ -185,7 +180,7 @@ class SumoScenario:
         """Start a fresh run (SUMO restarted, traffic regenerated from the seed)."""
         if seed is not None:
             self.seed = int(seed)
-        self.close()
+        self._close_bridge()
         self._wall0 = time.perf_counter()
         self.events, self.trace = [], []
         self.t, self.k = 0.0, 0
@@ -242,11 +237,15 @@ class SumoScenario:
 
     def close(self) -> None:
         """Close SUMO and the recording (safe to call twice)."""
+        try:
+            self._close_bridge()
+        finally:
+            self.recorder.close()
+
+    def _close_bridge(self) -> None:
         if self.bridge is not None:
             self.bridge.close()
             self.bridge = None
-        if self.trace or self.events:
-            self.recorder.close()
 
     # -- shared machinery ----------------------------------------------------------------------
     def _make_bridge(self) -> SumoBridge:

@@ -235,8 +235,8 @@ class HighwayScenario(SumoScenario):
 
     # -- recording --------------------------------------------------------------------------
     def _record_boxes(self) -> None:
-        ids, rows = self.bridge.boxes()
-        self.recorder.boxes(self.t, ids, rows, (self.ego.state[0], self._road_y))
+        ids, poses = self.bridge.poses()
+        self.recorder.vehicles(self.t, ids, poses, (self.ego.state[0], self._road_y))
 
     def _scene(self) -> Scene:
         c = self.config

@@ -54,6 +54,19 @@ def front_bumper_to_cg(xf: float, yf: float, psi: float, cg_to_front: float) -> 
     return xf - cg_to_front * math.cos(psi), yf - cg_to_front * math.sin(psi)
 
 
+def sumo_poses_to_boxes(rows) -> np.ndarray:
+    """Rows (front x, front y, SUMO angle deg, length, width) -> (centre x, centre y, yaw
+    rad in (-pi, pi], length, width), vectorised."""
+    out = np.array(rows, dtype=float).reshape(-1, 5)
+    psi = np.radians(90.0 - out[:, 2])
+    half = 0.5 * out[:, 3]
+    c, s = np.cos(psi), np.sin(psi)
+    out[:, 0] -= half * c
+    out[:, 1] -= half * s
+    out[:, 2] = np.arctan2(s, c)
+    return out
+
+
 # --- configuration -----------------------------------------------------------------------
 
 @dataclass(frozen=True)
@@ -370,20 +383,18 @@ class SumoBridge:
             self._dims[vid] = dims
         return dims
 
-    def boxes(self, skip: Iterable[str] = ()) -> tuple[list[str], np.ndarray]:
-        """Every vehicle in the network as an oriented box: ids and rows
-        (centre x, centre y, yaw rad, length, width)."""
+    def poses(self) -> tuple[list[str], list[tuple[float, float, float, float, float]]]:
+        """Every vehicle as SUMO reports it: ids and rows (front bumper x, y in m, SUMO
+        angle in deg, length, width in m). Cheap: no conversion happens here."""
         veh = self._ls.vehicle
         get_pos, get_angle, dims = veh.getPosition, veh.getAngle, self.dimensions
-        ids = [v for v in veh.getIDList() if v not in skip] if skip else list(veh.getIDList())
-        raw = [(*get_pos(v), get_angle(v), *dims(v)) for v in ids]
-        rows = np.array(raw, dtype=float).reshape(-1, 5)
-        psi = np.radians(90.0 - rows[:, 2])
-        half = 0.5 * rows[:, 3]
-        rows[:, 0] -= half * np.cos(psi)
-        rows[:, 1] -= half * np.sin(psi)
-        rows[:, 2] = np.arctan2(np.sin(psi), np.cos(psi))
-        return ids, rows
+        ids = veh.getIDList()
+        return list(ids), [(*get_pos(v), get_angle(v), *dims(v)) for v in ids]
+
+    def boxes(self) -> tuple[list[str], np.ndarray]:
+        """Every vehicle as an oriented box: ids and rows (centre x, y, yaw rad, length, width)."""
+        ids, rows = self.poses()
+        return ids, sumo_poses_to_boxes(rows)
 
     def lane_shapes(self) -> dict[str, tuple[float, list[tuple[float, float]]]]:
         """Every non-internal lane: id -> (width, centre-line points)."""
