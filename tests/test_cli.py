@@ -1,7 +1,6 @@
 """The command line as a user runs it (a subprocess, real SUMO)."""
 
 import json
-import os
 import subprocess
 import sys
 

@@ -23,9 +23,10 @@ The scenario flushes at least every simulated second.
 from __future__ import annotations
 
 import multiprocessing
-import queue
-import threading
+import sys
 from collections import OrderedDict
+from contextlib import contextmanager
+from contextlib import contextmanager
 from collections.abc import Sequence
 from functools import lru_cache
 from pathlib import Path
@@ -60,19 +61,18 @@ class RerunRecorder:
         args = (str(self.path), application_id, recording_id)
         if background:
             ctx = _writer_context()
-            self._conn, child = ctx.Pipe()
-            self._proc = ctx.Process(target=_writer_main, args=(child, *args), daemon=True,
-                                     name="ego-rerun-writer")
-            self._proc.start()
-            child.close()
+            data_in, self._conn = ctx.Pipe(duplex=False)  # batches: loop -> writer
+            self._replies, reply_out = ctx.Pipe(duplex=False)  # failures: writer -> loop
+            _widen_pipe(self._conn)
+            self._proc = ctx.Process(target=_writer_main, args=(data_in, reply_out, *args),
+                                     daemon=True, name="ego-rerun-writer")
+            with _main_module_hidden():
+                self._proc.start()
+            data_in.close()
+            reply_out.close()
             self._writer = None
-            # The loop only queues; a pump thread does the (blocking) pipe writes, so a writer
-            # still starting up never stalls the simulation.
-            self._outbox: queue.SimpleQueue = queue.SimpleQueue()
-            self._pump = threading.Thread(target=self._pump_main, name="ego-rerun-pump", daemon=True)
-            self._pump.start()
         else:
-            self._conn = self._proc = None
+            self._conn = self._replies = self._proc = None
             self._writer = RerunWriter(*args)
 
     # -- what the loop calls ------------------------------------------------------------------
@@ -113,11 +113,10 @@ class RerunRecorder:
         if self._writer is not None:
             self._writer.close()
         else:
-            self._outbox.put(("close",))
-            self._pump.join()
+            self._send("close")
             if self._error is None:
                 try:
-                    reply = self._conn.recv()
+                    reply = self._replies.recv()
                     if reply[0] == "error":
                         self._error = reply[1]
                 except (EOFError, OSError):
@@ -128,41 +127,74 @@ class RerunRecorder:
 
     # -- plumbing ------------------------------------------------------------------------------
     def _send(self, kind: str, *payload) -> None:
+        """Hand a batch to the writer. The pipe is widened to 1 MiB, so this only copies
+        bytes: the writer drains it on the other core while the loop goes on."""
         if self._writer is not None:
             self._writer.handle(kind, *payload)
-        else:
-            self._outbox.put((kind, *payload))
-
-    def _pump_main(self) -> None:
-        """Forward queued batches to the writer process until ``close``."""
-        while True:
-            item = self._outbox.get()
-            if self._error is None:
-                try:
-                    if self._conn.poll():  # the writer only speaks to report a failure
-                        reply = self._conn.recv()
-                        self._error = reply[1] if reply[0] == "error" else f"unexpected {reply[0]!r}"
-                    else:
-                        self._conn.send(item)
-                except (EOFError, OSError) as exc:
-                    self._error = f"the writer process died ({exc})"
-            if item[0] == "close":
+            return
+        if self._error is not None:
+            return
+        try:
+            if self._replies.poll():  # the writer only speaks to report a failure
+                reply = self._replies.recv()
+                self._error = reply[1] if reply[0] == "error" else f"unexpected reply {reply[0]!r}"
                 return
+            self._conn.send((kind, *payload))
+        except (EOFError, OSError) as exc:
+            self._error = f"the writer process died ({exc})"
 
     def _shutdown(self) -> None:
         if self._proc is not None:
-            if self._pump.is_alive():
-                self._outbox.put(("close",))
-                self._pump.join()
             self._conn.close()  # the writer exits on end-of-file if it is still waiting
             self._proc.join(timeout=30)
             if self._proc.is_alive():
                 self._proc.kill()
+            self._replies.close()
             self._proc = None
 
     def __del__(self) -> None:
         if getattr(self, "_proc", None) is not None:
             self._proc.kill()
+
+
+def _widen_pipe(conn) -> None:
+    """Grow a pipe's kernel buffer to 1 MiB (Linux; the default is 64 KiB), so a writer that
+    is still starting up does not block the simulation."""
+    try:
+        import fcntl
+
+        fcntl.fcntl(conn.fileno(), getattr(fcntl, "F_SETPIPE_SZ", 1031), 1 << 20)
+    except (ImportError, OSError):
+        pass
+
+
+@contextmanager
+def _main_module_hidden():
+    """Keep multiprocessing from re-importing the user's ``__main__`` in the writer.
+
+    A new multiprocessing child normally imports the parent's main script (as
+    ``__mp_main__``) so it can unpickle objects defined there; a user script without an
+    ``if __name__ == "__main__":`` guard would then run a second simulation inside the
+    writer. The writer needs nothing from ``__main__``, so the script's file and spec are
+    hidden while the process starts (multiprocessing reads them only then).
+    """
+    main = sys.modules.get("__main__")
+    if main is None:
+        yield
+        return
+    missing = object()
+    saved_file = main.__dict__.pop("__file__", missing)
+    saved_spec = main.__dict__.get("__spec__", missing)
+    main.__spec__ = None
+    try:
+        yield
+    finally:
+        if saved_file is not missing:
+            main.__file__ = saved_file
+        if saved_spec is missing:
+            del main.__spec__
+        else:
+            main.__spec__ = saved_spec
 
 
 @lru_cache(maxsize=1)
@@ -174,22 +206,22 @@ def _writer_context():
     return ctx
 
 
-def _writer_main(conn, path: str, application_id: str, recording_id: str | None) -> None:
-    """Entry point of the writer process: apply every message until ``close``."""
+def _writer_main(batches, replies, path: str, application_id: str, recording_id: str | None) -> None:
+    """Entry point of the writer process: apply every batch until ``close``."""
     try:
         writer = RerunWriter(path, application_id, recording_id)
         while True:
-            kind, *payload = conn.recv()
+            kind, *payload = batches.recv()
             if kind == "close":
                 writer.close()
-                conn.send(("done",))
+                replies.send(("done",))
                 return
             writer.handle(kind, *payload)
     except EOFError:  # the simulation process went away
         return
     except Exception as exc:  # noqa: BLE001 - reported to the simulation process
         try:
-            conn.send(("error", f"{type(exc).__name__}: {exc}"))
+            replies.send(("error", f"{type(exc).__name__}: {exc}"))
         except OSError:
             pass
 

@@ -10,10 +10,11 @@ pushed into SUMO and SUMO advances one step so the traffic reacts.
 
 from __future__ import annotations
 
+import logging
 import math
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
@@ -26,6 +27,8 @@ from ego.scenarios.metrics import json_number
 from ego.sumo.bridge import Collision, SumoBridge
 
 STATUSES = ("completed", "collision", "diverged", "timeout")
+_log = logging.getLogger("ego.scenario")
+_LOG_LEVELS = {"INFO": logging.INFO, "WARN": logging.WARNING, "ERROR": logging.ERROR}
 
 
 @dataclass(frozen=True)
@@ -195,7 +198,7 @@ class SumoScenario:
         self._setup(np.random.default_rng(self.seed))
         self.recorder.begin(self._scene(), self._series(), self._meta())
         self._record_boxes()
-        self._update(initial=True)
+        self._update()
         return self.obs
 
     @property
@@ -270,8 +273,10 @@ class SumoScenario:
                     self.event("traffic", f"collision in the traffic: {c.collider} hit {c.victim}", "WARN")
 
     def event(self, kind: str, text: str, level: str = "INFO") -> None:
+        """Record an event: the run's event list, the ``ego`` logger and the recording."""
         ev = Event(self.t, kind, text, level)
         self.events.append(ev)
+        _log.log(_LOG_LEVELS.get(level, logging.INFO), "%s t=%.2f s [%s] %s", self.name, self.t, kind, text)
         self.recorder.event(self.t, f"[{kind}] {text}", level)
 
     def _end(self, status: str, detail: str, level: str = "INFO") -> None:
@@ -336,7 +341,7 @@ class SumoScenario:
     def _check_divergence(self) -> str | None:
         return None
 
-    def _update(self, initial: bool = False) -> None:
+    def _update(self) -> None:
         raise NotImplementedError
 
     def _final_status(self) -> tuple[str, str]:
@@ -358,13 +363,3 @@ class SumoScenario:
 def signal_series(names: Sequence[str]) -> list[Series]:
     """Recording series for a controller's internal signals."""
     return [Series(n, f"plots/controller/{n}", "") for n in names]
-
-
-@dataclass
-class Trigger:
-    """When and why a manoeuvre started."""
-
-    t: float | None = None
-    ttc: float | None = None
-    reason: str = ""
-    extra: dict = field(default_factory=dict)

@@ -22,7 +22,7 @@ import numpy as np
 from ego.params import param
 from ego.scenarios import metrics as m
 from ego.scenarios.events import INF, GapRule, check_lane, choose_lane
-from ego.scenarios.highway import EGO, LANE_NAMES, ROUTE, TRAFFIC_TYPE, HighwayConfig, HighwayScenario
+from ego.scenarios.highway import LANE_NAMES, ROUTE, HighwayConfig, HighwayScenario
 from ego.sumo.bridge import VehicleSpec, VehicleType
 from ego.sumo.traffic import BrakingLeader, PacedVehicle
 

@@ -145,6 +145,7 @@ class HighwayScenario(SumoScenario):
         self.ego = EgoVehicle(model, self.geometry, c.dt, c.substeps, max_steer=c.max_steer)
         self.ego.state = (x, c.ego_speed, y, 0.0, psi, 0.0)
         self.target_lane = c.ego_lane
+        self._road_y = self.road.points[0][1]
         self._kinematics()
         bridge.read_neighbours(EGO, self.neighbours)
         self._sync_t, self._sync_s = 0.0, self.s
@@ -167,19 +168,14 @@ class HighwayScenario(SumoScenario):
 
     def _before_sumo_step(self) -> None:
         x = self.ego.state
-        self.bridge.push(EGO, x[0], x[2], x[4], self._speed_along())
+        # SUMO's drivers see the ego's speed along the road (computed by _kinematics)
+        self.bridge.push(EGO, x[0], x[2], x[4], self.ds)
         for actor in self.actors:
             actor.update(self.bridge, self.t - self.config.sumo_step)
 
     def _after_sumo_step(self) -> None:
         self.bridge.read_neighbours(EGO, self.neighbours)
         self._sync_t, self._sync_s = self.t, self.s
-
-    def _speed_along(self) -> float:
-        """Ego speed along the road (m/s), what SUMO's drivers should see."""
-        _, u, _, v, psi, _ = self.ego.state
-        heading = psi - self.heading_error
-        return u * math.cos(psi - heading) - v * math.sin(psi - heading)
 
     def _kinematics(self) -> None:
         """Road-frame position and velocity of the ego's centre of gravity."""
@@ -199,16 +195,13 @@ class HighwayScenario(SumoScenario):
             return None
         return divergence(self.ego.state, self.d_road, self.heading_error, self.road_halfwidth)
 
-    def _update(self, initial: bool = False) -> None:
-        # gaps extrapolated from the last SUMO step at the neighbours' speeds
+    def _update(self) -> None:
         n = self.neighbours
         lead, foll = n.leader, n.follower
-        since = self.t - self._sync_t
-        moved = self.s - self._sync_s
         ds = self.ds
-        gap = self.gap_front = lead.gap + lead.speed * since - moved
+        gap = self.gap_front = self.extrapolated_gap(lead)
         self.ttc_front = time_to_collision(gap, ds - lead.speed)
-        gap = self.gap_rear = foll.gap + moved - foll.speed * since
+        gap = self.gap_rear = self.extrapolated_gap(foll, behind=True)
         self.ttc_rear = time_to_collision(gap, foll.speed - ds)
         self._plan()
         obs = self.obs
@@ -242,7 +235,6 @@ class HighwayScenario(SumoScenario):
         c = self.config
         x0 = self.ego.state[0] - 60.0
         x1 = self.ego.state[0] + max(c.ego_speed, 10.0) * c.duration + 60.0
-        self._road_y = self.road.points[0][1]
         return Scene(lanes=[(lane.width, lane.points) for lane in self.lanes.values()],
                      bounds=(x0, x1, self._road_y - 40.0, self._road_y + 40.0), title=self.name)
 

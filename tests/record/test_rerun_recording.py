@@ -94,3 +94,33 @@ def test_rerun_cli_verifies_the_file(recorded, tmp_path):
     rerun = os.path.join(os.path.dirname(sys.executable), "rerun")
     out = subprocess.run([rerun, "rrd", "verify", str(path)], capture_output=True, text=True, env=env)
     assert out.returncode == 0, out.stderr
+
+
+def test_a_script_without_a_main_guard_runs_once_with_recording(tmp_path):
+    # The writer process must not re-run the user's script (multiprocessing would import it).
+    script = tmp_path / "my_run.py"
+    rrd = tmp_path / "mine.rrd"
+    script.write_text(
+        "from ego.runner import RunSpec, run\n"
+        "print('SCRIPT BODY')\n"
+        f"r = run(RunSpec('emergency-brake', 'pid', 0, {{'duration': '3'}}, record={str(rrd)!r}))\n"
+        "print('STATUS', r.status)\n"
+    )
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300,
+                         cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.count("SCRIPT BODY") == 1 and "STATUS completed" in out.stdout
+    assert RrdReader(rrd).recordings()
+
+
+def test_in_process_writer_gives_the_same_file_content(tmp_path, fuzzy_ready):
+    from ego.record import RerunRecorder
+    from ego.runner import build
+
+    spec = RunSpec("emergency-brake", "fuzzy", 0, {"duration": "4"})
+    sc = build(spec)
+    sc.recorder = RerunRecorder(tmp_path / "inproc.rrd", background=False)
+    result = sc.run()
+    t, d = _series(tmp_path / "inproc.rrd", "/plots/lateral_error/ego")
+    assert len(t) == result.metrics["steps"]
+    np.testing.assert_allclose(d, result.column("d"))
