@@ -1,6 +1,7 @@
 """The ``ego`` command line.
 
     ego run SCENARIO --controller NAME [--record PATH] [--seed N] [--set key=value ...] [--json]
+    ego compare SCENARIO --controllers A,B,... [--seeds N] [--set key=value ...] --out DIR
     ego list [--json]
 
 Exit status: 0 the run completed; 1 it ended in a collision, diverged or timed out
@@ -39,6 +40,7 @@ def _parser() -> argparse.ArgumentParser:
                "  ego list\n"
                "  ego run emergency-brake --controller fuzzy --record runs/eb.rrd\n"
                "  ego run emergency-brake --controller pid --set block_left=true --json\n"
+               "  ego compare fast-follower --controllers pid,fuzzy,rbf-smc --seeds 3 --out runs/ff\n"
                "  rerun runs/eb.rrd   # review the recording",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -61,6 +63,26 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scenario or controller parameter (repeatable)")
     run.add_argument("--json", action="store_true", help="print one JSON object instead of text")
+
+    cmp_ = sub.add_parser(
+        "compare", help="every controller x seed of one scenario, in parallel processes",
+        description="Run every combination of controllers and seeds of one scenario in parallel "
+                    "processes (one SUMO each) and write metrics.csv, metrics.md, PNG plots and "
+                    "one .rrd per run into --out.",
+        epilog="Example: ego compare emergency-brake --controllers pid,fuzzy,rbf-smc --seeds 3 "
+               "--out runs/cmp\nA --set key applies to the scenario and to every controller "
+               "that has it.",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    cmp_.add_argument("scenario", metavar="SCENARIO", help=f"one of: {', '.join(SCENARIOS)}")
+    cmp_.add_argument("--controllers", required=True, metavar="A,B,...",
+                      help=f"comma-separated, from: {', '.join(CONTROLLERS)}")
+    cmp_.add_argument("--seeds", type=int, default=1, metavar="N", help="seeds 0..N-1 (default 1)")
+    cmp_.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                      help="override a parameter (repeatable)")
+    cmp_.add_argument("--out", required=True, metavar="DIR", help="output folder")
+    cmp_.add_argument("--jobs", type=int, default=None, metavar="J",
+                      help="parallel processes (default: the number of CPUs)")
 
     lst = sub.add_parser("list", help="scenarios, controllers and every parameter",
                          description="List scenarios, controllers and every parameter with "
@@ -151,6 +173,24 @@ def _run(args) -> int:
     return EXIT_OK if result.status == "completed" else EXIT_NOT_COMPLETED
 
 
+def _compare(args) -> int:
+    from pathlib import Path
+
+    from ego.compare import compare
+
+    if args.seeds < 1:
+        raise ConfigError(f"bad value for --seeds: {args.seeds} (expected a whole number of at least 1)")
+    if args.jobs is not None and args.jobs < 1:
+        raise ConfigError(f"bad value for --jobs: {args.jobs} (expected a whole number of at least 1)")
+    names = [n.strip() for n in args.controllers.split(",") if n.strip()]
+    out = Path(args.out)
+    rows = compare(args.scenario, names, args.seeds, parse_overrides(args.overrides), out, args.jobs)
+    print((out / "metrics.md").read_text(), end="")
+    print(f"\nwrote {out}/metrics.csv, metrics.md, lateral_error.png, speed.png, steering.png, fx.png "
+          f"and {len(rows)} recordings in {out}/runs/")
+    return EXIT_OK
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     from ego.sumo.bridge import SumoError
 
@@ -158,6 +198,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = _parser().parse_args(argv)
         if args.command == "run":
             return _run(args)
+        if args.command == "compare":
+            return _compare(args)
         if args.command == "list":
             cat = _catalogue()
             if args.json:

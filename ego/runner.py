@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from ego.control import controller_spec
-from ego.params import ConfigError, apply_overrides, unknown_parameter, describe
+from ego.params import ConfigError, apply_overrides, describe, unknown_parameter
 from ego.record import RerunRecorder
 from ego.scenarios import RunResult, scenario_class
 
@@ -22,10 +22,21 @@ class RunSpec:
     seed: int = 0
     overrides: Mapping[str, Any] = field(default_factory=dict)
     record: str | None = None
+    #: write the recording from a separate process (False: in this one, e.g. in a pool
+    #: worker that already has a core of its own)
+    background_recording: bool = True
 
 
-def build(spec: RunSpec):
-    """Resolve names and overrides into a ready scenario (validates everything first)."""
+def split_overrides(scenario: str, controller: str, overrides: Mapping[str, Any]) -> dict:
+    """The overrides that apply to this scenario and controller (others are dropped)."""
+    known = {i.name for i in describe(scenario_class(scenario).config_cls)}
+    known |= {i.name for i in describe(controller_spec(controller).params)}
+    return {k: v for k, v in overrides.items() if k in known}
+
+
+def configure(spec: RunSpec):
+    """Resolve names and overrides: (scenario class, its config, controller spec, its params).
+    Raises ConfigError on any unknown name or bad value; builds nothing."""
     cls = scenario_class(spec.scenario)
     ctrl = controller_spec(spec.controller)
     config, rest = apply_overrides(cls.config_cls(), spec.overrides, strict=False)
@@ -33,13 +44,20 @@ def build(spec: RunSpec):
     if rest:
         known = [i.name for i in describe(cls.config_cls)] + [i.name for i in describe(ctrl.params)]
         raise unknown_parameter(next(iter(rest)), known)
+    return cls, config, ctrl, ctrl_params
+
+
+def build(spec: RunSpec):
+    """Resolve names and overrides into a ready scenario (validates everything first)."""
+    cls, config, ctrl, ctrl_params = configure(spec)
     controller = ctrl.build(ctrl_params, config.dt)
     recorder = None
     if spec.record:
         path = Path(spec.record)
         if path.suffix != ".rrd":
             raise ConfigError(f"bad --record path {spec.record!r} (expected a file ending in .rrd)")
-        recorder = RerunRecorder(path, recording_id=f"{spec.scenario}-{spec.controller}-{spec.seed}")
+        recorder = RerunRecorder(path, recording_id=f"{spec.scenario}-{spec.controller}-{spec.seed}",
+                                 background=spec.background_recording)
     return cls(config, controller, seed=spec.seed, recorder=recorder, controller_name=spec.controller)
 
 

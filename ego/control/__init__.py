@@ -5,8 +5,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ego.control.base import Controller, ControllerSpec, Observation
+from ego.control.bp_pid import BPPIDController, BPPIDParams
 from ego.control.fuzzy import FuzzyController, FuzzyParams
+from ego.control.fuzzy_pid import FuzzyPIDController, FuzzyPIDParams
 from ego.control.pid import PID, PIDController, PIDParams
+from ego.control.rbf_smc import RBFSMCController, RBFSMCParams
 from ego.params import ConfigError
 
 
@@ -38,6 +41,12 @@ CONTROLLERS: dict[str, ControllerSpec] = {
                        FuzzyParams, FuzzyController),
         ControllerSpec("pid", "PID baseline with anti-windup and filtered derivative",
                        PIDParams, PIDController),
+        ControllerSpec("fuzzy-pid", "report 000's fuzzy-adaptive PID (classic dKp/dKi/dKd tables)",
+                       FuzzyPIDParams, FuzzyPIDController),
+        ControllerSpec("bp-pid", "report 000's BP neural-network PID (default: stabilised learning)",
+                       BPPIDParams, BPPIDController),
+        ControllerSpec("rbf-smc", "report 000's RBF adaptive sliding-mode control",
+                       RBFSMCParams, RBFSMCController),
         ControllerSpec("none", "controller off: Fx = 0, delta = 0 (the ego coasts)",
                        NoParams, NoController),
     )
@@ -55,7 +64,13 @@ def controller_spec(name: str) -> ControllerSpec:
 
 
 __all__ = [
+    "BPPIDController",
+    "BPPIDParams",
     "CONTROLLERS",
+    "FuzzyPIDController",
+    "FuzzyPIDParams",
+    "RBFSMCController",
+    "RBFSMCParams",
     "Controller",
     "ControllerSpec",
     "FuzzyController",

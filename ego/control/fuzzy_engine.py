@@ -238,8 +238,16 @@ class FastMamdani:
             if len(self.outputs) == 1 and all(len(t[0]) == 1 for row in self._table2 for t in row):
                 #: ``single2(x0, x1) -> float``: the fastest path, for one output (the C twin
                 #: when built, else :attr:`single2_py`; the same numbers either way)
-                self.single2_py = _single_output_two_inputs(self)
-                self.single2 = _native_single2(self) or self.single2_py
+                self.single2_py = _single_output_two_inputs(self, 0)
+                self.single2 = _native_single2(self, 0) or self.single2_py
+
+    def single2_output(self, o: int, native: bool = True):
+        """``f(x0, x1) -> float`` computing output ``o`` alone (two inputs, one term per
+        rule for that output): the C twin when built and ``native``, else Python."""
+        if len(self.inputs) != 2 or not all(len(t[o]) == 1 for row in self._table2 for t in row):
+            raise UnsupportedRuleBase(f"output {o}: needs two inputs and one term per rule")
+        fast = _native_single2(self, o) if native else None
+        return fast or _single_output_two_inputs(self, o)
 
     @classmethod
     def from_system(
@@ -341,8 +349,8 @@ class FastMamdani:
         return tuple(out)
 
 
-def _single_output_two_inputs(engine: FastMamdani):
-    """A closure computing engine.evaluate2(x0, x1)[0], with every step written out.
+def _single_output_two_inputs(engine: FastMamdani, o: int):
+    """A closure computing engine.evaluate2(x0, x1)[o], with every step written out.
 
     The same arithmetic as :meth:`FastMamdani.evaluate2` (tests compare them); it exists
     because a controller calls it twice per 10 ms step and CPython charges for every
@@ -353,8 +361,8 @@ def _single_output_two_inputs(engine: FastMamdani):
     lo1, hi1, last1 = p1[0], p1[-1], len(p1) - 1
     inv0 = [1.0 / (p0[k + 1] - p0[k]) for k in range(last0)]
     inv1 = [1.0 / (p1[k + 1] - p1[k]) for k in range(last1)]
-    rows = [[terms[0][0] for terms in row] for row in engine._table2]
-    out = engine._out[0]
+    rows = [[terms[o][0] for terms in row] for row in engine._table2]
+    out = engine._out[o]
     coef = out._coef
     pair = out._pair
     bisect_right = bisect.bisect_right
@@ -409,14 +417,14 @@ def _single_output_two_inputs(engine: FastMamdani):
     return evaluate
 
 
-def _native_single2(engine: FastMamdani):
-    """``single2`` bound to ego._native.mamdani2 and this rule base's packed tables."""
+def _native_single2(engine: FastMamdani, o: int):
+    """Output ``o`` bound to ego._native.mamdani2 and this rule base's packed tables."""
     from ego.native import NATIVE
 
     if NATIVE is None:
         return None
-    out = engine._out[0]
-    table = [row[j][0][0] for row in engine._table2 for j in range(len(row))]
+    out = engine._out[o]
+    table = [row[j][o][0] for row in engine._table2 for j in range(len(row))]
     return functools.partial(
         NATIVE.mamdani2,
         struct.pack(f"{len(engine._peaks[0])}d", *engine._peaks[0]),

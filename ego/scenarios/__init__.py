@@ -3,13 +3,16 @@
 from __future__ import annotations
 
 from ego.params import ConfigError
-from ego.scenarios.base import CommonConfig, Event, RunResult, SumoScenario
-from ego.scenarios.emergency_brake import EmergencyBrake, EmergencyBrakeConfig
+from ego.scenarios.base import CommonConfig, Event, RunResult, Scenario
+from ego.scenarios.evasive import EmergencyBrake, EmergencyBrakeConfig, FastFollower, FastFollowerConfig
+from ego.scenarios.tracking import Report000, Report000Config, SineTracking, SineTrackingConfig
 
-SCENARIOS: dict[str, type[SumoScenario]] = {cls.name: cls for cls in (EmergencyBrake,)}
+SCENARIOS: dict[str, type[Scenario]] = {
+    cls.name: cls for cls in (EmergencyBrake, FastFollower, SineTracking, Report000)
+}
 
 
-def scenario_class(name: str) -> type[SumoScenario]:
+def scenario_class(name: str) -> type[Scenario]:
     """The registered scenario ``name``, or a ConfigError naming the known ones."""
     try:
         return SCENARIOS[name]
@@ -22,8 +25,14 @@ __all__ = [
     "CommonConfig",
     "EmergencyBrake",
     "EmergencyBrakeConfig",
+    "FastFollower",
+    "FastFollowerConfig",
+    "Report000",
+    "Report000Config",
+    "SineTracking",
+    "SineTrackingConfig",
     "Event",
     "RunResult",
-    "SumoScenario",
+    "Scenario",
     "scenario_class",
 ]

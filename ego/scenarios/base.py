@@ -1,11 +1,12 @@
-"""The simulation loop shared by every SUMO scenario.
+"""The simulation loop shared by every scenario.
 
 A scenario is steppable (``reset`` / ``step``), not only a closed loop, so it can back a
-Gymnasium environment or be driven by an external policy; :meth:`SumoScenario.run` is the
-closed loop with the scenario's own controller. Each call to :meth:`SumoScenario.step`
-advances one control period ``dt``: the controller's action is held while the ego's model
-integrates (``substeps`` RK4 steps), and every ``sumo_step / dt`` periods the ego's pose is
-pushed into SUMO and SUMO advances one step so the traffic reacts.
+Gymnasium environment or be driven by an external policy; :meth:`Scenario.run` is the
+closed loop with the scenario's own controller. Each call to :meth:`Scenario.step` advances
+one control period ``dt``: the controller's action is held while the ego's model integrates
+(``substeps`` RK4 steps). In SUMO scenarios, every ``sumo_step / dt`` periods the ego's pose
+is pushed into SUMO and SUMO advances one step so the traffic reacts; scenarios without
+traffic (the bare model) simply have no bridge.
 """
 
 from __future__ import annotations
@@ -32,13 +33,24 @@ _LOG_LEVELS = {"INFO": logging.INFO, "WARN": logging.WARNING, "ERROR": logging.E
 
 
 @dataclass(frozen=True)
-class CommonConfig:
-    """Timing shared by every scenario."""
+class TimingConfig:
+    """Timing of every scenario."""
 
     dt: float = param(0.01, "s", "control period: controller and model step", min=0.001, max=0.1)
     substeps: int = param(1, "-", "RK4 physics sub-steps per control period", min=1, max=100)
-    sumo_step: float = param(0.1, "s", "SUMO step, a whole multiple of dt", min=0.01, max=1.0)
     duration: float = param(25.0, "s", "simulated time", min=1.0, max=3600.0)
+
+    @property
+    def control_per_sumo(self) -> int:
+        """Control periods per SUMO step (0: no SUMO)."""
+        return 0
+
+
+@dataclass(frozen=True)
+class CommonConfig(TimingConfig):
+    """Timing of the scenarios that run in SUMO."""
+
+    sumo_step: float = param(0.1, "s", "SUMO step, a whole multiple of dt", min=0.01, max=1.0)
     lateral_resolution: float = param(0.875, "m", "width of SUMO's sublanes (sublane model)",
                                       min=0.1, max=3.5)
 
@@ -141,12 +153,13 @@ def divergence(state: Sequence[float], offset: float, heading_error: float,
     return None
 
 
-class SumoScenario:
-    """Base of every scenario that runs the ego in SUMO traffic.
+class Scenario:
+    """Base of every scenario.
 
     Subclasses set ``name``/``config_cls`` and implement the ``_setup`` (traffic, ego),
-    ``_before_sumo_step`` (scripted actors), ``_after_sumo_step`` (read the scene) and
-    ``_update`` (events, references, observation and trace row) hooks plus ``_metrics``.
+    ``_act`` (apply the action, write the trace row), ``_update`` (events, references,
+    observation) and ``_metrics`` hooks; SUMO scenarios also ``_make_bridge`` and the
+    ``_before_sumo_step`` (scripted actors) / ``_after_sumo_step`` (read the scene) hooks.
     """
 
     name: ClassVar[str] = ""
@@ -194,7 +207,8 @@ class SumoScenario:
         self.controller.reset(seed=self.seed)
         self._signal_names = tuple(self.controller.signals())
         self.bridge = self._make_bridge()
-        self.bridge.start()
+        if self.bridge is not None:
+            self.bridge.start()
         self._setup(np.random.default_rng(self.seed))
         self.recorder.begin(self._scene(), self._series(), self._meta())
         self._record_boxes()
@@ -212,7 +226,7 @@ class SumoScenario:
         self._act(action)
         k = self.k = self.k + 1
         t = self.t = k * self._dt
-        if k % self._per_sumo == 0:
+        if self._per_sumo and k % self._per_sumo == 0:
             self._sumo_step()
         if self.status == "running":
             reason = self._check_divergence()
@@ -251,8 +265,9 @@ class SumoScenario:
             self.bridge = None
 
     # -- shared machinery ----------------------------------------------------------------------
-    def _make_bridge(self) -> SumoBridge:
-        raise NotImplementedError
+    def _make_bridge(self) -> SumoBridge | None:
+        """The SUMO bridge of a traffic scenario; None for the bare model."""
+        return None
 
     def _sumo_step(self) -> None:
         bridge = self.bridge

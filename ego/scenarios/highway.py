@@ -17,7 +17,7 @@ from ego.models import NonlinearBicycle, NonlinearBicycleParams, VehicleGeometry
 from ego.params import param
 from ego.record.base import Scene, Series
 from ego.road import LanePolyline
-from ego.scenarios.base import CommonConfig, EgoVehicle, SumoScenario, divergence, signal_series
+from ego.scenarios.base import CommonConfig, EgoVehicle, Scenario, divergence, signal_series
 from ego.scenarios.events import INF, time_to_collision
 from ego.sumo.bridge import (
     Neighbours,
@@ -54,14 +54,18 @@ class HighwayConfig(CommonConfig):
     max_steer: float = param(0.5, "rad", "front steer limit of the ego", min=0.01, max=1.0)
 
 
-class HighwayScenario(SumoScenario):
+class HighwayScenario(Scenario):
     """Base of the motorway scenarios; subclasses add traffic and manoeuvre logic."""
 
     config_cls = HighwayConfig
+    #: t time (s); s, d position along / left of the target lane centre (m) and d_ref its
+    #: reference; e_lat = d - d_ref; lane_offset from the ego's start lane (m); speed (body
+    #: u) and ds (along the road), s_ref, speed_ref the longitudinal reference; Fx (N),
+    #: delta (rad) as applied; TTCs (s) and gaps (m); lat_accel (m/s^2); yaw_rate (rad/s)
     columns = (
-        "t", "s", "d", "lane_offset", "speed", "ds", "s_ref", "speed_ref", "Fx", "delta",
-        "ttc_front", "ttc_rear", "gap_front", "gap_rear", "lat_accel", "yaw_rate", "phase",
-        "target_lane",
+        "t", "s", "d", "d_ref", "e_lat", "lane_offset", "speed", "ds", "s_ref", "speed_ref",
+        "Fx", "delta", "ttc_front", "ttc_rear", "gap_front", "gap_rear", "lat_accel", "yaw_rate",
+        "phase", "target_lane",
     )
 
     def __init__(self, config, controller, **kwargs) -> None:
@@ -157,8 +161,9 @@ class HighwayScenario(SumoScenario):
         fx, delta = ego.applied
         obs = self.obs
         # the row describes time t: the state before this step and the action applied
+        d = obs.d
         self.trace.append((
-            obs.t, self.s, self.d_road - self.lane_offset[self.target_lane], self.d_road,
+            obs.t, self.s, d, obs.d_ref, d - obs.d_ref, self.d_road,
             obs.speed, self.ds, obs.s_ref, obs.ds_ref,
             fx, delta, self.ttc_front, self.ttc_rear, self.gap_front, self.gap_rear,
             ego.lateral_accel, obs.yaw_rate, self.phase, self.target_lane,
@@ -240,7 +245,9 @@ class HighwayScenario(SumoScenario):
 
     def _series(self) -> list[Series]:
         return [
-            Series("d", "plots/lateral_error/ego", "m", "offset from target lane centre"),
+            Series("e_lat", "plots/lateral_error/ego", "m", "lateral error (actual - reference)"),
+            Series("d", "plots/lateral_position/ego", "m", "offset from the target lane centre"),
+            Series("d_ref", "plots/lateral_position/reference", "m", "reference"),
             Series("speed", "plots/speed/ego", "m/s", "speed"),
             Series("speed_ref", "plots/speed/reference", "m/s", "reference"),
             Series("Fx", "plots/Fx/Fx", "N", "Fx per driven wheel"),

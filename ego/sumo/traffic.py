@@ -101,3 +101,21 @@ class PacedVehicle:
 
     def update(self, bridge: SumoBridge, t: float) -> bool:
         return False
+
+
+@dataclass
+class RecklessFollower:
+    """A SUMO vehicle that holds ``speed`` and ignores the car ahead (speed mode 0): a fast
+    driver closing from behind who will not brake. It can hit the ego; that is the point."""
+
+    vid: str
+    speed: float
+
+    def start(self, bridge: SumoBridge) -> None:
+        veh = bridge.libsumo.vehicle
+        veh.setLaneChangeMode(self.vid, 0)
+        veh.setSpeedMode(self.vid, 0)
+        veh.setSpeed(self.vid, self.speed)
+
+    def update(self, bridge: SumoBridge, t: float) -> bool:
+        return False

@@ -1,0 +1,156 @@
+"""Report 000's BP neural-network PID (section "(c) BP neural-network PID").
+
+One network for both channels: inputs ``[p_x, i_x, d_x, 1, p_y, i_y, d_y, 1]`` (the error,
+its integral and its rate on each channel, with biases), 10 ReLU hidden units, 6 sigmoid
+outputs; each gain is ``1 + sigmoid`` (the report's fix against gains collapsing to 0).
+The report's control law: ``u_x = Kp p + 4 Ki i + 2 Kd d`` and
+``u_y = Kp p + 0.1 Ki i + 0.55 Kd d``; ``Fx = fx_gain * u_x``, ``delta = delta_gain * u_y``
+(the report's Simulink output gains were not given; ours are chosen to give the same
+loop gains as the other controllers).
+
+Two variants (``--set variant=...``):
+
+* ``report`` - the report's S-function as published: weights ~ N(0, 1); raw (unsquashed)
+  inputs and an unbounded integral; the "gradient" ``sigmoid'(z) * [p, i, d]`` (it never
+  sees whether the tracking error shrank); and the momentum term subtracted,
+  ``W -= eta*g + alpha*(W_k - W_(k-1))``, which damps rather than carries the motion. It
+  uses the report's experiment values (learning rate 0.05, momentum 0.01) and control law
+  (weights 4, 2, 0.1, 0.55) whatever the other parameters say.
+* ``stable`` (default) - the textbook rule (Liu, *Advanced PID control*, ch. 4): gradient
+  descent on E = e^2/2 of each channel with the plant Jacobian replaced by its sign (+1
+  here: more Fx moves the car forward, more steer moves it left), the correct momentum
+  ``W += -eta*g + alpha*(W_k - W_(k-1))``, inputs squashed by tanh, small initial weights,
+  gradients clipped; and a control law that does not wind up: the report's 4 Ki on the
+  X position error saturates the tyres (the rear friction circle then lets the car spin),
+  so the integral weights are 0.05 (X) and 0 (Y), the lateral derivative weight 2.5. It
+  still adapts the gains online, but cannot blow them up.
+
+numpy, not torch: per step the network is a handful of 10x8 and 6x10 products, where
+numpy's call overhead (~1 us) is far below torch's (~5-10 us per operation), and there is
+no batch to amortise it over.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ego.control.base import Observation
+from ego.params import param
+
+N_IN, N_HIDDEN, N_OUT = 8, 10, 6
+#: the report's control law: u_x = Kp p + 4 Ki i + 2 Kd d, u_y = Kp p + 0.1 Ki i + 0.55 Kd d
+REPORT_WEIGHTS = (4.0, 2.0, 0.1, 0.55)
+
+
+@dataclass(frozen=True)
+class BPPIDParams:
+    variant: str = param("stable", "-", "stable (textbook learning, default) or report "
+                         "(the published S-function)", choices=("stable", "report"))
+    learning_rate: float = param(0.002, "-", "eta of the stable variant (report: 0.05)", min=0.0)
+    momentum: float = param(0.01, "-", "alpha of the stable variant (report: 0.01)", min=0.0,
+                            max=0.99)
+    fx_gain: float = param(500.0, "N", "Fx = fx_gain * u_x", min=0.0)
+    delta_gain: float = param(0.004, "rad", "delta = delta_gain * u_y", min=0.0)
+    ki_lon_weight: float = param(0.05, "-", "u_x = Kp p + ki_lon_weight Ki i + kd_lon_weight Kd d, "
+                                 "stable variant (report: 4)", min=0.0)
+    kd_lon_weight: float = param(2.0, "-", "stable variant (report: 2)", min=0.0)
+    ki_lat_weight: float = param(0.0, "-", "u_y = Kp p + ki_lat_weight Ki i + kd_lat_weight Kd d, "
+                                 "stable variant (report: 0.1)", min=0.0)
+    kd_lat_weight: float = param(2.5, "-", "stable variant (report: 0.55)", min=0.0)
+    integral_limit: float = param(5.0, "m s", "|integral of the error| limit of the stable "
+                                  "variant (anti-windup)", min=0.0, min_exclusive=True)
+    init_scale: float = param(0.1, "-", "initial weights ~ N(0, init_scale^2), stable variant "
+                              "(report: 1)", min=0.0)
+
+
+class BPPIDController:
+    """The report's BP-NN PID (``variant=report``) or its stabilised form (default)."""
+
+    def __init__(self, params: BPPIDParams, dt: float) -> None:
+        self.params = params
+        self.dt = dt
+        self.report = params.variant == "report"
+        p = params
+        self.eta = 0.05 if self.report else p.learning_rate
+        self.alpha = 0.01 if self.report else p.momentum
+        self.integral_limit = math.inf if self.report else p.integral_limit
+        weights = REPORT_WEIGHTS if self.report else (p.ki_lon_weight, p.kd_lon_weight,
+                                                       p.ki_lat_weight, p.kd_lat_weight)
+        self.coef = np.array([1.0, weights[0], weights[1], 1.0, weights[2], weights[3]])
+        self.x = np.empty(N_IN)
+        self.reset(seed=0)
+
+    def reset(self, *, seed: int | None = None) -> None:
+        rng = np.random.default_rng(seed)
+        scale = 1.0 if self.report else self.params.init_scale
+        self.w1 = scale * rng.standard_normal((N_HIDDEN, N_IN))
+        self.w2 = scale * rng.standard_normal((N_OUT, N_HIDDEN))
+        self.w1_prev = self.w1.copy()
+        self.w2_prev = self.w2.copy()
+        self.i_lon = self.i_lat = 0.0
+        self.gains = np.ones(N_OUT)
+        self._u = (0.0, 0.0)
+
+    def _forward(self, x: np.ndarray):
+        z1 = self.w1 @ x
+        h = np.maximum(z1, 0.0)
+        z2 = self.w2 @ h
+        k = 1.0 / (1.0 + np.exp(-np.clip(z2, -50.0, 50.0)))
+        return z1, h, k
+
+    def step(self, obs: Observation) -> tuple[float, float]:
+        p = self.params
+        dt = self.dt
+        e_x, de_x = obs.s_ref - obs.s, obs.ds_ref - obs.ds
+        e_y, de_y = obs.d_ref - obs.d, obs.dd_ref - obs.dd
+        lim = self.integral_limit
+        self.i_lon = min(lim, max(-lim, self.i_lon + dt * e_x))
+        self.i_lat = min(lim, max(-lim, self.i_lat + dt * e_y))
+        terms = np.array([e_x, self.i_lon, de_x, e_y, self.i_lat, de_y])
+        x = self.x
+        if self.report:
+            x[:] = (terms[0], terms[1], terms[2], 1.0, terms[3], terms[4], terms[5], 1.0)
+        else:
+            x[:] = (*np.tanh(terms[:3]), 1.0, *np.tanh(terms[3:]), 1.0)
+        z1, h, k = self._forward(x)
+        self.gains = gains = 1.0 + k
+        c = self.coef * terms
+        u_x = gains[0] * c[0] + gains[1] * c[1] + gains[2] * c[2]
+        u_y = gains[3] * c[3] + gains[4] * c[4] + gains[5] * c[5]
+        self._learn(x, z1, h, k, terms, c, e_x, e_y)
+        self._u = (u_x, u_y)
+        return p.fx_gain * float(u_x), p.delta_gain * float(u_y)
+
+    def _learn(self, x, z1, h, k, terms, c, e_x, e_y) -> None:
+        dk = k * (1.0 - k)
+        if self.report:
+            # as published: "error" = [p, i, d] per channel, no tracking error, momentum
+            # subtracted
+            delta3 = dk * terms
+            sign = -1.0
+        else:
+            # dE/dK = -e * sign(dy/du) * du/dK, sign(dy/du) = +1 on both channels
+            e = np.array([e_x, e_x, e_x, e_y, e_y, e_y])
+            delta3 = -np.tanh(e) * np.tanh(c) * dk
+            sign = 1.0
+        delta2 = (self.w2.T @ delta3) * (z1 > 0.0)
+        g2 = np.outer(delta3, h)
+        g1 = np.outer(delta2, x)
+        if not self.report:  # clip the step, not its direction
+            norm = math.sqrt(float(np.sum(g2 * g2) + np.sum(g1 * g1)))
+            if norm > 1.0:
+                g2 /= norm
+                g1 /= norm
+        for w, w_prev, g in ((self.w2, self.w2_prev, g2), (self.w1, self.w1_prev, g1)):
+            step = -self.eta * g + sign * self.alpha * (w - w_prev)
+            w_prev[:] = w
+            w += step
+
+    def signals(self) -> dict[str, float]:
+        g = self.gains
+        return {"kp_lon": float(g[0]), "ki_lon": float(g[1]), "kd_lon": float(g[2]),
+                "kp_lat": float(g[3]), "ki_lat": float(g[4]), "kd_lat": float(g[5]),
+                "weight_norm": float(math.sqrt(float(np.sum(self.w1 ** 2) + np.sum(self.w2 ** 2))))}

@@ -1,0 +1,116 @@
+"""Report 000's RBF neural adaptive sliding-mode control (section "(d)").
+
+Errors here follow the report: ``e = actual - reference``. Sliding surfaces
+``s_X = c_X e_X + de_X`` and ``s_Y = c_Y e_Y + de_Y``; control
+``u = -f_hat - s - eta * sign(s)`` on each channel, ``Fx = 1000 u_X``, ``delta = 0.6 u_Y``.
+``f_hat = W^T h`` approximates the unknown dynamics with 10 Gaussian nodes on
+``[X, Y, dX, dY]`` (road frame here), ``h_j = d exp(-|x - c_j|^2 / (2 b^2))``, centres
+``0.5 * randn``, width ``b = 10``, scale ``d = 1e-5``, initial weights 0.1.
+
+Adaptive law, derived for this error convention: with ``V = s^2/2 + |W~|^2/(2 gamma)`` and
+``ds/dt = f - f_hat - s - eta sign(s)``, choosing ``dW/dt = gamma s h`` gives
+``dV/dt = -s^2 - eta |s| <= 0`` - the report's sign.
+
+Variants (``--set variant=...``):
+
+* ``fixed`` (default) - each channel has its own weights, ``u_Y`` switches on ``sign(s_Y)``
+  (the report's code uses ``sign(s_X)``), and a boundary layer ``sat(s/phi)`` replaces
+  ``sign(s)`` (``phi_lon``, ``phi_lat``; 0 gives ``sign``) against chattering.
+* ``report`` - the published S-function: one weight vector shared by both channels,
+  updated with ``gamma (s_X + s_Y) h``, and ``sign(s_X)`` in ``u_Y``; pure ``sign``.
+
+The Gaussians sit near the origin while X grows by 20 m each second, so ``h`` - and with
+it the neural term - vanishes within seconds: in practice the report's controller is the
+sliding-mode law with its proportional term. ``rbf_norm`` records the weights.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ego.control.base import Observation
+from ego.params import param
+
+N_NODES = 10
+
+
+@dataclass(frozen=True)
+class RBFSMCParams:
+    variant: str = param("fixed", "-", "fixed (default: sign(s_Y), own weights per channel, "
+                         "boundary layer) or report (the published S-function)",
+                         choices=("fixed", "report"))
+    c_lon: float = param(1.0, "1/s", "sliding surface s_X = c_lon e_X + de_X (report: 1)", min=0.0)
+    c_lat: float = param(0.5, "1/s", "sliding surface s_Y = c_lat e_Y + de_Y (report: 0.5)",
+                         min=0.0)
+    eta_lon: float = param(2.0, "m/s", "switching gain, X (report: 2)", min=0.0)
+    eta_lat: float = param(0.1, "m/s", "switching gain, Y (report: 0.1)", min=0.0)
+    gamma: float = param(1000.0, "-", "adaptation rate (report: 1000)", min=0.0)
+    width: float = param(10.0, "-", "Gaussian width b (report: 10)", min=0.0, min_exclusive=True)
+    scale: float = param(1e-5, "-", "Gaussian scale d (report: 1e-5)", min=0.0)
+    centre_spread: float = param(0.5, "-", "centres ~ centre_spread * N(0, 1) (report: 0.5)", min=0.0)
+    w0: float = param(0.1, "-", "initial weights (report: 0.1)")
+    fx_gain: float = param(1000.0, "N s/m", "Fx = fx_gain * u_X (report: 1000)", min=0.0)
+    delta_gain: float = param(0.6, "rad s/m", "delta = delta_gain * u_Y (report: 0.6)", min=0.0)
+    phi_lon: float = param(0.5, "m/s", "boundary layer on s_X (fixed variant; 0: sign)", min=0.0)
+    phi_lat: float = param(0.1, "m/s", "boundary layer on s_Y (fixed variant; 0: sign)", min=0.0)
+
+
+def _switch(s: float, phi: float) -> float:
+    """sign(s), or sat(s/phi) inside a boundary layer of width phi."""
+    if phi > 0.0:
+        r = s / phi
+        return 1.0 if r > 1.0 else (-1.0 if r < -1.0 else r)
+    return 1.0 if s > 0.0 else (-1.0 if s < 0.0 else 0.0)
+
+
+class RBFSMCController:
+    """RBF adaptive sliding-mode control on both channels."""
+
+    def __init__(self, params: RBFSMCParams, dt: float) -> None:
+        self.params = params
+        self.dt = dt
+        self.report = params.variant == "report"
+        self.reset(seed=0)
+
+    def reset(self, *, seed: int | None = None) -> None:
+        p = self.params
+        rng = np.random.default_rng(seed)
+        self.centres = p.centre_spread * rng.standard_normal((N_NODES, 4))
+        self.w_lon = np.full(N_NODES, p.w0)
+        self.w_lat = self.w_lon if self.report else np.full(N_NODES, p.w0)
+        self.s_lon = self.s_lat = 0.0
+        self.f_lon = self.f_lat = 0.0
+
+    def _basis(self, x: np.ndarray) -> np.ndarray:
+        p = self.params
+        diff = self.centres - x
+        return p.scale * np.exp(-np.einsum("ij,ij->i", diff, diff) / (2.0 * p.width * p.width))
+
+    def step(self, obs: Observation) -> tuple[float, float]:
+        p = self.params
+        e_x, de_x = obs.s - obs.s_ref, obs.ds - obs.ds_ref
+        e_y, de_y = obs.d - obs.d_ref, obs.dd - obs.dd_ref
+        s_x = p.c_lon * e_x + de_x
+        s_y = p.c_lat * e_y + de_y
+        h = self._basis(np.array([obs.s, obs.d, obs.ds, obs.dd]))
+        f_x = float(self.w_lon @ h)
+        f_y = float(self.w_lat @ h)
+        if self.report:
+            u_x = -s_x - f_x - p.eta_lon * _switch(s_x, 0.0)
+            u_y = -s_y - f_y - p.eta_lat * _switch(s_x, 0.0)  # sic: the report's sign(s_X)
+            self.w_lon += (self.dt * p.gamma * (s_x + s_y)) * h  # shared with w_lat
+        else:
+            u_x = -s_x - f_x - p.eta_lon * _switch(s_x, p.phi_lon)
+            u_y = -s_y - f_y - p.eta_lat * _switch(s_y, p.phi_lat)
+            self.w_lon += (self.dt * p.gamma * s_x) * h
+            self.w_lat += (self.dt * p.gamma * s_y) * h
+        self.s_lon, self.s_lat, self.f_lon, self.f_lat = s_x, s_y, f_x, f_y
+        return p.fx_gain * u_x, p.delta_gain * u_y
+
+    def signals(self) -> dict[str, float]:
+        return {"s_lon": self.s_lon, "s_lat": self.s_lat, "f_hat_lon": self.f_lon,
+                "f_hat_lat": self.f_lat, "rbf_norm_lon": float(math.sqrt(self.w_lon @ self.w_lon)),
+                "rbf_norm_lat": float(math.sqrt(self.w_lat @ self.w_lat))}

@@ -1,0 +1,366 @@
+"""Evasive lane changes triggered by traffic (report 000's real-life framing).
+
+* ``emergency-brake``: the car ahead brakes hard; when the FRONT time-to-collision falls
+  below ``ttc_threshold`` the ego brakes and changes lane (report 000's "decelerate and
+  change lane": X_ref = 15 t from 20 m/s, a Y step to the next lane).
+* ``fast-follower``: a car closes from behind in the ego's lane at 1.5 times the ego's
+  speed; when the REAR time-to-collision falls below ``ttc_threshold`` the ego accelerates
+  and changes lane to let it pass ("accelerate and change lane": X_ref = 25 t).
+
+Either way each adjacent lane is checked by gap acceptance (lead and lag gaps and speeds);
+the ego changes into the better acceptable lane, its position reference moving at
+``evade_speed`` but never closer to the target lane's leader than ``follow_gap`` plus
+``follow_headway`` times its speed. With no acceptable lane it stays in its lane: behind a
+braking leader it brakes (the speed reference falls at ``brake_decel`` to the leader's
+speed), ahead of a fast follower it accelerates.
+
+Phases: 0 cruise, 1 lane change, 2 in-lane manoeuvre, 3 done.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ego.params import param
+from ego.scenarios import metrics as m
+from ego.scenarios.events import INF, GapRule, check_lane, choose_lane
+from ego.scenarios.highway import LANE_NAMES, ROUTE, HighwayConfig, HighwayScenario
+from ego.sumo.bridge import VehicleSpec, VehicleType
+from ego.sumo.traffic import BrakingLeader, PacedVehicle, RecklessFollower
+
+CRUISE, LANE_CHANGE, IN_LANE, DONE = 0, 1, 2, 3
+PHASE_NAMES = {CRUISE: "cruise", LANE_CHANGE: "lane change", IN_LANE: "in-lane manoeuvre", DONE: "done"}
+BLOCKER_TYPE = VehicleType("blocker", length=4.5, width=1.8, sigma=0.0, color=(160, 60, 220))
+
+
+@dataclass(frozen=True)
+class EvasiveConfig(HighwayConfig):
+    """The manoeuvre shared by both scenarios."""
+
+    ttc_threshold: float = param(3.0, "s", "time-to-collision that triggers the manoeuvre",
+                                 min=0.1, max=20.0)
+    evade_speed: float = param(15.0, "m/s", "speed reference during the lane change", min=1.0,
+                               max=45.0)
+    follow_gap: float = param(5.0, "m", "standstill gap kept to the leader once evading", min=0.0,
+                              max=50.0)
+    follow_headway: float = param(0.5, "s", "time headway kept to the leader once evading",
+                                  min=0.0, max=5.0)
+    accept_gap: float = param(5.0, "m", "gap acceptance: minimum lead and lag gap", min=0.0,
+                              max=100.0)
+    accept_time: float = param(1.5, "s", "gap acceptance: extra gap per m/s of closing speed",
+                               min=0.0, max=10.0)
+    settle_band: float = param(0.2, "m", "lane change is done when |lateral error| stays below",
+                               min=0.01, max=2.0)
+    block_left: bool = param(False, "-", "a car drives beside the ego in the left lane")
+    block_right: bool = param(False, "-", "a car drives beside the ego in the right lane")
+
+
+class EvasiveLaneChange(HighwayScenario):
+    """Trigger, gap acceptance, references and metrics of an evasive lane change."""
+
+    config_cls = EvasiveConfig
+    #: which time-to-collision triggers: "front" or "rear"
+    trigger_on = "front"
+
+    def __init__(self, config, controller, **kwargs) -> None:
+        super().__init__(config, controller, **kwargs)
+        self._reset_plan()
+
+    def _reset_plan(self) -> None:
+        self.phase = CRUISE
+        self.trigger_t: float | None = None
+        self.trigger_ttc: float | None = None
+        self.trigger_s = 0.0
+        self.chosen: str | None = None
+        self.choice_reason = ""
+        self.done_t: float | None = None
+        self._inside_since: float | None = None
+        self._s0 = 0.0
+        self._speed_ref = 0.0
+
+    def _traffic(self, rng):
+        """The scenario's own vehicles, lane blockers and background traffic."""
+        c = self.config
+        self._reset_plan()
+        self.actors = []
+        specs, required = self._actors()
+        self.bridge.add_type(BLOCKER_TYPE)
+        clear = []
+        for flag, lane, name in ((c.block_left, c.ego_lane + 1, "blocker_left"),
+                                 (c.block_right, c.ego_lane - 1, "blocker_right")):
+            if flag and 0 <= lane <= 2:
+                specs.append(VehicleSpec(name, BLOCKER_TYPE.id, ROUTE, lane, c.ego_start, c.ego_speed))
+                self.actors.append(PacedVehicle(name, c.ego_speed))
+                self.colors[name] = BLOCKER_TYPE.color
+                required.append(name)
+                clear.append((lane, c.ego_start - 45.0, c.ego_start + 45.0))
+        specs += self.background(rng, keep_clear=clear)
+        return specs, required
+
+    def _actors(self) -> tuple[list[VehicleSpec], list[str]]:
+        raise NotImplementedError
+
+    def _setup(self, rng) -> None:
+        super()._setup(rng)
+        self._s0 = self.s
+        self._speed_ref = self.config.ego_speed
+
+    # -- manoeuvre logic --------------------------------------------------------------------
+    def _target_leader(self):
+        """The nearest vehicle ahead in the target lane (SUMO's sublane-aware leader once
+        the ego is in it), or None."""
+        n = self.neighbours
+        if n.lane == self.target_lane:
+            return n.leader
+        if self.target_lane == n.lane + 1:
+            return n.left_leader
+        if self.target_lane == n.lane - 1:
+            return n.right_leader
+        return None
+
+    def _follow_reference(self, leader) -> tuple[float, float]:
+        """Position/speed reference that keeps the follow distance to ``leader``."""
+        c = self.config
+        gap = INF if leader is None else self.extrapolated_gap(leader)
+        if gap == INF:
+            return INF, self._speed_ref
+        return self.s + gap - c.follow_gap - c.follow_headway * leader.speed, leader.speed
+
+    def _plan(self) -> None:
+        c = self.config
+        obs = self.obs
+        if self.phase == CRUISE:
+            ttc = self.ttc_front if self.trigger_on == "front" else self.ttc_rear
+            if ttc < c.ttc_threshold:
+                self._trigger(ttc)
+        if self.phase == CRUISE:
+            s_ref, v_ref = self._s0 + c.ego_speed * self.t, c.ego_speed
+        elif self.chosen is not None:
+            # evade at evade_speed, but never plan closer than the follow distance to whoever
+            # drives ahead in the target lane (that traffic may brake too), nor to the car
+            # the ego still overlaps (SUMO's sublane leader) while it has not cleared it
+            s_ref, v_ref = self.trigger_s + c.evade_speed * (self.t - self.trigger_t), c.evade_speed
+            for leader in (self._target_leader(), self.neighbours.leader):
+                fs, fv = self._follow_reference(leader)
+                if fs < s_ref:
+                    s_ref, v_ref = fs, fv
+        else:
+            s_ref, v_ref = self._in_lane_reference()
+        self._speed_ref = v_ref
+        obs.s_ref, obs.ds_ref = s_ref, v_ref
+        obs.d_ref = obs.dd_ref = 0.0
+        if self.phase in (LANE_CHANGE, IN_LANE):
+            self._check_done()
+
+    def _in_lane_reference(self) -> tuple[float, float]:
+        """Position/speed reference when no lane is acceptable."""
+        raise NotImplementedError
+
+    def _in_lane_settled(self) -> bool:
+        raise NotImplementedError
+
+    def _trigger(self, ttc: float) -> None:
+        c = self.config
+        n = self.neighbours
+        rule = GapRule(c.accept_gap, c.accept_time)
+        left = check_lane("left", n.has_left, self.ds, c.evade_speed,
+                          n.left_leader.gap, n.left_leader.speed,
+                          n.left_follower.gap, n.left_follower.speed, rule)
+        right = check_lane("right", n.has_right, self.ds, c.evade_speed,
+                           n.right_leader.gap, n.right_leader.speed,
+                           n.right_follower.gap, n.right_follower.speed, rule)
+        self.chosen, self.choice_reason = choose_lane(left, right)
+        self.trigger_t, self.trigger_ttc, self.trigger_s = self.t, ttc, self.s
+        other = n.leader if self.trigger_on == "front" else n.follower
+        gap = self.gap_front if self.trigger_on == "front" else self.gap_rear
+        closing = abs(self.ds - other.speed)
+        self.event("trigger", f"{self.trigger_on} TTC {ttc:.2f} s < {c.ttc_threshold:.2f} s "
+                   f"(gap {gap:.1f} m to {other.id or '?'}, closing at {closing:.1f} m/s)", "WARN")
+        self._on_trigger()
+        if self.chosen is None:
+            self.phase = IN_LANE
+            self.event("lane", f"stay in the {LANE_NAMES[self.target_lane]} lane "
+                       f"({self.in_lane_action}): {self.choice_reason}", "WARN")
+        else:
+            self.phase = LANE_CHANGE
+            self.target_lane += 1 if self.chosen == "left" else -1
+            self.event("lane", f"change to the {LANE_NAMES[self.target_lane]} lane "
+                       f"(SUMO lane {self.target_lane}): {self.choice_reason}")
+
+    in_lane_action = ""
+
+    def _on_trigger(self) -> None:
+        pass
+
+    def _check_done(self) -> None:
+        """Online completion: inside the band (or settled in lane) for one second."""
+        c = self.config
+        if self.phase == LANE_CHANGE:
+            inside = abs(self.d_road - self.lane_offset[self.target_lane]) < c.settle_band
+        else:
+            inside = self._in_lane_settled()
+        if not inside:
+            self._inside_since = None
+            return
+        if self._inside_since is None:
+            self._inside_since = self.t
+        elif self.t - self._inside_since >= 1.0:
+            what = "lane change" if self.phase == LANE_CHANGE else "in-lane manoeuvre"
+            self.event("done", f"{what} complete: settled since t = {self._inside_since:.2f} s "
+                       f"({self._inside_since - self.trigger_t:.2f} s after the trigger)")
+            self.phase = DONE
+            self.done_t = self._inside_since
+
+    def _final_status(self) -> tuple[str, str]:
+        if self.phase in (LANE_CHANGE, IN_LANE):
+            return "timeout", f"the manoeuvre ({PHASE_NAMES[self.phase]}) did not finish in time"
+        if self.phase == CRUISE:
+            return "completed", f"the {self.trigger_on} TTC never fell below the threshold: no manoeuvre"
+        return "completed", "manoeuvre complete"
+
+    # -- metrics ----------------------------------------------------------------------------
+    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
+        col = {name: trace[:, i] for i, name in enumerate(columns)}
+        c = self.config
+        t = col["t"]
+        triggered = self.trigger_t is not None
+        lane_change = triggered and self.chosen is not None
+        duration = overshoot = None
+        if lane_change:
+            after = t >= self.trigger_t
+            duration = m.settling_time(t, col["d"], c.settle_band, self.trigger_t)
+            direction = 1.0 if self.chosen == "left" else -1.0
+            overshoot = m.overshoot(col["d"][after], direction)
+        completed = bool(lane_change and duration is not None and self.status in ("completed", "timeout"))
+        return {
+            "lane_change_completed": completed,
+            "target_lane": self.target_lane if triggered else None,
+            "target_side": self.chosen if triggered else None,
+            "trigger_time": m.json_number(self.trigger_t, 4),
+            "trigger_ttc": m.json_number(self.trigger_ttc, 4),
+            "lane_choice": self.choice_reason or None,
+            "lane_change_duration": m.json_number(duration, 4),
+            "max_overshoot": m.json_number(overshoot, 4),
+            "min_ttc_front": m.json_number(m.finite_min(col["ttc_front"]), 4),
+            "min_ttc_rear": m.json_number(m.finite_min(col["ttc_rear"]), 4),
+            "min_gap_front": m.json_number(m.finite_min(col["gap_front"]), 4),
+            "max_abs_lateral_accel": m.json_number(m.max_abs(col["lat_accel"]), 4),
+            "final_speed": m.json_number(float(col["speed"][-1]) if len(t) else None, 4),
+        }
+
+
+# --- emergency brake ------------------------------------------------------------------------
+
+LEAD = "lead"
+LEAD_TYPE = VehicleType("lead", length=4.5, width=1.8, sigma=0.0, color=(255, 150, 0))
+
+
+@dataclass(frozen=True)
+class EmergencyBrakeConfig(EvasiveConfig):
+    lead_gap: float = param(30.0, "m", "gap from the ego's front to the lead car's rear at t = 0",
+                            min=5.0, max=300.0)
+    lead_brake_time: float = param(2.0, "s", "when the lead car starts braking", min=0.0)
+    lead_decel: float = param(6.0, "m/s^2", "lead car's deceleration", min=0.5, max=12.0)
+    lead_final_speed: float = param(5.0, "m/s", "speed the lead car brakes to", min=0.0, max=40.0)
+    brake_decel: float = param(8.0, "m/s^2", "speed reference's deceleration when braking in lane",
+                               min=0.5, max=12.0)
+    brake_max_lag: float = param(2.0, "m", "how far the braking reference may fall behind the ego",
+                                 min=0.1, max=50.0)
+
+
+class EmergencyBrake(EvasiveLaneChange):
+    name = "emergency-brake"
+    summary = "lead car brakes hard; front TTC triggers braking and a lane change by gap acceptance"
+    config_cls = EmergencyBrakeConfig
+    trigger_on = "front"
+    in_lane_action = "brake"
+
+    def _actors(self):
+        c = self.config
+        self.bridge.add_type(LEAD_TYPE)
+        lead_front = c.ego_start + c.lead_gap + LEAD_TYPE.length
+        self.actors.append(BrakingLeader(LEAD, c.ego_speed, c.lead_brake_time, c.lead_decel,
+                                         c.lead_final_speed))
+        self.colors[LEAD] = LEAD_TYPE.color
+        return [VehicleSpec(LEAD, LEAD_TYPE.id, ROUTE, c.ego_lane, lead_front, c.ego_speed)], [LEAD]
+
+    def _on_trigger(self) -> None:
+        self._ramp_s, self._ramp_v = self.s - self.config.dt * self.ds, self.ds
+
+    def _in_lane_reference(self):
+        # brake at brake_decel down to the leader's speed, never planning closer than the
+        # follow distance
+        c = self.config
+        dt = c.dt
+        self._ramp_v = max(self.neighbours.leader.speed, self._ramp_v - c.brake_decel * dt)
+        # the reference may run ahead of what the car can brake, but never more than
+        # brake_max_lag behind it, or the controller would keep braking below the leader's
+        # speed to win the distance back
+        self._ramp_s = max(self._ramp_s + self._ramp_v * dt, self.s - c.brake_max_lag)
+        s_ref, v_ref = self._ramp_s, self._ramp_v
+        fs, fv = self._follow_reference(self.neighbours.leader)
+        if fs < s_ref:
+            s_ref, v_ref = fs, fv
+        return s_ref, v_ref
+
+    def _in_lane_settled(self) -> bool:
+        return self.ds <= self.neighbours.leader.speed + 0.1 or self.gap_front == INF
+
+
+# --- fast follower --------------------------------------------------------------------------
+
+FOLLOWER = "follower"
+FOLLOWER_TYPE = VehicleType("follower", length=4.5, width=1.8, sigma=0.0, max_speed=60.0,
+                            color=(0, 170, 255))
+
+
+@dataclass(frozen=True)
+class FastFollowerConfig(EvasiveConfig):
+    evade_speed: float = param(25.0, "m/s", "speed reference during the lane change "
+                               "(report 000: X_ref = 25 t)", min=1.0, max=45.0)
+    follower_gap: float = param(60.0, "m", "gap from the follower's front to the ego's rear at t = 0",
+                                min=5.0, max=500.0)
+    follower_speed: float = param(30.0, "m/s", "the follower's speed (>= 1.5 x ego_speed by "
+                                  "default)", min=1.0, max=60.0)
+
+
+class FastFollower(EvasiveLaneChange):
+    name = "fast-follower"
+    summary = "a car closes from behind at 1.5x the ego's speed; rear TTC triggers accelerating and a lane change"
+    config_cls = FastFollowerConfig
+    trigger_on = "rear"
+    in_lane_action = "accelerate"
+
+    def _actors(self):
+        c = self.config
+        self.bridge.add_type(FOLLOWER_TYPE)
+        front = c.ego_start - self.geometry.length - c.follower_gap
+        self.actors.append(RecklessFollower(FOLLOWER, c.follower_speed))
+        self.colors[FOLLOWER] = FOLLOWER_TYPE.color
+        # inserted at the ego's speed (SUMO checks insertion safety); it speeds up at once
+        return [VehicleSpec(FOLLOWER, FOLLOWER_TYPE.id, ROUTE, c.ego_lane, front, c.ego_speed)], [FOLLOWER]
+
+    def _after_sumo_step(self) -> None:
+        super()._after_sumo_step()
+        veh = self.bridge.libsumo.vehicle
+        self._follower_x = veh.getPosition(FOLLOWER)[0]
+
+    def _in_lane_reference(self):
+        # nowhere to go and braking would make it worse: speed up to evade_speed in lane,
+        # keeping the follow distance to any leader
+        c = self.config
+        s_ref = self.trigger_s + c.evade_speed * (self.t - self.trigger_t)
+        fs, fv = self._follow_reference(self.neighbours.leader)
+        return (fs, fv) if fs < s_ref else (s_ref, c.evade_speed)
+
+    def _in_lane_settled(self) -> bool:
+        return self.ttc_rear == INF
+
+    def _metrics(self, trace, columns) -> dict:
+        out = super()._metrics(trace, columns)
+        # passed: the follower's front bumper ended ahead of the ego's
+        ego_front = self.ego.state[0] + self.geometry.cg_to_front
+        out["follower_passed"] = bool(getattr(self, "_follower_x", -INF) > ego_front)
+        return out

@@ -1,0 +1,221 @@
+"""Reference tracking: report 000's own experiments, in SUMO and on the bare model.
+
+* ``sine-tracking`` - on the SUMO motorway: the lateral reference weaves
+  ``amplitude * sin(omega t)`` about the middle lane's centre (the report's 4 sin(0.2 t)
+  and 4 sin(0.5 t)) while the longitudinal reference accelerates (X_ref = 25 t,
+  ``ref_speed=25``) or decelerates (X_ref = 15 t, ``ref_speed=15``) from 20 m/s. The ego
+  sweeps across all three lanes, so there is no background traffic unless asked for.
+* ``report-000`` - the same references without SUMO, on the bare model, as the report ran
+  them in Simulink: ``case=step`` is the 5 m lane change (a Y step) with X_ref = 25 t or
+  15 t; ``case=sine`` the sine tracking. Its figures can be set beside the report's.
+
+Errors reported here are ``actual - reference``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ego.models import NonlinearBicycle, VehicleGeometry
+from ego.params import param
+from ego.record.base import Scene, Series
+from ego.scenarios import metrics as m
+from ego.scenarios.base import EgoVehicle, Scenario, TimingConfig, divergence, signal_series
+from ego.scenarios.highway import HighwayConfig, HighwayScenario
+
+
+def tracking_metrics(t: np.ndarray, e_lat: np.ndarray, e_speed: np.ndarray, after: float = 10.0) -> dict:
+    """RMS and largest lateral error over the run and after ``after`` seconds; RMS speed error."""
+    late = t >= after
+
+    def rms(x: np.ndarray) -> float | None:
+        return float(math.sqrt(float(np.mean(x * x)))) if x.size else None
+
+    return {
+        "rms_lateral_error": m.json_number(rms(e_lat), 4),
+        "max_abs_lateral_error": m.json_number(m.max_abs(e_lat), 4),
+        "rms_lateral_error_after_10s": m.json_number(rms(e_lat[late]), 4),
+        "max_abs_lateral_error_after_10s": m.json_number(m.max_abs(e_lat[late]) if late.any() else None, 4),
+        "rms_speed_error": m.json_number(rms(e_speed), 4),
+    }
+
+
+# --- sine tracking in SUMO ------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class SineTrackingConfig(HighwayConfig):
+    duration: float = param(40.0, "s", "simulated time", min=1.0, max=3600.0)
+    traffic_density: float = param(0.0, "veh/km", "background traffic per adjacent lane (the ego "
+                                   "weaves across them)", min=0.0, max=25.0)
+    omega: float = param(0.2, "rad/s", "lateral reference frequency (report: 0.2 and 0.5)",
+                         min=0.0, max=5.0)
+    amplitude: float = param(4.0, "m", "lateral reference amplitude (report: 4)", min=0.0, max=5.0)
+    ref_speed: float = param(25.0, "m/s", "longitudinal reference speed: 25 accelerates (X_ref = "
+                             "25 t), 15 decelerates (X_ref = 15 t)", min=1.0, max=45.0)
+
+
+class SineTracking(HighwayScenario):
+    name = "sine-tracking"
+    summary = "lateral reference A sin(omega t) across the motorway while X_ref = 25 t or 15 t"
+    config_cls = SineTrackingConfig
+
+    def _traffic(self, rng):
+        return self.background(rng), []
+
+    def _setup(self, rng) -> None:
+        super()._setup(rng)
+        self._s0 = self.s
+
+    def _plan(self) -> None:
+        c = self.config
+        obs = self.obs
+        wt = c.omega * self.t
+        obs.s_ref = self._s0 + c.ref_speed * self.t
+        obs.ds_ref = c.ref_speed
+        obs.d_ref = c.amplitude * math.sin(wt)
+        obs.dd_ref = c.amplitude * c.omega * math.cos(wt)
+
+    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
+        col = {name: trace[:, i] for i, name in enumerate(columns)}
+        out = tracking_metrics(col["t"], col["e_lat"], col["ds"] - col["speed_ref"])
+        out.update({
+            "min_ttc_front": m.json_number(m.finite_min(col["ttc_front"]), 4),
+            "min_ttc_rear": m.json_number(m.finite_min(col["ttc_rear"]), 4),
+            "max_abs_lateral_accel": m.json_number(m.max_abs(col["lat_accel"]), 4),
+            "final_speed": m.json_number(float(col["speed"][-1]) if len(col["t"]) else None, 4),
+        })
+        return out
+
+
+# --- report 000 on the bare model -----------------------------------------------------------
+
+@dataclass(frozen=True)
+class Report000Config(TimingConfig):
+    duration: float = param(30.0, "s", "simulated time", min=1.0, max=3600.0)
+    case: str = param("step", "-", "step (5 m lane change) or sine (A sin(omega t))",
+                      choices=("step", "sine"))
+    ref_speed: float = param(25.0, "m/s", "X_ref = ref_speed t: 25 accelerates, 15 decelerates",
+                             min=1.0, max=45.0)
+    initial_speed: float = param(20.0, "m/s", "u at t = 0 (report: 20)", min=1.0, max=45.0)
+    step: float = param(5.0, "m", "lateral step of case=step (report: 5)", min=-10.0, max=10.0)
+    omega: float = param(0.2, "rad/s", "case=sine: frequency (report: 0.2 and 0.5)", min=0.0, max=5.0)
+    amplitude: float = param(4.0, "m", "case=sine: amplitude (report: 4)", min=0.0, max=10.0)
+    settle_band: float = param(0.2, "m", "lane change done when |Y - Y_ref| stays below", min=0.01,
+                               max=2.0)
+    x_band: float = param(0.5, "m", "X tracking settled when |X - X_ref| stays below", min=0.01,
+                          max=10.0)
+    max_steer: float = param(0.5, "rad", "front steer limit", min=0.01, max=1.5)
+
+
+class Report000(Scenario):
+    """The report's Simulink experiments: the exact model, no traffic, no road."""
+
+    name = "report-000"
+    summary = "report 000's experiments on the bare model (no SUMO): X_ref = 25t/15t, Y step or sine"
+    config_cls = Report000Config
+    columns = ("t", "s", "d", "d_ref", "e_lat", "e_lon", "speed", "ds", "s_ref", "speed_ref", "Fx",
+               "delta", "lat_accel", "yaw_rate")
+    _RECORD_EVERY = 0.1  # s, ego outline in the recording
+
+    def __init__(self, config, controller, **kwargs) -> None:
+        super().__init__(config, controller, **kwargs)
+        self.geometry = VehicleGeometry()
+        self.ego: EgoVehicle | None = None
+        self._next_pose = 0.0
+
+    def _setup(self, rng) -> None:
+        c = self.config
+        self.ego = EgoVehicle(NonlinearBicycle(), self.geometry, c.dt, c.substeps, max_steer=c.max_steer)
+        self.ego.state = (0.0, c.initial_speed, 0.0, 0.0, 0.0, 0.0)
+        self.controlled_ids = ("ego",)
+        self._next_pose = 0.0
+
+    def _references(self, t: float) -> tuple[float, float, float, float]:
+        c = self.config
+        if c.case == "step":
+            return c.ref_speed * t, c.ref_speed, c.step, 0.0
+        wt = c.omega * t
+        return c.ref_speed * t, c.ref_speed, c.amplitude * math.sin(wt), c.amplitude * c.omega * math.cos(wt)
+
+    def _update(self) -> None:
+        X, u, Y, v, psi, r = self.ego.state
+        obs = self.obs
+        obs.t = self.t
+        obs.s_ref, obs.ds_ref, obs.d_ref, obs.dd_ref = self._references(self.t)
+        c, s = math.cos(psi), math.sin(psi)
+        obs.s, obs.d = X, Y
+        obs.ds, obs.dd = u * c - v * s, u * s + v * c
+        obs.speed, obs.yaw_rate = u, r
+        if self.t >= self._next_pose - 1e-9:
+            self._record_pose()
+
+    def _act(self, action) -> None:
+        ego = self.ego
+        ego.step(*action)
+        fx, delta = ego.applied
+        o = self.obs
+        self.trace.append((o.t, o.s, o.d, o.d_ref, o.d - o.d_ref, o.s - o.s_ref, o.speed, o.ds,
+                           o.s_ref, o.ds_ref, fx, delta, ego.lateral_accel, o.yaw_rate,
+                           *self.controller.signals().values()))
+
+    def _record_pose(self) -> None:
+        """The ego's outline, every _RECORD_EVERY seconds (there is no SUMO step)."""
+        X, _, Y, _, psi, _ = self.ego.state
+        g = self.geometry
+        front = (X + g.cg_to_front * math.cos(psi), Y + g.cg_to_front * math.sin(psi))
+        pose = (*front, (90.0 - math.degrees(psi)) % 360.0, g.length, g.width)
+        self.recorder.vehicles(self.t, ["ego"], [pose], (X, 0.0))
+        self._next_pose = self.t + self._RECORD_EVERY
+
+    def _check_divergence(self) -> str | None:
+        X, u, Y, v, psi, r = self.ego.state
+        # no road: only the state itself can be absurd (20 m off the reference is lost)
+        return divergence(self.ego.state, Y - self.obs.d_ref, psi, 20.0)
+
+    def _scene(self) -> Scene:
+        c = self.config
+        x1 = max(c.ref_speed, c.initial_speed) * c.duration
+        y = abs(c.step) if c.case == "step" else c.amplitude
+        # guide lines at the reference's extremes, the road the report never modelled
+        levels = sorted({0.0, y, -y if c.case == "sine" else 0.0})
+        lines = [(0.02, [(0.0, yy), (x1, yy)]) for yy in levels]
+        return Scene(lanes=lines, bounds=(-20.0, x1 + 20.0, -y - 10.0, y + 10.0), title=self.name)
+
+    def _series(self) -> list[Series]:
+        return [
+            Series("e_lat", "plots/lateral_error/ego", "m", "Y - Y_ref"),
+            Series("d", "plots/lateral_position/ego", "m", "Y"),
+            Series("d_ref", "plots/lateral_position/reference", "m", "Y_ref"),
+            Series("e_lon", "plots/longitudinal_error/ego", "m", "X - X_ref"),
+            Series("speed", "plots/speed/ego", "m/s", "speed"),
+            Series("speed_ref", "plots/speed/reference", "m/s", "reference"),
+            Series("Fx", "plots/Fx/Fx", "N", "Fx per driven wheel"),
+            Series("delta", "plots/delta/delta", "rad", "front steer"),
+            Series("lat_accel", "plots/lateral_accel/ego", "m/s^2", "lateral acceleration"),
+            *signal_series(self._signal_names),
+        ]
+
+    def _meta(self) -> dict:
+        meta = super()._meta()
+        meta.update({k: getattr(self.config, k) for k in self.config.__dataclass_fields__})
+        meta["colors"] = {"ego": (220, 40, 40)}
+        return meta
+
+    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
+        col = {name: trace[:, i] for i, name in enumerate(columns)}
+        c = self.config
+        t = col["t"]
+        out = tracking_metrics(t, col["e_lat"], col["ds"] - col["speed_ref"])
+        if c.case == "step":
+            duration = m.settling_time(t, col["e_lat"], c.settle_band, 0.0)
+            out["lane_change_duration"] = m.json_number(duration, 4)
+            out["lane_change_completed"] = duration is not None and self.status == "completed"
+            out["max_overshoot"] = m.json_number(m.overshoot(col["e_lat"], 1.0 if c.step >= 0 else -1.0), 4)
+        out["x_settling_time"] = m.json_number(m.settling_time(t, col["e_lon"], c.x_band, 0.0), 4)
+        out["max_abs_longitudinal_error"] = m.json_number(m.max_abs(col["e_lon"]), 4)
+        out["max_abs_lateral_accel"] = m.json_number(m.max_abs(col["lat_accel"]), 4)
+        out["final_speed"] = m.json_number(float(col["speed"][-1]) if len(t) else None, 4)
+        return out
