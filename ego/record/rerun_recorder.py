@@ -26,7 +26,6 @@ import multiprocessing
 import sys
 from collections import OrderedDict
 from contextlib import contextmanager
-from contextlib import contextmanager
 from collections.abc import Sequence
 from functools import lru_cache
 from pathlib import Path
