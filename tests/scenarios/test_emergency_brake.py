@@ -25,7 +25,7 @@ def test_changes_lane_without_collision_and_settles(controller, fuzzy_ready):
     assert m["target_side"] in ("left", "right") and m["target_lane"] in (0, 2)
     assert m["lane_change_completed"]
     # settled: the lateral error to the target lane centre stays within 0.2 m to the end
-    t, d = r.column("t"), r.column("d")
+    t, d = r.column("t"), r.column("e_lat")
     after = t >= m["trigger_time"] + m["lane_change_duration"]
     assert np.all(np.abs(d[after]) < 0.2)
     assert m["min_gap_front"] > 0.0

@@ -1,0 +1,63 @@
+"""ego compare: parallel runs, every file, failed runs as rows."""
+
+import csv
+import json
+import subprocess
+import sys
+
+import pytest
+from rerun.chunk import RrdReader
+
+from ego.compare import _one
+from ego.runner import RunSpec
+
+pytestmark = pytest.mark.sumo
+
+
+def test_compare_two_controllers_two_seeds_writes_everything(tmp_path):
+    out = tmp_path / "cmp"
+    p = subprocess.run([sys.executable, "-m", "ego", "compare", "emergency-brake", "--controllers",
+                        "pid,fuzzy", "--seeds", "2", "--out", str(out), "--set", "duration=16"],
+                       capture_output=True, text=True, timeout=600)
+    assert p.returncode == 0, p.stderr
+    rows = list(csv.DictReader(open(out / "metrics.csv")))
+    assert [(r["controller"], r["seed"]) for r in rows] == [("pid", "0"), ("pid", "1"),
+                                                              ("fuzzy", "0"), ("fuzzy", "1")]
+    assert all(r["status"] == "completed" for r in rows)
+    md = (out / "metrics.md").read_text()
+    assert "| pid | 2 completed |" in md and "| fuzzy | 2 completed |" in md
+    for png in ("lateral_error.png", "speed.png", "steering.png", "fx.png"):
+        data = (out / png).read_bytes()
+        assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 10_000
+    for r in rows:
+        rrd = out / "runs" / f"{r['controller']}-seed{r['seed']}.rrd"
+        assert RrdReader(rrd).recordings()
+    assert "4/4 runs" in p.stderr  # the progress bar
+
+
+def test_a_diverging_controller_is_a_row_not_a_crash(tmp_path):
+    out = tmp_path / "cmp"
+    p = subprocess.run([sys.executable, "-m", "ego", "compare", "report-000", "--controllers",
+                        "rbf-smc,bp-pid", "--set", "variant=report", "--out", str(out)],
+                       capture_output=True, text=True, timeout=600)
+    assert p.returncode == 0, p.stderr
+    status = {r["controller"]: r["status"] for r in csv.DictReader(open(out / "metrics.csv"))}
+    assert status == {"rbf-smc": "completed", "bp-pid": "diverged"}
+
+
+def test_a_run_that_raises_becomes_an_error_row(tmp_path):
+    blocker = tmp_path / "not-a-folder"
+    blocker.write_text("")
+    row = _one(RunSpec("report-000", "pid", 0, {}, record=str(blocker / "x.rrd")))
+    assert row.status == "error" and "Error" in row.error
+
+
+def test_bad_input_is_rejected_before_anything_runs(tmp_path):
+    p = subprocess.run([sys.executable, "-m", "ego", "compare", "emergency-brake", "--controllers",
+                        "pid,warp", "--out", str(tmp_path / "x")], capture_output=True, text=True)
+    assert p.returncode == 2 and "unknown controller 'warp'" in p.stderr
+    assert not (tmp_path / "x").exists()
+    p = subprocess.run([sys.executable, "-m", "ego", "compare", "emergency-brake", "--controllers",
+                        "pid", "--set", "kp_lat=x", "--out", str(tmp_path / "y")],
+                       capture_output=True, text=True)
+    assert p.returncode == 2 and "bad value for kp_lat" in p.stderr
