@@ -29,6 +29,7 @@ import numpy as np
 
 from ego.control import controller_spec
 from ego.params import ConfigError, describe
+from ego.processes import main_module_hidden
 from ego.runner import RunSpec, configure, run, split_overrides
 from ego.scenarios import scenario_class
 
@@ -117,7 +118,8 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
     started = time.perf_counter()
     ctx = multiprocessing.get_context("forkserver")
     with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pool:
-        futures = [pool.submit(_one, spec) for spec in specs]
+        with main_module_hidden():  # workers start on the first submissions
+            futures = [pool.submit(_one, spec) for spec in specs]
         for future in as_completed(futures):
             rows.append(future.result())
             if progress:
@@ -152,7 +154,8 @@ def _mean_spread(values: list) -> str:
     mean = float(np.mean(nums))
     text = f"{mean:.3g}"
     if len(nums) > 1:
-        text += f" +- {float(np.std(nums, ddof=1)):.2g}"
+        spread = float(np.std(nums, ddof=1))
+        text += f" +- {0.0 if spread < 1e-9 * max(1.0, abs(mean)) else spread:.2g}"
     if len(nums) < len(values):
         text += f" ({len(nums)}/{len(values)})"
     return text

@@ -1,7 +1,6 @@
 """ego compare: parallel runs, every file, failed runs as rows."""
 
 import csv
-import json
 import subprocess
 import sys
 

@@ -23,15 +23,14 @@ The scenario flushes at least every simulated second.
 from __future__ import annotations
 
 import multiprocessing
-import sys
 from collections import OrderedDict
-from contextlib import contextmanager
 from collections.abc import Sequence
 from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 
+from ego.processes import main_module_hidden
 from ego.record.base import Scene, Series, box_outlines, lane_edges
 
 TIMELINE = "sim_time"
@@ -65,7 +64,7 @@ class RerunRecorder:
             _widen_pipe(self._conn)
             self._proc = ctx.Process(target=_writer_main, args=(data_in, reply_out, *args),
                                      daemon=True, name="ego-rerun-writer")
-            with _main_module_hidden():
+            with main_module_hidden():
                 self._proc.start()
             data_in.close()
             reply_out.close()
@@ -165,35 +164,6 @@ def _widen_pipe(conn) -> None:
         fcntl.fcntl(conn.fileno(), getattr(fcntl, "F_SETPIPE_SZ", 1031), 1 << 20)
     except (ImportError, OSError):
         pass
-
-
-@contextmanager
-def _main_module_hidden():
-    """Keep multiprocessing from re-importing the user's ``__main__`` in the writer.
-
-    A new multiprocessing child normally imports the parent's main script (as
-    ``__mp_main__``) so it can unpickle objects defined there; a user script without an
-    ``if __name__ == "__main__":`` guard would then run a second simulation inside the
-    writer. The writer needs nothing from ``__main__``, so the script's file and spec are
-    hidden while the process starts (multiprocessing reads them only then).
-    """
-    main = sys.modules.get("__main__")
-    if main is None:
-        yield
-        return
-    missing = object()
-    saved_file = main.__dict__.pop("__file__", missing)
-    saved_spec = main.__dict__.get("__spec__", missing)
-    main.__spec__ = None
-    try:
-        yield
-    finally:
-        if saved_file is not missing:
-            main.__file__ = saved_file
-        if saved_spec is missing:
-            del main.__spec__
-        else:
-            main.__spec__ = saved_spec
 
 
 @lru_cache(maxsize=1)

@@ -42,7 +42,7 @@ def test_sliding_mode_drives_a_double_integrator_to_its_reference():
     # x'' = u (per unit gain): on s = x - r + x' the error decays like exp(-t)
     c = RBFSMCController(RBFSMCParams(fx_gain=1.0, delta_gain=1.0), 0.001)
     x, v = 0.0, 0.0
-    for k in range(10000):
+    for _ in range(10000):
         fx, _ = c.step(Observation(s=x, ds=v, s_ref=2.0, ds_ref=0.0))
         v += 0.001 * fx
         x += 0.001 * v
