@@ -350,40 +350,17 @@ class FastMamdani:
 
 
 def _single_output_two_inputs(engine: FastMamdani, o: int):
-    """A closure computing engine.evaluate2(x0, x1)[o], with every step written out.
-
-    The same arithmetic as :meth:`FastMamdani.evaluate2` (tests compare them); it exists
-    because a controller calls it twice per 10 ms step and CPython charges for every
-    function call and temporary.
-    """
-    p0, p1 = engine._peaks
-    lo0, hi0, last0 = p0[0], p0[-1], len(p0) - 1
-    lo1, hi1, last1 = p1[0], p1[-1], len(p1) - 1
-    inv0 = [1.0 / (p0[k + 1] - p0[k]) for k in range(last0)]
-    inv1 = [1.0 / (p1[k + 1] - p1[k]) for k in range(last1)]
+    """A closure computing engine.evaluate2(x0, x1)[o] for one output, without the
+    generic bookkeeping: the Python twin of ego._native.mamdani2 (tests compare them)."""
+    fuzzify0, fuzzify1 = engine._fuzzify2
     rows = [[terms[o][0] for terms in row] for row in engine._table2]
     out = engine._out[o]
     coef = out._coef
     pair = out._pair
-    bisect_right = bisect.bisect_right
 
     def evaluate(x0: float, x1: float) -> float:
-        if x0 <= lo0:
-            k0, b0 = 0, 0.0
-        elif x0 >= hi0:
-            k0, b0 = last0, 0.0
-        else:
-            k0 = bisect_right(p0, x0) - 1
-            b0 = (x0 - p0[k0]) * inv0[k0]
-        if x1 <= lo1:
-            k1, b1 = 0, 0.0
-        elif x1 >= hi1:
-            k1, b1 = last1, 0.0
-        else:
-            k1 = bisect_right(p1, x1) - 1
-            b1 = (x1 - p1[k1]) * inv1[k1]
-        a0 = 1.0 - b0
-        a1 = 1.0 - b1
+        k0, a0, b0 = fuzzify0(x0)
+        k1, a1, b1 = fuzzify1(x1)
         row = rows[k0]
         cuts = {row[k1]: a0 if a0 < a1 else a1}
         if b1 > 0.0:

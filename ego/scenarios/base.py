@@ -372,9 +372,24 @@ class Scenario:
         return []
 
     def _meta(self) -> dict:
-        return {"scenario": self.name, "controller": self.controller_name, "seed": self.seed}
+        """What the recording's "run" panel lists: names, seed and every parameter."""
+        meta = {"scenario": self.name, "controller": self.controller_name, "seed": self.seed}
+        meta.update({k: getattr(self.config, k) for k in self.config.__dataclass_fields__})
+        return meta
 
 
 def signal_series(names: Sequence[str]) -> list[Series]:
     """Recording series for a controller's internal signals."""
     return [Series(n, f"plots/controller/{n}", "") for n in names]
+
+
+def vehicle_series() -> list[Series]:
+    """Recording series every scenario has: speed and its reference, the actuators and the
+    lateral acceleration."""
+    return [
+        Series("speed", "plots/speed/ego", "m/s", "speed"),
+        Series("speed_ref", "plots/speed/reference", "m/s", "reference"),
+        Series("Fx", "plots/Fx/Fx", "N", "Fx per driven wheel"),
+        Series("delta", "plots/delta/delta", "rad", "front steer"),
+        Series("lat_accel", "plots/lateral_accel/ego", "m/s^2", "lateral acceleration"),
+    ]

@@ -17,7 +17,14 @@ from ego.models import NonlinearBicycle, NonlinearBicycleParams, VehicleGeometry
 from ego.params import param
 from ego.record.base import Scene, Series
 from ego.road import LanePolyline
-from ego.scenarios.base import CommonConfig, EgoVehicle, Scenario, divergence, signal_series
+from ego.scenarios.base import (
+    CommonConfig,
+    EgoVehicle,
+    Scenario,
+    divergence,
+    signal_series,
+    vehicle_series,
+)
 from ego.scenarios.events import INF, time_to_collision
 from ego.sumo.bridge import (
     Neighbours,
@@ -248,19 +255,12 @@ class HighwayScenario(Scenario):
             Series("e_lat", "plots/lateral_error/ego", "m", "lateral error (actual - reference)"),
             Series("d", "plots/lateral_position/ego", "m", "offset from the target lane centre"),
             Series("d_ref", "plots/lateral_position/reference", "m", "reference"),
-            Series("speed", "plots/speed/ego", "m/s", "speed"),
-            Series("speed_ref", "plots/speed/reference", "m/s", "reference"),
-            Series("Fx", "plots/Fx/Fx", "N", "Fx per driven wheel"),
-            Series("delta", "plots/delta/delta", "rad", "front steer"),
+            *vehicle_series(),
             Series("ttc_front", "plots/ttc/front", "s", "TTC front"),
             Series("ttc_rear", "plots/ttc/rear", "s", "TTC rear"),
-            Series("lat_accel", "plots/lateral_accel/ego", "m/s^2", "lateral acceleration"),
             Series("phase", "plots/manoeuvre/phase", "", "phase"),
             *signal_series(self._signal_names),
         ]
 
     def _meta(self) -> dict:
-        meta = super()._meta()
-        meta.update({k: getattr(self.config, k) for k in self.config.__dataclass_fields__})
-        meta["colors"] = self.colors
-        return meta
+        return {**super()._meta(), "colors": self.colors}

@@ -23,7 +23,14 @@ from ego.models import NonlinearBicycle, VehicleGeometry
 from ego.params import param
 from ego.record.base import Scene, Series
 from ego.scenarios import metrics as m
-from ego.scenarios.base import EgoVehicle, Scenario, TimingConfig, divergence, signal_series
+from ego.scenarios.base import (
+    EgoVehicle,
+    Scenario,
+    TimingConfig,
+    divergence,
+    signal_series,
+    vehicle_series,
+)
 from ego.scenarios.highway import HighwayConfig, HighwayScenario
 
 
@@ -190,19 +197,12 @@ class Report000(Scenario):
             Series("d", "plots/lateral_position/ego", "m", "Y"),
             Series("d_ref", "plots/lateral_position/reference", "m", "Y_ref"),
             Series("e_lon", "plots/longitudinal_error/ego", "m", "X - X_ref"),
-            Series("speed", "plots/speed/ego", "m/s", "speed"),
-            Series("speed_ref", "plots/speed/reference", "m/s", "reference"),
-            Series("Fx", "plots/Fx/Fx", "N", "Fx per driven wheel"),
-            Series("delta", "plots/delta/delta", "rad", "front steer"),
-            Series("lat_accel", "plots/lateral_accel/ego", "m/s^2", "lateral acceleration"),
+            *vehicle_series(),
             *signal_series(self._signal_names),
         ]
 
     def _meta(self) -> dict:
-        meta = super()._meta()
-        meta.update({k: getattr(self.config, k) for k in self.config.__dataclass_fields__})
-        meta["colors"] = {"ego": (220, 40, 40)}
-        return meta
+        return {**super()._meta(), "colors": {"ego": (220, 40, 40)}}
 
     def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
         col = {name: trace[:, i] for i, name in enumerate(columns)}
