@@ -354,9 +354,7 @@ def _single_output_two_inputs(engine: FastMamdani, o: int):
     generic bookkeeping: the Python twin of ego._native.mamdani2 (tests compare them)."""
     fuzzify0, fuzzify1 = engine._fuzzify2
     rows = [[terms[o][0] for terms in row] for row in engine._table2]
-    out = engine._out[o]
-    coef = out._coef
-    pair = out._pair
+    centroid = engine._out[o].centroid
 
     def evaluate(x0: float, x1: float) -> float:
         k0, a0, b0 = fuzzify0(x0)
@@ -379,17 +377,7 @@ def _single_output_two_inputs(engine: FastMamdani, o: int):
                 w = b0 if b0 < b1 else b1
                 if w > cuts.get(term, 0.0):
                     cuts[term] = w
-        area = moment = 0.0
-        for j, c in cuts.items():
-            A, M1, M2, M3 = coef[j]
-            area += A * c * (1.0 - 0.5 * c)
-            moment += c * (M1 + c * (M2 + c * M3))
-            nxt = cuts.get(j + 1)
-            if nxt is not None:
-                da, dm = pair(j, c, nxt)
-                area += da
-                moment += dm
-        return moment / area
+        return centroid(cuts)
 
     return evaluate
 
