@@ -1,5 +1,6 @@
 """Vehicle models: pure right-hand sides and the shared fixed-step integrator."""
 
+from ego.models.dynamic_bicycle import DynamicBicycle, DynamicBicycleParams
 from ego.models.geometry import VehicleGeometry
 from ego.models.integrate import FixedStepIntegrator, rk4_step
 from ego.models.nonlinear_bicycle import (
@@ -12,6 +13,8 @@ from ego.models.nonlinear_bicycle import (
 )
 
 __all__ = [
+    "DynamicBicycle",
+    "DynamicBicycleParams",
     "FixedStepIntegrator",
     "Input",
     "NonlinearBicycle",
