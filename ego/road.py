@@ -1,16 +1,36 @@
 """Lane coordinates: project a pose onto a lane's centre line.
 
 A lane is the polyline SUMO gives for it (``lane.getShape``). For a point (x, y) the
-projection returns the arc length ``s`` along the centre line to the closest point (m),
-the signed lateral offset ``d`` of the point from the centre line (m, positive to the
-LEFT of the driving direction) and the centre line's heading there (rad,
-counter-clockwise from +x).
+projection returns
+
+* ``s`` - arc length along the centre line to the closest point (m);
+* ``d`` - signed lateral offset of the point from the centre line (m, positive to the
+  LEFT of the driving direction; on a left-hand arc of radius R a point at distance rho
+  from the centre has d = R - rho, so report 002's e_d = rho - R is -d);
+* ``heading`` - the centre line's direction there (rad, counter-clockwise from +x),
+  interpolated between the tangents at the vertices (exact on an evenly sampled circle);
+* ``curvature`` - signed curvature there (1/m, positive turning left): the derivative
+  of that interpolated heading, constant along each segment (its heading change over
+  its length), so a long straight meeting an arc stays straight up to the junction.
+
+:meth:`LanePolyline.frame` adds the heading error ``psi - heading`` of a pose (rad,
+positive when the vehicle points left of the lane).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+
+_TWO_PI = 2.0 * math.pi
+
+
+def wrap_angle(a: float) -> float:
+    """Angle in (-pi, pi]."""
+    a = math.fmod(a + math.pi, _TWO_PI)
+    if a <= 0.0:
+        a += _TWO_PI
+    return a - math.pi
 
 
 class LanePolyline:
@@ -24,29 +44,48 @@ class LanePolyline:
             raise ValueError("a lane needs at least two points")
         self.lane_id = lane_id
         self.width = float(width)
-        self.points = [(float(x), float(y)) for x, y in points]
-        seg = []
-        s0 = 0.0
-        for (x0, y0), (x1, y1) in zip(self.points, self.points[1:]):
-            length = math.hypot(x1 - x0, y1 - y0)
-            if length == 0.0:
-                continue
-            ux, uy = (x1 - x0) / length, (y1 - y0) / length
-            seg.append((x0, y0, ux, uy, length, s0, math.atan2(uy, ux)))
-            s0 += length
-        if not seg:
+        pts = []
+        for x, y in points:
+            p = (float(x), float(y))
+            if not pts or p != pts[-1]:
+                pts.append(p)
+        if len(pts) < 2:
             raise ValueError("a lane needs two distinct points")
-        self._seg = seg
+        self.points = pts
+        raw = []
+        s0 = 0.0
+        for (x0, y0), (x1, y1) in zip(pts, pts[1:]):
+            length = math.hypot(x1 - x0, y1 - y0)
+            raw.append((x0, y0, (x1 - x0) / length, (y1 - y0) / length, length, s0,
+                        math.atan2(y1 - y0, x1 - x0)))
+            s0 += length
+        n = len(raw)
+        # tangent heading and discrete curvature at every vertex (ends: the end segment's).
+        # The tangent splits the turn in proportion to the OTHER side's length: equal
+        # chords of a sampled curve share it evenly, while where a long straight meets
+        # short chords (an arc starting at the vertex) the tangent stays the straight's.
+        heading = [raw[0][6]]
+        for i in range(1, n):
+            before, after = raw[i - 1][4], raw[i][4]
+            turn = wrap_angle(raw[i][6] - raw[i - 1][6])
+            heading.append(raw[i - 1][6] + turn * after / (before + after))
+        heading.append(raw[-1][6])
+        # segment: x0, y0, ux, uy, length, s0, direction, heading at start, heading
+        # change along it, curvature
+        self._seg = []
+        for i in range(n):
+            change = wrap_angle(heading[i + 1] - heading[i])
+            self._seg.append((*raw[i], heading[i], change, change / raw[i][4]))
         self._hint = 0
 
     @property
     def length(self) -> float:
-        x0, y0, ux, uy, length, s0, _ = self._seg[-1]
-        return s0 + length
+        last = self._seg[-1]
+        return last[5] + last[4]
 
     def _local(self, i: int, x: float, y: float) -> tuple[float, float, float]:
         """(along, across, distance^2) of (x, y) relative to segment i, along clamped."""
-        x0, y0, ux, uy, length, _, _ = self._seg[i]
+        x0, y0, ux, uy, length = self._seg[i][:5]
         dx, dy = x - x0, y - y0
         along = dx * ux + dy * uy
         across = uy * -dx + ux * dy
@@ -57,17 +96,13 @@ class LanePolyline:
             return along, across, ex * ex + ey * ey
         return along, across, across * across
 
-    def project(self, x: float, y: float) -> tuple[float, float, float]:
-        """(s, d, heading) of the closest point of the centre line to (x, y).
-
-        Searches outward from the previous answer's segment, so successive calls along a
-        trajectory cost O(1); beyond the ends the first/last segment is extended.
-        """
+    def _closest(self, x: float, y: float) -> tuple[int, float, float]:
+        """(segment, along, across) of the closest point, searching outward from the
+        previous answer's segment so successive calls along a trajectory cost O(1)."""
         seg = self._seg
         n = len(seg)
         i = self._hint
         best = self._local(i, x, y)
-        # walk towards the closer neighbour while it improves
         for step in (1, -1):
             j = i + step
             while 0 <= j < n:
@@ -79,19 +114,75 @@ class LanePolyline:
                     break
         self._hint = i
         along, across, _ = best
-        _, _, _, _, length, s0, heading = seg[i]
+        length = seg[i][4]
         if 0 < i and along < 0.0:
             along = 0.0
         if i < n - 1 and along > length:
             along = length
-        return s0 + along, across, heading
+        return i, along, across
+
+    def project(self, x: float, y: float) -> tuple[float, float, float]:
+        """(s, d, heading) of the closest point of the centre line to (x, y); beyond the
+        ends the first/last segment is extended."""
+        i, along, across = self._closest(x, y)
+        seg = self._seg[i]
+        t = min(max(along / seg[4], 0.0), 1.0)
+        return seg[5] + along, across, seg[7] + t * seg[8]
+
+    def frame(self, x: float, y: float, psi: float) -> tuple[float, float, float, float]:
+        """(s, d, heading error psi - heading, curvature) of a pose (m, m, rad, 1/m)."""
+        i, along, across = self._closest(x, y)
+        seg = self._seg[i]
+        t = min(max(along / seg[4], 0.0), 1.0)
+        return seg[5] + along, across, wrap_angle(psi - seg[7] - t * seg[8]), seg[9]
+
+    def heading_at(self, s: float) -> float:
+        """The centre line's (interpolated tangent) heading at arc length ``s`` (rad)."""
+        seg = self._seg[self._segment_at(s)]
+        t = min(max((s - seg[5]) / seg[4], 0.0), 1.0)
+        return wrap_angle(seg[7] + t * seg[8])
+
+    def mean_curvature(self, s: float, ahead: float) -> float:
+        """Mean curvature over [s, s + ahead] (1/m): the lane's turn there over ``ahead``."""
+        if ahead <= 0.0:
+            return self.curvature_at(s)
+        return wrap_angle(self.heading_at(s + ahead) - self.heading_at(s)) / ahead
+
+    def curvature_at(self, s: float) -> float:
+        """Signed curvature (1/m) at arc length ``s``."""
+        return self._seg[self._segment_at(s)][9]
+
+    def _segment_at(self, s: float) -> int:
+        seg = self._seg
+        lo, hi = 0, len(seg) - 1
+        while lo < hi:
+            mid = (lo + hi + 1) // 2
+            if seg[mid][5] <= s:
+                lo = mid
+            else:
+                hi = mid - 1
+        return lo
+
+    def curved_spans(self, min_curvature: float = 1e-3) -> list[tuple[float, float, float]]:
+        """(s_start, s_end, mean curvature) of every run of segments curving by more than
+        ``min_curvature`` (1/m) the same way: where the lane's arcs are."""
+        spans = []
+        run: list[tuple[float, float, float]] = []
+        for seg in self._seg:
+            kappa = seg[9]
+            if abs(kappa) > min_curvature and (not run or (kappa > 0) == (run[0][2] > 0)):
+                run.append((seg[5], seg[5] + seg[4], kappa))
+                continue
+            if run:
+                spans.append(run)
+            run = [(seg[5], seg[5] + seg[4], kappa)] if abs(kappa) > min_curvature else []
+        if run:
+            spans.append(run)
+        return [(r[0][0], r[-1][1], sum(k * (b - a) for a, b, k in r) / (r[-1][1] - r[0][0]))
+                for r in spans]
 
     def offset_point(self, s: float, d: float) -> tuple[float, float]:
         """World point at arc length ``s`` and lateral offset ``d`` (m)."""
-        seg = self._seg
-        i = 0
-        while i < len(seg) - 1 and s > seg[i][5] + seg[i][4]:
-            i += 1
-        x0, y0, ux, uy, _, s0, _ = seg[i]
+        x0, y0, ux, uy, _, s0 = self._seg[self._segment_at(s)][:6]
         along = s - s0
         return x0 + along * ux - d * uy, y0 + along * uy + d * ux
