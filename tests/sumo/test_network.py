@@ -1,9 +1,13 @@
-"""The shipped motorway network: built from its plain XML, and what it must be."""
+"""The shipped networks: built from their plain XML, and what they must be."""
 
+import importlib.util
+import math
+
+import numpy as np
 import pytest
 import sumolib
 
-from ego.sumo.net import build_network, net_file, network_body
+from ego.sumo.net import available_networks, build_network, net_file, network_body, nets_dir
 
 
 @pytest.fixture(scope="module")
@@ -11,9 +15,19 @@ def net():
     return sumolib.net.readNet(str(net_file("highway")))
 
 
-def test_committed_network_matches_a_rebuild(tmp_path):
-    rebuilt = build_network("highway", output=tmp_path / "highway.net.xml")
-    assert network_body(rebuilt) == network_body(net_file("highway"))
+@pytest.fixture(scope="module")
+def curve():
+    return sumolib.net.readNet(str(net_file("curve")))
+
+
+def test_both_networks_ship():
+    assert {"highway", "curve"} <= set(available_networks())
+
+
+@pytest.mark.parametrize("name", ["highway", "curve"])
+def test_committed_network_matches_a_rebuild(tmp_path, name):
+    rebuilt = build_network(name, output=tmp_path / f"{name}.net.xml")
+    assert network_body(rebuilt) == network_body(net_file(name))
 
 
 def test_three_lanes_of_3_5_m_at_least_2_km(net):
@@ -34,3 +48,59 @@ def test_lanes_are_straight_and_centred(net):
         assert len(shape) == 2
         assert all(p[1] == pytest.approx(y) for p in shape)
         assert shape[1][0] > shape[0][0]  # driving towards +x
+
+
+# -- curve: report 002's 90-degree arc of radius 15 m about (100, 15) ---------------------------
+
+CENTRE, R = (100.0, 15.0), 15.0
+
+
+def dense(shape, per_metre=20):
+    """Points along every segment of a polyline (the chords, not only the vertices)."""
+    out = []
+    for (x0, y0), (x1, y1) in zip(shape, shape[1:]):
+        n = max(2, int(math.hypot(x1 - x0, y1 - y0) * per_metre))
+        t = np.linspace(0.0, 1.0, n)
+        out.append(np.column_stack([x0 + t * (x1 - x0), y0 + t * (y1 - y0)]))
+    return np.vstack(out)
+
+
+def arc_part(points):
+    """The points whose angle about the centre lies within the arc (first quadrant turn)."""
+    dx, dy = points[:, 0] - CENTRE[0], points[:, 1] - CENTRE[1]
+    # the arc runs from angle -90 deg (100, 0) to 0 deg (115, 15) about the centre
+    ang = np.arctan2(dy, dx)
+    return points[(ang >= -math.pi / 2) & (ang <= 0.0) & (dx >= 0) & (dy <= 0)]
+
+
+@pytest.mark.parametrize("lane_id, radius", [("forward_0", 15.0), ("oncoming_0", 11.5)])
+def test_curve_lane_is_within_1_cm_of_the_true_circle(curve, lane_id, radius):
+    shape = curve.getLane(lane_id).getShape()
+    pts = arc_part(dense(shape))
+    assert len(pts) > 300  # the arc is sampled, not skipped
+    rho = np.hypot(pts[:, 0] - CENTRE[0], pts[:, 1] - CENTRE[1])
+    assert np.max(np.abs(rho - radius)) < 0.01
+
+
+def test_curve_has_straights_a_quarter_circle_and_one_lane_each_way(curve):
+    fwd, onc = curve.getEdge("forward"), curve.getEdge("oncoming")
+    assert fwd.getLaneNumber() == onc.getLaneNumber() == 1
+    shape = fwd.getLane(0).getShape()
+    assert shape[0] == pytest.approx((0.0, 0.0)) and shape[1] == pytest.approx((100.0, 0.0))
+    assert shape[-2] == pytest.approx((115.0, 15.0)) and shape[-1] == pytest.approx((115.0, 115.0))
+    # 100 m + a quarter of 2 pi 15 m (chords) + 100 m
+    assert fwd.getLane(0).getLength() == pytest.approx(200.0 + R * math.pi / 2, abs=0.01)
+    # oncoming drives the other way, 3.5 m to the ego's left
+    o = onc.getLane(0).getShape()
+    assert o[0] == pytest.approx((111.5, 115.0)) and o[-1] == pytest.approx((0.0, 3.5))
+    assert fwd.getLane(0).getWidth() == onc.getLane(0).getWidth() == pytest.approx(3.5)
+
+
+def test_curve_sources_match_their_generator(tmp_path):
+    folder = nets_dir() / "curve"
+    spec = importlib.util.spec_from_file_location("curve_generate", folder / "generate.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    mod.main(tmp_path)
+    for name in ("curve.nod.xml", "curve.edg.xml"):
+        assert (tmp_path / name).read_text() == (folder / name).read_text()
