@@ -3,6 +3,7 @@
     ego run SCENARIO --controller NAME [--record PATH] [--seed N] [--set key=value ...] [--json]
     ego compare SCENARIO --controllers A,B,... [--seeds N] [--set key=value ...] --out DIR
     ego list [--json]
+    ego train narma-l2 [--seed N] [--samples N] [--epochs N] [--out PATH]
 
 Exit status: 0 the run completed; 1 it ended in a collision, diverged or timed out
 (the metrics are still printed); 2 bad input (unknown name, bad value), with one line
@@ -13,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from collections.abc import Sequence
 
@@ -29,8 +31,18 @@ class _Parser(argparse.ArgumentParser):
         raise ConfigError(message)
 
 
-def _parser() -> argparse.ArgumentParser:
+def _controllers_help() -> str:
     from ego.control import CONTROLLERS
+    from ego.scenarios import SCENARIOS
+
+    parts = []
+    for task, specs in CONTROLLERS.items():
+        scen = [n for n, c in SCENARIOS.items() if c.task == task]
+        parts.append(f"{', '.join(specs)} (for {', '.join(scen)})")
+    return "; ".join(parts)
+
+
+def _parser() -> argparse.ArgumentParser:
     from ego.scenarios import SCENARIOS
 
     ap = _Parser(
@@ -41,6 +53,9 @@ def _parser() -> argparse.ArgumentParser:
                "  ego run emergency-brake --controller fuzzy --record runs/eb.rrd\n"
                "  ego run emergency-brake --controller pid --set block_left=true --json\n"
                "  ego compare fast-follower --controllers pid,fuzzy,rbf-smc --seeds 3 --out runs/ff\n"
+               "  ego run curve --controller narma-l2 --set entry_speed=40\n"
+               "  ego compare curve --controllers pid,fuzzy-curve,narma-l2 --out runs/curve\n"
+               "  ego train narma-l2 --seed 0\n"
                "  rerun runs/eb.rrd   # review the recording",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -56,7 +71,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     run.add_argument("scenario", metavar="SCENARIO", help=f"one of: {', '.join(SCENARIOS)}")
     run.add_argument("--controller", "-c", required=True, metavar="NAME",
-                     help=f"one of: {', '.join(CONTROLLERS)}")
+                     help=f"one of: {_controllers_help()}")
     run.add_argument("--record", metavar="PATH", help="write a Rerun recording (.rrd) here")
     run.add_argument("--seed", type=int, default=0, metavar="N",
                      help="seed of the traffic and of SUMO (default 0)")
@@ -76,7 +91,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     cmp_.add_argument("scenario", metavar="SCENARIO", help=f"one of: {', '.join(SCENARIOS)}")
     cmp_.add_argument("--controllers", required=True, metavar="A,B,...",
-                      help=f"comma-separated, from: {', '.join(CONTROLLERS)}")
+                      help=f"comma-separated, from: {_controllers_help()}")
     cmp_.add_argument("--seeds", type=int, default=1, metavar="N", help="seeds 0..N-1 (default 1)")
     cmp_.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                       help="override a parameter (repeatable)")
@@ -88,11 +103,36 @@ def _parser() -> argparse.ArgumentParser:
                          description="List scenarios, controllers and every parameter with "
                                      "its default and unit.")
     lst.add_argument("--json", action="store_true", help="print JSON instead of text")
+
+    trn = sub.add_parser(
+        "train", help="train a learned controller (narma-l2)",
+        description="Generate identification data from the ego's model and train a learned "
+                    "controller's networks (torch, CPU, seeded: the same seed gives the same "
+                    "weights). Writes the weights (.npz) and their training metadata (.json).",
+        epilog="Example: ego train narma-l2 --seed 0   (rewrites the model shipped with ego)\n"
+               "The report's setting (100 samples at one operating point): ego train narma-l2 "
+               "--samples 100 --speeds 30,30 --accels 0.3,0.3 --radii 15,15 --out runs/narma_report.npz; "
+               "use it with --set model=runs/narma_report.npz",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    trn.add_argument("what", metavar="MODEL", choices=["narma-l2"], help="narma-l2")
+    trn.add_argument("--seed", type=int, default=0, metavar="N", help="seed of data and training (default 0)")
+    trn.add_argument("--samples", type=int, default=20000, metavar="N",
+                     help="identification samples (default 20000)")
+    trn.add_argument("--epochs", type=int, default=150, metavar="N", help="training epochs (default 150)")
+    trn.add_argument("--speeds", default="20,40", metavar="LO,HI",
+                     help="entry speed range in km/h (default 20,40)")
+    trn.add_argument("--accels", default="0,0.6", metavar="LO,HI",
+                     help="axial acceleration range in m/s^2 (default 0,0.6)")
+    trn.add_argument("--radii", default="12,60", metavar="LO,HI",
+                     help="curve radius range in m (default 12,60)")
+    trn.add_argument("--out", default=None, metavar="PATH",
+                     help="weights file (.npz; default: the model shipped in the package)")
     return ap
 
 
 def _catalogue() -> dict:
-    from ego.control import CONTROLLERS
+    from ego.control import CONTROLLERS, TASKS
     from ego.scenarios import SCENARIOS
 
     def params(cls) -> list[dict]:
@@ -103,10 +143,12 @@ def _catalogue() -> dict:
         ]
 
     return {
-        "scenarios": [{"name": n, "summary": c.summary, "parameters": params(c.config_cls)}
+        "scenarios": [{"name": n, "task": c.task, "summary": c.summary,
+                       "parameters": params(c.config_cls)}
                       for n, c in SCENARIOS.items()],
-        "controllers": [{"name": n, "summary": s.summary, "parameters": params(s.params)}
-                        for n, s in CONTROLLERS.items()],
+        "tasks": [{"name": t, "summary": TASKS[t]} for t in CONTROLLERS],
+        "controllers": [{"name": n, "task": t, "summary": s.summary, "parameters": params(s.params)}
+                        for t, specs in CONTROLLERS.items() for n, s in specs.items()],
     }
 
 
@@ -123,12 +165,15 @@ def _print_catalogue(cat: dict) -> None:
 
     print("Scenarios (ego run SCENARIO ...; parameters with --set key=value):")
     for s in cat["scenarios"]:
-        print(f"\n  {s['name']}: {s['summary']}")
+        print(f"\n  {s['name']} [{s['task']} task]: {s['summary']}")
         table(s["parameters"])
-    print("\nControllers (--controller NAME; parameters with --set key=value):")
-    for c in cat["controllers"]:
-        print(f"\n  {c['name']}: {c['summary']}")
-        table(c["parameters"])
+    for task in cat["tasks"]:
+        print(f"\nControllers of the {task['name']} task ({task['summary']}; --controller NAME, "
+              "parameters with --set key=value):")
+        for c in cat["controllers"]:
+            if c["task"] == task["name"]:
+                print(f"\n  {c['name']}: {c['summary']}")
+                table(c["parameters"])
 
 
 def _fmt(value) -> str:
@@ -186,8 +231,46 @@ def _compare(args) -> int:
     out = Path(args.out)
     rows = compare(args.scenario, names, args.seeds, parse_overrides(args.overrides), out, args.jobs)
     print((out / "metrics.md").read_text(), end="")
-    print(f"\nwrote {out}/metrics.csv, metrics.md, lateral_error.png, speed.png, steering.png, fx.png "
-          f"and {len(rows)} recordings in {out}/runs/")
+    pngs = ", ".join(sorted(p.name for p in out.glob("*.png")))
+    print(f"\nwrote {out}/metrics.csv, metrics.md, {pngs} and {len(rows)} recordings in {out}/runs/")
+    return EXIT_OK
+
+
+def _range(text: str, what: str) -> tuple[float, float]:
+    try:
+        lo, hi = (float(x) for x in text.split(","))
+    except ValueError:
+        raise ConfigError(f"bad value for {what}: {text!r} (expected LO,HI, e.g. 20,40)") from None
+    if not (math.isfinite(lo) and math.isfinite(hi)) or lo > hi:
+        raise ConfigError(f"bad value for {what}: {text!r} (expected finite LO <= HI)")
+    return lo, hi
+
+
+def _train(args) -> int:
+    from pathlib import Path
+
+    from ego.control.narma import DEFAULT_MODEL
+    from ego.train.narma_l2 import DataSpec, TrainSpec, train
+
+    if args.samples < 50:
+        raise ConfigError(f"bad value for --samples: {args.samples} (expected at least 50)")
+    if args.epochs < 1:
+        raise ConfigError(f"bad value for --epochs: {args.epochs} (expected at least 1)")
+    v_lo, v_hi = _range(args.speeds, "--speeds")
+    a_lo, a_hi = _range(args.accels, "--accels")
+    r_lo, r_hi = _range(args.radii, "--radii")
+    if r_lo < 5.0 or r_hi > 1000.0:
+        raise ConfigError(f"bad value for --radii: {args.radii!r} (expected m within 5..1000)")
+    if v_lo < 5.0 or v_hi > 60.0:
+        raise ConfigError(f"bad value for --speeds: {args.speeds!r} (expected km/h within 5..60)")
+    if a_lo < -2.0 or a_hi > 2.0:
+        raise ConfigError(f"bad value for --accels: {args.accels!r} (expected m/s^2 within -2..2)")
+    out = Path(args.out) if args.out else DEFAULT_MODEL
+    if out.suffix != ".npz":
+        raise ConfigError(f"bad --out path {args.out!r} (expected a file ending in .npz)")
+    data = DataSpec(samples=args.samples, speed_min=v_lo, speed_max=v_hi, accel_min=a_lo,
+                    accel_max=a_hi, radius_min=r_lo, radius_max=r_hi)
+    train(TrainSpec(seed=args.seed, epochs=args.epochs, data=data), out)
     return EXIT_OK
 
 
@@ -200,6 +283,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _run(args)
         if args.command == "compare":
             return _compare(args)
+        if args.command == "train":
+            return _train(args)
         if args.command == "list":
             cat = _catalogue()
             if args.json:

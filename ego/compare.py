@@ -36,12 +36,16 @@ from ego.scenarios import scenario_class
 #: trace columns kept for the plots: (column, file, y label)
 PLOTS = (
     ("e_lat", "lateral_error.png", "lateral error (actual - reference) [m]"),
+    ("e_d", "e_d.png", "e_d = distance to the arc centre - R [m]"),
+    ("e_a", "e_a.png", "e_a = heading - tangent [rad]"),
     ("speed", "speed.png", "speed [m/s]"),
     ("delta", "steering.png", "front steer angle [rad]"),
     ("Fx", "fx.png", "Fx per driven wheel [N]"),
+    ("a_x", "a_x.png", "axial acceleration [m/s^2]"),
 )
 #: headline metrics for metrics.md, in order, when the scenario reports them
 HEADLINE = (
+    "max_abs_ed", "final_ed", "max_abs_ea", "final_ea", "time_in_arc", "entry_speed", "exit_speed",
     "lane_change_duration", "max_overshoot", "min_ttc_front", "min_ttc_rear", "min_gap_front",
     "rms_lateral_error", "max_abs_lateral_error_after_10s", "rms_speed_error", "x_settling_time",
     "max_abs_lateral_accel",
@@ -75,10 +79,10 @@ def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict,
     if not controllers:
         raise ConfigError("--controllers needs at least one name")
     for name in controllers:
-        controller_spec(name)
+        controller_spec(name, cls.task)
     known = {i.name for i in describe(cls.config_cls)}
     for name in controllers:
-        known |= {i.name for i in describe(controller_spec(name).params)}
+        known |= {i.name for i in describe(controller_spec(name, cls.task).params)}
     unknown = sorted(set(overrides) - known)
     if unknown:
         raise ConfigError(f"unknown parameter {unknown[0]!r} for {scenario} with "
@@ -194,6 +198,8 @@ def write_plots(scenario: str, rows: Sequence[RunRow], controllers: list[str], o
         if r.controller not in first and r.traces:
             first[r.controller] = r
     for column, filename, label in PLOTS:
+        if not any(column in r.traces for r in first.values()):
+            continue  # not a column of this scenario
         fig, ax = plt.subplots(figsize=(9, 4.5), dpi=110)
         for name in controllers:
             r = first.get(name)

@@ -29,8 +29,9 @@ class RunSpec:
 
 def split_overrides(scenario: str, controller: str, overrides: Mapping[str, Any]) -> dict:
     """The overrides that apply to this scenario and controller (others are dropped)."""
-    known = {i.name for i in describe(scenario_class(scenario).config_cls)}
-    known |= {i.name for i in describe(controller_spec(controller).params)}
+    cls = scenario_class(scenario)
+    known = {i.name for i in describe(cls.config_cls)}
+    known |= {i.name for i in describe(controller_spec(controller, cls.task).params)}
     return {k: v for k, v in overrides.items() if k in known}
 
 
@@ -38,7 +39,7 @@ def configure(spec: RunSpec):
     """Resolve names and overrides: (scenario class, its config, controller spec, its params).
     Raises ConfigError on any unknown name or bad value; builds nothing."""
     cls = scenario_class(spec.scenario)
-    ctrl = controller_spec(spec.controller)
+    ctrl = controller_spec(spec.controller, cls.task)
     config, rest = apply_overrides(cls.config_cls(), spec.overrides, strict=False)
     ctrl_params, rest = apply_overrides(ctrl.params(), rest, strict=False)
     if rest:

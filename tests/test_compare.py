@@ -32,6 +32,26 @@ def test_compare_two_controllers_two_seeds_writes_everything(tmp_path):
         rrd = out / "runs" / f"{r['controller']}-seed{r['seed']}.rrd"
         assert RrdReader(rrd).recordings()
     assert "4/4 runs" in p.stderr  # the progress bar
+    assert not (out / "e_d.png").exists()  # the curve's plots only where there is a curve
+
+
+def test_compare_the_curve_controllers(tmp_path):
+    out = tmp_path / "curve"
+    p = subprocess.run([sys.executable, "-m", "ego", "compare", "curve", "--controllers",
+                        "pid,fuzzy-curve,narma-l2", "--out", str(out)],
+                       capture_output=True, text=True, timeout=600)
+    assert p.returncode == 0, p.stderr
+    rows = {r["controller"]: r for r in csv.DictReader(open(out / "metrics.csv"))}
+    assert set(rows) == {"pid", "fuzzy-curve", "narma-l2"}
+    for r in rows.values():
+        assert r["status"] == "completed" and r["completed_arc"] == "True"
+        assert float(r["max_abs_ed"]) < 0.5
+    md = (out / "metrics.md").read_text()
+    assert "max_abs_ed" in md and "time_in_arc" in md and "| narma-l2 | 1 completed |" in md
+    for png in ("e_d.png", "e_a.png", "speed.png", "steering.png", "a_x.png"):
+        assert (out / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", png
+    assert not (out / "fx.png").exists() and not (out / "lateral_error.png").exists()
+    assert "e_d.png" in p.stdout
 
 
 def test_a_diverging_controller_is_a_row_not_a_crash(tmp_path):

@@ -6,8 +6,10 @@ from dataclasses import dataclass
 
 from ego.control.base import Controller, ControllerSpec, Observation
 from ego.control.bp_pid import BPPIDController, BPPIDParams
+from ego.control.curve import CurvePID, CurvePIDParams, FuzzyCurve, FuzzyCurveParams
 from ego.control.fuzzy import FuzzyController, FuzzyParams
 from ego.control.fuzzy_pid import FuzzyPIDController, FuzzyPIDParams
+from ego.control.narma import NarmaL2Controller, NarmaL2Params
 from ego.control.pid import PID, PIDController, PIDParams
 from ego.control.rbf_smc import RBFSMCController, RBFSMCParams
 from ego.params import ConfigError
@@ -19,7 +21,8 @@ class NoParams:
 
 
 class NoController:
-    """Controller switched off: Fx = 0 and delta = 0, so the ego coasts straight on."""
+    """Controller switched off: zero longitudinal command (Fx or a_x) and delta = 0, so the
+    ego coasts straight on."""
 
     def __init__(self, params: NoParams, dt: float) -> None:
         pass
@@ -34,32 +37,67 @@ class NoController:
         return {}
 
 
-CONTROLLERS: dict[str, ControllerSpec] = {
-    spec.name: spec
-    for spec in (
-        ControllerSpec("fuzzy", "report 000's 7x7 Mamdani fuzzy controller on both channels",
-                       FuzzyParams, FuzzyController),
-        ControllerSpec("pid", "PID baseline with anti-windup and filtered derivative",
-                       PIDParams, PIDController),
-        ControllerSpec("fuzzy-pid", "report 000's fuzzy-adaptive PID (classic dKp/dKi/dKd tables)",
-                       FuzzyPIDParams, FuzzyPIDController),
-        ControllerSpec("bp-pid", "report 000's BP neural-network PID (default: stabilised learning)",
-                       BPPIDParams, BPPIDController),
-        ControllerSpec("rbf-smc", "report 000's RBF adaptive sliding-mode control",
-                       RBFSMCParams, RBFSMCController),
-        ControllerSpec("none", "controller off: Fx = 0, delta = 0 (the ego coasts)",
-                       NoParams, NoController),
-    )
+#: What a task's controllers return: (longitudinal command, front steer angle in rad).
+TASKS: dict[str, str] = {
+    "tracking": "report 000's two-channel tracking: returns (Fx per driven wheel in N, delta in rad)",
+    "curve": "report 002's curve: returns (axial acceleration a_x in m/s^2, delta in rad)",
+}
+
+_NONE = ControllerSpec("none", "controller off: zero longitudinal command, delta = 0 (the ego "
+                       "coasts straight on)", NoParams, NoController)
+
+#: task -> name -> spec. A scenario belongs to one task; its controllers are looked up there.
+CONTROLLERS: dict[str, dict[str, ControllerSpec]] = {
+    "tracking": {
+        spec.name: spec
+        for spec in (
+            ControllerSpec("fuzzy", "report 000's 7x7 Mamdani fuzzy controller on both channels",
+                           FuzzyParams, FuzzyController),
+            ControllerSpec("pid", "PID baseline with anti-windup and filtered derivative",
+                           PIDParams, PIDController),
+            ControllerSpec("fuzzy-pid", "report 000's fuzzy-adaptive PID (classic dKp/dKi/dKd tables)",
+                           FuzzyPIDParams, FuzzyPIDController),
+            ControllerSpec("bp-pid", "report 000's BP neural-network PID (default: stabilised learning)",
+                           BPPIDParams, BPPIDController),
+            ControllerSpec("rbf-smc", "report 000's RBF adaptive sliding-mode control",
+                           RBFSMCParams, RBFSMCController),
+            _NONE,
+        )
+    },
+    "curve": {
+        spec.name: spec
+        for spec in (
+            ControllerSpec("pid", "report 002's PI on e = e_lat + e_head (Kp 2, Ki 0.5)",
+                           CurvePIDParams, CurvePID),
+            ControllerSpec("fuzzy-curve", "report 002's two 5x5 fuzzy tables (speed x position "
+                           "error, speed x angle error), mixed with weight w",
+                           FuzzyCurveParams, FuzzyCurve),
+            ControllerSpec("narma-l2", "report 002's NARMA-L2: f and g networks trained on "
+                           "20-40 km/h, delta = (r - f) / g with a move penalty", NarmaL2Params, NarmaL2Controller),
+            _NONE,
+        )
+    },
 }
 
 
-def controller_spec(name: str) -> ControllerSpec:
-    """The registered controller ``name``, or a ConfigError naming the allowed ones."""
+def controller_names(task: str | None = None) -> list[str]:
+    """Registered names of one task, or of every task (each name once)."""
+    tasks = [task] if task is not None else list(CONTROLLERS)
+    return list(dict.fromkeys(n for t in tasks for n in CONTROLLERS[t]))
+
+
+def controller_spec(name: str, task: str = "tracking") -> ControllerSpec:
+    """The controller ``name`` of ``task``, or a ConfigError naming the allowed ones."""
     try:
-        return CONTROLLERS[name]
+        return CONTROLLERS[task][name]
     except KeyError:
+        if task not in CONTROLLERS:
+            raise ConfigError(f"unknown task {task!r} (known: {', '.join(CONTROLLERS)})") from None
+        others = [t for t in CONTROLLERS if name in CONTROLLERS[t]]
+        hint = f"; {name!r} is a {others[0]} controller" if others else ""
         raise ConfigError(
-            f"unknown controller {name!r} (known: {', '.join(CONTROLLERS)})"
+            f"unknown controller {name!r} for the {task} task (known: "
+            f"{', '.join(CONTROLLERS[task])}){hint}"
         ) from None
 
 
@@ -67,6 +105,14 @@ __all__ = [
     "BPPIDController",
     "BPPIDParams",
     "CONTROLLERS",
+    "TASKS",
+    "CurvePID",
+    "CurvePIDParams",
+    "FuzzyCurve",
+    "FuzzyCurveParams",
+    "NarmaL2Controller",
+    "NarmaL2Params",
+    "controller_names",
     "FuzzyPIDController",
     "FuzzyPIDParams",
     "RBFSMCController",

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 from ego.params import ConfigError
 from ego.scenarios.base import CommonConfig, Event, RunResult, Scenario
+from ego.scenarios.curve import CurveConfig, CurveScenario
 from ego.scenarios.evasive import EmergencyBrake, EmergencyBrakeConfig, FastFollower, FastFollowerConfig
 from ego.scenarios.tracking import Report000, Report000Config, SineTracking, SineTrackingConfig
 
 SCENARIOS: dict[str, type[Scenario]] = {
-    cls.name: cls for cls in (EmergencyBrake, FastFollower, SineTracking, Report000)
+    cls.name: cls for cls in (EmergencyBrake, FastFollower, CurveScenario, SineTracking, Report000)
 }
 
 
@@ -23,6 +24,8 @@ def scenario_class(name: str) -> type[Scenario]:
 __all__ = [
     "SCENARIOS",
     "CommonConfig",
+    "CurveConfig",
+    "CurveScenario",
     "EmergencyBrake",
     "EmergencyBrakeConfig",
     "FastFollower",

@@ -21,7 +21,7 @@ from typing import ClassVar
 import numpy as np
 
 from ego.control.base import Controller, Observation
-from ego.models import NonlinearBicycle, VehicleGeometry
+from ego.models import DynamicBicycle, NonlinearBicycle, VehicleGeometry
 from ego.params import ConfigError, param
 from ego.record.base import NullRecorder, Recorder, Scene, Series
 from ego.scenarios.metrics import json_number
@@ -98,12 +98,14 @@ class RunResult:
 
 
 class EgoVehicle:
-    """An ego car: report 000's model, its body and actuator limits, integrated per period."""
+    """An ego car: its model (report 000's or 002's), body and actuator limits, integrated
+    per period. The model's input is (longitudinal command, delta): Fx for report 000's
+    model, a_x for report 002's."""
 
     __slots__ = ("model", "geometry", "state", "max_steer", "stop_speed", "lateral_accel",
                  "applied", "_step")
 
-    def __init__(self, model: NonlinearBicycle, geometry: VehicleGeometry, dt: float,
+    def __init__(self, model: NonlinearBicycle | DynamicBicycle, geometry: VehicleGeometry, dt: float,
                  substeps: int, max_steer: float = 0.5, stop_speed: float = 0.5) -> None:
         self.model = model
         self.geometry = geometry
@@ -117,7 +119,7 @@ class EgoVehicle:
     def step(self, fx: float, delta: float) -> None:
         """Apply the actuator limits and integrate one control period.
 
-        Steering saturates at ``max_steer`` (rad). A negative Fx is braking, which fades
+        Steering saturates at ``max_steer`` (rad). A negative Fx (a_x) is braking, which fades
         below ``stop_speed`` (m/s) so it stops the car instead of reversing it (the
         report's model has no standstill).
         """
@@ -164,6 +166,8 @@ class Scenario:
 
     name: ClassVar[str] = ""
     summary: ClassVar[str] = ""
+    #: which controllers drive it (``ego.control.CONTROLLERS[task]``) and what they return
+    task: ClassVar[str] = "tracking"
     config_cls: ClassVar[type] = CommonConfig
     #: trace columns written every control step; ``t`` first
     columns: tuple[str, ...] = ("t",)
@@ -190,6 +194,8 @@ class Scenario:
         self._wall = 0.0
         self._signal_names: tuple[str, ...] = ()
         self.controlled_ids: tuple[str, ...] = ()
+        #: vehicle id -> RGB for the recording (others: grey)
+        self.colors: dict[str, tuple[int, int, int]] = {}
 
     # -- Gymnasium-style interface -----------------------------------------------------------
     def reset(self, *, seed: int | None = None) -> Observation:
@@ -220,7 +226,8 @@ class Scenario:
         return self.status != "running"
 
     def step(self, action: tuple[float, float]) -> Observation:
-        """Apply ``action`` = (Fx in N, delta in rad) for one control period."""
+        """Apply ``action`` = (longitudinal command, delta in rad) for one control period:
+        Fx per driven wheel (N) in tracking scenarios, a_x (m/s^2) in the curve task."""
         if self.status != "running":
             raise RuntimeError(f"the run has ended ({self.status}); call reset()")
         self._act(action)
@@ -234,7 +241,7 @@ class Scenario:
                 self._end("diverged", reason, level="ERROR")
             else:
                 self._update()
-                if t >= self._t_end:
+                if t >= self._t_end and self.status == "running":
                     self._end(*self._final_status())
         if t >= self._next_flush or self.status != "running":
             self._flush()
@@ -278,14 +285,16 @@ class Scenario:
         if collisions:
             mine = [c for c in collisions if c.collider in bridge.controlled or c.victim in bridge.controlled]
             if mine:
-                c = mine[0]
-                self.collision = c
-                self._end("collision",
-                          f"{c.collider} ({c.collider_speed:.1f} m/s) hit {c.victim} "
-                          f"({c.victim_speed:.1f} m/s): {c.kind}", level="ERROR")
+                self._collided(mine[0])
             else:
                 for c in collisions:
                     self.event("traffic", f"collision in the traffic: {c.collider} hit {c.victim}", "WARN")
+
+    def _collided(self, c: Collision) -> None:
+        """End the run on a collision involving the ego."""
+        self.collision = c
+        self._end("collision", f"{c.collider} ({c.collider_speed:.1f} m/s) hit {c.victim} "
+                  f"({c.victim_speed:.1f} m/s): {c.kind}", level="ERROR")
 
     def event(self, kind: str, text: str, level: str = "INFO") -> None:
         """Record an event: the run's event list, the ``ego`` logger and the recording."""
@@ -375,7 +384,49 @@ class Scenario:
         """What the recording's "run" panel lists: names, seed and every parameter."""
         meta = {"scenario": self.name, "controller": self.controller_name, "seed": self.seed}
         meta.update({k: getattr(self.config, k) for k in self.config.__dataclass_fields__})
+        if self.colors:
+            meta["colors"] = self.colors
         return meta
+
+
+class RoadScenario(Scenario):
+    """A SUMO scenario whose ego (id ``"ego"``) drives along a lane: the lane frame of the
+    ego's centre of gravity every control period, the divergence checks, and the ego's
+    pose pushed into SUMO (with scripted actors updated) before every SUMO step."""
+
+    ego_id: ClassVar[str] = "ego"
+
+    def __init__(self, config, controller: Controller, **kwargs) -> None:
+        super().__init__(config, controller, **kwargs)
+        self.ego: EgoVehicle | None = None
+        self.road = None  #: the lane the frame is measured on (ego.road.LanePolyline)
+        self.road_halfwidth = 0.0  #: |d| beyond which the ego has left the road (m)
+        self.actors: list = []  #: scripted SUMO vehicles, ``update(bridge, t)`` each SUMO step
+        self.s = self.d_road = self.heading_error = self.curvature = self.ds = self.dd = 0.0
+
+    def _kinematics(self) -> None:
+        """Lane-frame position and velocity of the ego's centre of gravity."""
+        X, u, Y, v, psi, r = self.ego.state
+        s, d, err, kappa = self.road.frame(X, Y, psi)
+        c, sn = math.cos(err), math.sin(err)
+        self.s, self.d_road, self.heading_error, self.curvature = s, d, err, kappa
+        self.ds = u * c - v * sn
+        self.dd = u * sn + v * c
+
+    def _check_divergence(self) -> str | None:
+        u, r = self.ego.state[1], self.ego.state[5]
+        # comparisons are False for NaN, so anything odd falls through to the full check
+        if (abs(self.d_road) <= self.road_halfwidth and -1.0 <= u <= 80.0 and abs(r) <= 2.5
+                and abs(self.heading_error) <= 1.3):
+            return None
+        return divergence(self.ego.state, self.d_road, self.heading_error, self.road_halfwidth)
+
+    def _before_sumo_step(self) -> None:
+        x = self.ego.state
+        # SUMO's drivers see the ego's speed along the road (computed by _kinematics)
+        self.bridge.push(self.ego_id, x[0], x[2], x[4], self.ds)
+        for actor in self.actors:
+            actor.update(self.bridge, self.t - self.config.sumo_step)
 
 
 def signal_series(names: Sequence[str]) -> list[Series]:

@@ -89,3 +89,23 @@ def choose_lane(left: LaneCheck, right: LaneCheck) -> tuple[str | None, str]:
     else:
         why += f"; chose {best.side}"
     return best.side, why
+
+
+def boxes_overlap(a: tuple[float, float, float, float, float],
+                  b: tuple[float, float, float, float, float]) -> bool:
+    """Do two oriented rectangles (centre x, y in m, yaw rad, length, width in m) overlap?
+
+    Separating-axis test on the four edge normals: two convex shapes are disjoint iff
+    their projections on one of those axes are.
+    """
+    ax, ay, apsi, al, aw = a
+    bx, by, bpsi, bl, bw = b
+    dx, dy = bx - ax, by - ay
+    ca, sa, cb, sb = math.cos(apsi), math.sin(apsi), math.cos(bpsi), math.sin(bpsi)
+    for ux, uy in ((ca, sa), (-sa, ca), (cb, sb), (-sb, cb)):
+        # half extent of each box along (ux, uy), and the centre distance along it
+        ra = 0.5 * (al * abs(ca * ux + sa * uy) + aw * abs(-sa * ux + ca * uy))
+        rb = 0.5 * (bl * abs(cb * ux + sb * uy) + bw * abs(-sb * ux + cb * uy))
+        if abs(dx * ux + dy * uy) > ra + rb:
+            return False
+    return True

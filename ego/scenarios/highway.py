@@ -8,7 +8,6 @@ divergence checks, the trace and the recording. A concrete scenario adds its tra
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -20,8 +19,7 @@ from ego.road import LanePolyline
 from ego.scenarios.base import (
     CommonConfig,
     EgoVehicle,
-    Scenario,
-    divergence,
+    RoadScenario,
     signal_series,
     vehicle_series,
 )
@@ -33,8 +31,6 @@ from ego.sumo.bridge import (
     VehicleSpec,
     VehicleType,
     ego_type,
-    front_bumper_to_cg,
-    sumo_angle_to_yaw,
 )
 from ego.sumo.net import net_file
 from ego.sumo.traffic import background_traffic
@@ -61,7 +57,7 @@ class HighwayConfig(CommonConfig):
     max_steer: float = param(0.5, "rad", "front steer limit of the ego", min=0.01, max=1.0)
 
 
-class HighwayScenario(Scenario):
+class HighwayScenario(RoadScenario):
     """Base of the motorway scenarios; subclasses add traffic and manoeuvre logic."""
 
     config_cls = HighwayConfig
@@ -77,17 +73,10 @@ class HighwayScenario(Scenario):
 
     def __init__(self, config, controller, **kwargs) -> None:
         super().__init__(config, controller, **kwargs)
-        self.ego: EgoVehicle | None = None
         self.geometry = VehicleGeometry()
         self.neighbours = Neighbours()
         self.lanes: dict[int, LanePolyline] = {}
         self.lane_offset: dict[int, float] = {}
-        self.road: LanePolyline | None = None
-        self.road_halfwidth = 0.0
-        self.colors: dict[str, tuple[int, int, int]] = {}
-        self.actors: list = []
-        # road-frame kinematics of the ego at the current control step
-        self.s = self.d_road = self.heading_error = self.ds = self.dd = 0.0
         self.ttc_front = self.ttc_rear = INF
         self.gap_front = self.gap_rear = INF
         self.target_lane = 0
@@ -144,14 +133,13 @@ class HighwayScenario(Scenario):
         self.lanes = {int(lid.rsplit("_", 1)[1]): LanePolyline(pts, width, lid)
                       for lid, (width, pts) in shapes.items() if lid.startswith(EDGE + "_")}
         self.road = self.lanes[c.ego_lane]
+        self.obs.lane = self.road
         self.lane_offset = {i: self.road.project(*lane.points[0])[1] for i, lane in self.lanes.items()}
         outer = [abs(off) + 0.5 * self.lanes[i].width for i, off in self.lane_offset.items()]
         # beyond the outer lane edge by more than half a car: off the road
         self.road_halfwidth = max(outer) + 0.5 * self.geometry.width + 0.5
 
-        xf, yf = veh.getPosition(EGO)
-        psi = sumo_angle_to_yaw(veh.getAngle(EGO))
-        x, y = front_bumper_to_cg(xf, yf, psi, self.geometry.cg_to_front)
+        x, y, psi = bridge.cg_pose(EGO)
         model = NonlinearBicycle(NonlinearBicycleParams(slip_speed_floor=1.0))
         self.ego = EgoVehicle(model, self.geometry, c.dt, c.substeps, max_steer=c.max_steer)
         self.ego.state = (x, c.ego_speed, y, 0.0, psi, 0.0)
@@ -178,34 +166,9 @@ class HighwayScenario(Scenario):
         ))
         self._kinematics()
 
-    def _before_sumo_step(self) -> None:
-        x = self.ego.state
-        # SUMO's drivers see the ego's speed along the road (computed by _kinematics)
-        self.bridge.push(EGO, x[0], x[2], x[4], self.ds)
-        for actor in self.actors:
-            actor.update(self.bridge, self.t - self.config.sumo_step)
-
     def _after_sumo_step(self) -> None:
         self.bridge.read_neighbours(EGO, self.neighbours)
         self._sync_t, self._sync_s = self.t, self.s
-
-    def _kinematics(self) -> None:
-        """Road-frame position and velocity of the ego's centre of gravity."""
-        X, u, Y, v, psi, r = self.ego.state
-        s, d, heading = self.road.project(X, Y)
-        err = psi - heading
-        c, sn = math.cos(err), math.sin(err)
-        self.s, self.d_road, self.heading_error = s, d, err
-        self.ds = u * c - v * sn
-        self.dd = u * sn + v * c
-
-    def _check_divergence(self) -> str | None:
-        u, r = self.ego.state[1], self.ego.state[5]
-        # comparisons are False for NaN, so anything odd falls through to the full check
-        if (abs(self.d_road) <= self.road_halfwidth and -1.0 <= u <= 80.0 and abs(r) <= 2.5
-                and abs(self.heading_error) <= 1.3):
-            return None
-        return divergence(self.ego.state, self.d_road, self.heading_error, self.road_halfwidth)
 
     def _update(self) -> None:
         n = self.neighbours
@@ -225,6 +188,8 @@ class HighwayScenario(Scenario):
         x = self.ego.state
         obs.speed = x[1]
         obs.yaw_rate = x[5]
+        obs.heading_error = self.heading_error
+        obs.curvature = self.curvature
 
     def extrapolated_gap(self, other, behind: bool = False) -> float:
         """Gap to a neighbour now, from the last SUMO step at the neighbour's speed (m)."""
@@ -261,6 +226,3 @@ class HighwayScenario(Scenario):
             Series("phase", "plots/manoeuvre/phase", "", "phase"),
             *signal_series(self._signal_names),
         ]
-
-    def _meta(self) -> dict:
-        return {**super()._meta(), "colors": self.colors}

@@ -191,6 +191,7 @@ class SumoBridge:
         self._dims: dict[str, tuple[float, float]] = {}
         self._lanes_of_edge: dict[str, int] = {}
         self._pending: list[VehicleSpec] = []
+        self._keep_route: dict[str, int] = {}
         self.collisions: list[Collision] = []
         self._ls = None
 
@@ -276,12 +277,28 @@ class SumoBridge:
             raise SumoError(f"SUMO could not insert {', '.join(lost)} (too close to other vehicles?)")
         return missing
 
-    def control(self, vid: str, geometry: VehicleGeometry) -> None:
-        """Take ``vid`` away from SUMO: its pose comes from :meth:`push` from now on."""
+    def control(self, vid: str, geometry: VehicleGeometry, keep_route: int = 2) -> None:
+        """Take ``vid`` away from SUMO: its pose comes from :meth:`push` from now on.
+
+        ``keep_route`` is moveToXY's mapping mode: 2 (default) maps the pose onto any
+        lane of the network, 1 only onto the vehicle's route (so on a two-way road an ego
+        drifting left is never mapped onto the oncoming lane).
+        """
+        if keep_route not in (0, 1, 2):
+            raise ValueError(f"keep_route must be 0, 1 or 2, got {keep_route}")
         veh = self.libsumo.vehicle
         veh.setSpeedMode(vid, 0)
         veh.setLaneChangeMode(vid, 0)
         self.controlled[vid] = geometry
+        self._keep_route[vid] = keep_route
+
+    def cg_pose(self, vid: str) -> tuple[float, float, float]:
+        """Centre of gravity (x, y in m) and yaw (rad) of controlled vehicle ``vid`` where
+        SUMO has it (e.g. right after inserting it on its lane)."""
+        veh = self.libsumo.vehicle
+        xf, yf = veh.getPosition(vid)
+        psi = sumo_angle_to_yaw(veh.getAngle(vid))
+        return (*front_bumper_to_cg(xf, yf, psi, self.controlled[vid].cg_to_front), psi)
 
     # -- per step -------------------------------------------------------------------------
     def push(self, vid: str, x: float, y: float, psi: float, speed: float,
@@ -296,7 +313,7 @@ class SumoBridge:
         s = math.sin(psi)
         veh = self._ls.vehicle
         veh.moveToXY(vid, "", -1, x + geo.cg_to_front * c, y + geo.cg_to_front * s,
-                     (90.0 - psi * _DEG) % 360.0, 2)
+                     (90.0 - psi * _DEG) % 360.0, self._keep_route[vid])
         if accel is None:
             veh.setPreviousSpeed(vid, speed)
         else:

@@ -119,3 +119,40 @@ class RecklessFollower:
 
     def update(self, bridge: SumoBridge, t: float) -> bool:
         return False
+
+
+@dataclass
+class PoissonFlow:
+    """Vehicles entering a route at its start: seeded exponential headways (mean
+    3600/``rate`` s, never below ``min_headway``), departing at ``speed``."""
+
+    rng: np.random.Generator
+    route: str
+    type_id: str
+    rate: float  #: vehicles per hour
+    speed: float  #: departure speed (m/s)
+    min_headway: float = 2.0  #: (s)
+    prefix: str = "flow"
+    next_time: float = 0.0
+    count: int = 0
+
+    def __post_init__(self) -> None:
+        self.next_time = self._headway() if self.rate > 0 else float("inf")
+
+    def _headway(self) -> float:
+        mean = 3600.0 / self.rate
+        return self.min_headway + float(self.rng.exponential(max(mean - self.min_headway, 0.0)))
+
+    def start(self, bridge: SumoBridge) -> None:
+        pass
+
+    def update(self, bridge: SumoBridge, t: float) -> bool:
+        """Call every SUMO step; True on the steps a vehicle is added."""
+        if t < self.next_time:
+            return False
+        veh = bridge.libsumo.vehicle
+        veh.add(f"{self.prefix}{self.count}", self.route, typeID=self.type_id, departLane="0",
+                departPos="0", departSpeed=f"{self.speed:.3f}")
+        self.count += 1
+        self.next_time += self._headway()
+        return True

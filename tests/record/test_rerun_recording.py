@@ -124,3 +124,33 @@ def test_in_process_writer_gives_the_same_file_content(tmp_path, fuzzy_ready):
     t, d = _series(tmp_path / "inproc.rrd", "/plots/lateral_error/ego")
     assert len(t) == result.metrics["steps"]
     np.testing.assert_allclose(d, result.column("d"))
+
+
+def test_a_curve_run_records_its_errors_and_the_ego_round_the_arc(tmp_path):
+    path = tmp_path / "curve.rrd"
+    result = run(RunSpec("curve", "narma-l2", 0, {"lead": 15.0}, record=str(path)))
+    m = result.metrics
+    assert m["status"] == "completed"
+    t, ed = _series(path, "/plots/e_d/ego")
+    assert len(t) == m["steps"]
+    np.testing.assert_allclose(ed, result.column("e_d"))
+    assert np.max(np.abs(ed[result.column("in_arc") > 0])) == pytest.approx(m["max_abs_ed"], abs=1e-6)
+    for entity in ("/plots/e_a/ego", "/plots/a_x/applied", "/plots/a_x/plan", "/plots/gap/lead",
+                   "/plots/controller/narma_g"):
+        assert len(_series(path, entity)[0]) == m["steps"], entity
+    # the ego's outline turns with the road: heading +x at the start, +y at the end
+    outlines = []
+    for chunk in RrdReader(path).stream():
+        if chunk.entity_path == "/world/map/vehicles":
+            rb = chunk.to_record_batch()
+            outlines += list(zip(rb.column("LineStrips2D:labels").to_pylist(),
+                                 rb.column("LineStrips2D:strips").to_pylist()))
+    first, last = (np.array(s[lab.index("ego")]) for lab, s in (outlines[0], outlines[-1]))
+    assert {"ego", "lead"} <= set(outlines[-1][0])
+
+    def long_side(box):
+        sides = np.diff(box, axis=0)
+        return sides[np.argmax(np.linalg.norm(sides, axis=1))]
+
+    assert abs(long_side(first)[1]) < 0.05 * abs(long_side(first)[0])  # along x
+    assert abs(long_side(last)[0]) < 0.2 * abs(long_side(last)[1])  # along y, nearly

@@ -59,3 +59,22 @@ def test_no_acceptable_lane_means_brake_in_lane():
     bad = check_lane("left", True, 20.0, 15.0, 2.0, 5.0, 1.0, 20.0, RULE)
     side, why = choose_lane(bad, check_lane("right", False, 20, 15, 0, 0, 0, 0, RULE))
     assert side is None and why.endswith("brake in lane")
+
+
+def test_boxes_overlap_by_separating_axes():
+    from ego.scenarios.events import boxes_overlap
+
+    car = (0.0, 0.0, 0.0, 4.0, 2.0)
+    assert boxes_overlap(car, (3.9, 0.0, 0.0, 4.0, 2.0))  # nose to tail, 0.1 m overlap
+    assert not boxes_overlap(car, (4.1, 0.0, 0.0, 4.0, 2.0))
+    assert not boxes_overlap(car, (0.0, 2.05, 0.0, 4.0, 2.0))  # side by side, 5 cm apart
+    # rotated 45 degrees: its corner reaches sqrt(2)/2 * (4 + 2) / 2 = 2.12 m sideways
+    diag = math.pi / 4
+    assert boxes_overlap(car, (0.0, 3.0, diag, 4.0, 2.0))
+    assert not boxes_overlap(car, (0.0, 3.2, diag, 4.0, 2.0))
+    # corner near corner, separated only along the rotated box's own axis
+    assert not boxes_overlap(car, (3.6, 2.6, diag, 2.0, 2.0))
+    assert boxes_overlap(car, (2.5, 1.5, diag, 2.0, 2.0))
+    # symmetric
+    b = (1.0, 2.0, 0.3, 4.5, 1.8)
+    assert boxes_overlap(car, b) == boxes_overlap(b, car)

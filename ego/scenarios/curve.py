@@ -1,0 +1,346 @@
+"""Report 002's curve task in SUMO (``sumo_nets/curve``): a 90-degree arc of radius 15 m.
+
+The ego is report 002's linear dynamic bicycle (:class:`ego.models.DynamicBicycle`), driven
+by the axial acceleration a_x and the front steer angle. It approaches the arc on the
+straight at ``entry_speed`` holding its lane and speed. The task starts on an event from
+SUMO: when the distance along the ego's route to the arc start
+(``vehicle.getDrivingDistance``, from the front bumper) falls to ``preview``, the curve
+controller engages and the plan becomes the report's constant a_x = ``accel``. The task
+ends when the ego's centre of gravity leaves the arc (status ``completed``). The
+controller is reset when it takes over; its commands before are ignored.
+
+The arc is found in the lane SUMO gives, not hard-coded: its curved span
+(:meth:`ego.road.LanePolyline.curved_spans`). The errors are the report's, measured at the
+centre of gravity against that lane: ``e_d`` = distance to the arc centre - R (positive
+outside the arc; ``-d`` on this left-hand arc) and ``e_a`` = heading - tangent heading
+(rad, positive pointing left of the lane).
+
+Traffic: an oncoming flow on the other lane (seeded), and with ``lead`` > 0 a slower car
+ahead that the ego catches in the curve. The ego's plan then brakes below ``accel`` when
+its constant-time-gap law asks for less (``time_gap``, ``min_gap``); the controllers steer
+either way. SUMO detects a collision with the lead; one with an oncoming car is detected
+here from the vehicles' boxes (they are on different edges, which SUMO does not check).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ego.models import DynamicBicycle, DynamicBicycleParams, VehicleGeometry
+from ego.params import ConfigError, param
+from ego.record.base import Scene, Series
+from ego.road import LanePolyline
+from ego.scenarios import metrics as m
+from ego.scenarios.base import CommonConfig, EgoVehicle, RoadScenario, signal_series
+from ego.scenarios.events import INF, boxes_overlap
+from ego.sumo.bridge import (
+    Collision,
+    Neighbours,
+    SumoBridge,
+    SumoConfig,
+    VehicleSpec,
+    VehicleType,
+    ego_type,
+    sumo_poses_to_boxes,
+)
+from ego.sumo.net import net_file
+from ego.sumo.traffic import PacedVehicle, PoissonFlow, background_traffic
+
+EGO = "ego"
+LEAD = "lead"
+EDGE, ROUTE = "forward", "forward_route"
+ONCOMING_EDGE, ONCOMING_ROUTE = "oncoming", "oncoming_route"
+ONCOMING_PREFIX = "oncoming"
+#: report 002's car: wheelbase 3.2 m (lf 1.488, lr 1.712), ~0.95 m front and ~0.75 m rear overhang
+GEOMETRY = VehicleGeometry(length=4.9, width=1.9, cg_to_front=2.45)
+#: oncoming cars: SUMO does not slow down for curves, so their top speed is the curve's
+#: (30 km/h on the 11.5 m inner arc is a lateral acceleration of 6 m/s^2)
+TRAFFIC_TYPE = VehicleType("traffic", length=4.5, width=1.8, max_speed=30.0 / 3.6,
+                           color=(150, 150, 150))
+LEAD_TYPE = VehicleType("lead", length=4.5, width=1.8, sigma=0.0, color=(160, 60, 220))
+APPROACH, ENGAGED = 0, 1
+KMH = 1.0 / 3.6
+ONCOMING_SPEED = 25.0 * KMH  #: departure speed of the oncoming cars (m/s)
+
+
+@dataclass(frozen=True)
+class CurveConfig(CommonConfig):
+    """Report 002's task: enter the arc at 30 km/h, accelerate at 0.3 m/s^2, steer round it."""
+
+    duration: float = param(20.0, "s", "simulated time limit (status timeout if the ego has not "
+                            "left the arc by then)", min=1.0, max=600.0)
+    entry_speed: float = param(30.0, "km/h", "ego's speed on the approach (report 002: 30 km/h)",
+                               min=5.0, max=60.0)
+    accel: float = param(0.3, "m/s^2", "axial acceleration from the event on (report 002: 0.3)",
+                         min=-2.0, max=2.0)
+    approach: float = param(20.0, "m", "ego's front bumper before the arc start at t = 0",
+                            min=5.0, max=95.0)
+    preview: float = param(2.0, "m", "the controller engages when the route distance from the "
+                           "front bumper to the arc start falls to this", min=0.0, max=50.0)
+    lead: float = param(0.0, "km/h", "speed of a slower car ahead that the ego meets in the "
+                        "curve (0: no car ahead)", min=0.0, max=60.0)
+    lead_gap: float = param(15.0, "m", "gap from the ego's front to the lead's rear at t = 0",
+                            min=3.0, max=80.0)
+    time_gap: float = param(1.2, "s", "ego's plan behind a lead: time gap it keeps", min=0.1, max=5.0)
+    min_gap: float = param(2.0, "m", "ego's plan behind a lead: standstill gap", min=0.5, max=20.0)
+    oncoming: float = param(600.0, "veh/h", "oncoming traffic on the other lane (0: none)",
+                            min=0.0, max=900.0)
+    max_steer: float = param(0.6, "rad", "front steer limit of the ego", min=0.05, max=1.0)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.preview > self.approach:
+            raise ConfigError(f"bad value for preview: {self.preview} (expected at most "
+                              f"approach={self.approach} m, or the task starts at once)")
+
+
+class CurveScenario(RoadScenario):
+    """Report 002's 90-degree curve with a SUMO lead car and oncoming traffic."""
+
+    name = "curve"
+    summary = ("report 002: steer a 30 km/h car accelerating at 0.3 m/s^2 round a 90-degree "
+               "arc of radius 15 m (oncoming traffic; --set lead=KMH for a slow car ahead)")
+    task = "curve"
+    config_cls = CurveConfig
+    #: t (s); s along the lane (m) and d left of its centre (m) of the centre of gravity;
+    #: e_d, e_a the report's errors (m, rad); speed u and ds along the lane (m/s); a_x,
+    #: delta as applied; accel_ref the plan (m/s^2); curvature of the lane at the
+    #: projection (1/m); gap_front to the lead (m); lat_accel (m/s^2); yaw_rate (rad/s);
+    #: phase 0 approach, 1 engaged; in_arc 1 while the centre of gravity is on the arc
+    columns = (
+        "t", "s", "d", "e_d", "e_a", "speed", "ds", "a_x", "delta", "accel_ref", "curvature",
+        "gap_front", "lat_accel", "yaw_rate", "phase", "in_arc",
+    )
+
+    def __init__(self, config, controller, **kwargs) -> None:
+        super().__init__(config, controller, **kwargs)
+        self.geometry = GEOMETRY
+        self.neighbours = Neighbours()
+        self.lanes: dict[str, LanePolyline] = {}
+        self.arc_start = self.arc_end = 0.0
+        self.arc_sign = 1.0
+        self._reset_state()
+
+    def _reset_state(self) -> None:
+        self.s = self.d_road = self.heading_error = self.curvature = self.ds = self.dd = 0.0
+        self.phase = APPROACH
+        self.engage_t: float | None = None
+        self.arc_enter_t: float | None = None
+        self.arc_exit_t: float | None = None
+        self.gap_front = self._sync_gap = INF
+        self.lead_speed = 0.0
+        self._sync_t = 0.0
+
+    # -- set-up ---------------------------------------------------------------------------
+    def _make_bridge(self) -> SumoBridge:
+        c = self.config
+        return SumoBridge(SumoConfig(net_file("curve"), step_length=c.sumo_step, seed=self.seed,
+                                     lateral_resolution=c.lateral_resolution))
+
+    def _setup(self, rng: np.random.Generator) -> None:
+        c = self.config
+        self._reset_state()
+        bridge = self.bridge
+        shapes = bridge.lane_shapes()
+        self.lanes = {lid: LanePolyline(pts, width, lid) for lid, (width, pts) in shapes.items()}
+        self.road = self.lanes[f"{EDGE}_0"]
+        self.obs.lane = self.road
+        spans = self.road.curved_spans()
+        if not spans:
+            raise ConfigError(f"the {EDGE} lane of the curve network has no arc")
+        self.arc_start, self.arc_end, kappa = spans[0]
+        self.arc_sign = 1.0 if kappa > 0 else -1.0
+        self.road_halfwidth = 0.5 * self.road.width + 0.5 * self.geometry.width + 0.5
+
+        bridge.add_type(ego_type(EGO, self.geometry))
+        bridge.add_type(TRAFFIC_TYPE)
+        bridge.add_type(LEAD_TYPE)
+        bridge.add_route(ROUTE, [EDGE])
+        bridge.add_route(ONCOMING_ROUTE, [ONCOMING_EDGE])
+        ego_pos = self.arc_start - c.approach
+        speed = c.entry_speed * KMH
+        specs = [VehicleSpec(EGO, EGO, ROUTE, 0, ego_pos, speed)]
+        required = [EGO]
+        self.actors = []
+        if c.lead > 0.0:
+            lead_pos = ego_pos + c.lead_gap + LEAD_TYPE.length
+            specs.append(VehicleSpec(LEAD, LEAD_TYPE.id, ROUTE, 0, lead_pos, c.lead * KMH))
+            required.append(LEAD)
+            self.actors.append(PacedVehicle(LEAD, c.lead * KMH))
+        if c.oncoming > 0.0:
+            onc_speed = ONCOMING_SPEED
+            specs += background_traffic(
+                rng, lanes=[0], start=5.0, end=self.lanes[f"{ONCOMING_EDGE}_0"].length - 5.0,
+                density=c.oncoming / (onc_speed / KMH), speed=onc_speed, min_spacing=20.0,
+                route=ONCOMING_ROUTE, type_id=TRAFFIC_TYPE.id, prefix=ONCOMING_PREFIX,
+            )
+            self.actors.append(PoissonFlow(rng, ONCOMING_ROUTE, TRAFFIC_TYPE.id, c.oncoming, onc_speed,
+                                           prefix=f"{ONCOMING_PREFIX}_flow"))
+        bridge.add_vehicles(specs)
+        missing = bridge.insert(required=required)
+        if missing:
+            self.event("traffic", f"SUMO could not place {len(missing)} oncoming vehicles", "WARN")
+        for actor in self.actors:
+            actor.start(bridge)
+        # keepRoute=1: the ego stays mapped on its own lane, never onto the oncoming one
+        bridge.control(EGO, self.geometry, keep_route=1)
+        self.controlled_ids = (EGO,)
+        self.colors[EGO] = (220, 40, 40)
+        self.colors[LEAD] = LEAD_TYPE.color
+
+        x, y, psi = bridge.cg_pose(EGO)
+        model = DynamicBicycle(DynamicBicycleParams(slip_speed_floor=1.0))
+        self.ego = EgoVehicle(model, self.geometry, c.dt, c.substeps, max_steer=c.max_steer)
+        self.ego.state = (x, speed, y, 0.0, psi, 0.0)
+        self._kinematics()
+        self._after_sumo_step()
+
+    # -- per step ---------------------------------------------------------------------------
+    def _act(self, action: tuple[float, float]) -> None:
+        obs = self.obs
+        if self.phase == APPROACH:
+            # before the event the ego holds its lane and its plan; commands are ignored
+            action = (obs.accel_ref, 0.0)
+        ego = self.ego
+        ego.step(*action)
+        a_x, delta = ego.applied
+        d = self.d_road
+        self.trace.append((
+            obs.t, self.s, d, -self.arc_sign * d, self.heading_error, obs.speed, self.ds,
+            a_x, delta, obs.accel_ref, self.curvature, self.gap_front, ego.lateral_accel,
+            obs.yaw_rate, self.phase, 1.0 if self.arc_start <= self.s <= self.arc_end else 0.0,
+            *self.controller.signals().values(),
+        ))
+        self._kinematics()
+
+    def _after_sumo_step(self) -> None:
+        bridge = self.bridge
+        lead = bridge.read_neighbours(EGO, self.neighbours).leader
+        self._sync_gap, self.lead_speed, self._sync_t = lead.gap, lead.speed, self.t
+        if self.phase == APPROACH:
+            veh = bridge.libsumo.vehicle
+            # route distance from the front bumper to the arc start; SUMO answers a huge
+            # negative number once the position is behind the vehicle
+            dist = veh.getDrivingDistance(EGO, EDGE, self.arc_start, 0)
+            if dist <= self.config.preview:
+                self.phase = ENGAGED
+                self.engage_t = self.t
+                # it takes over from a car held straight: no history, no integral
+                self.controller.reset(seed=self.seed)
+                self.event("engage", f"arc start {max(dist, 0.0):.2f} m ahead (preview "
+                           f"{self.config.preview:g} m): the curve controller takes over")
+        self._check_oncoming()
+
+    def _check_oncoming(self) -> None:
+        """Collision with an oncoming car: box overlap (SUMO does not check across edges)."""
+        ids, rows = self.bridge.poses()
+        X, u, Y, _, psi, _ = self.ego.state
+        ego_box = (X + (0.5 * self.geometry.length - self.geometry.cg_to_front) * math.cos(psi),
+                   Y + (0.5 * self.geometry.length - self.geometry.cg_to_front) * math.sin(psi),
+                   psi, self.geometry.length, self.geometry.width)
+        near = [(vid, row) for vid, row in zip(ids, rows) if vid.startswith(ONCOMING_PREFIX)
+                and abs(row[0] - X) < 12.0 and abs(row[1] - Y) < 12.0]
+        if not near:
+            return
+        boxes = sumo_poses_to_boxes([row for _, row in near])
+        for (vid, _), box in zip(near, boxes):
+            if boxes_overlap(ego_box, tuple(box)):
+                speed = self.bridge.libsumo.vehicle.getSpeed(vid)
+                self._collided(Collision(EGO, vid, "oncoming", u, speed))
+                return
+
+    def _update(self) -> None:
+        c = self.config
+        obs = self.obs
+        s = self.s
+        if self.arc_enter_t is None and s >= self.arc_start:
+            self.arc_enter_t = self.t
+            self.event("arc", f"entering the arc at {self.ego.state[1] / KMH:.1f} km/h")
+        if s >= self.arc_end and self.arc_exit_t is None:
+            self.arc_exit_t = self.t
+            self._end("completed", f"left the arc after {self.t - (self.arc_enter_t or 0.0):.2f} s "
+                      f"at {self.ego.state[1] / KMH:.1f} km/h, e_d {-self.arc_sign * self.d_road:+.3f} m")
+            return
+        plan = c.accel if self.phase == ENGAGED else 0.0
+        gap = self._sync_gap
+        if gap < INF:
+            # extrapolated from the last SUMO step at both cars' speeds
+            gap += (self.lead_speed - self.ds) * (self.t - self._sync_t)
+            follow = (0.4 * (gap - c.min_gap - c.time_gap * self.ds)
+                      + 1.0 * (self.lead_speed - self.ds))
+            if follow < plan:
+                plan = max(follow, -7.0)
+        self.gap_front = gap
+        obs.t = self.t
+        obs.s = s
+        obs.ds = self.ds
+        obs.d = self.d_road
+        obs.dd = self.dd
+        x = self.ego.state
+        obs.speed = x[1]
+        obs.yaw_rate = x[5]
+        obs.heading_error = self.heading_error
+        obs.curvature = self.curvature
+        obs.accel_ref = plan
+
+    def _final_status(self) -> tuple[str, str]:
+        where = "on the approach" if self.arc_enter_t is None else "in the arc"
+        return "timeout", f"still {where} after {self.config.duration:g} s"
+
+    # -- results ------------------------------------------------------------------------------
+    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
+        col = {name: trace[:, i] for i, name in enumerate(columns)} if trace.size else {}
+        arc = col["in_arc"] > 0.5 if col else np.zeros(0, dtype=bool)
+        ed = col["e_d"][arc] if col else np.zeros(0)
+        ea = col["e_a"][arc] if col else np.zeros(0)
+        speed = col["speed"] if col else np.zeros(0)
+        engaged = col["phase"] > 0.5 if col else np.zeros(0, dtype=bool)
+        completed = self.arc_exit_t is not None and self.status == "completed"
+        enter_i = int(np.argmax(arc)) if arc.any() else None
+        x = self.ego.state if self.ego is not None else (0.0,) * 6
+        return {
+            "completed_arc": completed,
+            "max_abs_ed": m.json_number(m.max_abs(ed)) if ed.size else None,
+            "final_ed": m.json_number(float(ed[-1])) if ed.size else None,
+            "rms_ed": m.json_number(float(np.sqrt(np.mean(ed ** 2)))) if ed.size else None,
+            "max_abs_ea": m.json_number(m.max_abs(ea)) if ea.size else None,
+            "final_ea": m.json_number(float(ea[-1])) if ea.size else None,
+            "time_in_arc": (m.json_number(self.arc_exit_t - self.arc_enter_t, 4)
+                            if completed and self.arc_enter_t is not None else None),
+            "entry_speed": m.json_number(speed[enter_i] / KMH, 3) if enter_i is not None else None,
+            "exit_speed": m.json_number(x[1] / KMH, 3) if completed else None,
+            "engage_time": m.json_number(self.engage_t, 4),
+            "max_abs_delta": m.json_number(m.max_abs(col["delta"][engaged])) if engaged.any() else None,
+            "max_lat_accel": m.json_number(m.max_abs(col["lat_accel"][arc])) if arc.any() else None,
+            "min_gap_front": m.json_number(m.finite_min(col["gap_front"]), 3) if col else None,
+        }
+
+    # -- recording ----------------------------------------------------------------------------
+    def _record_boxes(self) -> None:
+        ids, poses = self.bridge.poses()
+        x = self.ego.state
+        self.recorder.vehicles(self.t, ids, poses, (x[0], x[2]))
+
+    def _scene(self) -> Scene:
+        pts = [p for lane in self.lanes.values() for p in lane.points]
+        xs, ys = [p[0] for p in pts], [p[1] for p in pts]
+        return Scene(lanes=[(lane.width, lane.points) for lane in self.lanes.values()],
+                     bounds=(min(xs) - 10.0, max(xs) + 10.0, min(ys) - 10.0, max(ys) + 10.0),
+                     title=self.name)
+
+    def _series(self) -> list[Series]:
+        return [
+            Series("e_d", "plots/e_d/ego", "m", "e_d = distance to the arc centre - R"),
+            Series("e_a", "plots/e_a/ego", "rad", "e_a = heading - tangent"),
+            Series("speed", "plots/speed/ego", "m/s", "speed"),
+            Series("a_x", "plots/a_x/applied", "m/s^2", "axial acceleration"),
+            Series("accel_ref", "plots/a_x/plan", "m/s^2", "plan"),
+            Series("delta", "plots/delta/delta", "rad", "front steer"),
+            Series("lat_accel", "plots/lateral_accel/ego", "m/s^2", "lateral acceleration"),
+            Series("gap_front", "plots/gap/lead", "m", "gap to the lead"),
+            Series("phase", "plots/manoeuvre/phase", "", "phase"),
+            *signal_series(self._signal_names),
+        ]

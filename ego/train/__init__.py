@@ -1,0 +1,1 @@
+"""Training of the learned controllers (``ego train ...``)."""

@@ -1,0 +1,271 @@
+"""Identify report 002's car for NARMA-L2: designed excitation, then f and g in torch.
+
+    ego train narma-l2 [--seed N] [--samples N] [--epochs N] [--out PATH]
+
+Data. The report identified its plant from 100 samples at one operating point (30 km/h,
+a_x = 0.3 m/s^2), and its controller failed anywhere else. Here each episode draws an
+entry speed in [20, 40] km/h, an axial acceleration in [0, 0.6] m/s^2, a curve (a
+90-degree arc, radius log-uniform in [12, 60] m, left or right, between straights) and a
+small initial offset, and drives :class:`ego.models.DynamicBicycle` through it with the
+lane errors measured exactly as in the scenario (:class:`ego.road.LanePolyline` on a lane
+sampled every degree like ``sumo_nets/curve``). The steer is a stabilising feedback
+(curvature feed-forward plus error feedback, so the car stays where a controller keeps
+it) plus the excitation: random levels up to +-0.1 rad held for 1-5 samples (a
+multi-level pseudo-random signal), so every sample carries information about g.
+Every fifth episode is held out (too few episodes: the last fifth of the samples).
+
+Training. f = y + dy_scale * F(x) and g = g_scale * G(x); F and G are 32-32-1 tanh
+networks (12 inputs) trained jointly on the one-step-ahead error with Adam, on one CPU thread with
+deterministic algorithms and a seeded generator: the same seed gives the same weights.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import platform
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ego.control.narma import DEFAULT_MODEL, FEATURES
+from ego.models import DynamicBicycle, DynamicBicycleParams
+from ego.road import LanePolyline
+
+KMH = 1.0 / 3.6
+
+
+@dataclass(frozen=True)
+class DataSpec:
+    """How the identification data are generated."""
+
+    samples: int = 20000  #: at least this many (regressor, target) pairs in all
+    sample_period: float = 0.05  #: controller sample period h (s)
+    dt: float = 0.01  #: model step (s): the scenario's control period
+    speed_min: float = 20.0  #: entry speed range (km/h)
+    speed_max: float = 40.0
+    accel_min: float = 0.0  #: axial acceleration range (m/s^2)
+    accel_max: float = 0.6
+    radius_min: float = 12.0  #: curve radius range (m), log-uniform
+    radius_max: float = 60.0
+    excitation: float = 0.1  #: largest excitation level (rad)
+    hold_max: int = 5  #: excitation levels last 1..hold_max samples
+    steer_limit: float = 0.6  #: (rad)
+    held_out_every: int = 5  #: every n-th episode is held out
+
+
+@dataclass(frozen=True)
+class TrainSpec:
+    seed: int = 0
+    epochs: int = 150
+    batch: int = 256
+    hidden: int = 32
+    lr: float = 3e-3
+    data: DataSpec = DataSpec()
+
+
+def curve_polyline(radius: float, side: float, approach: float = 15.0, exit_: float = 25.0) -> LanePolyline:
+    """Straight along +x, a 90-degree arc of ``radius`` turning left (side +1) or right (-1)
+    sampled every degree, then a straight."""
+    pts = [(-approach, 0.0)]
+    for k in range(91):
+        a = math.radians(k)
+        pts.append((radius * math.sin(a), side * (radius - radius * math.cos(a))))
+    pts.append((radius, side * (radius + exit_)))
+    return LanePolyline(pts)
+
+
+def generate(spec: DataSpec, rng: np.random.Generator) -> dict[str, np.ndarray]:
+    """Episodes until ``spec.samples`` pairs: X (n, features), y0 = y(k), y1 = y(k+1),
+    u = u(k) and the episode index of each pair."""
+    params = DynamicBicycleParams(slip_speed_floor=1.0)
+    model = DynamicBicycle(params)
+    per = round(spec.sample_period / spec.dt)
+    step = model.stepper(spec.dt, 1)
+    L, K = params.wheelbase, params.understeer_gradient
+    rows, y0s, y1s, us, episodes = [], [], [], [], []
+    episode = 0
+    while len(rows) < spec.samples:
+        v0 = rng.uniform(spec.speed_min, spec.speed_max) * KMH
+        a_x = rng.uniform(spec.accel_min, spec.accel_max)
+        radius = math.exp(rng.uniform(math.log(spec.radius_min), math.log(spec.radius_max)))
+        side = 1.0 if rng.random() < 0.5 else -1.0
+        lane = curve_polyline(radius, side)
+        d0, psi0 = rng.uniform(-0.3, 0.3), rng.uniform(-0.05, 0.05)
+        # feedback gains of the exciting driver, drawn per episode (varied closed loops)
+        k_lat, k_head = rng.uniform(0.1, 0.4), rng.uniform(0.5, 1.5)
+        x = (-12.0, v0, d0, 0.0, psi0, 0.0)
+        end = lane.length - 10.0
+        hist = None
+        u_prev = [0.0, 0.0]
+        level, hold = 0.0, 0
+        while True:
+            s, d, err, kappa = lane.frame(x[0], x[2], x[4])
+            if s >= end or abs(d) > 2.5:
+                break
+            e_lat, e_head = -d, -err
+            if hist is None:
+                hist = [e_lat, e_head, e_lat, e_head]
+            if hold == 0:
+                level = rng.uniform(-spec.excitation, spec.excitation)
+                hold = int(rng.integers(1, spec.hold_max + 1))
+            hold -= 1
+            u_ff = kappa * (L + K * x[1] * x[1])
+            u = u_ff + k_lat * e_lat + k_head * e_head + level
+            u = max(-spec.steer_limit, min(spec.steer_limit, u))
+            ds = x[1] * math.cos(err) - x[3] * math.sin(err)
+            row = (e_lat, e_head, hist[0], hist[1], hist[2], hist[3], u_prev[0], u_prev[1],
+                   x[1], a_x, kappa, lane.mean_curvature(s, ds * spec.sample_period))
+            for _ in range(per):
+                x, _ = step(x, a_x, u)
+            s1, d1, err1, _ = lane.frame(x[0], x[2], x[4])
+            rows.append(row)
+            y0s.append(e_lat + e_head)
+            y1s.append(-d1 - err1)
+            us.append(u)
+            episodes.append(episode)
+            hist = [e_lat, e_head, hist[0], hist[1]]
+            u_prev = [u, u_prev[0]]
+            if not all(map(math.isfinite, x)):
+                raise RuntimeError("the identification run diverged")
+        episode += 1
+    return {"X": np.array(rows), "y0": np.array(y0s), "y1": np.array(y1s), "u": np.array(us),
+            "episode": np.array(episodes)}
+
+
+def held_out_mask(episode: np.ndarray, every: int) -> np.ndarray:
+    """Every ``every``-th episode is held out; with fewer episodes than that (a tiny data
+    set like the report's), the last 1/every of the samples."""
+    if episode.max() + 1 >= every:
+        return episode % every == every - 1
+    mask = np.zeros(len(episode), dtype=bool)
+    mask[len(episode) - max(1, len(episode) // every):] = True
+    return mask
+
+
+def _mlp(torch, n_in: int, hidden: int):
+    nn = torch.nn
+    return nn.Sequential(nn.Linear(n_in, hidden), nn.Tanh(), nn.Linear(hidden, hidden), nn.Tanh(),
+                         nn.Linear(hidden, 1))
+
+
+def train(spec: TrainSpec = TrainSpec(), out: Path = DEFAULT_MODEL, log=print) -> dict:
+    """Generate the data, train f and g, write ``out`` (.npz) and its metadata (.json).
+    Returns the metadata (errors, timings, sizes)."""
+    import torch
+
+    t0 = time.perf_counter()
+    rng = np.random.default_rng(spec.seed)
+    data = generate(spec.data, rng)
+    t_data = time.perf_counter() - t0
+    X, y0, y1, u, ep = data["X"], data["y0"], data["y1"], data["u"], data["episode"]
+    held = held_out_mask(ep, spec.data.held_out_every)
+    tr = ~held
+    mean, std = X[tr].mean(axis=0), X[tr].std(axis=0)
+    std[std < 1e-9] = 1.0
+    dy = y1 - y0
+    dy_scale = float(np.std(dy[tr]))
+    # g's scale: least squares of dy on u (the average effect of a radian of steer)
+    g_scale = float(abs(np.linalg.lstsq(np.column_stack([u[tr], np.ones(tr.sum())]), dy[tr],
+                                        rcond=None)[0][0]))
+    log(f"data: {len(X)} samples from {ep.max() + 1} episodes in {t_data:.1f} s "
+        f"({tr.sum()} training, {held.sum()} held out); g_scale {g_scale:.4f} m/rad")
+
+    torch.manual_seed(spec.seed)
+    torch.use_deterministic_algorithms(True)
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        dtype = torch.float64
+        xt = torch.tensor((X - mean) / std, dtype=dtype)
+        target = torch.tensor(dy / dy_scale, dtype=dtype)
+        ut = torch.tensor(u * g_scale / dy_scale, dtype=dtype)
+        f_net = _mlp(torch, X.shape[1], spec.hidden).to(dtype)
+        g_net = _mlp(torch, X.shape[1], spec.hidden).to(dtype)
+        with torch.no_grad():  # start g at the average effect (G = 1)
+            g_net[-1].bias.fill_(1.0)
+        opt = torch.optim.Adam([*f_net.parameters(), *g_net.parameters()], lr=spec.lr)
+        sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, T_max=spec.epochs)
+        idx_train = torch.tensor(np.flatnonzero(tr))
+        gen = torch.Generator().manual_seed(spec.seed)
+
+        def loss_on(idx):
+            pred = f_net(xt[idx]).squeeze(1) + g_net(xt[idx]).squeeze(1) * ut[idx]
+            return torch.mean((pred - target[idx]) ** 2)
+
+        t1 = time.perf_counter()
+        for epoch in range(spec.epochs):
+            perm = idx_train[torch.randperm(len(idx_train), generator=gen)]
+            for i in range(0, len(perm), spec.batch):
+                opt.zero_grad()
+                loss = loss_on(perm[i:i + spec.batch])
+                loss.backward()
+                opt.step()
+            sched.step()
+            if (epoch + 1) % max(1, spec.epochs // 5) == 0:
+                with torch.no_grad():
+                    log(f"epoch {epoch + 1}/{spec.epochs}: training loss "
+                        f"{float(loss_on(idx_train)):.5f} (relative to var dy)")
+        t_train = time.perf_counter() - t1
+        arrays = {"mean": mean, "std": std, "dy_scale": np.array(dy_scale),
+                  "g_scale": np.array(g_scale)}
+        for name, net in (("f", f_net), ("g", g_net)):
+            layers = [m for m in net if isinstance(m, torch.nn.Linear)]
+            for j, layer in enumerate(layers, 1):
+                arrays[f"{name}_w{j}"] = layer.weight.detach().numpy().copy()
+                arrays[f"{name}_b{j}"] = layer.bias.detach().numpy().copy()
+    finally:
+        torch.set_num_threads(threads)
+
+    meta = {
+        "features": list(FEATURES),
+        "output": "y = e_lat + e_head one sample ahead",
+        "sample_period": spec.data.sample_period,
+        "seed": spec.seed,
+        "train": {k: v for k, v in asdict(spec).items() if k != "data"},
+        "data": asdict(spec.data),
+        "samples": int(len(X)),
+        "episodes": int(ep.max() + 1),
+        "training_samples": int(tr.sum()),
+        "held_out_samples": int(held.sum()),
+        "data_seconds": round(t_data, 2),
+        "train_seconds": round(t_train, 2),
+        "torch": torch.__version__,
+        "python": platform.python_version(),
+    }
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    np.savez(out, **arrays)
+    from ego.control.narma import NarmaModel
+
+    model = NarmaModel(arrays, meta)
+    meta["errors"] = identification_errors(model, data, held)
+    out.with_suffix(".json").write_text(json.dumps(meta, indent=2) + "\n")
+    e = meta["errors"]
+    log(f"one-step error of y (m): training RMS {e['train_rms']:.2e}, held-out RMS "
+        f"{e['held_out_rms']:.2e} ({100 * e['held_out_relative']:.1f} % of the held-out change "
+        f"of y per sample, RMS {e['held_out_dy_rms']:.2e}); trained in {t_train:.1f} s")
+    log(f"wrote {out} and {out.with_suffix('.json').name}")
+    return meta
+
+
+def identification_errors(model, data: dict, held: np.ndarray) -> dict:
+    """One-step-ahead prediction errors of y with the numpy model (what control uses)."""
+    X, y1, u = data["X"], data["y1"], data["u"]
+    pred = np.array([model.predict(X[i], u[i]) for i in range(len(X))])
+    err = pred - y1
+    dy = y1 - data["y0"]
+    tr = ~held
+
+    def rms(a):
+        return float(np.sqrt(np.mean(a ** 2)))
+
+    return {
+        "train_rms": rms(err[tr]),
+        "held_out_rms": rms(err[held]),
+        "held_out_max": float(np.max(np.abs(err[held]))),
+        "held_out_dy_rms": rms(dy[held]),
+        "held_out_relative": rms(err[held]) / rms(dy[held]),
+    }
