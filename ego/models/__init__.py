@@ -3,6 +3,7 @@
 from ego.models.dynamic_bicycle import DynamicBicycle, DynamicBicycleParams
 from ego.models.geometry import VehicleGeometry
 from ego.models.integrate import FixedStepIntegrator, rk4_step
+from ego.models.lateral_error import LateralError, LateralErrorParams
 from ego.models.nonlinear_bicycle import (
     Input,
     NonlinearBicycle,
@@ -17,6 +18,8 @@ __all__ = [
     "DynamicBicycleParams",
     "FixedStepIntegrator",
     "Input",
+    "LateralError",
+    "LateralErrorParams",
     "NonlinearBicycle",
     "NonlinearBicycleParams",
     "PacejkaTyre",
