@@ -6,7 +6,10 @@ projection returns
 * ``s`` - arc length along the centre line to the closest point (m);
 * ``d`` - signed lateral offset of the point from the centre line (m, positive to the
   LEFT of the driving direction; on a left-hand arc of radius R a point at distance rho
-  from the centre has d = R - rho, so report 002's e_d = rho - R is -d);
+  from the centre has d = R - rho, so report 002's e_d = rho - R is -d). It is measured
+  to the constant-curvature arc each segment stands for (the chord plus the sagitta
+  profile kappa u (L - u) / 2), not to the chord: a car driving the true curve then sees
+  a smooth d instead of a sawtooth of the chords' sagitta every segment;
 * ``heading`` - the centre line's direction there (rad, counter-clockwise from +x),
   interpolated between the tangents at the vertices (exact on an evenly sampled circle);
 * ``curvature`` - signed curvature there (1/m, positive turning left): the derivative
@@ -126,15 +129,16 @@ class LanePolyline:
         ends the first/last segment is extended."""
         i, along, across = self._closest(x, y)
         seg = self._seg[i]
-        t = min(max(along / seg[4], 0.0), 1.0)
-        return seg[5] + along, across, seg[7] + t * seg[8]
+        u = min(max(along, 0.0), seg[4])
+        return seg[5] + along, across + seg[9] * u * (seg[4] - u) * 0.5, seg[7] + u / seg[4] * seg[8]
 
     def frame(self, x: float, y: float, psi: float) -> tuple[float, float, float, float]:
         """(s, d, heading error psi - heading, curvature) of a pose (m, m, rad, 1/m)."""
         i, along, across = self._closest(x, y)
         seg = self._seg[i]
-        t = min(max(along / seg[4], 0.0), 1.0)
-        return seg[5] + along, across, wrap_angle(psi - seg[7] - t * seg[8]), seg[9]
+        u = min(max(along, 0.0), seg[4])
+        return (seg[5] + along, across + seg[9] * u * (seg[4] - u) * 0.5,
+                wrap_angle(psi - seg[7] - u / seg[4] * seg[8]), seg[9])
 
     def heading_at(self, s: float) -> float:
         """The centre line's (interpolated tangent) heading at arc length ``s`` (rad)."""
@@ -182,7 +186,11 @@ class LanePolyline:
                 for r in spans]
 
     def offset_point(self, s: float, d: float) -> tuple[float, float]:
-        """World point at arc length ``s`` and lateral offset ``d`` (m)."""
-        x0, y0, ux, uy, _, s0 = self._seg[self._segment_at(s)][:6]
+        """World point at arc length ``s`` and lateral offset ``d`` (m), the inverse of
+        :meth:`project`."""
+        seg = self._seg[self._segment_at(s)]
+        x0, y0, ux, uy, length, s0 = seg[:6]
         along = s - s0
-        return x0 + along * ux - d * uy, y0 + along * uy + d * ux
+        u = min(max(along, 0.0), length)
+        across = d - seg[9] * u * (length - u) * 0.5
+        return x0 + along * ux - across * uy, y0 + along * uy + across * ux
