@@ -23,3 +23,10 @@ def test_loop_against_bare_sumo(tmp_path, monkeypatch):
     monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path))
     figures = main(["--repeat", "5"])
     assert figures["control_steps"] == 2500
+
+
+def test_tuning_batch_against_the_per_member_loop():
+    from bench_tune import main
+
+    figures = main(["--members", "40", "--loop-members", "4", "--no-full"])
+    assert figures["batch_generation_s"] > 0 and figures["drive_steps"] > 40000

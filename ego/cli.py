@@ -4,6 +4,7 @@
     ego compare SCENARIO --controllers A,B,... [--seeds N] [--set key=value ...] --out DIR
     ego list [--json]
     ego train narma-l2 [--seed N] [--samples N] [--epochs N] [--out PATH]
+    ego tune lane-centering [--quick] [--workers N] [--seed N] [--drives V[:OFF],...] [--out PATH]
 
 Exit status: 0 the run completed; 1 it ended in a collision, diverged or timed out
 (the metrics are still printed); 2 bad input (unknown name, bad value), with one line
@@ -56,6 +57,8 @@ def _parser() -> argparse.ArgumentParser:
                "  ego run curve --controller narma-l2 --set entry_speed=40\n"
                "  ego compare curve --controllers pid,fuzzy-curve,narma-l2 --out runs/curve\n"
                "  ego train narma-l2 --seed 0\n"
+               "  ego run lane-centering --controller cascade-pid --set speed=25\n"
+               "  ego tune lane-centering --quick\n"
                "  rerun runs/eb.rrd   # review the recording",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -128,6 +131,30 @@ def _parser() -> argparse.ArgumentParser:
                      help="curve radius range in m (default 12,60)")
     trn.add_argument("--out", default=None, metavar="PATH",
                      help="weights file (.npz; default: the model shipped in the package)")
+
+    tun = sub.add_parser(
+        "tune", help="tune a controller's gains (lane-centering: differential evolution)",
+        description="Tune report 003's cascade PID by differential evolution with the report's "
+                    "settings (population 15 x 12 gains, at most 100 generations, its cost), each "
+                    "generation simulated as one vectorised batch over the whole road. Writes the "
+                    "gains and how they were found to a preset file (.json) that the "
+                    "lane-centering scenario loads by default.",
+        epilog="Example: ego tune lane-centering   (about two minutes; rewrites the shipped preset)\n"
+               "         ego tune lane-centering --quick --out runs/quick.json   (seconds)\n"
+               "Use a preset with: ego run lane-centering -c cascade-pid --set gains_file=PATH",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    tun.add_argument("what", metavar="TASK", choices=["lane-centering"], help="lane-centering")
+    tun.add_argument("--quick", action="store_true",
+                     help="4 generations of a population of 4 x 12: a check, not a tuning")
+    tun.add_argument("--workers", type=int, default=1, metavar="N",
+                     help="processes sharing each generation (default 1)")
+    tun.add_argument("--seed", type=int, default=0, metavar="N", help="seed of the evolution (default 0)")
+    tun.add_argument("--drives", default="8,25:1", metavar="V[:OFF],...",
+                     help="drives whose costs are summed: speed in m/s, optionally the initial "
+                          "offset in m (default 8,25:1; report 003: 8)")
+    tun.add_argument("--out", default=None, metavar="PATH",
+                     help="preset file (.json; default: the preset shipped in the package)")
     return ap
 
 
@@ -274,6 +301,31 @@ def _train(args) -> int:
     return EXIT_OK
 
 
+def _tune(args) -> int:
+    from pathlib import Path
+
+    from ego.control.cascade import TUNED_PRESET
+    from ego.train.lane_centering import TuneSpec, tune
+
+    if args.workers < 1:
+        raise ConfigError(f"bad value for --workers: {args.workers} (expected a whole number of at least 1)")
+    try:
+        drives = tuple((float(d.split(":")[0]), float(d.split(":")[1]) if ":" in d else 0.0)
+                       for d in args.drives.split(","))
+    except ValueError:
+        raise ConfigError(f"bad value for --drives: {args.drives!r} (expected speeds in m/s with "
+                          "optional offsets in m, e.g. 8,25:1)") from None
+    if any(not (2.0 <= v <= 30.0) or abs(o) > 1.5 for v, o in drives):
+        raise ConfigError(f"bad value for --drives: {args.drives!r} (expected speeds from 2 to 30 m/s "
+                          "and offsets within 1.5 m)")
+    out = Path(args.out) if args.out else TUNED_PRESET
+    if out.suffix != ".json":
+        raise ConfigError(f"bad --out path {args.out!r} (expected a file ending in .json)")
+    spec = TuneSpec.quick(args.seed, args.workers) if args.quick else TuneSpec(seed=args.seed, workers=args.workers)
+    tune(TuneSpec(**{**spec.__dict__, "drives": drives}), out)
+    return EXIT_OK
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     from ego.sumo.bridge import SumoError
 
@@ -285,6 +337,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _compare(args)
         if args.command == "train":
             return _train(args)
+        if args.command == "tune":
+            return _tune(args)
         if args.command == "list":
             cat = _catalogue()
             if args.json:

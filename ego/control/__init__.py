@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 from ego.control.base import Controller, ControllerSpec, Observation
 from ego.control.bp_pid import BPPIDController, BPPIDParams
+from ego.control.cascade import CascadePID, CascadePIDParams
 from ego.control.curve import CurvePID, CurvePIDParams, FuzzyCurve, FuzzyCurveParams
 from ego.control.fuzzy import FuzzyController, FuzzyParams
 from ego.control.fuzzy_pid import FuzzyPIDController, FuzzyPIDParams
@@ -41,6 +42,8 @@ class NoController:
 TASKS: dict[str, str] = {
     "tracking": "report 000's two-channel tracking: returns (Fx per driven wheel in N, delta in rad)",
     "curve": "report 002's curve: returns (axial acceleration a_x in m/s^2, delta in rad)",
+    "lane-centering": "report 003's lane centring: returns (axial acceleration a_x in m/s^2, "
+                      "delta in rad)",
 }
 
 _NONE = ControllerSpec("none", "controller off: zero longitudinal command, delta = 0 (the ego "
@@ -77,6 +80,14 @@ CONTROLLERS: dict[str, dict[str, ControllerSpec]] = {
             _NONE,
         )
     },
+    "lane-centering": {
+        spec.name: spec
+        for spec in (
+            ControllerSpec("cascade-pid", "report 003's four-loop cascade PID with curvature "
+                           "feed-forward (preset tuned or report)", CascadePIDParams, CascadePID),
+            _NONE,
+        )
+    },
 }
 
 
@@ -106,6 +117,8 @@ __all__ = [
     "BPPIDParams",
     "CONTROLLERS",
     "TASKS",
+    "CascadePID",
+    "CascadePIDParams",
     "CurvePID",
     "CurvePIDParams",
     "FuzzyCurve",

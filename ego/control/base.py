@@ -34,6 +34,7 @@ class Observation:
     dd: float = 0.0  #: its rate (m/s, + moving left)
     speed: float = 0.0  #: body longitudinal speed u (m/s)
     yaw_rate: float = 0.0  #: r (rad/s)
+    vy: float = 0.0  #: body lateral speed v (m/s, + left)
     heading_error: float = 0.0  #: yaw minus the lane's heading at the projection (rad, + left)
     curvature: float = 0.0  #: the lane's curvature at the projection (1/m, + turning left)
     accel_ref: float = 0.0  #: planned axial acceleration, tasks commanding a_x (m/s^2)

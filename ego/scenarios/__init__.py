@@ -5,11 +5,12 @@ from __future__ import annotations
 from ego.params import ConfigError
 from ego.scenarios.base import CommonConfig, Event, RunResult, Scenario
 from ego.scenarios.curve import CurveConfig, CurveScenario
+from ego.scenarios.lane_centering import LaneCenteringConfig, LaneCenteringScenario
 from ego.scenarios.evasive import EmergencyBrake, EmergencyBrakeConfig, FastFollower, FastFollowerConfig
 from ego.scenarios.tracking import Report000, Report000Config, SineTracking, SineTrackingConfig
 
 SCENARIOS: dict[str, type[Scenario]] = {
-    cls.name: cls for cls in (EmergencyBrake, FastFollower, CurveScenario, SineTracking, Report000)
+    cls.name: cls for cls in (EmergencyBrake, FastFollower, CurveScenario, LaneCenteringScenario, SineTracking, Report000)
 }
 
 
@@ -30,6 +31,8 @@ __all__ = [
     "EmergencyBrakeConfig",
     "FastFollower",
     "FastFollowerConfig",
+    "LaneCenteringConfig",
+    "LaneCenteringScenario",
     "Report000",
     "Report000Config",
     "SineTracking",

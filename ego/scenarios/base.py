@@ -402,6 +402,7 @@ class RoadScenario(Scenario):
         self.road = None  #: the lane the frame is measured on (ego.road.LanePolyline)
         self.road_halfwidth = 0.0  #: |d| beyond which the ego has left the road (m)
         self.actors: list = []  #: scripted SUMO vehicles, ``update(bridge, t)`` each SUMO step
+        self.lanes: dict = {}  #: the lanes drawn in the recording (LanePolyline values)
         self.s = self.d_road = self.heading_error = self.curvature = self.ds = self.dd = 0.0
 
     def _kinematics(self) -> None:
@@ -427,6 +428,20 @@ class RoadScenario(Scenario):
         self.bridge.push(self.ego_id, x[0], x[2], x[4], self.ds)
         for actor in self.actors:
             actor.update(self.bridge, self.t - self.config.sumo_step)
+
+    def _record_boxes(self) -> None:
+        """Every vehicle as SUMO has it; the following view keeps the ego in place."""
+        ids, poses = self.bridge.poses()
+        x = self.ego.state
+        self.recorder.vehicles(self.t, ids, poses, (x[0], x[2]))
+
+    def _scene(self) -> Scene:
+        """Every lane in ``self.lanes`` (id -> LanePolyline), framed with a margin."""
+        pts = [p for lane in self.lanes.values() for p in lane.points]
+        xs, ys = [p[0] for p in pts], [p[1] for p in pts]
+        return Scene(lanes=[(lane.width, lane.points) for lane in self.lanes.values()],
+                     bounds=(min(xs) - 20.0, max(xs) + 20.0, min(ys) - 20.0, max(ys) + 20.0),
+                     title=self.name)
 
 
 def signal_series(names: Sequence[str]) -> list[Series]:

@@ -31,7 +31,7 @@ import numpy as np
 
 from ego.models import DynamicBicycle, DynamicBicycleParams, VehicleGeometry
 from ego.params import ConfigError, param
-from ego.record.base import Scene, Series
+from ego.record.base import Series
 from ego.road import LanePolyline
 from ego.scenarios import metrics as m
 from ego.scenarios.base import CommonConfig, EgoVehicle, RoadScenario, signal_series
@@ -282,6 +282,7 @@ class CurveScenario(RoadScenario):
         x = self.ego.state
         obs.speed = x[1]
         obs.yaw_rate = x[5]
+        obs.vy = x[3]
         obs.heading_error = self.heading_error
         obs.curvature = self.curvature
         obs.accel_ref = plan
@@ -319,18 +320,6 @@ class CurveScenario(RoadScenario):
         }
 
     # -- recording ----------------------------------------------------------------------------
-    def _record_boxes(self) -> None:
-        ids, poses = self.bridge.poses()
-        x = self.ego.state
-        self.recorder.vehicles(self.t, ids, poses, (x[0], x[2]))
-
-    def _scene(self) -> Scene:
-        pts = [p for lane in self.lanes.values() for p in lane.points]
-        xs, ys = [p[0] for p in pts], [p[1] for p in pts]
-        return Scene(lanes=[(lane.width, lane.points) for lane in self.lanes.values()],
-                     bounds=(min(xs) - 10.0, max(xs) + 10.0, min(ys) - 10.0, max(ys) + 10.0),
-                     title=self.name)
-
     def _series(self) -> list[Series]:
         return [
             Series("e_d", "plots/e_d/ego", "m", "e_d = distance to the arc centre - R"),

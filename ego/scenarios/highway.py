@@ -188,6 +188,7 @@ class HighwayScenario(RoadScenario):
         x = self.ego.state
         obs.speed = x[1]
         obs.yaw_rate = x[5]
+        obs.vy = x[3]
         obs.heading_error = self.heading_error
         obs.curvature = self.curvature
 

@@ -133,6 +133,7 @@ class PoissonFlow:
     speed: float  #: departure speed (m/s)
     min_headway: float = 2.0  #: (s)
     prefix: str = "flow"
+    lane: int = 0
     next_time: float = 0.0
     count: int = 0
 
@@ -151,7 +152,7 @@ class PoissonFlow:
         if t < self.next_time:
             return False
         veh = bridge.libsumo.vehicle
-        veh.add(f"{self.prefix}{self.count}", self.route, typeID=self.type_id, departLane="0",
+        veh.add(f"{self.prefix}{self.count}", self.route, typeID=self.type_id, departLane=str(self.lane),
                 departPos="0", departSpeed=f"{self.speed:.3f}")
         self.count += 1
         self.next_time += self._headway()

@@ -20,11 +20,11 @@ def curve():
     return sumolib.net.readNet(str(net_file("curve")))
 
 
-def test_both_networks_ship():
-    assert {"highway", "curve"} <= set(available_networks())
+def test_every_network_ships():
+    assert {"highway", "curve", "lane_centering"} <= set(available_networks())
 
 
-@pytest.mark.parametrize("name", ["highway", "curve"])
+@pytest.mark.parametrize("name", ["highway", "curve", "lane_centering"])
 def test_committed_network_matches_a_rebuild(tmp_path, name):
     rebuilt = build_network(name, output=tmp_path / f"{name}.net.xml")
     assert network_body(rebuilt) == network_body(net_file(name))
@@ -96,11 +96,58 @@ def test_curve_has_straights_a_quarter_circle_and_one_lane_each_way(curve):
     assert fwd.getLane(0).getWidth() == onc.getLane(0).getWidth() == pytest.approx(3.5)
 
 
-def test_curve_sources_match_their_generator(tmp_path):
-    folder = nets_dir() / "curve"
-    spec = importlib.util.spec_from_file_location("curve_generate", folder / "generate.py")
+@pytest.mark.parametrize("name", ["curve", "lane_centering"])
+def test_sources_match_their_generator(tmp_path, name):
+    folder = nets_dir() / name
+    spec = importlib.util.spec_from_file_location(f"{name}_generate", folder / "generate.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     mod.main(tmp_path)
-    for name in ("curve.nod.xml", "curve.edg.xml"):
-        assert (tmp_path / name).read_text() == (folder / name).read_text()
+    for part in (f"{name}.nod.xml", f"{name}.edg.xml"):
+        assert (tmp_path / part).read_text() == (folder / part).read_text()
+
+
+# -- lane_centering: report 003's road -------------------------------------------------------------
+
+def distance_to_road(road, pts, d):
+    """Exact distance from points to the road's offset curve at d (m, + left)."""
+    from scipy.spatial import cKDTree
+
+    ss = np.linspace(0.0, road.length, 30001)
+    _, i = cKDTree(road.offset_point(ss, d)).query(pts)
+    s = ss[i]
+    for _ in range(4):  # Newton steps onto the foot of the perpendicular
+        c = road.offset_point(s, d)
+        th = road.heading(s)
+        s = s + ((pts - c) * np.stack([np.cos(th), np.sin(th)], -1)).sum(-1) / (1 - road.curvature(s) * d)
+    return np.hypot(*(pts - road.offset_point(s, d)).T)
+
+
+@pytest.mark.parametrize("lane, offset", [(0, 0.0), (1, 3.8)])
+def test_lane_centering_lanes_are_within_1_cm_of_the_analytic_road(lane, offset):
+    from ego.roads import report003_road
+
+    road = report003_road()
+    net = sumolib.net.readNet(str(net_file("lane_centering")))
+    shape = net.getEdge("road").getLane(lane).getShape()
+    pts = dense(shape, per_metre=4)
+    assert np.max(distance_to_road(road, pts, offset)) < 0.01
+    assert net.getEdge("road").getLane(lane).getWidth() == pytest.approx(3.8)
+
+
+def test_report003_road_turns_90_degrees_through_easements():
+    from ego.roads import report003_road
+
+    road = report003_road()
+    assert road.final_heading == pytest.approx(math.pi / 2, abs=1e-12)
+    assert road.length == pytest.approx(2000 + 2 * 150 + 500 * math.pi / 2 - 150)
+    s = np.array([999.0, 1075.0, 1150.0, 1500.0, 1785.4, 1935.4 + 1.0])
+    np.testing.assert_allclose(road.curvature(s), [0, 0.5 / 500, 1 / 500, 1 / 500, 1 / 500, 0], atol=1e-6)
+    # the curvature is continuous: the easements start and end at zero slope
+    eps = 1e-6
+    for edge in (1000.0, 1150.0, 1785.398, 1935.398):
+        assert abs(road.curvature(edge + eps) - road.curvature(edge - eps)) < 1e-8
+    # a point on the arc is 500 m from the arc's centre
+    p = road.point(np.array([1400.0, 1600.0]))
+    centre = road.point(1400.0) + 500 * np.array([-np.sin(road.heading(1400.0)), np.cos(road.heading(1400.0))])
+    assert np.hypot(*(p[1] - centre)) == pytest.approx(500.0, abs=1e-6)

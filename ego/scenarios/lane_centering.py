@@ -1,0 +1,271 @@
+"""Report 003's lane centring on its road in SUMO (``sumo_nets/lane_centering``).
+
+The ego keeps the centre of the right lane - whose centre line is report 003's road: a
+1000 m straight, a cosine easement, a 500 m-radius arc, the easement back, a 1000 m
+straight - at a constant ``speed`` (report 003: 8 m/s), with traffic in the left lane. The
+run ends when the ego reaches the end of the road (``completed``).
+
+Two plants (``plant``):
+
+* ``lateral-error`` (default, the report's): :class:`ego.models.LateralError` in the lane's
+  frame, with the curvature of the SUMO lane under the car; its pose in the world (pushed
+  into SUMO) follows from the lane frame.
+* ``dynamic-bicycle``: report 002's model with report 003's car
+  (:class:`ego.models.DynamicBicycle`) in world coordinates, its errors measured on the SUMO
+  lane (:class:`ego.road.LanePolyline`), its speed held by a P law on a_x.
+
+The report claims 0.000 m max/mean/std of the lateral error over 50 s: at 8 m/s, 50 s
+is 400 m of the first straight, where from rest nothing ever moves (``--set duration=50``
+shows it); the figures here are over the whole road.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ego.models import (
+    DynamicBicycle,
+    DynamicBicycleParams,
+    LateralError,
+    LateralErrorParams,
+    VehicleGeometry,
+)
+from ego.params import param
+from ego.record.base import Series
+from ego.road import LanePolyline
+from ego.scenarios import metrics as m
+from ego.scenarios.base import CommonConfig, EgoVehicle, RoadScenario, signal_series
+from ego.sumo.bridge import SumoBridge, SumoConfig, VehicleSpec, VehicleType, ego_type
+from ego.sumo.net import net_file
+from ego.sumo.traffic import PoissonFlow, background_traffic
+
+EGO = "ego"
+EDGE, ROUTE = "road", "road_route"
+EGO_LANE, TRAFFIC_LANE = 0, 1
+#: report 003's car: wheelbase 2.8 m (lf 1.25, lr 1.55), width 1.85 m, ~0.95 m overhangs
+GEOMETRY = VehicleGeometry(length=4.7, width=1.85, cg_to_front=2.2)
+TRAFFIC_TYPE = VehicleType("traffic", length=4.5, width=1.8, color=(150, 150, 150))
+END_MARGIN = 15.0  #: m before the end of the lane where the run ends (SUMO would remove the ego)
+
+
+def report003_dynamic_params() -> DynamicBicycleParams:
+    """Report 003's car in report 002's model (its negative per-tyre convention)."""
+    p = LateralErrorParams()
+    return DynamicBicycleParams(m=p.m, Iz=p.Iz, lf=p.lf, lr=p.lr, Cf=-p.Cf, Cr=-p.Cr,
+                                slip_speed_floor=1.0)
+
+
+class LaneFrameEgo:
+    """The lateral-error model as an ego: lane-frame state, world pose derived from it.
+
+    ``state`` is the world tuple (X, u, Y, v, psi, r) every scenario reads; ``lane_state``
+    is the model's (e, psi_err, vy, r) and ``s`` the arc length along the lane."""
+
+    __slots__ = ("geometry", "lane", "speed", "dt", "max_steer", "s", "lane_state", "state",
+                 "applied", "lateral_accel", "kappa", "_step", "_model")
+
+    def __init__(self, model: LateralError, lane: LanePolyline, geometry: VehicleGeometry,
+                 s0: float, e0: float, dt: float, max_steer: float) -> None:
+        self.geometry, self.lane, self.speed, self.dt = geometry, lane, model.speed, dt
+        self.max_steer = max_steer
+        self._model = model
+        self._step = model.stepper(dt)
+        self.s = s0
+        self.lane_state = (e0, 0.0, 0.0, 0.0)
+        self.applied = (0.0, 0.0)
+        self.lateral_accel = 0.0
+        self.kappa = lane.curvature_at(s0)
+        self._pose()
+
+    def _pose(self) -> None:
+        e, psi, vy, r = self.lane_state
+        x, y = self.lane.offset_point(self.s, e)
+        self.state = (x, self.speed, y, vy, self.lane.heading_at(self.s) + psi, r)
+
+    def step(self, a_x: float, delta: float) -> None:
+        """One control period: the steer saturates; a_x is ignored (constant speed)."""
+        ms = self.max_steer
+        delta = ms if delta > ms else (-ms if delta < -ms else delta)
+        self.applied = (0.0, delta)
+        x = self.lane_state
+        kappa = self.kappa
+        self.lateral_accel = self._model.lateral_accel(x, delta)
+        e, psi, vy, _ = x
+        v = self.speed
+        # the reference point moves along the lane at the car's speed projected on it
+        self.s += self.dt * (v * math.cos(psi) - vy * math.sin(psi)) / (1.0 - kappa * e)
+        self.lane_state = self._step(x, delta, kappa)
+        self.kappa = self.lane.curvature_at(self.s)
+        self._pose()
+
+
+@dataclass(frozen=True)
+class LaneCenteringConfig(CommonConfig):
+    """Report 003's drive: the whole road at constant speed."""
+
+    duration: float = param(600.0, "s", "simulated time limit (the drive ends at the end of the "
+                            "road: 367 s at 8 m/s)", min=1.0, max=3600.0)
+    speed: float = param(8.0, "m/s", "the ego's constant speed (report 003: 8 m/s)", min=2.0, max=30.0)
+    plant: str = param("lateral-error", "-", "the ego's model", choices=("lateral-error", "dynamic-bicycle"))
+    offset: float = param(0.0, "m", "the ego's lateral offset from the lane centre at t = 0 (+ left)",
+                          min=-1.5, max=1.5)
+    start: float = param(20.0, "m", "the ego's front bumper along the road at t = 0", min=5.0, max=2000.0)
+    traffic_density: float = param(8.0, "veh/km", "traffic in the left lane", min=0.0, max=30.0)
+    traffic_factor: float = param(1.15, "-", "the traffic's speed as a multiple of the ego's",
+                                  min=0.5, max=2.0)
+    max_steer: float = param(math.radians(25.0), "rad", "front steer limit of the ego (report 003: "
+                             "25 deg)", min=0.05, max=1.0)
+
+
+class LaneCenteringScenario(RoadScenario):
+    """Report 003's lane centring on its road, traffic in the other lane."""
+
+    name = "lane-centering"
+    summary = ("report 003: keep the lane centre over 1000 m straight, a 500 m-radius curve with "
+               "cosine easements and 1000 m straight, at 8 m/s (--set speed=25; --set "
+               "plant=dynamic-bicycle)")
+    task = "lane-centering"
+    config_cls = LaneCenteringConfig
+    #: t (s); s along the lane (m); d the lateral error (m, + left of the lane centre);
+    #: heading_error (rad); vy body lateral speed (m/s); yaw_rate (rad/s); speed (m/s);
+    #: a_x, delta as applied; curvature of the lane at the car (1/m); lat_accel (m/s^2)
+    columns = ("t", "s", "d", "heading_error", "vy", "yaw_rate", "speed", "a_x", "delta",
+               "curvature", "lat_accel")
+
+    def __init__(self, config, controller, **kwargs) -> None:
+        super().__init__(config, controller, **kwargs)
+        self.geometry = GEOMETRY
+        self.lanes: dict[str, LanePolyline] = {}
+        self.spans: list[tuple[float, float, float]] = []
+        self._in_curve = False
+        self._end_s = 0.0
+
+    def _make_bridge(self) -> SumoBridge:
+        c = self.config
+        return SumoBridge(SumoConfig(net_file("lane_centering"), step_length=c.sumo_step,
+                                     seed=self.seed, lateral_resolution=c.lateral_resolution))
+
+    def _setup(self, rng: np.random.Generator) -> None:
+        c = self.config
+        bridge = self.bridge
+        shapes = bridge.lane_shapes()
+        self.lanes = {lid: LanePolyline(pts, width, lid) for lid, (width, pts) in shapes.items()}
+        self.road = lane = self.lanes[f"{EDGE}_{EGO_LANE}"]
+        self.obs.lane = lane
+        self.spans = lane.curved_spans(min_curvature=1e-4)
+        self._in_curve = False
+        self._end_s = lane.length - END_MARGIN
+        self.road_halfwidth = 0.5 * lane.width + 0.5 * self.geometry.width + 0.5
+
+        traffic_speed = c.traffic_factor * c.speed
+        bridge.add_type(ego_type(EGO, self.geometry))
+        # the traffic's top speed is its speed: SUMO's drivers would otherwise speed up to
+        # the lane's limit (30 m/s)
+        bridge.add_type(replace(TRAFFIC_TYPE, max_speed=traffic_speed))
+        bridge.add_route(ROUTE, [EDGE])
+        specs = background_traffic(
+            rng, lanes=[TRAFFIC_LANE], start=10.0, end=lane.length - 50.0, density=c.traffic_density,
+            speed=traffic_speed, min_spacing=max(20.0, 1.5 * traffic_speed) + TRAFFIC_TYPE.length,
+            route=ROUTE, type_id=TRAFFIC_TYPE.id,
+        ) if c.traffic_density > 0 else []
+        self.actors = []
+        if c.traffic_density > 0:
+            self.actors.append(PoissonFlow(rng, ROUTE, TRAFFIC_TYPE.id, c.traffic_density * traffic_speed * 3.6,
+                                           traffic_speed, min_headway=2.0, prefix="flow", lane=TRAFFIC_LANE))
+        bridge.add_vehicles([*specs, VehicleSpec(EGO, EGO, ROUTE, EGO_LANE, c.start, c.speed)])
+        missing = bridge.insert(required=[EGO])
+        if missing:
+            self.event("traffic", f"SUMO could not place {len(missing)} vehicles", "WARN")
+        veh = bridge.libsumo.vehicle
+        for spec in specs:
+            if spec.id not in missing:
+                veh.setLaneChangeMode(spec.id, 0)
+        bridge.control(EGO, self.geometry)
+        self.controlled_ids = (EGO,)
+        self.colors[EGO] = (220, 40, 40)
+
+        x, y, psi = bridge.cg_pose(EGO)
+        s0 = lane.project(x, y)[0]
+        if c.plant == "lateral-error":
+            model = LateralError(LateralErrorParams(), c.speed)
+            self.ego = LaneFrameEgo(model, lane, self.geometry, s0, c.offset, c.dt, c.max_steer)
+        else:
+            self.ego = EgoVehicle(DynamicBicycle(report003_dynamic_params()), self.geometry, c.dt,
+                                  c.substeps, max_steer=c.max_steer)
+            x, y = lane.offset_point(s0, c.offset)
+            self.ego.state = (x, c.speed, y, 0.0, lane.heading_at(s0), 0.0)
+        self._kinematics()
+
+    # -- per step ---------------------------------------------------------------------------
+    def _act(self, action: tuple[float, float]) -> None:
+        ego = self.ego
+        ego.step(*action)
+        a_x, delta = ego.applied
+        obs = self.obs
+        self.trace.append((
+            obs.t, self.s, self.d_road, self.heading_error, obs.vy, obs.yaw_rate, obs.speed,
+            a_x, delta, self.curvature, ego.lateral_accel, *self.controller.signals().values(),
+        ))
+        self._kinematics()
+
+    def _update(self) -> None:
+        s = self.s
+        if s >= self._end_s:
+            self._end("completed", f"reached the end of the road ({s:.0f} m)")
+            return
+        inside = any(a <= s <= b for a, b, _ in self.spans)
+        if inside != self._in_curve:
+            self._in_curve = inside
+            self.event("curve", f"{'entering' if inside else 'leaving'} the curve at s = {s:.0f} m, "
+                       f"lateral error {self.d_road:+.3f} m")
+        obs = self.obs
+        x = self.ego.state
+        obs.t = self.t
+        obs.s = s
+        obs.ds = self.ds
+        obs.d = self.d_road
+        obs.dd = self.dd
+        obs.speed = x[1]
+        obs.yaw_rate = x[5]
+        obs.vy = x[3]
+        obs.heading_error = self.heading_error
+        obs.curvature = self.curvature
+        # the plan holds the speed (the lateral-error model's speed is constant anyway)
+        obs.accel_ref = 1.0 * (self.config.speed - x[1])
+
+    def _final_status(self) -> tuple[str, str]:
+        return "timeout", f"at s = {self.s:.0f} m of {self._end_s + END_MARGIN:.0f} m after " \
+                          f"{self.config.duration:g} s"
+
+    # -- results ------------------------------------------------------------------------------
+    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
+        if not trace.size:
+            return {"completed_road": False}
+        col = {name: trace[:, i] for i, name in enumerate(columns)}
+        d = col["d"]
+        return {
+            "completed_road": self.status == "completed",
+            "distance": m.json_number(float(col["s"][-1] - col["s"][0]), 2),
+            "max_abs_lateral_error": m.json_number(m.max_abs(d)),
+            "mean_abs_lateral_error": m.json_number(float(np.mean(np.abs(d)))),
+            "std_lateral_error": m.json_number(float(np.std(d))),
+            "rms_lateral_error": m.json_number(float(np.sqrt(np.mean(d * d)))),
+            "max_abs_heading_error": m.json_number(m.max_abs(col["heading_error"])),
+            "max_abs_steer": m.json_number(m.max_abs(col["delta"])),
+            "max_abs_lateral_accel": m.json_number(m.max_abs(col["lat_accel"])),
+        }
+
+    # -- recording ----------------------------------------------------------------------------
+    def _series(self) -> list[Series]:
+        return [
+            Series("d", "plots/lateral_error/ego", "m", "lateral error (+ left of the lane centre)"),
+            Series("heading_error", "plots/heading_error/ego", "rad", "heading error"),
+            Series("delta", "plots/delta/delta", "rad", "front steer"),
+            Series("curvature", "plots/curvature/lane", "1/m", "lane curvature"),
+            Series("lat_accel", "plots/lateral_accel/ego", "m/s^2", "lateral acceleration"),
+            Series("speed", "plots/speed/ego", "m/s", "speed"),
+            *signal_series(self._signal_names),
+        ]
