@@ -8,7 +8,7 @@ divergence checks, the trace and the recording. A concrete scenario adds its tra
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -110,7 +110,9 @@ class HighwayScenario(RoadScenario):
         c = self.config
         bridge = self.bridge
         bridge.add_type(ego_type(EGO, self.geometry))
-        bridge.add_type(TRAFFIC_TYPE)
+        # the background's top speed is traffic_speed: SUMO's drivers would otherwise speed
+        # up to the motorway's limit (130 km/h)
+        bridge.add_type(replace(TRAFFIC_TYPE, max_speed=c.traffic_speed))
         bridge.add_route(ROUTE, [EDGE])
         specs, required = self._traffic(rng)
         ego_spec = VehicleSpec(EGO, EGO, ROUTE, c.ego_lane, c.ego_start, c.ego_speed)

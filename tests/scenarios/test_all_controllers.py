@@ -26,10 +26,19 @@ def test_fast_follower_hits_a_coasting_ego_from_behind():
 
 
 def test_fast_follower_triggers_on_the_rear_ttc_and_accelerates(fuzzy_ready):
-    r = run(RunSpec("fast-follower", "fuzzy", seed=0))
+    r = run(RunSpec("fast-follower", "fuzzy", seed=0, overrides={"traffic_density": 0.0}))
     m = r.metrics
     assert m["trigger_ttc"] < 3.0 and r.events[0].text.startswith("rear TTC")
     assert m["final_speed"] == pytest.approx(25.0, abs=0.5)  # evade_speed (report: X_ref = 25 t)
+
+
+def test_in_traffic_the_evading_ego_settles_behind_the_new_lanes_leader(fuzzy_ready):
+    # the background drives at traffic_speed (20 m/s): the ego accelerates to pass the
+    # follower's lane, then keeps its distance to the car ahead in the new lane
+    m = run(RunSpec("fast-follower", "fuzzy", seed=0)).metrics
+    assert m["follower_passed"] and not m["collision"]
+    assert m["final_speed"] == pytest.approx(20.0, abs=0.5)
+    assert m["min_gap_front"] > 5.0
 
 
 @pytest.mark.parametrize("controller, overrides", [
