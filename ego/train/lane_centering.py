@@ -374,15 +374,19 @@ class _Objective:
             self.pool.shutdown()
 
 
-def drive_figures(gains, spec: tuple[tuple[float, float], ...]) -> dict:
-    """Cost and lateral-error figures of one set of gains on each drive."""
+def drive_figures(gain_sets, spec: tuple[tuple[float, float], ...]) -> list[dict]:
+    """Cost and lateral-error figures of each set of gains on each drive (one simulation)."""
     setups, kappas = drives(spec)
-    stats, _ = simulate_drives(np.array([gains], dtype=float), setups, kappas)
-    out = {}
-    for (v, o), (mx, mn, sd) in zip(spec, stats):
-        out[drive_name(v, o)] = {"cost": float(cost(mx, mn, sd)[0]), "max_abs_lateral_error": float(mx[0]),
-                                 "mean_abs_lateral_error": float(mn[0]),
-                                 "std_abs_lateral_error": float(sd[0])}
+    stats, _ = simulate_drives(np.array(gain_sets, dtype=float), setups, kappas)
+    out = []
+    for j in range(len(gain_sets)):
+        figures = {}
+        for (v, o), (mx, mn, sd) in zip(spec, stats):
+            figures[drive_name(v, o)] = {
+                "cost": float(cost(mx[j:j + 1], mn[j:j + 1], sd[j:j + 1])[0]),
+                "max_abs_lateral_error": float(mx[j]), "mean_abs_lateral_error": float(mn[j]),
+                "std_abs_lateral_error": float(sd[j])}
+        out.append(figures)
     return out
 
 
@@ -411,7 +415,7 @@ def tune(spec: TuneSpec = TuneSpec(), out: Path | None = TUNED_PRESET, log=print
         objective.close()
     wall = time.perf_counter() - t0
     gains = [float(g) for g in result.x]
-    tuned, report = drive_figures(gains, speeds), drive_figures(REPORT_GAINS, speeds)
+    tuned, report = drive_figures([gains, REPORT_GAINS], speeds)
     preset = {
         "gains": dict(zip(GAIN_NAMES, gains)),
         "cost": float(result.fun),
