@@ -4,6 +4,7 @@ from ego.models.dynamic_bicycle import DynamicBicycle, DynamicBicycleParams
 from ego.models.geometry import VehicleGeometry
 from ego.models.integrate import FixedStepIntegrator, rk4_step
 from ego.models.lateral_error import LateralError, LateralErrorParams
+from ego.models.longitudinal import Longitudinal, LongitudinalParams, SpacingPolicy
 from ego.models.nonlinear_bicycle import (
     Input,
     NonlinearBicycle,
@@ -20,9 +21,12 @@ __all__ = [
     "Input",
     "LateralError",
     "LateralErrorParams",
+    "Longitudinal",
+    "LongitudinalParams",
     "NonlinearBicycle",
     "NonlinearBicycleParams",
     "PacejkaTyre",
+    "SpacingPolicy",
     "State",
     "VehicleGeometry",
     "magic_formula",
