@@ -8,6 +8,14 @@ from ego.control.base import Controller, ControllerSpec, Observation
 from ego.control.bp_pid import BPPIDController, BPPIDParams
 from ego.control.cascade import CascadePID, CascadePIDParams
 from ego.control.curve import CurvePID, CurvePIDParams, FuzzyCurve, FuzzyCurveParams
+from ego.control.following import (
+    BPPIDAcc,
+    BPPIDAccParams,
+    FollowingObservation,
+    FollowingPID,
+    FollowingPIDParams,
+    PlatoonControl,
+)
 from ego.control.fuzzy import FuzzyController, FuzzyParams
 from ego.control.fuzzy_pid import FuzzyPIDController, FuzzyPIDParams
 from ego.control.narma import NarmaL2Controller, NarmaL2Params
@@ -44,6 +52,8 @@ TASKS: dict[str, str] = {
     "curve": "report 002's curve: returns (axial acceleration a_x in m/s^2, delta in rad)",
     "lane-centering": "report 003's lane centring: returns (axial acceleration a_x in m/s^2, "
                       "delta in rad)",
+    "car-following": "report 004's car following, one controller per follower: returns (commanded "
+                     "acceleration in m/s^2, 0: the platoon keeps its lane)",
 }
 
 _NONE = ControllerSpec("none", "controller off: zero longitudinal command, delta = 0 (the ego "
@@ -88,6 +98,17 @@ CONTROLLERS: dict[str, dict[str, ControllerSpec]] = {
             _NONE,
         )
     },
+    "car-following": {
+        spec.name: spec
+        for spec in (
+            ControllerSpec("pid", "report 004's PID on the spacing error (Kp 0.85, Ki 0.2, Kd 0.3)",
+                           FollowingPIDParams, FollowingPID),
+            ControllerSpec("bp-pid-acc", "report 004's 3-5-3 BP neural-network PID (inputs r_in, "
+                           "y_out, error; outputs Kp, Ki, Kd; incremental PID)", BPPIDAccParams, BPPIDAcc),
+            ControllerSpec("none", "controller off: zero acceleration command (the followers coast)",
+                           NoParams, NoController),
+        )
+    },
 }
 
 
@@ -113,6 +134,8 @@ def controller_spec(name: str, task: str = "tracking") -> ControllerSpec:
 
 
 __all__ = [
+    "BPPIDAcc",
+    "BPPIDAccParams",
     "BPPIDController",
     "BPPIDParams",
     "CONTROLLERS",
@@ -126,6 +149,9 @@ __all__ = [
     "NarmaL2Controller",
     "NarmaL2Params",
     "controller_names",
+    "FollowingObservation",
+    "FollowingPID",
+    "FollowingPIDParams",
     "FuzzyPIDController",
     "FuzzyPIDParams",
     "RBFSMCController",
@@ -139,5 +165,6 @@ __all__ = [
     "PID",
     "PIDController",
     "PIDParams",
+    "PlatoonControl",
     "controller_spec",
 ]
