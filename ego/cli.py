@@ -59,6 +59,8 @@ def _parser() -> argparse.ArgumentParser:
                "  ego train narma-l2 --seed 0\n"
                "  ego run lane-centering --controller cascade-pid --set speed=25\n"
                "  ego tune lane-centering --quick\n"
+               "  ego run platoon --controller bp-pid-acc --set followers=5 --record runs/platoon.rrd\n"
+               "  ego compare platoon --controllers pid,bp-pid-acc --seeds 3 --out runs/platoon\n"
                "  rerun runs/eb.rrd   # review the recording",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -212,7 +214,9 @@ def _fmt(value) -> str:
 
 
 def _print_result(result) -> None:
-    m = result.metrics
+    from ego.scenarios.metrics import flatten
+
+    m = flatten(result.metrics)
     print(f"{m['scenario']} with {m['controller']} (seed {m['seed']}): {m['status'].upper()}"
           f" - {m['status_detail']}")
     skip = {"scenario", "controller", "seed", "status", "status_detail", "lane_choice"}

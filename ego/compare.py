@@ -4,11 +4,13 @@ Each run is a :class:`~ego.runner.RunSpec` executed in a worker process (libsumo
 simulation per process), writing its own ``.rrd``. A run that fails or diverges becomes a
 row with its status; it never stops the comparison. Outputs in ``--out``:
 
-* ``metrics.csv`` - one row per run, every metric;
+* ``metrics.csv`` - one row per run, every metric (nested ones as dotted columns,
+  ``followers.f1.min_gap``);
 * ``metrics.md`` - one row per controller: runs by status, then mean +- standard deviation
   over seeds of the scenario's headline metrics;
-* ``lateral_error.png``, ``speed.png``, ``steering.png``, ``fx.png`` - the first seed of
-  every controller, one line each;
+* ``lateral_error.png``, ``speed.png``, ``steering.png``, ``fx.png`` (and the plots the
+  scenario adds: the curve's e_d, e_a, a_x; the platoon's spacing error and acceleration of
+  its first and last follower) - the first seed of every controller, one line each;
 * ``runs/<controller>-seed<N>.rrd`` - every run's recording.
 """
 
@@ -32,6 +34,7 @@ from ego.params import ConfigError, describe
 from ego.processes import main_module_hidden
 from ego.runner import RunSpec, configure, run, split_overrides
 from ego.scenarios import scenario_class
+from ego.scenarios.metrics import flatten
 
 #: trace columns kept for the plots: (column, file, y label)
 PLOTS = (
@@ -49,6 +52,9 @@ HEADLINE = (
     "lane_change_duration", "max_overshoot", "min_ttc_front", "min_ttc_rear", "min_gap_front",
     "rms_lateral_error", "max_abs_lateral_error_after_10s", "rms_speed_error", "x_settling_time",
     "max_abs_lateral_accel",
+    # the platoon (a key ending in "." stands for every flattened metric under it)
+    "rms_spacing_error", "max_abs_spacing_error", "min_gap", "min_ttc", "max_abs_accel", "max_abs_jerk",
+    "settle_times.", "string_stable", "frequency_gain.",
 )
 
 
@@ -62,15 +68,22 @@ class RunRow:
     error: str = ""
 
 
+def plots_of(spec: RunSpec) -> tuple[tuple[str, str, str], ...]:
+    """The standard plots and the scenario's own: (column, file, y label)."""
+    cls, config, _, _ = configure(spec)
+    return PLOTS + cls.compare_plots(config)
+
+
 def _one(spec: RunSpec) -> RunRow:
-    """Worker: run and keep the metrics and the plotted columns (never raises)."""
+    """Worker: run and keep the metrics (flattened) and the plotted columns (never raises)."""
     try:
+        plots = plots_of(spec)
         result = run(spec)
     except Exception as exc:  # noqa: BLE001 - a broken run is a row, not a crash
         return RunRow(spec.controller, spec.seed, "error", {}, error=f"{type(exc).__name__}: {exc}")
     t = result.column("t")
-    traces = {c: result.column(c) for c, _, _ in PLOTS if c in result.columns}
-    return RunRow(spec.controller, spec.seed, result.status, result.metrics, {"t": t, **traces})
+    traces = {c: result.column(c) for c, _, _ in plots if c in result.columns}
+    return RunRow(spec.controller, spec.seed, result.status, flatten(result.metrics), {"t": t, **traces})
 
 
 def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict, out: Path) -> list[RunSpec]:
@@ -115,7 +128,8 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
     out = Path(out)
     specs = plan(scenario, controllers, seeds, overrides, out)
     for spec in specs:  # every value too (a bad --set value) before any process starts
-        configure(spec)
+        cls, config, ctrl, params = configure(spec)
+        cls.build_controller(ctrl, params, config)
     (out / "runs").mkdir(parents=True, exist_ok=True)
     jobs = max(1, min(jobs or os.cpu_count() or 1, len(specs)))
     rows: list[RunRow] = []
@@ -132,11 +146,12 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
     rows.sort(key=lambda r: order[(r.controller, r.seed)])
     write_csv(rows, out / "metrics.csv")
     write_markdown(scenario, rows, list(controllers), out / "metrics.md")
-    write_plots(scenario, rows, list(controllers), out)
+    write_plots(scenario, rows, list(controllers), out, plots_of(specs[0]))
     return rows
 
 
 def write_csv(rows: Sequence[RunRow], path: Path) -> None:
+    """One row per run, one column per (flattened) metric."""
     keys: list[str] = []
     for r in rows:
         keys += [k for k in r.metrics if k not in keys]
@@ -151,6 +166,8 @@ def write_csv(rows: Sequence[RunRow], path: Path) -> None:
 
 
 def _mean_spread(values: list) -> str:
+    if values and all(isinstance(v, bool) for v in values):
+        return f"{sum(values)}/{len(values)}"  # how many runs say yes
     nums = [float(v) for v in values if isinstance(v, (int, float)) and not isinstance(v, bool)
             and v is not None and math.isfinite(v)]
     if not nums:
@@ -165,11 +182,24 @@ def _mean_spread(values: list) -> str:
     return text
 
 
+def headline_keys(rows: Sequence[RunRow]) -> list[str]:
+    """The HEADLINE metrics the rows have, prefixes ("settle_times.") expanded in order."""
+    keys: list[str] = []
+    for k in HEADLINE:
+        if k.endswith("."):
+            keys += [name for name in dict.fromkeys(n for r in rows for n in r.metrics)
+                     if name.startswith(k) and name not in keys]
+        elif any(k in r.metrics for r in rows):
+            keys.append(k)
+    return keys
+
+
 def write_markdown(scenario: str, rows: Sequence[RunRow], controllers: list[str], path: Path) -> None:
-    present = [k for k in HEADLINE if any(k in r.metrics for r in rows)]
+    present = headline_keys(rows)
     lines = [f"# {scenario}: {len(rows)} runs",
              "",
-             "Mean +- standard deviation over seeds; (k/n) when only k of n runs have the value.",
+             "Mean +- standard deviation over seeds; (k/n) when only k of n runs have the value; "
+             "k/n for a yes/no metric: k of n runs say yes.",
              "",
              "| controller | runs | " + " | ".join(present) + " |",
              "|---|---|" + "---|" * len(present)]
@@ -187,7 +217,8 @@ def write_markdown(scenario: str, rows: Sequence[RunRow], controllers: list[str]
     path.write_text("\n".join(lines) + "\n")
 
 
-def write_plots(scenario: str, rows: Sequence[RunRow], controllers: list[str], out: Path) -> None:
+def write_plots(scenario: str, rows: Sequence[RunRow], controllers: list[str], out: Path,
+                plots: Sequence[tuple[str, str, str]] = PLOTS) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -197,7 +228,7 @@ def write_plots(scenario: str, rows: Sequence[RunRow], controllers: list[str], o
     for r in rows:
         if r.controller not in first and r.traces:
             first[r.controller] = r
-    for column, filename, label in PLOTS:
+    for column, filename, label in plots:
         if not any(column in r.traces for r in first.values()):
             continue  # not a column of this scenario
         fig, ax = plt.subplots(figsize=(9, 4.5), dpi=110)

@@ -40,7 +40,7 @@ def configure(spec: RunSpec):
     Raises ConfigError on any unknown name or bad value; builds nothing."""
     cls = scenario_class(spec.scenario)
     ctrl = controller_spec(spec.controller, cls.task)
-    config, rest = apply_overrides(cls.config_cls(), spec.overrides, strict=False)
+    config, rest = apply_overrides(cls.default_config(spec.overrides), spec.overrides, strict=False)
     ctrl_params, rest = apply_overrides(ctrl.params(), rest, strict=False)
     if rest:
         known = [i.name for i in describe(cls.config_cls)] + [i.name for i in describe(ctrl.params)]
@@ -51,7 +51,7 @@ def configure(spec: RunSpec):
 def build(spec: RunSpec):
     """Resolve names and overrides into a ready scenario (validates everything first)."""
     cls, config, ctrl, ctrl_params = configure(spec)
-    controller = ctrl.build(ctrl_params, config.dt)
+    controller = cls.build_controller(ctrl, ctrl_params, config)
     recorder = None
     if spec.record:
         path = Path(spec.record)

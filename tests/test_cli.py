@@ -31,6 +31,33 @@ def test_list_names_every_parameter_with_default_and_unit():
     assert curve_params["entry_speed"]["unit"] == "km/h" and curve_params["lead"]["default"] == 0.0
     text = ego("list")
     assert text.returncode == 0 and "lead_decel" in text.stdout and "m/s^2" in text.stdout
+    following = {c["name"]: c for c in cat["controllers"] if c["task"] == "car-following"}
+    assert set(following) == {"pid", "bp-pid-acc", "none"}
+    gains = {p["name"]: p["default"] for p in following["pid"]["parameters"]}
+    assert gains == {"kp": 0.85, "ki": 0.2, "kd": 0.3, "period": 0.1}
+    bp = {p["name"]: p["default"] for p in following["bp-pid-acc"]["parameters"]}
+    assert bp["learning_rate"] == 0.25 and bp["momentum"] == 0.01 and bp["init_range"] == 0.5
+    platoon = {p["name"]: p for p in scenarios["platoon"]["parameters"]}
+    assert platoon["followers"]["default"] == 3 and platoon["followers"]["allowed"] == "a whole number from 1 to 10"
+    assert platoon["standstill_gap"]["default"] == 3.0 and platoon["headway"]["unit"] == "s"
+    assert "scale-model" in platoon["variant"]["allowed"]
+
+
+@pytest.mark.sumo
+def test_platoon_run_prints_per_follower_metrics_and_json(tmp_path):
+    text = ego("run", "platoon", "-c", "pid", "--set", "duration=20")
+    assert text.returncode == 0, text.stderr
+    for line in ("followers.f3.max_abs_jerk", "settle_times.brake@10s", "amplification.f1->f2.l2_accel",
+                 "string_stable"):
+        assert line in text.stdout
+    out = ego("run", "platoon", "-c", "bp-pid-acc", "--json", "--set", "followers=2", "--set", "duration=20")
+    assert out.returncode == 0, out.stderr
+    m = json.loads(out.stdout)
+    assert set(m["followers"]) == {"f1", "f2"}
+    assert set(m["followers"]["f1"]) == {"rms_spacing_error", "max_abs_spacing_error", "min_gap", "min_ttc",
+                                         "max_abs_accel", "max_abs_jerk", "settle_times"}
+    assert m["collision"] is False and isinstance(m["string_stable"], bool)
+    assert set(m["amplification"]) == {"leader->f1", "f1->f2"}
 
 
 @pytest.mark.sumo

@@ -80,3 +80,30 @@ def test_bad_input_is_rejected_before_anything_runs(tmp_path):
                         "pid", "--set", "kp_lat=x", "--out", str(tmp_path / "y")],
                        capture_output=True, text=True)
     assert p.returncode == 2 and "bad value for kp_lat" in p.stderr
+
+
+def test_compare_the_platoon_controllers(tmp_path):
+    out = tmp_path / "platoon"
+    p = subprocess.run([sys.executable, "-m", "ego", "compare", "platoon", "--controllers", "pid,bp-pid-acc",
+                        "--seeds", "2", "--set", "duration=40", "--set", "period=0.2", "--out", str(out)],
+                       capture_output=True, text=True, timeout=600)
+    assert p.returncode == 0, p.stderr
+    rows = list(csv.DictReader(open(out / "metrics.csv")))
+    assert [(r["controller"], r["seed"], r["status"]) for r in rows] == [
+        ("pid", "0", "completed"), ("pid", "1", "completed"),
+        ("bp-pid-acc", "0", "completed"), ("bp-pid-acc", "1", "completed")]
+    # nested metrics become dotted columns
+    assert {"followers.f3.min_gap", "settle_times.brake@10s", "amplification.f2->f3.l2_spacing_error"} <= set(rows[0])
+    md = (out / "metrics.md").read_text()
+    assert "settle_times.brake@10s" in md and "string_stable" in md and "| pid | 2 completed |" in md
+    for png in ("spacing_error_f1.png", "spacing_error_f3.png", "accel_f1.png", "accel_f3.png"):
+        assert (out / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", png
+    assert not (out / "lateral_error.png").exists()
+
+
+def test_compare_checks_the_control_period_before_starting(tmp_path):
+    p = subprocess.run([sys.executable, "-m", "ego", "compare", "platoon", "--controllers", "pid",
+                        "--set", "period=0.015", "--out", str(tmp_path / "x")],
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode == 2 and "bad value for period: 0.015" in p.stderr
+    assert not (tmp_path / "x").exists()

@@ -30,6 +30,8 @@ class Scene:
     lanes: Sequence[tuple[float, Sequence[tuple[float, float]]]]  #: (width m, centre line)
     bounds: tuple[float, float, float, float] = (0.0, 100.0, -10.0, 10.0)  #: x0, x1, y0, y1 (m)
     title: str = ""
+    #: what the following view shows around the followed point: x0, x1, y0, y1 (m)
+    follow_view: tuple[float, float, float, float] = (-35.0, 85.0, -14.0, 14.0)
 
 
 class Recorder(Protocol):

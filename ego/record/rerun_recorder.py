@@ -317,9 +317,10 @@ def _blueprint(scene: Scene, series: Sequence[Series]):
         unit = members[0].unit
         title = panel.split("/")[-1].replace("_", " ") + (f" [{unit}]" if unit else "")
         plots.append(rrb.TimeSeriesView(origin=panel, name=title, axis_y=axis))
+    fx0, fx1, fy0, fy1 = scene.follow_view
     follow = rrb.Spatial2DView(
         origin=FOLLOW, contents="world/**", name="following the ego",
-        visual_bounds=rrb.VisualBounds2D(x_range=(-35.0, 85.0), y_range=(-14.0, 14.0)))
+        visual_bounds=rrb.VisualBounds2D(x_range=(fx0, fx1), y_range=(-fy1, -fy0)))
     x0, x1, y0, y1 = scene.bounds
     road = rrb.Spatial2DView(origin="world", name="road (top-down)",
                              visual_bounds=rrb.VisualBounds2D(x_range=(x0, x1), y_range=(-y1, -y0)))

@@ -6,11 +6,13 @@ from ego.params import ConfigError
 from ego.scenarios.base import CommonConfig, Event, RunResult, Scenario
 from ego.scenarios.curve import CurveConfig, CurveScenario
 from ego.scenarios.lane_centering import LaneCenteringConfig, LaneCenteringScenario
+from ego.scenarios.platoon import PlatoonConfig, PlatoonScenario
 from ego.scenarios.evasive import EmergencyBrake, EmergencyBrakeConfig, FastFollower, FastFollowerConfig
 from ego.scenarios.tracking import Report000, Report000Config, SineTracking, SineTrackingConfig
 
 SCENARIOS: dict[str, type[Scenario]] = {
-    cls.name: cls for cls in (EmergencyBrake, FastFollower, CurveScenario, LaneCenteringScenario, SineTracking, Report000)
+    cls.name: cls for cls in (EmergencyBrake, FastFollower, CurveScenario, LaneCenteringScenario, PlatoonScenario,
+                               SineTracking, Report000)
 }
 
 
@@ -33,6 +35,8 @@ __all__ = [
     "FastFollowerConfig",
     "LaneCenteringConfig",
     "LaneCenteringScenario",
+    "PlatoonConfig",
+    "PlatoonScenario",
     "Report000",
     "Report000Config",
     "SineTracking",

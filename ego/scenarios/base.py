@@ -14,13 +14,13 @@ from __future__ import annotations
 import logging
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
-from ego.control.base import Controller, Observation
+from ego.control.base import Controller, ControllerSpec, Observation
 from ego.models import DynamicBicycle, NonlinearBicycle, VehicleGeometry
 from ego.params import ConfigError, param
 from ego.record.base import NullRecorder, Recorder, Scene, Series
@@ -171,6 +171,24 @@ class Scenario:
     config_cls: ClassVar[type] = CommonConfig
     #: trace columns written every control step; ``t`` first
     columns: tuple[str, ...] = ("t",)
+
+    @classmethod
+    def default_config(cls, overrides: Mapping[str, Any]):
+        """The configuration the overrides apply to: the defaults of ``config_cls``; a
+        scenario with variants starts from the variant's preset (``--set variant=...``)."""
+        return cls.config_cls()
+
+    @classmethod
+    def build_controller(cls, spec: ControllerSpec, params: Any, config) -> Controller:
+        """The controller the loop drives: one of ``spec`` stepping every ``config.dt``;
+        a scenario with several controlled vehicles builds one per vehicle."""
+        return spec.build(params, config.dt)
+
+    @classmethod
+    def compare_plots(cls, config) -> tuple[tuple[str, str, str], ...]:
+        """Trace columns ``ego compare`` plots for this scenario besides its standard ones:
+        (column, file name, y label)."""
+        return ()
 
     def __init__(self, config, controller: Controller, *, seed: int = 0,
                  recorder: Recorder | None = None, controller_name: str = "") -> None:

@@ -387,6 +387,12 @@ class SumoBridge:
             out.right_follower.clear()
         return out
 
+    def read_leader(self, vid: str, out: Neighbour) -> Neighbour:
+        """Fill ``out`` with the nearest vehicle ahead of ``vid`` in its lane within
+        ``look_ahead`` (gap bumper to bumper; exact for controlled vehicles, minGap 0)."""
+        self._fill(out, self._ls.vehicle.getLeader(vid, self.look_ahead), False)
+        return out
+
     def dimensions(self, vid: str) -> tuple[float, float]:
         """(length, width) of any vehicle (m), cached."""
         dims = self._dims.get(vid)

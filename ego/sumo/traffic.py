@@ -6,6 +6,7 @@ Generation is pure (numpy Generator in, vehicle specs out); the actors act on SU
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -112,10 +113,8 @@ class RecklessFollower:
     speed: float
 
     def start(self, bridge: SumoBridge) -> None:
-        veh = bridge.libsumo.vehicle
-        veh.setLaneChangeMode(self.vid, 0)
-        veh.setSpeedMode(self.vid, 0)
-        veh.setSpeed(self.vid, self.speed)
+        _ignore_safety(bridge, self.vid)
+        bridge.libsumo.vehicle.setSpeed(self.vid, self.speed)
 
     def update(self, bridge: SumoBridge, t: float) -> bool:
         return False
@@ -157,3 +156,100 @@ class PoissonFlow:
         self.count += 1
         self.next_time += self._headway()
         return True
+
+
+@dataclass(frozen=True)
+class Manoeuvre:
+    """From ``time`` (s) on, the speed moves towards ``speed`` (m/s) at ``rate`` (m/s^2)."""
+
+    time: float
+    speed: float
+    rate: float
+
+    def kind(self, speed_before: float) -> str:
+        """"stop", "brake" or "accelerate" (or "hold" when already there)."""
+        if self.speed == 0.0 and speed_before > 0.0:
+            return "stop"
+        if self.speed < speed_before:
+            return "brake"
+        return "accelerate" if self.speed > speed_before else "hold"
+
+
+@dataclass(frozen=True)
+class SpeedProfile:
+    """A leader's speed over time: ``start`` (m/s), then each manoeuvre in turn (a ramp at
+    its rate, cut short where the next one begins), plus ``amplitude`` sin(``omega`` t) (m/s,
+    rad/s); never below 0. Pure: the same ``t`` always gives the same speed."""
+
+    start: float
+    manoeuvres: tuple[Manoeuvre, ...] = ()
+    amplitude: float = 0.0
+    omega: float = 0.0
+
+    def __post_init__(self) -> None:
+        times = [m.time for m in self.manoeuvres]
+        if times != sorted(times) or len(set(times)) != len(times):
+            raise ValueError("manoeuvre times must increase")
+
+    def base_speed(self, t: float) -> float:
+        """The speed without the sinusoid (m/s)."""
+        v = self.start
+        ms = self.manoeuvres
+        for i, m in enumerate(ms):
+            if t <= m.time:
+                return v
+            until = ms[i + 1].time if i + 1 < len(ms) else math.inf
+            change = m.rate * (min(t, until) - m.time)
+            v = min(m.speed, v + change) if m.speed > v else max(m.speed, v - change)
+            if t <= until:
+                return v
+        return v
+
+    def speed(self, t: float) -> float:
+        v = self.base_speed(t)
+        if self.amplitude:
+            v += self.amplitude * math.sin(self.omega * t)
+        return v if v > 0.0 else 0.0
+
+    def windows(self, end: float) -> list[tuple[str, float, float]]:
+        """(name, start, end) of each manoeuvre, e.g. ("brake@10s", 10, 35): from its start
+        until the next one starts (or ``end``); holds are left out."""
+        out = []
+        for i, m in enumerate(self.manoeuvres):
+            kind = m.kind(self.base_speed(m.time))
+            stop = self.manoeuvres[i + 1].time if i + 1 < len(self.manoeuvres) else end
+            if kind != "hold" and m.time < end:
+                out.append((f"{kind}@{m.time:g}s", m.time, min(stop, end)))
+        return out
+
+    def distance(self, t_end: float, dt: float = 0.01) -> float:
+        """Distance driven from 0 to ``t_end`` (m; trapezoids of ``dt``)."""
+        n = max(1, math.ceil(t_end / dt))
+        ts = np.linspace(0.0, t_end, n + 1)
+        v = np.array([self.speed(t) for t in ts])
+        return float(np.sum(0.5 * (v[1:] + v[:-1])) * (t_end / n))
+
+
+@dataclass
+class ProfiledLeader:
+    """A SUMO vehicle driving a :class:`SpeedProfile` exactly: speed mode 0 (no limits of
+    its own) and, every SUMO step, its speed set to the profile's at the time the step
+    represents."""
+
+    vid: str
+    profile: SpeedProfile
+
+    def start(self, bridge: SumoBridge) -> None:
+        _ignore_safety(bridge, self.vid)
+
+    def update(self, bridge: SumoBridge, t: float) -> bool:
+        bridge.libsumo.vehicle.setSpeed(self.vid, self.profile.speed(t))
+        return False
+
+
+def _ignore_safety(bridge: SumoBridge, vid: str) -> None:
+    """SUMO's driver no longer changes lanes nor checks safe speeds or its own limits: the
+    speed set is the speed driven."""
+    veh = bridge.libsumo.vehicle
+    veh.setLaneChangeMode(vid, 0)
+    veh.setSpeedMode(vid, 0)

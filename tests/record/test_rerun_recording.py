@@ -154,3 +154,26 @@ def test_a_curve_run_records_its_errors_and_the_ego_round_the_arc(tmp_path):
 
     assert abs(long_side(first)[1]) < 0.05 * abs(long_side(first)[0])  # along x
     assert abs(long_side(last)[0]) < 0.2 * abs(long_side(last)[1])  # along y, nearly
+
+
+def test_platoon_recording_has_every_follower(tmp_path):
+    path = tmp_path / "platoon.rrd"
+    result = run(RunSpec("platoon", "bp-pid-acc", 0, {"duration": "30"}, record=str(path)))
+    steps = result.metrics["steps"]
+    for vid in ("f1", "f2", "f3"):
+        t, e = _series(path, f"/plots/spacing_error/{vid}")
+        assert len(t) == steps
+        np.testing.assert_allclose(e, result.column(f"e_{vid}"))
+        _, kp = _series(path, f"/plots/kp/{vid}")
+        np.testing.assert_allclose(kp, result.column(f"kp_{vid}"))
+        for panel in ("gap", "speed", "accel", "command"):
+            assert len(_series(path, f"/plots/{panel}/{vid}")[0]) == steps
+    _, lead = _series(path, "/plots/speed/leader")
+    np.testing.assert_allclose(lead, result.column("lead_speed"))
+    labels = set()
+    for chunk in RrdReader(path).stream():
+        if chunk.entity_path == "/world/map/vehicles":
+            for row in chunk.to_record_batch().column("LineStrips2D:labels").to_pylist():
+                labels |= set(row)
+    assert labels == {"leader", "f1", "f2", "f3"}
+    assert RrdReader(path).blueprints()

@@ -21,10 +21,10 @@ def curve():
 
 
 def test_every_network_ships():
-    assert {"highway", "curve", "lane_centering"} <= set(available_networks())
+    assert {"highway", "curve", "lane_centering", "platoon"} <= set(available_networks())
 
 
-@pytest.mark.parametrize("name", ["highway", "curve", "lane_centering"])
+@pytest.mark.parametrize("name", ["highway", "curve", "lane_centering", "platoon"])
 def test_committed_network_matches_a_rebuild(tmp_path, name):
     rebuilt = build_network(name, output=tmp_path / f"{name}.net.xml")
     assert network_body(rebuilt) == network_body(net_file(name))
@@ -48,6 +48,13 @@ def test_lanes_are_straight_and_centred(net):
         assert len(shape) == 2
         assert all(p[1] == pytest.approx(y) for p in shape)
         assert shape[1][0] > shape[0][0]  # driving towards +x
+
+
+def test_platoon_road_is_one_straight_lane_of_3_km():
+    edges = [e for e in sumolib.net.readNet(str(net_file("platoon"))).getEdges() if not e.isSpecial()]
+    assert len(edges) == 1 and edges[0].getLaneNumber() == 1
+    shape = edges[0].getLane(0).getShape()
+    assert shape == [pytest.approx((0.0, 0.0)), pytest.approx((3000.0, 0.0))]
 
 
 # -- curve: report 002's 90-degree arc of radius 15 m about (100, 15) ---------------------------

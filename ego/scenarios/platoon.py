@@ -1,0 +1,493 @@
+"""Report 004's car following in SUMO: a platoon behind a leader that brakes, speeds up and stops.
+
+A SUMO vehicle leads on a single-lane road (``sumo_nets/platoon``), driving a scripted speed
+profile (default: cruise at 40 km/h, brake to 20 km/h, accelerate to 50 km/h, brake hard to
+a stop). Behind it ``followers`` cars each run their own :class:`ego.models.Longitudinal`
+model and their own controller (one :class:`ego.control.following.PlatoonControl` member
+each), and every SUMO step each one is pushed into SUMO with the bridge's multi-vehicle
+support (``SumoBridge.control`` / ``push``), so SUMO holds the whole platoon.
+
+Sensing: every SUMO step each follower reads its leader from SUMO (``getLeader``: who, and
+the bumper-to-bumper gap). Between SUMO steps the gap is carried forward with the
+predecessor's motion: the follower ahead is one of ours, so its exact motion is known; the
+SUMO leader is extrapolated the way SUMO moves it (at its next speed, v + a * step, for the
+whole step, with the acceleration SUMO last reported), which is exact while its acceleration
+holds. Each car's spacing error is report 004's delta_d = gap - d_s - lambda v.
+
+Metrics: per follower the RMS and peak spacing error, the smallest gap and time-to-collision,
+the peak acceleration and jerk, and how long the spacing error takes to settle after each
+leader manoeuvre; for the platoon, whether it is string stable, with the measured
+amplification between consecutive vehicles (peak and L2 ratios of the spacing error and of
+the acceleration; with a sinusoidal leader, the gain at its frequency). A run ends at
+``duration`` (completed), at the first collision, or when a follower diverges.
+
+``variant=scale-model`` is report 004's 3-car scale test: a leader setting off to 0.5 m/s
+and two followers keeping 0.4 m standstill gaps, with small cars.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from ego.control.following import FollowingObservation, PlatoonControl
+from ego.models import Longitudinal, LongitudinalParams, VehicleGeometry
+from ego.params import ConfigError, param
+from ego.record.base import Scene, Series
+from ego.road import LanePolyline
+from ego.scenarios import metrics as m
+from ego.scenarios import string_stability as ss
+from ego.scenarios.base import CommonConfig, Scenario
+from ego.scenarios.events import INF, time_to_collision
+from ego.sumo.bridge import (
+    Collision,
+    Neighbour,
+    SumoBridge,
+    SumoConfig,
+    VehicleSpec,
+    VehicleType,
+    ego_type,
+)
+from ego.sumo.net import net_file
+from ego.sumo.traffic import Manoeuvre, ProfiledLeader, SpeedProfile
+
+LEADER = "leader"
+EDGE, ROUTE = "road", "road_route"
+KMH = 1.0 / 3.6
+TAIL = 10.0  #: m of road behind the last follower at t = 0
+END_MARGIN = 20.0  #: m the leader must stay short of the end of the road
+LEADER_COLOR = (255, 150, 0)
+FOLLOWER_COLOR = (220, 40, 40)
+
+#: ``--set variant=NAME`` starts from these values (anything set explicitly still wins)
+VARIANTS: dict[str, dict[str, Any]] = {
+    "road": {},
+    "scale-model": {
+        "followers": 2, "standstill_gap": 0.4, "start_speed": 0.0,
+        "manoeuvres": "2:1.8:0.5,40:0:0.5", "duration": 60.0, "length": 0.4, "width": 0.2,
+        "max_accel": 1.0, "max_decel": 2.0, "lag": 0.1, "settle_band": 0.02,
+    },
+}
+
+
+def parse_manoeuvres(text: str) -> tuple[Manoeuvre, ...]:
+    """``"10:20:2,35:50:1.5"`` (time s : target km/h : rate m/s^2, ...) or ``"none"``."""
+    raw = text.strip().lower()
+    if raw in ("", "none"):
+        return ()
+    bad = ConfigError(f"bad value for manoeuvres: {text!r} (expected time s:target km/h:rate m/s^2 "
+                      "items separated by commas with increasing times, e.g. 10:20:2,35:50:1.5,60:0:6; "
+                      "or none)")
+    out = []
+    for item in raw.split(","):
+        try:
+            t, v, rate = (float(x) for x in item.split(":"))
+        except ValueError:
+            raise bad from None
+        if not (math.isfinite(t) and t >= 0.0 and 0.0 <= v <= 150.0 and 0.0 < rate <= 12.0):
+            raise bad
+        if out and t <= out[-1].time:
+            raise bad
+        out.append(Manoeuvre(t, v * KMH, rate))
+    return tuple(out)
+
+
+@dataclass(frozen=True)
+class PlatoonConfig(CommonConfig):
+    """Report 004's platoon (``variant=road``, default) or its scale test (``scale-model``)."""
+
+    variant: str = param("road", "-", "road: report 004's simulation (40 km/h, d_s 3 m); scale-model: "
+                         "its 3-car test (leader to 0.5 m/s, 0.4 m gaps: followers=2, "
+                         "standstill_gap=0.4, start_speed=0, manoeuvres=2:1.8:0.5,40:0:0.5, "
+                         "duration=60, length=0.4, width=0.2, max_accel=1, max_decel=2, lag=0.1, "
+                         "settle_band=0.02)", choices=tuple(VARIANTS))
+    duration: float = param(90.0, "s", "simulated time", min=1.0, max=3600.0)
+    followers: int = param(3, "-", "project-controlled followers behind the SUMO leader", min=1, max=10)
+    standstill_gap: float = param(3.0, "m", "d_s: the gap kept at standstill (report 004: 3 m)",
+                                  min=0.1, max=50.0)
+    headway: float = param(2.0, "s", "lambda: time headway of the spacing policy, desired gap "
+                           "d_s + lambda v (report 004: 0.2 s, string unstable with its gains)",
+                           min=0.0, max=5.0)
+    start_speed: float = param(40.0, "km/h", "the platoon's speed at t = 0 (report 004: 40 km/h)",
+                               min=0.0, max=150.0)
+    manoeuvres: str = param("10:20:2,35:50:1.5,60:0:6", "-", "the leader's manoeuvres: time s:target "
+                            "km/h:rate m/s^2, comma-separated (default: brake to 20 km/h at 10 s, "
+                            "accelerate to 50 km/h at 35 s, brake hard to a stop at 60 s); none: cruise")
+    sine_amplitude: float = param(0.0, "km/h", "adds amplitude x sin(sine_omega t) to the leader's "
+                                  "speed; the frequency-domain gains are measured then", min=0.0, max=30.0)
+    sine_omega: float = param(0.9, "rad/s", "angular frequency of the leader's speed oscillation",
+                              min=0.01, max=10.0)
+    sine_transient: float = param(40.0, "s", "left out at the start when measuring the gains at "
+                                  "sine_omega", min=0.0, max=3000.0)
+    start_error: float = param(0.0, "m", "every follower starts this much farther back than its "
+                               "desired gap (negative: closer)", min=-40.0, max=100.0)
+    lag: float = param(0.2, "s", "first-order actuator lag of the followers (report 004: none)",
+                       min=0.0, max=2.0)
+    max_accel: float = param(2.5, "m/s^2", "followers' largest acceleration command", min=0.1, max=10.0)
+    max_decel: float = param(8.0, "m/s^2", "followers' largest deceleration command", min=0.1, max=12.0)
+    length: float = param(4.5, "m", "length of every car", min=0.1, max=20.0)
+    width: float = param(1.8, "m", "width of every car", min=0.05, max=3.0)
+    settle_band: float = param(0.2, "m", "the spacing error has settled when |delta_d| stays below",
+                               min=0.001, max=10.0)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        self.profile  # noqa: B018 - parse (and reject) the manoeuvres now
+        if self.start_gap <= 0.0:
+            raise ConfigError(f"bad value for start_error: {self.start_error:g} (the followers would "
+                              f"start at a gap of {self.start_gap:.2f} m; expected a positive gap)")
+
+    @property
+    def profile(self) -> SpeedProfile:
+        """The leader's speed profile (m/s)."""
+        return SpeedProfile(self.start_speed * KMH, parse_manoeuvres(self.manoeuvres),
+                            self.sine_amplitude * KMH, self.sine_omega)
+
+    @property
+    def start_gap(self) -> float:
+        """Bumper-to-bumper gap of every follower at t = 0 (m)."""
+        return self.standstill_gap + self.headway * self.profile.speed(0.0) + self.start_error
+
+
+class PlatoonScenario(Scenario):
+    """A SUMO leader and a platoon of project-controlled followers in one lane."""
+
+    name = "platoon"
+    summary = ("report 004: a platoon of followers (own model and controller each) behind a SUMO "
+               "leader that brakes, accelerates and stops; string stability measured "
+               "(--set variant=scale-model: the report's 3-car scale test)")
+    task = "car-following"
+    config_cls = PlatoonConfig
+
+    @classmethod
+    def default_config(cls, overrides: Mapping[str, Any]) -> PlatoonConfig:
+        preset = VARIANTS.get(str(overrides.get("variant", "road")).strip())
+        base = cls.config_cls()
+        return replace(base, variant=str(overrides["variant"]).strip(), **preset) if preset else base
+
+    @classmethod
+    def build_controller(cls, spec, params, config) -> PlatoonControl:
+        ids = follower_ids(config.followers)
+        return PlatoonControl([spec.build(params, config.dt) for _ in ids], ids)
+
+    @classmethod
+    def compare_plots(cls, config) -> tuple[tuple[str, str, str], ...]:
+        """The first and the last follower's spacing error and acceleration."""
+        ids = follower_ids(config.followers)
+        plots = []
+        for vid in dict.fromkeys((ids[0], ids[-1])):
+            plots += [(f"e_{vid}", f"spacing_error_{vid}.png", f"spacing error delta_d of {vid} [m]"),
+                      (f"accel_{vid}", f"accel_{vid}.png", f"acceleration of {vid} [m/s^2]")]
+        return tuple(plots)
+
+    def __init__(self, config, controller, **kwargs) -> None:
+        super().__init__(config, controller, **kwargs)
+        c = config
+        self.ids = follower_ids(c.followers)
+        self.columns = ("t", "lead_speed", "lead_accel") + tuple(
+            f"{q}_{vid}" for vid in self.ids for q in PER_FOLLOWER)
+        self.profile = c.profile
+        self.policy_gap, self.policy_headway = c.standstill_gap, c.headway
+        self.geometry = VehicleGeometry(length=c.length, width=c.width, cg_to_front=0.5 * c.length)
+        self.model = Longitudinal(LongitudinalParams(lag=c.lag, max_accel=c.max_accel, max_decel=c.max_decel))
+        self.lane: LanePolyline | None = None
+        self.obs: list[FollowingObservation] = []
+        n = c.followers
+        self.s = [0.0] * n  #: front bumpers along the lane (m)
+        self.v = [0.0] * n
+        self.a = [0.0] * n
+        self.u = [0.0] * n  #: commands as the actuators took them (m/s^2)
+        self.gap = [0.0] * n
+        self.ttc = [INF] * n
+        self._gap_sync = [0.0] * n
+        self._s_sync = [0.0] * n
+        self._lead = Neighbour()
+        self._lead_v = self._lead_a = self._lead_v_now = 0.0
+        self._lead_s_sync = 0.0
+        self._sync_t = 0.0
+        self._bad: str | None = None
+
+    # -- set-up ---------------------------------------------------------------------------
+    def _make_bridge(self) -> SumoBridge:
+        c = self.config
+        return SumoBridge(SumoConfig(net_file("platoon"), step_length=c.sumo_step, seed=self.seed,
+                                     lateral_resolution=c.lateral_resolution))
+
+    def _setup(self, rng: np.random.Generator) -> None:
+        c = self.config
+        bridge = self.bridge
+        width, points = bridge.lane_shapes()[f"{EDGE}_0"]
+        self.lane = lane = LanePolyline(points, width, f"{EDGE}_0")
+        L, gap0, n = c.length, c.start_gap, c.followers
+        v0 = self.profile.speed(0.0)
+        lead_pos = TAIL + L + n * (L + gap0)
+        need = lead_pos + self.profile.distance(c.duration) + END_MARGIN
+        if need > lane.length:
+            raise ConfigError(f"the platoon and its leader's {c.duration:g} s drive need {need:.0f} m of "
+                              f"road; the platoon network has {lane.length:.0f} m (shorten duration or "
+                              "lower the speeds)")
+        bridge.add_type(VehicleType(LEADER, length=L, width=c.width, accel=10.0, decel=12.0,
+                                    emergency_decel=12.0, max_speed=60.0, sigma=0.0, color=LEADER_COLOR))
+        bridge.add_type(ego_type("follower", self.geometry, decel=c.max_decel))
+        bridge.add_route(ROUTE, [EDGE])
+        fronts = [lead_pos - (i + 1) * (L + gap0) for i in range(n)]
+        bridge.add_vehicles([VehicleSpec(LEADER, LEADER, ROUTE, 0, lead_pos, v0)]
+                            + [VehicleSpec(vid, "follower", ROUTE, 0, pos, v0)
+                               for vid, pos in zip(self.ids, fronts)])
+        bridge.insert(required=[LEADER, *self.ids])
+        self.leader = ProfiledLeader(LEADER, self.profile)
+        self.leader.start(bridge)
+        for vid in self.ids:
+            bridge.control(vid, self.geometry, keep_route=1)
+        self.controlled_ids = self.ids
+        self.colors = {LEADER: LEADER_COLOR, **{vid: FOLLOWER_COLOR for vid in self.ids}}
+
+        self.s = fronts
+        self.v = [v0] * n
+        self.a = [0.0] * n
+        self.u = [0.0] * n
+        self._step_model = self.model.stepper(c.dt)
+        self.obs = [FollowingObservation(standstill_gap=c.standstill_gap, headway=c.headway,
+                                         max_accel=c.max_accel, max_decel=c.max_decel) for _ in self.ids]
+        self._bad = None
+        self._after_sumo_step()
+
+    # -- per step ---------------------------------------------------------------------------
+    def _act(self, actions) -> None:
+        """Every follower's command through its actuator and model; the trace row for t."""
+        row = [self.t, self._lead_v_now, self._lead_a]
+        s, v, a, u, gap, ttc, obs = self.s, self.v, self.a, self.u, self.gap, self.ttc, self.obs
+        step, sat = self._step_model, self.model.saturate
+        for i, (cmd, _) in enumerate(actions):
+            if not math.isfinite(cmd):
+                self._bad = f"the controller of {self.ids[i]} commanded {cmd} m/s^2"
+                cmd = 0.0
+            u[i] = sat(cmd)
+            row += (gap[i], obs[i].spacing_error, v[i], a[i], u[i], ttc[i])
+            s[i], v[i], a[i] = step(s[i], v[i], a[i], cmd)
+        self.trace.append((*row, *self.controller.signals().values()))
+
+    def _before_sumo_step(self) -> None:
+        bridge, lane, t = self.bridge, self.lane, self.t
+        self.leader.update(bridge, t)
+        back = self.geometry.cg_to_front
+        for vid, s, v, a in zip(self.ids, self.s, self.v, self.a):
+            x, y = lane.offset_point(s - back, 0.0)
+            bridge.push(vid, x, y, lane.heading_at(s - back), v, a)
+
+    def _after_sumo_step(self) -> None:
+        """Read who leads whom and the gaps from SUMO; the leader's speed and acceleration."""
+        bridge = self.bridge
+        veh = bridge.libsumo.vehicle
+        self._lead_v, self._lead_a = veh.getSpeed(LEADER), veh.getAcceleration(LEADER)
+        self._lead_s_sync = veh.getLanePosition(LEADER)
+        self._sync_t = self.t
+        L = self.config.length
+        for i, vid in enumerate(self.ids):
+            ahead = LEADER if i == 0 else self.ids[i - 1]
+            found = bridge.read_leader(vid, self._lead)
+            if found.id == ahead:
+                self._gap_sync[i] = found.gap
+            else:  # beyond SUMO's look-ahead: from the lane positions
+                front = self._lead_s_sync if i == 0 else self.s[i - 1]
+                self._gap_sync[i] = front - L - self.s[i]
+            self._s_sync[i] = self.s[i]
+
+    def _check_divergence(self) -> str | None:
+        if self._bad is not None:
+            return self._bad
+        for vid, s, v, a in zip(self.ids, self.s, self.v, self.a):
+            if not (math.isfinite(s) and math.isfinite(v) and math.isfinite(a)):
+                return f"the state of {vid} is not finite (NaN or infinity)"
+            if v > 80.0:
+                return f"{vid} drives at {v:.1f} m/s: absurd"
+        return None
+
+    def _update(self) -> None:
+        """Gaps now (carried forward from the last SUMO step), observations, collisions."""
+        t = self.t
+        since = t - self._sync_t
+        lead_a = self._lead_a
+        # SUMO moves its vehicles at their new speed for the whole step (Euler): the leader
+        # keeps its acceleration, so until the next step it drives at v + a * step
+        lead_v = self._lead_v + lead_a * self.config.sumo_step
+        lead_v = lead_v if lead_v > 0.0 else 0.0
+        self._lead_v_now = lead_v
+        moved = lead_v * since
+        s, v, a = self.s, self.v, self.a
+        for i, o in enumerate(self.obs):
+            if i:
+                moved = s[i - 1] - self._s_sync[i - 1]
+                lead_v, lead_a = v[i - 1], a[i - 1]
+            gap = self._gap_sync[i] + moved - (s[i] - self._s_sync[i])
+            self.gap[i] = gap
+            self.ttc[i] = time_to_collision(gap, v[i] - lead_v)
+            o.t = t
+            o.gap = gap
+            o.speed = v[i]
+            o.accel = a[i]
+            o.lead_speed = lead_v
+            o.lead_accel = lead_a
+            if gap <= 0.0:
+                ahead = LEADER if i == 0 else self.ids[i - 1]
+                self._collided(Collision(self.ids[i], ahead, "rear-end (gap <= 0)", v[i], lead_v))
+                return
+
+    # -- results ------------------------------------------------------------------------------
+    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
+        if not trace.size:
+            return {"string_stable": None}
+        c = self.config
+        col = {name: trace[:, j] for j, name in enumerate(columns)}
+        t = col["t"]
+        windows = self.profile.windows(float(t[-1]) + c.dt)
+        followers: dict[str, dict] = {}
+        for vid in self.ids:
+            e, acc = col[f"e_{vid}"], col[f"accel_{vid}"]
+            jerk = np.diff(acc) / c.dt if len(acc) > 1 else np.zeros(1)
+            followers[vid] = {
+                "rms_spacing_error": m.json_number(float(np.sqrt(np.mean(e * e)))),
+                "max_abs_spacing_error": m.json_number(m.max_abs(e)),
+                "min_gap": m.json_number(float(np.min(col[f"gap_{vid}"])), 4),
+                "min_ttc": m.json_number(m.finite_min(col[f"ttc_{vid}"]), 4),
+                "max_abs_accel": m.json_number(m.max_abs(acc)),
+                "max_abs_jerk": m.json_number(m.max_abs(jerk)),
+                "settle_times": {name: _settle(t, e, c.settle_band, start, stop)
+                                 for name, start, stop in windows},
+            }
+        per = list(followers.values())
+
+        def worst(key: str, pick=max):
+            values = [f[key] for f in per if f[key] is not None]
+            return pick(values) if values else None
+
+        settle = {}
+        for name, _, _ in windows:
+            times = [f["settle_times"][name] for f in per]
+            settle[name] = None if any(x is None for x in times) else max(times)
+        amplification = self._amplification(col)
+        gains = self._sine_gains(col)
+        ratios = [r["l2_accel"] for r in amplification.values()]
+        ratios += [r["l2_spacing_error"] for r in amplification.values() if "l2_spacing_error" in r]
+        ratios += list(gains.values()) if gains else []
+        ratios = [r for r in ratios if r is not None]
+        return {
+            "followers": followers,
+            "rms_spacing_error": worst("rms_spacing_error"),
+            "max_abs_spacing_error": worst("max_abs_spacing_error"),
+            "min_gap": worst("min_gap", min),
+            "min_ttc": worst("min_ttc", min),
+            "max_abs_accel": worst("max_abs_accel"),
+            "max_abs_jerk": worst("max_abs_jerk"),
+            "settle_times": settle,
+            "string_stable": _string_stable(ratios, self.status),
+            "amplification": amplification,
+            "frequency_gain": gains,
+        }
+
+    def _amplification(self, col: dict) -> dict[str, dict]:
+        """Ratios between consecutive vehicles, over the whole run: peak and L2 of the
+        acceleration (from the leader on) and of the spacing error (between followers)."""
+        out = {}
+        names = (LEADER, *self.ids)
+        accel = [col["lead_accel"]] + [col[f"accel_{vid}"] for vid in self.ids]
+        for k in range(len(self.ids)):
+            up, down = names[k], names[k + 1]
+            pair = {"peak_accel": _num(ss.peak_ratio(accel[k], accel[k + 1], ACCEL_FLOOR)),
+                    "l2_accel": _num(ss.l2_ratio(accel[k], accel[k + 1], ACCEL_FLOOR))}
+            if k:
+                e_up, e_down = col[f"e_{up}"], col[f"e_{down}"]
+                pair["peak_spacing_error"] = _num(ss.peak_ratio(e_up, e_down, ERROR_FLOOR))
+                pair["l2_spacing_error"] = _num(ss.l2_ratio(e_up, e_down, ERROR_FLOOR))
+            out[f"{up}->{down}"] = pair
+        return out
+
+    def _sine_gains(self, col: dict) -> dict[str, float | None] | None:
+        """With a sinusoidal leader: |V_i / V_(i-1)| at its frequency, after the transient."""
+        c = self.config
+        if c.sine_amplitude <= 0.0:
+            return None
+        t = col["t"]
+        keep = t >= c.sine_transient
+        if not keep.any():
+            return None
+        names = (LEADER, *self.ids)
+        speeds = [col["lead_speed"]] + [col[f"speed_{vid}"] for vid in self.ids]
+        return {f"{names[k]}->{names[k + 1]}": _num(ss.sine_gain(t[keep], speeds[k][keep],
+                                                                 speeds[k + 1][keep], c.sine_omega))
+                for k in range(len(self.ids))}
+
+    # -- recording ----------------------------------------------------------------------------
+    def _record_boxes(self) -> None:
+        ids, poses = self.bridge.poses()
+        back = self.s[-1] - self.config.length
+        x, y = self.lane.offset_point(0.5 * (self._lead_s_sync + back), 0.0)
+        self.recorder.vehicles(self.t, ids, poses, (x, y))
+
+    def _scene(self) -> Scene:
+        c = self.config
+        pts = self.lane.points
+        xs, ys = [p[0] for p in pts], [p[1] for p in pts]
+        top = max(self.profile.speed(k * 0.5) for k in range(int(c.duration * 2) + 1))
+        span = c.followers * (c.length + c.standstill_gap + c.headway * top + max(c.start_error, 0.0)) + c.length
+        half = 0.6 * span + 2.0 * c.length
+        return Scene(lanes=[(self.lane.width, pts)],
+                     bounds=(min(xs) - 20.0, max(xs) + 20.0, min(ys) - 20.0, max(ys) + 20.0),
+                     title=self.name, follow_view=(-half, half, -0.25 * half, 0.25 * half))
+
+    def _series(self) -> list[Series]:
+        out = [Series("lead_speed", "plots/speed/leader", "m/s", "leader"),
+               Series("lead_accel", "plots/accel/leader", "m/s^2", "leader")]
+        for vid in self.ids:
+            out += [
+                Series(f"e_{vid}", f"plots/spacing_error/{vid}", "m", f"{vid} delta_d"),
+                Series(f"gap_{vid}", f"plots/gap/{vid}", "m", f"{vid} gap"),
+                Series(f"speed_{vid}", f"plots/speed/{vid}", "m/s", vid),
+                Series(f"accel_{vid}", f"plots/accel/{vid}", "m/s^2", vid),
+                Series(f"command_{vid}", f"plots/command/{vid}", "m/s^2", f"{vid} command"),
+                Series(f"ttc_{vid}", f"plots/ttc/{vid}", "s", f"{vid} TTC"),
+            ]
+        for name in self._signal_names:
+            signal, _, vid = name.rpartition("_")
+            out.append(Series(name, f"plots/{signal}/{vid}", "", f"{vid} {signal}"))
+        return out
+
+
+#: per-follower trace columns, each as ``<quantity>_<follower id>``: gap to the car ahead
+#: (m), spacing error delta_d (m), speed (m/s), actual acceleration (m/s^2), the command
+#: as the actuator took it (m/s^2), time-to-collision with the car ahead (s)
+PER_FOLLOWER = ("gap", "e", "speed", "accel", "command", "ttc")
+#: string stable: no measured amplification above 1 + this
+STABLE_TOLERANCE = 1e-3
+#: below these peaks a signal is sensing noise, and its ratios are not reported
+ACCEL_FLOOR = 0.01  #: m/s^2
+ERROR_FLOOR = 0.005  #: m
+
+
+def follower_ids(n: int) -> tuple[str, ...]:
+    """f1 (right behind the leader) .. fn."""
+    return tuple(f"f{i}" for i in range(1, n + 1))
+
+
+def _string_stable(ratios: list[float], status: str) -> bool | None:
+    """False when any disturbance grew down the platoon (even in a run that then crashed);
+    True when a completed run measured only shrinking ones; None when nothing tells."""
+    if any(r > 1.0 + STABLE_TOLERANCE for r in ratios):
+        return False
+    return True if ratios and status == "completed" else None
+
+
+def _num(x: float | None) -> float | None:
+    return m.json_number(x, 4)
+
+
+def _settle(t: np.ndarray, e: np.ndarray, band: float, start: float, stop: float) -> float | None:
+    """Seconds from ``start`` until |e| stays below ``band`` up to ``stop``; None if it never does."""
+    inside = (t >= start) & (t < stop)
+    if not inside.any():
+        return None
+    return m.json_number(m.settling_time(t[inside], e[inside], band, start), 3)
