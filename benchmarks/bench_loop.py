@@ -1,11 +1,13 @@
 """Speed of the whole loop against bare SUMO stepping of the same traffic, in one run.
 
-    python benchmarks/bench_loop.py [--repeat 5] [--controller fuzzy] [--no-record]
+    python benchmarks/bench_loop.py [--repeat 5] [--scenario emergency-brake] [--controller fuzzy]
+                                    [--no-record] [--set key=value ...]
 
-Prints the real-time factor of ``emergency-brake`` (fuzzy, recording on, dt = 0.01 s)
-and the ratio of the loop's cost per SUMO step to ``simulationStep()`` alone on the same
-traffic (same scenario set-up and seed, no ego control, no recording). Targets (issue 2):
->= 100x real time, loop <= 3x bare SUMO.
+Prints the real-time factor of a scenario (default ``emergency-brake`` with fuzzy, recording
+on, dt = 0.01 s) and the ratio of the loop's cost per SUMO step to ``simulationStep()``
+alone on the same traffic (same scenario set-up and seed, no control, no recording).
+Targets (issue 2, emergency-brake): >= 100x real time, loop <= 3x bare SUMO. For the
+platoon: ``--scenario platoon --controller bp-pid-acc [--set followers=10]``.
 """
 
 from __future__ import annotations
@@ -56,6 +58,7 @@ def timed_bare_sumo(spec: RunSpec, sumo_steps: int) -> float:
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--scenario", default="emergency-brake")
     ap.add_argument("--controller", default="fuzzy")
     ap.add_argument("--no-record", action="store_true")
     ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
@@ -68,7 +71,7 @@ def main(argv: list[str] | None = None) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(args.repeat):
             record = None if args.no_record else str(Path(tmp) / f"run{i}.rrd")
-            spec = RunSpec("emergency-brake", args.controller, seed=0, overrides=overrides,
+            spec = RunSpec(args.scenario, args.controller, seed=0, overrides=overrides,
                            record=record)
             loop, sim, steps, sumo_steps = timed_loop(spec)
             bare = timed_bare_sumo(spec, sumo_steps)
@@ -77,6 +80,7 @@ def main(argv: list[str] | None = None) -> dict:
     loop = statistics.median(loops)
     bare = statistics.median(bares)
     figures = {
+        "scenario": args.scenario,
         "controller": args.controller,
         "recording": not args.no_record,
         "sim_time_s": sim,
@@ -89,7 +93,7 @@ def main(argv: list[str] | None = None) -> dict:
         "bare_sumo_us_per_step": 1e6 * bare / sumo_steps,
         "loop_over_bare_sumo": loop / bare,
     }
-    print(f"emergency-brake, {args.controller}, recording {'on' if figures['recording'] else 'off'}, "
+    print(f"{args.scenario}, {args.controller}, recording {'on' if figures['recording'] else 'off'}, "
           f"dt = 0.01 s, SUMO step 0.1 s, median of {args.repeat}")
     print(f"  simulated {sim:.1f} s ({steps} control steps, {sumo_steps} SUMO steps) in {loop:.3f} s")
     print(f"  real-time factor           {figures['real_time_factor']:8.1f} x   (target >= 100)")

@@ -72,19 +72,23 @@ class SampledFollower:
         self._every = _updates_every(period, dt)
         self._count = 0
         self._action = (0.0, 0.0)
+        #: True on the steps that computed a new command (the signals changed then only)
+        self.updated = True
 
     def reset(self, *, seed: int | None = None) -> None:
         self._count = 0
         self._action = (0.0, 0.0)
+        self.updated = True
         self._reset(seed)
 
     def step(self, obs: FollowingObservation) -> tuple[float, float]:
         """(commanded acceleration in m/s^2, 0): the platoon keeps its lane."""
-        if self._count == 0:
+        count = self._count
+        self.updated = count == 0
+        if self.updated:
             self._action = (self._update(obs), 0.0)
-        self._count += 1
-        if self._count == self._every:
-            self._count = 0
+        count += 1
+        self._count = 0 if count == self._every else count
         return self._action
 
     def _reset(self, seed: int | None) -> None:
@@ -233,14 +237,23 @@ class PlatoonControl:
             raise ValueError(f"{len(members)} controllers for {len(ids)} followers")
         self.members = list(members)
         self.ids = tuple(ids)
+        self._signals: dict[str, float] | None = None
 
     def reset(self, *, seed: int | None = None) -> None:
         for i, member in enumerate(self.members):
             member.reset(seed=member_seed(seed, i))
+        self._signals = None
 
     def step(self, observations: Sequence) -> list[tuple[float, float]]:
-        return [member.step(obs) for member, obs in zip(self.members, observations)]
+        actions = [member.step(obs) for member, obs in zip(self.members, observations)]
+        if self._signals is not None and any(getattr(m, "updated", True) for m in self.members):
+            self._signals = None
+        return actions
 
     def signals(self) -> dict[str, float]:
-        return {f"{name}_{vid}": value for member, vid in zip(self.members, self.ids)
-                for name, value in member.signals().items()}
+        """Every member's signals; rebuilt only after a member computed a new command
+        (sampled controllers change nothing in between). Do not modify the dict."""
+        if self._signals is None:
+            self._signals = {f"{name}_{vid}": value for member, vid in zip(self.members, self.ids)
+                             for name, value in member.signals().items()}
+        return self._signals

@@ -200,8 +200,8 @@ class PlatoonScenario(Scenario):
         self.s = [0.0] * n  #: front bumpers along the lane (m)
         self.v = [0.0] * n
         self.a = [0.0] * n
-        self.u = [0.0] * n  #: commands as the actuators took them (m/s^2)
         self.gap = [0.0] * n
+        self.e = [0.0] * n  #: spacing errors delta_d (m)
         self.ttc = [INF] * n
         self._gap_sync = [0.0] * n
         self._s_sync = [0.0] * n
@@ -249,7 +249,6 @@ class PlatoonScenario(Scenario):
         self.s = fronts
         self.v = [v0] * n
         self.a = [0.0] * n
-        self.u = [0.0] * n
         self._step_model = self.model.stepper(c.dt)
         self.obs = [FollowingObservation(standstill_gap=c.standstill_gap, headway=c.headway,
                                          max_accel=c.max_accel, max_decel=c.max_decel) for _ in self.ids]
@@ -260,16 +259,16 @@ class PlatoonScenario(Scenario):
     def _act(self, actions) -> None:
         """Every follower's command through its actuator and model; the trace row for t."""
         row = [self.t, self._lead_v_now, self._lead_a]
-        s, v, a, u, gap, ttc, obs = self.s, self.v, self.a, self.u, self.gap, self.ttc, self.obs
-        step, sat = self._step_model, self.model.saturate
+        s, v, a, gap, e, ttc = self.s, self.v, self.a, self.gap, self.e, self.ttc
+        step, hi, lo = self._step_model, self.config.max_accel, -self.config.max_decel
         for i, (cmd, _) in enumerate(actions):
-            if not math.isfinite(cmd):
+            if not -math.inf < cmd < math.inf:  # NaN fails both comparisons
                 self._bad = f"the controller of {self.ids[i]} commanded {cmd} m/s^2"
                 cmd = 0.0
-            u[i] = sat(cmd)
-            row += (gap[i], obs[i].spacing_error, v[i], a[i], u[i], ttc[i])
+            row += (gap[i], e[i], v[i], a[i], hi if cmd > hi else (lo if cmd < lo else cmd), ttc[i])
             s[i], v[i], a[i] = step(s[i], v[i], a[i], cmd)
-        self.trace.append((*row, *self.controller.signals().values()))
+        row += self.controller.signals().values()
+        self.trace.append(row)
 
     def _before_sumo_step(self) -> None:
         bridge, lane, t = self.bridge, self.lane, self.t
@@ -300,6 +299,9 @@ class PlatoonScenario(Scenario):
     def _check_divergence(self) -> str | None:
         if self._bad is not None:
             return self._bad
+        # one sum is finite only if every state is (NaN and infinity propagate)
+        if math.isfinite(sum(self.s) + sum(self.a)) and max(self.v) <= 80.0:
+            return None
         for vid, s, v, a in zip(self.ids, self.s, self.v, self.a):
             if not (math.isfinite(s) and math.isfinite(v) and math.isfinite(a)):
                 return f"the state of {vid} is not finite (NaN or infinity)"
@@ -318,17 +320,20 @@ class PlatoonScenario(Scenario):
         lead_v = lead_v if lead_v > 0.0 else 0.0
         self._lead_v_now = lead_v
         moved = lead_v * since
-        s, v, a = self.s, self.v, self.a
+        s, v, a, s_sync, gap_sync = self.s, self.v, self.a, self._s_sync, self._gap_sync
+        d_s, headway = self.config.standstill_gap, self.config.headway
         for i, o in enumerate(self.obs):
             if i:
-                moved = s[i - 1] - self._s_sync[i - 1]
+                moved = s[i - 1] - s_sync[i - 1]
                 lead_v, lead_a = v[i - 1], a[i - 1]
-            gap = self._gap_sync[i] + moved - (s[i] - self._s_sync[i])
+            gap = gap_sync[i] + moved - (s[i] - s_sync[i])
+            speed = v[i]
             self.gap[i] = gap
-            self.ttc[i] = time_to_collision(gap, v[i] - lead_v)
+            self.e[i] = gap - d_s - headway * speed
+            self.ttc[i] = time_to_collision(gap, speed - lead_v)
             o.t = t
             o.gap = gap
-            o.speed = v[i]
+            o.speed = speed
             o.accel = a[i]
             o.lead_speed = lead_v
             o.lead_accel = lead_a

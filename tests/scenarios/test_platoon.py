@@ -210,9 +210,22 @@ def test_bad_input_is_one_line_and_exit_2(args, message):
     assert len(lines) == 1 and lines[0].startswith("ego: error:") and message in lines[0], p.stderr
 
 
-def test_the_reports_control_period_runs():
-    m = _run("pid", period=1.0, duration=40.0).metrics
-    assert m["status"] == "completed" and m["collision"] is False
+def _step_response(period):
+    """Report 004's simulation: one follower, lambda 0.2 s, no lag, 1 m too far back."""
+    r = _run("pid", followers=1, manoeuvres="none", start_error=1.0, headway=0.2, lag=0.0,
+             period=period, duration=120.0)
+    t, e = r.column("t"), np.abs(r.column("e_f1"))
+    return r, [e[(t >= a) & (t < a + 20.0)].max() for a in range(0, 120, 20)]
+
+
+def test_the_reports_one_second_period_makes_its_own_pid_oscillate():
+    """Sampled every 1 s the report's loop is unstable (largest closed-loop eigenvalue
+    1.066 with a zero-order hold) and grows into a limit cycle held by the actuator limits;
+    every 0.1 s (the default) it converges."""
+    r, peaks = _step_response(1.0)
+    assert r.status == "completed" and peaks[-1] > 5.0 > 1.0  # from 1 m to a 7 m swing
+    r, peaks = _step_response(0.1)
+    assert peaks[0] == pytest.approx(1.0, abs=1e-3) and peaks[-1] < 1e-3
 
 
 def test_config_rejects_a_gap_that_starts_inside_the_car_ahead():
