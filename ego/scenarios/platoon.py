@@ -349,7 +349,7 @@ class PlatoonScenario(Scenario):
         c = self.config
         col = {name: trace[:, j] for j, name in enumerate(columns)}
         t = col["t"]
-        windows = self.profile.windows(float(t[-1]) + c.dt)
+        windows = self.windows(float(t[-1]) + c.dt)
         followers: dict[str, dict] = {}
         for vid in self.ids:
             e, acc = col[f"e_{vid}"], col[f"accel_{vid}"]
@@ -393,6 +393,15 @@ class PlatoonScenario(Scenario):
             "amplification": amplification,
             "frequency_gain": gains,
         }
+
+    def windows(self, end: float) -> list[tuple[str, float, float]]:
+        """(name, start, end) of every disturbance the spacing error settles from: the
+        start (when the followers start off their desired gaps) and each manoeuvre."""
+        out = self.profile.windows(end)
+        if self.config.start_error:
+            first = min([w[1] for w in out] + [end])
+            out.insert(0, ("start@0s", 0.0, first))
+        return out
 
     def _amplification(self, col: dict) -> dict[str, dict]:
         """Ratios between consecutive vehicles, over the whole run: peak and L2 of the
