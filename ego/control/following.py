@@ -15,11 +15,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ego.control.pid import PID
+from ego.models.longitudinal import SpacingPolicy
 from ego.params import ConfigError, param
 
 
@@ -33,25 +34,25 @@ class FollowingObservation:
     accel: float = 0.0  #: own actual acceleration (m/s^2)
     lead_speed: float = 0.0  #: the predecessor's speed (m/s)
     lead_accel: float = 0.0  #: the predecessor's acceleration (m/s^2)
-    standstill_gap: float = 3.0  #: d_s of the spacing policy (m)
-    headway: float = 0.2  #: lambda of the spacing policy (s)
+    #: the spacing policy the platoon keeps (d_s, lambda)
+    policy: SpacingPolicy = field(default_factory=SpacingPolicy)
     max_accel: float = math.inf  #: the car's largest acceleration command (m/s^2)
     max_decel: float = math.inf  #: the car's largest deceleration command (m/s^2, positive)
 
     @property
     def desired_gap(self) -> float:
         """d_s + lambda v (m)."""
-        return self.standstill_gap + self.headway * self.speed
+        return self.policy.desired_gap(self.speed)
 
     @property
     def spacing_error(self) -> float:
         """delta_d = gap - d_s - lambda v (m, positive: too far back)."""
-        return self.gap - self.standstill_gap - self.headway * self.speed
+        return self.policy.error(self.gap, self.speed)
 
     @property
     def spacing_error_rate(self) -> float:
         """d(delta_d)/dt = (v_lead - v) - lambda a (m/s)."""
-        return self.lead_speed - self.speed - self.headway * self.accel
+        return self.policy.error_rate(self.lead_speed, self.speed, self.accel)
 
 
 def _updates_every(period: float, dt: float) -> int:
@@ -188,8 +189,8 @@ class BPPIDAcc(SampledFollower):
         T = self.period
         e = obs.spacing_error
         x = self.x
-        x[0] = obs.gap - obs.standstill_gap
-        x[1] = obs.headway * obs.speed
+        x[0] = obs.gap - obs.policy.standstill_gap
+        x[1] = obs.policy.headway * obs.speed
         x[2] = e
         h = np.tanh(self.w1 @ x)
         o = np.tanh(self.w2 @ h)

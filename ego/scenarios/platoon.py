@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from ego.control.following import FollowingObservation, PlatoonControl
-from ego.models import Longitudinal, LongitudinalParams, VehicleGeometry
+from ego.models import Longitudinal, LongitudinalParams, SpacingPolicy, VehicleGeometry
 from ego.params import ConfigError, param
 from ego.record.base import Scene, Series
 from ego.road import LanePolyline
@@ -191,7 +191,7 @@ class PlatoonScenario(Scenario):
         self.columns = ("t", "lead_speed", "lead_accel") + tuple(
             f"{q}_{vid}" for vid in self.ids for q in PER_FOLLOWER)
         self.profile = c.profile
-        self.policy_gap, self.policy_headway = c.standstill_gap, c.headway
+        self.policy = SpacingPolicy(c.standstill_gap, c.headway)
         self.geometry = VehicleGeometry(length=c.length, width=c.width, cg_to_front=0.5 * c.length)
         self.model = Longitudinal(LongitudinalParams(lag=c.lag, max_accel=c.max_accel, max_decel=c.max_decel))
         self.lane: LanePolyline | None = None
@@ -250,8 +250,8 @@ class PlatoonScenario(Scenario):
         self.v = [v0] * n
         self.a = [0.0] * n
         self._step_model = self.model.stepper(c.dt)
-        self.obs = [FollowingObservation(standstill_gap=c.standstill_gap, headway=c.headway,
-                                         max_accel=c.max_accel, max_decel=c.max_decel) for _ in self.ids]
+        self.obs = [FollowingObservation(policy=self.policy, max_accel=c.max_accel, max_decel=c.max_decel)
+                    for _ in self.ids]
         self._bad = None
         self._after_sumo_step()
 
@@ -321,7 +321,7 @@ class PlatoonScenario(Scenario):
         self._lead_v_now = lead_v
         moved = lead_v * since
         s, v, a, s_sync, gap_sync = self.s, self.v, self.a, self._s_sync, self._gap_sync
-        d_s, headway = self.config.standstill_gap, self.config.headway
+        error = self.policy.error
         for i, o in enumerate(self.obs):
             if i:
                 moved = s[i - 1] - s_sync[i - 1]
@@ -329,7 +329,7 @@ class PlatoonScenario(Scenario):
             gap = gap_sync[i] + moved - (s[i] - s_sync[i])
             speed = v[i]
             self.gap[i] = gap
-            self.e[i] = gap - d_s - headway * speed
+            self.e[i] = error(gap, speed)
             self.ttc[i] = time_to_collision(gap, speed - lead_v)
             o.t = t
             o.gap = gap

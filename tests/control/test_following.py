@@ -16,6 +16,7 @@ from ego.control.following import (
     FollowingPIDParams,
     PlatoonControl,
 )
+from ego.models import SpacingPolicy
 from ego.params import ConfigError
 
 DT = 0.01
@@ -23,7 +24,8 @@ DT = 0.01
 
 def _obs(gap=8.0, speed=10.0, accel=0.0, lead_speed=10.0, max_accel=2.5, max_decel=8.0):
     return FollowingObservation(gap=gap, speed=speed, accel=accel, lead_speed=lead_speed,
-                                standstill_gap=3.0, headway=0.2, max_accel=max_accel, max_decel=max_decel)
+                                policy=SpacingPolicy(standstill_gap=3.0, headway=0.2),
+                                max_accel=max_accel, max_decel=max_decel)
 
 
 def _free(gap, speed=10.0):
