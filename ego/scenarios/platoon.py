@@ -206,7 +206,7 @@ class PlatoonScenario(Scenario):
         self._gap_sync = [0.0] * n
         self._s_sync = [0.0] * n
         self._lead = Neighbour()
-        self._lead_v = self._lead_a = self._lead_v_now = 0.0
+        self._lead_a = self._lead_v_now = 0.0
         self._lead_s_sync = 0.0
         self._sync_t = 0.0
         self._bad: str | None = None
@@ -282,7 +282,10 @@ class PlatoonScenario(Scenario):
         """Read who leads whom and the gaps from SUMO; the leader's speed and acceleration."""
         bridge = self.bridge
         veh = bridge.libsumo.vehicle
-        self._lead_v, self._lead_a = veh.getSpeed(LEADER), veh.getAcceleration(LEADER)
+        lead_v, self._lead_a = veh.getSpeed(LEADER), veh.getAcceleration(LEADER)
+        # SUMO moves its vehicles at their new speed for the whole step (Euler): the leader
+        # keeps its acceleration, so until the next step it drives at v + a * step
+        self._lead_v_now = max(lead_v + self._lead_a * self.config.sumo_step, 0.0)
         self._lead_s_sync = veh.getLanePosition(LEADER)
         self._sync_t = self.t
         L = self.config.length
@@ -313,12 +316,7 @@ class PlatoonScenario(Scenario):
         """Gaps now (carried forward from the last SUMO step), observations, collisions."""
         t = self.t
         since = t - self._sync_t
-        lead_a = self._lead_a
-        # SUMO moves its vehicles at their new speed for the whole step (Euler): the leader
-        # keeps its acceleration, so until the next step it drives at v + a * step
-        lead_v = self._lead_v + lead_a * self.config.sumo_step
-        lead_v = lead_v if lead_v > 0.0 else 0.0
-        self._lead_v_now = lead_v
+        lead_v, lead_a = self._lead_v_now, self._lead_a
         moved = lead_v * since
         s, v, a, s_sync, gap_sync = self.s, self.v, self.a, self._s_sync, self._gap_sync
         error = self.policy.error
