@@ -16,17 +16,19 @@
 #include <math.h>
 
 /* ---------------------------------------------------------------------------------------
- * Nonlinear bicycle (report 000). Parameters are 15 doubles packed in a bytes object:
- * Nw, rolling, m, Iz, a, b, DFzf, DFzr, F_max, By, Cy, Ey, Shy, Svy, slip_speed_floor.
+ * Nonlinear bicycle (report 000). Parameters are 16 doubles packed in a bytes object:
+ * Nw, rolling, m, Iz, a, b, DFzf, DFzr, F_max, By, Cy, Ey, Shy, Svy, slip_speed_floor,
+ * abs (1: the drive/brake force is limited to what the rear friction circle leaves beside
+ * the rear lateral force, so the circle never scales the lateral force down).
  * ------------------------------------------------------------------------------------- */
-#define BIKE_NPARAM 15
+#define BIKE_NPARAM 16
 #define NX 6
 
 static void bike_rhs(const double *p, const double *x, double Fx, double delta, double *dx)
 {
     const double Nw = p[0], rolling = p[1], m = p[2], Iz = p[3], a = p[4], b = p[5];
     const double DFzf = p[6], DFzr = p[7], F_max = p[8], By = p[9], Cy = p[10], Ey = p[11];
-    const double Shy = p[12], Svy = p[13], floor_ = p[14];
+    const double Shy = p[12], Svy = p[13], floor_ = p[14], abs_ = p[15];
     const double R2D = 180.0 / 3.141592653589793;
     const double oneE = 1.0 - Ey, EB = Ey / By, F_max2 = F_max * F_max;
     const double uu = x[1], v = x[3], psi = x[4], r = x[5];
@@ -36,7 +38,13 @@ static void bike_rhs(const double *p, const double *x, double Fx, double delta, 
     const double F_yf = DFzf * sin(Cy * atan(By * (oneE * af + EB * atan(By * af)))) + Svy;
     double F_yr = DFzr * sin(Cy * atan(By * (oneE * ar + EB * atan(By * ar)))) + Svy;
     double NF = Nw * Fx;
-    const double total2 = NF * NF + F_yr * F_yr;
+    double total2 = NF * NF + F_yr * F_yr;
+    if (abs_ != 0.0 && total2 > F_max2) { /* ABS / traction control */
+        const double room = F_max2 - F_yr * F_yr;
+        const double lim = room > 0.0 ? sqrt(room) : 0.0;
+        NF = NF > 0.0 ? lim : -lim;
+        total2 = NF * NF + F_yr * F_yr;
+    }
     if (total2 > F_max2) { /* rear friction circle */
         const double scale = F_max / sqrt(total2);
         NF *= scale;

@@ -89,6 +89,11 @@ class NonlinearBicycleParams:
     #: standstill (atan2(v, u) jumps to +-90 deg) and make the equations stiff there.
     slip_speed_floor: float = 0.0
     tyre: PacejkaTyre = PacejkaTyre()  #: lateral tyre, same front and rear
+    #: Friction-aware drive and brake (what ABS and traction control give a real car): the
+    #: demanded Nw*Fx is limited to sqrt(F_max^2 - F_yr^2), what the rear friction circle
+    #: leaves beside the current rear lateral force, so over-braking can no longer strip
+    #: the rear's lateral grip and spin the car. False is the report's raw model.
+    abs: bool = False
 
     @property
     def wheelbase(self) -> float:
@@ -138,6 +143,7 @@ class NonlinearBicycle:
             p.F_max, t.By, t.Cy, t.Ey, t.Shy, t.Svy,
         )
         self._floor = p.slip_speed_floor
+        self._abs = bool(p.abs)
         self.rhs = self._make_rhs()
 
     def _make_rhs(self):
@@ -149,6 +155,7 @@ class NonlinearBicycle:
         """
         Nw, rolling, m, Iz, a, b, DFzf, DFzr, F_max, By, Cy, Ey, Shy, Svy = self._c
         floor = self._floor
+        limited = self._abs
         oneE = 1.0 - Ey
         EB = Ey / By
         F_max2 = F_max * F_max
@@ -166,6 +173,10 @@ class NonlinearBicycle:
             F_yr = DFzr * sin(Cy * atan(By * (oneE * ar + EB * atan(By * ar)))) + Svy
             NF = Nw * Fx
             total2 = NF * NF + F_yr * F_yr
+            if limited and total2 > F_max2:  # ABS / traction control
+                room = F_max2 - F_yr * F_yr
+                NF = math.copysign(sqrt(room) if room > 0.0 else 0.0, NF)
+                total2 = NF * NF + F_yr * F_yr
             if total2 > F_max2:  # rear friction circle
                 scale = F_max / sqrt(total2)
                 NF *= scale
@@ -192,12 +203,21 @@ class NonlinearBicycle:
         alpha_r = -math.atan2(v - b * r, uu) * _RAD2DEG
         F_yf = magic_formula(alpha_f, By, Cy, DFzf, Ey, Shy, Svy)
         F_yr = magic_formula(alpha_r, By, Cy, DFzr, Ey, Shy, Svy)
+        if self._abs:
+            Fx = math.copysign(min(abs(Fx), self.drive_limit(F_yr)), Fx)
         F_total = math.hypot(Nw * Fx, F_yr)
         if F_total > F_max:  # rear friction circle
             scale = F_max / F_total
             Fx *= scale
             F_yr *= scale
         return alpha_f, alpha_r, F_yf, F_yr, Fx
+
+    def drive_limit(self, F_yr: float) -> float:
+        """Largest |Fx| per driven wheel (N) the rear friction circle carries beside the rear
+        lateral force ``F_yr`` (N): sqrt(F_max^2 - F_yr^2) / Nw."""
+        p = self.params
+        room = p.F_max * p.F_max - F_yr * F_yr
+        return math.sqrt(room) / p.Nw if room > 0.0 else 0.0
 
     def tyre_forces(self, x: Sequence[float], u: Sequence[float]) -> tuple[float, float, float, float, float]:
         """(alpha_f deg, alpha_r deg, F_yf N, F_yr N, Fx N), Fx after the friction circle."""
@@ -214,7 +234,7 @@ class NonlinearBicycle:
 
         if NATIVE is not None:
             native_step = NATIVE.bicycle_step
-            packed = struct.pack(f"{len(self._c) + 1}d", *self._c, self._floor)
+            packed = struct.pack(f"{len(self._c) + 2}d", *self._c, self._floor, float(self._abs))
 
             def step(state, fx, delta):
                 return native_step(state, fx, delta, h, substeps, packed)

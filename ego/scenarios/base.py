@@ -15,7 +15,7 @@ import logging
 import math
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
@@ -25,6 +25,7 @@ from ego.models import DynamicBicycle, NonlinearBicycle, VehicleGeometry
 from ego.params import ConfigError, param
 from ego.record.base import NullRecorder, Recorder, Scene, Series
 from ego.scenarios.metrics import json_number
+from ego.scenarios.trace import Column, Metric, Plot, Trace
 from ego.sumo.bridge import Collision, SumoBridge
 
 STATUSES = ("completed", "collision", "diverged", "timeout")
@@ -92,6 +93,8 @@ class RunResult:
     events: list[Event]
     columns: tuple[str, ...]
     trace: np.ndarray
+    #: column -> unit of every trace column ("" for controller signals)
+    units: dict = field(default_factory=dict)
 
     def column(self, name: str) -> np.ndarray:
         return self.trace[:, self.columns.index(name)]
@@ -169,8 +172,13 @@ class Scenario:
     #: which controllers drive it (``ego.control.CONTROLLERS[task]``) and what they return
     task: ClassVar[str] = "tracking"
     config_cls: ClassVar[type] = CommonConfig
-    #: trace columns written every control step; ``t`` first
-    columns: tuple[str, ...] = ("t",)
+    #: trace columns written by name every control step; ``t`` first
+    columns: tuple[Column, ...] = (Column("t", "s", "time"),)
+    #: the scenario's own metrics (besides COMMON_METRICS), with units; headline ones are
+    #: the columns of ``ego compare``'s metrics.md
+    metric_specs: ClassVar[tuple[Metric, ...]] = ()
+    #: trace columns ``ego compare`` plots, one line per controller
+    plots: ClassVar[tuple[Plot, ...]] = ()
 
     @classmethod
     def default_config(cls, overrides: Mapping[str, Any]):
@@ -185,10 +193,18 @@ class Scenario:
         return spec.build(params, config.dt)
 
     @classmethod
-    def compare_plots(cls, config) -> tuple[tuple[str, str, str], ...]:
-        """Trace columns ``ego compare`` plots for this scenario besides its standard ones:
-        (column, file name, y label)."""
-        return ()
+    def compare_plots(cls, config) -> tuple[Plot, ...]:
+        """Trace columns ``ego compare`` plots for this configuration (default: ``plots``)."""
+        return cls.plots
+
+    @classmethod
+    def metrics_declared(cls, config=None) -> tuple[Metric, ...]:
+        """Every metric a run reports: the common ones, then the scenario's own."""
+        return COMMON_METRICS + cls.metric_specs + COMMON_TAIL_METRICS
+
+    def trace_columns(self) -> tuple[Column, ...]:
+        """The declared trace columns of this run (default: the class's ``columns``)."""
+        return self.columns
 
     def __init__(self, config, controller: Controller, *, seed: int = 0,
                  recorder: Recorder | None = None, controller_name: str = "") -> None:
@@ -200,7 +216,7 @@ class Scenario:
         self.bridge: SumoBridge | None = None
         self.obs = Observation()
         self.events: list[Event] = []
-        self.trace: list[tuple] = []
+        self.trace = Trace(self.trace_columns())
         self.t = 0.0
         self.k = 0
         self.status = "running"
@@ -222,7 +238,7 @@ class Scenario:
             self.seed = int(seed)
         self._close_bridge()
         self._wall0 = time.perf_counter()
-        self.events, self.trace = [], []
+        self.events = []
         self.t, self.k = 0.0, 0
         self.status, self.status_detail, self.collision = "running", "", None
         self._flushed, self._next_flush = 0, 1.0
@@ -231,6 +247,7 @@ class Scenario:
         self.controller.reset(seed=self.seed)
         self._signal_names = tuple(self.controller.signals())
         self.bridge = self._make_bridge()
+        self.trace = Trace(self.trace_columns(), self._signal_names)
         if self.bridge is not None:
             self.bridge.start()
         self._setup(np.random.default_rng(self.seed))
@@ -328,18 +345,17 @@ class Scenario:
         self._wall = time.perf_counter() - self._wall0
 
     def _flush(self) -> None:
-        rows = self.trace[self._flushed:]
-        if rows:
-            data = np.array(rows, dtype=float)
+        if len(self.trace) > self._flushed:
+            data = self.trace.array(self._flushed)
             data[np.isinf(data)] = np.nan  # infinite TTC: a gap in the plot
-            self.recorder.write_rows(self.columns + self._signal_names, data)
+            self.recorder.write_rows(self.trace.names, data)
             self._flushed = len(self.trace)
         self.recorder.flush()
         self._next_flush = math.floor(self.t) + 1.0
 
     def result(self) -> RunResult:
-        columns = self.columns + self._signal_names
-        trace = np.array(self.trace, dtype=float).reshape(-1, len(columns))
+        columns = self.trace.names
+        trace = self.trace.array()
         metrics = {
             "scenario": self.name,
             "controller": self.controller_name,
@@ -356,7 +372,7 @@ class Scenario:
             "steps": self.k,
         })
         return RunResult(self.name, self.controller_name, self.seed, self.status, metrics,
-                         list(self.events), columns, trace)
+                         list(self.events), columns, trace, self.trace.units())
 
     def _other_party(self) -> str | None:
         c = self.collision
@@ -460,6 +476,24 @@ class RoadScenario(Scenario):
         return Scene(lanes=[(lane.width, lane.points) for lane in self.lanes.values()],
                      bounds=(min(xs) - 20.0, max(xs) + 20.0, min(ys) - 20.0, max(ys) + 20.0),
                      title=self.name)
+
+
+#: metrics every run reports first ...
+COMMON_METRICS = (
+    Metric("scenario", "-", "scenario name"),
+    Metric("controller", "-", "controller name"),
+    Metric("seed", "-", "random seed of the traffic and the controller"),
+    Metric("status", "-", "completed, collision, diverged or timeout"),
+    Metric("status_detail", "-", "why the run ended"),
+    Metric("collision", "-", "the ego (or a controlled vehicle) was in a collision"),
+    Metric("collision_with", "-", "the other party of the collision"),
+)
+#: ... and last
+COMMON_TAIL_METRICS = (
+    Metric("sim_time", "s", "simulated time"),
+    Metric("wall_time", "s", "wall-clock time of the run"),
+    Metric("steps", "-", "control steps"),
+)
 
 
 def signal_series(names: Sequence[str]) -> list[Series]:
