@@ -27,6 +27,8 @@ from ego.params import param
 from ego.scenarios import metrics as m
 from ego.scenarios.events import INF, GapRule, check_lane, choose_lane
 from ego.scenarios.highway import LANE_NAMES, ROUTE, HighwayConfig, HighwayScenario
+from ego.scenarios.sensor import Detection
+from ego.scenarios.trace import Metric
 from ego.sumo.bridge import VehicleSpec, VehicleType
 from ego.sumo.traffic import BrakingLeader, PacedVehicle, RecklessFollower
 
@@ -55,6 +57,13 @@ class EvasiveConfig(HighwayConfig):
                                min=0.01, max=2.0)
     block_left: bool = param(False, "-", "a car drives beside the ego in the left lane")
     block_right: bool = param(False, "-", "a car drives beside the ego in the right lane")
+    aeb: bool = param(True, "-", "automatic emergency braking: full braking at the friction limit, "
+                      "overriding the controller's longitudinal command, when braking in lane needs "
+                      "more than aeb_decel or the front TTC falls below aeb_ttc")
+    aeb_decel: float = param(3.0, "m/s^2", "AEB engages when braking in lane needs this much "
+                             "(the front object's deceleration + closing^2 / (2 gap))", min=0.5, max=12.0)
+    aeb_ttc: float = param(1.0, "s", "AEB engages in any phase below this front TTC, unless the ego "
+                           "clears the front object sideways first", min=0.0, max=10.0)
 
 
 class EvasiveLaneChange(HighwayScenario):
@@ -69,6 +78,10 @@ class EvasiveLaneChange(HighwayScenario):
         self._reset_plan()
 
     def _reset_plan(self) -> None:
+        self.aeb_active = False
+        self.aeb_time: float | None = None  #: when the AEB first engaged
+        self.aeb_engagements = 0
+        self._lane_leader, self._lane_follower = Detection(), Detection()
         self.phase = CRUISE
         self.trigger_t: float | None = None
         self.trigger_ttc: float | None = None
@@ -106,27 +119,70 @@ class EvasiveLaneChange(HighwayScenario):
         super()._setup(rng)
         self._s0 = self.s
         self._speed_ref = self.config.ego_speed
+        p = self.ego.model.params
+        #: the AEB's command: the whole friction circle as braking force (ABS trims it)
+        self._full_brake = -p.F_max / p.Nw
 
     # -- manoeuvre logic --------------------------------------------------------------------
-    def _target_leader(self):
-        """The nearest vehicle ahead in the target lane (SUMO's sublane-aware leader once
-        the ego is in it), or None."""
-        n = self.neighbours
-        if n.lane == self.target_lane:
-            return n.leader
-        if self.target_lane == n.lane + 1:
-            return n.left_leader
-        if self.target_lane == n.lane - 1:
-            return n.right_leader
-        return None
+    def _target_leader(self) -> Detection:
+        """The nearest vehicle ahead overlapping the target lane (surround sensor)."""
+        self.sensor.lane_neighbours(self.target_lane, self._lane_leader, self._lane_follower)
+        return self._lane_leader
 
-    def _follow_reference(self, leader) -> tuple[float, float]:
+    def _follow_reference(self, leader: Detection) -> tuple[float, float]:
         """Position/speed reference that keeps the follow distance to ``leader``."""
         c = self.config
-        gap = INF if leader is None else self.extrapolated_gap(leader)
+        gap = leader.gap
         if gap == INF:
             return INF, self._speed_ref
         return self.s + gap - c.follow_gap - c.follow_headway * leader.speed, leader.speed
+
+    # -- automatic emergency braking ----------------------------------------------------------
+    def braking_need(self) -> float:
+        """Deceleration (m/s^2) that keeps the ego behind the front object: its own
+        deceleration plus closing^2 / (2 gap) (0 when nothing is ahead)."""
+        front = self.sensor.front
+        if front.gap == INF:
+            return 0.0
+        need = max(0.0, -front.accel)
+        closing = self.ds - front.speed
+        if closing > 0.0:
+            need += closing * closing / (2.0 * max(front.gap, 0.1))
+        return need
+
+    def _aeb(self) -> None:
+        """Engage or release the AEB (see ``aeb`` in the configuration)."""
+        c = self.config
+        need = self.braking_need()
+        braking_in_lane = self.phase == IN_LANE and self.in_lane_action == "brake"
+        if not self.aeb_active:
+            if (braking_in_lane and need >= c.aeb_decel) or self._imminent():
+                self.aeb_active = True
+                self.aeb_engagements += 1
+                if self.aeb_time is None:
+                    self.aeb_time = self.t
+                front = self.sensor.front
+                self.event("aeb", f"AEB engages: braking at the friction limit (front {front.id}, gap "
+                           f"{front.gap:.1f} m, TTC {self.ttc_front:.2f} s, needs {need:.1f} m/s^2)", "WARN")
+        elif need < 0.5 * c.aeb_decel and not self._imminent():
+            self.aeb_active = False
+            self.event("aeb", f"AEB releases (needs {need:.1f} m/s^2)")
+
+    def _imminent(self) -> bool:
+        """The front TTC is below ``aeb_ttc`` and the ego does not clear the front object
+        sideways before it would hit it (a lane change leaving a braking car)."""
+        ttc = self.ttc_front
+        if ttc >= self.config.aeb_ttc:
+            return False
+        front = self.sensor.front
+        # the ego moves away from the object's side at this relative speed (m/s)
+        clearing = -front.side * (self.dd - front.lateral_speed)
+        return not (clearing > 0.0 and front.overlap / clearing < ttc)
+
+    def _override(self, action: tuple[float, float]) -> tuple[float, float]:
+        if self.aeb_active:
+            return self._full_brake, action[1]
+        return action
 
     def _plan(self) -> None:
         c = self.config
@@ -135,14 +191,16 @@ class EvasiveLaneChange(HighwayScenario):
             ttc = self.ttc_front if self.trigger_on == "front" else self.ttc_rear
             if ttc < c.ttc_threshold:
                 self._trigger(ttc)
+        if c.aeb:
+            self._aeb()
         if self.phase == CRUISE:
             s_ref, v_ref = self._s0 + c.ego_speed * self.t, c.ego_speed
         elif self.chosen is not None:
             # evade at evade_speed, but never plan closer than the follow distance to whoever
             # drives ahead in the target lane (that traffic may brake too), nor to the car
-            # the ego still overlaps (SUMO's sublane leader) while it has not cleared it
+            # the ego's body still overlaps (the sensor's front object) until it has cleared it
             s_ref, v_ref = self.trigger_s + c.evade_speed * (self.t - self.trigger_t), c.evade_speed
-            for leader in (self._target_leader(), self.neighbours.leader):
+            for leader in (self._target_leader(), self.sensor.front):
                 fs, fv = self._follow_reference(leader)
                 if fs < s_ref:
                     s_ref, v_ref = fs, fv
@@ -161,19 +219,26 @@ class EvasiveLaneChange(HighwayScenario):
     def _in_lane_settled(self) -> bool:
         raise NotImplementedError
 
+    def _lane_check(self, side: str, lane: int, rule: GapRule):
+        """Gap acceptance of ``lane`` from the surround sensor's lead and lag vehicles."""
+        lead, lag = Detection(), Detection()
+        exists = self.sensor.lane_neighbours(lane, lead, lag)
+        return check_lane(side, exists, self.ds, self.config.evade_speed,
+                          lead.gap, lead.speed, lag.gap, lag.speed, rule)
+
+    def _choose_lane(self) -> tuple[str | None, str]:
+        """The better acceptable adjacent lane (or None) and why."""
+        c = self.config
+        rule = GapRule(c.accept_gap, c.accept_time)
+        lane = self.target_lane
+        return choose_lane(self._lane_check("left", lane + 1, rule),
+                           self._lane_check("right", lane - 1, rule))
+
     def _trigger(self, ttc: float) -> None:
         c = self.config
-        n = self.neighbours
-        rule = GapRule(c.accept_gap, c.accept_time)
-        left = check_lane("left", n.has_left, self.ds, c.evade_speed,
-                          n.left_leader.gap, n.left_leader.speed,
-                          n.left_follower.gap, n.left_follower.speed, rule)
-        right = check_lane("right", n.has_right, self.ds, c.evade_speed,
-                           n.right_leader.gap, n.right_leader.speed,
-                           n.right_follower.gap, n.right_follower.speed, rule)
-        self.chosen, self.choice_reason = choose_lane(left, right)
+        self.chosen, self.choice_reason = self._choose_lane()
         self.trigger_t, self.trigger_ttc, self.trigger_s = self.t, ttc, self.s
-        other = n.leader if self.trigger_on == "front" else n.follower
+        other = self.sensor.front if self.trigger_on == "front" else self.sensor.rear
         gap = self.gap_front if self.trigger_on == "front" else self.gap_rear
         closing = abs(self.ds - other.speed)
         self.event("trigger", f"{self.trigger_on} TTC {ttc:.2f} s < {c.ttc_threshold:.2f} s "
@@ -221,6 +286,26 @@ class EvasiveLaneChange(HighwayScenario):
         return "completed", "manoeuvre complete"
 
     # -- metrics ----------------------------------------------------------------------------
+    metric_specs = (
+        Metric("lane_change_completed", "-", "the ego changed lane and settled in the target lane"),
+        Metric("target_lane", "-", "SUMO index of the lane the ego ended in (after a trigger)"),
+        Metric("target_side", "-", "left, right, or none (stayed in lane)"),
+        Metric("trigger_time", "s", "when the TTC fell below the threshold"),
+        Metric("trigger_ttc", "s", "the TTC at the trigger"),
+        Metric("lane_choice", "-", "gap acceptance of both lanes at the trigger"),
+        Metric("lane_change_duration", "s", "trigger to settled in the target lane", headline=True),
+        Metric("max_overshoot", "m", "largest overshoot past the target lane centre", headline=True),
+        Metric("min_ttc_front", "s", "smallest front TTC (surround sensor)", headline=True),
+        Metric("min_ttc_rear", "s", "smallest rear TTC (surround sensor)", headline=True),
+        Metric("min_gap_front", "m", "smallest bumper gap to the front object, from the outlines",
+               headline=True),
+        Metric("max_abs_lateral_accel", "m/s^2", "largest |lateral acceleration|", headline=True),
+        Metric("max_decel", "m/s^2", "largest deceleration along the road"),
+        Metric("aeb_time", "s", "when the AEB first engaged (none: never)"),
+        Metric("aeb_engagements", "-", "how often the AEB engaged"),
+        Metric("final_speed", "m/s", "speed at the end"),
+    )
+
     def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
         col = {name: trace[:, i] for i, name in enumerate(columns)}
         c = self.config
@@ -247,8 +332,23 @@ class EvasiveLaneChange(HighwayScenario):
             "min_ttc_rear": m.json_number(m.finite_min(col["ttc_rear"]), 4),
             "min_gap_front": m.json_number(m.finite_min(col["gap_front"]), 4),
             "max_abs_lateral_accel": m.json_number(m.max_abs(col["lat_accel"]), 4),
+            "max_decel": m.json_number(max_decel(t, col["ds"]), 4),
+            "aeb_time": m.json_number(self.aeb_time, 4),
+            "aeb_engagements": self.aeb_engagements,
             "final_speed": m.json_number(float(col["speed"][-1]) if len(t) else None, 4),
         }
+
+
+def max_decel(t: np.ndarray, speed: np.ndarray, window: float = 0.1) -> float | None:
+    """Largest deceleration (m/s^2) of ``speed`` averaged over ``window`` seconds (one SUMO
+    step: a per-sample difference would report integration noise)."""
+    if len(t) < 2:
+        return None
+    k = max(1, int(round(window / float(t[1] - t[0]))))
+    if len(t) <= k:
+        k = len(t) - 1
+    rate = (speed[k:] - speed[:-k]) / (t[k:] - t[:-k])
+    return max(0.0, float(-rate.min()))
 
 
 # --- emergency brake ------------------------------------------------------------------------
@@ -294,19 +394,20 @@ class EmergencyBrake(EvasiveLaneChange):
         # follow distance
         c = self.config
         dt = c.dt
-        self._ramp_v = max(self.neighbours.leader.speed, self._ramp_v - c.brake_decel * dt)
+        front = self.sensor.front
+        self._ramp_v = max(front.speed, self._ramp_v - c.brake_decel * dt)
         # the reference may run ahead of what the car can brake, but never more than
         # brake_max_lag behind it, or the controller would keep braking below the leader's
         # speed to win the distance back
         self._ramp_s = max(self._ramp_s + self._ramp_v * dt, self.s - c.brake_max_lag)
         s_ref, v_ref = self._ramp_s, self._ramp_v
-        fs, fv = self._follow_reference(self.neighbours.leader)
+        fs, fv = self._follow_reference(front)
         if fs < s_ref:
             s_ref, v_ref = fs, fv
         return s_ref, v_ref
 
     def _in_lane_settled(self) -> bool:
-        return self.ds <= self.neighbours.leader.speed + 0.1 or self.gap_front == INF
+        return self.ds <= self.sensor.front.speed + 0.1 or self.gap_front == INF
 
 
 # --- fast follower --------------------------------------------------------------------------
@@ -332,6 +433,9 @@ class FastFollower(EvasiveLaneChange):
     config_cls = FastFollowerConfig
     trigger_on = "rear"
     in_lane_action = "accelerate"
+    metric_specs = EvasiveLaneChange.metric_specs + (
+        Metric("follower_passed", "-", "the follower's front bumper ended ahead of the ego's"),
+    )
 
     def _actors(self):
         c = self.config
@@ -344,15 +448,14 @@ class FastFollower(EvasiveLaneChange):
 
     def _after_sumo_step(self) -> None:
         super()._after_sumo_step()
-        veh = self.bridge.libsumo.vehicle
-        self._follower_x = veh.getPosition(FOLLOWER)[0]
+        self._follower_x = self.bridge.front_bumper(FOLLOWER)[0]
 
     def _in_lane_reference(self):
         # nowhere to go and braking would make it worse: speed up to evade_speed in lane,
         # keeping the follow distance to any leader
         c = self.config
         s_ref = self.trigger_s + c.evade_speed * (self.t - self.trigger_t)
-        fs, fv = self._follow_reference(self.neighbours.leader)
+        fs, fv = self._follow_reference(self.sensor.front)
         return (fs, fv) if fs < s_ref else (s_ref, c.evade_speed)
 
     def _in_lane_settled(self) -> bool:

@@ -8,24 +8,28 @@ divergence checks, the trace and the recording. A concrete scenario adds its tra
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ego.models import NonlinearBicycle, NonlinearBicycleParams, VehicleGeometry
+from ego.models.actuators import ActuatorLimits
+from ego.models.plant import BicyclePlant
 from ego.params import param
 from ego.record.base import Scene, Series
 from ego.road import LanePolyline
 from ego.scenarios.base import (
     CommonConfig,
-    EgoVehicle,
     RoadScenario,
     signal_series,
     vehicle_series,
 )
-from ego.scenarios.events import INF, time_to_collision
+from ego.scenarios.events import INF, boxes_overlap, time_to_collision
+from ego.scenarios.sensor import SurroundSensor
+from ego.scenarios.trace import Column, Metric, Plot
 from ego.sumo.bridge import (
-    Neighbours,
+    Collision,
     SumoBridge,
     SumoConfig,
     VehicleSpec,
@@ -55,34 +59,57 @@ class HighwayConfig(CommonConfig):
                                    min=0.0, max=25.0)
     traffic_speed: float = param(20.0, "m/s", "background traffic's speed", min=1.0, max=40.0)
     max_steer: float = param(0.5, "rad", "front steer limit of the ego", min=0.01, max=1.0)
+    abs: bool = param(True, "-", "friction-aware drive and brake (ABS / traction control): the "
+                      "longitudinal force never exceeds what the tyres carry beside the lateral "
+                      "force; false: the report's raw model")
+    sensor_range: float = param(150.0, "m", "radius around the ego the surround sensor sees",
+                                min=20.0, max=500.0)
 
 
 class HighwayScenario(RoadScenario):
     """Base of the motorway scenarios; subclasses add traffic and manoeuvre logic."""
 
     config_cls = HighwayConfig
-    #: t time (s); s, d position along / left of the target lane centre (m) and d_ref its
-    #: reference; e_lat = d - d_ref; lane_offset from the ego's start lane (m); speed (body
-    #: u) and ds (along the road), s_ref, speed_ref the longitudinal reference; Fx (N),
-    #: delta (rad) as applied; TTCs (s) and gaps (m); lat_accel (m/s^2); yaw_rate (rad/s)
     columns = (
-        "t", "s", "d", "d_ref", "e_lat", "lane_offset", "speed", "ds", "s_ref", "speed_ref",
-        "Fx", "delta", "ttc_front", "ttc_rear", "gap_front", "gap_rear", "lat_accel", "yaw_rate",
-        "phase", "target_lane",
+        Column("t", "s", "time"),
+        Column("s", "m", "centre of gravity along the start lane"),
+        Column("d", "m", "offset from the target lane centre (+ left)"),
+        Column("d_ref", "m", "lateral reference (offset from the target lane centre)"),
+        Column("e_lat", "m", "lateral error d - d_ref"),
+        Column("lane_offset", "m", "offset from the start lane centre (+ left)"),
+        Column("speed", "m/s", "body longitudinal speed u"),
+        Column("ds", "m/s", "speed along the road"),
+        Column("s_ref", "m", "longitudinal reference position"),
+        Column("speed_ref", "m/s", "longitudinal reference speed"),
+        Column("Fx", "N", "applied longitudinal force per driven wheel"),
+        Column("delta", "rad", "applied front steer angle"),
+        Column("ttc_front", "s", "time to collision with the front object (surround sensor)"),
+        Column("ttc_rear", "s", "time to collision with the rear object (surround sensor)"),
+        Column("gap_front", "m", "bumper gap to the front object, from the outlines"),
+        Column("gap_rear", "m", "bumper gap to the rear object, from the outlines"),
+        Column("lat_accel", "m/s^2", "body lateral acceleration"),
+        Column("yaw_rate", "rad/s", "yaw rate"),
+        Column("phase", "-", "manoeuvre phase (0 cruise, 1 lane change, 2 in lane, 3 done)"),
+        Column("target_lane", "-", "SUMO index of the target lane (0 right)"),
+    )
+    plots = (
+        Plot("e_lat", "lateral_error.png", "lateral error (actual - reference)"),
+        Plot("speed", "speed.png", "speed"),
+        Plot("delta", "steering.png", "front steer angle"),
+        Plot("Fx", "fx.png", "Fx per driven wheel"),
+        Plot("gap_front", "gap_front.png", "gap to the front object"),
     )
 
     def __init__(self, config, controller, **kwargs) -> None:
         super().__init__(config, controller, **kwargs)
         self.geometry = VehicleGeometry()
-        self.neighbours = Neighbours()
+        self.sensor: SurroundSensor | None = None
         self.lanes: dict[int, LanePolyline] = {}
         self.lane_offset: dict[int, float] = {}
         self.ttc_front = self.ttc_rear = INF
         self.gap_front = self.gap_rear = INF
         self.target_lane = 0
         self.phase = 0
-        self._sync_t = 0.0
-        self._sync_s = 0.0
         self._road_y = 0.0
 
     # -- set-up ---------------------------------------------------------------------------
@@ -121,10 +148,9 @@ class HighwayScenario(RoadScenario):
         if missing:
             self.event("traffic", f"SUMO could not place {len(missing)} background vehicles: "
                        f"{', '.join(missing[:5])}{'...' if len(missing) > 5 else ''}", "WARN")
-        veh = bridge.libsumo.vehicle
         for spec in specs:
             if spec.id not in missing and spec.id not in required:
-                veh.setLaneChangeMode(spec.id, 0)
+                bridge.keep_lane(spec.id)
         for actor in self.actors:
             actor.start(bridge)
         bridge.control(EGO, self.geometry)
@@ -142,44 +168,64 @@ class HighwayScenario(RoadScenario):
         self.road_halfwidth = max(outer) + 0.5 * self.geometry.width + 0.5
 
         x, y, psi = bridge.cg_pose(EGO)
-        model = NonlinearBicycle(NonlinearBicycleParams(slip_speed_floor=1.0))
-        self.ego = EgoVehicle(model, self.geometry, c.dt, c.substeps, max_steer=c.max_steer)
-        self.ego.state = (x, c.ego_speed, y, 0.0, psi, 0.0)
+        model = NonlinearBicycle(NonlinearBicycleParams(slip_speed_floor=1.0, abs=c.abs))
+        self.ego = BicyclePlant(model, self.geometry, c.dt, c.substeps,
+                                ActuatorLimits(max_steer=c.max_steer, stop_speed=0.5),
+                                state=(x, c.ego_speed, y, 0.0, psi, 0.0))
         self.target_lane = c.ego_lane
         self._road_y = self.road.points[0][1]
         self._kinematics()
-        bridge.read_neighbours(EGO, self.neighbours)
-        self._sync_t, self._sync_s = 0.0, self.s
+        g = self.geometry
+        bands = {i: (off - 0.5 * self.lanes[i].width, off + 0.5 * self.lanes[i].width)
+                 for i, off in self.lane_offset.items()}
+        self.sensor = SurroundSensor(self.road, bands, g.cg_to_front, g.length, g.width)
+        bridge.subscribe_surroundings(EGO, c.sensor_range)
+        self._sense()
 
     # -- per step ---------------------------------------------------------------------------
     def _act(self, action: tuple[float, float]) -> None:
         ego = self.ego
-        ego.step(*action)
+        ego.step(self._override(action))
         fx, delta = ego.applied
         obs = self.obs
         # the row describes time t: the state before this step and the action applied
         d = obs.d
-        self.trace.append((
-            obs.t, self.s, d, obs.d_ref, d - obs.d_ref, self.d_road,
-            obs.speed, self.ds, obs.s_ref, obs.ds_ref,
-            fx, delta, self.ttc_front, self.ttc_rear, self.gap_front, self.gap_rear,
-            ego.lateral_accel, obs.yaw_rate, self.phase, self.target_lane,
-            *self.controller.signals().values(),
-        ))
+        self.trace.append(
+            self.controller.signals(),
+            t=obs.t, s=self.s, d=d, d_ref=obs.d_ref, e_lat=d - obs.d_ref, lane_offset=self.d_road,
+            speed=obs.speed, ds=self.ds, s_ref=obs.s_ref, speed_ref=obs.ds_ref,
+            Fx=fx, delta=delta, ttc_front=self.ttc_front, ttc_rear=self.ttc_rear,
+            gap_front=self.gap_front, gap_rear=self.gap_rear,
+            lat_accel=ego.lateral_accel, yaw_rate=obs.yaw_rate, phase=self.phase,
+            target_lane=self.target_lane,
+        )
         self._kinematics()
 
+    def _override(self, action: tuple[float, float]) -> tuple[float, float]:
+        """The action the ego's actuators get (a scenario's safety layer may replace the
+        controller's longitudinal command)."""
+        return action
+
     def _after_sumo_step(self) -> None:
-        self.bridge.read_neighbours(EGO, self.neighbours)
-        self._sync_t, self._sync_s = self.t, self.s
+        self._sense()
+
+    def _sense(self) -> None:
+        """The surround sensor's view at a SUMO step."""
+        self.sensor.sync(self.t, *self.bridge.surroundings(EGO))
 
     def _update(self) -> None:
-        n = self.neighbours
-        lead, foll = n.leader, n.follower
+        sensor = self.sensor
+        sensor.scan(self.t, self.s, self.d_road, self.heading_error)
+        front, rear = sensor.front, sensor.rear
         ds = self.ds
-        gap = self.gap_front = self.extrapolated_gap(lead)
-        self.ttc_front = time_to_collision(gap, ds - lead.speed)
-        gap = self.gap_rear = self.extrapolated_gap(foll, behind=True)
-        self.ttc_rear = time_to_collision(gap, foll.speed - ds)
+        gap = self.gap_front = front.gap
+        self.ttc_front = time_to_collision(gap, ds - front.speed)
+        gap = self.gap_rear = rear.gap
+        self.ttc_rear = time_to_collision(gap, rear.speed - ds)
+        if (self.gap_front <= 0.0 or self.gap_rear <= 0.0) and self.status == "running":
+            self._check_overlap(front.id if self.gap_front <= 0.0 else rear.id)
+            if self.status != "running":
+                return
         self._plan()
         obs = self.obs
         obs.t = self.t
@@ -194,13 +240,19 @@ class HighwayScenario(RoadScenario):
         obs.heading_error = self.heading_error
         obs.curvature = self.curvature
 
-    def extrapolated_gap(self, other, behind: bool = False) -> float:
-        """Gap to a neighbour now, from the last SUMO step at the neighbour's speed (m)."""
-        since = self.t - self._sync_t
-        moved = self.s - self._sync_s
-        if behind:
-            return other.gap + moved - other.speed * since
-        return other.gap + other.speed * since - moved
+    def _check_overlap(self, other: str) -> None:
+        """A collision SUMO has not reported (yet): the outlines overlap."""
+        box = self.sensor.box(other)
+        x = self.ego.state
+        g = self.geometry
+        off = g.cg_to_front - 0.5 * g.length  # the CG is not the box centre
+        ego_box = (x[0] + off * math.cos(x[4]), x[2] + off * math.sin(x[4]), x[4], g.length, g.width)
+        if box is not None and boxes_overlap(ego_box, box):
+            kind = "outlines overlap (surround sensor)"
+            if other == self.sensor.front.id:  # the ego ran into it
+                self._collided(Collision(EGO, other, kind, self.ds, self.sensor.front.speed))
+            else:
+                self._collided(Collision(other, EGO, kind, self.sensor.rear.speed, self.ds))
 
     def _plan(self) -> None:
         """Set ``obs.s_ref/ds_ref/d_ref/dd_ref``, ``target_lane`` and ``phase``."""

@@ -193,6 +193,7 @@ class SumoBridge:
         self._pending: list[VehicleSpec] = []
         self._keep_route: dict[str, int] = {}
         self.collisions: list[Collision] = []
+        self._ctx_vars: tuple[int, int, int] = (0, 0, 0)
         self._ls = None
 
     # -- lifecycle --------------------------------------------------------------------
@@ -392,6 +393,43 @@ class SumoBridge:
         ``look_ahead`` (gap bumper to bumper; exact for controlled vehicles, minGap 0)."""
         self._fill(out, self._ls.vehicle.getLeader(vid, self.look_ahead), False)
         return out
+
+    def keep_lane(self, vid: str) -> None:
+        """SUMO's driver of ``vid`` never changes lanes (it still drives and brakes)."""
+        self._ls.vehicle.setLaneChangeMode(vid, 0)
+
+    def front_bumper(self, vid: str) -> tuple[float, float]:
+        """Front bumper centre of any vehicle (m), as of the last step."""
+        return self._ls.vehicle.getPosition(vid)
+
+    def subscribe_surroundings(self, vid: str, radius: float) -> None:
+        """Ask SUMO for the position, angle and speed of every vehicle within ``radius`` (m)
+        of ``vid`` after each step (one context subscription: no call per vehicle)."""
+        from libsumo import constants as tc
+
+        self.libsumo.vehicle.subscribeContext(
+            vid, tc.CMD_GET_VEHICLE_VARIABLE, float(radius),
+            [tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED])
+        self._ctx_vars = (tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED)
+
+    def surroundings(self, vid: str) -> tuple[list[str], list[tuple[float, ...]]]:
+        """The vehicles around ``vid`` (see :meth:`subscribe_surroundings`), controlled ones
+        excluded: ids and rows (centre x, y in m, yaw in rad, speed m/s, length, width in m)."""
+        results = self._ls.vehicle.getContextSubscriptionResults(vid)
+        p_key, a_key, v_key = self._ctx_vars
+        controlled, dims = self.controlled, self.dimensions
+        cos, sin, rad = math.cos, math.sin, math.radians
+        ids, rows = [], []
+        for other, var in results.items():
+            if other in controlled:
+                continue
+            xf, yf = var[p_key]
+            psi = rad(90.0 - var[a_key])
+            length, width = dims(other)
+            half = 0.5 * length
+            ids.append(other)
+            rows.append((xf - half * cos(psi), yf - half * sin(psi), psi, var[v_key], length, width))
+        return ids, rows
 
     def dimensions(self, vid: str) -> tuple[float, float]:
         """(length, width) of any vehicle (m), cached."""
