@@ -223,8 +223,14 @@ class EvasiveLaneChange(HighwayScenario):
         """Gap acceptance of ``lane`` from the surround sensor's lead and lag vehicles."""
         lead, lag = Detection(), Detection()
         exists = self.sensor.lane_neighbours(lane, lead, lag)
-        return check_lane(side, exists, self.ds, self.config.evade_speed,
-                          lead.gap, lead.speed, lag.gap, lag.speed, rule)
+        planned = self.config.evade_speed
+        front = self.sensor.front
+        if self.trigger_on == "front" and front.gap != INF:
+            # until it has cleared the car it leaves, the ego may have to slow to that car's
+            # speed: the new lane's follower must have room for that
+            planned = min(planned, front.speed)
+        return check_lane(side, exists, self.ds, planned, lead.gap, lead.speed, lag.gap, lag.speed,
+                          rule)
 
     def _choose_lane(self) -> tuple[str | None, str]:
         """The better acceptable adjacent lane (or None) and why."""

@@ -1,0 +1,148 @@
+"""The surround sensor: gaps from the vehicles' outlines, never more than the clearance."""
+
+import math
+
+import numpy as np
+import pytest
+
+from ego.road import LanePolyline
+from ego.runner import RunSpec, build
+from ego.scenarios.sensor import Detection, SurroundSensor
+
+LANE = LanePolyline([(0.0, 0.0), (1000.0, 0.0)], 3.5)
+BANDS = {0: (-5.25, -1.75), 1: (-1.75, 1.75), 2: (1.75, 5.25)}
+
+
+def _sensor():
+    return SurroundSensor(LANE, BANDS, cg_to_front=2.25, length=4.5, width=1.8)
+
+
+def corners(x, y, psi, length, width, cg_to_front=None):
+    """Corners of a box whose reference point (centre, or CG when cg_to_front is given) is at
+    (x, y)."""
+    front = 0.5 * length if cg_to_front is None else cg_to_front
+    rear = front - length
+    c, s = math.cos(psi), math.sin(psi)
+    return [(x + c * lx - s * ly, y + s * lx + c * ly)
+            for lx, ly in ((front, 0.5 * width), (front, -0.5 * width), (rear, -0.5 * width),
+                           (rear, 0.5 * width))]
+
+
+def _seg_dist(p, a, b):
+    (px, py), (ax, ay), (bx, by) = p, a, b
+    dx, dy = bx - ax, by - ay
+    t = min(1.0, max(0.0, ((px - ax) * dx + (py - ay) * dy) / (dx * dx + dy * dy)))
+    return math.hypot(ax + t * dx - px, ay + t * dy - py)
+
+
+def outline_distance(a, b):
+    """Distance between two disjoint convex quadrilaterals (corner lists)."""
+    return min(min(_seg_dist(p, q[i], q[(i + 1) % 4]) for p in r for i in range(4))
+               for r, q in ((a, b), (b, a)))
+
+
+def test_the_car_the_ego_is_leaving_stays_the_front_object():
+    # the ego is half into the left lane, turned 0.1 rad left; the lead, in the ego's old
+    # lane, still overlaps its right side by ~0.5 m: SUMO's lane leader would be the left
+    # lane's car, the sensor's front object is the lead
+    sensor = _sensor()
+    ids = ["lead", "left_car"]
+    rows = [(30.0, 0.0, 0.0, 10.0, 4.5, 1.8),  # centre x, y, yaw, speed, length, width
+            (60.0, 3.5, 0.0, 20.0, 4.5, 1.8)]
+    sensor.sync(0.0, ids, rows)
+    sensor.scan(0.0, s=10.0, d=1.75, heading_error=0.1)
+    assert sensor.front.id == "lead"
+    ego = corners(10.0, 1.75, 0.1, 4.5, 1.8, cg_to_front=2.25)
+    lead = corners(30.0, 0.0, 0.0, 4.5, 1.8)
+    true_gap = min(p[0] for p in lead) - max(p[0] for p in ego)
+    assert sensor.front.gap == pytest.approx(true_gap, abs=1e-9)
+    assert sensor.front.gap <= outline_distance(ego, lead)
+    assert sensor.front.speed == pytest.approx(10.0)
+    # it reaches 0.27 m into the ego's extent across the lane, from the right
+    assert sensor.front.overlap == pytest.approx(0.9 - min(p[1] for p in ego), abs=1e-9)
+    assert 0.2 < sensor.front.overlap < 0.3 and sensor.front.side == -1.0
+    # the left lane's leader is the other car, for gap acceptance
+    lead_left, lag_left = Detection(), Detection()
+    assert sensor.lane_neighbours(2, lead_left, lag_left)
+    assert lead_left.id == "left_car" and lag_left.gap == math.inf
+    assert not sensor.lane_neighbours(3, lead_left, lag_left)
+
+
+def test_once_the_ego_has_cleared_it_the_lead_is_no_longer_ahead_of_it():
+    sensor = _sensor()
+    sensor.sync(0.0, ["lead"], [(30.0, 0.0, 0.0, 10.0, 4.5, 1.8)])
+    sensor.scan(0.0, s=10.0, d=3.0, heading_error=0.0)  # the ego's right edge at 2.1 m
+    assert sensor.front.id == "" and sensor.front.gap == math.inf
+
+
+def test_between_sumo_steps_objects_move_at_their_velocity():
+    sensor = _sensor()
+    # a car cutting in from the left: 2 m/s across, 15 m/s along, heading turned accordingly
+    yaw = math.atan2(-2.0, 15.0)
+    v = math.hypot(2.0, 15.0)
+    sensor.sync(0.0, ["cut"], [(25.0, 2.2, yaw, v, 4.5, 1.8)])
+    sensor.scan(0.0, s=0.0, d=0.0, heading_error=0.0)
+    assert sensor.front.id == ""  # not yet over the ego's lane
+    sensor.scan(0.08, s=0.0, d=0.0, heading_error=0.0)
+    assert sensor.front.id == "cut"
+    assert sensor.front.speed == pytest.approx(15.0)
+    assert sensor.front.lateral_speed == pytest.approx(-2.0)
+
+
+def test_accelerations_are_measured_between_sumo_steps():
+    sensor = _sensor()
+    sensor.sync(0.0, ["lead"], [(30.0, 0.0, 0.0, 20.0, 4.5, 1.8)])
+    sensor.sync(0.1, ["lead"], [(32.0, 0.0, 0.0, 19.4, 4.5, 1.8)])
+    sensor.scan(0.1, s=0.0, d=0.0, heading_error=0.0)
+    assert sensor.front.accel == pytest.approx(-6.0)
+
+
+def test_a_gap_never_exceeds_the_distance_between_the_outlines():
+    rng = np.random.default_rng(0)
+    sensor = _sensor()
+    checked = 0
+    for _ in range(2000):
+        ego_d, ego_psi = rng.uniform(-2.0, 2.0), rng.uniform(-0.3, 0.3)
+        x, y, yaw = rng.uniform(3.0, 25.0), rng.uniform(-3.0, 3.0), rng.uniform(-0.3, 0.3)
+        sensor.sync(0.0, ["o"], [(x, y, yaw, 10.0, 4.5, 1.8)])
+        sensor.scan(0.0, s=0.0, d=ego_d, heading_error=ego_psi)
+        det = sensor.front if sensor.front.id else sensor.rear
+        if not det.id or det.gap <= 0.0:
+            continue
+        ego = corners(0.0, ego_d, ego_psi, 4.5, 1.8, cg_to_front=2.25)
+        other = corners(x, y, yaw, 4.5, 1.8)
+        assert det.gap <= outline_distance(ego, other) + 1e-9
+        checked += 1
+    assert checked > 300
+
+
+@pytest.mark.sumo
+def test_in_sumo_the_sensor_sees_the_overlapping_lead_that_sumo_s_leader_misses(fuzzy_ready):
+    """A constructed overlap in real SUMO: the ego placed half into the left lane, turned
+    left, the braking lead still overlapping its right side."""
+    scenario = build(RunSpec("emergency-brake", "none", 0,
+                             {"traffic_density": "0", "lead_gap": "12", "lead_brake_time": "0"}))
+    try:
+        scenario.reset()
+        x = list(scenario.ego.state)
+        psi = 0.1
+        x[2] += 1.6  # CG 1.6 m left of the lane centre, front bumper over the lane line
+        x[4] = psi
+        scenario.ego.state = tuple(x)
+        scenario._kinematics()
+        for _ in range(scenario.config.control_per_sumo):
+            scenario.step((0.0, 0.0))
+        assert scenario.status == "running"
+        bridge = scenario.bridge
+        lane_leader = bridge.libsumo.vehicle.getLeader("ego", 100.0)
+        assert bridge.libsumo.vehicle.getLaneIndex("ego") == 2  # SUMO has it in the left lane
+        assert not lane_leader or lane_leader[0] != "lead"  # ... so its leader is not the lead
+        assert scenario.sensor.front.id == "lead"
+        assert scenario.gap_front < 12.0 and math.isfinite(scenario.ttc_front)
+        box = scenario.sensor.box("lead")
+        g = scenario.geometry
+        s = scenario.ego.state
+        ego = corners(s[0], s[2], s[4], g.length, g.width, cg_to_front=g.cg_to_front)
+        assert scenario.gap_front <= outline_distance(ego, corners(*box)) + 1e-9
+    finally:
+        scenario.close()
