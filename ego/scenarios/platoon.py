@@ -28,6 +28,7 @@ and two followers keeping 0.4 m standstill gaps, with small cars.
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from typing import Any
@@ -213,8 +214,8 @@ class PlatoonScenario(Scenario):
         super().__init__(config, controller, **kwargs)
         c = config
         self.ids = follower_ids(c.followers)
-        #: trace column names of each follower, in PER_FOLLOWER order
-        self._row_keys = [tuple(f"{q}_{vid}" for q, _, _ in PER_FOLLOWER) for vid in self.ids]
+        #: the trace columns in the order _act collects a row's values
+        self._row_names = tuple(c.name for c in self.trace_columns())
         self.profile = c.profile
         self.policy = SpacingPolicy(c.standstill_gap, c.headway)
         self.geometry = VehicleGeometry(length=c.length, width=c.width, cg_to_front=0.5 * c.length)
@@ -281,21 +282,16 @@ class PlatoonScenario(Scenario):
         """Every follower's command through its plant; the trace row for t (states before
         the step, the command as the actuator took it)."""
         gap, e, ttc = self.gap, self.e, self.ttc
-        row = {"t": self.t, "lead_speed": self._lead_v_now, "lead_accel": self._lead_a}
-        for i, (plant, keys, (cmd, _)) in enumerate(zip(self.plants, self._row_keys, actions)):
+        values = [self.t, self._lead_v_now, self._lead_a]
+        for i, (plant, (cmd, _)) in enumerate(zip(self.plants, actions)):
             if not -math.inf < cmd < math.inf:  # NaN fails both comparisons
                 self._bad = f"the controller of {self.ids[i]} commanded {cmd} m/s^2"
                 cmd = 0.0
             _, v, a = plant.state
             plant.step((cmd,))
-            k_gap, k_e, k_speed, k_accel, k_command, k_ttc = keys
-            row[k_gap] = gap[i]
-            row[k_e] = e[i]
-            row[k_speed] = v
-            row[k_accel] = a
-            row[k_command] = plant.applied[0]
-            row[k_ttc] = ttc[i]
-        self.trace.append(self.controller.signals(), **row)
+            # in PER_FOLLOWER order
+            values += (gap[i], e[i], v, a, plant.applied[0], ttc[i])
+        self.trace.append(self.controller.signals(), **dict(zip(self._row_names, values)))
 
     def _before_sumo_step(self) -> None:
         bridge = self.bridge
@@ -331,8 +327,7 @@ class PlatoonScenario(Scenario):
             return self._bad
         states = [plant.state for plant in self.plants]
         # one sum is finite only if every state is (NaN and infinity propagate)
-        if (math.isfinite(sum(x[0] for x in states) + sum(x[2] for x in states))
-                and max(x[1] for x in states) <= 80.0):
+        if math.isfinite(sum(map(sum, states))) and max(map(_speed_of, states)) <= 80.0:
             return None
         for vid, (s, v, a) in zip(self.ids, states):
             if not (math.isfinite(s) and math.isfinite(v) and math.isfinite(a)):
@@ -519,6 +514,9 @@ STABLE_TOLERANCE = 1e-3
 #: below these peaks a signal is sensing noise, and its ratios are not reported
 ACCEL_FLOOR = 0.01  #: m/s^2
 ERROR_FLOOR = 0.005  #: m
+
+
+_speed_of = operator.itemgetter(1)  #: a follower's speed in its state (s, v, a)
 
 
 def follower_ids(n: int) -> tuple[str, ...]:
