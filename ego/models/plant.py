@@ -1,19 +1,32 @@
-"""The plant interface the scenario loop drives, and the bicycle plants.
+"""The plant interface the scenario loop drives, and the plants of the reports' models.
 
 A :class:`Plant` owns its state, its actuator limits and its integration: the loop hands
 it the controller's action once per control period and reads back the pose (for SUMO and
 the recording), the applied (saturated) input and the lateral acceleration. Nothing else
 about a vehicle model leaks into a scenario.
+
+* :class:`BicyclePlant`: report 000's nonlinear or report 002's dynamic bicycle, in world
+  coordinates.
+* :class:`LaneFramePlant`: report 003's lateral-error model, in a lane's frame.
+* :class:`LongitudinalPlant`: report 004's follower, a point on its lane.
+
+Every plant saturates its input with :meth:`ego.models.actuators.ActuatorLimits.apply`.
 """
 
 from __future__ import annotations
 
+import math
 from typing import Protocol, runtime_checkable
 
 from ego.models.actuators import ActuatorLimits
 from ego.models.dynamic_bicycle import DynamicBicycle
 from ego.models.geometry import VehicleGeometry
+from ego.models.lateral_error import LateralError
+from ego.models.longitudinal import Longitudinal
 from ego.models.nonlinear_bicycle import NonlinearBicycle
+
+#: the world state of every bicycle-like plant: X (m), u (m/s), Y (m), v (m/s), psi (rad), r (rad/s)
+WORLD_STATE = ("X", "U", "Y", "V", "PSI", "R")
 
 
 @runtime_checkable
@@ -84,3 +97,123 @@ class BicyclePlant:
         command, delta = self.limits.apply(action[0], action[1], x[1], self.applied[1], self.dt)
         self.applied = (command, delta)
         self.state, self.lateral_accel = self._step(x, command, delta)
+
+
+class Lane(Protocol):
+    """What a plant living on a lane needs of it (:class:`ego.road.LanePolyline` has it):
+    arc length ``s`` (m) along the centre line, offset ``d`` (m, positive left)."""
+
+    def offset_point(self, s: float, d: float) -> tuple[float, float]:
+        """World point (x, y) at ``s``, offset ``d`` to the left."""
+
+    def heading_at(self, s: float) -> float:
+        """Heading of the centre line at ``s`` (rad, counter-clockwise from +x)."""
+
+    def curvature_at(self, s: float) -> float:
+        """Curvature of the centre line at ``s`` (1/m, positive turning left)."""
+
+
+class LaneFramePlant:
+    """Report 003's lateral-error model on a lane, at the model's constant speed.
+
+    The model's state ``lane_state = (e, psi_err, vy, r)`` (names in ``lane_state_names``)
+    lives in the lane's frame at arc length ``s`` (m) of the lane's reference point; the
+    plant's ``state`` is the world tuple (X, u, Y, v, psi, r) every bicycle plant has,
+    derived from it after each step. The curvature input is the lane's at ``s``, held over
+    the period. The longitudinal command is ignored (the speed is constant): it is applied
+    as 0.
+    """
+
+    __slots__ = ("model", "lane", "geometry", "limits", "dt", "speed", "s", "lane_state", "state",
+                 "applied", "lateral_accel", "kappa", "_step")
+
+    state_names = WORLD_STATE
+    lane_state_names = LateralError.state_names
+    input_names = ("a_x", "delta")
+    input_units = ("m/s^2", "rad")
+
+    def __init__(self, model: LateralError, lane: Lane, geometry: VehicleGeometry, dt: float,
+                 s0: float, e0: float = 0.0, limits: ActuatorLimits | None = None) -> None:
+        self.model = model
+        self.lane = lane
+        self.geometry = geometry
+        self.limits = limits if limits is not None else ActuatorLimits()
+        self.dt = dt
+        self.speed = model.speed
+        self._step = model.stepper(dt)
+        self.s = s0
+        self.lane_state = (e0, 0.0, 0.0, 0.0)
+        self.applied = (0.0, 0.0)
+        self.lateral_accel = 0.0
+        self.kappa = lane.curvature_at(s0)
+        self._world()
+
+    def _world(self) -> None:
+        e, psi, vy, r = self.lane_state
+        x, y = self.lane.offset_point(self.s, e)
+        self.state = (x, self.speed, y, vy, self.lane.heading_at(self.s) + psi, r)
+
+    def pose(self) -> tuple[float, float, float]:
+        x = self.state
+        return x[0], x[2], x[4]
+
+    def step(self, action: tuple[float, float]) -> None:
+        v = self.speed
+        _, delta = self.limits.apply(action[0], action[1], v, self.applied[1], self.dt)
+        self.applied = (0.0, delta)
+        x = self.lane_state
+        kappa = self.kappa
+        self.lateral_accel = self.model.lateral_accel(x, delta)
+        e, psi, vy, _ = x
+        # the reference point moves along the lane at the car's speed projected on it
+        self.s += self.dt * (v * math.cos(psi) - vy * math.sin(psi)) / (1.0 - kappa * e)
+        self.lane_state = self._step(x, delta, kappa)
+        self.kappa = self.lane.curvature_at(self.s)
+        self._world()
+
+
+class LongitudinalPlant:
+    """Report 004's follower (:class:`Longitudinal`): a point on its lane, state
+    ``(s, v, a)``: front bumper along the lane (m), speed (m/s), actual acceleration (m/s^2).
+
+    The input is the commanded acceleration (m/s^2); the limits default to the model's
+    actuator, ``[-max_decel, max_accel]``, with no standstill rule because the model's own
+    step already holds a braking car at rest. The pose is the centre of gravity on the lane's
+    centre line, ``cg_to_front`` behind the front bumper, heading along the lane; the
+    lateral acceleration is 0.
+    """
+
+    __slots__ = ("model", "lane", "geometry", "limits", "dt", "state", "applied", "_step")
+
+    state_names = Longitudinal.state_names
+    input_names = ("command",)
+    input_units = ("m/s^2",)
+    lateral_accel = 0.0
+
+    def __init__(self, model: Longitudinal, lane: Lane, geometry: VehicleGeometry, dt: float,
+                 s0: float, v0: float = 0.0, a0: float = 0.0, limits: ActuatorLimits | None = None) -> None:
+        p = model.params
+        self.model = model
+        self.lane = lane
+        self.geometry = geometry
+        self.limits = limits if limits is not None else ActuatorLimits(
+            max_steer=0.0, min_command=-p.max_decel, max_command=p.max_accel, stop_speed=0.0)
+        self.dt = dt
+        self.state = (s0, v0, a0)
+        self.applied = (0.0,)
+        self._step = model.stepper(dt)
+
+    @property
+    def speed(self) -> float:
+        return self.state[1]
+
+    def pose(self) -> tuple[float, float, float]:
+        cg = self.state[0] - self.geometry.cg_to_front
+        x, y = self.lane.offset_point(cg, 0.0)
+        return x, y, self.lane.heading_at(cg)
+
+    def step(self, action: tuple[float, ...]) -> None:
+        s, v, a = self.state
+        command = self.limits.apply(action[0], 0.0, v, 0.0, self.dt)[0]
+        self.applied = (command,)
+        self.state = self._step(s, v, a, command)

@@ -260,7 +260,7 @@ class RerunWriter:
         """Vehicle outlines and the follow frame as one record batch."""
         import pyarrow as pa
 
-        from ego.sumo.bridge import sumo_poses_to_boxes
+        from ego.models.geometry import sumo_poses_to_boxes
 
         outlines = box_outlines(sumo_poses_to_boxes(poses)).astype(np.float32)
         counts = np.asarray(counts, dtype=np.int32)

@@ -29,13 +29,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ego.models import DynamicBicycle, DynamicBicycleParams, VehicleGeometry
+from ego.models import ActuatorLimits, BicyclePlant, DynamicBicycle, DynamicBicycleParams, VehicleGeometry
 from ego.params import ConfigError, param
 from ego.record.base import Series
 from ego.road import LanePolyline
 from ego.scenarios import metrics as m
-from ego.scenarios.base import CommonConfig, EgoVehicle, RoadScenario, signal_series
+from ego.scenarios.base import CommonConfig, RoadScenario, signal_series
 from ego.scenarios.events import INF, boxes_overlap
+from ego.scenarios.trace import Column, Metric, Plot
 from ego.sumo.bridge import (
     Collision,
     Neighbours,
@@ -105,14 +106,45 @@ class CurveScenario(RoadScenario):
                "arc of radius 15 m (oncoming traffic; --set lead=KMH for a slow car ahead)")
     task = "curve"
     config_cls = CurveConfig
-    #: t (s); s along the lane (m) and d left of its centre (m) of the centre of gravity;
-    #: e_d, e_a the report's errors (m, rad); speed u and ds along the lane (m/s); a_x,
-    #: delta as applied; accel_ref the plan (m/s^2); curvature of the lane at the
-    #: projection (1/m); gap_front to the lead (m); lat_accel (m/s^2); yaw_rate (rad/s);
-    #: phase 0 approach, 1 engaged; in_arc 1 while the centre of gravity is on the arc
     columns = (
-        "t", "s", "d", "e_d", "e_a", "speed", "ds", "a_x", "delta", "accel_ref", "curvature",
-        "gap_front", "lat_accel", "yaw_rate", "phase", "in_arc",
+        Column("t", "s", "time"),
+        Column("s", "m", "centre of gravity along the lane"),
+        Column("d", "m", "centre of gravity left of the lane centre"),
+        Column("e_d", "m", "distance to the arc centre - R (positive outside the arc)"),
+        Column("e_a", "rad", "heading - tangent heading (positive left)"),
+        Column("speed", "m/s", "body longitudinal speed u"),
+        Column("ds", "m/s", "speed along the lane"),
+        Column("a_x", "m/s^2", "axial acceleration as applied"),
+        Column("delta", "rad", "front steer angle as applied"),
+        Column("accel_ref", "m/s^2", "the plan's axial acceleration"),
+        Column("curvature", "1/m", "lane curvature at the projection"),
+        Column("gap_front", "m", "gap to the lead (inf: none)"),
+        Column("lat_accel", "m/s^2", "lateral acceleration"),
+        Column("yaw_rate", "rad/s", "yaw rate"),
+        Column("phase", "-", "0 approach, 1 engaged"),
+        Column("in_arc", "-", "1 while the centre of gravity is on the arc"),
+    )
+    metric_specs = (
+        Metric("completed_arc", "-", "the ego left the arc at its end"),
+        Metric("max_abs_ed", "m", "largest |e_d| in the arc", headline=True),
+        Metric("final_ed", "m", "e_d as the ego leaves the arc", headline=True),
+        Metric("rms_ed", "m", "RMS of e_d in the arc"),
+        Metric("max_abs_ea", "rad", "largest |e_a| in the arc", headline=True),
+        Metric("final_ea", "rad", "e_a as the ego leaves the arc", headline=True),
+        Metric("time_in_arc", "s", "time from entering to leaving the arc", headline=True),
+        Metric("entry_speed", "km/h", "speed entering the arc", headline=True),
+        Metric("exit_speed", "km/h", "speed leaving the arc", headline=True),
+        Metric("engage_time", "s", "when the curve controller took over"),
+        Metric("max_abs_delta", "rad", "largest |steer| once engaged"),
+        Metric("max_lat_accel", "m/s^2", "largest |lateral acceleration| in the arc"),
+        Metric("min_gap_front", "m", "smallest gap to the lead", headline=True),
+    )
+    plots = (
+        Plot("e_d", "e_d.png", "e_d = distance to the arc centre - R"),
+        Plot("e_a", "e_a.png", "e_a = heading - tangent"),
+        Plot("speed", "speed.png", "speed"),
+        Plot("delta", "steering.png", "front steer angle"),
+        Plot("a_x", "a_x.png", "axial acceleration"),
     )
 
     def __init__(self, config, controller, **kwargs) -> None:
@@ -193,8 +225,8 @@ class CurveScenario(RoadScenario):
 
         x, y, psi = bridge.cg_pose(EGO)
         model = DynamicBicycle(DynamicBicycleParams(slip_speed_floor=1.0))
-        self.ego = EgoVehicle(model, self.geometry, c.dt, c.substeps, max_steer=c.max_steer)
-        self.ego.state = (x, speed, y, 0.0, psi, 0.0)
+        self.ego = BicyclePlant(model, self.geometry, c.dt, c.substeps,
+                                ActuatorLimits(max_steer=c.max_steer), state=(x, speed, y, 0.0, psi, 0.0))
         self._kinematics()
         self._after_sumo_step()
 
@@ -205,15 +237,16 @@ class CurveScenario(RoadScenario):
             # before the event the ego holds its lane and its plan; commands are ignored
             action = (obs.accel_ref, 0.0)
         ego = self.ego
-        ego.step(*action)
+        ego.step(action)
         a_x, delta = ego.applied
         d = self.d_road
-        self.trace.append((
-            obs.t, self.s, d, -self.arc_sign * d, self.heading_error, obs.speed, self.ds,
-            a_x, delta, obs.accel_ref, self.curvature, self.gap_front, ego.lateral_accel,
-            obs.yaw_rate, self.phase, 1.0 if self.arc_start <= self.s <= self.arc_end else 0.0,
-            *self.controller.signals().values(),
-        ))
+        self.trace.append(
+            self.controller.signals(),
+            t=obs.t, s=self.s, d=d, e_d=-self.arc_sign * d, e_a=self.heading_error, speed=obs.speed,
+            ds=self.ds, a_x=a_x, delta=delta, accel_ref=obs.accel_ref, curvature=self.curvature,
+            gap_front=self.gap_front, lat_accel=ego.lateral_accel, yaw_rate=obs.yaw_rate,
+            phase=self.phase, in_arc=1.0 if self.arc_start <= self.s <= self.arc_end else 0.0,
+        )
         self._kinematics()
 
     def _after_sumo_step(self) -> None:
@@ -221,10 +254,9 @@ class CurveScenario(RoadScenario):
         lead = bridge.read_neighbours(EGO, self.neighbours).leader
         self._sync_gap, self.lead_speed, self._sync_t = lead.gap, lead.speed, self.t
         if self.phase == APPROACH:
-            veh = bridge.libsumo.vehicle
             # route distance from the front bumper to the arc start; SUMO answers a huge
             # negative number once the position is behind the vehicle
-            dist = veh.getDrivingDistance(EGO, EDGE, self.arc_start, 0)
+            dist = bridge.driving_distance(EGO, EDGE, self.arc_start, 0)
             if dist <= self.config.preview:
                 self.phase = ENGAGED
                 self.engage_t = self.t
@@ -248,7 +280,7 @@ class CurveScenario(RoadScenario):
         boxes = sumo_poses_to_boxes([row for _, row in near])
         for (vid, _), box in zip(near, boxes):
             if boxes_overlap(ego_box, tuple(box)):
-                speed = self.bridge.libsumo.vehicle.getSpeed(vid)
+                speed = self.bridge.speed(vid)
                 self._collided(Collision(EGO, vid, "oncoming", u, speed))
                 return
 

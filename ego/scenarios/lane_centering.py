@@ -8,11 +8,12 @@ run ends when the ego reaches the end of the road (``completed``).
 Two plants (``plant``):
 
 * ``lateral-error`` (default, the report's): :class:`ego.models.LateralError` in the lane's
-  frame, with the curvature of the SUMO lane under the car; its pose in the world (pushed
-  into SUMO) follows from the lane frame.
+  frame (:class:`ego.models.LaneFramePlant`), with the curvature of the SUMO lane under the
+  car; its pose in the world (pushed into SUMO) follows from the lane frame.
 * ``dynamic-bicycle``: report 002's model with report 003's car
-  (:class:`ego.models.DynamicBicycle`) in world coordinates, its errors measured on the SUMO
-  lane (:class:`ego.road.LanePolyline`), its speed held by a P law on a_x.
+  (:class:`ego.models.DynamicBicycle` on :func:`ego.models.dynamic_params_from_lateral`) in
+  world coordinates (:class:`ego.models.BicyclePlant`), its errors measured on the SUMO lane
+  (:class:`ego.road.LanePolyline`), its speed held by a P law on a_x.
 
 The report claims 0.000 m max/mean/std of the lateral error over 50 s: at 8 m/s, 50 s
 is 400 m of the first straight, where from rest nothing ever moves (``--set duration=50``
@@ -27,17 +28,21 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ego.models import (
+    ActuatorLimits,
+    BicyclePlant,
     DynamicBicycle,
-    DynamicBicycleParams,
+    LaneFramePlant,
     LateralError,
     LateralErrorParams,
     VehicleGeometry,
+    dynamic_params_from_lateral,
 )
 from ego.params import param
 from ego.record.base import Series
 from ego.road import LanePolyline
 from ego.scenarios import metrics as m
-from ego.scenarios.base import CommonConfig, EgoVehicle, RoadScenario, signal_series
+from ego.scenarios.base import CommonConfig, RoadScenario, signal_series
+from ego.scenarios.trace import Column, Metric, Plot
 from ego.sumo.bridge import SumoBridge, SumoConfig, VehicleSpec, VehicleType, ego_type
 from ego.sumo.net import net_file
 from ego.sumo.traffic import PoissonFlow, background_traffic
@@ -49,57 +54,6 @@ EGO_LANE, TRAFFIC_LANE = 0, 1
 GEOMETRY = VehicleGeometry(length=4.7, width=1.85, cg_to_front=2.2)
 TRAFFIC_TYPE = VehicleType("traffic", length=4.5, width=1.8, color=(150, 150, 150))
 END_MARGIN = 15.0  #: m before the end of the lane where the run ends (SUMO would remove the ego)
-
-
-def report003_dynamic_params() -> DynamicBicycleParams:
-    """Report 003's car in report 002's model (its negative per-tyre convention)."""
-    p = LateralErrorParams()
-    return DynamicBicycleParams(m=p.m, Iz=p.Iz, lf=p.lf, lr=p.lr, Cf=-p.Cf, Cr=-p.Cr,
-                                slip_speed_floor=1.0)
-
-
-class LaneFrameEgo:
-    """The lateral-error model as an ego: lane-frame state, world pose derived from it.
-
-    ``state`` is the world tuple (X, u, Y, v, psi, r) every scenario reads; ``lane_state``
-    is the model's (e, psi_err, vy, r) and ``s`` the arc length along the lane."""
-
-    __slots__ = ("geometry", "lane", "speed", "dt", "max_steer", "s", "lane_state", "state",
-                 "applied", "lateral_accel", "kappa", "_step", "_model")
-
-    def __init__(self, model: LateralError, lane: LanePolyline, geometry: VehicleGeometry,
-                 s0: float, e0: float, dt: float, max_steer: float) -> None:
-        self.geometry, self.lane, self.speed, self.dt = geometry, lane, model.speed, dt
-        self.max_steer = max_steer
-        self._model = model
-        self._step = model.stepper(dt)
-        self.s = s0
-        self.lane_state = (e0, 0.0, 0.0, 0.0)
-        self.applied = (0.0, 0.0)
-        self.lateral_accel = 0.0
-        self.kappa = lane.curvature_at(s0)
-        self._pose()
-
-    def _pose(self) -> None:
-        e, psi, vy, r = self.lane_state
-        x, y = self.lane.offset_point(self.s, e)
-        self.state = (x, self.speed, y, vy, self.lane.heading_at(self.s) + psi, r)
-
-    def step(self, a_x: float, delta: float) -> None:
-        """One control period: the steer saturates; a_x is ignored (constant speed)."""
-        ms = self.max_steer
-        delta = ms if delta > ms else (-ms if delta < -ms else delta)
-        self.applied = (0.0, delta)
-        x = self.lane_state
-        kappa = self.kappa
-        self.lateral_accel = self._model.lateral_accel(x, delta)
-        e, psi, vy, _ = x
-        v = self.speed
-        # the reference point moves along the lane at the car's speed projected on it
-        self.s += self.dt * (v * math.cos(psi) - vy * math.sin(psi)) / (1.0 - kappa * e)
-        self.lane_state = self._step(x, delta, kappa)
-        self.kappa = self.lane.curvature_at(self.s)
-        self._pose()
 
 
 @dataclass(frozen=True)
@@ -129,11 +83,35 @@ class LaneCenteringScenario(RoadScenario):
                "plant=dynamic-bicycle)")
     task = "lane-centering"
     config_cls = LaneCenteringConfig
-    #: t (s); s along the lane (m); d the lateral error (m, + left of the lane centre);
-    #: heading_error (rad); vy body lateral speed (m/s); yaw_rate (rad/s); speed (m/s);
-    #: a_x, delta as applied; curvature of the lane at the car (1/m); lat_accel (m/s^2)
-    columns = ("t", "s", "d", "heading_error", "vy", "yaw_rate", "speed", "a_x", "delta",
-               "curvature", "lat_accel")
+    columns = (
+        Column("t", "s", "time"),
+        Column("s", "m", "centre of gravity along the lane"),
+        Column("d", "m", "lateral error: centre of gravity left of the lane centre"),
+        Column("heading_error", "rad", "heading - lane heading (positive left)"),
+        Column("vy", "m/s", "body lateral speed"),
+        Column("yaw_rate", "rad/s", "yaw rate"),
+        Column("speed", "m/s", "body longitudinal speed"),
+        Column("a_x", "m/s^2", "axial acceleration as applied (0: the lateral-error model)"),
+        Column("delta", "rad", "front steer angle as applied"),
+        Column("curvature", "1/m", "lane curvature at the car"),
+        Column("lat_accel", "m/s^2", "lateral acceleration"),
+    )
+    metric_specs = (
+        Metric("completed_road", "-", "the ego reached the end of the road"),
+        Metric("distance", "m", "distance driven along the lane"),
+        Metric("max_abs_lateral_error", "m", "largest |lateral error|"),
+        Metric("mean_abs_lateral_error", "m", "mean |lateral error|"),
+        Metric("std_lateral_error", "m", "standard deviation of the lateral error"),
+        Metric("rms_lateral_error", "m", "RMS of the lateral error", headline=True),
+        Metric("max_abs_heading_error", "rad", "largest |heading error|"),
+        Metric("max_abs_steer", "rad", "largest |steer|"),
+        Metric("max_abs_lateral_accel", "m/s^2", "largest |lateral acceleration|", headline=True),
+    )
+    plots = (
+        Plot("speed", "speed.png", "speed"),
+        Plot("delta", "steering.png", "front steer angle"),
+        Plot("a_x", "a_x.png", "axial acceleration"),
+    )
 
     def __init__(self, config, controller, **kwargs) -> None:
         super().__init__(config, controller, **kwargs)
@@ -179,36 +157,38 @@ class LaneCenteringScenario(RoadScenario):
         missing = bridge.insert(required=[EGO])
         if missing:
             self.event("traffic", f"SUMO could not place {len(missing)} vehicles", "WARN")
-        veh = bridge.libsumo.vehicle
         for spec in specs:
             if spec.id not in missing:
-                veh.setLaneChangeMode(spec.id, 0)
+                bridge.keep_lane(spec.id)
         bridge.control(EGO, self.geometry)
         self.controlled_ids = (EGO,)
         self.colors[EGO] = (220, 40, 40)
 
         x, y, psi = bridge.cg_pose(EGO)
         s0 = lane.project(x, y)[0]
+        limits = ActuatorLimits(max_steer=c.max_steer)
         if c.plant == "lateral-error":
             model = LateralError(LateralErrorParams(), c.speed)
-            self.ego = LaneFrameEgo(model, lane, self.geometry, s0, c.offset, c.dt, c.max_steer)
+            self.ego = LaneFramePlant(model, lane, self.geometry, c.dt, s0, c.offset, limits)
         else:
-            self.ego = EgoVehicle(DynamicBicycle(report003_dynamic_params()), self.geometry, c.dt,
-                                  c.substeps, max_steer=c.max_steer)
+            model = DynamicBicycle(dynamic_params_from_lateral(LateralErrorParams(), slip_speed_floor=1.0))
             x, y = lane.offset_point(s0, c.offset)
-            self.ego.state = (x, c.speed, y, 0.0, lane.heading_at(s0), 0.0)
+            self.ego = BicyclePlant(model, self.geometry, c.dt, c.substeps, limits,
+                                    state=(x, c.speed, y, 0.0, lane.heading_at(s0), 0.0))
         self._kinematics()
 
     # -- per step ---------------------------------------------------------------------------
     def _act(self, action: tuple[float, float]) -> None:
         ego = self.ego
-        ego.step(*action)
+        ego.step(action)
         a_x, delta = ego.applied
         obs = self.obs
-        self.trace.append((
-            obs.t, self.s, self.d_road, self.heading_error, obs.vy, obs.yaw_rate, obs.speed,
-            a_x, delta, self.curvature, ego.lateral_accel, *self.controller.signals().values(),
-        ))
+        self.trace.append(
+            self.controller.signals(),
+            t=obs.t, s=self.s, d=self.d_road, heading_error=self.heading_error, vy=obs.vy,
+            yaw_rate=obs.yaw_rate, speed=obs.speed, a_x=a_x, delta=delta, curvature=self.curvature,
+            lat_accel=ego.lateral_accel,
+        )
         self._kinematics()
 
     def _update(self) -> None:

@@ -3,7 +3,7 @@
 A SUMO vehicle leads on a single-lane road (``sumo_nets/platoon``), driving a scripted speed
 profile (default: cruise at 40 km/h, brake to 20 km/h, accelerate to 50 km/h, brake hard to
 a stop). Behind it ``followers`` cars each run their own :class:`ego.models.Longitudinal`
-model and their own controller (one :class:`ego.control.following.PlatoonControl` member
+model (a :class:`ego.models.LongitudinalPlant`, which saturates the command) and their own controller (one :class:`ego.control.following.PlatoonControl` member
 each), and every SUMO step each one is pushed into SUMO with the bridge's multi-vehicle
 support (``SumoBridge.control`` / ``push``), so SUMO holds the whole platoon.
 
@@ -28,6 +28,7 @@ and two followers keeping 0.4 m standstill gaps, with small cars.
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from typing import Any
@@ -35,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from ego.control.following import FollowingObservation, PlatoonControl
-from ego.models import Longitudinal, LongitudinalParams, SpacingPolicy, VehicleGeometry
+from ego.models import Longitudinal, LongitudinalParams, LongitudinalPlant, SpacingPolicy, VehicleGeometry
 from ego.params import ConfigError, param
 from ego.record.base import Scene, Series
 from ego.road import LanePolyline
@@ -43,6 +44,7 @@ from ego.scenarios import metrics as m
 from ego.scenarios import string_stability as ss
 from ego.scenarios.base import CommonConfig, Scenario
 from ego.scenarios.events import INF, time_to_collision
+from ego.scenarios.trace import Column, Metric, Plot
 from ego.sumo.bridge import (
     Collision,
     Neighbour,
@@ -162,6 +164,24 @@ class PlatoonScenario(Scenario):
                "(--set variant=scale-model: the report's 3-car scale test)")
     task = "car-following"
     config_cls = PlatoonConfig
+    metric_specs = (
+        Metric("followers.", "-", "per follower (id): the platoon's metrics below, each in its unit, "
+               "and its settle_times"),
+        Metric("rms_spacing_error", "m", "worst follower's RMS spacing error delta_d", headline=True),
+        Metric("max_abs_spacing_error", "m", "worst follower's largest |delta_d|", headline=True),
+        Metric("min_gap", "m", "smallest gap of any follower", headline=True),
+        Metric("min_ttc", "s", "smallest time-to-collision of any follower", headline=True),
+        Metric("max_abs_accel", "m/s^2", "worst follower's largest |acceleration|", headline=True),
+        Metric("max_abs_jerk", "m/s^3", "worst follower's largest |jerk|", headline=True),
+        Metric("settle_times.", "s", "per disturbance window: the slowest follower's time until "
+               "|delta_d| stays within settle_band (None: some never settled)", headline=True),
+        Metric("string_stable", "-", "no disturbance grew down the platoon (None: nothing tells)",
+               headline=True),
+        Metric("amplification.", "-", "per pair of consecutive vehicles: peak and L2 ratios of the "
+               "acceleration and of the spacing error"),
+        Metric("frequency_gain.", "-", "per pair of consecutive vehicles: speed gain at sine_omega "
+               "(with a sinusoidal leader)", headline=True),
+    )
 
     @classmethod
     def default_config(cls, overrides: Mapping[str, Any]) -> PlatoonConfig:
@@ -175,21 +195,27 @@ class PlatoonScenario(Scenario):
         return PlatoonControl([spec.build(params, config.dt) for _ in ids], ids)
 
     @classmethod
-    def compare_plots(cls, config) -> tuple[tuple[str, str, str], ...]:
+    def compare_plots(cls, config) -> tuple[Plot, ...]:
         """The first and the last follower's spacing error and acceleration."""
         ids = follower_ids(config.followers)
         plots = []
         for vid in dict.fromkeys((ids[0], ids[-1])):
-            plots += [(f"e_{vid}", f"spacing_error_{vid}.png", f"spacing error delta_d of {vid} [m]"),
-                      (f"accel_{vid}", f"accel_{vid}.png", f"acceleration of {vid} [m/s^2]")]
+            plots += [Plot(f"e_{vid}", f"spacing_error_{vid}.png", f"spacing error delta_d of {vid}"),
+                      Plot(f"accel_{vid}", f"accel_{vid}.png", f"acceleration of {vid}")]
         return tuple(plots)
+
+    def trace_columns(self) -> tuple[Column, ...]:
+        """The leader's columns, then :data:`PER_FOLLOWER` for every follower."""
+        return LEADER_COLUMNS + tuple(Column(f"{q}_{vid}", unit, f"{vid}: {text}")
+                                      for vid in follower_ids(self.config.followers)
+                                      for q, unit, text in PER_FOLLOWER)
 
     def __init__(self, config, controller, **kwargs) -> None:
         super().__init__(config, controller, **kwargs)
         c = config
         self.ids = follower_ids(c.followers)
-        self.columns = ("t", "lead_speed", "lead_accel") + tuple(
-            f"{q}_{vid}" for vid in self.ids for q in PER_FOLLOWER)
+        #: the trace columns in the order _act collects a row's values
+        self._row_names = tuple(c.name for c in self.trace_columns())
         self.profile = c.profile
         self.policy = SpacingPolicy(c.standstill_gap, c.headway)
         self.geometry = VehicleGeometry(length=c.length, width=c.width, cg_to_front=0.5 * c.length)
@@ -197,9 +223,8 @@ class PlatoonScenario(Scenario):
         self.lane: LanePolyline | None = None
         self.obs: list[FollowingObservation] = []
         n = c.followers
-        self.s = [0.0] * n  #: front bumpers along the lane (m)
-        self.v = [0.0] * n
-        self.a = [0.0] * n
+        #: the followers, f1 first: state (front bumper along the lane m, speed m/s, acceleration m/s^2)
+        self.plants: list[LongitudinalPlant] = []
         self.gap = [0.0] * n
         self.e = [0.0] * n  #: spacing errors delta_d (m)
         self.ttc = [INF] * n
@@ -246,10 +271,7 @@ class PlatoonScenario(Scenario):
         self.controlled_ids = self.ids
         self.colors = {LEADER: LEADER_COLOR, **{vid: FOLLOWER_COLOR for vid in self.ids}}
 
-        self.s = fronts
-        self.v = [v0] * n
-        self.a = [0.0] * n
-        self._step_model = self.model.stepper(c.dt)
+        self.plants = [LongitudinalPlant(self.model, lane, self.geometry, c.dt, front, v0) for front in fronts]
         self.obs = [FollowingObservation(policy=self.policy, max_accel=c.max_accel, max_decel=c.max_decel)
                     for _ in self.ids]
         self._bad = None
@@ -257,55 +279,57 @@ class PlatoonScenario(Scenario):
 
     # -- per step ---------------------------------------------------------------------------
     def _act(self, actions) -> None:
-        """Every follower's command through its actuator and model; the trace row for t."""
-        row = [self.t, self._lead_v_now, self._lead_a]
-        s, v, a, gap, e, ttc = self.s, self.v, self.a, self.gap, self.e, self.ttc
-        step, hi, lo = self._step_model, self.config.max_accel, -self.config.max_decel
-        for i, (cmd, _) in enumerate(actions):
+        """Every follower's command through its plant; the trace row for t (states before
+        the step, the command as the actuator took it)."""
+        gap, e, ttc = self.gap, self.e, self.ttc
+        values = [self.t, self._lead_v_now, self._lead_a]
+        for i, (plant, (cmd, _)) in enumerate(zip(self.plants, actions)):
             if not -math.inf < cmd < math.inf:  # NaN fails both comparisons
                 self._bad = f"the controller of {self.ids[i]} commanded {cmd} m/s^2"
                 cmd = 0.0
-            row += (gap[i], e[i], v[i], a[i], hi if cmd > hi else (lo if cmd < lo else cmd), ttc[i])
-            s[i], v[i], a[i] = step(s[i], v[i], a[i], cmd)
-        row += self.controller.signals().values()
-        self.trace.append(row)
+            _, v, a = plant.state
+            plant.step((cmd,))
+            # in PER_FOLLOWER order
+            values += (gap[i], e[i], v, a, plant.applied[0], ttc[i])
+        self.trace.append(self.controller.signals(), **dict(zip(self._row_names, values)))
 
     def _before_sumo_step(self) -> None:
-        bridge, lane, t = self.bridge, self.lane, self.t
-        self.leader.update(bridge, t)
-        back = self.geometry.cg_to_front
-        for vid, s, v, a in zip(self.ids, self.s, self.v, self.a):
-            x, y = lane.offset_point(s - back, 0.0)
-            bridge.push(vid, x, y, lane.heading_at(s - back), v, a)
+        bridge = self.bridge
+        self.leader.update(bridge, self.t)
+        for vid, plant in zip(self.ids, self.plants):
+            x, y, psi = plant.pose()
+            _, v, a = plant.state
+            bridge.push(vid, x, y, psi, v, a)
 
     def _after_sumo_step(self) -> None:
         """Read who leads whom and the gaps from SUMO; the leader's speed and acceleration."""
         bridge = self.bridge
-        veh = bridge.libsumo.vehicle
-        lead_v, self._lead_a = veh.getSpeed(LEADER), veh.getAcceleration(LEADER)
+        lead_v, self._lead_a = bridge.speed(LEADER), bridge.acceleration(LEADER)
         # SUMO moves its vehicles at their new speed for the whole step (Euler): the leader
         # keeps its acceleration, so until the next step it drives at v + a * step
         self._lead_v_now = max(lead_v + self._lead_a * self.config.sumo_step, 0.0)
-        self._lead_s_sync = veh.getLanePosition(LEADER)
+        self._lead_s_sync = bridge.lane_position(LEADER)
         self._sync_t = self.t
         L = self.config.length
+        s = [plant.state[0] for plant in self.plants]
         for i, vid in enumerate(self.ids):
             ahead = LEADER if i == 0 else self.ids[i - 1]
             found = bridge.read_leader(vid, self._lead)
             if found.id == ahead:
                 self._gap_sync[i] = found.gap
             else:  # beyond SUMO's look-ahead: from the lane positions
-                front = self._lead_s_sync if i == 0 else self.s[i - 1]
-                self._gap_sync[i] = front - L - self.s[i]
-            self._s_sync[i] = self.s[i]
+                front = self._lead_s_sync if i == 0 else s[i - 1]
+                self._gap_sync[i] = front - L - s[i]
+            self._s_sync[i] = s[i]
 
     def _check_divergence(self) -> str | None:
         if self._bad is not None:
             return self._bad
+        states = [plant.state for plant in self.plants]
         # one sum is finite only if every state is (NaN and infinity propagate)
-        if math.isfinite(sum(self.s) + sum(self.a)) and max(self.v) <= 80.0:
+        if math.isfinite(sum(map(sum, states))) and max(map(_speed_of, states)) <= 80.0:
             return None
-        for vid, s, v, a in zip(self.ids, self.s, self.v, self.a):
+        for vid, (s, v, a) in zip(self.ids, states):
             if not (math.isfinite(s) and math.isfinite(v) and math.isfinite(a)):
                 return f"the state of {vid} is not finite (NaN or infinity)"
             if v > 80.0:
@@ -318,27 +342,28 @@ class PlatoonScenario(Scenario):
         since = t - self._sync_t
         lead_v, lead_a = self._lead_v_now, self._lead_a
         moved = lead_v * since
-        s, v, a, s_sync, gap_sync = self.s, self.v, self.a, self._s_sync, self._gap_sync
+        s_sync, gap_sync = self._s_sync, self._gap_sync
         error = self.policy.error
-        for i, o in enumerate(self.obs):
+        ahead_s = 0.0
+        for i, (o, plant) in enumerate(zip(self.obs, self.plants)):
+            s, speed, accel = plant.state
             if i:
-                moved = s[i - 1] - s_sync[i - 1]
-                lead_v, lead_a = v[i - 1], a[i - 1]
-            gap = gap_sync[i] + moved - (s[i] - s_sync[i])
-            speed = v[i]
+                moved = ahead_s - s_sync[i - 1]
+            gap = gap_sync[i] + moved - (s - s_sync[i])
             self.gap[i] = gap
             self.e[i] = error(gap, speed)
             self.ttc[i] = time_to_collision(gap, speed - lead_v)
             o.t = t
             o.gap = gap
             o.speed = speed
-            o.accel = a[i]
+            o.accel = accel
             o.lead_speed = lead_v
             o.lead_accel = lead_a
             if gap <= 0.0:
                 ahead = LEADER if i == 0 else self.ids[i - 1]
-                self._collided(Collision(self.ids[i], ahead, "rear-end (gap <= 0)", v[i], lead_v))
+                self._collided(Collision(self.ids[i], ahead, "rear-end (gap <= 0)", speed, lead_v))
                 return
+            ahead_s, lead_v, lead_a = s, speed, accel
 
     # -- results ------------------------------------------------------------------------------
     def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
@@ -436,7 +461,7 @@ class PlatoonScenario(Scenario):
     # -- recording ----------------------------------------------------------------------------
     def _record_boxes(self) -> None:
         ids, poses = self.bridge.poses()
-        back = self.s[-1] - self.config.length
+        back = self.plants[-1].state[0] - self.config.length
         x, y = self.lane.offset_point(0.5 * (self._lead_s_sync + back), 0.0)
         self.recorder.vehicles(self.t, ids, poses, (x, y))
 
@@ -469,15 +494,29 @@ class PlatoonScenario(Scenario):
         return out
 
 
-#: per-follower trace columns, each as ``<quantity>_<follower id>``: gap to the car ahead
-#: (m), spacing error delta_d (m), speed (m/s), actual acceleration (m/s^2), the command
-#: as the actuator took it (m/s^2), time-to-collision with the car ahead (s)
-PER_FOLLOWER = ("gap", "e", "speed", "accel", "command", "ttc")
+#: the leader's trace columns (after t)
+LEADER_COLUMNS = (
+    Column("t", "s", "time"),
+    Column("lead_speed", "m/s", "the SUMO leader's speed (as extrapolated between SUMO steps)"),
+    Column("lead_accel", "m/s^2", "the SUMO leader's acceleration in SUMO's last step"),
+)
+#: per-follower trace columns, each named ``<quantity>_<follower id>``: (quantity, unit, what)
+PER_FOLLOWER = (
+    ("gap", "m", "gap to the car ahead"),
+    ("e", "m", "spacing error delta_d"),
+    ("speed", "m/s", "speed"),
+    ("accel", "m/s^2", "actual acceleration"),
+    ("command", "m/s^2", "the command as the actuator took it"),
+    ("ttc", "s", "time-to-collision with the car ahead"),
+)
 #: string stable: no measured amplification above 1 + this
 STABLE_TOLERANCE = 1e-3
 #: below these peaks a signal is sensing noise, and its ratios are not reported
 ACCEL_FLOOR = 0.01  #: m/s^2
 ERROR_FLOOR = 0.005  #: m
+
+
+_speed_of = operator.itemgetter(1)  #: a follower's speed in its state (s, v, a)
 
 
 def follower_ids(n: int) -> tuple[str, ...]:

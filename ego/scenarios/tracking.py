@@ -19,12 +19,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ego.models import NonlinearBicycle, VehicleGeometry
+from ego.models import ActuatorLimits, BicyclePlant, NonlinearBicycle, VehicleGeometry
 from ego.params import param
 from ego.record.base import Scene, Series
 from ego.scenarios import metrics as m
 from ego.scenarios.base import (
-    EgoVehicle,
     Scenario,
     TimingConfig,
     divergence,
@@ -32,6 +31,7 @@ from ego.scenarios.base import (
     vehicle_series,
 )
 from ego.scenarios.highway import HighwayConfig, HighwayScenario
+from ego.scenarios.trace import Column, Metric, Plot
 
 
 def tracking_metrics(t: np.ndarray, e_lat: np.ndarray, e_speed: np.ndarray, after: float = 10.0) -> dict:
@@ -48,6 +48,23 @@ def tracking_metrics(t: np.ndarray, e_lat: np.ndarray, e_speed: np.ndarray, afte
         "max_abs_lateral_error_after_10s": m.json_number(m.max_abs(e_lat[late]) if late.any() else None, 4),
         "rms_speed_error": m.json_number(rms(e_speed), 4),
     }
+
+
+#: what :func:`tracking_metrics` reports
+TRACKING_METRICS = (
+    Metric("rms_lateral_error", "m", "RMS of the lateral error (actual - reference)", headline=True),
+    Metric("max_abs_lateral_error", "m", "largest |lateral error|"),
+    Metric("rms_lateral_error_after_10s", "m", "RMS of the lateral error after 10 s"),
+    Metric("max_abs_lateral_error_after_10s", "m", "largest |lateral error| after 10 s", headline=True),
+    Metric("rms_speed_error", "m/s", "RMS of the speed along the road - reference", headline=True),
+)
+#: the trace columns ``ego compare`` plots for a tracking run
+TRACKING_PLOTS = (
+    Plot("e_lat", "lateral_error.png", "lateral error (actual - reference)"),
+    Plot("speed", "speed.png", "speed"),
+    Plot("delta", "steering.png", "front steer angle"),
+    Plot("Fx", "fx.png", "Fx per driven wheel"),
+)
 
 
 # --- sine tracking in SUMO ------------------------------------------------------------------
@@ -68,6 +85,13 @@ class SineTracking(HighwayScenario):
     name = "sine-tracking"
     summary = "lateral reference A sin(omega t) across the motorway while X_ref = 25 t or 15 t"
     config_cls = SineTrackingConfig
+    metric_specs = TRACKING_METRICS + (
+        Metric("min_ttc_front", "s", "smallest time-to-collision with the car ahead", headline=True),
+        Metric("min_ttc_rear", "s", "smallest time-to-collision with the car behind", headline=True),
+        Metric("max_abs_lateral_accel", "m/s^2", "largest |lateral acceleration|", headline=True),
+        Metric("final_speed", "m/s", "speed at the end"),
+    )
+    plots = TRACKING_PLOTS
 
     def _traffic(self, rng):
         return self.background(rng), []
@@ -123,20 +147,47 @@ class Report000(Scenario):
     name = "report-000"
     summary = "report 000's experiments on the bare model (no SUMO): X_ref = 25t/15t, Y step or sine"
     config_cls = Report000Config
-    columns = ("t", "s", "d", "d_ref", "e_lat", "e_lon", "speed", "ds", "s_ref", "speed_ref", "Fx",
-               "delta", "lat_accel", "yaw_rate")
+    columns = (
+        Column("t", "s", "time"),
+        Column("s", "m", "X of the centre of gravity"),
+        Column("d", "m", "Y of the centre of gravity"),
+        Column("d_ref", "m", "Y reference"),
+        Column("e_lat", "m", "lateral error Y - Y_ref"),
+        Column("e_lon", "m", "longitudinal error X - X_ref"),
+        Column("speed", "m/s", "body longitudinal speed u"),
+        Column("ds", "m/s", "dX/dt"),
+        Column("s_ref", "m", "X reference"),
+        Column("speed_ref", "m/s", "dX_ref/dt"),
+        Column("Fx", "N", "longitudinal force per driven wheel as applied"),
+        Column("delta", "rad", "front steer angle as applied"),
+        Column("lat_accel", "m/s^2", "lateral acceleration"),
+        Column("yaw_rate", "rad/s", "yaw rate"),
+    )
+    metric_specs = TRACKING_METRICS + (
+        Metric("lane_change_duration", "s", "case=step: until |Y - Y_ref| stays within settle_band",
+               headline=True),
+        Metric("lane_change_completed", "-", "case=step: the lane change settled and the run completed"),
+        Metric("max_overshoot", "m", "case=step: largest excursion past the target", headline=True),
+        Metric("x_settling_time", "s", "until |X - X_ref| stays within x_band", headline=True),
+        Metric("max_abs_longitudinal_error", "m", "largest |X - X_ref|"),
+        Metric("max_abs_lateral_accel", "m/s^2", "largest |lateral acceleration|", headline=True),
+        Metric("final_speed", "m/s", "speed at the end"),
+    )
+    plots = TRACKING_PLOTS
     _RECORD_EVERY = 0.1  # s, ego outline in the recording
 
     def __init__(self, config, controller, **kwargs) -> None:
         super().__init__(config, controller, **kwargs)
         self.geometry = VehicleGeometry()
-        self.ego: EgoVehicle | None = None
+        self.ego: BicyclePlant | None = None
         self._next_pose = 0.0
 
     def _setup(self, rng) -> None:
         c = self.config
-        self.ego = EgoVehicle(NonlinearBicycle(), self.geometry, c.dt, c.substeps, max_steer=c.max_steer)
-        self.ego.state = (0.0, c.initial_speed, 0.0, 0.0, 0.0, 0.0)
+        # the report's raw model (no ABS): its published figures are compared with these
+        self.ego = BicyclePlant(NonlinearBicycle(), self.geometry, c.dt, c.substeps,
+                                ActuatorLimits(max_steer=c.max_steer),
+                                state=(0.0, c.initial_speed, 0.0, 0.0, 0.0, 0.0))
         self.controlled_ids = ("ego",)
         self._next_pose = 0.0
 
@@ -161,12 +212,15 @@ class Report000(Scenario):
 
     def _act(self, action) -> None:
         ego = self.ego
-        ego.step(*action)
+        ego.step(action)
         fx, delta = ego.applied
         o = self.obs
-        self.trace.append((o.t, o.s, o.d, o.d_ref, o.d - o.d_ref, o.s - o.s_ref, o.speed, o.ds,
-                           o.s_ref, o.ds_ref, fx, delta, ego.lateral_accel, o.yaw_rate,
-                           *self.controller.signals().values()))
+        self.trace.append(
+            self.controller.signals(),
+            t=o.t, s=o.s, d=o.d, d_ref=o.d_ref, e_lat=o.d - o.d_ref, e_lon=o.s - o.s_ref,
+            speed=o.speed, ds=o.ds, s_ref=o.s_ref, speed_ref=o.ds_ref, Fx=fx, delta=delta,
+            lat_accel=ego.lateral_accel, yaw_rate=o.yaw_rate,
+        )
 
     def _record_pose(self) -> None:
         """The ego's outline, every _RECORD_EVERY seconds (there is no SUMO step)."""

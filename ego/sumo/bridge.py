@@ -20,7 +20,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ego.models.geometry import VehicleGeometry
+from ego.models.geometry import (  # noqa: F401 - the pose conversions are importable from here too
+    VehicleGeometry,
+    cg_to_front_bumper,
+    front_bumper_to_cg,
+    sumo_angle_to_yaw,
+    sumo_poses_to_boxes,
+    yaw_to_sumo_angle,
+)
 from ego.sumo.net import sumo_binary
 
 # libsumo prints a pyarrow version warning to stdout on import unless told to be quiet;
@@ -29,42 +36,6 @@ os.environ.setdefault("LIBSUMO_AS_TRACI", "quiet")
 
 INF = math.inf
 _DEG = 180.0 / math.pi
-
-
-# --- pose conversions (pure) -------------------------------------------------------------
-
-def yaw_to_sumo_angle(psi: float) -> float:
-    """Model yaw (rad, counter-clockwise from +x) -> SUMO angle (deg, clockwise from north)."""
-    return (90.0 - psi * _DEG) % 360.0
-
-
-def sumo_angle_to_yaw(angle: float) -> float:
-    """SUMO angle (deg, clockwise from north) -> yaw (rad, counter-clockwise from +x), in (-pi, pi]."""
-    psi = math.radians(90.0 - angle)
-    return math.atan2(math.sin(psi), math.cos(psi))
-
-
-def cg_to_front_bumper(x: float, y: float, psi: float, cg_to_front: float) -> tuple[float, float]:
-    """Front bumper centre of a vehicle whose centre of gravity is at (x, y) with yaw psi."""
-    return x + cg_to_front * math.cos(psi), y + cg_to_front * math.sin(psi)
-
-
-def front_bumper_to_cg(xf: float, yf: float, psi: float, cg_to_front: float) -> tuple[float, float]:
-    """Inverse of :func:`cg_to_front_bumper`."""
-    return xf - cg_to_front * math.cos(psi), yf - cg_to_front * math.sin(psi)
-
-
-def sumo_poses_to_boxes(rows) -> np.ndarray:
-    """Rows (front x, front y, SUMO angle deg, length, width) -> (centre x, centre y, yaw
-    rad in (-pi, pi], length, width), vectorised."""
-    out = np.array(rows, dtype=float).reshape(-1, 5)
-    psi = np.radians(90.0 - out[:, 2])
-    half = 0.5 * out[:, 3]
-    c, s = np.cos(psi), np.sin(psi)
-    out[:, 0] -= half * c
-    out[:, 1] -= half * s
-    out[:, 2] = np.arctan2(s, c)
-    return out
 
 
 # --- configuration -----------------------------------------------------------------------
@@ -465,6 +436,28 @@ class SumoBridge:
             for lid in lane.getIDList()
             if not lid.startswith(":")
         }
+
+    # -- reads and settings the scenarios need (the bridge is their only door to SUMO) --
+    def speed(self, vid: str) -> float:
+        """Speed of any vehicle as SUMO has it (m/s)."""
+        return self._ls.vehicle.getSpeed(vid)
+
+    def acceleration(self, vid: str) -> float:
+        """Acceleration of any vehicle in SUMO's last step (m/s^2)."""
+        return self._ls.vehicle.getAcceleration(vid)
+
+    def lane_position(self, vid: str) -> float:
+        """Position of any vehicle's front bumper along its lane (m)."""
+        return self._ls.vehicle.getLanePosition(vid)
+
+    def driving_distance(self, vid: str, edge: str, pos: float, lane: int = 0) -> float:
+        """Route distance (m) from ``vid``'s front bumper to ``pos`` (m) on ``edge``; SUMO
+        answers a huge negative number once that point is behind the vehicle."""
+        return self._ls.vehicle.getDrivingDistance(vid, edge, pos, lane)
+
+    def keep_lane(self, vid: str) -> None:
+        """SUMO's driver of ``vid`` never changes lane (lane-change mode 0)."""
+        self.libsumo.vehicle.setLaneChangeMode(vid, 0)
 
 
 def ego_type(type_id: str, geometry: VehicleGeometry, decel: float = 7.0) -> VehicleType:
