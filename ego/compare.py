@@ -244,20 +244,29 @@ def write_plots(scenario: str, rows: Sequence[RunRow], controllers: list[str], o
     for r in rows:
         if r.controller not in first and r.traces:
             first[r.controller] = r
+    runs = [first[name] for name in controllers if name in first]
     for plot in plots:
-        column = plot.column
-        runs = [(name, first[name]) for name in controllers if name in first and column in first[name].traces]
-        if not runs:
-            continue  # no run got that far
-        unit = runs[0][1].units.get(column, "")
-        fig, ax = plt.subplots(figsize=(9, 4.5), dpi=110)
-        for name, r in runs:
-            ax.plot(r.traces["t"], r.traces[column], label=f"{name} ({r.status})", linewidth=1.3)
-        ax.set_xlabel(with_unit("time", runs[0][1].units.get("t", "s")))
-        ax.set_ylabel(with_unit(plot.label, unit))
-        ax.set_title(f"{scenario}: {plot.label} (seed {min(r.seed for r in rows)})")
-        ax.grid(True, alpha=0.3)
-        ax.legend(loc="best", fontsize=8)
-        fig.tight_layout()
-        fig.savefig(out / plot.file)
-        plt.close(fig)
+        fig = figure(scenario, plot, runs, min(r.seed for r in rows))
+        if fig is not None:
+            fig.savefig(out / plot.file)
+            plt.close(fig)
+
+
+def figure(scenario: str, plot: Plot, runs: Sequence[RunRow], seed: int):
+    """``plot`` of ``runs`` (one line each), the y axis labelled with the trace column's unit;
+    None when no run has the column (none got that far). A matplotlib Figure."""
+    import matplotlib.pyplot as plt
+
+    runs = [r for r in runs if plot.column in r.traces]
+    if not runs:
+        return None
+    fig, ax = plt.subplots(figsize=(9, 4.5), dpi=110)
+    for r in runs:
+        ax.plot(r.traces["t"], r.traces[plot.column], label=f"{r.controller} ({r.status})", linewidth=1.3)
+    ax.set_xlabel(with_unit("time", runs[0].units.get("t", "s")))
+    ax.set_ylabel(with_unit(plot.label, runs[0].units.get(plot.column, "")))
+    ax.set_title(f"{scenario}: {plot.label} (seed {seed})")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    fig.tight_layout()
+    return fig

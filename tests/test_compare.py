@@ -9,9 +9,10 @@ from concurrent.futures import ThreadPoolExecutor
 import pytest
 from rerun.chunk import RrdReader
 
-from ego.compare import _one, compare
+from ego.compare import _one, compare, figure
 from ego.params import ConfigError
 from ego.runner import RunSpec
+from ego.scenarios.trace import Plot
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
@@ -59,6 +60,12 @@ def test_a_run_row_keeps_the_plotted_columns_with_their_units(point_mass, tmp_pa
     assert set(row.traces) == {"t", "speed", "e_lon"}  # only what the plots need
     assert row.units == {"t": "s", "speed": "m/s", "e_lon": "m"}
     assert len(row.traces["speed"]) == 100
+    fig = figure("point-mass", point_mass.plots[1], [row], 0)
+    ax = fig.axes[0]
+    assert ax.get_ylabel() == "position error [m]" and ax.get_xlabel() == "time [s]"
+    assert ax.get_title() == "point-mass: position error (seed 0)"
+    assert [line.get_label() for line in ax.lines] == ["pid (completed)"]
+    assert figure("point-mass", Plot("Fx", "fx.png", "force"), [row], 0) is None  # not kept
 
 
 def test_unknown_scenario_stops_compare_before_anything_runs(tmp_path):
