@@ -11,7 +11,8 @@ from rerun.chunk import RrdReader
 
 from ego.compare import _one, compare, figure
 from ego.params import ConfigError
-from ego.runner import RunSpec
+from ego.runner import RunSpec, declared_columns
+from ego.scenarios import SCENARIOS
 from ego.scenarios.trace import Plot
 
 PNG = b"\x89PNG\r\n\x1a\n"
@@ -66,6 +67,23 @@ def test_a_run_row_keeps_the_plotted_columns_with_their_units(point_mass, tmp_pa
     assert ax.get_title() == "point-mass: position error (seed 0)"
     assert [line.get_label() for line in ax.lines] == ["pid (completed)"]
     assert figure("point-mass", Plot("Fx", "fx.png", "force"), [row], 0) is None  # not kept
+
+
+@pytest.mark.parametrize("name", list(SCENARIOS))
+def test_every_scenario_declares_what_compare_shows(name):
+    # passes once every scenario declares its columns, metrics and plots (the kit's ports)
+    cls = SCENARIOS[name]
+    config = cls.default_config({})
+    columns = {c.name: c.unit for c in declared_columns(cls, config)}
+    plots = cls.compare_plots(config)
+    for plot in plots:
+        assert isinstance(plot, Plot) and plot.column in columns, plot
+        assert plot.file.endswith(".png") and "[" not in plot.label, plot
+    assert len({p.file for p in plots}) == len(plots)
+    metrics = [m.name for m in cls.metrics_declared(config)]
+    assert len(set(metrics)) == len(metrics)
+    assert not {"units", "events", "record"} & set(metrics)  # keys ego run --json adds
+    assert any(m.headline for m in cls.metrics_declared(config))
 
 
 def test_unknown_scenario_stops_compare_before_anything_runs(tmp_path):
