@@ -313,8 +313,8 @@ def _compare(args) -> int:
     out = Path(args.out)
     rows = compare(args.scenario, names, args.seeds, parse_overrides(args.overrides), out, args.jobs)
     print((out / "metrics.md").read_text(), end="")
-    pngs = ", ".join(sorted(p.name for p in out.glob("*.png")))
-    print(f"\nwrote {out}/metrics.csv, {UNITS_FILE}, metrics.md, {pngs} and {len(rows)} recordings in {out}/runs/")
+    files = ["metrics.csv", UNITS_FILE, "metrics.md"] + sorted(p.name for p in out.glob("*.png"))
+    print(f"\nwrote into {out}/: {', '.join(files)} and {len(rows)} recordings in runs/")
     return EXIT_OK
 
 

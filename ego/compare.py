@@ -207,6 +207,10 @@ def headline_keys(rows: Sequence[RunRow], declared: Sequence[Metric]) -> list[st
     return headline_names(declared, (n for r in rows for n in r.metrics))
 
 
+def _table_row(cells: Sequence[str]) -> str:
+    return "| " + " | ".join(cells) + " |"
+
+
 def write_markdown(scenario: str, rows: Sequence[RunRow], controllers: list[str], path: Path,
                    declared: Sequence[Metric]) -> None:
     present = headline_keys(rows, declared)
@@ -216,7 +220,7 @@ def write_markdown(scenario: str, rows: Sequence[RunRow], controllers: list[str]
              "Mean +- standard deviation over seeds; (k/n) when only k of n runs have the value; "
              "k/n for a yes/no metric: k of n runs say yes.",
              "",
-             "| controller | runs | " + " | ".join(with_unit(k, units[k]) for k in present) + " |",
+             _table_row(["controller", "runs"] + [with_unit(k, units[k]) for k in present]),
              "|---|---|" + "---|" * len(present)]
     for name in controllers:
         mine = [r for r in rows if r.controller == name]
@@ -225,7 +229,7 @@ def write_markdown(scenario: str, rows: Sequence[RunRow], controllers: list[str]
             counts[r.status] = counts.get(r.status, 0) + 1
         status = ", ".join(f"{n} {s}" for s, n in counts.items())
         cells = [_mean_spread([r.metrics.get(k) for r in mine]) for k in present]
-        lines.append(f"| {name} | {status} | " + " | ".join(cells) + " |")
+        lines.append(_table_row([name, status] + cells))
     errors = [r for r in rows if r.error]
     if errors:
         lines += ["", "Errors:", ""] + [f"- {r.controller} seed {r.seed}: {r.error}" for r in errors]
