@@ -6,6 +6,14 @@
     ego train narma-l2 [--seed N] [--samples N] [--epochs N] [--out PATH]
     ego tune lane-centering [--quick] [--workers N] [--seed N] [--drives V[:OFF],...] [--out PATH]
 
+Units come from the scenario's declarations: ``ego run`` prints each numeric metric
+followed by its unit, and ``--json`` adds a top-level ``"units"`` object (flattened metric
+name, e.g. ``settle_times.brake@10s``, -> unit; ``-`` for a pure number, a code or text,
+``""`` where the scenario declares none) beside the metrics and ``"events"``. ``ego list
+--json`` gives per scenario its ``parameters``, ``metrics`` (name, unit, description,
+headline; a name ending in ``.`` stands for every metric under it) and trace ``columns``
+(name, unit, description), and per controller its ``parameters``.
+
 Exit status: 0 the run completed; 1 it ended in a collision, diverged or timed out
 (the metrics are still printed); 2 bad input (unknown name, bad value), with one line
 on stderr naming it and what is allowed.
@@ -161,8 +169,13 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _catalogue() -> dict:
+    """Everything ``ego list`` shows. Per scenario: its parameters, every metric a run
+    reports (with its unit, and whether ``ego compare``'s table shows it) and its trace
+    columns for the default configuration (the controller's signals follow, unitless)."""
     from ego.control import CONTROLLERS, TASKS
+    from ego.runner import declared_columns
     from ego.scenarios import SCENARIOS
+    from ego.scenarios.base import COMMON_METRICS, COMMON_TAIL_METRICS
 
     def params(cls) -> list[dict]:
         return [
@@ -171,10 +184,20 @@ def _catalogue() -> dict:
             for i in describe(cls)
         ]
 
+    def scenario(name: str, cls) -> dict:
+        config = cls.default_config({})
+        return {
+            "name": name, "task": cls.task, "summary": cls.summary,
+            "parameters": params(cls.config_cls),
+            "metrics": [{"name": m.name, "unit": m.unit, "description": m.description, "headline": m.headline}
+                        for m in cls.metrics_declared(config)],
+            "columns": [{"name": c.name, "unit": c.unit, "description": c.description}
+                        for c in declared_columns(cls, config)],
+        }
+
     return {
-        "scenarios": [{"name": n, "task": c.task, "summary": c.summary,
-                       "parameters": params(c.config_cls)}
-                      for n, c in SCENARIOS.items()],
+        "scenarios": [scenario(n, c) for n, c in SCENARIOS.items()],
+        "common_metrics": [m.name for m in COMMON_METRICS + COMMON_TAIL_METRICS],
         "tasks": [{"name": t, "summary": TASKS[t]} for t in CONTROLLERS],
         "controllers": [{"name": n, "task": t, "summary": s.summary, "parameters": params(s.params)}
                         for t, specs in CONTROLLERS.items() for n, s in specs.items()],
@@ -182,6 +205,8 @@ def _catalogue() -> dict:
 
 
 def _print_catalogue(cat: dict) -> None:
+    from ego.scenarios.metrics import with_unit
+
     def table(rows: list[dict]) -> None:
         if not rows:
             print("    (no parameters)")
@@ -192,10 +217,28 @@ def _print_catalogue(cat: dict) -> None:
             unit = "" if r["unit"] in ("", "-") else f" {r['unit']}"
             print(f"    {r['name']:<{w}}  {default + unit:<14}  {r['description']}")
 
+    def metrics(rows: list[dict]) -> None:
+        own = [r for r in rows if r["name"] not in common]
+        if not own:
+            return
+        print("    metrics (* in ego compare's table):")
+        # a prefix ("settle_times.") stands for every metric under it
+        labels = [with_unit(r["name"] + ("*" if r["name"].endswith(".") else ""), r["unit"])
+                  + (" *" if r["headline"] else "") for r in own]
+        w = max(map(len, labels))
+        for label, r in zip(labels, own):
+            print(f"      {label:<{w}}  {r['description']}".rstrip())
+
+    common = set(cat["common_metrics"])
+    every = {m["name"]: m for s in cat["scenarios"] for m in s["metrics"] if m["name"] in common}
     print("Scenarios (ego run SCENARIO ...; parameters with --set key=value):")
+    if every:
+        print("Every run reports " + ", ".join(with_unit(n, every[n]["unit"]) for n in cat["common_metrics"]
+                                             if n in every) + " and the scenario's metrics below.")
     for s in cat["scenarios"]:
         print(f"\n  {s['name']} [{s['task']} task]: {s['summary']}")
         table(s["parameters"])
+        metrics(s["metrics"])
     for task in cat["tasks"]:
         print(f"\nControllers of the {task['name']} task ({task['summary']}; --controller NAME, "
               "parameters with --set key=value):")
@@ -213,7 +256,9 @@ def _fmt(value) -> str:
     return str(value)
 
 
-def _print_result(result) -> None:
+def _print_result(result, units: dict[str, str]) -> None:
+    """The run's metrics as text, each number followed by its unit (``units``: flattened
+    metric -> unit)."""
     from ego.scenarios.metrics import flatten
 
     m = flatten(result.metrics)
@@ -223,7 +268,10 @@ def _print_result(result) -> None:
     width = max(len(k) for k in m)
     for key, value in m.items():
         if key not in skip:
-            print(f"  {key:<{width}}  {_fmt(value)}")
+            unit = units.get(key, "")
+            number = isinstance(value, (int, float)) and not isinstance(value, bool)
+            suffix = f" {unit}" if number and unit not in ("", "-") else ""
+            print(f"  {key:<{width}}  {_fmt(value)}{suffix}")
     if result.events:
         print("events:")
         for e in result.events:
@@ -231,19 +279,22 @@ def _print_result(result) -> None:
 
 
 def _run(args) -> int:
-    from ego.runner import RunSpec, run
+    from ego.runner import RunSpec, declared_metrics, run
+    from ego.scenarios.metrics import flatten, metric_units
 
     spec = RunSpec(args.scenario, args.controller, seed=args.seed,
                    overrides=parse_overrides(args.overrides), record=args.record)
     result = run(spec)
+    units = metric_units(declared_metrics(spec), flatten(result.metrics))
     if args.json:
         out = dict(result.metrics)
         out["events"] = [e.as_dict() for e in result.events]
+        out["units"] = units
         if args.record:
             out["record"] = args.record
         print(json.dumps(out))
     else:
-        _print_result(result)
+        _print_result(result, units)
         if args.record:
             print(f"recording: {args.record}  (review with: rerun {args.record})")
     return EXIT_OK if result.status == "completed" else EXIT_NOT_COMPLETED
@@ -252,7 +303,7 @@ def _run(args) -> int:
 def _compare(args) -> int:
     from pathlib import Path
 
-    from ego.compare import compare
+    from ego.compare import UNITS_FILE, compare
 
     if args.seeds < 1:
         raise ConfigError(f"bad value for --seeds: {args.seeds} (expected a whole number of at least 1)")
@@ -262,8 +313,8 @@ def _compare(args) -> int:
     out = Path(args.out)
     rows = compare(args.scenario, names, args.seeds, parse_overrides(args.overrides), out, args.jobs)
     print((out / "metrics.md").read_text(), end="")
-    pngs = ", ".join(sorted(p.name for p in out.glob("*.png")))
-    print(f"\nwrote {out}/metrics.csv, metrics.md, {pngs} and {len(rows)} recordings in {out}/runs/")
+    files = ["metrics.csv", UNITS_FILE, "metrics.md"] + sorted(p.name for p in out.glob("*.png"))
+    print(f"\nwrote into {out}/: {', '.join(files)} and {len(rows)} recordings in runs/")
     return EXIT_OK
 
 

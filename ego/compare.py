@@ -2,15 +2,23 @@
 
 Each run is a :class:`~ego.runner.RunSpec` executed in a worker process (libsumo allows one
 simulation per process), writing its own ``.rrd``. A run that fails or diverges becomes a
-row with its status; it never stops the comparison. Outputs in ``--out``:
+row with its status; it never stops the comparison. What to show comes from the scenario's
+declarations (:mod:`ego.scenarios.trace`): this module keeps no table of its own.
+Outputs in ``--out``:
 
 * ``metrics.csv`` - one row per run, every metric (nested ones as dotted columns,
-  ``followers.f1.min_gap``);
+  ``followers.f1.min_gap``); the header is the first row, so csv readers and pandas load it
+  as it is;
+* ``metrics_units.csv`` - the units of metrics.csv, a sidecar rather than a units row that
+  would break those readers: header ``metric,unit``, then one row per column of
+  metrics.csv in the same order; ``-`` for a pure number, a code or text, empty where the
+  scenario declares no unit;
 * ``metrics.md`` - one row per controller: runs by status, then mean +- standard deviation
-  over seeds of the scenario's headline metrics;
-* ``lateral_error.png``, ``speed.png``, ``steering.png``, ``fx.png`` (and the plots the
-  scenario adds: the curve's e_d, e_a, a_x; the platoon's spacing error and acceleration of
-  its first and last follower) - the first seed of every controller, one line each;
+  over seeds of the scenario's headline metrics (``Metric(..., headline=True)``), each
+  header with its unit (``min_gap_front [m]``; a pure number has none);
+* one PNG per plot the scenario declares (``Scenario.compare_plots``, file names its own) -
+  the first seed of every controller, one line each, the y axis labelled with the trace
+  column's unit;
 * ``runs/<controller>-seed<N>.rrd`` - every run's recording.
 """
 
@@ -23,7 +31,7 @@ import os
 import sys
 import time
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -34,28 +42,12 @@ from ego.params import ConfigError, describe
 from ego.processes import main_module_hidden
 from ego.runner import RunSpec, configure, run, split_overrides
 from ego.scenarios import scenario_class
-from ego.scenarios.metrics import flatten
+from ego.scenarios.metrics import flatten, headline_names, metric_units, with_unit
+from ego.scenarios.trace import Metric, Plot
 
-#: trace columns kept for the plots: (column, file, y label)
-PLOTS = (
-    ("e_lat", "lateral_error.png", "lateral error (actual - reference) [m]"),
-    ("e_d", "e_d.png", "e_d = distance to the arc centre - R [m]"),
-    ("e_a", "e_a.png", "e_a = heading - tangent [rad]"),
-    ("speed", "speed.png", "speed [m/s]"),
-    ("delta", "steering.png", "front steer angle [rad]"),
-    ("Fx", "fx.png", "Fx per driven wheel [N]"),
-    ("a_x", "a_x.png", "axial acceleration [m/s^2]"),
-)
-#: headline metrics for metrics.md, in order, when the scenario reports them
-HEADLINE = (
-    "max_abs_ed", "final_ed", "max_abs_ea", "final_ea", "time_in_arc", "entry_speed", "exit_speed",
-    "lane_change_duration", "max_overshoot", "min_ttc_front", "min_ttc_rear", "min_gap_front",
-    "rms_lateral_error", "max_abs_lateral_error_after_10s", "rms_speed_error", "x_settling_time",
-    "max_abs_lateral_accel",
-    # the platoon (a key ending in "." stands for every flattened metric under it)
-    "rms_spacing_error", "max_abs_spacing_error", "min_gap", "min_ttc", "max_abs_accel", "max_abs_jerk",
-    "settle_times.", "string_stable", "frequency_gain.",
-)
+#: the columns metrics.csv starts with, before the metrics
+RUN_COLUMNS = ("controller", "seed", "status", "error")
+UNITS_FILE = "metrics_units.csv"
 
 
 @dataclass
@@ -64,14 +56,15 @@ class RunRow:
     seed: int
     status: str
     metrics: dict
-    traces: dict = field(default_factory=dict)  # column -> (t, values)
+    traces: dict = field(default_factory=dict)  # column -> values ("t" too)
     error: str = ""
+    units: dict = field(default_factory=dict)  # column of traces -> unit
 
 
-def plots_of(spec: RunSpec) -> tuple[tuple[str, str, str], ...]:
-    """The standard plots and the scenario's own: (column, file, y label)."""
+def plots_of(spec: RunSpec) -> tuple[Plot, ...]:
+    """The plots the scenario declares for this run's configuration."""
     cls, config, _, _ = configure(spec)
-    return PLOTS + cls.compare_plots(config)
+    return tuple(cls.compare_plots(config))
 
 
 def _one(spec: RunSpec) -> RunRow:
@@ -81,9 +74,10 @@ def _one(spec: RunSpec) -> RunRow:
         result = run(spec)
     except Exception as exc:  # noqa: BLE001 - a broken run is a row, not a crash
         return RunRow(spec.controller, spec.seed, "error", {}, error=f"{type(exc).__name__}: {exc}")
-    t = result.column("t")
-    traces = {c: result.column(c) for c, _, _ in plots if c in result.columns}
-    return RunRow(spec.controller, spec.seed, result.status, flatten(result.metrics), {"t": t, **traces})
+    kept = ["t"] + [p.column for p in plots if p.column in result.columns]
+    traces = {c: result.column(c) for c in kept}
+    units = {c: result.units.get(c, "") for c in kept}
+    return RunRow(spec.controller, spec.seed, result.status, flatten(result.metrics), traces, units=units)
 
 
 def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict, out: Path) -> list[RunSpec]:
@@ -123,19 +117,29 @@ def _progress(done: int, total: int, row: RunRow, started: float) -> None:
 
 
 def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict, out: Path,
-            jobs: int | None = None, progress: Callable | None = _progress) -> list[RunRow]:
-    """Run everything, write the outputs, return the rows (in controller, seed order)."""
+            jobs: int | None = None, progress: Callable | None = _progress,
+            executor: Executor | None = None) -> list[RunRow]:
+    """Run everything, write the outputs, return the rows (in controller, seed order).
+
+    The runs go to a pool of ``jobs`` worker processes (default: one per CPU; libsumo allows
+    one simulation per process), or to ``executor`` when given (shut down at the end; e.g.
+    threads for a scenario without SUMO).
+    """
     out = Path(out)
     specs = plan(scenario, controllers, seeds, overrides, out)
     for spec in specs:  # every value too (a bad --set value) before any process starts
         cls, config, ctrl, params = configure(spec)
         cls.build_controller(ctrl, params, config)
+    cls, config, _, _ = configure(specs[0])
+    plots = tuple(cls.compare_plots(config))
+    declared = cls.metrics_declared(config)
     (out / "runs").mkdir(parents=True, exist_ok=True)
-    jobs = max(1, min(jobs or os.cpu_count() or 1, len(specs)))
+    if executor is None:
+        jobs = max(1, min(jobs or os.cpu_count() or 1, len(specs)))
+        executor = ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("forkserver"))
     rows: list[RunRow] = []
     started = time.perf_counter()
-    ctx = multiprocessing.get_context("forkserver")
-    with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pool:
+    with executor as pool:
         with main_module_hidden():  # workers start on the first submissions
             futures = [pool.submit(_one, spec) for spec in specs]
         for future in as_completed(futures):
@@ -144,25 +148,41 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
                 progress(len(rows), len(specs), rows[-1], started)
     order = {(s.controller, s.seed): i for i, s in enumerate(specs)}
     rows.sort(key=lambda r: order[(r.controller, r.seed)])
-    write_csv(rows, out / "metrics.csv")
-    write_markdown(scenario, rows, list(controllers), out / "metrics.md")
-    write_plots(scenario, rows, list(controllers), out, plots_of(specs[0]))
+    columns = csv_columns(rows)
+    write_csv(rows, out / "metrics.csv", columns)
+    write_units(columns, declared, out / UNITS_FILE)
+    write_markdown(scenario, rows, list(controllers), out / "metrics.md", declared)
+    write_plots(scenario, rows, list(controllers), out, plots)
     return rows
 
 
-def write_csv(rows: Sequence[RunRow], path: Path) -> None:
-    """One row per run, one column per (flattened) metric."""
+def csv_columns(rows: Sequence[RunRow]) -> list[str]:
+    """The columns of metrics.csv: the run's own, then every metric in the order they come."""
     keys: list[str] = []
     for r in rows:
         keys += [k for k in r.metrics if k not in keys]
-    head = ["controller", "seed", "status", "error"]
-    keys = [k for k in keys if k not in head]
+    return list(RUN_COLUMNS) + [k for k in keys if k not in RUN_COLUMNS]
+
+
+def write_csv(rows: Sequence[RunRow], path: Path, columns: Sequence[str] | None = None) -> None:
+    """One row per run, one column per (flattened) metric."""
+    columns = list(columns or csv_columns(rows))
+    keys = columns[len(RUN_COLUMNS):]
     with open(path, "w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(head + keys)
+        w.writerow(columns)
         for r in rows:
             w.writerow([r.controller, r.seed, r.status, r.error] + ["" if r.metrics.get(k) is None
                                                                   else r.metrics.get(k) for k in keys])
+
+
+def write_units(columns: Sequence[str], declared: Sequence[Metric], path: Path) -> None:
+    """metrics.csv's sidecar: ``metric,unit``, one row per column of metrics.csv, in order."""
+    units = {**dict.fromkeys(RUN_COLUMNS, "-"), **metric_units(declared, columns[len(RUN_COLUMNS):])}
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["metric", "unit"])
+        w.writerows([c, units[c]] for c in columns)
 
 
 def _mean_spread(values: list) -> str:
@@ -182,26 +202,25 @@ def _mean_spread(values: list) -> str:
     return text
 
 
-def headline_keys(rows: Sequence[RunRow]) -> list[str]:
-    """The HEADLINE metrics the rows have, prefixes ("settle_times.") expanded in order."""
-    keys: list[str] = []
-    for k in HEADLINE:
-        if k.endswith("."):
-            keys += [name for name in dict.fromkeys(n for r in rows for n in r.metrics)
-                     if name.startswith(k) and name not in keys]
-        elif any(k in r.metrics for r in rows):
-            keys.append(k)
-    return keys
+def headline_keys(rows: Sequence[RunRow], declared: Sequence[Metric]) -> list[str]:
+    """The scenario's headline metrics the rows have, prefixes ("settle_times.") expanded in order."""
+    return headline_names(declared, (n for r in rows for n in r.metrics))
 
 
-def write_markdown(scenario: str, rows: Sequence[RunRow], controllers: list[str], path: Path) -> None:
-    present = headline_keys(rows)
+def _table_row(cells: Sequence[str]) -> str:
+    return "| " + " | ".join(cells) + " |"
+
+
+def write_markdown(scenario: str, rows: Sequence[RunRow], controllers: list[str], path: Path,
+                   declared: Sequence[Metric]) -> None:
+    present = headline_keys(rows, declared)
+    units = metric_units(declared, present)
     lines = [f"# {scenario}: {len(rows)} runs",
              "",
              "Mean +- standard deviation over seeds; (k/n) when only k of n runs have the value; "
              "k/n for a yes/no metric: k of n runs say yes.",
              "",
-             "| controller | runs | " + " | ".join(present) + " |",
+             _table_row(["controller", "runs"] + [with_unit(k, units[k]) for k in present]),
              "|---|---|" + "---|" * len(present)]
     for name in controllers:
         mine = [r for r in rows if r.controller == name]
@@ -210,7 +229,7 @@ def write_markdown(scenario: str, rows: Sequence[RunRow], controllers: list[str]
             counts[r.status] = counts.get(r.status, 0) + 1
         status = ", ".join(f"{n} {s}" for s, n in counts.items())
         cells = [_mean_spread([r.metrics.get(k) for r in mine]) for k in present]
-        lines.append(f"| {name} | {status} | " + " | ".join(cells) + " |")
+        lines.append(_table_row([name, status] + cells))
     errors = [r for r in rows if r.error]
     if errors:
         lines += ["", "Errors:", ""] + [f"- {r.controller} seed {r.seed}: {r.error}" for r in errors]
@@ -218,7 +237,8 @@ def write_markdown(scenario: str, rows: Sequence[RunRow], controllers: list[str]
 
 
 def write_plots(scenario: str, rows: Sequence[RunRow], controllers: list[str], out: Path,
-                plots: Sequence[tuple[str, str, str]] = PLOTS) -> None:
+                plots: Sequence[Plot]) -> None:
+    """One PNG per declared plot whose column some controller's first run has."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -228,20 +248,29 @@ def write_plots(scenario: str, rows: Sequence[RunRow], controllers: list[str], o
     for r in rows:
         if r.controller not in first and r.traces:
             first[r.controller] = r
-    for column, filename, label in plots:
-        if not any(column in r.traces for r in first.values()):
-            continue  # not a column of this scenario
-        fig, ax = plt.subplots(figsize=(9, 4.5), dpi=110)
-        for name in controllers:
-            r = first.get(name)
-            if r is None or column not in r.traces:
-                continue
-            ax.plot(r.traces["t"], r.traces[column], label=f"{name} ({r.status})", linewidth=1.3)
-        ax.set_xlabel("time [s]")
-        ax.set_ylabel(label)
-        ax.set_title(f"{scenario}: {label.split(' [')[0]} (seed {min(r.seed for r in rows)})")
-        ax.grid(True, alpha=0.3)
-        ax.legend(loc="best", fontsize=8)
-        fig.tight_layout()
-        fig.savefig(out / filename)
-        plt.close(fig)
+    runs = [first[name] for name in controllers if name in first]
+    for plot in plots:
+        fig = figure(scenario, plot, runs, min(r.seed for r in rows))
+        if fig is not None:
+            fig.savefig(out / plot.file)
+            plt.close(fig)
+
+
+def figure(scenario: str, plot: Plot, runs: Sequence[RunRow], seed: int):
+    """``plot`` of ``runs`` (one line each), the y axis labelled with the trace column's unit;
+    None when no run has the column (none got that far). A matplotlib Figure."""
+    import matplotlib.pyplot as plt
+
+    runs = [r for r in runs if plot.column in r.traces]
+    if not runs:
+        return None
+    fig, ax = plt.subplots(figsize=(9, 4.5), dpi=110)
+    for r in runs:
+        ax.plot(r.traces["t"], r.traces[plot.column], label=f"{r.controller} ({r.status})", linewidth=1.3)
+    ax.set_xlabel(with_unit("time", runs[0].units.get("t", "s")))
+    ax.set_ylabel(with_unit(plot.label, runs[0].units.get(plot.column, "")))
+    ax.set_title(f"{scenario}: {plot.label} (seed {seed})")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    fig.tight_layout()
+    return fig

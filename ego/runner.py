@@ -7,10 +7,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ego.control import controller_spec
+from ego.control import CONTROLLERS, controller_spec
 from ego.params import ConfigError, apply_overrides, describe, unknown_parameter
 from ego.record import RerunRecorder
-from ego.scenarios import RunResult, scenario_class
+from ego.scenarios import RunResult, Scenario, scenario_class
+from ego.scenarios.trace import Column, Metric
 
 
 @dataclass(frozen=True)
@@ -65,3 +66,19 @@ def build(spec: RunSpec):
 def run(spec: RunSpec) -> RunResult:
     """Run one scenario to its end; SUMO and the recording are closed whatever happens."""
     return build(spec).run()
+
+
+def declared_metrics(spec: RunSpec) -> tuple[Metric, ...]:
+    """Every metric a run of ``spec`` reports, as its scenario declares them (units, headline)."""
+    cls, config, _, _ = configure(spec)
+    return cls.metrics_declared(config)
+
+
+def declared_columns(cls: type[Scenario], config) -> tuple[Column, ...]:
+    """The trace columns a run of ``cls`` with ``config`` writes before its controller's
+    signals (which are unitless). Some depend on the configuration (one set per platoon
+    follower), so the scenario is built - with its task's ``none`` controller, no SUMO
+    started - and asked."""
+    spec = CONTROLLERS[cls.task]["none"]
+    scenario = cls(config, cls.build_controller(spec, spec.params(), config), controller_name="none")
+    return tuple(scenario.trace_columns())

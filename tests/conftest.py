@@ -17,3 +17,13 @@ def fuzzy_ready():
     from ego.control import fuzzy
 
     return fuzzy.evaluator()
+
+
+@pytest.fixture
+def point_mass(monkeypatch):
+    """The test-only point-mass scenario (no SUMO), registered for the test's duration."""
+    from ego.scenarios import SCENARIOS
+    from point_mass import PointMass
+
+    monkeypatch.setitem(SCENARIOS, PointMass.name, PointMass)
+    return PointMass

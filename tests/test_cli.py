@@ -6,7 +6,11 @@ import sys
 
 import pytest
 
+from ego.cli import main
+from ego.scenarios.base import COMMON_METRICS, COMMON_TAIL_METRICS
+
 EGO = [sys.executable, "-m", "ego"]
+COMMON = {m.name for m in COMMON_METRICS + COMMON_TAIL_METRICS}
 
 
 def ego(*args, env=None):
@@ -43,6 +47,84 @@ def test_list_names_every_parameter_with_default_and_unit():
     assert "scale-model" in platoon["variant"]["allowed"]
 
 
+def test_list_json_gives_every_scenario_its_metrics_and_columns_with_units():
+    # passes once every scenario declares its columns, metrics and plots (the kit's ports)
+    out = ego("list", "--json")
+    assert out.returncode == 0, out.stderr
+    cat = json.loads(out.stdout)
+    from ego.scenarios import SCENARIOS
+
+    assert [s["name"] for s in cat["scenarios"]] == list(SCENARIOS)
+    for s in cat["scenarios"]:
+        names = [m["name"] for m in s["metrics"]]
+        assert set(names) >= COMMON and set(names) - COMMON, f"{s['name']} declares no metric of its own"
+        for m in s["metrics"]:
+            assert m["unit"] and isinstance(m["headline"], bool) and isinstance(m["description"], str), m
+        assert s["columns"][0] == {"name": "t", "unit": "s", "description": s["columns"][0]["description"]}
+        assert all(c["unit"] for c in s["columns"]), s["name"]
+    for c in cat["controllers"]:
+        assert all(p["unit"] for p in c["parameters"]), c["name"]
+
+
+def test_list_shows_the_scenario_declarations(point_mass, capsys, monkeypatch):
+    import ego.scenarios
+
+    monkeypatch.setattr(ego.scenarios, "SCENARIOS", {point_mass.name: point_mass})  # alone, whatever the others
+    assert main(["list", "--json"]) == 0
+    cat = json.loads(capsys.readouterr().out)
+    pm = {s["name"]: s for s in cat["scenarios"]}["point-mass"]
+    assert pm["task"] == "tracking"
+    assert {p["name"]: p["unit"] for p in pm["parameters"]} == {
+        "dt": "s", "substeps": "-", "duration": "s", "ref_speed": "m/s", "mass": "kg"}
+    own = [m for m in pm["metrics"] if m["name"] not in COMMON]
+    assert own == [
+        {"name": "rms_speed_error", "unit": "m/s", "description": "RMS of speed - reference speed",
+         "headline": True},
+        {"name": "final_position", "unit": "m", "description": "position at the end", "headline": False},
+        {"name": "settle_times.", "unit": "s",
+         "description": "time until |speed error| stays within each band", "headline": True},
+        {"name": "reached_speed", "unit": "-",
+         "description": "the speed came within 1 m/s of the reference", "headline": True},
+    ]
+    assert {"name": "sim_time", "unit": "s", "description": "simulated time", "headline": False} in pm["metrics"]
+    assert [(c["name"], c["unit"]) for c in pm["columns"]] == [
+        ("t", "s"), ("s", "m"), ("speed", "m/s"), ("e_lon", "m"), ("Fx", "N")]
+    tracking = {c["name"]: c for c in cat["controllers"] if c["task"] == "tracking"}
+    assert "kp_lat" in {p["name"] for p in tracking["pid"]["parameters"]}
+    assert main(["list"]) == 0
+    text = capsys.readouterr().out
+    assert "rms_speed_error [m/s] *  RMS of speed - reference speed" in text
+    assert "final_position [m]       position at the end" in text
+    assert "settle_times.* [s] *" in text and "reached_speed *" in text and "sim_time [s]" in text
+
+
+def test_run_text_gives_every_number_its_unit(point_mass, capsys):
+    assert main(["run", "point-mass", "-c", "pid"]) == 0
+    lines = {line.split()[0]: line.split()[1:] for line in capsys.readouterr().out.splitlines()[1:]}
+    assert lines["rms_speed_error"] == ["3.999", "m/s"]
+    assert lines["final_position"][1] == "m"
+    assert lines["settle_times.band5"] == ["0.790", "s"] and lines["settle_times.band1"] == ["-"]
+    assert lines["reached_speed"] == ["True"] and lines["steps"] == ["400"]
+    assert lines["sim_time"] == ["4.000", "s"] and lines["collision"] == ["False"]
+
+
+def test_run_json_carries_a_units_map_beside_the_metrics(point_mass, capsys):
+    assert main(["run", "point-mass", "-c", "fuzzy", "--json", "--set", "duration=2"]) == 0
+    m = json.loads(capsys.readouterr().out)
+    assert m["status"] == "completed" and m["steps"] == 200 and set(m["settle_times"]) == {"band5", "band1"}
+    assert m["units"] == {
+        "scenario": "-", "controller": "-", "seed": "-", "status": "-", "status_detail": "-", "collision": "-",
+        "collision_with": "-", "rms_speed_error": "m/s", "final_position": "m", "settle_times.band5": "s",
+        "settle_times.band1": "s", "reached_speed": "-", "sim_time": "s", "wall_time": "s", "steps": "-"}
+
+
+def test_bad_input_to_a_declared_scenario_is_one_line(point_mass, capsys):
+    assert main(["run", "point-mass", "-c", "pid", "--set", "ref_speed=fast"]) == 2
+    out = capsys.readouterr()
+    assert out.out == "" and out.err == ("ego: error: bad value for ref_speed: 'fast' "
+                                         "(expected a number from 0 to 40 (m/s))\n")
+
+
 @pytest.mark.sumo
 def test_platoon_run_prints_per_follower_metrics_and_json(tmp_path):
     text = ego("run", "platoon", "-c", "pid", "--set", "duration=20")
@@ -74,6 +156,7 @@ def test_run_json_is_one_object_with_the_documented_fields(tmp_path):
                 "max_abs_lateral_accel", "sim_time", "wall_time", "steps"):
         assert key in m, key
     assert m["status"] == "completed" and m["sim_time"] == 15.0 and m["steps"] == 1500
+    assert m["units"]["min_ttc_front"] == "s" and m["units"]["max_abs_lateral_accel"] == "m/s^2"
     assert rec.exists() and rec.stat().st_size > 0
 
 

@@ -1,18 +1,98 @@
-"""ego compare: parallel runs, every file, failed runs as rows."""
+"""ego compare: parallel runs, every file, failed runs as rows; what it shows comes from the
+scenario's declarations (the point-mass scenario needs no SUMO)."""
 
 import csv
 import subprocess
 import sys
+from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 from rerun.chunk import RrdReader
 
-from ego.compare import _one
-from ego.runner import RunSpec
+from ego.compare import _one, compare, figure
+from ego.params import ConfigError
+from ego.runner import RunSpec, declared_columns
+from ego.scenarios import SCENARIOS
+from ego.scenarios.trace import Plot
 
-pytestmark = pytest.mark.sumo
+PNG = b"\x89PNG\r\n\x1a\n"
 
 
+def test_compare_shows_what_the_scenario_declares_with_units(point_mass, tmp_path):
+    out = tmp_path / "cmp"
+    rows = compare("point-mass", ["pid", "fuzzy"], 2, {}, out, progress=None,
+                   executor=ThreadPoolExecutor(max_workers=2))
+    assert [(r.controller, r.seed, r.status) for r in rows] == [
+        ("pid", 0, "completed"), ("pid", 1, "completed"), ("fuzzy", 0, "completed"), ("fuzzy", 1, "completed")]
+    md = (out / "metrics.md").read_text().splitlines()
+    # the scenario's headline metrics only, in declaration order, the prefix expanded, with units
+    assert md[4] == ("| controller | runs | rms_speed_error [m/s] | settle_times.band5 [s] "
+                     "| settle_times.band1 [s] | reached_speed |")
+    assert md[6].startswith("| pid | 2 completed | 4 +- 0 | 0.79 +- 0 | - | 2/2 |")
+    assert md[7].startswith("| fuzzy | 2 completed |")
+    assert not any("final_position" in line for line in md)  # declared, not a headline
+    # metrics.csv: the header is the first row; the sidecar gives a unit to each of its columns
+    with open(out / "metrics.csv", newline="") as f:
+        table = list(csv.reader(f))
+    header = table[0]
+    assert header[:4] == ["controller", "seed", "status", "error"]
+    assert [r[:3] for r in table[1:]] == [["pid", "0", "completed"], ["pid", "1", "completed"],
+                                          ["fuzzy", "0", "completed"], ["fuzzy", "1", "completed"]]
+    with open(out / "metrics_units.csv", newline="") as f:
+        units = list(csv.reader(f))
+    assert units[0] == ["metric", "unit"]
+    assert [u[0] for u in units[1:]] == header
+    unit = dict(units[1:])
+    assert unit["controller"] == "-" and unit["status"] == "-"
+    assert unit["rms_speed_error"] == "m/s" and unit["final_position"] == "m"
+    assert unit["settle_times.band5"] == unit["settle_times.band1"] == "s"
+    assert unit["reached_speed"] == "-" and unit["sim_time"] == "s" and unit["steps"] == "-"
+    # exactly the declared plots
+    assert sorted(p.name for p in out.glob("*.png")) == ["lon_error.png", "speed.png"]
+    for png in out.glob("*.png"):
+        assert png.read_bytes()[:8] == PNG
+    for r in rows:
+        assert RrdReader(out / "runs" / f"{r.controller}-seed{r.seed}.rrd").recordings()
+
+
+def test_a_run_row_keeps_the_plotted_columns_with_their_units(point_mass, tmp_path):
+    row = _one(RunSpec("point-mass", "pid", 0, {"duration": 1.0}))
+    assert row.status == "completed"
+    assert set(row.traces) == {"t", "speed", "e_lon"}  # only what the plots need
+    assert row.units == {"t": "s", "speed": "m/s", "e_lon": "m"}
+    assert len(row.traces["speed"]) == 100
+    fig = figure("point-mass", point_mass.plots[1], [row], 0)
+    ax = fig.axes[0]
+    assert ax.get_ylabel() == "position error [m]" and ax.get_xlabel() == "time [s]"
+    assert ax.get_title() == "point-mass: position error (seed 0)"
+    assert [line.get_label() for line in ax.lines] == ["pid (completed)"]
+    assert figure("point-mass", Plot("Fx", "fx.png", "force"), [row], 0) is None  # not kept
+
+
+@pytest.mark.parametrize("name", list(SCENARIOS))
+def test_every_scenario_declares_what_compare_shows(name):
+    # passes once every scenario declares its columns, metrics and plots (the kit's ports)
+    cls = SCENARIOS[name]
+    config = cls.default_config({})
+    columns = {c.name: c.unit for c in declared_columns(cls, config)}
+    plots = cls.compare_plots(config)
+    for plot in plots:
+        assert isinstance(plot, Plot) and plot.column in columns, plot
+        assert plot.file.endswith(".png") and "[" not in plot.label, plot
+    assert len({p.file for p in plots}) == len(plots)
+    metrics = [m.name for m in cls.metrics_declared(config)]
+    assert len(set(metrics)) == len(metrics)
+    assert not {"units", "events", "record"} & set(metrics)  # keys ego run --json adds
+    assert any(m.headline for m in cls.metrics_declared(config))
+
+
+def test_unknown_scenario_stops_compare_before_anything_runs(tmp_path):
+    with pytest.raises(ConfigError, match="unknown scenario 'point-mass'"):
+        compare("point-mass", ["pid"], 1, {}, tmp_path / "x", progress=None)
+    assert not (tmp_path / "x").exists()
+
+
+@pytest.mark.sumo
 def test_compare_two_controllers_two_seeds_writes_everything(tmp_path):
     out = tmp_path / "cmp"
     p = subprocess.run([sys.executable, "-m", "ego", "compare", "emergency-brake", "--controllers",
@@ -25,6 +105,10 @@ def test_compare_two_controllers_two_seeds_writes_everything(tmp_path):
     assert all(r["status"] == "completed" for r in rows)
     md = (out / "metrics.md").read_text()
     assert "| pid | 2 completed |" in md and "| fuzzy | 2 completed |" in md
+    assert "min_ttc_front [s]" in md and "min_gap_front [m]" in md
+    units = dict(csv.reader(open(out / "metrics_units.csv")))
+    assert units["min_gap_front"] == "m" and units["status"] == "-"
+    assert "metrics_units.csv" in p.stdout
     for png in ("lateral_error.png", "speed.png", "steering.png", "fx.png"):
         data = (out / png).read_bytes()
         assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 10_000
@@ -35,6 +119,7 @@ def test_compare_two_controllers_two_seeds_writes_everything(tmp_path):
     assert not (out / "e_d.png").exists()  # the curve's plots only where there is a curve
 
 
+@pytest.mark.sumo
 def test_compare_the_curve_controllers(tmp_path):
     out = tmp_path / "curve"
     p = subprocess.run([sys.executable, "-m", "ego", "compare", "curve", "--controllers",
@@ -47,13 +132,14 @@ def test_compare_the_curve_controllers(tmp_path):
         assert r["status"] == "completed" and r["completed_arc"] == "True"
         assert float(r["max_abs_ed"]) < 0.5
     md = (out / "metrics.md").read_text()
-    assert "max_abs_ed" in md and "time_in_arc" in md and "| narma-l2 | 1 completed |" in md
+    assert "max_abs_ed [m]" in md and "time_in_arc [s]" in md and "| narma-l2 | 1 completed |" in md
     for png in ("e_d.png", "e_a.png", "speed.png", "steering.png", "a_x.png"):
         assert (out / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", png
     assert not (out / "fx.png").exists() and not (out / "lateral_error.png").exists()
     assert "e_d.png" in p.stdout
 
 
+@pytest.mark.sumo
 def test_a_diverging_controller_is_a_row_not_a_crash(tmp_path):
     out = tmp_path / "cmp"
     p = subprocess.run([sys.executable, "-m", "ego", "compare", "report-000", "--controllers",
@@ -64,6 +150,7 @@ def test_a_diverging_controller_is_a_row_not_a_crash(tmp_path):
     assert status == {"rbf-smc": "completed", "bp-pid": "diverged"}
 
 
+@pytest.mark.sumo
 def test_a_run_that_raises_becomes_an_error_row(tmp_path):
     blocker = tmp_path / "not-a-folder"
     blocker.write_text("")
@@ -71,6 +158,7 @@ def test_a_run_that_raises_becomes_an_error_row(tmp_path):
     assert row.status == "error" and "Error" in row.error
 
 
+@pytest.mark.sumo
 def test_bad_input_is_rejected_before_anything_runs(tmp_path):
     p = subprocess.run([sys.executable, "-m", "ego", "compare", "emergency-brake", "--controllers",
                         "pid,warp", "--out", str(tmp_path / "x")], capture_output=True, text=True)
@@ -82,6 +170,7 @@ def test_bad_input_is_rejected_before_anything_runs(tmp_path):
     assert p.returncode == 2 and "bad value for kp_lat" in p.stderr
 
 
+@pytest.mark.sumo
 def test_compare_the_platoon_controllers(tmp_path):
     out = tmp_path / "platoon"
     p = subprocess.run([sys.executable, "-m", "ego", "compare", "platoon", "--controllers", "pid,bp-pid-acc",
@@ -95,12 +184,13 @@ def test_compare_the_platoon_controllers(tmp_path):
     # nested metrics become dotted columns
     assert {"followers.f3.min_gap", "settle_times.brake@10s", "amplification.f2->f3.l2_spacing_error"} <= set(rows[0])
     md = (out / "metrics.md").read_text()
-    assert "settle_times.brake@10s" in md and "string_stable" in md and "| pid | 2 completed |" in md
+    assert "settle_times.brake@10s [s]" in md and "string_stable" in md and "| pid | 2 completed |" in md
     for png in ("spacing_error_f1.png", "spacing_error_f3.png", "accel_f1.png", "accel_f3.png"):
         assert (out / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", png
     assert not (out / "lateral_error.png").exists()
 
 
+@pytest.mark.sumo
 def test_compare_checks_the_control_period_before_starting(tmp_path):
     p = subprocess.run([sys.executable, "-m", "ego", "compare", "platoon", "--controllers", "pid",
                         "--set", "period=0.015", "--out", str(tmp_path / "x")],

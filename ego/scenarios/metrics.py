@@ -1,11 +1,14 @@
-"""Metrics computed from a run's trace (pure numpy)."""
+"""Metrics computed from a run's trace (pure numpy), and how flattened metric names map to
+their declarations (:class:`~ego.scenarios.trace.Metric`: unit, headline)."""
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping, Sequence
 
 import numpy as np
+
+from ego.scenarios.trace import Metric
 
 
 def settling_time(t: np.ndarray, error: np.ndarray, band: float, start: float) -> float | None:
@@ -65,3 +68,42 @@ def flatten(metrics: Mapping, prefix: str = "") -> dict:
         else:
             out[name] = value
     return out
+
+
+# -- declarations: which Metric a flattened name belongs to ---------------------------------
+def declaration(declared: Sequence[Metric], name: str) -> Metric | None:
+    """The :class:`~ego.scenarios.trace.Metric` that declares the flattened metric ``name``.
+
+    An exact name wins; otherwise the longest prefix declaration (a name ending in ``"."``)
+    that ``name`` starts with, so ``followers.`` can give a default and
+    ``followers.f1.min_gap`` a more specific one. None when nothing declares it.
+    """
+    best: Metric | None = None
+    for m in declared:
+        if m.name == name:
+            return m
+        if m.name.endswith(".") and name.startswith(m.name) and (best is None or len(m.name) > len(best.name)):
+            best = m
+    return best
+
+
+def metric_units(declared: Sequence[Metric], names: Iterable[str]) -> dict[str, str]:
+    """Flattened metric name -> its declared unit (``""`` where nothing declares it)."""
+    out = {}
+    for name in names:
+        m = declaration(declared, name)
+        out[name] = m.unit if m is not None else ""
+    return out
+
+
+def headline_names(declared: Sequence[Metric], names: Iterable[str]) -> list[str]:
+    """The headline metrics among the flattened ``names``: in declaration order, a prefix
+    declaration expanded over the names under it in the order they come."""
+    names = list(dict.fromkeys(names))
+    owner = {n: declaration(declared, n) for n in names}
+    return [n for m in declared if m.headline for n in names if owner[n] is m]
+
+
+def with_unit(name: str, unit: str) -> str:
+    """``"min_gap [m]"``; the bare name for a pure number (``"-"``) or an unknown unit (``""``)."""
+    return name if unit in ("", "-") else f"{name} [{unit}]"
