@@ -168,9 +168,13 @@ class HighwayScenario(RoadScenario):
         self.road_halfwidth = max(outer) + 0.5 * self.geometry.width + 0.5
 
         x, y, psi = bridge.cg_pose(EGO)
-        model = NonlinearBicycle(NonlinearBicycleParams(slip_speed_floor=1.0, abs=c.abs))
-        self.ego = BicyclePlant(model, self.geometry, c.dt, c.substeps,
-                                ActuatorLimits(max_steer=c.max_steer, stop_speed=0.5),
+        params = NonlinearBicycleParams(slip_speed_floor=1.0, abs=c.abs)
+        # with ABS no demand beyond the whole friction circle reaches the tyres (the model
+        # trims it further to what the circle leaves beside the lateral force)
+        grip = params.F_max / params.Nw if c.abs else INF
+        self.ego = BicyclePlant(NonlinearBicycle(params), self.geometry, c.dt, c.substeps,
+                                ActuatorLimits(max_steer=c.max_steer, min_command=-grip,
+                                               max_command=grip, stop_speed=0.5),
                                 state=(x, c.ego_speed, y, 0.0, psi, 0.0))
         self.target_lane = c.ego_lane
         self._road_y = self.road.points[0][1]
