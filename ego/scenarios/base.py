@@ -21,7 +21,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ego.control.base import Controller, ControllerSpec, Observation
-from ego.models import DynamicBicycle, NonlinearBicycle, VehicleGeometry
+from ego.models.plant import Plant
 from ego.params import ConfigError, param
 from ego.record.base import NullRecorder, Recorder, Scene, Series
 from ego.scenarios.metrics import json_number
@@ -98,45 +98,6 @@ class RunResult:
 
     def column(self, name: str) -> np.ndarray:
         return self.trace[:, self.columns.index(name)]
-
-
-class EgoVehicle:
-    """An ego car: its model (report 000's or 002's), body and actuator limits, integrated
-    per period. The model's input is (longitudinal command, delta): Fx for report 000's
-    model, a_x for report 002's."""
-
-    __slots__ = ("model", "geometry", "state", "max_steer", "stop_speed", "lateral_accel",
-                 "applied", "_step")
-
-    def __init__(self, model: NonlinearBicycle | DynamicBicycle, geometry: VehicleGeometry, dt: float,
-                 substeps: int, max_steer: float = 0.5, stop_speed: float = 0.5) -> None:
-        self.model = model
-        self.geometry = geometry
-        self.state: tuple[float, ...] = model.x0
-        self.max_steer = max_steer
-        self.stop_speed = stop_speed
-        self.lateral_accel = 0.0
-        self.applied = (0.0, 0.0)
-        self._step = model.stepper(dt / substeps, substeps)
-
-    def step(self, fx: float, delta: float) -> None:
-        """Apply the actuator limits and integrate one control period.
-
-        Steering saturates at ``max_steer`` (rad). A negative Fx (a_x) is braking, which fades
-        below ``stop_speed`` (m/s) so it stops the car instead of reversing it (the
-        report's model has no standstill).
-        """
-        ms = self.max_steer
-        if delta > ms:
-            delta = ms
-        elif delta < -ms:
-            delta = -ms
-        x = self.state
-        u = x[1]
-        if fx < 0.0 and u < self.stop_speed:
-            fx *= max(u, 0.0) / self.stop_speed
-        self.applied = (fx, delta)
-        self.state, self.lateral_accel = self._step(x, fx, delta)
 
 
 def divergence(state: Sequence[float], offset: float, heading_error: float,
@@ -432,7 +393,7 @@ class RoadScenario(Scenario):
 
     def __init__(self, config, controller: Controller, **kwargs) -> None:
         super().__init__(config, controller, **kwargs)
-        self.ego: EgoVehicle | None = None
+        self.ego: Plant | None = None  #: the ego's plant (state (X, u, Y, v, psi, r))
         self.road = None  #: the lane the frame is measured on (ego.road.LanePolyline)
         self.road_halfwidth = 0.0  #: |d| beyond which the ego has left the road (m)
         self.actors: list = []  #: scripted SUMO vehicles, ``update(bridge, t)`` each SUMO step

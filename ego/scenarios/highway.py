@@ -27,7 +27,7 @@ from ego.scenarios.base import (
 )
 from ego.scenarios.events import INF, boxes_overlap, time_to_collision
 from ego.scenarios.sensor import SurroundSensor
-from ego.scenarios.trace import Column, Metric, Plot
+from ego.scenarios.trace import Column, Plot
 from ego.sumo.bridge import (
     Collision,
     SumoBridge,

@@ -455,10 +455,6 @@ class SumoBridge:
         answers a huge negative number once that point is behind the vehicle."""
         return self._ls.vehicle.getDrivingDistance(vid, edge, pos, lane)
 
-    def keep_lane(self, vid: str) -> None:
-        """SUMO's driver of ``vid`` never changes lane (lane-change mode 0)."""
-        self.libsumo.vehicle.setLaneChangeMode(vid, 0)
-
 
 def ego_type(type_id: str, geometry: VehicleGeometry, decel: float = 7.0) -> VehicleType:
     """SUMO type for a controlled vehicle: its real size, minGap 0 so leader gaps are exact.
