@@ -5,13 +5,14 @@ from __future__ import annotations
 from ego.params import ConfigError
 from ego.scenarios.base import CommonConfig, Event, RunResult, Scenario
 from ego.scenarios.curve import CurveConfig, CurveScenario
+from ego.scenarios.cut_in import CutIn, CutInConfig
 from ego.scenarios.lane_centering import LaneCenteringConfig, LaneCenteringScenario
 from ego.scenarios.platoon import PlatoonConfig, PlatoonScenario
 from ego.scenarios.evasive import EmergencyBrake, EmergencyBrakeConfig, FastFollower, FastFollowerConfig
 from ego.scenarios.tracking import Report000, Report000Config, SineTracking, SineTrackingConfig
 
 SCENARIOS: dict[str, type[Scenario]] = {
-    cls.name: cls for cls in (EmergencyBrake, FastFollower, CurveScenario, LaneCenteringScenario, PlatoonScenario,
+    cls.name: cls for cls in (EmergencyBrake, FastFollower, CutIn, CurveScenario, LaneCenteringScenario, PlatoonScenario,
                                SineTracking, Report000)
 }
 
@@ -29,6 +30,8 @@ __all__ = [
     "CommonConfig",
     "CurveConfig",
     "CurveScenario",
+    "CutIn",
+    "CutInConfig",
     "EmergencyBrake",
     "EmergencyBrakeConfig",
     "FastFollower",

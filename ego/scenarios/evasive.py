@@ -138,16 +138,16 @@ class EvasiveLaneChange(HighwayScenario):
         return self.s + gap - c.follow_gap - c.follow_headway * leader.speed, leader.speed
 
     # -- automatic emergency braking ----------------------------------------------------------
-    def braking_need(self) -> float:
-        """Deceleration (m/s^2) that keeps the ego behind the front object: its own
-        deceleration plus closing^2 / (2 gap) (0 when nothing is ahead)."""
+    def braking_need(self, margin: float = 0.0) -> float:
+        """Deceleration (m/s^2) that keeps the ego ``margin`` (m) behind the front object: its
+        own deceleration plus closing^2 / (2 (gap - margin)) (0 when nothing is ahead)."""
         front = self.sensor.front
         if front.gap == INF:
             return 0.0
         need = max(0.0, -front.accel)
         closing = self.ds - front.speed
         if closing > 0.0:
-            need += closing * closing / (2.0 * max(front.gap, 0.1))
+            need += closing * closing / (2.0 * max(front.gap - margin, 0.1))
         return need
 
     def _aeb(self) -> None:

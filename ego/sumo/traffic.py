@@ -253,3 +253,69 @@ def _ignore_safety(bridge: SumoBridge, vid: str) -> None:
     veh = bridge.libsumo.vehicle
     veh.setLaneChangeMode(vid, 0)
     veh.setSpeedMode(vid, 0)
+
+
+def min_jerk(u: float) -> float:
+    """The minimum-jerk fraction of a move at normalised time u in [0, 1]: 10u^3 - 15u^4 + 6u^5
+    (zero speed and acceleration at both ends)."""
+    u = 0.0 if u < 0.0 else (1.0 if u > 1.0 else u)
+    return u * u * u * (10.0 + u * (-15.0 + 6.0 * u))
+
+
+@dataclass
+class CutInVehicle:
+    """A SUMO car that overtakes a vehicle in the next lane and cuts in ahead of it.
+
+    It drives ``overtake_speed`` in ``source_lane``, then slows to ``speed`` over
+    ``slow_time`` (s), starting where its rear bumper ends ``gap`` (m) ahead of ``target``'s
+    front bumper (a target at constant speed), then moves across into ``lane`` in ``duration`` (s)
+    along a minimum-jerk profile: SUMO's sublane model moves it there step by step
+    (``changeSublane``), heading and all, no jump.
+    """
+
+    vid: str
+    target: str
+    source_lane: int  #: the lane it starts in
+    lane: int  #: the lane it cuts into
+    overtake_speed: float
+    speed: float
+    gap: float
+    duration: float
+    lane_width: float
+    step: float  #: SUMO's step (s)
+    slow_time: float = 2.0
+    phase: str = "overtake"
+    cut_in_time: float | None = None  #: when it started across the lane (s)
+
+    def start(self, bridge: SumoBridge) -> None:
+        _ignore_safety(bridge, self.vid)
+        veh = bridge.libsumo.vehicle
+        # SUMO's own limits on lateral motion must not shape the scripted profile
+        veh.setMaxSpeedLat(self.vid, 4.0 * self.lane_width / self.duration)
+        veh.setParameter(self.vid, "laneChangeModel.lcAccelLat", "100")
+        veh.setSpeed(self.vid, self.overtake_speed)
+
+    def update(self, bridge: SumoBridge, t: float) -> bool:
+        """Call before every SUMO step from ``t`` (s); True on the step it starts across."""
+        veh = bridge.libsumo.vehicle
+        started = False
+        if self.phase == "overtake":
+            rear = veh.getPosition(self.vid)[0] - veh.getLength(self.vid)
+            # while it slows, the gap changes by the mean relative speed times slow_time
+            v = veh.getSpeed(self.target)
+            change = 0.5 * self.slow_time * ((self.overtake_speed - v) + (self.speed - v))
+            if rear - bridge.front_bumper(self.target)[0] >= self.gap - change:
+                veh.slowDown(self.vid, self.speed, self.slow_time)
+                self.phase, self._until = "slow", t + self.slow_time
+        elif self.phase == "slow" and t >= self._until - 1e-9:
+            veh.setSpeed(self.vid, self.speed)
+            self.phase, self.cut_in_time, started = "cut in", t, True
+            self._y0 = veh.getPosition(self.vid)[1]
+            self._sign = 1.0 if self.lane > self.source_lane else -1.0
+        if self.phase == "cut in":
+            u = (t + self.step - self.cut_in_time) / self.duration
+            want = self._sign * self.lane_width * min_jerk(u)
+            veh.changeSublane(self.vid, want - (veh.getPosition(self.vid)[1] - self._y0))
+            if u >= 1.0:
+                self.phase = "in lane"
+        return started
