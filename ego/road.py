@@ -81,6 +81,14 @@ class LanePolyline:
             self._seg.append((*raw[i], heading[i], change, change / raw[i][4]))
         self._hint = 0
 
+    def straight(self) -> tuple[float, float, float, float, float, float] | None:
+        """(x0, y0, ux, uy, s0, heading) when the lane is one straight segment (its frame is a
+        rotation: s = s0 + (p - p0).u, d = u x (p - p0)), else None."""
+        if len(self._seg) != 1:
+            return None
+        x0, y0, ux, uy, _, s0, heading = self._seg[0][:7]
+        return x0, y0, ux, uy, s0, heading
+
     @property
     def length(self) -> float:
         last = self._seg[-1]

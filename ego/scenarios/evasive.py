@@ -153,9 +153,11 @@ class EvasiveLaneChange(HighwayScenario):
     def _aeb(self) -> None:
         """Engage or release the AEB (see ``aeb`` in the configuration)."""
         c = self.config
-        need = self.braking_need()
-        braking_in_lane = self.phase == IN_LANE and self.in_lane_action == "brake"
         if not self.aeb_active:
+            braking_in_lane = self.phase == IN_LANE and self.in_lane_action == "brake"
+            if not braking_in_lane and self.ttc_front >= c.aeb_ttc:
+                return  # the common case, decided without computing the need
+            need = self.braking_need()
             if (braking_in_lane and need >= c.aeb_decel) or self._imminent():
                 self.aeb_active = True
                 self.aeb_engagements += 1
@@ -164,9 +166,11 @@ class EvasiveLaneChange(HighwayScenario):
                 front = self.sensor.front
                 self.event("aeb", f"AEB engages: braking at the friction limit (front {front.id}, gap "
                            f"{front.gap:.1f} m, TTC {self.ttc_front:.2f} s, needs {need:.1f} m/s^2)", "WARN")
-        elif need < 0.5 * c.aeb_decel and not self._imminent():
-            self.aeb_active = False
-            self.event("aeb", f"AEB releases (needs {need:.1f} m/s^2)")
+        else:
+            need = self.braking_need()
+            if need < 0.5 * c.aeb_decel and not self._imminent():
+                self.aeb_active = False
+                self.event("aeb", f"AEB releases (needs {need:.1f} m/s^2)")
 
     def _imminent(self) -> bool:
         """The front TTC is below ``aeb_ttc`` and the ego does not clear the front object

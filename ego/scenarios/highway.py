@@ -104,6 +104,7 @@ class HighwayScenario(RoadScenario):
         super().__init__(config, controller, **kwargs)
         self.geometry = VehicleGeometry()
         self.sensor: SurroundSensor | None = None
+        self._looked = False  #: the sensor has looked since the last SUMO step
         self.lanes: dict[int, LanePolyline] = {}
         self.lane_offset: dict[int, float] = {}
         self.ttc_front = self.ttc_rear = INF
@@ -182,7 +183,8 @@ class HighwayScenario(RoadScenario):
         g = self.geometry
         bands = {i: (off - 0.5 * self.lanes[i].width, off + 0.5 * self.lanes[i].width)
                  for i, off in self.lane_offset.items()}
-        self.sensor = SurroundSensor(self.road, bands, g.cg_to_front, g.length, g.width)
+        self.sensor = SurroundSensor(self.road, bands, g.cg_to_front, g.length, g.width,
+                                     horizon=c.sumo_step)
         bridge.subscribe_surroundings(EGO, c.sensor_range)
         self._sense()
 
@@ -216,10 +218,15 @@ class HighwayScenario(RoadScenario):
     def _sense(self) -> None:
         """The surround sensor's view at a SUMO step."""
         self.sensor.sync(self.t, *self.bridge.surroundings(EGO))
+        self._looked = False
 
     def _update(self) -> None:
         sensor = self.sensor
-        sensor.scan(self.t, self.s, self.d_road, self.heading_error)
+        if self._looked:  # between SUMO steps: the same vehicles, moved on
+            sensor.advance(self.t, self.s)
+        else:
+            sensor.scan(self.t, self.s, self.d_road, self.heading_error)
+            self._looked = True
         front, rear = sensor.front, sensor.rear
         ds = self.ds
         gap = self.gap_front = front.gap

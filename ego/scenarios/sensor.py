@@ -2,22 +2,24 @@
 
 SUMO's leader/follower queries are lane bookkeeping: while the ego straddles two lanes its
 "leader" is already the target lane's car although its body still overlaps the car it is
-leaving. This sensor never overstates clearance that way. Every SUMO step it takes the
-oriented boxes of the vehicles near the ego (one libsumo context subscription, see
-:meth:`ego.sumo.bridge.SumoBridge.surroundings`) and expresses each in the frame of a
-reference lane: its extent along the lane ``[s_lo, s_hi]`` and across it ``[d_lo, d_hi]``
-and its velocity along and across the lane. Between SUMO steps those extents move at those
-velocities (the SUMO step is 10 control periods; a braking car moves 3 cm less in 0.1 s
-at 6 m/s^2, which the next SUMO step corrects).
-
-Each control step :meth:`SurroundSensor.scan` takes the ego's pose in the same frame:
+leaving. This sensor never overstates clearance that way. Like a radar it looks once per
+SUMO step (10 Hz by default): it takes the oriented boxes of the vehicles near the ego
+(one libsumo context subscription, see :meth:`ego.sumo.bridge.SumoBridge.surroundings`),
+expresses each in the frame of a reference lane (its extent along the lane ``[s_lo,
+s_hi]`` and across it ``[d_lo, d_hi]``, its velocity along and across the lane) and, with
+the ego's outline in the same frame (:meth:`SurroundSensor.scan`), finds
 
 * ``front``: the nearest vehicle ahead whose extent across the lane overlaps the ego's, in
-  whatever lane; ``gap`` from the ego's foremost corner to its rearmost point (m, <= 0 when
-  they overlap); ``speed`` its velocity along the lane (m/s);
+  whatever lane; ``gap`` from the ego's foremost point to its rearmost point (m, <= 0 when
+  they overlap); ``speed`` its velocity along the lane (m/s), ``accel`` its acceleration;
 * ``rear``: the same behind;
-* :meth:`lane_leader` / :meth:`lane_follower`: the nearest vehicle ahead of / behind the ego
-  overlapping a lane's band (gap acceptance, following a lane's leader).
+* :meth:`SurroundSensor.lane_neighbours`: the nearest vehicles ahead of and behind the
+  ego overlapping a lane's band (gap acceptance, following a lane's leader).
+
+Between two looks (:meth:`SurroundSensor.advance`, every control period) each detected
+vehicle moves on at its speed and the ego by what its model integrated, as a tracker
+carries a radar's objects between scans (a car braking at 6 m/s^2 is 3 cm behind that by
+the next look, which corrects it).
 
 Extents are exact for boxes on a straight reference lane; on a curved one they are those
 of the box turned by its heading relative to the lane at its centre. A gap is the
@@ -32,44 +34,65 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 INF = math.inf
 
 
-@dataclass(slots=True)
 class Detection:
     """One sensed vehicle: ``gap`` bumper to bumper along the lane (m; inf: none), ``speed``
-    its velocity along the lane (m/s)."""
+    its velocity along the lane (m/s), ``accel`` its acceleration along the lane over the
+    last SUMO step (m/s^2). ``overlap``, ``side`` and ``lateral_speed`` say how it sits
+    across the band it was found in."""
 
-    id: str = ""
-    gap: float = INF
-    speed: float = 0.0
-    accel: float = 0.0  #: its acceleration along the lane over the last SUMO step (m/s^2)
-    #: how far its extent across the lane reaches into the band asked about (m)
-    overlap: float = 0.0
-    #: +1 when its centre is left of the band's centre, -1 when right (across the lane)
-    side: float = 0.0
-    lateral_speed: float = 0.0  #: its velocity across the lane (m/s, + left)
+    __slots__ = ("id", "gap", "speed", "accel", "_gap0", "_o", "_lo", "_hi", "_since")
+
+    def __init__(self, id: str = "", gap: float = INF, speed: float = 0.0,  # noqa: A002
+                 accel: float = 0.0) -> None:
+        self.id, self.gap, self.speed, self.accel = id, gap, speed, accel
+        self._gap0 = gap  #: the gap at the scan that found it
+        self._o = None
+        self._lo = self._hi = self._since = 0.0
+
+    def __repr__(self) -> str:
+        return f"Detection(id={self.id!r}, gap={self.gap!r}, speed={self.speed!r}, accel={self.accel!r})"
 
     def clear(self) -> None:
         self.id = ""
         self.gap = INF
         self.speed = 0.0
         self.accel = 0.0
-        self.overlap = 0.0
-        self.side = 0.0
-        self.lateral_speed = 0.0
+        self._o = None
 
-    def set(self, vid: str, gap: float, speed: float, accel: float, overlap: float, side: float,
-            lateral_speed: float) -> None:
-        self.id = vid
-        self.gap = gap
-        self.speed = speed
-        self.accel = accel
-        self.overlap = overlap
-        self.side = side
-        self.lateral_speed = lateral_speed
+    def _found(self, o: tuple, gap: float, lo: float, hi: float, since: float) -> None:
+        self.id, self.gap, self.speed, self.accel = o[0], gap, o[5], o[7]
+        self._gap0 = gap
+        self._o, self._lo, self._hi, self._since = o, lo, hi, since
+
+    def _copy(self, other: Detection, gap: float) -> None:
+        self.id, self.gap, self.speed, self.accel = other.id, gap, other.speed, other.accel
+        self._gap0 = other._gap0
+        self._o, self._lo, self._hi, self._since = other._o, other._lo, other._hi, other._since
+
+    @property
+    def lateral_speed(self) -> float:
+        """Its velocity across the lane (m/s, + left)."""
+        return self._o[6] if self._o is not None else 0.0
+
+    @property
+    def overlap(self) -> float:
+        """How far its extent across the lane reaches into the band it was found in (m)."""
+        if self._o is None:
+            return 0.0
+        shift = self._o[6] * self._since
+        return min(self._o[4] + shift, self._hi) - max(self._o[3] + shift, self._lo)
+
+    @property
+    def side(self) -> float:
+        """+1 when its centre is left of the band's centre, -1 when right."""
+        if self._o is None:
+            return 0.0
+        shift = self._o[6] * self._since
+        return 1.0 if self._o[3] + self._o[4] + 2.0 * shift > self._lo + self._hi else -1.0
 
 
 def box_extents(s: float, d: float, rel_heading: float, length: float, width: float,
@@ -91,11 +114,21 @@ class SurroundSensor:
     """
 
     __slots__ = ("lane", "bands", "cg_to_front", "cg_to_rear", "half_width", "front", "rear",
-                 "_objects", "_t_sync", "_t", "_ego", "_count", "_speeds", "_rows")
+                 "horizon", "reach", "_objects", "_near", "_lanes", "_straight", "_t_sync", "_t",
+                 "_t_scan", "_s", "_s_scan", "_ego", "_count", "_speeds", "_rows")
 
     def __init__(self, lane, bands: dict[int, tuple[float, float]], cg_to_front: float,
-                 length: float, width: float) -> None:
+                 length: float, width: float, horizon: float = 0.1, reach: float = 1.0) -> None:
         self.lane = lane
+        #: the time between two SUMO steps (s) and how far (m) the ego may move sideways in
+        #: it (1 m: 10 m/s at 0.1 s, far beyond a lane change): what the front/rear scan
+        #: looks at between two SUMO steps
+        self.horizon = horizon
+        self.reach = reach
+        self._near: list | None = None
+        self._lanes: dict[int, tuple[Detection, Detection]] = {}  #: per lane, at the last scan
+        self._t_scan = self._s = self._s_scan = 0.0
+        self._straight = lane.straight() if hasattr(lane, "straight") else None
         self.bands = dict(bands)
         self.cg_to_front = cg_to_front
         self.cg_to_rear = length - cg_to_front
@@ -120,17 +153,25 @@ class SurroundSensor:
         """The vehicles around the ego at a SUMO step, time ``t`` (s): ``rows`` of (centre x,
         y in m, yaw rad, speed m/s, length, width m) as
         :meth:`~ego.sumo.bridge.SumoBridge.surroundings` gives them."""
-        frame = self.lane.frame
         cos, sin = math.cos, math.sin
+        straight = self._straight
+        frame = self.lane.frame
         objects = []
         before = self._speeds
         dt = t - self._t_sync
         speeds = {}
         for vid, (x, y, yaw, v, length, width) in zip(ids, rows):
-            s, d, rel, _ = frame(x, y, yaw)
+            if straight is not None:  # one segment: the frame is a rotation
+                x0, y0, ux, uy, s0, heading = straight
+                dx, dy = x - x0, y - y0
+                s, d = s0 + dx * ux + dy * uy, dy * ux - dx * uy
+                rel = yaw - heading
+            else:
+                s, d, rel, _ = frame(x, y, yaw)
             c, sn = cos(rel), sin(rel)
-            hs = 0.5 * (length * abs(c) + width * abs(sn))
-            hd = 0.5 * (length * abs(sn) + width * abs(c))
+            ac, asn = abs(c), abs(sn)
+            hs = 0.5 * (length * ac + width * asn)
+            hd = 0.5 * (length * asn + width * ac)
             vs = v * c
             prev = before.get(vid)
             accel = (vs - prev) / dt if prev is not None and dt > 0.0 else 0.0
@@ -138,6 +179,7 @@ class SurroundSensor:
             objects.append((vid, s - hs, s + hs, d - hd, d + hd, vs, v * sn, accel))
         objects.sort(key=lambda o: o[1])
         self._objects = objects
+        self._near = None
         self._speeds = speeds
         self._rows = dict(zip(ids, rows))
         self._count = len(objects)
@@ -151,56 +193,93 @@ class SurroundSensor:
         ac, as_ = abs(c), abs(sn)
         # the CG is not the box centre: take the extreme corners
         f, r = self.cg_to_front, self.cg_to_rear
-        s_lo = s + min(f * c, -r * c) - hw * as_
-        s_hi = s + max(f * c, -r * c) + hw * as_
-        d_lo = d + min(f * sn, -r * sn) - hw * ac
-        d_hi = d + max(f * sn, -r * sn) + hw * ac
-        return s_lo, s_hi, d_lo, d_hi
+        fc, rc, fs, rs = f * c, r * c, f * sn, r * sn
+        return (s + (fc if fc < -rc else -rc) - hw * as_, s + (fc if fc > -rc else -rc) + hw * as_,
+                d + (fs if fs < -rs else -rs) - hw * ac, d + (fs if fs > -rs else -rs) + hw * ac)
 
     def scan(self, t: float, s: float, d: float, heading_error: float) -> None:
-        """Update ``front`` and ``rear`` for the ego's centre of gravity at (s, d) (m) with
-        ``heading_error`` (rad) at time ``t`` (s)."""
+        """Look: ``front`` and ``rear`` for the ego's centre of gravity at (s, d) (m) with
+        ``heading_error`` (rad) at time ``t`` (s). Called at every SUMO step (the sensor's
+        rate); :meth:`advance` carries the gaps on in between."""
         ego = self._ego = self.ego_extents(s, d, heading_error)
-        self._t = t
-        self._nearest(ego[2], ego[3], self.front, self.rear)
+        self._t = self._t_scan = t
+        self._s = self._s_scan = s
+        self._lanes = {}
+        near = self._near
+        if near is None:
+            # the vehicles that can reach across to the ego before the next SUMO step: the
+            # ego moves sideways by less than `reach` (m), each of them by |v_d| * horizon
+            lo, hi, h, m = ego[2], ego[3], self.horizon, self.reach
+            near = self._near = [o for o in self._objects
+                                 if o[4] + abs(o[6]) * h + m > lo and o[3] - abs(o[6]) * h - m < hi]
+        self._nearest(near, ego[2], ego[3], self.front, self.rear)
 
-    def _nearest(self, lo: float, hi: float, ahead: Detection, behind: Detection) -> None:
-        """Nearest vehicle ahead of and behind the ego overlapping [lo, hi] across the lane."""
-        since = self._t - self._t_sync
+    def advance(self, t: float, s: float) -> None:
+        """Between two looks: the gaps at time ``t`` (s) with the ego's centre of gravity at
+        ``s`` (m) along the lane, each detected vehicle moving at its speed."""
+        self._t, self._s = t, s
+        moved = s - self._s_scan
+        since = t - self._t_scan
+        front, rear = self.front, self.rear
+        if front._o is not None:
+            front.gap = front._gap0 + front.speed * since - moved
+        if rear._o is not None:
+            rear.gap = rear._gap0 + moved - rear.speed * since
+
+    def _nearest(self, objects, lo: float, hi: float, ahead: Detection, behind: Detection) -> None:
+        """Nearest of ``objects`` ahead of and behind the ego overlapping [lo, hi] across the
+        lane, at the last scan."""
+        since = self._t_scan - self._t_sync
         e_lo, e_hi = self._ego[0], self._ego[1]
-        e_mid = 0.5 * (e_lo + e_hi)
+        twice_mid = e_lo + e_hi
         best_ahead = best_behind = INF
-        ahead.clear()
-        behind.clear()
-        for vid, s_lo, s_hi, d_lo, d_hi, vs, vd, acc in self._objects:
-            shift = vd * since
-            if d_hi + shift <= lo or d_lo + shift >= hi:
+        front = rear = None
+        for o in objects:
+            shift = o[6] * since
+            if o[4] + shift <= lo or o[3] + shift >= hi:
                 continue
-            move = vs * since
-            a, b = s_lo + move, s_hi + move
-            if a + b >= 2.0 * e_mid:  # its centre is ahead of the ego's
-                gap = a - e_hi
-                if gap < best_ahead:
-                    best_ahead = gap
-                    ahead.set(vid, gap, vs, acc, min(d_hi + shift, hi) - max(d_lo + shift, lo),
-                              1.0 if d_lo + d_hi + 2.0 * shift > lo + hi else -1.0, vd)
-            else:
-                gap = e_lo - b
-                if gap < best_behind:
-                    best_behind = gap
-                    behind.set(vid, gap, vs, acc, min(d_hi + shift, hi) - max(d_lo + shift, lo),
-                               1.0 if d_lo + d_hi + 2.0 * shift > lo + hi else -1.0, vd)
+            move = o[5] * since
+            a, b = o[1] + move, o[2] + move
+            if a + b >= twice_mid:  # its centre is ahead of the ego's
+                if a - e_hi < best_ahead:
+                    best_ahead, front = a - e_hi, o
+            elif e_lo - b < best_behind:
+                best_behind, rear = e_lo - b, o
+        if front is None:
+            ahead.clear()
+        else:
+            ahead._found(front, best_ahead, lo, hi, since)
+        if rear is None:
+            behind.clear()
+        else:
+            behind._found(rear, best_behind, lo, hi, since)
 
     def lane_neighbours(self, lane: int, leader: Detection, follower: Detection) -> bool:
         """Fill ``leader``/``follower`` with the nearest vehicles ahead of / behind the ego
-        whose extent overlaps lane ``lane``'s band (as of the last :meth:`scan`); False
-        (both cleared) when there is no such lane."""
+        whose extent overlaps lane ``lane``'s band (seen at the last :meth:`scan`, gaps
+        carried on to now); False (both cleared) when there is no such lane."""
         band = self.bands.get(lane)
         if band is None:
             leader.clear()
             follower.clear()
             return False
-        self._nearest(band[0], band[1], leader, follower)
+        found = self._lanes.get(lane)
+        if found is None:
+            lo, hi, h = band[0], band[1], self.horizon
+            near = [o for o in self._objects if o[4] + abs(o[6]) * h > lo and o[3] - abs(o[6]) * h < hi]
+            found = self._lanes[lane] = (Detection(), Detection())
+            self._nearest(near, lo, hi, *found)
+        moved = self._s - self._s_scan
+        since = self._t - self._t_scan
+        ahead, behind = found
+        if ahead._o is None:
+            leader.clear()
+        else:
+            leader._copy(ahead, ahead._gap0 + ahead.speed * since - moved)
+        if behind._o is None:
+            follower.clear()
+        else:
+            follower._copy(behind, behind._gap0 + moved - behind.speed * since)
         return True
 
     def box(self, vid: str) -> tuple[float, float, float, float, float] | None:

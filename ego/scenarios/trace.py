@@ -14,7 +14,7 @@ units and headlines from these declarations; they keep no tables of their own.
 
 from __future__ import annotations
 
-import operator
+import keyword
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
@@ -61,26 +61,69 @@ class Plot:
 class Trace:
     """Rows of declared columns, written by name, then the controller's signals.
 
-    ``append`` costs one key-set comparison and one C-level fetch per row: cheap enough for
-    the control loop.
+    ``append(signals, **columns)`` is generated for the declared columns as a function with
+    one keyword-only parameter per column, so Python itself checks every row's names as
+    fast as a call can be: a missing or unknown column raises :class:`TraceError`.
     """
 
-    __slots__ = ("columns", "signal_names", "rows", "_names", "_keys", "_get")
+    __slots__ = ("columns", "signal_names", "rows", "append", "_names")
 
     def __init__(self, columns: Sequence[Column], signal_names: Iterable[str] = ()) -> None:
         names = tuple(c.name for c in columns)
         if len(set(names)) != len(names):
             dup = sorted({n for n in names if names.count(n) > 1})
             raise TraceError(f"trace columns declared twice: {', '.join(dup)}")
+        bad = [n for n in names if not n.isidentifier() or keyword.iskeyword(n)]
+        if bad:
+            raise TraceError(f"trace column names must be Python identifiers: {', '.join(bad)}")
         self.columns = tuple(columns)
         self.signal_names = tuple(signal_names)
         clash = set(self.signal_names) & set(names)
         if clash:
             raise TraceError(f"controller signals clash with trace columns: {', '.join(sorted(clash))}")
         self._names = names
-        self._keys = frozenset(names)
-        self._get = operator.itemgetter(*names) if len(names) > 1 else (lambda d: (d[names[0]],))
         self.rows: list[tuple] = []
+        self.append = self._writer()
+
+    def _writer(self):
+        """The row writer ``append(signals, /, *, <every column>)``, generated: a column left
+        out keeps a marker default and an unknown one lands in ``unknown``, both checked by
+        identity tests before the row is stored."""
+        names = self._names
+        params = ", ".join(f"{n}=_M" for n in names)
+        missing = " or ".join(f"{n} is _M" for n in names)
+        values = "".join(f"{n}, " for n in names)
+        given = ", ".join(f"{n!r}: {n}" for n in names)
+        source = (
+            f"def append(signals=None, /, *, {params}, **unknown):\n"
+            f"    if unknown or {missing}:\n"
+            f"        _reject({{{given}, **unknown}})\n"
+            f"    if signals is None:\n"
+            f"        signals = _empty\n"
+            f"    if tuple(signals) != _signals:\n"
+            f"        _bad_signals(signals)\n"
+            f"    _add(({values}*signals.values()))\n"
+        )
+        scope = {"_M": _MISSING, "_empty": {}, "_signals": self.signal_names, "_add": self.rows.append,
+                 "_bad_signals": self._bad_signals, "_reject": self._reject}
+        exec(compile(source, f"<trace row of {len(names)} columns>", "exec"), scope)  # noqa: S102
+        append = scope["append"]
+        append.__doc__ = "One row: every declared column by name, then the controller's ``signals``."
+        return append
+
+    def _bad_signals(self, signals) -> None:
+        raise TraceError(f"controller signals {tuple(signals)} do not match the declared "
+                         f"{self.signal_names}")
+
+    def _reject(self, values: Mapping[str, float]) -> None:
+        missing = [n for n in self._names if values.get(n, _MISSING) is _MISSING]
+        unknown = [n for n in values if n not in self._names]
+        parts = []
+        if missing:
+            parts.append(f"missing {', '.join(missing)}")
+        if unknown:
+            parts.append(f"unknown {', '.join(unknown)}")
+        raise TraceError(f"trace row does not match the declared columns: {'; '.join(parts)}")
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -91,28 +134,6 @@ class Trace:
         """Column name -> unit (controller signals: ``""``, their units are the controller's)."""
         return {**{c.name: c.unit for c in self.columns}, **{n: "" for n in self.signal_names}}
 
-    def append(self, signals: Mapping[str, float] | None = None, /, **values: float) -> None:
-        """One row: every declared column by name, and the controller's ``signals``."""
-        if values.keys() != self._keys:
-            self._reject(values)
-        row = self._get(values)
-        if self.signal_names or signals:
-            if signals is None or tuple(signals) != self.signal_names:
-                got = tuple(signals or ())
-                raise TraceError(f"controller signals {got} do not match the declared {self.signal_names}")
-            row = row + tuple(signals.values())
-        self.rows.append(row)
-
-    def _reject(self, values: Mapping[str, float]) -> None:
-        missing = [n for n in self._names if n not in values]
-        unknown = [n for n in values if n not in self._keys]
-        parts = []
-        if missing:
-            parts.append(f"missing {', '.join(missing)}")
-        if unknown:
-            parts.append(f"unknown {', '.join(unknown)}")
-        raise TraceError(f"trace row does not match the declared columns: {'; '.join(parts)}")
-
     def __len__(self) -> int:
         return len(self.rows)
 
@@ -122,6 +143,18 @@ class Trace:
     def array(self, start: int = 0) -> np.ndarray:
         """Rows from ``start`` on as a float array (rows x columns)."""
         return np.array(self.rows[start:], dtype=float).reshape(-1, len(self.names))
+
+
+class _Missing:
+    """The default of a trace column not given."""
+
+    __slots__ = ()
+
+    def __repr__(self) -> str:
+        return "<missing>"
+
+
+_MISSING = _Missing()
 
 
 def column(name: str, columns: Sequence[Column]) -> Column:

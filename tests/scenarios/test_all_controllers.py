@@ -55,7 +55,8 @@ def test_the_reports_unstable_form_is_reported_as_such(controller, overrides, tm
 
 def test_the_friction_aware_brake_keeps_the_reports_bp_pid_on_the_road():
     # the published BP-NN PID over-brakes; on the raw model that spins the car (above),
-    # with ABS it stays on the road but needs about 21 s to settle in the new lane
+    # with ABS it stays on the road and hits nothing, but does not settle in the new lane
+    # within the run (its learning keeps the lateral channel swinging)
     m = run(RunSpec("emergency-brake", "bp-pid", 0, {"variant": "report"})).metrics
-    assert m["status"] == "completed" and not m["collision"]
-    assert m["lane_change_duration"] > 15.0
+    assert m["status"] in ("completed", "timeout") and not m["collision"]
+    assert m["lane_change_duration"] is None or m["lane_change_duration"] > 15.0
