@@ -55,6 +55,35 @@ def timed_bare_sumo(spec: RunSpec, sumo_steps: int) -> float:
         scenario.close()
 
 
+def sensor_cost(spec: RunSpec, at: float = 5.0, number: int = 2000) -> tuple[float, float] | None:
+    """(us per SUMO step, us per control step) of the surround sensor in the middle of a run
+    (``at`` seconds in): reading the context subscription and placing every box in the lane
+    frame plus one look, and carrying the gaps on between looks; None without a sensor."""
+    import timeit
+
+    scenario = build(RunSpec(spec.scenario, spec.controller, spec.seed, spec.overrides))
+    try:
+        obs = scenario.reset()
+        sensor = getattr(scenario, "sensor", None)
+        if sensor is None:
+            return None
+        while not scenario.done and scenario.t < at:
+            obs = scenario.step(scenario.controller.step(obs))
+
+        def look():
+            scenario._sense()
+            sensor.scan(scenario.t, scenario.s, scenario.d_road, scenario.heading_error)
+
+        def carry_on():
+            sensor.advance(scenario.t, scenario.s)
+
+        per_sumo = min(timeit.repeat(look, number=number, repeat=5)) / number
+        per_control = min(timeit.repeat(carry_on, number=number, repeat=5)) / number
+        return 1e6 * per_sumo, 1e6 * per_control
+    finally:
+        scenario.close()
+
+
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5)
@@ -79,6 +108,7 @@ def main(argv: list[str] | None = None) -> dict:
             bares.append(bare)
     loop = statistics.median(loops)
     bare = statistics.median(bares)
+    sensor = sensor_cost(spec)
     figures = {
         "scenario": args.scenario,
         "controller": args.controller,
@@ -93,6 +123,11 @@ def main(argv: list[str] | None = None) -> dict:
         "bare_sumo_us_per_step": 1e6 * bare / sumo_steps,
         "loop_over_bare_sumo": loop / bare,
     }
+    if sensor is not None:
+        per_sumo_step = sensor[0] + (steps / sumo_steps - 1) * sensor[1]
+        figures.update(sensor_us_per_look=sensor[0], sensor_us_per_control_step=sensor[1],
+                       sensor_us_per_sumo_step=per_sumo_step,
+                       sensor_share_of_loop=per_sumo_step / figures["loop_us_per_sumo_step"])
     print(f"{args.scenario}, {args.controller}, recording {'on' if figures['recording'] else 'off'}, "
           f"dt = 0.01 s, SUMO step 0.1 s, median of {args.repeat}")
     print(f"  simulated {sim:.1f} s ({steps} control steps, {sumo_steps} SUMO steps) in {loop:.3f} s")
@@ -100,6 +135,11 @@ def main(argv: list[str] | None = None) -> dict:
     print(f"  loop per SUMO step         {figures['loop_us_per_sumo_step']:8.1f} us")
     print(f"  bare SUMO per step         {figures['bare_sumo_us_per_step']:8.1f} us")
     print(f"  loop / bare SUMO           {figures['loop_over_bare_sumo']:8.2f}     (target <= 3)")
+    if sensor is not None:
+        print(f"  surround sensor per SUMO step {figures['sensor_us_per_sumo_step']:5.1f} us "
+              f"({100 * figures['sensor_share_of_loop']:.0f} % of the loop): a look (context "
+              f"subscription, boxes, search) {sensor[0]:.1f} us + {steps // sumo_steps - 1} x "
+              f"{sensor[1]:.2f} us carrying gaps on")
     return figures
 
 

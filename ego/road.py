@@ -39,7 +39,7 @@ def wrap_angle(a: float) -> float:
 class LanePolyline:
     """A lane centre line made of straight segments, with a fast local projection."""
 
-    __slots__ = ("lane_id", "width", "points", "_seg", "_hint")
+    __slots__ = ("lane_id", "width", "points", "_seg", "_hint", "_single")
 
     def __init__(self, points: Sequence[tuple[float, float]], width: float = 3.5,
                  lane_id: str = "") -> None:
@@ -80,13 +80,15 @@ class LanePolyline:
             change = wrap_angle(heading[i + 1] - heading[i])
             self._seg.append((*raw[i], heading[i], change, change / raw[i][4]))
         self._hint = 0
+        #: one straight segment: frame() is a rotation, done without a search
+        self._single = self._seg[0] if n == 1 else None
 
     def straight(self) -> tuple[float, float, float, float, float, float] | None:
         """(x0, y0, ux, uy, s0, heading) when the lane is one straight segment (its frame is a
         rotation: s = s0 + (p - p0).u, d = u x (p - p0)), else None."""
-        if len(self._seg) != 1:
+        if self._single is None:
             return None
-        x0, y0, ux, uy, _, s0, heading = self._seg[0][:7]
+        x0, y0, ux, uy, _, s0, heading = self._single[:7]
         return x0, y0, ux, uy, s0, heading
 
     @property
@@ -142,6 +144,14 @@ class LanePolyline:
 
     def frame(self, x: float, y: float, psi: float) -> tuple[float, float, float, float]:
         """(s, d, heading error psi - heading, curvature) of a pose (m, m, rad, 1/m)."""
+        single = self._single
+        if single is not None:
+            x0, y0, ux, uy, _, s0, heading = single[:7]
+            dx, dy = x - x0, y - y0
+            err = psi - heading
+            if not -math.pi < err <= math.pi:
+                err = wrap_angle(err)
+            return s0 + dx * ux + dy * uy, dy * ux - dx * uy, err, 0.0
         i, along, across = self._closest(x, y)
         seg = self._seg[i]
         u = min(max(along, 0.0), seg[4])

@@ -65,7 +65,7 @@ class BicyclePlant:
     """
 
     __slots__ = ("model", "geometry", "limits", "state", "applied", "lateral_accel", "dt",
-                 "state_names", "input_names", "input_units", "_step")
+                 "state_names", "input_names", "input_units", "_step", "_apply")
 
     def __init__(self, model: NonlinearBicycle | DynamicBicycle, geometry: VehicleGeometry,
                  dt: float, substeps: int = 1, limits: ActuatorLimits | None = None,
@@ -83,6 +83,7 @@ class BicyclePlant:
         self.applied = (0.0, 0.0)
         self.lateral_accel = 0.0
         self._step = model.stepper(dt / substeps, substeps)
+        self._apply = self.limits.apply
 
     @property
     def speed(self) -> float:
@@ -94,7 +95,7 @@ class BicyclePlant:
 
     def step(self, action: tuple[float, float]) -> None:
         x = self.state
-        command, delta = self.limits.apply(action[0], action[1], x[1], self.applied[1], self.dt)
+        command, delta = self._apply(action[0], action[1], x[1], self.applied[1], self.dt)
         self.applied = (command, delta)
         self.state, self.lateral_accel = self._step(x, command, delta)
 
