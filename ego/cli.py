@@ -198,7 +198,7 @@ def _catalogue() -> dict:
     return {
         "scenarios": [scenario(n, c) for n, c in SCENARIOS.items()],
         "common_metrics": [m.name for m in COMMON_METRICS + COMMON_TAIL_METRICS],
-        "tasks": [{"name": t, "summary": TASKS[t]} for t in CONTROLLERS],
+        "tasks": [TASKS[t].as_dict() for t in CONTROLLERS],
         "controllers": [{"name": n, "task": t, "summary": s.summary, "parameters": params(s.params)}
                         for t, specs in CONTROLLERS.items() for n, s in specs.items()],
     }
@@ -242,6 +242,9 @@ def _print_catalogue(cat: dict) -> None:
     for task in cat["tasks"]:
         print(f"\nControllers of the {task['name']} task ({task['summary']}; --controller NAME, "
               "parameters with --set key=value):")
+        print(f"  they observe ({task['observation'].split(':')[1]}): "
+              + ", ".join(with_unit(x["name"], x["unit"]) for x in task["observes"]))
+        print("  and return (" + ", ".join(with_unit(x["name"], x["unit"]) for x in task["returns"]) + ")")
         for c in cat["controllers"]:
             if c["task"] == task["name"]:
                 print(f"\n  {c['name']}: {c['summary']}")

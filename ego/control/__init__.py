@@ -21,6 +21,7 @@ from ego.control.fuzzy_pid import FuzzyPIDController, FuzzyPIDParams
 from ego.control.narma import NarmaL2Controller, NarmaL2Params
 from ego.control.pid import PID, PIDController, PIDParams
 from ego.control.rbf_smc import RBFSMCController, RBFSMCParams
+from ego.control.tasks import TASKS, Signal, Task
 from ego.params import ConfigError
 
 
@@ -46,20 +47,12 @@ class NoController:
         return {}
 
 
-#: What a task's controllers return: (longitudinal command, front steer angle in rad).
-TASKS: dict[str, str] = {
-    "tracking": "report 000's two-channel tracking: returns (Fx per driven wheel in N, delta in rad)",
-    "curve": "report 002's curve: returns (axial acceleration a_x in m/s^2, delta in rad)",
-    "lane-centering": "report 003's lane centring: returns (axial acceleration a_x in m/s^2, "
-                      "delta in rad)",
-    "car-following": "report 004's car following, one controller per follower: returns (commanded "
-                     "acceleration in m/s^2, 0: the platoon keeps its lane)",
-}
-
 _NONE = ControllerSpec("none", "controller off: zero longitudinal command, delta = 0 (the ego "
                        "coasts straight on)", NoParams, NoController)
 
-#: task -> name -> spec. A scenario belongs to one task; its controllers are looked up there.
+#: task -> name -> spec: the one controller registry. A scenario belongs to one task
+#: (``ego.control.tasks.TASKS`` says what its controllers observe and return); its
+#: controllers are looked up there.
 CONTROLLERS: dict[str, dict[str, ControllerSpec]] = {
     "tracking": {
         spec.name: spec
@@ -155,6 +148,8 @@ __all__ = [
     "FuzzyPIDController",
     "FuzzyPIDParams",
     "RBFSMCController",
+    "Signal",
+    "Task",
     "RBFSMCParams",
     "Controller",
     "ControllerSpec",

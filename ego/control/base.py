@@ -38,7 +38,7 @@ class Observation:
     heading_error: float = 0.0  #: yaw minus the lane's heading at the projection (rad, + left)
     curvature: float = 0.0  #: the lane's curvature at the projection (1/m, + turning left)
     accel_ref: float = 0.0  #: planned axial acceleration, tasks commanding a_x (m/s^2)
-    #: the lane ``s`` is measured along (:class:`ego.road.LanePolyline`), for controllers
+    #: the lane ``s`` is measured along (:class:`ego.lane_frame.LanePolyline`), for controllers
     #: that preview the road (curvature ahead); None where there is no road
     lane: Any = None
 

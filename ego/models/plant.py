@@ -101,7 +101,7 @@ class BicyclePlant:
 
 
 class Lane(Protocol):
-    """What a plant living on a lane needs of it (:class:`ego.road.LanePolyline` has it):
+    """What a plant living on a lane needs of it (:class:`ego.lane_frame.LanePolyline` has it):
     arc length ``s`` (m) along the centre line, offset ``d`` (m, positive left)."""
 
     def offset_point(self, s: float, d: float) -> tuple[float, float]:

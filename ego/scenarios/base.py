@@ -398,7 +398,7 @@ class RoadScenario(Scenario):
     def __init__(self, config, controller: Controller, **kwargs) -> None:
         super().__init__(config, controller, **kwargs)
         self.ego: Plant | None = None  #: the ego's plant (state (X, u, Y, v, psi, r))
-        self.road = None  #: the lane the frame is measured on (ego.road.LanePolyline)
+        self.road = None  #: the lane the frame is measured on (ego.lane_frame.LanePolyline)
         self.road_halfwidth = 0.0  #: |d| beyond which the ego has left the road (m)
         self.actors: list = []  #: scripted SUMO vehicles, ``update(bridge, t)`` each SUMO step
         self.lanes: dict = {}  #: the lanes drawn in the recording (LanePolyline values)

@@ -10,7 +10,7 @@ ends when the ego's centre of gravity leaves the arc (status ``completed``). The
 controller is reset when it takes over; its commands before are ignored.
 
 The arc is found in the lane SUMO gives, not hard-coded: its curved span
-(:meth:`ego.road.LanePolyline.curved_spans`). The errors are the report's, measured at the
+(:meth:`ego.lane_frame.LanePolyline.curved_spans`). The errors are the report's, measured at the
 centre of gravity against that lane: ``e_d`` = distance to the arc centre - R (positive
 outside the arc; ``-d`` on this left-hand arc) and ``e_a`` = heading - tangent heading
 (rad, positive pointing left of the lane).
@@ -32,7 +32,7 @@ import numpy as np
 from ego.models import ActuatorLimits, BicyclePlant, DynamicBicycle, DynamicBicycleParams, VehicleGeometry
 from ego.params import ConfigError, param
 from ego.record.base import Series
-from ego.road import LanePolyline
+from ego.lane_frame import LanePolyline
 from ego.scenarios import metrics as m
 from ego.scenarios.base import CommonConfig, RoadScenario, signal_series
 from ego.scenarios.events import INF, boxes_overlap

@@ -18,7 +18,7 @@ from ego.models.actuators import ActuatorLimits
 from ego.models.plant import BicyclePlant
 from ego.params import param
 from ego.record.base import Scene, Series
-from ego.road import LanePolyline
+from ego.lane_frame import LanePolyline
 from ego.scenarios.base import (
     CommonConfig,
     RoadScenario,

@@ -13,7 +13,7 @@ Two plants (``plant``):
 * ``dynamic-bicycle``: report 002's model with report 003's car
   (:class:`ego.models.DynamicBicycle` on :func:`ego.models.dynamic_params_from_lateral`) in
   world coordinates (:class:`ego.models.BicyclePlant`), its errors measured on the SUMO lane
-  (:class:`ego.road.LanePolyline`), its speed held by a P law on a_x.
+  (:class:`ego.lane_frame.LanePolyline`), its speed held by a P law on a_x.
 
 The report claims 0.000 m max/mean/std of the lateral error over 50 s: at 8 m/s, 50 s
 is 400 m of the first straight, where from rest nothing ever moves (``--set duration=50``
@@ -39,7 +39,7 @@ from ego.models import (
 )
 from ego.params import param
 from ego.record.base import Series
-from ego.road import LanePolyline
+from ego.lane_frame import LanePolyline
 from ego.scenarios import metrics as m
 from ego.scenarios.base import CommonConfig, RoadScenario, signal_series
 from ego.scenarios.trace import Column, Metric, Plot

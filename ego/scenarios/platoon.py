@@ -39,7 +39,7 @@ from ego.control.following import FollowingObservation, PlatoonControl
 from ego.models import Longitudinal, LongitudinalParams, LongitudinalPlant, SpacingPolicy, VehicleGeometry
 from ego.params import ConfigError, param
 from ego.record.base import Scene, Series
-from ego.road import LanePolyline
+from ego.lane_frame import LanePolyline
 from ego.scenarios import metrics as m
 from ego.scenarios import string_stability as ss
 from ego.scenarios.base import CommonConfig, Scenario

@@ -108,7 +108,7 @@ def box_extents(s: float, d: float, rel_heading: float, length: float, width: fl
 class SurroundSensor:
     """Oriented boxes near the ego in a reference lane's frame; see the module docstring.
 
-    ``lane`` is the reference lane (:class:`ego.road.LanePolyline`); ``bands`` maps a lane
+    ``lane`` is the reference lane (:class:`ego.lane_frame.LanePolyline`); ``bands`` maps a lane
     index to (d_lo, d_hi), its edges in that frame (m); ``cg_to_front``, ``length`` and
     ``width`` are the ego's body (m).
     """

@@ -31,7 +31,7 @@ import numpy as np
 
 from ego.control.cascade import GAIN_NAMES, REPORT_GAINS, TUNED_PRESET, Cascade
 from ego.models.lateral_error import LateralError, LateralErrorParams
-from ego.roads import report003_road
+from ego.analytic_road import report003_road
 
 MAX_ERROR = 0.5  #: the report's goal (m)
 DIVERGED = 1e3  #: |e| (m) beyond which a member is lost (its cost is then >= 1e4)

@@ -7,7 +7,7 @@ a_x = 0.3 m/s^2), and its controller failed anywhere else. Here each episode dra
 entry speed in [20, 40] km/h, an axial acceleration in [0, 0.6] m/s^2, a curve (a
 90-degree arc, radius log-uniform in [12, 60] m, left or right, between straights) and a
 small initial offset, and drives :class:`ego.models.DynamicBicycle` through it with the
-lane errors measured exactly as in the scenario (:class:`ego.road.LanePolyline` on a lane
+lane errors measured exactly as in the scenario (:class:`ego.lane_frame.LanePolyline` on a lane
 sampled every degree like ``sumo_nets/curve``). The steer is a stabilising feedback
 (curvature feed-forward plus error feedback, so the car stays where a controller keeps
 it) plus the excitation: random levels up to +-0.1 rad held for 1-5 samples (a
@@ -32,7 +32,7 @@ import numpy as np
 
 from ego.control.narma import DEFAULT_MODEL, FEATURES
 from ego.models import DynamicBicycle, DynamicBicycleParams
-from ego.road import LanePolyline
+from ego.lane_frame import LanePolyline
 
 KMH = 1.0 / 3.6
 

@@ -2,7 +2,7 @@
 
     python sumo_nets/lane_centering/generate.py && python sumo_nets/build.py lane_centering
 
-Report 003's road (:func:`ego.roads.report003_road`): 1000 m straight along +x, a 150 m
+Report 003's road (:func:`ego.analytic_road.report003_road`): 1000 m straight along +x, a 150 m
 cosine easement, a left arc of radius 500 m, the easement back and 1000 m straight along
 +y, 90 degrees in all. Two 3.8 m lanes in the same direction. The edge's shape is the
 analytic road shifted half a lane to the LEFT and spreadType="center", so the right lane's
@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ego.roads import STRAIGHT, report003_road
+from ego.analytic_road import STRAIGHT, report003_road
 
 LANE_WIDTH = 3.8  #: m (report 003)
 STEP = 2.0  #: m between shape points on the curved pieces

@@ -20,7 +20,7 @@ from ego.models import (
     Plant,
     VehicleGeometry,
 )
-from ego.road import LanePolyline
+from ego.lane_frame import LanePolyline
 
 DT = 0.01
 GEOMETRY = VehicleGeometry()

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from ego.road import LanePolyline
+from ego.lane_frame import LanePolyline
 from ego.runner import RunSpec, build
 from ego.scenarios.sensor import Detection, SurroundSensor
 

@@ -132,7 +132,7 @@ def distance_to_road(road, pts, d):
 
 @pytest.mark.parametrize("lane, offset", [(0, 0.0), (1, 3.8)])
 def test_lane_centering_lanes_are_within_1_cm_of_the_analytic_road(lane, offset):
-    from ego.roads import report003_road
+    from ego.analytic_road import report003_road
 
     road = report003_road()
     net = sumolib.net.readNet(str(net_file("lane_centering")))
@@ -143,7 +143,7 @@ def test_lane_centering_lanes_are_within_1_cm_of_the_analytic_road(lane, offset)
 
 
 def test_report003_road_turns_90_degrees_through_easements():
-    from ego.roads import report003_road
+    from ego.analytic_road import report003_road
 
     road = report003_road()
     assert road.final_heading == pytest.approx(math.pi / 2, abs=1e-12)

@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from ego.road import LanePolyline, wrap_angle
+from ego.lane_frame import LanePolyline, wrap_angle
 
 R = 15.0
 
