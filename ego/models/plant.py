@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 from typing import Protocol, runtime_checkable
 
-from ego.models.actuators import ActuatorLimits
+from ego.models.actuators import ActuatorLimits, standstill
 from ego.models.dynamic_bicycle import DynamicBicycle
 from ego.models.geometry import VehicleGeometry
 from ego.models.lateral_error import LateralError
@@ -184,7 +184,7 @@ class LongitudinalPlant:
     lateral acceleration is 0.
     """
 
-    __slots__ = ("model", "lane", "geometry", "limits", "dt", "state", "applied", "_step")
+    __slots__ = ("model", "lane", "geometry", "limits", "dt", "state", "applied", "_step", "_lo", "_hi")
 
     state_names = Longitudinal.state_names
     input_names = ("command",)
@@ -203,6 +203,8 @@ class LongitudinalPlant:
         self.state = (s0, v0, a0)
         self.applied = (0.0,)
         self._step = model.stepper(dt)
+        # the only limits a longitudinal command has, taken out of the dataclass once
+        self._lo, self._hi = self.limits.min_command, self.limits.max_command
 
     @property
     def speed(self) -> float:
@@ -215,6 +217,12 @@ class LongitudinalPlant:
 
     def step(self, action: tuple[float, ...]) -> None:
         s, v, a = self.state
-        command = self.limits.apply(action[0], 0.0, v, 0.0, self.dt)[0]
+        command = action[0]
+        if command < self._lo:
+            command = self._lo
+        elif command > self._hi:
+            command = self._hi
+        if self.limits.stop_speed > 0.0:
+            command = standstill(command, v, self.limits.stop_speed)
         self.applied = (command,)
         self.state = self._step(s, v, a, command)

@@ -11,7 +11,7 @@ below ``ttc_threshold`` it brakes in lane behind the car if braking at up to
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from ego.params import ConfigError, param
 from ego.scenarios import metrics as m
@@ -60,7 +60,9 @@ class CutIn(EvasiveLaneChange):
     config_cls = CutInConfig
     trigger_on = "front"
     in_lane_action = "brake"
-    metric_specs = EvasiveLaneChange.metric_specs + (
+    #: the lane-change metrics stay, but the table shows what a cut-in is judged by
+    metric_specs = tuple(replace(m, headline=m.name in ("max_decel", "lane_change_duration"))
+                         for m in EvasiveLaneChange.metric_specs) + (
         Metric("min_gap", "m", "smallest bumper gap to the front object (the cutting car once it is "
                "in), from the outlines", headline=True),
         Metric("min_ttc", "s", "smallest front TTC", headline=True),

@@ -243,6 +243,7 @@ class PlatoonScenario(Scenario):
                                      lateral_resolution=c.lateral_resolution))
 
     def _setup(self, rng: np.random.Generator) -> None:
+        self._write_row = self.trace.bind(self._row_names)
         c = self.config
         bridge = self.bridge
         width, points = bridge.lane_shapes()[f"{EDGE}_0"]
@@ -291,7 +292,7 @@ class PlatoonScenario(Scenario):
             plant.step((cmd,))
             # in PER_FOLLOWER order
             values += (gap[i], e[i], v, a, plant.applied[0], ttc[i])
-        self.trace.append(self.controller.signals(), **dict(zip(self._row_names, values)))
+        self._write_row(self.controller.signals(), values)
 
     def _before_sumo_step(self) -> None:
         bridge = self.bridge

@@ -111,6 +111,28 @@ class Trace:
         append.__doc__ = "One row: every declared column by name, then the controller's ``signals``."
         return append
 
+    def bind(self, names: Sequence[str]):
+        """A writer for rows built in a loop: ``write(signals, values)`` with ``values`` in
+        the order of ``names``. The names are checked against the declared columns once,
+        here (every column exactly once, nothing else), so each row only pays a length check
+        and its signals' names."""
+        names = tuple(names)
+        if len(names) != len(set(names)) or set(names) != set(self._names):
+            self._reject({n: 0.0 for n in names})
+        order = [names.index(n) for n in self._names]
+        width, signals, add, bad = len(names), self.signal_names, self.rows.append, self._bad_signals
+        identity = order == list(range(width))
+
+        def write(sigs: Mapping[str, float], values: Sequence[float]) -> None:
+            if len(values) != width:
+                raise TraceError(f"trace row has {len(values)} values for {width} columns")
+            if tuple(sigs) != signals:
+                bad(sigs)
+            row = tuple(values) if identity else tuple(values[i] for i in order)
+            add(row + tuple(sigs.values()))
+
+        return write
+
     def _bad_signals(self, signals) -> None:
         raise TraceError(f"controller signals {tuple(signals)} do not match the declared "
                          f"{self.signal_names}")

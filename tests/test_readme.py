@@ -1,0 +1,23 @@
+"""README's kit example runs as written."""
+
+from pathlib import Path
+
+import pytest
+
+README = Path(__file__).resolve().parents[1] / "README.md"
+
+
+@pytest.mark.sumo
+def test_the_kit_example_in_readme_runs(fuzzy_ready):
+    text = README.read_text()
+    block = text.split("## Writing a scenario from the kit")[1].split("```python")[1].split("```")[0]
+    scope: dict = {}
+    exec(compile(block, "README.md", "exec"), scope)  # noqa: S102
+    from ego.control import FuzzyController, FuzzyParams
+
+    cfg = scope["SlowTruckConfig"](block_left=True, block_right=True)
+    r = scope["SlowTruck"](cfg, FuzzyController(FuzzyParams(), cfg.dt), seed=0).run()
+    m = r.metrics
+    # nowhere to go: it brakes behind the truck and follows it
+    assert m["status"] == "completed" and not m["collision"] and m["target_side"] is None
+    assert m["truck_speed"] == 15.0 and m["final_speed"] == pytest.approx(15.0, abs=0.5)
