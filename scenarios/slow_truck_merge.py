@@ -82,9 +82,8 @@ class TruckMerge(EvasiveLaneChange):
 
     def _in_lane_reference(self):
         # nowhere to go: follow whoever is ahead at the follow distance
-        fs, fv = self._follow_reference(self.sensor.front)
-        cruise = self._s0 + self.config.ego_speed * self.t
-        return (fs, fv) if fs < cruise else (cruise, self.config.ego_speed)
+        c = self.config
+        return self.behind_front(self._s0 + c.ego_speed * self.t, c.ego_speed)
 
     def _in_lane_settled(self) -> bool:
         return self.ds <= self.sensor.front.speed + 0.2

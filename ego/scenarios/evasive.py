@@ -137,6 +137,12 @@ class EvasiveLaneChange(HighwayScenario):
             return INF, self._speed_ref
         return self.s + gap - c.follow_gap - c.follow_headway * leader.speed, leader.speed
 
+    def behind_front(self, s_ref: float, v_ref: float) -> tuple[float, float]:
+        """The reference (``s_ref`` m, ``v_ref`` m/s), unless the follow distance to the
+        front object is closer: then that one."""
+        fs, fv = self._follow_reference(self.sensor.front)
+        return (fs, fv) if fs < s_ref else (s_ref, v_ref)
+
     # -- automatic emergency braking ----------------------------------------------------------
     def braking_need(self, margin: float = 0.0) -> float:
         """Deceleration (m/s^2) that keeps the ego ``margin`` (m) behind the front object: its
@@ -465,8 +471,7 @@ class FastFollower(EvasiveLaneChange):
         # keeping the follow distance to any leader
         c = self.config
         s_ref = self.trigger_s + c.evade_speed * (self.t - self.trigger_t)
-        fs, fv = self._follow_reference(self.sensor.front)
-        return (fs, fv) if fs < s_ref else (s_ref, c.evade_speed)
+        return self.behind_front(s_ref, c.evade_speed)
 
     def _in_lane_settled(self) -> bool:
         return self.ttc_rear == INF
