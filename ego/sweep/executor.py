@@ -1,0 +1,188 @@
+"""Engines that run many independent tasks: one interface, a process pool or a Ray cluster.
+
+Every engine runs a picklable top-level function over tasks and yields ``Outcome``s as
+tasks finish (not in submission order). libsumo runs one simulation per process, so each
+engine runs one task at a time per worker process; workers are reused (SUMO is started and
+closed inside each run, and the bridge's guard refuses a second simulation in a process).
+
+A worker that dies (killed, out of memory, a crash in native code) costs its task one
+retry; a task whose worker dies twice comes back as an ``Outcome`` with ``error`` set and no
+value. It never stops the others. ``ego sweep`` and ``ego compare`` use this module.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+from ego.processes import main_module_hidden
+
+ENGINES = ("process", "ray")
+
+
+@dataclass
+class Outcome:
+    """One task's result: ``value`` (what the function returned) or ``error`` (why there is
+    none: the worker died twice, or the function raised)."""
+
+    task: Any
+    value: Any = None
+    error: str = ""
+    attempts: int = 1
+
+
+class Executor(Protocol):
+    """Runs ``fn`` over tasks on some workers."""
+
+    #: how many tasks run at once
+    workers: int
+
+    def run(self, fn: Callable[[Any], Any], tasks: Iterable[Any]) -> Iterator[Outcome]:
+        """Yield one Outcome per task as tasks finish. ``tasks`` is consumed lazily (a few per
+        worker ahead), so a generator of millions costs no memory."""
+
+    def close(self) -> None:
+        """Stop the workers (safe to call twice)."""
+
+
+def default_workers() -> int:
+    return max(1, os.cpu_count() or 1)
+
+
+def _worker_main(conn) -> None:
+    """A worker: run ``fn(task)`` for each (fn, task) received, send back (ok, value or
+    error text). It ends when the parent closes its end of the pipe - or dies: then the
+    pipe reports end-of-file and the worker exits instead of living on."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
+    import pickle
+
+    while True:
+        try:
+            data = conn.recv_bytes()
+        except (EOFError, OSError):
+            return
+        try:
+            fn, task = pickle.loads(data)
+            reply = (True, fn(task))
+        except Exception as exc:  # noqa: BLE001 - the task's own failure goes back as text
+            reply = (False, f"{type(exc).__name__}: {exc}")
+        try:
+            conn.send(reply)
+        except (BrokenPipeError, OSError):
+            return
+
+
+class _Worker:
+    __slots__ = ("process", "conn", "job")
+
+    def __init__(self, ctx) -> None:
+        parent, child = ctx.Pipe(duplex=True)
+        self.process = ctx.Process(target=_worker_main, args=(child,), daemon=True)
+        with main_module_hidden():
+            self.process.start()
+        child.close()
+        self.conn = parent
+        self.job: tuple[Any, int] | None = None  # (task, attempt) it is running
+
+    def stop(self) -> None:
+        try:
+            self.conn.close()
+        finally:
+            self.process.join(timeout=5)
+            if self.process.is_alive():
+                self.process.kill()
+                self.process.join()
+
+
+class ProcessExecutor:
+    """A pool of warm worker processes (forkserver: they start from a clean server and never
+    re-import the user's script), one task at a time each, fed through a pipe per worker so a
+    dead worker is known by name: only its own task is retried, and a new worker takes its
+    place."""
+
+    def __init__(self, workers: int | None = None, retries: int = 1) -> None:
+        self.workers = max(1, int(workers or default_workers()))
+        self.retries = retries
+        self._ctx = multiprocessing.get_context("forkserver")
+        self._pool: list[_Worker] = []
+
+    def run(self, fn: Callable[[Any], Any], tasks: Iterable[Any]) -> Iterator[Outcome]:
+        from multiprocessing.connection import wait as wait_any
+
+        source = iter(tasks)
+        retry: list[tuple[Any, int]] = []
+
+        def next_job() -> tuple[Any, int] | None:
+            if retry:
+                return retry.pop()
+            for task in source:
+                return task, 0
+            return None
+
+        while len(self._pool) < self.workers:
+            self._pool.append(_Worker(self._ctx))
+        for worker in self._pool:
+            job = next_job()
+            if job is None:
+                break
+            worker.job = (job[0], job[1] + 1)
+            worker.conn.send((fn, job[0]))
+        while True:
+            busy = [w for w in self._pool if w.job is not None]
+            if not busy:
+                return
+            ready = wait_any([w.conn for w in busy] + [w.process.sentinel for w in busy])
+            for worker in busy:
+                if worker.conn not in ready and worker.process.sentinel not in ready:
+                    continue
+                task, attempt = worker.job
+                worker.job = None
+                try:
+                    ok, value = worker.conn.recv()
+                except (EOFError, OSError):  # it died with the task
+                    worker.stop()
+                    self._pool[self._pool.index(worker)] = worker = _Worker(self._ctx)
+                    if attempt <= self.retries:
+                        retry.append((task, attempt))
+                    else:
+                        yield Outcome(task, error=f"the worker process died {attempt} times running it",
+                                      attempts=attempt)
+                else:
+                    yield Outcome(task, value if ok else None, "" if ok else value, attempt)
+                job = next_job()
+                if job is not None:
+                    worker.job = (job[0], job[1] + 1)
+                    worker.conn.send((fn, job[0]))
+
+    def pids(self) -> list[int]:
+        """The worker processes' ids (for tests that kill one)."""
+        return [w.process.pid for w in self._pool]
+
+    def close(self) -> None:
+        pool, self._pool = self._pool, []
+        for worker in pool:
+            worker.stop()
+
+    def __enter__(self) -> ProcessExecutor:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def make_executor(engine: str, workers: int | None = None, address: str | None = None) -> Executor:
+    """The engine by name: ``process`` (default) or ``ray`` (``address``: join a cluster)."""
+    if engine == "process":
+        return ProcessExecutor(workers)
+    if engine == "ray":
+        from ego.sweep.ray_engine import RayExecutor
+
+        return RayExecutor(workers, address)
+    from ego.params import ConfigError
+
+    raise ConfigError(f"unknown engine {engine!r} (known: {', '.join(ENGINES)})")
