@@ -2,6 +2,8 @@
 
     ego run SCENARIO --controller NAME [--record PATH] [--seed N] [--set key=value ...] [--json]
     ego compare SCENARIO --controllers A,B,... [--seeds N] [--set key=value ...] --out DIR
+    ego sweep SPEC.toml --out DIR [--engine process|ray] [--jobs N] [--address ADDR]
+              [--record none|failed|all] [--plot X,Y[:METRIC] ...]
     ego list [--json]
     ego train narma-l2 [--seed N] [--samples N] [--epochs N] [--out PATH]
     ego tune lane-centering [--quick] [--workers N] [--seed N] [--drives V[:OFF],...] [--out PATH]
@@ -111,6 +113,36 @@ def _parser() -> argparse.ArgumentParser:
     cmp_.add_argument("--out", required=True, metavar="DIR", help="output folder")
     cmp_.add_argument("--jobs", type=int, default=None, metavar="J",
                       help="parallel processes (default: the number of CPUs)")
+
+    swp = sub.add_parser(
+        "sweep", help="many runs over a parameter space (a TOML spec), resumable Parquet results",
+        description="Run every run of a sweep spec (scenario, controllers, seeds, fixed values, a "
+                    "grid and/or a sample over ranges) on a process pool or a Ray cluster. Results "
+                    "go to DIR/results.parquet as runs finish; the same command again resumes. "
+                    "DIR/summary.md sums them up per controller.",
+        epilog=("Spec format (see scenarios/sweeps/*.toml):\n"
+                "  scenario = \"emergency-brake\"\n  controllers = [\"pid\", \"fuzzy\"]\n"
+                "  seeds = 2                 # or a list [0, 7, 9]\n"
+                "  [set]                     # fixed for every run\n  traffic_density = 5\n"
+                "  [grid]                    # full factorial\n  ego_speed = [20, 25, 30]\n"
+                "  [sample]                  # n points over ranges: random | lhs | sobol\n"
+                "  method = \"sobol\"\n  n = 256\n  lead_gap = [20, 60]\n\n"
+                "Example: ego sweep scenarios/sweeps/envelope.toml --out runs/envelope "
+                "--plot ego_speed,lead_decel:min_gap_front"),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    swp.add_argument("spec", metavar="SPEC.toml", help="the sweep specification")
+    swp.add_argument("--out", required=True, metavar="DIR", help="output folder (resumed if it holds results)")
+    swp.add_argument("--engine", default="process", metavar="ENGINE",
+                     help="process (default: a pool of worker processes) or ray")
+    swp.add_argument("--jobs", type=int, default=None, metavar="N",
+                     help="parallel runs (default: the number of CPUs)")
+    swp.add_argument("--address", default=None, metavar="ADDR",
+                     help="with --engine ray: join this Ray cluster (e.g. auto or ray://host:10001)")
+    swp.add_argument("--record", default="failed", metavar="WHICH",
+                     help="recordings: none, failed (default: runs that did not complete) or all")
+    swp.add_argument("--plot", action="append", default=[], metavar="X,Y[:METRIC]",
+                     help="an envelope plot over two swept parameters (repeatable)")
 
     lst = sub.add_parser("list", help="scenarios, controllers and every parameter",
                          description="List scenarios, controllers and every parameter with "
@@ -331,6 +363,55 @@ def _range(text: str, what: str) -> tuple[float, float]:
     return lo, hi
 
 
+def _sweep(args) -> int:
+    from pathlib import Path
+
+    from ego.sweep import spec as sweep_spec
+    from ego.sweep.executor import ENGINES
+    from ego.sweep.runner import RECORD, parse_plot, print_progress, sweep
+
+    spec = sweep_spec.load(args.spec)
+    if args.engine not in ENGINES:
+        raise ConfigError(f"bad --engine {args.engine!r} (allowed: {', '.join(ENGINES)})")
+    if args.jobs is not None and args.jobs < 1:
+        raise ConfigError(f"bad value for --jobs: {args.jobs} (expected a whole number of at least 1)")
+    if args.address is not None and args.engine != "ray":
+        raise ConfigError("--address needs --engine ray")
+    if args.record not in RECORD:
+        raise ConfigError(f"bad --record {args.record!r} (allowed: {', '.join(RECORD)})")
+    for p in args.plot:
+        parse_plot(p, spec)
+    out = Path(args.out)
+    if not args.out or (out.exists() and not out.is_dir()):
+        raise ConfigError(f"bad --out {args.out!r} (expected a folder)")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ConfigError(f"cannot create --out folder {args.out!r}: {exc.strerror}") from None
+    report = sweep(spec, out, engine=args.engine, jobs=args.jobs, address=args.address,
+                   record=args.record, plots=args.plot, progress=print_progress)
+    statuses = ", ".join(f"{n} {s}" for s, n in sorted(report.by_status.items())) or "none"
+    print(f"{report.total} runs in the spec: {report.already} were already in "
+          f"{out / 'results.parquet'}, {report.ran} ran now ({statuses}) in {report.seconds:.1f} s")
+    if report.interrupted:
+        left = report.total - report.already - report.ran
+        print(f"interrupted: {left} runs remain; the same command resumes", file=sys.stderr)
+        return 130
+    print(f"wrote {out / 'results.parquet'}, {out / 'summary.md'}"
+          + "".join(f", {out / name}" for name in _plot_names(args.plot, spec)))
+    return EXIT_OK
+
+
+def _plot_names(plots, spec) -> list[str]:
+    from ego.sweep.runner import parse_plot
+
+    names = []
+    for p in plots:
+        x, y, metric = parse_plot(p, spec)
+        names.append(f"envelope_{x}_{y}" + (f"_{metric}" if metric else "") + ".png")
+    return names
+
+
 def _train(args) -> int:
     from pathlib import Path
 
@@ -393,6 +474,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _run(args)
         if args.command == "compare":
             return _compare(args)
+        if args.command == "sweep":
+            return _sweep(args)
         if args.command == "train":
             return _train(args)
         if args.command == "tune":

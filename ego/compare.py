@@ -26,12 +26,10 @@ from __future__ import annotations
 
 import csv
 import math
-import multiprocessing
 import os
 import sys
 import time
 from collections.abc import Callable, Sequence
-from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -39,11 +37,11 @@ import numpy as np
 
 from ego.control import controller_spec
 from ego.params import ConfigError, describe
-from ego.processes import main_module_hidden
 from ego.runner import RunSpec, configure, run, split_overrides
 from ego.scenarios import scenario_class
 from ego.scenarios.metrics import flatten, headline_names, metric_units, with_unit
 from ego.scenarios.trace import Metric, Plot
+from ego.sweep.executor import Executor, ProcessExecutor
 
 #: the columns metrics.csv starts with, before the metrics
 RUN_COLUMNS = ("controller", "seed", "status", "error")
@@ -121,9 +119,10 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
             executor: Executor | None = None) -> list[RunRow]:
     """Run everything, write the outputs, return the rows (in controller, seed order).
 
-    The runs go to a pool of ``jobs`` worker processes (default: one per CPU; libsumo allows
-    one simulation per process), or to ``executor`` when given (shut down at the end; e.g.
-    threads for a scenario without SUMO).
+    The runs go to the sweep engines' process pool (``jobs`` workers, default one per CPU;
+    libsumo allows one simulation per process; one code path with ``ego sweep``), or to
+    ``executor`` when given (closed at the end; e.g. ``InlineExecutor`` for a scenario
+    without SUMO).
     """
     out = Path(out)
     specs = plan(scenario, controllers, seeds, overrides, out)
@@ -135,17 +134,18 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
     declared = cls.metrics_declared(config)
     (out / "runs").mkdir(parents=True, exist_ok=True)
     if executor is None:
-        jobs = max(1, min(jobs or os.cpu_count() or 1, len(specs)))
-        executor = ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("forkserver"))
+        executor = ProcessExecutor(max(1, min(jobs or os.cpu_count() or 1, len(specs))))
     rows: list[RunRow] = []
     started = time.perf_counter()
-    with executor as pool:
-        with main_module_hidden():  # workers start on the first submissions
-            futures = [pool.submit(_one, spec) for spec in specs]
-        for future in as_completed(futures):
-            rows.append(future.result())
+    try:
+        for outcome in executor.run(_one, specs):
+            spec = outcome.task
+            rows.append(outcome.value if outcome.value is not None else
+                        RunRow(spec.controller, spec.seed, "error", {}, error=outcome.error))
             if progress:
                 progress(len(rows), len(specs), rows[-1], started)
+    finally:
+        executor.close()
     order = {(s.controller, s.seed): i for i, s in enumerate(specs)}
     rows.sort(key=lambda r: order[(r.controller, r.seed)])
     columns = csv_columns(rows)

@@ -4,7 +4,7 @@ scenario's declarations (the point-mass scenario needs no SUMO)."""
 import csv
 import subprocess
 import sys
-from concurrent.futures import ThreadPoolExecutor
+from ego.sweep.executor import InlineExecutor
 
 import pytest
 from rerun.chunk import RrdReader
@@ -21,7 +21,7 @@ PNG = b"\x89PNG\r\n\x1a\n"
 def test_compare_shows_what_the_scenario_declares_with_units(point_mass, tmp_path):
     out = tmp_path / "cmp"
     rows = compare("point-mass", ["pid", "fuzzy"], 2, {}, out, progress=None,
-                   executor=ThreadPoolExecutor(max_workers=2))
+                   executor=InlineExecutor())
     assert [(r.controller, r.seed, r.status) for r in rows] == [
         ("pid", 0, "completed"), ("pid", 1, "completed"), ("fuzzy", 0, "completed"), ("fuzzy", 1, "completed")]
     md = (out / "metrics.md").read_text().splitlines()

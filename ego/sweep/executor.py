@@ -175,6 +175,23 @@ class ProcessExecutor:
         self.close()
 
 
+class InlineExecutor:
+    """Runs the tasks one after another in this process (tests, scenarios without SUMO, a
+    debugger). Same Outcomes as the others; nothing can die but the whole process."""
+
+    workers = 1
+
+    def run(self, fn: Callable[[Any], Any], tasks: Iterable[Any]) -> Iterator[Outcome]:
+        for task in tasks:
+            try:
+                yield Outcome(task, fn(task))
+            except Exception as exc:  # noqa: BLE001 - the task's own failure is an outcome
+                yield Outcome(task, error=f"{type(exc).__name__}: {exc}")
+
+    def close(self) -> None:
+        pass
+
+
 def make_executor(engine: str, workers: int | None = None, address: str | None = None) -> Executor:
     """The engine by name: ``process`` (default) or ``ray`` (``address``: join a cluster)."""
     if engine == "process":

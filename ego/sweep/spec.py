@@ -1,0 +1,305 @@
+"""A sweep's specification (TOML, read with ``tomllib``) and its lazily expanded runs.
+
+```toml
+scenario = "emergency-brake"
+controllers = ["pid", "fuzzy"]      # names as `ego run` takes them
+seeds = 2                           # seeds 0..1, or a list [0, 7, 9]
+[set]                               # fixed overrides for every run
+traffic_density = 5
+[grid]                              # full factorial over these values
+ego_speed = [20, 25, 30]
+lead_decel = [4, 6, 8]
+[sample]                            # or/and: n points over ranges
+method = "sobol"                    # random | lhs | sobol (scipy.stats.qmc)
+n = 256
+seed = 0                            # of the sampler (default 0)
+lead_gap = [20, 60]
+```
+
+Every name and value is checked before anything runs, with the same checks as ``--set``
+(a grid's every value, a range's both ends), and the number of runs is computed, not
+listed: a spec of billions of runs fails at once. The runs are then generated one by one:
+points (grid x sample) in order, and for each point every controller and seed. A run's id
+is a hash of scenario, controller, seed and overrides, stable across machines and sessions.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import tomllib
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from itertools import product
+from pathlib import Path
+from typing import Any
+
+from ego.control import controller_spec
+from ego.params import ConfigError, apply_overrides, describe
+
+#: SUMO takes seeds 0..2^31-1
+MAX_SEED = 2**31 - 1
+#: more runs than this is a mistake, not a sweep
+MAX_RUNS = 10_000_000
+METHODS = ("random", "lhs", "sobol")
+_TOP = ("scenario", "controllers", "seeds", "set", "grid", "sample")
+
+
+@dataclass(frozen=True)
+class Run:
+    """One run of a sweep: what ``ego run`` would take, and its stable id."""
+
+    run_id: str
+    scenario: str
+    controller: str
+    seed: int
+    overrides: dict
+
+
+@dataclass(frozen=True)
+class Sample:
+    method: str
+    n: int
+    ranges: dict  #: name -> (low, high)
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    scenario: str
+    controllers: tuple[str, ...]
+    seeds: tuple[int, ...]
+    fixed: dict = field(default_factory=dict)
+    grid: dict = field(default_factory=dict)  #: name -> list of values
+    sample: Sample | None = None
+    source: str = ""
+
+    @property
+    def swept(self) -> tuple[str, ...]:
+        """The parameters that vary between runs (grid, then sample)."""
+        return tuple(self.grid) + (tuple(self.sample.ranges) if self.sample else ())
+
+    def points(self) -> int:
+        """How many parameter points: grid combinations x sample points."""
+        n = math.prod(len(v) for v in self.grid.values()) if self.grid else 1
+        return n * (self.sample.n if self.sample else 1)
+
+    def count(self) -> int:
+        """How many runs: points x controllers x seeds."""
+        return self.points() * len(self.controllers) * len(self.seeds)
+
+    def runs(self) -> Iterator[Run]:
+        """Every run, generated lazily: for each point, every controller and seed."""
+        for point in self._points():
+            overrides = {**self.fixed, **point}
+            for controller in self.controllers:
+                for seed in self.seeds:
+                    yield Run(run_id(self.scenario, controller, seed, overrides), self.scenario,
+                              controller, seed, overrides)
+
+    def _points(self) -> Iterator[dict]:
+        names = list(self.grid)
+        combos = product(*(self.grid[n] for n in names)) if names else [()]
+        for combo in combos:
+            base = dict(zip(names, combo))
+            if self.sample is None:
+                yield base
+                continue
+            for drawn in _sample_points(self.sample, self._types):
+                yield {**base, **drawn}
+
+    @property
+    def _types(self) -> dict:
+        return _param_types(self.scenario, self.controllers)
+
+
+def run_id(scenario: str, controller: str, seed: int, overrides: dict) -> str:
+    """A stable id: the first 16 hex digits of SHA-256 over the canonical JSON of the run."""
+    canon = json.dumps({"scenario": scenario, "controller": controller, "seed": int(seed),
+                        "overrides": {k: overrides[k] for k in sorted(overrides)}},
+                       sort_keys=True, separators=(",", ":"), default=str)
+    return hashlib.sha256(canon.encode()).hexdigest()[:16]
+
+
+def _param_types(scenario: str, controllers) -> dict:
+    from ego.scenarios import scenario_class
+
+    cls = scenario_class(scenario)
+    infos = {i.name: i for i in describe(cls.config_cls)}
+    for name in controllers:
+        infos.update({i.name: i for i in describe(controller_spec(name, cls.task).params)})
+    return infos
+
+
+def _sample_points(sample: Sample, infos: dict, chunk: int = 4096) -> Iterator[dict]:
+    """``sample.n`` points over the ranges (scipy.stats.qmc), whole numbers for int parameters."""
+    import numpy as np
+    from scipy.stats import qmc
+
+    names = list(sample.ranges)
+    lo = np.array([sample.ranges[k][0] for k in names], dtype=float)
+    hi = np.array([sample.ranges[k][1] for k in names], dtype=float)
+    d = len(names)
+    if sample.method == "lhs":  # stratified over all n at once
+        blocks = iter([qmc.LatinHypercube(d=d, seed=sample.seed).random(sample.n)])
+    elif sample.method == "sobol":
+        engine = qmc.Sobol(d=d, scramble=True, seed=sample.seed)
+        blocks = (engine.random(min(chunk, sample.n - i)) for i in range(0, sample.n, chunk))
+    else:
+        rng = np.random.default_rng(sample.seed)
+        blocks = (rng.random((min(chunk, sample.n - i), d)) for i in range(0, sample.n, chunk))
+    for block in blocks:
+        for row in lo + block * (hi - lo):
+            point = {}
+            for name, value in zip(names, row):
+                value = float(value)
+                point[name] = int(round(value)) if infos[name].type is int else round(value, 6)
+            yield point
+
+
+def load(path: str | Path) -> SweepSpec:
+    """Read and validate a spec file; ConfigError (one line, naming the file) on anything wrong."""
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"cannot read the sweep spec {str(path)!r}: {exc.strerror or exc}") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{path}: not valid TOML: {exc}") from None
+    return parse(data, str(path))
+
+
+def parse(data: dict, source: str = "the spec") -> SweepSpec:
+    """Validate a spec's contents (see the module docstring)."""
+    def bad(msg: str) -> ConfigError:
+        return ConfigError(f"{source}: {msg}")
+
+    unknown = [k for k in data if k not in _TOP]
+    if unknown:
+        raise bad(f"unknown key {unknown[0]!r} (allowed: {', '.join(_TOP)})")
+    scenario = data.get("scenario")
+    if not isinstance(scenario, str):
+        raise bad("scenario must be a scenario name, e.g. scenario = \"emergency-brake\"")
+    from ego.scenarios import scenario_class
+
+    try:
+        cls = scenario_class(scenario)
+    except ConfigError as exc:
+        raise bad(str(exc)) from None
+    controllers = data.get("controllers")
+    if (not isinstance(controllers, list) or not controllers
+            or not all(isinstance(c, str) for c in controllers)):
+        raise bad("controllers must be a non-empty list of names, e.g. controllers = [\"pid\"]")
+    if len(set(controllers)) != len(controllers):
+        dup = next(c for c in controllers if controllers.count(c) > 1)
+        raise bad(f"controller {dup!r} is listed twice")
+    for name in controllers:
+        try:
+            controller_spec(name, cls.task)
+        except ConfigError as exc:
+            raise bad(str(exc)) from None
+    seeds = _seeds(data.get("seeds", 1), bad)
+    infos = _param_types(scenario, controllers)
+
+    def known(name: str, where: str):
+        info = infos.get(name)
+        if info is None:
+            raise bad(f"[{where}] unknown parameter {name!r} for {scenario} with "
+                      f"{', '.join(controllers)} (see ego list)")
+        return info
+
+    fixed = data.get("set", {})
+    grid = data.get("grid", {})
+    sample_data = data.get("sample")
+    for section, value in (("set", fixed), ("grid", grid)):
+        if not isinstance(value, dict):
+            raise bad(f"[{section}] must be a table of parameter = value")
+    for name, value in fixed.items():
+        known(name, "set")
+        _check(scenario, controllers, {name: value}, f"[set] {name}", bad)
+    for name, values in grid.items():
+        known(name, "grid")
+        if not isinstance(values, list) or not values:
+            raise bad(f"[grid] {name} must be a non-empty list of values")
+        if name in fixed:
+            raise bad(f"{name} is both fixed in [set] and swept in [grid]")
+        for v in values:
+            _check(scenario, controllers, {name: v}, f"[grid] {name}", bad)
+    sample = None
+    if sample_data is not None:
+        if not isinstance(sample_data, dict):
+            raise bad("[sample] must be a table")
+        method = sample_data.get("method", "lhs")
+        if method not in METHODS:
+            raise bad(f"[sample] method {method!r} (allowed: {', '.join(METHODS)})")
+        n = sample_data.get("n")
+        if not isinstance(n, int) or isinstance(n, bool) or n < 1:
+            raise bad(f"[sample] n must be a whole number of at least 1, got {n!r}")
+        sseed = sample_data.get("seed", 0)
+        if not isinstance(sseed, int) or isinstance(sseed, bool) or not 0 <= sseed <= MAX_SEED:
+            raise bad(f"[sample] seed must be a whole number from 0 to {MAX_SEED}, got {sseed!r}")
+        ranges = {}
+        for name, rng in sample_data.items():
+            if name in ("method", "n", "seed"):
+                continue
+            info = known(name, "sample")
+            if info.type not in (int, float) or info.choices is not None:
+                raise bad(f"[sample] {name} is not a number to sample (put it in [grid])")
+            if (not isinstance(rng, list) or len(rng) != 2
+                    or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in rng)
+                    or not rng[0] < rng[1]):
+                raise bad(f"[sample] {name} must be a range [low, high] with low < high, got {rng!r}")
+            if name in fixed or name in grid:
+                raise bad(f"{name} is sampled in [sample] and also in [set] or [grid]")
+            for end in rng:
+                _check(scenario, controllers, {name: end}, f"[sample] {name}", bad)
+            ranges[name] = (float(rng[0]), float(rng[1]))
+        if not ranges:
+            raise bad("[sample] names no parameter range")
+        if method == "sobol" and n & (n - 1):
+            raise bad(f"[sample] sobol needs n a power of 2 for its balance properties, got {n}")
+        sample = Sample(method, n, ranges, sseed)
+    spec = SweepSpec(scenario, tuple(controllers), seeds, dict(fixed), {k: list(v) for k, v in grid.items()},
+                     sample, source)
+    total = spec.count()
+    if total > MAX_RUNS:
+        raise bad(f"expands to {total:,} runs; the limit is {MAX_RUNS:,}")
+    # the first point as a whole (combinations a value-by-value check cannot see)
+    first = next(spec.runs())
+    _check(scenario, controllers, first.overrides, "the first run", bad)
+    return spec
+
+
+def _seeds(value: Any, bad) -> tuple[int, ...]:
+    if isinstance(value, int) and not isinstance(value, bool):
+        if not 1 <= value <= 100_000:
+            raise bad(f"seeds = {value}: give a count from 1 to 100000 or a list of seeds")
+        return tuple(range(value))
+    if isinstance(value, list) and value:
+        for s in value:
+            if not isinstance(s, int) or isinstance(s, bool) or not 0 <= s <= MAX_SEED:
+                raise bad(f"seed {s!r} is not a whole number from 0 to {MAX_SEED}")
+        if len(set(value)) != len(value):
+            raise bad("a seed is listed twice")
+        return tuple(value)
+    raise bad(f"seeds must be a count or a list of seeds, got {value!r}")
+
+
+def _check(scenario: str, controllers, overrides: dict, where: str, bad) -> None:
+    """The values against the scenario's and every controller's parameters, as --set does."""
+    from ego.scenarios import scenario_class
+
+    cls = scenario_class(scenario)
+    try:
+        config, rest = apply_overrides(cls.default_config(overrides), overrides, strict=False)
+        for name in controllers:
+            params = controller_spec(name, cls.task).params
+            mine = {k: v for k, v in rest.items() if k in {i.name for i in describe(params)}}
+            apply_overrides(params(), mine)
+    except ConfigError as exc:
+        raise bad(f"{where}: {exc}") from None
+    except (TypeError, ValueError) as exc:
+        raise bad(f"{where}: {exc}") from None
