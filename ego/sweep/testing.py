@@ -78,3 +78,24 @@ def second_simulation_refused(_: Any = None) -> str:
     if SumoBridge._running:
         raise AssertionError("the bridge's guard was left set after close")
     return refused
+
+
+def run_in_worker(spec: tuple) -> tuple[int, str, bool]:
+    """One real SUMO run: (this worker's pid, the run's status, whether SUMO is still marked
+    running in this process afterwards - it must not be)."""
+    from ego.sumo.bridge import SumoBridge
+
+    status = run_metrics(spec)["status"]
+    return os.getpid(), status, SumoBridge._running
+
+
+def call(job: tuple[str, Any]) -> Any:
+    """``(name, argument)`` -> this module's function ``name`` applied to the argument: one
+    run mixing tasks that succeed, raise and kill their worker."""
+    name, arg = job
+    if name not in _CALLABLE:
+        raise KeyError(f"no task function {name!r}")
+    return _CALLABLE[name](arg)
+
+
+_CALLABLE = {f.__name__: f for f in (square, fail, die_once, always_die, pid)}
