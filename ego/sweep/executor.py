@@ -112,6 +112,17 @@ class ProcessExecutor:
         self._pool: list[_Worker] = []
 
     def run(self, fn: Callable[[Any], Any], tasks: Iterable[Any]) -> Iterator[Outcome]:
+        try:
+            yield from self._run(fn, tasks)
+        finally:
+            # the caller stopped early (or failed): a worker still busy would hand its stale
+            # reply to the next run, so it is killed now and replaced at the next run
+            for worker in [w for w in self._pool if w.job is not None]:
+                worker.process.kill()
+                worker.stop()
+                self._pool.remove(worker)
+
+    def _run(self, fn: Callable[[Any], Any], tasks: Iterable[Any]) -> Iterator[Outcome]:
         from multiprocessing.connection import wait as wait_any
 
         source = iter(tasks)

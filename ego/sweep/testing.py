@@ -1,0 +1,101 @@
+"""Small task functions for testing and measuring the sweep engines.
+
+They live in the package (not in tests/) so that any engine's workers can import them by
+name: a Ray worker or a forkserver child imports ``ego``, not the test directory.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+from pathlib import Path
+from typing import Any
+
+
+def square(x: float) -> float:
+    return x * x
+
+
+def fail(x: Any) -> None:
+    raise ValueError(f"bad task {x!r}")
+
+
+def die_once(marker: str) -> int:
+    """SIGKILL this worker process the first time (leaving ``marker`` behind), return its
+    pid the second time: one death, then a value."""
+    path = Path(marker)
+    if not path.exists():
+        path.write_text(str(os.getpid()))
+        os.kill(os.getpid(), signal.SIGKILL)
+    return os.getpid()
+
+
+def always_die(_: Any) -> None:
+    os.kill(os.getpid(), signal.SIGKILL)
+
+
+def pid(_: Any) -> int:
+    return os.getpid()
+
+
+def ego_location(_: Any) -> str:
+    """Where the worker imported ``ego`` from (it must be the caller's own copy)."""
+    import ego
+
+    return str(Path(ego.__file__).resolve().parent)
+
+
+def run_metrics(spec: tuple) -> dict:
+    """One real SUMO run, not recorded: ``(scenario, controller, seed)`` or
+    ``(scenario, controller, seed, overrides)`` -> its metrics without ``wall_time``."""
+    from ego.runner import RunSpec, run
+
+    scenario, controller, seed, *rest = spec
+    result = run(RunSpec(scenario, controller, seed, dict(rest[0]) if rest else {}, record=None))
+    metrics = dict(result.metrics)
+    metrics.pop("wall_time", None)
+    return metrics
+
+
+def second_simulation_refused(_: Any = None) -> str:
+    """Start a SUMO simulation, then try a second one in the same process: returns the
+    ``SumoError`` text (and raises if the second one was allowed). Both are closed after."""
+    from ego.sumo.bridge import SumoBridge, SumoConfig, SumoError
+    from ego.sumo.net import net_file
+
+    def bridge() -> SumoBridge:
+        return SumoBridge(SumoConfig(net_file("highway"), seed=1))
+
+    with bridge():
+        second = bridge()
+        try:
+            second.start()
+        except SumoError as exc:
+            refused = f"{type(exc).__name__}: {exc}"
+        else:
+            second.close()
+            raise AssertionError("a second SUMO simulation started in one process")
+    if SumoBridge._running:
+        raise AssertionError("the bridge's guard was left set after close")
+    return refused
+
+
+def run_in_worker(spec: tuple) -> tuple[int, str, bool]:
+    """One real SUMO run: (this worker's pid, the run's status, whether SUMO is still marked
+    running in this process afterwards - it must not be)."""
+    from ego.sumo.bridge import SumoBridge
+
+    status = run_metrics(spec)["status"]
+    return os.getpid(), status, SumoBridge._running
+
+
+def call(job: tuple[str, Any]) -> Any:
+    """``(name, argument)`` -> this module's function ``name`` applied to the argument: one
+    run mixing tasks that succeed, raise and kill their worker."""
+    name, arg = job
+    if name not in _CALLABLE:
+        raise KeyError(f"no task function {name!r}")
+    return _CALLABLE[name](arg)
+
+
+_CALLABLE = {f.__name__: f for f in (square, fail, die_once, always_die, pid)}
