@@ -7,6 +7,7 @@
     ego list [--json]
     ego train narma-l2 [--seed N] [--samples N] [--epochs N] [--out PATH]
     ego tune lane-centering [--quick] [--workers N] [--seed N] [--drives V[:OFF],...] [--out PATH]
+                            [--cost model|sumo] [--engine process|ray] [--address ADDR] [--duration S]
 
 Units come from the scenario's declarations: ``ego run`` prints each numeric metric
 followed by its unit, and ``--json`` adds a top-level ``"units"`` object (flattened metric
@@ -195,6 +196,15 @@ def _parser() -> argparse.ArgumentParser:
     tun.add_argument("--drives", default="8,25:1", metavar="V[:OFF],...",
                      help="drives whose costs are summed: speed in m/s, optionally the initial "
                           "offset in m (default 8,25:1; report 003: 8)")
+    tun.add_argument("--cost", default="model", metavar="KIND",
+                     help="model (default: the lateral-error model, the whole population in one numpy "
+                          "simulation) or sumo (each member's cost from SUMO runs of lane-centering on "
+                          "the dynamic bicycle, through --engine)")
+    tun.add_argument("--engine", default="process", metavar="ENGINE",
+                     help="with --cost sumo: process (default) or ray; --workers runs at once")
+    tun.add_argument("--address", default=None, metavar="ADDR", help="with --engine ray: join this cluster")
+    tun.add_argument("--duration", type=float, default=None, metavar="S",
+                     help="with --cost sumo: simulated seconds of each run (default: the whole road)")
     tun.add_argument("--out", default=None, metavar="PATH",
                      help="preset file (.json; default: the preset shipped in the package)")
     return ap
@@ -460,8 +470,21 @@ def _tune(args) -> int:
     out = Path(args.out) if args.out else TUNED_PRESET
     if out.suffix != ".json":
         raise ConfigError(f"bad --out path {args.out!r} (expected a file ending in .json)")
+    from ego.sweep.executor import ENGINES
+
+    if args.cost not in ("model", "sumo"):
+        raise ConfigError(f"bad --cost {args.cost!r} (allowed: model, sumo)")
+    if args.engine not in ENGINES:
+        raise ConfigError(f"bad --engine {args.engine!r} (allowed: {', '.join(ENGINES)})")
+    if args.cost == "model" and (args.engine != "process" or args.address or args.duration is not None):
+        raise ConfigError("--engine, --address and --duration go with --cost sumo")
+    if args.address is not None and args.engine != "ray":
+        raise ConfigError("--address needs --engine ray")
+    if args.duration is not None and not (1.0 <= args.duration <= 3600.0 and math.isfinite(args.duration)):
+        raise ConfigError(f"bad value for --duration: {args.duration} (expected 1 to 3600 s)")
     spec = TuneSpec.quick(args.seed, args.workers) if args.quick else TuneSpec(seed=args.seed, workers=args.workers)
-    tune(TuneSpec(**{**spec.__dict__, "drives": drives}), out)
+    tune(TuneSpec(**{**spec.__dict__, "drives": drives, "cost": args.cost, "engine": args.engine,
+                     "address": args.address, "duration": args.duration}), out)
     return EXIT_OK
 
 

@@ -308,6 +308,14 @@ class TuneSpec:
     #: all ``maxiter`` generations
     tol: float = 0.0
     drives: tuple[tuple[float, float], ...] = ((8.0, 0.0), (25.0, 1.0))
+    #: what a member's cost is: "model" simulates the lateral-error model for the whole
+    #: population at once in numpy (the default, the report's setting); "sumo" runs the
+    #: lane-centering scenario in SUMO on the dynamic bicycle for each member and drive,
+    #: through ``engine`` (process or ray, ``address`` to join a cluster)
+    cost: str = "model"
+    engine: str = "process"
+    address: str | None = None
+    duration: float | None = None  #: cost=sumo: simulated time of each run (s; None: the road)
 
     @classmethod
     def quick(cls, seed: int = 0, workers: int = 1) -> TuneSpec:
@@ -374,6 +382,62 @@ class _Objective:
             self.pool.shutdown()
 
 
+def sumo_cost(task: tuple) -> float:
+    """One member on one drive in SUMO: (gains, speed m/s, offset m, duration s or None) ->
+    the report's cost of the run's lateral error (a run that does not complete costs 1e4+)."""
+    from ego.control.cascade import CascadePID, CascadePIDParams
+    from ego.runner import RunSpec, configure
+
+    gains, speed, offset, duration = task
+    overrides = {"speed": speed, "offset": offset, "plant": "dynamic-bicycle"}
+    if duration is not None:
+        overrides["duration"] = duration
+    cls, config, _, _ = configure(RunSpec("lane-centering", "cascade-pid", 0, overrides))
+    p = CascadePIDParams(preset="report")
+    controller = CascadePID(p, config.dt)
+    controller.law = Cascade(tuple(gains), config.dt, p.integral_limit, p.alpha, p.adaptive,
+                             p.feedforward, math.radians(p.steer_limit), math.radians(p.steer_rate))
+    result = cls(config, controller, seed=0, controller_name="cascade-pid").run()
+    e = np.abs(result.column("d"))
+    if result.status not in ("completed", "timeout") or not e.size:  # timeout: a shortened drive
+        return float(1e4 + (np.nanmax(e) if e.size else 0.0))
+    return float(cost(np.array([e.max()]), np.array([e.mean()]), np.array([e.std()]))[0])
+
+
+class _SumoObjective:
+    """The vectorised objective with each member's cost from SUMO runs on an executor."""
+
+    def __init__(self, spec: TuneSpec) -> None:
+        from ego.sweep.executor import make_executor
+
+        self.spec = spec
+        self.executor = make_executor(spec.engine, spec.workers, spec.address)
+        self.generations = 0
+        self.members = 0
+        self.initial_best: float | None = None
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        members = np.ascontiguousarray(np.asarray(x).T)
+        self.generations += 1
+        self.members += len(members)
+        tasks = [(i, (tuple(map(float, g)), v, o, self.spec.duration))
+                 for i, g in enumerate(members) for v, o in self.spec.drives]
+        costs = np.zeros(len(members))
+        for outcome in self.executor.run(_indexed_sumo_cost, tasks):
+            i = outcome.task[0]
+            costs[i] += outcome.value if outcome.value is not None else 1e6
+        if self.initial_best is None:
+            self.initial_best = float(costs.min())
+        return costs
+
+    def close(self) -> None:
+        self.executor.close()
+
+
+def _indexed_sumo_cost(task: tuple) -> float:
+    return sumo_cost(task[1])
+
+
 def drive_figures(gain_sets, spec: tuple[tuple[float, float], ...]) -> list[dict]:
     """Cost and lateral-error figures of each set of gains on each drive (one simulation)."""
     setups, kappas = drives(spec)
@@ -397,7 +461,7 @@ def tune(spec: TuneSpec = TuneSpec(), out: Path | None = TUNED_PRESET, log=print
 
     t0 = time.perf_counter()
     speeds = tuple((float(v), float(o)) for v, o in spec.drives)
-    objective = _Objective(speeds, spec.workers)
+    objective = _SumoObjective(spec) if spec.cost == "sumo" else _Objective(speeds, spec.workers)
     best = []
 
     def progress(intermediate_result):
