@@ -479,6 +479,11 @@ class EmergencyBrake(EvasiveLaneChange):
         # brake_max_lag behind it, or the controller would keep braking below the leader's
         # speed to win the distance back
         self._ramp_s = max(self._ramp_s + self._ramp_v * dt, self.s - c.brake_max_lag)
+        if self._ramp_v <= 0.0:
+            # to a standstill (behind a car standing still): the reference stops where the
+            # ego does, never behind it, or the position loop would back the car up after
+            # the stop (by up to brake_max_lag)
+            self._ramp_s = max(self._ramp_s, self.s)
         s_ref, v_ref = self._ramp_s, self._ramp_v
         fs, fv = self._follow_reference(front)
         if fs < s_ref:
