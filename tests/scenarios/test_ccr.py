@@ -179,3 +179,16 @@ def test_ccr_files_hold_the_euro_ncap_matrices():
     assert b["grid"] == {"lead_decel": [2, 6], "lead_gap": [12, 40]}
     for spec in (s, m_, b):
         assert spec["controllers"] == list(CONTROLLER_NAMES)
+
+
+def test_the_envelope_classifier_knows_a_stopped_lead():
+    from ego.scenarios.envelope import avoidable
+
+    # a stopped lead 30 m ahead of the ego at 22.2 m/s: braking at 6.96 m/s^2 needs 35.5 m
+    stopped, _ = apply_overrides(EmergencyBrakeConfig(), {"lead_speed": 0, "lead_final_speed": 0})
+    assert not avoidable({"trigger_time": 0.0}, 30.0, 22.222, stopped, DECEL_LIMIT)
+    assert avoidable({"trigger_time": 0.0}, 40.0, 22.222, stopped, DECEL_LIMIT)
+    # the same gap to a lead at the ego's speed is no danger at all
+    assert avoidable({"trigger_time": 0.0}, 30.0, 22.222, EmergencyBrakeConfig(ego_speed=22.222,
+                                                                               lead_brake_time=100.0),
+                      DECEL_LIMIT)
