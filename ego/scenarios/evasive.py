@@ -400,6 +400,9 @@ def max_decel(t: np.ndarray, speed: np.ndarray, window: float = 0.1) -> float | 
 # --- emergency brake ------------------------------------------------------------------------
 
 LEAD = "lead"
+#: the ego comes to rest at or below this speed along the road, and moves again above
+#: MOVING (m/s)
+STOPPED, MOVING = 0.05, 0.5
 LEAD_TYPE = VehicleType("lead", length=4.5, width=1.8, sigma=0.0, color=(255, 150, 0))
 
 
@@ -467,10 +470,12 @@ class EmergencyBrake(EvasiveLaneChange):
 
     def _on_trigger(self) -> None:
         self._ramp_s, self._ramp_v = self.s - self.config.dt * self.ds, self.ds
+        self._rest_s: float | None = None  #: where the ego came to rest behind a stopped car
+        self._moving = True  #: it has moved (faster than MOVING) since it last came to rest
 
     def _in_lane_reference(self):
         # brake at brake_decel down to the leader's speed, never planning closer than the
-        # follow distance
+        # follow distance (a stopped ego stays where it stopped)
         c = self.config
         dt = c.dt
         front = self.sensor.front
@@ -479,15 +484,22 @@ class EmergencyBrake(EvasiveLaneChange):
         # brake_max_lag behind it, or the controller would keep braking below the leader's
         # speed to win the distance back
         self._ramp_s = max(self._ramp_s + self._ramp_v * dt, self.s - c.brake_max_lag)
-        if self._ramp_v <= 0.0:
-            # to a standstill (behind a car standing still): the reference stops where the
-            # ego does, never behind it, or the position loop would back the car up after
-            # the stop (by up to brake_max_lag)
-            self._ramp_s = max(self._ramp_s, self.s)
         s_ref, v_ref = self._ramp_s, self._ramp_v
         fs, fv = self._follow_reference(front)
         if fs < s_ref:
             s_ref, v_ref = fs, fv
+        if self.ds > MOVING:
+            self._moving = True
+        if self._ramp_v <= 0.0:
+            # stopped behind a car standing still: the reference stays where the ego came to
+            # rest (its latest stop), never behind it - neither the ramp (up to brake_max_lag
+            # behind) nor the follow distance (when the ego stopped closer) may back the car
+            # up. While it still moves, a reference behind it asks for all the braking there
+            # is; a creep below MOVING is no new stop (the reference does not follow it).
+            if self._moving and self.ds <= STOPPED:
+                self._rest_s, self._moving = self.s, False
+            if self._rest_s is not None:
+                s_ref, v_ref = max(s_ref, self._rest_s), 0.0
         return s_ref, v_ref
 
     def _in_lane_settled(self) -> bool:

@@ -192,3 +192,16 @@ def test_the_envelope_classifier_knows_a_stopped_lead():
     assert avoidable({"trigger_time": 0.0}, 30.0, 22.222, EmergencyBrakeConfig(ego_speed=22.222,
                                                                                lead_brake_time=100.0),
                       DECEL_LIMIT)
+
+
+@pytest.mark.sumo
+def test_stopped_by_the_aeb_behind_a_car_that_then_stops_does_not_roll_away(fuzzy_ready):
+    # CCRb 12 m, 2 m/s^2, a late trigger: the AEB stops the ego while the lead still rolls,
+    # then the lead stops too. The braking reference used to stay behind the resting ego, so
+    # the controller never held it and it rolled backwards until the run diverged
+    r = _run("fuzzy-pid", ego_speed=13.889, lead_final_speed=0, lead_gap=12, lead_decel=2,
+             ttc_threshold=1.0, traffic_density=0, evade=False)
+    m = r.metrics
+    assert m["status"] == "completed" and not m["collision"], m["status_detail"]
+    s = r.column("s")
+    assert s.max() - s[-1] < 1.0 and r.column("ds").min() > -0.5  # was: -1 m/s, diverged
