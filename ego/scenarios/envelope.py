@@ -48,7 +48,7 @@ def avoidable(metrics: dict, trace_gap_at_trigger: float, ego_speed_at_trigger: 
               config, decel_limit: float) -> bool:
     """Would braking at ``decel_limit`` from the trigger have kept the ego behind the lead?"""
     def fn(t):
-        return lead_speed(t, config.ego_speed, config.lead_brake_time, config.lead_decel,
+        return lead_speed(t, config.lead_cruise_speed, config.lead_brake_time, config.lead_decel,
                           config.lead_final_speed)
     return braking_min_gap(metrics["trigger_time"], trace_gap_at_trigger, ego_speed_at_trigger,
                            decel_limit, fn) > 0.0

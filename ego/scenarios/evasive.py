@@ -23,10 +23,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ego.params import param
+from ego.params import ConfigError, param
 from ego.scenarios import metrics as m
 from ego.scenarios.events import INF, GapRule, check_lane, choose_lane
-from ego.scenarios.highway import LANE_NAMES, ROUTE, HighwayConfig, HighwayScenario
+from ego.scenarios.highway import (
+    EGO,
+    LANE_NAMES,
+    ROUTE,
+    TRAFFIC_TYPE,
+    HighwayConfig,
+    HighwayScenario,
+)
 from ego.scenarios.sensor import Detection
 from ego.scenarios.trace import Metric
 from ego.sumo.bridge import VehicleSpec, VehicleType
@@ -64,6 +71,27 @@ class EvasiveConfig(HighwayConfig):
                              "(the front object's deceleration + closing^2 / (2 gap))", min=0.5, max=12.0)
     aeb_ttc: float = param(1.0, "s", "AEB engages in any phase below this front TTC, unless the ego "
                            "clears the front object sideways first", min=0.0, max=10.0)
+    evade: bool = param(True, "-", "change lane when gap acceptance finds a lane; false: never "
+                        "change lane, always the in-lane manoeuvre at the trigger (pure emergency "
+                        "braking behind a braking car: what an AEB test measures)")
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        # the background traffic keeps a safe spacing (HighwayScenario.background: the larger
+        # of 20 m and 1.5 s at traffic_speed, plus a car length); a denser flow cannot be
+        # placed, so say so before SUMO starts
+        top = max_traffic_density(self.traffic_speed)
+        if self.traffic_density > top:
+            raise ConfigError(f"bad value for traffic_density: {self.traffic_density:g} (at most "
+                              f"{top:.1f} veh/km at traffic_speed={self.traffic_speed:g} m/s: the "
+                              f"background keeps {max(20.0, 1.5 * self.traffic_speed) + TRAFFIC_TYPE.length:.1f} m "
+                              f"between cars)")
+
+
+def max_traffic_density(traffic_speed: float) -> float:
+    """The densest background (veh/km per lane) :meth:`HighwayScenario.background` can place at
+    ``traffic_speed`` (m/s): one car per minimum spacing."""
+    return 1000.0 / (max(20.0, 1.5 * traffic_speed) + TRAFFIC_TYPE.length)
 
 
 class EvasiveLaneChange(HighwayScenario):
@@ -245,6 +273,8 @@ class EvasiveLaneChange(HighwayScenario):
     def _choose_lane(self) -> tuple[str | None, str]:
         """The better acceptable adjacent lane (or None) and why."""
         c = self.config
+        if not c.evade:
+            return None, f"evade=false: no lane change, {self.in_lane_action} in lane"
         rule = GapRule(c.accept_gap, c.accept_time)
         lane = self.target_lane
         return choose_lane(self._lane_check("left", lane + 1, rule),
@@ -370,20 +400,42 @@ def max_decel(t: np.ndarray, speed: np.ndarray, window: float = 0.1) -> float | 
 # --- emergency brake ------------------------------------------------------------------------
 
 LEAD = "lead"
+#: the ego comes to rest at or below this speed along the road, and moves again above
+#: MOVING (m/s)
+STOPPED, MOVING = 0.05, 0.5
 LEAD_TYPE = VehicleType("lead", length=4.5, width=1.8, sigma=0.0, color=(255, 150, 0))
+
+
+#: ``lead_speed`` = SAME_AS_EGO: the lead car drives at ``ego_speed``
+SAME_AS_EGO = -1.0
 
 
 @dataclass(frozen=True)
 class EmergencyBrakeConfig(EvasiveConfig):
     lead_gap: float = param(30.0, "m", "gap from the ego's front to the lead car's rear at t = 0",
                             min=5.0, max=300.0)
+    lead_speed: float = param(SAME_AS_EGO, "m/s", "the lead car's speed from t = 0 until it brakes: "
+                              "-1 = ego_speed, 0 = stopped (Euro NCAP CCRs), 5.556 = 20 km/h (CCRm)",
+                              min=-1.0, max=45.0)
     lead_brake_time: float = param(2.0, "s", "when the lead car starts braking", min=0.0)
     lead_decel: float = param(6.0, "m/s^2", "lead car's deceleration", min=0.5, max=12.0)
-    lead_final_speed: float = param(5.0, "m/s", "speed the lead car brakes to", min=0.0, max=40.0)
+    lead_final_speed: float = param(5.0, "m/s", "speed the lead car brakes to; at or above its "
+                                    "speed it never brakes (it never speeds up)", min=0.0, max=40.0)
     brake_decel: float = param(8.0, "m/s^2", "speed reference's deceleration when braking in lane",
                                min=0.5, max=12.0)
     brake_max_lag: float = param(2.0, "m", "how far the braking reference may fall behind the ego",
                                  min=0.1, max=50.0)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.lead_speed != SAME_AS_EGO and self.lead_speed < 0.0:
+            raise ConfigError(f"bad value for lead_speed: {self.lead_speed:g} (expected -1 for "
+                              f"ego_speed, or a speed of at least 0 m/s)")
+
+    @property
+    def lead_cruise_speed(self) -> float:
+        """The lead car's speed until it brakes (m/s): ``lead_speed``, or ``ego_speed`` for -1."""
+        return self.ego_speed if self.lead_speed == SAME_AS_EGO else self.lead_speed
 
 
 class EmergencyBrake(EvasiveLaneChange):
@@ -397,17 +449,33 @@ class EmergencyBrake(EvasiveLaneChange):
         c = self.config
         self.bridge.add_type(LEAD_TYPE)
         lead_front = c.ego_start + c.lead_gap + LEAD_TYPE.length
-        self.actors.append(BrakingLeader(LEAD, c.ego_speed, c.lead_brake_time, c.lead_decel,
+        self.actors.append(BrakingLeader(LEAD, c.lead_cruise_speed, c.lead_brake_time, c.lead_decel,
                                          c.lead_final_speed))
         self.colors[LEAD] = LEAD_TYPE.color
-        return [VehicleSpec(LEAD, LEAD_TYPE.id, ROUTE, c.ego_lane, lead_front, c.ego_speed)], [LEAD]
+        # inserted at the ego's speed at least: SUMO would refuse to insert the ego closer to
+        # a slower car than its own stopping distance; BrakingLeader.start sets the lead's
+        # speed before the first step (it does not move in between)
+        speed = max(c.ego_speed, c.lead_cruise_speed)
+        return [VehicleSpec(LEAD, LEAD_TYPE.id, ROUTE, c.ego_lane, lead_front, speed)], [LEAD]
+
+    def _reset_plan(self) -> None:
+        super()._reset_plan()
+        #: (ego speed, other party's speed) along the road at the collision (m/s)
+        self._impact: tuple[float, float] | None = None
+
+    def _collided(self, c) -> None:
+        ego_speed, other_speed = self.ds, (c.victim_speed if c.collider == EGO else c.collider_speed)
+        self._impact = (ego_speed, other_speed)
+        super()._collided(c)
 
     def _on_trigger(self) -> None:
         self._ramp_s, self._ramp_v = self.s - self.config.dt * self.ds, self.ds
+        self._rest_s: float | None = None  #: where the ego came to rest behind a stopped car
+        self._moving = True  #: it has moved (faster than MOVING) since it last came to rest
 
     def _in_lane_reference(self):
         # brake at brake_decel down to the leader's speed, never planning closer than the
-        # follow distance
+        # follow distance (a stopped ego stays where it stopped)
         c = self.config
         dt = c.dt
         front = self.sensor.front
@@ -420,10 +488,36 @@ class EmergencyBrake(EvasiveLaneChange):
         fs, fv = self._follow_reference(front)
         if fs < s_ref:
             s_ref, v_ref = fs, fv
+        if self.ds > MOVING:
+            self._moving = True
+        if self._ramp_v <= 0.0:
+            # stopped behind a car standing still: the reference stays where the ego came to
+            # rest (its latest stop), never behind it - neither the ramp (up to brake_max_lag
+            # behind) nor the follow distance (when the ego stopped closer) may back the car
+            # up. While it still moves, a reference behind it asks for all the braking there
+            # is; a creep below MOVING is no new stop (the reference does not follow it).
+            if self._moving and self.ds <= STOPPED:
+                self._rest_s, self._moving = self.s, False
+            if self._rest_s is not None:
+                s_ref, v_ref = max(s_ref, self._rest_s), 0.0
         return s_ref, v_ref
 
     def _in_lane_settled(self) -> bool:
         return self.ds <= self.sensor.front.speed + 0.1 or self.gap_front == INF
+
+    metric_specs = EvasiveLaneChange.metric_specs + (
+        Metric("impact_speed", "m/s", "the ego's speed along the road at the collision (none: no "
+               "collision)"),
+        Metric("impact_relative_speed", "m/s", "the ego's speed minus the other party's (the lead "
+               "car's) at the collision (none: no collision)"),
+    )
+
+    def _metrics(self, trace, columns) -> dict:
+        out = super()._metrics(trace, columns)
+        ego_speed, other = self._impact if self._impact is not None else (None, None)
+        out["impact_speed"] = m.json_number(ego_speed, 4)
+        out["impact_relative_speed"] = m.json_number(None if ego_speed is None else ego_speed - other, 4)
+        return out
 
 
 # --- fast follower --------------------------------------------------------------------------

@@ -60,8 +60,10 @@ def background_traffic(
 class BrakingLeader:
     """A SUMO vehicle that cruises, then at ``brake_time`` brakes at ``decel`` to ``final_speed``.
 
-    The vehicle's SUMO type must allow ``decel`` (:meth:`vehicle_decel`); SUMO then lowers
-    its speed by exactly decel*step each step, and holds ``final_speed`` afterwards.
+    SUMO lowers its speed by exactly decel*step each step (its decel is set to ``decel``,
+    its emergency decel to at least that), and holds ``final_speed`` afterwards. A
+    ``final_speed`` at or above ``cruise_speed`` means it never brakes: it holds
+    ``cruise_speed`` (0: a car standing still from the start, e.g. Euro NCAP CCRs).
     """
 
     vid: str
@@ -72,13 +74,20 @@ class BrakingLeader:
     braking: bool = False
 
     def start(self, bridge: SumoBridge) -> None:
+        """Call once it is inserted. Whatever speed it was inserted at, it drives
+        ``cruise_speed`` from now on: SUMO refuses to insert a car at speed behind a stopped
+        one closer than its own stopping distance, so a scenario may insert a slow leader at
+        its follower's speed (passing that check) and the speed is set here, before the
+        first step, without SUMO's deceleration limit and without moving it."""
         veh = bridge.libsumo.vehicle
         veh.setLaneChangeMode(self.vid, 0)
+        if veh.getSpeed(self.vid) != self.cruise_speed:
+            veh.setPreviousSpeed(self.vid, self.cruise_speed, 0.0)
         veh.setSpeed(self.vid, self.cruise_speed)
 
     def update(self, bridge: SumoBridge, t: float) -> bool:
         """Call every SUMO step with scenario time ``t`` (s); True on the step braking starts."""
-        if not self.braking and t >= self.brake_time - 1e-9:
+        if not self.braking and t >= self.brake_time - 1e-9 and self.final_speed < self.cruise_speed:
             self.braking = True
             veh = bridge.libsumo.vehicle
             veh.setEmergencyDecel(self.vid, max(9.0, self.decel))
