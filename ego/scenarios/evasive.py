@@ -470,6 +470,7 @@ class EmergencyBrake(EvasiveLaneChange):
 
     def _on_trigger(self) -> None:
         self._ramp_s, self._ramp_v = self.s - self.config.dt * self.ds, self.ds
+        self._trigger_gap, self._trigger_speed = self.gap_front, self.ds
         self._rest_s: float | None = None  #: where the ego came to rest behind a stopped car
         self._moving = True  #: it has moved (faster than MOVING) since it last came to rest
 
@@ -510,6 +511,9 @@ class EmergencyBrake(EvasiveLaneChange):
                "collision)"),
         Metric("impact_relative_speed", "m/s", "the ego's speed minus the other party's (the lead "
                "car's) at the collision (none: no collision)"),
+        Metric("collision_avoidable", "-", "true: braking at the friction limit from the trigger "
+               "would have kept the ego behind the lead, so the collision is the controller's or the "
+               "planner's; false: physics left no way out by braking; none: no collision"),
     )
 
     def _metrics(self, trace, columns) -> dict:
@@ -517,7 +521,18 @@ class EmergencyBrake(EvasiveLaneChange):
         ego_speed, other = self._impact if self._impact is not None else (None, None)
         out["impact_speed"] = m.json_number(ego_speed, 4)
         out["impact_relative_speed"] = m.json_number(None if ego_speed is None else ego_speed - other, 4)
+        out["collision_avoidable"] = self._avoidable() if self.collision is not None else None
         return out
+
+    def _avoidable(self) -> bool | None:
+        """The braking criterion of :mod:`ego.scenarios.envelope` from this run's trigger."""
+        from ego.scenarios.envelope import avoidable
+
+        if self.trigger_t is None or self._trigger_gap == INF:
+            return None
+        p = self.ego.model.params
+        return avoidable({"trigger_time": self.trigger_t}, self._trigger_gap, self._trigger_speed,
+                         self.config, p.F_max / p.m + p.f * p.g)
 
 
 # --- fast follower --------------------------------------------------------------------------

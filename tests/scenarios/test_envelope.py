@@ -80,16 +80,29 @@ def _classify(args):
     controller, case = args
     case = dict(case)
     seed = case.pop("seed")
-    spec = _spec(controller, seed, case)
-    r = run(spec)
-    m = r.metrics
+    m = run(_spec(controller, seed, case)).metrics
     verdict = None
     if m["collision"]:
-        _, config, _, _ = configure(spec)
-        i = int(np.searchsorted(r.column("t"), m["trigger_time"]))
-        verdict = ("avoidable" if avoidable(m, float(r.column("gap_front")[i]), float(r.column("ds")[i]),
-                                            config, DECEL_LIMIT) else "unavoidable")
+        verdict = "avoidable" if m["collision_avoidable"] else "unavoidable"
     return controller, seed, case, m["status"], verdict, m["status_detail"]
+
+
+@pytest.mark.sumo
+def test_the_scenario_classifies_its_collision_by_the_braking_criterion(fuzzy_ready):
+    # no controller: braking from the trigger would have stopped in time
+    m = run(_spec("none", 0, {})).metrics
+    assert m["collision"] and m["collision_avoidable"] is True
+    # a lead braking at 8.5 m/s^2 from 57 m ahead at 32.5 m/s: beyond the tyres
+    r = run(_spec("pid", 3751, dict(ego_speed=32.5, lead_decel=8.52, lead_gap=57.37, traffic_density=22.07,
+                                    block_left=True)))
+    assert r.metrics["collision"] and r.metrics["collision_avoidable"] is False
+    # the same verdict from the trace, by the envelope's criterion
+    _, config, _, _ = configure(_spec("pid", 3751, dict(ego_speed=32.5, lead_decel=8.52, lead_gap=57.37,
+                                                         traffic_density=22.07, block_left=True)))
+    i = int(np.searchsorted(r.column("t"), r.metrics["trigger_time"]))
+    assert not avoidable(r.metrics, float(r.column("gap_front")[i]), float(r.column("ds")[i]), config,
+                         DECEL_LIMIT)
+    assert run(_spec("pid", 0, {})).metrics["collision_avoidable"] is None  # no collision
 
 
 @pytest.mark.sumo
