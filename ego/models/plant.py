@@ -97,7 +97,12 @@ class BicyclePlant:
         x = self.state
         command, delta = self._apply(action[0], action[1], x[1], self.applied[1], self.dt)
         self.applied = (command, delta)
-        self.state, self.lateral_accel = self._step(x, command, delta)
+        state, self.lateral_accel = self._step(x, command, delta)
+        if state[1] < 0.0 <= x[1] and command <= 0.0 and self.limits.stop_speed > 0.0:
+            # at rest with no drive the brakes hold the car: the reports' rolling resistance
+            # (a constant force) would otherwise push it backwards
+            state = (state[0], 0.0, *state[2:])
+        self.state = state
 
 
 class Lane(Protocol):

@@ -32,26 +32,36 @@ def lead_speed(t: np.ndarray, speed: float, brake_time: float, decel: float, fin
 
 
 def braking_min_gap(t0: float, gap0: float, ego_speed0: float, decel: float, lead_speed_fn,
-                    horizon: float = 30.0, dt: float = 0.001) -> float:
+                    horizon: float = 30.0, dt: float = 0.001, lead_step: float | None = None) -> float:
     """Smallest gap (m) over ``horizon`` seconds when the ego brakes at ``decel`` (m/s^2)
-    from ``ego_speed0`` at ``t0`` with ``gap0`` to a lead moving at ``lead_speed_fn(t)``
-    (trapezoidal rule on the closing speed)."""
+    from ``ego_speed0`` at ``t0`` with ``gap0`` to a lead moving at ``lead_speed_fn(t)``.
+
+    With ``lead_step`` (s) the lead moves as SUMO moves it: each step by its speed at the
+    step's end times the step (SUMO's Euler update; a braking car then covers
+    ``decel * step^2 / 2`` less per step than the continuous profile), else by the
+    continuous profile (trapezoidal rule)."""
     t = t0 + np.arange(0.0, horizon, dt)
     v_ego = np.maximum(ego_speed0 - decel * (t - t0), 0.0)
-    v_lead = lead_speed_fn(t)
-    closing = v_ego - v_lead
-    moved = np.concatenate(([0.0], np.cumsum(0.5 * (closing[1:] + closing[:-1]) * dt)))
-    return float(gap0 - moved.max())
+    ego_x = np.concatenate(([0.0], np.cumsum(0.5 * (v_ego[1:] + v_ego[:-1]) * dt)))
+    if lead_step:
+        tk = t0 + lead_step * np.arange(int(horizon / lead_step) + 2)
+        xk = np.concatenate(([0.0], np.cumsum(lead_speed_fn(tk[1:]) * lead_step)))
+        lead_x = np.interp(t, tk, xk)
+    else:
+        v_lead = lead_speed_fn(t)
+        lead_x = np.concatenate(([0.0], np.cumsum(0.5 * (v_lead[1:] + v_lead[:-1]) * dt)))
+    return float(np.min(gap0 + lead_x - ego_x))
 
 
 def avoidable(metrics: dict, trace_gap_at_trigger: float, ego_speed_at_trigger: float,
               config, decel_limit: float) -> bool:
-    """Would braking at ``decel_limit`` from the trigger have kept the ego behind the lead?"""
+    """Would braking at ``decel_limit`` from the trigger have kept the ego behind the lead (the
+    lead moving as SUMO moves it, step by step)?"""
     def fn(t):
         return lead_speed(t, config.lead_cruise_speed, config.lead_brake_time, config.lead_decel,
                           config.lead_final_speed)
     return braking_min_gap(metrics["trigger_time"], trace_gap_at_trigger, ego_speed_at_trigger,
-                           decel_limit, fn) > 0.0
+                           decel_limit, fn, lead_step=config.sumo_step) > 0.0
 
 
 def sample(n: int, seed: int) -> Iterator[dict]:

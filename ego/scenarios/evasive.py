@@ -173,15 +173,21 @@ class EvasiveLaneChange(HighwayScenario):
 
     # -- automatic emergency braking ----------------------------------------------------------
     def braking_need(self, margin: float = 0.0) -> float:
-        """Deceleration (m/s^2) that keeps the ego ``margin`` (m) behind the front object: its
-        own deceleration plus closing^2 / (2 (gap - margin)) (0 when nothing is ahead)."""
+        """Constant deceleration (m/s^2) that keeps the ego ``margin`` (m) behind the front
+        object (0 when nothing is ahead). A front object braking at b: the ego must stop
+        within the gap plus that object's stopping distance, v^2 / (2 (gap - margin +
+        v_f^2 / (2 b))), but no less than closing^2 / (2 (gap - margin)) (the object may stop
+        braking); one at constant speed: closing^2 / (2 (gap - margin)) when closing in."""
         front = self.sensor.front
         if front.gap == INF:
             return 0.0
-        need = max(0.0, -front.accel)
+        room = max(front.gap - margin, 0.1)
         closing = self.ds - front.speed
-        if closing > 0.0:
-            need += closing * closing / (2.0 * max(front.gap - margin, 0.1))
+        need = closing * closing / (2.0 * room) if closing > 0.0 else 0.0
+        decel = -front.accel
+        if decel > 0.5:
+            v = max(self.ds, 0.0)
+            need = max(need, v * v / (2.0 * (room + front.speed * front.speed / (2.0 * decel))))
         return need
 
     def _aeb(self) -> None:
@@ -202,7 +208,10 @@ class EvasiveLaneChange(HighwayScenario):
                            f"{front.gap:.1f} m, TTC {self.ttc_front:.2f} s, needs {need:.1f} m/s^2)", "WARN")
         else:
             need = self.braking_need()
-            if need < 0.5 * c.aeb_decel and not self._imminent():
+            # it brakes until it no longer closes in: a release while closing hands a fast
+            # approach back to a slow position loop
+            closing = self.ds - self.sensor.front.speed if self.sensor.front.gap != INF else 0.0
+            if need < 0.5 * c.aeb_decel and closing <= 0.0 and not self._imminent():
                 self.aeb_active = False
                 self.event("aeb", f"AEB releases (needs {need:.1f} m/s^2)")
 
@@ -237,7 +246,8 @@ class EvasiveLaneChange(HighwayScenario):
             # evade at evade_speed, but never plan closer than the follow distance to whoever
             # drives ahead in the target lane (that traffic may brake too), nor to the car
             # the ego's body still overlaps (the sensor's front object) until it has cleared it
-            s_ref, v_ref = self.trigger_s + c.evade_speed * (self.t - self.trigger_t), c.evade_speed
+            v_evade = self._evade_speed
+            s_ref, v_ref = self.trigger_s + v_evade * (self.t - self.trigger_t), v_evade
             for leader in (self._target_leader(), self.sensor.front):
                 fs, fv = self._follow_reference(leader)
                 if fs < s_ref:
@@ -284,6 +294,10 @@ class EvasiveLaneChange(HighwayScenario):
         c = self.config
         self.chosen, self.choice_reason = self._choose_lane()
         self.trigger_t, self.trigger_ttc, self.trigger_s = self.t, ttc, self.s
+        # "decelerate and change lane": evading a car ahead never speeds up towards it (from
+        # below evade_speed the ego keeps its speed); evading one behind does speed up
+        self._evade_speed = (min(c.evade_speed, self.ds) if self.trigger_on == "front"
+                             else c.evade_speed)
         other = self.sensor.front if self.trigger_on == "front" else self.sensor.rear
         gap = self.gap_front if self.trigger_on == "front" else self.gap_rear
         closing = abs(self.ds - other.speed)
@@ -485,6 +499,11 @@ class EmergencyBrake(EvasiveLaneChange):
         # brake_max_lag behind it, or the controller would keep braking below the leader's
         # speed to win the distance back
         self._ramp_s = max(self._ramp_s + self._ramp_v * dt, self.s - c.brake_max_lag)
+        if self.aeb_active:
+            # the AEB may brake harder than the ramp: the ramp waits for the car, so the
+            # position loop does not find its reference far ahead when the AEB lets go
+            self._ramp_s = min(self._ramp_s, self.s + c.brake_max_lag)
+            self._ramp_v = min(self._ramp_v, max(self.ds, front.speed))
         s_ref, v_ref = self._ramp_s, self._ramp_v
         fs, fv = self._follow_reference(front)
         if fs < s_ref:

@@ -53,10 +53,10 @@ def test_the_reports_unstable_form_is_reported_as_such(controller, overrides, tm
     assert RrdReader(rrd).recordings()  # the recording is kept
 
 
-def test_the_friction_aware_brake_keeps_the_reports_bp_pid_on_the_road():
-    # the published BP-NN PID over-brakes; on the raw model that spins the car (above),
-    # with ABS it stays on the road and hits nothing, but does not settle in the new lane
-    # within the run (its learning keeps the lateral channel swinging)
+def test_the_friction_aware_brake_stops_the_reports_bp_pid_from_spinning():
+    # the published BP-NN PID over-brakes; on the raw model that spins the car (above);
+    # with ABS it no longer spins, but its lateral channel is still unstable: it wanders off
+    # the road (or does not settle in the new lane) without hitting anything
     m = run(RunSpec("emergency-brake", "bp-pid", 0, {"variant": "report"})).metrics
-    assert m["status"] in ("completed", "timeout") and not m["collision"]
-    assert m["lane_change_duration"] is None or m["lane_change_duration"] > 15.0
+    assert not m["collision"] and m["lane_change_duration"] is None
+    assert "heading" not in m["status_detail"] and "spinning" not in m["status_detail"]
