@@ -199,6 +199,7 @@ class EvasiveLaneChange(HighwayScenario):
                 return  # the common case, decided without computing the need
             need = self.braking_need()
             if (braking_in_lane and need >= c.aeb_decel) or self._imminent():
+                self._abort_lane_change()
                 self.aeb_active = True
                 self.aeb_engagements += 1
                 if self.aeb_time is None:
@@ -214,6 +215,25 @@ class EvasiveLaneChange(HighwayScenario):
             if need < 0.5 * c.aeb_decel and closing <= 0.0 and not self._imminent():
                 self.aeb_active = False
                 self.event("aeb", f"AEB releases (needs {need:.1f} m/s^2)")
+
+    def _abort_lane_change(self) -> None:
+        """An emergency stop early in a lane change (the ego not yet half-way across) is made
+        in the lane it is leaving: braking hard in front of the new lane's traffic is what
+        gets a car hit from behind."""
+        if self.phase != LANE_CHANGE or self.in_lane_action != "brake":
+            return
+        origin = self.target_lane - (1 if self.chosen == "left" else -1)
+        span = self.lane_offset[self.target_lane] - self.lane_offset[origin]
+        progress = (self.d_road - self.lane_offset[origin]) / span if span else 1.0
+        if progress >= 0.5:
+            return
+        self.event("lane", f"lane change aborted at {100 * progress:.0f} % across: emergency braking "
+                   f"in the {LANE_NAMES[origin]} lane", "WARN")
+        self.target_lane, self.chosen, self.phase = origin, None, IN_LANE
+        self._start_in_lane()
+
+    def _start_in_lane(self) -> None:
+        """Set up the in-lane manoeuvre's references from here."""
 
     def _imminent(self) -> bool:
         """The front TTC is below ``aeb_ttc`` and the ego does not clear the front object
@@ -483,8 +503,11 @@ class EmergencyBrake(EvasiveLaneChange):
         super()._collided(c)
 
     def _on_trigger(self) -> None:
-        self._ramp_s, self._ramp_v = self.s - self.config.dt * self.ds, self.ds
         self._trigger_gap, self._trigger_speed = self.gap_front, self.ds
+        self._start_in_lane()
+
+    def _start_in_lane(self) -> None:
+        self._ramp_s, self._ramp_v = self.s - self.config.dt * self.ds, self.ds
         self._rest_s: float | None = None  #: where the ego came to rest behind a stopped car
         self._moving = True  #: it has moved (faster than MOVING) since it last came to rest
 
