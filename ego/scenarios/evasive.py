@@ -217,16 +217,18 @@ class EvasiveLaneChange(HighwayScenario):
                 self.event("aeb", f"AEB releases (needs {need:.1f} m/s^2)")
 
     def _abort_lane_change(self) -> None:
-        """An emergency stop early in a lane change (the ego not yet half-way across) is made
-        in the lane it is leaving: braking hard in front of the new lane's traffic is what
-        gets a car hit from behind."""
+        """An emergency stop early in a lane change (the ego not yet half-way across, and
+        braking alone enough to stop behind the front object) is made in the lane it is
+        leaving: braking hard in front of the new lane's traffic is what gets a car hit from
+        behind."""
         if self.phase != LANE_CHANGE or self.in_lane_action != "brake":
             return
         origin = self.target_lane - (1 if self.chosen == "left" else -1)
         span = self.lane_offset[self.target_lane] - self.lane_offset[origin]
         progress = (self.d_road - self.lane_offset[origin]) / span if span else 1.0
-        if progress >= 0.5:
-            return
+        p = self.ego.model.params
+        if progress >= 0.5 or self.braking_need() > 0.9 * (p.F_max / p.m + p.f * p.g):
+            return  # well across, or braking alone would not stop it in time: carry on
         self.event("lane", f"lane change aborted at {100 * progress:.0f} % across: emergency braking "
                    f"in the {LANE_NAMES[origin]} lane", "WARN")
         self.target_lane, self.chosen, self.phase = origin, None, IN_LANE
