@@ -6,9 +6,10 @@ controller and case, collision or not and the impact speed in km/h.
 ``--set`` overrides the files' values for every run (e.g. ``--set ttc_threshold=1.5``: an AEB
 that reacts later).
 
-A stopgap until ``ego sweep`` runs spec files: it reads only ``scenario``, ``controllers``,
-``seeds``, ``[set]`` and ``[grid]`` (the CCR files have no ``[sample]``), one run a case,
-in a pool of processes (libsumo runs one simulation per process).
+``ego sweep`` runs the same files into results.parquet; this script only formats the CCR
+matrices as tables: it reads ``scenario``, ``controllers``, ``seeds``, ``[set]`` and
+``[grid]`` (the CCR files have no ``[sample]``), one run a case, in a pool of processes
+(libsumo runs one simulation per process).
 """
 
 from __future__ import annotations
