@@ -31,6 +31,7 @@ import sys
 from collections.abc import Sequence
 
 from ego import __version__
+from ego.checks import check_output_dir, check_output_file, check_seed
 from ego.params import ConfigError, describe, parse_overrides
 
 EXIT_OK, EXIT_NOT_COMPLETED, EXIT_USAGE = 0, 1, 2
@@ -173,7 +174,9 @@ def _parser() -> argparse.ArgumentParser:
     trn.add_argument("--radii", default="12,60", metavar="LO,HI",
                      help="curve radius range in m (default 12,60)")
     trn.add_argument("--out", default=None, metavar="PATH",
-                     help="weights file (.npz; default: the model shipped in the package)")
+                     help="weights file (.npz; default: runs/narma_l2.npz)")
+    trn.add_argument("--install", action="store_true",
+                     help="replace the model shipped in the package (what ego run uses by default)")
 
     tun = sub.add_parser(
         "tune", help="tune a controller's gains (lane-centering: differential evolution)",
@@ -206,7 +209,9 @@ def _parser() -> argparse.ArgumentParser:
     tun.add_argument("--duration", type=float, default=None, metavar="S",
                      help="with --cost sumo: simulated seconds of each run (default: the whole road)")
     tun.add_argument("--out", default=None, metavar="PATH",
-                     help="preset file (.json; default: the preset shipped in the package)")
+                     help="preset file (.json; default: runs/cascade_pid_tuned.json)")
+    tun.add_argument("--install", action="store_true",
+                     help="replace the tuned preset shipped in the package (cascade-pid's default)")
     return ap
 
 
@@ -327,7 +332,7 @@ def _run(args) -> int:
     from ego.runner import RunSpec, declared_metrics, run
     from ego.scenarios.metrics import flatten, metric_units
 
-    spec = RunSpec(args.scenario, args.controller, seed=args.seed,
+    spec = RunSpec(args.scenario, args.controller, seed=check_seed(args.seed, "--seed"),
                    overrides=parse_overrides(args.overrides), record=args.record)
     result = run(spec)
     units = metric_units(declared_metrics(spec), flatten(result.metrics))
@@ -346,16 +351,20 @@ def _run(args) -> int:
 
 
 def _compare(args) -> int:
-    from pathlib import Path
-
     from ego.compare import UNITS_FILE, compare
 
     if args.seeds < 1:
         raise ConfigError(f"bad value for --seeds: {args.seeds} (expected a whole number of at least 1)")
     if args.jobs is not None and args.jobs < 1:
         raise ConfigError(f"bad value for --jobs: {args.jobs} (expected a whole number of at least 1)")
+    if args.seeds > 100_000:
+        raise ConfigError(f"bad value for --seeds: {args.seeds} (expected at most 100000; use ego sweep "
+                          "for more)")
     names = [n.strip() for n in args.controllers.split(",") if n.strip()]
-    out = Path(args.out)
+    if len(set(names)) != len(names):
+        dup = next(n for n in names if names.count(n) > 1)
+        raise ConfigError(f"bad value for --controllers: {dup!r} is listed twice")
+    out = check_output_dir(args.out, "--out")
     rows = compare(args.scenario, names, args.seeds, parse_overrides(args.overrides), out, args.jobs)
     print((out / "metrics.md").read_text(), end="")
     files = ["metrics.csv", UNITS_FILE, "metrics.md"] + sorted(p.name for p in out.glob("*.png"))
@@ -374,8 +383,6 @@ def _range(text: str, what: str) -> tuple[float, float]:
 
 
 def _sweep(args) -> int:
-    from pathlib import Path
-
     from ego.sweep import spec as sweep_spec
     from ego.sweep.executor import ENGINES
     from ego.sweep.runner import RECORD, parse_plot, print_progress, sweep
@@ -391,9 +398,7 @@ def _sweep(args) -> int:
         raise ConfigError(f"bad --record {args.record!r} (allowed: {', '.join(RECORD)})")
     for p in args.plot:
         parse_plot(p, spec)
-    out = Path(args.out)
-    if not args.out or (out.exists() and not out.is_dir()):
-        raise ConfigError(f"bad --out {args.out!r} (expected a folder)")
+    out = check_output_dir(args.out, "--out")
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -422,9 +427,19 @@ def _plot_names(plots, spec) -> list[str]:
     return names
 
 
-def _train(args) -> int:
+def _model_out(args, shipped, default: str, suffix: str):
+    """Where ``ego train``/``ego tune`` write: --out, the shipped file with --install (and
+    only then), else ``default`` in the working directory."""
     from pathlib import Path
 
+    if args.install and args.out:
+        raise ConfigError("give --out or --install, not both")
+    if args.install:
+        return Path(shipped)
+    return check_output_file(args.out or default, "--out path", suffix)
+
+
+def _train(args) -> int:
     from ego.control.narma import DEFAULT_MODEL
     from ego.train.narma_l2 import DataSpec, TrainSpec, train
 
@@ -441,9 +456,8 @@ def _train(args) -> int:
         raise ConfigError(f"bad value for --speeds: {args.speeds!r} (expected km/h within 5..60)")
     if a_lo < -2.0 or a_hi > 2.0:
         raise ConfigError(f"bad value for --accels: {args.accels!r} (expected m/s^2 within -2..2)")
-    out = Path(args.out) if args.out else DEFAULT_MODEL
-    if out.suffix != ".npz":
-        raise ConfigError(f"bad --out path {args.out!r} (expected a file ending in .npz)")
+    check_seed(args.seed, "--seed")
+    out = _model_out(args, DEFAULT_MODEL, "runs/narma_l2.npz", ".npz")
     data = DataSpec(samples=args.samples, speed_min=v_lo, speed_max=v_hi, accel_min=a_lo,
                     accel_max=a_hi, radius_min=r_lo, radius_max=r_hi)
     train(TrainSpec(seed=args.seed, epochs=args.epochs, data=data), out)
@@ -451,25 +465,26 @@ def _train(args) -> int:
 
 
 def _tune(args) -> int:
-    from pathlib import Path
-
     from ego.control.cascade import TUNED_PRESET
     from ego.train.lane_centering import TuneSpec, tune
 
     if args.workers < 1:
         raise ConfigError(f"bad value for --workers: {args.workers} (expected a whole number of at least 1)")
     try:
-        drives = tuple((float(d.split(":")[0]), float(d.split(":")[1]) if ":" in d else 0.0)
-                       for d in args.drives.split(","))
+        parts = [d.split(":") for d in args.drives.split(",")]
+        if any(len(p) > 2 for p in parts):
+            raise ValueError
+        drives = tuple((float(p[0]), float(p[1]) if len(p) == 2 else 0.0) for p in parts)
+        if not all(math.isfinite(x) for d in drives for x in d):
+            raise ValueError
     except ValueError:
         raise ConfigError(f"bad value for --drives: {args.drives!r} (expected speeds in m/s with "
                           "optional offsets in m, e.g. 8,25:1)") from None
     if any(not (2.0 <= v <= 30.0) or abs(o) > 1.5 for v, o in drives):
         raise ConfigError(f"bad value for --drives: {args.drives!r} (expected speeds from 2 to 30 m/s "
                           "and offsets within 1.5 m)")
-    out = Path(args.out) if args.out else TUNED_PRESET
-    if out.suffix != ".json":
-        raise ConfigError(f"bad --out path {args.out!r} (expected a file ending in .json)")
+    check_seed(args.seed, "--seed")
+    out = _model_out(args, TUNED_PRESET, "runs/cascade_pid_tuned.json", ".json")
     from ego.sweep.executor import ENGINES
 
     if args.cost not in ("model", "sumo"):

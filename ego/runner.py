@@ -4,11 +4,10 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 from ego.control import CONTROLLERS, controller_spec
-from ego.params import ConfigError, apply_overrides, describe, unknown_parameter
+from ego.params import apply_overrides, describe, unknown_parameter
 from ego.record import RerunRecorder
 from ego.scenarios import RunResult, Scenario, scenario_class
 from ego.scenarios.trace import Column, Metric
@@ -39,6 +38,9 @@ def split_overrides(scenario: str, controller: str, overrides: Mapping[str, Any]
 def configure(spec: RunSpec):
     """Resolve names and overrides: (scenario class, its config, controller spec, its params).
     Raises ConfigError on any unknown name or bad value; builds nothing."""
+    from ego.checks import check_seed
+
+    check_seed(spec.seed)
     cls = scenario_class(spec.scenario)
     ctrl = controller_spec(spec.controller, cls.task)
     config, rest = apply_overrides(cls.default_config(spec.overrides), spec.overrides, strict=False)
@@ -54,10 +56,11 @@ def build(spec: RunSpec):
     cls, config, ctrl, ctrl_params = configure(spec)
     controller = cls.build_controller(ctrl, ctrl_params, config)
     recorder = None
-    if spec.record:
-        path = Path(spec.record)
-        if path.suffix != ".rrd":
-            raise ConfigError(f"bad --record path {spec.record!r} (expected a file ending in .rrd)")
+    if spec.record is not None:
+        from ego.checks import check_output_file
+
+        path = check_output_file(spec.record, "--record path", ".rrd")
+        path.parent.mkdir(parents=True, exist_ok=True)
         recorder = RerunRecorder(path, recording_id=f"{spec.scenario}-{spec.controller}-{spec.seed}",
                                  background=spec.background_recording)
     return cls(config, controller, seed=spec.seed, recorder=recorder, controller_name=spec.controller)

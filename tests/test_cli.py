@@ -223,3 +223,55 @@ def test_curve_run_uses_a_model_trained_elsewhere(tmp_path):
     assert res.returncode in (0, 1), res.stderr  # a two-epoch model may well fail the curve
     m = json.loads(res.stdout)
     assert m["scenario"] == "curve" and m["controller"] == "narma-l2"
+
+
+@pytest.mark.parametrize("args, message", [
+    (["run", "emergency-brake", "-c", "pid", "--seed", "-1"], "bad value for --seed: -1"),
+    (["run", "emergency-brake", "-c", "pid", "--seed", "2147483648"], "bad value for --seed: 2147483648"),
+    (["run", "emergency-brake", "-c", "pid", "--record", ""], "bad --record path ''"),
+    (["run", "emergency-brake", "-c", "pid", "--record", "/proc/x.rrd"], "not a place for files"),
+    (["run", "emergency-brake", "-c", "pid", "--record", "{tmp}/file.txt/x.rrd"], "is a file, not a folder"),
+    (["run", "emergency-brake", "-c", "pid", "--record", "{tmp}/dir.rrd"], "it is a folder"),
+    (["compare", "emergency-brake", "--controllers", "pid", "--out", "{tmp}/file.txt"], "it is a file"),
+    (["compare", "emergency-brake", "--controllers", "pid,pid", "--out", "{tmp}/c"], "'pid' is listed twice"),
+    (["compare", "emergency-brake", "--controllers", "pid", "--seeds", "1000000000", "--out", "{tmp}/c"],
+     "bad value for --seeds: 1000000000"),
+    (["compare", "emergency-brake", "--controllers", "pid", "--out", ""], "bad --out ''"),
+    (["train", "narma-l2", "--seed", "-1"], "bad value for --seed: -1"),
+    (["train", "narma-l2", "--out", "{tmp}/a.npz", "--install"], "not both"),
+    (["tune", "lane-centering", "--seed", "-1"], "bad value for --seed: -1"),
+    (["tune", "lane-centering", "--drives", "8:nan"], "bad value for --drives: '8:nan'"),
+    (["tune", "lane-centering", "--drives", "8:1:2"], "bad value for --drives: '8:1:2'"),
+    (["sweep", "{tmp}/none.toml", "--out", "{tmp}/s"], "cannot read the sweep spec"),
+], ids=lambda a: " ".join(a)[:60] if isinstance(a, list) else None)
+def test_bad_seeds_and_output_places_fail_at_once_writing_nothing(args, message, tmp_path):
+    (tmp_path / "file.txt").write_text("x")
+    (tmp_path / "dir.rrd").mkdir()
+    before = sorted(p.name for p in tmp_path.iterdir())
+    res = ego(*[a.replace("{tmp}", str(tmp_path)) for a in args])
+    assert res.returncode == 2, res.stderr
+    assert message in res.stderr and res.stderr.count("\n") == 1 and "Traceback" not in res.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == before  # nothing written
+
+
+def test_the_python_api_refuses_a_seed_it_would_truncate():
+    from ego.params import ConfigError
+    from ego.runner import RunSpec, configure
+
+    for seed in (1.7, "1", True, -1, 2**31):
+        with pytest.raises(ConfigError, match="bad value for seed"):
+            configure(RunSpec("emergency-brake", "pid", seed))
+
+
+def test_train_and_tune_write_into_the_working_folder_unless_told_to_install(tmp_path):
+    import subprocess
+    import sys
+
+    from ego.control.cascade import TUNED_PRESET
+
+    shipped = TUNED_PRESET.read_bytes()
+    p = subprocess.run([sys.executable, "-m", "ego", "tune", "lane-centering", "--quick"], cwd=tmp_path,
+                       capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    assert (tmp_path / "runs" / "cascade_pid_tuned.json").is_file()
+    assert TUNED_PRESET.read_bytes() == shipped  # the shipped preset is untouched

@@ -1,0 +1,72 @@
+"""Checks of user input made before anything runs: seeds and output locations.
+
+Each raises :class:`ego.params.ConfigError` with one line naming the value and what is
+allowed, so the CLI exits 2 before SUMO starts or a file is written.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+from ego.params import ConfigError
+
+#: SUMO's seeds (and every seed ego takes): 0 .. 2^31 - 1
+MAX_SEED = 2**31 - 1
+
+
+def check_seed(value: Any, what: str = "seed") -> int:
+    """``value`` as a seed, or ConfigError: a whole number from 0 to 2^31 - 1 (an int; a
+    bool, float or string is refused rather than truncated)."""
+    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= MAX_SEED:
+        raise ConfigError(f"bad value for {what}: {value!r} (expected a whole number from 0 to {MAX_SEED})")
+    return value
+
+
+def _writable_ancestor(path: Path, what: str, text: str) -> None:
+    """The nearest existing ancestor of ``path`` must be a folder we may write into."""
+    parent = path.parent
+    while not parent.exists():
+        if parent == parent.parent:
+            break
+        parent = parent.parent
+    if not parent.is_dir():
+        raise ConfigError(f"bad {what} {text!r}: {parent} is a file, not a folder")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise ConfigError(f"bad {what} {text!r}: cannot write into {parent}")
+
+
+def check_output_file(text: str | None, what: str, suffix: str) -> Path:
+    """An output file: non-empty, ending in ``suffix``, not a folder, in a folder that exists
+    or can be made and may be written."""
+    if text is None or not str(text).strip():
+        raise ConfigError(f"bad {what} {text!r} (expected a file ending in {suffix})")
+    path = Path(text)
+    if path.suffix != suffix:
+        raise ConfigError(f"bad {what} {text!r} (expected a file ending in {suffix})")
+    if path.exists() and not path.is_file():
+        raise ConfigError(f"bad {what} {text!r}: it is a folder (expected a file ending in {suffix})")
+    if path.exists() and not os.access(path, os.W_OK):
+        raise ConfigError(f"bad {what} {text!r}: the file cannot be written")
+    _writable_ancestor(path, what, text)
+    if str(path.resolve()).startswith("/proc/") or str(path.resolve()).startswith("/sys/"):
+        raise ConfigError(f"bad {what} {text!r}: not a place for files")
+    return path
+
+
+def check_output_dir(text: str | None, what: str) -> Path:
+    """An output folder: non-empty, a folder if it exists, else creatable, and writable."""
+    if text is None or not str(text).strip():
+        raise ConfigError(f"bad {what} {text!r} (expected a folder)")
+    path = Path(text)
+    if path.exists():
+        if not path.is_dir():
+            raise ConfigError(f"bad {what} {text!r}: it is a file (expected a folder)")
+        if not os.access(path, os.W_OK | os.X_OK):
+            raise ConfigError(f"bad {what} {text!r}: cannot write into it")
+        return path
+    _writable_ancestor(path, what, text)
+    if str(path.resolve()).startswith(("/proc/", "/sys/")):
+        raise ConfigError(f"bad {what} {text!r}: not a place for files")
+    return path
