@@ -18,7 +18,8 @@ headline; a name ending in ``.`` stands for every metric under it) and trace ``c
 (name, unit, description), and per controller its ``parameters``.
 
 Exit status: 0 the run completed; 1 it ended in a collision, diverged or timed out
-(the metrics are still printed); 2 bad input (unknown name, bad value), with one line
+(the metrics are still printed); 130 interrupted by Ctrl-C or SIGTERM (status
+``interrupted``, the metrics so far printed, the recording closed); 2 bad input (unknown name, bad value), with one line
 on stderr naming it and what is allowed.
 """
 
@@ -34,7 +35,12 @@ from ego import __version__
 from ego.checks import check_output_dir, check_output_file, check_seed
 from ego.params import ConfigError, describe, parse_overrides
 
-EXIT_OK, EXIT_NOT_COMPLETED, EXIT_USAGE = 0, 1, 2
+EXIT_OK, EXIT_NOT_COMPLETED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+
+def _terminate(signum, frame) -> None:
+    """SIGTERM ends a run like Ctrl-C: status interrupted, metrics so far, recording closed."""
+    raise KeyboardInterrupt
 
 
 class _Parser(argparse.ArgumentParser):
@@ -347,6 +353,8 @@ def _run(args) -> int:
         _print_result(result, units)
         if args.record:
             print(f"recording: {args.record}  (review with: rerun {args.record})")
+    if result.status == "interrupted":
+        return EXIT_INTERRUPTED
     return EXIT_OK if result.status == "completed" else EXIT_NOT_COMPLETED
 
 
@@ -506,6 +514,10 @@ def _tune(args) -> int:
 def main(argv: Sequence[str] | None = None) -> int:
     from ego.sumo.bridge import SumoError
 
+    import signal
+
+    if argv is None:  # the command itself, not a call from Python code
+        signal.signal(signal.SIGTERM, _terminate)
     try:
         args = _parser().parse_args(argv)
         if args.command == "run":

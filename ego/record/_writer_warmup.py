@@ -8,3 +8,11 @@ from ego.record.base import Scene, Series
 from ego.record.rerun_recorder import _blueprint
 
 _blueprint(Scene(lanes=[]), [Series("x", "plots/x/x", "m")])
+
+# Ctrl-C and SIGTERM sent to the process group are the simulation process's to handle: it
+# ends the run and closes the recording. The forkserver hands the handlers it finds after
+# this import to every writer it forks, so a writer ignores both from its first instant.
+import signal  # noqa: E402
+
+signal.signal(signal.SIGINT, signal.SIG_IGN)
+signal.signal(signal.SIGTERM, signal.SIG_IGN)

@@ -176,7 +176,17 @@ def _writer_context():
 
 
 def _writer_main(batches, replies, path: str, application_id: str, recording_id: str | None) -> None:
-    """Entry point of the writer process: apply every batch until ``close``."""
+    """Entry point of the writer process: apply every batch until ``close``.
+
+    Ctrl-C and SIGTERM sent to the whole process group are the simulation process's to
+    handle (it ends the run and closes the recording), so the writer ignores them; if the
+    simulation process dies instead, the writer still closes the file with everything it
+    received."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    writer = None
     try:
         writer = RerunWriter(path, application_id, recording_id)
         while True:
@@ -186,7 +196,9 @@ def _writer_main(batches, replies, path: str, application_id: str, recording_id:
                 replies.send(("done",))
                 return
             writer.handle(kind, *payload)
-    except EOFError:  # the simulation process went away
+    except EOFError:  # the simulation process went away: keep what arrived
+        if writer is not None:
+            writer.close()
         return
     except Exception as exc:  # noqa: BLE001 - reported to the simulation process
         try:

@@ -28,7 +28,7 @@ from ego.scenarios.metrics import json_number
 from ego.scenarios.trace import Column, Metric, Plot, Trace
 from ego.sumo.bridge import Collision, SumoBridge
 
-STATUSES = ("completed", "collision", "diverged", "timeout")
+STATUSES = ("completed", "collision", "diverged", "timeout", "interrupted")
 _log = logging.getLogger("ego.scenario")
 _LOG_LEVELS = {"INFO": logging.INFO, "WARN": logging.WARNING, "ERROR": logging.ERROR}
 
@@ -252,8 +252,15 @@ class Scenario:
             obs = self.reset()
             controller = self.controller
             step = self.step
-            while self.status == "running":
-                obs = step(controller.step(obs))
+            try:
+                while self.status == "running":
+                    obs = step(controller.step(obs))
+            except KeyboardInterrupt:  # Ctrl-C (or SIGTERM, see ego.cli): keep what ran
+                if self.status == "running":
+                    # a step cut short leaves no row: one row per completed control step
+                    del self.trace.rows[max(self.k, self._flushed):]
+                    self._end("interrupted", "interrupted (SIGINT or SIGTERM)", level="WARN")
+                    self._flush()
             return self.result()
         finally:
             self.close()
