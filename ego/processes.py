@@ -34,3 +34,32 @@ def main_module_hidden():
             del main.__spec__
         else:
             main.__spec__ = saved_spec
+
+
+@contextmanager
+def signals_deferred():
+    """Hold SIGINT and SIGTERM until the block ends, then deliver the first that came.
+
+    Around a message written to a pipe: a Ctrl-C in the middle of ``Connection.send`` would
+    leave half a message in the pipe and the reader would fail on it. Outside the main
+    thread (where Python cannot set handlers) it does nothing.
+    """
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    pending: list[int] = []
+
+    def hold(signum, frame) -> None:
+        pending.append(signum)
+
+    old = {sig: signal.signal(sig, hold) for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
+        if pending:
+            signal.raise_signal(pending[0])

@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ego.processes import main_module_hidden
+from ego.processes import main_module_hidden, signals_deferred
 from ego.record.base import Scene, Series, box_outlines, lane_edges
 
 TIMELINE = "sim_time"
@@ -137,7 +137,8 @@ class RerunRecorder:
                 reply = self._replies.recv()
                 self._error = reply[1] if reply[0] == "error" else f"unexpected reply {reply[0]!r}"
                 return
-            self._conn.send((kind, *payload))
+            with signals_deferred():  # never half a message in the pipe
+                self._conn.send((kind, *payload))
         except (EOFError, OSError) as exc:
             self._error = f"the writer process died ({exc})"
 

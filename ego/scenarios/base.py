@@ -247,23 +247,52 @@ class Scenario:
         return self.obs
 
     def run(self) -> RunResult:
-        """The closed loop: reset, then the scenario's controller until the run ends."""
+        """The closed loop: reset, then the scenario's controller until the run ends.
+
+        Ctrl-C (SIGINT) or SIGTERM ends the run at the next control step with status
+        ``interrupted``: the metrics so far, the recording closed with every step simulated
+        (a second signal interrupts at once)."""
+        restore = self._catch_stop_signals()
         try:
             obs = self.reset()
             controller = self.controller
             step = self.step
-            try:
-                while self.status == "running":
-                    obs = step(controller.step(obs))
-            except KeyboardInterrupt:  # Ctrl-C (or SIGTERM, see ego.cli): keep what ran
-                if self.status == "running":
-                    # a step cut short leaves no row: one row per completed control step
-                    del self.trace.rows[max(self.k, self._flushed):]
-                    self._end("interrupted", "interrupted (SIGINT or SIGTERM)", level="WARN")
-                    self._flush()
+            while self.status == "running" and not self._stop:
+                obs = step(controller.step(obs))
+            if self._stop and self.status == "running":
+                self._end("interrupted", "interrupted (SIGINT or SIGTERM)", level="WARN")
+                self._flush()
             return self.result()
         finally:
+            restore()
             self.close()
+
+    _stop = False
+
+    def _catch_stop_signals(self):
+        """Make SIGINT and SIGTERM request a stop at the next step; returns the undo."""
+        import signal
+        import threading
+
+        self._stop = False
+        if threading.current_thread() is not threading.main_thread():
+            return lambda: None
+
+        def request(signum, frame) -> None:
+            if self._stop:  # asked twice: stop now
+                raise KeyboardInterrupt
+            self._stop = True
+
+        # a process that ignores a signal (a sweep's worker: the parent handles Ctrl-C) keeps
+        # ignoring it
+        old = {sig: signal.signal(sig, request) for sig in (signal.SIGINT, signal.SIGTERM)
+               if signal.getsignal(sig) is not signal.SIG_IGN}
+
+        def restore() -> None:
+            for sig, handler in old.items():
+                signal.signal(sig, handler)
+
+        return restore
 
     def close(self) -> None:
         """Close SUMO and the recording (safe to call twice)."""
@@ -317,6 +346,12 @@ class Scenario:
         self._wall = time.perf_counter() - self._wall0
 
     def _flush(self) -> None:
+        from ego.processes import signals_deferred
+
+        with signals_deferred():  # Ctrl-C lands before or after a batch, never inside it
+            self._flush_now()
+
+    def _flush_now(self) -> None:
         if len(self.trace) > self._flushed:
             data = self.trace.array(self._flushed)
             data[np.isinf(data)] = np.nan  # infinite TTC: a gap in the plot

@@ -58,7 +58,8 @@ def _worker_main(conn) -> None:
     pipe reports end-of-file and the worker exits instead of living on."""
     import signal
 
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C and SIGTERM are the parent's to handle
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
     import pickle
 
     while True:

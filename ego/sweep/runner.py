@@ -105,6 +105,8 @@ def sweep(spec: SweepSpec, out: Path, *, engine: str = "process", jobs: int | No
         if executor is not None:
             for outcome in executor.run(run_task, tasks()):
                 row = outcome.value if outcome.value is not None else error_row(outcome)
+                if row["status"] == "interrupted":  # not a result: the next run of the sweep redoes it
+                    continue
                 store.add(row)
                 ran += 1
                 by_status[row["status"]] = by_status.get(row["status"], 0) + 1
