@@ -59,6 +59,8 @@ class ParamInfo:
             return "one of " + ", ".join(_fmt(c) for c in self.choices)
         if self.type is bool:
             return "true or false"
+        if self.type is str:
+            return "text"
         kind = "a whole number" if self.type is int else "a number"
         lo, hi = self.min, self.max
         if lo is not None and hi is not None:
@@ -77,8 +79,10 @@ class ParamInfo:
 def _fmt(v: Any) -> str:
     if isinstance(v, bool):
         return "true" if v else "false"
-    if isinstance(v, float) and v.is_integer():
+    if isinstance(v, float) and v.is_integer() and abs(v) < 1e15:
         return str(int(v))
+    if isinstance(v, float):
+        return f"{v:g}"
     return str(v)
 
 

@@ -323,7 +323,9 @@ class EvasiveLaneChange(HighwayScenario):
         other = self.sensor.front if self.trigger_on == "front" else self.sensor.rear
         gap = self.gap_front if self.trigger_on == "front" else self.gap_rear
         closing = abs(self.ds - other.speed)
-        self.event("trigger", f"{self.trigger_on} TTC {ttc:.2f} s < {c.ttc_threshold:.2f} s "
+        # enough digits that the event never reads "3.00 s < 3.00 s"
+        digits = 2 if round(ttc, 2) < round(c.ttc_threshold, 2) else 4
+        self.event("trigger", f"{self.trigger_on} TTC {ttc:.{digits}f} s < {c.ttc_threshold:.{digits}f} s "
                    f"(gap {gap:.1f} m to {other.id or '?'}, closing at {closing:.1f} m/s)", "WARN")
         self._on_trigger()
         if self.chosen is None:

@@ -52,10 +52,11 @@ def net_file(name: str) -> Path:
     """The built ``.net.xml`` of network ``name``."""
     path = nets_dir() / name / f"{name}.net.xml"
     if not path.exists():
-        raise ConfigError(
-            f"unknown network {name!r} (known: {', '.join(available_networks())}); "
-            "build with python sumo_nets/build.py"
-        )
+        known = available_networks()
+        if name in known:  # its sources are there, the built file is not
+            raise ConfigError(f"network {name!r} is not built ({path} is missing); build it with "
+                              "python sumo_nets/build.py")
+        raise ConfigError(f"unknown network {name!r} (known: {', '.join(known)})")
     return path
 
 
