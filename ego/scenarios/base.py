@@ -23,6 +23,7 @@ import numpy as np
 from ego.control.base import Controller, ControllerSpec, Observation
 from ego.models.plant import Plant
 from ego.params import ConfigError, param
+from ego.processes import signals_deferred
 from ego.record.base import NullRecorder, Recorder, Scene, Series
 from ego.scenarios.metrics import json_number
 from ego.scenarios.trace import Column, Metric, Plot, Trace
@@ -346,8 +347,6 @@ class Scenario:
         self._wall = time.perf_counter() - self._wall0
 
     def _flush(self) -> None:
-        from ego.processes import signals_deferred
-
         with signals_deferred():  # Ctrl-C lands before or after a batch, never inside it
             self._flush_now()
 

@@ -95,16 +95,6 @@ class Detection:
         return 1.0 if self._o[3] + self._o[4] + 2.0 * shift > self._lo + self._hi else -1.0
 
 
-def box_extents(s: float, d: float, rel_heading: float, length: float, width: float,
-                ) -> tuple[float, float, float, float]:
-    """(s_lo, s_hi, d_lo, d_hi) of a box centred at (s, d) turned by ``rel_heading`` (rad)
-    from the lane direction (m)."""
-    c, sn = abs(math.cos(rel_heading)), abs(math.sin(rel_heading))
-    hs = 0.5 * (length * c + width * sn)
-    hd = 0.5 * (length * sn + width * c)
-    return s - hs, s + hs, d - hd, d + hd
-
-
 class SurroundSensor:
     """Oriented boxes near the ego in a reference lane's frame; see the module docstring.
 
@@ -115,7 +105,7 @@ class SurroundSensor:
 
     __slots__ = ("lane", "bands", "cg_to_front", "cg_to_rear", "half_width", "front", "rear",
                  "horizon", "reach", "_objects", "_near", "_lanes", "_straight", "_t_sync", "_t",
-                 "_t_scan", "_s", "_s_scan", "_ego", "_count", "_speeds", "_rows")
+                 "_t_scan", "_s", "_s_scan", "_ego", "_speeds", "_rows")
 
     def __init__(self, lane, bands: dict[int, tuple[float, float]], cg_to_front: float,
                  length: float, width: float, horizon: float = 0.1, reach: float = 1.0) -> None:
@@ -142,12 +132,6 @@ class SurroundSensor:
         self._t_sync = 0.0
         self._t = 0.0
         self._ego = (0.0, 0.0, 0.0, 0.0)
-        self._count = 0
-
-    @property
-    def count(self) -> int:
-        """Vehicles seen at the last SUMO step."""
-        return self._count
 
     def sync(self, t: float, ids: Sequence[str], rows: Sequence[tuple]) -> None:
         """The vehicles around the ego at a SUMO step, time ``t`` (s): ``rows`` of (centre x,
@@ -182,7 +166,6 @@ class SurroundSensor:
         self._near = None
         self._speeds = speeds
         self._rows = dict(zip(ids, rows))
-        self._count = len(objects)
         self._t_sync = t
 
     def ego_extents(self, s: float, d: float, heading_error: float) -> tuple[float, float, float, float]:
@@ -291,10 +274,3 @@ class SurroundSensor:
         x, y, yaw, v, length, width = row
         since = self._t - self._t_sync
         return x + v * since * math.cos(yaw), y + v * since * math.sin(yaw), yaw, length, width
-
-    def lane_of(self, d: float) -> int | None:
-        """The lane whose band contains the lateral offset ``d`` (m), or None."""
-        for lane, (lo, hi) in self.bands.items():
-            if lo <= d < hi:
-                return lane
-        return None

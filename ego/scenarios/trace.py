@@ -177,11 +177,3 @@ class _Missing:
 
 
 _MISSING = _Missing()
-
-
-def column(name: str, columns: Sequence[Column]) -> Column:
-    """The declared column ``name`` (KeyError naming the known ones)."""
-    for c in columns:
-        if c.name == name:
-            return c
-    raise KeyError(f"no trace column {name!r} (declared: {', '.join(c.name for c in columns)})")
