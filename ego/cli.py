@@ -1,6 +1,7 @@
 """The ``ego`` command line.
 
-    ego run SCENARIO --controller NAME [--record PATH] [--seed N] [--set key=value ...] [--json]
+    ego run SCENARIO --controller NAME [--record PATH] [--trace PATH] [--seed N] [--set key=value ...]
+            [--json]
     ego compare SCENARIO --controllers A,B,... [--seeds N] [--set key=value ...] --out DIR
     ego sweep SPEC.toml --out DIR [--engine process|ray] [--jobs N] [--address ADDR]
               [--record none|failed|all] [--plot X,Y[:METRIC] ...]
@@ -100,6 +101,9 @@ def _parser() -> argparse.ArgumentParser:
                      help="seed of the traffic and of SUMO (default 0)")
     run.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scenario or controller parameter (repeatable)")
+    run.add_argument("--trace", metavar="PATH",
+                     help="write every trace column with its unit, and the traffic near the ego, to "
+                          "PATH: .csv, .parquet or .mat (MATLAB); see docs/traces.md")
     run.add_argument("--json", action="store_true", help="print one JSON object instead of text")
 
     cmp_ = sub.add_parser(
@@ -338,9 +342,14 @@ def _run(args) -> int:
     from ego.runner import RunSpec, declared_metrics, run
     from ego.scenarios.metrics import flatten, metric_units
 
+    from ego.export import check_trace_path, write_trace
+
     spec = RunSpec(args.scenario, args.controller, seed=check_seed(args.seed, "--seed"),
                    overrides=parse_overrides(args.overrides), record=args.record)
+    if args.trace is not None:
+        check_trace_path(args.trace)
     result = run(spec)
+    written = [str(p) for p in write_trace(result, args.trace)] if args.trace is not None else []
     units = metric_units(declared_metrics(spec), flatten(result.metrics))
     if args.json:
         out = dict(result.metrics)
@@ -348,11 +357,15 @@ def _run(args) -> int:
         out["units"] = units
         if args.record:
             out["record"] = args.record
+        if written:
+            out["trace"] = written
         print(json.dumps(out))
     else:
         _print_result(result, units)
         if args.record:
             print(f"recording: {args.record}  (review with: rerun {args.record})")
+        if written:
+            print(f"trace: {', '.join(written)}")
     if result.status == "interrupted":
         return EXIT_INTERRUPTED
     return EXIT_OK if result.status == "completed" else EXIT_NOT_COMPLETED

@@ -27,6 +27,7 @@ from ego.processes import signals_deferred
 from ego.record.base import NullRecorder, Recorder, Scene, Series
 from ego.scenarios.metrics import json_number
 from ego.scenarios.trace import Column, Metric, Plot, Trace
+from ego.scenarios.traffic_log import TrafficLog
 from ego.sumo.bridge import Collision, SumoBridge
 
 STATUSES = ("completed", "collision", "diverged", "timeout", "interrupted")
@@ -96,9 +97,31 @@ class RunResult:
     trace: np.ndarray
     #: column -> unit of every trace column ("" for controller signals)
     units: dict = field(default_factory=dict)
+    #: every other vehicle near the ego at every SUMO step (None: a run without SUMO)
+    traffic: TrafficLog | None = None
 
     def column(self, name: str) -> np.ndarray:
         return self.trace[:, self.columns.index(name)]
+
+    def to_pandas(self, traffic: bool = False):
+        """The trace as a pandas DataFrame: one row per control step, one column per trace
+        column (``t`` in s first), ``df.attrs["units"]`` column -> unit (``""``: a
+        controller's signal). ``traffic=True``: the traffic log instead, one row per vehicle
+        and SUMO step (``vehicle`` its id), units likewise; None when the run has none.
+        pandas is imported here, not with ego."""
+        import pandas as pd
+
+        from ego.export import TRAFFIC_UNITS, trace_units, traffic_columns
+
+        if traffic:
+            if self.traffic is None:
+                return None
+            df, units = pd.DataFrame(traffic_columns(self.traffic)), dict(TRAFFIC_UNITS)
+        else:
+            df, units = pd.DataFrame(self.trace, columns=list(self.columns)), trace_units(self)
+        df.attrs["units"] = units
+        df.attrs.update(scenario=self.scenario, controller=self.controller, seed=self.seed, status=self.status)
+        return df
 
 
 def divergence(state: Sequence[float], offset: float, heading_error: float,
