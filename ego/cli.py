@@ -2,7 +2,8 @@
 
     ego run SCENARIO --controller NAME [--record PATH] [--trace PATH] [--seed N] [--set key=value ...]
             [--json]
-    ego compare SCENARIO --controllers A,B,... [--seeds N] [--set key=value ...] --out DIR
+    ego compare SCENARIO --controllers A,B@key=value,... [--seeds N] [--set key=value ...] --out DIR
+                [--traces csv|parquet|mat]
     ego sweep SPEC.toml --out DIR [--engine process|ray] [--jobs N] [--address ADDR]
               [--record none|failed|all] [--plot X,Y[:METRIC] ...]
     ego list [--json]
@@ -113,18 +114,24 @@ def _parser() -> argparse.ArgumentParser:
                     "one .rrd per run into --out.",
         epilog="Example: ego compare emergency-brake --controllers pid,fuzzy,rbf-smc --seeds 3 "
                "--out runs/cmp\nA --set key applies to the scenario and to every controller "
-               "that has it.",
+               "that has it.\nVariants of one controller side by side, named as given in every "
+               "table, plot and file:\n  ego compare emergency-brake --controllers "
+               "pid,pid@kp_lat=0.02@kd_lat=0.05 --out runs/pid-gains",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     cmp_.add_argument("scenario", metavar="SCENARIO", help=f"one of: {', '.join(SCENARIOS)}")
     cmp_.add_argument("--controllers", required=True, metavar="A,B,...",
-                      help=f"comma-separated, from: {_controllers_help()}")
+                      help="comma-separated; a name, or a variant with its own parameters "
+                           f"NAME@key=value[@key=value...] (pid@kp_lat=0.02), from: {_controllers_help()}")
     cmp_.add_argument("--seeds", type=int, default=1, metavar="N", help="seeds 0..N-1 (default 1)")
     cmp_.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                       help="override a parameter (repeatable)")
     cmp_.add_argument("--out", required=True, metavar="DIR", help="output folder")
     cmp_.add_argument("--jobs", type=int, default=None, metavar="J",
                       help="parallel processes (default: the number of CPUs)")
+    cmp_.add_argument("--traces", default=None, metavar="FORMAT",
+                      help="also write every run's trace to traces/<label>-seed<N>.FORMAT: csv, parquet "
+                           "or mat (see docs/traces.md)")
 
     swp = sub.add_parser(
         "sweep", help="many runs over a parameter space (a TOML spec), resumable Parquet results",
@@ -342,14 +349,12 @@ def _run(args) -> int:
     from ego.runner import RunSpec, declared_metrics, run
     from ego.scenarios.metrics import flatten, metric_units
 
-    from ego.export import check_trace_path, write_trace
+    from ego.export import trace_files
 
     spec = RunSpec(args.scenario, args.controller, seed=check_seed(args.seed, "--seed"),
-                   overrides=parse_overrides(args.overrides), record=args.record)
-    if args.trace is not None:
-        check_trace_path(args.trace)
-    result = run(spec)
-    written = [str(p) for p in write_trace(result, args.trace)] if args.trace is not None else []
+                   overrides=parse_overrides(args.overrides), record=args.record, trace=args.trace)
+    result = run(spec)  # checks the --trace path before anything runs
+    written = [str(p) for p in trace_files(args.trace, result.traffic is not None)] if args.trace else []
     units = metric_units(declared_metrics(spec), flatten(result.metrics))
     if args.json:
         out = dict(result.metrics)
@@ -381,15 +386,14 @@ def _compare(args) -> int:
     if args.seeds > 100_000:
         raise ConfigError(f"bad value for --seeds: {args.seeds} (expected at most 100000; use ego sweep "
                           "for more)")
-    names = [n.strip() for n in args.controllers.split(",") if n.strip()]
-    if len(set(names)) != len(names):
-        dup = next(n for n in names if names.count(n) > 1)
-        raise ConfigError(f"bad value for --controllers: {dup!r} is listed twice")
+    labels = [n.strip() for n in args.controllers.split(",") if n.strip()]
     out = check_output_dir(args.out, "--out")
-    rows = compare(args.scenario, names, args.seeds, parse_overrides(args.overrides), out, args.jobs)
+    rows = compare(args.scenario, labels, args.seeds, parse_overrides(args.overrides), out, args.jobs,
+                   traces=args.traces)
     print((out / "metrics.md").read_text(), end="")
     files = ["metrics.csv", UNITS_FILE, "metrics.md"] + sorted(p.name for p in out.glob("*.png"))
-    print(f"\nwrote into {out}/: {', '.join(files)} and {len(rows)} recordings in runs/")
+    traces = f" and their traces ({args.traces}) in traces/" if args.traces else ""
+    print(f"\nwrote into {out}/: {', '.join(files)}, {len(rows)} recordings in runs/{traces}")
     return EXIT_OK
 
 

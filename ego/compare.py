@@ -27,6 +27,7 @@ from __future__ import annotations
 import csv
 import math
 import os
+import re
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -36,7 +37,8 @@ from pathlib import Path
 import numpy as np
 
 from ego.control import controller_spec
-from ego.params import ConfigError, describe
+from ego.export import TRACE_SUFFIXES
+from ego.params import ConfigError, apply_overrides, describe
 from ego.runner import RunSpec, configure, run, split_overrides
 from ego.scenarios import scenario_class
 from ego.scenarios.metrics import flatten, headline_names, metric_units, with_unit
@@ -46,6 +48,8 @@ from ego.sweep.executor import Executor, ProcessExecutor
 #: the columns metrics.csv starts with, before the metrics
 RUN_COLUMNS = ("controller", "seed", "status", "error")
 UNITS_FILE = "metrics_units.csv"
+#: ``--traces`` formats: the suffixes :func:`ego.export.write_trace` knows, without the dot
+TRACE_FORMATS = tuple(suffix[1:] for suffix in TRACE_SUFFIXES)
 
 
 @dataclass
@@ -71,33 +75,78 @@ def _one(spec: RunSpec) -> RunRow:
         plots = plots_of(spec)
         result = run(spec)
     except Exception as exc:  # noqa: BLE001 - a broken run is a row, not a crash
-        return RunRow(spec.controller, spec.seed, "error", {}, error=f"{type(exc).__name__}: {exc}")
+        return RunRow(spec.name, spec.seed, "error", {}, error=f"{type(exc).__name__}: {exc}")
     kept = ["t"] + [p.column for p in plots if p.column in result.columns]
     traces = {c: result.column(c) for c in kept}
     units = {c: result.units.get(c, "") for c in kept}
-    return RunRow(spec.controller, spec.seed, result.status, flatten(result.metrics), traces, units=units)
+    return RunRow(spec.name, spec.seed, result.status, flatten(result.metrics), traces, units=units)
 
 
-def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict, out: Path) -> list[RunSpec]:
-    """Validate names and overrides, and list the runs (before any process starts)."""
+def parse_variant(label: str, task: str) -> tuple[str, dict[str, str]]:
+    """A ``--controllers`` item: a controller's name, then any of its parameters as
+    ``@key=value`` (``pid@kp_lat=0.02@kd_lat=0.05``) -> (name, {key: value}). The values are
+    checked as ``--set`` checks them; ConfigError names the item."""
+    name, *items = label.split("@")
+    spec = controller_spec(name.strip(), task)
+    params: dict[str, str] = {}
+    try:
+        for item in items:
+            key, sep, value = item.partition("=")
+            if not sep or not key.strip():
+                raise ConfigError(f"{item!r} is not key=value (expected NAME@key=value@key=value...)")
+            if key.strip() in params:
+                raise ConfigError(f"{key.strip()} is given twice")
+            params[key.strip()] = value
+        apply_overrides(spec.params(), params)
+    except ConfigError as exc:
+        raise ConfigError(f"bad --controllers item {label!r}: {exc}") from None
+    return spec.name, params
+
+
+def file_label(label: str) -> str:
+    """``label`` as a file name: kept as given but for characters a file name cannot hold
+    (or would hide), each replaced by ``_`` (``gains_file=runs/a.json`` -> ``gains_file=runs_a.json``)."""
+    return re.sub(r"[^A-Za-z0-9._@=+-]", "_", label)
+
+
+def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict, out: Path,
+         traces: str | None = None) -> list[RunSpec]:
+    """Validate names, variants and overrides, and list the runs (before any process starts).
+
+    ``controllers`` are labels: a controller's name, or a variant of it with its own
+    parameters (:func:`parse_variant`); each run is named by its label. ``traces``: a
+    format of :data:`TRACE_FORMATS`, each run's trace to ``out/traces/<label>-seed<N>.<format>``.
+    """
     cls = scenario_class(scenario)
     if not controllers:
         raise ConfigError("--controllers needs at least one name")
-    for name in controllers:
-        controller_spec(name, cls.task)
+    dup = next((c for c in controllers if list(controllers).count(c) > 1), None)
+    if dup is not None:
+        raise ConfigError(f"bad value for --controllers: {dup!r} is listed twice")
+    if traces is not None and traces not in TRACE_FORMATS:
+        raise ConfigError(f"bad --traces {traces!r} (allowed: {', '.join(TRACE_FORMATS)})")
+    variants = {label: parse_variant(label, cls.task) for label in controllers}
+    files: dict[str, str] = {}
+    for label in controllers:
+        other = files.setdefault(file_label(label), label)
+        if other != label:
+            raise ConfigError(f"bad value for --controllers: {other!r} and {label!r} would share the "
+                              f"file name {file_label(label)!r}")
     known = {i.name for i in describe(cls.config_cls)}
-    for name in controllers:
+    for name, _ in variants.values():
         known |= {i.name for i in describe(controller_spec(name, cls.task).params)}
     unknown = sorted(set(overrides) - known)
     if unknown:
         raise ConfigError(f"unknown parameter {unknown[0]!r} for {scenario} with "
                           f"{', '.join(controllers)} (see ego list)")
     specs = []
-    for name in controllers:
-        mine = split_overrides(scenario, name, overrides)
+    for label, (name, params) in variants.items():
+        mine = {**split_overrides(scenario, name, overrides), **params}  # the variant's own win
         for seed in range(seeds):
-            rrd = out / "runs" / f"{name}-seed{seed}.rrd"
-            specs.append(RunSpec(scenario, name, seed, mine, str(rrd), background_recording=False))
+            stem = f"{file_label(label)}-seed{seed}"
+            trace = str(out / "traces" / f"{stem}.{traces}") if traces else None
+            specs.append(RunSpec(scenario, name, seed, mine, str(out / "runs" / f"{stem}.rrd"), trace=trace,
+                                 background_recording=False, label=label))
     return specs
 
 
@@ -116,8 +165,10 @@ def _progress(done: int, total: int, row: RunRow, started: float) -> None:
 
 def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict, out: Path,
             jobs: int | None = None, progress: Callable | None = _progress,
-            executor: Executor | None = None) -> list[RunRow]:
+            executor: Executor | None = None, traces: str | None = None) -> list[RunRow]:
     """Run everything, write the outputs, return the rows (in controller, seed order).
+    ``controllers`` are labels (:func:`plan`: names or variants); ``traces`` a format of
+    :data:`TRACE_FORMATS` to write each run's trace in, or None.
 
     The runs go to the sweep engines' process pool (``jobs`` workers, default one per CPU;
     libsumo allows one simulation per process; one code path with ``ego sweep``), or to
@@ -125,7 +176,7 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
     without SUMO).
     """
     out = Path(out)
-    specs = plan(scenario, controllers, seeds, overrides, out)
+    specs = plan(scenario, controllers, seeds, overrides, out, traces)
     for spec in specs:  # every value too (a bad --set value) before any process starts
         cls, config, ctrl, params = configure(spec)
         cls.build_controller(ctrl, params, config)
@@ -133,6 +184,8 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
     plots = tuple(cls.compare_plots(config))
     declared = cls.metrics_declared(config)
     (out / "runs").mkdir(parents=True, exist_ok=True)
+    if traces:
+        (out / "traces").mkdir(exist_ok=True)
     if executor is None:
         executor = ProcessExecutor(max(1, min(jobs or os.cpu_count() or 1, len(specs))))
     rows: list[RunRow] = []
@@ -141,12 +194,12 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
         for outcome in executor.run(_one, specs):
             spec = outcome.task
             rows.append(outcome.value if outcome.value is not None else
-                        RunRow(spec.controller, spec.seed, "error", {}, error=outcome.error))
+                        RunRow(spec.name, spec.seed, "error", {}, error=outcome.error))
             if progress:
                 progress(len(rows), len(specs), rows[-1], started)
     finally:
         executor.close()
-    order = {(s.controller, s.seed): i for i, s in enumerate(specs)}
+    order = {(s.name, s.seed): i for i, s in enumerate(specs)}
     rows.sort(key=lambda r: order[(r.controller, r.seed)])
     columns = csv_columns(rows)
     write_csv(rows, out / "metrics.csv", columns)

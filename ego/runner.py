@@ -22,9 +22,20 @@ class RunSpec:
     seed: int = 0
     overrides: Mapping[str, Any] = field(default_factory=dict)
     record: str | None = None
+    #: write the trace (and traffic log) here after the run: .csv, .parquet or .mat
+    #: (:func:`ego.export.write_trace`)
+    trace: str | None = None
     #: write the recording from a separate process (False: in this one, e.g. in a pool
     #: worker that already has a core of its own)
     background_recording: bool = True
+    #: the controller's name in the results (``RunResult.controller``, the recording):
+    #: ``ego compare``'s variant label, e.g. ``pid@kp_lat=0.02``; default ``controller``
+    label: str = ""
+
+    @property
+    def name(self) -> str:
+        """The controller as the results name it: ``label``, else ``controller``."""
+        return self.label or self.controller
 
 
 def split_overrides(scenario: str, controller: str, overrides: Mapping[str, Any]) -> dict:
@@ -55,20 +66,30 @@ def build(spec: RunSpec):
     """Resolve names and overrides into a ready scenario (validates everything first)."""
     cls, config, ctrl, ctrl_params = configure(spec)
     controller = cls.build_controller(ctrl, ctrl_params, config)
+    if spec.trace is not None:
+        from ego.export import check_trace_path
+
+        check_trace_path(spec.trace)
     recorder = None
     if spec.record is not None:
         from ego.checks import check_output_file
 
         path = check_output_file(spec.record, "--record path", ".rrd")
         path.parent.mkdir(parents=True, exist_ok=True)
-        recorder = RerunRecorder(path, recording_id=f"{spec.scenario}-{spec.controller}-{spec.seed}",
+        recorder = RerunRecorder(path, recording_id=f"{spec.scenario}-{spec.name}-{spec.seed}",
                                  background=spec.background_recording)
-    return cls(config, controller, seed=spec.seed, recorder=recorder, controller_name=spec.controller)
+    return cls(config, controller, seed=spec.seed, recorder=recorder, controller_name=spec.name)
 
 
 def run(spec: RunSpec) -> RunResult:
-    """Run one scenario to its end; SUMO and the recording are closed whatever happens."""
-    return build(spec).run()
+    """Run one scenario to its end; SUMO and the recording are closed whatever happens.
+    With ``spec.trace``, the trace is written there (an interrupted run's too)."""
+    result = build(spec).run()
+    if spec.trace is not None:
+        from ego.export import write_trace
+
+        write_trace(result, spec.trace)
+    return result
 
 
 def declared_metrics(spec: RunSpec) -> tuple[Metric, ...]:
