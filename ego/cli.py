@@ -19,8 +19,10 @@ name, e.g. ``settle_times.brake@10s``, -> unit; ``-`` for a pure number, a code 
 headline; a name ending in ``.`` stands for every metric under it) and trace ``columns``
 (name, unit, description), and per controller its ``parameters``.
 
-Exit status: 0 the run completed; 1 it ended in a collision, diverged or timed out
-(the metrics are still printed); 130 interrupted by Ctrl-C or SIGTERM (status
+Exit status: 0 the run completed, or ``ended`` (the ``duration`` ran out before the
+scenario's end, in a scenario whose end the controller does not decide: a shortened run,
+not a failure); 1 it ended in a collision, diverged or timed out (the duration ran out
+during a manoeuvre; the metrics are still printed); 130 interrupted by Ctrl-C or SIGTERM (status
 ``interrupted``, the metrics so far printed, the recording closed); 2 bad input (unknown name, bad value), with one line
 on stderr naming it and what is allowed.
 """
@@ -90,7 +92,8 @@ def _parser() -> argparse.ArgumentParser:
     run = sub.add_parser(
         "run", help="run one scenario with one controller",
         description="Run one scenario with one controller and print its metrics.",
-        epilog="Exit status: 0 completed; 1 collision, diverged or timeout; 2 bad input.\n"
+        epilog="Exit status: 0 completed or ended (the duration ran out first, not a failure); "
+               "1 collision, diverged or timeout; 2 bad input.\n"
                "Every parameter, its unit and default: ego list",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -159,7 +162,8 @@ def _parser() -> argparse.ArgumentParser:
     swp.add_argument("--address", default=None, metavar="ADDR",
                      help="with --engine ray: join this Ray cluster (e.g. auto or ray://host:10001)")
     swp.add_argument("--record", default="failed", metavar="WHICH",
-                     help="recordings: none, failed (default: runs that did not complete) or all")
+                     help="recordings: none, failed (default: runs that did not complete or end by "
+                          "their duration) or all")
     swp.add_argument("--plot", action="append", default=[], metavar="X,Y[:METRIC]",
                      help="an envelope plot over two swept parameters (repeatable)")
 
@@ -276,10 +280,10 @@ def _print_catalogue(cat: dict) -> None:
             print("    (no parameters)")
             return
         w = max(len(r["name"]) for r in rows)
-        for r in rows:
-            default = json.dumps(r["default"])
-            unit = "" if r["unit"] in ("", "-") else f" {r['unit']}"
-            print(f"    {r['name']:<{w}}  {default + unit:<14}  {r['description']}")
+        defaults = [_default(r["default"], r["unit"]) for r in rows]
+        wd = min(max(map(len, defaults)), 24)  # a long text default overflows rather than widen all
+        for r, default in zip(rows, defaults):
+            print(f"    {r['name']:<{w}}  {default:<{wd}}  {r['description']}")
 
     def metrics(rows: list[dict]) -> None:
         own = [r for r in rows if r["name"] not in common]
@@ -315,6 +319,19 @@ def _print_catalogue(cat: dict) -> None:
                 table(c["parameters"])
 
 
+def _default(value, unit: str) -> str:
+    """A parameter's default for ``ego list``: a number to 6 significant digits with its
+    unit, an angle also in degrees (``0.436332 rad (25 deg)``), text quoted."""
+    from ego.params import _fmt as number
+
+    if isinstance(value, str):
+        return json.dumps(value)
+    text = number(value) + ("" if unit in ("", "-") else f" {unit}")
+    if unit == "rad" and isinstance(value, float):
+        text += f" ({math.degrees(value):.3g} deg)"
+    return text
+
+
 def _fmt(value) -> str:
     if value is None:
         return "-"
@@ -347,6 +364,7 @@ def _print_result(result, units: dict[str, str]) -> None:
 
 def _run(args) -> int:
     from ego.runner import RunSpec, declared_metrics, run
+    from ego.scenarios.base import NOT_FAILED
     from ego.scenarios.metrics import flatten, metric_units
 
     from ego.export import trace_files
@@ -373,7 +391,7 @@ def _run(args) -> int:
             print(f"trace: {', '.join(written)}")
     if result.status == "interrupted":
         return EXIT_INTERRUPTED
-    return EXIT_OK if result.status == "completed" else EXIT_NOT_COMPLETED
+    return EXIT_OK if result.status in NOT_FAILED else EXIT_NOT_COMPLETED
 
 
 def _compare(args) -> int:

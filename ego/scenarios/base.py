@@ -30,7 +30,10 @@ from ego.scenarios.trace import Column, Metric, Plot, Trace
 from ego.scenarios.traffic_log import TrafficLog
 from ego.sumo.bridge import Collision, SumoBridge
 
-STATUSES = ("completed", "collision", "diverged", "timeout", "interrupted")
+STATUSES = ("completed", "ended", "collision", "diverged", "timeout", "interrupted")
+#: the statuses that are no failure: the scenario's own end, or the duration ran out in a
+#: scenario whose end the controller does not decide (``ended``: a shortened run)
+NOT_FAILED = ("completed", "ended")
 _log = logging.getLogger("ego.scenario")
 _LOG_LEVELS = {"INFO": logging.INFO, "WARN": logging.WARNING, "ERROR": logging.ERROR}
 
@@ -512,7 +515,9 @@ COMMON_METRICS = (
     Metric("scenario", "-", "scenario name"),
     Metric("controller", "-", "controller name"),
     Metric("seed", "-", "random seed of the traffic and the controller"),
-    Metric("status", "-", "completed, collision, diverged or timeout"),
+    Metric("status", "-", "completed; ended (the duration ran out before the scenario's end, "
+           "not a failure); collision, diverged or timeout (the duration ran out during a "
+           "manoeuvre); interrupted"),
     Metric("status_detail", "-", "why the run ended"),
     Metric("collision", "-", "the ego (or a controlled vehicle) was in a collision"),
     Metric("collision_with", "-", "the other party of the collision"),

@@ -321,7 +321,7 @@ class CurveScenario(RoadScenario):
 
     def _final_status(self) -> tuple[str, str]:
         where = "on the approach" if self.arc_enter_t is None else "in the arc"
-        return "timeout", f"still {where} after {self.config.duration:g} s"
+        return "timeout", f"the duration ({self.config.duration:g} s) ended the run with the ego still {where}"
 
     # -- results ------------------------------------------------------------------------------
     def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:

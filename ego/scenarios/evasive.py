@@ -364,7 +364,8 @@ class EvasiveLaneChange(HighwayScenario):
 
     def _final_status(self) -> tuple[str, str]:
         if self.phase in (LANE_CHANGE, IN_LANE):
-            return "timeout", f"the manoeuvre ({PHASE_NAMES[self.phase]}) did not finish in time"
+            return "timeout", (f"the duration ({self.config.duration:g} s) ended the run before the "
+                               f"manoeuvre ({PHASE_NAMES[self.phase]}) finished")
         if self.phase == CRUISE:
             return "completed", f"the {self.trigger_on} TTC never fell below the threshold: no manoeuvre"
         return "completed", "manoeuvre complete"

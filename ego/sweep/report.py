@@ -2,8 +2,8 @@
 
 **Reading an envelope plot** (``envelope_<X>_<Y>[_<METRIC>].png``): one column per
 controller. The top row is the outcome of every run at its (X, Y) point: green completed,
-red collision, black diverged, orange timeout, grey error; where a point has several runs
-(seeds) the worst outcome is drawn. The boundary between green and red is the controller's
+light green ended (the duration ran out first), red collision, black diverged, orange
+timeout, grey error; where a point has several runs (seeds) the worst outcome is drawn. The boundary between green and red is the controller's
 operating envelope over those two parameters (the others vary or stay fixed as the spec
 says). The bottom row, when a metric is asked for, colours each point by that metric (the
 mean over its runs), on one colour scale shared by all controllers, so the columns compare.
@@ -19,8 +19,8 @@ import numpy as np
 from ego.scenarios.metrics import with_unit
 
 #: outcome -> (colour, rank: a point with several runs shows its worst)
-OUTCOMES = {"completed": ("#2ca02c", 0), "timeout": ("#ff7f0e", 1), "collision": ("#d62728", 3),
-            "diverged": ("#000000", 4), "error": ("#9e9e9e", 2)}
+OUTCOMES = {"completed": ("#2ca02c", 0), "ended": ("#98df8a", 1), "timeout": ("#ff7f0e", 2),
+            "collision": ("#d62728", 4), "diverged": ("#000000", 5), "error": ("#9e9e9e", 3)}
 
 
 def _units(scenario: str) -> dict[str, str]:

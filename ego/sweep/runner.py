@@ -3,7 +3,7 @@
 Outputs in ``--out``: ``results.parquet`` (see :mod:`ego.sweep.results`), ``summary.md``
 (per controller: runs by status and the distribution of the scenario's headline metrics),
 ``runs/<controller>-<run id>.rrd`` as ``--record`` says (``failed``, the default, records
-only the runs that did not complete: each is run again with a recording, which gives the
+only the runs that failed - not ``completed`` nor ``ended``: each is run again with a recording, which gives the
 same run since runs are deterministic), and the envelope plots asked for with ``--plot``.
 """
 
@@ -28,6 +28,7 @@ _HOST = socket.gethostname()
 def run_task(task: tuple) -> dict:
     """One run in a worker: ``(Run, recording path or None, record policy)`` -> its row."""
     from ego.runner import RunSpec, run
+    from ego.scenarios.base import NOT_FAILED
     from ego.scenarios.metrics import flatten
 
     r, rrd, policy = task
@@ -38,7 +39,7 @@ def run_task(task: tuple) -> dict:
         spec = RunSpec(r.scenario, r.controller, r.seed, r.overrides,
                        record=rrd if policy == "all" else None, background_recording=False)
         result = run(spec)
-        if policy == "failed" and result.status != "completed" and rrd:
+        if policy == "failed" and result.status not in NOT_FAILED and rrd:
             run(RunSpec(r.scenario, r.controller, r.seed, r.overrides, record=rrd,
                         background_recording=False))
         metrics = flatten(result.metrics)

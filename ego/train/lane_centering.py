@@ -387,6 +387,7 @@ def sumo_cost(task: tuple) -> float:
     the report's cost of the run's lateral error (a run that does not complete costs 1e4+)."""
     from ego.control.cascade import CascadePID, CascadePIDParams
     from ego.runner import RunSpec, configure
+    from ego.scenarios.base import NOT_FAILED
 
     gains, speed, offset, duration = task
     overrides = {"speed": speed, "offset": offset, "plant": "dynamic-bicycle"}
@@ -399,7 +400,7 @@ def sumo_cost(task: tuple) -> float:
                              p.feedforward, math.radians(p.steer_limit), math.radians(p.steer_rate))
     result = cls(config, controller, seed=0, controller_name="cascade-pid").run()
     e = np.abs(result.column("d"))
-    if result.status not in ("completed", "timeout") or not e.size:  # timeout: a shortened drive
+    if result.status not in NOT_FAILED or not e.size:  # ended: a shortened drive
         return float(1e4 + (np.nanmax(e) if e.size else 0.0))
     return float(cost(np.array([e.max()]), np.array([e.mean()]), np.array([e.std()]))[0])
 
