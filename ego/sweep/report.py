@@ -16,17 +16,19 @@ from pathlib import Path
 
 import numpy as np
 
-from ego.scenarios.metrics import with_unit
+from ego.scenarios.metrics import metric_units, with_unit
 
 #: outcome -> (colour, rank: a point with several runs shows its worst)
 OUTCOMES = {"completed": ("#2ca02c", 0), "ended": ("#98df8a", 1), "timeout": ("#ff7f0e", 2),
             "collision": ("#d62728", 4), "diverged": ("#000000", 5), "error": ("#9e9e9e", 3)}
 
 
-def _units(scenario: str) -> dict[str, str]:
+def _unit(scenario: str, metric: str) -> str:
+    """The declared unit of a (flattened) metric: ``settle_times.brake@10s`` is in the unit
+    its prefix ``settle_times.`` declares."""
     from ego.scenarios import scenario_class
 
-    return {m.name: m.unit for m in scenario_class(scenario).metrics_declared()}
+    return metric_units(scenario_class(scenario).metrics_declared(), [metric])[metric]
 
 
 def write_summary(spec, table, path: Path) -> None:
@@ -90,7 +92,6 @@ def write_plots(spec, table, out: Path, x: str, y: str, metric: str | None) -> P
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    units = _units(spec.scenario)
     data = table.to_pydict()
     rows = 2 if metric else 1
     ncol = len(spec.controllers)
@@ -151,7 +152,7 @@ def write_plots(spec, table, out: Path, x: str, y: str, metric: str | None) -> P
     if metric and scatter is not None:
         cax = fig.add_axes([0.85, 0.1, 0.02, 0.3])
         bar = fig.colorbar(scatter, cax=cax)
-        bar.set_label(with_unit(metric, units.get(metric, "")) + "\n(mean of a point's runs)", fontsize=7)
+        bar.set_label(with_unit(metric, _unit(spec.scenario, metric)) + "\n(mean of a point's runs)", fontsize=7)
     title = f"{spec.scenario}: outcome over {x} and {y}" + (f"; {metric}" if metric else "")
     fig.suptitle(title, fontsize=10)
     name = f"envelope_{x}_{y}" + (f"_{metric}" if metric else "") + ".png"
