@@ -5,6 +5,7 @@ Outputs in ``--out``: ``results.parquet`` (see :mod:`ego.sweep.results`), ``summ
 ``runs/<controller>-<run id>.rrd`` as ``--record`` says (``failed``, the default, records
 only the runs that did not complete: each is run again with a recording, which gives the
 same run since runs are deterministic), and the envelope plots asked for with ``--plot``.
+``--out`` is held while the sweep runs: a second sweep or comparison into it is refused.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from ego.outputs import PARTIAL_SUFFIX, FolderLock
 from ego.params import ConfigError
 from ego.sweep.executor import Outcome, make_executor
 from ego.sweep.results import ResultStore
@@ -80,7 +82,12 @@ def sweep(spec: SweepSpec, out: Path, *, engine: str = "process", jobs: int | No
         raise ConfigError(f"bad --record {record!r} (allowed: {', '.join(RECORD)})")
     plot_specs = [parse_plot(p, spec) for p in plots]
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    with FolderLock(out, "--out"):  # one sweep at a time per folder (its results file)
+        return _sweep(spec, out, engine, jobs, address, record, plot_specs, progress)
+
+
+def _sweep(spec: SweepSpec, out: Path, engine: str, jobs: int | None, address: str | None, record: str,
+           plot_specs: list, progress: Callable | None) -> SweepReport:
     store = ResultStore(out)
     done = store.done_ids()
     total = spec.count()
@@ -118,6 +125,9 @@ def sweep(spec: SweepSpec, out: Path, *, engine: str = "process", jobs: int | No
         store.flush()
         if executor is not None:
             executor.close()
+        # recordings of runs killed mid-way (their workers are gone; the folder is ours)
+        for partial in runs_dir.glob(f"*{PARTIAL_SUFFIX}"):
+            partial.unlink(missing_ok=True)
     table = store.table()
     if table is not None:
         from ego.sweep.report import write_plots, write_summary
