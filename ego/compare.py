@@ -43,7 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from ego.control import controller_spec
-from ego.outputs import FolderLock, atomic_path, partials_of, write_text
+from ego.outputs import FolderLock, atomic_path, remove_partials, write_text
 from ego.params import ConfigError, describe
 from ego.processes import signals_deferred
 from ego.runner import RunSpec, configure, run, split_overrides
@@ -149,14 +149,14 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
     declared = cls.metrics_declared(config)
     with FolderLock(out, "--out"):
         (out / "runs").mkdir(parents=True, exist_ok=True)
+        remove_partials(out / "runs")  # left by a comparison that was killed
         for spec in specs:  # an older comparison's recording must not pass for this one's
             Path(spec.record).unlink(missing_ok=True)
         if executor is None:
             executor = ProcessExecutor(max(1, min(jobs or os.cpu_count() or 1, len(specs))))
         rows = _execute(executor, specs, progress)
+        remove_partials(out / "runs")  # runs killed mid-way; their workers are gone
         for row, spec in zip(rows, specs):
-            for partial in partials_of(spec.record):  # a run killed mid-way; its writer is gone
-                partial.unlink(missing_ok=True)
             row.recording = spec.record if Path(spec.record).exists() else ""
         columns = csv_columns(rows)
         with signals_deferred():  # a second Ctrl-C waits until every file is whole

@@ -32,10 +32,11 @@ def partial_path(path: str | Path, pid: int | None = None) -> Path:
     return path.with_name(f"{path.name}.{os.getpid() if pid is None else pid}{PARTIAL_SUFFIX}")
 
 
-def partials_of(path: str | Path) -> list[Path]:
-    """Every unfinished temporary file of ``path`` (any writer's)."""
-    path = Path(path)
-    return sorted(path.parent.glob(f"{path.name}.*{PARTIAL_SUFFIX}"))
+def remove_partials(folder: str | Path) -> None:
+    """Remove the unfinished files in ``folder``: call it only while holding the folder
+    (:class:`FolderLock`), when every writer of them is known to be gone."""
+    for partial in Path(folder).glob(f"*{PARTIAL_SUFFIX}"):
+        partial.unlink(missing_ok=True)
 
 
 @contextmanager

@@ -17,7 +17,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from ego.outputs import PARTIAL_SUFFIX, FolderLock
+from ego.outputs import FolderLock, remove_partials
 from ego.params import ConfigError
 from ego.sweep.executor import Outcome, make_executor
 from ego.sweep.results import ResultStore
@@ -96,6 +96,7 @@ def _sweep(spec: SweepSpec, out: Path, engine: str, jobs: int | None, address: s
     runs_dir = out / "runs"
     if record != "none":
         runs_dir.mkdir(parents=True, exist_ok=True)
+    remove_partials(runs_dir)  # left by a sweep that was killed
 
     def tasks():
         for r in spec.runs():
@@ -125,9 +126,7 @@ def _sweep(spec: SweepSpec, out: Path, engine: str, jobs: int | None, address: s
         store.flush()
         if executor is not None:
             executor.close()
-        # recordings of runs killed mid-way (their workers are gone; the folder is ours)
-        for partial in runs_dir.glob(f"*{PARTIAL_SUFFIX}"):
-            partial.unlink(missing_ok=True)
+        remove_partials(runs_dir)  # recordings of runs killed mid-way; their workers are gone
     table = store.table()
     if table is not None:
         from ego.sweep.report import write_plots, write_summary
