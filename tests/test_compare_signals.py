@@ -7,10 +7,9 @@ import os
 import signal
 import subprocess
 import sys
-import time
 
-import psutil
 import pytest
+from process_group import group, survivors, wait_for
 
 pytestmark = pytest.mark.sumo
 
@@ -22,34 +21,6 @@ def _compare(out, *args, jobs=1):
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
 
 
-def _wait_for(predicate, proc, what, timeout=180.0):
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        assert proc.poll() is None, (what, proc.communicate())
-        assert time.monotonic() < deadline, f"never saw {what}"
-        time.sleep(0.05)
-
-
-def _group(pgid):
-    """The live (not zombie) processes of process group ``pgid``."""
-    alive = []
-    for p in psutil.process_iter():
-        try:
-            if os.getpgid(p.pid) == pgid and p.status() != psutil.STATUS_ZOMBIE:
-                alive.append(p)
-        except (ProcessLookupError, psutil.NoSuchProcess):
-            pass
-    return alive
-
-
-def _group_ends(pgid, timeout=60.0):
-    """Wait until no process of the group is left; the survivors' command lines otherwise."""
-    deadline = time.monotonic() + timeout
-    while (alive := _group(pgid)) and time.monotonic() < deadline:
-        time.sleep(0.1)
-    return [" ".join(p.cmdline())[:120] for p in alive]
-
-
 def _rows(out):
     with open(out / "metrics.csv", newline="") as f:
         return [(r["controller"], r["seed"], r["status"]) for r in csv.DictReader(f)]
@@ -59,7 +30,7 @@ def test_ctrl_c_keeps_the_finished_runs_and_marks_the_rest(tmp_path):
     out = tmp_path / "cmp"
     p = _compare(out, "--controllers", "none,pid", "--seeds", "2")
     first = out / "runs" / "none-seed0.rrd"  # a recording takes its name when its run ends
-    _wait_for(first.exists, p, "the first run finish")
+    wait_for(first.exists, p, "the first run finish")
     os.killpg(p.pid, signal.SIGINT)  # as a terminal does: the whole group
     stdout, stderr = p.communicate(timeout=120)
     assert p.returncode == 130, stderr
@@ -75,7 +46,7 @@ def test_ctrl_c_keeps_the_finished_runs_and_marks_the_rest(tmp_path):
     md = (out / "metrics.md").read_text()
     assert f"Interrupted: {len(unfinished)} of 4 runs did not finish" in md
     assert f"{len(finished)} of 4 recordings" in stdout
-    assert not _group_ends(p.pid)
+    assert not survivors(p.pid)
 
 
 @pytest.mark.parametrize("sig", ["SIGTERM", "SIGKILL"])
@@ -83,12 +54,12 @@ def test_a_killed_compare_leaves_no_process_behind(sig, tmp_path):
     out = tmp_path / "cmp"
     p = _compare(out, "--controllers", "pid,fuzzy", "--seeds", "3", jobs=2)
     # both workers are simulating: each has begun a recording
-    _wait_for(lambda: len(list((out / "runs").glob("*.partial"))) >= 2, p, "two runs under way")
-    helpers = _group(p.pid)
+    wait_for(lambda: len(list((out / "runs").glob("*.partial"))) >= 2, p, "two runs under way")
+    helpers = group(p.pid)
     assert len(helpers) >= 4  # ego, the fork server, the resource tracker, the workers
     p.send_signal(getattr(signal, sig))  # the main process only
     stdout, stderr = p.communicate(timeout=120)
-    assert not _group_ends(p.pid)
+    assert not survivors(p.pid)
     if sig == "SIGTERM":  # ends like Ctrl-C: every file written, no run claimed twice
         assert p.returncode == 130, stderr
         assert {r[2] for r in _rows(out)} <= {"completed", "interrupted"}
@@ -104,7 +75,7 @@ def test_a_killed_compare_leaves_no_process_behind(sig, tmp_path):
 def test_a_second_compare_into_a_busy_folder_is_refused(tmp_path):
     out = tmp_path / "cmp"
     p = _compare(out, "--controllers", "pid", "--seeds", "2")
-    _wait_for(lambda: list((out / "runs").glob("*.partial")), p, "a run under way")
+    wait_for(lambda: list((out / "runs").glob("*.partial")), p, "a run under way")
     second = subprocess.run([sys.executable, "-m", "ego", "compare", "emergency-brake", "--controllers", "fuzzy",
                              "--out", str(out)], capture_output=True, text=True, timeout=120)
     assert second.returncode == 2
@@ -117,7 +88,7 @@ def test_a_second_compare_into_a_busy_folder_is_refused(tmp_path):
     assert third.returncode == 2 and f"(pid {p.pid})" in third.stderr
     p.kill()
     p.communicate()
-    assert not _group_ends(p.pid)
+    assert not survivors(p.pid)
     # the holder is gone: the folder is free again (a dead holder needs no cleaning up)
     again = subprocess.run([sys.executable, "-m", "ego", "compare", "emergency-brake", "--controllers", "none",
                             "--set", "duration=2", "--out", str(out)], capture_output=True, text=True, timeout=300)

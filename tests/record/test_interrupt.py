@@ -8,6 +8,7 @@ import sys
 import time
 
 import pytest
+from process_group import survivors, wait_for
 
 pytestmark = pytest.mark.sumo
 
@@ -24,16 +25,6 @@ def _rows(path, entity="/plots/speed/ego"):
     return n
 
 
-def wait_for_partial(path, proc, timeout=120.0):
-    """Wait until the recording of ``path`` has begun (its partial file exists): the run is
-    then past start-up and stepping. Polls the file system, as a user would see it."""
-    deadline = time.monotonic() + timeout
-    while not list(path.parent.glob(path.name + ".*.partial")):
-        assert proc.poll() is None, proc.communicate()
-        assert time.monotonic() < deadline, "the recording never began"
-        time.sleep(0.05)
-
-
 # Repeated at several moments: where the signal lands (start-up, a step, a recorder batch)
 # used to decide whether the recording survived.
 @pytest.mark.parametrize("sig, after", [("SIGINT", 0.0), ("SIGINT", 0.4), ("SIGINT", 1.0), ("SIGINT", 1.7),
@@ -45,7 +36,8 @@ def test_an_interrupted_recorded_run_keeps_everything_it_simulated(sig, after, t
     p = subprocess.Popen([sys.executable, "-m", "ego", "run", "emergency-brake", "-c", "fuzzy", "--record",
                           str(rrd), "--set", "duration=3600"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                          text=True, start_new_session=True, env=env)
-    wait_for_partial(rrd, p)
+    # the recording has begun (its partial file exists): the run is past its imports
+    wait_for(lambda: list(tmp_path.glob("run.rrd.*.partial")), p, "the recording begin")
     time.sleep(after)
     os.killpg(p.pid, getattr(signal, sig))  # the whole process group, as a terminal does
     out, err = p.communicate(timeout=120)
@@ -57,3 +49,4 @@ def test_an_interrupted_recorded_run_keeps_everything_it_simulated(sig, after, t
     assert check.returncode == 0, check.stderr
     assert _rows(rrd) == steps  # one row per control step, the last one included
     assert sorted(p.name for p in tmp_path.glob("run.rrd*")) == ["run.rrd"]  # no partial file left
+    assert not survivors(p.pid)  # the recording's writer process is gone too
