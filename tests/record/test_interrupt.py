@@ -50,3 +50,22 @@ def test_an_interrupted_recorded_run_keeps_everything_it_simulated(sig, after, t
     assert _rows(rrd) == steps  # one row per control step, the last one included
     assert sorted(p.name for p in tmp_path.glob("run.rrd*")) == ["run.rrd"]  # no partial file left
     assert not survivors(p.pid)  # the recording's writer process is gone too
+
+
+def test_a_killed_recorded_run_leaves_a_partial_file_named_so_and_no_writer(tmp_path):
+    rrd = tmp_path / "run.rrd"
+    env = dict(os.environ, XDG_CONFIG_HOME=str(tmp_path), XDG_DATA_HOME=str(tmp_path))
+    p = subprocess.Popen([sys.executable, "-m", "ego", "run", "emergency-brake", "-c", "pid", "--record",
+                          str(rrd), "--set", "duration=3600"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         text=True, start_new_session=True, env=env)
+    wait_for(lambda: list(tmp_path.glob("run.rrd.*.partial")), p, "the recording begin")
+    time.sleep(0.5)
+    p.kill()  # the simulation process only, no chance to close anything
+    p.communicate(timeout=60)
+    # the writer sees its input end, closes the file with what it received and exits
+    assert not survivors(p.pid)
+    assert not rrd.exists()  # never the finished recording's name
+    (partial,) = tmp_path.glob("run.rrd.*.partial")
+    rerun = os.path.join(os.path.dirname(sys.executable), "rerun")
+    check = subprocess.run([rerun, "rrd", "verify", str(partial)], capture_output=True, text=True, env=env)
+    assert check.returncode == 0, check.stderr
