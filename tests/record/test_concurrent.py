@@ -9,7 +9,7 @@ import sys
 import pytest
 from rerun.chunk import RrdReader
 
-from test_interrupt import _rows
+from test_interrupt import _rows, _verify
 
 pytestmark = pytest.mark.sumo
 
@@ -26,9 +26,7 @@ def test_two_writers_to_one_recording_leave_a_valid_file(tmp_path):
         out, err = p.communicate(timeout=300)
         assert p.returncode == 0, err
         steps[seed] = json.loads(out)["steps"]
-    rerun = os.path.join(os.path.dirname(sys.executable), "rerun")
-    check = subprocess.run([rerun, "rrd", "verify", str(rrd)], capture_output=True, text=True, env=env)
-    assert check.returncode == 0, check.stderr
+    _verify(rrd, tmp_path)
     (recording,) = RrdReader(rrd).recordings()  # one run's recording, whole
     winner = int(recording.recording_id.rsplit("-", 1)[1])
     assert _rows(rrd) == steps[winner]
