@@ -180,6 +180,8 @@ class ProcessExecutor:
     def close(self) -> None:
         pool, self._pool = self._pool, []
         for worker in pool:
+            if worker.job is not None:  # a run abandoned mid-way (Ctrl-C): no waiting for it
+                worker.process.kill()
             worker.stop()
 
     def __enter__(self) -> ProcessExecutor:
