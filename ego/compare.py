@@ -274,8 +274,8 @@ def write_markdown(scenario: str, rows: Sequence[RunRow], controllers: list[str]
         lines += ["", "Errors:", ""] + [f"- {r.controller} seed {r.seed}: {r.error}" for r in errors]
     unfinished = [r for r in rows if r.status == "interrupted"]
     if unfinished:
-        lines += ["", f"Interrupted: {len(unfinished)} of {len(rows)} runs did not finish (no metrics, "
-                  "no recording): " + ", ".join(f"{r.controller} seed {r.seed}" for r in unfinished[:20])
+        lines += ["", f"Interrupted: {len(unfinished)} of {len(rows)} runs did not finish: "
+                  + ", ".join(f"{r.controller} seed {r.seed}" for r in unfinished[:20])
                   + (", ..." if len(unfinished) > 20 else "")]
     write_text(path, "\n".join(lines) + "\n")
 

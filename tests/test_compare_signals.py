@@ -1,6 +1,7 @@
-"""ego compare in real processes under signals: Ctrl-C keeps the finished rows, SIGTERM and
-SIGKILL of the main process leave no process of its group behind (workers, fork server,
-resource tracker), and the output folder is held while it runs."""
+"""ego compare under signals: Ctrl-C keeps the finished rows (in real processes, and in one
+process with the in-process executor), SIGTERM and SIGKILL of the main process leave no
+process of its group behind (workers, fork server, resource tracker), and the output folder
+is held while it runs."""
 
 import csv
 import os
@@ -11,7 +12,10 @@ import sys
 import pytest
 from process_group import group, survivors, wait_for
 
-pytestmark = pytest.mark.sumo
+from ego.compare import compare
+from ego.control import CONTROLLERS, NoController, NoParams
+from ego.control.base import ControllerSpec
+from ego.sweep.executor import InlineExecutor
 
 
 def _compare(out, *args, jobs=1):
@@ -26,6 +30,36 @@ def _rows(out):
         return [(r["controller"], r["seed"], r["status"]) for r in csv.DictReader(f)]
 
 
+class CtrlCAt(NoController):
+    """Presses Ctrl-C (SIGINT to this process) at its 10th control step."""
+
+    def __init__(self, params, dt):
+        self.steps = 0
+
+    def step(self, obs):
+        self.steps += 1
+        if self.steps == 10:
+            signal.raise_signal(signal.SIGINT)
+        return 0.0, 0.0
+
+
+def test_ctrl_c_in_an_in_process_comparison_stops_it_and_keeps_what_finished(point_mass, monkeypatch, tmp_path):
+    monkeypatch.setitem(CONTROLLERS["tracking"], "ctrl-c", ControllerSpec("ctrl-c", "test", NoParams, CtrlCAt))
+    out = tmp_path / "cmp"
+    rows = compare("point-mass", ["pid", "ctrl-c", "fuzzy"], 1, {"duration": 1.0}, out, progress=None,
+                   executor=InlineExecutor())
+    assert [(r.controller, r.status) for r in rows] == [("pid", "completed"), ("ctrl-c", "interrupted"),
+                                                        ("fuzzy", "interrupted")]
+    # the run that caught the Ctrl-C stopped at the next step, its metrics so far and its
+    # recording closed; the one after it never ran
+    assert rows[1].metrics["steps"] == 10 and rows[1].recording
+    assert rows[2].metrics == {} and not rows[2].recording
+    assert _rows(out) == [("pid", "0", "completed"), ("ctrl-c", "0", "interrupted"), ("fuzzy", "0", "interrupted")]
+    assert "Interrupted: 2 of 3 runs did not finish" in (out / "metrics.md").read_text()
+    assert sorted(p.name for p in (out / "runs").iterdir()) == ["ctrl-c-seed0.rrd", "pid-seed0.rrd"]
+
+
+@pytest.mark.sumo
 def test_ctrl_c_keeps_the_finished_runs_and_marks_the_rest(tmp_path):
     out = tmp_path / "cmp"
     p = _compare(out, "--controllers", "none,pid", "--seeds", "2")
@@ -49,6 +83,7 @@ def test_ctrl_c_keeps_the_finished_runs_and_marks_the_rest(tmp_path):
     assert not survivors(p.pid)
 
 
+@pytest.mark.sumo
 @pytest.mark.parametrize("sig", ["SIGTERM", "SIGKILL"])
 def test_a_killed_compare_leaves_no_process_behind(sig, tmp_path):
     out = tmp_path / "cmp"
@@ -72,6 +107,7 @@ def test_a_killed_compare_leaves_no_process_behind(sig, tmp_path):
         assert not list((out / "runs").glob("*.rrd"))
 
 
+@pytest.mark.sumo
 def test_a_second_compare_into_a_busy_folder_is_refused(tmp_path):
     out = tmp_path / "cmp"
     p = _compare(out, "--controllers", "pid", "--seeds", "2")
