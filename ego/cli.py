@@ -19,12 +19,16 @@ name, e.g. ``settle_times.brake@10s``, -> unit; ``-`` for a pure number, a code 
 headline; a name ending in ``.`` stands for every metric under it) and trace ``columns``
 (name, unit, description), and per controller its ``parameters``.
 
-Exit status: 0 the run completed, or ``ended`` (the ``duration`` ran out before the
-scenario's end, in a scenario whose end the controller does not decide: a shortened run,
-not a failure); 1 it ended in a collision, diverged or timed out (the duration ran out
-during a manoeuvre; the metrics are still printed); 130 interrupted by Ctrl-C or SIGTERM (status
-``interrupted``, the metrics so far printed, the recording closed); 2 bad input (unknown name, bad value), with one line
-on stderr naming it and what is allowed.
+Exit status of ``ego run``: 0 the run completed, or ``ended`` (the ``duration`` ran out
+before the scenario's end, in a scenario whose end the controller does not decide: a
+shortened run, not a failure); 1 it ended in a collision, diverged or timed out (the
+duration ran out during a manoeuvre; the metrics are still printed); 130 interrupted by
+Ctrl-C or SIGTERM (status ``interrupted``, the metrics so far printed, the recording
+closed); 2 bad input (unknown name, bad value), with one line on stderr naming it and what
+is allowed. ``ego compare`` and ``ego sweep``: 0 every run gave a result (a collision is a
+result); 1 some run ended in ``error`` (ego could not run it); 130 interrupted (what
+finished is written); 2 bad input, or ``--out`` held by another ego process.
+docs/reliability.md has the details.
 """
 
 from __future__ import annotations
@@ -119,7 +123,9 @@ def _parser() -> argparse.ArgumentParser:
                "--out runs/cmp\nA --set key applies to the scenario and to every controller "
                "that has it.\nVariants of one controller side by side, named as given in every "
                "table, plot and file:\n  ego compare emergency-brake --controllers "
-               "pid,pid@kp_lat=0.02@kd_lat=0.05 --out runs/pid-gains",
+               "pid,pid@kp_lat=0.02@kd_lat=0.05 --out runs/pid-gains\n"
+               "Exit status: 0 every run gave a result; 1 some run ended in an error; "
+               "130 interrupted (finished runs written); 2 bad input or --out in use.",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     cmp_.add_argument("scenario", metavar="SCENARIO", help=f"one of: {', '.join(SCENARIOS)}")
@@ -150,7 +156,9 @@ def _parser() -> argparse.ArgumentParser:
                 "  [sample]                  # n points over ranges: random | lhs | sobol\n"
                 "  method = \"sobol\"\n  n = 256\n  lead_gap = [20, 60]\n\n"
                 "Example: ego sweep scenarios/sweeps/envelope.toml --out runs/envelope "
-                "--plot ego_speed,lead_decel:min_gap_front"),
+                "--plot ego_speed,lead_decel:min_gap_front\n"
+                "Exit status: 0 every run gave a result; 1 some run ended in an error; 130 "
+                "interrupted (the same command resumes); 2 bad input or --out in use."),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     swp.add_argument("spec", metavar="SPEC.toml", help="the sweep specification")
@@ -410,8 +418,26 @@ def _compare(args) -> int:
                    traces=args.traces)
     print((out / "metrics.md").read_text(), end="")
     files = ["metrics.csv", UNITS_FILE, "metrics.md"] + sorted(p.name for p in out.glob("*.png"))
+    recorded = sum(1 for r in rows if r.recording)
     traces = f" and their traces ({args.traces}) in traces/" if args.traces else ""
-    print(f"\nwrote into {out}/: {', '.join(files)}, {len(rows)} recordings in runs/{traces}")
+    print(f"\nwrote into {out}/: {', '.join(files)} and {recorded} of {len(rows)} recordings in "
+          f"runs/{traces}")
+    return _compare_status([r.status for r in rows])
+
+
+def _compare_status(statuses: Sequence[str]) -> int:
+    """``ego compare``'s exit status: 130 when interrupted (the finished runs are written),
+    1 when a run ended in ``error`` (ego could not run it: an exception, a dead worker),
+    else 0 - a collision or a diverging controller is a result of the comparison."""
+    if "interrupted" in statuses:
+        unfinished = statuses.count("interrupted")
+        print(f"ego: interrupted: {unfinished} of {len(statuses)} runs did not finish "
+              "(rows with status interrupted)", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    if "error" in statuses:
+        print(f"ego: {statuses.count('error')} of {len(statuses)} runs ended in an error "
+              "(see metrics.md)", file=sys.stderr)
+        return EXIT_NOT_COMPLETED
     return EXIT_OK
 
 
@@ -454,9 +480,13 @@ def _sweep(args) -> int:
     if report.interrupted:
         left = report.total - report.already - report.ran
         print(f"interrupted: {left} runs remain; the same command resumes", file=sys.stderr)
-        return 130
+        return EXIT_INTERRUPTED
     print(f"wrote {out / 'results.parquet'}, {out / 'summary.md'}"
           + "".join(f", {out / name}" for name in _plot_names(args.plot, spec)))
+    if report.by_status.get("error"):
+        print(f"ego: {report.by_status['error']} of {report.ran} runs ended in an error "
+              "(see summary.md)", file=sys.stderr)
+        return EXIT_NOT_COMPLETED
     return EXIT_OK
 
 

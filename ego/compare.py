@@ -19,7 +19,14 @@ Outputs in ``--out``:
 * one PNG per plot the scenario declares (``Scenario.compare_plots``, file names its own) -
   the first seed of every controller, one line each, the y axis labelled with the trace
   column's unit;
-* ``runs/<controller>-seed<N>.rrd`` - every run's recording.
+* ``runs/<controller>-seed<N>.rrd`` - every run's recording (none for a run that could
+  not start or did not finish).
+
+Every file appears whole (written under a temporary name, then renamed), and ``--out`` is
+held for the whole comparison: a second ``ego compare`` or ``ego sweep`` into it is refused.
+An interrupted comparison (Ctrl-C, SIGTERM) stops its runs at once and still writes every
+file: the runs that finished with their metrics, the others as rows with status
+``interrupted`` and no recording.
 """
 
 from __future__ import annotations
@@ -38,7 +45,9 @@ import numpy as np
 
 from ego.control import controller_spec
 from ego.export import TRACE_SUFFIXES
+from ego.outputs import FolderLock, atomic_path, remove_partials, write_text
 from ego.params import ConfigError, apply_overrides, describe
+from ego.processes import signals_deferred
 from ego.runner import RunSpec, configure, run, split_overrides
 from ego.scenarios import scenario_class
 from ego.scenarios.metrics import flatten, headline_names, metric_units, with_unit
@@ -61,6 +70,7 @@ class RunRow:
     traces: dict = field(default_factory=dict)  # column -> values ("t" too)
     error: str = ""
     units: dict = field(default_factory=dict)  # column of traces -> unit
+    recording: str = ""  # the run's .rrd, when this comparison wrote it
 
 
 def plots_of(spec: RunSpec) -> tuple[Plot, ...]:
@@ -174,39 +184,68 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
     libsumo allows one simulation per process; one code path with ``ego sweep``), or to
     ``executor`` when given (closed at the end; e.g. ``InlineExecutor`` for a scenario
     without SUMO).
+
+    ``out`` is locked while it runs (:class:`ego.outputs.FolderLock`: ConfigError if another
+    process holds it). A KeyboardInterrupt (Ctrl-C; SIGTERM in the ``ego`` command) stops
+    the runs: every file is still written, the unfinished runs as rows with status
+    ``interrupted``; the caller sees it in the rows.
     """
     out = Path(out)
     specs = plan(scenario, controllers, seeds, overrides, out, traces)
-    for spec in specs:  # every value too (a bad --set value) before any process starts
+    # every value too (a bad --set value) before any process starts: once per controller,
+    # since the seed changes nothing that is checked (100000 seeds would take a minute)
+    for spec in (s for s in specs if s.seed == 0):
         cls, config, ctrl, params = configure(spec)
         cls.build_controller(ctrl, params, config)
     cls, config, _, _ = configure(specs[0])
     plots = tuple(cls.compare_plots(config))
     declared = cls.metrics_declared(config)
-    (out / "runs").mkdir(parents=True, exist_ok=True)
-    if traces:
-        (out / "traces").mkdir(exist_ok=True)
-    if executor is None:
-        executor = ProcessExecutor(max(1, min(jobs or os.cpu_count() or 1, len(specs))))
-    rows: list[RunRow] = []
+    with FolderLock(out, "--out"):
+        (out / "runs").mkdir(parents=True, exist_ok=True)
+        if traces:
+            (out / "traces").mkdir(exist_ok=True)
+        remove_partials(out / "runs")  # left by a comparison that was killed
+        for spec in specs:  # an older comparison's recording must not pass for this one's
+            Path(spec.record).unlink(missing_ok=True)
+        if executor is None:
+            executor = ProcessExecutor(max(1, min(jobs or os.cpu_count() or 1, len(specs))))
+        rows = _execute(executor, specs, progress)
+        remove_partials(out / "runs")  # runs killed mid-way; their workers are gone
+        for row, spec in zip(rows, specs):
+            row.recording = spec.record if Path(spec.record).exists() else ""
+        columns = csv_columns(rows)
+        with signals_deferred():  # a second Ctrl-C waits until every file is whole
+            write_csv(rows, out / "metrics.csv", columns)
+            write_units(columns, declared, out / UNITS_FILE)
+            write_markdown(scenario, rows, list(controllers), out / "metrics.md", declared)
+            write_plots(scenario, rows, list(controllers), out, plots)
+    return rows
+
+
+def _execute(executor: Executor, specs: Sequence[RunSpec], progress: Callable | None) -> list[RunRow]:
+    """Run ``specs`` on ``executor`` (closed at the end): one row per spec, in their order.
+
+    On KeyboardInterrupt, or when a run in this process comes back interrupted (the
+    in-process executor: the run caught the Ctrl-C), the rest is not run and the
+    runs without a result are rows with status ``interrupted``."""
+    done: dict[tuple[str, int], RunRow] = {}
     started = time.perf_counter()
     try:
         for outcome in executor.run(_one, specs):
             spec = outcome.task
-            rows.append(outcome.value if outcome.value is not None else
-                        RunRow(spec.name, spec.seed, "error", {}, error=outcome.error))
+            row = outcome.value if outcome.value is not None else RunRow(
+                spec.name, spec.seed, "error", {}, error=outcome.error)
+            done[(row.controller, row.seed)] = row
             if progress:
-                progress(len(rows), len(specs), rows[-1], started)
+                progress(len(done), len(specs), row, started)
+            if row.status == "interrupted":
+                break
+    except KeyboardInterrupt:
+        pass
     finally:
         executor.close()
-    order = {(s.name, s.seed): i for i, s in enumerate(specs)}
-    rows.sort(key=lambda r: order[(r.controller, r.seed)])
-    columns = csv_columns(rows)
-    write_csv(rows, out / "metrics.csv", columns)
-    write_units(columns, declared, out / UNITS_FILE)
-    write_markdown(scenario, rows, list(controllers), out / "metrics.md", declared)
-    write_plots(scenario, rows, list(controllers), out, plots)
-    return rows
+    return [done.get((s.name, s.seed)) or RunRow(s.name, s.seed, "interrupted", {})
+            for s in specs]
 
 
 def csv_columns(rows: Sequence[RunRow]) -> list[str]:
@@ -221,7 +260,7 @@ def write_csv(rows: Sequence[RunRow], path: Path, columns: Sequence[str] | None 
     """One row per run, one column per (flattened) metric."""
     columns = list(columns or csv_columns(rows))
     keys = columns[len(RUN_COLUMNS):]
-    with open(path, "w", newline="") as f:
+    with atomic_path(path) as tmp, open(tmp, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(columns)
         for r in rows:
@@ -232,7 +271,7 @@ def write_csv(rows: Sequence[RunRow], path: Path, columns: Sequence[str] | None 
 def write_units(columns: Sequence[str], declared: Sequence[Metric], path: Path) -> None:
     """metrics.csv's sidecar: ``metric,unit``, one row per column of metrics.csv, in order."""
     units = {**dict.fromkeys(RUN_COLUMNS, "-"), **metric_units(declared, columns[len(RUN_COLUMNS):])}
-    with open(path, "w", newline="") as f:
+    with atomic_path(path) as tmp, open(tmp, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["metric", "unit"])
         w.writerows([c, units[c]] for c in columns)
@@ -286,7 +325,12 @@ def write_markdown(scenario: str, rows: Sequence[RunRow], controllers: list[str]
     errors = [r for r in rows if r.error]
     if errors:
         lines += ["", "Errors:", ""] + [f"- {r.controller} seed {r.seed}: {r.error}" for r in errors]
-    path.write_text("\n".join(lines) + "\n")
+    unfinished = [r for r in rows if r.status == "interrupted"]
+    if unfinished:
+        lines += ["", f"Interrupted: {len(unfinished)} of {len(rows)} runs did not finish: "
+                  + ", ".join(f"{r.controller} seed {r.seed}" for r in unfinished[:20])
+                  + (", ..." if len(unfinished) > 20 else "")]
+    write_text(path, "\n".join(lines) + "\n")
 
 
 def write_plots(scenario: str, rows: Sequence[RunRow], controllers: list[str], out: Path,
@@ -305,7 +349,8 @@ def write_plots(scenario: str, rows: Sequence[RunRow], controllers: list[str], o
     for plot in plots:
         fig = figure(scenario, plot, runs, min(r.seed for r in rows))
         if fig is not None:
-            fig.savefig(out / plot.file)
+            with atomic_path(out / plot.file) as tmp:
+                fig.savefig(tmp, format="png")
             plt.close(fig)
 
 

@@ -25,6 +25,7 @@ import json
 import math
 from dataclasses import dataclass
 from functools import lru_cache
+from importlib.resources import files
 from pathlib import Path
 
 from ego.control.base import Observation
@@ -35,7 +36,7 @@ from ego.params import ConfigError, param
 REPORT_GAINS = (0.2036, 0.3188, 0.1748, 1.5698, 0.0482, 0.0236,
                 0.1837, 0.4796, 0.2856, 1.0627, 0.3497, 0.1980)
 GAIN_NAMES = tuple(f"{k}_{loop}" for loop in ("e", "psi", "vy", "r") for k in ("kp", "ki", "kd"))
-TUNED_PRESET = Path(__file__).resolve().parent / "trained" / "cascade_pid_tuned.json"
+TUNED_PRESET = Path(str(files("ego.control") / "trained" / "cascade_pid_tuned.json"))  # package data
 
 
 @lru_cache(maxsize=4)

@@ -24,6 +24,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass
 from functools import lru_cache
+from importlib.resources import files
 from pathlib import Path
 
 import numpy as np
@@ -36,7 +37,7 @@ from ego.params import ConfigError, param
 FEATURES = ("e_lat", "e_head", "e_lat_1", "e_head_1", "e_lat_2", "e_head_2", "u_1", "u_2",
             "speed", "a_x", "curvature", "curvature_ahead")
 #: where the shipped networks live (written by ``ego train narma-l2``)
-TRAINED_DIR = Path(__file__).resolve().parent / "trained"
+TRAINED_DIR = Path(str(files("ego.control") / "trained"))  # package data, installed or not
 DEFAULT_MODEL = TRAINED_DIR / "narma_l2.npz"
 
 

@@ -23,6 +23,7 @@ The scenario flushes at least every simulated second.
 from __future__ import annotations
 
 import multiprocessing
+import os
 from collections import OrderedDict
 from collections.abc import Sequence
 from functools import lru_cache
@@ -30,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ego.outputs import partial_path
 from ego.processes import main_module_hidden, signals_deferred
 from ego.record.base import Scene, Series, box_outlines, lane_edges
 
@@ -197,9 +199,9 @@ def _writer_main(batches, replies, path: str, application_id: str, recording_id:
                 replies.send(("done",))
                 return
             writer.handle(kind, *payload)
-    except EOFError:  # the simulation process went away: keep what arrived
+    except EOFError:  # the simulation process died: keep what arrived, named as partial
         if writer is not None:
-            writer.close()
+            writer.close(finished=False)
         return
     except Exception as exc:  # noqa: BLE001 - reported to the simulation process
         try:
@@ -209,12 +211,18 @@ def _writer_main(batches, replies, path: str, application_id: str, recording_id:
 
 
 class RerunWriter:
-    """Does the actual Rerun work, synchronously (in the writer process, or in-process)."""
+    """Does the actual Rerun work, synchronously (in the writer process, or in-process).
+
+    The recording is written to ``<path>.<pid>.partial`` and renamed to ``path`` when it is
+    closed, so ``path`` only ever holds a whole recording (two runs recording to one path
+    leave the last one to finish, never a mix); a writer whose run died leaves the partial
+    file, named as such."""
 
     def __init__(self, path: str, application_id: str = "ego", recording_id: str | None = None) -> None:
         import rerun as rr
 
         self.path = Path(path)
+        self._partial = partial_path(self.path)
         self._rr = rr
         self._rec = rr.RecordingStream(application_id, recording_id=recording_id)
         self._series: dict[str, Series] = {}
@@ -230,7 +238,7 @@ class RerunWriter:
         rr = self._rr
         self._series = {s.column: s for s in series}
         self._colors = dict(meta.get("colors", {}))
-        self._rec.save(self.path, default_blueprint=_blueprint(scene, series))
+        self._rec.save(self._partial, default_blueprint=_blueprint(scene, series))
         self._open = True
         rec = self._rec
         rec.log(MAP, rr.Transform3D(scale=[1.0, -1.0, 1.0]), static=True)
@@ -311,11 +319,15 @@ class RerunWriter:
         self._rec.set_time(TIMELINE, duration=t)
         self._rec.log("events", self._rr.TextLog(text, level=level if level in _LEVELS else "INFO"))
 
-    def close(self) -> None:
+    def close(self, finished: bool = True) -> None:
+        """End the file; put it in place unless its run did not finish (``finished=False``:
+        the simulation process died, the file keeps its partial name)."""
         if self._open:
             self._open = False
             self._rec.flush()
             self._rec.disconnect()
+            if finished:
+                os.replace(self._partial, self.path)
 
 
 def _blueprint(scene: Scene, series: Sequence[Series]):

@@ -181,7 +181,11 @@ class SumoBridge:
                             "(libsumo allows one per process; use processes for parallel runs)")
         import libsumo
 
-        libsumo.start(self.config.command())
+        try:
+            libsumo.start(self.config.command())
+        except Exception as exc:  # noqa: BLE001 - libsumo says only "Process Error"; SUMO's reasons went to stderr
+            raise SumoError(f"SUMO could not start on {self.config.net} ({type(exc).__name__}: {exc}; "
+                            "SUMO's own messages are on stderr)") from None
         SumoBridge._running = True
         self._ls = libsumo
 

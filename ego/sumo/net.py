@@ -3,6 +3,7 @@
 Each network lives in ``sumo_nets/<name>/`` as plain XML sources (``<name>.nod.xml``,
 ``<name>.edg.xml``, ...) plus a netconvert configuration ``<name>.netccfg``; the built
 ``<name>.net.xml`` is committed next to them and rebuilt with ``python sumo_nets/build.py``.
+An installed ego (a wheel) carries the folder as its package ``ego.sumo_nets``.
 """
 
 from __future__ import annotations
@@ -33,15 +34,30 @@ def sumo_binary(name: str = "sumo") -> Path:
 
 
 def nets_dir() -> Path:
-    """The ``sumo_nets`` folder: $EGO_SUMO_NETS, else the one beside the ``ego`` package."""
+    """The networks folder: $EGO_SUMO_NETS; else the package ``ego.sumo_nets`` of an
+    installed ego (a wheel carries the checkout's ``sumo_nets/`` under that name); else
+    ``sumo_nets/`` beside the ``ego`` package of a checkout."""
     env = os.environ.get("EGO_SUMO_NETS")
-    path = Path(env) if env else Path(__file__).resolve().parents[2] / "sumo_nets"
+    if env:
+        path = Path(env)
+    else:
+        path = _installed_nets() or Path(__file__).resolve().parents[2] / "sumo_nets"
     if not path.is_dir():
         raise ConfigError(
-            f"SUMO networks folder {path} not found (install ego editable from its checkout, "
-            "or set EGO_SUMO_NETS)"
+            f"SUMO networks folder {path} not found (reinstall ego, or set EGO_SUMO_NETS to a "
+            "folder of networks)"
         )
     return path
+
+
+def _installed_nets() -> Path | None:
+    from importlib.resources import files
+
+    try:
+        # an installed wheel unpacks into real files (ego has a C extension, it is never zipped)
+        return Path(str(files("ego.sumo_nets")))
+    except ModuleNotFoundError:  # ego imported from a checkout (PYTHONPATH): no such package
+        return None
 
 
 def available_networks() -> list[str]:

@@ -5,6 +5,7 @@ Outputs in ``--out``: ``results.parquet`` (see :mod:`ego.sweep.results`), ``summ
 ``runs/<controller>-<run id>.rrd`` as ``--record`` says (``failed``, the default, records
 only the runs that failed - not ``completed`` nor ``ended``: each is run again with a recording, which gives the
 same run since runs are deterministic), and the envelope plots asked for with ``--plot``.
+``--out`` is held while the sweep runs: a second sweep or comparison into it is refused.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from ego.outputs import FolderLock, remove_partials
 from ego.params import ConfigError
 from ego.sweep.executor import Outcome, make_executor
 from ego.sweep.results import ResultStore
@@ -81,7 +83,12 @@ def sweep(spec: SweepSpec, out: Path, *, engine: str = "process", jobs: int | No
         raise ConfigError(f"bad --record {record!r} (allowed: {', '.join(RECORD)})")
     plot_specs = [parse_plot(p, spec) for p in plots]
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    with FolderLock(out, "--out"):  # one sweep at a time per folder (its results file)
+        return _sweep(spec, out, engine, jobs, address, record, plot_specs, progress)
+
+
+def _sweep(spec: SweepSpec, out: Path, engine: str, jobs: int | None, address: str | None, record: str,
+           plot_specs: list, progress: Callable | None) -> SweepReport:
     store = ResultStore(out)
     done = store.done_ids()
     total = spec.count()
@@ -90,6 +97,7 @@ def sweep(spec: SweepSpec, out: Path, *, engine: str = "process", jobs: int | No
     runs_dir = out / "runs"
     if record != "none":
         runs_dir.mkdir(parents=True, exist_ok=True)
+    remove_partials(runs_dir)  # left by a sweep that was killed
 
     def tasks():
         for r in spec.runs():
@@ -119,6 +127,7 @@ def sweep(spec: SweepSpec, out: Path, *, engine: str = "process", jobs: int | No
         store.flush()
         if executor is not None:
             executor.close()
+        remove_partials(runs_dir)  # recordings of runs killed mid-way; their workers are gone
     table = store.table()
     if table is not None:
         from ego.sweep.report import write_plots, write_summary

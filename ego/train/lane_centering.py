@@ -32,6 +32,7 @@ import numpy as np
 from ego.control.cascade import GAIN_NAMES, REPORT_GAINS, TUNED_PRESET, Cascade
 from ego.models.lateral_error import LateralError, LateralErrorParams
 from ego.analytic_road import report003_road
+from ego.outputs import write_text
 
 MAX_ERROR = 0.5  #: the report's goal (m)
 DIVERGED = 1e3  #: |e| (m) beyond which a member is lost (its cost is then >= 1e4)
@@ -507,6 +508,6 @@ def tune(spec: TuneSpec = TuneSpec(), out: Path | None = TUNED_PRESET, log=print
     if out is not None:
         out = Path(out)
         out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(json.dumps(preset, indent=2) + "\n")
+        write_text(out, json.dumps(preset, indent=2) + "\n")
         log(f"wrote {out}")
     return preset

@@ -33,6 +33,7 @@ import numpy as np
 from ego.control.narma import DEFAULT_MODEL, FEATURES
 from ego.models import DynamicBicycle, DynamicBicycleParams
 from ego.lane_frame import LanePolyline
+from ego.outputs import atomic_path, write_text
 
 KMH = 1.0 / 3.6
 
@@ -237,12 +238,13 @@ def train(spec: TrainSpec = TrainSpec(), out: Path = DEFAULT_MODEL, log=print) -
     }
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    np.savez(out, **arrays)
+    with atomic_path(out) as tmp, open(tmp, "wb") as f:  # the shipped model is read by running controllers
+        np.savez(f, **arrays)
     from ego.control.narma import NarmaModel
 
     model = NarmaModel(arrays, meta)
     meta["errors"] = identification_errors(model, data, held)
-    out.with_suffix(".json").write_text(json.dumps(meta, indent=2) + "\n")
+    write_text(out.with_suffix(".json"), json.dumps(meta, indent=2) + "\n")
     e = meta["errors"]
     log(f"one-step error of y (m): training RMS {e['train_rms']:.2e}, held-out RMS "
         f"{e['held_out_rms']:.2e} ({100 * e['held_out_relative']:.1f} % of the held-out change "
