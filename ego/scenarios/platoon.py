@@ -44,7 +44,7 @@ from ego.scenarios import metrics as m
 from ego.scenarios import string_stability as ss
 from ego.scenarios.base import CommonConfig, Scenario
 from ego.scenarios.events import INF, time_to_collision
-from ego.scenarios.trace import Column, Metric, Plot
+from ego.scenarios.trace import Band, Column, FrequencyResponse, Metric, Plot, Ref
 from ego.sumo.bridge import (
     Collision,
     Neighbour,
@@ -195,14 +195,31 @@ class PlatoonScenario(Scenario):
         return PlatoonControl([spec.build(params, config.dt) for _ in ids], ids)
 
     @classmethod
-    def compare_plots(cls, config) -> tuple[Plot, ...]:
-        """The first and the last follower's spacing error and acceleration."""
+    def compare_plots(cls, config) -> tuple:
+        """Every follower's speed (the leader's dashed), spacing error (the settle band
+        shaded), gap and acceleration, one line per follower in a panel per controller; the
+        string stability's |H(jw)|."""
         ids = follower_ids(config.followers)
-        plots = []
-        for vid in dict.fromkeys((ids[0], ids[-1])):
-            plots += [Plot(f"e_{vid}", f"spacing_error_{vid}.png", f"spacing error delta_d of {vid}"),
-                      Plot(f"accel_{vid}", f"accel_{vid}.png", f"acceleration of {vid}")]
-        return tuple(plots)
+
+        def lines(q: str) -> tuple[tuple[str, str], ...]:
+            return tuple((f"{q}_{vid}", vid) for vid in ids)
+
+        sine = config.sine_amplitude > 0.0
+        return (
+            Plot(f"speed_{ids[0]}", "speed.png", "speed", lines=lines("speed"),
+                 refs=(Ref("leader", "lead_speed"),)),
+            Plot(f"e_{ids[0]}", "spacing_error.png", "spacing error delta_d", lines=lines("e"),
+                 band=Band(-config.settle_band, config.settle_band, f"settle band +-{config.settle_band:g} m")),
+            Plot(f"gap_{ids[0]}", "gap.png", "gap to the car ahead", lines=lines("gap"),
+                 refs=(Ref("standstill gap d_s", value=config.standstill_gap),)),
+            Plot(f"accel_{ids[0]}", "accel.png", "acceleration", lines=lines("accel"),
+                 refs=(Ref("leader", "lead_accel"),)),
+            FrequencyResponse("string_stability.png", ("lead_speed", *(f"speed_{vid}" for vid in ids)),
+                              (LEADER, *ids), config.headway, config.lag,
+                              config.sine_omega if sine else None,
+                              config.sine_transient if sine else 0.0,
+                              tuple(f"{g}_{vid}" for vid in ids for g in ("kp", "ki", "kd"))),
+        )
 
     def trace_columns(self) -> tuple[Column, ...]:
         """The leader's columns, then :data:`PER_FOLLOWER` for every follower."""
@@ -322,6 +339,17 @@ class PlatoonScenario(Scenario):
                 front = self._lead_s_sync if i == 0 else s[i - 1]
                 self._gap_sync[i] = front - L - s[i]
             self._s_sync[i] = s[i]
+
+    def _setup_traffic_log(self) -> None:
+        self.bridge.subscribe_states((LEADER, *self.ids))
+        self._controlled = frozenset(self.ids)
+
+    def _log_traffic(self) -> None:
+        """Every vehicle within RADIUS of a follower (every follower is an ego)."""
+        ids, rows = self.bridge.states()
+        mine = self._controlled
+        centres = [r[:2] for vid, r in zip(ids, rows) if vid in mine]
+        self.traffic.add(self.t, centres, ids, rows)
 
     def _check_divergence(self) -> str | None:
         if self._bad is not None:
