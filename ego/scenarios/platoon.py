@@ -252,6 +252,10 @@ class PlatoonScenario(Scenario):
         self._lead_s_sync = 0.0
         self._sync_t = 0.0
         self._bad: str | None = None
+        #: the traffic log's ids (the leader, then the followers) and the followers' poses
+        #: pushed into SUMO for the last step (centre of gravity x, y in m, yaw in rad)
+        self._log_ids = (LEADER, *self.ids)
+        self._pushed: list[tuple[float, float, float]] = []
 
     # -- set-up ---------------------------------------------------------------------------
     def _make_bridge(self) -> SumoBridge:
@@ -293,6 +297,7 @@ class PlatoonScenario(Scenario):
         self.obs = [FollowingObservation(policy=self.policy, max_accel=c.max_accel, max_decel=c.max_decel)
                     for _ in self.ids]
         self._bad = None
+        self._pushed = [plant.pose() for plant in self.plants]
         self._after_sumo_step()
 
     # -- per step ---------------------------------------------------------------------------
@@ -314,10 +319,12 @@ class PlatoonScenario(Scenario):
     def _before_sumo_step(self) -> None:
         bridge = self.bridge
         self.leader.update(bridge, self.t)
+        pushed = self._pushed = []
         for vid, plant in zip(self.ids, self.plants):
             x, y, psi = plant.pose()
             _, v, a = plant.state
             bridge.push(vid, x, y, psi, v, a)
+            pushed.append((x, y, psi))
 
     def _after_sumo_step(self) -> None:
         """Read who leads whom and the gaps from SUMO; the leader's speed and acceleration."""
@@ -340,16 +347,14 @@ class PlatoonScenario(Scenario):
                 self._gap_sync[i] = front - L - s[i]
             self._s_sync[i] = s[i]
 
-    def _setup_traffic_log(self) -> None:
-        self.bridge.subscribe_states((LEADER, *self.ids))
-        self._controlled = frozenset(self.ids)
-
     def _log_traffic(self) -> None:
-        """Every vehicle within RADIUS of a follower (every follower is an ego)."""
-        ids, rows = self.bridge.states()
-        mine = self._controlled
-        centres = [r[:2] for vid, r in zip(ids, rows) if vid in mine]
-        self.traffic.add(self.t, centres, ids, rows)
+        """Every vehicle within RADIUS of a follower (every follower is an ego): the
+        followers where they were pushed into SUMO for this step, the leader from SUMO."""
+        rows = [self.bridge.box(LEADER)]
+        L, W = self.config.length, self.config.width
+        for plant, (x, y, psi) in zip(self.plants, self._pushed):
+            rows.append((x, y, psi, plant.state[1], L, W))  # the CG is the box centre here
+        self.traffic.add(self.t, [p[:2] for p in self._pushed], self._log_ids, rows)
 
     def _check_divergence(self) -> str | None:
         if self._bad is not None:

@@ -74,7 +74,8 @@ class TrafficCollector:
         self._chunks: list[np.ndarray] = []  #: (k, 8): t, vehicle, then _FIELDS
 
     def add(self, t: float, centres, ids, rows) -> None:
-        """The vehicles at time ``t`` (s); kept by reference until the next batch."""
+        """The vehicles at time ``t`` (s) and the centres: one (x, y) or a sequence of them,
+        the same number at every step; kept by reference until the next batch."""
         pending = self._pending
         pending.append((t, centres, ids, rows))
         if len(pending) >= BATCH:
@@ -87,7 +88,10 @@ class TrafficCollector:
             return
         rows = np.array(list(chain.from_iterable(p[3] for p in pending)), dtype=float).reshape(-1, 6)
         step = np.repeat(np.arange(len(pending)), counts)
-        centres = np.array([p[1] for p in pending], dtype=float).reshape(len(pending), -1, 2)[step]
+        centres = np.array([p[1] for p in pending], dtype=float)
+        if centres.ndim == 2:  # one (x, y) per step
+            centres = centres[:, None, :]
+        centres = centres[step]
         d2 = ((rows[:, None, :2] - centres) ** 2).sum(axis=2).min(axis=1)
         keep = np.flatnonzero(d2 <= self.radius * self.radius)
         if not keep.size:

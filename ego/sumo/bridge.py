@@ -386,31 +386,13 @@ class SumoBridge:
     def surroundings(self, vid: str) -> tuple[list[str], list[tuple[float, ...]]]:
         """The vehicles around ``vid`` (see :meth:`subscribe_surroundings`), controlled ones
         excluded: ids and rows (centre x, y in m, yaw in rad, speed m/s, length, width in m)."""
-        return self._rows(self._ls.vehicle.getContextSubscriptionResults(vid), self.controlled)
-
-    def subscribe_states(self, ids: Iterable[str]) -> None:
-        """Ask SUMO for the position, angle and speed of each of ``ids`` after each step
-        (one subscription each, read all at once by :meth:`states`)."""
-        from libsumo import constants as tc
-
-        variables = [tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED]
-        for vid in ids:
-            self.libsumo.vehicle.subscribe(vid, variables)
-        self._ctx_vars = (tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED)
-
-    def states(self) -> tuple[list[str], list[tuple[float, ...]]]:
-        """The vehicles of :meth:`subscribe_states`, controlled ones included: ids and rows
-        as :meth:`surroundings` gives them."""
-        return self._rows(self._ls.vehicle.getAllSubscriptionResults(), ())
-
-    def _rows(self, results: dict, skip) -> tuple[list[str], list[tuple[float, ...]]]:
-        """Subscription results -> ids and rows (centre x, y, yaw, speed, length, width)."""
+        results = self._ls.vehicle.getContextSubscriptionResults(vid)
         p_key, a_key, v_key = self._ctx_vars
-        dims = self.dimensions
+        controlled, dims = self.controlled, self.dimensions
         cos, sin, rad = math.cos, math.sin, math.radians
         ids, rows = [], []
         for other, var in results.items():
-            if other in skip:
+            if other in controlled:
                 continue
             xf, yf = var[p_key]
             psi = rad(90.0 - var[a_key])
@@ -419,6 +401,16 @@ class SumoBridge:
             ids.append(other)
             rows.append((xf - half * cos(psi), yf - half * sin(psi), psi, var[v_key], length, width))
         return ids, rows
+
+    def box(self, vid: str) -> tuple[float, float, float, float, float, float]:
+        """One vehicle as :meth:`surroundings` gives each: (centre x, y in m, yaw in rad,
+        speed m/s, length, width in m), as of the last step."""
+        veh = self._ls.vehicle
+        xf, yf = veh.getPosition(vid)
+        psi = math.radians(90.0 - veh.getAngle(vid))
+        length, width = self.dimensions(vid)
+        half = 0.5 * length
+        return xf - half * math.cos(psi), yf - half * math.sin(psi), psi, veh.getSpeed(vid), length, width
 
     def dimensions(self, vid: str) -> tuple[float, float]:
         """(length, width) of any vehicle (m), cached."""
