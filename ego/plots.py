@@ -267,7 +267,9 @@ def _trajectory_panel(ax, decl: Trajectory, r, colour) -> None:
         if np.isfinite(g).any():
             k = int(np.nanargmin(g))
             closest = (float(t[k]), float(g[k]), k)
-    moments = [m for m in (trig, closest[0] if closest else None) if m is not None]
+    # (time, line style of the outlines drawn then, what happened)
+    moments = [(m, style, what) for m, style, what in ((trig, "--", "trigger"),
+               (closest[0] if closest else None, "-", "closest approach")) if m is not None]
     if log is not None and len(log):
         cmap = pyplot().get_cmap("tab20")
         for i, vid in enumerate(log.ids):
@@ -278,12 +280,22 @@ def _trajectory_panel(ax, decl: Trajectory, r, colour) -> None:
             ax.annotate(vid, (vx[0], vy[0]), fontsize=6, color=col, xytext=(0, 3),
                         textcoords="offset points")
             lo_y, hi_y = min(lo_y, float(vy.min())), max(hi_y, float(vy.max()))
-            for when in moments:  # its outline at the trigger and at the closest approach
+            for when, style, _ in moments:  # its outline at the trigger and at the closest approach
                 j = rows[np.argmin(np.abs(log.t[rows] - when))]
                 if abs(log.t[j] - when) <= 0.051 + 1e-9 * abs(when):
                     _box(ax, log.x[j], log.y[j], log.heading[j], log.length[j], log.width[j],
-                         color=col, lw=1.0)
+                         color=col, lw=1.0, ls=style)
     ax.plot(ex, ey, color=colour, lw=1.6, label=f"ego ({r.controller})")
+    if decl.ego_box is not None:
+        length, width, ahead = decl.ego_box
+        for when, style, _ in moments:
+            k = _at(t, when)
+            k0, k1 = max(k - 1, 0), min(k + 1, len(t) - 1)
+            heading = math.atan2(ey[k1] - ey[k0], ex[k1] - ex[k0]) if k1 > k0 else 0.0
+            _box(ax, ex[k] + ahead * math.cos(heading), ey[k] + ahead * math.sin(heading), heading,
+                 length, width, color=colour, lw=1.4, ls=style)
+    for _, style, what in moments:
+        ax.plot([], [], color="0.3", ls=style, lw=1.0, label=f"outlines at the {what}")
     if trig is not None:
         k = _at(t, trig)
         ax.plot(ex[k], ey[k], marker="^", color="k", ms=8, ls="", label=f"trigger at {trig:.2f} s")
@@ -299,7 +311,7 @@ def _trajectory_panel(ax, decl: Trajectory, r, colour) -> None:
     ax.set_ylabel("y [m]")
     ax.set_title(f"{r.controller} seed {r.seed}: {r.status}", fontsize=9)
     ax.grid(True, alpha=0.2)
-    ax.legend(loc="upper left", fontsize=7, ncol=3)
+    ax.legend(loc="best", fontsize=7, ncol=3)
 
 
 # --- string stability ------------------------------------------------------------------------
@@ -373,7 +385,7 @@ def frequency_figure(scenario: str, decl: FrequencyResponse, runs: Sequence, par
             h = np.abs(ss.pid_transfer(omegas, kp, ki, kd, decl.headway, decl.lag, delay))
             ax.plot(omegas, h, color=colour, lw=1.8,
                     label=f"{name}: theory (kp {kp:.3g}, ki {ki:.3g}, kd {kd:.3g}), peak {h.max():.3f}")
-        ax.plot([], [], ls="", marker="o", color=colour, label=f"{name}: measured ({len(own)} runs)")
+        ax.plot([], [], ls="", marker="o", color=colour, label=f"{name}: measured ({len(own)} run{'s' if len(own) > 1 else ''})")
     ax.axhline(1.0, color="k", ls="--", lw=1.0, label="|H| = 1: string stability limit")
     for k in range(len(decl.speeds) - 1):
         ax.plot([], [], ls="", marker="os^Dv<>p*h"[k % 10], color="0.4",
@@ -383,7 +395,7 @@ def frequency_figure(scenario: str, decl: FrequencyResponse, runs: Sequence, par
                 label=f"gain at the leader's sine ({decl.omega:g} rad/s)")
     ax.set_xscale("log")
     if span[1] > 0:
-        ax.set_xlim(max(1e-2, 0.5 * span[0]), min(10.0, 2.0 * span[1]))
+        ax.set_xlim(max(1e-2, min(0.05, 0.5 * span[0])), min(10.0, max(3.0, 2.0 * span[1])))
     ax.set_ylim(0.0, 2.0)
     ax.set_xlabel("angular frequency w [rad/s]")
     ax.set_ylabel("|H(jw)| = |V_i / V_(i-1)|")

@@ -28,6 +28,7 @@ from ego.scenarios import metrics as m
 from ego.scenarios.events import INF, GapRule, check_lane, choose_lane
 from ego.scenarios.highway import (
     EGO,
+    EGO_BOX,
     LANE_NAMES,
     ROUTE,
     TRAFFIC_TYPE,
@@ -130,7 +131,7 @@ class EvasiveLaneChange(HighwayScenario):
             Plot("gap_front", "gap_front.png", "gap to the front object", markers=marks),
             Plot("ttc_front", "ttc.png", "time to collision", lines=(("ttc_front", "front"), ("ttc_rear", "rear")),
                  refs=ttc_refs, markers=marks, ylim=(0.0, max(10.0, 3.0 * config.ttc_threshold))),
-            Trajectory(),
+            Trajectory(ego_box=EGO_BOX),
         )
     #: which time-to-collision triggers: "front" or "rear"
     trigger_on = "front"

@@ -46,6 +46,9 @@ EDGE = "motorway"
 N_LANES = 3
 LANE_NAMES = {0: "right", 1: "middle", 2: "left"}
 TRAFFIC_TYPE = VehicleType("traffic", length=4.5, width=1.8, color=(150, 150, 150))
+#: the ego's outline for the top-down plot: length, width, centre ahead of the CG (m)
+EGO_BOX = (VehicleGeometry().length, VehicleGeometry().width,
+           VehicleGeometry().cg_to_front - 0.5 * VehicleGeometry().length)
 #: m the surroundings subscription reaches at least: the traffic log's radius
 LOG_REACH = RADIUS + REACH_MARGIN
 
@@ -103,7 +106,7 @@ class HighwayScenario(RoadScenario):
         Plot("delta", "steering.png", "front steer angle"),
         Plot("Fx", "fx.png", "Fx per driven wheel"),
         Plot("gap_front", "gap_front.png", "gap to the front object"),
-        Trajectory(),
+        Trajectory(ego_box=EGO_BOX),
     )
 
     def __init__(self, config, controller, **kwargs) -> None:

@@ -113,6 +113,9 @@ class Trajectory:
     #: further gap columns: the closest approach is the smallest of all
     other_gaps: tuple[str, ...] = ("gap_rear",)
     trigger: str = "trigger"  #: the event kind marked
+    #: the ego's outline: (length, width, how far its centre is ahead of the centre of
+    #: gravity) in m; None: its path only
+    ego_box: tuple[float, float, float] | None = None
 
     @property
     def columns(self) -> tuple[str, ...]:
