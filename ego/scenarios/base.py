@@ -504,7 +504,7 @@ class RoadScenario(Scenario):
 
     def _log_traffic(self) -> None:
         x = self.ego.state
-        # the box's centre: the centre of gravity is cg_to_front - length / 2 behind it
+        # the box's centre is cg_to_front - length / 2 ahead of the centre of gravity
         off = self.geometry.cg_to_front - 0.5 * self.geometry.length
         psi = x[4]
         ids, rows = self._surroundings()
