@@ -100,3 +100,16 @@ def test_the_measured_gain_of_a_pure_gain_is_that_gain():
     up = np.sin(0.5 * t) + 0.3 * np.sin(2.0 * t)
     w, g = measured_gains(t, up, 0.7 * up)
     assert len(w) >= 2 and np.allclose(g, 0.7)
+
+
+@pytest.mark.sumo
+@pytest.mark.parametrize("scenario, controller", [
+    ("fast-follower", "pid"), ("curve", "pid"), ("sine-tracking", "fuzzy"), ("report-000", "pid"),
+], ids=["fast-follower", "curve", "sine-tracking", "report-000"])
+def test_every_declared_plot_of_the_other_scenarios_is_written(scenario, controller, tmp_path):
+    row = _one(RunSpec(scenario, controller, 0, {"duration": 2.0}))
+    assert row.status != "error", row.error
+    cls = scenario_class(scenario)
+    plots = cls.compare_plots(cls.config_cls(duration=2.0))
+    write_all(scenario, plots, [row], [controller], tmp_path)
+    assert _pngs(tmp_path) == sorted(p.file for p in plots)
