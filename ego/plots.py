@@ -156,7 +156,9 @@ def time_figure(scenario: str, plot: Plot, runs: Sequence, controllers: Sequence
         handles += _markers(ax, plot, mine, controllers, colours if not plot.lines else None)
         if plot.ylim is not None:
             ax.set_ylim(*plot.ylim)
-        ax.set_xlim(0.0, max(float(r.traces["t"][-1]) for r in runs if len(r.traces["t"])) or 1.0)
+        end = max([float(r.traces["t"][-1]) for r in runs if len(r.traces["t"])]
+                  + [ev.t for r in runs for ev in r.events if any(ev.kind == m.kind for m in plot.markers)])
+        ax.set_xlim(0.0, 1.01 * end or 1.0)
         ax.grid(True, alpha=0.3)
         ax.set_ylabel(with_unit(plot.label, unit))
         ax.legend(handles=handles, loc="best", fontsize=7)
@@ -271,7 +273,10 @@ def _trajectory_panel(ax, decl: Trajectory, r, colour) -> None:
     moments = [(m, style, what) for m, style, what in ((trig, "--", "trigger"),
                (closest[0] if closest else None, "-", "closest approach")) if m is not None]
     if log is not None and len(log):
-        cmap = pyplot().get_cmap("tab20")
+        steps = np.diff(np.unique(log.t))
+        # a vehicle's outline is drawn at its logged pose nearest to the moment, one SUMO step off at most
+        reach = 1.0001 * float(steps.min()) if len(steps) else 0.0
+        cmap = pyplot().get_cmap("tab20b")  # apart from the controllers' tab10 colours
         for i, vid in enumerate(log.ids):
             rows = np.flatnonzero(log.vehicle == i)
             vx, vy = log.x[rows], log.y[rows]
@@ -282,7 +287,7 @@ def _trajectory_panel(ax, decl: Trajectory, r, colour) -> None:
             lo_y, hi_y = min(lo_y, float(vy.min())), max(hi_y, float(vy.max()))
             for when, style, _ in moments:  # its outline at the trigger and at the closest approach
                 j = rows[np.argmin(np.abs(log.t[rows] - when))]
-                if abs(log.t[j] - when) <= 0.051 + 1e-9 * abs(when):
+                if abs(log.t[j] - when) <= reach:
                     _box(ax, log.x[j], log.y[j], log.heading[j], log.length[j], log.width[j],
                          color=col, lw=1.0, ls=style)
     ax.plot(ex, ey, color=colour, lw=1.6, label=f"ego ({r.controller})")
