@@ -280,7 +280,7 @@ def _trajectory_panel(ax, decl: Trajectory, r, colour) -> None:
         for i, vid in enumerate(log.ids):
             rows = np.flatnonzero(log.vehicle == i)
             vx, vy = log.x[rows], log.y[rows]
-            col = cmap(i % 20)
+            col = cmap((4 * i + i // 5) % 20)  # a new hue for each of the first five
             ax.plot(vx, vy, color=col, lw=1.0, alpha=0.8)
             ax.annotate(vid, (vx[0], vy[0]), fontsize=6, color=col, xytext=(0, 3),
                         textcoords="offset points")
