@@ -72,7 +72,8 @@ def test_a_platoon_comparison_writes_its_plots_and_string_stability(tmp_path):
     plots = scenario_class("platoon").compare_plots(scenario_class("platoon").config_cls(**overrides))
     spacing = figure("platoon", plots[1], rows, ["pid", "bp-pid-acc"])
     assert len(spacing.axes) == 2  # a panel per controller, a line per follower
-    assert [t.get_text() for t in spacing.axes[0].get_legend().get_texts()][1:] == ["f1", "f2"]
+    assert [t.get_text() for t in spacing.axes[0].get_legend().get_texts()] == [
+        "settle band +-0.2 m", "f1", "f2", "the leader's manoeuvre starts"]  # braking at 10 s
     bode = figure("platoon", plots[-1], rows, ["pid", "bp-pid-acc"], {"pid": _pid_params()})
     labels = [t.get_text() for t in bode.axes[0].get_legend().get_texts()]
     assert labels[0].startswith("pid: theory (kp 0.85, ki 0.2, kd 0.3)")

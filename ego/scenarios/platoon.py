@@ -44,7 +44,7 @@ from ego.scenarios import metrics as m
 from ego.scenarios import string_stability as ss
 from ego.scenarios.base import CommonConfig, Scenario
 from ego.scenarios.events import INF, time_to_collision
-from ego.scenarios.trace import Band, Column, FrequencyResponse, Metric, Plot, Ref
+from ego.scenarios.trace import Band, Column, FrequencyResponse, Marker, Metric, Plot, Ref
 from ego.sumo.bridge import (
     Collision,
     Neighbour,
@@ -205,15 +205,17 @@ class PlatoonScenario(Scenario):
             return tuple((f"{q}_{vid}", vid) for vid in ids)
 
         sine = config.sine_amplitude > 0.0
+        marks = (Marker("leader", "the leader's manoeuvre starts", "v"), Marker("collision", "collision", "X"))
         return (
             Plot(f"speed_{ids[0]}", "speed.png", "speed", lines=lines("speed"),
-                 refs=(Ref("leader", "lead_speed"),)),
+                 refs=(Ref("leader", "lead_speed"),), markers=marks),
             Plot(f"e_{ids[0]}", "spacing_error.png", "spacing error delta_d", lines=lines("e"),
-                 band=Band(-config.settle_band, config.settle_band, f"settle band +-{config.settle_band:g} m")),
+                 band=Band(-config.settle_band, config.settle_band, f"settle band +-{config.settle_band:g} m"),
+                 markers=marks),
             Plot(f"gap_{ids[0]}", "gap.png", "gap to the car ahead", lines=lines("gap"),
-                 refs=(Ref("standstill gap d_s", value=config.standstill_gap),)),
+                 refs=(Ref("standstill gap d_s", value=config.standstill_gap),), markers=marks),
             Plot(f"accel_{ids[0]}", "accel.png", "acceleration", lines=lines("accel"),
-                 refs=(Ref("leader", "lead_accel"),)),
+                 refs=(Ref("leader", "lead_accel"),), markers=marks),
             FrequencyResponse("string_stability.png", ("lead_speed", *(f"speed_{vid}" for vid in ids)),
                               (LEADER, *ids), config.headway, config.lag,
                               config.sine_omega if sine else None,
@@ -256,6 +258,7 @@ class PlatoonScenario(Scenario):
         #: pushed into SUMO for the last step (centre of gravity x, y in m, yaw in rad)
         self._log_ids = (LEADER, *self.ids)
         self._pushed: list[tuple[float, float, float]] = []
+        self._manoeuvres: list = []  #: the leader's manoeuvres not yet announced as events
 
     # -- set-up ---------------------------------------------------------------------------
     def _make_bridge(self) -> SumoBridge:
@@ -298,6 +301,7 @@ class PlatoonScenario(Scenario):
                     for _ in self.ids]
         self._bad = None
         self._pushed = [plant.pose() for plant in self.plants]
+        self._manoeuvres = list(self.profile.manoeuvres)
         self._after_sumo_step()
 
     # -- per step ---------------------------------------------------------------------------
@@ -329,6 +333,14 @@ class PlatoonScenario(Scenario):
     def _after_sumo_step(self) -> None:
         """Read who leads whom and the gaps from SUMO; the leader's speed and acceleration."""
         bridge = self.bridge
+        pending = self._manoeuvres
+        if pending and self.t >= pending[0].time - 1e-9:
+            m = pending.pop(0)
+            kind = m.kind(self.profile.speed(m.time - 1e-6))
+            what = "brakes to a stop" if kind == "stop" else (
+                f"{'brakes' if kind == 'brake' else 'accelerates'} to {m.speed / KMH:.0f} km/h")
+            if kind != "hold":
+                self.event("leader", f"the leader {what} at {m.rate:g} m/s^2")
         lead_v, self._lead_a = bridge.speed(LEADER), bridge.acceleration(LEADER)
         # SUMO moves its vehicles at their new speed for the whole step (Euler): the leader
         # keeps its acceleration, so until the next step it drives at v + a * step
