@@ -114,15 +114,17 @@ def _width(n: int) -> float:
 def time_figure(scenario: str, plot: Plot, runs: Sequence, controllers: Sequence[str]):
     """A trace column (or ``plot.lines``) over time; see the module docstring."""
     plt = pyplot()
-    runs = [r for r in runs if all(c in r.traces for c in ((plot.lines[0][0],) if plot.lines else (plot.column,)))]
+    runs = [r for r in runs if plot.column in r.traces]  # with lines, ``column`` is the first
     if not runs:
         return None
+    end = max([float(r.traces["t"][-1]) for r in runs if len(r.traces["t"])]
+              + [ev.t for r in runs for ev in r.events if any(ev.kind == m.kind for m in plot.markers)])
     controllers = [c for c in controllers if any(r.controller == c for r in runs)]
     panels = controllers if plot.lines else [None]
     fig, axes = plt.subplots(len(panels), 1, figsize=(9.5, 1.2 + 3.0 * len(panels)), dpi=DPI,
                              sharex=True, sharey=True, squeeze=False)
     colours = _colours(len(plot.lines) if plot.lines else len(controllers))
-    unit = runs[0].units.get(plot.lines[0][0] if plot.lines else plot.column, "")
+    unit = runs[0].units.get(plot.column, "")
     for ax, panel in zip(axes[:, 0], panels):
         mine = [r for r in runs if panel is None or r.controller == panel]
         handles = []
@@ -156,8 +158,6 @@ def time_figure(scenario: str, plot: Plot, runs: Sequence, controllers: Sequence
         handles += _markers(ax, plot, mine, controllers, colours if not plot.lines else None)
         if plot.ylim is not None:
             ax.set_ylim(*plot.ylim)
-        end = max([float(r.traces["t"][-1]) for r in runs if len(r.traces["t"])]
-                  + [ev.t for r in runs for ev in r.events if any(ev.kind == m.kind for m in plot.markers)])
         ax.set_xlim(0.0, 1.01 * end or 1.0)
         ax.grid(True, alpha=0.3)
         ax.set_ylabel(with_unit(plot.label, unit))

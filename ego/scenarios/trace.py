@@ -89,7 +89,8 @@ class Plot:
     refs: tuple[Ref, ...] = ()  #: drawn dashed
     band: Band | None = None
     markers: tuple[Marker, ...] = ()
-    #: (column, legend) of each line when several columns share the plot (``column`` first)
+    #: (column, legend) of each line when several columns share the plot (``column`` is
+    #: the first: a run without it is left out)
     lines: tuple[tuple[str, str], ...] = ()
     ylim: tuple[float, float] | None = None  #: the y range shown (None: all the data)
 
