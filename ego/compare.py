@@ -16,9 +16,10 @@ Outputs in ``--out``:
 * ``metrics.md`` - one row per controller: runs by status, then mean +- standard deviation
   over seeds of the scenario's headline metrics (``Metric(..., headline=True)``), each
   header with its unit (``min_gap_front [m]``; a pure number has none);
-* one PNG per plot the scenario declares (``Scenario.compare_plots``, file names its own) -
-  the first seed of every controller, one line each, the y axis labelled with the trace
-  column's unit;
+* one PNG per plot the scenario declares (``Scenario.compare_plots``, file names its own;
+  :mod:`ego.plots` draws them) - every seed of every controller, references dashed, bands
+  shaded, events marked, the y axis labelled with the trace column's unit; the top-down
+  ``trajectory.png`` from the traffic log; a platoon's ``string_stability.png``;
 * ``runs/<controller>-seed<N>.rrd`` - every run's recording (none for a run that could
   not start or did not finish).
 
@@ -51,7 +52,8 @@ from ego.processes import signals_deferred
 from ego.runner import RunSpec, configure, run, split_overrides
 from ego.scenarios import scenario_class
 from ego.scenarios.metrics import flatten, headline_names, metric_units, with_unit
-from ego.scenarios.trace import Metric, Plot
+from ego.scenarios.trace import Metric
+from ego.scenarios.traffic_log import TrafficLog
 from ego.sweep.executor import Executor, ProcessExecutor
 
 #: the columns metrics.csv starts with, before the metrics
@@ -71,9 +73,12 @@ class RunRow:
     error: str = ""
     units: dict = field(default_factory=dict)  # column of traces -> unit
     recording: str = ""  # the run's .rrd, when this comparison wrote it
+    events: list = field(default_factory=list)  # ego.scenarios.base.Event
+    traffic: TrafficLog | None = None  # the vehicles near the ego (RunResult.traffic)
+    lanes: tuple = ()  # (width, centre-line points) of the scene's lanes
 
 
-def plots_of(spec: RunSpec) -> tuple[Plot, ...]:
+def plots_of(spec: RunSpec) -> tuple:
     """The plots the scenario declares for this run's configuration."""
     cls, config, _, _ = configure(spec)
     return tuple(cls.compare_plots(config))
@@ -86,10 +91,11 @@ def _one(spec: RunSpec) -> RunRow:
         result = run(spec)
     except Exception as exc:  # noqa: BLE001 - a broken run is a row, not a crash
         return RunRow(spec.name, spec.seed, "error", {}, error=f"{type(exc).__name__}: {exc}")
-    kept = ["t"] + [p.column for p in plots if p.column in result.columns]
+    kept = list(dict.fromkeys(["t"] + [c for p in plots for c in p.columns if c in result.columns]))
     traces = {c: result.column(c) for c in kept}
     units = {c: result.units.get(c, "") for c in kept}
-    return RunRow(spec.name, spec.seed, result.status, flatten(result.metrics), traces, units=units)
+    return RunRow(spec.name, spec.seed, result.status, flatten(result.metrics), traces, units=units,
+                  events=list(result.events), traffic=result.traffic, lanes=result.lanes)
 
 
 def parse_variant(label: str, task: str) -> tuple[str, dict[str, str]]:
@@ -199,6 +205,8 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
         cls.build_controller(ctrl, params, config)
     cls, config, _, _ = configure(specs[0])
     plots = tuple(cls.compare_plots(config))
+    # each controller's parameters (a platoon's string stability is drawn from them)
+    params = {s.name: configure(s)[3] for s in specs if s.seed == specs[0].seed}
     declared = cls.metrics_declared(config)
     with FolderLock(out, "--out"):
         (out / "runs").mkdir(parents=True, exist_ok=True)
@@ -218,7 +226,7 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
             write_csv(rows, out / "metrics.csv", columns)
             write_units(columns, declared, out / UNITS_FILE)
             write_markdown(scenario, rows, list(controllers), out / "metrics.md", declared)
-            write_plots(scenario, rows, list(controllers), out, plots)
+            write_plots(scenario, rows, list(controllers), out, plots, params)
     return rows
 
 
@@ -334,41 +342,8 @@ def write_markdown(scenario: str, rows: Sequence[RunRow], controllers: list[str]
 
 
 def write_plots(scenario: str, rows: Sequence[RunRow], controllers: list[str], out: Path,
-                plots: Sequence[Plot]) -> None:
-    """One PNG per declared plot whose column some controller's first run has."""
-    import matplotlib
+                plots: Sequence, params: dict | None = None) -> None:
+    """One PNG per declared plot some run has the data for (see :mod:`ego.plots`)."""
+    from ego.plots import write_all
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    first = {}
-    for r in rows:
-        if r.controller not in first and r.traces:
-            first[r.controller] = r
-    runs = [first[name] for name in controllers if name in first]
-    for plot in plots:
-        fig = figure(scenario, plot, runs, min(r.seed for r in rows))
-        if fig is not None:
-            with atomic_path(out / plot.file) as tmp:
-                fig.savefig(tmp, format="png")
-            plt.close(fig)
-
-
-def figure(scenario: str, plot: Plot, runs: Sequence[RunRow], seed: int):
-    """``plot`` of ``runs`` (one line each), the y axis labelled with the trace column's unit;
-    None when no run has the column (none got that far). A matplotlib Figure."""
-    import matplotlib.pyplot as plt
-
-    runs = [r for r in runs if plot.column in r.traces]
-    if not runs:
-        return None
-    fig, ax = plt.subplots(figsize=(9, 4.5), dpi=110)
-    for r in runs:
-        ax.plot(r.traces["t"], r.traces[plot.column], label=f"{r.controller} ({r.status})", linewidth=1.3)
-    ax.set_xlabel(with_unit("time", runs[0].units.get("t", "s")))
-    ax.set_ylabel(with_unit(plot.label, runs[0].units.get(plot.column, "")))
-    ax.set_title(f"{scenario}: {plot.label} (seed {seed})")
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="best", fontsize=8)
-    fig.tight_layout()
-    return fig
+    write_all(scenario, plots, rows, controllers, out, params)

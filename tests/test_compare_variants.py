@@ -9,7 +9,8 @@ import pytest
 from rerun.chunk import RrdReader
 
 from ego.cli import main
-from ego.compare import compare, figure, file_label, parse_variant, plan
+from ego.compare import compare, file_label, parse_variant, plan
+from ego.plots import figure
 from ego.params import ConfigError
 from ego.sweep.executor import InlineExecutor
 
@@ -28,8 +29,9 @@ def test_variants_are_labelled_as_given_everywhere(point_mass, tmp_path):
         assert [r["controller"] for r in csv.DictReader(f)] == LABELS
     md = (out / "metrics.md").read_text()
     assert "| pid@kp_lon=2000@kd_lon=500 | 1 completed |" in md
-    fig = figure("point-mass", point_mass.plots[0], rows, 0)
-    assert [line.get_label() for line in fig.axes[0].lines] == [f"{label} (completed)" for label in LABELS]
+    fig = figure("point-mass", point_mass.plots[0], rows, LABELS)
+    legend = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert [next(t for t in legend if t.startswith(label + " ")) for label in LABELS]
     for label in LABELS:
         assert RrdReader(out / "runs" / f"{label}-seed0.rrd").recordings()
         trace = pd.read_csv(out / "traces" / f"{label}-seed0.csv")

@@ -121,6 +121,26 @@ def test_every_format_holds_the_traffic_log_with_units(result, tmp_path):
 
 
 @pytest.mark.sumo
+def test_a_real_runs_traffic_log_reaches_the_file_as_simulated(tmp_path):
+    """The traffic log of a real run (the emergency brake's lead is within 50 m from the
+    start) survives the Parquet file row for row."""
+    real = run(RunSpec("emergency-brake", "pid", 0, {"duration": 2.0}))
+    log = real.traffic
+    assert log is not None and len(log) > 0
+    files = write_trace(real, tmp_path / "run.parquet")
+    table = pq.read_table(files[1])
+    assert table.num_rows == len(log)
+    assert table.column("vehicle").to_pylist() == [log.ids[i] for i in log.vehicle]
+    for name in ("t", "x", "y", "heading", "speed", "length", "width"):
+        np.testing.assert_array_equal(table.column(name).to_numpy(), getattr(log, name))
+    # every row within the log's 50 m of the ego's centre of gravity at that time
+    ego = real.to_pandas().set_index("t")
+    gaps = np.hypot(table.column("x").to_numpy() - ego["x"].reindex(log.t, method="nearest").to_numpy(),
+                    table.column("y").to_numpy() - ego["y"].reindex(log.t, method="nearest").to_numpy())
+    assert gaps.max() <= 50.0 + 2.0  # the ego moves < 2 m between a SUMO step and the nearest row
+
+
+@pytest.mark.sumo
 def test_to_pandas_gives_the_trace_and_the_traffic_with_units(result):
     df = result.to_pandas()
     assert tuple(df.columns) == result.columns and len(df) == len(result.trace)

@@ -27,7 +27,7 @@ from ego.processes import signals_deferred
 from ego.record.base import NullRecorder, Recorder, Scene, Series
 from ego.scenarios.metrics import json_number
 from ego.scenarios.trace import Column, Metric, Plot, Trace
-from ego.scenarios.traffic_log import TrafficLog
+from ego.scenarios.traffic_log import RADIUS, REACH_MARGIN, TrafficCollector, TrafficLog
 from ego.sumo.bridge import Collision, SumoBridge
 
 STATUSES = ("completed", "ended", "collision", "diverged", "timeout", "interrupted")
@@ -100,8 +100,10 @@ class RunResult:
     trace: np.ndarray
     #: column -> unit of every trace column ("" for controller signals)
     units: dict = field(default_factory=dict)
-    #: every other vehicle near the ego at every SUMO step (None: a run without SUMO)
+    #: the vehicles near the ego at every SUMO step (None: a scenario without traffic)
     traffic: TrafficLog | None = None
+    #: the lanes of the scene: (width m, centre-line points (x, y) m) each
+    lanes: tuple = ()
 
     def column(self, name: str) -> np.ndarray:
         return self.trace[:, self.columns.index(name)]
@@ -204,6 +206,8 @@ class Scenario:
         #: the recording wants the vehicles' outlines (none to fetch from SUMO for a null one)
         self._outlines = not isinstance(self.recorder, NullRecorder)
         self.bridge: SumoBridge | None = None
+        self.traffic: TrafficCollector | None = None
+        self._lanes: tuple = ()
         self.obs = Observation()
         self.events: list[Event] = []
         self.trace = Trace(self.trace_columns())
@@ -238,12 +242,19 @@ class Scenario:
         self._signal_names = tuple(self.controller.signals())
         self.bridge = self._make_bridge()
         self.trace = Trace(self.trace_columns(), self._signal_names)
+        self.traffic = None
         if self.bridge is not None:
             self.bridge.start()
+            self.traffic = TrafficCollector()
         self._setup(np.random.default_rng(self.seed))
-        self.recorder.begin(self._scene(), self._series(), self._meta())
+        scene = self._scene()
+        self._lanes = tuple((w, tuple(map(tuple, pts))) for w, pts in scene.lanes)
+        self.recorder.begin(scene, self._series(), self._meta())
         if self._outlines:
             self._record_boxes()
+        if self.traffic is not None:
+            self._setup_traffic_log()
+            self._log_traffic()
         self._update()
         return self.obs
 
@@ -345,6 +356,7 @@ class Scenario:
         self._after_sumo_step()
         if self._outlines:
             self._record_boxes()
+        self._log_traffic()
         if collisions:
             mine = [c for c in collisions if c.collider in bridge.controlled or c.victim in bridge.controlled]
             if mine:
@@ -404,7 +416,8 @@ class Scenario:
             "steps": self.k,
         })
         return RunResult(self.name, self.controller_name, self.seed, self.status, metrics,
-                         list(self.events), columns, trace, self.trace.units())
+                         list(self.events), columns, trace, self.trace.units(),
+                         self.traffic.log() if self.traffic is not None else None, self._lanes)
 
     def _other_party(self) -> str | None:
         c = self.collision
@@ -427,6 +440,12 @@ class Scenario:
 
     def _record_boxes(self) -> None:
         pass
+
+    def _setup_traffic_log(self) -> None:
+        """Ask SUMO for what :meth:`_log_traffic` reads (after ``_setup``)."""
+
+    def _log_traffic(self) -> None:
+        """Hand this SUMO step's vehicles to ``self.traffic`` (a SUMO scenario's duty)."""
 
     def _check_divergence(self) -> str | None:
         return None
@@ -470,12 +489,14 @@ class RoadScenario(Scenario):
         self.actors: list = []  #: scripted SUMO vehicles, ``update(bridge, t)`` each SUMO step
         self.lanes: dict = {}  #: the lanes drawn in the recording (LanePolyline values)
         self.s = self.d_road = self.heading_error = self.curvature = self.ds = self.dd = 0.0
+        self.X = self.Y = 0.0  #: world position of the centre of gravity (m)
 
     def _kinematics(self) -> None:
         """Lane-frame position and velocity of the ego's centre of gravity."""
         X, u, Y, v, psi, r = self.ego.state
         s, d, err, kappa = self.road.frame(X, Y, psi)
         c, sn = math.cos(err), math.sin(err)
+        self.X, self.Y = X, Y
         self.s, self.d_road, self.heading_error, self.curvature = s, d, err, kappa
         self.ds = u * c - v * sn
         self.dd = u * sn + v * c
@@ -494,6 +515,23 @@ class RoadScenario(Scenario):
         self.bridge.push(self.ego_id, x[0], x[2], x[4], self.ds)
         for actor in self.actors:
             actor.update(self.bridge, self.t - self.config.sumo_step)
+
+    def _setup_traffic_log(self) -> None:
+        """The vehicles near the ego, for the traffic log (a scenario with a surround
+        sensor shares its subscription instead, reaching at least as far)."""
+        self.bridge.subscribe_surroundings(self.ego_id, RADIUS + REACH_MARGIN)
+
+    def _surroundings(self) -> tuple[list[str], list[tuple]]:
+        """This SUMO step's vehicles around the ego (see ``SumoBridge.surroundings``)."""
+        return self.bridge.surroundings(self.ego_id)
+
+    def _log_traffic(self) -> None:
+        x = self.ego.state
+        # the box's centre is cg_to_front - length / 2 ahead of the centre of gravity
+        off = self.geometry.cg_to_front - 0.5 * self.geometry.length
+        psi = x[4]
+        ids, rows = self._surroundings()
+        self.traffic.add(self.t, (x[0] + off * math.cos(psi), x[2] + off * math.sin(psi)), ids, rows)
 
     def _record_boxes(self) -> None:
         """Every vehicle as SUMO has it; the following view keeps the ego in place."""

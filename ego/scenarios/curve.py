@@ -36,7 +36,7 @@ from ego.lane_frame import LanePolyline
 from ego.scenarios import metrics as m
 from ego.scenarios.base import CommonConfig, RoadScenario, signal_series
 from ego.scenarios.events import INF, boxes_overlap
-from ego.scenarios.trace import Column, Metric, Plot
+from ego.scenarios.trace import Column, Marker, Metric, Plot
 from ego.sumo.bridge import (
     Collision,
     Neighbours,
@@ -139,13 +139,17 @@ class CurveScenario(RoadScenario):
         Metric("max_lat_accel", "m/s^2", "largest |lateral acceleration| in the arc"),
         Metric("min_gap_front", "m", "smallest gap to the lead", headline=True),
     )
-    plots = (
-        Plot("e_d", "e_d.png", "e_d = distance to the arc centre - R"),
-        Plot("e_a", "e_a.png", "e_a = heading - tangent"),
-        Plot("speed", "speed.png", "speed"),
-        Plot("delta", "steering.png", "front steer angle"),
-        Plot("a_x", "a_x.png", "axial acceleration"),
-    )
+    plots = tuple(Plot(column, file, label, markers=(
+        Marker("engage", "the curve controller engages", "v"),
+        Marker("arc", "entering the arc", "s"),
+        Marker("collision", "collision", "X"),
+    )) for column, file, label in (
+        ("e_d", "e_d.png", "e_d = distance to the arc centre - R"),
+        ("e_a", "e_a.png", "e_a = heading - tangent"),
+        ("speed", "speed.png", "speed"),
+        ("delta", "steering.png", "front steer angle"),
+        ("a_x", "a_x.png", "axial acceleration"),
+    ))
 
     def __init__(self, config, controller, **kwargs) -> None:
         super().__init__(config, controller, **kwargs)

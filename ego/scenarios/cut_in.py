@@ -17,7 +17,7 @@ from ego.params import ConfigError, param
 from ego.scenarios import metrics as m
 from ego.scenarios.evasive import EvasiveConfig, EvasiveLaneChange
 from ego.scenarios.highway import LANE_NAMES, ROUTE
-from ego.scenarios.trace import Metric, Plot
+from ego.scenarios.trace import Marker, Metric
 from ego.sumo.bridge import VehicleSpec, VehicleType
 from ego.sumo.traffic import CutInVehicle
 
@@ -70,7 +70,7 @@ class CutIn(EvasiveLaneChange):
         Metric("cut_in_time", "s", "when the car started across the lane"),
         Metric("response", "-", "brake (in lane) or evade (lane change), none without a trigger"),
     )
-    plots = EvasiveLaneChange.plots + (Plot("ttc_front", "ttc_front.png", "front TTC"),)
+    markers = EvasiveLaneChange.markers + (Marker("cut-in", "the car starts across", "<"),)
 
     def _actors(self):
         c = self.config

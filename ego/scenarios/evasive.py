@@ -28,6 +28,7 @@ from ego.scenarios import metrics as m
 from ego.scenarios.events import INF, GapRule, check_lane, choose_lane
 from ego.scenarios.highway import (
     EGO,
+    EGO_BOX,
     LANE_NAMES,
     ROUTE,
     TRAFFIC_TYPE,
@@ -35,7 +36,7 @@ from ego.scenarios.highway import (
     HighwayScenario,
 )
 from ego.scenarios.sensor import Detection
-from ego.scenarios.trace import Metric
+from ego.scenarios.trace import Band, Marker, Metric, Plot, Ref, Trajectory
 from ego.sumo.bridge import VehicleSpec, VehicleType
 from ego.sumo.traffic import BrakingLeader, PacedVehicle, RecklessFollower
 
@@ -94,10 +95,44 @@ def max_traffic_density(traffic_speed: float) -> float:
     return 1000.0 / (max(20.0, 1.5 * traffic_speed) + TRAFFIC_TYPE.length)
 
 
+#: the events marked on the time axis of every plot
+MARKERS = (
+    Marker("trigger", "trigger (TTC below the threshold)", "v"),
+    Marker("lane", "lane chosen (or stay)", "s"),
+    Marker("aeb", "AEB engages / releases", "P"),
+    Marker("done", "manoeuvre done", "D"),
+    Marker("collision", "collision", "X"),
+)
+
+
 class EvasiveLaneChange(HighwayScenario):
     """Trigger, gap acceptance, references and metrics of an evasive lane change."""
 
     config_cls = EvasiveConfig
+    markers = MARKERS
+
+    @classmethod
+    def compare_plots(cls, config) -> tuple:
+        """The lateral position against its reference and the settle band, the speed against
+        its reference, the actuators, the gap, front and rear TTC against the trigger's
+        threshold, every one with the events marked; the top-down trajectory."""
+        band = config.settle_band
+        ttc_refs = (Ref(f"trigger threshold {config.ttc_threshold:g} s", value=config.ttc_threshold),)
+        if config.aeb:
+            ttc_refs += (Ref(f"AEB threshold {config.aeb_ttc:g} s", value=config.aeb_ttc),)
+        marks = cls.markers
+        return (
+            Plot("d", "lateral_error.png", "offset from the target lane centre (+ left)",
+                 refs=(Ref("lateral reference", "d_ref"),), band=Band(-band, band, f"settle band +-{band:g} m"),
+                 markers=marks),
+            Plot("speed", "speed.png", "speed", refs=(Ref("speed reference", "speed_ref"),), markers=marks),
+            Plot("delta", "steering.png", "front steer angle", markers=marks),
+            Plot("Fx", "fx.png", "Fx per driven wheel", markers=marks),
+            Plot("gap_front", "gap_front.png", "gap to the front object", markers=marks),
+            Plot("ttc_front", "ttc.png", "time to collision", lines=(("ttc_front", "front"), ("ttc_rear", "rear")),
+                 refs=ttc_refs, markers=marks, ylim=(0.0, max(10.0, 3.0 * config.ttc_threshold))),
+            Trajectory(ego_box=EGO_BOX),
+        )
     #: which time-to-collision triggers: "front" or "rear"
     trigger_on = "front"
 

@@ -27,7 +27,8 @@ from ego.scenarios.base import (
 )
 from ego.scenarios.events import INF, boxes_overlap, time_to_collision
 from ego.scenarios.sensor import SurroundSensor
-from ego.scenarios.trace import Column, Plot
+from ego.scenarios.trace import Column, Plot, Ref, Trajectory
+from ego.scenarios.traffic_log import RADIUS, REACH_MARGIN
 from ego.sumo.bridge import (
     Collision,
     SumoBridge,
@@ -45,6 +46,11 @@ EDGE = "motorway"
 N_LANES = 3
 LANE_NAMES = {0: "right", 1: "middle", 2: "left"}
 TRAFFIC_TYPE = VehicleType("traffic", length=4.5, width=1.8, color=(150, 150, 150))
+#: the ego's outline for the top-down plot: length, width, centre ahead of the CG (m)
+EGO_BOX = (VehicleGeometry().length, VehicleGeometry().width,
+           VehicleGeometry().cg_to_front - 0.5 * VehicleGeometry().length)
+#: m the surroundings subscription reaches at least: the traffic log's radius
+LOG_REACH = RADIUS + REACH_MARGIN
 
 
 @dataclass(frozen=True)
@@ -72,6 +78,8 @@ class HighwayScenario(RoadScenario):
     config_cls = HighwayConfig
     columns = (
         Column("t", "s", "time"),
+        Column("x", "m", "centre of gravity, world frame"),
+        Column("y", "m", "centre of gravity, world frame"),
         Column("s", "m", "centre of gravity along the start lane"),
         Column("d", "m", "offset from the target lane centre (+ left)"),
         Column("d_ref", "m", "lateral reference (offset from the target lane centre)"),
@@ -94,10 +102,11 @@ class HighwayScenario(RoadScenario):
     )
     plots = (
         Plot("e_lat", "lateral_error.png", "lateral error (actual - reference)"),
-        Plot("speed", "speed.png", "speed"),
+        Plot("speed", "speed.png", "speed", refs=(Ref("speed reference", "speed_ref"),)),
         Plot("delta", "steering.png", "front steer angle"),
         Plot("Fx", "fx.png", "Fx per driven wheel"),
         Plot("gap_front", "gap_front.png", "gap to the front object"),
+        Trajectory(ego_box=EGO_BOX),
     )
 
     def __init__(self, config, controller, **kwargs) -> None:
@@ -112,6 +121,7 @@ class HighwayScenario(RoadScenario):
         self.target_lane = 0
         self.phase = 0
         self._road_y = 0.0
+        self._around: tuple[list, list] = ([], [])
 
     # -- set-up ---------------------------------------------------------------------------
     def _make_bridge(self) -> SumoBridge:
@@ -185,7 +195,8 @@ class HighwayScenario(RoadScenario):
                  for i, off in self.lane_offset.items()}
         self.sensor = SurroundSensor(self.road, bands, g.cg_to_front, g.length, g.width,
                                      horizon=c.sumo_step)
-        bridge.subscribe_surroundings(EGO, c.sensor_range)
+        # one subscription for the sensor and the traffic log, as far as either looks
+        bridge.subscribe_surroundings(EGO, max(c.sensor_range, LOG_REACH))
         self._sense()
 
     # -- per step ---------------------------------------------------------------------------
@@ -198,7 +209,8 @@ class HighwayScenario(RoadScenario):
         d = obs.d
         self.trace.append(
             self.controller.signals(),
-            t=obs.t, s=self.s, d=d, d_ref=obs.d_ref, e_lat=d - obs.d_ref, lane_offset=self.d_road,
+            t=obs.t, x=self.X, y=self.Y, s=self.s, d=d, d_ref=obs.d_ref,
+            e_lat=d - obs.d_ref, lane_offset=self.d_road,
             speed=obs.speed, ds=self.ds, s_ref=obs.s_ref, speed_ref=obs.ds_ref,
             Fx=fx, delta=delta, ttc_front=self.ttc_front, ttc_rear=self.ttc_rear,
             gap_front=self.gap_front, gap_rear=self.gap_rear,
@@ -217,8 +229,20 @@ class HighwayScenario(RoadScenario):
 
     def _sense(self) -> None:
         """The surround sensor's view at a SUMO step."""
-        self.sensor.sync(self.t, *self.bridge.surroundings(EGO))
+        ids, rows = self._around = self.bridge.surroundings(EGO)
+        reach = self.config.sensor_range
+        if reach < LOG_REACH:  # the subscription reaches farther for the traffic log
+            x, y = self.bridge.front_bumper(EGO)
+            near = [i for i, r in enumerate(rows) if math.hypot(r[0] - x, r[1] - y) <= reach]
+            ids, rows = [ids[i] for i in near], [rows[i] for i in near]
+        self.sensor.sync(self.t, ids, rows)
         self._looked = False
+
+    def _setup_traffic_log(self) -> None:
+        pass  # the sensor's subscription (_setup)
+
+    def _surroundings(self) -> tuple[list[str], list[tuple]]:
+        return self._around
 
     def _update(self) -> None:
         sensor = self.sensor

@@ -48,7 +48,7 @@ from ego.record.base import Series
 from ego.lane_frame import LanePolyline
 from ego.scenarios import metrics as m
 from ego.scenarios.base import CommonConfig, RoadScenario, signal_series
-from ego.scenarios.trace import Column, Metric, Plot
+from ego.scenarios.trace import Band, Column, Marker, Metric, Plot
 from ego.sumo.bridge import SumoBridge, SumoConfig, VehicleSpec, VehicleType, ego_type
 from ego.sumo.net import net_file
 from ego.sumo.traffic import PoissonFlow, background_traffic
@@ -59,6 +59,7 @@ EGO_LANE, TRAFFIC_LANE = 0, 1
 #: report 003's car: wheelbase 2.8 m (lf 1.25, lr 1.55), width 1.85 m, ~0.95 m overhangs
 GEOMETRY = VehicleGeometry(length=4.7, width=1.85, cg_to_front=2.2)
 TRAFFIC_TYPE = VehicleType("traffic", length=4.5, width=1.8, color=(150, 150, 150))
+GOAL = 0.5  #: m, report 003's goal for the largest lateral error
 END_MARGIN = 15.0  #: m before the end of the lane where the run ends (SUMO would remove the ego)
 #: m: the length of the road (report 003's; the SUMO lane's centre line is built from it)
 ROAD_LENGTH = report003_road().length
@@ -118,7 +119,8 @@ class LaneCenteringScenario(RoadScenario):
     metric_specs = (
         Metric("completed_road", "-", "the ego reached the end of the road"),
         Metric("distance", "m", "distance driven along the lane"),
-        Metric("max_abs_lateral_error", "m", "largest |lateral error|"),
+        Metric("max_abs_lateral_error", "m", "largest |lateral error| (report 003's goal: < 0.5 m)",
+               headline=True),
         Metric("mean_abs_lateral_error", "m", "mean |lateral error|"),
         Metric("std_lateral_error", "m", "standard deviation of the lateral error"),
         Metric("rms_lateral_error", "m", "RMS of the lateral error", headline=True),
@@ -127,6 +129,9 @@ class LaneCenteringScenario(RoadScenario):
         Metric("max_abs_lateral_accel", "m/s^2", "largest |lateral acceleration|", headline=True),
     )
     plots = (
+        Plot("d", "lateral_error.png", "lateral error (+ left of the lane centre)",
+             band=Band(-GOAL, GOAL, f"report 003's goal: |e| < {GOAL:g} m"),
+             markers=(Marker("curve", "entering / leaving the curve", "|"),)),
         Plot("speed", "speed.png", "speed"),
         Plot("delta", "steering.png", "front steer angle"),
         Plot("a_x", "a_x.png", "axial acceleration"),

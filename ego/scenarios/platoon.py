@@ -44,7 +44,7 @@ from ego.scenarios import metrics as m
 from ego.scenarios import string_stability as ss
 from ego.scenarios.base import CommonConfig, Scenario
 from ego.scenarios.events import INF, time_to_collision
-from ego.scenarios.trace import Column, Metric, Plot
+from ego.scenarios.trace import Band, Column, FrequencyResponse, Marker, Metric, Plot, Ref
 from ego.sumo.bridge import (
     Collision,
     Neighbour,
@@ -195,14 +195,33 @@ class PlatoonScenario(Scenario):
         return PlatoonControl([spec.build(params, config.dt) for _ in ids], ids)
 
     @classmethod
-    def compare_plots(cls, config) -> tuple[Plot, ...]:
-        """The first and the last follower's spacing error and acceleration."""
+    def compare_plots(cls, config) -> tuple:
+        """Every follower's speed (the leader's dashed), spacing error (the settle band
+        shaded), gap and acceleration, one line per follower in a panel per controller; the
+        string stability's |H(jw)|."""
         ids = follower_ids(config.followers)
-        plots = []
-        for vid in dict.fromkeys((ids[0], ids[-1])):
-            plots += [Plot(f"e_{vid}", f"spacing_error_{vid}.png", f"spacing error delta_d of {vid}"),
-                      Plot(f"accel_{vid}", f"accel_{vid}.png", f"acceleration of {vid}")]
-        return tuple(plots)
+
+        def lines(q: str) -> tuple[tuple[str, str], ...]:
+            return tuple((f"{q}_{vid}", vid) for vid in ids)
+
+        sine = config.sine_amplitude > 0.0
+        marks = (Marker("leader", "the leader's manoeuvre starts", "v"), Marker("collision", "collision", "X"))
+        return (
+            Plot(f"speed_{ids[0]}", "speed.png", "speed", lines=lines("speed"),
+                 refs=(Ref("leader", "lead_speed"),), markers=marks),
+            Plot(f"e_{ids[0]}", "spacing_error.png", "spacing error delta_d", lines=lines("e"),
+                 band=Band(-config.settle_band, config.settle_band, f"settle band +-{config.settle_band:g} m"),
+                 markers=marks),
+            Plot(f"gap_{ids[0]}", "gap.png", "gap to the car ahead", lines=lines("gap"),
+                 refs=(Ref("standstill gap d_s", value=config.standstill_gap),), markers=marks),
+            Plot(f"accel_{ids[0]}", "accel.png", "acceleration", lines=lines("accel"),
+                 refs=(Ref("leader", "lead_accel"),), markers=marks),
+            FrequencyResponse("string_stability.png", ("lead_speed", *(f"speed_{vid}" for vid in ids)),
+                              (LEADER, *ids), config.headway, config.lag,
+                              config.sine_omega if sine else None,
+                              config.sine_transient if sine else 0.0,
+                              tuple(f"{g}_{vid}" for vid in ids for g in ("kp", "ki", "kd"))),
+        )
 
     def trace_columns(self) -> tuple[Column, ...]:
         """The leader's columns, then :data:`PER_FOLLOWER` for every follower."""
@@ -235,6 +254,11 @@ class PlatoonScenario(Scenario):
         self._lead_s_sync = 0.0
         self._sync_t = 0.0
         self._bad: str | None = None
+        #: the traffic log's ids (the leader, then the followers) and the followers' poses
+        #: pushed into SUMO for the last step (centre of gravity x, y in m, yaw in rad)
+        self._log_ids = (LEADER, *self.ids)
+        self._pushed: list[tuple[float, float, float]] = []
+        self._manoeuvres: list = []  #: the leader's manoeuvres not yet announced as events
 
     # -- set-up ---------------------------------------------------------------------------
     def _make_bridge(self) -> SumoBridge:
@@ -276,6 +300,8 @@ class PlatoonScenario(Scenario):
         self.obs = [FollowingObservation(policy=self.policy, max_accel=c.max_accel, max_decel=c.max_decel)
                     for _ in self.ids]
         self._bad = None
+        self._pushed = [plant.pose() for plant in self.plants]
+        self._manoeuvres = list(self.profile.manoeuvres)
         self._after_sumo_step()
 
     # -- per step ---------------------------------------------------------------------------
@@ -297,14 +323,24 @@ class PlatoonScenario(Scenario):
     def _before_sumo_step(self) -> None:
         bridge = self.bridge
         self.leader.update(bridge, self.t)
+        pushed = self._pushed = []
         for vid, plant in zip(self.ids, self.plants):
             x, y, psi = plant.pose()
             _, v, a = plant.state
             bridge.push(vid, x, y, psi, v, a)
+            pushed.append((x, y, psi))
 
     def _after_sumo_step(self) -> None:
         """Read who leads whom and the gaps from SUMO; the leader's speed and acceleration."""
         bridge = self.bridge
+        pending = self._manoeuvres
+        if pending and self.t >= pending[0].time - 1e-9:
+            m = pending.pop(0)
+            kind = m.kind(self.profile.speed(m.time - 1e-6))
+            what = "brakes to a stop" if kind == "stop" else (
+                f"{'brakes' if kind == 'brake' else 'accelerates'} to {m.speed / KMH:.0f} km/h")
+            if kind != "hold":
+                self.event("leader", f"the leader {what} at {m.rate:g} m/s^2")
         lead_v, self._lead_a = bridge.speed(LEADER), bridge.acceleration(LEADER)
         # SUMO moves its vehicles at their new speed for the whole step (Euler): the leader
         # keeps its acceleration, so until the next step it drives at v + a * step
@@ -322,6 +358,15 @@ class PlatoonScenario(Scenario):
                 front = self._lead_s_sync if i == 0 else s[i - 1]
                 self._gap_sync[i] = front - L - s[i]
             self._s_sync[i] = s[i]
+
+    def _log_traffic(self) -> None:
+        """Every vehicle within RADIUS of a follower (every follower is an ego): the
+        followers where they were pushed into SUMO for this step, the leader from SUMO."""
+        rows = [self.bridge.box(LEADER)]
+        L, W = self.config.length, self.config.width
+        for plant, (x, y, psi) in zip(self.plants, self._pushed):
+            rows.append((x, y, psi, plant.state[1], L, W))  # the CG is the box centre here
+        self.traffic.add(self.t, [p[:2] for p in self._pushed], self._log_ids, rows)
 
     def _check_divergence(self) -> str | None:
         if self._bad is not None:

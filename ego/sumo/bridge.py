@@ -406,6 +406,16 @@ class SumoBridge:
             rows.append((xf - half * cos(psi), yf - half * sin(psi), psi, var[v_key], length, width))
         return ids, rows
 
+    def box(self, vid: str) -> tuple[float, float, float, float, float, float]:
+        """One vehicle as :meth:`surroundings` gives each: (centre x, y in m, yaw in rad,
+        speed m/s, length, width in m), as of the last step."""
+        veh = self._ls.vehicle
+        xf, yf = veh.getPosition(vid)
+        psi = math.radians(90.0 - veh.getAngle(vid))
+        length, width = self.dimensions(vid)
+        half = 0.5 * length
+        return xf - half * math.cos(psi), yf - half * math.sin(psi), psi, veh.getSpeed(vid), length, width
+
     def dimensions(self, vid: str) -> tuple[float, float]:
         """(length, width) of any vehicle (m), cached."""
         dims = self._dims.get(vid)

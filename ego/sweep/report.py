@@ -87,11 +87,9 @@ def write_summary(spec, table, path: Path) -> None:
 
 def write_plots(spec, table, out: Path, x: str, y: str, metric: str | None) -> Path:
     """The envelope plot for (x, y[, metric]); see the module docstring. Returns its path."""
-    import matplotlib
+    from ego.plots import pyplot, save
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     data = table.to_pydict()
     rows = 2 if metric else 1
     ncol = len(spec.controllers)
@@ -156,12 +154,7 @@ def write_plots(spec, table, out: Path, x: str, y: str, metric: str | None) -> P
     title = f"{spec.scenario}: outcome over {x} and {y}" + (f"; {metric}" if metric else "")
     fig.suptitle(title, fontsize=10)
     name = f"envelope_{x}_{y}" + (f"_{metric}" if metric else "") + ".png"
-    path = out / name
-    tmp = out / f".{name}.tmp.png"
-    fig.savefig(tmp)
-    plt.close(fig)
-    tmp.replace(path)
-    return path
+    return save(fig, out / name)
 
 
 def _param_unit(spec, name: str) -> str:
