@@ -33,9 +33,24 @@ from collections.abc import Sequence
 
 from ego import __version__
 from ego.checks import check_output_dir, check_output_file, check_seed
-from ego.params import ConfigError, describe, parse_overrides
+from ego.params import ConfigError, describe, did_you_mean, parse_overrides
 
 EXIT_OK, EXIT_NOT_COMPLETED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+#: more parallel processes than this is a typo, not a machine
+MAX_JOBS = 1024
+
+
+def _choice(value: str, allowed, what: str) -> str:
+    """``value`` if it is one of ``allowed``, else ConfigError (with the closest name)."""
+    if value not in allowed:
+        raise ConfigError(f"bad {what} {value!r} (allowed: {', '.join(allowed)}){did_you_mean(value, allowed)}")
+    return value
+
+
+def _count(value: int | None, what: str, lo: int, hi: int) -> None:
+    """A whole-number option within lo..hi (None: its default)."""
+    if value is not None and not lo <= value <= hi:
+        raise ConfigError(f"bad value for {what}: {value} (expected a whole number from {lo} to {hi})")
 
 
 def _terminate(signum, frame) -> None:
@@ -361,13 +376,11 @@ def _run(args) -> int:
 def _compare(args) -> int:
     from ego.compare import UNITS_FILE, compare
 
-    if args.seeds < 1:
-        raise ConfigError(f"bad value for --seeds: {args.seeds} (expected a whole number of at least 1)")
-    if args.jobs is not None and args.jobs < 1:
-        raise ConfigError(f"bad value for --jobs: {args.jobs} (expected a whole number of at least 1)")
     if args.seeds > 100_000:
         raise ConfigError(f"bad value for --seeds: {args.seeds} (expected at most 100000; use ego sweep "
                           "for more)")
+    _count(args.seeds, "--seeds", 1, 100_000)
+    _count(args.jobs, "--jobs", 1, MAX_JOBS)
     names = [n.strip() for n in args.controllers.split(",") if n.strip()]
     if len(set(names)) != len(names):
         dup = next(n for n in names if names.count(n) > 1)
@@ -396,14 +409,11 @@ def _sweep(args) -> int:
     from ego.sweep.runner import RECORD, parse_plot, print_progress, sweep
 
     spec = sweep_spec.load(args.spec)
-    if args.engine not in ENGINES:
-        raise ConfigError(f"bad --engine {args.engine!r} (allowed: {', '.join(ENGINES)})")
-    if args.jobs is not None and args.jobs < 1:
-        raise ConfigError(f"bad value for --jobs: {args.jobs} (expected a whole number of at least 1)")
+    _choice(args.engine, ENGINES, "--engine")
+    _count(args.jobs, "--jobs", 1, MAX_JOBS)
     if args.address is not None and args.engine != "ray":
         raise ConfigError("--address needs --engine ray")
-    if args.record not in RECORD:
-        raise ConfigError(f"bad --record {args.record!r} (allowed: {', '.join(RECORD)})")
+    _choice(args.record, RECORD, "--record")
     for p in args.plot:
         parse_plot(p, spec)
     out = check_output_dir(args.out, "--out")
@@ -451,10 +461,8 @@ def _train(args) -> int:
     from ego.control.narma import DEFAULT_MODEL
     from ego.train.narma_l2 import DataSpec, TrainSpec, train
 
-    if args.samples < 50:
-        raise ConfigError(f"bad value for --samples: {args.samples} (expected at least 50)")
-    if args.epochs < 1:
-        raise ConfigError(f"bad value for --epochs: {args.epochs} (expected at least 1)")
+    _count(args.samples, "--samples", 50, 10_000_000)
+    _count(args.epochs, "--epochs", 1, 100_000)
     v_lo, v_hi = _range(args.speeds, "--speeds")
     a_lo, a_hi = _range(args.accels, "--accels")
     r_lo, r_hi = _range(args.radii, "--radii")
@@ -476,8 +484,7 @@ def _tune(args) -> int:
     from ego.control.cascade import TUNED_PRESET
     from ego.train.lane_centering import TuneSpec, tune
 
-    if args.workers < 1:
-        raise ConfigError(f"bad value for --workers: {args.workers} (expected a whole number of at least 1)")
+    _count(args.workers, "--workers", 1, MAX_JOBS)
     try:
         parts = [d.split(":") for d in args.drives.split(",")]
         if any(len(p) > 2 for p in parts):
@@ -495,10 +502,8 @@ def _tune(args) -> int:
     out = _model_out(args, TUNED_PRESET, "runs/cascade_pid_tuned.json", ".json")
     from ego.sweep.executor import ENGINES
 
-    if args.cost not in ("model", "sumo"):
-        raise ConfigError(f"bad --cost {args.cost!r} (allowed: model, sumo)")
-    if args.engine not in ENGINES:
-        raise ConfigError(f"bad --engine {args.engine!r} (allowed: {', '.join(ENGINES)})")
+    _choice(args.cost, ("model", "sumo"), "--cost")
+    _choice(args.engine, ENGINES, "--engine")
     if args.cost == "model" and (args.engine != "process" or args.address or args.duration is not None):
         raise ConfigError("--engine, --address and --duration go with --cost sumo")
     if args.address is not None and args.engine != "ray":

@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from ego.control import controller_spec
-from ego.params import ConfigError, describe
+from ego.params import ConfigError, describe, did_you_mean
 from ego.runner import RunSpec, configure, run, split_overrides
 from ego.scenarios import scenario_class
 from ego.scenarios.metrics import flatten, headline_names, metric_units, with_unit
@@ -91,7 +91,7 @@ def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict,
     unknown = sorted(set(overrides) - known)
     if unknown:
         raise ConfigError(f"unknown parameter {unknown[0]!r} for {scenario} with "
-                          f"{', '.join(controllers)} (see ego list)")
+                          f"{', '.join(controllers)} (see ego list){did_you_mean(unknown[0], known)}")
     specs = []
     for name in controllers:
         mine = split_overrides(scenario, name, overrides)

@@ -163,6 +163,7 @@ class PlatoonScenario(Scenario):
                "leader that brakes, accelerates and stops; string stability measured "
                "(--set variant=scale-model: the report's 3-car scale test)")
     task = "car-following"
+    network = "platoon"
     config_cls = PlatoonConfig
     metric_specs = (
         Metric("followers.", "-", "per follower (id): the platoon's metrics below, each in its unit, "
@@ -239,7 +240,7 @@ class PlatoonScenario(Scenario):
     # -- set-up ---------------------------------------------------------------------------
     def _make_bridge(self) -> SumoBridge:
         c = self.config
-        return SumoBridge(SumoConfig(net_file("platoon"), step_length=c.sumo_step, seed=self.seed,
+        return SumoBridge(SumoConfig(net_file(self.network), step_length=c.sumo_step, seed=self.seed,
                                      lateral_resolution=c.lateral_resolution))
 
     def _setup(self, rng: np.random.Generator) -> None:
