@@ -28,6 +28,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import sys
 from collections.abc import Sequence
 
@@ -62,6 +63,9 @@ class _Parser(argparse.ArgumentParser):
     """argparse that reports bad usage in one line and exits with 2."""
 
     def error(self, message: str) -> None:  # pragma: no cover - exercised through main()
+        choice = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
+        if choice:  # a misspelt command or choice: name the closest
+            message += did_you_mean(choice.group(1), re.findall(r"'([^']*)'", choice.group(2)))
         raise ConfigError(message)
 
 

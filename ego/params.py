@@ -256,4 +256,5 @@ def apply_overrides(obj: Any, overrides: Mapping[str, Any], *, strict: bool = Tr
 
 def unknown_parameter(key: str, known: Iterable[str]) -> ConfigError:
     names = sorted(set(known))
-    return ConfigError(f"unknown parameter {key!r} (known: {', '.join(names)}){did_you_mean(key, names)}")
+    # the suggestion before the (long) list, where it is read
+    return ConfigError(f"unknown parameter {key!r}{did_you_mean(key, names)} (known: {', '.join(names)})")

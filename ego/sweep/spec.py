@@ -162,8 +162,10 @@ def load(path: str | Path) -> SweepSpec:
     """Read and validate a spec file; ConfigError (one line, naming the file) on anything wrong."""
     path = Path(path)
     try:
-        text = path.read_text()
-    except (OSError, UnicodeDecodeError) as exc:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise ConfigError(f"cannot read the sweep spec {str(path)!r}: not a text file (expected TOML)") from None
+    except OSError as exc:
         raise ConfigError(f"cannot read the sweep spec {str(path)!r}: {exc.strerror or exc}") from None
     try:
         data = tomllib.loads(text)
