@@ -175,6 +175,9 @@ def _parser() -> argparse.ArgumentParser:
                          description="List scenarios, controllers and every parameter with "
                                      "its default and unit.")
     lst.add_argument("--json", action="store_true", help="print JSON instead of text")
+    lst.add_argument("--markdown", action="store_true",
+                     help="print every parameter's default, unit and allowed values as Markdown tables "
+                          "(the reference in docs/inputs.md)")
 
     trn = sub.add_parser(
         "train", help="train a learned controller (narma-l2)",
@@ -274,6 +277,28 @@ def _catalogue() -> dict:
         "controllers": [{"name": n, "task": t, "summary": s.summary, "parameters": params(s.params)}
                         for t, specs in CONTROLLERS.items() for n, s in specs.items()],
     }
+
+
+def parameters_markdown(cat: dict) -> str:
+    """Every scenario's and controller's parameters as Markdown tables (``ego list --markdown``):
+    name, default, unit, what is allowed, description."""
+    def table(title: str, rows: list[dict]) -> list[str]:
+        lines = [f"### {title}", ""]
+        if not rows:
+            return lines + ["(no parameters)", ""]
+        lines += ["| parameter | default | unit | allowed | description |", "|---|---|---|---|---|"]
+        for r in rows:
+            cells = (f"`{r['name']}`", f"`{json.dumps(r['default'])}`", r["unit"], r["allowed"], r["description"])
+            lines.append("| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |")
+        return lines + [""]
+
+    lines = ["## Scenario parameters", ""]
+    for s in cat["scenarios"]:
+        lines += table(f"{s['name']} ({s['task']} task)", s["parameters"])
+    lines += ["## Controller parameters", ""]
+    for c in cat["controllers"]:
+        lines += table(f"{c['name']} ({c['task']} task)", c["parameters"])
+    return "\n".join(lines)
 
 
 def _print_catalogue(cat: dict) -> None:
@@ -543,6 +568,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             cat = _catalogue()
             if args.json:
                 print(json.dumps(cat, indent=2))
+            elif args.markdown:
+                print(parameters_markdown(cat), end="")
             else:
                 _print_catalogue(cat)
             return EXIT_OK

@@ -133,7 +133,7 @@ def describe(cls_or_obj: Any) -> list[ParamInfo]:
 def parse_value(info: ParamInfo, text: str) -> Any:
     """Convert command-line text to the parameter's type, or raise :class:`ConfigError`."""
     raw = text.strip()
-    bad = f"bad value for {info.name}: {_shown(text)} (expected {info.allowed()})"
+    bad = f"bad value for {info.name}: {shown(text)} (expected {info.allowed()})"
     if info.type is bool:
         low = raw.lower()
         if low in ("true", "1", "yes", "on"):
@@ -156,10 +156,11 @@ def parse_value(info: ParamInfo, text: str) -> Any:
     raise ConfigError(bad)
 
 
-def _shown(value: Any) -> str:
-    """A value as a message quotes it: numbers plainly, anything else as its repr, on one
-    line and cut short."""
-    text = _fmt(value) if isinstance(value, (int, float)) else repr(value)
+def shown(value: Any, exact: bool = False) -> str:
+    """A value as a message quotes it, on one line and cut short: numbers plainly (``exact``:
+    as Python writes them, so ``2.0`` shows it is a float), anything else as its repr."""
+    plain = isinstance(value, (int, float)) and not exact
+    text = _fmt(value) if plain else repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
 
 
@@ -192,10 +193,10 @@ def _type_ok(info: ParamInfo, value: Any) -> bool:
 
 def check_value(info: ParamInfo, value: Any) -> None:
     """Raise :class:`ConfigError` unless ``value`` is allowed for ``info`` (type, then range)."""
-    bad = f"bad value for {info.name}: {_shown(value)} (expected {info.allowed()})"
+    bad = f"bad value for {info.name}: {shown(value)} (expected {info.allowed()})"
     if not _type_ok(info, value):
-        shown = repr(value) if len(repr(value)) <= 60 else repr(value)[:57] + "..."
-        raise ConfigError(f"bad value for {info.name}: {shown} (expected {info.allowed()}, not {_kind(value)})")
+        raise ConfigError(f"bad value for {info.name}: {shown(value, exact=True)} (expected {info.allowed()}, "
+                          f"not {_kind(value)})")
     if info.choices is not None:
         if value not in info.choices:
             raise ConfigError(bad + did_you_mean(value, info.choices))
@@ -222,9 +223,9 @@ def parse_overrides(pairs: Iterable[str]) -> dict[str, str]:
         key, sep, value = item.partition("=")
         key = key.strip()
         if not sep or not key:
-            raise ConfigError(f"bad --set item {_shown(item)} (expected key=value)")
+            raise ConfigError(f"bad --set item {shown(item)} (expected key=value)")
         if key in out:  # the later one would silently win
-            raise ConfigError(f"--set {key} is given twice ({_shown(out[key])} and {_shown(value)})")
+            raise ConfigError(f"--set {key} is given twice ({shown(out[key])} and {shown(value)})")
         out[key] = value
     return out
 

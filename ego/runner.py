@@ -66,6 +66,7 @@ def configure(spec: RunSpec):
     if rest:
         known = [i.name for i in describe(cls.config_cls)] + [i.name for i in describe(ctrl.params)]
         raise unknown_parameter(next(iter(rest)), known)
+    cls.check_config(config)
     return cls, config, ctrl, ctrl_params
 
 

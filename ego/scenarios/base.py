@@ -153,6 +153,12 @@ class Scenario:
         return cls.config_cls()
 
     @classmethod
+    def check_config(cls, config) -> None:
+        """Checks of a configuration that need more than the configuration (the network's
+        geometry, say), made by ``ego.runner.configure`` before anything runs: ConfigError.
+        Default: none."""
+
+    @classmethod
     def build_controller(cls, spec: ControllerSpec, params: Any, config) -> Controller:
         """The controller the loop drives: one of ``spec`` stepping every ``config.dt``;
         a scenario with several controlled vehicles builds one per vehicle."""

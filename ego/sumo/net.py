@@ -62,6 +62,16 @@ def net_file(name: str) -> Path:
     return path
 
 
+def lane_length(name: str, lane: str) -> float:
+    """The length (m) of lane ``lane`` in the built network ``name``, read from its XML (no
+    SUMO started)."""
+    path = net_file(name)
+    for _, elem in ET.iterparse(path, events=("start",)):
+        if elem.tag == "lane" and elem.get("id") == lane:
+            return float(elem.get("length"))
+    raise ConfigError(f"the SUMO network {path} has no lane {lane!r}; rebuild it: python sumo_nets/build.py")
+
+
 def check_network(path: Path) -> None:
     """A built network must be whole XML with a ``<net>`` root and edges: a truncated or
     garbled file is a ConfigError naming it here, before libsumo reads it (libsumo would
