@@ -697,3 +697,13 @@ def test_a_misspelt_name_far_from_any_gets_no_suggestion():
     assert did_you_mean("fuzy", ["pid", "fuzzy"]) == "; did you mean 'fuzzy'?"
     assert did_you_mean(3, ["pid"]) == ""
 
+
+
+def test_the_inputs_reference_in_the_docs_is_what_ego_list_markdown_prints(capsys):
+    assert main(["list", "--markdown"]) == 0
+    generated = capsys.readouterr().out
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "inputs.md").read_text()
+    assert "ego list --markdown" in doc
+    assert doc.endswith(generated), "docs/inputs.md is stale: regenerate its reference with ego list --markdown"
+    for name in ("init_range", "learning_rate", "width", "lead_brake_time", "substeps", "gains_file", "model"):
+        assert f"| `{name}` |" in generated
