@@ -12,6 +12,7 @@ import dataclasses
 import difflib
 import math
 import numbers
+import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -130,6 +131,11 @@ def describe(cls_or_obj: Any) -> list[ParamInfo]:
     return out
 
 
+#: a number as the command line takes it: ASCII digits, an optional fraction and exponent
+#: (inf and nan are read, then refused by the range check with the value named)
+_NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)(e[+-]?\d+)?|[+-]?(inf|infinity|nan)", re.ASCII | re.IGNORECASE)
+
+
 def parse_value(info: ParamInfo, text: str) -> Any:
     """Convert command-line text to the parameter's type, or raise :class:`ConfigError`."""
     raw = text.strip()
@@ -143,6 +149,8 @@ def parse_value(info: ParamInfo, text: str) -> Any:
         raise ConfigError(bad)
     if info.type not in (int, float):
         return raw
+    if not _NUMBER.fullmatch(raw):  # Python also reads "1_0" and other scripts' digits: not here
+        raise ConfigError(bad)
     try:
         return info.type(raw)
     except (ValueError, OverflowError):
@@ -202,7 +210,11 @@ def check_value(info: ParamInfo, value: Any) -> None:
             raise ConfigError(bad + did_you_mean(value, info.choices))
         return
     if info.type in (int, float):
-        if not math.isfinite(value):
+        try:
+            finite = math.isfinite(value)
+        except OverflowError:  # a whole number too big for a float
+            finite = False
+        if not finite:
             raise ConfigError(bad)
         if info.min is not None and (value <= info.min if info.min_exclusive else value < info.min):
             raise ConfigError(bad)
