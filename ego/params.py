@@ -155,10 +155,7 @@ def parse_value(info: ParamInfo, text: str) -> Any:
         return info.type(raw)
     except (ValueError, OverflowError):
         pass
-    try:
-        whole = float(raw)
-    except ValueError:
-        whole = math.nan
+    whole = float(raw)  # the pattern is a float's
     if info.type is int and whole.is_integer():  # "2.0" or "1e2": a whole number written as a float
         raise ConfigError(f"{bad[:-1]}: write {int(whole)})")
     raise ConfigError(bad)
