@@ -40,6 +40,14 @@ def _writable_ancestor(path: Path, what: str, text: str) -> None:
         raise ConfigError(f"bad {what} {text!r}: cannot write into {parent}")
 
 
+def check_count(value: Any, what: str, lo: int, hi: int) -> None:
+    """A whole number from ``lo`` to ``hi`` (None: a default is used), or ConfigError."""
+    if value is None:
+        return
+    if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+        raise ConfigError(f"bad value for {what}: {value!r} (expected a whole number from {lo} to {hi})")
+
+
 def check_output_file(text: str | None, what: str, suffix: str) -> Path:
     """An output file: non-empty, ending in ``suffix``, not a folder, in a folder that exists
     or can be made and may be written."""

@@ -33,7 +33,7 @@ import sys
 from collections.abc import Sequence
 
 from ego import __version__
-from ego.checks import check_output_dir, check_output_file, check_seed
+from ego.checks import check_count, check_output_dir, check_output_file, check_seed
 from ego.params import ConfigError, describe, did_you_mean, parse_overrides
 
 EXIT_OK, EXIT_NOT_COMPLETED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
@@ -46,12 +46,6 @@ def _choice(value: str, allowed, what: str) -> str:
     if value not in allowed:
         raise ConfigError(f"bad {what} {value!r} (allowed: {', '.join(allowed)}){did_you_mean(value, allowed)}")
     return value
-
-
-def _count(value: int | None, what: str, lo: int, hi: int) -> None:
-    """A whole-number option within lo..hi (None: its default)."""
-    if value is not None and not lo <= value <= hi:
-        raise ConfigError(f"bad value for {what}: {value} (expected a whole number from {lo} to {hi})")
 
 
 def _terminate(signum, frame) -> None:
@@ -403,13 +397,13 @@ def _run(args) -> int:
 
 
 def _compare(args) -> int:
-    from ego.compare import UNITS_FILE, compare
+    from ego.compare import MAX_SEEDS, UNITS_FILE, compare
 
-    if args.seeds > 100_000:
-        raise ConfigError(f"bad value for --seeds: {args.seeds} (expected at most 100000; use ego sweep "
+    if args.seeds > MAX_SEEDS:
+        raise ConfigError(f"bad value for --seeds: {args.seeds} (expected at most {MAX_SEEDS}; use ego sweep "
                           "for more)")
-    _count(args.seeds, "--seeds", 1, 100_000)
-    _count(args.jobs, "--jobs", 1, MAX_JOBS)
+    check_count(args.seeds, "--seeds", 1, 100_000)
+    check_count(args.jobs, "--jobs", 1, MAX_JOBS)
     names = [n.strip() for n in args.controllers.split(",") if n.strip()]
     if len(set(names)) != len(names):
         dup = next(n for n in names if names.count(n) > 1)
@@ -439,7 +433,7 @@ def _sweep(args) -> int:
 
     spec = sweep_spec.load(args.spec)
     _choice(args.engine, ENGINES, "--engine")
-    _count(args.jobs, "--jobs", 1, MAX_JOBS)
+    check_count(args.jobs, "--jobs", 1, MAX_JOBS)
     if args.address is not None and args.engine != "ray":
         raise ConfigError("--address needs --engine ray")
     _choice(args.record, RECORD, "--record")
@@ -490,8 +484,8 @@ def _train(args) -> int:
     from ego.control.narma import DEFAULT_MODEL
     from ego.train.narma_l2 import DataSpec, TrainSpec, train
 
-    _count(args.samples, "--samples", 50, 10_000_000)
-    _count(args.epochs, "--epochs", 1, 100_000)
+    check_count(args.samples, "--samples", 50, 10_000_000)
+    check_count(args.epochs, "--epochs", 1, 100_000)
     v_lo, v_hi = _range(args.speeds, "--speeds")
     a_lo, a_hi = _range(args.accels, "--accels")
     r_lo, r_hi = _range(args.radii, "--radii")
@@ -513,7 +507,7 @@ def _tune(args) -> int:
     from ego.control.cascade import TUNED_PRESET
     from ego.train.lane_centering import TuneSpec, tune
 
-    _count(args.workers, "--workers", 1, MAX_JOBS)
+    check_count(args.workers, "--workers", 1, MAX_JOBS)
     try:
         parts = [d.split(":") for d in args.drives.split(",")]
         if any(len(p) > 2 for p in parts):

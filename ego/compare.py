@@ -29,12 +29,13 @@ import math
 import os
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from ego.checks import check_count
 from ego.control import controller_spec
 from ego.params import ConfigError, describe, did_you_mean
 from ego.runner import RunSpec, configure, run, split_overrides
@@ -46,6 +47,8 @@ from ego.sweep.executor import Executor, ProcessExecutor
 #: the columns metrics.csv starts with, before the metrics
 RUN_COLUMNS = ("controller", "seed", "status", "error")
 UNITS_FILE = "metrics_units.csv"
+#: more seeds than this is a sweep (ego sweep), not a comparison
+MAX_SEEDS = 100_000
 
 
 @dataclass
@@ -79,10 +82,15 @@ def _one(spec: RunSpec) -> RunRow:
 
 
 def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict, out: Path) -> list[RunSpec]:
-    """Validate names and overrides, and list the runs (before any process starts)."""
+    """Validate names, counts and overrides, and list the runs (before any process starts)."""
     cls = scenario_class(scenario)
+    if isinstance(controllers, str) or not all(isinstance(c, str) for c in controllers):
+        raise ConfigError(f"bad controllers {controllers!r:.60} (expected a list of names)")
     if not controllers:
         raise ConfigError("--controllers needs at least one name")
+    check_count(seeds, "seeds", 1, MAX_SEEDS)
+    if not isinstance(overrides, Mapping):
+        raise ConfigError(f"bad overrides {overrides!r:.60} (expected a mapping of parameter name to value)")
     for name in controllers:
         controller_spec(name, cls.task)
     known = {i.name for i in describe(cls.config_cls)}

@@ -555,6 +555,17 @@ def _apply(cls_path: str, overrides: dict):
     return apply
 
 
+def _compare(**changes):
+    def call(files):
+        from ego.compare import compare
+
+        kw = {"scenario": "emergency-brake", "controllers": ["pid"], "seeds": 1, "overrides": {},
+              "out": Path(files["out"])}
+        kw.update(changes)
+        return compare(**kw)
+    return call
+
+
 def _sweep_parse(**changes):
     def parse(files):
         from ego.sweep.spec import parse
@@ -622,6 +633,11 @@ API = [
     A("config-preview-huge", _make("ego.scenarios.CurveConfig", preview=1e308), "bad value for preview: 1e+308"),
     A("apply-numpy-nan", _apply("ego.scenarios.EmergencyBrakeConfig", {"lead_gap": np.float64("nan")}), "bad value for lead_gap: nan"),
     A("apply-misspelt", _apply("ego.scenarios.PlatoonConfig", {"folowers": 3}), "did you mean 'followers'?"),
+    A("compare-seeds-text", _compare(seeds="3"), "bad value for seeds: '3' (expected a whole number from 1 to 100000)"),
+    A("compare-seeds-float", _compare(seeds=2.0), "bad value for seeds: 2.0"),
+    A("compare-controllers-text", _compare(controllers="pid,fuzzy"), "bad controllers 'pid,fuzzy' (expected a list of names)"),
+    A("compare-overrides-list", _compare(overrides=["dt=0.01"]), "bad overrides"),
+    A("compare-misspelt", _compare(overrides={"ego_sped": 1}), "did you mean 'ego_speed'?"),
     A("sweep-float-for-int", _sweep_parse(grid={"substeps": [1, 2.0]}), "bad value for substeps: 2.0"),
     A("sweep-parse-misspelt-axis", _sweep_parse(grid={"ego_sped": [20]}), "did you mean 'ego_speed'?"),
     A("sweep-misspelt-sample-axis", _sweep_parse(grid={}, sample={"n": 4, "lead_gapp": [20, 40]}), "did you mean 'lead_gap'?"),
