@@ -17,6 +17,8 @@ from ego.params import ConfigError
 
 #: SUMO's seeds (and every seed ego takes): 0 .. 2^31 - 1
 MAX_SEED = 2**31 - 1
+#: more parallel processes than this (--jobs, --workers) is a typo, not a machine
+MAX_JOBS = 1024
 
 
 def check_seed(value: Any, what: str = "seed") -> int:
@@ -46,6 +48,12 @@ def check_count(value: Any, what: str, lo: int, hi: int) -> None:
         return
     if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
         raise ConfigError(f"bad value for {what}: {value!r} (expected a whole number from {lo} to {hi})")
+
+
+def check_number(value: Any, what: str, lo: float, hi: float, unit: str) -> None:
+    """A finite number from ``lo`` to ``hi`` (None: a default is used), or ConfigError."""
+    if value is not None and not (finite_number(value) and lo <= value <= hi):
+        raise ConfigError(f"bad value for {what}: {value!r} (expected {lo:g} to {hi:g} {unit})")
 
 
 def check_output_file(text: str | None, what: str, suffix: str) -> Path:

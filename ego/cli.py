@@ -33,12 +33,10 @@ import sys
 from collections.abc import Sequence
 
 from ego import __version__
-from ego.checks import check_count, check_output_dir, check_output_file, check_seed
+from ego.checks import MAX_JOBS, check_count, check_number, check_output_dir, check_output_file, check_seed
 from ego.params import ConfigError, describe, did_you_mean, parse_overrides
 
 EXIT_OK, EXIT_NOT_COMPLETED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
-#: more parallel processes than this is a typo, not a machine
-MAX_JOBS = 1024
 
 
 def _choice(value: str, allowed, what: str) -> str:
@@ -416,14 +414,23 @@ def _compare(args) -> int:
     return EXIT_OK
 
 
-def _range(text: str, what: str) -> tuple[float, float]:
+def _range(text: str, what: str, declared) -> tuple[float, float]:
+    """``LO,HI`` within the bounds ``declared`` (a parameter's ``ParamInfo``) gives."""
     try:
         lo, hi = (float(x) for x in text.split(","))
     except ValueError:
         raise ConfigError(f"bad value for {what}: {text!r} (expected LO,HI, e.g. 20,40)") from None
     if not (math.isfinite(lo) and math.isfinite(hi)) or lo > hi:
         raise ConfigError(f"bad value for {what}: {text!r} (expected finite LO <= HI)")
+    if lo < declared.min or hi > declared.max:
+        raise ConfigError(f"bad value for {what}: {text!r} (expected {declared.unit} within "
+                          f"{declared.min:g}..{declared.max:g})")
     return lo, hi
+
+
+def _declared(cls, name: str):
+    """The declaration (``ParamInfo``) of parameter ``name`` of ``cls``."""
+    return next(i for i in describe(cls) if i.name == name)
 
 
 def _sweep(args) -> int:
@@ -484,17 +491,13 @@ def _train(args) -> int:
     from ego.control.narma import DEFAULT_MODEL
     from ego.train.narma_l2 import DataSpec, TrainSpec, train
 
-    check_count(args.samples, "--samples", 50, 10_000_000)
-    check_count(args.epochs, "--epochs", 1, 100_000)
-    v_lo, v_hi = _range(args.speeds, "--speeds")
-    a_lo, a_hi = _range(args.accels, "--accels")
-    r_lo, r_hi = _range(args.radii, "--radii")
-    if r_lo < 5.0 or r_hi > 1000.0:
-        raise ConfigError(f"bad value for --radii: {args.radii!r} (expected m within 5..1000)")
-    if v_lo < 5.0 or v_hi > 60.0:
-        raise ConfigError(f"bad value for --speeds: {args.speeds!r} (expected km/h within 5..60)")
-    if a_lo < -2.0 or a_hi > 2.0:
-        raise ConfigError(f"bad value for --accels: {args.accels!r} (expected m/s^2 within -2..2)")
+    for value, what, cls, name in ((args.samples, "--samples", DataSpec, "samples"),
+                                   (args.epochs, "--epochs", TrainSpec, "epochs")):
+        declared = _declared(cls, name)
+        check_count(value, what, int(declared.min), int(declared.max))
+    v_lo, v_hi = _range(args.speeds, "--speeds", _declared(DataSpec, "speed_min"))
+    a_lo, a_hi = _range(args.accels, "--accels", _declared(DataSpec, "accel_min"))
+    r_lo, r_hi = _range(args.radii, "--radii", _declared(DataSpec, "radius_min"))
     check_seed(args.seed, "--seed")
     out = _model_out(args, DEFAULT_MODEL, "runs/narma_l2.npz", ".npz")
     data = DataSpec(samples=args.samples, speed_min=v_lo, speed_max=v_hi, accel_min=a_lo,
@@ -505,7 +508,7 @@ def _train(args) -> int:
 
 def _tune(args) -> int:
     from ego.control.cascade import TUNED_PRESET
-    from ego.train.lane_centering import TuneSpec, tune
+    from ego.train.lane_centering import MAX_DURATION, TuneSpec, check_drives, tune
 
     check_count(args.workers, "--workers", 1, MAX_JOBS)
     try:
@@ -518,9 +521,7 @@ def _tune(args) -> int:
     except ValueError:
         raise ConfigError(f"bad value for --drives: {args.drives!r} (expected speeds in m/s with "
                           "optional offsets in m, e.g. 8,25:1)") from None
-    if any(not (2.0 <= v <= 30.0) or abs(o) > 1.5 for v, o in drives):
-        raise ConfigError(f"bad value for --drives: {args.drives!r} (expected speeds from 2 to 30 m/s "
-                          "and offsets within 1.5 m)")
+    check_drives(drives, "--drives", repr(args.drives))
     check_seed(args.seed, "--seed")
     out = _model_out(args, TUNED_PRESET, "runs/cascade_pid_tuned.json", ".json")
     from ego.sweep.executor import ENGINES
@@ -531,8 +532,7 @@ def _tune(args) -> int:
         raise ConfigError("--engine, --address and --duration go with --cost sumo")
     if args.address is not None and args.engine != "ray":
         raise ConfigError("--address needs --engine ray")
-    if args.duration is not None and not (1.0 <= args.duration <= 3600.0 and math.isfinite(args.duration)):
-        raise ConfigError(f"bad value for --duration: {args.duration} (expected 1 to 3600 s)")
+    check_number(args.duration, "--duration", 1.0, MAX_DURATION, "s")
     spec = TuneSpec.quick(args.seed, args.workers) if args.quick else TuneSpec(seed=args.seed, workers=args.workers)
     tune(TuneSpec(**{**spec.__dict__, "drives": drives, "cost": args.cost, "engine": args.engine,
                      "address": args.address, "duration": args.duration}), out)
