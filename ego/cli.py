@@ -36,14 +36,22 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import sys
 from collections.abc import Sequence
 
 from ego import __version__
-from ego.checks import check_output_dir, check_output_file, check_seed
-from ego.params import ConfigError, describe, parse_overrides
+from ego.checks import MAX_JOBS, check_count, check_number, check_output_dir, check_output_file, check_seed
+from ego.params import ConfigError, describe, did_you_mean, parse_overrides
 
 EXIT_OK, EXIT_NOT_COMPLETED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+
+def _choice(value: str, allowed, what: str) -> str:
+    """``value`` if it is one of ``allowed``, else ConfigError (with the closest name)."""
+    if value not in allowed:
+        raise ConfigError(f"bad {what} {value!r} (allowed: {', '.join(allowed)}){did_you_mean(value, allowed)}")
+    return value
 
 
 def _terminate(signum, frame) -> None:
@@ -55,6 +63,9 @@ class _Parser(argparse.ArgumentParser):
     """argparse that reports bad usage in one line and exits with 2."""
 
     def error(self, message: str) -> None:  # pragma: no cover - exercised through main()
+        choice = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
+        if choice:  # a misspelt command or choice: name the closest
+            message += did_you_mean(choice.group(1), re.findall(r"'([^']*)'", choice.group(2)))
         raise ConfigError(message)
 
 
@@ -179,6 +190,9 @@ def _parser() -> argparse.ArgumentParser:
                          description="List scenarios, controllers and every parameter with "
                                      "its default and unit.")
     lst.add_argument("--json", action="store_true", help="print JSON instead of text")
+    lst.add_argument("--markdown", action="store_true",
+                     help="print every parameter's default, unit and allowed values as Markdown tables "
+                          "(the reference in docs/inputs.md)")
 
     trn = sub.add_parser(
         "train", help="train a learned controller (narma-l2)",
@@ -278,6 +292,28 @@ def _catalogue() -> dict:
         "controllers": [{"name": n, "task": t, "summary": s.summary, "parameters": params(s.params)}
                         for t, specs in CONTROLLERS.items() for n, s in specs.items()],
     }
+
+
+def parameters_markdown(cat: dict) -> str:
+    """Every scenario's and controller's parameters as Markdown tables (``ego list --markdown``):
+    name, default, unit, what is allowed, description."""
+    def table(title: str, rows: list[dict]) -> list[str]:
+        lines = [f"### {title}", ""]
+        if not rows:
+            return lines + ["(no parameters)", ""]
+        lines += ["| parameter | default | unit | allowed | description |", "|---|---|---|---|---|"]
+        for r in rows:
+            cells = (f"`{r['name']}`", f"`{json.dumps(r['default'])}`", r["unit"], r["allowed"], r["description"])
+            lines.append("| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |")
+        return lines + [""]
+
+    lines = ["## Scenario parameters", ""]
+    for s in cat["scenarios"]:
+        lines += table(f"{s['name']} ({s['task']} task)", s["parameters"])
+    lines += ["## Controller parameters", ""]
+    for c in cat["controllers"]:
+        lines += table(f"{c['name']} ({c['task']} task)", c["parameters"])
+    return "\n".join(lines)
 
 
 def _print_catalogue(cat: dict) -> None:
@@ -403,15 +439,13 @@ def _run(args) -> int:
 
 
 def _compare(args) -> int:
-    from ego.compare import UNITS_FILE, compare
+    from ego.compare import MAX_SEEDS, UNITS_FILE, compare
 
-    if args.seeds < 1:
-        raise ConfigError(f"bad value for --seeds: {args.seeds} (expected a whole number of at least 1)")
-    if args.jobs is not None and args.jobs < 1:
-        raise ConfigError(f"bad value for --jobs: {args.jobs} (expected a whole number of at least 1)")
-    if args.seeds > 100_000:
-        raise ConfigError(f"bad value for --seeds: {args.seeds} (expected at most 100000; use ego sweep "
+    if args.seeds > MAX_SEEDS:
+        raise ConfigError(f"bad value for --seeds: {args.seeds} (expected at most {MAX_SEEDS}; use ego sweep "
                           "for more)")
+    check_count(args.seeds, "--seeds", 1, MAX_SEEDS)
+    check_count(args.jobs, "--jobs", 1, MAX_JOBS)
     labels = [n.strip() for n in args.controllers.split(",") if n.strip()]
     out = check_output_dir(args.out, "--out")
     rows = compare(args.scenario, labels, args.seeds, parse_overrides(args.overrides), out, args.jobs,
@@ -441,14 +475,23 @@ def _compare_status(statuses: Sequence[str]) -> int:
     return EXIT_OK
 
 
-def _range(text: str, what: str) -> tuple[float, float]:
+def _range(text: str, what: str, declared) -> tuple[float, float]:
+    """``LO,HI`` within the bounds ``declared`` (a parameter's ``ParamInfo``) gives."""
     try:
         lo, hi = (float(x) for x in text.split(","))
     except ValueError:
         raise ConfigError(f"bad value for {what}: {text!r} (expected LO,HI, e.g. 20,40)") from None
     if not (math.isfinite(lo) and math.isfinite(hi)) or lo > hi:
         raise ConfigError(f"bad value for {what}: {text!r} (expected finite LO <= HI)")
+    if lo < declared.min or hi > declared.max:
+        raise ConfigError(f"bad value for {what}: {text!r} (expected {declared.unit} within "
+                          f"{declared.min:g}..{declared.max:g})")
     return lo, hi
+
+
+def _declared(cls, name: str):
+    """The declaration (``ParamInfo``) of parameter ``name`` of ``cls``."""
+    return next(i for i in describe(cls) if i.name == name)
 
 
 def _sweep(args) -> int:
@@ -457,14 +500,11 @@ def _sweep(args) -> int:
     from ego.sweep.runner import RECORD, parse_plot, print_progress, sweep
 
     spec = sweep_spec.load(args.spec)
-    if args.engine not in ENGINES:
-        raise ConfigError(f"bad --engine {args.engine!r} (allowed: {', '.join(ENGINES)})")
-    if args.jobs is not None and args.jobs < 1:
-        raise ConfigError(f"bad value for --jobs: {args.jobs} (expected a whole number of at least 1)")
+    _choice(args.engine, ENGINES, "--engine")
+    check_count(args.jobs, "--jobs", 1, MAX_JOBS)
     if args.address is not None and args.engine != "ray":
         raise ConfigError("--address needs --engine ray")
-    if args.record not in RECORD:
-        raise ConfigError(f"bad --record {args.record!r} (allowed: {', '.join(RECORD)})")
+    _choice(args.record, RECORD, "--record")
     for p in args.plot:
         parse_plot(p, spec)
     out = check_output_dir(args.out, "--out")
@@ -516,19 +556,13 @@ def _train(args) -> int:
     from ego.control.narma import DEFAULT_MODEL
     from ego.train.narma_l2 import DataSpec, TrainSpec, train
 
-    if args.samples < 50:
-        raise ConfigError(f"bad value for --samples: {args.samples} (expected at least 50)")
-    if args.epochs < 1:
-        raise ConfigError(f"bad value for --epochs: {args.epochs} (expected at least 1)")
-    v_lo, v_hi = _range(args.speeds, "--speeds")
-    a_lo, a_hi = _range(args.accels, "--accels")
-    r_lo, r_hi = _range(args.radii, "--radii")
-    if r_lo < 5.0 or r_hi > 1000.0:
-        raise ConfigError(f"bad value for --radii: {args.radii!r} (expected m within 5..1000)")
-    if v_lo < 5.0 or v_hi > 60.0:
-        raise ConfigError(f"bad value for --speeds: {args.speeds!r} (expected km/h within 5..60)")
-    if a_lo < -2.0 or a_hi > 2.0:
-        raise ConfigError(f"bad value for --accels: {args.accels!r} (expected m/s^2 within -2..2)")
+    for value, what, cls, name in ((args.samples, "--samples", DataSpec, "samples"),
+                                   (args.epochs, "--epochs", TrainSpec, "epochs")):
+        declared = _declared(cls, name)
+        check_count(value, what, int(declared.min), int(declared.max))
+    v_lo, v_hi = _range(args.speeds, "--speeds", _declared(DataSpec, "speed_min"))
+    a_lo, a_hi = _range(args.accels, "--accels", _declared(DataSpec, "accel_min"))
+    r_lo, r_hi = _range(args.radii, "--radii", _declared(DataSpec, "radius_min"))
     check_seed(args.seed, "--seed")
     out = _model_out(args, DEFAULT_MODEL, "runs/narma_l2.npz", ".npz")
     data = DataSpec(samples=args.samples, speed_min=v_lo, speed_max=v_hi, accel_min=a_lo,
@@ -539,10 +573,9 @@ def _train(args) -> int:
 
 def _tune(args) -> int:
     from ego.control.cascade import TUNED_PRESET
-    from ego.train.lane_centering import TuneSpec, tune
+    from ego.train.lane_centering import MAX_DURATION, TuneSpec, check_drives, tune
 
-    if args.workers < 1:
-        raise ConfigError(f"bad value for --workers: {args.workers} (expected a whole number of at least 1)")
+    check_count(args.workers, "--workers", 1, MAX_JOBS)
     try:
         parts = [d.split(":") for d in args.drives.split(",")]
         if any(len(p) > 2 for p in parts):
@@ -553,23 +586,18 @@ def _tune(args) -> int:
     except ValueError:
         raise ConfigError(f"bad value for --drives: {args.drives!r} (expected speeds in m/s with "
                           "optional offsets in m, e.g. 8,25:1)") from None
-    if any(not (2.0 <= v <= 30.0) or abs(o) > 1.5 for v, o in drives):
-        raise ConfigError(f"bad value for --drives: {args.drives!r} (expected speeds from 2 to 30 m/s "
-                          "and offsets within 1.5 m)")
+    check_drives(drives, "--drives", repr(args.drives))
     check_seed(args.seed, "--seed")
     out = _model_out(args, TUNED_PRESET, "runs/cascade_pid_tuned.json", ".json")
     from ego.sweep.executor import ENGINES
 
-    if args.cost not in ("model", "sumo"):
-        raise ConfigError(f"bad --cost {args.cost!r} (allowed: model, sumo)")
-    if args.engine not in ENGINES:
-        raise ConfigError(f"bad --engine {args.engine!r} (allowed: {', '.join(ENGINES)})")
+    _choice(args.cost, ("model", "sumo"), "--cost")
+    _choice(args.engine, ENGINES, "--engine")
     if args.cost == "model" and (args.engine != "process" or args.address or args.duration is not None):
         raise ConfigError("--engine, --address and --duration go with --cost sumo")
     if args.address is not None and args.engine != "ray":
         raise ConfigError("--address needs --engine ray")
-    if args.duration is not None and not (1.0 <= args.duration <= 3600.0 and math.isfinite(args.duration)):
-        raise ConfigError(f"bad value for --duration: {args.duration} (expected 1 to 3600 s)")
+    check_number(args.duration, "--duration", 1.0, MAX_DURATION, "s")
     spec = TuneSpec.quick(args.seed, args.workers) if args.quick else TuneSpec(seed=args.seed, workers=args.workers)
     tune(TuneSpec(**{**spec.__dict__, "drives": drives, "cost": args.cost, "engine": args.engine,
                      "address": args.address, "duration": args.duration}), out)
@@ -599,6 +627,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             cat = _catalogue()
             if args.json:
                 print(json.dumps(cat, indent=2))
+            elif args.markdown:
+                print(parameters_markdown(cat), end="")
             else:
                 _print_catalogue(cat)
             return EXIT_OK

@@ -38,16 +38,17 @@ import os
 import re
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from ego.checks import check_count
 from ego.control import controller_spec
 from ego.export import TRACE_SUFFIXES
 from ego.outputs import FolderLock, atomic_path, remove_partials, write_text
-from ego.params import ConfigError, apply_overrides, describe
+from ego.params import ConfigError, apply_overrides, describe, did_you_mean
 from ego.processes import signals_deferred
 from ego.runner import RunSpec, configure, run, split_overrides
 from ego.scenarios import scenario_class
@@ -61,6 +62,8 @@ RUN_COLUMNS = ("controller", "seed", "status", "error")
 UNITS_FILE = "metrics_units.csv"
 #: ``--traces`` formats: the suffixes :func:`ego.export.write_trace` knows, without the dot
 TRACE_FORMATS = tuple(suffix[1:] for suffix in TRACE_SUFFIXES)
+#: more seeds than this is a sweep (ego sweep), not a comparison
+MAX_SEEDS = 100_000
 
 
 @dataclass
@@ -134,8 +137,13 @@ def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict,
     format of :data:`TRACE_FORMATS`, each run's trace to ``out/traces/<label>-seed<N>.<format>``.
     """
     cls = scenario_class(scenario)
+    if isinstance(controllers, str) or not all(isinstance(c, str) for c in controllers):
+        raise ConfigError(f"bad controllers {controllers!r:.60} (expected a list of names)")
     if not controllers:
         raise ConfigError("--controllers needs at least one name")
+    check_count(seeds, "seeds", 1, MAX_SEEDS)
+    if not isinstance(overrides, Mapping):
+        raise ConfigError(f"bad overrides {overrides!r:.60} (expected a mapping of parameter name to value)")
     dup = next((c for c in controllers if list(controllers).count(c) > 1), None)
     if dup is not None:
         raise ConfigError(f"bad value for --controllers: {dup!r} is listed twice")
@@ -154,7 +162,7 @@ def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict,
     unknown = sorted(set(overrides) - known)
     if unknown:
         raise ConfigError(f"unknown parameter {unknown[0]!r} for {scenario} with "
-                          f"{', '.join(controllers)} (see ego list)")
+                          f"{', '.join(controllers)} (see ego list){did_you_mean(unknown[0], known)}")
     specs = []
     for label, (name, params) in variants.items():
         mine = {**split_overrides(scenario, name, overrides), **params}  # the variant's own win

@@ -2,15 +2,17 @@
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 from ego.control import CONTROLLERS, controller_spec
-from ego.params import apply_overrides, describe, unknown_parameter
+from ego.params import ConfigError, apply_overrides, describe, unknown_parameter
 from ego.record import RerunRecorder
 from ego.scenarios import RunResult, Scenario, scenario_class
 from ego.scenarios.trace import Column, Metric
+from ego.sumo.net import net_file
 
 
 @dataclass(frozen=True)
@@ -37,6 +39,20 @@ class RunSpec:
         """The controller as the results name it: ``label``, else ``controller``."""
         return self.label or self.controller
 
+    def __post_init__(self) -> None:
+        """The fields' types, at once (names and values are checked by :func:`configure`,
+        before anything is built): ConfigError naming the field, never a TypeError later."""
+        for name in ("scenario", "controller"):
+            if not isinstance(getattr(self, name), str):
+                raise ConfigError(f"bad {name} {getattr(self, name)!r} (expected a name, see ego list)")
+        if not isinstance(self.overrides, Mapping) or not all(isinstance(k, str) for k in self.overrides):
+            raise ConfigError(f"bad overrides {self.overrides!r:.60} (expected a mapping of parameter "
+                              "name to value)")
+        if self.record is not None and not isinstance(self.record, (str, os.PathLike)):
+            raise ConfigError(f"bad record {self.record!r} (expected a path ending in .rrd, or None)")
+        if not isinstance(self.background_recording, bool):
+            raise ConfigError(f"bad background_recording {self.background_recording!r} (expected true or false)")
+
 
 def split_overrides(scenario: str, controller: str, overrides: Mapping[str, Any]) -> dict:
     """The overrides that apply to this scenario and controller (others are dropped)."""
@@ -53,12 +69,15 @@ def configure(spec: RunSpec):
 
     check_seed(spec.seed)
     cls = scenario_class(spec.scenario)
+    if cls.network is not None:  # a missing or garbled network fails here, not inside SUMO
+        net_file(cls.network)
     ctrl = controller_spec(spec.controller, cls.task)
     config, rest = apply_overrides(cls.default_config(spec.overrides), spec.overrides, strict=False)
     ctrl_params, rest = apply_overrides(ctrl.params(), rest, strict=False)
     if rest:
         known = [i.name for i in describe(cls.config_cls)] + [i.name for i in describe(ctrl.params)]
         raise unknown_parameter(next(iter(rest)), known)
+    cls.check_config(config)
     return cls, config, ctrl, ctrl_params
 
 
@@ -74,7 +93,7 @@ def build(spec: RunSpec):
     if spec.record is not None:
         from ego.checks import check_output_file
 
-        path = check_output_file(spec.record, "--record path", ".rrd")
+        path = check_output_file(os.fspath(spec.record), "--record path", ".rrd")
         path.parent.mkdir(parents=True, exist_ok=True)
         recorder = RerunRecorder(path, recording_id=f"{spec.scenario}-{spec.name}-{spec.seed}",
                                  background=spec.background_recording)

@@ -21,7 +21,7 @@ import numpy as np
 
 from ego.control.pid import PID
 from ego.models.longitudinal import SpacingPolicy
-from ego.params import ConfigError, param
+from ego.params import ConfigError, Params, param
 
 
 @dataclass(slots=True)
@@ -100,13 +100,13 @@ class SampledFollower:
 
 
 @dataclass(frozen=True)
-class FollowingPIDParams:
+class FollowingPIDParams(Params):
     """Report 004's baseline PID on the spacing error."""
 
-    kp: float = param(0.85, "1/s^2", "proportional gain (report 004: 0.85)", min=0.0)
-    ki: float = param(0.2, "1/s^3", "integral gain (report 004: 0.2)", min=0.0)
+    kp: float = param(0.85, "1/s^2", "proportional gain (report 004: 0.85)", min=0.0, max=100.0)
+    ki: float = param(0.2, "1/s^3", "integral gain (report 004: 0.2)", min=0.0, max=100.0)
     kd: float = param(0.3, "1/s", "derivative gain, on the measured error rate (report 004: 0.3)",
-                      min=0.0)
+                      min=0.0, max=100.0)
     period: float = param(0.1, "s", "control period: a new command every period, held between "
                           "(report 004: 1 s)", min=0.01, max=2.0)
 
@@ -135,13 +135,14 @@ class FollowingPID(SampledFollower):
 
 
 @dataclass(frozen=True)
-class BPPIDAccParams:
+class BPPIDAccParams(Params):
     """Report 004's BP neural-network PID for car following."""
 
-    learning_rate: float = param(0.25, "-", "eta (report 004: 0.25)", min=0.0)
+    learning_rate: float = param(0.25, "-", "eta (report 004: 0.25; 0: no learning)", min=0.0,
+                                 max=1.0)
     momentum: float = param(0.01, "-", "alpha (report 004: 0.01)", min=0.0, max=0.99)
     init_range: float = param(0.5, "-", "initial weights ~ U[-init_range, init_range] "
-                              "(report 004: 0.5)", min=0.0)
+                              "(report 004: 0.5)", min=0.0, max=10.0, min_exclusive=True)
     period: float = param(0.1, "s", "control period: a new command every period, held between "
                           "(report 004: 1 s)", min=0.01, max=2.0)
 

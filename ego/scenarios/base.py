@@ -22,7 +22,7 @@ import numpy as np
 
 from ego.control.base import Controller, ControllerSpec, Observation
 from ego.models.plant import Plant
-from ego.params import ConfigError, param
+from ego.params import ConfigError, Params, param
 from ego.processes import signals_deferred
 from ego.record.base import NullRecorder, Recorder, Scene, Series
 from ego.scenarios.metrics import json_number
@@ -39,7 +39,7 @@ _LOG_LEVELS = {"INFO": logging.INFO, "WARN": logging.WARNING, "ERROR": logging.E
 
 
 @dataclass(frozen=True)
-class TimingConfig:
+class TimingConfig(Params):
     """Timing of every scenario."""
 
     dt: float = param(0.01, "s", "control period: controller and model step", min=0.001, max=0.1)
@@ -61,6 +61,7 @@ class CommonConfig(TimingConfig):
                                       min=0.1, max=3.5)
 
     def __post_init__(self) -> None:
+        super().__post_init__()
         ratio = self.sumo_step / self.dt
         if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
             raise ConfigError(
@@ -162,6 +163,9 @@ class Scenario:
     #: which controllers drive it (``ego.control.CONTROLLERS[task]``) and what they return
     task: ClassVar[str] = "tracking"
     config_cls: ClassVar[type] = CommonConfig
+    #: the SUMO network it runs on (``ego.sumo.net.net_file``; checked before any run), or
+    #: None without SUMO
+    network: ClassVar[str | None] = None
     #: trace columns written by name every control step; ``t`` first
     columns: tuple[Column, ...] = (Column("t", "s", "time"),)
     #: the scenario's own metrics (besides COMMON_METRICS), with units; headline ones are
@@ -175,6 +179,12 @@ class Scenario:
         """The configuration the overrides apply to: the defaults of ``config_cls``; a
         scenario with variants starts from the variant's preset (``--set variant=...``)."""
         return cls.config_cls()
+
+    @classmethod
+    def check_config(cls, config) -> None:
+        """Checks of a configuration that need more than the configuration (the network's
+        geometry, say), made by ``ego.runner.configure`` before anything runs: ConfigError.
+        Default: none."""
 
     @classmethod
     def build_controller(cls, spec: ControllerSpec, params: Any, config) -> Controller:

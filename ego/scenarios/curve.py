@@ -105,6 +105,7 @@ class CurveScenario(RoadScenario):
     summary = ("report 002: steer a 30 km/h car accelerating at 0.3 m/s^2 round a 90-degree "
                "arc of radius 15 m (oncoming traffic; --set lead=KMH for a slow car ahead)")
     task = "curve"
+    network = "curve"
     config_cls = CurveConfig
     columns = (
         Column("t", "s", "time"),
@@ -173,7 +174,7 @@ class CurveScenario(RoadScenario):
     # -- set-up ---------------------------------------------------------------------------
     def _make_bridge(self) -> SumoBridge:
         c = self.config
-        return SumoBridge(SumoConfig(net_file("curve"), step_length=c.sumo_step, seed=self.seed,
+        return SumoBridge(SumoConfig(net_file(self.network), step_length=c.sumo_step, seed=self.seed,
                                      lateral_resolution=c.lateral_resolution))
 
     def _setup(self, rng: np.random.Generator) -> None:

@@ -491,7 +491,8 @@ class EmergencyBrakeConfig(EvasiveConfig):
     lead_speed: float = param(SAME_AS_EGO, "m/s", "the lead car's speed from t = 0 until it brakes: "
                               "-1 = ego_speed, 0 = stopped (Euro NCAP CCRs), 5.556 = 20 km/h (CCRm)",
                               min=-1.0, max=45.0)
-    lead_brake_time: float = param(2.0, "s", "when the lead car starts braking", min=0.0)
+    lead_brake_time: float = param(2.0, "s", "when the lead car starts braking (at most duration)",
+                                   min=0.0, max=3600.0)
     lead_decel: float = param(6.0, "m/s^2", "lead car's deceleration", min=0.5, max=12.0)
     lead_final_speed: float = param(5.0, "m/s", "speed the lead car brakes to; at or above its "
                                     "speed it never brakes (it never speeds up)", min=0.0, max=40.0)
@@ -505,6 +506,9 @@ class EmergencyBrakeConfig(EvasiveConfig):
         if self.lead_speed != SAME_AS_EGO and self.lead_speed < 0.0:
             raise ConfigError(f"bad value for lead_speed: {self.lead_speed:g} (expected -1 for "
                               f"ego_speed, or a speed of at least 0 m/s)")
+        if self.lead_brake_time > self.duration:
+            raise ConfigError(f"bad value for lead_brake_time: {self.lead_brake_time:g} (expected at most "
+                              f"duration={self.duration:g} s: the lead would brake after the run)")
 
     @property
     def lead_cruise_speed(self) -> float:

@@ -76,6 +76,7 @@ class HighwayScenario(RoadScenario):
     """Base of the motorway scenarios; subclasses add traffic and manoeuvre logic."""
 
     config_cls = HighwayConfig
+    network = "highway"
     columns = (
         Column("t", "s", "time"),
         Column("x", "m", "centre of gravity, world frame"),
@@ -126,7 +127,7 @@ class HighwayScenario(RoadScenario):
     # -- set-up ---------------------------------------------------------------------------
     def _make_bridge(self) -> SumoBridge:
         c = self.config
-        return SumoBridge(SumoConfig(net_file("highway"), step_length=c.sumo_step, seed=self.seed,
+        return SumoBridge(SumoConfig(net_file(self.network), step_length=c.sumo_step, seed=self.seed,
                                      lateral_resolution=c.lateral_resolution))
 
     def _traffic(self, rng: np.random.Generator) -> tuple[list[VehicleSpec], list[str]]:

@@ -102,6 +102,7 @@ class LaneCenteringScenario(RoadScenario):
                "cosine easements and 1000 m straight, at 8 m/s (--set speed=25; --set "
                "plant=dynamic-bicycle)")
     task = "lane-centering"
+    network = "lane_centering"
     config_cls = LaneCenteringConfig
     columns = (
         Column("t", "s", "time"),
@@ -147,7 +148,7 @@ class LaneCenteringScenario(RoadScenario):
 
     def _make_bridge(self) -> SumoBridge:
         c = self.config
-        return SumoBridge(SumoConfig(net_file("lane_centering"), step_length=c.sumo_step,
+        return SumoBridge(SumoConfig(net_file(self.network), step_length=c.sumo_step,
                                      seed=self.seed, lateral_resolution=c.lateral_resolution))
 
     def _setup(self, rng: np.random.Generator) -> None:

@@ -37,7 +37,7 @@ import numpy as np
 
 from ego.control.following import FollowingObservation, PlatoonControl
 from ego.models import Longitudinal, LongitudinalParams, LongitudinalPlant, SpacingPolicy, VehicleGeometry
-from ego.params import ConfigError, param
+from ego.params import ConfigError, param, shown
 from ego.record.base import Scene, Series
 from ego.lane_frame import LanePolyline
 from ego.scenarios import metrics as m
@@ -54,7 +54,7 @@ from ego.sumo.bridge import (
     VehicleType,
     ego_type,
 )
-from ego.sumo.net import net_file
+from ego.sumo.net import lane_length, net_file
 from ego.sumo.traffic import Manoeuvre, ProfiledLeader, SpeedProfile
 
 LEADER = "leader"
@@ -81,7 +81,7 @@ def parse_manoeuvres(text: str) -> tuple[Manoeuvre, ...]:
     raw = text.strip().lower()
     if raw in ("", "none"):
         return ()
-    bad = ConfigError(f"bad value for manoeuvres: {text!r} (expected time s:target km/h:rate m/s^2 "
+    bad = ConfigError(f"bad value for manoeuvres: {shown(text)} (expected time s:target km/h:rate m/s^2 "
                       "items separated by commas with increasing times, e.g. 10:20:2,35:50:1.5,60:0:6; "
                       "or none)")
     out = []
@@ -90,7 +90,7 @@ def parse_manoeuvres(text: str) -> tuple[Manoeuvre, ...]:
             t, v, rate = (float(x) for x in item.split(":"))
         except ValueError:
             raise bad from None
-        if not (math.isfinite(t) and t >= 0.0 and 0.0 <= v <= 150.0 and 0.0 < rate <= 12.0):
+        if not (0.0 <= t <= 3600.0 and 0.0 <= v <= 150.0 and 0.0 < rate <= 12.0):
             raise bad
         if out and t <= out[-1].time:
             raise bad
@@ -155,6 +155,18 @@ class PlatoonConfig(CommonConfig):
         return self.standstill_gap + self.headway * self.profile.speed(0.0) + self.start_error
 
 
+def _check_road(c: PlatoonConfig, length: float) -> float:
+    """The leader's start (m along the lane) if the drive fits on a lane of ``length`` m,
+    else ConfigError."""
+    lead_pos = TAIL + c.length + c.followers * (c.length + c.start_gap)
+    need = lead_pos + c.profile.distance(c.duration) + END_MARGIN
+    if need > length:
+        raise ConfigError(f"the platoon and its leader's {c.duration:g} s drive need {need:.0f} m of "
+                          f"road; the platoon network has {length:.0f} m (shorten duration or "
+                          "lower the speeds)")
+    return lead_pos
+
+
 class PlatoonScenario(Scenario):
     """A SUMO leader and a platoon of project-controlled followers in one lane."""
 
@@ -163,6 +175,7 @@ class PlatoonScenario(Scenario):
                "leader that brakes, accelerates and stops; string stability measured "
                "(--set variant=scale-model: the report's 3-car scale test)")
     task = "car-following"
+    network = "platoon"
     config_cls = PlatoonConfig
     metric_specs = (
         Metric("followers.", "-", "per follower (id): the platoon's metrics below, each in its unit, "
@@ -182,6 +195,11 @@ class PlatoonScenario(Scenario):
         Metric("frequency_gain.", "-", "per pair of consecutive vehicles: speed gain at sine_omega "
                "(with a sinusoidal leader)", headline=True),
     )
+
+    @classmethod
+    def check_config(cls, config: PlatoonConfig) -> None:
+        """The leader's whole drive must fit on the network's road (read from its XML)."""
+        _check_road(config, lane_length(cls.network, f"{EDGE}_0"))
 
     @classmethod
     def default_config(cls, overrides: Mapping[str, Any]) -> PlatoonConfig:
@@ -263,7 +281,7 @@ class PlatoonScenario(Scenario):
     # -- set-up ---------------------------------------------------------------------------
     def _make_bridge(self) -> SumoBridge:
         c = self.config
-        return SumoBridge(SumoConfig(net_file("platoon"), step_length=c.sumo_step, seed=self.seed,
+        return SumoBridge(SumoConfig(net_file(self.network), step_length=c.sumo_step, seed=self.seed,
                                      lateral_resolution=c.lateral_resolution))
 
     def _setup(self, rng: np.random.Generator) -> None:
@@ -274,12 +292,7 @@ class PlatoonScenario(Scenario):
         self.lane = lane = LanePolyline(points, width, f"{EDGE}_0")
         L, gap0, n = c.length, c.start_gap, c.followers
         v0 = self.profile.speed(0.0)
-        lead_pos = TAIL + L + n * (L + gap0)
-        need = lead_pos + self.profile.distance(c.duration) + END_MARGIN
-        if need > lane.length:
-            raise ConfigError(f"the platoon and its leader's {c.duration:g} s drive need {need:.0f} m of "
-                              f"road; the platoon network has {lane.length:.0f} m (shorten duration or "
-                              "lower the speeds)")
+        lead_pos = _check_road(c, lane.length)
         bridge.add_type(VehicleType(LEADER, length=L, width=c.width, accel=10.0, decel=12.0,
                                     emergency_decel=12.0, max_speed=60.0, sigma=0.0, color=LEADER_COLOR))
         bridge.add_type(ego_type("follower", self.geometry, decel=c.max_decel))

@@ -151,6 +151,9 @@ class SumoBridge:
     """One headless SUMO simulation and the vehicles ego controls in it."""
 
     _running = False  # libsumo: one simulation per process
+    #: simulations started in this process so far (bad input must never get this far: the
+    #: input catalogue's tests check it stays put)
+    started = 0
 
     def __init__(self, config: SumoConfig, look_ahead: float = 250.0) -> None:
         self.config = config
@@ -181,6 +184,7 @@ class SumoBridge:
                             "(libsumo allows one per process; use processes for parallel runs)")
         import libsumo
 
+        SumoBridge.started += 1
         try:
             libsumo.start(self.config.command())
         except Exception as exc:  # noqa: BLE001 - libsumo says only "Process Error"; SUMO's reasons went to stderr

@@ -11,9 +11,10 @@ from __future__ import annotations
 import os
 import re
 import subprocess
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from ego.params import ConfigError
+from ego.params import ConfigError, did_you_mean
 
 _HEADER = re.compile(r"^<\?xml[^>]*>\s*(<!--.*?-->\s*)?", re.S)
 
@@ -72,8 +73,41 @@ def net_file(name: str) -> Path:
         if name in known:  # its sources are there, the built file is not
             raise ConfigError(f"network {name!r} is not built ({path} is missing); build it with "
                               "python sumo_nets/build.py")
-        raise ConfigError(f"unknown network {name!r} (known: {', '.join(known)})")
+        raise ConfigError(f"unknown network {name!r} (known: {', '.join(known)}){did_you_mean(name, known)}")
+    check_network(path)
     return path
+
+
+def lane_length(name: str, lane: str) -> float:
+    """The length (m) of lane ``lane`` in the built network ``name``, read from its XML (no
+    SUMO started)."""
+    path = net_file(name)
+    for _, elem in ET.iterparse(path, events=("start",)):
+        if elem.tag == "lane" and elem.get("id") == lane:
+            return float(elem.get("length"))
+    raise ConfigError(f"the SUMO network {path} has no lane {lane!r}; rebuild it: python sumo_nets/build.py")
+
+
+def check_network(path: Path) -> None:
+    """A built network must be whole XML with a ``<net>`` root and edges: a truncated or
+    garbled file is a ConfigError naming it here, before libsumo reads it (libsumo would
+    fail deep inside SUMO, or worse, load half a road). The shipped networks take well
+    under a millisecond to parse."""
+    edges = 0
+    root = None
+    try:
+        for event, elem in ET.iterparse(path, events=("start",)):
+            if root is None:
+                root = elem.tag
+            edges += elem.tag == "edge"
+    except ET.ParseError as exc:
+        raise ConfigError(f"the SUMO network {path} is not valid XML ({exc}); rebuild it: "
+                          "python sumo_nets/build.py") from None
+    except OSError as exc:
+        raise ConfigError(f"cannot read the SUMO network {path}: {exc.strerror or exc}") from None
+    if root != "net" or not edges:
+        raise ConfigError(f"the SUMO network {path} is not a SUMO network (expected a <net> with edges); "
+                          "rebuild it: python sumo_nets/build.py")
 
 
 def build_network(name: str, output: Path | None = None) -> Path:

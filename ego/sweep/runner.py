@@ -19,6 +19,7 @@ from pathlib import Path
 
 from ego.outputs import FolderLock, remove_partials
 from ego.params import ConfigError
+from ego.params import ConfigError, did_you_mean
 from ego.sweep.executor import Outcome, make_executor
 from ego.sweep.results import ResultStore
 from ego.sweep.spec import Run, SweepSpec
@@ -148,7 +149,7 @@ def parse_plot(text: str, spec: SweepSpec) -> tuple[str, str, str | None]:
     for name in names:
         if name not in spec.swept:
             raise ConfigError(f"bad --plot {text!r}: {name!r} is not swept by the spec "
-                              f"(swept: {', '.join(spec.swept) or 'nothing'})")
+                              f"(swept: {', '.join(spec.swept) or 'nothing'}){did_you_mean(name, spec.swept)}")
     metric = metric.strip() or None
     if metric is not None:
         from ego.scenarios import scenario_class
@@ -156,7 +157,7 @@ def parse_plot(text: str, spec: SweepSpec) -> tuple[str, str, str | None]:
         known = {m.name for m in scenario_class(spec.scenario).metrics_declared()}
         if metric not in known:
             raise ConfigError(f"bad --plot {text!r}: {metric!r} is not a metric of {spec.scenario} "
-                              f"(see ego list)")
+                              f"(see ego list){did_you_mean(metric, known)}")
     return names[0], names[1], metric
 
 
