@@ -17,7 +17,7 @@ from ego.models import NonlinearBicycle, NonlinearBicycleParams, VehicleGeometry
 from ego.models.actuators import ActuatorLimits
 from ego.models.plant import BicyclePlant
 from ego.params import param
-from ego.record.base import Scene, Series
+from ego.record.base import Series
 from ego.lane_frame import LanePolyline
 from ego.scenarios.base import (
     CommonConfig,
