@@ -9,8 +9,7 @@ import pyarrow as pa
 import pytest
 from rerun.chunk import RrdReader
 
-from ego.record.rerun_recorder import PALETTE, THRESHOLD, TITLE_SERIES, panel_title
-from ego.record.base import Series
+from ego.record.rerun_recorder import PALETTE, THRESHOLD
 from ego.runner import RunSpec, build
 
 pytestmark = pytest.mark.sumo
@@ -196,17 +195,3 @@ def test_the_platoon_leaders_manoeuvres_are_events(platoon):
     half = close["range"]["x_range"][1]
     assert wide["range"]["x_range"] == pytest.approx([-2 * half, 2 * half])
     assert 280.0 < 4 * half < 320.0  # about 300 m for report 004's platoon
-
-
-@pytest.mark.parametrize("panel, members, title", [
-    ("plots/a_x", [Series("a", "plots/a_x/applied", "m/s^2", "applied"), Series("b", "plots/a_x/plan", "m/s^2", "plan")],
-     "a_x [m/s^2]: applied blue, plan orange"),
-    ("plots/lateral_error", [Series("e", "plots/lateral_error/ego", "m", "lateral error (actual - reference)")],
-     "lateral error [m]"),
-    ("plots/controller/1", [Series("u", "plots/controller/1/fuzzy_u_lon", "-", "fuzzy_u_lon")],
-     "controller [-]: fuzzy_u_lon"),
-    ("plots/many", [Series(f"c{i}", f"plots/many/s{i}", "m", f"s{i}") for i in range(TITLE_SERIES + 1)],
-     "many [m]"),
-], ids=["symbols-kept", "one-series", "controller-one-signal", "legend-instead"])
-def test_panel_titles(panel, members, title):
-    assert panel_title(panel, members) == title
