@@ -43,6 +43,8 @@ class NoController:
     def step(self, obs: Observation) -> tuple[float, float]:
         return 0.0, 0.0
 
+    signal_units: dict[str, str] = {}
+
     def signals(self) -> dict[str, float]:
         return {}
 

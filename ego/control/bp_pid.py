@@ -150,6 +150,10 @@ class BPPIDController:
             w_prev[:] = w
             w += step
 
+    #: the network's gain multipliers (1 + k) and the norm of its weights: pure numbers
+    signal_units = {"kp_lon": "-", "ki_lon": "-", "kd_lon": "-", "kp_lat": "-", "ki_lat": "-",
+                    "kd_lat": "-", "weight_norm": "-"}
+
     def signals(self) -> dict[str, float]:
         g = self.gains
         return {"kp_lon": float(g[0]), "ki_lon": float(g[1]), "kd_lon": float(g[2]),

@@ -189,6 +189,9 @@ class CascadePID:
                               obs.curvature, obs.speed)
         return obs.accel_ref, delta
 
+    #: the outer loops' outputs (references of the inner loops) and the feedback steer
+    signal_units = {"psi_err_ref": "rad", "vy_ref": "m/s", "r_ref": "rad/s", "delta_fb": "rad"}
+
     def signals(self) -> dict[str, float]:
         o = self.law.out
         return {"psi_err_ref": o[0], "vy_ref": o[1], "r_ref": o[2], "delta_fb": o[3]}

@@ -163,6 +163,10 @@ class CurvePID:
         delta = self.pid.step(e, de)
         return self.pedal.step(obs, e_head), delta
 
+    #: e = e_lat + e_head (a heading error counts as metres, as the gains in rad/m say), its
+    #: integral, and the pedal's command
+    signal_units = {"pid_e": "m", "pid_integral": "m s", "a_x_cmd": "m/s^2"}
+
     def signals(self) -> dict[str, float]:
         return {"pid_e": self._e, "pid_integral": self.pid.integral, "a_x_cmd": self.pedal.a_x}
 
@@ -210,6 +214,8 @@ class FuzzyCurve:
         self._delta_a = da = wa * self._angle(v, e_head * ka)
         self._delta_d = dd = wd * self._position(v, e_lat * kd)
         return self.pedal.step(obs, e_head), da + dd
+
+    signal_units = {"delta_angle": "rad", "delta_position": "rad", "a_x_cmd": "m/s^2"}
 
     def signals(self) -> dict[str, float]:
         return {"delta_angle": self._delta_a, "delta_position": self._delta_d,

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ego.control.base import signal_units
 from ego.control.pid import PID
 from ego.models.longitudinal import SpacingPolicy
 from ego.params import ConfigError, Params, param
@@ -130,6 +131,8 @@ class FollowingPID(SampledFollower):
         pid.u_min, pid.u_max = -obs.max_decel, obs.max_accel
         return pid.step(obs.spacing_error, obs.spacing_error_rate)
 
+    signal_units = {"integral": "m s"}  #: integral of the spacing error
+
     def signals(self) -> dict[str, float]:
         return {"integral": self.pid.integral}
 
@@ -217,6 +220,9 @@ class BPPIDAcc(SampledFollower):
         self.u = u
         return u
 
+    #: the network's gains, read as the continuous PID's (command in m/s^2 from errors in m)
+    signal_units = {"kp": "1/s^2", "ki": "1/s^3", "kd": "1/s"}
+
     def signals(self) -> dict[str, float]:
         g = self.gains
         return {"kp": float(g[0]), "ki": float(g[1]), "kd": float(g[2])}
@@ -251,6 +257,12 @@ class PlatoonControl:
         if self._signals is not None and any(getattr(m, "updated", True) for m in self.members):
             self._signals = None
         return actions
+
+    @property
+    def signal_units(self) -> dict[str, str]:
+        """Every member's signal units, under the names :meth:`signals` gives them."""
+        return {f"{name}_{vid}": unit for member, vid in zip(self.members, self.ids)
+                for name, unit in signal_units(member).items()}
 
     def signals(self) -> dict[str, float]:
         """Every member's signals; rebuilt only after a member computed a new command

@@ -92,5 +92,8 @@ class FuzzyController:
         self._u_lat = u_lat
         return fx_gain * u_lon, delta_gain * u_lat
 
+    #: the rule base's outputs before the output gains: pure numbers
+    signal_units = {"fuzzy_u_lon": "-", "fuzzy_u_lat": "-"}
+
     def signals(self) -> dict[str, float]:
         return {"fuzzy_u_lon": self._u_lon, "fuzzy_u_lat": self._u_lat}

@@ -139,6 +139,10 @@ class FuzzyPIDController:
         delta = self.lat.step(obs.d_ref - obs.d, obs.dd_ref - obs.dd)
         return fx, delta
 
+    #: the scheduled gains: Fx (N) and delta (rad) per m of error, per m s, per m/s
+    signal_units = {"kp_lon": "N/m", "ki_lon": "N/(m s)", "kd_lon": "N s/m",
+                    "kp_lat": "rad/m", "ki_lat": "rad/(m s)", "kd_lat": "rad s/m"}
+
     def signals(self) -> dict[str, float]:
         lon, lat = self.lon.pid, self.lat.pid
         return {"kp_lon": lon.kp, "ki_lon": lon.ki, "kd_lon": lon.kd,

@@ -235,5 +235,8 @@ class NarmaL2Controller:
         self.f, self.g = f, g
         return a_x, self.u
 
+    #: the networks' f (the error next sample, m) and g (its change per rad of steer)
+    signal_units = {"narma_f": "m", "narma_g": "m/rad", "a_x_cmd": "m/s^2"}
+
     def signals(self) -> dict[str, float]:
         return {"narma_f": self.f, "narma_g": self.g, "a_x_cmd": self.pedal.a_x}

@@ -90,5 +90,7 @@ class PIDController:
         delta = self.lat.step(obs.d_ref - obs.d, obs.dd_ref - obs.dd)
         return fx, delta
 
+    signal_units = {"integral_lon": "m s", "integral_lat": "m s"}  #: integrals of the errors
+
     def signals(self) -> dict[str, float]:
         return {"integral_lon": self.lon.integral, "integral_lat": self.lat.integral}

@@ -116,6 +116,11 @@ class RBFSMCController:
         self.s_lon, self.s_lat, self.f_lon, self.f_lat = s_x, s_y, f_x, f_y
         return p.fx_gain * u_x, p.delta_gain * u_y
 
+    #: sliding variables s = c e + de, the RBF estimates f and their weights' norms, all in the
+    #: units of u before the output gain (m/s: the basis functions are pure numbers)
+    signal_units = {"s_lon": "m/s", "s_lat": "m/s", "f_hat_lon": "m/s", "f_hat_lat": "m/s",
+                    "rbf_norm_lon": "m/s", "rbf_norm_lat": "m/s"}
+
     def signals(self) -> dict[str, float]:
         return {"s_lon": self.s_lon, "s_lat": self.s_lat, "f_hat_lon": self.f_lon,
                 "f_hat_lat": self.f_lat, "rbf_norm_lon": float(math.sqrt(self.w_lon @ self.w_lon)),

@@ -20,11 +20,11 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ego.control.base import Controller, ControllerSpec, Observation
+from ego.control.base import Controller, ControllerSpec, Observation, signal_units
 from ego.models.plant import Plant
 from ego.params import ConfigError, Params, param
 from ego.processes import signals_deferred
-from ego.record.base import NullRecorder, Recorder, Scene, Series
+from ego.record.base import NullRecorder, Recorder, Scene, Series, unit_path
 from ego.scenarios.metrics import json_number
 from ego.scenarios.trace import Column, Metric, Plot, Trace
 from ego.scenarios.traffic_log import RADIUS, REACH_MARGIN, TrafficCollector, TrafficLog
@@ -99,7 +99,7 @@ class RunResult:
     events: list[Event]
     columns: tuple[str, ...]
     trace: np.ndarray
-    #: column -> unit of every trace column ("" for controller signals)
+    #: column -> unit of every trace column (controller signals: as the controller declares)
     units: dict = field(default_factory=dict)
     #: the vehicles near the ego at every SUMO step (None: a scenario without traffic)
     traffic: TrafficLog | None = None
@@ -231,6 +231,7 @@ class Scenario:
         self._wall0 = 0.0
         self._wall = 0.0
         self._signal_names: tuple[str, ...] = ()
+        self._signal_units: dict[str, str] = {}
         self.controlled_ids: tuple[str, ...] = ()
         #: vehicle id -> RGB for the recording (others: grey)
         self.colors: dict[str, tuple[int, int, int]] = {}
@@ -250,8 +251,9 @@ class Scenario:
         self._dt, self._per_sumo, self._t_end = c.dt, c.control_per_sumo, c.duration - 1e-9
         self.controller.reset(seed=self.seed)
         self._signal_names = tuple(self.controller.signals())
+        self._signal_units = signal_units(self.controller)
         self.bridge = self._make_bridge()
-        self.trace = Trace(self.trace_columns(), self._signal_names)
+        self.trace = Trace(self.trace_columns(), self._signal_names, self._signal_units)
         self.traffic = None
         if self.bridge is not None:
             self.bridge.start()
@@ -550,12 +552,8 @@ class RoadScenario(Scenario):
         self.recorder.vehicles(self.t, ids, poses, (x[0], x[2]))
 
     def _scene(self) -> Scene:
-        """Every lane in ``self.lanes`` (id -> LanePolyline), framed with a margin."""
-        pts = [p for lane in self.lanes.values() for p in lane.points]
-        xs, ys = [p[0] for p in pts], [p[1] for p in pts]
-        return Scene(lanes=[(lane.width, lane.points) for lane in self.lanes.values()],
-                     bounds=(min(xs) - 20.0, max(xs) + 20.0, min(ys) - 20.0, max(ys) + 20.0),
-                     title=self.name)
+        """Every lane in ``self.lanes`` (id -> LanePolyline)."""
+        return Scene(lanes=[(lane.width, lane.points) for lane in self.lanes.values()], title=self.name)
 
 
 #: metrics every run reports first ...
@@ -578,18 +576,20 @@ COMMON_TAIL_METRICS = (
 )
 
 
-def signal_series(names: Sequence[str]) -> list[Series]:
-    """Recording series for a controller's internal signals."""
-    return [Series(n, f"plots/controller/{n}", "") for n in names]
+def signal_series(names: Sequence[str], units: Mapping[str, str]) -> list[Series]:
+    """Recording series for a controller's internal signals: one "controller" panel per
+    unit (``units``: name -> unit, as the controller declares them)."""
+    return [Series(n, f"plots/controller/{unit_path(units.get(n, ''))}/{n}", units.get(n, ""), n)
+            for n in names]
 
 
 def vehicle_series() -> list[Series]:
     """Recording series every scenario has: speed and its reference, the actuators and the
     lateral acceleration."""
     return [
-        Series("speed", "plots/speed/ego", "m/s", "speed"),
+        Series("speed", "plots/speed/ego", "m/s", "ego"),
         Series("speed_ref", "plots/speed/reference", "m/s", "reference"),
         Series("Fx", "plots/Fx/Fx", "N", "Fx per driven wheel"),
-        Series("delta", "plots/delta/delta", "rad", "front steer"),
+        Series("delta", "plots/delta/delta", "rad", "front steer delta"),
         Series("lat_accel", "plots/lateral_accel/ego", "m/s^2", "lateral acceleration"),
     ]

@@ -63,6 +63,7 @@ TRAFFIC_TYPE = VehicleType("traffic", length=4.5, width=1.8, max_speed=30.0 / 3.
                            color=(150, 150, 150))
 LEAD_TYPE = VehicleType("lead", length=4.5, width=1.8, sigma=0.0, color=(160, 60, 220))
 APPROACH, ENGAGED = 0, 1
+PHASE_NAMES = ("approach", "engaged")  #: by phase number
 KMH = 1.0 / 3.6
 ONCOMING_SPEED = 25.0 * KMH  #: departure speed of the oncoming cars (m/s)
 
@@ -358,15 +359,17 @@ class CurveScenario(RoadScenario):
 
     # -- recording ----------------------------------------------------------------------------
     def _series(self) -> list[Series]:
+        # the gap panel only with a lead: without one it would stay empty
+        lead = [Series("gap_front", "plots/gap/lead", "m", "lead")] if self.config.lead > 0 else []
         return [
             Series("e_d", "plots/e_d/ego", "m", "e_d = distance to the arc centre - R"),
             Series("e_a", "plots/e_a/ego", "rad", "e_a = heading - tangent"),
             Series("speed", "plots/speed/ego", "m/s", "speed"),
-            Series("a_x", "plots/a_x/applied", "m/s^2", "axial acceleration"),
+            Series("a_x", "plots/a_x/applied", "m/s^2", "applied"),
             Series("accel_ref", "plots/a_x/plan", "m/s^2", "plan"),
-            Series("delta", "plots/delta/delta", "rad", "front steer"),
+            Series("delta", "plots/delta/delta", "rad", "front steer delta"),
             Series("lat_accel", "plots/lateral_accel/ego", "m/s^2", "lateral acceleration"),
-            Series("gap_front", "plots/gap/lead", "m", "gap to the lead"),
-            Series("phase", "plots/manoeuvre/phase", "", "phase"),
-            *signal_series(self._signal_names),
+            *lead,
+            Series("phase", "states/manoeuvre", "", "manoeuvre", states=PHASE_NAMES),
+            *signal_series(self._signal_names, self._signal_units),
         ]

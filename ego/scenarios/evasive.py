@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ego.params import ConfigError, param
+from ego.record.base import Series
 from ego.scenarios import metrics as m
 from ego.scenarios.events import INF, GapRule, check_lane, choose_lane
 from ego.scenarios.highway import (
@@ -41,7 +42,7 @@ from ego.sumo.bridge import VehicleSpec, VehicleType
 from ego.sumo.traffic import BrakingLeader, PacedVehicle, RecklessFollower
 
 CRUISE, LANE_CHANGE, IN_LANE, DONE = 0, 1, 2, 3
-PHASE_NAMES = {CRUISE: "cruise", LANE_CHANGE: "lane change", IN_LANE: "in-lane manoeuvre", DONE: "done"}
+PHASE_NAMES = ("cruise", "lane change", "in-lane manoeuvre", "done")  #: by phase number
 BLOCKER_TYPE = VehicleType("blocker", length=4.5, width=1.8, sigma=0.0, color=(160, 60, 220))
 
 
@@ -404,6 +405,15 @@ class EvasiveLaneChange(HighwayScenario):
         if self.phase == CRUISE:
             return "completed", f"the {self.trigger_on} TTC never fell below the threshold: no manoeuvre"
         return "completed", "manoeuvre complete"
+
+    def _series(self) -> list[Series]:
+        """The highway's series, the thresholds on the TTC panel and the manoeuvre's phase."""
+        c = self.config
+        limits = [Series("", "plots/ttc/trigger", "s", "trigger", constant=c.ttc_threshold)]
+        if c.aeb and c.aeb_ttc > 0.0:
+            limits.append(Series("", "plots/ttc/aeb", "s", "AEB", constant=c.aeb_ttc))
+        return [*super()._series(), *limits,
+                Series("phase", "states/manoeuvre", "", "manoeuvre", states=PHASE_NAMES)]
 
     # -- metrics ----------------------------------------------------------------------------
     metric_specs = (

@@ -17,7 +17,7 @@ from ego.models import NonlinearBicycle, NonlinearBicycleParams, VehicleGeometry
 from ego.models.actuators import ActuatorLimits
 from ego.models.plant import BicyclePlant
 from ego.params import param
-from ego.record.base import Scene, Series
+from ego.record.base import Series
 from ego.lane_frame import LanePolyline
 from ego.scenarios.base import (
     CommonConfig,
@@ -299,21 +299,13 @@ class HighwayScenario(RoadScenario):
         ids, poses = self.bridge.poses()
         self.recorder.vehicles(self.t, ids, poses, (self.ego.state[0], self._road_y))
 
-    def _scene(self) -> Scene:
-        c = self.config
-        x0 = self.ego.state[0] - 60.0
-        x1 = self.ego.state[0] + max(c.ego_speed, 10.0) * c.duration + 60.0
-        return Scene(lanes=[(lane.width, lane.points) for lane in self.lanes.values()],
-                     bounds=(x0, x1, self._road_y - 40.0, self._road_y + 40.0), title=self.name)
-
     def _series(self) -> list[Series]:
         return [
             Series("e_lat", "plots/lateral_error/ego", "m", "lateral error (actual - reference)"),
-            Series("d", "plots/lateral_position/ego", "m", "offset from the target lane centre"),
+            Series("d", "plots/lateral_position/ego", "m", "ego"),
             Series("d_ref", "plots/lateral_position/reference", "m", "reference"),
             *vehicle_series(),
-            Series("ttc_front", "plots/ttc/front", "s", "TTC front"),
-            Series("ttc_rear", "plots/ttc/rear", "s", "TTC rear"),
-            Series("phase", "plots/manoeuvre/phase", "", "phase"),
-            *signal_series(self._signal_names),
+            Series("ttc_front", "plots/ttc/front", "s", "front"),
+            Series("ttc_rear", "plots/ttc/rear", "s", "rear"),
+            *signal_series(self._signal_names, self._signal_units),
         ]

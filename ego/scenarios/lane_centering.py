@@ -274,5 +274,5 @@ class LaneCenteringScenario(RoadScenario):
             Series("curvature", "plots/curvature/lane", "1/m", "lane curvature"),
             Series("lat_accel", "plots/lateral_accel/ego", "m/s^2", "lateral acceleration"),
             Series("speed", "plots/speed/ego", "m/s", "speed"),
-            *signal_series(self._signal_names),
+            *signal_series(self._signal_names, self._signal_units),
         ]

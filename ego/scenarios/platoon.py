@@ -276,7 +276,6 @@ class PlatoonScenario(Scenario):
         #: pushed into SUMO for the last step (centre of gravity x, y in m, yaw in rad)
         self._log_ids = (LEADER, *self.ids)
         self._pushed: list[tuple[float, float, float]] = []
-        self._manoeuvres: list = []  #: the leader's manoeuvres not yet announced as events
 
     # -- set-up ---------------------------------------------------------------------------
     def _make_bridge(self) -> SumoBridge:
@@ -314,7 +313,8 @@ class PlatoonScenario(Scenario):
                     for _ in self.ids]
         self._bad = None
         self._pushed = [plant.pose() for plant in self.plants]
-        self._manoeuvres = list(self.profile.manoeuvres)
+        self._manoeuvre = 0  #: the leader's next manoeuvre (index into profile.manoeuvres)
+        self._manoeuvre_at = self._next_manoeuvre_time()
         self._after_sumo_step()
 
     # -- per step ---------------------------------------------------------------------------
@@ -346,14 +346,6 @@ class PlatoonScenario(Scenario):
     def _after_sumo_step(self) -> None:
         """Read who leads whom and the gaps from SUMO; the leader's speed and acceleration."""
         bridge = self.bridge
-        pending = self._manoeuvres
-        if pending and self.t >= pending[0].time - 1e-9:
-            m = pending.pop(0)
-            kind = m.kind(self.profile.speed(m.time - 1e-6))
-            what = "brakes to a stop" if kind == "stop" else (
-                f"{'brakes' if kind == 'brake' else 'accelerates'} to {m.speed / KMH:.0f} km/h")
-            if kind != "hold":
-                self.event("leader", f"the leader {what} at {m.rate:g} m/s^2")
         lead_v, self._lead_a = bridge.speed(LEADER), bridge.acceleration(LEADER)
         # SUMO moves its vehicles at their new speed for the whole step (Euler): the leader
         # keeps its acceleration, so until the next step it drives at v + a * step
@@ -398,6 +390,8 @@ class PlatoonScenario(Scenario):
     def _update(self) -> None:
         """Gaps now (carried forward from the last SUMO step), observations, collisions."""
         t = self.t
+        if t >= self._manoeuvre_at:
+            self._leader_manoeuvre()
         since = t - self._sync_t
         lead_v, lead_a = self._lead_v_now, self._lead_a
         moved = lead_v * since
@@ -423,6 +417,23 @@ class PlatoonScenario(Scenario):
                 self._collided(Collision(self.ids[i], ahead, "rear-end (gap <= 0)", speed, lead_v))
                 return
             ahead_s, lead_v, lead_a = s, speed, accel
+
+    def _next_manoeuvre_time(self) -> float:
+        ms = self.profile.manoeuvres
+        return ms[self._manoeuvre].time if self._manoeuvre < len(ms) else INF
+
+    def _leader_manoeuvre(self) -> None:
+        """The leader starts its next manoeuvre: an event (the log, the recording's events)."""
+        m = self.profile.manoeuvres[self._manoeuvre]
+        self._manoeuvre += 1
+        self._manoeuvre_at = self._next_manoeuvre_time()
+        before = self.profile.base_speed(m.time)
+        kind = m.kind(before)
+        if kind == "hold":
+            self.event("leader", f"{LEADER} holds its speed ({before / KMH:.0f} km/h)")
+            return
+        what = "stops" if kind == "stop" else f"{kind}s to {m.speed / KMH:g} km/h"
+        self.event("leader", f"{LEADER} {what} at {m.rate:g} m/s^2 (from {before / KMH:.0f} km/h)")
 
     # -- results ------------------------------------------------------------------------------
     def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
@@ -526,30 +537,29 @@ class PlatoonScenario(Scenario):
 
     def _scene(self) -> Scene:
         c = self.config
-        pts = self.lane.points
-        xs, ys = [p[0] for p in pts], [p[1] for p in pts]
         top = max(self.profile.speed(k * 0.5) for k in range(int(c.duration * 2) + 1))
         span = c.followers * (c.length + c.standstill_gap + c.headway * top + max(c.start_error, 0.0)) + c.length
         half = 0.6 * span + 2.0 * c.length
-        return Scene(lanes=[(self.lane.width, pts)],
-                     bounds=(min(xs) - 20.0, max(xs) + 20.0, min(ys) - 20.0, max(ys) + 20.0),
-                     title=self.name, follow_view=(-half, half, -0.25 * half, 0.25 * half))
+        # the wide view: twice the close one (300 m for report 004's platoon at 50 km/h)
+        return Scene(lanes=[(self.lane.width, self.lane.points)], title=self.name, followed="the platoon",
+                     follow_view=(-half, half, -0.25 * half, 0.25 * half),
+                     around_view=(-2.0 * half, 2.0 * half, -0.3 * half, 0.3 * half))
 
     def _series(self) -> list[Series]:
         out = [Series("lead_speed", "plots/speed/leader", "m/s", "leader"),
                Series("lead_accel", "plots/accel/leader", "m/s^2", "leader")]
         for vid in self.ids:
             out += [
-                Series(f"e_{vid}", f"plots/spacing_error/{vid}", "m", f"{vid} delta_d"),
-                Series(f"gap_{vid}", f"plots/gap/{vid}", "m", f"{vid} gap"),
+                Series(f"e_{vid}", f"plots/spacing_error/{vid}", "m", vid),
+                Series(f"gap_{vid}", f"plots/gap/{vid}", "m", vid),
                 Series(f"speed_{vid}", f"plots/speed/{vid}", "m/s", vid),
                 Series(f"accel_{vid}", f"plots/accel/{vid}", "m/s^2", vid),
-                Series(f"command_{vid}", f"plots/command/{vid}", "m/s^2", f"{vid} command"),
-                Series(f"ttc_{vid}", f"plots/ttc/{vid}", "s", f"{vid} TTC"),
+                Series(f"command_{vid}", f"plots/command/{vid}", "m/s^2", vid),
+                Series(f"ttc_{vid}", f"plots/ttc/{vid}", "s", vid),
             ]
-        for name in self._signal_names:
+        for name in self._signal_names:  # one panel per signal: each has one unit
             signal, _, vid = name.rpartition("_")
-            out.append(Series(name, f"plots/{signal}/{vid}", "", f"{vid} {signal}"))
+            out.append(Series(name, f"plots/{signal}/{vid}", self._signal_units.get(name, ""), vid))
         return out
 
 

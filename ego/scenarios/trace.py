@@ -154,9 +154,10 @@ class Trace:
     fast as a call can be: a missing or unknown column raises :class:`TraceError`.
     """
 
-    __slots__ = ("columns", "signal_names", "rows", "append", "_names")
+    __slots__ = ("columns", "signal_names", "signal_units", "rows", "append", "_names")
 
-    def __init__(self, columns: Sequence[Column], signal_names: Iterable[str] = ()) -> None:
+    def __init__(self, columns: Sequence[Column], signal_names: Iterable[str] = (),
+                 signal_units: Mapping[str, str] | None = None) -> None:
         names = tuple(c.name for c in columns)
         if len(set(names)) != len(names):
             dup = sorted({n for n in names if names.count(n) > 1})
@@ -166,6 +167,8 @@ class Trace:
             raise TraceError(f"trace column names must be Python identifiers: {', '.join(bad)}")
         self.columns = tuple(columns)
         self.signal_names = tuple(signal_names)
+        #: the controller's declared units of its signals ("" where it declares none)
+        self.signal_units = {n: (signal_units or {}).get(n, "") for n in self.signal_names}
         clash = set(self.signal_names) & set(names)
         if clash:
             raise TraceError(f"controller signals clash with trace columns: {', '.join(sorted(clash))}")
@@ -241,8 +244,8 @@ class Trace:
         return self._names + self.signal_names
 
     def units(self) -> dict[str, str]:
-        """Column name -> unit (controller signals: ``""``, their units are the controller's)."""
-        return {**{c.name: c.unit for c in self.columns}, **{n: "" for n in self.signal_names}}
+        """Column name -> unit (controller signals: as the controller declares them)."""
+        return {**{c.name: c.unit for c in self.columns}, **self.signal_units}
 
     def __len__(self) -> int:
         return len(self.rows)
