@@ -695,6 +695,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     res.add_argument("--jobs", type=int, default=None, help="worker processes (default: one per CPU)")
     args = ap.parse_args(argv)
     try:
+        if not RESULTS.is_dir():
+            raise ConfigError(f"no {RESULTS} here: the result pages live in a checkout of ego "
+                              "(pip install -e .), not in an installed wheel")
         every = tables()
         pages = sorted({t.page for t in every})
         names = [t.name for t in every]
