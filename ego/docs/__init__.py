@@ -570,11 +570,14 @@ def _outcomes(ms: list[dict]) -> list[str]:
 
 def ccr_cell(m: dict) -> str:
     """``no (6.8 m)``: avoided, the smallest bumper gap; ``HIT 24.7 (20.1)``: the impact speed and
-    in brackets the relative impact speed, km/h."""
+    in brackets the relative impact speed, km/h; ``HIT <id>``: a collision with another vehicle
+    than the lead; a status: the run neither completed nor collided."""
     if m["status"] not in ("completed", "collision"):
         return m["status"]
     if not m["collision"]:
         return f"no ({m['min_gap_front']:.1f} m)"
+    if m["collision_with"] != "lead":  # not what the test is about: say what it hit
+        return f"HIT {m['collision_with']}"
     return f"HIT {m['impact_speed'] * KMH:.1f} ({m['impact_relative_speed'] * KMH:.1f})"
 
 
