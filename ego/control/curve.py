@@ -176,7 +176,7 @@ class CurvePID:
 @dataclass(frozen=True)
 class FuzzyCurveParams(PedalParams):
     """Report 002's dual-table fuzzy steering. The report gives the tables, not the
-    universes or the weight: these are ours (see README)."""
+    universes or the weight: these are ours (see docs/controllers.md)."""
 
     w: float = param(0.5, "-", "weight of the angle table: delta = w delta_a + (1 - w) delta_d",
                      min=0, max=1)
