@@ -100,22 +100,19 @@ class EgoView:
 
     def reward_signals(self) -> tuple[float, float, float, float]:
         """(speed along the lane m/s, tracking error m, longitudinal and lateral
-        acceleration m/s^2) now."""
+        acceleration m/s^2) now; the longitudinal acceleration of a road task is the rate of
+        the speed along the lane since the last call."""
         sc = self.scenario
         if self.following:
             o = sc.obs[0]
             return o.speed, sc.e[0], o.accel, 0.0
         o = sc.obs
-        return o.ds, o.d - o.d_ref, self._a_lon(o.ds), sc.ego.lateral_accel
+        ds, t = o.ds, o.t
+        t0, ds0 = self._prev
+        self._prev = (t, ds)
+        return ds, o.d - o.d_ref, (ds - ds0) / (t - t0) if t > t0 else 0.0, sc.ego.lateral_accel
 
     _prev = (0.0, 0.0)
-
-    def _a_lon(self, ds: float) -> float:
-        """The rate of the speed along the lane since the last call (m/s^2)."""
-        t0, ds0 = self._prev
-        t = self.scenario.t
-        self._prev = (t, ds)
-        return (ds - ds0) / (t - t0) if t > t0 else 0.0
 
     def reset(self) -> None:
         sc = self.scenario
@@ -171,9 +168,12 @@ def reward_terms(view: EgoView, crashed: bool, speed_range: tuple[float, float],
     (min(1, |a|^2 / comfort_accel^2))."""
     speed, error, a_lon, a_lat = view.reward_signals()
     lo, hi = speed_range
-    progress = min(max((speed - lo) / (hi - lo), 0.0), 1.0)
+    progress = (speed - lo) / (hi - lo)
+    progress = 0.0 if progress < 0.0 else (1.0 if progress > 1.0 else progress)
     centring = 1.0 / (1.0 + cfg.lane_centering_cost * error * error)
-    discomfort = min((a_lon * a_lon + a_lat * a_lat) / (cfg.comfort_accel * cfg.comfort_accel), 1.0)
+    discomfort = (a_lon * a_lon + a_lat * a_lat) / (cfg.comfort_accel * cfg.comfort_accel)
+    if discomfort > 1.0:
+        discomfort = 1.0
     crash = 1.0 if crashed else 0.0
     reward = (cfg.collision_reward * crash + cfg.progress_reward * progress
               + cfg.lane_centering_reward * centring + cfg.comfort_reward * discomfort)

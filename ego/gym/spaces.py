@@ -88,10 +88,11 @@ class EgoStateObservation:
         self.space = spaces.Box(-np.inf, np.inf, (len(self.names),), np.float64)
 
     def reset(self, view) -> None:
-        pass
+        # the scenario fills one observation in place all run long
+        self._source = view.obs
 
     def observe(self, view) -> np.ndarray:
-        return np.array(self._get(view.obs), dtype=np.float64)
+        return np.array(self._get(self._source), dtype=np.float64)
 
 
 class KinematicsObservation:
@@ -172,9 +173,8 @@ class KinematicsObservation:
             out[:n, j] = columns[f]
         if self.normalize:
             scaled = self._scaled
-            out[:n, scaled] = (out[:n, scaled] - self._lo[scaled]) / self._span[scaled] * 2.0 - 1.0
-            if self.clip:
-                np.clip(out[:n], -1.0, 1.0, out=out[:n])
+            values = (out[:n, scaled] - self._lo[scaled]) / self._span[scaled] * 2.0 - 1.0
+            out[:n, scaled] = np.clip(values, -1.0, 1.0) if self.clip else values
         if self.order == "shuffled" and n > 2:
             self._rng.shuffle(out[1:n])
         return out.astype(np.float32)
