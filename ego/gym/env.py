@@ -47,7 +47,7 @@ _ONE_G = 9.81
 @dataclass(frozen=True)
 class EnvConfig:
     """The env's scalar keys (besides ``observation``, ``action``, ``controller`` and
-    ``reward_speed_range``). Reward per env step (see :func:`reward_terms`):
+    ``reward_speed_range``). Reward per env step (see :class:`Reward`):
     ``collision_reward * crashed + progress_reward * progress + lane_centering_reward *
     centring + comfort_reward * discomfort``."""
 
@@ -161,23 +161,33 @@ class EgoView:
         return ego, rows, sc.config.length
 
 
-def reward_terms(view: EgoView, crashed: bool, speed_range: tuple[float, float],
-                 cfg: EnvConfig) -> tuple[float, dict]:
-    """The default reward and its terms: crashed (0 or 1), progress (the speed along the lane
-    mapped from ``speed_range`` to [0, 1]), centring (1 / (1 + cost e^2)), discomfort
-    (min(1, |a|^2 / comfort_accel^2))."""
-    speed, error, a_lon, a_lat = view.reward_signals()
-    lo, hi = speed_range
-    progress = (speed - lo) / (hi - lo)
-    progress = 0.0 if progress < 0.0 else (1.0 if progress > 1.0 else progress)
-    centring = 1.0 / (1.0 + cfg.lane_centering_cost * error * error)
-    discomfort = (a_lon * a_lon + a_lat * a_lat) / (cfg.comfort_accel * cfg.comfort_accel)
-    if discomfort > 1.0:
-        discomfort = 1.0
-    crash = 1.0 if crashed else 0.0
-    reward = (cfg.collision_reward * crash + cfg.progress_reward * progress
-              + cfg.lane_centering_reward * centring + cfg.comfort_reward * discomfort)
-    return reward, {"crashed": crash, "progress": progress, "centring": centring, "discomfort": discomfort}
+class Reward:
+    """The default reward of an env step and its terms: crashed (1 on the step the ego
+    collides or diverges, else 0), progress (the speed along the lane mapped from
+    ``speed_range`` (m/s) to [0, 1]), centring (1 / (1 + lane_centering_cost e^2), e the
+    tracking error in m) and discomfort (min(1, (a_lon^2 + a_lat^2) / comfort_accel^2)), each
+    weighted by its ``*_reward`` of :class:`EnvConfig`."""
+
+    def __init__(self, cfg: EnvConfig, speed_range: tuple[float, float]) -> None:
+        self.speed_range = speed_range
+        self._weights = (cfg.collision_reward, cfg.progress_reward, cfg.lane_centering_reward,
+                         cfg.comfort_reward)
+        self._lo, self._per_speed = speed_range[0], 1.0 / (speed_range[1] - speed_range[0])
+        self._cost = cfg.lane_centering_cost
+        self._per_accel2 = 1.0 / (cfg.comfort_accel * cfg.comfort_accel)
+
+    def __call__(self, view: EgoView, crashed: bool) -> tuple[float, dict]:
+        speed, error, a_lon, a_lat = view.reward_signals()
+        progress = (speed - self._lo) * self._per_speed
+        progress = 0.0 if progress < 0.0 else (1.0 if progress > 1.0 else progress)
+        centring = 1.0 / (1.0 + self._cost * error * error)
+        discomfort = (a_lon * a_lon + a_lat * a_lat) * self._per_accel2
+        if discomfort > 1.0:
+            discomfort = 1.0
+        crash = 1.0 if crashed else 0.0
+        w_crash, w_progress, w_centring, w_comfort = self._weights
+        reward = w_crash * crash + w_progress * progress + w_centring * centring + w_comfort * discomfort
+        return reward, {"crashed": crash, "progress": progress, "centring": centring, "discomfort": discomfort}
 
 
 class AgentSlot:
@@ -298,10 +308,11 @@ class EgoEnv(gym.Env):
         self.close()
         self.scenario = cls(sc_config, own, seed=0, controller_name=f"agent+{controller}" if helper else "agent")
         self.env_config = env
-        self.speed_range = (float(lo), float(hi))
+        self.reward = Reward(env, (float(lo), float(hi)))
         self.observation_type = observation
         self.action_type = action
         self.observation_space = observation.space
+        self._observe = observation.observe
         self.action_space = action.space
         self._every = every
         self._helper = helper
@@ -340,15 +351,17 @@ class EgoEnv(gym.Env):
         sc = self.scenario
         if sc is None or sc.bridge is None:
             raise RuntimeError("call reset() before step()")
-        lon, lat = self.action_type.native(action)
+        command = self.action_type.native(action)
         step = sc.step
         if not self._helper:
-            command = (lon, lat)
-            for _ in range(self._every):
-                step(command)
-                if sc.status != "running":
-                    break
+            step(command)
+            if self._every > 1:
+                for _ in range(self._every - 1):
+                    if sc.status != "running":
+                        break
+                    step(command)
         else:
+            lon, lat = command
             controller = sc.controller
             following = self.task == "car-following"
             for _ in range(self._every):
@@ -362,18 +375,17 @@ class EgoEnv(gym.Env):
                 if sc.status != "running":
                     break
         status = sc.status
-        ended = status != "running"
-        crashed = status in ("collision", "diverged")
-        reward, terms = reward_terms(self._view, crashed, self.speed_range, self.env_config)
+        crashed = status == "collision" or status == "diverged"
+        reward, terms = self.reward(self._view, crashed)
         info = {"status": status, "rewards": terms}
         terminated = truncated = False
-        if ended:
+        if status != "running":
             # the duration reached is a truncation; anything before it ends the task
             truncated = not crashed and sc.t >= sc.config.duration - 1e-9
             terminated = not truncated
             info["status_detail"] = sc.status_detail
             info["metrics"] = sc.result().metrics
-        return self.observation_type.observe(self._view), reward, terminated, truncated, info
+        return self._observe(self._view), reward, terminated, truncated, info
 
     def render(self):
         if self.render_mode != "rgb_array" or self.scenario is None or self.scenario.bridge is None:

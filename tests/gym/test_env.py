@@ -207,3 +207,10 @@ def test_env_ids_are_registered():
     for env_id, scenario in ego.gym.ENV_IDS.items():
         spec = gym.spec(env_id)
         assert spec.kwargs["scenario"] == scenario
+
+
+def test_step_before_reset_is_refused():
+    env = gym.make("ego/CutIn-v0")
+    with pytest.raises(RuntimeError, match="reset"):
+        env.step(env.action_space.sample())
+    env.close()
