@@ -316,6 +316,7 @@ class EgoEnv(gym.Env):
         self.action_space = action.space
         self._every = every
         self._helper = helper
+        self._following = self.task == "car-following"
         self._view = EgoView(self.scenario, self.np_random)
 
     # -- the Gymnasium interface -------------------------------------------------------------
@@ -353,25 +354,29 @@ class EgoEnv(gym.Env):
             raise RuntimeError("call reset() before step()")
         command = self.action_type.native(action)
         step = sc.step
-        if not self._helper:
+        if not self._helper:  # the agent drives both channels
             step(command)
             if self._every > 1:
                 for _ in range(self._every - 1):
                     if sc.status != "running":
                         break
                     step(command)
+        elif self._following:
+            # the others' controllers step as in a run; the first follower's command is the agent's
+            first = (command[0], 0.0)
+            controller_step = sc.controller.step
+            for _ in range(self._every):
+                own = controller_step(sc.obs)
+                own[0] = first
+                step(own)
+                if sc.status != "running":
+                    break
         else:
             lon, lat = command
-            controller = sc.controller
-            following = self.task == "car-following"
+            controller_step = sc.controller.step
             for _ in range(self._every):
-                own = controller.step(sc.obs)
-                if following:
-                    if lon is not None:
-                        own[0] = (lon, 0.0)
-                    step(own)
-                else:
-                    step((own[0] if lon is None else lon, own[1] if lat is None else lat))
+                own = controller_step(sc.obs)
+                step((own[0] if lon is None else lon, own[1] if lat is None else lat))
                 if sc.status != "running":
                     break
         status = sc.status

@@ -1,5 +1,6 @@
 """The top-down frame of ``render_mode="rgb_array"``: the lanes and every vehicle's box as SUMO
-has it, the view following the ego (``screen_width`` x ``screen_height`` px at ``scaling``
+has it, in the scenario's colours (the ego red, other scripted cars in theirs, the background
+traffic blue), the view following the ego (``screen_width`` x ``screen_height`` px at ``scaling``
 px/m). Drawn with matplotlib's Agg canvas (no display, no window)."""
 
 from __future__ import annotations
@@ -58,6 +59,7 @@ class TopDown:
             patch.remove()
         ids, boxes = scenario.bridge.boxes()
         controlled = set(scenario.controlled_ids)
+        colors = scenario.colors  # the scenario's own (0-255), as in its recording
         self._vehicles = []
         centre = None
         for vid, (x, y, yaw, length, width) in zip(ids, boxes):
@@ -66,7 +68,9 @@ class TopDown:
             corners = [(x + c * a - s * b, y + s * a + c * b)
                        for a, b in ((hl, hw), (-hl, hw), (-hl, -hw), (hl, -hw))]
             mine = vid in controlled
-            patch = Polygon(corners, closed=True, facecolor=_CONTROLLED if mine else _OTHER,
+            rgb = colors.get(vid)
+            face = tuple(c / 255.0 for c in rgb) if rgb is not None else (_CONTROLLED if mine else _OTHER)
+            patch = Polygon(corners, closed=True, facecolor=face,
                             edgecolor="black", linewidth=0.5, zorder=2)
             self.ax.add_patch(patch)
             self._vehicles.append(patch)
