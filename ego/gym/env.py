@@ -87,6 +87,10 @@ class EgoView:
         self.following = scenario.task == "car-following"
         self._sensor: SurroundSensor | None = None
         self._looked = -1
+        #: () -> (speed along the lane m/s, tracking error m, longitudinal and lateral
+        #: acceleration m/s^2) now; a road task's longitudinal acceleration is the rate of the
+        #: speed along the lane since the last call
+        self.reward_signals = self._following_signals if self.following else self._road_signals
 
     @property
     def obs(self):
@@ -98,14 +102,13 @@ class EgoView:
         sc = self.scenario
         return sc.plants[0] if self.following else sc.ego
 
-    def reward_signals(self) -> tuple[float, float, float, float]:
-        """(speed along the lane m/s, tracking error m, longitudinal and lateral
-        acceleration m/s^2) now; the longitudinal acceleration of a road task is the rate of
-        the speed along the lane since the last call."""
+    def _following_signals(self) -> tuple[float, float, float, float]:
         sc = self.scenario
-        if self.following:
-            o = sc.obs[0]
-            return o.speed, sc.e[0], o.accel, 0.0
+        o = sc.obs[0]
+        return o.speed, sc.e[0], o.accel, 0.0
+
+    def _road_signals(self) -> tuple[float, float, float, float]:
+        sc = self.scenario
         o = sc.obs
         ds, t = o.ds, o.t
         t0, ds0 = self._prev
