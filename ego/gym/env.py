@@ -20,6 +20,7 @@ a platoon whose string stability the metrics measure.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
@@ -238,7 +239,9 @@ class EgoEnv(gym.Env):
         self.scenario_cls = scenario_class(scenario)
         self.task = self.scenario_cls.task
         self.render_mode = render_mode
-        self.config = self.default_config(scenario)
+        # env.default_config() lists this env's scenario (the class method takes a name)
+        self.default_config = functools.partial(type(self).default_config, scenario)
+        self.config = self.default_config()
         self.configure(config or {})
         self.scenario = None
         self._renderer = None

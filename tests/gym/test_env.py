@@ -90,6 +90,7 @@ def test_default_config_and_configure():
     assert cfg["action"]["lateral"] is False and cfg["followers"] == 3 and cfg["dt"] == 0.01
     assert set(ego.gym.ENV_KEYS) <= set(cfg)
     env = ego.gym.EgoEnv("platoon", config={"variant": "scale-model"})
+    assert env.default_config() == cfg  # an env lists its own scenario's keys
     assert env.scenario.config.followers == 2  # the preset wins over the listed defaults
     assert env.observation_space.shape == (10,) and env.action_space.shape == (1,)
     assert env.observation_type.names[:3] == ("t", "gap", "speed")
