@@ -33,3 +33,11 @@ def test_tuning_batch_against_the_per_member_loop():
 
     figures = main(["--members", "40", "--loop-members", "4", "--no-full"])
     assert figures["batch_generation_s"] > 0 and figures["drive_steps"] > 40000
+
+
+def test_gym_wrapper_against_the_raw_step(tmp_path, monkeypatch):
+    from bench_gym import main
+
+    monkeypatch.setenv("MPLCONFIGDIR", str(tmp_path))
+    figures = main(["--repeat", "3"])
+    assert all(row["steps"] > 0 and row["overhead"] >= 0.0 for row in figures.values())
