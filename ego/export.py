@@ -27,15 +27,14 @@ Every file is written to a temporary file in its folder and moved into place
 
 from __future__ import annotations
 
-import contextlib
 import csv
 import os
-from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 
 from ego.checks import check_output_file
+from ego.outputs import atomic_path
 from ego.params import ConfigError
 from ego.scenarios.traffic_log import UNITS as TRAFFIC_UNITS
 
@@ -73,18 +72,6 @@ def write_trace(result, path: str | os.PathLike) -> list[Path]:
     writer = {".csv": _write_csv, ".parquet": _write_parquet, ".mat": _write_mat}[path.suffix]
     writer(result, path)
     return trace_files(path, result.traffic is not None)
-
-
-@contextlib.contextmanager
-def atomic_path(path: Path) -> Iterator[Path]:
-    """A temporary path beside ``path`` to write; moved onto ``path`` when the block ends
-    without an error, removed otherwise."""
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        yield tmp
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
 
 
 def trace_units(result) -> dict[str, str]:

@@ -19,12 +19,12 @@ traffic, lanes). matplotlib runs with its Agg backend; every file is written ato
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 
+from ego.outputs import atomic_path
 from ego.scenarios.metrics import with_unit
 from ego.scenarios.trace import FrequencyResponse, Plot, Trajectory
 
@@ -46,15 +46,14 @@ def pyplot():
 
 
 def save(fig, path: Path) -> Path:
-    """Write ``fig`` to ``path`` atomically (a temporary file in the same folder, then
-    ``os.replace``) and close it."""
+    """Write ``fig`` to ``path`` atomically (:func:`ego.outputs.atomic_path`; the format
+    from the suffix) and close it."""
     path = Path(path)
-    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
     try:
-        fig.savefig(tmp)
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, format=path.suffix[1:])
     finally:
         pyplot().close(fig)
-    os.replace(tmp, path)
     return path
 
 

@@ -27,6 +27,8 @@ from typing import Any
 
 import numpy as np
 
+from ego.outputs import write_text
+
 ROOT = Path(__file__).resolve().parents[2]
 RESULTS = ROOT / "docs" / "results"
 SWEEPS = ROOT / "scenarios" / "sweeps"
@@ -678,9 +680,7 @@ def regenerate(selected: Sequence[Table], check: bool, workers: int | None = Non
                 differ.append(t.name)
                 text = text.replace(old, new)
         if not check and text != original:
-            tmp = path.with_name(f".{path.name}.tmp")
-            tmp.write_text(text)
-            os.replace(tmp, path)
+            write_text(path, text)
     return differ
 
 

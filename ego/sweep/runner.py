@@ -18,7 +18,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ego.outputs import FolderLock, remove_partials
-from ego.params import ConfigError
 from ego.params import ConfigError, did_you_mean
 from ego.sweep.executor import Outcome, make_executor
 from ego.sweep.results import ResultStore

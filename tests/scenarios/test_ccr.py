@@ -76,7 +76,7 @@ def test_a_stopped_lead_stays_put_and_the_sensor_sees_it_from_the_start():
         assert sc.sensor.front.id == "lead" and sc.sensor.front.speed == 0.0
         assert sc.gap_front == pytest.approx(100.0, abs=0.05)
         while not sc.done:
-            obs = sc.step((0.0, 0.0))
+            sc.step((0.0, 0.0))
         assert "lead" in veh.getIDList() and veh.getSpeed("lead") == 0.0
         assert veh.getLanePosition("lead") == x0
     finally:

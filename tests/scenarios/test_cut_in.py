@@ -1,7 +1,5 @@
 """cut-in: a car overtakes and cuts in ahead of the ego, slower; the ego brakes in lane."""
 
-import math
-
 import numpy as np
 import pytest
 
