@@ -70,7 +70,7 @@ def test_a_stopped_lead_stays_put_and_the_sensor_sees_it_from_the_start():
     sc = build(RunSpec("emergency-brake", "none", 0, {**{k: str(v).lower() for k, v in CCRS.items()},
                                                       "ego_speed": "5", "duration": "3"}))
     try:
-        obs = sc.reset()
+        sc.reset()
         veh = sc.bridge.libsumo.vehicle
         x0 = veh.getLanePosition("lead")
         assert sc.sensor.front.id == "lead" and sc.sensor.front.speed == 0.0
