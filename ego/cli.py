@@ -1,7 +1,9 @@
 """The ``ego`` command line.
 
     ego run SCENARIO --controller NAME [--record PATH] [--seed N] [--set key=value ...] [--json]
+            [--backend sumo|highway-env] [--video PATH.gif|PATH.mp4]
     ego compare SCENARIO --controllers A,B,... [--seeds N] [--set key=value ...] --out DIR
+                [--backend sumo|highway-env]
     ego sweep SPEC.toml --out DIR [--engine process|ray] [--jobs N] [--address ADDR]
               [--record none|failed|all] [--plot X,Y[:METRIC] ...]
     ego list [--json]
@@ -33,6 +35,7 @@ from collections.abc import Sequence
 
 from ego import __version__
 from ego.checks import check_output_dir, check_output_file, check_seed
+from ego.highway_env import BACKENDS
 from ego.params import ConfigError, describe, parse_overrides
 
 EXIT_OK, EXIT_NOT_COMPLETED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
@@ -71,6 +74,7 @@ def _parser() -> argparse.ArgumentParser:
                "  ego list\n"
                "  ego run emergency-brake --controller fuzzy --record runs/eb.rrd\n"
                "  ego run emergency-brake --controller pid --set block_left=true --json\n"
+               "  ego run emergency-brake --controller pid --backend highway-env --video runs/eb.gif\n"
                "  ego compare fast-follower --controllers pid,fuzzy,rbf-smc --seeds 3 --out runs/ff\n"
                "  ego run curve --controller narma-l2 --set entry_speed=40\n"
                "  ego compare curve --controllers pid,fuzzy-curve,narma-l2 --out runs/curve\n"
@@ -101,6 +105,11 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scenario or controller parameter (repeatable)")
     run.add_argument("--json", action="store_true", help="print one JSON object instead of text")
+    run.add_argument("--backend", default="sumo", choices=BACKENDS,
+                     help="traffic simulator (default sumo; highway-env runs emergency-brake, "
+                          "fast-follower and cut-in)")
+    run.add_argument("--video", metavar="PATH",
+                     help="with --backend highway-env: a video of the run (.gif, or .mp4 with ffmpeg)")
 
     cmp_ = sub.add_parser(
         "compare", help="every controller x seed of one scenario, in parallel processes",
@@ -121,6 +130,8 @@ def _parser() -> argparse.ArgumentParser:
     cmp_.add_argument("--out", required=True, metavar="DIR", help="output folder")
     cmp_.add_argument("--jobs", type=int, default=None, metavar="J",
                       help="parallel processes (default: the number of CPUs)")
+    cmp_.add_argument("--backend", default="sumo", choices=BACKENDS,
+                      help="traffic simulator (default sumo)")
 
     swp = sub.add_parser(
         "sweep", help="many runs over a parameter space (a TOML spec), resumable Parquet results",
@@ -339,7 +350,8 @@ def _run(args) -> int:
     from ego.scenarios.metrics import flatten, metric_units
 
     spec = RunSpec(args.scenario, args.controller, seed=check_seed(args.seed, "--seed"),
-                   overrides=parse_overrides(args.overrides), record=args.record)
+                   overrides=parse_overrides(args.overrides), record=args.record,
+                   backend=args.backend, video=args.video)
     result = run(spec)
     units = metric_units(declared_metrics(spec), flatten(result.metrics))
     if args.json:
@@ -348,11 +360,15 @@ def _run(args) -> int:
         out["units"] = units
         if args.record:
             out["record"] = args.record
+        if args.video:
+            out["video"] = args.video
         print(json.dumps(out))
     else:
         _print_result(result, units)
         if args.record:
             print(f"recording: {args.record}  (review with: rerun {args.record})")
+        if args.video:
+            print(f"video: {args.video}")
     if result.status == "interrupted":
         return EXIT_INTERRUPTED
     return EXIT_OK if result.status == "completed" else EXIT_NOT_COMPLETED
@@ -373,7 +389,8 @@ def _compare(args) -> int:
         dup = next(n for n in names if names.count(n) > 1)
         raise ConfigError(f"bad value for --controllers: {dup!r} is listed twice")
     out = check_output_dir(args.out, "--out")
-    rows = compare(args.scenario, names, args.seeds, parse_overrides(args.overrides), out, args.jobs)
+    rows = compare(args.scenario, names, args.seeds, parse_overrides(args.overrides), out, args.jobs,
+                   backend=args.backend)
     print((out / "metrics.md").read_text(), end="")
     files = ["metrics.csv", UNITS_FILE, "metrics.md"] + sorted(p.name for p in out.glob("*.png"))
     print(f"\nwrote into {out}/: {', '.join(files)} and {len(rows)} recordings in runs/")

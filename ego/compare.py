@@ -39,6 +39,7 @@ from ego.control import controller_spec
 from ego.params import ConfigError, describe
 from ego.runner import RunSpec, configure, run, split_overrides
 from ego.scenarios import scenario_class
+from ego.scenarios.base import check_backend
 from ego.scenarios.metrics import flatten, headline_names, metric_units, with_unit
 from ego.scenarios.trace import Metric, Plot
 from ego.sweep.executor import Executor, ProcessExecutor
@@ -78,9 +79,12 @@ def _one(spec: RunSpec) -> RunRow:
     return RunRow(spec.controller, spec.seed, result.status, flatten(result.metrics), traces, units=units)
 
 
-def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict, out: Path) -> list[RunSpec]:
-    """Validate names and overrides, and list the runs (before any process starts)."""
+def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict, out: Path,
+         backend: str = "sumo") -> list[RunSpec]:
+    """Validate names and overrides, and list the runs (before any process starts) on the
+    traffic simulator ``backend``."""
     cls = scenario_class(scenario)
+    check_backend(cls, backend)
     if not controllers:
         raise ConfigError("--controllers needs at least one name")
     for name in controllers:
@@ -97,7 +101,8 @@ def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict,
         mine = split_overrides(scenario, name, overrides)
         for seed in range(seeds):
             rrd = out / "runs" / f"{name}-seed{seed}.rrd"
-            specs.append(RunSpec(scenario, name, seed, mine, str(rrd), background_recording=False))
+            specs.append(RunSpec(scenario, name, seed, mine, str(rrd), background_recording=False,
+                                 backend=backend))
     return specs
 
 
@@ -116,7 +121,7 @@ def _progress(done: int, total: int, row: RunRow, started: float) -> None:
 
 def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict, out: Path,
             jobs: int | None = None, progress: Callable | None = _progress,
-            executor: Executor | None = None) -> list[RunRow]:
+            executor: Executor | None = None, backend: str = "sumo") -> list[RunRow]:
     """Run everything, write the outputs, return the rows (in controller, seed order).
 
     The runs go to the sweep engines' process pool (``jobs`` workers, default one per CPU;
@@ -125,7 +130,7 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
     without SUMO).
     """
     out = Path(out)
-    specs = plan(scenario, controllers, seeds, overrides, out)
+    specs = plan(scenario, controllers, seeds, overrides, out, backend)
     for spec in specs:  # every value too (a bad --set value) before any process starts
         cls, config, ctrl, params = configure(spec)
         cls.build_controller(ctrl, params, config)

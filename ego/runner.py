@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
+import importlib.util
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 from ego.control import CONTROLLERS, controller_spec
-from ego.params import apply_overrides, describe, unknown_parameter
+from ego.params import ConfigError, apply_overrides, describe, unknown_parameter
 from ego.record import RerunRecorder
 from ego.scenarios import RunResult, Scenario, scenario_class
+from ego.scenarios.base import check_backend
 from ego.scenarios.trace import Column, Metric
 
 
@@ -25,6 +27,10 @@ class RunSpec:
     #: write the recording from a separate process (False: in this one, e.g. in a pool
     #: worker that already has a core of its own)
     background_recording: bool = True
+    #: the traffic simulator: "sumo" or "highway-env" (ego.highway_env.BACKENDS)
+    backend: str = "sumo"
+    #: a .gif or .mp4 of the run from highway-env's renderer (highway-env only)
+    video: str | None = None
 
 
 def split_overrides(scenario: str, controller: str, overrides: Mapping[str, Any]) -> dict:
@@ -42,6 +48,15 @@ def configure(spec: RunSpec):
 
     check_seed(spec.seed)
     cls = scenario_class(spec.scenario)
+    check_backend(cls, spec.backend)
+    if spec.backend == "highway-env" and importlib.util.find_spec("highway_env") is None:
+        raise ConfigError("--backend highway-env needs the highway-env package: pip install 'ego[highway]'")
+    if spec.video is not None:
+        if spec.backend != "highway-env":
+            raise ConfigError("--video needs --backend highway-env (a SUMO run is recorded with --record)")
+        from ego.highway_env.video import check_video_path
+
+        check_video_path(spec.video)
     ctrl = controller_spec(spec.controller, cls.task)
     config, rest = apply_overrides(cls.default_config(spec.overrides), spec.overrides, strict=False)
     ctrl_params, rest = apply_overrides(ctrl.params(), rest, strict=False)
@@ -63,7 +78,8 @@ def build(spec: RunSpec):
         path.parent.mkdir(parents=True, exist_ok=True)
         recorder = RerunRecorder(path, recording_id=f"{spec.scenario}-{spec.controller}-{spec.seed}",
                                  background=spec.background_recording)
-    return cls(config, controller, seed=spec.seed, recorder=recorder, controller_name=spec.controller)
+    return cls(config, controller, seed=spec.seed, recorder=recorder, controller_name=spec.controller,
+               backend=spec.backend, video=spec.video)
 
 
 def run(spec: RunSpec) -> RunResult:

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ego.highway_env import BACKENDS
 from ego.params import ConfigError, param
 from ego.scenarios import metrics as m
 from ego.scenarios.events import INF, GapRule, check_lane, choose_lane
@@ -98,6 +99,8 @@ class EvasiveLaneChange(HighwayScenario):
     """Trigger, gap acceptance, references and metrics of an evasive lane change."""
 
     config_cls = EvasiveConfig
+    #: SUMO, or highway-env's road and IDM/MOBIL drivers (ego.highway_env)
+    backends = BACKENDS
     #: which time-to-collision triggers: "front" or "rear"
     trigger_on = "front"
 

@@ -1,7 +1,10 @@
 """Traffic around the ego: seeded background flows and scripted actors.
 
-Generation is pure (numpy Generator in, vehicle specs out); the actors act on SUMO through
-:class:`ego.sumo.bridge.SumoBridge`.
+Generation is pure (numpy Generator in, vehicle specs out); the actors act on the traffic
+through the commands of :class:`ego.sumo.bridge.SumoBridge` (``keep_lane``, ``drive_blind``,
+``set_speed``, ``slow_down``, ``change_sublane``...), which
+:class:`ego.highway_env.bridge.HighwayEnvBridge` has too, so the same actor drives SUMO or
+highway-env.
 """
 
 from __future__ import annotations
@@ -79,20 +82,15 @@ class BrakingLeader:
         one closer than its own stopping distance, so a scenario may insert a slow leader at
         its follower's speed (passing that check) and the speed is set here, before the
         first step, without SUMO's deceleration limit and without moving it."""
-        veh = bridge.libsumo.vehicle
-        veh.setLaneChangeMode(self.vid, 0)
-        if veh.getSpeed(self.vid) != self.cruise_speed:
-            veh.setPreviousSpeed(self.vid, self.cruise_speed, 0.0)
-        veh.setSpeed(self.vid, self.cruise_speed)
+        bridge.keep_lane(self.vid)
+        bridge.start_speed(self.vid, self.cruise_speed)
 
     def update(self, bridge: SumoBridge, t: float) -> bool:
         """Call every SUMO step with scenario time ``t`` (s); True on the step braking starts."""
         if not self.braking and t >= self.brake_time - 1e-9 and self.final_speed < self.cruise_speed:
             self.braking = True
-            veh = bridge.libsumo.vehicle
-            veh.setEmergencyDecel(self.vid, max(9.0, self.decel))
-            veh.setDecel(self.vid, self.decel)
-            veh.setSpeed(self.vid, self.final_speed)
+            bridge.set_decel(self.vid, self.decel)
+            bridge.set_speed(self.vid, self.final_speed)
             return True
         return False
 
@@ -105,9 +103,8 @@ class PacedVehicle:
     speed: float
 
     def start(self, bridge: SumoBridge) -> None:
-        veh = bridge.libsumo.vehicle
-        veh.setLaneChangeMode(self.vid, 0)
-        veh.setSpeed(self.vid, self.speed)
+        bridge.keep_lane(self.vid)
+        bridge.set_speed(self.vid, self.speed)
 
     def update(self, bridge: SumoBridge, t: float) -> bool:
         return False
@@ -122,8 +119,8 @@ class RecklessFollower:
     speed: float
 
     def start(self, bridge: SumoBridge) -> None:
-        _ignore_safety(bridge, self.vid)
-        bridge.libsumo.vehicle.setSpeed(self.vid, self.speed)
+        bridge.drive_blind(self.vid)
+        bridge.set_speed(self.vid, self.speed)
 
     def update(self, bridge: SumoBridge, t: float) -> bool:
         return False
@@ -249,19 +246,11 @@ class ProfiledLeader:
     profile: SpeedProfile
 
     def start(self, bridge: SumoBridge) -> None:
-        _ignore_safety(bridge, self.vid)
+        bridge.drive_blind(self.vid)
 
     def update(self, bridge: SumoBridge, t: float) -> bool:
-        bridge.libsumo.vehicle.setSpeed(self.vid, self.profile.speed(t))
+        bridge.set_speed(self.vid, self.profile.speed(t))
         return False
-
-
-def _ignore_safety(bridge: SumoBridge, vid: str) -> None:
-    """SUMO's driver no longer changes lanes nor checks safe speeds or its own limits: the
-    speed set is the speed driven."""
-    veh = bridge.libsumo.vehicle
-    veh.setLaneChangeMode(vid, 0)
-    veh.setSpeedMode(vid, 0)
 
 
 def min_jerk(u: float) -> float:
@@ -297,34 +286,31 @@ class CutInVehicle:
     cut_in_time: float | None = None  #: when it started across the lane (s)
 
     def start(self, bridge: SumoBridge) -> None:
-        _ignore_safety(bridge, self.vid)
-        veh = bridge.libsumo.vehicle
-        # SUMO's own limits on lateral motion must not shape the scripted profile
-        veh.setMaxSpeedLat(self.vid, 4.0 * self.lane_width / self.duration)
-        veh.setParameter(self.vid, "laneChangeModel.lcAccelLat", "100")
-        veh.setSpeed(self.vid, self.overtake_speed)
+        bridge.drive_blind(self.vid)
+        # the traffic model's own limits on lateral motion must not shape the scripted profile
+        bridge.free_lateral(self.vid, 4.0 * self.lane_width / self.duration)
+        bridge.set_speed(self.vid, self.overtake_speed)
 
     def update(self, bridge: SumoBridge, t: float) -> bool:
         """Call before every SUMO step from ``t`` (s); True on the step it starts across."""
-        veh = bridge.libsumo.vehicle
         started = False
         if self.phase == "overtake":
-            rear = veh.getPosition(self.vid)[0] - veh.getLength(self.vid)
+            rear = bridge.front_bumper(self.vid)[0] - bridge.dimensions(self.vid)[0]
             # while it slows, the gap changes by the mean relative speed times slow_time
-            v = veh.getSpeed(self.target)
+            v = bridge.speed(self.target)
             change = 0.5 * self.slow_time * ((self.overtake_speed - v) + (self.speed - v))
             if rear - bridge.front_bumper(self.target)[0] >= self.gap - change:
-                veh.slowDown(self.vid, self.speed, self.slow_time)
+                bridge.slow_down(self.vid, self.speed, self.slow_time)
                 self.phase, self._until = "slow", t + self.slow_time
         elif self.phase == "slow" and t >= self._until - 1e-9:
-            veh.setSpeed(self.vid, self.speed)
+            bridge.set_speed(self.vid, self.speed)
             self.phase, self.cut_in_time, started = "cut in", t, True
-            self._y0 = veh.getPosition(self.vid)[1]
+            self._y0 = bridge.front_bumper(self.vid)[1]
             self._sign = 1.0 if self.lane > self.source_lane else -1.0
         if self.phase == "cut in":
             u = (t + self.step - self.cut_in_time) / self.duration
             want = self._sign * self.lane_width * min_jerk(u)
-            veh.changeSublane(self.vid, want - (veh.getPosition(self.vid)[1] - self._y0))
+            bridge.change_sublane(self.vid, want - (bridge.front_bumper(self.vid)[1] - self._y0))
             if u >= 1.0:
                 self.phase = "in lane"
         return started
