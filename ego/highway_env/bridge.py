@@ -29,8 +29,10 @@ from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
+from gymnasium import spaces
 from highway_env import utils
 from highway_env.envs.common.abstract import AbstractEnv
+from highway_env.envs.common.observation import ObservationType
 from highway_env.road.lane import LineType, StraightLane
 from highway_env.road.road import Road, RoadNetwork
 from highway_env.vehicle.behavior import IDMVehicle
@@ -134,6 +136,16 @@ def _approach(value: float, target: float, step: float) -> float:
     return min(target, value + step) if target > value else max(target, value - step)
 
 
+class _NoObservation(ObservationType):
+    """An empty observation (see :meth:`EgoTrafficEnv.define_spaces`)."""
+
+    def space(self) -> spaces.Space:
+        return spaces.Box(0.0, 0.0, shape=(0,), dtype=np.float32)
+
+    def observe(self) -> np.ndarray:
+        return np.zeros(0, dtype=np.float32)
+
+
 class EgoTrafficEnv(AbstractEnv):
     """highway-env's environment around one run's road and vehicles: ``configure`` gets
     ``lanes`` (highway-env frame: (start, end, width)) and ``vehicles`` (built by
@@ -169,6 +181,13 @@ class EgoTrafficEnv(AbstractEnv):
             self.road.vehicles.append(vehicle)
             if isinstance(vehicle, EgoVehicle):
                 self.controlled_vehicles.append(vehicle)
+
+    def define_spaces(self) -> None:
+        # the scenario reads the road itself: no observation is built (highway-env's
+        # Kinematics table costs ~5 ms and needs a controlled vehicle)
+        super().define_spaces()
+        self.observation_type = _NoObservation(self)
+        self.observation_space = self.observation_type.space()
 
     def _info(self, obs, action=None) -> dict:
         return {}
@@ -373,7 +392,7 @@ class HighwayEnvBridge:
         radius = self._radius.get(vid, math.inf)
         ids, rows = [], []
         for other, v in world.items():
-            if other in self.controlled:
+            if other == vid or other in self.controlled:
                 continue
             x, y = v.position
             if math.hypot(x - me[0], y - me[1]) <= radius:
