@@ -33,3 +33,12 @@ def test_tuning_batch_against_the_per_member_loop():
 
     figures = main(["--members", "40", "--loop-members", "4", "--no-full"])
     assert figures["batch_generation_s"] > 0 and figures["drive_steps"] > 40000
+
+
+def test_highway_env_against_sumo():
+    from bench_highway_env import main
+
+    figures = main(["--repeat", "2"])
+    assert figures["sumo"]["control_steps"] == figures["highway-env"]["control_steps"] == 2500
+    figures = main(["--repeat", "2", "--scenario", "fast-follower"])
+    assert figures["highway-env"]["traffic_steps"] > 0
