@@ -251,7 +251,7 @@ def _catalogue() -> dict:
     def scenario(name: str, cls) -> dict:
         config = cls.default_config({})
         return {
-            "name": name, "task": cls.task, "summary": cls.summary,
+            "name": name, "task": cls.task, "summary": cls.summary, "backends": list(cls.backends),
             "parameters": params(cls.config_cls),
             "metrics": [{"name": m.name, "unit": m.unit, "description": m.description, "headline": m.headline}
                         for m in cls.metrics_declared(config)],
