@@ -48,3 +48,17 @@ def test_a_crash_into_the_braking_lead_matches_sumos():
 def test_a_follower_hitting_the_ego_is_a_collision_with_the_follower():
     m = _run("fast-follower", evade=False, ttc_threshold=0.5, duration=10).metrics
     assert m["status"] == "collision" and m["collision_with"] == "follower"
+
+
+@pytest.mark.sumo
+def test_the_recording_has_the_same_layout_on_both_backends(tmp_path):
+    from rerun.chunk import RrdReader
+
+    paths = {}
+    for backend in ("sumo", "highway-env"):
+        rrd = tmp_path / f"{backend}.rrd"
+        run(RunSpec("cut-in", "pid", 0, {"duration": "3"}, record=str(rrd), background_recording=False,
+                    backend=backend))
+        paths[backend] = {c.entity_path for c in RrdReader(rrd).stream()}
+    assert paths["sumo"] == paths["highway-env"]
+    assert "/plots/ttc/front" in paths["highway-env"] and "/events" in paths["highway-env"]
