@@ -300,7 +300,8 @@ def _print_catalogue(cat: dict) -> None:
         print("Every run reports " + ", ".join(with_unit(n, every[n]["unit"]) for n in cat["common_metrics"]
                                              if n in every) + " and the scenario's metrics below.")
     for s in cat["scenarios"]:
-        print(f"\n  {s['name']} [{s['task']} task]: {s['summary']}")
+        on = "" if s["backends"] == ["sumo"] else f"; --backend {' or '.join(s['backends'])}"
+        print(f"\n  {s['name']} [{s['task']} task{on}]: {s['summary']}")
         table(s["parameters"])
         metrics(s["metrics"])
     for task in cat["tasks"]:
