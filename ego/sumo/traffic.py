@@ -1,10 +1,10 @@
 """Traffic around the ego: seeded background flows and scripted actors.
 
 Generation is pure (numpy Generator in, vehicle specs out); the actors act on the traffic
-through the commands of :class:`ego.sumo.bridge.SumoBridge` (``keep_lane``, ``drive_blind``,
-``set_speed``, ``slow_down``, ``change_sublane``...), which
-:class:`ego.highway_env.bridge.HighwayEnvBridge` has too, so the same actor drives SUMO or
-highway-env.
+through :class:`TrafficCommands` (``keep_lane``, ``drive_blind``, ``set_speed``, ``slow_down``,
+``change_sublane``...), which :class:`ego.sumo.bridge.SumoBridge` and
+:class:`ego.highway_env.bridge.HighwayEnvBridge` both have, so the same actor drives SUMO or
+highway-env (PoissonFlow still adds SUMO vehicles through libsumo).
 """
 
 from __future__ import annotations
@@ -12,10 +12,29 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
 from ego.sumo.bridge import SumoBridge, VehicleSpec
+
+
+class TrafficCommands(Protocol):
+    """What a scripted actor may ask of the traffic: :class:`~ego.sumo.bridge.SumoBridge` and
+    :class:`ego.highway_env.bridge.HighwayEnvBridge` both have it (see SumoBridge for each
+    command's meaning; speeds m/s, decelerations m/s^2, positions m in ego's frame)."""
+
+    def keep_lane(self, vid: str) -> None: ...
+    def drive_blind(self, vid: str) -> None: ...
+    def set_speed(self, vid: str, speed: float) -> None: ...
+    def start_speed(self, vid: str, speed: float) -> None: ...
+    def set_decel(self, vid: str, decel: float) -> None: ...
+    def slow_down(self, vid: str, speed: float, duration: float) -> None: ...
+    def free_lateral(self, vid: str, max_lateral_speed: float) -> None: ...
+    def change_sublane(self, vid: str, dy: float) -> None: ...
+    def speed(self, vid: str) -> float: ...
+    def front_bumper(self, vid: str) -> tuple[float, float]: ...
+    def dimensions(self, vid: str) -> tuple[float, float]: ...
 
 
 def background_traffic(
@@ -76,7 +95,7 @@ class BrakingLeader:
     final_speed: float
     braking: bool = False
 
-    def start(self, bridge: SumoBridge) -> None:
+    def start(self, bridge: TrafficCommands) -> None:
         """Call once it is inserted. Whatever speed it was inserted at, it drives
         ``cruise_speed`` from now on: SUMO refuses to insert a car at speed behind a stopped
         one closer than its own stopping distance, so a scenario may insert a slow leader at
@@ -85,7 +104,7 @@ class BrakingLeader:
         bridge.keep_lane(self.vid)
         bridge.start_speed(self.vid, self.cruise_speed)
 
-    def update(self, bridge: SumoBridge, t: float) -> bool:
+    def update(self, bridge: TrafficCommands, t: float) -> bool:
         """Call every SUMO step with scenario time ``t`` (s); True on the step braking starts."""
         if not self.braking and t >= self.brake_time - 1e-9 and self.final_speed < self.cruise_speed:
             self.braking = True
@@ -102,11 +121,11 @@ class PacedVehicle:
     vid: str
     speed: float
 
-    def start(self, bridge: SumoBridge) -> None:
+    def start(self, bridge: TrafficCommands) -> None:
         bridge.keep_lane(self.vid)
         bridge.set_speed(self.vid, self.speed)
 
-    def update(self, bridge: SumoBridge, t: float) -> bool:
+    def update(self, bridge: TrafficCommands, t: float) -> bool:
         return False
 
 
@@ -118,11 +137,11 @@ class RecklessFollower:
     vid: str
     speed: float
 
-    def start(self, bridge: SumoBridge) -> None:
+    def start(self, bridge: TrafficCommands) -> None:
         bridge.drive_blind(self.vid)
         bridge.set_speed(self.vid, self.speed)
 
-    def update(self, bridge: SumoBridge, t: float) -> bool:
+    def update(self, bridge: TrafficCommands, t: float) -> bool:
         return False
 
 
@@ -245,10 +264,10 @@ class ProfiledLeader:
     vid: str
     profile: SpeedProfile
 
-    def start(self, bridge: SumoBridge) -> None:
+    def start(self, bridge: TrafficCommands) -> None:
         bridge.drive_blind(self.vid)
 
-    def update(self, bridge: SumoBridge, t: float) -> bool:
+    def update(self, bridge: TrafficCommands, t: float) -> bool:
         bridge.set_speed(self.vid, self.profile.speed(t))
         return False
 
@@ -285,13 +304,13 @@ class CutInVehicle:
     phase: str = "overtake"
     cut_in_time: float | None = None  #: when it started across the lane (s)
 
-    def start(self, bridge: SumoBridge) -> None:
+    def start(self, bridge: TrafficCommands) -> None:
         bridge.drive_blind(self.vid)
         # the traffic model's own limits on lateral motion must not shape the scripted profile
         bridge.free_lateral(self.vid, 4.0 * self.lane_width / self.duration)
         bridge.set_speed(self.vid, self.overtake_speed)
 
-    def update(self, bridge: SumoBridge, t: float) -> bool:
+    def update(self, bridge: TrafficCommands, t: float) -> bool:
         """Call before every SUMO step from ``t`` (s); True on the step it starts across."""
         started = False
         if self.phase == "overtake":

@@ -122,3 +122,17 @@ def test_a_crash_in_the_traffic_names_the_car_behind_as_collider(make):
         found += bridge.step()
     assert [(c.collider, c.victim) for c in found] == [("fast", "slow")]
     assert math.isclose(found[0].collider_speed, 30.0)
+
+
+def test_both_traffic_sources_take_every_command_of_the_actors():
+    import inspect
+
+    from ego.sumo.bridge import SumoBridge
+    from ego.sumo.traffic import TrafficCommands
+
+    for name, member in vars(TrafficCommands).items():
+        if name.startswith("_") or not callable(member):
+            continue
+        for source in (SumoBridge, HighwayEnvBridge):
+            assert list(inspect.signature(getattr(source, name)).parameters) == list(
+                inspect.signature(member).parameters), (source.__name__, name)
