@@ -127,7 +127,8 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
     The runs go to the sweep engines' process pool (``jobs`` workers, default one per CPU;
     libsumo allows one simulation per process; one code path with ``ego sweep``), or to
     ``executor`` when given (closed at the end; e.g. ``InlineExecutor`` for a scenario
-    without SUMO).
+    without SUMO). ``backend`` is the traffic simulator of every run ("sumo" or
+    "highway-env"); metrics.csv's ``backend`` column says which ran.
     """
     out = Path(out)
     specs = plan(scenario, controllers, seeds, overrides, out, backend)

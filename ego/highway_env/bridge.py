@@ -373,9 +373,10 @@ class HighwayEnvBridge:
                 pair = frozenset((id(v), id(other)))
                 if other is v or pair in paired:
                     continue
-                if utils.are_polygons_intersecting(v.polygon(), other.polygon(),
-                                                   v.velocity * self.step_length,
-                                                   other.velocity * self.step_length)[1]:
+                # overlapping now, or within the step highway-env looked ahead (what set the flag)
+                if any(utils.are_polygons_intersecting(v.polygon(), other.polygon(),
+                                                       v.velocity * self.step_length,
+                                                       other.velocity * self.step_length)[:2]):
                     paired.add(pair)
                     rear, front = sorted((v, other), key=lambda w: w.position[0])
                     found.append(Collision(self._id_of[id(rear)], self._id_of[id(front)],
