@@ -84,6 +84,25 @@ def sensor_cost(spec: RunSpec, at: float = 5.0, number: int = 2000) -> tuple[flo
         scenario.close()
 
 
+def traffic_log_cost(spec: RunSpec, at: float = 5.0, number: int = 2048) -> float:
+    """us per SUMO step of the traffic log in the middle of a run
+    (``at`` seconds in): handing the step's vehicles to the collector, with its batched
+    filtering (every ``BATCH`` steps) spread over the steps."""
+    import timeit
+
+    scenario = build(RunSpec(spec.scenario, spec.controller, spec.seed, spec.overrides))
+    try:
+        obs = scenario.reset()
+        while not scenario.done and scenario.t < at:
+            obs = scenario.step(scenario.controller.step(obs))
+        if scenario.traffic is None:
+            return 0.0
+        per_step = min(timeit.repeat(scenario._log_traffic, number=number, repeat=5)) / number
+        return 1e6 * per_step
+    finally:
+        scenario.close()
+
+
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5)
@@ -109,6 +128,7 @@ def main(argv: list[str] | None = None) -> dict:
     loop = statistics.median(loops)
     bare = statistics.median(bares)
     sensor = sensor_cost(spec)
+    log_us = traffic_log_cost(spec)
     figures = {
         "scenario": args.scenario,
         "controller": args.controller,
@@ -122,7 +142,9 @@ def main(argv: list[str] | None = None) -> dict:
         "loop_us_per_sumo_step": 1e6 * loop / sumo_steps,
         "bare_sumo_us_per_step": 1e6 * bare / sumo_steps,
         "loop_over_bare_sumo": loop / bare,
+        "traffic_log_us_per_sumo_step": log_us,
     }
+    figures["traffic_log_share_of_loop"] = log_us / figures["loop_us_per_sumo_step"]
     if sensor is not None:
         per_sumo_step = sensor[0] + (steps / sumo_steps - 1) * sensor[1]
         figures.update(sensor_us_per_look=sensor[0], sensor_us_per_control_step=sensor[1],
@@ -135,6 +157,8 @@ def main(argv: list[str] | None = None) -> dict:
     print(f"  loop per SUMO step         {figures['loop_us_per_sumo_step']:8.1f} us")
     print(f"  bare SUMO per step         {figures['bare_sumo_us_per_step']:8.1f} us")
     print(f"  loop / bare SUMO           {figures['loop_over_bare_sumo']:8.2f}     (target <= 3)")
+    print(f"  traffic log per SUMO step  {log_us:8.1f} us   ({100 * figures['traffic_log_share_of_loop']:.1f} % "
+          f"of the loop: handing a step's vehicles over, filtered in batches)")
     if sensor is not None:
         print(f"  surround sensor per SUMO step {figures['sensor_us_per_sumo_step']:5.1f} us "
               f"({100 * figures['sensor_share_of_loop']:.0f} % of the loop): a look (context "

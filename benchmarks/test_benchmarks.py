@@ -42,3 +42,11 @@ def test_highway_env_against_sumo():
     assert figures["sumo"]["control_steps"] == figures["highway-env"]["control_steps"] == 2500
     figures = main(["--repeat", "2", "--scenario", "fast-follower"])
     assert figures["highway-env"]["traffic_steps"] > 0
+
+
+def test_gym_wrapper_against_the_raw_step(tmp_path, monkeypatch):
+    from bench_gym import main
+
+    monkeypatch.setenv("MPLCONFIGDIR", str(tmp_path))
+    figures = main(["--repeat", "3"])
+    assert all(row["steps"] > 0 and row["overhead"] >= 0.0 for row in figures.values())

@@ -1,4 +1,5 @@
-"""Checks of user input made before anything runs: seeds and output locations.
+"""Checks of user input made before anything runs: seeds, output locations and the input
+files a run reads (a trained model, a gains preset).
 
 Each raises :class:`ego.params.ConfigError` with one line naming the value and what is
 allowed, so the CLI exits 2 before SUMO starts or a file is written.
@@ -6,6 +7,8 @@ allowed, so the CLI exits 2 before SUMO starts or a file is written.
 
 from __future__ import annotations
 
+import json
+import math
 import os
 from pathlib import Path
 from typing import Any
@@ -14,6 +17,8 @@ from ego.params import ConfigError
 
 #: SUMO's seeds (and every seed ego takes): 0 .. 2^31 - 1
 MAX_SEED = 2**31 - 1
+#: more parallel processes than this (--jobs, --workers) is a typo, not a machine
+MAX_JOBS = 1024
 
 
 def check_seed(value: Any, what: str = "seed") -> int:
@@ -35,6 +40,20 @@ def _writable_ancestor(path: Path, what: str, text: str) -> None:
         raise ConfigError(f"bad {what} {text!r}: {parent} is a file, not a folder")
     if not os.access(parent, os.W_OK | os.X_OK):
         raise ConfigError(f"bad {what} {text!r}: cannot write into {parent}")
+
+
+def check_count(value: Any, what: str, lo: int, hi: int) -> None:
+    """A whole number from ``lo`` to ``hi`` (None: a default is used), or ConfigError."""
+    if value is None:
+        return
+    if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+        raise ConfigError(f"bad value for {what}: {value!r} (expected a whole number from {lo} to {hi})")
+
+
+def check_number(value: Any, what: str, lo: float, hi: float, unit: str) -> None:
+    """A finite number from ``lo`` to ``hi`` (None: a default is used), or ConfigError."""
+    if value is not None and not (finite_number(value) and lo <= value <= hi):
+        raise ConfigError(f"bad value for {what}: {value!r} (expected {lo:g} to {hi:g} {unit})")
 
 
 def check_output_file(text: str | None, what: str, suffix: str) -> Path:
@@ -70,3 +89,43 @@ def check_output_dir(text: str | None, what: str) -> Path:
     if str(path.resolve()).startswith(("/proc/", "/sys/")):
         raise ConfigError(f"bad {what} {text!r}: not a place for files")
     return path
+
+
+def check_input_file(text: str | os.PathLike, what: str, suffix: str) -> Path:
+    """An input file: ends in ``suffix``, exists and is a readable file (not a folder)."""
+    path = Path(text)
+    if path.suffix != suffix:
+        raise ConfigError(f"bad {what} {str(text)!r} (expected a file ending in {suffix})")
+    if path.is_dir():
+        raise ConfigError(f"bad {what} {str(text)!r}: it is a folder (expected a file ending in {suffix})")
+    if not path.is_file():
+        raise ConfigError(f"bad {what} {str(text)!r}: no such file")
+    if not os.access(path, os.R_OK):
+        raise ConfigError(f"bad {what} {str(text)!r}: the file cannot be read")
+    return path
+
+
+def read_json(text: str | os.PathLike, what: str) -> Any:
+    """The contents of a JSON input file, or ConfigError naming the file and what is wrong
+    (missing, a folder, not text, not JSON); NaN and infinities are not JSON and are refused."""
+    path = check_input_file(text, what, ".json")
+
+    def no_constant(name: str) -> Any:
+        raise ValueError(f"{name} is not a number JSON allows")
+
+    try:
+        return json.loads(path.read_text(encoding="utf-8"), parse_constant=no_constant)
+    except UnicodeDecodeError:
+        raise ConfigError(f"bad {what} {str(text)!r}: not a text file (expected JSON)") from None
+    except json.JSONDecodeError as exc:
+        raise ConfigError(f"bad {what} {str(text)!r}: not valid JSON ({exc.msg} at line {exc.lineno} "
+                          f"column {exc.colno})") from None
+    except ValueError as exc:
+        raise ConfigError(f"bad {what} {str(text)!r}: {exc}") from None
+    except OSError as exc:
+        raise ConfigError(f"bad {what} {str(text)!r}: {exc.strerror or exc}") from None
+
+
+def finite_number(value: Any) -> bool:
+    """A real number (not a bool, not text) that is neither NaN nor infinite."""
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)

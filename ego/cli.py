@@ -1,9 +1,9 @@
 """The ``ego`` command line.
 
-    ego run SCENARIO --controller NAME [--record PATH] [--seed N] [--set key=value ...] [--json]
-            [--backend sumo|highway-env] [--video PATH.gif|PATH.mp4]
-    ego compare SCENARIO --controllers A,B,... [--seeds N] [--set key=value ...] --out DIR
-                [--backend sumo|highway-env]
+    ego run SCENARIO --controller NAME [--record PATH] [--trace PATH] [--seed N] [--set key=value ...]
+            [--json] [--backend sumo|highway-env] [--video PATH.gif|PATH.mp4]
+    ego compare SCENARIO --controllers A,B@key=value,... [--seeds N] [--set key=value ...] --out DIR
+                [--traces csv|parquet|mat] [--backend sumo|highway-env]
     ego sweep SPEC.toml --out DIR [--engine process|ray] [--jobs N] [--address ADDR]
               [--record none|failed|all] [--plot X,Y[:METRIC] ...]
     ego list [--json]
@@ -19,10 +19,16 @@ name, e.g. ``settle_times.brake@10s``, -> unit; ``-`` for a pure number, a code 
 headline; a name ending in ``.`` stands for every metric under it) and trace ``columns``
 (name, unit, description), and per controller its ``parameters``.
 
-Exit status: 0 the run completed; 1 it ended in a collision, diverged or timed out
-(the metrics are still printed); 130 interrupted by Ctrl-C or SIGTERM (status
-``interrupted``, the metrics so far printed, the recording closed); 2 bad input (unknown name, bad value), with one line
-on stderr naming it and what is allowed.
+Exit status of ``ego run``: 0 the run completed, or ``ended`` (the ``duration`` ran out
+before the scenario's end, in a scenario whose end the controller does not decide: a
+shortened run, not a failure); 1 it ended in a collision, diverged or timed out (the
+duration ran out during a manoeuvre; the metrics are still printed); 130 interrupted by
+Ctrl-C or SIGTERM (status ``interrupted``, the metrics so far printed, the recording
+closed); 2 bad input (unknown name, bad value), with one line on stderr naming it and what
+is allowed. ``ego compare`` and ``ego sweep``: 0 every run gave a result (a collision is a
+result); 1 some run ended in ``error`` (ego could not run it); 130 interrupted (what
+finished is written); 2 bad input, or ``--out`` held by another ego process.
+docs/reliability.md has the details.
 """
 
 from __future__ import annotations
@@ -30,15 +36,23 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import sys
 from collections.abc import Sequence
 
 from ego import __version__
-from ego.checks import check_output_dir, check_output_file, check_seed
+from ego.checks import MAX_JOBS, check_count, check_number, check_output_dir, check_output_file, check_seed
 from ego.highway_env import BACKENDS
-from ego.params import ConfigError, describe, parse_overrides
+from ego.params import ConfigError, describe, did_you_mean, parse_overrides
 
 EXIT_OK, EXIT_NOT_COMPLETED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+
+def _choice(value: str, allowed, what: str) -> str:
+    """``value`` if it is one of ``allowed``, else ConfigError (with the closest name)."""
+    if value not in allowed:
+        raise ConfigError(f"bad {what} {value!r} (allowed: {', '.join(allowed)}){did_you_mean(value, allowed)}")
+    return value
 
 
 def _terminate(signum, frame) -> None:
@@ -50,6 +64,9 @@ class _Parser(argparse.ArgumentParser):
     """argparse that reports bad usage in one line and exits with 2."""
 
     def error(self, message: str) -> None:  # pragma: no cover - exercised through main()
+        choice = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
+        if choice:  # a misspelt command or choice: name the closest
+            message += did_you_mean(choice.group(1), re.findall(r"'([^']*)'", choice.group(2)))
         raise ConfigError(message)
 
 
@@ -92,7 +109,8 @@ def _parser() -> argparse.ArgumentParser:
     run = sub.add_parser(
         "run", help="run one scenario with one controller",
         description="Run one scenario with one controller and print its metrics.",
-        epilog="Exit status: 0 completed; 1 collision, diverged or timeout; 2 bad input.\n"
+        epilog="Exit status: 0 completed or ended (the duration ran out first, not a failure); "
+               "1 collision, diverged or timeout; 2 bad input.\n"
                "Every parameter, its unit and default: ego list",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -104,6 +122,9 @@ def _parser() -> argparse.ArgumentParser:
                      help="seed of the traffic and of SUMO (default 0)")
     run.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scenario or controller parameter (repeatable)")
+    run.add_argument("--trace", metavar="PATH",
+                     help="write every trace column with its unit, and the traffic near the ego, to "
+                          "PATH: .csv, .parquet or .mat (MATLAB); see docs/traces.md")
     run.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     run.add_argument("--backend", default="sumo", choices=BACKENDS,
                      help="traffic simulator (default sumo; highway-env runs emergency-brake, "
@@ -118,12 +139,17 @@ def _parser() -> argparse.ArgumentParser:
                     "one .rrd per run into --out.",
         epilog="Example: ego compare emergency-brake --controllers pid,fuzzy,rbf-smc --seeds 3 "
                "--out runs/cmp\nA --set key applies to the scenario and to every controller "
-               "that has it.",
+               "that has it.\nVariants of one controller side by side, named as given in every "
+               "table, plot and file:\n  ego compare emergency-brake --controllers "
+               "pid,pid@kp_lat=0.02@kd_lat=0.05 --out runs/pid-gains\n"
+               "Exit status: 0 every run gave a result; 1 some run ended in an error; "
+               "130 interrupted (finished runs written); 2 bad input or --out in use.",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     cmp_.add_argument("scenario", metavar="SCENARIO", help=f"one of: {', '.join(SCENARIOS)}")
     cmp_.add_argument("--controllers", required=True, metavar="A,B,...",
-                      help=f"comma-separated, from: {_controllers_help()}")
+                      help="comma-separated; a name, or a variant with its own parameters "
+                           f"NAME@key=value[@key=value...] (pid@kp_lat=0.02), from: {_controllers_help()}")
     cmp_.add_argument("--seeds", type=int, default=1, metavar="N", help="seeds 0..N-1 (default 1)")
     cmp_.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                       help="override a parameter (repeatable)")
@@ -132,6 +158,9 @@ def _parser() -> argparse.ArgumentParser:
                       help="parallel processes (default: the number of CPUs)")
     cmp_.add_argument("--backend", default="sumo", choices=BACKENDS,
                       help="traffic simulator (default sumo)")
+    cmp_.add_argument("--traces", default=None, metavar="FORMAT",
+                      help="also write every run's trace to traces/<label>-seed<N>.FORMAT: csv, parquet "
+                           "or mat (see docs/traces.md)")
 
     swp = sub.add_parser(
         "sweep", help="many runs over a parameter space (a TOML spec), resumable Parquet results",
@@ -147,7 +176,9 @@ def _parser() -> argparse.ArgumentParser:
                 "  [sample]                  # n points over ranges: random | lhs | sobol\n"
                 "  method = \"sobol\"\n  n = 256\n  lead_gap = [20, 60]\n\n"
                 "Example: ego sweep scenarios/sweeps/envelope.toml --out runs/envelope "
-                "--plot ego_speed,lead_decel:min_gap_front"),
+                "--plot ego_speed,lead_decel:min_gap_front\n"
+                "Exit status: 0 every run gave a result; 1 some run ended in an error; 130 "
+                "interrupted (the same command resumes); 2 bad input or --out in use."),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     swp.add_argument("spec", metavar="SPEC.toml", help="the sweep specification")
@@ -159,7 +190,8 @@ def _parser() -> argparse.ArgumentParser:
     swp.add_argument("--address", default=None, metavar="ADDR",
                      help="with --engine ray: join this Ray cluster (e.g. auto or ray://host:10001)")
     swp.add_argument("--record", default="failed", metavar="WHICH",
-                     help="recordings: none, failed (default: runs that did not complete) or all")
+                     help="recordings: none, failed (default: runs that did not complete or end by "
+                          "their duration) or all")
     swp.add_argument("--plot", action="append", default=[], metavar="X,Y[:METRIC]",
                      help="an envelope plot over two swept parameters (repeatable)")
 
@@ -167,6 +199,9 @@ def _parser() -> argparse.ArgumentParser:
                          description="List scenarios, controllers and every parameter with "
                                      "its default and unit.")
     lst.add_argument("--json", action="store_true", help="print JSON instead of text")
+    lst.add_argument("--markdown", action="store_true",
+                     help="print every parameter's default, unit and allowed values as Markdown tables "
+                          "(the reference in docs/inputs.md)")
 
     trn = sub.add_parser(
         "train", help="train a learned controller (narma-l2)",
@@ -268,6 +303,28 @@ def _catalogue() -> dict:
     }
 
 
+def parameters_markdown(cat: dict) -> str:
+    """Every scenario's and controller's parameters as Markdown tables (``ego list --markdown``):
+    name, default, unit, what is allowed, description."""
+    def table(title: str, rows: list[dict]) -> list[str]:
+        lines = [f"### {title}", ""]
+        if not rows:
+            return lines + ["(no parameters)", ""]
+        lines += ["| parameter | default | unit | allowed | description |", "|---|---|---|---|---|"]
+        for r in rows:
+            cells = (f"`{r['name']}`", f"`{json.dumps(r['default'])}`", r["unit"], r["allowed"], r["description"])
+            lines.append("| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |")
+        return lines + [""]
+
+    lines = ["## Scenario parameters", ""]
+    for s in cat["scenarios"]:
+        lines += table(f"{s['name']} ({s['task']} task)", s["parameters"])
+    lines += ["## Controller parameters", ""]
+    for c in cat["controllers"]:
+        lines += table(f"{c['name']} ({c['task']} task)", c["parameters"])
+    return "\n".join(lines)
+
+
 def _print_catalogue(cat: dict) -> None:
     from ego.scenarios.metrics import with_unit
 
@@ -276,10 +333,10 @@ def _print_catalogue(cat: dict) -> None:
             print("    (no parameters)")
             return
         w = max(len(r["name"]) for r in rows)
-        for r in rows:
-            default = json.dumps(r["default"])
-            unit = "" if r["unit"] in ("", "-") else f" {r['unit']}"
-            print(f"    {r['name']:<{w}}  {default + unit:<14}  {r['description']}")
+        defaults = [_default(r["default"], r["unit"]) for r in rows]
+        wd = min(max(map(len, defaults)), 24)  # a long text default overflows rather than widen all
+        for r, default in zip(rows, defaults):
+            print(f"    {r['name']:<{w}}  {default:<{wd}}  {r['description']}")
 
     def metrics(rows: list[dict]) -> None:
         own = [r for r in rows if r["name"] not in common]
@@ -316,6 +373,19 @@ def _print_catalogue(cat: dict) -> None:
                 table(c["parameters"])
 
 
+def _default(value, unit: str) -> str:
+    """A parameter's default for ``ego list``: a number to 6 significant digits with its
+    unit, an angle also in degrees (``0.436332 rad (25 deg)``), text quoted."""
+    from ego.params import _fmt as number
+
+    if isinstance(value, str):
+        return json.dumps(value)
+    text = number(value) + ("" if unit in ("", "-") else f" {unit}")
+    if unit == "rad" and isinstance(value, float):
+        text += f" ({math.degrees(value):.3g} deg)"
+    return text
+
+
 def _fmt(value) -> str:
     if value is None:
         return "-"
@@ -348,12 +418,16 @@ def _print_result(result, units: dict[str, str]) -> None:
 
 def _run(args) -> int:
     from ego.runner import RunSpec, declared_metrics, run
+    from ego.scenarios.base import NOT_FAILED
     from ego.scenarios.metrics import flatten, metric_units
 
+    from ego.export import trace_files
+
     spec = RunSpec(args.scenario, args.controller, seed=check_seed(args.seed, "--seed"),
-                   overrides=parse_overrides(args.overrides), record=args.record,
+                   overrides=parse_overrides(args.overrides), record=args.record, trace=args.trace,
                    backend=args.backend, video=args.video)
-    result = run(spec)
+    result = run(spec)  # checks the --trace path before anything runs
+    written = [str(p) for p in trace_files(args.trace, result.traffic is not None)] if args.trace else []
     units = metric_units(declared_metrics(spec), flatten(result.metrics))
     if args.json:
         out = dict(result.metrics)
@@ -363,6 +437,8 @@ def _run(args) -> int:
             out["record"] = args.record
         if args.video:
             out["video"] = args.video
+        if written:
+            out["trace"] = written
         print(json.dumps(out))
     else:
         _print_result(result, units)
@@ -370,42 +446,67 @@ def _run(args) -> int:
             print(f"recording: {args.record}  (review with: rerun {args.record})")
         if args.video:
             print(f"video: {args.video}")
+        if written:
+            print(f"trace: {', '.join(written)}")
     if result.status == "interrupted":
         return EXIT_INTERRUPTED
-    return EXIT_OK if result.status == "completed" else EXIT_NOT_COMPLETED
+    return EXIT_OK if result.status in NOT_FAILED else EXIT_NOT_COMPLETED
 
 
 def _compare(args) -> int:
-    from ego.compare import UNITS_FILE, compare
+    from ego.compare import MAX_SEEDS, UNITS_FILE, compare
 
-    if args.seeds < 1:
-        raise ConfigError(f"bad value for --seeds: {args.seeds} (expected a whole number of at least 1)")
-    if args.jobs is not None and args.jobs < 1:
-        raise ConfigError(f"bad value for --jobs: {args.jobs} (expected a whole number of at least 1)")
-    if args.seeds > 100_000:
-        raise ConfigError(f"bad value for --seeds: {args.seeds} (expected at most 100000; use ego sweep "
+    if args.seeds > MAX_SEEDS:
+        raise ConfigError(f"bad value for --seeds: {args.seeds} (expected at most {MAX_SEEDS}; use ego sweep "
                           "for more)")
-    names = [n.strip() for n in args.controllers.split(",") if n.strip()]
-    if len(set(names)) != len(names):
-        dup = next(n for n in names if names.count(n) > 1)
-        raise ConfigError(f"bad value for --controllers: {dup!r} is listed twice")
+    check_count(args.seeds, "--seeds", 1, MAX_SEEDS)
+    check_count(args.jobs, "--jobs", 1, MAX_JOBS)
+    labels = [n.strip() for n in args.controllers.split(",") if n.strip()]
     out = check_output_dir(args.out, "--out")
-    rows = compare(args.scenario, names, args.seeds, parse_overrides(args.overrides), out, args.jobs,
-                   backend=args.backend)
+    rows = compare(args.scenario, labels, args.seeds, parse_overrides(args.overrides), out, args.jobs,
+                   traces=args.traces, backend=args.backend)
     print((out / "metrics.md").read_text(), end="")
     files = ["metrics.csv", UNITS_FILE, "metrics.md"] + sorted(p.name for p in out.glob("*.png"))
-    print(f"\nwrote into {out}/: {', '.join(files)} and {len(rows)} recordings in runs/")
+    recorded = sum(1 for r in rows if r.recording)
+    traces = f" and their traces ({args.traces}) in traces/" if args.traces else ""
+    print(f"\nwrote into {out}/: {', '.join(files)} and {recorded} of {len(rows)} recordings in "
+          f"runs/{traces}")
+    return _compare_status([r.status for r in rows])
+
+
+def _compare_status(statuses: Sequence[str]) -> int:
+    """``ego compare``'s exit status: 130 when interrupted (the finished runs are written),
+    1 when a run ended in ``error`` (ego could not run it: an exception, a dead worker),
+    else 0 - a collision or a diverging controller is a result of the comparison."""
+    if "interrupted" in statuses:
+        unfinished = statuses.count("interrupted")
+        print(f"ego: interrupted: {unfinished} of {len(statuses)} runs did not finish "
+              "(rows with status interrupted)", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    if "error" in statuses:
+        print(f"ego: {statuses.count('error')} of {len(statuses)} runs ended in an error "
+              "(see metrics.md)", file=sys.stderr)
+        return EXIT_NOT_COMPLETED
     return EXIT_OK
 
 
-def _range(text: str, what: str) -> tuple[float, float]:
+def _range(text: str, what: str, declared) -> tuple[float, float]:
+    """``LO,HI`` within the bounds ``declared`` (a parameter's ``ParamInfo``) gives."""
     try:
         lo, hi = (float(x) for x in text.split(","))
     except ValueError:
         raise ConfigError(f"bad value for {what}: {text!r} (expected LO,HI, e.g. 20,40)") from None
     if not (math.isfinite(lo) and math.isfinite(hi)) or lo > hi:
         raise ConfigError(f"bad value for {what}: {text!r} (expected finite LO <= HI)")
+    if lo < declared.min or hi > declared.max:
+        raise ConfigError(f"bad value for {what}: {text!r} (expected {declared.unit} within "
+                          f"{declared.min:g}..{declared.max:g})")
     return lo, hi
+
+
+def _declared(cls, name: str):
+    """The declaration (``ParamInfo``) of parameter ``name`` of ``cls``."""
+    return next(i for i in describe(cls) if i.name == name)
 
 
 def _sweep(args) -> int:
@@ -414,14 +515,11 @@ def _sweep(args) -> int:
     from ego.sweep.runner import RECORD, parse_plot, print_progress, sweep
 
     spec = sweep_spec.load(args.spec)
-    if args.engine not in ENGINES:
-        raise ConfigError(f"bad --engine {args.engine!r} (allowed: {', '.join(ENGINES)})")
-    if args.jobs is not None and args.jobs < 1:
-        raise ConfigError(f"bad value for --jobs: {args.jobs} (expected a whole number of at least 1)")
+    _choice(args.engine, ENGINES, "--engine")
+    check_count(args.jobs, "--jobs", 1, MAX_JOBS)
     if args.address is not None and args.engine != "ray":
         raise ConfigError("--address needs --engine ray")
-    if args.record not in RECORD:
-        raise ConfigError(f"bad --record {args.record!r} (allowed: {', '.join(RECORD)})")
+    _choice(args.record, RECORD, "--record")
     for p in args.plot:
         parse_plot(p, spec)
     out = check_output_dir(args.out, "--out")
@@ -437,9 +535,13 @@ def _sweep(args) -> int:
     if report.interrupted:
         left = report.total - report.already - report.ran
         print(f"interrupted: {left} runs remain; the same command resumes", file=sys.stderr)
-        return 130
+        return EXIT_INTERRUPTED
     print(f"wrote {out / 'results.parquet'}, {out / 'summary.md'}"
           + "".join(f", {out / name}" for name in _plot_names(args.plot, spec)))
+    if report.by_status.get("error"):
+        print(f"ego: {report.by_status['error']} of {report.ran} runs ended in an error "
+              "(see summary.md)", file=sys.stderr)
+        return EXIT_NOT_COMPLETED
     return EXIT_OK
 
 
@@ -469,19 +571,13 @@ def _train(args) -> int:
     from ego.control.narma import DEFAULT_MODEL
     from ego.train.narma_l2 import DataSpec, TrainSpec, train
 
-    if args.samples < 50:
-        raise ConfigError(f"bad value for --samples: {args.samples} (expected at least 50)")
-    if args.epochs < 1:
-        raise ConfigError(f"bad value for --epochs: {args.epochs} (expected at least 1)")
-    v_lo, v_hi = _range(args.speeds, "--speeds")
-    a_lo, a_hi = _range(args.accels, "--accels")
-    r_lo, r_hi = _range(args.radii, "--radii")
-    if r_lo < 5.0 or r_hi > 1000.0:
-        raise ConfigError(f"bad value for --radii: {args.radii!r} (expected m within 5..1000)")
-    if v_lo < 5.0 or v_hi > 60.0:
-        raise ConfigError(f"bad value for --speeds: {args.speeds!r} (expected km/h within 5..60)")
-    if a_lo < -2.0 or a_hi > 2.0:
-        raise ConfigError(f"bad value for --accels: {args.accels!r} (expected m/s^2 within -2..2)")
+    for value, what, cls, name in ((args.samples, "--samples", DataSpec, "samples"),
+                                   (args.epochs, "--epochs", TrainSpec, "epochs")):
+        declared = _declared(cls, name)
+        check_count(value, what, int(declared.min), int(declared.max))
+    v_lo, v_hi = _range(args.speeds, "--speeds", _declared(DataSpec, "speed_min"))
+    a_lo, a_hi = _range(args.accels, "--accels", _declared(DataSpec, "accel_min"))
+    r_lo, r_hi = _range(args.radii, "--radii", _declared(DataSpec, "radius_min"))
     check_seed(args.seed, "--seed")
     out = _model_out(args, DEFAULT_MODEL, "runs/narma_l2.npz", ".npz")
     data = DataSpec(samples=args.samples, speed_min=v_lo, speed_max=v_hi, accel_min=a_lo,
@@ -492,10 +588,9 @@ def _train(args) -> int:
 
 def _tune(args) -> int:
     from ego.control.cascade import TUNED_PRESET
-    from ego.train.lane_centering import TuneSpec, tune
+    from ego.train.lane_centering import MAX_DURATION, TuneSpec, check_drives, tune
 
-    if args.workers < 1:
-        raise ConfigError(f"bad value for --workers: {args.workers} (expected a whole number of at least 1)")
+    check_count(args.workers, "--workers", 1, MAX_JOBS)
     try:
         parts = [d.split(":") for d in args.drives.split(",")]
         if any(len(p) > 2 for p in parts):
@@ -506,23 +601,18 @@ def _tune(args) -> int:
     except ValueError:
         raise ConfigError(f"bad value for --drives: {args.drives!r} (expected speeds in m/s with "
                           "optional offsets in m, e.g. 8,25:1)") from None
-    if any(not (2.0 <= v <= 30.0) or abs(o) > 1.5 for v, o in drives):
-        raise ConfigError(f"bad value for --drives: {args.drives!r} (expected speeds from 2 to 30 m/s "
-                          "and offsets within 1.5 m)")
+    check_drives(drives, "--drives", repr(args.drives))
     check_seed(args.seed, "--seed")
     out = _model_out(args, TUNED_PRESET, "runs/cascade_pid_tuned.json", ".json")
     from ego.sweep.executor import ENGINES
 
-    if args.cost not in ("model", "sumo"):
-        raise ConfigError(f"bad --cost {args.cost!r} (allowed: model, sumo)")
-    if args.engine not in ENGINES:
-        raise ConfigError(f"bad --engine {args.engine!r} (allowed: {', '.join(ENGINES)})")
+    _choice(args.cost, ("model", "sumo"), "--cost")
+    _choice(args.engine, ENGINES, "--engine")
     if args.cost == "model" and (args.engine != "process" or args.address or args.duration is not None):
         raise ConfigError("--engine, --address and --duration go with --cost sumo")
     if args.address is not None and args.engine != "ray":
         raise ConfigError("--address needs --engine ray")
-    if args.duration is not None and not (1.0 <= args.duration <= 3600.0 and math.isfinite(args.duration)):
-        raise ConfigError(f"bad value for --duration: {args.duration} (expected 1 to 3600 s)")
+    check_number(args.duration, "--duration", 1.0, MAX_DURATION, "s")
     spec = TuneSpec.quick(args.seed, args.workers) if args.quick else TuneSpec(seed=args.seed, workers=args.workers)
     tune(TuneSpec(**{**spec.__dict__, "drives": drives, "cost": args.cost, "engine": args.engine,
                      "address": args.address, "duration": args.duration}), out)
@@ -552,6 +642,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             cat = _catalogue()
             if args.json:
                 print(json.dumps(cat, indent=2))
+            elif args.markdown:
+                print(parameters_markdown(cat), end="")
             else:
                 _print_catalogue(cat)
             return EXIT_OK

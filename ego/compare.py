@@ -16,10 +16,18 @@ Outputs in ``--out``:
 * ``metrics.md`` - one row per controller: runs by status, then mean +- standard deviation
   over seeds of the scenario's headline metrics (``Metric(..., headline=True)``), each
   header with its unit (``min_gap_front [m]``; a pure number has none);
-* one PNG per plot the scenario declares (``Scenario.compare_plots``, file names its own) -
-  the first seed of every controller, one line each, the y axis labelled with the trace
-  column's unit;
-* ``runs/<controller>-seed<N>.rrd`` - every run's recording.
+* one PNG per plot the scenario declares (``Scenario.compare_plots``, file names its own;
+  :mod:`ego.plots` draws them) - every seed of every controller, references dashed, bands
+  shaded, events marked, the y axis labelled with the trace column's unit; the top-down
+  ``trajectory.png`` from the traffic log; a platoon's ``string_stability.png``;
+* ``runs/<controller>-seed<N>.rrd`` - every run's recording (none for a run that could
+  not start or did not finish).
+
+Every file appears whole (written under a temporary name, then renamed), and ``--out`` is
+held for the whole comparison: a second ``ego compare`` or ``ego sweep`` into it is refused.
+An interrupted comparison (Ctrl-C, SIGTERM) stops its runs at once and still writes every
+file: the runs that finished with their metrics, the others as rows with status
+``interrupted`` and no recording.
 """
 
 from __future__ import annotations
@@ -27,26 +35,36 @@ from __future__ import annotations
 import csv
 import math
 import os
+import re
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from ego.checks import check_count
 from ego.control import controller_spec
-from ego.params import ConfigError, describe
+from ego.export import TRACE_SUFFIXES
+from ego.outputs import FolderLock, atomic_path, remove_partials, write_text
+from ego.params import ConfigError, apply_overrides, describe, did_you_mean
+from ego.processes import signals_deferred
 from ego.runner import RunSpec, configure, run, split_overrides
 from ego.scenarios import scenario_class
 from ego.scenarios.base import check_backend
 from ego.scenarios.metrics import flatten, headline_names, metric_units, with_unit
-from ego.scenarios.trace import Metric, Plot
+from ego.scenarios.trace import Metric
+from ego.scenarios.traffic_log import TrafficLog
 from ego.sweep.executor import Executor, ProcessExecutor
 
 #: the columns metrics.csv starts with, before the metrics
 RUN_COLUMNS = ("controller", "seed", "status", "error")
 UNITS_FILE = "metrics_units.csv"
+#: ``--traces`` formats: the suffixes :func:`ego.export.write_trace` knows, without the dot
+TRACE_FORMATS = tuple(suffix[1:] for suffix in TRACE_SUFFIXES)
+#: more seeds than this is a sweep (ego sweep), not a comparison
+MAX_SEEDS = 100_000
 
 
 @dataclass
@@ -58,9 +76,13 @@ class RunRow:
     traces: dict = field(default_factory=dict)  # column -> values ("t" too)
     error: str = ""
     units: dict = field(default_factory=dict)  # column of traces -> unit
+    recording: str = ""  # the run's .rrd, when this comparison wrote it
+    events: list = field(default_factory=list)  # ego.scenarios.base.Event
+    traffic: TrafficLog | None = None  # the vehicles near the ego (RunResult.traffic)
+    lanes: tuple = ()  # (width, centre-line points) of the scene's lanes
 
 
-def plots_of(spec: RunSpec) -> tuple[Plot, ...]:
+def plots_of(spec: RunSpec) -> tuple:
     """The plots the scenario declares for this run's configuration."""
     cls, config, _, _ = configure(spec)
     return tuple(cls.compare_plots(config))
@@ -72,36 +94,86 @@ def _one(spec: RunSpec) -> RunRow:
         plots = plots_of(spec)
         result = run(spec)
     except Exception as exc:  # noqa: BLE001 - a broken run is a row, not a crash
-        return RunRow(spec.controller, spec.seed, "error", {}, error=f"{type(exc).__name__}: {exc}")
-    kept = ["t"] + [p.column for p in plots if p.column in result.columns]
+        return RunRow(spec.name, spec.seed, "error", {}, error=f"{type(exc).__name__}: {exc}")
+    kept = list(dict.fromkeys(["t"] + [c for p in plots for c in p.columns if c in result.columns]))
     traces = {c: result.column(c) for c in kept}
     units = {c: result.units.get(c, "") for c in kept}
-    return RunRow(spec.controller, spec.seed, result.status, flatten(result.metrics), traces, units=units)
+    return RunRow(spec.name, spec.seed, result.status, flatten(result.metrics), traces, units=units,
+                  events=list(result.events), traffic=result.traffic, lanes=result.lanes)
+
+
+def parse_variant(label: str, task: str) -> tuple[str, dict[str, str]]:
+    """A ``--controllers`` item: a controller's name, then any of its parameters as
+    ``@key=value`` (``pid@kp_lat=0.02@kd_lat=0.05``) -> (name, {key: value}). The values are
+    checked as ``--set`` checks them; ConfigError names the item."""
+    name, *items = label.split("@")
+    spec = controller_spec(name.strip(), task)
+    params: dict[str, str] = {}
+    try:
+        for item in items:
+            key, sep, value = item.partition("=")
+            if not sep or not key.strip():
+                raise ConfigError(f"{item!r} is not key=value (expected NAME@key=value@key=value...)")
+            if key.strip() in params:
+                raise ConfigError(f"{key.strip()} is given twice")
+            params[key.strip()] = value
+        apply_overrides(spec.params(), params)
+    except ConfigError as exc:
+        raise ConfigError(f"bad --controllers item {label!r}: {exc}") from None
+    return spec.name, params
+
+
+def file_label(label: str) -> str:
+    """``label`` as a file name: kept as given but for characters a file name cannot hold
+    (or would hide), each replaced by ``_`` (``gains_file=runs/a.json`` -> ``gains_file=runs_a.json``)."""
+    return re.sub(r"[^A-Za-z0-9._@=+-]", "_", label)
 
 
 def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict, out: Path,
-         backend: str = "sumo") -> list[RunSpec]:
-    """Validate names and overrides, and list the runs (before any process starts) on the
-    traffic simulator ``backend``."""
+         traces: str | None = None, backend: str = "sumo") -> list[RunSpec]:
+    """Validate names, variants and overrides, and list the runs (before any process starts).
+
+    ``controllers`` are labels: a controller's name, or a variant of it with its own
+    parameters (:func:`parse_variant`); each run is named by its label. ``traces``: a
+    format of :data:`TRACE_FORMATS`, each run's trace to ``out/traces/<label>-seed<N>.<format>``.
+    ``backend``: the traffic simulator of every run.
+    """
     cls = scenario_class(scenario)
     check_backend(cls, backend)
+    if isinstance(controllers, str) or not all(isinstance(c, str) for c in controllers):
+        raise ConfigError(f"bad controllers {controllers!r:.60} (expected a list of names)")
     if not controllers:
         raise ConfigError("--controllers needs at least one name")
-    for name in controllers:
-        controller_spec(name, cls.task)
+    check_count(seeds, "seeds", 1, MAX_SEEDS)
+    if not isinstance(overrides, Mapping):
+        raise ConfigError(f"bad overrides {overrides!r:.60} (expected a mapping of parameter name to value)")
+    dup = next((c for c in controllers if list(controllers).count(c) > 1), None)
+    if dup is not None:
+        raise ConfigError(f"bad value for --controllers: {dup!r} is listed twice")
+    if traces is not None and traces not in TRACE_FORMATS:
+        raise ConfigError(f"bad --traces {traces!r} (allowed: {', '.join(TRACE_FORMATS)})")
+    variants = {label: parse_variant(label, cls.task) for label in controllers}
+    files: dict[str, str] = {}
+    for label in controllers:
+        other = files.setdefault(file_label(label), label)
+        if other != label:
+            raise ConfigError(f"bad value for --controllers: {other!r} and {label!r} would share the "
+                              f"file name {file_label(label)!r}")
     known = {i.name for i in describe(cls.config_cls)}
-    for name in controllers:
+    for name, _ in variants.values():
         known |= {i.name for i in describe(controller_spec(name, cls.task).params)}
     unknown = sorted(set(overrides) - known)
     if unknown:
         raise ConfigError(f"unknown parameter {unknown[0]!r} for {scenario} with "
-                          f"{', '.join(controllers)} (see ego list)")
+                          f"{', '.join(controllers)} (see ego list){did_you_mean(unknown[0], known)}")
     specs = []
-    for name in controllers:
-        mine = split_overrides(scenario, name, overrides)
+    for label, (name, params) in variants.items():
+        mine = {**split_overrides(scenario, name, overrides), **params}  # the variant's own win
         for seed in range(seeds):
-            rrd = out / "runs" / f"{name}-seed{seed}.rrd"
-            specs.append(RunSpec(scenario, name, seed, mine, str(rrd), background_recording=False,
+            stem = f"{file_label(label)}-seed{seed}"
+            trace = str(out / "traces" / f"{stem}.{traces}") if traces else None
+            specs.append(RunSpec(scenario, name, seed, mine, str(out / "runs" / f"{stem}.rrd"), trace=trace,
+                                 background_recording=False, label=label,
                                  backend=backend))
     return specs
 
@@ -121,45 +193,81 @@ def _progress(done: int, total: int, row: RunRow, started: float) -> None:
 
 def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict, out: Path,
             jobs: int | None = None, progress: Callable | None = _progress,
-            executor: Executor | None = None, backend: str = "sumo") -> list[RunRow]:
+            executor: Executor | None = None, traces: str | None = None,
+            backend: str = "sumo") -> list[RunRow]:
     """Run everything, write the outputs, return the rows (in controller, seed order).
+    ``controllers`` are labels (:func:`plan`: names or variants); ``traces`` a format of
+    :data:`TRACE_FORMATS` to write each run's trace in, or None.
 
     The runs go to the sweep engines' process pool (``jobs`` workers, default one per CPU;
     libsumo allows one simulation per process; one code path with ``ego sweep``), or to
     ``executor`` when given (closed at the end; e.g. ``InlineExecutor`` for a scenario
     without SUMO). ``backend`` is the traffic simulator of every run ("sumo" or
     "highway-env"); metrics.csv's ``backend`` column says which ran.
+
+    ``out`` is locked while it runs (:class:`ego.outputs.FolderLock`: ConfigError if another
+    process holds it). A KeyboardInterrupt (Ctrl-C; SIGTERM in the ``ego`` command) stops
+    the runs: every file is still written, the unfinished runs as rows with status
+    ``interrupted``; the caller sees it in the rows.
     """
     out = Path(out)
-    specs = plan(scenario, controllers, seeds, overrides, out, backend)
-    for spec in specs:  # every value too (a bad --set value) before any process starts
+    specs = plan(scenario, controllers, seeds, overrides, out, traces, backend)
+    # every value too (a bad --set value) before any process starts: once per controller,
+    # since the seed changes nothing that is checked (100000 seeds would take a minute)
+    for spec in (s for s in specs if s.seed == 0):
         cls, config, ctrl, params = configure(spec)
         cls.build_controller(ctrl, params, config)
     cls, config, _, _ = configure(specs[0])
     plots = tuple(cls.compare_plots(config))
+    # each controller's parameters (a platoon's string stability is drawn from them)
+    params = {s.name: configure(s)[3] for s in specs if s.seed == specs[0].seed}
     declared = cls.metrics_declared(config)
-    (out / "runs").mkdir(parents=True, exist_ok=True)
-    if executor is None:
-        executor = ProcessExecutor(max(1, min(jobs or os.cpu_count() or 1, len(specs))))
-    rows: list[RunRow] = []
+    with FolderLock(out, "--out"):
+        (out / "runs").mkdir(parents=True, exist_ok=True)
+        if traces:
+            (out / "traces").mkdir(exist_ok=True)
+        remove_partials(out / "runs")  # left by a comparison that was killed
+        for spec in specs:  # an older comparison's recording must not pass for this one's
+            Path(spec.record).unlink(missing_ok=True)
+        if executor is None:
+            executor = ProcessExecutor(max(1, min(jobs or os.cpu_count() or 1, len(specs))))
+        rows = _execute(executor, specs, progress)
+        remove_partials(out / "runs")  # runs killed mid-way; their workers are gone
+        for row, spec in zip(rows, specs):
+            row.recording = spec.record if Path(spec.record).exists() else ""
+        columns = csv_columns(rows)
+        with signals_deferred():  # a second Ctrl-C waits until every file is whole
+            write_csv(rows, out / "metrics.csv", columns)
+            write_units(columns, declared, out / UNITS_FILE)
+            write_markdown(scenario, rows, list(controllers), out / "metrics.md", declared)
+            write_plots(scenario, rows, list(controllers), out, plots, params)
+    return rows
+
+
+def _execute(executor: Executor, specs: Sequence[RunSpec], progress: Callable | None) -> list[RunRow]:
+    """Run ``specs`` on ``executor`` (closed at the end): one row per spec, in their order.
+
+    On KeyboardInterrupt, or when a run in this process comes back interrupted (the
+    in-process executor: the run caught the Ctrl-C), the rest is not run and the
+    runs without a result are rows with status ``interrupted``."""
+    done: dict[tuple[str, int], RunRow] = {}
     started = time.perf_counter()
     try:
         for outcome in executor.run(_one, specs):
             spec = outcome.task
-            rows.append(outcome.value if outcome.value is not None else
-                        RunRow(spec.controller, spec.seed, "error", {}, error=outcome.error))
+            row = outcome.value if outcome.value is not None else RunRow(
+                spec.name, spec.seed, "error", {}, error=outcome.error)
+            done[(row.controller, row.seed)] = row
             if progress:
-                progress(len(rows), len(specs), rows[-1], started)
+                progress(len(done), len(specs), row, started)
+            if row.status == "interrupted":
+                break
+    except KeyboardInterrupt:
+        pass
     finally:
         executor.close()
-    order = {(s.controller, s.seed): i for i, s in enumerate(specs)}
-    rows.sort(key=lambda r: order[(r.controller, r.seed)])
-    columns = csv_columns(rows)
-    write_csv(rows, out / "metrics.csv", columns)
-    write_units(columns, declared, out / UNITS_FILE)
-    write_markdown(scenario, rows, list(controllers), out / "metrics.md", declared)
-    write_plots(scenario, rows, list(controllers), out, plots)
-    return rows
+    return [done.get((s.name, s.seed)) or RunRow(s.name, s.seed, "interrupted", {})
+            for s in specs]
 
 
 def csv_columns(rows: Sequence[RunRow]) -> list[str]:
@@ -174,7 +282,7 @@ def write_csv(rows: Sequence[RunRow], path: Path, columns: Sequence[str] | None 
     """One row per run, one column per (flattened) metric."""
     columns = list(columns or csv_columns(rows))
     keys = columns[len(RUN_COLUMNS):]
-    with open(path, "w", newline="") as f:
+    with atomic_path(path) as tmp, open(tmp, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(columns)
         for r in rows:
@@ -185,7 +293,7 @@ def write_csv(rows: Sequence[RunRow], path: Path, columns: Sequence[str] | None 
 def write_units(columns: Sequence[str], declared: Sequence[Metric], path: Path) -> None:
     """metrics.csv's sidecar: ``metric,unit``, one row per column of metrics.csv, in order."""
     units = {**dict.fromkeys(RUN_COLUMNS, "-"), **metric_units(declared, columns[len(RUN_COLUMNS):])}
-    with open(path, "w", newline="") as f:
+    with atomic_path(path) as tmp, open(tmp, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["metric", "unit"])
         w.writerows([c, units[c]] for c in columns)
@@ -239,44 +347,17 @@ def write_markdown(scenario: str, rows: Sequence[RunRow], controllers: list[str]
     errors = [r for r in rows if r.error]
     if errors:
         lines += ["", "Errors:", ""] + [f"- {r.controller} seed {r.seed}: {r.error}" for r in errors]
-    path.write_text("\n".join(lines) + "\n")
+    unfinished = [r for r in rows if r.status == "interrupted"]
+    if unfinished:
+        lines += ["", f"Interrupted: {len(unfinished)} of {len(rows)} runs did not finish: "
+                  + ", ".join(f"{r.controller} seed {r.seed}" for r in unfinished[:20])
+                  + (", ..." if len(unfinished) > 20 else "")]
+    write_text(path, "\n".join(lines) + "\n")
 
 
 def write_plots(scenario: str, rows: Sequence[RunRow], controllers: list[str], out: Path,
-                plots: Sequence[Plot]) -> None:
-    """One PNG per declared plot whose column some controller's first run has."""
-    import matplotlib
+                plots: Sequence, params: dict | None = None) -> None:
+    """One PNG per declared plot some run has the data for (see :mod:`ego.plots`)."""
+    from ego.plots import write_all
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    first = {}
-    for r in rows:
-        if r.controller not in first and r.traces:
-            first[r.controller] = r
-    runs = [first[name] for name in controllers if name in first]
-    for plot in plots:
-        fig = figure(scenario, plot, runs, min(r.seed for r in rows))
-        if fig is not None:
-            fig.savefig(out / plot.file)
-            plt.close(fig)
-
-
-def figure(scenario: str, plot: Plot, runs: Sequence[RunRow], seed: int):
-    """``plot`` of ``runs`` (one line each), the y axis labelled with the trace column's unit;
-    None when no run has the column (none got that far). A matplotlib Figure."""
-    import matplotlib.pyplot as plt
-
-    runs = [r for r in runs if plot.column in r.traces]
-    if not runs:
-        return None
-    fig, ax = plt.subplots(figsize=(9, 4.5), dpi=110)
-    for r in runs:
-        ax.plot(r.traces["t"], r.traces[plot.column], label=f"{r.controller} ({r.status})", linewidth=1.3)
-    ax.set_xlabel(with_unit("time", runs[0].units.get("t", "s")))
-    ax.set_ylabel(with_unit(plot.label, runs[0].units.get(plot.column, "")))
-    ax.set_title(f"{scenario}: {plot.label} (seed {seed})")
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="best", fontsize=8)
-    fig.tight_layout()
-    return fig
+    write_all(scenario, plots, rows, controllers, out, params)

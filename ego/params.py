@@ -9,14 +9,42 @@ parameter and what it accepts.
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import math
+import numbers
+import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
 
+#: a quarter turn (rad): the bound of every steer limit and angle
+HALF_PI = math.pi / 2
+
+
 class ConfigError(ValueError):
     """A user-supplied value or name is not allowed; the message is one line for the user."""
+
+
+def did_you_mean(name: Any, known: Iterable[Any]) -> str:
+    """``"; did you mean 'x'?"`` for the known name closest to a misspelt ``name``, or ``""``."""
+    if not isinstance(name, str):
+        return ""
+    names = [str(k) for k in known]
+    close = difflib.get_close_matches(name, names, n=1, cutoff=0.6)
+    if not close:  # a case slip (LEFT for left) is a near miss too
+        lower = {n.lower(): n for n in names}
+        close = [lower[n] for n in difflib.get_close_matches(name.lower(), list(lower), n=1, cutoff=0.8)]
+    return f"; did you mean {close[0]!r}?" if close else ""
+
+
+class Params:
+    """Base of every parameter dataclass: its values are checked when it is made, so a
+    controller's or scenario's parameters built in Python are held to the same ranges and
+    types as ``--set`` (subclasses with a ``__post_init__`` of their own call this one)."""
+
+    def __post_init__(self) -> None:
+        validate(self)
 
 
 def param(
@@ -103,48 +131,92 @@ def describe(cls_or_obj: Any) -> list[ParamInfo]:
     return out
 
 
+#: a number as the command line takes it: ASCII digits, an optional fraction and exponent
+#: (inf and nan are read, then refused by the range check with the value named)
+_NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)(e[+-]?\d+)?|[+-]?(inf|infinity|nan)", re.ASCII | re.IGNORECASE)
+
+
 def parse_value(info: ParamInfo, text: str) -> Any:
     """Convert command-line text to the parameter's type, or raise :class:`ConfigError`."""
     raw = text.strip()
+    bad = f"bad value for {info.name}: {shown(text)} (expected {info.allowed()})"
+    if info.type is bool:
+        low = raw.lower()
+        if low in ("true", "1", "yes", "on"):
+            return True
+        if low in ("false", "0", "no", "off"):
+            return False
+        raise ConfigError(bad)
+    if info.type not in (int, float):
+        return raw
+    if not _NUMBER.fullmatch(raw):  # Python also reads "1_0" and other scripts' digits: not here
+        raise ConfigError(bad)
     try:
-        if info.type is bool:
-            low = raw.lower()
-            if low in ("true", "1", "yes", "on"):
-                return True
-            if low in ("false", "0", "no", "off"):
-                return False
-            raise ValueError
-        if info.type is int:
-            value: Any = int(raw)
-        elif info.type is float:
-            value = float(raw)
-        else:
-            value = raw
-    except ValueError:
-        raise ConfigError(f"bad value for {info.name}: {text!r} (expected {info.allowed()})") from None
-    return value
+        return info.type(raw)
+    except (ValueError, OverflowError):
+        pass
+    whole = float(raw)  # the pattern is a float's
+    if info.type is int and whole.is_integer():  # "2.0" or "1e2": a whole number written as a float
+        raise ConfigError(f"{bad[:-1]}: write {int(whole)})")
+    raise ConfigError(bad)
+
+
+def shown(value: Any, exact: bool = False) -> str:
+    """A value as a message quotes it, on one line and cut short: numbers plainly (``exact``:
+    as Python writes them, so ``2.0`` shows it is a float), anything else as its repr."""
+    plain = isinstance(value, (int, float)) and not exact
+    text = _fmt(value) if plain else repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _kind(value: Any) -> str:
+    """What a value of the wrong type is, for the message."""
+    if isinstance(value, bool):
+        return "true/false"
+    if isinstance(value, numbers.Integral):
+        return "a whole number"
+    if isinstance(value, numbers.Real):
+        return "a float"
+    if isinstance(value, str):
+        return "text"
+    return "None" if value is None else f"a {type(value).__name__}"
+
+
+def _type_ok(info: ParamInfo, value: Any) -> bool:
+    """Booleans are not numbers, and a float is not a whole number even when integral
+    (``2.0`` for ``substeps`` is refused, not silently truncated)."""
+    if info.type is bool:
+        return isinstance(value, bool)
+    if isinstance(value, bool):
+        return False
+    if info.type is int:
+        return isinstance(value, numbers.Integral)
+    if info.type is float:
+        return isinstance(value, numbers.Real)
+    return isinstance(value, info.type)
 
 
 def check_value(info: ParamInfo, value: Any) -> None:
-    """Raise :class:`ConfigError` unless ``value`` is allowed for ``info``."""
-    bad = f"bad value for {info.name}: {_fmt(value)} (expected {info.allowed()})"
+    """Raise :class:`ConfigError` unless ``value`` is allowed for ``info`` (type, then range)."""
+    bad = f"bad value for {info.name}: {shown(value)} (expected {info.allowed()})"
+    if not _type_ok(info, value):
+        raise ConfigError(f"bad value for {info.name}: {shown(value, exact=True)} (expected {info.allowed()}, "
+                          f"not {_kind(value)})")
     if info.choices is not None:
         if value not in info.choices:
-            raise ConfigError(bad)
+            raise ConfigError(bad + did_you_mean(value, info.choices))
         return
     if info.type in (int, float):
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ConfigError(bad)
-        if info.type is int and int(value) != value:
-            raise ConfigError(bad)
-        if not math.isfinite(value):
+        try:
+            finite = math.isfinite(value)
+        except OverflowError:  # a whole number too big for a float
+            finite = False
+        if not finite:
             raise ConfigError(bad)
         if info.min is not None and (value <= info.min if info.min_exclusive else value < info.min):
             raise ConfigError(bad)
         if info.max is not None and value > info.max:
             raise ConfigError(bad)
-    elif info.type is bool and not isinstance(value, bool):
-        raise ConfigError(bad)
 
 
 def validate(obj: Any) -> None:
@@ -160,7 +232,9 @@ def parse_overrides(pairs: Iterable[str]) -> dict[str, str]:
         key, sep, value = item.partition("=")
         key = key.strip()
         if not sep or not key:
-            raise ConfigError(f"bad --set item {item!r} (expected key=value)")
+            raise ConfigError(f"bad --set item {shown(item)} (expected key=value)")
+        if key in out:  # the later one would silently win
+            raise ConfigError(f"--set {key} is given twice ({shown(out[key])} and {shown(value)})")
         out[key] = value
     return out
 
@@ -179,17 +253,18 @@ def apply_overrides(obj: Any, overrides: Mapping[str, Any], *, strict: bool = Tr
             rest[key] = value
             continue
         typed = parse_value(info, value) if isinstance(value, str) else value
-        if info.type is float and isinstance(typed, int) and not isinstance(typed, bool):
-            typed = float(typed)
         check_value(info, typed)
-        changes[key] = typed
+        # plain Python values (an int for a float, numpy scalars): hashes and JSON stay stable
+        changes[key] = info.type(typed)
     if strict and rest:
         raise unknown_parameter(next(iter(rest)), infos)
     new = dataclasses.replace(obj, **changes) if changes else obj
-    validate(new)
+    if not isinstance(new, Params):  # a Params checked itself when it was made
+        validate(new)
     return new, rest
 
 
 def unknown_parameter(key: str, known: Iterable[str]) -> ConfigError:
-    names = sorted(known)
-    return ConfigError(f"unknown parameter {key!r} (known: {', '.join(names)})")
+    names = sorted(set(known))
+    # the suggestion before the (long) list, where it is read
+    return ConfigError(f"unknown parameter {key!r}{did_you_mean(key, names)} (known: {', '.join(names)})")

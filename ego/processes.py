@@ -63,3 +63,46 @@ def signals_deferred():
             signal.signal(sig, handler)
         if pending:
             signal.raise_signal(pending[0])
+
+
+def exit_with(pid: int) -> None:
+    """End this process (SIGKILL) as soon as process ``pid`` ends, whatever it is doing.
+
+    For a pool worker: its parent is the multiprocessing fork server, not the process that
+    feeds it tasks, so the kernel's parent-death signal cannot say that the feeder died; a
+    worker in the middle of a long simulation would finish it, and the fork server and the
+    resource tracker (which live while any worker does) with it. A daemon thread waits on a
+    pidfd of ``pid`` instead (Linux 5.3+; elsewhere it polls once a second) and kills this
+    process when ``pid`` exits. Call it at the worker's start, while ``pid`` is alive; if
+    ``pid`` is already gone, this process ends at once.
+    """
+    import os
+    import signal
+    import threading
+
+    def die() -> None:
+        os.kill(os.getpid(), signal.SIGKILL)
+
+    try:
+        fd = os.pidfd_open(pid)
+    except ProcessLookupError:
+        die()
+        return
+    except (AttributeError, OSError):  # no pidfd here: poll
+        fd = None
+
+    def watch() -> None:
+        import select
+        import time
+
+        if fd is not None:
+            select.select([fd], [], [])  # readable once the process has exited
+            die()
+        while True:
+            try:
+                os.kill(pid, 0)
+            except ProcessLookupError:
+                die()
+            time.sleep(1.0)
+
+    threading.Thread(target=watch, name=f"exit-with-{pid}", daemon=True).start()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib.util
+import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -13,6 +14,7 @@ from ego.record import RerunRecorder
 from ego.scenarios import RunResult, Scenario, scenario_class
 from ego.scenarios.base import check_backend
 from ego.scenarios.trace import Column, Metric
+from ego.sumo.net import net_file
 
 
 @dataclass(frozen=True)
@@ -24,6 +26,9 @@ class RunSpec:
     seed: int = 0
     overrides: Mapping[str, Any] = field(default_factory=dict)
     record: str | None = None
+    #: write the trace (and traffic log) here after the run: .csv, .parquet or .mat
+    #: (:func:`ego.export.write_trace`)
+    trace: str | None = None
     #: write the recording from a separate process (False: in this one, e.g. in a pool
     #: worker that already has a core of its own)
     background_recording: bool = True
@@ -31,6 +36,28 @@ class RunSpec:
     backend: str = "sumo"
     #: a .gif or .mp4 of the run from highway-env's renderer (highway-env only)
     video: str | None = None
+    #: the controller's name in the results (``RunResult.controller``, the recording):
+    #: ``ego compare``'s variant label, e.g. ``pid@kp_lat=0.02``; default ``controller``
+    label: str = ""
+
+    @property
+    def name(self) -> str:
+        """The controller as the results name it: ``label``, else ``controller``."""
+        return self.label or self.controller
+
+    def __post_init__(self) -> None:
+        """The fields' types, at once (names and values are checked by :func:`configure`,
+        before anything is built): ConfigError naming the field, never a TypeError later."""
+        for name in ("scenario", "controller"):
+            if not isinstance(getattr(self, name), str):
+                raise ConfigError(f"bad {name} {getattr(self, name)!r} (expected a name, see ego list)")
+        if not isinstance(self.overrides, Mapping) or not all(isinstance(k, str) for k in self.overrides):
+            raise ConfigError(f"bad overrides {self.overrides!r:.60} (expected a mapping of parameter "
+                              "name to value)")
+        if self.record is not None and not isinstance(self.record, (str, os.PathLike)):
+            raise ConfigError(f"bad record {self.record!r} (expected a path ending in .rrd, or None)")
+        if not isinstance(self.background_recording, bool):
+            raise ConfigError(f"bad background_recording {self.background_recording!r} (expected true or false)")
 
 
 def split_overrides(scenario: str, controller: str, overrides: Mapping[str, Any]) -> dict:
@@ -48,6 +75,8 @@ def configure(spec: RunSpec):
 
     check_seed(spec.seed)
     cls = scenario_class(spec.scenario)
+    if cls.network is not None:  # a missing or garbled network fails here, not inside SUMO
+        net_file(cls.network)
     check_backend(cls, spec.backend)
     if spec.backend == "highway-env" and importlib.util.find_spec("highway_env") is None:
         raise ConfigError("--backend highway-env needs the highway-env package: pip install 'ego[highway]'")
@@ -63,6 +92,7 @@ def configure(spec: RunSpec):
     if rest:
         known = [i.name for i in describe(cls.config_cls)] + [i.name for i in describe(ctrl.params)]
         raise unknown_parameter(next(iter(rest)), known)
+    cls.check_config(config)
     return cls, config, ctrl, ctrl_params
 
 
@@ -70,21 +100,31 @@ def build(spec: RunSpec):
     """Resolve names and overrides into a ready scenario (validates everything first)."""
     cls, config, ctrl, ctrl_params = configure(spec)
     controller = cls.build_controller(ctrl, ctrl_params, config)
+    if spec.trace is not None:
+        from ego.export import check_trace_path
+
+        check_trace_path(spec.trace)
     recorder = None
     if spec.record is not None:
         from ego.checks import check_output_file
 
-        path = check_output_file(spec.record, "--record path", ".rrd")
+        path = check_output_file(os.fspath(spec.record), "--record path", ".rrd")
         path.parent.mkdir(parents=True, exist_ok=True)
-        recorder = RerunRecorder(path, recording_id=f"{spec.scenario}-{spec.controller}-{spec.seed}",
+        recorder = RerunRecorder(path, recording_id=f"{spec.scenario}-{spec.name}-{spec.seed}",
                                  background=spec.background_recording)
-    return cls(config, controller, seed=spec.seed, recorder=recorder, controller_name=spec.controller,
+    return cls(config, controller, seed=spec.seed, recorder=recorder, controller_name=spec.name,
                backend=spec.backend, video=spec.video)
 
 
 def run(spec: RunSpec) -> RunResult:
-    """Run one scenario to its end; SUMO and the recording are closed whatever happens."""
-    return build(spec).run()
+    """Run one scenario to its end; SUMO and the recording are closed whatever happens.
+    With ``spec.trace``, the trace is written there (an interrupted run's too)."""
+    result = build(spec).run()
+    if spec.trace is not None:
+        from ego.export import write_trace
+
+        write_trace(result, spec.trace)
+    return result
 
 
 def declared_metrics(spec: RunSpec) -> tuple[Metric, ...]:

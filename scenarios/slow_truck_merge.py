@@ -4,7 +4,7 @@ the two. Copy this file and change the traffic.
 
     python scenarios/slow_truck_merge.py [--controller fuzzy] [--out runs/truck]
 
-What the kit gives (see README, "Writing a scenario"):
+What the kit gives (see docs/architecture.md, "Writing a scenario from the kit"):
 
 * ``EvasiveLaneChange`` / ``EvasiveConfig``: the motorway, the ego on its plant (report
   000's car with ABS), the surround sensor (gaps and TTC from the vehicles' outlines), the

@@ -275,3 +275,25 @@ def test_train_and_tune_write_into_the_working_folder_unless_told_to_install(tmp
     assert p.returncode == 0, p.stderr
     assert (tmp_path / "runs" / "cascade_pid_tuned.json").is_file()
     assert TUNED_PRESET.read_bytes() == shipped  # the shipped preset is untouched
+
+
+def test_list_gives_numbers_readably_and_angles_in_degrees_too(capsys):
+    assert main(["list"]) == 0
+    text = capsys.readouterr().out
+    assert "0.4363323129985824" not in text and "25.0 s" not in text
+    lane = text[text.index("lane-centering [lane-centering task]"):]
+    assert "max_steer           0.436332 rad (25 deg)  front steer limit" in lane
+    assert "the end of the 2935 m road: 363 s at 8 m/s" in lane
+
+
+@pytest.mark.sumo
+def test_the_duration_that_ends_a_run_is_named_and_a_shortened_drive_is_no_failure(capsys):
+    # lane centring's end is the road's, at the configured speed: a shorter duration is a choice
+    assert main(["run", "lane-centering", "-c", "cascade-pid", "--set", "duration=20"]) == 0
+    first = capsys.readouterr().out.splitlines()[0]
+    assert first == ("lane-centering with cascade-pid (seed 0): ENDED - the duration (20 s) ended the run "
+                     "at s = 178 m of the drive to s = 2920 m")
+    # the duration cut the emergency brake's lane change short: the manoeuvre did not finish
+    assert main(["run", "emergency-brake", "-c", "pid", "--set", "duration=5"]) == 1
+    first = capsys.readouterr().out.splitlines()[0]
+    assert first.endswith("TIMEOUT - the duration (5 s) ended the run before the manoeuvre (lane change) finished")

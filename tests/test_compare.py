@@ -9,7 +9,8 @@ from ego.sweep.executor import InlineExecutor
 import pytest
 from rerun.chunk import RrdReader
 
-from ego.compare import _one, compare, figure
+from ego.compare import _one, compare
+from ego.plots import figure
 from ego.params import ConfigError
 from ego.runner import RunSpec, declared_columns
 from ego.scenarios import SCENARIOS
@@ -61,12 +62,12 @@ def test_a_run_row_keeps_the_plotted_columns_with_their_units(point_mass, tmp_pa
     assert set(row.traces) == {"t", "speed", "e_lon"}  # only what the plots need
     assert row.units == {"t": "s", "speed": "m/s", "e_lon": "m"}
     assert len(row.traces["speed"]) == 100
-    fig = figure("point-mass", point_mass.plots[1], [row], 0)
+    fig = figure("point-mass", point_mass.plots[1], [row], ["pid"])
     ax = fig.axes[0]
     assert ax.get_ylabel() == "position error [m]" and ax.get_xlabel() == "time [s]"
-    assert ax.get_title() == "point-mass: position error (seed 0)"
-    assert [line.get_label() for line in ax.lines] == ["pid (completed)"]
-    assert figure("point-mass", Plot("Fx", "fx.png", "force"), [row], 0) is None  # not kept
+    assert fig._suptitle.get_text() == "point-mass: position error - seed 0"
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == ["pid (1 completed)"]
+    assert figure("point-mass", Plot("Fx", "fx.png", "force"), [row], ["pid"]) is None  # not kept
 
 
 @pytest.mark.parametrize("name", list(SCENARIOS))
@@ -77,8 +78,9 @@ def test_every_scenario_declares_what_compare_shows(name):
     columns = {c.name: c.unit for c in declared_columns(cls, config)}
     plots = cls.compare_plots(config)
     for plot in plots:
-        assert isinstance(plot, Plot) and plot.column in columns, plot
-        assert plot.file.endswith(".png") and "[" not in plot.label, plot
+        optional = getattr(plot, "gain_columns", ())  # controller signals, when there
+        assert all(c in columns for c in plot.columns if c not in optional), plot
+        assert plot.file.endswith(".png") and "[" not in getattr(plot, "label", ""), plot
     assert len({p.file for p in plots}) == len(plots)
     metrics = [m.name for m in cls.metrics_declared(config)]
     assert len(set(metrics)) == len(metrics)
@@ -185,7 +187,7 @@ def test_compare_the_platoon_controllers(tmp_path):
     assert {"followers.f3.min_gap", "settle_times.brake@10s", "amplification.f2->f3.l2_spacing_error"} <= set(rows[0])
     md = (out / "metrics.md").read_text()
     assert "settle_times.brake@10s [s]" in md and "string_stable" in md and "| pid | 2 completed |" in md
-    for png in ("spacing_error_f1.png", "spacing_error_f3.png", "accel_f1.png", "accel_f3.png"):
+    for png in ("speed.png", "spacing_error.png", "gap.png", "accel.png", "string_stability.png"):
         assert (out / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", png
     assert not (out / "lateral_error.png").exists()
 

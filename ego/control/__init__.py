@@ -22,11 +22,11 @@ from ego.control.narma import NarmaL2Controller, NarmaL2Params
 from ego.control.pid import PID, PIDController, PIDParams
 from ego.control.rbf_smc import RBFSMCController, RBFSMCParams
 from ego.control.tasks import TASKS, Signal, Task
-from ego.params import ConfigError
+from ego.params import ConfigError, Params, did_you_mean
 
 
 @dataclass(frozen=True)
-class NoParams:
+class NoParams(Params):
     """No parameters."""
 
 
@@ -42,6 +42,8 @@ class NoController:
 
     def step(self, obs: Observation) -> tuple[float, float]:
         return 0.0, 0.0
+
+    signal_units: dict[str, str] = {}
 
     def signals(self) -> dict[str, float]:
         return {}
@@ -117,9 +119,11 @@ def controller_spec(name: str, task: str = "tracking") -> ControllerSpec:
         return CONTROLLERS[task][name]
     except KeyError:
         if task not in CONTROLLERS:
-            raise ConfigError(f"unknown task {task!r} (known: {', '.join(CONTROLLERS)})") from None
+            raise ConfigError(f"unknown task {task!r} (known: {', '.join(CONTROLLERS)})"
+                              f"{did_you_mean(task, CONTROLLERS)}") from None
         others = [t for t in CONTROLLERS if name in CONTROLLERS[t]]
-        hint = f"; {name!r} is a {others[0]} controller" if others else ""
+        # the right name for another task, or a misspelt one
+        hint = f"; {name!r} is a {others[0]} controller" if others else did_you_mean(name, CONTROLLERS[task])
         raise ConfigError(
             f"unknown controller {name!r} for the {task} task (known: "
             f"{', '.join(CONTROLLERS[task])}){hint}"

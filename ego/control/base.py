@@ -64,7 +64,17 @@ class Controller(Protocol):
         """Return (Fx per driven wheel in N, front steer angle in rad)."""
 
     def signals(self) -> Mapping[str, float]:
-        """Internal signals worth recording (gains, sliding variables); may be empty."""
+        """Internal signals worth recording (gains, sliding variables); may be empty.
+
+        A controller declares their units in a ``signal_units`` attribute (signal name ->
+        SI unit, "-" for a pure number): the recording draws one panel per unit. It is
+        optional (a controller without it gets unit-less panels), so it is not a member of
+        this protocol; every controller shipped with ego declares it."""
+
+
+def signal_units(controller: Controller) -> dict[str, str]:
+    """Signal name -> unit, as ``controller.signal_units`` declares them ({} without)."""
+    return dict(getattr(controller, "signal_units", None) or {})
 
 
 @dataclass(frozen=True)

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ego.control.base import Observation
-from ego.params import param
+from ego.params import Params, param
 
 N_IN, N_HIDDEN, N_OUT = 8, 10, 6
 #: the report's control law: u_x = Kp p + 4 Ki i + 2 Kd d, u_y = Kp p + 0.1 Ki i + 0.55 Kd d
@@ -46,24 +46,25 @@ REPORT_WEIGHTS = (4.0, 2.0, 0.1, 0.55)
 
 
 @dataclass(frozen=True)
-class BPPIDParams:
+class BPPIDParams(Params):
     variant: str = param("stable", "-", "stable (textbook learning, default) or report "
                          "(the published S-function)", choices=("stable", "report"))
-    learning_rate: float = param(0.002, "-", "eta of the stable variant (report: 0.05)", min=0.0)
+    learning_rate: float = param(0.002, "-", "eta of the stable variant (report: 0.05; 0: no learning)",
+                                 min=0.0, max=1.0)
     momentum: float = param(0.01, "-", "alpha of the stable variant (report: 0.01)", min=0.0,
                             max=0.99)
-    fx_gain: float = param(500.0, "N", "Fx = fx_gain * u_x", min=0.0)
-    delta_gain: float = param(0.004, "rad", "delta = delta_gain * u_y", min=0.0)
+    fx_gain: float = param(500.0, "N", "Fx = fx_gain * u_x", min=0.0, max=20000.0)
+    delta_gain: float = param(0.004, "rad", "delta = delta_gain * u_y", min=0.0, max=1.0)
     ki_lon_weight: float = param(0.05, "-", "u_x = Kp p + ki_lon_weight Ki i + kd_lon_weight Kd d, "
-                                 "stable variant (report: 4)", min=0.0)
-    kd_lon_weight: float = param(2.0, "-", "stable variant (report: 2)", min=0.0)
+                                 "stable variant (report: 4)", min=0.0, max=100.0)
+    kd_lon_weight: float = param(2.0, "-", "stable variant (report: 2)", min=0.0, max=100.0)
     ki_lat_weight: float = param(0.0, "-", "u_y = Kp p + ki_lat_weight Ki i + kd_lat_weight Kd d, "
-                                 "stable variant (report: 0.1)", min=0.0)
-    kd_lat_weight: float = param(2.5, "-", "stable variant (report: 0.55)", min=0.0)
+                                 "stable variant (report: 0.1)", min=0.0, max=100.0)
+    kd_lat_weight: float = param(2.5, "-", "stable variant (report: 0.55)", min=0.0, max=100.0)
     integral_limit: float = param(5.0, "m s", "|integral of the error| limit of the stable "
-                                  "variant (anti-windup)", min=0.0, min_exclusive=True)
+                                  "variant (anti-windup)", min=0.0, max=1000.0, min_exclusive=True)
     init_scale: float = param(0.1, "-", "initial weights ~ N(0, init_scale^2), stable variant "
-                              "(report: 1)", min=0.0)
+                              "(report: 1)", min=0.0, max=10.0)
 
 
 class BPPIDController:
@@ -148,6 +149,10 @@ class BPPIDController:
             step = -self.eta * g + sign * self.alpha * (w - w_prev)
             w_prev[:] = w
             w += step
+
+    #: the network's gain multipliers (1 + k) and the norm of its weights: pure numbers
+    signal_units = {"kp_lon": "-", "ki_lon": "-", "kd_lon": "-", "kp_lat": "-", "ki_lat": "-",
+                    "kd_lat": "-", "weight_norm": "-"}
 
     def signals(self) -> dict[str, float]:
         g = self.gains

@@ -21,32 +21,54 @@ Gains: the report's (``preset=report``) or ours from ``ego tune lane-centering``
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass
 from functools import lru_cache
+from importlib.resources import files
 from pathlib import Path
 
 from ego.control.base import Observation
 from ego.models.lateral_error import LateralErrorParams
-from ego.params import ConfigError, param
+from ego.checks import finite_number, read_json
+from ego.params import ConfigError, Params, did_you_mean, param
 
 #: Kp, Ki, Kd of the e, psi, vy and r loops: report 003's differential-evolution result
 REPORT_GAINS = (0.2036, 0.3188, 0.1748, 1.5698, 0.0482, 0.0236,
                 0.1837, 0.4796, 0.2856, 1.0627, 0.3497, 0.1980)
 GAIN_NAMES = tuple(f"{k}_{loop}" for loop in ("e", "psi", "vy", "r") for k in ("kp", "ki", "kd"))
-TUNED_PRESET = Path(__file__).resolve().parent / "trained" / "cascade_pid_tuned.json"
+TUNED_PRESET = Path(str(files("ego.control") / "trained" / "cascade_pid_tuned.json"))  # package data
+
+
+#: a preset's gains lie in 0..MAX_GAIN (the tuner searches 0..2; a negative gain is a sign error)
+MAX_GAIN = 100.0
 
 
 @lru_cache(maxsize=4)
 def load_preset(path: str = str(TUNED_PRESET)) -> tuple[float, ...]:
-    """The 12 gains of a preset file written by ``ego tune lane-centering``."""
+    """The 12 gains of a preset file written by ``ego tune lane-centering``; ConfigError
+    naming the file and what is wrong with it (not JSON, a gain missing, not a finite number
+    from 0 to ``MAX_GAIN``)."""
     p = Path(path)
     if not p.exists():
         raise ConfigError(f"no tuned gains at {p} (run: ego tune lane-centering)")
-    data = json.loads(p.read_text())
-    gains = tuple(float(data["gains"][n]) for n in GAIN_NAMES)
-    return gains
+    data = read_json(p, "gains_file")
+    gains = data.get("gains") if isinstance(data, dict) else None
+    if not isinstance(gains, dict):
+        raise ConfigError(f"bad gains_file {path!r}: expected an object with \"gains\": "
+                          f"{{{', '.join(GAIN_NAMES[:2])}, ...}} as ego tune writes")
+    for name in GAIN_NAMES:
+        if name not in gains:
+            raise ConfigError(f"bad gains_file {path!r}: the gain {name} is missing "
+                              f"(expected {', '.join(GAIN_NAMES)})")
+        value = gains[name]
+        if not finite_number(value) or not 0.0 <= value <= MAX_GAIN:
+            raise ConfigError(f"bad gains_file {path!r}: {name} = {value!r:.40} (expected a number "
+                              f"from 0 to {MAX_GAIN:g})")
+    extra = sorted(set(gains) - set(GAIN_NAMES))
+    if extra:
+        raise ConfigError(f"bad gains_file {path!r}: unknown gain {extra[0]!r} (expected "
+                          f"{', '.join(GAIN_NAMES)}){did_you_mean(extra[0], GAIN_NAMES)}")
+    return tuple(float(gains[n]) for n in GAIN_NAMES)
 
 
 def adaptive_gain(e: float) -> float:
@@ -56,20 +78,25 @@ def adaptive_gain(e: float) -> float:
 
 
 @dataclass(frozen=True)
-class CascadePIDParams:
+class CascadePIDParams(Params):
     """Report 003's cascade; ``preset`` picks the gains."""
 
     preset: str = param("tuned", "-", "gains: tuned (ego tune lane-centering) or report (report "
                         "003's)", choices=("tuned", "report"))
     gains_file: str = param("", "-", "a preset file written by ego tune (overrides preset)")
     integral_limit: float = param(1.0, "-", "|integral| limit of every loop (anti-windup)",
-                                  min=0, min_exclusive=True)
+                                  min=0, max=100.0, min_exclusive=True)
     alpha: float = param(0.2, "-", "derivative filter: D = alpha d + (1 - alpha) D_prev",
                          min=0, max=1, min_exclusive=True)
     adaptive: bool = param(True, "-", "report 003's adaptive gain on the position loop")
     feedforward: bool = param(True, "-", "curvature feed-forward kappa (L + K_us v^2)")
     steer_limit: float = param(25.0, "deg", "|delta| limit (report 003: 25 deg)", min=1.0, max=45.0)
     steer_rate: float = param(30.0, "deg/s", "|d delta/dt| limit", min=1.0, max=1000.0)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.gains_file:  # read and check it now, before any run starts
+            load_preset(self.gains_file)
 
     def gains(self) -> tuple[float, ...]:
         if self.gains_file:
@@ -161,6 +188,9 @@ class CascadePID:
         delta = self.law.step(obs.d - obs.d_ref, obs.heading_error, obs.vy, obs.yaw_rate,
                               obs.curvature, obs.speed)
         return obs.accel_ref, delta
+
+    #: the outer loops' outputs (references of the inner loops) and the feedback steer
+    signal_units = {"psi_err_ref": "rad", "vy_ref": "m/s", "r_ref": "rad/s", "delta_fb": "rad"}
 
     def signals(self) -> dict[str, float]:
         o = self.law.out

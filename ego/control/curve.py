@@ -27,7 +27,7 @@ from functools import lru_cache
 from ego.control.base import Observation
 from ego.control.fuzzy_engine import FastMamdani, table_system
 from ego.control.pid import PID
-from ego.params import param
+from ego.params import HALF_PI, Params, param
 
 TERMS = ("NB", "NS", "ZE", "PS", "PB")
 
@@ -85,16 +85,16 @@ def lateral_errors(obs: Observation) -> tuple[float, float]:
 # --- the optional pedal loop -----------------------------------------------------------------
 
 @dataclass(frozen=True)
-class PedalParams:
+class PedalParams(Params):
     """Report 002's afterthought: a pedal PI that lowers a_x while the angle error is large."""
 
     pedal: bool = param(False, "-", "close the pedal loop (report 002's idea; default: hold the "
                         "scenario's a_x)")
     pedal_kp: float = param(20.0, "m/s^2/rad", "pedal loop: deceleration per rad of excess "
-                            "angle error", min=0)
-    pedal_ki: float = param(20.0, "m/s^3/rad", "pedal loop: integral gain", min=0)
+                            "angle error", min=0, max=1000.0)
+    pedal_ki: float = param(20.0, "m/s^3/rad", "pedal loop: integral gain", min=0, max=1000.0)
     pedal_angle: float = param(0.05, "rad", "pedal loop: angle error tolerated before it "
-                               "lifts off", min=0)
+                               "lifts off", min=0, max=HALF_PI)
     pedal_min_accel: float = param(-3.0, "m/s^2", "pedal loop: strongest braking it may "
                                    "command", min=-9.0, max=0.0)
 
@@ -133,10 +133,11 @@ class PedalLoop:
 class CurvePIDParams(PedalParams):
     """Report 002's PID: Kp = 2, Ki = 0.5, no D (it destabilised the report's loop)."""
 
-    kp: float = param(2.0, "rad/m", "proportional gain on e = e_lat + e_head", min=0)
-    ki: float = param(0.5, "rad/(m s)", "integral gain", min=0)
-    kd: float = param(0.0, "rad s/m", "derivative gain (on the measured error rate)", min=0)
-    steer_limit: float = param(0.6, "rad", "|delta| limit", min=0, min_exclusive=True)
+    kp: float = param(2.0, "rad/m", "proportional gain on e = e_lat + e_head", min=0, max=100.0)
+    ki: float = param(0.5, "rad/(m s)", "integral gain", min=0, max=100.0)
+    kd: float = param(0.0, "rad s/m", "derivative gain (on the measured error rate)", min=0,
+                      max=100.0)
+    steer_limit: float = param(0.6, "rad", "|delta| limit", min=0, max=HALF_PI, min_exclusive=True)
 
 
 class CurvePID:
@@ -162,6 +163,10 @@ class CurvePID:
         delta = self.pid.step(e, de)
         return self.pedal.step(obs, e_head), delta
 
+    #: e = e_lat + e_head (a heading error counts as metres, as the gains in rad/m say), its
+    #: integral, and the pedal's command
+    signal_units = {"pid_e": "m", "pid_integral": "m s", "a_x_cmd": "m/s^2"}
+
     def signals(self) -> dict[str, float]:
         return {"pid_e": self._e, "pid_integral": self.pid.integral, "a_x_cmd": self.pedal.a_x}
 
@@ -171,18 +176,18 @@ class CurvePID:
 @dataclass(frozen=True)
 class FuzzyCurveParams(PedalParams):
     """Report 002's dual-table fuzzy steering. The report gives the tables, not the
-    universes or the weight: these are ours (see README)."""
+    universes or the weight: these are ours (see docs/controllers.md)."""
 
     w: float = param(0.5, "-", "weight of the angle table: delta = w delta_a + (1 - w) delta_d",
                      min=0, max=1)
     speed_range: float = param(20.0, "m/s", "speed universe [-range, range]: ZE is standstill, "
-                               "PS its middle, PB its end", min=0, min_exclusive=True)
-    position_range: float = param(0.15, "m", "position-error universe [-range, range]", min=0,
-                                  min_exclusive=True)
-    angle_range: float = param(0.1, "rad", "angle-error universe [-range, range]", min=0,
-                               min_exclusive=True)
+                               "PS its middle, PB its end", min=0.1, max=100.0)
+    position_range: float = param(0.15, "m", "position-error universe [-range, range]", min=0.001,
+                                  max=10.0)
+    angle_range: float = param(0.1, "rad", "angle-error universe [-range, range]", min=0.001,
+                               max=HALF_PI)
     steer_range: float = param(0.8, "rad", "output universe: each table steers within "
-                               "[-range, range]", min=0, min_exclusive=True)
+                               "[-range, range]", min=0.001, max=HALF_PI)
 
 
 class FuzzyCurve:
@@ -209,6 +214,8 @@ class FuzzyCurve:
         self._delta_a = da = wa * self._angle(v, e_head * ka)
         self._delta_d = dd = wd * self._position(v, e_lat * kd)
         return self.pedal.step(obs, e_head), da + dd
+
+    signal_units = {"delta_angle": "rad", "delta_position": "rad", "a_x_cmd": "m/s^2"}
 
     def signals(self) -> dict[str, float]:
         return {"delta_angle": self._delta_a, "delta_position": self._delta_d,

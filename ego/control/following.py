@@ -19,9 +19,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ego.control.base import signal_units
 from ego.control.pid import PID
 from ego.models.longitudinal import SpacingPolicy
-from ego.params import ConfigError, param
+from ego.params import ConfigError, Params, param
 
 
 @dataclass(slots=True)
@@ -100,13 +101,13 @@ class SampledFollower:
 
 
 @dataclass(frozen=True)
-class FollowingPIDParams:
+class FollowingPIDParams(Params):
     """Report 004's baseline PID on the spacing error."""
 
-    kp: float = param(0.85, "1/s^2", "proportional gain (report 004: 0.85)", min=0.0)
-    ki: float = param(0.2, "1/s^3", "integral gain (report 004: 0.2)", min=0.0)
+    kp: float = param(0.85, "1/s^2", "proportional gain (report 004: 0.85)", min=0.0, max=100.0)
+    ki: float = param(0.2, "1/s^3", "integral gain (report 004: 0.2)", min=0.0, max=100.0)
     kd: float = param(0.3, "1/s", "derivative gain, on the measured error rate (report 004: 0.3)",
-                      min=0.0)
+                      min=0.0, max=100.0)
     period: float = param(0.1, "s", "control period: a new command every period, held between "
                           "(report 004: 1 s)", min=0.01, max=2.0)
 
@@ -130,18 +131,21 @@ class FollowingPID(SampledFollower):
         pid.u_min, pid.u_max = -obs.max_decel, obs.max_accel
         return pid.step(obs.spacing_error, obs.spacing_error_rate)
 
+    signal_units = {"integral": "m s"}  #: integral of the spacing error
+
     def signals(self) -> dict[str, float]:
         return {"integral": self.pid.integral}
 
 
 @dataclass(frozen=True)
-class BPPIDAccParams:
+class BPPIDAccParams(Params):
     """Report 004's BP neural-network PID for car following."""
 
-    learning_rate: float = param(0.25, "-", "eta (report 004: 0.25)", min=0.0)
+    learning_rate: float = param(0.25, "-", "eta (report 004: 0.25; 0: no learning)", min=0.0,
+                                 max=1.0)
     momentum: float = param(0.01, "-", "alpha (report 004: 0.01)", min=0.0, max=0.99)
     init_range: float = param(0.5, "-", "initial weights ~ U[-init_range, init_range] "
-                              "(report 004: 0.5)", min=0.0)
+                              "(report 004: 0.5)", min=0.0, max=10.0, min_exclusive=True)
     period: float = param(0.1, "s", "control period: a new command every period, held between "
                           "(report 004: 1 s)", min=0.01, max=2.0)
 
@@ -216,6 +220,9 @@ class BPPIDAcc(SampledFollower):
         self.u = u
         return u
 
+    #: the network's gains, read as the continuous PID's (command in m/s^2 from errors in m)
+    signal_units = {"kp": "1/s^2", "ki": "1/s^3", "kd": "1/s"}
+
     def signals(self) -> dict[str, float]:
         g = self.gains
         return {"kp": float(g[0]), "ki": float(g[1]), "kd": float(g[2])}
@@ -250,6 +257,12 @@ class PlatoonControl:
         if self._signals is not None and any(getattr(m, "updated", True) for m in self.members):
             self._signals = None
         return actions
+
+    @property
+    def signal_units(self) -> dict[str, str]:
+        """Every member's signal units, under the names :meth:`signals` gives them."""
+        return {f"{name}_{vid}": unit for member, vid in zip(self.members, self.ids)
+                for name, unit in signal_units(member).items()}
 
     def signals(self) -> dict[str, float]:
         """Every member's signals; rebuilt only after a member computed a new command

@@ -15,7 +15,7 @@ from functools import lru_cache
 
 from ego.control.base import Observation
 from ego.control.fuzzy_engine import FastMamdani, table_system
-from ego.params import param
+from ego.params import Params, param
 
 TERMS = ("NB", "NM", "NS", "ZO", "PS", "PM", "PB")
 
@@ -59,15 +59,15 @@ def evaluator() -> FastMamdani:
 
 
 @dataclass(frozen=True)
-class FuzzyParams:
+class FuzzyParams(Params):
     """Report 000's gains; input gains of 1 reproduce the lane-change experiments."""
 
-    fx_gain: float = param(100.0, "N", "output gain: Fx = fx_gain * u", min=0)
-    delta_gain: float = param(0.001, "rad", "output gain: delta = delta_gain * u", min=0)
-    ke_lon: float = param(1.0, "1/m", "longitudinal error input gain", min=0)
-    kec_lon: float = param(1.0, "s/m", "longitudinal error-rate input gain", min=0)
-    ke_lat: float = param(1.0, "1/m", "lateral error input gain", min=0)
-    kec_lat: float = param(1.0, "s/m", "lateral error-rate input gain", min=0)
+    fx_gain: float = param(100.0, "N", "output gain: Fx = fx_gain * u", min=0, max=20000.0)
+    delta_gain: float = param(0.001, "rad", "output gain: delta = delta_gain * u", min=0, max=1.0)
+    ke_lon: float = param(1.0, "1/m", "longitudinal error input gain", min=0, max=1000.0)
+    kec_lon: float = param(1.0, "s/m", "longitudinal error-rate input gain", min=0, max=1000.0)
+    ke_lat: float = param(1.0, "1/m", "lateral error input gain", min=0, max=1000.0)
+    kec_lat: float = param(1.0, "s/m", "lateral error-rate input gain", min=0, max=1000.0)
 
 
 class FuzzyController:
@@ -91,6 +91,9 @@ class FuzzyController:
         self._u_lon = u_lon
         self._u_lat = u_lat
         return fx_gain * u_lon, delta_gain * u_lat
+
+    #: the rule base's outputs before the output gains: pure numbers
+    signal_units = {"fuzzy_u_lon": "-", "fuzzy_u_lat": "-"}
 
     def signals(self) -> dict[str, float]:
         return {"fuzzy_u_lon": self._u_lon, "fuzzy_u_lat": self._u_lat}

@@ -27,7 +27,7 @@ from ego.control.base import Observation
 from ego.control.fuzzy import INPUT_RANGE, INPUT_SAMPLES, OUTPUT_SAMPLES, TERMS
 from ego.control.fuzzy_engine import FastMamdani, table_system
 from ego.control.pid import PID
-from ego.params import param
+from ego.params import HALF_PI, Params, param
 
 
 def _table(text: str) -> tuple[tuple[str, ...], ...]:
@@ -69,27 +69,27 @@ def evaluator() -> FastMamdani:
 
 
 @dataclass(frozen=True)
-class FuzzyPIDParams:
+class FuzzyPIDParams(Params):
     """Report 000's gain scales; ``adapt`` and the input gains are ours (lost figure)."""
 
     variant: str = param("tuned", "-", "tuned (default) or report (the report's lateral scales, "
                          "overriding kp_lat, ki_lat, kd_lat)", choices=("tuned", "report"))
-    kp_lon: float = param(800.0, "N/m", "longitudinal Kp scale (report: 800)", min=0)
-    ki_lon: float = param(200.0, "N/(m s)", "longitudinal Ki scale (report: 200)", min=0)
-    kd_lon: float = param(800.0, "N s/m", "longitudinal Kd scale (report: 800)", min=0)
-    kp_lat: float = param(0.008, "rad/m", "lateral Kp scale (report: 0.0005)", min=0)
-    ki_lat: float = param(0.0, "rad/(m s)", "lateral Ki scale (report: 0)", min=0)
-    kd_lat: float = param(0.016, "rad s/m", "lateral Kd scale (report: 0.002)", min=0)
+    kp_lon: float = param(800.0, "N/m", "longitudinal Kp scale (report: 800)", min=0, max=1e5)
+    ki_lon: float = param(200.0, "N/(m s)", "longitudinal Ki scale (report: 200)", min=0, max=1e5)
+    kd_lon: float = param(800.0, "N s/m", "longitudinal Kd scale (report: 800)", min=0, max=1e5)
+    kp_lat: float = param(0.008, "rad/m", "lateral Kp scale (report: 0.0005)", min=0, max=10.0)
+    ki_lat: float = param(0.0, "rad/(m s)", "lateral Ki scale (report: 0)", min=0, max=10.0)
+    kd_lat: float = param(0.016, "rad s/m", "lateral Kd scale (report: 0.002)", min=0, max=10.0)
     adapt: float = param(0.5, "-", "how far the rules move each gain: scale*(1 + adapt*dK)",
                          min=0.0, max=1.0)
-    ke_lon: float = param(1.0, "1/m", "longitudinal error input gain", min=0)
-    kec_lon: float = param(1.0, "s/m", "longitudinal error-rate input gain", min=0)
-    ke_lat: float = param(1.0, "1/m", "lateral error input gain", min=0)
-    kec_lat: float = param(1.0, "s/m", "lateral error-rate input gain", min=0)
-    tau_d: float = param(0.05, "s", "derivative low-pass time constant", min=0)
+    ke_lon: float = param(1.0, "1/m", "longitudinal error input gain", min=0, max=1000.0)
+    kec_lon: float = param(1.0, "s/m", "longitudinal error-rate input gain", min=0, max=1000.0)
+    ke_lat: float = param(1.0, "1/m", "lateral error input gain", min=0, max=1000.0)
+    kec_lat: float = param(1.0, "s/m", "lateral error-rate input gain", min=0, max=1000.0)
+    tau_d: float = param(0.05, "s", "derivative low-pass time constant", min=0, max=10.0)
     fx_limit: float = param(4805.0, "N", "|Fx| limit per driven wheel (0.7 m g / Nw)", min=0,
-                            min_exclusive=True)
-    steer_limit: float = param(0.5, "rad", "|delta| limit", min=0, min_exclusive=True)
+                            max=20000.0, min_exclusive=True)
+    steer_limit: float = param(0.5, "rad", "|delta| limit", min=0, max=HALF_PI, min_exclusive=True)
 
 
 class _Channel:
@@ -138,6 +138,10 @@ class FuzzyPIDController:
         fx = self.lon.step(obs.s_ref - obs.s, obs.ds_ref - obs.ds)
         delta = self.lat.step(obs.d_ref - obs.d, obs.dd_ref - obs.dd)
         return fx, delta
+
+    #: the scheduled gains: Fx (N) and delta (rad) per m of error, per m s, per m/s
+    signal_units = {"kp_lon": "N/m", "ki_lon": "N/(m s)", "kd_lon": "N s/m",
+                    "kp_lat": "rad/m", "ki_lat": "rad/(m s)", "kd_lat": "rad s/m"}
 
     def signals(self) -> dict[str, float]:
         lon, lat = self.lon.pid, self.lat.pid

@@ -21,22 +21,25 @@ preallocated buffers; torch is only needed to train.
 
 from __future__ import annotations
 
-import json
+import zipfile
+import zlib
 from dataclasses import dataclass
 from functools import lru_cache
+from importlib.resources import files
 from pathlib import Path
 
 import numpy as np
 
 from ego.control.base import Observation
 from ego.control.curve import PedalLoop, PedalParams
-from ego.params import ConfigError, param
+from ego.checks import check_input_file, finite_number, read_json
+from ego.params import HALF_PI, ConfigError, param
 
 #: the regressor, in order; ``_1``/``_2`` are one and two samples back, u the steer (rad)
 FEATURES = ("e_lat", "e_head", "e_lat_1", "e_head_1", "e_lat_2", "e_head_2", "u_1", "u_2",
             "speed", "a_x", "curvature", "curvature_ahead")
 #: where the shipped networks live (written by ``ego train narma-l2``)
-TRAINED_DIR = Path(__file__).resolve().parent / "trained"
+TRAINED_DIR = Path(str(files("ego.control") / "trained"))  # package data, installed or not
 DEFAULT_MODEL = TRAINED_DIR / "narma_l2.npz"
 
 
@@ -50,9 +53,6 @@ class NarmaModel:
     def __init__(self, arrays: dict, meta: dict) -> None:
         self.meta = meta
         self.h = float(meta["sample_period"])
-        if tuple(meta["features"]) != FEATURES:
-            raise ConfigError(f"the NARMA-L2 model was trained on features {meta['features']}, "
-                              f"this ego expects {list(FEATURES)}: retrain with ego train narma-l2")
         self.mean = np.asarray(arrays["mean"], dtype=float)
         self.inv_std = 1.0 / np.asarray(arrays["std"], dtype=float)
         self.dy_scale = float(arrays["dy_scale"])
@@ -67,13 +67,27 @@ class NarmaModel:
 
     @classmethod
     def load(cls, path: str | Path = DEFAULT_MODEL) -> NarmaModel:
+        """The weights (.npz) and their metadata (the .json beside them), each checked: a
+        file that is not what ``ego train narma-l2`` writes is a ConfigError naming it."""
         path = Path(path)
         meta_path = path.with_suffix(".json")
-        if not path.exists() or not meta_path.exists():
+        if path.suffix == ".npz" and not path.exists():
             raise ConfigError(f"no trained NARMA-L2 model at {path} (train one: ego train narma-l2)")
-        with np.load(path) as data:
-            arrays = {k: data[k] for k in data.files}
-        return cls(arrays, json.loads(meta_path.read_text()))
+        check_input_file(path, "NARMA-L2 model", ".npz")
+        if not meta_path.exists():
+            raise ConfigError(f"bad NARMA-L2 model {str(path)!r}: its metadata {meta_path.name} is missing "
+                              "(ego train narma-l2 writes both)")
+        meta = read_json(meta_path, "NARMA-L2 metadata")
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                arrays = {k: data[k] for k in data.files}
+        except (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
+            raise ConfigError(f"bad NARMA-L2 model {str(path)!r}: not a readable .npz file "
+                              f"({type(exc).__name__})") from None
+        problem = _meta_problem(meta) or _arrays_problem(arrays)
+        if problem:
+            raise ConfigError(f"bad NARMA-L2 model {str(path)!r}: {problem} (retrain: ego train narma-l2)")
+        return cls(arrays, meta)
 
     def _net(self, i: int, xn: np.ndarray) -> float:
         w1, b1, w2, b2, w3, b3, h1, h2 = self.nets[i]
@@ -99,6 +113,50 @@ class NarmaModel:
         return f + g * u
 
 
+def _meta_problem(meta) -> str | None:
+    """What is wrong with a model's metadata (or None)."""
+    if not isinstance(meta, dict):
+        return "its metadata is not a JSON object"
+    h = meta.get("sample_period")
+    if not finite_number(h) or not 0.001 <= h <= 1.0:
+        return f"its metadata's sample_period is {h!r:.40} (expected 0.001 to 1 s)"
+    if meta.get("features") != list(FEATURES):
+        return f"it was trained on features {meta.get('features')!r:.80}, this ego expects {list(FEATURES)}"
+    return None
+
+
+def _arrays_problem(arrays: dict) -> str | None:
+    """What is wrong with a model's arrays (or None): every array present, numeric, finite,
+    with the shapes of two tanh networks on ``FEATURES``."""
+    n = len(FEATURES)
+    names = ["mean", "std", "dy_scale", "g_scale"] + [f"{net}_{k}" for net in "fg"
+                                                      for k in ("w1", "b1", "w2", "b2", "w3", "b3")]
+    for name in names:
+        if name not in arrays:
+            return f"the array {name} is missing"
+        a = arrays[name]
+        if not np.issubdtype(a.dtype, np.number) or np.issubdtype(a.dtype, np.complexfloating):
+            return f"the array {name} is not numeric ({a.dtype})"
+        if not np.isfinite(a).all():
+            return f"the array {name} holds NaN or infinite values"
+    shapes = {"mean": (n,), "std": (n,)}
+    for net in "fg":
+        h1, h2 = arrays[f"{net}_b1"].size, arrays[f"{net}_b2"].size
+        shapes.update({f"{net}_w1": (h1, n), f"{net}_b1": (h1,), f"{net}_w2": (h2, h1), f"{net}_b2": (h2,)})
+    for name, shape in shapes.items():
+        if arrays[name].shape != shape:
+            return f"the array {name} has shape {arrays[name].shape} (expected {shape})"
+    for name in ("dy_scale", "g_scale", "f_b3", "g_b3"):
+        if arrays[name].size != 1:
+            return f"the array {name} has {arrays[name].size} values (expected one)"
+    for net in "fg":
+        if arrays[f"{net}_w3"].size != arrays[f"{net}_b2"].size:
+            return f"the array {net}_w3 has {arrays[f'{net}_w3'].size} values (expected {arrays[f'{net}_b2'].size})"
+    if (arrays["std"] <= 0).any():
+        return "the array std has values that are not positive"
+    return None
+
+
 @lru_cache(maxsize=4)
 def load_model(path: str = str(DEFAULT_MODEL)) -> NarmaModel:
     """A trained model, loaded once per process."""
@@ -112,11 +170,17 @@ class NarmaL2Params(PedalParams):
     rho: float = param(0.8, "-", "reference r(k+1) = rho * y(k): the error kept per sample "
                        "(0: deadbeat)", min=0, max=0.99)
     move_penalty: float = param(0.002, "m^2/rad^2", "weight lambda on steer changes (0: the plain "
-                                "inverse u = (r - f) / g, which rings; see the module)", min=0)
-    g_min: float = param(0.01, "m/rad", "floor on |g| (the steer's effect per sample)", min=0,
-                         min_exclusive=True)
-    steer_limit: float = param(0.6, "rad", "|delta| limit", min=0, min_exclusive=True)
+                                "inverse u = (r - f) / g, which rings; see the module)", min=0,
+                                max=100.0)
+    g_min: float = param(0.01, "m/rad", "floor on |g| (the steer's effect per sample)", min=1e-4,
+                         max=10.0)
+    steer_limit: float = param(0.6, "rad", "|delta| limit", min=0, max=HALF_PI, min_exclusive=True)
     model: str = param("", "-", "trained model (.npz); empty: the one shipped with ego")
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.model:  # read and check it now, before any run starts
+            load_model(self.model)
 
 
 class NarmaL2Controller:
@@ -170,6 +234,9 @@ class NarmaL2Controller:
         self.u = lim if u > lim else (-lim if u < -lim else u)
         self.f, self.g = f, g
         return a_x, self.u
+
+    #: the networks' f (the error next sample, m) and g (its change per rad of steer)
+    signal_units = {"narma_f": "m", "narma_g": "m/rad", "a_x_cmd": "m/s^2"}
 
     def signals(self) -> dict[str, float]:
         return {"narma_f": self.f, "narma_g": self.g, "a_x_cmd": self.pedal.a_x}

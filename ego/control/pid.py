@@ -7,7 +7,7 @@ import math
 from dataclasses import dataclass
 
 from ego.control.base import Observation
-from ego.params import param
+from ego.params import HALF_PI, Params, param
 
 
 class PID:
@@ -57,19 +57,19 @@ class PID:
 
 
 @dataclass(frozen=True)
-class PIDParams:
+class PIDParams(Params):
     """Two-channel PID baseline (tuned here; report 000 has no plain PID)."""
 
-    kp_lon: float = param(800.0, "N/m", "longitudinal proportional gain", min=0)
-    ki_lon: float = param(20.0, "N/(m s)", "longitudinal integral gain", min=0)
-    kd_lon: float = param(1500.0, "N s/m", "longitudinal derivative gain", min=0)
-    kp_lat: float = param(0.01, "rad/m", "lateral proportional gain", min=0)
-    ki_lat: float = param(0.0, "rad/(m s)", "lateral integral gain", min=0)
-    kd_lat: float = param(0.02, "rad s/m", "lateral derivative gain", min=0)
-    tau_d: float = param(0.05, "s", "derivative low-pass time constant", min=0)
+    kp_lon: float = param(800.0, "N/m", "longitudinal proportional gain", min=0, max=1e5)
+    ki_lon: float = param(20.0, "N/(m s)", "longitudinal integral gain", min=0, max=1e5)
+    kd_lon: float = param(1500.0, "N s/m", "longitudinal derivative gain", min=0, max=1e5)
+    kp_lat: float = param(0.01, "rad/m", "lateral proportional gain", min=0, max=10.0)
+    ki_lat: float = param(0.0, "rad/(m s)", "lateral integral gain", min=0, max=10.0)
+    kd_lat: float = param(0.02, "rad s/m", "lateral derivative gain", min=0, max=10.0)
+    tau_d: float = param(0.05, "s", "derivative low-pass time constant", min=0, max=10.0)
     fx_limit: float = param(4805.0, "N", "|Fx| limit per driven wheel (0.7 m g / Nw)", min=0,
-                            min_exclusive=True)
-    steer_limit: float = param(0.5, "rad", "|delta| limit", min=0, min_exclusive=True)
+                            max=20000.0, min_exclusive=True)
+    steer_limit: float = param(0.5, "rad", "|delta| limit", min=0, max=HALF_PI, min_exclusive=True)
 
 
 class PIDController:
@@ -89,6 +89,8 @@ class PIDController:
         fx = self.lon.step(obs.s_ref - obs.s, obs.ds_ref - obs.ds)
         delta = self.lat.step(obs.d_ref - obs.d, obs.dd_ref - obs.dd)
         return fx, delta
+
+    signal_units = {"integral_lon": "m s", "integral_lat": "m s"}  #: integrals of the errors
 
     def signals(self) -> dict[str, float]:
         return {"integral_lon": self.lon.integral, "integral_lat": self.lat.integral}

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Protocol
@@ -13,14 +14,27 @@ import numpy as np
 class Series:
     """One recorded time series: a column of the run's trace.
 
-    ``path`` is its place in the recording (``plots/<panel>/<name>``: series sharing a
-    panel are drawn together); ``unit`` is shown in the legend.
+    ``path`` is its place in the recording: ``plots/<panel>/.../<name>``, and the series
+    sharing a parent path are drawn in one panel, titled by ``<panel>`` and the unit (so a
+    panel holds one unit only); ``label`` names the series in the panel's title and when
+    hovered (short: "ego", "reference", "f1"). Two special kinds:
+
+    * ``states``: the column holds a state index (0, 1, ...); it is recorded as the named
+      states ``states[i]`` (a state timeline under ``states/<name>``), not as a number;
+    * ``constant``: no column, a horizontal line at this value (a threshold) over the run.
     """
 
     column: str
     path: str
     unit: str
     label: str = ""
+    states: tuple[str, ...] = ()
+    constant: float | None = None
+
+    @property
+    def panel(self) -> str:
+        """The panel's entity path: the series' parent."""
+        return self.path.rpartition("/")[0]
 
 
 @dataclass(frozen=True)
@@ -28,10 +42,12 @@ class Scene:
     """What a recording shows besides time series."""
 
     lanes: Sequence[tuple[float, Sequence[tuple[float, float]]]]  #: (width m, centre line)
-    bounds: tuple[float, float, float, float] = (0.0, 100.0, -10.0, 10.0)  #: x0, x1, y0, y1 (m)
     title: str = ""
-    #: what the following view shows around the followed point: x0, x1, y0, y1 (m)
-    follow_view: tuple[float, float, float, float] = (-35.0, 85.0, -14.0, 14.0)
+    followed: str = "the ego"  #: what the road views follow, as their titles name it
+    #: what the close view shows around the followed point: x0, x1, y0, y1 (m, x ahead)
+    follow_view: tuple[float, float, float, float] = (-20.0, 40.0, -10.0, 10.0)
+    #: what the wide view shows around it: 300 m of road, 100 m behind to 200 m ahead
+    around_view: tuple[float, float, float, float] = (-100.0, 200.0, -9.0, 9.0)
 
 
 class Recorder(Protocol):
@@ -103,3 +119,9 @@ def lane_edges(width: float, centre: Sequence[tuple[float, float]]) -> tuple[np.
     n = np.column_stack([-d[:, 1], d[:, 0]])
     n /= np.linalg.norm(n, axis=1, keepdims=True)
     return pts + 0.5 * width * n, pts - 0.5 * width * n
+
+
+def unit_path(unit: str) -> str:
+    """A unit as an entity-path part: "N/(m s)" -> "N_per_m_s", "m/s^2" -> "m_per_s_2",
+    no unit or "-" -> "1"."""
+    return re.sub(r"[^A-Za-z0-9]+", "_", unit.replace("/", " per ")).strip("_") or "1"

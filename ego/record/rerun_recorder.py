@@ -6,10 +6,16 @@ Layout of a recording (entity paths):
   that +y (left of a road heading east) is up on screen; below it ``world/map/lanes``
   (lane edges, static) and ``world/map/vehicles`` (every vehicle as a closed, labelled
   outline, at SUMO's rate);
-* ``world/follow`` - a frame translated to the followed vehicle every SUMO step; the
-  "following the ego" view uses it as its origin, so the ego stays put on screen;
-* ``plots/<panel>/<series>`` - time series, one plot panel each;
+* ``world/follow`` - a frame translated to the followed vehicle every SUMO step; both road
+  views (the close one and the 300 m one) use it as their origin, so the ego stays put on
+  screen;
+* ``plots/<panel>/.../<series>`` - time series; the series sharing a parent path share a
+  plot panel, which holds one unit; a threshold is a series too (a constant);
+* ``states/<name>`` - named states (the manoeuvre's phase), a state timeline;
 * ``events`` - the event log; ``run`` - the run's parameters.
+
+The embedded blueprint opens the recording at its end (the time panel follows the latest
+data): the plots are complete and the road views show the outcome; scrub back from there.
 
 :class:`RerunRecorder` is what the simulation loop talks to. By default it hands every
 batch (plain numpy arrays and lists) over a pipe to a writer process that owns the Rerun
@@ -23,6 +29,7 @@ The scenario flushes at least every simulated second.
 from __future__ import annotations
 
 import multiprocessing
+import os
 from collections import OrderedDict
 from collections.abc import Sequence
 from functools import lru_cache
@@ -30,11 +37,20 @@ from pathlib import Path
 
 import numpy as np
 
+from ego.outputs import partial_path
 from ego.processes import main_module_hidden, signals_deferred
 from ego.record.base import Scene, Series, box_outlines, lane_edges
 
 TIMELINE = "sim_time"
 _GREY = (150, 150, 150)
+#: series colours in a panel, in declaration order, with the names panel titles use
+PALETTE = (("blue", (80, 150, 255)), ("orange", (255, 160, 40)), ("green", (90, 200, 90)),
+           ("pink", (240, 100, 200)), ("cyan", (60, 210, 230)), ("yellow", (230, 220, 60)),
+           ("violet", (160, 110, 255)), ("white", (230, 230, 230)), ("brown", (180, 120, 70)),
+           ("olive", (150, 160, 60)), ("grey", (140, 140, 140)), ("teal", (40, 160, 140)))
+THRESHOLD = ("red", (230, 50, 50))  #: colour of constants (thresholds)
+#: a panel with more series than this shows Rerun's legend; fewer are named in its title
+TITLE_SERIES = 4
 _LEVELS = {"INFO", "WARN", "ERROR", "DEBUG", "TRACE", "CRITICAL"}
 MAP = "world/map"
 VEHICLES = "world/map/vehicles"
@@ -197,9 +213,9 @@ def _writer_main(batches, replies, path: str, application_id: str, recording_id:
                 replies.send(("done",))
                 return
             writer.handle(kind, *payload)
-    except EOFError:  # the simulation process went away: keep what arrived
+    except EOFError:  # the simulation process died: keep what arrived, named as partial
         if writer is not None:
-            writer.close()
+            writer.close(finished=False)
         return
     except Exception as exc:  # noqa: BLE001 - reported to the simulation process
         try:
@@ -209,15 +225,24 @@ def _writer_main(batches, replies, path: str, application_id: str, recording_id:
 
 
 class RerunWriter:
-    """Does the actual Rerun work, synchronously (in the writer process, or in-process)."""
+    """Does the actual Rerun work, synchronously (in the writer process, or in-process).
+
+    The recording is written to ``<path>.<pid>.partial`` and renamed to ``path`` when it is
+    closed, so ``path`` only ever holds a whole recording (two runs recording to one path
+    leave the last one to finish, never a mix); a writer whose run died leaves the partial
+    file, named as such."""
 
     def __init__(self, path: str, application_id: str = "ego", recording_id: str | None = None) -> None:
         import rerun as rr
 
         self.path = Path(path)
+        self._partial = partial_path(self.path)
         self._rr = rr
         self._rec = rr.RecordingStream(application_id, recording_id=recording_id)
         self._series: dict[str, Series] = {}
+        self._constants: list[Series] = []
+        self._states: dict[str, Series] = {}
+        self._state_now: dict[str, int] = {}
         self._row_plans: dict[tuple, tuple] = {}
         self._colors: dict[str, tuple[int, int, int]] = {}
         self._open = False
@@ -228,9 +253,11 @@ class RerunWriter:
 
     def begin(self, scene: Scene, series: Sequence[Series], meta: dict) -> None:
         rr = self._rr
-        self._series = {s.column: s for s in series}
+        self._series = {s.column: s for s in series if s.constant is None and not s.states}
+        self._constants = [s for s in series if s.constant is not None]
+        self._states = {s.column: s for s in series if s.states}
         self._colors = dict(meta.get("colors", {}))
-        self._rec.save(self.path, default_blueprint=_blueprint(scene, series))
+        self._rec.save(self._partial, default_blueprint=_blueprint(scene, series))
         self._open = True
         rec = self._rec
         rec.log(MAP, rr.Transform3D(scale=[1.0, -1.0, 1.0]), static=True)
@@ -240,10 +267,12 @@ class RerunWriter:
             edges.extend([left, right])
         rec.log(f"{MAP}/lanes", rr.LineStrips2D(edges, colors=[(110, 110, 110)], radii=[0.06]),
                 static=True)
-        for s in series:
-            name = s.label or s.column
-            rec.log(s.path, rr.SeriesLines(names=[f"{name} [{s.unit}]" if s.unit else name]),
-                    static=True)
+        for panel in _panels(series).values():
+            for s, (_, color) in zip(panel, _colors(panel)):
+                name = s.label or s.column
+                if s.constant is not None:  # its value when hovered
+                    name = f"{name} {s.constant:g} {s.unit}".rstrip()
+                rec.log(s.path, rr.SeriesLines(names=[name], colors=[color]), static=True)
         summary = "\n".join(f"{k}: {v}" for k, v in meta.items() if k != "colors")
         rec.log("run", rr.TextDocument(summary, media_type="text/plain"), static=True)
 
@@ -256,18 +285,35 @@ class RerunWriter:
             picked = [(j, self._series[name]) for j, name in enumerate(columns) if name in self._series]
             fields = [_index_field()] + [
                 _component_field(s.path, "Scalars", "scalars", "Scalar", pa.list_(pa.float64()))
-                for _, s in picked
+                for s in [s for _, s in picked] + self._constants
             ]
-            plan = self._row_plans[columns] = ([j for j, _ in picked], pa.schema(fields))
-        index, schema = plan
-        if not index:
+            states = [(columns.index(name), s) for name, s in self._states.items() if name in columns]
+            plan = self._row_plans[columns] = ([j for j, _ in picked], pa.schema(fields), states)
+        index, schema, states = plan
+        if states:
+            self._state_changes(rows, states)
+        if len(schema) == 1:
             return
         offsets = pa.array(np.arange(len(rows) + 1, dtype=np.int32))
         arrays = [_durations(rows[:, 0])]
-        for j in index:
-            arrays.append(pa.ListArray.from_arrays(offsets, pa.array(rows[:, j], type=pa.float64())))
+        for values in [rows[:, j] for j in index] + [np.full(len(rows), s.constant) for s in self._constants]:
+            arrays.append(pa.ListArray.from_arrays(offsets, pa.array(values, type=pa.float64())))
         self._rr.send_record_batch(pa.RecordBatch.from_arrays(arrays, schema=schema),
                                    recording=self._rec)
+
+    def _state_changes(self, rows: np.ndarray, states: list[tuple[int, Series]]) -> None:
+        """Each state column as named state changes: only the rows where it changes."""
+        rr = self._rr
+        for j, s in states:
+            values = rows[:, j].astype(np.int64)
+            before = np.concatenate([[self._state_now.get(s.column, -1)], values[:-1]])
+            at = np.flatnonzero(values != before)
+            if not len(at):
+                continue
+            self._state_now[s.column] = int(values[-1])
+            names = [s.states[v] if 0 <= v < len(s.states) else str(v) for v in values[at]]
+            rr.send_columns(s.path, indexes=[rr.TimeColumn(TIMELINE, duration=rows[at, 0])],
+                            columns=rr.StateChange.columns(state=names), recording=self._rec)
 
     def vehicles(self, times, counts, poses, labels, follow_points) -> None:
         """Vehicle outlines and the follow frame as one record batch."""
@@ -311,36 +357,104 @@ class RerunWriter:
         self._rec.set_time(TIMELINE, duration=t)
         self._rec.log("events", self._rr.TextLog(text, level=level if level in _LEVELS else "INFO"))
 
-    def close(self) -> None:
+    def close(self, finished: bool = True) -> None:
+        """End the file; put it in place unless its run did not finish (``finished=False``:
+        the simulation process died, the file keeps its partial name)."""
         if self._open:
             self._open = False
             self._rec.flush()
             self._rec.disconnect()
+            if finished:
+                os.replace(self._partial, self.path)
+
+
+def _panels(series: Sequence[Series]) -> OrderedDict[str, list[Series]]:
+    """Plot panel path -> its series, in declaration order (named states are not plots)."""
+    panels: OrderedDict[str, list[Series]] = OrderedDict()
+    for s in series:
+        if not s.states:
+            panels.setdefault(s.panel, []).append(s)
+    return panels
+
+
+def _colors(members: Sequence[Series]) -> list[tuple[str, tuple[int, int, int]]]:
+    """(name, RGB) of each series of a panel: the palette in turn, thresholds in red."""
+    out, k = [], 0
+    for s in members:
+        if s.constant is not None:
+            out.append(THRESHOLD)
+        else:
+            out.append(PALETTE[k % len(PALETTE)])
+            k += 1
+    return out
+
+
+def panel_title(panel: str, members: Sequence[Series]) -> str:
+    """A plot panel's title: its name (``plots/<name>/...``), the unit, and which colour is
+    which series (so no legend has to cover the data). A lone series is named only when the
+    panel's name does not say it already (it is not "ego" nor the panel's own name)."""
+    unit = f" [{members[0].unit}]" if members[0].unit else ""
+    name = panel.split("/")[1]
+    parts = name.split("_")
+    if all(len(p) >= 3 for p in parts):  # words: "lateral_error" reads "lateral error"
+        name = " ".join(parts)  # symbols ("a_x", "e_d") stay as written
+    if len(members) == 1:
+        s = members[0]
+        entity = s.path.rpartition("/")[2]
+        return f"{name}{unit}" if entity in ("ego", panel.split("/")[1]) else f"{name}{unit}: {s.label or s.column}"
+    lines = [s for s in members if s.constant is None]
+    if len(lines) > TITLE_SERIES:
+        return f"{name}{unit}"
+    names = [f"{s.label or s.column} {c}" for s, (c, _) in zip(lines, PALETTE)]
+    limits = [s.label for s in members if s.constant is not None]
+    if limits:  # thresholds share one colour
+        names.append(f"{', '.join(limits)} {THRESHOLD[0]}")
+    return f"{name}{unit}: {', '.join(names)}"
 
 
 def _blueprint(scene: Scene, series: Sequence[Series]):
+    """The layout: the 300 m around the ego across the top; below, the close view, the
+    manoeuvre's states, the events and the run's parameters on the left, the plots on the
+    right."""
+    import rerun as rr
     import rerun.blueprint as rrb
 
-    panels: OrderedDict[str, list[Series]] = OrderedDict()
-    for s in series:
-        panels.setdefault("/".join(s.path.split("/")[:2]), []).append(s)
     plots = []
-    for panel, members in panels.items():
-        axis = rrb.ScalarAxis(range=(0.0, 10.0)) if panel.endswith("ttc") else None
-        unit = members[0].unit
-        title = panel.split("/")[-1].replace("_", " ") + (f" [{unit}]" if unit else "")
-        plots.append(rrb.TimeSeriesView(origin=panel, name=title, axis_y=axis))
-    fx0, fx1, fy0, fy1 = scene.follow_view
-    follow = rrb.Spatial2DView(
-        origin=FOLLOW, contents="world/**", name="following the ego",
-        visual_bounds=rrb.VisualBounds2D(x_range=(fx0, fx1), y_range=(-fy1, -fy0)))
-    x0, x1, y0, y1 = scene.bounds
-    road = rrb.Spatial2DView(origin="world", name="road (top-down)",
-                             visual_bounds=rrb.VisualBounds2D(x_range=(x0, x1), y_range=(-y1, -y0)))
-    left = rrb.Vertical(follow, road, rrb.TextLogView(origin="events", name="events"),
-                        rrb.TextDocumentView(origin="run", name="run"),
-                        row_shares=[3, 2, 2, 2])
-    return rrb.Blueprint(rrb.Horizontal(left, rrb.Grid(*plots), column_shares=[2, 3]),
+    for panel, members in _panels(series).items():
+        units = {s.unit for s in members}
+        if len(units) > 1:  # a declaration error: say which
+            raise ValueError(f"panel {panel} mixes units: {', '.join(sorted(units))}")
+        axis = rrb.ScalarAxis(range=(0.0, 10.0)) if panel.split("/")[1] == "ttc" else None
+        legend = rrb.PlotLegend(visible=len(members) > TITLE_SERIES, corner="RightTop")
+        plots.append(rrb.TimeSeriesView(origin=panel, name=panel_title(panel, members), axis_y=axis,
+                                        plot_legend=legend))
+
+    def road(view, name, **kwargs):
+        x0, x1, y0, y1 = view  # the map is mirrored: +y (left) is up on screen
+        return rrb.Spatial2DView(origin=FOLLOW, contents="world/**", name=name,
+                                 visual_bounds=rrb.VisualBounds2D(x_range=(x0, x1), y_range=(-y1, -y0)),
+                                 **kwargs)
+
+    a0, a1 = scene.around_view[:2]
+    # no labels at this scale: they would lie on top of each other (colours tell ego and lead)
+    around = road(scene.around_view,
+                  f"{a1 - a0:.0f} m around {scene.followed} ({-a0:.0f} m behind, {a1:.0f} m ahead)",
+                  overrides={VEHICLES: rr.LineStrips2D.from_fields(show_labels=False)})
+    close = road(scene.follow_view, f"following {scene.followed}")
+    left = [close]
+    shares = [3]
+    if any(s.states for s in series):
+        left.append(rrb.StateTimelineView(origin="states", name="manoeuvre"))
+        shares.append(1)
+    events = rrb.TextLogView(origin="events", name="events",
+                             columns=rrb.TextLogColumns(timeline_columns=[TIMELINE],
+                                                        text_log_columns=["loglevel", "body"]))
+    left.append(rrb.Tabs(events, rrb.TextDocumentView(origin="run", name="run")))
+    shares.append(3)
+    below = rrb.Horizontal(rrb.Vertical(*left, row_shares=shares), rrb.Grid(*plots, grid_columns=3),
+                           column_shares=[1, 3])
+    return rrb.Blueprint(rrb.Vertical(around, below, row_shares=[1, 6]),
+                         rrb.TimePanel(timeline=TIMELINE, play_state="following", state="collapsed"),
                          collapse_panels=True)
 
 

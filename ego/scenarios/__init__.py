@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ego.params import ConfigError
+from ego.params import ConfigError, did_you_mean
 from ego.scenarios.base import CommonConfig, Event, RunResult, Scenario
 from ego.scenarios.curve import CurveConfig, CurveScenario
 from ego.scenarios.cut_in import CutIn, CutInConfig
@@ -22,7 +22,8 @@ def scenario_class(name: str) -> type[Scenario]:
     try:
         return SCENARIOS[name]
     except KeyError:
-        raise ConfigError(f"unknown scenario {name!r} (known: {', '.join(SCENARIOS)})") from None
+        raise ConfigError(f"unknown scenario {name!r} (known: {', '.join(SCENARIOS)})"
+                          f"{did_you_mean(name, SCENARIOS)}") from None
 
 
 __all__ = [

@@ -20,22 +20,26 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ego.control.base import Controller, ControllerSpec, Observation
+from ego.control.base import Controller, ControllerSpec, Observation, signal_units
 from ego.models.plant import Plant
-from ego.params import ConfigError, param
+from ego.params import ConfigError, Params, param
 from ego.processes import signals_deferred
-from ego.record.base import NullRecorder, Recorder, Scene, Series
+from ego.record.base import NullRecorder, Recorder, Scene, Series, unit_path
 from ego.scenarios.metrics import json_number
 from ego.scenarios.trace import Column, Metric, Plot, Trace
+from ego.scenarios.traffic_log import RADIUS, REACH_MARGIN, TrafficCollector, TrafficLog
 from ego.sumo.bridge import Collision, SumoBridge
 
-STATUSES = ("completed", "collision", "diverged", "timeout", "interrupted")
+STATUSES = ("completed", "ended", "collision", "diverged", "timeout", "interrupted")
+#: the statuses that are no failure: the scenario's own end, or the duration ran out in a
+#: scenario whose end the controller does not decide (``ended``: a shortened run)
+NOT_FAILED = ("completed", "ended")
 _log = logging.getLogger("ego.scenario")
 _LOG_LEVELS = {"INFO": logging.INFO, "WARN": logging.WARNING, "ERROR": logging.ERROR}
 
 
 @dataclass(frozen=True)
-class TimingConfig:
+class TimingConfig(Params):
     """Timing of every scenario."""
 
     dt: float = param(0.01, "s", "control period: controller and model step", min=0.001, max=0.1)
@@ -57,6 +61,7 @@ class CommonConfig(TimingConfig):
                                       min=0.1, max=3.5)
 
     def __post_init__(self) -> None:
+        super().__post_init__()
         ratio = self.sumo_step / self.dt
         if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
             raise ConfigError(
@@ -94,11 +99,35 @@ class RunResult:
     events: list[Event]
     columns: tuple[str, ...]
     trace: np.ndarray
-    #: column -> unit of every trace column ("" for controller signals)
+    #: column -> unit of every trace column (controller signals: as the controller declares)
     units: dict = field(default_factory=dict)
+    #: the vehicles near the ego at every SUMO step (None: a scenario without traffic)
+    traffic: TrafficLog | None = None
+    #: the lanes of the scene: (width m, centre-line points (x, y) m) each
+    lanes: tuple = ()
 
     def column(self, name: str) -> np.ndarray:
         return self.trace[:, self.columns.index(name)]
+
+    def to_pandas(self, traffic: bool = False):
+        """The trace as a pandas DataFrame: one row per control step, one column per trace
+        column (``t`` in s first), ``df.attrs["units"]`` column -> unit (``""``: a
+        controller's signal). ``traffic=True``: the traffic log instead, one row per vehicle
+        and SUMO step (``vehicle`` its id), units likewise; None when the run has none.
+        pandas is imported here, not with ego."""
+        import pandas as pd
+
+        from ego.export import TRAFFIC_UNITS, trace_units, traffic_columns
+
+        if traffic:
+            if self.traffic is None:
+                return None
+            df, units = pd.DataFrame(traffic_columns(self.traffic)), dict(TRAFFIC_UNITS)
+        else:
+            df, units = pd.DataFrame(self.trace, columns=list(self.columns)), trace_units(self)
+        df.attrs["units"] = units
+        df.attrs.update(scenario=self.scenario, controller=self.controller, seed=self.seed, status=self.status)
+        return df
 
 
 def divergence(state: Sequence[float], offset: float, heading_error: float,
@@ -145,6 +174,9 @@ class Scenario:
     #: which controllers drive it (``ego.control.CONTROLLERS[task]``) and what they return
     task: ClassVar[str] = "tracking"
     config_cls: ClassVar[type] = CommonConfig
+    #: the SUMO network it runs on (``ego.sumo.net.net_file``; checked before any run), or
+    #: None without SUMO
+    network: ClassVar[str | None] = None
     #: trace columns written by name every control step; ``t`` first
     columns: tuple[Column, ...] = (Column("t", "s", "time"),)
     #: the scenario's own metrics (besides COMMON_METRICS), with units; headline ones are
@@ -160,6 +192,12 @@ class Scenario:
         """The configuration the overrides apply to: the defaults of ``config_cls``; a
         scenario with variants starts from the variant's preset (``--set variant=...``)."""
         return cls.config_cls()
+
+    @classmethod
+    def check_config(cls, config) -> None:
+        """Checks of a configuration that need more than the configuration (the network's
+        geometry, say), made by ``ego.runner.configure`` before anything runs: ConfigError.
+        Default: none."""
 
     @classmethod
     def build_controller(cls, spec: ControllerSpec, params: Any, config) -> Controller:
@@ -197,6 +235,8 @@ class Scenario:
         #: the recording wants the vehicles' outlines (none to fetch from SUMO for a null one)
         self._outlines = not isinstance(self.recorder, NullRecorder)
         self.bridge: SumoBridge | None = None
+        self.traffic: TrafficCollector | None = None
+        self._lanes: tuple = ()
         self.obs = Observation()
         self.events: list[Event] = []
         self.trace = Trace(self.trace_columns())
@@ -210,6 +250,7 @@ class Scenario:
         self._wall0 = 0.0
         self._wall = 0.0
         self._signal_names: tuple[str, ...] = ()
+        self._signal_units: dict[str, str] = {}
         self.controlled_ids: tuple[str, ...] = ()
         #: vehicle id -> RGB for the recording (others: grey)
         self.colors: dict[str, tuple[int, int, int]] = {}
@@ -229,14 +270,22 @@ class Scenario:
         self._dt, self._per_sumo, self._t_end = c.dt, c.control_per_sumo, c.duration - 1e-9
         self.controller.reset(seed=self.seed)
         self._signal_names = tuple(self.controller.signals())
+        self._signal_units = signal_units(self.controller)
         self.bridge = self._make_bridge()
-        self.trace = Trace(self.trace_columns(), self._signal_names)
+        self.trace = Trace(self.trace_columns(), self._signal_names, self._signal_units)
+        self.traffic = None
         if self.bridge is not None:
             self.bridge.start()
+            self.traffic = TrafficCollector()
         self._setup(np.random.default_rng(self.seed))
-        self.recorder.begin(self._scene(), self._series(), self._meta())
+        scene = self._scene()
+        self._lanes = tuple((w, tuple(map(tuple, pts))) for w, pts in scene.lanes)
+        self.recorder.begin(scene, self._series(), self._meta())
         if self._outlines:
             self._record_boxes()
+        if self.traffic is not None:
+            self._setup_traffic_log()
+            self._log_traffic()
         self._update()
         return self.obs
 
@@ -338,6 +387,7 @@ class Scenario:
         self._after_sumo_step()
         if self._outlines:
             self._record_boxes()
+        self._log_traffic()
         if collisions:
             mine = [c for c in collisions if c.collider in bridge.controlled or c.victim in bridge.controlled]
             if mine:
@@ -399,7 +449,8 @@ class Scenario:
             "steps": self.k,
         })
         return RunResult(self.name, self.controller_name, self.seed, self.status, metrics,
-                         list(self.events), columns, trace, self.trace.units())
+                         list(self.events), columns, trace, self.trace.units(),
+                         self.traffic.log() if self.traffic is not None else None, self._lanes)
 
     def _other_party(self) -> str | None:
         c = self.collision
@@ -422,6 +473,12 @@ class Scenario:
 
     def _record_boxes(self) -> None:
         pass
+
+    def _setup_traffic_log(self) -> None:
+        """Ask SUMO for what :meth:`_log_traffic` reads (after ``_setup``)."""
+
+    def _log_traffic(self) -> None:
+        """Hand this SUMO step's vehicles to ``self.traffic`` (a SUMO scenario's duty)."""
 
     def _check_divergence(self) -> str | None:
         return None
@@ -465,12 +522,14 @@ class RoadScenario(Scenario):
         self.actors: list = []  #: scripted SUMO vehicles, ``update(bridge, t)`` each SUMO step
         self.lanes: dict = {}  #: the lanes drawn in the recording (LanePolyline values)
         self.s = self.d_road = self.heading_error = self.curvature = self.ds = self.dd = 0.0
+        self.X = self.Y = 0.0  #: world position of the centre of gravity (m)
 
     def _kinematics(self) -> None:
         """Lane-frame position and velocity of the ego's centre of gravity."""
         X, u, Y, v, psi, r = self.ego.state
         s, d, err, kappa = self.road.frame(X, Y, psi)
         c, sn = math.cos(err), math.sin(err)
+        self.X, self.Y = X, Y
         self.s, self.d_road, self.heading_error, self.curvature = s, d, err, kappa
         self.ds = u * c - v * sn
         self.dd = u * sn + v * c
@@ -490,6 +549,23 @@ class RoadScenario(Scenario):
         for actor in self.actors:
             actor.update(self.bridge, self.t - self.config.sumo_step)
 
+    def _setup_traffic_log(self) -> None:
+        """The vehicles near the ego, for the traffic log (a scenario with a surround
+        sensor shares its subscription instead, reaching at least as far)."""
+        self.bridge.subscribe_surroundings(self.ego_id, RADIUS + REACH_MARGIN)
+
+    def _surroundings(self) -> tuple[list[str], list[tuple]]:
+        """This SUMO step's vehicles around the ego (see ``SumoBridge.surroundings``)."""
+        return self.bridge.surroundings(self.ego_id)
+
+    def _log_traffic(self) -> None:
+        x = self.ego.state
+        # the box's centre is cg_to_front - length / 2 ahead of the centre of gravity
+        off = self.geometry.cg_to_front - 0.5 * self.geometry.length
+        psi = x[4]
+        ids, rows = self._surroundings()
+        self.traffic.add(self.t, (x[0] + off * math.cos(psi), x[2] + off * math.sin(psi)), ids, rows)
+
     def _record_boxes(self) -> None:
         """Every vehicle as SUMO has it; the following view keeps the ego in place."""
         ids, poses = self.bridge.poses()
@@ -497,12 +573,8 @@ class RoadScenario(Scenario):
         self.recorder.vehicles(self.t, ids, poses, (x[0], x[2]))
 
     def _scene(self) -> Scene:
-        """Every lane in ``self.lanes`` (id -> LanePolyline), framed with a margin."""
-        pts = [p for lane in self.lanes.values() for p in lane.points]
-        xs, ys = [p[0] for p in pts], [p[1] for p in pts]
-        return Scene(lanes=[(lane.width, lane.points) for lane in self.lanes.values()],
-                     bounds=(min(xs) - 20.0, max(xs) + 20.0, min(ys) - 20.0, max(ys) + 20.0),
-                     title=self.name)
+        """Every lane in ``self.lanes`` (id -> LanePolyline)."""
+        return Scene(lanes=[(lane.width, lane.points) for lane in self.lanes.values()], title=self.name)
 
 
 #: metrics every run reports first ...
@@ -510,7 +582,9 @@ COMMON_METRICS = (
     Metric("scenario", "-", "scenario name"),
     Metric("controller", "-", "controller name"),
     Metric("seed", "-", "random seed of the traffic and the controller"),
-    Metric("status", "-", "completed, collision, diverged or timeout"),
+    Metric("status", "-", "completed; ended (the duration ran out before the scenario's end, "
+           "not a failure); collision, diverged or timeout (the duration ran out during a "
+           "manoeuvre); interrupted"),
     Metric("status_detail", "-", "why the run ended"),
     Metric("collision", "-", "the ego (or a controlled vehicle) was in a collision"),
     Metric("collision_with", "-", "the other party of the collision"),
@@ -525,18 +599,20 @@ COMMON_TAIL_METRICS = (
 )
 
 
-def signal_series(names: Sequence[str]) -> list[Series]:
-    """Recording series for a controller's internal signals."""
-    return [Series(n, f"plots/controller/{n}", "") for n in names]
+def signal_series(names: Sequence[str], units: Mapping[str, str]) -> list[Series]:
+    """Recording series for a controller's internal signals: one "controller" panel per
+    unit (``units``: name -> unit, as the controller declares them)."""
+    return [Series(n, f"plots/controller/{unit_path(units.get(n, ''))}/{n}", units.get(n, ""), n)
+            for n in names]
 
 
 def vehicle_series() -> list[Series]:
     """Recording series every scenario has: speed and its reference, the actuators and the
     lateral acceleration."""
     return [
-        Series("speed", "plots/speed/ego", "m/s", "speed"),
+        Series("speed", "plots/speed/ego", "m/s", "ego"),
         Series("speed_ref", "plots/speed/reference", "m/s", "reference"),
         Series("Fx", "plots/Fx/Fx", "N", "Fx per driven wheel"),
-        Series("delta", "plots/delta/delta", "rad", "front steer"),
+        Series("delta", "plots/delta/delta", "rad", "front steer delta"),
         Series("lat_accel", "plots/lateral_accel/ego", "m/s^2", "lateral acceleration"),
     ]

@@ -36,7 +36,7 @@ from ego.lane_frame import LanePolyline
 from ego.scenarios import metrics as m
 from ego.scenarios.base import CommonConfig, RoadScenario, signal_series
 from ego.scenarios.events import INF, boxes_overlap
-from ego.scenarios.trace import Column, Metric, Plot
+from ego.scenarios.trace import Column, Marker, Metric, Plot
 from ego.sumo.bridge import (
     Collision,
     Neighbours,
@@ -63,6 +63,7 @@ TRAFFIC_TYPE = VehicleType("traffic", length=4.5, width=1.8, max_speed=30.0 / 3.
                            color=(150, 150, 150))
 LEAD_TYPE = VehicleType("lead", length=4.5, width=1.8, sigma=0.0, color=(160, 60, 220))
 APPROACH, ENGAGED = 0, 1
+PHASE_NAMES = ("approach", "engaged")  #: by phase number
 KMH = 1.0 / 3.6
 ONCOMING_SPEED = 25.0 * KMH  #: departure speed of the oncoming cars (m/s)
 
@@ -105,6 +106,7 @@ class CurveScenario(RoadScenario):
     summary = ("report 002: steer a 30 km/h car accelerating at 0.3 m/s^2 round a 90-degree "
                "arc of radius 15 m (oncoming traffic; --set lead=KMH for a slow car ahead)")
     task = "curve"
+    network = "curve"
     config_cls = CurveConfig
     columns = (
         Column("t", "s", "time"),
@@ -139,13 +141,17 @@ class CurveScenario(RoadScenario):
         Metric("max_lat_accel", "m/s^2", "largest |lateral acceleration| in the arc"),
         Metric("min_gap_front", "m", "smallest gap to the lead", headline=True),
     )
-    plots = (
-        Plot("e_d", "e_d.png", "e_d = distance to the arc centre - R"),
-        Plot("e_a", "e_a.png", "e_a = heading - tangent"),
-        Plot("speed", "speed.png", "speed"),
-        Plot("delta", "steering.png", "front steer angle"),
-        Plot("a_x", "a_x.png", "axial acceleration"),
-    )
+    plots = tuple(Plot(column, file, label, markers=(
+        Marker("engage", "the curve controller engages", "v"),
+        Marker("arc", "entering the arc", "s"),
+        Marker("collision", "collision", "X"),
+    )) for column, file, label in (
+        ("e_d", "e_d.png", "e_d = distance to the arc centre - R"),
+        ("e_a", "e_a.png", "e_a = heading - tangent"),
+        ("speed", "speed.png", "speed"),
+        ("delta", "steering.png", "front steer angle"),
+        ("a_x", "a_x.png", "axial acceleration"),
+    ))
 
     def __init__(self, config, controller, **kwargs) -> None:
         super().__init__(config, controller, **kwargs)
@@ -169,7 +175,7 @@ class CurveScenario(RoadScenario):
     # -- set-up ---------------------------------------------------------------------------
     def _make_bridge(self) -> SumoBridge:
         c = self.config
-        return SumoBridge(SumoConfig(net_file("curve"), step_length=c.sumo_step, seed=self.seed,
+        return SumoBridge(SumoConfig(net_file(self.network), step_length=c.sumo_step, seed=self.seed,
                                      lateral_resolution=c.lateral_resolution))
 
     def _setup(self, rng: np.random.Generator) -> None:
@@ -321,7 +327,7 @@ class CurveScenario(RoadScenario):
 
     def _final_status(self) -> tuple[str, str]:
         where = "on the approach" if self.arc_enter_t is None else "in the arc"
-        return "timeout", f"still {where} after {self.config.duration:g} s"
+        return "timeout", f"the duration ({self.config.duration:g} s) ended the run with the ego still {where}"
 
     # -- results ------------------------------------------------------------------------------
     def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
@@ -353,15 +359,17 @@ class CurveScenario(RoadScenario):
 
     # -- recording ----------------------------------------------------------------------------
     def _series(self) -> list[Series]:
+        # the gap panel only with a lead: without one it would stay empty
+        lead = [Series("gap_front", "plots/gap/lead", "m", "lead")] if self.config.lead > 0 else []
         return [
             Series("e_d", "plots/e_d/ego", "m", "e_d = distance to the arc centre - R"),
             Series("e_a", "plots/e_a/ego", "rad", "e_a = heading - tangent"),
             Series("speed", "plots/speed/ego", "m/s", "speed"),
-            Series("a_x", "plots/a_x/applied", "m/s^2", "axial acceleration"),
+            Series("a_x", "plots/a_x/applied", "m/s^2", "applied"),
             Series("accel_ref", "plots/a_x/plan", "m/s^2", "plan"),
-            Series("delta", "plots/delta/delta", "rad", "front steer"),
+            Series("delta", "plots/delta/delta", "rad", "front steer delta"),
             Series("lat_accel", "plots/lateral_accel/ego", "m/s^2", "lateral acceleration"),
-            Series("gap_front", "plots/gap/lead", "m", "gap to the lead"),
-            Series("phase", "plots/manoeuvre/phase", "", "phase"),
-            *signal_series(self._signal_names),
+            *lead,
+            Series("phase", "states/manoeuvre", "", "manoeuvre", states=PHASE_NAMES),
+            *signal_series(self._signal_names, self._signal_units),
         ]

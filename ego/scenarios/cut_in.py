@@ -17,7 +17,7 @@ from ego.params import ConfigError, param
 from ego.scenarios import metrics as m
 from ego.scenarios.evasive import EvasiveConfig, EvasiveLaneChange
 from ego.scenarios.highway import LANE_NAMES, ROUTE
-from ego.scenarios.trace import Metric, Plot
+from ego.scenarios.trace import Marker, Metric
 from ego.sumo.bridge import VehicleSpec, VehicleType
 from ego.sumo.traffic import CutInVehicle
 
@@ -52,6 +52,14 @@ class CutInConfig(EvasiveConfig):
         if self.cut_in_speed >= self.ego_speed:
             raise ConfigError(f"bad value for cut_in_speed: {self.cut_in_speed} (must be below "
                               f"ego_speed={self.ego_speed} m/s)")
+        if self.cut_in_lane not in LANE_NAMES:
+            raise ConfigError(f"bad value for cut_in_side: {self.cut_in_side!r} (no {self.cut_in_side} lane "
+                              f"next to ego_lane={self.ego_lane})")
+
+    @property
+    def cut_in_lane(self) -> int:
+        """The lane the car cuts in from."""
+        return self.ego_lane + (1 if self.cut_in_side == "left" else -1)
 
 
 class CutIn(EvasiveLaneChange):
@@ -70,14 +78,11 @@ class CutIn(EvasiveLaneChange):
         Metric("cut_in_time", "s", "when the car started across the lane"),
         Metric("response", "-", "brake (in lane) or evade (lane change), none without a trigger"),
     )
-    plots = EvasiveLaneChange.plots + (Plot("ttc_front", "ttc_front.png", "front TTC"),)
+    markers = EvasiveLaneChange.markers + (Marker("cut-in", "the car starts across", "<"),)
 
     def _actors(self):
         c = self.config
-        lane = c.ego_lane + (1 if c.cut_in_side == "left" else -1)
-        if lane not in LANE_NAMES:
-            raise ConfigError(f"bad value for cut_in_side: {c.cut_in_side!r} (no {c.cut_in_side} lane "
-                              f"next to ego_lane={c.ego_lane})")
+        lane = c.cut_in_lane
         self.bridge.add_type(CUTTER_TYPE)
         width = self.bridge.lane_shapes()[f"motorway_{c.ego_lane}"][0]
         self.cutter = CutInVehicle(CUTTER, "ego", lane, c.ego_lane, c.ego_speed + c.overtake_speed,

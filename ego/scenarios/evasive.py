@@ -25,10 +25,12 @@ import numpy as np
 
 from ego.highway_env import BACKENDS
 from ego.params import ConfigError, param
+from ego.record.base import Series
 from ego.scenarios import metrics as m
 from ego.scenarios.events import INF, GapRule, check_lane, choose_lane
 from ego.scenarios.highway import (
     EGO,
+    EGO_BOX,
     LANE_NAMES,
     ROUTE,
     TRAFFIC_TYPE,
@@ -36,12 +38,12 @@ from ego.scenarios.highway import (
     HighwayScenario,
 )
 from ego.scenarios.sensor import Detection
-from ego.scenarios.trace import Metric
+from ego.scenarios.trace import Band, Marker, Metric, Plot, Ref, Trajectory
 from ego.sumo.bridge import VehicleSpec, VehicleType
 from ego.sumo.traffic import BrakingLeader, PacedVehicle, RecklessFollower
 
 CRUISE, LANE_CHANGE, IN_LANE, DONE = 0, 1, 2, 3
-PHASE_NAMES = {CRUISE: "cruise", LANE_CHANGE: "lane change", IN_LANE: "in-lane manoeuvre", DONE: "done"}
+PHASE_NAMES = ("cruise", "lane change", "in-lane manoeuvre", "done")  #: by phase number
 BLOCKER_TYPE = VehicleType("blocker", length=4.5, width=1.8, sigma=0.0, color=(160, 60, 220))
 
 
@@ -95,12 +97,46 @@ def max_traffic_density(traffic_speed: float) -> float:
     return 1000.0 / (max(20.0, 1.5 * traffic_speed) + TRAFFIC_TYPE.length)
 
 
+#: the events marked on the time axis of every plot
+MARKERS = (
+    Marker("trigger", "trigger (TTC below the threshold)", "v"),
+    Marker("lane", "lane chosen (or stay)", "s"),
+    Marker("aeb", "AEB engages / releases", "P"),
+    Marker("done", "manoeuvre done", "D"),
+    Marker("collision", "collision", "X"),
+)
+
+
 class EvasiveLaneChange(HighwayScenario):
     """Trigger, gap acceptance, references and metrics of an evasive lane change."""
 
     config_cls = EvasiveConfig
     #: SUMO, or highway-env's road and IDM/MOBIL drivers (ego.highway_env)
     backends = BACKENDS
+    markers = MARKERS
+
+    @classmethod
+    def compare_plots(cls, config) -> tuple:
+        """The lateral position against its reference and the settle band, the speed against
+        its reference, the actuators, the gap, front and rear TTC against the trigger's
+        threshold, every one with the events marked; the top-down trajectory."""
+        band = config.settle_band
+        ttc_refs = (Ref(f"trigger threshold {config.ttc_threshold:g} s", value=config.ttc_threshold),)
+        if config.aeb:
+            ttc_refs += (Ref(f"AEB threshold {config.aeb_ttc:g} s", value=config.aeb_ttc),)
+        marks = cls.markers
+        return (
+            Plot("d", "lateral_error.png", "offset from the target lane centre (+ left)",
+                 refs=(Ref("lateral reference", "d_ref"),), band=Band(-band, band, f"settle band +-{band:g} m"),
+                 markers=marks),
+            Plot("speed", "speed.png", "speed", refs=(Ref("speed reference", "speed_ref"),), markers=marks),
+            Plot("delta", "steering.png", "front steer angle", markers=marks),
+            Plot("Fx", "fx.png", "Fx per driven wheel", markers=marks),
+            Plot("gap_front", "gap_front.png", "gap to the front object", markers=marks),
+            Plot("ttc_front", "ttc.png", "time to collision", lines=(("ttc_front", "front"), ("ttc_rear", "rear")),
+                 refs=ttc_refs, markers=marks, ylim=(0.0, max(10.0, 3.0 * config.ttc_threshold))),
+            Trajectory(ego_box=EGO_BOX),
+        )
     #: which time-to-collision triggers: "front" or "rear"
     trigger_on = "front"
 
@@ -367,10 +403,20 @@ class EvasiveLaneChange(HighwayScenario):
 
     def _final_status(self) -> tuple[str, str]:
         if self.phase in (LANE_CHANGE, IN_LANE):
-            return "timeout", f"the manoeuvre ({PHASE_NAMES[self.phase]}) did not finish in time"
+            return "timeout", (f"the duration ({self.config.duration:g} s) ended the run before the "
+                               f"manoeuvre ({PHASE_NAMES[self.phase]}) finished")
         if self.phase == CRUISE:
             return "completed", f"the {self.trigger_on} TTC never fell below the threshold: no manoeuvre"
         return "completed", "manoeuvre complete"
+
+    def _series(self) -> list[Series]:
+        """The highway's series, the thresholds on the TTC panel and the manoeuvre's phase."""
+        c = self.config
+        limits = [Series("", "plots/ttc/trigger", "s", "trigger", constant=c.ttc_threshold)]
+        if c.aeb and c.aeb_ttc > 0.0:
+            limits.append(Series("", "plots/ttc/aeb", "s", "AEB", constant=c.aeb_ttc))
+        return [*super()._series(), *limits,
+                Series("phase", "states/manoeuvre", "", "manoeuvre", states=PHASE_NAMES)]
 
     # -- metrics ----------------------------------------------------------------------------
     metric_specs = (
@@ -458,7 +504,8 @@ class EmergencyBrakeConfig(EvasiveConfig):
     lead_speed: float = param(SAME_AS_EGO, "m/s", "the lead car's speed from t = 0 until it brakes: "
                               "-1 = ego_speed, 0 = stopped (Euro NCAP CCRs), 5.556 = 20 km/h (CCRm)",
                               min=-1.0, max=45.0)
-    lead_brake_time: float = param(2.0, "s", "when the lead car starts braking", min=0.0)
+    lead_brake_time: float = param(2.0, "s", "when the lead car starts braking (at most duration)",
+                                   min=0.0, max=3600.0)
     lead_decel: float = param(6.0, "m/s^2", "lead car's deceleration", min=0.5, max=12.0)
     lead_final_speed: float = param(5.0, "m/s", "speed the lead car brakes to; at or above its "
                                     "speed it never brakes (it never speeds up)", min=0.0, max=40.0)
@@ -472,6 +519,9 @@ class EmergencyBrakeConfig(EvasiveConfig):
         if self.lead_speed != SAME_AS_EGO and self.lead_speed < 0.0:
             raise ConfigError(f"bad value for lead_speed: {self.lead_speed:g} (expected -1 for "
                               f"ego_speed, or a speed of at least 0 m/s)")
+        if self.lead_brake_time > self.duration:
+            raise ConfigError(f"bad value for lead_brake_time: {self.lead_brake_time:g} (expected at most "
+                              f"duration={self.duration:g} s: the lead would brake after the run)")
 
     @property
     def lead_cruise_speed(self) -> float:

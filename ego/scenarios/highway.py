@@ -17,7 +17,7 @@ from ego.models import NonlinearBicycle, NonlinearBicycleParams, VehicleGeometry
 from ego.models.actuators import ActuatorLimits
 from ego.models.plant import BicyclePlant
 from ego.params import param
-from ego.record.base import Scene, Series
+from ego.record.base import Series
 from ego.lane_frame import LanePolyline
 from ego.scenarios.base import (
     CommonConfig,
@@ -27,7 +27,8 @@ from ego.scenarios.base import (
 )
 from ego.scenarios.events import INF, boxes_overlap, time_to_collision
 from ego.scenarios.sensor import SurroundSensor
-from ego.scenarios.trace import Column, Plot
+from ego.scenarios.trace import Column, Plot, Ref, Trajectory
+from ego.scenarios.traffic_log import RADIUS, REACH_MARGIN
 from ego.sumo.bridge import (
     Collision,
     SumoBridge,
@@ -45,6 +46,11 @@ EDGE = "motorway"
 N_LANES = 3
 LANE_NAMES = {0: "right", 1: "middle", 2: "left"}
 TRAFFIC_TYPE = VehicleType("traffic", length=4.5, width=1.8, color=(150, 150, 150))
+#: the ego's outline for the top-down plot: length, width, centre ahead of the CG (m)
+EGO_BOX = (VehicleGeometry().length, VehicleGeometry().width,
+           VehicleGeometry().cg_to_front - 0.5 * VehicleGeometry().length)
+#: m the surroundings subscription reaches at least: the traffic log's radius
+LOG_REACH = RADIUS + REACH_MARGIN
 
 
 @dataclass(frozen=True)
@@ -70,8 +76,11 @@ class HighwayScenario(RoadScenario):
     """Base of the motorway scenarios; subclasses add traffic and manoeuvre logic."""
 
     config_cls = HighwayConfig
+    network = "highway"
     columns = (
         Column("t", "s", "time"),
+        Column("x", "m", "centre of gravity, world frame"),
+        Column("y", "m", "centre of gravity, world frame"),
         Column("s", "m", "centre of gravity along the start lane"),
         Column("d", "m", "offset from the target lane centre (+ left)"),
         Column("d_ref", "m", "lateral reference (offset from the target lane centre)"),
@@ -94,10 +103,11 @@ class HighwayScenario(RoadScenario):
     )
     plots = (
         Plot("e_lat", "lateral_error.png", "lateral error (actual - reference)"),
-        Plot("speed", "speed.png", "speed"),
+        Plot("speed", "speed.png", "speed", refs=(Ref("speed reference", "speed_ref"),)),
         Plot("delta", "steering.png", "front steer angle"),
         Plot("Fx", "fx.png", "Fx per driven wheel"),
         Plot("gap_front", "gap_front.png", "gap to the front object"),
+        Trajectory(ego_box=EGO_BOX),
     )
 
     def __init__(self, config, controller, **kwargs) -> None:
@@ -112,6 +122,7 @@ class HighwayScenario(RoadScenario):
         self.target_lane = 0
         self.phase = 0
         self._road_y = 0.0
+        self._around: tuple[list, list] = ([], [])
 
     # -- set-up ---------------------------------------------------------------------------
     def _make_bridge(self) -> SumoBridge:
@@ -120,9 +131,9 @@ class HighwayScenario(RoadScenario):
             # imported here: the SUMO path never loads highway-env
             from ego.highway_env.bridge import HighwayEnvBridge
 
-            return HighwayEnvBridge(net_file("highway"), step_length=c.sumo_step, seed=self.seed,
+            return HighwayEnvBridge(net_file(self.network), step_length=c.sumo_step, seed=self.seed,
                                     edge=EDGE, video=self.video, duration=c.duration)
-        return SumoBridge(SumoConfig(net_file("highway"), step_length=c.sumo_step, seed=self.seed,
+        return SumoBridge(SumoConfig(net_file(self.network), step_length=c.sumo_step, seed=self.seed,
                                      lateral_resolution=c.lateral_resolution))
 
     def _traffic(self, rng: np.random.Generator) -> tuple[list[VehicleSpec], list[str]]:
@@ -191,7 +202,8 @@ class HighwayScenario(RoadScenario):
                  for i, off in self.lane_offset.items()}
         self.sensor = SurroundSensor(self.road, bands, g.cg_to_front, g.length, g.width,
                                      horizon=c.sumo_step)
-        bridge.subscribe_surroundings(EGO, c.sensor_range)
+        # one subscription for the sensor and the traffic log, as far as either looks
+        bridge.subscribe_surroundings(EGO, max(c.sensor_range, LOG_REACH))
         self._sense()
 
     # -- per step ---------------------------------------------------------------------------
@@ -204,7 +216,8 @@ class HighwayScenario(RoadScenario):
         d = obs.d
         self.trace.append(
             self.controller.signals(),
-            t=obs.t, s=self.s, d=d, d_ref=obs.d_ref, e_lat=d - obs.d_ref, lane_offset=self.d_road,
+            t=obs.t, x=self.X, y=self.Y, s=self.s, d=d, d_ref=obs.d_ref,
+            e_lat=d - obs.d_ref, lane_offset=self.d_road,
             speed=obs.speed, ds=self.ds, s_ref=obs.s_ref, speed_ref=obs.ds_ref,
             Fx=fx, delta=delta, ttc_front=self.ttc_front, ttc_rear=self.ttc_rear,
             gap_front=self.gap_front, gap_rear=self.gap_rear,
@@ -223,8 +236,20 @@ class HighwayScenario(RoadScenario):
 
     def _sense(self) -> None:
         """The surround sensor's view at a SUMO step."""
-        self.sensor.sync(self.t, *self.bridge.surroundings(EGO))
+        ids, rows = self._around = self.bridge.surroundings(EGO)
+        reach = self.config.sensor_range
+        if reach < LOG_REACH:  # the subscription reaches farther for the traffic log
+            x, y = self.bridge.front_bumper(EGO)
+            near = [i for i, r in enumerate(rows) if math.hypot(r[0] - x, r[1] - y) <= reach]
+            ids, rows = [ids[i] for i in near], [rows[i] for i in near]
+        self.sensor.sync(self.t, ids, rows)
         self._looked = False
+
+    def _setup_traffic_log(self) -> None:
+        pass  # the sensor's subscription (_setup)
+
+    def _surroundings(self) -> tuple[list[str], list[tuple]]:
+        return self._around
 
     def _update(self) -> None:
         sensor = self.sensor
@@ -280,21 +305,13 @@ class HighwayScenario(RoadScenario):
         ids, poses = self.bridge.poses()
         self.recorder.vehicles(self.t, ids, poses, (self.ego.state[0], self._road_y))
 
-    def _scene(self) -> Scene:
-        c = self.config
-        x0 = self.ego.state[0] - 60.0
-        x1 = self.ego.state[0] + max(c.ego_speed, 10.0) * c.duration + 60.0
-        return Scene(lanes=[(lane.width, lane.points) for lane in self.lanes.values()],
-                     bounds=(x0, x1, self._road_y - 40.0, self._road_y + 40.0), title=self.name)
-
     def _series(self) -> list[Series]:
         return [
             Series("e_lat", "plots/lateral_error/ego", "m", "lateral error (actual - reference)"),
-            Series("d", "plots/lateral_position/ego", "m", "offset from the target lane centre"),
+            Series("d", "plots/lateral_position/ego", "m", "ego"),
             Series("d_ref", "plots/lateral_position/reference", "m", "reference"),
             *vehicle_series(),
-            Series("ttc_front", "plots/ttc/front", "s", "TTC front"),
-            Series("ttc_rear", "plots/ttc/rear", "s", "TTC rear"),
-            Series("phase", "plots/manoeuvre/phase", "", "phase"),
-            *signal_series(self._signal_names),
+            Series("ttc_front", "plots/ttc/front", "s", "front"),
+            Series("ttc_rear", "plots/ttc/rear", "s", "rear"),
+            *signal_series(self._signal_names, self._signal_units),
         ]

@@ -18,6 +18,11 @@ Two plants (``plant``):
 The report claims 0.000 m max/mean/std of the lateral error over 50 s: at 8 m/s, 50 s
 is 400 m of the first straight, where from rest nothing ever moves (``--set duration=50``
 shows it); the figures here are over the whole road.
+
+The drive ends :data:`END_MARGIN` before the end of the road (:data:`ROAD_LENGTH`, 2935 m):
+at s = 2920 m, 363 s after the start at the defaults (:func:`drive_time`). The speed is
+the configuration's, so when the ``duration`` runs out first the user shortened the drive:
+status ``ended``, not a failure.
 """
 
 from __future__ import annotations
@@ -27,6 +32,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ego.analytic_road import report003_road
 from ego.models import (
     ActuatorLimits,
     BicyclePlant,
@@ -42,7 +48,7 @@ from ego.record.base import Series
 from ego.lane_frame import LanePolyline
 from ego.scenarios import metrics as m
 from ego.scenarios.base import CommonConfig, RoadScenario, signal_series
-from ego.scenarios.trace import Column, Metric, Plot
+from ego.scenarios.trace import Band, Column, Marker, Metric, Plot
 from ego.sumo.bridge import SumoBridge, SumoConfig, VehicleSpec, VehicleType, ego_type
 from ego.sumo.net import net_file
 from ego.sumo.traffic import PoissonFlow, background_traffic
@@ -53,20 +59,34 @@ EGO_LANE, TRAFFIC_LANE = 0, 1
 #: report 003's car: wheelbase 2.8 m (lf 1.25, lr 1.55), width 1.85 m, ~0.95 m overhangs
 GEOMETRY = VehicleGeometry(length=4.7, width=1.85, cg_to_front=2.2)
 TRAFFIC_TYPE = VehicleType("traffic", length=4.5, width=1.8, color=(150, 150, 150))
+GOAL = 0.5  #: m, report 003's goal for the largest lateral error
 END_MARGIN = 15.0  #: m before the end of the lane where the run ends (SUMO would remove the ego)
+#: m: the length of the road (report 003's; the SUMO lane's centre line is built from it)
+ROAD_LENGTH = report003_road().length
+DEFAULT_SPEED, DEFAULT_START = 8.0, 20.0  #: m/s, m: report 003's speed, the front bumper at t = 0
+
+
+def drive_time(speed: float = DEFAULT_SPEED, start: float = DEFAULT_START) -> float:
+    """Seconds from t = 0 to the end of the drive at a constant ``speed`` (m/s) with the
+    front bumper at ``start`` (m along the road) at t = 0: the centre of gravity travels from
+    ``start - cg_to_front`` to END_MARGIN before the end of the road."""
+    return (ROAD_LENGTH - END_MARGIN - (start - GEOMETRY.cg_to_front)) / speed
 
 
 @dataclass(frozen=True)
 class LaneCenteringConfig(CommonConfig):
     """Report 003's drive: the whole road at constant speed."""
 
-    duration: float = param(600.0, "s", "simulated time limit (the drive ends at the end of the "
-                            "road: 367 s at 8 m/s)", min=1.0, max=3600.0)
-    speed: float = param(8.0, "m/s", "the ego's constant speed (report 003: 8 m/s)", min=2.0, max=30.0)
+    duration: float = param(600.0, "s", f"simulated time limit (the drive ends {END_MARGIN:g} m before the "
+                            f"end of the {ROAD_LENGTH:.0f} m road: {drive_time():.0f} s at "
+                            f"{DEFAULT_SPEED:g} m/s; a shorter duration ends it first: status ended)",
+                            min=1.0, max=3600.0)
+    speed: float = param(DEFAULT_SPEED, "m/s", "the ego's constant speed (report 003: 8 m/s)", min=2.0, max=30.0)
     plant: str = param("lateral-error", "-", "the ego's model", choices=("lateral-error", "dynamic-bicycle"))
     offset: float = param(0.0, "m", "the ego's lateral offset from the lane centre at t = 0 (+ left)",
                           min=-1.5, max=1.5)
-    start: float = param(20.0, "m", "the ego's front bumper along the road at t = 0", min=5.0, max=2000.0)
+    start: float = param(DEFAULT_START, "m", "the ego's front bumper along the road at t = 0", min=5.0,
+                         max=2000.0)
     traffic_density: float = param(8.0, "veh/km", "traffic in the left lane", min=0.0, max=30.0)
     traffic_factor: float = param(1.15, "-", "the traffic's speed as a multiple of the ego's",
                                   min=0.5, max=2.0)
@@ -82,6 +102,7 @@ class LaneCenteringScenario(RoadScenario):
                "cosine easements and 1000 m straight, at 8 m/s (--set speed=25; --set "
                "plant=dynamic-bicycle)")
     task = "lane-centering"
+    network = "lane_centering"
     config_cls = LaneCenteringConfig
     columns = (
         Column("t", "s", "time"),
@@ -99,7 +120,8 @@ class LaneCenteringScenario(RoadScenario):
     metric_specs = (
         Metric("completed_road", "-", "the ego reached the end of the road"),
         Metric("distance", "m", "distance driven along the lane"),
-        Metric("max_abs_lateral_error", "m", "largest |lateral error|"),
+        Metric("max_abs_lateral_error", "m", "largest |lateral error| (report 003's goal: < 0.5 m)",
+               headline=True),
         Metric("mean_abs_lateral_error", "m", "mean |lateral error|"),
         Metric("std_lateral_error", "m", "standard deviation of the lateral error"),
         Metric("rms_lateral_error", "m", "RMS of the lateral error", headline=True),
@@ -108,6 +130,9 @@ class LaneCenteringScenario(RoadScenario):
         Metric("max_abs_lateral_accel", "m/s^2", "largest |lateral acceleration|", headline=True),
     )
     plots = (
+        Plot("d", "lateral_error.png", "lateral error (+ left of the lane centre)",
+             band=Band(-GOAL, GOAL, f"report 003's goal: |e| < {GOAL:g} m"),
+             markers=(Marker("curve", "entering / leaving the curve", "|"),)),
         Plot("speed", "speed.png", "speed"),
         Plot("delta", "steering.png", "front steer angle"),
         Plot("a_x", "a_x.png", "axial acceleration"),
@@ -123,7 +148,7 @@ class LaneCenteringScenario(RoadScenario):
 
     def _make_bridge(self) -> SumoBridge:
         c = self.config
-        return SumoBridge(SumoConfig(net_file("lane_centering"), step_length=c.sumo_step,
+        return SumoBridge(SumoConfig(net_file(self.network), step_length=c.sumo_step,
                                      seed=self.seed, lateral_resolution=c.lateral_resolution))
 
     def _setup(self, rng: np.random.Generator) -> None:
@@ -194,7 +219,8 @@ class LaneCenteringScenario(RoadScenario):
     def _update(self) -> None:
         s = self.s
         if s >= self._end_s:
-            self._end("completed", f"reached the end of the road ({s:.0f} m)")
+            self._end("completed", f"reached the end of the drive at s = {self._end_s:.0f} m "
+                      f"({END_MARGIN:g} m before the end of the road)")
             return
         inside = any(a <= s <= b for a, b, _ in self.spans)
         if inside != self._in_curve:
@@ -217,8 +243,9 @@ class LaneCenteringScenario(RoadScenario):
         obs.accel_ref = 1.0 * (self.config.speed - x[1])
 
     def _final_status(self) -> tuple[str, str]:
-        return "timeout", f"at s = {self.s:.0f} m of {self._end_s + END_MARGIN:.0f} m after " \
-                          f"{self.config.duration:g} s"
+        # the speed is the configuration's: the drive's length in time is the user's choice
+        return "ended", (f"the duration ({self.config.duration:g} s) ended the run at s = {self.s:.0f} m "
+                         f"of the drive to s = {self._end_s:.0f} m")
 
     # -- results ------------------------------------------------------------------------------
     def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
@@ -247,5 +274,5 @@ class LaneCenteringScenario(RoadScenario):
             Series("curvature", "plots/curvature/lane", "1/m", "lane curvature"),
             Series("lat_accel", "plots/lateral_accel/ego", "m/s^2", "lateral acceleration"),
             Series("speed", "plots/speed/ego", "m/s", "speed"),
-            *signal_series(self._signal_names),
+            *signal_series(self._signal_names, self._signal_units),
         ]

@@ -37,14 +37,14 @@ import numpy as np
 
 from ego.control.following import FollowingObservation, PlatoonControl
 from ego.models import Longitudinal, LongitudinalParams, LongitudinalPlant, SpacingPolicy, VehicleGeometry
-from ego.params import ConfigError, param
+from ego.params import ConfigError, param, shown
 from ego.record.base import Scene, Series
 from ego.lane_frame import LanePolyline
 from ego.scenarios import metrics as m
 from ego.scenarios import string_stability as ss
 from ego.scenarios.base import CommonConfig, Scenario
 from ego.scenarios.events import INF, time_to_collision
-from ego.scenarios.trace import Column, Metric, Plot
+from ego.scenarios.trace import Band, Column, FrequencyResponse, Marker, Metric, Plot, Ref
 from ego.sumo.bridge import (
     Collision,
     Neighbour,
@@ -54,7 +54,7 @@ from ego.sumo.bridge import (
     VehicleType,
     ego_type,
 )
-from ego.sumo.net import net_file
+from ego.sumo.net import lane_length, net_file
 from ego.sumo.traffic import Manoeuvre, ProfiledLeader, SpeedProfile
 
 LEADER = "leader"
@@ -81,7 +81,7 @@ def parse_manoeuvres(text: str) -> tuple[Manoeuvre, ...]:
     raw = text.strip().lower()
     if raw in ("", "none"):
         return ()
-    bad = ConfigError(f"bad value for manoeuvres: {text!r} (expected time s:target km/h:rate m/s^2 "
+    bad = ConfigError(f"bad value for manoeuvres: {shown(text)} (expected time s:target km/h:rate m/s^2 "
                       "items separated by commas with increasing times, e.g. 10:20:2,35:50:1.5,60:0:6; "
                       "or none)")
     out = []
@@ -90,7 +90,7 @@ def parse_manoeuvres(text: str) -> tuple[Manoeuvre, ...]:
             t, v, rate = (float(x) for x in item.split(":"))
         except ValueError:
             raise bad from None
-        if not (math.isfinite(t) and t >= 0.0 and 0.0 <= v <= 150.0 and 0.0 < rate <= 12.0):
+        if not (0.0 <= t <= 3600.0 and 0.0 <= v <= 150.0 and 0.0 < rate <= 12.0):
             raise bad
         if out and t <= out[-1].time:
             raise bad
@@ -155,6 +155,18 @@ class PlatoonConfig(CommonConfig):
         return self.standstill_gap + self.headway * self.profile.speed(0.0) + self.start_error
 
 
+def _check_road(c: PlatoonConfig, length: float) -> float:
+    """The leader's start (m along the lane) if the drive fits on a lane of ``length`` m,
+    else ConfigError."""
+    lead_pos = TAIL + c.length + c.followers * (c.length + c.start_gap)
+    need = lead_pos + c.profile.distance(c.duration) + END_MARGIN
+    if need > length:
+        raise ConfigError(f"the platoon and its leader's {c.duration:g} s drive need {need:.0f} m of "
+                          f"road; the platoon network has {length:.0f} m (shorten duration or "
+                          "lower the speeds)")
+    return lead_pos
+
+
 class PlatoonScenario(Scenario):
     """A SUMO leader and a platoon of project-controlled followers in one lane."""
 
@@ -163,6 +175,7 @@ class PlatoonScenario(Scenario):
                "leader that brakes, accelerates and stops; string stability measured "
                "(--set variant=scale-model: the report's 3-car scale test)")
     task = "car-following"
+    network = "platoon"
     config_cls = PlatoonConfig
     metric_specs = (
         Metric("followers.", "-", "per follower (id): the platoon's metrics below, each in its unit, "
@@ -184,6 +197,11 @@ class PlatoonScenario(Scenario):
     )
 
     @classmethod
+    def check_config(cls, config: PlatoonConfig) -> None:
+        """The leader's whole drive must fit on the network's road (read from its XML)."""
+        _check_road(config, lane_length(cls.network, f"{EDGE}_0"))
+
+    @classmethod
     def default_config(cls, overrides: Mapping[str, Any]) -> PlatoonConfig:
         preset = VARIANTS.get(str(overrides.get("variant", "road")).strip())
         base = cls.config_cls()
@@ -195,14 +213,33 @@ class PlatoonScenario(Scenario):
         return PlatoonControl([spec.build(params, config.dt) for _ in ids], ids)
 
     @classmethod
-    def compare_plots(cls, config) -> tuple[Plot, ...]:
-        """The first and the last follower's spacing error and acceleration."""
+    def compare_plots(cls, config) -> tuple:
+        """Every follower's speed (the leader's dashed), spacing error (the settle band
+        shaded), gap and acceleration, one line per follower in a panel per controller; the
+        string stability's |H(jw)|."""
         ids = follower_ids(config.followers)
-        plots = []
-        for vid in dict.fromkeys((ids[0], ids[-1])):
-            plots += [Plot(f"e_{vid}", f"spacing_error_{vid}.png", f"spacing error delta_d of {vid}"),
-                      Plot(f"accel_{vid}", f"accel_{vid}.png", f"acceleration of {vid}")]
-        return tuple(plots)
+
+        def lines(q: str) -> tuple[tuple[str, str], ...]:
+            return tuple((f"{q}_{vid}", vid) for vid in ids)
+
+        sine = config.sine_amplitude > 0.0
+        marks = (Marker("leader", "the leader's manoeuvre starts", "v"), Marker("collision", "collision", "X"))
+        return (
+            Plot(f"speed_{ids[0]}", "speed.png", "speed", lines=lines("speed"),
+                 refs=(Ref("leader", "lead_speed"),), markers=marks),
+            Plot(f"e_{ids[0]}", "spacing_error.png", "spacing error delta_d", lines=lines("e"),
+                 band=Band(-config.settle_band, config.settle_band, f"settle band +-{config.settle_band:g} m"),
+                 markers=marks),
+            Plot(f"gap_{ids[0]}", "gap.png", "gap to the car ahead", lines=lines("gap"),
+                 refs=(Ref("standstill gap d_s", value=config.standstill_gap),), markers=marks),
+            Plot(f"accel_{ids[0]}", "accel.png", "acceleration", lines=lines("accel"),
+                 refs=(Ref("leader", "lead_accel"),), markers=marks),
+            FrequencyResponse("string_stability.png", ("lead_speed", *(f"speed_{vid}" for vid in ids)),
+                              (LEADER, *ids), config.headway, config.lag,
+                              config.sine_omega if sine else None,
+                              config.sine_transient if sine else 0.0,
+                              tuple(f"{g}_{vid}" for vid in ids for g in ("kp", "ki", "kd"))),
+        )
 
     def trace_columns(self) -> tuple[Column, ...]:
         """The leader's columns, then :data:`PER_FOLLOWER` for every follower."""
@@ -235,11 +272,15 @@ class PlatoonScenario(Scenario):
         self._lead_s_sync = 0.0
         self._sync_t = 0.0
         self._bad: str | None = None
+        #: the traffic log's ids (the leader, then the followers) and the followers' poses
+        #: pushed into SUMO for the last step (centre of gravity x, y in m, yaw in rad)
+        self._log_ids = (LEADER, *self.ids)
+        self._pushed: list[tuple[float, float, float]] = []
 
     # -- set-up ---------------------------------------------------------------------------
     def _make_bridge(self) -> SumoBridge:
         c = self.config
-        return SumoBridge(SumoConfig(net_file("platoon"), step_length=c.sumo_step, seed=self.seed,
+        return SumoBridge(SumoConfig(net_file(self.network), step_length=c.sumo_step, seed=self.seed,
                                      lateral_resolution=c.lateral_resolution))
 
     def _setup(self, rng: np.random.Generator) -> None:
@@ -250,12 +291,7 @@ class PlatoonScenario(Scenario):
         self.lane = lane = LanePolyline(points, width, f"{EDGE}_0")
         L, gap0, n = c.length, c.start_gap, c.followers
         v0 = self.profile.speed(0.0)
-        lead_pos = TAIL + L + n * (L + gap0)
-        need = lead_pos + self.profile.distance(c.duration) + END_MARGIN
-        if need > lane.length:
-            raise ConfigError(f"the platoon and its leader's {c.duration:g} s drive need {need:.0f} m of "
-                              f"road; the platoon network has {lane.length:.0f} m (shorten duration or "
-                              "lower the speeds)")
+        lead_pos = _check_road(c, lane.length)
         bridge.add_type(VehicleType(LEADER, length=L, width=c.width, accel=10.0, decel=12.0,
                                     emergency_decel=12.0, max_speed=60.0, sigma=0.0, color=LEADER_COLOR))
         bridge.add_type(ego_type("follower", self.geometry, decel=c.max_decel))
@@ -276,6 +312,9 @@ class PlatoonScenario(Scenario):
         self.obs = [FollowingObservation(policy=self.policy, max_accel=c.max_accel, max_decel=c.max_decel)
                     for _ in self.ids]
         self._bad = None
+        self._pushed = [plant.pose() for plant in self.plants]
+        self._manoeuvre = 0  #: the leader's next manoeuvre (index into profile.manoeuvres)
+        self._manoeuvre_at = self._next_manoeuvre_time()
         self._after_sumo_step()
 
     # -- per step ---------------------------------------------------------------------------
@@ -297,10 +336,12 @@ class PlatoonScenario(Scenario):
     def _before_sumo_step(self) -> None:
         bridge = self.bridge
         self.leader.update(bridge, self.t)
+        pushed = self._pushed = []
         for vid, plant in zip(self.ids, self.plants):
             x, y, psi = plant.pose()
             _, v, a = plant.state
             bridge.push(vid, x, y, psi, v, a)
+            pushed.append((x, y, psi))
 
     def _after_sumo_step(self) -> None:
         """Read who leads whom and the gaps from SUMO; the leader's speed and acceleration."""
@@ -323,6 +364,15 @@ class PlatoonScenario(Scenario):
                 self._gap_sync[i] = front - L - s[i]
             self._s_sync[i] = s[i]
 
+    def _log_traffic(self) -> None:
+        """Every vehicle within RADIUS of a follower (every follower is an ego): the
+        followers where they were pushed into SUMO for this step, the leader from SUMO."""
+        rows = [self.bridge.box(LEADER)]
+        L, W = self.config.length, self.config.width
+        for plant, (x, y, psi) in zip(self.plants, self._pushed):
+            rows.append((x, y, psi, plant.state[1], L, W))  # the CG is the box centre here
+        self.traffic.add(self.t, [p[:2] for p in self._pushed], self._log_ids, rows)
+
     def _check_divergence(self) -> str | None:
         if self._bad is not None:
             return self._bad
@@ -340,6 +390,8 @@ class PlatoonScenario(Scenario):
     def _update(self) -> None:
         """Gaps now (carried forward from the last SUMO step), observations, collisions."""
         t = self.t
+        if t >= self._manoeuvre_at:
+            self._leader_manoeuvre()
         since = t - self._sync_t
         lead_v, lead_a = self._lead_v_now, self._lead_a
         moved = lead_v * since
@@ -365,6 +417,23 @@ class PlatoonScenario(Scenario):
                 self._collided(Collision(self.ids[i], ahead, "rear-end (gap <= 0)", speed, lead_v))
                 return
             ahead_s, lead_v, lead_a = s, speed, accel
+
+    def _next_manoeuvre_time(self) -> float:
+        ms = self.profile.manoeuvres
+        return ms[self._manoeuvre].time if self._manoeuvre < len(ms) else INF
+
+    def _leader_manoeuvre(self) -> None:
+        """The leader starts its next manoeuvre: an event (the log, the recording's events)."""
+        m = self.profile.manoeuvres[self._manoeuvre]
+        self._manoeuvre += 1
+        self._manoeuvre_at = self._next_manoeuvre_time()
+        before = self.profile.base_speed(m.time)
+        kind = m.kind(before)
+        if kind == "hold":
+            self.event("leader", f"{LEADER} holds its speed ({before / KMH:.0f} km/h)")
+            return
+        what = "stops" if kind == "stop" else f"{kind}s to {m.speed / KMH:g} km/h"
+        self.event("leader", f"{LEADER} {what} at {m.rate:g} m/s^2 (from {before / KMH:.0f} km/h)")
 
     # -- results ------------------------------------------------------------------------------
     def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
@@ -468,30 +537,29 @@ class PlatoonScenario(Scenario):
 
     def _scene(self) -> Scene:
         c = self.config
-        pts = self.lane.points
-        xs, ys = [p[0] for p in pts], [p[1] for p in pts]
         top = max(self.profile.speed(k * 0.5) for k in range(int(c.duration * 2) + 1))
         span = c.followers * (c.length + c.standstill_gap + c.headway * top + max(c.start_error, 0.0)) + c.length
         half = 0.6 * span + 2.0 * c.length
-        return Scene(lanes=[(self.lane.width, pts)],
-                     bounds=(min(xs) - 20.0, max(xs) + 20.0, min(ys) - 20.0, max(ys) + 20.0),
-                     title=self.name, follow_view=(-half, half, -0.25 * half, 0.25 * half))
+        # the wide view: twice the close one (300 m for report 004's platoon at 50 km/h)
+        return Scene(lanes=[(self.lane.width, self.lane.points)], title=self.name, followed="the platoon",
+                     follow_view=(-half, half, -0.25 * half, 0.25 * half),
+                     around_view=(-2.0 * half, 2.0 * half, -0.3 * half, 0.3 * half))
 
     def _series(self) -> list[Series]:
         out = [Series("lead_speed", "plots/speed/leader", "m/s", "leader"),
                Series("lead_accel", "plots/accel/leader", "m/s^2", "leader")]
         for vid in self.ids:
             out += [
-                Series(f"e_{vid}", f"plots/spacing_error/{vid}", "m", f"{vid} delta_d"),
-                Series(f"gap_{vid}", f"plots/gap/{vid}", "m", f"{vid} gap"),
+                Series(f"e_{vid}", f"plots/spacing_error/{vid}", "m", vid),
+                Series(f"gap_{vid}", f"plots/gap/{vid}", "m", vid),
                 Series(f"speed_{vid}", f"plots/speed/{vid}", "m/s", vid),
                 Series(f"accel_{vid}", f"plots/accel/{vid}", "m/s^2", vid),
-                Series(f"command_{vid}", f"plots/command/{vid}", "m/s^2", f"{vid} command"),
-                Series(f"ttc_{vid}", f"plots/ttc/{vid}", "s", f"{vid} TTC"),
+                Series(f"command_{vid}", f"plots/command/{vid}", "m/s^2", vid),
+                Series(f"ttc_{vid}", f"plots/ttc/{vid}", "s", vid),
             ]
-        for name in self._signal_names:
+        for name in self._signal_names:  # one panel per signal: each has one unit
             signal, _, vid = name.rpartition("_")
-            out.append(Series(name, f"plots/{signal}/{vid}", "", f"{vid} {signal}"))
+            out.append(Series(name, f"plots/{signal}/{vid}", self._signal_units.get(name, ""), vid))
         return out
 
 

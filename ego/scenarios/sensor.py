@@ -125,7 +125,8 @@ class SurroundSensor:
         self.half_width = 0.5 * width
         self.front = Detection()
         self.rear = Detection()
-        #: (id, s_lo, s_hi, d_lo, d_hi, v_s, v_d, a_s) at the last sync, ordered by s_lo
+        #: (id, s_lo, s_hi, d_lo, d_hi, v_s, v_d, a_s, heading relative to the lane) at the
+        #: last sync, ordered by s_lo
         self._objects: list[tuple] = []
         self._speeds: dict[str, float] = {}  #: id -> v_s at the last sync
         self._rows: dict[str, tuple] = {}  #: id -> world row at the last sync
@@ -160,7 +161,7 @@ class SurroundSensor:
             prev = before.get(vid)
             accel = (vs - prev) / dt if prev is not None and dt > 0.0 else 0.0
             speeds[vid] = vs
-            objects.append((vid, s - hs, s + hs, d - hd, d + hd, vs, v * sn, accel))
+            objects.append((vid, s - hs, s + hs, d - hd, d + hd, vs, v * sn, accel, rel))
         objects.sort(key=lambda o: o[1])
         self._objects = objects
         self._near = None
@@ -264,6 +265,14 @@ class SurroundSensor:
         else:
             follower._copy(behind, behind._gap0 + moved - behind.speed * since)
         return True
+
+    def tracks(self, t: float) -> list[tuple[float, float, float, float, float]]:
+        """Every vehicle seen at the last SUMO step, moved on to time ``t`` (s) at its
+        velocity: (s, d) of its box centre in the lane frame (m), its velocity along and across
+        the lane (m/s, + left) and its heading relative to the lane (rad, + left)."""
+        since = t - self._t_sync
+        return [(0.5 * (o[1] + o[2]) + o[5] * since, 0.5 * (o[3] + o[4]) + o[6] * since, o[5], o[6], o[8])
+                for o in self._objects]
 
     def box(self, vid: str) -> tuple[float, float, float, float, float] | None:
         """World box (centre x, y in m, yaw rad, length, width in m) of a sensed vehicle now,

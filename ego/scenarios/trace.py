@@ -50,12 +50,100 @@ class Metric:
 
 
 @dataclass(frozen=True)
+class Ref:
+    """A dashed reference line on a plot: the trace column ``column``, or the constant
+    ``value`` (in the plot's unit)."""
+
+    label: str
+    column: str = ""
+    value: float | None = None
+
+
+@dataclass(frozen=True)
+class Band:
+    """A shaded band from ``lo`` to ``hi`` (the plot's unit): a tolerance such as the settle band."""
+
+    lo: float
+    hi: float
+    label: str
+
+
+@dataclass(frozen=True)
+class Marker:
+    """The events of ``kind`` (``RunResult.events``) marked on a plot's time axis."""
+
+    kind: str
+    label: str
+    symbol: str = "v"  #: matplotlib marker
+
+
+@dataclass(frozen=True)
 class Plot:
-    """A trace column ``ego compare`` plots, one line per controller, into ``file``."""
+    """A trace column ``ego compare`` plots over time into ``file``: every run of every
+    controller, one colour per controller; with ``lines``, one panel per controller and one
+    line per column (the vehicles of a platoon, front and rear TTC)."""
 
     column: str
     file: str
     label: str  #: y-axis label without the unit (the column's unit is added)
+    refs: tuple[Ref, ...] = ()  #: drawn dashed
+    band: Band | None = None
+    markers: tuple[Marker, ...] = ()
+    #: (column, legend) of each line when several columns share the plot (``column`` is
+    #: the first: a run without it is left out)
+    lines: tuple[tuple[str, str], ...] = ()
+    ylim: tuple[float, float] | None = None  #: the y range shown (None: all the data)
+
+    @property
+    def columns(self) -> tuple[str, ...]:
+        """Every trace column the plot reads."""
+        own = tuple(c for c, _ in self.lines) or (self.column,)
+        return own + tuple(r.column for r in self.refs if r.column)
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """The top-down view into ``file``: the ego's path (trace columns ``x``, ``y``), every
+    vehicle of the traffic log, the lanes, markers at the trigger event and at the closest
+    approach with the gap (trace column ``gap``) written there."""
+
+    file: str = "trajectory.png"
+    x: str = "x"
+    y: str = "y"
+    gap: str = "gap_front"
+    #: further gap columns: the closest approach is the smallest of all
+    other_gaps: tuple[str, ...] = ("gap_rear",)
+    trigger: str = "trigger"  #: the event kind marked
+    #: the ego's outline: (length, width, how far its centre is ahead of the centre of
+    #: gravity) in m; None: its path only
+    ego_box: tuple[float, float, float] | None = None
+
+    @property
+    def columns(self) -> tuple[str, ...]:
+        return (self.x, self.y, self.gap, *self.other_gaps)
+
+
+@dataclass(frozen=True)
+class FrequencyResponse:
+    """A platoon's string stability into ``file``: the linear theory's |H(jw)| of each
+    controller with PID gains (its parameters ``kp``, ``ki``, ``kd`` or the mean of its
+    signals ``kp_<id>``...), and the gains measured between consecutive vehicles' speeds
+    (``speeds``, the leader first) as points."""
+
+    file: str
+    speeds: tuple[str, ...]
+    names: tuple[str, ...]
+    headway: float  #: s, the spacing policy's lambda
+    lag: float  #: s, the actuator lag
+    omega: float | None = None  #: rad/s of a sinusoidal leader (its gain is marked)
+    transient: float = 0.0  #: s left out at the start
+    #: controller signals read when there (an adaptive PID's gains, ``kp_f1``, ...)
+    gain_columns: tuple[str, ...] = ()
+
+    @property
+    def columns(self) -> tuple[str, ...]:
+        """Every trace column the plot reads (``gain_columns`` only when a run has them)."""
+        return self.speeds + self.gain_columns
 
 
 class Trace:
@@ -66,9 +154,10 @@ class Trace:
     fast as a call can be: a missing or unknown column raises :class:`TraceError`.
     """
 
-    __slots__ = ("columns", "signal_names", "rows", "append", "_names")
+    __slots__ = ("columns", "signal_names", "signal_units", "rows", "append", "_names")
 
-    def __init__(self, columns: Sequence[Column], signal_names: Iterable[str] = ()) -> None:
+    def __init__(self, columns: Sequence[Column], signal_names: Iterable[str] = (),
+                 signal_units: Mapping[str, str] | None = None) -> None:
         names = tuple(c.name for c in columns)
         if len(set(names)) != len(names):
             dup = sorted({n for n in names if names.count(n) > 1})
@@ -78,6 +167,8 @@ class Trace:
             raise TraceError(f"trace column names must be Python identifiers: {', '.join(bad)}")
         self.columns = tuple(columns)
         self.signal_names = tuple(signal_names)
+        #: the controller's declared units of its signals ("" where it declares none)
+        self.signal_units = {n: (signal_units or {}).get(n, "") for n in self.signal_names}
         clash = set(self.signal_names) & set(names)
         if clash:
             raise TraceError(f"controller signals clash with trace columns: {', '.join(sorted(clash))}")
@@ -153,8 +244,8 @@ class Trace:
         return self._names + self.signal_names
 
     def units(self) -> dict[str, str]:
-        """Column name -> unit (controller signals: ``""``, their units are the controller's)."""
-        return {**{c.name: c.unit for c in self.columns}, **{n: "" for n in self.signal_names}}
+        """Column name -> unit (controller signals: as the controller declares them)."""
+        return {**{c.name: c.unit for c in self.columns}, **self.signal_units}
 
     def __len__(self) -> int:
         return len(self.rows)

@@ -243,7 +243,7 @@ class Report000(Scenario):
         # guide lines at the reference's extremes, the road the report never modelled
         levels = sorted({0.0, y, -y if c.case == "sine" else 0.0})
         lines = [(0.02, [(0.0, yy), (x1, yy)]) for yy in levels]
-        return Scene(lanes=lines, bounds=(-20.0, x1 + 20.0, -y - 10.0, y + 10.0), title=self.name)
+        return Scene(lanes=lines, title=self.name)
 
     def _series(self) -> list[Series]:
         return [
@@ -252,7 +252,7 @@ class Report000(Scenario):
             Series("d_ref", "plots/lateral_position/reference", "m", "Y_ref"),
             Series("e_lon", "plots/longitudinal_error/ego", "m", "X - X_ref"),
             *vehicle_series(),
-            *signal_series(self._signal_names),
+            *signal_series(self._signal_names, self._signal_units),
         ]
 
     def _meta(self) -> dict:

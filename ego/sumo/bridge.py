@@ -151,6 +151,9 @@ class SumoBridge:
     """One headless SUMO simulation and the vehicles ego controls in it."""
 
     _running = False  # libsumo: one simulation per process
+    #: simulations started in this process so far (bad input must never get this far: the
+    #: input catalogue's tests check it stays put)
+    started = 0
 
     def __init__(self, config: SumoConfig, look_ahead: float = 250.0) -> None:
         self.config = config
@@ -181,7 +184,12 @@ class SumoBridge:
                             "(libsumo allows one per process; use processes for parallel runs)")
         import libsumo
 
-        libsumo.start(self.config.command())
+        SumoBridge.started += 1
+        try:
+            libsumo.start(self.config.command())
+        except Exception as exc:  # noqa: BLE001 - libsumo says only "Process Error"; SUMO's reasons went to stderr
+            raise SumoError(f"SUMO could not start on {self.config.net} ({type(exc).__name__}: {exc}; "
+                            "SUMO's own messages are on stderr)") from None
         SumoBridge._running = True
         self._ls = libsumo
 
@@ -443,6 +451,16 @@ class SumoBridge:
             ids.append(other)
             rows.append((xf - half * cos(psi), yf - half * sin(psi), psi, var[v_key], length, width))
         return ids, rows
+
+    def box(self, vid: str) -> tuple[float, float, float, float, float, float]:
+        """One vehicle as :meth:`surroundings` gives each: (centre x, y in m, yaw in rad,
+        speed m/s, length, width in m), as of the last step."""
+        veh = self._ls.vehicle
+        xf, yf = veh.getPosition(vid)
+        psi = math.radians(90.0 - veh.getAngle(vid))
+        length, width = self.dimensions(vid)
+        half = 0.5 * length
+        return xf - half * math.cos(psi), yf - half * math.sin(psi), psi, veh.getSpeed(vid), length, width
 
     def dimensions(self, vid: str) -> tuple[float, float]:
         """(length, width) of any vehicle (m), cached."""

@@ -3,6 +3,7 @@
 Each network lives in ``sumo_nets/<name>/`` as plain XML sources (``<name>.nod.xml``,
 ``<name>.edg.xml``, ...) plus a netconvert configuration ``<name>.netccfg``; the built
 ``<name>.net.xml`` is committed next to them and rebuilt with ``python sumo_nets/build.py``.
+An installed ego (a wheel) carries the folder as its package ``ego.sumo_nets``.
 """
 
 from __future__ import annotations
@@ -10,9 +11,10 @@ from __future__ import annotations
 import os
 import re
 import subprocess
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from ego.params import ConfigError
+from ego.params import ConfigError, did_you_mean
 
 _HEADER = re.compile(r"^<\?xml[^>]*>\s*(<!--.*?-->\s*)?", re.S)
 
@@ -33,15 +35,30 @@ def sumo_binary(name: str = "sumo") -> Path:
 
 
 def nets_dir() -> Path:
-    """The ``sumo_nets`` folder: $EGO_SUMO_NETS, else the one beside the ``ego`` package."""
+    """The networks folder: $EGO_SUMO_NETS; else the package ``ego.sumo_nets`` of an
+    installed ego (a wheel carries the checkout's ``sumo_nets/`` under that name); else
+    ``sumo_nets/`` beside the ``ego`` package of a checkout."""
     env = os.environ.get("EGO_SUMO_NETS")
-    path = Path(env) if env else Path(__file__).resolve().parents[2] / "sumo_nets"
+    if env:
+        path = Path(env)
+    else:
+        path = _installed_nets() or Path(__file__).resolve().parents[2] / "sumo_nets"
     if not path.is_dir():
         raise ConfigError(
-            f"SUMO networks folder {path} not found (install ego editable from its checkout, "
-            "or set EGO_SUMO_NETS)"
+            f"SUMO networks folder {path} not found (reinstall ego, or set EGO_SUMO_NETS to a "
+            "folder of networks)"
         )
     return path
+
+
+def _installed_nets() -> Path | None:
+    from importlib.resources import files
+
+    try:
+        # an installed wheel unpacks into real files (ego has a C extension, it is never zipped)
+        return Path(str(files("ego.sumo_nets")))
+    except ModuleNotFoundError:  # ego imported from a checkout (PYTHONPATH): no such package
+        return None
 
 
 def available_networks() -> list[str]:
@@ -56,8 +73,41 @@ def net_file(name: str) -> Path:
         if name in known:  # its sources are there, the built file is not
             raise ConfigError(f"network {name!r} is not built ({path} is missing); build it with "
                               "python sumo_nets/build.py")
-        raise ConfigError(f"unknown network {name!r} (known: {', '.join(known)})")
+        raise ConfigError(f"unknown network {name!r} (known: {', '.join(known)}){did_you_mean(name, known)}")
+    check_network(path)
     return path
+
+
+def lane_length(name: str, lane: str) -> float:
+    """The length (m) of lane ``lane`` in the built network ``name``, read from its XML (no
+    SUMO started)."""
+    path = net_file(name)
+    for _, elem in ET.iterparse(path, events=("start",)):
+        if elem.tag == "lane" and elem.get("id") == lane:
+            return float(elem.get("length"))
+    raise ConfigError(f"the SUMO network {path} has no lane {lane!r}; rebuild it: python sumo_nets/build.py")
+
+
+def check_network(path: Path) -> None:
+    """A built network must be whole XML with a ``<net>`` root and edges: a truncated or
+    garbled file is a ConfigError naming it here, before libsumo reads it (libsumo would
+    fail deep inside SUMO, or worse, load half a road). The shipped networks take well
+    under a millisecond to parse."""
+    edges = 0
+    root = None
+    try:
+        for event, elem in ET.iterparse(path, events=("start",)):
+            if root is None:
+                root = elem.tag
+            edges += elem.tag == "edge"
+    except ET.ParseError as exc:
+        raise ConfigError(f"the SUMO network {path} is not valid XML ({exc}); rebuild it: "
+                          "python sumo_nets/build.py") from None
+    except OSError as exc:
+        raise ConfigError(f"cannot read the SUMO network {path}: {exc.strerror or exc}") from None
+    if root != "net" or not edges:
+        raise ConfigError(f"the SUMO network {path} is not a SUMO network (expected a <net> with edges); "
+                          "rebuild it: python sumo_nets/build.py")
 
 
 def build_network(name: str, output: Path | None = None) -> Path:

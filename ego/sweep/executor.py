@@ -18,7 +18,7 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any, Protocol
 
-from ego.processes import main_module_hidden
+from ego.processes import exit_with, main_module_hidden
 
 ENGINES = ("process", "ray")
 
@@ -52,14 +52,16 @@ def default_workers() -> int:
     return max(1, os.cpu_count() or 1)
 
 
-def _worker_main(conn) -> None:
+def _worker_main(conn, parent: int) -> None:
     """A worker: run ``fn(task)`` for each (fn, task) received, send back (ok, value or
-    error text). It ends when the parent closes its end of the pipe - or dies: then the
-    pipe reports end-of-file and the worker exits instead of living on."""
+    error text). It ends when the parent closes its end of the pipe, and dies with the
+    parent (``parent``: its pid) even in the middle of a task, so a killed ``ego compare``
+    or ``ego sweep`` leaves no process behind."""
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C and SIGTERM are the parent's to handle
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    exit_with(parent)
     import pickle
 
     while True:
@@ -83,7 +85,7 @@ class _Worker:
 
     def __init__(self, ctx) -> None:
         parent, child = ctx.Pipe(duplex=True)
-        self.process = ctx.Process(target=_worker_main, args=(child,), daemon=True)
+        self.process = ctx.Process(target=_worker_main, args=(child, os.getpid()), daemon=True)
         with main_module_hidden():
             self.process.start()
         child.close()
@@ -178,6 +180,8 @@ class ProcessExecutor:
     def close(self) -> None:
         pool, self._pool = self._pool, []
         for worker in pool:
+            if worker.job is not None:  # a run abandoned mid-way (Ctrl-C): no waiting for it
+                worker.process.kill()
             worker.stop()
 
     def __enter__(self) -> ProcessExecutor:

@@ -2,8 +2,8 @@
 
 **Reading an envelope plot** (``envelope_<X>_<Y>[_<METRIC>].png``): one column per
 controller. The top row is the outcome of every run at its (X, Y) point: green completed,
-red collision, black diverged, orange timeout, grey error; where a point has several runs
-(seeds) the worst outcome is drawn. The boundary between green and red is the controller's
+light green ended (the duration ran out first), red collision, black diverged, orange
+timeout, grey error; where a point has several runs (seeds) the worst outcome is drawn. The boundary between green and red is the controller's
 operating envelope over those two parameters (the others vary or stay fixed as the spec
 says). The bottom row, when a metric is asked for, colours each point by that metric (the
 mean over its runs), on one colour scale shared by all controllers, so the columns compare.
@@ -16,17 +16,19 @@ from pathlib import Path
 
 import numpy as np
 
-from ego.scenarios.metrics import with_unit
+from ego.scenarios.metrics import metric_units, with_unit
 
 #: outcome -> (colour, rank: a point with several runs shows its worst)
-OUTCOMES = {"completed": ("#2ca02c", 0), "timeout": ("#ff7f0e", 1), "collision": ("#d62728", 3),
-            "diverged": ("#000000", 4), "error": ("#9e9e9e", 2)}
+OUTCOMES = {"completed": ("#2ca02c", 0), "ended": ("#98df8a", 1), "timeout": ("#ff7f0e", 2),
+            "collision": ("#d62728", 4), "diverged": ("#000000", 5), "error": ("#9e9e9e", 3)}
 
 
-def _units(scenario: str) -> dict[str, str]:
+def _unit(scenario: str, metric: str) -> str:
+    """The declared unit of a (flattened) metric: ``settle_times.brake@10s`` is in the unit
+    its prefix ``settle_times.`` declares."""
     from ego.scenarios import scenario_class
 
-    return {m.name: m.unit for m in scenario_class(scenario).metrics_declared()}
+    return metric_units(scenario_class(scenario).metrics_declared(), [metric])[metric]
 
 
 def write_summary(spec, table, path: Path) -> None:
@@ -85,12 +87,9 @@ def write_summary(spec, table, path: Path) -> None:
 
 def write_plots(spec, table, out: Path, x: str, y: str, metric: str | None) -> Path:
     """The envelope plot for (x, y[, metric]); see the module docstring. Returns its path."""
-    import matplotlib
+    from ego.plots import pyplot, save
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    units = _units(spec.scenario)
+    plt = pyplot()
     data = table.to_pydict()
     rows = 2 if metric else 1
     ncol = len(spec.controllers)
@@ -151,16 +150,11 @@ def write_plots(spec, table, out: Path, x: str, y: str, metric: str | None) -> P
     if metric and scatter is not None:
         cax = fig.add_axes([0.85, 0.1, 0.02, 0.3])
         bar = fig.colorbar(scatter, cax=cax)
-        bar.set_label(with_unit(metric, units.get(metric, "")) + "\n(mean of a point's runs)", fontsize=7)
+        bar.set_label(with_unit(metric, _unit(spec.scenario, metric)) + "\n(mean of a point's runs)", fontsize=7)
     title = f"{spec.scenario}: outcome over {x} and {y}" + (f"; {metric}" if metric else "")
     fig.suptitle(title, fontsize=10)
     name = f"envelope_{x}_{y}" + (f"_{metric}" if metric else "") + ".png"
-    path = out / name
-    tmp = out / f".{name}.tmp.png"
-    fig.savefig(tmp)
-    plt.close(fig)
-    tmp.replace(path)
-    return path
+    return save(fig, out / name)
 
 
 def _param_unit(spec, name: str) -> str:

@@ -10,10 +10,11 @@ next run of the same command skips the run ids already there.
 
 from __future__ import annotations
 
-import os
 import time
 from collections.abc import Iterable
 from pathlib import Path
+
+from ego.outputs import atomic_path
 
 #: columns every row has, first
 KEY_COLUMNS = ("run_id", "scenario", "controller", "seed")
@@ -71,9 +72,8 @@ class ResultStore:
         table = batch if self._table is None else pa.concat_tables(
             [self._table, batch], promote_options="permissive")
         table = table.select(_ordered(table.column_names))
-        tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}.tmp")
-        pq.write_table(table, tmp)
-        os.replace(tmp, self.path)
+        with atomic_path(self.path) as tmp:
+            pq.write_table(table, tmp)
         self._table = table
         self._pending = []
 

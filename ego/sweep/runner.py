@@ -3,8 +3,9 @@
 Outputs in ``--out``: ``results.parquet`` (see :mod:`ego.sweep.results`), ``summary.md``
 (per controller: runs by status and the distribution of the scenario's headline metrics),
 ``runs/<controller>-<run id>.rrd`` as ``--record`` says (``failed``, the default, records
-only the runs that did not complete: each is run again with a recording, which gives the
+only the runs that failed - not ``completed`` nor ``ended``: each is run again with a recording, which gives the
 same run since runs are deterministic), and the envelope plots asked for with ``--plot``.
+``--out`` is held while the sweep runs: a second sweep or comparison into it is refused.
 """
 
 from __future__ import annotations
@@ -16,7 +17,9 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from ego.outputs import FolderLock, remove_partials
 from ego.params import ConfigError
+from ego.params import ConfigError, did_you_mean
 from ego.sweep.executor import Outcome, make_executor
 from ego.sweep.results import ResultStore
 from ego.sweep.spec import Run, SweepSpec
@@ -28,6 +31,7 @@ _HOST = socket.gethostname()
 def run_task(task: tuple) -> dict:
     """One run in a worker: ``(Run, recording path or None, record policy)`` -> its row."""
     from ego.runner import RunSpec, run
+    from ego.scenarios.base import NOT_FAILED
     from ego.scenarios.metrics import flatten
 
     r, rrd, policy = task
@@ -38,7 +42,7 @@ def run_task(task: tuple) -> dict:
         spec = RunSpec(r.scenario, r.controller, r.seed, r.overrides,
                        record=rrd if policy == "all" else None, background_recording=False)
         result = run(spec)
-        if policy == "failed" and result.status != "completed" and rrd:
+        if policy == "failed" and result.status not in NOT_FAILED and rrd:
             run(RunSpec(r.scenario, r.controller, r.seed, r.overrides, record=rrd,
                         background_recording=False))
         metrics = flatten(result.metrics)
@@ -80,7 +84,12 @@ def sweep(spec: SweepSpec, out: Path, *, engine: str = "process", jobs: int | No
         raise ConfigError(f"bad --record {record!r} (allowed: {', '.join(RECORD)})")
     plot_specs = [parse_plot(p, spec) for p in plots]
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    with FolderLock(out, "--out"):  # one sweep at a time per folder (its results file)
+        return _sweep(spec, out, engine, jobs, address, record, plot_specs, progress)
+
+
+def _sweep(spec: SweepSpec, out: Path, engine: str, jobs: int | None, address: str | None, record: str,
+           plot_specs: list, progress: Callable | None) -> SweepReport:
     store = ResultStore(out)
     done = store.done_ids()
     total = spec.count()
@@ -89,6 +98,7 @@ def sweep(spec: SweepSpec, out: Path, *, engine: str = "process", jobs: int | No
     runs_dir = out / "runs"
     if record != "none":
         runs_dir.mkdir(parents=True, exist_ok=True)
+    remove_partials(runs_dir)  # left by a sweep that was killed
 
     def tasks():
         for r in spec.runs():
@@ -118,6 +128,7 @@ def sweep(spec: SweepSpec, out: Path, *, engine: str = "process", jobs: int | No
         store.flush()
         if executor is not None:
             executor.close()
+        remove_partials(runs_dir)  # recordings of runs killed mid-way; their workers are gone
     table = store.table()
     if table is not None:
         from ego.sweep.report import write_plots, write_summary
@@ -138,7 +149,7 @@ def parse_plot(text: str, spec: SweepSpec) -> tuple[str, str, str | None]:
     for name in names:
         if name not in spec.swept:
             raise ConfigError(f"bad --plot {text!r}: {name!r} is not swept by the spec "
-                              f"(swept: {', '.join(spec.swept) or 'nothing'})")
+                              f"(swept: {', '.join(spec.swept) or 'nothing'}){did_you_mean(name, spec.swept)}")
     metric = metric.strip() or None
     if metric is not None:
         from ego.scenarios import scenario_class
@@ -146,7 +157,7 @@ def parse_plot(text: str, spec: SweepSpec) -> tuple[str, str, str | None]:
         known = {m.name for m in scenario_class(spec.scenario).metrics_declared()}
         if metric not in known:
             raise ConfigError(f"bad --plot {text!r}: {metric!r} is not a metric of {spec.scenario} "
-                              f"(see ego list)")
+                              f"(see ego list){did_you_mean(metric, known)}")
     return names[0], names[1], metric
 
 

@@ -36,7 +36,7 @@ from pathlib import Path
 from typing import Any
 
 from ego.control import controller_spec
-from ego.params import ConfigError, apply_overrides, describe
+from ego.params import ConfigError, apply_overrides, describe, did_you_mean
 
 #: SUMO takes seeds 0..2^31-1
 MAX_SEED = 2**31 - 1
@@ -162,8 +162,10 @@ def load(path: str | Path) -> SweepSpec:
     """Read and validate a spec file; ConfigError (one line, naming the file) on anything wrong."""
     path = Path(path)
     try:
-        text = path.read_text()
-    except (OSError, UnicodeDecodeError) as exc:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise ConfigError(f"cannot read the sweep spec {str(path)!r}: not a text file (expected TOML)") from None
+    except OSError as exc:
         raise ConfigError(f"cannot read the sweep spec {str(path)!r}: {exc.strerror or exc}") from None
     try:
         data = tomllib.loads(text)
@@ -179,7 +181,7 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
 
     unknown = [k for k in data if k not in _TOP]
     if unknown:
-        raise bad(f"unknown key {unknown[0]!r} (allowed: {', '.join(_TOP)})")
+        raise bad(f"unknown key {unknown[0]!r} (allowed: {', '.join(_TOP)}){did_you_mean(unknown[0], _TOP)}")
     scenario = data.get("scenario")
     if not isinstance(scenario, str):
         raise bad("scenario must be a scenario name, e.g. scenario = \"emergency-brake\"")
@@ -208,7 +210,7 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
         info = infos.get(name)
         if info is None:
             raise bad(f"[{where}] unknown parameter {name!r} for {scenario} with "
-                      f"{', '.join(controllers)} (see ego list)")
+                      f"{', '.join(controllers)} (see ego list){did_you_mean(name, infos)}")
         return info
 
     fixed = data.get("set", {})
@@ -234,7 +236,7 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
             raise bad("[sample] must be a table")
         method = sample_data.get("method", "lhs")
         if method not in METHODS:
-            raise bad(f"[sample] method {method!r} (allowed: {', '.join(METHODS)})")
+            raise bad(f"[sample] method {method!r} (allowed: {', '.join(METHODS)}){did_you_mean(method, METHODS)}")
         n = sample_data.get("n")
         if not isinstance(n, int) or isinstance(n, bool) or n < 1:
             raise bad(f"[sample] n must be a whole number of at least 1, got {n!r}")

@@ -89,6 +89,53 @@ def run_in_worker(spec: tuple) -> tuple[int, str, bool]:
     return os.getpid(), status, SumoBridge._running
 
 
+class RaisesAt:
+    """A tracking controller that drives like the ``none`` controller, then raises at its
+    ``step``-th control step: a user's controller failing mid-run."""
+
+    def __init__(self, step: int) -> None:
+        self.step_at, self.steps = step, 0
+
+    def reset(self, *, seed: int | None = None) -> None:
+        self.steps = 0
+
+    def step(self, obs) -> tuple[float, float]:
+        self.steps += 1
+        if self.steps == self.step_at:
+            raise RuntimeError(f"controller fault injected at step {self.steps}")
+        return 0.0, 0.0
+
+    def signals(self) -> dict[str, float]:
+        return {}
+
+
+def compare_run_with_fault(job: tuple) -> Any:
+    """``(fault, RunSpec, argument)`` -> ego compare's worker function on the spec (a row),
+    with a fault in this worker for that run only: ``none``; ``controller`` (the spec's
+    controller name ``raises`` is a :class:`RaisesAt` at step ``argument``); ``sumo`` (the
+    networks are read from the folder ``argument``, e.g. one holding a broken network)."""
+    from ego.compare import _one
+    from ego.control import CONTROLLERS, NoParams
+    from ego.control.base import ControllerSpec
+
+    fault, spec, argument = job
+    saved_env = os.environ.get("EGO_SUMO_NETS")
+    tracking = CONTROLLERS["tracking"]
+    try:
+        if fault == "controller":
+            tracking["raises"] = ControllerSpec("raises", "raises mid-run (tests)", NoParams,
+                                                lambda params, dt: RaisesAt(int(argument)))
+        elif fault == "sumo":
+            os.environ["EGO_SUMO_NETS"] = str(argument)
+        return _one(spec)
+    finally:
+        tracking.pop("raises", None)
+        if saved_env is None:
+            os.environ.pop("EGO_SUMO_NETS", None)
+        else:
+            os.environ["EGO_SUMO_NETS"] = saved_env
+
+
 def call(job: tuple[str, Any]) -> Any:
     """``(name, argument)`` -> this module's function ``name`` applied to the argument: one
     run mixing tasks that succeed, raise and kill their worker."""

@@ -29,9 +29,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ego.checks import MAX_JOBS, check_count, check_number, check_seed, finite_number
 from ego.control.cascade import GAIN_NAMES, REPORT_GAINS, TUNED_PRESET, Cascade
 from ego.models.lateral_error import LateralError, LateralErrorParams
 from ego.analytic_road import report003_road
+from ego.outputs import write_text
+from ego.params import ConfigError, did_you_mean
 
 MAX_ERROR = 0.5  #: the report's goal (m)
 DIVERGED = 1e3  #: |e| (m) beyond which a member is lost (its cost is then >= 1e4)
@@ -292,6 +295,21 @@ def cost(max_abs, mean_abs, std_abs):
 BOUNDS = [(0.0, 2.0)] * 12
 
 
+#: the speeds (m/s) and largest initial offset (m) of a drive; the longest SUMO cost run (s)
+DRIVE_SPEEDS, MAX_OFFSET, MAX_DURATION = (2.0, 30.0), 1.5, 3600.0
+
+
+def check_drives(drives, what: str = "drives", text: str | None = None) -> None:
+    """(speed, offset) pairs within ``DRIVE_SPEEDS`` and ``MAX_OFFSET``, or ConfigError
+    quoting ``text`` (what the user wrote) or the drives."""
+    lo, hi = DRIVE_SPEEDS
+    pairs = isinstance(drives, (tuple, list)) and len(drives) > 0 and all(
+        isinstance(d, (tuple, list)) and len(d) == 2 and all(finite_number(x) for x in d) for d in drives)
+    if not pairs or any(not lo <= v <= hi or abs(o) > MAX_OFFSET for v, o in drives):
+        raise ConfigError(f"bad value for {what}: {text if text is not None else drives!r:.60} (expected "
+                          f"speeds from {lo:g} to {hi:g} m/s and offsets within {MAX_OFFSET:g} m)")
+
+
 @dataclass(frozen=True)
 class TuneSpec:
     """Differential evolution as report 003 ran it - population 15, 100 generations, its
@@ -316,6 +334,24 @@ class TuneSpec:
     engine: str = "process"
     address: str | None = None
     duration: float | None = None  #: cost=sumo: simulated time of each run (s; None: the road)
+
+    def __post_init__(self) -> None:
+        """The same checks as ``ego tune``'s options, from Python: ConfigError."""
+        from ego.sweep.executor import ENGINES
+
+        check_count(self.popsize, "popsize", 1, 1000)
+        check_count(self.maxiter, "maxiter", 1, 100_000)
+        check_seed(self.seed, "seed")
+        check_count(self.workers, "workers", 1, MAX_JOBS)
+        check_number(self.tol, "tol", 0.0, 1.0, "")
+        check_drives(self.drives)
+        for name, allowed in (("cost", ("model", "sumo")), ("engine", ENGINES)):
+            if getattr(self, name) not in allowed:
+                raise ConfigError(f"bad value for {name}: {getattr(self, name)!r} (expected one of "
+                                  f"{', '.join(allowed)}){did_you_mean(getattr(self, name), allowed)}")
+        if self.address is not None and not isinstance(self.address, str):
+            raise ConfigError(f"bad value for address: {self.address!r} (expected text, e.g. auto)")
+        check_number(self.duration, "duration", 1.0, MAX_DURATION, "s")
 
     @classmethod
     def quick(cls, seed: int = 0, workers: int = 1) -> TuneSpec:
@@ -387,6 +423,7 @@ def sumo_cost(task: tuple) -> float:
     the report's cost of the run's lateral error (a run that does not complete costs 1e4+)."""
     from ego.control.cascade import CascadePID, CascadePIDParams
     from ego.runner import RunSpec, configure
+    from ego.scenarios.base import NOT_FAILED
 
     gains, speed, offset, duration = task
     overrides = {"speed": speed, "offset": offset, "plant": "dynamic-bicycle"}
@@ -399,7 +436,7 @@ def sumo_cost(task: tuple) -> float:
                              p.feedforward, math.radians(p.steer_limit), math.radians(p.steer_rate))
     result = cls(config, controller, seed=0, controller_name="cascade-pid").run()
     e = np.abs(result.column("d"))
-    if result.status not in ("completed", "timeout") or not e.size:  # timeout: a shortened drive
+    if result.status not in NOT_FAILED or not e.size:  # ended: a shortened drive
         return float(1e4 + (np.nanmax(e) if e.size else 0.0))
     return float(cost(np.array([e.max()]), np.array([e.mean()]), np.array([e.std()]))[0])
 
@@ -506,6 +543,6 @@ def tune(spec: TuneSpec = TuneSpec(), out: Path | None = TUNED_PRESET, log=print
     if out is not None:
         out = Path(out)
         out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(json.dumps(preset, indent=2) + "\n")
+        write_text(out, json.dumps(preset, indent=2) + "\n")
         log(f"wrote {out}")
     return preset

@@ -30,40 +30,63 @@ from pathlib import Path
 
 import numpy as np
 
+from ego.checks import MAX_SEED
 from ego.control.narma import DEFAULT_MODEL, FEATURES
 from ego.models import DynamicBicycle, DynamicBicycleParams
 from ego.lane_frame import LanePolyline
+from ego.outputs import atomic_path, write_text
+from ego.params import HALF_PI, ConfigError, Params, param
 
 KMH = 1.0 / 3.6
 
 
 @dataclass(frozen=True)
-class DataSpec:
-    """How the identification data are generated."""
+class DataSpec(Params):
+    """How the identification data are generated (``ego train narma-l2``'s options read
+    their bounds from here)."""
 
-    samples: int = 20000  #: at least this many (regressor, target) pairs in all
-    sample_period: float = 0.05  #: controller sample period h (s)
-    dt: float = 0.01  #: model step (s): the scenario's control period
-    speed_min: float = 20.0  #: entry speed range (km/h)
-    speed_max: float = 40.0
-    accel_min: float = 0.0  #: axial acceleration range (m/s^2)
-    accel_max: float = 0.6
-    radius_min: float = 12.0  #: curve radius range (m), log-uniform
-    radius_max: float = 60.0
-    excitation: float = 0.1  #: largest excitation level (rad)
-    hold_max: int = 5  #: excitation levels last 1..hold_max samples
-    steer_limit: float = 0.6  #: (rad)
-    held_out_every: int = 5  #: every n-th episode is held out
+    samples: int = param(20000, "-", "at least this many (regressor, target) pairs in all",
+                         min=50, max=10_000_000)
+    sample_period: float = param(0.05, "s", "controller sample period h", min=0.001, max=1.0)
+    dt: float = param(0.01, "s", "model step: the scenario's control period", min=0.001, max=0.1)
+    speed_min: float = param(20.0, "km/h", "entry speed range: low end", min=5.0, max=60.0)
+    speed_max: float = param(40.0, "km/h", "entry speed range: high end", min=5.0, max=60.0)
+    accel_min: float = param(0.0, "m/s^2", "axial acceleration range: low end", min=-2.0, max=2.0)
+    accel_max: float = param(0.6, "m/s^2", "axial acceleration range: high end", min=-2.0, max=2.0)
+    radius_min: float = param(12.0, "m", "curve radius range (log-uniform): low end", min=5.0, max=1000.0)
+    radius_max: float = param(60.0, "m", "curve radius range (log-uniform): high end", min=5.0, max=1000.0)
+    excitation: float = param(0.1, "rad", "largest excitation level", min=0.0, max=HALF_PI)
+    hold_max: int = param(5, "-", "excitation levels last 1..hold_max samples", min=1, max=100)
+    steer_limit: float = param(0.6, "rad", "steer limit", min=0.0, max=HALF_PI, min_exclusive=True)
+    held_out_every: int = param(5, "-", "every n-th episode is held out", min=2, max=1000)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        for low, high in (("speed_min", "speed_max"), ("accel_min", "accel_max"), ("radius_min", "radius_max")):
+            if getattr(self, low) > getattr(self, high):
+                raise ConfigError(f"bad value for {low}: {getattr(self, low):g} (expected at most "
+                                  f"{high}={getattr(self, high):g})")
+        ratio = self.sample_period / self.dt
+        if abs(ratio - round(ratio)) > 1e-9:
+            raise ConfigError(f"bad value for sample_period: {self.sample_period:g} (expected a whole "
+                              f"multiple of dt={self.dt:g} s)")
 
 
 @dataclass(frozen=True)
-class TrainSpec:
-    seed: int = 0
-    epochs: int = 150
-    batch: int = 256
-    hidden: int = 32
-    lr: float = 3e-3
+class TrainSpec(Params):
+    """The networks and their training (torch, CPU)."""
+
+    seed: int = param(0, "-", "seed of the data and the training", min=0, max=MAX_SEED)
+    epochs: int = param(150, "-", "training epochs", min=1, max=100_000)
+    batch: int = param(256, "-", "minibatch size", min=1, max=1_000_000)
+    hidden: int = param(32, "-", "neurons in each hidden layer", min=1, max=1024)
+    lr: float = param(3e-3, "-", "Adam's learning rate", min=0.0, max=1.0, min_exclusive=True)
     data: DataSpec = DataSpec()
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if not isinstance(self.data, DataSpec):
+            raise ConfigError(f"bad data {self.data!r:.60} (expected a DataSpec)")
 
 
 def curve_polyline(radius: float, side: float, approach: float = 15.0, exit_: float = 25.0) -> LanePolyline:
@@ -237,12 +260,13 @@ def train(spec: TrainSpec = TrainSpec(), out: Path = DEFAULT_MODEL, log=print) -
     }
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    np.savez(out, **arrays)
+    with atomic_path(out) as tmp, open(tmp, "wb") as f:  # the shipped model is read by running controllers
+        np.savez(f, **arrays)
     from ego.control.narma import NarmaModel
 
     model = NarmaModel(arrays, meta)
     meta["errors"] = identification_errors(model, data, held)
-    out.with_suffix(".json").write_text(json.dumps(meta, indent=2) + "\n")
+    write_text(out.with_suffix(".json"), json.dumps(meta, indent=2) + "\n")
     e = meta["errors"]
     log(f"one-step error of y (m): training RMS {e['train_rms']:.2e}, held-out RMS "
         f"{e['held_out_rms']:.2e} ({100 * e['held_out_relative']:.1f} % of the held-out change "

@@ -55,7 +55,7 @@ def test_series_have_one_sample_per_step_and_match_the_metrics(recorded):
     _, ay = _series(path, "/plots/lateral_accel/ego")
     assert np.max(np.abs(ay)) == pytest.approx(m["max_abs_lateral_accel"], abs=1e-4)
     for entity in ("/plots/speed/ego", "/plots/speed/reference", "/plots/Fx/Fx", "/plots/delta/delta",
-                   "/plots/ttc/rear", "/plots/manoeuvre/phase", "/plots/controller/fuzzy_u_lat"):
+                   "/plots/ttc/rear", "/plots/ttc/trigger", "/plots/controller/1/fuzzy_u_lat"):
         assert len(_series(path, entity)[0]) == m["steps"], entity
 
 
@@ -136,7 +136,7 @@ def test_a_curve_run_records_its_errors_and_the_ego_round_the_arc(tmp_path):
     np.testing.assert_allclose(ed, result.column("e_d"))
     assert np.max(np.abs(ed[result.column("in_arc") > 0])) == pytest.approx(m["max_abs_ed"], abs=1e-6)
     for entity in ("/plots/e_a/ego", "/plots/a_x/applied", "/plots/a_x/plan", "/plots/gap/lead",
-                   "/plots/controller/narma_g"):
+                   "/plots/controller/m_per_rad/narma_g"):
         assert len(_series(path, entity)[0]) == m["steps"], entity
     # the ego's outline turns with the road: heading +x at the start, +y at the end
     outlines = []

@@ -190,7 +190,7 @@ def test_the_envelope_classifier_knows_a_stopped_lead():
     assert avoidable({"trigger_time": 0.0}, 40.0, 22.222, stopped, DECEL_LIMIT)
     # the same gap to a lead at the ego's speed is no danger at all
     assert avoidable({"trigger_time": 0.0}, 30.0, 22.222, EmergencyBrakeConfig(ego_speed=22.222,
-                                                                               lead_brake_time=100.0),
+                                                                               lead_brake_time=25.0),
                       DECEL_LIMIT)
 
 

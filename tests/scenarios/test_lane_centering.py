@@ -3,6 +3,7 @@
 import pytest
 
 from ego.runner import RunSpec, run
+from ego.scenarios.lane_centering import ROAD_LENGTH, LaneCenteringConfig, drive_time
 
 pytestmark = pytest.mark.sumo
 FIELDS = ("max_abs_lateral_error", "mean_abs_lateral_error", "std_lateral_error",
@@ -22,6 +23,9 @@ def test_the_shipped_preset_keeps_the_lane_within_half_a_metre(speed, plant):
     assert m["max_abs_steer"] <= 0.4364  # 25 deg
     for key in FIELDS:
         assert key in m, key
+    # one drive, one set of figures: where and when it ends, as ego list and the messages say
+    assert m["sim_time"] == pytest.approx(drive_time(speed), abs=0.05)
+    assert m["status_detail"] == "reached the end of the drive at s = 2920 m (15 m before the end of the road)"
     kinds = [e.kind for e in r.events]
     assert kinds.count("curve") == 2  # entering and leaving, from the SUMO lane's geometry
 
@@ -33,9 +37,17 @@ def test_the_reports_gains_swing_across_the_lane():
     assert m["max_abs_lateral_error"] > 1.0 or m["status"] != "completed"
 
 
+def test_the_road_and_the_drive_are_one_set_of_figures():
+    assert ROAD_LENGTH == pytest.approx(2935.4, abs=0.05)  # 2 x 1000 + 2 x 150 + (500 pi / 2 - 150)
+    assert drive_time() == pytest.approx((2935.4 - 15 - (20 - 2.2)) / 8, abs=0.01)  # 362.8 s
+    assert "the end of the 2935 m road: 363 s at 8 m/s" in LaneCenteringConfig.__dataclass_fields__[
+        "duration"].metadata["doc"]
+
+
 def test_the_reports_fifty_seconds_are_exactly_zero():
     m = run(RunSpec("lane-centering", "cascade-pid", 0, {"duration": 50.0, "preset": "report"})).metrics
-    assert m["status"] == "timeout"  # 400 m of a 2935 m road
+    assert m["status"] == "ended"  # 400 m of a 2920 m drive: the duration ended it, nothing failed
+    assert m["status_detail"] == "the duration (50 s) ended the run at s = 418 m of the drive to s = 2920 m"
     assert m["max_abs_lateral_error"] == 0.0 and m["std_lateral_error"] == 0.0
 
 

@@ -198,7 +198,7 @@ def test_a_diverging_controller_ends_the_run_and_keeps_the_recording(tmp_path):
     (["--set", "period=0.015"], "bad value for period: 0.015"),
     (["--set", "manoeuvres=10:20"], "bad value for manoeuvres"),
     (["--set", "followers=11"], "bad value for followers: 11"),
-    (["--set", "variant=toy"], "bad value for variant: toy"),
+    (["--set", "variant=toy"], "bad value for variant: 'toy'"),
     (["--set", "manoeuvres=none", "--set", "start_speed=100", "--set", "duration=200"], "road"),
     (["--set", "start_error=-40"], "bad value for start_error"),
 ])

@@ -176,7 +176,7 @@ def test_a_worker_dying_twice_is_an_error_while_the_others_complete(engine, tmp_
 # -- cost ----------------------------------------------------------------------------------------
 
 def test_per_task_overhead_printed(engine):
-    """Not asserted: the figure README quotes (200 trivial tasks, 2 workers)."""
+    """Not asserted: the figure docs/performance.md quotes (200 trivial tasks, 2 workers)."""
     outcomes(engine, T.square, range(10))  # warm
     t0 = time.perf_counter()
     got = outcomes(engine, T.square, range(200))

@@ -108,3 +108,10 @@ def test_failed_runs_are_recorded_by_default_and_an_error_is_a_row(tmp_path):
     assert report.by_status == {"collision": 1, "completed": 1}
     rrds = sorted(p.name for p in (tmp_path / "runs").glob("*.rrd"))
     assert len(rrds) == 1 and rrds[0].startswith("none-")
+
+
+def test_an_envelope_metric_under_a_prefix_has_the_prefix_unit():
+    from ego.sweep.report import _unit
+
+    assert _unit("platoon", "settle_times.brake@10s") == "s"
+    assert _unit("emergency-brake", "min_gap_front") == "m"

@@ -1,0 +1,142 @@
+"""Cost of the Gymnasium wrapper over the raw scenario step, and env steps/s, in one run.
+
+    python benchmarks/bench_gym.py [--repeat 3] [--duration 20] [--ids ego/CutIn-v0 ...]
+
+For every env id: the scenario's default controller drives one run (seed 0) and its actions
+are kept; then the same actions are replayed (same trajectory, no controller cost) through
+``env.step`` of ``gym.make(id)`` with the ``EgoAction`` type and the ``EgoState`` observation,
+and with the ``Kinematics`` observation, timing both the whole ``env.step`` and the
+``Scenario.step`` inside it (the raw step). The two are measured over the same steps, so the
+ratio holds on a busy machine, where two separate loops do not. Printed: env steps/s, raw
+steps/s and the wrapper's cost per step over the raw step (target <= 15 % with ``EgoState``),
+the timer's own cost taken out. In the platoon the agent drives the first follower and the
+env steps the others' controllers itself: they count as raw work, as ``ego run`` steps them
+too. Best of ``--repeat``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import gymnasium as gym  # noqa: E402
+import numpy as np  # noqa: E402
+
+import ego.gym  # noqa: E402
+from ego.gym.env import DEFAULT_CONTROLLER  # noqa: E402
+from ego.runner import RunSpec, build  # noqa: E402
+from ego.scenarios import scenario_class  # noqa: E402
+
+
+def demonstration(scenario: str, controller: str, overrides: dict) -> list:
+    """The controller's actions, step by step, over one run (the first follower's in a platoon)."""
+    sc = build(RunSpec(scenario, controller, 0, overrides))
+    try:
+        obs = sc.reset()
+        actions = []
+        while not sc.done:
+            action = sc.controller.step(obs)
+            actions.append(action[0] if sc.task == "car-following" else action)
+            obs = sc.step(action)
+        return actions
+    finally:
+        sc.close()
+
+
+def _timer_cost(number: int = 100000) -> float:
+    """Seconds one timed call adds (two perf_counter calls and the closure)."""
+    timed, spent = _timed(lambda: None)
+    t0 = time.perf_counter()
+    for _ in range(number):
+        timed()
+    return (time.perf_counter() - t0) / number
+
+
+def _timed(fn):
+    """``fn`` wrapped to add the seconds spent inside it to ``spent[0]``."""
+    spent = [0.0]
+    clock = time.perf_counter
+
+    def timed(*args):
+        t0 = clock()
+        out = fn(*args)
+        spent[0] += clock() - t0
+        return out
+
+    return timed, spent
+
+
+def env_replay(env_id: str, overrides: dict, observation: dict, actions: np.ndarray) -> tuple[float, float, int]:
+    """(seconds for ``env.step`` over ``actions``, seconds of them inside the scenario's own
+    work, timed calls): the scenario's step, and in a platoon its other followers' controllers,
+    which the raw loop steps too. Both are measured over the same steps, so a busy machine
+    slows both alike."""
+    env = gym.make(env_id, config={**overrides, "observation": observation, "action": {"type": "EgoAction"}})
+    try:
+        env.reset(seed=0)
+        sc = env.unwrapped.scenario
+        sc.step, spent = _timed(sc.step)
+        calls = len(actions)
+        if env.unwrapped.task == "car-following":
+            sc.controller.step, spent_ctrl = _timed(sc.controller.step)
+            calls *= 2
+        else:
+            spent_ctrl = [0.0]
+        step = env.step
+        t0 = time.perf_counter()
+        for action in actions:
+            step(action)
+        return time.perf_counter() - t0, spent[0] + spent_ctrl[0], calls
+    finally:
+        env.close()
+
+
+def main(argv: list[str] | None = None) -> dict:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--duration", type=float, default=20.0, help="simulated seconds per run")
+    ap.add_argument("--ids", nargs="*", default=list(ego.gym.ENV_IDS))
+    args = ap.parse_args(argv)
+    os.environ.setdefault("MPLCONFIGDIR", tempfile.mkdtemp())
+    overrides = {"duration": args.duration}
+    figures = {}
+    timer = _timer_cost()
+    print(f"env step against the raw scenario step, same actions, dt = 0.01 s, {args.duration:g} s "
+          f"runs, best of {args.repeat}")
+    print(f"  {'env id':24} {'steps':>6} {'raw steps/s':>12} {'env steps/s':>12} {'overhead':>9} "
+          f"{'Kinematics steps/s':>19} {'overhead':>9}")
+    for env_id in args.ids:
+        scenario = ego.gym.ENV_IDS[env_id]
+        controller = DEFAULT_CONTROLLER[scenario_class(scenario).task]
+        recorded = demonstration(scenario, controller, overrides)
+        actions = np.array(recorded, dtype=np.float64).reshape(len(recorded), -1)
+        if scenario_class(scenario).task == "car-following":
+            actions = actions[:, :1]
+        n = len(actions)
+        row = {"steps": n}
+        for key, observation in (("", "EgoState"), ("kinematics_", "Kinematics")):
+            runs = []
+            for _ in range(args.repeat):
+                total, inner, calls = env_replay(env_id, overrides, {"type": observation}, actions)
+                wrapper = max(total - inner - calls * timer, 0.0)
+                runs.append((wrapper / inner, total, inner))
+            overhead, total, inner = min(runs)
+            row.update({f"{key}overhead": overhead, f"{key}env_steps_per_s": n / total})
+            if not key:
+                row["raw_steps_per_s"] = n / inner
+        figures[env_id] = row
+        print(f"  {env_id:24} {n:6d} {row['raw_steps_per_s']:12.0f} {row['env_steps_per_s']:12.0f} "
+              f"{100 * row['overhead']:8.1f}% {row['kinematics_env_steps_per_s']:19.0f} "
+              f"{100 * row['kinematics_overhead']:8.1f}%")
+    print("  target: overhead <= 15 % with EgoState")
+    return figures
+
+
+if __name__ == "__main__":
+    main()

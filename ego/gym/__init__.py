@@ -1,0 +1,57 @@
+"""ego's SUMO scenarios as Gymnasium environments, registered on import.
+
+    import gymnasium as gym
+    import ego.gym
+
+    env = gym.make("ego/EmergencyBrake-v0", config={"observation": {"type": "Kinematics"}})
+    obs, info = env.reset(seed=0)
+
+One environment class (:class:`EgoEnv`) over every scenario, configured as highway-env's
+environments are (``default_config()``, ``configure()``, ``gym.make(id, config=...)``,
+``reset(options={"config": ...})``). Only this package imports gymnasium; install it with
+``pip install ego[gym]``. See docs/gym.md.
+"""
+
+from __future__ import annotations
+
+import gymnasium
+
+from ego.gym.env import ENV_KEYS, EgoEnv, EgoView, EnvConfig, Reward
+from ego.gym.policy import ControllerPolicy
+from ego.gym.spaces import (
+    ContinuousAction,
+    EgoAction,
+    EgoStateObservation,
+    KinematicsObservation,
+)
+
+#: env id -> scenario name
+ENV_IDS = {
+    "ego/EmergencyBrake-v0": "emergency-brake",
+    "ego/FastFollower-v0": "fast-follower",
+    "ego/CutIn-v0": "cut-in",
+    "ego/Curve-v0": "curve",
+    "ego/LaneCentering-v0": "lane-centering",
+    "ego/Platoon-v0": "platoon",
+}
+
+# EgoEnv refuses a step before reset itself, and passes gymnasium's checker (tests/gym): the
+# per-step wrappers gym.make would add for both cost 10 % of a step
+for _id, _scenario in ENV_IDS.items():
+    if _id not in gymnasium.registry:
+        gymnasium.register(_id, entry_point="ego.gym.env:EgoEnv", kwargs={"scenario": _scenario},
+                           order_enforce=False, disable_env_checker=True)
+
+__all__ = [
+    "ENV_IDS",
+    "ENV_KEYS",
+    "ContinuousAction",
+    "ControllerPolicy",
+    "EgoAction",
+    "EgoEnv",
+    "EgoStateObservation",
+    "EgoView",
+    "EnvConfig",
+    "KinematicsObservation",
+    "Reward",
+]

@@ -1,0 +1,439 @@
+"""One Gymnasium environment over every SUMO scenario, configured as highway-env's are.
+
+``EgoEnv(scenario, config)`` wraps :class:`ego.scenarios.Scenario` (``reset`` / ``step``): one env
+step is one control period ``dt`` of the scenario (or ``1 / policy_frequency`` s, the action
+held), SUMO and the ego's own model stepping inside it exactly as in ``ego run``. The
+configuration is one dict: the env's own keys (:data:`ENV_KEYS`: observation and action types,
+the controller of the channels the agent does not drive, the reward, rendering) and the
+scenario's and that controller's parameters, validated as ``ego run --set`` values are.
+
+Episodes: ``terminated`` when the run ends before its duration (a collision or a divergence
+of the ego, or the task's own end: the curve left, the road's end reached); ``truncated``
+when the simulated time reaches ``duration``. ``info`` has ``status`` (``running``,
+``completed``, ``collision``, ``diverged``, ``timeout``) and ``rewards`` (the reward's terms)
+every step, and at the end ``status_detail`` and ``metrics``: what ``ego run`` reports.
+
+The platoon: the agent drives the first follower (``f1``, right behind the SUMO leader); the
+followers behind it keep the scenario's controller, so the agent's driving propagates down
+a platoon whose string stability the metrics measure.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, fields
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+
+from ego.checks import MAX_SEED, check_seed
+from ego.control import CONTROLLERS, controller_spec
+from ego.models import NonlinearBicycleParams
+from ego.params import ConfigError, apply_overrides, describe, param, unknown_parameter
+from ego.runner import RunSpec, configure
+from ego.scenarios import scenario_class
+from ego.scenarios.sensor import SurroundSensor
+from ego.gym.spaces import action_type, observation_type
+
+#: the controller that drives the channels the agent leaves, per task
+DEFAULT_CONTROLLER = {"tracking": "pid", "curve": "pid", "lane-centering": "cascade-pid",
+                      "car-following": "pid"}
+#: 1 g: the box of ``EgoAction`` for an acceleration command without a limit of its own
+_ONE_G = 9.81
+
+
+@dataclass(frozen=True)
+class EnvConfig:
+    """The env's scalar keys (besides ``observation``, ``action``, ``controller`` and
+    ``reward_speed_range``). Reward per env step (see :class:`Reward`):
+    ``collision_reward * crashed + progress_reward * progress + lane_centering_reward *
+    centring + comfort_reward * discomfort``."""
+
+    policy_frequency: float = param(0.0, "Hz", "env steps per simulated second, the action held in "
+                                    "between; 0: one env step per control period dt", min=0.0, max=1000.0)
+    collision_reward: float = param(-1.0, "-", "weight of the crash term (1 on the step the ego "
+                                    "collides or diverges)", min=-1e6, max=1e6)
+    progress_reward: float = param(0.4, "-", "weight of the progress term: the ego's speed along its "
+                                   "lane mapped from reward_speed_range to [0, 1]", min=-1e6, max=1e6)
+    lane_centering_reward: float = param(0.2, "-", "weight of the centring term 1 / (1 + "
+                                         "lane_centering_cost e^2), e the lateral error (m) from the "
+                                         "reference; for the platoon the spacing error", min=-1e6, max=1e6)
+    lane_centering_cost: float = param(4.0, "1/m^2", "how fast the centring term falls with the error",
+                                       min=0.0, max=1e6)
+    comfort_reward: float = param(-0.1, "-", "weight of the discomfort term min(1, (a_lon^2 + a_lat^2) "
+                                  "/ comfort_accel^2)", min=-1e6, max=1e6)
+    comfort_accel: float = param(5.0, "m/s^2", "acceleration at which the discomfort term saturates",
+                                 min=0.01, max=100.0)
+    screen_width: int = param(600, "px", "width of the rgb_array frame", min=16, max=4096)
+    screen_height: int = param(150, "px", "height of the rgb_array frame", min=16, max=4096)
+    scaling: float = param(5.5, "px/m", "zoom of the rgb_array frame", min=0.1, max=100.0)
+
+
+_ENV_SCALARS = tuple(f.name for f in fields(EnvConfig))
+#: the env's own configuration keys; every other key is a scenario or controller parameter
+ENV_KEYS = ("observation", "action", "controller", "reward_speed_range", *_ENV_SCALARS)
+
+
+class EgoView:
+    """What the env reads of a scenario's ego, the same for every task: the controller's
+    observation, the speed along the lane, the tracking error, the accelerations and the
+    traffic around it in its lane's frame. ``np_random`` is the env's generator."""
+
+    def __init__(self, scenario, np_random) -> None:
+        self.scenario = scenario
+        self.np_random = np_random
+        self.following = scenario.task == "car-following"
+        self._sensor: SurroundSensor | None = None
+        self._looked = -1
+        #: () -> (speed along the lane m/s, tracking error m, longitudinal and lateral
+        #: acceleration m/s^2) now; a road task's longitudinal acceleration is the rate of the
+        #: speed along the lane since the last call
+        self.reward_signals = self._following_signals if self.following else self._road_signals
+
+    @property
+    def obs(self):
+        """The observation the scenario's controller gets (the first follower's in a platoon)."""
+        o = self.scenario.obs
+        return o[0] if self.following else o
+
+    def plant(self):
+        sc = self.scenario
+        return sc.plants[0] if self.following else sc.ego
+
+    def _following_signals(self) -> tuple[float, float, float, float]:
+        sc = self.scenario
+        o = sc.obs[0]
+        return o.speed, sc.e[0], o.accel, 0.0
+
+    def _road_signals(self) -> tuple[float, float, float, float]:
+        sc = self.scenario
+        o = sc.obs
+        ds, t = o.ds, o.t
+        t0, ds0 = self._prev
+        self._prev = (t, ds)
+        return ds, o.d - o.d_ref, (ds - ds0) / (t - t0) if t > t0 else 0.0, sc.ego.lateral_accel
+
+    _prev = (0.0, 0.0)
+
+    def reset(self) -> None:
+        sc = self.scenario
+        self._prev = (sc.t, sc.obs[0].speed if self.following else sc.obs.ds)
+        self._looked = -1
+        self._sensor = None
+
+    # -- traffic for the Kinematics observation ---------------------------------------------
+    def traffic(self) -> tuple[tuple, list[tuple], float]:
+        """(ego row, rows of the others, ego length m); a row is (s, d, v_s, v_d, heading) of
+        a box centre in the ego's lane frame (m, m/s, rad; + left)."""
+        sc = self.scenario
+        if self.following:
+            return self._platoon()
+        ego = (sc.s, sc.d_road, sc.ds, sc.dd, sc.heading_error)
+        sensor = getattr(sc, "sensor", None)
+        if sensor is None:
+            sensor = self._own_sensor()
+        return ego, sensor.tracks(sc.t), sc.geometry.length
+
+    def _own_sensor(self) -> SurroundSensor:
+        """A surround sensor of the env's own for a scenario without one (the curve, lane
+        centring): it looks at every SUMO step, as a scenario's sensor does."""
+        sc = self.scenario
+        c = sc.config
+        if self._sensor is None:
+            g = sc.geometry
+            self._sensor = SurroundSensor(sc.road, {}, g.cg_to_front, g.length, g.width, horizon=c.sumo_step)
+            sc.bridge.subscribe_surroundings(sc.ego_id, 200.0)
+        per = c.control_per_sumo
+        look = sc.k // per
+        if look != self._looked:
+            self._looked = look
+            self._sensor.sync(look * per * c.dt, *sc.bridge.surroundings(sc.ego_id))
+        return self._sensor
+
+    def _platoon(self):
+        """The leader and the followers behind the first, all on the platoon's one lane."""
+        sc = self.scenario
+        half = 0.5 * sc.config.length
+        first = sc.plants[0].state
+        ego = (first[0] - half, 0.0, first[1], 0.0, 0.0)
+        lead = sc.obs[0]
+        rows = [(first[0] + sc.gap[0] + half, 0.0, lead.lead_speed, 0.0, 0.0)]
+        rows += [(p.state[0] - half, 0.0, p.state[1], 0.0, 0.0) for p in sc.plants[1:]]
+        return ego, rows, sc.config.length
+
+
+class Reward:
+    """The default reward of an env step and its terms: crashed (1 on the step the ego
+    collides or diverges, else 0), progress (the speed along the lane mapped from
+    ``speed_range`` (m/s) to [0, 1]), centring (1 / (1 + lane_centering_cost e^2), e the
+    tracking error in m) and discomfort (min(1, (a_lon^2 + a_lat^2) / comfort_accel^2)), each
+    weighted by its ``*_reward`` of :class:`EnvConfig`."""
+
+    def __init__(self, cfg: EnvConfig, speed_range: tuple[float, float]) -> None:
+        self.speed_range = speed_range
+        self._weights = (cfg.collision_reward, cfg.progress_reward, cfg.lane_centering_reward,
+                         cfg.comfort_reward)
+        self._lo, self._per_speed = speed_range[0], 1.0 / (speed_range[1] - speed_range[0])
+        self._cost = cfg.lane_centering_cost
+        self._per_accel2 = 1.0 / (cfg.comfort_accel * cfg.comfort_accel)
+
+    def __call__(self, view: EgoView, crashed: bool) -> tuple[float, dict]:
+        speed, error, a_lon, a_lat = view.reward_signals()
+        progress = (speed - self._lo) * self._per_speed
+        progress = 0.0 if progress < 0.0 else (1.0 if progress > 1.0 else progress)
+        centring = 1.0 / (1.0 + self._cost * error * error)
+        discomfort = (a_lon * a_lon + a_lat * a_lat) * self._per_accel2
+        if discomfort > 1.0:
+            discomfort = 1.0
+        crash = 1.0 if crashed else 0.0
+        w_crash, w_progress, w_centring, w_comfort = self._weights
+        reward = w_crash * crash + w_progress * progress + w_centring * centring + w_comfort * discomfort
+        return reward, {"crashed": crash, "progress": progress, "centring": centring, "discomfort": discomfort}
+
+
+class AgentSlot:
+    """The scenario's controller when the agent drives every channel: it commands nothing (the
+    env hands the agent's action to the scenario) and counts the resets the scenario makes
+    (each run's start, and a hand-over such as the curve's engagement), so that a
+    :class:`ego.gym.ControllerPolicy` resets its controller at the same steps."""
+
+    def __init__(self) -> None:
+        self.resets = 0
+        self.seed: int | None = None
+
+    def reset(self, *, seed: int | None = None) -> None:
+        self.resets += 1
+        self.seed = seed
+
+    def step(self, obs) -> tuple[float, float]:
+        return 0.0, 0.0
+
+    def signals(self) -> dict:
+        return {}
+
+
+#: the env whose SUMO runs in this process (libsumo runs one simulation per process)
+_running: list = [None]
+
+
+class EgoEnv(gym.Env):
+    """An ego scenario as a Gymnasium env (see the module docstring). ``scenario`` is a name
+    of ``ego list``; ``config`` updates :meth:`default_config`.
+
+    libsumo runs one simulation per process, so one env per process runs at a time:
+    ``reset`` ends the run of any other ego env of the process (whose next ``step`` then asks
+    for a reset). Envs in parallel live in their own processes (``gym.make_vec(...,
+    vectorization_mode="async")``).
+    """
+
+    metadata: ClassVar[dict] = {"render_modes": ["rgb_array"], "render_fps": 10}
+
+    def __init__(self, scenario: str = "emergency-brake", config: Mapping[str, Any] | None = None,
+                 render_mode: str | None = None) -> None:
+        if render_mode not in (None, *self.metadata["render_modes"]):
+            raise ConfigError(f"bad value for render_mode: {render_mode!r} (expected rgb_array or None)")
+        self.scenario_name = scenario
+        self.scenario_cls = scenario_class(scenario)
+        self.task = self.scenario_cls.task
+        self.render_mode = render_mode
+        # env.default_config() lists this env's scenario (the class method takes a name)
+        self.default_config = functools.partial(type(self).default_config, scenario)
+        self.config = self.default_config()
+        self.configure(config or {})
+        self.scenario = None
+        self._renderer = None
+        self._build()
+
+    @classmethod
+    def default_config(cls, scenario: str = "emergency-brake") -> dict:
+        """Every key with its default: the env's (:data:`ENV_KEYS`) and the scenario's
+        parameters (``ego list``); the controller's parameters may be added."""
+        sc = scenario_class(scenario)
+        config: dict[str, Any] = {
+            "observation": {"type": "EgoState"},
+            "action": {"type": "ContinuousAction", "longitudinal": True,
+                       "lateral": sc.task != "car-following"},
+            "controller": DEFAULT_CONTROLLER[sc.task],
+            "reward_speed_range": [0.0, 30.0],
+        }
+        env = EnvConfig()
+        config.update({name: getattr(env, name) for name in _ENV_SCALARS})
+        base = sc.config_cls()
+        config.update({i.name: getattr(base, i.name) for i in describe(sc.config_cls)})
+        return config
+
+    def configure(self, config: Mapping[str, Any]) -> None:
+        """Update the configuration (highway-env's: a plain update); it takes effect at
+        construction or at the next ``reset(options={"config": ...})``."""
+        if not isinstance(config, Mapping):
+            raise ConfigError(f"bad value for config: {config!r} (expected a dict)")
+        self.config.update(config)
+
+    # -- building ----------------------------------------------------------------------------
+    def _build(self) -> None:
+        """Validate the configuration and build the scenario, the spaces and the types; no
+        SUMO starts (``reset`` starts it)."""
+        cfg = self.config
+        cls = self.scenario_cls
+        controller = cfg.get("controller")
+        if controller not in CONTROLLERS[self.task] or controller == "none":
+            names = [n for n in CONTROLLERS[self.task] if n != "none"]
+            raise ConfigError(f"bad value for controller: {controller!r} (the {self.task} task's "
+                              f"controllers: {', '.join(names)})")
+        spec = controller_spec(controller, self.task)
+        params = {k: v for k, v in cfg.items() if k not in ENV_KEYS}
+        known = set(ENV_KEYS) | {i.name for i in describe(cls.config_cls)} | {i.name for i in describe(spec.params)}
+        for key in cfg:
+            if key not in known:
+                raise unknown_parameter(key, known)
+        env, _ = apply_overrides(EnvConfig(), {k: cfg[k] for k in _ENV_SCALARS})
+        lo, hi = cfg["reward_speed_range"] if _pair(cfg["reward_speed_range"]) else (None, None)
+        if lo is None or not lo < hi:
+            raise ConfigError(f"bad value for reward_speed_range: {cfg['reward_speed_range']!r} "
+                              "(expected [low, high] in m/s with low < high)")
+        # the scenario's defaults are not overrides: a preset (the platoon's variant) would lose
+        base = cls.config_cls()
+        overrides = {k: v for k, v in params.items() if not (hasattr(base, k) and getattr(base, k) == v)}
+        _, sc_config, spec, ctrl_params = configure(RunSpec(self.scenario_name, controller, 0, overrides))
+        observation = observation_type(cfg["observation"], self.task)
+        action = action_type(cfg["action"], self.task, _native_limits(self.task, sc_config))
+        every = 1
+        if env.policy_frequency > 0.0:
+            ratio = 1.0 / (env.policy_frequency * sc_config.dt)
+            if abs(ratio - round(ratio)) > 1e-6 or round(ratio) < 1:
+                raise ConfigError(f"bad value for policy_frequency: {env.policy_frequency:g} (expected "
+                                  f"1 / dt = {1.0 / sc_config.dt:g} Hz divided by a whole number)")
+            every = round(ratio)
+
+        # the agent drives both channels: the loop needs no controller of its own
+        helper = not (action.longitudinal and action.lateral) or self.task == "car-following"
+        own = cls.build_controller(spec, ctrl_params, sc_config) if helper else AgentSlot()
+        self.close()
+        self.scenario = cls(sc_config, own, seed=0, controller_name=f"agent+{controller}" if helper else "agent")
+        self.env_config = env
+        self.reward = Reward(env, (float(lo), float(hi)))
+        self.observation_type = observation
+        self.action_type = action
+        self.observation_space = observation.space
+        self._observe = observation.observe
+        self.action_space = action.space
+        self._every = every
+        self._helper = helper
+        self._following = self.task == "car-following"
+        self._view = EgoView(self.scenario, self.np_random)
+
+    # -- the Gymnasium interface -------------------------------------------------------------
+    def reset(self, *, seed: int | None = None, options: Mapping[str, Any] | None = None):
+        """Start a run: SUMO restarted, the traffic drawn from the seed. ``seed``: the run's seed
+        (``ego run --seed``); without one a seed is drawn from the env's generator.
+        ``options={"config": {...}}`` reconfigures first (spaces rebuilt)."""
+        super().reset(seed=seed)
+        if options and "config" in options:
+            self.configure(options["config"])
+            self._build()
+        if isinstance(seed, np.integer):
+            seed = int(seed)
+        run_seed = check_seed(seed) if seed is not None else int(self.np_random.integers(0, MAX_SEED + 1))
+        other = _running[0]
+        if other is not None and other is not self:
+            other.close()
+        _running[0] = self
+        sc = self.scenario
+        sc.reset(seed=run_seed)
+        view = self._view
+        view.np_random = self.np_random
+        view.reset()
+        self.observation_type.reset(view)
+        if self.action_type.longitudinal:
+            plant = view.plant()
+            p = plant.model.params
+            self.action_type.set_plant(p.m / p.Nw if plant.input_names[0] == "Fx" else 1.0)
+        self._crashed = False
+        return self.observation_type.observe(view), {"status": sc.status}
+
+    def step(self, action):
+        sc = self.scenario
+        if sc is None or sc.bridge is None:
+            raise RuntimeError("call reset() before step()")
+        command = self.action_type.native(action)
+        step = sc.step
+        if not self._helper:  # the agent drives both channels
+            step(command)
+            if self._every > 1:
+                for _ in range(self._every - 1):
+                    if sc.status != "running":
+                        break
+                    step(command)
+        elif self._following:
+            # the others' controllers step as in a run; the first follower's command is the agent's
+            first = (command[0], 0.0)
+            controller_step = sc.controller.step
+            for _ in range(self._every):
+                own = controller_step(sc.obs)
+                own[0] = first
+                step(own)
+                if sc.status != "running":
+                    break
+        else:
+            lon, lat = command
+            controller_step = sc.controller.step
+            for _ in range(self._every):
+                own = controller_step(sc.obs)
+                step((own[0] if lon is None else lon, own[1] if lat is None else lat))
+                if sc.status != "running":
+                    break
+        status = sc.status
+        crashed = status == "collision" or status == "diverged"
+        reward, terms = self.reward(self._view, crashed)
+        info = {"status": status, "rewards": terms}
+        terminated = truncated = False
+        if status != "running":
+            # the duration reached is a truncation; anything before it ends the task
+            truncated = not crashed and sc.t >= sc.config.duration - 1e-9
+            terminated = not truncated
+            info["status_detail"] = sc.status_detail
+            info["metrics"] = sc.result().metrics
+        return self._observe(self._view), reward, terminated, truncated, info
+
+    def render(self):
+        if self.render_mode != "rgb_array" or self.scenario is None or self.scenario.bridge is None:
+            return None
+        if self._renderer is None:
+            from ego.gym.render import TopDown
+
+            self._renderer = TopDown(self.env_config)
+        return self._renderer.draw(self.scenario, self._view)
+
+    def close(self) -> None:
+        if _running[0] is self:
+            _running[0] = None
+        if self.scenario is not None:
+            self.scenario.close()
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+
+def _pair(value: Any) -> bool:
+    try:
+        lo, hi = value
+        return all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in (lo, hi))
+    except (TypeError, ValueError):
+        return False
+
+
+def _native_limits(task: str, config) -> tuple[float, float, float]:
+    """(most negative, largest longitudinal command, largest |delta|) of ``EgoAction``'s box in
+    the plant's units: the friction circle's Fx per driven wheel for report 000's model, the
+    followers' acceleration limits, else 1 g; the scenario's steer limit."""
+    steer = getattr(config, "max_steer", 0.0)
+    if task == "tracking":
+        p = NonlinearBicycleParams()
+        grip = p.F_max / p.Nw
+        return -grip, grip, steer
+    if task == "car-following":
+        return -config.max_decel, config.max_accel, 0.0
+    return -_ONE_G, _ONE_G, steer

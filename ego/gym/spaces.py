@@ -1,0 +1,290 @@
+"""Observation and action types of :class:`ego.gym.EgoEnv`, after highway-env's.
+
+Observation types (``config["observation"]["type"]``):
+
+* ``EgoState``: the task's own observation (``ego.control.tasks.TASKS[task].observes``) as a
+  float64 vector, one named field per entry (``names``), in SI units: exactly what the
+  scenario's controllers see, so a controller can drive the env (:class:`ego.gym.ControllerPolicy`).
+* ``Kinematics``: highway-env's ``Kinematics``: ``vehicles_count`` rows of ``features`` (presence,
+  x, y, vx, vy, heading, cos_h, sin_h), the ego first, then the nearest vehicles sorted by
+  distance, in the road frame of the ego's lane (x along it, y across it, + left; heading
+  relative to the lane), relative to the ego unless ``absolute``, mapped from
+  ``features_range`` to [-1, 1] when ``normalize`` (and clipped when ``clip``).
+
+Action types (``config["action"]["type"]``), each with ``longitudinal`` / ``lateral`` flags
+(a channel switched off is driven by the scenario's own ``controller``):
+
+* ``ContinuousAction``: highway-env's: [acceleration, steering] in [-1, 1], mapped linearly onto
+  ``acceleration_range`` (m/s^2) and ``steering_range`` (rad), then onto the ego's own model
+  inputs: report 000's Fx per driven wheel = m a / Nw, report 002's a_x = a, report 004's
+  commanded acceleration = a; delta = steering.
+* ``EgoAction``: the ego's model inputs in their own units (``ego.control.tasks``): (Fx N, delta
+  rad), (a_x m/s^2, delta rad) or (command m/s^2). Values outside the box go to the plant,
+  which saturates them as it saturates a controller's command, so a controller's own action
+  passes unchanged.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from operator import attrgetter
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+
+from ego.control.tasks import TASKS
+from ego.params import ConfigError
+
+#: the observed fields that are not numbers, and what a vector carries instead
+_NOT_NUMERIC = {"lane": (), "policy": ("policy.standstill_gap", "policy.headway")}
+
+
+def _options(kind: str, given: Mapping[str, Any], allowed: Sequence[str]) -> dict:
+    """``given`` without its ``type``, every key one of ``allowed``."""
+    if not isinstance(given, Mapping):
+        raise ConfigError(f"bad value for {kind}: {given!r} (expected a dict with a 'type')")
+    out = {k: v for k, v in given.items() if k != "type"}
+    for key in out:
+        if key not in allowed:
+            raise ConfigError(f"unknown {kind} option {key!r} for {given.get('type')} "
+                              f"(known: {', '.join(allowed)})")
+    return out
+
+
+def _flag(name: str, value: Any) -> bool:
+    if not isinstance(value, (bool, np.bool_)):
+        raise ConfigError(f"bad value for {name}: {value!r} (expected true or false)")
+    return bool(value)
+
+
+def _range(name: str, value: Any) -> tuple[float, float]:
+    try:
+        lo, hi = (float(v) for v in value)
+    except (TypeError, ValueError):
+        raise ConfigError(f"bad value for {name}: {value!r} (expected [low, high])") from None
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+        raise ConfigError(f"bad value for {name}: {value!r} (expected finite low < high)")
+    return lo, hi
+
+
+# -- observations ----------------------------------------------------------------------------
+
+class EgoStateObservation:
+    """The task's own observation as a vector; ``names`` are its fields (``standstill_gap`` and
+    ``headway`` stand for the car-following task's spacing policy)."""
+
+    type_name = "EgoState"
+
+    def __init__(self, task: str) -> None:
+        paths = []
+        for signal in TASKS[task].observes:
+            paths += _NOT_NUMERIC.get(signal.name, (signal.name,))
+        #: attribute paths into the scenario's observation, and the vector's field names
+        self.paths = tuple(paths)
+        self.names = tuple(p.rsplit(".", 1)[-1] for p in paths)
+        self._get = attrgetter(*self.paths)
+        self.space = spaces.Box(-np.inf, np.inf, (len(self.names),), np.float64)
+
+    def reset(self, view) -> None:
+        # the scenario fills one observation in place all run long
+        self._source = view.obs
+
+    def observe(self, view) -> np.ndarray:
+        return np.array(self._get(self._source), dtype=np.float64)
+
+
+class KinematicsObservation:
+    """highway-env's ``Kinematics`` (see the module docstring), built with numpy from the
+    vehicles around the ego in its lane's frame (:meth:`ego.gym.env.EgoView.traffic`)."""
+
+    type_name = "Kinematics"
+    FEATURES = ("presence", "x", "y", "vx", "vy")
+    KNOWN = ("presence", "x", "y", "vx", "vy", "heading", "cos_h", "sin_h")
+    #: highway-env's defaults: 5 and 2 times its largest speed (40 m/s), 3 lanes of 4 m
+    FEATURES_RANGE = {"x": [-200.0, 200.0], "y": [-12.0, 12.0], "vx": [-80.0, 80.0], "vy": [-80.0, 80.0]}
+    OPTIONS = ("features", "vehicles_count", "features_range", "absolute", "order", "normalize", "clip",
+               "see_behind", "perception_distance")
+
+    def __init__(self, features: Sequence[str] | None = None, vehicles_count: int = 5,
+                 features_range: Mapping[str, Sequence[float]] | None = None, absolute: bool = False,
+                 order: str = "sorted", normalize: bool = True, clip: bool = True, see_behind: bool = False,
+                 perception_distance: float = 200.0) -> None:
+        self.features = tuple(features) if features is not None else self.FEATURES
+        for f in self.features:
+            if f not in self.KNOWN:
+                raise ConfigError(f"unknown Kinematics feature {f!r} (known: {', '.join(self.KNOWN)})")
+        if isinstance(vehicles_count, bool) or not isinstance(vehicles_count, (int, np.integer)) \
+                or not 1 <= vehicles_count <= 100:
+            raise ConfigError(f"bad value for vehicles_count: {vehicles_count!r} (expected a whole number "
+                              "from 1 to 100)")
+        if order not in ("sorted", "shuffled"):
+            raise ConfigError(f"bad value for order: {order!r} (expected one of sorted, shuffled)")
+        ranges = dict(self.FEATURES_RANGE)
+        for key, value in (features_range or {}).items():
+            if key not in ("x", "y", "vx", "vy"):
+                raise ConfigError(f"unknown features_range key {key!r} (known: x, y, vx, vy)")
+            ranges[key] = _range(f"features_range[{key}]", value)
+        if not (isinstance(perception_distance, (int, float)) and 0.0 < perception_distance <= 1000.0):
+            raise ConfigError(f"bad value for perception_distance: {perception_distance!r} (expected a "
+                              "number above 0 and up to 1000 (m))")
+        self.vehicles_count = int(vehicles_count)
+        self.absolute = _flag("absolute", absolute)
+        self.normalize = _flag("normalize", normalize)
+        self.clip = _flag("clip", clip)
+        self.see_behind = _flag("see_behind", see_behind)
+        self.order = order
+        self.perception_distance = float(perception_distance)
+        self.names = self.features
+        self.space = spaces.Box(-np.inf, np.inf, (self.vehicles_count, len(self.features)), np.float32)
+        # per feature: the column of the (s, d, v_s, v_d, heading) rows, or how to derive it
+        lo = np.array([ranges[f][0] if f in ranges else -1.0 for f in self.features])
+        hi = np.array([ranges[f][1] if f in ranges else 1.0 for f in self.features])
+        self._scaled = np.array([f in ranges for f in self.features])
+        self._lo, self._span = lo, hi - lo
+        self._rng = np.random.default_rng()
+
+    def reset(self, view) -> None:
+        self._rng = view.np_random
+
+    def observe(self, view) -> np.ndarray:
+        ego, others, length = view.traffic()
+        rows = np.asarray(others, dtype=np.float64).reshape(-1, 5)
+        ego = np.asarray(ego, dtype=np.float64)
+        rel = rows[:, :4] - ego[:4]
+        dist = np.hypot(rel[:, 0], rel[:, 1])
+        keep = dist <= self.perception_distance
+        if not self.see_behind:
+            # highway-env drops the vehicles more than two car lengths behind
+            keep &= rel[:, 0] > -2.0 * length
+        rows, rel, dist = rows[keep], rel[keep], dist[keep]
+        nearest = np.argsort(dist, kind="stable")[: self.vehicles_count - 1]
+        rows, rel = rows[nearest], rel[nearest]
+        if not self.absolute:
+            rows = np.concatenate([rel, rows[:, 4:]], axis=1)
+        table = np.concatenate([ego[None, :], rows])
+        out = np.zeros((self.vehicles_count, len(self.features)))
+        n = len(table)
+        heading = table[:, 4]
+        columns = {"presence": np.ones(n), "x": table[:, 0], "y": table[:, 1], "vx": table[:, 2],
+                   "vy": table[:, 3], "heading": heading, "cos_h": np.cos(heading), "sin_h": np.sin(heading)}
+        for j, f in enumerate(self.features):
+            out[:n, j] = columns[f]
+        if self.normalize:
+            scaled = self._scaled
+            values = (out[:n, scaled] - self._lo[scaled]) / self._span[scaled] * 2.0 - 1.0
+            out[:n, scaled] = np.clip(values, -1.0, 1.0) if self.clip else values
+        if self.order == "shuffled" and n > 2:
+            self._rng.shuffle(out[1:n])
+        return out.astype(np.float32)
+
+
+def observation_type(config: Mapping[str, Any], task: str):
+    """The observation type ``config`` (``{"type": ..., options}``) names."""
+    kind = config.get("type") if isinstance(config, Mapping) else None
+    if kind == "EgoState":
+        _options("observation", config, ())
+        return EgoStateObservation(task)
+    if kind == "Kinematics":
+        return KinematicsObservation(**_options("observation", config, KinematicsObservation.OPTIONS))
+    raise ConfigError(f"bad value for observation: {config!r} (expected a dict whose type is one of "
+                      "EgoState, Kinematics)")
+
+
+# -- actions ---------------------------------------------------------------------------------
+
+class ActionType:
+    """The agent's action -> the ego's (longitudinal command, delta), ``None`` for a channel
+    the agent does not drive; and back (:meth:`from_native`) for a controller's command."""
+
+    type_name = ""
+    OPTIONS = ("longitudinal", "lateral")
+
+    def __init__(self, task: str, limits: tuple[float, float, float], longitudinal: bool = True,
+                 lateral: bool | None = None) -> None:
+        steerable = TASKS[task].returns[1].high > 0.0
+        self.longitudinal = _flag("longitudinal", longitudinal)
+        self.lateral = _flag("lateral", steerable if lateral is None else lateral)
+        if self.lateral and not steerable:
+            raise ConfigError(f"bad value for lateral: true (the {task} task does not steer: its "
+                              "followers keep their lane)")
+        if not (self.longitudinal or self.lateral):
+            raise ConfigError("bad action: longitudinal and lateral are both false (the agent would "
+                              "drive nothing)")
+        #: (most negative, largest longitudinal command, largest |delta|) in the plant's units
+        self.limits = limits
+        self.channels = (self.longitudinal, self.lateral)
+        self.size = self.longitudinal + self.lateral
+        #: Fx per driven wheel (N) per m/s^2 of acceleration (report 000's model); 1 otherwise
+        self.force_per_accel = 1.0
+
+    def set_plant(self, force_per_accel: float) -> None:
+        self.force_per_accel = force_per_accel
+
+
+class ContinuousAction(ActionType):
+    type_name = "ContinuousAction"
+    OPTIONS = ("longitudinal", "lateral", "acceleration_range", "steering_range", "clip")
+
+    def __init__(self, task: str, limits, longitudinal: bool = True, lateral: bool | None = None,
+                 acceleration_range: Sequence[float] = (-5.0, 5.0),
+                 steering_range: Sequence[float] = (-math.pi / 4, math.pi / 4), clip: bool = True) -> None:
+        super().__init__(task, limits, longitudinal, lateral)
+        self.acceleration_range = _range("acceleration_range", acceleration_range)
+        self.steering_range = _range("steering_range", steering_range)
+        self.clip = _flag("clip", clip)
+        self.space = spaces.Box(-1.0, 1.0, (self.size,), np.float32)
+        # native = offset + half_span * x for each channel the agent drives
+        ranges = [r for r, on in zip((self.acceleration_range, self.steering_range), self.channels) if on]
+        self._mid = [0.5 * (lo + hi) for lo, hi in ranges]
+        self._half = [0.5 * (hi - lo) for lo, hi in ranges]
+
+    def native(self, action) -> tuple[float | None, float | None]:
+        a = np.clip(action, -1.0, 1.0) if self.clip else np.asarray(action)
+        values = [mid + half * float(x) for mid, half, x in zip(self._mid, self._half, a)]
+        lon = values.pop(0) * self.force_per_accel if self.longitudinal else None
+        lat = values[0] if self.lateral else None
+        return lon, lat
+
+    def from_native(self, command: float, delta: float) -> np.ndarray:
+        values = []
+        if self.longitudinal:
+            values.append(command / self.force_per_accel)
+        if self.lateral:
+            values.append(delta)
+        x = [(v - mid) / half for v, mid, half in zip(values, self._mid, self._half)]
+        return np.clip(np.array(x, dtype=np.float32), -1.0, 1.0)
+
+
+class EgoAction(ActionType):
+    type_name = "EgoAction"
+
+    def __init__(self, task: str, limits, longitudinal: bool = True, lateral: bool | None = None) -> None:
+        super().__init__(task, limits, longitudinal, lateral)
+        lo, hi, steer = limits
+        low = [b for b, on in zip((lo, -steer), self.channels) if on]
+        high = [b for b, on in zip((hi, steer), self.channels) if on]
+        self.space = spaces.Box(np.array(low), np.array(high), dtype=np.float64)
+        both = self.longitudinal and self.lateral
+        self.native = self._both if both else self._one
+
+    def _both(self, action) -> tuple[float, float]:
+        return float(action[0]), float(action[1])
+
+    def _one(self, action) -> tuple[float | None, float | None]:
+        x = float(action[0])
+        return (x, None) if self.longitudinal else (None, x)
+
+    def from_native(self, command: float, delta: float) -> np.ndarray:
+        return np.array([v for v, on in zip((command, delta), self.channels) if on], dtype=np.float64)
+
+
+def action_type(config: Mapping[str, Any], task: str, limits) -> ActionType:
+    """The action type ``config`` (``{"type": ..., options}``) names."""
+    kind = config.get("type") if isinstance(config, Mapping) else None
+    for cls in (ContinuousAction, EgoAction):
+        if kind == cls.type_name:
+            return cls(task, limits, **_options("action", config, cls.OPTIONS))
+    raise ConfigError(f"bad value for action: {config!r} (expected a dict whose type is one of "
+                      "ContinuousAction, EgoAction)")

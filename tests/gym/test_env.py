@@ -1,0 +1,217 @@
+"""ego.gym: the env ids against Gymnasium's checker, determinism, vector envs, configuration,
+actions, episode ends, the Kinematics observation and rendering - all on real SUMO."""
+
+import subprocess
+import sys
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import ego.gym
+from ego.params import ConfigError
+
+pytestmark = pytest.mark.filterwarnings("ignore::UserWarning")  # the checker's unbounded-Box notes
+
+
+@pytest.fixture
+def make():
+    """gym.make, every env closed at the end (one SUMO per process)."""
+    made = []
+
+    def _make(env_id, **kwargs):
+        env = gym.make(env_id, **kwargs)
+        made.append(env)
+        return env
+
+    yield _make
+    for env in made:
+        env.close()
+
+
+@pytest.mark.sumo
+@pytest.mark.parametrize("env_id", list(ego.gym.ENV_IDS))
+def test_check_env_passes(env_id, make):
+    env = make(env_id)
+    check_env(env.unwrapped)
+
+
+@pytest.mark.sumo
+@pytest.mark.parametrize("observation", ["EgoState", "Kinematics"])
+@pytest.mark.parametrize("env_id", ["ego/CutIn-v0", "ego/Curve-v0", "ego/Platoon-v0"])
+def test_same_seed_same_episode_and_fresh_arrays(env_id, observation, make):
+    env = make(env_id, config={"observation": {"type": observation}, "policy_frequency": 10})
+    actions = [env.action_space.sample() for _ in range(30)]
+
+    def episode(seed):
+        obs, _ = env.reset(seed=seed)
+        out = [obs]
+        for a in actions:
+            obs, reward, terminated, truncated, _ = env.step(a)
+            out += [obs, np.array([reward])]
+            if terminated or truncated:
+                break
+        return out
+
+    first, second = episode(7), episode(7)
+    assert len(first) == len(second)
+    assert all(np.array_equal(a, b) for a, b in zip(first, second))
+    # no two observations share memory: the env never hands out its buffers
+    assert not any(np.shares_memory(a, b) for a, b in zip(first[:-2:2], first[2::2]))
+    obs0, _ = env.reset(seed=7)
+    assert np.array_equal(obs0, first[0]) and obs0 is not first[0]
+
+
+@pytest.mark.sumo
+def test_async_vector_env_runs_one_sumo_per_subprocess():
+    envs = gym.make_vec("ego/EmergencyBrake-v0", num_envs=2, vectorization_mode="async",
+                        config={"policy_frequency": 10})
+    try:
+        obs, info = envs.reset(seed=[0, 1])
+        assert obs.shape == (2, 15) and list(info["status"]) == ["running", "running"]
+        for _ in range(5):
+            obs, reward, terminated, truncated, info = envs.step(envs.action_space.sample())
+        assert obs.shape == (2, 15) and reward.shape == (2,)
+        assert obs[0, 0] == pytest.approx(0.5) and obs[1, 0] == pytest.approx(0.5)  # t after 5 x 0.1 s
+    finally:
+        envs.close()
+    # the parent never started SUMO: a single env still runs here
+    env = gym.make("ego/EmergencyBrake-v0")
+    try:
+        env.reset(seed=0)
+    finally:
+        env.close()
+
+
+def test_default_config_and_configure():
+    cfg = ego.gym.EgoEnv.default_config("platoon")
+    assert cfg["observation"] == {"type": "EgoState"} and cfg["controller"] == "pid"
+    assert cfg["action"]["lateral"] is False and cfg["followers"] == 3 and cfg["dt"] == 0.01
+    assert set(ego.gym.ENV_KEYS) <= set(cfg)
+    env = ego.gym.EgoEnv("platoon", config={"variant": "scale-model"})
+    assert env.default_config() == cfg  # an env lists its own scenario's keys
+    assert env.scenario.config.followers == 2  # the preset wins over the listed defaults
+    assert env.observation_space.shape == (10,) and env.action_space.shape == (1,)
+    assert env.observation_type.names[:3] == ("t", "gap", "speed")
+    env.close()
+
+
+@pytest.mark.parametrize("config, message", [
+    ({"ego_speed": 100}, "bad value for ego_speed: 100"),
+    ({"ego_speed": "fast"}, "bad value for ego_speed: 'fast'"),
+    ({"bogus": 1}, "unknown parameter 'bogus'"),
+    ({"observation": {"type": "Pixels"}}, "bad value for observation"),
+    ({"observation": {"type": "Kinematics", "features": ["z"]}}, "unknown Kinematics feature 'z'"),
+    ({"action": {"type": "EgoAction", "steer": True}}, "unknown action option 'steer'"),
+    ({"action": {"type": "ContinuousAction", "lateral": False, "longitudinal": False}}, "both false"),
+    ({"controller": "narma-l2"}, "bad value for controller: 'narma-l2'"),
+    ({"policy_frequency": 3}, "bad value for policy_frequency: 3"),
+    ({"collision_reward": "x"}, "bad value for collision_reward"),
+    ({"reward_speed_range": [30, 10]}, "bad value for reward_speed_range"),
+], ids=["range", "type", "unknown", "observation", "feature", "action-option", "no-channel",
+        "controller", "frequency", "reward", "speed-range"])
+def test_bad_config_is_one_line_config_error(config, message):
+    with pytest.raises(ConfigError, match=message.replace("[", r"\[")) as err:
+        ego.gym.EgoEnv("emergency-brake", config=config)
+    assert "\n" not in str(err.value)
+
+
+def test_platoon_does_not_steer():
+    with pytest.raises(ConfigError, match="does not steer"):
+        ego.gym.EgoEnv("platoon", config={"action": {"type": "ContinuousAction", "lateral": True}})
+
+
+@pytest.mark.sumo
+def test_reset_options_reconfigure_and_rebuild_the_spaces(make):
+    env = make("ego/EmergencyBrake-v0")
+    assert env.observation_space.shape == (15,)
+    obs, _ = env.reset(seed=0, options={"config": {"observation": {"type": "Kinematics", "vehicles_count": 7},
+                                                   "ego_speed": 25.0}})
+    assert obs.shape == (7, 5) and env.unwrapped.observation_space.shape == (7, 5)
+    assert env.unwrapped.scenario.config.ego_speed == 25.0
+
+
+@pytest.mark.sumo
+def test_continuous_action_becomes_report_000s_fx(make):
+    env = make("ego/EmergencyBrake-v0")
+    env.reset(seed=0)
+    env.step(np.array([0.4, 0.0], dtype=np.float32))  # 0.4 of +-5 m/s^2
+    ego_plant = env.unwrapped.scenario.ego
+    p = ego_plant.model.params
+    assert ego_plant.applied[0] == pytest.approx(p.m * 2.0 / p.Nw)
+    assert ego_plant.applied[1] == 0.0
+
+
+@pytest.mark.sumo
+def test_collision_terminates_and_reports_metrics(make):
+    env = make("ego/EmergencyBrake-v0", config={"aeb": False, "action": {"type": "EgoAction"}})
+    env.reset(seed=0)
+    coast = np.zeros(2)
+    for _ in range(3000):
+        obs, reward, terminated, truncated, info = env.step(coast)
+        if terminated or truncated:
+            break
+    assert terminated and not truncated and info["status"] == "collision"
+    assert info["rewards"]["crashed"] == 1.0 and reward < 0.0
+    assert info["metrics"]["collision_with"] == "lead" and info["metrics"]["controller"] == "agent"
+
+
+@pytest.mark.sumo
+def test_duration_truncates(make):
+    env = make("ego/Platoon-v0", config={"duration": 2.0, "policy_frequency": 10})
+    env.reset(seed=0)
+    steps = 0
+    while True:
+        steps += 1
+        _, _, terminated, truncated, info = env.step(np.zeros(1, dtype=np.float32))
+        if terminated or truncated:
+            break
+    assert steps == 20 and truncated and not terminated
+    assert info["status"] == "completed" and info["metrics"]["steps"] == 200
+
+
+@pytest.mark.sumo
+def test_kinematics_rows_in_the_lane_frame(make):
+    env = make("ego/EmergencyBrake-v0", config={"observation": {
+        "type": "Kinematics", "normalize": False, "see_behind": True, "vehicles_count": 6,
+        "features": ["presence", "x", "y", "vx", "vy", "heading"]}})
+    obs, _ = env.reset(seed=0)
+    sc = env.unwrapped.scenario
+    assert obs[0, 0] == 1.0 and obs[0, 1] == pytest.approx(sc.s) and obs[0, 3] == pytest.approx(sc.ds)
+    present = obs[1:][obs[1:, 0] == 1.0]
+    distance = np.hypot(present[:, 1], present[:, 2])
+    assert len(present) >= 1 and np.all(np.diff(distance) >= 0.0)  # nearest first
+    # the lead car: ahead in the ego's lane, lead_gap (30 m) plus half of both cars
+    lead = present[(np.abs(present[:, 2]) < 0.5) & (present[:, 1] > 0)][0]
+    assert lead[1] == pytest.approx(30.0 + 2.25 + sc.geometry.cg_to_front, abs=0.05)
+
+
+@pytest.mark.sumo
+@pytest.mark.parametrize("env_id", ["ego/CutIn-v0", "ego/Curve-v0", "ego/Platoon-v0"])
+def test_render_rgb_array(env_id, make):
+    env = make(env_id, render_mode="rgb_array", config={"screen_width": 200, "screen_height": 80})
+    env.reset(seed=0)
+    frame = env.render()
+    assert frame.shape == (80, 200, 3) and frame.dtype == np.uint8
+    assert len(np.unique(frame.reshape(-1, 3), axis=0)) > 3  # road, vehicles, background
+
+
+def test_only_ego_gym_imports_gymnasium():
+    code = ("import sys, ego, ego.cli, ego.runner, ego.compare, ego.sweep, ego.scenarios, ego.control; "
+            "assert 'gymnasium' not in sys.modules, 'gymnasium imported'")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stderr
+
+
+def test_env_ids_are_registered():
+    for env_id, scenario in ego.gym.ENV_IDS.items():
+        spec = gym.spec(env_id)
+        assert spec.kwargs["scenario"] == scenario
+
+
+def test_step_before_reset_is_refused():
+    env = gym.make("ego/CutIn-v0")
+    with pytest.raises(RuntimeError, match="reset"):
+        env.step(env.action_space.sample())
+    env.close()
