@@ -35,6 +35,15 @@ def test_tuning_batch_against_the_per_member_loop():
     assert figures["batch_generation_s"] > 0 and figures["drive_steps"] > 40000
 
 
+def test_highway_env_against_sumo():
+    from bench_highway_env import main
+
+    figures = main(["--repeat", "2"])
+    assert figures["sumo"]["control_steps"] == figures["highway-env"]["control_steps"] == 2500
+    figures = main(["--repeat", "2", "--scenario", "fast-follower"])
+    assert figures["highway-env"]["traffic_steps"] > 0
+
+
 def test_gym_wrapper_against_the_raw_step(tmp_path, monkeypatch):
     from bench_gym import main
 

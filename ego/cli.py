@@ -1,9 +1,9 @@
 """The ``ego`` command line.
 
     ego run SCENARIO --controller NAME [--record PATH] [--trace PATH] [--seed N] [--set key=value ...]
-            [--json]
+            [--json] [--backend sumo|highway-env] [--video PATH.gif|PATH.mp4]
     ego compare SCENARIO --controllers A,B@key=value,... [--seeds N] [--set key=value ...] --out DIR
-                [--traces csv|parquet|mat]
+                [--traces csv|parquet|mat] [--backend sumo|highway-env]
     ego sweep SPEC.toml --out DIR [--engine process|ray] [--jobs N] [--address ADDR]
               [--record none|failed|all] [--plot X,Y[:METRIC] ...]
     ego list [--json]
@@ -42,6 +42,7 @@ from collections.abc import Sequence
 
 from ego import __version__
 from ego.checks import MAX_JOBS, check_count, check_number, check_output_dir, check_output_file, check_seed
+from ego.highway_env import BACKENDS
 from ego.params import ConfigError, describe, did_you_mean, parse_overrides
 
 EXIT_OK, EXIT_NOT_COMPLETED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
@@ -90,6 +91,7 @@ def _parser() -> argparse.ArgumentParser:
                "  ego list\n"
                "  ego run emergency-brake --controller fuzzy --record runs/eb.rrd\n"
                "  ego run emergency-brake --controller pid --set block_left=true --json\n"
+               "  ego run emergency-brake --controller pid --backend highway-env --video runs/eb.gif\n"
                "  ego compare fast-follower --controllers pid,fuzzy,rbf-smc --seeds 3 --out runs/ff\n"
                "  ego run curve --controller narma-l2 --set entry_speed=40\n"
                "  ego compare curve --controllers pid,fuzzy-curve,narma-l2 --out runs/curve\n"
@@ -124,6 +126,11 @@ def _parser() -> argparse.ArgumentParser:
                      help="write every trace column with its unit, and the traffic near the ego, to "
                           "PATH: .csv, .parquet or .mat (MATLAB); see docs/traces.md")
     run.add_argument("--json", action="store_true", help="print one JSON object instead of text")
+    run.add_argument("--backend", default="sumo", choices=BACKENDS,
+                     help="traffic simulator (default sumo; highway-env runs emergency-brake, "
+                          "fast-follower and cut-in)")
+    run.add_argument("--video", metavar="PATH",
+                     help="with --backend highway-env: a video of the run (.gif, or .mp4 with ffmpeg)")
 
     cmp_ = sub.add_parser(
         "compare", help="every controller x seed of one scenario, in parallel processes",
@@ -149,6 +156,8 @@ def _parser() -> argparse.ArgumentParser:
     cmp_.add_argument("--out", required=True, metavar="DIR", help="output folder")
     cmp_.add_argument("--jobs", type=int, default=None, metavar="J",
                       help="parallel processes (default: the number of CPUs)")
+    cmp_.add_argument("--backend", default="sumo", choices=BACKENDS,
+                      help="traffic simulator (default sumo)")
     cmp_.add_argument("--traces", default=None, metavar="FORMAT",
                       help="also write every run's trace to traces/<label>-seed<N>.FORMAT: csv, parquet "
                            "or mat (see docs/traces.md)")
@@ -277,7 +286,7 @@ def _catalogue() -> dict:
     def scenario(name: str, cls) -> dict:
         config = cls.default_config({})
         return {
-            "name": name, "task": cls.task, "summary": cls.summary,
+            "name": name, "task": cls.task, "summary": cls.summary, "backends": list(cls.backends),
             "parameters": params(cls.config_cls),
             "metrics": [{"name": m.name, "unit": m.unit, "description": m.description, "headline": m.headline}
                         for m in cls.metrics_declared(config)],
@@ -348,7 +357,8 @@ def _print_catalogue(cat: dict) -> None:
         print("Every run reports " + ", ".join(with_unit(n, every[n]["unit"]) for n in cat["common_metrics"]
                                              if n in every) + " and the scenario's metrics below.")
     for s in cat["scenarios"]:
-        print(f"\n  {s['name']} [{s['task']} task]: {s['summary']}")
+        on = "" if s["backends"] == ["sumo"] else f"; --backend {' or '.join(s['backends'])}"
+        print(f"\n  {s['name']} [{s['task']} task{on}]: {s['summary']}")
         table(s["parameters"])
         metrics(s["metrics"])
     for task in cat["tasks"]:
@@ -414,7 +424,8 @@ def _run(args) -> int:
     from ego.export import trace_files
 
     spec = RunSpec(args.scenario, args.controller, seed=check_seed(args.seed, "--seed"),
-                   overrides=parse_overrides(args.overrides), record=args.record, trace=args.trace)
+                   overrides=parse_overrides(args.overrides), record=args.record, trace=args.trace,
+                   backend=args.backend, video=args.video)
     result = run(spec)  # checks the --trace path before anything runs
     written = [str(p) for p in trace_files(args.trace, result.traffic is not None)] if args.trace else []
     units = metric_units(declared_metrics(spec), flatten(result.metrics))
@@ -424,6 +435,8 @@ def _run(args) -> int:
         out["units"] = units
         if args.record:
             out["record"] = args.record
+        if args.video:
+            out["video"] = args.video
         if written:
             out["trace"] = written
         print(json.dumps(out))
@@ -431,6 +444,8 @@ def _run(args) -> int:
         _print_result(result, units)
         if args.record:
             print(f"recording: {args.record}  (review with: rerun {args.record})")
+        if args.video:
+            print(f"video: {args.video}")
         if written:
             print(f"trace: {', '.join(written)}")
     if result.status == "interrupted":
@@ -449,7 +464,7 @@ def _compare(args) -> int:
     labels = [n.strip() for n in args.controllers.split(",") if n.strip()]
     out = check_output_dir(args.out, "--out")
     rows = compare(args.scenario, labels, args.seeds, parse_overrides(args.overrides), out, args.jobs,
-                   traces=args.traces)
+                   traces=args.traces, backend=args.backend)
     print((out / "metrics.md").read_text(), end="")
     files = ["metrics.csv", UNITS_FILE, "metrics.md"] + sorted(p.name for p in out.glob("*.png"))
     recorded = sum(1 for r in rows if r.recording)

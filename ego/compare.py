@@ -52,6 +52,7 @@ from ego.params import ConfigError, apply_overrides, describe, did_you_mean
 from ego.processes import signals_deferred
 from ego.runner import RunSpec, configure, run, split_overrides
 from ego.scenarios import scenario_class
+from ego.scenarios.base import check_backend
 from ego.scenarios.metrics import flatten, headline_names, metric_units, with_unit
 from ego.scenarios.trace import Metric
 from ego.scenarios.traffic_log import TrafficLog
@@ -129,14 +130,16 @@ def file_label(label: str) -> str:
 
 
 def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict, out: Path,
-         traces: str | None = None) -> list[RunSpec]:
+         traces: str | None = None, backend: str = "sumo") -> list[RunSpec]:
     """Validate names, variants and overrides, and list the runs (before any process starts).
 
     ``controllers`` are labels: a controller's name, or a variant of it with its own
     parameters (:func:`parse_variant`); each run is named by its label. ``traces``: a
     format of :data:`TRACE_FORMATS`, each run's trace to ``out/traces/<label>-seed<N>.<format>``.
+    ``backend``: the traffic simulator of every run.
     """
     cls = scenario_class(scenario)
+    check_backend(cls, backend)
     if isinstance(controllers, str) or not all(isinstance(c, str) for c in controllers):
         raise ConfigError(f"bad controllers {controllers!r:.60} (expected a list of names)")
     if not controllers:
@@ -170,7 +173,8 @@ def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict,
             stem = f"{file_label(label)}-seed{seed}"
             trace = str(out / "traces" / f"{stem}.{traces}") if traces else None
             specs.append(RunSpec(scenario, name, seed, mine, str(out / "runs" / f"{stem}.rrd"), trace=trace,
-                                 background_recording=False, label=label))
+                                 background_recording=False, label=label,
+                                 backend=backend))
     return specs
 
 
@@ -189,7 +193,8 @@ def _progress(done: int, total: int, row: RunRow, started: float) -> None:
 
 def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict, out: Path,
             jobs: int | None = None, progress: Callable | None = _progress,
-            executor: Executor | None = None, traces: str | None = None) -> list[RunRow]:
+            executor: Executor | None = None, traces: str | None = None,
+            backend: str = "sumo") -> list[RunRow]:
     """Run everything, write the outputs, return the rows (in controller, seed order).
     ``controllers`` are labels (:func:`plan`: names or variants); ``traces`` a format of
     :data:`TRACE_FORMATS` to write each run's trace in, or None.
@@ -197,7 +202,8 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
     The runs go to the sweep engines' process pool (``jobs`` workers, default one per CPU;
     libsumo allows one simulation per process; one code path with ``ego sweep``), or to
     ``executor`` when given (closed at the end; e.g. ``InlineExecutor`` for a scenario
-    without SUMO).
+    without SUMO). ``backend`` is the traffic simulator of every run ("sumo" or
+    "highway-env"); metrics.csv's ``backend`` column says which ran.
 
     ``out`` is locked while it runs (:class:`ego.outputs.FolderLock`: ConfigError if another
     process holds it). A KeyboardInterrupt (Ctrl-C; SIGTERM in the ``ego`` command) stops
@@ -205,7 +211,7 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
     ``interrupted``; the caller sees it in the rows.
     """
     out = Path(out)
-    specs = plan(scenario, controllers, seeds, overrides, out, traces)
+    specs = plan(scenario, controllers, seeds, overrides, out, traces, backend)
     # every value too (a bad --set value) before any process starts: once per controller,
     # since the seed changes nothing that is checked (100000 seeds would take a minute)
     for spec in (s for s in specs if s.seed == 0):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -11,6 +12,7 @@ from ego.control import CONTROLLERS, controller_spec
 from ego.params import ConfigError, apply_overrides, describe, unknown_parameter
 from ego.record import RerunRecorder
 from ego.scenarios import RunResult, Scenario, scenario_class
+from ego.scenarios.base import check_backend
 from ego.scenarios.trace import Column, Metric
 from ego.sumo.net import net_file
 
@@ -30,6 +32,10 @@ class RunSpec:
     #: write the recording from a separate process (False: in this one, e.g. in a pool
     #: worker that already has a core of its own)
     background_recording: bool = True
+    #: the traffic simulator: "sumo" or "highway-env" (ego.highway_env.BACKENDS)
+    backend: str = "sumo"
+    #: a .gif or .mp4 of the run from highway-env's renderer (highway-env only)
+    video: str | None = None
     #: the controller's name in the results (``RunResult.controller``, the recording):
     #: ``ego compare``'s variant label, e.g. ``pid@kp_lat=0.02``; default ``controller``
     label: str = ""
@@ -71,6 +77,15 @@ def configure(spec: RunSpec):
     cls = scenario_class(spec.scenario)
     if cls.network is not None:  # a missing or garbled network fails here, not inside SUMO
         net_file(cls.network)
+    check_backend(cls, spec.backend)
+    if spec.backend == "highway-env" and importlib.util.find_spec("highway_env") is None:
+        raise ConfigError("--backend highway-env needs the highway-env package: pip install 'ego[highway]'")
+    if spec.video is not None:
+        if spec.backend != "highway-env":
+            raise ConfigError("--video needs --backend highway-env (a SUMO run is recorded with --record)")
+        from ego.highway_env.video import check_video_path
+
+        check_video_path(spec.video)
     ctrl = controller_spec(spec.controller, cls.task)
     config, rest = apply_overrides(cls.default_config(spec.overrides), spec.overrides, strict=False)
     ctrl_params, rest = apply_overrides(ctrl.params(), rest, strict=False)
@@ -97,7 +112,8 @@ def build(spec: RunSpec):
         path.parent.mkdir(parents=True, exist_ok=True)
         recorder = RerunRecorder(path, recording_id=f"{spec.scenario}-{spec.name}-{spec.seed}",
                                  background=spec.background_recording)
-    return cls(config, controller, seed=spec.seed, recorder=recorder, controller_name=spec.name)
+    return cls(config, controller, seed=spec.seed, recorder=recorder, controller_name=spec.name,
+               backend=spec.backend, video=spec.video)
 
 
 def run(spec: RunSpec) -> RunResult:

@@ -149,6 +149,17 @@ def divergence(state: Sequence[float], offset: float, heading_error: float,
     return None
 
 
+def check_backend(cls: type[Scenario], backend: str) -> None:
+    """ConfigError unless scenario ``cls`` runs on traffic simulator ``backend``."""
+    from ego.highway_env import BACKENDS
+
+    if backend not in BACKENDS:
+        raise ConfigError(f"bad value for --backend: {backend!r} (expected one of: {', '.join(BACKENDS)})")
+    if backend not in cls.backends:
+        raise ConfigError(f"bad value for --backend: {backend!r} (scenario {cls.name} runs on "
+                          f"{' or '.join(cls.backends)} only)")
+
+
 class Scenario:
     """Base of every scenario.
 
@@ -173,6 +184,8 @@ class Scenario:
     metric_specs: ClassVar[tuple[Metric, ...]] = ()
     #: trace columns ``ego compare`` plots, one line per controller
     plots: ClassVar[tuple[Plot, ...]] = ()
+    #: the traffic simulators it runs on (``ego run --backend``; ego.highway_env.BACKENDS)
+    backends: ClassVar[tuple[str, ...]] = ("sumo",)
 
     @classmethod
     def default_config(cls, overrides: Mapping[str, Any]):
@@ -200,15 +213,21 @@ class Scenario:
     @classmethod
     def metrics_declared(cls, config=None) -> tuple[Metric, ...]:
         """Every metric a run reports: the common ones, then the scenario's own."""
-        return COMMON_METRICS + cls.metric_specs + COMMON_TAIL_METRICS
+        backend = (BACKEND_METRIC,) if len(cls.backends) > 1 else ()
+        return COMMON_METRICS + backend + cls.metric_specs + COMMON_TAIL_METRICS
 
     def trace_columns(self) -> tuple[Column, ...]:
         """The declared trace columns of this run (default: the class's ``columns``)."""
         return self.columns
 
     def __init__(self, config, controller: Controller, *, seed: int = 0,
-                 recorder: Recorder | None = None, controller_name: str = "") -> None:
+                 recorder: Recorder | None = None, controller_name: str = "",
+                 backend: str = "sumo", video: str | None = None) -> None:
+        check_backend(type(self), backend)
         self.config = config
+        #: the traffic simulator (one of ``backends``) and the video it renders (highway-env)
+        self.backend = backend
+        self.video = video
         self.controller = controller
         self.controller_name = controller_name or type(controller).__name__
         self.seed = int(seed)
@@ -421,6 +440,8 @@ class Scenario:
             "collision": self.collision is not None,
             "collision_with": self._other_party(),
         }
+        if len(self.backends) > 1:
+            metrics["backend"] = self.backend
         metrics.update(self._metrics(trace, columns))
         metrics.update({
             "sim_time": json_number(self.t, 4),
@@ -568,6 +589,8 @@ COMMON_METRICS = (
     Metric("collision", "-", "the ego (or a controlled vehicle) was in a collision"),
     Metric("collision_with", "-", "the other party of the collision"),
 )
+#: ... then, for a scenario with several traffic simulators, which one ran ...
+BACKEND_METRIC = Metric("backend", "-", "traffic simulator: sumo or highway-env")
 #: ... and last
 COMMON_TAIL_METRICS = (
     Metric("sim_time", "s", "simulated time"),

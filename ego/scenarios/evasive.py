@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ego.highway_env import BACKENDS
 from ego.params import ConfigError, param
 from ego.record.base import Series
 from ego.scenarios import metrics as m
@@ -110,6 +111,8 @@ class EvasiveLaneChange(HighwayScenario):
     """Trigger, gap acceptance, references and metrics of an evasive lane change."""
 
     config_cls = EvasiveConfig
+    #: SUMO, or highway-env's road and IDM/MOBIL drivers (ego.highway_env)
+    backends = BACKENDS
     markers = MARKERS
 
     @classmethod

@@ -127,6 +127,12 @@ class HighwayScenario(RoadScenario):
     # -- set-up ---------------------------------------------------------------------------
     def _make_bridge(self) -> SumoBridge:
         c = self.config
+        if self.backend == "highway-env":
+            # imported here: the SUMO path never loads highway-env
+            from ego.highway_env.bridge import HighwayEnvBridge
+
+            return HighwayEnvBridge(net_file(self.network), step_length=c.sumo_step, seed=self.seed,
+                                    edge=EDGE, video=self.video, duration=c.duration)
         return SumoBridge(SumoConfig(net_file(self.network), step_length=c.sumo_step, seed=self.seed,
                                      lateral_resolution=c.lateral_resolution))
 

@@ -377,6 +377,48 @@ class SumoBridge:
         """SUMO's driver of ``vid`` never changes lanes (it still drives and brakes)."""
         self._ls.vehicle.setLaneChangeMode(vid, 0)
 
+    # -- commands of the scripted actors (ego.sumo.traffic); every traffic source has them --
+    def drive_blind(self, vid: str) -> None:
+        """``vid`` no longer changes lanes nor checks safe speeds or its own limits: the
+        speed set is the speed driven (SUMO's speed mode 0)."""
+        veh = self._ls.vehicle
+        veh.setLaneChangeMode(vid, 0)
+        veh.setSpeedMode(vid, 0)
+
+    def set_speed(self, vid: str, speed: float) -> None:
+        """``vid`` drives towards ``speed`` (m/s) at its own acceleration and deceleration
+        (at once when it drives blind) and holds it."""
+        self._ls.vehicle.setSpeed(vid, speed)
+
+    def start_speed(self, vid: str, speed: float) -> None:
+        """Before the first step: ``vid`` drives ``speed`` (m/s) from now on, set without its
+        deceleration limit and without moving it."""
+        veh = self._ls.vehicle
+        if veh.getSpeed(vid) != speed:
+            veh.setPreviousSpeed(vid, speed, 0.0)
+        veh.setSpeed(vid, speed)
+
+    def set_decel(self, vid: str, decel: float) -> None:
+        """``vid`` brakes at ``decel`` (m/s^2) when its speed is set lower."""
+        veh = self._ls.vehicle
+        veh.setEmergencyDecel(vid, max(9.0, decel))
+        veh.setDecel(vid, decel)
+
+    def slow_down(self, vid: str, speed: float, duration: float) -> None:
+        """``vid`` changes its speed linearly to ``speed`` (m/s) over ``duration`` (s)."""
+        self._ls.vehicle.slowDown(vid, speed, duration)
+
+    def free_lateral(self, vid: str, max_lateral_speed: float) -> None:
+        """Lateral moves of ``vid`` (:meth:`change_sublane`) are limited only by
+        ``max_lateral_speed`` (m/s), not by SUMO's lateral acceleration."""
+        veh = self._ls.vehicle
+        veh.setMaxSpeedLat(vid, max_lateral_speed)
+        veh.setParameter(vid, "laneChangeModel.lcAccelLat", "100")
+
+    def change_sublane(self, vid: str, dy: float) -> None:
+        """Move ``vid`` sideways by ``dy`` (m, + left) in the next step (sublane model)."""
+        self._ls.vehicle.changeSublane(vid, dy)
+
     def front_bumper(self, vid: str) -> tuple[float, float]:
         """Front bumper centre of any vehicle (m), as of the last step."""
         return self._ls.vehicle.getPosition(vid)

@@ -1,7 +1,10 @@
 """Traffic around the ego: seeded background flows and scripted actors.
 
-Generation is pure (numpy Generator in, vehicle specs out); the actors act on SUMO through
-:class:`ego.sumo.bridge.SumoBridge`.
+Generation is pure (numpy Generator in, vehicle specs out); the actors act on the traffic
+through :class:`TrafficCommands` (``keep_lane``, ``drive_blind``, ``set_speed``, ``slow_down``,
+``change_sublane``...), which :class:`ego.sumo.bridge.SumoBridge` and
+:class:`ego.highway_env.bridge.HighwayEnvBridge` both have, so the same actor drives SUMO or
+highway-env (PoissonFlow still adds SUMO vehicles through libsumo).
 """
 
 from __future__ import annotations
@@ -9,10 +12,29 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
 from ego.sumo.bridge import SumoBridge, VehicleSpec
+
+
+class TrafficCommands(Protocol):
+    """What a scripted actor may ask of the traffic: :class:`~ego.sumo.bridge.SumoBridge` and
+    :class:`ego.highway_env.bridge.HighwayEnvBridge` both have it (see SumoBridge for each
+    command's meaning; speeds m/s, decelerations m/s^2, positions m in ego's frame)."""
+
+    def keep_lane(self, vid: str) -> None: ...
+    def drive_blind(self, vid: str) -> None: ...
+    def set_speed(self, vid: str, speed: float) -> None: ...
+    def start_speed(self, vid: str, speed: float) -> None: ...
+    def set_decel(self, vid: str, decel: float) -> None: ...
+    def slow_down(self, vid: str, speed: float, duration: float) -> None: ...
+    def free_lateral(self, vid: str, max_lateral_speed: float) -> None: ...
+    def change_sublane(self, vid: str, dy: float) -> None: ...
+    def speed(self, vid: str) -> float: ...
+    def front_bumper(self, vid: str) -> tuple[float, float]: ...
+    def dimensions(self, vid: str) -> tuple[float, float]: ...
 
 
 def background_traffic(
@@ -73,26 +95,21 @@ class BrakingLeader:
     final_speed: float
     braking: bool = False
 
-    def start(self, bridge: SumoBridge) -> None:
+    def start(self, bridge: TrafficCommands) -> None:
         """Call once it is inserted. Whatever speed it was inserted at, it drives
         ``cruise_speed`` from now on: SUMO refuses to insert a car at speed behind a stopped
         one closer than its own stopping distance, so a scenario may insert a slow leader at
         its follower's speed (passing that check) and the speed is set here, before the
         first step, without SUMO's deceleration limit and without moving it."""
-        veh = bridge.libsumo.vehicle
-        veh.setLaneChangeMode(self.vid, 0)
-        if veh.getSpeed(self.vid) != self.cruise_speed:
-            veh.setPreviousSpeed(self.vid, self.cruise_speed, 0.0)
-        veh.setSpeed(self.vid, self.cruise_speed)
+        bridge.keep_lane(self.vid)
+        bridge.start_speed(self.vid, self.cruise_speed)
 
-    def update(self, bridge: SumoBridge, t: float) -> bool:
+    def update(self, bridge: TrafficCommands, t: float) -> bool:
         """Call every SUMO step with scenario time ``t`` (s); True on the step braking starts."""
         if not self.braking and t >= self.brake_time - 1e-9 and self.final_speed < self.cruise_speed:
             self.braking = True
-            veh = bridge.libsumo.vehicle
-            veh.setEmergencyDecel(self.vid, max(9.0, self.decel))
-            veh.setDecel(self.vid, self.decel)
-            veh.setSpeed(self.vid, self.final_speed)
+            bridge.set_decel(self.vid, self.decel)
+            bridge.set_speed(self.vid, self.final_speed)
             return True
         return False
 
@@ -104,12 +121,11 @@ class PacedVehicle:
     vid: str
     speed: float
 
-    def start(self, bridge: SumoBridge) -> None:
-        veh = bridge.libsumo.vehicle
-        veh.setLaneChangeMode(self.vid, 0)
-        veh.setSpeed(self.vid, self.speed)
+    def start(self, bridge: TrafficCommands) -> None:
+        bridge.keep_lane(self.vid)
+        bridge.set_speed(self.vid, self.speed)
 
-    def update(self, bridge: SumoBridge, t: float) -> bool:
+    def update(self, bridge: TrafficCommands, t: float) -> bool:
         return False
 
 
@@ -121,11 +137,11 @@ class RecklessFollower:
     vid: str
     speed: float
 
-    def start(self, bridge: SumoBridge) -> None:
-        _ignore_safety(bridge, self.vid)
-        bridge.libsumo.vehicle.setSpeed(self.vid, self.speed)
+    def start(self, bridge: TrafficCommands) -> None:
+        bridge.drive_blind(self.vid)
+        bridge.set_speed(self.vid, self.speed)
 
-    def update(self, bridge: SumoBridge, t: float) -> bool:
+    def update(self, bridge: TrafficCommands, t: float) -> bool:
         return False
 
 
@@ -248,20 +264,12 @@ class ProfiledLeader:
     vid: str
     profile: SpeedProfile
 
-    def start(self, bridge: SumoBridge) -> None:
-        _ignore_safety(bridge, self.vid)
+    def start(self, bridge: TrafficCommands) -> None:
+        bridge.drive_blind(self.vid)
 
-    def update(self, bridge: SumoBridge, t: float) -> bool:
-        bridge.libsumo.vehicle.setSpeed(self.vid, self.profile.speed(t))
+    def update(self, bridge: TrafficCommands, t: float) -> bool:
+        bridge.set_speed(self.vid, self.profile.speed(t))
         return False
-
-
-def _ignore_safety(bridge: SumoBridge, vid: str) -> None:
-    """SUMO's driver no longer changes lanes nor checks safe speeds or its own limits: the
-    speed set is the speed driven."""
-    veh = bridge.libsumo.vehicle
-    veh.setLaneChangeMode(vid, 0)
-    veh.setSpeedMode(vid, 0)
 
 
 def min_jerk(u: float) -> float:
@@ -296,35 +304,32 @@ class CutInVehicle:
     phase: str = "overtake"
     cut_in_time: float | None = None  #: when it started across the lane (s)
 
-    def start(self, bridge: SumoBridge) -> None:
-        _ignore_safety(bridge, self.vid)
-        veh = bridge.libsumo.vehicle
-        # SUMO's own limits on lateral motion must not shape the scripted profile
-        veh.setMaxSpeedLat(self.vid, 4.0 * self.lane_width / self.duration)
-        veh.setParameter(self.vid, "laneChangeModel.lcAccelLat", "100")
-        veh.setSpeed(self.vid, self.overtake_speed)
+    def start(self, bridge: TrafficCommands) -> None:
+        bridge.drive_blind(self.vid)
+        # the traffic model's own limits on lateral motion must not shape the scripted profile
+        bridge.free_lateral(self.vid, 4.0 * self.lane_width / self.duration)
+        bridge.set_speed(self.vid, self.overtake_speed)
 
-    def update(self, bridge: SumoBridge, t: float) -> bool:
+    def update(self, bridge: TrafficCommands, t: float) -> bool:
         """Call before every SUMO step from ``t`` (s); True on the step it starts across."""
-        veh = bridge.libsumo.vehicle
         started = False
         if self.phase == "overtake":
-            rear = veh.getPosition(self.vid)[0] - veh.getLength(self.vid)
+            rear = bridge.front_bumper(self.vid)[0] - bridge.dimensions(self.vid)[0]
             # while it slows, the gap changes by the mean relative speed times slow_time
-            v = veh.getSpeed(self.target)
+            v = bridge.speed(self.target)
             change = 0.5 * self.slow_time * ((self.overtake_speed - v) + (self.speed - v))
             if rear - bridge.front_bumper(self.target)[0] >= self.gap - change:
-                veh.slowDown(self.vid, self.speed, self.slow_time)
+                bridge.slow_down(self.vid, self.speed, self.slow_time)
                 self.phase, self._until = "slow", t + self.slow_time
         elif self.phase == "slow" and t >= self._until - 1e-9:
-            veh.setSpeed(self.vid, self.speed)
+            bridge.set_speed(self.vid, self.speed)
             self.phase, self.cut_in_time, started = "cut in", t, True
-            self._y0 = veh.getPosition(self.vid)[1]
+            self._y0 = bridge.front_bumper(self.vid)[1]
             self._sign = 1.0 if self.lane > self.source_lane else -1.0
         if self.phase == "cut in":
             u = (t + self.step - self.cut_in_time) / self.duration
             want = self._sign * self.lane_width * min_jerk(u)
-            veh.changeSublane(self.vid, want - (veh.getPosition(self.vid)[1] - self._y0))
+            bridge.change_sublane(self.vid, want - (bridge.front_bumper(self.vid)[1] - self._y0))
             if u >= 1.0:
                 self.phase = "in lane"
         return started

@@ -1,0 +1,100 @@
+"""A video of a run from highway-env's renderer: GIF (Pillow) or MP4 (ffmpeg on PATH).
+
+Frames are RGB arrays (height, width, 3) from ``render_mode="rgb_array"``. The file is
+written next to its final path and moved there when complete (``os.replace``), so a broken
+run never leaves half a video under the asked name.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+
+from ego.params import ConfigError
+
+FORMATS = (".gif", ".mp4")
+#: at most this many frames are kept (every k-th frame of a longer run): GIF frames are
+#: held in memory until the file is written
+MAX_FRAMES = 1500
+
+
+def check_video_path(text: str | None) -> Path:
+    """The ``--video`` path: a writable file ending in .gif or .mp4; .mp4 needs ffmpeg."""
+    from ego.checks import check_output_file
+
+    suffix = Path(str(text)).suffix.lower() if text else ""
+    if suffix not in FORMATS:
+        raise ConfigError(f"bad --video path {text!r} (expected a file ending in .gif or .mp4)")
+    if suffix == ".mp4" and shutil.which("ffmpeg") is None:
+        raise ConfigError(f"bad --video path {text!r}: writing mp4 needs ffmpeg on PATH (not found); "
+                          "write a .gif instead")
+    return check_output_file(text, "--video path", Path(text).suffix)
+
+
+class VideoWriter:
+    """Collect frames at ``fps`` (frames per simulated second) and write ``path`` on close.
+
+    ``frames_expected`` (the run's traffic steps) sets the stride that keeps at most
+    :data:`MAX_FRAMES` frames; the frame rate is lowered to match, so the video still plays
+    in real time.
+    """
+
+    def __init__(self, path: str | os.PathLike, fps: float, frames_expected: int) -> None:
+        self.path = Path(path)
+        self.stride = max(1, -(-int(frames_expected) // MAX_FRAMES))
+        self.fps = fps / self.stride
+        self._count = 0
+        self._frames: list = []
+        self._tmp = self.path.with_name(f".{self.path.name}.part{self.path.suffix}")
+        self._ffmpeg: subprocess.Popen | None = None
+
+    def add(self, frame: np.ndarray) -> None:
+        """Offer one frame (every frame of the run, in order; the stride picks)."""
+        k = self._count
+        self._count += 1
+        if k % self.stride:
+            return
+        if self.path.suffix.lower() == ".gif":
+            from PIL import Image
+
+            # a palette image is a quarter of the RGB frame's memory
+            self._frames.append(Image.fromarray(frame).quantize(colors=64))
+        else:
+            if self._ffmpeg is None:
+                self._start_ffmpeg(frame.shape[1], frame.shape[0])
+            self._ffmpeg.stdin.write(np.ascontiguousarray(frame, dtype=np.uint8).tobytes())
+
+    def _start_ffmpeg(self, width: int, height: int) -> None:
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._ffmpeg = subprocess.Popen(
+            [shutil.which("ffmpeg") or "ffmpeg", "-loglevel", "error", "-y", "-f", "rawvideo",
+             "-pix_fmt", "rgb24", "-s", f"{width}x{height}", "-r", f"{self.fps:g}", "-i", "-",
+             # yuv420p needs even sides; most players need yuv420p
+             "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-pix_fmt", "yuv420p", "-f", "mp4",
+             str(self._tmp)],
+            stdin=subprocess.PIPE)
+
+    def close(self) -> None:
+        """Write the file (nothing when no frame came)."""
+        try:
+            if self._ffmpeg is not None:
+                self._ffmpeg.stdin.close()
+                if self._ffmpeg.wait() != 0:
+                    raise RuntimeError(f"ffmpeg failed writing {self.path}")
+            elif self._frames:
+                self.path.parent.mkdir(parents=True, exist_ok=True)
+                first, *rest = self._frames
+                first.save(self._tmp, format="GIF", save_all=True, append_images=rest,
+                           duration=round(1000.0 / self.fps), loop=0)
+            else:
+                return
+            os.replace(self._tmp, self.path)
+        finally:
+            self._frames = []
+            self._ffmpeg = None
+            if self._tmp.exists():
+                self._tmp.unlink()

@@ -1,0 +1,52 @@
+"""``--video``: a GIF from highway-env's renderer, written atomically; bad paths refused."""
+
+import shutil
+
+import pytest
+from PIL import Image
+
+from ego.highway_env.video import MAX_FRAMES, VideoWriter, check_video_path
+from ego.params import ConfigError
+from ego.runner import RunSpec, run
+
+
+@pytest.mark.highway_env
+def test_a_run_writes_a_gif_of_every_traffic_step(tmp_path):
+    path = tmp_path / "videos" / "cut-in.gif"
+    m = run(RunSpec("cut-in", "pid", 0, {"duration": "4"}, backend="highway-env", video=str(path))).metrics
+    assert m["status"] == "completed"
+    assert path.stat().st_size > 10_000
+    with Image.open(path) as gif:
+        assert gif.n_frames == 41  # t = 0 and each 0.1 s step
+        assert gif.size == (900, 200)
+        assert gif.info["duration"] == 100  # ms: real time
+        gif.seek(20)
+        colours = gif.convert("RGB").getcolors(maxcolors=10_000)
+    assert len(colours) > 3  # a drawn road and cars, not a black frame
+    assert sorted(p.name for p in path.parent.iterdir()) == ["cut-in.gif"]  # no temp file left
+
+
+def test_a_long_run_keeps_every_kth_frame_at_a_lower_rate(tmp_path):
+    writer = VideoWriter(tmp_path / "v.gif", fps=10.0, frames_expected=3 * MAX_FRAMES + 1)
+    assert (writer.stride, writer.fps) == (4, 2.5)
+
+
+@pytest.mark.parametrize("path, why", [
+    ("run.avi", "expected a file ending in .gif or .mp4"),
+    ("run", "expected a file ending in .gif or .mp4"),
+])
+def test_bad_video_paths_are_refused(path, why):
+    with pytest.raises(ConfigError, match=why):
+        check_video_path(path)
+
+
+@pytest.mark.skipif(shutil.which("ffmpeg") is not None, reason="ffmpeg is installed")
+def test_mp4_without_ffmpeg_suggests_a_gif():
+    with pytest.raises(ConfigError, match=r"needs ffmpeg on PATH .*write a \.gif instead"):
+        check_video_path("run.mp4")
+
+
+def test_video_needs_the_highway_env_backend(tmp_path):
+    with pytest.raises(ConfigError, match="--video needs --backend highway-env"):
+        run(RunSpec("cut-in", "pid", video=str(tmp_path / "v.gif")))
+    assert not (tmp_path / "v.gif").exists()
