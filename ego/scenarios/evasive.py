@@ -375,7 +375,7 @@ class EvasiveLaneChange(HighwayScenario):
             self.phase = LANE_CHANGE
             self.target_lane += 1 if self.chosen == "left" else -1
             self.event("lane", f"change to the {LANE_NAMES[self.target_lane]} lane "
-                       f"(SUMO lane {self.target_lane}): {self.choice_reason}")
+                       f"(lane index {self.target_lane} of the network): {self.choice_reason}")
 
     in_lane_action = ""
 
