@@ -18,7 +18,7 @@ ROWS = [
     ("curve", "narma-l2"), ("curve-speeds", "pid"), ("curve-variations", "pid, pedal=true"),
     ("lane-centering", "report 003's, lateral-error"), ("recovery", "25 m/s"),
     ("platoon", "pid, 0-2"), ("followers", "pid, f3"), ("headway", "2"), ("scale-model", "pid, lambda 0.2 s"),
-    ("ccrb", "pid"), ("ccrs-ttc1", "fuzzy"),
+    ("ccrb", "pid"), ("ccrs-ttc1", "fuzzy"), ("cross-emergency-brake", "pid"),
 ]
 TABLES = {t.name: t for t in docs.tables()}
 

@@ -106,6 +106,32 @@ class Recovery:
                 "settle": settling_time(t, d, self.band, 0.0)}
 
 
+@dataclass(frozen=True)
+class CrossSim:
+    """One run of a motorway scenario on ``backend`` (``sumo`` or ``highway-env``): its
+    metrics plus the smallest rear gap after the trigger (m, ``min_gap_rear_after``) - how
+    close the traffic of the lane the ego moved into came (SUMO's Krauss drivers or
+    highway-env's IDM)."""
+
+    scenario: str
+    controller: str
+    seed: int
+    backend: str
+
+    def __call__(self) -> dict:
+        from ego.runner import RunSpec, run
+
+        r = run(RunSpec(self.scenario, self.controller, self.seed, backend=self.backend))
+        metrics = {k: v for k, v in r.metrics.items() if k not in ("wall_time", "events")}
+        gap = None
+        if metrics.get("trigger_time") is not None:
+            rear = r.column("gap_rear")[r.column("t") >= metrics["trigger_time"]]
+            rear = rear[np.isfinite(rear)]
+            gap = float(rear.min()) if len(rear) else None
+        metrics["min_gap_rear_after"] = gap
+        return metrics
+
+
 def _call(job: Callable[[], Any]) -> Any:
     """Worker: run one job (a top-level function, so the process pool can send it)."""
     return job()
@@ -626,9 +652,57 @@ def envelope() -> list[Table]:
     return tables
 
 
+#: the traffic simulators of the cross-simulator page (ego.highway_env.BACKENDS)
+BACKENDS = ("sumo", "highway-env")
+#: per scenario: (metric, header) of the cross-simulator page; min_gap_rear_after from CrossSim
+CROSS_FIGURES = {
+    "emergency-brake": (("min_gap_front", "min gap front [m]"), ("min_ttc_front", "min TTC front [s]"),
+                        ("lane_change_duration", "lane change [s]"), ("max_decel", "max decel [m/s^2]"),
+                        ("min_gap_rear_after", "new follower's min gap [m]"),
+                        ("min_ttc_rear", "min TTC rear [s]")),
+    "fast-follower": (("min_ttc_rear", "min TTC rear [s]"), ("min_gap_front", "min gap front [m]"),
+                      ("lane_change_duration", "lane change [s]"),
+                      ("min_gap_rear_after", "new follower's min gap [m]"),
+                      ("follower_passed", "follower passed")),
+}
+
+
+def _cross_cells(figures: tuple, seeds: int) -> Callable[[list], list[str]]:
+    """Cells of a cross-simulator row: runs by status on each backend, then each figure's
+    mean over the seeds on SUMO beside highway-env (``k/n`` for a yes/no figure)."""
+    def cells(ms: list[dict]) -> list[str]:
+        by = {b: ms[i * seeds:(i + 1) * seeds] for i, b in enumerate(BACKENDS)}
+        out = [statuses(by[b]) for b in BACKENDS]
+        for key, _ in figures:
+            for b in BACKENDS:
+                values = [m.get(key) for m in by[b]]
+                out.append(count(values) if all(isinstance(v, bool) for v in values) else mean_sd(values))
+        return out
+    return cells
+
+
+def cross_simulator(seeds: int = 3) -> list[Table]:
+    """Each motorway controller on SUMO beside highway-env (docs/results/cross-simulator.md)."""
+    out = []
+    for scenario, figures in CROSS_FIGURES.items():
+        header = ["controller"] + [f"runs ({b})" for b in ("SUMO", "highway-env")]
+        for _, label in figures:
+            header += [f"{label} SUMO", f"{label} highway-env"]
+        rows = tuple(Row(c, tuple(CrossSim(scenario, c, seed, b) for b in BACKENDS for seed in range(seeds)),
+                         _cross_cells(figures, seeds)) for c in TRACKING)
+        out.append(Table(
+            f"cross-{scenario}", "cross-simulator",
+            tuple(f"ego compare {scenario} --controllers {','.join(TRACKING)} --seeds {seeds} "
+                  f"--backend {b} --out runs/{scenario}-{b}" for b in BACKENDS),
+            tuple(header), rows,
+            (f"Mean +- standard deviation over seeds 0-{seeds - 1}; the new follower's min gap is "
+             "the smallest rear gap after the trigger, from the run's trace.",)))
+    return out
+
+
 def tables() -> list[Table]:
     """Every table of docs/results/, page by page."""
-    return report_000() + report_002() + report_003() + report_004() + envelope()
+    return report_000() + report_002() + report_003() + report_004() + envelope() + cross_simulator()
 
 
 # -- running and writing ---------------------------------------------------------------------------
@@ -692,7 +766,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m ego.docs", description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="command", required=True)
     res = sub.add_parser("results", help="rerun the runs behind docs/results/ and rewrite its tables")
-    res.add_argument("--page", action="append", default=[], help="only this page (report-000, ..., envelope)")
+    res.add_argument("--page", action="append", default=[], help="only this page (report-000, ..., envelope, cross-simulator)")
     res.add_argument("--table", action="append", default=[], help="only this table (the marker's NAME)")
     res.add_argument("--check", action="store_true", help="compare with the committed text, write nothing")
     res.add_argument("--jobs", type=int, default=None, help="worker processes (default: one per CPU)")
