@@ -24,6 +24,7 @@ step ahead at constant velocity); each new overlapping pair becomes a
 from __future__ import annotations
 
 import math
+import os
 import xml.etree.ElementTree as ET
 from collections.abc import Iterable
 from pathlib import Path
@@ -464,6 +465,16 @@ class HighwayEnvBridge:
                  for width, pts in self._lanes.values()]
         config = {"lanes": lanes, "vehicles": [self._maker(vid) for vid in ids],
                   "simulation_frequency": round(1.0 / self.step_length)}
+        if self._video is not None and not os.environ.get("XDG_RUNTIME_DIR"):
+            # SDL (pygame renders the frames) wants a private runtime folder and says so on
+            # stderr when there is none, as in a container or a CI job
+            import atexit
+            import shutil
+            import tempfile
+
+            runtime = tempfile.mkdtemp(prefix="ego-sdl-")
+            atexit.register(shutil.rmtree, runtime, True)
+            os.environ["XDG_RUNTIME_DIR"] = runtime
         env = EgoTrafficEnv(config, render_mode="rgb_array" if self._video is not None else None)
         env.reset(seed=self.seed)
         self.env = env
