@@ -393,10 +393,13 @@ class _Objective:
         self.initial_best: float | None = None
         if workers > 1:
             import multiprocessing
+            import os
 
-            from ego.processes import main_module_hidden
+            from ego.processes import exit_with, main_module_hidden
 
-            self.pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("forkserver"))
+            # the workers die with this process, even mid-generation (a killed ego tune)
+            self.pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("forkserver"),
+                                            initializer=exit_with, initargs=(os.getpid(),))
             with main_module_hidden():  # warm the workers up (each computes the road once)
                 list(self.pool.map(total_cost, [np.array([REPORT_GAINS])] * workers, [speeds] * workers))
 
