@@ -214,13 +214,12 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
     specs = plan(scenario, controllers, seeds, overrides, out, traces, backend)
     # every value too (a bad --set value) before any process starts: once per controller,
     # since the seed changes nothing that is checked (100000 seeds would take a minute)
+    # (and each controller's parameters kept: a platoon's string stability is drawn from them)
+    params = {}
     for spec in (s for s in specs if s.seed == 0):
-        cls, config, ctrl, params = configure(spec)
-        cls.build_controller(ctrl, params, config)
-    cls, config, _, _ = configure(specs[0])
+        cls, config, ctrl, params[spec.name] = configure(spec)
+        cls.build_controller(ctrl, params[spec.name], config)
     plots = tuple(cls.compare_plots(config))
-    # each controller's parameters (a platoon's string stability is drawn from them)
-    params = {s.name: configure(s)[3] for s in specs if s.seed == specs[0].seed}
     declared = cls.metrics_declared(config)
     with FolderLock(out, "--out"):
         (out / "runs").mkdir(parents=True, exist_ok=True)

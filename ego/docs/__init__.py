@@ -51,10 +51,13 @@ class Sim:
     def __call__(self) -> dict:
         from ego.runner import RunSpec, run
 
-        metrics = dict(run(RunSpec(self.scenario, self.controller, self.seed, dict(self.overrides))).metrics)
-        metrics.pop("wall_time", None)
-        metrics.pop("events", None)
-        return metrics
+        return _table_metrics(run(RunSpec(self.scenario, self.controller, self.seed, dict(self.overrides))))
+
+
+def _table_metrics(result) -> dict:
+    """A run's metrics as a table reads them: without the wall time (it differs run to run)
+    and the event list."""
+    return {k: v for k, v in result.metrics.items() if k not in ("wall_time", "events")}
 
 
 def sim(scenario: str, controller: str, seed: int = 0, **overrides: Any) -> Sim:
@@ -122,7 +125,7 @@ class CrossSim:
         from ego.runner import RunSpec, run
 
         r = run(RunSpec(self.scenario, self.controller, self.seed, backend=self.backend))
-        metrics = {k: v for k, v in r.metrics.items() if k not in ("wall_time", "events")}
+        metrics = _table_metrics(r)
         gap = None
         if metrics.get("trigger_time") is not None:
             rear = r.column("gap_rear")[r.column("t") >= metrics["trigger_time"]]
