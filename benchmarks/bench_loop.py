@@ -64,18 +64,19 @@ def sensor_cost(spec: RunSpec, at: float = 5.0, number: int = 2000) -> tuple[flo
     scenario = build(RunSpec(spec.scenario, spec.controller, spec.seed, spec.overrides))
     try:
         obs = scenario.reset()
-        sensor = getattr(scenario, "sensor", None)
-        if sensor is None:
+        view = scenario.view  # a composed motorway scenario's sensors
+        if view is None or getattr(view, "sensor", None) is None:
             return None
+        sensor = view.sensor
         while not scenario.done and scenario.t < at:
             obs = scenario.step(scenario.controller.step(obs))
 
         def look():
-            scenario._sense()
-            sensor.scan(scenario.t, scenario.s, scenario.d_road, scenario.heading_error)
+            view.sense(scenario.t)
+            sensor.scan(scenario.t, view.s, view.d_road, view.heading_error)
 
         def carry_on():
-            sensor.advance(scenario.t, scenario.s)
+            sensor.advance(scenario.t, view.s)
 
         per_sumo = min(timeit.repeat(look, number=number, repeat=5)) / number
         per_control = min(timeit.repeat(carry_on, number=number, repeat=5)) / number

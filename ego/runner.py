@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import importlib.util
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -14,6 +13,7 @@ from ego.record import RerunRecorder
 from ego.scenarios import RunResult, Scenario, scenario_class
 from ego.scenarios.base import check_backend
 from ego.scenarios.trace import Column, Metric
+from ego.sim.registry import check_options
 from ego.sumo.net import net_file
 
 
@@ -34,11 +34,23 @@ class RunSpec:
     background_recording: bool = True
     #: the traffic simulator: "sumo" or "highway-env" (ego.highway_env.BACKENDS)
     backend: str = "sumo"
-    #: a .gif or .mp4 of the run from highway-env's renderer (highway-env only)
+    #: a .gif or .mp4 of the run from highway-env's renderer (highway-env only; the same as
+    #: ``backend_options={"video": ...}``)
     video: str | None = None
+    #: options of the traffic simulator, as data (``ego.sim.registry``: each backend says
+    #: which it takes), e.g. ``{"video": "run.gif"}`` for highway-env
+    backend_options: Mapping[str, Any] = field(default_factory=dict)
     #: the controller's name in the results (``RunResult.controller``, the recording):
     #: ``ego compare``'s variant label, e.g. ``pid@kp_lat=0.02``; default ``controller``
     label: str = ""
+
+    @property
+    def sim_options(self) -> dict[str, Any]:
+        """The backend's options: ``backend_options`` plus ``video`` when set."""
+        options = dict(self.backend_options)
+        if self.video is not None:
+            options["video"] = self.video
+        return options
 
     @property
     def name(self) -> str:
@@ -78,14 +90,7 @@ def configure(spec: RunSpec):
     if cls.network is not None:  # a missing or garbled network fails here, not inside SUMO
         net_file(cls.network)
     check_backend(cls, spec.backend)
-    if spec.backend == "highway-env" and importlib.util.find_spec("highway_env") is None:
-        raise ConfigError("--backend highway-env needs the highway-env package: pip install 'ego[highway]'")
-    if spec.video is not None:
-        if spec.backend != "highway-env":
-            raise ConfigError("--video needs --backend highway-env (a SUMO run is recorded with --record)")
-        from ego.highway_env.video import check_video_path
-
-        check_video_path(spec.video)
+    check_options(spec.backend, spec.sim_options)
     ctrl = controller_spec(spec.controller, cls.task)
     config, rest = apply_overrides(cls.default_config(spec.overrides), spec.overrides, strict=False)
     ctrl_params, rest = apply_overrides(ctrl.params(), rest, strict=False)
@@ -113,7 +118,7 @@ def build(spec: RunSpec):
         recorder = RerunRecorder(path, recording_id=f"{spec.scenario}-{spec.name}-{spec.seed}",
                                  background=spec.background_recording)
     return cls(config, controller, seed=spec.seed, recorder=recorder, controller_name=spec.name,
-               backend=spec.backend, video=spec.video)
+               backend=spec.backend, backend_options=spec.sim_options)
 
 
 def run(spec: RunSpec) -> RunResult:

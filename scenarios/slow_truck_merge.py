@@ -6,17 +6,18 @@ the two. Copy this file and change the traffic.
 
 What the kit gives (see docs/architecture.md, "Writing a scenario from the kit"):
 
-* ``EvasiveLaneChange`` / ``EvasiveConfig``: the motorway, the ego on its plant (report
-  000's car with ABS), the surround sensor (gaps and TTC from the vehicles' outlines), the
-  front/rear TTC trigger, gap acceptance, the AEB and the metrics, all declared with units;
-* scripted SUMO actors (``ego.sumo.traffic``): ``PacedVehicle`` holds a speed,
-  ``CutInVehicle`` overtakes and merges, ``BrakingLeader`` brakes, ``RecklessFollower``
-  never brakes; ``VehicleType`` and ``VehicleSpec`` put them on the road;
+* ``ego.scenarios.evasive.compose``: the parts of an evasive scenario - the motorway world,
+  the ego on its plant (report 000's car with ABS), the surround view (gaps and TTC from the
+  vehicles' outlines), the manoeuvre state machine (TTC trigger, gap acceptance, lane change
+  or in-lane manoeuvre) and the safety layer (AEB); ``METRICS`` and ``evasive_metrics``, all
+  declared with units;
+* scripted actors (``ego.sumo.traffic``): ``PacedVehicle`` holds a speed, ``CutInVehicle``
+  overtakes and merges, ``BrakingLeader`` brakes, ``RecklessFollower`` never brakes;
+  ``VehicleType`` and ``VehicleSpec`` (``ego.sim``) put them on the road;
 * ``RerunRecorder``: the recording with its layout (``rerun FILE.rrd`` to review it).
 
-A scenario says which vehicles exist (``_actors``), what the ego does when nothing is free
-(``_in_lane_reference``) and when that is settled (``_in_lane_settled``); everything else
-is inherited.
+A scenario says which vehicles exist (``populate``), what the ego does when no lane is free
+(an in-lane behaviour: ``reference`` and ``settled``) and what it reports (``_metrics``).
 """
 
 from __future__ import annotations
@@ -28,10 +29,11 @@ from pathlib import Path
 from ego.control import controller_spec
 from ego.params import param
 from ego.record import RerunRecorder
-from ego.scenarios.evasive import EvasiveConfig, EvasiveLaneChange
-from ego.scenarios.highway import ROUTE
+from ego.scenarios.base import Scenario
+from ego.scenarios.evasive import METRICS, EvasiveConfig, compose, evasive_metrics
+from ego.scenarios.motorway import COLUMNS, EDGE, PLOTS, ROUTE
 from ego.scenarios.trace import Metric
-from ego.sumo.bridge import VehicleSpec, VehicleType
+from ego.sim import VehicleSpec, VehicleType
 from ego.sumo.traffic import CutInVehicle, PacedVehicle
 
 TRUCK = VehicleType("truck", length=12.0, width=2.5, sigma=0.0, accel=1.0, decel=4.0,
@@ -53,45 +55,46 @@ class TruckMergeConfig(EvasiveConfig):
                                max=20.0)
 
 
-class TruckMerge(EvasiveLaneChange):
+class FollowAhead:
+    """The in-lane manoeuvre: nowhere to go, follow whoever is ahead at the follow distance."""
+
+    action = "brake"
+
+    def start(self, man) -> None:
+        pass
+
+    def reference(self, man):
+        c = man.config
+        return man.behind_front(man.s0 + c.ego_speed * man.t, c.ego_speed)
+
+    def settled(self, man) -> bool:
+        return man.view.ds <= man.view.sensor.front.speed + 0.2
+
+
+class TruckMerge(Scenario):
     name = "truck-merge"
     summary = "slow truck ahead, a car merges from the right; front TTC triggers braking or a lane change"
     config_cls = TruckMergeConfig
-    trigger_on = "front"
-    in_lane_action = "brake"
-    metric_specs = EvasiveLaneChange.metric_specs + (
-        Metric("merge_time", "s", "when the merging car started across"),
-    )
+    network, edge, columns, plots = "highway", EDGE, COLUMNS, PLOTS
+    metric_specs = METRICS + (Metric("merge_time", "s", "when the merging car started across"),)
 
-    def _actors(self):
+    def compose(self):
+        return compose(self, "front", FollowAhead(), self.populate)
+
+    def populate(self, world) -> None:
         c = self.config
-        for vtype in (TRUCK, MERGER):
-            self.bridge.add_type(vtype)
         truck_front = c.ego_start + c.truck_gap + TRUCK.length
         self.merger = CutInVehicle("merger", "ego", c.ego_lane - 1, c.ego_lane, c.ego_speed + 4.0,
                                    c.ego_speed - c.merge_speed, c.merge_gap, 2.5, 3.5, c.sumo_step)
-        self.actors += [PacedVehicle("truck", c.truck_speed), self.merger]
-        self.colors.update(truck=TRUCK.color, merger=MERGER.color)
-        return [VehicleSpec("truck", TRUCK.id, ROUTE, c.ego_lane, truck_front, c.truck_speed),
-                VehicleSpec("merger", MERGER.id, ROUTE, c.ego_lane - 1, c.ego_start - 30.0, c.ego_speed)
-                ], ["truck", "merger"]
-
-    def background(self, rng, keep_clear=()):
+        world.vehicle(VehicleSpec("truck", TRUCK.id, ROUTE, c.ego_lane, truck_front, c.truck_speed), TRUCK,
+                      PacedVehicle("truck", c.truck_speed))
+        world.vehicle(VehicleSpec("merger", MERGER.id, ROUTE, c.ego_lane - 1, c.ego_start - 30.0, c.ego_speed),
+                      MERGER, self.merger)
         # the right lane belongs to the merging car (it drives blind, as scripted)
-        return super().background(rng, keep_clear=(*keep_clear, (self.config.ego_lane - 1, 0.0, 1e9)))
+        world.keep_clear(c.ego_lane - 1)
 
-    def _in_lane_reference(self):
-        # nowhere to go: follow whoever is ahead at the follow distance
-        c = self.config
-        return self.behind_front(self._s0 + c.ego_speed * self.t, c.ego_speed)
-
-    def _in_lane_settled(self) -> bool:
-        return self.ds <= self.sensor.front.speed + 0.2
-
-    def _metrics(self, trace, columns):
-        out = super()._metrics(trace, columns)
-        out["merge_time"] = self.merger.cut_in_time
-        return out
+    def _metrics(self, trace, names):
+        return {**evasive_metrics(self, trace, names), "merge_time": self.merger.cut_in_time}
 
 
 def main() -> None:

@@ -6,7 +6,7 @@ from ego.params import ConfigError, apply_overrides, describe
 
 
 def test_a_huge_value_is_named_briefly():
-    from ego.scenarios.evasive import EmergencyBrakeConfig
+    from ego.scenarios.emergency_brake import EmergencyBrakeConfig
 
     with pytest.raises(ConfigError) as err:
         apply_overrides(EmergencyBrakeConfig(), {"lead_gap": 1e308})

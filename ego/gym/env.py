@@ -131,8 +131,9 @@ class EgoView:
         sc = self.scenario
         if self.following:
             return self._platoon()
-        ego = (sc.s, sc.d_road, sc.ds, sc.dd, sc.heading_error)
-        sensor = getattr(sc, "sensor", None)
+        road = sc.view or sc  # a composed scenario's road and surround sensors are its view
+        ego = (road.s, road.d_road, road.ds, road.dd, road.heading_error)
+        sensor = getattr(road, "sensor", None)
         if sensor is None:
             sensor = self._own_sensor()
         return ego, sensor.tracks(sc.t), sc.geometry.length

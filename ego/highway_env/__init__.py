@@ -10,5 +10,8 @@ ego[highway]``): it is imported only here, and only when the backend is asked fo
 
 from __future__ import annotations
 
-#: the traffic simulators a scenario can run on (``ego run --backend``)
-BACKENDS = ("sumo", "highway-env")
+from ego.sim.registry import BACKENDS as _REGISTRY
+
+#: the traffic simulators a scenario can run on (``ego run --backend``): the names of
+#: ``ego.sim.registry.BACKENDS``
+BACKENDS = tuple(_REGISTRY)

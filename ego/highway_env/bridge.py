@@ -41,7 +41,8 @@ from highway_env.vehicle.kinematics import Vehicle
 
 from ego.highway_env.video import VideoWriter
 from ego.models.geometry import VehicleGeometry
-from ego.sumo.bridge import Collision, SumoError, VehicleSpec, VehicleType
+from ego.sim.registry import SimSetup
+from ego.sim.types import Collision, Departure, SimError, VehicleSpec, VehicleType
 
 _DEG = 180.0 / math.pi
 #: a scripted car that has crashed stops like highway-env's own crashed cars (dv/dt = -v)
@@ -58,7 +59,7 @@ def net_lanes(net: Path, edge: str | None = None) -> dict[str, tuple[float, list
             continue
         pts = [tuple(float(v) for v in p.split(",")[:2]) for p in lane.get("shape").split()]
         if len(pts) != 2:
-            raise SumoError(f"the highway-env backend needs straight lanes; {lid} in {net} has "
+            raise SimError(f"the highway-env backend needs straight lanes; {lid} in {net} has "
                             f"{len(pts)} shape points")
         lanes[lid] = (float(lane.get("width", 3.2)), pts)
     return lanes
@@ -271,10 +272,14 @@ class HighwayEnvBridge:
     def add_route(self, route_id: str, edges) -> None:
         """Routes are implicit: every vehicle drives along the straight road."""
 
+    def depart(self, departure: Departure) -> None:
+        """Flows entering mid-run are not modelled here (no scenario on this backend has one)."""
+        raise SimError(f"the highway-env backend cannot add {departure.id} during a run (no flows)")
+
     def add_vehicles(self, specs: Iterable[VehicleSpec]) -> None:
         for s in specs:
             if s.type_id not in self._types:
-                raise SumoError(f"unknown vehicle type {s.type_id!r} for {s.id}")
+                raise SimError(f"unknown vehicle type {s.type_id!r} for {s.id}")
             self._specs[s.id] = s
 
     def insert(self, required: Iterable[str] = ()) -> list[str]:
@@ -340,7 +345,7 @@ class HighwayEnvBridge:
             return
         vehicle = self._by_id[vid]
         if not isinstance(vehicle, ScriptedVehicle):
-            raise SumoError(f"{vid} is driven by highway-env's IDM; script it before the first step")
+            raise SimError(f"{vid} is driven by highway-env's IDM; script it before the first step")
         for key, value in commands.items():
             setattr(vehicle, key, value)
 
@@ -441,7 +446,7 @@ class HighwayEnvBridge:
     def _need_spec(self, vid: str) -> VehicleSpec:
         spec = self._specs.get(vid)
         if spec is None:
-            raise SumoError(f"no vehicle {vid!r} in the highway-env traffic")
+            raise SimError(f"no vehicle {vid!r} in the highway-env traffic")
         return spec
 
     def _lane_id(self, lane: int) -> str:
@@ -458,7 +463,7 @@ class HighwayEnvBridge:
         if self.env is not None:
             return self.env
         if not self._running:
-            raise SumoError("the highway-env traffic is not running")
+            raise SimError("the highway-env traffic is not running")
         ids = list(self._specs)
         # highway-env's lanes in its frame (y mirrored), in the order of the SUMO lane ids
         lanes = [((pts[0][0], -pts[0][1]), (pts[1][0], -pts[1][1]), width)
@@ -511,3 +516,9 @@ class HighwayEnvBridge:
             return v
 
         return make
+
+
+def make_sim(setup: SimSetup, options: dict) -> HighwayEnvBridge:
+    """The registry's factory for ``highway-env`` (:mod:`ego.sim.registry`); option ``video``."""
+    return HighwayEnvBridge(setup.net, step_length=setup.step_length, seed=setup.seed, edge=setup.edge,
+                            video=options.get("video"), duration=setup.duration)

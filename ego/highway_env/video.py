@@ -98,3 +98,9 @@ class VideoWriter:
             self._ffmpeg = None
             if self._tmp.exists():
                 self._tmp.unlink()
+
+
+def check_options(options) -> None:
+    """The highway-env backend's options (``ego.sim.registry``): ``video``, a .gif/.mp4 path."""
+    if options.get("video") is not None:
+        check_video_path(options["video"])

@@ -28,7 +28,9 @@ from ego.record.base import NullRecorder, Recorder, Scene, Series, unit_path
 from ego.scenarios.metrics import json_number
 from ego.scenarios.trace import Column, Metric, Plot, Trace
 from ego.scenarios.traffic_log import RADIUS, REACH_MARGIN, TrafficCollector, TrafficLog
-from ego.sumo.bridge import Collision, SumoBridge
+from ego.sim.protocol import TrafficSim
+from ego.sim.registry import SimSetup, make_sim
+from ego.sim.types import Collision
 
 STATUSES = ("completed", "ended", "collision", "diverged", "timeout", "interrupted")
 #: the statuses that are no failure: the scenario's own end, or the duration ran out in a
@@ -151,10 +153,9 @@ def divergence(state: Sequence[float], offset: float, heading_error: float,
 
 def check_backend(cls: type[Scenario], backend: str) -> None:
     """ConfigError unless scenario ``cls`` runs on traffic simulator ``backend``."""
-    from ego.highway_env import BACKENDS
+    from ego.sim.registry import backend as registered
 
-    if backend not in BACKENDS:
-        raise ConfigError(f"bad value for --backend: {backend!r} (expected one of: {', '.join(BACKENDS)})")
+    registered(backend)  # a name no backend has
     if backend not in cls.backends:
         raise ConfigError(f"bad value for --backend: {backend!r} (scenario {cls.name} runs on "
                           f"{' or '.join(cls.backends)} only)")
@@ -177,6 +178,8 @@ class Scenario:
     #: the SUMO network it runs on (``ego.sumo.net.net_file``; checked before any run), or
     #: None without SUMO
     network: ClassVar[str | None] = None
+    #: the edge it drives on, for a backend that builds one straight road (highway-env)
+    edge: ClassVar[str | None] = None
     #: trace columns written by name every control step; ``t`` first
     columns: tuple[Column, ...] = (Column("t", "s", "time"),)
     #: the scenario's own metrics (besides COMMON_METRICS), with units; headline ones are
@@ -222,19 +225,20 @@ class Scenario:
 
     def __init__(self, config, controller: Controller, *, seed: int = 0,
                  recorder: Recorder | None = None, controller_name: str = "",
-                 backend: str = "sumo", video: str | None = None) -> None:
+                 backend: str = "sumo", backend_options: Mapping[str, Any] | None = None) -> None:
         check_backend(type(self), backend)
         self.config = config
-        #: the traffic simulator (one of ``backends``) and the video it renders (highway-env)
+        #: the traffic simulator (one of ``backends``; ``ego.sim.registry``) and its options
+        #: as data (highway-env: ``video``)
         self.backend = backend
-        self.video = video
+        self.backend_options = dict(backend_options or {})
         self.controller = controller
         self.controller_name = controller_name or type(controller).__name__
         self.seed = int(seed)
         self.recorder: Recorder = recorder if recorder is not None else NullRecorder()
         #: the recording wants the vehicles' outlines (none to fetch from SUMO for a null one)
         self._outlines = not isinstance(self.recorder, NullRecorder)
-        self.bridge: SumoBridge | None = None
+        self.bridge: TrafficSim | None = None
         self.traffic: TrafficCollector | None = None
         self._lanes: tuple = ()
         self.obs = Observation()
@@ -254,6 +258,21 @@ class Scenario:
         self.controlled_ids: tuple[str, ...] = ()
         #: vehicle id -> RGB for the recording (others: grey)
         self.colors: dict[str, tuple[int, int, int]] = {}
+        parts = self.compose()
+        if parts is not None:
+            ComposedLoop.bind(self, parts)
+
+    #: a composed scenario's parts (:meth:`compose`; None: the scenario implements the hooks)
+    parts = world = view = manoeuvre = safety = None
+    #: a composed scenario's own work after the actors' updates before a simulator step, and
+    #: after the step's surround sensing (None: nothing)
+    before_sim_step = None
+    after_sim_step = None
+
+    def compose(self) -> Parts | None:
+        """The scenario's parts (:class:`Parts`), or None for one that implements the loop
+        hooks itself."""
+        return None
 
     # -- Gymnasium-style interface -----------------------------------------------------------
     def reset(self, *, seed: int | None = None) -> Observation:
@@ -376,9 +395,17 @@ class Scenario:
             self.bridge = None
 
     # -- shared machinery ----------------------------------------------------------------------
-    def _make_bridge(self) -> SumoBridge | None:
-        """The SUMO bridge of a traffic scenario; None for the bare model."""
-        return None
+    def _make_bridge(self) -> TrafficSim | None:
+        """The traffic simulator of a scenario with a ``network`` (``ego.sim.registry``:
+        ``self.backend`` with ``self.backend_options``); None for the bare model."""
+        if self.network is None:
+            return None
+        from ego.sumo.net import net_file
+
+        c = self.config
+        return make_sim(self.backend, SimSetup(net_file(self.network), c.sumo_step, self.seed,
+                                               c.lateral_resolution, self.edge, c.duration),
+                        self.backend_options)
 
     def _sumo_step(self) -> None:
         bridge = self.bridge
@@ -507,6 +534,139 @@ class Scenario:
         return meta
 
 
+class Parts:
+    """A scenario composed of parts, each with one job (see docs/architecture.md):
+
+    * ``world``: the traffic simulator, the traffic actors, the lanes
+      (:class:`ego.scenarios.motorway.MotorwayWorld`);
+    * ``plants``: vehicle id -> :class:`~ego.models.plant.Plant` (the ego: ``ego``);
+    * ``view``: the task's sensors and its one observation builder
+      (:class:`ego.scenarios.motorway.SurroundView`);
+    * ``manoeuvre``: the named state machine whose state is the trace's ``phase``
+      (:class:`ego.scenarios.manoeuvre.EvasiveManoeuvre`, or a plain reference);
+    * ``safety``: the filter between the controller's action and the plant
+      (:class:`ego.scenarios.safety.SafetyLayer`), or None.
+
+    :meth:`Scenario.compose` returns one; the scenario's loop hooks are then these parts'
+    methods, bound once per run (no dispatch per step)."""
+
+    __slots__ = ("world", "view", "manoeuvre", "safety", "make_plant", "series")
+
+    def __init__(self, world, view, manoeuvre, safety=None, make_plant=None, series=None) -> None:
+        self.world, self.view, self.manoeuvre, self.safety = world, view, manoeuvre, safety
+        #: (config, geometry, pose) -> the ego's plant
+        self.make_plant = make_plant
+        #: (signal names, signal units) -> the recording's panels (unless the scenario has
+        #: its own ``_series``)
+        self.series = series
+
+
+class ComposedLoop:
+    """The loop hooks of a composed scenario (:class:`Parts`): :meth:`Scenario.__init__`
+    binds them onto the scenario in place of the template hooks, so one step calls the
+    parts directly: safety filter -> plant -> trace row -> road sensor; at a simulator
+    step: ego pushed, actors, step, surround sensor; then divergence, the surround view,
+    the manoeuvre and the observation."""
+
+    @staticmethod
+    def bind(sc: Scenario, parts: Parts) -> None:
+        sc.parts = parts
+        sc.world, sc.view, sc.manoeuvre, sc.safety = parts.world, parts.view, parts.manoeuvre, parts.safety
+        for name in ("_setup", "_act", "_update", "_before_sumo_step", "_after_sumo_step", "_record_boxes",
+                     "_setup_traffic_log", "_log_traffic", "_check_divergence", "_final_status", "_scene"):
+            setattr(sc, name, getattr(ComposedLoop, name).__get__(sc))
+        if parts.series is not None and type(sc)._series is Scenario._series:
+            sc._series = lambda: parts.series(sc._signal_names, sc._signal_units)
+
+    def _setup(self, rng: np.random.Generator) -> None:
+        from ego.scenarios.motorway import EGO
+
+        parts = self.parts
+        world, view = parts.world, parts.view
+        bridge = self.bridge
+        missing = world.setup(bridge, rng)
+        if missing:
+            self.event("traffic", f"SUMO could not place {len(missing)} background vehicles: "
+                       f"{', '.join(missing[:5])}{'...' if len(missing) > 5 else ''}", "WARN")
+        self.controlled_ids = (EGO,)
+        self.colors.update(world.colors)
+        self.lanes = world.lanes
+        self.ego = parts.make_plant(self.config, self.geometry, bridge.cg_pose(EGO))
+        self.plants = {EGO: self.ego}
+        view.setup(bridge, world.lanes, self.ego)
+        self.obs.lane = view.road
+        self._road_y = view.road.points[0][1]
+        self.manoeuvre.reset(self.ego)
+        if self.safety is not None:
+            self.safety.reset(self.ego)
+            self._filter = self.safety.filter
+        else:
+            self._filter = _unfiltered
+        self._write_row = self.trace.bind(view.row_names)
+        view.sense(self.t)
+
+    def _act(self, action: tuple[float, float]) -> None:
+        ego = self.ego
+        ego.step(self._filter(action))
+        fx, delta = ego.applied
+        obs, view = self.obs, self.view
+        # the row describes time t: the state before this step and the action applied
+        d = obs.d
+        self._write_row(self.controller.signals(), (
+            obs.t, view.X, view.Y, view.s, d, obs.d_ref, d - obs.d_ref, view.d_road, obs.speed, view.ds,
+            obs.s_ref, obs.ds_ref, fx, delta, view.ttc_front, view.ttc_rear, view.gap_front, view.gap_rear,
+            ego.lateral_accel, obs.yaw_rate, self.manoeuvre.phase, view.target_lane))
+        view.frame()
+
+    def _before_sumo_step(self) -> None:
+        bridge = self.bridge
+        self.view.push(bridge)
+        t = self.t - self.config.sumo_step
+        for actor in self.world.actors:
+            actor.update(bridge, t)
+        if self.before_sim_step is not None:
+            self.before_sim_step()
+
+    def _after_sumo_step(self) -> None:
+        self.view.sense(self.t)
+        if self.after_sim_step is not None:
+            self.after_sim_step()
+
+    def _scene(self) -> Scene:
+        return Scene(lanes=[(lane.width, lane.points) for lane in self.lanes.values()], title=self.name)
+
+    def _record_boxes(self) -> None:
+        ids, poses = self.bridge.poses()
+        self.recorder.vehicles(self.t, ids, poses, (self.ego.state[0], self._road_y))
+
+    def _setup_traffic_log(self) -> None:
+        pass  # the surround sensor's subscription reaches as far
+
+    def _log_traffic(self) -> None:
+        centre, ids, rows = self.view.traffic_row()
+        self.traffic.add(self.t, centre, ids, rows)
+
+    def _check_divergence(self) -> str | None:
+        return self.view.diverged()
+
+    def _update(self) -> None:
+        view = self.view
+        collision = view.look(self.t)
+        if collision is not None and self.status == "running":
+            self._collided(collision)
+            if self.status != "running":
+                return
+        self.manoeuvre.plan(self.obs, self.t)
+        view.observe(self.obs, self.t)
+
+    def _final_status(self) -> tuple[str, str]:
+        return self.manoeuvre.final_status()
+
+
+def _unfiltered(action):
+    return action
+
+
 class RoadScenario(Scenario):
     """A SUMO scenario whose ego (id ``"ego"``) drives along a lane: the lane frame of the
     ego's centre of gravity every control period, the divergence checks, and the ego's
@@ -555,7 +715,7 @@ class RoadScenario(Scenario):
         self.bridge.subscribe_surroundings(self.ego_id, RADIUS + REACH_MARGIN)
 
     def _surroundings(self) -> tuple[list[str], list[tuple]]:
-        """This SUMO step's vehicles around the ego (see ``SumoBridge.surroundings``)."""
+        """This SUMO step's vehicles around the ego (see ``TrafficSim.surroundings``)."""
         return self.bridge.surroundings(self.ego_id)
 
     def _log_traffic(self) -> None:

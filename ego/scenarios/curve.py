@@ -35,19 +35,17 @@ from ego.record.base import Series
 from ego.lane_frame import LanePolyline
 from ego.scenarios import metrics as m
 from ego.scenarios.base import CommonConfig, RoadScenario, signal_series
+from ego.scenarios.observe import road_observation
 from ego.scenarios.events import INF, boxes_overlap
 from ego.scenarios.trace import Column, Marker, Metric, Plot
 from ego.sumo.bridge import (
     Collision,
     Neighbours,
-    SumoBridge,
-    SumoConfig,
     VehicleSpec,
     VehicleType,
     ego_type,
     sumo_poses_to_boxes,
 )
-from ego.sumo.net import net_file
 from ego.sumo.traffic import PacedVehicle, PoissonFlow, background_traffic
 
 EGO = "ego"
@@ -173,11 +171,6 @@ class CurveScenario(RoadScenario):
         self._sync_t = 0.0
 
     # -- set-up ---------------------------------------------------------------------------
-    def _make_bridge(self) -> SumoBridge:
-        c = self.config
-        return SumoBridge(SumoConfig(net_file(self.network), step_length=c.sumo_step, seed=self.seed,
-                                     lateral_resolution=c.lateral_resolution))
-
     def _setup(self, rng: np.random.Generator) -> None:
         c = self.config
         self._reset_state()
@@ -312,17 +305,8 @@ class CurveScenario(RoadScenario):
             if follow < plan:
                 plan = max(follow, -7.0)
         self.gap_front = gap
-        obs.t = self.t
-        obs.s = s
-        obs.ds = self.ds
-        obs.d = self.d_road
-        obs.dd = self.dd
-        x = self.ego.state
-        obs.speed = x[1]
-        obs.yaw_rate = x[5]
-        obs.vy = x[3]
-        obs.heading_error = self.heading_error
-        obs.curvature = self.curvature
+        road_observation(obs, self.t, s, self.ds, self.d_road, self.dd, self.ego.state, self.heading_error,
+                         self.curvature)
         obs.accel_ref = plan
 
     def _final_status(self) -> tuple[str, str]:

@@ -1,24 +1,25 @@
 """``cut-in``: a car overtakes the ego and cuts into its lane close ahead, slower.
 
-Built from the kit only: the motorway, the ego's plant, the surround sensor, gap acceptance
-and the AEB come from :class:`~ego.scenarios.evasive.EvasiveLaneChange`; the cutting car is
-a scripted SUMO actor (:class:`~ego.sumo.traffic.CutInVehicle`) whose lateral motion SUMO's
-sublane model drives. The ego cruises at ``ego_speed``; when the sensor's front TTC falls
-below ``ttc_threshold`` it brakes in lane behind the car if braking at up to
-``brake_share`` of its friction limit avoids it, and otherwise evades by gap acceptance
-(staying in lane, with the AEB, when no lane is free).
+Composed from the kit: the motorway world with the cutting car (a scripted CutInVehicle the
+sublane model moves across), the surround view, the evasive manoeuvre and the AEB. At the
+front TTC trigger the ego brakes in lane if braking at up to ``brake_share`` of its friction
+limit avoids the car, else it evades by gap acceptance (in lane, with the AEB, if none is free).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
+from ego.highway_env import BACKENDS
 from ego.params import ConfigError, param
 from ego.scenarios import metrics as m
-from ego.scenarios.evasive import EvasiveConfig, EvasiveLaneChange
-from ego.scenarios.highway import LANE_NAMES, ROUTE
+from ego.scenarios.base import Parts, Scenario
+from ego.scenarios.evasive import MARKERS, METRICS, EvasiveConfig, compare_plots, compose, evasive_metrics
+from ego.scenarios.events import INF
+from ego.scenarios.motorway import COLUMNS, EDGE, LANE_NAMES, PLOTS, ROUTE, MotorwayWorld
+from ego.scenarios.safety import friction_limit
 from ego.scenarios.trace import Marker, Metric
-from ego.sumo.bridge import VehicleSpec, VehicleType
+from ego.sim.types import VehicleSpec, VehicleType
 from ego.sumo.traffic import CutInVehicle
 
 CUTTER = "cutter"
@@ -36,10 +37,8 @@ class CutInConfig(EvasiveConfig):
     cut_in_speed: float = param(5.0, "m/s", "how much slower than the ego it is when it cuts in",
                                 min=0.0, max=20.0)
     cut_in_duration: float = param(2.0, "s", "time it takes across the lane", min=0.5, max=10.0)
-    overtake_speed: float = param(5.0, "m/s", "how much faster than the ego it overtakes",
-                                  min=1.0, max=20.0)
-    start_behind: float = param(20.0, "m", "its front bumper behind the ego's at t = 0", min=0.0,
-                                max=200.0)
+    overtake_speed: float = param(5.0, "m/s", "how much faster than the ego it overtakes", min=1.0, max=20.0)
+    start_behind: float = param(20.0, "m", "its front bumper behind the ego's at t = 0", min=0.0, max=200.0)
     brake_decel: float = param(3.0, "m/s^2", "deceleration of the in-lane speed reference (more when "
                                "braking needs more)", min=0.5, max=12.0)
     brake_max_lag: float = param(2.0, "m", "how far the in-lane position reference may run from the ego",
@@ -57,20 +56,50 @@ class CutInConfig(EvasiveConfig):
                               f"next to ego_lane={self.ego_lane})")
 
     @property
-    def cut_in_lane(self) -> int:
-        """The lane the car cuts in from."""
+    def cut_in_lane(self) -> int:  # the lane the car cuts in from
         return self.ego_lane + (1 if self.cut_in_side == "left" else -1)
 
 
-class CutIn(EvasiveLaneChange):
+class FollowInLane:
+    """An ACC-like reference: the speed goes to the front car's speed plus a term that opens the
+    gap to the follow distance, changing at ``brake_decel`` (or 1.2 times what braking needs
+    to stop closing ``follow_gap`` behind it, when that is more); the position integrates it,
+    never more than ``brake_max_lag`` from the ego."""
+
+    action = "brake"
+    ref_s = ref_v = 0.0
+
+    def begin(self, man) -> None:  # at the trigger (an aborted lane change keeps the references)
+        self.ref_s, self.ref_v = man.view.s, man.view.ds
+
+    def start(self, man) -> None:
+        pass
+
+    def reference(self, man) -> tuple[float, float]:
+        c, view = man.config, man.view
+        front = view.sensor.front
+        if front.gap == INF:
+            target = c.ego_speed
+        else:
+            desired = c.follow_gap + c.follow_headway * front.speed
+            target = front.speed + max(-3.0, min(3.0, 0.5 * (front.gap - desired)))
+        rate = max(c.brake_decel, 1.2 * man.braking_need(margin=c.follow_gap)) * c.dt
+        self.ref_v += max(-rate, min(rate, target - self.ref_v))
+        lag = c.brake_max_lag
+        self.ref_s = min(max(self.ref_s + self.ref_v * c.dt, view.s - lag), view.s + lag)
+        return self.ref_s, self.ref_v
+
+    def settled(self, man) -> bool:
+        return man.view.ds <= man.view.sensor.front.speed + 0.1 or man.view.gap_front == INF
+
+
+class CutIn(Scenario):
     name = "cut-in"
     summary = "a car overtakes and cuts in 15 m ahead, 5 m/s slower; front TTC triggers braking or evasion"
     config_cls = CutInConfig
-    trigger_on = "front"
-    in_lane_action = "brake"
+    network, edge, backends, columns, plots = "highway", EDGE, BACKENDS, COLUMNS, PLOTS
     #: the lane-change metrics stay, but the table shows what a cut-in is judged by
-    metric_specs = tuple(replace(m, headline=m.name in ("max_decel", "lane_change_duration"))
-                         for m in EvasiveLaneChange.metric_specs) + (
+    metric_specs = tuple(replace(x, headline=x.name in ("max_decel", "lane_change_duration")) for x in METRICS) + (
         Metric("min_gap", "m", "smallest bumper gap to the front object (the cutting car once it is "
                "in), from the outlines", headline=True),
         Metric("min_ttc", "s", "smallest front TTC", headline=True),
@@ -78,75 +107,44 @@ class CutIn(EvasiveLaneChange):
         Metric("cut_in_time", "s", "when the car started across the lane"),
         Metric("response", "-", "brake (in lane) or evade (lane change), none without a trigger"),
     )
-    markers = EvasiveLaneChange.markers + (Marker("cut-in", "the car starts across", "<"),)
+    markers = MARKERS + (Marker("cut-in", "the car starts across", "<"),)
 
-    def _actors(self):
+    compare_plots = classmethod(compare_plots)
+
+    def compose(self) -> Parts:
+        self.in_lane = FollowInLane()
+        return compose(self, "front", self.in_lane, self.populate, choose=self.choose, on_trigger=self.in_lane.begin)
+
+    def populate(self, world: MotorwayWorld) -> None:
         c = self.config
-        lane = c.cut_in_lane
-        self.bridge.add_type(CUTTER_TYPE)
-        width = self.bridge.lane_shapes()[f"motorway_{c.ego_lane}"][0]
-        self.cutter = CutInVehicle(CUTTER, "ego", lane, c.ego_lane, c.ego_speed + c.overtake_speed,
-                                   c.ego_speed - c.cut_in_speed, c.cut_in_gap, c.cut_in_duration, width,
-                                   c.sumo_step)
-        self.actors.append(self.cutter)
-        self.colors[CUTTER] = CUTTER_TYPE.color
-        spec = VehicleSpec(CUTTER, CUTTER_TYPE.id, ROUTE, lane, c.ego_start - c.start_behind, c.ego_speed)
-        return [spec], [CUTTER]
-
-    def background(self, rng, keep_clear=()):
+        self._announced = False
+        world.add_type(CUTTER_TYPE)
+        self.cutter = CutInVehicle(CUTTER, "ego", c.cut_in_lane, c.ego_lane, c.ego_speed + c.overtake_speed,
+                                   c.ego_speed - c.cut_in_speed, c.cut_in_gap, c.cut_in_duration,
+                                   world.lane_width(c.ego_lane), c.sumo_step)
+        world.vehicle(VehicleSpec(CUTTER, CUTTER_TYPE.id, ROUTE, c.cut_in_lane, c.ego_start - c.start_behind,
+                                  c.ego_speed), CUTTER_TYPE, self.cutter)
         # the cutting car's lane stays clear: it drives blind (its script is the point)
-        return super().background(rng, keep_clear=(*keep_clear, (self.cutter.source_lane, 0.0, 1e9)))
+        world.keep_clear(c.cut_in_lane)
 
-    def _before_sumo_step(self) -> None:
-        started = self.cutter.cut_in_time is None
-        super()._before_sumo_step()
-        if started and self.cutter.cut_in_time is not None:
+    def before_sim_step(self) -> None:
+        if self.cutter.cut_in_time is not None and not self._announced:
+            self._announced = True
             self.event("cut-in", f"{CUTTER} cuts into the {LANE_NAMES[self.config.ego_lane]} lane")
 
-    def _choose_lane(self):
+    def choose(self, man):
         # brake in lane when that is enough; evade by gap acceptance only when it is not
-        p = self.ego.model.params
-        limit = self.config.brake_share * (p.F_max / p.m + p.f * p.g)
-        need = self.braking_need()
+        limit = self.config.brake_share * friction_limit(self.ego.model.params)
+        need = man.braking_need()
         if need <= limit:
             return None, f"braking needs {need:.1f} m/s^2 <= {limit:.1f} m/s^2: brake in lane"
-        lane, why = super()._choose_lane()
+        lane, why = man.gap_acceptance()
         return lane, f"braking needs {need:.1f} m/s^2 > {limit:.1f} m/s^2; {why}"
 
-    def _on_trigger(self) -> None:
-        self._ref_s, self._ref_v = self.s, self.ds
-
-    def _in_lane_reference(self):
-        # an ACC-like reference: the speed goes to the front car's speed plus a term that
-        # opens the gap to the follow distance, changing at brake_decel (or at 1.2 times
-        # what braking needs to stop closing follow_gap behind it, when that is more); the
-        # position integrates it, never more than brake_max_lag from the ego
-        c = self.config
-        front = self.sensor.front
-        if front.gap == float("inf"):
-            target = c.ego_speed
-        else:
-            desired = c.follow_gap + c.follow_headway * front.speed
-            target = front.speed + max(-3.0, min(3.0, 0.5 * (front.gap - desired)))
-        rate = max(c.brake_decel, 1.2 * self.braking_need(margin=c.follow_gap)) * c.dt
-        self._ref_v += max(-rate, min(rate, target - self._ref_v))
-        lag = c.brake_max_lag
-        self._ref_s = min(max(self._ref_s + self._ref_v * c.dt, self.s - lag), self.s + lag)
-        return self._ref_s, self._ref_v
-
-    def _in_lane_settled(self) -> bool:
-        return self.ds <= self.sensor.front.speed + 0.1 or self.gap_front == float("inf")
-
-    def _metrics(self, trace, columns) -> dict:
-        out = super()._metrics(trace, columns)
-        cut = self.cutter.cut_in_time
-        out.update({
-            "min_gap": out["min_gap_front"],
-            "min_ttc": out["min_ttc_front"],
-            "reaction_time": m.json_number(self.trigger_t - cut if cut is not None and self.trigger_t
-                                           is not None else None, 4),
-            "cut_in_time": m.json_number(cut, 4),
-            "response": ("none" if self.trigger_t is None else "brake" if self.chosen is None
-                         else "evade"),
-        })
-        return out
+    def _metrics(self, trace, names) -> dict:
+        out = evasive_metrics(self, trace, names)
+        cut, trigger_t = self.cutter.cut_in_time, self.manoeuvre.trigger_t
+        reaction = trigger_t - cut if cut is not None and trigger_t is not None else None
+        response = "none" if trigger_t is None else "brake" if self.manoeuvre.chosen is None else "evade"
+        return {**out, "min_gap": out["min_gap_front"], "min_ttc": out["min_ttc_front"],
+                "reaction_time": m.json_number(reaction, 4), "cut_in_time": m.json_number(cut, 4), "response": response}

@@ -48,9 +48,9 @@ from ego.record.base import Series
 from ego.lane_frame import LanePolyline
 from ego.scenarios import metrics as m
 from ego.scenarios.base import CommonConfig, RoadScenario, signal_series
+from ego.scenarios.observe import road_observation
 from ego.scenarios.trace import Band, Column, Marker, Metric, Plot
-from ego.sumo.bridge import SumoBridge, SumoConfig, VehicleSpec, VehicleType, ego_type
-from ego.sumo.net import net_file
+from ego.sumo.bridge import VehicleSpec, VehicleType, ego_type
 from ego.sumo.traffic import PoissonFlow, background_traffic
 
 EGO = "ego"
@@ -146,11 +146,6 @@ class LaneCenteringScenario(RoadScenario):
         self._in_curve = False
         self._end_s = 0.0
 
-    def _make_bridge(self) -> SumoBridge:
-        c = self.config
-        return SumoBridge(SumoConfig(net_file(self.network), step_length=c.sumo_step,
-                                     seed=self.seed, lateral_resolution=c.lateral_resolution))
-
     def _setup(self, rng: np.random.Generator) -> None:
         c = self.config
         bridge = self.bridge
@@ -229,16 +224,7 @@ class LaneCenteringScenario(RoadScenario):
                        f"lateral error {self.d_road:+.3f} m")
         obs = self.obs
         x = self.ego.state
-        obs.t = self.t
-        obs.s = s
-        obs.ds = self.ds
-        obs.d = self.d_road
-        obs.dd = self.dd
-        obs.speed = x[1]
-        obs.yaw_rate = x[5]
-        obs.vy = x[3]
-        obs.heading_error = self.heading_error
-        obs.curvature = self.curvature
+        road_observation(obs, self.t, s, self.ds, self.d_road, self.dd, x, self.heading_error, self.curvature)
         # the plan holds the speed (the lateral-error model's speed is constant anyway)
         obs.accel_ref = 1.0 * (self.config.speed - x[1])
 

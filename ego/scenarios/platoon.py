@@ -48,13 +48,11 @@ from ego.scenarios.trace import Band, Column, FrequencyResponse, Marker, Metric,
 from ego.sumo.bridge import (
     Collision,
     Neighbour,
-    SumoBridge,
-    SumoConfig,
     VehicleSpec,
     VehicleType,
     ego_type,
 )
-from ego.sumo.net import lane_length, net_file
+from ego.sumo.net import lane_length
 from ego.sumo.traffic import Manoeuvre, ProfiledLeader, SpeedProfile
 
 LEADER = "leader"
@@ -278,11 +276,6 @@ class PlatoonScenario(Scenario):
         self._pushed: list[tuple[float, float, float]] = []
 
     # -- set-up ---------------------------------------------------------------------------
-    def _make_bridge(self) -> SumoBridge:
-        c = self.config
-        return SumoBridge(SumoConfig(net_file(self.network), step_length=c.sumo_step, seed=self.seed,
-                                     lateral_resolution=c.lateral_resolution))
-
     def _setup(self, rng: np.random.Generator) -> None:
         self._write_row = self.trace.bind(self._row_names)
         c = self.config

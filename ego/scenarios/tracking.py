@@ -24,13 +24,15 @@ from ego.params import param
 from ego.record.base import Scene, Series
 from ego.scenarios import metrics as m
 from ego.scenarios.base import (
+    Parts,
     Scenario,
     TimingConfig,
     divergence,
     signal_series,
     vehicle_series,
 )
-from ego.scenarios.highway import HighwayConfig, HighwayScenario
+from ego.scenarios.motorway import COLUMNS, EDGE, HighwayConfig, MotorwayWorld, SurroundView, ego_plant
+from ego.scenarios.motorway import series as motorway_series
 from ego.scenarios.trace import Column, Metric, Plot
 
 
@@ -81,10 +83,35 @@ class SineTrackingConfig(HighwayConfig):
                              "25 t), 15 decelerates (X_ref = 15 t)", min=1.0, max=45.0)
 
 
-class SineTracking(HighwayScenario):
+class SineReference:
+    """The manoeuvre of ``sine-tracking``: a plain reference, one state (cruise) throughout."""
+
+    phase = 0
+
+    def __init__(self, config, view) -> None:
+        self.config, self.view = config, view
+        self.s0 = 0.0
+
+    def reset(self, plant) -> None:
+        self.s0 = self.view.s
+
+    def plan(self, obs, t: float) -> None:
+        c = self.config
+        wt = c.omega * t
+        obs.s_ref = self.s0 + c.ref_speed * t
+        obs.ds_ref = c.ref_speed
+        obs.d_ref = c.amplitude * math.sin(wt)
+        obs.dd_ref = c.amplitude * c.omega * math.cos(wt)
+
+    def final_status(self) -> tuple[str, str]:
+        return "completed", "reached the end of the simulated time"
+
+
+class SineTracking(Scenario):
     name = "sine-tracking"
     summary = "lateral reference A sin(omega t) across the motorway while X_ref = 25 t or 15 t"
     config_cls = SineTrackingConfig
+    network, edge, columns = "highway", EDGE, COLUMNS
     metric_specs = TRACKING_METRICS + (
         Metric("min_ttc_front", "s", "smallest time-to-collision with the car ahead", headline=True),
         Metric("min_ttc_rear", "s", "smallest time-to-collision with the car behind", headline=True),
@@ -93,21 +120,15 @@ class SineTracking(HighwayScenario):
     )
     plots = TRACKING_PLOTS
 
-    def _traffic(self, rng):
-        return self.background(rng), []
+    def compose(self) -> Parts:
+        """The motorway world with its background only, the surround view, the sine reference."""
+        self.geometry = VehicleGeometry()
+        view = SurroundView(self.config, self.geometry)
+        return Parts(MotorwayWorld(self.config, self.geometry, lambda world: None), view,
+                     SineReference(self.config, view), None, ego_plant)
 
-    def _setup(self, rng) -> None:
-        super()._setup(rng)
-        self._s0 = self.s
-
-    def _plan(self) -> None:
-        c = self.config
-        obs = self.obs
-        wt = c.omega * self.t
-        obs.s_ref = self._s0 + c.ref_speed * self.t
-        obs.ds_ref = c.ref_speed
-        obs.d_ref = c.amplitude * math.sin(wt)
-        obs.dd_ref = c.amplitude * c.omega * math.cos(wt)
+    def _series(self):
+        return motorway_series(self._signal_names, self._signal_units)
 
     def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
         col = {name: trace[:, i] for i, name in enumerate(columns)}

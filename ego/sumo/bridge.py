@@ -28,6 +28,8 @@ from ego.models.geometry import (  # noqa: F401 - the pose conversions are impor
     sumo_poses_to_boxes,
     yaw_to_sumo_angle,
 )
+from ego.sim.registry import SimSetup
+from ego.sim.types import Collision, Departure, SimError, VehicleSpec, VehicleType, ego_type  # noqa: F401 - importable from here too
 from ego.sumo.net import sumo_binary
 
 # libsumo prints a pyarrow version warning to stdout on import unless told to be quiet;
@@ -69,44 +71,6 @@ class SumoConfig:
         ]
 
 
-@dataclass(frozen=True)
-class VehicleType:
-    """A SUMO vehicle type (copied from SUMO's default passenger car, then adjusted)."""
-
-    id: str
-    length: float = 5.0
-    width: float = 1.8
-    min_gap: float = 2.5
-    accel: float = 2.6
-    decel: float = 4.5
-    emergency_decel: float = 9.0
-    max_speed: float = 55.0
-    sigma: float = 0.5  #: Krauss driver imperfection (SUMO's RNG, seeded)
-    tau: float = 1.0  #: desired time headway of SUMO's car-following model (s)
-    color: tuple[int, int, int] = (255, 255, 0)
-
-
-@dataclass(frozen=True)
-class VehicleSpec:
-    """One vehicle to insert: on ``route``, in lane ``lane``, front bumper at ``pos`` (m)."""
-
-    id: str
-    type_id: str
-    route: str
-    lane: int
-    pos: float
-    speed: float
-
-
-@dataclass(frozen=True)
-class Collision:
-    collider: str
-    victim: str
-    kind: str
-    collider_speed: float
-    victim_speed: float
-
-
 @dataclass(slots=True)
 class Neighbour:
     """The nearest vehicle in one slot; ``gap`` is bumper to bumper (m), inf when none."""
@@ -143,7 +107,7 @@ class Neighbours:
         return self.lane > 0
 
 
-class SumoError(RuntimeError):
+class SumoError(SimError):
     """SUMO refused something (a vehicle could not be inserted, a second simulation...)."""
 
 
@@ -419,6 +383,11 @@ class SumoBridge:
         """Move ``vid`` sideways by ``dy`` (m, + left) in the next step (sublane model)."""
         self._ls.vehicle.changeSublane(vid, dy)
 
+    def depart(self, d: Departure) -> None:
+        """A vehicle enters ``d.route`` at its start now, in lane ``d.lane`` at ``d.speed``."""
+        self.libsumo.vehicle.add(d.id, d.route, typeID=d.type_id, departLane=str(d.lane), departPos="0",
+                                 departSpeed=f"{d.speed:.3f}")
+
     def front_bumper(self, vid: str) -> tuple[float, float]:
         """Front bumper centre of any vehicle (m), as of the last step."""
         return self._ls.vehicle.getPosition(vid)
@@ -516,13 +485,7 @@ class SumoBridge:
         return self._ls.vehicle.getDrivingDistance(vid, edge, pos, lane)
 
 
-def ego_type(type_id: str, geometry: VehicleGeometry, decel: float = 7.0) -> VehicleType:
-    """SUMO type for a controlled vehicle: its real size, minGap 0 so leader gaps are exact.
-
-    ``decel`` is what other drivers assume it can brake; 7 m/s^2 is report 000's car on
-    its 0.7 friction circle. SUMO never drives it, so its car-following headway only
-    matters for insertion: a short ``tau`` lets a scenario start it close behind a leader.
-    """
-    return VehicleType(type_id, length=geometry.length, width=geometry.width, min_gap=0.0,
-                       decel=decel, emergency_decel=max(9.0, decel), sigma=0.0, tau=0.2,
-                       color=(220, 40, 40))
+def make_sim(setup: SimSetup, options: dict) -> SumoBridge:
+    """The registry's factory for ``sumo`` (:mod:`ego.sim.registry`; SUMO takes no options)."""
+    return SumoBridge(SumoConfig(setup.net, step_length=setup.step_length, seed=setup.seed,
+                                 lateral_resolution=setup.lateral_resolution))

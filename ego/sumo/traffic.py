@@ -4,7 +4,7 @@ Generation is pure (numpy Generator in, vehicle specs out); the actors act on th
 through :class:`TrafficCommands` (``keep_lane``, ``drive_blind``, ``set_speed``, ``slow_down``,
 ``change_sublane``...), which :class:`ego.sumo.bridge.SumoBridge` and
 :class:`ego.highway_env.bridge.HighwayEnvBridge` both have, so the same actor drives SUMO or
-highway-env (PoissonFlow still adds SUMO vehicles through libsumo).
+highway-env (``PoissonFlow`` adds its cars through :meth:`TrafficSim.depart`).
 """
 
 from __future__ import annotations
@@ -12,29 +12,11 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Protocol
 
 import numpy as np
 
-from ego.sumo.bridge import SumoBridge, VehicleSpec
-
-
-class TrafficCommands(Protocol):
-    """What a scripted actor may ask of the traffic: :class:`~ego.sumo.bridge.SumoBridge` and
-    :class:`ego.highway_env.bridge.HighwayEnvBridge` both have it (see SumoBridge for each
-    command's meaning; speeds m/s, decelerations m/s^2, positions m in ego's frame)."""
-
-    def keep_lane(self, vid: str) -> None: ...
-    def drive_blind(self, vid: str) -> None: ...
-    def set_speed(self, vid: str, speed: float) -> None: ...
-    def start_speed(self, vid: str, speed: float) -> None: ...
-    def set_decel(self, vid: str, decel: float) -> None: ...
-    def slow_down(self, vid: str, speed: float, duration: float) -> None: ...
-    def free_lateral(self, vid: str, max_lateral_speed: float) -> None: ...
-    def change_sublane(self, vid: str, dy: float) -> None: ...
-    def speed(self, vid: str) -> float: ...
-    def front_bumper(self, vid: str) -> tuple[float, float]: ...
-    def dimensions(self, vid: str) -> tuple[float, float]: ...
+from ego.sim.protocol import TrafficCommands, TrafficSim  # noqa: F401 - TrafficCommands importable from here too
+from ego.sim.types import Departure, VehicleSpec
 
 
 def background_traffic(
@@ -168,16 +150,14 @@ class PoissonFlow:
         mean = 3600.0 / self.rate
         return self.min_headway + float(self.rng.exponential(max(mean - self.min_headway, 0.0)))
 
-    def start(self, bridge: SumoBridge) -> None:
+    def start(self, bridge: TrafficSim) -> None:
         pass
 
-    def update(self, bridge: SumoBridge, t: float) -> bool:
+    def update(self, bridge: TrafficSim, t: float) -> bool:
         """Call every SUMO step; True on the steps a vehicle is added."""
         if t < self.next_time:
             return False
-        veh = bridge.libsumo.vehicle
-        veh.add(f"{self.prefix}{self.count}", self.route, typeID=self.type_id, departLane=str(self.lane),
-                departPos="0", departSpeed=f"{self.speed:.3f}")
+        bridge.depart(Departure(f"{self.prefix}{self.count}", self.route, self.type_id, self.lane, self.speed))
         self.count += 1
         self.next_time += self._headway()
         return True

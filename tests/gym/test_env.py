@@ -178,7 +178,7 @@ def test_kinematics_rows_in_the_lane_frame(make):
         "features": ["presence", "x", "y", "vx", "vy", "heading"]}})
     obs, _ = env.reset(seed=0)
     sc = env.unwrapped.scenario
-    assert obs[0, 0] == 1.0 and obs[0, 1] == pytest.approx(sc.s) and obs[0, 3] == pytest.approx(sc.ds)
+    assert obs[0, 0] == 1.0 and obs[0, 1] == pytest.approx(sc.view.s) and obs[0, 3] == pytest.approx(sc.view.ds)
     present = obs[1:][obs[1:, 0] == 1.0]
     distance = np.hypot(present[:, 1], present[:, 2])
     assert len(present) >= 1 and np.all(np.diff(distance) >= 0.0)  # nearest first

@@ -73,8 +73,8 @@ def test_a_stopped_lead_stays_put_and_the_sensor_sees_it_from_the_start():
         sc.reset()
         veh = sc.bridge.libsumo.vehicle
         x0 = veh.getLanePosition("lead")
-        assert sc.sensor.front.id == "lead" and sc.sensor.front.speed == 0.0
-        assert sc.gap_front == pytest.approx(100.0, abs=0.05)
+        assert sc.view.sensor.front.id == "lead" and sc.view.sensor.front.speed == 0.0
+        assert sc.view.gap_front == pytest.approx(100.0, abs=0.05)
         while not sc.done:
             sc.step((0.0, 0.0))
         assert "lead" in veh.getIDList() and veh.getSpeed("lead") == 0.0

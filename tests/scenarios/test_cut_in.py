@@ -31,7 +31,7 @@ def test_the_cutting_car_moves_across_smoothly_in_the_set_time(fuzzy_ready):
         while not scenario.done and scenario.t < 16.0:
             scenario.step(scenario.controller.step(scenario.obs))
             if scenario.k % scenario.config.control_per_sumo == 0:
-                box = scenario.sensor.box("cutter")
+                box = scenario.view.sensor.box("cutter")
                 ts.append(scenario.t)
                 ys.append(box[1])
         t0 = scenario.cutter.cut_in_time

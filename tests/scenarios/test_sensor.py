@@ -129,7 +129,7 @@ def test_in_sumo_the_sensor_sees_the_overlapping_lead_that_sumo_s_leader_misses(
         x[2] += 1.6  # CG 1.6 m left of the lane centre, front bumper over the lane line
         x[4] = psi
         scenario.ego.state = tuple(x)
-        scenario._kinematics()
+        scenario.view.frame()
         for _ in range(scenario.config.control_per_sumo):
             scenario.step((0.0, 0.0))
         assert scenario.status == "running"
@@ -137,12 +137,13 @@ def test_in_sumo_the_sensor_sees_the_overlapping_lead_that_sumo_s_leader_misses(
         lane_leader = bridge.libsumo.vehicle.getLeader("ego", 100.0)
         assert bridge.libsumo.vehicle.getLaneIndex("ego") == 2  # SUMO has it in the left lane
         assert not lane_leader or lane_leader[0] != "lead"  # ... so its leader is not the lead
-        assert scenario.sensor.front.id == "lead"
-        assert scenario.gap_front < 12.0 and math.isfinite(scenario.ttc_front)
-        box = scenario.sensor.box("lead")
+        view = scenario.view
+        assert view.sensor.front.id == "lead"
+        assert view.gap_front < 12.0 and math.isfinite(view.ttc_front)
+        box = view.sensor.box("lead")
         g = scenario.geometry
         s = scenario.ego.state
         ego = corners(s[0], s[2], s[4], g.length, g.width, cg_to_front=g.cg_to_front)
-        assert scenario.gap_front <= outline_distance(ego, corners(*box)) + 1e-9
+        assert view.gap_front <= outline_distance(ego, corners(*box)) + 1e-9
     finally:
         scenario.close()

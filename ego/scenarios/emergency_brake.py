@@ -1,0 +1,193 @@
+"""``emergency-brake``: the car ahead brakes hard (report 000's "decelerate and change lane").
+
+When the FRONT time-to-collision falls below ``ttc_threshold`` the ego changes into the
+better acceptable lane (gap acceptance), its position reference at ``evade_speed``; with no
+acceptable lane it brakes in lane: the speed reference falls at ``brake_decel`` to the
+leader's speed. The AEB (:mod:`ego.scenarios.safety`) brakes at the friction limit when
+braking in lane needs more than ``aeb_decel`` or a collision is imminent. With
+``lead_speed`` and ``evade=false`` it is Euro NCAP's CCRs / CCRm / CCRb.
+
+Composed of: the motorway world with the lead car (:class:`~ego.sumo.traffic.BrakingLeader`),
+the surround view, the evasive manoeuvre with :class:`BrakeInLane`, and the safety layer.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ego.highway_env import BACKENDS
+from ego.params import ConfigError, param
+from ego.scenarios import metrics as m
+from ego.scenarios.base import Parts, Scenario
+from ego.scenarios.evasive import (
+    MARKERS,
+    METRICS,
+    EvasiveConfig,
+    compare_plots,
+    compose,
+    evasive_metrics,
+)
+from ego.scenarios.events import INF
+from ego.scenarios.motorway import COLUMNS, EDGE, EGO, PLOTS, ROUTE, MotorwayWorld
+from ego.scenarios.safety import friction_limit
+from ego.scenarios.trace import Metric
+from ego.sim.types import VehicleSpec, VehicleType
+from ego.sumo.traffic import BrakingLeader
+
+LEAD = "lead"
+#: the ego comes to rest at or below this speed along the road, and moves again above
+#: MOVING (m/s)
+STOPPED, MOVING = 0.05, 0.5
+LEAD_TYPE = VehicleType("lead", length=4.5, width=1.8, sigma=0.0, color=(255, 150, 0))
+#: ``lead_speed`` = SAME_AS_EGO: the lead car drives at ``ego_speed``
+SAME_AS_EGO = -1.0
+
+
+@dataclass(frozen=True)
+class EmergencyBrakeConfig(EvasiveConfig):
+    lead_gap: float = param(30.0, "m", "gap from the ego's front to the lead car's rear at t = 0",
+                            min=5.0, max=300.0)
+    lead_speed: float = param(SAME_AS_EGO, "m/s", "the lead car's speed from t = 0 until it brakes: "
+                              "-1 = ego_speed, 0 = stopped (Euro NCAP CCRs), 5.556 = 20 km/h (CCRm)",
+                              min=-1.0, max=45.0)
+    lead_brake_time: float = param(2.0, "s", "when the lead car starts braking (at most duration)",
+                                   min=0.0, max=3600.0)
+    lead_decel: float = param(6.0, "m/s^2", "lead car's deceleration", min=0.5, max=12.0)
+    lead_final_speed: float = param(5.0, "m/s", "speed the lead car brakes to; at or above its "
+                                    "speed it never brakes (it never speeds up)", min=0.0, max=40.0)
+    brake_decel: float = param(8.0, "m/s^2", "speed reference's deceleration when braking in lane",
+                               min=0.5, max=12.0)
+    brake_max_lag: float = param(2.0, "m", "how far the braking reference may fall behind the ego",
+                                 min=0.1, max=50.0)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.lead_speed != SAME_AS_EGO and self.lead_speed < 0.0:
+            raise ConfigError(f"bad value for lead_speed: {self.lead_speed:g} (expected -1 for "
+                              f"ego_speed, or a speed of at least 0 m/s)")
+        if self.lead_brake_time > self.duration:
+            raise ConfigError(f"bad value for lead_brake_time: {self.lead_brake_time:g} (expected at most "
+                              f"duration={self.duration:g} s: the lead would brake after the run)")
+
+    @property
+    def lead_cruise_speed(self) -> float:
+        """The lead car's speed until it brakes (m/s): ``lead_speed``, or ``ego_speed`` for -1."""
+        return self.ego_speed if self.lead_speed == SAME_AS_EGO else self.lead_speed
+
+
+class BrakeInLane:
+    """Brake at ``brake_decel`` down to the leader's speed, never planning closer than the
+    follow distance; a stopped ego stays where it stopped."""
+
+    action = "brake"
+
+    def __init__(self, config, safety_active) -> None:
+        self.config = config
+        self.safety_active = safety_active  #: () -> the AEB is braking
+        self.ramp_s = self.ramp_v = 0.0
+        self.rest_s: float | None = None  #: where the ego came to rest behind a stopped car
+        self.moving = True  #: it has moved (faster than MOVING) since it last came to rest
+
+    def start(self, man) -> None:
+        view = man.view
+        self.ramp_s, self.ramp_v = view.s - self.config.dt * view.ds, view.ds
+        self.rest_s, self.moving = None, True
+
+    def reference(self, man) -> tuple[float, float]:
+        c, view = self.config, man.view
+        dt = c.dt
+        front = view.sensor.front
+        self.ramp_v = max(front.speed, self.ramp_v - c.brake_decel * dt)
+        # the reference may run ahead of what the car can brake, but never more than
+        # brake_max_lag behind it, or the controller would keep braking below the leader's
+        # speed to win the distance back
+        self.ramp_s = max(self.ramp_s + self.ramp_v * dt, view.s - c.brake_max_lag)
+        if self.safety_active():
+            # the AEB may brake harder than the ramp: the ramp waits for the car, so the
+            # position loop does not find its reference far ahead when the AEB lets go
+            self.ramp_s = min(self.ramp_s, view.s + c.brake_max_lag)
+            self.ramp_v = min(self.ramp_v, max(view.ds, front.speed))
+        s_ref, v_ref = self.ramp_s, self.ramp_v
+        fs, fv = man.follow_reference(front)
+        if fs < s_ref:
+            s_ref, v_ref = fs, fv
+        if view.ds > MOVING:
+            self.moving = True
+        if self.ramp_v <= 0.0:
+            # stopped behind a car standing still: the reference stays where the ego came to
+            # rest (its latest stop), never behind it - neither the ramp (up to brake_max_lag
+            # behind) nor the follow distance (when the ego stopped closer) may back the car
+            # up. While it still moves, a reference behind it asks for all the braking there
+            # is; a creep below MOVING is no new stop (the reference does not follow it).
+            if self.moving and view.ds <= STOPPED:
+                self.rest_s, self.moving = view.s, False
+            if self.rest_s is not None:
+                s_ref, v_ref = max(s_ref, self.rest_s), 0.0
+        return s_ref, v_ref
+
+    def settled(self, man) -> bool:
+        view = man.view
+        return view.ds <= view.sensor.front.speed + 0.1 or view.gap_front == INF
+
+
+class EmergencyBrake(Scenario):
+    name = "emergency-brake"
+    summary = "lead car brakes hard; front TTC triggers braking and a lane change by gap acceptance"
+    config_cls = EmergencyBrakeConfig
+    network, edge, backends = "highway", EDGE, BACKENDS
+    columns, plots, markers = COLUMNS, PLOTS, MARKERS
+    metric_specs = METRICS + (
+        Metric("impact_speed", "m/s", "the ego's speed along the road at the collision (none: no "
+               "collision)"),
+        Metric("impact_relative_speed", "m/s", "the ego's speed minus the other party's (the lead "
+               "car's) at the collision (none: no collision)"),
+        Metric("collision_avoidable", "-", "true: braking at the friction limit from the trigger "
+               "would have kept the ego behind the lead, so the collision is the controller's or the "
+               "planner's; false: physics left no way out by braking; none: no collision"),
+    )
+
+    compare_plots = classmethod(compare_plots)
+
+    def compose(self) -> Parts:
+        self.in_lane = BrakeInLane(self.config, lambda: self.safety is not None and self.safety.active)
+        return compose(self, "front", self.in_lane, self.populate, on_trigger=self.on_trigger)
+
+    def populate(self, world: MotorwayWorld) -> None:
+        c = self.config
+        self._impact: tuple[float, float] | None = None  #: (ego, other) speeds at the collision
+        self._trigger_gap = self._trigger_speed = INF
+        lead_front = c.ego_start + c.lead_gap + LEAD_TYPE.length
+        # inserted at the ego's speed at least: SUMO would refuse to insert the ego closer to
+        # a slower car than its own stopping distance; BrakingLeader.start sets the lead's
+        # speed before the first step (it does not move in between)
+        speed = max(c.ego_speed, c.lead_cruise_speed)
+        world.vehicle(VehicleSpec(LEAD, LEAD_TYPE.id, ROUTE, c.ego_lane, lead_front, speed), LEAD_TYPE,
+                      BrakingLeader(LEAD, c.lead_cruise_speed, c.lead_brake_time, c.lead_decel,
+                                    c.lead_final_speed))
+
+    def on_trigger(self, man) -> None:
+        self._trigger_gap, self._trigger_speed = self.view.gap_front, self.view.ds
+        self.in_lane.start(man)
+
+    def _collided(self, c) -> None:
+        other_speed = c.victim_speed if c.collider == EGO else c.collider_speed
+        self._impact = (self.view.ds, other_speed)
+        super()._collided(c)
+
+    def _metrics(self, trace, names) -> dict:
+        out = evasive_metrics(self, trace, names)
+        ego_speed, other = self._impact if self._impact is not None else (None, None)
+        out["impact_speed"] = m.json_number(ego_speed, 4)
+        out["impact_relative_speed"] = m.json_number(None if ego_speed is None else ego_speed - other, 4)
+        out["collision_avoidable"] = self._avoidable() if self.collision is not None else None
+        return out
+
+    def _avoidable(self) -> bool | None:
+        """The braking criterion of :mod:`ego.scenarios.envelope` from this run's trigger."""
+        from ego.scenarios.envelope import avoidable
+
+        trigger_t = self.manoeuvre.trigger_t
+        if trigger_t is None or self._trigger_gap == INF:
+            return None
+        return avoidable({"trigger_time": trigger_t}, self._trigger_gap, self._trigger_speed, self.config,
+                         friction_limit(self.ego.model.params))

@@ -1,0 +1,93 @@
+"""``fast-follower``: a car closes from behind at 1.5 times the ego's speed (report 000's
+"accelerate and change lane").
+
+When the REAR time-to-collision falls below ``ttc_threshold`` the ego changes into the
+better acceptable lane at ``evade_speed`` (X_ref = 25 t); with no acceptable lane it speeds
+up in its lane (braking would make it worse), keeping the follow distance to any leader.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ego.highway_env import BACKENDS
+from ego.params import param
+from ego.scenarios.base import Parts, Scenario
+from ego.scenarios.evasive import (
+    MARKERS,
+    METRICS,
+    EvasiveConfig,
+    compare_plots,
+    compose,
+    evasive_metrics,
+)
+from ego.scenarios.events import INF
+from ego.scenarios.motorway import COLUMNS, EDGE, PLOTS, ROUTE, MotorwayWorld
+from ego.scenarios.trace import Metric
+from ego.sim.types import VehicleSpec, VehicleType
+from ego.sumo.traffic import RecklessFollower
+
+FOLLOWER = "follower"
+FOLLOWER_TYPE = VehicleType("follower", length=4.5, width=1.8, sigma=0.0, max_speed=60.0,
+                            color=(0, 170, 255))
+
+
+@dataclass(frozen=True)
+class FastFollowerConfig(EvasiveConfig):
+    evade_speed: float = param(25.0, "m/s", "speed reference during the lane change "
+                               "(report 000: X_ref = 25 t)", min=1.0, max=45.0)
+    follower_gap: float = param(60.0, "m", "gap from the follower's front to the ego's rear at t = 0",
+                                min=5.0, max=500.0)
+    follower_speed: float = param(30.0, "m/s", "the follower's speed (>= 1.5 x ego_speed by "
+                                  "default)", min=1.0, max=60.0)
+
+
+class AccelerateInLane:
+    """Nowhere to go and braking would make it worse: speed up to ``evade_speed`` in lane,
+    keeping the follow distance to any leader; settled once nothing closes from behind."""
+
+    action = "accelerate"
+
+    def start(self, man) -> None:
+        pass
+
+    def reference(self, man) -> tuple[float, float]:
+        c = man.config
+        s_ref = man.trigger_s + c.evade_speed * (man.t - man.trigger_t)
+        return man.behind_front(s_ref, c.evade_speed)
+
+    def settled(self, man) -> bool:
+        return man.view.ttc_rear == INF
+
+
+class FastFollower(Scenario):
+    name = "fast-follower"
+    summary = "a car closes from behind at 1.5x the ego's speed; rear TTC triggers accelerating and a lane change"
+    config_cls = FastFollowerConfig
+    network, edge, backends = "highway", EDGE, BACKENDS
+    columns, plots, markers = COLUMNS, PLOTS, MARKERS
+    metric_specs = METRICS + (
+        Metric("follower_passed", "-", "the follower's front bumper ended ahead of the ego's"),
+    )
+
+    compare_plots = classmethod(compare_plots)
+
+    def compose(self) -> Parts:
+        return compose(self, "rear", AccelerateInLane(), self.populate)
+
+    def populate(self, world: MotorwayWorld) -> None:
+        c = self.config
+        self._follower_x = -INF
+        front = c.ego_start - self.geometry.length - c.follower_gap
+        # inserted at the ego's speed (SUMO checks insertion safety); it speeds up at once
+        world.vehicle(VehicleSpec(FOLLOWER, FOLLOWER_TYPE.id, ROUTE, c.ego_lane, front, c.ego_speed),
+                      FOLLOWER_TYPE, RecklessFollower(FOLLOWER, c.follower_speed))
+
+    def after_sim_step(self) -> None:
+        self._follower_x = self.bridge.front_bumper(FOLLOWER)[0]
+
+    def _metrics(self, trace, names) -> dict:
+        out = evasive_metrics(self, trace, names)
+        # passed: the follower's front bumper ended ahead of the ego's
+        out["follower_passed"] = bool(self._follower_x > self.ego.state[0] + self.geometry.cg_to_front)
+        return out

@@ -1,0 +1,265 @@
+"""The evasive manoeuvre as a named state machine (report 000's real-life framing).
+
+States (their numbers are the trace's ``phase`` and the recording's manoeuvre timeline)::
+
+    cruise --trigger, gap acceptance--> lane change --settled--> done
+       |                                    |
+       +--------no acceptable lane------> in-lane manoeuvre --settled--> done
+                                            ^
+             lane change --emergency stop--+  (the AEB engages early in the change)
+
+* **cruise**: hold ``ego_speed``; when the front (or rear) time-to-collision falls below
+  ``ttc_threshold`` the manoeuvre is **triggered** and **gap acceptance** checks both
+  adjacent lanes (lead and lag gaps against their speeds, :mod:`ego.scenarios.events`);
+* **lane change**: the position reference moves at ``evade_speed`` but never closer to the
+  target lane's leader (nor to the car the ego still overlaps) than the follow distance;
+* **in-lane manoeuvre**: no acceptable lane - the scenario's in-lane behaviour (brake behind
+  a braking car, accelerate away from a fast follower...);
+* **done**: settled in the target lane (or the in-lane manoeuvre settled) for one second.
+
+Transitions go through :meth:`EvasiveManoeuvre.enter`, which refuses one not in
+:data:`TRANSITIONS`; a new transition (finish a lane change weighing the target lane's
+follower instead of aborting it, say) is a row there and a branch in
+:meth:`EvasiveManoeuvre.emergency_stop`.
+
+The scenario supplies an :class:`InLane` behaviour: what to do and when it is settled.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Protocol
+
+from ego.scenarios.events import INF, GapRule, check_lane, choose_lane
+from ego.scenarios.motorway import LANE_NAMES
+from ego.scenarios.safety import braking_need, friction_limit
+from ego.scenarios.sensor import Detection
+
+CRUISE, LANE_CHANGE, IN_LANE, DONE = 0, 1, 2, 3
+PHASE_NAMES = ("cruise", "lane change", "in-lane manoeuvre", "done")  #: by state number
+#: state -> the states it may go to
+TRANSITIONS = {
+    CRUISE: (LANE_CHANGE, IN_LANE),
+    LANE_CHANGE: (IN_LANE, DONE),
+    IN_LANE: (DONE,),
+    DONE: (),
+}
+
+
+class InLane(Protocol):
+    """A scenario's in-lane manoeuvre (no acceptable lane, or a lane change aborted)."""
+
+    #: "brake" (the AEB watches the braking) or "accelerate"
+    action: str
+
+    def start(self, m: EvasiveManoeuvre) -> None:
+        """Set up the references from here (at the trigger, or when a lane change is aborted)."""
+
+    def reference(self, m: EvasiveManoeuvre) -> tuple[float, float]:
+        """Position (m) and speed (m/s) reference now."""
+
+    def settled(self, m: EvasiveManoeuvre) -> bool:
+        """The manoeuvre has done its job (held for a second: done)."""
+
+
+class EvasiveManoeuvre:
+    """Trigger, gap acceptance and the references of an evasive lane change; see the module.
+
+    ``view`` is the surround view, ``trigger_on`` "front" or "rear", ``in_lane`` the
+    scenario's :class:`InLane`; ``choose`` may replace gap acceptance (``choose(m) ->
+    (side or None, why)``; :meth:`gap_acceptance` is the default); ``on_trigger(m)`` runs at
+    the trigger, before the lane is entered."""
+
+    def __init__(self, config, view, trigger_on: str, in_lane: InLane, event: Callable[..., None],
+                 choose: Callable | None = None, on_trigger: Callable | None = None) -> None:
+        self.config = config
+        self.view = view
+        self.trigger_on = trigger_on
+        self.in_lane = in_lane
+        self.event = event
+        self.choose = choose or EvasiveManoeuvre.gap_acceptance
+        self.on_trigger = on_trigger
+        self.safety = None  #: the safety layer, updated between the trigger and the references
+        self.plant = None
+        self.reset()
+
+    def reset(self, plant=None) -> None:
+        view = self.view
+        self.plant = plant
+        self.phase = CRUISE
+        self.t = 0.0
+        self.trigger_t: float | None = None
+        self.trigger_ttc: float | None = None
+        self.trigger_s = 0.0
+        self.chosen: str | None = None
+        self.choice_reason = ""
+        self.done_t: float | None = None
+        self._inside_since: float | None = None
+        self._lane_leader, self._lane_follower = Detection(), Detection()
+        self.s0 = view.s
+        self.speed_ref = self.config.ego_speed
+        self.evade_speed = self.config.evade_speed
+
+    # -- the state machine ------------------------------------------------------------------
+    def enter(self, state: int) -> None:
+        """Go to ``state`` (a transition of :data:`TRANSITIONS`)."""
+        if state not in TRANSITIONS[self.phase]:
+            raise RuntimeError(f"no transition from {PHASE_NAMES[self.phase]} to {PHASE_NAMES[state]}")
+        self.phase = state
+
+    def braking_in_lane(self) -> bool:
+        return self.phase == IN_LANE and self.in_lane.action == "brake"
+
+    def plan(self, obs, t: float) -> None:
+        """One control period: trigger, the safety layer, the references into ``obs``."""
+        self.t = t
+        c = self.config
+        view = self.view
+        if self.phase == CRUISE:
+            ttc = view.ttc_front if self.trigger_on == "front" else view.ttc_rear
+            if ttc < c.ttc_threshold:
+                self.trigger(ttc)
+        if self.safety is not None:
+            self.safety.update()
+        if self.phase == CRUISE:
+            s_ref, v_ref = self.s0 + c.ego_speed * t, c.ego_speed
+        elif self.chosen is not None:
+            # evade at evade_speed, but never plan closer than the follow distance to whoever
+            # drives ahead in the target lane (that traffic may brake too), nor to the car
+            # the ego's body still overlaps (the sensor's front object) until it has cleared it
+            v_evade = self.evade_speed
+            s_ref, v_ref = self.trigger_s + v_evade * (t - self.trigger_t), v_evade
+            for leader in (self.target_leader(), view.sensor.front):
+                fs, fv = self.follow_reference(leader)
+                if fs < s_ref:
+                    s_ref, v_ref = fs, fv
+        else:
+            s_ref, v_ref = self.in_lane.reference(self)
+        self.speed_ref = v_ref
+        obs.s_ref, obs.ds_ref = s_ref, v_ref
+        obs.d_ref = obs.dd_ref = 0.0
+        if self.phase in (LANE_CHANGE, IN_LANE):
+            self.check_done()
+
+    def trigger(self, ttc: float) -> None:
+        """Triggered: gap acceptance, then the lane change or the in-lane manoeuvre."""
+        c = self.config
+        view = self.view
+        self.chosen, self.choice_reason = self.choose(self)
+        self.trigger_t, self.trigger_ttc, self.trigger_s = self.t, ttc, view.s
+        # "decelerate and change lane": evading a car ahead never speeds up towards it (from
+        # below evade_speed the ego keeps its speed); evading one behind does speed up
+        self.evade_speed = (min(c.evade_speed, view.ds) if self.trigger_on == "front" else c.evade_speed)
+        other = view.sensor.front if self.trigger_on == "front" else view.sensor.rear
+        gap = view.gap_front if self.trigger_on == "front" else view.gap_rear
+        closing = abs(view.ds - other.speed)
+        # enough digits that the event never reads "3.00 s < 3.00 s"
+        digits = 2 if round(ttc, 2) < round(c.ttc_threshold, 2) else 4
+        self.event("trigger", f"{self.trigger_on} TTC {ttc:.{digits}f} s < {c.ttc_threshold:.{digits}f} s "
+                   f"(gap {gap:.1f} m to {other.id or '?'}, closing at {closing:.1f} m/s)", "WARN")
+        if self.on_trigger is not None:
+            self.on_trigger(self)
+        if self.chosen is None:
+            self.enter(IN_LANE)
+            self.event("lane", f"stay in the {LANE_NAMES[view.target_lane]} lane "
+                       f"({self.in_lane.action}): {self.choice_reason}", "WARN")
+        else:
+            self.enter(LANE_CHANGE)
+            view.target_lane += 1 if self.chosen == "left" else -1
+            self.event("lane", f"change to the {LANE_NAMES[view.target_lane]} lane "
+                       f"(lane index {view.target_lane} of the network): {self.choice_reason}")
+
+    def emergency_stop(self) -> None:
+        """The safety layer brakes at the friction limit. Early in a lane change (the ego not
+        yet half-way across, and braking alone enough to stop behind the front object) the
+        stop is made in the lane it is leaving: braking hard in front of the new lane's
+        traffic is what gets a car hit from behind. Otherwise it carries on."""
+        if self.phase != LANE_CHANGE or self.in_lane.action != "brake":
+            return
+        view = self.view
+        origin = view.target_lane - (1 if self.chosen == "left" else -1)
+        span = view.lane_offset[view.target_lane] - view.lane_offset[origin]
+        progress = (view.d_road - view.lane_offset[origin]) / span if span else 1.0
+        if progress >= 0.5 or braking_need(view.sensor.front, view.ds) > 0.9 * friction_limit(self.plant.model.params):
+            return  # well across, or braking alone would not stop it in time: carry on
+        self.event("lane", f"lane change aborted at {100 * progress:.0f} % across: emergency braking "
+                   f"in the {LANE_NAMES[origin]} lane", "WARN")
+        view.target_lane, self.chosen = origin, None
+        self.enter(IN_LANE)
+        self.in_lane.start(self)
+
+    def check_done(self) -> None:
+        """Online completion: inside the band (or the in-lane manoeuvre settled) for one second."""
+        view = self.view
+        if self.phase == LANE_CHANGE:
+            inside = abs(view.d_road - view.lane_offset[view.target_lane]) < self.config.settle_band
+        else:
+            inside = self.in_lane.settled(self)
+        if not inside:
+            self._inside_since = None
+            return
+        t = self.t
+        if self._inside_since is None:
+            self._inside_since = t
+        elif t - self._inside_since >= 1.0:
+            what = "lane change" if self.phase == LANE_CHANGE else "in-lane manoeuvre"
+            self.event("done", f"{what} complete: settled since t = {self._inside_since:.2f} s "
+                       f"({self._inside_since - self.trigger_t:.2f} s after the trigger)")
+            self.enter(DONE)
+            self.done_t = self._inside_since
+
+    def final_status(self) -> tuple[str, str]:
+        """The run's status when its duration runs out."""
+        if self.phase in (LANE_CHANGE, IN_LANE):
+            return "timeout", (f"the duration ({self.config.duration:g} s) ended the run before the "
+                               f"manoeuvre ({PHASE_NAMES[self.phase]}) finished")
+        if self.phase == CRUISE:
+            return "completed", f"the {self.trigger_on} TTC never fell below the threshold: no manoeuvre"
+        return "completed", "manoeuvre complete"
+
+    # -- references -------------------------------------------------------------------------
+    def target_leader(self) -> Detection:
+        """The nearest vehicle ahead overlapping the target lane (surround sensor)."""
+        self.view.sensor.lane_neighbours(self.view.target_lane, self._lane_leader, self._lane_follower)
+        return self._lane_leader
+
+    def follow_reference(self, leader: Detection) -> tuple[float, float]:
+        """Position/speed reference that keeps the follow distance to ``leader``."""
+        c = self.config
+        gap = leader.gap
+        if gap == INF:
+            return INF, self.speed_ref
+        return self.view.s + gap - c.follow_gap - c.follow_headway * leader.speed, leader.speed
+
+    def behind_front(self, s_ref: float, v_ref: float) -> tuple[float, float]:
+        """The reference (``s_ref`` m, ``v_ref`` m/s), unless the follow distance to the
+        front object is closer: then that one."""
+        fs, fv = self.follow_reference(self.view.sensor.front)
+        return (fs, fv) if fs < s_ref else (s_ref, v_ref)
+
+    def braking_need(self, margin: float = 0.0) -> float:
+        """:func:`ego.scenarios.safety.braking_need` behind the front object now."""
+        return braking_need(self.view.sensor.front, self.view.ds, margin)
+
+    # -- gap acceptance ---------------------------------------------------------------------
+    def lane_check(self, side: str, lane: int, rule: GapRule):
+        """Gap acceptance of ``lane`` from the surround sensor's lead and lag vehicles."""
+        view = self.view
+        lead, lag = Detection(), Detection()
+        exists = view.sensor.lane_neighbours(lane, lead, lag)
+        planned = self.config.evade_speed
+        front = view.sensor.front
+        if self.trigger_on == "front" and front.gap != INF:
+            # until it has cleared the car it leaves, the ego may have to slow to that car's
+            # speed: the new lane's follower must have room for that
+            planned = min(planned, front.speed)
+        return check_lane(side, exists, view.ds, planned, lead.gap, lead.speed, lag.gap, lag.speed, rule)
+
+    def gap_acceptance(self) -> tuple[str | None, str]:
+        """The better acceptable adjacent lane (or None) and why."""
+        c = self.config
+        if not c.evade:
+            return None, f"evade=false: no lane change, {self.in_lane.action} in lane"
+        rule = GapRule(c.accept_gap, c.accept_time)
+        lane = self.view.target_lane
+        return choose_lane(self.lane_check("left", lane + 1, rule), self.lane_check("right", lane - 1, rule))

@@ -1,0 +1,385 @@
+"""The parts every motorway scenario is composed of (``sumo_nets/highway``: three straight lanes).
+
+* :class:`MotorwayWorld` - the world: the traffic simulator, the ego's and the scenario's
+  vehicles, the seeded background, the scripted actors and the lanes;
+* :func:`ego_plant` - the ego's plant (report 000's car, ABS by default);
+* :class:`SurroundView` - the motorway's sensors: the ego's lane frame (a road sensor) and
+  the surround sensor (gaps and time-to-collision from the vehicles' outlines), with the
+  task's one observation builder (:func:`ego.scenarios.observe.road_observation`) and the
+  trace row they describe;
+* the trace columns, plots and recording series every motorway run has.
+
+A concrete scenario (``emergency_brake.py``, ``cut_in.py``...) subclasses
+:class:`~ego.scenarios.base.Scenario` directly and wires these together with a manoeuvre
+(:mod:`ego.scenarios.manoeuvre`) and a safety layer (:mod:`ego.scenarios.safety`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ego.lane_frame import LanePolyline
+from ego.models import NonlinearBicycle, NonlinearBicycleParams, VehicleGeometry
+from ego.models.actuators import ActuatorLimits
+from ego.models.plant import BicyclePlant
+from ego.params import ConfigError, param
+from ego.record.base import Series
+from ego.scenarios.base import CommonConfig, divergence, signal_series, vehicle_series
+from ego.scenarios.events import INF, boxes_overlap, time_to_collision
+from ego.scenarios.observe import road_observation
+from ego.scenarios.sensor import SurroundSensor
+from ego.scenarios.trace import Column, Plot, Ref, Trajectory
+from ego.scenarios.traffic_log import RADIUS, REACH_MARGIN
+from ego.sim.protocol import TrafficSim
+from ego.sim.types import Collision, VehicleSpec, VehicleType, ego_type
+from ego.sumo.traffic import PacedVehicle, background_traffic
+
+EGO = "ego"
+ROUTE = "motorway_route"
+EDGE = "motorway"
+N_LANES = 3
+LANE_NAMES = {0: "right", 1: "middle", 2: "left"}
+TRAFFIC_TYPE = VehicleType("traffic", length=4.5, width=1.8, color=(150, 150, 150))
+BLOCKER_TYPE = VehicleType("blocker", length=4.5, width=1.8, sigma=0.0, color=(160, 60, 220))
+EGO_COLOR = (220, 40, 40)
+#: the ego's outline for the top-down plot: length, width, centre ahead of the CG (m)
+EGO_BOX = (VehicleGeometry().length, VehicleGeometry().width,
+           VehicleGeometry().cg_to_front - 0.5 * VehicleGeometry().length)
+#: m the surroundings subscription reaches at least: the traffic log's radius
+LOG_REACH = RADIUS + REACH_MARGIN
+
+
+@dataclass(frozen=True)
+class HighwayConfig(CommonConfig):
+    """The ego and the background traffic on the motorway."""
+
+    ego_speed: float = param(20.0, "m/s", "ego's initial speed (report 000: 20 m/s)", min=1.0, max=45.0)
+    ego_lane: int = param(1, "-", "ego's lane: 0 right, 1 middle, 2 left", choices=(0, 1, 2))
+    ego_start: float = param(300.0, "m", "ego's front bumper along the motorway at t = 0",
+                             min=50.0, max=1500.0)
+    traffic_density: float = param(10.0, "veh/km", "background traffic per adjacent lane",
+                                   min=0.0, max=25.0)
+    traffic_speed: float = param(20.0, "m/s", "background traffic's speed", min=1.0, max=40.0)
+    max_steer: float = param(0.5, "rad", "front steer limit of the ego", min=0.01, max=1.0)
+    abs: bool = param(True, "-", "friction-aware drive and brake (ABS / traction control): the "
+                      "longitudinal force never exceeds what the tyres carry beside the lateral "
+                      "force; false: the report's raw model")
+    sensor_range: float = param(150.0, "m", "radius around the ego the surround sensor sees",
+                                min=20.0, max=500.0)
+
+
+def max_traffic_density(traffic_speed: float) -> float:
+    """The densest background (veh/km per lane) :meth:`MotorwayWorld.background` can place at
+    ``traffic_speed`` (m/s): one car per minimum spacing."""
+    return 1000.0 / (max(20.0, 1.5 * traffic_speed) + TRAFFIC_TYPE.length)
+
+
+def check_density(config: HighwayConfig) -> None:
+    """ConfigError when the background cannot be placed (it keeps a safe spacing)."""
+    top = max_traffic_density(config.traffic_speed)
+    if config.traffic_density > top:
+        raise ConfigError(f"bad value for traffic_density: {config.traffic_density:g} (at most "
+                          f"{top:.1f} veh/km at traffic_speed={config.traffic_speed:g} m/s: the "
+                          f"background keeps {max(20.0, 1.5 * config.traffic_speed) + TRAFFIC_TYPE.length:.1f} m "
+                          f"between cars)")
+
+
+# --- the world ---------------------------------------------------------------------------
+
+class MotorwayWorld:
+    """The simulator with the motorway's traffic: the scenario's own vehicles (``traffic``
+    adds them with :meth:`vehicle`), lane blockers, the seeded background in the lanes next
+    to the ego's, the scripted actors (``update(sim, t)`` before every simulator step) and
+    the lanes (index -> :class:`~ego.lane_frame.LanePolyline`)."""
+
+    def __init__(self, config: HighwayConfig, geometry: VehicleGeometry,
+                 traffic: Callable[[MotorwayWorld], None]) -> None:
+        self.config = config
+        self.geometry = geometry
+        self.traffic = traffic
+        self.sim: TrafficSim | None = None
+        self.actors: list = []
+        self.colors: dict[str, tuple[int, int, int]] = {}
+        self.lanes: dict[int, LanePolyline] = {}
+        self._specs: list[VehicleSpec] = []
+        self._required: list[str] = []
+        self._clear: list[tuple[int, float, float]] = []
+        self._types: set[str] = set()
+
+    def vehicle(self, spec: VehicleSpec, vtype: VehicleType, actor=None, *, required: bool = True) -> None:
+        """Put a scenario vehicle on the road (its type added once), scripted by ``actor``."""
+        self.add_type(vtype)
+        self._specs.append(spec)
+        if actor is not None:
+            self.actors.append(actor)
+        self.colors[spec.id] = vtype.color
+        if required:
+            self._required.append(spec.id)
+
+    def add_type(self, vtype: VehicleType) -> None:
+        if vtype.id not in self._types:
+            self._types.add(vtype.id)
+            self.sim.add_type(vtype)
+
+    def keep_clear(self, lane: int, start: float = 0.0, end: float = 1e9) -> None:
+        """No background vehicle between ``start`` and ``end`` (m) in ``lane``."""
+        self._clear.append((lane, start, end))
+
+    def background(self, rng: np.random.Generator) -> list[VehicleSpec]:
+        """Seeded background traffic in the lanes next to the ego's."""
+        c = self.config
+        lanes = [lane for lane in (c.ego_lane - 1, c.ego_lane + 1) if 0 <= lane < N_LANES]
+        return background_traffic(
+            rng, lanes=lanes, start=max(10.0, c.ego_start - 250.0), end=c.ego_start + 700.0,
+            density=c.traffic_density, speed=c.traffic_speed,
+            min_spacing=max(20.0, 1.5 * c.traffic_speed) + TRAFFIC_TYPE.length,
+            route=ROUTE, type_id=TRAFFIC_TYPE.id, keep_clear=self._clear,
+        )
+
+    def setup(self, sim: TrafficSim, rng: np.random.Generator) -> list[str]:
+        """Populate ``sim`` (started): returns the ids it could not place."""
+        c = self.config
+        self.sim = sim
+        self.actors, self.colors, self._specs, self._required, self._clear = [], {}, [], [], []
+        self._types = set()
+        self.add_type(ego_type(EGO, self.geometry))
+        # the background's top speed is traffic_speed: the simulator's drivers would otherwise
+        # speed up to the motorway's limit (130 km/h)
+        self.add_type(replace(TRAFFIC_TYPE, max_speed=c.traffic_speed))
+        sim.add_route(ROUTE, [EDGE])
+        self.traffic(self)
+        if hasattr(c, "block_left"):  # a configuration with lane blockers
+            self.add_type(BLOCKER_TYPE)
+        for flag, lane, name in ((getattr(c, "block_left", False), c.ego_lane + 1, "blocker_left"),
+                                 (getattr(c, "block_right", False), c.ego_lane - 1, "blocker_right")):
+            if flag and 0 <= lane <= 2:
+                self.vehicle(VehicleSpec(name, BLOCKER_TYPE.id, ROUTE, lane, c.ego_start, c.ego_speed),
+                             BLOCKER_TYPE, PacedVehicle(name, c.ego_speed))
+                self.keep_clear(lane, c.ego_start - 45.0, c.ego_start + 45.0)
+        specs = self._specs + self.background(rng)
+        required = self._required
+        sim.add_vehicles([*specs, VehicleSpec(EGO, EGO, ROUTE, c.ego_lane, c.ego_start, c.ego_speed)])
+        missing = sim.insert(required=[EGO, *required])
+        for spec in specs:
+            if spec.id not in missing and spec.id not in required:
+                sim.keep_lane(spec.id)
+        for actor in self.actors:
+            actor.start(sim)
+        sim.control(EGO, self.geometry)
+        self.colors[EGO] = EGO_COLOR
+        shapes = sim.lane_shapes()
+        self.lanes = {int(lid.rsplit("_", 1)[1]): LanePolyline(pts, width, lid)
+                      for lid, (width, pts) in shapes.items() if lid.startswith(EDGE + "_")}
+        return missing
+
+    def lane_width(self, lane: int) -> float:
+        """The width (m) of ``lane`` as the simulator has it (before :meth:`setup` returns)."""
+        return self.sim.lane_shapes()[f"{EDGE}_{lane}"][0]
+
+
+def ego_plant(config: HighwayConfig, geometry: VehicleGeometry, pose: tuple[float, float, float]) -> BicyclePlant:
+    """Report 000's car at ``pose`` (x, y in m, yaw rad) and ``ego_speed``; with ``abs`` the
+    friction-aware drive and brake, the command limited to the whole friction circle."""
+    c = config
+    x, y, psi = pose
+    params = NonlinearBicycleParams(slip_speed_floor=1.0, abs=c.abs)
+    # with ABS no demand beyond the whole friction circle reaches the tyres (the model
+    # trims it further to what the circle leaves beside the lateral force)
+    grip = params.F_max / params.Nw if c.abs else INF
+    return BicyclePlant(NonlinearBicycle(params), geometry, c.dt, c.substeps,
+                        ActuatorLimits(max_steer=c.max_steer, min_command=-grip, max_command=grip,
+                                       stop_speed=0.5),
+                        state=(x, c.ego_speed, y, 0.0, psi, 0.0))
+
+
+# --- the sensors and the observation ------------------------------------------------------
+
+class SurroundView:
+    """What the ego knows of itself and the traffic, every control period.
+
+    The road sensor: its centre of gravity in the frame of its start lane (``s``,
+    ``d_road`` m, ``heading_error`` rad, ``curvature`` 1/m, ``ds``/``dd`` m/s). The
+    surround sensor (:class:`~ego.scenarios.sensor.SurroundSensor`): ``front``/``rear``
+    objects, their bumper gaps (m) and times to collision (s), looked at every simulator
+    step and carried on in between. ``target_lane`` is the lane the observation's ``d`` is
+    measured from (the manoeuvre moves it)."""
+
+    def __init__(self, config: HighwayConfig, geometry: VehicleGeometry) -> None:
+        self.config = config
+        self.geometry = geometry
+        #: the trace columns a motorway step writes, in the order it writes them
+        self.row_names = ROW
+        self.sensor: SurroundSensor | None = None
+        self.lanes: dict[int, LanePolyline] = {}
+        self.lane_offset: dict[int, float] = {}
+        self.road: LanePolyline | None = None
+        self.road_halfwidth = 0.0
+        self.target_lane = 0
+        self.s = self.d_road = self.heading_error = self.curvature = self.ds = self.dd = 0.0
+        self.X = self.Y = 0.0
+        self.ttc_front = self.ttc_rear = INF
+        self.gap_front = self.gap_rear = INF
+        self.around: tuple[list, list] = ([], [])
+        self._looked = False
+        self._plant = None
+        self._sim = None
+
+    def setup(self, sim: TrafficSim | None, lanes: dict[int, LanePolyline], plant) -> None:
+        """Measure in ``lanes`` (index -> lane; the start lane ``ego_lane``) for ``plant``;
+        ``sim`` is what :meth:`sense` and :meth:`push` talk to (None: the sensor is fed by
+        hand, through ``sensor.sync``)."""
+        c, g = self.config, self.geometry
+        self._sim, self._plant = sim, plant
+        self.lanes = lanes
+        self.road = lanes[c.ego_lane]
+        self.lane_offset = {i: self.road.project(*lane.points[0])[1] for i, lane in lanes.items()}
+        outer = [abs(off) + 0.5 * lanes[i].width for i, off in self.lane_offset.items()]
+        # beyond the outer lane edge by more than half a car: off the road
+        self.road_halfwidth = max(outer) + 0.5 * g.width + 0.5
+        self.target_lane = c.ego_lane
+        self.ttc_front = self.ttc_rear = INF
+        self.gap_front = self.gap_rear = INF
+        self.frame()
+        bands = {i: (off - 0.5 * lanes[i].width, off + 0.5 * lanes[i].width)
+                 for i, off in self.lane_offset.items()}
+        self.sensor = SurroundSensor(self.road, bands, g.cg_to_front, g.length, g.width, horizon=c.sumo_step)
+        if sim is not None:
+            # one subscription for the sensor and the traffic log, as far as either looks
+            sim.subscribe_surroundings(EGO, max(c.sensor_range, LOG_REACH))
+
+    def frame(self) -> None:
+        """Lane-frame position and velocity of the ego's centre of gravity (the road sensor)."""
+        X, u, Y, v, psi, r = self._plant.state
+        s, d, err, kappa = self.road.frame(X, Y, psi)
+        c, sn = math.cos(err), math.sin(err)
+        self.X, self.Y = X, Y
+        self.s, self.d_road, self.heading_error, self.curvature = s, d, err, kappa
+        self.ds = u * c - v * sn
+        self.dd = u * sn + v * c
+
+    def sense(self, t: float) -> None:
+        """The surround sensor's view at a simulator step."""
+        sim = self._sim
+        ids, rows = self.around = sim.surroundings(EGO)
+        reach = self.config.sensor_range
+        if reach < LOG_REACH:  # the subscription reaches farther for the traffic log
+            x, y = sim.front_bumper(EGO)
+            near = [i for i, r in enumerate(rows) if math.hypot(r[0] - x, r[1] - y) <= reach]
+            ids, rows = [ids[i] for i in near], [rows[i] for i in near]
+        self.sensor.sync(t, ids, rows)
+        self._looked = False
+
+    def look(self, t: float) -> Collision | None:
+        """Gaps and TTCs now; a collision the simulator has not reported (yet) when the
+        outlines overlap."""
+        sensor = self.sensor
+        if self._looked:  # between simulator steps: the same vehicles, moved on
+            sensor.advance(t, self.s)
+        else:
+            sensor.scan(t, self.s, self.d_road, self.heading_error)
+            self._looked = True
+        front, rear = sensor.front, sensor.rear
+        ds = self.ds
+        gap = self.gap_front = front.gap
+        self.ttc_front = time_to_collision(gap, ds - front.speed)
+        gap = self.gap_rear = rear.gap
+        self.ttc_rear = time_to_collision(gap, rear.speed - ds)
+        if self.gap_front <= 0.0 or self.gap_rear <= 0.0:
+            return self._overlap(front.id if self.gap_front <= 0.0 else rear.id)
+        return None
+
+    def _overlap(self, other: str) -> Collision | None:
+        box = self.sensor.box(other)
+        x = self._plant.state
+        g = self.geometry
+        off = g.cg_to_front - 0.5 * g.length  # the CG is not the box centre
+        ego_box = (x[0] + off * math.cos(x[4]), x[2] + off * math.sin(x[4]), x[4], g.length, g.width)
+        if box is not None and boxes_overlap(ego_box, box):
+            kind = "outlines overlap (surround sensor)"
+            if other == self.sensor.front.id:  # the ego ran into it
+                return Collision(EGO, other, kind, self.ds, self.sensor.front.speed)
+            return Collision(other, EGO, kind, self.sensor.rear.speed, self.ds)
+        return None
+
+    def observe(self, obs, t: float) -> None:
+        """The tracking task's observation (the references are the manoeuvre's)."""
+        road_observation(obs, t, self.s, self.ds, self.d_road - self.lane_offset[self.target_lane], self.dd,
+                         self._plant.state, self.heading_error, self.curvature)
+
+    def diverged(self) -> str | None:
+        """Why the ego's state is beyond any controller's doing, or None."""
+        state = self._plant.state
+        u, r = state[1], state[5]
+        # comparisons are False for NaN, so anything odd falls through to the full check
+        if (abs(self.d_road) <= self.road_halfwidth and -1.0 <= u <= 80.0 and abs(r) <= 2.5
+                and abs(self.heading_error) <= 1.3):
+            return None
+        return divergence(state, self.d_road, self.heading_error, self.road_halfwidth)
+
+    def push(self, sim: TrafficSim) -> None:
+        """The ego's pose into the simulator (its drivers see the speed along the road)."""
+        x = self._plant.state
+        sim.push(EGO, x[0], x[2], x[4], self.ds)
+
+    def traffic_row(self) -> tuple[tuple[float, float], list, list]:
+        """The ego's box centre and this step's vehicles, for the traffic log."""
+        x = self._plant.state
+        off = self.geometry.cg_to_front - 0.5 * self.geometry.length
+        psi = x[4]
+        ids, rows = self.around
+        return (x[0] + off * math.cos(psi), x[2] + off * math.sin(psi)), ids, rows
+
+
+# --- trace, plots and recording ------------------------------------------------------------
+
+COLUMNS = (
+    Column("t", "s", "time"),
+    Column("x", "m", "centre of gravity, world frame"),
+    Column("y", "m", "centre of gravity, world frame"),
+    Column("s", "m", "centre of gravity along the start lane"),
+    Column("d", "m", "offset from the target lane centre (+ left)"),
+    Column("d_ref", "m", "lateral reference (offset from the target lane centre)"),
+    Column("e_lat", "m", "lateral error d - d_ref"),
+    Column("lane_offset", "m", "offset from the start lane centre (+ left)"),
+    Column("speed", "m/s", "body longitudinal speed u"),
+    Column("ds", "m/s", "speed along the road"),
+    Column("s_ref", "m", "longitudinal reference position"),
+    Column("speed_ref", "m/s", "longitudinal reference speed"),
+    Column("Fx", "N", "applied longitudinal force per driven wheel"),
+    Column("delta", "rad", "applied front steer angle"),
+    Column("ttc_front", "s", "time to collision with the front object (surround sensor)"),
+    Column("ttc_rear", "s", "time to collision with the rear object (surround sensor)"),
+    Column("gap_front", "m", "bumper gap to the front object, from the outlines"),
+    Column("gap_rear", "m", "bumper gap to the rear object, from the outlines"),
+    Column("lat_accel", "m/s^2", "body lateral acceleration"),
+    Column("yaw_rate", "rad/s", "yaw rate"),
+    Column("phase", "-", "manoeuvre phase (0 cruise, 1 lane change, 2 in lane, 3 done)"),
+    Column("target_lane", "-", "SUMO index of the target lane (0 right)"),
+)
+#: the order :meth:`ego.scenarios.base.Scenario._act` writes a motorway row in
+ROW = tuple(c.name for c in COLUMNS)
+PLOTS = (
+    Plot("e_lat", "lateral_error.png", "lateral error (actual - reference)"),
+    Plot("speed", "speed.png", "speed", refs=(Ref("speed reference", "speed_ref"),)),
+    Plot("delta", "steering.png", "front steer angle"),
+    Plot("Fx", "fx.png", "Fx per driven wheel"),
+    Plot("gap_front", "gap_front.png", "gap to the front object"),
+    Trajectory(ego_box=EGO_BOX),
+)
+
+
+def series(signal_names, signal_units) -> list[Series]:
+    """The recording's panels of every motorway run."""
+    return [
+        Series("e_lat", "plots/lateral_error/ego", "m", "lateral error (actual - reference)"),
+        Series("d", "plots/lateral_position/ego", "m", "ego"),
+        Series("d_ref", "plots/lateral_position/reference", "m", "reference"),
+        *vehicle_series(),
+        Series("ttc_front", "plots/ttc/front", "s", "front"),
+        Series("ttc_rear", "plots/ttc/rear", "s", "rear"),
+        *signal_series(signal_names, signal_units),
+    ]

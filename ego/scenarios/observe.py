@@ -1,0 +1,33 @@
+"""The observation builders: one per task, shared by every scenario of that task.
+
+A road task's controller (``tracking``, ``curve``) sees the ego in the lane frame of its
+reference lane (``ego.control.Observation``); :func:`road_observation` is the one place that
+fills it from the road sensor's measurements. The references (``s_ref``, ``d_ref``,
+``accel_ref``...) are the manoeuvre's to set. Observations are keyed by vehicle id
+(:meth:`ego.scenarios.base.Scenario.observations`): one entry for a single ego, one per
+follower in the platoon.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from ego.control.base import Observation
+
+
+def road_observation(obs: Observation, t: float, s: float, ds: float, d: float, dd: float,
+                     state: Sequence[float], heading_error: float, curvature: float) -> None:
+    """Fill ``obs`` in place (it is the controller's, reused every step): time ``t`` (s), the
+    centre of gravity at ``s`` along the lane and ``d`` across it (m, + left) moving at
+    ``ds``/``dd`` (m/s), the plant's ``state`` (X, u, Y, v, psi, r) for the body speeds and yaw
+    rate, the heading error (rad) and the lane's curvature (1/m)."""
+    obs.t = t
+    obs.s = s
+    obs.ds = ds
+    obs.d = d
+    obs.dd = dd
+    obs.speed = state[1]
+    obs.yaw_rate = state[5]
+    obs.vy = state[3]
+    obs.heading_error = heading_error
+    obs.curvature = curvature

@@ -1,0 +1,117 @@
+"""The safety layer: a filter between the controller's action and the plant.
+
+:class:`SafetyLayer` holds the friction limit (the whole friction circle as the largest
+braking command; the plant's ABS trims it further) and the automatic emergency brake
+(AEB): while the AEB is engaged the longitudinal command becomes full braking, whatever
+the controller asked; the steering passes through. Engaging is decided once per control
+period from the surround view (:meth:`SafetyLayer.update`); the manoeuvre is told
+(:meth:`ego.scenarios.manoeuvre.EvasiveManoeuvre.emergency_stop`) so it can leave a lane
+change it should not finish while braking hard.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from ego.scenarios.events import INF
+from ego.scenarios.sensor import Detection
+
+
+def braking_need(front: Detection, ds: float, margin: float = 0.0) -> float:
+    """Constant deceleration (m/s^2) that keeps the ego (speed ``ds`` m/s along the road)
+    ``margin`` (m) behind the ``front`` object (0 when nothing is ahead). A front object
+    braking at b: the ego must stop within the gap plus that object's stopping distance,
+    v^2 / (2 (gap - margin + v_f^2 / (2 b))), but no less than closing^2 / (2 (gap - margin))
+    (the object may stop braking); one at constant speed: closing^2 / (2 (gap - margin)) when
+    closing in."""
+    if front.gap == INF:
+        return 0.0
+    room = max(front.gap - margin, 0.1)
+    closing = ds - front.speed
+    need = closing * closing / (2.0 * room) if closing > 0.0 else 0.0
+    decel = -front.accel
+    if decel > 0.5:
+        v = max(ds, 0.0)
+        need = max(need, v * v / (2.0 * (room + front.speed * front.speed / (2.0 * decel))))
+    return need
+
+
+def friction_limit(params) -> float:
+    """The largest deceleration (m/s^2) the tyres and the rolling resistance give:
+    F_max / m + f g."""
+    return params.F_max / params.m + params.f * params.g
+
+
+class SafetyLayer:
+    """AEB and the friction limit between the controller and the plant.
+
+    ``view`` is the surround view (:class:`ego.scenarios.motorway.SurroundView`), ``config``
+    the scenario's (``aeb``, ``aeb_decel``, ``aeb_ttc``), ``event(kind, text, level)`` the
+    run's event log and ``clock()`` the run's time (s)."""
+
+    __slots__ = ("config", "view", "event", "clock", "manoeuvre", "active", "time", "engagements",
+                 "full_brake")
+
+    def __init__(self, config, view, event: Callable[..., None], clock: Callable[[], float]) -> None:
+        self.config = config
+        self.view = view
+        self.event = event
+        self.clock = clock
+        self.manoeuvre = None  #: told when the AEB engages (``emergency_stop``)
+        self.active = False
+        self.time: float | None = None  #: when the AEB first engaged
+        self.engagements = 0
+        self.full_brake = 0.0
+
+    def reset(self, plant) -> None:
+        p = plant.model.params
+        self.active = False
+        self.time = None
+        self.engagements = 0
+        #: the AEB's command: the whole friction circle as braking force (ABS trims it)
+        self.full_brake = -p.F_max / p.Nw
+
+    def filter(self, action: tuple[float, float]) -> tuple[float, float]:
+        """The action the plant gets: full braking while the AEB is engaged."""
+        if self.active:
+            return self.full_brake, action[1]
+        return action
+
+    def update(self) -> None:
+        """Engage or release the AEB (see ``aeb`` in the configuration)."""
+        c = self.config
+        view = self.view
+        front = view.sensor.front
+        if not self.active:
+            braking_in_lane = self.manoeuvre.braking_in_lane()
+            if not braking_in_lane and view.ttc_front >= c.aeb_ttc:
+                return  # the common case, decided without computing the need
+            need = braking_need(front, view.ds)
+            if (braking_in_lane and need >= c.aeb_decel) or self.imminent():
+                self.manoeuvre.emergency_stop()
+                self.active = True
+                self.engagements += 1
+                if self.time is None:
+                    self.time = self.clock()
+                self.event("aeb", f"AEB engages: braking at the friction limit (front {front.id}, gap "
+                           f"{front.gap:.1f} m, TTC {view.ttc_front:.2f} s, needs {need:.1f} m/s^2)", "WARN")
+        else:
+            need = braking_need(front, view.ds)
+            # it brakes until it no longer closes in: a release while closing hands a fast
+            # approach back to a slow position loop
+            closing = view.ds - front.speed if front.gap != INF else 0.0
+            if need < 0.5 * c.aeb_decel and closing <= 0.0 and not self.imminent():
+                self.active = False
+                self.event("aeb", f"AEB releases (needs {need:.1f} m/s^2)")
+
+    def imminent(self) -> bool:
+        """The front TTC is below ``aeb_ttc`` and the ego does not clear the front object
+        sideways before it would hit it (a lane change leaving a braking car)."""
+        view = self.view
+        ttc = view.ttc_front
+        if ttc >= self.config.aeb_ttc:
+            return False
+        front = view.sensor.front
+        # the ego moves away from the object's side at this relative speed (m/s)
+        clearing = -front.side * (view.dd - front.lateral_speed)
+        return not (clearing > 0.0 and front.overlap / clearing < ttc)

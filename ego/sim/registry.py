@@ -1,0 +1,121 @@
+"""Traffic simulators by name: ``name -> Backend(factory, capabilities)``.
+
+A scenario asks for a simulator with :func:`make_sim` and declares what it needs of one
+(:class:`Capabilities`); :func:`check_backend_for` refuses a backend that lacks it before
+anything starts. Backend options (highway-env's ``video``, say) travel as data: a mapping
+handed to the factory, checked by the backend's ``check_options``.
+
+A backend module is imported only when its factory runs, so SUMO runs never load
+highway-env and the registry costs nothing to import.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ego.params import ConfigError, did_you_mean
+from ego.sim.protocol import TrafficSim
+
+
+@dataclass(frozen=True)
+class Capabilities:
+    """What a simulator can do beyond the :class:`~ego.sim.protocol.TrafficSim` basics."""
+
+    #: vehicles move sideways within a lane and change lane gradually (SUMO's sublane model)
+    sublane: bool = False
+    #: scripted actors (speed commands, blind driving, sideways moves) are honoured
+    scripted_actors: bool = True
+    #: it renders a video of the run (backend option ``video``)
+    video: bool = False
+    #: any network (curves, junctions); False: straight multi-lane roads only
+    any_network: bool = False
+
+
+@dataclass(frozen=True)
+class SimSetup:
+    """What every simulator is started with (seconds, metres)."""
+
+    net: Path
+    step_length: float
+    seed: int
+    #: sublane width (m), for a backend with the sublane model
+    lateral_resolution: float = 0.875
+    #: the edge the scenario drives on (a straight-road backend builds only that)
+    edge: str | None = None
+    #: the run's simulated time (s), for a backend that renders a video
+    duration: float = 0.0
+
+
+@dataclass(frozen=True)
+class Backend:
+    """A registered simulator: ``factory`` is ``"module:function"``, the function taking
+    (SimSetup, options mapping) and returning a :class:`TrafficSim`; ``options`` the option
+    names it accepts; ``requires`` the Python package it needs (None: always there)."""
+
+    name: str
+    factory: str
+    capabilities: Capabilities
+    options: tuple[str, ...] = ()
+    requires: str | None = None
+    install: str = ""
+    #: "module:function" checking the options before anything runs (ConfigError)
+    check: str | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def load(self, ref: str) -> Callable:
+        module, _, name = ref.partition(":")
+        return getattr(importlib.import_module(module), name)
+
+
+BACKENDS: dict[str, Backend] = {}
+
+
+def register(backend: Backend) -> Backend:
+    """Make ``backend`` known by its name (a later one of the same name replaces it)."""
+    BACKENDS[backend.name] = backend
+    return backend
+
+
+register(Backend("sumo", "ego.sumo.bridge:make_sim",
+                 Capabilities(sublane=True, scripted_actors=True, video=False, any_network=True)))
+register(Backend("highway-env", "ego.highway_env.bridge:make_sim",
+                 Capabilities(sublane=False, scripted_actors=True, video=True, any_network=False),
+                 options=("video",), requires="highway_env", install="pip install 'ego[highway]'",
+                 check="ego.highway_env.video:check_options"))
+
+
+def backend(name: str) -> Backend:
+    """The registered backend ``name``, or a ConfigError naming the known ones."""
+    try:
+        return BACKENDS[name]
+    except KeyError:
+        raise ConfigError(f"bad value for --backend: {name!r} (expected one of: {', '.join(BACKENDS)})"
+                          f"{did_you_mean(name, BACKENDS)}") from None
+
+
+def check_options(name: str, options: Mapping[str, Any]) -> None:
+    """ConfigError unless backend ``name`` is installed and takes every option in ``options``."""
+    b = backend(name)
+    if b.requires is not None and importlib.util.find_spec(b.requires) is None:
+        raise ConfigError(f"--backend {name} needs the {b.requires.replace('_', '-')} package: {b.install}")
+    for key in options:
+        if key not in b.options:
+            takers = [o.name for o in BACKENDS.values() if key in o.options]
+            if takers:
+                raise ConfigError(f"--{key} needs --backend {' or '.join(takers)} (--backend {name} "
+                                  f"takes {', '.join('--' + o for o in b.options) or 'no options'})")
+            raise ConfigError(f"bad backend option {key!r} (--backend {name} takes "
+                              f"{', '.join(b.options) or 'none'})")
+    if b.check is not None and options:
+        b.load(b.check)(options)
+
+
+def make_sim(name: str, setup: SimSetup, options: Mapping[str, Any] | None = None) -> TrafficSim:
+    """A new (not yet started) simulation of backend ``name``."""
+    b = backend(name)
+    return b.load(b.factory)(setup, dict(options or {}))

@@ -1,0 +1,71 @@
+"""The simulator boundary: backends by name with declared capabilities, options as data,
+one error type for every backend, and no libsumo outside ego/sumo."""
+
+import ast
+from pathlib import Path
+
+import pytest
+
+from ego.params import ConfigError
+from ego.runner import RunSpec, run
+from ego.sim import BACKENDS, SimError, check_options
+from ego.sim.protocol import TrafficSim
+from ego.sumo.bridge import SumoBridge, SumoError
+
+PACKAGE = Path(__file__).resolve().parents[2] / "ego"
+
+
+def test_both_backends_are_registered_with_their_capabilities():
+    sumo, he = BACKENDS["sumo"], BACKENDS["highway-env"]
+    assert sumo.capabilities.sublane and sumo.capabilities.any_network and not sumo.capabilities.video
+    assert he.capabilities.video and not he.capabilities.sublane and he.options == ("video",)
+    assert all(b.capabilities.scripted_actors for b in BACKENDS.values())
+
+
+def test_options_are_checked_against_the_backend():
+    check_options("sumo", {})
+    with pytest.raises(ConfigError, match="--video needs --backend highway-env"):
+        check_options("sumo", {"video": "run.gif"})
+    with pytest.raises(ConfigError, match="bad backend option 'zoom'"):
+        check_options("sumo", {"zoom": 2})
+    with pytest.raises(ConfigError, match="bad value for --backend: 'carla'"):
+        check_options("carla", {})
+
+
+def test_sumo_errors_are_sim_errors_and_the_bridge_has_the_protocol():
+    assert issubclass(SumoError, SimError)
+    missing = [name for name in dir(TrafficSim) if not name.startswith("_") and name != "controlled"
+               and not hasattr(SumoBridge, name)]
+    assert missing == []
+
+
+def test_highway_env_raises_sim_errors_not_sumo_errors():
+    source = (PACKAGE / "highway_env" / "bridge.py").read_text()
+    assert "SumoError" not in source and "raise SimError(" in source
+
+
+def test_no_libsumo_import_outside_ego_sumo():
+    offenders = []
+    for path in PACKAGE.rglob("*.py"):
+        if path.parent.name == "sumo":
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import)
+                     else [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+            if any(n.split(".")[0] == "libsumo" for n in names):
+                offenders.append(str(path.relative_to(PACKAGE)))
+    assert offenders == []
+
+
+def test_the_sim_package_imports_nothing_above_it():
+    for path in (PACKAGE / "sim").glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("ego."):
+                assert node.module.split(".")[1] in ("sim", "models", "params"), (path.name, node.module)
+
+
+@pytest.mark.sumo
+def test_backend_options_travel_as_data(tmp_path):
+    with pytest.raises(ConfigError, match="--video needs --backend highway-env"):
+        run(RunSpec("cut-in", "pid", backend_options={"video": str(tmp_path / "v.gif")}))
+    assert not (tmp_path / "v.gif").exists()
