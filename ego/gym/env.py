@@ -31,6 +31,7 @@ import numpy as np
 
 from ego.checks import MAX_SEED, check_seed
 from ego.control import CONTROLLERS, controller_spec
+from ego.control.tasks import TASKS
 from ego.models import NonlinearBicycleParams
 from ego.params import ConfigError, apply_overrides, describe, param, unknown_parameter
 from ego.runner import RunSpec, configure
@@ -85,42 +86,40 @@ class EgoView:
     def __init__(self, scenario, np_random) -> None:
         self.scenario = scenario
         self.np_random = np_random
-        self.following = scenario.task == "car-following"
         self._sensor: SurroundSensor | None = None
         self._looked = -1
-        #: () -> (speed along the lane m/s, tracking error m, longitudinal and lateral
-        #: acceleration m/s^2) now; a road task's longitudinal acceleration is the rate of the
-        #: speed along the lane since the last call
-        self.reward_signals = self._following_signals if self.following else self._road_signals
+
+    @property
+    def agent(self) -> str:
+        """The vehicle the agent drives (the ego; the platoon's first follower)."""
+        return self.scenario.agent_id
 
     @property
     def obs(self):
-        """The observation the scenario's controller gets (the first follower's in a platoon)."""
-        o = self.scenario.obs
-        return o[0] if self.following else o
+        """The observation the agent's vehicle's controller gets."""
+        return self.scenario.observation(self.agent)
 
     def plant(self):
-        sc = self.scenario
-        return sc.plants[0] if self.following else sc.ego
+        return self.scenario.plant(self.agent)
 
-    def _following_signals(self) -> tuple[float, float, float, float]:
+    def reward_signals(self) -> tuple[float, float, float, float]:
+        """(speed along the lane m/s, tracking error m, longitudinal and lateral acceleration
+        m/s^2) now; without a measured longitudinal acceleration, the rate of the speed along
+        the lane since the last call."""
         sc = self.scenario
-        o = sc.obs[0]
-        return o.speed, sc.e[0], o.accel, 0.0
-
-    def _road_signals(self) -> tuple[float, float, float, float]:
-        sc = self.scenario
-        o = sc.obs
-        ds, t = o.ds, o.t
-        t0, ds0 = self._prev
-        self._prev = (t, ds)
-        return ds, o.d - o.d_ref, (ds - ds0) / (t - t0) if t > t0 else 0.0, sc.ego.lateral_accel
+        speed, error, a_lon, a_lat = sc.agent_signals(self.agent)
+        if a_lon is None:
+            t = self.obs.t  # the time the observation was taken
+            t0, ds0 = self._prev
+            self._prev = (t, speed)
+            a_lon = (speed - ds0) / (t - t0) if t > t0 else 0.0
+        return speed, error, a_lon, a_lat
 
     _prev = (0.0, 0.0)
 
     def reset(self) -> None:
         sc = self.scenario
-        self._prev = (sc.t, sc.obs[0].speed if self.following else sc.obs.ds)
+        self._prev = (sc.t, sc.agent_signals(self.agent)[0])
         self._looked = -1
         self._sensor = None
 
@@ -129,14 +128,10 @@ class EgoView:
         """(ego row, rows of the others, ego length m); a row is (s, d, v_s, v_d, heading) of
         a box centre in the ego's lane frame (m, m/s, rad; + left)."""
         sc = self.scenario
-        if self.following:
-            return self._platoon()
-        road = sc.view or sc  # a composed scenario's road and surround sensors are its view
-        ego = (road.s, road.d_road, road.ds, road.dd, road.heading_error)
-        sensor = getattr(road, "sensor", None)
-        if sensor is None:
-            sensor = self._own_sensor()
-        return ego, sensor.tracks(sc.t), sc.geometry.length
+        ego, rows, length = sc.lane_rows(self.agent)
+        if rows is None:  # no surround sensor of its own
+            rows = self._own_sensor().tracks(sc.t)
+        return ego, rows, length
 
     def _own_sensor(self) -> SurroundSensor:
         """A surround sensor of the env's own for a scenario without one (the curve, lane
@@ -153,17 +148,6 @@ class EgoView:
             self._looked = look
             self._sensor.sync(look * per * c.dt, *sc.bridge.surroundings(sc.ego_id))
         return self._sensor
-
-    def _platoon(self):
-        """The leader and the followers behind the first, all on the platoon's one lane."""
-        sc = self.scenario
-        half = 0.5 * sc.config.length
-        first = sc.plants[0].state
-        ego = (first[0] - half, 0.0, first[1], 0.0, 0.0)
-        lead = sc.obs[0]
-        rows = [(first[0] + sc.gap[0] + half, 0.0, lead.lead_speed, 0.0, 0.0)]
-        rows += [(p.state[0] - half, 0.0, p.state[1], 0.0, 0.0) for p in sc.plants[1:]]
-        return ego, rows, sc.config.length
 
 
 class Reward:
@@ -256,7 +240,7 @@ class EgoEnv(gym.Env):
         config: dict[str, Any] = {
             "observation": {"type": "EgoState"},
             "action": {"type": "ContinuousAction", "longitudinal": True,
-                       "lateral": sc.task != "car-following"},
+                       "lateral": TASKS[sc.task].returns[1].high > 0.0},  # a task that steers
             "controller": DEFAULT_CONTROLLER[sc.task],
             "reward_speed_range": [0.0, 30.0],
         }
@@ -310,7 +294,7 @@ class EgoEnv(gym.Env):
             every = round(ratio)
 
         # the agent drives both channels: the loop needs no controller of its own
-        helper = not (action.longitudinal and action.lateral) or self.task == "car-following"
+        helper = not (action.longitudinal and action.lateral)
         own = cls.build_controller(spec, ctrl_params, sc_config) if helper else AgentSlot()
         self.close()
         self.scenario = cls(sc_config, own, seed=0, controller_name=f"agent+{controller}" if helper else "agent")
@@ -323,7 +307,6 @@ class EgoEnv(gym.Env):
         self.action_space = action.space
         self._every = every
         self._helper = helper
-        self._following = self.task == "car-following"
         self._view = EgoView(self.scenario, self.np_random)
 
     # -- the Gymnasium interface -------------------------------------------------------------
@@ -368,22 +351,13 @@ class EgoEnv(gym.Env):
                     if sc.status != "running":
                         break
                     step(command)
-        elif self._following:
-            # the others' controllers step as in a run; the first follower's command is the agent's
-            first = (command[0], 0.0)
-            controller_step = sc.controller.step
-            for _ in range(self._every):
-                own = controller_step(sc.obs)
-                own[0] = first
-                step(own)
-                if sc.status != "running":
-                    break
         else:
+            # the scenario's controllers step as in a run; the agent's vehicle takes the agent's
+            # channels (the platoon's other followers keep theirs)
             lon, lat = command
-            controller_step = sc.controller.step
+            controller_step, joint, agent = sc.controller.step, sc.joint_action, sc.agent_id
             for _ in range(self._every):
-                own = controller_step(sc.obs)
-                step((own[0] if lon is None else lon, own[1] if lat is None else lat))
+                step(joint(controller_step(sc.obs), agent, lon, lat))
                 if sc.status != "running":
                     break
         status = sc.status

@@ -479,6 +479,43 @@ class Scenario:
                          list(self.events), columns, trace, self.trace.units(),
                          self.traffic.log() if self.traffic is not None else None, self._lanes)
 
+    # -- one contract for every task: the controlled vehicles by id ------------------------
+    # (what a front-end driving one vehicle, ego.gym, reads; the platoon has one per follower)
+    @property
+    def agent_id(self) -> str:
+        """The vehicle an agent drives: the first controlled one (the ego, the platoon's first
+        follower)."""
+        return self.controlled_ids[0]
+
+    def observation(self, vid: str):
+        """What vehicle ``vid``'s controller observes now (its task's observation)."""
+        return self.obs
+
+    def plant(self, vid: str) -> Plant:
+        """Vehicle ``vid``'s plant."""
+        return self.ego
+
+    def joint_action(self, own, vid: str, longitudinal: float | None, lateral: float | None):
+        """The action :meth:`step` takes when vehicle ``vid`` gets ``longitudinal`` and
+        ``lateral`` (None: that channel stays ``own``'s, the scenario's controller's)."""
+        return (own[0] if longitudinal is None else longitudinal, own[1] if lateral is None else lateral)
+
+    def agent_signals(self, vid: str) -> tuple[float, float, float | None, float]:
+        """Vehicle ``vid`` now: (speed along its lane m/s, tracking error m, longitudinal and
+        lateral acceleration m/s^2); the longitudinal one None when the scenario does not
+        measure it (the rate of the speed stands for it)."""
+        o = self.obs
+        return o.ds, o.d - o.d_ref, None, self.plant(vid).lateral_accel
+
+    def lane_rows(self, vid: str):
+        """(vehicle ``vid``'s row, the other vehicles' rows or None without a surround sensor,
+        its length m); a row is (s, d, v_s, v_d, heading) of a box centre in its lane's frame
+        (m, m/s, rad; + left)."""
+        road = self.view or self  # a composed scenario's road and surround sensors are its view
+        ego = (road.s, road.d_road, road.ds, road.dd, road.heading_error)
+        sensor = getattr(road, "sensor", None)
+        return ego, (sensor.tracks(self.t) if sensor is not None else None), self.geometry.length
+
     def _other_party(self) -> str | None:
         c = self.collision
         if c is None:
@@ -573,8 +610,11 @@ class ComposedLoop:
         sc.parts = parts
         sc.world, sc.view, sc.manoeuvre, sc.safety = parts.world, parts.view, parts.manoeuvre, parts.safety
         for name in ("_setup", "_act", "_update", "_before_sumo_step", "_after_sumo_step", "_record_boxes",
-                     "_setup_traffic_log", "_log_traffic", "_check_divergence", "_final_status", "_scene"):
+                     "_setup_traffic_log", "_log_traffic", "_scene"):
             setattr(sc, name, getattr(ComposedLoop, name).__get__(sc))
+        # the parts' own methods where the loop's hook is exactly theirs (no wrapper per step)
+        sc._check_divergence = parts.view.diverged
+        sc._final_status = parts.manoeuvre.final_status
         if parts.series is not None and type(sc)._series is Scenario._series:
             sc._series = lambda: parts.series(sc._signal_names, sc._signal_units)
 
@@ -646,21 +686,16 @@ class ComposedLoop:
         centre, ids, rows = self.view.traffic_row()
         self.traffic.add(self.t, centre, ids, rows)
 
-    def _check_divergence(self) -> str | None:
-        return self.view.diverged()
-
     def _update(self) -> None:
-        view = self.view
-        collision = view.look(self.t)
+        view, t = self.view, self.t
+        collision = view.look(t)
         if collision is not None and self.status == "running":
             self._collided(collision)
             if self.status != "running":
                 return
-        self.manoeuvre.plan(self.obs, self.t)
-        view.observe(self.obs, self.t)
-
-    def _final_status(self) -> tuple[str, str]:
-        return self.manoeuvre.final_status()
+        obs = self.obs
+        self.manoeuvre.plan(obs, t)
+        view.observe(obs, t)
 
 
 def _unfiltered(action):

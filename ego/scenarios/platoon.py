@@ -310,6 +310,35 @@ class PlatoonScenario(Scenario):
         self._manoeuvre_at = self._next_manoeuvre_time()
         self._after_sumo_step()
 
+    # -- the controlled vehicles by id (Scenario's contract) -------------------------------
+    def observation(self, vid: str) -> FollowingObservation:
+        return self.obs[self.ids.index(vid)]
+
+    def plant(self, vid: str) -> LongitudinalPlant:
+        return self.plants[self.ids.index(vid)]
+
+    def joint_action(self, own, vid: str, longitudinal: float | None, lateral: float | None):
+        """The controllers' actions (one per follower) with ``vid``'s longitudinal command
+        replaced (a follower does not steer)."""
+        own[self.ids.index(vid)] = (longitudinal, 0.0)
+        return own
+
+    def agent_signals(self, vid: str) -> tuple[float, float, float | None, float]:
+        i = self.ids.index(vid)
+        o = self.obs[i]
+        return o.speed, self.e[i], o.accel, 0.0
+
+    def lane_rows(self, vid: str):
+        """The leader and the followers behind ``vid``, all on the platoon's one lane."""
+        i = self.ids.index(vid)
+        half = 0.5 * self.config.length
+        own = self.plants[i].state
+        ego = (own[0] - half, 0.0, own[1], 0.0, 0.0)
+        lead = self.obs[0]
+        rows = [(self.plants[0].state[0] + self.gap[0] + half, 0.0, lead.lead_speed, 0.0, 0.0)]
+        rows += [(p.state[0] - half, 0.0, p.state[1], 0.0, 0.0) for j, p in enumerate(self.plants) if j != i]
+        return ego, rows, self.config.length
+
     # -- per step ---------------------------------------------------------------------------
     def _act(self, actions) -> None:
         """Every follower's command through its plant; the trace row for t (states before

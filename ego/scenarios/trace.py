@@ -219,7 +219,7 @@ class Trace:
                 raise TraceError(f"trace row has {len(values)} values for {width} columns")
             if tuple(sigs) != signals:
                 bad(sigs)
-            row = tuple(values) if identity else tuple(values[i] for i in order)
+            row = (values if type(values) is tuple else tuple(values)) if identity else tuple(values[i] for i in order)
             add(row + tuple(sigs.values()))
 
         return write
