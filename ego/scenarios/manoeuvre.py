@@ -95,7 +95,7 @@ class EvasiveManoeuvre:
         self.choice_reason = ""
         self.done_t: float | None = None
         self._inside_since: float | None = None
-        self._lane_leader, self._lane_follower = Detection(), Detection()
+        self._lane_leader = Detection()
         self.s0 = view.s
         self.speed_ref = self.config.ego_speed
         self.evade_speed = self.config.evade_speed
@@ -220,7 +220,7 @@ class EvasiveManoeuvre:
     # -- references -------------------------------------------------------------------------
     def target_leader(self) -> Detection:
         """The nearest vehicle ahead overlapping the target lane (surround sensor)."""
-        self.view.sensor.lane_neighbours(self.view.target_lane, self._lane_leader, self._lane_follower)
+        self.view.sensor.lane_leader(self.view.target_lane, self._lane_leader)
         return self._lane_leader
 
     def follow_reference(self, leader: Detection) -> tuple[float, float]:

@@ -266,6 +266,26 @@ class SurroundSensor:
             follower._copy(behind, behind._gap0 + moved - behind.speed * since)
         return True
 
+    def lane_leader(self, lane: int, leader: Detection) -> bool:
+        """:meth:`lane_neighbours` for the leader alone (the lane change's reference asks for
+        it every control period; the follower is not needed there)."""
+        band = self.bands.get(lane)
+        if band is None:
+            leader.clear()
+            return False
+        found = self._lanes.get(lane)
+        if found is None:
+            lo, hi, h = band[0], band[1], self.horizon
+            near = [o for o in self._objects if o[4] + abs(o[6]) * h > lo and o[3] - abs(o[6]) * h < hi]
+            found = self._lanes[lane] = (Detection(), Detection())
+            self._nearest(near, lo, hi, *found)
+        ahead = found[0]
+        if ahead._o is None:
+            leader.clear()
+        else:
+            leader._copy(ahead, ahead._gap0 + ahead.speed * (self._t - self._t_scan) - (self._s - self._s_scan))
+        return True
+
     def tracks(self, t: float) -> list[tuple[float, float, float, float, float]]:
         """Every vehicle seen at the last SUMO step, moved on to time ``t`` (s) at its
         velocity: (s, d) of its box centre in the lane frame (m), its velocity along and across

@@ -132,6 +132,8 @@ class SumoBridge:
         self._keep_route: dict[str, int] = {}
         self.collisions: list[Collision] = []
         self._ctx_vars: tuple[int, int, int] = (0, 0, 0)
+        #: vehicles whose position and angle SUMO reports after every step (poses())
+        self._pose_subscribed: set[str] = set()
         self._ls = None
 
     # -- lifecycle --------------------------------------------------------------------
@@ -156,6 +158,7 @@ class SumoBridge:
                             "SUMO's own messages are on stderr)") from None
         SumoBridge._running = True
         self._ls = libsumo
+        self._pose_subscribed = set()
 
     def close(self) -> None:
         if self._ls is not None:
@@ -407,7 +410,7 @@ class SumoBridge:
         excluded: ids and rows (centre x, y in m, yaw in rad, speed m/s, length, width in m)."""
         results = self._ls.vehicle.getContextSubscriptionResults(vid)
         p_key, a_key, v_key = self._ctx_vars
-        controlled, dims = self.controlled, self.dimensions
+        controlled, dims, known = self.controlled, self.dimensions, self._dims
         cos, sin, rad = math.cos, math.sin, math.radians
         ids, rows = [], []
         for other, var in results.items():
@@ -415,7 +418,7 @@ class SumoBridge:
                 continue
             xf, yf = var[p_key]
             psi = rad(90.0 - var[a_key])
-            length, width = dims(other)
+            length, width = known.get(other) or dims(other)
             half = 0.5 * length
             ids.append(other)
             rows.append((xf - half * cos(psi), yf - half * sin(psi), psi, var[v_key], length, width))
@@ -448,9 +451,26 @@ class SumoBridge:
         """Every vehicle as SUMO reports it: ids and rows (front bumper x, y in m, SUMO
         angle in deg, length, width in m). Cheap: no conversion happens here."""
         veh = self._ls.vehicle
-        get_pos, get_angle, dims = veh.getPosition, veh.getAngle, self.dimensions
         ids = veh.getIDList()
-        return list(ids), [(*get_pos(v), get_angle(v), *dims(v)) for v in ids]
+        # one call for every vehicle SUMO already reports after each step (a subscription per
+        # vehicle, made the first time it is seen), not two per vehicle
+        results = veh.getAllSubscriptionResults()
+        subscribed, dims = self._pose_subscribed, self.dimensions
+        from libsumo import constants as tc
+
+        p_key, a_key = tc.VAR_POSITION, tc.VAR_ANGLE
+        rows = []
+        for v in ids:
+            r = results.get(v) if v in subscribed else None
+            if r is None:  # new: asked directly this once
+                if v not in subscribed:
+                    veh.subscribe(v, (p_key, a_key))
+                    subscribed.add(v)
+                rows.append((*veh.getPosition(v), veh.getAngle(v), *dims(v)))
+            else:
+                x, y = r[p_key]
+                rows.append((x, y, r[a_key], *dims(v)))
+        return list(ids), rows
 
     def boxes(self) -> tuple[list[str], np.ndarray]:
         """Every vehicle as an oriented box: ids and rows (centre x, y, yaw rad, length, width)."""
