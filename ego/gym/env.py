@@ -141,12 +141,12 @@ class EgoView:
         if self._sensor is None:
             g = sc.geometry
             self._sensor = SurroundSensor(sc.road, {}, g.cg_to_front, g.length, g.width, horizon=c.sumo_step)
-            sc.bridge.subscribe_surroundings(sc.ego_id, 200.0)
+            sc.bridge.subscribe_surroundings(self.agent, 200.0)
         per = c.control_per_sumo
         look = sc.k // per
         if look != self._looked:
             self._looked = look
-            self._sensor.sync(look * per * c.dt, *sc.bridge.surroundings(sc.ego_id))
+            self._sensor.sync(look * per * c.dt, *sc.bridge.surroundings(self.agent))
         return self._sensor
 
 

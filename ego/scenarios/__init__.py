@@ -18,6 +18,23 @@ SCENARIOS: dict[str, type[Scenario]] = {
 }
 
 
+def _discover() -> None:
+    """Register every named Scenario subclass defined in a module of this package (after the
+    ones above, in module order): a new scenario is one module here, touching no other file."""
+    import importlib
+    import pkgutil
+
+    for info in sorted(pkgutil.iter_modules(__path__), key=lambda i: i.name):
+        module = importlib.import_module(f"{__name__}.{info.name}")
+        for obj in vars(module).values():
+            if (isinstance(obj, type) and issubclass(obj, Scenario) and obj.name
+                    and obj.__module__ == module.__name__):
+                SCENARIOS.setdefault(obj.name, obj)
+
+
+_discover()
+
+
 def scenario_class(name: str) -> type[Scenario]:
     """The registered scenario ``name``, or a ConfigError naming the known ones."""
     try:

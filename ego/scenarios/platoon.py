@@ -259,7 +259,9 @@ class PlatoonScenario(Scenario):
         self.obs: list[FollowingObservation] = []
         n = c.followers
         #: the followers, f1 first: state (front bumper along the lane m, speed m/s, acceleration m/s^2)
-        self.plants: list[LongitudinalPlant] = []
+        #: the followers' plants in platoon order (f1 first) and the same keyed by vehicle id
+        self.chain: list[LongitudinalPlant] = []
+        self.plants: dict[str, LongitudinalPlant] = {}
         self.gap = [0.0] * n
         self.e = [0.0] * n  #: spacing errors delta_d (m)
         self.ttc = [INF] * n
@@ -301,11 +303,12 @@ class PlatoonScenario(Scenario):
         self.controlled_ids = self.ids
         self.colors = {LEADER: LEADER_COLOR, **{vid: FOLLOWER_COLOR for vid in self.ids}}
 
-        self.plants = [LongitudinalPlant(self.model, lane, self.geometry, c.dt, front, v0) for front in fronts]
+        self.chain = [LongitudinalPlant(self.model, lane, self.geometry, c.dt, front, v0) for front in fronts]
+        self.plants = dict(zip(self.ids, self.chain))
         self.obs = [FollowingObservation(policy=self.policy, max_accel=c.max_accel, max_decel=c.max_decel)
                     for _ in self.ids]
         self._bad = None
-        self._pushed = [plant.pose() for plant in self.plants]
+        self._pushed = [plant.pose() for plant in self.chain]
         self._manoeuvre = 0  #: the leader's next manoeuvre (index into profile.manoeuvres)
         self._manoeuvre_at = self._next_manoeuvre_time()
         self._after_sumo_step()
@@ -315,7 +318,7 @@ class PlatoonScenario(Scenario):
         return self.obs[self.ids.index(vid)]
 
     def plant(self, vid: str) -> LongitudinalPlant:
-        return self.plants[self.ids.index(vid)]
+        return self.plants[vid]
 
     def joint_action(self, own, vid: str, longitudinal: float | None, lateral: float | None):
         """The controllers' actions (one per follower) with ``vid``'s longitudinal command
@@ -332,11 +335,11 @@ class PlatoonScenario(Scenario):
         """The leader and the followers behind ``vid``, all on the platoon's one lane."""
         i = self.ids.index(vid)
         half = 0.5 * self.config.length
-        own = self.plants[i].state
+        own = self.chain[i].state
         ego = (own[0] - half, 0.0, own[1], 0.0, 0.0)
         lead = self.obs[0]
-        rows = [(self.plants[0].state[0] + self.gap[0] + half, 0.0, lead.lead_speed, 0.0, 0.0)]
-        rows += [(p.state[0] - half, 0.0, p.state[1], 0.0, 0.0) for j, p in enumerate(self.plants) if j != i]
+        rows = [(self.chain[0].state[0] + self.gap[0] + half, 0.0, lead.lead_speed, 0.0, 0.0)]
+        rows += [(p.state[0] - half, 0.0, p.state[1], 0.0, 0.0) for j, p in enumerate(self.chain) if j != i]
         return ego, rows, self.config.length
 
     # -- per step ---------------------------------------------------------------------------
@@ -345,7 +348,7 @@ class PlatoonScenario(Scenario):
         the step, the command as the actuator took it)."""
         gap, e, ttc = self.gap, self.e, self.ttc
         values = [self.t, self._lead_v_now, self._lead_a]
-        for i, (plant, (cmd, _)) in enumerate(zip(self.plants, actions)):
+        for i, (plant, (cmd, _)) in enumerate(zip(self.chain, actions)):
             if not -math.inf < cmd < math.inf:  # NaN fails both comparisons
                 self._bad = f"the controller of {self.ids[i]} commanded {cmd} m/s^2"
                 cmd = 0.0
@@ -359,7 +362,7 @@ class PlatoonScenario(Scenario):
         bridge = self.bridge
         self.leader.update(bridge, self.t)
         pushed = self._pushed = []
-        for vid, plant in zip(self.ids, self.plants):
+        for vid, plant in zip(self.ids, self.chain):
             x, y, psi = plant.pose()
             _, v, a = plant.state
             bridge.push(vid, x, y, psi, v, a)
@@ -375,7 +378,7 @@ class PlatoonScenario(Scenario):
         self._lead_s_sync = bridge.lane_position(LEADER)
         self._sync_t = self.t
         L = self.config.length
-        s = [plant.state[0] for plant in self.plants]
+        s = [plant.state[0] for plant in self.chain]
         for i, vid in enumerate(self.ids):
             ahead = LEADER if i == 0 else self.ids[i - 1]
             found = bridge.read_leader(vid, self._lead)
@@ -391,14 +394,14 @@ class PlatoonScenario(Scenario):
         followers where they were pushed into SUMO for this step, the leader from SUMO."""
         rows = [self.bridge.box(LEADER)]
         L, W = self.config.length, self.config.width
-        for plant, (x, y, psi) in zip(self.plants, self._pushed):
+        for plant, (x, y, psi) in zip(self.chain, self._pushed):
             rows.append((x, y, psi, plant.state[1], L, W))  # the CG is the box centre here
         self.traffic.add(self.t, [p[:2] for p in self._pushed], self._log_ids, rows)
 
     def _check_divergence(self) -> str | None:
         if self._bad is not None:
             return self._bad
-        states = [plant.state for plant in self.plants]
+        states = [plant.state for plant in self.chain]
         # one sum is finite only if every state is (NaN and infinity propagate)
         if math.isfinite(sum(map(sum, states))) and max(map(_speed_of, states)) <= 80.0:
             return None
@@ -420,7 +423,7 @@ class PlatoonScenario(Scenario):
         s_sync, gap_sync = self._s_sync, self._gap_sync
         error = self.policy.error
         ahead_s = 0.0
-        for i, (o, plant) in enumerate(zip(self.obs, self.plants)):
+        for i, (o, plant) in enumerate(zip(self.obs, self.chain)):
             s, speed, accel = plant.state
             if i:
                 moved = ahead_s - s_sync[i - 1]
@@ -553,7 +556,7 @@ class PlatoonScenario(Scenario):
     # -- recording ----------------------------------------------------------------------------
     def _record_boxes(self) -> None:
         ids, poses = self.bridge.poses()
-        back = self.plants[-1].state[0] - self.config.length
+        back = self.chain[-1].state[0] - self.config.length
         x, y = self.lane.offset_point(0.5 * (self._lead_s_sync + back), 0.0)
         self.recorder.vehicles(self.t, ids, poses, (x, y))
 

@@ -156,7 +156,7 @@ def test_ten_followers_are_all_pushed_into_sumo():
         for _ in range(1500):  # 15 s: through the braking
             obs = scenario.step(scenario.controller.step(obs))
         veh = scenario.bridge.libsumo.vehicle
-        for vid, plant in zip(scenario.ids, scenario.plants):
+        for vid, plant in scenario.plants.items():
             assert veh.getLanePosition(vid) == pytest.approx(plant.state[0], abs=1e-6)
         assert [veh.getLeader(vid, 100.0)[0] for vid in scenario.ids] == ["leader", *scenario.ids[:-1]]
     finally:
