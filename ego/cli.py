@@ -620,7 +620,7 @@ def _tune(args) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    from ego.sumo.bridge import SumoError
+    from ego.sim import SimError  # every backend's (SUMO's SumoError is one)
 
     import signal
 
@@ -649,7 +649,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             return EXIT_OK
         _parser().print_help()
         return EXIT_USAGE
-    except (ConfigError, SumoError) as exc:
+    except (ConfigError, SimError) as exc:
         print(f"ego: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt:

@@ -386,8 +386,9 @@ class SumoBridge:
         """Move ``vid`` sideways by ``dy`` (m, + left) in the next step (sublane model)."""
         self._ls.vehicle.changeSublane(vid, dy)
 
-    def depart(self, d: Departure) -> None:
-        """A vehicle enters ``d.route`` at its start now, in lane ``d.lane`` at ``d.speed``."""
+    def depart(self, departure: Departure) -> None:
+        """A vehicle enters ``departure.route`` at its start now, in its lane at its speed."""
+        d = departure
         self.libsumo.vehicle.add(d.id, d.route, typeID=d.type_id, departLane=str(d.lane), departPos="0",
                                  departSpeed=f"{d.speed:.3f}")
 

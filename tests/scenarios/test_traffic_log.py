@@ -49,7 +49,7 @@ def _sumo_truth(scenario, radius=RADIUS):
     bridge = scenario.bridge
     ids, boxes = bridge.boxes()
     out = {}
-    ego = dict(zip(ids, boxes))[scenario.ego_id]
+    ego = dict(zip(ids, boxes))[scenario.agent_id]
     for vid, (x, y, yaw, length, width) in zip(ids, boxes):
         if vid in bridge.controlled:
             continue
