@@ -326,7 +326,7 @@ def parameters_markdown(cat: dict) -> str:
 
 
 def _print_catalogue(cat: dict) -> None:
-    from ego.scenarios.metrics import with_unit
+    from ego.results.metrics import with_unit
 
     def table(rows: list[dict]) -> None:
         if not rows:
@@ -397,7 +397,7 @@ def _fmt(value) -> str:
 def _print_result(result, units: dict[str, str]) -> None:
     """The run's metrics as text, each number followed by its unit (``units``: flattened
     metric -> unit)."""
-    from ego.scenarios.metrics import flatten
+    from ego.results.metrics import flatten
 
     m = flatten(result.metrics)
     print(f"{m['scenario']} with {m['controller']} (seed {m['seed']}): {m['status'].upper()}"
@@ -417,18 +417,18 @@ def _print_result(result, units: dict[str, str]) -> None:
 
 
 def _run(args) -> int:
-    from ego.runner import RunSpec, declared_metrics, run
+    from ego.results.export import trace_files
+    from ego.results.metrics import flatten, metric_units
+    from ego.runner import RunSpec, resolve, run
     from ego.scenarios.base import NOT_FAILED
-    from ego.scenarios.metrics import flatten, metric_units
-
-    from ego.export import trace_files
 
     spec = RunSpec(args.scenario, args.controller, seed=check_seed(args.seed, "--seed"),
                    overrides=parse_overrides(args.overrides), record=args.record, trace=args.trace,
                    backend=args.backend, video=args.video)
-    result = run(spec)  # checks the --trace path before anything runs
+    resolved = resolve(spec)  # every name, value and path checked before anything runs
+    result = run(resolved)
     written = [str(p) for p in trace_files(args.trace, result.traffic is not None)] if args.trace else []
-    units = metric_units(declared_metrics(spec), flatten(result.metrics))
+    units = metric_units(resolved.metrics_declared(), flatten(result.metrics))
     if args.json:
         out = dict(result.metrics)
         out["events"] = [e.as_dict() for e in result.events]
@@ -511,8 +511,9 @@ def _declared(cls, name: str):
 
 def _sweep(args) -> int:
     from ego.sweep import spec as sweep_spec
-    from ego.sweep.executor import ENGINES
-    from ego.sweep.runner import RECORD, parse_plot, print_progress, sweep
+    from ego.parallel.executor import ENGINES
+    from ego.results.progress import Progress
+    from ego.sweep.runner import RECORD, parse_plot, sweep
 
     spec = sweep_spec.load(args.spec)
     _choice(args.engine, ENGINES, "--engine")
@@ -528,7 +529,7 @@ def _sweep(args) -> int:
     except OSError as exc:
         raise ConfigError(f"cannot create --out folder {args.out!r}: {exc.strerror}") from None
     report = sweep(spec, out, engine=args.engine, jobs=args.jobs, address=args.address,
-                   record=args.record, plots=args.plot, progress=print_progress)
+                   record=args.record, plots=args.plot, progress=Progress)
     statuses = ", ".join(f"{n} {s}" for s, n in sorted(report.by_status.items())) or "none"
     print(f"{report.total} runs in the spec: {report.already} were already in "
           f"{out / 'results.parquet'}, {report.ran} ran now ({statuses}) in {report.seconds:.1f} s")
@@ -604,7 +605,7 @@ def _tune(args) -> int:
     check_drives(drives, "--drives", repr(args.drives))
     check_seed(args.seed, "--seed")
     out = _model_out(args, TUNED_PRESET, "runs/cascade_pid_tuned.json", ".json")
-    from ego.sweep.executor import ENGINES
+    from ego.parallel.executor import ENGINES
 
     _choice(args.cost, ("model", "sumo"), "--cost")
     _choice(args.engine, ENGINES, "--engine")

@@ -30,7 +30,7 @@ from ego.params import param
 from ego.record import RerunRecorder
 from ego.scenarios.evasive import EvasiveConfig, EvasiveLaneChange
 from ego.scenarios.highway import ROUTE
-from ego.scenarios.trace import Metric
+from ego.results.trace import Metric
 from ego.sumo.bridge import VehicleSpec, VehicleType
 from ego.sumo.traffic import CutInVehicle, PacedVehicle
 

@@ -256,11 +256,11 @@ def test_bad_seeds_and_output_places_fail_at_once_writing_nothing(args, message,
 
 def test_the_python_api_refuses_a_seed_it_would_truncate():
     from ego.params import ConfigError
-    from ego.runner import RunSpec, configure
+    from ego.runner import RunSpec, resolve
 
     for seed in (1.7, "1", True, -1, 2**31):
         with pytest.raises(ConfigError, match="bad value for seed"):
-            configure(RunSpec("emergency-brake", "pid", seed))
+            resolve(RunSpec("emergency-brake", "pid", seed))
 
 
 def test_train_and_tune_write_into_the_working_folder_unless_told_to_install(tmp_path):

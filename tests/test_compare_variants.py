@@ -12,7 +12,7 @@ from ego.cli import main
 from ego.compare import compare, file_label, parse_variant, plan
 from ego.plots import figure
 from ego.params import ConfigError
-from ego.sweep.executor import InlineExecutor
+from ego.parallel.executor import InlineExecutor
 
 LABELS = ["pid", "pid@kp_lon=2000@kd_lon=500", "fuzzy"]
 

@@ -99,7 +99,7 @@ class Recovery:
 
     def __call__(self) -> dict:
         from ego.runner import RunSpec, run
-        from ego.scenarios.metrics import overshoot, settling_time
+        from ego.results.metrics import overshoot, settling_time
 
         r = run(RunSpec("lane-centering", "cascade-pid", 0, {"speed": self.speed, "offset": self.offset}))
         t, d = r.column("t"), r.column("d")
@@ -711,23 +711,23 @@ def tables() -> list[Table]:
 # -- running and writing ---------------------------------------------------------------------------
 def run_jobs(jobs: Iterable, workers: int | None = None, progress: bool = True) -> dict:
     """Each distinct job's result, run in a process pool (libsumo: one simulation per process)."""
-    from ego.sweep.executor import ProcessExecutor
+    from ego.parallel.executor import ProcessExecutor
+
+    from ego.results.progress import Progress
 
     todo = list(dict.fromkeys(jobs))
     results: dict = {}
+    shown = Progress(len(todo)) if progress else None
     executor = ProcessExecutor(max(1, min(workers or os.cpu_count() or 1, len(todo) or 1)))
     try:
         for outcome in executor.run(_call, todo):
             if outcome.value is None:
                 raise RuntimeError(f"{outcome.task}: {outcome.error}")
             results[outcome.task] = outcome.value
-            if progress and sys.stderr.isatty():
-                sys.stderr.write(f"\r{len(results)}/{len(todo)} runs")
-                sys.stderr.flush()
+            if shown is not None:
+                shown(type(outcome.task).__name__, "done")
     finally:
         executor.close()
-    if progress:
-        sys.stderr.write(f"\r{len(results)}/{len(todo)} runs\n")
     return results
 
 

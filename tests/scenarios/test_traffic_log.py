@@ -8,7 +8,7 @@ import pytest
 
 from ego.runner import RunSpec, build
 from ego.scenarios import traffic_log as tl
-from ego.scenarios.traffic_log import RADIUS, UNITS, TrafficCollector, TrafficLog
+from ego.results.traffic_log import RADIUS, UNITS, TrafficCollector, TrafficLog
 
 
 def _rows(n, x0=0.0):

@@ -2,7 +2,7 @@
 
 :func:`write_trace` picks the format by the path's suffix (:data:`TRACE_SUFFIXES`). Every
 file holds every trace column (the scenario's declared ones, then the controller's
-signals) with its unit, and - when the run has one (:class:`~ego.scenarios.traffic_log.TrafficLog`,
+signals) with its unit, and - when the run has one (:class:`~ego.results.traffic_log.TrafficLog`,
 SUMO scenarios) - the traffic log: per SUMO step, the pose of every other vehicle within
 50 m of the ego, one row per vehicle and step ("long" format).
 
@@ -36,7 +36,7 @@ import numpy as np
 from ego.checks import check_output_file
 from ego.outputs import atomic_path
 from ego.params import ConfigError
-from ego.scenarios.traffic_log import UNITS as TRAFFIC_UNITS
+from ego.results.traffic_log import UNITS as TRAFFIC_UNITS
 
 TRACE_SUFFIXES = (".csv", ".parquet", ".mat")
 #: the columns of a traffic table, in order (``vehicle``: the id in csv and Parquet)

@@ -213,7 +213,7 @@ def make_executor(engine: str, workers: int | None = None, address: str | None =
     if engine == "process":
         return ProcessExecutor(workers)
     if engine == "ray":
-        from ego.sweep.ray_engine import RayExecutor
+        from ego.parallel.ray_engine import RayExecutor
 
         return RayExecutor(workers, address)
     from ego.params import ConfigError

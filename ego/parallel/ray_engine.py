@@ -5,7 +5,7 @@ Locally it starts a private Ray instance on this machine (one CPU slot per worke
 CPUs. Each task takes one CPU, so each Ray worker process runs one simulation at a time
 (libsumo's one-per-process rule), and workers are reused from task to task.
 
-Ray itself is imported only when a ``RayExecutor`` is made, so ``ego.sweep.executor`` and
+Ray itself is imported only when a ``RayExecutor`` is made, so ``ego.parallel.executor`` and
 the process engine never pay for it; without Ray installed, making one is a ConfigError.
 
 Failures, as the process engine reports them:
@@ -26,7 +26,7 @@ from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
 from ego.params import ConfigError
-from ego.sweep.executor import Outcome, default_workers
+from ego.parallel.executor import Outcome, default_workers
 
 #: tasks in flight per worker: enough to keep every worker busy while results travel back,
 #: few enough that a generator of tasks is read lazily
