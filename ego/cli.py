@@ -510,9 +510,9 @@ def _declared(cls, name: str):
 
 
 def _sweep(args) -> int:
-    from ego.sweep import spec as sweep_spec
     from ego.parallel.executor import ENGINES
     from ego.results.progress import Progress
+    from ego.sweep import spec as sweep_spec
     from ego.sweep.runner import RECORD, parse_plot, sweep
 
     spec = sweep_spec.load(args.spec)
@@ -621,9 +621,9 @@ def _tune(args) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    from ego.sumo.bridge import SumoError
-
     import signal
+
+    from ego.sumo.bridge import SumoError
 
     if argv is None:  # the command itself, not a call from Python code
         signal.signal(signal.SIGTERM, _terminate)

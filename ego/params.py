@@ -17,7 +17,6 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-
 #: a quarter turn (rad): the bound of every steer limit and angle
 HALF_PI = math.pi / 2
 

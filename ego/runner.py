@@ -20,9 +20,9 @@ from ego.control.base import Controller, ControllerSpec
 from ego.params import ConfigError, ParamInfo, apply_overrides, describe, unknown_parameter
 from ego.record import RerunRecorder
 from ego.results import RunResult
+from ego.results.trace import Column, Metric
 from ego.scenarios import Scenario, scenario_class
 from ego.scenarios.base import check_backend
-from ego.results.trace import Column, Metric
 from ego.sumo.net import net_file
 
 

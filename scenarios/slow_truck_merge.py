@@ -28,9 +28,9 @@ from pathlib import Path
 from ego.control import controller_spec
 from ego.params import param
 from ego.record import RerunRecorder
+from ego.results.trace import Metric
 from ego.scenarios.evasive import EvasiveConfig, EvasiveLaneChange
 from ego.scenarios.highway import ROUTE
-from ego.results.trace import Metric
 from ego.sumo.bridge import VehicleSpec, VehicleType
 from ego.sumo.traffic import CutInVehicle, PacedVehicle
 

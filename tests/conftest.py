@@ -22,8 +22,9 @@ def fuzzy_ready():
 @pytest.fixture
 def point_mass(monkeypatch):
     """The test-only point-mass scenario (no SUMO), registered for the test's duration."""
-    from ego.scenarios import SCENARIOS
     from point_mass import PointMass
+
+    from ego.scenarios import SCENARIOS
 
     monkeypatch.setitem(SCENARIOS, PointMass.name, PointMass)
     return PointMass

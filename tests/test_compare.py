@@ -4,17 +4,17 @@ scenario's declarations (the point-mass scenario needs no SUMO)."""
 import csv
 import subprocess
 import sys
-from ego.parallel.executor import InlineExecutor
 
 import pytest
 from rerun.chunk import RrdReader
 
 from ego.compare import compare, run_one
-from ego.plots import figure
+from ego.parallel.executor import InlineExecutor
 from ego.params import ConfigError
+from ego.plots import figure
+from ego.results.trace import Plot
 from ego.runner import RunSpec, declared_columns
 from ego.scenarios import SCENARIOS
-from ego.results.trace import Plot
 
 PNG = b"\x89PNG\r\n\x1a\n"
 

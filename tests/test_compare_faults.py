@@ -9,11 +9,11 @@ import subprocess
 import sys
 
 import pytest
+from engine_tasks import compare_run_with_fault
 
 from ego.compare import run_one
-from ego.runner import RunSpec
 from ego.parallel.executor import ProcessExecutor
-from engine_tasks import compare_run_with_fault
+from ego.runner import RunSpec
 
 pytestmark = pytest.mark.sumo
 

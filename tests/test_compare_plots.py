@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 from ego.compare import compare, run_one
+from ego.parallel.executor import InlineExecutor
 from ego.plots import figure, measured_gains, write_all
 from ego.runner import RunSpec
 from ego.scenarios import scenario_class
-from ego.parallel.executor import InlineExecutor
 
 PNG = b"\x89PNG\r\n\x1a\n"
 EVASIVE_FILES = ["fx.png", "gap_front.png", "lateral_error.png", "speed.png", "steering.png",

@@ -13,11 +13,11 @@ import pyarrow.parquet as pq
 import pytest
 from scipy.io import loadmat
 
-from ego.results.export import check_trace_path, write_trace
 from ego.params import ConfigError
-from ego.runner import RunSpec, run
+from ego.results.export import check_trace_path, write_trace
 from ego.results.traffic_log import UNITS as TRAFFIC_UNITS
 from ego.results.traffic_log import TrafficLog
+from ego.runner import RunSpec, run
 
 
 @pytest.fixture(scope="module")

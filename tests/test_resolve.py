@@ -9,8 +9,8 @@ import pytest
 
 from ego.cli import main
 from ego.compare import compare
-from ego.params import ConfigError
 from ego.parallel.executor import InlineExecutor
+from ego.params import ConfigError
 from ego.runner import ResolvedRun, RunSpec, parameter_namespace, resolve, run
 from ego.sweep.pipeline import RunTask, execute
 

@@ -27,9 +27,9 @@ from functools import lru_cache
 from importlib.resources import files
 from pathlib import Path
 
+from ego.checks import finite_number, read_json
 from ego.control.base import Observation
 from ego.models.lateral_error import LateralErrorParams
-from ego.checks import finite_number, read_json
 from ego.params import ConfigError, Params, did_you_mean, param
 
 #: Kp, Ki, Kd of the e, psi, vy and r loops: report 003's differential-evolution result

@@ -30,9 +30,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ego.checks import check_input_file, finite_number, read_json
 from ego.control.base import Observation
 from ego.control.curve import PedalLoop, PedalParams
-from ego.checks import check_input_file, finite_number, read_json
 from ego.params import HALF_PI, ConfigError, param
 
 #: the regressor, in order; ``_1``/``_2`` are one and two samples back, u the steer (rad)

@@ -98,8 +98,8 @@ class Recovery:
     band: float = 0.01
 
     def __call__(self) -> dict:
-        from ego.runner import RunSpec, run
         from ego.results.metrics import overshoot, settling_time
+        from ego.runner import RunSpec, run
 
         r = run(RunSpec("lane-centering", "cascade-pid", 0, {"speed": self.speed, "offset": self.offset}))
         t, d = r.column("t"), r.column("d")
@@ -712,7 +712,6 @@ def tables() -> list[Table]:
 def run_jobs(jobs: Iterable, workers: int | None = None, progress: bool = True) -> dict:
     """Each distinct job's result, run in a process pool (libsumo: one simulation per process)."""
     from ego.parallel.executor import ProcessExecutor
-
     from ego.results.progress import Progress
 
     todo = list(dict.fromkeys(jobs))

@@ -10,7 +10,7 @@ several times faster in CPython than the generic loop over components.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from functools import lru_cache
+from functools import cache
 
 Rhs = Callable[[Sequence[float], Sequence[float]], Sequence[float]]
 
@@ -35,7 +35,7 @@ def rk4_step(rhs: Rhs, x: Sequence[float], u: Sequence[float], h: float,
     )
 
 
-@lru_cache(maxsize=None)
+@cache
 def unrolled_rk4(n: int) -> Callable:
     """:func:`rk4_step` written out for an ``n``-dimensional state (same arithmetic)."""
     idx = range(n)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -57,7 +58,7 @@ def json_number(x: float | None, digits: int = 6) -> float | None:
     return round(float(x), digits)
 
 
-def flatten(metrics: Mapping, prefix: str = "") -> dict:
+def flatten(metrics: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
     """Nested metrics on one level, keys joined by dots (``followers.f1.min_gap``): for CSV
     columns and text listings."""
     out = {}

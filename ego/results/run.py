@@ -7,6 +7,7 @@ the plots read it, and nothing here knows which scenario made it.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -22,7 +23,7 @@ class Event:
     text: str
     level: str = "INFO"
 
-    def as_dict(self) -> dict:
+    def as_dict(self) -> dict[str, Any]:
         return {"t": round(self.t, 4), "kind": self.kind, "text": self.text, "level": self.level}
 
 
@@ -34,21 +35,21 @@ class RunResult:
     controller: str
     seed: int
     status: str
-    metrics: dict
+    metrics: dict[str, Any]
     events: list[Event]
     columns: tuple[str, ...]
     trace: np.ndarray
     #: column -> unit of every trace column (controller signals: as the controller declares)
-    units: dict = field(default_factory=dict)
+    units: dict[str, str] = field(default_factory=dict)
     #: the vehicles near the ego at every SUMO step (None: a scenario without traffic)
     traffic: TrafficLog | None = None
     #: the lanes of the scene: (width m, centre-line points (x, y) m) each
-    lanes: tuple = ()
+    lanes: tuple[tuple[float, Any], ...] = ()
 
     def column(self, name: str) -> np.ndarray:
         return self.trace[:, self.columns.index(name)]
 
-    def to_pandas(self, traffic: bool = False):
+    def to_pandas(self, traffic: bool = False) -> Any:
         """The trace as a pandas DataFrame: one row per control step, one column per trace
         column (``t`` in s first), ``df.attrs["units"]`` column -> unit (``""``: a
         controller's signal). ``traffic=True``: the traffic log instead, one row per vehicle
@@ -79,14 +80,14 @@ class RunRow:
     controller: str
     seed: int
     status: str
-    metrics: dict
-    traces: dict = field(default_factory=dict)  # column -> values ("t" too)
+    metrics: dict[str, Any]
+    traces: dict[str, np.ndarray] = field(default_factory=dict)  # column -> values ("t" too)
     error: str = ""
-    units: dict = field(default_factory=dict)  # column of traces -> unit
+    units: dict[str, str] = field(default_factory=dict)  # column of traces -> unit
     recording: str = ""  # the run's .rrd, when the comparison wrote it
-    events: list = field(default_factory=list)  # Event
+    events: list[Event] = field(default_factory=list)
     traffic: TrafficLog | None = None  # the vehicles near the ego (RunResult.traffic)
-    lanes: tuple = ()  # (width, centre-line points) of the scene's lanes
+    lanes: tuple[tuple[float, Any], ...] = ()  # (width, centre-line points) of the scene's lanes
     #: seconds from the worker receiving the run to its row (None: no worker finished it)
     wall_time: float | None = None
     #: the machine that ran it

@@ -15,7 +15,7 @@ units and headlines from these declarations; they keep no tables of their own.
 from __future__ import annotations
 
 import keyword
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -173,10 +173,10 @@ class Trace:
         if clash:
             raise TraceError(f"controller signals clash with trace columns: {', '.join(sorted(clash))}")
         self._names = names
-        self.rows: list[tuple] = []
+        self.rows: list[tuple[float, ...]] = []
         self.append = self._writer()
 
-    def _writer(self):
+    def _writer(self) -> Callable[..., None]:
         """The row writer ``append(signals, /, *, <every column>)``, generated: a column left
         out keeps a marker default and an unknown one lands in ``unknown``, both checked by
         identity tests before the row is stored."""
@@ -198,11 +198,11 @@ class Trace:
         scope = {"_M": _MISSING, "_empty": {}, "_signals": self.signal_names, "_add": self.rows.append,
                  "_bad_signals": self._bad_signals, "_reject": self._reject}
         exec(compile(source, f"<trace row of {len(names)} columns>", "exec"), scope)  # noqa: S102
-        append = scope["append"]
+        append: Callable[..., None] = scope["append"]  # type: ignore[assignment]
         append.__doc__ = "One row: every declared column by name, then the controller's ``signals``."
         return append
 
-    def bind(self, names: Sequence[str]):
+    def bind(self, names: Sequence[str]) -> Callable[[Mapping[str, float], Sequence[float]], None]:
         """A writer for rows built in a loop: ``write(signals, values)`` with ``values`` in
         the order of ``names``. The names are checked against the declared columns once,
         here (every column exactly once, nothing else), so each row only pays a length check
@@ -224,7 +224,7 @@ class Trace:
 
         return write
 
-    def _bad_signals(self, signals) -> None:
+    def _bad_signals(self, signals: Iterable[str]) -> None:
         raise TraceError(f"controller signals {tuple(signals)} do not match the declared "
                          f"{self.signal_names}")
 

@@ -9,8 +9,10 @@ in batches of numpy work (every :data:`BATCH` steps, so memory stays bounded in 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from itertools import chain
+from typing import Any
 
 import numpy as np
 
@@ -69,11 +71,11 @@ class TrafficCollector:
 
     def __init__(self, radius: float = RADIUS) -> None:
         self.radius = radius
-        self._pending: list[tuple] = []
+        self._pending: list[tuple[float, Any, Any, Any]] = []
         self._ids: dict[str, int] = {}
         self._chunks: list[np.ndarray] = []  #: (k, 8): t, vehicle, then _FIELDS
 
-    def add(self, t: float, centres, ids, rows) -> None:
+    def add(self, t: float, centres: Any, ids: Sequence[str], rows: Any) -> None:
         """The vehicles at time ``t`` (s) and the centres: one (x, y) or a sequence of them,
         the same number at every step; kept by reference until the next batch."""
         pending = self._pending

@@ -15,7 +15,7 @@ import logging
 import math
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
@@ -28,7 +28,7 @@ from ego.record.base import NullRecorder, Recorder, Scene, Series, unit_path
 from ego.results.metrics import json_number
 from ego.results.run import Event, RunResult
 from ego.results.trace import Column, Metric, Plot, Trace
-from ego.results.traffic_log import RADIUS, REACH_MARGIN, TrafficCollector, TrafficLog
+from ego.results.traffic_log import RADIUS, REACH_MARGIN, TrafficCollector
 from ego.sumo.bridge import Collision, SumoBridge
 
 STATUSES = ("completed", "ended", "collision", "diverged", "timeout", "interrupted")

@@ -13,12 +13,12 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ego.lane_frame import LanePolyline
 from ego.models import NonlinearBicycle, NonlinearBicycleParams, VehicleGeometry
 from ego.models.actuators import ActuatorLimits
 from ego.models.plant import BicyclePlant
 from ego.params import param
 from ego.record.base import Series
-from ego.lane_frame import LanePolyline
 from ego.scenarios.base import (
     CommonConfig,
     RoadScenario,

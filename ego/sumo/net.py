@@ -96,7 +96,7 @@ def check_network(path: Path) -> None:
     edges = 0
     root = None
     try:
-        for event, elem in ET.iterparse(path, events=("start",)):
+        for _event, elem in ET.iterparse(path, events=("start",)):
             if root is None:
                 root = elem.tag
             edges += elem.tag == "edge"

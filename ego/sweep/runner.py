@@ -16,9 +16,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ego.outputs import FolderLock, remove_partials
-from ego.params import ConfigError, did_you_mean
 from ego.parallel.executor import make_executor
-from ego.results.progress import Progress
+from ego.params import ConfigError, did_you_mean
 from ego.results.run import RunRow
 from ego.sweep.pipeline import RunTask, drive
 from ego.sweep.results import ResultStore

@@ -29,10 +29,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ego.analytic_road import report003_road
 from ego.checks import MAX_JOBS, check_count, check_number, check_seed, finite_number
 from ego.control.cascade import GAIN_NAMES, REPORT_GAINS, TUNED_PRESET, Cascade
 from ego.models.lateral_error import LateralError, LateralErrorParams
-from ego.analytic_road import report003_road
 from ego.outputs import write_text
 from ego.params import ConfigError, did_you_mean
 

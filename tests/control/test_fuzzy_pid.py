@@ -5,8 +5,7 @@ import numpy as np
 import pytest
 from skfuzzy import control as ctrl
 
-from ego.control import FuzzyPIDController, FuzzyPIDParams, Observation
-from ego.control import fuzzy_pid
+from ego.control import FuzzyPIDController, FuzzyPIDParams, Observation, fuzzy_pid
 from ego.control.fuzzy_pid import DKD, DKI, DKP
 
 OUTPUTS = ["dkp", "dki", "dkd"]

@@ -8,9 +8,9 @@ import pytest
 
 from ego.control import Observation
 from ego.control.narma import DEFAULT_MODEL, FEATURES, NarmaL2Controller, NarmaL2Params, NarmaModel, load_model
+from ego.lane_frame import LanePolyline
 from ego.models import DynamicBicycle, DynamicBicycleParams
 from ego.params import ConfigError
-from ego.lane_frame import LanePolyline
 from ego.train.narma_l2 import DataSpec, TrainSpec, generate, train
 
 SMALL = DataSpec(samples=600)

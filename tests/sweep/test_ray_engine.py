@@ -12,11 +12,11 @@ import sys
 import time
 from pathlib import Path
 
+import engine_tasks as T
 import pytest
 
-from ego.params import ConfigError
-import engine_tasks as T
 from ego.parallel.executor import Outcome, ProcessExecutor, make_executor
+from ego.params import ConfigError
 
 WORKERS = 2
 ROOT = Path(__file__).resolve().parents[2]
