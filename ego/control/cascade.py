@@ -113,7 +113,7 @@ class Cascade:
     __slots__ = ("kp", "ki", "kd", "beta", "ilim", "adaptive", "ff", "lim", "rate", "L", "K",
                  "integ", "dfilt", "prev", "delta", "first", "out")
 
-    def __init__(self, gains, dt: float, integral_limit: float = 1.0, alpha: float = 0.2,
+    def __init__(self, gains: tuple[float, ...], dt: float, integral_limit: float = 1.0, alpha: float = 0.2,
                  adaptive: bool = True, feedforward: bool = True, steer_limit: float = math.radians(25),
                  steer_rate: float = math.radians(30), vehicle: LateralErrorParams | None = None) -> None:
         if len(gains) != 12:
