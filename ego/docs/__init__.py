@@ -2,6 +2,9 @@
 
     python -m ego.docs results [--page NAME] [--table NAME] [--check] [--jobs N]
 
+A tool of the checkout, not of the package: the wheel leaves ``ego.docs`` out (it needs the
+checkout's ``docs/`` and ``scenarios/``); run it from a checkout (``pip install -e .``).
+
 Every table in ``docs/results/*.md`` sits between ``<!-- results:NAME -->`` and
 ``<!-- /results:NAME -->``; this module knows, for each NAME, which runs make it (the same
 runs as the ``ego compare`` / ``ego sweep`` commands printed beside the table) and how each
