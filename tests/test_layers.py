@@ -9,6 +9,7 @@ or through others): every import in every module of ego, lazy ones in functions 
 """
 
 import ast
+from functools import cache
 from pathlib import Path
 
 import pytest
@@ -60,6 +61,7 @@ def _imports(path: Path, module: str) -> set[str]:
     return {n for n in found if n == "ego" or n.startswith("ego.")}
 
 
+@cache
 def _graph() -> dict[str, set[str]]:
     graph: dict[str, set[str]] = {}
     for path in sorted(EGO.rglob("*.py")):

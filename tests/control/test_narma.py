@@ -21,6 +21,7 @@ def _arrays(path):
         return {k: data[k] for k in data.files}
 
 
+@pytest.mark.slow
 def test_training_is_deterministic_with_a_seed(tmp_path):
     paths = [tmp_path / "a.npz", tmp_path / "b.npz", tmp_path / "c.npz"]
     for path, seed in zip(paths, (5, 5, 6)):
