@@ -21,8 +21,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from ego.sweep.executor import InlineExecutor, make_executor  # noqa: E402
-from ego.sweep.runner import run_task  # noqa: E402
+from ego.parallel.executor import InlineExecutor, make_executor  # noqa: E402
+from ego.sweep.pipeline import execute  # noqa: E402
+from ego.sweep.runner import task_of  # noqa: E402
 from ego.sweep.spec import parse  # noqa: E402
 
 
@@ -31,14 +32,14 @@ def tasks(n: int, duration: float):
     spec = parse({"scenario": "emergency-brake", "controllers": ["pid"], "seeds": seeds,
                   "set": {"duration": duration, "traffic_density": 5.0},
                   "grid": {"ego_speed": [16, 20, 24, 28, 32, 36], "lead_gap": [20, 30, 45, 60]}})
-    return [(r, None, "none") for r in spec.runs()][:n]
+    return [task_of(r) for r in list(spec.runs())[:n]]
 
 
 def timed(executor, work) -> float:
     t0 = time.perf_counter()
-    for outcome in executor.run(run_task, work):
-        if outcome.value is None or outcome.value["status"] == "error":
-            raise RuntimeError(f"a run failed: {outcome.error or outcome.value.get('error')}")
+    for outcome in executor.run(execute, work):
+        if outcome.value is None or outcome.value.status == "error":
+            raise RuntimeError(f"a run failed: {outcome.error or outcome.value.error}")
     return time.perf_counter() - t0
 
 

@@ -3,7 +3,7 @@
 Each run is a :class:`~ego.runner.RunSpec` executed in a worker process (libsumo allows one
 simulation per process), writing its own ``.rrd``. A run that fails or diverges becomes a
 row with its status; it never stops the comparison. What to show comes from the scenario's
-declarations (:mod:`ego.scenarios.trace`): this module keeps no table of its own.
+declarations (:mod:`ego.results.trace`): this module keeps no table of its own.
 Outputs in ``--out``:
 
 * ``metrics.csv`` - one row per run, every metric (nested ones as dotted columns,
@@ -33,73 +33,53 @@ file: the runs that finished with their metrics, the others as rows with status
 from __future__ import annotations
 
 import csv
-import math
 import os
 import re
-import sys
-import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
-
-import numpy as np
 
 from ego.checks import check_count
 from ego.control import controller_spec
-from ego.export import TRACE_SUFFIXES
 from ego.outputs import FolderLock, atomic_path, remove_partials, write_text
-from ego.params import ConfigError, apply_overrides, describe, did_you_mean
+from ego.parallel.executor import Executor, ProcessExecutor
+from ego.params import ConfigError, apply_overrides, did_you_mean
 from ego.processes import signals_deferred
-from ego.runner import RunSpec, configure, run, split_overrides
+from ego.results import summary
+from ego.results.export import TRACE_SUFFIXES
+from ego.results.metrics import headline_names, metric_units
+from ego.results.progress import Progress
+from ego.results.run import RunRow
+from ego.results.trace import Metric
+from ego.runner import ResolvedRun, RunSpec, parameter_namespace, resolve, split_overrides
 from ego.scenarios import scenario_class
 from ego.scenarios.base import check_backend
-from ego.scenarios.metrics import flatten, headline_names, metric_units, with_unit
-from ego.scenarios.trace import Metric
-from ego.scenarios.traffic_log import TrafficLog
-from ego.sweep.executor import Executor, ProcessExecutor
+from ego.sweep.pipeline import RunTask, drive, execute
 
 #: the columns metrics.csv starts with, before the metrics
 RUN_COLUMNS = ("controller", "seed", "status", "error")
 UNITS_FILE = "metrics_units.csv"
-#: ``--traces`` formats: the suffixes :func:`ego.export.write_trace` knows, without the dot
+#: ``--traces`` formats: the suffixes :func:`ego.results.export.write_trace` knows, without the dot
 TRACE_FORMATS = tuple(suffix[1:] for suffix in TRACE_SUFFIXES)
 #: more seeds than this is a sweep (ego sweep), not a comparison
 MAX_SEEDS = 100_000
 
 
-@dataclass
-class RunRow:
-    controller: str
-    seed: int
-    status: str
-    metrics: dict
-    traces: dict = field(default_factory=dict)  # column -> values ("t" too)
-    error: str = ""
-    units: dict = field(default_factory=dict)  # column of traces -> unit
-    recording: str = ""  # the run's .rrd, when this comparison wrote it
-    events: list = field(default_factory=list)  # ego.scenarios.base.Event
-    traffic: TrafficLog | None = None  # the vehicles near the ego (RunResult.traffic)
-    lanes: tuple = ()  # (width, centre-line points) of the scene's lanes
-
-
-def plots_of(spec: RunSpec) -> tuple:
-    """The plots the scenario declares for this run's configuration."""
-    cls, config, _, _ = configure(spec)
-    return tuple(cls.compare_plots(config))
-
-
-def _one(spec: RunSpec) -> RunRow:
-    """Worker: run and keep the metrics (flattened) and the plotted columns (never raises)."""
+def run_one(spec: RunSpec) -> RunRow:
+    """One run of a comparison, in this process: resolved, run, and kept as compare keeps
+    it (the metrics, the plotted columns, the events, the traffic log). Never raises: a spec
+    that does not resolve is a row with status ``error`` too."""
     try:
-        plots = plots_of(spec)
-        result = run(spec)
+        resolved = resolve(spec)
     except Exception as exc:  # noqa: BLE001 - a broken run is a row, not a crash
         return RunRow(spec.name, spec.seed, "error", {}, error=f"{type(exc).__name__}: {exc}")
-    kept = list(dict.fromkeys(["t"] + [c for p in plots for c in p.columns if c in result.columns]))
-    traces = {c: result.column(c) for c in kept}
-    units = {c: result.units.get(c, "") for c in kept}
-    return RunRow(spec.name, spec.seed, result.status, flatten(result.metrics), traces, units=units,
-                  events=list(result.events), traffic=result.traffic, lanes=result.lanes)
+    return execute(task_of(resolved))
+
+
+def task_of(resolved: ResolvedRun, plots: Sequence | None = None) -> RunTask:
+    """The pipeline's task for one run of a comparison: the columns its plots draw, and the
+    events, traffic log and lanes they mark."""
+    plots = resolved.plots() if plots is None else plots
+    return RunTask(resolved, keep=tuple(c for p in plots for c in p.columns), details=True)
 
 
 def parse_variant(label: str, task: str) -> tuple[str, dict[str, str]]:
@@ -159,10 +139,8 @@ def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict,
         if other != label:
             raise ConfigError(f"bad value for --controllers: {other!r} and {label!r} would share the "
                               f"file name {file_label(label)!r}")
-    known = {i.name for i in describe(cls.config_cls)}
-    for name, _ in variants.values():
-        known |= {i.name for i in describe(controller_spec(name, cls.task).params)}
-    unknown = sorted(set(overrides) - known)
+    known = parameter_namespace(cls, [name for name, _ in variants.values()])
+    unknown = sorted(set(overrides) - set(known))
     if unknown:
         raise ConfigError(f"unknown parameter {unknown[0]!r} for {scenario} with "
                           f"{', '.join(controllers)} (see ego list){did_you_mean(unknown[0], known)}")
@@ -178,32 +156,22 @@ def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict,
     return specs
 
 
-def _progress(done: int, total: int, row: RunRow, started: float) -> None:
-    width = 24
-    filled = int(width * done / total)
-    bar = "#" * filled + "." * (width - filled)
-    what = f"{row.controller} seed {row.seed}: {row.status}"
-    line = f"[{bar}] {done}/{total} runs, {time.perf_counter() - started:5.1f} s  {what}"
-    if sys.stderr.isatty():
-        sys.stderr.write("\r" + line.ljust(100) + ("\n" if done == total else ""))
-    else:
-        sys.stderr.write(line + "\n")
-    sys.stderr.flush()
-
-
 def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict, out: Path,
-            jobs: int | None = None, progress: Callable | None = _progress,
+            jobs: int | None = None, progress: Callable[[int], Callable[[str, str], None]] | None = Progress,
             executor: Executor | None = None, traces: str | None = None,
             backend: str = "sumo") -> list[RunRow]:
     """Run everything, write the outputs, return the rows (in controller, seed order).
     ``controllers`` are labels (:func:`plan`: names or variants); ``traces`` a format of
     :data:`TRACE_FORMATS` to write each run's trace in, or None.
 
-    The runs go to the sweep engines' process pool (``jobs`` workers, default one per CPU;
-    libsumo allows one simulation per process; one code path with ``ego sweep``), or to
-    ``executor`` when given (closed at the end; e.g. ``InlineExecutor`` for a scenario
-    without SUMO). ``backend`` is the traffic simulator of every run ("sumo" or
-    "highway-env"); metrics.csv's ``backend`` column says which ran.
+    A comparison is a sweep over controllers x seeds on the same pipeline
+    (:mod:`ego.sweep.pipeline`): each controller variant is resolved once
+    (:func:`ego.runner.resolve`; the seeds only change the seed and the output paths), and
+    the resolved runs go to the process pool (``jobs`` workers, default one per CPU; libsumo
+    allows one simulation per process), or to ``executor`` when given (closed at the end;
+    e.g. ``InlineExecutor`` for a scenario without SUMO). ``backend`` is the traffic
+    simulator of every run ("sumo" or "highway-env"). ``progress``: made with the number of
+    runs, called once per finished run (:class:`ego.results.progress.Progress`), or None.
 
     ``out`` is locked while it runs (:class:`ego.outputs.FolderLock`: ConfigError if another
     process holds it). A KeyboardInterrupt (Ctrl-C; SIGTERM in the ``ego`` command) stops
@@ -214,13 +182,17 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
     specs = plan(scenario, controllers, seeds, overrides, out, traces, backend)
     # every value too (a bad --set value) before any process starts: once per controller,
     # since the seed changes nothing that is checked (100000 seeds would take a minute)
-    # (and each controller's parameters kept: a platoon's string stability is drawn from them)
-    params = {}
-    for spec in (s for s in specs if s.seed == 0):
-        cls, config, ctrl, params[spec.name] = configure(spec)
-        cls.build_controller(ctrl, params[spec.name], config)
-    plots = tuple(cls.compare_plots(config))
-    declared = cls.metrics_declared(config)
+    variants: dict[str, ResolvedRun] = {}
+    for spec in specs:
+        if spec.name not in variants:
+            variants[spec.name] = resolve(spec)
+            variants[spec.name].build_controller()
+    runs = [variants[s.name].with_outputs(seed=s.seed, record=s.record, trace=s.trace) for s in specs]
+    first = runs[0]
+    plots = first.plots()
+    declared = first.metrics_declared()
+    # each controller's parameters: a platoon's string stability is drawn from them
+    params = {name: r.controller_params for name, r in variants.items()}
     with FolderLock(out, "--out"):
         (out / "runs").mkdir(parents=True, exist_ok=True)
         if traces:
@@ -230,7 +202,14 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
             Path(spec.record).unlink(missing_ok=True)
         if executor is None:
             executor = ProcessExecutor(max(1, min(jobs or os.cpu_count() or 1, len(specs))))
-        rows = _execute(executor, specs, progress)
+        done: dict[tuple[str, int], RunRow] = {}
+
+        def keep(task: RunTask, row: RunRow) -> None:
+            done[(row.controller, row.seed)] = row
+
+        drive(executor, [task_of(r, plots) for r in runs], keep,
+              progress(len(runs)) if progress is not None else None)
+        rows = [done.get((s.name, s.seed)) or RunRow(s.name, s.seed, "interrupted", {}) for s in specs]
         remove_partials(out / "runs")  # runs killed mid-way; their workers are gone
         for row, spec in zip(rows, specs):
             row.recording = spec.record if Path(spec.record).exists() else ""
@@ -241,32 +220,6 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
             write_markdown(scenario, rows, list(controllers), out / "metrics.md", declared)
             write_plots(scenario, rows, list(controllers), out, plots, params)
     return rows
-
-
-def _execute(executor: Executor, specs: Sequence[RunSpec], progress: Callable | None) -> list[RunRow]:
-    """Run ``specs`` on ``executor`` (closed at the end): one row per spec, in their order.
-
-    On KeyboardInterrupt, or when a run in this process comes back interrupted (the
-    in-process executor: the run caught the Ctrl-C), the rest is not run and the
-    runs without a result are rows with status ``interrupted``."""
-    done: dict[tuple[str, int], RunRow] = {}
-    started = time.perf_counter()
-    try:
-        for outcome in executor.run(_one, specs):
-            spec = outcome.task
-            row = outcome.value if outcome.value is not None else RunRow(
-                spec.name, spec.seed, "error", {}, error=outcome.error)
-            done[(row.controller, row.seed)] = row
-            if progress:
-                progress(len(done), len(specs), row, started)
-            if row.status == "interrupted":
-                break
-    except KeyboardInterrupt:
-        pass
-    finally:
-        executor.close()
-    return [done.get((s.name, s.seed)) or RunRow(s.name, s.seed, "interrupted", {})
-            for s in specs]
 
 
 def csv_columns(rows: Sequence[RunRow]) -> list[str]:
@@ -298,60 +251,17 @@ def write_units(columns: Sequence[str], declared: Sequence[Metric], path: Path) 
         w.writerows([c, units[c]] for c in columns)
 
 
-def _mean_spread(values: list) -> str:
-    if values and all(isinstance(v, bool) for v in values):
-        return f"{sum(values)}/{len(values)}"  # how many runs say yes
-    nums = [float(v) for v in values if isinstance(v, (int, float)) and not isinstance(v, bool)
-            and v is not None and math.isfinite(v)]
-    if not nums:
-        return "-"
-    mean = float(np.mean(nums))
-    text = f"{mean:.3g}"
-    if len(nums) > 1:
-        spread = float(np.std(nums, ddof=1))
-        text += f" +- {0.0 if spread < 1e-9 * max(1.0, abs(mean)) else spread:.2g}"
-    if len(nums) < len(values):
-        text += f" ({len(nums)}/{len(values)})"
-    return text
-
-
 def headline_keys(rows: Sequence[RunRow], declared: Sequence[Metric]) -> list[str]:
     """The scenario's headline metrics the rows have, prefixes ("settle_times.") expanded in order."""
     return headline_names(declared, (n for r in rows for n in r.metrics))
 
 
-def _table_row(cells: Sequence[str]) -> str:
-    return "| " + " | ".join(cells) + " |"
-
-
 def write_markdown(scenario: str, rows: Sequence[RunRow], controllers: list[str], path: Path,
                    declared: Sequence[Metric]) -> None:
-    present = headline_keys(rows, declared)
-    units = metric_units(declared, present)
-    lines = [f"# {scenario}: {len(rows)} runs",
-             "",
-             "Mean +- standard deviation over seeds; (k/n) when only k of n runs have the value; "
-             "k/n for a yes/no metric: k of n runs say yes.",
-             "",
-             _table_row(["controller", "runs"] + [with_unit(k, units[k]) for k in present]),
-             "|---|---|" + "---|" * len(present)]
-    for name in controllers:
-        mine = [r for r in rows if r.controller == name]
-        counts: dict[str, int] = {}
-        for r in mine:
-            counts[r.status] = counts.get(r.status, 0) + 1
-        status = ", ".join(f"{n} {s}" for s, n in counts.items())
-        cells = [_mean_spread([r.metrics.get(k) for r in mine]) for k in present]
-        lines.append(_table_row([name, status] + cells))
-    errors = [r for r in rows if r.error]
-    if errors:
-        lines += ["", "Errors:", ""] + [f"- {r.controller} seed {r.seed}: {r.error}" for r in errors]
-    unfinished = [r for r in rows if r.status == "interrupted"]
-    if unfinished:
-        lines += ["", f"Interrupted: {len(unfinished)} of {len(rows)} runs did not finish: "
-                  + ", ".join(f"{r.controller} seed {r.seed}" for r in unfinished[:20])
-                  + (", ..." if len(unfinished) > 20 else "")]
-    write_text(path, "\n".join(lines) + "\n")
+    """metrics.md (:func:`ego.results.summary.comparison`)."""
+    plain = [{"controller": r.controller, "seed": r.seed, "status": r.status, "error": r.error,
+              "metrics": r.metrics} for r in rows]
+    write_text(path, summary.comparison(scenario, plain, controllers, declared))
 
 
 def write_plots(scenario: str, rows: Sequence[RunRow], controllers: list[str], out: Path,

@@ -10,13 +10,13 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import functools
 import math
 import numbers
 import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
-
 
 #: a quarter turn (rad): the bound of every steer limit and angle
 HALF_PI = math.pi / 2
@@ -117,6 +117,13 @@ def _fmt(v: Any) -> str:
 def describe(cls_or_obj: Any) -> list[ParamInfo]:
     """The parameters of a config dataclass (class or instance), in declaration order."""
     cls = cls_or_obj if isinstance(cls_or_obj, type) else type(cls_or_obj)
+    return list(_described(cls))
+
+
+@functools.cache
+def _described(cls: type) -> tuple[ParamInfo, ...]:
+    """:func:`describe` once per class (a class's fields do not change; every value check
+    and every resolved run asks)."""
     hints = {f.name: f.type for f in dataclasses.fields(cls)}
     out = []
     for f in dataclasses.fields(cls):
@@ -128,7 +135,7 @@ def describe(cls_or_obj: Any) -> list[ParamInfo]:
         m = f.metadata
         out.append(ParamInfo(f.name, t, f.default, m["unit"], m["doc"], m["min"], m["max"],
                              m["choices"], m["min_exclusive"]))
-    return out
+    return tuple(out)
 
 
 #: a number as the command line takes it: ASCII digits, an optional fraction and exponent
@@ -198,13 +205,12 @@ def _type_ok(info: ParamInfo, value: Any) -> bool:
 
 def check_value(info: ParamInfo, value: Any) -> None:
     """Raise :class:`ConfigError` unless ``value`` is allowed for ``info`` (type, then range)."""
-    bad = f"bad value for {info.name}: {shown(value)} (expected {info.allowed()})"
     if not _type_ok(info, value):
         raise ConfigError(f"bad value for {info.name}: {shown(value, exact=True)} (expected {info.allowed()}, "
                           f"not {_kind(value)})")
     if info.choices is not None:
         if value not in info.choices:
-            raise ConfigError(bad + did_you_mean(value, info.choices))
+            raise ConfigError(_bad_value(info, value) + did_you_mean(value, info.choices))
         return
     if info.type in (int, float):
         try:
@@ -212,11 +218,16 @@ def check_value(info: ParamInfo, value: Any) -> None:
         except OverflowError:  # a whole number too big for a float
             finite = False
         if not finite:
-            raise ConfigError(bad)
+            raise ConfigError(_bad_value(info, value))
         if info.min is not None and (value <= info.min if info.min_exclusive else value < info.min):
-            raise ConfigError(bad)
+            raise ConfigError(_bad_value(info, value))
         if info.max is not None and value > info.max:
-            raise ConfigError(bad)
+            raise ConfigError(_bad_value(info, value))
+
+
+def _bad_value(info: ParamInfo, value: Any) -> str:
+    """The message of a value out of range (written only when one is)."""
+    return f"bad value for {info.name}: {shown(value)} (expected {info.allowed()})"
 
 
 def validate(obj: Any) -> None:

@@ -1,18 +1,18 @@
 """The PNGs of ``ego compare`` (and the file writing ``ego sweep``'s plots share).
 
-What to draw comes from the scenario's declarations (:mod:`ego.scenarios.trace`):
+What to draw comes from the scenario's declarations (:mod:`ego.results.trace`):
 
-* :class:`~ego.scenarios.trace.Plot` - a trace column over time, every run of every
+* :class:`~ego.results.trace.Plot` - a trace column over time, every run of every
   controller (one thin line per seed, one colour per controller), its references dashed,
   its tolerance band shaded, the declared events marked on the time axis; with ``lines``,
   one panel per controller and one colour per column (the vehicles of a platoon);
-* :class:`~ego.scenarios.trace.Trajectory` - the top-down view of each run: the lanes, the
+* :class:`~ego.results.trace.Trajectory` - the top-down view of each run: the lanes, the
   ego's path, every vehicle of the traffic log (``RunResult.traffic``), the trigger and the
   closest approach with its gap written there;
-* :class:`~ego.scenarios.trace.FrequencyResponse` - a platoon's |H(jw)|: the linear theory
+* :class:`~ego.results.trace.FrequencyResponse` - a platoon's |H(jw)|: the linear theory
   of each PID-like controller and the gains measured between consecutive vehicles.
 
-The runs come as :class:`ego.compare.RunRow` (controller, seed, status, traces, events,
+The runs come as :class:`ego.results.run.RunRow` (controller, seed, status, traces, events,
 traffic, lanes). matplotlib runs with its Agg backend; every file is written atomically.
 """
 
@@ -25,8 +25,8 @@ from pathlib import Path
 import numpy as np
 
 from ego.outputs import atomic_path
-from ego.scenarios.metrics import with_unit
-from ego.scenarios.trace import FrequencyResponse, Plot, Trajectory
+from ego.results.metrics import with_unit
+from ego.results.trace import FrequencyResponse, Plot, Trajectory
 
 #: at most this many runs get a panel of their own in a trajectory figure
 MAX_PANELS = 12
@@ -231,7 +231,7 @@ def _at(t: np.ndarray, when: float) -> int:
 
 
 def trajectory_figure(scenario: str, decl: Trajectory, runs: Sequence):
-    """One panel per run (up to MAX_PANELS): see :class:`~ego.scenarios.trace.Trajectory`."""
+    """One panel per run (up to MAX_PANELS): see :class:`~ego.results.trace.Trajectory`."""
     plt = pyplot()
     runs = [r for r in runs if decl.x in r.traces and decl.y in r.traces and len(r.traces["t"])]
     if not runs:

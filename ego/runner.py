@@ -1,18 +1,27 @@
-"""One run as a pure function of a picklable description: what sweeps and the CLI call."""
+"""One run as a pure function of a picklable description: what sweeps and the CLI call.
+
+The path of a run: a :class:`RunSpec` (names, overrides, output paths) is resolved once by
+:func:`resolve` into a frozen :class:`ResolvedRun` (classes looked up, every value checked);
+:func:`build` makes the scenario from it and :func:`run` runs it into a
+:class:`~ego.results.RunResult`. Workers, plots and exports receive the resolved run.
+"""
 
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
-from dataclasses import dataclass, field
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import Any
 
 from ego.control import CONTROLLERS, controller_spec
-from ego.params import ConfigError, apply_overrides, describe, unknown_parameter
+from ego.control.base import Controller, ControllerSpec
+from ego.params import ConfigError, ParamInfo, apply_overrides, describe, unknown_parameter
 from ego.record import RerunRecorder
-from ego.scenarios import RunResult, Scenario, scenario_class
+from ego.results import RunResult
+from ego.results.trace import Column, Metric
+from ego.scenarios import Scenario, scenario_class
 from ego.scenarios.base import check_backend
-from ego.scenarios.trace import Column, Metric
 from ego.sim.registry import check_options
 from ego.sumo.net import net_file
 
@@ -27,7 +36,7 @@ class RunSpec:
     overrides: Mapping[str, Any] = field(default_factory=dict)
     record: str | None = None
     #: write the trace (and traffic log) here after the run: .csv, .parquet or .mat
-    #: (:func:`ego.export.write_trace`)
+    #: (:func:`ego.results.export.write_trace`)
     trace: str | None = None
     #: write the recording from a separate process (False: in this one, e.g. in a pool
     #: worker that already has a core of its own)
@@ -58,7 +67,7 @@ class RunSpec:
         return self.label or self.controller
 
     def __post_init__(self) -> None:
-        """The fields' types, at once (names and values are checked by :func:`configure`,
+        """The fields' types, at once (names and values are checked by :func:`resolve`,
         before anything is built): ConfigError naming the field, never a TypeError later."""
         for name in ("scenario", "controller"):
             if not isinstance(getattr(self, name), str):
@@ -72,17 +81,97 @@ class RunSpec:
             raise ConfigError(f"bad background_recording {self.background_recording!r} (expected true or false)")
 
 
+def parameter_namespace(scenario: type[Scenario] | str, controllers: Iterable[str] = ()) -> dict[str, ParamInfo]:
+    """Every parameter a run of ``scenario`` with any of ``controllers`` takes, by name: the
+    scenario's configuration, then each controller's parameters (a name both declare is the
+    scenario's). The one place this union is built: ``--set`` checking, compare's variants,
+    sweep specs and the Gymnasium environment all ask here. ConfigError for an unknown
+    scenario or controller."""
+    cls = scenario_class(scenario) if isinstance(scenario, str) else scenario
+    infos: dict[str, ParamInfo] = {}
+    for name in controllers:
+        infos.update({i.name: i for i in describe(controller_spec(name, cls.task).params)})
+    infos.update({i.name: i for i in describe(cls.config_cls)})
+    return infos
+
+
 def split_overrides(scenario: str, controller: str, overrides: Mapping[str, Any]) -> dict:
     """The overrides that apply to this scenario and controller (others are dropped)."""
-    cls = scenario_class(scenario)
-    known = {i.name for i in describe(cls.config_cls)}
-    known |= {i.name for i in describe(controller_spec(controller, cls.task).params)}
+    known = parameter_namespace(scenario, [controller])
     return {k: v for k, v in overrides.items() if k in known}
 
 
-def configure(spec: RunSpec):
-    """Resolve names and overrides: (scenario class, its config, controller spec, its params).
-    Raises ConfigError on any unknown name or bad value; builds nothing."""
+@dataclass(frozen=True)
+class ResolvedRun:
+    """A :class:`RunSpec` with every name resolved and every value checked: what a run,
+    its worker, the plots and the exports receive. Made only by :func:`resolve` (once per
+    run; :meth:`with_outputs` derives a seed's or a recording's variant without resolving
+    again). Frozen and picklable: the scenario class, the controller spec and both
+    configurations travel to a worker by reference and value, so the worker needs no
+    registry and repeats no check."""
+
+    spec: RunSpec
+    #: the scenario class the name resolved to
+    scenario_cls: type[Scenario]
+    #: the scenario's configuration, every override applied and checked (a ``Params``)
+    config: Any
+    #: the controller the name resolved to, for the scenario's task
+    controller: ControllerSpec
+    #: the controller's parameters, every override applied and checked (a ``Params``)
+    controller_params: Any
+
+    @property
+    def name(self) -> str:
+        """The controller as the results name it (:attr:`RunSpec.name`)."""
+        return self.spec.name
+
+    @property
+    def seed(self) -> int:
+        return self.spec.seed
+
+    def with_outputs(self, **changes: Any) -> ResolvedRun:
+        """The same run with other ``seed``, ``record``, ``trace``, ``label`` or
+        ``background_recording``: none of them changes a configuration, so only the new
+        values are checked."""
+        allowed = {"seed", "record", "trace", "label", "background_recording"}
+        bad = sorted(set(changes) - allowed)
+        if bad:
+            raise ConfigError(f"with_outputs cannot change {bad[0]!r} (allowed: {', '.join(sorted(allowed))})")
+        spec = replace(self.spec, **changes)
+        _check_outputs(spec)
+        return replace(self, spec=spec)
+
+    def build_controller(self) -> Controller:
+        """A fresh controller for this run (the scenario's task decides how it is made)."""
+        return self.scenario_cls.build_controller(self.controller, self.controller_params, self.config)
+
+    def metrics_declared(self) -> tuple[Metric, ...]:
+        """Every metric the run reports, as its scenario declares them (units, headline)."""
+        return tuple(self.scenario_cls.metrics_declared(self.config))
+
+    def plots(self) -> tuple:
+        """The plots ``ego compare`` draws for this configuration."""
+        return tuple(self.scenario_cls.compare_plots(self.config))
+
+
+def _check_outputs(spec: RunSpec) -> None:
+    from ego.checks import check_seed
+
+    check_seed(spec.seed)
+    if spec.trace is not None:
+        from ego.results.export import check_trace_path
+
+        check_trace_path(spec.trace)
+    if spec.record is not None:
+        from ego.checks import check_output_file
+
+        check_output_file(os.fspath(spec.record), "--record path", ".rrd")
+
+
+def resolve(spec: RunSpec) -> ResolvedRun:
+    """Resolve names and overrides and check every value (and the output paths): the run
+    as a frozen :class:`ResolvedRun`. Raises ConfigError on any unknown name or bad value;
+    builds nothing and starts nothing."""
     from ego.checks import check_seed
 
     check_seed(spec.seed)
@@ -95,47 +184,39 @@ def configure(spec: RunSpec):
     config, rest = apply_overrides(cls.default_config(spec.overrides), spec.overrides, strict=False)
     ctrl_params, rest = apply_overrides(ctrl.params(), rest, strict=False)
     if rest:
-        known = [i.name for i in describe(cls.config_cls)] + [i.name for i in describe(ctrl.params)]
-        raise unknown_parameter(next(iter(rest)), known)
+        raise unknown_parameter(next(iter(rest)), parameter_namespace(cls, [ctrl.name]))
     cls.check_config(config)
-    return cls, config, ctrl, ctrl_params
+    _check_outputs(spec)
+    return ResolvedRun(spec, cls, config, ctrl, ctrl_params)
 
 
-def build(spec: RunSpec):
-    """Resolve names and overrides into a ready scenario (validates everything first)."""
-    cls, config, ctrl, ctrl_params = configure(spec)
-    controller = cls.build_controller(ctrl, ctrl_params, config)
-    if spec.trace is not None:
-        from ego.export import check_trace_path
-
-        check_trace_path(spec.trace)
+def build(what: RunSpec | ResolvedRun) -> Scenario:
+    """A ready scenario for ``what`` (a spec is resolved first; a resolved run is not checked
+    again). Nothing starts until its ``run()`` or ``reset()``."""
+    resolved = what if isinstance(what, ResolvedRun) else resolve(what)
+    spec = resolved.spec
+    controller = resolved.build_controller()
     recorder = None
     if spec.record is not None:
-        from ego.checks import check_output_file
-
-        path = check_output_file(os.fspath(spec.record), "--record path", ".rrd")
+        path = Path(os.fspath(spec.record))
         path.parent.mkdir(parents=True, exist_ok=True)
         recorder = RerunRecorder(path, recording_id=f"{spec.scenario}-{spec.name}-{spec.seed}",
                                  background=spec.background_recording)
-    return cls(config, controller, seed=spec.seed, recorder=recorder, controller_name=spec.name,
-               backend=spec.backend, backend_options=spec.sim_options)
+    return resolved.scenario_cls(resolved.config, controller, seed=spec.seed, recorder=recorder,
+                                 controller_name=spec.name, backend=spec.backend,
+                                 backend_options=spec.sim_options)
 
 
-def run(spec: RunSpec) -> RunResult:
+def run(what: RunSpec | ResolvedRun) -> RunResult:
     """Run one scenario to its end; SUMO and the recording are closed whatever happens.
     With ``spec.trace``, the trace is written there (an interrupted run's too)."""
-    result = build(spec).run()
-    if spec.trace is not None:
-        from ego.export import write_trace
+    resolved = what if isinstance(what, ResolvedRun) else resolve(what)
+    result = build(resolved).run()
+    if resolved.spec.trace is not None:
+        from ego.results.export import write_trace
 
-        write_trace(result, spec.trace)
+        write_trace(result, resolved.spec.trace)
     return result
-
-
-def declared_metrics(spec: RunSpec) -> tuple[Metric, ...]:
-    """Every metric a run of ``spec`` reports, as its scenario declares them (units, headline)."""
-    cls, config, _, _ = configure(spec)
-    return cls.metrics_declared(config)
 
 
 def declared_columns(cls: type[Scenario], config) -> tuple[Column, ...]:

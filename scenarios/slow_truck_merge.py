@@ -29,10 +29,10 @@ from pathlib import Path
 from ego.control import controller_spec
 from ego.params import param
 from ego.record import RerunRecorder
+from ego.results.trace import Metric
 from ego.scenarios.base import Scenario
 from ego.scenarios.evasive import METRICS, EvasiveConfig, compose, evasive_metrics
 from ego.scenarios.motorway import COLUMNS, EDGE, PLOTS, ROUTE
-from ego.scenarios.trace import Metric
 from ego.sim import VehicleSpec, VehicleType
 from ego.sumo.traffic import CutInVehicle, PacedVehicle
 

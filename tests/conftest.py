@@ -11,6 +11,17 @@ for var in ("XDG_CONFIG_HOME", "XDG_DATA_HOME", "MPLCONFIGDIR"):
 os.environ.setdefault("RERUN_ANALYTICS", "false")
 
 
+def pytest_collection_modifyitems(config, items):
+    """A highway-env simulation and a Ray instance take seconds to start: such tests are
+    ``slow`` too, so ``pytest -m "not sumo and not slow"`` is the fast loop."""
+    slow = pytest.mark.slow
+    for item in items:
+        ray = "ray_executor" in getattr(item, "fixturenames", ()) or \
+            getattr(getattr(item, "callspec", None), "params", {}).get("engine") == "ray"
+        if item.get_closest_marker("highway_env") is not None or ray:
+            item.add_marker(slow)
+
+
 @pytest.fixture(scope="session")
 def fuzzy_ready():
     """Compile report 000's rule base once (scikit-fuzzy builds its graph slowly)."""
@@ -22,8 +33,9 @@ def fuzzy_ready():
 @pytest.fixture
 def point_mass(monkeypatch):
     """The test-only point-mass scenario (no SUMO), registered for the test's duration."""
-    from ego.scenarios import SCENARIOS
     from point_mass import PointMass
+
+    from ego.scenarios import SCENARIOS
 
     monkeypatch.setitem(SCENARIOS, PointMass.name, PointMass)
     return PointMass

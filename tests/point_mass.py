@@ -13,9 +13,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ego.params import param
+from ego.results.metrics import json_number, settling_time
+from ego.results.trace import Column, Metric, Plot
 from ego.scenarios.base import Scenario, TimingConfig
-from ego.scenarios.metrics import json_number, settling_time
-from ego.scenarios.trace import Column, Metric, Plot
 
 DRIVEN_WHEELS = 2
 

@@ -5,7 +5,7 @@ exit status 2, nothing on stdout, exactly one line on stderr starting ``ego: err
 names the bad value (and, where one is close, the name meant), no traceback, no file written
 and no SUMO simulation started. The CLI cases call ``ego.cli.main`` in this process (cheap);
 a handful run ``python -m ego`` as a subprocess to prove the same end to end. The Python API
-cases (RunSpec, configure, parameter dataclasses, sweep specs, file loaders) must raise
+cases (RunSpec, resolve, parameter dataclasses, sweep specs, file loaders) must raise
 :class:`ego.params.ConfigError` itself - never a TypeError, ValueError or KeyError - with a
 one-line message naming the value.
 
@@ -526,9 +526,9 @@ def test_a_network_spoilt_after_the_check_is_still_refused_before_sumo(files, mo
 
 
 def _configure(scenario="emergency-brake", controller="pid", seed=0, **overrides):
-    from ego.runner import RunSpec, configure
+    from ego.runner import RunSpec, resolve
 
-    return lambda files: configure(RunSpec(scenario, controller, seed, overrides))
+    return lambda files: resolve(RunSpec(scenario, controller, seed, overrides))
 
 
 def _spec_of(**kw):

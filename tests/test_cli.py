@@ -206,6 +206,7 @@ def test_help_explains_the_run_command():
         assert word in out.stdout
 
 
+@pytest.mark.slow
 def test_train_writes_weights_and_metadata(tmp_path):
     out = tmp_path / "m.npz"
     res = ego("train", "narma-l2", "--samples", "400", "--epochs", "2", "--seed", "3", "--out", str(out))
@@ -215,6 +216,7 @@ def test_train_writes_weights_and_metadata(tmp_path):
     assert meta["seed"] == 3 and meta["samples"] >= 400 and meta["train"]["epochs"] == 2
 
 
+@pytest.mark.slow
 @pytest.mark.sumo
 def test_curve_run_uses_a_model_trained_elsewhere(tmp_path):
     out = tmp_path / "m.npz"
@@ -256,13 +258,14 @@ def test_bad_seeds_and_output_places_fail_at_once_writing_nothing(args, message,
 
 def test_the_python_api_refuses_a_seed_it_would_truncate():
     from ego.params import ConfigError
-    from ego.runner import RunSpec, configure
+    from ego.runner import RunSpec, resolve
 
     for seed in (1.7, "1", True, -1, 2**31):
         with pytest.raises(ConfigError, match="bad value for seed"):
-            configure(RunSpec("emergency-brake", "pid", seed))
+            resolve(RunSpec("emergency-brake", "pid", seed))
 
 
+@pytest.mark.slow
 def test_train_and_tune_write_into_the_working_folder_unless_told_to_install(tmp_path):
     import subprocess
     import sys

@@ -4,17 +4,17 @@ scenario's declarations (the point-mass scenario needs no SUMO)."""
 import csv
 import subprocess
 import sys
-from ego.sweep.executor import InlineExecutor
 
 import pytest
 from rerun.chunk import RrdReader
 
-from ego.compare import _one, compare
-from ego.plots import figure
+from ego.compare import compare, run_one
+from ego.parallel.executor import InlineExecutor
 from ego.params import ConfigError
+from ego.plots import figure
+from ego.results.trace import Plot
 from ego.runner import RunSpec, declared_columns
 from ego.scenarios import SCENARIOS
-from ego.scenarios.trace import Plot
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
@@ -57,7 +57,7 @@ def test_compare_shows_what_the_scenario_declares_with_units(point_mass, tmp_pat
 
 
 def test_a_run_row_keeps_the_plotted_columns_with_their_units(point_mass, tmp_path):
-    row = _one(RunSpec("point-mass", "pid", 0, {"duration": 1.0}))
+    row = run_one(RunSpec("point-mass", "pid", 0, {"duration": 1.0}))
     assert row.status == "completed"
     assert set(row.traces) == {"t", "speed", "e_lon"}  # only what the plots need
     assert row.units == {"t": "s", "speed": "m/s", "e_lon": "m"}
@@ -156,7 +156,7 @@ def test_a_diverging_controller_is_a_row_not_a_crash(tmp_path):
 def test_a_run_that_raises_becomes_an_error_row(tmp_path):
     blocker = tmp_path / "not-a-folder"
     blocker.write_text("")
-    row = _one(RunSpec("report-000", "pid", 0, {}, record=str(blocker / "x.rrd")))
+    row = run_one(RunSpec("report-000", "pid", 0, {}, record=str(blocker / "x.rrd")))
     assert row.status == "error" and "Error" in row.error
 
 

@@ -9,11 +9,11 @@ import subprocess
 import sys
 
 import pytest
+from engine_tasks import compare_run_with_fault
 
-from ego.compare import _one
+from ego.compare import run_one
+from ego.parallel.executor import ProcessExecutor
 from ego.runner import RunSpec
-from ego.sweep.executor import ProcessExecutor
-from ego.sweep.testing import compare_run_with_fault
 
 pytestmark = pytest.mark.sumo
 
@@ -54,7 +54,7 @@ def test_faulty_runs_are_error_rows_and_the_same_worker_runs_the_next(broken_net
     # a run that raised mid-run still closed its recording; one that never started has none
     assert (tmp_path / "raises-1.rrd").exists() and not (tmp_path / "pid-2.rrd").exists()
     # and the run after the faults is the run a fresh process gives
-    fresh = _one(RunSpec("emergency-brake", "pid", 3, {"duration": 3.0, "traffic_density": 0}))
+    fresh = run_one(RunSpec("emergency-brake", "pid", 3, {"duration": 3.0, "traffic_density": 0}))
     assert {**rows[3].metrics, "wall_time": 0} == {**fresh.metrics, "wall_time": 0}
 
 

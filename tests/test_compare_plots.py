@@ -6,11 +6,11 @@ import dataclasses
 import numpy as np
 import pytest
 
-from ego.compare import _one, compare
+from ego.compare import compare, run_one
+from ego.parallel.executor import InlineExecutor
 from ego.plots import figure, measured_gains, write_all
 from ego.runner import RunSpec
 from ego.scenarios import scenario_class
-from ego.sweep.executor import InlineExecutor
 
 PNG = b"\x89PNG\r\n\x1a\n"
 EVASIVE_FILES = ["fx.png", "gap_front.png", "lateral_error.png", "speed.png", "steering.png",
@@ -54,7 +54,7 @@ def test_an_evasive_comparison_writes_every_plot_with_every_seed(tmp_path):
 
 @pytest.mark.sumo
 def test_a_label_with_signs_never_reaches_a_file_name(tmp_path):
-    row = _one(RunSpec("cut-in", "fuzzy", 0, {"duration": 3.0}))
+    row = run_one(RunSpec("cut-in", "fuzzy", 0, {"duration": 3.0}))
     odd = dataclasses.replace(row, controller="pid@kp_lat=0.02,kd=1/2")
     plots = scenario_class("cut-in").compare_plots(scenario_class("cut-in").config_cls())
     written = write_all("cut-in", plots, [row, odd], ["fuzzy", odd.controller], tmp_path)
@@ -108,7 +108,7 @@ def test_the_measured_gain_of_a_pure_gain_is_that_gain():
     ("fast-follower", "pid"), ("curve", "pid"), ("sine-tracking", "fuzzy"), ("report-000", "pid"),
 ], ids=["fast-follower", "curve", "sine-tracking", "report-000"])
 def test_every_declared_plot_of_the_other_scenarios_is_written(scenario, controller, tmp_path):
-    row = _one(RunSpec(scenario, controller, 0, {"duration": 2.0}))
+    row = run_one(RunSpec(scenario, controller, 0, {"duration": 2.0}))
     assert row.status != "error", row.error
     cls = scenario_class(scenario)
     plots = cls.compare_plots(cls.config_cls(duration=2.0))

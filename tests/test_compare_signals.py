@@ -15,7 +15,7 @@ from process_group import group, survivors, wait_for
 from ego.compare import compare
 from ego.control import CONTROLLERS, NoController, NoParams
 from ego.control.base import ControllerSpec
-from ego.sweep.executor import InlineExecutor
+from ego.parallel.executor import InlineExecutor
 
 
 def _compare(out, *args, jobs=1):

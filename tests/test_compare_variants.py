@@ -10,9 +10,9 @@ from rerun.chunk import RrdReader
 
 from ego.cli import main
 from ego.compare import compare, file_label, parse_variant, plan
-from ego.plots import figure
+from ego.parallel.executor import InlineExecutor
 from ego.params import ConfigError
-from ego.sweep.executor import InlineExecutor
+from ego.plots import figure
 
 LABELS = ["pid", "pid@kp_lon=2000@kd_lon=500", "fuzzy"]
 

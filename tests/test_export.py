@@ -13,11 +13,11 @@ import pyarrow.parquet as pq
 import pytest
 from scipy.io import loadmat
 
-from ego.export import check_trace_path, write_trace
 from ego.params import ConfigError
+from ego.results.export import check_trace_path, write_trace
+from ego.results.traffic_log import UNITS as TRAFFIC_UNITS
+from ego.results.traffic_log import TrafficLog
 from ego.runner import RunSpec, run
-from ego.scenarios.traffic_log import UNITS as TRAFFIC_UNITS
-from ego.scenarios.traffic_log import TrafficLog
 
 
 @pytest.fixture(scope="module")
@@ -153,7 +153,7 @@ def test_to_pandas_gives_the_trace_and_the_traffic_with_units(result):
 
 
 def test_pandas_is_imported_only_when_asked():
-    code = ("import sys; import ego.runner, ego.export, ego.scenarios; "
+    code = ("import sys; import ego.runner, ego.results.export, ego.scenarios; "
             "print('pandas' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"

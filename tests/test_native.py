@@ -41,6 +41,7 @@ def test_bicycle_step_matches_the_python_model(floor):
         assert ay_n == pytest.approx(ay_p, rel=1e-13, abs=1e-13)
 
 
+@pytest.mark.slow
 def test_mamdani_matches_python_and_scikit_fuzzy():
     from skfuzzy import control as ctrl
 

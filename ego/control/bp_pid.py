@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -95,7 +96,7 @@ class BPPIDController:
         self.gains = np.ones(N_OUT)
         self._u = (0.0, 0.0)
 
-    def _forward(self, x: np.ndarray):
+    def _forward(self, x: np.ndarray) -> tuple[Any, ...]:
         z1 = self.w1 @ x
         h = np.maximum(z1, 0.0)
         z2 = self.w2 @ h
@@ -125,7 +126,7 @@ class BPPIDController:
         self._u = (u_x, u_y)
         return p.fx_gain * float(u_x), p.delta_gain * float(u_y)
 
-    def _learn(self, x, z1, h, k, terms, c, e_x, e_y) -> None:
+    def _learn(self, x: Any, z1: Any, h: Any, k: Any, terms: Any, c: Any, e_x: Any, e_y: Any) -> None:
         dk = k * (1.0 - k)
         if self.report:
             # as published: "error" = [p, i, d] per channel, no tracking error, momentum

@@ -27,9 +27,9 @@ from functools import lru_cache
 from importlib.resources import files
 from pathlib import Path
 
+from ego.checks import finite_number, read_json
 from ego.control.base import Observation
 from ego.models.lateral_error import LateralErrorParams
-from ego.checks import finite_number, read_json
 from ego.params import ConfigError, Params, did_you_mean, param
 
 #: Kp, Ki, Kd of the e, psi, vy and r loops: report 003's differential-evolution result
@@ -113,7 +113,7 @@ class Cascade:
     __slots__ = ("kp", "ki", "kd", "beta", "ilim", "adaptive", "ff", "lim", "rate", "L", "K",
                  "integ", "dfilt", "prev", "delta", "first", "out")
 
-    def __init__(self, gains, dt: float, integral_limit: float = 1.0, alpha: float = 0.2,
+    def __init__(self, gains: tuple[float, ...], dt: float, integral_limit: float = 1.0, alpha: float = 0.2,
                  adaptive: bool = True, feedforward: bool = True, steer_limit: float = math.radians(25),
                  steer_rate: float = math.radians(30), vehicle: LateralErrorParams | None = None) -> None:
         if len(gains) != 12:

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Any
 
 from ego.control.base import Observation
 from ego.control.fuzzy_engine import FastMamdani, table_system
@@ -57,7 +58,7 @@ INPUT_SAMPLES = 201
 OUTPUT_SAMPLES = 401
 
 
-def rule_base(rules) -> object:
+def rule_base(rules: Any) -> object:
     """One of the two tables as a scikit-fuzzy ControlSystem on normalised universes:
     inputs ``v`` and ``e`` on [-1, 1], output ``theta`` on [-1, 1]."""
     return table_system(

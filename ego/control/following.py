@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -240,7 +241,7 @@ class PlatoonControl:
     the followers' observations and returns their actions; signals are named
     ``<signal>_<follower id>``."""
 
-    def __init__(self, members: Sequence, ids: Sequence[str]) -> None:
+    def __init__(self, members: Sequence[Any], ids: Sequence[str]) -> None:
         if len(members) != len(ids):
             raise ValueError(f"{len(members)} controllers for {len(ids)} followers")
         self.members = list(members)
@@ -252,7 +253,7 @@ class PlatoonControl:
             member.reset(seed=member_seed(seed, i))
         self._signals = None
 
-    def step(self, observations: Sequence) -> list[tuple[float, float]]:
+    def step(self, observations: Sequence[Any]) -> list[tuple[float, float]]:
         actions = [member.step(obs) for member, obs in zip(self.members, observations)]
         if self._signals is not None and any(getattr(m, "updated", True) for m in self.members):
             self._signals = None

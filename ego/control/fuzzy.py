@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Any
 
 from ego.control.base import Observation
 from ego.control.fuzzy_engine import FastMamdani, table_system
@@ -40,7 +41,7 @@ INPUT_SAMPLES = 121
 OUTPUT_SAMPLES = 601
 
 
-def rule_base():
+def rule_base() -> Any:
     """Report 000's rule base as a scikit-fuzzy ControlSystem (inputs e, ec; output u)."""
     return table_system(
         inputs=[("e", -INPUT_RANGE, INPUT_RANGE), ("ec", -INPUT_RANGE, INPUT_RANGE)],

@@ -27,8 +27,9 @@ import bisect
 import functools
 import itertools
 import struct
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -60,7 +61,7 @@ class Partition:
         return self.peaks[-1]
 
 
-def partition_of(variable) -> Partition:
+def partition_of(variable: Any) -> Partition:
     """Read and validate a scikit-fuzzy Antecedent/Consequent as a :class:`Partition`."""
     universe = np.asarray(variable.universe, dtype=float)
     if universe.ndim != 1 or universe.size < 2 or np.any(np.diff(universe) <= 0):
@@ -241,7 +242,7 @@ class FastMamdani:
                 self.single2_py = _single_output_two_inputs(self, 0)
                 self.single2 = _native_single2(self, 0) or self.single2_py
 
-    def single2_output(self, o: int, native: bool = True):
+    def single2_output(self, o: int, native: bool = True) -> Callable[[float, float], float]:
         """``f(x0, x1) -> float`` computing output ``o`` alone (two inputs, one term per
         rule for that output): the C twin when built and ``native``, else Python."""
         if len(self.inputs) != 2 or not all(len(t[o]) == 1 for row in self._table2 for t in row):
@@ -252,7 +253,7 @@ class FastMamdani:
     @classmethod
     def from_system(
         cls,
-        system,
+        system: Any,
         input_labels: Sequence[str] | None = None,
         output_labels: Sequence[str] | None = None,
     ) -> FastMamdani:
@@ -274,7 +275,7 @@ class FastMamdani:
             if getattr(c, "defuzzify_method", "centroid") != "centroid":
                 raise UnsupportedRuleBase(f"{c.label}: only centroid defuzzification is supported")
 
-        def and_terms(node) -> list:
+        def and_terms(node: Any) -> list[Any]:
             if isinstance(node, Term):
                 return [node]
             if isinstance(node, TermAggregate) and node.kind == "and":
@@ -349,7 +350,7 @@ class FastMamdani:
         return tuple(out)
 
 
-def _single_output_two_inputs(engine: FastMamdani, o: int):
+def _single_output_two_inputs(engine: FastMamdani, o: int) -> Callable[[float, float], float]:
     """A closure computing engine.evaluate2(x0, x1)[o] for one output, without the
     generic bookkeeping: the Python twin of ego._native.mamdani2 (tests compare them)."""
     fuzzify0, fuzzify1 = engine._fuzzify2
@@ -382,7 +383,7 @@ def _single_output_two_inputs(engine: FastMamdani, o: int):
     return evaluate
 
 
-def _native_single2(engine: FastMamdani, o: int):
+def _native_single2(engine: FastMamdani, o: int) -> Callable[[float, float], float] | None:
     """Output ``o`` bound to ego._native.mamdani2 and this rule base's packed tables."""
     from ego.native import NATIVE
 
@@ -401,7 +402,7 @@ def _native_single2(engine: FastMamdani, o: int):
     )
 
 
-def _fuzzifier(peaks: Sequence[float]):
+def _fuzzifier(peaks: Sequence[float]) -> Callable[[float], Any]:
     """x -> (k, mu_k, mu_k+1) for a Ruspini partition: at most two neighbours are non-zero."""
     last = len(peaks) - 1
     lo, hi = peaks[0], peaks[-1]
@@ -420,7 +421,8 @@ def _fuzzifier(peaks: Sequence[float]):
     return fuzzify
 
 
-def uniform_partition(label: str, lower: float, upper: float, term_labels: Sequence[str], samples: int):
+def uniform_partition(label: str, lower: float, upper: float, term_labels: Sequence[str],
+                      samples: int) -> tuple[np.ndarray, dict[str, tuple[float, float, float]]]:
     """Universe and triangle vertices for a uniform Ruspini partition over [lower, upper].
 
     ``samples`` must put every peak on the grid, i.e. (samples - 1) divisible by
@@ -446,7 +448,7 @@ def table_system(
     tables: Mapping[str, Sequence[Sequence[str]]],
     samples: int,
     output_samples: int | None = None,
-):
+) -> Any:
     """Build a two-input scikit-fuzzy ``ControlSystem`` from rule tables.
 
     ``inputs``/``outputs`` are (label, lower, upper); every variable gets the same uniform
@@ -459,7 +461,7 @@ def table_system(
     if len(inputs) != 2:
         raise ValueError("table_system builds two-input rule tables")
 
-    def make(kind, spec, n_samples):
+    def make(kind: Any, spec: tuple[str, float, float], n_samples: int) -> Any:
         label, lo, hi = spec
         universe, vertices = uniform_partition(label, lo, hi, term_labels, n_samples)
         var = kind(universe, label)

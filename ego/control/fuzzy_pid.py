@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Any
 
 from ego.control.base import Observation
 from ego.control.fuzzy import INPUT_RANGE, INPUT_SAMPLES, OUTPUT_SAMPLES, TERMS
@@ -50,7 +51,7 @@ DKD = _table("PS NS NB NB NB NM PS | PS NS NB NM NM NS ZO | ZO NS NM NM NS NS ZO
 REPORT_LAT_SCALES = (0.0005, 0.0, 0.002)
 
 
-def rule_base():
+def rule_base() -> Any:
     """The three 7x7 tables as one scikit-fuzzy ControlSystem (inputs e, ec; outputs dkp,
     dki, dkd on [-1, 1])."""
     return table_system(
@@ -97,7 +98,8 @@ class _Channel:
 
     __slots__ = ("pid", "scales", "adapt", "ke", "kec", "dk", "_rules")
 
-    def __init__(self, scales, adapt, ke, kec, dt, limit, tau_d, rules) -> None:
+    def __init__(self, scales: tuple[float, float, float], adapt: float, ke: float, kec: float,
+                 dt: float, limit: float, tau_d: float, rules: Any) -> None:
         self.scales = scales
         self.adapt = adapt
         self.ke, self.kec = ke, kec

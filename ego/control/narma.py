@@ -27,12 +27,13 @@ from dataclasses import dataclass
 from functools import lru_cache
 from importlib.resources import files
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
+from ego.checks import check_input_file, finite_number, read_json
 from ego.control.base import Observation
 from ego.control.curve import PedalLoop, PedalParams
-from ego.checks import check_input_file, finite_number, read_json
 from ego.params import HALF_PI, ConfigError, param
 
 #: the regressor, in order; ``_1``/``_2`` are one and two samples back, u the steer (rad)
@@ -50,7 +51,7 @@ class NarmaModel:
     w3 . + b3; then f = y + dy_scale * F and g = g_scale * G.
     """
 
-    def __init__(self, arrays: dict, meta: dict) -> None:
+    def __init__(self, arrays: dict[str, np.ndarray], meta: dict[str, Any]) -> None:
         self.meta = meta
         self.h = float(meta["sample_period"])
         self.mean = np.asarray(arrays["mean"], dtype=float)
@@ -113,11 +114,11 @@ class NarmaModel:
         return f + g * u
 
 
-def _meta_problem(meta) -> str | None:
+def _meta_problem(meta: Any) -> str | None:
     """What is wrong with a model's metadata (or None)."""
     if not isinstance(meta, dict):
         return "its metadata is not a JSON object"
-    h = meta.get("sample_period")
+    h: Any = meta.get("sample_period")
     if not finite_number(h) or not 0.001 <= h <= 1.0:
         return f"its metadata's sample_period is {h!r:.40} (expected 0.001 to 1 s)"
     if meta.get("features") != list(FEATURES):
@@ -125,7 +126,7 @@ def _meta_problem(meta) -> str | None:
     return None
 
 
-def _arrays_problem(arrays: dict) -> str | None:
+def _arrays_problem(arrays: dict[str, np.ndarray]) -> str | None:
     """What is wrong with a model's arrays (or None): every array present, numeric, finite,
     with the shapes of two tanh networks on ``FEATURES``."""
     n = len(FEATURES)
@@ -139,7 +140,7 @@ def _arrays_problem(arrays: dict) -> str | None:
             return f"the array {name} is not numeric ({a.dtype})"
         if not np.isfinite(a).all():
             return f"the array {name} holds NaN or infinite values"
-    shapes = {"mean": (n,), "std": (n,)}
+    shapes: dict[str, tuple[int, ...]] = {"mean": (n,), "std": (n,)}
     for net in "fg":
         h1, h2 = arrays[f"{net}_b1"].size, arrays[f"{net}_b2"].size
         shapes.update({f"{net}_w1": (h1, n), f"{net}_b1": (h1,), f"{net}_w2": (h2, h1), f"{net}_b2": (h2,)})

@@ -93,7 +93,8 @@ class RBFSMCController:
     def _basis(self, x: np.ndarray) -> np.ndarray:
         p = self.params
         diff = self.centres - x
-        return p.scale * np.exp(-np.einsum("ij,ij->i", diff, diff) / (2.0 * p.width * p.width))
+        basis: np.ndarray = p.scale * np.exp(-np.einsum("ij,ij->i", diff, diff) / (2.0 * p.width * p.width))
+        return basis
 
     def step(self, obs: Observation) -> tuple[float, float]:
         p = self.params

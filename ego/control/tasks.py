@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 INF = math.inf
 
@@ -23,7 +24,7 @@ class Signal:
     low: float = -INF
     high: float = INF
 
-    def as_dict(self) -> dict:
+    def as_dict(self) -> dict[str, Any]:
         return {"name": self.name, "unit": self.unit, "description": self.description,
                 "range": [None if math.isinf(self.low) else self.low,
                           None if math.isinf(self.high) else self.high]}
@@ -40,7 +41,7 @@ class Task:
     observes: tuple[Signal, ...]
     returns: tuple[Signal, ...]
 
-    def as_dict(self) -> dict:
+    def as_dict(self) -> dict[str, Any]:
         return {"name": self.name, "summary": self.summary, "observation": self.observation,
                 "observes": [s.as_dict() for s in self.observes],
                 "returns": [s.as_dict() for s in self.returns]}

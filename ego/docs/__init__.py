@@ -2,6 +2,9 @@
 
     python -m ego.docs results [--page NAME] [--table NAME] [--check] [--jobs N]
 
+A tool of the checkout, not of the package: the wheel leaves ``ego.docs`` out (it needs the
+checkout's ``docs/`` and ``scenarios/``); run it from a checkout (``pip install -e .``).
+
 Every table in ``docs/results/*.md`` sits between ``<!-- results:NAME -->`` and
 ``<!-- /results:NAME -->``; this module knows, for each NAME, which runs make it (the same
 runs as the ``ego compare`` / ``ego sweep`` commands printed beside the table) and how each
@@ -98,8 +101,8 @@ class Recovery:
     band: float = 0.01
 
     def __call__(self) -> dict:
+        from ego.results.metrics import overshoot, settling_time
         from ego.runner import RunSpec, run
-        from ego.scenarios.metrics import overshoot, settling_time
 
         r = run(RunSpec("lane-centering", "cascade-pid", 0, {"speed": self.speed, "offset": self.offset}))
         t, d = r.column("t"), r.column("d")
@@ -711,23 +714,22 @@ def tables() -> list[Table]:
 # -- running and writing ---------------------------------------------------------------------------
 def run_jobs(jobs: Iterable, workers: int | None = None, progress: bool = True) -> dict:
     """Each distinct job's result, run in a process pool (libsumo: one simulation per process)."""
-    from ego.sweep.executor import ProcessExecutor
+    from ego.parallel.executor import ProcessExecutor
+    from ego.results.progress import Progress
 
     todo = list(dict.fromkeys(jobs))
     results: dict = {}
+    shown = Progress(len(todo)) if progress else None
     executor = ProcessExecutor(max(1, min(workers or os.cpu_count() or 1, len(todo) or 1)))
     try:
         for outcome in executor.run(_call, todo):
             if outcome.value is None:
                 raise RuntimeError(f"{outcome.task}: {outcome.error}")
             results[outcome.task] = outcome.value
-            if progress and sys.stderr.isatty():
-                sys.stderr.write(f"\r{len(results)}/{len(todo)} runs")
-                sys.stderr.flush()
+            if shown is not None:
+                shown(type(outcome.task).__name__, "done")
     finally:
         executor.close()
-    if progress:
-        sys.stderr.write(f"\r{len(results)}/{len(todo)} runs\n")
     return results
 
 

@@ -30,14 +30,14 @@ import gymnasium as gym
 import numpy as np
 
 from ego.checks import MAX_SEED, check_seed
-from ego.control import CONTROLLERS, controller_spec
+from ego.control import CONTROLLERS
 from ego.control.tasks import TASKS
+from ego.gym.spaces import action_type, observation_type
 from ego.models import NonlinearBicycleParams
 from ego.params import ConfigError, apply_overrides, describe, param, unknown_parameter
-from ego.runner import RunSpec, configure
+from ego.runner import RunSpec, parameter_namespace, resolve
 from ego.scenarios import scenario_class
 from ego.scenarios.sensor import SurroundSensor
-from ego.gym.spaces import action_type, observation_type
 
 #: the controller that drives the channels the agent leaves, per task
 DEFAULT_CONTROLLER = {"tracking": "pid", "curve": "pid", "lane-centering": "cascade-pid",
@@ -268,9 +268,8 @@ class EgoEnv(gym.Env):
             names = [n for n in CONTROLLERS[self.task] if n != "none"]
             raise ConfigError(f"bad value for controller: {controller!r} (the {self.task} task's "
                               f"controllers: {', '.join(names)})")
-        spec = controller_spec(controller, self.task)
         params = {k: v for k, v in cfg.items() if k not in ENV_KEYS}
-        known = set(ENV_KEYS) | {i.name for i in describe(cls.config_cls)} | {i.name for i in describe(spec.params)}
+        known = set(ENV_KEYS) | set(parameter_namespace(cls, [controller]))
         for key in cfg:
             if key not in known:
                 raise unknown_parameter(key, known)
@@ -282,7 +281,8 @@ class EgoEnv(gym.Env):
         # the scenario's defaults are not overrides: a preset (the platoon's variant) would lose
         base = cls.config_cls()
         overrides = {k: v for k, v in params.items() if not (hasattr(base, k) and getattr(base, k) == v)}
-        _, sc_config, spec, ctrl_params = configure(RunSpec(self.scenario_name, controller, 0, overrides))
+        resolved = resolve(RunSpec(self.scenario_name, controller, 0, overrides))
+        sc_config, spec, ctrl_params = resolved.config, resolved.controller, resolved.controller_params
         observation = observation_type(cfg["observation"], self.task)
         action = action_type(cfg["action"], self.task, _native_limits(self.task, sc_config))
         every = 1

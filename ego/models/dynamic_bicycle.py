@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ego.models.integrate import FixedStepIntegrator
+from ego.models.integrate import FixedStepIntegrator, Stepper
 
 
 @dataclass(frozen=True)
@@ -101,13 +101,13 @@ class DynamicBicycle:
         """dx/dt as a float array; ``x = [X, u, Y, v, psi, r]``, ``u = [a_x, delta]``."""
         return np.array(self.rhs(tuple(map(float, x)), tuple(map(float, u))), dtype=float)
 
-    def stepper(self, h: float, substeps: int = 1):
+    def stepper(self, h: float, substeps: int = 1) -> Stepper:
         """``step(state, a_x, delta) -> (state, lateral_accel)`` over ``substeps`` RK4 steps of
         ``h`` (s); ``lateral_accel`` = dv/dt + u r at the start (m/s^2)."""
         integrate = FixedStepIntegrator(self.rhs, h * substeps, substeps, n_states=6).step
         rhs = self.rhs
 
-        def step(state, a_x, delta):
+        def step(state: Sequence[float], a_x: float, delta: float) -> tuple[tuple[float, ...], float]:
             command = (a_x, delta)
             k1 = rhs(state, command)
             return integrate(state, command, k1), k1[3] + state[1] * state[5]

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -53,7 +54,7 @@ def front_bumper_to_cg(xf: float, yf: float, psi: float, cg_to_front: float) -> 
     return xf - cg_to_front * math.cos(psi), yf - cg_to_front * math.sin(psi)
 
 
-def sumo_poses_to_boxes(rows) -> np.ndarray:
+def sumo_poses_to_boxes(rows: Any) -> np.ndarray:
     """Rows (front x, front y, SUMO angle deg, length, width) -> (centre x, centre y, yaw
     rad in (-pi, pi], length, width), vectorised."""
     out = np.array(rows, dtype=float).reshape(-1, 5)

@@ -10,7 +10,12 @@ several times faster in CPython than the generic loop over components.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from functools import lru_cache
+from functools import cache
+from typing import Any
+
+#: a model's ``stepper(...)``: ``step(state, first input, second input) -> (state, lateral
+#: acceleration m/s^2)``
+Stepper = Callable[[Sequence[float], float, float], tuple[tuple[float, ...], float]]
 
 Rhs = Callable[[Sequence[float], Sequence[float]], Sequence[float]]
 
@@ -35,8 +40,8 @@ def rk4_step(rhs: Rhs, x: Sequence[float], u: Sequence[float], h: float,
     )
 
 
-@lru_cache(maxsize=None)
-def unrolled_rk4(n: int) -> Callable:
+@cache
+def unrolled_rk4(n: int) -> Callable[..., tuple[float, ...]]:
     """:func:`rk4_step` written out for an ``n``-dimensional state (same arithmetic)."""
     idx = range(n)
     xs = ", ".join(f"x{i}" for i in idx)
@@ -60,9 +65,10 @@ def rk4(rhs, x, u, h, k1=None):
     sixth = h / 6.0
     return ({", ".join(f"x{i} + sixth * (a{i} + 2.0 * b{i} + 2.0 * c{i} + d{i})" for i in idx)}{',' if n == 1 else ''})
 """
-    namespace: dict = {}
+    namespace: dict[str, Any] = {}
     exec(compile(src, f"<rk4 unrolled for {n} states>", "exec"), namespace)
-    return namespace["rk4"]
+    rk4: Callable[..., tuple[float, ...]] = namespace["rk4"]
+    return rk4
 
 
 class FixedStepIntegrator:

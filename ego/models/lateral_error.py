@@ -21,7 +21,7 @@ scenario use the same matrices, and :meth:`LateralError.rhs` serves the generic 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -85,7 +85,7 @@ class LateralError:
 
         self.rhs = rhs
 
-    def derivatives(self, x, u) -> np.ndarray:
+    def derivatives(self, x: Sequence[float], u: Sequence[float]) -> np.ndarray:
         """dx/dt for ``x = [e, psi_err, vy, r]`` and ``u = [delta, kappa]``."""
         return np.array(self.rhs(tuple(map(float, x)), tuple(map(float, u))))
 
@@ -108,13 +108,13 @@ class LateralError:
         Ad, Bd, Ed = self.discrete(dt)
         return [Ad[:, j].copy() for j in range(4)] + [Bd, Ed]
 
-    def stepper(self, dt: float):
+    def stepper(self, dt: float) -> Callable[[Sequence[float], float, float], tuple[float, ...]]:
         """``step(x, delta, kappa) -> x'`` over ``dt`` on plain floats, summing the columns
         in :meth:`columns` order (the tuner's batch simulation does the same)."""
         cols = [tuple(float(v) for v in c) for c in self.columns(dt)]
         rows = tuple(tuple(c[i] for c in cols) for i in range(4))
 
-        def step(x, delta: float, kappa: float) -> tuple[float, float, float, float]:
+        def step(x: Sequence[float], delta: float, kappa: float) -> tuple[float, ...]:
             e, psi, vy, r = x
             return tuple(a * e + b * psi + c * vy + d * r + f * delta + g * kappa
                          for a, b, c, d, f, g in rows)
@@ -134,7 +134,7 @@ class LateralError:
         psi, vy, delta = np.linalg.solve(M, rhs)
         return np.array([0.0, psi, vy, r]), float(delta)
 
-    def lateral_accel(self, x, delta: float) -> float:
+    def lateral_accel(self, x: Sequence[float], delta: float) -> float:
         """a_y = dvy/dt + v r (m/s^2)."""
         return float(self.A[2, 2] * x[2] + self.A[2, 3] * x[3] + self.B[2] * delta + self.speed * x[3])
 

@@ -32,6 +32,7 @@ is the right-hand side for generic integrators and tests.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -85,7 +86,7 @@ class Longitudinal:
         p = self.params
         return p.max_accel if u > p.max_accel else (-p.max_decel if u < -p.max_decel else u)
 
-    def derivatives(self, x, u: float) -> np.ndarray:
+    def derivatives(self, x: Sequence[float], u: float) -> np.ndarray:
         """dx/dt of ``x = [s, v, a]`` under command ``u`` away from standstill. With no lag
         the acceleration is the saturated command itself (and da/dt is reported as 0)."""
         s, v, a = (float(c) for c in x)
@@ -103,7 +104,7 @@ class Longitudinal:
         den = np.array([self.params.lag, 1.0, 0.0, 0.0]) if self.params.lag > 0 else np.array([1.0, 0.0, 0.0])
         return num, den
 
-    def stepper(self, dt: float):
+    def stepper(self, dt: float) -> Callable[[float, float, float, float], tuple[float, float, float]]:
         """``step(s, v, a, u) -> (s, v, a)`` over ``dt`` (s) with ``u`` held, exact:
 
         a(t) = u + (a0 - u) e^(-t/tau)

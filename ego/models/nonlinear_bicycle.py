@@ -16,13 +16,13 @@ from __future__ import annotations
 
 import math
 import struct
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from enum import IntEnum
 
 import numpy as np
 
-from ego.models.integrate import FixedStepIntegrator
+from ego.models.integrate import FixedStepIntegrator, Stepper
 
 _RAD2DEG = 180.0 / math.pi
 
@@ -146,7 +146,7 @@ class NonlinearBicycle:
         self._abs = bool(p.abs)
         self.rhs = self._make_rhs()
 
-    def _make_rhs(self):
+    def _make_rhs(self) -> Callable[[Sequence[float], Sequence[float]], tuple[float, ...]]:
         """dx/dt on plain floats as a closure over the folded constants.
 
         The tyre formula is written out inline (same as :func:`magic_formula`, which
@@ -195,7 +195,8 @@ class NonlinearBicycle:
 
         return rhs
 
-    def _forces(self, uu: float, v: float, r: float, Fx: float, delta: float):
+    def _forces(self, uu: float, v: float, r: float, Fx: float,
+                delta: float) -> tuple[float, float, float, float, float]:
         Nw, _, _, _, a, b, DFzf, DFzr, F_max, By, Cy, Ey, Shy, Svy = self._c
         if uu < self._floor:
             uu = self._floor
@@ -223,7 +224,7 @@ class NonlinearBicycle:
         """(alpha_f deg, alpha_r deg, F_yf N, F_yr N, Fx N), Fx after the friction circle."""
         return self._forces(x[State.U], x[State.V], x[State.R], u[Input.FX], u[Input.DELTA])
 
-    def stepper(self, h: float, substeps: int = 1):
+    def stepper(self, h: float, substeps: int = 1) -> Stepper:
         """``step(state, Fx, delta) -> (state, lateral_accel)``: ``substeps`` RK4 steps of
         ``h`` (s) with the input held; ``lateral_accel`` = dv/dt + u r at the start (m/s^2).
 
@@ -236,14 +237,15 @@ class NonlinearBicycle:
             native_step = NATIVE.bicycle_step
             packed = struct.pack(f"{len(self._c) + 2}d", *self._c, self._floor, float(self._abs))
 
-            def step(state, fx, delta):
-                return native_step(state, fx, delta, h, substeps, packed)
+            def native(state: Sequence[float], fx: float, delta: float) -> tuple[tuple[float, ...], float]:
+                result: tuple[tuple[float, ...], float] = native_step(state, fx, delta, h, substeps, packed)
+                return result
 
-            return step
+            return native
         integrator = FixedStepIntegrator(self.rhs, h * substeps, substeps, n_states=6)
         rhs, integrate = self.rhs, integrator.step
 
-        def step(state, fx, delta):
+        def step(state: Sequence[float], fx: float, delta: float) -> tuple[tuple[float, ...], float]:
             command = (fx, delta)
             k1 = rhs(state, command)
             return integrate(state, command, k1), k1[3] + state[1] * state[5]

@@ -148,7 +148,7 @@ class LaneFramePlant:
         self.speed = model.speed
         self._step = model.stepper(dt)
         self.s = s0
-        self.lane_state = (e0, 0.0, 0.0, 0.0)
+        self.lane_state: tuple[float, ...] = (e0, 0.0, 0.0, 0.0)
         self.applied = (0.0, 0.0)
         self.lateral_accel = 0.0
         self.kappa = lane.curvature_at(s0)

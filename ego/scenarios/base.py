@@ -15,7 +15,7 @@ import logging
 import math
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
@@ -25,9 +25,10 @@ from ego.models.plant import Plant
 from ego.params import ConfigError, Params, param
 from ego.processes import signals_deferred
 from ego.record.base import NullRecorder, Recorder, Scene, Series, unit_path
-from ego.scenarios.metrics import json_number
-from ego.scenarios.trace import Column, Metric, Plot, Trace
-from ego.scenarios.traffic_log import RADIUS, REACH_MARGIN, TrafficCollector, TrafficLog
+from ego.results.metrics import json_number
+from ego.results.run import Event, RunResult
+from ego.results.trace import Column, Metric, Plot, Trace
+from ego.results.traffic_log import RADIUS, REACH_MARGIN, TrafficCollector
 from ego.sim.protocol import TrafficSim
 from ego.sim.registry import SimSetup, make_sim
 from ego.sim.types import Collision
@@ -74,62 +75,6 @@ class CommonConfig(TimingConfig):
     def control_per_sumo(self) -> int:
         """Control periods per SUMO step."""
         return round(self.sumo_step / self.dt)
-
-
-@dataclass(frozen=True)
-class Event:
-    """Something that happened in a run: it goes to the log and to the recording."""
-
-    t: float
-    kind: str
-    text: str
-    level: str = "INFO"
-
-    def as_dict(self) -> dict:
-        return {"t": round(self.t, 4), "kind": self.kind, "text": self.text, "level": self.level}
-
-
-@dataclass
-class RunResult:
-    """Outcome of one run: status, metrics (JSON-ready), events and the full trace."""
-
-    scenario: str
-    controller: str
-    seed: int
-    status: str
-    metrics: dict
-    events: list[Event]
-    columns: tuple[str, ...]
-    trace: np.ndarray
-    #: column -> unit of every trace column (controller signals: as the controller declares)
-    units: dict = field(default_factory=dict)
-    #: the vehicles near the ego at every SUMO step (None: a scenario without traffic)
-    traffic: TrafficLog | None = None
-    #: the lanes of the scene: (width m, centre-line points (x, y) m) each
-    lanes: tuple = ()
-
-    def column(self, name: str) -> np.ndarray:
-        return self.trace[:, self.columns.index(name)]
-
-    def to_pandas(self, traffic: bool = False):
-        """The trace as a pandas DataFrame: one row per control step, one column per trace
-        column (``t`` in s first), ``df.attrs["units"]`` column -> unit (``""``: a
-        controller's signal). ``traffic=True``: the traffic log instead, one row per vehicle
-        and SUMO step (``vehicle`` its id), units likewise; None when the run has none.
-        pandas is imported here, not with ego."""
-        import pandas as pd
-
-        from ego.export import TRAFFIC_UNITS, trace_units, traffic_columns
-
-        if traffic:
-            if self.traffic is None:
-                return None
-            df, units = pd.DataFrame(traffic_columns(self.traffic)), dict(TRAFFIC_UNITS)
-        else:
-            df, units = pd.DataFrame(self.trace, columns=list(self.columns)), trace_units(self)
-        df.attrs["units"] = units
-        df.attrs.update(scenario=self.scenario, controller=self.controller, seed=self.seed, status=self.status)
-        return df
 
 
 def divergence(state: Sequence[float], offset: float, heading_error: float,
@@ -199,7 +144,7 @@ class Scenario:
     @classmethod
     def check_config(cls, config) -> None:
         """Checks of a configuration that need more than the configuration (the network's
-        geometry, say), made by ``ego.runner.configure`` before anything runs: ConfigError.
+        geometry, say), made by ``ego.runner.resolve`` before anything runs: ConfigError.
         Default: none."""
 
     @classmethod

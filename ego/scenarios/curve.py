@@ -29,10 +29,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ego.lane_frame import LanePolyline
 from ego.models import ActuatorLimits, BicyclePlant, DynamicBicycle, DynamicBicycleParams, VehicleGeometry
 from ego.params import ConfigError, param
 from ego.record.base import Series
-from ego.lane_frame import LanePolyline
 from ego.scenarios import metrics as m
 from ego.scenarios.base import CommonConfig, RoadScenario, signal_series
 from ego.scenarios.observe import road_observation

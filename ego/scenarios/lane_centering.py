@@ -33,6 +33,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ego.analytic_road import report003_road
+from ego.lane_frame import LanePolyline
 from ego.models import (
     ActuatorLimits,
     BicyclePlant,
@@ -45,7 +46,6 @@ from ego.models import (
 )
 from ego.params import param
 from ego.record.base import Series
-from ego.lane_frame import LanePolyline
 from ego.scenarios import metrics as m
 from ego.scenarios.base import CommonConfig, RoadScenario, signal_series
 from ego.scenarios.observe import road_observation

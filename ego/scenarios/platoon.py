@@ -36,10 +36,10 @@ from typing import Any
 import numpy as np
 
 from ego.control.following import FollowingObservation, PlatoonControl
+from ego.lane_frame import LanePolyline
 from ego.models import Longitudinal, LongitudinalParams, LongitudinalPlant, SpacingPolicy, VehicleGeometry
 from ego.params import ConfigError, param, shown
 from ego.record.base import Scene, Series
-from ego.lane_frame import LanePolyline
 from ego.scenarios import metrics as m
 from ego.scenarios import string_stability as ss
 from ego.scenarios.base import CommonConfig, Scenario

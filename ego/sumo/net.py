@@ -88,15 +88,32 @@ def lane_length(name: str, lane: str) -> float:
     raise ConfigError(f"the SUMO network {path} has no lane {lane!r}; rebuild it: python sumo_nets/build.py")
 
 
+#: networks found whole, by (path, modification time, size): a sweep resolves thousands of
+#: runs on one network and parses it once; a file changed since is parsed again
+_CHECKED: set[tuple[str, int, int]] = set()
+
+
 def check_network(path: Path) -> None:
     """A built network must be whole XML with a ``<net>`` root and edges: a truncated or
     garbled file is a ConfigError naming it here, before libsumo reads it (libsumo would
-    fail deep inside SUMO, or worse, load half a road). The shipped networks take well
-    under a millisecond to parse."""
+    fail deep inside SUMO, or worse, load half a road). Parsed once per version of the
+    file in a process."""
+    try:
+        stat = path.stat()
+    except OSError as exc:
+        raise ConfigError(f"cannot read the SUMO network {path}: {exc.strerror or exc}") from None
+    key = (str(path), stat.st_mtime_ns, stat.st_size)
+    if key in _CHECKED:
+        return
+    _check_network(path)
+    _CHECKED.add(key)
+
+
+def _check_network(path: Path) -> None:
     edges = 0
     root = None
     try:
-        for event, elem in ET.iterparse(path, events=("start",)):
+        for _event, elem in ET.iterparse(path, events=("start",)):
             if root is None:
                 root = elem.tag
             edges += elem.tag == "edge"

@@ -16,7 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ego.scenarios.metrics import metric_units, with_unit
+from ego.outputs import write_text
+from ego.results import summary
+from ego.results.metrics import metric_units, with_unit
 
 #: outcome -> (colour, rank: a point with several runs shows its worst)
 OUTCOMES = {"completed": ("#2ca02c", 0), "ended": ("#98df8a", 1), "timeout": ("#ff7f0e", 2),
@@ -33,56 +35,13 @@ def _unit(scenario: str, metric: str) -> str:
 
 def write_summary(spec, table, path: Path) -> None:
     """Per controller: runs by status, then each headline metric's median, 5th and 95th
-    percentiles, minimum and maximum over the runs that have it."""
+    percentiles, minimum and maximum over the runs that have it
+    (:func:`ego.results.summary.sweep`)."""
     from ego.scenarios import scenario_class
 
-    cls = scenario_class(spec.scenario)
-    data = table.to_pydict()
-    n = table.num_rows
-    heads = [m for m in cls.metrics_declared() if m.headline and not m.name.endswith(".")]
-    heads = [m for m in heads if m.name in data]
-    lines = [f"# {spec.scenario} sweep: {n} runs", "",
-             f"Spec: `{spec.source}`; swept: {', '.join(spec.swept) or 'nothing'}; "
-             f"{len(spec.seeds)} seed(s).", ""]
-    statuses = sorted({s for s in data["status"]})
-    lines += ["| controller | runs | " + " | ".join(statuses) + " |",
-              "|---|---|" + "---|" * len(statuses)]
-    for c in spec.controllers:
-        mine = [i for i in range(n) if data["controller"][i] == c]
-        counts = [sum(1 for i in mine if data["status"][i] == s) for s in statuses]
-        lines.append(f"| {c} | {len(mine)} | " + " | ".join(map(str, counts)) + " |")
-    if heads:
-        lines += ["", "Headline metrics over the runs that have them: median [5th, 95th percentile] "
-                  "(min to max), n runs.", "",
-                  "| controller | " + " | ".join(with_unit(m.name, m.unit) for m in heads) + " |",
-                  "|---|" + "---|" * len(heads)]
-        for c in spec.controllers:
-            cells = []
-            for m in heads:
-                vals = [v for i, v in enumerate(data[m.name]) if data["controller"][i] == c
-                        and isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)]
-                if not vals:
-                    cells.append("-")
-                    continue
-                a = np.array(vals)
-                p5, p50, p95 = np.percentile(a, [5, 50, 95])
-                cells.append(f"{p50:.3g} [{p5:.3g}, {p95:.3g}] ({a.min():.3g} to {a.max():.3g}), {a.size}")
-            lines.append(f"| {c} | " + " | ".join(cells) + " |")
-    for extra in ("collision_avoidable",):
-        if extra in data:
-            lines += ["", f"Collisions braking at the friction limit from the trigger would have "
-                      f"avoided (`{extra}`):", ""]
-            for c in spec.controllers:
-                k = sum(1 for i in range(n) if data["controller"][i] == c and data[extra][i] is True)
-                lines.append(f"- {c}: {k}")
-    errors = [i for i in range(n) if data["status"][i] == "error"]
-    if errors:
-        lines += ["", f"{len(errors)} runs ended in an error; the first:", "",
-                  f"- {data['controller'][errors[0]]} seed {data['seed'][errors[0]]}: "
-                  f"{data['error'][errors[0]]}"]
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text("\n".join(lines) + "\n")
-    tmp.replace(path)
+    text = summary.sweep(spec.scenario, spec.source, spec.swept, len(spec.seeds), table.to_pylist(),
+                         spec.controllers, scenario_class(spec.scenario).metrics_declared())
+    write_text(path, text)
 
 
 def write_plots(spec, table, out: Path, x: str, y: str, metric: str | None) -> Path:
@@ -158,7 +117,7 @@ def write_plots(spec, table, out: Path, x: str, y: str, metric: str | None) -> P
 
 
 def _param_unit(spec, name: str) -> str:
-    from ego.sweep.spec import _param_types
+    from ego.runner import parameter_namespace
 
-    info = _param_types(spec.scenario, spec.controllers).get(name)
+    info = parameter_namespace(spec.scenario, spec.controllers).get(name)
     return info.unit if info is not None else ""

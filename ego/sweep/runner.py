@@ -10,59 +10,52 @@ same run since runs are deterministic), and the envelope plots asked for with ``
 
 from __future__ import annotations
 
-import socket
-import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 from ego.outputs import FolderLock, remove_partials
+from ego.parallel.executor import make_executor
 from ego.params import ConfigError, did_you_mean
-from ego.sweep.executor import Outcome, make_executor
+from ego.results.run import RunRow
+from ego.sweep.pipeline import RunTask, drive
 from ego.sweep.results import ResultStore
 from ego.sweep.spec import Run, SweepSpec
 
 RECORD = ("none", "failed", "all")
-_HOST = socket.gethostname()
 
 
-def run_task(task: tuple) -> dict:
-    """One run in a worker: ``(Run, recording path or None, record policy)`` -> its row."""
-    from ego.runner import RunSpec, run
-    from ego.scenarios.base import NOT_FAILED
-    from ego.scenarios.metrics import flatten
+def task_of(r: Run, rrd: str | None = None, policy: str = "none") -> RunTask:
+    """The pipeline's task for sweep run ``r`` (resolved here, once): recorded to ``rrd``
+    always (``policy`` ``all``) or only when it fails (``failed``). ConfigError when the
+    run's values do not resolve."""
+    from ego.runner import RunSpec, resolve
 
-    r, rrd, policy = task
-    t0 = time.perf_counter()
-    row = {"run_id": r.run_id, "scenario": r.scenario, "controller": r.controller, "seed": r.seed,
+    resolved = resolve(RunSpec(r.scenario, r.controller, r.seed, r.overrides,
+                               record=rrd if policy == "all" else None, background_recording=False))
+    return RunTask(resolved, record_failed=rrd if policy == "failed" and rrd else None, key=r)
+
+
+def row_of(r: Run, row: RunRow) -> dict:
+    """The results.parquet row of sweep run ``r``: its key columns and overrides, every
+    metric flattened, then status, error, the row's wall time (spec to row) and host."""
+    out = {"run_id": r.run_id, "scenario": r.scenario, "controller": r.controller, "seed": r.seed,
            **r.overrides}
-    try:
-        spec = RunSpec(r.scenario, r.controller, r.seed, r.overrides,
-                       record=rrd if policy == "all" else None, background_recording=False)
-        result = run(spec)
-        if policy == "failed" and result.status not in NOT_FAILED and rrd:
-            run(RunSpec(r.scenario, r.controller, r.seed, r.overrides, record=rrd,
-                        background_recording=False))
-        metrics = flatten(result.metrics)
-        metrics.pop("wall_time", None)  # the row's own wall_time (spec to row) replaces it
-        for key in ("scenario", "controller", "seed"):
-            metrics.pop(key, None)
-        row.update(metrics)
-        row["status"] = result.status
-        row["error"] = ""
-    except Exception as exc:  # noqa: BLE001 - a broken run is a row, never the end of a sweep
-        row["status"] = "error"
-        row["error"] = f"{type(exc).__name__}: {exc}"
-    row["wall_time"] = time.perf_counter() - t0
-    row["host"] = _HOST
-    return row
+    metrics = dict(row.metrics)
+    for key in ("wall_time", "scenario", "controller", "seed"):  # the row's own replace them
+        metrics.pop(key, None)
+    out.update(metrics)
+    out["status"] = row.status
+    out["error"] = row.error
+    out["wall_time"] = row.wall_time
+    out["host"] = row.host
+    return out
 
 
-def error_row(outcome: Outcome) -> dict:
-    r: Run = outcome.task[0]
+def error_row(r: Run, error: str) -> dict:
     return {"run_id": r.run_id, "scenario": r.scenario, "controller": r.controller, "seed": r.seed,
-            **r.overrides, "status": "error", "error": outcome.error, "wall_time": None, "host": None}
+            **r.overrides, "status": "error", "error": error, "wall_time": None, "host": None}
 
 
 @dataclass
@@ -77,8 +70,10 @@ class SweepReport:
 
 def sweep(spec: SweepSpec, out: Path, *, engine: str = "process", jobs: int | None = None,
           address: str | None = None, record: str = "failed", plots: Sequence[str] = (),
-          progress: Callable[[int, int, dict], None] | None = None) -> SweepReport:
-    """Run every run of ``spec`` not yet in ``out/results.parquet``; see the module docstring."""
+          progress: Callable[[int], Callable[[str, str], None]] | None = None) -> SweepReport:
+    """Run every run of ``spec`` not yet in ``out/results.parquet``; see the module docstring.
+    ``progress``: made with the number of runs to do, called once per finished run
+    (:class:`ego.results.progress.Progress`), or None."""
     if record not in RECORD:
         raise ConfigError(f"bad --record {record!r} (allowed: {', '.join(RECORD)})")
     plot_specs = [parse_plot(p, spec) for p in plots]
@@ -99,34 +94,38 @@ def _sweep(spec: SweepSpec, out: Path, engine: str, jobs: int | None, address: s
         runs_dir.mkdir(parents=True, exist_ok=True)
     remove_partials(runs_dir)  # left by a sweep that was killed
 
-    def tasks():
-        for r in spec.runs():
-            if r.run_id not in done:
-                rrd = str(runs_dir / f"{r.controller}-{r.run_id}.rrd") if record != "none" else None
-                yield r, rrd, record
-
     by_status: dict[str, int] = {}
     started = time.perf_counter()
     ran = 0
+
+    def store_row(row: dict) -> None:
+        nonlocal ran
+        store.add(row)
+        ran += 1
+        by_status[row["status"]] = by_status.get(row["status"], 0) + 1
+
+    def tasks() -> Iterator[RunTask]:
+        for r in spec.runs():
+            if r.run_id not in done:
+                rrd = str(runs_dir / f"{r.controller}-{r.run_id}.rrd") if record != "none" else None
+                try:
+                    yield task_of(r, rrd, record)
+                except Exception as exc:  # noqa: BLE001 - values no run takes: the run's row says so
+                    store_row(error_row(r, f"{type(exc).__name__}: {exc}"))
+                    if shown is not None:
+                        shown(f"{r.controller} seed {r.seed}", "error")
+
+    def keep(task: RunTask, row: RunRow) -> None:
+        if row.status != "interrupted":  # not a result: the next run of the sweep redoes it
+            store_row(row_of(task.key, row))
+
+    shown = progress(todo) if progress is not None and todo else None
     interrupted = False
-    executor = make_executor(engine, jobs, address) if todo else None
     try:
-        if executor is not None:
-            for outcome in executor.run(run_task, tasks()):
-                row = outcome.value if outcome.value is not None else error_row(outcome)
-                if row["status"] == "interrupted":  # not a result: the next run of the sweep redoes it
-                    continue
-                store.add(row)
-                ran += 1
-                by_status[row["status"]] = by_status.get(row["status"], 0) + 1
-                if progress:
-                    progress(ran, todo, row)
-    except KeyboardInterrupt:
-        interrupted = True
+        if todo:
+            interrupted = drive(make_executor(engine, jobs, address), tasks(), keep, shown)
     finally:
         store.flush()
-        if executor is not None:
-            executor.close()
         remove_partials(runs_dir)  # recordings of runs killed mid-way; their workers are gone
     table = store.table()
     if table is not None:
@@ -158,19 +157,3 @@ def parse_plot(text: str, spec: SweepSpec) -> tuple[str, str, str | None]:
             raise ConfigError(f"bad --plot {text!r}: {metric!r} is not a metric of {spec.scenario} "
                               f"(see ego list){did_you_mean(metric, known)}")
     return names[0], names[1], metric
-
-
-def print_progress(done: int, total: int, row: dict, started: list[float] = []) -> None:  # noqa: B006
-    """A one-line progress report on stderr (rewritten in place on a terminal)."""
-    if not started:
-        started.append(time.perf_counter())
-    elapsed = time.perf_counter() - started[0]
-    rate = done / elapsed if elapsed > 0 else 0.0
-    left = (total - done) / rate if rate > 0 else float("inf")
-    line = (f"{done}/{total} runs, {rate:.1f} runs/s, ~{left:.0f} s left  "
-            f"{row['controller']} seed {row['seed']}: {row['status']}")
-    if sys.stderr.isatty():
-        sys.stderr.write("\r" + line.ljust(100) + ("\n" if done == total else ""))
-    elif done == total or done % max(1, total // 20) == 0:
-        sys.stderr.write(line + "\n")
-    sys.stderr.flush()

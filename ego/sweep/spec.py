@@ -123,13 +123,9 @@ def run_id(scenario: str, controller: str, seed: int, overrides: dict) -> str:
 
 
 def _param_types(scenario: str, controllers) -> dict:
-    from ego.scenarios import scenario_class
+    from ego.runner import parameter_namespace
 
-    cls = scenario_class(scenario)
-    infos = {i.name: i for i in describe(cls.config_cls)}
-    for name in controllers:
-        infos.update({i.name: i for i in describe(controller_spec(name, cls.task).params)})
-    return infos
+    return parameter_namespace(scenario, controllers)
 
 
 def _sample_points(sample: Sample, infos: dict, chunk: int = 4096) -> Iterator[dict]:

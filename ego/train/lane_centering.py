@@ -29,10 +29,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ego.analytic_road import report003_road
 from ego.checks import MAX_JOBS, check_count, check_number, check_seed, finite_number
 from ego.control.cascade import GAIN_NAMES, REPORT_GAINS, TUNED_PRESET, Cascade
 from ego.models.lateral_error import LateralError, LateralErrorParams
-from ego.analytic_road import report003_road
 from ego.outputs import write_text
 from ego.params import ConfigError, did_you_mean
 
@@ -337,7 +337,7 @@ class TuneSpec:
 
     def __post_init__(self) -> None:
         """The same checks as ``ego tune``'s options, from Python: ConfigError."""
-        from ego.sweep.executor import ENGINES
+        from ego.parallel.executor import ENGINES
 
         check_count(self.popsize, "popsize", 1, 1000)
         check_count(self.maxiter, "maxiter", 1, 100_000)
@@ -425,14 +425,15 @@ def sumo_cost(task: tuple) -> float:
     """One member on one drive in SUMO: (gains, speed m/s, offset m, duration s or None) ->
     the report's cost of the run's lateral error (a run that does not complete costs 1e4+)."""
     from ego.control.cascade import CascadePID, CascadePIDParams
-    from ego.runner import RunSpec, configure
+    from ego.runner import RunSpec, resolve
     from ego.scenarios.base import NOT_FAILED
 
     gains, speed, offset, duration = task
     overrides = {"speed": speed, "offset": offset, "plant": "dynamic-bicycle"}
     if duration is not None:
         overrides["duration"] = duration
-    cls, config, _, _ = configure(RunSpec("lane-centering", "cascade-pid", 0, overrides))
+    resolved = resolve(RunSpec("lane-centering", "cascade-pid", 0, overrides))
+    cls, config = resolved.scenario_cls, resolved.config
     p = CascadePIDParams(preset="report")
     controller = CascadePID(p, config.dt)
     controller.law = Cascade(tuple(gains), config.dt, p.integral_limit, p.alpha, p.adaptive,
@@ -448,7 +449,7 @@ class _SumoObjective:
     """The vectorised objective with each member's cost from SUMO runs on an executor."""
 
     def __init__(self, spec: TuneSpec) -> None:
-        from ego.sweep.executor import make_executor
+        from ego.parallel.executor import make_executor
 
         self.spec = spec
         self.executor = make_executor(spec.engine, spec.workers, spec.address)

@@ -32,8 +32,8 @@ import numpy as np
 
 from ego.checks import MAX_SEED
 from ego.control.narma import DEFAULT_MODEL, FEATURES
-from ego.models import DynamicBicycle, DynamicBicycleParams
 from ego.lane_frame import LanePolyline
+from ego.models import DynamicBicycle, DynamicBicycleParams
 from ego.outputs import atomic_path, write_text
 from ego.params import HALF_PI, ConfigError, Params, param
 

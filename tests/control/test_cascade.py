@@ -43,6 +43,7 @@ def population():
     return np.vstack([REPORT_GAINS, load_preset(), rng.uniform(0.0, 2.0, (22, 12))])
 
 
+@pytest.mark.slow
 def test_batch_equals_single_runs_member_by_member(kappas, population):
     """The tuner's vectorised simulation (both speeds in one time loop) against the plain
     single-run simulation with the scenario's controller: the same errors at every step."""
@@ -90,6 +91,7 @@ def test_cost_is_the_reports():
     assert cost(np.array([np.nan]), np.array([0.0]), np.array([0.0]))[0] >= 1e4
 
 
+@pytest.mark.slow
 def test_a_quick_tuning_improves_on_its_initial_population(tmp_path):
     out = tmp_path / "quick.json"
     preset = tune(TuneSpec.quick(seed=1), out, log=lambda *_: None)

@@ -24,6 +24,7 @@ def obs(d=0.0, heading_error=0.0, speed=30 / 3.6, accel_ref=0.3, curvature=0.0):
                        accel_ref=accel_ref, curvature=curvature)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("table", ["angle", "position"])
 def test_fast_tables_equal_scikit_fuzzy(table):
     rules = {"angle": ANGLE_RULES, "position": POSITION_RULES}[table]

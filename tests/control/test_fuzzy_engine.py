@@ -21,6 +21,7 @@ def skfuzzy_grid(system, xs, ys, out="u"):
     return np.asarray(sim.output[out])
 
 
+@pytest.mark.slow
 def test_report_rule_base_dense_grid_including_edges_and_beyond():
     system = fuzzy.rule_base()
     fast = FastMamdani.from_system(system, ["e", "ec"], ["u"])
@@ -32,6 +33,7 @@ def test_report_rule_base_dense_grid_including_edges_and_beyond():
     assert np.max(np.abs(got - ref)) < TOL
 
 
+@pytest.mark.slow
 def test_report_rule_base_random_points_one_by_one():
     system = fuzzy.rule_base()
     fast = FastMamdani.from_system(system, ["e", "ec"], ["u"])
@@ -45,6 +47,7 @@ def test_report_rule_base_random_points_one_by_one():
         assert fast.evaluate(float(e), float(c))[0] == pytest.approx(sim.output["u"], abs=TOL)
 
 
+@pytest.mark.slow
 def test_generic_and_specialised_paths_agree():
     fast = fuzzy.evaluator()
     rng = np.random.default_rng(1)
@@ -56,6 +59,7 @@ def test_generic_and_specialised_paths_agree():
         assert fast.single2(e, c) == pytest.approx(generic, abs=1e-12)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("out_samples", [7, 13, 61], ids=lambda n: f"{n}-samples")
 def test_exact_even_on_coarse_output_universes(out_samples):
     # On a coarse output grid scikit-fuzzy's chords over the crossings matter; the
@@ -94,6 +98,7 @@ def _uneven_system():
     return ctrl.ControlSystem(rules)
 
 
+@pytest.mark.slow
 def test_uneven_partition_three_outputs():
     system = _uneven_system()
     fast = FastMamdani.from_system(system, ["e", "ec"], ["kp", "ki", "kd"])
@@ -120,6 +125,7 @@ def test_rejects_non_triangular_terms():
         FastMamdani.from_system(ctrl.ControlSystem(rules), ["e", "ec"], ["u"])
 
 
+@pytest.mark.slow
 def test_rejects_or_rules_and_incomplete_tables():
     system = fuzzy.rule_base()
     e = next(a for a in system.antecedents if a.label == "e")

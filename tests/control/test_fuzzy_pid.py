@@ -5,8 +5,7 @@ import numpy as np
 import pytest
 from skfuzzy import control as ctrl
 
-from ego.control import FuzzyPIDController, FuzzyPIDParams, Observation
-from ego.control import fuzzy_pid
+from ego.control import FuzzyPIDController, FuzzyPIDParams, Observation, fuzzy_pid
 from ego.control.fuzzy_pid import DKD, DKI, DKP
 
 OUTPUTS = ["dkp", "dki", "dkd"]
@@ -23,6 +22,7 @@ def test_tables_are_complete_7x7():
         assert len(table) == 7 and all(len(row) == 7 for row in table)
 
 
+@pytest.mark.slow
 def test_dense_grid_and_edges_match_scikit_fuzzy(system):
     engine = fuzzy_pid.evaluator()
     axis = np.unique(np.concatenate([np.linspace(-11, 11, 45), np.linspace(-10, 10, 31)]))
@@ -36,6 +36,7 @@ def test_dense_grid_and_edges_match_scikit_fuzzy(system):
         assert np.max(np.abs(got - sim.output[name])) < TOL, name
 
 
+@pytest.mark.slow
 def test_random_points_one_by_one_match_scikit_fuzzy(system):
     engine = fuzzy_pid.evaluator()
     sim = ctrl.ControlSystemSimulation(system, cache=False)

@@ -8,9 +8,9 @@ import pytest
 
 from ego.control import Observation
 from ego.control.narma import DEFAULT_MODEL, FEATURES, NarmaL2Controller, NarmaL2Params, NarmaModel, load_model
+from ego.lane_frame import LanePolyline
 from ego.models import DynamicBicycle, DynamicBicycleParams
 from ego.params import ConfigError
-from ego.lane_frame import LanePolyline
 from ego.train.narma_l2 import DataSpec, TrainSpec, generate, train
 
 SMALL = DataSpec(samples=600)
@@ -21,6 +21,7 @@ def _arrays(path):
         return {k: data[k] for k in data.files}
 
 
+@pytest.mark.slow
 def test_training_is_deterministic_with_a_seed(tmp_path):
     paths = [tmp_path / "a.npz", tmp_path / "b.npz", tmp_path / "c.npz"]
     for path, seed in zip(paths, (5, 5, 6)):

@@ -61,7 +61,7 @@ def test_exact_step_equals_the_integrated_ode():
     rng = np.random.default_rng(4)
     x = (0.0, 15.0, 0.0)
     for u in rng.uniform(-5.0, 2.5, 40):  # within the limits: the ODE then needs no clipping
-        sol = solve_ivp(lambda t, y: model.derivatives(y, u), (0.0, dt), x, method="DOP853",
+        sol = solve_ivp(lambda t, y, u=u: model.derivatives(y, u), (0.0, dt), x, method="DOP853",
                         rtol=1e-12, atol=1e-12)
         x_ode = sol.y[:, -1]
         x = step(*x, u)

@@ -5,6 +5,7 @@ import math
 
 import pytest
 
+from ego.lane_frame import LanePolyline
 from ego.models import (
     ActuatorLimits,
     BicyclePlant,
@@ -20,7 +21,6 @@ from ego.models import (
     Plant,
     VehicleGeometry,
 )
-from ego.lane_frame import LanePolyline
 
 DT = 0.01
 GEOMETRY = VehicleGeometry()
@@ -43,7 +43,10 @@ def lane_frame(limits=None, speed=20.0, lane=EAST, e0=0.0):
     return LaneFramePlant(LateralError(LateralErrorParams(), speed), lane, GEOMETRY, DT, 100.0, e0, limits)
 
 
-def longitudinal(speed=20.0, params=LongitudinalParams(max_accel=2.5, max_decel=8.0), lane=EAST):
+LIMITED = LongitudinalParams(max_accel=2.5, max_decel=8.0)
+
+
+def longitudinal(speed=20.0, params=LIMITED, lane=EAST):
     return LongitudinalPlant(Longitudinal(params), lane, GEOMETRY, DT, 100.0, speed)
 
 

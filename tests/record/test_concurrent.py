@@ -8,7 +8,6 @@ import sys
 
 import pytest
 from rerun.chunk import RrdReader
-
 from test_interrupt import _rows, _verify
 
 pytestmark = pytest.mark.sumo

@@ -12,7 +12,7 @@ import pytest
 from ego.control import CONTROLLERS
 from ego.models import NonlinearBicycleParams
 from ego.params import ConfigError, apply_overrides, describe
-from ego.runner import RunSpec, configure, run
+from ego.runner import RunSpec, resolve, run
 from ego.scenarios import EmergencyBrakeConfig, scenario_class
 
 P = NonlinearBicycleParams()
@@ -164,7 +164,7 @@ def test_spec_file_names_real_parameters_and_allowed_values(path):
         for corner in corners:
             overrides = {**fixed, **dict(zip(grid, values)), **corner}
             for controller in spec["controllers"]:
-                configure(RunSpec(spec["scenario"], controller, 0, overrides))
+                resolve(RunSpec(spec["scenario"], controller, 0, overrides))
 
 
 def test_ccr_files_hold_the_euro_ncap_matrices():

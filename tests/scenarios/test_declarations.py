@@ -5,7 +5,7 @@ trace, and every trace column has a unit."""
 import numpy as np
 import pytest
 
-from ego.runner import RunSpec, configure, run
+from ego.runner import RunSpec, resolve, run
 from ego.scenarios import metrics as m
 from ego.scenarios.tracking import SineTracking
 
@@ -46,7 +46,8 @@ def test_every_metric_of_a_run_is_declared_and_every_declared_one_shows_up(runs)
     scenario, results = runs
     seen: set[str] = set()
     for spec, result in results:
-        cls, config, _, _ = configure(spec)
+        r = resolve(spec)
+        cls, config = r.scenario_cls, r.config
         specs, names, prefixes = declared(cls, config)
         assert len({s.name for s in specs}) == len(specs), "a metric declared twice"
         assert all(s.unit for s in specs)
@@ -63,7 +64,8 @@ def test_every_metric_of_a_run_is_declared_and_every_declared_one_shows_up(runs)
 def test_every_plot_is_a_trace_column_and_every_column_has_a_unit(runs):
     scenario, results = runs
     for spec, result in results:
-        cls, config, _, _ = configure(spec)
+        r = resolve(spec)
+        cls, config = r.scenario_cls, r.config
         plots = cls.plots + tuple(p for p in cls.compare_plots(config) if p not in cls.plots)
         assert plots, f"{scenario} declares nothing to plot"
         for plot in plots:

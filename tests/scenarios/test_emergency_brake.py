@@ -110,8 +110,9 @@ class _SteerHard:
 
 
 def test_diverging_controller_ends_cleanly_and_keeps_the_recording(tmp_path):
-    from ego.record import RerunRecorder
     from rerun.chunk import RrdReader
+
+    from ego.record import RerunRecorder
 
     path = tmp_path / "div.rrd"
     sc = EmergencyBrake(EmergencyBrakeConfig(), _SteerHard(), seed=0,

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from ego.models import NonlinearBicycleParams
-from ego.runner import RunSpec, configure, run
+from ego.runner import RunSpec, resolve, run
 from ego.scenarios.envelope import avoidable, braking_min_gap, lead_speed, sample
 
 P = NonlinearBicycleParams()
@@ -97,8 +97,8 @@ def test_the_scenario_classifies_its_collision_by_the_braking_criterion(fuzzy_re
                                     block_left=True)))
     assert r.metrics["collision"] and r.metrics["collision_avoidable"] is False
     # the same verdict from the trace, by the envelope's criterion
-    _, config, _, _ = configure(_spec("pid", 3751, dict(ego_speed=32.5, lead_decel=8.52, lead_gap=57.37,
-                                                         traffic_density=22.07, block_left=True)))
+    config = resolve(_spec("pid", 3751, dict(ego_speed=32.5, lead_decel=8.52, lead_gap=57.37,
+                                                         traffic_density=22.07, block_left=True))).config
     i = int(np.searchsorted(r.column("t"), r.metrics["trigger_time"]))
     assert not avoidable(r.metrics, float(r.column("gap_front")[i]), float(r.column("ds")[i]), config,
                          DECEL_LIMIT)

@@ -2,8 +2,8 @@
 
 import pytest
 
-from ego.scenarios.metrics import declaration, headline_names, metric_units, with_unit
-from ego.scenarios.trace import Metric
+from ego.results.metrics import declaration, headline_names, metric_units, with_unit
+from ego.results.trace import Metric
 
 DECLARED = (
     Metric("status", "-"),

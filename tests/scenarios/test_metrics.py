@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from ego.scenarios.metrics import finite_min, json_number, max_abs, overshoot, settling_time
+from ego.results.metrics import finite_min, json_number, max_abs, overshoot, settling_time
 
 
 def test_settling_time_is_last_exit_from_the_band():

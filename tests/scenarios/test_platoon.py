@@ -10,7 +10,7 @@ import pytest
 
 from ego.control.following import FollowingObservation, PlatoonControl
 from ego.params import ConfigError
-from ego.runner import RunSpec, configure, run
+from ego.runner import RunSpec, resolve, run
 from ego.scenarios import string_stability as ss
 from ego.scenarios.platoon import PlatoonScenario
 
@@ -141,14 +141,15 @@ def test_scale_model_variant_is_the_reports_three_car_test():
     assert m["min_gap"] == pytest.approx(0.4, abs=0.02)  # 40 cm at standstill, never less
     assert all(t is not None for t in m["settle_times"].values())
     # explicit settings still win over the variant's preset
-    _, config, _, _ = configure(RunSpec("platoon", "pid", 0, {"variant": "scale-model", "followers": "3"}))
+    config = resolve(RunSpec("platoon", "pid", 0, {"variant": "scale-model", "followers": "3"})).config
     assert config.followers == 3 and config.standstill_gap == 0.4 and config.variant == "scale-model"
 
 
 def test_ten_followers_are_all_pushed_into_sumo():
     """The bridge holds every follower: where SUMO has each one is where its model is."""
     spec = RunSpec("platoon", "pid", 0, {"followers": "10", "duration": "40"})
-    cls, config, ctrl, params = configure(spec)
+    r = resolve(spec)
+    cls, config, ctrl, params = r.scenario_cls, r.config, r.controller, r.controller_params
     scenario = cls(config, cls.build_controller(ctrl, params, config), seed=0)
     try:
         obs = scenario.reset()

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from ego.scenarios.trace import Column, Trace, TraceError
+from ego.results.trace import Column, Trace, TraceError
 
 COLUMNS = (Column("t", "s", "time"), Column("gap", "m", "gap"), Column("speed", "m/s", "speed"))
 

@@ -6,9 +6,9 @@ import pickle
 import numpy as np
 import pytest
 
+from ego.results.traffic_log import RADIUS, UNITS, TrafficCollector, TrafficLog
 from ego.runner import RunSpec, build
 from ego.scenarios import traffic_log as tl
-from ego.scenarios.traffic_log import RADIUS, UNITS, TrafficCollector, TrafficLog
 
 
 def _rows(n, x0=0.0):
@@ -106,7 +106,7 @@ def test_the_platoon_logs_the_leader_and_the_followers_as_sumo_has_them(monkeypa
     assert log.ids == ("leader", "f1", "f2")
     assert len(log) == 3 * 21  # t = 0 and 20 SUMO steps
     last = np.flatnonzero(log.t == log.t[-1])
-    for vid, (x, y, yaw, length, width) in zip(ids, boxes):
+    for vid, (x, y, yaw, length, _width) in zip(ids, boxes):
         j = last[log.ids.index(vid)]
         assert (log.x[j], log.y[j], log.heading[j], log.length[j]) == pytest.approx((x, y, yaw, length), abs=1e-6)
     back = pickle.loads(pickle.dumps(log))  # it travels from compare's workers

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import sumolib
 
-from ego.sumo.net import available_networks, build_network, net_file, network_body, nets_dir
+from ego.sumo.net import available_networks, build_network, net_file, nets_dir, network_body
 
 
 @pytest.fixture(scope="module")

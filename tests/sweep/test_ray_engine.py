@@ -2,20 +2,21 @@
 
 One local Ray instance (2 CPUs) serves the whole module: it starts in ~4 s and is shut
 down at the end. Behavioural tests run on both engines (``engine`` fixture); the task
-functions live in ``ego.sweep.testing`` so both engines' workers import them from ego.
+functions live in ``tests/engine_tasks.py``, which both engines' workers import by name.
 """
 
 import itertools
+import os
 import subprocess
 import sys
 import time
 from pathlib import Path
 
+import engine_tasks as T
 import pytest
 
+from ego.parallel.executor import Outcome, ProcessExecutor, make_executor
 from ego.params import ConfigError
-from ego.sweep import testing as T
-from ego.sweep.executor import Outcome, ProcessExecutor, make_executor
 
 WORKERS = 2
 ROOT = Path(__file__).resolve().parents[2]
@@ -26,10 +27,18 @@ SPECS = [("emergency-brake", c, s) for c in ("pid", "fuzzy") for s in (0, 1)]
 @pytest.fixture(scope="module")
 def ray_executor():
     pytest.importorskip("ray")
-    from ego.sweep.ray_engine import RayExecutor
+    from ego.parallel.ray_engine import RayExecutor
 
     t0 = time.perf_counter()
-    executor = RayExecutor(WORKERS)
+    saved = os.environ.get("PYTHONPATH")
+    os.environ.update(T.ray_env())  # Ray's workers start with it: they import engine_tasks
+    try:
+        executor = RayExecutor(WORKERS)
+    finally:
+        if saved is None:
+            os.environ.pop("PYTHONPATH")
+        else:
+            os.environ["PYTHONPATH"] = saved
     print(f"\nRay start-up (ray.init, {WORKERS} CPUs): {time.perf_counter() - t0:.2f} s")
     yield executor
     t0 = time.perf_counter()
@@ -58,13 +67,13 @@ def outcomes(executor, fn, tasks) -> list[Outcome]:
 # -- the interface ---------------------------------------------------------------------------
 
 def test_executor_module_does_not_import_ray():
-    code = "import sys, ego.sweep.executor; assert 'ray' not in sys.modules, 'ray imported'"
+    code = "import sys, ego.parallel.executor; assert 'ray' not in sys.modules, 'ray imported'"
     subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT,
                    env={"PYTHONPATH": str(ROOT), "PATH": ""})
 
 
 def test_without_ray_the_engine_is_a_config_error(monkeypatch):
-    from ego.sweep.ray_engine import RayExecutor
+    from ego.parallel.ray_engine import RayExecutor
 
     monkeypatch.setitem(sys.modules, "ray", None)  # import ray -> ImportError
     with pytest.raises(ConfigError, match=r"pip install 'ego\[ray\]'"):

@@ -10,8 +10,9 @@ import time
 import pyarrow.parquet as pq
 import pytest
 
-from ego.sweep.executor import ProcessExecutor
-from ego.sweep.runner import run_task, sweep
+from ego.parallel.executor import ProcessExecutor
+from ego.sweep.pipeline import execute
+from ego.sweep.runner import sweep, task_of
 from ego.sweep.spec import parse
 
 pytestmark = pytest.mark.sumo
@@ -86,19 +87,19 @@ def test_a_killed_sweep_resumes_with_no_duplicate_and_no_missing_row(tmp_path):
 
 def test_a_dead_worker_costs_one_retry_and_never_stops_the_sweep(tmp_path):
     spec = parse({**SPEC, "controllers": ["pid"], "set": {"duration": 25.0, "traffic_density": 0}})
-    tasks = [(r, None, "none") for r in spec.runs()]
-    victim = tasks[0][0].run_id
+    tasks = [task_of(r) for r in spec.runs()]
+    victim = tasks[0].key.run_id
     with ProcessExecutor(2) as ex:
         outcomes = []
-        for outcome in ex.run(run_task, tasks):
+        for outcome in ex.run(execute, tasks):
             outcomes.append(outcome)
             if len(outcomes) == 1:  # kill a busy worker while the others keep going
                 os.kill(ex.pids()[0], signal.SIGKILL)
     assert len(outcomes) == len(tasks)
-    assert {o.task[0].run_id for o in outcomes} == {t[0].run_id for t in tasks}
-    assert all(o.value is not None and o.value["status"] == "completed" for o in outcomes)
+    assert {o.task.key.run_id for o in outcomes} == {t.key.run_id for t in tasks}
+    assert all(o.value is not None and o.value.status == "completed" for o in outcomes)
     assert max(o.attempts for o in outcomes) == 2  # the killed worker's run ran again
-    assert victim in {o.task[0].run_id for o in outcomes}
+    assert victim in {o.task.key.run_id for o in outcomes}
 
 
 def test_failed_runs_are_recorded_by_default_and_an_error_is_a_row(tmp_path):

@@ -16,6 +16,7 @@ import multiprocessing
 import os
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
+from multiprocessing.connection import Connection
 from typing import Any, Protocol
 
 from ego.processes import exit_with, main_module_hidden
@@ -52,7 +53,7 @@ def default_workers() -> int:
     return max(1, os.cpu_count() or 1)
 
 
-def _worker_main(conn, parent: int) -> None:
+def _worker_main(conn: Connection, parent: int) -> None:
     """A worker: run ``fn(task)`` for each (fn, task) received, send back (ok, value or
     error text). It ends when the parent closes its end of the pipe, and dies with the
     parent (``parent``: its pid) even in the middle of a task, so a killed ``ego compare``
@@ -83,7 +84,7 @@ def _worker_main(conn, parent: int) -> None:
 class _Worker:
     __slots__ = ("process", "conn", "job")
 
-    def __init__(self, ctx) -> None:
+    def __init__(self, ctx: Any) -> None:
         parent, child = ctx.Pipe(duplex=True)
         self.process = ctx.Process(target=_worker_main, args=(child, os.getpid()), daemon=True)
         with main_module_hidden():
@@ -154,6 +155,7 @@ class ProcessExecutor:
             for worker in busy:
                 if worker.conn not in ready and worker.process.sentinel not in ready:
                     continue
+                assert worker.job is not None  # it is busy
                 task, attempt = worker.job
                 worker.job = None
                 try:
@@ -187,7 +189,7 @@ class ProcessExecutor:
     def __enter__(self) -> ProcessExecutor:
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.close()
 
 
@@ -213,7 +215,7 @@ def make_executor(engine: str, workers: int | None = None, address: str | None =
     if engine == "process":
         return ProcessExecutor(workers)
     if engine == "ray":
-        from ego.sweep.ray_engine import RayExecutor
+        from ego.parallel.ray_engine import RayExecutor
 
         return RayExecutor(workers, address)
     from ego.params import ConfigError

@@ -1,7 +1,9 @@
-"""Small task functions for testing and measuring the sweep engines.
+"""Small task functions for testing the executors (``ego.parallel``) and compare's faults.
 
-They live in the package (not in tests/) so that any engine's workers can import them by
-name: a Ray worker or a forkserver child imports ``ego``, not the test directory.
+Test scaffolding, not shipped: the workers import this module by name as the tests do. A
+forkserver worker starts with the test process's ``sys.path`` (which holds ``tests/``); a
+Ray worker gets ``tests/`` on its ``PYTHONPATH`` from the fixture that starts Ray
+(:func:`ray_env`).
 """
 
 from __future__ import annotations
@@ -114,7 +116,7 @@ def compare_run_with_fault(job: tuple) -> Any:
     with a fault in this worker for that run only: ``none``; ``controller`` (the spec's
     controller name ``raises`` is a :class:`RaisesAt` at step ``argument``); ``sumo`` (the
     networks are read from the folder ``argument``, e.g. one holding a broken network)."""
-    from ego.compare import _one
+    from ego.compare import run_one
     from ego.control import CONTROLLERS, NoParams
     from ego.control.base import ControllerSpec
 
@@ -127,13 +129,21 @@ def compare_run_with_fault(job: tuple) -> Any:
                                                 lambda params, dt: RaisesAt(int(argument)))
         elif fault == "sumo":
             os.environ["EGO_SUMO_NETS"] = str(argument)
-        return _one(spec)
+        return run_one(spec)
     finally:
         tracking.pop("raises", None)
         if saved_env is None:
             os.environ.pop("EGO_SUMO_NETS", None)
         else:
             os.environ["EGO_SUMO_NETS"] = saved_env
+
+
+def ray_env() -> dict[str, str]:
+    """The environment a local Ray instance must start with for its workers to import this
+    module (and ``point_mass``) by name: ``tests/`` on ``PYTHONPATH``."""
+    here = str(Path(__file__).resolve().parent)
+    path = os.environ.get("PYTHONPATH", "")
+    return {"PYTHONPATH": here + (os.pathsep + path if path else "")}
 
 
 def call(job: tuple[str, Any]) -> Any:

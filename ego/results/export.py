@@ -2,7 +2,7 @@
 
 :func:`write_trace` picks the format by the path's suffix (:data:`TRACE_SUFFIXES`). Every
 file holds every trace column (the scenario's declared ones, then the controller's
-signals) with its unit, and - when the run has one (:class:`~ego.scenarios.traffic_log.TrafficLog`,
+signals) with its unit, and - when the run has one (:class:`~ego.results.traffic_log.TrafficLog`,
 SUMO scenarios) - the traffic log: per SUMO step, the pose of every other vehicle within
 50 m of the ego, one row per vehicle and step ("long" format).
 
@@ -29,14 +29,23 @@ from __future__ import annotations
 
 import csv
 import os
+from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ego.checks import check_output_file
 from ego.outputs import atomic_path
 from ego.params import ConfigError
-from ego.scenarios.traffic_log import UNITS as TRAFFIC_UNITS
+from ego.results.traffic_log import UNITS as TRAFFIC_UNITS
+from ego.results.traffic_log import TrafficLog
+
+if TYPE_CHECKING:
+    from ego.results.run import RunResult
+
+__all__ = ["TRACE_SUFFIXES", "TRAFFIC_COLUMNS", "TRAFFIC_UNITS", "check_trace_path", "run_info", "trace_files",
+           "trace_units", "traffic_columns", "write_trace"]
 
 TRACE_SUFFIXES = (".csv", ".parquet", ".mat")
 #: the columns of a traffic table, in order (``vehicle``: the id in csv and Parquet)
@@ -53,7 +62,7 @@ def check_trace_path(text: str | None, what: str = "--trace path") -> Path:
     return check_output_file(text, what, suffix)
 
 
-def trace_files(path: str | os.PathLike, traffic: bool = True) -> list[Path]:
+def trace_files(path: str | os.PathLike[str], traffic: bool = True) -> list[Path]:
     """The files :func:`write_trace` writes for ``path`` (``traffic``: the run has a traffic log)."""
     path = Path(path)
     if path.suffix == ".csv":
@@ -64,29 +73,29 @@ def trace_files(path: str | os.PathLike, traffic: bool = True) -> list[Path]:
     return [path]
 
 
-def write_trace(result, path: str | os.PathLike) -> list[Path]:
+def write_trace(result: RunResult, path: str | os.PathLike[str]) -> list[Path]:
     """Write ``result``'s (:class:`~ego.scenarios.base.RunResult`) trace and traffic log to
     ``path`` in the format its suffix names; returns the files written."""
-    path = check_trace_path(str(path), "trace path")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    writer = {".csv": _write_csv, ".parquet": _write_parquet, ".mat": _write_mat}[path.suffix]
-    writer(result, path)
-    return trace_files(path, result.traffic is not None)
+    out = check_trace_path(str(path), "trace path")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    writer: Callable[[RunResult, Path], None] = {".csv": _write_csv, ".parquet": _write_parquet, ".mat": _write_mat}[out.suffix]
+    writer(result, out)
+    return trace_files(out, result.traffic is not None)
 
 
-def trace_units(result) -> dict[str, str]:
+def trace_units(result: RunResult) -> dict[str, str]:
     """Trace column -> unit, every column in order (``""``: a controller's signal)."""
     return {c: result.units.get(c, "") for c in result.columns}
 
 
-def traffic_columns(log) -> dict[str, np.ndarray]:
+def traffic_columns(log: TrafficLog) -> dict[str, np.ndarray]:
     """The traffic log as columns (:data:`TRAFFIC_COLUMNS`), ``vehicle`` as the vehicles' ids."""
     ids = np.array(log.ids, dtype=object)
     return {name: ids[np.asarray(log.vehicle, dtype=np.intp)] if name == "vehicle" else getattr(log, name)
             for name in TRAFFIC_COLUMNS}
 
 
-def run_info(result) -> dict[str, str]:
+def run_info(result: RunResult) -> dict[str, str]:
     """What run a file holds: scenario, controller, seed, status (as text)."""
     return {"scenario": result.scenario, "controller": result.controller, "seed": str(result.seed),
             "status": result.status}
@@ -101,7 +110,7 @@ def _write_csv_table(path: Path, columns: dict[str, np.ndarray]) -> None:
         w.writerows(zip(*(c.tolist() for c in columns.values())))
 
 
-def _write_csv(result, path: Path) -> None:
+def _write_csv(result: RunResult, path: Path) -> None:
     units = trace_units(result)
     rows = [("trace", c, u) for c, u in units.items()]
     _write_csv_table(path, {c: result.trace[:, i] for i, c in enumerate(result.columns)})
@@ -127,7 +136,7 @@ def _write_parquet_table(path: Path, columns: dict[str, np.ndarray], units: dict
         pq.write_table(table, tmp)
 
 
-def _write_parquet(result, path: Path) -> None:
+def _write_parquet(result: RunResult, path: Path) -> None:
     meta = run_info(result)
     _write_parquet_table(path, {c: result.trace[:, i] for i, c in enumerate(result.columns)},
                          trace_units(result), meta)
@@ -137,7 +146,7 @@ def _write_parquet(result, path: Path) -> None:
 
 
 # -- MATLAB -------------------------------------------------------------------------------------
-def _write_mat(result, path: Path) -> None:
+def _write_mat(result: RunResult, path: Path) -> None:
     from scipy.io import savemat
 
     data = {

@@ -5,7 +5,7 @@ Locally it starts a private Ray instance on this machine (one CPU slot per worke
 CPUs. Each task takes one CPU, so each Ray worker process runs one simulation at a time
 (libsumo's one-per-process rule), and workers are reused from task to task.
 
-Ray itself is imported only when a ``RayExecutor`` is made, so ``ego.sweep.executor`` and
+Ray itself is imported only when a ``RayExecutor`` is made, so ``ego.parallel.executor`` and
 the process engine never pay for it; without Ray installed, making one is a ConfigError.
 
 Failures, as the process engine reports them:
@@ -25,8 +25,8 @@ import os
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
+from ego.parallel.executor import Outcome, default_workers
 from ego.params import ConfigError
-from ego.sweep.executor import Outcome, default_workers
 
 #: tasks in flight per worker: enough to keep every worker busy while results travel back,
 #: few enough that a generator of tasks is read lazily
@@ -57,8 +57,8 @@ class RayExecutor:
         self._started = False  # shut down in close() only what this executor started
         if not ray.is_initialized():
             os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
-            quiet = dict(include_dashboard=False, logging_level=logging.ERROR, log_to_driver=False,
-                         ignore_reinit_error=True)
+            quiet: dict[str, Any] = dict(include_dashboard=False, logging_level=logging.ERROR,
+                                         log_to_driver=False, ignore_reinit_error=True)
             if address is None:
                 # "local": always a private instance, never a cluster found by chance
                 ray.init(address="local", num_cpus=int(workers or default_workers()),
@@ -69,7 +69,7 @@ class RayExecutor:
         if workers:
             self.workers = max(1, int(workers))
         else:
-            self.workers = max(1, int(ray.cluster_resources().get("CPU", 1)))
+            self.workers = max(1, int(ray.cluster_resources().get("CPU", 1)))  # type: ignore[no-untyped-call]
         # max_calls=0 (the default): a worker process is reused for task after task
         self._remote = ray.remote(num_cpus=1, max_retries=0)(_call)
 
@@ -124,5 +124,5 @@ class RayExecutor:
     def __enter__(self) -> RayExecutor:
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.close()

@@ -1,0 +1,66 @@
+"""What every command of the ``ego`` command line shares: exit codes, the one-line usage
+errors, small argument checks."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import re
+from pathlib import Path
+
+from ego.checks import check_output_file
+from ego.params import ConfigError, describe, did_you_mean
+
+EXIT_OK, EXIT_NOT_COMPLETED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+
+def choice(value: str, allowed, what: str) -> str:
+    """``value`` if it is one of ``allowed``, else ConfigError (with the closest name)."""
+    if value not in allowed:
+        raise ConfigError(f"bad {what} {value!r} (allowed: {', '.join(allowed)}){did_you_mean(value, allowed)}")
+    return value
+
+
+def terminate(signum, frame) -> None:
+    """SIGTERM ends a run like Ctrl-C: status interrupted, metrics so far, recording closed."""
+    raise KeyboardInterrupt
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse that reports bad usage in one line and exits with 2."""
+
+    def error(self, message: str) -> None:  # pragma: no cover - exercised through main()
+        choice = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
+        if choice:  # a misspelt command or choice: name the closest
+            message += did_you_mean(choice.group(1), re.findall(r"'([^']*)'", choice.group(2)))
+        raise ConfigError(message)
+
+
+def parse_range(text: str, what: str, declared) -> tuple[float, float]:
+    """``LO,HI`` within the bounds ``declared`` (a parameter's ``ParamInfo``) gives."""
+    try:
+        lo, hi = (float(x) for x in text.split(","))
+    except ValueError:
+        raise ConfigError(f"bad value for {what}: {text!r} (expected LO,HI, e.g. 20,40)") from None
+    if not (math.isfinite(lo) and math.isfinite(hi)) or lo > hi:
+        raise ConfigError(f"bad value for {what}: {text!r} (expected finite LO <= HI)")
+    if lo < declared.min or hi > declared.max:
+        raise ConfigError(f"bad value for {what}: {text!r} (expected {declared.unit} within "
+                          f"{declared.min:g}..{declared.max:g})")
+    return lo, hi
+
+
+def declared(cls, name: str):
+    """The declaration (``ParamInfo``) of parameter ``name`` of ``cls``."""
+    return next(i for i in describe(cls) if i.name == name)
+
+
+def model_out(args, shipped, default: str, suffix: str):
+    """Where ``ego train``/``ego tune`` write: --out, the shipped file with --install (and
+    only then), else ``default`` in the working directory."""
+
+    if args.install and args.out:
+        raise ConfigError("give --out or --install, not both")
+    if args.install:
+        return Path(shipped)
+    return check_output_file(args.out or default, "--out path", suffix)

@@ -1,0 +1,48 @@
+"""``ego compare``: every controller x seed of one scenario (:mod:`ego.compare`)."""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Sequence
+from typing import Any
+
+from ego.checks import MAX_JOBS, check_count, check_output_dir
+from ego.cli.common import EXIT_INTERRUPTED, EXIT_NOT_COMPLETED, EXIT_OK
+from ego.params import ConfigError, parse_overrides
+
+
+def command(args: Any) -> int:
+    from ego.compare import MAX_SEEDS, UNITS_FILE, compare
+
+    if args.seeds > MAX_SEEDS:
+        raise ConfigError(f"bad value for --seeds: {args.seeds} (expected at most {MAX_SEEDS}; use ego sweep "
+                          "for more)")
+    check_count(args.seeds, "--seeds", 1, MAX_SEEDS)
+    check_count(args.jobs, "--jobs", 1, MAX_JOBS)
+    labels = [n.strip() for n in args.controllers.split(",") if n.strip()]
+    out = check_output_dir(args.out, "--out")
+    rows = compare(args.scenario, labels, args.seeds, parse_overrides(args.overrides), out, args.jobs,
+                   traces=args.traces, backend=args.backend)
+    print((out / "metrics.md").read_text(), end="")
+    files = ["metrics.csv", UNITS_FILE, "metrics.md"] + sorted(p.name for p in out.glob("*.png"))
+    recorded = sum(1 for r in rows if r.recording)
+    traces = f" and their traces ({args.traces}) in traces/" if args.traces else ""
+    print(f"\nwrote into {out}/: {', '.join(files)} and {recorded} of {len(rows)} recordings in "
+          f"runs/{traces}")
+    return exit_status([r.status for r in rows])
+
+
+def exit_status(statuses: Sequence[str]) -> int:
+    """``ego compare``'s exit status: 130 when interrupted (the finished runs are written),
+    1 when a run ended in ``error`` (ego could not run it: an exception, a dead worker),
+    else 0 - a collision or a diverging controller is a result of the comparison."""
+    if "interrupted" in statuses:
+        unfinished = statuses.count("interrupted")
+        print(f"ego: interrupted: {unfinished} of {len(statuses)} runs did not finish "
+              "(rows with status interrupted)", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    if "error" in statuses:
+        print(f"ego: {statuses.count('error')} of {len(statuses)} runs ended in an error "
+              "(see metrics.md)", file=sys.stderr)
+        return EXIT_NOT_COMPLETED
+    return EXIT_OK

@@ -1,0 +1,110 @@
+"""Metrics computed from a run's trace (pure numpy), and how flattened metric names map to
+their declarations (:class:`~ego.results.trace.Metric`: unit, headline)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from ego.results.trace import Metric
+
+
+def settling_time(t: np.ndarray, error: np.ndarray, band: float, start: float) -> float | None:
+    """Time from ``start`` until |error| stays below ``band`` to the end of the trace (s).
+
+    None when the last sample is still outside the band (not settled).
+    """
+    t = np.asarray(t)
+    error = np.asarray(error)
+    after = t >= start
+    if not after.any():
+        return None
+    outside = np.abs(error[after]) >= band
+    if outside[-1]:
+        return None
+    idx = np.flatnonzero(outside)
+    t_after = t[after]
+    settled_at = t_after[idx[-1] + 1] if idx.size else t_after[0]
+    return float(settled_at - start)
+
+
+def overshoot(offset: np.ndarray, direction: float) -> float:
+    """Largest excursion past the target (m); ``offset`` = position - target, ``direction``
+    the sign of the motion towards the target (+1 moving up/left, -1 down/right)."""
+    if offset.size == 0:
+        return 0.0
+    return float(max(0.0, np.max(direction * offset)))
+
+
+def finite_min(values: np.ndarray) -> float | None:
+    """Smallest finite value, or None when there is none (e.g. a TTC that stayed infinite)."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    return float(v.min()) if v.size else None
+
+
+def max_abs(values: np.ndarray) -> float:
+    v = np.asarray(values, dtype=float)
+    return float(np.max(np.abs(v))) if v.size else 0.0
+
+
+def json_number(x: float | None, digits: int = 6) -> float | None:
+    """Round for JSON; non-finite -> None (JSON has no infinity)."""
+    if x is None or not math.isfinite(x):
+        return None
+    return round(float(x), digits)
+
+
+def flatten(metrics: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    """Nested metrics on one level, keys joined by dots (``followers.f1.min_gap``): for CSV
+    columns and text listings."""
+    out = {}
+    for key, value in metrics.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, Mapping):
+            out.update(flatten(value, name + "."))
+        else:
+            out[name] = value
+    return out
+
+
+# -- declarations: which Metric a flattened name belongs to ---------------------------------
+def declaration(declared: Sequence[Metric], name: str) -> Metric | None:
+    """The :class:`~ego.results.trace.Metric` that declares the flattened metric ``name``.
+
+    An exact name wins; otherwise the longest prefix declaration (a name ending in ``"."``)
+    that ``name`` starts with, so ``followers.`` can give a default and
+    ``followers.f1.min_gap`` a more specific one. None when nothing declares it.
+    """
+    best: Metric | None = None
+    for m in declared:
+        if m.name == name:
+            return m
+        if m.name.endswith(".") and name.startswith(m.name) and (best is None or len(m.name) > len(best.name)):
+            best = m
+    return best
+
+
+def metric_units(declared: Sequence[Metric], names: Iterable[str]) -> dict[str, str]:
+    """Flattened metric name -> its declared unit (``""`` where nothing declares it)."""
+    out = {}
+    for name in names:
+        m = declaration(declared, name)
+        out[name] = m.unit if m is not None else ""
+    return out
+
+
+def headline_names(declared: Sequence[Metric], names: Iterable[str]) -> list[str]:
+    """The headline metrics among the flattened ``names``: in declaration order, a prefix
+    declaration expanded over the names under it in the order they come."""
+    names = list(dict.fromkeys(names))
+    owner = {n: declaration(declared, n) for n in names}
+    return [n for m in declared if m.headline for n in names if owner[n] is m]
+
+
+def with_unit(name: str, unit: str) -> str:
+    """``"min_gap [m]"``; the bare name for a pure number (``"-"``) or an unknown unit (``""``)."""
+    return name if unit in ("", "-") else f"{name} [{unit}]"

@@ -1,0 +1,149 @@
+"""The one summary formatter: per-controller markdown tables over many runs.
+
+``ego compare`` writes ``metrics.md`` (:func:`comparison`: runs by status, then each
+headline metric as mean +- standard deviation over seeds) and ``ego sweep`` writes
+``summary.md`` (:func:`sweep`: runs by status, then each headline metric's median and
+percentiles). Both are built from :func:`table`, one row per controller and one cell
+function per column, over the runs' flattened metrics.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from ego.results.metrics import headline_names, metric_units, with_unit
+from ego.results.trace import Metric
+
+#: one run's flattened metrics (status and error among them)
+Row = Mapping[str, Any]
+
+
+def table_row(cells: Sequence[str]) -> str:
+    return "| " + " | ".join(cells) + " |"
+
+
+def table(controllers: Sequence[str], runs: Mapping[str, Sequence[Row]],
+          columns: Sequence[tuple[str, Callable[[Sequence[Row]], str]]]) -> list[str]:
+    """A markdown table: the header (``controller`` then each column's name), the rule, and
+    one line per controller whose cells are each column's function of its runs."""
+    lines = [table_row(["controller"] + [name for name, _ in columns]), "|---|" + "---|" * len(columns)]
+    for c in controllers:
+        mine = runs.get(c, ())
+        lines.append(table_row([c] + [cell(mine) for _, cell in columns]))
+    return lines
+
+
+def _finite(values: Sequence[Any]) -> list[float]:
+    return [float(v) for v in values if isinstance(v, (int, float)) and not isinstance(v, bool)
+            and v is not None and math.isfinite(v)]
+
+
+def mean_spread(values: Sequence[Any]) -> str:
+    """``mean +- sd`` of the finite numbers, ``(k/n)`` when only k of n runs have one;
+    ``k/n`` for a yes/no metric (k runs say yes); ``-`` when none has a number."""
+    if values and all(isinstance(v, bool) for v in values):
+        return f"{sum(values)}/{len(values)}"
+    nums = _finite(values)
+    if not nums:
+        return "-"
+    mean = float(np.mean(nums))
+    text = f"{mean:.3g}"
+    if len(nums) > 1:
+        spread = float(np.std(nums, ddof=1))
+        text += f" +- {0.0 if spread < 1e-9 * max(1.0, abs(mean)) else spread:.2g}"
+    if len(nums) < len(values):
+        text += f" ({len(nums)}/{len(values)})"
+    return text
+
+
+def percentiles(values: Sequence[Any]) -> str:
+    """``median [5th, 95th percentile] (min to max), n`` of the finite numbers, or ``-``."""
+    nums = _finite(values)
+    if not nums:
+        return "-"
+    a = np.array(nums)
+    p5, p50, p95 = np.percentile(a, [5, 50, 95])
+    return f"{p50:.3g} [{p5:.3g}, {p95:.3g}] ({a.min():.3g} to {a.max():.3g}), {a.size}"
+
+
+def _by_controller(rows: Sequence[Row], controllers: Sequence[str]) -> dict[str, list[Row]]:
+    runs: dict[str, list[Row]] = {c: [] for c in controllers}
+    for r in rows:
+        runs.setdefault(r["controller"], []).append(r)
+    return runs
+
+
+def comparison(scenario: str, rows: Sequence[Row], controllers: Sequence[str],
+               declared: Sequence[Metric]) -> str:
+    """``ego compare``'s metrics.md. ``rows``: each run's metrics with ``controller``,
+    ``seed``, ``status`` and ``error``."""
+    present = headline_names(declared, (n for r in rows for n in r["metrics"]))
+    units = metric_units(declared, present)
+
+    def statuses(mine: Sequence[Row]) -> str:
+        counts: dict[str, int] = {}
+        for r in mine:
+            counts[r["status"]] = counts.get(r["status"], 0) + 1
+        return ", ".join(f"{n} {s}" for s, n in counts.items())
+
+    def metric(key: str) -> Callable[[Sequence[Row]], str]:
+        return lambda mine: mean_spread([r["metrics"].get(key) for r in mine])
+
+    columns = [("runs", statuses)] + [(with_unit(k, units[k]), metric(k)) for k in present]
+    lines = [f"# {scenario}: {len(rows)} runs",
+             "",
+             "Mean +- standard deviation over seeds; (k/n) when only k of n runs have the value; "
+             "k/n for a yes/no metric: k of n runs say yes.",
+             "",
+             *table(controllers, _by_controller(rows, controllers), columns)]
+    errors = [r for r in rows if r["error"]]
+    if errors:
+        lines += ["", "Errors:", ""] + [f"- {r['controller']} seed {r['seed']}: {r['error']}" for r in errors]
+    unfinished = [r for r in rows if r["status"] == "interrupted"]
+    if unfinished:
+        lines += ["", f"Interrupted: {len(unfinished)} of {len(rows)} runs did not finish: "
+                  + ", ".join(f"{r['controller']} seed {r['seed']}" for r in unfinished[:20])
+                  + (", ..." if len(unfinished) > 20 else "")]
+    return "\n".join(lines) + "\n"
+
+
+def sweep(scenario: str, source: str, swept: Sequence[str], seeds: int, rows: Sequence[Row],
+          controllers: Sequence[str], declared: Sequence[Metric]) -> str:
+    """``ego sweep``'s summary.md. ``rows``: each run's flattened metrics with
+    ``controller``, ``seed``, ``status`` and ``error`` beside them."""
+    heads = [m for m in declared if m.headline and not m.name.endswith(".")]
+    names = {k for r in rows for k in r}
+    heads = [m for m in heads if m.name in names]
+    runs = _by_controller(rows, controllers)
+    lines = [f"# {scenario} sweep: {len(rows)} runs", "",
+             f"Spec: `{source}`; swept: {', '.join(swept) or 'nothing'}; {seeds} seed(s).", ""]
+    statuses = sorted({r["status"] for r in rows})
+
+    def count(status: str) -> Callable[[Sequence[Row]], str]:
+        return lambda mine: str(sum(1 for r in mine if r["status"] == status))
+
+    lines += table(controllers, runs, [("runs", lambda mine: str(len(mine)))]
+                   + [(s, count(s)) for s in statuses])
+    if heads:
+        def metric(key: str) -> Callable[[Sequence[Row]], str]:
+            return lambda mine: percentiles([r.get(key) for r in mine])
+
+        lines += ["", "Headline metrics over the runs that have them: median [5th, 95th percentile] "
+                  "(min to max), n runs.", "",
+                  *table(controllers, runs, [(with_unit(m.name, m.unit), metric(m.name)) for m in heads])]
+    for extra in ("collision_avoidable",):
+        if extra in names:
+            lines += ["", f"Collisions braking at the friction limit from the trigger would have "
+                      f"avoided (`{extra}`):", ""]
+            for c in controllers:
+                k = sum(1 for r in runs.get(c, ()) if r.get(extra) is True)
+                lines.append(f"- {c}: {k}")
+    errors = [r for r in rows if r["status"] == "error"]
+    if errors:
+        lines += ["", f"{len(errors)} runs ended in an error; the first:", "",
+                  f"- {errors[0]['controller']} seed {errors[0]['seed']}: {errors[0]['error']}"]
+    return "\n".join(lines) + "\n"

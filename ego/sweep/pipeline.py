@@ -1,0 +1,82 @@
+"""The one pipeline of ``ego compare`` and ``ego sweep``: resolved runs to rows on an executor.
+
+A :class:`RunTask` is a :class:`~ego.runner.ResolvedRun` (resolved once, in the parent,
+before any worker starts) and what to bring back; :func:`execute` runs it in a worker and
+returns its :class:`~ego.results.run.RunRow` (never raises: a broken run is a row with
+status ``error``); :func:`drive` feeds tasks to an executor (:mod:`ego.parallel`) and hands
+each row back as it arrives, stopping cleanly on Ctrl-C. ``ego compare`` is this pipeline
+over controllers x seeds; ``ego sweep`` over a spec's points.
+"""
+
+from __future__ import annotations
+
+import socket
+import time
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from typing import Any
+
+from ego.parallel.executor import Executor
+from ego.results.run import RunRow
+from ego.runner import ResolvedRun
+
+_HOST = socket.gethostname()
+
+
+@dataclass(frozen=True)
+class RunTask:
+    """One run for a worker."""
+
+    run: ResolvedRun
+    #: trace columns to bring back (``t`` always comes with them); None: none
+    keep: tuple[str, ...] | None = None
+    #: bring back the events, the traffic log and the lanes (compare's plots)
+    details: bool = False
+    #: when the run fails (not ``completed`` nor ``ended``), run it again with its recording
+    #: written here (runs are deterministic, so it is the same run)
+    record_failed: str | None = None
+    #: the caller's own reference to the run (a sweep's ``Run``), handed back untouched
+    key: Any = None
+
+
+def execute(task: RunTask) -> RunRow:
+    """Worker: run the task's run into its row (never raises)."""
+    from ego.runner import run
+    from ego.scenarios.base import NOT_FAILED
+
+    t0 = time.perf_counter()
+    resolved = task.run
+    try:
+        result = run(resolved)
+        if task.record_failed is not None and result.status not in NOT_FAILED:
+            run(resolved.with_outputs(record=task.record_failed))
+        row = RunRow.from_result(result, resolved.name, task.keep, task.details)
+    except Exception as exc:  # noqa: BLE001 - a broken run is a row, never the end of the job
+        row = RunRow(resolved.name, resolved.seed, "error", {}, error=f"{type(exc).__name__}: {exc}")
+    row.wall_time = time.perf_counter() - t0
+    row.host = _HOST
+    return row
+
+
+def drive(executor: Executor, tasks: Iterable[RunTask], on_row: Callable[[RunTask, RunRow], None],
+          progress: Callable[[str, str], None] | None = None) -> bool:
+    """Run ``tasks`` on ``executor`` (closed at the end), calling ``on_row(task, row)`` as
+    each finishes (a task whose worker died twice is a row with status ``error``) and
+    ``progress(what, status)`` after it. Returns whether it was interrupted: a
+    KeyboardInterrupt, or a run that came back ``interrupted`` (the in-process executor:
+    the run caught the Ctrl-C), stops the rest."""
+    try:
+        for outcome in executor.run(execute, tasks):
+            task: RunTask = outcome.task
+            row = outcome.value if outcome.value is not None else RunRow(
+                task.run.name, task.run.seed, "error", {}, error=outcome.error)
+            on_row(task, row)
+            if progress is not None:
+                progress(f"{row.controller} seed {row.seed}", row.status)
+            if row.status == "interrupted":
+                return True
+    except KeyboardInterrupt:
+        return True
+    finally:
+        executor.close()
+    return False

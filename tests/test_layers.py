@@ -1,0 +1,129 @@
+"""ego's packages import downwards only, and no two packages import each other (directly
+or through others): every import in every module of ego, lazy ones in functions included.
+
+    foundation (params, checks, outputs, processes, native)
+    < models, control, sim, results, parallel, record, sumo, highway_env, geometry
+    < scenarios
+    < runner, plots
+    < compare, sweep, gym, train, docs, cli
+"""
+
+import ast
+from functools import cache
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+EGO = ROOT / "ego"
+
+LAYERS = [
+    {"ego", "ego.params", "ego.checks", "ego.outputs", "ego.processes", "ego.native", "ego._native"},
+    {"ego.models", "ego.control", "ego.sim", "ego.results", "ego.parallel", "ego.record", "ego.sumo",
+     "ego.highway_env", "ego.lane_frame", "ego.analytic_road"},
+    {"ego.scenarios"},
+    {"ego.runner", "ego.plots"},
+    {"ego.compare", "ego.sweep", "ego.gym", "ego.train", "ego.docs", "ego.cli", "ego.__main__"},
+]
+LEVEL = {unit: i for i, layer in enumerate(LAYERS) for unit in layer}
+#: modules kept at an old path for compatibility: they only re-export a lower module
+SHIMS = {"ego.scenarios.trace", "ego.scenarios.traffic_log", "ego.scenarios.metrics"}
+
+
+def _module(path: Path) -> str:
+    parts = list(path.relative_to(ROOT).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def _unit(module: str) -> str:
+    """The package (or top-level module) a module belongs to: ``ego.results.trace`` ->
+    ``ego.results``."""
+    return ".".join(module.split(".")[:2])
+
+
+def _imports(path: Path, module: str) -> set[str]:
+    tree = ast.parse(path.read_text(), str(path))
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    found = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            found |= {a.name for a in node.names}
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")
+                base = base[:len(base) - node.level + 1]
+                name = ".".join(base + ([node.module] if node.module else []))
+            else:
+                name = node.module or ""
+            found.add(name)
+    return {n for n in found if n == "ego" or n.startswith("ego.")}
+
+
+@cache
+def _graph() -> dict[str, set[str]]:
+    graph: dict[str, set[str]] = {}
+    for path in sorted(EGO.rglob("*.py")):
+        module = _module(path)
+        graph[module] = _imports(path, module)
+    return graph
+
+
+def test_every_unit_of_ego_has_a_layer():
+    units = {_unit(m) for m in _graph()}
+    assert units - set(LEVEL) == set(), "give the new package a layer in tests/test_layers.py"
+
+
+def test_no_module_imports_from_a_layer_above_it():
+    wrong = []
+    for module, imports in _graph().items():
+        if module in SHIMS:
+            continue
+        for name in imports:
+            if LEVEL[_unit(name)] > LEVEL[_unit(module)]:
+                wrong.append(f"{module} imports {name}")
+    assert wrong == []
+
+
+@pytest.mark.parametrize("low", ["ego.results", "ego.parallel", "ego.models", "ego.control"])
+def test_the_lower_packages_never_import_scenarios(low):
+    graph = _graph()
+    assert not [(m, n) for m, imps in graph.items() if _unit(m) == low for n in imps
+                if _unit(n) == "ego.scenarios"]
+
+
+def test_no_import_cycle_between_packages():
+    edges: dict[str, set[str]] = {}
+    for module, imports in _graph().items():
+        if module in SHIMS:
+            continue
+        edges.setdefault(_unit(module), set()).update(
+            _unit(n) for n in imports if _unit(n) not in (_unit(module), "ego"))
+    state: dict[str, int] = {}
+    stack: list[str] = []
+
+    def visit(u: str) -> None:
+        state[u] = 1
+        stack.append(u)
+        for v in sorted(edges.get(u, ())):
+            if state.get(v) == 1:
+                raise AssertionError("import cycle: " + " -> ".join(stack[stack.index(v):] + [v]))
+            if v not in state:
+                visit(v)
+        stack.pop()
+        state[u] = 2
+
+    for u in sorted(edges):
+        if u not in state:
+            visit(u)
+
+
+def test_the_layer_check_sees_a_wrong_import(tmp_path):
+    # the checker itself: an upward import written into a results module is found
+    path = tmp_path / "ego" / "results" / "bad.py"
+    path.parent.mkdir(parents=True)
+    path.write_text("def f():\n    from ego.scenarios import SCENARIOS\n")
+    imports = _imports(path, "ego.results.bad")
+    assert imports == {"ego.scenarios"}
+    assert LEVEL[_unit("ego.scenarios")] > LEVEL[_unit("ego.results.bad")]
