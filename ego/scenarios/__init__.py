@@ -6,10 +6,10 @@ from ego.params import ConfigError, did_you_mean
 from ego.scenarios.base import CommonConfig, Event, RunResult, Scenario
 from ego.scenarios.curve import CurveConfig, CurveScenario
 from ego.scenarios.cut_in import CutIn, CutInConfig
-from ego.scenarios.lane_centering import LaneCenteringConfig, LaneCenteringScenario
-from ego.scenarios.platoon import PlatoonConfig, PlatoonScenario
 from ego.scenarios.emergency_brake import EmergencyBrake, EmergencyBrakeConfig
 from ego.scenarios.fast_follower import FastFollower, FastFollowerConfig
+from ego.scenarios.lane_centering import LaneCenteringConfig, LaneCenteringScenario
+from ego.scenarios.platoon import PlatoonConfig, PlatoonScenario
 from ego.scenarios.tracking import Report000, Report000Config, SineTracking, SineTrackingConfig
 
 SCENARIOS: dict[str, type[Scenario]] = {

@@ -35,8 +35,8 @@ from ego.params import ConfigError, param
 from ego.record.base import Series
 from ego.scenarios import metrics as m
 from ego.scenarios.base import CommonConfig, RoadScenario, signal_series
-from ego.scenarios.observe import road_observation
 from ego.scenarios.events import INF, boxes_overlap
+from ego.scenarios.observe import road_observation
 from ego.scenarios.trace import Column, Marker, Metric, Plot
 from ego.sumo.bridge import (
     Collision,
