@@ -20,7 +20,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ego.control.base import Controller, ControllerSpec, Observation, signal_units
+from ego.control.base import Controller, ControllerError, ControllerSpec, Observation, signal_units
 from ego.models.plant import Plant
 from ego.params import ConfigError, Params, param
 from ego.processes import signals_deferred
@@ -30,7 +30,7 @@ from ego.scenarios.trace import Column, Metric, Plot, Trace
 from ego.scenarios.traffic_log import RADIUS, REACH_MARGIN, TrafficCollector, TrafficLog
 from ego.sumo.bridge import Collision, SumoBridge
 
-STATUSES = ("completed", "ended", "collision", "diverged", "timeout", "interrupted")
+STATUSES = ("completed", "ended", "collision", "diverged", "timeout", "interrupted", "error")
 #: the statuses that are no failure: the scenario's own end, or the duration ran out in a
 #: scenario whose end the controller does not decide (``ended``: a shortened run)
 NOT_FAILED = ("completed", "ended")
@@ -268,6 +268,9 @@ class Scenario:
         self._flushed, self._next_flush = 0, 1.0
         c = self.config
         self._dt, self._per_sumo, self._t_end = c.dt, c.control_per_sumo, c.duration - 1e-9
+        bind = getattr(self.controller, "bind_events", None)
+        if bind is not None:  # an FMU controller's log messages become the run's events
+            bind(self.event)
         self.controller.reset(seed=self.seed)
         self._signal_names = tuple(self.controller.signals())
         self._signal_units = signal_units(self.controller)
@@ -326,8 +329,12 @@ class Scenario:
             obs = self.reset()
             controller = self.controller
             step = self.step
-            while self.status == "running" and not self._stop:
-                obs = step(controller.step(obs))
+            try:
+                while self.status == "running" and not self._stop:
+                    obs = step(controller.step(obs))
+            except ControllerError as exc:  # an FMU's error or a non-finite command
+                self._end("error", str(exc), level="ERROR")
+                self._flush()
             if self._stop and self.status == "running":
                 self._end("interrupted", "interrupted (SIGINT or SIGTERM)", level="WARN")
                 self._flush()
@@ -364,11 +371,17 @@ class Scenario:
         return restore
 
     def close(self) -> None:
-        """Close SUMO and the recording (safe to call twice)."""
+        """Close SUMO, the recording and the controller's resources (an FMU instance); safe
+        to call twice."""
         try:
             self._close_bridge()
         finally:
-            self.recorder.close()
+            try:
+                self.recorder.close()
+            finally:
+                close = getattr(self.controller, "close", None)
+                if close is not None:
+                    close()
 
     def _close_bridge(self) -> None:
         if self.bridge is not None:
