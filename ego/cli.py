@@ -72,8 +72,10 @@ class _Parser(argparse.ArgumentParser):
 
 def _controllers_help() -> str:
     from ego.control import CONTROLLERS
+    from ego.plugins import load_plugins
     from ego.scenarios import SCENARIOS
 
+    load_plugins()
     parts = []
     for task, specs in CONTROLLERS.items():
         scen = [n for n, c in SCENARIOS.items() if c.task == task]
@@ -198,6 +200,9 @@ def _parser() -> argparse.ArgumentParser:
     lst = sub.add_parser("list", help="scenarios, controllers and every parameter",
                          description="List scenarios, controllers and every parameter with "
                                      "its default and unit.")
+    lst.add_argument("reference", nargs="?", metavar="CONTROLLER",
+                     help="a controller reference (path/to/controller.fmu, module:Class, file.py:Class): "
+                          "its variables, the tasks it drives and its parameters")
     lst.add_argument("--json", action="store_true", help="print JSON instead of text")
     lst.add_argument("--markdown", action="store_true",
                      help="print every parameter's default, unit and allowed values as Markdown tables "
@@ -272,9 +277,12 @@ def _catalogue() -> dict:
     reports (with its unit, and whether ``ego compare``'s table shows it) and its trace
     columns for the default configuration (the controller's signals follow, unitless)."""
     from ego.control import CONTROLLERS, TASKS
+    from ego.plugins import load_plugins
     from ego.runner import declared_columns
     from ego.scenarios import SCENARIOS
     from ego.scenarios.base import COMMON_METRICS, COMMON_TAIL_METRICS
+
+    load_plugins()
 
     def params(cls) -> list[dict]:
         return [
@@ -638,6 +646,12 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _train(args)
         if args.command == "tune":
             return _tune(args)
+        if args.command == "list" and args.reference:
+            from ego.plugins import describe_reference, print_reference
+
+            ref = describe_reference(args.reference)
+            print(json.dumps(ref, indent=2)) if args.json else print_reference(ref)
+            return EXIT_OK
         if args.command == "list":
             cat = _catalogue()
             if args.json:

@@ -109,9 +109,7 @@ class CoSim:
         self.fmu = fmu
 
     def _log(self, status: int, category: str, message: str) -> None:
-        if status >= 2 or not self.last_message:
-            self.last_message = message
-        if status >= 2:
+        if status >= 1:  # the message an error or non-finite output is reported with
             self.last_message = message
         if self.on_log is not None:
             self.on_log(LEVEL.get(status, "INFO"), category, message)

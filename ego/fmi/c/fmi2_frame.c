@@ -28,7 +28,8 @@ static void frame_log(void *env, int status, const char *category, const char *m
 {
     Instance *inst = (Instance *)env;
     if (inst->cb.logger && (inst->logging || status >= MODEL_WARNING))
-        inst->cb.logger(inst->cb.componentEnvironment, inst->name, (fmi2Status)status, category, "%s", message);
+        /* the message is the format (no arguments): the models' messages hold no '%' */
+        inst->cb.logger(inst->cb.componentEnvironment, inst->name, (fmi2Status)status, category, message);
 }
 
 static void set_start(Instance *inst)
@@ -57,7 +58,7 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid, f
     if (type != fmi2CoSimulation || !guid || strcmp(guid, MODEL_GUID) != 0) {
         if (cb && cb->logger)
             cb->logger(cb->componentEnvironment, name, fmi2Error, "logStatusError",
-                       "wrong FMU type or GUID (expected co-simulation, %s)", MODEL_GUID);
+                       "wrong FMU type or GUID (expected co-simulation and " MODEL_GUID ")");
         return NULL;
     }
     Instance *inst = (Instance *)calloc(1, sizeof(Instance));
