@@ -258,6 +258,10 @@ def describe_reference(ref: str) -> dict:
     for task in TASKS:
         try:
             spec = controller_spec(ref, task)
+            if ref.lower().endswith(".fmu"):  # connects by name to this task's signals?
+                from ego.fmi.controller import mapping_for
+
+                mapping_for(spec.params._info, task, "", ref)
             fits.append(task)
         except ConfigError as exc:
             errors[task] = str(exc)

@@ -85,9 +85,10 @@ class FmuParams(Params):
         for f in fields:
             object.__setattr__(self, f.name, values.get(f.name, f.default))
         self.__post_init__()
-        info = type(self)._info
-        # the mapping is checked with the parameters, before anything runs
-        mapping_for(info, type(self)._ref[1], self.fmu_map, type(self)._ref[0])  # type: ignore[attr-defined]
+        if values:  # set parameters (--set, a variant, a sweep): the mapping checked with them, before
+            # anything runs; the defaults' mapping is checked when the controller is built
+            ref, task = type(self)._ref
+            mapping_for(type(self)._info, task, self.fmu_map, ref)  # type: ignore[attr-defined]
 
     def __setattr__(self, name: str, value: Any) -> None:
         raise dataclasses.FrozenInstanceError(f"cannot assign to field {name!r}")
@@ -242,7 +243,6 @@ def fmu_controller_spec(ref: str, task: str):
             return FmuController(_info, params, dt, task, ref)
 
         spec = ControllerSpec(ref, summary, params_cls, build)
-        params_cls()  # the default mapping checked now
         _specs[key] = spec
     return spec
 

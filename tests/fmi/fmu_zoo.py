@@ -78,3 +78,14 @@ def fixed_step(step: float = 0.02) -> ModelSpec:
 def build(spec: ModelSpec, folder: Path) -> Path:
     """``spec`` built (or taken from the cache) into ``folder``/<identifier>.fmu."""
     return build_fmu(spec, Path(folder) / f"{spec.identifier}.fmu", cache_dir=CACHE)
+
+
+def renamed() -> ModelSpec:
+    """The faulty model (never failing by default) with outputs named and scaled as another
+    tool would: ``force`` in kN and ``steer`` in degrees (a mapping file connects them)."""
+    return ModelSpec(
+        "renamed", "outputs named force [kN] and steer [deg]",
+        (Var("fail_step", "parameter", 1e9), Var("hold_fx", "parameter", 0.1, "kN"),
+         Var("force", "output", 0.0, "kN"), Var("steer", "output", 0.0, "deg")),
+        (C / "faulty.c",), defines=("VR_Fx=VR_force", "VR_delta=VR_steer"),
+        units=(("kN", (("kg", 1), ("m", 1), ("s", -2)), 1000.0, 0.0), ("deg", (("rad", 1),), math.pi / 180, 0.0)))
