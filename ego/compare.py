@@ -98,8 +98,9 @@ def _one(spec: RunSpec) -> RunRow:
     kept = list(dict.fromkeys(["t"] + [c for p in plots for c in p.columns if c in result.columns]))
     traces = {c: result.column(c) for c in kept}
     units = {c: result.units.get(c, "") for c in kept}
+    error = result.metrics.get("status_detail", "") if result.status == "error" else ""  # an FMU's error
     return RunRow(spec.name, spec.seed, result.status, flatten(result.metrics), traces, units=units,
-                  events=list(result.events), traffic=result.traffic, lanes=result.lanes)
+                  events=list(result.events), traffic=result.traffic, lanes=result.lanes, error=error)
 
 
 def parse_variant(label: str, task: str) -> tuple[str, dict[str, str]]:

@@ -50,7 +50,8 @@ def run_task(task: tuple) -> dict:
             metrics.pop(key, None)
         row.update(metrics)
         row["status"] = result.status
-        row["error"] = ""
+        # a run ended in error by its controller (an FMU's error) keeps the reason here too
+        row["error"] = result.metrics.get("status_detail", "") if result.status == "error" else ""
     except Exception as exc:  # noqa: BLE001 - a broken run is a row, never the end of a sweep
         row["status"] = "error"
         row["error"] = f"{type(exc).__name__}: {exc}"
