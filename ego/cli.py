@@ -208,6 +208,14 @@ def _parser() -> argparse.ArgumentParser:
                      help="print every parameter's default, unit and allowed values as Markdown tables "
                           "(the reference in docs/inputs.md)")
 
+    exf = sub.add_parser(
+        "export-fmu", help="write one of ego's vehicle models as an FMI 2.0 co-simulation FMU",
+        description="Write ego's vehicle model as an FMI 2.0 co-simulation FMU with its C sources "
+                    "(compiled here with the system C compiler; see docs/fmi.md).",
+        epilog="Example: ego export-fmu nonlinear-bicycle --out runs/bicycle.fmu")
+    exf.add_argument("model", metavar="MODEL", help="nonlinear-bicycle (report 000) or linear-bicycle (report 002)")
+    exf.add_argument("--out", required=True, metavar="FILE.fmu", help="the FMU to write")
+
     trn = sub.add_parser(
         "train", help="train a learned controller (narma-l2)",
         description="Generate identification data from the ego's model and train a learned "
@@ -646,6 +654,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _train(args)
         if args.command == "tune":
             return _tune(args)
+        if args.command == "export-fmu":
+            from ego.fmi.export import export_fmu
+
+            print(f"wrote {export_fmu(args.model, args.out)}")
+            return EXIT_OK
         if args.command == "list" and args.reference:
             from ego.plugins import describe_reference, print_reference
 

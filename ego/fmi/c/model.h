@@ -4,6 +4,7 @@
 #ifndef EGO_FMU_MODEL_H
 #define EGO_FMU_MODEL_H
 
+#include <stddef.h>
 #include "model_vars.h"
 
 #define MODEL_OK 0
