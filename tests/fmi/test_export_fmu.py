@@ -70,7 +70,7 @@ def test_the_sources_inside_compile_on_their_own(tmp_path):
     subprocess.run([sys.executable, "-m", "ego", "export-fmu", "nonlinear-bicycle", "--out", str(out)], check=True)
     with zipfile.ZipFile(out) as z:
         z.extractall(tmp_path / "x", [n for n in z.namelist() if n.startswith("sources/")])
-        listed = read_model_description(str(out)).coSimulation.sourceFiles
+        listed = read_model_description(str(out)).buildConfigurations[0].sourceFileSets[0].sourceFiles
     src = tmp_path / "x" / "sources"
     assert set(listed) <= {p.name for p in src.iterdir()}
     cc = shutil.which("cc") or shutil.which("gcc")
