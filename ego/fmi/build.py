@@ -145,6 +145,9 @@ def model_description(spec: ModelSpec) -> str:
     if spec.step_size:
         lines.append(f'  <DefaultExperiment startTime="0.0" stepSize="{_num(spec.step_size)}"/>')
     lines.append("  <ModelVariables>")
+    if v3:  # FMI 3.0 asks for the independent variable (past the model's own references)
+        lines.append(f'    <Float64 name="time" valueReference="{len(spec.variables)}" causality="independent" '
+                     'variability="continuous" description="simulation time"/>')
     outputs = []
     for vr, v in enumerate(spec.variables):
         variability = v.variability or ("tunable" if v.causality == "parameter" else "continuous")

@@ -23,7 +23,7 @@ from typing import Any
 from ego.fmi.cosim import CoSim, FmuError
 from ego.fmi.mapping import Mapping, build_mapping
 from ego.fmi.model import FmuInfo, check_step, inspect_fmu
-from ego.params import Params, param
+from ego.params import ConfigError, Params, param
 
 #: observation signals that are objects, not numbers: never FMU inputs
 NOT_SIGNALS = ("lane", "policy")
@@ -175,7 +175,11 @@ class FmuController:
             logging.getLogger("ego.fmi").log({"INFO": 20, "WARN": 30}.get(level, 40), "%s", text)
 
     def reset(self, *, seed: int | None = None) -> None:
-        self.cosim.start(self._parameters, 0.0)
+        try:
+            self.cosim.start(self._parameters, 0.0)
+        except FmuError as exc:  # it refused its parameters or failed to start: before the run
+            self.close()
+            raise ConfigError(str(exc)) from None
         self._k = 0
 
     def step(self, obs) -> tuple[float, ...]:

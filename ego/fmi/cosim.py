@@ -71,8 +71,9 @@ class CoSim:
         self.out_val = (ctypes.c_double * max(n_out, 1))()
         self.n_in, self.n_out = n_in, n_out
         self.component = None
-        self._flags = (ctypes.c_bool * 3)() if self.v3 else None
-        self._last_time = ctypes.c_double()
+        # doStep's out-arguments (FMI 3.0), made once
+        self._flags = (ctypes.c_bool(), ctypes.c_bool(), ctypes.c_bool(), ctypes.c_double())
+        self._flag_refs = tuple(ctypes.byref(f) for f in self._flags)
 
     # -- life cycle -----------------------------------------------------------------------------
     def _load(self) -> None:
@@ -117,7 +118,7 @@ class CoSim:
     def _instantiate(self) -> None:
         fmu = self.fmu
         if self.v3:
-            from fmpy.fmi3 import fmi3LogMessageCallback
+            from fmpy.fmi3 import fmi3IntermediateUpdateCallback, fmi3LogMessageCallback
 
             def log(env, status, category, message):
                 self._log(int(status), (category or b"").decode("utf-8", "replace"),
@@ -127,7 +128,7 @@ class CoSim:
             comp = fmu.dll.fmi3InstantiateCoSimulation(
                 self.instance_name.encode(), self.info.guid.encode(),
                 (os.path.join(fmu.unzipDirectory, "resources") + os.sep).encode(), False, True, False, False,
-                None, 0, None, self._log_cb, None)
+                None, 0, None, self._log_cb, fmi3IntermediateUpdateCallback())
         else:
             from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
                                    fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2CoSimulation)
@@ -201,9 +202,7 @@ class CoSim:
             if status > 1:
                 self._check(status, f"set inputs at t = {t:.3f} s")
         if self.v3:
-            f = self._flags
-            status = self._do_step(comp, t, h, True, ctypes.byref(f, 0), ctypes.byref(f, 1), ctypes.byref(f, 2),
-                                   ctypes.byref(self._last_time))
+            status = self._do_step(comp, t, h, True, *self._flag_refs)
         else:
             status = self._do_step(comp, t, h, 1)
         if status > 1:

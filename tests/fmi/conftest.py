@@ -22,5 +22,7 @@ def fmus(tmp_path_factory):
         "nan": fmu_zoo.faulty(nan=True),
         "fixed": fmu_zoo.fixed_step(),
         "renamed": fmu_zoo.renamed(),
+        "pid3": fmu_zoo.pid_tracking("3.0"),
+        "error3": fmu_zoo.faulty(version="3.0"),
     }
     return {name: str(fmu_zoo.build(spec, folder)) for name, spec in specs.items()}

@@ -31,7 +31,8 @@ def same(a: dict, b: dict, rel: float = 1e-9) -> None:
             assert a[k] == b[k], k
 
 
-@pytest.mark.parametrize("scenario,fmu", [("emergency-brake", "pid"), ("cut-in", "pid"), ("curve", "pid_curve")])
+@pytest.mark.parametrize("scenario,fmu", [("emergency-brake", "pid"), ("cut-in", "pid"), ("curve", "pid_curve"),
+                                          ("emergency-brake", "pid3")])
 def test_pid_as_an_fmu_gives_the_builtin_pids_metrics(fmus, scenario, fmu):
     builtin = metrics(RunSpec(scenario, "pid"))
     assert builtin["status"] in ("completed", "ended")
@@ -66,16 +67,17 @@ def test_a_mapping_file_connects_other_names_and_units(fmus, tmp_path):
 @pytest.mark.parametrize("fmu,detail", [
     ("error", "FMU error_at_step (doStep at t = 0.300 s): error: actuator model diverged at t = 0.30 s (step 30)"),
     ("nan", "FMU nan_output: output 'delta' (delta) is nan at t = 0.300 s (step 30)"),
+    ("error3", "FMU error_at_step3 (doStep at t = 0.300 s): error: actuator model diverged at t = 0.30 s (step 30)"),
 ])
 def test_a_faulty_fmu_ends_the_run_as_error_with_its_message(fmus, fmu, detail, tmp_path):
     before = set(os.listdir(tempfile.gettempdir()))
     result = run(RunSpec("emergency-brake", fmus[fmu], overrides={"fmu.fail_step": 30},
                          record=str(tmp_path / "r.rrd"), background_recording=False))
     assert (result.status, result.metrics["status_detail"]) == ("error", detail)
-    assert result.metrics["steps"] == 30 if fmu == "error" else 31
+    assert result.metrics["steps"] == 30 if fmu != "nan" else 31
     fmu_events = [e for e in result.events if e.kind == "fmu"]
     assert fmu_events[0].text.endswith("faulty controller initialised (logEvents)")
-    if fmu == "error":  # the FMU's log message is an event of the run and the recording
+    if fmu != "nan":  # the FMU's log message is an event of the run and the recording
         assert fmu_events[-1].level == "ERROR" and "actuator model diverged" in fmu_events[-1].text
     assert (tmp_path / "r.rrd").stat().st_size > 0
     left = {n for n in set(os.listdir(tempfile.gettempdir())) - before if n.startswith("ego-fmu-")}
