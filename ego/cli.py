@@ -215,6 +215,8 @@ def _parser() -> argparse.ArgumentParser:
         epilog="Example: ego export-fmu nonlinear-bicycle --out runs/bicycle.fmu")
     exf.add_argument("model", metavar="MODEL", help="nonlinear-bicycle (report 000) or linear-bicycle (report 002)")
     exf.add_argument("--out", required=True, metavar="FILE.fmu", help="the FMU to write")
+    exf.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                     help="a parameter's start value in the FMU (repeatable), e.g. abs=1")
 
     trn = sub.add_parser(
         "train", help="train a learned controller (narma-l2)",
@@ -657,7 +659,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command == "export-fmu":
             from ego.fmi.export import export_fmu
 
-            print(f"wrote {export_fmu(args.model, args.out)}")
+            print(f"wrote {export_fmu(args.model, args.out, parse_overrides(args.overrides))}")
             return EXIT_OK
         if args.command == "list" and args.reference:
             from ego.plugins import describe_reference, print_reference

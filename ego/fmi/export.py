@@ -15,6 +15,7 @@ hold them to 1e-9).
 
 from __future__ import annotations
 
+import math
 import os
 from pathlib import Path
 
@@ -81,12 +82,32 @@ MODELS = {"nonlinear-bicycle": (nonlinear_bicycle_spec, "report 000's nonlinear 
           "linear-bicycle": (linear_bicycle_spec, "report 002's linear dynamic bicycle (a_x, delta)")}
 
 
-def export_fmu(model: str, out: str | os.PathLike) -> Path:
-    """Write ``model`` (a name of :data:`MODELS`) as an FMI 2.0 co-simulation FMU to ``out``."""
+def export_fmu(model: str, out: str | os.PathLike, starts: dict[str, str] | None = None) -> Path:
+    """Write ``model`` (a name of :data:`MODELS`) as an FMI 2.0 co-simulation FMU to ``out``;
+    ``starts`` sets parameters' start values (``{"abs": "1", "slip_speed_floor": "1"}``: the
+    motorway scenarios' settings)."""
+    import dataclasses
+
     from ego.checks import check_output_file
     from ego.params import did_you_mean
 
     if model not in MODELS:
         raise ConfigError(f"unknown model {model!r} (known: {', '.join(MODELS)}){did_you_mean(model, MODELS)}")
     path = check_output_file(os.fspath(out), "--out", ".fmu")
-    return build_fmu(MODELS[model][0](), path)
+    spec = MODELS[model][0]()
+    params = {v.name: v for v in spec.variables if v.causality == "parameter"}
+    changed = dict(params)
+    for key, text in (starts or {}).items():
+        if key not in params:
+            raise ConfigError(f"unknown parameter {key!r} of {model}{did_you_mean(key, params)} (known: "
+                              f"{', '.join(params)})")
+        try:
+            value = float(text)
+        except ValueError:
+            raise ConfigError(f"bad value for {key}: {text!r} (expected a number)") from None
+        if not math.isfinite(value):
+            raise ConfigError(f"bad value for {key}: {text!r} (expected a finite number)")
+        changed[key] = dataclasses.replace(params[key], start=value)
+    spec = dataclasses.replace(spec, variables=tuple(changed.get(v.name, v) if v.causality == "parameter" else v
+                                                     for v in spec.variables))
+    return build_fmu(spec, path)
