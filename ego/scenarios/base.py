@@ -59,17 +59,17 @@ class CommonConfig(TimingConfig):
     sumo_step: float = param(0.1, "s", "SUMO step, a whole multiple of dt", min=0.01, max=1.0)
     lateral_resolution: float = param(0.875, "m", "width of SUMO's sublanes (sublane model)",
                                       min=0.1, max=3.5)
-    plant: str = param("", "-", "an FMI co-simulation FMU replacing the ego's vehicle model (path/to/"
-                       "vehicle.fmu; see docs/fmi.md); empty: the scenario's own model")
+    plant: str = param("", "-", "an FMI co-simulation FMU (path/to/vehicle.fmu) replacing the ego's "
+                       "vehicle model (see docs/fmi.md); empty: the scenario's own model")
     plant_map: str = param("", "-", "TOML file mapping the plant FMU's variables (default: by name)")
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if self.plant:  # the FMU checked with the parameters, before anything runs
+        if self.plant.lower().endswith(".fmu"):  # the FMU checked with the parameters, before anything runs
             from ego.fmi.plant import check_plant_fmu
 
             check_plant_fmu(self.plant, self.plant_map)
-        elif self.plant_map:
+        elif self.plant_map and not self.plant:
             raise ConfigError("plant_map needs plant (the FMU it maps)")
         ratio = self.sumo_step / self.dt
         if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
@@ -290,7 +290,7 @@ class Scenario:
             self.bridge.start()
             self.traffic = TrafficCollector()
         self._setup(np.random.default_rng(self.seed))
-        if getattr(c, "plant", ""):  # an FMU in place of the ego's own model
+        if str(getattr(c, "plant", "")).lower().endswith(".fmu"):  # an FMU in place of the ego's own model
             from ego.fmi.plant import replace_plant
 
             replace_plant(self)
