@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from math import isfinite
 import operator
 from functools import lru_cache
 from typing import Any
@@ -159,6 +160,7 @@ class FmuController:
         self.cosim = CoSim(info, [link.vr for link in m.inputs], [link.vr for link in (*m.outputs, *m.extras)],
                            on_log=self._on_log, instance_name=info.model_identifier)
         self._k = 0
+        self._out: tuple[float, ...] = ()
 
     def bind_events(self, event) -> None:
         """Route the FMU's log messages to ``event(kind, text, level)`` (the run's events and
@@ -183,28 +185,23 @@ class FmuController:
         self._k = 0
 
     def step(self, obs) -> tuple[float, ...]:
-        cs = self.cosim
-        buf = cs.in_val
         get = self._get_obs
-        if get is not None:
-            if self._single:
-                buf[0] = get(obs)
-            else:
-                buf[:cs.n_in] = get(obs)
+        values = () if get is None else ((get(obs),) if self._single else get(obs))
+        if self._in_conv:
+            values = list(values)
             for i, inv, off in self._in_conv:
-                buf[i] = (buf[i] - off) * inv
+                values[i] = (values[i] - off) * inv
         k = self._k
-        cs.step(k * self.dt, self.dt)
+        out = self._out = self.cosim.exchange(values, k * self.dt, self.dt)
         self._k = k + 1
-        out = cs.out_val
         if self._n_actions == 2:
             (f0, o0), (f1, o1) = self._out_conv
             a, b = out[0] * f0 + o0, out[1] * f1 + o1
-            if not (math.isfinite(a) and math.isfinite(b)):
+            if not (isfinite(a) and isfinite(b)):
                 self._not_finite(obs, (a, b))
             return a, b
         action = tuple(out[i] * f + o for i, (f, o) in enumerate(self._out_conv))
-        if not all(math.isfinite(x) for x in action):
+        if not all(isfinite(x) for x in action):
             self._not_finite(obs, action)
         return action
 
@@ -216,8 +213,8 @@ class FmuController:
                        + (f"; its last message: {self.cosim.last_message}" if self.cosim.last_message else ""))
 
     def signals(self) -> dict[str, float]:
-        out = self.cosim.out_val
-        return {name: out[i] for name, i in self._extras}
+        out = self._out
+        return {name: out[i] if i < len(out) else 0.0 for name, i in self._extras}
 
     def close(self) -> None:
         """Terminate and free the FMU instance (the next reset instantiates it again)."""

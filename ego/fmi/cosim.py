@@ -16,6 +16,7 @@ from __future__ import annotations
 import ctypes
 import os
 import shutil
+import struct
 import tempfile
 import weakref
 from collections.abc import Callable, Sequence
@@ -70,6 +71,10 @@ class CoSim:
         self.out_vr = (vr_t * max(n_out, 1))(*outputs)
         self.out_val = (ctypes.c_double * max(n_out, 1))()
         self.n_in, self.n_out = n_in, n_out
+        self._n_in, self._n_out = ctypes.c_size_t(n_in), ctypes.c_size_t(n_out)
+        self._t, self._h = ctypes.c_double(), ctypes.c_double()
+        self._pack = struct.Struct(f"{max(n_in, 1)}d").pack_into if n_in else None
+        self._unpack = struct.Struct(f"{n_out}d").unpack_from if n_out else (lambda buf: ())
         self.component = None
         # doStep's out-arguments (FMI 3.0), made once
         self._flags = (ctypes.c_bool(), ctypes.c_bool(), ctypes.c_bool(), ctypes.c_double())
@@ -94,18 +99,16 @@ class CoSim:
 
             fmu = FMU2Slave(**kw)
         dll = fmu.dll
-        if self.v3:
-            self._set = dll.fmi3SetFloat64
-            self._get = dll.fmi3GetFloat64
-            self._do_step = dll.fmi3DoStep
-            fmu.terminate_raw = dll.fmi3Terminate
-            fmu.free_raw = dll.fmi3FreeInstance
-        else:
-            self._set = dll.fmi2SetReal
-            self._get = dll.fmi2GetReal
-            self._do_step = dll.fmi2DoStep
-            fmu.terminate_raw = dll.fmi2Terminate
-            fmu.free_raw = dll.fmi2FreeInstance
+        # the hot path's functions without ctypes argtypes (fmpy's copies have them): every
+        # argument is passed ready-made (c_void_p, c_size_t, c_double, arrays), which halves
+        # the cost of a call
+        raw = dll._FuncPtr
+        prefix = "fmi3" if self.v3 else "fmi2"
+        self._set = raw((f"{prefix}SetFloat64" if self.v3 else "fmi2SetReal", dll))
+        self._get = raw((f"{prefix}GetFloat64" if self.v3 else "fmi2GetReal", dll))
+        self._do_step = raw((f"{prefix}DoStep", dll))
+        fmu.terminate_raw = getattr(dll, f"{prefix}Terminate")
+        fmu.free_raw = getattr(dll, f"{prefix}FreeInstance")
         st["fmu"] = fmu
         self.fmu = fmu
 
@@ -152,6 +155,7 @@ class CoSim:
             raise FmuError(f"FMU {self.info.model_name}: instantiation failed"
                            + (f": {self.last_message}" if self.last_message else ""))
         self.component = comp
+        self._comp = ctypes.c_void_p(comp)
         self._state["component"] = comp
 
     def start(self, parameters: dict[int, float], start_time: float = 0.0) -> None:
@@ -193,32 +197,44 @@ class CoSim:
             msg = self.last_message or f"status {STATUS.get(status, status)}"
             raise FmuError(f"FMU {self.info.model_name} ({what}): {STATUS.get(status, status)}: {msg}")
 
-    def step(self, t: float, h: float) -> None:
-        """Inputs (``in_val``) in, one communication step from t to t + h, outputs (``out_val``) out."""
-        comp = self.component
+    def exchange(self, values, t: float, h: float) -> tuple[float, ...]:
+        """Inputs ``values`` (in value-reference order of ``inputs``) in at t, one
+        communication step to t + h, the outputs out (a tuple)."""
         if self.n_in:
-            status = self._set(comp, self.in_vr, self.n_in, self.in_val, self.n_in) if self.v3 else \
-                self._set(comp, self.in_vr, self.n_in, self.in_val)
-            if status > 1:
-                self._check(status, f"set inputs at t = {t:.3f} s")
+            self._pack(self.in_val, 0, *values)
+        self._t.value = t
+        self._h.value = h
+        comp, n_in, n_out = self._comp, self._n_in, self._n_out
         if self.v3:
-            status = self._do_step(comp, t, h, True, *self._flag_refs)
-        else:
-            status = self._do_step(comp, t, h, 1)
-        if status > 1:
-            self._check(status, f"doStep at t = {t:.3f} s")
-        if self.n_out:
-            status = self._get(comp, self.out_vr, self.n_out, self.out_val, self.n_out) if self.v3 else \
-                self._get(comp, self.out_vr, self.n_out, self.out_val)
+            if self.n_in:
+                status = self._set(comp, self.in_vr, n_in, self.in_val, n_in)
+                if status > 1:
+                    self._check(status, f"set inputs at t = {t:.3f} s")
+            status = self._do_step(comp, self._t, self._h, 1, *self._flag_refs)
             if status > 1:
-                self._check(status, f"get outputs at t = {t + h:.3f} s")
+                self._check(status, f"doStep at t = {t:.3f} s")
+            if self.n_out:
+                status = self._get(comp, self.out_vr, n_out, self.out_val, n_out)
+        else:
+            if self.n_in:
+                status = self._set(comp, self.in_vr, n_in, self.in_val)
+                if status > 1:
+                    self._check(status, f"set inputs at t = {t:.3f} s")
+            status = self._do_step(comp, self._t, self._h, 1)
+            if status > 1:
+                self._check(status, f"doStep at t = {t:.3f} s")
+            if self.n_out:
+                status = self._get(comp, self.out_vr, n_out, self.out_val)
+        if self.n_out and status > 1:
+            self._check(status, f"get outputs at t = {t + h:.3f} s")
+        return self._unpack(self.out_val)
 
     def get(self, vrs: Sequence[int]) -> list[float]:
         vr_t = ctypes.c_uint32 if self.v3 else ctypes.c_uint
         arr_vr = (vr_t * len(vrs))(*vrs)
         val = (ctypes.c_double * len(vrs))()
-        status = self._get(self.component, arr_vr, len(vrs), val, len(vrs)) if self.v3 else \
-            self._get(self.component, arr_vr, len(vrs), val)
+        n = ctypes.c_size_t(len(vrs))
+        status = self._get(self._comp, arr_vr, n, val, n) if self.v3 else self._get(self._comp, arr_vr, n, val)
         self._check(status, "get")
         return list(val)
 

@@ -114,14 +114,10 @@ class FmuPlant:
         x = self.state
         command, delta = self._apply(action[0], action[1], x[1], self.applied[1], self.dt)
         self.applied = (command, delta)
-        cs = self.cosim
-        buf = cs.in_val
         (l0, l1) = self._in
-        buf[0] = (command - l0.offset) / l0.factor
-        buf[1] = (delta - l1.offset) / l1.factor
-        cs.step(self._k * self.dt, self.dt)
+        out = self.cosim.exchange(((command - l0.offset) / l0.factor, (delta - l1.offset) / l1.factor),
+                                  self._k * self.dt, self.dt)
         self._k += 1
-        out = cs.out_val
         state = tuple(out[i] * f + o for i, (f, o) in enumerate(self._out))
         if not all(math.isfinite(s) for s in state):
             raise FmuError(f"plant FMU {self.info.model_name}: its state is not finite at t = {self._k * self.dt:.3f} s")
