@@ -93,6 +93,9 @@ def configure(spec: RunSpec):
         known = [i.name for i in describe(cls.config_cls)] + [i.name for i in describe(ctrl.params)]
         raise unknown_parameter(next(iter(rest)), known)
     cls.check_config(config)
+    check = getattr(ctrl_params, "check", None)  # parameters that check themselves as a whole (an FMU's mapping)
+    if check is not None:
+        check()
     return cls, config, ctrl, ctrl_params
 
 

@@ -86,10 +86,15 @@ class FmuParams(Params):
         for f in fields:
             object.__setattr__(self, f.name, values.get(f.name, f.default))
         self.__post_init__()
-        if values:  # set parameters (--set, a variant, a sweep): the mapping checked with them, before
-            # anything runs; the defaults' mapping is checked when the controller is built
-            ref, task = type(self)._ref
-            mapping_for(type(self)._info, task, self.fmu_map, ref)  # type: ignore[attr-defined]
+        if self.fmu_map:  # a mapping file is checked against the FMU with the parameters
+            self.check()
+
+    def check(self) -> None:
+        """The connections these parameters make (the mapping file, or names) are valid for
+        the FMU: ConfigError otherwise. ``ego.runner.configure`` calls it on the resolved
+        parameters, before anything runs."""
+        ref, task = type(self)._ref
+        mapping_for(type(self)._info, task, self.fmu_map, ref)  # type: ignore[attr-defined]
 
     def __setattr__(self, name: str, value: Any) -> None:
         raise dataclasses.FrozenInstanceError(f"cannot assign to field {name!r}")
