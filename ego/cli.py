@@ -118,7 +118,8 @@ def _parser() -> argparse.ArgumentParser:
     )
     run.add_argument("scenario", metavar="SCENARIO", help=f"one of: {', '.join(SCENARIOS)}")
     run.add_argument("--controller", "-c", required=True, metavar="NAME",
-                     help=f"one of: {_controllers_help()}")
+                     help=f"one of: {_controllers_help()}; or a reference: package.module:Class, "
+                          "path/to/file.py:Class or path/to/controller.fmu (docs/fmi.md)")
     run.add_argument("--record", metavar="PATH", help="write a Rerun recording (.rrd) here")
     run.add_argument("--seed", type=int, default=0, metavar="N",
                      help="seed of the traffic and of SUMO (default 0)")

@@ -110,3 +110,30 @@ def test_reset_between_runs_gives_the_same_run(fmus):
     scenario.close()
     for m in (second, third):
         same({k: v for k, v in first.items() if k not in DROP}, {k: v for k, v in m.items() if k not in DROP})
+
+
+def test_ctrl_c_ends_the_run_and_frees_the_fmu(fmus, tmp_path):
+    """SIGINT mid-run: the run ends as interrupted, the FMU instance is terminated and freed
+    and its extracted folder removed, with or without a second Ctrl-C."""
+    import signal
+    import time
+
+    env = dict(os.environ, TMPDIR=str(tmp_path))
+    for presses in (1, 2):
+        proc = subprocess.Popen([sys.executable, "-m", "ego", "run", "sine-tracking", "-c", fmus["pid"],
+                                 "--set", "duration=3600", "--json"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                text=True, env=env)
+        deadline = time.monotonic() + 120
+        while not any(p.name.startswith("ego-fmu-") for p in tmp_path.iterdir()):
+            assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
+            time.sleep(0.05)
+        time.sleep(1.0)  # running
+        for _ in range(presses):
+            proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=120)
+        if presses == 1:
+            assert proc.returncode == 130, err
+            assert json.loads(out)["status"] == "interrupted"
+        else:  # the second press interrupts at once (or, landing late, the exit itself)
+            assert proc.returncode in (130, -signal.SIGINT), err
+        assert not [p.name for p in tmp_path.iterdir() if p.name.startswith("ego-fmu-")]
