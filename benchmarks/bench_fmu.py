@@ -92,8 +92,10 @@ def main() -> None:
         print(f"control step over {len(obs)} observations (best of {args.repeat}):")
         print(f"  built-in pid   {builtin * 1e6:7.2f} us")
         print(f"  pid C FMU      {mine * 1e6:7.2f} us")
-        print(f"  FMU overhead   {(mine - builtin) * 1e6:7.2f} us per control step (target <= 5 us); "
-              f"ratio {mine / builtin:.2f}x")
+        print(
+            f"  FMU overhead   {(mine - builtin) * 1e6:7.2f} us per control step (target <= 5 us); "
+            f"ratio {mine / builtin:.2f}x"
+        )
         rtf = {"pid": 0.0, fmu: 0.0}
         for _ in range(args.repeat):  # alternating, best of each
             for name in rtf:

@@ -86,8 +86,7 @@ def _import_file(path: str, what: str) -> Any:
             spec.loader.exec_module(module)
         except Exception as exc:  # noqa: BLE001 - the user's file is at fault: say which and why
             sys.modules.pop(mod_name, None)
-            raise ConfigError(f"bad {what} reference: importing {path!r} failed: "
-                              f"{type(exc).__name__}: {exc}") from None
+            raise ConfigError(f"bad {what} reference: importing {path!r} failed: {type(exc).__name__}: {exc}") from None
         _file_modules[key] = module
         return module
 
@@ -96,8 +95,10 @@ def load_object(ref: str, what: str = "controller") -> Any:
     """The object ``ref`` (``package.module:Name`` or ``path/file.py:Name``) names."""
     target, sep, attr = ref.rpartition(":")
     if not sep or not target or not attr:
-        raise ConfigError(f"bad {what} reference {ref!r} (expected a registered name, package.module:Name, "
-                          "path/to/file.py:Name or path/to/file.fmu)")
+        raise ConfigError(
+            f"bad {what} reference {ref!r} (expected a registered name, package.module:Name, "
+            "path/to/file.py:Name or path/to/file.fmu)"
+        )
     if target.endswith(".py") or "/" in target or os.sep in target:
         module = _import_file(target, what)
     else:
@@ -106,8 +107,9 @@ def load_object(ref: str, what: str = "controller") -> Any:
         except ImportError as exc:
             raise ConfigError(f"bad {what} reference {ref!r}: cannot import {target!r} ({exc})") from None
         except Exception as exc:  # noqa: BLE001
-            raise ConfigError(f"bad {what} reference {ref!r}: importing {target!r} failed: "
-                              f"{type(exc).__name__}: {exc}") from None
+            raise ConfigError(
+                f"bad {what} reference {ref!r}: importing {target!r} failed: {type(exc).__name__}: {exc}"
+            ) from None
     obj = module
     for part in attr.split("."):
         try:
@@ -139,21 +141,24 @@ def controller_spec_of(obj: Any, name: str, task: str, where: str):
     elif inspect.isclass(obj):
         missing = [m for m in ("reset", "step", "signals") if not callable(getattr(obj, m, None))]
         if missing:
-            raise ConfigError(f"bad controller {where}: class {obj.__name__} has no {', '.join(missing)} "
-                              "(a controller has reset, step and signals)")
+            raise ConfigError(
+                f"bad controller {where}: class {obj.__name__} has no {', '.join(missing)} "
+                "(a controller has reset, step and signals)"
+            )
         params = getattr(obj, "Params", None)
         from ego.control import NoParams
         from ego.params import Params
 
         if params is not None and not (inspect.isclass(params) and issubclass(params, Params)):
-            raise ConfigError(f"bad controller {where}: {obj.__name__}.Params is not an ego.params.Params "
-                              "dataclass")
+            raise ConfigError(f"bad controller {where}: {obj.__name__}.Params is not an ego.params.Params dataclass")
         doc = (inspect.getdoc(obj) or obj.__name__).strip().splitlines()[0]
         spec = ControllerSpec(name, doc, params or NoParams, _builder(obj, params is not None))
         obj_task = getattr(obj, "task", None)
     else:
-        raise ConfigError(f"bad controller {where}: {type(obj).__name__} is neither a controller class nor "
-                          "an ego.control.ControllerSpec")
+        raise ConfigError(
+            f"bad controller {where}: {type(obj).__name__} is neither a controller class nor "
+            "an ego.control.ControllerSpec"
+        )
     if obj_task is not None:
         tasks = (obj_task,) if isinstance(obj_task, str) else tuple(obj_task)
         if task not in tasks:
@@ -206,8 +211,10 @@ def load_controller_plugins(registry: dict[str, dict[str, Any]]) -> None:
                 if task in registry and ep.name not in registry[task]:
                     registry[task][ep.name] = controller_spec_of(obj, ep.name, task, f"plugin {ep.name!r}")
         except Exception as exc:  # noqa: BLE001
-            print(f"ego: warning: controller plugin {ep.name!r} ({ep.value}) not loaded: "
-                  f"{type(exc).__name__}: {exc}", file=sys.stderr)
+            print(
+                f"ego: warning: controller plugin {ep.name!r} ({ep.value}) not loaded: {type(exc).__name__}: {exc}",
+                file=sys.stderr,
+            )
 
 
 def load_scenario_plugins(registry: dict[str, Any]) -> None:
@@ -228,8 +235,10 @@ def load_scenario_plugins(registry: dict[str, Any]) -> None:
                 raise TypeError("not an ego Scenario subclass")
             registry.setdefault(ep.name, obj)
         except Exception as exc:  # noqa: BLE001
-            print(f"ego: warning: scenario plugin {ep.name!r} ({ep.value}) not loaded: "
-                  f"{type(exc).__name__}: {exc}", file=sys.stderr)
+            print(
+                f"ego: warning: scenario plugin {ep.name!r} ({ep.value}) not loaded: {type(exc).__name__}: {exc}",
+                file=sys.stderr,
+            )
 
 
 def load_plugins() -> None:
@@ -249,8 +258,10 @@ def describe_reference(ref: str) -> dict:
     from ego.params import describe
 
     def params(cls) -> list[dict]:
-        return [{"name": i.name, "default": i.default, "unit": i.unit, "allowed": i.allowed(),
-                 "description": i.doc} for i in describe(cls)]
+        return [
+            {"name": i.name, "default": i.default, "unit": i.unit, "allowed": i.allowed(), "description": i.doc}
+            for i in describe(cls)
+        ]
 
     out: dict = {"reference": ref}
     fits, errors = [], {}
@@ -269,12 +280,27 @@ def describe_reference(ref: str) -> dict:
         from ego.fmi.model import inspect_fmu
 
         info = inspect_fmu(ref)  # the FMU's own problems are raised here, before the tasks'
-        out.update(kind="fmu", fmi_version=info.fmi_version, model_name=info.model_name,
-                   description=info.description, generation_tool=info.generation_tool,
-                   variable_step=info.variable_step, default_step=info.default_step,
-                   variables=[{"name": v.name, "causality": v.causality, "type": v.type, "unit": v.unit,
-                               "start": v.start, "description": v.description}
-                              for v in info.variables if v.causality in ("input", "output", "parameter")])
+        out.update(
+            kind="fmu",
+            fmi_version=info.fmi_version,
+            model_name=info.model_name,
+            description=info.description,
+            generation_tool=info.generation_tool,
+            variable_step=info.variable_step,
+            default_step=info.default_step,
+            variables=[
+                {
+                    "name": v.name,
+                    "causality": v.causality,
+                    "type": v.type,
+                    "unit": v.unit,
+                    "start": v.start,
+                    "description": v.description,
+                }
+                for v in info.variables
+                if v.causality in ("input", "output", "parameter")
+            ],
+        )
     else:
         out["kind"] = "class"
     out["tasks"] = fits
@@ -291,18 +317,27 @@ def print_reference(d: dict) -> None:
     print(f"{d['reference']}: {d.get('summary', '')}")
     if d["kind"] == "fmu":
         step = "any communication step" if d["variable_step"] else f"fixed step {d['default_step']} s"
-        print(f"  FMI {d['fmi_version']} co-simulation, {step}"
-              + (f", made by {d['generation_tool']}" if d["generation_tool"] else ""))
+        print(
+            f"  FMI {d['fmi_version']} co-simulation, {step}"
+            + (f", made by {d['generation_tool']}" if d["generation_tool"] else "")
+        )
         for causality in ("input", "output", "parameter"):
             vs = [v for v in d["variables"] if v["causality"] == causality]
             if vs:
-                print(f"  {causality}s: " + ", ".join(
-                    v["name"] + (f" [{v['unit']}]" if v["unit"] else "") + ("" if v["type"] in ("Real", "Float64")
-                                                                           else f" ({v['type']})")
-                    for v in vs))
+                print(
+                    f"  {causality}s: "
+                    + ", ".join(
+                        v["name"]
+                        + (f" [{v['unit']}]" if v["unit"] else "")
+                        + ("" if v["type"] in ("Real", "Float64") else f" ({v['type']})")
+                        for v in vs
+                    )
+                )
     if d["tasks"]:
-        print(f"  drives the {', '.join(d['tasks'])} task{'s' if len(d['tasks']) > 1 else ''} "
-              "(connected by name, or by --set fmu_map=map.toml)")
+        print(
+            f"  drives the {', '.join(d['tasks'])} task{'s' if len(d['tasks']) > 1 else ''} "
+            "(connected by name, or by --set fmu_map=map.toml)"
+        )
     else:
         print("  connects to no task as it is:")
         for task, why in d.get("why_not", {}).items():

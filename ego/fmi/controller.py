@@ -16,9 +16,9 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from math import isfinite
 import operator
 from functools import lru_cache
+from math import isfinite
 from typing import Any
 
 from ego.fmi.cosim import CoSim, FmuError
@@ -68,6 +68,7 @@ def mapping_for(info: FmuInfo, task: str, map_file: str, name: str) -> Mapping:
 
 
 # -- parameters -------------------------------------------------------------------------------
+
 
 class FmuParams(Params):
     """Base of the parameter classes made per FMU: ``fmu_map`` and ``fmu.<name>`` fields.
@@ -127,19 +128,31 @@ def _params_class(info: FmuInfo, ref: str, task: str) -> type:
         f._field_type = dataclasses._FIELD  # type: ignore[attr-defined]  # what fields() lists
         fields[name] = f
 
-    add("fmu_map", str, param("", "-", "TOML file mapping FMU variables to the task's signals (default: "
-                              "by name; see docs/fmi.md)"))
+    add(
+        "fmu_map",
+        str,
+        param("", "-", "TOML file mapping FMU variables to the task's signals (default: by name; see docs/fmi.md)"),
+    )
     for v in info.tunable:
         start = v.start if v.start is not None and math.isfinite(v.start) else 0.0
         doc = v.description or f"FMU parameter {v.name}"
         add(f"fmu.{v.name}", float, param(float(start), v.unit or "-", doc))
-    cls = type(f"FmuParams_{info.model_identifier}", (FmuParams,),
-               {"__dataclass_fields__": fields, "__doc__": f"Parameters of the FMU {info.model_name}.",
-                "_ref": (ref, task), "_info": info, "__module__": __name__})
+    cls = type(
+        f"FmuParams_{info.model_identifier}",
+        (FmuParams,),
+        {
+            "__dataclass_fields__": fields,
+            "__doc__": f"Parameters of the FMU {info.model_name}.",
+            "_ref": (ref, task),
+            "_info": info,
+            "__module__": __name__,
+        },
+    )
     return cls
 
 
 # -- the controller ---------------------------------------------------------------------------
+
 
 class FmuController:
     """A co-simulation FMU stepping at the control period (see the module)."""
@@ -152,18 +165,23 @@ class FmuController:
         self._get_obs = operator.attrgetter(*signals) if signals else None
         self._single = len(signals) == 1
         #: inputs needing a conversion: (index, 1/factor, offset) with fmu = (task - offset) / factor
-        self._in_conv = tuple((i, 1.0 / link.factor, link.offset) for i, link in enumerate(m.inputs)
-                              if not link.identity)
+        self._in_conv = tuple(
+            (i, 1.0 / link.factor, link.offset) for i, link in enumerate(m.inputs) if not link.identity
+        )
         self._out_conv = tuple((link.factor, link.offset) for link in m.outputs)
         self._n_actions = len(m.outputs)
         self._extras = tuple((link.fmu_name, len(m.outputs) + i) for i, link in enumerate(m.extras))
         self.signal_units = {e.fmu_name: (u or "-") for e, u in zip(m.extras, m.extra_units)}
         values = params.values()
-        self._parameters = {v.vr: float(values[f"fmu.{v.name}"]) for v in info.tunable
-                            if f"fmu.{v.name}" in values}
+        self._parameters = {v.vr: float(values[f"fmu.{v.name}"]) for v in info.tunable if f"fmu.{v.name}" in values}
         self._event = None
-        self.cosim = CoSim(info, [link.vr for link in m.inputs], [link.vr for link in (*m.outputs, *m.extras)],
-                           on_log=self._on_log, instance_name=info.model_identifier)
+        self.cosim = CoSim(
+            info,
+            [link.vr for link in m.inputs],
+            [link.vr for link in (*m.outputs, *m.extras)],
+            on_log=self._on_log,
+            instance_name=info.model_identifier,
+        )
         self._k = 0
         self._out: tuple[float, ...] = ()
 
@@ -213,9 +231,11 @@ class FmuController:
     def _not_finite(self, obs, action) -> None:
         link, x = next((link, x) for link, x in zip(self.mapping.outputs, action) if not math.isfinite(x))
         t = (self._k - 1) * self.dt
-        raise FmuError(f"FMU {self.info.model_name}: output {link.fmu_name!r} ({link.signal}) is {x} "
-                       f"at t = {t:.3f} s (step {self._k - 1})"
-                       + (f"; its last message: {self.cosim.last_message}" if self.cosim.last_message else ""))
+        raise FmuError(
+            f"FMU {self.info.model_name}: output {link.fmu_name!r} ({link.signal}) is {x} "
+            f"at t = {t:.3f} s (step {self._k - 1})"
+            + (f"; its last message: {self.cosim.last_message}" if self.cosim.last_message else "")
+        )
 
     def signals(self) -> dict[str, float]:
         out = self._out
@@ -224,9 +244,13 @@ class FmuController:
     def close(self) -> None:
         """Terminate and free the FMU instance (the next reset instantiates it again)."""
         self.cosim.close()
-        self.cosim = CoSim(self.info, [link.vr for link in self.mapping.inputs],
-                           [link.vr for link in (*self.mapping.outputs, *self.mapping.extras)],
-                           on_log=self._on_log, instance_name=self.info.model_identifier)
+        self.cosim = CoSim(
+            self.info,
+            [link.vr for link in self.mapping.inputs],
+            [link.vr for link in (*self.mapping.outputs, *self.mapping.extras)],
+            on_log=self._on_log,
+            instance_name=self.info.model_identifier,
+        )
 
 
 _specs: dict[tuple[str, str, str], Any] = {}
@@ -243,7 +267,8 @@ def fmu_controller_spec(ref: str, task: str):
     if spec is None:
         params_cls = _params_class(info, ref, task)
         summary = f"FMI {info.fmi_version} co-simulation FMU {info.model_name}" + (
-            f": {info.description}" if info.description else "")
+            f": {info.description}" if info.description else ""
+        )
 
         def build(params, dt: float, _info=info) -> FmuController:
             return FmuController(_info, params, dt, task, ref)
@@ -251,4 +276,3 @@ def fmu_controller_spec(ref: str, task: str):
         spec = ControllerSpec(ref, summary, params_cls, build)
         _specs[key] = spec
     return spec
-

@@ -55,8 +55,14 @@ def _cleanup(state: dict) -> None:
 class CoSim:
     """A co-simulation instance of ``info``'s FMU."""
 
-    def __init__(self, info: FmuInfo, inputs: Sequence[int], outputs: Sequence[int],
-                 on_log: Callable[[str, str, str], None] | None = None, instance_name: str = "ego") -> None:
+    def __init__(
+        self,
+        info: FmuInfo,
+        inputs: Sequence[int],
+        outputs: Sequence[int],
+        on_log: Callable[[str, str, str], None] | None = None,
+        instance_name: str = "ego",
+    ) -> None:
         self.info = info
         self.v3 = info.fmi_version.startswith("3")
         self.on_log = on_log
@@ -88,8 +94,12 @@ class CoSim:
         folder = tempfile.mkdtemp(prefix="ego-fmu-")
         st["folder"] = folder
         extract(self.info.path, unzipdir=folder)
-        kw = dict(guid=self.info.guid, unzipDirectory=folder, modelIdentifier=self.info.model_identifier,
-                  instanceName=self.instance_name)
+        kw = dict(
+            guid=self.info.guid,
+            unzipDirectory=folder,
+            modelIdentifier=self.info.model_identifier,
+            instanceName=self.instance_name,
+        )
         if self.v3:
             from fmpy.fmi3 import FMU3Slave
 
@@ -124,22 +134,43 @@ class CoSim:
             from fmpy.fmi3 import fmi3IntermediateUpdateCallback, fmi3LogMessageCallback
 
             def log(env, status, category, message):
-                self._log(int(status), (category or b"").decode("utf-8", "replace"),
-                          (message or b"").decode("utf-8", "replace"))
+                self._log(
+                    int(status),
+                    (category or b"").decode("utf-8", "replace"),
+                    (message or b"").decode("utf-8", "replace"),
+                )
 
             self._log_cb = fmi3LogMessageCallback(log)
             comp = fmu.dll.fmi3InstantiateCoSimulation(
-                self.instance_name.encode(), self.info.guid.encode(),
-                (os.path.join(fmu.unzipDirectory, "resources") + os.sep).encode(), False, True, False, False,
-                None, 0, None, self._log_cb, fmi3IntermediateUpdateCallback())
+                self.instance_name.encode(),
+                self.info.guid.encode(),
+                (os.path.join(fmu.unzipDirectory, "resources") + os.sep).encode(),
+                False,
+                True,
+                False,
+                False,
+                None,
+                0,
+                None,
+                self._log_cb,
+                fmi3IntermediateUpdateCallback(),
+            )
         else:
-            from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                                   fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2CoSimulation)
             from fmpy import calloc, free
+            from fmpy.fmi2 import (
+                fmi2CallbackAllocateMemoryTYPE,
+                fmi2CallbackFreeMemoryTYPE,
+                fmi2CallbackFunctions,
+                fmi2CallbackLoggerTYPE,
+                fmi2CoSimulation,
+            )
 
             def log(env, name, status, category, message):
-                self._log(int(status), (category or b"").decode("utf-8", "replace"),
-                          (message or b"").decode("utf-8", "replace"))
+                self._log(
+                    int(status),
+                    (category or b"").decode("utf-8", "replace"),
+                    (message or b"").decode("utf-8", "replace"),
+                )
 
             cb = fmi2CallbackFunctions()
             cb.logger = fmi2CallbackLoggerTYPE(log)
@@ -148,12 +179,20 @@ class CoSim:
             self._callbacks = cb
             import pathlib
 
-            comp = fmu.dll.fmi2Instantiate(self.instance_name.encode(), fmi2CoSimulation, self.info.guid.encode(),
-                                           pathlib.Path(fmu.unzipDirectory, "resources").as_uri().encode(),
-                                           ctypes.byref(cb), 0, 1)
+            comp = fmu.dll.fmi2Instantiate(
+                self.instance_name.encode(),
+                fmi2CoSimulation,
+                self.info.guid.encode(),
+                pathlib.Path(fmu.unzipDirectory, "resources").as_uri().encode(),
+                ctypes.byref(cb),
+                0,
+                1,
+            )
         if not comp:
-            raise FmuError(f"FMU {self.info.model_name}: instantiation failed"
-                           + (f": {self.last_message}" if self.last_message else ""))
+            raise FmuError(
+                f"FMU {self.info.model_name}: instantiation failed"
+                + (f": {self.last_message}" if self.last_message else "")
+            )
         self.component = comp
         self._comp = ctypes.c_void_p(comp)
         self._state["component"] = comp
@@ -180,8 +219,9 @@ class CoSim:
         if self.v3:
             if parameters:
                 self._check(dll.fmi3SetFloat64(comp, arr_vr, len(vrs), arr_val, len(vrs)), "set parameters")
-            self._check(dll.fmi3EnterInitializationMode(comp, False, 0.0, start_time, False, 0.0),
-                        "enter initialisation mode")
+            self._check(
+                dll.fmi3EnterInitializationMode(comp, False, 0.0, start_time, False, 0.0), "enter initialisation mode"
+            )
             st["initialized"] = True
             self._check(dll.fmi3ExitInitializationMode(comp), "exit initialisation mode")
         else:

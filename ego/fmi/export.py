@@ -23,16 +23,25 @@ from ego.fmi.build import FRAME_DIR, ModelSpec, Var, build_fmu
 from ego.params import ConfigError
 
 EGO_DIR = Path(__file__).resolve().parent.parent
-STATE = (("X", "m", "world X of the centre of gravity"), ("u", "m/s", "body longitudinal speed"),
-         ("Y", "m", "world Y of the centre of gravity"), ("v", "m/s", "body lateral speed (+ left)"),
-         ("psi", "rad", "yaw, counter-clockwise from world X"), ("r", "rad/s", "yaw rate"))
+STATE = (
+    ("X", "m", "world X of the centre of gravity"),
+    ("u", "m/s", "body longitudinal speed"),
+    ("Y", "m", "world Y of the centre of gravity"),
+    ("v", "m/s", "body lateral speed (+ left)"),
+    ("psi", "rad", "yaw, counter-clockwise from world X"),
+    ("r", "rad/s", "yaw rate"),
+)
 
 
 def _state_vars(x0) -> tuple[Var, ...]:
     outs = tuple(Var(n, "output", float(x), u, d) for (n, u, d), x in zip(STATE, x0))
     starts = tuple(Var(f"{n}0", "parameter", float(x), u, f"initial {d}", "fixed") for (n, u, d), x in zip(STATE, x0))
-    return (*outs, Var("lateral_accel", "output", 0.0, "m/s2", "dv/dt + u r at the start of the last step"),
-            *starts, Var("substeps", "parameter", 1.0, "", "RK4 steps per communication step (whole number)", "fixed"))
+    return (
+        *outs,
+        Var("lateral_accel", "output", 0.0, "m/s2", "dv/dt + u r at the start of the last step"),
+        *starts,
+        Var("substeps", "parameter", 1.0, "", "RK4 steps per communication step (whole number)", "fixed"),
+    )
 
 
 def nonlinear_bicycle_spec(model=None) -> ModelSpec:
@@ -40,21 +49,41 @@ def nonlinear_bicycle_spec(model=None) -> ModelSpec:
     from ego.models.nonlinear_bicycle import NonlinearBicycle
 
     model = model if model is not None else NonlinearBicycle()
-    names = (("Nw", "", "driven wheels sharing Fx"), ("rolling", "N", "rolling resistance f m g"),
-             ("m", "kg", "mass"), ("Iz", "kg.m2", "yaw moment of inertia"), ("a", "m", "CG to front axle"),
-             ("b", "m", "CG to rear axle"), ("DFzf", "N", "front peak lateral force Dy Fzf"),
-             ("DFzr", "N", "rear peak lateral force Dy Fzr"), ("F_max", "N", "rear friction circle mu m g"),
-             ("By", "", "magic formula stiffness factor (per degree of slip)"), ("Cy", "", "shape factor"),
-             ("Ey", "", "curvature factor"), ("Shy", "", "horizontal shift (deg)"), ("Svy", "N", "vertical shift"))
+    names = (
+        ("Nw", "", "driven wheels sharing Fx"),
+        ("rolling", "N", "rolling resistance f m g"),
+        ("m", "kg", "mass"),
+        ("Iz", "kg.m2", "yaw moment of inertia"),
+        ("a", "m", "CG to front axle"),
+        ("b", "m", "CG to rear axle"),
+        ("DFzf", "N", "front peak lateral force Dy Fzf"),
+        ("DFzr", "N", "rear peak lateral force Dy Fzr"),
+        ("F_max", "N", "rear friction circle mu m g"),
+        ("By", "", "magic formula stiffness factor (per degree of slip)"),
+        ("Cy", "", "shape factor"),
+        ("Ey", "", "curvature factor"),
+        ("Shy", "", "horizontal shift (deg)"),
+        ("Svy", "N", "vertical shift"),
+    )
     params = tuple(Var(n, "parameter", float(v), u, d, "fixed") for (n, u, d), v in zip(names, model._c))
-    params += (Var("slip_speed_floor", "parameter", float(model._floor), "m/s", "slip angles use at least this "
-                   "speed", "fixed"),
-               Var("abs", "parameter", float(model._abs), "", "1: friction-aware drive and brake (ABS)", "fixed"))
+    params += (
+        Var(
+            "slip_speed_floor", "parameter", float(model._floor), "m/s", "slip angles use at least this speed", "fixed"
+        ),
+        Var("abs", "parameter", float(model._abs), "", "1: friction-aware drive and brake (ABS)", "fixed"),
+    )
     return ModelSpec(
-        "nonlinear_bicycle", "ego: report 000's nonlinear bicycle (Pacejka tyres, rear friction circle)",
-        (Var("Fx", "input", 0.0, "N", "longitudinal force per driven wheel"),
-         Var("delta", "input", 0.0, "rad", "front steer angle (+ left)"), *_state_vars(model.x0), *params),
-        (FRAME_DIR / "nonlinear_bicycle.c",), extra_headers=(EGO_DIR / "_bicycle.h",))
+        "nonlinear_bicycle",
+        "ego: report 000's nonlinear bicycle (Pacejka tyres, rear friction circle)",
+        (
+            Var("Fx", "input", 0.0, "N", "longitudinal force per driven wheel"),
+            Var("delta", "input", 0.0, "rad", "front steer angle (+ left)"),
+            *_state_vars(model.x0),
+            *params,
+        ),
+        (FRAME_DIR / "nonlinear_bicycle.c",),
+        extra_headers=(EGO_DIR / "_bicycle.h",),
+    )
 
 
 def linear_bicycle_spec(model=None) -> ModelSpec:
@@ -63,23 +92,32 @@ def linear_bicycle_spec(model=None) -> ModelSpec:
 
     model = model if model is not None else DynamicBicycle()
     p = model.params
-    params = (Var("m", "parameter", p.m, "kg", "mass", "fixed"),
-              Var("Iz", "parameter", p.Iz, "kg.m2", "yaw moment of inertia", "fixed"),
-              Var("lf", "parameter", p.lf, "m", "CG to front axle", "fixed"),
-              Var("lr", "parameter", p.lr, "m", "CG to rear axle", "fixed"),
-              Var("Cf", "parameter", p.Cf, "N/rad", "front cornering stiffness per tyre (negative)", "fixed"),
-              Var("Cr", "parameter", p.Cr, "N/rad", "rear cornering stiffness per tyre (negative)", "fixed"),
-              Var("slip_speed_floor", "parameter", p.slip_speed_floor, "m/s", "slip angles use at least this "
-                  "speed", "fixed"))
+    params = (
+        Var("m", "parameter", p.m, "kg", "mass", "fixed"),
+        Var("Iz", "parameter", p.Iz, "kg.m2", "yaw moment of inertia", "fixed"),
+        Var("lf", "parameter", p.lf, "m", "CG to front axle", "fixed"),
+        Var("lr", "parameter", p.lr, "m", "CG to rear axle", "fixed"),
+        Var("Cf", "parameter", p.Cf, "N/rad", "front cornering stiffness per tyre (negative)", "fixed"),
+        Var("Cr", "parameter", p.Cr, "N/rad", "rear cornering stiffness per tyre (negative)", "fixed"),
+        Var("slip_speed_floor", "parameter", p.slip_speed_floor, "m/s", "slip angles use at least this speed", "fixed"),
+    )
     return ModelSpec(
-        "linear_bicycle", "ego: report 002's linear dynamic bicycle",
-        (Var("a_x", "input", 0.0, "m/s2", "axial acceleration"),
-         Var("delta", "input", 0.0, "rad", "front steer angle (+ left)"), *_state_vars(model.x0), *params),
-        (FRAME_DIR / "linear_bicycle.c",))
+        "linear_bicycle",
+        "ego: report 002's linear dynamic bicycle",
+        (
+            Var("a_x", "input", 0.0, "m/s2", "axial acceleration"),
+            Var("delta", "input", 0.0, "rad", "front steer angle (+ left)"),
+            *_state_vars(model.x0),
+            *params,
+        ),
+        (FRAME_DIR / "linear_bicycle.c",),
+    )
 
 
-MODELS = {"nonlinear-bicycle": (nonlinear_bicycle_spec, "report 000's nonlinear bicycle (Fx, delta)"),
-          "linear-bicycle": (linear_bicycle_spec, "report 002's linear dynamic bicycle (a_x, delta)")}
+MODELS = {
+    "nonlinear-bicycle": (nonlinear_bicycle_spec, "report 000's nonlinear bicycle (Fx, delta)"),
+    "linear-bicycle": (linear_bicycle_spec, "report 002's linear dynamic bicycle (a_x, delta)"),
+}
 
 
 def export_fmu(model: str, out: str | os.PathLike, starts: dict[str, str] | None = None) -> Path:
@@ -99,8 +137,9 @@ def export_fmu(model: str, out: str | os.PathLike, starts: dict[str, str] | None
     changed = dict(params)
     for key, text in (starts or {}).items():
         if key not in params:
-            raise ConfigError(f"unknown parameter {key!r} of {model}{did_you_mean(key, params)} (known: "
-                              f"{', '.join(params)})")
+            raise ConfigError(
+                f"unknown parameter {key!r} of {model}{did_you_mean(key, params)} (known: {', '.join(params)})"
+            )
         try:
             value = float(text)
         except ValueError:
@@ -108,6 +147,7 @@ def export_fmu(model: str, out: str | os.PathLike, starts: dict[str, str] | None
         if not math.isfinite(value):
             raise ConfigError(f"bad value for {key}: {text!r} (expected a finite number)")
         changed[key] = dataclasses.replace(params[key], start=value)
-    spec = dataclasses.replace(spec, variables=tuple(changed.get(v.name, v) if v.causality == "parameter" else v
-                                                     for v in spec.variables))
+    spec = dataclasses.replace(
+        spec, variables=tuple(changed.get(v.name, v) if v.causality == "parameter" else v for v in spec.variables)
+    )
     return build_fmu(spec, path)

@@ -68,13 +68,20 @@ def read_map_file(path: str) -> dict:
     for table in ("inputs", "outputs"):
         items = data.get(table, {})
         if not isinstance(items, dict) or not all(isinstance(v, str) for v in items.values()):
-            raise ConfigError(f"bad fmu_map {path!r}: [{table}] must hold FMU_VARIABLE = \"signal\" lines")
+            raise ConfigError(f'bad fmu_map {path!r}: [{table}] must hold FMU_VARIABLE = "signal" lines')
         out[table] = dict(items)
     return out
 
 
-def build_mapping(info: FmuInfo, observes: dict[str, str], actions: dict[str, str], name: str,
-                  map_file: str = "", *, outputs_word: str = "action") -> Mapping:
+def build_mapping(
+    info: FmuInfo,
+    observes: dict[str, str],
+    actions: dict[str, str],
+    name: str,
+    map_file: str = "",
+    *,
+    outputs_word: str = "action",
+) -> Mapping:
     """Connect ``info``'s variables to ``observes`` (signal -> unit) and ``actions``
     (action -> unit, in order). ConfigError names the FMU and the offending variable."""
     explicit = read_map_file(map_file) if map_file else {"inputs": {}, "outputs": {}}
@@ -83,22 +90,28 @@ def build_mapping(info: FmuInfo, observes: dict[str, str], actions: dict[str, st
         for var, signal in explicit[table].items():
             v = by_name.get(var)
             if v is None:
-                raise ConfigError(f"bad fmu_map for {name!r}: the FMU has no variable {var!r}"
-                                  f"{did_you_mean(var, by_name)}")
+                raise ConfigError(
+                    f"bad fmu_map for {name!r}: the FMU has no variable {var!r}{did_you_mean(var, by_name)}"
+                )
             if v.causality != causality:
-                raise ConfigError(f"bad fmu_map for {name!r}: FMU variable {var!r} is {_a(v.causality)}, "
-                                  f"not an {causality}")
+                raise ConfigError(
+                    f"bad fmu_map for {name!r}: FMU variable {var!r} is {_a(v.causality)}, not an {causality}"
+                )
             known = observes if table == "inputs" else actions
             if signal not in known:
                 what = "observation signal" if table == "inputs" else outputs_word
-                raise ConfigError(f"bad fmu_map for {name!r}: unknown {what} {signal!r} for {var!r} (known: "
-                                  f"{', '.join(known)}){did_you_mean(signal, known)}")
+                raise ConfigError(
+                    f"bad fmu_map for {name!r}: unknown {what} {signal!r} for {var!r} (known: "
+                    f"{', '.join(known)}){did_you_mean(signal, known)}"
+                )
     inputs = []
     for v in info.of("input"):
         signal = explicit["inputs"].get(v.name, v.name)
         if signal not in observes:
-            raise ConfigError(f"FMU {name!r}: input {v.name!r} is connected to no observation signal (known: "
-                              f"{', '.join(observes)}); name it in a mapping file (--set fmu_map=map.toml)")
+            raise ConfigError(
+                f"FMU {name!r}: input {v.name!r} is connected to no observation signal (known: "
+                f"{', '.join(observes)}); name it in a mapping file (--set fmu_map=map.toml)"
+            )
         _real(v, name)
         f, o = conversion(v.unit, info.units, observes[signal], f"FMU {name!r} input {v.name!r}")
         # the FMU gets fmu = (task - o) / f
@@ -110,28 +123,35 @@ def build_mapping(info: FmuInfo, observes: dict[str, str], actions: dict[str, st
         v = by_name.get(var)
         if v is None:
             outs = ", ".join(o.name for o in info.of("output")) or "none"
-            raise ConfigError(f"FMU {name!r}: no output for the {outputs_word} {action!r} ({unit}); its outputs: "
-                              f"{outs}; name it in a mapping file (--set fmu_map=map.toml)")
+            raise ConfigError(
+                f"FMU {name!r}: no output for the {outputs_word} {action!r} ({unit}); its outputs: "
+                f"{outs}; name it in a mapping file (--set fmu_map=map.toml)"
+            )
         if v.causality != "output":
-            raise ConfigError(f"FMU {name!r}: variable {var!r} for the {outputs_word} {action!r} is "
-                              f"{_a(v.causality)}, not an output")
+            raise ConfigError(
+                f"FMU {name!r}: variable {var!r} for the {outputs_word} {action!r} is {_a(v.causality)}, not an output"
+            )
         _real(v, name)
         f, o = conversion(v.unit, info.units, unit, f"FMU {name!r} output {var!r}")
         outputs.append(Link(v.name, v.vr, action, f, o))
     used = {link.fmu_name for link in outputs}
-    extras = tuple(Link(v.name, v.vr, v.name, 1.0, 0.0) for v in info.of("output")
-                   if v.name not in used and v.type in REAL_TYPES)
+    extras = tuple(
+        Link(v.name, v.vr, v.name, 1.0, 0.0) for v in info.of("output") if v.name not in used and v.type in REAL_TYPES
+    )
     units = tuple(next((x.unit for x in info.variables if x.name == e.fmu_name), "") for e in extras)
     return Mapping(tuple(inputs), tuple(outputs), extras, units)
 
 
 def _a(causality: str) -> str:
-    return {"input": "an input", "output": "an output", "parameter": "a parameter",
-            "calculatedParameter": "a calculated parameter", "independent": "the independent variable"}.get(
-        causality, f"a {causality} variable")
+    return {
+        "input": "an input",
+        "output": "an output",
+        "parameter": "a parameter",
+        "calculatedParameter": "a calculated parameter",
+        "independent": "the independent variable",
+    }.get(causality, f"a {causality} variable")
 
 
 def _real(v, name: str) -> None:
     if v.type not in REAL_TYPES:
-        raise ConfigError(f"FMU {name!r}: variable {v.name!r} is {v.type}; ego connects real (Float64) "
-                          "variables only")
+        raise ConfigError(f"FMU {name!r}: variable {v.name!r} is {v.type}; ego connects real (Float64) variables only")

@@ -107,7 +107,6 @@ def inspect_fmu(path: str | os.PathLike) -> FmuInfo:
     if info is not None:
         return info
     try:
-        import fmpy
         from fmpy import read_model_description
     except ImportError:
         raise ConfigError("FMUs need fmpy: pip install 'ego[fmi]'") from None
@@ -134,16 +133,24 @@ def inspect_fmu(path: str | os.PathLike) -> FmuInfo:
     if not (version.startswith("2") or version.startswith("3")):
         raise ConfigError(f"bad FMU {shown!r}: FMI {version} is not supported (FMI 2.0 or 3.0 co-simulation)")
     if md.coSimulation is None:
-        kinds = [k for k, a in (("model exchange", "modelExchange"), ("scheduled execution", "scheduledExecution"))
-                 if getattr(md, a, None) is not None]
-        raise ConfigError(f"bad FMU {shown!r}: {' and '.join(kinds) or 'no'} interface only; ego steps "
-                          "co-simulation FMUs (export it for co-simulation)")
+        kinds = [
+            k
+            for k, a in (("model exchange", "modelExchange"), ("scheduled execution", "scheduledExecution"))
+            if getattr(md, a, None) is not None
+        ]
+        raise ConfigError(
+            f"bad FMU {shown!r}: {' and '.join(kinds) or 'no'} interface only; ego steps "
+            "co-simulation FMUs (export it for co-simulation)"
+        )
     here = _this_platform(version)
     ident = md.coSimulation.modelIdentifier
     if here not in platforms:
         has = ", ".join(platforms) or "none (no binaries/ folder)"
-        srcs = " (it ships C sources: compile it for this platform, e.g. fmpy's compile_platform_binary)" \
-            if any(n.startswith("sources/") for n in names) else ""
+        srcs = (
+            " (it ships C sources: compile it for this platform, e.g. fmpy's compile_platform_binary)"
+            if any(n.startswith("sources/") for n in names)
+            else ""
+        )
         raise ConfigError(f"bad FMU {shown!r}: no binary for this platform ({here}); it has binaries for {has}{srcs}")
     if not any(n.startswith(f"binaries/{here}/{ident}.") for n in names):
         raise ConfigError(f"bad FMU {shown!r}: binaries/{here}/ has no {ident} library")
@@ -169,20 +176,36 @@ def inspect_fmu(path: str | os.PathLike) -> FmuInfo:
                 start = float(v.start)
             except (TypeError, ValueError):
                 start = None
-        variables.append(FmuVar(v.name, int(v.valueReference), v.type, v.causality or "local",
-                                v.variability or "continuous", start, unit, v.description or ""))
+        variables.append(
+            FmuVar(
+                v.name,
+                int(v.valueReference),
+                v.type,
+                v.causality or "local",
+                v.variability or "continuous",
+                start,
+                unit,
+                v.description or "",
+            )
+        )
     de = md.defaultExperiment
     cs = md.coSimulation
     fixed = getattr(cs, "fixedInternalStepSize", None)
     info = FmuInfo(
-        path=str(p.resolve()), digest=digest, fmi_version="3.0" if version.startswith("3") else "2.0",
-        model_name=md.modelName or ident, model_identifier=ident,
+        path=str(p.resolve()),
+        digest=digest,
+        fmi_version="3.0" if version.startswith("3") else "2.0",
+        model_name=md.modelName or ident,
+        model_identifier=ident,
         guid=(md.guid if version.startswith("2") else getattr(md, "instantiationToken", None) or md.guid) or "",
-        description=md.description or "", variables=tuple(variables), units=units,
+        description=md.description or "",
+        variables=tuple(variables),
+        units=units,
         variable_step=bool(getattr(cs, "canHandleVariableCommunicationStepSize", False)),
         fixed_step=float(fixed) if fixed not in (None, "") else None,
         default_step=float(de.stepSize) if de is not None and de.stepSize not in (None, "") else None,
-        generation_tool=md.generationTool or "")
+        generation_tool=md.generationTool or "",
+    )
     _cache[key] = info
     return info
 
@@ -194,15 +217,19 @@ def check_step(info: FmuInfo, dt: float, name: str) -> None:
     fixed = info.fixed_step or info.default_step
     if info.variable_step:
         if info.fixed_step and not _multiple(dt, info.fixed_step):
-            raise ConfigError(f"bad FMU {name!r}: its fixed internal step {info.fixed_step:g} s does not divide "
-                              f"the control period dt = {dt:g} s (set --set dt= a multiple of it)")
+            raise ConfigError(
+                f"bad FMU {name!r}: its fixed internal step {info.fixed_step:g} s does not divide "
+                f"the control period dt = {dt:g} s (set --set dt= a multiple of it)"
+            )
         return
     if fixed is None:
         return  # nothing declared: the FMU says at the first doStep
     if not _multiple(dt, fixed) if info.fixed_step else not math.isclose(dt, fixed, rel_tol=1e-9):
-        raise ConfigError(f"bad FMU {name!r}: it cannot take a communication step of dt = {dt:g} s (it takes "
-                          f"only {fixed:g} s steps: canHandleVariableCommunicationStepSize is false; "
-                          f"set --set dt={fixed:g})")
+        raise ConfigError(
+            f"bad FMU {name!r}: it cannot take a communication step of dt = {dt:g} s (it takes "
+            f"only {fixed:g} s steps: canHandleVariableCommunicationStepSize is false; "
+            f"set --set dt={fixed:g})"
+        )
 
 
 def _multiple(dt: float, step: float) -> bool:

@@ -44,11 +44,14 @@ def check_plant_fmu(path: str, map_file: str = "") -> None:
 
 def _mapping(info, commands, name, map_file, partial_inputs=False):
     observes = {c: COMMANDS[c] for c in commands}
-    mapping = build_mapping(info, observes if not partial_inputs else COMMANDS, STATE, name, map_file,
-                            outputs_word="plant output")
+    mapping = build_mapping(
+        info, observes if not partial_inputs else COMMANDS, STATE, name, map_file, outputs_word="plant output"
+    )
     if not partial_inputs and {link.signal for link in mapping.inputs} != set(observes):
-        raise ConfigError(f"plant FMU {name!r}: its inputs must take the commands {', '.join(observes)} (it takes "
-                          f"{', '.join(link.signal for link in mapping.inputs) or 'none'})")
+        raise ConfigError(
+            f"plant FMU {name!r}: its inputs must take the commands {', '.join(observes)} (it takes "
+            f"{', '.join(link.signal for link in mapping.inputs) or 'none'})"
+        )
     return mapping
 
 
@@ -57,8 +60,10 @@ def _start_vrs(info, name):
     for s, unit in STATE.items():
         v = info.var(f"{s}0")
         if v is None or v.causality != "parameter":
-            raise ConfigError(f"plant FMU {name!r}: no parameter {s}0 for the initial {s} (a plant FMU takes its "
-                              "start state as parameters X0, u0, Y0, v0, psi0, r0; ego export-fmu writes them)")
+            raise ConfigError(
+                f"plant FMU {name!r}: no parameter {s}0 for the initial {s} (a plant FMU takes its "
+                "start state as parameters X0, u0, Y0, v0, psi0, r0; ego export-fmu writes them)"
+            )
         f, o = conversion(v.unit, info.units, unit, f"plant FMU {name!r} parameter {s}0")
         out.append((v.vr, f, o))
     return out
@@ -115,12 +120,15 @@ class FmuPlant:
         command, delta = self._apply(action[0], action[1], x[1], self.applied[1], self.dt)
         self.applied = (command, delta)
         (l0, l1) = self._in
-        out = self.cosim.exchange(((command - l0.offset) / l0.factor, (delta - l1.offset) / l1.factor),
-                                  self._k * self.dt, self.dt)
+        out = self.cosim.exchange(
+            ((command - l0.offset) / l0.factor, (delta - l1.offset) / l1.factor), self._k * self.dt, self.dt
+        )
         self._k += 1
         state = tuple(out[i] * f + o for i, (f, o) in enumerate(self._out))
         if not all(math.isfinite(s) for s in state):
-            raise FmuError(f"plant FMU {self.info.model_name}: its state is not finite at t = {self._k * self.dt:.3f} s")
+            raise FmuError(
+                f"plant FMU {self.info.model_name}: its state is not finite at t = {self._k * self.dt:.3f} s"
+            )
         if self._lat is not None:
             self.lateral_accel = out[6] * self._lat[0] + self._lat[1]
         else:  # dv/dt + u r over the step
@@ -136,7 +144,15 @@ def replace_plant(scenario) -> None:
     c = scenario.config
     base = scenario.ego
     if base is None or tuple(getattr(base, "state_names", ())) != ("X", "U", "Y", "V", "PSI", "R"):
-        raise ConfigError(f"--set plant= replaces a bicycle plant; the {scenario.name} scenario has none "
-                          "(motorway and curve scenarios have)")
-    scenario.ego = FmuPlant(c.plant, c.plant_map, base, c.dt, substeps=getattr(c, "substeps", 1),
-                            on_log=lambda level, cat, msg: scenario.event("fmu", f"plant: {msg}", level))
+        raise ConfigError(
+            f"--set plant= replaces a bicycle plant; the {scenario.name} scenario has none "
+            "(motorway and curve scenarios have)"
+        )
+    scenario.ego = FmuPlant(
+        c.plant,
+        c.plant_map,
+        base,
+        c.dt,
+        substeps=getattr(c, "substeps", 1),
+        on_log=lambda level, cat, msg: scenario.event("fmu", f"plant: {msg}", level),
+    )

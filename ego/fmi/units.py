@@ -39,8 +39,15 @@ _BASE: dict[str, Unit] = {
     "1": ({}, 1.0, 0.0),
     "-": ({}, 1.0, 0.0),
 }
-_ALIASES = {"kph": "km/h", "km/hr": "km/h", "mps": "m/s", "degree": "deg", "degrees": "deg", "rpm": "rev/min",
-            "rev": "rev"}
+_ALIASES = {
+    "kph": "km/h",
+    "km/hr": "km/h",
+    "mps": "m/s",
+    "degree": "deg",
+    "degrees": "deg",
+    "rpm": "rev/min",
+    "rev": "rev",
+}
 _BASE["rev"] = ({"rad": 1}, 2.0 * math.pi, 0.0)
 
 
@@ -64,7 +71,7 @@ def parse(text: str) -> Unit | None:
                 return None
             e = int(m.group(2) or 1) * sign
             base, f, _ = _BASE[m.group(1)]
-            factor *= f ** e
+            factor *= f**e
             for k, x in base.items():
                 exps[k] = exps.get(k, 0) + x * e
     return {k: e for k, e in exps.items() if e}, factor, 0.0
@@ -93,15 +100,16 @@ def conversion(fmu_unit_name: str, definitions: dict, task_unit: str, what: str)
     fu = fmu_unit(fmu_unit_name, definitions)
     tu = parse(task_unit)
     if fu is None:
-        raise ConfigError(f"{what}: unit {fmu_unit_name!r} is not defined in the FMU's UnitDefinitions and "
-                          f"is not a unit ego knows (expected something convertible to {task_unit})")
+        raise ConfigError(
+            f"{what}: unit {fmu_unit_name!r} is not defined in the FMU's UnitDefinitions and "
+            f"is not a unit ego knows (expected something convertible to {task_unit})"
+        )
     if tu is None:  # a task unit ego does not parse (should not happen): only the same name passes
         if fmu_unit_name == task_unit:
             return 1.0, 0.0
         raise ConfigError(f"{what}: cannot convert {fmu_unit_name!r} to {task_unit!r}")
     if not _same(fu[0], tu[0]):
-        raise ConfigError(f"{what}: unit {fmu_unit_name!r} cannot be converted to {task_unit!r} "
-                          "(different dimensions)")
+        raise ConfigError(f"{what}: unit {fmu_unit_name!r} cannot be converted to {task_unit!r} (different dimensions)")
     # SI = f_f * x + o_f ; task = (SI - o_t) / f_t
     factor = fu[1] / tu[1]
     offset = (fu[2] - tu[2]) / tu[1]

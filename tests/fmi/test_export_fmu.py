@@ -23,8 +23,9 @@ def step_with_fmpy(path, inputs, commands, dt, substeps):
     folder = extract(path)
     try:
         vr = {v.name: v.valueReference for v in md.modelVariables}
-        fmu = FMU2Slave(guid=md.guid, unzipDirectory=folder, modelIdentifier=md.coSimulation.modelIdentifier,
-                        instanceName="check")
+        fmu = FMU2Slave(
+            guid=md.guid, unzipDirectory=folder, modelIdentifier=md.coSimulation.modelIdentifier, instanceName="check"
+        )
         fmu.instantiate()
         fmu.setupExperiment(startTime=0.0)
         fmu.setReal([vr["substeps"]], [float(substeps)])
@@ -43,14 +44,18 @@ def step_with_fmpy(path, inputs, commands, dt, substeps):
 
 
 @pytest.mark.parametrize("substeps", [1, 4])
-@pytest.mark.parametrize("name,model,inputs,scale", [
-    ("nonlinear-bicycle", NonlinearBicycle, ("Fx", "delta"), 3000.0),
-    ("linear-bicycle", DynamicBicycle, ("a_x", "delta"), 3.0),
-])
+@pytest.mark.parametrize(
+    "name,model,inputs,scale",
+    [
+        ("nonlinear-bicycle", NonlinearBicycle, ("Fx", "delta"), 3000.0),
+        ("linear-bicycle", DynamicBicycle, ("a_x", "delta"), 3.0),
+    ],
+)
 def test_the_exported_fmu_steps_as_egos_model(tmp_path, name, model, inputs, scale, substeps):
     out = tmp_path / f"{name}.fmu"
-    proc = subprocess.run([sys.executable, "-m", "ego", "export-fmu", name, "--out", str(out)], capture_output=True,
-                          text=True)
+    proc = subprocess.run(
+        [sys.executable, "-m", "ego", "export-fmu", name, "--out", str(out)], capture_output=True, text=True
+    )
     assert proc.returncode == 0, proc.stderr
     rng = random.Random(7)
     commands = [(rng.uniform(-scale, scale), rng.uniform(-0.12, 0.12)) for _ in range(400)]
@@ -74,13 +79,18 @@ def test_the_sources_inside_compile_on_their_own(tmp_path):
     src = tmp_path / "x" / "sources"
     assert set(listed) <= {p.name for p in src.iterdir()}
     cc = shutil.which("cc") or shutil.which("gcc")
-    proc = subprocess.run([cc, "-shared", "-fPIC", "-I", str(src), "-o", str(tmp_path / "b.so"),
-                           *(str(src / n) for n in listed), "-lm"], capture_output=True, text=True)
+    proc = subprocess.run(
+        [cc, "-shared", "-fPIC", "-I", str(src), "-o", str(tmp_path / "b.so"), *(str(src / n) for n in listed), "-lm"],
+        capture_output=True,
+        text=True,
+    )
     assert proc.returncode == 0, proc.stderr
 
 
 def test_bad_export_arguments_are_one_line(tmp_path):
-    for args, expected in ((["bicycle", "--out", str(tmp_path / "b.fmu")], "unknown model 'bicycle'"),
-                           (["linear-bicycle", "--out", str(tmp_path / "b.zip")], "expected a file ending in .fmu")):
+    for args, expected in (
+        (["bicycle", "--out", str(tmp_path / "b.fmu")], "unknown model 'bicycle'"),
+        (["linear-bicycle", "--out", str(tmp_path / "b.zip")], "expected a file ending in .fmu"),
+    ):
         proc = subprocess.run([sys.executable, "-m", "ego", "export-fmu", *args], capture_output=True, text=True)
         assert proc.returncode == 2 and proc.stderr.count("\n") == 1 and expected in proc.stderr

@@ -23,8 +23,9 @@ def md_edit(f):
 
 
 def ego_error(*args) -> str:
-    proc = subprocess.run([sys.executable, "-m", "ego", "run", "emergency-brake", *args],
-                          capture_output=True, text=True, timeout=120)
+    proc = subprocess.run(
+        [sys.executable, "-m", "ego", "run", "emergency-brake", *args], capture_output=True, text=True, timeout=120
+    )
     assert proc.returncode == 2, proc.stderr
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("ego: error: "), proc.stderr
@@ -59,8 +60,10 @@ def test_fmi_1(fmus, tmp_path):
 
 def test_model_exchange_only(fmus, tmp_path):
     def me(text):
-        return re.sub(r"<CoSimulation.*?</CoSimulation>", '<ModelExchange modelIdentifier="pid_tracking"/>', text,
-                      flags=re.S)
+        return re.sub(
+            r"<CoSimulation.*?</CoSimulation>", '<ModelExchange modelIdentifier="pid_tracking"/>', text, flags=re.S
+        )
+
     bad = rewrite(fmus["pid"], tmp_path / "c.fmu", md_edit(me))
     assert "model exchange interface only; ego steps co-simulation FMUs" in ego_error("-c", bad)
 
@@ -70,6 +73,7 @@ def test_windows_only(fmus, tmp_path):
         if name.startswith("binaries/"):
             return "binaries/win64/pid_tracking.dll", data
         return None if name.startswith("sources/") else (name, data)
+
     bad = rewrite(fmus["pid"], tmp_path / "c.fmu", win)
     assert "no binary for this platform (linux64); it has binaries for win64" in ego_error("-c", bad)
 
@@ -79,13 +83,16 @@ def test_missing_output_names_the_outputs(fmus):
     assert "no output for the action 'Fx' (N); its outputs: force, steer; name it in a mapping file" in msg
 
 
-@pytest.mark.parametrize("mapping,expected", [
-    ('[outputs]\nhold_fx = "Fx"\n', "FMU variable 'hold_fx' is a parameter, not an output"),
-    ('[outputs]\nforce = "Fz"\n', "unknown action 'Fz' for 'force' (known: Fx, delta)"),
-    ('[outputs]\nforcee = "Fx"\n', "the FMU has no variable 'forcee'; did you mean 'force'?"),
-    ('[outputs]\nforce = "delta"\nsteer = "Fx"\n', "unit 'deg' cannot be converted to 'N' (different dimensions)"),
-    ('[links]\n', "unknown table 'links' (expected [inputs] and [outputs])"),
-])
+@pytest.mark.parametrize(
+    "mapping,expected",
+    [
+        ('[outputs]\nhold_fx = "Fx"\n', "FMU variable 'hold_fx' is a parameter, not an output"),
+        ('[outputs]\nforce = "Fz"\n', "unknown action 'Fz' for 'force' (known: Fx, delta)"),
+        ('[outputs]\nforcee = "Fx"\n', "the FMU has no variable 'forcee'; did you mean 'force'?"),
+        ('[outputs]\nforce = "delta"\nsteer = "Fx"\n', "unit 'deg' cannot be converted to 'N' (different dimensions)"),
+        ("[links]\n", "unknown table 'links' (expected [inputs] and [outputs])"),
+    ],
+)
 def test_bad_mappings(fmus, tmp_path, mapping, expected):
     path = tmp_path / "map.toml"
     path.write_text(mapping)
@@ -104,14 +111,16 @@ def test_a_step_the_fmu_cannot_take(fmus):
 
 
 def test_unknown_and_bad_parameters(fmus):
-    assert "unknown parameter 'fmu.kp_la'; did you mean 'fmu.kp_lat'?" in ego_error("-c", fmus["pid"], "--set",
-                                                                                   "fmu.kp_la=1")
+    assert "unknown parameter 'fmu.kp_la'; did you mean 'fmu.kp_lat'?" in ego_error(
+        "-c", fmus["pid"], "--set", "fmu.kp_la=1"
+    )
     assert "bad value for fmu.kp_lat: 'x' (expected a number" in ego_error("-c", fmus["pid"], "--set", "fmu.kp_lat=x")
 
 
 def test_wrong_task(fmus):
-    proc = subprocess.run([sys.executable, "-m", "ego", "run", "curve", "-c", fmus["pid"]], capture_output=True,
-                          text=True, timeout=120)
+    proc = subprocess.run(
+        [sys.executable, "-m", "ego", "run", "curve", "-c", fmus["pid"]], capture_output=True, text=True, timeout=120
+    )
     assert proc.returncode == 2
     assert "input 's_ref' is connected to no observation signal" not in proc.stderr  # s_ref is a curve signal too
     assert "no output for the action 'a_x'" in proc.stderr

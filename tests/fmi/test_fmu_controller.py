@@ -31,8 +31,9 @@ def same(a: dict, b: dict, rel: float = 1e-9) -> None:
             assert a[k] == b[k], k
 
 
-@pytest.mark.parametrize("scenario,fmu", [("emergency-brake", "pid"), ("cut-in", "pid"), ("curve", "pid_curve"),
-                                          ("emergency-brake", "pid3")])
+@pytest.mark.parametrize(
+    "scenario,fmu", [("emergency-brake", "pid"), ("cut-in", "pid"), ("curve", "pid_curve"), ("emergency-brake", "pid3")]
+)
 def test_pid_as_an_fmu_gives_the_builtin_pids_metrics(fmus, scenario, fmu):
     builtin = metrics(RunSpec(scenario, "pid"))
     assert builtin["status"] in ("completed", "ended")
@@ -42,8 +43,7 @@ def test_pid_as_an_fmu_gives_the_builtin_pids_metrics(fmus, scenario, fmu):
 def test_fmu_parameters_are_set_like_the_builtin_ones(fmus):
     over = {"duration": 8.0}
     builtin = metrics(RunSpec("emergency-brake", "pid", overrides={**over, "kp_lat": 0.02, "kd_lon": 1200.0}))
-    fmu = metrics(RunSpec("emergency-brake", fmus["pid"], overrides={**over, "fmu.kp_lat": 0.02,
-                                                                     "fmu.kd_lon": "1200"}))
+    fmu = metrics(RunSpec("emergency-brake", fmus["pid"], overrides={**over, "fmu.kp_lat": 0.02, "fmu.kd_lon": "1200"}))
     same(builtin, fmu)
     assert fmu != metrics(RunSpec("emergency-brake", fmus["pid"], overrides=over))
 
@@ -56,23 +56,38 @@ def test_a_mapping_file_connects_other_names_and_units(fmus, tmp_path):
     mapping = tmp_path / "map.toml"
     mapping.write_text('[outputs]\nforce = "Fx"\nsteer = "delta"\n')
     over = {"duration": 4.0}
-    renamed = metrics(RunSpec("emergency-brake", fmus["renamed"], overrides={**over, "fmu_map": str(mapping),
-                                                                             "fmu.hold_fx": 0.25}))
+    renamed = metrics(
+        RunSpec("emergency-brake", fmus["renamed"], overrides={**over, "fmu_map": str(mapping), "fmu.hold_fx": 0.25})
+    )
     # the same command in N from the other FMU: 0.25 kN = 250 N
-    plain = metrics(RunSpec("emergency-brake", fmus["error"], overrides={**over, "fmu.fail_step": 1e9,
-                                                                         "fmu.hold_fx": 250.0}))
+    plain = metrics(
+        RunSpec("emergency-brake", fmus["error"], overrides={**over, "fmu.fail_step": 1e9, "fmu.hold_fx": 250.0})
+    )
     same(plain, renamed)
 
 
-@pytest.mark.parametrize("fmu,detail", [
-    ("error", "FMU error_at_step (doStep at t = 0.300 s): error: actuator model diverged at t = 0.30 s (step 30)"),
-    ("nan", "FMU nan_output: output 'delta' (delta) is nan at t = 0.300 s (step 30)"),
-    ("error3", "FMU error_at_step3 (doStep at t = 0.300 s): error: actuator model diverged at t = 0.30 s (step 30)"),
-])
+@pytest.mark.parametrize(
+    "fmu,detail",
+    [
+        ("error", "FMU error_at_step (doStep at t = 0.300 s): error: actuator model diverged at t = 0.30 s (step 30)"),
+        ("nan", "FMU nan_output: output 'delta' (delta) is nan at t = 0.300 s (step 30)"),
+        (
+            "error3",
+            "FMU error_at_step3 (doStep at t = 0.300 s): error: actuator model diverged at t = 0.30 s (step 30)",
+        ),
+    ],
+)
 def test_a_faulty_fmu_ends_the_run_as_error_with_its_message(fmus, fmu, detail, tmp_path):
     before = set(os.listdir(tempfile.gettempdir()))
-    result = run(RunSpec("emergency-brake", fmus[fmu], overrides={"fmu.fail_step": 30},
-                         record=str(tmp_path / "r.rrd"), background_recording=False))
+    result = run(
+        RunSpec(
+            "emergency-brake",
+            fmus[fmu],
+            overrides={"fmu.fail_step": 30},
+            record=str(tmp_path / "r.rrd"),
+            background_recording=False,
+        )
+    )
     assert (result.status, result.metrics["status_detail"]) == ("error", detail)
     assert result.metrics["steps"] == 30 if fmu != "nan" else 31
     fmu_events = [e for e in result.events if e.kind == "fmu"]
@@ -85,8 +100,22 @@ def test_a_faulty_fmu_ends_the_run_as_error_with_its_message(fmus, fmu, detail, 
 
 
 def test_the_cli_reports_an_fmu_error_as_status_error(fmus, tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "ego", "run", "emergency-brake", "-c", fmus["error"],
-                           "--set", "fmu.fail_step=10", "--json"], capture_output=True, text=True)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "ego",
+            "run",
+            "emergency-brake",
+            "-c",
+            fmus["error"],
+            "--set",
+            "fmu.fail_step=10",
+            "--json",
+        ],
+        capture_output=True,
+        text=True,
+    )
     out = json.loads(proc.stdout)
     assert proc.returncode == 1 and out["status"] == "error"
     assert "actuator model diverged at t = 0.10 s" in out["status_detail"]
@@ -120,9 +149,24 @@ def test_ctrl_c_ends_the_run_and_frees_the_fmu(fmus, tmp_path):
 
     env = dict(os.environ, TMPDIR=str(tmp_path))
     for presses in (1, 2):
-        proc = subprocess.Popen([sys.executable, "-m", "ego", "run", "sine-tracking", "-c", fmus["pid"],
-                                 "--set", "duration=3600", "--json"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                text=True, env=env)
+        proc = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "ego",
+                "run",
+                "sine-tracking",
+                "-c",
+                fmus["pid"],
+                "--set",
+                "duration=3600",
+                "--json",
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=env,
+        )
         deadline = time.monotonic() + 120
         while not any(p.name.startswith("ego-fmu-") for p in tmp_path.iterdir()):
             assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()

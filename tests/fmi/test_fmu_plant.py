@@ -16,8 +16,9 @@ DROP = ("wall_time", "controller", "real_time_factor")
 def export(tmp_path, model, *sets):
     out = tmp_path / f"{model}.fmu"
     args = [a for s in sets for a in ("--set", s)]
-    subprocess.run([sys.executable, "-m", "ego", "export-fmu", model, "--out", str(out), *args], check=True,
-                   capture_output=True)
+    subprocess.run(
+        [sys.executable, "-m", "ego", "export-fmu", model, "--out", str(out), *args], check=True, capture_output=True
+    )
     return str(out)
 
 
@@ -55,11 +56,12 @@ def ego_error(*args):
 def test_plant_fmus_are_checked_before_anything_runs(tmp_path, fmus):
     # a controller FMU is no plant: its inputs are not the plant's commands
     assert "input 's_ref' is connected to no observation signal (known: Fx, a_x, delta)" in ego_error(
-        "emergency-brake", "-c", "pid", "--set", f"plant={fmus['pid']}")
+        "emergency-brake", "-c", "pid", "--set", f"plant={fmus['pid']}"
+    )
     # outputs named otherwise need a mapping
-    assert "no output for the plant output 'X'" in ego_error("emergency-brake", "-c", "pid", "--set",
-                                                           f"plant={fmus['error']}")
+    assert "no output for the plant output 'X'" in ego_error(
+        "emergency-brake", "-c", "pid", "--set", f"plant={fmus['error']}"
+    )
     assert "plant_map needs plant" in ego_error("emergency-brake", "-c", "pid", "--set", "plant_map=m.toml")
     # lane centring has a plant parameter of its own (its model)
-    assert "bad value for plant" in ego_error("lane-centering", "-c", "cascade-pid", "--set",
-                                              f"plant={fmus['pid']}")
+    assert "bad value for plant" in ego_error("lane-centering", "-c", "cascade-pid", "--set", f"plant={fmus['pid']}")

@@ -11,7 +11,6 @@ import sys
 
 import pyarrow.parquet as pq
 import pytest
-
 from process_group import survivors
 
 pytestmark = pytest.mark.sumo
@@ -61,16 +60,37 @@ def plugin_env(tmp_path_factory):
     (root / "src" / "pyproject.toml").write_text(PYPROJECT)
     (pkg / "__init__.py").write_text(MODULE)
     site = root / "site"
-    subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--no-build-isolation", "--no-index",
-                    "--target", str(site), str(root / "src")], check=True, capture_output=True)
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "install",
+            "-q",
+            "--no-deps",
+            "--no-build-isolation",
+            "--no-index",
+            "--target",
+            str(site),
+            str(root / "src"),
+        ],
+        check=True,
+        capture_output=True,
+    )
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join(p for p in (str(site), env.get("PYTHONPATH", "")) if p)
     return env
 
 
 def ego(env, *args):
-    proc = subprocess.Popen([sys.executable, "-m", "ego", *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, start_new_session=True, env=env)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "ego", *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        env=env,
+    )
     out, err = proc.communicate(timeout=600)
     return subprocess.CompletedProcess(proc.args, proc.returncode, out, err), survivors(proc.pid)
 
@@ -93,8 +113,19 @@ def test_ego_list_and_run_find_the_plugins(plugin_env):
 
 
 def test_compare_jobs_2_runs_the_plugin_in_its_workers(plugin_env, tmp_path):
-    proc, left = ego(plugin_env, "compare", "demo-brake", "--controllers", "pid,demo-pid", "--jobs", "2",
-                     "--set", "duration=4", "--out", str(tmp_path / "cmp"))
+    proc, left = ego(
+        plugin_env,
+        "compare",
+        "demo-brake",
+        "--controllers",
+        "pid,demo-pid",
+        "--jobs",
+        "2",
+        "--set",
+        "duration=4",
+        "--out",
+        str(tmp_path / "cmp"),
+    )
     assert proc.returncode == 0, proc.stderr  # every run gave a result
     assert not left
     rows = {r["controller"]: r for r in csv.DictReader(open(tmp_path / "cmp" / "metrics.csv"))}
@@ -105,13 +136,28 @@ def test_compare_jobs_2_runs_the_plugin_in_its_workers(plugin_env, tmp_path):
 def test_sweep_on_ray_runs_the_plugin_in_its_workers(plugin_env, tmp_path):
     spec = tmp_path / "sweep.toml"
     spec.write_text('scenario = "demo-brake"\ncontrollers = ["demo-pid", "pid"]\nseeds = 2\n[set]\nduration = 3\n')
-    proc, left = ego(plugin_env, "sweep", str(spec), "--engine", "ray", "--jobs", "2", "--record", "none",
-                     "--out", str(tmp_path / "sw"))
+    proc, left = ego(
+        plugin_env,
+        "sweep",
+        str(spec),
+        "--engine",
+        "ray",
+        "--jobs",
+        "2",
+        "--record",
+        "none",
+        "--out",
+        str(tmp_path / "sw"),
+    )
     assert proc.returncode == 0, proc.stderr
     assert not left
     rows = pq.read_table(tmp_path / "sw" / "results.parquet").to_pylist()
     assert sorted((r["controller"], r["seed"]) for r in rows if r["status"] != "error") == [
-        ("demo-pid", 0), ("demo-pid", 1), ("pid", 0), ("pid", 1)]
+        ("demo-pid", 0),
+        ("demo-pid", 1),
+        ("pid", 0),
+        ("pid", 1),
+    ]
     by = {(r["controller"], r["seed"]): (r["status"], r["min_gap_front"]) for r in rows}
     assert by[("demo-pid", 0)] == by[("pid", 0)] and by[("demo-pid", 1)] == by[("pid", 1)]
 

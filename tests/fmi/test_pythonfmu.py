@@ -20,7 +20,9 @@ def law(p, s_ref, ds_ref, s, ds, d_ref, dd_ref, d, dd):
 GAINS = {"kp_lon": 800.0, "kd_lon": 1500.0, "kp_lat": 0.01, "kd_lat": 0.02}
 '''
 
-SLAVE = LAW + '''
+SLAVE = (
+    LAW
+    + '''
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
 
 INPUTS = ("s_ref", "ds_ref", "s", "ds", "d_ref", "dd_ref", "d", "dd")
@@ -50,8 +52,11 @@ class PdFmu(Fmi2Slave):
         self.Fx, self.delta = law(p, *(getattr(self, name) for name in INPUTS))
         return True
 '''
+)
 
-CLASS = LAW + '''
+CLASS = (
+    LAW
+    + '''
 from ego.control.base import Observation
 
 
@@ -72,13 +77,17 @@ class Pd:
     def signals(self):
         return {}
 '''
+)
 
 
 def test_a_pythonfmu_fmu_drives_like_the_same_law_as_a_class(tmp_path):
     (tmp_path / "pd_fmu.py").write_text(SLAVE)
     (tmp_path / "pd.py").write_text(CLASS)
-    proc = subprocess.run([sys.executable, "-m", "pythonfmu", "build", "-f", str(tmp_path / "pd_fmu.py"),
-                           "--dest", str(tmp_path)], capture_output=True, text=True)
+    proc = subprocess.run(
+        [sys.executable, "-m", "pythonfmu", "build", "-f", str(tmp_path / "pd_fmu.py"), "--dest", str(tmp_path)],
+        capture_output=True,
+        text=True,
+    )
     assert proc.returncode == 0, proc.stderr
     fmu = tmp_path / "PdFmu.fmu"
     over = {"duration": 6.0}

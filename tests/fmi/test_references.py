@@ -12,11 +12,10 @@ import tempfile
 
 import pyarrow.parquet as pq
 import pytest
+from process_group import survivors
 
 from ego.params import ConfigError
 from ego.runner import RunSpec, run
-
-from process_group import survivors
 
 pytestmark = pytest.mark.sumo
 
@@ -58,12 +57,15 @@ def test_a_files_class_and_a_modules_class_are_controllers(user_file, monkeypatc
     assert metrics(RunSpec("emergency-brake", "my_controllers:MyPID", overrides=over)) == builtin
 
 
-@pytest.mark.parametrize("ref,expected", [
-    ("{f}:Broken", "class Broken has no reset, step, signals"),
-    ("{f}:Nope", "has no 'Nope'"),
-    ("nowhere/file.py:X", "no file 'nowhere/file.py'"),
-    ("no_such_module_xyz:X", "cannot import 'no_such_module_xyz'"),
-])
+@pytest.mark.parametrize(
+    "ref,expected",
+    [
+        ("{f}:Broken", "class Broken has no reset, step, signals"),
+        ("{f}:Nope", "has no 'Nope'"),
+        ("nowhere/file.py:X", "no file 'nowhere/file.py'"),
+        ("no_such_module_xyz:X", "cannot import 'no_such_module_xyz'"),
+    ],
+)
 def test_bad_references_are_config_errors(user_file, ref, expected):
     with pytest.raises(ConfigError, match=expected):
         run(RunSpec("emergency-brake", ref.format(f=user_file)))
@@ -76,18 +78,35 @@ def test_a_class_for_another_task_is_refused(user_file):
 
 def ego(*args, cwd=None, timeout=600):
     """An ego command in a session of its own; (completed process, leftover processes)."""
-    proc = subprocess.Popen([sys.executable, "-m", "ego", *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, start_new_session=True, cwd=cwd)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "ego", *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        cwd=cwd,
+    )
     out, err = proc.communicate(timeout=timeout)
     return subprocess.CompletedProcess(proc.args, proc.returncode, out, err), survivors(proc.pid)
 
 
 def test_compare_jobs_2_with_a_file_class_and_fmus(user_file, fmus, tmp_path):
     before = {n for n in os.listdir(tempfile.gettempdir()) if n.startswith("ego-fmu-")}
-    controllers = ",".join(["pid", f"{user_file}:MyPID", fmus["pid"], f"{fmus['pid']}@fmu.kp_lat=0.02",
-                            fmus["error"]])
-    proc, left = ego("compare", "emergency-brake", "--controllers", controllers, "--jobs", "2", "--set",
-                     "duration=4", "--set", "fmu.fail_step=20", "--out", str(tmp_path / "cmp"))
+    controllers = ",".join(["pid", f"{user_file}:MyPID", fmus["pid"], f"{fmus['pid']}@fmu.kp_lat=0.02", fmus["error"]])
+    proc, left = ego(
+        "compare",
+        "emergency-brake",
+        "--controllers",
+        controllers,
+        "--jobs",
+        "2",
+        "--set",
+        "duration=4",
+        "--set",
+        "fmu.fail_step=20",
+        "--out",
+        str(tmp_path / "cmp"),
+    )
     assert proc.returncode == 1, proc.stderr  # one controller's runs ended in error
     assert not left
     rows = {r["controller"]: r for r in csv.DictReader(open(tmp_path / "cmp" / "metrics.csv"))}
@@ -105,10 +124,13 @@ def test_sweep_with_a_file_class_and_fmus(user_file, fmus, tmp_path, engine):
     before = {n for n in os.listdir(tempfile.gettempdir()) if n.startswith("ego-fmu-")}
     spec = tmp_path / "sweep.toml"
     names = ["pid", f"{user_file}:MyPID", fmus["pid"], fmus["error"]]
-    spec.write_text(f"scenario = \"emergency-brake\"\ncontrollers = {json.dumps(names)}\nseeds = 1\n"
-                    "[set]\nduration = 3\n[grid]\nego_speed = [20, 25]\n")
-    proc, left = ego("sweep", str(spec), "--engine", engine, "--jobs", "2", "--record", "none",
-                     "--out", str(tmp_path / "sw"))
+    spec.write_text(
+        f'scenario = "emergency-brake"\ncontrollers = {json.dumps(names)}\nseeds = 1\n'
+        "[set]\nduration = 3\n[grid]\nego_speed = [20, 25]\n"
+    )
+    proc, left = ego(
+        "sweep", str(spec), "--engine", engine, "--jobs", "2", "--record", "none", "--out", str(tmp_path / "sw")
+    )
     assert proc.returncode == 1, proc.stderr  # the faulty FMU's runs are errors; the sweep went on
     assert not left
     by = {}
@@ -126,8 +148,10 @@ def test_sweep_with_a_file_class_and_fmus(user_file, fmus, tmp_path, engine):
 
 def test_an_fmu_parameter_is_swept_like_any_other(fmus, tmp_path):
     spec = tmp_path / "sweep.toml"
-    spec.write_text(f"scenario = \"emergency-brake\"\ncontrollers = [\"{fmus['pid']}\"]\nseeds = 1\n"
-                    "[set]\nduration = 5\n[grid]\n\"fmu.kp_lat\" = [0.01, 0.02]\n")
+    spec.write_text(
+        f'scenario = "emergency-brake"\ncontrollers = ["{fmus["pid"]}"]\nseeds = 1\n'
+        '[set]\nduration = 5\n[grid]\n"fmu.kp_lat" = [0.01, 0.02]\n'
+    )
     proc, left = ego("sweep", str(spec), "--jobs", "2", "--record", "none", "--out", str(tmp_path / "sw"))
     assert proc.returncode == 0, proc.stderr
     rows = {r["fmu.kp_lat"]: r for r in pq.read_table(tmp_path / "sw" / "results.parquet").to_pylist()}
