@@ -186,6 +186,9 @@ def resolve(spec: RunSpec) -> ResolvedRun:
     if rest:
         raise unknown_parameter(next(iter(rest)), parameter_namespace(cls, [ctrl.name]))
     cls.check_config(config)
+    check = getattr(ctrl_params, "check", None)  # parameters that check themselves as a whole (an FMU's mapping)
+    if check is not None:
+        check()
     _check_outputs(spec)
     return ResolvedRun(spec, cls, config, ctrl, ctrl_params)
 

@@ -52,6 +52,7 @@ COMMANDS = {
     "list": "ego.cli.catalogue",
     "train": "ego.cli.train",
     "tune": "ego.cli.tune",
+    "export-fmu": "ego.cli.export_fmu",
 }
 
 

@@ -11,6 +11,12 @@ from ego.params import describe
 
 
 def command(args: Any) -> int:
+    if args.reference:
+        from ego.plugins import describe_reference, print_reference
+
+        ref = describe_reference(args.reference)
+        print(json.dumps(ref, indent=2)) if args.json else print_reference(ref)
+        return EXIT_OK
     cat = catalogue()
     if args.json:
         print(json.dumps(cat, indent=2))
@@ -26,9 +32,12 @@ def catalogue() -> dict:
     reports (with its unit, and whether ``ego compare``'s table shows it) and its trace
     columns for the default configuration (the controller's signals follow, unitless)."""
     from ego.control import CONTROLLERS, TASKS
+    from ego.plugins import load_plugins
     from ego.runner import declared_columns
     from ego.scenarios import SCENARIOS
     from ego.scenarios.base import COMMON_METRICS, COMMON_TAIL_METRICS
+
+    load_plugins()
 
     def params(cls) -> list[dict]:
         return [

@@ -11,8 +11,10 @@ from ego.highway_env import BACKENDS
 
 def controllers_help() -> str:
     from ego.control import CONTROLLERS
+    from ego.plugins import load_plugins
     from ego.scenarios import SCENARIOS
 
+    load_plugins()
     parts = []
     for task, specs in CONTROLLERS.items():
         scen = [n for n, c in SCENARIOS.items() if c.task == task]
@@ -55,7 +57,8 @@ def parser() -> argparse.ArgumentParser:
     )
     run.add_argument("scenario", metavar="SCENARIO", help=f"one of: {', '.join(SCENARIOS)}")
     run.add_argument("--controller", "-c", required=True, metavar="NAME",
-                     help=f"one of: {controllers_help()}")
+                     help=f"one of: {controllers_help()}; or a reference: package.module:Class, "
+                          "path/to/file.py:Class or path/to/controller.fmu (docs/fmi.md)")
     run.add_argument("--record", metavar="PATH", help="write a Rerun recording (.rrd) here")
     run.add_argument("--seed", type=int, default=0, metavar="N",
                      help="seed of the traffic and of SUMO (default 0)")
@@ -137,10 +140,23 @@ def parser() -> argparse.ArgumentParser:
     lst = sub.add_parser("list", help="scenarios, controllers and every parameter",
                          description="List scenarios, controllers and every parameter with "
                                      "its default and unit.")
+    lst.add_argument("reference", nargs="?", metavar="CONTROLLER",
+                     help="a controller reference (path/to/controller.fmu, module:Class, file.py:Class): "
+                          "its variables, the tasks it drives and its parameters")
     lst.add_argument("--json", action="store_true", help="print JSON instead of text")
     lst.add_argument("--markdown", action="store_true",
                      help="print every parameter's default, unit and allowed values as Markdown tables "
                           "(the reference in docs/inputs.md)")
+
+    exf = sub.add_parser(
+        "export-fmu", help="write one of ego's vehicle models as an FMI 2.0 co-simulation FMU",
+        description="Write ego's vehicle model as an FMI 2.0 co-simulation FMU with its C sources "
+                    "(compiled here with the system C compiler; see docs/fmi.md).",
+        epilog="Example: ego export-fmu nonlinear-bicycle --out runs/bicycle.fmu")
+    exf.add_argument("model", metavar="MODEL", help="nonlinear-bicycle (report 000) or linear-bicycle (report 002)")
+    exf.add_argument("--out", required=True, metavar="FILE.fmu", help="the FMU to write")
+    exf.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                     help="a parameter's start value in the FMU (repeatable), e.g. abs=1")
 
     trn = sub.add_parser(
         "train", help="train a learned controller (narma-l2)",

@@ -23,6 +23,7 @@ from ego.control.pid import PID, PIDController, PIDParams
 from ego.control.rbf_smc import RBFSMCController, RBFSMCParams
 from ego.control.tasks import TASKS, Signal, Task
 from ego.params import ConfigError, Params, did_you_mean
+from ego.plugins import is_reference, load_controller_plugins, resolve_controller
 
 
 @dataclass(frozen=True)
@@ -109,15 +110,22 @@ CONTROLLERS: dict[str, dict[str, ControllerSpec]] = {
 
 def controller_names(task: str | None = None) -> list[str]:
     """Registered names of one task, or of every task (each name once)."""
+    load_controller_plugins(CONTROLLERS)
     tasks = [task] if task is not None else list(CONTROLLERS)
     return list(dict.fromkeys(n for t in tasks for n in CONTROLLERS[t]))
 
 
 def controller_spec(name: str, task: str = "tracking") -> ControllerSpec:
-    """The controller ``name`` of ``task``, or a ConfigError naming the allowed ones."""
+    """The controller ``name`` of ``task``, or a ConfigError naming the allowed ones. Besides
+    a registered name (entry-point plugins included), ``name`` may be a reference:
+    ``package.module:Class``, ``path/to/file.py:Class`` or ``path/to/controller.fmu``
+    (:mod:`ego.plugins`)."""
+    load_controller_plugins(CONTROLLERS)
     try:
         return CONTROLLERS[task][name]
     except KeyError:
+        if task in CONTROLLERS and is_reference(name):
+            return resolve_controller(name, task)
         if task not in CONTROLLERS:
             raise ConfigError(f"unknown task {task!r} (known: {', '.join(CONTROLLERS)})"
                               f"{did_you_mean(task, CONTROLLERS)}") from None

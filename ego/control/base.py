@@ -15,6 +15,11 @@ from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
 
+class ControllerError(RuntimeError):
+    """A controller failed mid-run (an FMU returned an error, a non-finite command): the run
+    ends with status ``error`` and this message, everything closed."""
+
+
 @dataclass(slots=True)
 class Observation:
     """One control step's view of the tracking task (road frame, SI units).

@@ -104,6 +104,8 @@ class RunRow:
         kept = [] if keep is None else list(dict.fromkeys(["t", *[c for c in keep if c in result.columns]]))
         row = cls(name, result.seed, result.status, flatten(result.metrics),
                   {c: result.column(c) for c in kept}, units={c: result.units.get(c, "") for c in kept})
+        if result.status == "error":  # a run its controller ended (an FMU's error): the reason
+            row.error = str(result.metrics.get("status_detail", ""))
         if details:
             row.events, row.traffic, row.lanes = list(result.events), result.traffic, result.lanes
         return row

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from ego.params import ConfigError, did_you_mean
+from ego.plugins import is_reference, load_scenario_plugins, resolve_scenario
 from ego.scenarios.base import CommonConfig, Event, RunResult, Scenario
 from ego.scenarios.curve import CurveConfig, CurveScenario
 from ego.scenarios.cut_in import CutIn, CutInConfig
@@ -36,10 +37,15 @@ _discover()
 
 
 def scenario_class(name: str) -> type[Scenario]:
-    """The registered scenario ``name``, or a ConfigError naming the known ones."""
+    """The registered scenario ``name`` (entry-point plugins included), the scenario class a
+    ``package.module:Name`` or ``path/to/file.py:Name`` reference names, or a ConfigError
+    naming the known ones."""
+    load_scenario_plugins(SCENARIOS)
     try:
         return SCENARIOS[name]
     except KeyError:
+        if is_reference(name):
+            return resolve_scenario(name)
         raise ConfigError(f"unknown scenario {name!r} (known: {', '.join(SCENARIOS)})"
                           f"{did_you_mean(name, SCENARIOS)}") from None
 

@@ -20,7 +20,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ego.control.base import Controller, ControllerSpec, Observation, signal_units
+from ego.control.base import Controller, ControllerError, ControllerSpec, Observation, signal_units
 from ego.models.plant import Plant
 from ego.params import ConfigError, Params, param
 from ego.processes import signals_deferred
@@ -33,7 +33,7 @@ from ego.sim.protocol import TrafficSim
 from ego.sim.registry import SimSetup, make_sim
 from ego.sim.types import Collision
 
-STATUSES = ("completed", "ended", "collision", "diverged", "timeout", "interrupted")
+STATUSES = ("completed", "ended", "collision", "diverged", "timeout", "interrupted", "error")
 #: the statuses that are no failure: the scenario's own end, or the duration ran out in a
 #: scenario whose end the controller does not decide (``ended``: a shortened run)
 NOT_FAILED = ("completed", "ended")
@@ -62,9 +62,18 @@ class CommonConfig(TimingConfig):
     sumo_step: float = param(0.1, "s", "SUMO step, a whole multiple of dt", min=0.01, max=1.0)
     lateral_resolution: float = param(0.875, "m", "width of SUMO's sublanes (sublane model)",
                                       min=0.1, max=3.5)
+    plant: str = param("", "-", "an FMI co-simulation FMU (path/to/vehicle.fmu) replacing the ego's "
+                       "vehicle model (see docs/fmi.md); empty: the scenario's own model")
+    plant_map: str = param("", "-", "TOML file mapping the plant FMU's variables (default: by name)")
 
     def __post_init__(self) -> None:
         super().__post_init__()
+        if self.plant.lower().endswith(".fmu"):  # the FMU checked with the parameters, before anything runs
+            from ego.fmi.plant import check_plant_fmu
+
+            check_plant_fmu(self.plant, self.plant_map)
+        elif self.plant_map and not self.plant:
+            raise ConfigError("plant_map needs plant (the FMU it maps)")
         ratio = self.sumo_step / self.dt
         if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
             raise ConfigError(
@@ -232,6 +241,9 @@ class Scenario:
         self._flushed, self._next_flush = 0, 1.0
         c = self.config
         self._dt, self._per_sumo, self._t_end = c.dt, c.control_per_sumo, c.duration - 1e-9
+        bind = getattr(self.controller, "bind_events", None)
+        if bind is not None:  # an FMU controller's log messages become the run's events
+            bind(self.event)
         self.controller.reset(seed=self.seed)
         self._signal_names = tuple(self.controller.signals())
         self._signal_units = signal_units(self.controller)
@@ -242,6 +254,10 @@ class Scenario:
             self.bridge.start()
             self.traffic = TrafficCollector()
         self._setup(np.random.default_rng(self.seed))
+        if str(getattr(c, "plant", "")).lower().endswith(".fmu"):  # an FMU in place of the ego's own model
+            from ego.fmi.plant import replace_plant
+
+            replace_plant(self)
         scene = self._scene()
         self._lanes = tuple((w, tuple(map(tuple, pts))) for w, pts in scene.lanes)
         self.recorder.begin(scene, self._series(), self._meta())
@@ -290,8 +306,12 @@ class Scenario:
             obs = self.reset()
             controller = self.controller
             step = self.step
-            while self.status == "running" and not self._stop:
-                obs = step(controller.step(obs))
+            try:
+                while self.status == "running" and not self._stop:
+                    obs = step(controller.step(obs))
+            except ControllerError as exc:  # an FMU's error or a non-finite command
+                self._end("error", str(exc), level="ERROR")
+                self._flush()
             if self._stop and self.status == "running":
                 self._end("interrupted", "interrupted (SIGINT or SIGTERM)", level="WARN")
                 self._flush()
@@ -328,11 +348,18 @@ class Scenario:
         return restore
 
     def close(self) -> None:
-        """Close SUMO and the recording (safe to call twice)."""
+        """Close SUMO, the recording and the controller's resources (an FMU instance); safe
+        to call twice."""
         try:
             self._close_bridge()
         finally:
-            self.recorder.close()
+            try:
+                self.recorder.close()
+            finally:
+                for part in (self.controller, getattr(self, "ego", None)):
+                    close = getattr(part, "close", None)  # an FMU controller's or plant's instance
+                    if close is not None:
+                        close()
 
     def _close_bridge(self) -> None:
         if self.bridge is not None:

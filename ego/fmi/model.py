@@ -1,0 +1,237 @@
+"""Reading an FMU and checking it can run here, before anything runs.
+
+:func:`inspect_fmu` opens the zip, reads and validates ``modelDescription.xml`` (fmpy) and
+refuses, in one line naming the file and the reason: a file that is not a zip, a missing or
+invalid model description, FMI 1.0, model exchange only, no binary for this platform (naming
+the platforms it has), non-real inputs or outputs. The result is cached by the file's content
+hash, so a worker re-reading the same file does not parse it again.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+
+from ego.params import ConfigError
+from ego.plugins import file_digest
+
+REAL_TYPES = ("Real", "Float64", "Float32")
+
+
+@dataclass(frozen=True)
+class FmuVar:
+    """A variable of the FMU, as ego uses it."""
+
+    name: str
+    vr: int
+    type: str  #: Real (FMI 2.0) / Float64 (3.0) / Integer / Boolean ...
+    causality: str
+    variability: str
+    start: float | None
+    unit: str  #: the unit's name ("" when none)
+    description: str
+
+
+@dataclass(frozen=True, eq=False)
+class FmuInfo:
+    """What ego needs from an FMU's model description (picklable; equal and hashed by the
+    file's path and content)."""
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, FmuInfo) and (other.path, other.digest) == (self.path, self.digest)
+
+    def __hash__(self) -> int:
+        return hash((self.path, self.digest))
+
+    path: str
+    digest: str
+    fmi_version: str  #: "2.0" or "3.0"
+    model_name: str
+    model_identifier: str
+    guid: str
+    description: str
+    variables: tuple[FmuVar, ...]
+    #: unit name -> ({SI base unit: exponent}, factor, offset)
+    units: dict
+    variable_step: bool
+    fixed_step: float | None  #: FMI 3.0 fixedInternalStepSize
+    default_step: float | None
+    generation_tool: str
+
+    def var(self, name: str) -> FmuVar | None:
+        for v in self.variables:
+            if v.name == name:
+                return v
+        return None
+
+    def of(self, causality: str) -> list[FmuVar]:
+        return [v for v in self.variables if v.causality == causality]
+
+    @property
+    def tunable(self) -> list[FmuVar]:
+        """Parameters ego may set (``--set fmu.<name>=value``): real parameters, fixed or tunable."""
+        return [v for v in self.variables if v.causality == "parameter" and v.type in REAL_TYPES]
+
+
+_cache: dict[tuple[str, str], FmuInfo] = {}
+
+
+def _platforms(z: zipfile.ZipFile) -> list[str]:
+    out = set()
+    for n in z.namelist():
+        parts = n.split("/")
+        if len(parts) >= 3 and parts[0] == "binaries" and parts[2]:
+            out.add(parts[1])
+    return sorted(out)
+
+
+def _this_platform(version: str) -> str:
+    import fmpy
+
+    return fmpy.platform if version.startswith("2") else fmpy.platform_tuple
+
+
+def inspect_fmu(path: str | os.PathLike) -> FmuInfo:
+    """The model description of the co-simulation FMU at ``path``, checked for this machine;
+    ConfigError (one line, the file named) otherwise."""
+    shown = os.fspath(path)
+    p = Path(shown).expanduser()
+    if not p.is_file():
+        raise ConfigError(f"bad FMU {shown!r}: no such file")
+    digest = file_digest(p)
+    key = (str(p.resolve()), digest)
+    info = _cache.get(key)
+    if info is not None:
+        return info
+    try:
+        from fmpy import read_model_description
+    except ImportError:
+        raise ConfigError("FMUs need fmpy: pip install 'ego[fmi]'") from None
+    if not zipfile.is_zipfile(p):
+        raise ConfigError(f"bad FMU {shown!r}: not a zip file (an FMU is a zip archive with a modelDescription.xml)")
+    with zipfile.ZipFile(p) as z:
+        names = set(z.namelist())
+        if "modelDescription.xml" not in names:
+            raise ConfigError(f"bad FMU {shown!r}: no modelDescription.xml in the archive")
+        platforms = _platforms(z)
+        import re
+
+        head = z.read("modelDescription.xml")[:4000].decode("utf-8", "replace")
+        m = re.search(r'fmiVersion\s*=\s*"([^"]*)"', head)
+        version = m.group(1) if m else ""
+    if version.startswith("1"):
+        raise ConfigError(f"bad FMU {shown!r}: FMI {version} is not supported (FMI 2.0 or 3.0 co-simulation)")
+    try:
+        md = read_model_description(str(p), validate=True)
+    except Exception as exc:  # noqa: BLE001 - fmpy's reasons vary: an XML or schema error
+        text = " ".join(str(exc).split())
+        raise ConfigError(f"bad FMU {shown!r}: invalid modelDescription.xml: {text[:300]}") from None
+    version = md.fmiVersion
+    if not (version.startswith("2") or version.startswith("3")):
+        raise ConfigError(f"bad FMU {shown!r}: FMI {version} is not supported (FMI 2.0 or 3.0 co-simulation)")
+    if md.coSimulation is None:
+        kinds = [
+            k
+            for k, a in (("model exchange", "modelExchange"), ("scheduled execution", "scheduledExecution"))
+            if getattr(md, a, None) is not None
+        ]
+        raise ConfigError(
+            f"bad FMU {shown!r}: {' and '.join(kinds) or 'no'} interface only; ego steps "
+            "co-simulation FMUs (export it for co-simulation)"
+        )
+    here = _this_platform(version)
+    ident = md.coSimulation.modelIdentifier
+    if here not in platforms:
+        has = ", ".join(platforms) or "none (no binaries/ folder)"
+        srcs = (
+            " (it ships C sources: compile it for this platform, e.g. fmpy's compile_platform_binary)"
+            if any(n.startswith("sources/") for n in names)
+            else ""
+        )
+        raise ConfigError(f"bad FMU {shown!r}: no binary for this platform ({here}); it has binaries for {has}{srcs}")
+    if not any(n.startswith(f"binaries/{here}/{ident}.") for n in names):
+        raise ConfigError(f"bad FMU {shown!r}: binaries/{here}/ has no {ident} library")
+    units = {}
+    for u in md.unitDefinitions or ():
+        b = u.baseUnit
+        if b is None:
+            units[u.name] = None
+            continue
+        exps = {k: int(getattr(b, k, 0) or 0) for k in ("kg", "m", "s", "A", "K", "mol", "cd", "rad")}
+        units[u.name] = ({k: e for k, e in exps.items() if e}, float(b.factor or 1.0), float(b.offset or 0.0))
+    types = {t.name: t for t in md.typeDefinitions or ()}
+    variables = []
+    for v in md.modelVariables:
+        unit = v.unit or ""
+        if not unit and v.declaredType is not None:
+            unit = getattr(v.declaredType, "unit", "") or ""
+        if not unit and isinstance(getattr(v, "declaredType", None), str) and v.declaredType in types:
+            unit = getattr(types[v.declaredType], "unit", "") or ""
+        start = None
+        if v.start is not None and v.type in REAL_TYPES:
+            try:
+                start = float(v.start)
+            except (TypeError, ValueError):
+                start = None
+        variables.append(
+            FmuVar(
+                v.name,
+                int(v.valueReference),
+                v.type,
+                v.causality or "local",
+                v.variability or "continuous",
+                start,
+                unit,
+                v.description or "",
+            )
+        )
+    de = md.defaultExperiment
+    cs = md.coSimulation
+    fixed = getattr(cs, "fixedInternalStepSize", None)
+    info = FmuInfo(
+        path=str(p.resolve()),
+        digest=digest,
+        fmi_version="3.0" if version.startswith("3") else "2.0",
+        model_name=md.modelName or ident,
+        model_identifier=ident,
+        guid=(md.guid if version.startswith("2") else getattr(md, "instantiationToken", None) or md.guid) or "",
+        description=md.description or "",
+        variables=tuple(variables),
+        units=units,
+        variable_step=bool(getattr(cs, "canHandleVariableCommunicationStepSize", False)),
+        fixed_step=float(fixed) if fixed not in (None, "") else None,
+        default_step=float(de.stepSize) if de is not None and de.stepSize not in (None, "") else None,
+        generation_tool=md.generationTool or "",
+    )
+    _cache[key] = info
+    return info
+
+
+def check_step(info: FmuInfo, dt: float, name: str) -> None:
+    """The communication step ``dt`` (the control period) is one the FMU can take: any step
+    when it handles variable steps, else its fixed (3.0) or default step, or a whole multiple
+    of its fixed internal step."""
+    fixed = info.fixed_step or info.default_step
+    if info.variable_step:
+        if info.fixed_step and not _multiple(dt, info.fixed_step):
+            raise ConfigError(
+                f"bad FMU {name!r}: its fixed internal step {info.fixed_step:g} s does not divide "
+                f"the control period dt = {dt:g} s (set --set dt= a multiple of it)"
+            )
+        return
+    if fixed is None:
+        return  # nothing declared: the FMU says at the first doStep
+    if not _multiple(dt, fixed) if info.fixed_step else not math.isclose(dt, fixed, rel_tol=1e-9):
+        raise ConfigError(
+            f"bad FMU {name!r}: it cannot take a communication step of dt = {dt:g} s (it takes "
+            f"only {fixed:g} s steps: canHandleVariableCommunicationStepSize is false; "
+            f"set --set dt={fixed:g})"
+        )
+
+
+def _multiple(dt: float, step: float) -> bool:
+    n = round(dt / step)
+    return n >= 1 and math.isclose(n * step, dt, rel_tol=1e-9)

@@ -1,0 +1,172 @@
+"""Plugins: a package installed into a temporary environment (pip install --target, on the
+PYTHONPATH) registers a controller and a scenario through the ``ego.controllers`` and
+``ego.scenarios`` entry points; ego run, ego compare --jobs 2 and ego sweep --engine ray find
+them, their workers importing the plugin themselves."""
+
+import csv
+import json
+import os
+import subprocess
+import sys
+
+import pyarrow.parquet as pq
+import pytest
+from process_group import survivors
+
+pytestmark = pytest.mark.sumo
+
+PYPROJECT = """
+[build-system]
+requires = ["setuptools"]
+build-backend = "setuptools.build_meta"
+
+[project]
+name = "ego-demo-plugin"
+version = "0.1"
+
+[project.entry-points."ego.controllers"]
+demo-pid = "ego_demo_plugin:DemoPID"
+
+[project.entry-points."ego.scenarios"]
+demo-brake = "ego_demo_plugin:DemoBrake"
+"""
+
+MODULE = '''
+"""A plugin: ego's pid under another name, and emergency-brake as a scenario of its own."""
+from ego.control.pid import PIDController, PIDParams
+from ego.scenarios import EmergencyBrake
+
+
+class DemoPID(PIDController):
+    """the demo plugin's pid"""
+
+    Params = PIDParams
+    task = "tracking"
+
+
+class DemoBrake(EmergencyBrake):
+    """emergency-brake, from the demo plugin"""
+
+    name = "demo-brake"
+'''
+
+
+@pytest.fixture(scope="module")
+def plugin_env(tmp_path_factory):
+    """Environment variables of a Python that has the plugin installed."""
+    root = tmp_path_factory.mktemp("plugin")
+    pkg = root / "src" / "ego_demo_plugin"
+    pkg.mkdir(parents=True)
+    (root / "src" / "pyproject.toml").write_text(PYPROJECT)
+    (pkg / "__init__.py").write_text(MODULE)
+    site = root / "site"
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "install",
+            "-q",
+            "--no-deps",
+            "--no-build-isolation",
+            "--no-index",
+            "--target",
+            str(site),
+            str(root / "src"),
+        ],
+        check=True,
+        capture_output=True,
+    )
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(site), env.get("PYTHONPATH", "")) if p)
+    return env
+
+
+def ego(env, *args):
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "ego", *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        env=env,
+    )
+    out, err = proc.communicate(timeout=600)
+    return subprocess.CompletedProcess(proc.args, proc.returncode, out, err), survivors(proc.pid)
+
+
+def test_ego_list_and_run_find_the_plugins(plugin_env):
+    listed, _ = ego(plugin_env, "list")
+    assert "demo-pid: the demo plugin's pid" in listed.stdout and "demo-brake" in listed.stdout
+    runs = {}
+    for scenario, controller in (("emergency-brake", "pid"), ("demo-brake", "demo-pid")):
+        proc, left = ego(plugin_env, "run", scenario, "-c", controller, "--set", "duration=4", "--json")
+        assert proc.returncode == 1, proc.stderr  # timeout: 4 s is too short for the lane change
+        assert not left
+        runs[controller] = json.loads(proc.stdout)
+    for key in ("status", "min_gap_front", "max_abs_lateral_accel", "steps"):
+        assert runs["pid"][key] == runs["demo-pid"][key]
+    assert runs["demo-pid"]["scenario"] == "demo-brake"
+    # without the plugin, the names are unknown
+    plain, _ = ego(dict(os.environ), "run", "emergency-brake", "-c", "demo-pid")
+    assert plain.returncode == 2 and "unknown controller 'demo-pid'" in plain.stderr
+
+
+def test_compare_jobs_2_runs_the_plugin_in_its_workers(plugin_env, tmp_path):
+    proc, left = ego(
+        plugin_env,
+        "compare",
+        "demo-brake",
+        "--controllers",
+        "pid,demo-pid",
+        "--jobs",
+        "2",
+        "--set",
+        "duration=4",
+        "--out",
+        str(tmp_path / "cmp"),
+    )
+    assert proc.returncode == 0, proc.stderr  # every run gave a result
+    assert not left
+    rows = {r["controller"]: r for r in csv.DictReader(open(tmp_path / "cmp" / "metrics.csv"))}
+    assert rows["demo-pid"]["min_gap_front"] == rows["pid"]["min_gap_front"]
+    assert rows["demo-pid"]["status"] == rows["pid"]["status"] == "timeout"
+
+
+def test_sweep_on_ray_runs_the_plugin_in_its_workers(plugin_env, tmp_path):
+    spec = tmp_path / "sweep.toml"
+    spec.write_text('scenario = "demo-brake"\ncontrollers = ["demo-pid", "pid"]\nseeds = 2\n[set]\nduration = 3\n')
+    proc, left = ego(
+        plugin_env,
+        "sweep",
+        str(spec),
+        "--engine",
+        "ray",
+        "--jobs",
+        "2",
+        "--record",
+        "none",
+        "--out",
+        str(tmp_path / "sw"),
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert not left
+    rows = pq.read_table(tmp_path / "sw" / "results.parquet").to_pylist()
+    assert sorted((r["controller"], r["seed"]) for r in rows if r["status"] != "error") == [
+        ("demo-pid", 0),
+        ("demo-pid", 1),
+        ("pid", 0),
+        ("pid", 1),
+    ]
+    by = {(r["controller"], r["seed"]): (r["status"], r["min_gap_front"]) for r in rows}
+    assert by[("demo-pid", 0)] == by[("pid", 0)] and by[("demo-pid", 1)] == by[("pid", 1)]
+
+
+def test_a_scenario_named_by_file_reference(tmp_path):
+    path = tmp_path / "my_scenarios.py"
+    path.write_text(MODULE)
+    from ego.runner import RunSpec, run
+
+    mine = run(RunSpec(f"{path}:DemoBrake", "pid", overrides={"duration": 3.0})).metrics
+    builtin = run(RunSpec("emergency-brake", "pid", overrides={"duration": 3.0})).metrics
+    assert mine["min_gap_front"] == builtin["min_gap_front"] and mine["scenario"] == "demo-brake"
