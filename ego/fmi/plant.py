@@ -73,6 +73,8 @@ class FmuPlant:
     """The ego's plant stepped as a co-simulation FMU (the :class:`ego.models.plant.Plant`
     interface of the plant it replaces)."""
 
+    is_fmu = True
+
     def __init__(self, path: str, map_file: str, base, dt: float, on_log=None, substeps: int = 1) -> None:
         info = inspect_fmu(path)
         check_step(info, dt, path)
@@ -139,16 +141,16 @@ class FmuPlant:
         self.cosim.close()
 
 
-def replace_plant(scenario) -> None:
-    """Put the FMU of ``scenario.config.plant`` in place of the plant the scenario built."""
+def fmu_plant(scenario, base):
+    """The FMU of ``scenario.config.plant`` in place of ``base``, the plant the scenario built
+    for its ego (its initial state and geometry)."""
     c = scenario.config
-    base = scenario.ego
     if base is None or tuple(getattr(base, "state_names", ())) != ("X", "U", "Y", "V", "PSI", "R"):
         raise ConfigError(
             f"--set plant= replaces a bicycle plant; the {scenario.name} scenario has none "
             "(motorway and curve scenarios have)"
         )
-    scenario.ego = FmuPlant(
+    return FmuPlant(
         c.plant,
         c.plant_map,
         base,

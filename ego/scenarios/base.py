@@ -254,10 +254,9 @@ class Scenario:
             self.bridge.start()
             self.traffic = TrafficCollector()
         self._setup(np.random.default_rng(self.seed))
-        if str(getattr(c, "plant", "")).lower().endswith(".fmu"):  # an FMU in place of the ego's own model
-            from ego.fmi.plant import replace_plant
-
-            replace_plant(self)
+        if self._fmu_plant() and not getattr(self.ego, "is_fmu", False):
+            raise ConfigError(f"--set plant= replaces a bicycle plant; the {self.name} scenario has none "
+                              "(motorway and curve scenarios have)")
         scene = self._scene()
         self._lanes = tuple((w, tuple(map(tuple, pts))) for w, pts in scene.lanes)
         self.recorder.begin(scene, self._series(), self._meta())
@@ -346,6 +345,19 @@ class Scenario:
                 signal.signal(sig, handler)
 
         return restore
+
+    def _fmu_plant(self) -> bool:
+        """Whether the configuration puts an FMU in place of the ego's own model."""
+        return str(getattr(self.config, "plant", "")).lower().endswith(".fmu")
+
+    def own_plant(self, plant: Plant) -> Plant:
+        """The ego's plant: ``plant``, or the FMU of ``--set plant=vehicle.fmu`` in its place
+        (started from its state)."""
+        if not self._fmu_plant():
+            return plant
+        from ego.fmi.plant import fmu_plant
+
+        return fmu_plant(self, plant)
 
     def close(self) -> None:
         """Close SUMO, the recording and the controller's resources (an FMU instance); safe
@@ -603,7 +615,7 @@ class ComposedLoop:
         self.controlled_ids = (EGO,)
         self.colors.update(world.colors)
         self.lanes = world.lanes
-        self.ego = parts.make_plant(self.config, self.geometry, bridge.cg_pose(EGO))
+        self.ego = self.own_plant(parts.make_plant(self.config, self.geometry, bridge.cg_pose(EGO)))
         self.plants = {EGO: self.ego}
         view.setup(bridge, world.lanes, self.ego)
         self.obs.lane = view.road

@@ -224,8 +224,9 @@ class CurveScenario(RoadScenario):
 
         x, y, psi = bridge.cg_pose(EGO)
         model = DynamicBicycle(DynamicBicycleParams(slip_speed_floor=1.0))
-        self.ego = BicyclePlant(model, self.geometry, c.dt, c.substeps,
-                                ActuatorLimits(max_steer=c.max_steer), state=(x, speed, y, 0.0, psi, 0.0))
+        self.ego = self.own_plant(BicyclePlant(model, self.geometry, c.dt, c.substeps,
+                                               ActuatorLimits(max_steer=c.max_steer),
+                                               state=(x, speed, y, 0.0, psi, 0.0)))
         self._kinematics()
         self._after_sumo_step()
 
