@@ -153,6 +153,19 @@ class ResolvedRun:
         """The plots ``ego compare`` draws for this configuration."""
         return tuple(self.scenario_cls.compare_plots(self.config))
 
+    def __reduce__(self) -> tuple:
+        # The scenario class and the controller spec travel as their names: a reference
+        # (``file.py:Class``, an FMU) makes classes and builders that exist only in the
+        # process that loaded it, and a worker loads it itself (cached by content hash);
+        # both configurations travel by value and are not checked again.
+        return _rebuilt, (self.spec, self.config, self.controller_params)
+
+
+def _rebuilt(spec: RunSpec, config: Any, controller_params: Any) -> ResolvedRun:
+    """A :class:`ResolvedRun` unpickled in a worker: names looked up, nothing checked again."""
+    cls = scenario_class(spec.scenario)
+    return ResolvedRun(spec, cls, config, controller_spec(spec.controller, cls.task), controller_params)
+
 
 def _check_outputs(spec: RunSpec) -> None:
     from ego.checks import check_seed

@@ -79,6 +79,9 @@ class FmuPlant:
         info = inspect_fmu(path)
         check_step(info, dt, path)
         self.geometry, self.limits, self.dt = base.geometry, base.limits, dt
+        #: the model the FMU stands in for: its parameters still give the friction limit the
+        #: safety layer and the braking criterion assume
+        self.model = getattr(base, "model", None)
         self.state, self.state_names = tuple(base.state), tuple(base.state_names)
         self.input_names, self.input_units = tuple(base.input_names), tuple(base.input_units)
         self.applied = (0.0, 0.0)
