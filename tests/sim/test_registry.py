@@ -32,11 +32,14 @@ def test_options_are_checked_against_the_backend():
         check_options("carla", {})
 
 
-def test_sumo_errors_are_sim_errors_and_the_bridge_has_the_protocol():
+def test_sumo_errors_are_sim_errors_and_both_bridges_have_the_protocol():
+    from ego.highway_env.bridge import HighwayEnvBridge
+
     assert issubclass(SumoError, SimError)
-    missing = [name for name in dir(TrafficSim) if not name.startswith("_") and name != "controlled"
-               and not hasattr(SumoBridge, name)]
-    assert missing == []
+    for bridge in (SumoBridge, HighwayEnvBridge):
+        missing = [name for name in dir(TrafficSim) if not name.startswith("_") and name != "controlled"
+                   and not hasattr(bridge, name)]
+        assert missing == [], bridge.__name__
 
 
 def test_highway_env_raises_sim_errors_not_sumo_errors():
