@@ -114,14 +114,17 @@ class ProcessExecutor:
         self.retries = retries
         self._ctx = multiprocessing.get_context("forkserver")
         self._pool: list[_Worker] = []
+        self._drained: list[Outcome] = []
 
     def run(self, fn: Callable[[Any], Any], tasks: Iterable[Any]) -> Iterator[Outcome]:
         try:
             yield from self._run(fn, tasks)
         finally:
             # the caller stopped early (or failed): a worker still busy would hand its stale
-            # reply to the next run, so it is killed now and replaced at the next run
+            # reply to the next run, so it is killed now and replaced at the next run; a reply
+            # already sent (a run that finished as Ctrl-C came) is kept for drained()
             for worker in [w for w in self._pool if w.job is not None]:
+                self._keep_sent_reply(worker)
                 worker.process.kill()
                 worker.stop()
                 self._pool.remove(worker)
@@ -174,6 +177,22 @@ class ProcessExecutor:
                 if job is not None:
                     worker.job = (job[0], job[1] + 1)
                     worker.conn.send((fn, job[0]))
+
+    def _keep_sent_reply(self, worker: _Worker) -> None:
+        assert worker.job is not None
+        task, attempt = worker.job
+        try:
+            if worker.conn.poll():
+                ok, value = worker.conn.recv()
+                self._drained.append(Outcome(task, value if ok else None, "" if ok else value, attempt))
+        except (EOFError, OSError):  # it died as it answered: nothing finished
+            pass
+
+    def drained(self) -> list[Outcome]:
+        """The outcomes of runs that had finished, their replies already sent, when the
+        caller stopped reading (Ctrl-C): nothing finished is lost. Each is returned once."""
+        out, self._drained = self._drained, []
+        return out
 
     def pids(self) -> list[int]:
         """The worker processes' ids (for tests that kill one)."""

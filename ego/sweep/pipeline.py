@@ -16,7 +16,7 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any
 
-from ego.parallel.executor import Executor
+from ego.parallel.executor import Executor, Outcome
 from ego.results.run import RunRow
 from ego.runner import ResolvedRun
 
@@ -65,17 +65,23 @@ def drive(executor: Executor, tasks: Iterable[RunTask], on_row: Callable[[RunTas
     ``progress(what, status)`` after it. Returns whether it was interrupted: a
     KeyboardInterrupt, or a run that came back ``interrupted`` (the in-process executor:
     the run caught the Ctrl-C), stops the rest."""
+    def take(outcome: Outcome) -> str:
+        task: RunTask = outcome.task
+        row = outcome.value if outcome.value is not None else RunRow(
+            task.run.name, task.run.seed, "error", {}, error=outcome.error)
+        on_row(task, row)
+        if progress is not None:
+            progress(f"{row.controller} seed {row.seed}", row.status)
+        return row.status
+
     try:
         for outcome in executor.run(execute, tasks):
-            task: RunTask = outcome.task
-            row = outcome.value if outcome.value is not None else RunRow(
-                task.run.name, task.run.seed, "error", {}, error=outcome.error)
-            on_row(task, row)
-            if progress is not None:
-                progress(f"{row.controller} seed {row.seed}", row.status)
-            if row.status == "interrupted":
+            if take(outcome) == "interrupted":
                 return True
     except KeyboardInterrupt:
+        # runs that finished as the Ctrl-C came (their replies already sent) are kept
+        for outcome in getattr(executor, "drained", list)():
+            take(outcome)
         return True
     finally:
         executor.close()
