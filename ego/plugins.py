@@ -23,7 +23,9 @@ and ``ego.scenarios``::
     [project.entry-points."ego.controllers"]
     my-pid = "my_package.control:MyPID"       # a class (its ``task`` attribute) or a spec
 
-A reference is a plain string, so it travels to process and Ray workers as it is and each
+Controller references resolve in :mod:`ego.control.references`, scenario references in
+:mod:`ego.scenarios.references`; this module holds what both share (importing a reference,
+content hashes, entry points) and imports neither. A reference is a plain string, so it travels to process and Ray workers as it is and each
 worker resolves it again itself (imports the module, extracts the FMU).
 """
 
@@ -32,11 +34,9 @@ from __future__ import annotations
 import hashlib
 import importlib
 import importlib.util
-import inspect
 import os
 import sys
 import threading
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -119,233 +119,31 @@ def load_object(ref: str, what: str = "controller") -> Any:
     return obj
 
 
-def _builder(cls: type, has_params: bool):
-    """How to build ``cls``: (params, dt), (dt) or () as its constructor takes them."""
-    if has_params:
-        return cls
-    try:
-        sig = inspect.signature(cls)
-        sig.bind(0.01)
-        return lambda params, dt: cls(dt)
-    except (TypeError, ValueError):
-        return lambda params, dt: cls()
+def entry_points(group: str) -> list[Any]:
+    """The installed entry points of ``group``, the first time it is asked for in this
+    process (a plugin registers once); afterwards an empty list."""
+    from importlib.metadata import entry_points as installed
 
-
-def controller_spec_of(obj: Any, name: str, task: str, where: str):
-    """A :class:`ControllerSpec` named ``name`` from a spec or a controller class."""
-    from ego.control.base import ControllerSpec
-
-    if isinstance(obj, ControllerSpec):
-        spec = replace(obj, name=name)
-        obj_task = getattr(obj, "task", None)
-    elif inspect.isclass(obj):
-        missing = [m for m in ("reset", "step", "signals") if not callable(getattr(obj, m, None))]
-        if missing:
-            raise ConfigError(
-                f"bad controller {where}: class {obj.__name__} has no {', '.join(missing)} "
-                "(a controller has reset, step and signals)"
-            )
-        params = getattr(obj, "Params", None)
-        from ego.control import NoParams
-        from ego.params import Params
-
-        if params is not None and not (inspect.isclass(params) and issubclass(params, Params)):
-            raise ConfigError(f"bad controller {where}: {obj.__name__}.Params is not an ego.params.Params dataclass")
-        doc = (inspect.getdoc(obj) or obj.__name__).strip().splitlines()[0]
-        spec = ControllerSpec(name, doc, params or NoParams, _builder(obj, params is not None))
-        obj_task = getattr(obj, "task", None)
-    else:
-        raise ConfigError(
-            f"bad controller {where}: {type(obj).__name__} is neither a controller class nor "
-            "an ego.control.ControllerSpec"
-        )
-    if obj_task is not None:
-        tasks = (obj_task,) if isinstance(obj_task, str) else tuple(obj_task)
-        if task not in tasks:
-            raise ConfigError(f"controller {name!r} drives the {', '.join(tasks)} task, not {task}")
-    return spec
-
-
-def resolve_controller(ref: str, task: str):
-    """The :class:`ControllerSpec` of a reference (``module:Name``, ``file.py:Name``, ``*.fmu``)
-    for ``task``; its name is the reference as given. ConfigError on anything wrong."""
-    if ref.lower().endswith(".fmu"):
-        from ego.fmi.controller import fmu_controller_spec
-
-        return fmu_controller_spec(ref, task)
-    return controller_spec_of(load_object(ref, "controller"), ref, task, repr(ref))
-
-
-def resolve_scenario(ref: str):
-    """The scenario class a ``module:Name`` or ``file.py:Name`` reference names."""
-    from ego.scenarios.base import Scenario
-
-    obj = load_object(ref, "scenario")
-    if not (inspect.isclass(obj) and issubclass(obj, Scenario)):
-        raise ConfigError(f"bad scenario reference {ref!r}: not an ego Scenario subclass")
-    return obj
-
-
-def _entry_points(group: str):
-    from importlib.metadata import entry_points
-
-    return entry_points(group=group)
-
-
-def load_controller_plugins(registry: dict[str, dict[str, Any]]) -> None:
-    """Register the ``ego.controllers`` entry points into ``registry`` (task -> name -> spec),
-    once per process. A plugin that fails to load is skipped with a warning on stderr (one
-    broken package does not break ego)."""
-    if CONTROLLER_GROUP in _loaded_groups:
-        return
+    if group in _loaded_groups:
+        return []
     with _lock:
-        if CONTROLLER_GROUP in _loaded_groups:
-            return
-        _loaded_groups.add(CONTROLLER_GROUP)
-        eps = list(_entry_points(CONTROLLER_GROUP))
-    for ep in eps:
-        try:
-            obj = ep.load()
-            tasks = getattr(obj, "task", None) or "tracking"
-            for task in (tasks,) if isinstance(tasks, str) else tuple(tasks):
-                if task in registry and ep.name not in registry[task]:
-                    registry[task][ep.name] = controller_spec_of(obj, ep.name, task, f"plugin {ep.name!r}")
-        except Exception as exc:  # noqa: BLE001
-            print(
-                f"ego: warning: controller plugin {ep.name!r} ({ep.value}) not loaded: {type(exc).__name__}: {exc}",
-                file=sys.stderr,
-            )
+        if group in _loaded_groups:
+            return []
+        _loaded_groups.add(group)
+        return list(installed(group=group))
 
 
-def load_scenario_plugins(registry: dict[str, Any]) -> None:
-    """Register the ``ego.scenarios`` entry points into ``registry`` (name -> class), once."""
-    if SCENARIO_GROUP in _loaded_groups:
-        return
-    with _lock:
-        if SCENARIO_GROUP in _loaded_groups:
-            return
-        _loaded_groups.add(SCENARIO_GROUP)
-        eps = list(_entry_points(SCENARIO_GROUP))
-    from ego.scenarios.base import Scenario
-
-    for ep in eps:
-        try:
-            obj = ep.load()
-            if not (inspect.isclass(obj) and issubclass(obj, Scenario)):
-                raise TypeError("not an ego Scenario subclass")
-            registry.setdefault(ep.name, obj)
-        except Exception as exc:  # noqa: BLE001
-            print(
-                f"ego: warning: scenario plugin {ep.name!r} ({ep.value}) not loaded: {type(exc).__name__}: {exc}",
-                file=sys.stderr,
-            )
+#: file suffix -> "module:function" building a controller spec from such a file (``ref``,
+#: ``task``): the kinds of reference beside ``module:Name``; looked up by name, so this
+#: module (below the controllers) imports none of them
+CONTROLLER_FILES = {".fmu": "ego.fmi.controller:fmu_controller_spec"}
 
 
-def load_plugins() -> None:
-    """Register every installed plugin (both groups) into ego's registries."""
-    from ego.control import CONTROLLERS
-    from ego.scenarios import SCENARIOS
-
-    load_controller_plugins(CONTROLLERS)
-    load_scenario_plugins(SCENARIOS)
-
-
-def describe_reference(ref: str) -> dict:
-    """What ``ego list REF`` shows for a controller reference: for an FMU its FMI version,
-    variables with units and causality, the tasks whose signals its inputs and outputs
-    connect to by name, and its parameters (``fmu.<name>``); for a class its parameters."""
-    from ego.control import TASKS, controller_spec
-    from ego.params import describe
-
-    def params(cls) -> list[dict]:
-        return [
-            {"name": i.name, "default": i.default, "unit": i.unit, "allowed": i.allowed(), "description": i.doc}
-            for i in describe(cls)
-        ]
-
-    out: dict = {"reference": ref}
-    fits, errors = [], {}
-    spec = None
-    for task in TASKS:
-        try:
-            spec = controller_spec(ref, task)
-            if ref.lower().endswith(".fmu"):  # connects by name to this task's signals?
-                from ego.fmi.controller import mapping_for
-
-                mapping_for(spec.params._info, task, "", ref)
-            fits.append(task)
-        except ConfigError as exc:
-            errors[task] = str(exc)
-    if ref.lower().endswith(".fmu"):
-        from ego.fmi.model import inspect_fmu
-
-        info = inspect_fmu(ref)  # the FMU's own problems are raised here, before the tasks'
-        out.update(
-            kind="fmu",
-            fmi_version=info.fmi_version,
-            model_name=info.model_name,
-            description=info.description,
-            generation_tool=info.generation_tool,
-            variable_step=info.variable_step,
-            default_step=info.default_step,
-            variables=[
-                {
-                    "name": v.name,
-                    "causality": v.causality,
-                    "type": v.type,
-                    "unit": v.unit,
-                    "start": v.start,
-                    "description": v.description,
-                }
-                for v in info.variables
-                if v.causality in ("input", "output", "parameter")
-            ],
-        )
-    else:
-        out["kind"] = "class"
-    out["tasks"] = fits
-    if spec is not None:
-        out["summary"] = spec.summary
-        out["parameters"] = params(spec.params)
-    if not fits:
-        out["why_not"] = errors
-    return out
-
-
-def print_reference(d: dict) -> None:
-    """``ego list REF`` as text."""
-    print(f"{d['reference']}: {d.get('summary', '')}")
-    if d["kind"] == "fmu":
-        step = "any communication step" if d["variable_step"] else f"fixed step {d['default_step']} s"
-        print(
-            f"  FMI {d['fmi_version']} co-simulation, {step}"
-            + (f", made by {d['generation_tool']}" if d["generation_tool"] else "")
-        )
-        for causality in ("input", "output", "parameter"):
-            vs = [v for v in d["variables"] if v["causality"] == causality]
-            if vs:
-                print(
-                    f"  {causality}s: "
-                    + ", ".join(
-                        v["name"]
-                        + (f" [{v['unit']}]" if v["unit"] else "")
-                        + ("" if v["type"] in ("Real", "Float64") else f" ({v['type']})")
-                        for v in vs
-                    )
-                )
-    if d["tasks"]:
-        print(
-            f"  drives the {', '.join(d['tasks'])} task{'s' if len(d['tasks']) > 1 else ''} "
-            "(connected by name, or by --set fmu_map=map.toml)"
-        )
-    else:
-        print("  connects to no task as it is:")
-        for task, why in d.get("why_not", {}).items():
-            print(f"    {task}: {why}")
-    if d.get("parameters"):
-        w = max(len(p["name"]) for p in d["parameters"])
-        print("  parameters (--set key=value):")
-        for p in d["parameters"]:
-            default = repr(p["default"]) if isinstance(p["default"], str) else f"{p['default']:g}"
-            unit = "" if p["unit"] in ("", "-") else f" {p['unit']}"
-            print(f"    {p['name']:<{w}}  {default}{unit}  {p['description']}")
+def file_resolver(ref: str) -> Any:
+    """The function that resolves ``ref`` when its suffix is a file kind of
+    :data:`CONTROLLER_FILES`, else None."""
+    for suffix, target in CONTROLLER_FILES.items():
+        if ref.lower().endswith(suffix):
+            module, _, name = target.partition(":")
+            return getattr(importlib.import_module(module), name)
+    return None

@@ -18,8 +18,9 @@ ROOT = Path(__file__).resolve().parents[1]
 EGO = ROOT / "ego"
 
 LAYERS = [
-    {"ego", "ego.params", "ego.checks", "ego.outputs", "ego.processes", "ego.native", "ego._native"},
-    {"ego.models", "ego.control", "ego.sim", "ego.results", "ego.parallel", "ego.record", "ego.sumo",
+    {"ego", "ego.params", "ego.checks", "ego.outputs", "ego.processes", "ego.native", "ego._native",
+     "ego.plugins"},
+    {"ego.models", "ego.control", "ego.fmi", "ego.sim", "ego.results", "ego.parallel", "ego.record", "ego.sumo",
      "ego.highway_env", "ego.lane_frame", "ego.analytic_road"},
     {"ego.scenarios"},
     {"ego.runner", "ego.plots"},

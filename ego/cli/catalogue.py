@@ -12,7 +12,7 @@ from ego.params import describe
 
 def command(args: Any) -> int:
     if args.reference:
-        from ego.plugins import describe_reference, print_reference
+        from ego.cli.references import describe_reference, print_reference
 
         ref = describe_reference(args.reference)
         print(json.dumps(ref, indent=2)) if args.json else print_reference(ref)
@@ -31,8 +31,8 @@ def catalogue() -> dict:
     """Everything ``ego list`` shows. Per scenario: its parameters, every metric a run
     reports (with its unit, and whether ``ego compare``'s table shows it) and its trace
     columns for the default configuration (the controller's signals follow, unitless)."""
+    from ego.cli.references import load_plugins
     from ego.control import CONTROLLERS, TASKS
-    from ego.plugins import load_plugins
     from ego.runner import declared_columns
     from ego.scenarios import SCENARIOS
     from ego.scenarios.base import COMMON_METRICS, COMMON_TAIL_METRICS

@@ -10,8 +10,8 @@ from ego.highway_env import BACKENDS
 
 
 def controllers_help() -> str:
+    from ego.cli.references import load_plugins
     from ego.control import CONTROLLERS
-    from ego.plugins import load_plugins
     from ego.scenarios import SCENARIOS
 
     load_plugins()

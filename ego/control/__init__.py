@@ -21,9 +21,10 @@ from ego.control.fuzzy_pid import FuzzyPIDController, FuzzyPIDParams
 from ego.control.narma import NarmaL2Controller, NarmaL2Params
 from ego.control.pid import PID, PIDController, PIDParams
 from ego.control.rbf_smc import RBFSMCController, RBFSMCParams
+from ego.control.references import load_controller_plugins, resolve_controller
 from ego.control.tasks import TASKS, Signal, Task
 from ego.params import ConfigError, Params, did_you_mean
-from ego.plugins import is_reference, load_controller_plugins, resolve_controller
+from ego.plugins import is_reference
 
 
 @dataclass(frozen=True)

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ego.params import ConfigError, did_you_mean
-from ego.plugins import is_reference, load_scenario_plugins, resolve_scenario
+from ego.plugins import is_reference
 from ego.scenarios.base import CommonConfig, Event, RunResult, Scenario
 from ego.scenarios.curve import CurveConfig, CurveScenario
 from ego.scenarios.cut_in import CutIn, CutInConfig
@@ -11,6 +11,7 @@ from ego.scenarios.emergency_brake import EmergencyBrake, EmergencyBrakeConfig
 from ego.scenarios.fast_follower import FastFollower, FastFollowerConfig
 from ego.scenarios.lane_centering import LaneCenteringConfig, LaneCenteringScenario
 from ego.scenarios.platoon import PlatoonConfig, PlatoonScenario
+from ego.scenarios.references import load_scenario_plugins, resolve_scenario
 from ego.scenarios.tracking import Report000, Report000Config, SineTracking, SineTrackingConfig
 
 SCENARIOS: dict[str, type[Scenario]] = {
