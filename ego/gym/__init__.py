@@ -35,11 +35,29 @@ ENV_IDS = {
     "ego/Platoon-v0": "platoon",
 }
 
+#: env id -> the mean return (default config, 100 Hz) an agent must beat to count as solving
+#: it: the env's default controller's mean return on the evaluation episodes of
+#: docs/results/rl-baselines.md, so "solved" means "as good as the controller"
+REWARD_THRESHOLDS: dict[str, float] = {}
+
+
+def _max_episode_steps(scenario: str) -> int:
+    """Env steps of a default run: its duration over the control period (policy_frequency 0)."""
+    from ego.scenarios import scenario_class
+
+    c = scenario_class(scenario).config_cls()
+    return int(round(c.duration / c.dt))
+
+
 # EgoEnv refuses a step before reset itself, and passes gymnasium's checker (tests/gym): the
-# per-step wrappers gym.make would add for both cost 10 % of a step
+# per-step wrappers gym.make would add for both cost 10 % of a step. gym.make_vec(id, n) runs
+# each env in its own process by default (ego.gym.vector: libsumo runs one SUMO per process).
 for _id, _scenario in ENV_IDS.items():
     if _id not in gymnasium.registry:
         gymnasium.register(_id, entry_point="ego.gym.env:EgoEnv", kwargs={"scenario": _scenario},
+                           vector_entry_point="ego.gym.vector:make_vector",
+                           max_episode_steps=_max_episode_steps(_scenario),
+                           reward_threshold=REWARD_THRESHOLDS.get(_id),
                            order_enforce=False, disable_env_checker=True)
 
 __all__ = [

@@ -73,26 +73,54 @@ def _range(name: str, value: Any) -> tuple[float, float]:
 
 class EgoStateObservation:
     """The task's own observation as a vector; ``names`` are its fields (``standstill_gap`` and
-    ``headway`` stand for the car-following task's spacing policy)."""
+    ``headway`` stand for the car-following task's spacing policy).
+
+    ``normalize`` (default): time and station are relative, not raw: ``t`` becomes the share
+    of the run's duration elapsed (0 to 1), ``s`` the station relative to its reference
+    ``s - s_ref`` (m), and ``s_ref`` the reference's station since the reset over the distance
+    the reference covers in the run at its starting speed (about 0 to 1). Every other field
+    stays in its SI unit. ``normalize=False``: every field raw."""
 
     type_name = "EgoState"
+    OPTIONS = ("normalize",)
 
-    def __init__(self, task: str) -> None:
+    def __init__(self, task: str, normalize: bool = True) -> None:
         paths = []
         for signal in TASKS[task].observes:
             paths += _NOT_NUMERIC.get(signal.name, (signal.name,))
         #: attribute paths into the scenario's observation, and the vector's field names
         self.paths = tuple(paths)
         self.names = tuple(p.rsplit(".", 1)[-1] for p in paths)
+        self.normalize = _flag("normalize", normalize)
         self._get = attrgetter(*self.paths)
         self.space = spaces.Box(-np.inf, np.inf, (len(self.names),), np.float64)
+        names = self.names
+        self._t = names.index("t")
+        self._s = names.index("s") if "s" in names else None
+        self._s_ref = names.index("s_ref") if "s_ref" in names else None
+        self._per_duration = 1.0
+        self._s_ref0, self._per_distance = 0.0, 1.0
 
     def reset(self, view) -> None:
         # the scenario fills one observation in place all run long
-        self._source = view.obs
+        self._source = source = view.obs
+        self._per_duration = 1.0 / view.scenario.config.duration
+        if self._s_ref is not None:
+            s_ref0 = source.s_ref
+            distance = max(abs(source.ds_ref), 1.0) / self._per_duration
+            self._s_ref0, self._per_distance = s_ref0, 1.0 / distance
 
     def observe(self, view) -> np.ndarray:
-        return np.array(self._get(self._source), dtype=np.float64)
+        if not self.normalize:
+            return np.array(self._get(self._source), dtype=np.float64)
+        values = list(self._get(self._source))
+        values[self._t] *= self._per_duration
+        s = self._s
+        if s is not None:
+            r = self._s_ref
+            values[s] -= values[r]
+            values[r] = (values[r] - self._s_ref0) * self._per_distance
+        return np.array(values, dtype=np.float64)
 
 
 class KinematicsObservation:
@@ -184,8 +212,7 @@ def observation_type(config: Mapping[str, Any], task: str):
     """The observation type ``config`` (``{"type": ..., options}``) names."""
     kind = config.get("type") if isinstance(config, Mapping) else None
     if kind == "EgoState":
-        _options("observation", config, ())
-        return EgoStateObservation(task)
+        return EgoStateObservation(task, **_options("observation", config, EgoStateObservation.OPTIONS))
     if kind == "Kinematics":
         return KinematicsObservation(**_options("observation", config, KinematicsObservation.OPTIONS))
     raise ConfigError(f"bad value for observation: {config!r} (expected a dict whose type is one of "
@@ -222,6 +249,30 @@ class ActionType:
     def set_plant(self, force_per_accel: float) -> None:
         self.force_per_accel = force_per_accel
 
+    def _shaped(self, action) -> np.ndarray:
+        """``action`` as an array of the space's shape, or a ValueError naming that shape."""
+        shape = getattr(action, "shape", None)
+        if shape != self.space.shape:
+            try:
+                action = np.asarray(action, dtype=np.float64)
+            except (TypeError, ValueError):
+                shape = None
+            else:
+                shape = action.shape
+            if shape != self.space.shape:
+                raise ValueError(f"bad action {_short(action)}: expected an array of shape "
+                                 f"{self.space.shape} ({self._describe()}), got shape {shape}")
+        return action
+
+    def _describe(self) -> str:
+        names = [n for n, on in zip(("longitudinal", "steering"), self.channels) if on]
+        return f"{self.type_name}: [{', '.join(names)}]"
+
+
+def _short(action) -> str:
+    text = repr(action)
+    return text if len(text) <= 60 else text[:57] + "..."
+
 
 class ContinuousAction(ActionType):
     type_name = "ContinuousAction"
@@ -241,7 +292,8 @@ class ContinuousAction(ActionType):
         self._half = [0.5 * (hi - lo) for lo, hi in ranges]
 
     def native(self, action) -> tuple[float | None, float | None]:
-        a = np.clip(action, -1.0, 1.0) if self.clip else np.asarray(action)
+        action = self._shaped(action)
+        a = np.clip(action, -1.0, 1.0) if self.clip else action
         values = [mid + half * float(x) for mid, half, x in zip(self._mid, self._half, a)]
         lon = values.pop(0) * self.force_per_accel if self.longitudinal else None
         lat = values[0] if self.lateral else None
@@ -270,10 +322,11 @@ class EgoAction(ActionType):
         self.native = self._both if both else self._one
 
     def _both(self, action) -> tuple[float, float]:
+        action = self._shaped(action)
         return float(action[0]), float(action[1])
 
     def _one(self, action) -> tuple[float | None, float | None]:
-        x = float(action[0])
+        x = float(self._shaped(action)[0])
         return (x, None) if self.longitudinal else (None, x)
 
     def from_native(self, command: float, delta: float) -> np.ndarray:

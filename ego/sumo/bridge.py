@@ -178,8 +178,51 @@ class SumoBridge:
     def __exit__(self, *exc) -> None:
         self.close()
 
+    #: [allowed]: a simulation started while libsumo's is busy runs through TraCI instead (a
+    #: socket to a ``sumo`` subprocess, same API; see :meth:`sharing`)
+    _share = [False]
+    _traci_count = 0
+
+    @staticmethod
+    def sharing(enabled: bool = True):
+        """Context manager: bridges started inside it while libsumo's one simulation of the
+        process is busy run through a TraCI connection instead (several simulations in one
+        process, each TraCI step paying a socket round trip per call)."""
+        import contextlib
+
+        @contextlib.contextmanager
+        def scope():
+            before = SumoBridge._share[0]
+            SumoBridge._share[0] = enabled
+            try:
+                yield
+            finally:
+                SumoBridge._share[0] = before
+
+        return scope()
+
+    #: True when this bridge talks TraCI (a second simulation of the process), not libsumo
+    via_traci = False
+
+    def _start_traci(self) -> None:
+        import traci
+
+        SumoBridge._traci_count += 1
+        label = f"ego-{os.getpid()}-{SumoBridge._traci_count}"
+        SumoBridge.started += 1
+        try:
+            traci.start(self.config.command(), label=label)
+        except Exception as exc:  # noqa: BLE001 - SUMO's reasons went to stderr
+            raise SumoError(f"SUMO could not start through TraCI on {self.config.net} "
+                            f"({type(exc).__name__}: {exc})") from None
+        self._ls = traci.getConnection(label)
+        self.via_traci = True
+
     def start(self) -> None:
         if SumoBridge._running:
+            if SumoBridge._share[0]:
+                self._start_traci()
+                return
             raise SumoError("a SUMO simulation is already running in this process "
                             "(libsumo allows one per process; use processes for parallel runs)")
         import libsumo
@@ -199,7 +242,10 @@ class SumoBridge:
                 self._ls.close()
             finally:
                 self._ls = None
-                SumoBridge._running = False
+                if self.via_traci:
+                    self.via_traci = False
+                else:
+                    SumoBridge._running = False
 
     @property
     def libsumo(self):

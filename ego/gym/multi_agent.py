@@ -1,0 +1,154 @@
+"""The platoon's followers as agents: a PettingZoo ``ParallelEnv`` over ``ego/Platoon-v0``.
+
+    from ego.gym.multi_agent import PlatoonParallelEnv
+
+    env = PlatoonParallelEnv(config={"controlled_vehicles": 3})
+    observations, infos = env.reset(seed=0)
+    actions = {agent: env.action_space(agent).sample() for agent in env.agents}
+    observations, rewards, terminations, truncations, infos = env.step(actions)
+
+highway-env's convention: ``controlled_vehicles`` (default: every follower) of the
+platoon's followers, ``f1`` (right behind the SUMO leader) first, are agents; the followers
+behind them keep the env's ``controller``. Every other key is the single-agent env's
+(``ego.gym.EgoEnv("platoon", config)``: scenario parameters, ``randomize``, ``policy_frequency``,
+the reward weights, the observation's ``normalize`` and the action type), applied to each
+agent: its own ``EgoState`` observation (the car-following fields of its own car), its own
+action (its acceleration command), and its own reward (progress = its speed, centring = its
+spacing error, discomfort = its acceleration; the crash term for every agent when the run
+crashes). All agents end together: the run's end (a collision, a divergence) terminates
+every agent, the duration truncates them; ``infos[agent]["metrics"]`` then holds the run's
+metrics (per follower under ``followers``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+from pettingzoo import ParallelEnv
+
+from ego.gym.env import EgoEnv
+from ego.gym.spaces import EgoStateObservation
+from ego.params import ConfigError
+from ego.scenarios.platoon import follower_ids
+
+
+class _FollowerView:
+    """What the reward reads of follower ``i``: its speed, spacing error and acceleration."""
+
+    def __init__(self, scenario, i: int) -> None:
+        self.scenario, self.i = scenario, i
+        self.obs = scenario.obs[i]
+
+    def reward_signals(self) -> tuple[float, float, float, float]:
+        o = self.obs
+        return o.speed, self.scenario.e[self.i], o.accel, 0.0
+
+
+class PlatoonParallelEnv(ParallelEnv):
+    """The platoon's first ``controlled_vehicles`` followers as agents (module docstring)."""
+
+    metadata = {"name": "ego_platoon_v0", "render_modes": ["rgb_array"], "render_fps": 100,
+                "is_parallelizable": True}
+
+    def __init__(self, config: Mapping[str, Any] | None = None, render_mode: str | None = None) -> None:
+        config = dict(config or {})
+        k = config.pop("controlled_vehicles", None)
+        randomize = config.get("randomize")
+        if isinstance(randomize, Mapping) and "followers" in randomize:
+            raise ConfigError("bad value for randomize: followers cannot vary (the agents are fixed)")
+        self._env = env = EgoEnv("platoon", config, render_mode)
+        n = env.scenario.config.followers
+        if k is None:
+            k = n
+        if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 1 <= k <= n:
+            raise ConfigError(f"bad value for controlled_vehicles: {k!r} (expected a whole number from 1 "
+                              f"to followers = {n})")
+        self.render_mode = render_mode
+        self.possible_agents = list(follower_ids(n)[: int(k)])
+        self.agents: list[str] = []
+        normalize = env.observation_type.normalize
+        self._observers = [EgoStateObservation("car-following", normalize=normalize) for _ in self.possible_agents]
+        self._observation_space = self._observers[0].space
+        self._action_space = env.action_space
+        self.metadata = {**self.metadata, "render_fps": env.metadata["render_fps"]}
+
+    def observation_space(self, agent: str):
+        return self._observation_space
+
+    def action_space(self, agent: str):
+        return self._action_space
+
+    @property
+    def config(self) -> dict:
+        return self._env.config
+
+    def reset(self, seed: int | None = None, options: Mapping[str, Any] | None = None):
+        env = self._env
+        _, info = env.reset(seed=seed, options=options)
+        sc = env.scenario
+        self._views = [_FollowerView(sc, i) for i in range(len(self.possible_agents))]
+        for observer, view in zip(self._observers, self._views):
+            observer.reset(env._view)
+            observer._source = view.obs
+        self.agents = list(self.possible_agents)
+        return self._observations(), {a: dict(info) for a in self.agents}
+
+    def _observations(self) -> dict:
+        view = self._env._view
+        return {a: o.observe(view) for a, o in zip(self.agents, self._observers)}
+
+    def step(self, actions: Mapping[str, Any]):
+        env = self._env
+        sc = env.scenario
+        if sc is None or sc.bridge is None or not self.agents:
+            raise RuntimeError("call reset() before step()")
+        native = env.action_type.native
+        missing = [a for a in self.agents if a not in actions]
+        if missing:
+            raise ValueError(f"bad actions: no action for agent(s) {', '.join(missing)} (expected one per "
+                             f"agent of {', '.join(self.agents)})")
+        commands = [native(actions[a])[0] for a in self.agents]
+        total = sum(commands)
+        if total - total != 0.0:  # nan or inf: the run ends before the models see it
+            sc._end("diverged", f"an agent's action is not finite: {commands}", level="ERROR")
+        else:
+            step, controller_step = sc.step, sc.controller.step
+            for _ in range(env._every):
+                own = controller_step(sc.obs)
+                for i, c in enumerate(commands):
+                    own[i] = (c, 0.0)
+                step(own)
+                if sc.status != "running":
+                    break
+        status = sc.status
+        crashed = status in ("collision", "diverged")
+        rewards, infos = {}, {}
+        for agent, view in zip(self.agents, self._views):
+            rewards[agent], terms = env.reward(view, crashed)
+            infos[agent] = {"status": status, "rewards": terms}
+        observations = self._observations()
+        done = status != "running"
+        truncated = done and not crashed and sc.t >= sc.config.duration - 1e-9
+        if done:
+            metrics = sc.result().metrics
+            for info in infos.values():
+                info["status_detail"] = sc.status_detail
+                info["metrics"] = metrics
+        terminations = {a: done and not truncated for a in self.agents}
+        truncations = {a: truncated for a in self.agents}
+        if done:
+            self.agents = []
+        return observations, rewards, terminations, truncations, infos
+
+    def render(self):
+        return self._env.render()
+
+    def close(self) -> None:
+        self._env.close()
+
+    def state(self) -> np.ndarray:
+        """Every follower's observation, stacked (agents first)."""
+        view = self._env._view
+        return np.concatenate([o.observe(view) for o in self._observers])
