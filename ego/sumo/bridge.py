@@ -205,17 +205,29 @@ class SumoBridge:
     via_traci = False
 
     def _start_traci(self) -> None:
-        import traci
+        import contextlib
+        import io
+        import subprocess
+
+        # traci.main, not traci: with LIBSUMO_AS_TRACI set (above) ``traci`` is libsumo itself
+        from traci import main as traci
 
         SumoBridge._traci_count += 1
         label = f"ego-{os.getpid()}-{SumoBridge._traci_count}"
         SumoBridge.started += 1
+        port = traci.getFreeSocketPort()
+        proc = subprocess.Popen([*self.config.command(), "--remote-port", str(port)],
+                                stdout=subprocess.DEVNULL)
         try:
-            traci.start(self.config.command(), label=label)
+            # poll for SUMO's socket every 20 ms (traci.start waits whole seconds), its retry
+            # notes kept off stdout (reserved for results)
+            with contextlib.redirect_stdout(io.StringIO()):
+                self._ls = traci.connect(port, numRetries=500, proc=proc, waitBetweenRetries=0.02, label=label)
         except Exception as exc:  # noqa: BLE001 - SUMO's reasons went to stderr
+            proc.kill()
+            proc.wait()
             raise SumoError(f"SUMO could not start through TraCI on {self.config.net} "
                             f"({type(exc).__name__}: {exc})") from None
-        self._ls = traci.getConnection(label)
         self.via_traci = True
 
     def start(self) -> None:
