@@ -411,7 +411,7 @@ class EgoEnv(gym.Env):
             seed = int(seed)
         run_seed = check_seed(seed) if seed is not None else int(self.np_random.integers(0, MAX_SEED + 1))
         self._start(run_seed)
-        self._limit = getattr(self.spec, "max_episode_steps", None)
+        self._limit = _registered_limit(self.spec)
         return self.observation_type.observe(self._view), {"status": self.scenario.status,
                                                            "randomized": dict(self.randomized)}
 
@@ -497,7 +497,8 @@ class EgoEnv(gym.Env):
             info["status_detail"] = sc.status_detail
             info["metrics"] = sc.result().metrics
         elif self._limit is not None and self._elapsed >= self._limit:
-            # gym.make's TimeLimit truncates this step: the run's metrics so far
+            # the registered TimeLimit truncates this step: the run's metrics so far (a TimeLimit
+            # of another length cannot be seen from here: env.unwrapped.metrics())
             info["status_detail"] = f"max_episode_steps ({self._limit}) reached"
             info["metrics"] = sc.result().metrics
         return self._observe(self._view), reward, terminated, truncated, info
@@ -541,12 +542,25 @@ class EgoEnv(gym.Env):
         if run is not None:
             seed, history, prev, elapsed = run
             self._start(seed)
-            self._limit = getattr(self.spec, "max_episode_steps", None)
+            self._limit = _registered_limit(self.spec)
             apply = self._apply
             for command in history:  # same seed, same commands: the same run (determinism)
                 apply(command)
             self._view._prev, self._elapsed = prev, elapsed
         self._np_random = state["np_random"]
+
+
+def _registered_limit(spec) -> int | None:
+    """The ``max_episode_steps`` of the id's registration: the step at which gym.make's
+    TimeLimit truncates (gym.make leaves the env's own spec without it)."""
+    if spec is None:
+        return None
+    if spec.max_episode_steps is not None:
+        return spec.max_episode_steps
+    try:
+        return gym.spec(spec.id).max_episode_steps
+    except gym.error.Error:
+        return None
 
 
 def _check_randomize(value: Any, config_cls, base) -> dict[str, tuple]:

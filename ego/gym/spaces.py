@@ -76,10 +76,13 @@ class EgoStateObservation:
     ``headway`` stand for the car-following task's spacing policy).
 
     ``normalize`` (default): time and station are relative, not raw: ``t`` becomes the share
-    of the run's duration elapsed (0 to 1), ``s`` the station relative to its reference
-    ``s - s_ref`` (m), and ``s_ref`` the reference's station since the reset over the distance
-    the reference covers in the run at its starting speed (about 0 to 1). Every other field
-    stays in its SI unit. ``normalize=False``: every field raw."""
+    of the run's duration elapsed (0 to 1); where the task tracks a moving station reference
+    (the motorway scenarios) ``s`` becomes the station error ``s - s_ref`` (m) and ``s_ref``
+    the reference's station since the reset over the distance it covers in the run at its
+    starting speed (about 0 to 1); where it does not (the curve, lane centring: ``s_ref`` 0)
+    ``s`` becomes the station since the reset over the distance the ego covers in the run at
+    its starting speed (about 0 to 1). Every other field stays in its SI unit.
+    ``normalize=False``: every field raw."""
 
     type_name = "EgoState"
     OPTIONS = ("normalize",)
@@ -100,15 +103,17 @@ class EgoStateObservation:
         self._s_ref = names.index("s_ref") if "s_ref" in names else None
         self._per_duration = 1.0
         self._s_ref0, self._per_distance = 0.0, 1.0
+        self._s0, self._tracks = 0.0, True
 
     def reset(self, view) -> None:
         # the scenario fills one observation in place all run long
         self._source = source = view.obs
         self._per_duration = 1.0 / view.scenario.config.duration
         if self._s_ref is not None:
-            s_ref0 = source.s_ref
-            distance = max(abs(source.ds_ref), 1.0) / self._per_duration
-            self._s_ref0, self._per_distance = s_ref0, 1.0 / distance
+            self._tracks = source.s_ref != 0.0 or source.ds_ref != 0.0
+            speed = source.ds_ref if self._tracks else source.ds
+            self._s_ref0, self._s0 = source.s_ref, source.s
+            self._per_distance = self._per_duration / max(abs(speed), 1.0)
 
     def observe(self, view) -> np.ndarray:
         if not self.normalize:
@@ -118,8 +123,11 @@ class EgoStateObservation:
         s = self._s
         if s is not None:
             r = self._s_ref
-            values[s] -= values[r]
-            values[r] = (values[r] - self._s_ref0) * self._per_distance
+            if self._tracks:
+                values[s] -= values[r]
+                values[r] = (values[r] - self._s_ref0) * self._per_distance
+            else:
+                values[s] = (values[s] - self._s0) * self._per_distance
         return np.array(values, dtype=np.float64)
 
 
