@@ -335,6 +335,8 @@ class EgoEnv(gym.Env):
         base = cls.config_cls()
         overrides = {k: v for k, v in params.items() if not (hasattr(base, k) and getattr(base, k) == v)}
         randomize = _check_randomize(cfg["randomize"], cls.config_cls, base)
+        if "variant" in overrides and cfg["randomize"] == DEFAULT_RANDOMIZE.get(self.scenario_name):
+            randomize = {}  # the defaults are the road's: a preset (scale-model) runs as it is
         _, sc_config, spec, ctrl_params = configure(RunSpec(self.scenario_name, controller, 0, overrides))
         observation = observation_type(cfg["observation"], self.task)
         action = action_type(cfg["action"], self.task, _native_limits(self.task, sc_config))
