@@ -77,7 +77,9 @@ def env_replay(env_id: str, overrides: dict, observation: dict, actions: np.ndar
     work, timed calls): the scenario's step, and in a platoon its other followers' controllers,
     which the raw loop steps too. Both are measured over the same steps, so a busy machine
     slows both alike."""
-    env = gym.make(env_id, config={**overrides, "observation": observation, "action": {"type": "EgoAction"}})
+    # the demonstration's own scenario: no randomisation
+    env = gym.make(env_id, config={**overrides, "randomize": {}, "observation": observation,
+                                   "action": {"type": "EgoAction"}})
     try:
         env.reset(seed=0)
         sc = env.unwrapped.scenario

@@ -39,6 +39,8 @@ from ego.params import ConfigError
 
 #: the observed fields that are not numbers, and what a vector carries instead
 _NOT_NUMERIC = {"lane": (), "policy": ("policy.standstill_gap", "policy.headway")}
+#: observed fields fixed for a whole run
+_RUN_CONSTANT = ("policy.standstill_gap", "policy.headway", "max_accel", "max_decel")
 
 
 def _options(kind: str, given: Mapping[str, Any], allowed: Sequence[str]) -> dict:
@@ -95,7 +97,16 @@ class EgoStateObservation:
         self.paths = tuple(paths)
         self.names = tuple(p.rsplit(".", 1)[-1] for p in paths)
         self.normalize = _flag("normalize", normalize)
-        self._get = attrgetter(*self.paths)
+        # the trailing fields that hold still over a run (the platoon's spacing policy and
+        # limits) are read once per reset, not every step
+        n_const = 0
+        while n_const < len(paths) and paths[-1 - n_const] in _RUN_CONSTANT:
+            n_const += 1
+        self._const_get = attrgetter(*paths[len(paths) - n_const:]) if n_const else None
+        self._const: list = []
+        dynamic = paths[: len(paths) - n_const]
+        get = attrgetter(*dynamic)
+        self._get = get if len(dynamic) > 1 else (lambda o: (get(o),))
         self.space = spaces.Box(-np.inf, np.inf, (len(self.names),), np.float64)
         names = self.names
         self._t = names.index("t")
@@ -109,6 +120,9 @@ class EgoStateObservation:
         # the scenario fills one observation in place all run long
         self._source = source = view.obs
         self._per_duration = 1.0 / view.scenario.config.duration
+        if self._const_get is not None:
+            const = self._const_get(source)
+            self._const = list(const) if isinstance(const, tuple) else [const]
         if self._s_ref is not None:
             self._tracks = source.s_ref != 0.0 or source.ds_ref != 0.0
             speed = source.ds_ref if self._tracks else source.ds
@@ -116,9 +130,9 @@ class EgoStateObservation:
             self._per_distance = self._per_duration / max(abs(speed), 1.0)
 
     def observe(self, view) -> np.ndarray:
-        if not self.normalize:
-            return np.array(self._get(self._source), dtype=np.float64)
         values = list(self._get(self._source))
+        if not self.normalize:
+            return np.array(values + self._const if self._const else values, dtype=np.float64)
         values[self._t] *= self._per_duration
         s = self._s
         if s is not None:
@@ -128,7 +142,7 @@ class EgoStateObservation:
                 values[r] = (values[r] - self._s_ref0) * self._per_distance
             else:
                 values[s] = (values[s] - self._s0) * self._per_distance
-        return np.array(values, dtype=np.float64)
+        return np.array(values + self._const if self._const else values, dtype=np.float64)
 
 
 class KinematicsObservation:
@@ -260,14 +274,14 @@ class ActionType:
     def _shaped(self, action) -> np.ndarray:
         """``action`` as an array of the space's shape, or a ValueError naming that shape."""
         shape = getattr(action, "shape", None)
-        if shape != self.space.shape:
+        if shape != self._shape:
             try:
                 action = np.asarray(action, dtype=np.float64)
             except (TypeError, ValueError):
                 shape = None
             else:
                 shape = action.shape
-            if shape != self.space.shape:
+            if shape != self._shape:
                 raise ValueError(f"bad action {_short(action)}: expected an array of shape "
                                  f"{self.space.shape} ({self._describe()}), got shape {shape}")
         return action
@@ -294,6 +308,7 @@ class ContinuousAction(ActionType):
         self.steering_range = _range("steering_range", steering_range)
         self.clip = _flag("clip", clip)
         self.space = spaces.Box(-1.0, 1.0, (self.size,), np.float32)
+        self._shape = self.space.shape
         # native = offset + half_span * x for each channel the agent drives
         ranges = [r for r, on in zip((self.acceleration_range, self.steering_range), self.channels) if on]
         self._mid = [0.5 * (lo + hi) for lo, hi in ranges]
@@ -326,6 +341,7 @@ class EgoAction(ActionType):
         low = [b for b, on in zip((lo, -steer), self.channels) if on]
         high = [b for b, on in zip((hi, steer), self.channels) if on]
         self.space = spaces.Box(np.array(low), np.array(high), dtype=np.float64)
+        self._shape = self.space.shape
         both = self.longitudinal and self.lateral
         self.native = self._both if both else self._one
 
