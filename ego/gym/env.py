@@ -353,8 +353,12 @@ class EgoEnv(gym.Env):
                 configure(RunSpec(self.scenario_name, controller, 0,
                                   {**overrides, **{k: v[corner] for k, v in randomize.items()}}))
 
+        meta = action.type_name == "DiscreteMetaAction"
+        if meta and self.task != "tracking":
+            raise ConfigError(f"bad value for action: DiscreteMetaAction needs lanes to change (the motorway "
+                              f"scenarios: emergency-brake, fast-follower, cut-in), not {self.scenario_name}")
         # the agent drives both channels: the loop needs no controller of its own
-        helper = not (action.longitudinal and action.lateral) or self.task == "car-following"
+        helper = not (action.longitudinal and action.lateral) or self.task == "car-following" or meta
         self.close()
         self._controller_name = f"agent+{controller}" if helper else "agent"
         self._spec, self._ctrl_params, self._overrides = spec, ctrl_params, overrides
@@ -382,6 +386,8 @@ class EgoEnv(gym.Env):
         self._view = EgoView(self.scenario, self.np_random)
         if not self._helper:
             self._apply = self._apply_both
+        elif self.action_type.type_name == "DiscreteMetaAction":
+            self._apply, self._meta_command = self._apply_meta, None
         elif self._following:
             self._apply = self._apply_following
         else:
@@ -442,7 +448,10 @@ class EgoEnv(gym.Env):
         view.np_random = self.np_random
         view.reset()
         self.observation_type.reset(view)
-        if self.action_type.longitudinal:
+        if self.action_type.type_name == "DiscreteMetaAction":
+            self.action_type.reset(view)
+            self._meta_command = None
+        elif self.action_type.longitudinal:
             plant = view.plant()
             p = plant.model.params
             self.action_type.set_plant(p.m / p.Nw if plant.input_names[0] == "Fx" else 1.0)
@@ -459,6 +468,16 @@ class EgoEnv(gym.Env):
         lon, lat = command
         own = sc.controller.step(sc.obs)
         sc.step((own[0] if lon is None else lon, own[1] if lat is None else lat))
+
+    def _apply_meta(self, command) -> None:
+        # a new command tuple is a new env step: the meta action moves the targets once
+        self._history.append(command)
+        meta = self.action_type
+        if command is not self._meta_command:
+            self._meta_command = command
+            meta.update(command[0])
+        sc = self.scenario
+        sc.step(sc.controller.step(meta.controller_observation()))
 
     def _apply_following(self, command) -> None:
         # the others' controllers step as in a run; the first follower's command is the agent's

@@ -24,7 +24,23 @@ CONFIGS = {
     "kinematics": {"observation": {"type": "Kinematics"}},
     "ego-action-10hz": {"action": {"type": "EgoAction"}, "policy_frequency": 10},
     "raw-fixed": {"observation": {"type": "EgoState", "normalize": False}, "randomize": {}},
+    "ttc": {"observation": {"type": "TimeToCollision"}, "policy_frequency": 10},
+    "grid": {"observation": {"type": "OccupancyGrid"}},
 }
+MOTORWAY = ["ego/EmergencyBrake-v0", "ego/FastFollower-v0", "ego/CutIn-v0"]
+
+
+@pytest.mark.parametrize("env_id", MOTORWAY)
+def test_checkers_pass_with_discrete_meta_actions(env_id):
+    env = gym.make(env_id, config={"action": {"type": "DiscreteMetaAction"}, "policy_frequency": 1,
+                                   "observation": {"type": "Kinematics"}})
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            check_env(env.unwrapped)
+            sb3_check_env(env, warn=False)
+    finally:
+        env.close()
 
 
 @pytest.mark.parametrize("config", list(CONFIGS), ids=list(CONFIGS))

@@ -275,3 +275,51 @@ def test_docs_status_list_names_every_status():
     line = next(x for x in text.splitlines() if "`info`: `status`" in x)
     for status in ("running", *STATUSES):
         assert f"`{status}`" in line or f"`{status}`" in text.split("`info`: `status`")[1][:600], status
+
+
+# -- highway-env's action and observation types ---------------------------------------------------
+@pytest.mark.sumo
+def test_discrete_meta_actions_change_lane_and_speed_through_the_controller(make):
+    env = make("ego/FastFollower-v0", config={"action": {"type": "DiscreteMetaAction"}, "randomize": {},
+                                              "policy_frequency": 1, "traffic_density": 0.0})
+    env.reset(seed=0)
+    u = env.unwrapped
+    meta, sc = u.action_type, u.scenario
+    assert meta.actions == {0: "LANE_LEFT", 1: "IDLE", 2: "LANE_RIGHT", 3: "FASTER", 4: "SLOWER"}
+    start_lane, offsets = meta.lane, sc.lane_offset
+    env.step(meta.actions_indexes["LANE_LEFT"])
+    for _ in range(7):
+        env.step(meta.actions_indexes["IDLE"])
+    assert meta.lane == start_lane + 1
+    assert sc.d_road == pytest.approx(offsets[start_lane + 1], abs=0.3)  # the pid steered across
+    env.step(meta.actions_indexes["FASTER"])
+    for _ in range(4):
+        env.step(meta.actions_indexes["IDLE"])
+    assert sc.obs.ds == pytest.approx(meta.target_speeds[meta.speed_index], abs=1.0)
+    with pytest.raises(ValueError, match=r"expected an integer from 0 to 4 \(DiscreteMetaAction: 0 LANE_LEFT"):
+        env.step(7)
+
+
+def test_discrete_meta_action_needs_lanes():
+    with pytest.raises(ConfigError, match="DiscreteMetaAction needs lanes"):
+        ego.gym.EgoEnv("curve", config={"action": {"type": "DiscreteMetaAction"}})
+
+
+@pytest.mark.sumo
+def test_time_to_collision_and_occupancy_grid_see_the_lead_car(make):
+    env = make("ego/EmergencyBrake-v0", config={"randomize": {}, "traffic_density": 0.0,
+                                                "observation": {"type": "TimeToCollision"}})
+    env.reset(seed=0)
+    for _ in range(300):  # the lead brakes at 2 s: closing in the ego's own lane
+        obs, *_ = env.step(np.zeros(2, dtype=np.float32))
+    assert obs.shape == (3, 3, 10) and obs[:, 1, :].sum() >= 1.0  # own lane: a predicted collision
+    faster, now = obs[2, 1].argmax(), obs[1, 1].argmax()
+    assert faster <= now  # faster: sooner
+    grid = make("ego/EmergencyBrake-v0", config={"randomize": {}, "traffic_density": 0.0, "multi_instance": True,
+                                                 "lead_gap": 12.0,
+                                                 "observation": {"type": "OccupancyGrid"}})
+    g, _ = grid.reset(seed=0)
+    presence = g[0]
+    assert g.shape == (4, 11, 11) and presence.sum() >= 1.0
+    ix, iy = np.argwhere(presence == 1.0)[0]
+    assert ix > 5 and iy == 5  # ahead, in the ego's own lane (the centre column)
