@@ -703,9 +703,50 @@ def cross_simulator(seeds: int = 3) -> list[Table]:
     return out
 
 
+def _rl_cells(results: list) -> list[str]:
+    from ego.gym.baselines import summary
+
+    mean, sd, ok = summary(results)
+    lengths = [n for r in results for n in r["lengths"]]
+    return [f"{mean:.2f}", "-" if math.isnan(sd) else f"{sd:.2f}", f"{100 * ok:.0f} %",
+            f"{sum(lengths) / len(lengths):.0f}"]
+
+
+def rl_baselines() -> list[Table]:
+    """docs/results/rl-baselines.md: per env id, every controller of its task through
+    ControllerPolicy and PPO / SAC (3 training seeds) on the same evaluation episodes."""
+    from ego.control import CONTROLLERS
+
+    from ego.gym.baselines import ALGOS, BUDGET, EVAL_SEEDS, ControllerEval, TrainedEval
+    from ego.scenarios import scenario_class
+
+    ids = {"ego/EmergencyBrake-v0": "emergency-brake", "ego/FastFollower-v0": "fast-follower",
+           "ego/CutIn-v0": "cut-in", "ego/Curve-v0": "curve", "ego/LaneCentering-v0": "lane-centering",
+           "ego/Platoon-v0": "platoon"}
+    rows = []
+    for env_id, scenario in ids.items():
+        short = env_id.split("/", 1)[1]
+        for controller in CONTROLLERS[scenario_class(scenario).task]:
+            if controller != "none":
+                rows.append(Row(f"{short}, {controller}", (ControllerEval(env_id, controller),), _rl_cells))
+        for algo in ALGOS:
+            rows.append(Row(f"{short}, {algo.upper()}", tuple(TrainedEval(env_id, algo, seed) for seed in range(3)),
+                            _rl_cells))
+    return [Table("rl-baselines", "rl-baselines",
+                  (f"python scenarios/rl/train_sb3.py --env ID --algo ppo --seed 0 --steps {BUDGET}",),
+                  ("env, policy", "mean return", "sd over training seeds", "episodes without a crash",
+                   "mean episode length (env steps)"),
+                  tuple(rows),
+                  (f"Evaluation episodes: seeds {EVAL_SEEDS[0]}-{EVAL_SEEDS[-1]} of each env in its benchmark "
+                   f"configuration (ego.gym.baselines.BENCH_CONFIG: randomised episodes, 10 Hz policy). "
+                   f"PPO and SAC: stable-baselines3 defaults (PPO n_steps 512), {BUDGET} env steps each, "
+                   "training seeds 0-2; a controller is one deterministic run of the episodes.",))]
+
+
 def tables() -> list[Table]:
     """Every table of docs/results/, page by page."""
-    return report_000() + report_002() + report_003() + report_004() + envelope() + cross_simulator()
+    return (report_000() + report_002() + report_003() + report_004() + envelope() + cross_simulator()
+            + rl_baselines())
 
 
 # -- running and writing ---------------------------------------------------------------------------
