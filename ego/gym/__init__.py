@@ -60,6 +60,11 @@ for _id, _scenario in ENV_IDS.items():
                            reward_threshold=REWARD_THRESHOLDS.get(_id),
                            order_enforce=False, disable_env_checker=True)
 
+if "ego/PlatoonMultiAgent-v0" not in gymnasium.registry:
+    gymnasium.register("ego/PlatoonMultiAgent-v0", entry_point="ego.gym.multi_agent:PlatoonMultiAgentEnv",
+                       max_episode_steps=_max_episode_steps("platoon"), order_enforce=False,
+                       disable_env_checker=True)
+
 __all__ = [
     "ENV_IDS",
     "ENV_KEYS",

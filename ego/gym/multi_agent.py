@@ -7,6 +7,10 @@
     actions = {agent: env.action_space(agent).sample() for agent in env.agents}
     observations, rewards, terminations, truncations, infos = env.step(actions)
 
+The same as one Gymnasium env, highway-env's ``MultiAgentAction`` / ``MultiAgentObservation``
+way (tuples, one entry per agent): ``gym.make("ego/PlatoonMultiAgent-v0", config=...)``
+(:class:`PlatoonMultiAgentEnv`).
+
 highway-env's convention: ``controlled_vehicles`` (default: every follower) of the
 platoon's followers, ``f1`` (right behind the SUMO leader) first, are agents; the followers
 behind them keep the env's ``controller``. Every other key is the single-agent env's
@@ -25,7 +29,9 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
+from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
 from ego.gym.env import EgoEnv
@@ -152,3 +158,56 @@ class PlatoonParallelEnv(ParallelEnv):
         """Every follower's observation, stacked (agents first)."""
         view = self._env._view
         return np.concatenate([o.observe(view) for o in self._observers])
+
+
+class PlatoonMultiAgentEnv(gym.Env):
+    """highway-env's multi-agent convention as one Gymnasium env (``ego/PlatoonMultiAgent-v0``):
+    ``controlled_vehicles`` followers, the action a ``Tuple`` of one action per agent
+    (highway-env's ``MultiAgentAction``), the observation a ``Tuple`` of one ``EgoState`` per
+    agent (``MultiAgentObservation``), the reward the agents' mean, ``info["agents_rewards"]``
+    each agent's and ``info["agents_terminated"]`` each agent's end. Configured as
+    :class:`PlatoonParallelEnv` is (the same keys); ``action`` and ``observation`` may be given
+    highway-env's way (``{"type": "MultiAgentAction", "action_config": {...}}``,
+    ``{"type": "MultiAgentObservation", "observation_config": {...}}``)."""
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 100}
+
+    def __init__(self, config: Mapping[str, Any] | None = None, render_mode: str | None = None) -> None:
+        config = dict(config or {})
+        action, observation = config.get("action"), config.get("observation")
+        if isinstance(action, Mapping) and action.get("type") == "MultiAgentAction":
+            config["action"] = action.get("action_config", {"type": "ContinuousAction", "lateral": False})
+        if isinstance(observation, Mapping) and observation.get("type") == "MultiAgentObservation":
+            config["observation"] = observation.get("observation_config", {"type": "EgoState"})
+        self.parallel = PlatoonParallelEnv(config, render_mode)
+        self.render_mode = render_mode
+        agents = self.parallel.possible_agents
+        self.controlled_vehicles = tuple(agents)
+        self.action_space = spaces.Tuple([self.parallel.action_space(a) for a in agents])
+        self.observation_space = spaces.Tuple([self.parallel.observation_space(a) for a in agents])
+        self.metadata = {**self.metadata, "render_fps": self.parallel.metadata["render_fps"]}
+
+    def reset(self, *, seed: int | None = None, options: Mapping[str, Any] | None = None):
+        super().reset(seed=seed)
+        if seed is None:
+            seed = int(self.np_random.integers(0, 2**31 - 1))
+        observations, infos = self.parallel.reset(seed=seed, options=options)
+        return tuple(observations[a] for a in self.controlled_vehicles), infos[self.controlled_vehicles[0]]
+
+    def step(self, action):
+        agents = self.controlled_vehicles
+        if not isinstance(action, (tuple, list)) or len(action) != len(agents):
+            raise ValueError(f"bad action {action!r:.60}: expected a tuple of {len(agents)} actions, one per "
+                             f"controlled vehicle ({', '.join(agents)})")
+        observations, rewards, terminations, truncations, infos = self.parallel.step(dict(zip(agents, action)))
+        info = dict(infos[agents[0]])
+        info["agents_rewards"] = tuple(rewards[a] for a in agents)
+        info["agents_terminated"] = tuple(terminations[a] for a in agents)
+        return (tuple(observations[a] for a in agents), float(np.mean(info["agents_rewards"])),
+                terminations[agents[0]], truncations[agents[0]], info)
+
+    def render(self):
+        return self.parallel.render()
+
+    def close(self) -> None:
+        self.parallel.close()

@@ -103,3 +103,22 @@ def test_vector_envs_step_1000_steps(env_id, kind):
         assert obs.shape[0] == 2 and np.all(np.isfinite(obs))
     finally:
         envs.close()
+
+
+def test_highway_envs_multi_agent_convention_as_one_gymnasium_env():
+    env = gym.make("ego/PlatoonMultiAgent-v0", config={
+        "controlled_vehicles": 2, "policy_frequency": 10,
+        "action": {"type": "MultiAgentAction", "action_config": {"type": "ContinuousAction", "lateral": False}},
+        "observation": {"type": "MultiAgentObservation", "observation_config": {"type": "EgoState"}}})
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            check_env(env.unwrapped)
+        obs, _ = env.reset(seed=0)
+        assert len(obs) == 2 and env.unwrapped.controlled_vehicles == ("f1", "f2")
+        obs, reward, *_, info = env.step(env.action_space.sample())
+        assert reward == pytest.approx(np.mean(info["agents_rewards"])) and len(info["agents_rewards"]) == 2
+        with pytest.raises(ValueError, match="expected a tuple of 2 actions"):
+            env.step(np.zeros(1))
+    finally:
+        env.close()
