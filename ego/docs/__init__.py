@@ -716,7 +716,6 @@ def rl_baselines() -> list[Table]:
     """docs/results/rl-baselines.md: per env id, every controller of its task through
     ControllerPolicy and PPO / SAC (3 training seeds) on the same evaluation episodes."""
     from ego.control import CONTROLLERS
-
     from ego.gym.baselines import ALGOS, BUDGET, EVAL_SEEDS, ControllerEval, TrainedEval
     from ego.scenarios import scenario_class
 

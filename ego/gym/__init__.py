@@ -46,7 +46,7 @@ def _max_episode_steps(scenario: str) -> int:
     from ego.scenarios import scenario_class
 
     c = scenario_class(scenario).config_cls()
-    return int(round(c.duration / c.dt))
+    return round(c.duration / c.dt)
 
 
 # EgoEnv refuses a step before reset itself, and passes gymnasium's checker (tests/gym): the

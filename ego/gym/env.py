@@ -31,13 +31,13 @@ import numpy as np
 
 from ego.checks import MAX_SEED, check_seed
 from ego.control import CONTROLLERS, controller_spec
+from ego.gym.spaces import action_type, observation_type
 from ego.models import NonlinearBicycleParams
 from ego.params import ConfigError, apply_overrides, describe, param, unknown_parameter
 from ego.runner import RunSpec, configure
 from ego.scenarios import scenario_class
 from ego.scenarios.sensor import SurroundSensor
 from ego.sumo.bridge import SumoBridge
-from ego.gym.spaces import action_type, observation_type
 
 #: the controller that drives the channels the agent leaves, per task
 DEFAULT_CONTROLLER = {"tracking": "pid", "curve": "pid", "lane-centering": "cascade-pid",

@@ -27,7 +27,7 @@ metrics (per follower under ``followers``).
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
@@ -55,8 +55,8 @@ class _FollowerView:
 class PlatoonParallelEnv(ParallelEnv):
     """The platoon's first ``controlled_vehicles`` followers as agents (module docstring)."""
 
-    metadata = {"name": "ego_platoon_v0", "render_modes": ["rgb_array"], "render_fps": 100,
-                "is_parallelizable": True}
+    metadata: ClassVar[dict] = {"name": "ego_platoon_v0", "render_modes": ["rgb_array"], "render_fps": 100,
+                                "is_parallelizable": True}
 
     def __init__(self, config: Mapping[str, Any] | None = None, render_mode: str | None = None) -> None:
         config = dict(config or {})
@@ -170,7 +170,7 @@ class PlatoonMultiAgentEnv(gym.Env):
     highway-env's way (``{"type": "MultiAgentAction", "action_config": {...}}``,
     ``{"type": "MultiAgentObservation", "observation_config": {...}}``)."""
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": 100}
+    metadata: ClassVar[dict] = {"render_modes": ["rgb_array"], "render_fps": 100}
 
     def __init__(self, config: Mapping[str, Any] | None = None, render_mode: str | None = None) -> None:
         config = dict(config or {})

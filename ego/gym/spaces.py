@@ -330,7 +330,7 @@ class OccupancyGridObservation:
             ranges[key] = _range(f"features_range[{key}]", value)
         self._ranges = ranges
         self._origin, self._step = (x0, y0), (sx, sy)
-        self.shape = (len(self.features), int(round((x1 - x0) / sx)), int(round((y1 - y0) / sy)))
+        self.shape = (len(self.features), round((x1 - x0) / sx), round((y1 - y0) / sy))
         self.names = self.features
         self.space = spaces.Box(-1.0, 1.0, self.shape, np.float32)
 
@@ -346,7 +346,7 @@ class OccupancyGridObservation:
 
     def observe(self, view) -> np.ndarray:
         ego, others, _ = view.traffic()
-        f, nx, ny = self.shape
+        _, nx, ny = self.shape
         out = np.zeros(self.shape, dtype=np.float32)
         (x0, y0), (sx, sy) = self._origin, self._step
         if "on_road" in self.features:

@@ -17,6 +17,7 @@ import os
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 
@@ -180,7 +181,7 @@ class SumoBridge:
 
     #: [allowed]: a simulation started while libsumo's is busy runs through TraCI instead (a
     #: socket to a ``sumo`` subprocess, same API; see :meth:`sharing`)
-    _share = [False]
+    _share: ClassVar[list[bool]] = [False]
     _traci_count = 0
 
     @staticmethod

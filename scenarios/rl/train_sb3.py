@@ -16,7 +16,15 @@ import sys
 import time
 
 from ego.gym import ENV_IDS
-from ego.gym.baselines import ALGOS, BENCH_CONFIG, controller_policy_act, evaluate, model_act, summary, train
+from ego.gym.baselines import (
+    ALGOS,
+    BENCH_CONFIG,
+    controller_policy_act,
+    evaluate,
+    model_act,
+    summary,
+    train,
+)
 from ego.gym.env import DEFAULT_CONTROLLER
 
 

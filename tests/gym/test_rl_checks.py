@@ -92,7 +92,7 @@ def test_vector_envs_step_1000_steps(env_id, kind):
         space = envs.single_action_space if hasattr(envs, "single_action_space") else envs.action_space
         rng = np.random.default_rng(0)
         # a gentle random policy: some episodes end, the vector env resets them
-        sample = lambda: 0.3 * rng.uniform(-1.0, 1.0, (2, *space.shape)).astype(space.dtype)  # noqa: E731
+        sample = lambda: 0.3 * rng.uniform(-1.0, 1.0, (2, *space.shape)).astype(space.dtype)
         if hasattr(envs, "single_action_space"):
             envs.reset(seed=0)
             obs = _step(envs, 1000, sample)

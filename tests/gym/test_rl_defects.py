@@ -57,7 +57,7 @@ def test_multi_instance_runs_a_second_sumo_through_traci_with_the_same_episode(m
     actions = [np.array([0.2, 0.01 * (k % 5)], dtype=np.float32) for k in range(150)]
     for action in actions:  # interleaved: both simulations live in this process
         a, ra, *_ = first.step(action)
-        b, rb, *_ = second.step(action)
+        b, rb, *_ = second.step(action)  # same reward too
     assert np.array_equal(a, b) and ra == rb
 
 
@@ -76,7 +76,7 @@ def test_controller_policy_gives_the_controllers_metrics_at_any_policy_frequency
     obs, first = env.reset(seed=2)
     steps = 0
     while True:
-        obs, reward, terminated, truncated, info = env.step(policy(obs))
+        obs, _, terminated, truncated, info = env.step(policy(obs))
         steps += 1
         if terminated or truncated:
             break

@@ -39,7 +39,7 @@ def test_bad_video_paths_are_refused(path, why):
 
 
 def test_mp4_without_any_ffmpeg_suggests_a_gif(monkeypatch):
-    import ego.highway_env.video as video
+    from ego.highway_env import video
 
     monkeypatch.setattr(video, "ffmpeg_exe", lambda: None)  # a machine with neither
     with pytest.raises(ConfigError, match=r"needs ffmpeg \(pip install imageio-ffmpeg.*write a \.gif instead"):
