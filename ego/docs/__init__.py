@@ -712,6 +712,12 @@ def _rl_cells(results: list) -> list[str]:
             f"{sum(lengths) / len(lengths):.0f}"]
 
 
+#: env id -> its table on docs/results/rl-baselines.md (one table each: regenerated one at a time)
+RL_TABLES = {"ego/EmergencyBrake-v0": "rl-emergency-brake", "ego/FastFollower-v0": "rl-fast-follower",
+             "ego/CutIn-v0": "rl-cut-in", "ego/Curve-v0": "rl-curve", "ego/LaneCentering-v0": "rl-lane-centering",
+             "ego/Platoon-v0": "rl-platoon"}
+
+
 def rl_baselines() -> list[Table]:
     """docs/results/rl-baselines.md: per env id, every controller of its task through
     ControllerPolicy and PPO / SAC (3 training seeds) on the same evaluation episodes."""
@@ -719,27 +725,22 @@ def rl_baselines() -> list[Table]:
     from ego.gym.baselines import ALGOS, BUDGET, EVAL_SEEDS, ControllerEval, TrainedEval
     from ego.scenarios import scenario_class
 
-    ids = {"ego/EmergencyBrake-v0": "emergency-brake", "ego/FastFollower-v0": "fast-follower",
-           "ego/CutIn-v0": "cut-in", "ego/Curve-v0": "curve", "ego/LaneCentering-v0": "lane-centering",
-           "ego/Platoon-v0": "platoon"}
-    rows = []
-    for env_id, scenario in ids.items():
-        short = env_id.split("/", 1)[1]
-        for controller in CONTROLLERS[scenario_class(scenario).task]:
-            if controller != "none":
-                rows.append(Row(f"{short}, {controller}", (ControllerEval(env_id, controller),), _rl_cells))
-        for algo in ALGOS:
-            rows.append(Row(f"{short}, {algo.upper()}", tuple(TrainedEval(env_id, algo, seed) for seed in range(3)),
-                            _rl_cells))
-    return [Table("rl-baselines", "rl-baselines",
-                  (f"python scenarios/rl/train_sb3.py --env ID --algo ppo --seed 0 --steps {BUDGET}",),
-                  ("env, policy", "mean return", "sd over training seeds", "episodes without a crash",
-                   "mean episode length (env steps)"),
-                  tuple(rows),
-                  (f"Evaluation episodes: seeds {EVAL_SEEDS[0]}-{EVAL_SEEDS[-1]} of each env in its benchmark "
-                   f"configuration (ego.gym.baselines.BENCH_CONFIG: randomised episodes, 10 Hz policy). "
-                   f"PPO and SAC: stable-baselines3 defaults (PPO n_steps 512), {BUDGET} env steps each, "
-                   "training seeds 0-2; a controller is one deterministic run of the episodes.",))]
+    out = []
+    for env_id, name in RL_TABLES.items():
+        scenario = name.removeprefix("rl-")
+        rows = [Row(controller, (ControllerEval(env_id, controller),), _rl_cells)
+                for controller in CONTROLLERS[scenario_class(scenario).task] if controller != "none"]
+        rows += [Row(algo.upper(), tuple(TrainedEval(env_id, algo, seed) for seed in range(3)), _rl_cells)
+                 for algo in ALGOS]
+        out.append(Table(name, "rl-baselines",
+                         (f"python scenarios/rl/train_sb3.py --env {env_id} --algo ppo --seed 0 --steps {BUDGET}",),
+                         (f"{env_id} policy", "mean return", "sd over training seeds", "episodes without a crash",
+                          "mean episode length (env steps)"),
+                         tuple(rows),
+                         (f"Evaluation episodes: seeds {EVAL_SEEDS[0]}-{EVAL_SEEDS[-1]}. PPO and SAC: {BUDGET} env "
+                          "steps each, training seeds 0-2 (mean of the seeds' mean returns +- their standard "
+                          "deviation); a controller is one deterministic run of the episodes.",)))
+    return out
 
 
 def tables() -> list[Table]:

@@ -20,9 +20,12 @@ from ego.gym.env import ENV_KEYS, EgoEnv, EgoView, EnvConfig, Reward
 from ego.gym.policy import ControllerPolicy
 from ego.gym.spaces import (
     ContinuousAction,
+    DiscreteMetaAction,
     EgoAction,
     EgoStateObservation,
     KinematicsObservation,
+    OccupancyGridObservation,
+    TimeToCollisionObservation,
 )
 
 #: env id -> scenario name
@@ -70,11 +73,14 @@ __all__ = [
     "ENV_KEYS",
     "ContinuousAction",
     "ControllerPolicy",
+    "DiscreteMetaAction",
     "EgoAction",
     "EgoEnv",
     "EgoStateObservation",
     "EgoView",
     "EnvConfig",
     "KinematicsObservation",
+    "OccupancyGridObservation",
     "Reward",
+    "TimeToCollisionObservation",
 ]

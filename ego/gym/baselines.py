@@ -26,13 +26,13 @@ BENCH_CONFIG: dict[str, dict] = {
     "ego/FastFollower-v0": {"policy_frequency": 10},
     "ego/CutIn-v0": {"policy_frequency": 10},
     "ego/Curve-v0": {"policy_frequency": 10},
-    "ego/LaneCentering-v0": {"policy_frequency": 10, "duration": 60.0},
+    "ego/LaneCentering-v0": {"policy_frequency": 10, "duration": 30.0},
     "ego/Platoon-v0": {"policy_frequency": 10},
 }
 #: the evaluation episodes' seeds (never used in training: training seeds its episodes from 0)
-EVAL_SEEDS = tuple(range(1000, 1005))
-#: the training budget of the committed table: env steps (at 10 Hz: 300 simulated seconds)
-BUDGET = 3000
+EVAL_SEEDS = tuple(range(1000, 1003))
+#: the training budget of the committed table: env steps (at 10 Hz: 200 simulated seconds)
+BUDGET = 2000
 ALGOS = ("ppo", "sac")
 
 

@@ -10,8 +10,15 @@ scenario's and that controller's parameters, validated as ``ego run --set`` valu
 Episodes: ``terminated`` when the run ends before its duration (a collision or a divergence
 of the ego, or the task's own end: the curve left, the road's end reached); ``truncated``
 when the simulated time reaches ``duration``. ``info`` has ``status`` (``running``,
-``completed``, ``collision``, ``diverged``, ``timeout``) and ``rewards`` (the reward's terms)
-every step, and at the end ``status_detail`` and ``metrics``: what ``ego run`` reports.
+``completed``, ``ended``, ``collision``, ``diverged``, ``timeout``) and ``rewards`` (the
+reward's terms) every step, and at the end ``status_detail`` and ``metrics``: what ``ego run``
+reports (also where the registered ``TimeLimit`` truncates). A non-finite action ends the run
+``diverged`` before anything sees it.
+
+Each reset draws the episode's ``randomize`` parameters from its seed (:data:`DEFAULT_RANDOMIZE`),
+so an env is a distribution of scenarios. An env pickles (mid-episode: the episode's commands
+are replayed in a new SUMO). ``multi_instance`` lets a second env of the process run its SUMO
+through TraCI.
 
 The platoon: the agent drives the first follower (``f1``, right behind the SUMO leader); the
 followers behind it keep the scenario's controller, so the agent's driving propagates down
