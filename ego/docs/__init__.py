@@ -716,6 +716,9 @@ def _rl_cells(results: list) -> list[str]:
 RL_TABLES = {"ego/EmergencyBrake-v0": "rl-emergency-brake", "ego/FastFollower-v0": "rl-fast-follower",
              "ego/CutIn-v0": "rl-cut-in", "ego/Curve-v0": "rl-curve", "ego/LaneCentering-v0": "rl-lane-centering",
              "ego/Platoon-v0": "rl-platoon"}
+#: the env ids whose tables have trained PPO / SAC rows (the others' training runs did not fit
+#: in the time the shared machine gave: their PPO / SAC rows are still to be made)
+RL_TRAINED = ("ego/CutIn-v0", "ego/Curve-v0", "ego/LaneCentering-v0", "ego/Platoon-v0")
 
 
 def rl_baselines() -> list[Table]:
@@ -731,7 +734,7 @@ def rl_baselines() -> list[Table]:
         rows = [Row(controller, (ControllerEval(env_id, controller),), _rl_cells)
                 for controller in CONTROLLERS[scenario_class(scenario).task] if controller != "none"]
         rows += [Row(algo.upper(), tuple(TrainedEval(env_id, algo, seed) for seed in range(3)), _rl_cells)
-                 for algo in ALGOS]
+                 for algo in ALGOS if env_id in RL_TRAINED]
         out.append(Table(name, "rl-baselines",
                          (f"python scenarios/rl/train_sb3.py --env {env_id} --algo ppo --seed 0 --steps {BUDGET}",),
                          (f"{env_id} policy", "mean return", "sd over training seeds", "episodes without a crash",
