@@ -10,7 +10,7 @@ scenario's and that controller's parameters, validated as ``ego run --set`` valu
 Episodes: ``terminated`` when the run ends before its duration (a collision or a divergence
 of the ego, or the task's own end: the curve left, the road's end reached); ``truncated``
 when the simulated time reaches ``duration``. ``info`` has ``status`` (``running``,
-``completed``, ``ended``, ``collision``, ``diverged``, ``timeout``) and ``rewards`` (the
+``completed``, ``ended``, ``collision``, ``diverged``, ``timeout``, ``error``) and ``rewards`` (the
 reward's terms) every step, and at the end ``status_detail`` and ``metrics``: what ``ego run``
 reports (also where the registered ``TimeLimit`` truncates). A non-finite action ends the run
 ``diverged`` before anything sees it.

@@ -284,18 +284,18 @@ def test_discrete_meta_actions_change_lane_and_speed_through_the_controller(make
                                               "policy_frequency": 1, "traffic_density": 0.0})
     env.reset(seed=0)
     u = env.unwrapped
-    meta, sc = u.action_type, u.scenario
+    meta, road = u.action_type, u._view.road  # the composed scenario's road state (its view)
     assert meta.actions == {0: "LANE_LEFT", 1: "IDLE", 2: "LANE_RIGHT", 3: "FASTER", 4: "SLOWER"}
-    start_lane, offsets = meta.lane, sc.lane_offset
+    start_lane, offsets = meta.lane, road.lane_offset
     env.step(meta.actions_indexes["LANE_LEFT"])
     for _ in range(7):
         env.step(meta.actions_indexes["IDLE"])
     assert meta.lane == start_lane + 1
-    assert sc.d_road == pytest.approx(offsets[start_lane + 1], abs=0.3)  # the pid steered across
+    assert road.d_road == pytest.approx(offsets[start_lane + 1], abs=0.3)  # the pid steered across
     env.step(meta.actions_indexes["FASTER"])
     for _ in range(4):
         env.step(meta.actions_indexes["IDLE"])
-    assert sc.obs.ds == pytest.approx(meta.target_speeds[meta.speed_index], abs=1.0)
+    assert u._view.obs.ds == pytest.approx(meta.target_speeds[meta.speed_index], abs=1.0)
     with pytest.raises(ValueError, match=r"expected an integer from 0 to 4 \(DiscreteMetaAction: 0 LANE_LEFT"):
         env.step(7)
 
