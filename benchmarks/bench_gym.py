@@ -1,6 +1,6 @@
 """Cost of the Gymnasium wrapper over the raw scenario step, and env steps/s, in one run.
 
-    python benchmarks/bench_gym.py [--repeat 3] [--duration 20] [--ids ego/CutIn-v0 ...]
+    python benchmarks/bench_gym.py [--repeat 3] [--duration 20] [--ids ego/CutIn-v0 ...] [--vector-steps 2000]
 
 For every env id: the scenario's default controller drives one run (seed 0) and its actions
 are kept; then the same actions are replayed (same trajectory, no controller cost) through
@@ -12,6 +12,9 @@ steps/s and the wrapper's cost per step over the raw step (target <= 15 % with `
 the timer's own cost taken out. In the platoon the agent drives the first follower and the
 env steps the others' controllers itself: they count as raw work, as ``ego run`` steps them
 too. Best of ``--repeat``.
+
+Then, per id, ``gym.make_vec(id, 2)`` (by default one worker process per env) against one env
+in this process: env steps/s of each (target: the vector env >= 1.8x on 2 cores).
 """
 
 from __future__ import annotations
@@ -77,7 +80,9 @@ def env_replay(env_id: str, overrides: dict, observation: dict, actions: np.ndar
     work, timed calls): the scenario's step, and in a platoon its other followers' controllers,
     which the raw loop steps too. Both are measured over the same steps, so a busy machine
     slows both alike."""
-    env = gym.make(env_id, config={**overrides, "observation": observation, "action": {"type": "EgoAction"}})
+    # the demonstration's own scenario: no randomisation
+    env = gym.make(env_id, config={**overrides, "randomize": {}, "observation": observation,
+                                   "action": {"type": "EgoAction"}})
     try:
         env.reset(seed=0)
         sc = env.unwrapped.scenario
@@ -97,11 +102,43 @@ def env_replay(env_id: str, overrides: dict, observation: dict, actions: np.ndar
         env.close()
 
 
+def vector_speedup(env_id: str, steps: int, config: dict) -> tuple[float, float]:
+    """(one env's steps/s, ``gym.make_vec(env_id, 2)``'s env steps/s): zero actions (the
+    scenario's traffic and the ego's model still run), episodes reset as they end; the
+    vector env's worker start-up is not timed."""
+    env = gym.make(env_id, config=config)
+    try:
+        env.reset(seed=0)
+        zero = np.zeros(env.action_space.shape, dtype=env.action_space.dtype)
+        t0 = time.perf_counter()
+        for _ in range(steps):
+            *_, terminated, truncated, _ = env.step(zero)
+            if terminated or truncated:
+                env.reset()
+        one = steps / (time.perf_counter() - t0)
+    finally:
+        env.close()
+    envs = gym.make_vec(env_id, num_envs=2, config=config)
+    try:
+        envs.reset(seed=0)
+        zeros = np.zeros((2, *envs.single_action_space.shape), dtype=envs.single_action_space.dtype)
+        envs.step(zeros)
+        t0 = time.perf_counter()
+        for _ in range(steps):
+            envs.step(zeros)
+        two = 2 * steps / (time.perf_counter() - t0)
+    finally:
+        envs.close()
+    return one, two
+
+
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--duration", type=float, default=20.0, help="simulated seconds per run")
     ap.add_argument("--ids", nargs="*", default=list(ego.gym.ENV_IDS))
+    ap.add_argument("--vector-steps", type=int, default=2000,
+                    help="steps of one env and of make_vec(id, 2) for the speed-up (0: skip)")
     args = ap.parse_args(argv)
     os.environ.setdefault("MPLCONFIGDIR", tempfile.mkdtemp())
     overrides = {"duration": args.duration}
@@ -135,6 +172,19 @@ def main(argv: list[str] | None = None) -> dict:
               f"{100 * row['overhead']:8.1f}% {row['kinematics_env_steps_per_s']:19.0f} "
               f"{100 * row['kinematics_overhead']:8.1f}%")
     print("  target: overhead <= 15 % with EgoState")
+    if args.vector_steps:
+        print(f"gym.make_vec(id, 2) (one process per env) against one env, {args.vector_steps} steps each, "
+              f"{os.cpu_count()} cores")
+        print(f"  {'env id':24} {'policy_frequency':>16} {'1 env steps/s':>14} {'2 envs steps/s':>15} "
+              f"{'speed-up':>9}")
+        for env_id in args.ids:
+            for pf in (0, 10):
+                one, two = vector_speedup(env_id, args.vector_steps // (10 if pf else 1),
+                                          {**overrides, "policy_frequency": pf})
+                figures[env_id].update({f"one_env_steps_per_s_pf{pf}": one, f"make_vec2_steps_per_s_pf{pf}": two,
+                                        f"vector_speedup_pf{pf}": two / one})
+                print(f"  {env_id:24} {pf:16d} {one:14.0f} {two:15.0f} {two / one:8.2f}x")
+        print("  target: >= 1.8x on 2 cores")
     return figures
 
 

@@ -19,6 +19,8 @@ ROWS = [
     ("lane-centering", "report 003's, lateral-error"), ("recovery", "25 m/s"),
     ("platoon", "pid, 0-2"), ("followers", "pid, f3"), ("headway", "2"), ("scale-model", "pid, lambda 0.2 s"),
     ("ccrb", "pid"), ("ccrs-ttc1", "fuzzy"), ("cross-emergency-brake", "pid"),
+    # the RL baselines: a controller row (the trained rows take minutes of training each)
+    ("rl-cut-in", "pid"),
 ]
 TABLES = {t.name: t for t in docs.tables()}
 

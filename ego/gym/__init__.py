@@ -20,9 +20,12 @@ from ego.gym.env import ENV_KEYS, EgoEnv, EgoView, EnvConfig, Reward
 from ego.gym.policy import ControllerPolicy
 from ego.gym.spaces import (
     ContinuousAction,
+    DiscreteMetaAction,
     EgoAction,
     EgoStateObservation,
     KinematicsObservation,
+    OccupancyGridObservation,
+    TimeToCollisionObservation,
 )
 
 #: env id -> scenario name
@@ -35,23 +38,57 @@ ENV_IDS = {
     "ego/Platoon-v0": "platoon",
 }
 
+#: env id -> the mean return an agent must reach to count as solving it: the env's default
+#: controller's mean return on the evaluation episodes of docs/results/rl-baselines.md (the
+#: benchmark configuration: ego.gym.baselines.BENCH_CONFIG, 10 Hz), so "solved" means "as
+#: good as the controller" (tests/gym check it against the page)
+REWARD_THRESHOLDS: dict[str, float] = {
+    "ego/EmergencyBrake-v0": 87.54,
+    "ego/FastFollower-v0": 116.70,
+    "ego/CutIn-v0": 150.97,
+    "ego/Curve-v0": 13.77,
+    "ego/LaneCentering-v0": 89.85,
+    "ego/Platoon-v0": 209.74,
+}
+
+
+def _max_episode_steps(scenario: str) -> int:
+    """Env steps of a default run: its duration over the control period (policy_frequency 0)."""
+    from ego.scenarios import scenario_class
+
+    c = scenario_class(scenario).config_cls()
+    return round(c.duration / c.dt)
+
+
 # EgoEnv refuses a step before reset itself, and passes gymnasium's checker (tests/gym): the
-# per-step wrappers gym.make would add for both cost 10 % of a step
+# per-step wrappers gym.make would add for both cost 10 % of a step. gym.make_vec(id, n) runs
+# each env in its own process by default (ego.gym.vector: libsumo runs one SUMO per process).
 for _id, _scenario in ENV_IDS.items():
     if _id not in gymnasium.registry:
         gymnasium.register(_id, entry_point="ego.gym.env:EgoEnv", kwargs={"scenario": _scenario},
+                           vector_entry_point="ego.gym.vector:make_vector",
+                           max_episode_steps=_max_episode_steps(_scenario),
+                           reward_threshold=REWARD_THRESHOLDS.get(_id),
                            order_enforce=False, disable_env_checker=True)
+
+if "ego/PlatoonMultiAgent-v0" not in gymnasium.registry:
+    gymnasium.register("ego/PlatoonMultiAgent-v0", entry_point="ego.gym.multi_agent:PlatoonMultiAgentEnv",
+                       max_episode_steps=_max_episode_steps("platoon"), order_enforce=False,
+                       disable_env_checker=True)
 
 __all__ = [
     "ENV_IDS",
     "ENV_KEYS",
     "ContinuousAction",
     "ControllerPolicy",
+    "DiscreteMetaAction",
     "EgoAction",
     "EgoEnv",
     "EgoStateObservation",
     "EgoView",
     "EnvConfig",
     "KinematicsObservation",
+    "OccupancyGridObservation",
     "Reward",
+    "TimeToCollisionObservation",
 ]

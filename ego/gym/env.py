@@ -10,8 +10,15 @@ scenario's and that controller's parameters, validated as ``ego run --set`` valu
 Episodes: ``terminated`` when the run ends before its duration (a collision or a divergence
 of the ego, or the task's own end: the curve left, the road's end reached); ``truncated``
 when the simulated time reaches ``duration``. ``info`` has ``status`` (``running``,
-``completed``, ``collision``, ``diverged``, ``timeout``) and ``rewards`` (the reward's terms)
-every step, and at the end ``status_detail`` and ``metrics``: what ``ego run`` reports.
+``completed``, ``ended``, ``collision``, ``diverged``, ``timeout``, ``error``) and ``rewards`` (the
+reward's terms) every step, and at the end ``status_detail`` and ``metrics``: what ``ego run``
+reports (also where the registered ``TimeLimit`` truncates). A non-finite action ends the run
+``diverged`` before anything sees it.
+
+Each reset draws the episode's ``randomize`` parameters from its seed (:data:`DEFAULT_RANDOMIZE`),
+so an env is a distribution of scenarios. An env pickles (mid-episode: the episode's commands
+are replayed in a new SUMO). ``multi_instance`` lets a second env of the process run its SUMO
+through TraCI.
 
 The platoon: the agent drives the first follower (``f1``, right behind the SUMO leader); the
 followers behind it keep the scenario's controller, so the agent's driving propagates down
@@ -38,12 +45,26 @@ from ego.params import ConfigError, apply_overrides, describe, param, unknown_pa
 from ego.runner import RunSpec, parameter_namespace, resolve
 from ego.scenarios import scenario_class
 from ego.scenarios.sensor import SurroundSensor
+from ego.sim import sharing_instances
 
 #: the controller that drives the channels the agent leaves, per task
 DEFAULT_CONTROLLER = {"tracking": "pid", "curve": "pid", "lane-centering": "cascade-pid",
                       "car-following": "pid"}
 #: 1 g: the box of ``EgoAction`` for an acceleration command without a limit of its own
 _ONE_G = 9.81
+#: each env's default episode distribution: scenario parameter -> [low, high], sampled at
+#: every reset from the episode's seed (``config["randomize"]``; ``{}``: one fixed scenario)
+DEFAULT_RANDOMIZE: dict[str, dict[str, list[float]]] = {
+    "emergency-brake": {"ego_speed": [17.0, 23.0], "lead_gap": [20.0, 45.0], "lead_decel": [3.0, 9.0],
+                        "lead_brake_time": [1.0, 3.0], "traffic_density": [5.0, 15.0]},
+    "fast-follower": {"follower_gap": [40.0, 80.0], "follower_speed": [30.0, 36.0],
+                      "traffic_density": [5.0, 15.0]},
+    "cut-in": {"ego_speed": [20.0, 30.0], "cut_in_gap": [10.0, 25.0], "cut_in_speed": [2.0, 8.0],
+               "cut_in_duration": [1.5, 3.0]},
+    "curve": {"entry_speed": [25.0, 35.0], "accel": [0.1, 0.5], "approach": [15.0, 25.0]},
+    "lane-centering": {"offset": [-0.5, 0.5], "speed": [6.0, 10.0], "traffic_density": [4.0, 12.0]},
+    "platoon": {"headway": [1.5, 2.5], "start_speed": [30.0, 50.0], "start_error": [0.0, 3.0]},
+}
 
 
 @dataclass(frozen=True)
@@ -75,7 +96,8 @@ class EnvConfig:
 
 _ENV_SCALARS = tuple(f.name for f in fields(EnvConfig))
 #: the env's own configuration keys; every other key is a scenario or controller parameter
-ENV_KEYS = ("observation", "action", "controller", "reward_speed_range", *_ENV_SCALARS)
+ENV_KEYS = ("observation", "action", "controller", "reward_speed_range", "randomize", "multi_instance",
+            *_ENV_SCALARS)
 
 
 class EgoView:
@@ -83,16 +105,30 @@ class EgoView:
     observation, the speed along the lane, the tracking error, the accelerations and the
     traffic around it in its lane's frame. ``np_random`` is the env's generator."""
 
-    def __init__(self, scenario, np_random) -> None:
+    def __init__(self, scenario, np_random, vid: str | None = None) -> None:
         self.scenario = scenario
         self.np_random = np_random
+        self._vid = vid
         self._sensor: SurroundSensor | None = None
         self._looked = -1
 
     @property
     def agent(self) -> str:
-        """The vehicle the agent drives (the ego; the platoon's first follower)."""
-        return self.scenario.agent_id
+        """The vehicle the agent drives (the ego; the platoon's first follower; ``vid`` when
+        given: one agent of several)."""
+        return self.scenario.agent_id if self._vid is None else self._vid
+
+    @property
+    def road(self):
+        """The scenario's road state (s, d_road, lanes, target lane): a composed scenario's
+        view, else the scenario itself."""
+        sc = self.scenario
+        return getattr(sc, "view", None) or sc
+
+    @property
+    def steers(self) -> bool:
+        """The agent's vehicle steers (False: it keeps its one lane, the platoon's followers)."""
+        return TASKS[self.scenario.task].returns[1].high > 0.0
 
     @property
     def obs(self):
@@ -176,6 +212,9 @@ class Reward:
         crash = 1.0 if crashed else 0.0
         w_crash, w_progress, w_centring, w_comfort = self._weights
         reward = w_crash * crash + w_progress * progress + w_centring * centring + w_comfort * discomfort
+        if reward - reward != 0.0:  # a diverged ego's signals (nan, inf): those terms count 0
+            progress, centring, discomfort = (x if math.isfinite(x) else 0.0 for x in (progress, centring, discomfort))
+            reward = w_crash * crash + w_progress * progress + w_centring * centring + w_comfort * discomfort
         return reward, {"crashed": crash, "progress": progress, "centring": centring, "discomfort": discomfort}
 
 
@@ -200,21 +239,29 @@ class AgentSlot:
         return {}
 
 
-#: the env whose SUMO runs in this process (libsumo runs one simulation per process)
+#: the env whose SUMO runs through libsumo in this process (libsumo runs one simulation per
+#: process; a ``multi_instance`` env started while it runs talks TraCI instead)
 _running: list = [None]
+
+#: why a step is refused after another env's reset ended this env's run
+_EVICTED = ("this env's SUMO run was ended by the reset of another ego env in this process: libsumo "
+            "runs one simulation per process. Use gym.make_vec(id, n) (one process per env), SB3's "
+            "SubprocVecEnv, or config={'multi_instance': True} for several envs in one process "
+            "(DummyVecEnv; the second and later run SUMO through TraCI, slower)")
 
 
 class EgoEnv(gym.Env):
     """An ego scenario as a Gymnasium env (see the module docstring). ``scenario`` is a name
     of ``ego list``; ``config`` updates :meth:`default_config`.
 
-    libsumo runs one simulation per process, so one env per process runs at a time:
-    ``reset`` ends the run of any other ego env of the process (whose next ``step`` then asks
-    for a reset). Envs in parallel live in their own processes (``gym.make_vec(...,
-    vectorization_mode="async")``).
+    libsumo runs one simulation per process, so by default one env per process runs at a
+    time: ``reset`` ends the run of any other ego env of the process (whose next ``step`` then
+    raises, saying so). ``config["multi_instance"] = True`` lets an env start while another
+    runs: its SUMO then runs through TraCI (a ``sumo`` subprocess behind a socket). Envs in
+    parallel live in their own processes: ``gym.make_vec(id, n)`` does that by default.
     """
 
-    metadata: ClassVar[dict] = {"render_modes": ["rgb_array"], "render_fps": 10}
+    metadata: ClassVar[dict] = {"render_modes": ["rgb_array"], "render_fps": 100}
 
     def __init__(self, scenario: str = "emergency-brake", config: Mapping[str, Any] | None = None,
                  render_mode: str | None = None) -> None:
@@ -230,6 +277,12 @@ class EgoEnv(gym.Env):
         self.configure(config or {})
         self.scenario = None
         self._renderer = None
+        self._history: list = []
+        self._substep = None
+        self._evicted = False
+        self._elapsed = 0
+        self._limit = None
+        self.randomized: dict[str, float] = {}
         self._build()
 
     @classmethod
@@ -243,6 +296,8 @@ class EgoEnv(gym.Env):
                        "lateral": TASKS[sc.task].returns[1].high > 0.0},  # a task that steers
             "controller": DEFAULT_CONTROLLER[sc.task],
             "reward_speed_range": [0.0, 30.0],
+            "randomize": {k: list(v) for k, v in DEFAULT_RANDOMIZE.get(scenario, {}).items()},
+            "multi_instance": False,
         }
         env = EnvConfig()
         config.update({name: getattr(env, name) for name in _ENV_SCALARS})
@@ -278,9 +333,15 @@ class EgoEnv(gym.Env):
         if lo is None or not lo < hi:
             raise ConfigError(f"bad value for reward_speed_range: {cfg['reward_speed_range']!r} "
                               "(expected [low, high] in m/s with low < high)")
+        multi = cfg["multi_instance"]
+        if not isinstance(multi, (bool, np.bool_)):
+            raise ConfigError(f"bad value for multi_instance: {multi!r} (expected true or false)")
         # the scenario's defaults are not overrides: a preset (the platoon's variant) would lose
         base = cls.config_cls()
         overrides = {k: v for k, v in params.items() if not (hasattr(base, k) and getattr(base, k) == v)}
+        randomize = _check_randomize(cfg["randomize"], cls.config_cls, base)
+        if "variant" in overrides and cfg["randomize"] == DEFAULT_RANDOMIZE.get(self.scenario_name):
+            randomize = {}  # the defaults are the road's: a preset (scale-model) runs as it is
         resolved = resolve(RunSpec(self.scenario_name, controller, 0, overrides))
         sc_config, spec, ctrl_params = resolved.config, resolved.controller, resolved.controller_params
         observation = observation_type(cfg["observation"], self.task)
@@ -292,12 +353,23 @@ class EgoEnv(gym.Env):
                 raise ConfigError(f"bad value for policy_frequency: {env.policy_frequency:g} (expected "
                                   f"1 / dt = {1.0 / sc_config.dt:g} Hz divided by a whole number)")
             every = round(ratio)
+        # the corners of the distribution must make valid runs: checked now, not at a reset
+        for corner in (0, 1):
+            if randomize:
+                resolve(RunSpec(self.scenario_name, controller, 0,
+                                {**overrides, **{k: v[corner] for k, v in randomize.items()}}))
 
+        meta = action.type_name == "DiscreteMetaAction"
+        if meta and self.task != "tracking":
+            raise ConfigError(f"bad value for action: DiscreteMetaAction needs lanes to change (the motorway "
+                              f"scenarios: emergency-brake, fast-follower, cut-in), not {self.scenario_name}")
         # the agent drives both channels: the loop needs no controller of its own
-        helper = not (action.longitudinal and action.lateral)
-        own = cls.build_controller(spec, ctrl_params, sc_config) if helper else AgentSlot()
+        helper = not (action.longitudinal and action.lateral) or meta
         self.close()
-        self.scenario = cls(sc_config, own, seed=0, controller_name=f"agent+{controller}" if helper else "agent")
+        self._controller_name = f"agent+{controller}" if helper else "agent"
+        self._spec, self._ctrl_params, self._overrides = spec, ctrl_params, overrides
+        self._randomize = randomize
+        self._multi = bool(multi)
         self.env_config = env
         self.reward = Reward(env, (float(lo), float(hi)))
         self.observation_type = observation
@@ -307,13 +379,41 @@ class EgoEnv(gym.Env):
         self.action_space = action.space
         self._every = every
         self._helper = helper
+        self._make_scenario(sc_config)
+        # one frame per env step: a video plays in simulated time
+        self.metadata = {**type(self).metadata, "render_fps": 1.0 / (every * sc_config.dt)}
+
+    def _make_scenario(self, sc_config) -> None:
+        """The scenario object (no SUMO yet) on ``sc_config``, its controller and the view."""
+        cls = self.scenario_cls
+        own = cls.build_controller(self._spec, self._ctrl_params, sc_config) if self._helper else AgentSlot()
+        self.scenario = cls(sc_config, own, seed=0, controller_name=self._controller_name)
         self._view = EgoView(self.scenario, self.np_random)
+        if not self._helper:
+            self._apply = self._apply_both
+        elif self.action_type.type_name == "DiscreteMetaAction":
+            self._apply, self._meta_command = self._apply_meta, None
+        else:
+            self._apply = self._apply_channels
+
+    def _sample(self, run_seed: int) -> dict[str, float]:
+        """The randomised parameters of the episode with ``run_seed`` (its own stream of the
+        seed), rounded as ``ego run --set`` would print them, so the episode is re-runnable."""
+        rng = np.random.default_rng((run_seed, 0x52414E44))
+        out = {}
+        for name, (lo, hi) in self._randomize.items():
+            if isinstance(lo, int) and isinstance(hi, int):
+                out[name] = int(rng.integers(lo, hi + 1))
+            else:
+                out[name] = round(float(rng.uniform(lo, hi)), 3)
+        return out
 
     # -- the Gymnasium interface -------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: Mapping[str, Any] | None = None):
         """Start a run: SUMO restarted, the traffic drawn from the seed. ``seed``: the run's seed
         (``ego run --seed``); without one a seed is drawn from the env's generator.
-        ``options={"config": {...}}`` reconfigures first (spaces rebuilt)."""
+        ``options={"config": {...}}`` reconfigures first (spaces rebuilt). The randomised
+        parameters (``config["randomize"]``) are drawn from the run's seed: ``info["randomized"]``."""
         super().reset(seed=seed)
         if options and "config" in options:
             self.configure(options["config"])
@@ -321,45 +421,87 @@ class EgoEnv(gym.Env):
         if isinstance(seed, np.integer):
             seed = int(seed)
         run_seed = check_seed(seed) if seed is not None else int(self.np_random.integers(0, MAX_SEED + 1))
+        self._start(run_seed)
+        self._limit = _registered_limit(self.spec)
+        return self.observation_type.observe(self._view), {"status": self.scenario.status,
+                                                           "randomized": dict(self.randomized)}
+
+    def _start(self, run_seed: int) -> None:
+        """Start the run with ``run_seed`` (the episode's parameters sampled from it)."""
         other = _running[0]
-        if other is not None and other is not self:
+        if other is not None and other is not self and not self._multi:
+            other._evicted = True
             other.close()
-        _running[0] = self
+        if self._randomize:
+            self.randomized = self._sample(run_seed)
+            self.scenario.close()
+            sc_config = resolve(RunSpec(self.scenario_name, self._spec.name, 0,
+                                        {**self._overrides, **self.randomized})).config
+            self._make_scenario(sc_config)
         sc = self.scenario
-        sc.reset(seed=run_seed)
+        with sharing_instances(self._multi):
+            sc.reset(seed=run_seed)
+        if sc.bridge is not None and not getattr(sc.bridge, "via_traci", False):
+            _running[0] = self
+        self._evicted = False
+        self._history = []
+        self._substep = None
+        self._elapsed = 0
         view = self._view
         view.np_random = self.np_random
         view.reset()
         self.observation_type.reset(view)
-        if self.action_type.longitudinal:
+        if self.action_type.type_name == "DiscreteMetaAction":
+            self.action_type.reset(view)
+            self._meta_command = None
+        elif self.action_type.longitudinal:
             plant = view.plant()
             p = plant.model.params
             self.action_type.set_plant(p.m / p.Nw if plant.input_names[0] == "Fx" else 1.0)
         self._crashed = False
-        return self.observation_type.observe(view), {"status": sc.status}
+
+    # one scenario step with the agent's command (also the replay of an unpickled env)
+    def _apply_both(self, command) -> None:
+        self._history.append(command)
+        self.scenario.step(command)
+
+    def _apply_channels(self, command) -> None:
+        # the scenario's controllers step as in a run; the agent's vehicle takes the agent's
+        # channels (the platoon's other followers keep theirs)
+        self._history.append(command)
+        sc = self.scenario
+        lon, lat = command
+        sc.step(sc.joint_action(sc.controller.step(sc.obs), sc.agent_id, lon, lat))
+
+    def _apply_meta(self, command) -> None:
+        # a new command tuple is a new env step: the meta action moves the targets once
+        self._history.append(command)
+        meta = self.action_type
+        if command is not self._meta_command:
+            self._meta_command = command
+            meta.update(command[0])
+        sc = self.scenario
+        sc.step(sc.controller.step(meta.controller_observation()))
 
     def step(self, action):
         sc = self.scenario
         if sc is None or sc.bridge is None:
-            raise RuntimeError("call reset() before step()")
+            raise RuntimeError(_EVICTED if self._evicted else "call reset() before step()")
         command = self.action_type.native(action)
-        step = sc.step
-        if not self._helper:  # the agent drives both channels
-            step(command)
+        lon, lat = command
+        check = (0.0 if lon is None else lon) + (0.0 if lat is None else lat)
+        substep, self._substep = self._substep, None
+        if check - check != 0.0:  # nan or inf: the episode ends before SUMO or the model see it
+            sc._end("diverged", f"the agent's action is not finite: {np.asarray(action).tolist()}", level="ERROR")
+        else:
+            apply = self._apply
+            apply(command)
             if self._every > 1:
                 for _ in range(self._every - 1):
                     if sc.status != "running":
                         break
-                    step(command)
-        else:
-            # the scenario's controllers step as in a run; the agent's vehicle takes the agent's
-            # channels (the platoon's other followers keep theirs)
-            lon, lat = command
-            controller_step, joint, agent = sc.controller.step, sc.joint_action, sc.agent_id
-            for _ in range(self._every):
-                step(joint(controller_step(sc.obs), agent, lon, lat))
-                if sc.status != "running":
-                    break
+                    apply(command if substep is None else substep())
+        self._elapsed += 1
         status = sc.status
         crashed = status == "collision" or status == "diverged"
         reward, terms = self.reward(self._view, crashed)
@@ -371,7 +513,18 @@ class EgoEnv(gym.Env):
             terminated = not truncated
             info["status_detail"] = sc.status_detail
             info["metrics"] = sc.result().metrics
+        elif self._limit is not None and self._elapsed >= self._limit:
+            # the registered TimeLimit truncates this step: the run's metrics so far (a TimeLimit
+            # of another length cannot be seen from here: env.unwrapped.metrics())
+            info["status_detail"] = f"max_episode_steps ({self._limit}) reached"
+            info["metrics"] = sc.result().metrics
         return self._observe(self._view), reward, terminated, truncated, info
+
+    def metrics(self) -> dict:
+        """The current run's metrics so far (what ``info["metrics"]`` holds at its end)."""
+        if self.scenario is None or self.scenario.bridge is None:
+            raise RuntimeError("call reset() first")
+        return self.scenario.result().metrics
 
     def render(self):
         if self.render_mode != "rgb_array" or self.scenario is None or self.scenario.bridge is None:
@@ -390,6 +543,69 @@ class EgoEnv(gym.Env):
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
+
+    # -- pickling: the configuration, the generator and the run replayed ----------------------
+    def __getstate__(self) -> dict:
+        sc = self.scenario
+        running = sc is not None and sc.bridge is not None
+        return {"scenario": self.scenario_name, "config": self.config, "render_mode": self.render_mode,
+                "np_random": self._np_random, "spec": self.spec,
+                "run": (sc.seed, list(self._history), self._view._prev, self._elapsed) if running else None}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__init__(state["scenario"], state["config"], state["render_mode"])
+        self.spec = state["spec"]
+        run = state["run"]
+        if run is not None:
+            seed, history, prev, elapsed = run
+            self._start(seed)
+            self._limit = _registered_limit(self.spec)
+            apply = self._apply
+            for command in history:  # same seed, same commands: the same run (determinism)
+                apply(command)
+            self._view._prev, self._elapsed = prev, elapsed
+        self._np_random = state["np_random"]
+
+
+def _registered_limit(spec) -> int | None:
+    """The ``max_episode_steps`` of the id's registration: the step at which gym.make's
+    TimeLimit truncates (gym.make leaves the env's own spec without it)."""
+    if spec is None:
+        return None
+    if spec.max_episode_steps is not None:
+        return spec.max_episode_steps
+    try:
+        return gym.spec(spec.id).max_episode_steps
+    except gym.error.Error:
+        return None
+
+
+def _check_randomize(value: Any, config_cls, base) -> dict[str, tuple]:
+    """``config["randomize"]``: scenario parameter -> [low, high], each bound checked as a
+    ``--set`` value; whole numbers stay whole for an int parameter."""
+    if not isinstance(value, Mapping):
+        raise ConfigError(f"bad value for randomize: {value!r} (expected a dict: parameter -> [low, high])")
+    infos = {i.name: i for i in describe(config_cls)}
+    out = {}
+    for name, bounds in value.items():
+        info = infos.get(name)
+        if info is None:
+            raise unknown_parameter(name, set(infos))
+        if info.type not in (int, float):
+            raise ConfigError(f"bad value for randomize[{name}]: {name} is not a number (a {info.type.__name__})")
+        if not _pair(bounds) or not bounds[0] <= bounds[1]:
+            raise ConfigError(f"bad value for randomize[{name}]: {bounds!r} (expected [low, high] with low <= high)")
+        lo, hi = bounds
+        if info.type is int:
+            if lo != int(lo) or hi != int(hi):
+                raise ConfigError(f"bad value for randomize[{name}]: {bounds!r} (expected whole numbers)")
+            lo, hi = int(lo), int(hi)
+        else:
+            lo, hi = float(lo), float(hi)
+        for v in (lo, hi):
+            apply_overrides(base, {name: v})
+        out[name] = (lo, hi)
+    return out
 
 
 def _pair(value: Any) -> bool:

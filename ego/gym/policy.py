@@ -9,6 +9,16 @@ round trip is exact (float64 both ways), so driving the env with the policy repr
 clipped, so commands beyond the ranges are lost.
 
 In the platoon the policy drives the first follower, as the env's agent does.
+
+At ``policy_frequency > 0`` an env step spans several control periods. The controller is
+still stepped at its own period: the action the policy returns is the first period's, and
+the env asks the policy for each further period of that env step (the policy hands the env
+a sub-step hook with every action). So the controller sees what it sees in ``ego run`` and
+gives the same metrics at any ``policy_frequency``.
+
+With the default normalised ``EgoState`` (relative time and station) the policy reads the
+controller's observation from the env it drives (the same values, unnormalised); with
+``normalize=False`` it rebuilds it from the vector.
 """
 
 from __future__ import annotations
@@ -53,7 +63,9 @@ class ControllerPolicy:
         self._policy = [names.index("standstill_gap"), names.index("headway")] if self.following else None
         self._t = names.index("t")
         self._to_action = self.env.action_type.from_native
-        self._slot, self._resets = None, 0
+        self._native = self.env.action_type.native
+        self._direct = self.env.observation_type.normalize
+        self._slot, self._resets, self._bridge = None, 0, None
 
     def reset(self, seed: int | None = None) -> None:
         """Reset the controller (the platoon's first follower's controller seeds as in a run)."""
@@ -62,20 +74,39 @@ class ControllerPolicy:
             # controllers that preview the road read the lane off the observation
             self._obs.lane = getattr(getattr(self.env.scenario, "obs", None), "lane", None)
 
-    def __call__(self, observation: np.ndarray) -> np.ndarray:
-        values = np.asarray(observation, dtype=np.float64).tolist()
-        slot = self.env.scenario.controller
+    def _follow_resets(self) -> None:
+        """Reset the controller when the scenario reset its own: a new run (a new SUMO
+        bridge), or a hand-over the agent's slot counted."""
+        sc = self.env.scenario
+        slot = sc.controller
         resets = getattr(slot, "resets", None)
         if resets is not None:
             if resets != self._resets or slot is not self._slot:  # a rebuilt env has a new slot
                 self._slot, self._resets = slot, resets
                 self.reset(slot.seed)
-        elif values[self._t] == 0.0:
-            self.reset(self.env.scenario.seed)
-        o = self._obs
-        for i, name in self._fields:
-            setattr(o, name, values[i])
-        if self._policy is not None:
-            o.policy = SpacingPolicy(values[self._policy[0]], values[self._policy[1]])
+        elif sc.bridge is not self._bridge:
+            self._bridge = sc.bridge
+            self.reset(sc.seed)
+
+    def __call__(self, observation: np.ndarray) -> np.ndarray:
+        self._follow_resets()
+        if self._direct:
+            o = self.env._view.obs
+        else:
+            values = np.asarray(observation, dtype=np.float64).tolist()
+            o = self._obs
+            for i, name in self._fields:
+                setattr(o, name, values[i])
+            if self._policy is not None:
+                o.policy = SpacingPolicy(values[self._policy[0]], values[self._policy[1]])
         command, delta = self.controller.step(o)
+        if self.env._every > 1:
+            self.env._substep = self._substep
         return self._to_action(command, delta)
+
+    def _substep(self):
+        """The controller's command for one further control period of an env step (called by
+        the env), as the env's action type passes it."""
+        self._follow_resets()
+        command, delta = self.controller.step(self.env._view.obs)
+        return self._native(self._to_action(command, delta))

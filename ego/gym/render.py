@@ -1,6 +1,7 @@
 """The top-down frame of ``render_mode="rgb_array"``: the lanes and every vehicle's box as SUMO
 has it, in the scenario's colours (the ego red, other scripted cars in theirs, the background
-traffic blue), the view following the ego (``screen_width`` x ``screen_height`` px at ``scaling``
+traffic blue), the agent's car drawn in its own colour (green, thick outline: in the platoon
+the first follower among the red ones), the view following the agent's car (``screen_width`` x ``screen_height`` px at ``scaling``
 px/m). Drawn with matplotlib's Agg canvas (no display, no window)."""
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ import numpy as np
 #: colours (RGB 0-1)
 _ROAD, _MARK, _OTHER, _BG = (0.42, 0.42, 0.42), (0.9, 0.9, 0.9), (0.2, 0.5, 0.85), (0.33, 0.55, 0.3)
 _CONTROLLED = (0.86, 0.16, 0.16)
+_AGENT = (0.1, 0.85, 0.3)
 
 
 class TopDown:
@@ -59,6 +61,7 @@ class TopDown:
             patch.remove()
         ids, boxes = scenario.bridge.boxes()
         controlled = set(scenario.controlled_ids)
+        agent = scenario.agent_id if scenario.controlled_ids else None
         colors = scenario.colors  # the scenario's own (0-255), as in its recording
         self._vehicles = []
         centre = None
@@ -70,11 +73,13 @@ class TopDown:
             mine = vid in controlled
             rgb = colors.get(vid)
             face = tuple(c / 255.0 for c in rgb) if rgb is not None else (_CONTROLLED if mine else _OTHER)
-            patch = Polygon(corners, closed=True, facecolor=face,
-                            edgecolor="black", linewidth=0.5, zorder=2)
+            if vid == agent:
+                face = _AGENT
+            patch = Polygon(corners, closed=True, facecolor=face, edgecolor="black",
+                            linewidth=1.5 if vid == agent else 0.5, zorder=3 if vid == agent else 2)
             self.ax.add_patch(patch)
             self._vehicles.append(patch)
-            if mine and centre is None:
+            if vid == agent:
                 centre = (x, y)
         if centre is None:
             x, y, _ = view.plant().pose()

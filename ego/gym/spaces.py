@@ -39,6 +39,8 @@ from ego.params import ConfigError
 
 #: the observed fields that are not numbers, and what a vector carries instead
 _NOT_NUMERIC = {"lane": (), "policy": ("policy.standstill_gap", "policy.headway")}
+#: observed fields fixed for a whole run
+_RUN_CONSTANT = ("policy.standstill_gap", "policy.headway", "max_accel", "max_decel")
 
 
 def _options(kind: str, given: Mapping[str, Any], allowed: Sequence[str]) -> dict:
@@ -73,26 +75,74 @@ def _range(name: str, value: Any) -> tuple[float, float]:
 
 class EgoStateObservation:
     """The task's own observation as a vector; ``names`` are its fields (``standstill_gap`` and
-    ``headway`` stand for the car-following task's spacing policy)."""
+    ``headway`` stand for the car-following task's spacing policy).
+
+    ``normalize`` (default): time and station are relative, not raw: ``t`` becomes the share
+    of the run's duration elapsed (0 to 1); where the task tracks a moving station reference
+    (the motorway scenarios) ``s`` becomes the station error ``s - s_ref`` (m) and ``s_ref``
+    the reference's station since the reset over the distance it covers in the run at its
+    starting speed (about 0 to 1); where it does not (the curve, lane centring: ``s_ref`` 0)
+    ``s`` becomes the station since the reset over the distance the ego covers in the run at
+    its starting speed (about 0 to 1). Every other field stays in its SI unit.
+    ``normalize=False``: every field raw."""
 
     type_name = "EgoState"
+    OPTIONS = ("normalize",)
 
-    def __init__(self, task: str) -> None:
+    def __init__(self, task: str, normalize: bool = True) -> None:
         paths = []
         for signal in TASKS[task].observes:
             paths += _NOT_NUMERIC.get(signal.name, (signal.name,))
         #: attribute paths into the scenario's observation, and the vector's field names
         self.paths = tuple(paths)
         self.names = tuple(p.rsplit(".", 1)[-1] for p in paths)
-        self._get = attrgetter(*self.paths)
+        self.normalize = _flag("normalize", normalize)
+        # the trailing fields that hold still over a run (the platoon's spacing policy and
+        # limits) are read once per reset, not every step
+        n_const = 0
+        while n_const < len(paths) and paths[-1 - n_const] in _RUN_CONSTANT:
+            n_const += 1
+        self._const_get = attrgetter(*paths[len(paths) - n_const:]) if n_const else None
+        self._const: list = []
+        dynamic = paths[: len(paths) - n_const]
+        get = attrgetter(*dynamic)
+        self._get = get if len(dynamic) > 1 else (lambda o: (get(o),))
         self.space = spaces.Box(-np.inf, np.inf, (len(self.names),), np.float64)
+        names = self.names
+        self._t = names.index("t")
+        self._s = names.index("s") if "s" in names else None
+        self._s_ref = names.index("s_ref") if "s_ref" in names else None
+        self._per_duration = 1.0
+        self._s_ref0, self._per_distance = 0.0, 1.0
+        self._s0, self._tracks = 0.0, True
 
     def reset(self, view) -> None:
         # the scenario fills one observation in place all run long
-        self._source = view.obs
+        self._source = source = view.obs
+        self._per_duration = 1.0 / view.scenario.config.duration
+        if self._const_get is not None:
+            const = self._const_get(source)
+            self._const = list(const) if isinstance(const, tuple) else [const]
+        if self._s_ref is not None:
+            self._tracks = source.s_ref != 0.0 or source.ds_ref != 0.0
+            speed = source.ds_ref if self._tracks else source.ds
+            self._s_ref0, self._s0 = source.s_ref, source.s
+            self._per_distance = self._per_duration / max(abs(speed), 1.0)
 
     def observe(self, view) -> np.ndarray:
-        return np.array(self._get(self._source), dtype=np.float64)
+        values = list(self._get(self._source))
+        if not self.normalize:
+            return np.array(values + self._const if self._const else values, dtype=np.float64)
+        values[self._t] *= self._per_duration
+        s = self._s
+        if s is not None:
+            r = self._s_ref
+            if self._tracks:
+                values[s] -= values[r]
+                values[r] = (values[r] - self._s_ref0) * self._per_distance
+            else:
+                values[s] = (values[s] - self._s0) * self._per_distance
+        return np.array(values + self._const if self._const else values, dtype=np.float64)
 
 
 class KinematicsObservation:
@@ -180,16 +230,156 @@ class KinematicsObservation:
         return out.astype(np.float32)
 
 
+def _lane_width(view) -> float:
+    """The width (m) of the ego's lane (the platoon's one lane)."""
+    sc = view.road
+    lane = getattr(sc, "road", None) or getattr(sc, "lane", None)
+    return float(getattr(lane, "width", 3.5) or 3.5)
+
+
+class TimeToCollisionObservation:
+    """highway-env's ``TimeToCollision``: a (3, 3, ``horizon``) grid over (ego speed: one
+    ``speed_step`` slower, as now, one faster) x (lane: right, own, left) x (time bins of
+    1 s): 1 in the bin of the predicted time to collision with the nearest vehicle ahead in
+    that lane at that speed (vehicles closing from behind count as well), else 0. Built from
+    the same vehicles as ``Kinematics``, in the ego's lane frame; lanes that do not exist
+    are 1 throughout (highway-env marks off-road lanes as occupied)."""
+
+    type_name = "TimeToCollision"
+    OPTIONS = ("horizon", "speed_step")
+
+    def __init__(self, horizon: int = 10, speed_step: float = 5.0) -> None:
+        if isinstance(horizon, bool) or not isinstance(horizon, (int, np.integer)) or not 1 <= horizon <= 100:
+            raise ConfigError(f"bad value for horizon: {horizon!r} (expected a whole number of seconds from 1 to 100)")
+        if not (isinstance(speed_step, (int, float)) and 0.0 < speed_step <= 20.0):
+            raise ConfigError(f"bad value for speed_step: {speed_step!r} (expected a number above 0 up to 20 (m/s))")
+        self.horizon, self.speed_step = int(horizon), float(speed_step)
+        self.names = ("speed", "lane", "time")
+        self.space = spaces.Box(0.0, 1.0, (3, 3, self.horizon), np.float32)
+
+    def reset(self, view) -> None:
+        self._width = _lane_width(view)
+        sc = view.road
+        offsets = getattr(sc, "lane_offset", None)
+        lane = getattr(sc, "target_lane", None)
+        #: which of (right, own, left) exist
+        if offsets and lane is not None and lane in offsets:
+            self._exists = [lane - 1 in offsets, True, lane + 1 in offsets]
+        else:
+            self._exists = [True, True, True] if view.steers else [False, True, False]
+
+    def observe(self, view) -> np.ndarray:
+        ego, others, _ = view.traffic()
+        out = np.zeros((3, 3, self.horizon), dtype=np.float32)
+        for j, exists in enumerate(self._exists):
+            if not exists:
+                out[:, j, :] = 1.0
+        if not others:
+            return out
+        rows = np.asarray(others, dtype=np.float64).reshape(-1, 5)
+        gap = rows[:, 0] - ego[0]
+        lane = np.rint((rows[:, 1] - ego[1]) / self._width).astype(int)
+        for j, dl in enumerate((-1, 0, 1)):
+            if not self._exists[j]:
+                continue
+            here = lane == dl
+            if not here.any():
+                continue
+            g, v = gap[here], rows[here, 2]
+            for i, dv in enumerate((-self.speed_step, 0.0, self.speed_step)):
+                closing = np.where(g > 0.0, ego[2] + dv - v, v - ego[2] - dv)
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    ttc = np.where(closing > 0.0, np.abs(g) / closing, np.inf)
+                ttc = ttc[ttc < self.horizon]
+                if ttc.size:
+                    out[i, j, int(ttc.min())] = 1.0
+        return out
+
+
+class OccupancyGridObservation:
+    """highway-env's ``OccupancyGrid``: ``features`` (presence, vx, vy, on_road) on a grid
+    of ``grid_step`` cells over ``grid_size`` (m, [[x_min, x_max], [y_min, y_max]]) around the
+    ego, in its lane's frame (x along, y across, + left), velocities relative to the ego
+    mapped from ``features_range`` to [-1, 1]. Shape (features, nx, ny)."""
+
+    type_name = "OccupancyGrid"
+    KNOWN = ("presence", "vx", "vy", "on_road")
+    OPTIONS = ("features", "grid_size", "grid_step", "features_range")
+
+    def __init__(self, features: Sequence[str] = ("presence", "vx", "vy", "on_road"),
+                 grid_size: Sequence[Sequence[float]] = ((-27.5, 27.5), (-27.5, 27.5)),
+                 grid_step: Sequence[float] = (5.0, 5.0),
+                 features_range: Mapping[str, Sequence[float]] | None = None) -> None:
+        self.features = tuple(features)
+        for f in self.features:
+            if f not in self.KNOWN:
+                raise ConfigError(f"unknown OccupancyGrid feature {f!r} (known: {', '.join(self.KNOWN)})")
+        try:
+            (x0, x1), (y0, y1) = ((float(a), float(b)) for a, b in grid_size)
+            sx, sy = (float(v) for v in grid_step)
+        except (TypeError, ValueError):
+            raise ConfigError(f"bad value for grid_size/grid_step: {grid_size!r}, {grid_step!r} (expected "
+                              "[[x_min, x_max], [y_min, y_max]] and [step_x, step_y] in m)") from None
+        if not (x0 < x1 and y0 < y1 and sx > 0.0 and sy > 0.0) or (x1 - x0) / sx > 200 or (y1 - y0) / sy > 200:
+            raise ConfigError(f"bad value for grid_size/grid_step: {grid_size!r}, {grid_step!r} (expected "
+                              "min < max, steps above 0, at most 200 cells a side)")
+        ranges = {"vx": (-80.0, 80.0), "vy": (-80.0, 80.0)}
+        for key, value in (features_range or {}).items():
+            if key not in ranges:
+                raise ConfigError(f"unknown features_range key {key!r} (known: vx, vy)")
+            ranges[key] = _range(f"features_range[{key}]", value)
+        self._ranges = ranges
+        self._origin, self._step = (x0, y0), (sx, sy)
+        self.shape = (len(self.features), round((x1 - x0) / sx), round((y1 - y0) / sy))
+        self.names = self.features
+        self.space = spaces.Box(-1.0, 1.0, self.shape, np.float32)
+
+    def reset(self, view) -> None:
+        sc = view.road
+        width = _lane_width(view)
+        offsets = getattr(sc, "lane_offset", None)
+        lane = getattr(sc, "target_lane", None)
+        # the road's lateral extent in the ego's start-lane frame (y of lane centres +- half a lane)
+        centres = list(offsets.values()) if offsets else [0.0]
+        self._road = (min(centres) - 0.5 * width, max(centres) + 0.5 * width)
+        del lane
+
+    def observe(self, view) -> np.ndarray:
+        ego, others, _ = view.traffic()
+        _, nx, ny = self.shape
+        out = np.zeros(self.shape, dtype=np.float32)
+        (x0, y0), (sx, sy) = self._origin, self._step
+        if "on_road" in self.features:
+            y = y0 + sy * (np.arange(ny) + 0.5) + ego[1]
+            road = ((y >= self._road[0]) & (y <= self._road[1])).astype(np.float32)
+            out[self.features.index("on_road")] = road[None, :]
+        if others:
+            rows = np.asarray(others, dtype=np.float64).reshape(-1, 5)
+            ix = np.floor((rows[:, 0] - ego[0] - x0) / sx).astype(int)
+            iy = np.floor((rows[:, 1] - ego[1] - y0) / sy).astype(int)
+            inside = (ix >= 0) & (ix < nx) & (iy >= 0) & (iy < ny)
+            ix, iy, rows = ix[inside], iy[inside], rows[inside]
+            for k, name in enumerate(self.features):
+                if name == "presence":
+                    out[k, ix, iy] = 1.0
+                elif name in ("vx", "vy"):
+                    col = 2 if name == "vx" else 3
+                    lo, hi = self._ranges[name]
+                    rel = rows[:, col] - ego[col]
+                    out[k, ix, iy] = np.clip((rel - lo) / (hi - lo) * 2.0 - 1.0, -1.0, 1.0)
+        return out
+
+
 def observation_type(config: Mapping[str, Any], task: str):
     """The observation type ``config`` (``{"type": ..., options}``) names."""
     kind = config.get("type") if isinstance(config, Mapping) else None
     if kind == "EgoState":
-        _options("observation", config, ())
-        return EgoStateObservation(task)
-    if kind == "Kinematics":
-        return KinematicsObservation(**_options("observation", config, KinematicsObservation.OPTIONS))
+        return EgoStateObservation(task, **_options("observation", config, EgoStateObservation.OPTIONS))
+    for cls in (KinematicsObservation, TimeToCollisionObservation, OccupancyGridObservation):
+        if kind == cls.type_name:
+            return cls(**_options("observation", config, cls.OPTIONS))
     raise ConfigError(f"bad value for observation: {config!r} (expected a dict whose type is one of "
-                      "EgoState, Kinematics)")
+                      "EgoState, Kinematics, TimeToCollision, OccupancyGrid)")
 
 
 # -- actions ---------------------------------------------------------------------------------
@@ -222,6 +412,30 @@ class ActionType:
     def set_plant(self, force_per_accel: float) -> None:
         self.force_per_accel = force_per_accel
 
+    def _shaped(self, action) -> np.ndarray:
+        """``action`` as an array of the space's shape, or a ValueError naming that shape."""
+        shape = getattr(action, "shape", None)
+        if shape != self._shape:
+            try:
+                action = np.asarray(action, dtype=np.float64)
+            except (TypeError, ValueError):
+                shape = None
+            else:
+                shape = action.shape
+            if shape != self._shape:
+                raise ValueError(f"bad action {_short(action)}: expected an array of shape "
+                                 f"{self.space.shape} ({self._describe()}), got shape {shape}")
+        return action
+
+    def _describe(self) -> str:
+        names = [n for n, on in zip(("longitudinal", "steering"), self.channels) if on]
+        return f"{self.type_name}: [{', '.join(names)}]"
+
+
+def _short(action) -> str:
+    text = repr(action)
+    return text if len(text) <= 60 else text[:57] + "..."
+
 
 class ContinuousAction(ActionType):
     type_name = "ContinuousAction"
@@ -235,13 +449,15 @@ class ContinuousAction(ActionType):
         self.steering_range = _range("steering_range", steering_range)
         self.clip = _flag("clip", clip)
         self.space = spaces.Box(-1.0, 1.0, (self.size,), np.float32)
+        self._shape = self.space.shape
         # native = offset + half_span * x for each channel the agent drives
         ranges = [r for r, on in zip((self.acceleration_range, self.steering_range), self.channels) if on]
         self._mid = [0.5 * (lo + hi) for lo, hi in ranges]
         self._half = [0.5 * (hi - lo) for lo, hi in ranges]
 
     def native(self, action) -> tuple[float | None, float | None]:
-        a = np.clip(action, -1.0, 1.0) if self.clip else np.asarray(action)
+        action = self._shaped(action)
+        a = np.clip(action, -1.0, 1.0) if self.clip else action
         values = [mid + half * float(x) for mid, half, x in zip(self._mid, self._half, a)]
         lon = values.pop(0) * self.force_per_accel if self.longitudinal else None
         lat = values[0] if self.lateral else None
@@ -266,25 +482,128 @@ class EgoAction(ActionType):
         low = [b for b, on in zip((lo, -steer), self.channels) if on]
         high = [b for b, on in zip((hi, steer), self.channels) if on]
         self.space = spaces.Box(np.array(low), np.array(high), dtype=np.float64)
+        self._shape = self.space.shape
         both = self.longitudinal and self.lateral
         self.native = self._both if both else self._one
 
     def _both(self, action) -> tuple[float, float]:
+        action = self._shaped(action)
         return float(action[0]), float(action[1])
 
     def _one(self, action) -> tuple[float | None, float | None]:
-        x = float(action[0])
+        x = float(self._shaped(action)[0])
         return (x, None) if self.longitudinal else (None, x)
 
     def from_native(self, command: float, delta: float) -> np.ndarray:
         return np.array([v for v, on in zip((command, delta), self.channels) if on], dtype=np.float64)
 
 
+class DiscreteMetaAction(ActionType):
+    """highway-env's ``DiscreteMetaAction`` through ego's controllers: LANE_LEFT, IDLE,
+    LANE_RIGHT, FASTER, SLOWER (those of the channels switched on) set a target lane and a
+    target speed (one of ``target_speeds``, m/s); every control period the env's
+    ``controller`` then tracks them: its observation gets the references (the target lane's
+    centre as ``d_ref``; a station reference moving at the target speed, at most
+    ``max_lag`` m from the ego) in place of the scenario's planner's. Motorway scenarios only
+    (they have lanes); the scenario's AEB still brakes when a collision is imminent."""
+
+    type_name = "DiscreteMetaAction"
+    OPTIONS = ("longitudinal", "lateral", "target_speeds", "max_lag")
+    ALL = ("LANE_LEFT", "IDLE", "LANE_RIGHT", "FASTER", "SLOWER")
+
+    def __init__(self, task: str, limits, longitudinal: bool = True, lateral: bool | None = None,
+                 target_speeds: Sequence[float] = (10.0, 15.0, 20.0, 25.0, 30.0, 35.0),
+                 max_lag: float = 2.0) -> None:
+        super().__init__(task, limits, longitudinal, lateral)
+        try:
+            speeds = sorted(float(v) for v in target_speeds)
+        except (TypeError, ValueError):
+            speeds = []
+        if not speeds or not all(0.0 <= v <= 60.0 for v in speeds):
+            raise ConfigError(f"bad value for target_speeds: {target_speeds!r} (expected a list of speeds "
+                              "from 0 to 60 (m/s))")
+        if not (isinstance(max_lag, (int, float)) and 0.0 < max_lag <= 50.0):
+            raise ConfigError(f"bad value for max_lag: {max_lag!r} (expected a number above 0 up to 50 (m))")
+        self.target_speeds, self.max_lag = tuple(speeds), float(max_lag)
+        names = []
+        if self.lateral:
+            names += ["LANE_LEFT", "IDLE", "LANE_RIGHT"]
+        if self.longitudinal:
+            names += (["FASTER", "SLOWER"] if self.lateral else ["SLOWER", "IDLE", "FASTER"])
+        #: action index -> its name (highway-env's ``actions``)
+        self.actions = dict(enumerate(names))
+        self.actions_indexes = {v: k for k, v in self.actions.items()}
+        self.space = spaces.Discrete(len(names))
+        self._shape = ()
+        self.lane, self.speed_index = 0, 0
+        self._s_ref = 0.0
+
+    def reset(self, view) -> None:
+        road, obs = view.road, view.obs
+        self._view = view
+        self._offsets = road.lane_offset
+        self.lane = road.target_lane
+        self.speed_index = int(np.argmin([abs(v - obs.ds) for v in self.target_speeds]))
+        self._s_ref = obs.s
+        self._dt = view.scenario.config.dt
+        from copy import copy
+
+        self._obs = copy(obs)
+        self._fields = type(obs).__slots__
+
+    def native(self, action) -> tuple[int, None]:
+        """A fresh (index, None) each env step (the env updates the targets once per tuple)."""
+        try:
+            index = int(action)
+        except (TypeError, ValueError):
+            index = -1
+        if index != action or not 0 <= index < len(self.actions):
+            raise ValueError(f"bad action {_short(action)}: expected an integer from 0 to "
+                             f"{len(self.actions) - 1} ({self._describe()})")
+        return (index, None)
+
+    def _describe(self) -> str:
+        return f"{self.type_name}: " + ", ".join(f"{k} {v}" for k, v in self.actions.items())
+
+    def from_native(self, command: float, delta: float):
+        raise ConfigError("a controller policy cannot drive DiscreteMetaAction (its commands are not "
+                          "meta actions); use ContinuousAction or EgoAction")
+
+    def update(self, index: int) -> None:
+        """Apply meta action ``index`` to the targets."""
+        name = self.actions[index]
+        if name == "LANE_LEFT" and self.lane + 1 in self._offsets:
+            self.lane += 1
+        elif name == "LANE_RIGHT" and self.lane - 1 in self._offsets:
+            self.lane -= 1
+        elif name == "FASTER":
+            self.speed_index = min(self.speed_index + 1, len(self.target_speeds) - 1)
+        elif name == "SLOWER":
+            self.speed_index = max(self.speed_index - 1, 0)
+
+    def controller_observation(self):
+        """The scenario's observation with the targets as references (a private copy)."""
+        view = self._view
+        src, o = view.obs, self._obs
+        for name in self._fields:
+            setattr(o, name, getattr(src, name))
+        if self.lateral:
+            o.d = view.road.d_road - self._offsets[self.lane]
+            o.d_ref = o.dd_ref = 0.0
+        if self.longitudinal:
+            v = self.target_speeds[self.speed_index]
+            s = src.s
+            lag = self.max_lag
+            self._s_ref = min(max(self._s_ref + v * self._dt, s - lag), s + lag)
+            o.s_ref, o.ds_ref, o.accel_ref = self._s_ref, v, 0.0
+        return o
+
+
 def action_type(config: Mapping[str, Any], task: str, limits) -> ActionType:
     """The action type ``config`` (``{"type": ..., options}``) names."""
     kind = config.get("type") if isinstance(config, Mapping) else None
-    for cls in (ContinuousAction, EgoAction):
+    for cls in (ContinuousAction, EgoAction, DiscreteMetaAction):
         if kind == cls.type_name:
             return cls(task, limits, **_options("action", config, cls.OPTIONS))
     raise ConfigError(f"bad value for action: {config!r} (expected a dict whose type is one of "
-                      "ContinuousAction, EgoAction)")
+                      "ContinuousAction, EgoAction, DiscreteMetaAction)")

@@ -1,4 +1,8 @@
-"""A video of a run from highway-env's renderer: GIF (Pillow) or MP4 (ffmpeg on PATH).
+"""A video of a run from highway-env's renderer: GIF (Pillow) or MP4 (ffmpeg).
+
+MP4 is encoded by the ffmpeg binary the ``imageio-ffmpeg`` wheel ships (installed with
+``ego[highway]`` and ``ego[gym]``), so no system ffmpeg is needed; without that package an
+``ffmpeg`` on PATH is used.
 
 Frames are RGB arrays (height, width, 3) from ``render_mode="rgb_array"``. The file is
 written next to its final path and moved there when complete (``os.replace``), so a broken
@@ -22,6 +26,16 @@ FORMATS = (".gif", ".mp4")
 MAX_FRAMES = 1500
 
 
+def ffmpeg_exe() -> str | None:
+    """The ffmpeg binary: imageio-ffmpeg's own, else one on PATH, else None."""
+    try:
+        import imageio_ffmpeg
+
+        return imageio_ffmpeg.get_ffmpeg_exe()
+    except (ImportError, RuntimeError):
+        return shutil.which("ffmpeg")
+
+
 def check_video_path(text: str | None) -> Path:
     """The ``--video`` path: a writable file ending in .gif or .mp4; .mp4 needs ffmpeg."""
     from ego.checks import check_output_file
@@ -29,9 +43,9 @@ def check_video_path(text: str | None) -> Path:
     suffix = Path(str(text)).suffix.lower() if text else ""
     if suffix not in FORMATS:
         raise ConfigError(f"bad --video path {text!r} (expected a file ending in .gif or .mp4)")
-    if suffix == ".mp4" and shutil.which("ffmpeg") is None:
-        raise ConfigError(f"bad --video path {text!r}: writing mp4 needs ffmpeg on PATH (not found); "
-                          "write a .gif instead")
+    if suffix == ".mp4" and ffmpeg_exe() is None:
+        raise ConfigError(f"bad --video path {text!r}: writing mp4 needs ffmpeg (pip install "
+                          "imageio-ffmpeg, or ffmpeg on PATH); write a .gif instead")
     return check_output_file(text, "--video path", Path(text).suffix)
 
 
@@ -71,7 +85,7 @@ class VideoWriter:
     def _start_ffmpeg(self, width: int, height: int) -> None:
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._ffmpeg = subprocess.Popen(
-            [shutil.which("ffmpeg") or "ffmpeg", "-loglevel", "error", "-y", "-f", "rawvideo",
+            [ffmpeg_exe() or "ffmpeg", "-loglevel", "error", "-y", "-f", "rawvideo",
              "-pix_fmt", "rgb24", "-s", f"{width}x{height}", "-r", f"{self.fps:g}", "-i", "-",
              # yuv420p needs even sides; most players need yuv420p
              "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-pix_fmt", "yuv420p", "-f", "mp4",

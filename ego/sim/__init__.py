@@ -5,6 +5,7 @@ implement it; nothing above this package imports a backend directly."""
 
 from __future__ import annotations
 
+from ego.sim.instances import exclusive_running, sharing_instances
 from ego.sim.protocol import TrafficCommands, TrafficSim
 from ego.sim.registry import BACKENDS, Backend, Capabilities, SimSetup, backend, check_options, make_sim, register
 from ego.sim.types import Collision, Departure, SimError, VehicleSpec, VehicleType
@@ -23,6 +24,8 @@ __all__ = [
     "VehicleType",
     "backend",
     "check_options",
+    "exclusive_running",
     "make_sim",
     "register",
+    "sharing_instances",
 ]

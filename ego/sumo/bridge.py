@@ -28,6 +28,7 @@ from ego.models.geometry import (  # noqa: F401 - the pose conversions are impor
     sumo_poses_to_boxes,
     yaw_to_sumo_angle,
 )
+from ego.sim import instances
 from ego.sim.registry import SimSetup
 from ego.sim.types import Collision, Departure, SimError, VehicleSpec, VehicleType, ego_type  # noqa: F401 - importable from here too
 from ego.sumo.net import sumo_binary
@@ -144,8 +145,45 @@ class SumoBridge:
     def __exit__(self, *exc) -> None:
         self.close()
 
+    #: TraCI connections opened by this process so far (their labels)
+    _traci_count = 0
+
+    #: True when this bridge talks TraCI (a second simulation of the process), not libsumo
+    via_traci = False
+
+    def _start_traci(self) -> None:
+        import contextlib
+        import io
+        import subprocess
+
+        # traci.main, not traci: with LIBSUMO_AS_TRACI set (above) ``traci`` is libsumo itself
+        from traci import main as traci
+
+        SumoBridge._traci_count += 1
+        label = f"ego-{os.getpid()}-{SumoBridge._traci_count}"
+        SumoBridge.started += 1
+        port = traci.getFreeSocketPort()
+        proc = subprocess.Popen([*self.config.command(), "--remote-port", str(port)],
+                                stdout=subprocess.DEVNULL)
+        try:
+            # poll for SUMO's socket every 20 ms (traci.start waits whole seconds), its retry
+            # notes kept off stdout (reserved for results)
+            with contextlib.redirect_stdout(io.StringIO()):
+                self._ls = traci.connect(port, numRetries=500, proc=proc, waitBetweenRetries=0.02, label=label)
+        except Exception as exc:  # noqa: BLE001 - SUMO's reasons went to stderr
+            proc.kill()
+            proc.wait()
+            raise SumoError(f"SUMO could not start through TraCI on {self.config.net} "
+                            f"({type(exc).__name__}: {exc})") from None
+        self.via_traci = True
+        self._pose_subscribed = set()
+
     def start(self) -> None:
         if SumoBridge._running:
+            # inside ego.sim.sharing_instances: a second simulation of the process talks TraCI
+            if instances.sharing():
+                self._start_traci()
+                return
             raise SumoError("a SUMO simulation is already running in this process "
                             "(libsumo allows one per process; use processes for parallel runs)")
         import libsumo
@@ -157,6 +195,7 @@ class SumoBridge:
             raise SumoError(f"SUMO could not start on {self.config.net} ({type(exc).__name__}: {exc}; "
                             "SUMO's own messages are on stderr)") from None
         SumoBridge._running = True
+        instances.claim_exclusive(True)
         self._ls = libsumo
         self._pose_subscribed = set()
 
@@ -166,7 +205,11 @@ class SumoBridge:
                 self._ls.close()
             finally:
                 self._ls = None
-                SumoBridge._running = False
+                if self.via_traci:
+                    self.via_traci = False
+                else:
+                    SumoBridge._running = False
+                    instances.claim_exclusive(False)
 
     @property
     def libsumo(self):

@@ -64,16 +64,17 @@ def test_same_seed_same_episode_and_fresh_arrays(env_id, observation, make):
 
 
 @pytest.mark.sumo
-def test_async_vector_env_runs_one_sumo_per_subprocess():
-    envs = gym.make_vec("ego/EmergencyBrake-v0", num_envs=2, vectorization_mode="async",
-                        config={"policy_frequency": 10})
+def test_make_vec_by_default_runs_one_sumo_per_subprocess():
+    envs = gym.make_vec("ego/EmergencyBrake-v0", num_envs=2, config={"policy_frequency": 10})
+    assert isinstance(envs, gym.vector.AsyncVectorEnv)
     try:
         obs, info = envs.reset(seed=[0, 1])
         assert obs.shape == (2, 15) and list(info["status"]) == ["running", "running"]
         for _ in range(5):
             obs, reward, terminated, truncated, info = envs.step(envs.action_space.sample())
         assert obs.shape == (2, 15) and reward.shape == (2,)
-        assert obs[0, 0] == pytest.approx(0.5) and obs[1, 0] == pytest.approx(0.5)  # t after 5 x 0.1 s
+        # t after 5 x 0.1 s, over the 25 s duration (normalised)
+        assert obs[0, 0] == pytest.approx(0.5 / 25) and obs[1, 0] == pytest.approx(0.5 / 25)
     finally:
         envs.close()
     # the parent never started SUMO: a single env still runs here
@@ -127,7 +128,7 @@ def test_reset_options_reconfigure_and_rebuild_the_spaces(make):
     env = make("ego/EmergencyBrake-v0")
     assert env.observation_space.shape == (15,)
     obs, _ = env.reset(seed=0, options={"config": {"observation": {"type": "Kinematics", "vehicles_count": 7},
-                                                   "ego_speed": 25.0}})
+                                                   "ego_speed": 25.0, "randomize": {}}})
     assert obs.shape == (7, 5) and env.unwrapped.observation_space.shape == (7, 5)
     assert env.unwrapped.scenario.config.ego_speed == 25.0
 
@@ -173,7 +174,7 @@ def test_duration_truncates(make):
 
 @pytest.mark.sumo
 def test_kinematics_rows_in_the_lane_frame(make):
-    env = make("ego/EmergencyBrake-v0", config={"observation": {
+    env = make("ego/EmergencyBrake-v0", config={"randomize": {}, "observation": {
         "type": "Kinematics", "normalize": False, "see_behind": True, "vehicles_count": 6,
         "features": ["presence", "x", "y", "vx", "vy", "heading"]}})
     obs, _ = env.reset(seed=0)

@@ -19,14 +19,16 @@ _VARYING = ("wall_time", "controller")
 
 
 def drive(env_id, controller, seed, config):
+    """The final info of one episode driven by ``controller``, with the episode's randomised
+    parameters (``randomized``) beside the metrics."""
     env = gym.make(env_id, config=config)
     try:
         policy = ego.gym.ControllerPolicy(controller, env)
-        obs, _ = env.reset(seed=seed)
+        obs, first = env.reset(seed=seed)
         while True:
             obs, _, terminated, truncated, info = env.step(policy(obs))
             if terminated or truncated:
-                return info
+                return {**info, "randomized": first["randomized"]}
     finally:
         env.close()
 
@@ -38,7 +40,9 @@ def same_metrics(a, b):
 @pytest.mark.sumo
 def test_pid_policy_on_emergency_brake_gives_ego_runs_metrics():
     info = drive("ego/EmergencyBrake-v0", "pid", 0, {"action": {"type": "EgoAction"}})
-    reference = run(RunSpec("emergency-brake", "pid", 0)).metrics
+    assert set(info["randomized"]) == set(ego.gym.env.DEFAULT_RANDOMIZE["emergency-brake"])
+    # the same episode: the randomised parameters drawn from the seed, as --set values
+    reference = run(RunSpec("emergency-brake", "pid", 0, info["randomized"])).metrics
     assert info["metrics"]["controller"] == "agent"
     assert same_metrics(info["metrics"], reference) == {}
     assert info["metrics"]["lane_change_completed"] is True  # the run did something
@@ -59,7 +63,7 @@ def test_policy_reproduces_ego_run(env_id, scenario, controller, config):
     if config.pop("action_channels", None) == "longitudinal":
         action["lateral"] = False
     info = drive(env_id, controller, 3, {**config, "action": action})
-    reference = run(RunSpec(scenario, controller, 3, config)).metrics
+    reference = run(RunSpec(scenario, controller, 3, {**config, **info["randomized"]})).metrics
     assert same_metrics(info["metrics"], reference) == {}
 
 

@@ -1,7 +1,5 @@
 """``--video``: a GIF from highway-env's renderer, written atomically; bad paths refused."""
 
-import shutil
-
 import pytest
 from PIL import Image
 
@@ -40,10 +38,31 @@ def test_bad_video_paths_are_refused(path, why):
         check_video_path(path)
 
 
-@pytest.mark.skipif(shutil.which("ffmpeg") is not None, reason="ffmpeg is installed")
-def test_mp4_without_ffmpeg_suggests_a_gif():
-    with pytest.raises(ConfigError, match=r"needs ffmpeg on PATH .*write a \.gif instead"):
+def test_mp4_without_any_ffmpeg_suggests_a_gif(monkeypatch):
+    from ego.highway_env import video
+
+    monkeypatch.setattr(video, "ffmpeg_exe", lambda: None)  # a machine with neither
+    with pytest.raises(ConfigError, match=r"needs ffmpeg \(pip install imageio-ffmpeg.*write a \.gif instead"):
         check_video_path("run.mp4")
+
+
+def test_mp4_is_written_with_imageio_ffmpegs_own_binary(tmp_path, monkeypatch):
+    import imageio_ffmpeg
+    import numpy as np
+
+    monkeypatch.setenv("PATH", str(tmp_path))  # no system ffmpeg: the wheel's binary must do
+    path = check_video_path(str(tmp_path / "v.mp4"))
+    writer = VideoWriter(path, fps=10.0, frames_expected=12)
+    for k in range(12):
+        frame = np.zeros((31, 40, 3), dtype=np.uint8)  # odd height: padded to even
+        frame[:, : 3 * k + 1] = (200, 30, 30)
+        writer.add(frame)
+    writer.close()
+    reader = imageio_ffmpeg.read_frames(str(path))
+    meta = next(reader)
+    frames = list(reader)
+    assert meta["size"] == (40, 32) and meta["fps"] == 10.0 and len(frames) == 12
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["v.mp4"]
 
 
 def test_video_needs_the_highway_env_backend(tmp_path):

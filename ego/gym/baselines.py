@@ -1,0 +1,144 @@
+"""The RL baselines of docs/results/rl-baselines.md: trained PPO and SAC (stable-baselines3)
+beside every ego controller of the task, on the same randomised evaluation episodes.
+
+Every env runs in its benchmark configuration (:data:`BENCH_CONFIG`: the env's defaults,
+randomised episodes included, at ``policy_frequency`` 10 Hz, with a shorter lane-centring
+drive); a policy is scored on the episodes of :data:`EVAL_SEEDS` (the env's seeds: the
+same traffic and the same randomised parameters for every policy). The controllers drive
+through :class:`ego.gym.ControllerPolicy` (stepped at their own 100 Hz inside each policy
+step); the agents act at 10 Hz.
+
+    python scenarios/rl/train_sb3.py --env ego/CutIn-v0 --algo ppo --seed 0 --steps 5000
+
+stable-baselines3 is the ``rl`` extra (``pip install -e ".[rl]"``); it is imported only here.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+#: env id -> config of the benchmark (on top of the env's defaults)
+BENCH_CONFIG: dict[str, dict] = {
+    "ego/EmergencyBrake-v0": {"policy_frequency": 10},
+    "ego/FastFollower-v0": {"policy_frequency": 10},
+    "ego/CutIn-v0": {"policy_frequency": 10},
+    "ego/Curve-v0": {"policy_frequency": 10},
+    "ego/LaneCentering-v0": {"policy_frequency": 10, "duration": 30.0},
+    "ego/Platoon-v0": {"policy_frequency": 10},
+}
+#: the evaluation episodes' seeds (never used in training: training seeds its episodes from 0)
+EVAL_SEEDS = tuple(range(1000, 1003))
+#: the training budget of the committed table: env steps (at 10 Hz: 200 simulated seconds)
+BUDGET = 2000
+ALGOS = ("ppo", "sac")
+
+
+def make_env(env_id: str):
+    import gymnasium as gym
+
+    import ego.gym  # noqa: F401 - registers the ids
+
+    return gym.make(env_id, config=BENCH_CONFIG[env_id])
+
+
+def evaluate(env_id: str, act) -> dict:
+    """``act(env, obs) -> action`` on every episode of :data:`EVAL_SEEDS`: the returns, the
+    statuses and the episode lengths (env steps)."""
+    env = make_env(env_id)
+    returns, statuses, lengths = [], [], []
+    try:
+        for seed in EVAL_SEEDS:
+            obs, _ = env.reset(seed=seed)
+            total, steps = 0.0, 0
+            while True:
+                obs, reward, terminated, truncated, info = env.step(act(env, obs))
+                total += float(reward)
+                steps += 1
+                if terminated or truncated:
+                    break
+            returns.append(total)
+            statuses.append(info["status"])
+            lengths.append(steps)
+    finally:
+        env.close()
+    return {"returns": returns, "statuses": statuses, "lengths": lengths}
+
+
+def controller_policy_act(controller: str):
+    """``act`` of an ego controller through :class:`ego.gym.ControllerPolicy` (one per env)."""
+    from ego.gym import ControllerPolicy
+
+    policies: dict = {}
+
+    def act(env, obs):
+        policy = policies.get(id(env))
+        if policy is None:
+            policy = policies[id(env)] = ControllerPolicy(controller, env)
+        return policy(obs)
+
+    return act
+
+
+def train(env_id: str, algo: str, seed: int, steps: int):
+    """A stable-baselines3 ``algo`` (ppo, sac) trained ``steps`` env steps on ``env_id`` (one
+    env; its episodes drawn from ``seed``); SB3's default hyper-parameters, MLP policy."""
+    import torch
+    from stable_baselines3 import PPO, SAC
+
+    torch.set_num_threads(1)  # the machine is shared: one core per run
+    env = make_env(env_id)
+    try:
+        env.reset(seed=seed)
+        cls = {"ppo": PPO, "sac": SAC}[algo]
+        kwargs = {"n_steps": 512, "batch_size": 64} if algo == "ppo" else {"learning_starts": 500}
+        model = cls("MlpPolicy", env, seed=seed, verbose=0, device="cpu", **kwargs)
+        model.learn(total_timesteps=steps)
+        return model
+    finally:
+        env.close()
+
+
+def model_act(model):
+    def act(env, obs):
+        action, _ = model.predict(obs, deterministic=True)
+        return action
+
+    return act
+
+
+@dataclass(frozen=True)
+class ControllerEval:
+    """A docs job: an ego controller on the evaluation episodes of ``env_id``."""
+
+    env_id: str
+    controller: str
+
+    def __call__(self) -> dict:
+        return evaluate(self.env_id, controller_policy_act(self.controller))
+
+
+@dataclass(frozen=True)
+class TrainedEval:
+    """A docs job: ``algo`` trained ``steps`` env steps with ``seed``, then evaluated."""
+
+    env_id: str
+    algo: str
+    seed: int
+    steps: int = BUDGET
+
+    def __call__(self) -> dict:
+        model = train(self.env_id, self.algo, self.seed, self.steps)
+        return evaluate(self.env_id, model_act(model))
+
+
+def summary(results: list[dict]) -> tuple[float, float, float]:
+    """(mean return, its standard deviation over the runs' means, share of episodes that did
+    not crash): the runs are the training seeds (one run for a controller)."""
+    means = [float(np.mean(r["returns"])) for r in results]
+    crashed = sum(s in ("collision", "diverged") for r in results for s in r["statuses"])
+    episodes = sum(len(r["statuses"]) for r in results)
+    sd = float(np.std(means, ddof=1)) if len(means) > 1 else math.nan
+    return float(np.mean(means)), sd, 1.0 - crashed / episodes

@@ -1,0 +1,66 @@
+"""Train a stable-baselines3 PPO or SAC agent on an ego env and score it beside a controller.
+
+    pip install -e ".[rl]"
+    python scenarios/rl/train_sb3.py --env ego/CutIn-v0 --algo ppo --seed 0 --steps 5000 [--save model.zip]
+
+The env runs in its benchmark configuration (``ego.gym.baselines.BENCH_CONFIG``: randomised
+episodes, 10 Hz policy), and the agent is scored on the evaluation episodes
+(``ego.gym.baselines.EVAL_SEEDS``) that docs/results/rl-baselines.md uses, beside the env's
+default controller driving the same episodes through ``ControllerPolicy``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+from ego.gym import ENV_IDS
+from ego.gym.baselines import (
+    ALGOS,
+    BENCH_CONFIG,
+    controller_policy_act,
+    evaluate,
+    model_act,
+    summary,
+    train,
+)
+from ego.gym.env import DEFAULT_CONTROLLER
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--env", default="ego/CutIn-v0", help=f"one of {', '.join(ENV_IDS)}")
+    ap.add_argument("--algo", default="ppo", help="ppo or sac")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--steps", type=int, default=5000, help="training budget in env steps")
+    ap.add_argument("--save", default=None, help="write the trained model here (.zip)")
+    args = ap.parse_args(argv)
+    problems = []
+    if args.env not in BENCH_CONFIG:
+        problems.append(f"bad value for --env: {args.env!r} (expected one of {', '.join(ENV_IDS)})")
+    if args.algo not in ALGOS:
+        problems.append(f"bad value for --algo: {args.algo!r} (expected one of {', '.join(ALGOS)})")
+    if not 1 <= args.steps <= 10_000_000:
+        problems.append(f"bad value for --steps: {args.steps} (expected 1 to 10000000)")
+    if not 0 <= args.seed <= 2**31 - 1:
+        problems.append(f"bad value for --seed: {args.seed} (expected 0 to 2147483647)")
+    if problems:
+        print(f"train_sb3.py: error: {problems[0]}", file=sys.stderr)
+        return 2
+    t0 = time.perf_counter()
+    model = train(args.env, args.algo, args.seed, args.steps)
+    print(f"{args.algo} trained {args.steps} env steps on {args.env} in {time.perf_counter() - t0:.0f} s")
+    if args.save:
+        model.save(args.save)
+    from ego.scenarios import scenario_class
+
+    controller = DEFAULT_CONTROLLER[scenario_class(ENV_IDS[args.env]).task]
+    for name, act in ((args.algo, model_act(model)), (controller, controller_policy_act(controller))):
+        mean, _, ok = summary([evaluate(args.env, act)])
+        print(f"  {name:12} mean return {mean:10.2f}   episodes without a crash {100 * ok:5.1f} %")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
