@@ -1,0 +1,279 @@
+"""Roads of scenario files: OpenDRIVE (.xodr) converted by SUMO's netconvert, or a SUMO
+``.net.xml`` as it is, and OpenDRIVE lane positions on the converted network.
+
+A converted road is cached by the hash of its content and of the conversion options in
+``$XDG_CACHE_HOME/ego/opendrive`` (default ``~/.cache/ego/opendrive``): a sweep converts once.
+
+netconvert samples OpenDRIVE's curves (arcs, clothoids) into polyline points every
+``--opendrive.curve-resolution`` metres (SUMO's default 2 m); :data:`CURVE_RESOLUTION` is
+finer, so that ego's lane frame (:class:`ego.lane_frame.LanePolyline`, which reads the
+curvature of a polyline from the heading change of its segments) sees a converted arc's and
+clothoid's curvature within 1e-3 1/m of the analytic value.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import os
+import subprocess
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+
+from ego.openscenario.xmltree import ScenarioFileError
+
+#: m between the points netconvert samples an OpenDRIVE curve at
+CURVE_RESOLUTION = 0.5
+OPTIONS = ("--opendrive.curve-resolution", repr(CURVE_RESOLUTION), "--output.original-names", "true",
+           "--geometry.min-dist", "0.001", "--no-turnarounds", "true", "--offset.disable-normalization", "true",
+           "--precision", "6", "--no-warnings", "true")
+
+
+def cache_dir() -> Path:
+    """Where converted roads are kept: ``$XDG_CACHE_HOME/ego/opendrive`` or ``~/.cache/ego/opendrive``."""
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "ego" / "opendrive"
+
+
+def network_file(road: Path) -> Path:
+    """The SUMO network of ``road``: a ``.net.xml`` itself, an ``.xodr`` converted (cached).
+    A failed conversion is one line naming the file and netconvert's first error."""
+    if str(road).endswith(".net.xml"):
+        return road
+    data = road.read_bytes()
+    from ego.sumo.net import sumo_binary
+
+    exe = sumo_binary("netconvert")
+    key = hashlib.sha256(data + "\0".join(OPTIONS).encode() + str(exe).encode()).hexdigest()[:24]
+    out = cache_dir() / f"{key}.net.xml"
+    if out.is_file():
+        return out
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_name(f".{key}.{os.getpid()}.net.xml")
+    env = {**os.environ, "SUMO_HOME": str(exe.parent.parent)}
+    proc = subprocess.run([str(exe), "--opendrive-files", str(road), "-o", str(tmp), *OPTIONS],
+                          capture_output=True, text=True, env=env)
+    if proc.returncode != 0 or not tmp.is_file():
+        tmp.unlink(missing_ok=True)
+        lines = [ln.strip() for ln in (proc.stderr + proc.stdout).splitlines() if ln.strip()]
+        first = next((ln for ln in lines if ln.startswith("Error")), lines[0] if lines else "no output")
+        raise ScenarioFileError(road, None, f"netconvert cannot convert this OpenDRIVE file: {first}")
+    try:
+        _parse(tmp)
+    except ScenarioFileError:
+        tmp.unlink(missing_ok=True)
+        raise
+    if not _edges(tmp):
+        tmp.unlink(missing_ok=True)
+        raise ScenarioFileError(road, None, "netconvert made no drivable lane of this OpenDRIVE file "
+                                "(no lane of type driving?)")
+    os.replace(tmp, out)
+    return out
+
+
+@dataclass(frozen=True)
+class Lane:
+    id: str  #: SUMO lane id
+    edge: str
+    index: int  #: SUMO index, 0 = rightmost
+    length: float
+    width: float
+    shape: tuple[tuple[float, float], ...]
+    orig: str  #: OpenDRIVE origin (road_section_lane) when converted, else ""
+
+
+@dataclass(frozen=True)
+class Edge:
+    id: str
+    lanes: tuple[Lane, ...]  #: by SUMO index
+    successors: tuple[str, ...]
+
+
+def _parse(net: Path) -> ET.Element:
+    try:
+        return ET.parse(net).getroot()
+    except ET.ParseError as exc:
+        raise ScenarioFileError(net, exc.position[0], f"malformed SUMO network: {exc}") from None
+
+
+@lru_cache(maxsize=8)
+def _edges_cached(net: str, mtime: float) -> dict[str, Edge]:
+    root = _parse(Path(net))
+    succ: dict[str, list[str]] = {}
+    for c in root.iter("connection"):
+        f, t = c.get("from", ""), c.get("to", "")
+        if not f.startswith(":") and not t.startswith(":") and t not in succ.setdefault(f, []):
+            succ[f].append(t)
+    edges = {}
+    for e in root.iter("edge"):
+        if e.get("function") == "internal":
+            continue
+        lanes = []
+        for ln in e.iter("lane"):
+            pts = tuple(tuple(float(v) for v in p.split(",")[:2]) for p in ln.get("shape", "").split())
+            orig = next((p.get("value", "") for p in ln.iter("param") if p.get("key") == "origId"), "")
+            lanes.append(Lane(ln.get("id"), e.get("id"), int(ln.get("index")), float(ln.get("length")),
+                              float(ln.get("width", "3.2")), pts, orig))  # type: ignore[arg-type]
+        lanes.sort(key=lambda lane: lane.index)
+        edges[e.get("id")] = Edge(e.get("id"), tuple(lanes), tuple(succ.get(e.get("id"), ())))  # type: ignore[index]
+    return edges
+
+
+def _edges(net: Path) -> dict[str, Edge]:
+    return _edges_cached(str(net), net.stat().st_mtime)
+
+
+class RoadMap:
+    """OpenDRIVE lane positions on a SUMO network (a converted ``.xodr`` or a ``.net.xml``).
+
+    On a converted road, OpenDRIVE road ``r``'s right-hand lanes are the SUMO edge ``-r``
+    (``-r.S`` for a later lane section starting at S), its left-hand lanes the edge ``r``;
+    lane -1 (next to the reference line) is SUMO's leftmost lane of ``-r``. On a SUMO
+    network the road id is the edge id and lane -k is the k-th lane from the left.
+    """
+
+    def __init__(self, net: Path, converted: bool) -> None:
+        self.net, self.converted = net, converted
+        self.edges = _edges(net)
+
+    def sections(self, road: str) -> list[tuple[float, Edge, bool]]:
+        """(start s, edge, right-hand) of the road's edges, by start."""
+        if not self.converted:
+            e = self.edges.get(road)
+            return [(0.0, e, True)] if e is not None else []
+        out = []
+        for eid, e in self.edges.items():
+            right = eid.startswith("-")
+            base = eid[1:] if right else eid
+            name, _, start = base.partition(".")
+            if name == road:
+                try:
+                    out.append((float(start) if start else 0.0, e, right))
+                except ValueError:
+                    continue
+        return sorted(out, key=lambda x: x[0])
+
+    def lane_position(self, road: str, lane: int, s: float) -> tuple[Lane, float]:
+        """The SUMO lane and the position along it (m) of OpenDRIVE (road, lane, s)."""
+        if lane == 0:
+            raise ValueError("lane 0 is the reference line, not a lane")
+        secs = [x for x in self.sections(road) if x[2] == (lane < 0)]
+        if not secs:
+            known = sorted({(eid[1:] if eid.startswith("-") else eid).partition(".")[0] for eid in self.edges}
+                           if self.converted else self.edges)
+            raise ValueError(f"unknown road {road!r} (roads: {', '.join(known)})")
+        start, edge, right = secs[0]
+        for x in secs:
+            if x[0] <= s + 1e-9:
+                start, edge, right = x
+        k = abs(lane)
+        n = len(edge.lanes)
+        if k > n:
+            raise ValueError(f"road {road!r} has {n} lane{'s' if n != 1 else ''} on that side at s = {s:g} "
+                             f"(lane ids {', '.join(str(-i if right else i) for i in range(1, n + 1))})")
+        sumo_lane = edge.lanes[n - k]
+        pos = s - start if right else sumo_lane.length - (s - start)
+        return sumo_lane, min(max(pos, 0.0), sumo_lane.length)
+
+    def lane_id_of(self, sumo_lane: Lane) -> int:
+        """The OpenDRIVE-style lane id of a SUMO lane (-1 = leftmost of its edge)."""
+        n = len(self.edges[sumo_lane.edge].lanes)
+        k = n - sumo_lane.index
+        return -k if (not self.converted or sumo_lane.edge.startswith("-")) else k
+
+    def route_from(self, edge: str, limit: int = 64) -> list[str]:
+        """``edge`` and its successors as long as each has one (the way straight on)."""
+        route = [edge]
+        while len(route) < limit:
+            nxt = self.edges[route[-1]].successors
+            if len(nxt) != 1 or nxt[0] in route:
+                break
+            route.append(nxt[0])
+        return route
+
+    def nearest_lane(self, x: float, y: float) -> tuple[Lane, float, float]:
+        """The lane whose centre line is nearest to (x, y): (lane, s along it, d + left)."""
+        from ego.lane_frame import LanePolyline
+
+        best = None
+        for e in self.edges.values():
+            for ln in e.lanes:
+                if len(ln.shape) < 2:
+                    continue
+                s, d, _ = LanePolyline(ln.shape, ln.width, ln.id).project(x, y)
+                s = min(max(s, 0.0), ln.length)
+                if best is None or abs(d) < abs(best[2]):
+                    best = (ln, s, d)
+        if best is None:
+            raise ValueError("the road has no lanes")
+        return best
+
+
+def curvature_error(shape, analytic) -> float:
+    """Largest |curvature - analytic(s)| of ego's lane frame over a lane shape (1/m), ``analytic``
+    a function of the arc length (a test's and the docs' check of a converted road)."""
+    from ego.lane_frame import LanePolyline
+
+    lane = LanePolyline(shape)
+    worst = 0.0
+    n = max(2, int(lane.length / 0.25))
+    for i in range(1, n):
+        s = lane.length * i / n
+        worst = max(worst, abs(lane.curvature_at(s) - analytic(s)))
+    return worst
+
+
+
+def _circle_curvature(a, b, c) -> float:
+    """Signed curvature (1/m, + left) of the circle through three points (0: collinear)."""
+    (ax, ay), (bx, by), (cx, cy) = a, b, c
+    cross = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+    ab, bc, ca = math.hypot(bx - ax, by - ay), math.hypot(cx - bx, cy - by), math.hypot(ax - cx, ay - cy)
+    if ab * bc * ca == 0.0:
+        return 0.0
+    return 2.0 * cross / (ab * bc * ca)
+
+
+def refine_shape(points, step: float = 0.5, ratio: float = 3.0) -> list[tuple[float, float]]:
+    """A lane shape with every curved segment split into pieces of at most ``step`` (m) on
+    the circle the neighbouring points describe.
+
+    netconvert samples a clothoid with a step that changes along it, and ego's lane frame
+    reads curvature from the heading change between segments, so a change of step shows as
+    a spike; points on the local circle make the steps even. A segment's curvature is the
+    mean of the circles through it and each neighbour of comparable length (within
+    ``ratio``); a segment whose neighbours are much longer or shorter (a straight meeting a
+    curve) takes only the comparable side, or stays straight."""
+    pts = [(float(x), float(y)) for x, y in points]
+    n = len(pts)
+    if n < 3:
+        return pts
+    lengths = [math.hypot(pts[i + 1][0] - pts[i][0], pts[i + 1][1] - pts[i][1]) for i in range(n - 1)]
+    out = [pts[0]]
+    for i in range(n - 1):
+        length = lengths[i]
+        ks = []
+        for j in (i - 1, i + 1):
+            if 0 <= j < n - 1 and lengths[j] > 0 and 1.0 / ratio <= length / lengths[j] <= ratio:
+                a, b, c = (pts[i - 1], pts[i], pts[i + 1]) if j == i - 1 else (pts[i], pts[i + 1], pts[i + 2])
+                ks.append(_circle_curvature(a, b, c))
+        k = sum(ks) / len(ks) if ks else 0.0
+        pieces = math.ceil(length / step) if k != 0.0 else 1
+        (x0, y0), (x1, y1) = pts[i], pts[i + 1]
+        if pieces > 1 and abs(k) * length < 1.0:
+            # points on the arc of curvature k over the chord: offset from the chord by the
+            # arc's sagitta profile at each fraction u of the chord
+            ux, uy = (x1 - x0) / length, (y1 - y0) / length
+            r = 1.0 / k
+            half = 0.5 * length
+            for m in range(1, pieces):
+                u = m / pieces
+                xc = (u - 0.5) * length
+                # the arc bulges away from its centre: height of the arc beside the chord at xc (circle of radius |r| centred at the
+                # chord's middle, below it by sqrt(r^2 - half^2))
+                h = -math.copysign(math.sqrt(r * r - xc * xc) - math.sqrt(r * r - half * half), k)
+                out.append((x0 + u * (x1 - x0) - h * uy, y0 + u * (y1 - y0) + h * ux))
+        out.append((x1, y1))
+    return out
