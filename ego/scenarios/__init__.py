@@ -18,7 +18,14 @@ SCENARIOS: dict[str, type[Scenario]] = {
 
 
 def scenario_class(name: str) -> type[Scenario]:
-    """The registered scenario ``name``, or a ConfigError naming the known ones."""
+    """The registered scenario ``name``, or a ConfigError naming the known ones. A name
+    ending in ``.xosc`` is an OpenSCENARIO file (:mod:`ego.openscenario`)."""
+    from ego.openscenario import is_scenario_file
+
+    if is_scenario_file(name):
+        from ego.openscenario.scenario import file_scenario_class
+
+        return file_scenario_class(name)
     try:
         return SCENARIOS[name]
     except KeyError:
