@@ -114,7 +114,9 @@ def _parser() -> argparse.ArgumentParser:
                "Every parameter, its unit and default: ego list",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    run.add_argument("scenario", metavar="SCENARIO", help=f"one of: {', '.join(SCENARIOS)}")
+    run.add_argument("scenario", metavar="SCENARIO",
+                     help=f"one of: {', '.join(SCENARIOS)}; or an OpenSCENARIO file (.xosc)")
+    run.add_argument("--ego", metavar="ENTITY", help="with an .xosc file: the entity ego drives (default Ego)")
     run.add_argument("--controller", "-c", required=True, metavar="NAME",
                      help=f"one of: {_controllers_help()}")
     run.add_argument("--record", metavar="PATH", help="write a Rerun recording (.rrd) here")
@@ -146,7 +148,9 @@ def _parser() -> argparse.ArgumentParser:
                "130 interrupted (finished runs written); 2 bad input or --out in use.",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    cmp_.add_argument("scenario", metavar="SCENARIO", help=f"one of: {', '.join(SCENARIOS)}")
+    cmp_.add_argument("scenario", metavar="SCENARIO",
+                      help=f"one of: {', '.join(SCENARIOS)}; or an OpenSCENARIO file (.xosc)")
+    cmp_.add_argument("--ego", metavar="ENTITY", help="with an .xosc file: the entity ego drives (default Ego)")
     cmp_.add_argument("--controllers", required=True, metavar="A,B,...",
                       help="comma-separated; a name, or a variant with its own parameters "
                            f"NAME@key=value[@key=value...] (pid@kp_lat=0.02), from: {_controllers_help()}")
@@ -198,6 +202,10 @@ def _parser() -> argparse.ArgumentParser:
     lst = sub.add_parser("list", help="scenarios, controllers and every parameter",
                          description="List scenarios, controllers and every parameter with "
                                      "its default and unit.")
+    lst.add_argument("file", nargs="?", metavar="FILE.xosc",
+                     help="an OpenSCENARIO file: its parameters, entities, the ego and every element "
+                          "(supported or not)")
+    lst.add_argument("--ego", metavar="ENTITY", help="with FILE.xosc: the entity ego drives (default Ego)")
     lst.add_argument("--json", action="store_true", help="print JSON instead of text")
     lst.add_argument("--markdown", action="store_true",
                      help="print every parameter's default, unit and allowed values as Markdown tables "
@@ -424,7 +432,7 @@ def _run(args) -> int:
     from ego.export import trace_files
 
     spec = RunSpec(args.scenario, args.controller, seed=check_seed(args.seed, "--seed"),
-                   overrides=parse_overrides(args.overrides), record=args.record, trace=args.trace,
+                   overrides=_ego_entity(args, parse_overrides(args.overrides)), record=args.record, trace=args.trace,
                    backend=args.backend, video=args.video)
     result = run(spec)  # checks the --trace path before anything runs
     written = [str(p) for p in trace_files(args.trace, result.traffic is not None)] if args.trace else []
@@ -453,6 +461,17 @@ def _run(args) -> int:
     return EXIT_OK if result.status in NOT_FAILED else EXIT_NOT_COMPLETED
 
 
+def _ego_entity(args, overrides: dict) -> dict:
+    """``--ego ENTITY`` as the file scenario's ``ego_entity`` parameter."""
+    if args.ego is None:
+        return overrides
+    from ego.openscenario import is_scenario_file
+
+    if not is_scenario_file(args.scenario):
+        raise ConfigError(f"--ego goes with an OpenSCENARIO file (.xosc), not {args.scenario!r}")
+    return {**overrides, "ego_entity": args.ego}
+
+
 def _compare(args) -> int:
     from ego.compare import MAX_SEEDS, UNITS_FILE, compare
 
@@ -463,7 +482,7 @@ def _compare(args) -> int:
     check_count(args.jobs, "--jobs", 1, MAX_JOBS)
     labels = [n.strip() for n in args.controllers.split(",") if n.strip()]
     out = check_output_dir(args.out, "--out")
-    rows = compare(args.scenario, labels, args.seeds, parse_overrides(args.overrides), out, args.jobs,
+    rows = compare(args.scenario, labels, args.seeds, _ego_entity(args, parse_overrides(args.overrides)), out, args.jobs,
                    traces=args.traces, backend=args.backend)
     print((out / "metrics.md").read_text(), end="")
     files = ["metrics.csv", UNITS_FILE, "metrics.md"] + sorted(p.name for p in out.glob("*.png"))
@@ -638,6 +657,14 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _train(args)
         if args.command == "tune":
             return _tune(args)
+        if args.command == "list" and (args.file or args.ego):
+            from ego.openscenario.scenario import file_listing, print_listing
+
+            if not args.file:
+                raise ConfigError("--ego goes with a scenario file: ego list FILE.xosc --ego ENTITY")
+            listing = file_listing(args.file, args.ego or "")
+            print(json.dumps(listing, indent=2) if args.json else print_listing(listing), end="" if not args.json else "\n")
+            return EXIT_OK
         if args.command == "list":
             cat = _catalogue()
             if args.json:

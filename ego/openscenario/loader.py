@@ -218,11 +218,15 @@ def _check_root(path, root: Node) -> None:
     _check_tree(path, root)
 
 
-def _declarations(path, node: Node | None, outer: Mapping[str, object]) -> dict[str, M.Parameter]:
+def _declarations(path, node: Node | None, outer: Mapping[str, object],
+                  overrides: Mapping[str, object] | None = None) -> dict[str, M.Parameter]:
+    """The declarations in order, each value resolved with the ones before it; a name in
+    ``overrides`` takes that value instead (so a later ``$ref`` to it sees the override)."""
     out: dict[str, M.Parameter] = {}
     if node is None:
         return out
     values = dict(outer)
+    overrides = overrides or {}
     for d in node.all("ParameterDeclaration"):
         name = d.attrs.get("name")
         kind = d.attrs.get("parameterType")
@@ -238,7 +242,7 @@ def _declarations(path, node: Node | None, outer: Mapping[str, object]) -> dict[
             raise ScenarioFileError(path, d.line, f"parameter {name!r} needs attribute value")
         raw = d.attrs["value"]
         try:
-            raw = resolve(raw, values)
+            raw = overrides[name] if name in overrides else resolve(raw, values)
             value = convert(kind, raw, f"parameter {name!r}")
         except (ExpressionError, ValueError) as exc:
             raise ScenarioFileError(path, d.line, str(exc)) from None
@@ -559,16 +563,16 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
     if version[0] != 1 or not 0 <= version[1] <= 3:
         raise ScenarioFileError(path, header.line, f"OpenSCENARIO {version[0]}.{version[1]} is not supported by "
                                 f"ego (1.0 to 1.3; see {DOCS})")
-    params = _declarations(path, root.child("ParameterDeclarations"), {})
-    values: dict[str, object] = {k: p.value for k, p in params.items()}
-    for k, v in (overrides or {}).items():
-        if k in params:
-            try:
-                values[k] = convert(params[k].type, v, f"parameter {k!r}")
-            except ValueError as exc:
-                from ego.params import ConfigError
+    defaults = _declarations(path, root.child("ParameterDeclarations"), {})
+    given = {k: v for k, v in (overrides or {}).items() if k in defaults}
+    try:
+        params = _declarations(path, root.child("ParameterDeclarations"), {}, given)
+    except ScenarioFileError as exc:
+        from ego.params import ConfigError
 
-                raise ConfigError(str(exc)) from None
+        raise ConfigError(exc.detail) from None
+    values: dict[str, object] = {k: p.value for k, p in params.items()}
+    params = defaults
     b = _Builder(path, values)
     cl = root.child("CatalogLocations")
     for vc in cl.all("VehicleCatalog") if cl is not None else ():

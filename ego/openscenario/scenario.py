@@ -227,7 +227,10 @@ class FileScenario(EmergencyBrake):
     @classmethod
     def resolve(cls, config) -> tuple[M.Scenario, RoadMap, str, dict[str, Placement]]:
         """The file with ``config``'s parameter values: model, roads, ego entity, starts."""
-        values = {k: getattr(config, k) for k in cls.file_params}
+        # a parameter left at its declared default keeps its declaration (which may refer to
+        # another parameter: LeadSpeed = $EgoSpeed follows EgoSpeed); a set one is its value
+        defaults = cls.config_cls()
+        values = {k: getattr(config, k) for k in cls.file_params if getattr(config, k) != getattr(defaults, k)}
         model = load(cls.file, values)
         net = network_file(model.road)
         roads = RoadMap(net, converted=not str(model.road).endswith(".net.xml"))
@@ -602,3 +605,63 @@ def _check_ego_actions(model: M.Scenario, ego: str) -> None:
                                                         f"<{type(a.action).__name__}> on the ego ({ego}) is not "
                                                         f"supported by ego: the ego moves by its own model (see "
                                                         f"{DOCS})")
+
+
+def file_listing(path: str, ego: str = "") -> dict:
+    """What ``ego list FILE.xosc`` shows: parameters with defaults, entities, the ego, ego's
+    own parameters of a file scenario, and every element with supported or not. Works on a
+    file ego refuses too (that is when it is needed)."""
+    from ego.openscenario.loader import _declarations, elements, read_tree
+    from ego.params import describe
+
+    root = read_tree(path)
+    decl = root.child("ParameterDeclarations")
+    params = _declarations(path, decl, {}) if decl is not None else {}
+    ents = root.child("Entities")
+    entities = []
+    for so in ents.all("ScenarioObject") if ents is not None else ():
+        body = so.children[0] if so.children else None
+        kind = body.tag if body is not None else "?"
+        if body is not None and body.tag == "Vehicle":
+            kind = f"Vehicle ({body.attrs.get('vehicleCategory', '?')})"
+        elif body is not None and body.tag == "CatalogReference":
+            kind = f"CatalogReference {body.attrs.get('catalogName', '?')}/{body.attrs.get('entryName', '?')}"
+        entities.append({"name": so.attrs.get("name", "?"), "kind": kind, "line": so.line})
+    names = [e["name"] for e in entities]
+    target = ego or "Ego"
+    chosen = target if target in names else next((n for n in names if n.lower() == target.lower()), None)
+    els = elements(root)
+    own = {f.name for f in dataclasses.fields(FileConfig)}
+    return {
+        "file": path,
+        "parameters": [{"name": p.name, "type": p.type, "default": p.value, "line": p.line,
+                        "sets_ego_parameter": p.name in own} for p in params.values()],
+        "entities": entities,
+        "ego": chosen,
+        "ego_parameters": [{"name": i.name, "default": i.default, "unit": i.unit, "description": i.doc}
+                           for i in describe(FileConfig) if i.name not in params],
+        "elements": [{"element": tag, "line": line, "supported": ok} for tag, line, ok in els],
+        "supported": all(ok for _, _, ok in els),
+    }
+
+
+def print_listing(listing: dict) -> str:
+    """The listing as text."""
+    out = [f"{listing['file']}: {'every element supported' if listing['supported'] else 'NOT SUPPORTED (see below)'}",
+           "", "parameters (--set NAME=VALUE):"]
+    for p in listing["parameters"] or [{"name": "(none)", "type": "", "default": "", "line": ""}]:
+        note = "  (sets ego's parameter)" if p.get("sets_ego_parameter") else ""
+        out.append(f"  {p['name']:<24} {p['type']:<8} default {p['default']!s:<12} line {p['line']}{note}")
+    out += ["", "entities:"]
+    for e in listing["entities"]:
+        mark = "  <- the ego" if e["name"] == listing["ego"] else ""
+        out.append(f"  {e['name']:<24} {e['kind']:<30} line {e['line']}{mark}")
+    if listing["ego"] is None:
+        out.append("  (no entity named Ego: choose one with --ego)")
+    out += ["", "ego's parameters of a file scenario (--set):"]
+    for p in listing["ego_parameters"]:
+        out.append(f"  {p['name']:<24} {p['default']!s:<8} {p['unit']:<7} {p['description']}")
+    out += ["", "elements:"]
+    for e in listing["elements"]:
+        out.append(f"  line {e['line']:<5} {e['element']:<36} {'supported' if e['supported'] else 'NOT SUPPORTED'}")
+    return "\n".join(out) + "\n"
