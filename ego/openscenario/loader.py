@@ -318,7 +318,7 @@ class _Builder:
         """The single child (``tag``, or any) the element needs."""
         kids = node.children if tag is None else node.all(tag)
         if len(kids) != 1:
-            what = f"<{tag}>" if tag else "one child element"
+            what = f"<{tag}>" if tag else "child element"
             raise self.error(node, f"<{node.tag}> needs exactly one {what} (found {len(kids)})")
         return kids[0]
 
