@@ -51,7 +51,8 @@ class Transition:
 
     def value(self, t: float) -> float:
         if self.duration <= 0.0 or self.shape == "step":
-            return self.end if t >= self.t0 else self.start
+            # a step takes effect over the step after t0: the value at t0 is still the start
+            return self.end if t > self.t0 + 1e-9 else self.start
         return self.start + (self.end - self.start) * shape_value(self.shape, (t - self.t0) / self.duration)
 
     def done(self, t: float) -> bool:

@@ -37,7 +37,8 @@ STANDBY, RUNNING, COMPLETE = "standby", "running", "complete"
 @dataclass(slots=True)
 class EntityState:
     """An entity as the conditions see it: box centre (m), yaw (rad), speed (m/s), road frame
-    (s along the reference lane, d + left of it, m), size (m) and distance travelled (m)."""
+    (s along the reference lane, d + left of it, m), size (m), distance travelled (m) and the
+    front bumper's d (m: the point SUMO's sublane model moves sideways)."""
 
     x: float = 0.0
     y: float = 0.0
@@ -48,6 +49,7 @@ class EntityState:
     length: float = 4.5
     width: float = 1.8
     traveled: float = 0.0
+    d_front: float = 0.0
 
 
 class Driver(Protocol):
@@ -449,7 +451,7 @@ class ActionRun:
         self.finished = True
         if self.is_ego:
             return
-        if isinstance(self.action, M.FollowTrajectoryAction):
+        if isinstance(self.action, (M.FollowTrajectoryAction, M.LaneChangeAction, M.LaneOffsetAction)):
             self.board.driver.release(self.actor)
 
     def start(self, t: float) -> None:
@@ -488,8 +490,9 @@ class ActionRun:
                 base = b.states[a.relative_to].d if a.relative_to is not None else drv.lane_centre_of(me.d)
                 target = base + a.value
                 shape = a.shape
-                T = offset_duration(shape, a.max_lateral_acc, target - me.d)
-            self.profile = Transition(t, me.d, target, T, shape)
+                T = offset_duration(shape, a.max_lateral_acc, target - (me.d if self.is_ego else me.d_front))
+            start = me.d if self.is_ego else me.d_front
+            self.profile = Transition(t, start, target, T, shape)
             if self.is_ego:
                 drv.ego_lateral(self.profile)
                 self.finished = True
@@ -566,6 +569,7 @@ class ActionRun:
             drv.lateral(self.actor, p.value(t + h), p.peak_rate)  # type: ignore[union-attr]
             if p.done(t + h) and not getattr(a, "continuous", False):  # type: ignore[union-attr]
                 self.finished = True
+                drv.release(self.actor)
         elif isinstance(a, M.FollowTrajectoryAction):
             x, y, heading, speed, end = self._trajectory_point(t + h)
             drv.place(self.actor, x, y, heading, speed)

@@ -277,7 +277,7 @@ class FileScenario(EmergencyBrake):
         self._ego_lateral: Transition | None = None
         self._cruise_s: float | None = None
         self._cruise_v = 0.0
-        self._history: dict[str, list[tuple[float, float]]] = {}
+        self._history: dict[str, list[tuple[float, float, float]]] = {}
         self._limits: dict[str, tuple[float, float]] = {}
         self._lateral_free: set[str] = set()
         self._trigger_gap, self._trigger_speed = INF, 0.0
@@ -404,41 +404,54 @@ class FileScenario(EmergencyBrake):
         # the storyboard
         self.board = Storyboard(self.model, self.ego_name, self, c.sumo_step, self._story_event)
         self._scripted = [n for n in self.model.entities if n != self.ego_name]
-        self._observe(0.0)
+        self._history = {n: [] for n in self._scripted}
+        self._observe(-1.0)  # the start positions (no distance travelled)
+        for hist in self._history.values():
+            hist.clear()
 
     def _story_event(self, kind: str, text: str) -> None:
         self.event("storyboard", text)
 
     # -- the storyboard's view of the world ---------------------------------------------------
-    def _observe(self, h: float) -> None:
-        """Every entity's state for the conditions (box centres, road frame)."""
+    def _observe(self, t: float) -> None:
+        """Every entity's state at storyboard time ``t`` for the conditions: box centres, the
+        road frame, the distance travelled (summed from the centres' moves); the scripted
+        entities' (t, speed, d) history for the tests and the braking criterion."""
         states = self.board.states
         x = self.ego.state
         g = self.geometry
         off = g.cg_to_front - 0.5 * g.length
         e = states[self.ego_name]
-        e.x, e.y, e.yaw = x[0] + off * math.cos(x[4]), x[2] + off * math.sin(x[4]), x[4]
-        e.traveled += abs(x[1]) * h
+        bx, by = x[0] + off * math.cos(x[4]), x[2] + off * math.sin(x[4])
+        if t >= 0.0:
+            e.traveled += math.hypot(bx - e.x, by - e.y)
+        e.x, e.y, e.yaw = bx, by, x[4]
         e.speed = x[1]
         e.s, e.d = self.s + off, self.d_road
+        e.d_front = self.d_road
         project = self.road.project
         box = self.bridge.box
+        history = self._history
         for name in self._scripted:
             st = states[name]
             bx, by, yaw, speed, _, _ = box(name)
+            if t >= 0.0:
+                st.traveled += math.hypot(bx - st.x, by - st.y)
             st.x, st.y, st.yaw = bx, by, yaw
-            st.traveled += speed * h
             st.speed = speed
             s, d, _ = project(bx, by)
+            half = 0.5 * st.length
             st.s, st.d = s, d
-            self._history.setdefault(name, []).append((self.t, speed))
+            st.d_front = project(bx + half * math.cos(yaw), by + half * math.sin(yaw))[1]
+            history[name].append((t, speed, st.d_front))
 
     def _before_sumo_step(self) -> None:
         super()._before_sumo_step()
         c = self.config
         board = self.board
-        self._observe(c.sumo_step)
-        board.step(self.t - c.sumo_step)
+        t = self.t - c.sumo_step
+        self._observe(t)
+        board.step(t)
         if board.stopped and self.status == "running":
             self._end("completed", "the storyboard's StopTrigger ended the scenario")
 
@@ -509,10 +522,22 @@ class FileScenario(EmergencyBrake):
         self.bridge.set_speed(name, target)
 
     def lateral(self, name: str, d_next: float, peak_speed: float) -> None:
+        st = self.board.states[name]
+        if not math.isfinite(peak_speed):
+            # a step: the sublane model moves a car at most a lane-width fraction a step, so
+            # the car is placed across at once (where it would be after the step)
+            h = self.config.sumo_step
+            x, y = self.road.offset_point(st.s + st.speed * h, d_next - (st.d_front - st.d))
+            self.bridge.place(name, x, y, self.road.heading_at(st.s + st.speed * h), st.speed)
+            return
         if name not in self._lateral_free:
-            self.bridge.free_lateral(name, max(10.0, 2.0 * peak_speed if math.isfinite(peak_speed) else 10.0))
+            # as cut-in's car: SUMO's own limits on lateral motion and its speed loss while
+            # moving sideways must not shape the scripted profile
+            self.bridge.drive_blind(name)
+            speed = 2.0 * peak_speed if math.isfinite(peak_speed) else 100.0 / self.config.sumo_step
+            self.bridge.free_lateral(name, max(10.0, speed))
             self._lateral_free.add(name)
-        self.bridge.change_sublane(name, d_next - self.board.states[name].d)
+        self.bridge.change_sublane(name, d_next - st.d_front)
 
     def teleport(self, name: str, x: float, y: float, heading: float) -> None:
         self.bridge.place(name, x, y, heading, self.board.states[name].speed, keep_route=1)
@@ -521,7 +546,10 @@ class FileScenario(EmergencyBrake):
         self.bridge.place(name, x, y, heading, speed)
 
     def release(self, name: str) -> None:
-        pass  # SUMO drives it on from where it was placed
+        """A scripted move ended: SUMO drives the car on from where it is, minding others."""
+        if name in self._lateral_free:
+            self.bridge.drive_safe(name)
+            self._lateral_free.discard(name)
 
     def ego_speed(self, profile, relative) -> None:
         self._ego_profile, self._ego_relative = profile, relative
@@ -571,7 +599,7 @@ class FileScenario(EmergencyBrake):
         hist = self._history.get(other)
         if not hist or len(hist) < 2:
             return None
-        t = np.array([h[0] for h in hist]) - self.config.sumo_step
+        t = np.array([h[0] for h in hist])
         v = np.array([h[1] for h in hist])
         rate = (v[-1] - v[-2]) / (t[-1] - t[-2])
 

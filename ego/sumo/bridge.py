@@ -404,6 +404,11 @@ class SumoBridge:
         veh.setEmergencyDecel(vid, max(9.0, decel))
         veh.setDecel(vid, decel)
 
+    def drive_safe(self, vid: str) -> None:
+        """Undo :meth:`drive_blind`'s speed mode: ``vid`` keeps safe speeds and its limits
+        again (lane changes stay off)."""
+        self._ls.vehicle.setSpeedMode(vid, 31)
+
     def set_accel(self, vid: str, accel: float) -> None:
         """``vid`` speeds up at ``accel`` (m/s^2) when its speed is set higher."""
         self._ls.vehicle.setAccel(vid, accel)
