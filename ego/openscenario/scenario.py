@@ -544,6 +544,7 @@ class FileScenario(EmergencyBrake):
 
     def place(self, name: str, x: float, y: float, heading: float, speed: float) -> None:
         self.bridge.place(name, x, y, heading, speed)
+        self.bridge.set_speed(name, speed)  # SUMO's own speed too (it drives on from there)
 
     def release(self, name: str) -> None:
         """A scripted move ended: SUMO drives the car on from where it is, minding others."""
