@@ -71,6 +71,8 @@ class Driver(Protocol):
     def release(self, name: str) -> None: ...
     def ego_speed(self, profile: Transition | None, relative: tuple[str, str, float] | None) -> None: ...
     def ego_lateral(self, profile: Transition) -> None: ...
+    def ego_references(self) -> tuple[float, float]:
+        """The ego's speed reference (m/s) and lateral reference (d, m) now."""
 
 
 def compare(rule: str, lhs: float, rhs: float) -> bool:
@@ -458,7 +460,8 @@ class ActionRun:
         b, a, me = self.board, self.action, self.board.states[self.actor]
         drv = b.driver
         if isinstance(a, M.SpeedAction):
-            v0 = me.speed
+            # the ego's references move on from where they are (its measured speed wobbles)
+            v0 = drv.ego_references()[0] if self.is_ego else me.speed
             target = a.value
             if a.relative_to is not None:
                 ref = b.states[a.relative_to].speed
@@ -490,8 +493,9 @@ class ActionRun:
                 base = b.states[a.relative_to].d if a.relative_to is not None else drv.lane_centre_of(me.d)
                 target = base + a.value
                 shape = a.shape
-                T = offset_duration(shape, a.max_lateral_acc, target - (me.d if self.is_ego else me.d_front))
-            start = me.d if self.is_ego else me.d_front
+                T = offset_duration(shape, a.max_lateral_acc,
+                                    target - (drv.ego_references()[1] if self.is_ego else me.d_front))
+            start = drv.ego_references()[1] if self.is_ego else me.d_front
             self.profile = Transition(t, start, target, T, shape)
             if self.is_ego:
                 drv.ego_lateral(self.profile)

@@ -558,6 +558,9 @@ class FileScenario(EmergencyBrake):
             c = self.config
             self._cruise_s = self._s0 + c.ego_speed * self.t
 
+    def ego_references(self) -> tuple[float, float]:
+        return self._speed_ref, self.lane_offset[self.target_lane] + self.obs.d_ref
+
     def ego_lateral(self, profile: Transition) -> None:
         self._ego_lateral = profile
         self.target_lane = min(self.lane_offset, key=lambda i: abs(profile.end - self.lane_offset[i]))

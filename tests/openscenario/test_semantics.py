@@ -262,3 +262,25 @@ def test_traveled_distance_matches_constant_speed(tmp_path):
     k = round(sc.board.t / 0.1)
     assert st.traveled == pytest.approx(1.5 * k, abs=1e-6)
     assert math.isclose(st.speed, 15.0)
+
+
+def test_actions_on_the_ego_move_its_references(tmp_path):
+    """A LaneChangeAction and a SpeedAction addressed to the ego: its controller tracks them
+    (the lateral reference moves to the middle lane along the shape, the speed reference
+    follows the linear profile)."""
+    evs = [event("Left", "Ego", lane_change(-2, "cubic", "time", 3.0), trigger([sim_time(0.95)])),
+           event("Faster", "Ego", speed(24.0, "linear", "time", 2.0), trigger([sim_time(0.95)]))]
+    sc = run_scene(scene(tmp_path, evs), 8.0)
+    assert sc.status == "completed"
+    assert sc.target_lane == 1
+    assert sc.d_road == pytest.approx(sc.lane_offset[1], abs=0.3)  # report 000's PID settles slowly
+    assert sc.ego.state[1] == pytest.approx(24.0, abs=0.2)
+    t = sc.trace.array(0)
+    cols = sc.trace.names
+    times = t[:, cols.index("t")]
+    # a row at time t holds the references of storyboard time t - 0.1 (one SUMO step)
+    i = int(round(2.1 / 0.01))  # storyboard time 2.0, halfway along the speed ramp: 22 m/s
+    assert times[i] == pytest.approx(2.1)
+    assert t[i, cols.index("speed_ref")] == pytest.approx(22.0, abs=1e-9)
+    i = int(round(2.6 / 0.01))  # storyboard time 2.5, halfway across: 1.75 m short of the lane
+    assert t[i, cols.index("d_ref")] == pytest.approx(-1.75, abs=1e-9)
