@@ -8,6 +8,7 @@ docs/openscenario.md)``.
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Mapping
 from functools import lru_cache
@@ -180,7 +181,7 @@ def convert(kind: str, raw: object, what: str) -> object:
             v = float(raw)  # type: ignore[arg-type]
         except (TypeError, ValueError):
             raise ValueError(f"bad value for {what}: {raw!r} (expected a number)") from None
-        if v != v or v in (float("inf"), float("-inf")):
+        if not math.isfinite(v):
             raise ValueError(f"bad value for {what}: {raw!r} (expected a finite number)")
         return v
     if kind in ("integer", "int", "unsignedInt", "unsignedShort"):
@@ -586,7 +587,7 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
                                 "filepath=...> (an .xodr or a SUMO .net.xml)")
     road = (path.parent / b.str_(logic, "filepath")).resolve()
     rel = b.str_(logic, "filepath")
-    if not (rel.endswith(".xodr") or rel.endswith(".net.xml")):
+    if not rel.endswith((".xodr", ".net.xml")):
         raise b.error(logic, f"bad road file {rel!r} (expected an OpenDRIVE .xodr or a SUMO .net.xml)")
     if not road.is_file():
         raise b.error(logic, f"road file {rel!r} not found ({road})")

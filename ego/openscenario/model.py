@@ -8,7 +8,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Union
 
 RULES = ("greaterThan", "lessThan", "equalTo", "greaterOrEqual", "lessOrEqual", "notEqualTo")
 EDGES = ("rising", "falling", "risingOrFalling", "none")
@@ -71,7 +70,7 @@ class RelativeRoadPosition:
     line: int
 
 
-Position = Union[WorldPosition, LanePosition, RoadPosition, RelativeLanePosition, RelativeRoadPosition]
+Position = WorldPosition | LanePosition | RoadPosition | RelativeLanePosition | RelativeRoadPosition
 
 
 # --- entities --------------------------------------------------------------------------------
@@ -154,7 +153,7 @@ class FollowTrajectoryAction:
     line: int = 0
 
 
-PrivateAction = Union[SpeedAction, LaneChangeAction, LaneOffsetAction, TeleportAction, FollowTrajectoryAction]
+PrivateAction = SpeedAction | LaneChangeAction | LaneOffsetAction | TeleportAction | FollowTrajectoryAction
 
 
 # --- conditions ------------------------------------------------------------------------------

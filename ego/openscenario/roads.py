@@ -54,7 +54,7 @@ def network_file(road: Path) -> Path:
     tmp = out.with_name(f".{key}.{os.getpid()}.net.xml")
     env = {**os.environ, "SUMO_HOME": str(exe.parent.parent)}
     proc = subprocess.run([str(exe), "--opendrive-files", str(road), "-o", str(tmp), *OPTIONS],
-                          capture_output=True, text=True, env=env)
+                          capture_output=True, text=True, env=env, check=False)
     if proc.returncode != 0 or not tmp.is_file():
         tmp.unlink(missing_ok=True)
         lines = [ln.strip() for ln in (proc.stderr + proc.stdout).splitlines() if ln.strip()]
@@ -161,7 +161,7 @@ class RoadMap:
             raise ValueError("lane 0 is the reference line, not a lane")
         secs = [x for x in self.sections(road) if x[2] == (lane < 0)]
         if not secs:
-            known = sorted({(eid[1:] if eid.startswith("-") else eid).partition(".")[0] for eid in self.edges}
+            known = sorted({(eid.removeprefix("-")).partition(".")[0] for eid in self.edges}
                            if self.converted else self.edges)
             raise ValueError(f"unknown road {road!r} (roads: {', '.join(known)})")
         start, edge, right = secs[0]

@@ -100,7 +100,7 @@ def box_point_distance(e: EntityState, x: float, y: float) -> float:
 class ConditionState:
     """One condition's edge and delay bookkeeping."""
 
-    __slots__ = ("c", "prev", "history")
+    __slots__ = ("c", "history", "prev")
 
     def __init__(self, c: M.Condition) -> None:
         self.c = c
@@ -135,7 +135,7 @@ class ConditionState:
 class Element:
     """A storyboard element with its state and the transitions of the latest step."""
 
-    __slots__ = ("kind", "name", "state", "count", "max_count", "transitions", "children", "node")
+    __slots__ = ("children", "count", "kind", "max_count", "name", "node", "state", "transitions")
 
     def __init__(self, kind: str, name: str, node, max_count: int = 1) -> None:
         self.kind, self.name, self.node = kind, name, node

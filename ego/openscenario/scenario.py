@@ -30,29 +30,28 @@ from pathlib import Path
 
 import numpy as np
 
+from ego.lane_frame import LanePolyline
 from ego.models import NonlinearBicycle, NonlinearBicycleParams
 from ego.models.actuators import ActuatorLimits
 from ego.models.plant import BicyclePlant
-from ego.lane_frame import LanePolyline
 from ego.openscenario import model as M
 from ego.openscenario.dynamics import Transition
 from ego.openscenario.loader import declared_parameters, load
 from ego.openscenario.roads import RoadMap, network_file, refine_shape
-from ego.openscenario.runtime import EntityState, Storyboard
+from ego.openscenario.runtime import Storyboard
 from ego.openscenario.xmltree import DOCS, ScenarioFileError
 from ego.params import ConfigError, param
-from ego.scenarios.events import INF
 from ego.scenarios.evasive import (
     BLOCKER_TYPE,
     CRUISE,
     EmergencyBrake,
     EvasiveConfig,
 )
-from ego.scenarios.highway import EGO, TRAFFIC_TYPE
+from ego.scenarios.events import INF
+from ego.scenarios.highway import EGO, LOG_REACH, TRAFFIC_TYPE
 from ego.scenarios.sensor import SurroundSensor
 from ego.sumo.bridge import SumoBridge, SumoConfig, VehicleSpec, VehicleType, ego_type
 from ego.sumo.traffic import PacedVehicle, background_traffic
-from ego.scenarios.highway import LOG_REACH
 
 ENTITY_COLORS = ((255, 150, 0), (0, 170, 255), (160, 60, 220), (40, 180, 90), (230, 200, 0))
 
@@ -248,7 +247,7 @@ class FileScenario(EmergencyBrake):
             from ego.params import apply_overrides
 
             cfg, _ = apply_overrides(cfg, early, strict=False)
-        model, roads, ego, starts = cls.resolve(cfg)
+        model, _, ego, starts = cls.resolve(cfg)
         start = starts[ego]
         if start.speed is None:
             raise ScenarioFileError(model.path, model.entities[ego].line, f"the ego {ego!r} needs a SpeedAction "
@@ -258,7 +257,7 @@ class FileScenario(EmergencyBrake):
 
     @classmethod
     def check_config(cls, config) -> None:
-        model, roads, ego, starts = cls.resolve(config)
+        _, roads, ego, starts = cls.resolve(config)
         edge = roads.edges[starts[ego].edge]
         if config.ego_lane >= len(edge.lanes):
             raise ConfigError(f"bad value for ego_lane: {config.ego_lane} (the ego's road has {len(edge.lanes)} lanes)")

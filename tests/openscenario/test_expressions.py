@@ -59,9 +59,10 @@ def test_resolve():
 def test_declarations_follow_overrides(tmp_path):
     """A declaration referring to an earlier parameter sees that parameter's set value;
     ``ego run --set`` of a declared parameter reaches the storyboard."""
-    from ego.openscenario.loader import load
     import shutil
     from pathlib import Path
+
+    from ego.openscenario.loader import load
 
     shipped = Path(__file__).resolve().parents[2] / "scenarios" / "openscenario"
     for name in ("ccrb.xosc", "straight3.xodr"):

@@ -11,9 +11,25 @@ from __future__ import annotations
 import math
 
 import pytest
+from scenes import (
+    entity,
+    event,
+    lane_change,
+    lane_offset,
+    run_scene,
+    scene,
+    sim_time,
+    speed,
+    starts,
+    trigger,
+)
 
-from ego.openscenario.dynamics import Transition, lateral_duration, offset_duration, speed_duration
-from scenes import entity, event, lane_change, lane_offset, run_scene, scene, sim_time, speed, starts, trigger
+from ego.openscenario.dynamics import (
+    Transition,
+    lateral_duration,
+    offset_duration,
+    speed_duration,
+)
 
 pytestmark = pytest.mark.sumo
 
@@ -279,8 +295,8 @@ def test_actions_on_the_ego_move_its_references(tmp_path):
     cols = sc.trace.names
     times = t[:, cols.index("t")]
     # a row at time t holds the references of storyboard time t - 0.1 (one SUMO step)
-    i = int(round(2.1 / 0.01))  # storyboard time 2.0, halfway along the speed ramp: 22 m/s
+    i = round(2.1 / 0.01)  # storyboard time 2.0, halfway along the speed ramp: 22 m/s
     assert times[i] == pytest.approx(2.1)
     assert t[i, cols.index("speed_ref")] == pytest.approx(22.0, abs=1e-9)
-    i = int(round(2.6 / 0.01))  # storyboard time 2.5, halfway across: 1.75 m short of the lane
+    i = round(2.6 / 0.01)  # storyboard time 2.5, halfway across: 1.75 m short of the lane
     assert t[i, cols.index("d_ref")] == pytest.approx(-1.75, abs=1e-9)
