@@ -79,8 +79,8 @@ def equivalence_table() -> Table:
     return Table("xosc-equivalence", PAGE,
                  ("ego run scenarios/openscenario/emergency_brake.xosc -c pid",
                   "ego sweep scenarios/openscenario/ccr-s.toml --out runs/xosc-ccr-s"),
-                 ("file / built-in", "runs", "identical metrics", "max |gap difference| [m]",
-                  "max |impact speed difference| [km/h]"),
+                 ("file / built-in", "runs", "identical metrics", "largest gap difference [m]",
+                  "largest impact speed difference [km/h]"),
                  tuple(rows),
                  ("Identical metrics: every metric of the run equal (the scenario's name, the wall time and "
                   "the built-in's backend aside). The CCR rows pair each run of the TOML sweep with the "
