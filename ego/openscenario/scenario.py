@@ -225,7 +225,20 @@ class FileScenario(EmergencyBrake):
     # -- resolution (before anything runs) ----------------------------------------------------
     @classmethod
     def resolve(cls, config) -> tuple[M.Scenario, RoadMap, str, dict[str, Placement]]:
-        """The file with ``config``'s parameter values: model, roads, ego entity, starts."""
+        """The file with ``config``'s parameter values: model, roads, ego entity, starts
+        (the last few kept: a run resolves its configuration three times)."""
+        cache = cls.__dict__.get("_resolved")
+        if cache is None:
+            cache = cls._resolved = {}
+        hit = cache.get(config)
+        if hit is None:
+            hit = cache[config] = cls._resolve(config)
+            while len(cache) > 8:
+                cache.pop(next(iter(cache)))
+        return hit
+
+    @classmethod
+    def _resolve(cls, config) -> tuple[M.Scenario, RoadMap, str, dict[str, Placement]]:
         # a parameter left at its declared default keeps its declaration (which may refer to
         # another parameter: LeadSpeed = $EgoSpeed follows EgoSpeed); a set one is its value
         defaults = cls.config_cls()
