@@ -13,6 +13,7 @@ import os
 from collections.abc import Mapping
 from functools import lru_cache
 from pathlib import Path
+from typing import Any
 
 from ego.openscenario import model as M
 from ego.openscenario.expressions import ExpressionError, resolve
@@ -487,7 +488,7 @@ class _Builder:
 
     def condition(self, node: Node) -> M.Condition:
         name = self.str_(node, "name")
-        base = {"name": name, "delay": self.num(node, "delay", nonneg=True),
+        base: dict[str, Any] = {"name": name, "delay": self.num(node, "delay", nonneg=True),
                 "edge": self.enum(node, "conditionEdge", M.EDGES), "line": node.line}
         inner = self.one(node)
         if inner.tag == "ByValueCondition":
@@ -543,7 +544,7 @@ class _Builder:
     def position_of(self, position_node: Node) -> M.Position:
         return self.position(position_node)
 
-    def reach(self, c: Node, base: dict) -> M.Condition:
+    def reach(self, c: Node, base: dict[str, Any]) -> M.Condition:
         return M.Condition(kind=c.tag, rule="lessOrEqual", value=self.num(c, "tolerance", nonneg=True),
                            position=self.position(self.one(c, "Position")), **base)
 

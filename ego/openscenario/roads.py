@@ -106,18 +106,19 @@ def _edges_cached(net: str, mtime: float) -> dict[str, Edge]:
         f, t = c.get("from", ""), c.get("to", "")
         if not f.startswith(":") and not t.startswith(":") and t not in succ.setdefault(f, []):
             succ[f].append(t)
-    edges = {}
+    edges: dict[str, Edge] = {}
     for e in root.iter("edge"):
         if e.get("function") == "internal":
             continue
+        eid = e.get("id", "")
         lanes = []
         for ln in e.iter("lane"):
-            pts = tuple(tuple(float(v) for v in p.split(",")[:2]) for p in ln.get("shape", "").split())
+            pts = tuple((float(p.split(",")[0]), float(p.split(",")[1])) for p in ln.get("shape", "").split())
             orig = next((p.get("value", "") for p in ln.iter("param") if p.get("key") == "origId"), "")
-            lanes.append(Lane(ln.get("id"), e.get("id"), int(ln.get("index")), float(ln.get("length")),
-                              float(ln.get("width", "3.2")), pts, orig))  # type: ignore[arg-type]
+            lanes.append(Lane(ln.get("id", ""), eid, int(ln.get("index", "0")), float(ln.get("length", "0")),
+                              float(ln.get("width", "3.2")), pts, orig))
         lanes.sort(key=lambda lane: lane.index)
-        edges[e.get("id")] = Edge(e.get("id"), tuple(lanes), tuple(succ.get(e.get("id"), ())))  # type: ignore[index]
+        edges[eid] = Edge(eid, tuple(lanes), tuple(succ.get(eid, ())))
     return edges
 
 

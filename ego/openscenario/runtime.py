@@ -159,8 +159,8 @@ class Storyboard:
         self.scenario, self.ego, self.driver, self.h = scenario, ego, driver, step
         self.log = log or (lambda kind, text: None)
         self.states: dict[str, EntityState] = {name: EntityState() for name in scenario.entities}
-        for name, e in scenario.entities.items():
-            self.states[name].length, self.states[name].width = e.vehicle.length, e.vehicle.width
+        for name, ent in scenario.entities.items():
+            self.states[name].length, self.states[name].width = ent.vehicle.length, ent.vehicle.width
         self.conditions: dict[int, ConditionState] = {}
         self.by_name: dict[tuple[str, str], list[Element]] = {}
         self.stories: list[Element] = []
@@ -516,6 +516,7 @@ class ActionRun:
         self.cum = [0.0]
         for (x0, y0), (x1, y1) in zip(self.xy, self.xy[1:]):
             self.cum.append(self.cum[-1] + math.hypot(x1 - x0, y1 - y0))
+        self.times: list[float] | None
         if a.timing is not None:  # type: ignore[union-attr]
             domain, scale, offset = a.timing  # type: ignore[union-attr]
             base = 0.0 if domain == "absolute" else t
