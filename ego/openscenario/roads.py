@@ -22,6 +22,8 @@ from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
+import numpy as np
+
 from ego.openscenario.xmltree import ScenarioFileError
 
 #: m between the points netconvert samples an OpenDRIVE curve at
@@ -227,54 +229,39 @@ def curvature_error(shape, analytic) -> float:
 
 
 
-def _circle_curvature(a, b, c) -> float:
-    """Signed curvature (1/m, + left) of the circle through three points (0: collinear)."""
-    (ax, ay), (bx, by), (cx, cy) = a, b, c
-    cross = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
-    ab, bc, ca = math.hypot(bx - ax, by - ay), math.hypot(cx - bx, cy - by), math.hypot(ax - cx, ay - cy)
-    if ab * bc * ca == 0.0:
-        return 0.0
-    return 2.0 * cross / (ab * bc * ca)
+def refine_shape(points, step: float = 0.25, ratio: float = 3.0, longest: float = 5.0) -> list[tuple[float, float]]:
+    """A lane shape whose curved runs are resampled every ``step`` (m) along a cubic spline
+    through their points.
 
+    netconvert samples an OpenDRIVE curve with a step that changes along it (a clothoid:
+    2 m, then 1 m, then 0.5 m as its curvature grows), and ego's lane frame reads curvature
+    from the heading change between segments: where the step changes, unequal neighbours
+    bias the heading at their shared vertex and the curvature spikes. A run is a stretch of
+    segments shorter than ``longest`` whose neighbours' lengths differ by at most ``ratio``
+    (netconvert's samples of one curve); its points are on the curve (within 0.1 mm), so a
+    not-a-knot cubic spline through them (parametrised by chord length) and resampled evenly
+    gives the lane frame even steps. Long segments (straights) and their ends stay as they
+    are."""
+    from scipy.interpolate import CubicSpline
 
-def refine_shape(points, step: float = 0.5, ratio: float = 3.0) -> list[tuple[float, float]]:
-    """A lane shape with every curved segment split into pieces of at most ``step`` (m) on
-    the circle the neighbouring points describe.
-
-    netconvert samples a clothoid with a step that changes along it, and ego's lane frame
-    reads curvature from the heading change between segments, so a change of step shows as
-    a spike; points on the local circle make the steps even. A segment's curvature is the
-    mean of the circles through it and each neighbour of comparable length (within
-    ``ratio``); a segment whose neighbours are much longer or shorter (a straight meeting a
-    curve) takes only the comparable side, or stays straight."""
-    pts = [(float(x), float(y)) for x, y in points]
+    pts = np.asarray(points, dtype=float)
     n = len(pts)
-    if n < 3:
-        return pts
-    lengths = [math.hypot(pts[i + 1][0] - pts[i][0], pts[i + 1][1] - pts[i][1]) for i in range(n - 1)]
-    out = [pts[0]]
-    for i in range(n - 1):
-        length = lengths[i]
-        ks = []
-        for j in (i - 1, i + 1):
-            if 0 <= j < n - 1 and lengths[j] > 0 and 1.0 / ratio <= length / lengths[j] <= ratio:
-                a, b, c = (pts[i - 1], pts[i], pts[i + 1]) if j == i - 1 else (pts[i], pts[i + 1], pts[i + 2])
-                ks.append(_circle_curvature(a, b, c))
-        k = sum(ks) / len(ks) if ks else 0.0
-        pieces = math.ceil(length / step) if k != 0.0 else 1
-        (x0, y0), (x1, y1) = pts[i], pts[i + 1]
-        if pieces > 1 and abs(k) * length < 1.0:
-            # points on the arc of curvature k over the chord: offset from the chord by the
-            # arc's sagitta profile at each fraction u of the chord
-            ux, uy = (x1 - x0) / length, (y1 - y0) / length
-            r = 1.0 / k
-            half = 0.5 * length
-            for m in range(1, pieces):
-                u = m / pieces
-                xc = (u - 0.5) * length
-                # the arc bulges away from its centre: height of the arc beside the chord at xc (circle of radius |r| centred at the
-                # chord's middle, below it by sqrt(r^2 - half^2))
-                h = -math.copysign(math.sqrt(r * r - xc * xc) - math.sqrt(r * r - half * half), k)
-                out.append((x0 + u * (x1 - x0) - h * uy, y0 + u * (y1 - y0) + h * ux))
-        out.append((x1, y1))
+    if n < 4:
+        return [(float(x), float(y)) for x, y in pts]
+    lengths = np.hypot(*np.diff(pts, axis=0).T)
+    out = [(float(pts[0, 0]), float(pts[0, 1]))]
+    i = 0
+    while i < n - 1:
+        j = i
+        while (j + 1 < n - 1 and lengths[j] < longest and lengths[j + 1] < longest
+               and 1.0 / ratio <= lengths[j + 1] / lengths[j] <= ratio):
+            j += 1
+        if j - i >= 2:  # segments i..j: points i..j+1
+            u = np.concatenate(([0.0], np.cumsum(lengths[i:j + 1])))
+            spline = CubicSpline(u, pts[i:j + 2], axis=0, bc_type="not-a-knot")
+            m = max(1, math.ceil(u[-1] / step))
+            out.extend((float(x), float(y)) for x, y in spline(np.linspace(0.0, u[-1], m + 1)[1:]))
+        else:
+            out.extend((float(x), float(y)) for x, y in pts[i + 1:j + 2])
+        i = j + 1
     return out
