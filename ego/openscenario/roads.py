@@ -5,10 +5,10 @@ A converted road is cached by the hash of its content and of the conversion opti
 ``$XDG_CACHE_HOME/ego/opendrive`` (default ``~/.cache/ego/opendrive``): a sweep converts once.
 
 netconvert samples OpenDRIVE's curves (arcs, clothoids) into polyline points every
-``--opendrive.curve-resolution`` metres (SUMO's default 2 m); :data:`CURVE_RESOLUTION` is
-finer, so that ego's lane frame (:class:`ego.lane_frame.LanePolyline`, which reads the
-curvature of a polyline from the heading change of its segments) sees a converted arc's and
-clothoid's curvature within 1e-3 1/m of the analytic value.
+``--opendrive.curve-resolution`` metres (:data:`CURVE_RESOLUTION`; SUMO's default is 2 m)
+written with 6 decimals (its default 2 would put centimetre noise on every point);
+:func:`refine_shape` then evens out the steps for ego's lane frame, so that its curvature on
+a converted arc and clothoid matches the analytic value within 1e-3 1/m.
 """
 
 from __future__ import annotations
