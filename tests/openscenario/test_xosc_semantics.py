@@ -2,7 +2,7 @@
 where the hand-computed condition first holds; edges, delays, condition groups, priorities
 and execution counts; each dynamics shape moves a SUMO car along its closed-form profile.
 
-Kinematics of the scene (tests/openscenario/scenes.py): at storyboard time t = 0.1 k the box
+Kinematics of the scene (tests/openscenario/xosc_scenes.py): at storyboard time t = 0.1 k the box
 centres are s_A = 100 + 2.5 k (lane -1, y = 3.5), s_B = 200 + 1.5 k (lane -2); every car is
 4.5 m long. Thresholds sit between steps, never on one."""
 
@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 
 import pytest
-from scenes import (
+from xosc_scenes import (
     entity,
     event,
     lane_change,
