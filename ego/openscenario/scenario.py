@@ -13,10 +13,12 @@ A file's parameters are parameters of the scenario (``--set Name=value``, sweep 
 a declared parameter with the name of an ego parameter (``traffic_density``, ``duration``,
 ``ttc_threshold``...) sets that parameter's default.
 
-This module builds on today's ``EmergencyBrake`` class by subclassing (``_setup``,
-``_traffic``, ``_make_bridge`` are generalised from the motorway's to any single-road
-network); once ego's scenarios are composed parts it maps onto World (the road and
-entities), Manoeuvre (the ego's references), and a scripted-actor part (the storyboard).
+The scenario is emergency-brake's composition configured by the file: the motorway world
+(:class:`~ego.scenarios.motorway.MotorwayWorld`) given the file's road (its edge, route and
+lanes) and populated with the file's entities (:class:`ScriptedEntity`, commanded by the
+storyboard before every simulator step), the surround view, the plant, the evasive
+manoeuvre whose cruise references the storyboard moves (:class:`FileManoeuvre`) and the
+safety layer.
 """
 
 from __future__ import annotations
@@ -31,9 +33,6 @@ from pathlib import Path
 import numpy as np
 
 from ego.lane_frame import LanePolyline
-from ego.models import NonlinearBicycle, NonlinearBicycleParams
-from ego.models.actuators import ActuatorLimits
-from ego.models.plant import BicyclePlant
 from ego.openscenario import model as M
 from ego.openscenario.dynamics import Transition
 from ego.openscenario.loader import declared_parameters, load
@@ -41,17 +40,14 @@ from ego.openscenario.roads import RoadMap, network_file, refine_shape
 from ego.openscenario.runtime import Storyboard
 from ego.openscenario.xmltree import DOCS, ScenarioFileError
 from ego.params import ConfigError, param
-from ego.scenarios.evasive import (
-    BLOCKER_TYPE,
-    CRUISE,
-    EmergencyBrake,
-    EvasiveConfig,
-)
+from ego.scenarios.base import Parts
+from ego.scenarios.emergency_brake import BrakeInLane, EmergencyBrake
+from ego.scenarios.evasive import EvasiveConfig, compose
 from ego.scenarios.events import INF
-from ego.scenarios.highway import EGO, LOG_REACH, TRAFFIC_TYPE
-from ego.scenarios.sensor import SurroundSensor
-from ego.sumo.bridge import SumoBridge, SumoConfig, VehicleSpec, VehicleType, ego_type
-from ego.sumo.traffic import PacedVehicle, background_traffic
+from ego.scenarios.manoeuvre import CRUISE, EvasiveManoeuvre
+from ego.scenarios.motorway import EGO
+from ego.sim.types import VehicleSpec, VehicleType
+from ego.sumo.bridge import SumoBridge, SumoConfig
 
 ENTITY_COLORS = ((255, 150, 0), (0, 170, 255), (160, 60, 220), (40, 180, 90), (230, 200, 0))
 
@@ -275,15 +271,66 @@ class FileScenario(EmergencyBrake):
         if config.ego_lane >= len(edge.lanes):
             raise ConfigError(f"bad value for ego_lane: {config.ego_lane} (the ego's road has {len(edge.lanes)} lanes)")
 
-    # -- set-up ---------------------------------------------------------------------------
-    def _make_bridge(self) -> SumoBridge:
+    # -- the parts ----------------------------------------------------------------------------
+    def compose(self) -> Parts:
+        """emergency-brake's parts on the file's road: the world is the motorway world given
+        the file's edge, route and lanes and populated with the file's entities (scripted by
+        the storyboard); the manoeuvre is the evasive one whose cruise references the
+        storyboard moves (:class:`FileManoeuvre`)."""
         c = self.config
         self.model, self.roads, self.ego_name, self.starts = self.resolve(c)
+        edge = self.starts[self.ego_name].edge
+        road = {"edge": edge, "route": f"route_{edge}", "route_edges": tuple(self.roads.route_from(edge)),
+                "n_lanes": len(self.roads.edges[edge].lanes), "refine": refine_shape}
+        self.in_lane = BrakeInLane(c, lambda: self.safety is not None and self.safety.active)
+        parts = compose(self, "front", self.in_lane, self.populate, on_trigger=self.on_trigger, road=road,
+                        manoeuvre_cls=FileManoeuvre)
+        parts.manoeuvre.story = self
+        return parts
+
+    def _make_bridge(self) -> SumoBridge:
+        c = self.config
         return SumoBridge(SumoConfig(self.roads.net, step_length=c.sumo_step, seed=self.seed,
                                      lateral_resolution=c.lateral_resolution))
 
-    def _reset_plan(self) -> None:
-        super()._reset_plan()
+    # the ego's frame as the storyboard and the tests read it: the surround view's
+    @property
+    def road(self):
+        return self.view.road
+
+    @property
+    def lane_offset(self) -> dict[int, float]:
+        return self.view.lane_offset
+
+    @property
+    def s(self) -> float:
+        return self.view.s
+
+    @property
+    def d_road(self) -> float:
+        return self.view.d_road
+
+    @property
+    def target_lane(self) -> int:
+        return self.view.target_lane
+
+    @target_lane.setter
+    def target_lane(self, lane: int) -> None:
+        self.view.target_lane = lane
+
+    def _route(self, edge: str) -> str:
+        world = self.world
+        rid = f"route_{edge}"
+        if rid != world.route and rid not in self._routes:
+            world.sim.add_route(rid, self.roads.route_from(edge))
+            self._routes.add(rid)
+        return rid
+
+    def populate(self, world) -> None:
+        """The file's entities but the ego, as SUMO vehicles the storyboard commands."""
+        c = self.config
+        self._impact: tuple[float, float] | None = None  #: (ego, other) speeds at the collision
+        self._trigger_gap, self._trigger_speed = INF, 0.0
         self._ego_profile: Transition | None = None
         self._ego_relative: tuple | None = None
         self._ego_lateral: Transition | None = None
@@ -292,18 +339,8 @@ class FileScenario(EmergencyBrake):
         self._history: dict[str, list[tuple[float, float, float]]] = {}
         self._limits: dict[str, tuple[float, float]] = {}
         self._lateral_free: set[str] = set()
-        self._trigger_gap, self._trigger_speed = INF, 0.0
-
-    def _route(self, edge: str) -> str:
-        rid = f"route_{edge}"
-        if rid not in self._routes:
-            self.bridge.add_route(rid, self.roads.route_from(edge))
-            self._routes.add(rid)
-        return rid
-
-    def _actors(self):
-        specs, required = [], []
-        c = self.config
+        self._routes: set[str] = set()
+        self._types: dict[str, VehicleType] = {}
         for k, (name, ent) in enumerate(self.model.entities.items()):
             if name == self.ego_name:
                 continue
@@ -312,109 +349,16 @@ class FileScenario(EmergencyBrake):
             color = ENTITY_COLORS[(k - 1) % len(ENTITY_COLORS)]
             vt = VehicleType(f"xosc_{name}", length=v.length, width=v.width, accel=v.max_accel, decel=v.max_decel,
                              emergency_decel=max(9.0, v.max_decel), max_speed=v.max_speed, sigma=0.0, color=color)
-            self.bridge.add_type(vt)
             self._types[name] = vt
-            self.colors[name] = color
             # inserted at the ego's speed at least (SUMO's insertion check), its own speed set
             # before the first step (as emergency-brake's lead)
             speed = max(c.ego_speed, start.speed if start.speed is not None else 0.0)
-            specs.append(VehicleSpec(name, vt.id, self._route(start.edge), start.index, start.front, speed))
-            required.append(name)
-        return specs, required
+            world.vehicle(VehicleSpec(name, vt.id, self._route(start.edge), start.index, start.front, speed), vt,
+                          ScriptedEntity(name, start.speed))
 
-    def _traffic(self, rng):
-        c = self.config
-        self._reset_plan()
-        self.actors = []
-        self._routes: set[str] = set()
-        self._types: dict[str, VehicleType] = {}
-        specs, required = self._actors()
-        self.bridge.add_type(BLOCKER_TYPE)
-        clear = []
-        n = len(self.roads.edges[self.starts[self.ego_name].edge].lanes)
-        route = self._route(self.starts[self.ego_name].edge)
-        for flag, lane, name in ((c.block_left, c.ego_lane + 1, "blocker_left"),
-                                 (c.block_right, c.ego_lane - 1, "blocker_right")):
-            if flag and 0 <= lane < n:
-                specs.append(VehicleSpec(name, BLOCKER_TYPE.id, route, lane, c.ego_start, c.ego_speed))
-                self.actors.append(PacedVehicle(name, c.ego_speed))
-                self.colors[name] = BLOCKER_TYPE.color
-                required.append(name)
-                clear.append((lane, c.ego_start - 45.0, c.ego_start + 45.0))
-        specs += self.background(rng, keep_clear=clear)
-        return specs, required
-
-    def background(self, rng, keep_clear=()):
-        c = self.config
-        n = len(self.roads.edges[self.starts[self.ego_name].edge].lanes)
-        lanes = [lane for lane in (c.ego_lane - 1, c.ego_lane + 1) if 0 <= lane < n]
-        return background_traffic(
-            rng, lanes=lanes, start=max(10.0, c.ego_start - 250.0), end=c.ego_start + 700.0,
-            density=c.traffic_density, speed=c.traffic_speed,
-            min_spacing=max(20.0, 1.5 * c.traffic_speed) + TRAFFIC_TYPE.length,
-            route=self._route(self.starts[self.ego_name].edge), type_id=TRAFFIC_TYPE.id, keep_clear=keep_clear)
-
-    def _setup(self, rng) -> None:
-        # HighwayScenario._setup on the file's road (its edge, route and lanes)
-        c = self.config
-        bridge = self.bridge
-        bridge.add_type(ego_type(EGO, self.geometry))
-        bridge.add_type(replace(TRAFFIC_TYPE, max_speed=c.traffic_speed))
-        specs, required = self._traffic(rng)
-        edge = self.starts[self.ego_name].edge
-        ego_spec = VehicleSpec(EGO, EGO, self._route(edge), c.ego_lane, c.ego_start, c.ego_speed)
-        bridge.add_vehicles([*specs, ego_spec])
-        missing = bridge.insert(required=[EGO, *required])
-        if missing:
-            self.event("traffic", f"SUMO could not place {len(missing)} background vehicles: "
-                       f"{', '.join(missing[:5])}{'...' if len(missing) > 5 else ''}", "WARN")
-        scripted = set(self.model.entities) - {self.ego_name}
-        for spec in specs:
-            if spec.id not in missing and spec.id not in required:
-                bridge.keep_lane(spec.id)
-        for name in scripted:
-            bridge.keep_lane(name)
-            speed = self.starts[name].speed
-            if speed is not None:
-                bridge.start_speed(name, speed)
-        for actor in self.actors:
-            actor.start(bridge)
-        bridge.control(EGO, self.geometry)
-        self.controlled_ids = (EGO,)
-        self.colors[EGO] = (220, 40, 40)
-
-        shapes = bridge.lane_shapes()
-        self.lanes = {int(lid.rsplit("_", 1)[1]): LanePolyline(refine_shape(pts), width, lid)
-                      for lid, (width, pts) in shapes.items() if lid.rsplit("_", 1)[0] == edge}
-        self.road = self.lanes[c.ego_lane]
-        self.obs.lane = self.road
-        self.lane_offset = {i: self.road.project(*lane.points[0])[1] for i, lane in self.lanes.items()}
-        outer = [abs(off) + 0.5 * self.lanes[i].width for i, off in self.lane_offset.items()]
-        self.road_halfwidth = max(outer) + 0.5 * self.geometry.width + 0.5
-
-        x, y, psi = bridge.cg_pose(EGO)
-        params = NonlinearBicycleParams(slip_speed_floor=1.0, abs=c.abs)
-        grip = params.F_max / params.Nw if c.abs else INF
-        self.ego = BicyclePlant(NonlinearBicycle(params), self.geometry, c.dt, c.substeps,
-                                ActuatorLimits(max_steer=c.max_steer, min_command=-grip,
-                                               max_command=grip, stop_speed=0.5),
-                                state=(x, c.ego_speed, y, 0.0, psi, 0.0))
-        self.target_lane = c.ego_lane
-        self._road_y = self.road.points[0][1]
-        self._kinematics()
-        g = self.geometry
-        bands = {i: (off - 0.5 * self.lanes[i].width, off + 0.5 * self.lanes[i].width)
-                 for i, off in self.lane_offset.items()}
-        self.sensor = SurroundSensor(self.road, bands, g.cg_to_front, g.length, g.width, horizon=c.sumo_step)
-        bridge.subscribe_surroundings(EGO, max(c.sensor_range, LOG_REACH))
-        self._sense()
-        # EvasiveLaneChange._setup
-        self._s0 = self.s
-        self._speed_ref = c.ego_speed
-        p = self.ego.model.params
-        self._full_brake = -p.F_max / p.Nw
-        # the storyboard
-        self.board = Storyboard(self.model, self.ego_name, self, c.sumo_step, self._story_event)
+    def after_setup(self) -> None:
+        """The storyboard starts from the entities' start positions."""
+        self.board = Storyboard(self.model, self.ego_name, self, self.config.sumo_step, self._story_event)
         self._scripted = [n for n in self.model.entities if n != self.ego_name]
         self._history = {n: [] for n in self._scripted}
         self._observe(-1.0)  # the start positions (no distance travelled)
@@ -457,11 +401,10 @@ class FileScenario(EmergencyBrake):
             st.d_front = project(bx + half * math.cos(yaw), by + half * math.sin(yaw))[1]
             history[name].append((t, speed, st.d_front))
 
-    def _before_sumo_step(self) -> None:
-        super()._before_sumo_step()
-        c = self.config
+    def before_sim_step(self) -> None:
+        """The storyboard's step, after the actors' updates before a simulator step."""
         board = self.board
-        t = self.t - c.sumo_step
+        t = self.t - self.config.sumo_step
         self._observe(t)
         board.step(t)
         if board.stopped and self.status == "running":
@@ -568,22 +511,20 @@ class FileScenario(EmergencyBrake):
         self._ego_profile, self._ego_relative = profile, relative
         if self._cruise_s is None:
             c = self.config
-            self._cruise_s = self._s0 + c.ego_speed * self.t
+            self._cruise_s = self.manoeuvre.s0 + c.ego_speed * self.t
 
     def ego_references(self) -> tuple[float, float]:
-        return self._speed_ref, self.lane_offset[self.target_lane] + self.obs.d_ref
+        return self.manoeuvre.speed_ref, self.lane_offset[self.target_lane] + self.obs.d_ref
 
     def ego_lateral(self, profile: Transition) -> None:
         self._ego_lateral = profile
         self.target_lane = min(self.lane_offset, key=lambda i: abs(profile.end - self.lane_offset[i]))
 
     # -- the ego's references ---------------------------------------------------------------
-    def _plan(self) -> None:
-        super()._plan()
-        if self.phase != CRUISE:
-            return
-        obs = self.obs
-        t_board = self.t - self.config.sumo_step
+    def cruise_references(self, obs, t: float) -> None:
+        """The cruise references moved by the storyboard's actions on the ego (called by
+        :class:`FileManoeuvre` after emergency-brake's own references)."""
+        t_board = t - self.config.sumo_step
         if self._ego_profile is not None:
             v = self._ego_profile.value(t_board)
             if self._ego_relative is not None and self._ego_profile.done(t_board):
@@ -593,23 +534,20 @@ class FileScenario(EmergencyBrake):
             self._cruise_s += 0.5 * (self._cruise_v + v) * self.config.dt if self._cruise_v else v * self.config.dt
             self._cruise_v = v
             obs.s_ref, obs.ds_ref = self._cruise_s, v
-            self._speed_ref = v
+            self.manoeuvre.speed_ref = v
         if self._ego_lateral is not None:
             p = self._ego_lateral
             obs.d_ref = p.value(t_board) - self.lane_offset[self.target_lane]
-            obs.dd_ref = 0.0
-            obs.d = self.d_road - self.lane_offset[self.target_lane]
+            obs.dd_ref = 0.0  # obs.d from the target lane: the surround view's observation
 
     # -- metrics ----------------------------------------------------------------------------
-    def _on_trigger(self) -> None:
-        super()._on_trigger()
-
     def _avoidable(self) -> bool | None:
         """The braking criterion of :mod:`ego.scenarios.envelope` with the other party's speed
         as SUMO drove it (after the collision: its last deceleration held down to a stop)."""
         from ego.scenarios.envelope import braking_min_gap
 
-        if self.trigger_t is None or self._trigger_gap == INF or self.collision is None:
+        trigger_t = self.manoeuvre.trigger_t
+        if trigger_t is None or self._trigger_gap == INF or self.collision is None:
             return None
         other = self.collision.victim if self.collision.collider == EGO else self.collision.collider
         hist = self._history.get(other)
@@ -625,13 +563,41 @@ class FileScenario(EmergencyBrake):
             return np.where(tt <= t[-1], np.interp(tt, t, v), ext)
 
         p = self.ego.model.params
-        return braking_min_gap(self.trigger_t, self._trigger_gap, self._trigger_speed,
+        return braking_min_gap(trigger_t, self._trigger_gap, self._trigger_speed,
                                p.F_max / p.m + p.f * p.g, fn, lead_step=self.config.sumo_step) > 0.0
 
     def _meta(self) -> dict:
         meta = super()._meta()
         meta["file"] = os.fspath(self.file)
         return meta
+
+
+class ScriptedEntity:
+    """A file entity SUMO drives: lane changes off, its Init speed from the first step; the
+    storyboard (not this actor) commands it afterwards."""
+
+    def __init__(self, vid: str, speed: float | None) -> None:
+        self.vid, self.speed = vid, speed
+
+    def start(self, sim) -> None:
+        sim.keep_lane(self.vid)
+        if self.speed is not None:
+            sim.start_speed(self.vid, self.speed)
+
+    def update(self, sim, t: float) -> None:
+        pass
+
+
+class FileManoeuvre(EvasiveManoeuvre):
+    """emergency-brake's manoeuvre whose cruise references follow the storyboard's actions
+    on the ego (SpeedAction, LaneChange/LaneOffsetAction): ``story`` is the file scenario."""
+
+    story: FileScenario | None = None
+
+    def plan(self, obs, t: float) -> None:
+        super().plan(obs, t)
+        if self.phase == CRUISE and self.story is not None:
+            self.story.cruise_references(obs, t)
 
 
 def _check_ego_actions(model: M.Scenario, ego: str) -> None:
