@@ -27,8 +27,8 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 import math
+import os
 import tomllib
 from collections.abc import Iterator
 from dataclasses import dataclass, field

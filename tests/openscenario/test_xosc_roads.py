@@ -18,7 +18,7 @@ from ego.openscenario.roads import RoadMap, cache_dir, network_file, refine_shap
 ROOT = Path(__file__).resolve().parents[2]
 SHIPPED = ROOT / "scenarios" / "openscenario"
 sys.path.insert(0, str(SHIPPED))
-import make_roads
+import make_roads  # noqa: E402  (shipped beside the files, not a package)
 
 
 @pytest.fixture(autouse=True)
