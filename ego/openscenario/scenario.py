@@ -192,10 +192,19 @@ def _file_class(path: str, mtime: float) -> type:
         fields.append((name, kind, param(p.value, "-", f"declared in {Path(path).name}:{p.line} ({p.type})")))
     cfg = dataclasses.make_dataclass(f"{Path(path).stem}Config", fields, bases=(FileConfig,), frozen=True)
     cfg.__module__ = __name__
+    # made per file, so no module attribute names it: a configuration travels to a worker
+    # process as the file's name and its values, and is rebuilt there from the file
+    cfg.__reduce__ = lambda self: (_file_config, (path, {f.name: getattr(self, f.name)
+                                                         for f in dataclasses.fields(self)}))
     return type(f"FileScenario[{Path(path).name}]", (FileScenario,), {
         "name": path, "config_cls": cfg, "file": path, "file_params": tuple(params),
         "summary": f"OpenSCENARIO file {path}",
     })
+
+
+def _file_config(path: str, values: dict):
+    """A file scenario's configuration unpickled: the file's config class with ``values``."""
+    return file_scenario_class(path).config_cls(**values)
 
 
 def file_scenario_class(name: str) -> type:
