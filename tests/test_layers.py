@@ -21,7 +21,7 @@ LAYERS = [
     {"ego", "ego.params", "ego.checks", "ego.outputs", "ego.processes", "ego.native", "ego._native"},
     {"ego.models", "ego.control", "ego.sim", "ego.results", "ego.parallel", "ego.record", "ego.sumo",
      "ego.highway_env", "ego.lane_frame", "ego.analytic_road"},
-    {"ego.scenarios"},
+    {"ego.scenarios", "ego.openscenario"},
     {"ego.runner", "ego.plots"},
     {"ego.compare", "ego.sweep", "ego.gym", "ego.train", "ego.docs", "ego.cli", "ego.__main__"},
 ]
