@@ -708,7 +708,7 @@ def cross_simulator(seeds: int = 3) -> list[Table]:
 
 def tables() -> list[Table]:
     """Every table of docs/results/, page by page."""
-    from ego.openscenario.docs import tables as openscenario
+    from ego.docs.openscenario import tables as openscenario
 
     return (report_000() + report_002() + report_003() + report_004() + envelope() + cross_simulator()
             + openscenario())
