@@ -50,3 +50,10 @@ def test_gym_wrapper_against_the_raw_step(tmp_path, monkeypatch):
     monkeypatch.setenv("MPLCONFIGDIR", str(tmp_path))
     figures = main(["--repeat", "3"])
     assert all(row["steps"] > 0 and row["overhead"] >= 0.0 for row in figures.values())
+
+
+def test_scenario_file_against_builtin():
+    from bench_xosc import main
+
+    figures = main(["--repeat", "2"])
+    assert figures["ratio"] > 0 and figures["convert_ms"] > 0

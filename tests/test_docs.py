@@ -21,6 +21,7 @@ ROWS = [
     ("ccrb", "pid"), ("ccrs-ttc1", "fuzzy"), ("cross-emergency-brake", "pid"),
     # the RL baselines: a controller row (the trained rows take minutes of training each)
     ("rl-cut-in", "pid"),
+    ("xosc-equivalence", "emergency_brake.xosc / emergency-brake, pid"),
 ]
 TABLES = {t.name: t for t in docs.tables()}
 

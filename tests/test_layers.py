@@ -22,7 +22,7 @@ LAYERS = [
      "ego.plugins"},
     {"ego.models", "ego.control", "ego.fmi", "ego.sim", "ego.results", "ego.parallel", "ego.record", "ego.sumo",
      "ego.highway_env", "ego.lane_frame", "ego.analytic_road"},
-    {"ego.scenarios"},
+    {"ego.scenarios", "ego.openscenario"},
     {"ego.runner", "ego.plots"},
     {"ego.compare", "ego.sweep", "ego.gym", "ego.train", "ego.docs", "ego.cli", "ego.__main__"},
 ]

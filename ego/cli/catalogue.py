@@ -7,10 +7,20 @@ import math
 from typing import Any
 
 from ego.cli.common import EXIT_OK
-from ego.params import describe
+from ego.params import ConfigError, describe
 
 
 def command(args: Any) -> int:
+    from ego.openscenario import is_scenario_file
+
+    if args.ego and not (args.reference and is_scenario_file(args.reference)):
+        raise ConfigError("--ego goes with a scenario file: ego list FILE.xosc --ego ENTITY")
+    if args.reference and is_scenario_file(args.reference):
+        from ego.openscenario.scenario import file_listing, print_listing
+
+        listing = file_listing(args.reference, args.ego or "")
+        print(json.dumps(listing, indent=2) if args.json else print_listing(listing), end="" if not args.json else "\n")
+        return EXIT_OK
     if args.reference:
         from ego.cli.references import describe_reference, print_reference
 

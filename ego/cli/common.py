@@ -36,6 +36,18 @@ class Parser(argparse.ArgumentParser):
         raise ConfigError(message)
 
 
+def ego_entity(args, overrides: dict) -> dict:
+    """``--ego ENTITY`` (``ego run`` / ``ego compare``) as the file scenario's ``ego_entity``
+    parameter; ConfigError with a built-in scenario."""
+    if args.ego is None:
+        return overrides
+    from ego.openscenario import is_scenario_file
+
+    if not is_scenario_file(args.scenario):
+        raise ConfigError(f"--ego goes with an OpenSCENARIO file (.xosc), not {args.scenario!r}")
+    return {**overrides, "ego_entity": args.ego}
+
+
 def parse_range(text: str, what: str, declared) -> tuple[float, float]:
     """``LO,HI`` within the bounds ``declared`` (a parameter's ``ParamInfo``) gives."""
     try:

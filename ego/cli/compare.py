@@ -7,7 +7,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from ego.checks import MAX_JOBS, check_count, check_output_dir
-from ego.cli.common import EXIT_INTERRUPTED, EXIT_NOT_COMPLETED, EXIT_OK
+from ego.cli.common import EXIT_INTERRUPTED, EXIT_NOT_COMPLETED, EXIT_OK, ego_entity
 from ego.params import ConfigError, parse_overrides
 
 
@@ -21,7 +21,7 @@ def command(args: Any) -> int:
     check_count(args.jobs, "--jobs", 1, MAX_JOBS)
     labels = [n.strip() for n in args.controllers.split(",") if n.strip()]
     out = check_output_dir(args.out, "--out")
-    rows = compare(args.scenario, labels, args.seeds, parse_overrides(args.overrides), out, args.jobs,
+    rows = compare(args.scenario, labels, args.seeds, ego_entity(args, parse_overrides(args.overrides)), out, args.jobs,
                    traces=args.traces, backend=args.backend)
     print((out / "metrics.md").read_text(), end="")
     files = ["metrics.csv", UNITS_FILE, "metrics.md"] + sorted(p.name for p in out.glob("*.png"))

@@ -55,7 +55,9 @@ def parser() -> argparse.ArgumentParser:
                "Every parameter, its unit and default: ego list",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    run.add_argument("scenario", metavar="SCENARIO", help=f"one of: {', '.join(SCENARIOS)}")
+    run.add_argument("scenario", metavar="SCENARIO",
+                     help=f"one of: {', '.join(SCENARIOS)}; or an OpenSCENARIO file (.xosc)")
+    run.add_argument("--ego", metavar="ENTITY", help="with an .xosc file: the entity ego drives (default Ego)")
     run.add_argument("--controller", "-c", required=True, metavar="NAME",
                      help=f"one of: {controllers_help()}; or a reference: package.module:Class, "
                           "path/to/file.py:Class or path/to/controller.fmu (docs/fmi.md)")
@@ -88,7 +90,9 @@ def parser() -> argparse.ArgumentParser:
                "130 interrupted (finished runs written); 2 bad input or --out in use.",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    cmp_.add_argument("scenario", metavar="SCENARIO", help=f"one of: {', '.join(SCENARIOS)}")
+    cmp_.add_argument("scenario", metavar="SCENARIO",
+                      help=f"one of: {', '.join(SCENARIOS)}; or an OpenSCENARIO file (.xosc)")
+    cmp_.add_argument("--ego", metavar="ENTITY", help="with an .xosc file: the entity ego drives (default Ego)")
     cmp_.add_argument("--controllers", required=True, metavar="A,B,...",
                       help="comma-separated; a name, or a variant with its own parameters "
                            f"NAME@key=value[@key=value...] (pid@kp_lat=0.02), from: {controllers_help()}")
@@ -140,9 +144,11 @@ def parser() -> argparse.ArgumentParser:
     lst = sub.add_parser("list", help="scenarios, controllers and every parameter",
                          description="List scenarios, controllers and every parameter with "
                                      "its default and unit.")
-    lst.add_argument("reference", nargs="?", metavar="CONTROLLER",
+    lst.add_argument("reference", nargs="?", metavar="CONTROLLER|FILE.xosc",
                      help="a controller reference (path/to/controller.fmu, module:Class, file.py:Class): "
-                          "its variables, the tasks it drives and its parameters")
+                          "its variables, the tasks it drives and its parameters; or an OpenSCENARIO "
+                          "file: its parameters, entities, the ego and every element (supported or not)")
+    lst.add_argument("--ego", metavar="ENTITY", help="with FILE.xosc: the entity ego drives (default Ego)")
     lst.add_argument("--json", action="store_true", help="print JSON instead of text")
     lst.add_argument("--markdown", action="store_true",
                      help="print every parameter's default, unit and allowed values as Markdown tables "

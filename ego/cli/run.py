@@ -6,7 +6,7 @@ import json
 from typing import Any
 
 from ego.checks import check_seed
-from ego.cli.common import EXIT_INTERRUPTED, EXIT_NOT_COMPLETED, EXIT_OK
+from ego.cli.common import EXIT_INTERRUPTED, EXIT_NOT_COMPLETED, EXIT_OK, ego_entity
 from ego.params import parse_overrides
 
 
@@ -17,7 +17,7 @@ def command(args: Any) -> int:
     from ego.scenarios.base import NOT_FAILED
 
     spec = RunSpec(args.scenario, args.controller, seed=check_seed(args.seed, "--seed"),
-                   overrides=parse_overrides(args.overrides), record=args.record, trace=args.trace,
+                   overrides=ego_entity(args, parse_overrides(args.overrides)), record=args.record, trace=args.trace,
                    backend=args.backend, video=args.video)
     resolved = resolve(spec)  # every name, value and path checked before anything runs
     result = run(resolved)

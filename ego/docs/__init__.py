@@ -751,8 +751,10 @@ def rl_baselines() -> list[Table]:
 
 def tables() -> list[Table]:
     """Every table of docs/results/, page by page."""
+    from ego.docs.openscenario import tables as openscenario
+
     return (report_000() + report_002() + report_003() + report_004() + envelope() + cross_simulator()
-            + rl_baselines())
+            + rl_baselines() + openscenario())
 
 
 # -- running and writing ---------------------------------------------------------------------------

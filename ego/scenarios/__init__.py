@@ -40,7 +40,14 @@ _discover()
 def scenario_class(name: str) -> type[Scenario]:
     """The registered scenario ``name`` (entry-point plugins included), the scenario class a
     ``package.module:Name`` or ``path/to/file.py:Name`` reference names, or a ConfigError
-    naming the known ones."""
+    naming the known ones. A name ending in ``.xosc`` is an OpenSCENARIO file
+    (:mod:`ego.openscenario`)."""
+    from ego.openscenario import is_scenario_file
+
+    if is_scenario_file(name):
+        from ego.openscenario.scenario import file_scenario_class
+
+        return file_scenario_class(name)
     load_scenario_plugins(SCENARIOS)
     try:
         return SCENARIOS[name]

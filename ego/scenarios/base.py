@@ -222,6 +222,9 @@ class Scenario:
     #: after the step's surround sensing (None: nothing)
     before_sim_step = None
     after_sim_step = None
+    #: a composed scenario's own work once its parts are set up, before the first
+    #: observation (None: nothing)
+    after_setup = None
 
     def compose(self) -> Parts | None:
         """The scenario's parts (:class:`Parts`), or None for one that implements the loop
@@ -628,6 +631,8 @@ class ComposedLoop:
             self._filter = _unfiltered
         self._write_row = self.trace.bind(view.row_names)
         view.sense(self.t)
+        if self.after_setup is not None:
+            self.after_setup()
 
     def _act(self, action: tuple[float, float]) -> None:
         ego = self.ego

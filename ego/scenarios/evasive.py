@@ -75,20 +75,23 @@ class EvasiveConfig(HighwayConfig):
 
 
 def compose(scenario, trigger_on: str, in_lane: InLane, traffic: Callable[[MotorwayWorld], None],
-            choose: Callable | None = None, on_trigger: Callable | None = None) -> Parts:
+            choose: Callable | None = None, on_trigger: Callable | None = None, *,
+            road: dict | None = None, manoeuvre_cls: type[EvasiveManoeuvre] = EvasiveManoeuvre) -> Parts:
     """The parts of an evasive scenario: the motorway world with ``traffic``, the ego's plant,
     the surround view, the manoeuvre triggered by the ``trigger_on`` TTC with the scenario's
-    ``in_lane`` behaviour, and the AEB (when ``aeb`` is on)."""
+    ``in_lane`` behaviour, and the AEB (when ``aeb`` is on). ``road``: the world's road
+    (:class:`MotorwayWorld`'s keywords; default the motorway); ``manoeuvre_cls``: an
+    :class:`EvasiveManoeuvre` with more references (a scenario file's storyboard)."""
     c = scenario.config
     scenario.geometry = VehicleGeometry()
     view = SurroundView(c, scenario.geometry)
-    manoeuvre = EvasiveManoeuvre(c, view, trigger_on, in_lane, scenario.event, choose, on_trigger)
+    manoeuvre = manoeuvre_cls(c, view, trigger_on, in_lane, scenario.event, choose, on_trigger)
     safety = None
     if c.aeb:
         safety = SafetyLayer(c, view, scenario.event, lambda: scenario.t)
         safety.manoeuvre = manoeuvre
         manoeuvre.safety = safety
-    return Parts(MotorwayWorld(c, scenario.geometry, traffic), view, manoeuvre, safety, ego_plant,
+    return Parts(MotorwayWorld(c, scenario.geometry, traffic, **(road or {})), view, manoeuvre, safety, ego_plant,
                  lambda names, units: evasive_series(c, names, units))
 
 

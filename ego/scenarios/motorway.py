@@ -94,13 +94,22 @@ class MotorwayWorld:
     """The simulator with the motorway's traffic: the scenario's own vehicles (``traffic``
     adds them with :meth:`vehicle`), lane blockers, the seeded background in the lanes next
     to the ego's, the scripted actors (``update(sim, t)`` before every simulator step) and
-    the lanes (index -> :class:`~ego.lane_frame.LanePolyline`)."""
+    the lanes (index -> :class:`~ego.lane_frame.LanePolyline`).
+
+    The road is data: by default the motorway (``sumo_nets/highway``); a scenario file
+    (:mod:`ego.openscenario`) gives its own ``edge`` (the ego's), the ``route`` id and its
+    ``route_edges``, the number of lanes and ``refine`` (lane points -> the points the lane
+    frame is built on)."""
 
     def __init__(self, config: HighwayConfig, geometry: VehicleGeometry,
-                 traffic: Callable[[MotorwayWorld], None]) -> None:
+                 traffic: Callable[[MotorwayWorld], None], *, edge: str = EDGE, route: str = ROUTE,
+                 route_edges: tuple[str, ...] = (EDGE,), n_lanes: int = N_LANES,
+                 refine: Callable[[list], list] | None = None) -> None:
         self.config = config
         self.geometry = geometry
         self.traffic = traffic
+        self.edge, self.route, self.route_edges, self.n_lanes = edge, route, route_edges, n_lanes
+        self.refine = refine
         self.sim: TrafficSim | None = None
         self.actors: list = []
         self.colors: dict[str, tuple[int, int, int]] = {}
@@ -132,12 +141,12 @@ class MotorwayWorld:
     def background(self, rng: np.random.Generator) -> list[VehicleSpec]:
         """Seeded background traffic in the lanes next to the ego's."""
         c = self.config
-        lanes = [lane for lane in (c.ego_lane - 1, c.ego_lane + 1) if 0 <= lane < N_LANES]
+        lanes = [lane for lane in (c.ego_lane - 1, c.ego_lane + 1) if 0 <= lane < self.n_lanes]
         return background_traffic(
             rng, lanes=lanes, start=max(10.0, c.ego_start - 250.0), end=c.ego_start + 700.0,
             density=c.traffic_density, speed=c.traffic_speed,
             min_spacing=max(20.0, 1.5 * c.traffic_speed) + TRAFFIC_TYPE.length,
-            route=ROUTE, type_id=TRAFFIC_TYPE.id, keep_clear=self._clear,
+            route=self.route, type_id=TRAFFIC_TYPE.id, keep_clear=self._clear,
         )
 
     def setup(self, sim: TrafficSim, rng: np.random.Generator) -> list[str]:
@@ -150,19 +159,19 @@ class MotorwayWorld:
         # the background's top speed is traffic_speed: the simulator's drivers would otherwise
         # speed up to the motorway's limit (130 km/h)
         self.add_type(replace(TRAFFIC_TYPE, max_speed=c.traffic_speed))
-        sim.add_route(ROUTE, [EDGE])
+        sim.add_route(self.route, list(self.route_edges))
         self.traffic(self)
         if hasattr(c, "block_left"):  # a configuration with lane blockers
             self.add_type(BLOCKER_TYPE)
         for flag, lane, name in ((getattr(c, "block_left", False), c.ego_lane + 1, "blocker_left"),
                                  (getattr(c, "block_right", False), c.ego_lane - 1, "blocker_right")):
-            if flag and 0 <= lane <= 2:
-                self.vehicle(VehicleSpec(name, BLOCKER_TYPE.id, ROUTE, lane, c.ego_start, c.ego_speed),
+            if flag and 0 <= lane < self.n_lanes:
+                self.vehicle(VehicleSpec(name, BLOCKER_TYPE.id, self.route, lane, c.ego_start, c.ego_speed),
                              BLOCKER_TYPE, PacedVehicle(name, c.ego_speed))
                 self.keep_clear(lane, c.ego_start - 45.0, c.ego_start + 45.0)
         specs = self._specs + self.background(rng)
         required = self._required
-        sim.add_vehicles([*specs, VehicleSpec(EGO, EGO, ROUTE, c.ego_lane, c.ego_start, c.ego_speed)])
+        sim.add_vehicles([*specs, VehicleSpec(EGO, EGO, self.route, c.ego_lane, c.ego_start, c.ego_speed)])
         missing = sim.insert(required=[EGO, *required])
         for spec in specs:
             if spec.id not in missing and spec.id not in required:
@@ -172,13 +181,14 @@ class MotorwayWorld:
         sim.control(EGO, self.geometry)
         self.colors[EGO] = EGO_COLOR
         shapes = sim.lane_shapes()
-        self.lanes = {int(lid.rsplit("_", 1)[1]): LanePolyline(pts, width, lid)
-                      for lid, (width, pts) in shapes.items() if lid.startswith(EDGE + "_")}
+        refine = self.refine
+        self.lanes = {int(lid.rsplit("_", 1)[1]): LanePolyline(refine(pts) if refine else pts, width, lid)
+                      for lid, (width, pts) in shapes.items() if lid.rsplit("_", 1)[0] == self.edge}
         return missing
 
     def lane_width(self, lane: int) -> float:
         """The width (m) of ``lane`` as the simulator has it (before :meth:`setup` returns)."""
-        return self.sim.lane_shapes()[f"{EDGE}_{lane}"][0]
+        return self.sim.lane_shapes()[f"{self.edge}_{lane}"][0]
 
 
 def ego_plant(config: HighwayConfig, geometry: VehicleGeometry, pose: tuple[float, float, float]) -> BicyclePlant:

@@ -414,6 +414,25 @@ class SumoBridge:
         veh.setEmergencyDecel(vid, max(9.0, decel))
         veh.setDecel(vid, decel)
 
+    def drive_safe(self, vid: str) -> None:
+        """Undo :meth:`drive_blind`'s speed mode: ``vid`` keeps safe speeds and its limits
+        again (lane changes stay off)."""
+        self._ls.vehicle.setSpeedMode(vid, 31)
+
+    def set_accel(self, vid: str, accel: float) -> None:
+        """``vid`` speeds up at ``accel`` (m/s^2) when its speed is set higher."""
+        self._ls.vehicle.setAccel(vid, accel)
+
+    def place(self, vid: str, x: float, y: float, psi: float, speed: float, keep_route: int = 2) -> None:
+        """Move SUMO vehicle ``vid``'s box centre to (x, y) (m) heading ``psi`` (rad) at
+        ``speed`` (m/s) in the next step (a scripted trajectory or teleport); SUMO drives it
+        on from there unless placed again."""
+        half = 0.5 * self.dimensions(vid)[0]
+        veh = self._ls.vehicle
+        veh.moveToXY(vid, "", -1, x + half * math.cos(psi), y + half * math.sin(psi),
+                     (90.0 - psi * _DEG) % 360.0, keep_route)
+        veh.setPreviousSpeed(vid, max(speed, 0.0))
+
     def slow_down(self, vid: str, speed: float, duration: float) -> None:
         """``vid`` changes its speed linearly to ``speed`` (m/s) over ``duration`` (s)."""
         self._ls.vehicle.slowDown(vid, speed, duration)

@@ -28,6 +28,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import os
 import tomllib
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -167,6 +168,10 @@ def load(path: str | Path) -> SweepSpec:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{path}: not valid TOML: {exc}") from None
+    scenario = data.get("scenario")
+    if isinstance(scenario, str) and scenario.lower().endswith(".xosc") and not Path(scenario).is_absolute():
+        # an OpenSCENARIO file is named relative to the spec's folder
+        data["scenario"] = os.path.normpath(path.parent / scenario)
     return parse(data, str(path))
 
 

@@ -1,0 +1,146 @@
+"""Parameter references and expressions of OpenSCENARIO XML attributes.
+
+An attribute's value is a literal, a reference ``$name`` to a declared parameter (the whole
+value), or (OpenSCENARIO 1.1) an expression ``${...}``: numbers, ``$name`` references,
+``+ - * /``, unary minus and parentheses, evaluated left to right with the usual precedence
+(``* /`` before ``+ -``). Anything else in an expression is an error naming it.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping
+
+_TOKEN = re.compile(r"\s*(?:(\d+\.?\d*(?:[eE][+-]?\d+)?|\.\d+(?:[eE][+-]?\d+)?)|\$([A-Za-z_][\w]*)|(.))")
+
+
+class ExpressionError(ValueError):
+    """A bad reference or expression; the message names what is wrong."""
+
+
+def is_reference(text: str) -> bool:
+    """True for ``$name`` and ``${...}`` values."""
+    return text.startswith("$")
+
+
+def resolve(text: str, values: Mapping[str, object]) -> object:
+    """The value of an attribute ``text``: itself, a parameter's value (``$name``) or an
+    expression's (``${...}``, a float)."""
+    if not text.startswith("$"):
+        return text
+    if text.startswith("${"):
+        if not text.endswith("}"):
+            raise ExpressionError(f"unterminated expression {text!r} (expected ${{...}})")
+        return evaluate(text[2:-1], values)
+    name = text[1:]
+    if name not in values:
+        raise ExpressionError(f"parameter {text!r} is not declared" + _known(values))
+    return values[name]
+
+
+def _known(values: Mapping[str, object]) -> str:
+    return f" (declared: {', '.join(values)})" if values else " (no ParameterDeclarations)"
+
+
+def evaluate(expr: str, values: Mapping[str, object]) -> float:
+    """The number ``expr`` (the inside of ``${...}``) evaluates to."""
+    tokens: list[tuple[str, object]] = []
+    pos = 0
+    expr = expr.rstrip()
+    while pos < len(expr):
+        m = _TOKEN.match(expr, pos)
+        if m is None:  # only trailing blanks are left
+            break
+        number, name, other = m.groups()
+        pos = m.end()
+        if number is not None:
+            tokens.append(("num", float(number)))
+        elif name is not None:
+            if name not in values:
+                raise ExpressionError(f"parameter '${name}' in expression '${{{expr}}}' is not declared"
+                                      + _known(values))
+            tokens.append(("num", _number(name, values[name], expr)))
+        elif other in "+-*/()":
+            tokens.append((other, None))
+        else:
+            raise ExpressionError(f"unexpected {other!r} in expression '${{{expr}}}' (allowed: numbers, "
+                                  "$parameters, + - * / and parentheses)")
+    if not tokens:
+        raise ExpressionError("empty expression '${}'")
+    parser = _Parser(tokens, expr)
+    value = parser.sum()
+    if parser.i != len(tokens):
+        raise ExpressionError(f"unexpected {tokens[parser.i][0]!r} in expression '${{{expr}}}'")
+    if not math.isfinite(value):
+        raise ExpressionError(f"expression '${{{expr}}}' is not finite")
+    return value
+
+
+def _number(name: str, value: object, expr: str) -> float:
+    if isinstance(value, bool):
+        raise ExpressionError(f"parameter '${name}' in expression '${{{expr}}}' is a boolean, not a number")
+    try:
+        return float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise ExpressionError(f"parameter '${name}' = {value!r} in expression '${{{expr}}}' is not a "
+                              "number") from None
+
+
+class _Parser:
+    """Recursive descent: sum := product (('+'|'-') product)*; product := unary (('*'|'/')
+    unary)*; unary := '-' unary | '+' unary | atom; atom := number | '(' sum ')'."""
+
+    def __init__(self, tokens: list[tuple[str, object]], expr: str) -> None:
+        self.tokens, self.i, self.expr = tokens, 0, expr
+
+    def _peek(self) -> str | None:
+        return self.tokens[self.i][0] if self.i < len(self.tokens) else None
+
+    def sum(self) -> float:
+        value = self.product()
+        while self._peek() in ("+", "-"):
+            op = self.tokens[self.i][0]
+            self.i += 1
+            rhs = self.product()
+            value = value + rhs if op == "+" else value - rhs
+        return value
+
+    def product(self) -> float:
+        value = self.unary()
+        while self._peek() in ("*", "/"):
+            op = self.tokens[self.i][0]
+            self.i += 1
+            rhs = self.unary()
+            if op == "*":
+                value *= rhs
+            elif rhs == 0.0:
+                raise ExpressionError(f"division by zero in expression '${{{self.expr}}}'")
+            else:
+                value /= rhs
+        return value
+
+    def unary(self) -> float:
+        kind = self._peek()
+        if kind in ("-", "+"):
+            self.i += 1
+            value = self.unary()
+            return -value if kind == "-" else value
+        return self.atom()
+
+    def atom(self) -> float:
+        kind = self._peek()
+        if kind == "num":
+            value = self.tokens[self.i][1]
+            self.i += 1
+            return value  # type: ignore[return-value]
+        if kind == "(":
+            self.i += 1
+            value = self.sum()
+            if self._peek() != ")":
+                raise ExpressionError(f"missing ')' in expression '${{{self.expr}}}'")
+            self.i += 1
+            return value
+        what = "the end" if kind is None else repr(kind)
+        raise ExpressionError(f"unexpected {what} in expression '${{{self.expr}}}' (expected a number, "
+                              "a $parameter or '(')")

@@ -1,0 +1,686 @@
+"""Read an OpenSCENARIO XML file into :mod:`ego.openscenario.model`, refusing anything outside
+ego's subset before anything runs.
+
+Every refusal is one line ``FILE:LINE: what`` (:class:`ScenarioFileError`); an element
+outside the subset reads ``FILE:LINE: <Element> is not supported by ego (see
+docs/openscenario.md)``.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Mapping
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+from ego.openscenario import model as M
+from ego.openscenario.expressions import ExpressionError, resolve
+from ego.openscenario.xmltree import DOCS, Node, ScenarioFileError, parse_file
+
+#: what each supported element may contain (tag -> allowed child tags); a child outside
+#: its set is refused as not supported
+CHILDREN: dict[str, set[str]] = {
+    "OpenSCENARIO": {"FileHeader", "ParameterDeclarations", "CatalogLocations", "RoadNetwork", "Entities",
+                     "Storyboard"},
+    "FileHeader": set(),
+    "ParameterDeclarations": {"ParameterDeclaration"},
+    "ParameterDeclaration": set(),
+    "CatalogLocations": {"VehicleCatalog"},
+    "VehicleCatalog": {"Directory"},
+    "Directory": set(),
+    "RoadNetwork": {"LogicFile", "SceneGraphFile"},
+    "LogicFile": set(),
+    "SceneGraphFile": set(),
+    "Entities": {"ScenarioObject"},
+    "ScenarioObject": {"Vehicle", "CatalogReference"},
+    "CatalogReference": {"ParameterAssignments"},
+    "ParameterAssignments": {"ParameterAssignment"},
+    "ParameterAssignment": set(),
+    "Vehicle": {"ParameterDeclarations", "BoundingBox", "Performance", "Axles", "Properties"},
+    "BoundingBox": {"Center", "Dimensions"},
+    "Center": set(),
+    "Dimensions": set(),
+    "Performance": set(),
+    "Axles": {"FrontAxle", "RearAxle", "AdditionalAxle"},
+    "FrontAxle": set(), "RearAxle": set(), "AdditionalAxle": set(),
+    "Properties": {"Property"},
+    "Property": set(),
+    "Storyboard": {"Init", "Story", "StopTrigger"},
+    "Init": {"Actions"},
+    "Actions": {"Private"},
+    "Private": {"PrivateAction"},
+    "PrivateAction": {"TeleportAction", "LongitudinalAction", "LateralAction", "RoutingAction"},
+    "TeleportAction": {"Position"},
+    "Position": {"WorldPosition", "LanePosition", "RoadPosition", "RelativeLanePosition",
+                 "RelativeRoadPosition"},
+    "WorldPosition": set(),
+    "LanePosition": {"Orientation"},
+    "RoadPosition": {"Orientation"},
+    "RelativeLanePosition": {"Orientation"},
+    "RelativeRoadPosition": {"Orientation"},
+    "Orientation": set(),
+    "LongitudinalAction": {"SpeedAction"},
+    "SpeedAction": {"SpeedActionDynamics", "SpeedActionTarget"},
+    "SpeedActionDynamics": set(),
+    "SpeedActionTarget": {"AbsoluteTargetSpeed", "RelativeTargetSpeed"},
+    "AbsoluteTargetSpeed": set(),
+    "RelativeTargetSpeed": set(),
+    "LateralAction": {"LaneChangeAction", "LaneOffsetAction"},
+    "LaneChangeAction": {"LaneChangeActionDynamics", "LaneChangeTarget"},
+    "LaneChangeActionDynamics": set(),
+    "LaneChangeTarget": {"AbsoluteTargetLane", "RelativeTargetLane"},
+    "AbsoluteTargetLane": set(),
+    "RelativeTargetLane": set(),
+    "LaneOffsetAction": {"LaneOffsetActionDynamics", "LaneOffsetTarget"},
+    "LaneOffsetActionDynamics": set(),
+    "LaneOffsetTarget": {"AbsoluteTargetLaneOffset", "RelativeTargetLaneOffset"},
+    "AbsoluteTargetLaneOffset": set(),
+    "RelativeTargetLaneOffset": set(),
+    "RoutingAction": {"FollowTrajectoryAction"},
+    "FollowTrajectoryAction": {"Trajectory", "TrajectoryRef", "TimeReference", "TrajectoryFollowingMode"},
+    "TrajectoryRef": {"Trajectory"},
+    "Trajectory": {"Shape"},
+    "Shape": {"Polyline"},
+    "Polyline": {"Vertex"},
+    "Vertex": {"Position"},
+    "TimeReference": {"None", "Timing"},
+    "None": set(),
+    "Timing": set(),
+    "TrajectoryFollowingMode": set(),
+    "Story": {"Act"},
+    "Act": {"ManeuverGroup", "StartTrigger", "StopTrigger"},
+    "ManeuverGroup": {"Actors", "Maneuver"},
+    "Actors": {"EntityRef"},
+    "EntityRef": set(),
+    "Maneuver": {"Event"},
+    "Event": {"Action", "StartTrigger"},
+    "Action": {"PrivateAction"},
+    "StartTrigger": {"ConditionGroup"},
+    "StopTrigger": {"ConditionGroup"},
+    "ConditionGroup": {"Condition"},
+    "Condition": {"ByEntityCondition", "ByValueCondition"},
+    "ByEntityCondition": {"TriggeringEntities", "EntityCondition"},
+    "TriggeringEntities": {"EntityRef"},
+    "EntityCondition": {"TimeHeadwayCondition", "TimeToCollisionCondition", "RelativeDistanceCondition",
+                        "DistanceCondition", "ReachPositionCondition", "SpeedCondition",
+                        "RelativeSpeedCondition", "TraveledDistanceCondition"},
+    "TimeHeadwayCondition": set(),
+    "TimeToCollisionCondition": {"TimeToCollisionConditionTarget"},
+    "TimeToCollisionConditionTarget": {"Position", "EntityRef"},
+    "RelativeDistanceCondition": set(),
+    "DistanceCondition": {"Position"},
+    "ReachPositionCondition": {"Position"},
+    "SpeedCondition": set(),
+    "RelativeSpeedCondition": set(),
+    "TraveledDistanceCondition": set(),
+    "ByValueCondition": {"SimulationTimeCondition", "StoryboardElementStateCondition", "ParameterCondition"},
+    "SimulationTimeCondition": set(),
+    "StoryboardElementStateCondition": set(),
+    "ParameterCondition": set(),
+}
+
+#: elements accepted and not used (the subset table in docs/openscenario.md says so)
+NOT_USED = {"SceneGraphFile": "the 3D scene is not drawn", "Axles": "ego's own body for the ego; SUMO's for others",
+            "Properties": "no property is read", "Orientation": "the lane's heading is used"}
+
+VEHICLE_CATEGORIES = ("car", "van", "truck", "trailer", "semitrailer", "bus", "motorbike")
+
+
+def unsupported(path, node: Node) -> ScenarioFileError:
+    return ScenarioFileError(path, node.line, f"<{node.tag}> is not supported by ego (see {DOCS})")
+
+
+def _check_tree(path, node: Node) -> None:
+    """Refuse the first element outside the subset (depth first, in file order)."""
+    allowed = CHILDREN.get(node.tag)
+    if allowed is None:
+        raise unsupported(path, node)
+    for c in node.children:
+        if c.tag not in allowed:
+            raise unsupported(path, c)
+        _check_tree(path, c)
+
+
+def elements(root: Node) -> list[tuple[str, int, bool]]:
+    """Every element of the file: (tag, line, supported), in file order (``ego list``)."""
+    out = []
+
+    def walk(node: Node, allowed: set[str] | None) -> None:
+        ok = (allowed is None or node.tag in allowed) and node.tag in CHILDREN
+        out.append((node.tag, node.line, ok))
+        for c in node.children:
+            walk(c, CHILDREN.get(node.tag, set()) if ok else set())
+
+    walk(root, None)
+    return out
+
+
+@lru_cache(maxsize=32)
+def _read(path: str, mtime: float, size: int) -> Node:
+    return parse_file(path)
+
+
+def read_tree(path: str | os.PathLike) -> Node:
+    """The parsed file (cached by path, mtime and size: sweeps resolve a file many times)."""
+    p = Path(path)
+    try:
+        st = p.stat()
+    except OSError:
+        return parse_file(p)  # parse_file names the problem
+    return _read(str(p.resolve()), st.st_mtime, st.st_size)
+
+
+TYPES = ("double", "integer", "unsignedInt", "unsignedShort", "int", "string", "boolean", "dateTime")
+
+
+def convert(kind: str, raw: object, what: str) -> object:
+    """``raw`` as a value of OpenSCENARIO parameter type ``kind`` (ValueError naming ``what``)."""
+    if kind == "double":
+        try:
+            v = float(raw)  # type: ignore[arg-type]
+        except (TypeError, ValueError):
+            raise ValueError(f"bad value for {what}: {raw!r} (expected a number)") from None
+        if not math.isfinite(v):
+            raise ValueError(f"bad value for {what}: {raw!r} (expected a finite number)")
+        return v
+    if kind in ("integer", "int", "unsignedInt", "unsignedShort"):
+        try:
+            f = float(raw)  # type: ignore[arg-type]
+        except (TypeError, ValueError):
+            raise ValueError(f"bad value for {what}: {raw!r} (expected an integer)") from None
+        if f != int(f) or (kind.startswith("unsigned") and f < 0):
+            raise ValueError(f"bad value for {what}: {raw!r} (expected a{'' if kind[0] == 'i' else 'n unsigned'} "
+                             "integer)")
+        return int(f)
+    if kind == "boolean":
+        if isinstance(raw, bool):
+            return raw
+        text = str(raw).strip().lower()
+        if text in ("true", "1"):
+            return True
+        if text in ("false", "0"):
+            return False
+        raise ValueError(f"bad value for {what}: {raw!r} (expected true or false)")
+    return str(raw)
+
+
+def declared_parameters(path: str | os.PathLike) -> dict[str, M.Parameter]:
+    """The file's ParameterDeclarations (name -> Parameter), checked."""
+    root = read_tree(path)
+    _check_root(path, root)
+    return _declarations(path, root.child("ParameterDeclarations"), {})
+
+
+def _check_root(path, root: Node) -> None:
+    if root.tag != "OpenSCENARIO":
+        raise ScenarioFileError(path, root.line, f"<{root.tag}> is not an OpenSCENARIO file (expected "
+                                "<OpenSCENARIO> as the root element)")
+    _check_tree(path, root)
+
+
+def _declarations(path, node: Node | None, outer: Mapping[str, object],
+                  overrides: Mapping[str, object] | None = None) -> dict[str, M.Parameter]:
+    """The declarations in order, each value resolved with the ones before it; a name in
+    ``overrides`` takes that value instead (so a later ``$ref`` to it sees the override)."""
+    out: dict[str, M.Parameter] = {}
+    if node is None:
+        return out
+    values = dict(outer)
+    overrides = overrides or {}
+    for d in node.all("ParameterDeclaration"):
+        name = d.attrs.get("name")
+        kind = d.attrs.get("parameterType")
+        if not name:
+            raise ScenarioFileError(path, d.line, "<ParameterDeclaration> needs attribute name")
+        if kind not in TYPES:
+            raise ScenarioFileError(path, d.line, f"bad parameterType {kind!r} of parameter {name!r} "
+                                    f"(allowed: {', '.join(TYPES)})")
+        if name in out:
+            raise ScenarioFileError(path, d.line, f"parameter {name!r} is declared twice (first on line "
+                                    f"{out[name].line})")
+        if "value" not in d.attrs:
+            raise ScenarioFileError(path, d.line, f"parameter {name!r} needs attribute value")
+        raw = d.attrs["value"]
+        try:
+            raw = overrides[name] if name in overrides else resolve(raw, values)
+            value = convert(kind, raw, f"parameter {name!r}")
+        except (ExpressionError, ValueError) as exc:
+            raise ScenarioFileError(path, d.line, str(exc)) from None
+        out[name] = M.Parameter(name, kind, value, d.line)
+        values[name] = value
+    return out
+
+
+class _Builder:
+    """Builds the model from a checked tree with parameter ``values``."""
+
+    def __init__(self, path: Path, values: dict[str, object]) -> None:
+        self.path, self.values = path, values
+        self.entities: dict[str, M.Entity] = {}
+        self.catalog_dirs: list[Path] = []
+
+    # -- attributes ----------------------------------------------------------------------------
+    def error(self, node: Node, message: str) -> ScenarioFileError:
+        return ScenarioFileError(self.path, node.line, message)
+
+    def raw(self, node: Node, name: str, default: object = ...) -> object:
+        if name not in node.attrs:
+            if default is ...:
+                raise self.error(node, f"<{node.tag}> needs attribute {name}")
+            return default
+        try:
+            return resolve(node.attrs[name], self.values)
+        except ExpressionError as exc:
+            raise self.error(node, str(exc)) from None
+
+    def num(self, node: Node, name: str, default: object = ..., positive: bool = False,
+            nonneg: bool = False) -> float:
+        v = self.raw(node, name, default)
+        if v is None:
+            return v  # type: ignore[return-value]
+        try:
+            f = convert("double", v, f"{name} in <{node.tag}>")
+        except ValueError as exc:
+            raise self.error(node, str(exc)) from None
+        if positive and f <= 0.0:
+            raise self.error(node, f"bad value for {name} in <{node.tag}>: {f:g} (expected > 0)")
+        if nonneg and f < 0.0:
+            raise self.error(node, f"bad value for {name} in <{node.tag}>: {f:g} (expected >= 0)")
+        return f  # type: ignore[return-value]
+
+    def int_(self, node: Node, name: str, default: object = ..., minimum: int | None = None) -> int:
+        v = self.raw(node, name, default)
+        try:
+            i = convert("integer", v, f"{name} in <{node.tag}>")
+        except ValueError as exc:
+            raise self.error(node, str(exc)) from None
+        if minimum is not None and i < minimum:  # type: ignore[operator]
+            raise self.error(node, f"bad value for {name} in <{node.tag}>: {i} (expected >= {minimum})")
+        return i  # type: ignore[return-value]
+
+    def bool_(self, node: Node, name: str, default: object = ...) -> bool:
+        v = self.raw(node, name, default)
+        try:
+            return convert("boolean", v, f"{name} in <{node.tag}>")  # type: ignore[return-value]
+        except ValueError as exc:
+            raise self.error(node, str(exc)) from None
+
+    def str_(self, node: Node, name: str, default: object = ...) -> str:
+        return str(self.raw(node, name, default))
+
+    def enum(self, node: Node, name: str, allowed, default: object = ...) -> str:
+        v = self.str_(node, name, default)
+        if v not in allowed:
+            raise self.error(node, f"bad value for {name} in <{node.tag}>: {v!r} (allowed: {', '.join(allowed)})")
+        return v
+
+    def one(self, node: Node, tag: str | None = None) -> Node:
+        """The single child (``tag``, or any) the element needs."""
+        kids = node.children if tag is None else node.all(tag)
+        if len(kids) != 1:
+            what = f"<{tag}>" if tag else "child element"
+            raise self.error(node, f"<{node.tag}> needs exactly one {what} (found {len(kids)})")
+        return kids[0]
+
+    def entity_ref(self, node: Node, name: str = "entityRef") -> str:
+        ref = self.str_(node, name)
+        if ref not in self.entities:
+            raise self.error(node, f"unknown entity {ref!r} in <{node.tag}> (entities: "
+                             f"{', '.join(self.entities) or 'none'})")
+        return ref
+
+    # -- entities ---------------------------------------------------------------------------
+    def vehicle(self, node: Node, name: str) -> M.Vehicle:
+        cat = self.enum(node, "vehicleCategory", VEHICLE_CATEGORIES)
+        bb = self.one(node, "BoundingBox")
+        center, dims = self.one(bb, "Center"), self.one(bb, "Dimensions")
+        perf = self.one(node, "Performance")
+        return M.Vehicle(
+            name=name, category=cat,
+            length=self.num(dims, "length", positive=True), width=self.num(dims, "width", positive=True),
+            height=self.num(dims, "height", positive=True), center_x=self.num(center, "x"),
+            max_speed=self.num(perf, "maxSpeed", positive=True),
+            max_accel=self.num(perf, "maxAcceleration", positive=True),
+            max_decel=self.num(perf, "maxDeceleration", positive=True), line=node.line)
+
+    def catalog_vehicle(self, node: Node) -> M.Vehicle:
+        catalog, entry = self.str_(node, "catalogName"), self.str_(node, "entryName")
+        if not self.catalog_dirs:
+            raise self.error(node, f"<CatalogReference> to {catalog!r} but no <VehicleCatalog> in "
+                             "<CatalogLocations>")
+        files = [d / f"{catalog}.xosc" for d in self.catalog_dirs]
+        file = next((f for f in files if f.is_file()), None)
+        if file is None:
+            raise self.error(node, f"vehicle catalog {catalog!r} not found (looked for "
+                             f"{', '.join(str(f) for f in files)})")
+        root = read_tree(file)
+        cat = root.child("Catalog")
+        if root.tag != "OpenSCENARIO" or cat is None:
+            raise ScenarioFileError(file, root.line, "not an OpenSCENARIO catalog (expected <Catalog>)")
+        for v in cat.children:
+            if v.tag != "Vehicle":
+                raise unsupported(file, v)
+            if v.attrs.get("name") == entry:
+                _check_tree(file, v)
+                # the catalog's own parameters, then the reference's assignments
+                decl = _declarations(file, v.child("ParameterDeclarations"), self.values)
+                values = {**self.values, **{k: p.value for k, p in decl.items()}}
+                assigns = node.child("ParameterAssignments")
+                for a in assigns.all("ParameterAssignment") if assigns is not None else ():
+                    ref = self.str_(a, "parameterRef")
+                    if ref not in decl:
+                        raise self.error(a, f"catalog entry {entry!r} declares no parameter {ref!r}"
+                                         f" (declared: {', '.join(decl) or 'none'})")
+                    try:
+                        values[ref] = convert(decl[ref].type, self.raw(a, "value"), f"parameter {ref!r}")
+                    except ValueError as exc:
+                        raise self.error(a, str(exc)) from None
+                inner = _Builder(file, values)
+                return inner.vehicle(v, entry)
+        names = [v.attrs.get("name", "?") for v in cat.children]
+        raise self.error(node, f"no vehicle {entry!r} in catalog {catalog!r} (entries: {', '.join(names)})")
+
+    # -- positions ------------------------------------------------------------------------------
+    def position(self, node: Node) -> M.Position:
+        p = self.one(node)
+        tag = p.tag
+        if tag == "WorldPosition":
+            h = self.raw(p, "h", None)
+            return M.WorldPosition(self.num(p, "x"), self.num(p, "y"),
+                                   None if h is None else self.num(p, "h"), p.line)
+        if tag == "LanePosition":
+            return M.LanePosition(self.str_(p, "roadId"), self.int_(p, "laneId"), self.num(p, "s", nonneg=True),
+                                  self.num(p, "offset", 0.0), p.line)
+        if tag == "RoadPosition":
+            return M.RoadPosition(self.str_(p, "roadId"), self.num(p, "s", nonneg=True), self.num(p, "t"), p.line)
+        if tag == "RelativeLanePosition":
+            if "dsLane" in p.attrs:
+                raise self.error(p, "dsLane in <RelativeLanePosition> is not supported by ego (use ds; "
+                                 f"see {DOCS})")
+            return M.RelativeLanePosition(self.entity_ref(p), self.int_(p, "dLane"), self.num(p, "ds", 0.0),
+                                          self.num(p, "offset", 0.0), p.line)
+        return M.RelativeRoadPosition(self.entity_ref(p), self.num(p, "ds"), self.num(p, "dt"), p.line)
+
+    # -- actions ------------------------------------------------------------------------------
+    def dynamics(self, node: Node, rate_ok: bool = True) -> M.Dynamics:
+        shape = self.enum(node, "dynamicsShape", M.SHAPES)
+        dims = M.DIMENSIONS if rate_ok else ("time", "distance")
+        dim = self.enum(node, "dynamicsDimension", dims)
+        value = self.num(node, "value", nonneg=True)
+        if shape != "step" and value <= 0.0:
+            raise self.error(node, f"bad value for value in <{node.tag}>: {value:g} (expected > 0 for "
+                             f"dynamicsShape {shape})")
+        return M.Dynamics(shape, dim, value)
+
+    def private_action(self, node: Node) -> M.PrivateAction:
+        a = self.one(node)
+        if a.tag == "TeleportAction":
+            return M.TeleportAction(self.position(self.one(a, "Position")), a.line)
+        inner = self.one(a)
+        if inner.tag == "SpeedAction":
+            dyn = self.dynamics(self.one(inner, "SpeedActionDynamics"))
+            target = self.one(self.one(inner, "SpeedActionTarget"))
+            if target.tag == "AbsoluteTargetSpeed":
+                return M.SpeedAction(dyn, self.num(target, "value", nonneg=True), line=inner.line)
+            return M.SpeedAction(dyn, self.num(target, "value"), self.entity_ref(target),
+                                 self.enum(target, "speedTargetValueType", ("delta", "factor")),
+                                 self.bool_(target, "continuous"), inner.line)
+        if inner.tag == "LaneChangeAction":
+            dyn = self.dynamics(self.one(inner, "LaneChangeActionDynamics"), rate_ok=False)
+            target = self.one(self.one(inner, "LaneChangeTarget"))
+            offset = self.num(inner, "targetLaneOffset", 0.0)
+            if target.tag == "AbsoluteTargetLane":
+                return M.LaneChangeAction(dyn, self.int_(target, "value"), None, 0, offset, inner.line)
+            return M.LaneChangeAction(dyn, None, self.entity_ref(target), self.int_(target, "value"), offset,
+                                      inner.line)
+        if inner.tag == "LaneOffsetAction":
+            d = self.one(inner, "LaneOffsetActionDynamics")
+            acc = self.raw(d, "maxLateralAcc", None)
+            shape = self.enum(d, "dynamicsShape", M.SHAPES)
+            if acc is None and shape != "step":
+                raise self.error(d, f"<LaneOffsetActionDynamics> needs maxLateralAcc for dynamicsShape {shape}")
+            target = self.one(self.one(inner, "LaneOffsetTarget"))
+            rel = self.entity_ref(target) if target.tag == "RelativeTargetLaneOffset" else None
+            return M.LaneOffsetAction(shape, None if acc is None else self.num(d, "maxLateralAcc", positive=True),
+                                      self.num(target, "value"), rel, self.bool_(inner, "continuous"), inner.line)
+        # FollowTrajectoryAction
+        traj_node = inner.child("Trajectory")
+        if traj_node is None:
+            ref = inner.child("TrajectoryRef")
+            if ref is None:
+                raise self.error(inner, "<FollowTrajectoryAction> needs a <Trajectory>")
+            traj_node = self.one(ref, "Trajectory")
+        poly = self.one(self.one(traj_node, "Shape"), "Polyline")
+        vertices = []
+        for v in poly.all("Vertex"):
+            t = self.raw(v, "time", None)
+            vertices.append(M.Vertex(None if t is None else self.num(v, "time"),
+                                     self.position(self.one(v, "Position"))))
+        if len(vertices) < 2:
+            raise self.error(poly, f"<Polyline> needs at least two <Vertex> (found {len(vertices)})")
+        timing = None
+        tr = inner.child("TimeReference")
+        if tr is not None and tr.child("Timing") is not None:
+            tm = tr.child("Timing")
+            timing = (self.enum(tm, "domainAbsoluteRelative", ("absolute", "relative")),
+                      self.num(tm, "scale", positive=True), self.num(tm, "offset"))
+            times = [v.time for v in vertices]
+            if any(t is None for t in times):
+                raise self.error(poly, "every <Vertex> needs a time when the trajectory has <Timing>")
+            if any(b <= a for a, b in zip(times, times[1:])):  # type: ignore[operator]
+                raise self.error(poly, "<Vertex> times must increase")
+        return M.FollowTrajectoryAction(tuple(vertices), timing, self.num(inner, "initialDistanceOffset", 0.0),
+                                        inner.line)
+
+    # -- triggers ---------------------------------------------------------------------------
+    def trigger(self, node: Node | None) -> M.Trigger | None:
+        if node is None:
+            return None
+        groups = []
+        for g in node.all("ConditionGroup"):
+            conds = tuple(self.condition(c) for c in g.all("Condition"))
+            if not conds:
+                raise self.error(g, "<ConditionGroup> needs at least one <Condition>")
+            groups.append(conds)
+        return M.Trigger(tuple(groups))
+
+    def condition(self, node: Node) -> M.Condition:
+        name = self.str_(node, "name")
+        base: dict[str, Any] = {"name": name, "delay": self.num(node, "delay", nonneg=True),
+                "edge": self.enum(node, "conditionEdge", M.EDGES), "line": node.line}
+        inner = self.one(node)
+        if inner.tag == "ByValueCondition":
+            c = self.one(inner)
+            if c.tag == "SimulationTimeCondition":
+                return M.Condition(kind=c.tag, rule=self.enum(c, "rule", M.RULES), value=self.num(c, "value"), **base)
+            if c.tag == "ParameterCondition":
+                ref = self.str_(c, "parameterRef")
+                if ref not in self.values:
+                    raise self.error(c, f"parameter {ref!r} is not declared (declared: "
+                                     f"{', '.join(self.values) or 'none'})")
+                return M.Condition(kind=c.tag, rule=self.enum(c, "rule", M.RULES), value=self.str_(c, "value"),
+                                   parameter=ref, **base)
+            return M.Condition(kind=c.tag, element_type=self.enum(c, "storyboardElementType", M.ELEMENT_TYPES),
+                               element_ref=self.str_(c, "storyboardElementRef"),
+                               state=self.enum(c, "state", M.STATES), **base)
+        te = self.one(inner, "TriggeringEntities")
+        refs = tuple(self.entity_ref(e) for e in te.all("EntityRef"))
+        if not refs:
+            raise self.error(te, "<TriggeringEntities> needs at least one <EntityRef>")
+        base["triggering"] = refs
+        base["triggering_rule"] = self.enum(te, "triggeringEntitiesRule", ("any", "all"))
+        c = self.one(self.one(inner, "EntityCondition"))
+        tag = c.tag
+        if tag == "ReachPositionCondition":
+            return self.reach(c, base)
+        if tag == "TraveledDistanceCondition":
+            return M.Condition(kind=tag, rule="greaterOrEqual", value=self.num(c, "value", nonneg=True), **base)
+        rule = self.enum(c, "rule", M.RULES)
+        if tag == "SpeedCondition":
+            return M.Condition(kind=tag, rule=rule, value=self.num(c, "value"), **base)
+        if tag == "RelativeSpeedCondition":
+            return M.Condition(kind=tag, rule=rule, value=self.num(c, "value"), entity=self.entity_ref(c), **base)
+        if tag == "TimeHeadwayCondition":
+            return M.Condition(kind=tag, rule=rule, value=self.num(c, "value"), entity=self.entity_ref(c),
+                               freespace=self.bool_(c, "freespace"), **base)
+        if tag == "RelativeDistanceCondition":
+            dtype = self.enum(c, "relativeDistanceType", ("longitudinal", "lateral", "cartesianDistance",
+                                                          "euclidianDistance"))
+            return M.Condition(kind=tag, rule=rule, value=self.num(c, "value"), entity=self.entity_ref(c),
+                               freespace=self.bool_(c, "freespace"), distance_type=dtype, **base)
+        if tag == "TimeToCollisionCondition":
+            target = self.one(self.one(c, "TimeToCollisionConditionTarget"))
+            entity = self.entity_ref(target) if target.tag == "EntityRef" else None
+            pos = self.position_of(target) if target.tag == "Position" else None
+            return M.Condition(kind=tag, rule=rule, value=self.num(c, "value"), entity=entity, position=pos,
+                               freespace=self.bool_(c, "freespace"), **base)
+        if tag == "DistanceCondition":
+            return M.Condition(kind=tag, rule=rule, value=self.num(c, "value"), freespace=self.bool_(c, "freespace"),
+                               position=self.position(self.one(c, "Position")), **base)
+        raise AssertionError(tag)  # every EntityCondition in CHILDREN is handled
+
+    def position_of(self, position_node: Node) -> M.Position:
+        return self.position(position_node)
+
+    def reach(self, c: Node, base: dict[str, Any]) -> M.Condition:
+        return M.Condition(kind=c.tag, rule="lessOrEqual", value=self.num(c, "tolerance", nonneg=True),
+                           position=self.position(self.one(c, "Position")), **base)
+
+
+def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None) -> M.Scenario:
+    """The scenario in ``path`` with its parameters set to their defaults, then ``overrides``
+    (a declared parameter's name -> value; undeclared names are not looked at here)."""
+    path = Path(path)
+    root = read_tree(path)
+    _check_root(path, root)
+    header = root.child("FileHeader")
+    if header is None:
+        raise ScenarioFileError(path, root.line, "<OpenSCENARIO> needs a <FileHeader>")
+    try:
+        version = (int(header.attrs.get("revMajor", "")), int(header.attrs.get("revMinor", "")))
+    except ValueError:
+        raise ScenarioFileError(path, header.line, "<FileHeader> needs integer revMajor and revMinor") from None
+    if version[0] != 1 or not 0 <= version[1] <= 3:
+        raise ScenarioFileError(path, header.line, f"OpenSCENARIO {version[0]}.{version[1]} is not supported by "
+                                f"ego (1.0 to 1.3; see {DOCS})")
+    defaults = _declarations(path, root.child("ParameterDeclarations"), {})
+    given = {k: v for k, v in (overrides or {}).items() if k in defaults}
+    try:
+        params = _declarations(path, root.child("ParameterDeclarations"), {}, given)
+    except ScenarioFileError as exc:
+        from ego.params import ConfigError
+
+        raise ConfigError(exc.detail) from None
+    values: dict[str, object] = {k: p.value for k, p in params.items()}
+    params = defaults
+    b = _Builder(path, values)
+    cl = root.child("CatalogLocations")
+    for vc in cl.all("VehicleCatalog") if cl is not None else ():
+        d = b.one(vc, "Directory")
+        b.catalog_dirs.append((path.parent / b.str_(d, "path")).resolve())
+
+    net = root.child("RoadNetwork")
+    logic = net.child("LogicFile") if net is not None else None
+    if logic is None:
+        raise ScenarioFileError(path, (net or root).line, "the scenario needs <RoadNetwork><LogicFile "
+                                "filepath=...> (an .xodr or a SUMO .net.xml)")
+    road = (path.parent / b.str_(logic, "filepath")).resolve()
+    rel = b.str_(logic, "filepath")
+    if not rel.endswith((".xodr", ".net.xml")):
+        raise b.error(logic, f"bad road file {rel!r} (expected an OpenDRIVE .xodr or a SUMO .net.xml)")
+    if not road.is_file():
+        raise b.error(logic, f"road file {rel!r} not found ({road})")
+
+    ents = root.child("Entities")
+    for so in ents.all("ScenarioObject") if ents is not None else ():
+        name = b.str_(so, "name")
+        if name in b.entities:
+            raise b.error(so, f"entity {name!r} is declared twice")
+        body = b.one(so)
+        v = b.vehicle(body, name) if body.tag == "Vehicle" else b.catalog_vehicle(body)
+        b.entities[name] = M.Entity(name, v, so.line)
+    if not b.entities:
+        raise ScenarioFileError(path, (ents or root).line, "the scenario needs at least one entity")
+
+    sb = root.child("Storyboard")
+    if sb is None:
+        raise ScenarioFileError(path, root.line, "<OpenSCENARIO> needs a <Storyboard>")
+    init: dict[str, list[M.PrivateAction]] = {name: [] for name in b.entities}
+    init_node = sb.child("Init")
+    actions = init_node.child("Actions") if init_node is not None else None
+    for priv in actions.all("Private") if actions is not None else ():
+        ref = b.entity_ref(priv)
+        for pa in priv.all("PrivateAction"):
+            act = b.private_action(pa)
+            if not isinstance(act, (M.TeleportAction, M.SpeedAction)) or (
+                    isinstance(act, M.SpeedAction) and act.relative_to is not None):
+                raise ScenarioFileError(path, pa.children[0].line, f"<{pa.children[0].tag}> in <Init> is not "
+                                        f"supported by ego (Init takes TeleportAction and SpeedAction with "
+                                        f"AbsoluteTargetSpeed; see {DOCS})")
+            init[ref].append(act)
+    for name, acts in init.items():
+        if not any(isinstance(a, M.TeleportAction) for a in acts):
+            raise ScenarioFileError(path, b.entities[name].line, f"entity {name!r} has no TeleportAction in "
+                                    "<Init> (ego needs every entity's start position)")
+
+    stories = []
+    names: dict[str, int] = {}
+    for st in sb.all("Story"):
+        acts = []
+        for act in st.all("Act"):
+            groups = []
+            for mg in act.all("ManeuverGroup"):
+                actors_node = b.one(mg, "Actors")
+                actors = tuple(b.entity_ref(e) for e in actors_node.all("EntityRef"))
+                mans = []
+                for man in mg.all("Maneuver"):
+                    events = []
+                    for ev in man.all("Event"):
+                        acts_ = tuple(M.Action(b.str_(a, "name"), b.private_action(b.one(a, "PrivateAction")), a.line)
+                                      for a in ev.all("Action"))
+                        if not acts_:
+                            raise b.error(ev, "<Event> needs at least one <Action>")
+                        events.append(M.Event(b.str_(ev, "name"), b.enum(ev, "priority", M.PRIORITIES),
+                                              b.int_(ev, "maximumExecutionCount", 1, minimum=1), acts_,
+                                              b.trigger(ev.child("StartTrigger")), ev.line))
+                        for a in acts_:
+                            names.setdefault(a.name, a.line)
+                        names.setdefault(events[-1].name, ev.line)
+                    mans.append(M.Maneuver(b.str_(man, "name"), tuple(events), man.line))
+                    names.setdefault(mans[-1].name, man.line)
+                groups.append(M.ManeuverGroup(b.str_(mg, "name"), b.int_(mg, "maximumExecutionCount", minimum=1),
+                                              actors, tuple(mans), mg.line))
+                names.setdefault(groups[-1].name, mg.line)
+            acts.append(M.Act(b.str_(act, "name"), tuple(groups), b.trigger(act.child("StartTrigger")),
+                              b.trigger(act.child("StopTrigger")), act.line))
+            names.setdefault(acts[-1].name, act.line)
+        stories.append(M.Story(b.str_(st, "name", ""), tuple(acts), st.line))
+        names.setdefault(stories[-1].name, st.line)
+    stop = b.trigger(sb.child("StopTrigger"))
+    scenario = M.Scenario(path, header.attrs.get("description", ""), version, params, values, road,
+                          logic.line, b.entities, init, tuple(stories), stop)
+    _check_refs(scenario, names)
+    return scenario
+
+
+def _conditions(scenario: M.Scenario):
+    triggers = [scenario.stop]
+    for st in scenario.stories:
+        for act in st.acts:
+            triggers += [act.start, act.stop]
+            for g in act.groups:
+                for man in g.maneuvers:
+                    triggers += [ev.start for ev in man.events]
+    for t in triggers:
+        for group in t.groups if t is not None else ():
+            yield from group
+
+
+def _check_refs(scenario: M.Scenario, names: dict[str, int]) -> None:
+    """StoryboardElementStateConditions name existing elements."""
+    for c in _conditions(scenario):
+        if c.kind == "StoryboardElementStateCondition" and c.element_ref not in names:
+            raise ScenarioFileError(scenario.path, c.line, f"unknown storyboard element {c.element_ref!r} "
+                                    f"(elements: {', '.join(names) or 'none'})")

@@ -1,0 +1,254 @@
+"""The typed model of a scenario file, every value resolved (parameters substituted).
+
+Units are SI: m, s, m/s, m/s^2, rad. Lane ids are OpenDRIVE's (negative on the right of the
+reference line); ``line`` is where the element starts in its file.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+RULES = ("greaterThan", "lessThan", "equalTo", "greaterOrEqual", "lessOrEqual", "notEqualTo")
+EDGES = ("rising", "falling", "risingOrFalling", "none")
+SHAPES = ("step", "linear", "cubic", "sinusoidal")
+DIMENSIONS = ("time", "rate", "distance")
+PRIORITIES = ("overwrite", "override", "skip", "parallel")
+STATES = ("standbyState", "runningState", "completeState", "startTransition", "endTransition",
+          "stopTransition", "skipTransition", "completeTransition")
+ELEMENT_TYPES = ("story", "act", "maneuverGroup", "maneuver", "event", "action")
+
+
+@dataclass(frozen=True)
+class Parameter:
+    name: str
+    type: str  #: double, integer, unsignedInt, unsignedShort, string, boolean, dateTime
+    value: object  #: the declared default, converted to the type
+    line: int
+
+
+# --- positions -------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class WorldPosition:
+    x: float
+    y: float
+    h: float | None
+    line: int
+
+
+@dataclass(frozen=True)
+class LanePosition:
+    road: str
+    lane: int
+    s: float
+    offset: float
+    line: int
+
+
+@dataclass(frozen=True)
+class RoadPosition:
+    road: str
+    s: float
+    t: float  #: lateral, + left of the reference line
+    line: int
+
+
+@dataclass(frozen=True)
+class RelativeLanePosition:
+    entity: str
+    dlane: int
+    ds: float
+    offset: float
+    line: int
+
+
+@dataclass(frozen=True)
+class RelativeRoadPosition:
+    entity: str
+    ds: float
+    dt: float
+    line: int
+
+
+Position = WorldPosition | LanePosition | RoadPosition | RelativeLanePosition | RelativeRoadPosition
+
+
+# --- entities --------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Vehicle:
+    name: str
+    category: str
+    length: float
+    width: float
+    height: float
+    center_x: float  #: the bounding box's centre ahead of the reference point (m)
+    max_speed: float
+    max_accel: float
+    max_decel: float
+    line: int
+
+
+@dataclass(frozen=True)
+class Entity:
+    name: str
+    vehicle: Vehicle
+    line: int
+
+
+# --- actions ---------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Dynamics:
+    shape: str  #: one of SHAPES
+    dimension: str  #: one of DIMENSIONS
+    value: float  #: s, m/s^2 (or m/s for lateral) or m, per dimension
+
+
+@dataclass(frozen=True)
+class SpeedAction:
+    dynamics: Dynamics
+    value: float  #: absolute m/s, or the delta (m/s) / factor of a relative target
+    relative_to: str | None = None
+    relative_kind: str = "delta"  #: delta or factor
+    continuous: bool = False
+    line: int = 0
+
+
+@dataclass(frozen=True)
+class LaneChangeAction:
+    dynamics: Dynamics
+    target_lane: int | None  #: absolute OpenDRIVE lane id
+    relative_to: str | None  #: entity of a relative target
+    relative_lanes: int  #: lanes to the left (+) of relative_to's lane
+    target_offset: float
+    line: int = 0
+
+
+@dataclass(frozen=True)
+class LaneOffsetAction:
+    shape: str
+    max_lateral_acc: float | None
+    value: float  #: m, + left of the lane centre
+    relative_to: str | None
+    continuous: bool
+    line: int = 0
+
+
+@dataclass(frozen=True)
+class TeleportAction:
+    position: Position
+    line: int = 0
+
+
+@dataclass(frozen=True)
+class Vertex:
+    time: float | None
+    position: Position
+
+
+@dataclass(frozen=True)
+class FollowTrajectoryAction:
+    vertices: tuple[Vertex, ...]
+    timing: tuple[str, float, float] | None  #: (absolute|relative, scale, offset) or None
+    initial_distance_offset: float
+    line: int = 0
+
+
+PrivateAction = SpeedAction | LaneChangeAction | LaneOffsetAction | TeleportAction | FollowTrajectoryAction
+
+
+# --- conditions ------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Condition:
+    name: str
+    delay: float
+    edge: str
+    kind: str  #: the condition element's tag, e.g. SimulationTimeCondition
+    rule: str = "greaterThan"
+    value: object = 0.0
+    triggering: tuple[str, ...] = ()  #: entities of a ByEntityCondition
+    triggering_rule: str = "any"
+    entity: str | None = None  #: the other entity (TimeHeadway, RelativeDistance...)
+    position: Position | None = None
+    freespace: bool = False
+    distance_type: str = "longitudinal"
+    element_type: str = ""
+    element_ref: str = ""
+    state: str = ""
+    parameter: str = ""
+    line: int = 0
+
+
+@dataclass(frozen=True)
+class Trigger:
+    groups: tuple[tuple[Condition, ...], ...]  #: OR of ANDs
+
+    @property
+    def empty(self) -> bool:
+        return not self.groups
+
+
+@dataclass(frozen=True)
+class Action:
+    name: str
+    action: PrivateAction
+    line: int
+
+
+@dataclass(frozen=True)
+class Event:
+    name: str
+    priority: str
+    max_count: int
+    actions: tuple[Action, ...]
+    start: Trigger | None
+    line: int
+
+
+@dataclass(frozen=True)
+class Maneuver:
+    name: str
+    events: tuple[Event, ...]
+    line: int
+
+
+@dataclass(frozen=True)
+class ManeuverGroup:
+    name: str
+    max_count: int
+    actors: tuple[str, ...]
+    maneuvers: tuple[Maneuver, ...]
+    line: int
+
+
+@dataclass(frozen=True)
+class Act:
+    name: str
+    groups: tuple[ManeuverGroup, ...]
+    start: Trigger | None
+    stop: Trigger | None
+    line: int
+
+
+@dataclass(frozen=True)
+class Story:
+    name: str
+    acts: tuple[Act, ...]
+    line: int
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """One scenario file, resolved."""
+
+    path: Path
+    description: str
+    version: tuple[int, int]
+    parameters: dict[str, Parameter]
+    values: dict[str, object]  #: every parameter's value in this resolution
+    road: Path  #: the .xodr or .net.xml file
+    road_line: int
+    entities: dict[str, Entity]
+    init: dict[str, list[PrivateAction]]  #: entity -> Init actions (teleports and speeds)
+    stories: tuple[Story, ...]
+    stop: Trigger | None
+    elements: list[tuple[str, str, int, bool]] = field(default_factory=list)  #: (tag, note, line, supported)

@@ -1,0 +1,267 @@
+"""Roads of scenario files: OpenDRIVE (.xodr) converted by SUMO's netconvert, or a SUMO
+``.net.xml`` as it is, and OpenDRIVE lane positions on the converted network.
+
+A converted road is cached by the hash of its content and of the conversion options in
+``$XDG_CACHE_HOME/ego/opendrive`` (default ``~/.cache/ego/opendrive``): a sweep converts once.
+
+netconvert samples OpenDRIVE's curves (arcs, clothoids) into polyline points every
+``--opendrive.curve-resolution`` metres (:data:`CURVE_RESOLUTION`; SUMO's default is 2 m)
+written with 6 decimals (its default 2 would put centimetre noise on every point);
+:func:`refine_shape` then evens out the steps for ego's lane frame, so that its curvature on
+a converted arc and clothoid matches the analytic value within 1e-3 1/m.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import os
+import subprocess
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from ego.openscenario.xmltree import ScenarioFileError
+
+#: m between the points netconvert samples an OpenDRIVE curve at
+CURVE_RESOLUTION = 0.5
+OPTIONS = ("--opendrive.curve-resolution", repr(CURVE_RESOLUTION), "--output.original-names", "true",
+           "--geometry.min-dist", "0.001", "--no-turnarounds", "true", "--offset.disable-normalization", "true",
+           "--precision", "6", "--no-warnings", "true")
+
+
+def cache_dir() -> Path:
+    """Where converted roads are kept: ``$XDG_CACHE_HOME/ego/opendrive`` or ``~/.cache/ego/opendrive``."""
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "ego" / "opendrive"
+
+
+def network_file(road: Path) -> Path:
+    """The SUMO network of ``road``: a ``.net.xml`` itself, an ``.xodr`` converted (cached).
+    A failed conversion is one line naming the file and netconvert's first error."""
+    if str(road).endswith(".net.xml"):
+        return road
+    data = road.read_bytes()
+    from ego.sumo.net import sumo_binary
+
+    exe = sumo_binary("netconvert")
+    key = hashlib.sha256(data + "\0".join(OPTIONS).encode() + str(exe).encode()).hexdigest()[:24]
+    out = cache_dir() / f"{key}.net.xml"
+    if out.is_file():
+        return out
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_name(f".{key}.{os.getpid()}.net.xml")
+    env = {**os.environ, "SUMO_HOME": str(exe.parent.parent)}
+    proc = subprocess.run([str(exe), "--opendrive-files", str(road), "-o", str(tmp), *OPTIONS],
+                          capture_output=True, text=True, env=env, check=False)
+    if proc.returncode != 0 or not tmp.is_file():
+        tmp.unlink(missing_ok=True)
+        lines = [ln.strip() for ln in (proc.stderr + proc.stdout).splitlines() if ln.strip()]
+        first = next((ln for ln in lines if ln.startswith("Error")), lines[0] if lines else "no output")
+        raise ScenarioFileError(road, None, f"netconvert cannot convert this OpenDRIVE file: {first}")
+    try:
+        _parse(tmp)
+    except ScenarioFileError:
+        tmp.unlink(missing_ok=True)
+        raise
+    if not _edges(tmp):
+        tmp.unlink(missing_ok=True)
+        raise ScenarioFileError(road, None, "netconvert made no drivable lane of this OpenDRIVE file "
+                                "(no lane of type driving?)")
+    os.replace(tmp, out)
+    return out
+
+
+@dataclass(frozen=True)
+class Lane:
+    id: str  #: SUMO lane id
+    edge: str
+    index: int  #: SUMO index, 0 = rightmost
+    length: float
+    width: float
+    shape: tuple[tuple[float, float], ...]
+    orig: str  #: OpenDRIVE origin (road_section_lane) when converted, else ""
+
+
+@dataclass(frozen=True)
+class Edge:
+    id: str
+    lanes: tuple[Lane, ...]  #: by SUMO index
+    successors: tuple[str, ...]
+
+
+def _parse(net: Path) -> ET.Element:
+    try:
+        return ET.parse(net).getroot()
+    except ET.ParseError as exc:
+        raise ScenarioFileError(net, exc.position[0], f"malformed SUMO network: {exc}") from None
+
+
+@lru_cache(maxsize=8)
+def _edges_cached(net: str, mtime: float) -> dict[str, Edge]:
+    root = _parse(Path(net))
+    succ: dict[str, list[str]] = {}
+    for c in root.iter("connection"):
+        f, t = c.get("from", ""), c.get("to", "")
+        if not f.startswith(":") and not t.startswith(":") and t not in succ.setdefault(f, []):
+            succ[f].append(t)
+    edges: dict[str, Edge] = {}
+    for e in root.iter("edge"):
+        if e.get("function") == "internal":
+            continue
+        eid = e.get("id", "")
+        lanes = []
+        for ln in e.iter("lane"):
+            pts = tuple((float(p.split(",")[0]), float(p.split(",")[1])) for p in ln.get("shape", "").split())
+            orig = next((p.get("value", "") for p in ln.iter("param") if p.get("key") == "origId"), "")
+            lanes.append(Lane(ln.get("id", ""), eid, int(ln.get("index", "0")), float(ln.get("length", "0")),
+                              float(ln.get("width", "3.2")), pts, orig))
+        lanes.sort(key=lambda lane: lane.index)
+        edges[eid] = Edge(eid, tuple(lanes), tuple(succ.get(eid, ())))
+    return edges
+
+
+def _edges(net: Path) -> dict[str, Edge]:
+    return _edges_cached(str(net), net.stat().st_mtime)
+
+
+class RoadMap:
+    """OpenDRIVE lane positions on a SUMO network (a converted ``.xodr`` or a ``.net.xml``).
+
+    On a converted road, OpenDRIVE road ``r``'s right-hand lanes are the SUMO edge ``-r``
+    (``-r.S`` for a later lane section starting at S), its left-hand lanes the edge ``r``;
+    lane -1 (next to the reference line) is SUMO's leftmost lane of ``-r``. On a SUMO
+    network the road id is the edge id and lane -k is the k-th lane from the left.
+    """
+
+    def __init__(self, net: Path, converted: bool) -> None:
+        self.net, self.converted = net, converted
+        self.edges = _edges(net)
+
+    def sections(self, road: str) -> list[tuple[float, Edge, bool]]:
+        """(start s, edge, right-hand) of the road's edges, by start."""
+        if not self.converted:
+            e = self.edges.get(road)
+            return [(0.0, e, True)] if e is not None else []
+        out = []
+        for eid, e in self.edges.items():
+            right = eid.startswith("-")
+            base = eid[1:] if right else eid
+            name, _, start = base.partition(".")
+            if name == road:
+                try:
+                    out.append((float(start) if start else 0.0, e, right))
+                except ValueError:
+                    continue
+        return sorted(out, key=lambda x: x[0])
+
+    def lane_position(self, road: str, lane: int, s: float) -> tuple[Lane, float]:
+        """The SUMO lane and the position along it (m) of OpenDRIVE (road, lane, s)."""
+        if lane == 0:
+            raise ValueError("lane 0 is the reference line, not a lane")
+        secs = [x for x in self.sections(road) if x[2] == (lane < 0)]
+        if not secs:
+            known = sorted({(eid.removeprefix("-")).partition(".")[0] for eid in self.edges}
+                           if self.converted else self.edges)
+            raise ValueError(f"unknown road {road!r} (roads: {', '.join(known)})")
+        start, edge, right = secs[0]
+        for x in secs:
+            if x[0] <= s + 1e-9:
+                start, edge, right = x
+        k = abs(lane)
+        n = len(edge.lanes)
+        if k > n:
+            raise ValueError(f"road {road!r} has {n} lane{'s' if n != 1 else ''} on that side at s = {s:g} "
+                             f"(lane ids {', '.join(str(-i if right else i) for i in range(1, n + 1))})")
+        sumo_lane = edge.lanes[n - k]
+        pos = s - start if right else sumo_lane.length - (s - start)
+        return sumo_lane, min(max(pos, 0.0), sumo_lane.length)
+
+    def lane_id_of(self, sumo_lane: Lane) -> int:
+        """The OpenDRIVE-style lane id of a SUMO lane (-1 = leftmost of its edge)."""
+        n = len(self.edges[sumo_lane.edge].lanes)
+        k = n - sumo_lane.index
+        return -k if (not self.converted or sumo_lane.edge.startswith("-")) else k
+
+    def route_from(self, edge: str, limit: int = 64) -> list[str]:
+        """``edge`` and its successors as long as each has one (the way straight on)."""
+        route = [edge]
+        while len(route) < limit:
+            nxt = self.edges[route[-1]].successors
+            if len(nxt) != 1 or nxt[0] in route:
+                break
+            route.append(nxt[0])
+        return route
+
+    def nearest_lane(self, x: float, y: float) -> tuple[Lane, float, float]:
+        """The lane whose centre line is nearest to (x, y): (lane, s along it, d + left)."""
+        from ego.lane_frame import LanePolyline
+
+        best = None
+        for e in self.edges.values():
+            for ln in e.lanes:
+                if len(ln.shape) < 2:
+                    continue
+                s, d, _ = LanePolyline(ln.shape, ln.width, ln.id).project(x, y)
+                s = min(max(s, 0.0), ln.length)
+                if best is None or abs(d) < abs(best[2]):
+                    best = (ln, s, d)
+        if best is None:
+            raise ValueError("the road has no lanes")
+        return best
+
+
+def curvature_error(shape, analytic) -> float:
+    """Largest |curvature - analytic(s)| of ego's lane frame over a lane shape (1/m), ``analytic``
+    a function of the arc length (a test's and the docs' check of a converted road)."""
+    from ego.lane_frame import LanePolyline
+
+    lane = LanePolyline(shape)
+    worst = 0.0
+    n = max(2, int(lane.length / 0.25))
+    for i in range(1, n):
+        s = lane.length * i / n
+        worst = max(worst, abs(lane.curvature_at(s) - analytic(s)))
+    return worst
+
+
+
+def refine_shape(points, step: float = 0.25, ratio: float = 3.0, longest: float = 5.0) -> list[tuple[float, float]]:
+    """A lane shape whose curved runs are resampled every ``step`` (m) along a cubic spline
+    through their points.
+
+    netconvert samples an OpenDRIVE curve with a step that changes along it (a clothoid:
+    2 m, then 1 m, then 0.5 m as its curvature grows), and ego's lane frame reads curvature
+    from the heading change between segments: where the step changes, unequal neighbours
+    bias the heading at their shared vertex and the curvature spikes. A run is a stretch of
+    segments shorter than ``longest`` whose neighbours' lengths differ by at most ``ratio``
+    (netconvert's samples of one curve); its points are on the curve (within 0.1 mm), so a
+    not-a-knot cubic spline through them (parametrised by chord length) and resampled evenly
+    gives the lane frame even steps. Long segments (straights) and their ends stay as they
+    are."""
+    from scipy.interpolate import CubicSpline
+
+    pts = np.asarray(points, dtype=float)
+    n = len(pts)
+    if n < 4:
+        return [(float(x), float(y)) for x, y in pts]
+    lengths = np.hypot(*np.diff(pts, axis=0).T)
+    out = [(float(pts[0, 0]), float(pts[0, 1]))]
+    i = 0
+    while i < n - 1:
+        j = i
+        while (j + 1 < n - 1 and lengths[j] < longest and lengths[j + 1] < longest
+               and 1.0 / ratio <= lengths[j + 1] / lengths[j] <= ratio):
+            j += 1
+        if j - i >= 2:  # segments i..j: points i..j+1
+            u = np.concatenate(([0.0], np.cumsum(lengths[i:j + 1])))
+            spline = CubicSpline(u, pts[i:j + 2], axis=0, bc_type="not-a-knot")
+            m = max(1, math.ceil(u[-1] / step))
+            out.extend((float(x), float(y)) for x, y in spline(np.linspace(0.0, u[-1], m + 1)[1:]))
+        else:
+            out.extend((float(x), float(y)) for x, y in pts[i + 1:j + 2])
+        i = j + 1
+    return out

@@ -1,0 +1,583 @@
+"""The storyboard at run time: element states, triggers and conditions, actions.
+
+Once every storyboard step (ego's SUMO step, 0.1 s by default) :meth:`Storyboard.step`
+evaluates every condition from the entities' states *as of the start of the step* (so the
+order of elements never matters), then starts, stops and completes elements, then lets each
+running action command its entity for the coming step through a :class:`Driver` (the SUMO
+side, or the ego's references). A StoryboardElementStateCondition sees a transition made at
+one step at the next.
+
+States are ``standby``, ``running`` and ``complete``; an Event runs up to its
+``maximumExecutionCount`` times (back to standby after each run), with ``priority``
+overwrite/override (stops the other running events of its maneuver), skip (does not start
+while another event of its maneuver runs) or parallel; a ManeuverGroup runs its maneuvers up
+to its ``maximumExecutionCount`` times.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass
+from typing import Protocol
+
+from ego.openscenario import model as M
+from ego.openscenario.dynamics import (
+    Transition,
+    lateral_duration,
+    offset_duration,
+    speed_duration,
+)
+
+INF = math.inf
+EPS = 1e-9
+STANDBY, RUNNING, COMPLETE = "standby", "running", "complete"
+
+
+@dataclass(slots=True)
+class EntityState:
+    """An entity as the conditions see it: box centre (m), yaw (rad), speed (m/s), road frame
+    (s along the reference lane, d + left of it, m), size (m), distance travelled (m) and the
+    front bumper's d (m: the point SUMO's sublane model moves sideways)."""
+
+    x: float = 0.0
+    y: float = 0.0
+    yaw: float = 0.0
+    speed: float = 0.0
+    s: float = 0.0
+    d: float = 0.0
+    length: float = 4.5
+    width: float = 1.8
+    traveled: float = 0.0
+    d_front: float = 0.0
+
+
+class Driver(Protocol):
+    """What the storyboard asks of the simulation (positions m, speeds m/s, rad)."""
+
+    def position_xy(self, position: M.Position, states: dict[str, EntityState]) -> tuple[float, float, float]:
+        """World (x, y, heading) of a position, relative ones from ``states``."""
+    def road_frame(self, x: float, y: float) -> tuple[float, float]: ...
+    def lane_centre_of(self, d: float) -> float:
+        """d of the centre of the lane at offset ``d``."""
+    def lane_centre(self, lane_id: int, relative_to: float | None = None, dlane: int = 0) -> float:
+        """d of OpenDRIVE lane ``lane_id`` (or the lane ``dlane`` to the left of the lane at
+        ``relative_to``)."""
+    def speed(self, name: str, v_next: float, peak_rate: float) -> None: ...
+    def speed_rate(self, name: str, target: float, rate: float) -> None: ...
+    def lateral(self, name: str, d_next: float, peak_speed: float) -> None: ...
+    def teleport(self, name: str, x: float, y: float, heading: float) -> None: ...
+    def place(self, name: str, x: float, y: float, heading: float, speed: float) -> None: ...
+    def release(self, name: str) -> None: ...
+    def ego_speed(self, profile: Transition | None, relative: tuple[str, str, float] | None) -> None: ...
+    def ego_lateral(self, profile: Transition) -> None: ...
+    def ego_references(self) -> tuple[float, float]:
+        """The ego's speed reference (m/s) and lateral reference (d, m) now."""
+
+
+def compare(rule: str, lhs: float, rhs: float) -> bool:
+    if rule == "greaterThan":
+        return lhs > rhs
+    if rule == "lessThan":
+        return lhs < rhs
+    if rule == "greaterOrEqual":
+        return lhs >= rhs - EPS
+    if rule == "lessOrEqual":
+        return lhs <= rhs + EPS
+    if rule == "equalTo":
+        return abs(lhs - rhs) <= EPS
+    return abs(lhs - rhs) > EPS  # notEqualTo
+
+
+def box_point_distance(e: EntityState, x: float, y: float) -> float:
+    """Distance (m) from (x, y) to the entity's box (0 inside)."""
+    c, s = math.cos(e.yaw), math.sin(e.yaw)
+    dx, dy = x - e.x, y - e.y
+    lx, ly = abs(c * dx + s * dy), abs(-s * dx + c * dy)
+    return math.hypot(max(lx - 0.5 * e.length, 0.0), max(ly - 0.5 * e.width, 0.0))
+
+
+class ConditionState:
+    """One condition's edge and delay bookkeeping."""
+
+    __slots__ = ("c", "history", "prev")
+
+    def __init__(self, c: M.Condition) -> None:
+        self.c = c
+        self.prev: bool | None = None
+        self.history: deque[tuple[float, bool]] = deque()
+
+    def update(self, t: float, raw: bool) -> bool:
+        edge = self.c.edge
+        prev = self.prev
+        self.prev = raw
+        if edge == "none":
+            value = raw
+        elif prev is None:
+            value = False
+        elif edge == "rising":
+            value = raw and not prev
+        elif edge == "falling":
+            value = prev and not raw
+        else:
+            value = raw != prev
+        delay = self.c.delay
+        if delay <= 0.0:
+            return value
+        h = self.history
+        h.append((t, value))
+        due = t - delay + EPS
+        while len(h) >= 2 and h[1][0] <= due:
+            h.popleft()
+        return h[0][1] if h[0][0] <= due else False
+
+
+class Element:
+    """A storyboard element with its state and the transitions of the latest step."""
+
+    __slots__ = ("children", "count", "kind", "max_count", "name", "node", "state", "transitions")
+
+    def __init__(self, kind: str, name: str, node, max_count: int = 1) -> None:
+        self.kind, self.name, self.node = kind, name, node
+        self.state = STANDBY
+        self.count = 0
+        self.max_count = max_count
+        self.transitions: set[str] = set()
+        self.children: list[Element] = []
+
+    def go(self, state: str, transition: str) -> None:
+        self.state = state
+        self.transitions.add(transition)
+
+
+class Storyboard:
+    """Runs a resolved scenario's storyboard against a :class:`Driver`.
+
+    ``log(kind, text)`` receives every element transition and action (the run's events)."""
+
+    def __init__(self, scenario: M.Scenario, ego: str, driver: Driver, step: float, log=None) -> None:
+        self.scenario, self.ego, self.driver, self.h = scenario, ego, driver, step
+        self.log = log or (lambda kind, text: None)
+        self.states: dict[str, EntityState] = {name: EntityState() for name in scenario.entities}
+        for name, ent in scenario.entities.items():
+            self.states[name].length, self.states[name].width = ent.vehicle.length, ent.vehicle.width
+        self.conditions: dict[int, ConditionState] = {}
+        self.by_name: dict[tuple[str, str], list[Element]] = {}
+        self.stories: list[Element] = []
+        for st in scenario.stories:
+            story = self._element("story", st.name, st)
+            for act in st.acts:
+                a = self._element("act", act.name, act)
+                story.children.append(a)
+                for g in act.groups:
+                    mg = self._element("maneuverGroup", g.name, g, g.max_count)
+                    a.children.append(mg)
+                    for man in g.maneuvers:
+                        mm = self._element("maneuver", man.name, man)
+                        mg.children.append(mm)
+                        for ev in man.events:
+                            e = self._element("event", ev.name, ev, ev.max_count)
+                            mm.children.append(e)
+                            for action in ev.actions:
+                                e.children.append(self._element("action", action.name, action))
+            self.stories.append(story)
+        for cond in self._all_conditions():
+            self.conditions[id(cond)] = ConditionState(cond)
+        #: running actions: element -> (the actor, the action runner)
+        self.running: dict[int, list[ActionRun]] = {}
+        #: per entity and domain ("long", "lat"): the action run controlling it
+        self.slots: dict[tuple[str, str], ActionRun] = {}
+        self.stopped = False
+        self.t = 0.0
+        self._fired: dict[int, bool] = {}
+
+    def _element(self, kind: str, name: str, node, max_count: int = 1) -> Element:
+        el = Element(kind, name, node, max_count)
+        self.by_name.setdefault((kind, name), []).append(el)
+        return el
+
+    def _all_conditions(self):
+        triggers = [self.scenario.stop]
+        for st in self.scenario.stories:
+            for act in st.acts:
+                triggers += [act.start, act.stop]
+                for g in act.groups:
+                    for man in g.maneuvers:
+                        triggers += [ev.start for ev in man.events]
+        for trig in triggers:
+            for group in trig.groups if trig is not None else ():
+                yield from group
+
+    # -- conditions -------------------------------------------------------------------------
+    def _entity_value(self, c: M.Condition, name: str) -> bool:
+        st = self.states
+        e = st[name]
+        kind = c.kind
+        if kind == "SpeedCondition":
+            return compare(c.rule, e.speed, c.value)  # type: ignore[arg-type]
+        if kind == "RelativeSpeedCondition":
+            return compare(c.rule, e.speed - st[c.entity].speed, c.value)  # type: ignore[index, arg-type]
+        if kind == "TraveledDistanceCondition":
+            return e.traveled >= c.value - EPS  # type: ignore[operator]
+        if kind == "ReachPositionCondition":
+            x, y, _ = self.driver.position_xy(c.position, st)  # type: ignore[arg-type]
+            return math.hypot(e.x - x, e.y - y) <= c.value + EPS  # type: ignore[operator]
+        if kind == "DistanceCondition":
+            x, y, _ = self.driver.position_xy(c.position, st)  # type: ignore[arg-type]
+            dist = box_point_distance(e, x, y) if c.freespace else math.hypot(e.x - x, e.y - y)
+            return compare(c.rule, dist, c.value)  # type: ignore[arg-type]
+        if kind == "RelativeDistanceCondition":
+            o = st[c.entity]  # type: ignore[index]
+            ds, dd = abs(o.s - e.s), abs(o.d - e.d)
+            if c.freespace:
+                ds -= 0.5 * (o.length + e.length)
+                dd -= 0.5 * (o.width + e.width)
+            if c.distance_type == "longitudinal":
+                dist = ds
+            elif c.distance_type == "lateral":
+                dist = dd
+            elif c.freespace:
+                dist = math.hypot(max(ds, 0.0), max(dd, 0.0))
+            else:
+                dist = math.hypot(o.x - e.x, o.y - e.y)
+            return compare(c.rule, dist, c.value)  # type: ignore[arg-type]
+        if kind == "TimeHeadwayCondition":
+            o = st[c.entity]  # type: ignore[index]
+            gap = o.s - e.s - (0.5 * (o.length + e.length) if c.freespace else 0.0)
+            thw = gap / e.speed if (o.s > e.s and e.speed > 0.0) else INF
+            return compare(c.rule, thw, c.value)  # type: ignore[arg-type]
+        if kind == "TimeToCollisionCondition":
+            if c.entity is not None:
+                o = st[c.entity]
+                ahead = o.s >= e.s
+                gap = abs(o.s - e.s) - (0.5 * (o.length + e.length) if c.freespace else 0.0)
+                closing = (e.speed - o.speed) if ahead else (o.speed - e.speed)
+            else:
+                x, y, _ = self.driver.position_xy(c.position, st)  # type: ignore[arg-type]
+                ps, _ = self.driver.road_frame(x, y)
+                gap = ps - e.s - (0.5 * e.length if c.freespace else 0.0)
+                closing = e.speed if gap >= 0.0 else -e.speed
+                gap = abs(gap)
+            ttc = gap / closing if closing > 0.0 else INF
+            return compare(c.rule, max(ttc, 0.0), c.value)  # type: ignore[arg-type]
+        raise AssertionError(kind)
+
+    def _raw(self, c: M.Condition, t: float) -> bool:
+        kind = c.kind
+        if kind == "SimulationTimeCondition":
+            return compare(c.rule, t, c.value)  # type: ignore[arg-type]
+        if kind == "ParameterCondition":
+            value = self.scenario.values[c.parameter]
+            if isinstance(value, (int, float)) and not isinstance(value, bool):
+                try:
+                    return compare(c.rule, float(value), float(c.value))  # type: ignore[arg-type]
+                except ValueError:
+                    return False
+            text = str(value).lower() if isinstance(value, bool) else str(value)
+            equal = text == str(c.value)
+            return equal if c.rule == "equalTo" else (not equal if c.rule == "notEqualTo" else False)
+        if kind == "StoryboardElementStateCondition":
+            els = self.by_name.get((c.element_type, c.element_ref), [])
+            want = c.state
+            for el in els:
+                if want.endswith("State"):
+                    if el.state == want[:-5]:
+                        return True
+                elif want in el.transitions:
+                    return True
+            return False
+        results = (self._entity_value(c, name) for name in c.triggering)
+        return any(results) if c.triggering_rule == "any" else all(results)
+
+    def _evaluate(self, t: float) -> None:
+        fired = self._fired
+        for key, cs in self.conditions.items():
+            fired[key] = cs.update(t, self._raw(cs.c, t))
+
+    def _trigger(self, trig: M.Trigger | None, default: bool) -> bool:
+        if trig is None or trig.empty:
+            return default
+        fired = self._fired
+        return any(all(fired[id(c)] for c in group) for group in trig.groups)
+
+    # -- the step ---------------------------------------------------------------------------
+    def step(self, t: float) -> None:
+        """One storyboard step at time ``t`` (s): conditions, transitions, then the actions'
+        commands for [t, t + step]."""
+        self.t = t
+        self._evaluate(t)
+        for els in self.by_name.values():
+            for el in els:
+                el.transitions.clear()
+        if self._trigger(self.scenario.stop, False) and not self.stopped:
+            self.stopped = True
+            self.log("storyboard", f"t = {t:.2f} s: storyboard StopTrigger: the scenario ends")
+            return
+        for story in self.stories:
+            self._story(story, t)
+        for runs in list(self.running.values()):
+            for run in runs:
+                if not run.finished:
+                    run.step(t)
+
+    def _story(self, story: Element, t: float) -> None:
+        if story.state == STANDBY:
+            story.go(RUNNING, "startTransition")
+        if story.state != RUNNING:
+            return
+        for act in story.children:
+            node: M.Act = act.node
+            if act.state == STANDBY and self._trigger(node.start, True):
+                act.go(RUNNING, "startTransition")
+                self.log("act", f"t = {t:.2f} s: act {act.name!r} starts")
+                for g in act.children:
+                    self._start_group(g)
+            if act.state == RUNNING:
+                if self._trigger(node.stop, False):
+                    self._stop(act, "stopTransition")
+                    self.log("act", f"t = {t:.2f} s: act {act.name!r} stops (StopTrigger)")
+                    continue
+                for g in act.children:
+                    self._group(g, t)
+                if all(g.state == COMPLETE for g in act.children):
+                    act.go(COMPLETE, "endTransition")
+        if all(a.state == COMPLETE for a in story.children):
+            story.go(COMPLETE, "endTransition")
+
+    def _start_group(self, g: Element) -> None:
+        g.go(RUNNING, "startTransition")
+        for man in g.children:
+            man.state = STANDBY
+            man.go(RUNNING, "startTransition")
+            for ev in man.children:
+                ev.state, ev.count = STANDBY, 0
+                for a in ev.children:
+                    a.state = STANDBY
+
+    def _group(self, g: Element, t: float) -> None:
+        if g.state != RUNNING:
+            return
+        for man in g.children:
+            if man.state != RUNNING:
+                continue
+            self._maneuver(man, g, t)
+            if all(ev.state == COMPLETE for ev in man.children):
+                man.go(COMPLETE, "endTransition")
+        if all(man.state == COMPLETE for man in g.children):
+            g.count += 1
+            g.go(COMPLETE, "endTransition")
+            if g.count < g.max_count:
+                count = g.count
+                self._start_group(g)
+                g.count = count
+
+    def _maneuver(self, man: Element, group: Element, t: float) -> None:
+        for ev in man.children:
+            node: M.Event = ev.node
+            if ev.state == STANDBY and self._trigger(node.start, True):
+                others = [o for o in man.children if o is not ev and o.state == RUNNING]
+                if node.priority == "skip" and others:
+                    ev.transitions.add("skipTransition")
+                    continue
+                if node.priority in ("overwrite", "override"):
+                    for o in others:
+                        self._stop(o, "stopTransition")
+                        self.log("event", f"t = {t:.2f} s: event {o.name!r} overwritten by {ev.name!r}")
+                ev.go(RUNNING, "startTransition")
+                self.log("event", f"t = {t:.2f} s: event {ev.name!r} starts (run {ev.count + 1} of "
+                         f"{ev.max_count})")
+                actors = group.node.actors
+                runs = []
+                for a in ev.children:
+                    a.state = STANDBY
+                    a.go(RUNNING, "startTransition")
+                    for actor in actors:
+                        runs.append(self._start_action(a, actor, t))
+                self.running[id(ev)] = runs
+            if ev.state == RUNNING:
+                runs = self.running.get(id(ev), [])
+                for a in ev.children:
+                    if a.state == RUNNING and all(r.finished for r in runs if r.element is a):
+                        a.go(COMPLETE, "endTransition")
+                if all(a.state == COMPLETE for a in ev.children):
+                    self.running.pop(id(ev), None)
+                    ev.count += 1
+                    if ev.count < ev.max_count:
+                        ev.go(STANDBY, "endTransition")
+                    else:
+                        ev.go(COMPLETE, "endTransition")
+
+    def _stop(self, el: Element, transition: str) -> None:
+        """Stop ``el`` and everything running below it."""
+        if el.state == RUNNING or el.kind == "event":
+            for run in self.running.pop(id(el), []):
+                run.stop()
+        for child in el.children:
+            if child.state == RUNNING:
+                self._stop(child, transition)
+        el.count = el.max_count
+        el.go(COMPLETE, transition)
+
+    def _start_action(self, el: Element, actor: str, t: float) -> ActionRun:
+        action: M.Action = el.node
+        run = ActionRun(self, el, actor, action.action)
+        for domain in run.domains:
+            old = self.slots.get((actor, domain))
+            if old is not None and not old.finished:
+                old.stop()
+            self.slots[(actor, domain)] = run
+        self.log("action", f"t = {t:.2f} s: {type(action.action).__name__} {action.name!r} on {actor}")
+        run.start(t)
+        return run
+
+
+class ActionRun:
+    """One private action on one actor, from its start to its end (or its stop)."""
+
+    def __init__(self, board: Storyboard, element: Element, actor: str, action: M.PrivateAction) -> None:
+        self.board, self.element, self.actor, self.action = board, element, actor, action
+        self.finished = False
+        self.profile: Transition | None = None
+        if isinstance(action, M.SpeedAction):
+            self.domains: tuple[str, ...] = ("long",)
+        elif isinstance(action, (M.LaneChangeAction, M.LaneOffsetAction)):
+            self.domains = ("lat",)
+        else:
+            self.domains = ("long", "lat")
+
+    @property
+    def is_ego(self) -> bool:
+        return self.actor == self.board.ego
+
+    def stop(self) -> None:
+        self.finished = True
+        if self.is_ego:
+            return
+        if isinstance(self.action, (M.FollowTrajectoryAction, M.LaneChangeAction, M.LaneOffsetAction)):
+            self.board.driver.release(self.actor)
+
+    def start(self, t: float) -> None:
+        b, a, me = self.board, self.action, self.board.states[self.actor]
+        drv = b.driver
+        if isinstance(a, M.SpeedAction):
+            # the ego's references move on from where they are (its measured speed wobbles)
+            v0 = drv.ego_references()[0] if self.is_ego else me.speed
+            target = a.value
+            if a.relative_to is not None:
+                ref = b.states[a.relative_to].speed
+                target = ref + a.value if a.relative_kind == "delta" else ref * a.value
+            target = max(target, 0.0)
+            dyn = a.dynamics
+            T = speed_duration(dyn.shape, dyn.dimension, dyn.value, v0, target)
+            self.profile = Transition(t, v0, target, T, dyn.shape)
+            if self.is_ego:
+                rel = (a.relative_to, a.relative_kind, a.value) if (a.relative_to and a.continuous) else None
+                drv.ego_speed(self.profile, rel)
+                self.finished = not a.continuous
+                return
+            if dyn.shape == "linear" and dyn.dimension == "rate" and v0 != target:
+                drv.speed_rate(self.actor, target, dyn.value)  # SUMO's own per-step rate: exact
+                self._native = True
+            else:
+                self._native = False
+        elif isinstance(a, (M.LaneChangeAction, M.LaneOffsetAction)):
+            if isinstance(a, M.LaneChangeAction):
+                if a.target_lane is not None:
+                    centre = drv.lane_centre(a.target_lane)
+                else:
+                    centre = drv.lane_centre(0, b.states[a.relative_to].d, a.relative_lanes)  # type: ignore[index]
+                target = centre + a.target_offset
+                T = lateral_duration(a.dynamics.shape, a.dynamics.dimension, a.dynamics.value, me.speed)
+                shape = a.dynamics.shape
+            else:
+                base = b.states[a.relative_to].d if a.relative_to is not None else drv.lane_centre_of(me.d)
+                target = base + a.value
+                shape = a.shape
+                T = offset_duration(shape, a.max_lateral_acc,
+                                    target - (drv.ego_references()[1] if self.is_ego else me.d_front))
+            start = drv.ego_references()[1] if self.is_ego else me.d_front
+            self.profile = Transition(t, start, target, T, shape)
+            if self.is_ego:
+                drv.ego_lateral(self.profile)
+                self.finished = True
+                return
+        elif isinstance(a, M.TeleportAction):
+            x, y, h = drv.position_xy(a.position, b.states)
+            drv.teleport(self.actor, x, y, h)
+            self.finished = True
+            return
+        else:
+            self._trajectory_start(t)
+
+    def _trajectory_start(self, t: float) -> None:
+        b, a = self.board, self.action
+        pts = [b.driver.position_xy(v.position, b.states) for v in a.vertices]  # type: ignore[union-attr]
+        self.xy = [(p[0], p[1]) for p in pts]
+        self.cum = [0.0]
+        for (x0, y0), (x1, y1) in zip(self.xy, self.xy[1:]):
+            self.cum.append(self.cum[-1] + math.hypot(x1 - x0, y1 - y0))
+        self.times: list[float] | None
+        if a.timing is not None:  # type: ignore[union-attr]
+            domain, scale, offset = a.timing  # type: ignore[union-attr]
+            base = 0.0 if domain == "absolute" else t
+            self.times = [base + v.time * scale + offset for v in a.vertices]  # type: ignore[union-attr, operator]
+        else:
+            self.times = None
+            self.v = b.states[self.actor].speed
+            self.t0 = t
+            self.s0 = a.initial_distance_offset  # type: ignore[union-attr]
+
+    def _trajectory_point(self, t: float) -> tuple[float, float, float, float, bool]:
+        """(x, y, heading, speed, at the end) on the trajectory at time ``t``."""
+        xy, cum = self.xy, self.cum
+        if self.times is not None:
+            times = self.times
+            if t <= times[0]:
+                i, u = 0, 0.0
+            elif t >= times[-1]:
+                i, u = len(times) - 2, 1.0
+            else:
+                i = max(k for k in range(len(times) - 1) if times[k] <= t)
+                u = (t - times[i]) / (times[i + 1] - times[i])
+            seg = cum[i + 1] - cum[i]
+            speed = seg / (times[i + 1] - times[i])
+            end = t >= times[-1] - EPS
+        else:
+            s = min(self.s0 + self.v * (t - self.t0), cum[-1])
+            i = max(k for k in range(len(cum) - 1) if cum[k] <= s) if s > 0 else 0
+            i = min(i, len(cum) - 2)
+            seg = cum[i + 1] - cum[i]
+            u = (s - cum[i]) / seg if seg > 0 else 1.0
+            speed, end = self.v, s >= cum[-1] - EPS
+        (x0, y0), (x1, y1) = xy[i], xy[i + 1]
+        heading = math.atan2(y1 - y0, x1 - x0)
+        return x0 + u * (x1 - x0), y0 + u * (y1 - y0), heading, speed, end
+
+    def step(self, t: float) -> None:
+        """Command the actor for [t, t + step]."""
+        b, a = self.board, self.action
+        h = b.h
+        drv = b.driver
+        if isinstance(a, M.SpeedAction):
+            p = self.profile
+            if a.continuous and a.relative_to is not None and p.done(t):  # type: ignore[union-attr]
+                ref = b.states[a.relative_to].speed
+                target = max(ref + a.value if a.relative_kind == "delta" else ref * a.value, 0.0)
+                drv.speed(self.actor, target, INF)
+                return
+            if not self._native:
+                drv.speed(self.actor, p.value(t + h), max(p.peak_rate, 0.0))  # type: ignore[union-attr]
+            if p.done(t + h) and not a.continuous:  # type: ignore[union-attr]
+                self.finished = True
+        elif isinstance(a, (M.LaneChangeAction, M.LaneOffsetAction)):
+            p = self.profile
+            drv.lateral(self.actor, p.value(t + h), p.peak_rate)  # type: ignore[union-attr]
+            if p.done(t + h) and not getattr(a, "continuous", False):  # type: ignore[union-attr]
+                self.finished = True
+                drv.release(self.actor)
+        elif isinstance(a, M.FollowTrajectoryAction):
+            x, y, heading, speed, end = self._trajectory_point(t + h)
+            drv.place(self.actor, x, y, heading, speed)
+            if end:
+                self.finished = True
+                drv.release(self.actor)

@@ -1,0 +1,686 @@
+"""A scenario file as a scenario of ego: the one module joining the file's model and its
+storyboard to ego's motorway machinery.
+
+The ego entity (``--ego``, default the entity named ``Ego`` in any case) gets ego's plant,
+controller, surround sensor and manoeuvre: the evasive logic of ``emergency-brake`` (front
+TTC trigger, gap acceptance, AEB, braking in lane) with its parameters (``--set
+evade=false`` ...). Its Init lane and speed are its references; SpeedAction and
+LaneChange/LaneOffsetAction addressed to it move those references. Every other entity is a
+SUMO vehicle that the storyboard commands through the bridge; when no action holds it, SUMO's
+driver model drives it (lane changes off, an Init speed held as its desired speed).
+
+A file's parameters are parameters of the scenario (``--set Name=value``, sweep grids);
+a declared parameter with the name of an ego parameter (``traffic_density``, ``duration``,
+``ttc_threshold``...) sets that parameter's default.
+
+The scenario is emergency-brake's composition configured by the file: the motorway world
+(:class:`~ego.scenarios.motorway.MotorwayWorld`) given the file's road (its edge, route and
+lanes) and populated with the file's entities (:class:`ScriptedEntity`, commanded by the
+storyboard before every simulator step), the surround view, the plant, the evasive
+manoeuvre whose cruise references the storyboard moves (:class:`FileManoeuvre`) and the
+safety layer.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+from dataclasses import dataclass, replace
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from ego.lane_frame import LanePolyline
+from ego.openscenario import model as M
+from ego.openscenario.dynamics import Transition
+from ego.openscenario.loader import declared_parameters, load
+from ego.openscenario.roads import RoadMap, network_file, refine_shape
+from ego.openscenario.runtime import Storyboard
+from ego.openscenario.xmltree import DOCS, ScenarioFileError
+from ego.params import ConfigError, param
+from ego.scenarios.base import Parts
+from ego.scenarios.emergency_brake import BrakeInLane, EmergencyBrake
+from ego.scenarios.evasive import EvasiveConfig, compose
+from ego.scenarios.events import INF
+from ego.scenarios.manoeuvre import CRUISE, EvasiveManoeuvre
+from ego.scenarios.motorway import EGO
+from ego.sim.types import VehicleSpec, VehicleType
+from ego.sumo.bridge import SumoBridge, SumoConfig
+
+ENTITY_COLORS = ((255, 150, 0), (0, 170, 255), (160, 60, 220), (40, 180, 90), (230, 200, 0))
+
+
+@dataclass(frozen=True)
+class FileConfig(EvasiveConfig):
+    """ego's parameters of a file scenario (the file's own parameters are added per file)."""
+
+    ego_entity: str = param("", "-", "the entity ego drives (--ego; default: the one named Ego, any case)")
+    ego_speed: float = param(20.0, "m/s", "ego's initial speed (default: the file's Init)", min=0.0, max=60.0)
+    ego_lane: int = param(1, "-", "ego's SUMO lane index, 0 = right (default: the file's Init)", min=0, max=15)
+    ego_start: float = param(300.0, "m", "ego's front bumper along its lane at t = 0 (default: the file's Init)",
+                             min=0.0, max=1e6)
+    traffic_density: float = param(0.0, "veh/km", "background traffic per adjacent lane (none unless asked)",
+                                   min=0.0, max=25.0)
+    brake_decel: float = param(8.0, "m/s^2", "speed reference's deceleration when braking in lane",
+                               min=0.5, max=12.0)
+    brake_max_lag: float = param(2.0, "m", "how far the braking reference may fall behind the ego",
+                                 min=0.1, max=50.0)
+
+
+_TYPES = {"double": "float", "integer": "int", "int": "int", "unsignedInt": "int", "unsignedShort": "int",
+          "boolean": "bool", "string": "str", "dateTime": "str"}
+_PY = {"float": float, "int": int, "bool": bool, "str": str}
+
+
+def find_ego(scenario: M.Scenario, wanted: str) -> str:
+    """The ego entity: ``wanted`` (exact, else case-insensitive), else the one named Ego."""
+    names = list(scenario.entities)
+    target = wanted or "Ego"
+    if target in names:
+        return target
+    folded = [n for n in names if n.lower() == target.lower()]
+    if len(folded) == 1:
+        return folded[0]
+    if wanted:
+        raise ConfigError(f"bad value for --ego: {wanted!r} (entities: {', '.join(names)})")
+    raise ConfigError(f"{scenario.path}: no entity named Ego; choose the ego with --ego (entities: "
+                      f"{', '.join(names)})")
+
+
+@dataclass(frozen=True)
+class Placement:
+    """Where an entity starts: SUMO lane, front bumper along it (m), lateral offset (m)."""
+
+    edge: str
+    index: int
+    front: float
+    offset: float
+    speed: float | None
+
+
+def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
+    """Every entity's start from its Init TeleportAction and SpeedAction."""
+    out: dict[str, Placement] = {}
+    centre: dict[str, tuple] = {}  # name -> (lane, centre position along it, offset)
+    pending = dict(scenario.init)
+    for _ in range(len(pending) + 1):
+        for name, actions in list(pending.items()):
+            tp = next(a for a in actions if isinstance(a, M.TeleportAction))
+            pos = tp.position
+            ref = getattr(pos, "entity", None)
+            if ref is not None and ref not in centre:
+                continue  # placed after the entity it is relative to
+            try:
+                lane, s, off = _place(pos, roads, centre)
+            except ValueError as exc:
+                raise ScenarioFileError(scenario.path, pos.line, str(exc)) from None
+            v = scenario.entities[name].vehicle
+            speed = next((a.value for a in actions if isinstance(a, M.SpeedAction)), None)
+            centre[name] = (lane, s, off)
+            front = s + v.center_x + 0.5 * v.length
+            out[name] = Placement(lane.edge, lane.index, front, off, speed)
+            del pending[name]
+        if not pending:
+            break
+    if pending:
+        name = next(iter(pending))
+        raise ScenarioFileError(scenario.path, scenario.entities[name].line,
+                                f"the start positions of {', '.join(pending)} refer to each other")
+    return out
+
+
+def _place(pos: M.Position, roads: RoadMap, centre: dict) -> tuple:
+    if isinstance(pos, M.LanePosition):
+        lane, s = roads.lane_position(pos.road, pos.lane, pos.s)
+        return lane, s, pos.offset
+    if isinstance(pos, M.RoadPosition):
+        lane1, s = roads.lane_position(pos.road, -1, pos.s)
+        edge = roads.edges[lane1.edge]
+        # the reference line is the left edge of lane -1; t measured from it (+ left)
+        d = pos.t + 0.5 * lane1.width
+        return _lane_at(edge, lane1, d, s)
+    if isinstance(pos, M.WorldPosition):
+        return roads.nearest_lane(pos.x, pos.y)
+    lane, s, off = centre[pos.entity]
+    edge = roads.edges[lane.edge]
+    if isinstance(pos, M.RelativeLanePosition):
+        index = lane.index + pos.dlane
+        if not 0 <= index < len(edge.lanes):
+            raise ValueError(f"dLane {pos.dlane} from {pos.entity}'s lane leaves the road ({len(edge.lanes)} lanes)")
+        return edge.lanes[index], s + pos.ds, pos.offset
+    return _lane_at(edge, lane, off + pos.dt, s + pos.ds)
+
+
+def _lane_at(edge, lane, d: float, s: float) -> tuple:
+    """The lane of ``edge`` containing lateral offset ``d`` from ``lane``'s centre."""
+    offsets = _lane_offsets(edge, lane)
+    best = min(offsets, key=lambda i: abs(d - offsets[i]))
+    return edge.lanes[best], s, d - offsets[best]
+
+
+def _lane_offsets(edge, lane) -> dict[int, float]:
+    """Each lane's centre offset (m, + left) from ``lane``'s centre, by SUMO index."""
+    out, acc = {}, 0.0
+    for ln in edge.lanes:  # from the right
+        out[ln.index] = acc + 0.5 * ln.width
+        acc += ln.width
+    base = out[lane.index]
+    return {i: v - base for i, v in out.items()}
+
+
+@lru_cache(maxsize=64)
+def _file_class(path: str, mtime: float) -> type:
+    params = declared_parameters(path)
+    fields = []
+    ego_fields = {f.name: f for f in dataclasses.fields(FileConfig)}
+    for name, p in params.items():
+        kind = _TYPES[p.type]
+        if name in ego_fields:
+            f = ego_fields[name]
+            meta = dict(f.metadata)
+            if f.type not in (kind, "float") or (f.type == "float" and kind not in ("float", "int")):
+                raise ScenarioFileError(path, p.line, f"parameter {name!r} is ego's {f.type} parameter "
+                                        f"(declared {p.type})")
+            value = _PY[f.type](p.value)
+            fields.append((name, f.type, dataclasses.field(default=value, metadata=meta)))
+            continue
+        if not name.isidentifier() or name.startswith("_"):
+            raise ScenarioFileError(path, p.line, f"parameter name {name!r} is not supported by ego (letters, "
+                                    f"digits and _ only; see {DOCS})")
+        fields.append((name, kind, param(p.value, "-", f"declared in {Path(path).name}:{p.line} ({p.type})")))
+    cfg = dataclasses.make_dataclass(f"{Path(path).stem}Config", fields, bases=(FileConfig,), frozen=True)
+    cfg.__module__ = __name__
+    # made per file, so no module attribute names it: a configuration travels to a worker
+    # process as the file's name and its values, and is rebuilt there from the file
+    cfg.__reduce__ = lambda self: (_file_config, (path, {f.name: getattr(self, f.name)
+                                                         for f in dataclasses.fields(self)}))
+    return type(f"FileScenario[{Path(path).name}]", (FileScenario,), {
+        "name": path, "config_cls": cfg, "file": path, "file_params": tuple(params),
+        "summary": f"OpenSCENARIO file {path}",
+    })
+
+
+def _file_config(path: str, values: dict):
+    """A file scenario's configuration unpickled: the file's config class with ``values``."""
+    return file_scenario_class(path).config_cls(**values)
+
+
+def file_scenario_class(name: str) -> type:
+    """The scenario class of the file ``name`` (cached while the file is unchanged)."""
+    path = Path(name)
+    if not path.is_file():
+        raise ConfigError(f"scenario file {name!r} not found" if not path.exists() else
+                          f"scenario file {name!r} is not a file")
+    cls = _file_class(name, path.stat().st_mtime)
+    return cls
+
+
+class FileScenario(EmergencyBrake):
+    """A scenario file run with ego's ego (see the module docstring)."""
+
+    name = ""
+    file = ""
+    file_params: tuple[str, ...] = ()
+    config_cls = FileConfig
+    network = None
+    backends = ("sumo",)
+
+    # -- resolution (before anything runs) ----------------------------------------------------
+    @classmethod
+    def resolve(cls, config) -> tuple[M.Scenario, RoadMap, str, dict[str, Placement]]:
+        """The file with ``config``'s parameter values: model, roads, ego entity, starts
+        (the last few kept: a run resolves its configuration three times)."""
+        cache = cls.__dict__.get("_resolved")
+        if cache is None:
+            cache = cls._resolved = {}
+        hit = cache.get(config)
+        if hit is None:
+            hit = cache[config] = cls._resolve(config)
+            while len(cache) > 8:
+                cache.pop(next(iter(cache)))
+        return hit
+
+    @classmethod
+    def _resolve(cls, config) -> tuple[M.Scenario, RoadMap, str, dict[str, Placement]]:
+        # a parameter left at its declared default keeps its declaration (which may refer to
+        # another parameter: LeadSpeed = $EgoSpeed follows EgoSpeed); a set one is its value
+        defaults = cls.config_cls()
+        values = {k: getattr(config, k) for k in cls.file_params if getattr(config, k) != getattr(defaults, k)}
+        model = load(cls.file, values)
+        net = network_file(model.road)
+        roads = RoadMap(net, converted=not str(model.road).endswith(".net.xml"))
+        ego = find_ego(model, config.ego_entity)
+        _check_ego_actions(model, ego)
+        return model, roads, ego, placements(model, roads)
+
+    @classmethod
+    def default_config(cls, overrides):
+        cfg = cls.config_cls()
+        # the file's parameters and the ego's choice first: the Init depends on them
+        known = {f.name for f in dataclasses.fields(cfg)}
+        early = {k: v for k, v in overrides.items() if k in cls.file_params or k == "ego_entity"}
+        if early:
+            from ego.params import apply_overrides
+
+            cfg, _ = apply_overrides(cfg, early, strict=False)
+        model, _, ego, starts = cls.resolve(cfg)
+        start = starts[ego]
+        if start.speed is None:
+            raise ScenarioFileError(model.path, model.entities[ego].line, f"the ego {ego!r} needs a SpeedAction "
+                                    "in <Init> (its initial speed is its reference)")
+        del known
+        return replace(cfg, ego_speed=float(start.speed), ego_lane=int(start.index), ego_start=float(start.front))
+
+    @classmethod
+    def check_config(cls, config) -> None:
+        _, roads, ego, starts = cls.resolve(config)
+        edge = roads.edges[starts[ego].edge]
+        if config.ego_lane >= len(edge.lanes):
+            raise ConfigError(f"bad value for ego_lane: {config.ego_lane} (the ego's road has {len(edge.lanes)} lanes)")
+
+    # -- the parts ----------------------------------------------------------------------------
+    def compose(self) -> Parts:
+        """emergency-brake's parts on the file's road: the world is the motorway world given
+        the file's edge, route and lanes and populated with the file's entities (scripted by
+        the storyboard); the manoeuvre is the evasive one whose cruise references the
+        storyboard moves (:class:`FileManoeuvre`)."""
+        c = self.config
+        self.model, self.roads, self.ego_name, self.starts = self.resolve(c)
+        edge = self.starts[self.ego_name].edge
+        road = {"edge": edge, "route": f"route_{edge}", "route_edges": tuple(self.roads.route_from(edge)),
+                "n_lanes": len(self.roads.edges[edge].lanes), "refine": refine_shape}
+        self.in_lane = BrakeInLane(c, lambda: self.safety is not None and self.safety.active)
+        parts = compose(self, "front", self.in_lane, self.populate, on_trigger=self.on_trigger, road=road,
+                        manoeuvre_cls=FileManoeuvre)
+        parts.manoeuvre.story = self
+        return parts
+
+    def _make_bridge(self) -> SumoBridge:
+        c = self.config
+        return SumoBridge(SumoConfig(self.roads.net, step_length=c.sumo_step, seed=self.seed,
+                                     lateral_resolution=c.lateral_resolution))
+
+    # the ego's frame as the storyboard and the tests read it: the surround view's
+    @property
+    def road(self):
+        return self.view.road
+
+    @property
+    def lane_offset(self) -> dict[int, float]:
+        return self.view.lane_offset
+
+    @property
+    def s(self) -> float:
+        return self.view.s
+
+    @property
+    def d_road(self) -> float:
+        return self.view.d_road
+
+    @property
+    def target_lane(self) -> int:
+        return self.view.target_lane
+
+    @target_lane.setter
+    def target_lane(self, lane: int) -> None:
+        self.view.target_lane = lane
+
+    def _route(self, edge: str) -> str:
+        world = self.world
+        rid = f"route_{edge}"
+        if rid != world.route and rid not in self._routes:
+            world.sim.add_route(rid, self.roads.route_from(edge))
+            self._routes.add(rid)
+        return rid
+
+    def populate(self, world) -> None:
+        """The file's entities but the ego, as SUMO vehicles the storyboard commands."""
+        c = self.config
+        self._impact: tuple[float, float] | None = None  #: (ego, other) speeds at the collision
+        self._trigger_gap, self._trigger_speed = INF, 0.0
+        self._ego_profile: Transition | None = None
+        self._ego_relative: tuple | None = None
+        self._ego_lateral: Transition | None = None
+        self._cruise_s: float | None = None
+        self._cruise_v = 0.0
+        self._history: dict[str, list[tuple[float, float, float]]] = {}
+        self._limits: dict[str, tuple[float, float]] = {}
+        self._lateral_free: set[str] = set()
+        self._routes: set[str] = set()
+        self._types: dict[str, VehicleType] = {}
+        for k, (name, ent) in enumerate(self.model.entities.items()):
+            if name == self.ego_name:
+                continue
+            v = ent.vehicle
+            start = self.starts[name]
+            color = ENTITY_COLORS[(k - 1) % len(ENTITY_COLORS)]
+            vt = VehicleType(f"xosc_{name}", length=v.length, width=v.width, accel=v.max_accel, decel=v.max_decel,
+                             emergency_decel=max(9.0, v.max_decel), max_speed=v.max_speed, sigma=0.0, color=color)
+            self._types[name] = vt
+            # inserted at the ego's speed at least (SUMO's insertion check), its own speed set
+            # before the first step (as emergency-brake's lead)
+            speed = max(c.ego_speed, start.speed if start.speed is not None else 0.0)
+            world.vehicle(VehicleSpec(name, vt.id, self._route(start.edge), start.index, start.front, speed), vt,
+                          ScriptedEntity(name, start.speed))
+
+    def after_setup(self) -> None:
+        """The storyboard starts from the entities' start positions."""
+        self.board = Storyboard(self.model, self.ego_name, self, self.config.sumo_step, self._story_event)
+        self._scripted = [n for n in self.model.entities if n != self.ego_name]
+        self._history = {n: [] for n in self._scripted}
+        self._observe(-1.0)  # the start positions (no distance travelled)
+        for hist in self._history.values():
+            hist.clear()
+
+    def _story_event(self, kind: str, text: str) -> None:
+        self.event("storyboard", text)
+
+    # -- the storyboard's view of the world ---------------------------------------------------
+    def _observe(self, t: float) -> None:
+        """Every entity's state at storyboard time ``t`` for the conditions: box centres, the
+        road frame, the distance travelled (summed from the centres' moves); the scripted
+        entities' (t, speed, d) history for the tests and the braking criterion."""
+        states = self.board.states
+        x = self.ego.state
+        g = self.geometry
+        off = g.cg_to_front - 0.5 * g.length
+        e = states[self.ego_name]
+        bx, by = x[0] + off * math.cos(x[4]), x[2] + off * math.sin(x[4])
+        if t >= 0.0:
+            e.traveled += math.hypot(bx - e.x, by - e.y)
+        e.x, e.y, e.yaw = bx, by, x[4]
+        e.speed = x[1]
+        e.s, e.d = self.s + off, self.d_road
+        e.d_front = self.d_road
+        project = self.road.project
+        box = self.bridge.box
+        history = self._history
+        for name in self._scripted:
+            st = states[name]
+            bx, by, yaw, speed, _, _ = box(name)
+            if t >= 0.0:
+                st.traveled += math.hypot(bx - st.x, by - st.y)
+            st.x, st.y, st.yaw = bx, by, yaw
+            st.speed = speed
+            s, d, _ = project(bx, by)
+            half = 0.5 * st.length
+            st.s, st.d = s, d
+            st.d_front = project(bx + half * math.cos(yaw), by + half * math.sin(yaw))[1]
+            history[name].append((t, speed, st.d_front))
+
+    def before_sim_step(self) -> None:
+        """The storyboard's step, after the actors' updates before a simulator step."""
+        board = self.board
+        t = self.t - self.config.sumo_step
+        self._observe(t)
+        board.step(t)
+        if board.stopped and self.status == "running":
+            self._end("completed", "the storyboard's StopTrigger ended the scenario")
+
+    def position_xy(self, position, states) -> tuple[float, float, float]:
+        road = self.road
+        if isinstance(position, M.WorldPosition):
+            s, _, _ = road.project(position.x, position.y)
+            return position.x, position.y, position.h if position.h is not None else road.heading_at(s)
+        if isinstance(position, (M.LanePosition, M.RoadPosition)):
+            if isinstance(position, M.LanePosition):
+                lane, pos = self.roads.lane_position(position.road, position.lane, position.s)
+                d_extra = position.offset
+            else:
+                lane, pos = self.roads.lane_position(position.road, -1, position.s)
+                d_extra = position.t + 0.5 * lane.width
+            poly = LanePolyline(lane.shape, lane.width, lane.id)
+            x, y = poly.offset_point(pos, d_extra)
+            return x, y, poly.heading_at(pos)
+        e = states[position.entity]
+        if isinstance(position, M.RelativeLanePosition):
+            s, d = e.s + position.ds, self.lane_centre(0, e.d, position.dlane) + position.offset
+        else:
+            s, d = e.s + position.ds, e.d + position.dt
+        x, y = road.offset_point(s, d)
+        return x, y, road.heading_at(s)
+
+    def road_frame(self, x: float, y: float) -> tuple[float, float]:
+        s, d, _ = self.road.project(x, y)
+        return s, d
+
+    def lane_centre_of(self, d: float) -> float:
+        return min(self.lane_offset.values(), key=lambda off: abs(d - off))
+
+    def lane_centre(self, lane_id: int, relative_to: float | None = None, dlane: int = 0) -> float:
+        n = len(self.lanes)
+        if relative_to is None:
+            index = n - abs(lane_id)
+        else:
+            index = min(self.lane_offset, key=lambda i: abs(relative_to - self.lane_offset[i])) + dlane
+        if index not in self.lane_offset:
+            raise ConfigError(f"lane {lane_id if relative_to is None else f'{dlane:+d} from the reference'} does "
+                              f"not exist on the ego's road ({n} lanes)")
+        return self.lane_offset[index]
+
+    def _limit(self, name: str, rate: float) -> None:
+        """Let SUMO follow a commanded speed change of ``rate`` (m/s^2) per step."""
+        vt = self._types[name]
+        acc, dec = self._limits.get(name, (vt.accel, vt.decel))
+        need = rate * 1.5 + 0.1 if math.isfinite(rate) else 1e3
+        if need > acc or need > dec:
+            acc, dec = max(acc, need), max(dec, need)
+            self.bridge.set_accel(name, acc)
+            self.bridge.set_decel(name, dec)
+            self._limits[name] = (acc, dec)
+
+    def speed(self, name: str, v_next: float, peak_rate: float) -> None:
+        if not math.isfinite(peak_rate):
+            self.bridge.start_speed(name, v_next)  # a step: at once
+            return
+        self._limit(name, peak_rate)
+        self.bridge.set_speed(name, v_next)
+
+    def speed_rate(self, name: str, target: float, rate: float) -> None:
+        if target < self.board.states[name].speed:
+            self.bridge.set_decel(name, rate)
+        else:
+            self.bridge.set_accel(name, rate)
+        self.bridge.set_speed(name, target)
+
+    def lateral(self, name: str, d_next: float, peak_speed: float) -> None:
+        st = self.board.states[name]
+        if not math.isfinite(peak_speed):
+            # a step: the sublane model moves a car at most a lane-width fraction a step, so
+            # the car is placed across at once (where it would be after the step)
+            h = self.config.sumo_step
+            x, y = self.road.offset_point(st.s + st.speed * h, d_next - (st.d_front - st.d))
+            self.bridge.place(name, x, y, self.road.heading_at(st.s + st.speed * h), st.speed)
+            return
+        if name not in self._lateral_free:
+            # as cut-in's car: SUMO's own limits on lateral motion and its speed loss while
+            # moving sideways must not shape the scripted profile
+            self.bridge.drive_blind(name)
+            speed = 2.0 * peak_speed if math.isfinite(peak_speed) else 100.0 / self.config.sumo_step
+            self.bridge.free_lateral(name, max(10.0, speed))
+            self._lateral_free.add(name)
+        self.bridge.change_sublane(name, d_next - st.d_front)
+
+    def teleport(self, name: str, x: float, y: float, heading: float) -> None:
+        self.bridge.place(name, x, y, heading, self.board.states[name].speed, keep_route=1)
+
+    def place(self, name: str, x: float, y: float, heading: float, speed: float) -> None:
+        self.bridge.place(name, x, y, heading, speed)
+        self.bridge.set_speed(name, speed)  # SUMO's own speed too (it drives on from there)
+
+    def release(self, name: str) -> None:
+        """A scripted move ended: SUMO drives the car on from where it is, minding others."""
+        if name in self._lateral_free:
+            self.bridge.drive_safe(name)
+            self._lateral_free.discard(name)
+
+    def ego_speed(self, profile, relative) -> None:
+        self._ego_profile, self._ego_relative = profile, relative
+        if self._cruise_s is None:
+            c = self.config
+            self._cruise_s = self.manoeuvre.s0 + c.ego_speed * self.t
+
+    def ego_references(self) -> tuple[float, float]:
+        return self.manoeuvre.speed_ref, self.lane_offset[self.target_lane] + self.obs.d_ref
+
+    def ego_lateral(self, profile: Transition) -> None:
+        self._ego_lateral = profile
+        self.target_lane = min(self.lane_offset, key=lambda i: abs(profile.end - self.lane_offset[i]))
+
+    # -- the ego's references ---------------------------------------------------------------
+    def cruise_references(self, obs, t: float) -> None:
+        """The cruise references moved by the storyboard's actions on the ego (called by
+        :class:`FileManoeuvre` after emergency-brake's own references)."""
+        t_board = t - self.config.sumo_step
+        if self._ego_profile is not None:
+            v = self._ego_profile.value(t_board)
+            if self._ego_relative is not None and self._ego_profile.done(t_board):
+                ref, kind, value = self._ego_relative
+                other = self.board.states[ref].speed
+                v = max(other + value if kind == "delta" else other * value, 0.0)
+            self._cruise_s += 0.5 * (self._cruise_v + v) * self.config.dt if self._cruise_v else v * self.config.dt
+            self._cruise_v = v
+            obs.s_ref, obs.ds_ref = self._cruise_s, v
+            self.manoeuvre.speed_ref = v
+        if self._ego_lateral is not None:
+            p = self._ego_lateral
+            obs.d_ref = p.value(t_board) - self.lane_offset[self.target_lane]
+            obs.dd_ref = 0.0  # obs.d from the target lane: the surround view's observation
+
+    # -- metrics ----------------------------------------------------------------------------
+    def _avoidable(self) -> bool | None:
+        """The braking criterion of :mod:`ego.scenarios.envelope` with the other party's speed
+        as SUMO drove it (after the collision: its last deceleration held down to a stop)."""
+        from ego.scenarios.envelope import braking_min_gap
+
+        trigger_t = self.manoeuvre.trigger_t
+        if trigger_t is None or self._trigger_gap == INF or self.collision is None:
+            return None
+        other = self.collision.victim if self.collision.collider == EGO else self.collision.collider
+        hist = self._history.get(other)
+        if not hist or len(hist) < 2:
+            return None
+        t = np.array([h[0] for h in hist])
+        v = np.array([h[1] for h in hist])
+        rate = (v[-1] - v[-2]) / (t[-1] - t[-2])
+
+        def fn(tt):
+            tt = np.asarray(tt, float)
+            ext = np.maximum(v[-1] + min(rate, 0.0) * (tt - t[-1]), 0.0)
+            return np.where(tt <= t[-1], np.interp(tt, t, v), ext)
+
+        p = self.ego.model.params
+        return braking_min_gap(trigger_t, self._trigger_gap, self._trigger_speed,
+                               p.F_max / p.m + p.f * p.g, fn, lead_step=self.config.sumo_step) > 0.0
+
+    def _meta(self) -> dict:
+        meta = super()._meta()
+        meta["file"] = os.fspath(self.file)
+        return meta
+
+
+class ScriptedEntity:
+    """A file entity SUMO drives: lane changes off, its Init speed from the first step; the
+    storyboard (not this actor) commands it afterwards."""
+
+    def __init__(self, vid: str, speed: float | None) -> None:
+        self.vid, self.speed = vid, speed
+
+    def start(self, sim) -> None:
+        sim.keep_lane(self.vid)
+        if self.speed is not None:
+            sim.start_speed(self.vid, self.speed)
+
+    def update(self, sim, t: float) -> None:
+        pass
+
+
+class FileManoeuvre(EvasiveManoeuvre):
+    """emergency-brake's manoeuvre whose cruise references follow the storyboard's actions
+    on the ego (SpeedAction, LaneChange/LaneOffsetAction): ``story`` is the file scenario."""
+
+    story: FileScenario | None = None
+
+    def plan(self, obs, t: float) -> None:
+        super().plan(obs, t)
+        if self.phase == CRUISE and self.story is not None:
+            self.story.cruise_references(obs, t)
+
+
+def _check_ego_actions(model: M.Scenario, ego: str) -> None:
+    """Actions ego cannot apply to its own vehicle, refused before the run."""
+    for st in model.stories:
+        for act in st.acts:
+            for g in act.groups:
+                if ego not in g.actors:
+                    continue
+                for man in g.maneuvers:
+                    for ev in man.events:
+                        for a in ev.actions:
+                            if isinstance(a.action, (M.TeleportAction, M.FollowTrajectoryAction)):
+                                raise ScenarioFileError(model.path, a.action.line,
+                                                        f"<{type(a.action).__name__}> on the ego ({ego}) is not "
+                                                        f"supported by ego: the ego moves by its own model (see "
+                                                        f"{DOCS})")
+
+
+def file_listing(path: str, ego: str = "") -> dict:
+    """What ``ego list FILE.xosc`` shows: parameters with defaults, entities, the ego, ego's
+    own parameters of a file scenario, and every element with supported or not. Works on a
+    file ego refuses too (that is when it is needed)."""
+    from ego.openscenario.loader import _declarations, elements, read_tree
+    from ego.params import describe
+
+    root = read_tree(path)
+    decl = root.child("ParameterDeclarations")
+    params = _declarations(path, decl, {}) if decl is not None else {}
+    ents = root.child("Entities")
+    entities = []
+    for so in ents.all("ScenarioObject") if ents is not None else ():
+        body = so.children[0] if so.children else None
+        kind = body.tag if body is not None else "?"
+        if body is not None and body.tag == "Vehicle":
+            kind = f"Vehicle ({body.attrs.get('vehicleCategory', '?')})"
+        elif body is not None and body.tag == "CatalogReference":
+            kind = f"CatalogReference {body.attrs.get('catalogName', '?')}/{body.attrs.get('entryName', '?')}"
+        entities.append({"name": so.attrs.get("name", "?"), "kind": kind, "line": so.line})
+    names = [e["name"] for e in entities]
+    target = ego or "Ego"
+    chosen = target if target in names else next((n for n in names if n.lower() == target.lower()), None)
+    els = elements(root)
+    own = {f.name for f in dataclasses.fields(FileConfig)}
+    return {
+        "file": path,
+        "parameters": [{"name": p.name, "type": p.type, "default": p.value, "line": p.line,
+                        "sets_ego_parameter": p.name in own} for p in params.values()],
+        "entities": entities,
+        "ego": chosen,
+        "ego_parameters": [{"name": i.name, "default": i.default, "unit": i.unit, "description": i.doc}
+                           for i in describe(FileConfig) if i.name not in params],
+        "elements": [{"element": tag, "line": line, "supported": ok} for tag, line, ok in els],
+        "supported": all(ok for _, _, ok in els),
+    }
+
+
+def print_listing(listing: dict) -> str:
+    """The listing as text."""
+    out = [f"{listing['file']}: {'every element supported' if listing['supported'] else 'NOT SUPPORTED (see below)'}",
+           "", "parameters (--set NAME=VALUE):"]
+    for p in listing["parameters"] or [{"name": "(none)", "type": "", "default": "", "line": ""}]:
+        note = "  (sets ego's parameter)" if p.get("sets_ego_parameter") else ""
+        out.append(f"  {p['name']:<24} {p['type']:<8} default {p['default']!s:<12} line {p['line']}{note}")
+    out += ["", "entities:"]
+    for e in listing["entities"]:
+        mark = "  <- the ego" if e["name"] == listing["ego"] else ""
+        out.append(f"  {e['name']:<24} {e['kind']:<30} line {e['line']}{mark}")
+    if listing["ego"] is None:
+        out.append("  (no entity named Ego: choose one with --ego)")
+    out += ["", "ego's parameters of a file scenario (--set):"]
+    for p in listing["ego_parameters"]:
+        out.append(f"  {p['name']:<24} {p['default']!s:<8} {p['unit']:<7} {p['description']}")
+    out += ["", "elements:"]
+    for e in listing["elements"]:
+        out.append(f"  line {e['line']:<5} {e['element']:<36} {'supported' if e['supported'] else 'NOT SUPPORTED'}")
+    return "\n".join(out) + "\n"

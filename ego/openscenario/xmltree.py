@@ -1,0 +1,88 @@
+"""A small XML tree that keeps every element's line: ``FILE:LINE`` in every message.
+
+``xml.etree`` drops line numbers; expat (the parser ``xml.etree`` itself uses) reports them
+while parsing, so the tree is built here from expat's callbacks.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from xml.parsers import expat
+
+from ego.params import ConfigError
+
+DOCS = "docs/openscenario.md"
+
+
+class ScenarioFileError(ConfigError):
+    """A scenario or road file that ego refuses, as one line ``FILE:LINE: what``."""
+
+    def __init__(self, file: str | os.PathLike, line: int | None, message: str) -> None:
+        where = f"{os.fspath(file)}:{line}" if line else os.fspath(file)
+        super().__init__(f"{where}: {message}")
+        self.file, self.line, self.detail = os.fspath(file), line, message
+
+
+@dataclass(slots=True)
+class Node:
+    """One element: its tag, attributes (as written), children and line (1-based)."""
+
+    tag: str
+    attrs: dict[str, str]
+    line: int
+    children: list[Node] = field(default_factory=list)
+
+    def child(self, tag: str) -> Node | None:
+        """The first child named ``tag``, or None."""
+        for c in self.children:
+            if c.tag == tag:
+                return c
+        return None
+
+    def all(self, tag: str) -> list[Node]:
+        """Every child named ``tag``."""
+        return [c for c in self.children if c.tag == tag]
+
+
+def parse_file(path: str | os.PathLike) -> Node:
+    """The root element of the XML file ``path``; malformed XML or an unreadable file is a
+    :class:`ScenarioFileError` naming the line."""
+    path = Path(path)
+    try:
+        data = path.read_bytes()
+    except FileNotFoundError:
+        raise ScenarioFileError(path, None, "no such file") from None
+    except IsADirectoryError:
+        raise ScenarioFileError(path, None, "is a folder, expected an .xosc file") from None
+    except OSError as exc:
+        raise ScenarioFileError(path, None, f"cannot read: {exc.strerror}") from None
+    return parse_bytes(data, path)
+
+
+def parse_bytes(data: bytes, path: str | os.PathLike = "<string>") -> Node:
+    """The root element of ``data`` (see :func:`parse_file`)."""
+    parser = expat.ParserCreate()
+    stack: list[Node] = []
+    root: list[Node] = []
+
+    def start(tag: str, attrs: dict[str, str]) -> None:
+        node = Node(tag, attrs, parser.CurrentLineNumber)
+        if stack:
+            stack[-1].children.append(node)
+        else:
+            root.append(node)
+        stack.append(node)
+
+    def end(tag: str) -> None:
+        stack.pop()
+
+    parser.StartElementHandler = start
+    parser.EndElementHandler = end
+    try:
+        parser.Parse(data, True)
+    except expat.ExpatError as exc:
+        raise ScenarioFileError(path, exc.lineno, f"malformed XML: {expat.ErrorString(exc.code)} "
+                                f"(column {exc.offset + 1})") from None
+    return root[0]
