@@ -139,10 +139,15 @@ def entry_points(group: str) -> list[Any]:
 CONTROLLER_FILES = {".fmu": "ego.fmi.controller:fmu_controller_spec"}
 
 
-def file_resolver(ref: str) -> Any:
-    """The function that resolves ``ref`` when its suffix is a file kind of
-    :data:`CONTROLLER_FILES`, else None."""
-    for suffix, target in CONTROLLER_FILES.items():
+#: file suffix -> "module:function" giving the scenario class of such a file (``ref``): a
+#: scenario described as data (OpenSCENARIO), looked up by name like CONTROLLER_FILES
+SCENARIO_FILES = {".xosc": "ego.openscenario.scenario:file_scenario_class"}
+
+
+def file_resolver(ref: str, kinds: dict[str, str] = CONTROLLER_FILES) -> Any:
+    """The function that resolves ``ref`` when its suffix is a file kind of ``kinds``
+    (:data:`CONTROLLER_FILES` or :data:`SCENARIO_FILES`), else None."""
+    for suffix, target in kinds.items():
         if ref.lower().endswith(suffix):
             module, _, name = target.partition(":")
             return getattr(importlib.import_module(module), name)

@@ -42,12 +42,12 @@ def scenario_class(name: str) -> type[Scenario]:
     ``package.module:Name`` or ``path/to/file.py:Name`` reference names, or a ConfigError
     naming the known ones. A name ending in ``.xosc`` is an OpenSCENARIO file
     (:mod:`ego.openscenario`)."""
-    from ego.openscenario import is_scenario_file
+    from ego.plugins import SCENARIO_FILES, file_resolver
 
-    if is_scenario_file(name):
-        from ego.openscenario.scenario import file_scenario_class
-
-        return file_scenario_class(name)
+    resolver = file_resolver(name, SCENARIO_FILES) if isinstance(name, str) else None
+    if resolver is not None:  # a file (ego.openscenario), looked up by name: nothing above imported here
+        cls: type[Scenario] = resolver(name)
+        return cls
     load_scenario_plugins(SCENARIOS)
     try:
         return SCENARIOS[name]
