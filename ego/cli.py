@@ -41,7 +41,8 @@ import sys
 from collections.abc import Sequence
 
 from ego import __version__
-from ego.checks import MAX_JOBS, check_count, check_number, check_output_dir, check_output_file, check_seed
+from ego.checks import (MAX_JOBS, check_count, check_number, check_output_dir, check_output_file, check_seed,
+                        whole_number)
 from ego.highway_env import BACKENDS
 from ego.params import ConfigError, describe, did_you_mean, parse_overrides
 
@@ -118,7 +119,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--controller", "-c", required=True, metavar="NAME",
                      help=f"one of: {_controllers_help()}")
     run.add_argument("--record", metavar="PATH", help="write a Rerun recording (.rrd) here")
-    run.add_argument("--seed", type=int, default=0, metavar="N",
+    run.add_argument("--seed", type=whole_number("--seed"), default=0, metavar="N",
                      help="seed of the traffic and of SUMO (default 0)")
     run.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scenario or controller parameter (repeatable)")
@@ -150,11 +151,11 @@ def _parser() -> argparse.ArgumentParser:
     cmp_.add_argument("--controllers", required=True, metavar="A,B,...",
                       help="comma-separated; a name, or a variant with its own parameters "
                            f"NAME@key=value[@key=value...] (pid@kp_lat=0.02), from: {_controllers_help()}")
-    cmp_.add_argument("--seeds", type=int, default=1, metavar="N", help="seeds 0..N-1 (default 1)")
+    cmp_.add_argument("--seeds", type=whole_number("--seeds"), default=1, metavar="N", help="seeds 0..N-1 (default 1)")
     cmp_.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                       help="override a parameter (repeatable)")
     cmp_.add_argument("--out", required=True, metavar="DIR", help="output folder")
-    cmp_.add_argument("--jobs", type=int, default=None, metavar="J",
+    cmp_.add_argument("--jobs", type=whole_number("--jobs"), default=None, metavar="J",
                       help="parallel processes (default: the number of CPUs)")
     cmp_.add_argument("--backend", default="sumo", choices=BACKENDS,
                       help="traffic simulator (default sumo)")
@@ -185,7 +186,7 @@ def _parser() -> argparse.ArgumentParser:
     swp.add_argument("--out", required=True, metavar="DIR", help="output folder (resumed if it holds results)")
     swp.add_argument("--engine", default="process", metavar="ENGINE",
                      help="process (default: a pool of worker processes) or ray")
-    swp.add_argument("--jobs", type=int, default=None, metavar="N",
+    swp.add_argument("--jobs", type=whole_number("--jobs"), default=None, metavar="N",
                      help="parallel runs (default: the number of CPUs)")
     swp.add_argument("--address", default=None, metavar="ADDR",
                      help="with --engine ray: join this Ray cluster (e.g. auto or ray://host:10001)")
@@ -215,10 +216,10 @@ def _parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     trn.add_argument("what", metavar="MODEL", choices=["narma-l2"], help="narma-l2")
-    trn.add_argument("--seed", type=int, default=0, metavar="N", help="seed of data and training (default 0)")
-    trn.add_argument("--samples", type=int, default=20000, metavar="N",
+    trn.add_argument("--seed", type=whole_number("--seed"), default=0, metavar="N", help="seed of data and training (default 0)")
+    trn.add_argument("--samples", type=whole_number("--samples"), default=20000, metavar="N",
                      help="identification samples (default 20000)")
-    trn.add_argument("--epochs", type=int, default=150, metavar="N", help="training epochs (default 150)")
+    trn.add_argument("--epochs", type=whole_number("--epochs"), default=150, metavar="N", help="training epochs (default 150)")
     trn.add_argument("--speeds", default="20,40", metavar="LO,HI",
                      help="entry speed range in km/h (default 20,40)")
     trn.add_argument("--accels", default="0,0.6", metavar="LO,HI",
@@ -245,9 +246,9 @@ def _parser() -> argparse.ArgumentParser:
     tun.add_argument("what", metavar="TASK", choices=["lane-centering"], help="lane-centering")
     tun.add_argument("--quick", action="store_true",
                      help="4 generations of a population of 4 x 12: a check, not a tuning")
-    tun.add_argument("--workers", type=int, default=1, metavar="N",
+    tun.add_argument("--workers", type=whole_number("--workers"), default=1, metavar="N",
                      help="processes sharing each generation (default 1)")
-    tun.add_argument("--seed", type=int, default=0, metavar="N", help="seed of the evolution (default 0)")
+    tun.add_argument("--seed", type=whole_number("--seed"), default=0, metavar="N", help="seed of the evolution (default 0)")
     tun.add_argument("--drives", default="8,25:1", metavar="V[:OFF],...",
                      help="drives whose costs are summed: speed in m/s, optionally the initial "
                           "offset in m (default 8,25:1; report 003: 8)")
@@ -426,7 +427,16 @@ def _run(args) -> int:
     spec = RunSpec(args.scenario, args.controller, seed=check_seed(args.seed, "--seed"),
                    overrides=parse_overrides(args.overrides), record=args.record, trace=args.trace,
                    backend=args.backend, video=args.video)
-    result = run(spec)  # checks the --trace path before anything runs
+    from ego.outputs import OutputError
+
+    failure = None
+    try:
+        result = run(spec)  # checks the --trace path before anything runs
+    except OutputError as exc:  # a write failed after the run: its metrics are still printed
+        if exc.result is None:
+            raise
+        result, failure = exc.result, exc
+        args.record = args.trace = args.video = None  # not written
     written = [str(p) for p in trace_files(args.trace, result.traffic is not None)] if args.trace else []
     units = metric_units(declared_metrics(spec), flatten(result.metrics))
     if args.json:
@@ -448,6 +458,10 @@ def _run(args) -> int:
             print(f"video: {args.video}")
         if written:
             print(f"trace: {', '.join(written)}")
+    if failure is not None:
+        sys.stdout.flush()
+        print(f"ego: error: {failure}", file=sys.stderr)
+        return EXIT_NOT_COMPLETED
     if result.status == "interrupted":
         return EXIT_INTERRUPTED
     return EXIT_OK if result.status in NOT_FAILED else EXIT_NOT_COMPLETED
@@ -620,6 +634,7 @@ def _tune(args) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    from ego.outputs import OutputError
     from ego.sumo.bridge import SumoError
 
     import signal
@@ -652,6 +667,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (ConfigError, SumoError) as exc:
         print(f"ego: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
+    except OutputError as exc:  # a write failed after the checks (a full disk): one line
+        print(f"ego: error: {exc}", file=sys.stderr)
+        return EXIT_NOT_COMPLETED
     except KeyboardInterrupt:
         print("ego: interrupted", file=sys.stderr)
         return 130

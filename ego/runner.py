@@ -56,6 +56,16 @@ class RunSpec:
                               "name to value)")
         if self.record is not None and not isinstance(self.record, (str, os.PathLike)):
             raise ConfigError(f"bad record {self.record!r} (expected a path ending in .rrd, or None)")
+        if not isinstance(self.label, str):
+            raise ConfigError(f"bad label {self.label!r} (expected text: the controller's name in the results)")
+        for name in ("trace", "video"):
+            value = getattr(self, name)
+            if value is not None and not isinstance(value, (str, os.PathLike)):
+                raise ConfigError(f"bad {name} {value!r} (expected a path, or None)")
+        import numbers
+
+        if isinstance(self.seed, numbers.Integral) and not isinstance(self.seed, (bool, int)):
+            object.__setattr__(self, "seed", int(self.seed))  # a numpy integer is a seed too
         if not isinstance(self.background_recording, bool):
             raise ConfigError(f"bad background_recording {self.background_recording!r} (expected true or false)")
 
@@ -99,6 +109,9 @@ def configure(spec: RunSpec):
 def build(spec: RunSpec):
     """Resolve names and overrides into a ready scenario (validates everything first)."""
     cls, config, ctrl, ctrl_params = configure(spec)
+    from ego.paths import check_run_outputs
+
+    check_run_outputs(spec)  # every file the run writes, before anything is built
     controller = cls.build_controller(ctrl, ctrl_params, config)
     if spec.trace is not None:
         from ego.export import check_trace_path
@@ -119,11 +132,24 @@ def build(spec: RunSpec):
 def run(spec: RunSpec) -> RunResult:
     """Run one scenario to its end; SUMO and the recording are closed whatever happens.
     With ``spec.trace``, the trace is written there (an interrupted run's too)."""
-    result = build(spec).run()
+    from ego.outputs import OutputError, output_error
+
+    scenario = build(spec)
+    try:
+        result = scenario.run()
+    except OutputError as exc:  # the recording could not be written: the run's metrics stand
+        exc.result = scenario.result()
+        raise
     if spec.trace is not None:
         from ego.export import write_trace
 
-        write_trace(result, spec.trace)
+        try:
+            write_trace(result, spec.trace)
+        except OutputError as exc:
+            exc.result = result
+            raise
+        except OSError as exc:
+            raise output_error(spec.trace, exc, result) from None
     return result
 
 

@@ -29,6 +29,7 @@ The scenario flushes at least every simulated second.
 from __future__ import annotations
 
 import multiprocessing
+import errno
 import os
 from collections import OrderedDict
 from collections.abc import Sequence
@@ -38,6 +39,10 @@ from pathlib import Path
 import numpy as np
 
 from ego.outputs import partial_path
+
+# Rerun's file sink logs a failed write (a full disk) on stderr itself; ego reports it in one
+# line (OutputError), so Rerun's own log is off unless the user asks for it
+os.environ.setdefault("RUST_LOG", "off")
 from ego.processes import main_module_hidden, signals_deferred
 from ego.record.base import Scene, Series, box_outlines, lane_edges
 
@@ -118,7 +123,15 @@ class RerunRecorder:
             self._box_t, self._box_n, self._box_rows, self._box_labels, self._follow = [], [], [], [], []
 
     def close(self) -> None:
-        """Flush, let the writer finish the file, and report its failure if it had one."""
+        """Flush, let the writer finish the file, and report its failure if it had one.
+        Ctrl-C and SIGTERM wait until the file is whole (a second Ctrl-C must not leave half
+        a recording)."""
+        from ego.processes import signals_deferred
+
+        with signals_deferred():
+            self._close()
+
+    def _close(self) -> None:
         if not self._open:
             self._shutdown()
             return
@@ -137,7 +150,9 @@ class RerunRecorder:
                     self._error = "the writer process died"
         self._shutdown()
         if self._error is not None:
-            raise RuntimeError(f"recording to {self.path} failed: {self._error}")
+            from ego.outputs import OutputError
+
+            raise OutputError(f"cannot write {self.path}: {self._error}")
 
     # -- plumbing ------------------------------------------------------------------------------
     def _send(self, kind: str, *payload) -> None:
@@ -168,8 +183,12 @@ class RerunRecorder:
             self._proc = None
 
     def __del__(self) -> None:
-        if getattr(self, "_proc", None) is not None:
-            self._proc.kill()
+        proc = getattr(self, "_proc", None)
+        if proc is not None and getattr(proc, "_popen", None) is not None:  # never started: nothing to end
+            try:
+                proc.kill()
+            except (OSError, ValueError, AttributeError):
+                pass
 
 
 def _widen_pipe(conn) -> None:
@@ -218,10 +237,21 @@ def _writer_main(batches, replies, path: str, application_id: str, recording_id:
             writer.close(finished=False)
         return
     except Exception as exc:  # noqa: BLE001 - reported to the simulation process
+        if writer is not None:  # no half recording left behind
+            writer.discard()
         try:
-            replies.send(("error", f"{type(exc).__name__}: {exc}"))
+            replies.send(("error", _describe(exc)))
         except OSError:
             pass
+
+
+def _describe(exc: BaseException) -> str:
+    """An error as one line: an OSError with its errno name, else type and message."""
+    if isinstance(exc, OSError) and exc.errno is not None:
+        import errno
+
+        return f"[Errno {exc.errno} {errno.errorcode.get(exc.errno, '?')}] {exc.strerror}"
+    return f"{type(exc).__name__}: {exc}"
 
 
 class RerunWriter:
@@ -359,13 +389,57 @@ class RerunWriter:
 
     def close(self, finished: bool = True) -> None:
         """End the file; put it in place unless its run did not finish (``finished=False``:
-        the simulation process died, the file keeps its partial name)."""
+        the simulation process died, the file keeps its partial name). A file the sink
+        could not write whole (a full disk) is removed and an OSError raised: a final name
+        only ever holds a whole recording."""
         if self._open:
             self._open = False
-            self._rec.flush()
+            try:
+                self._rec.flush()
+                self._rec.disconnect()
+                if finished:
+                    _check_written(self._partial)
+                    os.replace(self._partial, self.path)
+            except Exception as exc:  # noqa: BLE001 - no half recording under any name
+                self.discard()
+                raise _write_failure(self._partial, exc) from None
+
+    def discard(self) -> None:
+        """Drop the unfinished file (a write failed)."""
+        self._open = False
+        try:
             self._rec.disconnect()
-            if finished:
-                os.replace(self._partial, self.path)
+        except Exception:  # noqa: BLE001 - the file is going anyway
+            pass
+        try:
+            self._partial.unlink(missing_ok=True)
+        except OSError:
+            pass
+
+
+def _check_written(partial: Path) -> None:
+    """Rerun's file sink reports a failed write only in its log; an empty or missing file is
+    one too."""
+    try:
+        size = os.path.getsize(partial)
+    except OSError as exc:
+        raise exc
+    if size == 0:
+        raise OSError(errno.EIO, "the recording is empty", str(partial))
+
+
+def _write_failure(partial: Path, exc: BaseException) -> OSError:
+    """``exc`` (Rerun's ``RuntimeError: File-writer thread shut down prematurely`` says no
+    more) as an OSError with the errno the filesystem explains it by."""
+    if isinstance(exc, OSError):
+        return exc
+    try:
+        vfs = os.statvfs(partial.parent)
+        if vfs.f_bavail == 0:
+            return OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(partial))
+    except OSError:
+        pass
+    return OSError(errno.EIO, f"the recording's writer failed ({type(exc).__name__}: {exc})", str(partial))
 
 
 def _panels(series: Sequence[Series]) -> OrderedDict[str, list[Series]]:

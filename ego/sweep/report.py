@@ -80,9 +80,9 @@ def write_summary(spec, table, path: Path) -> None:
         lines += ["", f"{len(errors)} runs ended in an error; the first:", "",
                   f"- {data['controller'][errors[0]]} seed {data['seed'][errors[0]]}: "
                   f"{data['error'][errors[0]]}"]
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text("\n".join(lines) + "\n")
-    tmp.replace(path)
+    from ego.outputs import write_text
+
+    write_text(path, "\n".join(lines) + "\n")
 
 
 def write_plots(spec, table, out: Path, x: str, y: str, metric: str | None) -> Path:

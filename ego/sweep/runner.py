@@ -10,6 +10,7 @@ same run since runs are deterministic), and the envelope plots asked for with ``
 
 from __future__ import annotations
 
+import os
 import socket
 import sys
 import time
@@ -17,7 +18,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from ego.outputs import FolderLock, remove_partials
+from ego.outputs import LOCK_FILE, FolderLock, OutputError, output_error, remove_partials
 from ego.params import ConfigError, did_you_mean
 from ego.sweep.executor import Outcome, make_executor
 from ego.sweep.results import ResultStore
@@ -56,13 +57,28 @@ def run_task(task: tuple) -> dict:
         row["error"] = f"{type(exc).__name__}: {exc}"
     row["wall_time"] = time.perf_counter() - t0
     row["host"] = _HOST
+    row["node"] = node_id()
     return row
+
+
+def node_id() -> str | None:
+    """The Ray node this process runs on (its node id), or None outside a Ray worker."""
+    ray = sys.modules.get("ray")
+    if ray is None:
+        return None
+    try:
+        if ray.is_initialized():
+            return ray.get_runtime_context().get_node_id()
+    except Exception:  # noqa: BLE001 - the id is a label, never the end of a row
+        return None
+    return None
 
 
 def error_row(outcome: Outcome) -> dict:
     r: Run = outcome.task[0]
     return {"run_id": r.run_id, "scenario": r.scenario, "controller": r.controller, "seed": r.seed,
-            **r.overrides, "status": "error", "error": outcome.error, "wall_time": None, "host": None}
+            **r.overrides, "status": "error", "error": outcome.error, "wall_time": None, "host": None,
+            "node": None}
 
 
 @dataclass
@@ -83,6 +99,7 @@ def sweep(spec: SweepSpec, out: Path, *, engine: str = "process", jobs: int | No
         raise ConfigError(f"bad --record {record!r} (allowed: {', '.join(RECORD)})")
     plot_specs = [parse_plot(p, spec) for p in plots]
     out = Path(out)
+    check_outputs(spec, out, record, plot_specs)
     with FolderLock(out, "--out"):  # one sweep at a time per folder (its results file)
         return _sweep(spec, out, engine, jobs, address, record, plot_specs, progress)
 
@@ -90,6 +107,7 @@ def sweep(spec: SweepSpec, out: Path, *, engine: str = "process", jobs: int | No
 def _sweep(spec: SweepSpec, out: Path, engine: str, jobs: int | None, address: str | None, record: str,
            plot_specs: list, progress: Callable | None) -> SweepReport:
     store = ResultStore(out)
+    store.check_compatible(spec.scenario, _sample_rows(spec))  # before anything runs
     done = store.done_ids()
     total = spec.count()
     already = sum(1 for r in spec.runs() if r.run_id in done) if done else 0
@@ -110,6 +128,7 @@ def _sweep(spec: SweepSpec, out: Path, engine: str, jobs: int | None, address: s
     ran = 0
     interrupted = False
     executor = make_executor(engine, jobs, address) if todo else None
+    failure: OutputError | None = None
     try:
         if executor is not None:
             for outcome in executor.run(run_task, tasks()):
@@ -123,11 +142,25 @@ def _sweep(spec: SweepSpec, out: Path, engine: str, jobs: int | None, address: s
                     progress(ran, todo, row)
     except KeyboardInterrupt:
         interrupted = True
+    except OutputError as exc:  # the results file cannot be written (a full disk): stop
+        failure = exc
     finally:
-        store.flush()
-        if executor is not None:
-            executor.close()
-        remove_partials(runs_dir)  # recordings of runs killed mid-way; their workers are gone
+        # whatever the writer does, the workers are stopped: a failing flush never leaves
+        # the executor (and the process) hanging
+        try:
+            store.flush()
+        except OutputError as exc:
+            failure = failure or exc
+        except Exception as exc:  # noqa: BLE001 - any writer failure is one line, not a hang
+            failure = failure or output_error(store.path, exc)
+        finally:
+            if executor is not None:
+                executor.close()
+            remove_partials(runs_dir)  # recordings of runs killed mid-way; their workers are gone
+    if failure is not None:
+        kept = len(store) - len(store._pending)
+        raise OutputError(f"{failure} ({kept} results are in {store.path}; the same command resumes "
+                          "once there is room)")
     table = store.table()
     if table is not None:
         from ego.sweep.report import write_plots, write_summary
@@ -136,6 +169,43 @@ def _sweep(spec: SweepSpec, out: Path, engine: str, jobs: int | None, address: s
         for p in plot_specs:
             write_plots(spec, table, out, *p)
     return SweepReport(total, already, ran, by_status, time.perf_counter() - started, interrupted)
+
+
+def _sample_rows(spec: SweepSpec, limit: int = 200) -> list[dict]:
+    """The key columns and overrides of the spec's first runs and of every grid value: what
+    the results file's columns will be asked to hold."""
+    rows = []
+    for i, r in enumerate(spec.runs()):
+        if i >= limit:
+            break
+        rows.append({"run_id": r.run_id, "scenario": r.scenario, "controller": r.controller,
+                     "seed": r.seed, **r.overrides})
+    for name, values in spec.grid.items():
+        rows.extend({name: v} for v in values)
+    return rows
+
+
+def check_outputs(spec: SweepSpec, out: Path, record: str, plot_specs: Sequence = ()) -> None:
+    """Every name the sweep creates in ``out`` - results.parquet, summary.md, the plots, the
+    lock, runs/ and its recordings (the longest controller name) - free and writable, before
+    anything runs (:mod:`ego.paths`)."""
+    from ego.paths import check_folder_contents, check_folder_target
+
+    check_folder_target(out, "--out", str(out))
+    files = ["results.parquet", "summary.md", LOCK_FILE]
+    files += [f"envelope_{x}_{y}" + (f"_{m}" if m else "") + ".png" for x, y, m in plot_specs]
+    folders = []
+    if record != "none":
+        folders.append("runs")
+        longest = max(spec.controllers, key=len)
+        files.append(f"runs/{longest}-{'0' * 16}.rrd")
+        runs = out / "runs"
+        if runs.is_dir():  # a recording's name taken by a folder, a FIFO...
+            for r in spec.runs() if spec.count() <= 100_000 else ():
+                name = f"{r.controller}-{r.run_id}.rrd"
+                if os.path.lexists(runs / name):
+                    files.append(f"runs/{name}")
+    check_folder_contents(out, "--out", files=files, folders=folders, text=str(out))
 
 
 def parse_plot(text: str, spec: SweepSpec) -> tuple[str, str, str | None]:
