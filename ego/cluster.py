@@ -49,8 +49,8 @@ def check_address(address: str) -> None:
     if target is None:
         return
     try:
-        with socket.create_connection(target, timeout=CONNECT_TIMEOUT):
-            pass
+        with socket.create_connection(target, timeout=CONNECT_TIMEOUT) as sock:
+            speaks_grpc = _answers_http2(sock)
     except socket.gaierror as exc:
         raise ConfigError(f"cannot join the Ray cluster at {address!r}: unknown host ({exc.strerror})") from None
     except TimeoutError:
@@ -59,13 +59,38 @@ def check_address(address: str) -> None:
     except OSError as exc:
         raise ConfigError(f"cannot join the Ray cluster at {address!r}: {exc.strerror or exc} "
                           "(is a Ray head running there?)") from None
+    if not speaks_grpc:
+        raise ConfigError(f"cannot join the Ray cluster at {address!r}: something listens there but it "
+                          "is not a Ray head (it does not speak gRPC)")
+
+
+#: an HTTP/2 client's first bytes: the connection preface and an empty SETTINGS frame
+_PREFACE = b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n" + bytes([0, 0, 0, 4, 0, 0, 0, 0, 0])
+
+
+def _answers_http2(sock: socket.socket) -> bool:
+    """A Ray head's GCS (and a Ray client server) is a gRPC server: it answers an HTTP/2
+    preface with a SETTINGS frame. Anything else listening there (a web server) does not,
+    and ``ray.init`` would wait on it for minutes."""
+    try:
+        sock.sendall(_PREFACE)
+        head = b""
+        while len(head) < 9:
+            chunk = sock.recv(9 - len(head))
+            if not chunk:
+                return False
+            head += chunk
+    except OSError:
+        return False
+    return head[3] == 4  # the frame type: SETTINGS
 
 
 @contextmanager
 def joining(address: str):
     """Ray's failures to connect as one ConfigError naming ``address`` and the cause."""
-    os.environ.setdefault("RAY_gcs_rpc_server_reconnect_timeout_s", str(GCS_TIMEOUT))
-    os.environ.setdefault("RAY_gcs_server_request_timeout_seconds", str(GCS_TIMEOUT))
+    target = _host_port(address) if isinstance(address, str) else None
+    if target is not None and _loopback(target[0]):
+        _stay_on_loopback()
     try:
         yield
     except ConfigError:
@@ -79,6 +104,30 @@ def joining(address: str):
         cause = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
         raise ConfigError(f"cannot join the Ray cluster at {address!r}: {type(exc).__name__}"
                           + (f": {cause[:200]}" if cause else "")) from None
+
+
+def _loopback(host: str) -> bool:
+    import ipaddress
+
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def _stay_on_loopback() -> None:
+    """A cluster on 127.0.0.1 (``ray.cluster_utils.Cluster``, a head started with
+    ``--node-ip-address 127.0.0.1``): Ray would replace the loopback address by this
+    machine's outward address before connecting, where the cluster does not listen, and
+    retry for minutes. Ray's own switch for single-machine clusters keeps it on loopback."""
+    try:
+        import ray._private.ray_constants as constants
+
+        constants.ENABLE_RAY_CLUSTER = False
+    except (ImportError, AttributeError):
+        pass
 
 
 def _shutdown_quietly() -> None:

@@ -19,7 +19,7 @@ from ego.params import ConfigError
 
 #: columns every row has, first
 KEY_COLUMNS = ("run_id", "scenario", "controller", "seed")
-TAIL_COLUMNS = ("wall_time", "host", "node", "error")
+TAIL_COLUMNS = ("wall_time", "host", "node", "attempts", "error")
 
 
 def _pa():
@@ -165,7 +165,7 @@ def _normalise(row: dict) -> dict:
     seed and counts; booleans and text as they are."""
     out = {}
     for k, v in row.items():
-        if isinstance(v, bool) or v is None or isinstance(v, str) or k == "seed":
+        if isinstance(v, bool) or v is None or isinstance(v, str) or k in ("seed", "attempts"):
             out[k] = v
         elif isinstance(v, (int, float)):
             out[k] = float(v)

@@ -100,6 +100,10 @@ def sweep(spec: SweepSpec, out: Path, *, engine: str = "process", jobs: int | No
     plot_specs = [parse_plot(p, spec) for p in plots]
     out = Path(out)
     check_outputs(spec, out, record, plot_specs)
+    if engine == "ray" and address is not None:  # nothing listening: refused before --out is touched
+        from ego.cluster import check_address
+
+        check_address(address)
     with FolderLock(out, "--out"):  # one sweep at a time per folder (its results file)
         return _sweep(spec, out, engine, jobs, address, record, plot_specs, progress)
 
@@ -133,6 +137,7 @@ def _sweep(spec: SweepSpec, out: Path, engine: str, jobs: int | None, address: s
         if executor is not None:
             for outcome in executor.run(run_task, tasks()):
                 row = outcome.value if outcome.value is not None else error_row(outcome)
+                row["attempts"] = outcome.attempts  # 2: its worker (or node) died once
                 if row["status"] == "interrupted":  # not a result: the next run of the sweep redoes it
                     continue
                 store.add(row)
