@@ -63,6 +63,8 @@ def main(argv=None) -> int:
         except KeyboardInterrupt:
             _say("ego: interrupted")
             status = EXIT_INTERRUPTED
+        except SystemExit as exc:  # --help, --version: their text must reach stdout too
+            status = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
         except BrokenPipeError:
             _stdout_gone()
             return 0

@@ -87,8 +87,11 @@ def check_output_file(text: str | None, what: str, suffix: str) -> Path:
     from ego.paths import check_path_names
 
     check_path_names(path, what, text)
-    if path.exists() and not path.is_file():
+    if path.is_dir():
         raise ConfigError(f"bad {what} {text!r}: it is a folder (expected a file ending in {suffix})")
+    if path.exists() and not path.is_file():
+        raise ConfigError(f"bad {what} {text!r}: it is not a regular file (a FIFO, socket or device; "
+                          f"expected a file ending in {suffix})")
     if path.exists() and not os.access(path, os.W_OK):
         raise ConfigError(f"bad {what} {text!r}: the file cannot be written")
     _writable_ancestor(path, what, text)

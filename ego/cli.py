@@ -533,6 +533,10 @@ def _sweep(args) -> int:
     check_count(args.jobs, "--jobs", 1, MAX_JOBS)
     if args.address is not None and args.engine != "ray":
         raise ConfigError("--address needs --engine ray")
+    if args.address is not None:  # nothing listening there: one line in seconds, nothing written
+        from ego.cluster import check_address
+
+        check_address(args.address)
     _choice(args.record, RECORD, "--record")
     for p in args.plot:
         parse_plot(p, spec)
@@ -626,6 +630,10 @@ def _tune(args) -> int:
         raise ConfigError("--engine, --address and --duration go with --cost sumo")
     if args.address is not None and args.engine != "ray":
         raise ConfigError("--address needs --engine ray")
+    if args.address is not None:
+        from ego.cluster import check_address
+
+        check_address(args.address)
     check_number(args.duration, "--duration", 1.0, MAX_DURATION, "s")
     spec = TuneSpec.quick(args.seed, args.workers) if args.quick else TuneSpec(seed=args.seed, workers=args.workers)
     tune(TuneSpec(**{**spec.__dict__, "drives": drives, "cost": args.cost, "engine": args.engine,

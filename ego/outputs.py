@@ -118,8 +118,12 @@ class FolderLock:
             raise ConfigError(f"bad {self.what} {str(self.folder)!r}: another ego process "
                               f"(pid {holder}) is writing into it; wait for it or choose another "
                               "folder") from None
-        os.ftruncate(fd, 0)
-        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        try:
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        except OSError as exc:  # a full disk: one line, before anything runs
+            os.close(fd)
+            raise output_error(self.folder / LOCK_FILE, exc) from None
         self._fd = fd
         return self
 

@@ -67,9 +67,7 @@ def nearest_existing(path: Path) -> Path:
         try:
             os.stat(p)
             return p
-        except FileNotFoundError:
-            pass
-        except NotADirectoryError:
+        except OSError:  # missing, under a file, too long, a loop: look further up
             pass
         if p.parent == p:
             return p
@@ -124,8 +122,8 @@ def _lengths(path: Path, what: str, text: str, extra: int) -> None:
                                    f"allows ({name_max} bytes)")
     last = len(os.fsencode(Path(absolute).name)) + extra
     if last > name_max:
-        raise _bad(what, text, f"the name is too long for the filesystem ({last} bytes with ego's "
-                               f"temporary suffix; at most {name_max})")
+        raise _bad(what, text, f"the name is too long for the filesystem ({last} bytes"
+                               + (" with ego's temporary suffix" if extra else "") + f"; at most {name_max})")
     if len(os.fsencode(absolute)) + extra >= path_max:
         raise _bad(what, text, f"the path is too long for the filesystem (at most {path_max} bytes)")
 
