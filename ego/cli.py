@@ -70,6 +70,11 @@ class _Parser(argparse.ArgumentParser):
             message += did_you_mean(choice.group(1), re.findall(r"'([^']*)'", choice.group(2)))
         raise ConfigError(message)
 
+    def _print_message(self, message: str, file=None) -> None:
+        """As argparse's, but a failed write (help on a full stdout) is not swallowed."""
+        if message:
+            (file or sys.stderr).write(message)
+
 
 def _controllers_help() -> str:
     from ego.control import CONTROLLERS

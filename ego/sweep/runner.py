@@ -100,6 +100,8 @@ def sweep(spec: SweepSpec, out: Path, *, engine: str = "process", jobs: int | No
     plot_specs = [parse_plot(p, spec) for p in plots]
     out = Path(out)
     check_outputs(spec, out, record, plot_specs)
+    if (out / "results.parquet").is_file():  # results it cannot join: refused before --out is touched
+        ResultStore(out).check_compatible(spec.scenario, _sample_rows(spec))
     if engine == "ray" and address is not None:  # nothing listening: refused before --out is touched
         from ego.cluster import check_address
 
