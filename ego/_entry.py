@@ -16,15 +16,6 @@ import sys
 EXIT_NOT_COMPLETED, EXIT_INTERRUPTED = 1, 130
 
 
-def _terminate(signum, frame) -> None:
-    """SIGTERM ends the command like Ctrl-C."""
-    raise KeyboardInterrupt
-
-
-def _exit_now(signum, frame) -> None:  # pragma: no cover - a signal during interpreter exit
-    os._exit(EXIT_INTERRUPTED)
-
-
 def _describe(exc: OSError) -> str:
     import errno
 
@@ -51,10 +42,21 @@ def _stdout_gone() -> None:
         pass
 
 
+_received: list[int] = []
+
+
+def _stop(signum, frame) -> None:
+    """SIGINT and SIGTERM: noted (an import they break may raise something else), then a
+    KeyboardInterrupt, which the command answers with ``ego: interrupted`` and exit 130."""
+    _received.append(signum)
+    raise KeyboardInterrupt
+
+
 def main(argv=None) -> int:
     if argv is None:
-        signal.signal(signal.SIGTERM, _terminate)
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+        signal.signal(signal.SIGINT, _stop)
+        signal.signal(signal.SIGTERM, _stop)
+        argv = sys.argv[1:]
     try:
         try:
             from ego.cli import main as cli_main
@@ -69,9 +71,17 @@ def main(argv=None) -> int:
             _stdout_gone()
             return 0
         except OSError as exc:  # a write the checks could not foresee (stdout on a full disk)
+            if _received:
+                _say("ego: interrupted")
+                return EXIT_INTERRUPTED
             _stdout_gone()
             _say(f"ego: error: {_describe(exc)}")
             return EXIT_NOT_COMPLETED
+        except Exception:
+            if _received:  # an import broken by the signal (numpy turns it into an ImportError)
+                _say("ego: interrupted")
+                return EXIT_INTERRUPTED
+            raise
         try:
             sys.stdout.flush()
         except BrokenPipeError:
@@ -81,15 +91,21 @@ def main(argv=None) -> int:
             _say(f"ego: error: {_describe(exc)}")
             return EXIT_NOT_COMPLETED
         return status
-    except KeyboardInterrupt:  # a second signal while the first was being reported
-        _say("ego: interrupted")
+    except KeyboardInterrupt:  # a second signal while the first was being answered
         return EXIT_INTERRUPTED
     finally:
-        if argv is None:  # the interpreter's exit (atexit handlers) is not interrupted with a traceback
-            signal.signal(signal.SIGINT, _exit_now)
-            signal.signal(signal.SIGTERM, _exit_now)
+        # the answer is given: a signal during the interpreter's exit (where Python restores the
+        # default action, which would end the process by the signal) changes nothing
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
 
 
 def run() -> None:
     """``python -m ego`` and the console script."""
-    sys.exit(main())
+    try:
+        status = main()
+    except KeyboardInterrupt:  # in the instant between an answer and the signals set aside
+        status = EXIT_INTERRUPTED
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    sys.exit(status)
