@@ -108,4 +108,15 @@ def run() -> None:
         status = EXIT_INTERRUPTED
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
-    sys.exit(status)
+    # Python's own exit can still turn a Ctrl-C that came during the run into "killed by
+    # SIGINT" (exit -2) after everything is done; the answer is given, so the exit handlers
+    # run and the process ends with it
+    import atexit
+
+    atexit._run_exitfuncs()
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):
+            pass
+    os._exit(status if isinstance(status, int) else 1)
