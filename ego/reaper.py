@@ -1,6 +1,6 @@
 """A watcher that ends a process's descendants when the process ends, however it ends.
 
-``start_reaper(pid)`` starts ``python -m ego.reaper PID`` as a child of ``pid``. Every half
+``start_reaper(pid)`` starts ``python -m ego.reaper PID`` as a child of ``pid``. Five times a
 second it notes ``pid``'s descendants (from ``/proc``, with each one's start time, so a
 reused pid is never killed); when ``pid`` exits - even by SIGKILL, which no handler sees -
 it SIGKILLs every noted process still alive, and their descendants. Linux only (``/proc``);
@@ -20,7 +20,7 @@ import sys
 import time
 
 #: how often the descendants are noted (s)
-PERIOD = 0.5
+PERIOD = 0.2
 
 
 def _stat(pid: int) -> tuple[int, int] | None:

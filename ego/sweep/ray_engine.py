@@ -62,10 +62,10 @@ class RayExecutor:
             from ego.cluster import check_address, joining, reap_with_this_process
 
             if address is None:
+                reap_with_this_process()  # its processes end with this one, even SIGKILLed mid-start
                 # "local": always a private instance, never a cluster found by chance
                 ray.init(address="local", num_cpus=int(workers or default_workers()),
                          _node_ip_address="127.0.0.1", **quiet)
-                reap_with_this_process()  # its agents end with this process, even SIGKILLed
             else:
                 check_address(address)  # nothing listening: one line in seconds, not minutes
                 with joining(address):
