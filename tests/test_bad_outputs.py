@@ -421,10 +421,18 @@ def test_sweep_spec_values_are_checked_against_set_not_defaults():
 # -- the sweep's results file ---------------------------------------------------------------------------
 
 def _ego(*args, cwd, env=None, timeout=240, preexec_fn=None, stdout=subprocess.PIPE):
+    """``python -m ego ARGS`` in a session of its own; the result's ``pid`` is its session id."""
     full_env = dict(os.environ, **(env or {}))
-    return subprocess.run([sys.executable, "-m", "ego", *args], cwd=cwd, env=full_env, stdout=stdout,
-                          stderr=subprocess.PIPE, text=True, timeout=timeout, preexec_fn=preexec_fn,
-                          start_new_session=True)
+    proc = subprocess.Popen([sys.executable, "-m", "ego", *args], cwd=cwd, env=full_env, stdout=stdout,
+                            stderr=subprocess.PIPE, text=True, preexec_fn=preexec_fn, start_new_session=True)
+    try:
+        out, err = proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        raise
+    res = subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
+    res.pid = proc.pid
+    return res
 
 
 def _one_line_error(res, status: int, *needles: str) -> None:
@@ -540,6 +548,47 @@ def test_a_sweep_whose_results_fill_the_disk_stops_in_one_line_without_hanging(t
         _one_line_error(res, 1, "results.parquet", "Errno")
         assert time.monotonic() - t0 < 100
         assert not [f for f in disk.files() if f.endswith(".partial")]
+        assert not _session_left(res.pid), "worker processes outlived the sweep"
+
+
+def _session_left(sid: int) -> list[int]:
+    """Processes still alive in the session the command led (its workers, fork server...)."""
+    import psutil
+
+    deadline = time.monotonic() + 10
+    while True:
+        left = []
+        for p in psutil.process_iter(["pid", "status"]):
+            try:
+                if os.getsid(p.pid) == sid and p.info["status"] != psutil.STATUS_ZOMBIE:
+                    left.append(p.pid)
+            except OSError:
+                pass
+        if not left or time.monotonic() > deadline:
+            return left
+        time.sleep(0.2)
+
+
+def test_a_sweep_recording_every_run_on_a_full_disk_keeps_the_metrics(tmp_path):
+    """--record all on a disk without room: each row keeps its metrics and names the
+    recording it could not write; no recording, whole or partial, is left."""
+    import pyarrow.parquet as pq
+
+    (tmp_path / "s.toml").write_text(SPEC)
+    with FullDisk(tmp_path / "disk", 60_000) as disk:
+        out = disk.root / "o"
+        res = _ego("sweep", "s.toml", "--out", str(out), "--jobs", "1", "--record", "all", cwd=tmp_path,
+                   env=disk.env, preexec_fn=disk.preexec(), timeout=180)
+        assert "Traceback" not in res.stderr, res.stderr[-2000:]
+        assert not [f for f in disk.files() if f.endswith((".partial", ".rrd"))], disk.files()
+        if res.returncode == 0:
+            table = pq.read_table(out / "results.parquet").to_pydict()
+            assert set(table["status"]) <= {"completed", "ended", "timeout", "collision"}, table["status"]
+            assert all("cannot write" in e and "Errno" in e for e in table["error"]), table["error"]
+            assert all(isinstance(v, float) for v in table["sim_time"])
+        else:  # the results file itself did not fit: one line, exit 1
+            _one_line_error(res, 1, "cannot write", "Errno")
+        assert not _session_left(res.pid)
 
 
 @pytest.mark.parametrize("args, room", [

@@ -43,6 +43,10 @@ from ego.outputs import partial_path
 # Rerun's file sink logs a failed write (a full disk) on stderr itself; ego reports it in one
 # line (OutputError), so Rerun's own log is off unless the user asks for it
 os.environ.setdefault("RUST_LOG", "off")
+#: recording streams whose file could not be written (see RerunWriter.discard)
+_ABANDONED: list = []
+#: how long closing a recording may wait for Rerun's file sink (s); longer is a stuck disk
+FLUSH_TIMEOUT = 120.0
 from ego.processes import main_module_hidden, signals_deferred
 from ego.record.base import Scene, Series, box_outlines, lane_edges
 
@@ -138,7 +142,10 @@ class RerunRecorder:
         self._open = False
         self.flush()
         if self._writer is not None:
-            self._writer.close()
+            try:
+                self._writer.close()
+            except OSError as exc:  # a full disk: reported below as an OutputError
+                self._error = _describe(exc)
         else:
             self._send("close")
             if self._error is None:
@@ -159,7 +166,12 @@ class RerunRecorder:
         """Hand a batch to the writer. The pipe is widened to 1 MiB, so this only copies
         bytes: the writer drains it on the other core while the loop goes on."""
         if self._writer is not None:
-            self._writer.handle(kind, *payload)
+            if self._error is None:  # a failed recording stops; the run goes on
+                try:
+                    self._writer.handle(kind, *payload)
+                except Exception as exc:  # noqa: BLE001 - reported by close() as an OutputError
+                    self._error = _describe(_write_failure(self._writer._partial, exc))
+                    self._writer.discard()
             return
         if self._error is not None:
             return
@@ -237,12 +249,15 @@ def _writer_main(batches, replies, path: str, application_id: str, recording_id:
             writer.close(finished=False)
         return
     except Exception as exc:  # noqa: BLE001 - reported to the simulation process
-        if writer is not None:  # no half recording left behind
-            writer.discard()
-        try:
+        if writer is not None:
+            exc = _write_failure(writer._partial, exc)  # the errno, asked before the file goes
+        try:  # first: the simulation process stops sending and goes on
             replies.send(("error", _describe(exc)))
         except OSError:
             pass
+        if writer is not None:  # no half recording left behind
+            writer.discard()
+            os._exit(0)  # Python's exit would wait for Rerun's stuck thread: the reply is sent
 
 
 def _describe(exc: BaseException) -> str:
@@ -287,8 +302,9 @@ class RerunWriter:
         self._constants = [s for s in series if s.constant is not None]
         self._states = {s.column: s for s in series if s.states}
         self._colors = dict(meta.get("colors", {}))
-        self._rec.save(self._partial, default_blueprint=_blueprint(scene, series))
-        self._open = True
+        self._open = True  # from here, close() or discard() ends the file
+        blueprint = _blueprint(scene, series)
+        _watched(lambda: self._rec.save(self._partial, default_blueprint=blueprint), self._partial)
         rec = self._rec
         rec.log(MAP, rr.Transform3D(scale=[1.0, -1.0, 1.0]), static=True)
         edges = []
@@ -395,26 +411,79 @@ class RerunWriter:
         if self._open:
             self._open = False
             try:
-                self._rec.flush()
+                _flush(self._rec, self._partial)
                 self._rec.disconnect()
                 if finished:
                     _check_written(self._partial)
                     os.replace(self._partial, self.path)
             except Exception as exc:  # noqa: BLE001 - no half recording under any name
+                failure = _write_failure(self._partial, exc)  # asked before the file goes
                 self.discard()
-                raise _write_failure(self._partial, exc) from None
+                raise failure from None
 
     def discard(self) -> None:
-        """Drop the unfinished file (a write failed)."""
+        """Drop the unfinished file (a write failed): its name first, so nothing is left even
+        if Rerun's sink then takes its time to stop."""
         self._open = False
-        try:
-            self._rec.disconnect()
-        except Exception:  # noqa: BLE001 - the file is going anyway
-            pass
         try:
             self._partial.unlink(missing_ok=True)
         except OSError:
             pass
+        # Rerun's sink may wait for ever on a writer thread a full disk stopped: give it a
+        # few seconds in a thread of its own, then leave it
+        import threading
+
+        def disconnect() -> None:
+            try:
+                self._rec.disconnect()
+            except Exception:  # noqa: BLE001 - the file is going anyway
+                pass
+
+        thread = threading.Thread(target=disconnect, name="ego-rerun-discard", daemon=True)
+        thread.start()
+        thread.join(timeout=5.0)
+        # dropping the stream would join its forwarding thread, which Rerun leaves waiting for
+        # the dead file writer: the stream is kept for the life of the process instead
+        _ABANDONED.append(self._rec)
+
+
+def _flush(rec, partial: Path) -> None:
+    """``rec.flush()``, watched (:func:`_watched`)."""
+    _watched(lambda: rec.flush(timeout_sec=FLUSH_TIMEOUT), partial)
+
+
+def _watched(call, partial: Path) -> None:
+    """``call()`` (a Rerun call that writes ``partial``), watched: when the file's
+    filesystem is full and the file has stopped growing for a second, Rerun's file writer
+    has died (its save and flush may then wait for ever instead of failing): OSError
+    ENOSPC, and the call is left to its thread."""
+    import threading
+    import time
+
+    failure: list[BaseException] = []
+
+    def work() -> None:
+        try:
+            call()
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller
+            failure.append(exc)
+
+    thread = threading.Thread(target=work, name="ego-rerun-flush", daemon=True)
+    thread.start()
+    size, still = -1, time.monotonic()
+    while thread.is_alive():
+        thread.join(timeout=0.1)
+        try:
+            now = os.path.getsize(partial)
+            full = os.statvfs(partial.parent).f_bavail == 0
+        except OSError:
+            continue
+        if now != size:
+            size, still = now, time.monotonic()
+        elif full and time.monotonic() - still > 1.0:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(partial))
+    if failure:
+        raise failure[0]
 
 
 def _check_written(partial: Path) -> None:

@@ -25,11 +25,18 @@ from ego.sweep.results import ResultStore
 from ego.sweep.spec import Run, SweepSpec
 
 RECORD = ("none", "failed", "all")
+#: a recording failed in this worker process (see run_task)
+_WEDGED = False
 _HOST = socket.gethostname()
 
 
 def run_task(task: tuple) -> dict:
-    """One run in a worker: ``(Run, recording path or None, record policy)`` -> its row."""
+    """One run in a worker: ``(Run, recording path or None, record policy)`` -> its row.
+
+    A recording that a full disk stopped keeps the row's metrics (``error`` names the file);
+    Rerun's file sink can then leave threads of this process waiting for ever, so the
+    worker does not take another run: it ends, and the engine gives the next run a fresh
+    worker (that run's ``attempts`` is 2)."""
     from ego.runner import RunSpec, run
     from ego.scenarios.base import NOT_FAILED
     from ego.scenarios.metrics import flatten
@@ -38,10 +45,22 @@ def run_task(task: tuple) -> dict:
     t0 = time.perf_counter()
     row = {"run_id": r.run_id, "scenario": r.scenario, "controller": r.controller, "seed": r.seed,
            **r.overrides}
+    from ego.outputs import OutputError
+
+    global _WEDGED
+    if _WEDGED:  # see the docstring
+        os._exit(75)
     try:
         spec = RunSpec(r.scenario, r.controller, r.seed, r.overrides,
                        record=rrd if policy == "all" else None, background_recording=False)
-        result = run(spec)
+        try:
+            result = run(spec)
+        except OutputError as exc:  # the recording failed (a full disk): the run's metrics stand
+            if exc.result is None:
+                raise
+            result = exc.result
+            row["recording_error"] = str(exc)
+            _WEDGED = True
         if policy == "failed" and result.status not in NOT_FAILED and rrd:
             run(RunSpec(r.scenario, r.controller, r.seed, r.overrides, record=rrd,
                         background_recording=False))
@@ -51,7 +70,7 @@ def run_task(task: tuple) -> dict:
             metrics.pop(key, None)
         row.update(metrics)
         row["status"] = result.status
-        row["error"] = ""
+        row["error"] = row.pop("recording_error", "")
     except Exception as exc:  # noqa: BLE001 - a broken run is a row, never the end of a sweep
         row["status"] = "error"
         row["error"] = f"{type(exc).__name__}: {exc}"
