@@ -85,8 +85,13 @@ def _file_ancestor(path: Path) -> Path:
 def _resolve(path: Path, what: str, text: str) -> Path:
     try:
         return Path(os.path.realpath(path, strict=False))
-    except (OSError, RuntimeError) as exc:  # a symlink loop (Python < 3.13 raises RuntimeError)
-        raise _bad(what, text, f"cannot resolve it ({getattr(exc, 'strerror', None) or exc})") from None
+    except (
+        OSError,
+        RuntimeError,
+    ) as exc:  # a symlink loop (Python < 3.13 raises RuntimeError)
+        raise _bad(
+            what, text, f"cannot resolve it ({getattr(exc, 'strerror', None) or exc})"
+        ) from None
 
 
 def _loop_check(path: Path, what: str, text: str) -> None:
@@ -101,7 +106,9 @@ def _loop_check(path: Path, what: str, text: str) -> None:
             if exc.errno in (errno.ENOENT, errno.ENOTDIR):
                 return
             if exc.errno == errno.ENAMETOOLONG:
-                raise _bad(what, text, "the name is too long for the filesystem") from None
+                raise _bad(
+                    what, text, "the name is too long for the filesystem"
+                ) from None
             raise _bad(what, text, f"{part}: {exc.strerror}") from None
 
 
@@ -118,20 +125,33 @@ def _lengths(path: Path, what: str, text: str, extra: int) -> None:
     absolute = os.path.abspath(path)
     for part in Path(absolute).parts[1:-1]:
         if len(os.fsencode(part)) > name_max:
-            raise _bad(what, text, f"the folder name {part[:40]!r}... is longer than the filesystem "
-                                   f"allows ({name_max} bytes)")
+            raise _bad(
+                what,
+                text,
+                f"the folder name {part[:40]!r}... is longer than the filesystem "
+                f"allows ({name_max} bytes)",
+            )
     last = len(os.fsencode(Path(absolute).name)) + extra
     if last > name_max:
-        raise _bad(what, text, f"the name is too long for the filesystem ({last} bytes"
-                               + (" with ego's temporary suffix" if extra else "") + f"; at most {name_max})")
+        raise _bad(
+            what,
+            text,
+            f"the name is too long for the filesystem ({last} bytes"
+            + (" with ego's temporary suffix" if extra else "")
+            + f"; at most {name_max})",
+        )
     if len(os.fsencode(absolute)) + extra >= path_max:
-        raise _bad(what, text, f"the path is too long for the filesystem (at most {path_max} bytes)")
+        raise _bad(
+            what,
+            text,
+            f"the path is too long for the filesystem (at most {path_max} bytes)",
+        )
 
 
 def _space_and_writable(path: Path, what: str, text: str) -> None:
     """The folder that will hold ``path`` (or its nearest existing ancestor) is a writable
     folder on a writable filesystem with room."""
-    parent = nearest_existing(path.parent if not path.exists() else path.parent)
+    parent = nearest_existing(path.parent)
     try:
         st = os.stat(parent)
     except OSError as exc:
@@ -149,12 +169,17 @@ def _space_and_writable(path: Path, what: str, text: str) -> None:
     free = vfs.f_bavail * vfs.f_frsize
     need = min_free_bytes()
     if free < need:
-        raise _bad(what, text, f"the filesystem of {parent} has {free // 1024} KiB free "
-                               f"(ego needs at least {need // (1024 * 1024)} MiB; EGO_MIN_FREE_MB sets it)")
+        raise _bad(
+            what,
+            text,
+            f"the filesystem of {parent} has {free // 1024} KiB free "
+            f"(ego needs at least {need // (1024 * 1024)} MiB; EGO_MIN_FREE_MB sets it)",
+        )
 
 
-def check_path_names(path: str | os.PathLike, what: str, text: str | None = None,
-                     partial: bool = True) -> Path:
+def check_path_names(
+    path: str | os.PathLike, what: str, text: str | None = None, partial: bool = True
+) -> Path:
     """Only the name of ``path``: lengths (with the temporary suffix if ``partial``), symlink
     loops, ``/proc`` and ``/sys``. Safe to call before anything else looks at the path."""
     path = Path(path)
@@ -165,8 +190,9 @@ def check_path_names(path: str | os.PathLike, what: str, text: str | None = None
     return path
 
 
-def check_file_target(path: str | os.PathLike, what: str, text: str | None = None,
-                      partial: bool = True) -> Path:
+def check_file_target(
+    path: str | os.PathLike, what: str, text: str | None = None, partial: bool = True
+) -> Path:
     """``path`` may be created (or replaced) as a regular file, written under its temporary
     name first (``partial``); see the module docstring. Returns ``path``."""
     path = Path(path)
@@ -179,21 +205,27 @@ def check_file_target(path: str | os.PathLike, what: str, text: str | None = Non
     except FileNotFoundError:
         st = None
     except NotADirectoryError:
-        raise _bad(what, text, f"{_file_ancestor(path)} is a file, not a folder") from None
+        raise _bad(
+            what, text, f"{_file_ancestor(path)} is a file, not a folder"
+        ) from None
     except OSError as exc:
         raise _bad(what, text, exc.strerror or str(exc)) from None
     if st is not None:
         if stat.S_ISDIR(st.st_mode):
             raise _bad(what, text, "it is a folder (expected a file)")
         if not stat.S_ISREG(st.st_mode):
-            raise _bad(what, text, "it is not a regular file (a FIFO, socket or device)")
+            raise _bad(
+                what, text, "it is not a regular file (a FIFO, socket or device)"
+            )
         if not os.access(path, os.W_OK):
             raise _bad(what, text, "the file cannot be written")
     _space_and_writable(path, what, text)
     return path
 
 
-def check_folder_target(path: str | os.PathLike, what: str, text: str | None = None) -> Path:
+def check_folder_target(
+    path: str | os.PathLike, what: str, text: str | None = None
+) -> Path:
     """``path`` is a folder ego may write into, or may be created as one."""
     path = Path(path)
     text = str(path) if text is None else text
@@ -205,7 +237,9 @@ def check_folder_target(path: str | os.PathLike, what: str, text: str | None = N
     except FileNotFoundError:
         st = None
     except NotADirectoryError:
-        raise _bad(what, text, f"{_file_ancestor(path)} is a file, not a folder") from None
+        raise _bad(
+            what, text, f"{_file_ancestor(path)} is a file, not a folder"
+        ) from None
     except OSError as exc:
         raise _bad(what, text, exc.strerror or str(exc)) from None
     if st is not None:
@@ -225,19 +259,26 @@ def check_folder_target(path: str | os.PathLike, what: str, text: str | None = N
     return path
 
 
-def check_folder_contents(folder: str | os.PathLike, what: str, files: Iterable[str] = (),
-                          folders: Iterable[str] = (), text: str | None = None) -> None:
+def check_folder_contents(
+    folder: str | os.PathLike,
+    what: str,
+    files: Iterable[str] = (),
+    folders: Iterable[str] = (),
+    text: str | None = None,
+) -> None:
     """The names ego will create inside output folder ``folder``: each of ``files`` (relative
     paths) must be free for a file (and its temporary name), each of ``folders`` free for a
     folder. One ConfigError naming the first occupied name."""
     folder = Path(folder)
     text = str(folder) if text is None else text
     prefix = f"bad {what} {text!r}: "
-    for name, check in [(n, check_folder_target) for n in folders] + [(n, check_file_target) for n in files]:
+    for name, check in [(n, check_folder_target) for n in folders] + [
+        (n, check_file_target) for n in files
+    ]:
         try:
             check(folder / name, what, text)
         except ConfigError as exc:
-            why = str(exc)[len(prefix):] if str(exc).startswith(prefix) else str(exc)
+            why = str(exc).removeprefix(prefix)
             raise ConfigError(f"{prefix}{name} inside it: {why}") from None
 
 
@@ -246,7 +287,9 @@ def check_run_outputs(spec) -> None:
     with the sidecar files beside it (``x.units.csv`` beside ``--trace x.csv``), its video -
     free and writable, before the run starts."""
     if spec.record is not None:
-        check_file_target(os.fspath(spec.record), "--record path", os.fspath(spec.record))
+        check_file_target(
+            os.fspath(spec.record), "--record path", os.fspath(spec.record)
+        )
     if spec.trace is not None:
         from ego.export import trace_files
 
@@ -258,8 +301,10 @@ def check_run_outputs(spec) -> None:
                 if Path(path) == Path(text):
                     raise
                 prefix = f"bad --trace path {text!r}: "
-                why = str(exc)[len(prefix):] if str(exc).startswith(prefix) else str(exc)
-                raise ConfigError(f"{prefix}{path} (written beside it): {why}") from None
+                why = str(exc).removeprefix(prefix)
+                raise ConfigError(
+                    f"{prefix}{path} (written beside it): {why}"
+                ) from None
     if spec.video is not None:
         check_file_target(os.fspath(spec.video), "--video path", os.fspath(spec.video))
 

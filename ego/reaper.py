@@ -30,7 +30,7 @@ def _stat(pid: int) -> tuple[int, int] | None:
             data = f.read()
     except OSError:
         return None
-    fields = data[data.rfind(b")") + 2:].split()
+    fields = data[data.rfind(b")") + 2 :].split()
     return int(fields[1]), int(fields[19])
 
 
@@ -44,7 +44,9 @@ def _table() -> dict[int, tuple[int, int]]:
     return out
 
 
-def descendants(root: int, table: dict[int, tuple[int, int]] | None = None) -> dict[int, int]:
+def descendants(
+    root: int, table: dict[int, tuple[int, int]] | None = None
+) -> dict[int, int]:
     """pid -> start time of every descendant of ``root``."""
     table = _table() if table is None else table
     children: dict[int, list[int]] = {}
@@ -98,11 +100,18 @@ def start_reaper(pid: int | None = None) -> subprocess.Popen | None:
     if not os.path.isdir("/proc"):
         return None
     pid = os.getpid() if pid is None else pid
-    return subprocess.Popen([sys.executable, "-m", "ego.reaper", str(pid)], stdin=subprocess.DEVNULL,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    return subprocess.Popen(
+        [sys.executable, "-m", "ego.reaper", str(pid)],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        start_new_session=True,
+    )
 
 
 if __name__ == "__main__":
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C to the terminal is the watched process's
+    signal.signal(
+        signal.SIGINT, signal.SIG_IGN
+    )  # a Ctrl-C to the terminal is the watched process's
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
     watch(int(sys.argv[1]))

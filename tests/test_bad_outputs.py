@@ -28,6 +28,7 @@ import sys
 import time
 import zipfile
 from pathlib import Path
+from typing import Self
 
 import numpy as np
 import pytest
@@ -40,8 +41,10 @@ from ego.sumo.bridge import SumoBridge
 from ego.sumo.net import nets_dir
 
 EB = ["run", "emergency-brake", "-c", "pid", "--set", "duration=4"]
-SPEC = ('scenario = "emergency-brake"\ncontrollers = ["pid"]\n[set]\nduration = 4\n'
-        '[grid]\nego_speed = [20, 25]\nlead_gap = [30]\n')
+SPEC = (
+    'scenario = "emergency-brake"\ncontrollers = ["pid"]\n[set]\nduration = 4\n'
+    "[grid]\nego_speed = [20, 25]\nlead_gap = [30]\n"
+)
 LONG = "x" * 250  # a valid name (<= 255) that the temporary suffix makes too long
 TOO_LONG = "y" * 256
 DEEP = "/".join(["d" * 200] * 25)  # longer than PATH_MAX in all
@@ -56,10 +59,15 @@ def _can_mount() -> bool:
         return False
     probe = Path(f"/tmp/ego-mount-probe-{os.getpid()}")
     probe.mkdir(exist_ok=True)
-    ok = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(probe)],
-                        capture_output=True).returncode == 0
+    ok = (
+        subprocess.run(
+            ["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(probe)],
+            capture_output=True,
+        ).returncode
+        == 0
+    )
     if ok:
-        subprocess.run(["umount", str(probe)], capture_output=True)
+        subprocess.run(["umount", str(probe)], check=False, capture_output=True)
     probe.rmdir()
     return ok
 
@@ -89,8 +97,12 @@ def places(tmp_path_factory):
     tiny.mkdir()
     mounted = []
     if MOUNT:
-        subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1m,ro", "tmpfs", str(ro)], check=True)
-        subprocess.run(["mount", "-t", "tmpfs", "-o", "size=2m", "tmpfs", str(tiny)], check=True)
+        subprocess.run(
+            ["mount", "-t", "tmpfs", "-o", "size=1m,ro", "tmpfs", str(ro)], check=True
+        )
+        subprocess.run(
+            ["mount", "-t", "tmpfs", "-o", "size=2m", "tmpfs", str(tiny)], check=True
+        )
         mounted = [ro, tiny]
     else:  # without mount: a folder without write permission, and the free-space floor raised
         ro.chmod(0o555)
@@ -100,7 +112,7 @@ def places(tmp_path_factory):
         subprocess.run(["umount", str(m)], check=False)
 
 
-def C(id: str, args: list[str], message: str, env: dict | None = None):  # noqa: N802 - a table row
+def C(id: str, args: list[str], message: str, env: dict | None = None):
     return pytest.param(args, message, env or {}, id=id)
 
 
@@ -110,13 +122,31 @@ FILE_OPTIONS = {
     "trace-csv": (EB + ["--trace"], ".csv", "--trace path"),
     "trace-parquet": (EB + ["--trace"], ".parquet", "--trace path"),
     "trace-mat": (EB + ["--trace"], ".mat", "--trace path"),
-    "video": (["run", "emergency-brake", "-c", "pid", "--backend", "highway-env", "--video"], ".gif",
-              "--video path"),
-    "train": (["train", "narma-l2", "--samples", "400", "--epochs", "1", "--out"], ".npz", "--out path"),
+    "video": (
+        ["run", "emergency-brake", "-c", "pid", "--backend", "highway-env", "--video"],
+        ".gif",
+        "--video path",
+    ),
+    "train": (
+        ["train", "narma-l2", "--samples", "400", "--epochs", "1", "--out"],
+        ".npz",
+        "--out path",
+    ),
     "tune": (["tune", "lane-centering", "--quick", "--out"], ".json", "--out path"),
 }
 DIR_OPTIONS = {
-    "compare": (["compare", "emergency-brake", "--controllers", "pid", "--set", "duration=4", "--out"], "--out"),
+    "compare": (
+        [
+            "compare",
+            "emergency-brake",
+            "--controllers",
+            "pid",
+            "--set",
+            "duration=4",
+            "--out",
+        ],
+        "--out",
+    ),
     "sweep": (["sweep", "{spec}", "--out"], "--out"),
 }
 
@@ -124,16 +154,27 @@ CASES = []
 for key, (args, suffix, what) in FILE_OPTIONS.items():
     CASES += [
         C(f"{key}-name-too-long", [*args, f"{{root}}/{TOO_LONG}{suffix}"], "too long"),
-        C(f"{key}-name-too-long-with-partial-suffix", [*args, f"{{root}}/{LONG[:250 - len(suffix)]}{suffix}"],
-          "temporary suffix"),
-        C(f"{key}-folder-name-too-long", [*args, f"{{root}}/{TOO_LONG}/x{suffix}"], "longer than the filesystem"),
+        C(
+            f"{key}-name-too-long-with-partial-suffix",
+            [*args, f"{{root}}/{LONG[: 250 - len(suffix)]}{suffix}"],
+            "temporary suffix",
+        ),
+        C(
+            f"{key}-folder-name-too-long",
+            [*args, f"{{root}}/{TOO_LONG}/x{suffix}"],
+            "longer than the filesystem",
+        ),
         C(f"{key}-path-too-long", [*args, f"{{root}}/{DEEP}/x{suffix}"], "too long"),
         C(f"{key}-symlink-loop", [*args, f"{{root}}/loop_a/x{suffix}"], "symlink loop"),
         C(f"{key}-self-loop", [*args, f"{{root}}/self/x{suffix}"], "symlink loop"),
         C(f"{key}-loop-as-the-file", [*args, f"{{root}}/loop{suffix}"], "symlink loop"),
         C(f"{key}-in-proc", [*args, f"/proc/x{suffix}"], ""),
         C(f"{key}-in-sys", [*args, f"/sys/x{suffix}"], ""),
-        C(f"{key}-under-a-file", [*args, f"{{root}}/file.txt/x{suffix}"], "is a file, not a folder"),
+        C(
+            f"{key}-under-a-file",
+            [*args, f"{{root}}/file.txt/x{suffix}"],
+            "is a file, not a folder",
+        ),
         C(f"{key}-a-folder", [*args, f"{{root}}/folder{suffix}"], "folder"),
         C(f"{key}-a-fifo", [*args, f"{{root}}/fifo{suffix}"], "not a regular file"),
         C(f"{key}-read-only", [*args, f"{{ro}}/x{suffix}"], "{ro}"),
@@ -153,7 +194,11 @@ for key, (args, what) in DIR_OPTIONS.items():
         C(f"{key}-out-sys-sub", [*args, "/sys/kernel/ego-out"], ""),
         C(f"{key}-out-a-file", [*args, "{root}/file.txt"], "it is a file"),
         C(f"{key}-out-a-fifo", [*args, "{root}/fifo.rrd"], "it is a file"),
-        C(f"{key}-out-under-a-file", [*args, "{root}/file.txt/out"], "is a file, not a folder"),
+        C(
+            f"{key}-out-under-a-file",
+            [*args, "{root}/file.txt/out"],
+            "is a file, not a folder",
+        ),
         C(f"{key}-out-read-only", [*args, "{ro}"], "{ro}"),
         C(f"{key}-out-read-only-sub", [*args, "{ro}/out"], "{ro}"),
         C(f"{key}-out-tiny-filesystem", [*args, "{tiny}/out"], "free"),
@@ -161,10 +206,14 @@ for key, (args, what) in DIR_OPTIONS.items():
 
 # names occupied inside an --out folder: (what to make, relative path), the option's args
 OCCUPIED = [
-    ("compare", "file", "runs", []), ("compare", "dir", "metrics.csv", []),
-    ("compare", "dir", "metrics_units.csv", []), ("compare", "dir", "metrics.md", []),
-    ("compare", "dir", ".ego.lock", []), ("compare", "fifo", ".ego.lock", []),
-    ("compare", "dir", "runs/pid-seed0.rrd", []), ("compare", "fifo", "runs/pid-seed0.rrd", []),
+    ("compare", "file", "runs", []),
+    ("compare", "dir", "metrics.csv", []),
+    ("compare", "dir", "metrics_units.csv", []),
+    ("compare", "dir", "metrics.md", []),
+    ("compare", "dir", ".ego.lock", []),
+    ("compare", "fifo", ".ego.lock", []),
+    ("compare", "dir", "runs/pid-seed0.rrd", []),
+    ("compare", "fifo", "runs/pid-seed0.rrd", []),
     ("compare", "file", "traces", ["--traces", "csv"]),
     ("compare", "dir", "traces/pid-seed0.csv", ["--traces", "csv"]),
     ("compare", "dir", "traces/pid-seed0.units.csv", ["--traces", "csv"]),
@@ -172,61 +221,199 @@ OCCUPIED = [
     ("compare", "dir", "traces/pid-seed0.parquet", ["--traces", "parquet"]),
     ("compare", "dir", "traces/pid-seed0.traffic.parquet", ["--traces", "parquet"]),
     ("compare", "dir", "traces/pid-seed0.mat", ["--traces", "mat"]),
-    ("compare", "dir", f"runs/{'p' * 10}", []),  # harmless: another name; must NOT be refused
-    ("sweep", "dir", "results.parquet", []), ("sweep", "dir", "summary.md", []),
-    ("sweep", "dir", ".ego.lock", []), ("sweep", "file", "runs", []),
-    ("sweep", "dir", "runs/pid-{run_id}.rrd", []), ("sweep", "fifo", "runs/pid-{run_id}.rrd", []),
-    ("sweep", "dir", "envelope_ego_speed_lead_gap.png", ["--plot", "ego_speed,lead_gap"]),
+    (
+        "compare",
+        "dir",
+        f"runs/{'p' * 10}",
+        [],
+    ),  # harmless: another name; must NOT be refused
+    ("sweep", "dir", "results.parquet", []),
+    ("sweep", "dir", "summary.md", []),
+    ("sweep", "dir", ".ego.lock", []),
+    ("sweep", "file", "runs", []),
+    ("sweep", "dir", "runs/pid-{run_id}.rrd", []),
+    ("sweep", "fifo", "runs/pid-{run_id}.rrd", []),
+    (
+        "sweep",
+        "dir",
+        "envelope_ego_speed_lead_gap.png",
+        ["--plot", "ego_speed,lead_gap"],
+    ),
     ("sweep", "fifo", "summary.md", []),
 ]
 for command, kind, name, extra in OCCUPIED:
     if name.startswith("runs/pppp"):
         continue
     args = DIR_OPTIONS[command][0]
-    CASES.append(C(f"{command}-occupied-{kind}-{name.replace('/', '_')}{'-' + extra[1] if extra else ''}",
-                   [*args, "{out}", *extra, f"@{kind}:{name}"], name.split("/")[-1].replace("pid-{run_id}", "") + " inside it"))
+    CASES.append(
+        C(
+            f"{command}-occupied-{kind}-{name.replace('/', '_')}{'-' + extra[1] if extra else ''}",
+            [*args, "{out}", *extra, f"@{kind}:{name}"],
+            name.split("/")[-1].replace("pid-{run_id}", "") + " inside it",
+        )
+    )
 
 # the trace's side files, and shipped files
 CASES += [
-    C("trace-units-sidecar-a-folder", [*EB, "--trace", "{out}/x.csv", "@dir:x.units.csv"], "x.units.csv"),
-    C("trace-traffic-sidecar-a-folder", [*EB, "--trace", "{out}/x.csv", "@dir:x.traffic.csv"], "x.traffic.csv"),
-    C("trace-parquet-traffic-sidecar-a-fifo", [*EB, "--trace", "{out}/x.parquet", "@fifo:x.traffic.parquet"],
-      "x.traffic.parquet"),
-    C("trace-units-sidecar-too-long", [*EB, "--trace", "{root}/" + "z" * 232 + ".csv"], "too long"),
-    C("train-out-the-shipped-model", ["train", "narma-l2", "--samples", "400", "--epochs", "1", "--out",
-                                      str(DEFAULT_MODEL)], "--install"),
-    C("tune-out-the-shipped-preset", ["tune", "lane-centering", "--quick", "--out", str(TUNED_PRESET)], "--install"),
-    C("train-out-inside-the-package", ["train", "narma-l2", "--samples", "400", "--epochs", "1", "--out",
-                                       str(DEFAULT_MODEL.parent / "new.npz")], "inside the ego package"),
-    C("record-inside-the-package", [*EB, "--record", str(DEFAULT_MODEL.parent / "x.rrd")], "inside the ego package"),
-    C("seed-underscore", ["run", "emergency-brake", "-c", "pid", "--seed", "1_0"], "'1_0'"),
-    C("seed-arabic-digit", ["run", "emergency-brake", "-c", "pid", "--seed", "\u0663"], "'\u0663'"),
+    C(
+        "trace-units-sidecar-a-folder",
+        [*EB, "--trace", "{out}/x.csv", "@dir:x.units.csv"],
+        "x.units.csv",
+    ),
+    C(
+        "trace-traffic-sidecar-a-folder",
+        [*EB, "--trace", "{out}/x.csv", "@dir:x.traffic.csv"],
+        "x.traffic.csv",
+    ),
+    C(
+        "trace-parquet-traffic-sidecar-a-fifo",
+        [*EB, "--trace", "{out}/x.parquet", "@fifo:x.traffic.parquet"],
+        "x.traffic.parquet",
+    ),
+    C(
+        "trace-units-sidecar-too-long",
+        [*EB, "--trace", "{root}/" + "z" * 232 + ".csv"],
+        "too long",
+    ),
+    C(
+        "train-out-the-shipped-model",
+        [
+            "train",
+            "narma-l2",
+            "--samples",
+            "400",
+            "--epochs",
+            "1",
+            "--out",
+            str(DEFAULT_MODEL),
+        ],
+        "--install",
+    ),
+    C(
+        "tune-out-the-shipped-preset",
+        ["tune", "lane-centering", "--quick", "--out", str(TUNED_PRESET)],
+        "--install",
+    ),
+    C(
+        "train-out-inside-the-package",
+        [
+            "train",
+            "narma-l2",
+            "--samples",
+            "400",
+            "--epochs",
+            "1",
+            "--out",
+            str(DEFAULT_MODEL.parent / "new.npz"),
+        ],
+        "inside the ego package",
+    ),
+    C(
+        "record-inside-the-package",
+        [*EB, "--record", str(DEFAULT_MODEL.parent / "x.rrd")],
+        "inside the ego package",
+    ),
+    C(
+        "seed-underscore",
+        ["run", "emergency-brake", "-c", "pid", "--seed", "1_0"],
+        "'1_0'",
+    ),
+    C(
+        "seed-arabic-digit",
+        ["run", "emergency-brake", "-c", "pid", "--seed", "\u0663"],
+        "'\u0663'",
+    ),
     C("train-seed-underscore", ["train", "narma-l2", "--seed", "1_0"], "'1_0'"),
-    C("compare-seeds-underscore", ["compare", "emergency-brake", "--controllers", "pid", "--seeds", "1_0",
-                                   "--out", "{out}"], "'1_0'"),
-    C("compare-duplicate-variants", ["compare", "emergency-brake", "--controllers",
-                                     "pid@kp_lat=0.02,pid@kp_lat= 0.02", "--out", "{out}"], "same controller"),
-    C("sweep-address-nothing-listening", ["sweep", "{spec}", "--out", "{out}", "--engine", "ray", "--address",
-                                          "127.0.0.1:1"], "127.0.0.1:1"),
-    C("sweep-address-malformed", ["sweep", "{spec}", "--out", "{out}", "--engine", "ray", "--address",
-                                  "127.0.0.1:notaport"], "127.0.0.1:notaport"),
-    C("tune-address-nothing-listening", ["tune", "lane-centering", "--quick", "--cost", "sumo", "--engine", "ray",
-                                         "--address", "127.0.0.1:1", "--out", "{out}/g.json"], "127.0.0.1:1"),
+    C(
+        "compare-seeds-underscore",
+        [
+            "compare",
+            "emergency-brake",
+            "--controllers",
+            "pid",
+            "--seeds",
+            "1_0",
+            "--out",
+            "{out}",
+        ],
+        "'1_0'",
+    ),
+    C(
+        "compare-duplicate-variants",
+        [
+            "compare",
+            "emergency-brake",
+            "--controllers",
+            "pid@kp_lat=0.02,pid@kp_lat= 0.02",
+            "--out",
+            "{out}",
+        ],
+        "same controller",
+    ),
+    C(
+        "sweep-address-nothing-listening",
+        [
+            "sweep",
+            "{spec}",
+            "--out",
+            "{out}",
+            "--engine",
+            "ray",
+            "--address",
+            "127.0.0.1:1",
+        ],
+        "127.0.0.1:1",
+    ),
+    C(
+        "sweep-address-malformed",
+        [
+            "sweep",
+            "{spec}",
+            "--out",
+            "{out}",
+            "--engine",
+            "ray",
+            "--address",
+            "127.0.0.1:notaport",
+        ],
+        "127.0.0.1:notaport",
+    ),
+    C(
+        "tune-address-nothing-listening",
+        [
+            "tune",
+            "lane-centering",
+            "--quick",
+            "--cost",
+            "sumo",
+            "--engine",
+            "ray",
+            "--address",
+            "127.0.0.1:1",
+            "--out",
+            "{out}/g.json",
+        ],
+        "127.0.0.1:1",
+    ),
 ]
 
 
 def _occupy(folder: Path, spec: str) -> None:
     kind, _, name = spec[1:].partition(":")
     if "{run_id}" in name:
-        from ego.sweep.spec import parse
-
         import tomllib
+
+        from ego.sweep.spec import parse
 
         first = next(parse(tomllib.loads(SPEC)).runs())
         name = name.replace("{run_id}", first.run_id)
     target = folder / name
     target.parent.mkdir(parents=True, exist_ok=True)
-    {"dir": lambda p: p.mkdir(), "file": lambda p: p.write_text("x"), "fifo": os.mkfifo}[kind](target)
+    {
+        "dir": lambda p: p.mkdir(),
+        "file": lambda p: p.write_text("x"),
+        "fifo": os.mkfifo,
+    }[kind](target)
 
 
 def _fill(args, paths) -> list[str]:
@@ -239,15 +426,16 @@ def _fill(args, paths) -> list[str]:
 
 
 @pytest.mark.parametrize("args, message, env", CASES)
-def test_a_bad_output_place_is_one_line_exit_2_before_anything_runs(args, message, env, places, tmp_path,
-                                                                    capsys, monkeypatch):
+def test_a_bad_output_place_is_one_line_exit_2_before_anything_runs(
+    args, message, env, places, tmp_path, capsys, monkeypatch
+):
     monkeypatch.chdir(tmp_path)
     out = tmp_path / "out"
     spec = tmp_path / "spec.toml"
     spec.write_text(SPEC)
     if not MOUNT:  # the tiny filesystem stands for itself only when mounted: raise the floor instead
         if "{tiny}" in " ".join(args):
-            monkeypatch.setenv("EGO_MIN_FREE_MB", str(10 ** 9))
+            monkeypatch.setenv("EGO_MIN_FREE_MB", str(10**9))
     paths = {**places, "out": str(out), "spec": str(spec)}
     occupy = [a for a in args if a.startswith("@")]
     args = [a for a in args if not a.startswith("@")]
@@ -255,8 +443,15 @@ def test_a_bad_output_place_is_one_line_exit_2_before_anything_runs(args, messag
         out.mkdir(exist_ok=True)
         _occupy(out, o)
     before, started = _tree(tmp_path), SumoBridge.started
-    root_before = _tree(Path(places["root"])) if MOUNT or not os.access(places["ro"], os.W_OK) else None
-    shipped = {p: hashlib.sha256(p.read_bytes()).hexdigest() for p in (DEFAULT_MODEL, TUNED_PRESET)}
+    root_before = (
+        _tree(Path(places["root"]))
+        if MOUNT or not os.access(places["ro"], os.W_OK)
+        else None
+    )
+    shipped = {
+        p: hashlib.sha256(p.read_bytes()).hexdigest()
+        for p in (DEFAULT_MODEL, TUNED_PRESET)
+    }
     t0 = time.monotonic()
     status = main(_fill(args, paths))
     res = capsys.readouterr()
@@ -275,8 +470,8 @@ def test_a_bad_output_place_is_one_line_exit_2_before_anything_runs(args, messag
 
 def test_a_harmless_extra_name_inside_out_is_not_refused(tmp_path):
     """The checks refuse occupied names only: another file in runs/ is fine."""
-    from ego.paths import check_compare_outputs
     from ego.compare import plan
+    from ego.paths import check_compare_outputs
 
     out = tmp_path / "out"
     (out / "runs" / "notes.txt").parent.mkdir(parents=True)
@@ -293,12 +488,15 @@ def test_the_catalogue_is_big_enough_and_its_ids_unique():
 
 # -- odd inputs in Python ---------------------------------------------------------------------------
 
+
 def _gains_file(path: Path, text: str) -> str:
     path.write_text(text)
     return str(path)
 
 
-def _shipped_model(path: Path, change: dict | None = None, member: tuple[str, bytes] | None = None) -> str:
+def _shipped_model(
+    path: Path, change: dict | None = None, member: tuple[str, bytes] | None = None
+) -> str:
     with np.load(DEFAULT_MODEL) as data:
         arrays = {k: data[k] for k in data.files}
     arrays.update(change or {})
@@ -313,7 +511,7 @@ def _shipped_model(path: Path, change: dict | None = None, member: tuple[str, by
 def _huge_header_model(path: Path) -> str:
     """A model whose std member's header claims 10^12 values."""
     _shipped_model(path)
-    header = {"descr": "<f8", "fortran_order": False, "shape": (10 ** 12,)}
+    header = {"descr": "<f8", "fortran_order": False, "shape": (10**12,)}
     import io
 
     buf = io.BytesIO()
@@ -332,7 +530,9 @@ def _huge_header_model(path: Path) -> str:
 
 def _nets_copy(tmp_path: Path, how: str) -> str:
     dst = tmp_path / f"nets-{how}"
-    shutil.copytree(nets_dir(), dst, ignore=shutil.ignore_patterns("*.py", "__pycache__"))
+    shutil.copytree(
+        nets_dir(), dst, ignore=shutil.ignore_patterns("*.py", "__pycache__")
+    )
     net = dst / "highway" / "highway.net.xml"
     if how == "no-length":
         import re
@@ -341,7 +541,10 @@ def _nets_copy(tmp_path: Path, how: str) -> str:
     elif how == "other-scenario":
         shutil.copy(dst / "platoon" / "platoon.net.xml", net)
     elif how == "fewer-lanes":
-        shutil.copy(dst / "lane_centering" / "lane_centering.net.xml", dst / "platoon" / "platoon.net.xml")
+        shutil.copy(
+            dst / "lane_centering" / "lane_centering.net.xml",
+            dst / "platoon" / "platoon.net.xml",
+        )
     return str(dst)
 
 
@@ -358,30 +561,75 @@ def test_odd_inputs_in_python_are_config_errors(tmp_path, monkeypatch):
         "spec.load(5)": (lambda: sweep_spec.load(5), "bad sweep spec path 5"),
         "spec.load(/dev/zero)": (lambda: sweep_spec.load("/dev/zero"), "larger than"),
         "spec.load(folder)": (lambda: sweep_spec.load(str(tmp_path)), "it is a folder"),
-        "compare(out=5)": (lambda: compare("emergency-brake", ["pid"], 1, {}, 5), "bad out 5"),
-        "RunSpec(label=5)": (lambda: RunSpec("emergency-brake", "pid", label=5), "bad label 5"),
-        "RunSpec(trace=5)": (lambda: RunSpec("emergency-brake", "pid", trace=5), "bad trace 5"),
-        "gains-duplicate-key": (lambda: load_preset(_gains_file(tmp_path / "dup.json",
-                                                                '{"gains": [1], "gains": [2]}')), "given twice"),
-        "gains-deep-nesting": (lambda: load_preset(_gains_file(tmp_path / "deep.json", "[" * 100000 + "]" * 100000)),
-                               "nested too deeply"),
-        "model-std-denormal": (lambda: NarmaModel.load(_shipped_model(tmp_path / "denormal.npz",
-                                                                      {"std": np.full(5, 1e-320)})), "std"),
-        "model-member-not-npy": (lambda: NarmaModel.load(_shipped_model(tmp_path / "member.npz",
-                                                                        member=("notes.txt", b"hello"))),
-                                 "not npy data"),
-        "model-member-garbage-npy": (lambda: NarmaModel.load(_shipped_model(tmp_path / "garbage.npz",
-                                                                            member=("extra.npy", b"garbage"))),
-                                     "not npy data"),
-        "model-header-10^12": (lambda: NarmaModel.load(_huge_header_model(tmp_path / "huge.npz")), "claims"),
-        "model-metadata-deep": (lambda: (_shipped_model(tmp_path / "deepmeta.npz"),
-                                         (tmp_path / "deepmeta.json").write_text("{\"a\":" * 50000 + "1" + "}" * 50000),
-                                         NarmaModel.load(tmp_path / "deepmeta.npz")), "nested too deeply"),
+        "compare(out=5)": (
+            lambda: compare("emergency-brake", ["pid"], 1, {}, 5),
+            "bad out 5",
+        ),
+        "RunSpec(label=5)": (
+            lambda: RunSpec("emergency-brake", "pid", label=5),
+            "bad label 5",
+        ),
+        "RunSpec(trace=5)": (
+            lambda: RunSpec("emergency-brake", "pid", trace=5),
+            "bad trace 5",
+        ),
+        "gains-duplicate-key": (
+            lambda: load_preset(
+                _gains_file(tmp_path / "dup.json", '{"gains": [1], "gains": [2]}')
+            ),
+            "given twice",
+        ),
+        "gains-deep-nesting": (
+            lambda: load_preset(
+                _gains_file(tmp_path / "deep.json", "[" * 100000 + "]" * 100000)
+            ),
+            "nested too deeply",
+        ),
+        "model-std-denormal": (
+            lambda: NarmaModel.load(
+                _shipped_model(tmp_path / "denormal.npz", {"std": np.full(5, 1e-320)})
+            ),
+            "std",
+        ),
+        "model-member-not-npy": (
+            lambda: NarmaModel.load(
+                _shipped_model(tmp_path / "member.npz", member=("notes.txt", b"hello"))
+            ),
+            "not npy data",
+        ),
+        "model-member-garbage-npy": (
+            lambda: NarmaModel.load(
+                _shipped_model(
+                    tmp_path / "garbage.npz", member=("extra.npy", b"garbage")
+                )
+            ),
+            "not npy data",
+        ),
+        "model-header-10^12": (
+            lambda: NarmaModel.load(_huge_header_model(tmp_path / "huge.npz")),
+            "claims",
+        ),
+        "model-metadata-deep": (
+            lambda: (
+                _shipped_model(tmp_path / "deepmeta.npz"),
+                (tmp_path / "deepmeta.json").write_text(
+                    '{"a":' * 50000 + "1" + "}" * 50000
+                ),
+                NarmaModel.load(tmp_path / "deepmeta.npz"),
+            ),
+            "nested too deeply",
+        ),
     }
-    with np.load(DEFAULT_MODEL) as data:  # the denormal case needs the model's own std length
+    with np.load(
+        DEFAULT_MODEL
+    ) as data:  # the denormal case needs the model's own std length
         n = data["std"].size
-    cases["model-std-denormal"] = (lambda: NarmaModel.load(_shipped_model(tmp_path / "denormal.npz",
-                                                                          {"std": np.full(n, 1e-320)})), "std")
+    cases["model-std-denormal"] = (
+        lambda: NarmaModel.load(
+            _shipped_model(tmp_path / "denormal.npz", {"std": np.full(n, 1e-320)})
+        ),
+        "std",
+    )
     for name, (call, message) in cases.items():
         with pytest.raises(ConfigError) as info:
             call()
@@ -390,8 +638,11 @@ def test_odd_inputs_in_python_are_config_errors(tmp_path, monkeypatch):
     assert RunSpec("emergency-brake", "pid", seed=np.int64(3)).seed == 3
     assert type(RunSpec("emergency-brake", "pid", seed=np.int64(3)).seed) is int
     configure(RunSpec("emergency-brake", "pid", seed=np.int32(7)))
-    for how, message in (("no-length", "without a valid length"), ("other-scenario", "is not the highway network"),
-                         ("fewer-lanes", "is not the platoon network")):
+    for how, message in (
+        ("no-length", "without a valid length"),
+        ("other-scenario", "is not the highway network"),
+        ("fewer-lanes", "is not the platoon network"),
+    ):
         monkeypatch.setenv("EGO_SUMO_NETS", _nets_copy(tmp_path, how))
         scenario = "platoon" if how == "fewer-lanes" else "emergency-brake"
         controller = "bp-pid-acc" if how == "fewer-lanes" else "pid"
@@ -402,11 +653,20 @@ def test_odd_inputs_in_python_are_config_errors(tmp_path, monkeypatch):
 def test_sweep_spec_values_are_checked_against_set_not_defaults():
     from ego.sweep import spec as sweep_spec
 
-    ok = sweep_spec.parse({"scenario": "emergency-brake", "controllers": ["pid"], "set": {"duration": 40},
-                           "grid": {"lead_brake_time": [30]}})
+    ok = sweep_spec.parse(
+        {
+            "scenario": "emergency-brake",
+            "controllers": ["pid"],
+            "set": {"duration": 40},
+            "grid": {"lead_brake_time": [30]},
+        }
+    )
     assert ok.count() == 1
     for data, message in [
-        ({"set": {"duration": 3}, "grid": {"lead_brake_time": [2, 10]}}, "lead_brake_time: 10"),
+        (
+            {"set": {"duration": 3}, "grid": {"lead_brake_time": [2, 10]}},
+            "lead_brake_time: 10",
+        ),
         ({"grid": {"ego_speed": [20, "25"]}}, "mixes numbers and text"),
         ({"grid": {"abs": [True, "false"]}}, "mixes"),
         ({"grid": {"ego_speed": [20, 20.0]}}, "twice"),
@@ -415,16 +675,27 @@ def test_sweep_spec_values_are_checked_against_set_not_defaults():
         ({"grid": {"duration": [3, 40], "lead_brake_time": [10]}}, "duration = 3"),
     ]:
         with pytest.raises(ConfigError, match=message):
-            sweep_spec.parse({"scenario": "emergency-brake", "controllers": ["pid"], **data})
+            sweep_spec.parse(
+                {"scenario": "emergency-brake", "controllers": ["pid"], **data}
+            )
 
 
 # -- the sweep's results file ---------------------------------------------------------------------------
 
+
 def _ego(*args, cwd, env=None, timeout=240, preexec_fn=None, stdout=subprocess.PIPE):
     """``python -m ego ARGS`` in a session of its own; the result's ``pid`` is its session id."""
     full_env = dict(os.environ, **(env or {}))
-    proc = subprocess.Popen([sys.executable, "-m", "ego", *args], cwd=cwd, env=full_env, stdout=stdout,
-                            stderr=subprocess.PIPE, text=True, preexec_fn=preexec_fn, start_new_session=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "ego", *args],
+        cwd=cwd,
+        env=full_env,
+        stdout=stdout,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=preexec_fn,  # noqa: PLW1509 - sets a limit only, before exec
+        start_new_session=True,
+    )
     try:
         out, err = proc.communicate(timeout=timeout)
     except subprocess.TimeoutExpired:
@@ -437,26 +708,43 @@ def _ego(*args, cwd, env=None, timeout=240, preexec_fn=None, stdout=subprocess.P
 
 def _one_line_error(res, status: int, *needles: str) -> None:
     assert res.returncode == status, (res.returncode, res.stderr[-2000:])
-    lines = [line for line in res.stderr.splitlines() if line.startswith("ego: error: ")]
+    lines = [
+        line for line in res.stderr.splitlines() if line.startswith("ego: error: ")
+    ]
     assert len(lines) == 1, res.stderr[-2000:]
-    assert "Traceback" not in res.stderr and "Exception ignored" not in res.stderr, res.stderr[-2000:]
+    assert "Traceback" not in res.stderr and "Exception ignored" not in res.stderr, (
+        res.stderr[-2000:]
+    )
     for needle in needles:
         assert needle in lines[0], lines[0]
 
 
-def test_sweep_results_that_cannot_take_the_new_rows_are_refused_before_running(tmp_path):
+def test_sweep_results_that_cannot_take_the_new_rows_are_refused_before_running(
+    tmp_path,
+):
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    (tmp_path / "a.toml").write_text('scenario = "emergency-brake"\ncontrollers = ["pid"]\n[set]\nduration = 2\n'
-                                     '[grid]\nabs = ["true", "false"]\n')
-    (tmp_path / "b.toml").write_text('scenario = "emergency-brake"\ncontrollers = ["pid"]\n[set]\nduration = 2\n'
-                                     '[grid]\nabs = [true, false]\n')
-    (tmp_path / "c.toml").write_text('scenario = "fast-follower"\ncontrollers = ["pid"]\n[set]\nduration = 2\n')
-    first = _ego("sweep", "a.toml", "--out", "o", "--jobs", "1", "--record", "none", cwd=tmp_path)
+    (tmp_path / "a.toml").write_text(
+        'scenario = "emergency-brake"\ncontrollers = ["pid"]\n[set]\nduration = 2\n'
+        '[grid]\nabs = ["true", "false"]\n'
+    )
+    (tmp_path / "b.toml").write_text(
+        'scenario = "emergency-brake"\ncontrollers = ["pid"]\n[set]\nduration = 2\n'
+        "[grid]\nabs = [true, false]\n"
+    )
+    (tmp_path / "c.toml").write_text(
+        'scenario = "fast-follower"\ncontrollers = ["pid"]\n[set]\nduration = 2\n'
+    )
+    first = _ego(
+        "sweep", "a.toml", "--out", "o", "--jobs", "1", "--record", "none", cwd=tmp_path
+    )
     assert first.returncode == 0, first.stderr
     before = (tmp_path / "o" / "results.parquet").read_bytes()
-    for spec, needle in (("b.toml", "column abs holds text"), ("c.toml", "holds results of emergency-brake")):
+    for spec, needle in (
+        ("b.toml", "column abs holds text"),
+        ("c.toml", "holds results of emergency-brake"),
+    ):
         res = _ego("sweep", spec, "--out", "o", "--jobs", "1", cwd=tmp_path)
         _one_line_error(res, 2, needle)
         assert (tmp_path / "o" / "results.parquet").read_bytes() == before
@@ -473,7 +761,9 @@ def test_a_results_file_with_odd_rows_keeps_them_as_text(tmp_path):
 
     store = ResultStore(tmp_path, flush_rows=1000)
     store.add({"run_id": "a", "scenario": "s", "controller": "c", "seed": 0, "m": 1.5})
-    store.add({"run_id": "b", "scenario": "s", "controller": "c", "seed": 0, "m": "odd"})
+    store.add(
+        {"run_id": "b", "scenario": "s", "controller": "c", "seed": 0, "m": "odd"}
+    )
     store.flush()
     store.add({"run_id": "c", "scenario": "s", "controller": "c", "seed": 0, "m": True})
     store.flush()
@@ -481,6 +771,7 @@ def test_a_results_file_with_odd_rows_keeps_them_as_text(tmp_path):
 
 
 # -- a disk that fills during the run ---------------------------------------------------------------------
+
 
 class FullDisk:
     """A place where a write fails after the checks: a tmpfs with ~``room`` bytes free (and the
@@ -492,10 +783,13 @@ class FullDisk:
         self.room = room
         self.mounted = False
 
-    def __enter__(self) -> FullDisk:
+    def __enter__(self) -> Self:
         self.root.mkdir(parents=True, exist_ok=True)
         if MOUNT:
-            subprocess.run(["mount", "-t", "tmpfs", "-o", "size=4m", "tmpfs", str(self.root)], check=True)
+            subprocess.run(
+                ["mount", "-t", "tmpfs", "-o", "size=4m", "tmpfs", str(self.root)],
+                check=True,
+            )
             self.mounted = True
             free = os.statvfs(self.root).f_bavail * os.statvfs(self.root).f_frsize
             with open(self.root / ".filler", "wb") as f:
@@ -518,33 +812,75 @@ class FullDisk:
         def limit() -> None:
             signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
             resource.setrlimit(resource.RLIMIT_FSIZE, (room, room))
+
         return limit
 
     def files(self) -> list[str]:
-        return sorted(str(p.relative_to(self.root)) for p in self.root.rglob("*") if p.name != ".filler")
+        return sorted(
+            str(p.relative_to(self.root))
+            for p in self.root.rglob("*")
+            if p.name != ".filler"
+        )
 
 
-@pytest.mark.parametrize("option, name, room", [
-    ("--trace", "t.csv", 20_000), ("--trace", "t.parquet", 8_000), ("--trace", "t.mat", 20_000),
-    ("--record", "r.rrd", 20_000),
-])
-def test_a_run_whose_output_fills_the_disk_prints_its_metrics_and_one_line(option, name, room, tmp_path):
+@pytest.mark.parametrize(
+    "option, name, room",
+    [
+        ("--trace", "t.csv", 20_000),
+        ("--trace", "t.parquet", 8_000),
+        ("--trace", "t.mat", 20_000),
+        ("--record", "r.rrd", 20_000),
+    ],
+)
+def test_a_run_whose_output_fills_the_disk_prints_its_metrics_and_one_line(
+    option, name, room, tmp_path
+):
     with FullDisk(tmp_path / "disk", room) as disk:
-        res = _ego(*EB, option, str(disk.root / name), "--json", cwd=tmp_path, env=disk.env,
-                   preexec_fn=disk.preexec())
-        _one_line_error(res, 1, "cannot write", str(disk.root / name).rsplit(".", 1)[0], "Errno")
-        metrics = json.loads(res.stdout)  # the metrics are still printed, the status unchanged
+        res = _ego(
+            *EB,
+            option,
+            str(disk.root / name),
+            "--json",
+            cwd=tmp_path,
+            env=disk.env,
+            preexec_fn=disk.preexec(),
+        )
+        _one_line_error(
+            res, 1, "cannot write", str(disk.root / name).rsplit(".", 1)[0], "Errno"
+        )
+        metrics = json.loads(
+            res.stdout
+        )  # the metrics are still printed, the status unchanged
         assert metrics["status"] in ("completed", "ended", "timeout")
-        assert metrics["status"] == json.loads(_ego(*EB, "--json", cwd=tmp_path).stdout)["status"]
+        assert (
+            metrics["status"]
+            == json.loads(_ego(*EB, "--json", cwd=tmp_path).stdout)["status"]
+        )
         assert disk.files() == []  # no partial, no half file under the final name
 
 
-def test_a_sweep_whose_results_fill_the_disk_stops_in_one_line_without_hanging(tmp_path):
+def test_a_sweep_whose_results_fill_the_disk_stops_in_one_line_without_hanging(
+    tmp_path,
+):
     (tmp_path / "s.toml").write_text(SPEC)
-    with FullDisk(tmp_path / "disk", 6_000) as disk:  # room for the lock, not for the results
+    with FullDisk(
+        tmp_path / "disk", 6_000
+    ) as disk:  # room for the lock, not for the results
         t0 = time.monotonic()
-        res = _ego("sweep", "s.toml", "--out", str(disk.root / "o"), "--jobs", "2", "--record", "none",
-                   cwd=tmp_path, env=disk.env, preexec_fn=disk.preexec(), timeout=120)
+        res = _ego(
+            "sweep",
+            "s.toml",
+            "--out",
+            str(disk.root / "o"),
+            "--jobs",
+            "2",
+            "--record",
+            "none",
+            cwd=tmp_path,
+            env=disk.env,
+            preexec_fn=disk.preexec(),
+            timeout=120,
+        )
         _one_line_error(res, 1, "results.parquet", "Errno")
         assert time.monotonic() - t0 < 100
         assert not [f for f in disk.files() if f.endswith(".partial")]
@@ -577,35 +913,95 @@ def test_a_sweep_recording_every_run_on_a_full_disk_keeps_the_metrics(tmp_path):
     (tmp_path / "s.toml").write_text(SPEC)
     with FullDisk(tmp_path / "disk", 60_000) as disk:
         out = disk.root / "o"
-        res = _ego("sweep", "s.toml", "--out", str(out), "--jobs", "1", "--record", "all", cwd=tmp_path,
-                   env=disk.env, preexec_fn=disk.preexec(), timeout=180)
+        res = _ego(
+            "sweep",
+            "s.toml",
+            "--out",
+            str(out),
+            "--jobs",
+            "1",
+            "--record",
+            "all",
+            cwd=tmp_path,
+            env=disk.env,
+            preexec_fn=disk.preexec(),
+            timeout=180,
+        )
         assert "Traceback" not in res.stderr, res.stderr[-2000:]
-        assert not [f for f in disk.files() if f.endswith((".partial", ".rrd"))], disk.files()
+        assert not [f for f in disk.files() if f.endswith((".partial", ".rrd"))], (
+            disk.files()
+        )
         if res.returncode == 0:
             table = pq.read_table(out / "results.parquet").to_pydict()
-            assert set(table["status"]) <= {"completed", "ended", "timeout", "collision"}, table["status"]
-            assert all("cannot write" in e and "Errno" in e for e in table["error"]), table["error"]
+            assert set(table["status"]) <= {
+                "completed",
+                "ended",
+                "timeout",
+                "collision",
+            }, table["status"]
+            assert all("cannot write" in e and "Errno" in e for e in table["error"]), (
+                table["error"]
+            )
             assert all(isinstance(v, float) for v in table["sim_time"])
         else:  # the results file itself did not fit: one line, exit 1
             _one_line_error(res, 1, "cannot write", "Errno")
         assert not _session_left(res.pid)
 
 
-@pytest.mark.parametrize("args, room", [
-    (["train", "narma-l2", "--samples", "400", "--epochs", "1", "--out", "{disk}/m.npz"], 2_000),
-    (["tune", "lane-centering", "--quick", "--out", "{disk}/g.json"], 100),
-    (["compare", "emergency-brake", "--controllers", "pid", "--set", "duration=4", "--out", "{disk}/c"], 0),
-])
+@pytest.mark.parametrize(
+    "args, room",
+    [
+        (
+            [
+                "train",
+                "narma-l2",
+                "--samples",
+                "400",
+                "--epochs",
+                "1",
+                "--out",
+                "{disk}/m.npz",
+            ],
+            2_000,
+        ),
+        (["tune", "lane-centering", "--quick", "--out", "{disk}/g.json"], 100),
+        (
+            [
+                "compare",
+                "emergency-brake",
+                "--controllers",
+                "pid",
+                "--set",
+                "duration=4",
+                "--out",
+                "{disk}/c",
+            ],
+            0,
+        ),
+    ],
+)
 def test_train_tune_compare_on_a_full_disk_end_in_one_line(args, room, tmp_path):
     with FullDisk(tmp_path / "disk", room) as disk:
-        res = _ego(*[a.replace("{disk}", str(disk.root)) for a in args], cwd=tmp_path, env=disk.env,
-                   preexec_fn=disk.preexec())
+        res = _ego(
+            *[a.replace("{disk}", str(disk.root)) for a in args],
+            cwd=tmp_path,
+            env=disk.env,
+            preexec_fn=disk.preexec(),
+        )
         _one_line_error(res, 1, "cannot write", "Errno")
         assert not [f for f in disk.files() if f.endswith(".partial")]
 
 
-@pytest.mark.parametrize("args", [["list"], ["list", "--json"], ["list", "--markdown"],
-                                  [*EB, "--json"], ["--version"]])
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["list"],
+        ["list", "--json"],
+        ["list", "--markdown"],
+        [*EB, "--json"],
+        ["--version"],
+    ],
+)
 def test_stdout_on_a_full_device_is_one_line(args, tmp_path):
     with open("/dev/full", "w") as full:
         res = _ego(*args, cwd=tmp_path, stdout=full)
@@ -614,38 +1010,72 @@ def test_stdout_on_a_full_device_is_one_line(args, tmp_path):
 
 def test_the_shipped_files_survive_train_and_tune_pointed_at_them(tmp_path):
     before = {p: p.read_bytes() for p in (DEFAULT_MODEL, TUNED_PRESET)}
-    res = _ego("train", "narma-l2", "--samples", "400", "--epochs", "1", "--out", str(DEFAULT_MODEL), cwd=tmp_path)
+    res = _ego(
+        "train",
+        "narma-l2",
+        "--samples",
+        "400",
+        "--epochs",
+        "1",
+        "--out",
+        str(DEFAULT_MODEL),
+        cwd=tmp_path,
+    )
     _one_line_error(res, 2, "--install")
-    res = _ego("tune", "lane-centering", "--quick", "--out", str(TUNED_PRESET), cwd=tmp_path)
+    res = _ego(
+        "tune", "lane-centering", "--quick", "--out", str(TUNED_PRESET), cwd=tmp_path
+    )
     _one_line_error(res, 2, "--install")
     assert {p: p.read_bytes() for p in before} == before
 
 
 # -- signals in the first second ------------------------------------------------------------------------------
 
+
 def _rerun_env(tmp_path: Path) -> dict:
-    return {"XDG_CONFIG_HOME": str(tmp_path / "xdg-config"), "XDG_DATA_HOME": str(tmp_path / "xdg-data")}
+    return {
+        "XDG_CONFIG_HOME": str(tmp_path / "xdg-config"),
+        "XDG_DATA_HOME": str(tmp_path / "xdg-data"),
+    }
 
 
 def _verify(path: Path, tmp_path: Path) -> bool:
     rerun = Path(sys.executable).with_name("rerun")
-    res = subprocess.run([str(rerun), "rrd", "verify", str(path)], capture_output=True, text=True, timeout=120,
-                         env=dict(os.environ, **_rerun_env(tmp_path)))
+    res = subprocess.run(
+        [str(rerun), "rrd", "verify", str(path)],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=dict(os.environ, **_rerun_env(tmp_path)),
+    )
     return res.returncode == 0
 
 
 def _launch(tmp_path: Path, *extra: str) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "ego", *EB, "--record", str(tmp_path / "r.rrd"), *extra],
-                            cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True, env=dict(os.environ, **_rerun_env(tmp_path)))
+    return subprocess.Popen(
+        [sys.executable, "-m", "ego", *EB, "--record", str(tmp_path / "r.rrd"), *extra],
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        env=dict(os.environ, **_rerun_env(tmp_path)),
+    )
 
 
 @pytest.mark.parametrize("delay", [0.35, 0.5, 0.7, 1.0])
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
-def test_a_signal_in_the_first_second_is_exit_130_without_a_traceback(sig, delay, tmp_path):
+@pytest.mark.parametrize(
+    "sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"]
+)
+def test_a_signal_in_the_first_second_is_exit_130_without_a_traceback(
+    sig, delay, tmp_path
+):
     proc = _launch(tmp_path)
     time.sleep(delay)
-    os.killpg(proc.pid, sig) if sig == signal.SIGINT else proc.send_signal(sig)  # Ctrl-C reaches the group
+    os.killpg(proc.pid, sig) if sig == signal.SIGINT else proc.send_signal(
+        sig
+    )  # Ctrl-C reaches the group
     out, err = proc.communicate(timeout=120)
     assert proc.returncode == 130, (proc.returncode, err)
     assert "Traceback" not in err and "Exception ignored" not in err, err
@@ -665,10 +1095,12 @@ def test_a_double_ctrl_c_never_leaves_a_broken_recording(delay, tmp_path):
         os.killpg(proc.pid, signal.SIGINT)
     except ProcessLookupError:
         pass
-    out, err = proc.communicate(timeout=120)
+    _out, err = proc.communicate(timeout=120)
     assert proc.returncode in (0, 1, 130), (proc.returncode, err)
     assert "Traceback" not in err and "Exception ignored" not in err, err
-    for path in tmp_path.glob("r.rrd*"):  # a final recording or a partial one: each whole
+    for path in tmp_path.glob(
+        "r.rrd*"
+    ):  # a final recording or a partial one: each whole
         assert _verify(path, tmp_path), path
     assert not list(tmp_path.glob("*.partial"))
 
@@ -679,5 +1111,7 @@ def test_a_recorder_whose_writer_never_started_is_collected_quietly():
     rec = RerunRecorder.__new__(RerunRecorder)
     import multiprocessing
 
-    rec._proc = multiprocessing.get_context("spawn").Process(target=print)  # made, never started
+    rec._proc = multiprocessing.get_context("spawn").Process(
+        target=print
+    )  # made, never started
     rec.__del__()

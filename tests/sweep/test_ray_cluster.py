@@ -28,8 +28,10 @@ import psutil
 import pyarrow.parquet as pq
 import pytest
 
-SPEC = ('scenario = "emergency-brake"\ncontrollers = ["pid"]\nseeds = {seeds}\n[set]\nduration = 3\n'
-        '[grid]\nego_speed = [18, 20, 22, 24]\n')
+SPEC = (
+    'scenario = "emergency-brake"\ncontrollers = ["pid"]\nseeds = {seeds}\n[set]\nduration = 3\n'
+    "[grid]\nego_speed = [18, 20, 22, 24]\n"
+)
 
 
 @pytest.fixture(scope="module")
@@ -37,8 +39,14 @@ def cluster():
     os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
     from ray.cluster_utils import Cluster
 
-    c = Cluster(initialize_head=True, head_node_args={"num_cpus": 1, "node_ip_address": "127.0.0.1",
-                                                       "include_dashboard": False})
+    c = Cluster(
+        initialize_head=True,
+        head_node_args={
+            "num_cpus": 1,
+            "node_ip_address": "127.0.0.1",
+            "include_dashboard": False,
+        },
+    )
     workers = [c.add_node(num_cpus=1, node_ip_address="127.0.0.1") for _ in range(2)]
     c.wait_for_nodes()
     yield c, workers
@@ -46,8 +54,15 @@ def cluster():
 
 
 def _ego(*args: str, cwd: Path, **kw) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "ego", *args], cwd=cwd, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, start_new_session=True, **kw)
+    return subprocess.Popen(
+        [sys.executable, "-m", "ego", *args],
+        cwd=cwd,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        **kw,
+    )
 
 
 def _node_ids(c) -> set[str]:
@@ -57,9 +72,20 @@ def _node_ids(c) -> set[str]:
 def test_a_sweep_on_three_nodes_has_every_row_with_its_node(cluster, tmp_path):
     c, _ = cluster
     (tmp_path / "s.toml").write_text(SPEC.format(seeds=3))
-    proc = _ego("sweep", "s.toml", "--out", "o", "--engine", "ray", "--address", c.address, "--record", "none",
-                cwd=tmp_path)
-    out, err = proc.communicate(timeout=300)
+    proc = _ego(
+        "sweep",
+        "s.toml",
+        "--out",
+        "o",
+        "--engine",
+        "ray",
+        "--address",
+        c.address,
+        "--record",
+        "none",
+        cwd=tmp_path,
+    )
+    _out, err = proc.communicate(timeout=300)
     assert proc.returncode == 0, err[-3000:]
     table = pq.read_table(tmp_path / "o" / "results.parquet").to_pydict()
     assert len(table["run_id"]) == 12 and len(set(table["run_id"])) == 12
@@ -70,11 +96,24 @@ def test_a_sweep_on_three_nodes_has_every_row_with_its_node(cluster, tmp_path):
     assert "error" not in table["status"]
 
 
-def test_losing_a_worker_node_mid_sweep_costs_only_its_runs_one_retry(cluster, tmp_path):
+def test_losing_a_worker_node_mid_sweep_costs_only_its_runs_one_retry(
+    cluster, tmp_path
+):
     c, workers = cluster
     (tmp_path / "s.toml").write_text(SPEC.format(seeds=6))
-    proc = _ego("sweep", "s.toml", "--out", "o", "--engine", "ray", "--address", c.address, "--record", "none",
-                cwd=tmp_path)
+    proc = _ego(
+        "sweep",
+        "s.toml",
+        "--out",
+        "o",
+        "--engine",
+        "ray",
+        "--address",
+        c.address,
+        "--record",
+        "none",
+        cwd=tmp_path,
+    )
     victim = workers[0]
     lines: list[str] = []
 
@@ -100,8 +139,10 @@ def test_losing_a_worker_node_mid_sweep_costs_only_its_runs_one_retry(cluster, t
     assert 1 <= len(retried) <= 2, table["attempts"]
     assert all(table["node"][i] != victim.node_id for i in retried)
     assert max(table["attempts"]) == 2
-    c.add_node(num_cpus=1, node_ip_address="127.0.0.1")  # back to three nodes for the next tests
-    workers[0] = [n for n in c.worker_nodes if n is not workers[1]][0]
+    c.add_node(
+        num_cpus=1, node_ip_address="127.0.0.1"
+    )  # back to three nodes for the next tests
+    workers[0] = next(n for n in c.worker_nodes if n is not workers[1])
     c.wait_for_nodes()
 
 
@@ -124,8 +165,19 @@ def test_a_sigkilled_sweep_leaves_none_of_its_processes_on_any_node(cluster, tmp
     c, _ = cluster
     (tmp_path / "s.toml").write_text(SPEC.format(seeds=10))
     before = {p.pid for p in psutil.process_iter()}
-    proc = _ego("sweep", "s.toml", "--out", "o", "--engine", "ray", "--address", c.address, "--record", "none",
-                cwd=tmp_path)
+    proc = _ego(
+        "sweep",
+        "s.toml",
+        "--out",
+        "o",
+        "--engine",
+        "ray",
+        "--address",
+        c.address,
+        "--record",
+        "none",
+        cwd=tmp_path,
+    )
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and not _job_processes(before):
         time.sleep(0.2)
@@ -134,24 +186,45 @@ def test_a_sigkilled_sweep_leaves_none_of_its_processes_on_any_node(cluster, tmp
     proc.kill()
     proc.wait(timeout=30)
     deadline = time.monotonic() + 60
-    while time.monotonic() < deadline and (_job_processes(before) or any(d.is_running() and d.status() != "zombie"
-                                                                          for d in descendants)):
+    while time.monotonic() < deadline and (
+        _job_processes(before)
+        or any(d.is_running() and d.status() != "zombie" for d in descendants)
+    ):
         time.sleep(0.5)
-    assert not _job_processes(before), [p.info["cmdline"] for p in _job_processes(before)]
+    assert not _job_processes(before), [
+        p.info["cmdline"] for p in _job_processes(before)
+    ]
     assert not [d for d in descendants if d.is_running() and d.status() != "zombie"]
 
 
 def test_tune_with_sumo_costs_on_the_cluster(cluster, tmp_path):
     c, _ = cluster
-    proc = _ego("tune", "lane-centering", "--quick", "--cost", "sumo", "--engine", "ray", "--address", c.address,
-                "--duration", "2", "--out", "g.json", cwd=tmp_path)
-    out, err = proc.communicate(timeout=600)
+    proc = _ego(
+        "tune",
+        "lane-centering",
+        "--quick",
+        "--cost",
+        "sumo",
+        "--engine",
+        "ray",
+        "--address",
+        c.address,
+        "--duration",
+        "2",
+        "--out",
+        "g.json",
+        cwd=tmp_path,
+    )
+    _out, err = proc.communicate(timeout=600)
     assert proc.returncode == 0, err[-3000:]
     preset = json.loads((tmp_path / "g.json").read_text())
-    assert preset["gains"] and all(isinstance(g, float) for g in preset["gains"].values())
+    assert preset["gains"] and all(
+        isinstance(g, float) for g in preset["gains"].values()
+    )
 
 
 # -- without a cluster ------------------------------------------------------------------------------------
+
 
 def _free_port() -> int:
     with socket.socket() as s:
@@ -159,7 +232,9 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-@pytest.mark.parametrize("where", ["nothing", "refused-http", "unknown-host", "blackhole"])
+@pytest.mark.parametrize(
+    "where", ["nothing", "refused-http", "unknown-host", "blackhole"]
+)
 def test_an_address_without_a_ray_head_is_one_line_within_seconds(where, tmp_path):
     (tmp_path / "s.toml").write_text(SPEC.format(seeds=1))
     server = None
@@ -167,8 +242,11 @@ def test_an_address_without_a_ray_head_is_one_line_within_seconds(where, tmp_pat
         address, needle = "127.0.0.1:1", "Connection refused"
     elif where == "refused-http":
         port = _free_port()
-        server = subprocess.Popen([sys.executable, "-m", "http.server", str(port), "--bind", "127.0.0.1"],
-                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        server = subprocess.Popen(
+            [sys.executable, "-m", "http.server", str(port), "--bind", "127.0.0.1"],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
         for _ in range(100):
             try:
                 socket.create_connection(("127.0.0.1", port), timeout=0.2).close()
@@ -182,23 +260,48 @@ def test_an_address_without_a_ray_head_is_one_line_within_seconds(where, tmp_pat
         address, needle = "192.0.2.254:6379", ""  # TEST-NET: no answer or unreachable
     try:
         t0 = time.monotonic()
-        proc = _ego("sweep", "s.toml", "--out", "o", "--engine", "ray", "--address", address, cwd=tmp_path)
-        out, err = proc.communicate(timeout=60)
+        proc = _ego(
+            "sweep",
+            "s.toml",
+            "--out",
+            "o",
+            "--engine",
+            "ray",
+            "--address",
+            address,
+            cwd=tmp_path,
+        )
+        _out, err = proc.communicate(timeout=60)
         assert time.monotonic() - t0 < 15
     finally:
         if server is not None:
             server.kill()
             server.wait()
     assert proc.returncode == 2, err
-    assert err.startswith("ego: error: ") and err.count("\n") == 1 and "Traceback" not in err, err
+    assert (
+        err.startswith("ego: error: ")
+        and err.count("\n") == 1
+        and "Traceback" not in err
+    ), err
     assert address in err and needle in err
     assert not (tmp_path / "o").exists()
 
 
 def test_a_sigkilled_sweep_on_a_private_ray_leaves_no_ray_process(tmp_path):
     (tmp_path / "s.toml").write_text(SPEC.format(seeds=20))
-    proc = _ego("sweep", "s.toml", "--out", "o", "--engine", "ray", "--jobs", "1", "--record", "none",
-                cwd=tmp_path)
+    proc = _ego(
+        "sweep",
+        "s.toml",
+        "--out",
+        "o",
+        "--engine",
+        "ray",
+        "--jobs",
+        "1",
+        "--record",
+        "none",
+        cwd=tmp_path,
+    )
     deadline = time.monotonic() + 120
     ray_started = []
     while time.monotonic() < deadline:
