@@ -197,6 +197,7 @@ def test_a_sigkilled_sweep_leaves_none_of_its_processes_on_any_node(cluster, tmp
     assert not [d for d in descendants if d.is_running() and d.status() != "zombie"]
 
 
+@pytest.mark.benchmark  # about a minute: run with -m benchmark
 def test_tune_with_sumo_costs_on_the_cluster(cluster, tmp_path):
     c, _ = cluster
     proc = _ego(
