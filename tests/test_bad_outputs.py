@@ -830,14 +830,17 @@ class FullDisk:
         ("--trace", "t.parquet", 8_000),
         ("--trace", "t.mat", 20_000),
         ("--record", "r.rrd", 20_000),
+        ("--video", "v.gif", 20_000),
     ],
 )
 def test_a_run_whose_output_fills_the_disk_prints_its_metrics_and_one_line(
-    option, name, room, tmp_path
+    option, name, room, tmp_path, monkeypatch
 ):
+    run = EB + (["--backend", "highway-env"] if option == "--video" else [])
+    monkeypatch.setenv("MPLCONFIGDIR", str(tmp_path / "mpl"))
     with FullDisk(tmp_path / "disk", room) as disk:
         res = _ego(
-            *EB,
+            *run,
             option,
             str(disk.root / name),
             "--json",
@@ -854,7 +857,7 @@ def test_a_run_whose_output_fills_the_disk_prints_its_metrics_and_one_line(
         assert metrics["status"] in ("completed", "ended", "timeout")
         assert (
             metrics["status"]
-            == json.loads(_ego(*EB, "--json", cwd=tmp_path).stdout)["status"]
+            == json.loads(_ego(*run, "--json", cwd=tmp_path).stdout)["status"]
         )
         assert disk.files() == []  # no partial, no half file under the final name
 
