@@ -151,7 +151,7 @@ DIR_OPTIONS = {
 }
 
 CASES = []
-for key, (args, suffix, what) in FILE_OPTIONS.items():
+for key, (args, suffix, _what) in FILE_OPTIONS.items():
     CASES += [
         C(f"{key}-name-too-long", [*args, f"{{root}}/{TOO_LONG}{suffix}"], "too long"),
         C(
@@ -181,7 +181,7 @@ for key, (args, suffix, what) in FILE_OPTIONS.items():
         C(f"{key}-read-only-subfolder", [*args, f"{{ro}}/a/b/x{suffix}"], "{ro}"),
         C(f"{key}-tiny-filesystem", [*args, f"{{tiny}}/x{suffix}"], "free"),
     ]
-for key, (args, what) in DIR_OPTIONS.items():
+for key, (args, _what) in DIR_OPTIONS.items():
     CASES += [
         C(f"{key}-out-name-too-long", [*args, f"{{root}}/{TOO_LONG}"], "too long"),
         C(f"{key}-out-path-too-long", [*args, f"{{root}}/{DEEP}"], "too long"),

@@ -18,7 +18,7 @@ from ego.params import ConfigError
 MAX_MEMBER_BYTES = 256 * 1024 * 1024
 
 
-def check_npz_members(path: str | os.PathLike) -> None:
+def check_npz_members(path: str | os.PathLike[str]) -> None:
     """ConfigError (naming the member) unless every member of the archive at ``path`` is
     npy data whose header fits the member's size."""
     import numpy as np

@@ -28,8 +28,8 @@ The scenario flushes at least every simulated second.
 
 from __future__ import annotations
 
-import multiprocessing
 import errno
+import multiprocessing
 import os
 from collections import OrderedDict
 from collections.abc import Sequence
@@ -39,6 +39,8 @@ from pathlib import Path
 import numpy as np
 
 from ego.outputs import partial_path
+from ego.processes import main_module_hidden, signals_deferred
+from ego.record.base import Scene, Series, box_outlines, lane_edges
 
 # Rerun's file sink logs a failed write (a full disk) on stderr itself; ego reports it in one
 # line (OutputError), so Rerun's own log is off unless the user asks for it
@@ -47,8 +49,6 @@ os.environ.setdefault("RUST_LOG", "off")
 _ABANDONED: list = []
 #: how long closing a recording may wait for Rerun's file sink (s); longer is a stuck disk
 FLUSH_TIMEOUT = 120.0
-from ego.processes import main_module_hidden, signals_deferred
-from ego.record.base import Scene, Series, box_outlines, lane_edges
 
 TIMELINE = "sim_time"
 _GREY = (150, 150, 150)
