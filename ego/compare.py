@@ -134,6 +134,12 @@ def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict,
     if traces is not None and traces not in TRACE_FORMATS:
         raise ConfigError(f"bad --traces {traces!r} (allowed: {', '.join(TRACE_FORMATS)})")
     variants = {label: parse_variant(label, cls.task) for label in controllers}
+    files: dict[str, str] = {}
+    for label in controllers:
+        other = files.setdefault(file_label(label), label)
+        if other != label:
+            raise ConfigError(f"bad value for --controllers: {other!r} and {label!r} would share the "
+                              f"file name {file_label(label)!r}")
     resolved: list[tuple[str, str, Any]] = []  # one controller with the same values twice is one
     for label, (name, params) in variants.items():
         values = apply_overrides(controller_spec(name, cls.task).params(), params)[0]
@@ -142,12 +148,6 @@ def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict,
             raise ConfigError(f"bad value for --controllers: {same!r} and {label!r} are the same "
                               "controller with the same parameters")
         resolved.append((label, name, values))
-    files: dict[str, str] = {}
-    for label in controllers:
-        other = files.setdefault(file_label(label), label)
-        if other != label:
-            raise ConfigError(f"bad value for --controllers: {other!r} and {label!r} would share the "
-                              f"file name {file_label(label)!r}")
     known = parameter_namespace(cls, [name for name, _ in variants.values()])
     unknown = sorted(set(overrides) - set(known))
     if unknown:
