@@ -282,6 +282,17 @@ def check_folder_contents(
             raise ConfigError(f"{prefix}{name} inside it: {why}") from None
 
 
+def trace_files(path: str | os.PathLike[str], traffic: bool = True) -> list[Path]:
+    """The files :func:`ego.results.export.write_trace` writes for ``path`` (``traffic``: the run has a traffic log)."""
+    path = Path(path)
+    if path.suffix == ".csv":
+        return [path, path.with_name(f"{path.stem}.units.csv")] + \
+            ([path.with_name(f"{path.stem}.traffic.csv")] if traffic else [])
+    if path.suffix == ".parquet":
+        return [path] + ([path.with_name(f"{path.stem}.traffic.parquet")] if traffic else [])
+    return [path]
+
+
 def check_run_outputs(spec) -> None:
     """Every file one run (a :class:`ego.runner.RunSpec`) writes - its recording, its trace
     with the sidecar files beside it (``x.units.csv`` beside ``--trace x.csv``), its video -
@@ -291,8 +302,6 @@ def check_run_outputs(spec) -> None:
             os.fspath(spec.record), "--record path", os.fspath(spec.record)
         )
     if spec.trace is not None:
-        from ego.results.export import trace_files
-
         for path in trace_files(spec.trace):
             text = os.fspath(spec.trace)
             try:
@@ -327,8 +336,6 @@ def check_compare_outputs(out: str | os.PathLike, specs, traces: str | None) -> 
                 except ValueError:
                     pass
     if traces:
-        from ego.results.export import trace_files
-
         for spec in specs:
             for extra in trace_files(spec.trace)[1:]:
                 files.append(str(Path(extra).relative_to(out)))
