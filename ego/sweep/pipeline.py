@@ -25,6 +25,8 @@ from ego.runner import ResolvedRun
 _HOST = socket.gethostname()
 #: a recording failed in this worker process (see :func:`execute`)
 _WEDGED = False
+#: the process that drives the executor (an in-process executor's runs never end it)
+_DRIVER_PID: int | None = None
 
 
 @dataclass(frozen=True)
@@ -55,7 +57,7 @@ def execute(task: RunTask) -> RunRow:
     from ego.scenarios.base import NOT_FAILED
 
     global _WEDGED
-    if _WEDGED:  # see the docstring
+    if _WEDGED and os.getpid() != _DRIVER_PID:  # see the docstring; a worker, never the driver
         os._exit(75)
     t0 = time.perf_counter()
     resolved = task.run
@@ -101,6 +103,8 @@ def drive(executor: Executor, tasks: Iterable[RunTask], on_row: Callable[[RunTas
     ``progress(what, status)`` after it. Returns whether it was interrupted: a
     KeyboardInterrupt, or a run that came back ``interrupted`` (the in-process executor:
     the run caught the Ctrl-C), stops the rest."""
+    global _DRIVER_PID
+    _DRIVER_PID = os.getpid()
     try:
         for outcome in executor.run(execute, tasks):
             task: RunTask = outcome.task
