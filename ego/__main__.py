@@ -1,5 +1,3 @@
-import sys
+from ego._entry import run
 
-from ego.cli import main
-
-sys.exit(main())
+run()

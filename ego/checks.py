@@ -19,14 +19,34 @@ from ego.params import ConfigError
 MAX_SEED = 2**31 - 1
 #: more parallel processes than this (--jobs, --workers) is a typo, not a machine
 MAX_JOBS = 1024
+#: a JSON input (gains, metadata) larger than this is not one
+MAX_JSON_BYTES = 16 * 1024 * 1024
 
 
 def check_seed(value: Any, what: str = "seed") -> int:
     """``value`` as a seed, or ConfigError: a whole number from 0 to 2^31 - 1 (an int; a
     bool, float or string is refused rather than truncated)."""
+    import numbers
+
+    if isinstance(value, numbers.Integral) and not isinstance(value, (bool, int)):
+        value = int(value)  # a numpy integer
     if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= MAX_SEED:
         raise ConfigError(f"bad value for {what}: {value!r} (expected a whole number from 0 to {MAX_SEED})")
     return value
+
+
+def whole_number(what: str):
+    """An argparse ``type`` for a whole number written as ``--set`` takes one: ASCII digits
+    with an optional sign (``1_0``, ``٣``, `` 3`` and ``0x10`` are refused: ConfigError)."""
+    import re
+
+    def parse(text: str) -> int:
+        if not re.fullmatch(r"[+-]?[0-9]+", text):
+            raise ConfigError(f"bad value for {what}: {text!r} (expected a whole number written "
+                              "with the digits 0-9)")
+        return int(text)
+    parse.__name__ = "whole number (digits 0-9)"
+    return parse
 
 
 def _writable_ancestor(path: Path, what: str, text: str) -> None:
@@ -64,14 +84,37 @@ def check_output_file(text: str | None, what: str, suffix: str) -> Path:
     path = Path(text)
     if path.suffix != suffix:
         raise ConfigError(f"bad {what} {text!r} (expected a file ending in {suffix})")
-    if path.exists() and not path.is_file():
+    from ego.paths import check_path_names
+
+    check_path_names(path, what, text)
+    if path.is_dir():
         raise ConfigError(f"bad {what} {text!r}: it is a folder (expected a file ending in {suffix})")
+    if path.exists() and not path.is_file():
+        raise ConfigError(f"bad {what} {text!r}: it is not a regular file (a FIFO, socket or device; "
+                          f"expected a file ending in {suffix})")
     if path.exists() and not os.access(path, os.W_OK):
         raise ConfigError(f"bad {what} {text!r}: the file cannot be written")
     _writable_ancestor(path, what, text)
-    if str(path.resolve()).startswith("/proc/") or str(path.resolve()).startswith("/sys/"):
-        raise ConfigError(f"bad {what} {text!r}: not a place for files")
+    from ego.paths import check_file_target
+
+    check_file_target(path, what, text)
+    check_not_shipped(path, what, text)
     return path
+
+
+def check_not_shipped(path: Path, what: str, text: str) -> None:
+    """Files inside the installed ``ego`` package (the trained models, the tuned gains) are
+    replaced only through ``--install``; any other output there is refused."""
+    import ego
+
+    package = Path(os.path.realpath(Path(ego.__file__).parent))
+    try:
+        target = Path(os.path.realpath(path))
+    except (OSError, RuntimeError):
+        return
+    if target == package or package in target.parents:
+        raise ConfigError(f"bad {what} {text!r}: it is inside the ego package ({package}); the files "
+                          "shipped there are replaced only with --install")
 
 
 def check_output_dir(text: str | None, what: str) -> Path:
@@ -79,16 +122,17 @@ def check_output_dir(text: str | None, what: str) -> Path:
     if text is None or not str(text).strip():
         raise ConfigError(f"bad {what} {text!r} (expected a folder)")
     path = Path(text)
+    from ego.paths import check_folder_target, check_path_names
+
+    check_path_names(path, what, text, partial=False)
     if path.exists():
         if not path.is_dir():
             raise ConfigError(f"bad {what} {text!r}: it is a file (expected a folder)")
         if not os.access(path, os.W_OK | os.X_OK):
             raise ConfigError(f"bad {what} {text!r}: cannot write into it")
-        return path
+        return check_folder_target(path, what, text)
     _writable_ancestor(path, what, text)
-    if str(path.resolve()).startswith(("/proc/", "/sys/")):
-        raise ConfigError(f"bad {what} {text!r}: not a place for files")
-    return path
+    return check_folder_target(path, what, text)
 
 
 def check_input_file(text: str | os.PathLike, what: str, suffix: str) -> Path:
@@ -113,8 +157,21 @@ def read_json(text: str | os.PathLike, what: str) -> Any:
     def no_constant(name: str) -> Any:
         raise ValueError(f"{name} is not a number JSON allows")
 
+    def no_duplicates(pairs: list) -> dict:
+        seen: dict = {}
+        for key, value in pairs:
+            if key in seen:
+                raise ValueError(f"the key {key!r} is given twice")
+            seen[key] = value
+        return seen
+
     try:
-        return json.loads(path.read_text(encoding="utf-8"), parse_constant=no_constant)
+        if path.stat().st_size > MAX_JSON_BYTES:
+            raise ValueError(f"larger than {MAX_JSON_BYTES // (1024 * 1024)} MiB")
+        return json.loads(path.read_text(encoding="utf-8"), parse_constant=no_constant,
+                          object_pairs_hook=no_duplicates)
+    except RecursionError:
+        raise ConfigError(f"bad {what} {str(text)!r}: nested too deeply") from None
     except UnicodeDecodeError:
         raise ConfigError(f"bad {what} {str(text)!r}: not a text file (expected JSON)") from None
     except json.JSONDecodeError as exc:

@@ -37,6 +37,7 @@ import os
 import re
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 from ego.checks import check_count
 from ego.control import controller_spec
@@ -139,6 +140,14 @@ def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict,
         if other != label:
             raise ConfigError(f"bad value for --controllers: {other!r} and {label!r} would share the "
                               f"file name {file_label(label)!r}")
+    resolved: list[tuple[str, str, Any]] = []  # one controller with the same values twice is one
+    for label, (name, params) in variants.items():
+        values = apply_overrides(controller_spec(name, cls.task).params(), params)[0]
+        same = next((other for other, n, v in resolved if n == name and v == values), None)
+        if same is not None:
+            raise ConfigError(f"bad value for --controllers: {same!r} and {label!r} are the same "
+                              "controller with the same parameters")
+        resolved.append((label, name, values))
     known = parameter_namespace(cls, [name for name, _ in variants.values()])
     unknown = sorted(set(overrides) - set(known))
     if unknown:
@@ -178,8 +187,13 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
     the runs: every file is still written, the unfinished runs as rows with status
     ``interrupted``; the caller sees it in the rows.
     """
+    if not isinstance(out, (str, os.PathLike)):
+        raise ConfigError(f"bad out {out!r:.60} (expected a folder path)")
     out = Path(out)
     specs = plan(scenario, controllers, seeds, overrides, out, traces, backend)
+    from ego.paths import check_compare_outputs
+
+    check_compare_outputs(out, specs, traces)  # every file it writes, before anything runs
     # every value too (a bad --set value) before any process starts: once per controller,
     # since the seed changes nothing that is checked (100000 seeds would take a minute)
     variants: dict[str, ResolvedRun] = {}

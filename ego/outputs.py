@@ -24,6 +24,30 @@ LOCK_FILE = ".ego.lock"
 PARTIAL_SUFFIX = ".partial"
 
 
+class OutputError(RuntimeError):
+    """A write that failed after every check passed (the disk filled during the run, the
+    folder vanished): one line naming the file and the errno. ``result``: the run's result
+    when the failure came after a run (its metrics are still worth printing). The CLI
+    reports it in one line and exits 1."""
+
+    def __init__(self, message: str, result=None) -> None:
+        super().__init__(message)
+        self.result = result
+
+
+def output_error(path: str | Path, exc: BaseException, result=None) -> OutputError:
+    """The :class:`OutputError` for ``exc`` raised while writing ``path``."""
+    if isinstance(exc, OutputError):
+        return exc
+    if isinstance(exc, OSError) and exc.errno is not None:
+        import errno as _errno
+
+        why = f"[Errno {exc.errno} {_errno.errorcode.get(exc.errno, '?')}] {exc.strerror}"
+    else:
+        why = f"{type(exc).__name__}: {exc}"
+    return OutputError(f"cannot write {path}: {why}", result)
+
+
 def partial_path(path: str | Path, pid: int | None = None) -> Path:
     """The temporary name of ``path`` while process ``pid`` (default: this one) writes it.
     The pid keeps two writers of one file apart; the suffix says what the file is if its
@@ -48,9 +72,19 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     try:
         yield tmp
         os.replace(tmp, path)
+    except OSError as exc:  # a disk that filled, a folder that vanished: one line, no partial
+        _unlink_quietly(tmp)
+        raise output_error(path, exc) from None
     except BaseException:
-        tmp.unlink(missing_ok=True)
+        _unlink_quietly(tmp)
         raise
+
+
+def _unlink_quietly(path: Path) -> None:
+    try:
+        path.unlink(missing_ok=True)
+    except OSError:
+        pass
 
 
 def write_text(path: str | Path, text: str) -> None:
@@ -84,8 +118,12 @@ class FolderLock:
             raise ConfigError(f"bad {self.what} {str(self.folder)!r}: another ego process "
                               f"(pid {holder}) is writing into it; wait for it or choose another "
                               "folder") from None
-        os.ftruncate(fd, 0)
-        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        try:
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        except OSError as exc:  # a full disk: one line, before anything runs
+            os.close(fd)
+            raise output_error(self.folder / LOCK_FILE, exc) from None
         self._fd = fd
         return self
 

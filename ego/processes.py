@@ -17,6 +17,38 @@ def main_module_hidden():
     the script's file and spec are hidden while they start (multiprocessing reads them
     only then).
     """
+    with _stop_signals_blocked():
+        with _main_hidden():
+            yield
+
+
+@contextmanager
+def _stop_signals_blocked():
+    """SIGINT and SIGTERM blocked while a child starts: the child (the fork server, a
+    writer forked from it) inherits the mask, so a Ctrl-C to the process group in its first
+    instant - before it has set its own handlers - waits instead of printing a
+    KeyboardInterrupt traceback from inside the child; ego's children ignore both once they
+    run. This process gets any signal that came at the end of the block."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    # multiprocessing's resource tracker unblocks both signals after starting itself: started
+    # first, it leaves the mask alone while the child starts
+    from multiprocessing import resource_tracker
+
+    resource_tracker.ensure_running()
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+@contextmanager
+def _main_hidden():
     main = sys.modules.get("__main__")
     if main is None:
         yield

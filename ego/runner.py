@@ -77,6 +77,16 @@ class RunSpec:
                               "name to value)")
         if self.record is not None and not isinstance(self.record, (str, os.PathLike)):
             raise ConfigError(f"bad record {self.record!r} (expected a path ending in .rrd, or None)")
+        if not isinstance(self.label, str):
+            raise ConfigError(f"bad label {self.label!r} (expected text: the controller's name in the results)")
+        for name in ("trace", "video"):
+            value = getattr(self, name)
+            if value is not None and not isinstance(value, (str, os.PathLike)):
+                raise ConfigError(f"bad {name} {value!r} (expected a path, or None)")
+        import numbers
+
+        if isinstance(self.seed, numbers.Integral) and not isinstance(self.seed, (bool, int)):
+            object.__setattr__(self, "seed", int(self.seed))  # a numpy integer is a seed too
         if not isinstance(self.background_recording, bool):
             raise ConfigError(f"bad background_recording {self.background_recording!r} (expected true or false)")
 
@@ -179,6 +189,9 @@ def _check_outputs(spec: RunSpec) -> None:
         from ego.checks import check_output_file
 
         check_output_file(os.fspath(spec.record), "--record path", ".rrd")
+    from ego.paths import check_run_outputs
+
+    check_run_outputs(spec)  # every file the run writes (sidecars too), before anything runs
 
 
 def resolve(spec: RunSpec) -> ResolvedRun:
@@ -226,12 +239,25 @@ def build(what: RunSpec | ResolvedRun) -> Scenario:
 def run(what: RunSpec | ResolvedRun) -> RunResult:
     """Run one scenario to its end; SUMO and the recording are closed whatever happens.
     With ``spec.trace``, the trace is written there (an interrupted run's too)."""
+    from ego.outputs import OutputError, output_error
+
     resolved = what if isinstance(what, ResolvedRun) else resolve(what)
-    result = build(resolved).run()
+    scenario = build(resolved)
+    try:
+        result = scenario.run()
+    except OutputError as exc:  # the recording could not be written: the run's metrics stand
+        exc.result = scenario.result()
+        raise
     if resolved.spec.trace is not None:
         from ego.results.export import write_trace
 
-        write_trace(result, resolved.spec.trace)
+        try:
+            write_trace(result, resolved.spec.trace)
+        except OutputError as exc:
+            exc.result = result
+            raise
+        except OSError as exc:
+            raise output_error(resolved.spec.trace, exc, result) from None
     return result
 
 

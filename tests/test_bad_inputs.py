@@ -384,8 +384,8 @@ CLI = [
     # -- seeds and outputs of run --------------------------------------------------------------------------
     C("seed-negative", [*EB, "--seed", "-1"], "bad value for --seed: -1"),
     C("seed-2-31", [*EB, "--seed", "2147483648"], "bad value for --seed: 2147483648"),
-    C("seed-float", [*EB, "--seed", "1.5"], "invalid int value: '1.5'"),
-    C("seed-text", [*EB, "--seed", "abc"], "invalid int value: 'abc'"),
+    C("seed-float", [*EB, "--seed", "1.5"], "invalid whole number (digits 0-9) value: '1.5'"),
+    C("seed-text", [*EB, "--seed", "abc"], "invalid whole number (digits 0-9) value: 'abc'"),
     C("record-suffix", [*EB, "--record", "{out}/x.txt"], "expected a file ending in .rrd"),
     C("record-empty", [*EB, "--record", ""], "bad --record path ''"),
     C("record-folder", [*EB, "--record", "{folder.rrd}"], "it is a folder"),

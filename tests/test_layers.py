@@ -19,12 +19,12 @@ EGO = ROOT / "ego"
 
 LAYERS = [
     {"ego", "ego.params", "ego.checks", "ego.outputs", "ego.processes", "ego.native", "ego._native",
-     "ego.plugins"},
+     "ego.plugins", "ego.paths", "ego.reaper"},
     {"ego.models", "ego.control", "ego.fmi", "ego.sim", "ego.results", "ego.parallel", "ego.record", "ego.sumo",
-     "ego.highway_env", "ego.lane_frame", "ego.analytic_road"},
+     "ego.highway_env", "ego.lane_frame", "ego.analytic_road", "ego.cluster"},
     {"ego.scenarios", "ego.openscenario"},
     {"ego.runner", "ego.plots"},
-    {"ego.compare", "ego.sweep", "ego.gym", "ego.train", "ego.docs", "ego.cli", "ego.__main__"},
+    {"ego.compare", "ego.sweep", "ego.gym", "ego.train", "ego.docs", "ego.cli", "ego.__main__", "ego._entry"},
 ]
 LEVEL = {unit: i for i, layer in enumerate(LAYERS) for unit in layer}
 #: modules kept at an old path for compatibility: they only re-export a lower module

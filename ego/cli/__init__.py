@@ -41,7 +41,7 @@ import importlib
 import sys
 from collections.abc import Sequence
 
-from ego.cli.common import EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, terminate
+from ego.cli.common import EXIT_INTERRUPTED, EXIT_NOT_COMPLETED, EXIT_OK, EXIT_USAGE, terminate
 from ego.params import ConfigError
 
 #: command name -> the module that runs it (imported when the command runs)
@@ -60,6 +60,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     import signal
 
     from ego.cli.parser import parser
+    from ego.outputs import OutputError
     from ego.sim import SimError  # every backend's (SUMO's SumoError is one)
 
     if argv is None:  # the command itself, not a call from Python code
@@ -74,6 +75,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (ConfigError, SimError) as exc:
         print(f"ego: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
+    except OutputError as exc:  # a write failed after the checks (a full disk): one line
+        print(f"ego: error: {exc}", file=sys.stderr)
+        return EXIT_NOT_COMPLETED
     except KeyboardInterrupt:
         print("ego: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED

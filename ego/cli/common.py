@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import math
 import re
+import sys
 from pathlib import Path
 
 from ego.checks import check_output_file
@@ -34,6 +35,11 @@ class Parser(argparse.ArgumentParser):
         if choice:  # a misspelt command or choice: name the closest
             message += did_you_mean(choice.group(1), re.findall(r"'([^']*)'", choice.group(2)))
         raise ConfigError(message)
+
+    def _print_message(self, message: str, file=None) -> None:
+        """As argparse's, but a failed write (help on a full stdout) is not swallowed."""
+        if message:
+            (file or sys.stderr).write(message)
 
 
 def ego_entity(args, overrides: dict) -> dict:

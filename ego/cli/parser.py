@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from ego import __version__
+from ego.checks import whole_number
 from ego.cli.common import Parser
 from ego.highway_env import BACKENDS
 
@@ -62,7 +63,7 @@ def parser() -> argparse.ArgumentParser:
                      help=f"one of: {controllers_help()}; or a reference: package.module:Class, "
                           "path/to/file.py:Class or path/to/controller.fmu (docs/fmi.md)")
     run.add_argument("--record", metavar="PATH", help="write a Rerun recording (.rrd) here")
-    run.add_argument("--seed", type=int, default=0, metavar="N",
+    run.add_argument("--seed", type=whole_number("--seed"), default=0, metavar="N",
                      help="seed of the traffic and of SUMO (default 0)")
     run.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scenario or controller parameter (repeatable)")
@@ -96,11 +97,11 @@ def parser() -> argparse.ArgumentParser:
     cmp_.add_argument("--controllers", required=True, metavar="A,B,...",
                       help="comma-separated; a name, or a variant with its own parameters "
                            f"NAME@key=value[@key=value...] (pid@kp_lat=0.02), from: {controllers_help()}")
-    cmp_.add_argument("--seeds", type=int, default=1, metavar="N", help="seeds 0..N-1 (default 1)")
+    cmp_.add_argument("--seeds", type=whole_number("--seeds"), default=1, metavar="N", help="seeds 0..N-1 (default 1)")
     cmp_.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                       help="override a parameter (repeatable)")
     cmp_.add_argument("--out", required=True, metavar="DIR", help="output folder")
-    cmp_.add_argument("--jobs", type=int, default=None, metavar="J",
+    cmp_.add_argument("--jobs", type=whole_number("--jobs"), default=None, metavar="J",
                       help="parallel processes (default: the number of CPUs)")
     cmp_.add_argument("--backend", default="sumo", choices=BACKENDS,
                       help="traffic simulator (default sumo)")
@@ -131,7 +132,7 @@ def parser() -> argparse.ArgumentParser:
     swp.add_argument("--out", required=True, metavar="DIR", help="output folder (resumed if it holds results)")
     swp.add_argument("--engine", default="process", metavar="ENGINE",
                      help="process (default: a pool of worker processes) or ray")
-    swp.add_argument("--jobs", type=int, default=None, metavar="N",
+    swp.add_argument("--jobs", type=whole_number("--jobs"), default=None, metavar="N",
                      help="parallel runs (default: the number of CPUs)")
     swp.add_argument("--address", default=None, metavar="ADDR",
                      help="with --engine ray: join this Ray cluster (e.g. auto or ray://host:10001)")
@@ -176,10 +177,10 @@ def parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     trn.add_argument("what", metavar="MODEL", choices=["narma-l2"], help="narma-l2")
-    trn.add_argument("--seed", type=int, default=0, metavar="N", help="seed of data and training (default 0)")
-    trn.add_argument("--samples", type=int, default=20000, metavar="N",
+    trn.add_argument("--seed", type=whole_number("--seed"), default=0, metavar="N", help="seed of data and training (default 0)")
+    trn.add_argument("--samples", type=whole_number("--samples"), default=20000, metavar="N",
                      help="identification samples (default 20000)")
-    trn.add_argument("--epochs", type=int, default=150, metavar="N", help="training epochs (default 150)")
+    trn.add_argument("--epochs", type=whole_number("--epochs"), default=150, metavar="N", help="training epochs (default 150)")
     trn.add_argument("--speeds", default="20,40", metavar="LO,HI",
                      help="entry speed range in km/h (default 20,40)")
     trn.add_argument("--accels", default="0,0.6", metavar="LO,HI",
@@ -206,9 +207,9 @@ def parser() -> argparse.ArgumentParser:
     tun.add_argument("what", metavar="TASK", choices=["lane-centering"], help="lane-centering")
     tun.add_argument("--quick", action="store_true",
                      help="4 generations of a population of 4 x 12: a check, not a tuning")
-    tun.add_argument("--workers", type=int, default=1, metavar="N",
+    tun.add_argument("--workers", type=whole_number("--workers"), default=1, metavar="N",
                      help="processes sharing each generation (default 1)")
-    tun.add_argument("--seed", type=int, default=0, metavar="N", help="seed of the evolution (default 0)")
+    tun.add_argument("--seed", type=whole_number("--seed"), default=0, metavar="N", help="seed of the evolution (default 0)")
     tun.add_argument("--drives", default="8,25:1", metavar="V[:OFF],...",
                      help="drives whose costs are summed: speed in m/s, optionally the initial "
                           "offset in m (default 8,25:1; report 003: 8)")

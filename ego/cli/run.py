@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import sys
 from typing import Any
 
 from ego.checks import check_seed
@@ -20,7 +21,16 @@ def command(args: Any) -> int:
                    overrides=ego_entity(args, parse_overrides(args.overrides)), record=args.record, trace=args.trace,
                    backend=args.backend, video=args.video)
     resolved = resolve(spec)  # every name, value and path checked before anything runs
-    result = run(resolved)
+    from ego.outputs import OutputError
+
+    failure = None
+    try:
+        result = run(resolved)
+    except OutputError as exc:  # a write failed after the run: its metrics are still printed
+        if exc.result is None:
+            raise
+        result, failure = exc.result, exc
+        args.record = args.trace = args.video = None  # not written
     written = [str(p) for p in trace_files(args.trace, result.traffic is not None)] if args.trace else []
     units = metric_units(resolved.metrics_declared(), flatten(result.metrics))
     if args.json:
@@ -42,6 +52,10 @@ def command(args: Any) -> int:
             print(f"video: {args.video}")
         if written:
             print(f"trace: {', '.join(written)}")
+    if failure is not None:
+        sys.stdout.flush()
+        print(f"ego: error: {failure}", file=sys.stderr)
+        return EXIT_NOT_COMPLETED
     if result.status == "interrupted":
         return EXIT_INTERRUPTED
     return EXIT_OK if result.status in NOT_FAILED else EXIT_NOT_COMPLETED

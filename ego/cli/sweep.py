@@ -21,6 +21,10 @@ def command(args: Any) -> int:
     check_count(args.jobs, "--jobs", 1, MAX_JOBS)
     if args.address is not None and args.engine != "ray":
         raise ConfigError("--address needs --engine ray")
+    if args.address is not None:  # nothing listening there: one line in seconds, nothing written
+        from ego.cluster import check_address
+
+        check_address(args.address)
     choice(args.record, RECORD, "--record")
     for p in args.plot:
         parse_plot(p, spec)

@@ -21,6 +21,10 @@ def command(args: Any) -> int:
     r_lo, r_hi = parse_range(args.radii, "--radii", declared(DataSpec, "radius_min"))
     check_seed(args.seed, "--seed")
     out = model_out(args, DEFAULT_MODEL, "runs/narma_l2.npz", ".npz")
+    if not args.install:  # the metadata written beside the weights
+        from ego.paths import check_file_target
+
+        check_file_target(out.with_suffix(".json"), "--out path", str(out))
     data = DataSpec(samples=args.samples, speed_min=v_lo, speed_max=v_hi, accel_min=a_lo,
                     accel_max=a_hi, radius_min=r_lo, radius_max=r_hi)
     train(TrainSpec(seed=args.seed, epochs=args.epochs, data=data), out)

@@ -36,6 +36,10 @@ def command(args: Any) -> int:
         raise ConfigError("--engine, --address and --duration go with --cost sumo")
     if args.address is not None and args.engine != "ray":
         raise ConfigError("--address needs --engine ray")
+    if args.address is not None:
+        from ego.cluster import check_address
+
+        check_address(args.address)
     check_number(args.duration, "--duration", 1.0, MAX_DURATION, "s")
     spec = TuneSpec.quick(args.seed, args.workers) if args.quick else TuneSpec(seed=args.seed, workers=args.workers)
     tune(TuneSpec(**{**spec.__dict__, "drives": drives, "cost": args.cost, "engine": args.engine,

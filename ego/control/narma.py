@@ -80,9 +80,15 @@ class NarmaModel:
                               "(ego train narma-l2 writes both)")
         meta = read_json(meta_path, "NARMA-L2 metadata")
         try:
+            from ego.control.npz import check_npz_members
+
+            check_npz_members(path)  # every member npy data of a size the file can hold
             with np.load(path, allow_pickle=False) as data:
                 arrays = {k: data[k] for k in data.files}
-        except (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
+        except ConfigError as exc:
+            raise ConfigError(f"bad NARMA-L2 model {str(path)!r}: {exc}") from None
+        except (OSError, ValueError, EOFError, AttributeError, MemoryError, zipfile.BadZipFile,
+                zlib.error) as exc:
             raise ConfigError(f"bad NARMA-L2 model {str(path)!r}: not a readable .npz file "
                               f"({type(exc).__name__})") from None
         problem = _meta_problem(meta) or _arrays_problem(arrays)
@@ -112,6 +118,11 @@ class NarmaModel:
         """The model's y(k+1) for regressor ``x`` and steer ``u``."""
         f, g = self.f_g(x)
         return f + g * u
+
+
+#: the smallest standard deviation a feature may have: 1/std stays finite and the
+#: normalised regressor does not lose every digit
+MIN_STD = 1e-9
 
 
 def _meta_problem(meta: Any) -> str | None:
@@ -155,6 +166,9 @@ def _arrays_problem(arrays: dict[str, np.ndarray]) -> str | None:
             return f"the array {net}_w3 has {arrays[f'{net}_w3'].size} values (expected {arrays[f'{net}_b2'].size})"
     if (arrays["std"] <= 0).any():
         return "the array std has values that are not positive"
+    if (arrays["std"] < MIN_STD).any():
+        return (f"the array std has values below {MIN_STD:g} (1/std would overflow; "
+                f"smallest {float(arrays['std'].min()):g})")
     return None
 
 

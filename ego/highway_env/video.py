@@ -98,7 +98,9 @@ class VideoWriter:
             if self._ffmpeg is not None:
                 self._ffmpeg.stdin.close()
                 if self._ffmpeg.wait() != 0:
-                    raise RuntimeError(f"ffmpeg failed writing {self.path}")
+                    from ego.outputs import OutputError
+
+                    raise OutputError(f"cannot write {self.path}: ffmpeg failed (a full disk?)")
             elif self._frames:
                 self.path.parent.mkdir(parents=True, exist_ok=True)
                 first, *rest = self._frames
@@ -107,6 +109,10 @@ class VideoWriter:
             else:
                 return
             os.replace(self._tmp, self.path)
+        except OSError as exc:  # a full disk: one line naming the file (ego.outputs.OutputError)
+            from ego.outputs import output_error
+
+            raise output_error(self.path, exc) from None
         finally:
             self._frames = []
             self._ffmpeg = None

@@ -59,12 +59,17 @@ class RayExecutor:
             os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
             quiet: dict[str, Any] = dict(include_dashboard=False, logging_level=logging.ERROR,
                                          log_to_driver=False, ignore_reinit_error=True)
+            from ego.cluster import check_address, joining, reap_with_this_process
+
             if address is None:
+                reap_with_this_process()  # its processes end with this one, even SIGKILLed mid-start
                 # "local": always a private instance, never a cluster found by chance
                 ray.init(address="local", num_cpus=int(workers or default_workers()),
                          _node_ip_address="127.0.0.1", **quiet)
             else:
-                ray.init(address=address, **quiet)
+                check_address(address)  # nothing listening: one line in seconds, not minutes
+                with joining(address):
+                    ray.init(address=address, **quiet)
             self._started = True
         if workers:
             self.workers = max(1, int(workers))

@@ -28,6 +28,7 @@ The scenario flushes at least every simulated second.
 
 from __future__ import annotations
 
+import errno
 import multiprocessing
 import os
 from collections import OrderedDict
@@ -40,6 +41,14 @@ import numpy as np
 from ego.outputs import partial_path
 from ego.processes import main_module_hidden, signals_deferred
 from ego.record.base import Scene, Series, box_outlines, lane_edges
+
+# Rerun's file sink logs a failed write (a full disk) on stderr itself; ego reports it in one
+# line (OutputError), so Rerun's own log is off unless the user asks for it
+os.environ.setdefault("RUST_LOG", "off")
+#: recording streams whose file could not be written (see RerunWriter.discard)
+_ABANDONED: list = []
+#: how long closing a recording may wait for Rerun's file sink (s); longer is a stuck disk
+FLUSH_TIMEOUT = 120.0
 
 TIMELINE = "sim_time"
 _GREY = (150, 150, 150)
@@ -118,14 +127,25 @@ class RerunRecorder:
             self._box_t, self._box_n, self._box_rows, self._box_labels, self._follow = [], [], [], [], []
 
     def close(self) -> None:
-        """Flush, let the writer finish the file, and report its failure if it had one."""
+        """Flush, let the writer finish the file, and report its failure if it had one.
+        Ctrl-C and SIGTERM wait until the file is whole (a second Ctrl-C must not leave half
+        a recording)."""
+        from ego.processes import signals_deferred
+
+        with signals_deferred():
+            self._close()
+
+    def _close(self) -> None:
         if not self._open:
             self._shutdown()
             return
         self._open = False
         self.flush()
         if self._writer is not None:
-            self._writer.close()
+            try:
+                self._writer.close()
+            except OSError as exc:  # a full disk: reported below as an OutputError
+                self._error = _describe(exc)
         else:
             self._send("close")
             if self._error is None:
@@ -137,14 +157,21 @@ class RerunRecorder:
                     self._error = "the writer process died"
         self._shutdown()
         if self._error is not None:
-            raise RuntimeError(f"recording to {self.path} failed: {self._error}")
+            from ego.outputs import OutputError
+
+            raise OutputError(f"cannot write {self.path}: {self._error}")
 
     # -- plumbing ------------------------------------------------------------------------------
     def _send(self, kind: str, *payload) -> None:
         """Hand a batch to the writer. The pipe is widened to 1 MiB, so this only copies
         bytes: the writer drains it on the other core while the loop goes on."""
         if self._writer is not None:
-            self._writer.handle(kind, *payload)
+            if self._error is None:  # a failed recording stops; the run goes on
+                try:
+                    self._writer.handle(kind, *payload)
+                except Exception as exc:  # noqa: BLE001 - reported by close() as an OutputError
+                    self._error = _describe(_write_failure(self._writer._partial, exc))
+                    self._writer.discard()
             return
         if self._error is not None:
             return
@@ -168,8 +195,12 @@ class RerunRecorder:
             self._proc = None
 
     def __del__(self) -> None:
-        if getattr(self, "_proc", None) is not None:
-            self._proc.kill()
+        proc = getattr(self, "_proc", None)
+        if proc is not None and getattr(proc, "_popen", None) is not None:  # never started: nothing to end
+            try:
+                proc.kill()
+            except (OSError, ValueError, AttributeError):
+                pass
 
 
 def _widen_pipe(conn) -> None:
@@ -218,10 +249,24 @@ def _writer_main(batches, replies, path: str, application_id: str, recording_id:
             writer.close(finished=False)
         return
     except Exception as exc:  # noqa: BLE001 - reported to the simulation process
-        try:
-            replies.send(("error", f"{type(exc).__name__}: {exc}"))
+        if writer is not None:
+            exc = _write_failure(writer._partial, exc)  # the errno, asked before the file goes
+        try:  # first: the simulation process stops sending and goes on
+            replies.send(("error", _describe(exc)))
         except OSError:
             pass
+        if writer is not None:  # no half recording left behind
+            writer.discard()
+            os._exit(0)  # Python's exit would wait for Rerun's stuck thread: the reply is sent
+
+
+def _describe(exc: BaseException) -> str:
+    """An error as one line: an OSError with its errno name, else type and message."""
+    if isinstance(exc, OSError) and exc.errno is not None:
+        import errno
+
+        return f"[Errno {exc.errno} {errno.errorcode.get(exc.errno, '?')}] {exc.strerror}"
+    return f"{type(exc).__name__}: {exc}"
 
 
 class RerunWriter:
@@ -257,8 +302,9 @@ class RerunWriter:
         self._constants = [s for s in series if s.constant is not None]
         self._states = {s.column: s for s in series if s.states}
         self._colors = dict(meta.get("colors", {}))
-        self._rec.save(self._partial, default_blueprint=_blueprint(scene, series))
-        self._open = True
+        self._open = True  # from here, close() or discard() ends the file
+        blueprint = _blueprint(scene, series)
+        _watched(lambda: self._rec.save(self._partial, default_blueprint=blueprint), self._partial)
         rec = self._rec
         rec.log(MAP, rr.Transform3D(scale=[1.0, -1.0, 1.0]), static=True)
         edges = []
@@ -359,13 +405,110 @@ class RerunWriter:
 
     def close(self, finished: bool = True) -> None:
         """End the file; put it in place unless its run did not finish (``finished=False``:
-        the simulation process died, the file keeps its partial name)."""
+        the simulation process died, the file keeps its partial name). A file the sink
+        could not write whole (a full disk) is removed and an OSError raised: a final name
+        only ever holds a whole recording."""
         if self._open:
             self._open = False
-            self._rec.flush()
-            self._rec.disconnect()
-            if finished:
-                os.replace(self._partial, self.path)
+            try:
+                _flush(self._rec, self._partial)
+                self._rec.disconnect()
+                if finished:
+                    _check_written(self._partial)
+                    os.replace(self._partial, self.path)
+            except Exception as exc:  # noqa: BLE001 - no half recording under any name
+                failure = _write_failure(self._partial, exc)  # asked before the file goes
+                self.discard()
+                raise failure from None
+
+    def discard(self) -> None:
+        """Drop the unfinished file (a write failed): its name first, so nothing is left even
+        if Rerun's sink then takes its time to stop."""
+        self._open = False
+        try:
+            self._partial.unlink(missing_ok=True)
+        except OSError:
+            pass
+        # Rerun's sink may wait for ever on a writer thread a full disk stopped: give it a
+        # few seconds in a thread of its own, then leave it
+        import threading
+
+        def disconnect() -> None:
+            try:
+                self._rec.disconnect()
+            except Exception:  # noqa: BLE001 - the file is going anyway
+                pass
+
+        thread = threading.Thread(target=disconnect, name="ego-rerun-discard", daemon=True)
+        thread.start()
+        thread.join(timeout=5.0)
+        # dropping the stream would join its forwarding thread, which Rerun leaves waiting for
+        # the dead file writer: the stream is kept for the life of the process instead
+        _ABANDONED.append(self._rec)
+
+
+def _flush(rec, partial: Path) -> None:
+    """``rec.flush()``, watched (:func:`_watched`)."""
+    _watched(lambda: rec.flush(timeout_sec=FLUSH_TIMEOUT), partial)
+
+
+def _watched(call, partial: Path) -> None:
+    """``call()`` (a Rerun call that writes ``partial``), watched: when the file's
+    filesystem is full and the file has stopped growing for a second, Rerun's file writer
+    has died (its save and flush may then wait for ever instead of failing): OSError
+    ENOSPC, and the call is left to its thread."""
+    import threading
+    import time
+
+    failure: list[BaseException] = []
+
+    def work() -> None:
+        try:
+            call()
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller
+            failure.append(exc)
+
+    thread = threading.Thread(target=work, name="ego-rerun-flush", daemon=True)
+    thread.start()
+    size, still = -1, time.monotonic()
+    while thread.is_alive():
+        thread.join(timeout=0.1)
+        try:
+            now = os.path.getsize(partial)
+            full = os.statvfs(partial.parent).f_bavail == 0
+        except OSError:
+            continue
+        if now != size:
+            size, still = now, time.monotonic()
+        elif full and time.monotonic() - still > 1.0:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(partial))
+    if failure:
+        raise failure[0]
+
+
+def _check_written(partial: Path) -> None:
+    """Rerun's file sink reports a failed write only in its log; an empty or missing file is
+    one too."""
+    try:
+        size = os.path.getsize(partial)
+    except OSError as exc:
+        raise exc
+    if size == 0:
+        raise OSError(errno.EIO, "the recording is empty", str(partial))
+
+
+def _write_failure(partial: Path, exc: BaseException) -> OSError:
+    """``exc`` (Rerun's ``RuntimeError: File-writer thread shut down prematurely`` says no
+    more) as an OSError with the errno the filesystem explains it by."""
+    if isinstance(exc, OSError):
+        return exc
+    try:
+        vfs = os.statvfs(partial.parent)
+        if vfs.f_bavail == 0:
+            return OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(partial))
+    except OSError:
+        pass
+    return OSError(errno.EIO, f"the recording's writer failed ({type(exc).__name__}: {exc})", str(partial))
 
 
 def _panels(series: Sequence[Series]) -> OrderedDict[str, list[Series]]:

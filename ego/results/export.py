@@ -38,6 +38,7 @@ import numpy as np
 from ego.checks import check_output_file
 from ego.outputs import atomic_path
 from ego.params import ConfigError
+from ego.paths import trace_files
 from ego.results.traffic_log import UNITS as TRAFFIC_UNITS
 from ego.results.traffic_log import TrafficLog
 
@@ -60,17 +61,6 @@ def check_trace_path(text: str | None, what: str = "--trace path") -> Path:
         raise ConfigError(f"bad {what} {text!r}: unknown suffix {suffix or '(none)'!r} "
                           f"(allowed: {', '.join(TRACE_SUFFIXES)})")
     return check_output_file(text, what, suffix)
-
-
-def trace_files(path: str | os.PathLike[str], traffic: bool = True) -> list[Path]:
-    """The files :func:`write_trace` writes for ``path`` (``traffic``: the run has a traffic log)."""
-    path = Path(path)
-    if path.suffix == ".csv":
-        return [path, path.with_name(f"{path.stem}.units.csv")] + \
-            ([path.with_name(f"{path.stem}.traffic.csv")] if traffic else [])
-    if path.suffix == ".parquet":
-        return [path] + ([path.with_name(f"{path.stem}.traffic.parquet")] if traffic else [])
-    return [path]
 
 
 def write_trace(result: RunResult, path: str | os.PathLike[str]) -> list[Path]:

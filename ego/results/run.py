@@ -92,6 +92,10 @@ class RunRow:
     wall_time: float | None = None
     #: the machine that ran it
     host: str | None = None
+    #: the Ray node that ran it (None: not on Ray)
+    node: str | None = None
+    #: how many workers it took (2: its worker, or node, died once)
+    attempts: int = 1
 
     @classmethod
     def from_result(cls, result: RunResult, name: str, keep: tuple[str, ...] | None = None,

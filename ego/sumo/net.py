@@ -112,11 +112,21 @@ def check_network(path: Path) -> None:
 def _check_network(path: Path) -> None:
     edges = 0
     root = None
+    lanes: dict[str, int] = {}  # edge id -> its lanes (internal edges, ":...", left out)
+    edge = None
     try:
         for _event, elem in ET.iterparse(path, events=("start",)):
             if root is None:
                 root = elem.tag
-            edges += elem.tag == "edge"
+            if elem.tag == "edge":
+                edges += 1
+                edge = elem.get("id", "")
+                if not edge.startswith(":"):
+                    lanes[edge] = 0
+            elif elem.tag == "lane":
+                _check_lane(path, elem)
+                if edge in lanes:
+                    lanes[edge] += 1
     except ET.ParseError as exc:
         raise ConfigError(f"the SUMO network {path} is not valid XML ({exc}); rebuild it: "
                           "python sumo_nets/build.py") from None
@@ -125,6 +135,44 @@ def _check_network(path: Path) -> None:
     if root != "net" or not edges:
         raise ConfigError(f"the SUMO network {path} is not a SUMO network (expected a <net> with edges); "
                           "rebuild it: python sumo_nets/build.py")
+    _check_sources(path, lanes)
+
+
+def _check_lane(path: Path, elem) -> None:
+    """A lane needs a finite positive ``length`` (the scenarios read it before SUMO starts)."""
+    import math
+
+    text = elem.get("length")
+    try:
+        length = float(text)
+    except (TypeError, ValueError):
+        length = math.nan
+    if not (math.isfinite(length) and length > 0):
+        raise ConfigError(f"the SUMO network {path} has a lane ({elem.get('id')!r}) without a valid length "
+                          f"({text!r}); rebuild it: python sumo_nets/build.py")
+
+
+def _check_sources(path: Path, lanes: dict[str, int]) -> None:
+    """The built network must be the one its folder's sources (``<name>.edg.xml``) describe:
+    every edge there, with its number of lanes - another network copied under this name
+    (another scenario's) is refused here, not found out inside SUMO."""
+    name = path.name.removesuffix(".net.xml")
+    source = path.with_name(f"{name}.edg.xml")
+    if not source.is_file():
+        return
+    try:
+        declared = {e.get("id"): e.get("numLanes") for e in ET.parse(source).getroot().iter("edge")}
+    except (ET.ParseError, OSError):
+        return  # the sources are netconvert's input, not read by a run
+    for edge, count in declared.items():
+        if edge not in lanes:
+            raise ConfigError(f"the SUMO network {path} is not the {name} network: it has no edge {edge!r} "
+                              f"(its edges: {', '.join(sorted(lanes)) or 'none'}); rebuild it: "
+                              "python sumo_nets/build.py")
+        if count is not None and count.isdigit() and int(count) != lanes[edge]:
+            raise ConfigError(f"the SUMO network {path} is not the {name} network: edge {edge!r} has "
+                              f"{lanes[edge]} lanes, its sources say {count}; rebuild it: "
+                              "python sumo_nets/build.py")
 
 
 def build_network(name: str, output: Path | None = None) -> Path:

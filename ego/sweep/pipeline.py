@@ -10,7 +10,9 @@ over controllers x seeds; ``ego sweep`` over a spec's points.
 
 from __future__ import annotations
 
+import os
 import socket
+import sys
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
@@ -21,6 +23,10 @@ from ego.results.run import RunRow
 from ego.runner import ResolvedRun
 
 _HOST = socket.gethostname()
+#: a recording failed in this worker process (see :func:`execute`)
+_WEDGED = False
+#: the process that drives the executor (an in-process executor's runs never end it)
+_DRIVER_PID: int | None = None
 
 
 @dataclass(frozen=True)
@@ -40,22 +46,54 @@ class RunTask:
 
 
 def execute(task: RunTask) -> RunRow:
-    """Worker: run the task's run into its row (never raises)."""
+    """Worker: run the task's run into its row (never raises).
+
+    A recording that a full disk stopped keeps the row's metrics (``error`` names the file);
+    Rerun's file sink can then leave threads of this process waiting for ever, so the
+    worker does not take another run: it ends, and the engine gives the next run a fresh
+    worker (that run's ``attempts`` is 2)."""
+    from ego.outputs import OutputError
     from ego.runner import run
     from ego.scenarios.base import NOT_FAILED
 
+    global _WEDGED
+    if _WEDGED and os.getpid() != _DRIVER_PID:  # see the docstring; a worker, never the driver
+        os._exit(75)
     t0 = time.perf_counter()
     resolved = task.run
     try:
-        result = run(resolved)
+        recording_error = ""
+        try:
+            result = run(resolved)
+        except OutputError as exc:  # the recording failed (a full disk): the run's metrics stand
+            if exc.result is None:
+                raise
+            result = exc.result
+            recording_error = str(exc)
+            _WEDGED = True
         if task.record_failed is not None and result.status not in NOT_FAILED:
             run(resolved.with_outputs(record=task.record_failed))
         row = RunRow.from_result(result, resolved.name, task.keep, task.details)
+        row.error = recording_error
     except Exception as exc:  # noqa: BLE001 - a broken run is a row, never the end of the job
         row = RunRow(resolved.name, resolved.seed, "error", {}, error=f"{type(exc).__name__}: {exc}")
     row.wall_time = time.perf_counter() - t0
     row.host = _HOST
+    row.node = node_id()
     return row
+
+
+def node_id() -> str | None:
+    """The Ray node this process runs on (its node id), or None outside a Ray worker."""
+    ray = sys.modules.get("ray")
+    if ray is None:
+        return None
+    try:
+        if ray.is_initialized():
+            return str(ray.get_runtime_context().get_node_id())
+    except Exception:  # noqa: BLE001 - the id is a label, never the end of a row
+        return None
+    return None
 
 
 def drive(executor: Executor, tasks: Iterable[RunTask], on_row: Callable[[RunTask, RunRow], None],
@@ -65,10 +103,14 @@ def drive(executor: Executor, tasks: Iterable[RunTask], on_row: Callable[[RunTas
     ``progress(what, status)`` after it. Returns whether it was interrupted: a
     KeyboardInterrupt, or a run that came back ``interrupted`` (the in-process executor:
     the run caught the Ctrl-C), stops the rest."""
+    global _DRIVER_PID
+    _DRIVER_PID = os.getpid()
+
     def take(outcome: Outcome) -> str:
         task: RunTask = outcome.task
         row = outcome.value if outcome.value is not None else RunRow(
             task.run.name, task.run.seed, "error", {}, error=outcome.error)
+        row.attempts = outcome.attempts  # 2: its worker (or node) died once
         on_row(task, row)
         if progress is not None:
             progress(f"{row.controller} seed {row.seed}", row.status)

@@ -14,11 +14,12 @@ import time
 from collections.abc import Iterable
 from pathlib import Path
 
-from ego.outputs import atomic_path
+from ego.outputs import atomic_path, output_error
+from ego.params import ConfigError
 
 #: columns every row has, first
 KEY_COLUMNS = ("run_id", "scenario", "controller", "seed")
-TAIL_COLUMNS = ("wall_time", "host", "error")
+TAIL_COLUMNS = ("wall_time", "host", "node", "attempts", "error")
 
 
 def _pa():
@@ -43,10 +44,35 @@ class ResultStore:
             try:
                 self._table = pq.read_table(self.path)
             except Exception as exc:  # noqa: BLE001 - a damaged file is the user's to resolve
-                from ego.params import ConfigError
-
                 raise ConfigError(f"cannot read {self.path} to resume ({type(exc).__name__}: {exc}); "
                                   "move it away to start over") from None
+
+    def check_compatible(self, scenario: str, rows: Iterable[dict]) -> None:
+        """Refuse, before anything runs, to add rows to a results file they do not belong in:
+        one without ``run_id`` (not a sweep's), one of another scenario, or one whose columns
+        hold another kind of value than ``rows`` (samples of the new rows: the key columns
+        and overrides) would put there. ConfigError naming the file and the column."""
+        if self._table is None:
+            return
+        names = self._table.column_names
+        where = f"--out: {self.path}"
+        if "run_id" not in names:
+            raise ConfigError(f"bad {where} has no run_id column (not the results of an ego sweep); "
+                              "move it away or choose another --out")
+        if "scenario" in names:
+            others = sorted({s for s in self._table.column("scenario").to_pylist() if s is not None} - {scenario})
+            if others:
+                raise ConfigError(f"bad {where} holds results of {', '.join(others)}, this spec is "
+                                  f"{scenario}; one results file per scenario: choose another --out")
+        schema = self._table.schema
+        for row in rows:
+            for key, value in _normalise(row).items():
+                if key not in names or value is None:
+                    continue
+                have, want = _arrow_kind(schema.field(key).type), _kind(value)
+                if have not in ("null", want):
+                    raise ConfigError(f"bad {where}: its column {key} holds {have}, this spec gives "
+                                      f"{key} = {value!r} ({want}); choose another --out")
 
     def done_ids(self) -> set[str]:
         """The run ids already stored."""
@@ -68,11 +94,12 @@ class ResultStore:
         if not self._pending:
             return
         pa, pq = _pa()
-        batch = pa.Table.from_pylist([_normalise(r) for r in self._pending])
-        table = batch if self._table is None else pa.concat_tables(
-            [self._table, batch], promote_options="permissive")
+        try:
+            table = _combined(self._table, [_normalise(r) for r in self._pending])
+        except Exception as exc:  # noqa: BLE001 - reported in one line, never a hang
+            raise output_error(self.path, exc) from None
         table = table.select(_ordered(table.column_names))
-        with atomic_path(self.path) as tmp:
+        with atomic_path(self.path) as tmp:  # OSError -> OutputError, no partial left
             pq.write_table(table, tmp)
         self._table = table
         self._pending = []
@@ -83,12 +110,62 @@ class ResultStore:
         return self._table
 
 
+def _combined(old, rows: list[dict]):
+    """``old`` (a Table or None) with ``rows`` appended. A column whose values cannot share a
+    type (text in one row, a number in another: a metric of an odd run) is kept as text
+    rather than losing the rows."""
+    pa, _ = _pa()
+    try:
+        batch = pa.Table.from_pylist(rows)
+    except (pa.ArrowInvalid, pa.ArrowTypeError):
+        mixed = {k for k in {k for r in rows for k in r}
+                 if len({_kind(r[k]) for r in rows if r.get(k) is not None}) > 1}
+        batch = pa.Table.from_pylist([{k: (str(v) if k in mixed and v is not None else v)
+                                       for k, v in r.items()} for r in rows])
+    if old is None:
+        return batch
+    try:
+        return pa.concat_tables([old, batch], promote_options="permissive")
+    except (pa.ArrowInvalid, pa.ArrowTypeError):
+        common = set(old.column_names) & set(batch.column_names)
+        clash = [c for c in common if not old.schema.field(c).type.equals(batch.schema.field(c).type)]
+
+        def as_text(t):
+            for c in clash:
+                t = t.set_column(t.column_names.index(c), c, t.column(c).cast(pa.string()))
+            return t
+        return pa.concat_tables([as_text(old), as_text(batch)], promote_options="permissive")
+
+
+def _kind(value) -> str:
+    if isinstance(value, bool):
+        return "true/false"
+    if isinstance(value, (int, float)):
+        return "numbers"
+    if isinstance(value, str):
+        return "text"
+    return "null" if value is None else type(value).__name__
+
+
+def _arrow_kind(t) -> str:
+    pa, _ = _pa()
+    if pa.types.is_null(t):
+        return "null"
+    if pa.types.is_boolean(t):
+        return "true/false"
+    if pa.types.is_integer(t) or pa.types.is_floating(t):
+        return "numbers"
+    if pa.types.is_string(t) or pa.types.is_large_string(t):
+        return "text"
+    return str(t)
+
+
 def _normalise(row: dict) -> dict:
     """Numbers as float (so a column never mixes int and float between batches), except the
     seed and counts; booleans and text as they are."""
     out = {}
     for k, v in row.items():
-        if isinstance(v, bool) or v is None or isinstance(v, str) or k == "seed":
+        if isinstance(v, bool) or v is None or isinstance(v, str) or k in ("seed", "attempts"):
             out[k] = v
         elif isinstance(v, (int, float)):
             out[k] = float(v)

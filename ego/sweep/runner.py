@@ -10,12 +10,13 @@ same run since runs are deterministic), and the envelope plots asked for with ``
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from ego.outputs import FolderLock, remove_partials
+from ego.outputs import LOCK_FILE, FolderLock, OutputError, output_error, remove_partials
 from ego.parallel.executor import make_executor
 from ego.params import ConfigError, did_you_mean
 from ego.results.run import RunRow
@@ -50,12 +51,15 @@ def row_of(r: Run, row: RunRow) -> dict:
     out["error"] = row.error
     out["wall_time"] = row.wall_time
     out["host"] = row.host
+    out["node"] = row.node
+    out["attempts"] = row.attempts  # 2: its worker (or node) died once
     return out
 
 
 def error_row(r: Run, error: str) -> dict:
     return {"run_id": r.run_id, "scenario": r.scenario, "controller": r.controller, "seed": r.seed,
-            **r.overrides, "status": "error", "error": error, "wall_time": None, "host": None}
+            **r.overrides, "status": "error", "error": error, "wall_time": None, "host": None,
+            "node": None, "attempts": 1}
 
 
 @dataclass
@@ -78,6 +82,13 @@ def sweep(spec: SweepSpec, out: Path, *, engine: str = "process", jobs: int | No
         raise ConfigError(f"bad --record {record!r} (allowed: {', '.join(RECORD)})")
     plot_specs = [parse_plot(p, spec) for p in plots]
     out = Path(out)
+    check_outputs(spec, out, record, plot_specs)
+    if (out / "results.parquet").is_file():  # results it cannot join: refused before --out is touched
+        ResultStore(out).check_compatible(spec.scenario, _sample_rows(spec))
+    if engine == "ray" and address is not None:  # nothing listening: refused before --out is touched
+        from ego.cluster import check_address
+
+        check_address(address)
     with FolderLock(out, "--out"):  # one sweep at a time per folder (its results file)
         return _sweep(spec, out, engine, jobs, address, record, plot_specs, progress)
 
@@ -85,6 +96,7 @@ def sweep(spec: SweepSpec, out: Path, *, engine: str = "process", jobs: int | No
 def _sweep(spec: SweepSpec, out: Path, engine: str, jobs: int | None, address: str | None, record: str,
            plot_specs: list, progress: Callable | None) -> SweepReport:
     store = ResultStore(out)
+    store.check_compatible(spec.scenario, _sample_rows(spec))  # before anything runs
     done = store.done_ids()
     total = spec.count()
     already = sum(1 for r in spec.runs() if r.run_id in done) if done else 0
@@ -121,12 +133,26 @@ def _sweep(spec: SweepSpec, out: Path, engine: str, jobs: int | None, address: s
 
     shown = progress(todo) if progress is not None and todo else None
     interrupted = False
+    failure: OutputError | None = None
     try:
         if todo:
             interrupted = drive(make_executor(engine, jobs, address), tasks(), keep, shown)
+    except OutputError as exc:  # the results file cannot be written (a full disk): stop
+        failure = exc
     finally:
-        store.flush()
-        remove_partials(runs_dir)  # recordings of runs killed mid-way; their workers are gone
+        # drive() has closed the workers whatever happened; a failing flush is one line
+        try:
+            store.flush()
+        except OutputError as exc:
+            failure = failure or exc
+        except Exception as exc:  # noqa: BLE001 - any writer failure is one line, not a hang
+            failure = failure or output_error(store.path, exc)
+        finally:
+            remove_partials(runs_dir)  # recordings of runs killed mid-way; their workers are gone
+    if failure is not None:
+        kept = len(store) - len(store._pending)
+        raise OutputError(f"{failure} ({kept} results are in {store.path}; the same command resumes "
+                          "once there is room)")
     table = store.table()
     if table is not None:
         from ego.sweep.report import write_plots, write_summary
@@ -135,6 +161,43 @@ def _sweep(spec: SweepSpec, out: Path, engine: str, jobs: int | None, address: s
         for p in plot_specs:
             write_plots(spec, table, out, *p)
     return SweepReport(total, already, ran, by_status, time.perf_counter() - started, interrupted)
+
+
+def _sample_rows(spec: SweepSpec, limit: int = 200) -> list[dict]:
+    """The key columns and overrides of the spec's first runs and of every grid value: what
+    the results file's columns will be asked to hold."""
+    rows = []
+    for i, r in enumerate(spec.runs()):
+        if i >= limit:
+            break
+        rows.append({"run_id": r.run_id, "scenario": r.scenario, "controller": r.controller,
+                     "seed": r.seed, **r.overrides})
+    for name, values in spec.grid.items():
+        rows.extend({name: v} for v in values)
+    return rows
+
+
+def check_outputs(spec: SweepSpec, out: Path, record: str, plot_specs: Sequence = ()) -> None:
+    """Every name the sweep creates in ``out`` - results.parquet, summary.md, the plots, the
+    lock, runs/ and its recordings (the longest controller name) - free and writable, before
+    anything runs (:mod:`ego.paths`)."""
+    from ego.paths import check_folder_contents, check_folder_target
+
+    check_folder_target(out, "--out", str(out))
+    files = ["results.parquet", "summary.md", LOCK_FILE]
+    files += [f"envelope_{x}_{y}" + (f"_{m}" if m else "") + ".png" for x, y, m in plot_specs]
+    folders = []
+    if record != "none":
+        folders.append("runs")
+        longest = max(spec.controllers, key=len)
+        files.append(f"runs/{longest}-{'0' * 16}.rrd")
+        runs = out / "runs"
+        if runs.is_dir():  # a recording's name taken by a folder, a FIFO...
+            for r in spec.runs() if spec.count() <= 100_000 else ():
+                name = f"{r.controller}-{r.run_id}.rrd"
+                if os.path.lexists(runs / name):
+                    files.append(f"runs/{name}")
+    check_folder_contents(out, "--out", files=files, folders=folders, text=str(out))
 
 
 def parse_plot(text: str, spec: SweepSpec) -> tuple[str, str, str | None]:

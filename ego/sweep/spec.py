@@ -45,6 +45,10 @@ MAX_SEED = 2**31 - 1
 MAX_RUNS = 10_000_000
 METHODS = ("random", "lhs", "sobol")
 _TOP = ("scenario", "controllers", "seeds", "set", "grid", "sample")
+#: a spec larger than this is not a spec (``ego sweep /dev/zero``)
+MAX_SPEC_BYTES = 1 << 20
+#: grids with at most this many points are checked point by point (combinations of values)
+MAX_CHECKED_POINTS = 10_000
 
 
 @dataclass(frozen=True)
@@ -157,9 +161,18 @@ def _sample_points(sample: Sample, infos: dict, chunk: int = 4096) -> Iterator[d
 
 def load(path: str | Path) -> SweepSpec:
     """Read and validate a spec file; ConfigError (one line, naming the file) on anything wrong."""
+    if not isinstance(path, (str, Path)) and not hasattr(path, "__fspath__"):
+        raise ConfigError(f"bad sweep spec path {path!r:.60} (expected a path to a .toml file)")
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        if path.is_dir():
+            raise ConfigError(f"cannot read the sweep spec {str(path)!r}: it is a folder (expected a TOML file)")
+        with open(path, "rb") as f:
+            raw = f.read(MAX_SPEC_BYTES + 1)
+        if len(raw) > MAX_SPEC_BYTES:
+            raise ConfigError(f"cannot read the sweep spec {str(path)!r}: larger than "
+                              f"{MAX_SPEC_BYTES // 1024} KiB (a spec is a few lines of TOML)")
+        text = raw.decode("utf-8")
     except UnicodeDecodeError:
         raise ConfigError(f"cannot read the sweep spec {str(path)!r}: not a text file (expected TOML)") from None
     except OSError as exc:
@@ -168,6 +181,8 @@ def load(path: str | Path) -> SweepSpec:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{path}: not valid TOML: {exc}") from None
+    except RecursionError:
+        raise ConfigError(f"{path}: nested too deeply to be a sweep spec") from None
     scenario = data.get("scenario")
     if isinstance(scenario, str) and scenario.lower().endswith(".xosc") and not Path(scenario).is_absolute():
         # an OpenSCENARIO file is named relative to the spec's folder
@@ -180,6 +195,8 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
     def bad(msg: str) -> ConfigError:
         return ConfigError(f"{source}: {msg}")
 
+    if not isinstance(data, dict):
+        raise bad(f"expected a table of scenario, controllers, ... (got {type(data).__name__})")
     unknown = [k for k in data if k not in _TOP]
     if unknown:
         raise bad(f"unknown key {unknown[0]!r} (allowed: {', '.join(_TOP)}){did_you_mean(unknown[0], _TOP)}")
@@ -230,7 +247,8 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
         if name in fixed:
             raise bad(f"{name} is both fixed in [set] and swept in [grid]")
         for v in values:
-            _check(scenario, controllers, {name: v}, f"[grid] {name}", bad)
+            _check(scenario, controllers, {**fixed, name: v}, f"[grid] {name}", bad)
+        _one_kind(name, values, bad)
     sample = None
     if sample_data is not None:
         if not isinstance(sample_data, dict):
@@ -258,7 +276,7 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
             if name in fixed or name in grid:
                 raise bad(f"{name} is sampled in [sample] and also in [set] or [grid]")
             for end in rng:
-                _check(scenario, controllers, {name: end}, f"[sample] {name}", bad)
+                _check(scenario, controllers, {**fixed, name: end}, f"[sample] {name}", bad)
             ranges[name] = (float(rng[0]), float(rng[1]))
         if not ranges:
             raise bad("[sample] names no parameter range")
@@ -270,10 +288,44 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
     total = spec.count()
     if total > MAX_RUNS:
         raise bad(f"expands to {total:,} runs; the limit is {MAX_RUNS:,}")
-    # the first point as a whole (combinations a value-by-value check cannot see)
-    first = next(spec.runs())
-    _check(scenario, controllers, first.overrides, "the first run", bad)
+    # whole points (combinations a value-by-value check cannot see): every grid point when
+    # there are not too many, else the first
+    points = math.prod(len(v) for v in spec.grid.values()) if spec.grid else 1
+    names = list(spec.grid)
+    combos = product(*(spec.grid[n] for n in names)) if points <= MAX_CHECKED_POINTS else [
+        tuple(spec.grid[n][0] for n in names)]
+    for combo in combos:
+        point = dict(zip(names, combo))
+        where = "the run with " + ", ".join(f"{k} = {v!r}" for k, v in point.items()) if point else "the first run"
+        _check(scenario, controllers, {**spec.fixed, **point}, where, bad)
+    if sample is not None:
+        first = next(spec.runs())
+        _check(scenario, controllers, first.overrides, "the first run", bad)
     return spec
+
+
+def _kind(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true/false"
+    if isinstance(value, (int, float)):
+        return "numbers"
+    if isinstance(value, str):
+        return "text"
+    return type(value).__name__
+
+
+def _one_kind(name: str, values: list, bad) -> None:
+    """A grid axis holds values of one kind (numbers, text or true/false), each once: a
+    column of the results holds one type, and one run id is one run."""
+    kinds = {_kind(v) for v in values}
+    if len(kinds) > 1:
+        raise bad(f"[grid] {name} mixes {' and '.join(sorted(kinds))} ({values!r:.80}); write every "
+                  "value the same way")
+    seen = []
+    for v in values:
+        if any(v == s for s in seen):
+            raise bad(f"[grid] {name} lists {v!r} twice")
+        seen.append(v)
 
 
 def _seeds(value: Any, bad) -> tuple[int, ...]:
@@ -298,6 +350,7 @@ def _check(scenario: str, controllers, overrides: dict, where: str, bad) -> None
     cls = scenario_class(scenario)
     try:
         config, rest = apply_overrides(cls.default_config(overrides), overrides, strict=False)
+        cls.check_config(config)
         for name in controllers:
             params = controller_spec(name, cls.task).params
             mine = {k: v for k, v in rest.items() if k in {i.name for i in describe(params)}}
