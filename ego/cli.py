@@ -131,6 +131,8 @@ def _parser() -> argparse.ArgumentParser:
                           "fast-follower and cut-in)")
     run.add_argument("--video", metavar="PATH",
                      help="with --backend highway-env: a video of the run (.gif, or .mp4 with ffmpeg)")
+    run.add_argument("--require", action="append", default=[], metavar="\"NAME: FORMULA\"",
+                     help="a requirement in signal temporal logic over the trace's signals, on top of the scenario's defaults (repeatable; docs/requirements.md), e.g. \"keep_gap: always (gap_front >= 2 m)\"")
 
     cmp_ = sub.add_parser(
         "compare", help="every controller x seed of one scenario, in parallel processes",
@@ -161,6 +163,8 @@ def _parser() -> argparse.ArgumentParser:
     cmp_.add_argument("--traces", default=None, metavar="FORMAT",
                       help="also write every run's trace to traces/<label>-seed<N>.FORMAT: csv, parquet "
                            "or mat (see docs/traces.md)")
+    cmp_.add_argument("--require", action="append", default=[], metavar="\"NAME: FORMULA\"",
+                      help="a requirement in signal temporal logic over the trace's signals, on top of the scenario's defaults (repeatable; docs/requirements.md), e.g. \"keep_gap: always (gap_front >= 2 m)\"")
 
     swp = sub.add_parser(
         "sweep", help="many runs over a parameter space (a TOML spec), resumable Parquet results",
@@ -194,6 +198,12 @@ def _parser() -> argparse.ArgumentParser:
                           "their duration) or all")
     swp.add_argument("--plot", action="append", default=[], metavar="X,Y[:METRIC]",
                      help="an envelope plot over two swept parameters (repeatable)")
+    swp.add_argument("--require", action="append", default=[], metavar="\"NAME: FORMULA\"",
+                     help="a requirement on top of the spec's [requirements] (or the scenario's defaults); "
+                          "repeatable, see docs/requirements.md")
+    from ego.falsify.cli import add_parser as _add_falsify
+
+    _add_falsify(sub)
 
     lst = sub.add_parser("list", help="scenarios, controllers and every parameter",
                          description="List scenarios, controllers and every parameter with "
@@ -417,6 +427,7 @@ def _print_result(result, units: dict[str, str]) -> None:
 
 
 def _run(args) -> int:
+    from ego.requirements import with_defaults
     from ego.runner import RunSpec, declared_metrics, run
     from ego.scenarios.base import NOT_FAILED
     from ego.scenarios.metrics import flatten, metric_units
@@ -425,7 +436,8 @@ def _run(args) -> int:
 
     spec = RunSpec(args.scenario, args.controller, seed=check_seed(args.seed, "--seed"),
                    overrides=parse_overrides(args.overrides), record=args.record, trace=args.trace,
-                   backend=args.backend, video=args.video)
+                   backend=args.backend, video=args.video,
+                   requirements=with_defaults(args.scenario, args.require))
     result = run(spec)  # checks the --trace path before anything runs
     written = [str(p) for p in trace_files(args.trace, result.traffic is not None)] if args.trace else []
     units = metric_units(declared_metrics(spec), flatten(result.metrics))
@@ -463,8 +475,11 @@ def _compare(args) -> int:
     check_count(args.jobs, "--jobs", 1, MAX_JOBS)
     labels = [n.strip() for n in args.controllers.split(",") if n.strip()]
     out = check_output_dir(args.out, "--out")
+    from ego.requirements import with_defaults
+
     rows = compare(args.scenario, labels, args.seeds, parse_overrides(args.overrides), out, args.jobs,
-                   traces=args.traces, backend=args.backend)
+                   traces=args.traces, backend=args.backend,
+                   requirements=with_defaults(args.scenario, args.require))
     print((out / "metrics.md").read_text(), end="")
     files = ["metrics.csv", UNITS_FILE, "metrics.md"] + sorted(p.name for p in out.glob("*.png"))
     recorded = sum(1 for r in rows if r.recording)
@@ -515,6 +530,15 @@ def _sweep(args) -> int:
     from ego.sweep.runner import RECORD, parse_plot, print_progress, sweep
 
     spec = sweep_spec.load(args.spec)
+    if args.require:
+        import dataclasses
+
+        from ego.requirements import defaults, split
+
+        base = spec.requirements if spec.requirements is not None else defaults(spec.scenario)
+        reqs = {**base, **dict(split(t) for t in args.require)}
+        sweep_spec.check_requirements(next(spec.runs()), reqs, ConfigError)
+        spec = dataclasses.replace(spec, requirements=reqs)
     _choice(args.engine, ENGINES, "--engine")
     check_count(args.jobs, "--jobs", 1, MAX_JOBS)
     if args.address is not None and args.engine != "ray":
@@ -634,6 +658,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _compare(args)
         if args.command == "sweep":
             return _sweep(args)
+        if args.command == "falsify":
+            from ego.falsify.cli import main as falsify_main
+
+            return falsify_main(args)
         if args.command == "train":
             return _train(args)
         if args.command == "tune":

@@ -50,7 +50,7 @@ from ego.export import TRACE_SUFFIXES
 from ego.outputs import FolderLock, atomic_path, remove_partials, write_text
 from ego.params import ConfigError, apply_overrides, describe, did_you_mean
 from ego.processes import signals_deferred
-from ego.runner import RunSpec, configure, run, split_overrides
+from ego.runner import RunSpec, configure, declared_metrics, run, split_overrides
 from ego.scenarios import scenario_class
 from ego.scenarios.base import check_backend
 from ego.scenarios.metrics import flatten, headline_names, metric_units, with_unit
@@ -130,7 +130,7 @@ def file_label(label: str) -> str:
 
 
 def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict, out: Path,
-         traces: str | None = None, backend: str = "sumo") -> list[RunSpec]:
+         traces: str | None = None, backend: str = "sumo", requirements=None) -> list[RunSpec]:
     """Validate names, variants and overrides, and list the runs (before any process starts).
 
     ``controllers`` are labels: a controller's name, or a variant of it with its own
@@ -174,7 +174,7 @@ def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict,
             trace = str(out / "traces" / f"{stem}.{traces}") if traces else None
             specs.append(RunSpec(scenario, name, seed, mine, str(out / "runs" / f"{stem}.rrd"), trace=trace,
                                  background_recording=False, label=label,
-                                 backend=backend))
+                                 backend=backend, requirements=requirements))
     return specs
 
 
@@ -194,7 +194,7 @@ def _progress(done: int, total: int, row: RunRow, started: float) -> None:
 def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict, out: Path,
             jobs: int | None = None, progress: Callable | None = _progress,
             executor: Executor | None = None, traces: str | None = None,
-            backend: str = "sumo") -> list[RunRow]:
+            backend: str = "sumo", requirements=None) -> list[RunRow]:
     """Run everything, write the outputs, return the rows (in controller, seed order).
     ``controllers`` are labels (:func:`plan`: names or variants); ``traces`` a format of
     :data:`TRACE_FORMATS` to write each run's trace in, or None.
@@ -211,7 +211,7 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
     ``interrupted``; the caller sees it in the rows.
     """
     out = Path(out)
-    specs = plan(scenario, controllers, seeds, overrides, out, traces, backend)
+    specs = plan(scenario, controllers, seeds, overrides, out, traces, backend, requirements)
     # every value too (a bad --set value) before any process starts: once per controller,
     # since the seed changes nothing that is checked (100000 seeds would take a minute)
     # (and each controller's parameters kept: a platoon's string stability is drawn from them)
@@ -220,7 +220,7 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
         cls, config, ctrl, params[spec.name] = configure(spec)
         cls.build_controller(ctrl, params[spec.name], config)
     plots = tuple(cls.compare_plots(config))
-    declared = cls.metrics_declared(config)
+    declared = declared_metrics(specs[0])  # the scenario's, and the requirements' (checked here)
     with FolderLock(out, "--out"):
         (out / "runs").mkdir(parents=True, exist_ok=True)
         if traces:
@@ -343,6 +343,9 @@ def write_markdown(scenario: str, rows: Sequence[RunRow], controllers: list[str]
         status = ", ".join(f"{n} {s}" for s, n in counts.items())
         cells = [_mean_spread([r.metrics.get(k) for r in mine]) for k in present]
         lines.append(_table_row([name, status] + cells))
+    from ego.requirements import summary_lines
+
+    lines += summary_lines({name: [r.metrics for r in rows if r.controller == name] for name in controllers})
     errors = [r for r in rows if r.error]
     if errors:
         lines += ["", "Errors:", ""] + [f"- {r.controller} seed {r.seed}: {r.error}" for r in errors]

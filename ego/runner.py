@@ -39,6 +39,9 @@ class RunSpec:
     #: the controller's name in the results (``RunResult.controller``, the recording):
     #: ``ego compare``'s variant label, e.g. ``pid@kp_lat=0.02``; default ``controller``
     label: str = ""
+    #: requirements checked on the run (``ego.requirements``): ((name, formula), ...) or a
+    #: mapping; None: the scenario's defaults; (): none
+    requirements: Any = None
 
     @property
     def name(self) -> str:
@@ -56,6 +59,10 @@ class RunSpec:
                               "name to value)")
         if self.record is not None and not isinstance(self.record, (str, os.PathLike)):
             raise ConfigError(f"bad record {self.record!r} (expected a path ending in .rrd, or None)")
+        if self.requirements is not None:
+            pairs = tuple(self.requirements.items()) if isinstance(self.requirements, Mapping) \
+                else tuple(tuple(p) for p in self.requirements)
+            object.__setattr__(self, "requirements", pairs)
         if not isinstance(self.background_recording, bool):
             raise ConfigError(f"bad background_recording {self.background_recording!r} (expected true or false)")
 
@@ -100,6 +107,7 @@ def build(spec: RunSpec):
     """Resolve names and overrides into a ready scenario (validates everything first)."""
     cls, config, ctrl, ctrl_params = configure(spec)
     controller = cls.build_controller(ctrl, ctrl_params, config)
+    reqs = requirements_of(spec, cls, config, controller)
     if spec.trace is not None:
         from ego.export import check_trace_path
 
@@ -112,8 +120,33 @@ def build(spec: RunSpec):
         path.parent.mkdir(parents=True, exist_ok=True)
         recorder = RerunRecorder(path, recording_id=f"{spec.scenario}-{spec.name}-{spec.seed}",
                                  background=spec.background_recording)
-    return cls(config, controller, seed=spec.seed, recorder=recorder, controller_name=spec.name,
-               backend=spec.backend, video=spec.video)
+    scenario = cls(config, controller, seed=spec.seed, recorder=recorder, controller_name=spec.name,
+                   backend=spec.backend, video=spec.video)
+    if reqs:
+        from ego.requirements import check_run
+
+        scenario.on_result = lambda sc, result: check_run(sc, result, reqs)
+    return scenario
+
+
+def requirements_of(spec: RunSpec, cls, config, controller=None) -> tuple:
+    """The run's requirements parsed against its signals (the scenario's defaults when
+    ``spec.requirements`` is None); RequirementError before anything runs."""
+    from ego.requirements import defaults, resolve, signal_units
+
+    if spec.requirements == ():
+        return ()
+    columns = {c.name: c.unit for c in declared_columns(cls, config)}
+    if controller is not None:
+        try:
+            columns.update({n: "-" for n in controller.signals() if n not in columns})
+        except Exception:  # noqa: BLE001 - a controller that needs a reset first: its signals stay unnamed
+            pass
+    texts = dict(spec.requirements) if spec.requirements is not None else defaults(spec.scenario)
+    if not texts:
+        return ()
+    metrics = [m.name for m in cls.metrics_declared(config)]
+    return resolve(texts, signal_units(columns, metrics))
 
 
 def run(spec: RunSpec) -> RunResult:
@@ -130,7 +163,10 @@ def run(spec: RunSpec) -> RunResult:
 def declared_metrics(spec: RunSpec) -> tuple[Metric, ...]:
     """Every metric a run of ``spec`` reports, as its scenario declares them (units, headline)."""
     cls, config, _, _ = configure(spec)
-    return cls.metrics_declared(config)
+    reqs = requirements_of(spec, cls, config)
+    return cls.metrics_declared(config) + tuple(
+        Metric(f"requirements.{r.name}", "-" if r.unit in ("bool", "mixed") else r.unit,
+               f"robustness of {r.formula} (negative: violated)") for r in reqs)
 
 
 def declared_columns(cls: type[Scenario], config) -> tuple[Column, ...]:

@@ -331,12 +331,18 @@ class Scenario:
             if self._stop and self.status == "running":
                 self._end("interrupted", "interrupted (SIGINT or SIGTERM)", level="WARN")
                 self._flush()
-            return self.result()
+            result = self.result()
+            if self.on_result is not None:  # e.g. requirements checked while the recording is open
+                self.on_result(self, result)
+            return result
         finally:
             restore()
             self.close()
 
     _stop = False
+    #: called as ``on_result(scenario, result)`` after a run's result, before the recording
+    #: closes (ego.runner sets it to check the run's requirements)
+    on_result = None
 
     def _catch_stop_signals(self):
         """Make SIGINT and SIGTERM request a stop at the next step; returns the undo."""

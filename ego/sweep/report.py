@@ -75,6 +75,11 @@ def write_summary(spec, table, path: Path) -> None:
             for c in spec.controllers:
                 k = sum(1 for i in range(n) if data["controller"][i] == c and data[extra][i] is True)
                 lines.append(f"- {c}: {k}")
+    from ego.requirements import PREFIX, summary_lines
+
+    req_keys = [k for k in data if k.startswith(PREFIX)]
+    lines += summary_lines({c: [{k: data[k][i] for k in req_keys} for i in range(n)
+                                if data["controller"][i] == c] for c in spec.controllers})
     errors = [i for i in range(n) if data["status"][i] == "error"]
     if errors:
         lines += ["", f"{len(errors)} runs ended in an error; the first:", "",

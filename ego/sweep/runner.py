@@ -33,17 +33,19 @@ def run_task(task: tuple) -> dict:
     from ego.scenarios.base import NOT_FAILED
     from ego.scenarios.metrics import flatten
 
-    r, rrd, policy = task
+    r, rrd, policy, *more = task
+    reqs = more[0] if more else None  # the spec's [requirements] (None: the scenario's defaults)
     t0 = time.perf_counter()
     row = {"run_id": r.run_id, "scenario": r.scenario, "controller": r.controller, "seed": r.seed,
            **r.overrides}
     try:
         spec = RunSpec(r.scenario, r.controller, r.seed, r.overrides,
-                       record=rrd if policy == "all" else None, background_recording=False)
+                       record=rrd if policy == "all" else None, background_recording=False,
+                       requirements=reqs)
         result = run(spec)
         if policy == "failed" and result.status not in NOT_FAILED and rrd:
             run(RunSpec(r.scenario, r.controller, r.seed, r.overrides, record=rrd,
-                        background_recording=False))
+                        background_recording=False, requirements=reqs))
         metrics = flatten(result.metrics)
         metrics.pop("wall_time", None)  # the row's own wall_time (spec to row) replaces it
         for key in ("scenario", "controller", "seed"):
@@ -103,7 +105,7 @@ def _sweep(spec: SweepSpec, out: Path, engine: str, jobs: int | None, address: s
         for r in spec.runs():
             if r.run_id not in done:
                 rrd = str(runs_dir / f"{r.controller}-{r.run_id}.rrd") if record != "none" else None
-                yield r, rrd, record
+                yield r, rrd, record, spec.requirements
 
     by_status: dict[str, int] = {}
     started = time.perf_counter()
