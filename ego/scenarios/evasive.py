@@ -266,12 +266,40 @@ class EvasiveLaneChange(HighwayScenario):
         span = self.lane_offset[self.target_lane] - self.lane_offset[origin]
         progress = (self.d_road - self.lane_offset[origin]) / span if span else 1.0
         p = self.ego.model.params
-        if progress >= 0.5 or self.braking_need() > 0.9 * (p.F_max / p.m + p.f * p.g):
-            return  # well across, or braking alone would not stop it in time: carry on
+        limit = p.F_max / p.m + p.f * p.g
+        if progress >= 0.5:
+            return  # well across: finish it (the new lane's traffic sees the ego in its lane)
+        threat = self._target_follower_threat(limit)
+        if self.braking_need() > 0.9 * limit and threat is None:
+            return  # braking alone would not stop it in time and the new lane is clear: carry on
+        why = f"; the new lane's follower {threat}" if threat else ""
         self.event("lane", f"lane change aborted at {100 * progress:.0f} % across: emergency braking "
-                   f"in the {LANE_NAMES[origin]} lane", "WARN")
+                   f"in the {LANE_NAMES[origin]} lane{why}", "WARN")
         self.target_lane, self.chosen, self.phase = origin, None, IN_LANE
         self._start_in_lane()
+
+    def _target_follower_threat(self, decel: float, horizon: float = 3.0, margin: float = 2.0) -> str | None:
+        """Would the follower in the target lane run into the ego if the ego brakes here at
+        ``decel`` (m/s^2) down to the front object's speed? The follower is taken to hold its
+        speed (a car whose lane the ego only half occupies may not react to it: SUMO's drivers
+        do not), over ``horizon`` s; a threat is a gap below ``margin`` m. Returns why (its id,
+        gap and speed), or None when the lane behind is clear. Braking to a near stop across two
+        lanes in front of such a follower is how an AEB stop mid-lane-change gets rear-ended."""
+        follower = self._lane_follower
+        self.sensor.lane_neighbours(self.target_lane, self._lane_leader, follower)
+        if follower.gap == INF or follower.speed <= 0.0:
+            return None
+        v0 = max(self.ds, 0.0)
+        v_end = min(v0, max(self.sensor.front.speed, 0.0)) if self.sensor.front.gap != INF else v0
+        t_brake = (v0 - v_end) / decel
+        t = np.linspace(0.0, horizon, 31)
+        ego_x = np.where(t < t_brake, v0 * t - 0.5 * decel * t * t,
+                         v0 * t_brake - 0.5 * decel * t_brake ** 2 + v_end * (t - t_brake))
+        closest = float(np.min(follower.gap + ego_x - follower.speed * t))
+        if closest >= margin:
+            return None
+        return (f"{follower.id} ({follower.gap:.1f} m behind at {follower.speed:.1f} m/s) would close to "
+                f"{closest:.1f} m")
 
     def _start_in_lane(self) -> None:
         """Set up the in-lane manoeuvre's references from here."""
