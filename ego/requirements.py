@@ -512,29 +512,53 @@ class Verdict:
         return self.robustness >= 0.0
 
 
-def evaluate(req: Requirement, result, stride: int = 1) -> Verdict:
-    """Evaluate ``req`` on a finished run with rtamt (offline, discrete time) at the trace's
-    sample times (every ``stride``-th sample)."""
-    t = result.column("t")[::stride]
-    if len(t) < 2:
+#: requirements are evaluated on the trace's samples this far apart (s; the SUMO step, at
+#: which the traffic's signals change): rtamt's offline monitor costs about 30 us per sample
+#: and operator, so every 0.01 s control step would cost a third of a run's time
+PERIOD = 0.1
+
+
+def evaluate(req: Requirement, result, period: float = PERIOD) -> Verdict:
+    """Evaluate ``req`` on a finished run with rtamt (offline, discrete time) on the trace's
+    own samples, every ``period`` s (0: every sample), counted back from the last one so the
+    run's end (a collision) is always a sample. An ``always`` formula is evaluated as its
+    body's robustness signal, whose minimum is the formula's robustness (the same number,
+    and its first negative sample is the first violation)."""
+    t_all = result.column("t")
+    if len(t_all) < 2:
         return Verdict(req.name, math.nan, None, req.unit)
-    period = float(t[1] - t[0])
+    dt = float(t_all[1] - t_all[0])
+    stride = max(1, int(round(period / dt))) if period > 0 else 1
+    idx = np.arange(len(t_all) - 1, -1, -stride)[::-1]
+    if len(idx) < 2:
+        idx = np.arange(len(t_all))
+        stride = 1
+    t = t_all[idx]
     names = tuple(req.signals) or ("t",)
     data = {"time": (t - t[0]).tolist()}
     for n in names:
-        data[n] = signal(result, n)[::stride].tolist()
-    spec = _spec(req, period, names)
+        data[n] = signal(result, n)[idx].tolist()
+    always = req.rtamt.startswith("always (") and _outer_parens(req.rtamt[len("always "):])
+    text = req.rtamt[len("always "):] if always else req.rtamt
+    spec = _spec(Requirement(req.name, req.formula, text, req.signals, req.unit), stride * dt, names)
     rob = np.array([v for _, v in spec.evaluate(data)], dtype=float)
-    body = req.rtamt[len("always "):] if req.rtamt.startswith("always (") else None
-    trace = rob
-    if body is not None:
-        trace = np.array([v for _, v in _spec(Requirement(req.name + "__body", "", body, req.signals,
-                                                           req.unit), period, names).evaluate(data)],
-                         dtype=float)
-    bad = np.flatnonzero(trace < 0.0)
-    value = float(rob[0])
-    at = float(t[bad[0]]) if value < 0.0 and len(bad) else (float(t[0]) if value < 0.0 else None)
+    value = float(rob.min()) if always else float(rob[0])
+    at = None
+    if value < 0.0:
+        bad = np.flatnonzero(rob < 0.0)
+        at = float(t[bad[0]]) if len(bad) else float(t[0])
     return Verdict(req.name, value, at, req.unit)
+
+
+def _outer_parens(text: str) -> bool:
+    """``text`` is one parenthesised group (so ``always (a) until (b)`` is not an always)."""
+    depth = 0
+    for i, ch in enumerate(text):
+        depth += ch == "("
+        depth -= ch == ")"
+        if depth == 0:
+            return i == len(text) - 1
+    return False
 
 
 def check_run(scenario, result, requirements: Sequence[Requirement]) -> list[Verdict]:
