@@ -58,22 +58,22 @@ def _status_time(result, kind: str) -> float | None:
     return next((e.t for e in result.events if e.kind == kind), None)
 
 
-def _collision(result, t: np.ndarray) -> np.ndarray:
+def _collision(result, t: np.ndarray, scenario=None) -> np.ndarray:
     when = _status_time(result, "collision") if result.status == "collision" else None
     if when is None or not len(t):
         return np.zeros(len(t), bool)
     return t >= min(when, t[-1]) - 1e-9  # the run ends at the collision: its last sample at least
 
 
-def _avoidable_collision(result, t: np.ndarray) -> np.ndarray:
+def _avoidable_collision(result, t: np.ndarray, scenario=None) -> np.ndarray:
     return _collision(result, t) & bool(result.metrics.get("collision_avoidable"))
 
 
-def _collision_avoidable(result, t: np.ndarray) -> np.ndarray:
+def _collision_avoidable(result, t: np.ndarray, scenario=None) -> np.ndarray:
     return np.full(len(t), bool(result.metrics.get("collision_avoidable")))
 
 
-def _aeb_active(result, t: np.ndarray) -> np.ndarray:
+def _aeb_active(result, t: np.ndarray, scenario=None) -> np.ndarray:
     """From the run's ``aeb`` events: engaged from "AEB engages" until "AEB releases"."""
     out = np.zeros(len(t), bool)
     start = None
@@ -90,7 +90,7 @@ def _aeb_active(result, t: np.ndarray) -> np.ndarray:
     return out
 
 
-def _lateral_clear(result, t: np.ndarray) -> np.ndarray:
+def _lateral_clear(result, t: np.ndarray, scenario=None) -> np.ndarray:
     """The ego's outline has left the lane it started in (|lane_offset| at least half a
     lane plus half the ego's width): a car ahead in that lane is no longer in its way."""
     from ego.models.geometry import VehicleGeometry
@@ -100,8 +100,22 @@ def _lateral_clear(result, t: np.ndarray) -> np.ndarray:
     return offset >= 0.5 * width + 0.5 * VehicleGeometry().width
 
 
-def _gap_min(result, t: np.ndarray) -> np.ndarray:
+def _gap_min(result, t: np.ndarray, scenario=None) -> np.ndarray:
     return np.minimum(result.column("gap_front"), result.column("gap_rear"))
+
+
+def _clearance(result, t: np.ndarray, scenario=None) -> np.ndarray:
+    """The smaller bumper gap, front or rear; from the ego's collision on at most -1 m (a
+    collision is a violation by a clear margin even when the outlines only touch)."""
+    gap = np.minimum(result.column("gap_front"), result.column("gap_rear"))
+    hit = _collision(result, t)
+    return np.where(hit, np.minimum(gap, 0.0) - 1.0, gap)
+
+
+def _braking_margin(result, t: np.ndarray, scenario=None) -> np.ndarray:
+    """The scenario's braking margin (constant over the run); 1e9 without a trigger."""
+    margin = scenario.braking_margin() if scenario is not None else None
+    return np.full(len(t), 1e9 if margin is None else float(margin))
 
 
 @dataclass(frozen=True)
@@ -126,6 +140,11 @@ DERIVED = {d.name: d for d in (
             _aeb_active),
     Derived("lateral_clear", BOOL, "the ego's outline has left its start lane (|lane_offset| >= half a "
             "lane + half the ego's width)", ("lane_offset",), _lateral_clear),
+    Derived("braking_margin", "m", "the smallest gap to the lead had the ego braked at its friction "
+            "limit from the trigger, constant over the run (positive: braking avoids the lead; 1e9: no "
+            "trigger)", ("scenario:braking_margin",), _braking_margin),
+    Derived("clearance", "m", "gap_min, and from the ego's collision on min(gap_min, 0) - 1 m",
+            ("gap_front", "gap_rear"), _clearance),
     Derived("gap_min", "m", "the smaller of gap_front and gap_rear", ("gap_front", "gap_rear"), _gap_min),
 )}
 
@@ -438,12 +457,22 @@ def defaults(scenario: str) -> dict[str, str]:
 
 
 # -- resolving and evaluating -----------------------------------------------------------------------
-def signal_units(columns: Mapping[str, str], metrics: Sequence[str] = ()) -> dict[str, str]:
-    """Every signal a formula may name for a run with trace ``columns`` (name -> unit) and
-    metric names ``metrics``: the columns and the derived signals they allow."""
+def signal_units(columns: Mapping[str, str], metrics: Sequence[str] = (), cls=None) -> dict[str, str]:
+    """Every signal a formula may name for a run with trace ``columns`` (name -> unit),
+    metric names ``metrics`` and scenario class ``cls``: the columns and the derived signals
+    they allow."""
     out = dict(columns)
+
+    def have(need: str) -> bool:
+        kind, _, name = need.rpartition(":")
+        if kind == "metric":
+            return name in metrics
+        if kind == "scenario":
+            return hasattr(cls, name)
+        return name in columns
+
     for d in DERIVED.values():
-        ok = all((n[7:] in metrics) if n.startswith("metric:") else n in columns for n in d.needs)
+        ok = all(have(n) for n in d.needs)
         if ok and d.name not in out:
             out[d.name] = d.unit
     return out
@@ -460,14 +489,14 @@ def resolve(texts: Mapping[str, str], units: Mapping[str, str]) -> tuple[Require
     return tuple(out)
 
 
-def signal(result, name: str) -> np.ndarray:
+def signal(result, name: str, scenario=None) -> np.ndarray:
     """Signal ``name`` of a finished run as floats (booleans +1/-1; infinities clipped to
     +-1e9, so rtamt's min/max stay finite)."""
     t = result.column("t")
     if name in result.columns:
         x = result.column(name).astype(float)
     else:
-        x = np.asarray(DERIVED[name].fn(result, t))
+        x = np.asarray(DERIVED[name].fn(result, t, scenario))
         if x.dtype == bool:
             return np.where(x, 1.0, -1.0)
     x = np.nan_to_num(x, nan=0.0, posinf=1e9, neginf=-1e9)
@@ -518,7 +547,7 @@ class Verdict:
 PERIOD = 0.1
 
 
-def evaluate(req: Requirement, result, period: float = PERIOD) -> Verdict:
+def evaluate(req: Requirement, result, period: float = PERIOD, scenario=None) -> Verdict:
     """Evaluate ``req`` on a finished run with rtamt (offline, discrete time) on the trace's
     own samples, every ``period`` s (0: every sample), counted back from the last one so the
     run's end (a collision) is always a sample. An ``always`` formula is evaluated as its
@@ -537,7 +566,7 @@ def evaluate(req: Requirement, result, period: float = PERIOD) -> Verdict:
     names = tuple(req.signals) or ("t",)
     data = {"time": (t - t[0]).tolist()}
     for n in names:
-        data[n] = signal(result, n)[idx].tolist()
+        data[n] = signal(result, n, scenario)[idx].tolist()
     always = req.rtamt.startswith("always (") and _outer_parens(req.rtamt[len("always "):])
     text = req.rtamt[len("always "):] if always else req.rtamt
     spec = _spec(Requirement(req.name, req.formula, text, req.signals, req.unit), stride * dt, names)
@@ -570,7 +599,7 @@ def check_run(scenario, result, requirements: Sequence[Requirement]) -> list[Ver
     verdicts = []
     rob = {}
     for req in requirements:
-        v = evaluate(req, result)
+        v = evaluate(req, result, scenario=scenario)
         verdicts.append(v)
         rob[req.name] = None if math.isnan(v.robustness) else round(v.robustness, 6)
         if v.violated_at is not None:

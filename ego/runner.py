@@ -146,7 +146,7 @@ def requirements_of(spec: RunSpec, cls, config, controller=None) -> tuple:
     if not texts:
         return ()
     metrics = [m.name for m in cls.metrics_declared(config)]
-    return resolve(texts, signal_units(columns, metrics))
+    return resolve(texts, signal_units(columns, metrics, cls))
 
 
 def run(spec: RunSpec) -> RunResult:

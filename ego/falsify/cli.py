@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-OPTIMIZERS = ("cma", "bo", "random", "lhs")
+OPTIMIZERS = ("cma", "bo", "bo-tpe", "random", "lhs")
 UNTIL = ("first", "budget")
 
 

@@ -653,13 +653,23 @@ class EmergencyBrake(EvasiveLaneChange):
 
     def _avoidable(self) -> bool | None:
         """The braking criterion of :mod:`ego.scenarios.envelope` from this run's trigger."""
-        from ego.scenarios.envelope import avoidable
+        margin = self.braking_margin()
+        return None if margin is None else margin > 0.0
+
+    def braking_margin(self) -> float | None:
+        """The smallest gap (m) to the lead had the ego braked at its friction limit from the
+        trigger (:func:`ego.scenarios.envelope.braking_min_gap`, the lead as SUMO moves it;
+        positive: braking avoids it); None without a trigger."""
+        from ego.scenarios.envelope import braking_min_gap, lead_speed
 
         if self.trigger_t is None or self._trigger_gap == INF:
             return None
-        p = self.ego.model.params
-        return avoidable({"trigger_time": self.trigger_t}, self._trigger_gap, self._trigger_speed,
-                         self.config, p.F_max / p.m + p.f * p.g)
+        p, c = self.ego.model.params, self.config
+
+        def fn(t):
+            return lead_speed(t, c.lead_cruise_speed, c.lead_brake_time, c.lead_decel, c.lead_final_speed)
+        return braking_min_gap(self.trigger_t, self._trigger_gap, self._trigger_speed,
+                               p.F_max / p.m + p.f * p.g, fn, lead_step=c.sumo_step)
 
 
 # --- fast follower --------------------------------------------------------------------------
