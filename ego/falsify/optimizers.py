@@ -103,6 +103,9 @@ class Bayesian:
         if tpe:
             sampler = optuna.samplers.TPESampler(seed=seed, n_startup_trials=startup, constant_liar=True)
         else:
+            import warnings
+
+            warnings.filterwarnings("ignore", category=optuna.exceptions.ExperimentalWarning)
             sampler = optuna.samplers.GPSampler(seed=seed, n_startup_trials=startup,
                                                 deterministic_objective=True)
         self.study = optuna.create_study(direction="minimize", sampler=sampler)
