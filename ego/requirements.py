@@ -105,11 +105,12 @@ def _gap_min(result, t: np.ndarray, scenario=None) -> np.ndarray:
 
 
 def _clearance(result, t: np.ndarray, scenario=None) -> np.ndarray:
-    """The smaller bumper gap, front or rear; from the ego's collision on at most -1 m (a
+    """The smaller bumper gap, front or rear, at least 0 m until the ego's collision (the
+    outlines may touch by millimetres without a collision), from then on at most -1 m (a
     collision is a violation by a clear margin even when the outlines only touch)."""
     gap = np.minimum(result.column("gap_front"), result.column("gap_rear"))
     hit = _collision(result, t)
-    return np.where(hit, np.minimum(gap, 0.0) - 1.0, gap)
+    return np.where(hit, np.minimum(gap, 0.0) - 1.0, np.maximum(gap, 0.0))
 
 
 def _braking_margin(result, t: np.ndarray, scenario=None) -> np.ndarray:
@@ -143,7 +144,8 @@ DERIVED = {d.name: d for d in (
     Derived("braking_margin", "m", "the smallest gap to the lead had the ego braked at its friction "
             "limit from the trigger, constant over the run (positive: braking avoids the lead; 1e9: no "
             "trigger)", ("scenario:braking_margin",), _braking_margin),
-    Derived("clearance", "m", "gap_min, and from the ego's collision on min(gap_min, 0) - 1 m",
+    Derived("clearance", "m", "gap_min floored at 0 m, and from the ego's collision on "
+            "min(gap_min, 0) - 1 m (negative exactly when the ego collided)",
             ("gap_front", "gap_rear"), _clearance),
     Derived("gap_min", "m", "the smaller of gap_front and gap_rear", ("gap_front", "gap_rear"), _gap_min),
 )}

@@ -58,6 +58,7 @@ class Search:
     controller: str
     evaluations: list[Evaluation] = field(default_factory=list)
     verified: dict = field(default_factory=dict)  #: run_id -> (reproduced?, recording, detail)
+    ran: int = 0  #: runs made now (the others were stored already)
 
     @property
     def violations(self) -> list[Evaluation]:
@@ -126,17 +127,17 @@ def falsify(spec: FalsifySpec, out: Path, *, optimizer: str = "cma", budget: int
         executor = make_executor(engine, jobs, address) if own else executor
         started = time.perf_counter()
         searches: list[Search] = []
-        ran = 0
         interrupted = False
         try:
             for controller in spec.controllers:
                 search = Search(controller)
                 searches.append(search)
-                ran += _search(spec, controller, optimizer, optimizer_seed, budget, until, executor, store,
-                               known, search, progress)
+                _search(spec, controller, optimizer, optimizer_seed, budget, until, executor, store, known,
+                        search, progress)
         except KeyboardInterrupt:
             interrupted = True
         finally:
+            ran = sum(s.ran for s in searches)
             store.flush()
             if own:
                 executor.close()
@@ -151,11 +152,10 @@ def falsify(spec: FalsifySpec, out: Path, *, optimizer: str = "cma", budget: int
 
 
 def _search(spec: FalsifySpec, controller: str, optimizer: str, seed: int, budget: int, until: str,
-            executor, store: ResultStore, known: dict, search: Search, progress: bool) -> int:
+            executor, store: ResultStore, known: dict, search: Search, progress: bool) -> None:
     from ego.sweep.runner import error_row, run_task
 
     opt = make(optimizer, len(spec.dims), max(1, executor.workers), seed, budget)
-    ran = 0
     while len(search.evaluations) < budget:
         units = opt.ask()
         full = len(units)
@@ -173,7 +173,7 @@ def _search(spec: FalsifySpec, controller: str, optimizer: str, seed: int, budge
             row.update(optimizer=optimizer, optimizer_seed=seed)
             known[row["run_id"]] = row
             store.add(row)
-            ran += 1
+            search.ran += 1
         for rid, (s, o) in zip(ids, points):
             row = known[rid]
             search.evaluations.append(Evaluation(len(search.evaluations), controller, s, o, rid,
@@ -190,7 +190,6 @@ def _search(spec: FalsifySpec, controller: str, optimizer: str, seed: int, budge
             sys.stderr.flush()
         if until == "first" and search.violations:
             break
-    return ran
 
 
 def command(spec: FalsifySpec, e: Evaluation, record: str | None = None) -> str:

@@ -269,7 +269,14 @@ class EvasiveLaneChange(HighwayScenario):
         limit = p.F_max / p.m + p.f * p.g
         if progress >= 0.5:
             return  # well across: finish it (the new lane's traffic sees the ego in its lane)
-        threat = self._target_follower_threat(limit)
+        threat = None
+        front = self.sensor.front
+        if progress < 0.25 and front.gap != INF:
+            # early in the change, a follower in the new lane that would run into the braking
+            # ego sends it back, if braking stops it behind the front car holding its speed now
+            closing = self.ds - front.speed
+            if closing <= 0.0 or closing * closing / (2.0 * max(front.gap, 0.1)) <= 0.9 * limit:
+                threat = self._target_follower_threat(limit)
         if self.braking_need() > 0.9 * limit and threat is None:
             return  # braking alone would not stop it in time and the new lane is clear: carry on
         why = f"; the new lane's follower {threat}" if threat else ""
