@@ -13,6 +13,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
+import numpy as np
+
 from ego.params import ConfigError, param
 from ego.scenarios import metrics as m
 from ego.scenarios.evasive import EvasiveConfig, EvasiveLaneChange
@@ -77,6 +79,12 @@ class CutIn(EvasiveLaneChange):
         Metric("reaction_time", "s", "from the start of the cut-in to the trigger", headline=True),
         Metric("cut_in_time", "s", "when the car started across the lane"),
         Metric("response", "-", "brake (in lane) or evade (lane change), none without a trigger"),
+        Metric("reach_time", "s", "when the cutting car first reached over the ego's outline (became its "
+               "front object)"),
+        Metric("collision_avoidable", "-", "true: braking at the friction limit from the moment the car "
+               "reached over the ego's outline would have kept the ego behind it, so the collision is the "
+               "controller's or the planner's; false: physics (or the car hit the ego's side before it "
+               "reached over its outline); none: no collision"),
     )
     markers = EvasiveLaneChange.markers + (Marker("cut-in", "the car starts across", "<"),)
 
@@ -116,6 +124,31 @@ class CutIn(EvasiveLaneChange):
     def _on_trigger(self) -> None:
         self._ref_s, self._ref_v = self.s, self.ds
 
+    # -- the braking criterion: physics or the controller's failure (issue 21) ---------------------
+    def _reset_plan(self) -> None:
+        super()._reset_plan()
+        #: (t s, gap m, ego speed m/s, car's speed m/s) when the car first reached over the ego's outline
+        self._reach: tuple[float, float, float, float] | None = None
+
+    def _plan(self) -> None:
+        front = self.sensor.front
+        if self._reach is None and front.id == CUTTER and front.gap != float("inf"):
+            self._reach = (self.t, front.gap, self.ds, front.speed)
+        super()._plan()
+
+    def braking_margin(self) -> float | None:
+        """The smallest gap (m) to the cutting car had the ego braked at its friction limit
+        from the moment the car reached over its outline (the car holds its scripted speed
+        from the cut-in on, moved as SUMO moves it); None if it never did."""
+        from ego.scenarios.envelope import braking_min_gap
+
+        if self._reach is None:
+            return None
+        t0, gap, speed, car_speed = self._reach
+        p = self.ego.model.params
+        return braking_min_gap(t0, gap, speed, p.F_max / p.m + p.f * p.g,
+                               lambda t: np.full_like(t, car_speed), lead_step=self.config.sumo_step)
+
     def _in_lane_reference(self):
         # an ACC-like reference: the speed goes to the front car's speed plus a term that
         # opens the gap to the follow distance, changing at brake_decel (or at 1.2 times
@@ -148,5 +181,9 @@ class CutIn(EvasiveLaneChange):
             "cut_in_time": m.json_number(cut, 4),
             "response": ("none" if self.trigger_t is None else "brake" if self.chosen is None
                          else "evade"),
+            "reach_time": m.json_number(self._reach[0] if self._reach else None, 4),
+            # a car that hits the ego's side before it reaches over its outline left no time to brake
+            "collision_avoidable": (None if self.collision is None else False if self._reach is None
+                                    else bool(self.braking_margin() > 0.0)),
         })
         return out
