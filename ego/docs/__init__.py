@@ -705,7 +705,10 @@ def cross_simulator(seeds: int = 3) -> list[Table]:
 
 def tables() -> list[Table]:
     """Every table of docs/results/, page by page."""
-    return report_000() + report_002() + report_003() + report_004() + envelope() + cross_simulator()
+    from ego.falsify.bench import docs_tables
+
+    return (report_000() + report_002() + report_003() + report_004() + envelope() + cross_simulator()
+            + docs_tables())
 
 
 # -- running and writing ---------------------------------------------------------------------------
