@@ -255,11 +255,12 @@ class EvasiveLaneChange(HighwayScenario):
                 self.aeb_active = False
                 self.event("aeb", f"AEB releases (needs {need:.1f} m/s^2)")
 
-    def _abort_lane_change(self) -> None:
+    def _abort_lane_change(self, aeb: bool = True) -> None:
         """An emergency stop early in a lane change (the ego not yet half-way across, and
         braking alone enough to stop behind the front object) is made in the lane it is
         leaving: braking hard in front of the new lane's traffic is what gets a car hit from
-        behind."""
+        behind. ``aeb=False``: no emergency stop, the ego only slows behind the car it still
+        overlaps; it goes back only for a follower in the new lane that would run into it."""
         if self.phase != LANE_CHANGE or self.in_lane_action != "brake":
             return
         origin = self.target_lane - (1 if self.chosen == "left" else -1)
@@ -271,16 +272,17 @@ class EvasiveLaneChange(HighwayScenario):
             return  # well across: finish it (the new lane's traffic sees the ego in its lane)
         threat = None
         front = self.sensor.front
-        if progress < 0.25 and front.gap != INF:
+        if progress < 0.25 and front.gap != INF and (aeb or front.speed < self.ds - 0.5):
             # early in the change, a follower in the new lane that would run into the braking
             # ego sends it back, if braking stops it behind the front car holding its speed now
             closing = self.ds - front.speed
             if closing <= 0.0 or closing * closing / (2.0 * max(front.gap, 0.1)) <= 0.9 * limit:
                 threat = self._target_follower_threat(limit)
-        if self.braking_need() > 0.9 * limit and threat is None:
+        if threat is None and (not aeb or self.braking_need() > 0.9 * limit):
             return  # braking alone would not stop it in time and the new lane is clear: carry on
         why = f"; the new lane's follower {threat}" if threat else ""
-        self.event("lane", f"lane change aborted at {100 * progress:.0f} % across: emergency braking "
+        what = "emergency braking" if aeb else "braking"
+        self.event("lane", f"lane change aborted at {100 * progress:.0f} % across: {what} "
                    f"in the {LANE_NAMES[origin]} lane{why}", "WARN")
         self.target_lane, self.chosen, self.phase = origin, None, IN_LANE
         self._start_in_lane()
@@ -336,6 +338,8 @@ class EvasiveLaneChange(HighwayScenario):
                 self._trigger(ttc)
         if c.aeb:
             self._aeb()
+        if self.phase == LANE_CHANGE and not self.aeb_active and self._per_sumo and self.k % self._per_sumo == 0:
+            self._abort_lane_change(aeb=False)  # slowing across two lanes in front of a follower?
         if self.phase == CRUISE:
             s_ref, v_ref = self._s0 + c.ego_speed * self.t, c.ego_speed
         elif self.chosen is not None:

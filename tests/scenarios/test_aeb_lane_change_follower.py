@@ -27,6 +27,18 @@ def test_aborts_back_into_its_lane_instead_of_stopping_in_front_of_the_follower(
     assert m["requirements"]["no_avoidable_collision"] > 0
 
 
+@pytest.mark.parametrize("seed, case", [
+    # found by ego falsify (scenarios/falsify/emergency-brake.toml, fuzzy): no AEB, the ego slowed
+    # behind the lead it still overlapped, early in the change, and the new lane's follower hit it
+    (99320, {"ego_speed": 18.0762, "lead_decel": 7.1856, "lead_gap": 10.6072, "traffic_density": 12.3334}),
+    (91990, {"ego_speed": 14.6396, "lead_decel": 8.4011, "lead_gap": 10.0228, "traffic_density": 24.4863}),
+])
+def test_slowing_early_in_a_change_in_front_of_a_follower_goes_back(seed, case):
+    r = run(RunSpec("emergency-brake", "fuzzy", seed, case))
+    assert not r.metrics["collision"], r.metrics["status_detail"]
+    assert any(e.kind == "lane" and "aborted" in e.text and "follower" in e.text for e in r.events)
+
+
 def test_a_lane_change_with_a_clear_new_lane_is_not_aborted():
     # the default case changes lane with nobody close behind in the new lane: finished, no abort
     r = run(RunSpec("emergency-brake", "pid", 0, {}))
