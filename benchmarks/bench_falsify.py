@@ -25,15 +25,22 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from ego.falsify import bench  # noqa: E402
+from ego.falsify import bench
 
 
 def _jobs(args):
     if args.surrogate:
-        return {("surrogate", o): [bench.SurrogateJob(o, s, args.budget) for s in range(args.reps)]
-                for o in args.optimizers}
-    return {(r, o): [bench.BenchJob(r, o, s, args.budget) for s in range(args.reps)]
-            for r in args.requirements for o in args.optimizers}
+        return {
+            ("surrogate", o): [
+                bench.SurrogateJob(o, s, args.budget) for s in range(args.reps)
+            ]
+            for o in args.optimizers
+        }
+    return {
+        (r, o): [bench.BenchJob(r, o, s, args.budget) for s in range(args.reps)]
+        for r in args.requirements
+        for o in args.optimizers
+    }
 
 
 def main(argv=None) -> dict:
@@ -45,7 +52,11 @@ def main(argv=None) -> dict:
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--surrogate", action="store_true")
     ap.add_argument("--docs", action="store_true")
-    ap.add_argument("--plot", default=None, help="convergence plot path (default with --docs: docs/img/)")
+    ap.add_argument(
+        "--plot",
+        default=None,
+        help="convergence plot path (default with --docs: docs/img/)",
+    )
     args = ap.parse_args(argv)
     args.requirements = args.requirements or list(bench.REQUIREMENTS)
     args.optimizers = [o.strip() for o in args.optimizers.split(",")]
@@ -67,12 +78,18 @@ def main(argv=None) -> dict:
     for (req, opt), js in groups.items():
         runs = [results[j]["runs"] for j in js]
         q1, med, q3, found = bench.quartiles(runs, args.budget)
-        _, lhs, _, _ = bench.quartiles([results[j]["runs"] for j in groups[(req, "lhs")]], args.budget)
+        _, lhs, _, _ = bench.quartiles(
+            [results[j]["runs"] for j in groups[(req, "lhs")]], args.budget
+        )
         figures[(req, opt)] = {"runs": runs, "median": med, "ratio_to_lhs": med / lhs}
         fmt = bench.fmt_runs
-        print(f"{req:<16} {opt:<8} {found:>2}/{len(js):<3} {fmt(med, args.budget):>6}  "
-              f"[{fmt(q1, args.budget)}, {fmt(q3, args.budget)}]  {med / lhs:.2f}")
-    plot = args.plot or (str(ROOT / "docs" / "img" / "falsify_convergence.png") if args.docs else None)
+        print(
+            f"{req:<16} {opt:<8} {found:>2}/{len(js):<3} {fmt(med, args.budget):>6}  "
+            f"[{fmt(q1, args.budget)}, {fmt(q3, args.budget)}]  {med / lhs:.2f}"
+        )
+    plot = args.plot or (
+        str(ROOT / "docs" / "img" / "falsify_convergence.png") if args.docs else None
+    )
     if plot:
         write_plot(groups, results, Path(plot), args.budget)
         print(f"wrote {plot}")
@@ -95,8 +112,8 @@ def write_plot(groups, results, path: Path, budget: int) -> None:
             curves = np.full((len(js), budget), np.nan)
             for i, j in enumerate(js):
                 c = np.array(results[j]["curve"], dtype=float)
-                curves[i, :len(c)] = c
-                curves[i, len(c):] = c[-1] if len(c) else np.nan
+                curves[i, : len(c)] = c
+                curves[i, len(c) :] = c[-1] if len(c) else np.nan
             ax.plot(np.arange(1, budget + 1), np.nanmedian(curves, axis=0), label=opt)
         ax.axhline(0.0, color="k", lw=0.8, ls="--")
         ax.set_yscale("symlog", linthresh=0.1)

@@ -44,8 +44,10 @@ KNOWN_UNITS = ("m/s^2", "rad/s", "m/s", "m", "s", "N", "rad", "-")
 _TEMPORAL = ("always", "eventually", "historically", "once")
 _KEYWORDS = {"not", "and", "or", "implies", "until", "abs", "true", "false", *_TEMPORAL}
 _CMP = (">=", "<=", "==", "!=", ">", "<")
-_TOKEN = re.compile(r"\s*(?:(?P<num>\d+(?:\.\d*)?(?:[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?)"
-                    r"|(?P<name>[A-Za-z_][A-Za-z_0-9]*)|(?P<op>->|>=|<=|==|!=|[<>()\[\]:+\-*/^&|~]))")
+_TOKEN = re.compile(
+    r"\s*(?:(?P<num>\d+(?:\.\d*)?(?:[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?)"
+    r"|(?P<name>[A-Za-z_][A-Za-z_0-9]*)|(?P<op>->|>=|<=|==|!=|[<>()\[\]:+\-*/^&|~]))"
+)
 _REQ_NAME = re.compile(r"^[A-Za-z_][A-Za-z_0-9]*$")
 
 
@@ -62,7 +64,9 @@ def _collision(result, t: np.ndarray, scenario=None) -> np.ndarray:
     when = _status_time(result, "collision") if result.status == "collision" else None
     if when is None or not len(t):
         return np.zeros(len(t), bool)
-    return t >= min(when, t[-1]) - 1e-9  # the run ends at the collision: its last sample at least
+    return (
+        t >= min(when, t[-1]) - 1e-9
+    )  # the run ends at the collision: its last sample at least
 
 
 def _avoidable_collision(result, t: np.ndarray, scenario=None) -> np.ndarray:
@@ -130,25 +134,74 @@ class Derived:
     fn: object
 
 
-DERIVED = {d.name: d for d in (
-    Derived("collision", BOOL, "true from the ego's collision on (status collision)", (), _collision),
-    Derived("collision_avoidable", BOOL, "the run's collision_avoidable metric, constant over the "
+DERIVED = {
+    d.name: d
+    for d in (
+        Derived(
+            "collision",
+            BOOL,
+            "true from the ego's collision on (status collision)",
+            (),
+            _collision,
+        ),
+        Derived(
+            "collision_avoidable",
+            BOOL,
+            "the run's collision_avoidable metric, constant over the "
             "run (true: braking at the friction limit from the trigger would have avoided the "
-            "collision)", ("metric:collision_avoidable",), _collision_avoidable),
-    Derived("avoidable_collision", BOOL, "true from the ego's collision on when that collision was "
-            "avoidable (collision_avoidable)", ("metric:collision_avoidable",), _avoidable_collision),
-    Derived("aeb_active", BOOL, "the AEB brakes (between its engage and release events)", (),
-            _aeb_active),
-    Derived("lateral_clear", BOOL, "the ego's outline has left its start lane (|lane_offset| >= half a "
-            "lane + half the ego's width)", ("lane_offset",), _lateral_clear),
-    Derived("braking_margin", "m", "the smallest gap to the lead had the ego braked at its friction "
+            "collision)",
+            ("metric:collision_avoidable",),
+            _collision_avoidable,
+        ),
+        Derived(
+            "avoidable_collision",
+            BOOL,
+            "true from the ego's collision on when that collision was "
+            "avoidable (collision_avoidable)",
+            ("metric:collision_avoidable",),
+            _avoidable_collision,
+        ),
+        Derived(
+            "aeb_active",
+            BOOL,
+            "the AEB brakes (between its engage and release events)",
+            (),
+            _aeb_active,
+        ),
+        Derived(
+            "lateral_clear",
+            BOOL,
+            "the ego's outline has left its start lane (|lane_offset| >= half a "
+            "lane + half the ego's width)",
+            ("lane_offset",),
+            _lateral_clear,
+        ),
+        Derived(
+            "braking_margin",
+            "m",
+            "the smallest gap to the lead had the ego braked at its friction "
             "limit from the trigger, constant over the run (positive: braking avoids the lead; 1e9: no "
-            "trigger)", ("scenario:braking_margin",), _braking_margin),
-    Derived("clearance", "m", "gap_min floored at 0 m, and from the ego's collision on "
+            "trigger)",
+            ("scenario:braking_margin",),
+            _braking_margin,
+        ),
+        Derived(
+            "clearance",
+            "m",
+            "gap_min floored at 0 m, and from the ego's collision on "
             "min(gap_min, 0) - 1 m (negative exactly when the ego collided)",
-            ("gap_front", "gap_rear"), _clearance),
-    Derived("gap_min", "m", "the smaller of gap_front and gap_rear", ("gap_front", "gap_rear"), _gap_min),
-)}
+            ("gap_front", "gap_rear"),
+            _clearance,
+        ),
+        Derived(
+            "gap_min",
+            "m",
+            "the smaller of gap_front and gap_rear",
+            ("gap_front", "gap_rear"),
+            _gap_min,
+        ),
+    )
+}
 
 
 # -- parsing ----------------------------------------------------------------------------------------
@@ -199,7 +252,9 @@ class _Parser:
     def take(self, expected: str | None = None) -> str:
         tok = self.peek()
         if tok is None:
-            raise self.error(f"ends early (expected {expected!r})" if expected else "ends early")
+            raise self.error(
+                f"ends early (expected {expected!r})" if expected else "ends early"
+            )
         if expected is not None and tok != expected:
             raise self.error(f"expected {expected!r}, found {tok!r}")
         self.i += 1
@@ -271,7 +326,12 @@ class _Parser:
             inner = self.formula_()
             self.take(")")
             return f"({inner})"
-        if tok is not None and tok not in _KEYWORDS and _is_name(tok) and self.units.get(tok) == BOOL:
+        if (
+            tok is not None
+            and tok not in _KEYWORDS
+            and _is_name(tok)
+            and self.units.get(tok) == BOOL
+        ):
             nxt = self.peek(1)
             if nxt not in _CMP:
                 self.take()
@@ -304,15 +364,21 @@ class _Parser:
         left, lu = self.arith()
         op = self.peek()
         if op not in _CMP:
-            raise self.error(f"expected a comparison ({' '.join(_CMP)}) after {left!r}, found "
-                             f"{op if op is not None else 'the end'!r}")
+            raise self.error(
+                f"expected a comparison ({' '.join(_CMP)}) after {left!r}, found "
+                f"{op if op is not None else 'the end'!r}"
+            )
         self.take()
         right, ru = self.arith()
         unit = _join(lu, ru)
         if unit is False:
-            raise self.error(f"compares {left!r} in {lu} with {right!r} in {ru} (units differ)")
+            raise self.error(
+                f"compares {left!r} in {lu} with {right!r} in {ru} (units differ)"
+            )
         if unit == BOOL:
-            raise self.error(f"compares booleans ({left} {op} {right}): use the signal alone, or not")
+            raise self.error(
+                f"compares booleans ({left} {op} {right}): use the signal alone, or not"
+            )
         self.cmp_units.add(unit or "-")
         return f"({left} {op} {right})"
 
@@ -323,7 +389,9 @@ class _Parser:
             rt, ru = self.term()
             joined = _join(unit, ru)
             if joined is False:
-                raise self.error(f"{text!r} in {unit} {op} {rt!r} in {ru} (units differ)")
+                raise self.error(
+                    f"{text!r} in {unit} {op} {rt!r} in {ru} (units differ)"
+                )
             text, unit = f"{text} {op} {rt}", joined
         return text, unit
 
@@ -359,18 +427,25 @@ class _Parser:
             raise self.error(f"expected a signal or a number, found {tok!r}")
         if tok not in self.units:
             known = sorted(self.units)
-            raise self.error(f"unknown signal {tok!r} (known: {', '.join(known)}){did_you_mean(tok, known)}")
+            raise self.error(
+                f"unknown signal {tok!r} (known: {', '.join(known)}){did_you_mean(tok, known)}"
+            )
         if self.units[tok] == BOOL:
-            raise self.error(f"{tok} is a boolean signal: use it alone as a proposition (e.g. not {tok})")
+            raise self.error(
+                f"{tok} is a boolean signal: use it alone as a proposition (e.g. not {tok})"
+            )
         self.used[tok] = None
         return tok, self.units[tok] or "-"
 
     def unit_suffix(self) -> str | None:
         """The unit written after a number (tokens up to the longest known unit), or None."""
-        for unit in sorted(set(KNOWN_UNITS) | {u for u in self.units.values() if u and u != BOOL},
-                           key=len, reverse=True):
+        for unit in sorted(
+            set(KNOWN_UNITS) | {u for u in self.units.values() if u and u != BOOL},
+            key=len,
+            reverse=True,
+        ):
             toks = [t for t in self._lex_unit(unit)]
-            if toks and self.toks[self.i:self.i + len(toks)] == toks:
+            if toks and self.toks[self.i : self.i + len(toks)] == toks:
                 # "s" after a number inside an interval is handled by seconds(); here a name
                 # that is also a signal is a unit only when a comparison or an operator follows
                 self.i += len(toks)
@@ -400,11 +475,15 @@ def _join(a: str | None, b: str | None):
     return False
 
 
-def parse(formula: str, units: Mapping[str, str], name: str = "requirement") -> Requirement:
+def parse(
+    formula: str, units: Mapping[str, str], name: str = "requirement"
+) -> Requirement:
     """Check ``formula`` against the signals ``units`` (name -> unit; ``bool`` for booleans)
     and translate it for rtamt. RequirementError (one line) on anything wrong."""
     if not isinstance(formula, str):
-        raise RequirementError(f"bad requirement {name!r}: the formula must be text, got {formula!r}")
+        raise RequirementError(
+            f"bad requirement {name!r}: the formula must be text, got {formula!r}"
+        )
     p = _Parser(formula.strip(), units)
     text = p.parse()
     unit = next(iter(p.cmp_units)) if len(p.cmp_units) == 1 else "mixed"
@@ -416,19 +495,25 @@ def split(text: str) -> tuple[str, str]:
     name, sep, formula = text.partition(":")
     name = name.strip()
     if not sep or not _REQ_NAME.match(name) or not formula.strip():
-        raise RequirementError(f"bad --require {text!r} (expected NAME: FORMULA, e.g. "
-                               "\"keep_gap: always (gap_front >= 2 m)\"; NAME a Python identifier)")
+        raise RequirementError(
+            f"bad --require {text!r} (expected NAME: FORMULA, e.g. "
+            '"keep_gap: always (gap_front >= 2 m)"; NAME a Python identifier)'
+        )
     return name, formula.strip()
 
 
 def from_table(table, source: str) -> dict[str, str]:
     """A TOML ``[requirements]`` table (name = "formula") checked for shape."""
     if not isinstance(table, dict):
-        raise RequirementError(f"{source}: [requirements] must be a table of name = \"formula\"")
+        raise RequirementError(
+            f'{source}: [requirements] must be a table of name = "formula"'
+        )
     for k, v in table.items():
         if not _REQ_NAME.match(k) or not isinstance(v, str) or not v.strip():
-            raise RequirementError(f"{source}: [requirements] {k} = {v!r}: expected name = \"formula\" "
-                                   "(name a Python identifier)")
+            raise RequirementError(
+                f'{source}: [requirements] {k} = {v!r}: expected name = "formula" '
+                "(name a Python identifier)"
+            )
     return {k: v.strip() for k, v in table.items()}
 
 
@@ -437,13 +522,25 @@ _NO_COLLISION = ("no_collision", "always (not collision)")
 _NO_AVOIDABLE = ("no_avoidable_collision", "always (not avoidable_collision)")
 #: the requirements every run of a scenario checks unless told otherwise (docs/requirements.md)
 DEFAULTS: dict[str, tuple[tuple[str, str], ...]] = {
-    "emergency-brake": (_NO_AVOIDABLE, _NO_COLLISION,
-                        ("gap_or_clear", "always (gap_front >= 2 m or lateral_clear)"),
-                        ("aeb_slows", "always (aeb_active implies eventually[0:3] "
-                                      "(speed <= 1 m/s or not aeb_active))")),
-    "cut-in": (_NO_AVOIDABLE, _NO_COLLISION,
-               ("ttc_or_clear", "always (ttc_front >= 1 s or lateral_clear)")),
-    "fast-follower": (_NO_COLLISION, ("rear_ttc", "always (ttc_rear >= 0.5 s or lateral_clear)")),
+    "emergency-brake": (
+        _NO_AVOIDABLE,
+        _NO_COLLISION,
+        ("gap_or_clear", "always (gap_front >= 2 m or lateral_clear)"),
+        (
+            "aeb_slows",
+            "always (aeb_active implies eventually[0:3] "
+            "(speed <= 1 m/s or not aeb_active))",
+        ),
+    ),
+    "cut-in": (
+        _NO_AVOIDABLE,
+        _NO_COLLISION,
+        ("ttc_or_clear", "always (ttc_front >= 1 s or lateral_clear)"),
+    ),
+    "fast-follower": (
+        _NO_COLLISION,
+        ("rear_ttc", "always (ttc_rear >= 0.5 s or lateral_clear)"),
+    ),
     "curve": (_NO_COLLISION, ("friction", "always (abs(lat_accel) <= 7 m/s^2)")),
     "lane-centering": (("in_lane", "always (abs(d) <= 1 m)"),),
     "platoon": (_NO_COLLISION,),
@@ -459,7 +556,9 @@ def defaults(scenario: str) -> dict[str, str]:
 
 
 # -- resolving and evaluating -----------------------------------------------------------------------
-def signal_units(columns: Mapping[str, str], metrics: Sequence[str] = (), cls=None) -> dict[str, str]:
+def signal_units(
+    columns: Mapping[str, str], metrics: Sequence[str] = (), cls=None
+) -> dict[str, str]:
     """Every signal a formula may name for a run with trace ``columns`` (name -> unit),
     metric names ``metrics`` and scenario class ``cls``: the columns and the derived signals
     they allow."""
@@ -480,7 +579,9 @@ def signal_units(columns: Mapping[str, str], metrics: Sequence[str] = (), cls=No
     return out
 
 
-def resolve(texts: Mapping[str, str], units: Mapping[str, str]) -> tuple[Requirement, ...]:
+def resolve(
+    texts: Mapping[str, str], units: Mapping[str, str]
+) -> tuple[Requirement, ...]:
     """Parse every (name -> formula) against ``units``; the first problem is the error."""
     out = []
     for name, formula in texts.items():
@@ -549,7 +650,9 @@ class Verdict:
 PERIOD = 0.1
 
 
-def evaluate(req: Requirement, result, period: float = PERIOD, scenario=None) -> Verdict:
+def evaluate(
+    req: Requirement, result, period: float = PERIOD, scenario=None
+) -> Verdict:
     """Evaluate ``req`` on a finished run with rtamt (offline, discrete time) on the trace's
     own samples, every ``period`` s (0: every sample), counted back from the last one so the
     run's end (a collision) is always a sample. An ``always`` formula is evaluated as its
@@ -569,9 +672,15 @@ def evaluate(req: Requirement, result, period: float = PERIOD, scenario=None) ->
     data = {"time": (t - t[0]).tolist()}
     for n in names:
         data[n] = signal(result, n, scenario)[idx].tolist()
-    always = req.rtamt.startswith("always (") and _outer_parens(req.rtamt[len("always "):])
-    text = req.rtamt[len("always "):] if always else req.rtamt
-    spec = _spec(Requirement(req.name, req.formula, text, req.signals, req.unit), stride * dt, names)
+    always = req.rtamt.startswith("always (") and _outer_parens(
+        req.rtamt[len("always ") :]
+    )
+    text = req.rtamt[len("always ") :] if always else req.rtamt
+    spec = _spec(
+        Requirement(req.name, req.formula, text, req.signals, req.unit),
+        stride * dt,
+        names,
+    )
     rob = np.array([v for _, v in spec.evaluate(data)], dtype=float)
     value = float(rob.min()) if always else float(rob[0])
     at = None
@@ -605,8 +714,10 @@ def check_run(scenario, result, requirements: Sequence[Requirement]) -> list[Ver
         verdicts.append(v)
         rob[req.name] = None if math.isnan(v.robustness) else round(v.robustness, 6)
         if v.violated_at is not None:
-            text = (f"requirement {req.name} violated (robustness {v.robustness:.3g}"
-                    f"{'' if v.unit in ('-', 'mixed', BOOL) else ' ' + v.unit}): {req.formula}")
+            text = (
+                f"requirement {req.name} violated (robustness {v.robustness:.3g}"
+                f"{'' if v.unit in ('-', 'mixed', BOOL) else ' ' + v.unit}): {req.formula}"
+            )
             result.events.append(Event(v.violated_at, "requirement", text, "WARN"))
             scenario.recorder.event(v.violated_at, f"[requirement] {text}", "WARN")
     if requirements:
@@ -622,25 +733,47 @@ def summary_lines(groups: Mapping[str, Sequence[Mapping]]) -> list[str]:
     """A markdown table of passes and failures per requirement (columns) and group (rows:
     e.g. controllers), from flattened metric rows (``requirements.<name>`` robustness); no
     lines when no row has a requirement."""
-    names = list(dict.fromkeys(k[len(PREFIX):] for rows in groups.values() for r in rows for k in r
-                               if k.startswith(PREFIX)))
+    names = list(
+        dict.fromkeys(
+            k[len(PREFIX) :]
+            for rows in groups.values()
+            for r in rows
+            for k in r
+            if k.startswith(PREFIX)
+        )
+    )
     if not names:
         return []
-    lines = ["", "Requirements (robustness >= 0: passed; passed/evaluated, the smallest robustness "
-             "in brackets):", "", "| | " + " | ".join(names) + " |", "|---|" + "---|" * len(names)]
+    lines = [
+        "",
+        "Requirements (robustness >= 0: passed; passed/evaluated, the smallest robustness "
+        "in brackets):",
+        "",
+        "| | " + " | ".join(names) + " |",
+        "|---|" + "---|" * len(names),
+    ]
     for group, rows in groups.items():
         cells = []
         for n in names:
             values = [r.get(PREFIX + n) for r in rows]
-            values = [float(v) for v in values if isinstance(v, (int, float)) and not isinstance(v, bool)
-                      and math.isfinite(float(v))]
+            values = [
+                float(v)
+                for v in values
+                if isinstance(v, (int, float))
+                and not isinstance(v, bool)
+                and math.isfinite(float(v))
+            ]
             passed = sum(v >= 0.0 for v in values)
-            cells.append(f"{passed}/{len(values)} ({min(values):.3g})" if values else "-")
+            cells.append(
+                f"{passed}/{len(values)} ({min(values):.3g})" if values else "-"
+            )
         lines.append(f"| {group} | " + " | ".join(cells) + " |")
     return lines
 
 
-def with_defaults(scenario: str, texts: Sequence[str]) -> tuple[tuple[str, str], ...] | None:
+def with_defaults(
+    scenario: str, texts: Sequence[str]
+) -> tuple[tuple[str, str], ...] | None:
     """``--require NAME: FORMULA`` options on top of the scenario's defaults (a name given
     again replaces the default); None (the defaults) without options."""
     if not texts:

@@ -36,9 +36,14 @@ def bench_spec(requirement: str):
     if requirement not in spec.requirements:
         from ego.params import ConfigError
 
-        raise ConfigError(f"unknown benchmark requirement {requirement!r} (known: {', '.join(spec.requirements)})")
-    return dataclasses.replace(spec, requirement=requirement,
-                               requirements={requirement: spec.requirements[requirement]})
+        raise ConfigError(
+            f"unknown benchmark requirement {requirement!r} (known: {', '.join(spec.requirements)})"
+        )
+    return dataclasses.replace(
+        spec,
+        requirement=requirement,
+        requirements={requirement: spec.requirements[requirement]},
+    )
 
 
 @dataclass(frozen=True)
@@ -60,11 +65,21 @@ class BenchJob:
             workers = self.batch
 
         with tempfile.TemporaryDirectory(prefix="ego-bench-falsify-") as tmp:
-            report = falsify(bench_spec(self.requirement), Path(tmp), optimizer=self.optimizer,
-                             budget=self.budget, until="first", optimizer_seed=self.seed, verify=False,
-                             executor=Batched())
+            report = falsify(
+                bench_spec(self.requirement),
+                Path(tmp),
+                optimizer=self.optimizer,
+                budget=self.budget,
+                until="first",
+                optimizer_seed=self.seed,
+                verify=False,
+                executor=Batched(),
+            )
         search = report.searches[0]
-        return {"runs": search.first_violation, "curve": [float(x) for x in search.best_so_far()]}
+        return {
+            "runs": search.first_violation,
+            "curve": [float(x) for x in search.best_so_far()],
+        }
 
 
 #: the surrogate: a violating ball of this radius in the unit cube of DIMS dimensions
@@ -115,8 +130,15 @@ class SweepJob:
         from ego.sweep.spec import load
 
         spec = load(DENSE_SPEC)
-        result = run(RunSpec(spec.scenario, self.controller, self.seed, dict(self.overrides),
-                             requirements=spec.requirements))
+        result = run(
+            RunSpec(
+                spec.scenario,
+                self.controller,
+                self.seed,
+                dict(self.overrides),
+                requirements=spec.requirements,
+            )
+        )
         return dict(result.metrics.get("requirements", {}))
 
 
@@ -124,14 +146,18 @@ def dense_jobs() -> list[SweepJob]:
     from ego.sweep.spec import load
 
     spec = load(DENSE_SPEC)
-    return [SweepJob(r.seed, tuple(r.overrides.items()), r.controller) for r in spec.runs()]
+    return [
+        SweepJob(r.seed, tuple(r.overrides.items()), r.controller) for r in spec.runs()
+    ]
 
 
 def quartiles(runs: list, budget: int) -> tuple[float, float, float, int]:
     """(25th, 50th, 75th percentile, found) of runs-to-first; a repetition that found
     nothing counts as more than ``budget`` (the statistics are then lower bounds: ">")."""
     values = np.array([r if r is not None else np.inf for r in runs], dtype=float)
-    q = np.percentile(np.where(np.isinf(values), budget + 1, values), [25, 50, 75], method="lower")
+    q = np.percentile(
+        np.where(np.isinf(values), budget + 1, values), [25, 50, 75], method="lower"
+    )
     found = int(np.isfinite(values).sum())
     return float(q[0]), float(q[1]), float(q[2]), found
 
@@ -151,14 +177,20 @@ REQUIREMENTS = ("keeps_1m", "no_overbraking")
 
 def _runs_cells(reps: int, budget: int):
     """Cells of a runs-to-first row whose jobs are its own ``reps`` then LHS's ``reps``."""
+
     def cells(ms: list[dict]) -> list[str]:
         own, lhs = [m["runs"] for m in ms[:reps]], [m["runs"] for m in ms[reps:]]
         q1, med, q3, found = quartiles(own, budget)
         _, lhs_med, _, _ = quartiles(lhs, budget)
         ratio = med / lhs_med
         bound = "<=" if lhs_med > budget and med <= budget else ""
-        return [f"{found}/{reps}", fmt_runs(med, budget), f"{fmt_runs(q1, budget)} - {fmt_runs(q3, budget)}",
-                f"{bound}{ratio:.2f}" if not (med > budget) else "-"]
+        return [
+            f"{found}/{reps}",
+            fmt_runs(med, budget),
+            f"{fmt_runs(q1, budget)} - {fmt_runs(q3, budget)}",
+            f"{bound}{ratio:.2f}" if not (med > budget) else "-",
+        ]
+
     return cells
 
 
@@ -167,7 +199,12 @@ def _share_cells(name: str):
         values = [m.get(name) for m in ms]
         values = [float(v) for v in values if v is not None]
         bad = sum(v < 0 for v in values)
-        return [f"{bad}/{len(values)}", f"{100.0 * bad / len(values):.2f} %", f"{min(values):.3g}"]
+        return [
+            f"{bad}/{len(values)}",
+            f"{100.0 * bad / len(values):.2f} %",
+            f"{min(values):.3g}",
+        ]
+
     return cells
 
 
@@ -179,33 +216,71 @@ def docs_tables() -> list:
     dense = dense_jobs()
     spec = load(BENCH_SPEC)
     landscape = Table(
-        "falsify-landscape", "falsify",
+        "falsify-landscape",
+        "falsify",
         ("ego sweep benchmarks/falsify/dense.toml --out runs/falsify-dense",),
         ("requirement", "violating runs", "share of the space", "smallest robustness"),
-        tuple(Row(f"{name}: {spec.requirements[name]}", tuple(dense), _share_cells(name)) for name in REQUIREMENTS))
-    header = ("requirement, optimiser", "found", "median runs to the first violation", "quartiles",
-              "median / LHS median")
+        tuple(
+            Row(f"{name}: {spec.requirements[name]}", tuple(dense), _share_cells(name))
+            for name in REQUIREMENTS
+        ),
+    )
+    header = (
+        "requirement, optimiser",
+        "found",
+        "median runs to the first violation",
+        "quartiles",
+        "median / LHS median",
+    )
     real = Table(
-        "falsify-bench", "falsify",
-        tuple(f"python benchmarks/bench_falsify.py --requirement {name} --reps {REAL_REPS} --budget {REAL_BUDGET}"
-              for name in REQUIREMENTS),
+        "falsify-bench",
+        "falsify",
+        tuple(
+            f"python benchmarks/bench_falsify.py --requirement {name} --reps {REAL_REPS} --budget {REAL_BUDGET}"
+            for name in REQUIREMENTS
+        ),
         header,
-        tuple(Row(f"{name}, {opt}",
-                  tuple(BenchJob(name, opt, s, REAL_BUDGET) for s in range(REAL_REPS))
-                  + tuple(BenchJob(name, "lhs", s, REAL_BUDGET) for s in range(REAL_REPS)),
-                  _runs_cells(REAL_REPS, REAL_BUDGET))
-              for name in REQUIREMENTS for opt in OPTIMIZERS),
-        (f"Real ego runs (emergency-brake braking in lane, pid, {REAL_REPS} optimiser seeds each, "
-         f"budget {REAL_BUDGET} runs, batches of 2 as with --jobs 2). '>{REAL_BUDGET}': fewer than half "
-         "the repetitions found one within the budget.",))
+        tuple(
+            Row(
+                f"{name}, {opt}",
+                tuple(BenchJob(name, opt, s, REAL_BUDGET) for s in range(REAL_REPS))
+                + tuple(
+                    BenchJob(name, "lhs", s, REAL_BUDGET) for s in range(REAL_REPS)
+                ),
+                _runs_cells(REAL_REPS, REAL_BUDGET),
+            )
+            for name in REQUIREMENTS
+            for opt in OPTIMIZERS
+        ),
+        (
+            f"Real ego runs (emergency-brake braking in lane, pid, {REAL_REPS} optimiser seeds each, "
+            f"budget {REAL_BUDGET} runs, batches of 2 as with --jobs 2). '>{REAL_BUDGET}': fewer than half "
+            "the repetitions found one within the budget.",
+        ),
+    )
     surrogate = Table(
-        "falsify-surrogate", "falsify",
+        "falsify-surrogate",
+        "falsify",
         ("python benchmarks/bench_falsify.py --surrogate",),
         ("optimiser (SURROGATE, not ego runs)",) + header[1:],
-        tuple(Row(opt, tuple(SurrogateJob(opt, s, SURROGATE_BUDGET) for s in range(SURROGATE_REPS))
-                  + tuple(SurrogateJob("lhs", s, SURROGATE_BUDGET) for s in range(SURROGATE_REPS)),
-                  _runs_cells(SURROGATE_REPS, SURROGATE_BUDGET))
-              for opt in OPTIMIZERS),
-        (f"An analytic stand-in, not ego: a ball of radius {SURROGATE_RADIUS} in [0, 1]^4 (0.04 % of "
-         f"the cube), robustness = distance to it; {SURROGATE_REPS} seeds, budget {SURROGATE_BUDGET}.",))
+        tuple(
+            Row(
+                opt,
+                tuple(
+                    SurrogateJob(opt, s, SURROGATE_BUDGET)
+                    for s in range(SURROGATE_REPS)
+                )
+                + tuple(
+                    SurrogateJob("lhs", s, SURROGATE_BUDGET)
+                    for s in range(SURROGATE_REPS)
+                ),
+                _runs_cells(SURROGATE_REPS, SURROGATE_BUDGET),
+            )
+            for opt in OPTIMIZERS
+        ),
+        (
+            f"An analytic stand-in, not ego: a ball of radius {SURROGATE_RADIUS} in [0, 1]^4 (0.04 % of "
+            f"the cube), robustness = distance to it; {SURROGATE_REPS} seeds, budget {SURROGATE_BUDGET}.",
+        ),
+    )
     return [landscape, real, surrogate]

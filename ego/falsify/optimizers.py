@@ -26,7 +26,9 @@ def squash(y: float) -> float:
     """A robustness as an optimiser's score: sign(y) log(1 + |y|) (a clipped infinity of
     1e9 or a run with no result (NaN: the worst seen) must not swamp a GP's fit)."""
     if not math.isfinite(y):
-        return math.copysign(math.log1p(1e9), y) if not math.isnan(y) else math.log1p(1e9)
+        return (
+            math.copysign(math.log1p(1e9), y) if not math.isnan(y) else math.log1p(1e9)
+        )
     return math.copysign(math.log1p(abs(y)), y)
 
 
@@ -51,14 +53,15 @@ class LatinHypercube:
         self.i = 0
 
     def ask(self) -> np.ndarray:
-        out = self.points[self.i:self.i + self.batch]
+        out = self.points[self.i : self.i + self.batch]
         self.i += len(out)
         if not len(out):  # the budget is spent; more points are a fresh hypercube's
             from scipy.stats import qmc
 
-            out = qmc.LatinHypercube(d=self.points.shape[1], seed=self.i).random(self.batch)
+            out = qmc.LatinHypercube(d=self.points.shape[1], seed=self.i).random(
+                self.batch
+            )
         return out
-
 
     def tell(self, points: np.ndarray, scores: np.ndarray) -> None:
         pass
@@ -77,9 +80,19 @@ class CMAES:
 
         rng = np.random.default_rng([self.seed, self.restarts])
         x0 = rng.random(self.d) if self.restarts else np.full(self.d, 0.5)
-        self.es = cma.CMAEvolutionStrategy(x0, 0.3, {
-            "bounds": [0.0, 1.0], "popsize": self.popsize, "seed": int(rng.integers(1, 2**31 - 1)),
-            "verbose": -9, "CMA_stds": None, "tolfun": 1e-6, "tolx": 1e-4})
+        self.es = cma.CMAEvolutionStrategy(
+            x0,
+            0.3,
+            {
+                "bounds": [0.0, 1.0],
+                "popsize": self.popsize,
+                "seed": int(rng.integers(1, 2**31 - 1)),
+                "verbose": -9,
+                "CMA_stds": None,
+                "tolfun": 1e-6,
+                "tolx": 1e-4,
+            },
+        )
 
     def ask(self) -> np.ndarray:
         if self.es.stop():
@@ -94,27 +107,38 @@ class CMAES:
 
 
 class Bayesian:
-    def __init__(self, d: int, batch: int, seed: int, budget: int, tpe: bool = False) -> None:
+    def __init__(
+        self, d: int, batch: int, seed: int, budget: int, tpe: bool = False
+    ) -> None:
         import optuna
 
         optuna.logging.set_verbosity(optuna.logging.WARNING)
         self.d, self.batch = d, batch
         startup = max(10, 2 * d, batch)
         if tpe:
-            sampler = optuna.samplers.TPESampler(seed=seed, n_startup_trials=startup, constant_liar=True)
+            sampler = optuna.samplers.TPESampler(
+                seed=seed, n_startup_trials=startup, constant_liar=True
+            )
         else:
             import warnings
 
-            warnings.filterwarnings("ignore", category=optuna.exceptions.ExperimentalWarning)
-            sampler = optuna.samplers.GPSampler(seed=seed, n_startup_trials=startup,
-                                                deterministic_objective=True)
+            warnings.filterwarnings(
+                "ignore", category=optuna.exceptions.ExperimentalWarning
+            )
+            sampler = optuna.samplers.GPSampler(
+                seed=seed, n_startup_trials=startup, deterministic_objective=True
+            )
         self.study = optuna.create_study(direction="minimize", sampler=sampler)
-        self.dist = {f"x{i}": optuna.distributions.FloatDistribution(0.0, 1.0) for i in range(d)}
+        self.dist = {
+            f"x{i}": optuna.distributions.FloatDistribution(0.0, 1.0) for i in range(d)
+        }
         self._trials: list = []
 
     def ask(self) -> np.ndarray:
         self._trials = [self.study.ask(self.dist) for _ in range(self.batch)]
-        return np.array([[t.params[f"x{i}"] for i in range(self.d)] for t in self._trials])
+        return np.array(
+            [[t.params[f"x{i}"] for i in range(self.d)] for t in self._trials]
+        )
 
     def tell(self, points: np.ndarray, scores: np.ndarray) -> None:
         for trial, s in zip(self._trials, scores):

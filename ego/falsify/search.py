@@ -57,7 +57,9 @@ class Evaluation:
 class Search:
     controller: str
     evaluations: list[Evaluation] = field(default_factory=list)
-    verified: dict = field(default_factory=dict)  #: run_id -> (reproduced?, recording, detail)
+    verified: dict = field(
+        default_factory=dict
+    )  #: run_id -> (reproduced?, recording, detail)
     ran: int = 0  #: runs made now (the others were stored already)
 
     @property
@@ -70,7 +72,12 @@ class Search:
         return next((e.index + 1 for e in self.evaluations if e.robustness < 0.0), None)
 
     def best_so_far(self) -> np.ndarray:
-        rob = np.array([e.robustness if not math.isnan(e.robustness) else np.inf for e in self.evaluations])
+        rob = np.array(
+            [
+                e.robustness if not math.isnan(e.robustness) else np.inf
+                for e in self.evaluations
+            ]
+        )
         return np.minimum.accumulate(rob) if len(rob) else rob
 
 
@@ -93,24 +100,43 @@ class FalsifyReport:
         for s in self.searches:
             first = s.first_violation
             best = s.best_so_far()
-            lines.append(f"{s.controller}: {len(s.evaluations)} runs ({self.optimizer}), "
-                         f"{len(s.violations)} violate {self.spec.requirement}"
-                         + (f", the first at run {first}" if first else "")
-                         + (f"; best robustness {best[-1]:.4g}" if len(best) else ""))
-        lines.append(f"{self.ran} runs ran now in {self.seconds:.1f} s; wrote {self.out / 'results.parquet'}, "
-                     f"{self.out / 'falsified.md'}, {self.out / 'convergence.png'}")
+            lines.append(
+                f"{s.controller}: {len(s.evaluations)} runs ({self.optimizer}), "
+                f"{len(s.violations)} violate {self.spec.requirement}"
+                + (f", the first at run {first}" if first else "")
+                + (f"; best robustness {best[-1]:.4g}" if len(best) else "")
+            )
+        lines.append(
+            f"{self.ran} runs ran now in {self.seconds:.1f} s; wrote {self.out / 'results.parquet'}, "
+            f"{self.out / 'falsified.md'}, {self.out / 'convergence.png'}"
+        )
         return "\n".join(lines)
 
 
 def robustness_of(row: dict, name: str) -> float:
     v = row.get(PREFIX + name)
-    return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else math.nan
+    return (
+        float(v)
+        if isinstance(v, (int, float)) and not isinstance(v, bool)
+        else math.nan
+    )
 
 
-def falsify(spec: FalsifySpec, out: Path, *, optimizer: str = "cma", budget: int | None = None,
-            engine: str = "process", jobs: int | None = None, address: str | None = None,
-            until: str = "budget", optimizer_seed: int = 0, verify: bool = True, progress: bool = False,
-            executor=None) -> FalsifyReport:
+def falsify(
+    spec: FalsifySpec,
+    out: Path,
+    *,
+    optimizer: str = "cma",
+    budget: int | None = None,
+    engine: str = "process",
+    jobs: int | None = None,
+    address: str | None = None,
+    until: str = "budget",
+    optimizer_seed: int = 0,
+    verify: bool = True,
+    progress: bool = False,
+    executor=None,
+) -> FalsifyReport:
     """Run the search (see the module docstring); ``executor`` overrides ``engine``/``jobs``."""
     from ego.sweep.executor import make_executor
 
@@ -132,8 +158,19 @@ def falsify(spec: FalsifySpec, out: Path, *, optimizer: str = "cma", budget: int
             for controller in spec.controllers:
                 search = Search(controller)
                 searches.append(search)
-                _search(spec, controller, optimizer, optimizer_seed, budget, until, executor, store, known,
-                        search, progress)
+                _search(
+                    spec,
+                    controller,
+                    optimizer,
+                    optimizer_seed,
+                    budget,
+                    until,
+                    executor,
+                    store,
+                    known,
+                    search,
+                    progress,
+                )
         except KeyboardInterrupt:
             interrupted = True
         finally:
@@ -144,28 +181,55 @@ def falsify(spec: FalsifySpec, out: Path, *, optimizer: str = "cma", budget: int
         if verify and not interrupted:
             for search in searches:
                 _verify(spec, search, out)
-        report = FalsifyReport(spec, optimizer, searches, time.perf_counter() - started, ran, interrupted, out)
+        report = FalsifyReport(
+            spec,
+            optimizer,
+            searches,
+            time.perf_counter() - started,
+            ran,
+            interrupted,
+            out,
+        )
         write_text(out / "falsified.md", markdown(report, budget))
-        plot_convergence([(f"{s.controller} ({optimizer})", s.best_so_far()) for s in searches],
-                         out / "convergence.png", spec.requirement)
+        plot_convergence(
+            [(f"{s.controller} ({optimizer})", s.best_so_far()) for s in searches],
+            out / "convergence.png",
+            spec.requirement,
+        )
     return report
 
 
-def _search(spec: FalsifySpec, controller: str, optimizer: str, seed: int, budget: int, until: str,
-            executor, store: ResultStore, known: dict, search: Search, progress: bool) -> None:
+def _search(
+    spec: FalsifySpec,
+    controller: str,
+    optimizer: str,
+    seed: int,
+    budget: int,
+    until: str,
+    executor,
+    store: ResultStore,
+    known: dict,
+    search: Search,
+    progress: bool,
+) -> None:
     from ego.sweep.runner import error_row, run_task
 
     opt = make(optimizer, len(spec.dims), max(1, executor.workers), seed, budget)
     while len(search.evaluations) < budget:
         units = opt.ask()
         full = len(units)
-        units = units[:budget - len(search.evaluations)]
+        units = units[: budget - len(search.evaluations)]
         points = [spec.point(u) for u in units]
         ids = [spec.run_id(controller, s, o) for s, o in points]
         tasks = {}
         for rid, (s, o) in zip(ids, points):
             if rid not in known and rid not in tasks:
-                tasks[rid] = (Run(rid, spec.scenario, controller, s, o), None, "none", spec.requirements)
+                tasks[rid] = (
+                    Run(rid, spec.scenario, controller, s, o),
+                    None,
+                    "none",
+                    spec.requirements,
+                )
         for outcome in executor.run(run_task, tasks.values()):
             row = outcome.value if outcome.value is not None else error_row(outcome)
             if row["status"] == "interrupted":
@@ -176,17 +240,30 @@ def _search(spec: FalsifySpec, controller: str, optimizer: str, seed: int, budge
             search.ran += 1
         for rid, (s, o) in zip(ids, points):
             row = known[rid]
-            search.evaluations.append(Evaluation(len(search.evaluations), controller, s, o, rid,
-                                                 robustness_of(row, spec.requirement), row.get("status", ""),
-                                                 cached=rid not in tasks))
+            search.evaluations.append(
+                Evaluation(
+                    len(search.evaluations),
+                    controller,
+                    s,
+                    o,
+                    rid,
+                    robustness_of(row, spec.requirement),
+                    row.get("status", ""),
+                    cached=rid not in tasks,
+                )
+            )
         if len(units) == full:
-            scores = np.array([squash(e.robustness) for e in search.evaluations[-full:]])
+            scores = np.array(
+                [squash(e.robustness) for e in search.evaluations[-full:]]
+            )
             opt.tell(units, scores)
         if progress:
             best = search.best_so_far()[-1]
             found = len(search.violations)
-            sys.stderr.write(f"{controller}: {len(search.evaluations)}/{budget} runs, best robustness "
-                             f"{best:.4g}, {found} violation(s)\n")
+            sys.stderr.write(
+                f"{controller}: {len(search.evaluations)}/{budget} runs, best robustness "
+                f"{best:.4g}, {found} violation(s)\n"
+            )
             sys.stderr.flush()
         if until == "first" and search.violations:
             break
@@ -212,52 +289,101 @@ def _verify(spec: FalsifySpec, search: Search, out: Path) -> None:
     import json
 
     seen: dict[str, Evaluation] = {}
-    for e in [*search.violations[:1], *sorted(search.violations, key=lambda e: e.robustness)]:
+    for e in [
+        *search.violations[:1],
+        *sorted(search.violations, key=lambda e: e.robustness),
+    ]:
         seen.setdefault(e.run_id, e)
     for e in list(seen.values())[:VERIFY_AT_MOST]:
         rrd = out / "runs" / f"{e.controller}-{e.run_id}.rrd"
         rrd.parent.mkdir(parents=True, exist_ok=True)
         args = shlex.split(command(spec, e, str(rrd)))[1:] + ["--json"]
-        proc = subprocess.run([sys.executable, "-m", "ego", *args], capture_output=True, text=True,
-                              timeout=600)
+        proc = subprocess.run(
+            [sys.executable, "-m", "ego", *args],
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
         try:
-            got = json.loads(proc.stdout.strip().splitlines()[-1])["requirements"][spec.requirement]
+            got = json.loads(proc.stdout.strip().splitlines()[-1])["requirements"][
+                spec.requirement
+            ]
         except (ValueError, KeyError, IndexError, TypeError):
-            search.verified[e.run_id] = (False, "", (proc.stderr.strip().splitlines() or ["no output"])[-1])
+            search.verified[e.run_id] = (
+                False,
+                "",
+                (proc.stderr.strip().splitlines() or ["no output"])[-1],
+            )
             continue
-        same = got is not None and math.isclose(float(got), e.robustness, rel_tol=1e-6, abs_tol=1e-9)
-        search.verified[e.run_id] = (same, str(rrd) if rrd.exists() else "", f"robustness {got}")
+        same = got is not None and math.isclose(
+            float(got), e.robustness, rel_tol=1e-6, abs_tol=1e-9
+        )
+        search.verified[e.run_id] = (
+            same,
+            str(rrd) if rrd.exists() else "",
+            f"robustness {got}",
+        )
 
 
 def markdown(report: FalsifyReport, budget: int) -> str:
     spec = report.spec
-    lines = [f"# Falsification of `{spec.requirement}` on {spec.scenario}", "",
-             f"Requirement: `{spec.requirement}: {spec.formula}`; spec `{spec.source}`; optimiser "
-             f"{report.optimizer}; budget {budget} runs per controller.", "",
-             "Searched: " + ", ".join(f"{d.name} {'false/true' if d.kind == 'bool' else f'{d.lo:g}..{d.hi:g}'}"
-                                     for d in spec.dims)
-             + ("" if spec.seed is None else f"; seed fixed at {spec.seed}")
-             + ("; fixed: " + ", ".join(f"{k}={v}" for k, v in spec.fixed.items()) if spec.fixed else ""), "",
-             "| controller | runs | violations | runs to the first violation | best robustness |",
-             "|---|---|---|---|---|"]
+    lines = [
+        f"# Falsification of `{spec.requirement}` on {spec.scenario}",
+        "",
+        f"Requirement: `{spec.requirement}: {spec.formula}`; spec `{spec.source}`; optimiser "
+        f"{report.optimizer}; budget {budget} runs per controller.",
+        "",
+        "Searched: "
+        + ", ".join(
+            f"{d.name} {'false/true' if d.kind == 'bool' else f'{d.lo:g}..{d.hi:g}'}"
+            for d in spec.dims
+        )
+        + ("" if spec.seed is None else f"; seed fixed at {spec.seed}")
+        + (
+            "; fixed: " + ", ".join(f"{k}={v}" for k, v in spec.fixed.items())
+            if spec.fixed
+            else ""
+        ),
+        "",
+        "| controller | runs | violations | runs to the first violation | best robustness |",
+        "|---|---|---|---|---|",
+    ]
     for s in report.searches:
         best = s.best_so_far()
-        lines.append(f"| {s.controller} | {len(s.evaluations)} | {len(s.violations)} | "
-                     f"{s.first_violation or '-'} | {best[-1]:.4g} |" if len(best) else
-                     f"| {s.controller} | 0 | 0 | - | - |")
+        lines.append(
+            f"| {s.controller} | {len(s.evaluations)} | {len(s.violations)} | "
+            f"{s.first_violation or '-'} | {best[-1]:.4g} |"
+            if len(best)
+            else f"| {s.controller} | 0 | 0 | - | - |"
+        )
     for s in report.searches:
         if not s.violations:
             continue
-        distinct = {e.run_id: e for e in sorted(s.violations, key=lambda e: (e.robustness, e.index))}
-        lines += ["", f"## {s.controller}: {len(distinct)} distinct violating run(s)", ""]
+        distinct = {
+            e.run_id: e
+            for e in sorted(s.violations, key=lambda e: (e.robustness, e.index))
+        }
+        lines += [
+            "",
+            f"## {s.controller}: {len(distinct)} distinct violating run(s)",
+            "",
+        ]
         for e in list(distinct.values())[:20]:
             ok, rrd, detail = s.verified.get(e.run_id, (None, "", ""))
-            verdict = ("not verified" if ok is None else "reproduced by the command" if ok
-                       else f"NOT reproduced ({detail})")
+            verdict = (
+                "not verified"
+                if ok is None
+                else "reproduced by the command"
+                if ok
+                else f"NOT reproduced ({detail})"
+            )
             params = ", ".join(f"{k}={v}" for k, v in e.overrides.items())
-            lines += [f"- run {e.index + 1} (`{e.run_id}`), status {e.status}, robustness {e.robustness:.4g}: "
-                      f"seed {e.seed}, {params}; {verdict}" + (f"; recording `{rrd}`" if rrd else ""),
-                      f"  `{command(spec, e)}`"]
+            lines += [
+                f"- run {e.index + 1} (`{e.run_id}`), status {e.status}, robustness {e.robustness:.4g}: "
+                f"seed {e.seed}, {params}; {verdict}"
+                + (f"; recording `{rrd}`" if rrd else ""),
+                f"  `{command(spec, e)}`",
+            ]
         if len(distinct) > 20:
             lines.append(f"- ... {len(distinct) - 20} more in results.parquet")
     if report.interrupted:
@@ -273,7 +399,9 @@ def plot_convergence(curves, path: Path, requirement: str, title: str = "") -> P
     fig, ax = plt.subplots(figsize=(7, 4))
     for label, curve in curves:
         if len(curve):
-            ax.plot(np.arange(1, len(curve) + 1), np.clip(curve, -1e6, 1e6), label=label)
+            ax.plot(
+                np.arange(1, len(curve) + 1), np.clip(curve, -1e6, 1e6), label=label
+            )
     ax.axhline(0.0, color="k", lw=0.8, ls="--")
     ax.set_yscale("symlog", linthresh=0.1)
     ax.set_xlabel("runs")

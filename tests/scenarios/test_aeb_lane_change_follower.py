@@ -12,11 +12,18 @@ from ego.runner import RunSpec, run
 
 pytestmark = pytest.mark.sumo
 
-CASE = {"lead_decel": 6.35, "ego_speed": 17.39, "lead_gap": 22.15, "traffic_density": 20.67}
+CASE = {
+    "lead_decel": 6.35,
+    "ego_speed": 17.39,
+    "lead_gap": 22.15,
+    "traffic_density": 20.67,
+}
 
 
 @pytest.mark.parametrize("controller", ["fuzzy-pid", "bp-pid"])
-def test_aborts_back_into_its_lane_instead_of_stopping_in_front_of_the_follower(controller):
+def test_aborts_back_into_its_lane_instead_of_stopping_in_front_of_the_follower(
+    controller,
+):
     r = run(RunSpec("emergency-brake", controller, 13311774, CASE))
     m = r.metrics
     assert not m["collision"], m["status_detail"]
@@ -27,16 +34,38 @@ def test_aborts_back_into_its_lane_instead_of_stopping_in_front_of_the_follower(
     assert m["requirements"]["no_avoidable_collision"] > 0
 
 
-@pytest.mark.parametrize("seed, case", [
-    # found by ego falsify (scenarios/falsify/emergency-brake.toml, fuzzy): no AEB, the ego slowed
-    # behind the lead it still overlapped, early in the change, and the new lane's follower hit it
-    (99320, {"ego_speed": 18.0762, "lead_decel": 7.1856, "lead_gap": 10.6072, "traffic_density": 12.3334}),
-    (91990, {"ego_speed": 14.6396, "lead_decel": 8.4011, "lead_gap": 10.0228, "traffic_density": 24.4863}),
-])
+@pytest.mark.parametrize(
+    "seed, case",
+    [
+        # found by ego falsify (scenarios/falsify/emergency-brake.toml, fuzzy): no AEB, the ego slowed
+        # behind the lead it still overlapped, early in the change, and the new lane's follower hit it
+        (
+            99320,
+            {
+                "ego_speed": 18.0762,
+                "lead_decel": 7.1856,
+                "lead_gap": 10.6072,
+                "traffic_density": 12.3334,
+            },
+        ),
+        (
+            91990,
+            {
+                "ego_speed": 14.6396,
+                "lead_decel": 8.4011,
+                "lead_gap": 10.0228,
+                "traffic_density": 24.4863,
+            },
+        ),
+    ],
+)
 def test_slowing_early_in_a_change_in_front_of_a_follower_goes_back(seed, case):
     r = run(RunSpec("emergency-brake", "fuzzy", seed, case))
     assert not r.metrics["collision"], r.metrics["status_detail"]
-    assert any(e.kind == "lane" and "aborted" in e.text and "follower" in e.text for e in r.events)
+    assert any(
+        e.kind == "lane" and "aborted" in e.text and "follower" in e.text
+        for e in r.events
+    )
 
 
 def test_a_lane_change_with_a_clear_new_lane_is_not_aborted():
