@@ -168,10 +168,10 @@ def fmt_runs(x: float, budget: int) -> str:
 
 # -- docs/results/falsify.md ----------------------------------------------------------------------
 #: repetitions (optimiser seeds 0..n-1) per optimiser: real runs, and the surrogate
-REAL_REPS = 10
+REAL_REPS = 5
 SURROGATE_REPS = 20
-REAL_BUDGET = 200
-SURROGATE_BUDGET = 600
+REAL_BUDGET = 120
+SURROGATE_BUDGET = 400
 REQUIREMENTS = ("keeps_1m", "no_overbraking")
 
 
