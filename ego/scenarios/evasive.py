@@ -272,7 +272,10 @@ class EvasiveLaneChange(HighwayScenario):
             return  # well across: finish it (the new lane's traffic sees the ego in its lane)
         threat = None
         front = self.sensor.front
-        if progress < 0.25 and front.gap != INF and (aeb or front.speed < self.ds - 0.5):
+        # an emergency stop goes back up to a quarter across; a slow-down only at the very start
+        # (further across, a controller's lateral lag can carry the ego past the front car and
+        # swing it back into it)
+        if progress < (0.25 if aeb else 0.1) and front.gap != INF and (aeb or front.speed < self.ds - 0.5):
             # early in the change, a follower in the new lane that would run into the braking
             # ego sends it back, if braking stops it behind the front car holding its speed now
             closing = self.ds - front.speed

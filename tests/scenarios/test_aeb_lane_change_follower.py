@@ -68,6 +68,15 @@ def test_slowing_early_in_a_change_in_front_of_a_follower_goes_back(seed, case):
     )
 
 
+def test_a_slow_down_further_across_finishes_the_change():
+    # found by ego falsify with a first version that went back up to a quarter across without an
+    # emergency stop: fuzzy's lateral lag carried the ego past the lead and swung it back into it
+    case = {"ego_speed": 23.3631, "lead_decel": 4.7189, "lead_gap": 11.2988, "traffic_density": 14.3426,
+            "block_right": True}
+    r = run(RunSpec("emergency-brake", "fuzzy", 10216, case))
+    assert not r.metrics["collision"], r.metrics["status_detail"]
+
+
 def test_a_lane_change_with_a_clear_new_lane_is_not_aborted():
     # the default case changes lane with nobody close behind in the new lane: finished, no abort
     r = run(RunSpec("emergency-brake", "pid", 0, {}))
