@@ -11,6 +11,7 @@ from ego.params import parse_overrides
 
 
 def command(args: Any) -> int:
+    from ego.requirements import with_defaults
     from ego.results.export import trace_files
     from ego.results.metrics import flatten, metric_units
     from ego.runner import RunSpec, resolve, run
@@ -18,7 +19,8 @@ def command(args: Any) -> int:
 
     spec = RunSpec(args.scenario, args.controller, seed=check_seed(args.seed, "--seed"),
                    overrides=parse_overrides(args.overrides), record=args.record, trace=args.trace,
-                   backend=args.backend, video=args.video)
+                   backend=args.backend, video=args.video,
+                   requirements=with_defaults(args.scenario, args.require))
     resolved = resolve(spec)  # every name, value and path checked before anything runs
     result = run(resolved)
     written = [str(p) for p in trace_files(args.trace, result.traffic is not None)] if args.trace else []

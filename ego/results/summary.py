@@ -70,6 +70,14 @@ def percentiles(values: Sequence[Any]) -> str:
     return f"{p50:.3g} [{p5:.3g}, {p95:.3g}] ({a.min():.3g} to {a.max():.3g}), {a.size}"
 
 
+def requirement_lines(runs: Mapping[str, Sequence[Row]]) -> list[str]:
+    """The pass/fail table of the runs' requirements (``requirements.<name>`` robustness),
+    one row per controller; no lines when no run checked a requirement."""
+    from ego.requirements import summary_lines
+
+    return summary_lines(runs)
+
+
 def _by_controller(rows: Sequence[Row], controllers: Sequence[str]) -> dict[str, list[Row]]:
     runs: dict[str, list[Row]] = {c: [] for c in controllers}
     for r in rows:
@@ -100,6 +108,8 @@ def comparison(scenario: str, rows: Sequence[Row], controllers: Sequence[str],
              "k/n for a yes/no metric: k of n runs say yes.",
              "",
              *table(controllers, _by_controller(rows, controllers), columns)]
+    lines += requirement_lines({c: [r["metrics"] for r in mine]
+                                for c, mine in _by_controller(rows, controllers).items()})
     errors = [r for r in rows if r["error"]]
     if errors:
         lines += ["", "Errors:", ""] + [f"- {r['controller']} seed {r['seed']}: {r['error']}" for r in errors]
@@ -142,6 +152,7 @@ def sweep(scenario: str, source: str, swept: Sequence[str], seeds: int, rows: Se
             for c in controllers:
                 k = sum(1 for r in runs.get(c, ()) if r.get(extra) is True)
                 lines.append(f"- {c}: {k}")
+    lines += requirement_lines(runs)
     errors = [r for r in rows if r["status"] == "error"]
     if errors:
         lines += ["", f"{len(errors)} runs ended in an error; the first:", "",
