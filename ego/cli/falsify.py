@@ -99,8 +99,8 @@ def command(args) -> int:
     from ego.checks import check_count, check_output_dir, check_seed
     from ego.falsify.search import falsify
     from ego.falsify.spec import load
-    from ego.params import ConfigError
     from ego.parallel.executor import ENGINES
+    from ego.params import ConfigError
 
     spec = load(args.spec)
     for value, allowed, what in (
