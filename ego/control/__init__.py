@@ -125,7 +125,8 @@ def controller_spec(name: str, task: str = "tracking") -> ControllerSpec:
         return CONTROLLERS[task][name]
     except KeyError:
         if task in CONTROLLERS and is_reference(name):
-            return resolve_controller(name, task)
+            spec: ControllerSpec = resolve_controller(name, task)
+            return spec
         if task not in CONTROLLERS:
             raise ConfigError(f"unknown task {task!r} (known: {', '.join(CONTROLLERS)})"
                               f"{did_you_mean(task, CONTROLLERS)}") from None

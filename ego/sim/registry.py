@@ -67,9 +67,10 @@ class Backend:
     check: str | None = None
     extra: dict[str, Any] = field(default_factory=dict)
 
-    def load(self, ref: str) -> Callable:
+    def load(self, ref: str) -> Callable[..., Any]:
         module, _, name = ref.partition(":")
-        return getattr(importlib.import_module(module), name)
+        function: Callable[..., Any] = getattr(importlib.import_module(module), name)
+        return function
 
 
 BACKENDS: dict[str, Backend] = {}
@@ -118,4 +119,5 @@ def check_options(name: str, options: Mapping[str, Any]) -> None:
 def make_sim(name: str, setup: SimSetup, options: Mapping[str, Any] | None = None) -> TrafficSim:
     """A new (not yet started) simulation of backend ``name``."""
     b = backend(name)
-    return b.load(b.factory)(setup, dict(options or {}))
+    sim: TrafficSim = b.load(b.factory)(setup, dict(options or {}))
+    return sim
