@@ -25,7 +25,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from ego.falsify import bench
+from ego.falsify import bench  # noqa: E402
 
 
 def _jobs(args):
