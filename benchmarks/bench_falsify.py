@@ -25,6 +25,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from ego.docs import falsify as docs_falsify  # noqa: E402
 from ego.falsify import bench  # noqa: E402
 
 
@@ -58,19 +59,19 @@ def main(argv=None) -> dict:
         help="convergence plot path (default with --docs: docs/img/)",
     )
     args = ap.parse_args(argv)
-    args.requirements = args.requirements or list(bench.REQUIREMENTS)
+    args.requirements = args.requirements or list(docs_falsify.REQUIREMENTS)
     args.optimizers = [o.strip() for o in args.optimizers.split(",")]
     if "lhs" not in args.optimizers:
         args.optimizers.append("lhs")
     if args.reps is None:
-        args.reps = bench.SURROGATE_REPS if args.surrogate else bench.REAL_REPS
+        args.reps = docs_falsify.SURROGATE_REPS if args.surrogate else docs_falsify.REAL_REPS
     if args.budget is None:
-        args.budget = bench.SURROGATE_BUDGET if args.surrogate else bench.REAL_BUDGET
+        args.budget = docs_falsify.SURROGATE_BUDGET if args.surrogate else docs_falsify.REAL_BUDGET
     from ego.docs import run_jobs
 
     groups = _jobs(args)
     jobs = [j for js in groups.values() for j in js]
-    tables = bench.docs_tables() if args.docs else []
+    tables = docs_falsify.docs_tables() if args.docs else []
     jobs += [j for t in tables for r in t.rows for j in r.jobs]
     results = run_jobs(jobs, workers=args.jobs)
     figures: dict = {}

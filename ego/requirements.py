@@ -37,6 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ego.params import ConfigError, did_you_mean
+from ego.results.summary import REQUIREMENTS_PREFIX, requirement_lines
 
 BOOL = "bool"
 #: units a number may carry (besides the units of the trace's own columns)
@@ -726,49 +727,12 @@ def check_run(scenario, result, requirements: Sequence[Requirement]) -> list[Ver
 
 
 # -- summaries ----------------------------------------------------------------------------------------
-PREFIX = "requirements."
+PREFIX = REQUIREMENTS_PREFIX
 
 
-def summary_lines(groups: Mapping[str, Sequence[Mapping]]) -> list[str]:
-    """A markdown table of passes and failures per requirement (columns) and group (rows:
-    e.g. controllers), from flattened metric rows (``requirements.<name>`` robustness); no
-    lines when no row has a requirement."""
-    names = list(
-        dict.fromkeys(
-            k[len(PREFIX) :]
-            for rows in groups.values()
-            for r in rows
-            for k in r
-            if k.startswith(PREFIX)
-        )
-    )
-    if not names:
-        return []
-    lines = [
-        "",
-        "Requirements (robustness >= 0: passed; passed/evaluated, the smallest robustness "
-        "in brackets):",
-        "",
-        "| | " + " | ".join(names) + " |",
-        "|---|" + "---|" * len(names),
-    ]
-    for group, rows in groups.items():
-        cells = []
-        for n in names:
-            values = [r.get(PREFIX + n) for r in rows]
-            values = [
-                float(v)
-                for v in values
-                if isinstance(v, (int, float))
-                and not isinstance(v, bool)
-                and math.isfinite(float(v))
-            ]
-            passed = sum(v >= 0.0 for v in values)
-            cells.append(
-                f"{passed}/{len(values)} ({min(values):.3g})" if values else "-"
-            )
-        lines.append(f"| {group} | " + " | ".join(cells) + " |")
-    return lines
+#: every run's requirements' robustness in its metrics, flattened: ``requirements.<name>``
+#: (the pass/fail table of many runs is :func:`ego.results.summary.requirement_lines`)
+summary_lines = requirement_lines
 
 
 def with_defaults(

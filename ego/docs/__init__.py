@@ -708,7 +708,7 @@ def cross_simulator(seeds: int = 3) -> list[Table]:
 
 def tables() -> list[Table]:
     """Every table of docs/results/, page by page."""
-    from ego.falsify.bench import docs_tables
+    from ego.docs.falsify import docs_tables
 
     return (report_000() + report_002() + report_003() + report_004() + envelope() + cross_simulator()
             + docs_tables())
