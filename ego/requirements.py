@@ -705,7 +705,8 @@ def _outer_parens(text: str) -> bool:
 def check_run(scenario, result, requirements: Sequence[Requirement]) -> list[Verdict]:
     """Evaluate ``requirements`` on ``result`` (a run of ``scenario`` that has not closed its
     recording yet): the robustness of each into ``result.metrics["requirements"]``, each
-    violation as a ``requirement`` event of the run and its recording."""
+    violation as a ``requirement`` event of the run (in time order, before the run's own
+    events of that moment) and of its recording."""
     from ego.scenarios.base import Event
 
     verdicts = []
@@ -719,7 +720,9 @@ def check_run(scenario, result, requirements: Sequence[Requirement]) -> list[Ver
                 f"requirement {req.name} violated (robustness {v.robustness:.3g}"
                 f"{'' if v.unit in ('-', 'mixed', BOOL) else ' ' + v.unit}): {req.formula}"
             )
-            result.events.append(Event(v.violated_at, "requirement", text, "WARN"))
+            # in time order, before the run's own events of that moment (its end stays last)
+            at = next((i for i, e in enumerate(result.events) if e.t >= v.violated_at), len(result.events))
+            result.events.insert(at, Event(v.violated_at, "requirement", text, "WARN"))
             scenario.recorder.event(v.violated_at, f"[requirement] {text}", "WARN")
     if requirements:
         result.metrics["requirements"] = rob

@@ -10,12 +10,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-import numpy as np
-
 from ego.highway_env import BACKENDS
 from ego.params import ConfigError, param
 from ego.scenarios import metrics as m
 from ego.scenarios.base import Parts, Scenario
+from ego.scenarios.envelope import ReachCriterion
 from ego.scenarios.evasive import MARKERS, METRICS, EvasiveConfig, compare_plots, compose, evasive_metrics
 from ego.scenarios.events import INF
 from ego.scenarios.motorway import COLUMNS, EDGE, LANE_NAMES, PLOTS, ROUTE, MotorwayWorld
@@ -108,13 +107,7 @@ class CutIn(Scenario):
         Metric("reaction_time", "s", "from the start of the cut-in to the trigger", headline=True),
         Metric("cut_in_time", "s", "when the car started across the lane"),
         Metric("response", "-", "brake (in lane) or evade (lane change), none without a trigger"),
-        Metric("reach_time", "s", "when the cutting car first reached over the ego's outline (became its "
-               "front object)"),
-        Metric("collision_avoidable", "-", "true: braking at the friction limit from the moment the car "
-               "reached over the ego's outline would have kept the ego behind it, so the collision is the "
-               "controller's or the planner's; false: physics (or the car hit the ego's side before it "
-               "reached over its outline); none: no collision"),
-    )
+    ) + ReachCriterion.METRICS
     markers = MARKERS + (Marker("cut-in", "the car starts across", "<"),)
 
     compare_plots = classmethod(compare_plots)
@@ -126,8 +119,7 @@ class CutIn(Scenario):
     def populate(self, world: MotorwayWorld) -> None:
         c = self.config
         self._announced = False
-        #: (t s, gap m, ego speed m/s, car's speed m/s) when the car first reached over the ego's outline
-        self._reach: tuple[float, float, float, float] | None = None
+        self.reach = ReachCriterion(CUTTER)  # the braking criterion (issue 21)
         world.add_type(CUTTER_TYPE)
         self.cutter = CutInVehicle(CUTTER, "ego", c.cut_in_lane, c.ego_lane, c.ego_speed + c.overtake_speed,
                                    c.ego_speed - c.cut_in_speed, c.cut_in_gap, c.cut_in_duration,
@@ -142,23 +134,12 @@ class CutIn(Scenario):
             self._announced = True
             self.event("cut-in", f"{CUTTER} cuts into the {LANE_NAMES[self.config.ego_lane]} lane")
 
-    # -- the braking criterion: physics or the controller's failure (issue 21) ---------------------
     def before_plan(self) -> None:
-        front = self.view.sensor.front
-        if self._reach is None and front.id == CUTTER and front.gap != INF:
-            self._reach = (self.t, front.gap, self.view.ds, front.speed)
+        self.reach.watch(self.t, self.view.sensor.front, self.view.ds)
 
     def braking_margin(self) -> float | None:
-        """The smallest gap (m) to the cutting car had the ego braked at its friction limit
-        from the moment the car reached over its outline (the car holds its scripted speed
-        from the cut-in on, moved as SUMO moves it); None if it never did."""
-        from ego.scenarios.envelope import braking_min_gap
-
-        if self._reach is None:
-            return None
-        t0, gap, speed, car_speed = self._reach
-        return braking_min_gap(t0, gap, speed, friction_limit(self.ego.model.params),
-                               lambda t: np.full_like(t, car_speed), lead_step=self.config.sumo_step)
+        """:meth:`ReachCriterion.margin` at the friction limit (m; None: the car never reached over)."""
+        return self.reach.margin(friction_limit(self.ego.model.params), self.config.sumo_step)
 
     def choose(self, man):
         # brake in lane when that is enough; evade by gap acceptance only when it is not
@@ -176,7 +157,5 @@ class CutIn(Scenario):
         response = "none" if trigger_t is None else "brake" if self.manoeuvre.chosen is None else "evade"
         return {**out, "min_gap": out["min_gap_front"], "min_ttc": out["min_ttc_front"],
                 "reaction_time": m.json_number(reaction, 4), "cut_in_time": m.json_number(cut, 4), "response": response,
-                "reach_time": m.json_number(self._reach[0] if self._reach else None, 4),
-                # a car that hits the ego's side before it reaches over its outline left no time to brake
-                "collision_avoidable": (None if self.collision is None else False if self._reach is None
-                                        else bool(self.braking_margin() > 0.0))}
+                **self.reach.metrics(self.collision is not None, friction_limit(self.ego.model.params),
+                                     self.config.sumo_step)}

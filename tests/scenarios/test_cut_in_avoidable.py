@@ -15,7 +15,7 @@ def _run(**overrides):
 
 def test_the_margin_is_the_gap_less_the_closing_speeds_braking_distance():
     scenario, r = _run(cut_in_gap=15, cut_in_speed=14)
-    t0, gap, v0, vc = scenario._reach
+    t0, gap, v0, vc = scenario.reach.at
     assert r.metrics["reach_time"] == pytest.approx(t0, abs=1e-3)
     # its speed along the lane: the scripted 11 m/s, a little less while it moves across
     assert vc == pytest.approx(25.0 - 14.0, abs=0.5)
@@ -36,5 +36,5 @@ def test_no_collision_no_verdict_and_a_side_hit_is_physics():
     scenario, r = _run(
         cut_in_gap=5, cut_in_speed=12
     )  # hits the ego's side before reaching over it
-    assert r.status == "collision" and scenario._reach is None
+    assert r.status == "collision" and scenario.reach.at is None
     assert r.metrics["collision_avoidable"] is False
