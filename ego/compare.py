@@ -51,7 +51,7 @@ from ego.results.metrics import headline_names, metric_units
 from ego.results.progress import Progress
 from ego.results.run import RunRow
 from ego.results.trace import Metric
-from ego.runner import ResolvedRun, RunSpec, parameter_namespace, resolve, split_overrides
+from ego.runner import ResolvedRun, RunSpec, parameter_namespace, requirements_of, resolve, split_overrides
 from ego.scenarios import scenario_class
 from ego.scenarios.base import check_backend
 from ego.sweep.pipeline import RunTask, drive, execute
@@ -111,7 +111,7 @@ def file_label(label: str) -> str:
 
 
 def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict, out: Path,
-         traces: str | None = None, backend: str = "sumo") -> list[RunSpec]:
+         traces: str | None = None, backend: str = "sumo", requirements=None) -> list[RunSpec]:
     """Validate names, variants and overrides, and list the runs (before any process starts).
 
     ``controllers`` are labels: a controller's name, or a variant of it with its own
@@ -161,14 +161,14 @@ def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict,
             trace = str(out / "traces" / f"{stem}.{traces}") if traces else None
             specs.append(RunSpec(scenario, name, seed, mine, str(out / "runs" / f"{stem}.rrd"), trace=trace,
                                  background_recording=False, label=label,
-                                 backend=backend))
+                                 backend=backend, requirements=requirements))
     return specs
 
 
 def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict, out: Path,
             jobs: int | None = None, progress: Callable[[int], Callable[[str, str], None]] | None = Progress,
             executor: Executor | None = None, traces: str | None = None,
-            backend: str = "sumo") -> list[RunRow]:
+            backend: str = "sumo", requirements=None) -> list[RunRow]:
     """Run everything, write the outputs, return the rows (in controller, seed order).
     ``controllers`` are labels (:func:`plan`: names or variants); ``traces`` a format of
     :data:`TRACE_FORMATS` to write each run's trace in, or None.
@@ -190,7 +190,7 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
     if not isinstance(out, (str, os.PathLike)):
         raise ConfigError(f"bad out {out!r:.60} (expected a folder path)")
     out = Path(out)
-    specs = plan(scenario, controllers, seeds, overrides, out, traces, backend)
+    specs = plan(scenario, controllers, seeds, overrides, out, traces, backend, requirements)
     from ego.paths import check_compare_outputs
 
     check_compare_outputs(out, specs, traces)  # every file it writes, before anything runs
@@ -200,7 +200,8 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
     for spec in specs:
         if spec.name not in variants:
             variants[spec.name] = resolve(spec)
-            variants[spec.name].build_controller()
+            # the requirements too, against the trace's and the controller's signals
+            requirements_of(variants[spec.name], variants[spec.name].build_controller())
     runs = [variants[s.name].with_outputs(seed=s.seed, record=s.record, trace=s.trace) for s in specs]
     first = runs[0]
     plots = first.plots()

@@ -52,6 +52,9 @@ class RunSpec:
     #: the controller's name in the results (``RunResult.controller``, the recording):
     #: ``ego compare``'s variant label, e.g. ``pid@kp_lat=0.02``; default ``controller``
     label: str = ""
+    #: requirements checked on the run (``ego.requirements``): ((name, formula), ...) or a
+    #: mapping; None: the scenario's defaults; (): none
+    requirements: Any = None
 
     @property
     def sim_options(self) -> dict[str, Any]:
@@ -87,6 +90,10 @@ class RunSpec:
 
         if isinstance(self.seed, numbers.Integral) and not isinstance(self.seed, (bool, int)):
             object.__setattr__(self, "seed", int(self.seed))  # a numpy integer is a seed too
+        if self.requirements is not None:
+            pairs = tuple(self.requirements.items()) if isinstance(self.requirements, Mapping) \
+                else tuple(tuple(p) for p in self.requirements)
+            object.__setattr__(self, "requirements", pairs)
         if not isinstance(self.background_recording, bool):
             raise ConfigError(f"bad background_recording {self.background_recording!r} (expected true or false)")
 
@@ -156,8 +163,11 @@ class ResolvedRun:
         return self.scenario_cls.build_controller(self.controller, self.controller_params, self.config)
 
     def metrics_declared(self) -> tuple[Metric, ...]:
-        """Every metric the run reports, as its scenario declares them (units, headline)."""
-        return tuple(self.scenario_cls.metrics_declared(self.config))
+        """Every metric the run reports, as its scenario declares them (units, headline),
+        and its requirements' robustness (``requirements.<name>``)."""
+        return tuple(self.scenario_cls.metrics_declared(self.config)) + tuple(
+            Metric(f"requirements.{r.name}", "-" if r.unit in ("bool", "mixed") else r.unit,
+                   f"robustness of {r.formula} (negative: violated)") for r in requirements_of(self))
 
     def plots(self) -> tuple:
         """The plots ``ego compare`` draws for this configuration."""
@@ -225,15 +235,44 @@ def build(what: RunSpec | ResolvedRun) -> Scenario:
     resolved = what if isinstance(what, ResolvedRun) else resolve(what)
     spec = resolved.spec
     controller = resolved.build_controller()
+    reqs = requirements_of(resolved, controller)  # RequirementError before anything starts
     recorder = None
     if spec.record is not None:
         path = Path(os.fspath(spec.record))
         path.parent.mkdir(parents=True, exist_ok=True)
         recorder = RerunRecorder(path, recording_id=f"{spec.scenario}-{spec.name}-{spec.seed}",
                                  background=spec.background_recording)
-    return resolved.scenario_cls(resolved.config, controller, seed=spec.seed, recorder=recorder,
-                                 controller_name=spec.name, backend=spec.backend,
-                                 backend_options=spec.sim_options)
+    scenario = resolved.scenario_cls(resolved.config, controller, seed=spec.seed, recorder=recorder,
+                                     controller_name=spec.name, backend=spec.backend,
+                                     backend_options=spec.sim_options)
+    if reqs:
+        from ego.requirements import check_run
+
+        scenario.on_result = lambda sc, result: check_run(sc, result, reqs)
+    return scenario
+
+
+def requirements_of(resolved: ResolvedRun, controller: Controller | None = None) -> tuple:
+    """The run's requirements parsed against its signals (the scenario's defaults when
+    ``spec.requirements`` is None; with ``controller``, its signals too); RequirementError
+    before anything runs."""
+    from ego.requirements import defaults, signal_units
+    from ego.requirements import resolve as resolve_requirements
+
+    spec, cls, config = resolved.spec, resolved.scenario_cls, resolved.config
+    if spec.requirements == ():
+        return ()
+    texts = dict(spec.requirements) if spec.requirements is not None else defaults(spec.scenario)
+    if not texts:
+        return ()
+    columns = {c.name: c.unit for c in declared_columns(cls, config)}
+    if controller is not None:
+        try:
+            columns.update({n: "-" for n in controller.signals() if n not in columns})
+        except Exception:  # noqa: BLE001 - a controller that needs a reset first: its signals stay unnamed
+            pass
+    metrics = [m.name for m in cls.metrics_declared(config)]
+    return resolve_requirements(texts, signal_units(columns, metrics, cls))
 
 
 def run(what: RunSpec | ResolvedRun) -> RunResult:
@@ -259,6 +298,13 @@ def run(what: RunSpec | ResolvedRun) -> RunResult:
         except OSError as exc:
             raise output_error(resolved.spec.trace, exc, result) from None
     return result
+
+
+def declared_metrics(what: RunSpec | ResolvedRun) -> tuple[Metric, ...]:
+    """Every metric a run reports, as its scenario declares them (units, headline), and its
+    requirements' robustness (checked here: RequirementError on a bad formula)."""
+    resolved = what if isinstance(what, ResolvedRun) else resolve(what)
+    return resolved.metrics_declared()
 
 
 def declared_columns(cls: type[Scenario], config) -> tuple[Column, ...]:

@@ -4,8 +4,8 @@ or through others): every import in every module of ego, lazy ones in functions 
     foundation (params, checks, outputs, processes, native)
     < models, control, sim, results, parallel, record, sumo, highway_env, geometry
     < scenarios
-    < runner, plots
-    < compare, sweep, gym, train, docs, cli
+    < runner, plots, requirements
+    < compare, sweep, falsify, gym, train, docs, cli
 """
 
 import ast
@@ -23,8 +23,8 @@ LAYERS = [
     {"ego.models", "ego.control", "ego.fmi", "ego.sim", "ego.results", "ego.parallel", "ego.record", "ego.sumo",
      "ego.highway_env", "ego.lane_frame", "ego.analytic_road", "ego.cluster"},
     {"ego.scenarios", "ego.openscenario"},
-    {"ego.runner", "ego.plots"},
-    {"ego.compare", "ego.sweep", "ego.gym", "ego.train", "ego.docs", "ego.cli", "ego.__main__", "ego._entry"},
+    {"ego.runner", "ego.plots", "ego.requirements"},
+    {"ego.compare", "ego.sweep", "ego.falsify", "ego.gym", "ego.train", "ego.docs", "ego.cli", "ego.__main__", "ego._entry"},
 ]
 LEVEL = {unit: i for i, layer in enumerate(LAYERS) for unit in layer}
 #: modules kept at an old path for compatibility: they only re-export a lower module

@@ -2,10 +2,13 @@
 
     ego run SCENARIO --controller NAME [--record PATH] [--trace PATH] [--seed N] [--set key=value ...]
             [--json] [--backend sumo|highway-env] [--video PATH.gif|PATH.mp4]
+            [--require "NAME: FORMULA" ...]
     ego compare SCENARIO --controllers A,B@key=value,... [--seeds N] [--set key=value ...] --out DIR
-                [--traces csv|parquet|mat] [--backend sumo|highway-env]
+                [--traces csv|parquet|mat] [--backend sumo|highway-env] [--require "NAME: FORMULA" ...]
     ego sweep SPEC.toml --out DIR [--engine process|ray] [--jobs N] [--address ADDR]
-              [--record none|failed|all] [--plot X,Y[:METRIC] ...]
+              [--record none|failed|all] [--plot X,Y[:METRIC] ...] [--require "NAME: FORMULA" ...]
+    ego falsify SPEC.toml --out DIR [--engine process|ray] [--jobs N] [--budget N]
+                [--optimizer cma|bo|bo-tpe|random|lhs] [--until first|budget]
     ego list [--json]
     ego train narma-l2 [--seed N] [--samples N] [--epochs N] [--out PATH]
     ego tune lane-centering [--quick] [--workers N] [--seed N] [--drives V[:OFF],...] [--out PATH]
@@ -30,7 +33,7 @@ result); 1 some run ended in ``error`` (ego could not run it); 130 interrupted (
 finished is written); 2 bad input, or ``--out`` held by another ego process.
 docs/reliability.md has the details.
 
-The package holds one module per command (``ego.cli.run``, ``compare``, ``sweep``, ``list``
+The package holds one module per command (``ego.cli.run``, ``compare``, ``sweep``, ``falsify``, ``list``
 as ``catalogue``, ``train``, ``tune``), each with ``command(args) -> exit status``;
 :data:`COMMANDS` maps a command's name to its module and :func:`main` dispatches through it.
 """
@@ -49,6 +52,7 @@ COMMANDS = {
     "run": "ego.cli.run",
     "compare": "ego.cli.compare",
     "sweep": "ego.cli.sweep",
+    "falsify": "ego.cli.falsify",
     "list": "ego.cli.catalogue",
     "train": "ego.cli.train",
     "tune": "ego.cli.tune",

@@ -13,6 +13,7 @@ from ego.params import ConfigError, parse_overrides
 
 def command(args: Any) -> int:
     from ego.compare import MAX_SEEDS, UNITS_FILE, compare
+    from ego.requirements import with_defaults
 
     if args.seeds > MAX_SEEDS:
         raise ConfigError(f"bad value for --seeds: {args.seeds} (expected at most {MAX_SEEDS}; use ego sweep "
@@ -22,7 +23,8 @@ def command(args: Any) -> int:
     labels = [n.strip() for n in args.controllers.split(",") if n.strip()]
     out = check_output_dir(args.out, "--out")
     rows = compare(args.scenario, labels, args.seeds, ego_entity(args, parse_overrides(args.overrides)), out, args.jobs,
-                   traces=args.traces, backend=args.backend)
+                   traces=args.traces, backend=args.backend,
+                   requirements=with_defaults(args.scenario, args.require))
     print((out / "metrics.md").read_text(), end="")
     files = ["metrics.csv", UNITS_FILE, "metrics.md"] + sorted(p.name for p in out.glob("*.png"))
     recorded = sum(1 for r in rows if r.recording)

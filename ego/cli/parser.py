@@ -76,6 +76,10 @@ def parser() -> argparse.ArgumentParser:
                           "fast-follower and cut-in)")
     run.add_argument("--video", metavar="PATH",
                      help="with --backend highway-env: a video of the run (.gif, or .mp4 with ffmpeg)")
+    run.add_argument("--require", action="append", default=[], metavar="\"NAME: FORMULA\"",
+                     help="a requirement in signal temporal logic over the trace's signals, on top of the "
+                          "scenario's defaults (repeatable; docs/requirements.md), e.g. "
+                          "\"keep_gap: always (gap_front >= 2 m)\"")
 
     cmp_ = sub.add_parser(
         "compare", help="every controller x seed of one scenario, in parallel processes",
@@ -108,6 +112,10 @@ def parser() -> argparse.ArgumentParser:
     cmp_.add_argument("--traces", default=None, metavar="FORMAT",
                       help="also write every run's trace to traces/<label>-seed<N>.FORMAT: csv, parquet "
                            "or mat (see docs/traces.md)")
+    cmp_.add_argument("--require", action="append", default=[], metavar="\"NAME: FORMULA\"",
+                      help="a requirement in signal temporal logic over the trace's signals, on top of the "
+                           "scenario's defaults (repeatable; docs/requirements.md), e.g. "
+                           "\"keep_gap: always (gap_front >= 2 m)\"")
 
     swp = sub.add_parser(
         "sweep", help="many runs over a parameter space (a TOML spec), resumable Parquet results",
@@ -141,6 +149,12 @@ def parser() -> argparse.ArgumentParser:
                           "their duration) or all")
     swp.add_argument("--plot", action="append", default=[], metavar="X,Y[:METRIC]",
                      help="an envelope plot over two swept parameters (repeatable)")
+    swp.add_argument("--require", action="append", default=[], metavar="\"NAME: FORMULA\"",
+                     help="a requirement on top of the spec's [requirements] (or the scenario's defaults); "
+                          "repeatable, see docs/requirements.md")
+    from ego.cli.falsify import add_parser as add_falsify
+
+    add_falsify(sub)
 
     lst = sub.add_parser("list", help="scenarios, controllers and every parameter",
                          description="List scenarios, controllers and every parameter with "

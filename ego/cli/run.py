@@ -12,6 +12,7 @@ from ego.params import parse_overrides
 
 
 def command(args: Any) -> int:
+    from ego.requirements import with_defaults
     from ego.results.export import trace_files
     from ego.results.metrics import flatten, metric_units
     from ego.runner import RunSpec, resolve, run
@@ -19,7 +20,8 @@ def command(args: Any) -> int:
 
     spec = RunSpec(args.scenario, args.controller, seed=check_seed(args.seed, "--seed"),
                    overrides=ego_entity(args, parse_overrides(args.overrides)), record=args.record, trace=args.trace,
-                   backend=args.backend, video=args.video)
+                   backend=args.backend, video=args.video,
+                   requirements=with_defaults(args.scenario, args.require))
     resolved = resolve(spec)  # every name, value and path checked before anything runs
     from ego.outputs import OutputError
 

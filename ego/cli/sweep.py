@@ -17,6 +17,15 @@ def command(args: Any) -> int:
     from ego.sweep.runner import RECORD, parse_plot, sweep
 
     spec = sweep_spec.load(args.spec)
+    if args.require:
+        import dataclasses
+
+        from ego.requirements import defaults, split
+
+        base = spec.requirements if spec.requirements is not None else defaults(spec.scenario)
+        reqs = {**base, **dict(split(t) for t in args.require)}
+        sweep_spec.check_requirements(next(spec.runs()), reqs, ConfigError)
+        spec = dataclasses.replace(spec, requirements=reqs)
     choice(args.engine, ENGINES, "--engine")
     check_count(args.jobs, "--jobs", 1, MAX_JOBS)
     if args.address is not None and args.engine != "ray":

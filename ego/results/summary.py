@@ -18,6 +18,8 @@ import numpy as np
 from ego.results.metrics import headline_names, metric_units, with_unit
 from ego.results.trace import Metric
 
+#: the flattened metrics of a run's requirements: ``requirements.<name>`` (robustness)
+REQUIREMENTS_PREFIX = "requirements."
 #: one run's flattened metrics (status and error among them)
 Row = Mapping[str, Any]
 
@@ -70,6 +72,41 @@ def percentiles(values: Sequence[Any]) -> str:
     return f"{p50:.3g} [{p5:.3g}, {p95:.3g}] ({a.min():.3g} to {a.max():.3g}), {a.size}"
 
 
+def requirement_lines(groups: Mapping[str, Sequence[Mapping[str, Any]]]) -> list[str]:
+    """A markdown table of passes and failures per requirement (columns) and group (rows:
+    e.g. controllers), from flattened metric rows (``requirements.<name>`` robustness); no
+    lines when no row has a requirement."""
+    names = list(
+        dict.fromkeys(
+            k[len(REQUIREMENTS_PREFIX) :]
+            for rows in groups.values()
+            for r in rows
+            for k in r
+            if k.startswith(REQUIREMENTS_PREFIX)
+        )
+    )
+    if not names:
+        return []
+    lines = [
+        "",
+        "Requirements (robustness >= 0: passed; passed/evaluated, the smallest robustness "
+        "in brackets):",
+        "",
+        "| | " + " | ".join(names) + " |",
+        "|---|" + "---|" * len(names),
+    ]
+    for group, rows in groups.items():
+        cells = []
+        for n in names:
+            values = _finite([r.get(REQUIREMENTS_PREFIX + n) for r in rows])
+            passed = sum(v >= 0.0 for v in values)
+            cells.append(
+                f"{passed}/{len(values)} ({min(values):.3g})" if values else "-"
+            )
+        lines.append(f"| {group} | " + " | ".join(cells) + " |")
+    return lines
+
+
 def _by_controller(rows: Sequence[Row], controllers: Sequence[str]) -> dict[str, list[Row]]:
     runs: dict[str, list[Row]] = {c: [] for c in controllers}
     for r in rows:
@@ -100,6 +137,8 @@ def comparison(scenario: str, rows: Sequence[Row], controllers: Sequence[str],
              "k/n for a yes/no metric: k of n runs say yes.",
              "",
              *table(controllers, _by_controller(rows, controllers), columns)]
+    lines += requirement_lines({c: [r["metrics"] for r in mine]
+                                for c, mine in _by_controller(rows, controllers).items()})
     errors = [r for r in rows if r["error"]]
     if errors:
         lines += ["", "Errors:", ""] + [f"- {r['controller']} seed {r['seed']}: {r['error']}" for r in errors]
@@ -142,6 +181,7 @@ def sweep(scenario: str, source: str, swept: Sequence[str], seeds: int, rows: Se
             for c in controllers:
                 k = sum(1 for r in runs.get(c, ()) if r.get(extra) is True)
                 lines.append(f"- {c}: {k}")
+    lines += requirement_lines(runs)
     errors = [r for r in rows if r["status"] == "error"]
     if errors:
         lines += ["", f"{len(errors)} runs ended in an error; the first:", "",

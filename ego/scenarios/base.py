@@ -225,6 +225,8 @@ class Scenario:
     #: a composed scenario's own work once its parts are set up, before the first
     #: observation (None: nothing)
     after_setup = None
+    #: ... and each control period before the manoeuvre plans (the surround view updated)
+    before_plan = None
 
     def compose(self) -> Parts | None:
         """The scenario's parts (:class:`Parts`), or None for one that implements the loop
@@ -317,12 +319,18 @@ class Scenario:
             if self._stop and self.status == "running":
                 self._end("interrupted", "interrupted (SIGINT or SIGTERM)", level="WARN")
                 self._flush()
-            return self.result()
+            result = self.result()
+            if self.on_result is not None:  # e.g. requirements checked while the recording is open
+                self.on_result(self, result)
+            return result
         finally:
             restore()
             self.close()
 
     _stop = False
+    #: called as ``on_result(scenario, result)`` after a run's result, before the recording
+    #: closes (ego.runner sets it to check the run's requirements)
+    on_result = None
 
     def _catch_stop_signals(self):
         """Make SIGINT and SIGTERM request a stop at the next step; returns the undo."""
@@ -683,6 +691,8 @@ class ComposedLoop:
             if self.status != "running":
                 return
         obs = self.obs
+        if self.before_plan is not None:
+            self.before_plan()
         self.manoeuvre.plan(obs, t)
         view.observe(obs, t)
 

@@ -14,6 +14,7 @@ from ego.highway_env import BACKENDS
 from ego.params import ConfigError, param
 from ego.scenarios import metrics as m
 from ego.scenarios.base import Parts, Scenario
+from ego.scenarios.envelope import ReachCriterion
 from ego.scenarios.evasive import MARKERS, METRICS, EvasiveConfig, compare_plots, compose, evasive_metrics
 from ego.scenarios.events import INF
 from ego.scenarios.motorway import COLUMNS, EDGE, LANE_NAMES, PLOTS, ROUTE, MotorwayWorld
@@ -106,7 +107,7 @@ class CutIn(Scenario):
         Metric("reaction_time", "s", "from the start of the cut-in to the trigger", headline=True),
         Metric("cut_in_time", "s", "when the car started across the lane"),
         Metric("response", "-", "brake (in lane) or evade (lane change), none without a trigger"),
-    )
+    ) + ReachCriterion.METRICS
     markers = MARKERS + (Marker("cut-in", "the car starts across", "<"),)
 
     compare_plots = classmethod(compare_plots)
@@ -118,6 +119,7 @@ class CutIn(Scenario):
     def populate(self, world: MotorwayWorld) -> None:
         c = self.config
         self._announced = False
+        self.reach = ReachCriterion(CUTTER)  # the braking criterion (issue 21)
         world.add_type(CUTTER_TYPE)
         self.cutter = CutInVehicle(CUTTER, "ego", c.cut_in_lane, c.ego_lane, c.ego_speed + c.overtake_speed,
                                    c.ego_speed - c.cut_in_speed, c.cut_in_gap, c.cut_in_duration,
@@ -131,6 +133,13 @@ class CutIn(Scenario):
         if self.cutter.cut_in_time is not None and not self._announced:
             self._announced = True
             self.event("cut-in", f"{CUTTER} cuts into the {LANE_NAMES[self.config.ego_lane]} lane")
+
+    def before_plan(self) -> None:
+        self.reach.watch(self.t, self.view.sensor.front, self.view.ds)
+
+    def braking_margin(self) -> float | None:
+        """:meth:`ReachCriterion.margin` at the friction limit (m; None: the car never reached over)."""
+        return self.reach.margin(friction_limit(self.ego.model.params), self.config.sumo_step)
 
     def choose(self, man):
         # brake in lane when that is enough; evade by gap acceptance only when it is not
@@ -147,4 +156,6 @@ class CutIn(Scenario):
         reaction = trigger_t - cut if cut is not None and trigger_t is not None else None
         response = "none" if trigger_t is None else "brake" if self.manoeuvre.chosen is None else "evade"
         return {**out, "min_gap": out["min_gap_front"], "min_ttc": out["min_ttc_front"],
-                "reaction_time": m.json_number(reaction, 4), "cut_in_time": m.json_number(cut, 4), "response": response}
+                "reaction_time": m.json_number(reaction, 4), "cut_in_time": m.json_number(cut, 4), "response": response,
+                **self.reach.metrics(self.collision is not None, friction_limit(self.ego.model.params),
+                                     self.config.sumo_step)}

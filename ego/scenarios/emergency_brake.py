@@ -184,10 +184,21 @@ class EmergencyBrake(Scenario):
 
     def _avoidable(self) -> bool | None:
         """The braking criterion of :mod:`ego.scenarios.envelope` from this run's trigger."""
-        from ego.scenarios.envelope import avoidable
+        margin = self.braking_margin()
+        return None if margin is None else margin > 0.0
+
+    def braking_margin(self) -> float | None:
+        """The smallest gap (m) to the lead had the ego braked at its friction limit from the
+        trigger (:func:`ego.scenarios.envelope.braking_min_gap`, the lead as SUMO moves it;
+        positive: braking avoids it); None without a trigger."""
+        from ego.scenarios.envelope import braking_min_gap, lead_speed
 
         trigger_t = self.manoeuvre.trigger_t
         if trigger_t is None or self._trigger_gap == INF:
             return None
-        return avoidable({"trigger_time": trigger_t}, self._trigger_gap, self._trigger_speed, self.config,
-                         friction_limit(self.ego.model.params))
+        c = self.config
+
+        def fn(t):
+            return lead_speed(t, c.lead_cruise_speed, c.lead_brake_time, c.lead_decel, c.lead_final_speed)
+        return braking_min_gap(trigger_t, self._trigger_gap, self._trigger_speed,
+                               friction_limit(self.ego.model.params), fn, lead_step=c.sumo_step)

@@ -14,6 +14,9 @@ from collections.abc import Iterator
 
 import numpy as np
 
+from ego.results.metrics import json_number
+from ego.results.trace import Metric
+
 #: the envelope the issue asks for: (low, high) per parameter
 RANGES = {
     "ego_speed": (15.0, 33.0),  # m/s
@@ -51,6 +54,47 @@ def braking_min_gap(t0: float, gap0: float, ego_speed0: float, decel: float, lea
         v_lead = lead_speed_fn(t)
         lead_x = np.concatenate(([0.0], np.cumsum(0.5 * (v_lead[1:] + v_lead[:-1]) * dt)))
     return float(np.min(gap0 + lead_x - ego_x))
+
+
+class ReachCriterion:
+    """The braking criterion of a car that cuts in (cut-in's, issue 21): braking at the
+    friction limit from the moment the car ``vehicle`` first reaches over the ego's outline
+    (becomes its front object), the car holding its speed from then on."""
+
+    __slots__ = ("vehicle", "at")
+    METRICS = (
+        Metric("reach_time", "s", "when the cutting car first reached over the ego's outline (became its "
+               "front object)"),
+        Metric("collision_avoidable", "-", "true: braking at the friction limit from the moment the car "
+               "reached over the ego's outline would have kept the ego behind it, so the collision is the "
+               "controller's or the planner's; false: physics (or the car hit the ego's side before it "
+               "reached over its outline); none: no collision"),
+    )
+
+    def __init__(self, vehicle: str) -> None:
+        self.vehicle = vehicle
+        #: (t s, gap m, ego speed m/s, car's speed m/s) when the car first reached over the ego's outline
+        self.at: tuple[float, float, float, float] | None = None
+
+    def watch(self, t: float, front, ds: float) -> None:
+        """Each control period: ``front`` is the sensor's front object, ``ds`` the ego's speed."""
+        if self.at is None and front.id == self.vehicle and front.gap != float("inf"):
+            self.at = (t, front.gap, ds, front.speed)
+
+    def margin(self, decel: float, lead_step: float) -> float | None:
+        """The smallest gap (m) braking at ``decel`` from the reach would leave (the car moved
+        as SUMO moves it, every ``lead_step`` s); None if the car never reached over."""
+        if self.at is None:
+            return None
+        t0, gap, speed, car_speed = self.at
+        return braking_min_gap(t0, gap, speed, decel, lambda t: np.full_like(t, car_speed), lead_step=lead_step)
+
+    def metrics(self, collided: bool, decel: float, lead_step: float) -> dict:
+        """``reach_time`` and ``collision_avoidable`` (none without a collision; false when the
+        car hit the ego's side before it reached over its outline: no time to brake)."""
+        margin = self.margin(decel, lead_step)
+        return {"reach_time": json_number(self.at[0] if self.at else None, 4),
+                "collision_avoidable": None if not collided else False if margin is None else bool(margin > 0.0)}
 
 
 def avoidable(metrics: dict, trace_gap_at_trigger: float, ego_speed_at_trigger: float,

@@ -6,7 +6,8 @@ States (their numbers are the trace's ``phase`` and the recording's manoeuvre ti
        |                                    |
        +--------no acceptable lane------> in-lane manoeuvre --settled--> done
                                             ^
-             lane change --emergency stop--+  (the AEB engages early in the change)
+             lane change --emergency stop--+  (the AEB engages early in the change, or the
+                                               new lane's follower would hit the braking ego)
 
 * **cruise**: hold ``ego_speed``; when the front (or rear) time-to-collision falls below
   ``ttc_threshold`` the manoeuvre is **triggered** and **gap acceptance** checks both
@@ -18,9 +19,10 @@ States (their numbers are the trace's ``phase`` and the recording's manoeuvre ti
 * **done**: settled in the target lane (or the in-lane manoeuvre settled) for one second.
 
 Transitions go through :meth:`EvasiveManoeuvre.enter`, which refuses one not in
-:data:`TRANSITIONS`; a new transition (finish a lane change weighing the target lane's
-follower instead of aborting it, say) is a row there and a branch in
-:meth:`EvasiveManoeuvre.emergency_stop`.
+:data:`TRANSITIONS`. Whether a lane change is aborted or finished while braking is decided
+by :meth:`EvasiveManoeuvre.abort_lane_change` (weighing the target lane's follower, issue
+21): when the AEB engages (:meth:`EvasiveManoeuvre.emergency_stop`), and every SUMO step of
+a lane change in which the ego slows behind the car it still overlaps.
 
 The scenario supplies an :class:`InLane` behaviour: what to do and when it is settled.
 """
@@ -29,6 +31,8 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from typing import Protocol
+
+import numpy as np
 
 from ego.scenarios.events import INF, GapRule, check_lane, choose_lane
 from ego.scenarios.motorway import LANE_NAMES
@@ -95,7 +99,7 @@ class EvasiveManoeuvre:
         self.choice_reason = ""
         self.done_t: float | None = None
         self._inside_since: float | None = None
-        self._lane_leader = Detection()
+        self._lane_leader, self._lane_follower = Detection(), Detection()
         self.s0 = view.s
         self.speed_ref = self.config.ego_speed
         self.evade_speed = self.config.evade_speed
@@ -121,6 +125,9 @@ class EvasiveManoeuvre:
                 self.trigger(ttc)
         if self.safety is not None:
             self.safety.update()
+        if self.phase == LANE_CHANGE and not (self.safety is not None and self.safety.active) \
+                and self._sim_step(t):
+            self.abort_lane_change(aeb=False)  # slowing across two lanes in front of a follower?
         if self.phase == CRUISE:
             s_ref, v_ref = self.s0 + c.ego_speed * t, c.ego_speed
         elif self.chosen is not None:
@@ -140,6 +147,11 @@ class EvasiveManoeuvre:
         obs.d_ref = obs.dd_ref = 0.0
         if self.phase in (LANE_CHANGE, IN_LANE):
             self.check_done()
+
+    def _sim_step(self, t: float) -> bool:
+        """A SUMO step came just before this control period (the traffic moved)."""
+        per = self.config.control_per_sumo
+        return bool(per) and round(t / self.config.dt) % per == 0
 
     def trigger(self, ttc: float) -> None:
         """Triggered: gap acceptance, then the lane change or the in-lane manoeuvre."""
@@ -170,23 +182,76 @@ class EvasiveManoeuvre:
                        f"(lane index {view.target_lane} of the network): {self.choice_reason}")
 
     def emergency_stop(self) -> None:
-        """The safety layer brakes at the friction limit. Early in a lane change (the ego not
-        yet half-way across, and braking alone enough to stop behind the front object) the
-        stop is made in the lane it is leaving: braking hard in front of the new lane's
-        traffic is what gets a car hit from behind. Otherwise it carries on."""
+        """The safety layer brakes at the friction limit: :meth:`abort_lane_change` decides
+        whether a lane change goes on."""
+        self.abort_lane_change(aeb=True)
+
+    def abort_lane_change(self, aeb: bool = True) -> None:
+        """Abort or finish a lane change while braking (lane change -> in-lane manoeuvre).
+
+        An emergency stop (``aeb``) early in a lane change (the ego not yet half-way across,
+        and braking alone enough to stop behind the front object) is made in the lane it is
+        leaving: braking hard in front of the new lane's traffic is what gets a car hit from
+        behind. Up to a quarter across, it also goes back when the new lane's follower would
+        run into the braking ego (:meth:`target_follower_threat`), if braking stops it behind
+        the front car holding its speed now. ``aeb=False`` (checked every SUMO step of a lane
+        change while the AEB is off): no emergency stop, the ego only slows behind the car it
+        still overlaps; it goes back only in the first tenth of the change, and only for such
+        a follower. Otherwise it carries on."""
         if self.phase != LANE_CHANGE or self.in_lane.action != "brake":
             return
         view = self.view
         origin = view.target_lane - (1 if self.chosen == "left" else -1)
         span = view.lane_offset[view.target_lane] - view.lane_offset[origin]
         progress = (view.d_road - view.lane_offset[origin]) / span if span else 1.0
-        if progress >= 0.5 or braking_need(view.sensor.front, view.ds) > 0.9 * friction_limit(self.plant.model.params):
-            return  # well across, or braking alone would not stop it in time: carry on
-        self.event("lane", f"lane change aborted at {100 * progress:.0f} % across: emergency braking "
-                   f"in the {LANE_NAMES[origin]} lane", "WARN")
+        limit = friction_limit(self.plant.model.params)
+        if progress >= 0.5:
+            return  # well across: finish it (the new lane's traffic sees the ego in its lane)
+        threat = None
+        front = view.sensor.front
+        # an emergency stop goes back up to a quarter across; a slow-down only at the very start
+        # (further across, a controller's lateral lag can carry the ego past the front car and
+        # swing it back into it)
+        if progress < (0.25 if aeb else 0.1) and front.gap != INF and (aeb or front.speed < view.ds - 0.5):
+            # early in the change, a follower in the new lane that would run into the braking
+            # ego sends it back, if braking stops it behind the front car holding its speed now
+            closing = view.ds - front.speed
+            if closing <= 0.0 or closing * closing / (2.0 * max(front.gap, 0.1)) <= 0.9 * limit:
+                threat = self.target_follower_threat(limit)
+        if threat is None and (not aeb or braking_need(front, view.ds) > 0.9 * limit):
+            return  # braking alone would not stop it in time and the new lane is clear: carry on
+        why = f"; the new lane's follower {threat}" if threat else ""
+        what = "emergency braking" if aeb else "braking"
+        self.event("lane", f"lane change aborted at {100 * progress:.0f} % across: {what} "
+                   f"in the {LANE_NAMES[origin]} lane{why}", "WARN")
         view.target_lane, self.chosen = origin, None
         self.enter(IN_LANE)
         self.in_lane.start(self)
+
+    def target_follower_threat(self, decel: float, horizon: float = 3.0, margin: float = 2.0) -> str | None:
+        """Would the follower in the target lane run into the ego if the ego brakes here at
+        ``decel`` (m/s^2) down to the front object's speed? The follower is taken to hold its
+        speed (a car whose lane the ego only half occupies may not react to it: SUMO's drivers
+        do not), over ``horizon`` s; a threat is a gap below ``margin`` m. Returns why (its id,
+        gap and speed), or None when the lane behind is clear. Braking to a near stop across two
+        lanes in front of such a follower is how an AEB stop mid-lane-change gets rear-ended."""
+        view = self.view
+        follower = self._lane_follower
+        view.sensor.lane_neighbours(view.target_lane, self._lane_leader, follower)
+        if follower.gap == INF or follower.speed <= 0.0:
+            return None
+        front = view.sensor.front
+        v0 = max(view.ds, 0.0)
+        v_end = min(v0, max(front.speed, 0.0)) if front.gap != INF else v0
+        t_brake = (v0 - v_end) / decel
+        t = np.linspace(0.0, horizon, 31)
+        ego_x = np.where(t < t_brake, v0 * t - 0.5 * decel * t * t,
+                         v0 * t_brake - 0.5 * decel * t_brake ** 2 + v_end * (t - t_brake))
+        closest = float(np.min(follower.gap + ego_x - follower.speed * t))
+        if closest >= margin:
+            return None
+        return (f"{follower.id} ({follower.gap:.1f} m behind at {follower.speed:.1f} m/s) would close to "
+                f"{closest:.1f} m")
 
     def check_done(self) -> None:
         """Online completion: inside the band (or the in-lane manoeuvre settled) for one second."""

@@ -27,14 +27,16 @@ from ego.sweep.spec import Run, SweepSpec
 RECORD = ("none", "failed", "all")
 
 
-def task_of(r: Run, rrd: str | None = None, policy: str = "none") -> RunTask:
+def task_of(r: Run, rrd: str | None = None, policy: str = "none", requirements=None) -> RunTask:
     """The pipeline's task for sweep run ``r`` (resolved here, once): recorded to ``rrd``
-    always (``policy`` ``all``) or only when it fails (``failed``). ConfigError when the
-    run's values do not resolve."""
+    always (``policy`` ``all``) or only when it fails (``failed``), checked against
+    ``requirements`` (the spec's [requirements]; None: the scenario's defaults). ConfigError
+    when the run's values do not resolve."""
     from ego.runner import RunSpec, resolve
 
     resolved = resolve(RunSpec(r.scenario, r.controller, r.seed, r.overrides,
-                               record=rrd if policy == "all" else None, background_recording=False))
+                               record=rrd if policy == "all" else None, background_recording=False,
+                               requirements=requirements))
     return RunTask(resolved, record_failed=rrd if policy == "failed" and rrd else None, key=r)
 
 
@@ -121,7 +123,7 @@ def _sweep(spec: SweepSpec, out: Path, engine: str, jobs: int | None, address: s
             if r.run_id not in done:
                 rrd = str(runs_dir / f"{r.controller}-{r.run_id}.rrd") if record != "none" else None
                 try:
-                    yield task_of(r, rrd, record)
+                    yield task_of(r, rrd, record, spec.requirements)
                 except Exception as exc:  # noqa: BLE001 - values no run takes: the run's row says so
                     store_row(error_row(r, f"{type(exc).__name__}: {exc}"))
                     if shown is not None:

@@ -44,7 +44,7 @@ MAX_SEED = 2**31 - 1
 #: more runs than this is a mistake, not a sweep
 MAX_RUNS = 10_000_000
 METHODS = ("random", "lhs", "sobol")
-_TOP = ("scenario", "controllers", "seeds", "set", "grid", "sample")
+_TOP = ("scenario", "controllers", "seeds", "set", "grid", "sample", "requirements")
 #: a spec larger than this is not a spec (``ego sweep /dev/zero``)
 MAX_SPEC_BYTES = 1 << 20
 #: grids with at most this many points are checked point by point (combinations of values)
@@ -79,6 +79,8 @@ class SweepSpec:
     grid: dict = field(default_factory=dict)  #: name -> list of values
     sample: Sample | None = None
     source: str = ""
+    #: [requirements] name -> formula, checked on every run (None: the scenario's defaults)
+    requirements: dict | None = None
 
     @property
     def swept(self) -> tuple[str, ...]:
@@ -283,8 +285,13 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
         if method == "sobol" and n & (n - 1):
             raise bad(f"[sample] sobol needs n a power of 2 for its balance properties, got {n}")
         sample = Sample(method, n, ranges, sseed)
+    requirements = None
+    if "requirements" in data:
+        from ego.requirements import from_table
+
+        requirements = from_table(data["requirements"], source)
     spec = SweepSpec(scenario, tuple(controllers), seeds, dict(fixed), {k: list(v) for k, v in grid.items()},
-                     sample, source)
+                     sample, source, requirements)
     total = spec.count()
     if total > MAX_RUNS:
         raise bad(f"expands to {total:,} runs; the limit is {MAX_RUNS:,}")
@@ -298,10 +305,24 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
         point = dict(zip(names, combo))
         where = "the run with " + ", ".join(f"{k} = {v!r}" for k, v in point.items()) if point else "the first run"
         _check(scenario, controllers, {**spec.fixed, **point}, where, bad)
+    first = next(spec.runs())
     if sample is not None:
-        first = next(spec.runs())
         _check(scenario, controllers, first.overrides, "the first run", bad)
+    if requirements:
+        check_requirements(first, requirements, bad)
     return spec
+
+
+def check_requirements(first: Run, requirements: dict, bad) -> None:
+    """Every formula against the signals of the spec's first run (one line on a problem)."""
+    from ego.runner import RunSpec, requirements_of, resolve
+
+    spec = RunSpec(first.scenario, first.controller, first.seed, first.overrides,
+                   requirements=requirements)
+    try:
+        requirements_of(resolve(spec))
+    except ConfigError as exc:
+        raise bad(str(exc)) from None
 
 
 def _kind(value: Any) -> str:

@@ -28,8 +28,12 @@ def covered(key: str, names: set[str], prefixes: tuple[str, ...]) -> bool:
     return key in names or key.startswith(prefixes) or f"{key}." in prefixes
 
 
-def declared(cls, config):
-    specs = cls.metrics_declared(config)
+def declared(cls, config, spec=None):
+    """The metrics declared for a run: the scenario's, and with ``spec`` its requirements'
+    robustness (ego.runner.declared_metrics declares those)."""
+    from ego.runner import declared_metrics
+
+    specs = declared_metrics(spec) if spec is not None else cls.metrics_declared(config)
     names = {s.name for s in specs if not s.name.endswith(".")}
     prefixes = tuple(s.name for s in specs if s.name.endswith("."))
     return specs, names, prefixes
@@ -48,7 +52,7 @@ def test_every_metric_of_a_run_is_declared_and_every_declared_one_shows_up(runs)
     for spec, result in results:
         r = resolve(spec)
         cls, config = r.scenario_cls, r.config
-        specs, names, prefixes = declared(cls, config)
+        specs, names, prefixes = declared(cls, config, spec)
         assert len({s.name for s in specs}) == len(specs), "a metric declared twice"
         assert all(s.unit for s in specs)
         keys = m.flatten(result.metrics)

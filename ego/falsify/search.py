@@ -1,0 +1,422 @@
+"""``ego falsify``: search a spec's ranges for runs that violate a requirement.
+
+For each controller of the spec, an optimiser (:mod:`ego.falsify.optimizers`) proposes a
+batch of points (as many as the executor has workers), the sweep machinery runs them
+(:func:`ego.sweep.pipeline.execute` on :func:`ego.parallel.executor.make_executor`, rows into
+:class:`ego.sweep.results.ResultStore`), and the optimiser learns the target requirement's
+robustness of each. Outputs in ``--out``:
+
+* ``results.parquet``: every run (the sweep's columns, ``requirements.<name>`` for each
+  requirement, and ``optimizer``, ``optimizer_seed``, ``evaluation``). The same command
+  again resumes: the optimiser is replayed (it is deterministic), and a point whose run is
+  already stored takes its stored robustness instead of running again.
+* ``falsified.md``: per controller the budget, runs to the first violation, and each
+  violation: parameters, robustness, the exact ``ego run`` command that reproduces it (run
+  again as a command and checked, unless ``--no-verify``), and its recording.
+* ``convergence.png``: the best robustness so far against runs.
+"""
+
+from __future__ import annotations
+
+import math
+import shlex
+import subprocess
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ego.falsify.optimizers import make, squash
+from ego.falsify.spec import FalsifySpec
+from ego.outputs import FolderLock, write_text
+from ego.requirements import DEFAULTS, PREFIX
+from ego.sweep.results import ResultStore
+from ego.sweep.spec import Run
+
+#: violations checked by running their command again (each is a fresh ``ego run`` process)
+VERIFY_AT_MOST = 5
+
+
+@dataclass
+class Evaluation:
+    """One run of the search: its place in the sequence and its robustness."""
+
+    index: int
+    controller: str
+    seed: int
+    overrides: dict
+    run_id: str
+    robustness: float
+    status: str
+    cached: bool = False
+
+
+@dataclass
+class Search:
+    controller: str
+    evaluations: list[Evaluation] = field(default_factory=list)
+    verified: dict = field(
+        default_factory=dict
+    )  #: run_id -> (reproduced?, recording, detail)
+    ran: int = 0  #: runs made now (the others were stored already)
+
+    @property
+    def violations(self) -> list[Evaluation]:
+        return [e for e in self.evaluations if e.robustness < 0.0]
+
+    @property
+    def first_violation(self) -> int | None:
+        """Runs up to and including the first violation (None: none found)."""
+        return next((e.index + 1 for e in self.evaluations if e.robustness < 0.0), None)
+
+    def best_so_far(self) -> np.ndarray:
+        rob = np.array(
+            [
+                e.robustness if not math.isnan(e.robustness) else np.inf
+                for e in self.evaluations
+            ]
+        )
+        return np.minimum.accumulate(rob) if len(rob) else rob
+
+
+@dataclass
+class FalsifyReport:
+    spec: FalsifySpec
+    optimizer: str
+    searches: list[Search]
+    seconds: float
+    ran: int
+    interrupted: bool = False
+    out: Path | None = None
+
+    @property
+    def violations(self) -> int:
+        return sum(len(s.violations) for s in self.searches)
+
+    def text(self) -> str:
+        lines = []
+        for s in self.searches:
+            first = s.first_violation
+            best = s.best_so_far()
+            lines.append(
+                f"{s.controller}: {len(s.evaluations)} runs ({self.optimizer}), "
+                f"{len(s.violations)} violate {self.spec.requirement}"
+                + (f", the first at run {first}" if first else "")
+                + (f"; best robustness {best[-1]:.4g}" if len(best) else "")
+            )
+        lines.append(
+            f"{self.ran} runs ran now in {self.seconds:.1f} s; wrote {self.out / 'results.parquet'}, "
+            f"{self.out / 'falsified.md'}, {self.out / 'convergence.png'}"
+        )
+        return "\n".join(lines)
+
+
+def robustness_of(row: dict, name: str) -> float:
+    v = row.get(PREFIX + name)
+    return (
+        float(v)
+        if isinstance(v, (int, float)) and not isinstance(v, bool)
+        else math.nan
+    )
+
+
+def falsify(
+    spec: FalsifySpec,
+    out: Path,
+    *,
+    optimizer: str = "cma",
+    budget: int | None = None,
+    engine: str = "process",
+    jobs: int | None = None,
+    address: str | None = None,
+    until: str = "budget",
+    optimizer_seed: int = 0,
+    verify: bool = True,
+    progress: bool = False,
+    executor=None,
+) -> FalsifyReport:
+    """Run the search (see the module docstring); ``executor`` overrides ``engine``/``jobs``."""
+    from ego.parallel.executor import make_executor
+
+    out = Path(out)
+    budget = budget or spec.budget
+    with FolderLock(out, "--out"):
+        store = ResultStore(out)
+        table = store.table()
+        known: dict[str, dict] = {}
+        if table is not None:
+            for row in table.to_pylist():
+                known[row["run_id"]] = row
+        own = executor is None
+        executor = make_executor(engine, jobs, address) if own else executor
+        started = time.perf_counter()
+        searches: list[Search] = []
+        interrupted = False
+        try:
+            for controller in spec.controllers:
+                search = Search(controller)
+                searches.append(search)
+                _search(
+                    spec,
+                    controller,
+                    optimizer,
+                    optimizer_seed,
+                    budget,
+                    until,
+                    executor,
+                    store,
+                    known,
+                    search,
+                    progress,
+                )
+        except KeyboardInterrupt:
+            interrupted = True
+        finally:
+            ran = sum(s.ran for s in searches)
+            store.flush()
+            if own:
+                executor.close()
+        if verify and not interrupted:
+            for search in searches:
+                _verify(spec, search, out)
+        report = FalsifyReport(
+            spec,
+            optimizer,
+            searches,
+            time.perf_counter() - started,
+            ran,
+            interrupted,
+            out,
+        )
+        write_text(out / "falsified.md", markdown(report, budget))
+        plot_convergence(
+            [(f"{s.controller} ({optimizer})", s.best_so_far()) for s in searches],
+            out / "convergence.png",
+            spec.requirement,
+        )
+    return report
+
+
+def _search(
+    spec: FalsifySpec,
+    controller: str,
+    optimizer: str,
+    seed: int,
+    budget: int,
+    until: str,
+    executor,
+    store: ResultStore,
+    known: dict,
+    search: Search,
+    progress: bool,
+) -> None:
+    from ego.sweep.pipeline import execute
+    from ego.sweep.runner import error_row, row_of, task_of
+
+    opt = make(optimizer, len(spec.dims), max(1, executor.workers), seed, budget)
+
+    def keep(row: dict) -> None:
+        row.update(optimizer=optimizer, optimizer_seed=seed)
+        known[row["run_id"]] = row
+        store.add(row)
+        search.ran += 1
+
+    while len(search.evaluations) < budget:
+        units = opt.ask()
+        full = len(units)
+        units = units[: budget - len(search.evaluations)]
+        points = [spec.point(u) for u in units]
+        ids = [spec.run_id(controller, s, o) for s, o in points]
+        tasks = {}
+        fresh = set()
+        for rid, (s, o) in zip(ids, points):
+            if rid not in known and rid not in fresh:
+                fresh.add(rid)
+                r = Run(rid, spec.scenario, controller, s, o)
+                try:
+                    tasks[rid] = task_of(r, None, "none", spec.requirements)
+                except Exception as exc:  # noqa: BLE001 - values no run takes: the run's row says so
+                    keep(error_row(r, f"{type(exc).__name__}: {exc}"))
+        for outcome in executor.run(execute, tasks.values()):
+            task = outcome.task
+            if outcome.value is None:
+                row = error_row(task.key, outcome.error or "the worker died")
+            else:
+                row = row_of(task.key, outcome.value)
+            if row["status"] == "interrupted":
+                raise KeyboardInterrupt
+            keep(row)
+        for rid, (s, o) in zip(ids, points):
+            row = known[rid]
+            search.evaluations.append(
+                Evaluation(
+                    len(search.evaluations),
+                    controller,
+                    s,
+                    o,
+                    rid,
+                    robustness_of(row, spec.requirement),
+                    row.get("status", ""),
+                    cached=rid not in fresh,
+                )
+            )
+        if len(units) == full:
+            scores = np.array(
+                [squash(e.robustness) for e in search.evaluations[-full:]]
+            )
+            opt.tell(units, scores)
+        if progress:
+            best = search.best_so_far()[-1]
+            found = len(search.violations)
+            sys.stderr.write(
+                f"{controller}: {len(search.evaluations)}/{budget} runs, best robustness "
+                f"{best:.4g}, {found} violation(s)\n"
+            )
+            sys.stderr.flush()
+        if until == "first" and search.violations:
+            break
+
+
+def command(spec: FalsifySpec, e: Evaluation, record: str | None = None) -> str:
+    """The ``ego run`` command that makes the run ``e`` (the target requirement given with
+    ``--require`` unless it is one of the scenario's defaults, unchanged)."""
+    parts = ["ego", "run", spec.scenario, "-c", e.controller, "--seed", str(e.seed)]
+    for k, v in e.overrides.items():
+        parts += ["--set", f"{k}={str(v).lower() if isinstance(v, bool) else v}"]
+    if dict(DEFAULTS.get(spec.scenario, ())).get(spec.requirement) != spec.formula:
+        parts += ["--require", f"{spec.requirement}: {spec.formula}"]
+    if record:
+        parts += ["--record", record]
+    return shlex.join(parts)
+
+
+def _verify(spec: FalsifySpec, search: Search, out: Path) -> None:
+    """Run the command of the first few distinct violations (the first found, then the
+    worst) as a fresh ``ego run`` with a recording; reproduced when its robustness is the
+    search's."""
+    import json
+
+    seen: dict[str, Evaluation] = {}
+    for e in [
+        *search.violations[:1],
+        *sorted(search.violations, key=lambda e: e.robustness),
+    ]:
+        seen.setdefault(e.run_id, e)
+    for e in list(seen.values())[:VERIFY_AT_MOST]:
+        rrd = out / "runs" / f"{e.controller}-{e.run_id}.rrd"
+        rrd.parent.mkdir(parents=True, exist_ok=True)
+        args = shlex.split(command(spec, e, str(rrd)))[1:] + ["--json"]
+        proc = subprocess.run(
+            [sys.executable, "-m", "ego", *args],
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
+        try:
+            got = json.loads(proc.stdout.strip().splitlines()[-1])["requirements"][
+                spec.requirement
+            ]
+        except (ValueError, KeyError, IndexError, TypeError):
+            search.verified[e.run_id] = (
+                False,
+                "",
+                (proc.stderr.strip().splitlines() or ["no output"])[-1],
+            )
+            continue
+        same = got is not None and math.isclose(
+            float(got), e.robustness, rel_tol=1e-6, abs_tol=1e-9
+        )
+        search.verified[e.run_id] = (
+            same,
+            str(rrd) if rrd.exists() else "",
+            f"robustness {got}",
+        )
+
+
+def markdown(report: FalsifyReport, budget: int) -> str:
+    spec = report.spec
+    lines = [
+        f"# Falsification of `{spec.requirement}` on {spec.scenario}",
+        "",
+        f"Requirement: `{spec.requirement}: {spec.formula}`; spec `{spec.source}`; optimiser "
+        f"{report.optimizer}; budget {budget} runs per controller.",
+        "",
+        "Searched: "
+        + ", ".join(
+            f"{d.name} {'false/true' if d.kind == 'bool' else f'{d.lo:g}..{d.hi:g}'}"
+            for d in spec.dims
+        )
+        + ("" if spec.seed is None else f"; seed fixed at {spec.seed}")
+        + (
+            "; fixed: " + ", ".join(f"{k}={v}" for k, v in spec.fixed.items())
+            if spec.fixed
+            else ""
+        ),
+        "",
+        "| controller | runs | violations | runs to the first violation | best robustness |",
+        "|---|---|---|---|---|",
+    ]
+    for s in report.searches:
+        best = s.best_so_far()
+        lines.append(
+            f"| {s.controller} | {len(s.evaluations)} | {len(s.violations)} | "
+            f"{s.first_violation or '-'} | {best[-1]:.4g} |"
+            if len(best)
+            else f"| {s.controller} | 0 | 0 | - | - |"
+        )
+    for s in report.searches:
+        if not s.violations:
+            continue
+        distinct = {
+            e.run_id: e
+            for e in sorted(s.violations, key=lambda e: (e.robustness, e.index))
+        }
+        lines += [
+            "",
+            f"## {s.controller}: {len(distinct)} distinct violating run(s)",
+            "",
+        ]
+        for e in list(distinct.values())[:20]:
+            ok, rrd, detail = s.verified.get(e.run_id, (None, "", ""))
+            verdict = (
+                "not verified"
+                if ok is None
+                else "reproduced by the command"
+                if ok
+                else f"NOT reproduced ({detail})"
+            )
+            params = ", ".join(f"{k}={v}" for k, v in e.overrides.items())
+            lines += [
+                f"- run {e.index + 1} (`{e.run_id}`), status {e.status}, robustness {e.robustness:.4g}: "
+                f"seed {e.seed}, {params}; {verdict}"
+                + (f"; recording `{rrd}`" if rrd else ""),
+                f"  `{command(spec, e)}`",
+            ]
+        if len(distinct) > 20:
+            lines.append(f"- ... {len(distinct) - 20} more in results.parquet")
+    if report.interrupted:
+        lines += ["", "Interrupted: the same command resumes."]
+    return "\n".join(lines) + "\n"
+
+
+def plot_convergence(curves, path: Path, requirement: str, title: str = "") -> Path:
+    """Best robustness so far against runs, one line per (label, curve)."""
+    from ego.plots import pyplot, save
+
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for label, curve in curves:
+        if len(curve):
+            ax.plot(
+                np.arange(1, len(curve) + 1), np.clip(curve, -1e6, 1e6), label=label
+            )
+    ax.axhline(0.0, color="k", lw=0.8, ls="--")
+    ax.set_yscale("symlog", linthresh=0.1)
+    ax.set_xlabel("runs")
+    ax.set_ylabel(f"best robustness of {requirement}")
+    ax.set_title(title or "falsification: best robustness so far (below 0: violated)")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return save(fig, path)

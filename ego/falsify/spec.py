@@ -1,0 +1,284 @@
+"""A falsification spec (TOML): what to search, for which requirement, with what budget.
+
+```toml
+scenario = "emergency-brake"
+controllers = ["fuzzy-pid"]          # one search per controller, one after another
+requirement = "no_avoidable_collision"   # a name from [requirements] or the scenario's defaults
+seed = [0, 99999]                    # SUMO's seed: a range searched as a whole number, or one seed
+budget = 500                         # runs per controller (--budget overrides)
+[requirements]                       # optional: name = "formula" (default: the scenario's set)
+no_avoidable_collision = "always (not avoidable_collision)"
+[set]                                # fixed for every run
+lead_speed = -1
+[search]                             # the dimensions: [low, high] numbers (a whole-number
+ego_speed = [10, 36]                 # parameter is rounded), or [false, true]
+block_left = [false, true]
+```
+
+Every name and value is checked as ``ego sweep`` checks its spec (the same helpers), the
+formulas as ``--require`` checks them: one line, before anything runs.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ego.params import ConfigError, did_you_mean
+from ego.sweep.spec import MAX_SEED, _check, _param_types, run_id
+
+_TOP = (
+    "scenario",
+    "controllers",
+    "controller",
+    "requirement",
+    "seed",
+    "budget",
+    "requirements",
+    "set",
+    "search",
+)
+#: the float values of a run are rounded to this many decimals: what falsified.md prints
+#: is exactly what ran
+DIGITS = 4
+
+
+@dataclass(frozen=True)
+class Dim:
+    """One searched dimension: a parameter (``float``, ``int``, ``bool``) or the seed."""
+
+    name: str
+    kind: str
+    lo: float
+    hi: float
+
+    def value(self, u: float):
+        """The value at ``u`` in [0, 1]."""
+        u = min(1.0, max(0.0, float(u)))
+        if self.kind == "bool":
+            return bool(u >= 0.5)
+        x = self.lo + u * (self.hi - self.lo)
+        if self.kind in ("int", "seed"):
+            return int(min(self.hi, max(self.lo, round(x))))
+        return round(x, DIGITS)
+
+    def unit(self, value) -> float:
+        """The inverse of :meth:`value` (the point's position in [0, 1])."""
+        if self.kind == "bool":
+            return 0.75 if value else 0.25
+        return (
+            0.0
+            if self.hi == self.lo
+            else (float(value) - self.lo) / (self.hi - self.lo)
+        )
+
+
+@dataclass(frozen=True)
+class FalsifySpec:
+    scenario: str
+    controllers: tuple[str, ...]
+    requirement: str
+    requirements: dict  #: name -> formula, every one checked on every run
+    dims: tuple[Dim, ...]
+    fixed: dict = field(default_factory=dict)
+    seed: int | None = 0  #: the fixed seed, None when searched
+    budget: int = 200
+    source: str = ""
+
+    @property
+    def formula(self) -> str:
+        return self.requirements[self.requirement]
+
+    def point(self, u: np.ndarray) -> tuple[int, dict]:
+        """(seed, overrides) of the run at ``u`` in the unit cube."""
+        seed = self.seed
+        overrides = dict(self.fixed)
+        for dim, x in zip(self.dims, u):
+            if dim.kind == "seed":
+                seed = dim.value(x)
+            else:
+                overrides[dim.name] = dim.value(x)
+        return int(seed), overrides
+
+    def run_id(self, controller: str, seed: int, overrides: dict) -> str:
+        return run_id(self.scenario, controller, seed, overrides)
+
+    def check_optimizer(self, name: str) -> None:
+        if name == "cma" and len(self.dims) < 2:
+            raise ConfigError(
+                f"{self.source}: --optimizer cma needs at least 2 searched dimensions "
+                f"(the spec has {len(self.dims)}); use bo, random or lhs"
+            )
+
+
+def load(path: str | Path) -> FalsifySpec:
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except UnicodeDecodeError:
+        raise ConfigError(
+            f"cannot read the falsification spec {str(path)!r}: not a text file"
+        ) from None
+    except OSError as exc:
+        raise ConfigError(
+            f"cannot read the falsification spec {str(path)!r}: {exc.strerror or exc}"
+        ) from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{path}: not valid TOML: {exc}") from None
+    return parse(data, str(path))
+
+
+def parse(data: dict, source: str = "the spec") -> FalsifySpec:
+    """Validate a spec's contents (see the module docstring)."""
+    from ego.control import controller_spec
+    from ego.requirements import defaults, from_table
+    from ego.scenarios import scenario_class
+
+    def bad(msg: str) -> ConfigError:
+        return ConfigError(f"{source}: {msg}")
+
+    unknown = [k for k in data if k not in _TOP]
+    if unknown:
+        raise bad(
+            f"unknown key {unknown[0]!r} (allowed: {', '.join(_TOP)}){did_you_mean(unknown[0], _TOP)}"
+        )
+    scenario = data.get("scenario")
+    if not isinstance(scenario, str):
+        raise bad('scenario must be a scenario name, e.g. scenario = "emergency-brake"')
+    try:
+        cls = scenario_class(scenario)
+    except ConfigError as exc:
+        raise bad(str(exc)) from None
+    if "controller" in data and "controllers" in data:
+        raise bad("give controller or controllers, not both")
+    controllers = data.get(
+        "controllers", [data["controller"]] if "controller" in data else None
+    )
+    if (
+        not isinstance(controllers, list)
+        or not controllers
+        or not all(isinstance(c, str) for c in controllers)
+        or len(set(controllers)) != len(controllers)
+    ):
+        raise bad(
+            'controllers must be a non-empty list of distinct names, e.g. controllers = ["pid"]'
+        )
+    for name in controllers:
+        try:
+            controller_spec(name, cls.task)
+        except ConfigError as exc:
+            raise bad(str(exc)) from None
+    requirements = (
+        from_table(data["requirements"], source)
+        if "requirements" in data
+        else defaults(scenario)
+    )
+    target = data.get("requirement")
+    if not isinstance(target, str) or target not in requirements:
+        raise bad(
+            f"requirement = {target!r}: name one of the spec's requirements "
+            f"({', '.join(requirements) or 'none'}){did_you_mean(str(target), requirements)}"
+        )
+    budget = data.get("budget", 200)
+    if (
+        not isinstance(budget, int)
+        or isinstance(budget, bool)
+        or not 1 <= budget <= 10_000_000
+    ):
+        raise bad(
+            f"budget must be a whole number of runs from 1 to 10000000, got {budget!r}"
+        )
+    infos = _param_types(scenario, controllers)
+    fixed = data.get("set", {})
+    search = data.get("search", {})
+    for section, value in (("set", fixed), ("search", search)):
+        if not isinstance(value, dict):
+            raise bad(f"[{section}] must be a table of parameter = value")
+    for name, value in fixed.items():
+        if name not in infos:
+            raise bad(
+                f"[set] unknown parameter {name!r} for {scenario} (see ego list){did_you_mean(name, infos)}"
+            )
+        _check(scenario, controllers, {name: value}, f"[set] {name}", bad)
+    dims = []
+    for name, rng in search.items():
+        info = infos.get(name)
+        if info is None:
+            raise bad(
+                f"[search] unknown parameter {name!r} for {scenario} (see ego list)"
+                f"{did_you_mean(name, infos)}"
+            )
+        if name in fixed:
+            raise bad(f"{name} is both fixed in [set] and searched in [search]")
+        if info.type is bool:
+            if rng != [False, True]:
+                raise bad(
+                    f"[search] {name} is true or false: search it as [false, true], got {rng!r}"
+                )
+            dims.append(Dim(name, "bool", 0.0, 1.0))
+            continue
+        if info.type not in (int, float) or info.choices is not None:
+            raise bad(f"[search] {name} is not a number to search (fix it in [set])")
+        if (
+            not isinstance(rng, list)
+            or len(rng) != 2
+            or not all(
+                isinstance(x, (int, float)) and not isinstance(x, bool) for x in rng
+            )
+            or not rng[0] < rng[1]
+        ):
+            raise bad(
+                f"[search] {name} must be a range [low, high] with low < high, got {rng!r}"
+            )
+        for end in rng:
+            _check(scenario, controllers, {name: end}, f"[search] {name}", bad)
+        dims.append(
+            Dim(
+                name,
+                "int" if info.type is int else "float",
+                float(rng[0]),
+                float(rng[1]),
+            )
+        )
+    seed = data.get("seed", 0)
+    fixed_seed: int | None = None
+    if isinstance(seed, int) and not isinstance(seed, bool) and 0 <= seed <= MAX_SEED:
+        fixed_seed = seed
+    elif (
+        isinstance(seed, list)
+        and len(seed) == 2
+        and all(isinstance(s, int) and not isinstance(s, bool) for s in seed)
+        and 0 <= seed[0] < seed[1] <= MAX_SEED
+    ):
+        dims.append(Dim("seed", "seed", float(seed[0]), float(seed[1])))
+    else:
+        raise bad(
+            f"seed must be one seed or a range [low, high] of seeds within 0..{MAX_SEED}, got {seed!r}"
+        )
+    if not dims:
+        raise bad("[search] names nothing to search (and the seed is fixed)")
+    spec = FalsifySpec(
+        scenario,
+        tuple(controllers),
+        target,
+        requirements,
+        tuple(dims),
+        dict(fixed),
+        fixed_seed,
+        budget,
+        source,
+    )
+    # the corners as a whole (combinations a value-by-value check cannot see) and the formulas
+    for u in (np.zeros(len(dims)), np.ones(len(dims))):
+        _, overrides = spec.point(u)
+        _check(scenario, controllers, overrides, "the search's corner", bad)
+    from ego.sweep.spec import Run, check_requirements
+
+    seed0, over0 = spec.point(np.zeros(len(dims)))
+    check_requirements(
+        Run("", scenario, controllers[0], seed0, over0), requirements, bad
+    )
+    return spec

@@ -1,0 +1,749 @@
+"""Requirements in signal temporal logic over a run's named, unit-carrying trace signals.
+
+A requirement is ``name: formula``. The formula is STL over the trace's columns and a few
+derived signals (:data:`DERIVED`), evaluated by ``rtamt`` (offline, discrete time) on the
+trace's own sample times after the run; its **robustness** (how far the run is from
+violating it, in the unit of its comparisons; negative: violated) becomes the metric
+``requirements.<name>``, and a violation's first time becomes a ``requirement`` event of
+the run and its recording.
+
+Grammar (``docs/requirements.md`` has the full story)::
+
+    formula  := until ('implies' formula)?          (also ->)
+    until    := or ('until' [a:b]? or)?
+    or       := and ('or' and)*
+    and      := unary ('and' unary)*
+    unary    := 'not' unary | ('always' | 'eventually' | 'historically' | 'once') [a:b]? unary
+              | '(' formula ')' | arith CMP arith | BOOLEAN_SIGNAL
+    arith    := term (('+' | '-') term)* ;  term := factor (('*' | '/') factor)*
+    factor   := '-' factor | NUMBER UNIT? | SIGNAL | 'abs' '(' arith ')' | '(' arith ')'
+    CMP      := >= | <= | > | < | == | !=
+
+Intervals ``[a:b]`` are in seconds (``[0:3]``, or ``[0 s:3 s]``). A number may carry a unit
+written after it (``2 m``, ``1.0 s``, ``0.5 m/s``, ``3 m/s^2``); a number without one takes
+the unit of the other side. Both sides of a comparison, and both terms of ``+``/``-``, must
+have the same unit, so ``gap_front >= 2 s`` and ``gap_front >= ttc_front`` are refused. A
+boolean signal (unit ``bool``) stands alone as a proposition: internally it is +1 (true) or
+-1 (false) and its robustness is that value.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ego.params import ConfigError, did_you_mean
+from ego.results.summary import REQUIREMENTS_PREFIX, requirement_lines
+
+BOOL = "bool"
+#: units a number may carry (besides the units of the trace's own columns)
+KNOWN_UNITS = ("m/s^2", "rad/s", "m/s", "m", "s", "N", "rad", "-")
+_TEMPORAL = ("always", "eventually", "historically", "once")
+_KEYWORDS = {"not", "and", "or", "implies", "until", "abs", "true", "false", *_TEMPORAL}
+_CMP = (">=", "<=", "==", "!=", ">", "<")
+_TOKEN = re.compile(
+    r"\s*(?:(?P<num>\d+(?:\.\d*)?(?:[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?)"
+    r"|(?P<name>[A-Za-z_][A-Za-z_0-9]*)|(?P<op>->|>=|<=|==|!=|[<>()\[\]:+\-*/^&|~]))"
+)
+_REQ_NAME = re.compile(r"^[A-Za-z_][A-Za-z_0-9]*$")
+
+
+class RequirementError(ConfigError):
+    """A formula that cannot be evaluated (syntax, unknown signal, unit mismatch)."""
+
+
+# -- derived signals ----------------------------------------------------------------------------
+def _status_time(result, kind: str) -> float | None:
+    return next((e.t for e in result.events if e.kind == kind), None)
+
+
+def _collision(result, t: np.ndarray, scenario=None) -> np.ndarray:
+    when = _status_time(result, "collision") if result.status == "collision" else None
+    if when is None or not len(t):
+        return np.zeros(len(t), bool)
+    return (
+        t >= min(when, t[-1]) - 1e-9
+    )  # the run ends at the collision: its last sample at least
+
+
+def _avoidable_collision(result, t: np.ndarray, scenario=None) -> np.ndarray:
+    return _collision(result, t) & bool(result.metrics.get("collision_avoidable"))
+
+
+def _collision_avoidable(result, t: np.ndarray, scenario=None) -> np.ndarray:
+    return np.full(len(t), bool(result.metrics.get("collision_avoidable")))
+
+
+def _aeb_active(result, t: np.ndarray, scenario=None) -> np.ndarray:
+    """From the run's ``aeb`` events: engaged from "AEB engages" until "AEB releases"."""
+    out = np.zeros(len(t), bool)
+    start = None
+    for e in result.events:
+        if e.kind != "aeb":
+            continue
+        if "engages" in e.text and start is None:
+            start = e.t
+        elif "releases" in e.text and start is not None:
+            out |= (t >= start) & (t < e.t)
+            start = None
+    if start is not None:
+        out |= t >= start
+    return out
+
+
+def _lateral_clear(result, t: np.ndarray, scenario=None) -> np.ndarray:
+    """The ego's outline has left the lane it started in (|lane_offset| at least half a
+    lane plus half the ego's width): a car ahead in that lane is no longer in its way."""
+    from ego.models.geometry import VehicleGeometry
+
+    width = result.lanes[0][0] if result.lanes else 3.2
+    offset = np.abs(result.column("lane_offset"))
+    return offset >= 0.5 * width + 0.5 * VehicleGeometry().width
+
+
+def _gap_min(result, t: np.ndarray, scenario=None) -> np.ndarray:
+    return np.minimum(result.column("gap_front"), result.column("gap_rear"))
+
+
+def _clearance(result, t: np.ndarray, scenario=None) -> np.ndarray:
+    """The smaller bumper gap, front or rear, at least 0 m until the ego's collision (the
+    outlines may touch by millimetres without a collision), from then on at most -1 m (a
+    collision is a violation by a clear margin even when the outlines only touch)."""
+    gap = np.minimum(result.column("gap_front"), result.column("gap_rear"))
+    hit = _collision(result, t)
+    return np.where(hit, np.minimum(gap, 0.0) - 1.0, np.maximum(gap, 0.0))
+
+
+def _braking_margin(result, t: np.ndarray, scenario=None) -> np.ndarray:
+    """The scenario's braking margin (constant over the run); 1e9 without a trigger."""
+    margin = scenario.braking_margin() if scenario is not None else None
+    return np.full(len(t), 1e9 if margin is None else float(margin))
+
+
+@dataclass(frozen=True)
+class Derived:
+    """A signal computed from a finished run (its trace, events and metrics)."""
+
+    name: str
+    unit: str
+    description: str
+    needs: tuple[str, ...]  #: trace columns (or metrics, prefixed ``metric:``) it needs
+    fn: object
+
+
+DERIVED = {
+    d.name: d
+    for d in (
+        Derived(
+            "collision",
+            BOOL,
+            "true from the ego's collision on (status collision)",
+            (),
+            _collision,
+        ),
+        Derived(
+            "collision_avoidable",
+            BOOL,
+            "the run's collision_avoidable metric, constant over the "
+            "run (true: braking at the friction limit from the trigger would have avoided the "
+            "collision)",
+            ("metric:collision_avoidable",),
+            _collision_avoidable,
+        ),
+        Derived(
+            "avoidable_collision",
+            BOOL,
+            "true from the ego's collision on when that collision was "
+            "avoidable (collision_avoidable)",
+            ("metric:collision_avoidable",),
+            _avoidable_collision,
+        ),
+        Derived(
+            "aeb_active",
+            BOOL,
+            "the AEB brakes (between its engage and release events)",
+            (),
+            _aeb_active,
+        ),
+        Derived(
+            "lateral_clear",
+            BOOL,
+            "the ego's outline has left its start lane (|lane_offset| >= half a "
+            "lane + half the ego's width)",
+            ("lane_offset",),
+            _lateral_clear,
+        ),
+        Derived(
+            "braking_margin",
+            "m",
+            "the smallest gap to the lead had the ego braked at its friction "
+            "limit from the trigger, constant over the run (positive: braking avoids the lead; 1e9: no "
+            "trigger)",
+            ("scenario:braking_margin",),
+            _braking_margin,
+        ),
+        Derived(
+            "clearance",
+            "m",
+            "gap_min floored at 0 m, and from the ego's collision on "
+            "min(gap_min, 0) - 1 m (negative exactly when the ego collided)",
+            ("gap_front", "gap_rear"),
+            _clearance,
+        ),
+        Derived(
+            "gap_min",
+            "m",
+            "the smaller of gap_front and gap_rear",
+            ("gap_front", "gap_rear"),
+            _gap_min,
+        ),
+    )
+}
+
+
+# -- parsing ----------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Requirement:
+    """One parsed requirement: its name, the formula as written, the formula as rtamt reads
+    it, the signals it uses and the unit of its robustness (``"mixed"`` when its comparisons
+    have different units)."""
+
+    name: str
+    formula: str
+    rtamt: str
+    signals: tuple[str, ...]
+    unit: str
+
+    @property
+    def text(self) -> str:
+        return f"{self.name}: {self.formula}"
+
+
+class _Parser:
+    def __init__(self, formula: str, units: Mapping[str, str]) -> None:
+        self.formula = formula
+        self.units = units
+        self.toks = self._lex(formula)
+        self.i = 0
+        self.used: dict[str, None] = {}
+        self.cmp_units: set[str] = set()
+
+    def _lex(self, text: str) -> list[str]:
+        toks, pos = [], 0
+        text = text.rstrip()
+        while pos < len(text):
+            m = _TOKEN.match(text, pos)
+            if m is None or m.end() == pos:
+                raise self.error(f"unexpected character {text[pos:].lstrip()[:1]!r}")
+            toks.append(m.group(m.lastgroup))
+            pos = m.end()
+        return toks
+
+    def error(self, msg: str) -> RequirementError:
+        return RequirementError(f"bad requirement formula {self.formula!r}: {msg}")
+
+    def peek(self, k: int = 0) -> str | None:
+        j = self.i + k
+        return self.toks[j] if j < len(self.toks) else None
+
+    def take(self, expected: str | None = None) -> str:
+        tok = self.peek()
+        if tok is None:
+            raise self.error(
+                f"ends early (expected {expected!r})" if expected else "ends early"
+            )
+        if expected is not None and tok != expected:
+            raise self.error(f"expected {expected!r}, found {tok!r}")
+        self.i += 1
+        return tok
+
+    def next(self, what: str) -> str:
+        """The next token, whatever it is (``what`` names it when the formula ends)."""
+        tok = self.peek()
+        if tok is None:
+            raise self.error(f"ends early (expected {what})")
+        self.i += 1
+        return tok
+
+    def parse(self) -> str:
+        if not self.toks:
+            raise self.error("empty")
+        out = self.formula_()
+        if self.peek() is not None:
+            raise self.error(f"unexpected {self.peek()!r}")
+        return out
+
+    # formulas (return rtamt text)
+    def formula_(self) -> str:
+        left = self.until()
+        if self.peek() in ("implies", "->"):
+            self.take()
+            return f"({left}) implies ({self.formula_()})"
+        return left
+
+    def until(self) -> str:
+        left = self.or_()
+        if self.peek() == "until":
+            self.take()
+            return f"({left}) until{self.interval()} ({self.or_()})"
+        return left
+
+    def or_(self) -> str:
+        parts = [self.and_()]
+        while self.peek() in ("or", "|"):
+            self.take()
+            parts.append(self.and_())
+        return parts[0] if len(parts) == 1 else " or ".join(f"({p})" for p in parts)
+
+    def and_(self) -> str:
+        parts = [self.unary()]
+        while self.peek() in ("and", "&"):
+            self.take()
+            parts.append(self.unary())
+        return parts[0] if len(parts) == 1 else " and ".join(f"({p})" for p in parts)
+
+    def unary(self) -> str:
+        tok = self.peek()
+        if tok in ("not", "~"):
+            self.take()
+            return f"not ({self.unary()})"
+        if tok in _TEMPORAL:
+            self.take()
+            return f"{tok}{self.interval()} ({self.unary()})"
+        if tok in ("true", "false"):
+            self.take()
+            return "(1 > 0)" if tok == "true" else "(0 > 1)"
+        if tok == "(":
+            start = self.i
+            try:  # a parenthesised comparison's left side, e.g. (a - b) >= 2 m
+                return self.comparison()
+            except RequirementError:
+                self.i = start
+            self.take("(")
+            inner = self.formula_()
+            self.take(")")
+            return f"({inner})"
+        if (
+            tok is not None
+            and tok not in _KEYWORDS
+            and _is_name(tok)
+            and self.units.get(tok) == BOOL
+        ):
+            nxt = self.peek(1)
+            if nxt not in _CMP:
+                self.take()
+                self.used[tok] = None
+                self.cmp_units.add(BOOL)
+                return f"({tok} > 0)"
+        return self.comparison()
+
+    def interval(self) -> str:
+        if self.peek() != "[":
+            return ""
+        self.take("[")
+        lo = self.seconds()
+        self.take(":")
+        hi = self.seconds()
+        self.take("]")
+        if hi < lo:
+            raise self.error(f"interval [{lo:g}:{hi:g}] ends before it starts")
+        return f"[{lo!r}:{hi!r}]"
+
+    def seconds(self) -> float:
+        tok = self.next("a time in s")
+        if not _is_number(tok):
+            raise self.error(f"interval bound {tok!r} is not a number of seconds")
+        if self.peek() == "s":
+            self.take()
+        return float(tok)
+
+    def comparison(self) -> str:
+        left, lu = self.arith()
+        op = self.peek()
+        if op not in _CMP:
+            raise self.error(
+                f"expected a comparison ({' '.join(_CMP)}) after {left!r}, found "
+                f"{op if op is not None else 'the end'!r}"
+            )
+        self.take()
+        right, ru = self.arith()
+        unit = _join(lu, ru)
+        if unit is False:
+            raise self.error(
+                f"compares {left!r} in {lu} with {right!r} in {ru} (units differ)"
+            )
+        if unit == BOOL:
+            raise self.error(
+                f"compares booleans ({left} {op} {right}): use the signal alone, or not"
+            )
+        self.cmp_units.add(unit or "-")
+        return f"({left} {op} {right})"
+
+    def arith(self) -> tuple[str, str | None]:
+        text, unit = self.term()
+        while self.peek() in ("+", "-"):
+            op = self.take()
+            rt, ru = self.term()
+            joined = _join(unit, ru)
+            if joined is False:
+                raise self.error(
+                    f"{text!r} in {unit} {op} {rt!r} in {ru} (units differ)"
+                )
+            text, unit = f"{text} {op} {rt}", joined
+        return text, unit
+
+    def term(self) -> tuple[str, str | None]:
+        text, unit = self.factor()
+        while self.peek() in ("*", "/"):
+            op = self.take()
+            rt, ru = self.factor()
+            if unit is None or unit == "-":
+                unit = ru if op == "*" else (None if ru in (None, "-") else f"1/({ru})")
+            elif ru not in (None, "-"):
+                unit = f"({unit}){op}({ru})"
+            text = f"{text} {op} {rt}"
+        return text, unit
+
+    def factor(self) -> tuple[str, str | None]:
+        tok = self.next("a signal or a number")
+        if tok == "-":
+            text, unit = self.factor()
+            return f"-{text}", unit
+        if tok == "(":
+            text, unit = self.arith()
+            self.take(")")
+            return f"({text})", unit
+        if tok == "abs":
+            self.take("(")
+            text, unit = self.arith()
+            self.take(")")
+            return f"abs({text})", unit
+        if _is_number(tok):
+            return repr(float(tok)), self.unit_suffix()
+        if tok in _KEYWORDS or not _is_name(tok):
+            raise self.error(f"expected a signal or a number, found {tok!r}")
+        if tok not in self.units:
+            known = sorted(self.units)
+            raise self.error(
+                f"unknown signal {tok!r} (known: {', '.join(known)}){did_you_mean(tok, known)}"
+            )
+        if self.units[tok] == BOOL:
+            raise self.error(
+                f"{tok} is a boolean signal: use it alone as a proposition (e.g. not {tok})"
+            )
+        self.used[tok] = None
+        return tok, self.units[tok] or "-"
+
+    def unit_suffix(self) -> str | None:
+        """The unit written after a number (tokens up to the longest known unit), or None."""
+        for unit in sorted(
+            set(KNOWN_UNITS) | {u for u in self.units.values() if u and u != BOOL},
+            key=len,
+            reverse=True,
+        ):
+            toks = [t for t in self._lex_unit(unit)]
+            if toks and self.toks[self.i : self.i + len(toks)] == toks:
+                # "s" after a number inside an interval is handled by seconds(); here a name
+                # that is also a signal is a unit only when a comparison or an operator follows
+                self.i += len(toks)
+                return unit
+        return None
+
+    @staticmethod
+    def _lex_unit(unit: str) -> list[str]:
+        return [m.group(m.lastgroup) for m in _TOKEN.finditer(unit)]
+
+
+def _is_number(tok: str) -> bool:
+    return bool(tok) and (tok[0].isdigit() or (tok[0] == "." and len(tok) > 1))
+
+
+def _is_name(tok: str) -> bool:
+    return tok[0].isalpha() or tok[0] == "_"
+
+
+def _join(a: str | None, b: str | None):
+    """The unit of ``a`` op ``b`` for + - and comparisons: None (a bare number), the common
+    unit, or False when they differ."""
+    if a is None:
+        return b
+    if b is None or a == b:
+        return a
+    return False
+
+
+def parse(
+    formula: str, units: Mapping[str, str], name: str = "requirement"
+) -> Requirement:
+    """Check ``formula`` against the signals ``units`` (name -> unit; ``bool`` for booleans)
+    and translate it for rtamt. RequirementError (one line) on anything wrong."""
+    if not isinstance(formula, str):
+        raise RequirementError(
+            f"bad requirement {name!r}: the formula must be text, got {formula!r}"
+        )
+    p = _Parser(formula.strip(), units)
+    text = p.parse()
+    unit = next(iter(p.cmp_units)) if len(p.cmp_units) == 1 else "mixed"
+    return Requirement(name, formula.strip(), text, tuple(p.used), unit)
+
+
+def split(text: str) -> tuple[str, str]:
+    """``"name: formula"`` -> (name, formula); RequirementError naming the text otherwise."""
+    name, sep, formula = text.partition(":")
+    name = name.strip()
+    if not sep or not _REQ_NAME.match(name) or not formula.strip():
+        raise RequirementError(
+            f"bad --require {text!r} (expected NAME: FORMULA, e.g. "
+            '"keep_gap: always (gap_front >= 2 m)"; NAME a Python identifier)'
+        )
+    return name, formula.strip()
+
+
+def from_table(table, source: str) -> dict[str, str]:
+    """A TOML ``[requirements]`` table (name = "formula") checked for shape."""
+    if not isinstance(table, dict):
+        raise RequirementError(
+            f'{source}: [requirements] must be a table of name = "formula"'
+        )
+    for k, v in table.items():
+        if not _REQ_NAME.match(k) or not isinstance(v, str) or not v.strip():
+            raise RequirementError(
+                f'{source}: [requirements] {k} = {v!r}: expected name = "formula" '
+                "(name a Python identifier)"
+            )
+    return {k: v.strip() for k, v in table.items()}
+
+
+# -- defaults ---------------------------------------------------------------------------------------
+_NO_COLLISION = ("no_collision", "always (not collision)")
+_NO_AVOIDABLE = ("no_avoidable_collision", "always (not avoidable_collision)")
+#: the requirements every run of a scenario checks unless told otherwise (docs/requirements.md)
+DEFAULTS: dict[str, tuple[tuple[str, str], ...]] = {
+    "emergency-brake": (
+        _NO_AVOIDABLE,
+        _NO_COLLISION,
+        ("gap_or_clear", "always (gap_front >= 2 m or lateral_clear)"),
+        (
+            "aeb_slows",
+            "always (aeb_active implies eventually[0:3] "
+            "(speed <= 1 m/s or not aeb_active))",
+        ),
+    ),
+    "cut-in": (
+        _NO_AVOIDABLE,
+        _NO_COLLISION,
+        ("ttc_or_clear", "always (ttc_front >= 1 s or lateral_clear)"),
+    ),
+    "fast-follower": (
+        _NO_COLLISION,
+        ("rear_ttc", "always (ttc_rear >= 0.5 s or lateral_clear)"),
+    ),
+    "curve": (_NO_COLLISION, ("friction", "always (abs(lat_accel) <= 7 m/s^2)")),
+    "lane-centering": (("in_lane", "always (abs(d) <= 1 m)"),),
+    "platoon": (_NO_COLLISION,),
+    "sine-tracking": (("tracks", "always (abs(e_lat) <= 2 m)"),),
+    "report-000": (("tracks", "always (abs(e_lat) <= 2 m)"),),
+}
+
+
+def defaults(scenario: str) -> dict[str, str]:
+    """The scenario's default requirements (name -> formula); none for a scenario not in
+    :data:`DEFAULTS` (one registered by a user)."""
+    return dict(DEFAULTS.get(scenario, ()))
+
+
+# -- resolving and evaluating -----------------------------------------------------------------------
+def signal_units(
+    columns: Mapping[str, str], metrics: Sequence[str] = (), cls=None
+) -> dict[str, str]:
+    """Every signal a formula may name for a run with trace ``columns`` (name -> unit),
+    metric names ``metrics`` and scenario class ``cls``: the columns and the derived signals
+    they allow."""
+    out = dict(columns)
+
+    def have(need: str) -> bool:
+        kind, _, name = need.rpartition(":")
+        if kind == "metric":
+            return name in metrics
+        if kind == "scenario":
+            return hasattr(cls, name)
+        return name in columns
+
+    for d in DERIVED.values():
+        ok = all(have(n) for n in d.needs)
+        if ok and d.name not in out:
+            out[d.name] = d.unit
+    return out
+
+
+def resolve(
+    texts: Mapping[str, str], units: Mapping[str, str]
+) -> tuple[Requirement, ...]:
+    """Parse every (name -> formula) against ``units``; the first problem is the error."""
+    out = []
+    for name, formula in texts.items():
+        try:
+            out.append(parse(formula, units, name))
+        except RequirementError as exc:
+            raise RequirementError(f"requirement {name}: {exc}") from None
+    return tuple(out)
+
+
+def signal(result, name: str, scenario=None) -> np.ndarray:
+    """Signal ``name`` of a finished run as floats (booleans +1/-1; infinities clipped to
+    +-1e9, so rtamt's min/max stay finite)."""
+    t = result.column("t")
+    if name in result.columns:
+        x = result.column(name).astype(float)
+    else:
+        x = np.asarray(DERIVED[name].fn(result, t, scenario))
+        if x.dtype == bool:
+            return np.where(x, 1.0, -1.0)
+    x = np.nan_to_num(x, nan=0.0, posinf=1e9, neginf=-1e9)
+    return x
+
+
+_COMPILED: dict[tuple[str, float], object] = {}
+
+
+def _spec(req: Requirement, period: float, names: tuple[str, ...]):
+    """A parsed rtamt specification of ``req`` for samples ``period`` s apart (cached per
+    process: parsing is the expensive part)."""
+    key = (req.rtamt, round(period, 9))
+    spec = _COMPILED.get(key)
+    if spec is None:
+        import rtamt
+
+        spec = rtamt.StlDiscreteTimeOfflineSpecification()
+        spec.name = req.name
+        for n in names:
+            spec.declare_var(n, "float")
+        spec.set_sampling_period(period, "s", 0.1)
+        spec.spec = req.rtamt
+        spec.parse()
+        _COMPILED[key] = spec
+    return spec
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """A requirement's result on one run: robustness at t = 0 (``unit``) and the first time
+    its body fails (``always`` formulas: the first sample where the body's robustness is
+    negative; others: where the formula's own robustness is), None when satisfied."""
+
+    name: str
+    robustness: float
+    violated_at: float | None
+    unit: str
+
+    @property
+    def passed(self) -> bool:
+        return self.robustness >= 0.0
+
+
+#: requirements are evaluated on the trace's samples this far apart (s; the SUMO step, at
+#: which the traffic's signals change): rtamt's offline monitor costs about 30 us per sample
+#: and operator, so every 0.01 s control step would cost a third of a run's time
+PERIOD = 0.1
+
+
+def evaluate(
+    req: Requirement, result, period: float = PERIOD, scenario=None
+) -> Verdict:
+    """Evaluate ``req`` on a finished run with rtamt (offline, discrete time) on the trace's
+    own samples, every ``period`` s (0: every sample), counted back from the last one so the
+    run's end (a collision) is always a sample. An ``always`` formula is evaluated as its
+    body's robustness signal, whose minimum is the formula's robustness (the same number,
+    and its first negative sample is the first violation)."""
+    t_all = result.column("t")
+    if len(t_all) < 2:
+        return Verdict(req.name, math.nan, None, req.unit)
+    dt = float(t_all[1] - t_all[0])
+    stride = max(1, int(round(period / dt))) if period > 0 else 1
+    idx = np.arange(len(t_all) - 1, -1, -stride)[::-1]
+    if len(idx) < 2:
+        idx = np.arange(len(t_all))
+        stride = 1
+    t = t_all[idx]
+    names = tuple(req.signals) or ("t",)
+    data = {"time": (t - t[0]).tolist()}
+    for n in names:
+        data[n] = signal(result, n, scenario)[idx].tolist()
+    always = req.rtamt.startswith("always (") and _outer_parens(
+        req.rtamt[len("always ") :]
+    )
+    text = req.rtamt[len("always ") :] if always else req.rtamt
+    spec = _spec(
+        Requirement(req.name, req.formula, text, req.signals, req.unit),
+        stride * dt,
+        names,
+    )
+    rob = np.array([v for _, v in spec.evaluate(data)], dtype=float)
+    value = float(rob.min()) if always else float(rob[0])
+    at = None
+    if value < 0.0:
+        bad = np.flatnonzero(rob < 0.0)
+        at = float(t[bad[0]]) if len(bad) else float(t[0])
+    return Verdict(req.name, value, at, req.unit)
+
+
+def _outer_parens(text: str) -> bool:
+    """``text`` is one parenthesised group (so ``always (a) until (b)`` is not an always)."""
+    depth = 0
+    for i, ch in enumerate(text):
+        depth += ch == "("
+        depth -= ch == ")"
+        if depth == 0:
+            return i == len(text) - 1
+    return False
+
+
+def check_run(scenario, result, requirements: Sequence[Requirement]) -> list[Verdict]:
+    """Evaluate ``requirements`` on ``result`` (a run of ``scenario`` that has not closed its
+    recording yet): the robustness of each into ``result.metrics["requirements"]``, each
+    violation as a ``requirement`` event of the run (in time order, before the run's own
+    events of that moment) and of its recording."""
+    from ego.scenarios.base import Event
+
+    verdicts = []
+    rob = {}
+    for req in requirements:
+        v = evaluate(req, result, scenario=scenario)
+        verdicts.append(v)
+        rob[req.name] = None if math.isnan(v.robustness) else round(v.robustness, 6)
+        if v.violated_at is not None:
+            text = (
+                f"requirement {req.name} violated (robustness {v.robustness:.3g}"
+                f"{'' if v.unit in ('-', 'mixed', BOOL) else ' ' + v.unit}): {req.formula}"
+            )
+            # in time order, before the run's own events of that moment (its end stays last)
+            at = next((i for i, e in enumerate(result.events) if e.t >= v.violated_at), len(result.events))
+            result.events.insert(at, Event(v.violated_at, "requirement", text, "WARN"))
+            scenario.recorder.event(v.violated_at, f"[requirement] {text}", "WARN")
+    if requirements:
+        result.metrics["requirements"] = rob
+    return verdicts
+
+
+# -- summaries ----------------------------------------------------------------------------------------
+PREFIX = REQUIREMENTS_PREFIX
+
+
+#: every run's requirements' robustness in its metrics, flattened: ``requirements.<name>``
+#: (the pass/fail table of many runs is :func:`ego.results.summary.requirement_lines`)
+summary_lines = requirement_lines
+
+
+def with_defaults(
+    scenario: str, texts: Sequence[str]
+) -> tuple[tuple[str, str], ...] | None:
+    """``--require NAME: FORMULA`` options on top of the scenario's defaults (a name given
+    again replaces the default); None (the defaults) without options."""
+    if not texts:
+        return None
+    given = dict(split(t) for t in texts)
+    return tuple({**defaults(scenario), **given}.items())

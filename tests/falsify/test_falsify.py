@@ -1,0 +1,186 @@
+"""``ego falsify`` end to end on real SUMO runs (issue 21, point 2)."""
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+
+from ego.cli import main
+from ego.falsify.optimizers import NAMES, make
+from ego.falsify.search import falsify
+from ego.falsify.spec import load, parse
+from ego.params import ConfigError
+
+SPEC = """scenario = "emergency-brake"
+controller = "pid"
+requirement = "far"
+seed = 3
+[requirements]
+far = "always (gap_front >= 25 m)"
+[search]
+ego_speed = [15, 30]
+lead_gap = [20, 60]
+"""
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_optimisers_propose_batches_in_the_cube_and_replay_identically(name):
+    def sequence():
+        opt = make(name, 3, 2, 7, 12)
+        out = []
+        for _ in range(3):
+            x = opt.ask()
+            assert x.shape[1] == 3 and len(x) % 2 == 0 and np.all((x >= 0) & (x <= 1))
+            opt.tell(x, np.sum((x - 0.3) ** 2, axis=1))
+            out.append(x)
+        return np.concatenate(out)
+
+    assert np.array_equal(sequence(), sequence())
+
+
+def test_cma_finds_a_small_region_faster_than_random():
+    """A surrogate (no SUMO): a violating ball of radius 0.08 in 4 dimensions (0.04 % of the
+    cube) with a robustness that grows with the distance from it."""
+    centre = np.array([0.8, 0.2, 0.7, 0.35])
+
+    def runs_to_first(name, seed, budget=2000):
+        opt = make(name, 4, 2, seed, budget)
+        n = 0
+        while n < budget:
+            x = opt.ask()
+            rob = np.linalg.norm(x - centre, axis=1) - 0.08
+            for r in rob:
+                n += 1
+                if r < 0:
+                    return n
+            opt.tell(x, rob)
+        return budget
+
+    cma = np.median([runs_to_first("cma", s) for s in range(5)])
+    rnd = np.median([runs_to_first("random", s) for s in range(5)])
+    assert cma * 5 <= rnd
+
+
+@pytest.mark.parametrize(
+    "text, what",
+    [
+        (
+            'scenario = "emergency-brake"\ncontroller = "pid"\nrequirement = "nope"\n[search]\nego_speed = [10, 20]\n',
+            "requirement = 'nope'",
+        ),
+        (
+            SPEC.replace("ego_speed = [15, 30]", "ego_sped = [15, 30]"),
+            "unknown parameter 'ego_sped'",
+        ),
+        (SPEC.replace("ego_speed = [15, 30]", "ego_speed = [30, 15]"), "low < high"),
+        (SPEC.replace("ego_speed = [15, 30]", "ego_speed = [15, 300]"), "ego_speed"),
+        (SPEC.replace("25 m", "25 s"), "units differ"),
+        (SPEC.replace("seed = 3", "seed = [5, 2]"), "seed must be"),
+        ("budget = 0\n" + SPEC, "budget must be"),
+        ("bogus = 1\n" + SPEC, "unknown key 'bogus'"),
+    ],
+)
+def test_bad_specs_are_one_line_exit_2(text, what, tmp_path, capsys):
+    path = tmp_path / "f.toml"
+    path.write_text(text)
+    assert main(["falsify", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("ego: error:") and what in err and err.count("\n") == 1
+    assert not (tmp_path / "out").exists()
+
+
+def test_bad_options_exit_2(tmp_path, capsys):
+    path = tmp_path / "f.toml"
+    path.write_text(SPEC)
+    assert (
+        main(
+            [
+                "falsify",
+                str(path),
+                "--out",
+                str(tmp_path / "o"),
+                "--optimizer",
+                "gradient",
+            ]
+        )
+        == 2
+    )
+    assert "--optimizer" in capsys.readouterr().err
+    one = SPEC.replace("lead_gap = [20, 60]\n", "")
+    with pytest.raises(ConfigError, match="cma needs at least 2"):
+        parse(__import__("tomllib").loads(one), "x").check_optimizer("cma")
+
+
+@pytest.mark.sumo
+def test_falsify_finds_verifies_and_resumes(tmp_path, capsys):
+    path = tmp_path / "f.toml"
+    path.write_text(SPEC)
+    out = tmp_path / "out"
+    code = main(
+        [
+            "falsify",
+            str(path),
+            "--out",
+            str(out),
+            "--jobs",
+            "2",
+            "--budget",
+            "6",
+            "--optimizer",
+            "lhs",
+        ]
+    )
+    assert code == 1  # violations found
+    table = pq.read_table(out / "results.parquet").to_pandas()
+    assert (
+        len(table) == 6
+        and "requirements.far" in table
+        and (table["requirements.far"] < 0).any()
+    )
+    md = (out / "falsified.md").read_text()
+    assert "reproduced by the command" in md and "NOT reproduced" not in md
+    assert "ego run emergency-brake -c pid --seed 3 --set ego_speed=" in md
+    assert (
+        list((out / "runs").glob("*.rrd"))
+        and (out / "convergence.png").stat().st_size > 1000
+    )
+    # the same command again: every point is stored, nothing runs
+    capsys.readouterr()
+    assert (
+        main(
+            [
+                "falsify",
+                str(path),
+                "--out",
+                str(out),
+                "--jobs",
+                "2",
+                "--budget",
+                "6",
+                "--optimizer",
+                "lhs",
+                "--no-verify",
+            ]
+        )
+        == 1
+    )
+    assert "0 runs ran now" in capsys.readouterr().out
+    assert len(pq.read_table(out / "results.parquet")) == 6
+
+
+@pytest.mark.sumo
+def test_until_first_stops_at_the_first_batch_with_a_violation(tmp_path):
+    from ego.parallel.executor import ProcessExecutor
+
+    path = tmp_path / "f.toml"
+    path.write_text(SPEC.replace("lead_gap = [20, 60]", "lead_gap = [20, 24]"))
+    report = falsify(
+        load(path),
+        tmp_path / "o",
+        optimizer="random",
+        budget=20,
+        until="first",
+        verify=False,
+        executor=ProcessExecutor(2),
+    )
+    s = report.searches[0]
+    assert s.first_violation is not None and len(s.evaluations) == 2

@@ -1,0 +1,230 @@
+"""Requirements in signal temporal logic (ego.requirements): parsing with units, rtamt's
+robustness on hand-made traces, and real runs (issue 21, point 1)."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from ego.cli import main
+from ego.params import ConfigError
+from ego.requirements import (
+    DERIVED,
+    RequirementError,
+    evaluate,
+    parse,
+    split,
+    summary_lines,
+)
+from ego.scenarios.base import Event, RunResult
+
+UNITS = {
+    "t": "s",
+    "speed": "m/s",
+    "gap_front": "m",
+    "ttc_front": "s",
+    "lateral_clear": "bool",
+    "aeb_active": "bool",
+    "collision_avoidable": "bool",
+    "collision": "bool",
+}
+
+
+def _result(t, events=(), status="completed", metrics=None, **columns):
+    names = ("t", *columns)
+    trace = np.column_stack([t, *columns.values()])
+    return RunResult(
+        "x", "y", 0, status, dict(metrics or {}), list(events), names, trace
+    )
+
+
+@pytest.mark.parametrize(
+    "formula",
+    [
+        "always (gap_front >= 2.0)",
+        "always (ttc_front >= 1.0 or lateral_clear)",
+        "always (aeb_active implies eventually[0:3] (speed <= 1.0))",
+        "not collision_avoidable",
+        "always (gap_front >= 2 m)",
+        "eventually[0 s:2.5 s] (speed <= 0.5 m/s) -> always (abs(speed - 1 m/s) < 3 m/s)",
+    ],
+)
+def test_the_issues_examples_parse(formula):
+    assert parse(formula, UNITS).rtamt
+
+
+@pytest.mark.parametrize(
+    "formula, message",
+    [
+        (
+            "always (gap_front >= 2 s)",
+            "compares 'gap_front' in m with '2.0' in s (units differ)",
+        ),
+        ("always (gap_front >= ttc_front)", "in m with 'ttc_front' in s"),
+        ("always (gap_front + speed >= 2)", "units differ"),
+        ("always (gap_frnt >= 2)", "unknown signal 'gap_frnt'"),
+        ("always (gap_front >= 2", "ends early"),
+        ("always gap_front", "expected a comparison"),
+        (
+            "always (lateral_clear >= 1)",
+            "lateral_clear is a boolean signal: use it alone",
+        ),
+        ("always (speed >= 1) $", "unexpected character '$'"),
+        ("eventually[3:1] (speed >= 1)", "ends before it starts"),
+        ("", "empty"),
+    ],
+)
+def test_bad_formulas_are_one_line_errors(formula, message):
+    with pytest.raises(RequirementError, match=None) as err:
+        parse(formula, UNITS)
+    assert message in str(err.value) and "\n" not in str(err.value)
+    assert isinstance(err.value, ConfigError)
+
+
+def test_robustness_of_always_is_the_smallest_margin_and_the_first_violation_time():
+    t = np.arange(0.0, 5.0, 0.01)
+    gap = 10.0 - 2.0 * t  # 10 m down to 0.02 m
+    r = _result(t, gap_front=gap)
+    v = evaluate(parse("always (gap_front >= 2 m)", UNITS, "keep"), r, period=0)
+    assert v.robustness == pytest.approx(gap[-1] - 2.0)
+    assert v.violated_at == pytest.approx(
+        4.01
+    )  # the first sample with gap < 2 m (gap = 1.98 m)
+    assert v.unit == "m"
+    # at the 0.1 s period, counted back from the last sample: the end is a sample
+    v10 = evaluate(parse("always (gap_front >= 2 m)", UNITS, "keep"), r)
+    assert v10.robustness == pytest.approx(v.robustness)
+    assert v10.violated_at == pytest.approx(4.09)
+
+
+def test_bounded_eventually_counts_seconds_not_samples():
+    t = np.arange(0.0, 10.0, 0.01)
+    events = [
+        Event(1.0, "aeb", "AEB engages: ..."),
+        Event(9.0, "aeb", "AEB releases (...)"),
+    ]
+    f = parse(
+        "always (aeb_active implies eventually[0:3] (speed <= 1 m/s))",
+        {**UNITS, "aeb_active": "bool"},
+    )
+    fast = _result(
+        t, events, speed=np.where(t >= 3.5, 0.5, 10.0)
+    )  # slow 2.5 s after the AEB
+    slow = _result(t, events, speed=np.where(t >= 4.5, 0.5, 10.0))  # 3.5 s after it
+    assert evaluate(f, fast, period=0).robustness > 0
+    v = evaluate(f, slow, period=0)
+    assert v.robustness < 0 and v.violated_at == pytest.approx(1.0)
+
+
+def test_a_boolean_proposition_is_plus_or_minus_one():
+    t = np.arange(0.0, 2.0, 0.01)
+    hit = [Event(1.5, "collision", "run ends: collision")]
+    r = _result(
+        t,
+        hit,
+        status="collision",
+        metrics={"collision_avoidable": True},
+        gap_front=np.ones_like(t),
+        gap_rear=np.ones_like(t),
+    )
+    assert evaluate(parse("not collision_avoidable", UNITS), r).robustness == -1.0
+    v = evaluate(parse("always (not collision)", UNITS), r, period=0)
+    assert v.robustness == -1.0 and v.violated_at == pytest.approx(1.5)
+    v = evaluate(
+        parse("always (not collision)", UNITS), r
+    )  # every 0.1 s: within one period
+    assert v.robustness == -1.0 and 1.5 <= v.violated_at < 1.6
+    clear = DERIVED["clearance"].fn(r, t)
+    assert clear[0] == 1.0 and clear[-1] == -1.0
+
+
+def test_split_and_summary():
+    assert split("keep: always (gap_front >= 2 m)") == (
+        "keep",
+        "always (gap_front >= 2 m)",
+    )
+    with pytest.raises(RequirementError, match="expected NAME: FORMULA"):
+        split("always (gap_front >= 2 m)")
+    lines = summary_lines(
+        {
+            "pid": [{"requirements.keep": 1.0}, {"requirements.keep": -0.5}],
+            "fuzzy": [{"requirements.keep": 2.0}],
+        }
+    )
+    assert "| pid | 1/2 (-0.5) |" in lines and "| fuzzy | 1/1 (2) |" in lines
+
+
+@pytest.mark.sumo
+def test_a_run_reports_each_requirement_and_its_violation(capsys):
+    code = main(
+        [
+            "run",
+            "emergency-brake",
+            "-c",
+            "pid",
+            "--json",
+            "--require",
+            "far: always (gap_front >= 25 m)",
+        ]
+    )
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0
+    req = out["requirements"]
+    assert set(req) == {
+        "no_avoidable_collision",
+        "no_collision",
+        "gap_or_clear",
+        "aeb_slows",
+        "far",
+    }
+    assert req["no_collision"] == 1.0 and req["far"] < 0
+    assert out["units"]["requirements.far"] == "m"
+    events = [e for e in out["events"] if e["kind"] == "requirement"]
+    assert len(events) == 1 and "far" in events[0]["text"] and events[0]["t"] > 0
+    # the smallest gap, from the trace, is what the robustness says
+    assert req["far"] == pytest.approx(out["min_gap_front"] - 25.0, abs=0.2)
+
+
+@pytest.mark.parametrize(
+    "req, what",
+    [
+        ("x: always (gap_front >= 2 s)", "units differ"),
+        ("x: always (gap_frnt >= 2 m)", "unknown signal"),
+        ("x: always (", "ends early"),
+        ("always (gap_front >= 2 m)", "expected NAME: FORMULA"),
+    ],
+)
+@pytest.mark.parametrize("command", ["run", "compare"])
+def test_bad_requirements_exit_2_before_anything_runs(
+    command, req, what, capsys, tmp_path
+):
+    args = (
+        ["run", "emergency-brake", "-c", "pid", "--record", str(tmp_path / "r.rrd")]
+        if command == "run"
+        else [
+            "compare",
+            "emergency-brake",
+            "--controllers",
+            "pid",
+            "--out",
+            str(tmp_path / "cmp"),
+        ]
+    )
+    assert main(args + ["--require", req]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("ego: error:") and what in err and err.count("\n") == 1
+    assert not list(tmp_path.iterdir())
+
+
+def test_sweep_spec_requirements_are_checked(tmp_path, capsys):
+    spec = tmp_path / "s.toml"
+    spec.write_text(
+        'scenario = "emergency-brake"\ncontrollers = ["pid"]\n[requirements]\n'
+        'bad = "always (gap_front >= 2 s)"\n'
+    )
+    assert main(["sweep", str(spec), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "units differ" in err and err.count("\n") == 1
+    assert not (tmp_path / "out").exists()
+    assert math.isfinite(1.0)
