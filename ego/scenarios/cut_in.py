@@ -16,7 +16,7 @@ from ego.scenarios import metrics as m
 from ego.scenarios.base import Parts, Scenario
 from ego.scenarios.envelope import ReachCriterion
 from ego.scenarios.evasive import MARKERS, METRICS, EvasiveConfig, compare_plots, compose, evasive_metrics
-from ego.scenarios.events import INF
+from ego.scenarios.manoeuvre import FollowInLane
 from ego.scenarios.motorway import COLUMNS, EDGE, LANE_NAMES, PLOTS, ROUTE, MotorwayWorld
 from ego.scenarios.safety import friction_limit
 from ego.scenarios.trace import Marker, Metric
@@ -59,39 +59,6 @@ class CutInConfig(EvasiveConfig):
     @property
     def cut_in_lane(self) -> int:  # the lane the car cuts in from
         return self.ego_lane + (1 if self.cut_in_side == "left" else -1)
-
-
-class FollowInLane:
-    """An ACC-like reference: the speed goes to the front car's speed plus a term that opens the
-    gap to the follow distance, changing at ``brake_decel`` (or 1.2 times what braking needs
-    to stop closing ``follow_gap`` behind it, when that is more); the position integrates it,
-    never more than ``brake_max_lag`` from the ego."""
-
-    action = "brake"
-    ref_s = ref_v = 0.0
-
-    def begin(self, man) -> None:  # at the trigger (an aborted lane change keeps the references)
-        self.ref_s, self.ref_v = man.view.s, man.view.ds
-
-    def start(self, man) -> None:
-        pass
-
-    def reference(self, man) -> tuple[float, float]:
-        c, view = man.config, man.view
-        front = view.sensor.front
-        if front.gap == INF:
-            target = c.ego_speed
-        else:
-            desired = c.follow_gap + c.follow_headway * front.speed
-            target = front.speed + max(-3.0, min(3.0, 0.5 * (front.gap - desired)))
-        rate = max(c.brake_decel, 1.2 * man.braking_need(margin=c.follow_gap)) * c.dt
-        self.ref_v += max(-rate, min(rate, target - self.ref_v))
-        lag = c.brake_max_lag
-        self.ref_s = min(max(self.ref_s + self.ref_v * c.dt, view.s - lag), view.s + lag)
-        return self.ref_s, self.ref_v
-
-    def settled(self, man) -> bool:
-        return man.view.ds <= man.view.sensor.front.speed + 0.1 or man.view.gap_front == INF
 
 
 class CutIn(Scenario):

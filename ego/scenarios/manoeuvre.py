@@ -328,3 +328,36 @@ class EvasiveManoeuvre:
         rule = GapRule(c.accept_gap, c.accept_time)
         lane = self.view.target_lane
         return choose_lane(self.lane_check("left", lane + 1, rule), self.lane_check("right", lane - 1, rule))
+
+
+class FollowInLane:
+    """An in-lane behaviour (cut-in's): an ACC-like reference: the speed goes to the front car's speed plus a term that opens the
+    gap to the follow distance, changing at ``brake_decel`` (or 1.2 times what braking needs
+    to stop closing ``follow_gap`` behind it, when that is more); the position integrates it,
+    never more than ``brake_max_lag`` from the ego."""
+
+    action = "brake"
+    ref_s = ref_v = 0.0
+
+    def begin(self, man) -> None:  # at the trigger (an aborted lane change keeps the references)
+        self.ref_s, self.ref_v = man.view.s, man.view.ds
+
+    def start(self, man) -> None:
+        pass
+
+    def reference(self, man) -> tuple[float, float]:
+        c, view = man.config, man.view
+        front = view.sensor.front
+        if front.gap == INF:
+            target = c.ego_speed
+        else:
+            desired = c.follow_gap + c.follow_headway * front.speed
+            target = front.speed + max(-3.0, min(3.0, 0.5 * (front.gap - desired)))
+        rate = max(c.brake_decel, 1.2 * man.braking_need(margin=c.follow_gap)) * c.dt
+        self.ref_v += max(-rate, min(rate, target - self.ref_v))
+        lag = c.brake_max_lag
+        self.ref_s = min(max(self.ref_s + self.ref_v * c.dt, view.s - lag), view.s + lag)
+        return self.ref_s, self.ref_v
+
+    def settled(self, man) -> bool:
+        return man.view.ds <= man.view.sensor.front.speed + 0.1 or man.view.gap_front == INF
