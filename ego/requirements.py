@@ -550,10 +550,17 @@ DEFAULTS: dict[str, tuple[tuple[str, str], ...]] = {
 }
 
 
-def defaults(scenario: str) -> dict[str, str]:
-    """The scenario's default requirements (name -> formula); none for a scenario not in
-    :data:`DEFAULTS` (one registered by a user)."""
-    return dict(DEFAULTS.get(scenario, ()))
+def defaults(scenario: str, cls: type | None = None) -> dict[str, str]:
+    """The scenario's default requirements (name -> formula): those of its name, else of the
+    nearest built-in scenario its class ``cls`` builds on (a scenario file's are
+    emergency-brake's); none for a scenario of a user's own."""
+    if scenario in DEFAULTS or cls is None:
+        return dict(DEFAULTS.get(scenario, ()))
+    for base in cls.__mro__:
+        name = getattr(base, "name", None)
+        if isinstance(name, str) and name in DEFAULTS:
+            return dict(DEFAULTS[name])
+    return {}
 
 
 # -- resolving and evaluating -----------------------------------------------------------------------
@@ -746,4 +753,13 @@ def with_defaults(
     if not texts:
         return None
     given = dict(split(t) for t in texts)
-    return tuple({**defaults(scenario), **given}.items())
+    cls = None
+    if scenario not in DEFAULTS:  # a scenario file or a user's class: its base's defaults
+        from ego.params import ConfigError
+        from ego.scenarios import scenario_class
+
+        try:
+            cls = scenario_class(scenario)
+        except ConfigError:
+            cls = None  # named wrongly: resolving the run says so
+    return tuple({**defaults(scenario, cls), **given}.items())

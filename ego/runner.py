@@ -262,7 +262,7 @@ def requirements_of(resolved: ResolvedRun, controller: Controller | None = None)
     spec, cls, config = resolved.spec, resolved.scenario_cls, resolved.config
     if spec.requirements == ():
         return ()
-    texts = dict(spec.requirements) if spec.requirements is not None else defaults(spec.scenario)
+    texts = dict(spec.requirements) if spec.requirements is not None else defaults(spec.scenario, resolved.scenario_cls)
     if not texts:
         return ()
     columns = {c.name: c.unit for c in declared_columns(cls, config)}

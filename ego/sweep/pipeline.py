@@ -74,7 +74,8 @@ def execute(task: RunTask) -> RunRow:
         if task.record_failed is not None and result.status not in NOT_FAILED:
             run(resolved.with_outputs(record=task.record_failed))
         row = RunRow.from_result(result, resolved.name, task.keep, task.details)
-        row.error = recording_error
+        if recording_error:  # beside the run's own reason (an FMU's error), not instead of it
+            row.error = f"{row.error}; {recording_error}" if row.error else recording_error
     except Exception as exc:  # noqa: BLE001 - a broken run is a row, never the end of the job
         row = RunRow(resolved.name, resolved.seed, "error", {}, error=f"{type(exc).__name__}: {exc}")
     row.wall_time = time.perf_counter() - t0
