@@ -190,6 +190,25 @@ def check_path_names(
     return path
 
 
+def _place(path: Path, what: str, text: str, suffix_len: int) -> os.stat_result | None:
+    """The checks every output place shares (name lengths with ``suffix_len`` more for a
+    temporary name, symlink loops, places ego never writes) and what is there now: its
+    ``os.stat`` result, or None when nothing is."""
+    _lengths(path, what, text, suffix_len)
+    _loop_check(path, what, text)
+    _not_for_files(_resolve(path, what, text), what, text)
+    try:
+        return os.stat(path)
+    except FileNotFoundError:
+        return None
+    except NotADirectoryError:
+        raise _bad(
+            what, text, f"{_file_ancestor(path)} is a file, not a folder"
+        ) from None
+    except OSError as exc:
+        raise _bad(what, text, exc.strerror or str(exc)) from None
+
+
 def check_file_target(
     path: str | os.PathLike, what: str, text: str | None = None, partial: bool = True
 ) -> Path:
@@ -197,19 +216,7 @@ def check_file_target(
     name first (``partial``); see the module docstring. Returns ``path``."""
     path = Path(path)
     text = str(path) if text is None else text
-    _lengths(path, what, text, PARTIAL_SUFFIX_LEN if partial else 0)
-    _loop_check(path, what, text)
-    _not_for_files(_resolve(path, what, text), what, text)
-    try:
-        st = os.stat(path)
-    except FileNotFoundError:
-        st = None
-    except NotADirectoryError:
-        raise _bad(
-            what, text, f"{_file_ancestor(path)} is a file, not a folder"
-        ) from None
-    except OSError as exc:
-        raise _bad(what, text, exc.strerror or str(exc)) from None
+    st = _place(path, what, text, PARTIAL_SUFFIX_LEN if partial else 0)
     if st is not None:
         if stat.S_ISDIR(st.st_mode):
             raise _bad(what, text, "it is a folder (expected a file)")
@@ -229,19 +236,7 @@ def check_folder_target(
     """``path`` is a folder ego may write into, or may be created as one."""
     path = Path(path)
     text = str(path) if text is None else text
-    _lengths(path, what, text, 0)
-    _loop_check(path, what, text)
-    _not_for_files(_resolve(path, what, text), what, text)
-    try:
-        st = os.stat(path)
-    except FileNotFoundError:
-        st = None
-    except NotADirectoryError:
-        raise _bad(
-            what, text, f"{_file_ancestor(path)} is a file, not a folder"
-        ) from None
-    except OSError as exc:
-        raise _bad(what, text, exc.strerror or str(exc)) from None
+    st = _place(path, what, text, 0)
     if st is not None:
         if not stat.S_ISDIR(st.st_mode):
             raise _bad(what, text, "it is a file (expected a folder)")
