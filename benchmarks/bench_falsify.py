@@ -32,10 +32,7 @@ from ego.falsify import bench  # noqa: E402
 def _jobs(args):
     if args.surrogate:
         return {
-            ("surrogate", o): [
-                bench.SurrogateJob(o, s, args.budget) for s in range(args.reps)
-            ]
-            for o in args.optimizers
+            ("surrogate", o): [bench.SurrogateJob(o, s, args.budget) for s in range(args.reps)] for o in args.optimizers
         }
     return {
         (r, o): [bench.BenchJob(r, o, s, args.budget) for s in range(args.reps)]
@@ -79,18 +76,14 @@ def main(argv=None) -> dict:
     for (req, opt), js in groups.items():
         runs = [results[j]["runs"] for j in js]
         q1, med, q3, found = bench.quartiles(runs, args.budget)
-        _, lhs, _, _ = bench.quartiles(
-            [results[j]["runs"] for j in groups[(req, "lhs")]], args.budget
-        )
+        _, lhs, _, _ = bench.quartiles([results[j]["runs"] for j in groups[(req, "lhs")]], args.budget)
         figures[(req, opt)] = {"runs": runs, "median": med, "ratio_to_lhs": med / lhs}
         fmt = bench.fmt_runs
         print(
             f"{req:<16} {opt:<8} {found:>2}/{len(js):<3} {fmt(med, args.budget):>6}  "
             f"[{fmt(q1, args.budget)}, {fmt(q3, args.budget)}]  {med / lhs:.2f}"
         )
-    plot = args.plot or (
-        str(ROOT / "docs" / "img" / "falsify_convergence.png") if args.docs else None
-    )
+    plot = args.plot or (str(ROOT / "docs" / "img" / "falsify_convergence.png") if args.docs else None)
     if plot:
         write_plot(groups, results, Path(plot), args.budget)
         print(f"wrote {plot}")

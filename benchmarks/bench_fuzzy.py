@@ -52,17 +52,25 @@ def main(argv: list[str] | None = None) -> dict:
 
     t_py, err_py = timed(fast.single2_py)
     t_c, err_c = timed(fast.single2)
-    figures = {"skfuzzy_us": t_sk * 1e6, "python_us": t_py * 1e6, "native_us": t_c * 1e6,
-               "speedup_python": t_sk / t_py, "speedup_native": t_sk / t_c,
-               "max_abs_difference": max(err_py, err_c)}
+    figures = {
+        "skfuzzy_us": t_sk * 1e6,
+        "python_us": t_py * 1e6,
+        "native_us": t_c * 1e6,
+        "speedup_python": t_sk / t_py,
+        "speedup_native": t_sk / t_c,
+        "max_abs_difference": max(err_py, err_c),
+    }
     print(f"report 000 rule base (7x7, 121/601-sample universes), {len(pts)} random points")
     print(f"  scikit-fuzzy ControlSystemSimulation    {figures['skfuzzy_us']:10.1f} us per evaluation")
-    print(f"  FastMamdani, Python (single2_py)        {figures['python_us']:10.2f} us   "
-          f"speed-up {figures['speedup_python']:8.0f} x   (target >= 1000)")
-    print(f"  FastMamdani, C twin (single2)           {figures['native_us']:10.2f} us   "
-          f"speed-up {figures['speedup_native']:8.0f} x")
-    print(f"  largest difference to scikit-fuzzy     {figures['max_abs_difference']:10.2e}   "
-          "(output range 200)")
+    print(
+        f"  FastMamdani, Python (single2_py)        {figures['python_us']:10.2f} us   "
+        f"speed-up {figures['speedup_python']:8.0f} x   (target >= 1000)"
+    )
+    print(
+        f"  FastMamdani, C twin (single2)           {figures['native_us']:10.2f} us   "
+        f"speed-up {figures['speedup_native']:8.0f} x"
+    )
+    print(f"  largest difference to scikit-fuzzy     {figures['max_abs_difference']:10.2e}   (output range 200)")
     return figures
 
 

@@ -81,8 +81,9 @@ def env_replay(env_id: str, overrides: dict, observation: dict, actions: np.ndar
     which the raw loop steps too. Both are measured over the same steps, so a busy machine
     slows both alike."""
     # the demonstration's own scenario: no randomisation
-    env = gym.make(env_id, config={**overrides, "randomize": {}, "observation": observation,
-                                   "action": {"type": "EgoAction"}})
+    env = gym.make(
+        env_id, config={**overrides, "randomize": {}, "observation": observation, "action": {"type": "EgoAction"}}
+    )
     try:
         env.reset(seed=0)
         sc = env.unwrapped.scenario
@@ -137,17 +138,25 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--duration", type=float, default=20.0, help="simulated seconds per run")
     ap.add_argument("--ids", nargs="*", default=list(ego.gym.ENV_IDS))
-    ap.add_argument("--vector-steps", type=int, default=2000,
-                    help="steps of one env and of make_vec(id, 2) for the speed-up (0: skip)")
+    ap.add_argument(
+        "--vector-steps",
+        type=int,
+        default=2000,
+        help="steps of one env and of make_vec(id, 2) for the speed-up (0: skip)",
+    )
     args = ap.parse_args(argv)
     os.environ.setdefault("MPLCONFIGDIR", tempfile.mkdtemp())
     overrides = {"duration": args.duration}
     figures = {}
     timer = _timer_cost()
-    print(f"env step against the raw scenario step, same actions, dt = 0.01 s, {args.duration:g} s "
-          f"runs, best of {args.repeat}")
-    print(f"  {'env id':24} {'steps':>6} {'raw steps/s':>12} {'env steps/s':>12} {'overhead':>9} "
-          f"{'Kinematics steps/s':>19} {'overhead':>9}")
+    print(
+        f"env step against the raw scenario step, same actions, dt = 0.01 s, {args.duration:g} s "
+        f"runs, best of {args.repeat}"
+    )
+    print(
+        f"  {'env id':24} {'steps':>6} {'raw steps/s':>12} {'env steps/s':>12} {'overhead':>9} "
+        f"{'Kinematics steps/s':>19} {'overhead':>9}"
+    )
     for env_id in args.ids:
         scenario = ego.gym.ENV_IDS[env_id]
         controller = DEFAULT_CONTROLLER[scenario_class(scenario).task]
@@ -168,21 +177,30 @@ def main(argv: list[str] | None = None) -> dict:
             if not key:
                 row["raw_steps_per_s"] = n / inner
         figures[env_id] = row
-        print(f"  {env_id:24} {n:6d} {row['raw_steps_per_s']:12.0f} {row['env_steps_per_s']:12.0f} "
-              f"{100 * row['overhead']:8.1f}% {row['kinematics_env_steps_per_s']:19.0f} "
-              f"{100 * row['kinematics_overhead']:8.1f}%")
+        print(
+            f"  {env_id:24} {n:6d} {row['raw_steps_per_s']:12.0f} {row['env_steps_per_s']:12.0f} "
+            f"{100 * row['overhead']:8.1f}% {row['kinematics_env_steps_per_s']:19.0f} "
+            f"{100 * row['kinematics_overhead']:8.1f}%"
+        )
     print("  target: overhead <= 15 % with EgoState")
     if args.vector_steps:
-        print(f"gym.make_vec(id, 2) (one process per env) against one env, {args.vector_steps} steps each, "
-              f"{os.cpu_count()} cores")
-        print(f"  {'env id':24} {'policy_frequency':>16} {'1 env steps/s':>14} {'2 envs steps/s':>15} "
-              f"{'speed-up':>9}")
+        print(
+            f"gym.make_vec(id, 2) (one process per env) against one env, {args.vector_steps} steps each, "
+            f"{os.cpu_count()} cores"
+        )
+        print(f"  {'env id':24} {'policy_frequency':>16} {'1 env steps/s':>14} {'2 envs steps/s':>15} {'speed-up':>9}")
         for env_id in args.ids:
             for pf in (0, 10):
-                one, two = vector_speedup(env_id, args.vector_steps // (10 if pf else 1),
-                                          {**overrides, "policy_frequency": pf})
-                figures[env_id].update({f"one_env_steps_per_s_pf{pf}": one, f"make_vec2_steps_per_s_pf{pf}": two,
-                                        f"vector_speedup_pf{pf}": two / one})
+                one, two = vector_speedup(
+                    env_id, args.vector_steps // (10 if pf else 1), {**overrides, "policy_frequency": pf}
+                )
+                figures[env_id].update(
+                    {
+                        f"one_env_steps_per_s_pf{pf}": one,
+                        f"make_vec2_steps_per_s_pf{pf}": two,
+                        f"vector_speedup_pf{pf}": two / one,
+                    }
+                )
                 print(f"  {env_id:24} {pf:16d} {one:14.0f} {two:15.0f} {two / one:8.2f}x")
         print("  target: >= 1.8x on 2 cores")
     return figures

@@ -57,15 +57,23 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--scenario", default="emergency-brake")
     ap.add_argument("--controller", default="pid")
-    ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                    help="scenario/controller parameter, as for ego run")
+    ap.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="scenario/controller parameter, as for ego run",
+    )
     args = ap.parse_args(argv)
     overrides = dict(item.split("=", 1) for item in args.overrides)
     figures: dict = {"scenario": args.scenario, "controller": args.controller}
     print(f"{args.scenario}, {args.controller}, seed 0, no recording, median of {args.repeat}")
     for backend in BACKENDS:
-        runs = [timed_run(RunSpec(args.scenario, args.controller, 0, overrides, backend=backend))
-                for _ in range(args.repeat)]
+        runs = [
+            timed_run(RunSpec(args.scenario, args.controller, 0, overrides, backend=backend))
+            for _ in range(args.repeat)
+        ]
         loop = statistics.median(r[0] for r in runs)
         traffic = statistics.median(r[1] for r in runs)
         steps, traffic_steps = runs[0][2], runs[0][3]
@@ -78,15 +86,19 @@ def main(argv: list[str] | None = None) -> dict:
             "traffic_share_of_loop": traffic / loop,
         }
         f = figures[backend]
-        print(f"  {backend:<12} {f['steps_per_s']:9.0f} control steps/s   traffic step "
-              f"{f['traffic_step_us']:8.1f} us ({100 * f['traffic_share_of_loop']:.0f} % of the loop; "
-              f"{steps} control, {traffic_steps} traffic steps)")
+        print(
+            f"  {backend:<12} {f['steps_per_s']:9.0f} control steps/s   traffic step "
+            f"{f['traffic_step_us']:8.1f} us ({100 * f['traffic_share_of_loop']:.0f} % of the loop; "
+            f"{steps} control, {traffic_steps} traffic steps)"
+        )
     sumo, he = figures["sumo"], figures["highway-env"]
     figures["sumo_over_highway_env_steps_per_s"] = sumo["steps_per_s"] / he["steps_per_s"]
     figures["highway_env_over_sumo_traffic_step"] = he["traffic_step_us"] / sumo["traffic_step_us"]
-    print(f"  SUMO runs the loop {figures['sumo_over_highway_env_steps_per_s']:.1f} x faster; "
-          f"a highway-env traffic step costs {figures['highway_env_over_sumo_traffic_step']:.1f} x "
-          "a SUMO step")
+    print(
+        f"  SUMO runs the loop {figures['sumo_over_highway_env_steps_per_s']:.1f} x faster; "
+        f"a highway-env traffic step costs {figures['highway_env_over_sumo_traffic_step']:.1f} x "
+        "a SUMO step"
+    )
     return figures
 
 

@@ -110,8 +110,14 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--scenario", default="emergency-brake")
     ap.add_argument("--controller", default="fuzzy")
     ap.add_argument("--no-record", action="store_true")
-    ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                    help="scenario/controller parameter, as for ego run")
+    ap.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="scenario/controller parameter, as for ego run",
+    )
     args = ap.parse_args(argv)
     overrides = dict(item.split("=", 1) for item in args.overrides)
     os.environ.setdefault("XDG_CONFIG_HOME", tempfile.mkdtemp())
@@ -120,8 +126,7 @@ def main(argv: list[str] | None = None) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(args.repeat):
             record = None if args.no_record else str(Path(tmp) / f"run{i}.rrd")
-            spec = RunSpec(args.scenario, args.controller, seed=0, overrides=overrides,
-                           record=record)
+            spec = RunSpec(args.scenario, args.controller, seed=0, overrides=overrides, record=record)
             loop, sim, steps, sumo_steps = timed_loop(spec)
             bare = timed_bare_sumo(spec, sumo_steps)
             loops.append(loop)
@@ -148,23 +153,32 @@ def main(argv: list[str] | None = None) -> dict:
     figures["traffic_log_share_of_loop"] = log_us / figures["loop_us_per_sumo_step"]
     if sensor is not None:
         per_sumo_step = sensor[0] + (steps / sumo_steps - 1) * sensor[1]
-        figures.update(sensor_us_per_look=sensor[0], sensor_us_per_control_step=sensor[1],
-                       sensor_us_per_sumo_step=per_sumo_step,
-                       sensor_share_of_loop=per_sumo_step / figures["loop_us_per_sumo_step"])
-    print(f"{args.scenario}, {args.controller}, recording {'on' if figures['recording'] else 'off'}, "
-          f"dt = 0.01 s, SUMO step 0.1 s, median of {args.repeat}")
+        figures.update(
+            sensor_us_per_look=sensor[0],
+            sensor_us_per_control_step=sensor[1],
+            sensor_us_per_sumo_step=per_sumo_step,
+            sensor_share_of_loop=per_sumo_step / figures["loop_us_per_sumo_step"],
+        )
+    print(
+        f"{args.scenario}, {args.controller}, recording {'on' if figures['recording'] else 'off'}, "
+        f"dt = 0.01 s, SUMO step 0.1 s, median of {args.repeat}"
+    )
     print(f"  simulated {sim:.1f} s ({steps} control steps, {sumo_steps} SUMO steps) in {loop:.3f} s")
     print(f"  real-time factor           {figures['real_time_factor']:8.1f} x   (target >= 100)")
     print(f"  loop per SUMO step         {figures['loop_us_per_sumo_step']:8.1f} us")
     print(f"  bare SUMO per step         {figures['bare_sumo_us_per_step']:8.1f} us")
     print(f"  loop / bare SUMO           {figures['loop_over_bare_sumo']:8.2f}     (target <= 3)")
-    print(f"  traffic log per SUMO step  {log_us:8.1f} us   ({100 * figures['traffic_log_share_of_loop']:.1f} % "
-          f"of the loop: handing a step's vehicles over, filtered in batches)")
+    print(
+        f"  traffic log per SUMO step  {log_us:8.1f} us   ({100 * figures['traffic_log_share_of_loop']:.1f} % "
+        f"of the loop: handing a step's vehicles over, filtered in batches)"
+    )
     if sensor is not None:
-        print(f"  surround sensor per SUMO step {figures['sensor_us_per_sumo_step']:5.1f} us "
-              f"({100 * figures['sensor_share_of_loop']:.0f} % of the loop): a look (context "
-              f"subscription, boxes, search) {sensor[0]:.1f} us + {steps // sumo_steps - 1} x "
-              f"{sensor[1]:.2f} us carrying gaps on")
+        print(
+            f"  surround sensor per SUMO step {figures['sensor_us_per_sumo_step']:5.1f} us "
+            f"({100 * figures['sensor_share_of_loop']:.0f} % of the loop): a look (context "
+            f"subscription, boxes, search) {sensor[0]:.1f} us + {steps // sumo_steps - 1} x "
+            f"{sensor[1]:.2f} us carrying gaps on"
+        )
     return figures
 
 

@@ -29,9 +29,15 @@ from ego.sweep.spec import parse  # noqa: E402
 
 def tasks(n: int, duration: float):
     seeds = max(1, n // 24)
-    spec = parse({"scenario": "emergency-brake", "controllers": ["pid"], "seeds": seeds,
-                  "set": {"duration": duration, "traffic_density": 5.0},
-                  "grid": {"ego_speed": [16, 20, 24, 28, 32, 36], "lead_gap": [20, 30, 45, 60]}})
+    spec = parse(
+        {
+            "scenario": "emergency-brake",
+            "controllers": ["pid"],
+            "seeds": seeds,
+            "set": {"duration": duration, "traffic_density": 5.0},
+            "grid": {"ego_speed": [16, 20, 24, 28, 32, 36], "lead_gap": [20, 30, 45, 60]},
+        }
+    )
     return [task_of(r) for r in list(spec.runs())[:n]]
 
 
@@ -68,7 +74,7 @@ def main(argv=None) -> dict:
         for workers in sorted({1, cpus}):
             ex = make_executor(engine, workers)
             try:
-                timed(ex, work[:2 * workers])  # start the workers
+                timed(ex, work[: 2 * workers])  # start the workers
                 seconds = timed(ex, work)
             finally:
                 ex.close()

@@ -35,8 +35,12 @@ from ego.train.lane_centering import (  # noqa: E402
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--members", type=int, default=180, help="members of the generation")
-    ap.add_argument("--loop-members", type=int, default=None,
-                    help="time the per-member loop on this many members and scale up (default: all)")
+    ap.add_argument(
+        "--loop-members",
+        type=int,
+        default=None,
+        help="time the per-member loop on this many members and scale up (default: all)",
+    )
     ap.add_argument("--no-full", action="store_true", help="skip the full tuning")
     ap.add_argument("--workers", type=int, default=1)
     args = ap.parse_args(argv)
@@ -57,8 +61,13 @@ def main(argv: list[str] | None = None) -> dict:
             simulate_single(g, st, k)
     loop = (time.perf_counter() - t0) * args.members / n_loop
     steps = sum(len(k) for k in kappas)
-    figures = {"members": args.members, "batch_generation_s": batch, "loop_generation_s": loop,
-               "speedup": loop / batch, "drive_steps": steps}
+    figures = {
+        "members": args.members,
+        "batch_generation_s": batch,
+        "loop_generation_s": loop,
+        "speedup": loop / batch,
+        "drive_steps": steps,
+    }
     print(f"one generation of {args.members} members, {len(setups)} drives ({steps} steps each member):")
     print(f"  per-member loop: {loop:7.2f} s" + (f" (timed on {n_loop}, scaled)" if n_loop < args.members else ""))
     print(f"  vectorised batch: {batch:6.2f} s  -> {loop / batch:.0f}x faster")
@@ -68,8 +77,10 @@ def main(argv: list[str] | None = None) -> dict:
             preset = tune(spec, Path(tmp) / "preset.json", log=lambda *_: None)
             full = time.perf_counter() - t0
         figures.update(full_tuning_s=full, generations=preset["generations"], cost=preset["cost"])
-        print(f"full tuning (population {spec.popsize} x 12, {preset['generations']} generations, "
-              f"workers {spec.workers}): {full:.1f} s (target <= 120 s); best cost {preset['cost']:.6f}")
+        print(
+            f"full tuning (population {spec.popsize} x 12, {preset['generations']} generations, "
+            f"workers {spec.workers}): {full:.1f} s (target <= 120 s); best cost {preset['cost']:.6f}"
+        )
     return figures
 
 

@@ -70,14 +70,19 @@ def main(argv: list[str] | None = None) -> dict:
             else:
                 os.environ["XDG_CACHE_HOME"] = old
     figures = {
-        "parse_ms": parse * 1e3, "convert_ms": convert * 1e3, "cached_road_ms": cached * 1e3,
-        "builtin_s": statistics.median(builtin), "file_s": statistics.median(from_file),
+        "parse_ms": parse * 1e3,
+        "convert_ms": convert * 1e3,
+        "cached_road_ms": cached * 1e3,
+        "builtin_s": statistics.median(builtin),
+        "file_s": statistics.median(from_file),
     }
     figures["ratio"] = figures["file_s"] / figures["builtin_s"]
     print(f"emergency-brake with {args.controller}, {args.repeat} runs each, alternating (medians)")
     print(f"  parse emergency_brake.xosc            {figures['parse_ms']:8.2f} ms")
-    print(f"  convert straight3.xodr (netconvert)   {figures['convert_ms']:8.1f} ms   (cached: "
-          f"{figures['cached_road_ms']:.2f} ms)")
+    print(
+        f"  convert straight3.xodr (netconvert)   {figures['convert_ms']:8.1f} ms   (cached: "
+        f"{figures['cached_road_ms']:.2f} ms)"
+    )
     print(f"  built-in run                          {figures['builtin_s']:8.3f} s")
     print(f"  file run                              {figures['file_s']:8.3f} s")
     print(f"  ratio file / built-in                 {figures['ratio']:8.3f}")

@@ -23,8 +23,7 @@ def test_loop_against_bare_sumo(tmp_path, monkeypatch):
     monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path))
     figures = main(["--repeat", "5"])
     assert figures["control_steps"] == 2500
-    figures = main(["--repeat", "3", "--scenario", "platoon", "--controller", "bp-pid-acc",
-                    "--set", "followers=10"])
+    figures = main(["--repeat", "3", "--scenario", "platoon", "--controller", "bp-pid-acc", "--set", "followers=10"])
     assert figures["control_steps"] == 9000
 
 

@@ -66,17 +66,11 @@ def main(argv=None) -> int:
             _say("ego: interrupted")
             status = EXIT_INTERRUPTED
         except SystemExit as exc:  # --help, --version: their text must reach stdout too
-            status = (
-                exc.code
-                if isinstance(exc.code, int)
-                else (0 if exc.code is None else 2)
-            )
+            status = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
         except BrokenPipeError:
             _stdout_gone()
             return 0
-        except (
-            OSError
-        ) as exc:  # a write the checks could not foresee (stdout on a full disk)
+        except OSError as exc:  # a write the checks could not foresee (stdout on a full disk)
             if _received:
                 _say("ego: interrupted")
                 return EXIT_INTERRUPTED
@@ -84,9 +78,7 @@ def main(argv=None) -> int:
             _say(f"ego: error: {_describe(exc)}")
             return EXIT_NOT_COMPLETED
         except Exception:
-            if (
-                _received
-            ):  # an import broken by the signal (numpy turns it into an ImportError)
+            if _received:  # an import broken by the signal (numpy turns it into an ImportError)
                 _say("ego: interrupted")
                 return EXIT_INTERRUPTED
             raise
@@ -112,9 +104,7 @@ def run() -> None:
     """``python -m ego`` and the console script."""
     try:
         status = main()
-    except (
-        KeyboardInterrupt
-    ):  # in the instant between an answer and the signals set aside
+    except KeyboardInterrupt:  # in the instant between an answer and the signals set aside
         status = EXIT_INTERRUPTED
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_IGN)

@@ -63,8 +63,7 @@ class CurvatureRoad:
 
     STEP = 0.5  #: quadrature step (m)
 
-    def __init__(self, pieces: list[Piece], x0: float = 0.0, y0: float = 0.0,
-                 heading0: float = 0.0) -> None:
+    def __init__(self, pieces: list[Piece], x0: float = 0.0, y0: float = 0.0, heading0: float = 0.0) -> None:
         if not pieces:
             raise ValueError("a road needs at least one piece")
         self.pieces = list(pieces)
@@ -86,8 +85,9 @@ class CurvatureRoad:
         dx = (np.cos(th) * _GL_W).sum(axis=1) * half
         dy = (np.sin(th) * _GL_W).sum(axis=1) * half
         self._grid = grid
-        self._xy = np.column_stack([x0 + np.concatenate([[0.0], np.cumsum(dx)]),
-                                    y0 + np.concatenate([[0.0], np.cumsum(dy)])])
+        self._xy = np.column_stack(
+            [x0 + np.concatenate([[0.0], np.cumsum(dx)]), y0 + np.concatenate([[0.0], np.cumsum(dy)])]
+        )
 
     def _per_piece(self, s, fn) -> np.ndarray:
         """``fn(i, piece, u)`` for every value of ``s``, u metres into its piece (clamped to
@@ -135,8 +135,9 @@ REPORT003_EASEMENT = 150.0
 REPORT003_STRAIGHT = 1000.0
 
 
-def report003_road(radius: float = REPORT003_RADIUS, easement: float = REPORT003_EASEMENT,
-                   straight: float = REPORT003_STRAIGHT) -> CurvatureRoad:
+def report003_road(
+    radius: float = REPORT003_RADIUS, easement: float = REPORT003_EASEMENT, straight: float = REPORT003_STRAIGHT
+) -> CurvatureRoad:
     """1000 m straight, a 150 m cosine easement, an arc of radius 500 m, the easement back
     and 1000 m straight, turning left by 90 degrees in all.
 
@@ -147,10 +148,12 @@ def report003_road(radius: float = REPORT003_RADIUS, easement: float = REPORT003
     arc = radius * math.pi / 2 - easement
     if arc <= 0:
         raise ValueError("the easements alone turn more than 90 degrees")
-    return CurvatureRoad([
-        Piece(STRAIGHT, straight),
-        Piece(EASE_IN, easement, radius),
-        Piece(ARC, arc, radius),
-        Piece(EASE_OUT, easement, radius),
-        Piece(STRAIGHT, straight),
-    ])
+    return CurvatureRoad(
+        [
+            Piece(STRAIGHT, straight),
+            Piece(EASE_IN, easement, radius),
+            Piece(ARC, arc, radius),
+            Piece(EASE_OUT, easement, radius),
+            Piece(STRAIGHT, straight),
+        ]
+    )

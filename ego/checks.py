@@ -42,9 +42,9 @@ def whole_number(what: str):
 
     def parse(text: str) -> int:
         if not re.fullmatch(r"[+-]?[0-9]+", text):
-            raise ConfigError(f"bad value for {what}: {text!r} (expected a whole number written "
-                              "with the digits 0-9)")
+            raise ConfigError(f"bad value for {what}: {text!r} (expected a whole number written with the digits 0-9)")
         return int(text)
+
     parse.__name__ = "whole number (digits 0-9)"
     return parse
 
@@ -90,8 +90,10 @@ def check_output_file(text: str | None, what: str, suffix: str) -> Path:
     if path.is_dir():
         raise ConfigError(f"bad {what} {text!r}: it is a folder (expected a file ending in {suffix})")
     if path.exists() and not path.is_file():
-        raise ConfigError(f"bad {what} {text!r}: it is not a regular file (a FIFO, socket or device; "
-                          f"expected a file ending in {suffix})")
+        raise ConfigError(
+            f"bad {what} {text!r}: it is not a regular file (a FIFO, socket or device; "
+            f"expected a file ending in {suffix})"
+        )
     if path.exists() and not os.access(path, os.W_OK):
         raise ConfigError(f"bad {what} {text!r}: the file cannot be written")
     _writable_ancestor(path, what, text)
@@ -113,8 +115,10 @@ def check_not_shipped(path: Path, what: str, text: str) -> None:
     except (OSError, RuntimeError):
         return
     if target == package or package in target.parents:
-        raise ConfigError(f"bad {what} {text!r}: it is inside the ego package ({package}); the files "
-                          "shipped there are replaced only with --install")
+        raise ConfigError(
+            f"bad {what} {text!r}: it is inside the ego package ({package}); the files "
+            "shipped there are replaced only with --install"
+        )
 
 
 def check_output_dir(text: str | None, what: str) -> Path:
@@ -168,15 +172,15 @@ def read_json(text: str | os.PathLike, what: str) -> Any:
     try:
         if path.stat().st_size > MAX_JSON_BYTES:
             raise ValueError(f"larger than {MAX_JSON_BYTES // (1024 * 1024)} MiB")
-        return json.loads(path.read_text(encoding="utf-8"), parse_constant=no_constant,
-                          object_pairs_hook=no_duplicates)
+        return json.loads(path.read_text(encoding="utf-8"), parse_constant=no_constant, object_pairs_hook=no_duplicates)
     except RecursionError:
         raise ConfigError(f"bad {what} {str(text)!r}: nested too deeply") from None
     except UnicodeDecodeError:
         raise ConfigError(f"bad {what} {str(text)!r}: not a text file (expected JSON)") from None
     except json.JSONDecodeError as exc:
-        raise ConfigError(f"bad {what} {str(text)!r}: not valid JSON ({exc.msg} at line {exc.lineno} "
-                          f"column {exc.colno})") from None
+        raise ConfigError(
+            f"bad {what} {str(text)!r}: not valid JSON ({exc.msg} at line {exc.lineno} column {exc.colno})"
+        ) from None
     except ValueError as exc:
         raise ConfigError(f"bad {what} {str(text)!r}: {exc}") from None
     except OSError as exc:

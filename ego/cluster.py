@@ -33,14 +33,10 @@ def _host_port(address: str) -> tuple[str, int] | None:
     if "://" in text:
         scheme, _, text = text.partition("://")
         if scheme != "ray":
-            raise ConfigError(
-                f"bad --address {address!r} (expected host:port, ray://host:port or auto)"
-            )
+            raise ConfigError(f"bad --address {address!r} (expected host:port, ray://host:port or auto)")
     host, sep, port = text.rpartition(":")
     if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
-        raise ConfigError(
-            f"bad --address {address!r} (expected host:port, ray://host:port or auto)"
-        )
+        raise ConfigError(f"bad --address {address!r} (expected host:port, ray://host:port or auto)")
     return host.strip("[]"), int(port)
 
 
@@ -48,9 +44,7 @@ def check_address(address: str) -> None:
     """ConfigError unless something accepts a TCP connection at ``address`` within
     :data:`CONNECT_TIMEOUT` seconds (``auto`` is left to Ray)."""
     if not isinstance(address, str):
-        raise ConfigError(
-            f"bad --address {address!r} (expected host:port, ray://host:port or auto)"
-        )
+        raise ConfigError(f"bad --address {address!r} (expected host:port, ray://host:port or auto)")
     target = _host_port(address)
     if target is None:
         return
@@ -58,18 +52,14 @@ def check_address(address: str) -> None:
         with socket.create_connection(target, timeout=CONNECT_TIMEOUT) as sock:
             speaks_grpc = _answers_http2(sock)
     except socket.gaierror as exc:
-        raise ConfigError(
-            f"cannot join the Ray cluster at {address!r}: unknown host ({exc.strerror})"
-        ) from None
+        raise ConfigError(f"cannot join the Ray cluster at {address!r}: unknown host ({exc.strerror})") from None
     except TimeoutError:
         raise ConfigError(
-            f"cannot join the Ray cluster at {address!r}: no answer within "
-            f"{CONNECT_TIMEOUT:g} s"
+            f"cannot join the Ray cluster at {address!r}: no answer within {CONNECT_TIMEOUT:g} s"
         ) from None
     except OSError as exc:
         raise ConfigError(
-            f"cannot join the Ray cluster at {address!r}: {exc.strerror or exc} "
-            "(is a Ray head running there?)"
+            f"cannot join the Ray cluster at {address!r}: {exc.strerror or exc} (is a Ray head running there?)"
         ) from None
     if not speaks_grpc:
         raise ConfigError(
@@ -111,18 +101,13 @@ def joining(address: str):
         raise
     except (ConnectionError, TimeoutError, RuntimeError, ValueError, OSError) as exc:
         _shutdown_quietly()
-        cause = (
-            str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        )
-        raise ConfigError(
-            f"cannot join the Ray cluster at {address!r}: {cause[:200]}"
-        ) from None
+        cause = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise ConfigError(f"cannot join the Ray cluster at {address!r}: {cause[:200]}") from None
     except Exception as exc:  # noqa: BLE001 - Ray's own exception types vary by version
         _shutdown_quietly()
         cause = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
         raise ConfigError(
-            f"cannot join the Ray cluster at {address!r}: {type(exc).__name__}"
-            + (f": {cause[:200]}" if cause else "")
+            f"cannot join the Ray cluster at {address!r}: {type(exc).__name__}" + (f": {cause[:200]}" if cause else "")
         ) from None
 
 

@@ -110,8 +110,16 @@ def file_label(label: str) -> str:
     return re.sub(r"[^A-Za-z0-9._@=+-]", "_", label)
 
 
-def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict, out: Path,
-         traces: str | None = None, backend: str = "sumo", requirements=None) -> list[RunSpec]:
+def plan(
+    scenario: str,
+    controllers: Sequence[str],
+    seeds: int,
+    overrides: dict,
+    out: Path,
+    traces: str | None = None,
+    backend: str = "sumo",
+    requirements=None,
+) -> list[RunSpec]:
     """Validate names, variants and overrides, and list the runs (before any process starts).
 
     ``controllers`` are labels: a controller's name, or a variant of it with its own
@@ -138,37 +146,61 @@ def plan(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict,
     for label in controllers:
         other = files.setdefault(file_label(label), label)
         if other != label:
-            raise ConfigError(f"bad value for --controllers: {other!r} and {label!r} would share the "
-                              f"file name {file_label(label)!r}")
+            raise ConfigError(
+                f"bad value for --controllers: {other!r} and {label!r} would share the file name {file_label(label)!r}"
+            )
     resolved: list[tuple[str, str, Any]] = []  # one controller with the same values twice is one
     for label, (name, params) in variants.items():
         values = apply_overrides(controller_spec(name, cls.task).params(), params)[0]
         same = next((other for other, n, v in resolved if n == name and v == values), None)
         if same is not None:
-            raise ConfigError(f"bad value for --controllers: {same!r} and {label!r} are the same "
-                              "controller with the same parameters")
+            raise ConfigError(
+                f"bad value for --controllers: {same!r} and {label!r} are the same controller with the same parameters"
+            )
         resolved.append((label, name, values))
     known = parameter_namespace(cls, [name for name, _ in variants.values()])
     unknown = sorted(set(overrides) - set(known))
     if unknown:
-        raise ConfigError(f"unknown parameter {unknown[0]!r} for {scenario} with "
-                          f"{', '.join(controllers)} (see ego list){did_you_mean(unknown[0], known)}")
+        raise ConfigError(
+            f"unknown parameter {unknown[0]!r} for {scenario} with "
+            f"{', '.join(controllers)} (see ego list){did_you_mean(unknown[0], known)}"
+        )
     specs = []
     for label, (name, params) in variants.items():
         mine = {**split_overrides(scenario, name, overrides), **params}  # the variant's own win
         for seed in range(seeds):
             stem = f"{file_label(label)}-seed{seed}"
             trace = str(out / "traces" / f"{stem}.{traces}") if traces else None
-            specs.append(RunSpec(scenario, name, seed, mine, str(out / "runs" / f"{stem}.rrd"), trace=trace,
-                                 background_recording=False, label=label,
-                                 backend=backend, requirements=requirements))
+            specs.append(
+                RunSpec(
+                    scenario,
+                    name,
+                    seed,
+                    mine,
+                    str(out / "runs" / f"{stem}.rrd"),
+                    trace=trace,
+                    background_recording=False,
+                    label=label,
+                    backend=backend,
+                    requirements=requirements,
+                )
+            )
     return specs
 
 
-def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: dict, out: Path,
-            jobs: int | None = None, progress: Callable[[int], Callable[[str, str], None]] | None = Progress,
-            executor: Executor | None = None, traces: str | None = None,
-            backend: str = "sumo", requirements=None) -> list[RunRow]:
+def compare(
+    scenario: str,
+    controllers: Sequence[str],
+    seeds: int,
+    overrides: dict,
+    out: Path,
+    jobs: int | None = None,
+    progress: Callable[[int], Callable[[str, str], None]] | None = Progress,
+    executor: Executor | None = None,
+    traces: str | None = None,
+    backend: str = "sumo",
+    requirements=None,
+) -> list[RunRow]:
     """Run everything, write the outputs, return the rows (in controller, seed order).
     ``controllers`` are labels (:func:`plan`: names or variants); ``traces`` a format of
     :data:`TRACE_FORMATS` to write each run's trace in, or None.
@@ -222,8 +254,7 @@ def compare(scenario: str, controllers: Sequence[str], seeds: int, overrides: di
         def keep(task: RunTask, row: RunRow) -> None:
             done[(row.controller, row.seed)] = row
 
-        drive(executor, [task_of(r, plots) for r in runs], keep,
-              progress(len(runs)) if progress is not None else None)
+        drive(executor, [task_of(r, plots) for r in runs], keep, progress(len(runs)) if progress is not None else None)
         rows = [done.get((s.name, s.seed)) or RunRow(s.name, s.seed, "interrupted", {}) for s in specs]
         remove_partials(out / "runs")  # runs killed mid-way; their workers are gone
         for row, spec in zip(rows, specs):
@@ -248,18 +279,20 @@ def csv_columns(rows: Sequence[RunRow]) -> list[str]:
 def write_csv(rows: Sequence[RunRow], path: Path, columns: Sequence[str] | None = None) -> None:
     """One row per run, one column per (flattened) metric."""
     columns = list(columns or csv_columns(rows))
-    keys = columns[len(RUN_COLUMNS):]
+    keys = columns[len(RUN_COLUMNS) :]
     with atomic_path(path) as tmp, open(tmp, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(columns)
         for r in rows:
-            w.writerow([r.controller, r.seed, r.status, r.error] + ["" if r.metrics.get(k) is None
-                                                                  else r.metrics.get(k) for k in keys])
+            w.writerow(
+                [r.controller, r.seed, r.status, r.error]
+                + ["" if r.metrics.get(k) is None else r.metrics.get(k) for k in keys]
+            )
 
 
 def write_units(columns: Sequence[str], declared: Sequence[Metric], path: Path) -> None:
     """metrics.csv's sidecar: ``metric,unit``, one row per column of metrics.csv, in order."""
-    units = {**dict.fromkeys(RUN_COLUMNS, "-"), **metric_units(declared, columns[len(RUN_COLUMNS):])}
+    units = {**dict.fromkeys(RUN_COLUMNS, "-"), **metric_units(declared, columns[len(RUN_COLUMNS) :])}
     with atomic_path(path) as tmp, open(tmp, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["metric", "unit"])
@@ -271,16 +304,25 @@ def headline_keys(rows: Sequence[RunRow], declared: Sequence[Metric]) -> list[st
     return headline_names(declared, (n for r in rows for n in r.metrics))
 
 
-def write_markdown(scenario: str, rows: Sequence[RunRow], controllers: list[str], path: Path,
-                   declared: Sequence[Metric]) -> None:
+def write_markdown(
+    scenario: str, rows: Sequence[RunRow], controllers: list[str], path: Path, declared: Sequence[Metric]
+) -> None:
     """metrics.md (:func:`ego.results.summary.comparison`)."""
-    plain = [{"controller": r.controller, "seed": r.seed, "status": r.status, "error": r.error,
-              "metrics": r.metrics} for r in rows]
+    plain = [
+        {"controller": r.controller, "seed": r.seed, "status": r.status, "error": r.error, "metrics": r.metrics}
+        for r in rows
+    ]
     write_text(path, summary.comparison(scenario, plain, controllers, declared))
 
 
-def write_plots(scenario: str, rows: Sequence[RunRow], controllers: list[str], out: Path,
-                plots: Sequence, params: dict | None = None) -> None:
+def write_plots(
+    scenario: str,
+    rows: Sequence[RunRow],
+    controllers: list[str],
+    out: Path,
+    plots: Sequence,
+    params: dict | None = None,
+) -> None:
     """One PNG per declared plot some run has the data for (see :mod:`ego.plots`)."""
     from ego.plots import write_all
 

@@ -41,8 +41,7 @@ class LanePolyline:
 
     __slots__ = ("lane_id", "width", "points", "_seg", "_hint", "_single")
 
-    def __init__(self, points: Sequence[tuple[float, float]], width: float = 3.5,
-                 lane_id: str = "") -> None:
+    def __init__(self, points: Sequence[tuple[float, float]], width: float = 3.5, lane_id: str = "") -> None:
         if len(points) < 2:
             raise ValueError("a lane needs at least two points")
         self.lane_id = lane_id
@@ -59,8 +58,7 @@ class LanePolyline:
         s0 = 0.0
         for (x0, y0), (x1, y1) in zip(pts, pts[1:]):
             length = math.hypot(x1 - x0, y1 - y0)
-            raw.append((x0, y0, (x1 - x0) / length, (y1 - y0) / length, length, s0,
-                        math.atan2(y1 - y0, x1 - x0)))
+            raw.append((x0, y0, (x1 - x0) / length, (y1 - y0) / length, length, s0, math.atan2(y1 - y0, x1 - x0)))
             s0 += length
         n = len(raw)
         # tangent heading and discrete curvature at every vertex (ends: the end segment's).
@@ -155,8 +153,12 @@ class LanePolyline:
         i, along, across = self._closest(x, y)
         seg = self._seg[i]
         u = min(max(along, 0.0), seg[4])
-        return (seg[5] + along, across + seg[9] * u * (seg[4] - u) * 0.5,
-                wrap_angle(psi - seg[7] - u / seg[4] * seg[8]), seg[9])
+        return (
+            seg[5] + along,
+            across + seg[9] * u * (seg[4] - u) * 0.5,
+            wrap_angle(psi - seg[7] - u / seg[4] * seg[8]),
+            seg[9],
+        )
 
     def heading_at(self, s: float) -> float:
         """The centre line's (interpolated tangent) heading at arc length ``s`` (rad)."""
@@ -200,8 +202,7 @@ class LanePolyline:
             run = [(seg[5], seg[5] + seg[4], kappa)] if abs(kappa) > min_curvature else []
         if run:
             spans.append(run)
-        return [(r[0][0], r[-1][1], sum(k * (b - a) for a, b, k in r) / (r[-1][1] - r[0][0]))
-                for r in spans]
+        return [(r[0][0], r[-1][1], sum(k * (b - a) for a, b, k in r) / (r[-1][1] - r[0][0])) for r in spans]
 
     def offset_point(self, s: float, d: float) -> tuple[float, float]:
         """World point at arc length ``s`` and lateral offset ``d`` (m), the inverse of

@@ -115,9 +115,11 @@ class FolderLock:
         except OSError:
             holder = os.pread(fd, 64, 0).decode(errors="replace").strip() or "unknown"
             os.close(fd)
-            raise ConfigError(f"bad {self.what} {str(self.folder)!r}: another ego process "
-                              f"(pid {holder}) is writing into it; wait for it or choose another "
-                              "folder") from None
+            raise ConfigError(
+                f"bad {self.what} {str(self.folder)!r}: another ego process "
+                f"(pid {holder}) is writing into it; wait for it or choose another "
+                "folder"
+            ) from None
         try:
             os.ftruncate(fd, 0)
             os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)

@@ -92,8 +92,9 @@ class ParamInfo:
         kind = "a whole number" if self.type is int else "a number"
         lo, hi = self.min, self.max
         if lo is not None and hi is not None:
-            rng = f"from {_fmt(lo)} to {_fmt(hi)}" if not self.min_exclusive else \
-                f"above {_fmt(lo)} and up to {_fmt(hi)}"
+            rng = (
+                f"from {_fmt(lo)} to {_fmt(hi)}" if not self.min_exclusive else f"above {_fmt(lo)} and up to {_fmt(hi)}"
+            )
         elif lo is not None:
             rng = f"above {_fmt(lo)}" if self.min_exclusive else f"of at least {_fmt(lo)}"
         elif hi is not None:
@@ -133,8 +134,9 @@ def _described(cls: type) -> tuple[ParamInfo, ...]:
         if isinstance(t, str):  # postponed annotations
             t = {"float": float, "int": int, "bool": bool, "str": str}[t]
         m = f.metadata
-        out.append(ParamInfo(f.name, t, f.default, m["unit"], m["doc"], m["min"], m["max"],
-                             m["choices"], m["min_exclusive"]))
+        out.append(
+            ParamInfo(f.name, t, f.default, m["unit"], m["doc"], m["min"], m["max"], m["choices"], m["min_exclusive"])
+        )
     return tuple(out)
 
 
@@ -206,8 +208,9 @@ def _type_ok(info: ParamInfo, value: Any) -> bool:
 def check_value(info: ParamInfo, value: Any) -> None:
     """Raise :class:`ConfigError` unless ``value`` is allowed for ``info`` (type, then range)."""
     if not _type_ok(info, value):
-        raise ConfigError(f"bad value for {info.name}: {shown(value, exact=True)} (expected {info.allowed()}, "
-                          f"not {_kind(value)})")
+        raise ConfigError(
+            f"bad value for {info.name}: {shown(value, exact=True)} (expected {info.allowed()}, not {_kind(value)})"
+        )
     if info.choices is not None:
         if value not in info.choices:
             raise ConfigError(_bad_value(info, value) + did_you_mean(value, info.choices))

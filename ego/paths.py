@@ -89,9 +89,7 @@ def _resolve(path: Path, what: str, text: str) -> Path:
         OSError,
         RuntimeError,
     ) as exc:  # a symlink loop (Python < 3.13 raises RuntimeError)
-        raise _bad(
-            what, text, f"cannot resolve it ({getattr(exc, 'strerror', None) or exc})"
-        ) from None
+        raise _bad(what, text, f"cannot resolve it ({getattr(exc, 'strerror', None) or exc})") from None
 
 
 def _loop_check(path: Path, what: str, text: str) -> None:
@@ -106,9 +104,7 @@ def _loop_check(path: Path, what: str, text: str) -> None:
             if exc.errno in (errno.ENOENT, errno.ENOTDIR):
                 return
             if exc.errno == errno.ENAMETOOLONG:
-                raise _bad(
-                    what, text, "the name is too long for the filesystem"
-                ) from None
+                raise _bad(what, text, "the name is too long for the filesystem") from None
             raise _bad(what, text, f"{part}: {exc.strerror}") from None
 
 
@@ -128,8 +124,7 @@ def _lengths(path: Path, what: str, text: str, extra: int) -> None:
             raise _bad(
                 what,
                 text,
-                f"the folder name {part[:40]!r}... is longer than the filesystem "
-                f"allows ({name_max} bytes)",
+                f"the folder name {part[:40]!r}... is longer than the filesystem allows ({name_max} bytes)",
             )
     last = len(os.fsencode(Path(absolute).name)) + extra
     if last > name_max:
@@ -177,9 +172,7 @@ def _space_and_writable(path: Path, what: str, text: str) -> None:
         )
 
 
-def check_path_names(
-    path: str | os.PathLike, what: str, text: str | None = None, partial: bool = True
-) -> Path:
+def check_path_names(path: str | os.PathLike, what: str, text: str | None = None, partial: bool = True) -> Path:
     """Only the name of ``path``: lengths (with the temporary suffix if ``partial``), symlink
     loops, ``/proc`` and ``/sys``. Safe to call before anything else looks at the path."""
     path = Path(path)
@@ -202,16 +195,12 @@ def _place(path: Path, what: str, text: str, suffix_len: int) -> os.stat_result 
     except FileNotFoundError:
         return None
     except NotADirectoryError:
-        raise _bad(
-            what, text, f"{_file_ancestor(path)} is a file, not a folder"
-        ) from None
+        raise _bad(what, text, f"{_file_ancestor(path)} is a file, not a folder") from None
     except OSError as exc:
         raise _bad(what, text, exc.strerror or str(exc)) from None
 
 
-def check_file_target(
-    path: str | os.PathLike, what: str, text: str | None = None, partial: bool = True
-) -> Path:
+def check_file_target(path: str | os.PathLike, what: str, text: str | None = None, partial: bool = True) -> Path:
     """``path`` may be created (or replaced) as a regular file, written under its temporary
     name first (``partial``); see the module docstring. Returns ``path``."""
     path = Path(path)
@@ -221,18 +210,14 @@ def check_file_target(
         if stat.S_ISDIR(st.st_mode):
             raise _bad(what, text, "it is a folder (expected a file)")
         if not stat.S_ISREG(st.st_mode):
-            raise _bad(
-                what, text, "it is not a regular file (a FIFO, socket or device)"
-            )
+            raise _bad(what, text, "it is not a regular file (a FIFO, socket or device)")
         if not os.access(path, os.W_OK):
             raise _bad(what, text, "the file cannot be written")
     _space_and_writable(path, what, text)
     return path
 
 
-def check_folder_target(
-    path: str | os.PathLike, what: str, text: str | None = None
-) -> Path:
+def check_folder_target(path: str | os.PathLike, what: str, text: str | None = None) -> Path:
     """``path`` is a folder ego may write into, or may be created as one."""
     path = Path(path)
     text = str(path) if text is None else text
@@ -267,9 +252,7 @@ def check_folder_contents(
     folder = Path(folder)
     text = str(folder) if text is None else text
     prefix = f"bad {what} {text!r}: "
-    for name, check in [(n, check_folder_target) for n in folders] + [
-        (n, check_file_target) for n in files
-    ]:
+    for name, check in [(n, check_folder_target) for n in folders] + [(n, check_file_target) for n in files]:
         try:
             check(folder / name, what, text)
         except ConfigError as exc:
@@ -281,8 +264,9 @@ def trace_files(path: str | os.PathLike[str], traffic: bool = True) -> list[Path
     """The files :func:`ego.results.export.write_trace` writes for ``path`` (``traffic``: the run has a traffic log)."""
     path = Path(path)
     if path.suffix == ".csv":
-        return [path, path.with_name(f"{path.stem}.units.csv")] + \
-            ([path.with_name(f"{path.stem}.traffic.csv")] if traffic else [])
+        return [path, path.with_name(f"{path.stem}.units.csv")] + (
+            [path.with_name(f"{path.stem}.traffic.csv")] if traffic else []
+        )
     if path.suffix == ".parquet":
         return [path] + ([path.with_name(f"{path.stem}.traffic.parquet")] if traffic else [])
     return [path]
@@ -293,9 +277,7 @@ def check_run_outputs(spec) -> None:
     with the sidecar files beside it (``x.units.csv`` beside ``--trace x.csv``), its video -
     free and writable, before the run starts."""
     if spec.record is not None:
-        check_file_target(
-            os.fspath(spec.record), "--record path", os.fspath(spec.record)
-        )
+        check_file_target(os.fspath(spec.record), "--record path", os.fspath(spec.record))
     if spec.trace is not None:
         for path in trace_files(spec.trace):
             text = os.fspath(spec.trace)
@@ -306,9 +288,7 @@ def check_run_outputs(spec) -> None:
                     raise
                 prefix = f"bad --trace path {text!r}: "
                 why = str(exc).removeprefix(prefix)
-                raise ConfigError(
-                    f"{prefix}{path} (written beside it): {why}"
-                ) from None
+                raise ConfigError(f"{prefix}{path} (written beside it): {why}") from None
     if spec.video is not None:
         check_file_target(os.fspath(spec.video), "--video path", os.fspath(spec.video))
 

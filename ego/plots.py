@@ -57,8 +57,9 @@ def save(fig, path: Path) -> Path:
     return path
 
 
-def write_all(scenario: str, plots: Sequence, rows: Sequence, controllers: Sequence[str], out: Path,
-              params: Mapping | None = None) -> list[Path]:
+def write_all(
+    scenario: str, plots: Sequence, rows: Sequence, controllers: Sequence[str], out: Path, params: Mapping | None = None
+) -> list[Path]:
     """Every declared plot some run has the data for, into ``out``; returns the files."""
     written = []
     for plot in plots:
@@ -116,20 +117,22 @@ def time_figure(scenario: str, plot: Plot, runs: Sequence, controllers: Sequence
     runs = [r for r in runs if plot.column in r.traces]  # with lines, ``column`` is the first
     if not runs:
         return None
-    end = max([float(r.traces["t"][-1]) for r in runs if len(r.traces["t"])]
-              + [ev.t for r in runs for ev in r.events if any(ev.kind == m.kind for m in plot.markers)])
+    end = max(
+        [float(r.traces["t"][-1]) for r in runs if len(r.traces["t"])]
+        + [ev.t for r in runs for ev in r.events if any(ev.kind == m.kind for m in plot.markers)]
+    )
     controllers = [c for c in controllers if any(r.controller == c for r in runs)]
     panels = controllers if plot.lines else [None]
-    fig, axes = plt.subplots(len(panels), 1, figsize=(9.5, 1.2 + 3.0 * len(panels)), dpi=DPI,
-                             sharex=True, sharey=True, squeeze=False)
+    fig, axes = plt.subplots(
+        len(panels), 1, figsize=(9.5, 1.2 + 3.0 * len(panels)), dpi=DPI, sharex=True, sharey=True, squeeze=False
+    )
     colours = _colours(len(plot.lines) if plot.lines else len(controllers))
     unit = runs[0].units.get(plot.column, "")
     for ax, panel in zip(axes[:, 0], panels):
         mine = [r for r in runs if panel is None or r.controller == panel]
         handles = []
         if plot.band is not None:
-            handles.append(ax.axhspan(plot.band.lo, plot.band.hi, color="0.6", alpha=0.18, lw=0,
-                                      label=plot.band.label))
+            handles.append(ax.axhspan(plot.band.lo, plot.band.hi, color="0.6", alpha=0.18, lw=0, label=plot.band.label))
         constants = [ref for ref in plot.refs if not ref.column]
         for ref, (colour, style) in zip(constants, CONSTANT_STYLES):
             handles.append(ax.axhline(ref.value, color=colour, ls=style, lw=1.0, label=ref.label))
@@ -138,8 +141,9 @@ def time_figure(scenario: str, plot: Plot, runs: Sequence, controllers: Sequence
                 line = None
                 for r in mine:
                     if column in r.traces:
-                        line, = ax.plot(r.traces["t"], _finite(r.traces[column]), color=colour,
-                                        lw=_width(len(mine)), alpha=0.85)
+                        (line,) = ax.plot(
+                            r.traces["t"], _finite(r.traces[column]), color=colour, lw=_width(len(mine)), alpha=0.85
+                        )
                 if line is not None:
                     line.set_label(legend)
                     handles.append(line)
@@ -149,8 +153,9 @@ def time_figure(scenario: str, plot: Plot, runs: Sequence, controllers: Sequence
                 own = [r for r in mine if r.controller == name]
                 line = None
                 for r in own:
-                    line, = ax.plot(r.traces["t"], _finite(r.traces[plot.column]), color=colour,
-                                    lw=_width(len(own)), alpha=0.85)
+                    (line,) = ax.plot(
+                        r.traces["t"], _finite(r.traces[plot.column]), color=colour, lw=_width(len(own)), alpha=0.85
+                    )
                 line.set_label(f"{name} ({_status_text(own)})")
                 handles.append(line)
         handles += _column_refs(ax, plot, mine, colours if not plot.lines else None, controllers)
@@ -178,10 +183,11 @@ def _column_refs(ax, plot: Plot, runs: Sequence, colours, controllers) -> list:
         for r in runs:
             if ref.column in r.traces:
                 colour = colours[controllers.index(r.controller)] if colours else "k"
-                line, = ax.plot(r.traces["t"], _finite(r.traces[ref.column]), color=colour, ls="--",
-                                lw=0.9, alpha=0.8)
+                (line,) = ax.plot(
+                    r.traces["t"], _finite(r.traces[ref.column]), color=colour, ls="--", lw=0.9, alpha=0.8
+                )
         if line is not None:
-            proxy, = ax.plot([], [], color="k", ls="--", lw=0.9, label=ref.label)
+            (proxy,) = ax.plot([], [], color="k", ls="--", lw=0.9, label=ref.label)
             handles.append(proxy)
     return handles
 
@@ -200,15 +206,15 @@ def _markers(ax, plot: Plot, runs: Sequence, controllers, colours) -> list:
                     continue
                 seen = True
                 ax.axvline(ev.t, color=colour, ls=":", lw=0.8, alpha=0.6)
-                ax.plot([ev.t], [y], marker=marker.symbol, color=colour, ms=6, transform=transform,
-                        ls="")
+                ax.plot([ev.t], [y], marker=marker.symbol, color=colour, ms=6, transform=transform, ls="")
         if seen:
-            proxy, = ax.plot([], [], marker=marker.symbol, color="0.3", ls=":", lw=0.8, label=marker.label)
+            (proxy,) = ax.plot([], [], marker=marker.symbol, color="0.3", ls=":", lw=0.8, label=marker.label)
             handles.append(proxy)
     return handles
 
 
 # --- top-down view --------------------------------------------------------------------------
+
 
 def _lane_edges(width: float, points) -> tuple[np.ndarray, np.ndarray]:
     """The left and right edges of a lane from its centre line (m)."""
@@ -220,9 +226,15 @@ def _lane_edges(width: float, points) -> tuple[np.ndarray, np.ndarray]:
 
 def _box(ax, x, y, heading, length, width, **style) -> None:
     c, s = math.cos(heading), math.sin(heading)
-    corners = np.array([(0.5 * length, 0.5 * width), (-0.5 * length, 0.5 * width),
-                        (-0.5 * length, -0.5 * width), (0.5 * length, -0.5 * width),
-                        (0.5 * length, 0.5 * width)])
+    corners = np.array(
+        [
+            (0.5 * length, 0.5 * width),
+            (-0.5 * length, 0.5 * width),
+            (-0.5 * length, -0.5 * width),
+            (0.5 * length, -0.5 * width),
+            (0.5 * length, 0.5 * width),
+        ]
+    )
     ax.plot(x + corners[:, 0] * c - corners[:, 1] * s, y + corners[:, 0] * s + corners[:, 1] * c, **style)
 
 
@@ -244,8 +256,7 @@ def trajectory_figure(scenario: str, decl: Trajectory, runs: Sequence):
         _trajectory_panel(ax, decl, r, colours[controllers.index(r.controller)])
     axes[-1, 0].set_xlabel("x [m]")
     more = f" (first {len(shown)} of {len(runs)} runs)" if len(shown) < len(runs) else ""
-    fig.suptitle(f"{scenario}: top-down paths, the ego and every vehicle within 50 m of it{more}",
-                 fontsize=10)
+    fig.suptitle(f"{scenario}: top-down paths, the ego and every vehicle within 50 m of it{more}", fontsize=10)
     fig.tight_layout()
     return fig
 
@@ -269,8 +280,11 @@ def _trajectory_panel(ax, decl: Trajectory, r, colour) -> None:
             k = int(np.nanargmin(g))
             closest = (float(t[k]), float(g[k]), k)
     # (time, line style of the outlines drawn then, what happened)
-    moments = [(m, style, what) for m, style, what in ((trig, "--", "trigger"),
-               (closest[0] if closest else None, "-", "closest approach")) if m is not None]
+    moments = [
+        (m, style, what)
+        for m, style, what in ((trig, "--", "trigger"), (closest[0] if closest else None, "-", "closest approach"))
+        if m is not None
+    ]
     if log is not None and len(log):
         steps = np.diff(np.unique(log.t))
         # a vehicle's outline is drawn at its logged pose nearest to the moment, one SUMO step off at most
@@ -281,14 +295,14 @@ def _trajectory_panel(ax, decl: Trajectory, r, colour) -> None:
             vx, vy = log.x[rows], log.y[rows]
             col = cmap((4 * i + i // 5) % 20)  # a new hue for each of the first five
             ax.plot(vx, vy, color=col, lw=1.0, alpha=0.8)
-            ax.annotate(vid, (vx[0], vy[0]), fontsize=6, color=col, xytext=(0, 3),
-                        textcoords="offset points")
+            ax.annotate(vid, (vx[0], vy[0]), fontsize=6, color=col, xytext=(0, 3), textcoords="offset points")
             lo_y, hi_y = min(lo_y, float(vy.min())), max(hi_y, float(vy.max()))
             for when, style, _ in moments:  # its outline at the trigger and at the closest approach
                 j = rows[np.argmin(np.abs(log.t[rows] - when))]
                 if abs(log.t[j] - when) <= reach:
-                    _box(ax, log.x[j], log.y[j], log.heading[j], log.length[j], log.width[j],
-                         color=col, lw=1.0, ls=style)
+                    _box(
+                        ax, log.x[j], log.y[j], log.heading[j], log.length[j], log.width[j], color=col, lw=1.0, ls=style
+                    )
     ax.plot(ex, ey, color=colour, lw=1.6, label=f"ego ({r.controller})")
     if decl.ego_box is not None:
         length, width, ahead = decl.ego_box
@@ -296,8 +310,17 @@ def _trajectory_panel(ax, decl: Trajectory, r, colour) -> None:
             k = _at(t, when)
             k0, k1 = max(k - 1, 0), min(k + 1, len(t) - 1)
             heading = math.atan2(ey[k1] - ey[k0], ex[k1] - ex[k0]) if k1 > k0 else 0.0
-            _box(ax, ex[k] + ahead * math.cos(heading), ey[k] + ahead * math.sin(heading), heading,
-                 length, width, color=colour, lw=1.4, ls=style)
+            _box(
+                ax,
+                ex[k] + ahead * math.cos(heading),
+                ey[k] + ahead * math.sin(heading),
+                heading,
+                length,
+                width,
+                color=colour,
+                lw=1.4,
+                ls=style,
+            )
     for _, style, what in moments:
         ax.plot([], [], color="0.3", ls=style, lw=1.0, label=f"outlines at the {what}")
     if trig is not None:
@@ -305,11 +328,26 @@ def _trajectory_panel(ax, decl: Trajectory, r, colour) -> None:
         ax.plot(ex[k], ey[k], marker="^", color="k", ms=8, ls="", label=f"trigger at {trig:.2f} s")
     if closest is not None:
         when, gap, k = closest
-        ax.plot(ex[k], ey[k], marker="o", mfc="none", mec="r", ms=10, mew=1.5, ls="",
-                label=f"closest approach at {when:.2f} s")
-        ax.annotate(f"gap {gap:.2f} m\nat {when:.2f} s", (ex[k], ey[k]), xytext=(10, 12),
-                    textcoords="offset points", fontsize=8, color="r",
-                    arrowprops={"arrowstyle": "-", "color": "r", "lw": 0.8})
+        ax.plot(
+            ex[k],
+            ey[k],
+            marker="o",
+            mfc="none",
+            mec="r",
+            ms=10,
+            mew=1.5,
+            ls="",
+            label=f"closest approach at {when:.2f} s",
+        )
+        ax.annotate(
+            f"gap {gap:.2f} m\nat {when:.2f} s",
+            (ex[k], ey[k]),
+            xytext=(10, 12),
+            textcoords="offset points",
+            fontsize=8,
+            color="r",
+            arrowprops={"arrowstyle": "-", "color": "r", "lw": 0.8},
+        )
     ax.set_xlim(lo_x, hi_x)
     ax.set_ylim(lo_y - 4.0, hi_y + 4.0)
     ax.set_ylabel("y [m]")
@@ -319,6 +357,7 @@ def _trajectory_panel(ax, decl: Trajectory, r, colour) -> None:
 
 
 # --- string stability ------------------------------------------------------------------------
+
 
 def pid_gains(params, traces: Mapping, decl: FrequencyResponse) -> tuple[float, float, float, float] | None:
     """(kp, ki, kd, delay) of a controller for the linear theory: its parameters ``kp``,
@@ -336,8 +375,9 @@ def pid_gains(params, traces: Mapping, decl: FrequencyResponse) -> tuple[float, 
     return (*means, 0.5 * period)
 
 
-def measured_gains(t: np.ndarray, up: np.ndarray, down: np.ndarray,
-                   share: float = 0.1) -> tuple[np.ndarray, np.ndarray]:
+def measured_gains(
+    t: np.ndarray, up: np.ndarray, down: np.ndarray, share: float = 0.1
+) -> tuple[np.ndarray, np.ndarray]:
     """(omega rad/s, |V_down / V_up|) at the frequencies where the upstream speed has at
     least ``share`` of its strongest component: the ratio of the two speeds' spectra (an
     empirical transfer function estimate, Hann window, mean removed)."""
@@ -379,32 +419,54 @@ def frequency_figure(scenario: str, decl: FrequencyResponse, runs: Sequence, par
                 if len(w):
                     span = [min(span[0], w.min()), max(span[1], w.max())]
                 if decl.omega is not None:
-                    g1 = ss.sine_gain(t[keep], r.traces[decl.speeds[k]][keep],
-                                      r.traces[decl.speeds[k + 1]][keep], decl.omega)
+                    g1 = ss.sine_gain(
+                        t[keep], r.traces[decl.speeds[k]][keep], r.traces[decl.speeds[k + 1]][keep], decl.omega
+                    )
                     if g1 is not None:
                         ax.plot([decl.omega], [g1], marker="*", ms=13, color=colour, mec="k", ls="")
         gains = pid_gains(params.get(name), own[0].traces, decl)
         if gains is not None:
             kp, ki, kd, delay = gains
             h = np.abs(ss.pid_transfer(omegas, kp, ki, kd, decl.headway, decl.lag, delay))
-            ax.plot(omegas, h, color=colour, lw=1.8,
-                    label=f"{name}: theory (kp {kp:.3g}, ki {ki:.3g}, kd {kd:.3g}), peak {h.max():.3f}")
-        ax.plot([], [], ls="", marker="o", color=colour, label=f"{name}: measured ({len(own)} run{'s' if len(own) > 1 else ''})")
+            ax.plot(
+                omegas,
+                h,
+                color=colour,
+                lw=1.8,
+                label=f"{name}: theory (kp {kp:.3g}, ki {ki:.3g}, kd {kd:.3g}), peak {h.max():.3f}",
+            )
+        ax.plot(
+            [],
+            [],
+            ls="",
+            marker="o",
+            color=colour,
+            label=f"{name}: measured ({len(own)} run{'s' if len(own) > 1 else ''})",
+        )
     ax.axhline(1.0, color="k", ls="--", lw=1.0, label="|H| = 1: string stability limit")
     for k in range(len(decl.speeds) - 1):
-        ax.plot([], [], ls="", marker="os^Dv<>p*h"[k % 10], color="0.4",
-                label=f"{decl.names[k]}->{decl.names[k + 1]}")
+        ax.plot([], [], ls="", marker="os^Dv<>p*h"[k % 10], color="0.4", label=f"{decl.names[k]}->{decl.names[k + 1]}")
     if decl.omega is not None:
-        ax.plot([], [], ls="", marker="*", ms=11, color="0.4", mec="k",
-                label=f"gain at the leader's sine ({decl.omega:g} rad/s)")
+        ax.plot(
+            [],
+            [],
+            ls="",
+            marker="*",
+            ms=11,
+            color="0.4",
+            mec="k",
+            label=f"gain at the leader's sine ({decl.omega:g} rad/s)",
+        )
     ax.set_xscale("log")
     if span[1] > 0:
         ax.set_xlim(max(1e-2, min(0.05, 0.5 * span[0])), min(10.0, max(3.0, 2.0 * span[1])))
     ax.set_ylim(0.0, 2.0)
     ax.set_xlabel("angular frequency w [rad/s]")
     ax.set_ylabel("|H(jw)| = |V_i / V_(i-1)|")
-    ax.set_title(f"{scenario}: string stability, headway {decl.headway:g} s, lag {decl.lag:g} s - "
-                 f"{_seeds_text(runs)}", fontsize=9)
+    ax.set_title(
+        f"{scenario}: string stability, headway {decl.headway:g} s, lag {decl.lag:g} s - {_seeds_text(runs)}",
+        fontsize=9,
+    )
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="upper right", fontsize=7)
     fig.tight_layout()

@@ -44,9 +44,7 @@ def _table() -> dict[int, tuple[int, int]]:
     return out
 
 
-def descendants(
-    root: int, table: dict[int, tuple[int, int]] | None = None
-) -> dict[int, int]:
+def descendants(root: int, table: dict[int, tuple[int, int]] | None = None) -> dict[int, int]:
     """pid -> start time of every descendant of ``root``."""
     table = _table() if table is None else table
     children: dict[int, list[int]] = {}
@@ -110,8 +108,6 @@ def start_reaper(pid: int | None = None) -> subprocess.Popen | None:
 
 
 if __name__ == "__main__":
-    signal.signal(
-        signal.SIGINT, signal.SIG_IGN
-    )  # a Ctrl-C to the terminal is the watched process's
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C to the terminal is the watched process's
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
     watch(int(sys.argv[1]))

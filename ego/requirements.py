@@ -65,9 +65,7 @@ def _collision(result, t: np.ndarray, scenario=None) -> np.ndarray:
     when = _status_time(result, "collision") if result.status == "collision" else None
     if when is None or not len(t):
         return np.zeros(len(t), bool)
-    return (
-        t >= min(when, t[-1]) - 1e-9
-    )  # the run ends at the collision: its last sample at least
+    return t >= min(when, t[-1]) - 1e-9  # the run ends at the collision: its last sample at least
 
 
 def _avoidable_collision(result, t: np.ndarray, scenario=None) -> np.ndarray:
@@ -157,8 +155,7 @@ DERIVED = {
         Derived(
             "avoidable_collision",
             BOOL,
-            "true from the ego's collision on when that collision was "
-            "avoidable (collision_avoidable)",
+            "true from the ego's collision on when that collision was avoidable (collision_avoidable)",
             ("metric:collision_avoidable",),
             _avoidable_collision,
         ),
@@ -172,8 +169,7 @@ DERIVED = {
         Derived(
             "lateral_clear",
             BOOL,
-            "the ego's outline has left its start lane (|lane_offset| >= half a "
-            "lane + half the ego's width)",
+            "the ego's outline has left its start lane (|lane_offset| >= half a lane + half the ego's width)",
             ("lane_offset",),
             _lateral_clear,
         ),
@@ -253,9 +249,7 @@ class _Parser:
     def take(self, expected: str | None = None) -> str:
         tok = self.peek()
         if tok is None:
-            raise self.error(
-                f"ends early (expected {expected!r})" if expected else "ends early"
-            )
+            raise self.error(f"ends early (expected {expected!r})" if expected else "ends early")
         if expected is not None and tok != expected:
             raise self.error(f"expected {expected!r}, found {tok!r}")
         self.i += 1
@@ -327,12 +321,7 @@ class _Parser:
             inner = self.formula_()
             self.take(")")
             return f"({inner})"
-        if (
-            tok is not None
-            and tok not in _KEYWORDS
-            and _is_name(tok)
-            and self.units.get(tok) == BOOL
-        ):
+        if tok is not None and tok not in _KEYWORDS and _is_name(tok) and self.units.get(tok) == BOOL:
             nxt = self.peek(1)
             if nxt not in _CMP:
                 self.take()
@@ -373,13 +362,9 @@ class _Parser:
         right, ru = self.arith()
         unit = _join(lu, ru)
         if unit is False:
-            raise self.error(
-                f"compares {left!r} in {lu} with {right!r} in {ru} (units differ)"
-            )
+            raise self.error(f"compares {left!r} in {lu} with {right!r} in {ru} (units differ)")
         if unit == BOOL:
-            raise self.error(
-                f"compares booleans ({left} {op} {right}): use the signal alone, or not"
-            )
+            raise self.error(f"compares booleans ({left} {op} {right}): use the signal alone, or not")
         self.cmp_units.add(unit or "-")
         return f"({left} {op} {right})"
 
@@ -390,9 +375,7 @@ class _Parser:
             rt, ru = self.term()
             joined = _join(unit, ru)
             if joined is False:
-                raise self.error(
-                    f"{text!r} in {unit} {op} {rt!r} in {ru} (units differ)"
-                )
+                raise self.error(f"{text!r} in {unit} {op} {rt!r} in {ru} (units differ)")
             text, unit = f"{text} {op} {rt}", joined
         return text, unit
 
@@ -428,13 +411,9 @@ class _Parser:
             raise self.error(f"expected a signal or a number, found {tok!r}")
         if tok not in self.units:
             known = sorted(self.units)
-            raise self.error(
-                f"unknown signal {tok!r} (known: {', '.join(known)}){did_you_mean(tok, known)}"
-            )
+            raise self.error(f"unknown signal {tok!r} (known: {', '.join(known)}){did_you_mean(tok, known)}")
         if self.units[tok] == BOOL:
-            raise self.error(
-                f"{tok} is a boolean signal: use it alone as a proposition (e.g. not {tok})"
-            )
+            raise self.error(f"{tok} is a boolean signal: use it alone as a proposition (e.g. not {tok})")
         self.used[tok] = None
         return tok, self.units[tok] or "-"
 
@@ -476,15 +455,11 @@ def _join(a: str | None, b: str | None):
     return False
 
 
-def parse(
-    formula: str, units: Mapping[str, str], name: str = "requirement"
-) -> Requirement:
+def parse(formula: str, units: Mapping[str, str], name: str = "requirement") -> Requirement:
     """Check ``formula`` against the signals ``units`` (name -> unit; ``bool`` for booleans)
     and translate it for rtamt. RequirementError (one line) on anything wrong."""
     if not isinstance(formula, str):
-        raise RequirementError(
-            f"bad requirement {name!r}: the formula must be text, got {formula!r}"
-        )
+        raise RequirementError(f"bad requirement {name!r}: the formula must be text, got {formula!r}")
     p = _Parser(formula.strip(), units)
     text = p.parse()
     unit = next(iter(p.cmp_units)) if len(p.cmp_units) == 1 else "mixed"
@@ -506,14 +481,11 @@ def split(text: str) -> tuple[str, str]:
 def from_table(table, source: str) -> dict[str, str]:
     """A TOML ``[requirements]`` table (name = "formula") checked for shape."""
     if not isinstance(table, dict):
-        raise RequirementError(
-            f'{source}: [requirements] must be a table of name = "formula"'
-        )
+        raise RequirementError(f'{source}: [requirements] must be a table of name = "formula"')
     for k, v in table.items():
         if not _REQ_NAME.match(k) or not isinstance(v, str) or not v.strip():
             raise RequirementError(
-                f'{source}: [requirements] {k} = {v!r}: expected name = "formula" '
-                "(name a Python identifier)"
+                f'{source}: [requirements] {k} = {v!r}: expected name = "formula" (name a Python identifier)'
             )
     return {k: v.strip() for k, v in table.items()}
 
@@ -529,8 +501,7 @@ DEFAULTS: dict[str, tuple[tuple[str, str], ...]] = {
         ("gap_or_clear", "always (gap_front >= 2 m or lateral_clear)"),
         (
             "aeb_slows",
-            "always (aeb_active implies eventually[0:3] "
-            "(speed <= 1 m/s or not aeb_active))",
+            "always (aeb_active implies eventually[0:3] (speed <= 1 m/s or not aeb_active))",
         ),
     ),
     "cut-in": (
@@ -564,9 +535,7 @@ def defaults(scenario: str, cls: type | None = None) -> dict[str, str]:
 
 
 # -- resolving and evaluating -----------------------------------------------------------------------
-def signal_units(
-    columns: Mapping[str, str], metrics: Sequence[str] = (), cls=None
-) -> dict[str, str]:
+def signal_units(columns: Mapping[str, str], metrics: Sequence[str] = (), cls=None) -> dict[str, str]:
     """Every signal a formula may name for a run with trace ``columns`` (name -> unit),
     metric names ``metrics`` and scenario class ``cls``: the columns and the derived signals
     they allow."""
@@ -587,9 +556,7 @@ def signal_units(
     return out
 
 
-def resolve(
-    texts: Mapping[str, str], units: Mapping[str, str]
-) -> tuple[Requirement, ...]:
+def resolve(texts: Mapping[str, str], units: Mapping[str, str]) -> tuple[Requirement, ...]:
     """Parse every (name -> formula) against ``units``; the first problem is the error."""
     out = []
     for name, formula in texts.items():
@@ -658,9 +625,7 @@ class Verdict:
 PERIOD = 0.1
 
 
-def evaluate(
-    req: Requirement, result, period: float = PERIOD, scenario=None
-) -> Verdict:
+def evaluate(req: Requirement, result, period: float = PERIOD, scenario=None) -> Verdict:
     """Evaluate ``req`` on a finished run with rtamt (offline, discrete time) on the trace's
     own samples, every ``period`` s (0: every sample), counted back from the last one so the
     run's end (a collision) is always a sample. An ``always`` formula is evaluated as its
@@ -680,9 +645,7 @@ def evaluate(
     data = {"time": (t - t[0]).tolist()}
     for n in names:
         data[n] = signal(result, n, scenario)[idx].tolist()
-    always = req.rtamt.startswith("always (") and _outer_parens(
-        req.rtamt[len("always ") :]
-    )
+    always = req.rtamt.startswith("always (") and _outer_parens(req.rtamt[len("always ") :])
     text = req.rtamt[len("always ") :] if always else req.rtamt
     spec = _spec(
         Requirement(req.name, req.formula, text, req.signals, req.unit),
@@ -745,9 +708,7 @@ PREFIX = REQUIREMENTS_PREFIX
 summary_lines = requirement_lines
 
 
-def with_defaults(
-    scenario: str, texts: Sequence[str]
-) -> tuple[tuple[str, str], ...] | None:
+def with_defaults(scenario: str, texts: Sequence[str]) -> tuple[tuple[str, str], ...] | None:
     """``--require NAME: FORMULA`` options on top of the scenario's defaults (a name given
     again replaces the default); None (the defaults) without options."""
     if not texts:

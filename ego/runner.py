@@ -76,8 +76,7 @@ class RunSpec:
             if not isinstance(getattr(self, name), str):
                 raise ConfigError(f"bad {name} {getattr(self, name)!r} (expected a name, see ego list)")
         if not isinstance(self.overrides, Mapping) or not all(isinstance(k, str) for k in self.overrides):
-            raise ConfigError(f"bad overrides {self.overrides!r:.60} (expected a mapping of parameter "
-                              "name to value)")
+            raise ConfigError(f"bad overrides {self.overrides!r:.60} (expected a mapping of parameter name to value)")
         if self.record is not None and not isinstance(self.record, (str, os.PathLike)):
             raise ConfigError(f"bad record {self.record!r} (expected a path ending in .rrd, or None)")
         if not isinstance(self.label, str):
@@ -91,8 +90,11 @@ class RunSpec:
         if isinstance(self.seed, numbers.Integral) and not isinstance(self.seed, (bool, int)):
             object.__setattr__(self, "seed", int(self.seed))  # a numpy integer is a seed too
         if self.requirements is not None:
-            pairs = tuple(self.requirements.items()) if isinstance(self.requirements, Mapping) \
+            pairs = (
+                tuple(self.requirements.items())
+                if isinstance(self.requirements, Mapping)
                 else tuple(tuple(p) for p in self.requirements)
+            )
             object.__setattr__(self, "requirements", pairs)
         if not isinstance(self.background_recording, bool):
             raise ConfigError(f"bad background_recording {self.background_recording!r} (expected true or false)")
@@ -166,8 +168,13 @@ class ResolvedRun:
         """Every metric the run reports, as its scenario declares them (units, headline),
         and its requirements' robustness (``requirements.<name>``)."""
         return tuple(self.scenario_cls.metrics_declared(self.config)) + tuple(
-            Metric(f"requirements.{r.name}", "-" if r.unit in ("bool", "mixed") else r.unit,
-                   f"robustness of {r.formula} (negative: violated)") for r in requirements_of(self))
+            Metric(
+                f"requirements.{r.name}",
+                "-" if r.unit in ("bool", "mixed") else r.unit,
+                f"robustness of {r.formula} (negative: violated)",
+            )
+            for r in requirements_of(self)
+        )
 
     def plots(self) -> tuple:
         """The plots ``ego compare`` draws for this configuration."""
@@ -240,11 +247,18 @@ def build(what: RunSpec | ResolvedRun) -> Scenario:
     if spec.record is not None:
         path = Path(os.fspath(spec.record))
         path.parent.mkdir(parents=True, exist_ok=True)
-        recorder = RerunRecorder(path, recording_id=f"{spec.scenario}-{spec.name}-{spec.seed}",
-                                 background=spec.background_recording)
-    scenario = resolved.scenario_cls(resolved.config, controller, seed=spec.seed, recorder=recorder,
-                                     controller_name=spec.name, backend=spec.backend,
-                                     backend_options=spec.sim_options)
+        recorder = RerunRecorder(
+            path, recording_id=f"{spec.scenario}-{spec.name}-{spec.seed}", background=spec.background_recording
+        )
+    scenario = resolved.scenario_cls(
+        resolved.config,
+        controller,
+        seed=spec.seed,
+        recorder=recorder,
+        controller_name=spec.name,
+        backend=spec.backend,
+        backend_options=spec.sim_options,
+    )
     if reqs:
         from ego.requirements import check_run
 

@@ -57,9 +57,13 @@ class Clone(torch.nn.Module):
 
     def __init__(self, x: np.ndarray, y: np.ndarray, hidden: int = 32) -> None:
         super().__init__()
-        self.net = torch.nn.Sequential(torch.nn.Linear(x.shape[1], hidden), torch.nn.Tanh(),
-                                       torch.nn.Linear(hidden, hidden), torch.nn.Tanh(),
-                                       torch.nn.Linear(hidden, 1))
+        self.net = torch.nn.Sequential(
+            torch.nn.Linear(x.shape[1], hidden),
+            torch.nn.Tanh(),
+            torch.nn.Linear(hidden, hidden),
+            torch.nn.Tanh(),
+            torch.nn.Linear(hidden, 1),
+        )
         self.x_mean, self.x_std = x.mean(0), x.std(0) + 1e-9
         self.y_mean, self.y_std = y.mean(0), y.std(0) + 1e-9
 
@@ -81,6 +85,7 @@ class Clone(torch.nn.Module):
             with torch.no_grad():
                 z = self.net(torch.as_tensor(x, dtype=torch.float32)[None])[0].numpy()
             return (z * self.y_std + self.y_mean).astype(np.float64)
+
         return act
 
 
@@ -92,8 +97,12 @@ def main(argv: list[str] | None = None) -> dict:
     args = ap.parse_args(argv)
     torch.manual_seed(0)
     torch.set_num_threads(1)  # a small net: threads cost more than they give
-    config = {"speed": 25.0, "start": 800.0, "duration": args.duration,
-              "action": {"type": "EgoAction", "longitudinal": False}}
+    config = {
+        "speed": 25.0,
+        "start": 800.0,
+        "duration": args.duration,
+        "action": {"type": "EgoAction", "longitudinal": False},
+    }
     env = gym.make(ENV_ID, config=config)
     try:
         names = env.unwrapped.observation_type.names
@@ -116,9 +125,11 @@ def main(argv: list[str] | None = None) -> dict:
         t3 = time.perf_counter()
     finally:
         env.close()
-    print(f"{len(x)} demonstration steps from {args.episodes} cascade-pid runs in {t1 - t0:.1f} s; "
-          f"training {args.epochs} epochs in {t2 - t1:.1f} s (loss {loss:.4f} on standardised steer); "
-          f"evaluation in {t3 - t2:.1f} s")
+    print(
+        f"{len(x)} demonstration steps from {args.episodes} cascade-pid runs in {t1 - t0:.1f} s; "
+        f"training {args.epochs} epochs in {t2 - t1:.1f} s (loss {loss:.4f} on standardised steer); "
+        f"evaluation in {t3 - t2:.1f} s"
+    )
     print(f"from offset {test_offset} m:   {'clone':>12} {'cascade-pid':>12}")
     for key in HEADLINE:
         print(f"  {key:24} {cloned[key]!s:>12} {reference[key]!s:>12}")

@@ -25,7 +25,7 @@ class ScheduledStateFeedback:
 
     def step(self, obs: Observation):
         fx = self.k_s * (obs.s_ref - obs.s) + self.k_v * (obs.ds_ref - obs.ds)
-        a_y = self.w ** 2 * (obs.d_ref - obs.d) + 2 * self.zeta * self.w * (obs.dd_ref - obs.dd)
+        a_y = self.w**2 * (obs.d_ref - obs.d) + 2 * self.zeta * self.w * (obs.dd_ref - obs.dd)
         self._delta = a_y * self.L / max(obs.speed, 5.0) ** 2
         return fx, self._delta
 
@@ -39,5 +39,7 @@ for name, controller in [
     ("report 000 fuzzy", FuzzyController(FuzzyParams(), config.dt)),
 ]:
     m = EmergencyBrake(config, controller, seed=0, controller_name=name).run().metrics
-    print(f"{name:16s} {m['status']:10s} lane change {m['lane_change_duration']} s, "
-          f"overshoot {m['max_overshoot']} m, min gap {m['min_gap_front']} m")
+    print(
+        f"{name:16s} {m['status']:10s} lane change {m['lane_change_duration']} s, "
+        f"overshoot {m['max_overshoot']} m, min gap {m['min_gap_front']} m"
+    )

@@ -27,14 +27,15 @@ config = EmergencyBrakeConfig(
 controller = FuzzyController(FuzzyParams(fx_gain=100.0, delta_gain=0.001), dt=config.dt)
 record = Path("runs/emergency_brake.rrd")
 
-result = EmergencyBrake(config, controller, seed=1, recorder=RerunRecorder(record),
-                        controller_name="fuzzy").run()
+result = EmergencyBrake(config, controller, seed=1, recorder=RerunRecorder(record), controller_name="fuzzy").run()
 
 m = result.metrics
 print(f"status {m['status']}: {m['status_detail']}")
 print(f"lane chosen: {m['target_side']} ({m['lane_choice']})")
-print(f"lane change took {m['lane_change_duration']} s, overshoot {m['max_overshoot']} m, "
-      f"min front TTC {m['min_ttc_front']} s")
+print(
+    f"lane change took {m['lane_change_duration']} s, overshoot {m['max_overshoot']} m, "
+    f"min front TTC {m['min_ttc_front']} s"
+)
 for event in result.events:
     print(f"  t={event.t:6.2f} s  {event.text}")
 print(f"recording: {record} (rerun {record})")

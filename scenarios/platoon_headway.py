@@ -34,9 +34,11 @@ def main() -> None:
     rows = tuple(headway_row(h, args.seeds, args.omega) for h in HEADWAYS)
     table = Table("headway", "report-004", (), headway_header(args.omega), rows)
     print(markdown(table, run_jobs((j for r in rows for j in r.jobs), args.jobs)))
-    print(f"\ntheory: report 004's PID (kp, ki, kd {PID_GAINS}), lag {LAG} s, delay {DELAY} s; string stable "
-          f"for lambda >= {ss.min_stable_headway(*PID_GAINS, LAG, DELAY):.2f} s "
-          f"(without lag and delay: sqrt(2/kp) = {ss.min_stable_headway(*PID_GAINS):.2f} s)")
+    print(
+        f"\ntheory: report 004's PID (kp, ki, kd {PID_GAINS}), lag {LAG} s, delay {DELAY} s; string stable "
+        f"for lambda >= {ss.min_stable_headway(*PID_GAINS, LAG, DELAY):.2f} s "
+        f"(without lag and delay: sqrt(2/kp) = {ss.min_stable_headway(*PID_GAINS):.2f} s)"
+    )
 
 
 if __name__ == "__main__":

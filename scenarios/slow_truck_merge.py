@@ -36,23 +36,20 @@ from ego.scenarios.motorway import COLUMNS, EDGE, PLOTS, ROUTE
 from ego.sim import VehicleSpec, VehicleType
 from ego.sumo.traffic import CutInVehicle, PacedVehicle
 
-TRUCK = VehicleType("truck", length=12.0, width=2.5, sigma=0.0, accel=1.0, decel=4.0,
-                    color=(120, 90, 60))
-MERGER = VehicleType("merger", length=4.5, width=1.8, sigma=0.0, max_speed=50.0, accel=4.0,
-                     decel=8.0, color=(255, 80, 160))
+TRUCK = VehicleType("truck", length=12.0, width=2.5, sigma=0.0, accel=1.0, decel=4.0, color=(120, 90, 60))
+MERGER = VehicleType(
+    "merger", length=4.5, width=1.8, sigma=0.0, max_speed=50.0, accel=4.0, decel=8.0, color=(255, 80, 160)
+)
 
 
 @dataclass(frozen=True)
 class TruckMergeConfig(EvasiveConfig):
     duration: float = param(30.0, "s", "simulated time", min=1.0, max=600.0)
     ego_speed: float = param(27.0, "m/s", "ego's cruise speed", min=5.0, max=40.0)
-    truck_gap: float = param(120.0, "m", "truck's rear ahead of the ego's front at t = 0", min=20.0,
-                             max=500.0)
+    truck_gap: float = param(120.0, "m", "truck's rear ahead of the ego's front at t = 0", min=20.0, max=500.0)
     truck_speed: float = param(22.0, "m/s", "the truck's speed", min=1.0, max=30.0)
-    merge_gap: float = param(30.0, "m", "the merging car's rear ahead of the ego when it merges",
-                             min=5.0, max=100.0)
-    merge_speed: float = param(3.0, "m/s", "how much slower than the ego it merges", min=0.0,
-                               max=20.0)
+    merge_gap: float = param(30.0, "m", "the merging car's rear ahead of the ego when it merges", min=5.0, max=100.0)
+    merge_speed: float = param(3.0, "m/s", "how much slower than the ego it merges", min=0.0, max=20.0)
 
 
 class FollowAhead:
@@ -84,12 +81,28 @@ class TruckMerge(Scenario):
     def populate(self, world) -> None:
         c = self.config
         truck_front = c.ego_start + c.truck_gap + TRUCK.length
-        self.merger = CutInVehicle("merger", "ego", c.ego_lane - 1, c.ego_lane, c.ego_speed + 4.0,
-                                   c.ego_speed - c.merge_speed, c.merge_gap, 2.5, 3.5, c.sumo_step)
-        world.vehicle(VehicleSpec("truck", TRUCK.id, ROUTE, c.ego_lane, truck_front, c.truck_speed), TRUCK,
-                      PacedVehicle("truck", c.truck_speed))
-        world.vehicle(VehicleSpec("merger", MERGER.id, ROUTE, c.ego_lane - 1, c.ego_start - 30.0, c.ego_speed),
-                      MERGER, self.merger)
+        self.merger = CutInVehicle(
+            "merger",
+            "ego",
+            c.ego_lane - 1,
+            c.ego_lane,
+            c.ego_speed + 4.0,
+            c.ego_speed - c.merge_speed,
+            c.merge_gap,
+            2.5,
+            3.5,
+            c.sumo_step,
+        )
+        world.vehicle(
+            VehicleSpec("truck", TRUCK.id, ROUTE, c.ego_lane, truck_front, c.truck_speed),
+            TRUCK,
+            PacedVehicle("truck", c.truck_speed),
+        )
+        world.vehicle(
+            VehicleSpec("merger", MERGER.id, ROUTE, c.ego_lane - 1, c.ego_start - 30.0, c.ego_speed),
+            MERGER,
+            self.merger,
+        )
         # the right lane belongs to the merging car (it drives blind, as scripted)
         world.keep_clear(c.ego_lane - 1)
 
@@ -110,8 +123,7 @@ def main() -> None:
     args.out.mkdir(parents=True, exist_ok=True)
     rrd = args.out / f"{args.controller}-seed{args.seed}.rrd"
     recorder = RerunRecorder(rrd, recording_id=f"truck-merge-{args.controller}-{args.seed}")
-    result = TruckMerge(config, controller, seed=args.seed, recorder=recorder,
-                        controller_name=args.controller).run()
+    result = TruckMerge(config, controller, seed=args.seed, recorder=recorder, controller_name=args.controller).run()
     units = {m.name: m.unit for m in TruckMerge.metrics_declared(config)}
     for name, value in result.metrics.items():
         unit = units.get(name, "-")

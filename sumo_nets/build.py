@@ -1,7 +1,7 @@
 """Rebuild the SUMO networks from their plain XML sources with the wheel's netconvert.
 
-    python sumo_nets/build.py            # every network
-    python sumo_nets/build.py highway    # one
+python sumo_nets/build.py            # every network
+python sumo_nets/build.py highway    # one
 """
 
 import sys

@@ -16,8 +16,10 @@ def pytest_collection_modifyitems(config, items):
     ``slow`` too, so ``pytest -m "not sumo and not slow"`` is the fast loop."""
     slow = pytest.mark.slow
     for item in items:
-        ray = "ray_executor" in getattr(item, "fixturenames", ()) or \
-            getattr(getattr(item, "callspec", None), "params", {}).get("engine") == "ray"
+        ray = (
+            "ray_executor" in getattr(item, "fixturenames", ())
+            or getattr(getattr(item, "callspec", None), "params", {}).get("engine") == "ray"
+        )
         if item.get_closest_marker("highway_env") is not None or ray:
             item.add_marker(slow)
 

@@ -125,8 +125,9 @@ def compare_run_with_fault(job: tuple) -> Any:
     tracking = CONTROLLERS["tracking"]
     try:
         if fault == "controller":
-            tracking["raises"] = ControllerSpec("raises", "raises mid-run (tests)", NoParams,
-                                                lambda params, dt: RaisesAt(int(argument)))
+            tracking["raises"] = ControllerSpec(
+                "raises", "raises mid-run (tests)", NoParams, lambda params, dt: RaisesAt(int(argument))
+            )
         elif fault == "sumo":
             os.environ["EGO_SUMO_NETS"] = str(argument)
         return run_one(spec)

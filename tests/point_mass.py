@@ -61,8 +61,14 @@ class PointMass(Scenario):
     def _act(self, action: tuple[float, float]) -> None:
         fx, _ = action
         c = self.config
-        self.trace.append(self.controller.signals(), t=self.t, s=self.position, speed=self.velocity,
-                          e_lon=self.position - c.ref_speed * self.t, Fx=fx)
+        self.trace.append(
+            self.controller.signals(),
+            t=self.t,
+            s=self.position,
+            speed=self.velocity,
+            e_lon=self.position - c.ref_speed * self.t,
+            Fx=fx,
+        )
         self.velocity += DRIVEN_WHEELS * fx / c.mass * c.dt
         self.position += self.velocity * c.dt
 
@@ -76,9 +82,8 @@ class PointMass(Scenario):
         t = trace[:, columns.index("t")]
         error = trace[:, columns.index("speed")] - self.config.ref_speed
         return {
-            "rms_speed_error": json_number(math.sqrt(float(np.mean(error ** 2)))),
+            "rms_speed_error": json_number(math.sqrt(float(np.mean(error**2)))),
             "final_position": json_number(self.position),
-            "settle_times": {f"band{band:g}": json_number(settling_time(t, error, band, 0.0))
-                             for band in (5.0, 1.0)},
+            "settle_times": {f"band{band:g}": json_number(settling_time(t, error, band, 0.0)) for band in (5.0, 1.0)},
             "reached_speed": bool(np.any(np.abs(error) < 1.0)),
         }

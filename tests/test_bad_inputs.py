@@ -46,9 +46,11 @@ def _sweep(name: str, *extra: str) -> list[str]:
     return ["sweep", "{" + name + "}", "--out", "{out}", *extra]
 
 
-def _model(arrays: dict | None = None, meta: dict | str | None = None, drop: str | None = None,
-           change: dict | None = None):
+def _model(
+    arrays: dict | None = None, meta: dict | str | None = None, drop: str | None = None, change: dict | None = None
+):
     """A NARMA-L2 model: the shipped arrays and metadata with some changed."""
+
     def write(path: Path) -> None:
         with np.load(DEFAULT_MODEL) as data:
             a = {k: data[k] for k in data.files}
@@ -59,6 +61,7 @@ def _model(arrays: dict | None = None, meta: dict | str | None = None, drop: str
         m = json.loads(DEFAULT_MODEL.with_suffix(".json").read_text())
         text = meta if isinstance(meta, str) else json.dumps(m if meta is None else {**m, **meta})
         path.with_suffix(".json").write_text(text)
+
     return write
 
 
@@ -84,6 +87,7 @@ def _gains(payload) -> callable:
             path.write_text(payload)
         else:
             path.write_text(json.dumps(payload))
+
     return write
 
 
@@ -91,8 +95,7 @@ GOOD_GAINS = {f"{k}_{loop}": 0.5 for loop in ("e", "psi", "vy", "r") for k in ("
 
 #: file name -> how to write it (into the test's input folder)
 FILES = {
-    "model_text.npz": lambda p: (p.write_text("these are not weights\n"),
-                                 p.with_suffix(".json").write_text("{}")),
+    "model_text.npz": lambda p: (p.write_text("these are not weights\n"), p.with_suffix(".json").write_text("{}")),
     "model_empty.npz": lambda p: (p.write_bytes(b""), p.with_suffix(".json").write_text("{}")),
     "model_truncated.npz": _truncated_model,
     "model_keys.npz": _model(arrays={"weights": np.zeros(3)}),
@@ -142,13 +145,15 @@ FILES = {
     "spec_bool.toml": lambda p: p.write_text(SWEEP_OK.replace("[20, 25]", "[true]")),
     "spec_empty_grid.toml": lambda p: p.write_text(SWEEP_OK.replace("[20, 25]", "[]")),
     "spec_method.toml": lambda p: p.write_text(SWEEP_OK + '[sample]\nmethod = "sobl"\nn = 4\nlead_gap = [20, 40]\n'),
-    "spec_n.toml": lambda p: p.write_text(SWEEP_OK + '[sample]\nn = 0\nlead_gap = [20, 40]\n'),
-    "spec_reversed.toml": lambda p: p.write_text(SWEEP_OK + '[sample]\nn = 4\nlead_gap = [40, 20]\n'),
-    "spec_sample_range.toml": lambda p: p.write_text(SWEEP_OK + '[sample]\nn = 4\nlead_gap = [20, 4000]\n'),
-    "spec_sample_text.toml": lambda p: p.write_text(SWEEP_OK + '[sample]\nn = 4\nabs = [0, 1]\n'),
+    "spec_n.toml": lambda p: p.write_text(SWEEP_OK + "[sample]\nn = 0\nlead_gap = [20, 40]\n"),
+    "spec_reversed.toml": lambda p: p.write_text(SWEEP_OK + "[sample]\nn = 4\nlead_gap = [40, 20]\n"),
+    "spec_sample_range.toml": lambda p: p.write_text(SWEEP_OK + "[sample]\nn = 4\nlead_gap = [20, 4000]\n"),
+    "spec_sample_text.toml": lambda p: p.write_text(SWEEP_OK + "[sample]\nn = 4\nabs = [0, 1]\n"),
     "spec_seeds.toml": lambda p: p.write_text("seeds = [-1]\n" + SWEEP_OK),
     "spec_seeds0.toml": lambda p: p.write_text("seeds = 0\n" + SWEEP_OK),
-    "spec_huge.toml": lambda p: p.write_text(SWEEP_OK + '[sample]\nmethod = "random"\nn = 100000000\nlead_gap = [20, 40]\n'),
+    "spec_huge.toml": lambda p: p.write_text(
+        SWEEP_OK + '[sample]\nmethod = "random"\nn = 100000000\nlead_gap = [20, 40]\n'
+    ),
     "spec_mix.toml": lambda p: p.write_text(SWEEP_OK.replace("ego_speed = [20, 25]", "dt = [0.03]")),
     "spec_ok.toml": lambda p: p.write_text(SWEEP_OK),
     "file.txt": lambda p: p.write_text("x"),
@@ -158,6 +163,7 @@ FILES = {
 
 def _nets(kind: str):
     """A copy of the shipped networks folder with the highway network spoilt."""
+
     def write(path: Path) -> None:
         shutil.copytree(nets_dir(), path, ignore=shutil.ignore_patterns("*.py", "__pycache__"))
         net = path / "highway" / "highway.net.xml"
@@ -170,6 +176,7 @@ def _nets(kind: str):
             net.write_text('<?xml version="1.0"?>\n<routes><vehicle id="a"/></routes>\n')
         elif kind == "empty":
             net.write_text("")
+
     return write
 
 
@@ -223,7 +230,11 @@ CLI = [
     C("run-misspelt-curve-controller", ["run", "curve", "-c", "narma"], "did you mean 'narma-l2'?"),
     C("run-no-controller", ["run", "emergency-brake"], "--controller"),
     C("run-unknown-parameter", [*EB, "--set", "warp=9"], "unknown parameter 'warp'"),
-    C("run-misspelt-parameter", [*EB, "--set", "ego_sped=20"], "unknown parameter 'ego_sped'; did you mean 'ego_speed'?"),
+    C(
+        "run-misspelt-parameter",
+        [*EB, "--set", "ego_sped=20"],
+        "unknown parameter 'ego_sped'; did you mean 'ego_speed'?",
+    ),
     C("run-misspelt-controller-parameter", [*EB, "--set", "kp_latt=1"], "did you mean 'kp_lat'?"),
     C("run-parameter-of-another-controller", [*EB, "--set", "fx_gain=100"], "unknown parameter 'fx_gain'"),
     C("run-set-without-equals", [*EB, "--set", "ego_speed"], "bad --set item 'ego_speed' (expected key=value)"),
@@ -234,7 +245,11 @@ CLI = [
     C("list-unknown-option", ["list", "--jsn"], "unrecognized arguments: --jsn"),
     C("run-json-with-value", [*EB, "--json=1"], "--json"),
     # -- scenario values: type, then range ----------------------------------------------------------------
-    C("text-for-number", [*EB, "--set", "lead_decel=fast"], "bad value for lead_decel: 'fast' (expected a number from 0.5 to 12 (m/s^2))"),
+    C(
+        "text-for-number",
+        [*EB, "--set", "lead_decel=fast"],
+        "bad value for lead_decel: 'fast' (expected a number from 0.5 to 12 (m/s^2))",
+    ),
     C("negative-time", [*EB, "--set", "ttc_threshold=-1"], "bad value for ttc_threshold: -1"),
     C("nan", [*EB, "--set", "ego_speed=nan"], "bad value for ego_speed: nan"),
     C("inf", [*EB, "--set", "ego_speed=inf"], "bad value for ego_speed: inf"),
@@ -250,7 +265,11 @@ CLI = [
     C("unit-in-value", [*EB, "--set", "ego_speed=20m/s"], "bad value for ego_speed: '20m/s'"),
     C("long-text-is-cut", [*EB, "--set", "ego_speed=" + "9" * 500 + "x"], "..."),
     C("newline-in-value", [*EB, "--set", "ego_speed=2\n0"], "bad value for ego_speed: '2\\n0'"),
-    C("int-as-float", [*EB, "--set", "substeps=2.0"], "bad value for substeps: '2.0' (expected a whole number from 1 to 100: write 2)"),
+    C(
+        "int-as-float",
+        [*EB, "--set", "substeps=2.0"],
+        "bad value for substeps: '2.0' (expected a whole number from 1 to 100: write 2)",
+    ),
     C("int-as-exponent", [*EB, "--set", "substeps=1e2"], "write 100"),
     C("int-fraction", [*EB, "--set", "substeps=2.5"], "bad value for substeps: '2.5'"),
     C("int-zero", [*EB, "--set", "substeps=0"], "bad value for substeps: 0 (expected a whole number from 1 to 100)"),
@@ -267,15 +286,27 @@ CLI = [
     C("dt-zero", [*EB, "--set", "dt=0"], "bad value for dt: 0"),
     C("duration-1e308", [*EB, "--set", "duration=1e308"], "bad value for duration: 1e+308"),
     C("duration-zero", [*EB, "--set", "duration=0"], "bad value for duration: 0"),
-    C("brake-after-the-run", [*EB, "--set", "lead_brake_time=30"], "bad value for lead_brake_time: 30 (expected at most duration=25 s"),
+    C(
+        "brake-after-the-run",
+        [*EB, "--set", "lead_brake_time=30"],
+        "bad value for lead_brake_time: 30 (expected at most duration=25 s",
+    ),
     C("brake-time-1e308", [*EB, "--set", "lead_brake_time=1e308"], "bad value for lead_brake_time: 1e+308"),
     C("lead-speed-between", [*EB, "--set", "lead_speed=-0.5"], "bad value for lead_speed: -0.5"),
-    C("traffic-too-dense", [*EB, "--set", "traffic_density=25", "--set", "traffic_speed=40"], "bad value for traffic_density: 25"),
+    C(
+        "traffic-too-dense",
+        [*EB, "--set", "traffic_density=25", "--set", "traffic_speed=40"],
+        "bad value for traffic_density: 25",
+    ),
     C("sublane-zero", [*EB, "--set", "lateral_resolution=0"], "bad value for lateral_resolution: 0"),
     C("sumo-step-huge", [*EB, "--set", "sumo_step=1e9"], "bad value for sumo_step: 1000000000"),
     C("ego-start-negative", [*EB, "--set", "ego_start=-10"], "bad value for ego_start: -10"),
     C("cut-in-side-case", ["run", "cut-in", "-c", "pid", "--set", "cut_in_side=LEFT"], "did you mean 'left'?"),
-    C("cut-in-speed-type", ["run", "cut-in", "-c", "pid", "--set", "cut_in_speed=slow"], "bad value for cut_in_speed: 'slow'"),
+    C(
+        "cut-in-speed-type",
+        ["run", "cut-in", "-c", "pid", "--set", "cut_in_speed=slow"],
+        "bad value for cut_in_speed: 'slow'",
+    ),
     C("curve-preview", ["run", "curve", "-c", "pid", "--set", "preview=30"], "bad value for preview: 30"),
     C("curve-entry-speed", ["run", "curve", "-c", "pid", "--set", "entry_speed=100"], "bad value for entry_speed: 100"),
     C("curve-accel-inf", ["run", "curve", "-c", "pid", "--set", "accel=inf"], "bad value for accel: inf"),
@@ -290,47 +321,117 @@ CLI = [
     C("platoon-manoeuvres", [*PLATOON, "--set", "manoeuvres=brake hard"], "bad value for manoeuvres: 'brake hard'"),
     C("platoon-manoeuvres-nan", [*PLATOON, "--set", "manoeuvres=nan:20:2"], "bad value for manoeuvres"),
     C("platoon-headway", [*PLATOON, "--set", "headway=-1"], "bad value for headway: -1"),
-    C("platoon-manoeuvre-never", [*PLATOON, "--set", "manoeuvres=1e308:20:2"], "bad value for manoeuvres: '1e308:20:2'"),
+    C(
+        "platoon-manoeuvre-never",
+        [*PLATOON, "--set", "manoeuvres=1e308:20:2"],
+        "bad value for manoeuvres: '1e308:20:2'",
+    ),
     C("platoon-manoeuvres-long-text-is-cut", [*PLATOON, "--set", "manoeuvres=" + "10:20:2," * 500], "10:20:2,..."),
-    C("platoon-road-too-short", [*PLATOON, "--set", "manoeuvres=none", "--set", "start_speed=100", "--set", "duration=200"],
-      "need 5779 m of road; the platoon network has 3000 m"),
-    C("cut-in-no-lane-on-that-side", ["run", "cut-in", "-c", "pid", "--set", "ego_lane=2"], "no left lane next to ego_lane=2"),
-    C("cut-in-right-of-the-right-lane", ["run", "cut-in", "-c", "pid", "--set", "ego_lane=0", "--set", "cut_in_side=right"],
-      "no right lane next to ego_lane=0"),
+    C(
+        "platoon-road-too-short",
+        [*PLATOON, "--set", "manoeuvres=none", "--set", "start_speed=100", "--set", "duration=200"],
+        "need 5779 m of road; the platoon network has 3000 m",
+    ),
+    C(
+        "cut-in-no-lane-on-that-side",
+        ["run", "cut-in", "-c", "pid", "--set", "ego_lane=2"],
+        "no left lane next to ego_lane=2",
+    ),
+    C(
+        "cut-in-right-of-the-right-lane",
+        ["run", "cut-in", "-c", "pid", "--set", "ego_lane=0", "--set", "cut_in_side=right"],
+        "no right lane next to ego_lane=0",
+    ),
     C("platoon-start-error", [*PLATOON, "--set", "start_error=-40"], "bad value for start_error"),
-    C("report-case", ["run", "report-000", "-c", "pid", "--set", "case=ramp"], "bad value for case: 'ramp' (expected one of step, sine)"),
+    C(
+        "report-case",
+        ["run", "report-000", "-c", "pid", "--set", "case=ramp"],
+        "bad value for case: 'ramp' (expected one of step, sine)",
+    ),
     C("report-step", ["run", "report-000", "-c", "pid", "--set", "step=1e308"], "bad value for step: 1e+308"),
     # -- controller values ---------------------------------------------------------------------------------
     C("pid-gain-text", [*EB, "--set", "kp_lat=x"], "bad value for kp_lat: 'x'"),
     C("pid-gain-huge", [*EB, "--set", "kp_lon=1e308"], "bad value for kp_lon: 1e+308"),
-    C("pid-steer-limit-above-quarter-turn", [*EB, "--set", "steer_limit=2"], "bad value for steer_limit: 2 (expected a number above 0 and up to 1.5708 (rad))"),
+    C(
+        "pid-steer-limit-above-quarter-turn",
+        [*EB, "--set", "steer_limit=2"],
+        "bad value for steer_limit: 2 (expected a number above 0 and up to 1.5708 (rad))",
+    ),
     C("pid-steer-limit-zero", [*EB, "--set", "steer_limit=0"], "bad value for steer_limit: 0"),
     C("pid-fx-limit-huge", [*EB, "--set", "fx_limit=1e9"], "bad value for fx_limit: 1000000000"),
     C("pid-tau-negative", [*EB, "--set", "tau_d=-1"], "bad value for tau_d: -1"),
-    C("fuzzy-gain-huge", ["run", "emergency-brake", "-c", "fuzzy", "--set", "fx_gain=1e6"], "bad value for fx_gain: 1000000 (expected a number from 0 to 20000 (N))"),
-    C("fuzzy-input-gain-negative", ["run", "emergency-brake", "-c", "fuzzy", "--set", "ke_lon=-1"], "bad value for ke_lon: -1"),
+    C(
+        "fuzzy-gain-huge",
+        ["run", "emergency-brake", "-c", "fuzzy", "--set", "fx_gain=1e6"],
+        "bad value for fx_gain: 1000000 (expected a number from 0 to 20000 (N))",
+    ),
+    C(
+        "fuzzy-input-gain-negative",
+        ["run", "emergency-brake", "-c", "fuzzy", "--set", "ke_lon=-1"],
+        "bad value for ke_lon: -1",
+    ),
     C("fuzzy-pid-adapt", ["run", "emergency-brake", "-c", "fuzzy-pid", "--set", "adapt=2"], "bad value for adapt: 2"),
-    C("fuzzy-pid-variant", ["run", "emergency-brake", "-c", "fuzzy-pid", "--set", "variant=repor"], "did you mean 'report'?"),
-    C("bp-pid-learning-rate", ["run", "emergency-brake", "-c", "bp-pid", "--set", "learning_rate=2"], "bad value for learning_rate: 2 (expected a number from 0 to 1)"),
-    C("bp-pid-learning-rate-1e308", ["run", "emergency-brake", "-c", "bp-pid", "--set", "learning_rate=1e308"], "bad value for learning_rate: 1e+308"),
-    C("bp-pid-momentum", ["run", "emergency-brake", "-c", "bp-pid", "--set", "momentum=1"], "bad value for momentum: 1"),
-    C("bp-pid-init-scale", ["run", "emergency-brake", "-c", "bp-pid", "--set", "init_scale=1e308"], "bad value for init_scale: 1e+308"),
-    C("bp-pid-variant-case", ["run", "emergency-brake", "-c", "bp-pid", "--set", "variant=STABLE"], "did you mean 'stable'?"),
-    C("rbf-width-1e-300", ["run", "emergency-brake", "-c", "rbf-smc", "--set", "width=1e-300"], "bad value for width: 1e-300 (expected a number from 0.01 to 1000)"),
+    C(
+        "fuzzy-pid-variant",
+        ["run", "emergency-brake", "-c", "fuzzy-pid", "--set", "variant=repor"],
+        "did you mean 'report'?",
+    ),
+    C(
+        "bp-pid-learning-rate",
+        ["run", "emergency-brake", "-c", "bp-pid", "--set", "learning_rate=2"],
+        "bad value for learning_rate: 2 (expected a number from 0 to 1)",
+    ),
+    C(
+        "bp-pid-learning-rate-1e308",
+        ["run", "emergency-brake", "-c", "bp-pid", "--set", "learning_rate=1e308"],
+        "bad value for learning_rate: 1e+308",
+    ),
+    C(
+        "bp-pid-momentum",
+        ["run", "emergency-brake", "-c", "bp-pid", "--set", "momentum=1"],
+        "bad value for momentum: 1",
+    ),
+    C(
+        "bp-pid-init-scale",
+        ["run", "emergency-brake", "-c", "bp-pid", "--set", "init_scale=1e308"],
+        "bad value for init_scale: 1e+308",
+    ),
+    C(
+        "bp-pid-variant-case",
+        ["run", "emergency-brake", "-c", "bp-pid", "--set", "variant=STABLE"],
+        "did you mean 'stable'?",
+    ),
+    C(
+        "rbf-width-1e-300",
+        ["run", "emergency-brake", "-c", "rbf-smc", "--set", "width=1e-300"],
+        "bad value for width: 1e-300 (expected a number from 0.01 to 1000)",
+    ),
     C("rbf-width-zero", ["run", "emergency-brake", "-c", "rbf-smc", "--set", "width=0"], "bad value for width: 0"),
     C("rbf-w0-1e308", ["run", "emergency-brake", "-c", "rbf-smc", "--set", "w0=1e308"], "bad value for w0: 1e+308"),
-    C("rbf-gamma-negative", ["run", "emergency-brake", "-c", "rbf-smc", "--set", "gamma=-1"], "bad value for gamma: -1"),
+    C(
+        "rbf-gamma-negative",
+        ["run", "emergency-brake", "-c", "rbf-smc", "--set", "gamma=-1"],
+        "bad value for gamma: -1",
+    ),
     C("rbf-scale-nan", ["run", "emergency-brake", "-c", "rbf-smc", "--set", "scale=nan"], "bad value for scale: nan"),
     C("curve-pid-steer-limit", ["run", "curve", "-c", "pid", "--set", "steer_limit=3"], "bad value for steer_limit: 3"),
     C("fuzzy-curve-weight", ["run", "curve", "-c", "fuzzy-curve", "--set", "w=1.5"], "bad value for w: 1.5"),
-    C("fuzzy-curve-range-1e-300", ["run", "curve", "-c", "fuzzy-curve", "--set", "position_range=1e-300"], "bad value for position_range: 1e-300"),
+    C(
+        "fuzzy-curve-range-1e-300",
+        ["run", "curve", "-c", "fuzzy-curve", "--set", "position_range=1e-300"],
+        "bad value for position_range: 1e-300",
+    ),
     C("narma-rho", [*CURVE_NARMA, "--set", "rho=1"], "bad value for rho: 1"),
     C("narma-g-min", [*CURVE_NARMA, "--set", "g_min=0"], "bad value for g_min: 0"),
     C("narma-sample-period", [*CURVE_NARMA, "--set", "dt=0.02"], "dt must divide"),
     C("cascade-steer-limit", [*LANE, "--set", "steer_limit=90"], "bad value for steer_limit: 90"),
     C("cascade-alpha", [*LANE, "--set", "alpha=0"], "bad value for alpha: 0"),
     C("cascade-preset", [*LANE, "--set", "preset=tunned"], "did you mean 'tuned'?"),
-    C("acc-init-range-1e308", [*PLATOON, "--set", "init_range=1e308"], "bad value for init_range: 1e+308 (expected a number above 0 and up to 10)"),
+    C(
+        "acc-init-range-1e308",
+        [*PLATOON, "--set", "init_range=1e308"],
+        "bad value for init_range: 1e+308 (expected a number above 0 and up to 10)",
+    ),
     C("acc-learning-rate", [*PLATOON, "--set", "learning_rate=5"], "bad value for learning_rate: 5"),
     C("acc-period", ["run", "platoon", "-c", "pid", "--set", "period=0.015"], "bad value for period: 0.015"),
     # -- files: NARMA-L2 models ----------------------------------------------------------------------------
@@ -342,10 +443,26 @@ CLI = [
     C("model-truncated", [*CURVE_NARMA, "--set", "model={model_truncated.npz}"], "not a readable .npz file"),
     C("model-wrong-keys", [*CURVE_NARMA, "--set", "model={model_keys.npz}"], "the array mean is missing"),
     C("model-missing-array", [*CURVE_NARMA, "--set", "model={model_missing_g.npz}"], "the array g_w2 is missing"),
-    C("model-wrong-shape", [*CURVE_NARMA, "--set", "model={model_shape.npz}"], "the array f_w1 has shape (32, 7) (expected (32, 12))"),
-    C("model-wrong-mean-shape", [*CURVE_NARMA, "--set", "model={model_mean_shape.npz}"], "the array mean has shape (5,)"),
-    C("model-nan-weights", [*CURVE_NARMA, "--set", "model={model_nan.npz}"], "the array f_w2 holds NaN or infinite values"),
-    C("model-inf-scale", [*CURVE_NARMA, "--set", "model={model_inf.npz}"], "the array dy_scale holds NaN or infinite values"),
+    C(
+        "model-wrong-shape",
+        [*CURVE_NARMA, "--set", "model={model_shape.npz}"],
+        "the array f_w1 has shape (32, 7) (expected (32, 12))",
+    ),
+    C(
+        "model-wrong-mean-shape",
+        [*CURVE_NARMA, "--set", "model={model_mean_shape.npz}"],
+        "the array mean has shape (5,)",
+    ),
+    C(
+        "model-nan-weights",
+        [*CURVE_NARMA, "--set", "model={model_nan.npz}"],
+        "the array f_w2 holds NaN or infinite values",
+    ),
+    C(
+        "model-inf-scale",
+        [*CURVE_NARMA, "--set", "model={model_inf.npz}"],
+        "the array dy_scale holds NaN or infinite values",
+    ),
     C("model-zero-std", [*CURVE_NARMA, "--set", "model={model_std0.npz}"], "std has values that are not positive"),
     C("model-string-array", [*CURVE_NARMA, "--set", "model={model_strings.npz}"], "the array g_b1 is not numeric"),
     C("model-pickled-objects", [*CURVE_NARMA, "--set", "model={model_object.npz}"], "not a readable .npz file"),
@@ -353,14 +470,26 @@ CLI = [
     C("model-meta-list", [*CURVE_NARMA, "--set", "model={model_meta_list.npz}"], "its metadata is not a JSON object"),
     C("model-meta-period-text", [*CURVE_NARMA, "--set", "model={model_meta_period.npz}"], "sample_period is 'fast'"),
     C("model-meta-period-zero", [*CURVE_NARMA, "--set", "model={model_meta_period0.npz}"], "sample_period is 0"),
-    C("model-meta-features", [*CURVE_NARMA, "--set", "model={model_meta_features.npz}"], "trained on features ['speed']"),
+    C(
+        "model-meta-features",
+        [*CURVE_NARMA, "--set", "model={model_meta_features.npz}"],
+        "trained on features ['speed']",
+    ),
     C("model-meta-nan", [*CURVE_NARMA, "--set", "model={model_meta_nan.npz}"], "NaN is not a number JSON allows"),
-    C("model-meta-missing", [*CURVE_NARMA, "--set", "model={model_no_meta.npz}"], "its metadata model_no_meta.json is missing"),
+    C(
+        "model-meta-missing",
+        [*CURVE_NARMA, "--set", "model={model_no_meta.npz}"],
+        "its metadata model_no_meta.json is missing",
+    ),
     C("model-not-text", [*CURVE_NARMA, "--set", "model=0"], "(expected a file ending in .npz)"),
     # -- files: cascade gains presets ----------------------------------------------------------------------
     C("gains-garbage", [*LANE, "--set", "gains_file={gains_garbage.json}"], "not valid JSON"),
     C("gains-list", [*LANE, "--set", "gains_file={gains_list.json}"], 'expected an object with "gains"'),
-    C("gains-strings", [*LANE, "--set", "gains_file={gains_strings.json}"], "kp_e = 'high' (expected a number from 0 to 100)"),
+    C(
+        "gains-strings",
+        [*LANE, "--set", "gains_file={gains_strings.json}"],
+        "kp_e = 'high' (expected a number from 0 to 100)",
+    ),
     C("gains-nan", [*LANE, "--set", "gains_file={gains_nan.json}"], "NaN is not a number JSON allows"),
     C("gains-infinity", [*LANE, "--set", "gains_file={gains_inf.json}"], "Infinity is not a number JSON allows"),
     C("gains-binary", [*LANE, "--set", "gains_file={gains_binary.json}"], "not a text file"),
@@ -379,7 +508,12 @@ CLI = [
     C("net-garbled", EB, "is not valid XML", env={"EGO_SUMO_NETS": "{nets_garbled}"}),
     C("net-empty", EB, "is not valid XML", env={"EGO_SUMO_NETS": "{nets_empty}"}),
     C("net-not-a-network", EB, "is not a SUMO network", env={"EGO_SUMO_NETS": "{nets_not-a-net}"}),
-    C("nets-folder-missing", EB, "SUMO networks folder /nowhere/nets not found", env={"EGO_SUMO_NETS": "/nowhere/nets"}),
+    C(
+        "nets-folder-missing",
+        EB,
+        "SUMO networks folder /nowhere/nets not found",
+        env={"EGO_SUMO_NETS": "/nowhere/nets"},
+    ),
     C("nets-folder-a-file", EB, "not found", env={"EGO_SUMO_NETS": "{file.txt}"}),
     # -- seeds and outputs of run --------------------------------------------------------------------------
     C("seed-negative", [*EB, "--seed", "-1"], "bad value for --seed: -1"),
@@ -397,19 +531,43 @@ CLI = [
     C("compare-unknown-controller", [*CMP, "--controllers", "pid,magic"], "unknown controller 'magic'"),
     C("compare-misspelt-controller", [*CMP, "--controllers", "pid,fuzy"], "did you mean 'fuzzy'?"),
     C("compare-seeds-zero", [*CMP, "--controllers", "pid", "--seeds", "0"], "bad value for --seeds: 0"),
-    C("compare-seeds-huge", [*CMP, "--controllers", "pid", "--seeds", "1000000000"], "bad value for --seeds: 1000000000"),
+    C(
+        "compare-seeds-huge",
+        [*CMP, "--controllers", "pid", "--seeds", "1000000000"],
+        "bad value for --seeds: 1000000000",
+    ),
     C("compare-jobs-zero", [*CMP, "--controllers", "pid", "--jobs", "0"], "bad value for --jobs: 0"),
     C("compare-jobs-huge", [*CMP, "--controllers", "pid", "--jobs", "100000"], "bad value for --jobs: 100000"),
-    C("compare-out-a-file", ["compare", "emergency-brake", "--controllers", "pid", "--out", "{file.txt}"], "it is a file"),
+    C(
+        "compare-out-a-file",
+        ["compare", "emergency-brake", "--controllers", "pid", "--out", "{file.txt}"],
+        "it is a file",
+    ),
     C("compare-out-empty", ["compare", "emergency-brake", "--controllers", "pid", "--out", ""], "bad --out ''"),
     C("compare-no-out", ["compare", "emergency-brake", "--controllers", "pid"], "--out"),
     C("compare-unknown-parameter", [*CMP, "--controllers", "pid", "--set", "warp=1"], "unknown parameter 'warp'"),
-    C("compare-misspelt-parameter", [*CMP, "--controllers", "pid,fuzzy", "--set", "ego_sped=1"], "did you mean 'ego_speed'?"),
+    C(
+        "compare-misspelt-parameter",
+        [*CMP, "--controllers", "pid,fuzzy", "--set", "ego_sped=1"],
+        "did you mean 'ego_speed'?",
+    ),
     C("compare-bad-value", [*CMP, "--controllers", "pid", "--set", "lead_decel=nan"], "bad value for lead_decel: nan"),
-    C("compare-bad-controller-value", [*CMP, "--controllers", "pid,rbf-smc", "--set", "width=0"], "bad value for width: 0"),
-    C("compare-bad-model", ["compare", "curve", "--controllers", "narma-l2", "--out", "{out}", "--set", "model={model_nan.npz}"], "holds NaN"),
+    C(
+        "compare-bad-controller-value",
+        [*CMP, "--controllers", "pid,rbf-smc", "--set", "width=0"],
+        "bad value for width: 0",
+    ),
+    C(
+        "compare-bad-model",
+        ["compare", "curve", "--controllers", "narma-l2", "--out", "{out}", "--set", "model={model_nan.npz}"],
+        "holds NaN",
+    ),
     # -- sweep ---------------------------------------------------------------------------------------------
-    C("sweep-missing-spec", ["sweep", "/nowhere/s.toml", "--out", "{out}"], "cannot read the sweep spec '/nowhere/s.toml'"),
+    C(
+        "sweep-missing-spec",
+        ["sweep", "/nowhere/s.toml", "--out", "{out}"],
+        "cannot read the sweep spec '/nowhere/s.toml'",
+    ),
     C("sweep-spec-folder", _sweep("spec_dir.toml"), "cannot read the sweep spec"),
     C("sweep-spec-binary", _sweep("spec_binary.toml"), "not a text file (expected TOML)"),
     C("sweep-spec-garbled", _sweep("spec_garbled.toml"), "not valid TOML"),
@@ -422,7 +580,11 @@ CLI = [
     C("sweep-misspelt-axis-suggests", _sweep("spec_axis.toml"), "did you mean 'ego_speed'?"),
     C("sweep-grid-out-of-range", _sweep("spec_range.toml"), "[grid] ego_speed: bad value for ego_speed: 250"),
     C("sweep-grid-text", _sweep("spec_type.toml"), "bad value for ego_speed: 'fast'"),
-    C("sweep-grid-float-for-int", _sweep("spec_int.toml"), "bad value for substeps: 2.0 (expected a whole number from 1 to 100, not a float)"),
+    C(
+        "sweep-grid-float-for-int",
+        _sweep("spec_int.toml"),
+        "bad value for substeps: 2.0 (expected a whole number from 1 to 100, not a float)",
+    ),
     C("sweep-grid-bool-for-number", _sweep("spec_bool.toml"), "not true/false"),
     C("sweep-grid-empty", _sweep("spec_empty_grid.toml"), "must be a non-empty list"),
     C("sweep-grid-combination", _sweep("spec_mix.toml"), "bad value for sumo_step"),
@@ -440,7 +602,11 @@ CLI = [
     C("sweep-address-without-ray", _sweep("spec_ok.toml", "--address", "auto"), "--address needs --engine ray"),
     C("sweep-plot-malformed", _sweep("spec_ok.toml", "--plot", "ego_speed"), "bad --plot 'ego_speed'"),
     C("sweep-plot-not-swept", _sweep("spec_ok.toml", "--plot", "ego_sped,lead_gap"), "did you mean 'ego_speed'?"),
-    C("sweep-plot-metric", _sweep("spec_ok.toml", "--plot", "ego_speed,ego_speed:min_gap_frnt"), "did you mean 'min_gap_front'?"),
+    C(
+        "sweep-plot-metric",
+        _sweep("spec_ok.toml", "--plot", "ego_speed,ego_speed:min_gap_frnt"),
+        "did you mean 'min_gap_front'?",
+    ),
     C("sweep-out-a-file", ["sweep", "{spec_ok.toml}", "--out", "{file.txt}"], "it is a file"),
     # -- train ---------------------------------------------------------------------------------------------
     C("train-samples-few", [*TRAIN, "--samples", "5"], "bad value for --samples: 5"),
@@ -478,7 +644,8 @@ CLI = [
 
 @pytest.mark.parametrize("args, message, env", CLI)
 def test_bad_input_on_the_command_line_is_one_line_exit_2_nothing_written_no_sumo(
-        args, message, env, files, tmp_path, capsys, monkeypatch):
+    args, message, env, files, tmp_path, capsys, monkeypatch
+):
     monkeypatch.chdir(tmp_path)  # anything written to the working folder shows too
     for key, value in env.items():
         monkeypatch.setenv(key, _fill([value], files)[0])
@@ -495,17 +662,23 @@ def test_bad_input_on_the_command_line_is_one_line_exit_2_nothing_written_no_sum
     assert SumoBridge.started == started  # refused before SUMO starts
 
 
-@pytest.mark.parametrize("args, message", [
-    pytest.param([*EB, "--set", "substeps=2.0"], "write 2", id="int-as-float"),
-    pytest.param([*PLATOON, "--set", "init_range=1e308"], "bad value for init_range: 1e+308", id="init-range"),
-    pytest.param([*LANE, "--set", "gains_file={gains_binary.json}"], "not a text file", id="binary-gains"),
-    pytest.param([*CURVE_NARMA, "--set", "model={model_truncated.npz}"], "not a readable .npz file", id="truncated-model"),
-    pytest.param(["comprae"], "did you mean 'compare'?", id="misspelt-command"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        pytest.param([*EB, "--set", "substeps=2.0"], "write 2", id="int-as-float"),
+        pytest.param([*PLATOON, "--set", "init_range=1e308"], "bad value for init_range: 1e+308", id="init-range"),
+        pytest.param([*LANE, "--set", "gains_file={gains_binary.json}"], "not a text file", id="binary-gains"),
+        pytest.param(
+            [*CURVE_NARMA, "--set", "model={model_truncated.npz}"], "not a readable .npz file", id="truncated-model"
+        ),
+        pytest.param(["comprae"], "did you mean 'compare'?", id="misspelt-command"),
+    ],
+)
 def test_as_a_subprocess_bad_input_exits_2_with_one_line(args, message, files, tmp_path):
     before = _tree(tmp_path)
-    res = subprocess.run([sys.executable, "-m", "ego", *_fill(args, files)], capture_output=True, text=True,
-                         cwd=tmp_path, timeout=120)
+    res = subprocess.run(
+        [sys.executable, "-m", "ego", *_fill(args, files)], capture_output=True, text=True, cwd=tmp_path, timeout=120
+    )
     assert res.returncode == 2 and res.stdout == ""
     assert res.stderr.startswith("ego: error: ") and res.stderr.count("\n") == 1, res.stderr
     assert message in res.stderr and "Traceback" not in res.stderr
@@ -544,6 +717,7 @@ def _make(cls_path: str, **kw):
         module, name = cls_path.rsplit(".", 1)
         cls = getattr(importlib.import_module(module), name)
         return cls(**{k: _fill([v], files)[0] if isinstance(v, str) else v for k, v in kw.items()})
+
     return make
 
 
@@ -552,6 +726,7 @@ def _apply(cls_path: str, overrides: dict):
         from ego.params import apply_overrides
 
         return apply_overrides(_make(cls_path)(files), overrides)
+
     return apply
 
 
@@ -559,10 +734,16 @@ def _compare(**changes):
     def call(files):
         from ego.compare import compare
 
-        kw = {"scenario": "emergency-brake", "controllers": ["pid"], "seeds": 1, "overrides": {},
-              "out": Path(files["out"])}
+        kw = {
+            "scenario": "emergency-brake",
+            "controllers": ["pid"],
+            "seeds": 1,
+            "overrides": {},
+            "out": Path(files["out"]),
+        }
         kw.update(changes)
         return compare(**kw)
+
     return call
 
 
@@ -573,6 +754,7 @@ def _sweep_parse(**changes):
         data = {"scenario": "emergency-brake", "controllers": ["pid"], "grid": {"ego_speed": [20, 25]}}
         data.update(changes)
         return parse(data)
+
     return parse
 
 
@@ -583,6 +765,7 @@ def _loader(fn_path: str, file: str):
         module, name = fn_path.rsplit(".", 1)
         fn = getattr(importlib.import_module(module), name)
         return fn(files[file] if file in files else file)
+
     return load
 
 
@@ -591,18 +774,30 @@ def A(id: str, call, message: str):  # noqa: N802 - a table row
 
 
 API = [
-    A("runspec-substeps-float", _configure(substeps=2.0), "bad value for substeps: 2.0 (expected a whole number from 1 to 100, not a float)"),
+    A(
+        "runspec-substeps-float",
+        _configure(substeps=2.0),
+        "bad value for substeps: 2.0 (expected a whole number from 1 to 100, not a float)",
+    ),
     A("runspec-substeps-bool", _configure(substeps=True), "bad value for substeps: True"),
     A("runspec-substeps-numpy-float", _configure(substeps=np.float64(2.0)), "not a float"),
     A("runspec-dt-text", _configure(dt="x"), "bad value for dt: 'x'"),
-    A("runspec-dt-none", _configure(dt=None), "bad value for dt: None (expected a number from 0.001 to 0.1 (s), not None)"),
+    A(
+        "runspec-dt-none",
+        _configure(dt=None),
+        "bad value for dt: None (expected a number from 0.001 to 0.1 (s), not None)",
+    ),
     A("runspec-dt-list", _configure(dt=[0.01]), "bad value for dt: [0.01]"),
     A("runspec-dt-complex", _configure(dt=1j), "bad value for dt: 1j"),
     A("runspec-dt-nan", _configure(dt=math.nan), "bad value for dt: nan"),
     A("runspec-abs-int", _configure(abs=1), "bad value for abs: 1 (expected true or false, not a whole number)"),
     A("runspec-lane-bool", _configure(ego_lane=True), "bad value for ego_lane: True"),
     A("runspec-lane-float", _configure(ego_lane=1.0), "bad value for ego_lane: 1.0"),
-    A("runspec-text-param-number", _configure("curve", "narma-l2", model=3), "bad value for model: 3 (expected text, not a whole number)"),
+    A(
+        "runspec-text-param-number",
+        _configure("curve", "narma-l2", model=3),
+        "bad value for model: 3 (expected text, not a whole number)",
+    ),
     A("runspec-choice-number", _configure("platoon", "pid", variant=1), "bad value for variant: 1"),
     A("runspec-init-range", _configure("platoon", "bp-pid-acc", init_range=1e308), "bad value for init_range: 1e+308"),
     A("runspec-misspelt-parameter", _configure(ego_sped=1), "did you mean 'ego_speed'?"),
@@ -621,53 +816,107 @@ API = [
     A("params-learning-rate", _make("ego.control.BPPIDParams", learning_rate=2.0), "bad value for learning_rate: 2"),
     A("params-width", _make("ego.control.RBFSMCParams", width=1e-300), "bad value for width: 1e-300"),
     A("params-steer-limit", _make("ego.control.PIDParams", steer_limit=2.0), "bad value for steer_limit: 2"),
-    A("params-gain-text", _make("ego.control.PIDParams", kp_lat="1"), "bad value for kp_lat: '1' (expected a number from 0 to 10 (rad/m), not text)"),
+    A(
+        "params-gain-text",
+        _make("ego.control.PIDParams", kp_lat="1"),
+        "bad value for kp_lat: '1' (expected a number from 0 to 10 (rad/m), not text)",
+    ),
     A("params-gain-nan", _make("ego.control.FuzzyParams", fx_gain=math.nan), "bad value for fx_gain: nan"),
     A("params-period-zero", _make("ego.control.FollowingPIDParams", period=0.0), "bad value for period: 0"),
     A("params-preset", _make("ego.control.CascadePIDParams", preset="tunned"), "did you mean 'tuned'?"),
     A("params-gains-file", _make("ego.control.CascadePIDParams", gains_file="{gains_garbage.json}"), "not valid JSON"),
     A("params-model-file", _make("ego.control.NarmaL2Params", model="{model_nan.npz}"), "holds NaN"),
     A("config-substeps-float", _make("ego.scenarios.base.TimingConfig", substeps=2.0), "bad value for substeps: 2.0"),
-    A("config-brake-after-run", _make("ego.scenarios.EmergencyBrakeConfig", lead_brake_time=100.0), "bad value for lead_brake_time: 100"),
+    A(
+        "config-brake-after-run",
+        _make("ego.scenarios.EmergencyBrakeConfig", lead_brake_time=100.0),
+        "bad value for lead_brake_time: 100",
+    ),
     A("config-followers-bool", _make("ego.scenarios.PlatoonConfig", followers=True), "bad value for followers: True"),
     A("config-preview-huge", _make("ego.scenarios.CurveConfig", preview=1e308), "bad value for preview: 1e+308"),
-    A("apply-numpy-nan", _apply("ego.scenarios.EmergencyBrakeConfig", {"lead_gap": np.float64("nan")}), "bad value for lead_gap: nan"),
+    A(
+        "apply-numpy-nan",
+        _apply("ego.scenarios.EmergencyBrakeConfig", {"lead_gap": np.float64("nan")}),
+        "bad value for lead_gap: nan",
+    ),
     A("apply-misspelt", _apply("ego.scenarios.PlatoonConfig", {"folowers": 3}), "did you mean 'followers'?"),
     A("compare-seeds-text", _compare(seeds="3"), "bad value for seeds: '3' (expected a whole number from 1 to 100000)"),
     A("compare-seeds-float", _compare(seeds=2.0), "bad value for seeds: 2.0"),
-    A("compare-controllers-text", _compare(controllers="pid,fuzzy"), "bad controllers 'pid,fuzzy' (expected a list of names)"),
+    A(
+        "compare-controllers-text",
+        _compare(controllers="pid,fuzzy"),
+        "bad controllers 'pid,fuzzy' (expected a list of names)",
+    ),
     A("compare-overrides-list", _compare(overrides=["dt=0.01"]), "bad overrides"),
     A("compare-misspelt", _compare(overrides={"ego_sped": 1}), "did you mean 'ego_speed'?"),
     A("sweep-float-for-int", _sweep_parse(grid={"substeps": [1, 2.0]}), "bad value for substeps: 2.0"),
     A("sweep-parse-misspelt-axis", _sweep_parse(grid={"ego_sped": [20]}), "did you mean 'ego_speed'?"),
-    A("sweep-misspelt-sample-axis", _sweep_parse(grid={}, sample={"n": 4, "lead_gapp": [20, 40]}), "did you mean 'lead_gap'?"),
+    A(
+        "sweep-misspelt-sample-axis",
+        _sweep_parse(grid={}, sample={"n": 4, "lead_gapp": [20, 40]}),
+        "did you mean 'lead_gap'?",
+    ),
     A("sweep-seeds-text", _sweep_parse(seeds="3"), "seeds must be a count or a list"),
     A("sweep-set-text", _sweep_parse(set={"ego_speed": "fast"}), "bad value for ego_speed: 'fast'"),
     A("sweep-set-not-table", _sweep_parse(set=[1]), "[set] must be a table"),
     A("trainspec-data-samples", _make("ego.train.narma_l2.DataSpec", samples=5), "bad value for samples: 5"),
-    A("trainspec-data-reversed-speeds", _make("ego.train.narma_l2.DataSpec", speed_min=50.0, speed_max=30.0),
-      "bad value for speed_min: 50 (expected at most speed_max=30)"),
-    A("trainspec-data-sample-period", _make("ego.train.narma_l2.DataSpec", sample_period=0.025), "bad value for sample_period"),
+    A(
+        "trainspec-data-reversed-speeds",
+        _make("ego.train.narma_l2.DataSpec", speed_min=50.0, speed_max=30.0),
+        "bad value for speed_min: 50 (expected at most speed_max=30)",
+    ),
+    A(
+        "trainspec-data-sample-period",
+        _make("ego.train.narma_l2.DataSpec", sample_period=0.025),
+        "bad value for sample_period",
+    ),
     A("trainspec-epochs-float", _make("ego.train.narma_l2.TrainSpec", epochs=2.0), "bad value for epochs: 2.0"),
     A("trainspec-lr-zero", _make("ego.train.narma_l2.TrainSpec", lr=0.0), "bad value for lr: 0"),
     A("trainspec-data-not-a-spec", _make("ego.train.narma_l2.TrainSpec", data={"samples": 10}), "bad data"),
     A("tunespec-workers", _make("ego.train.lane_centering.TuneSpec", workers=0), "bad value for workers: 0"),
     A("tunespec-seed", _make("ego.train.lane_centering.TuneSpec", seed=-1), "bad value for seed: -1"),
-    A("tunespec-drives-fast", _make("ego.train.lane_centering.TuneSpec", drives=((100.0, 0.0),)), "expected speeds from 2 to 30 m/s"),
+    A(
+        "tunespec-drives-fast",
+        _make("ego.train.lane_centering.TuneSpec", drives=((100.0, 0.0),)),
+        "expected speeds from 2 to 30 m/s",
+    ),
     A("tunespec-drives-flat", _make("ego.train.lane_centering.TuneSpec", drives=(8.0, 0.0)), "bad value for drives"),
-    A("tunespec-drives-nan", _make("ego.train.lane_centering.TuneSpec", drives=((8.0, math.nan),)), "bad value for drives"),
+    A(
+        "tunespec-drives-nan",
+        _make("ego.train.lane_centering.TuneSpec", drives=((8.0, math.nan),)),
+        "bad value for drives",
+    ),
     A("tunespec-cost", _make("ego.train.lane_centering.TuneSpec", cost="sumoo"), "did you mean 'sumo'?"),
     A("tunespec-duration", _make("ego.train.lane_centering.TuneSpec", duration=0.0), "bad value for duration: 0.0"),
     A("tunespec-tol-nan", _make("ego.train.lane_centering.TuneSpec", tol=math.nan), "bad value for tol: nan"),
     A("load-preset-binary", _loader("ego.control.cascade.load_preset", "gains_binary.json"), "not a text file"),
-    A("load-preset-nan", _loader("ego.control.cascade.load_preset", "gains_nan.json"), "NaN is not a number JSON allows"),
-    A("load-model-truncated", lambda files: __import__("ego.control.narma").control.narma.NarmaModel.load(
-        files["model_truncated.npz"]), "not a readable .npz file"),
+    A(
+        "load-preset-nan",
+        _loader("ego.control.cascade.load_preset", "gains_nan.json"),
+        "NaN is not a number JSON allows",
+    ),
+    A(
+        "load-model-truncated",
+        lambda files: __import__("ego.control.narma").control.narma.NarmaModel.load(files["model_truncated.npz"]),
+        "not a readable .npz file",
+    ),
     A("load-model-shape", _loader("ego.control.narma.load_model", "model_shape.npz"), "the array f_w1 has shape"),
     A("load-sweep-binary", _loader("ego.sweep.spec.load", "spec_binary.toml"), "cannot read the sweep spec"),
-    A("controller-spec-misspelt", lambda files: __import__("ego.control").control.controller_spec("rbf_smc"), "did you mean 'rbf-smc'?"),
-    A("controller-spec-task", lambda files: __import__("ego.control").control.controller_spec("pid", "curv"), "did you mean 'curve'?"),
-    A("network-misspelt", lambda files: __import__("ego.sumo.net").sumo.net.net_file("highwya"), "did you mean 'highway'?"),
+    A(
+        "controller-spec-misspelt",
+        lambda files: __import__("ego.control").control.controller_spec("rbf_smc"),
+        "did you mean 'rbf-smc'?",
+    ),
+    A(
+        "controller-spec-task",
+        lambda files: __import__("ego.control").control.controller_spec("pid", "curv"),
+        "did you mean 'curve'?",
+    ),
+    A(
+        "network-misspelt",
+        lambda files: __import__("ego.sumo.net").sumo.net.net_file("highwya"),
+        "did you mean 'highway'?",
+    ),
 ]
 
 
@@ -702,8 +951,9 @@ def test_values_at_the_bounds_and_numpy_scalars_are_accepted_as_plain_python_val
     from ego.params import HALF_PI, apply_overrides
     from ego.scenarios import PlatoonConfig
 
-    config, _ = apply_overrides(PlatoonConfig(), {"followers": np.int64(10), "headway": np.float64(5.0),
-                                                  "standstill_gap": 3})
+    config, _ = apply_overrides(
+        PlatoonConfig(), {"followers": np.int64(10), "headway": np.float64(5.0), "standstill_gap": 3}
+    )
     assert config.followers == 10 and type(config.followers) is int
     assert type(config.headway) is float and type(config.standstill_gap) is float
     assert PIDParams(steer_limit=HALF_PI).steer_limit == HALF_PI
@@ -731,7 +981,6 @@ def test_a_misspelt_name_far_from_any_gets_no_suggestion():
     assert did_you_mean("zzz", ["pid", "fuzzy"]) == ""
     assert did_you_mean("fuzy", ["pid", "fuzzy"]) == "; did you mean 'fuzzy'?"
     assert did_you_mean(3, ["pid"]) == ""
-
 
 
 def test_the_inputs_reference_in_the_docs_is_what_ego_list_markdown_prints(capsys):

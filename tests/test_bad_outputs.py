@@ -97,12 +97,8 @@ def places(tmp_path_factory):
     tiny.mkdir()
     mounted = []
     if MOUNT:
-        subprocess.run(
-            ["mount", "-t", "tmpfs", "-o", "size=1m,ro", "tmpfs", str(ro)], check=True
-        )
-        subprocess.run(
-            ["mount", "-t", "tmpfs", "-o", "size=2m", "tmpfs", str(tiny)], check=True
-        )
+        subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1m,ro", "tmpfs", str(ro)], check=True)
+        subprocess.run(["mount", "-t", "tmpfs", "-o", "size=2m", "tmpfs", str(tiny)], check=True)
         mounted = [ro, tiny]
     else:  # without mount: a folder without write permission, and the free-space floor raised
         ro.chmod(0o555)
@@ -443,15 +439,8 @@ def test_a_bad_output_place_is_one_line_exit_2_before_anything_runs(
         out.mkdir(exist_ok=True)
         _occupy(out, o)
     before, started = _tree(tmp_path), SumoBridge.started
-    root_before = (
-        _tree(Path(places["root"]))
-        if MOUNT or not os.access(places["ro"], os.W_OK)
-        else None
-    )
-    shipped = {
-        p: hashlib.sha256(p.read_bytes()).hexdigest()
-        for p in (DEFAULT_MODEL, TUNED_PRESET)
-    }
+    root_before = _tree(Path(places["root"])) if MOUNT or not os.access(places["ro"], os.W_OK) else None
+    shipped = {p: hashlib.sha256(p.read_bytes()).hexdigest() for p in (DEFAULT_MODEL, TUNED_PRESET)}
     t0 = time.monotonic()
     status = main(_fill(args, paths))
     res = capsys.readouterr()
@@ -494,9 +483,7 @@ def _gains_file(path: Path, text: str) -> str:
     return str(path)
 
 
-def _shipped_model(
-    path: Path, change: dict | None = None, member: tuple[str, bytes] | None = None
-) -> str:
+def _shipped_model(path: Path, change: dict | None = None, member: tuple[str, bytes] | None = None) -> str:
     with np.load(DEFAULT_MODEL) as data:
         arrays = {k: data[k] for k in data.files}
     arrays.update(change or {})
@@ -530,9 +517,7 @@ def _huge_header_model(path: Path) -> str:
 
 def _nets_copy(tmp_path: Path, how: str) -> str:
     dst = tmp_path / f"nets-{how}"
-    shutil.copytree(
-        nets_dir(), dst, ignore=shutil.ignore_patterns("*.py", "__pycache__")
-    )
+    shutil.copytree(nets_dir(), dst, ignore=shutil.ignore_patterns("*.py", "__pycache__"))
     net = dst / "highway" / "highway.net.xml"
     if how == "no-length":
         import re
@@ -574,35 +559,23 @@ def test_odd_inputs_in_python_are_config_errors(tmp_path, monkeypatch):
             "bad trace 5",
         ),
         "gains-duplicate-key": (
-            lambda: load_preset(
-                _gains_file(tmp_path / "dup.json", '{"gains": [1], "gains": [2]}')
-            ),
+            lambda: load_preset(_gains_file(tmp_path / "dup.json", '{"gains": [1], "gains": [2]}')),
             "given twice",
         ),
         "gains-deep-nesting": (
-            lambda: load_preset(
-                _gains_file(tmp_path / "deep.json", "[" * 100000 + "]" * 100000)
-            ),
+            lambda: load_preset(_gains_file(tmp_path / "deep.json", "[" * 100000 + "]" * 100000)),
             "nested too deeply",
         ),
         "model-std-denormal": (
-            lambda: NarmaModel.load(
-                _shipped_model(tmp_path / "denormal.npz", {"std": np.full(5, 1e-320)})
-            ),
+            lambda: NarmaModel.load(_shipped_model(tmp_path / "denormal.npz", {"std": np.full(5, 1e-320)})),
             "std",
         ),
         "model-member-not-npy": (
-            lambda: NarmaModel.load(
-                _shipped_model(tmp_path / "member.npz", member=("notes.txt", b"hello"))
-            ),
+            lambda: NarmaModel.load(_shipped_model(tmp_path / "member.npz", member=("notes.txt", b"hello"))),
             "not npy data",
         ),
         "model-member-garbage-npy": (
-            lambda: NarmaModel.load(
-                _shipped_model(
-                    tmp_path / "garbage.npz", member=("extra.npy", b"garbage")
-                )
-            ),
+            lambda: NarmaModel.load(_shipped_model(tmp_path / "garbage.npz", member=("extra.npy", b"garbage"))),
             "not npy data",
         ),
         "model-header-10^12": (
@@ -612,22 +585,16 @@ def test_odd_inputs_in_python_are_config_errors(tmp_path, monkeypatch):
         "model-metadata-deep": (
             lambda: (
                 _shipped_model(tmp_path / "deepmeta.npz"),
-                (tmp_path / "deepmeta.json").write_text(
-                    '{"a":' * 50000 + "1" + "}" * 50000
-                ),
+                (tmp_path / "deepmeta.json").write_text('{"a":' * 50000 + "1" + "}" * 50000),
                 NarmaModel.load(tmp_path / "deepmeta.npz"),
             ),
             "nested too deeply",
         ),
     }
-    with np.load(
-        DEFAULT_MODEL
-    ) as data:  # the denormal case needs the model's own std length
+    with np.load(DEFAULT_MODEL) as data:  # the denormal case needs the model's own std length
         n = data["std"].size
     cases["model-std-denormal"] = (
-        lambda: NarmaModel.load(
-            _shipped_model(tmp_path / "denormal.npz", {"std": np.full(n, 1e-320)})
-        ),
+        lambda: NarmaModel.load(_shipped_model(tmp_path / "denormal.npz", {"std": np.full(n, 1e-320)})),
         "std",
     )
     for name, (call, message) in cases.items():
@@ -675,9 +642,7 @@ def test_sweep_spec_values_are_checked_against_set_not_defaults():
         ({"grid": {"duration": [3, 40], "lead_brake_time": [10]}}, "duration = 3"),
     ]:
         with pytest.raises(ConfigError, match=message):
-            sweep_spec.parse(
-                {"scenario": "emergency-brake", "controllers": ["pid"], **data}
-            )
+            sweep_spec.parse({"scenario": "emergency-brake", "controllers": ["pid"], **data})
 
 
 # -- the sweep's results file ---------------------------------------------------------------------------
@@ -708,13 +673,9 @@ def _ego(*args, cwd, env=None, timeout=240, preexec_fn=None, stdout=subprocess.P
 
 def _one_line_error(res, status: int, *needles: str) -> None:
     assert res.returncode == status, (res.returncode, res.stderr[-2000:])
-    lines = [
-        line for line in res.stderr.splitlines() if line.startswith("ego: error: ")
-    ]
+    lines = [line for line in res.stderr.splitlines() if line.startswith("ego: error: ")]
     assert len(lines) == 1, res.stderr[-2000:]
-    assert "Traceback" not in res.stderr and "Exception ignored" not in res.stderr, (
-        res.stderr[-2000:]
-    )
+    assert "Traceback" not in res.stderr and "Exception ignored" not in res.stderr, res.stderr[-2000:]
     for needle in needles:
         assert needle in lines[0], lines[0]
 
@@ -726,19 +687,13 @@ def test_sweep_results_that_cannot_take_the_new_rows_are_refused_before_running(
     import pyarrow.parquet as pq
 
     (tmp_path / "a.toml").write_text(
-        'scenario = "emergency-brake"\ncontrollers = ["pid"]\n[set]\nduration = 2\n'
-        '[grid]\nabs = ["true", "false"]\n'
+        'scenario = "emergency-brake"\ncontrollers = ["pid"]\n[set]\nduration = 2\n[grid]\nabs = ["true", "false"]\n'
     )
     (tmp_path / "b.toml").write_text(
-        'scenario = "emergency-brake"\ncontrollers = ["pid"]\n[set]\nduration = 2\n'
-        "[grid]\nabs = [true, false]\n"
+        'scenario = "emergency-brake"\ncontrollers = ["pid"]\n[set]\nduration = 2\n[grid]\nabs = [true, false]\n'
     )
-    (tmp_path / "c.toml").write_text(
-        'scenario = "fast-follower"\ncontrollers = ["pid"]\n[set]\nduration = 2\n'
-    )
-    first = _ego(
-        "sweep", "a.toml", "--out", "o", "--jobs", "1", "--record", "none", cwd=tmp_path
-    )
+    (tmp_path / "c.toml").write_text('scenario = "fast-follower"\ncontrollers = ["pid"]\n[set]\nduration = 2\n')
+    first = _ego("sweep", "a.toml", "--out", "o", "--jobs", "1", "--record", "none", cwd=tmp_path)
     assert first.returncode == 0, first.stderr
     before = (tmp_path / "o" / "results.parquet").read_bytes()
     for spec, needle in (
@@ -761,9 +716,7 @@ def test_a_results_file_with_odd_rows_keeps_them_as_text(tmp_path):
 
     store = ResultStore(tmp_path, flush_rows=1000)
     store.add({"run_id": "a", "scenario": "s", "controller": "c", "seed": 0, "m": 1.5})
-    store.add(
-        {"run_id": "b", "scenario": "s", "controller": "c", "seed": 0, "m": "odd"}
-    )
+    store.add({"run_id": "b", "scenario": "s", "controller": "c", "seed": 0, "m": "odd"})
     store.flush()
     store.add({"run_id": "c", "scenario": "s", "controller": "c", "seed": 0, "m": True})
     store.flush()
@@ -816,11 +769,7 @@ class FullDisk:
         return limit
 
     def files(self) -> list[str]:
-        return sorted(
-            str(p.relative_to(self.root))
-            for p in self.root.rglob("*")
-            if p.name != ".filler"
-        )
+        return sorted(str(p.relative_to(self.root)) for p in self.root.rglob("*") if p.name != ".filler")
 
 
 @pytest.mark.parametrize(
@@ -833,9 +782,7 @@ class FullDisk:
         ("--video", "v.gif", 20_000),
     ],
 )
-def test_a_run_whose_output_fills_the_disk_prints_its_metrics_and_one_line(
-    option, name, room, tmp_path, monkeypatch
-):
+def test_a_run_whose_output_fills_the_disk_prints_its_metrics_and_one_line(option, name, room, tmp_path, monkeypatch):
     run = EB + (["--backend", "highway-env"] if option == "--video" else [])
     monkeypatch.setenv("MPLCONFIGDIR", str(tmp_path / "mpl"))
     with FullDisk(tmp_path / "disk", room) as disk:
@@ -848,17 +795,10 @@ def test_a_run_whose_output_fills_the_disk_prints_its_metrics_and_one_line(
             env=disk.env,
             preexec_fn=disk.preexec(),
         )
-        _one_line_error(
-            res, 1, "cannot write", str(disk.root / name).rsplit(".", 1)[0], "Errno"
-        )
-        metrics = json.loads(
-            res.stdout
-        )  # the metrics are still printed, the status unchanged
+        _one_line_error(res, 1, "cannot write", str(disk.root / name).rsplit(".", 1)[0], "Errno")
+        metrics = json.loads(res.stdout)  # the metrics are still printed, the status unchanged
         assert metrics["status"] in ("completed", "ended", "timeout")
-        assert (
-            metrics["status"]
-            == json.loads(_ego(*run, "--json", cwd=tmp_path).stdout)["status"]
-        )
+        assert metrics["status"] == json.loads(_ego(*run, "--json", cwd=tmp_path).stdout)["status"]
         assert disk.files() == []  # no partial, no half file under the final name
 
 
@@ -866,9 +806,7 @@ def test_a_sweep_whose_results_fill_the_disk_stops_in_one_line_without_hanging(
     tmp_path,
 ):
     (tmp_path / "s.toml").write_text(SPEC)
-    with FullDisk(
-        tmp_path / "disk", 6_000
-    ) as disk:  # room for the lock, not for the results
+    with FullDisk(tmp_path / "disk", 6_000) as disk:  # room for the lock, not for the results
         t0 = time.monotonic()
         res = _ego(
             "sweep",
@@ -931,9 +869,7 @@ def test_a_sweep_recording_every_run_on_a_full_disk_keeps_the_metrics(tmp_path):
             timeout=180,
         )
         assert "Traceback" not in res.stderr, res.stderr[-2000:]
-        assert not [f for f in disk.files() if f.endswith((".partial", ".rrd"))], (
-            disk.files()
-        )
+        assert not [f for f in disk.files() if f.endswith((".partial", ".rrd"))], disk.files()
         if res.returncode == 0:
             table = pq.read_table(out / "results.parquet").to_pydict()
             assert set(table["status"]) <= {
@@ -942,9 +878,7 @@ def test_a_sweep_recording_every_run_on_a_full_disk_keeps_the_metrics(tmp_path):
                 "timeout",
                 "collision",
             }, table["status"]
-            assert all("cannot write" in e and "Errno" in e for e in table["error"]), (
-                table["error"]
-            )
+            assert all("cannot write" in e and "Errno" in e for e in table["error"]), table["error"]
             assert all(isinstance(v, float) for v in table["sim_time"])
         else:  # the results file itself did not fit: one line, exit 1
             _one_line_error(res, 1, "cannot write", "Errno")
@@ -1025,9 +959,7 @@ def test_the_shipped_files_survive_train_and_tune_pointed_at_them(tmp_path):
         cwd=tmp_path,
     )
     _one_line_error(res, 2, "--install")
-    res = _ego(
-        "tune", "lane-centering", "--quick", "--out", str(TUNED_PRESET), cwd=tmp_path
-    )
+    res = _ego("tune", "lane-centering", "--quick", "--out", str(TUNED_PRESET), cwd=tmp_path)
     _one_line_error(res, 2, "--install")
     assert {p: p.read_bytes() for p in before} == before
 
@@ -1068,17 +1000,11 @@ def _launch(tmp_path: Path, *extra: str) -> subprocess.Popen:
 
 
 @pytest.mark.parametrize("delay", [0.35, 0.5, 0.7, 1.0])
-@pytest.mark.parametrize(
-    "sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"]
-)
-def test_a_signal_in_the_first_second_is_exit_130_without_a_traceback(
-    sig, delay, tmp_path
-):
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_a_signal_in_the_first_second_is_exit_130_without_a_traceback(sig, delay, tmp_path):
     proc = _launch(tmp_path)
     time.sleep(delay)
-    os.killpg(proc.pid, sig) if sig == signal.SIGINT else proc.send_signal(
-        sig
-    )  # Ctrl-C reaches the group
+    os.killpg(proc.pid, sig) if sig == signal.SIGINT else proc.send_signal(sig)  # Ctrl-C reaches the group
     out, err = proc.communicate(timeout=120)
     assert proc.returncode == 130, (proc.returncode, err)
     assert "Traceback" not in err and "Exception ignored" not in err, err
@@ -1101,9 +1027,7 @@ def test_a_double_ctrl_c_never_leaves_a_broken_recording(delay, tmp_path):
     _out, err = proc.communicate(timeout=120)
     assert proc.returncode in (0, 1, 130), (proc.returncode, err)
     assert "Traceback" not in err and "Exception ignored" not in err, err
-    for path in tmp_path.glob(
-        "r.rrd*"
-    ):  # a final recording or a partial one: each whole
+    for path in tmp_path.glob("r.rrd*"):  # a final recording or a partial one: each whole
         assert _verify(path, tmp_path), path
     assert not list(tmp_path.glob("*.partial"))
 
@@ -1114,7 +1038,5 @@ def test_a_recorder_whose_writer_never_started_is_collected_quietly():
     rec = RerunRecorder.__new__(RerunRecorder)
     import multiprocessing
 
-    rec._proc = multiprocessing.get_context("spawn").Process(
-        target=print
-    )  # made, never started
+    rec._proc = multiprocessing.get_context("spawn").Process(target=print)  # made, never started
     rec.__del__()

@@ -23,8 +23,17 @@ def test_list_names_every_parameter_with_default_and_unit():
     cat = json.loads(out.stdout)
     scenarios = {s["name"]: s for s in cat["scenarios"]}
     params = {p["name"]: p for p in scenarios["emergency-brake"]["parameters"]}
-    for name in ("dt", "duration", "ego_speed", "lead_gap", "lead_brake_time", "lead_decel",
-                 "lead_final_speed", "ttc_threshold", "traffic_density"):
+    for name in (
+        "dt",
+        "duration",
+        "ego_speed",
+        "lead_gap",
+        "lead_brake_time",
+        "lead_decel",
+        "lead_final_speed",
+        "ttc_threshold",
+        "traffic_density",
+    ):
         assert name in params and params[name]["unit"] and params[name]["default"] is not None
     assert params["lead_decel"]["unit"] == "m/s^2"
     assert {c["name"] for c in cat["controllers"]} >= {"fuzzy", "pid"}
@@ -75,20 +84,37 @@ def test_list_shows_the_scenario_declarations(point_mass, capsys, monkeypatch):
     pm = {s["name"]: s for s in cat["scenarios"]}["point-mass"]
     assert pm["task"] == "tracking"
     assert {p["name"]: p["unit"] for p in pm["parameters"]} == {
-        "dt": "s", "substeps": "-", "duration": "s", "ref_speed": "m/s", "mass": "kg"}
+        "dt": "s",
+        "substeps": "-",
+        "duration": "s",
+        "ref_speed": "m/s",
+        "mass": "kg",
+    }
     own = [m for m in pm["metrics"] if m["name"] not in COMMON]
     assert own == [
-        {"name": "rms_speed_error", "unit": "m/s", "description": "RMS of speed - reference speed",
-         "headline": True},
+        {"name": "rms_speed_error", "unit": "m/s", "description": "RMS of speed - reference speed", "headline": True},
         {"name": "final_position", "unit": "m", "description": "position at the end", "headline": False},
-        {"name": "settle_times.", "unit": "s",
-         "description": "time until |speed error| stays within each band", "headline": True},
-        {"name": "reached_speed", "unit": "-",
-         "description": "the speed came within 1 m/s of the reference", "headline": True},
+        {
+            "name": "settle_times.",
+            "unit": "s",
+            "description": "time until |speed error| stays within each band",
+            "headline": True,
+        },
+        {
+            "name": "reached_speed",
+            "unit": "-",
+            "description": "the speed came within 1 m/s of the reference",
+            "headline": True,
+        },
     ]
     assert {"name": "sim_time", "unit": "s", "description": "simulated time", "headline": False} in pm["metrics"]
     assert [(c["name"], c["unit"]) for c in pm["columns"]] == [
-        ("t", "s"), ("s", "m"), ("speed", "m/s"), ("e_lon", "m"), ("Fx", "N")]
+        ("t", "s"),
+        ("s", "m"),
+        ("speed", "m/s"),
+        ("e_lon", "m"),
+        ("Fx", "N"),
+    ]
     tracking = {c["name"]: c for c in cat["controllers"] if c["task"] == "tracking"}
     assert "kp_lat" in {p["name"] for p in tracking["pid"]["parameters"]}
     assert main(["list"]) == 0
@@ -113,31 +139,56 @@ def test_run_json_carries_a_units_map_beside_the_metrics(point_mass, capsys):
     m = json.loads(capsys.readouterr().out)
     assert m["status"] == "completed" and m["steps"] == 200 and set(m["settle_times"]) == {"band5", "band1"}
     assert m["units"] == {
-        "scenario": "-", "controller": "-", "seed": "-", "status": "-", "status_detail": "-", "collision": "-",
-        "collision_with": "-", "rms_speed_error": "m/s", "final_position": "m", "settle_times.band5": "s",
-        "settle_times.band1": "s", "reached_speed": "-", "sim_time": "s", "wall_time": "s", "steps": "-"}
+        "scenario": "-",
+        "controller": "-",
+        "seed": "-",
+        "status": "-",
+        "status_detail": "-",
+        "collision": "-",
+        "collision_with": "-",
+        "rms_speed_error": "m/s",
+        "final_position": "m",
+        "settle_times.band5": "s",
+        "settle_times.band1": "s",
+        "reached_speed": "-",
+        "sim_time": "s",
+        "wall_time": "s",
+        "steps": "-",
+    }
 
 
 def test_bad_input_to_a_declared_scenario_is_one_line(point_mass, capsys):
     assert main(["run", "point-mass", "-c", "pid", "--set", "ref_speed=fast"]) == 2
     out = capsys.readouterr()
-    assert out.out == "" and out.err == ("ego: error: bad value for ref_speed: 'fast' "
-                                         "(expected a number from 0 to 40 (m/s))\n")
+    assert out.out == "" and out.err == (
+        "ego: error: bad value for ref_speed: 'fast' (expected a number from 0 to 40 (m/s))\n"
+    )
 
 
 @pytest.mark.sumo
 def test_platoon_run_prints_per_follower_metrics_and_json(tmp_path):
     text = ego("run", "platoon", "-c", "pid", "--set", "duration=20")
     assert text.returncode == 0, text.stderr
-    for line in ("followers.f3.max_abs_jerk", "settle_times.brake@10s", "amplification.f1->f2.l2_accel",
-                 "string_stable"):
+    for line in (
+        "followers.f3.max_abs_jerk",
+        "settle_times.brake@10s",
+        "amplification.f1->f2.l2_accel",
+        "string_stable",
+    ):
         assert line in text.stdout
     out = ego("run", "platoon", "-c", "bp-pid-acc", "--json", "--set", "followers=2", "--set", "duration=20")
     assert out.returncode == 0, out.stderr
     m = json.loads(out.stdout)
     assert set(m["followers"]) == {"f1", "f2"}
-    assert set(m["followers"]["f1"]) == {"rms_spacing_error", "max_abs_spacing_error", "min_gap", "min_ttc",
-                                         "max_abs_accel", "max_abs_jerk", "settle_times"}
+    assert set(m["followers"]["f1"]) == {
+        "rms_spacing_error",
+        "max_abs_spacing_error",
+        "min_gap",
+        "min_ttc",
+        "max_abs_accel",
+        "max_abs_jerk",
+        "settle_times",
+    }
     assert m["collision"] is False and isinstance(m["string_stable"], bool)
     assert set(m["amplification"]) == {"leader->f1", "f1->f2"}
 
@@ -145,15 +196,26 @@ def test_platoon_run_prints_per_follower_metrics_and_json(tmp_path):
 @pytest.mark.sumo
 def test_run_json_is_one_object_with_the_documented_fields(tmp_path):
     rec = tmp_path / "runs" / "eb.rrd"
-    out = ego("run", "emergency-brake", "--controller", "pid", "--json", "--record", str(rec),
-              "--set", "duration=15")
+    out = ego("run", "emergency-brake", "--controller", "pid", "--json", "--record", str(rec), "--set", "duration=15")
     assert out.returncode == 0, out.stderr
     lines = out.stdout.strip().splitlines()
     assert len(lines) == 1
     m = json.loads(lines[0])
-    for key in ("status", "collision", "lane_change_completed", "target_lane", "trigger_time",
-                "lane_change_duration", "max_overshoot", "min_ttc_front", "min_ttc_rear",
-                "max_abs_lateral_accel", "sim_time", "wall_time", "steps"):
+    for key in (
+        "status",
+        "collision",
+        "lane_change_completed",
+        "target_lane",
+        "trigger_time",
+        "lane_change_duration",
+        "max_overshoot",
+        "min_ttc_front",
+        "min_ttc_rear",
+        "max_abs_lateral_accel",
+        "sim_time",
+        "wall_time",
+        "steps",
+    ):
         assert key in m, key
     assert m["status"] == "completed" and m["sim_time"] == 15.0 and m["steps"] == 1500
     assert m["units"]["min_ttc_front"] == "s" and m["units"]["max_abs_lateral_accel"] == "m/s^2"
@@ -167,29 +229,57 @@ def test_a_collision_is_reported_with_exit_status_1():
     assert json.loads(out.stdout)["status"] == "collision"
 
 
-@pytest.mark.parametrize("args, message", [
-    (["run", "nowhere", "-c", "fuzzy"], "unknown scenario 'nowhere' (known: emergency-brake"),
-    (["run", "emergency-brake", "-c", "magic"], "unknown controller 'magic' for the tracking task (known: fuzzy, pid"),
-    (["run", "emergency-brake", "-c", "fuzzy", "--set", "warp=9"], "unknown parameter 'warp'"),
-    (["run", "emergency-brake", "-c", "fuzzy", "--set", "lead_decel=fast"],
-     "bad value for lead_decel: 'fast' (expected a number from 0.5 to 12 (m/s^2))"),
-    (["run", "emergency-brake", "-c", "fuzzy", "--set", "ttc_threshold=-1"], "bad value for ttc_threshold"),
-    (["run", "emergency-brake", "-c", "fuzzy", "--set", "dt=0.03"], "bad value for sumo_step"),
-    (["run", "emergency-brake", "-c", "pid", "--set", "kp_lat=x"], "bad value for kp_lat"),
-    (["run", "emergency-brake", "-c", "fuzzy", "--record", "x.txt"], "expected a file ending in .rrd"),
-    (["run", "emergency-brake"], "--controller"),
-    (["run", "curve", "-c", "fuzzy"], "unknown controller 'fuzzy' for the curve task (known: pid, "
-                                      "fuzzy-curve, narma-l2, none); 'fuzzy' is a tracking controller"),
-    (["run", "curve", "-c", "pid", "--set", "preview=30"], "bad value for preview: 30.0 (expected at most"),
-    (["run", "curve", "-c", "narma-l2", "--set", "model=/nowhere/m.npz"], "no trained NARMA-L2 model"),
-    (["run", "curve", "-c", "narma-l2", "--set", "dt=0.02"], "dt must divide"),
-    (["train", "narma-l2", "--speeds", "30"], "bad value for --speeds: '30' (expected LO,HI"),
-    (["train", "narma-l2", "--samples", "5"], "bad value for --samples: 5"),
-    (["train", "narma-l2", "--out", "x.pt"], "expected a file ending in .npz"),
-    (["train", "anything"], "invalid choice: 'anything'"),
-], ids=["scenario", "controller", "parameter", "value", "range", "timing", "controller-param",
-        "record", "missing", "task", "preview", "model", "sample-period", "train-range",
-        "train-samples", "train-out", "train-what"])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["run", "nowhere", "-c", "fuzzy"], "unknown scenario 'nowhere' (known: emergency-brake"),
+        (
+            ["run", "emergency-brake", "-c", "magic"],
+            "unknown controller 'magic' for the tracking task (known: fuzzy, pid",
+        ),
+        (["run", "emergency-brake", "-c", "fuzzy", "--set", "warp=9"], "unknown parameter 'warp'"),
+        (
+            ["run", "emergency-brake", "-c", "fuzzy", "--set", "lead_decel=fast"],
+            "bad value for lead_decel: 'fast' (expected a number from 0.5 to 12 (m/s^2))",
+        ),
+        (["run", "emergency-brake", "-c", "fuzzy", "--set", "ttc_threshold=-1"], "bad value for ttc_threshold"),
+        (["run", "emergency-brake", "-c", "fuzzy", "--set", "dt=0.03"], "bad value for sumo_step"),
+        (["run", "emergency-brake", "-c", "pid", "--set", "kp_lat=x"], "bad value for kp_lat"),
+        (["run", "emergency-brake", "-c", "fuzzy", "--record", "x.txt"], "expected a file ending in .rrd"),
+        (["run", "emergency-brake"], "--controller"),
+        (
+            ["run", "curve", "-c", "fuzzy"],
+            "unknown controller 'fuzzy' for the curve task (known: pid, "
+            "fuzzy-curve, narma-l2, none); 'fuzzy' is a tracking controller",
+        ),
+        (["run", "curve", "-c", "pid", "--set", "preview=30"], "bad value for preview: 30.0 (expected at most"),
+        (["run", "curve", "-c", "narma-l2", "--set", "model=/nowhere/m.npz"], "no trained NARMA-L2 model"),
+        (["run", "curve", "-c", "narma-l2", "--set", "dt=0.02"], "dt must divide"),
+        (["train", "narma-l2", "--speeds", "30"], "bad value for --speeds: '30' (expected LO,HI"),
+        (["train", "narma-l2", "--samples", "5"], "bad value for --samples: 5"),
+        (["train", "narma-l2", "--out", "x.pt"], "expected a file ending in .npz"),
+        (["train", "anything"], "invalid choice: 'anything'"),
+    ],
+    ids=[
+        "scenario",
+        "controller",
+        "parameter",
+        "value",
+        "range",
+        "timing",
+        "controller-param",
+        "record",
+        "missing",
+        "task",
+        "preview",
+        "model",
+        "sample-period",
+        "train-range",
+        "train-samples",
+        "train-out",
+        "train-what",
+    ],
+)
 def test_bad_input_is_one_line_and_exit_2(args, message):
     out = ego(*args)
     assert out.returncode == 2
@@ -227,25 +317,31 @@ def test_curve_run_uses_a_model_trained_elsewhere(tmp_path):
     assert m["scenario"] == "curve" and m["controller"] == "narma-l2"
 
 
-@pytest.mark.parametrize("args, message", [
-    (["run", "emergency-brake", "-c", "pid", "--seed", "-1"], "bad value for --seed: -1"),
-    (["run", "emergency-brake", "-c", "pid", "--seed", "2147483648"], "bad value for --seed: 2147483648"),
-    (["run", "emergency-brake", "-c", "pid", "--record", ""], "bad --record path ''"),
-    (["run", "emergency-brake", "-c", "pid", "--record", "/proc/x.rrd"], "not a place for files"),
-    (["run", "emergency-brake", "-c", "pid", "--record", "{tmp}/file.txt/x.rrd"], "is a file, not a folder"),
-    (["run", "emergency-brake", "-c", "pid", "--record", "{tmp}/dir.rrd"], "it is a folder"),
-    (["compare", "emergency-brake", "--controllers", "pid", "--out", "{tmp}/file.txt"], "it is a file"),
-    (["compare", "emergency-brake", "--controllers", "pid,pid", "--out", "{tmp}/c"], "'pid' is listed twice"),
-    (["compare", "emergency-brake", "--controllers", "pid", "--seeds", "1000000000", "--out", "{tmp}/c"],
-     "bad value for --seeds: 1000000000"),
-    (["compare", "emergency-brake", "--controllers", "pid", "--out", ""], "bad --out ''"),
-    (["train", "narma-l2", "--seed", "-1"], "bad value for --seed: -1"),
-    (["train", "narma-l2", "--out", "{tmp}/a.npz", "--install"], "not both"),
-    (["tune", "lane-centering", "--seed", "-1"], "bad value for --seed: -1"),
-    (["tune", "lane-centering", "--drives", "8:nan"], "bad value for --drives: '8:nan'"),
-    (["tune", "lane-centering", "--drives", "8:1:2"], "bad value for --drives: '8:1:2'"),
-    (["sweep", "{tmp}/none.toml", "--out", "{tmp}/s"], "cannot read the sweep spec"),
-], ids=lambda a: " ".join(a)[:60] if isinstance(a, list) else None)
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["run", "emergency-brake", "-c", "pid", "--seed", "-1"], "bad value for --seed: -1"),
+        (["run", "emergency-brake", "-c", "pid", "--seed", "2147483648"], "bad value for --seed: 2147483648"),
+        (["run", "emergency-brake", "-c", "pid", "--record", ""], "bad --record path ''"),
+        (["run", "emergency-brake", "-c", "pid", "--record", "/proc/x.rrd"], "not a place for files"),
+        (["run", "emergency-brake", "-c", "pid", "--record", "{tmp}/file.txt/x.rrd"], "is a file, not a folder"),
+        (["run", "emergency-brake", "-c", "pid", "--record", "{tmp}/dir.rrd"], "it is a folder"),
+        (["compare", "emergency-brake", "--controllers", "pid", "--out", "{tmp}/file.txt"], "it is a file"),
+        (["compare", "emergency-brake", "--controllers", "pid,pid", "--out", "{tmp}/c"], "'pid' is listed twice"),
+        (
+            ["compare", "emergency-brake", "--controllers", "pid", "--seeds", "1000000000", "--out", "{tmp}/c"],
+            "bad value for --seeds: 1000000000",
+        ),
+        (["compare", "emergency-brake", "--controllers", "pid", "--out", ""], "bad --out ''"),
+        (["train", "narma-l2", "--seed", "-1"], "bad value for --seed: -1"),
+        (["train", "narma-l2", "--out", "{tmp}/a.npz", "--install"], "not both"),
+        (["tune", "lane-centering", "--seed", "-1"], "bad value for --seed: -1"),
+        (["tune", "lane-centering", "--drives", "8:nan"], "bad value for --drives: '8:nan'"),
+        (["tune", "lane-centering", "--drives", "8:1:2"], "bad value for --drives: '8:1:2'"),
+        (["sweep", "{tmp}/none.toml", "--out", "{tmp}/s"], "cannot read the sweep spec"),
+    ],
+    ids=lambda a: " ".join(a)[:60] if isinstance(a, list) else None,
+)
 def test_bad_seeds_and_output_places_fail_at_once_writing_nothing(args, message, tmp_path):
     (tmp_path / "file.txt").write_text("x")
     (tmp_path / "dir.rrd").mkdir()
@@ -273,8 +369,13 @@ def test_train_and_tune_write_into_the_working_folder_unless_told_to_install(tmp
     from ego.control.cascade import TUNED_PRESET
 
     shipped = TUNED_PRESET.read_bytes()
-    p = subprocess.run([sys.executable, "-m", "ego", "tune", "lane-centering", "--quick"], cwd=tmp_path,
-                       capture_output=True, text=True, timeout=300)
+    p = subprocess.run(
+        [sys.executable, "-m", "ego", "tune", "lane-centering", "--quick"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert p.returncode == 0, p.stderr
     assert (tmp_path / "runs" / "cascade_pid_tuned.json").is_file()
     assert TUNED_PRESET.read_bytes() == shipped  # the shipped preset is untouched
@@ -284,7 +385,7 @@ def test_list_gives_numbers_readably_and_angles_in_degrees_too(capsys):
     assert main(["list"]) == 0
     text = capsys.readouterr().out
     assert "0.4363323129985824" not in text and "25.0 s" not in text
-    lane = text[text.index("lane-centering [lane-centering task]"):]
+    lane = text[text.index("lane-centering [lane-centering task]") :]
     assert "max_steer           0.436332 rad (25 deg)  front steer limit" in lane
     assert "the end of the 2935 m road: 363 s at 8 m/s" in lane
 
@@ -294,8 +395,10 @@ def test_the_duration_that_ends_a_run_is_named_and_a_shortened_drive_is_no_failu
     # lane centring's end is the road's, at the configured speed: a shorter duration is a choice
     assert main(["run", "lane-centering", "-c", "cascade-pid", "--set", "duration=20"]) == 0
     first = capsys.readouterr().out.splitlines()[0]
-    assert first == ("lane-centering with cascade-pid (seed 0): ENDED - the duration (20 s) ended the run "
-                     "at s = 178 m of the drive to s = 2920 m")
+    assert first == (
+        "lane-centering with cascade-pid (seed 0): ENDED - the duration (20 s) ended the run "
+        "at s = 178 m of the drive to s = 2920 m"
+    )
     # the duration cut the emergency brake's lane change short: the manoeuvre did not finish
     assert main(["run", "emergency-brake", "-c", "pid", "--set", "duration=5"]) == 1
     first = capsys.readouterr().out.splitlines()[0]

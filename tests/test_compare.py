@@ -21,14 +21,19 @@ PNG = b"\x89PNG\r\n\x1a\n"
 
 def test_compare_shows_what_the_scenario_declares_with_units(point_mass, tmp_path):
     out = tmp_path / "cmp"
-    rows = compare("point-mass", ["pid", "fuzzy"], 2, {}, out, progress=None,
-                   executor=InlineExecutor())
+    rows = compare("point-mass", ["pid", "fuzzy"], 2, {}, out, progress=None, executor=InlineExecutor())
     assert [(r.controller, r.seed, r.status) for r in rows] == [
-        ("pid", 0, "completed"), ("pid", 1, "completed"), ("fuzzy", 0, "completed"), ("fuzzy", 1, "completed")]
+        ("pid", 0, "completed"),
+        ("pid", 1, "completed"),
+        ("fuzzy", 0, "completed"),
+        ("fuzzy", 1, "completed"),
+    ]
     md = (out / "metrics.md").read_text().splitlines()
     # the scenario's headline metrics only, in declaration order, the prefix expanded, with units
-    assert md[4] == ("| controller | runs | rms_speed_error [m/s] | settle_times.band5 [s] "
-                     "| settle_times.band1 [s] | reached_speed |")
+    assert md[4] == (
+        "| controller | runs | rms_speed_error [m/s] | settle_times.band5 [s] "
+        "| settle_times.band1 [s] | reached_speed |"
+    )
     assert md[6].startswith("| pid | 2 completed | 4 +- 0 | 0.79 +- 0 | - | 2/2 |")
     assert md[7].startswith("| fuzzy | 2 completed |")
     assert not any("final_position" in line for line in md)  # declared, not a headline
@@ -37,8 +42,12 @@ def test_compare_shows_what_the_scenario_declares_with_units(point_mass, tmp_pat
         table = list(csv.reader(f))
     header = table[0]
     assert header[:4] == ["controller", "seed", "status", "error"]
-    assert [r[:3] for r in table[1:]] == [["pid", "0", "completed"], ["pid", "1", "completed"],
-                                          ["fuzzy", "0", "completed"], ["fuzzy", "1", "completed"]]
+    assert [r[:3] for r in table[1:]] == [
+        ["pid", "0", "completed"],
+        ["pid", "1", "completed"],
+        ["fuzzy", "0", "completed"],
+        ["fuzzy", "1", "completed"],
+    ]
     with open(out / "metrics_units.csv", newline="") as f:
         units = list(csv.reader(f))
     assert units[0] == ["metric", "unit"]
@@ -97,13 +106,29 @@ def test_unknown_scenario_stops_compare_before_anything_runs(tmp_path):
 @pytest.mark.sumo
 def test_compare_two_controllers_two_seeds_writes_everything(tmp_path):
     out = tmp_path / "cmp"
-    p = subprocess.run([sys.executable, "-m", "ego", "compare", "emergency-brake", "--controllers",
-                        "pid,fuzzy", "--seeds", "2", "--out", str(out), "--set", "duration=16"],
-                       capture_output=True, text=True, timeout=600)
+    p = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "ego",
+            "compare",
+            "emergency-brake",
+            "--controllers",
+            "pid,fuzzy",
+            "--seeds",
+            "2",
+            "--out",
+            str(out),
+            "--set",
+            "duration=16",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert p.returncode == 0, p.stderr
     rows = list(csv.DictReader(open(out / "metrics.csv")))
-    assert [(r["controller"], r["seed"]) for r in rows] == [("pid", "0"), ("pid", "1"),
-                                                              ("fuzzy", "0"), ("fuzzy", "1")]
+    assert [(r["controller"], r["seed"]) for r in rows] == [("pid", "0"), ("pid", "1"), ("fuzzy", "0"), ("fuzzy", "1")]
     assert all(r["status"] == "completed" for r in rows)
     md = (out / "metrics.md").read_text()
     assert "| pid | 2 completed |" in md and "| fuzzy | 2 completed |" in md
@@ -124,9 +149,22 @@ def test_compare_two_controllers_two_seeds_writes_everything(tmp_path):
 @pytest.mark.sumo
 def test_compare_the_curve_controllers(tmp_path):
     out = tmp_path / "curve"
-    p = subprocess.run([sys.executable, "-m", "ego", "compare", "curve", "--controllers",
-                        "pid,fuzzy-curve,narma-l2", "--out", str(out)],
-                       capture_output=True, text=True, timeout=600)
+    p = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "ego",
+            "compare",
+            "curve",
+            "--controllers",
+            "pid,fuzzy-curve,narma-l2",
+            "--out",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert p.returncode == 0, p.stderr
     rows = {r["controller"]: r for r in csv.DictReader(open(out / "metrics.csv"))}
     assert set(rows) == {"pid", "fuzzy-curve", "narma-l2"}
@@ -144,9 +182,24 @@ def test_compare_the_curve_controllers(tmp_path):
 @pytest.mark.sumo
 def test_a_diverging_controller_is_a_row_not_a_crash(tmp_path):
     out = tmp_path / "cmp"
-    p = subprocess.run([sys.executable, "-m", "ego", "compare", "report-000", "--controllers",
-                        "rbf-smc,bp-pid", "--set", "variant=report", "--out", str(out)],
-                       capture_output=True, text=True, timeout=600)
+    p = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "ego",
+            "compare",
+            "report-000",
+            "--controllers",
+            "rbf-smc,bp-pid",
+            "--set",
+            "variant=report",
+            "--out",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert p.returncode == 0, p.stderr
     status = {r["controller"]: r["status"] for r in csv.DictReader(open(out / "metrics.csv"))}
     assert status == {"rbf-smc": "completed", "bp-pid": "diverged"}
@@ -162,27 +215,76 @@ def test_a_run_that_raises_becomes_an_error_row(tmp_path):
 
 @pytest.mark.sumo
 def test_bad_input_is_rejected_before_anything_runs(tmp_path):
-    p = subprocess.run([sys.executable, "-m", "ego", "compare", "emergency-brake", "--controllers",
-                        "pid,warp", "--out", str(tmp_path / "x")], capture_output=True, text=True)
+    p = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "ego",
+            "compare",
+            "emergency-brake",
+            "--controllers",
+            "pid,warp",
+            "--out",
+            str(tmp_path / "x"),
+        ],
+        capture_output=True,
+        text=True,
+    )
     assert p.returncode == 2 and "unknown controller 'warp'" in p.stderr
     assert not (tmp_path / "x").exists()
-    p = subprocess.run([sys.executable, "-m", "ego", "compare", "emergency-brake", "--controllers",
-                        "pid", "--set", "kp_lat=x", "--out", str(tmp_path / "y")],
-                       capture_output=True, text=True)
+    p = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "ego",
+            "compare",
+            "emergency-brake",
+            "--controllers",
+            "pid",
+            "--set",
+            "kp_lat=x",
+            "--out",
+            str(tmp_path / "y"),
+        ],
+        capture_output=True,
+        text=True,
+    )
     assert p.returncode == 2 and "bad value for kp_lat" in p.stderr
 
 
 @pytest.mark.sumo
 def test_compare_the_platoon_controllers(tmp_path):
     out = tmp_path / "platoon"
-    p = subprocess.run([sys.executable, "-m", "ego", "compare", "platoon", "--controllers", "pid,bp-pid-acc",
-                        "--seeds", "2", "--set", "duration=40", "--set", "period=0.2", "--out", str(out)],
-                       capture_output=True, text=True, timeout=600)
+    p = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "ego",
+            "compare",
+            "platoon",
+            "--controllers",
+            "pid,bp-pid-acc",
+            "--seeds",
+            "2",
+            "--set",
+            "duration=40",
+            "--set",
+            "period=0.2",
+            "--out",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert p.returncode == 0, p.stderr
     rows = list(csv.DictReader(open(out / "metrics.csv")))
     assert [(r["controller"], r["seed"], r["status"]) for r in rows] == [
-        ("pid", "0", "completed"), ("pid", "1", "completed"),
-        ("bp-pid-acc", "0", "completed"), ("bp-pid-acc", "1", "completed")]
+        ("pid", "0", "completed"),
+        ("pid", "1", "completed"),
+        ("bp-pid-acc", "0", "completed"),
+        ("bp-pid-acc", "1", "completed"),
+    ]
     # nested metrics become dotted columns
     assert {"followers.f3.min_gap", "settle_times.brake@10s", "amplification.f2->f3.l2_spacing_error"} <= set(rows[0])
     md = (out / "metrics.md").read_text()
@@ -194,8 +296,23 @@ def test_compare_the_platoon_controllers(tmp_path):
 
 @pytest.mark.sumo
 def test_compare_checks_the_control_period_before_starting(tmp_path):
-    p = subprocess.run([sys.executable, "-m", "ego", "compare", "platoon", "--controllers", "pid",
-                        "--set", "period=0.015", "--out", str(tmp_path / "x")],
-                       capture_output=True, text=True, timeout=120)
+    p = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "ego",
+            "compare",
+            "platoon",
+            "--controllers",
+            "pid",
+            "--set",
+            "period=0.015",
+            "--out",
+            str(tmp_path / "x"),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert p.returncode == 2 and "bad value for period: 0.015" in p.stderr
     assert not (tmp_path / "x").exists()

@@ -30,15 +30,23 @@ def broken_nets(tmp_path):
 
 def test_faulty_runs_are_error_rows_and_the_same_worker_runs_the_next(broken_nets, tmp_path):
     def spec(controller, seed):
-        return RunSpec("emergency-brake", controller, seed, {"duration": 3.0, "traffic_density": 0},
-                       record=str(tmp_path / f"{controller}-{seed}.rrd"), background_recording=False)
+        return RunSpec(
+            "emergency-brake",
+            controller,
+            seed,
+            {"duration": 3.0, "traffic_density": 0},
+            record=str(tmp_path / f"{controller}-{seed}.rrd"),
+            background_recording=False,
+        )
 
-    jobs = [("none", spec("pid", 0), None),
-            ("controller", spec("raises", 1), 40),
-            ("sumo", spec("pid", 2), broken_nets),
-            ("none", spec("pid", 3), None),
-            ("controller", spec("raises", 4), 1),
-            ("none", spec("fuzzy", 5), None)]
+    jobs = [
+        ("none", spec("pid", 0), None),
+        ("controller", spec("raises", 1), 40),
+        ("sumo", spec("pid", 2), broken_nets),
+        ("none", spec("pid", 3), None),
+        ("controller", spec("raises", 4), 1),
+        ("none", spec("fuzzy", 5), None),
+    ]
     with ProcessExecutor(1) as ex:
         outcomes = list(ex.run(compare_run_with_fault, jobs))
         worker = ex.pids()
@@ -61,9 +69,27 @@ def test_faulty_runs_are_error_rows_and_the_same_worker_runs_the_next(broken_net
 def test_a_compare_where_every_run_fails_exits_1_and_claims_no_recording(broken_nets, tmp_path):
     out = tmp_path / "cmp"
     env = dict(os.environ, EGO_SUMO_NETS=str(broken_nets))
-    p = subprocess.run([sys.executable, "-m", "ego", "compare", "emergency-brake", "--controllers", "pid,fuzzy",
-                        "--seeds", "2", "--jobs", "1", "--out", str(out)],
-                       capture_output=True, text=True, timeout=300, env=env)
+    p = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "ego",
+            "compare",
+            "emergency-brake",
+            "--controllers",
+            "pid,fuzzy",
+            "--seeds",
+            "2",
+            "--jobs",
+            "1",
+            "--out",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=env,
+    )
     assert p.returncode == 1, p.stderr
     assert "ego: 4 of 4 runs ended in an error" in p.stderr and "Traceback" not in p.stderr
     assert "0 of 4 recordings" in p.stdout

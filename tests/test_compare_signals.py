@@ -20,9 +20,26 @@ from ego.parallel.executor import InlineExecutor
 
 def _compare(out, *args, jobs=1):
     """Start ``ego compare emergency-brake`` in a session of its own (its pid is its group)."""
-    return subprocess.Popen([sys.executable, "-m", "ego", "compare", "emergency-brake", *args, "--jobs", str(jobs),
-                             "--set", "duration=3600", "--out", str(out)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    return subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "ego",
+            "compare",
+            "emergency-brake",
+            *args,
+            "--jobs",
+            str(jobs),
+            "--set",
+            "duration=3600",
+            "--out",
+            str(out),
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
 
 
 def _rows(out):
@@ -46,10 +63,14 @@ class CtrlCAt(NoController):
 def test_ctrl_c_in_an_in_process_comparison_stops_it_and_keeps_what_finished(point_mass, monkeypatch, tmp_path):
     monkeypatch.setitem(CONTROLLERS["tracking"], "ctrl-c", ControllerSpec("ctrl-c", "test", NoParams, CtrlCAt))
     out = tmp_path / "cmp"
-    rows = compare("point-mass", ["pid", "ctrl-c", "fuzzy"], 1, {"duration": 1.0}, out, progress=None,
-                   executor=InlineExecutor())
-    assert [(r.controller, r.status) for r in rows] == [("pid", "completed"), ("ctrl-c", "interrupted"),
-                                                        ("fuzzy", "interrupted")]
+    rows = compare(
+        "point-mass", ["pid", "ctrl-c", "fuzzy"], 1, {"duration": 1.0}, out, progress=None, executor=InlineExecutor()
+    )
+    assert [(r.controller, r.status) for r in rows] == [
+        ("pid", "completed"),
+        ("ctrl-c", "interrupted"),
+        ("fuzzy", "interrupted"),
+    ]
     # the run that caught the Ctrl-C stopped at the next step, its metrics so far and its
     # recording closed; the one after it never ran
     assert rows[1].metrics["steps"] == 10 and rows[1].recording
@@ -112,22 +133,46 @@ def test_a_second_compare_into_a_busy_folder_is_refused(tmp_path):
     out = tmp_path / "cmp"
     p = _compare(out, "--controllers", "pid", "--seeds", "2")
     wait_for(lambda: list((out / "runs").glob("*.partial")), p, "a run under way")
-    second = subprocess.run([sys.executable, "-m", "ego", "compare", "emergency-brake", "--controllers", "fuzzy",
-                             "--out", str(out)], capture_output=True, text=True, timeout=120)
+    second = subprocess.run(
+        [sys.executable, "-m", "ego", "compare", "emergency-brake", "--controllers", "fuzzy", "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert second.returncode == 2
     assert second.stderr.count("\n") == 1 and "Traceback" not in second.stderr
     assert f"another ego process (pid {p.pid}) is writing into it" in second.stderr
     sweep_spec = tmp_path / "s.toml"
     sweep_spec.write_text('scenario = "emergency-brake"\ncontrollers = ["pid"]\n')
-    third = subprocess.run([sys.executable, "-m", "ego", "sweep", str(sweep_spec), "--out", str(out)],
-                           capture_output=True, text=True, timeout=120)
+    third = subprocess.run(
+        [sys.executable, "-m", "ego", "sweep", str(sweep_spec), "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert third.returncode == 2 and f"(pid {p.pid})" in third.stderr
     p.kill()
     p.communicate()
     assert not survivors(p.pid)
     # the holder is gone: the folder is free again (a dead holder needs no cleaning up)
-    again = subprocess.run([sys.executable, "-m", "ego", "compare", "emergency-brake", "--controllers", "none",
-                            "--set", "duration=2", "--out", str(out)], capture_output=True, text=True, timeout=300)
+    again = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "ego",
+            "compare",
+            "emergency-brake",
+            "--controllers",
+            "none",
+            "--set",
+            "duration=2",
+            "--out",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert again.returncode == 0, again.stderr
     assert _rows(out) == [("none", "0", "completed")]
     assert sorted(x.name for x in (out / "runs").iterdir()) == ["none-seed0.rrd"]

@@ -19,8 +19,9 @@ LABELS = ["pid", "pid@kp_lon=2000@kd_lon=500", "fuzzy"]
 
 def test_variants_are_labelled_as_given_everywhere(point_mass, tmp_path):
     out = tmp_path / "cmp"
-    rows = compare("point-mass", LABELS, 1, {"duration": "2"}, out, progress=None, executor=InlineExecutor(),
-                   traces="csv")
+    rows = compare(
+        "point-mass", LABELS, 1, {"duration": "2"}, out, progress=None, executor=InlineExecutor(), traces="csv"
+    )
     assert [(r.controller, r.status) for r in rows] == [(label, "completed") for label in LABELS]
     # the variant's own gains made a different run
     assert rows[0].metrics["rms_speed_error"] != rows[1].metrics["rms_speed_error"]
@@ -42,19 +43,25 @@ def test_variants_are_labelled_as_given_everywhere(point_mass, tmp_path):
 def test_a_variant_overrides_the_common_set_for_its_runs(point_mass, tmp_path):
     specs = plan("point-mass", ["pid", "pid@kp_lon=2000"], 1, {"kp_lon": "900", "duration": "2"}, tmp_path)
     assert [(s.controller, s.name, s.overrides["kp_lon"]) for s in specs] == [
-        ("pid", "pid", "900"), ("pid", "pid@kp_lon=2000", "2000")]
+        ("pid", "pid", "900"),
+        ("pid", "pid@kp_lon=2000", "2000"),
+    ]
     assert all(s.overrides["duration"] == "2" for s in specs)
 
 
-@pytest.mark.parametrize("label, message", [
-    ("pid@kp_lon=-1", "bad --controllers item 'pid@kp_lon=-1': bad value for kp_lon: -1 (expected a number"),
-    ("pid@kp_lon=x", "bad value for kp_lon: 'x'"),
-    ("pid@warp=1", "unknown parameter 'warp'"),
-    ("pid@kp_lon", "'kp_lon' is not key=value (expected NAME@key=value@key=value...)"),
-    ("pid@", "'' is not key=value"),
-    ("pid@kp_lon=1@kp_lon=2", "kp_lon is given twice"),
-    ("warp@kp_lon=1", "unknown controller 'warp'"),
-], ids=["out-of-range", "not-a-number", "unknown-parameter", "no-value", "empty", "twice", "unknown-controller"])
+@pytest.mark.parametrize(
+    "label, message",
+    [
+        ("pid@kp_lon=-1", "bad --controllers item 'pid@kp_lon=-1': bad value for kp_lon: -1 (expected a number"),
+        ("pid@kp_lon=x", "bad value for kp_lon: 'x'"),
+        ("pid@warp=1", "unknown parameter 'warp'"),
+        ("pid@kp_lon", "'kp_lon' is not key=value (expected NAME@key=value@key=value...)"),
+        ("pid@", "'' is not key=value"),
+        ("pid@kp_lon=1@kp_lon=2", "kp_lon is given twice"),
+        ("warp@kp_lon=1", "unknown controller 'warp'"),
+    ],
+    ids=["out-of-range", "not-a-number", "unknown-parameter", "no-value", "empty", "twice", "unknown-controller"],
+)
 def test_a_bad_variant_is_named(label, message):
     with pytest.raises(ConfigError) as err:
         parse_variant(label, "tracking")

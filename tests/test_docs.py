@@ -14,11 +14,22 @@ PAGES = sorted({t.page for t in docs.tables()})
 #: a few rows of every results page, chosen cheap (seconds of simulation each); each row is
 #: computed from its own runs only, so it must equal the committed line
 ROWS = [
-    ("traffic", "pid"), ("cut-in", "pid"), ("bare-model", "fuzzy"), ("sine", "rbf-smc"),
-    ("curve", "narma-l2"), ("curve-speeds", "pid"), ("curve-variations", "pid, pedal=true"),
-    ("lane-centering", "report 003's, lateral-error"), ("recovery", "25 m/s"),
-    ("platoon", "pid, 0-2"), ("followers", "pid, f3"), ("headway", "2"), ("scale-model", "pid, lambda 0.2 s"),
-    ("ccrb", "pid"), ("ccrs-ttc1", "fuzzy"), ("cross-emergency-brake", "pid"),
+    ("traffic", "pid"),
+    ("cut-in", "pid"),
+    ("bare-model", "fuzzy"),
+    ("sine", "rbf-smc"),
+    ("curve", "narma-l2"),
+    ("curve-speeds", "pid"),
+    ("curve-variations", "pid, pedal=true"),
+    ("lane-centering", "report 003's, lateral-error"),
+    ("recovery", "25 m/s"),
+    ("platoon", "pid, 0-2"),
+    ("followers", "pid, f3"),
+    ("headway", "2"),
+    ("scale-model", "pid, lambda 0.2 s"),
+    ("ccrb", "pid"),
+    ("ccrs-ttc1", "fuzzy"),
+    ("cross-emergency-brake", "pid"),
     # the RL baselines: a controller row (the trained rows take minutes of training each)
     ("rl-cut-in", "pid"),
     ("xosc-equivalence", "emergency_brake.xosc / emergency-brake, pid"),
@@ -77,8 +88,9 @@ def _markdown_files():
 def anchors(path: Path) -> set[str]:
     """The anchors GitHub makes for a markdown file: its headings' slugs and explicit ids."""
     text = re.sub(r"```.*?```", "", path.read_text(), flags=re.S)
-    slugs = {re.sub(r"[^\w\- ]", "", h.strip().lower()).replace(" ", "-")
-             for h in re.findall(r"^#+ (.+)$", text, flags=re.M)}
+    slugs = {
+        re.sub(r"[^\w\- ]", "", h.strip().lower()).replace(" ", "-") for h in re.findall(r"^#+ (.+)$", text, flags=re.M)
+    }
     return slugs | set(re.findall(r'<a id="([^"]+)">', text))
 
 

@@ -33,10 +33,15 @@ def traffic_log() -> TrafficLog:
     f = np.array
     return TrafficLog(
         ids=("left_3", "flow.0"),
-        t=f([0.1, 0.2, 0.2, 0.3, 0.3]), vehicle=f([0, 0, 1, 0, 1], dtype=np.int32),
-        x=f([10.0, 12.5, -20.0, 15.0, -18.25]), y=f([3.2, 3.2, -3.2, 3.2, -3.2]),
-        heading=f([0.0, 0.01, math.pi, 0.02, math.pi]), speed=f([25.0, 25.0, 20.0, 25.5, 20.0]),
-        length=f([4.5, 4.5, 12.0, 4.5, 12.0]), width=f([1.8, 1.8, 2.5, 1.8, 2.5]))
+        t=f([0.1, 0.2, 0.2, 0.3, 0.3]),
+        vehicle=f([0, 0, 1, 0, 1], dtype=np.int32),
+        x=f([10.0, 12.5, -20.0, 15.0, -18.25]),
+        y=f([3.2, 3.2, -3.2, 3.2, -3.2]),
+        heading=f([0.0, 0.01, math.pi, 0.02, math.pi]),
+        speed=f([25.0, 25.0, 20.0, 25.5, 20.0]),
+        length=f([4.5, 4.5, 12.0, 4.5, 12.0]),
+        width=f([1.8, 1.8, 2.5, 1.8, 2.5]),
+    )
 
 
 @pytest.mark.sumo
@@ -135,8 +140,10 @@ def test_a_real_runs_traffic_log_reaches_the_file_as_simulated(tmp_path):
         np.testing.assert_array_equal(table.column(name).to_numpy(), getattr(log, name))
     # every row within the log's 50 m of the ego's centre of gravity at that time
     ego = real.to_pandas().set_index("t")
-    gaps = np.hypot(table.column("x").to_numpy() - ego["x"].reindex(log.t, method="nearest").to_numpy(),
-                    table.column("y").to_numpy() - ego["y"].reindex(log.t, method="nearest").to_numpy())
+    gaps = np.hypot(
+        table.column("x").to_numpy() - ego["x"].reindex(log.t, method="nearest").to_numpy(),
+        table.column("y").to_numpy() - ego["y"].reindex(log.t, method="nearest").to_numpy(),
+    )
     assert gaps.max() <= 50.0 + 2.0  # the ego moves < 2 m between a SUMO step and the nearest row
 
 
@@ -153,14 +160,16 @@ def test_to_pandas_gives_the_trace_and_the_traffic_with_units(result):
 
 
 def test_pandas_is_imported_only_when_asked():
-    code = ("import sys; import ego.runner, ego.results.export, ego.scenarios; "
-            "print('pandas' in sys.modules)")
+    code = "import sys; import ego.runner, ego.results.export, ego.scenarios; print('pandas' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
 
 
-@pytest.mark.parametrize("name, suffix", [("run.txt", "'.txt'"), ("run", "'(none)'"), ("run.CSV", "'.CSV'"),
-                                          ("run.mat.gz", "'.gz'")], ids=str)
+@pytest.mark.parametrize(
+    "name, suffix",
+    [("run.txt", "'.txt'"), ("run", "'(none)'"), ("run.CSV", "'.CSV'"), ("run.mat.gz", "'.gz'")],
+    ids=str,
+)
 def test_an_unknown_suffix_names_it_and_the_allowed_ones(name, suffix, tmp_path):
     with pytest.raises(ConfigError) as err:
         check_trace_path(str(tmp_path / name))
@@ -194,11 +203,14 @@ def test_a_failed_write_leaves_the_old_file_and_no_temporary(result, tmp_path):
 @pytest.mark.sumo
 def test_ego_run_trace_checks_the_path_first_and_writes_the_file(tmp_path):
     ego = [sys.executable, "-m", "ego", "run", "emergency-brake", "-c", "pid", "--set", "duration=2"]
-    bad = subprocess.run([*ego, "--trace", str(tmp_path / "t.xlsx"), "--record", str(tmp_path / "r.rrd")],
-                         capture_output=True, text=True, timeout=300)
+    bad = subprocess.run(
+        [*ego, "--trace", str(tmp_path / "t.xlsx"), "--record", str(tmp_path / "r.rrd")],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "'.xlsx'" in bad.stderr
     assert list(tmp_path.iterdir()) == []  # nothing ran, nothing written
-    good = subprocess.run([*ego, "--trace", str(tmp_path / "t.parquet")], capture_output=True, text=True,
-                          timeout=300)
+    good = subprocess.run([*ego, "--trace", str(tmp_path / "t.parquet")], capture_output=True, text=True, timeout=300)
     assert f"trace: {tmp_path / 't.parquet'}" in good.stdout
     assert pq.read_table(tmp_path / "t.parquet").num_rows == 200

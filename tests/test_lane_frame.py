@@ -14,8 +14,10 @@ def curve_lane(step_deg: float = 1.0) -> LanePolyline:
     exit along +y: report 002's curve."""
     pts = [(0.0, 0.0)]
     n = round(90 / step_deg)
-    pts += [(100 + R * math.sin(math.radians(k * step_deg)), R - R * math.cos(math.radians(k * step_deg)))
-            for k in range(n + 1)]
+    pts += [
+        (100 + R * math.sin(math.radians(k * step_deg)), R - R * math.cos(math.radians(k * step_deg)))
+        for k in range(n + 1)
+    ]
     pts.append((100 + R, R + 100.0))
     return LanePolyline(pts)
 
@@ -67,7 +69,7 @@ def test_heading_error_sign_and_straights_have_no_curvature():
 
 def test_the_arc_is_found_as_one_curved_span():
     lane = curve_lane()
-    (start, end, kappa), = lane.curved_spans()
+    ((start, end, kappa),) = lane.curved_spans()
     assert start == pytest.approx(100.0)
     assert end - start == pytest.approx(R * math.pi / 2, rel=1e-4)
     assert kappa == pytest.approx(1 / R, rel=1e-3)

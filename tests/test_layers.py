@@ -18,13 +18,45 @@ ROOT = Path(__file__).resolve().parents[1]
 EGO = ROOT / "ego"
 
 LAYERS = [
-    {"ego", "ego.params", "ego.checks", "ego.outputs", "ego.processes", "ego.native", "ego._native",
-     "ego.plugins", "ego.paths", "ego.reaper"},
-    {"ego.models", "ego.control", "ego.fmi", "ego.sim", "ego.results", "ego.parallel", "ego.record", "ego.sumo",
-     "ego.highway_env", "ego.lane_frame", "ego.analytic_road", "ego.cluster"},
+    {
+        "ego",
+        "ego.params",
+        "ego.checks",
+        "ego.outputs",
+        "ego.processes",
+        "ego.native",
+        "ego._native",
+        "ego.plugins",
+        "ego.paths",
+        "ego.reaper",
+    },
+    {
+        "ego.models",
+        "ego.control",
+        "ego.fmi",
+        "ego.sim",
+        "ego.results",
+        "ego.parallel",
+        "ego.record",
+        "ego.sumo",
+        "ego.highway_env",
+        "ego.lane_frame",
+        "ego.analytic_road",
+        "ego.cluster",
+    },
     {"ego.scenarios", "ego.openscenario"},
     {"ego.runner", "ego.plots", "ego.requirements"},
-    {"ego.compare", "ego.sweep", "ego.falsify", "ego.gym", "ego.train", "ego.docs", "ego.cli", "ego.__main__", "ego._entry"},
+    {
+        "ego.compare",
+        "ego.sweep",
+        "ego.falsify",
+        "ego.gym",
+        "ego.train",
+        "ego.docs",
+        "ego.cli",
+        "ego.__main__",
+        "ego._entry",
+    },
 ]
 LEVEL = {unit: i for i, layer in enumerate(LAYERS) for unit in layer}
 #: modules kept at an old path for compatibility: they only re-export a lower module
@@ -54,7 +86,7 @@ def _imports(path: Path, module: str) -> set[str]:
         elif isinstance(node, ast.ImportFrom):
             if node.level:
                 base = package.split(".")
-                base = base[:len(base) - node.level + 1]
+                base = base[: len(base) - node.level + 1]
                 name = ".".join(base + ([node.module] if node.module else []))
             else:
                 name = node.module or ""
@@ -90,8 +122,7 @@ def test_no_module_imports_from_a_layer_above_it():
 @pytest.mark.parametrize("low", ["ego.results", "ego.parallel", "ego.models", "ego.control"])
 def test_the_lower_packages_never_import_scenarios(low):
     graph = _graph()
-    assert not [(m, n) for m, imps in graph.items() if _unit(m) == low for n in imps
-                if _unit(n) == "ego.scenarios"]
+    assert not [(m, n) for m, imps in graph.items() if _unit(m) == low for n in imps if _unit(n) == "ego.scenarios"]
 
 
 def test_no_import_cycle_between_packages():
@@ -100,7 +131,8 @@ def test_no_import_cycle_between_packages():
         if module in SHIMS:
             continue
         edges.setdefault(_unit(module), set()).update(
-            _unit(n) for n in imports if _unit(n) not in (_unit(module), "ego"))
+            _unit(n) for n in imports if _unit(n) not in (_unit(module), "ego")
+        )
     state: dict[str, int] = {}
     stack: list[str] = []
 
@@ -109,7 +141,7 @@ def test_no_import_cycle_between_packages():
         stack.append(u)
         for v in sorted(edges.get(u, ())):
             if state.get(v) == 1:
-                raise AssertionError("import cycle: " + " -> ".join(stack[stack.index(v):] + [v]))
+                raise AssertionError("import cycle: " + " -> ".join(stack[stack.index(v) :] + [v]))
             if v not in state:
                 visit(v)
         stack.pop()

@@ -50,8 +50,7 @@ def test_mamdani_matches_python_and_scikit_fuzzy():
     rng = np.random.default_rng(2)
     pts = np.vstack([rng.uniform(-12, 12, (2000, 2)), [[-10, -10], [10, 10], [0, 0], [10 / 3, 0]]])
     for e, c in pts:
-        assert engine.single2(float(e), float(c)) == pytest.approx(
-            engine.single2_py(float(e), float(c)), abs=1e-11)
+        assert engine.single2(float(e), float(c)) == pytest.approx(engine.single2_py(float(e), float(c)), abs=1e-11)
     sim = ctrl.ControlSystemSimulation(fuzzy.rule_base())
     sim.input["e"], sim.input["ec"] = pts[:300, 0], pts[:300, 1]
     sim.compute()
@@ -63,9 +62,13 @@ def test_mamdani_matches_python_and_scikit_fuzzy():
 def test_a_run_gives_the_same_metrics_with_and_without_the_extension():
     def metrics(pure: str) -> dict:
         env = dict(os.environ, EGO_PURE_PYTHON=pure)
-        out = subprocess.run([sys.executable, "-m", "ego", "run", "emergency-brake", "-c", "fuzzy",
-                              "--json", "--set", "duration=12"], capture_output=True, text=True,
-                             env=env, timeout=300)
+        out = subprocess.run(
+            [sys.executable, "-m", "ego", "run", "emergency-brake", "-c", "fuzzy", "--json", "--set", "duration=12"],
+            capture_output=True,
+            text=True,
+            env=env,
+            timeout=300,
+        )
         m = json.loads(out.stdout)
         m.pop("wall_time")
         return m

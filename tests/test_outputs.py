@@ -26,8 +26,11 @@ def test_an_output_folder_has_one_holder_at_a_time(tmp_path):
     out = tmp_path / "cmp"
     with FolderLock(out):
         assert (out / ".ego.lock").read_text() == f"{os.getpid()}\n"
-        with pytest.raises(ConfigError, match=rf"^bad --out '{out}': another ego process \(pid {os.getpid()}\) "
-                                              "is writing into it; wait for it or choose another folder$"):
+        with pytest.raises(
+            ConfigError,
+            match=rf"^bad --out '{out}': another ego process \(pid {os.getpid()}\) "
+            "is writing into it; wait for it or choose another folder$",
+        ):
             FolderLock(out).acquire()
     with FolderLock(out):  # released: free again
         pass

@@ -34,9 +34,7 @@ UNITS = {
 def _result(t, events=(), status="completed", metrics=None, **columns):
     names = ("t", *columns)
     trace = np.column_stack([t, *columns.values()])
-    return RunResult(
-        "x", "y", 0, status, dict(metrics or {}), list(events), names, trace
-    )
+    return RunResult("x", "y", 0, status, dict(metrics or {}), list(events), names, trace)
 
 
 @pytest.mark.parametrize(
@@ -88,9 +86,7 @@ def test_robustness_of_always_is_the_smallest_margin_and_the_first_violation_tim
     r = _result(t, gap_front=gap)
     v = evaluate(parse("always (gap_front >= 2 m)", UNITS, "keep"), r, period=0)
     assert v.robustness == pytest.approx(gap[-1] - 2.0)
-    assert v.violated_at == pytest.approx(
-        4.01
-    )  # the first sample with gap < 2 m (gap = 1.98 m)
+    assert v.violated_at == pytest.approx(4.01)  # the first sample with gap < 2 m (gap = 1.98 m)
     assert v.unit == "m"
     # at the 0.1 s period, counted back from the last sample: the end is a sample
     v10 = evaluate(parse("always (gap_front >= 2 m)", UNITS, "keep"), r)
@@ -108,9 +104,7 @@ def test_bounded_eventually_counts_seconds_not_samples():
         "always (aeb_active implies eventually[0:3] (speed <= 1 m/s))",
         {**UNITS, "aeb_active": "bool"},
     )
-    fast = _result(
-        t, events, speed=np.where(t >= 3.5, 0.5, 10.0)
-    )  # slow 2.5 s after the AEB
+    fast = _result(t, events, speed=np.where(t >= 3.5, 0.5, 10.0))  # slow 2.5 s after the AEB
     slow = _result(t, events, speed=np.where(t >= 4.5, 0.5, 10.0))  # 3.5 s after it
     assert evaluate(f, fast, period=0).robustness > 0
     v = evaluate(f, slow, period=0)
@@ -131,9 +125,7 @@ def test_a_boolean_proposition_is_plus_or_minus_one():
     assert evaluate(parse("not collision_avoidable", UNITS), r).robustness == -1.0
     v = evaluate(parse("always (not collision)", UNITS), r, period=0)
     assert v.robustness == -1.0 and v.violated_at == pytest.approx(1.5)
-    v = evaluate(
-        parse("always (not collision)", UNITS), r
-    )  # every 0.1 s: within one period
+    v = evaluate(parse("always (not collision)", UNITS), r)  # every 0.1 s: within one period
     assert v.robustness == -1.0 and 1.5 <= v.violated_at < 1.6
     clear = DERIVED["clearance"].fn(r, t)
     assert clear[0] == 1.0 and clear[-1] == -1.0
@@ -196,9 +188,7 @@ def test_a_run_reports_each_requirement_and_its_violation(capsys):
     ],
 )
 @pytest.mark.parametrize("command", ["run", "compare"])
-def test_bad_requirements_exit_2_before_anything_runs(
-    command, req, what, capsys, tmp_path
-):
+def test_bad_requirements_exit_2_before_anything_runs(command, req, what, capsys, tmp_path):
     args = (
         ["run", "emergency-brake", "-c", "pid", "--record", str(tmp_path / "r.rrd")]
         if command == "run"
@@ -220,8 +210,7 @@ def test_bad_requirements_exit_2_before_anything_runs(
 def test_sweep_spec_requirements_are_checked(tmp_path, capsys):
     spec = tmp_path / "s.toml"
     spec.write_text(
-        'scenario = "emergency-brake"\ncontrollers = ["pid"]\n[requirements]\n'
-        'bad = "always (gap_front >= 2 s)"\n'
+        'scenario = "emergency-brake"\ncontrollers = ["pid"]\n[requirements]\nbad = "always (gap_front >= 2 s)"\n'
     )
     assert main(["sweep", str(spec), "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err

@@ -44,8 +44,9 @@ def test_ego_run_json_resolves_once(counted, capsys, tmp_path):
 
 
 def test_compare_resolves_each_controller_once_and_its_workers_never(counted, tmp_path):
-    rows = compare("point-mass", ["pid", "fuzzy"], 3, {"duration": 1.0}, tmp_path / "out", progress=None,
-                   executor=InlineExecutor())
+    rows = compare(
+        "point-mass", ["pid", "fuzzy"], 3, {"duration": 1.0}, tmp_path / "out", progress=None, executor=InlineExecutor()
+    )
     assert [r.status for r in rows] == ["completed"] * 6
     assert len(counted) == 2  # one per controller; not per seed, not in the workers, not for the plots
     assert (tmp_path / "out" / "metrics.md").exists() and (tmp_path / "out" / "speed.png").exists()
@@ -55,8 +56,9 @@ def test_a_worker_runs_the_resolved_run_without_resolving_it(counted, tmp_path):
     resolved = resolve(RunSpec("point-mass", "pid", 2, {"duration": 1.0}))
     assert len(counted) == 1
     # through a pickle, as a process or Ray worker receives it
-    task = pickle.loads(pickle.dumps(RunTask(resolved, keep=("speed",), details=True,
-                                             record_failed=str(tmp_path / "x.rrd"))))
+    task = pickle.loads(
+        pickle.dumps(RunTask(resolved, keep=("speed",), details=True, record_failed=str(tmp_path / "x.rrd")))
+    )
     row = execute(task)
     assert row.status == "completed" and row.error == ""
     assert len(counted) == 1

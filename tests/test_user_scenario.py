@@ -13,8 +13,12 @@ ROOT = Path(__file__).resolve().parents[1]
 def test_slow_truck_merge_runs_headless_with_a_recording(tmp_path):
     from rerun.chunk import RrdReader
 
-    p = subprocess.run([sys.executable, str(ROOT / "scenarios" / "slow_truck_merge.py"), "-c", "pid",
-                        "--out", str(tmp_path)], capture_output=True, text=True, timeout=300)
+    p = subprocess.run(
+        [sys.executable, str(ROOT / "scenarios" / "slow_truck_merge.py"), "-c", "pid", "--out", str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert p.returncode == 0, p.stderr
     lines = dict(line.split(None, 1) for line in p.stdout.splitlines() if " " in line.strip())
     assert lines["status"].strip() == "completed" and lines["collision"].strip() == "False"

@@ -35,8 +35,12 @@ def test_a_wheel_installed_elsewhere_runs_a_scenario(tmp_path):
     for name in ("pyproject.toml", "README.md"):
         shutil.copy(ROOT / name, src / name)
     pip = [sys.executable, "-m", "pip", "--disable-pip-version-check", "-q"]
-    subprocess.run(pip + ["wheel", "--no-deps", "--no-build-isolation", "-w", str(tmp_path / "dist"), str(src)],
-                   check=True, capture_output=True, timeout=300)
+    subprocess.run(
+        pip + ["wheel", "--no-deps", "--no-build-isolation", "-w", str(tmp_path / "dist"), str(src)],
+        check=True,
+        capture_output=True,
+        timeout=300,
+    )
     (wheel,) = (tmp_path / "dist").glob("ego-*.whl")
     import zipfile
 
@@ -44,22 +48,45 @@ def test_a_wheel_installed_elsewhere_runs_a_scenario(tmp_path):
     assert "ego/cli/__init__.py" in names and "ego/results/run.py" in names and "ego/parallel/executor.py" in names
     assert not [n for n in names if n.startswith("ego/docs/")]  # a checkout's tool, not shipped
     site = tmp_path / "site"
-    subprocess.run(pip + ["install", "--no-deps", "--target", str(site), str(wheel)],
-                   check=True, capture_output=True, timeout=300)
+    subprocess.run(
+        pip + ["install", "--no-deps", "--target", str(site), str(wheel)], check=True, capture_output=True, timeout=300
+    )
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
     env = {k: v for k, v in os.environ.items() if k != "EGO_SUMO_NETS"}
     env["PYTHONPATH"] = str(site)  # the dependencies come from this environment
-    where = subprocess.run([sys.executable, "-c", "import ego, ego.sumo.net, ego.control.narma as n; "
-                            "print(ego.__file__); print(ego.sumo.net.nets_dir()); print(n.DEFAULT_MODEL)"],
-                           cwd=elsewhere, env=env, capture_output=True, text=True, timeout=120)
+    where = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            "import ego, ego.sumo.net, ego.control.narma as n; "
+            "print(ego.__file__); print(ego.sumo.net.nets_dir()); print(n.DEFAULT_MODEL)",
+        ],
+        cwd=elsewhere,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert where.returncode == 0, where.stderr
     for line in where.stdout.split():
         assert line.startswith(str(site / "ego")), where.stdout  # the installed copy, not the checkout
-    p = subprocess.run([sys.executable, "-m", "ego", "run", "emergency-brake", "-c", "pid", "--set", "duration=3"],
-                       cwd=elsewhere, env=env, capture_output=True, text=True, timeout=300)
+    p = subprocess.run(
+        [sys.executable, "-m", "ego", "run", "emergency-brake", "-c", "pid", "--set", "duration=3"],
+        cwd=elsewhere,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert p.returncode in (0, 1), p.stderr  # a short run may time out; it must run
     assert "emergency-brake with pid (seed 0)" in p.stdout
-    c = subprocess.run([sys.executable, "-m", "ego", "run", "curve", "-c", "narma-l2", "--set", "duration=2"],
-                       cwd=elsewhere, env=env, capture_output=True, text=True, timeout=300)
+    c = subprocess.run(
+        [sys.executable, "-m", "ego", "run", "curve", "-c", "narma-l2", "--set", "duration=2"],
+        cwd=elsewhere,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert c.returncode in (0, 1) and "curve with narma-l2" in c.stdout, c.stderr  # the trained networks

@@ -51,34 +51,43 @@ def catalogue() -> dict:
 
     def params(cls) -> list[dict]:
         return [
-            {"name": i.name, "default": i.default, "unit": i.unit, "allowed": i.allowed(),
-             "description": i.doc}
+            {"name": i.name, "default": i.default, "unit": i.unit, "allowed": i.allowed(), "description": i.doc}
             for i in describe(cls)
         ]
 
     def scenario(name: str, cls) -> dict:
         config = cls.default_config({})
         return {
-            "name": name, "task": cls.task, "summary": cls.summary, "backends": list(cls.backends),
+            "name": name,
+            "task": cls.task,
+            "summary": cls.summary,
+            "backends": list(cls.backends),
             "parameters": params(cls.config_cls),
-            "metrics": [{"name": m.name, "unit": m.unit, "description": m.description, "headline": m.headline}
-                        for m in cls.metrics_declared(config)],
-            "columns": [{"name": c.name, "unit": c.unit, "description": c.description}
-                        for c in declared_columns(cls, config)],
+            "metrics": [
+                {"name": m.name, "unit": m.unit, "description": m.description, "headline": m.headline}
+                for m in cls.metrics_declared(config)
+            ],
+            "columns": [
+                {"name": c.name, "unit": c.unit, "description": c.description} for c in declared_columns(cls, config)
+            ],
         }
 
     return {
         "scenarios": [scenario(n, c) for n, c in SCENARIOS.items()],
         "common_metrics": [m.name for m in COMMON_METRICS + COMMON_TAIL_METRICS],
         "tasks": [TASKS[t].as_dict() for t in CONTROLLERS],
-        "controllers": [{"name": n, "task": t, "summary": s.summary, "parameters": params(s.params)}
-                        for t, specs in CONTROLLERS.items() for n, s in specs.items()],
+        "controllers": [
+            {"name": n, "task": t, "summary": s.summary, "parameters": params(s.params)}
+            for t, specs in CONTROLLERS.items()
+            for n, s in specs.items()
+        ],
     }
 
 
 def parameters_markdown(cat: dict) -> str:
     """Every scenario's and controller's parameters as Markdown tables (``ego list --markdown``):
     name, default, unit, what is allowed, description."""
+
     def table(title: str, rows: list[dict]) -> list[str]:
         lines = [f"### {title}", ""]
         if not rows:
@@ -117,8 +126,10 @@ def print_catalogue(cat: dict) -> None:
             return
         print("    metrics (* in ego compare's table):")
         # a prefix ("settle_times.") stands for every metric under it
-        labels = [with_unit(r["name"] + ("*" if r["name"].endswith(".") else ""), r["unit"])
-                  + (" *" if r["headline"] else "") for r in own]
+        labels = [
+            with_unit(r["name"] + ("*" if r["name"].endswith(".") else ""), r["unit"]) + (" *" if r["headline"] else "")
+            for r in own
+        ]
         w = max(map(len, labels))
         for label, r in zip(labels, own):
             print(f"      {label:<{w}}  {r['description']}".rstrip())
@@ -127,18 +138,25 @@ def print_catalogue(cat: dict) -> None:
     every = {m["name"]: m for s in cat["scenarios"] for m in s["metrics"] if m["name"] in common}
     print("Scenarios (ego run SCENARIO ...; parameters with --set key=value):")
     if every:
-        print("Every run reports " + ", ".join(with_unit(n, every[n]["unit"]) for n in cat["common_metrics"]
-                                             if n in every) + " and the scenario's metrics below.")
+        print(
+            "Every run reports "
+            + ", ".join(with_unit(n, every[n]["unit"]) for n in cat["common_metrics"] if n in every)
+            + " and the scenario's metrics below."
+        )
     for s in cat["scenarios"]:
         on = "" if s["backends"] == ["sumo"] else f"; --backend {' or '.join(s['backends'])}"
         print(f"\n  {s['name']} [{s['task']} task{on}]: {s['summary']}")
         table(s["parameters"])
         metrics(s["metrics"])
     for task in cat["tasks"]:
-        print(f"\nControllers of the {task['name']} task ({task['summary']}; --controller NAME, "
-              "parameters with --set key=value):")
-        print(f"  they observe ({task['observation'].split(':')[1]}): "
-              + ", ".join(with_unit(x["name"], x["unit"]) for x in task["observes"]))
+        print(
+            f"\nControllers of the {task['name']} task ({task['summary']}; --controller NAME, "
+            "parameters with --set key=value):"
+        )
+        print(
+            f"  they observe ({task['observation'].split(':')[1]}): "
+            + ", ".join(with_unit(x["name"], x["unit"]) for x in task["observes"])
+        )
         print("  and return (" + ", ".join(with_unit(x["name"], x["unit"]) for x in task["returns"]) + ")")
         for c in cat["controllers"]:
             if c["task"] == task["name"]:

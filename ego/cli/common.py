@@ -63,8 +63,9 @@ def parse_range(text: str, what: str, declared) -> tuple[float, float]:
     if not (math.isfinite(lo) and math.isfinite(hi)) or lo > hi:
         raise ConfigError(f"bad value for {what}: {text!r} (expected finite LO <= HI)")
     if lo < declared.min or hi > declared.max:
-        raise ConfigError(f"bad value for {what}: {text!r} (expected {declared.unit} within "
-                          f"{declared.min:g}..{declared.max:g})")
+        raise ConfigError(
+            f"bad value for {what}: {text!r} (expected {declared.unit} within {declared.min:g}..{declared.max:g})"
+        )
     return lo, hi
 
 

@@ -16,21 +16,27 @@ def command(args: Any) -> int:
     from ego.requirements import with_defaults
 
     if args.seeds > MAX_SEEDS:
-        raise ConfigError(f"bad value for --seeds: {args.seeds} (expected at most {MAX_SEEDS}; use ego sweep "
-                          "for more)")
+        raise ConfigError(f"bad value for --seeds: {args.seeds} (expected at most {MAX_SEEDS}; use ego sweep for more)")
     check_count(args.seeds, "--seeds", 1, MAX_SEEDS)
     check_count(args.jobs, "--jobs", 1, MAX_JOBS)
     labels = [n.strip() for n in args.controllers.split(",") if n.strip()]
     out = check_output_dir(args.out, "--out")
-    rows = compare(args.scenario, labels, args.seeds, ego_entity(args, parse_overrides(args.overrides)), out, args.jobs,
-                   traces=args.traces, backend=args.backend,
-                   requirements=with_defaults(args.scenario, args.require))
+    rows = compare(
+        args.scenario,
+        labels,
+        args.seeds,
+        ego_entity(args, parse_overrides(args.overrides)),
+        out,
+        args.jobs,
+        traces=args.traces,
+        backend=args.backend,
+        requirements=with_defaults(args.scenario, args.require),
+    )
     print((out / "metrics.md").read_text(), end="")
     files = ["metrics.csv", UNITS_FILE, "metrics.md"] + sorted(p.name for p in out.glob("*.png"))
     recorded = sum(1 for r in rows if r.recording)
     traces = f" and their traces ({args.traces}) in traces/" if args.traces else ""
-    print(f"\nwrote into {out}/: {', '.join(files)} and {recorded} of {len(rows)} recordings in "
-          f"runs/{traces}")
+    print(f"\nwrote into {out}/: {', '.join(files)} and {recorded} of {len(rows)} recordings in runs/{traces}")
     return exit_status([r.status for r in rows])
 
 
@@ -40,11 +46,15 @@ def exit_status(statuses: Sequence[str]) -> int:
     else 0 - a collision or a diverging controller is a result of the comparison."""
     if "interrupted" in statuses:
         unfinished = statuses.count("interrupted")
-        print(f"ego: interrupted: {unfinished} of {len(statuses)} runs did not finish "
-              "(rows with status interrupted)", file=sys.stderr)
+        print(
+            f"ego: interrupted: {unfinished} of {len(statuses)} runs did not finish (rows with status interrupted)",
+            file=sys.stderr,
+        )
         return EXIT_INTERRUPTED
     if "error" in statuses:
-        print(f"ego: {statuses.count('error')} of {len(statuses)} runs ended in an error "
-              "(see metrics.md)", file=sys.stderr)
+        print(
+            f"ego: {statuses.count('error')} of {len(statuses)} runs ended in an error (see metrics.md)",
+            file=sys.stderr,
+        )
         return EXIT_NOT_COMPLETED
     return EXIT_OK

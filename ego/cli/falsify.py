@@ -36,18 +36,14 @@ def add_parser(sub) -> argparse.ArgumentParser:
         ),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    fal.add_argument(
-        "spec", metavar="SPEC.toml", help="the falsification specification"
-    )
+    fal.add_argument("spec", metavar="SPEC.toml", help="the falsification specification")
     fal.add_argument(
         "--out",
         required=True,
         metavar="DIR",
         help="output folder (resumed if it holds results)",
     )
-    fal.add_argument(
-        "--engine", default="process", metavar="ENGINE", help="process (default) or ray"
-    )
+    fal.add_argument("--engine", default="process", metavar="ENGINE", help="process (default) or ray")
     fal.add_argument(
         "--jobs",
         type=int,
@@ -109,9 +105,7 @@ def command(args) -> int:
         (args.engine, ENGINES, "--engine"),
     ):
         if value not in allowed:
-            raise ConfigError(
-                f"bad value for {what}: {value!r} (allowed: {', '.join(allowed)})"
-            )
+            raise ConfigError(f"bad value for {what}: {value!r} (allowed: {', '.join(allowed)})")
     check_count(args.jobs, "--jobs", 1, 1024)
     check_count(args.budget, "--budget", 1, 10_000_000)
     check_seed(args.optimizer_seed, "--optimizer-seed")
@@ -122,9 +116,7 @@ def command(args) -> int:
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise ConfigError(
-            f"cannot create --out folder {args.out!r}: {exc.strerror}"
-        ) from None
+        raise ConfigError(f"cannot create --out folder {args.out!r}: {exc.strerror}") from None
     report = falsify(
         spec,
         out,

@@ -30,214 +30,348 @@ def parser() -> argparse.ArgumentParser:
         prog="ego",
         description="Run an ego vehicle's own model and controller inside real SUMO traffic.",
         epilog="Examples:\n"
-               "  ego list\n"
-               "  ego run emergency-brake --controller fuzzy --record runs/eb.rrd\n"
-               "  ego run emergency-brake --controller pid --set block_left=true --json\n"
-               "  ego run emergency-brake --controller pid --backend highway-env --video runs/eb.gif\n"
-               "  ego compare fast-follower --controllers pid,fuzzy,rbf-smc --seeds 3 --out runs/ff\n"
-               "  ego run curve --controller narma-l2 --set entry_speed=40\n"
-               "  ego compare curve --controllers pid,fuzzy-curve,narma-l2 --out runs/curve\n"
-               "  ego train narma-l2 --seed 0\n"
-               "  ego run lane-centering --controller cascade-pid --set speed=25\n"
-               "  ego tune lane-centering --quick\n"
-               "  ego run platoon --controller bp-pid-acc --set followers=5 --record runs/platoon.rrd\n"
-               "  ego compare platoon --controllers pid,bp-pid-acc --seeds 3 --out runs/platoon\n"
-               "  rerun runs/eb.rrd   # review the recording",
+        "  ego list\n"
+        "  ego run emergency-brake --controller fuzzy --record runs/eb.rrd\n"
+        "  ego run emergency-brake --controller pid --set block_left=true --json\n"
+        "  ego run emergency-brake --controller pid --backend highway-env --video runs/eb.gif\n"
+        "  ego compare fast-follower --controllers pid,fuzzy,rbf-smc --seeds 3 --out runs/ff\n"
+        "  ego run curve --controller narma-l2 --set entry_speed=40\n"
+        "  ego compare curve --controllers pid,fuzzy-curve,narma-l2 --out runs/curve\n"
+        "  ego train narma-l2 --seed 0\n"
+        "  ego run lane-centering --controller cascade-pid --set speed=25\n"
+        "  ego tune lane-centering --quick\n"
+        "  ego run platoon --controller bp-pid-acc --set followers=5 --record runs/platoon.rrd\n"
+        "  ego compare platoon --controllers pid,bp-pid-acc --seeds 3 --out runs/platoon\n"
+        "  rerun runs/eb.rrd   # review the recording",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     ap.add_argument("--version", action="version", version=f"ego {__version__}")
     sub = ap.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
 
     run = sub.add_parser(
-        "run", help="run one scenario with one controller",
+        "run",
+        help="run one scenario with one controller",
         description="Run one scenario with one controller and print its metrics.",
         epilog="Exit status: 0 completed or ended (the duration ran out first, not a failure); "
-               "1 collision, diverged or timeout; 2 bad input.\n"
-               "Every parameter, its unit and default: ego list",
+        "1 collision, diverged or timeout; 2 bad input.\n"
+        "Every parameter, its unit and default: ego list",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    run.add_argument("scenario", metavar="SCENARIO",
-                     help=f"one of: {', '.join(SCENARIOS)}; or an OpenSCENARIO file (.xosc)")
+    run.add_argument(
+        "scenario", metavar="SCENARIO", help=f"one of: {', '.join(SCENARIOS)}; or an OpenSCENARIO file (.xosc)"
+    )
     run.add_argument("--ego", metavar="ENTITY", help="with an .xosc file: the entity ego drives (default Ego)")
-    run.add_argument("--controller", "-c", required=True, metavar="NAME",
-                     help=f"one of: {controllers_help()}; or a reference: package.module:Class, "
-                          "path/to/file.py:Class or path/to/controller.fmu (docs/fmi.md)")
+    run.add_argument(
+        "--controller",
+        "-c",
+        required=True,
+        metavar="NAME",
+        help=f"one of: {controllers_help()}; or a reference: package.module:Class, "
+        "path/to/file.py:Class or path/to/controller.fmu (docs/fmi.md)",
+    )
     run.add_argument("--record", metavar="PATH", help="write a Rerun recording (.rrd) here")
-    run.add_argument("--seed", type=whole_number("--seed"), default=0, metavar="N",
-                     help="seed of the traffic and of SUMO (default 0)")
-    run.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                     help="override a scenario or controller parameter (repeatable)")
-    run.add_argument("--trace", metavar="PATH",
-                     help="write every trace column with its unit, and the traffic near the ego, to "
-                          "PATH: .csv, .parquet or .mat (MATLAB); see docs/traces.md")
+    run.add_argument(
+        "--seed",
+        type=whole_number("--seed"),
+        default=0,
+        metavar="N",
+        help="seed of the traffic and of SUMO (default 0)",
+    )
+    run.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a scenario or controller parameter (repeatable)",
+    )
+    run.add_argument(
+        "--trace",
+        metavar="PATH",
+        help="write every trace column with its unit, and the traffic near the ego, to "
+        "PATH: .csv, .parquet or .mat (MATLAB); see docs/traces.md",
+    )
     run.add_argument("--json", action="store_true", help="print one JSON object instead of text")
-    run.add_argument("--backend", default="sumo", choices=BACKENDS,
-                     help="traffic simulator (default sumo; highway-env runs emergency-brake, "
-                          "fast-follower and cut-in)")
-    run.add_argument("--video", metavar="PATH",
-                     help="with --backend highway-env: a video of the run (.gif, or .mp4 with ffmpeg)")
-    run.add_argument("--require", action="append", default=[], metavar="\"NAME: FORMULA\"",
-                     help="a requirement in signal temporal logic over the trace's signals, on top of the "
-                          "scenario's defaults (repeatable; docs/requirements.md), e.g. "
-                          "\"keep_gap: always (gap_front >= 2 m)\"")
+    run.add_argument(
+        "--backend",
+        default="sumo",
+        choices=BACKENDS,
+        help="traffic simulator (default sumo; highway-env runs emergency-brake, fast-follower and cut-in)",
+    )
+    run.add_argument(
+        "--video", metavar="PATH", help="with --backend highway-env: a video of the run (.gif, or .mp4 with ffmpeg)"
+    )
+    run.add_argument(
+        "--require",
+        action="append",
+        default=[],
+        metavar='"NAME: FORMULA"',
+        help="a requirement in signal temporal logic over the trace's signals, on top of the "
+        "scenario's defaults (repeatable; docs/requirements.md), e.g. "
+        '"keep_gap: always (gap_front >= 2 m)"',
+    )
 
     cmp_ = sub.add_parser(
-        "compare", help="every controller x seed of one scenario, in parallel processes",
+        "compare",
+        help="every controller x seed of one scenario, in parallel processes",
         description="Run every combination of controllers and seeds of one scenario in parallel "
-                    "processes (one SUMO each) and write metrics.csv, metrics.md, PNG plots and "
-                    "one .rrd per run into --out.",
+        "processes (one SUMO each) and write metrics.csv, metrics.md, PNG plots and "
+        "one .rrd per run into --out.",
         epilog="Example: ego compare emergency-brake --controllers pid,fuzzy,rbf-smc --seeds 3 "
-               "--out runs/cmp\nA --set key applies to the scenario and to every controller "
-               "that has it.\nVariants of one controller side by side, named as given in every "
-               "table, plot and file:\n  ego compare emergency-brake --controllers "
-               "pid,pid@kp_lat=0.02@kd_lat=0.05 --out runs/pid-gains\n"
-               "Exit status: 0 every run gave a result; 1 some run ended in an error; "
-               "130 interrupted (finished runs written); 2 bad input or --out in use.",
+        "--out runs/cmp\nA --set key applies to the scenario and to every controller "
+        "that has it.\nVariants of one controller side by side, named as given in every "
+        "table, plot and file:\n  ego compare emergency-brake --controllers "
+        "pid,pid@kp_lat=0.02@kd_lat=0.05 --out runs/pid-gains\n"
+        "Exit status: 0 every run gave a result; 1 some run ended in an error; "
+        "130 interrupted (finished runs written); 2 bad input or --out in use.",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    cmp_.add_argument("scenario", metavar="SCENARIO",
-                      help=f"one of: {', '.join(SCENARIOS)}; or an OpenSCENARIO file (.xosc)")
+    cmp_.add_argument(
+        "scenario", metavar="SCENARIO", help=f"one of: {', '.join(SCENARIOS)}; or an OpenSCENARIO file (.xosc)"
+    )
     cmp_.add_argument("--ego", metavar="ENTITY", help="with an .xosc file: the entity ego drives (default Ego)")
-    cmp_.add_argument("--controllers", required=True, metavar="A,B,...",
-                      help="comma-separated; a name, or a variant with its own parameters "
-                           f"NAME@key=value[@key=value...] (pid@kp_lat=0.02), from: {controllers_help()}")
+    cmp_.add_argument(
+        "--controllers",
+        required=True,
+        metavar="A,B,...",
+        help="comma-separated; a name, or a variant with its own parameters "
+        f"NAME@key=value[@key=value...] (pid@kp_lat=0.02), from: {controllers_help()}",
+    )
     cmp_.add_argument("--seeds", type=whole_number("--seeds"), default=1, metavar="N", help="seeds 0..N-1 (default 1)")
-    cmp_.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                      help="override a parameter (repeatable)")
+    cmp_.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a parameter (repeatable)",
+    )
     cmp_.add_argument("--out", required=True, metavar="DIR", help="output folder")
-    cmp_.add_argument("--jobs", type=whole_number("--jobs"), default=None, metavar="J",
-                      help="parallel processes (default: the number of CPUs)")
-    cmp_.add_argument("--backend", default="sumo", choices=BACKENDS,
-                      help="traffic simulator (default sumo)")
-    cmp_.add_argument("--traces", default=None, metavar="FORMAT",
-                      help="also write every run's trace to traces/<label>-seed<N>.FORMAT: csv, parquet "
-                           "or mat (see docs/traces.md)")
-    cmp_.add_argument("--require", action="append", default=[], metavar="\"NAME: FORMULA\"",
-                      help="a requirement in signal temporal logic over the trace's signals, on top of the "
-                           "scenario's defaults (repeatable; docs/requirements.md), e.g. "
-                           "\"keep_gap: always (gap_front >= 2 m)\"")
+    cmp_.add_argument(
+        "--jobs",
+        type=whole_number("--jobs"),
+        default=None,
+        metavar="J",
+        help="parallel processes (default: the number of CPUs)",
+    )
+    cmp_.add_argument("--backend", default="sumo", choices=BACKENDS, help="traffic simulator (default sumo)")
+    cmp_.add_argument(
+        "--traces",
+        default=None,
+        metavar="FORMAT",
+        help="also write every run's trace to traces/<label>-seed<N>.FORMAT: csv, parquet or mat (see docs/traces.md)",
+    )
+    cmp_.add_argument(
+        "--require",
+        action="append",
+        default=[],
+        metavar='"NAME: FORMULA"',
+        help="a requirement in signal temporal logic over the trace's signals, on top of the "
+        "scenario's defaults (repeatable; docs/requirements.md), e.g. "
+        '"keep_gap: always (gap_front >= 2 m)"',
+    )
 
     swp = sub.add_parser(
-        "sweep", help="many runs over a parameter space (a TOML spec), resumable Parquet results",
+        "sweep",
+        help="many runs over a parameter space (a TOML spec), resumable Parquet results",
         description="Run every run of a sweep spec (scenario, controllers, seeds, fixed values, a "
-                    "grid and/or a sample over ranges) on a process pool or a Ray cluster. Results "
-                    "go to DIR/results.parquet as runs finish; the same command again resumes. "
-                    "DIR/summary.md sums them up per controller.",
-        epilog=("Spec format (see scenarios/sweeps/*.toml):\n"
-                "  scenario = \"emergency-brake\"\n  controllers = [\"pid\", \"fuzzy\"]\n"
-                "  seeds = 2                 # or a list [0, 7, 9]\n"
-                "  [set]                     # fixed for every run\n  traffic_density = 5\n"
-                "  [grid]                    # full factorial\n  ego_speed = [20, 25, 30]\n"
-                "  [sample]                  # n points over ranges: random | lhs | sobol\n"
-                "  method = \"sobol\"\n  n = 256\n  lead_gap = [20, 60]\n\n"
-                "Example: ego sweep scenarios/sweeps/envelope.toml --out runs/envelope "
-                "--plot ego_speed,lead_decel:min_gap_front\n"
-                "Exit status: 0 every run gave a result; 1 some run ended in an error; 130 "
-                "interrupted (the same command resumes); 2 bad input or --out in use."),
+        "grid and/or a sample over ranges) on a process pool or a Ray cluster. Results "
+        "go to DIR/results.parquet as runs finish; the same command again resumes. "
+        "DIR/summary.md sums them up per controller.",
+        epilog=(
+            "Spec format (see scenarios/sweeps/*.toml):\n"
+            '  scenario = "emergency-brake"\n  controllers = ["pid", "fuzzy"]\n'
+            "  seeds = 2                 # or a list [0, 7, 9]\n"
+            "  [set]                     # fixed for every run\n  traffic_density = 5\n"
+            "  [grid]                    # full factorial\n  ego_speed = [20, 25, 30]\n"
+            "  [sample]                  # n points over ranges: random | lhs | sobol\n"
+            '  method = "sobol"\n  n = 256\n  lead_gap = [20, 60]\n\n'
+            "Example: ego sweep scenarios/sweeps/envelope.toml --out runs/envelope "
+            "--plot ego_speed,lead_decel:min_gap_front\n"
+            "Exit status: 0 every run gave a result; 1 some run ended in an error; 130 "
+            "interrupted (the same command resumes); 2 bad input or --out in use."
+        ),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     swp.add_argument("spec", metavar="SPEC.toml", help="the sweep specification")
     swp.add_argument("--out", required=True, metavar="DIR", help="output folder (resumed if it holds results)")
-    swp.add_argument("--engine", default="process", metavar="ENGINE",
-                     help="process (default: a pool of worker processes) or ray")
-    swp.add_argument("--jobs", type=whole_number("--jobs"), default=None, metavar="N",
-                     help="parallel runs (default: the number of CPUs)")
-    swp.add_argument("--address", default=None, metavar="ADDR",
-                     help="with --engine ray: join this Ray cluster (e.g. auto or ray://host:10001)")
-    swp.add_argument("--record", default="failed", metavar="WHICH",
-                     help="recordings: none, failed (default: runs that did not complete or end by "
-                          "their duration) or all")
-    swp.add_argument("--plot", action="append", default=[], metavar="X,Y[:METRIC]",
-                     help="an envelope plot over two swept parameters (repeatable)")
-    swp.add_argument("--require", action="append", default=[], metavar="\"NAME: FORMULA\"",
-                     help="a requirement on top of the spec's [requirements] (or the scenario's defaults); "
-                          "repeatable, see docs/requirements.md")
+    swp.add_argument(
+        "--engine", default="process", metavar="ENGINE", help="process (default: a pool of worker processes) or ray"
+    )
+    swp.add_argument(
+        "--jobs",
+        type=whole_number("--jobs"),
+        default=None,
+        metavar="N",
+        help="parallel runs (default: the number of CPUs)",
+    )
+    swp.add_argument(
+        "--address",
+        default=None,
+        metavar="ADDR",
+        help="with --engine ray: join this Ray cluster (e.g. auto or ray://host:10001)",
+    )
+    swp.add_argument(
+        "--record",
+        default="failed",
+        metavar="WHICH",
+        help="recordings: none, failed (default: runs that did not complete or end by their duration) or all",
+    )
+    swp.add_argument(
+        "--plot",
+        action="append",
+        default=[],
+        metavar="X,Y[:METRIC]",
+        help="an envelope plot over two swept parameters (repeatable)",
+    )
+    swp.add_argument(
+        "--require",
+        action="append",
+        default=[],
+        metavar='"NAME: FORMULA"',
+        help="a requirement on top of the spec's [requirements] (or the scenario's defaults); "
+        "repeatable, see docs/requirements.md",
+    )
     from ego.cli.falsify import add_parser as add_falsify
 
     add_falsify(sub)
 
-    lst = sub.add_parser("list", help="scenarios, controllers and every parameter",
-                         description="List scenarios, controllers and every parameter with "
-                                     "its default and unit.")
-    lst.add_argument("reference", nargs="?", metavar="CONTROLLER|FILE.xosc",
-                     help="a controller reference (path/to/controller.fmu, module:Class, file.py:Class): "
-                          "its variables, the tasks it drives and its parameters; or an OpenSCENARIO "
-                          "file: its parameters, entities, the ego and every element (supported or not)")
+    lst = sub.add_parser(
+        "list",
+        help="scenarios, controllers and every parameter",
+        description="List scenarios, controllers and every parameter with its default and unit.",
+    )
+    lst.add_argument(
+        "reference",
+        nargs="?",
+        metavar="CONTROLLER|FILE.xosc",
+        help="a controller reference (path/to/controller.fmu, module:Class, file.py:Class): "
+        "its variables, the tasks it drives and its parameters; or an OpenSCENARIO "
+        "file: its parameters, entities, the ego and every element (supported or not)",
+    )
     lst.add_argument("--ego", metavar="ENTITY", help="with FILE.xosc: the entity ego drives (default Ego)")
     lst.add_argument("--json", action="store_true", help="print JSON instead of text")
-    lst.add_argument("--markdown", action="store_true",
-                     help="print every parameter's default, unit and allowed values as Markdown tables "
-                          "(the reference in docs/inputs.md)")
+    lst.add_argument(
+        "--markdown",
+        action="store_true",
+        help="print every parameter's default, unit and allowed values as Markdown tables "
+        "(the reference in docs/inputs.md)",
+    )
 
     exf = sub.add_parser(
-        "export-fmu", help="write one of ego's vehicle models as an FMI 2.0 co-simulation FMU",
+        "export-fmu",
+        help="write one of ego's vehicle models as an FMI 2.0 co-simulation FMU",
         description="Write ego's vehicle model as an FMI 2.0 co-simulation FMU with its C sources "
-                    "(compiled here with the system C compiler; see docs/fmi.md).",
-        epilog="Example: ego export-fmu nonlinear-bicycle --out runs/bicycle.fmu")
+        "(compiled here with the system C compiler; see docs/fmi.md).",
+        epilog="Example: ego export-fmu nonlinear-bicycle --out runs/bicycle.fmu",
+    )
     exf.add_argument("model", metavar="MODEL", help="nonlinear-bicycle (report 000) or linear-bicycle (report 002)")
     exf.add_argument("--out", required=True, metavar="FILE.fmu", help="the FMU to write")
-    exf.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                     help="a parameter's start value in the FMU (repeatable), e.g. abs=1")
+    exf.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a parameter's start value in the FMU (repeatable), e.g. abs=1",
+    )
 
     trn = sub.add_parser(
-        "train", help="train a learned controller (narma-l2)",
+        "train",
+        help="train a learned controller (narma-l2)",
         description="Generate identification data from the ego's model and train a learned "
-                    "controller's networks (torch, CPU, seeded: the same seed gives the same "
-                    "weights). Writes the weights (.npz) and their training metadata (.json).",
+        "controller's networks (torch, CPU, seeded: the same seed gives the same "
+        "weights). Writes the weights (.npz) and their training metadata (.json).",
         epilog="Example: ego train narma-l2 --seed 0   (rewrites the model shipped with ego)\n"
-               "The report's setting (100 samples at one operating point): ego train narma-l2 "
-               "--samples 100 --speeds 30,30 --accels 0.3,0.3 --radii 15,15 --out runs/narma_report.npz; "
-               "use it with --set model=runs/narma_report.npz",
+        "The report's setting (100 samples at one operating point): ego train narma-l2 "
+        "--samples 100 --speeds 30,30 --accels 0.3,0.3 --radii 15,15 --out runs/narma_report.npz; "
+        "use it with --set model=runs/narma_report.npz",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     trn.add_argument("what", metavar="MODEL", choices=["narma-l2"], help="narma-l2")
-    trn.add_argument("--seed", type=whole_number("--seed"), default=0, metavar="N", help="seed of data and training (default 0)")
-    trn.add_argument("--samples", type=whole_number("--samples"), default=20000, metavar="N",
-                     help="identification samples (default 20000)")
-    trn.add_argument("--epochs", type=whole_number("--epochs"), default=150, metavar="N", help="training epochs (default 150)")
-    trn.add_argument("--speeds", default="20,40", metavar="LO,HI",
-                     help="entry speed range in km/h (default 20,40)")
-    trn.add_argument("--accels", default="0,0.6", metavar="LO,HI",
-                     help="axial acceleration range in m/s^2 (default 0,0.6)")
-    trn.add_argument("--radii", default="12,60", metavar="LO,HI",
-                     help="curve radius range in m (default 12,60)")
-    trn.add_argument("--out", default=None, metavar="PATH",
-                     help="weights file (.npz; default: runs/narma_l2.npz)")
-    trn.add_argument("--install", action="store_true",
-                     help="replace the model shipped in the package (what ego run uses by default)")
+    trn.add_argument(
+        "--seed", type=whole_number("--seed"), default=0, metavar="N", help="seed of data and training (default 0)"
+    )
+    trn.add_argument(
+        "--samples",
+        type=whole_number("--samples"),
+        default=20000,
+        metavar="N",
+        help="identification samples (default 20000)",
+    )
+    trn.add_argument(
+        "--epochs", type=whole_number("--epochs"), default=150, metavar="N", help="training epochs (default 150)"
+    )
+    trn.add_argument("--speeds", default="20,40", metavar="LO,HI", help="entry speed range in km/h (default 20,40)")
+    trn.add_argument(
+        "--accels", default="0,0.6", metavar="LO,HI", help="axial acceleration range in m/s^2 (default 0,0.6)"
+    )
+    trn.add_argument("--radii", default="12,60", metavar="LO,HI", help="curve radius range in m (default 12,60)")
+    trn.add_argument("--out", default=None, metavar="PATH", help="weights file (.npz; default: runs/narma_l2.npz)")
+    trn.add_argument(
+        "--install", action="store_true", help="replace the model shipped in the package (what ego run uses by default)"
+    )
 
     tun = sub.add_parser(
-        "tune", help="tune a controller's gains (lane-centering: differential evolution)",
+        "tune",
+        help="tune a controller's gains (lane-centering: differential evolution)",
         description="Tune report 003's cascade PID by differential evolution with the report's "
-                    "settings (population 15 x 12 gains, at most 100 generations, its cost), each "
-                    "generation simulated as one vectorised batch over the whole road. Writes the "
-                    "gains and how they were found to a preset file (.json) that the "
-                    "lane-centering scenario loads by default.",
+        "settings (population 15 x 12 gains, at most 100 generations, its cost), each "
+        "generation simulated as one vectorised batch over the whole road. Writes the "
+        "gains and how they were found to a preset file (.json) that the "
+        "lane-centering scenario loads by default.",
         epilog="Example: ego tune lane-centering   (about two minutes; rewrites the shipped preset)\n"
-               "         ego tune lane-centering --quick --out runs/quick.json   (seconds)\n"
-               "Use a preset with: ego run lane-centering -c cascade-pid --set gains_file=PATH",
+        "         ego tune lane-centering --quick --out runs/quick.json   (seconds)\n"
+        "Use a preset with: ego run lane-centering -c cascade-pid --set gains_file=PATH",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     tun.add_argument("what", metavar="TASK", choices=["lane-centering"], help="lane-centering")
-    tun.add_argument("--quick", action="store_true",
-                     help="4 generations of a population of 4 x 12: a check, not a tuning")
-    tun.add_argument("--workers", type=whole_number("--workers"), default=1, metavar="N",
-                     help="processes sharing each generation (default 1)")
-    tun.add_argument("--seed", type=whole_number("--seed"), default=0, metavar="N", help="seed of the evolution (default 0)")
-    tun.add_argument("--drives", default="8,25:1", metavar="V[:OFF],...",
-                     help="drives whose costs are summed: speed in m/s, optionally the initial "
-                          "offset in m (default 8,25:1; report 003: 8)")
-    tun.add_argument("--cost", default="model", metavar="KIND",
-                     help="model (default: the lateral-error model, the whole population in one numpy "
-                          "simulation) or sumo (each member's cost from SUMO runs of lane-centering on "
-                          "the dynamic bicycle, through --engine)")
-    tun.add_argument("--engine", default="process", metavar="ENGINE",
-                     help="with --cost sumo: process (default) or ray; --workers runs at once")
+    tun.add_argument(
+        "--quick", action="store_true", help="4 generations of a population of 4 x 12: a check, not a tuning"
+    )
+    tun.add_argument(
+        "--workers",
+        type=whole_number("--workers"),
+        default=1,
+        metavar="N",
+        help="processes sharing each generation (default 1)",
+    )
+    tun.add_argument(
+        "--seed", type=whole_number("--seed"), default=0, metavar="N", help="seed of the evolution (default 0)"
+    )
+    tun.add_argument(
+        "--drives",
+        default="8,25:1",
+        metavar="V[:OFF],...",
+        help="drives whose costs are summed: speed in m/s, optionally the initial "
+        "offset in m (default 8,25:1; report 003: 8)",
+    )
+    tun.add_argument(
+        "--cost",
+        default="model",
+        metavar="KIND",
+        help="model (default: the lateral-error model, the whole population in one numpy "
+        "simulation) or sumo (each member's cost from SUMO runs of lane-centering on "
+        "the dynamic bicycle, through --engine)",
+    )
+    tun.add_argument(
+        "--engine",
+        default="process",
+        metavar="ENGINE",
+        help="with --cost sumo: process (default) or ray; --workers runs at once",
+    )
     tun.add_argument("--address", default=None, metavar="ADDR", help="with --engine ray: join this cluster")
-    tun.add_argument("--duration", type=float, default=None, metavar="S",
-                     help="with --cost sumo: simulated seconds of each run (default: the whole road)")
-    tun.add_argument("--out", default=None, metavar="PATH",
-                     help="preset file (.json; default: runs/cascade_pid_tuned.json)")
-    tun.add_argument("--install", action="store_true",
-                     help="replace the tuned preset shipped in the package (cascade-pid's default)")
+    tun.add_argument(
+        "--duration",
+        type=float,
+        default=None,
+        metavar="S",
+        help="with --cost sumo: simulated seconds of each run (default: the whole road)",
+    )
+    tun.add_argument(
+        "--out", default=None, metavar="PATH", help="preset file (.json; default: runs/cascade_pid_tuned.json)"
+    )
+    tun.add_argument(
+        "--install", action="store_true", help="replace the tuned preset shipped in the package (cascade-pid's default)"
+    )
     return ap

@@ -18,10 +18,17 @@ def command(args: Any) -> int:
     from ego.runner import RunSpec, resolve, run
     from ego.scenarios.base import NOT_FAILED
 
-    spec = RunSpec(args.scenario, args.controller, seed=check_seed(args.seed, "--seed"),
-                   overrides=ego_entity(args, parse_overrides(args.overrides)), record=args.record, trace=args.trace,
-                   backend=args.backend, video=args.video,
-                   requirements=with_defaults(args.scenario, args.require))
+    spec = RunSpec(
+        args.scenario,
+        args.controller,
+        seed=check_seed(args.seed, "--seed"),
+        overrides=ego_entity(args, parse_overrides(args.overrides)),
+        record=args.record,
+        trace=args.trace,
+        backend=args.backend,
+        video=args.video,
+        requirements=with_defaults(args.scenario, args.require),
+    )
     resolved = resolve(spec)  # every name, value and path checked before anything runs
     from ego.outputs import OutputError
 
@@ -77,8 +84,7 @@ def _print_result(result, units: dict[str, str]) -> None:
     from ego.results.metrics import flatten
 
     m = flatten(result.metrics)
-    print(f"{m['scenario']} with {m['controller']} (seed {m['seed']}): {m['status'].upper()}"
-          f" - {m['status_detail']}")
+    print(f"{m['scenario']} with {m['controller']} (seed {m['seed']}): {m['status'].upper()} - {m['status_detail']}")
     skip = {"scenario", "controller", "seed", "status", "status_detail", "lane_choice"}
     width = max(len(k) for k in m)
     for key, value in m.items():

@@ -42,20 +42,33 @@ def command(args: Any) -> int:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise ConfigError(f"cannot create --out folder {args.out!r}: {exc.strerror}") from None
-    report = sweep(spec, out, engine=args.engine, jobs=args.jobs, address=args.address,
-                   record=args.record, plots=args.plot, progress=Progress)
+    report = sweep(
+        spec,
+        out,
+        engine=args.engine,
+        jobs=args.jobs,
+        address=args.address,
+        record=args.record,
+        plots=args.plot,
+        progress=Progress,
+    )
     statuses = ", ".join(f"{n} {s}" for s, n in sorted(report.by_status.items())) or "none"
-    print(f"{report.total} runs in the spec: {report.already} were already in "
-          f"{out / 'results.parquet'}, {report.ran} ran now ({statuses}) in {report.seconds:.1f} s")
+    print(
+        f"{report.total} runs in the spec: {report.already} were already in "
+        f"{out / 'results.parquet'}, {report.ran} ran now ({statuses}) in {report.seconds:.1f} s"
+    )
     if report.interrupted:
         left = report.total - report.already - report.ran
         print(f"interrupted: {left} runs remain; the same command resumes", file=sys.stderr)
         return EXIT_INTERRUPTED
-    print(f"wrote {out / 'results.parquet'}, {out / 'summary.md'}"
-          + "".join(f", {out / name}" for name in plot_names(args.plot, spec)))
+    print(
+        f"wrote {out / 'results.parquet'}, {out / 'summary.md'}"
+        + "".join(f", {out / name}" for name in plot_names(args.plot, spec))
+    )
     if report.by_status.get("error"):
-        print(f"ego: {report.by_status['error']} of {report.ran} runs ended in an error "
-              "(see summary.md)", file=sys.stderr)
+        print(
+            f"ego: {report.by_status['error']} of {report.ran} runs ended in an error (see summary.md)", file=sys.stderr
+        )
         return EXIT_NOT_COMPLETED
     return EXIT_OK
 

@@ -12,8 +12,10 @@ def command(args: Any) -> int:
     from ego.control.narma import DEFAULT_MODEL
     from ego.train.narma_l2 import DataSpec, TrainSpec, train
 
-    for value, what, cls, name in ((args.samples, "--samples", DataSpec, "samples"),
-                                   (args.epochs, "--epochs", TrainSpec, "epochs")):
+    for value, what, cls, name in (
+        (args.samples, "--samples", DataSpec, "samples"),
+        (args.epochs, "--epochs", TrainSpec, "epochs"),
+    ):
         info = declared(cls, name)
         check_count(value, what, int(info.min), int(info.max))
     v_lo, v_hi = parse_range(args.speeds, "--speeds", declared(DataSpec, "speed_min"))
@@ -25,7 +27,14 @@ def command(args: Any) -> int:
         from ego.paths import check_file_target
 
         check_file_target(out.with_suffix(".json"), "--out path", str(out))
-    data = DataSpec(samples=args.samples, speed_min=v_lo, speed_max=v_hi, accel_min=a_lo,
-                    accel_max=a_hi, radius_min=r_lo, radius_max=r_hi)
+    data = DataSpec(
+        samples=args.samples,
+        speed_min=v_lo,
+        speed_max=v_hi,
+        accel_min=a_lo,
+        accel_max=a_hi,
+        radius_min=r_lo,
+        radius_max=r_hi,
+    )
     train(TrainSpec(seed=args.seed, epochs=args.epochs, data=data), out)
     return EXIT_OK

@@ -23,8 +23,9 @@ def command(args: Any) -> int:
         if not all(math.isfinite(x) for d in drives for x in d):
             raise ValueError
     except ValueError:
-        raise ConfigError(f"bad value for --drives: {args.drives!r} (expected speeds in m/s with "
-                          "optional offsets in m, e.g. 8,25:1)") from None
+        raise ConfigError(
+            f"bad value for --drives: {args.drives!r} (expected speeds in m/s with optional offsets in m, e.g. 8,25:1)"
+        ) from None
     check_drives(drives, "--drives", repr(args.drives))
     check_seed(args.seed, "--seed")
     out = model_out(args, TUNED_PRESET, "runs/cascade_pid_tuned.json", ".json")
@@ -42,6 +43,17 @@ def command(args: Any) -> int:
         check_address(args.address)
     check_number(args.duration, "--duration", 1.0, MAX_DURATION, "s")
     spec = TuneSpec.quick(args.seed, args.workers) if args.quick else TuneSpec(seed=args.seed, workers=args.workers)
-    tune(TuneSpec(**{**spec.__dict__, "drives": drives, "cost": args.cost, "engine": args.engine,
-                     "address": args.address, "duration": args.duration}), out)
+    tune(
+        TuneSpec(
+            **{
+                **spec.__dict__,
+                "drives": drives,
+                "cost": args.cost,
+                "engine": args.engine,
+                "address": args.address,
+                "duration": args.duration,
+            }
+        ),
+        out,
+    )
     return EXIT_OK

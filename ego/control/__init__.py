@@ -51,8 +51,9 @@ class NoController:
         return {}
 
 
-_NONE = ControllerSpec("none", "controller off: zero longitudinal command, delta = 0 (the ego "
-                       "coasts straight on)", NoParams, NoController)
+_NONE = ControllerSpec(
+    "none", "controller off: zero longitudinal command, delta = 0 (the ego coasts straight on)", NoParams, NoController
+)
 
 #: task -> name -> spec: the one controller registry. A scenario belongs to one task
 #: (``ego.control.tasks.TASKS`` says what its controllers observe and return); its
@@ -61,49 +62,77 @@ CONTROLLERS: dict[str, dict[str, ControllerSpec]] = {
     "tracking": {
         spec.name: spec
         for spec in (
-            ControllerSpec("fuzzy", "report 000's 7x7 Mamdani fuzzy controller on both channels",
-                           FuzzyParams, FuzzyController),
-            ControllerSpec("pid", "PID baseline with anti-windup and filtered derivative",
-                           PIDParams, PIDController),
-            ControllerSpec("fuzzy-pid", "report 000's fuzzy-adaptive PID (classic dKp/dKi/dKd tables)",
-                           FuzzyPIDParams, FuzzyPIDController),
-            ControllerSpec("bp-pid", "report 000's BP neural-network PID (default: stabilised learning)",
-                           BPPIDParams, BPPIDController),
-            ControllerSpec("rbf-smc", "report 000's RBF adaptive sliding-mode control",
-                           RBFSMCParams, RBFSMCController),
+            ControllerSpec(
+                "fuzzy", "report 000's 7x7 Mamdani fuzzy controller on both channels", FuzzyParams, FuzzyController
+            ),
+            ControllerSpec("pid", "PID baseline with anti-windup and filtered derivative", PIDParams, PIDController),
+            ControllerSpec(
+                "fuzzy-pid",
+                "report 000's fuzzy-adaptive PID (classic dKp/dKi/dKd tables)",
+                FuzzyPIDParams,
+                FuzzyPIDController,
+            ),
+            ControllerSpec(
+                "bp-pid",
+                "report 000's BP neural-network PID (default: stabilised learning)",
+                BPPIDParams,
+                BPPIDController,
+            ),
+            ControllerSpec("rbf-smc", "report 000's RBF adaptive sliding-mode control", RBFSMCParams, RBFSMCController),
             _NONE,
         )
     },
     "curve": {
         spec.name: spec
         for spec in (
-            ControllerSpec("pid", "report 002's PI on e = e_lat + e_head (Kp 2, Ki 0.5)",
-                           CurvePIDParams, CurvePID),
-            ControllerSpec("fuzzy-curve", "report 002's two 5x5 fuzzy tables (speed x position "
-                           "error, speed x angle error), mixed with weight w",
-                           FuzzyCurveParams, FuzzyCurve),
-            ControllerSpec("narma-l2", "report 002's NARMA-L2: f and g networks trained on "
-                           "20-40 km/h, delta = (r - f) / g with a move penalty", NarmaL2Params, NarmaL2Controller),
+            ControllerSpec("pid", "report 002's PI on e = e_lat + e_head (Kp 2, Ki 0.5)", CurvePIDParams, CurvePID),
+            ControllerSpec(
+                "fuzzy-curve",
+                "report 002's two 5x5 fuzzy tables (speed x position error, speed x angle error), mixed with weight w",
+                FuzzyCurveParams,
+                FuzzyCurve,
+            ),
+            ControllerSpec(
+                "narma-l2",
+                "report 002's NARMA-L2: f and g networks trained on "
+                "20-40 km/h, delta = (r - f) / g with a move penalty",
+                NarmaL2Params,
+                NarmaL2Controller,
+            ),
             _NONE,
         )
     },
     "lane-centering": {
         spec.name: spec
         for spec in (
-            ControllerSpec("cascade-pid", "report 003's four-loop cascade PID with curvature "
-                           "feed-forward (preset tuned or report)", CascadePIDParams, CascadePID),
+            ControllerSpec(
+                "cascade-pid",
+                "report 003's four-loop cascade PID with curvature feed-forward (preset tuned or report)",
+                CascadePIDParams,
+                CascadePID,
+            ),
             _NONE,
         )
     },
     "car-following": {
         spec.name: spec
         for spec in (
-            ControllerSpec("pid", "report 004's PID on the spacing error (Kp 0.85, Ki 0.2, Kd 0.3)",
-                           FollowingPIDParams, FollowingPID),  # type: ignore[arg-type]  # list in, list out
-            ControllerSpec("bp-pid-acc", "report 004's 3-5-3 BP neural-network PID (inputs r_in, "
-                           "y_out, error; outputs Kp, Ki, Kd; incremental PID)", BPPIDAccParams, BPPIDAcc),  # type: ignore[arg-type]
-            ControllerSpec("none", "controller off: zero acceleration command (the followers coast)",
-                           NoParams, NoController),
+            ControllerSpec(
+                "pid",
+                "report 004's PID on the spacing error (Kp 0.85, Ki 0.2, Kd 0.3)",
+                FollowingPIDParams,
+                FollowingPID,
+            ),  # type: ignore[arg-type]  # list in, list out
+            ControllerSpec(
+                "bp-pid-acc",
+                "report 004's 3-5-3 BP neural-network PID (inputs r_in, "
+                "y_out, error; outputs Kp, Ki, Kd; incremental PID)",
+                BPPIDAccParams,
+                BPPIDAcc,
+            ),  # type: ignore[arg-type]
+            ControllerSpec(
+                "none", "controller off: zero acceleration command (the followers coast)", NoParams, NoController
+            ),
         )
     },
 }
@@ -129,14 +158,14 @@ def controller_spec(name: str, task: str = "tracking") -> ControllerSpec:
             spec: ControllerSpec = resolve_controller(name, task)
             return spec
         if task not in CONTROLLERS:
-            raise ConfigError(f"unknown task {task!r} (known: {', '.join(CONTROLLERS)})"
-                              f"{did_you_mean(task, CONTROLLERS)}") from None
+            raise ConfigError(
+                f"unknown task {task!r} (known: {', '.join(CONTROLLERS)}){did_you_mean(task, CONTROLLERS)}"
+            ) from None
         others = [t for t in CONTROLLERS if name in CONTROLLERS[t]]
         # the right name for another task, or a misspelt one
         hint = f"; {name!r} is a {others[0]} controller" if others else did_you_mean(name, CONTROLLERS[task])
         raise ConfigError(
-            f"unknown controller {name!r} for the {task} task (known: "
-            f"{', '.join(CONTROLLERS[task])}){hint}"
+            f"unknown controller {name!r} for the {task} task (known: {', '.join(CONTROLLERS[task])}){hint}"
         ) from None
 
 

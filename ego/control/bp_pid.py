@@ -48,24 +48,45 @@ REPORT_WEIGHTS = (4.0, 2.0, 0.1, 0.55)
 
 @dataclass(frozen=True)
 class BPPIDParams(Params):
-    variant: str = param("stable", "-", "stable (textbook learning, default) or report "
-                         "(the published S-function)", choices=("stable", "report"))
-    learning_rate: float = param(0.002, "-", "eta of the stable variant (report: 0.05; 0: no learning)",
-                                 min=0.0, max=1.0)
-    momentum: float = param(0.01, "-", "alpha of the stable variant (report: 0.01)", min=0.0,
-                            max=0.99)
+    variant: str = param(
+        "stable",
+        "-",
+        "stable (textbook learning, default) or report (the published S-function)",
+        choices=("stable", "report"),
+    )
+    learning_rate: float = param(
+        0.002, "-", "eta of the stable variant (report: 0.05; 0: no learning)", min=0.0, max=1.0
+    )
+    momentum: float = param(0.01, "-", "alpha of the stable variant (report: 0.01)", min=0.0, max=0.99)
     fx_gain: float = param(500.0, "N", "Fx = fx_gain * u_x", min=0.0, max=20000.0)
     delta_gain: float = param(0.004, "rad", "delta = delta_gain * u_y", min=0.0, max=1.0)
-    ki_lon_weight: float = param(0.05, "-", "u_x = Kp p + ki_lon_weight Ki i + kd_lon_weight Kd d, "
-                                 "stable variant (report: 4)", min=0.0, max=100.0)
+    ki_lon_weight: float = param(
+        0.05,
+        "-",
+        "u_x = Kp p + ki_lon_weight Ki i + kd_lon_weight Kd d, stable variant (report: 4)",
+        min=0.0,
+        max=100.0,
+    )
     kd_lon_weight: float = param(2.0, "-", "stable variant (report: 2)", min=0.0, max=100.0)
-    ki_lat_weight: float = param(0.0, "-", "u_y = Kp p + ki_lat_weight Ki i + kd_lat_weight Kd d, "
-                                 "stable variant (report: 0.1)", min=0.0, max=100.0)
+    ki_lat_weight: float = param(
+        0.0,
+        "-",
+        "u_y = Kp p + ki_lat_weight Ki i + kd_lat_weight Kd d, stable variant (report: 0.1)",
+        min=0.0,
+        max=100.0,
+    )
     kd_lat_weight: float = param(2.5, "-", "stable variant (report: 0.55)", min=0.0, max=100.0)
-    integral_limit: float = param(5.0, "m s", "|integral of the error| limit of the stable "
-                                  "variant (anti-windup)", min=0.0, max=1000.0, min_exclusive=True)
-    init_scale: float = param(0.1, "-", "initial weights ~ N(0, init_scale^2), stable variant "
-                              "(report: 1)", min=0.0, max=10.0)
+    integral_limit: float = param(
+        5.0,
+        "m s",
+        "|integral of the error| limit of the stable variant (anti-windup)",
+        min=0.0,
+        max=1000.0,
+        min_exclusive=True,
+    )
+    init_scale: float = param(
+        0.1, "-", "initial weights ~ N(0, init_scale^2), stable variant (report: 1)", min=0.0, max=10.0
+    )
 
 
 class BPPIDController:
@@ -79,8 +100,9 @@ class BPPIDController:
         self.eta = 0.05 if self.report else p.learning_rate
         self.alpha = 0.01 if self.report else p.momentum
         self.integral_limit = math.inf if self.report else p.integral_limit
-        weights = REPORT_WEIGHTS if self.report else (p.ki_lon_weight, p.kd_lon_weight,
-                                                       p.ki_lat_weight, p.kd_lat_weight)
+        weights = (
+            REPORT_WEIGHTS if self.report else (p.ki_lon_weight, p.kd_lon_weight, p.ki_lat_weight, p.kd_lat_weight)
+        )
         self.coef = np.array([1.0, weights[0], weights[1], 1.0, weights[2], weights[3]])
         self.x = np.empty(N_IN)
         self.reset(seed=0)
@@ -152,11 +174,24 @@ class BPPIDController:
             w += step
 
     #: the network's gain multipliers (1 + k) and the norm of its weights: pure numbers
-    signal_units = {"kp_lon": "-", "ki_lon": "-", "kd_lon": "-", "kp_lat": "-", "ki_lat": "-",
-                    "kd_lat": "-", "weight_norm": "-"}
+    signal_units = {
+        "kp_lon": "-",
+        "ki_lon": "-",
+        "kd_lon": "-",
+        "kp_lat": "-",
+        "ki_lat": "-",
+        "kd_lat": "-",
+        "weight_norm": "-",
+    }
 
     def signals(self) -> dict[str, float]:
         g = self.gains
-        return {"kp_lon": float(g[0]), "ki_lon": float(g[1]), "kd_lon": float(g[2]),
-                "kp_lat": float(g[3]), "ki_lat": float(g[4]), "kd_lat": float(g[5]),
-                "weight_norm": float(math.sqrt(float(np.sum(self.w1 ** 2) + np.sum(self.w2 ** 2))))}
+        return {
+            "kp_lon": float(g[0]),
+            "ki_lon": float(g[1]),
+            "kd_lon": float(g[2]),
+            "kp_lat": float(g[3]),
+            "ki_lat": float(g[4]),
+            "kd_lat": float(g[5]),
+            "weight_norm": float(math.sqrt(float(np.sum(self.w1**2) + np.sum(self.w2**2)))),
+        }

@@ -33,8 +33,7 @@ from ego.models.lateral_error import LateralErrorParams
 from ego.params import ConfigError, Params, did_you_mean, param
 
 #: Kp, Ki, Kd of the e, psi, vy and r loops: report 003's differential-evolution result
-REPORT_GAINS = (0.2036, 0.3188, 0.1748, 1.5698, 0.0482, 0.0236,
-                0.1837, 0.4796, 0.2856, 1.0627, 0.3497, 0.1980)
+REPORT_GAINS = (0.2036, 0.3188, 0.1748, 1.5698, 0.0482, 0.0236, 0.1837, 0.4796, 0.2856, 1.0627, 0.3497, 0.1980)
 GAIN_NAMES = tuple(f"{k}_{loop}" for loop in ("e", "psi", "vy", "r") for k in ("kp", "ki", "kd"))
 TUNED_PRESET = Path(str(files("ego.control") / "trained" / "cascade_pid_tuned.json"))  # package data
 
@@ -54,20 +53,24 @@ def load_preset(path: str = str(TUNED_PRESET)) -> tuple[float, ...]:
     data = read_json(p, "gains_file")
     gains = data.get("gains") if isinstance(data, dict) else None
     if not isinstance(gains, dict):
-        raise ConfigError(f"bad gains_file {path!r}: expected an object with \"gains\": "
-                          f"{{{', '.join(GAIN_NAMES[:2])}, ...}} as ego tune writes")
+        raise ConfigError(
+            f'bad gains_file {path!r}: expected an object with "gains": '
+            f"{{{', '.join(GAIN_NAMES[:2])}, ...}} as ego tune writes"
+        )
     for name in GAIN_NAMES:
         if name not in gains:
-            raise ConfigError(f"bad gains_file {path!r}: the gain {name} is missing "
-                              f"(expected {', '.join(GAIN_NAMES)})")
+            raise ConfigError(f"bad gains_file {path!r}: the gain {name} is missing (expected {', '.join(GAIN_NAMES)})")
         value = gains[name]
         if not finite_number(value) or not 0.0 <= value <= MAX_GAIN:
-            raise ConfigError(f"bad gains_file {path!r}: {name} = {value!r:.40} (expected a number "
-                              f"from 0 to {MAX_GAIN:g})")
+            raise ConfigError(
+                f"bad gains_file {path!r}: {name} = {value!r:.40} (expected a number from 0 to {MAX_GAIN:g})"
+            )
     extra = sorted(set(gains) - set(GAIN_NAMES))
     if extra:
-        raise ConfigError(f"bad gains_file {path!r}: unknown gain {extra[0]!r} (expected "
-                          f"{', '.join(GAIN_NAMES)}){did_you_mean(extra[0], GAIN_NAMES)}")
+        raise ConfigError(
+            f"bad gains_file {path!r}: unknown gain {extra[0]!r} (expected "
+            f"{', '.join(GAIN_NAMES)}){did_you_mean(extra[0], GAIN_NAMES)}"
+        )
     return tuple(float(gains[n]) for n in GAIN_NAMES)
 
 
@@ -81,13 +84,16 @@ def adaptive_gain(e: float) -> float:
 class CascadePIDParams(Params):
     """Report 003's cascade; ``preset`` picks the gains."""
 
-    preset: str = param("tuned", "-", "gains: tuned (ego tune lane-centering) or report (report "
-                        "003's)", choices=("tuned", "report"))
+    preset: str = param(
+        "tuned", "-", "gains: tuned (ego tune lane-centering) or report (report 003's)", choices=("tuned", "report")
+    )
     gains_file: str = param("", "-", "a preset file written by ego tune (overrides preset)")
-    integral_limit: float = param(1.0, "-", "|integral| limit of every loop (anti-windup)",
-                                  min=0, max=100.0, min_exclusive=True)
-    alpha: float = param(0.2, "-", "derivative filter: D = alpha d + (1 - alpha) D_prev",
-                         min=0, max=1, min_exclusive=True)
+    integral_limit: float = param(
+        1.0, "-", "|integral| limit of every loop (anti-windup)", min=0, max=100.0, min_exclusive=True
+    )
+    alpha: float = param(
+        0.2, "-", "derivative filter: D = alpha d + (1 - alpha) D_prev", min=0, max=1, min_exclusive=True
+    )
     adaptive: bool = param(True, "-", "report 003's adaptive gain on the position loop")
     feedforward: bool = param(True, "-", "curvature feed-forward kappa (L + K_us v^2)")
     steer_limit: float = param(25.0, "deg", "|delta| limit (report 003: 25 deg)", min=1.0, max=45.0)
@@ -110,12 +116,38 @@ class Cascade:
     :func:`ego.train.lane_centering.simulate_batch` is the same law on numpy arrays (tests
     hold them equal member by member)."""
 
-    __slots__ = ("kp", "ki", "kd", "beta", "ilim", "adaptive", "ff", "lim", "rate", "L", "K",
-                 "integ", "dfilt", "prev", "delta", "first", "out")
+    __slots__ = (
+        "kp",
+        "ki",
+        "kd",
+        "beta",
+        "ilim",
+        "adaptive",
+        "ff",
+        "lim",
+        "rate",
+        "L",
+        "K",
+        "integ",
+        "dfilt",
+        "prev",
+        "delta",
+        "first",
+        "out",
+    )
 
-    def __init__(self, gains: tuple[float, ...], dt: float, integral_limit: float = 1.0, alpha: float = 0.2,
-                 adaptive: bool = True, feedforward: bool = True, steer_limit: float = math.radians(25),
-                 steer_rate: float = math.radians(30), vehicle: LateralErrorParams | None = None) -> None:
+    def __init__(
+        self,
+        gains: tuple[float, ...],
+        dt: float,
+        integral_limit: float = 1.0,
+        alpha: float = 0.2,
+        adaptive: bool = True,
+        feedforward: bool = True,
+        steer_limit: float = math.radians(25),
+        steer_rate: float = math.radians(30),
+        vehicle: LateralErrorParams | None = None,
+    ) -> None:
         if len(gains) != 12:
             raise ValueError(f"the cascade needs 12 gains, got {len(gains)}")
         g = [float(x) for x in gains]
@@ -178,15 +210,22 @@ class CascadePID:
 
     def __init__(self, params: CascadePIDParams, dt: float) -> None:
         self.params = p = params
-        self.law = Cascade(p.gains(), dt, p.integral_limit, p.alpha, p.adaptive, p.feedforward,
-                           math.radians(p.steer_limit), math.radians(p.steer_rate))
+        self.law = Cascade(
+            p.gains(),
+            dt,
+            p.integral_limit,
+            p.alpha,
+            p.adaptive,
+            p.feedforward,
+            math.radians(p.steer_limit),
+            math.radians(p.steer_rate),
+        )
 
     def reset(self, *, seed: int | None = None) -> None:
         self.law.reset()
 
     def step(self, obs: Observation) -> tuple[float, float]:
-        delta = self.law.step(obs.d - obs.d_ref, obs.heading_error, obs.vy, obs.yaw_rate,
-                              obs.curvature, obs.speed)
+        delta = self.law.step(obs.d - obs.d_ref, obs.heading_error, obs.vy, obs.yaw_rate, obs.curvature, obs.speed)
         return obs.accel_ref, delta
 
     #: the outer loops' outputs (references of the inner loops) and the feedback steer

@@ -85,19 +85,18 @@ def lateral_errors(obs: Observation) -> tuple[float, float]:
 
 # --- the optional pedal loop -----------------------------------------------------------------
 
+
 @dataclass(frozen=True)
 class PedalParams(Params):
     """Report 002's afterthought: a pedal PI that lowers a_x while the angle error is large."""
 
-    pedal: bool = param(False, "-", "close the pedal loop (report 002's idea; default: hold the "
-                        "scenario's a_x)")
-    pedal_kp: float = param(20.0, "m/s^2/rad", "pedal loop: deceleration per rad of excess "
-                            "angle error", min=0, max=1000.0)
+    pedal: bool = param(False, "-", "close the pedal loop (report 002's idea; default: hold the scenario's a_x)")
+    pedal_kp: float = param(
+        20.0, "m/s^2/rad", "pedal loop: deceleration per rad of excess angle error", min=0, max=1000.0
+    )
     pedal_ki: float = param(20.0, "m/s^3/rad", "pedal loop: integral gain", min=0, max=1000.0)
-    pedal_angle: float = param(0.05, "rad", "pedal loop: angle error tolerated before it "
-                               "lifts off", min=0, max=HALF_PI)
-    pedal_min_accel: float = param(-3.0, "m/s^2", "pedal loop: strongest braking it may "
-                                   "command", min=-9.0, max=0.0)
+    pedal_angle: float = param(0.05, "rad", "pedal loop: angle error tolerated before it lifts off", min=0, max=HALF_PI)
+    pedal_min_accel: float = param(-3.0, "m/s^2", "pedal loop: strongest braking it may command", min=-9.0, max=0.0)
 
 
 class PedalLoop:
@@ -130,14 +129,14 @@ class PedalLoop:
 
 # --- PID ---------------------------------------------------------------------------------------
 
+
 @dataclass(frozen=True)
 class CurvePIDParams(PedalParams):
     """Report 002's PID: Kp = 2, Ki = 0.5, no D (it destabilised the report's loop)."""
 
     kp: float = param(2.0, "rad/m", "proportional gain on e = e_lat + e_head", min=0, max=100.0)
     ki: float = param(0.5, "rad/(m s)", "integral gain", min=0, max=100.0)
-    kd: float = param(0.0, "rad s/m", "derivative gain (on the measured error rate)", min=0,
-                      max=100.0)
+    kd: float = param(0.0, "rad s/m", "derivative gain (on the measured error rate)", min=0, max=100.0)
     steer_limit: float = param(0.6, "rad", "|delta| limit", min=0, max=HALF_PI, min_exclusive=True)
 
 
@@ -174,21 +173,21 @@ class CurvePID:
 
 # --- fuzzy ---------------------------------------------------------------------------------------
 
+
 @dataclass(frozen=True)
 class FuzzyCurveParams(PedalParams):
     """Report 002's dual-table fuzzy steering. The report gives the tables, not the
     universes or the weight: these are ours (see docs/controllers.md)."""
 
-    w: float = param(0.5, "-", "weight of the angle table: delta = w delta_a + (1 - w) delta_d",
-                     min=0, max=1)
-    speed_range: float = param(20.0, "m/s", "speed universe [-range, range]: ZE is standstill, "
-                               "PS its middle, PB its end", min=0.1, max=100.0)
-    position_range: float = param(0.15, "m", "position-error universe [-range, range]", min=0.001,
-                                  max=10.0)
-    angle_range: float = param(0.1, "rad", "angle-error universe [-range, range]", min=0.001,
-                               max=HALF_PI)
-    steer_range: float = param(0.8, "rad", "output universe: each table steers within "
-                               "[-range, range]", min=0.001, max=HALF_PI)
+    w: float = param(0.5, "-", "weight of the angle table: delta = w delta_a + (1 - w) delta_d", min=0, max=1)
+    speed_range: float = param(
+        20.0, "m/s", "speed universe [-range, range]: ZE is standstill, PS its middle, PB its end", min=0.1, max=100.0
+    )
+    position_range: float = param(0.15, "m", "position-error universe [-range, range]", min=0.001, max=10.0)
+    angle_range: float = param(0.1, "rad", "angle-error universe [-range, range]", min=0.001, max=HALF_PI)
+    steer_range: float = param(
+        0.8, "rad", "output universe: each table steers within [-range, range]", min=0.001, max=HALF_PI
+    )
 
 
 class FuzzyCurve:
@@ -199,8 +198,13 @@ class FuzzyCurve:
         p = self.params = params
         self._angle = evaluator("angle").single2
         self._position = evaluator("position").single2
-        self._scale = (1.0 / p.speed_range, 1.0 / p.angle_range, 1.0 / p.position_range,
-                       p.w * p.steer_range, (1.0 - p.w) * p.steer_range)
+        self._scale = (
+            1.0 / p.speed_range,
+            1.0 / p.angle_range,
+            1.0 / p.position_range,
+            p.w * p.steer_range,
+            (1.0 - p.w) * p.steer_range,
+        )
         self.pedal = PedalLoop(p, dt)
         self._delta_a = self._delta_d = 0.0
 
@@ -219,5 +223,4 @@ class FuzzyCurve:
     signal_units = {"delta_angle": "rad", "delta_position": "rad", "a_x_cmd": "m/s^2"}
 
     def signals(self) -> dict[str, float]:
-        return {"delta_angle": self._delta_a, "delta_position": self._delta_d,
-                "a_x_cmd": self.pedal.a_x}
+        return {"delta_angle": self._delta_a, "delta_position": self._delta_d, "a_x_cmd": self.pedal.a_x}

@@ -107,10 +107,10 @@ class FollowingPIDParams(Params):
 
     kp: float = param(0.85, "1/s^2", "proportional gain (report 004: 0.85)", min=0.0, max=100.0)
     ki: float = param(0.2, "1/s^3", "integral gain (report 004: 0.2)", min=0.0, max=100.0)
-    kd: float = param(0.3, "1/s", "derivative gain, on the measured error rate (report 004: 0.3)",
-                      min=0.0, max=100.0)
-    period: float = param(0.1, "s", "control period: a new command every period, held between "
-                          "(report 004: 1 s)", min=0.01, max=2.0)
+    kd: float = param(0.3, "1/s", "derivative gain, on the measured error rate (report 004: 0.3)", min=0.0, max=100.0)
+    period: float = param(
+        0.1, "s", "control period: a new command every period, held between (report 004: 1 s)", min=0.01, max=2.0
+    )
 
 
 class FollowingPID(SampledFollower):
@@ -142,13 +142,19 @@ class FollowingPID(SampledFollower):
 class BPPIDAccParams(Params):
     """Report 004's BP neural-network PID for car following."""
 
-    learning_rate: float = param(0.25, "-", "eta (report 004: 0.25; 0: no learning)", min=0.0,
-                                 max=1.0)
+    learning_rate: float = param(0.25, "-", "eta (report 004: 0.25; 0: no learning)", min=0.0, max=1.0)
     momentum: float = param(0.01, "-", "alpha (report 004: 0.01)", min=0.0, max=0.99)
-    init_range: float = param(0.5, "-", "initial weights ~ U[-init_range, init_range] "
-                              "(report 004: 0.5)", min=0.0, max=10.0, min_exclusive=True)
-    period: float = param(0.1, "s", "control period: a new command every period, held between "
-                          "(report 004: 1 s)", min=0.01, max=2.0)
+    init_range: float = param(
+        0.5,
+        "-",
+        "initial weights ~ U[-init_range, init_range] (report 004: 0.5)",
+        min=0.0,
+        max=10.0,
+        min_exclusive=True,
+    )
+    period: float = param(
+        0.1, "s", "control period: a new command every period, held between (report 004: 1 s)", min=0.01, max=2.0
+    )
 
 
 N_IN, N_HIDDEN, N_OUT = 3, 5, 3
@@ -262,13 +268,19 @@ class PlatoonControl:
     @property
     def signal_units(self) -> dict[str, str]:
         """Every member's signal units, under the names :meth:`signals` gives them."""
-        return {f"{name}_{vid}": unit for member, vid in zip(self.members, self.ids)
-                for name, unit in signal_units(member).items()}
+        return {
+            f"{name}_{vid}": unit
+            for member, vid in zip(self.members, self.ids)
+            for name, unit in signal_units(member).items()
+        }
 
     def signals(self) -> dict[str, float]:
         """Every member's signals; rebuilt only after a member computed a new command
         (sampled controllers change nothing in between). Do not modify the dict."""
         if self._signals is None:
-            self._signals = {f"{name}_{vid}": value for member, vid in zip(self.members, self.ids)
-                             for name, value in member.signals().items()}
+            self._signals = {
+                f"{name}_{vid}": value
+                for member, vid in zip(self.members, self.ids)
+                for name, value in member.signals().items()
+            }
         return self._signals

@@ -83,8 +83,7 @@ def partition_of(variable: Any) -> Partition:
     peaks = universe[np.asarray(peaks_idx)[order]]
     if peaks[0] != universe[0] or peaks[-1] != universe[-1]:
         raise UnsupportedRuleBase(
-            f"{variable.label}: the outer terms must peak at the ends of the universe "
-            f"[{universe[0]}, {universe[-1]}]"
+            f"{variable.label}: the outer terms must peak at the ends of the universe [{universe[0]}, {universe[-1]}]"
         )
     for rank, k in enumerate(order):
         expected = np.interp(universe, peaks, np.eye(len(peaks))[rank])
@@ -127,12 +126,14 @@ class _Output:
             R = p[j + 1] - p[j] if j < n - 1 else 0.0
             lo = p[j - 1] if j > 0 else p[j]
             hi = p[j + 1] if j < n - 1 else p[j]
-            coef.append((
-                L + R,
-                0.5 * L * (lo + p[j]) + 0.5 * R * (p[j] + hi),
-                -0.5 * L * lo - 0.5 * R * hi,
-                (R * R - L * L) / 6.0,
-            ))
+            coef.append(
+                (
+                    L + R,
+                    0.5 * L * (lo + p[j]) + 0.5 * R * (p[j] + hi),
+                    -0.5 * L * lo - 0.5 * R * hi,
+                    (R * R - L * L) / 6.0,
+                )
+            )
         self._coef = tuple(coef)
 
     def _pair(self, j: int, a: float, b: float) -> tuple[float, float]:
@@ -213,8 +214,7 @@ class FastMamdani:
         missing = [k for k in itertools.product(*map(range, sizes)) if not table.get(k)]
         if missing:
             names = [
-                " AND ".join(f"{p.label}[{p.term_labels[i]}]" for p, i in zip(self.inputs, k))
-                for k in missing[:3]
+                " AND ".join(f"{p.label}[{p.term_labels[i]}]" for p, i in zip(self.inputs, k)) for k in missing[:3]
             ]
             raise UnsupportedRuleBase(
                 f"the rule table is incomplete: {len(missing)} input combinations have no rule "
@@ -230,9 +230,10 @@ class FastMamdani:
         if len(self.inputs) == 2:
             # rows[i][j] -> per output, the terms the rule (i, j) fires
             self._table2 = [
-                [tuple(tuple(t for o2, t in self._table[(i, j)] if o2 == o)
-                       for o in range(len(self.outputs)))
-                 for j in range(sizes[1])]
+                [
+                    tuple(tuple(t for o2, t in self._table[(i, j)] if o2 == o) for o in range(len(self.outputs)))
+                    for j in range(sizes[1])
+                ]
                 for i in range(sizes[0])
             ]
             self._fuzzify2 = (_fuzzifier(self._peaks[0]), _fuzzifier(self._peaks[1]))
@@ -266,8 +267,7 @@ class FastMamdani:
         output_labels = tuple(output_labels) if output_labels else tuple(sorted(cons))
         if set(input_labels) != set(ants) or set(output_labels) != set(cons):
             raise UnsupportedRuleBase(
-                f"labels {input_labels}->{output_labels} do not match the system's "
-                f"{sorted(ants)}->{sorted(cons)}"
+                f"labels {input_labels}->{output_labels} do not match the system's {sorted(ants)}->{sorted(cons)}"
             )
         inputs = [partition_of(ants[k]) for k in input_labels]
         outputs = [partition_of(cons[k]) for k in output_labels]
@@ -421,8 +421,9 @@ def _fuzzifier(peaks: Sequence[float]) -> Callable[[float], Any]:
     return fuzzify
 
 
-def uniform_partition(label: str, lower: float, upper: float, term_labels: Sequence[str],
-                      samples: int) -> tuple[np.ndarray, dict[str, tuple[float, float, float]]]:
+def uniform_partition(
+    label: str, lower: float, upper: float, term_labels: Sequence[str], samples: int
+) -> tuple[np.ndarray, dict[str, tuple[float, float, float]]]:
     """Universe and triangle vertices for a uniform Ruspini partition over [lower, upper].
 
     ``samples`` must put every peak on the grid, i.e. (samples - 1) divisible by

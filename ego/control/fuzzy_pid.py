@@ -36,15 +36,21 @@ def _table(text: str) -> tuple[tuple[str, ...], ...]:
 
 
 #: rows E NB..PB, columns EC NB..PB
-DKP = _table("PB PB PM PM PS ZO ZO | PB PB PM PS PS ZO NS | PM PM PM PS ZO NS NS | "
-             "PM PM PS ZO NS NM NM | PS PS ZO NS NS NM NM | PS ZO NS NM NM NM NB | "
-             "ZO ZO NM NM NM NB NB")
-DKI = _table("NB NB NM NM NS ZO ZO | NB NB NM NS NS ZO ZO | NB NM NS NS ZO PS PS | "
-             "NM NM NS ZO PS PM PM | NM NS ZO PS PS PM PB | ZO ZO PS PS PM PB PB | "
-             "ZO ZO PS PM PM PB PB")
-DKD = _table("PS NS NB NB NB NM PS | PS NS NB NM NM NS ZO | ZO NS NM NM NS NS ZO | "
-             "ZO NS NS NS NS NS ZO | ZO ZO ZO ZO ZO ZO ZO | PB NS PS PS PS PS PB | "
-             "PB PM PM PM PS PS PB")
+DKP = _table(
+    "PB PB PM PM PS ZO ZO | PB PB PM PS PS ZO NS | PM PM PM PS ZO NS NS | "
+    "PM PM PS ZO NS NM NM | PS PS ZO NS NS NM NM | PS ZO NS NM NM NM NB | "
+    "ZO ZO NM NM NM NB NB"
+)
+DKI = _table(
+    "NB NB NM NM NS ZO ZO | NB NB NM NS NS ZO ZO | NB NM NS NS ZO PS PS | "
+    "NM NM NS ZO PS PM PM | NM NS ZO PS PS PM PB | ZO ZO PS PS PM PB PB | "
+    "ZO ZO PS PM PM PB PB"
+)
+DKD = _table(
+    "PS NS NB NB NB NM PS | PS NS NB NM NM NS ZO | ZO NS NM NM NS NS ZO | "
+    "ZO NS NS NS NS NS ZO | ZO ZO ZO ZO ZO ZO ZO | PB NS PS PS PS PS PB | "
+    "PB PM PM PM PS PS PB"
+)
 
 
 #: the report's [Kp, Ki, Kd] scales for Y
@@ -73,23 +79,27 @@ def evaluator() -> FastMamdani:
 class FuzzyPIDParams(Params):
     """Report 000's gain scales; ``adapt`` and the input gains are ours (lost figure)."""
 
-    variant: str = param("tuned", "-", "tuned (default) or report (the report's lateral scales, "
-                         "overriding kp_lat, ki_lat, kd_lat)", choices=("tuned", "report"))
+    variant: str = param(
+        "tuned",
+        "-",
+        "tuned (default) or report (the report's lateral scales, overriding kp_lat, ki_lat, kd_lat)",
+        choices=("tuned", "report"),
+    )
     kp_lon: float = param(800.0, "N/m", "longitudinal Kp scale (report: 800)", min=0, max=1e5)
     ki_lon: float = param(200.0, "N/(m s)", "longitudinal Ki scale (report: 200)", min=0, max=1e5)
     kd_lon: float = param(800.0, "N s/m", "longitudinal Kd scale (report: 800)", min=0, max=1e5)
     kp_lat: float = param(0.008, "rad/m", "lateral Kp scale (report: 0.0005)", min=0, max=10.0)
     ki_lat: float = param(0.0, "rad/(m s)", "lateral Ki scale (report: 0)", min=0, max=10.0)
     kd_lat: float = param(0.016, "rad s/m", "lateral Kd scale (report: 0.002)", min=0, max=10.0)
-    adapt: float = param(0.5, "-", "how far the rules move each gain: scale*(1 + adapt*dK)",
-                         min=0.0, max=1.0)
+    adapt: float = param(0.5, "-", "how far the rules move each gain: scale*(1 + adapt*dK)", min=0.0, max=1.0)
     ke_lon: float = param(1.0, "1/m", "longitudinal error input gain", min=0, max=1000.0)
     kec_lon: float = param(1.0, "s/m", "longitudinal error-rate input gain", min=0, max=1000.0)
     ke_lat: float = param(1.0, "1/m", "lateral error input gain", min=0, max=1000.0)
     kec_lat: float = param(1.0, "s/m", "lateral error-rate input gain", min=0, max=1000.0)
     tau_d: float = param(0.05, "s", "derivative low-pass time constant", min=0, max=10.0)
-    fx_limit: float = param(4805.0, "N", "|Fx| limit per driven wheel (0.7 m g / Nw)", min=0,
-                            max=20000.0, min_exclusive=True)
+    fx_limit: float = param(
+        4805.0, "N", "|Fx| limit per driven wheel (0.7 m g / Nw)", min=0, max=20000.0, min_exclusive=True
+    )
     steer_limit: float = param(0.5, "rad", "|delta| limit", min=0, max=HALF_PI, min_exclusive=True)
 
 
@@ -98,8 +108,17 @@ class _Channel:
 
     __slots__ = ("pid", "scales", "adapt", "ke", "kec", "dk", "_rules")
 
-    def __init__(self, scales: tuple[float, float, float], adapt: float, ke: float, kec: float,
-                 dt: float, limit: float, tau_d: float, rules: Any) -> None:
+    def __init__(
+        self,
+        scales: tuple[float, float, float],
+        adapt: float,
+        ke: float,
+        kec: float,
+        dt: float,
+        limit: float,
+        tau_d: float,
+        rules: Any,
+    ) -> None:
         self.scales = scales
         self.adapt = adapt
         self.ke, self.kec = ke, kec
@@ -127,8 +146,9 @@ class FuzzyPIDController:
         engine = evaluator()
         rules = tuple(engine.single2_output(o) for o in range(3))
         lat = REPORT_LAT_SCALES if p.variant == "report" else (p.kp_lat, p.ki_lat, p.kd_lat)
-        self.lon = _Channel((p.kp_lon, p.ki_lon, p.kd_lon), p.adapt, p.ke_lon, p.kec_lon, dt,
-                            p.fx_limit, p.tau_d, rules)
+        self.lon = _Channel(
+            (p.kp_lon, p.ki_lon, p.kd_lon), p.adapt, p.ke_lon, p.kec_lon, dt, p.fx_limit, p.tau_d, rules
+        )
         self.lat = _Channel(lat, p.adapt, p.ke_lat, p.kec_lat, dt, p.steer_limit, p.tau_d, rules)
 
     def reset(self, *, seed: int | None = None) -> None:
@@ -142,10 +162,22 @@ class FuzzyPIDController:
         return fx, delta
 
     #: the scheduled gains: Fx (N) and delta (rad) per m of error, per m s, per m/s
-    signal_units = {"kp_lon": "N/m", "ki_lon": "N/(m s)", "kd_lon": "N s/m",
-                    "kp_lat": "rad/m", "ki_lat": "rad/(m s)", "kd_lat": "rad s/m"}
+    signal_units = {
+        "kp_lon": "N/m",
+        "ki_lon": "N/(m s)",
+        "kd_lon": "N s/m",
+        "kp_lat": "rad/m",
+        "ki_lat": "rad/(m s)",
+        "kd_lat": "rad s/m",
+    }
 
     def signals(self) -> dict[str, float]:
         lon, lat = self.lon.pid, self.lat.pid
-        return {"kp_lon": lon.kp, "ki_lon": lon.ki, "kd_lon": lon.kd,
-                "kp_lat": lat.kp, "ki_lat": lat.ki, "kd_lat": lat.kd}
+        return {
+            "kp_lon": lon.kp,
+            "ki_lon": lon.ki,
+            "kd_lon": lon.kd,
+            "kp_lat": lat.kp,
+            "ki_lat": lat.ki,
+            "kd_lat": lat.kd,
+        }

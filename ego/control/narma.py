@@ -37,8 +37,20 @@ from ego.control.curve import PedalLoop, PedalParams
 from ego.params import HALF_PI, ConfigError, param
 
 #: the regressor, in order; ``_1``/``_2`` are one and two samples back, u the steer (rad)
-FEATURES = ("e_lat", "e_head", "e_lat_1", "e_head_1", "e_lat_2", "e_head_2", "u_1", "u_2",
-            "speed", "a_x", "curvature", "curvature_ahead")
+FEATURES = (
+    "e_lat",
+    "e_head",
+    "e_lat_1",
+    "e_head_1",
+    "e_lat_2",
+    "e_head_2",
+    "u_1",
+    "u_2",
+    "speed",
+    "a_x",
+    "curvature",
+    "curvature_ahead",
+)
 #: where the shipped networks live (written by ``ego train narma-l2``)
 TRAINED_DIR = Path(str(files("ego.control") / "trained"))  # package data, installed or not
 DEFAULT_MODEL = TRAINED_DIR / "narma_l2.npz"
@@ -76,8 +88,10 @@ class NarmaModel:
             raise ConfigError(f"no trained NARMA-L2 model at {path} (train one: ego train narma-l2)")
         check_input_file(path, "NARMA-L2 model", ".npz")
         if not meta_path.exists():
-            raise ConfigError(f"bad NARMA-L2 model {str(path)!r}: its metadata {meta_path.name} is missing "
-                              "(ego train narma-l2 writes both)")
+            raise ConfigError(
+                f"bad NARMA-L2 model {str(path)!r}: its metadata {meta_path.name} is missing "
+                "(ego train narma-l2 writes both)"
+            )
         meta = read_json(meta_path, "NARMA-L2 metadata")
         try:
             from ego.control.npz import check_npz_members
@@ -87,10 +101,10 @@ class NarmaModel:
                 arrays = {k: data[k] for k in data.files}
         except ConfigError as exc:
             raise ConfigError(f"bad NARMA-L2 model {str(path)!r}: {exc}") from None
-        except (OSError, ValueError, EOFError, AttributeError, MemoryError, zipfile.BadZipFile,
-                zlib.error) as exc:
-            raise ConfigError(f"bad NARMA-L2 model {str(path)!r}: not a readable .npz file "
-                              f"({type(exc).__name__})") from None
+        except (OSError, ValueError, EOFError, AttributeError, MemoryError, zipfile.BadZipFile, zlib.error) as exc:
+            raise ConfigError(
+                f"bad NARMA-L2 model {str(path)!r}: not a readable .npz file ({type(exc).__name__})"
+            ) from None
         problem = _meta_problem(meta) or _arrays_problem(arrays)
         if problem:
             raise ConfigError(f"bad NARMA-L2 model {str(path)!r}: {problem} (retrain: ego train narma-l2)")
@@ -141,8 +155,9 @@ def _arrays_problem(arrays: dict[str, np.ndarray]) -> str | None:
     """What is wrong with a model's arrays (or None): every array present, numeric, finite,
     with the shapes of two tanh networks on ``FEATURES``."""
     n = len(FEATURES)
-    names = ["mean", "std", "dy_scale", "g_scale"] + [f"{net}_{k}" for net in "fg"
-                                                      for k in ("w1", "b1", "w2", "b2", "w3", "b3")]
+    names = ["mean", "std", "dy_scale", "g_scale"] + [
+        f"{net}_{k}" for net in "fg" for k in ("w1", "b1", "w2", "b2", "w3", "b3")
+    ]
     for name in names:
         if name not in arrays:
             return f"the array {name} is missing"
@@ -167,8 +182,10 @@ def _arrays_problem(arrays: dict[str, np.ndarray]) -> str | None:
     if (arrays["std"] <= 0).any():
         return "the array std has values that are not positive"
     if (arrays["std"] < MIN_STD).any():
-        return (f"the array std has values below {MIN_STD:g} (1/std would overflow; "
-                f"smallest {float(arrays['std'].min()):g})")
+        return (
+            f"the array std has values below {MIN_STD:g} (1/std would overflow; "
+            f"smallest {float(arrays['std'].min()):g})"
+        )
     return None
 
 
@@ -182,13 +199,17 @@ def load_model(path: str = str(DEFAULT_MODEL)) -> NarmaModel:
 class NarmaL2Params(PedalParams):
     """NARMA-L2 control on the shipped networks (trained by ``ego train narma-l2``)."""
 
-    rho: float = param(0.8, "-", "reference r(k+1) = rho * y(k): the error kept per sample "
-                       "(0: deadbeat)", min=0, max=0.99)
-    move_penalty: float = param(0.002, "m^2/rad^2", "weight lambda on steer changes (0: the plain "
-                                "inverse u = (r - f) / g, which rings; see the module)", min=0,
-                                max=100.0)
-    g_min: float = param(0.01, "m/rad", "floor on |g| (the steer's effect per sample)", min=1e-4,
-                         max=10.0)
+    rho: float = param(
+        0.8, "-", "reference r(k+1) = rho * y(k): the error kept per sample (0: deadbeat)", min=0, max=0.99
+    )
+    move_penalty: float = param(
+        0.002,
+        "m^2/rad^2",
+        "weight lambda on steer changes (0: the plain inverse u = (r - f) / g, which rings; see the module)",
+        min=0,
+        max=100.0,
+    )
+    g_min: float = param(0.01, "m/rad", "floor on |g| (the steer's effect per sample)", min=1e-4, max=10.0)
     steer_limit: float = param(0.6, "rad", "|delta| limit", min=0, max=HALF_PI, min_exclusive=True)
     model: str = param("", "-", "trained model (.npz); empty: the one shipped with ego")
 
@@ -206,8 +227,9 @@ class NarmaL2Controller:
         self.net = load_model(p.model or str(DEFAULT_MODEL))
         ratio = self.net.h / dt
         if abs(ratio - round(ratio)) > 1e-6 or round(ratio) < 1:
-            raise ConfigError(f"bad value for dt: {dt} (the NARMA-L2 model samples every "
-                              f"{self.net.h} s; dt must divide it)")
+            raise ConfigError(
+                f"bad value for dt: {dt} (the NARMA-L2 model samples every {self.net.h} s; dt must divide it)"
+            )
         self.every = round(ratio)
         self.pedal = PedalLoop(p, dt)
         self.x = np.zeros(len(FEATURES))

@@ -42,10 +42,7 @@ def check_npz_members(path: str | os.PathLike[str]) -> None:
                         raise ValueError(f"npy version {version}")
                     header = f.tell()
             except Exception as exc:  # noqa: BLE001 - any header numpy cannot read
-                raise ConfigError(
-                    f"its member {info.filename!r} is not npy data "
-                    f"({type(exc).__name__})"
-                ) from None
+                raise ConfigError(f"its member {info.filename!r} is not npy data ({type(exc).__name__})") from None
             claimed = math.prod(shape) * dtype.itemsize
             if claimed > MAX_MEMBER_BYTES or header + claimed > info.file_size:
                 raise ConfigError(

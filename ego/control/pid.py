@@ -24,8 +24,17 @@ class PID:
 
     __slots__ = ("kp", "ki", "kd", "dt", "u_min", "u_max", "_alpha", "_kaw", "integral", "de_f")
 
-    def __init__(self, kp: float, ki: float, kd: float, dt: float, u_min: float, u_max: float,
-                 tau_d: float = 0.05, tau_aw: float | None = None) -> None:
+    def __init__(
+        self,
+        kp: float,
+        ki: float,
+        kd: float,
+        dt: float,
+        u_min: float,
+        u_max: float,
+        tau_d: float = 0.05,
+        tau_aw: float | None = None,
+    ) -> None:
         if not dt > 0:
             raise ValueError(f"dt must be > 0, got {dt}")
         if not u_min < u_max:
@@ -67,8 +76,9 @@ class PIDParams(Params):
     ki_lat: float = param(0.0, "rad/(m s)", "lateral integral gain", min=0, max=10.0)
     kd_lat: float = param(0.02, "rad s/m", "lateral derivative gain", min=0, max=10.0)
     tau_d: float = param(0.05, "s", "derivative low-pass time constant", min=0, max=10.0)
-    fx_limit: float = param(4805.0, "N", "|Fx| limit per driven wheel (0.7 m g / Nw)", min=0,
-                            max=20000.0, min_exclusive=True)
+    fx_limit: float = param(
+        4805.0, "N", "|Fx| limit per driven wheel (0.7 m g / Nw)", min=0, max=20000.0, min_exclusive=True
+    )
     steer_limit: float = param(0.5, "rad", "|delta| limit", min=0, max=HALF_PI, min_exclusive=True)
 
 

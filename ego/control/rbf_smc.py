@@ -39,29 +39,25 @@ N_NODES = 10
 
 @dataclass(frozen=True)
 class RBFSMCParams(Params):
-    variant: str = param("fixed", "-", "fixed (default: sign(s_Y), own weights per channel, "
-                         "boundary layer) or report (the published S-function)",
-                         choices=("fixed", "report"))
-    c_lon: float = param(1.0, "1/s", "sliding surface s_X = c_lon e_X + de_X (report: 1)",
-                         min=0.0, max=100.0)
-    c_lat: float = param(0.5, "1/s", "sliding surface s_Y = c_lat e_Y + de_Y (report: 0.5)",
-                         min=0.0, max=100.0)
+    variant: str = param(
+        "fixed",
+        "-",
+        "fixed (default: sign(s_Y), own weights per channel, boundary layer) or report (the published S-function)",
+        choices=("fixed", "report"),
+    )
+    c_lon: float = param(1.0, "1/s", "sliding surface s_X = c_lon e_X + de_X (report: 1)", min=0.0, max=100.0)
+    c_lat: float = param(0.5, "1/s", "sliding surface s_Y = c_lat e_Y + de_Y (report: 0.5)", min=0.0, max=100.0)
     eta_lon: float = param(2.0, "m/s", "switching gain, X (report: 2)", min=0.0, max=100.0)
     eta_lat: float = param(0.1, "m/s", "switching gain, Y (report: 0.1)", min=0.0, max=100.0)
     gamma: float = param(1000.0, "-", "adaptation rate (report: 1000)", min=0.0, max=1e6)
-    width: float = param(10.0, "-", "Gaussian width b, in the errors' units (report: 10)",
-                         min=0.01, max=1000.0)
+    width: float = param(10.0, "-", "Gaussian width b, in the errors' units (report: 10)", min=0.01, max=1000.0)
     scale: float = param(1e-5, "-", "Gaussian scale d (report: 1e-5)", min=0.0, max=1.0)
-    centre_spread: float = param(0.5, "-", "centres ~ centre_spread * N(0, 1) (report: 0.5)", min=0.0,
-                                max=100.0)
+    centre_spread: float = param(0.5, "-", "centres ~ centre_spread * N(0, 1) (report: 0.5)", min=0.0, max=100.0)
     w0: float = param(0.1, "-", "initial weights (report: 0.1)", min=-100.0, max=100.0)
     fx_gain: float = param(1000.0, "N s/m", "Fx = fx_gain * u_X (report: 1000)", min=0.0, max=1e5)
-    delta_gain: float = param(0.6, "rad s/m", "delta = delta_gain * u_Y (report: 0.6)", min=0.0,
-                               max=10.0)
-    phi_lon: float = param(0.5, "m/s", "boundary layer on s_X (fixed variant; 0: sign)", min=0.0,
-                            max=100.0)
-    phi_lat: float = param(0.1, "m/s", "boundary layer on s_Y (fixed variant; 0: sign)", min=0.0,
-                            max=100.0)
+    delta_gain: float = param(0.6, "rad s/m", "delta = delta_gain * u_Y (report: 0.6)", min=0.0, max=10.0)
+    phi_lon: float = param(0.5, "m/s", "boundary layer on s_X (fixed variant; 0: sign)", min=0.0, max=100.0)
+    phi_lat: float = param(0.1, "m/s", "boundary layer on s_Y (fixed variant; 0: sign)", min=0.0, max=100.0)
 
 
 def _switch(s: float, phi: float) -> float:
@@ -119,10 +115,21 @@ class RBFSMCController:
 
     #: sliding variables s = c e + de, the RBF estimates f and their weights' norms, all in the
     #: units of u before the output gain (m/s: the basis functions are pure numbers)
-    signal_units = {"s_lon": "m/s", "s_lat": "m/s", "f_hat_lon": "m/s", "f_hat_lat": "m/s",
-                    "rbf_norm_lon": "m/s", "rbf_norm_lat": "m/s"}
+    signal_units = {
+        "s_lon": "m/s",
+        "s_lat": "m/s",
+        "f_hat_lon": "m/s",
+        "f_hat_lat": "m/s",
+        "rbf_norm_lon": "m/s",
+        "rbf_norm_lat": "m/s",
+    }
 
     def signals(self) -> dict[str, float]:
-        return {"s_lon": self.s_lon, "s_lat": self.s_lat, "f_hat_lon": self.f_lon,
-                "f_hat_lat": self.f_lat, "rbf_norm_lon": float(math.sqrt(self.w_lon @ self.w_lon)),
-                "rbf_norm_lat": float(math.sqrt(self.w_lat @ self.w_lat))}
+        return {
+            "s_lon": self.s_lon,
+            "s_lat": self.s_lat,
+            "f_hat_lon": self.f_lon,
+            "f_hat_lat": self.f_lat,
+            "rbf_norm_lon": float(math.sqrt(self.w_lon @ self.w_lon)),
+            "rbf_norm_lat": float(math.sqrt(self.w_lat @ self.w_lat)),
+        }

@@ -25,9 +25,12 @@ class Signal:
     high: float = INF
 
     def as_dict(self) -> dict[str, Any]:
-        return {"name": self.name, "unit": self.unit, "description": self.description,
-                "range": [None if math.isinf(self.low) else self.low,
-                          None if math.isinf(self.high) else self.high]}
+        return {
+            "name": self.name,
+            "unit": self.unit,
+            "description": self.description,
+            "range": [None if math.isinf(self.low) else self.low, None if math.isinf(self.high) else self.high],
+        }
 
 
 @dataclass(frozen=True)
@@ -42,9 +45,13 @@ class Task:
     returns: tuple[Signal, ...]
 
     def as_dict(self) -> dict[str, Any]:
-        return {"name": self.name, "summary": self.summary, "observation": self.observation,
-                "observes": [s.as_dict() for s in self.observes],
-                "returns": [s.as_dict() for s in self.returns]}
+        return {
+            "name": self.name,
+            "summary": self.summary,
+            "observation": self.observation,
+            "observes": [s.as_dict() for s in self.observes],
+            "returns": [s.as_dict() for s in self.returns],
+        }
 
 
 #: the road-frame observation of the tracking, curve and lane-centring tasks
@@ -72,30 +79,57 @@ _STEER = Signal("delta", "rad", "front steer angle (+ left); the plant saturates
 TASKS: dict[str, Task] = {
     t.name: t
     for t in (
-        Task("tracking", "report 000's two-channel tracking: Fx tracks s_ref, delta tracks d_ref",
-             _OBSERVATION, ROAD_FRAME,
-             (Signal("Fx", "N", "longitudinal force per driven wheel (+ drives, - brakes); the plant "
-                     "limits it to the friction circle (abs) and fades braking at standstill"), _STEER)),
-        Task("curve", "report 002's curve: steer along the arc while the plan sets a_x",
-             _OBSERVATION, ROAD_FRAME,
-             (Signal("a_x", "m/s^2", "axial acceleration (the pedal)"), _STEER)),
-        Task("lane-centering", "report 003's lane centring: steer to the lane centre at constant speed",
-             _OBSERVATION, ROAD_FRAME,
-             (Signal("a_x", "m/s^2", "axial acceleration (ignored: the lateral-error model runs at "
-                     "constant speed)"), _STEER)),
-        Task("car-following", "report 004's car following, one controller per follower",
-             "ego.control.following:FollowingObservation",
-             (Signal("t", "s", "time"),
-              Signal("gap", "m", "bumper to bumper to the predecessor", 0.0),
-              Signal("speed", "m/s", "own speed", 0.0),
-              Signal("accel", "m/s^2", "own actual acceleration"),
-              Signal("lead_speed", "m/s", "the predecessor's speed", 0.0),
-              Signal("lead_accel", "m/s^2", "the predecessor's acceleration"),
-              Signal("policy", "-", "the spacing policy (d_s in m, lambda in s)"),
-              Signal("max_accel", "m/s^2", "the car's largest acceleration command", 0.0),
-              Signal("max_decel", "m/s^2", "the car's largest deceleration command (positive)", 0.0)),
-             (Signal("command", "m/s^2", "commanded acceleration; the plant saturates it to "
-                     "[-max_decel, max_accel]"),
-              Signal("delta", "rad", "always 0: the platoon keeps its lane", 0.0, 0.0))),
+        Task(
+            "tracking",
+            "report 000's two-channel tracking: Fx tracks s_ref, delta tracks d_ref",
+            _OBSERVATION,
+            ROAD_FRAME,
+            (
+                Signal(
+                    "Fx",
+                    "N",
+                    "longitudinal force per driven wheel (+ drives, - brakes); the plant "
+                    "limits it to the friction circle (abs) and fades braking at standstill",
+                ),
+                _STEER,
+            ),
+        ),
+        Task(
+            "curve",
+            "report 002's curve: steer along the arc while the plan sets a_x",
+            _OBSERVATION,
+            ROAD_FRAME,
+            (Signal("a_x", "m/s^2", "axial acceleration (the pedal)"), _STEER),
+        ),
+        Task(
+            "lane-centering",
+            "report 003's lane centring: steer to the lane centre at constant speed",
+            _OBSERVATION,
+            ROAD_FRAME,
+            (
+                Signal("a_x", "m/s^2", "axial acceleration (ignored: the lateral-error model runs at constant speed)"),
+                _STEER,
+            ),
+        ),
+        Task(
+            "car-following",
+            "report 004's car following, one controller per follower",
+            "ego.control.following:FollowingObservation",
+            (
+                Signal("t", "s", "time"),
+                Signal("gap", "m", "bumper to bumper to the predecessor", 0.0),
+                Signal("speed", "m/s", "own speed", 0.0),
+                Signal("accel", "m/s^2", "own actual acceleration"),
+                Signal("lead_speed", "m/s", "the predecessor's speed", 0.0),
+                Signal("lead_accel", "m/s^2", "the predecessor's acceleration"),
+                Signal("policy", "-", "the spacing policy (d_s in m, lambda in s)"),
+                Signal("max_accel", "m/s^2", "the car's largest acceleration command", 0.0),
+                Signal("max_decel", "m/s^2", "the car's largest deceleration command (positive)", 0.0),
+            ),
+            (
+                Signal("command", "m/s^2", "commanded acceleration; the plant saturates it to [-max_decel, max_accel]"),
+                Signal("delta", "rad", "always 0: the platoon keeps its lane", 0.0, 0.0),
+            ),
+        ),
     )
 }

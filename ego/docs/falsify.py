@@ -68,10 +68,7 @@ def docs_tables() -> list:
         "falsify",
         ("ego sweep benchmarks/falsify/dense.toml --out runs/falsify-dense",),
         ("requirement", "violating runs", "share of the space", "smallest robustness"),
-        tuple(
-            Row(f"{name}: {spec.requirements[name]}", tuple(dense), _share_cells(name))
-            for name in REQUIREMENTS
-        ),
+        tuple(Row(f"{name}: {spec.requirements[name]}", tuple(dense), _share_cells(name)) for name in REQUIREMENTS),
     )
     header = (
         "requirement, optimiser",
@@ -92,9 +89,7 @@ def docs_tables() -> list:
             Row(
                 f"{name}, {opt}",
                 tuple(BenchJob(name, opt, s, REAL_BUDGET) for s in range(REAL_REPS))
-                + tuple(
-                    BenchJob(name, "lhs", s, REAL_BUDGET) for s in range(REAL_REPS)
-                ),
+                + tuple(BenchJob(name, "lhs", s, REAL_BUDGET) for s in range(REAL_REPS)),
                 _runs_cells(REAL_REPS, REAL_BUDGET),
             )
             for name in REQUIREMENTS
@@ -114,14 +109,8 @@ def docs_tables() -> list:
         tuple(
             Row(
                 opt,
-                tuple(
-                    SurrogateJob(opt, s, SURROGATE_BUDGET)
-                    for s in range(SURROGATE_REPS)
-                )
-                + tuple(
-                    SurrogateJob("lhs", s, SURROGATE_BUDGET)
-                    for s in range(SURROGATE_REPS)
-                ),
+                tuple(SurrogateJob(opt, s, SURROGATE_BUDGET) for s in range(SURROGATE_REPS))
+                + tuple(SurrogateJob("lhs", s, SURROGATE_BUDGET) for s in range(SURROGATE_REPS)),
                 _runs_cells(SURROGATE_REPS, SURROGATE_BUDGET),
             )
             for opt in OPTIMIZERS

@@ -17,8 +17,10 @@ NOT_COMPARED = ("scenario", "wall_time", "backend")
 
 
 def _header(spec) -> tuple[str, ...]:
-    labels = [", ".join(f"{v * KMH:.0f} km/h" if k == "EgoSpeed" else f"{k} {v:g}" for k, v in zip(spec.grid, point))
-              for point in itertools.product(*spec.grid.values())]
+    labels = [
+        ", ".join(f"{v * KMH:.0f} km/h" if k == "EgoSpeed" else f"{k} {v:g}" for k, v in zip(spec.grid, point))
+        for point in itertools.product(*spec.grid.values())
+    ]
     return ("controller",) + tuple(labels)
 
 
@@ -34,10 +36,18 @@ def ccr_tables() -> list[Table]:
     for test in ("s", "m", "b"):
         path = XOSC / f"ccr-{test}.toml"
         spec, jobs = _spec_jobs(path)
-        rows = tuple(Row(c, tuple(j for n, j in jobs if n == c), lambda ms: [ccr_cell(m) for m in ms])
-                     for c in spec.controllers)
-        out.append(Table(f"xosc-ccr{test}", PAGE, (f"ego sweep {path.relative_to(ROOT)} --out runs/xosc-ccr-{test}",),
-                         _header(spec), rows))
+        rows = tuple(
+            Row(c, tuple(j for n, j in jobs if n == c), lambda ms: [ccr_cell(m) for m in ms]) for c in spec.controllers
+        )
+        out.append(
+            Table(
+                f"xosc-ccr{test}",
+                PAGE,
+                (f"ego sweep {path.relative_to(ROOT)} --out runs/xosc-ccr-{test}",),
+                _header(spec),
+                rows,
+            )
+        )
     return out
 
 
@@ -46,45 +56,82 @@ def _differences(ms: list[dict]) -> list[str]:
     half = len(ms) // 2
     pairs = list(zip(ms[:half], ms[half:]))
     same = sum(all(b.get(k) == a[k] for k in a if k not in NOT_COMPARED) for a, b in pairs)
-    gaps = [abs(a["min_gap_front"] - b["min_gap_front"]) for a, b in pairs
-            if a.get("min_gap_front") is not None and b.get("min_gap_front") is not None]
-    hits = [abs(a["impact_speed"] - b["impact_speed"]) * KMH for a, b in pairs
-            if a.get("impact_speed") is not None and b.get("impact_speed") is not None]
-    return [str(len(pairs)), f"{same}/{len(pairs)}", f"{max(gaps):.4f}" if gaps else "-",
-            f"{max(hits):.4f}" if hits else "- (no impacts)"]
+    gaps = [
+        abs(a["min_gap_front"] - b["min_gap_front"])
+        for a, b in pairs
+        if a.get("min_gap_front") is not None and b.get("min_gap_front") is not None
+    ]
+    hits = [
+        abs(a["impact_speed"] - b["impact_speed"]) * KMH
+        for a, b in pairs
+        if a.get("impact_speed") is not None and b.get("impact_speed") is not None
+    ]
+    return [
+        str(len(pairs)),
+        f"{same}/{len(pairs)}",
+        f"{max(gaps):.4f}" if gaps else "-",
+        f"{max(hits):.4f}" if hits else "- (no impacts)",
+    ]
 
 
 def equivalence_table() -> Table:
     rows = []
     eb = str(XOSC / "emergency_brake.xosc")
     for c in TRACKING:
-        rows.append(Row(f"emergency_brake.xosc / emergency-brake, {c}",
-                        (sim("emergency-brake", c), sim(eb, c)), _differences))
+        rows.append(
+            Row(f"emergency_brake.xosc / emergency-brake, {c}", (sim("emergency-brake", c), sim(eb, c)), _differences)
+        )
     for test in ("s", "m", "b"):
         _, toml = _spec_jobs(SWEEPS / f"aeb-ccr-{test}.toml")
         _, xosc = _spec_jobs(XOSC / f"ccr-{test}.toml")
-        rows.append(Row(f"ccr-{test}.toml / aeb-ccr-{test}.toml, every controller",
-                        tuple(j for _, j in toml) + tuple(j for _, j in xosc), _differences))
+        rows.append(
+            Row(
+                f"ccr-{test}.toml / aeb-ccr-{test}.toml, every controller",
+                tuple(j for _, j in toml) + tuple(j for _, j in xosc),
+                _differences,
+            )
+        )
     for trigger in (1.5, 1.0):  # later triggers: collisions, so impact speeds are compared too
         for test in ("s", "b"):
             _, toml = _spec_jobs(SWEEPS / f"aeb-ccr-{test}.toml")
             _, xosc = _spec_jobs(XOSC / f"ccr-{test}.toml")
             extra = (("ttc_threshold", trigger),)
-            toml = [(c, type(j)(j.scenario, j.controller, j.seed, tuple(sorted(dict(j.overrides + extra).items()))))
-                    for c, j in toml]
-            xosc = [(c, type(j)(j.scenario, j.controller, j.seed, tuple(sorted(dict(j.overrides + extra).items()))))
-                    for c, j in xosc]
-            rows.append(Row(f"ccr-{test}.toml / aeb-ccr-{test}.toml, ttc_threshold = {trigger:g}",
-                            tuple(j for _, j in toml) + tuple(j for _, j in xosc), _differences))
-    return Table("xosc-equivalence", PAGE,
-                 ("ego run scenarios/openscenario/emergency_brake.xosc -c pid",
-                  "ego sweep scenarios/openscenario/ccr-s.toml --out runs/xosc-ccr-s"),
-                 ("file / built-in", "runs", "identical metrics", "largest gap difference [m]",
-                  "largest impact speed difference [km/h]"),
-                 tuple(rows),
-                 ("Identical metrics: every metric of the run equal (the scenario's name, the wall time and "
-                  "the built-in's backend aside). The CCR rows pair each run of the TOML sweep with the "
-                  ".xosc sweep's run of the same cell.",))
+            toml = [
+                (c, type(j)(j.scenario, j.controller, j.seed, tuple(sorted(dict(j.overrides + extra).items()))))
+                for c, j in toml
+            ]
+            xosc = [
+                (c, type(j)(j.scenario, j.controller, j.seed, tuple(sorted(dict(j.overrides + extra).items()))))
+                for c, j in xosc
+            ]
+            rows.append(
+                Row(
+                    f"ccr-{test}.toml / aeb-ccr-{test}.toml, ttc_threshold = {trigger:g}",
+                    tuple(j for _, j in toml) + tuple(j for _, j in xosc),
+                    _differences,
+                )
+            )
+    return Table(
+        "xosc-equivalence",
+        PAGE,
+        (
+            "ego run scenarios/openscenario/emergency_brake.xosc -c pid",
+            "ego sweep scenarios/openscenario/ccr-s.toml --out runs/xosc-ccr-s",
+        ),
+        (
+            "file / built-in",
+            "runs",
+            "identical metrics",
+            "largest gap difference [m]",
+            "largest impact speed difference [km/h]",
+        ),
+        tuple(rows),
+        (
+            "Identical metrics: every metric of the run equal (the scenario's name, the wall time and "
+            "the built-in's backend aside). The CCR rows pair each run of the TOML sweep with the "
+            ".xosc sweep's run of the same cell.",
+        ),
+    )
 
 
 def tables() -> list[Table]:

@@ -36,9 +36,7 @@ def bench_spec(requirement: str):
     if requirement not in spec.requirements:
         from ego.params import ConfigError
 
-        raise ConfigError(
-            f"unknown benchmark requirement {requirement!r} (known: {', '.join(spec.requirements)})"
-        )
+        raise ConfigError(f"unknown benchmark requirement {requirement!r} (known: {', '.join(spec.requirements)})")
     return dataclasses.replace(
         spec,
         requirement=requirement,
@@ -146,18 +144,14 @@ def dense_jobs() -> list[SweepJob]:
     from ego.sweep.spec import load
 
     spec = load(DENSE_SPEC)
-    return [
-        SweepJob(r.seed, tuple(r.overrides.items()), r.controller) for r in spec.runs()
-    ]
+    return [SweepJob(r.seed, tuple(r.overrides.items()), r.controller) for r in spec.runs()]
 
 
 def quartiles(runs: list, budget: int) -> tuple[float, float, float, int]:
     """(25th, 50th, 75th percentile, found) of runs-to-first; a repetition that found
     nothing counts as more than ``budget`` (the statistics are then lower bounds: ">")."""
     values = np.array([r if r is not None else np.inf for r in runs], dtype=float)
-    q = np.percentile(
-        np.where(np.isinf(values), budget + 1, values), [25, 50, 75], method="lower"
-    )
+    q = np.percentile(np.where(np.isinf(values), budget + 1, values), [25, 50, 75], method="lower")
     found = int(np.isfinite(values).sum())
     return float(q[0]), float(q[1]), float(q[2]), found
 

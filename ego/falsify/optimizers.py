@@ -26,9 +26,7 @@ def squash(y: float) -> float:
     """A robustness as an optimiser's score: sign(y) log(1 + |y|) (a clipped infinity of
     1e9 or a run with no result (NaN: the worst seen) must not swamp a GP's fit)."""
     if not math.isfinite(y):
-        return (
-            math.copysign(math.log1p(1e9), y) if not math.isnan(y) else math.log1p(1e9)
-        )
+        return math.copysign(math.log1p(1e9), y) if not math.isnan(y) else math.log1p(1e9)
     return math.copysign(math.log1p(abs(y)), y)
 
 
@@ -58,9 +56,7 @@ class LatinHypercube:
         if not len(out):  # the budget is spent; more points are a fresh hypercube's
             from scipy.stats import qmc
 
-            out = qmc.LatinHypercube(d=self.points.shape[1], seed=self.i).random(
-                self.batch
-            )
+            out = qmc.LatinHypercube(d=self.points.shape[1], seed=self.i).random(self.batch)
         return out
 
     def tell(self, points: np.ndarray, scores: np.ndarray) -> None:
@@ -107,38 +103,26 @@ class CMAES:
 
 
 class Bayesian:
-    def __init__(
-        self, d: int, batch: int, seed: int, budget: int, tpe: bool = False
-    ) -> None:
+    def __init__(self, d: int, batch: int, seed: int, budget: int, tpe: bool = False) -> None:
         import optuna
 
         optuna.logging.set_verbosity(optuna.logging.WARNING)
         self.d, self.batch = d, batch
         startup = max(10, 2 * d, batch)
         if tpe:
-            sampler = optuna.samplers.TPESampler(
-                seed=seed, n_startup_trials=startup, constant_liar=True
-            )
+            sampler = optuna.samplers.TPESampler(seed=seed, n_startup_trials=startup, constant_liar=True)
         else:
             import warnings
 
-            warnings.filterwarnings(
-                "ignore", category=optuna.exceptions.ExperimentalWarning
-            )
-            sampler = optuna.samplers.GPSampler(
-                seed=seed, n_startup_trials=startup, deterministic_objective=True
-            )
+            warnings.filterwarnings("ignore", category=optuna.exceptions.ExperimentalWarning)
+            sampler = optuna.samplers.GPSampler(seed=seed, n_startup_trials=startup, deterministic_objective=True)
         self.study = optuna.create_study(direction="minimize", sampler=sampler)
-        self.dist = {
-            f"x{i}": optuna.distributions.FloatDistribution(0.0, 1.0) for i in range(d)
-        }
+        self.dist = {f"x{i}": optuna.distributions.FloatDistribution(0.0, 1.0) for i in range(d)}
         self._trials: list = []
 
     def ask(self) -> np.ndarray:
         self._trials = [self.study.ask(self.dist) for _ in range(self.batch)]
-        return np.array(
-            [[t.params[f"x{i}"] for i in range(self.d)] for t in self._trials]
-        )
+        return np.array([[t.params[f"x{i}"] for i in range(self.d)] for t in self._trials])
 
     def tell(self, points: np.ndarray, scores: np.ndarray) -> None:
         for trial, s in zip(self._trials, scores):

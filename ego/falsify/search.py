@@ -57,9 +57,7 @@ class Evaluation:
 class Search:
     controller: str
     evaluations: list[Evaluation] = field(default_factory=list)
-    verified: dict = field(
-        default_factory=dict
-    )  #: run_id -> (reproduced?, recording, detail)
+    verified: dict = field(default_factory=dict)  #: run_id -> (reproduced?, recording, detail)
     ran: int = 0  #: runs made now (the others were stored already)
 
     @property
@@ -72,12 +70,7 @@ class Search:
         return next((e.index + 1 for e in self.evaluations if e.robustness < 0.0), None)
 
     def best_so_far(self) -> np.ndarray:
-        rob = np.array(
-            [
-                e.robustness if not math.isnan(e.robustness) else np.inf
-                for e in self.evaluations
-            ]
-        )
+        rob = np.array([e.robustness if not math.isnan(e.robustness) else np.inf for e in self.evaluations])
         return np.minimum.accumulate(rob) if len(rob) else rob
 
 
@@ -115,11 +108,7 @@ class FalsifyReport:
 
 def robustness_of(row: dict, name: str) -> float:
     v = row.get(PREFIX + name)
-    return (
-        float(v)
-        if isinstance(v, (int, float)) and not isinstance(v, bool)
-        else math.nan
-    )
+    return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else math.nan
 
 
 def falsify(
@@ -263,9 +252,7 @@ def _search(
                 )
             )
         if len(units) == full:
-            scores = np.array(
-                [squash(e.robustness) for e in search.evaluations[-full:]]
-            )
+            scores = np.array([squash(e.robustness) for e in search.evaluations[-full:]])
             opt.tell(units, scores)
         if progress:
             best = search.best_so_far()[-1]
@@ -315,9 +302,7 @@ def _verify(spec: FalsifySpec, search: Search, out: Path) -> None:
             timeout=600,
         )
         try:
-            got = json.loads(proc.stdout.strip().splitlines()[-1])["requirements"][
-                spec.requirement
-            ]
+            got = json.loads(proc.stdout.strip().splitlines()[-1])["requirements"][spec.requirement]
         except (ValueError, KeyError, IndexError, TypeError):
             search.verified[e.run_id] = (
                 False,
@@ -325,9 +310,7 @@ def _verify(spec: FalsifySpec, search: Search, out: Path) -> None:
                 (proc.stderr.strip().splitlines() or ["no output"])[-1],
             )
             continue
-        same = got is not None and math.isclose(
-            float(got), e.robustness, rel_tol=1e-6, abs_tol=1e-9
-        )
+        same = got is not None and math.isclose(float(got), e.robustness, rel_tol=1e-6, abs_tol=1e-9)
         search.verified[e.run_id] = (
             same,
             str(rrd) if rrd.exists() else "",
@@ -344,16 +327,9 @@ def markdown(report: FalsifyReport, budget: int) -> str:
         f"{report.optimizer}; budget {budget} runs per controller.",
         "",
         "Searched: "
-        + ", ".join(
-            f"{d.name} {'false/true' if d.kind == 'bool' else f'{d.lo:g}..{d.hi:g}'}"
-            for d in spec.dims
-        )
+        + ", ".join(f"{d.name} {'false/true' if d.kind == 'bool' else f'{d.lo:g}..{d.hi:g}'}" for d in spec.dims)
         + ("" if spec.seed is None else f"; seed fixed at {spec.seed}")
-        + (
-            "; fixed: " + ", ".join(f"{k}={v}" for k, v in spec.fixed.items())
-            if spec.fixed
-            else ""
-        ),
+        + ("; fixed: " + ", ".join(f"{k}={v}" for k, v in spec.fixed.items()) if spec.fixed else ""),
         "",
         "| controller | runs | violations | runs to the first violation | best robustness |",
         "|---|---|---|---|---|",
@@ -369,10 +345,7 @@ def markdown(report: FalsifyReport, budget: int) -> str:
     for s in report.searches:
         if not s.violations:
             continue
-        distinct = {
-            e.run_id: e
-            for e in sorted(s.violations, key=lambda e: (e.robustness, e.index))
-        }
+        distinct = {e.run_id: e for e in sorted(s.violations, key=lambda e: (e.robustness, e.index))}
         lines += [
             "",
             f"## {s.controller}: {len(distinct)} distinct violating run(s)",
@@ -381,17 +354,12 @@ def markdown(report: FalsifyReport, budget: int) -> str:
         for e in list(distinct.values())[:20]:
             ok, rrd, detail = s.verified.get(e.run_id, (None, "", ""))
             verdict = (
-                "not verified"
-                if ok is None
-                else "reproduced by the command"
-                if ok
-                else f"NOT reproduced ({detail})"
+                "not verified" if ok is None else "reproduced by the command" if ok else f"NOT reproduced ({detail})"
             )
             params = ", ".join(f"{k}={v}" for k, v in e.overrides.items())
             lines += [
                 f"- run {e.index + 1} (`{e.run_id}`), status {e.status}, robustness {e.robustness:.4g}: "
-                f"seed {e.seed}, {params}; {verdict}"
-                + (f"; recording `{rrd}`" if rrd else ""),
+                f"seed {e.seed}, {params}; {verdict}" + (f"; recording `{rrd}`" if rrd else ""),
                 f"  `{command(spec, e)}`",
             ]
         if len(distinct) > 20:
@@ -409,9 +377,7 @@ def plot_convergence(curves, path: Path, requirement: str, title: str = "") -> P
     fig, ax = plt.subplots(figsize=(7, 4))
     for label, curve in curves:
         if len(curve):
-            ax.plot(
-                np.arange(1, len(curve) + 1), np.clip(curve, -1e6, 1e6), label=label
-            )
+            ax.plot(np.arange(1, len(curve) + 1), np.clip(curve, -1e6, 1e6), label=label)
     ax.axhline(0.0, color="k", lw=0.8, ls="--")
     ax.set_yscale("symlog", linthresh=0.1)
     ax.set_xlabel("runs")

@@ -69,11 +69,7 @@ class Dim:
         """The inverse of :meth:`value` (the point's position in [0, 1])."""
         if self.kind == "bool":
             return 0.75 if value else 0.25
-        return (
-            0.0
-            if self.hi == self.lo
-            else (float(value) - self.lo) / (self.hi - self.lo)
-        )
+        return 0.0 if self.hi == self.lo else (float(value) - self.lo) / (self.hi - self.lo)
 
 
 @dataclass(frozen=True)
@@ -119,13 +115,9 @@ def load(path: str | Path) -> FalsifySpec:
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except UnicodeDecodeError:
-        raise ConfigError(
-            f"cannot read the falsification spec {str(path)!r}: not a text file"
-        ) from None
+        raise ConfigError(f"cannot read the falsification spec {str(path)!r}: not a text file") from None
     except OSError as exc:
-        raise ConfigError(
-            f"cannot read the falsification spec {str(path)!r}: {exc.strerror or exc}"
-        ) from None
+        raise ConfigError(f"cannot read the falsification spec {str(path)!r}: {exc.strerror or exc}") from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{path}: not valid TOML: {exc}") from None
     return parse(data, str(path))
@@ -142,9 +134,7 @@ def parse(data: dict, source: str = "the spec") -> FalsifySpec:
 
     unknown = [k for k in data if k not in _TOP]
     if unknown:
-        raise bad(
-            f"unknown key {unknown[0]!r} (allowed: {', '.join(_TOP)}){did_you_mean(unknown[0], _TOP)}"
-        )
+        raise bad(f"unknown key {unknown[0]!r} (allowed: {', '.join(_TOP)}){did_you_mean(unknown[0], _TOP)}")
     scenario = data.get("scenario")
     if not isinstance(scenario, str):
         raise bad('scenario must be a scenario name, e.g. scenario = "emergency-brake"')
@@ -154,28 +144,20 @@ def parse(data: dict, source: str = "the spec") -> FalsifySpec:
         raise bad(str(exc)) from None
     if "controller" in data and "controllers" in data:
         raise bad("give controller or controllers, not both")
-    controllers = data.get(
-        "controllers", [data["controller"]] if "controller" in data else None
-    )
+    controllers = data.get("controllers", [data["controller"]] if "controller" in data else None)
     if (
         not isinstance(controllers, list)
         or not controllers
         or not all(isinstance(c, str) for c in controllers)
         or len(set(controllers)) != len(controllers)
     ):
-        raise bad(
-            'controllers must be a non-empty list of distinct names, e.g. controllers = ["pid"]'
-        )
+        raise bad('controllers must be a non-empty list of distinct names, e.g. controllers = ["pid"]')
     for name in controllers:
         try:
             controller_spec(name, cls.task)
         except ConfigError as exc:
             raise bad(str(exc)) from None
-    requirements = (
-        from_table(data["requirements"], source)
-        if "requirements" in data
-        else defaults(scenario)
-    )
+    requirements = from_table(data["requirements"], source) if "requirements" in data else defaults(scenario)
     target = data.get("requirement")
     if not isinstance(target, str) or target not in requirements:
         raise bad(
@@ -183,14 +165,8 @@ def parse(data: dict, source: str = "the spec") -> FalsifySpec:
             f"({', '.join(requirements) or 'none'}){did_you_mean(str(target), requirements)}"
         )
     budget = data.get("budget", 200)
-    if (
-        not isinstance(budget, int)
-        or isinstance(budget, bool)
-        or not 1 <= budget <= 10_000_000
-    ):
-        raise bad(
-            f"budget must be a whole number of runs from 1 to 10000000, got {budget!r}"
-        )
+    if not isinstance(budget, int) or isinstance(budget, bool) or not 1 <= budget <= 10_000_000:
+        raise bad(f"budget must be a whole number of runs from 1 to 10000000, got {budget!r}")
     infos = _param_types(scenario, controllers)
     fixed = data.get("set", {})
     search = data.get("search", {})
@@ -199,25 +175,18 @@ def parse(data: dict, source: str = "the spec") -> FalsifySpec:
             raise bad(f"[{section}] must be a table of parameter = value")
     for name, value in fixed.items():
         if name not in infos:
-            raise bad(
-                f"[set] unknown parameter {name!r} for {scenario} (see ego list){did_you_mean(name, infos)}"
-            )
+            raise bad(f"[set] unknown parameter {name!r} for {scenario} (see ego list){did_you_mean(name, infos)}")
         _check(scenario, controllers, {name: value}, f"[set] {name}", bad)
     dims = []
     for name, rng in search.items():
         info = infos.get(name)
         if info is None:
-            raise bad(
-                f"[search] unknown parameter {name!r} for {scenario} (see ego list)"
-                f"{did_you_mean(name, infos)}"
-            )
+            raise bad(f"[search] unknown parameter {name!r} for {scenario} (see ego list){did_you_mean(name, infos)}")
         if name in fixed:
             raise bad(f"{name} is both fixed in [set] and searched in [search]")
         if info.type is bool:
             if rng != [False, True]:
-                raise bad(
-                    f"[search] {name} is true or false: search it as [false, true], got {rng!r}"
-                )
+                raise bad(f"[search] {name} is true or false: search it as [false, true], got {rng!r}")
             dims.append(Dim(name, "bool", 0.0, 1.0))
             continue
         if info.type not in (int, float) or info.choices is not None:
@@ -225,14 +194,10 @@ def parse(data: dict, source: str = "the spec") -> FalsifySpec:
         if (
             not isinstance(rng, list)
             or len(rng) != 2
-            or not all(
-                isinstance(x, (int, float)) and not isinstance(x, bool) for x in rng
-            )
+            or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in rng)
             or not rng[0] < rng[1]
         ):
-            raise bad(
-                f"[search] {name} must be a range [low, high] with low < high, got {rng!r}"
-            )
+            raise bad(f"[search] {name} must be a range [low, high] with low < high, got {rng!r}")
         for end in rng:
             _check(scenario, controllers, {name: end}, f"[search] {name}", bad)
         dims.append(
@@ -255,9 +220,7 @@ def parse(data: dict, source: str = "the spec") -> FalsifySpec:
     ):
         dims.append(Dim("seed", "seed", float(seed[0]), float(seed[1])))
     else:
-        raise bad(
-            f"seed must be one seed or a range [low, high] of seeds within 0..{MAX_SEED}, got {seed!r}"
-        )
+        raise bad(f"seed must be one seed or a range [low, high] of seeds within 0..{MAX_SEED}, got {seed!r}")
     if not dims:
         raise bad("[search] names nothing to search (and the seed is fixed)")
     spec = FalsifySpec(
@@ -278,7 +241,5 @@ def parse(data: dict, source: str = "the spec") -> FalsifySpec:
     from ego.sweep.spec import Run, check_requirements
 
     seed0, over0 = spec.point(np.zeros(len(dims)))
-    check_requirements(
-        Run("", scenario, controllers[0], seed0, over0), requirements, bad
-    )
+    check_requirements(Run("", scenario, controllers[0], seed0, over0), requirements, bad)
     return spec

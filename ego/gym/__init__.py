@@ -65,16 +65,25 @@ def _max_episode_steps(scenario: str) -> int:
 # each env in its own process by default (ego.gym.vector: libsumo runs one SUMO per process).
 for _id, _scenario in ENV_IDS.items():
     if _id not in gymnasium.registry:
-        gymnasium.register(_id, entry_point="ego.gym.env:EgoEnv", kwargs={"scenario": _scenario},
-                           vector_entry_point="ego.gym.vector:make_vector",
-                           max_episode_steps=_max_episode_steps(_scenario),
-                           reward_threshold=REWARD_THRESHOLDS.get(_id),
-                           order_enforce=False, disable_env_checker=True)
+        gymnasium.register(
+            _id,
+            entry_point="ego.gym.env:EgoEnv",
+            kwargs={"scenario": _scenario},
+            vector_entry_point="ego.gym.vector:make_vector",
+            max_episode_steps=_max_episode_steps(_scenario),
+            reward_threshold=REWARD_THRESHOLDS.get(_id),
+            order_enforce=False,
+            disable_env_checker=True,
+        )
 
 if "ego/PlatoonMultiAgent-v0" not in gymnasium.registry:
-    gymnasium.register("ego/PlatoonMultiAgent-v0", entry_point="ego.gym.multi_agent:PlatoonMultiAgentEnv",
-                       max_episode_steps=_max_episode_steps("platoon"), order_enforce=False,
-                       disable_env_checker=True)
+    gymnasium.register(
+        "ego/PlatoonMultiAgent-v0",
+        entry_point="ego.gym.multi_agent:PlatoonMultiAgentEnv",
+        max_episode_steps=_max_episode_steps("platoon"),
+        order_enforce=False,
+        disable_env_checker=True,
+    )
 
 __all__ = [
     "ENV_IDS",

@@ -48,19 +48,26 @@ from ego.scenarios.sensor import SurroundSensor
 from ego.sim import sharing_instances
 
 #: the controller that drives the channels the agent leaves, per task
-DEFAULT_CONTROLLER = {"tracking": "pid", "curve": "pid", "lane-centering": "cascade-pid",
-                      "car-following": "pid"}
+DEFAULT_CONTROLLER = {"tracking": "pid", "curve": "pid", "lane-centering": "cascade-pid", "car-following": "pid"}
 #: 1 g: the box of ``EgoAction`` for an acceleration command without a limit of its own
 _ONE_G = 9.81
 #: each env's default episode distribution: scenario parameter -> [low, high], sampled at
 #: every reset from the episode's seed (``config["randomize"]``; ``{}``: one fixed scenario)
 DEFAULT_RANDOMIZE: dict[str, dict[str, list[float]]] = {
-    "emergency-brake": {"ego_speed": [17.0, 23.0], "lead_gap": [20.0, 45.0], "lead_decel": [3.0, 9.0],
-                        "lead_brake_time": [1.0, 3.0], "traffic_density": [5.0, 15.0]},
-    "fast-follower": {"follower_gap": [40.0, 80.0], "follower_speed": [30.0, 36.0],
-                      "traffic_density": [5.0, 15.0]},
-    "cut-in": {"ego_speed": [20.0, 30.0], "cut_in_gap": [10.0, 25.0], "cut_in_speed": [2.0, 8.0],
-               "cut_in_duration": [1.5, 3.0]},
+    "emergency-brake": {
+        "ego_speed": [17.0, 23.0],
+        "lead_gap": [20.0, 45.0],
+        "lead_decel": [3.0, 9.0],
+        "lead_brake_time": [1.0, 3.0],
+        "traffic_density": [5.0, 15.0],
+    },
+    "fast-follower": {"follower_gap": [40.0, 80.0], "follower_speed": [30.0, 36.0], "traffic_density": [5.0, 15.0]},
+    "cut-in": {
+        "ego_speed": [20.0, 30.0],
+        "cut_in_gap": [10.0, 25.0],
+        "cut_in_speed": [2.0, 8.0],
+        "cut_in_duration": [1.5, 3.0],
+    },
     "curve": {"entry_speed": [25.0, 35.0], "accel": [0.1, 0.5], "approach": [15.0, 25.0]},
     "lane-centering": {"offset": [-0.5, 0.5], "speed": [6.0, 10.0], "traffic_density": [4.0, 12.0]},
     "platoon": {"headway": [1.5, 2.5], "start_speed": [30.0, 50.0], "start_error": [0.0, 3.0]},
@@ -74,21 +81,41 @@ class EnvConfig:
     ``collision_reward * crashed + progress_reward * progress + lane_centering_reward *
     centring + comfort_reward * discomfort``."""
 
-    policy_frequency: float = param(0.0, "Hz", "env steps per simulated second, the action held in "
-                                    "between; 0: one env step per control period dt", min=0.0, max=1000.0)
-    collision_reward: float = param(-1.0, "-", "weight of the crash term (1 on the step the ego "
-                                    "collides or diverges)", min=-1e6, max=1e6)
-    progress_reward: float = param(0.4, "-", "weight of the progress term: the ego's speed along its "
-                                   "lane mapped from reward_speed_range to [0, 1]", min=-1e6, max=1e6)
-    lane_centering_reward: float = param(0.2, "-", "weight of the centring term 1 / (1 + "
-                                         "lane_centering_cost e^2), e the lateral error (m) from the "
-                                         "reference; for the platoon the spacing error", min=-1e6, max=1e6)
-    lane_centering_cost: float = param(4.0, "1/m^2", "how fast the centring term falls with the error",
-                                       min=0.0, max=1e6)
-    comfort_reward: float = param(-0.1, "-", "weight of the discomfort term min(1, (a_lon^2 + a_lat^2) "
-                                  "/ comfort_accel^2)", min=-1e6, max=1e6)
-    comfort_accel: float = param(5.0, "m/s^2", "acceleration at which the discomfort term saturates",
-                                 min=0.01, max=100.0)
+    policy_frequency: float = param(
+        0.0,
+        "Hz",
+        "env steps per simulated second, the action held in between; 0: one env step per control period dt",
+        min=0.0,
+        max=1000.0,
+    )
+    collision_reward: float = param(
+        -1.0, "-", "weight of the crash term (1 on the step the ego collides or diverges)", min=-1e6, max=1e6
+    )
+    progress_reward: float = param(
+        0.4,
+        "-",
+        "weight of the progress term: the ego's speed along its lane mapped from reward_speed_range to [0, 1]",
+        min=-1e6,
+        max=1e6,
+    )
+    lane_centering_reward: float = param(
+        0.2,
+        "-",
+        "weight of the centring term 1 / (1 + "
+        "lane_centering_cost e^2), e the lateral error (m) from the "
+        "reference; for the platoon the spacing error",
+        min=-1e6,
+        max=1e6,
+    )
+    lane_centering_cost: float = param(
+        4.0, "1/m^2", "how fast the centring term falls with the error", min=0.0, max=1e6
+    )
+    comfort_reward: float = param(
+        -0.1, "-", "weight of the discomfort term min(1, (a_lon^2 + a_lat^2) / comfort_accel^2)", min=-1e6, max=1e6
+    )
+    comfort_accel: float = param(
+        5.0, "m/s^2", "acceleration at which the discomfort term saturates", min=0.01, max=100.0
+    )
     screen_width: int = param(600, "px", "width of the rgb_array frame", min=16, max=4096)
     screen_height: int = param(150, "px", "height of the rgb_array frame", min=16, max=4096)
     scaling: float = param(5.5, "px/m", "zoom of the rgb_array frame", min=0.1, max=100.0)
@@ -96,8 +123,7 @@ class EnvConfig:
 
 _ENV_SCALARS = tuple(f.name for f in fields(EnvConfig))
 #: the env's own configuration keys; every other key is a scenario or controller parameter
-ENV_KEYS = ("observation", "action", "controller", "reward_speed_range", "randomize", "multi_instance",
-            *_ENV_SCALARS)
+ENV_KEYS = ("observation", "action", "controller", "reward_speed_range", "randomize", "multi_instance", *_ENV_SCALARS)
 
 
 class EgoView:
@@ -195,8 +221,7 @@ class Reward:
 
     def __init__(self, cfg: EnvConfig, speed_range: tuple[float, float]) -> None:
         self.speed_range = speed_range
-        self._weights = (cfg.collision_reward, cfg.progress_reward, cfg.lane_centering_reward,
-                         cfg.comfort_reward)
+        self._weights = (cfg.collision_reward, cfg.progress_reward, cfg.lane_centering_reward, cfg.comfort_reward)
         self._lo, self._per_speed = speed_range[0], 1.0 / (speed_range[1] - speed_range[0])
         self._cost = cfg.lane_centering_cost
         self._per_accel2 = 1.0 / (cfg.comfort_accel * cfg.comfort_accel)
@@ -244,10 +269,12 @@ class AgentSlot:
 _running: list = [None]
 
 #: why a step is refused after another env's reset ended this env's run
-_EVICTED = ("this env's SUMO run was ended by the reset of another ego env in this process: libsumo "
-            "runs one simulation per process. Use gym.make_vec(id, n) (one process per env), SB3's "
-            "SubprocVecEnv, or config={'multi_instance': True} for several envs in one process "
-            "(DummyVecEnv; the second and later run SUMO through TraCI, slower)")
+_EVICTED = (
+    "this env's SUMO run was ended by the reset of another ego env in this process: libsumo "
+    "runs one simulation per process. Use gym.make_vec(id, n) (one process per env), SB3's "
+    "SubprocVecEnv, or config={'multi_instance': True} for several envs in one process "
+    "(DummyVecEnv; the second and later run SUMO through TraCI, slower)"
+)
 
 
 class EgoEnv(gym.Env):
@@ -263,8 +290,9 @@ class EgoEnv(gym.Env):
 
     metadata: ClassVar[dict] = {"render_modes": ["rgb_array"], "render_fps": 100}
 
-    def __init__(self, scenario: str = "emergency-brake", config: Mapping[str, Any] | None = None,
-                 render_mode: str | None = None) -> None:
+    def __init__(
+        self, scenario: str = "emergency-brake", config: Mapping[str, Any] | None = None, render_mode: str | None = None
+    ) -> None:
         if render_mode not in (None, *self.metadata["render_modes"]):
             raise ConfigError(f"bad value for render_mode: {render_mode!r} (expected rgb_array or None)")
         self.scenario_name = scenario
@@ -292,8 +320,11 @@ class EgoEnv(gym.Env):
         sc = scenario_class(scenario)
         config: dict[str, Any] = {
             "observation": {"type": "EgoState"},
-            "action": {"type": "ContinuousAction", "longitudinal": True,
-                       "lateral": TASKS[sc.task].returns[1].high > 0.0},  # a task that steers
+            "action": {
+                "type": "ContinuousAction",
+                "longitudinal": True,
+                "lateral": TASKS[sc.task].returns[1].high > 0.0,
+            },  # a task that steers
             "controller": DEFAULT_CONTROLLER[sc.task],
             "reward_speed_range": [0.0, 30.0],
             "randomize": {k: list(v) for k, v in DEFAULT_RANDOMIZE.get(scenario, {}).items()},
@@ -321,8 +352,9 @@ class EgoEnv(gym.Env):
         controller = cfg.get("controller")
         if controller not in CONTROLLERS[self.task] or controller == "none":
             names = [n for n in CONTROLLERS[self.task] if n != "none"]
-            raise ConfigError(f"bad value for controller: {controller!r} (the {self.task} task's "
-                              f"controllers: {', '.join(names)})")
+            raise ConfigError(
+                f"bad value for controller: {controller!r} (the {self.task} task's controllers: {', '.join(names)})"
+            )
         params = {k: v for k, v in cfg.items() if k not in ENV_KEYS}
         known = set(ENV_KEYS) | set(parameter_namespace(cls, [controller]))
         for key in cfg:
@@ -331,8 +363,10 @@ class EgoEnv(gym.Env):
         env, _ = apply_overrides(EnvConfig(), {k: cfg[k] for k in _ENV_SCALARS})
         lo, hi = cfg["reward_speed_range"] if _pair(cfg["reward_speed_range"]) else (None, None)
         if lo is None or not lo < hi:
-            raise ConfigError(f"bad value for reward_speed_range: {cfg['reward_speed_range']!r} "
-                              "(expected [low, high] in m/s with low < high)")
+            raise ConfigError(
+                f"bad value for reward_speed_range: {cfg['reward_speed_range']!r} "
+                "(expected [low, high] in m/s with low < high)"
+            )
         multi = cfg["multi_instance"]
         if not isinstance(multi, (bool, np.bool_)):
             raise ConfigError(f"bad value for multi_instance: {multi!r} (expected true or false)")
@@ -350,19 +384,26 @@ class EgoEnv(gym.Env):
         if env.policy_frequency > 0.0:
             ratio = 1.0 / (env.policy_frequency * sc_config.dt)
             if abs(ratio - round(ratio)) > 1e-6 or round(ratio) < 1:
-                raise ConfigError(f"bad value for policy_frequency: {env.policy_frequency:g} (expected "
-                                  f"1 / dt = {1.0 / sc_config.dt:g} Hz divided by a whole number)")
+                raise ConfigError(
+                    f"bad value for policy_frequency: {env.policy_frequency:g} (expected "
+                    f"1 / dt = {1.0 / sc_config.dt:g} Hz divided by a whole number)"
+                )
             every = round(ratio)
         # the corners of the distribution must make valid runs: checked now, not at a reset
         for corner in (0, 1):
             if randomize:
-                resolve(RunSpec(self.scenario_name, controller, 0,
-                                {**overrides, **{k: v[corner] for k, v in randomize.items()}}))
+                resolve(
+                    RunSpec(
+                        self.scenario_name, controller, 0, {**overrides, **{k: v[corner] for k, v in randomize.items()}}
+                    )
+                )
 
         meta = action.type_name == "DiscreteMetaAction"
         if meta and self.task != "tracking":
-            raise ConfigError(f"bad value for action: DiscreteMetaAction needs lanes to change (the motorway "
-                              f"scenarios: emergency-brake, fast-follower, cut-in), not {self.scenario_name}")
+            raise ConfigError(
+                f"bad value for action: DiscreteMetaAction needs lanes to change (the motorway "
+                f"scenarios: emergency-brake, fast-follower, cut-in), not {self.scenario_name}"
+            )
         # the agent drives both channels: the loop needs no controller of its own
         helper = not (action.longitudinal and action.lateral) or meta
         self.close()
@@ -423,8 +464,10 @@ class EgoEnv(gym.Env):
         run_seed = check_seed(seed) if seed is not None else int(self.np_random.integers(0, MAX_SEED + 1))
         self._start(run_seed)
         self._limit = _registered_limit(self.spec)
-        return self.observation_type.observe(self._view), {"status": self.scenario.status,
-                                                           "randomized": dict(self.randomized)}
+        return self.observation_type.observe(self._view), {
+            "status": self.scenario.status,
+            "randomized": dict(self.randomized),
+        }
 
     def _start(self, run_seed: int) -> None:
         """Start the run with ``run_seed`` (the episode's parameters sampled from it)."""
@@ -435,8 +478,9 @@ class EgoEnv(gym.Env):
         if self._randomize:
             self.randomized = self._sample(run_seed)
             self.scenario.close()
-            sc_config = resolve(RunSpec(self.scenario_name, self._spec.name, 0,
-                                        {**self._overrides, **self.randomized})).config
+            sc_config = resolve(
+                RunSpec(self.scenario_name, self._spec.name, 0, {**self._overrides, **self.randomized})
+            ).config
             self._make_scenario(sc_config)
         sc = self.scenario
         with sharing_instances(self._multi):
@@ -548,9 +592,14 @@ class EgoEnv(gym.Env):
     def __getstate__(self) -> dict:
         sc = self.scenario
         running = sc is not None and sc.bridge is not None
-        return {"scenario": self.scenario_name, "config": self.config, "render_mode": self.render_mode,
-                "np_random": self._np_random, "spec": self.spec,
-                "run": (sc.seed, list(self._history), self._view._prev, self._elapsed) if running else None}
+        return {
+            "scenario": self.scenario_name,
+            "config": self.config,
+            "render_mode": self.render_mode,
+            "np_random": self._np_random,
+            "spec": self.spec,
+            "run": (sc.seed, list(self._history), self._view._prev, self._elapsed) if running else None,
+        }
 
     def __setstate__(self, state: dict) -> None:
         self.__init__(state["scenario"], state["config"], state["render_mode"])

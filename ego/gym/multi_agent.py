@@ -43,8 +43,12 @@ from ego.scenarios.platoon import follower_ids
 class PlatoonParallelEnv(ParallelEnv):
     """The platoon's first ``controlled_vehicles`` followers as agents (module docstring)."""
 
-    metadata: ClassVar[dict] = {"name": "ego_platoon_v0", "render_modes": ["rgb_array"], "render_fps": 100,
-                                "is_parallelizable": True}
+    metadata: ClassVar[dict] = {
+        "name": "ego_platoon_v0",
+        "render_modes": ["rgb_array"],
+        "render_fps": 100,
+        "is_parallelizable": True,
+    }
 
     def __init__(self, config: Mapping[str, Any] | None = None, render_mode: str | None = None) -> None:
         config = dict(config or {})
@@ -57,8 +61,9 @@ class PlatoonParallelEnv(ParallelEnv):
         if k is None:
             k = n
         if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 1 <= k <= n:
-            raise ConfigError(f"bad value for controlled_vehicles: {k!r} (expected a whole number from 1 "
-                              f"to followers = {n})")
+            raise ConfigError(
+                f"bad value for controlled_vehicles: {k!r} (expected a whole number from 1 to followers = {n})"
+            )
         self.render_mode = render_mode
         self.possible_agents = list(follower_ids(n)[: int(k)])
         self.agents: list[str] = []
@@ -101,8 +106,10 @@ class PlatoonParallelEnv(ParallelEnv):
         native = env.action_type.native
         missing = [a for a in self.agents if a not in actions]
         if missing:
-            raise ValueError(f"bad actions: no action for agent(s) {', '.join(missing)} (expected one per "
-                             f"agent of {', '.join(self.agents)})")
+            raise ValueError(
+                f"bad actions: no action for agent(s) {', '.join(missing)} (expected one per "
+                f"agent of {', '.join(self.agents)})"
+            )
         commands = [native(actions[a])[0] for a in self.agents]
         total = sum(commands)
         if total - total != 0.0:  # nan or inf: the run ends before the models see it
@@ -185,14 +192,21 @@ class PlatoonMultiAgentEnv(gym.Env):
     def step(self, action):
         agents = self.controlled_vehicles
         if not isinstance(action, (tuple, list)) or len(action) != len(agents):
-            raise ValueError(f"bad action {action!r:.60}: expected a tuple of {len(agents)} actions, one per "
-                             f"controlled vehicle ({', '.join(agents)})")
+            raise ValueError(
+                f"bad action {action!r:.60}: expected a tuple of {len(agents)} actions, one per "
+                f"controlled vehicle ({', '.join(agents)})"
+            )
         observations, rewards, terminations, truncations, infos = self.parallel.step(dict(zip(agents, action)))
         info = dict(infos[agents[0]])
         info["agents_rewards"] = tuple(rewards[a] for a in agents)
         info["agents_terminated"] = tuple(terminations[a] for a in agents)
-        return (tuple(observations[a] for a in agents), float(np.mean(info["agents_rewards"])),
-                terminations[agents[0]], truncations[agents[0]], info)
+        return (
+            tuple(observations[a] for a in agents),
+            float(np.mean(info["agents_rewards"])),
+            terminations[agents[0]],
+            truncations[agents[0]],
+            info,
+        )
 
     def render(self):
         return self.parallel.render()

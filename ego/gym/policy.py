@@ -49,8 +49,10 @@ class ControllerPolicy:
         self.env = env.unwrapped
         task = self.env.task
         if self.env.observation_type.type_name != "EgoState":
-            raise ConfigError(f"a controller policy needs the EgoState observation (the env has "
-                              f"{self.env.observation_type.type_name})")
+            raise ConfigError(
+                f"a controller policy needs the EgoState observation (the env has "
+                f"{self.env.observation_type.type_name})"
+            )
         if isinstance(controller, str):
             spec = controller_spec(controller, task)
             built, _ = apply_overrides(spec.params(), params or {})

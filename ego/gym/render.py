@@ -46,8 +46,9 @@ class TopDown:
             half = 0.5 * lane.width
             left = [lane.offset_point(x, half) for x in s]
             right = [lane.offset_point(x, -half) for x in s]
-            ax.add_patch(Polygon(left + right[::-1], closed=True, facecolor=_ROAD, edgecolor=_MARK,
-                                 linewidth=0.6, zorder=1))
+            ax.add_patch(
+                Polygon(left + right[::-1], closed=True, facecolor=_ROAD, edgecolor=_MARK, linewidth=0.6, zorder=1)
+            )
         self._lanes_of = scenario
 
     def draw(self, scenario, view) -> np.ndarray:
@@ -68,15 +69,20 @@ class TopDown:
         for vid, (x, y, yaw, length, width) in zip(ids, boxes):
             c, s = math.cos(yaw), math.sin(yaw)
             hl, hw = 0.5 * length, 0.5 * width
-            corners = [(x + c * a - s * b, y + s * a + c * b)
-                       for a, b in ((hl, hw), (-hl, hw), (-hl, -hw), (hl, -hw))]
+            corners = [(x + c * a - s * b, y + s * a + c * b) for a, b in ((hl, hw), (-hl, hw), (-hl, -hw), (hl, -hw))]
             mine = vid in controlled
             rgb = colors.get(vid)
             face = tuple(c / 255.0 for c in rgb) if rgb is not None else (_CONTROLLED if mine else _OTHER)
             if vid == agent:
                 face = _AGENT
-            patch = Polygon(corners, closed=True, facecolor=face, edgecolor="black",
-                            linewidth=1.5 if vid == agent else 0.5, zorder=3 if vid == agent else 2)
+            patch = Polygon(
+                corners,
+                closed=True,
+                facecolor=face,
+                edgecolor="black",
+                linewidth=1.5 if vid == agent else 0.5,
+                zorder=3 if vid == agent else 2,
+            )
             self.ax.add_patch(patch)
             self._vehicles.append(patch)
             if vid == agent:

@@ -50,8 +50,7 @@ def _options(kind: str, given: Mapping[str, Any], allowed: Sequence[str]) -> dic
     out = {k: v for k, v in given.items() if k != "type"}
     for key in out:
         if key not in allowed:
-            raise ConfigError(f"unknown {kind} option {key!r} for {given.get('type')} "
-                              f"(known: {', '.join(allowed)})")
+            raise ConfigError(f"unknown {kind} option {key!r} for {given.get('type')} (known: {', '.join(allowed)})")
     return out
 
 
@@ -72,6 +71,7 @@ def _range(name: str, value: Any) -> tuple[float, float]:
 
 
 # -- observations ----------------------------------------------------------------------------
+
 
 class EgoStateObservation:
     """The task's own observation as a vector; ``names`` are its fields (``standstill_gap`` and
@@ -102,7 +102,7 @@ class EgoStateObservation:
         n_const = 0
         while n_const < len(paths) and paths[-1 - n_const] in _RUN_CONSTANT:
             n_const += 1
-        self._const_get = attrgetter(*paths[len(paths) - n_const:]) if n_const else None
+        self._const_get = attrgetter(*paths[len(paths) - n_const :]) if n_const else None
         self._const: list = []
         dynamic = paths[: len(paths) - n_const]
         get = attrgetter(*dynamic)
@@ -154,21 +154,42 @@ class KinematicsObservation:
     KNOWN = ("presence", "x", "y", "vx", "vy", "heading", "cos_h", "sin_h")
     #: highway-env's defaults: 5 and 2 times its largest speed (40 m/s), 3 lanes of 4 m
     FEATURES_RANGE = {"x": [-200.0, 200.0], "y": [-12.0, 12.0], "vx": [-80.0, 80.0], "vy": [-80.0, 80.0]}
-    OPTIONS = ("features", "vehicles_count", "features_range", "absolute", "order", "normalize", "clip",
-               "see_behind", "perception_distance")
+    OPTIONS = (
+        "features",
+        "vehicles_count",
+        "features_range",
+        "absolute",
+        "order",
+        "normalize",
+        "clip",
+        "see_behind",
+        "perception_distance",
+    )
 
-    def __init__(self, features: Sequence[str] | None = None, vehicles_count: int = 5,
-                 features_range: Mapping[str, Sequence[float]] | None = None, absolute: bool = False,
-                 order: str = "sorted", normalize: bool = True, clip: bool = True, see_behind: bool = False,
-                 perception_distance: float = 200.0) -> None:
+    def __init__(
+        self,
+        features: Sequence[str] | None = None,
+        vehicles_count: int = 5,
+        features_range: Mapping[str, Sequence[float]] | None = None,
+        absolute: bool = False,
+        order: str = "sorted",
+        normalize: bool = True,
+        clip: bool = True,
+        see_behind: bool = False,
+        perception_distance: float = 200.0,
+    ) -> None:
         self.features = tuple(features) if features is not None else self.FEATURES
         for f in self.features:
             if f not in self.KNOWN:
                 raise ConfigError(f"unknown Kinematics feature {f!r} (known: {', '.join(self.KNOWN)})")
-        if isinstance(vehicles_count, bool) or not isinstance(vehicles_count, (int, np.integer)) \
-                or not 1 <= vehicles_count <= 100:
-            raise ConfigError(f"bad value for vehicles_count: {vehicles_count!r} (expected a whole number "
-                              "from 1 to 100)")
+        if (
+            isinstance(vehicles_count, bool)
+            or not isinstance(vehicles_count, (int, np.integer))
+            or not 1 <= vehicles_count <= 100
+        ):
+            raise ConfigError(
+                f"bad value for vehicles_count: {vehicles_count!r} (expected a whole number from 1 to 100)"
+            )
         if order not in ("sorted", "shuffled"):
             raise ConfigError(f"bad value for order: {order!r} (expected one of sorted, shuffled)")
         ranges = dict(self.FEATURES_RANGE)
@@ -177,8 +198,10 @@ class KinematicsObservation:
                 raise ConfigError(f"unknown features_range key {key!r} (known: x, y, vx, vy)")
             ranges[key] = _range(f"features_range[{key}]", value)
         if not (isinstance(perception_distance, (int, float)) and 0.0 < perception_distance <= 1000.0):
-            raise ConfigError(f"bad value for perception_distance: {perception_distance!r} (expected a "
-                              "number above 0 and up to 1000 (m))")
+            raise ConfigError(
+                f"bad value for perception_distance: {perception_distance!r} (expected a "
+                "number above 0 and up to 1000 (m))"
+            )
         self.vehicles_count = int(vehicles_count)
         self.absolute = _flag("absolute", absolute)
         self.normalize = _flag("normalize", normalize)
@@ -217,8 +240,16 @@ class KinematicsObservation:
         out = np.zeros((self.vehicles_count, len(self.features)))
         n = len(table)
         heading = table[:, 4]
-        columns = {"presence": np.ones(n), "x": table[:, 0], "y": table[:, 1], "vx": table[:, 2],
-                   "vy": table[:, 3], "heading": heading, "cos_h": np.cos(heading), "sin_h": np.sin(heading)}
+        columns = {
+            "presence": np.ones(n),
+            "x": table[:, 0],
+            "y": table[:, 1],
+            "vx": table[:, 2],
+            "vy": table[:, 3],
+            "heading": heading,
+            "cos_h": np.cos(heading),
+            "sin_h": np.sin(heading),
+        }
         for j, f in enumerate(self.features):
             out[:n, j] = columns[f]
         if self.normalize:
@@ -306,10 +337,13 @@ class OccupancyGridObservation:
     KNOWN = ("presence", "vx", "vy", "on_road")
     OPTIONS = ("features", "grid_size", "grid_step", "features_range")
 
-    def __init__(self, features: Sequence[str] = ("presence", "vx", "vy", "on_road"),
-                 grid_size: Sequence[Sequence[float]] = ((-27.5, 27.5), (-27.5, 27.5)),
-                 grid_step: Sequence[float] = (5.0, 5.0),
-                 features_range: Mapping[str, Sequence[float]] | None = None) -> None:
+    def __init__(
+        self,
+        features: Sequence[str] = ("presence", "vx", "vy", "on_road"),
+        grid_size: Sequence[Sequence[float]] = ((-27.5, 27.5), (-27.5, 27.5)),
+        grid_step: Sequence[float] = (5.0, 5.0),
+        features_range: Mapping[str, Sequence[float]] | None = None,
+    ) -> None:
         self.features = tuple(features)
         for f in self.features:
             if f not in self.KNOWN:
@@ -318,11 +352,15 @@ class OccupancyGridObservation:
             (x0, x1), (y0, y1) = ((float(a), float(b)) for a, b in grid_size)
             sx, sy = (float(v) for v in grid_step)
         except (TypeError, ValueError):
-            raise ConfigError(f"bad value for grid_size/grid_step: {grid_size!r}, {grid_step!r} (expected "
-                              "[[x_min, x_max], [y_min, y_max]] and [step_x, step_y] in m)") from None
+            raise ConfigError(
+                f"bad value for grid_size/grid_step: {grid_size!r}, {grid_step!r} (expected "
+                "[[x_min, x_max], [y_min, y_max]] and [step_x, step_y] in m)"
+            ) from None
         if not (x0 < x1 and y0 < y1 and sx > 0.0 and sy > 0.0) or (x1 - x0) / sx > 200 or (y1 - y0) / sy > 200:
-            raise ConfigError(f"bad value for grid_size/grid_step: {grid_size!r}, {grid_step!r} (expected "
-                              "min < max, steps above 0, at most 200 cells a side)")
+            raise ConfigError(
+                f"bad value for grid_size/grid_step: {grid_size!r}, {grid_step!r} (expected "
+                "min < max, steps above 0, at most 200 cells a side)"
+            )
         ranges = {"vx": (-80.0, 80.0), "vy": (-80.0, 80.0)}
         for key, value in (features_range or {}).items():
             if key not in ranges:
@@ -378,11 +416,14 @@ def observation_type(config: Mapping[str, Any], task: str):
     for cls in (KinematicsObservation, TimeToCollisionObservation, OccupancyGridObservation):
         if kind == cls.type_name:
             return cls(**_options("observation", config, cls.OPTIONS))
-    raise ConfigError(f"bad value for observation: {config!r} (expected a dict whose type is one of "
-                      "EgoState, Kinematics, TimeToCollision, OccupancyGrid)")
+    raise ConfigError(
+        f"bad value for observation: {config!r} (expected a dict whose type is one of "
+        "EgoState, Kinematics, TimeToCollision, OccupancyGrid)"
+    )
 
 
 # -- actions ---------------------------------------------------------------------------------
+
 
 class ActionType:
     """The agent's action -> the ego's (longitudinal command, delta), ``None`` for a channel
@@ -391,17 +432,18 @@ class ActionType:
     type_name = ""
     OPTIONS = ("longitudinal", "lateral")
 
-    def __init__(self, task: str, limits: tuple[float, float, float], longitudinal: bool = True,
-                 lateral: bool | None = None) -> None:
+    def __init__(
+        self, task: str, limits: tuple[float, float, float], longitudinal: bool = True, lateral: bool | None = None
+    ) -> None:
         steerable = TASKS[task].returns[1].high > 0.0
         self.longitudinal = _flag("longitudinal", longitudinal)
         self.lateral = _flag("lateral", steerable if lateral is None else lateral)
         if self.lateral and not steerable:
-            raise ConfigError(f"bad value for lateral: true (the {task} task does not steer: its "
-                              "followers keep their lane)")
+            raise ConfigError(
+                f"bad value for lateral: true (the {task} task does not steer: its followers keep their lane)"
+            )
         if not (self.longitudinal or self.lateral):
-            raise ConfigError("bad action: longitudinal and lateral are both false (the agent would "
-                              "drive nothing)")
+            raise ConfigError("bad action: longitudinal and lateral are both false (the agent would drive nothing)")
         #: (most negative, largest longitudinal command, largest |delta|) in the plant's units
         self.limits = limits
         self.channels = (self.longitudinal, self.lateral)
@@ -423,8 +465,10 @@ class ActionType:
             else:
                 shape = action.shape
             if shape != self._shape:
-                raise ValueError(f"bad action {_short(action)}: expected an array of shape "
-                                 f"{self.space.shape} ({self._describe()}), got shape {shape}")
+                raise ValueError(
+                    f"bad action {_short(action)}: expected an array of shape "
+                    f"{self.space.shape} ({self._describe()}), got shape {shape}"
+                )
         return action
 
     def _describe(self) -> str:
@@ -441,9 +485,16 @@ class ContinuousAction(ActionType):
     type_name = "ContinuousAction"
     OPTIONS = ("longitudinal", "lateral", "acceleration_range", "steering_range", "clip")
 
-    def __init__(self, task: str, limits, longitudinal: bool = True, lateral: bool | None = None,
-                 acceleration_range: Sequence[float] = (-5.0, 5.0),
-                 steering_range: Sequence[float] = (-math.pi / 4, math.pi / 4), clip: bool = True) -> None:
+    def __init__(
+        self,
+        task: str,
+        limits,
+        longitudinal: bool = True,
+        lateral: bool | None = None,
+        acceleration_range: Sequence[float] = (-5.0, 5.0),
+        steering_range: Sequence[float] = (-math.pi / 4, math.pi / 4),
+        clip: bool = True,
+    ) -> None:
         super().__init__(task, limits, longitudinal, lateral)
         self.acceleration_range = _range("acceleration_range", acceleration_range)
         self.steering_range = _range("steering_range", steering_range)
@@ -511,17 +562,24 @@ class DiscreteMetaAction(ActionType):
     OPTIONS = ("longitudinal", "lateral", "target_speeds", "max_lag")
     ALL = ("LANE_LEFT", "IDLE", "LANE_RIGHT", "FASTER", "SLOWER")
 
-    def __init__(self, task: str, limits, longitudinal: bool = True, lateral: bool | None = None,
-                 target_speeds: Sequence[float] = (10.0, 15.0, 20.0, 25.0, 30.0, 35.0),
-                 max_lag: float = 2.0) -> None:
+    def __init__(
+        self,
+        task: str,
+        limits,
+        longitudinal: bool = True,
+        lateral: bool | None = None,
+        target_speeds: Sequence[float] = (10.0, 15.0, 20.0, 25.0, 30.0, 35.0),
+        max_lag: float = 2.0,
+    ) -> None:
         super().__init__(task, limits, longitudinal, lateral)
         try:
             speeds = sorted(float(v) for v in target_speeds)
         except (TypeError, ValueError):
             speeds = []
         if not speeds or not all(0.0 <= v <= 60.0 for v in speeds):
-            raise ConfigError(f"bad value for target_speeds: {target_speeds!r} (expected a list of speeds "
-                              "from 0 to 60 (m/s))")
+            raise ConfigError(
+                f"bad value for target_speeds: {target_speeds!r} (expected a list of speeds from 0 to 60 (m/s))"
+            )
         if not (isinstance(max_lag, (int, float)) and 0.0 < max_lag <= 50.0):
             raise ConfigError(f"bad value for max_lag: {max_lag!r} (expected a number above 0 up to 50 (m))")
         self.target_speeds, self.max_lag = tuple(speeds), float(max_lag)
@@ -529,7 +587,7 @@ class DiscreteMetaAction(ActionType):
         if self.lateral:
             names += ["LANE_LEFT", "IDLE", "LANE_RIGHT"]
         if self.longitudinal:
-            names += (["FASTER", "SLOWER"] if self.lateral else ["SLOWER", "IDLE", "FASTER"])
+            names += ["FASTER", "SLOWER"] if self.lateral else ["SLOWER", "IDLE", "FASTER"]
         #: action index -> its name (highway-env's ``actions``)
         self.actions = dict(enumerate(names))
         self.actions_indexes = {v: k for k, v in self.actions.items()}
@@ -558,16 +616,20 @@ class DiscreteMetaAction(ActionType):
         except (TypeError, ValueError):
             index = -1
         if index != action or not 0 <= index < len(self.actions):
-            raise ValueError(f"bad action {_short(action)}: expected an integer from 0 to "
-                             f"{len(self.actions) - 1} ({self._describe()})")
+            raise ValueError(
+                f"bad action {_short(action)}: expected an integer from 0 to "
+                f"{len(self.actions) - 1} ({self._describe()})"
+            )
         return (index, None)
 
     def _describe(self) -> str:
         return f"{self.type_name}: " + ", ".join(f"{k} {v}" for k, v in self.actions.items())
 
     def from_native(self, command: float, delta: float):
-        raise ConfigError("a controller policy cannot drive DiscreteMetaAction (its commands are not "
-                          "meta actions); use ContinuousAction or EgoAction")
+        raise ConfigError(
+            "a controller policy cannot drive DiscreteMetaAction (its commands are not "
+            "meta actions); use ContinuousAction or EgoAction"
+        )
 
     def update(self, index: int) -> None:
         """Apply meta action ``index`` to the targets."""
@@ -605,5 +667,7 @@ def action_type(config: Mapping[str, Any], task: str, limits) -> ActionType:
     for cls in (ContinuousAction, EgoAction, DiscreteMetaAction):
         if kind == cls.type_name:
             return cls(task, limits, **_options("action", config, cls.OPTIONS))
-    raise ConfigError(f"bad value for action: {config!r} (expected a dict whose type is one of "
-                      "ContinuousAction, EgoAction, DiscreteMetaAction)")
+    raise ConfigError(
+        f"bad value for action: {config!r} (expected a dict whose type is one of "
+        "ContinuousAction, EgoAction, DiscreteMetaAction)"
+    )

@@ -44,8 +44,13 @@ class _Maker:
         return gym.make(self.env_id, **self.kwargs)
 
 
-def make_vector(num_envs: int = 1, scenario: str = "emergency-brake", config: Mapping[str, Any] | None = None,
-                render_mode: str | None = None, **kwargs: Any):
+def make_vector(
+    num_envs: int = 1,
+    scenario: str = "emergency-brake",
+    config: Mapping[str, Any] | None = None,
+    render_mode: str | None = None,
+    **kwargs: Any,
+):
     """``num_envs`` envs of ``scenario``'s id, each in its own process when more than one.
 
     Workers start by ``fork`` when no SUMO runs in this process, else by ``forkserver``

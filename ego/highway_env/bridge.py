@@ -59,8 +59,7 @@ def net_lanes(net: Path, edge: str | None = None) -> dict[str, tuple[float, list
             continue
         pts = [tuple(float(v) for v in p.split(",")[:2]) for p in lane.get("shape").split()]
         if len(pts) != 2:
-            raise SimError(f"the highway-env backend needs straight lanes; {lid} in {net} has "
-                            f"{len(pts)} shape points")
+            raise SimError(f"the highway-env backend needs straight lanes; {lid} in {net} has {len(pts)} shape points")
         lanes[lid] = (float(lane.get("width", 3.2)), pts)
     return lanes
 
@@ -103,8 +102,9 @@ class ScriptedVehicle(Vehicle):
     by what :meth:`change_sublane` asked, in one step. It does not react to other cars, like
     the SUMO actors it stands for (they drive blind or have the lane to themselves)."""
 
-    def __init__(self, road, position, heading: float = 0.0, speed: float = 0.0,
-                 accel: float = 2.6, decel: float = 4.5) -> None:
+    def __init__(
+        self, road, position, heading: float = 0.0, speed: float = 0.0, accel: float = 2.6, decel: float = 4.5
+    ) -> None:
         super().__init__(road, position, heading, speed)
         self.target_speed = speed
         self.accel, self.decel = accel, decel
@@ -157,11 +157,17 @@ class EgoTrafficEnv(AbstractEnv):
     @classmethod
     def default_config(cls) -> dict:
         config = super().default_config()
-        config.update({
-            "lanes": [], "vehicles": [], "speed_limit": 36.11,
-            "screen_width": 900, "screen_height": 200, "scaling": 5.0,
-            "centering_position": [0.35, 0.5],
-        })
+        config.update(
+            {
+                "lanes": [],
+                "vehicles": [],
+                "speed_limit": 36.11,
+                "screen_width": 900,
+                "screen_height": 200,
+                "scaling": 5.0,
+                "centering_position": [0.35, 0.5],
+            }
+        )
         return config
 
     def _reset(self) -> None:
@@ -171,12 +177,16 @@ class EgoTrafficEnv(AbstractEnv):
         # one dashed line between two lanes
         rank = {i: r for r, i in enumerate(sorted(range(len(lanes)), key=lambda i: lanes[i][0][1]))}
         for i, (start, end, width) in enumerate(lanes):
-            lines = (LineType.CONTINUOUS_LINE if rank[i] == 0 else LineType.STRIPED,
-                     LineType.CONTINUOUS_LINE if rank[i] == len(lanes) - 1 else LineType.NONE)
-            net.add_lane("a", "b", StraightLane(start, end, width=width, line_types=lines,
-                                                speed_limit=self.config["speed_limit"]))
-        self.road = Road(network=net, np_random=self.np_random,
-                         record_history=self.config["show_trajectories"])
+            lines = (
+                LineType.CONTINUOUS_LINE if rank[i] == 0 else LineType.STRIPED,
+                LineType.CONTINUOUS_LINE if rank[i] == len(lanes) - 1 else LineType.NONE,
+            )
+            net.add_lane(
+                "a",
+                "b",
+                StraightLane(start, end, width=width, line_types=lines, speed_limit=self.config["speed_limit"]),
+            )
+        self.road = Road(network=net, np_random=self.np_random, record_history=self.config["show_trajectories"])
         self.controlled_vehicles = []
         for make in self.config["vehicles"]:
             vehicle = make(self.road)
@@ -221,8 +231,15 @@ class HighwayEnvBridge:
     into (``duration`` s sets how many frames to keep).
     """
 
-    def __init__(self, net: Path, step_length: float = 0.1, seed: int = 0, edge: str | None = None,
-                 video: str | None = None, duration: float = 60.0) -> None:
+    def __init__(
+        self,
+        net: Path,
+        step_length: float = 0.1,
+        seed: int = 0,
+        edge: str | None = None,
+        video: str | None = None,
+        duration: float = 60.0,
+    ) -> None:
         self.net = Path(net)
         self.step_length = float(step_length)
         self.seed = int(seed)
@@ -236,8 +253,9 @@ class HighwayEnvBridge:
         self._lanes: dict[str, tuple[float, list[tuple[float, float]]]] = {}
         self._radius: dict[str, float] = {}
         self._crashed: set[str] = set()
-        self._video = (VideoWriter(video, 1.0 / self.step_length,
-                                   math.ceil(duration / self.step_length) + 1) if video else None)
+        self._video = (
+            VideoWriter(video, 1.0 / self.step_length, math.ceil(duration / self.step_length) + 1) if video else None
+        )
         self.env: EgoTrafficEnv | None = None
         self._by_id: dict[str, Vehicle] = {}
         self._id_of: dict[int, str] = {}
@@ -350,8 +368,7 @@ class HighwayEnvBridge:
             setattr(vehicle, key, value)
 
     # -- per step -------------------------------------------------------------------------
-    def push(self, vid: str, x: float, y: float, psi: float, speed: float,
-             accel: float | None = None) -> None:
+    def push(self, vid: str, x: float, y: float, psi: float, speed: float, accel: float | None = None) -> None:
         """Place controlled vehicle ``vid`` (centre of gravity x, y in m, yaw psi in rad, ego
         frame; ``speed`` m/s along the road). Takes effect in the next :meth:`step`."""
         geo = self.controlled[vid]
@@ -380,14 +397,22 @@ class HighwayEnvBridge:
                 if other is v or pair in paired:
                     continue
                 # overlapping now, or within the step highway-env looked ahead (what set the flag)
-                if any(utils.are_polygons_intersecting(v.polygon(), other.polygon(),
-                                                       v.velocity * self.step_length,
-                                                       other.velocity * self.step_length)[:2]):
+                if any(
+                    utils.are_polygons_intersecting(
+                        v.polygon(), other.polygon(), v.velocity * self.step_length, other.velocity * self.step_length
+                    )[:2]
+                ):
                     paired.add(pair)
                     rear, front = sorted((v, other), key=lambda w: w.position[0])
-                    found.append(Collision(self._id_of[id(rear)], self._id_of[id(front)],
-                                           "boxes overlap (highway-env crashed)", rear.speed,
-                                           front.speed))
+                    found.append(
+                        Collision(
+                            self._id_of[id(rear)],
+                            self._id_of[id(front)],
+                            "boxes overlap (highway-env crashed)",
+                            rear.speed,
+                            front.speed,
+                        )
+                    )
         self._crashed.update(self._id_of[id(v)] for v in fresh)
         return found
 
@@ -415,8 +440,15 @@ class HighwayEnvBridge:
             psi = -v.heading
             half = 0.5 * v.LENGTH
             ids.append(vid)
-            rows.append((v.position[0] + half * math.cos(psi), -v.position[1] + half * math.sin(psi),
-                         (90.0 - psi * _DEG) % 360.0, v.LENGTH, v.WIDTH))
+            rows.append(
+                (
+                    v.position[0] + half * math.cos(psi),
+                    -v.position[1] + half * math.sin(psi),
+                    (90.0 - psi * _DEG) % 360.0,
+                    v.LENGTH,
+                    v.WIDTH,
+                )
+            )
         return ids, rows
 
     def front_bumper(self, vid: str) -> tuple[float, float]:
@@ -466,10 +498,12 @@ class HighwayEnvBridge:
             raise SimError("the highway-env traffic is not running")
         ids = list(self._specs)
         # highway-env's lanes in its frame (y mirrored), in the order of the SUMO lane ids
-        lanes = [((pts[0][0], -pts[0][1]), (pts[1][0], -pts[1][1]), width)
-                 for width, pts in self._lanes.values()]
-        config = {"lanes": lanes, "vehicles": [self._maker(vid) for vid in ids],
-                  "simulation_frequency": round(1.0 / self.step_length)}
+        lanes = [((pts[0][0], -pts[0][1]), (pts[1][0], -pts[1][1]), width) for width, pts in self._lanes.values()]
+        config = {
+            "lanes": lanes,
+            "vehicles": [self._maker(vid) for vid in ids],
+            "simulation_frequency": round(1.0 / self.step_length),
+        }
         if self._video is not None and not os.environ.get("XDG_RUNTIME_DIR"):
             # SDL (pygame renders the frames) wants a private runtime folder and says so on
             # stderr when there is none, as in a container or a CI job
@@ -509,8 +543,9 @@ class HighwayEnvBridge:
                 for key, value in script.items():
                     setattr(v, key, value)
             else:
-                v = TrafficVehicle(road, position, -psi, spec.speed, target_speed=vt.max_speed,
-                                   enable_lane_change=not keep)
+                v = TrafficVehicle(
+                    road, position, -psi, spec.speed, target_speed=vt.max_speed, enable_lane_change=not keep
+                )
             _size(v, vt.length, vt.width)
             v.color = vt.color
             return v
@@ -520,5 +555,11 @@ class HighwayEnvBridge:
 
 def make_sim(setup: SimSetup, options: dict) -> HighwayEnvBridge:
     """The registry's factory for ``highway-env`` (:mod:`ego.sim.registry`); option ``video``."""
-    return HighwayEnvBridge(setup.net, step_length=setup.step_length, seed=setup.seed, edge=setup.edge,
-                            video=options.get("video"), duration=setup.duration)
+    return HighwayEnvBridge(
+        setup.net,
+        step_length=setup.step_length,
+        seed=setup.seed,
+        edge=setup.edge,
+        video=options.get("video"),
+        duration=setup.duration,
+    )

@@ -44,8 +44,10 @@ def check_video_path(text: str | None) -> Path:
     if suffix not in FORMATS:
         raise ConfigError(f"bad --video path {text!r} (expected a file ending in .gif or .mp4)")
     if suffix == ".mp4" and ffmpeg_exe() is None:
-        raise ConfigError(f"bad --video path {text!r}: writing mp4 needs ffmpeg (pip install "
-                          "imageio-ffmpeg, or ffmpeg on PATH); write a .gif instead")
+        raise ConfigError(
+            f"bad --video path {text!r}: writing mp4 needs ffmpeg (pip install "
+            "imageio-ffmpeg, or ffmpeg on PATH); write a .gif instead"
+        )
     return check_output_file(text, "--video path", Path(text).suffix)
 
 
@@ -85,12 +87,32 @@ class VideoWriter:
     def _start_ffmpeg(self, width: int, height: int) -> None:
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._ffmpeg = subprocess.Popen(
-            [ffmpeg_exe() or "ffmpeg", "-loglevel", "error", "-y", "-f", "rawvideo",
-             "-pix_fmt", "rgb24", "-s", f"{width}x{height}", "-r", f"{self.fps:g}", "-i", "-",
-             # yuv420p needs even sides; most players need yuv420p
-             "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-pix_fmt", "yuv420p", "-f", "mp4",
-             str(self._tmp)],
-            stdin=subprocess.PIPE)
+            [
+                ffmpeg_exe() or "ffmpeg",
+                "-loglevel",
+                "error",
+                "-y",
+                "-f",
+                "rawvideo",
+                "-pix_fmt",
+                "rgb24",
+                "-s",
+                f"{width}x{height}",
+                "-r",
+                f"{self.fps:g}",
+                "-i",
+                "-",
+                # yuv420p needs even sides; most players need yuv420p
+                "-vf",
+                "pad=ceil(iw/2)*2:ceil(ih/2)*2",
+                "-pix_fmt",
+                "yuv420p",
+                "-f",
+                "mp4",
+                str(self._tmp),
+            ],
+            stdin=subprocess.PIPE,
+        )
 
     def close(self) -> None:
         """Write the file (nothing when no frame came)."""
@@ -104,8 +126,14 @@ class VideoWriter:
             elif self._frames:
                 self.path.parent.mkdir(parents=True, exist_ok=True)
                 first, *rest = self._frames
-                first.save(self._tmp, format="GIF", save_all=True, append_images=rest,
-                           duration=round(1000.0 / self.fps), loop=0)
+                first.save(
+                    self._tmp,
+                    format="GIF",
+                    save_all=True,
+                    append_images=rest,
+                    duration=round(1000.0 / self.fps),
+                    loop=0,
+                )
             else:
                 return
             os.replace(self._tmp, self.path)

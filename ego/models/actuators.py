@@ -45,8 +45,9 @@ class ActuatorLimits:
     max_command: float = INF  #: largest longitudinal command (N or m/s^2)
     stop_speed: float = 0.5  #: braking fades below this speed (m/s); 0: no standstill rule
 
-    def apply(self, command: float, delta: float, speed: float, previous_delta: float,
-              dt: float) -> tuple[float, float]:
+    def apply(
+        self, command: float, delta: float, speed: float, previous_delta: float, dt: float
+    ) -> tuple[float, float]:
         """The applied (command, delta) for a car at ``speed`` (m/s) whose steer was
         ``previous_delta`` (rad) one period ``dt`` (s) ago."""
         ms = self.max_steer

@@ -31,8 +31,7 @@ def dynamic_params_from_lateral(p: LateralErrorParams, slip_speed_floor: float =
     ``slip_speed_floor`` (m/s) is the dynamic model's own guard at standstill (0: none);
     the lateral-error model runs at a constant positive speed and has no such parameter.
     """
-    return DynamicBicycleParams(m=p.m, Iz=p.Iz, lf=p.lf, lr=p.lr, Cf=-p.Cf, Cr=-p.Cr,
-                                slip_speed_floor=slip_speed_floor)
+    return DynamicBicycleParams(m=p.m, Iz=p.Iz, lf=p.lf, lr=p.lr, Cf=-p.Cf, Cr=-p.Cr, slip_speed_floor=slip_speed_floor)
 
 
 def lateral_params_from_dynamic(p: DynamicBicycleParams) -> LateralErrorParams:

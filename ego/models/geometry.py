@@ -33,6 +33,7 @@ class VehicleGeometry:
 
 # --- pose conversions (pure) -------------------------------------------------------------
 
+
 def yaw_to_sumo_angle(psi: float) -> float:
     """Model yaw (rad, counter-clockwise from +x) -> SUMO angle (deg, clockwise from north)."""
     return (90.0 - psi * _DEG) % 360.0

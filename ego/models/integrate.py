@@ -20,8 +20,9 @@ Stepper = Callable[[Sequence[float], float, float], tuple[tuple[float, ...], flo
 Rhs = Callable[[Sequence[float], Sequence[float]], Sequence[float]]
 
 
-def rk4_step(rhs: Rhs, x: Sequence[float], u: Sequence[float], h: float,
-             k1: Sequence[float] | None = None) -> tuple[float, ...]:
+def rk4_step(
+    rhs: Rhs, x: Sequence[float], u: Sequence[float], h: float, k1: Sequence[float] | None = None
+) -> tuple[float, ...]:
     """Advance ``x`` by one classical Runge-Kutta step of length ``h`` (s), input held.
 
     ``rhs(x, u)`` returns dx/dt. The input ``u`` is held constant over the step
@@ -35,9 +36,7 @@ def rk4_step(rhs: Rhs, x: Sequence[float], u: Sequence[float], h: float,
     k3 = rhs([xi + half * ki for xi, ki in zip(x, k2)], u)
     k4 = rhs([xi + h * ki for xi, ki in zip(x, k3)], u)
     sixth = h / 6.0
-    return tuple(
-        xi + sixth * (a + 2.0 * b + 2.0 * c + d) for xi, a, b, c, d in zip(x, k1, k2, k3, k4)
-    )
+    return tuple(xi + sixth * (a + 2.0 * b + 2.0 * c + d) for xi, a, b, c, d in zip(x, k1, k2, k3, k4))
 
 
 @cache
@@ -54,16 +53,16 @@ def unrolled_rk4(n: int) -> Callable[..., tuple[float, ...]]:
 
     src = f"""
 def rk4(rhs, x, u, h, k1=None):
-    {xs}{',' if n == 1 else ''} = x
+    {xs}{"," if n == 1 else ""} = x
     if k1 is None:
         k1 = rhs(x, u)
-    {unpack('a')} = k1
+    {unpack("a")} = k1
     half = 0.5 * h
-    {unpack('b')} = rhs({stage('a', 'half')}, u)
-    {unpack('c')} = rhs({stage('b', 'half')}, u)
-    {unpack('d')} = rhs({stage('c', 'h')}, u)
+    {unpack("b")} = rhs({stage("a", "half")}, u)
+    {unpack("c")} = rhs({stage("b", "half")}, u)
+    {unpack("d")} = rhs({stage("c", "h")}, u)
     sixth = h / 6.0
-    return ({", ".join(f"x{i} + sixth * (a{i} + 2.0 * b{i} + 2.0 * c{i} + d{i})" for i in idx)}{',' if n == 1 else ''})
+    return ({", ".join(f"x{i} + sixth * (a{i} + 2.0 * b{i} + 2.0 * c{i} + d{i})" for i in idx)}{"," if n == 1 else ""})
 """
     namespace: dict[str, Any] = {}
     exec(compile(src, f"<rk4 unrolled for {n} states>", "exec"), namespace)
@@ -92,8 +91,7 @@ class FixedStepIntegrator:
         self._h = self.dt / self.substeps
         self._rk4 = unrolled_rk4(n_states) if n_states else rk4_step
 
-    def step(self, x: Sequence[float], u: Sequence[float],
-             k1: Sequence[float] | None = None) -> tuple[float, ...]:
+    def step(self, x: Sequence[float], u: Sequence[float], k1: Sequence[float] | None = None) -> tuple[float, ...]:
         """Integrate one control period with the input held; returns the new state.
 
         ``k1``, when given, is ``rhs(x, u)`` already evaluated by the caller.

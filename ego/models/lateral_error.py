@@ -68,11 +68,8 @@ class LateralError:
         a33 = -(cf + cr) / (p.m * v)
         a34 = -v - (cf * p.lf - cr * p.lr) / (p.m * v)
         a43 = -(cf * p.lf - cr * p.lr) / (p.Iz * v)
-        a44 = -(cf * p.lf ** 2 + cr * p.lr ** 2) / (p.Iz * v)
-        self.A = np.array([[0.0, v, 1.0, 0.0],
-                           [0.0, 0.0, 0.0, 1.0],
-                           [0.0, 0.0, a33, a34],
-                           [0.0, 0.0, a43, a44]])
+        a44 = -(cf * p.lf**2 + cr * p.lr**2) / (p.Iz * v)
+        self.A = np.array([[0.0, v, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0], [0.0, 0.0, a33, a34], [0.0, 0.0, a43, a44]])
         self.B = np.array([0.0, 0.0, cf / p.m, cf * p.lf / p.Iz])  # per rad of steer
         self.E = np.array([0.0, -v, 0.0, 0.0])  # per 1/m of curvature
         b3, b4 = cf / p.m, cf * p.lf / p.Iz
@@ -80,8 +77,7 @@ class LateralError:
         def rhs(x: Sequence[float], u: Sequence[float]) -> tuple[float, ...]:
             _, psi, vy, r = x
             delta, kappa = u
-            return (vy + v * psi, r - v * kappa, a33 * vy + a34 * r + b3 * delta,
-                    a43 * vy + a44 * r + b4 * delta)
+            return (vy + v * psi, r - v * kappa, a33 * vy + a34 * r + b3 * delta, a43 * vy + a44 * r + b4 * delta)
 
         self.rhs = rhs
 
@@ -116,8 +112,7 @@ class LateralError:
 
         def step(x: Sequence[float], delta: float, kappa: float) -> tuple[float, ...]:
             e, psi, vy, r = x
-            return tuple(a * e + b * psi + c * vy + d * r + f * delta + g * kappa
-                         for a, b, c, d, f, g in rows)
+            return tuple(a * e + b * psi + c * vy + d * r + f * delta + g * kappa for a, b, c, d, f, g in rows)
 
         return step
 
@@ -127,9 +122,7 @@ class LateralError:
         # unknowns psi, vy, delta with r = v kappa: rows 1, 3, 4 of A x + B delta + E kappa = 0
         r = v * kappa
         A, B = self.A, self.B
-        M = np.array([[v, 1.0, 0.0],
-                      [0.0, A[2, 2], B[2]],
-                      [0.0, A[3, 2], B[3]]])
+        M = np.array([[v, 1.0, 0.0], [0.0, A[2, 2], B[2]], [0.0, A[3, 2], B[3]]])
         rhs = -np.array([0.0, A[2, 3] * r, A[3, 3] * r])
         psi, vy, delta = np.linalg.solve(M, rhs)
         return np.array([0.0, psi, vy, r]), float(delta)
@@ -137,4 +130,3 @@ class LateralError:
     def lateral_accel(self, x: Sequence[float], delta: float) -> float:
         """a_y = dvy/dt + v r (m/s^2)."""
         return float(self.A[2, 2] * x[2] + self.A[2, 3] * x[3] + self.B[2] * delta + self.speed * x[3])
-

@@ -58,14 +58,10 @@ class PacejkaTyre:
 
     def force(self, slip_deg: float, normal_load: float) -> float:
         """Lateral force (N) at ``slip_deg`` (deg) under ``normal_load`` (N)."""
-        return magic_formula(
-            slip_deg, self.By, self.Cy, self.Dy * normal_load, self.Ey, self.Shy, self.Svy
-        )
+        return magic_formula(slip_deg, self.By, self.Cy, self.Dy * normal_load, self.Ey, self.Shy, self.Svy)
 
 
-def magic_formula(
-    slip_deg: float, By: float, Cy: float, DFz: float, Ey: float, Shy: float, Svy: float
-) -> float:
+def magic_formula(slip_deg: float, By: float, Cy: float, DFz: float, Ey: float, Shy: float, Svy: float) -> float:
     """Pacejka lateral force (N); ``DFz`` is peak factor times normal load (N)."""
     a = slip_deg + Shy
     phi = (1.0 - Ey) * a + (Ey / By) * math.atan(By * a)
@@ -139,8 +135,20 @@ class NonlinearBicycle:
         t = p.tyre
         # Constants folded once so the hot path is plain float arithmetic.
         self._c = (
-            p.Nw, p.f * p.m * p.g, p.m, p.Iz, p.a, p.b, p.Fzf * t.Dy, p.Fzr * t.Dy,
-            p.F_max, t.By, t.Cy, t.Ey, t.Shy, t.Svy,
+            p.Nw,
+            p.f * p.m * p.g,
+            p.m,
+            p.Iz,
+            p.a,
+            p.b,
+            p.Fzf * t.Dy,
+            p.Fzr * t.Dy,
+            p.F_max,
+            t.By,
+            t.Cy,
+            t.Ey,
+            t.Shy,
+            t.Svy,
         )
         self._floor = p.slip_speed_floor
         self._abs = bool(p.abs)
@@ -195,8 +203,9 @@ class NonlinearBicycle:
 
         return rhs
 
-    def _forces(self, uu: float, v: float, r: float, Fx: float,
-                delta: float) -> tuple[float, float, float, float, float]:
+    def _forces(
+        self, uu: float, v: float, r: float, Fx: float, delta: float
+    ) -> tuple[float, float, float, float, float]:
         Nw, _, _, _, a, b, DFzf, DFzr, F_max, By, Cy, Ey, Shy, Svy = self._c
         if uu < self._floor:
             uu = self._floor

@@ -64,12 +64,30 @@ class BicyclePlant:
     ``dt`` with the applied input held.
     """
 
-    __slots__ = ("model", "geometry", "limits", "state", "applied", "lateral_accel", "dt",
-                 "state_names", "input_names", "input_units", "_step", "_apply")
+    __slots__ = (
+        "model",
+        "geometry",
+        "limits",
+        "state",
+        "applied",
+        "lateral_accel",
+        "dt",
+        "state_names",
+        "input_names",
+        "input_units",
+        "_step",
+        "_apply",
+    )
 
-    def __init__(self, model: NonlinearBicycle | DynamicBicycle, geometry: VehicleGeometry,
-                 dt: float, substeps: int = 1, limits: ActuatorLimits | None = None,
-                 state: tuple[float, ...] | None = None) -> None:
+    def __init__(
+        self,
+        model: NonlinearBicycle | DynamicBicycle,
+        geometry: VehicleGeometry,
+        dt: float,
+        substeps: int = 1,
+        limits: ActuatorLimits | None = None,
+        state: tuple[float, ...] | None = None,
+    ) -> None:
         self.model = model
         self.geometry = geometry
         self.limits = limits if limits is not None else ActuatorLimits()
@@ -130,16 +148,37 @@ class LaneFramePlant:
     as 0.
     """
 
-    __slots__ = ("model", "lane", "geometry", "limits", "dt", "speed", "s", "lane_state", "state",
-                 "applied", "lateral_accel", "kappa", "_step")
+    __slots__ = (
+        "model",
+        "lane",
+        "geometry",
+        "limits",
+        "dt",
+        "speed",
+        "s",
+        "lane_state",
+        "state",
+        "applied",
+        "lateral_accel",
+        "kappa",
+        "_step",
+    )
 
     state_names = WORLD_STATE
     lane_state_names = LateralError.state_names
     input_names = ("a_x", "delta")
     input_units = ("m/s^2", "rad")
 
-    def __init__(self, model: LateralError, lane: Lane, geometry: VehicleGeometry, dt: float,
-                 s0: float, e0: float = 0.0, limits: ActuatorLimits | None = None) -> None:
+    def __init__(
+        self,
+        model: LateralError,
+        lane: Lane,
+        geometry: VehicleGeometry,
+        dt: float,
+        s0: float,
+        e0: float = 0.0,
+        limits: ActuatorLimits | None = None,
+    ) -> None:
         self.model = model
         self.lane = lane
         self.geometry = geometry
@@ -196,14 +235,26 @@ class LongitudinalPlant:
     input_units = ("m/s^2",)
     lateral_accel = 0.0
 
-    def __init__(self, model: Longitudinal, lane: Lane, geometry: VehicleGeometry, dt: float,
-                 s0: float, v0: float = 0.0, a0: float = 0.0, limits: ActuatorLimits | None = None) -> None:
+    def __init__(
+        self,
+        model: Longitudinal,
+        lane: Lane,
+        geometry: VehicleGeometry,
+        dt: float,
+        s0: float,
+        v0: float = 0.0,
+        a0: float = 0.0,
+        limits: ActuatorLimits | None = None,
+    ) -> None:
         p = model.params
         self.model = model
         self.lane = lane
         self.geometry = geometry
-        self.limits = limits if limits is not None else ActuatorLimits(
-            max_steer=0.0, min_command=-p.max_decel, max_command=p.max_accel, stop_speed=0.0)
+        self.limits = (
+            limits
+            if limits is not None
+            else ActuatorLimits(max_steer=0.0, min_command=-p.max_decel, max_command=p.max_accel, stop_speed=0.0)
+        )
         self.dt = dt
         self.state = (s0, v0, a0)
         self.applied = (0.0,)

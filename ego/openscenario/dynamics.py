@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 #: max |f'| and max |f''| per shape (for rate limits and lateral acceleration)
 PEAK_RATE = {"step": math.inf, "linear": 1.0, "cubic": 1.5, "sinusoidal": 0.5 * math.pi}
-PEAK_CURVATURE = {"step": math.inf, "linear": math.inf, "cubic": 6.0, "sinusoidal": 0.5 * math.pi ** 2}
+PEAK_CURVATURE = {"step": math.inf, "linear": math.inf, "cubic": 6.0, "sinusoidal": 0.5 * math.pi**2}
 
 
 def shape_value(shape: str, u: float) -> float:

@@ -58,14 +58,17 @@ def evaluate(expr: str, values: Mapping[str, object]) -> float:
             tokens.append(("num", float(number)))
         elif name is not None:
             if name not in values:
-                raise ExpressionError(f"parameter '${name}' in expression '${{{expr}}}' is not declared"
-                                      + _known(values))
+                raise ExpressionError(
+                    f"parameter '${name}' in expression '${{{expr}}}' is not declared" + _known(values)
+                )
             tokens.append(("num", _number(name, values[name], expr)))
         elif other in "+-*/()":
             tokens.append((other, None))
         else:
-            raise ExpressionError(f"unexpected {other!r} in expression '${{{expr}}}' (allowed: numbers, "
-                                  "$parameters, + - * / and parentheses)")
+            raise ExpressionError(
+                f"unexpected {other!r} in expression '${{{expr}}}' (allowed: numbers, "
+                "$parameters, + - * / and parentheses)"
+            )
     if not tokens:
         raise ExpressionError("empty expression '${}'")
     parser = _Parser(tokens, expr)
@@ -83,8 +86,7 @@ def _number(name: str, value: object, expr: str) -> float:
     try:
         return float(value)  # type: ignore[arg-type]
     except (TypeError, ValueError):
-        raise ExpressionError(f"parameter '${name}' = {value!r} in expression '${{{expr}}}' is not a "
-                              "number") from None
+        raise ExpressionError(f"parameter '${name}' = {value!r} in expression '${{{expr}}}' is not a number") from None
 
 
 class _Parser:
@@ -142,5 +144,6 @@ class _Parser:
             self.i += 1
             return value
         what = "the end" if kind is None else repr(kind)
-        raise ExpressionError(f"unexpected {what} in expression '${{{self.expr}}}' (expected a number, "
-                              "a $parameter or '(')")
+        raise ExpressionError(
+            f"unexpected {what} in expression '${{{self.expr}}}' (expected a number, a $parameter or '(')"
+        )

@@ -22,8 +22,14 @@ from ego.openscenario.xmltree import DOCS, Node, ScenarioFileError, parse_file
 #: what each supported element may contain (tag -> allowed child tags); a child outside
 #: its set is refused as not supported
 CHILDREN: dict[str, set[str]] = {
-    "OpenSCENARIO": {"FileHeader", "ParameterDeclarations", "CatalogLocations", "RoadNetwork", "Entities",
-                     "Storyboard"},
+    "OpenSCENARIO": {
+        "FileHeader",
+        "ParameterDeclarations",
+        "CatalogLocations",
+        "RoadNetwork",
+        "Entities",
+        "Storyboard",
+    },
     "FileHeader": set(),
     "ParameterDeclarations": {"ParameterDeclaration"},
     "ParameterDeclaration": set(),
@@ -44,7 +50,9 @@ CHILDREN: dict[str, set[str]] = {
     "Dimensions": set(),
     "Performance": set(),
     "Axles": {"FrontAxle", "RearAxle", "AdditionalAxle"},
-    "FrontAxle": set(), "RearAxle": set(), "AdditionalAxle": set(),
+    "FrontAxle": set(),
+    "RearAxle": set(),
+    "AdditionalAxle": set(),
     "Properties": {"Property"},
     "Property": set(),
     "Storyboard": {"Init", "Story", "StopTrigger"},
@@ -53,8 +61,7 @@ CHILDREN: dict[str, set[str]] = {
     "Private": {"PrivateAction"},
     "PrivateAction": {"TeleportAction", "LongitudinalAction", "LateralAction", "RoutingAction"},
     "TeleportAction": {"Position"},
-    "Position": {"WorldPosition", "LanePosition", "RoadPosition", "RelativeLanePosition",
-                 "RelativeRoadPosition"},
+    "Position": {"WorldPosition", "LanePosition", "RoadPosition", "RelativeLanePosition", "RelativeRoadPosition"},
     "WorldPosition": set(),
     "LanePosition": {"Orientation"},
     "RoadPosition": {"Orientation"},
@@ -103,9 +110,16 @@ CHILDREN: dict[str, set[str]] = {
     "Condition": {"ByEntityCondition", "ByValueCondition"},
     "ByEntityCondition": {"TriggeringEntities", "EntityCondition"},
     "TriggeringEntities": {"EntityRef"},
-    "EntityCondition": {"TimeHeadwayCondition", "TimeToCollisionCondition", "RelativeDistanceCondition",
-                        "DistanceCondition", "ReachPositionCondition", "SpeedCondition",
-                        "RelativeSpeedCondition", "TraveledDistanceCondition"},
+    "EntityCondition": {
+        "TimeHeadwayCondition",
+        "TimeToCollisionCondition",
+        "RelativeDistanceCondition",
+        "DistanceCondition",
+        "ReachPositionCondition",
+        "SpeedCondition",
+        "RelativeSpeedCondition",
+        "TraveledDistanceCondition",
+    },
     "TimeHeadwayCondition": set(),
     "TimeToCollisionCondition": {"TimeToCollisionConditionTarget"},
     "TimeToCollisionConditionTarget": {"Position", "EntityRef"},
@@ -122,8 +136,12 @@ CHILDREN: dict[str, set[str]] = {
 }
 
 #: elements accepted and not used (the subset table in docs/openscenario.md says so)
-NOT_USED = {"SceneGraphFile": "the 3D scene is not drawn", "Axles": "ego's own body for the ego; SUMO's for others",
-            "Properties": "no property is read", "Orientation": "the lane's heading is used"}
+NOT_USED = {
+    "SceneGraphFile": "the 3D scene is not drawn",
+    "Axles": "ego's own body for the ego; SUMO's for others",
+    "Properties": "no property is read",
+    "Orientation": "the lane's heading is used",
+}
 
 VEHICLE_CATEGORIES = ("car", "van", "truck", "trailer", "semitrailer", "bus", "motorbike")
 
@@ -191,8 +209,9 @@ def convert(kind: str, raw: object, what: str) -> object:
         except (TypeError, ValueError):
             raise ValueError(f"bad value for {what}: {raw!r} (expected an integer)") from None
         if f != int(f) or (kind.startswith("unsigned") and f < 0):
-            raise ValueError(f"bad value for {what}: {raw!r} (expected a{'' if kind[0] == 'i' else 'n unsigned'} "
-                             "integer)")
+            raise ValueError(
+                f"bad value for {what}: {raw!r} (expected a{'' if kind[0] == 'i' else 'n unsigned'} integer)"
+            )
         return int(f)
     if kind == "boolean":
         if isinstance(raw, bool):
@@ -215,13 +234,15 @@ def declared_parameters(path: str | os.PathLike) -> dict[str, M.Parameter]:
 
 def _check_root(path, root: Node) -> None:
     if root.tag != "OpenSCENARIO":
-        raise ScenarioFileError(path, root.line, f"<{root.tag}> is not an OpenSCENARIO file (expected "
-                                "<OpenSCENARIO> as the root element)")
+        raise ScenarioFileError(
+            path, root.line, f"<{root.tag}> is not an OpenSCENARIO file (expected <OpenSCENARIO> as the root element)"
+        )
     _check_tree(path, root)
 
 
-def _declarations(path, node: Node | None, outer: Mapping[str, object],
-                  overrides: Mapping[str, object] | None = None) -> dict[str, M.Parameter]:
+def _declarations(
+    path, node: Node | None, outer: Mapping[str, object], overrides: Mapping[str, object] | None = None
+) -> dict[str, M.Parameter]:
     """The declarations in order, each value resolved with the ones before it; a name in
     ``overrides`` takes that value instead (so a later ``$ref`` to it sees the override)."""
     out: dict[str, M.Parameter] = {}
@@ -235,11 +256,13 @@ def _declarations(path, node: Node | None, outer: Mapping[str, object],
         if not name:
             raise ScenarioFileError(path, d.line, "<ParameterDeclaration> needs attribute name")
         if kind not in TYPES:
-            raise ScenarioFileError(path, d.line, f"bad parameterType {kind!r} of parameter {name!r} "
-                                    f"(allowed: {', '.join(TYPES)})")
+            raise ScenarioFileError(
+                path, d.line, f"bad parameterType {kind!r} of parameter {name!r} (allowed: {', '.join(TYPES)})"
+            )
         if name in out:
-            raise ScenarioFileError(path, d.line, f"parameter {name!r} is declared twice (first on line "
-                                    f"{out[name].line})")
+            raise ScenarioFileError(
+                path, d.line, f"parameter {name!r} is declared twice (first on line {out[name].line})"
+            )
         if "value" not in d.attrs:
             raise ScenarioFileError(path, d.line, f"parameter {name!r} needs attribute value")
         raw = d.attrs["value"]
@@ -275,8 +298,7 @@ class _Builder:
         except ExpressionError as exc:
             raise self.error(node, str(exc)) from None
 
-    def num(self, node: Node, name: str, default: object = ..., positive: bool = False,
-            nonneg: bool = False) -> float:
+    def num(self, node: Node, name: str, default: object = ..., positive: bool = False, nonneg: bool = False) -> float:
         v = self.raw(node, name, default)
         if v is None:
             return v  # type: ignore[return-value]
@@ -327,8 +349,9 @@ class _Builder:
     def entity_ref(self, node: Node, name: str = "entityRef") -> str:
         ref = self.str_(node, name)
         if ref not in self.entities:
-            raise self.error(node, f"unknown entity {ref!r} in <{node.tag}> (entities: "
-                             f"{', '.join(self.entities) or 'none'})")
+            raise self.error(
+                node, f"unknown entity {ref!r} in <{node.tag}> (entities: {', '.join(self.entities) or 'none'})"
+            )
         return ref
 
     # -- entities ---------------------------------------------------------------------------
@@ -338,23 +361,28 @@ class _Builder:
         center, dims = self.one(bb, "Center"), self.one(bb, "Dimensions")
         perf = self.one(node, "Performance")
         return M.Vehicle(
-            name=name, category=cat,
-            length=self.num(dims, "length", positive=True), width=self.num(dims, "width", positive=True),
-            height=self.num(dims, "height", positive=True), center_x=self.num(center, "x"),
+            name=name,
+            category=cat,
+            length=self.num(dims, "length", positive=True),
+            width=self.num(dims, "width", positive=True),
+            height=self.num(dims, "height", positive=True),
+            center_x=self.num(center, "x"),
             max_speed=self.num(perf, "maxSpeed", positive=True),
             max_accel=self.num(perf, "maxAcceleration", positive=True),
-            max_decel=self.num(perf, "maxDeceleration", positive=True), line=node.line)
+            max_decel=self.num(perf, "maxDeceleration", positive=True),
+            line=node.line,
+        )
 
     def catalog_vehicle(self, node: Node) -> M.Vehicle:
         catalog, entry = self.str_(node, "catalogName"), self.str_(node, "entryName")
         if not self.catalog_dirs:
-            raise self.error(node, f"<CatalogReference> to {catalog!r} but no <VehicleCatalog> in "
-                             "<CatalogLocations>")
+            raise self.error(node, f"<CatalogReference> to {catalog!r} but no <VehicleCatalog> in <CatalogLocations>")
         files = [d / f"{catalog}.xosc" for d in self.catalog_dirs]
         file = next((f for f in files if f.is_file()), None)
         if file is None:
-            raise self.error(node, f"vehicle catalog {catalog!r} not found (looked for "
-                             f"{', '.join(str(f) for f in files)})")
+            raise self.error(
+                node, f"vehicle catalog {catalog!r} not found (looked for {', '.join(str(f) for f in files)})"
+            )
         root = read_tree(file)
         cat = root.child("Catalog")
         if root.tag != "OpenSCENARIO" or cat is None:
@@ -371,8 +399,11 @@ class _Builder:
                 for a in assigns.all("ParameterAssignment") if assigns is not None else ():
                     ref = self.str_(a, "parameterRef")
                     if ref not in decl:
-                        raise self.error(a, f"catalog entry {entry!r} declares no parameter {ref!r}"
-                                         f" (declared: {', '.join(decl) or 'none'})")
+                        raise self.error(
+                            a,
+                            f"catalog entry {entry!r} declares no parameter {ref!r}"
+                            f" (declared: {', '.join(decl) or 'none'})",
+                        )
                     try:
                         values[ref] = convert(decl[ref].type, self.raw(a, "value"), f"parameter {ref!r}")
                     except ValueError as exc:
@@ -388,19 +419,23 @@ class _Builder:
         tag = p.tag
         if tag == "WorldPosition":
             h = self.raw(p, "h", None)
-            return M.WorldPosition(self.num(p, "x"), self.num(p, "y"),
-                                   None if h is None else self.num(p, "h"), p.line)
+            return M.WorldPosition(self.num(p, "x"), self.num(p, "y"), None if h is None else self.num(p, "h"), p.line)
         if tag == "LanePosition":
-            return M.LanePosition(self.str_(p, "roadId"), self.int_(p, "laneId"), self.num(p, "s", nonneg=True),
-                                  self.num(p, "offset", 0.0), p.line)
+            return M.LanePosition(
+                self.str_(p, "roadId"),
+                self.int_(p, "laneId"),
+                self.num(p, "s", nonneg=True),
+                self.num(p, "offset", 0.0),
+                p.line,
+            )
         if tag == "RoadPosition":
             return M.RoadPosition(self.str_(p, "roadId"), self.num(p, "s", nonneg=True), self.num(p, "t"), p.line)
         if tag == "RelativeLanePosition":
             if "dsLane" in p.attrs:
-                raise self.error(p, "dsLane in <RelativeLanePosition> is not supported by ego (use ds; "
-                                 f"see {DOCS})")
-            return M.RelativeLanePosition(self.entity_ref(p), self.int_(p, "dLane"), self.num(p, "ds", 0.0),
-                                          self.num(p, "offset", 0.0), p.line)
+                raise self.error(p, f"dsLane in <RelativeLanePosition> is not supported by ego (use ds; see {DOCS})")
+            return M.RelativeLanePosition(
+                self.entity_ref(p), self.int_(p, "dLane"), self.num(p, "ds", 0.0), self.num(p, "offset", 0.0), p.line
+            )
         return M.RelativeRoadPosition(self.entity_ref(p), self.num(p, "ds"), self.num(p, "dt"), p.line)
 
     # -- actions ------------------------------------------------------------------------------
@@ -410,8 +445,9 @@ class _Builder:
         dim = self.enum(node, "dynamicsDimension", dims)
         value = self.num(node, "value", nonneg=True)
         if shape != "step" and value <= 0.0:
-            raise self.error(node, f"bad value for value in <{node.tag}>: {value:g} (expected > 0 for "
-                             f"dynamicsShape {shape})")
+            raise self.error(
+                node, f"bad value for value in <{node.tag}>: {value:g} (expected > 0 for dynamicsShape {shape})"
+            )
         return M.Dynamics(shape, dim, value)
 
     def private_action(self, node: Node) -> M.PrivateAction:
@@ -424,17 +460,23 @@ class _Builder:
             target = self.one(self.one(inner, "SpeedActionTarget"))
             if target.tag == "AbsoluteTargetSpeed":
                 return M.SpeedAction(dyn, self.num(target, "value", nonneg=True), line=inner.line)
-            return M.SpeedAction(dyn, self.num(target, "value"), self.entity_ref(target),
-                                 self.enum(target, "speedTargetValueType", ("delta", "factor")),
-                                 self.bool_(target, "continuous"), inner.line)
+            return M.SpeedAction(
+                dyn,
+                self.num(target, "value"),
+                self.entity_ref(target),
+                self.enum(target, "speedTargetValueType", ("delta", "factor")),
+                self.bool_(target, "continuous"),
+                inner.line,
+            )
         if inner.tag == "LaneChangeAction":
             dyn = self.dynamics(self.one(inner, "LaneChangeActionDynamics"), rate_ok=False)
             target = self.one(self.one(inner, "LaneChangeTarget"))
             offset = self.num(inner, "targetLaneOffset", 0.0)
             if target.tag == "AbsoluteTargetLane":
                 return M.LaneChangeAction(dyn, self.int_(target, "value"), None, 0, offset, inner.line)
-            return M.LaneChangeAction(dyn, None, self.entity_ref(target), self.int_(target, "value"), offset,
-                                      inner.line)
+            return M.LaneChangeAction(
+                dyn, None, self.entity_ref(target), self.int_(target, "value"), offset, inner.line
+            )
         if inner.tag == "LaneOffsetAction":
             d = self.one(inner, "LaneOffsetActionDynamics")
             acc = self.raw(d, "maxLateralAcc", None)
@@ -443,8 +485,14 @@ class _Builder:
                 raise self.error(d, f"<LaneOffsetActionDynamics> needs maxLateralAcc for dynamicsShape {shape}")
             target = self.one(self.one(inner, "LaneOffsetTarget"))
             rel = self.entity_ref(target) if target.tag == "RelativeTargetLaneOffset" else None
-            return M.LaneOffsetAction(shape, None if acc is None else self.num(d, "maxLateralAcc", positive=True),
-                                      self.num(target, "value"), rel, self.bool_(inner, "continuous"), inner.line)
+            return M.LaneOffsetAction(
+                shape,
+                None if acc is None else self.num(d, "maxLateralAcc", positive=True),
+                self.num(target, "value"),
+                rel,
+                self.bool_(inner, "continuous"),
+                inner.line,
+            )
         # FollowTrajectoryAction
         traj_node = inner.child("Trajectory")
         if traj_node is None:
@@ -456,23 +504,28 @@ class _Builder:
         vertices = []
         for v in poly.all("Vertex"):
             t = self.raw(v, "time", None)
-            vertices.append(M.Vertex(None if t is None else self.num(v, "time"),
-                                     self.position(self.one(v, "Position"))))
+            vertices.append(
+                M.Vertex(None if t is None else self.num(v, "time"), self.position(self.one(v, "Position")))
+            )
         if len(vertices) < 2:
             raise self.error(poly, f"<Polyline> needs at least two <Vertex> (found {len(vertices)})")
         timing = None
         tr = inner.child("TimeReference")
         if tr is not None and tr.child("Timing") is not None:
             tm = tr.child("Timing")
-            timing = (self.enum(tm, "domainAbsoluteRelative", ("absolute", "relative")),
-                      self.num(tm, "scale", positive=True), self.num(tm, "offset"))
+            timing = (
+                self.enum(tm, "domainAbsoluteRelative", ("absolute", "relative")),
+                self.num(tm, "scale", positive=True),
+                self.num(tm, "offset"),
+            )
             times = [v.time for v in vertices]
             if any(t is None for t in times):
                 raise self.error(poly, "every <Vertex> needs a time when the trajectory has <Timing>")
             if any(b <= a for a, b in zip(times, times[1:])):  # type: ignore[operator]
                 raise self.error(poly, "<Vertex> times must increase")
-        return M.FollowTrajectoryAction(tuple(vertices), timing, self.num(inner, "initialDistanceOffset", 0.0),
-                                        inner.line)
+        return M.FollowTrajectoryAction(
+            tuple(vertices), timing, self.num(inner, "initialDistanceOffset", 0.0), inner.line
+        )
 
     # -- triggers ---------------------------------------------------------------------------
     def trigger(self, node: Node | None) -> M.Trigger | None:
@@ -488,8 +541,12 @@ class _Builder:
 
     def condition(self, node: Node) -> M.Condition:
         name = self.str_(node, "name")
-        base: dict[str, Any] = {"name": name, "delay": self.num(node, "delay", nonneg=True),
-                "edge": self.enum(node, "conditionEdge", M.EDGES), "line": node.line}
+        base: dict[str, Any] = {
+            "name": name,
+            "delay": self.num(node, "delay", nonneg=True),
+            "edge": self.enum(node, "conditionEdge", M.EDGES),
+            "line": node.line,
+        }
         inner = self.one(node)
         if inner.tag == "ByValueCondition":
             c = self.one(inner)
@@ -498,13 +555,19 @@ class _Builder:
             if c.tag == "ParameterCondition":
                 ref = self.str_(c, "parameterRef")
                 if ref not in self.values:
-                    raise self.error(c, f"parameter {ref!r} is not declared (declared: "
-                                     f"{', '.join(self.values) or 'none'})")
-                return M.Condition(kind=c.tag, rule=self.enum(c, "rule", M.RULES), value=self.str_(c, "value"),
-                                   parameter=ref, **base)
-            return M.Condition(kind=c.tag, element_type=self.enum(c, "storyboardElementType", M.ELEMENT_TYPES),
-                               element_ref=self.str_(c, "storyboardElementRef"),
-                               state=self.enum(c, "state", M.STATES), **base)
+                    raise self.error(
+                        c, f"parameter {ref!r} is not declared (declared: {', '.join(self.values) or 'none'})"
+                    )
+                return M.Condition(
+                    kind=c.tag, rule=self.enum(c, "rule", M.RULES), value=self.str_(c, "value"), parameter=ref, **base
+                )
+            return M.Condition(
+                kind=c.tag,
+                element_type=self.enum(c, "storyboardElementType", M.ELEMENT_TYPES),
+                element_ref=self.str_(c, "storyboardElementRef"),
+                state=self.enum(c, "state", M.STATES),
+                **base,
+            )
         te = self.one(inner, "TriggeringEntities")
         refs = tuple(self.entity_ref(e) for e in te.all("EntityRef"))
         if not refs:
@@ -523,30 +586,62 @@ class _Builder:
         if tag == "RelativeSpeedCondition":
             return M.Condition(kind=tag, rule=rule, value=self.num(c, "value"), entity=self.entity_ref(c), **base)
         if tag == "TimeHeadwayCondition":
-            return M.Condition(kind=tag, rule=rule, value=self.num(c, "value"), entity=self.entity_ref(c),
-                               freespace=self.bool_(c, "freespace"), **base)
+            return M.Condition(
+                kind=tag,
+                rule=rule,
+                value=self.num(c, "value"),
+                entity=self.entity_ref(c),
+                freespace=self.bool_(c, "freespace"),
+                **base,
+            )
         if tag == "RelativeDistanceCondition":
-            dtype = self.enum(c, "relativeDistanceType", ("longitudinal", "lateral", "cartesianDistance",
-                                                          "euclidianDistance"))
-            return M.Condition(kind=tag, rule=rule, value=self.num(c, "value"), entity=self.entity_ref(c),
-                               freespace=self.bool_(c, "freespace"), distance_type=dtype, **base)
+            dtype = self.enum(
+                c, "relativeDistanceType", ("longitudinal", "lateral", "cartesianDistance", "euclidianDistance")
+            )
+            return M.Condition(
+                kind=tag,
+                rule=rule,
+                value=self.num(c, "value"),
+                entity=self.entity_ref(c),
+                freespace=self.bool_(c, "freespace"),
+                distance_type=dtype,
+                **base,
+            )
         if tag == "TimeToCollisionCondition":
             target = self.one(self.one(c, "TimeToCollisionConditionTarget"))
             entity = self.entity_ref(target) if target.tag == "EntityRef" else None
             pos = self.position_of(target) if target.tag == "Position" else None
-            return M.Condition(kind=tag, rule=rule, value=self.num(c, "value"), entity=entity, position=pos,
-                               freespace=self.bool_(c, "freespace"), **base)
+            return M.Condition(
+                kind=tag,
+                rule=rule,
+                value=self.num(c, "value"),
+                entity=entity,
+                position=pos,
+                freespace=self.bool_(c, "freespace"),
+                **base,
+            )
         if tag == "DistanceCondition":
-            return M.Condition(kind=tag, rule=rule, value=self.num(c, "value"), freespace=self.bool_(c, "freespace"),
-                               position=self.position(self.one(c, "Position")), **base)
+            return M.Condition(
+                kind=tag,
+                rule=rule,
+                value=self.num(c, "value"),
+                freespace=self.bool_(c, "freespace"),
+                position=self.position(self.one(c, "Position")),
+                **base,
+            )
         raise AssertionError(tag)  # every EntityCondition in CHILDREN is handled
 
     def position_of(self, position_node: Node) -> M.Position:
         return self.position(position_node)
 
     def reach(self, c: Node, base: dict[str, Any]) -> M.Condition:
-        return M.Condition(kind=c.tag, rule="lessOrEqual", value=self.num(c, "tolerance", nonneg=True),
-                           position=self.position(self.one(c, "Position")), **base)
+        return M.Condition(
+            kind=c.tag,
+            rule="lessOrEqual",
+            value=self.num(c, "tolerance", nonneg=True),
+            position=self.position(self.one(c, "Position")),
+            **base,
+        )
 
 
 def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None) -> M.Scenario:
@@ -563,8 +658,11 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
     except ValueError:
         raise ScenarioFileError(path, header.line, "<FileHeader> needs integer revMajor and revMinor") from None
     if version[0] != 1 or not 0 <= version[1] <= 3:
-        raise ScenarioFileError(path, header.line, f"OpenSCENARIO {version[0]}.{version[1]} is not supported by "
-                                f"ego (1.0 to 1.3; see {DOCS})")
+        raise ScenarioFileError(
+            path,
+            header.line,
+            f"OpenSCENARIO {version[0]}.{version[1]} is not supported by ego (1.0 to 1.3; see {DOCS})",
+        )
     defaults = _declarations(path, root.child("ParameterDeclarations"), {})
     given = {k: v for k, v in (overrides or {}).items() if k in defaults}
     try:
@@ -584,8 +682,11 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
     net = root.child("RoadNetwork")
     logic = net.child("LogicFile") if net is not None else None
     if logic is None:
-        raise ScenarioFileError(path, (net or root).line, "the scenario needs <RoadNetwork><LogicFile "
-                                "filepath=...> (an .xodr or a SUMO .net.xml)")
+        raise ScenarioFileError(
+            path,
+            (net or root).line,
+            "the scenario needs <RoadNetwork><LogicFile filepath=...> (an .xodr or a SUMO .net.xml)",
+        )
     road = (path.parent / b.str_(logic, "filepath")).resolve()
     rel = b.str_(logic, "filepath")
     if not rel.endswith((".xodr", ".net.xml")):
@@ -615,15 +716,23 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
         for pa in priv.all("PrivateAction"):
             act = b.private_action(pa)
             if not isinstance(act, (M.TeleportAction, M.SpeedAction)) or (
-                    isinstance(act, M.SpeedAction) and act.relative_to is not None):
-                raise ScenarioFileError(path, pa.children[0].line, f"<{pa.children[0].tag}> in <Init> is not "
-                                        f"supported by ego (Init takes TeleportAction and SpeedAction with "
-                                        f"AbsoluteTargetSpeed; see {DOCS})")
+                isinstance(act, M.SpeedAction) and act.relative_to is not None
+            ):
+                raise ScenarioFileError(
+                    path,
+                    pa.children[0].line,
+                    f"<{pa.children[0].tag}> in <Init> is not "
+                    f"supported by ego (Init takes TeleportAction and SpeedAction with "
+                    f"AbsoluteTargetSpeed; see {DOCS})",
+                )
             init[ref].append(act)
     for name, acts in init.items():
         if not any(isinstance(a, M.TeleportAction) for a in acts):
-            raise ScenarioFileError(path, b.entities[name].line, f"entity {name!r} has no TeleportAction in "
-                                    "<Init> (ego needs every entity's start position)")
+            raise ScenarioFileError(
+                path,
+                b.entities[name].line,
+                f"entity {name!r} has no TeleportAction in <Init> (ego needs every entity's start position)",
+            )
 
     stories = []
     names: dict[str, int] = {}
@@ -638,29 +747,59 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
                 for man in mg.all("Maneuver"):
                     events = []
                     for ev in man.all("Event"):
-                        acts_ = tuple(M.Action(b.str_(a, "name"), b.private_action(b.one(a, "PrivateAction")), a.line)
-                                      for a in ev.all("Action"))
+                        acts_ = tuple(
+                            M.Action(b.str_(a, "name"), b.private_action(b.one(a, "PrivateAction")), a.line)
+                            for a in ev.all("Action")
+                        )
                         if not acts_:
                             raise b.error(ev, "<Event> needs at least one <Action>")
-                        events.append(M.Event(b.str_(ev, "name"), b.enum(ev, "priority", M.PRIORITIES),
-                                              b.int_(ev, "maximumExecutionCount", 1, minimum=1), acts_,
-                                              b.trigger(ev.child("StartTrigger")), ev.line))
+                        events.append(
+                            M.Event(
+                                b.str_(ev, "name"),
+                                b.enum(ev, "priority", M.PRIORITIES),
+                                b.int_(ev, "maximumExecutionCount", 1, minimum=1),
+                                acts_,
+                                b.trigger(ev.child("StartTrigger")),
+                                ev.line,
+                            )
+                        )
                         for a in acts_:
                             names.setdefault(a.name, a.line)
                         names.setdefault(events[-1].name, ev.line)
                     mans.append(M.Maneuver(b.str_(man, "name"), tuple(events), man.line))
                     names.setdefault(mans[-1].name, man.line)
-                groups.append(M.ManeuverGroup(b.str_(mg, "name"), b.int_(mg, "maximumExecutionCount", minimum=1),
-                                              actors, tuple(mans), mg.line))
+                groups.append(
+                    M.ManeuverGroup(
+                        b.str_(mg, "name"), b.int_(mg, "maximumExecutionCount", minimum=1), actors, tuple(mans), mg.line
+                    )
+                )
                 names.setdefault(groups[-1].name, mg.line)
-            acts.append(M.Act(b.str_(act, "name"), tuple(groups), b.trigger(act.child("StartTrigger")),
-                              b.trigger(act.child("StopTrigger")), act.line))
+            acts.append(
+                M.Act(
+                    b.str_(act, "name"),
+                    tuple(groups),
+                    b.trigger(act.child("StartTrigger")),
+                    b.trigger(act.child("StopTrigger")),
+                    act.line,
+                )
+            )
             names.setdefault(acts[-1].name, act.line)
         stories.append(M.Story(b.str_(st, "name", ""), tuple(acts), st.line))
         names.setdefault(stories[-1].name, st.line)
     stop = b.trigger(sb.child("StopTrigger"))
-    scenario = M.Scenario(path, header.attrs.get("description", ""), version, params, values, road,
-                          logic.line, b.entities, init, tuple(stories), stop)
+    scenario = M.Scenario(
+        path,
+        header.attrs.get("description", ""),
+        version,
+        params,
+        values,
+        road,
+        logic.line,
+        b.entities,
+        init,
+        tuple(stories),
+        stop,
+    )
     _check_refs(scenario, names)
     return scenario
 
@@ -682,5 +821,8 @@ def _check_refs(scenario: M.Scenario, names: dict[str, int]) -> None:
     """StoryboardElementStateConditions name existing elements."""
     for c in _conditions(scenario):
         if c.kind == "StoryboardElementStateCondition" and c.element_ref not in names:
-            raise ScenarioFileError(scenario.path, c.line, f"unknown storyboard element {c.element_ref!r} "
-                                    f"(elements: {', '.join(names) or 'none'})")
+            raise ScenarioFileError(
+                scenario.path,
+                c.line,
+                f"unknown storyboard element {c.element_ref!r} (elements: {', '.join(names) or 'none'})",
+            )

@@ -14,8 +14,16 @@ EDGES = ("rising", "falling", "risingOrFalling", "none")
 SHAPES = ("step", "linear", "cubic", "sinusoidal")
 DIMENSIONS = ("time", "rate", "distance")
 PRIORITIES = ("overwrite", "override", "skip", "parallel")
-STATES = ("standbyState", "runningState", "completeState", "startTransition", "endTransition",
-          "stopTransition", "skipTransition", "completeTransition")
+STATES = (
+    "standbyState",
+    "runningState",
+    "completeState",
+    "startTransition",
+    "endTransition",
+    "stopTransition",
+    "skipTransition",
+    "completeTransition",
+)
 ELEMENT_TYPES = ("story", "act", "maneuverGroup", "maneuver", "event", "action")
 
 

@@ -28,9 +28,22 @@ from ego.openscenario.xmltree import ScenarioFileError
 
 #: m between the points netconvert samples an OpenDRIVE curve at
 CURVE_RESOLUTION = 0.5
-OPTIONS = ("--opendrive.curve-resolution", repr(CURVE_RESOLUTION), "--output.original-names", "true",
-           "--geometry.min-dist", "0.001", "--no-turnarounds", "true", "--offset.disable-normalization", "true",
-           "--precision", "6", "--no-warnings", "true")
+OPTIONS = (
+    "--opendrive.curve-resolution",
+    repr(CURVE_RESOLUTION),
+    "--output.original-names",
+    "true",
+    "--geometry.min-dist",
+    "0.001",
+    "--no-turnarounds",
+    "true",
+    "--offset.disable-normalization",
+    "true",
+    "--precision",
+    "6",
+    "--no-warnings",
+    "true",
+)
 
 
 def cache_dir() -> Path:
@@ -55,8 +68,13 @@ def network_file(road: Path) -> Path:
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_name(f".{key}.{os.getpid()}.net.xml")
     env = {**os.environ, "SUMO_HOME": str(exe.parent.parent)}
-    proc = subprocess.run([str(exe), "--opendrive-files", str(road), "-o", str(tmp), *OPTIONS],
-                          capture_output=True, text=True, env=env, check=False)
+    proc = subprocess.run(
+        [str(exe), "--opendrive-files", str(road), "-o", str(tmp), *OPTIONS],
+        capture_output=True,
+        text=True,
+        env=env,
+        check=False,
+    )
     if proc.returncode != 0 or not tmp.is_file():
         tmp.unlink(missing_ok=True)
         lines = [ln.strip() for ln in (proc.stderr + proc.stdout).splitlines() if ln.strip()]
@@ -69,8 +87,9 @@ def network_file(road: Path) -> Path:
         raise
     if not _edges(tmp):
         tmp.unlink(missing_ok=True)
-        raise ScenarioFileError(road, None, "netconvert made no drivable lane of this OpenDRIVE file "
-                                "(no lane of type driving?)")
+        raise ScenarioFileError(
+            road, None, "netconvert made no drivable lane of this OpenDRIVE file (no lane of type driving?)"
+        )
     os.replace(tmp, out)
     return out
 
@@ -117,8 +136,17 @@ def _edges_cached(net: str, mtime: float) -> dict[str, Edge]:
         for ln in e.iter("lane"):
             pts = tuple((float(p.split(",")[0]), float(p.split(",")[1])) for p in ln.get("shape", "").split())
             orig = next((p.get("value", "") for p in ln.iter("param") if p.get("key") == "origId"), "")
-            lanes.append(Lane(ln.get("id", ""), eid, int(ln.get("index", "0")), float(ln.get("length", "0")),
-                              float(ln.get("width", "3.2")), pts, orig))
+            lanes.append(
+                Lane(
+                    ln.get("id", ""),
+                    eid,
+                    int(ln.get("index", "0")),
+                    float(ln.get("length", "0")),
+                    float(ln.get("width", "3.2")),
+                    pts,
+                    orig,
+                )
+            )
         lanes.sort(key=lambda lane: lane.index)
         edges[eid] = Edge(eid, tuple(lanes), tuple(succ.get(eid, ())))
     return edges
@@ -164,8 +192,9 @@ class RoadMap:
             raise ValueError("lane 0 is the reference line, not a lane")
         secs = [x for x in self.sections(road) if x[2] == (lane < 0)]
         if not secs:
-            known = sorted({(eid.removeprefix("-")).partition(".")[0] for eid in self.edges}
-                           if self.converted else self.edges)
+            known = sorted(
+                {(eid.removeprefix("-")).partition(".")[0] for eid in self.edges} if self.converted else self.edges
+            )
             raise ValueError(f"unknown road {road!r} (roads: {', '.join(known)})")
         start, edge, right = secs[0]
         for x in secs:
@@ -174,8 +203,10 @@ class RoadMap:
         k = abs(lane)
         n = len(edge.lanes)
         if k > n:
-            raise ValueError(f"road {road!r} has {n} lane{'s' if n != 1 else ''} on that side at s = {s:g} "
-                             f"(lane ids {', '.join(str(-i if right else i) for i in range(1, n + 1))})")
+            raise ValueError(
+                f"road {road!r} has {n} lane{'s' if n != 1 else ''} on that side at s = {s:g} "
+                f"(lane ids {', '.join(str(-i if right else i) for i in range(1, n + 1))})"
+            )
         sumo_lane = edge.lanes[n - k]
         pos = s - start if right else sumo_lane.length - (s - start)
         return sumo_lane, min(max(pos, 0.0), sumo_lane.length)
@@ -228,7 +259,6 @@ def curvature_error(shape, analytic) -> float:
     return worst
 
 
-
 def refine_shape(points, step: float = 0.25, ratio: float = 3.0, longest: float = 5.0) -> list[tuple[float, float]]:
     """A lane shape whose curved runs are resampled every ``step`` (m) along a cubic spline
     through their points.
@@ -253,15 +283,19 @@ def refine_shape(points, step: float = 0.25, ratio: float = 3.0, longest: float 
     i = 0
     while i < n - 1:
         j = i
-        while (j + 1 < n - 1 and lengths[j] < longest and lengths[j + 1] < longest
-               and 1.0 / ratio <= lengths[j + 1] / lengths[j] <= ratio):
+        while (
+            j + 1 < n - 1
+            and lengths[j] < longest
+            and lengths[j + 1] < longest
+            and 1.0 / ratio <= lengths[j + 1] / lengths[j] <= ratio
+        ):
             j += 1
         if j - i >= 2:  # segments i..j: points i..j+1
-            u = np.concatenate(([0.0], np.cumsum(lengths[i:j + 1])))
-            spline = CubicSpline(u, pts[i:j + 2], axis=0, bc_type="not-a-knot")
+            u = np.concatenate(([0.0], np.cumsum(lengths[i : j + 1])))
+            spline = CubicSpline(u, pts[i : j + 2], axis=0, bc_type="not-a-knot")
             m = max(1, math.ceil(u[-1] / step))
             out.extend((float(x), float(y)) for x, y in spline(np.linspace(0.0, u[-1], m + 1)[1:]))
         else:
-            out.extend((float(x), float(y)) for x, y in pts[i + 1:j + 2])
+            out.extend((float(x), float(y)) for x, y in pts[i + 1 : j + 2])
         i = j + 1
     return out

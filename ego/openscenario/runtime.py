@@ -57,12 +57,15 @@ class Driver(Protocol):
 
     def position_xy(self, position: M.Position, states: dict[str, EntityState]) -> tuple[float, float, float]:
         """World (x, y, heading) of a position, relative ones from ``states``."""
+
     def road_frame(self, x: float, y: float) -> tuple[float, float]: ...
     def lane_centre_of(self, d: float) -> float:
         """d of the centre of the lane at offset ``d``."""
+
     def lane_centre(self, lane_id: int, relative_to: float | None = None, dlane: int = 0) -> float:
         """d of OpenDRIVE lane ``lane_id`` (or the lane ``dlane`` to the left of the lane at
         ``relative_to``)."""
+
     def speed(self, name: str, v_next: float, peak_rate: float) -> None: ...
     def speed_rate(self, name: str, target: float, rate: float) -> None: ...
     def lateral(self, name: str, d_next: float, peak_speed: float) -> None: ...
@@ -384,8 +387,7 @@ class Storyboard:
                         self._stop(o, "stopTransition")
                         self.log("event", f"t = {t:.2f} s: event {o.name!r} overwritten by {ev.name!r}")
                 ev.go(RUNNING, "startTransition")
-                self.log("event", f"t = {t:.2f} s: event {ev.name!r} starts (run {ev.count + 1} of "
-                         f"{ev.max_count})")
+                self.log("event", f"t = {t:.2f} s: event {ev.name!r} starts (run {ev.count + 1} of {ev.max_count})")
                 actors = group.node.actors
                 runs = []
                 for a in ev.children:
@@ -493,8 +495,9 @@ class ActionRun:
                 base = b.states[a.relative_to].d if a.relative_to is not None else drv.lane_centre_of(me.d)
                 target = base + a.value
                 shape = a.shape
-                T = offset_duration(shape, a.max_lateral_acc,
-                                    target - (drv.ego_references()[1] if self.is_ego else me.d_front))
+                T = offset_duration(
+                    shape, a.max_lateral_acc, target - (drv.ego_references()[1] if self.is_ego else me.d_front)
+                )
             start = drv.ego_references()[1] if self.is_ego else me.d_front
             self.profile = Transition(t, start, target, T, shape)
             if self.is_ego:

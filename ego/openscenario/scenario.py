@@ -59,18 +59,26 @@ class FileConfig(EvasiveConfig):
     ego_entity: str = param("", "-", "the entity ego drives (--ego; default: the one named Ego, any case)")
     ego_speed: float = param(20.0, "m/s", "ego's initial speed (default: the file's Init)", min=0.0, max=60.0)
     ego_lane: int = param(1, "-", "ego's SUMO lane index, 0 = right (default: the file's Init)", min=0, max=15)
-    ego_start: float = param(300.0, "m", "ego's front bumper along its lane at t = 0 (default: the file's Init)",
-                             min=0.0, max=1e6)
-    traffic_density: float = param(0.0, "veh/km", "background traffic per adjacent lane (none unless asked)",
-                                   min=0.0, max=25.0)
-    brake_decel: float = param(8.0, "m/s^2", "speed reference's deceleration when braking in lane",
-                               min=0.5, max=12.0)
-    brake_max_lag: float = param(2.0, "m", "how far the braking reference may fall behind the ego",
-                                 min=0.1, max=50.0)
+    ego_start: float = param(
+        300.0, "m", "ego's front bumper along its lane at t = 0 (default: the file's Init)", min=0.0, max=1e6
+    )
+    traffic_density: float = param(
+        0.0, "veh/km", "background traffic per adjacent lane (none unless asked)", min=0.0, max=25.0
+    )
+    brake_decel: float = param(8.0, "m/s^2", "speed reference's deceleration when braking in lane", min=0.5, max=12.0)
+    brake_max_lag: float = param(2.0, "m", "how far the braking reference may fall behind the ego", min=0.1, max=50.0)
 
 
-_TYPES = {"double": "float", "integer": "int", "int": "int", "unsignedInt": "int", "unsignedShort": "int",
-          "boolean": "bool", "string": "str", "dateTime": "str"}
+_TYPES = {
+    "double": "float",
+    "integer": "int",
+    "int": "int",
+    "unsignedInt": "int",
+    "unsignedShort": "int",
+    "boolean": "bool",
+    "string": "str",
+    "dateTime": "str",
+}
 _PY = {"float": float, "int": int, "bool": bool, "str": str}
 
 
@@ -85,8 +93,7 @@ def find_ego(scenario: M.Scenario, wanted: str) -> str:
         return folded[0]
     if wanted:
         raise ConfigError(f"bad value for --ego: {wanted!r} (entities: {', '.join(names)})")
-    raise ConfigError(f"{scenario.path}: no entity named Ego; choose the ego with --ego (entities: "
-                      f"{', '.join(names)})")
+    raise ConfigError(f"{scenario.path}: no entity named Ego; choose the ego with --ego (entities: {', '.join(names)})")
 
 
 @dataclass(frozen=True)
@@ -126,8 +133,11 @@ def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
             break
     if pending:
         name = next(iter(pending))
-        raise ScenarioFileError(scenario.path, scenario.entities[name].line,
-                                f"the start positions of {', '.join(pending)} refer to each other")
+        raise ScenarioFileError(
+            scenario.path,
+            scenario.entities[name].line,
+            f"the start positions of {', '.join(pending)} refer to each other",
+        )
     return out
 
 
@@ -181,25 +191,38 @@ def _file_class(path: str, mtime: float) -> type:
             f = ego_fields[name]
             meta = dict(f.metadata)
             if f.type not in (kind, "float") or (f.type == "float" and kind not in ("float", "int")):
-                raise ScenarioFileError(path, p.line, f"parameter {name!r} is ego's {f.type} parameter "
-                                        f"(declared {p.type})")
+                raise ScenarioFileError(
+                    path, p.line, f"parameter {name!r} is ego's {f.type} parameter (declared {p.type})"
+                )
             value = _PY[f.type](p.value)
             fields.append((name, f.type, dataclasses.field(default=value, metadata=meta)))
             continue
         if not name.isidentifier() or name.startswith("_"):
-            raise ScenarioFileError(path, p.line, f"parameter name {name!r} is not supported by ego (letters, "
-                                    f"digits and _ only; see {DOCS})")
+            raise ScenarioFileError(
+                path,
+                p.line,
+                f"parameter name {name!r} is not supported by ego (letters, digits and _ only; see {DOCS})",
+            )
         fields.append((name, kind, param(p.value, "-", f"declared in {Path(path).name}:{p.line} ({p.type})")))
     cfg = dataclasses.make_dataclass(f"{Path(path).stem}Config", fields, bases=(FileConfig,), frozen=True)
     cfg.__module__ = __name__
     # made per file, so no module attribute names it: a configuration travels to a worker
     # process as the file's name and its values, and is rebuilt there from the file
-    cfg.__reduce__ = lambda self: (_file_config, (path, {f.name: getattr(self, f.name)
-                                                         for f in dataclasses.fields(self)}))
-    return type(f"FileScenario[{Path(path).name}]", (FileScenario,), {
-        "name": path, "config_cls": cfg, "file": path, "file_params": tuple(params),
-        "summary": f"OpenSCENARIO file {path}",
-    })
+    cfg.__reduce__ = lambda self: (
+        _file_config,
+        (path, {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}),
+    )
+    return type(
+        f"FileScenario[{Path(path).name}]",
+        (FileScenario,),
+        {
+            "name": path,
+            "config_cls": cfg,
+            "file": path,
+            "file_params": tuple(params),
+            "summary": f"OpenSCENARIO file {path}",
+        },
+    )
 
 
 def _file_config(path: str, values: dict):
@@ -211,8 +234,9 @@ def file_scenario_class(name: str) -> type:
     """The scenario class of the file ``name`` (cached while the file is unchanged)."""
     path = Path(name)
     if not path.is_file():
-        raise ConfigError(f"scenario file {name!r} not found" if not path.exists() else
-                          f"scenario file {name!r} is not a file")
+        raise ConfigError(
+            f"scenario file {name!r} not found" if not path.exists() else f"scenario file {name!r} is not a file"
+        )
     cls = _file_class(name, path.stat().st_mtime)
     return cls
 
@@ -268,8 +292,11 @@ class FileScenario(EmergencyBrake):
         model, _, ego, starts = cls.resolve(cfg)
         start = starts[ego]
         if start.speed is None:
-            raise ScenarioFileError(model.path, model.entities[ego].line, f"the ego {ego!r} needs a SpeedAction "
-                                    "in <Init> (its initial speed is its reference)")
+            raise ScenarioFileError(
+                model.path,
+                model.entities[ego].line,
+                f"the ego {ego!r} needs a SpeedAction in <Init> (its initial speed is its reference)",
+            )
         del known
         return replace(cfg, ego_speed=float(start.speed), ego_lane=int(start.index), ego_start=float(start.front))
 
@@ -289,18 +316,31 @@ class FileScenario(EmergencyBrake):
         c = self.config
         self.model, self.roads, self.ego_name, self.starts = self.resolve(c)
         edge = self.starts[self.ego_name].edge
-        road = {"edge": edge, "route": f"route_{edge}", "route_edges": tuple(self.roads.route_from(edge)),
-                "n_lanes": len(self.roads.edges[edge].lanes), "refine": refine_shape}
+        road = {
+            "edge": edge,
+            "route": f"route_{edge}",
+            "route_edges": tuple(self.roads.route_from(edge)),
+            "n_lanes": len(self.roads.edges[edge].lanes),
+            "refine": refine_shape,
+        }
         self.in_lane = BrakeInLane(c, lambda: self.safety is not None and self.safety.active)
-        parts = compose(self, "front", self.in_lane, self.populate, on_trigger=self.on_trigger, road=road,
-                        manoeuvre_cls=FileManoeuvre)
+        parts = compose(
+            self,
+            "front",
+            self.in_lane,
+            self.populate,
+            on_trigger=self.on_trigger,
+            road=road,
+            manoeuvre_cls=FileManoeuvre,
+        )
         parts.manoeuvre.story = self
         return parts
 
     def _make_bridge(self) -> SumoBridge:
         c = self.config
-        return SumoBridge(SumoConfig(self.roads.net, step_length=c.sumo_step, seed=self.seed,
-                                     lateral_resolution=c.lateral_resolution))
+        return SumoBridge(
+            SumoConfig(self.roads.net, step_length=c.sumo_step, seed=self.seed, lateral_resolution=c.lateral_resolution)
+        )
 
     # the ego's frame as the storyboard and the tests read it: the surround view's
     @property
@@ -356,14 +396,26 @@ class FileScenario(EmergencyBrake):
             v = ent.vehicle
             start = self.starts[name]
             color = ENTITY_COLORS[(k - 1) % len(ENTITY_COLORS)]
-            vt = VehicleType(f"xosc_{name}", length=v.length, width=v.width, accel=v.max_accel, decel=v.max_decel,
-                             emergency_decel=max(9.0, v.max_decel), max_speed=v.max_speed, sigma=0.0, color=color)
+            vt = VehicleType(
+                f"xosc_{name}",
+                length=v.length,
+                width=v.width,
+                accel=v.max_accel,
+                decel=v.max_decel,
+                emergency_decel=max(9.0, v.max_decel),
+                max_speed=v.max_speed,
+                sigma=0.0,
+                color=color,
+            )
             self._types[name] = vt
             # inserted at the ego's speed at least (SUMO's insertion check), its own speed set
             # before the first step (as emergency-brake's lead)
             speed = max(c.ego_speed, start.speed if start.speed is not None else 0.0)
-            world.vehicle(VehicleSpec(name, vt.id, self._route(start.edge), start.index, start.front, speed), vt,
-                          ScriptedEntity(name, start.speed))
+            world.vehicle(
+                VehicleSpec(name, vt.id, self._route(start.edge), start.index, start.front, speed),
+                vt,
+                ScriptedEntity(name, start.speed),
+            )
 
     def after_setup(self) -> None:
         """The storyboard starts from the entities' start positions."""
@@ -456,8 +508,10 @@ class FileScenario(EmergencyBrake):
         else:
             index = min(self.lane_offset, key=lambda i: abs(relative_to - self.lane_offset[i])) + dlane
         if index not in self.lane_offset:
-            raise ConfigError(f"lane {lane_id if relative_to is None else f'{dlane:+d} from the reference'} does "
-                              f"not exist on the ego's road ({n} lanes)")
+            raise ConfigError(
+                f"lane {lane_id if relative_to is None else f'{dlane:+d} from the reference'} does "
+                f"not exist on the ego's road ({n} lanes)"
+            )
         return self.lane_offset[index]
 
     def _limit(self, name: str, rate: float) -> None:
@@ -572,8 +626,17 @@ class FileScenario(EmergencyBrake):
             return np.where(tt <= t[-1], np.interp(tt, t, v), ext)
 
         p = self.ego.model.params
-        return braking_min_gap(trigger_t, self._trigger_gap, self._trigger_speed,
-                               p.F_max / p.m + p.f * p.g, fn, lead_step=self.config.sumo_step) > 0.0
+        return (
+            braking_min_gap(
+                trigger_t,
+                self._trigger_gap,
+                self._trigger_speed,
+                p.F_max / p.m + p.f * p.g,
+                fn,
+                lead_step=self.config.sumo_step,
+            )
+            > 0.0
+        )
 
     def _meta(self) -> dict:
         meta = super()._meta()
@@ -620,10 +683,13 @@ def _check_ego_actions(model: M.Scenario, ego: str) -> None:
                     for ev in man.events:
                         for a in ev.actions:
                             if isinstance(a.action, (M.TeleportAction, M.FollowTrajectoryAction)):
-                                raise ScenarioFileError(model.path, a.action.line,
-                                                        f"<{type(a.action).__name__}> on the ego ({ego}) is not "
-                                                        f"supported by ego: the ego moves by its own model (see "
-                                                        f"{DOCS})")
+                                raise ScenarioFileError(
+                                    model.path,
+                                    a.action.line,
+                                    f"<{type(a.action).__name__}> on the ego ({ego}) is not "
+                                    f"supported by ego: the ego moves by its own model (see "
+                                    f"{DOCS})",
+                                )
 
 
 def file_listing(path: str, ego: str = "") -> dict:
@@ -653,12 +719,17 @@ def file_listing(path: str, ego: str = "") -> dict:
     own = {f.name for f in dataclasses.fields(FileConfig)}
     return {
         "file": path,
-        "parameters": [{"name": p.name, "type": p.type, "default": p.value, "line": p.line,
-                        "sets_ego_parameter": p.name in own} for p in params.values()],
+        "parameters": [
+            {"name": p.name, "type": p.type, "default": p.value, "line": p.line, "sets_ego_parameter": p.name in own}
+            for p in params.values()
+        ],
         "entities": entities,
         "ego": chosen,
-        "ego_parameters": [{"name": i.name, "default": i.default, "unit": i.unit, "description": i.doc}
-                           for i in describe(FileConfig) if i.name not in params],
+        "ego_parameters": [
+            {"name": i.name, "default": i.default, "unit": i.unit, "description": i.doc}
+            for i in describe(FileConfig)
+            if i.name not in params
+        ],
         "elements": [{"element": tag, "line": line, "supported": ok} for tag, line, ok in els],
         "supported": all(ok for _, _, ok in els),
     }
@@ -666,8 +737,11 @@ def file_listing(path: str, ego: str = "") -> dict:
 
 def print_listing(listing: dict) -> str:
     """The listing as text."""
-    out = [f"{listing['file']}: {'every element supported' if listing['supported'] else 'NOT SUPPORTED (see below)'}",
-           "", "parameters (--set NAME=VALUE):"]
+    out = [
+        f"{listing['file']}: {'every element supported' if listing['supported'] else 'NOT SUPPORTED (see below)'}",
+        "",
+        "parameters (--set NAME=VALUE):",
+    ]
     for p in listing["parameters"] or [{"name": "(none)", "type": "", "default": "", "line": ""}]:
         note = "  (sets ego's parameter)" if p.get("sets_ego_parameter") else ""
         out.append(f"  {p['name']:<24} {p['type']:<8} default {p['default']!s:<12} line {p['line']}{note}")

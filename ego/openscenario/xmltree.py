@@ -83,6 +83,7 @@ def parse_bytes(data: bytes, path: str | os.PathLike = "<string>") -> Node:
     try:
         parser.Parse(data, True)
     except expat.ExpatError as exc:
-        raise ScenarioFileError(path, exc.lineno, f"malformed XML: {expat.ErrorString(exc.code)} "
-                                f"(column {exc.offset + 1})") from None
+        raise ScenarioFileError(
+            path, exc.lineno, f"malformed XML: {expat.ErrorString(exc.code)} (column {exc.offset + 1})"
+        ) from None
     return root[0]

@@ -169,8 +169,9 @@ class ProcessExecutor:
                     if attempt <= self.retries:
                         retry.append((task, attempt))
                     else:
-                        yield Outcome(task, error=f"the worker process died {attempt} times running it",
-                                      attempts=attempt)
+                        yield Outcome(
+                            task, error=f"the worker process died {attempt} times running it", attempts=attempt
+                        )
                 else:
                     yield Outcome(task, value if ok else None, "" if ok else value, attempt)
                 job = next_job()

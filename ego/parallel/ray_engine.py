@@ -57,15 +57,17 @@ class RayExecutor:
         self._started = False  # shut down in close() only what this executor started
         if not ray.is_initialized():
             os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
-            quiet: dict[str, Any] = dict(include_dashboard=False, logging_level=logging.ERROR,
-                                         log_to_driver=False, ignore_reinit_error=True)
+            quiet: dict[str, Any] = dict(
+                include_dashboard=False, logging_level=logging.ERROR, log_to_driver=False, ignore_reinit_error=True
+            )
             from ego.cluster import check_address, joining, reap_with_this_process
 
             if address is None:
                 reap_with_this_process()  # its processes end with this one, even SIGKILLed mid-start
                 # "local": always a private instance, never a cluster found by chance
-                ray.init(address="local", num_cpus=int(workers or default_workers()),
-                         _node_ip_address="127.0.0.1", **quiet)
+                ray.init(
+                    address="local", num_cpus=int(workers or default_workers()), _node_ip_address="127.0.0.1", **quiet
+                )
             else:
                 check_address(address)  # nothing listening: one line in seconds, not minutes
                 with joining(address):
@@ -109,8 +111,11 @@ class RayExecutor:
                     if attempt <= self.retries:
                         submit(task, attempt + 1)
                         continue
-                    outcome = Outcome(task, error=f"the worker process died {attempt} times running it "
-                                                  f"({type(exc).__name__})", attempts=attempt)
+                    outcome = Outcome(
+                        task,
+                        error=f"the worker process died {attempt} times running it ({type(exc).__name__})",
+                        attempts=attempt,
+                    )
                 else:
                     outcome = Outcome(task, value if ok else None, "" if ok else value, attempt)
                 for task in source:  # refill before handing the outcome over

@@ -59,8 +59,7 @@ class Recorder(Protocol):
     def write_rows(self, columns: Sequence[str], rows: np.ndarray) -> None:
         """A batch of trace rows; ``columns[0]`` is the time column ``t`` (s)."""
 
-    def vehicles(self, t: float, ids: Sequence[str], poses: Sequence[tuple],
-                 follow: tuple[float, float]) -> None:
+    def vehicles(self, t: float, ids: Sequence[str], poses: Sequence[tuple], follow: tuple[float, float]) -> None:
         """Vehicles at time ``t`` as SUMO reports them: rows (front bumper x, y in m, SUMO
         angle in deg, length, width in m); ``follow`` is the point (m) the following view
         keeps in place. Must be cheap: convert later, off the loop."""
@@ -84,8 +83,7 @@ class NullRecorder:
     def write_rows(self, columns: Sequence[str], rows: np.ndarray) -> None:
         pass
 
-    def vehicles(self, t: float, ids: Sequence[str], poses: Sequence[tuple],
-                 follow: tuple[float, float]) -> None:
+    def vehicles(self, t: float, ids: Sequence[str], poses: Sequence[tuple], follow: tuple[float, float]) -> None:
         pass
 
     def event(self, t: float, text: str, level: str = "INFO") -> None:

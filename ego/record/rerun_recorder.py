@@ -53,10 +53,20 @@ FLUSH_TIMEOUT = 120.0
 TIMELINE = "sim_time"
 _GREY = (150, 150, 150)
 #: series colours in a panel, in declaration order, with the names panel titles use
-PALETTE = (("blue", (80, 150, 255)), ("orange", (255, 160, 40)), ("green", (90, 200, 90)),
-           ("pink", (240, 100, 200)), ("cyan", (60, 210, 230)), ("yellow", (230, 220, 60)),
-           ("violet", (160, 110, 255)), ("white", (230, 230, 230)), ("brown", (180, 120, 70)),
-           ("olive", (150, 160, 60)), ("grey", (140, 140, 140)), ("teal", (40, 160, 140)))
+PALETTE = (
+    ("blue", (80, 150, 255)),
+    ("orange", (255, 160, 40)),
+    ("green", (90, 200, 90)),
+    ("pink", (240, 100, 200)),
+    ("cyan", (60, 210, 230)),
+    ("yellow", (230, 220, 60)),
+    ("violet", (160, 110, 255)),
+    ("white", (230, 230, 230)),
+    ("brown", (180, 120, 70)),
+    ("olive", (150, 160, 60)),
+    ("grey", (140, 140, 140)),
+    ("teal", (40, 160, 140)),
+)
 THRESHOLD = ("red", (230, 50, 50))  #: colour of constants (thresholds)
 #: a panel with more series than this shows Rerun's legend; fewer are named in its title
 TITLE_SERIES = 4
@@ -69,8 +79,9 @@ FOLLOW = "world/follow"
 class RerunRecorder:
     """Writes one ``.rrd`` file per run; ``background=True`` writes from a separate process."""
 
-    def __init__(self, path: str | Path, *, application_id: str = "ego",
-                 recording_id: str | None = None, background: bool = True) -> None:
+    def __init__(
+        self, path: str | Path, *, application_id: str = "ego", recording_id: str | None = None, background: bool = True
+    ) -> None:
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._box_t: list[float] = []
@@ -87,8 +98,9 @@ class RerunRecorder:
             data_in, self._conn = ctx.Pipe(duplex=False)  # batches: loop -> writer
             self._replies, reply_out = ctx.Pipe(duplex=False)  # failures: writer -> loop
             _widen_pipe(self._conn)
-            self._proc = ctx.Process(target=_writer_main, args=(data_in, reply_out, *args),
-                                     daemon=True, name="ego-rerun-writer")
+            self._proc = ctx.Process(
+                target=_writer_main, args=(data_in, reply_out, *args), daemon=True, name="ego-rerun-writer"
+            )
             with main_module_hidden():
                 self._proc.start()
             data_in.close()
@@ -109,8 +121,7 @@ class RerunRecorder:
         if len(rows):
             self._send("rows", tuple(columns), rows)
 
-    def vehicles(self, t: float, ids: Sequence[str], poses: Sequence[tuple],
-                 follow: tuple[float, float]) -> None:
+    def vehicles(self, t: float, ids: Sequence[str], poses: Sequence[tuple], follow: tuple[float, float]) -> None:
         self._box_t.append(t)
         self._box_n.append(len(ids))
         self._box_rows.extend(poses)
@@ -122,8 +133,7 @@ class RerunRecorder:
 
     def flush(self) -> None:
         if self._box_t:
-            self._send("vehicles", self._box_t, self._box_n, self._box_rows, self._box_labels,
-                       self._follow)
+            self._send("vehicles", self._box_t, self._box_n, self._box_rows, self._box_labels, self._follow)
             self._box_t, self._box_n, self._box_rows, self._box_labels, self._follow = [], [], [], [], []
 
     def close(self) -> None:
@@ -293,8 +303,7 @@ class RerunWriter:
         self._open = False
 
     def handle(self, kind: str, *payload) -> None:
-        {"begin": self.begin, "rows": self.rows, "vehicles": self.vehicles,
-         "event": self.event}[kind](*payload)
+        {"begin": self.begin, "rows": self.rows, "vehicles": self.vehicles, "event": self.event}[kind](*payload)
 
     def begin(self, scene: Scene, series: Sequence[Series], meta: dict) -> None:
         rr = self._rr
@@ -311,8 +320,7 @@ class RerunWriter:
         for width, centre in scene.lanes:
             left, right = lane_edges(width, centre)
             edges.extend([left, right])
-        rec.log(f"{MAP}/lanes", rr.LineStrips2D(edges, colors=[(110, 110, 110)], radii=[0.06]),
-                static=True)
+        rec.log(f"{MAP}/lanes", rr.LineStrips2D(edges, colors=[(110, 110, 110)], radii=[0.06]), static=True)
         for panel in _panels(series).values():
             for s, (_, color) in zip(panel, _colors(panel)):
                 name = s.label or s.column
@@ -344,8 +352,7 @@ class RerunWriter:
         arrays = [_durations(rows[:, 0])]
         for values in [rows[:, j] for j in index] + [np.full(len(rows), s.constant) for s in self._constants]:
             arrays.append(pa.ListArray.from_arrays(offsets, pa.array(values, type=pa.float64())))
-        self._rr.send_record_batch(pa.RecordBatch.from_arrays(arrays, schema=schema),
-                                   recording=self._rec)
+        self._rr.send_record_batch(pa.RecordBatch.from_arrays(arrays, schema=schema), recording=self._rec)
 
     def _state_changes(self, rows: np.ndarray, states: list[tuple[int, Series]]) -> None:
         """Each state column as named state changes: only the rows where it changes."""
@@ -358,8 +365,12 @@ class RerunWriter:
                 continue
             self._state_now[s.column] = int(values[-1])
             names = [s.states[v] if 0 <= v < len(s.states) else str(v) for v in values[at]]
-            rr.send_columns(s.path, indexes=[rr.TimeColumn(TIMELINE, duration=rows[at, 0])],
-                            columns=rr.StateChange.columns(state=names), recording=self._rec)
+            rr.send_columns(
+                s.path,
+                indexes=[rr.TimeColumn(TIMELINE, duration=rows[at, 0])],
+                columns=rr.StateChange.columns(state=names),
+                recording=self._rec,
+            )
 
     def vehicles(self, times, counts, poses, labels, follow_points) -> None:
         """Vehicle outlines and the follow frame as one record batch."""
@@ -392,12 +403,13 @@ class RerunWriter:
             colors,
             pa.ListArray.from_arrays(
                 one_each,
-                pa.FixedSizeListArray.from_arrays(pa.array(follow.reshape(-1), type=pa.float32()),
-                                                  type=_vec3_list_type().value_type),
-                type=_vec3_list_type()),
+                pa.FixedSizeListArray.from_arrays(
+                    pa.array(follow.reshape(-1), type=pa.float32()), type=_vec3_list_type().value_type
+                ),
+                type=_vec3_list_type(),
+            ),
         ]
-        self._rr.send_record_batch(pa.RecordBatch.from_arrays(arrays, schema=pa.schema(fields)),
-                                   recording=self._rec)
+        self._rr.send_record_batch(pa.RecordBatch.from_arrays(arrays, schema=pa.schema(fields)), recording=self._rec)
 
     def event(self, t: float, text: str, level: str = "INFO") -> None:
         self._rec.set_time(TIMELINE, duration=t)
@@ -569,39 +581,52 @@ def _blueprint(scene: Scene, series: Sequence[Series]):
             raise ValueError(f"panel {panel} mixes units: {', '.join(sorted(units))}")
         axis = rrb.ScalarAxis(range=(0.0, 10.0)) if panel.split("/")[1] == "ttc" else None
         legend = rrb.PlotLegend(visible=len(members) > TITLE_SERIES, corner="RightTop")
-        plots.append(rrb.TimeSeriesView(origin=panel, name=panel_title(panel, members), axis_y=axis,
-                                        plot_legend=legend))
+        plots.append(
+            rrb.TimeSeriesView(origin=panel, name=panel_title(panel, members), axis_y=axis, plot_legend=legend)
+        )
 
     def road(view, name, **kwargs):
         x0, x1, y0, y1 = view  # the map is mirrored: +y (left) is up on screen
-        return rrb.Spatial2DView(origin=FOLLOW, contents="world/**", name=name,
-                                 visual_bounds=rrb.VisualBounds2D(x_range=(x0, x1), y_range=(-y1, -y0)),
-                                 **kwargs)
+        return rrb.Spatial2DView(
+            origin=FOLLOW,
+            contents="world/**",
+            name=name,
+            visual_bounds=rrb.VisualBounds2D(x_range=(x0, x1), y_range=(-y1, -y0)),
+            **kwargs,
+        )
 
     a0, a1 = scene.around_view[:2]
     # no labels at this scale: they would lie on top of each other (colours tell ego and lead)
-    around = road(scene.around_view,
-                  f"{a1 - a0:.0f} m around {scene.followed} ({-a0:.0f} m behind, {a1:.0f} m ahead)",
-                  overrides={VEHICLES: rr.LineStrips2D.from_fields(show_labels=False)})
+    around = road(
+        scene.around_view,
+        f"{a1 - a0:.0f} m around {scene.followed} ({-a0:.0f} m behind, {a1:.0f} m ahead)",
+        overrides={VEHICLES: rr.LineStrips2D.from_fields(show_labels=False)},
+    )
     close = road(scene.follow_view, f"following {scene.followed}")
     left = [close]
     shares = [3]
     if any(s.states for s in series):
         left.append(rrb.StateTimelineView(origin="states", name="manoeuvre"))
         shares.append(1)
-    events = rrb.TextLogView(origin="events", name="events",
-                             columns=rrb.TextLogColumns(timeline_columns=[TIMELINE],
-                                                        text_log_columns=["loglevel", "body"]))
+    events = rrb.TextLogView(
+        origin="events",
+        name="events",
+        columns=rrb.TextLogColumns(timeline_columns=[TIMELINE], text_log_columns=["loglevel", "body"]),
+    )
     left.append(rrb.Tabs(events, rrb.TextDocumentView(origin="run", name="run")))
     shares.append(3)
-    below = rrb.Horizontal(rrb.Vertical(*left, row_shares=shares), rrb.Grid(*plots, grid_columns=3),
-                           column_shares=[1, 3])
-    return rrb.Blueprint(rrb.Vertical(around, below, row_shares=[1, 6]),
-                         rrb.TimePanel(timeline=TIMELINE, play_state="following", state="collapsed"),
-                         collapse_panels=True)
+    below = rrb.Horizontal(
+        rrb.Vertical(*left, row_shares=shares), rrb.Grid(*plots, grid_columns=3), column_shares=[1, 3]
+    )
+    return rrb.Blueprint(
+        rrb.Vertical(around, below, row_shares=[1, 6]),
+        rrb.TimePanel(timeline=TIMELINE, play_state="following", state="collapsed"),
+        collapse_panels=True,
+    )
 
 
 # -- Arrow plumbing (the layout Rerun's own send_columns produces) ------------------------
+
 
 def _pa():
     import pyarrow as pa
@@ -611,8 +636,9 @@ def _pa():
 
 def _index_field():
     pa = _pa()
-    return pa.field(TIMELINE, pa.duration("ns"),
-                    metadata={b"rerun:kind": b"index", b"rerun:index_name": TIMELINE.encode()})
+    return pa.field(
+        TIMELINE, pa.duration("ns"), metadata={b"rerun:kind": b"index", b"rerun:index_name": TIMELINE.encode()}
+    )
 
 
 def _durations(seconds: np.ndarray):
@@ -622,13 +648,17 @@ def _durations(seconds: np.ndarray):
 
 def _component_field(entity: str, archetype: str, component: str, component_type: str, arrow_type):
     pa = _pa()
-    return pa.field(f"/{entity}:{archetype}:{component}", arrow_type, metadata={
-        b"rerun:kind": b"data",
-        b"rerun:entity_path": ("/" + entity).encode(),
-        b"rerun:archetype": f"rerun.archetypes.{archetype}".encode(),
-        b"rerun:component": f"{archetype}:{component}".encode(),
-        b"rerun:component_type": f"rerun.components.{component_type}".encode(),
-    })
+    return pa.field(
+        f"/{entity}:{archetype}:{component}",
+        arrow_type,
+        metadata={
+            b"rerun:kind": b"data",
+            b"rerun:entity_path": ("/" + entity).encode(),
+            b"rerun:archetype": f"rerun.archetypes.{archetype}".encode(),
+            b"rerun:component": f"{archetype}:{component}".encode(),
+            b"rerun:component_type": f"rerun.components.{component_type}".encode(),
+        },
+    )
 
 
 @lru_cache(maxsize=1)
@@ -654,8 +684,6 @@ def _strips(outlines: np.ndarray, row_offsets):
     n, k, _ = outlines.shape
     strip_t = rows_t.value_type
     point_t = strip_t.value_type
-    points = pa.FixedSizeListArray.from_arrays(pa.array(outlines.reshape(-1), type=pa.float32()),
-                                               type=point_t)
-    strips = pa.ListArray.from_arrays(pa.array(np.arange(0, n * k + 1, k, dtype=np.int32)), points,
-                                      type=strip_t)
+    points = pa.FixedSizeListArray.from_arrays(pa.array(outlines.reshape(-1), type=pa.float32()), type=point_t)
+    strips = pa.ListArray.from_arrays(pa.array(np.arange(0, n * k + 1, k, dtype=np.int32)), points, type=strip_t)
     return pa.ListArray.from_arrays(row_offsets, strips, type=rows_t)

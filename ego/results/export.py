@@ -45,8 +45,17 @@ from ego.results.traffic_log import TrafficLog
 if TYPE_CHECKING:
     from ego.results.run import RunResult
 
-__all__ = ["TRACE_SUFFIXES", "TRAFFIC_COLUMNS", "TRAFFIC_UNITS", "check_trace_path", "run_info", "trace_files",
-           "trace_units", "traffic_columns", "write_trace"]
+__all__ = [
+    "TRACE_SUFFIXES",
+    "TRAFFIC_COLUMNS",
+    "TRAFFIC_UNITS",
+    "check_trace_path",
+    "run_info",
+    "trace_files",
+    "trace_units",
+    "traffic_columns",
+    "write_trace",
+]
 
 TRACE_SUFFIXES = (".csv", ".parquet", ".mat")
 #: the columns of a traffic table, in order (``vehicle``: the id in csv and Parquet)
@@ -58,8 +67,9 @@ def check_trace_path(text: str | None, what: str = "--trace path") -> Path:
     written (:func:`ego.checks.check_output_file`); ConfigError otherwise."""
     suffix = Path(str(text or "")).suffix
     if suffix not in TRACE_SUFFIXES:
-        raise ConfigError(f"bad {what} {text!r}: unknown suffix {suffix or '(none)'!r} "
-                          f"(allowed: {', '.join(TRACE_SUFFIXES)})")
+        raise ConfigError(
+            f"bad {what} {text!r}: unknown suffix {suffix or '(none)'!r} (allowed: {', '.join(TRACE_SUFFIXES)})"
+        )
     return check_output_file(text, what, suffix)
 
 
@@ -68,7 +78,9 @@ def write_trace(result: RunResult, path: str | os.PathLike[str]) -> list[Path]:
     ``path`` in the format its suffix names; returns the files written."""
     out = check_trace_path(str(path), "trace path")
     out.parent.mkdir(parents=True, exist_ok=True)
-    writer: Callable[[RunResult, Path], None] = {".csv": _write_csv, ".parquet": _write_parquet, ".mat": _write_mat}[out.suffix]
+    writer: Callable[[RunResult, Path], None] = {".csv": _write_csv, ".parquet": _write_parquet, ".mat": _write_mat}[
+        out.suffix
+    ]
     writer(result, out)
     return trace_files(out, result.traffic is not None)
 
@@ -81,14 +93,20 @@ def trace_units(result: RunResult) -> dict[str, str]:
 def traffic_columns(log: TrafficLog) -> dict[str, np.ndarray]:
     """The traffic log as columns (:data:`TRAFFIC_COLUMNS`), ``vehicle`` as the vehicles' ids."""
     ids = np.array(log.ids, dtype=object)
-    return {name: ids[np.asarray(log.vehicle, dtype=np.intp)] if name == "vehicle" else getattr(log, name)
-            for name in TRAFFIC_COLUMNS}
+    return {
+        name: ids[np.asarray(log.vehicle, dtype=np.intp)] if name == "vehicle" else getattr(log, name)
+        for name in TRAFFIC_COLUMNS
+    }
 
 
 def run_info(result: RunResult) -> dict[str, str]:
     """What run a file holds: scenario, controller, seed, status (as text)."""
-    return {"scenario": result.scenario, "controller": result.controller, "seed": str(result.seed),
-            "status": result.status}
+    return {
+        "scenario": result.scenario,
+        "controller": result.controller,
+        "seed": str(result.seed),
+        "status": result.status,
+    }
 
 
 # -- csv ----------------------------------------------------------------------------------------
@@ -114,8 +132,9 @@ def _write_csv(result: RunResult, path: Path) -> None:
 
 
 # -- parquet ------------------------------------------------------------------------------------
-def _write_parquet_table(path: Path, columns: dict[str, np.ndarray], units: dict[str, str],
-                         meta: dict[str, str]) -> None:
+def _write_parquet_table(
+    path: Path, columns: dict[str, np.ndarray], units: dict[str, str], meta: dict[str, str]
+) -> None:
     import pyarrow as pa
     import pyarrow.parquet as pq
 
@@ -128,11 +147,11 @@ def _write_parquet_table(path: Path, columns: dict[str, np.ndarray], units: dict
 
 def _write_parquet(result: RunResult, path: Path) -> None:
     meta = run_info(result)
-    _write_parquet_table(path, {c: result.trace[:, i] for i, c in enumerate(result.columns)},
-                         trace_units(result), meta)
+    _write_parquet_table(path, {c: result.trace[:, i] for i, c in enumerate(result.columns)}, trace_units(result), meta)
     if result.traffic is not None:
-        _write_parquet_table(path.with_name(f"{path.stem}.traffic.parquet"), traffic_columns(result.traffic),
-                             TRAFFIC_UNITS, meta)
+        _write_parquet_table(
+            path.with_name(f"{path.stem}.traffic.parquet"), traffic_columns(result.traffic), TRAFFIC_UNITS, meta
+        )
 
 
 # -- MATLAB -------------------------------------------------------------------------------------

@@ -31,8 +31,10 @@ class Progress:
         elapsed = time.perf_counter() - self.started
         rate = self.done / elapsed if elapsed > 0 else 0.0
         left = f"~{(self.total - self.done) / rate:.0f} s left" if rate > 0 else "~? s left"
-        return (f"[{'#' * filled}{'.' * (WIDTH - filled)}] {self.done}/{self.total} runs, "
-                f"{rate:.1f} runs/s, {elapsed:.1f} s, {left}  {what}: {status}")
+        return (
+            f"[{'#' * filled}{'.' * (WIDTH - filled)}] {self.done}/{self.total} runs, "
+            f"{rate:.1f} runs/s, {elapsed:.1f} s, {left}  {what}: {status}"
+        )
 
     def __call__(self, what: str, status: str) -> None:
         self.done += 1

@@ -98,16 +98,23 @@ class RunRow:
     attempts: int = 1
 
     @classmethod
-    def from_result(cls, result: RunResult, name: str, keep: tuple[str, ...] | None = None,
-                    details: bool = False) -> RunRow:
+    def from_result(
+        cls, result: RunResult, name: str, keep: tuple[str, ...] | None = None, details: bool = False
+    ) -> RunRow:
         """The row of ``result`` (``name``: the controller's label): its metrics flattened;
         with ``keep``, ``t`` and those of the trace columns it names that the run has; with
         ``details``, its events, traffic log and lanes."""
         from ego.results.metrics import flatten
 
         kept = [] if keep is None else list(dict.fromkeys(["t", *[c for c in keep if c in result.columns]]))
-        row = cls(name, result.seed, result.status, flatten(result.metrics),
-                  {c: result.column(c) for c in kept}, units={c: result.units.get(c, "") for c in kept})
+        row = cls(
+            name,
+            result.seed,
+            result.status,
+            flatten(result.metrics),
+            {c: result.column(c) for c in kept},
+            units={c: result.units.get(c, "") for c in kept},
+        )
         if result.status == "error":  # a run its controller ended (an FMU's error): the reason
             row.error = str(result.metrics.get("status_detail", ""))
         if details:

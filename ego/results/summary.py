@@ -28,8 +28,11 @@ def table_row(cells: Sequence[str]) -> str:
     return "| " + " | ".join(cells) + " |"
 
 
-def table(controllers: Sequence[str], runs: Mapping[str, Sequence[Row]],
-          columns: Sequence[tuple[str, Callable[[Sequence[Row]], str]]]) -> list[str]:
+def table(
+    controllers: Sequence[str],
+    runs: Mapping[str, Sequence[Row]],
+    columns: Sequence[tuple[str, Callable[[Sequence[Row]], str]]],
+) -> list[str]:
     """A markdown table: the header (``controller`` then each column's name), the rule, and
     one line per controller whose cells are each column's function of its runs."""
     lines = [table_row(["controller"] + [name for name, _ in columns]), "|---|" + "---|" * len(columns)]
@@ -40,8 +43,11 @@ def table(controllers: Sequence[str], runs: Mapping[str, Sequence[Row]],
 
 
 def _finite(values: Sequence[Any]) -> list[float]:
-    return [float(v) for v in values if isinstance(v, (int, float)) and not isinstance(v, bool)
-            and v is not None and math.isfinite(v)]
+    return [
+        float(v)
+        for v in values
+        if isinstance(v, (int, float)) and not isinstance(v, bool) and v is not None and math.isfinite(v)
+    ]
 
 
 def mean_spread(values: Sequence[Any]) -> str:
@@ -89,8 +95,7 @@ def requirement_lines(groups: Mapping[str, Sequence[Mapping[str, Any]]]) -> list
         return []
     lines = [
         "",
-        "Requirements (robustness >= 0: passed; passed/evaluated, the smallest robustness "
-        "in brackets):",
+        "Requirements (robustness >= 0: passed; passed/evaluated, the smallest robustness in brackets):",
         "",
         "| | " + " | ".join(names) + " |",
         "|---|" + "---|" * len(names),
@@ -100,9 +105,7 @@ def requirement_lines(groups: Mapping[str, Sequence[Mapping[str, Any]]]) -> list
         for n in names:
             values = _finite([r.get(REQUIREMENTS_PREFIX + n) for r in rows])
             passed = sum(v >= 0.0 for v in values)
-            cells.append(
-                f"{passed}/{len(values)} ({min(values):.3g})" if values else "-"
-            )
+            cells.append(f"{passed}/{len(values)} ({min(values):.3g})" if values else "-")
         lines.append(f"| {group} | " + " | ".join(cells) + " |")
     return lines
 
@@ -114,8 +117,7 @@ def _by_controller(rows: Sequence[Row], controllers: Sequence[str]) -> dict[str,
     return runs
 
 
-def comparison(scenario: str, rows: Sequence[Row], controllers: Sequence[str],
-               declared: Sequence[Metric]) -> str:
+def comparison(scenario: str, rows: Sequence[Row], controllers: Sequence[str], declared: Sequence[Metric]) -> str:
     """``ego compare``'s metrics.md. ``rows``: each run's metrics with ``controller``,
     ``seed``, ``status`` and ``error``."""
     present = headline_names(declared, (n for r in rows for n in r["metrics"]))
@@ -131,59 +133,86 @@ def comparison(scenario: str, rows: Sequence[Row], controllers: Sequence[str],
         return lambda mine: mean_spread([r["metrics"].get(key) for r in mine])
 
     columns = [("runs", statuses)] + [(with_unit(k, units[k]), metric(k)) for k in present]
-    lines = [f"# {scenario}: {len(rows)} runs",
-             "",
-             "Mean +- standard deviation over seeds; (k/n) when only k of n runs have the value; "
-             "k/n for a yes/no metric: k of n runs say yes.",
-             "",
-             *table(controllers, _by_controller(rows, controllers), columns)]
-    lines += requirement_lines({c: [r["metrics"] for r in mine]
-                                for c, mine in _by_controller(rows, controllers).items()})
+    lines = [
+        f"# {scenario}: {len(rows)} runs",
+        "",
+        "Mean +- standard deviation over seeds; (k/n) when only k of n runs have the value; "
+        "k/n for a yes/no metric: k of n runs say yes.",
+        "",
+        *table(controllers, _by_controller(rows, controllers), columns),
+    ]
+    lines += requirement_lines(
+        {c: [r["metrics"] for r in mine] for c, mine in _by_controller(rows, controllers).items()}
+    )
     errors = [r for r in rows if r["error"]]
     if errors:
         lines += ["", "Errors:", ""] + [f"- {r['controller']} seed {r['seed']}: {r['error']}" for r in errors]
     unfinished = [r for r in rows if r["status"] == "interrupted"]
     if unfinished:
-        lines += ["", f"Interrupted: {len(unfinished)} of {len(rows)} runs did not finish: "
-                  + ", ".join(f"{r['controller']} seed {r['seed']}" for r in unfinished[:20])
-                  + (", ..." if len(unfinished) > 20 else "")]
+        lines += [
+            "",
+            f"Interrupted: {len(unfinished)} of {len(rows)} runs did not finish: "
+            + ", ".join(f"{r['controller']} seed {r['seed']}" for r in unfinished[:20])
+            + (", ..." if len(unfinished) > 20 else ""),
+        ]
     return "\n".join(lines) + "\n"
 
 
-def sweep(scenario: str, source: str, swept: Sequence[str], seeds: int, rows: Sequence[Row],
-          controllers: Sequence[str], declared: Sequence[Metric]) -> str:
+def sweep(
+    scenario: str,
+    source: str,
+    swept: Sequence[str],
+    seeds: int,
+    rows: Sequence[Row],
+    controllers: Sequence[str],
+    declared: Sequence[Metric],
+) -> str:
     """``ego sweep``'s summary.md. ``rows``: each run's flattened metrics with
     ``controller``, ``seed``, ``status`` and ``error`` beside them."""
     heads = [m for m in declared if m.headline and not m.name.endswith(".")]
     names = {k for r in rows for k in r}
     heads = [m for m in heads if m.name in names]
     runs = _by_controller(rows, controllers)
-    lines = [f"# {scenario} sweep: {len(rows)} runs", "",
-             f"Spec: `{source}`; swept: {', '.join(swept) or 'nothing'}; {seeds} seed(s).", ""]
+    lines = [
+        f"# {scenario} sweep: {len(rows)} runs",
+        "",
+        f"Spec: `{source}`; swept: {', '.join(swept) or 'nothing'}; {seeds} seed(s).",
+        "",
+    ]
     statuses = sorted({r["status"] for r in rows})
 
     def count(status: str) -> Callable[[Sequence[Row]], str]:
         return lambda mine: str(sum(1 for r in mine if r["status"] == status))
 
-    lines += table(controllers, runs, [("runs", lambda mine: str(len(mine)))]
-                   + [(s, count(s)) for s in statuses])
+    lines += table(controllers, runs, [("runs", lambda mine: str(len(mine)))] + [(s, count(s)) for s in statuses])
     if heads:
+
         def metric(key: str) -> Callable[[Sequence[Row]], str]:
             return lambda mine: percentiles([r.get(key) for r in mine])
 
-        lines += ["", "Headline metrics over the runs that have them: median [5th, 95th percentile] "
-                  "(min to max), n runs.", "",
-                  *table(controllers, runs, [(with_unit(m.name, m.unit), metric(m.name)) for m in heads])]
+        lines += [
+            "",
+            "Headline metrics over the runs that have them: median [5th, 95th percentile] (min to max), n runs.",
+            "",
+            *table(controllers, runs, [(with_unit(m.name, m.unit), metric(m.name)) for m in heads]),
+        ]
     for extra in ("collision_avoidable",):
         if extra in names:
-            lines += ["", f"Collisions braking at the friction limit from the trigger would have "
-                      f"avoided (`{extra}`):", ""]
+            lines += [
+                "",
+                f"Collisions braking at the friction limit from the trigger would have avoided (`{extra}`):",
+                "",
+            ]
             for c in controllers:
                 k = sum(1 for r in runs.get(c, ()) if r.get(extra) is True)
                 lines.append(f"- {c}: {k}")
     lines += requirement_lines(runs)
     errors = [r for r in rows if r["status"] == "error"]
     if errors:
-        lines += ["", f"{len(errors)} runs ended in an error; the first:", "",
-                  f"- {errors[0]['controller']} seed {errors[0]['seed']}: {errors[0]['error']}"]
+        lines += [
+            "",
+            f"{len(errors)} runs ended in an error; the first:",
+            "",
+            f"- {errors[0]['controller']} seed {errors[0]['seed']}: {errors[0]['error']}",
+        ]
     return "\n".join(lines) + "\n"

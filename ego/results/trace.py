@@ -156,8 +156,9 @@ class Trace:
 
     __slots__ = ("columns", "signal_names", "signal_units", "rows", "append", "_names")
 
-    def __init__(self, columns: Sequence[Column], signal_names: Iterable[str] = (),
-                 signal_units: Mapping[str, str] | None = None) -> None:
+    def __init__(
+        self, columns: Sequence[Column], signal_names: Iterable[str] = (), signal_units: Mapping[str, str] | None = None
+    ) -> None:
         names = tuple(c.name for c in columns)
         if len(set(names)) != len(names):
             dup = sorted({n for n in names if names.count(n) > 1})
@@ -195,8 +196,14 @@ class Trace:
             f"        _bad_signals(signals)\n"
             f"    _add(({values}*signals.values()))\n"
         )
-        scope = {"_M": _MISSING, "_empty": {}, "_signals": self.signal_names, "_add": self.rows.append,
-                 "_bad_signals": self._bad_signals, "_reject": self._reject}
+        scope = {
+            "_M": _MISSING,
+            "_empty": {},
+            "_signals": self.signal_names,
+            "_add": self.rows.append,
+            "_bad_signals": self._bad_signals,
+            "_reject": self._reject,
+        }
         exec(compile(source, f"<trace row of {len(names)} columns>", "exec"), scope)  # noqa: S102
         append: Callable[..., None] = scope["append"]  # type: ignore[assignment]
         append.__doc__ = "One row: every declared column by name, then the controller's ``signals``."
@@ -225,8 +232,7 @@ class Trace:
         return write
 
     def _bad_signals(self, signals: Iterable[str]) -> None:
-        raise TraceError(f"controller signals {tuple(signals)} do not match the declared "
-                         f"{self.signal_names}")
+        raise TraceError(f"controller signals {tuple(signals)} do not match the declared {self.signal_names}")
 
     def _reject(self, values: Mapping[str, float]) -> None:
         missing = [n for n in self._names if values.get(n, _MISSING) is _MISSING]

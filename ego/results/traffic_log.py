@@ -25,8 +25,7 @@ REACH_MARGIN = 20.0
 BATCH = 256
 
 #: the unit of every field of :class:`TrafficLog`
-UNITS = {"t": "s", "vehicle": "-", "x": "m", "y": "m", "heading": "rad", "speed": "m/s",
-         "length": "m", "width": "m"}
+UNITS = {"t": "s", "vehicle": "-", "x": "m", "y": "m", "heading": "rad", "speed": "m/s", "length": "m", "width": "m"}
 
 
 @dataclass(frozen=True)
@@ -38,15 +37,15 @@ class TrafficLog:
     every vehicle within RADIUS of some follower's centre: the leader and the followers.
     """
 
-    ids: tuple[str, ...]      # the vehicle ids seen, in first-seen order
-    t: np.ndarray             # float64 (n,)  s, simulation time of the SUMO step
-    vehicle: np.ndarray       # int32 (n,)    index into ids
-    x: np.ndarray             # float64 (n,)  m, world frame, centre of the vehicle's box
-    y: np.ndarray             # float64 (n,)  m
-    heading: np.ndarray       # float64 (n,)  rad, world frame, counter-clockwise from +x
-    speed: np.ndarray         # float64 (n,)  m/s
-    length: np.ndarray        # float64 (n,)  m
-    width: np.ndarray         # float64 (n,)  m
+    ids: tuple[str, ...]  # the vehicle ids seen, in first-seen order
+    t: np.ndarray  # float64 (n,)  s, simulation time of the SUMO step
+    vehicle: np.ndarray  # int32 (n,)    index into ids
+    x: np.ndarray  # float64 (n,)  m, world frame, centre of the vehicle's box
+    y: np.ndarray  # float64 (n,)  m
+    heading: np.ndarray  # float64 (n,)  rad, world frame, counter-clockwise from +x
+    speed: np.ndarray  # float64 (n,)  m/s
+    length: np.ndarray  # float64 (n,)  m
+    width: np.ndarray  # float64 (n,)  m
 
     def __len__(self) -> int:
         return len(self.t)
@@ -109,5 +108,4 @@ class TrafficCollector:
         self._filter()
         data = np.concatenate(self._chunks) if self._chunks else np.zeros((0, 8))
         cols = {name: np.ascontiguousarray(data[:, 2 + i]) for i, name in enumerate(_FIELDS)}
-        return TrafficLog(tuple(self._ids), np.ascontiguousarray(data[:, 0]),
-                          data[:, 1].astype(np.int32), **cols)
+        return TrafficLog(tuple(self._ids), np.ascontiguousarray(data[:, 0]), data[:, 1].astype(np.int32), **cols)

@@ -15,8 +15,17 @@ from ego.scenarios.references import load_scenario_plugins, resolve_scenario
 from ego.scenarios.tracking import Report000, Report000Config, SineTracking, SineTrackingConfig
 
 SCENARIOS: dict[str, type[Scenario]] = {
-    cls.name: cls for cls in (EmergencyBrake, FastFollower, CutIn, CurveScenario, LaneCenteringScenario, PlatoonScenario,
-                               SineTracking, Report000)
+    cls.name: cls
+    for cls in (
+        EmergencyBrake,
+        FastFollower,
+        CutIn,
+        CurveScenario,
+        LaneCenteringScenario,
+        PlatoonScenario,
+        SineTracking,
+        Report000,
+    )
 }
 
 
@@ -29,8 +38,7 @@ def _discover() -> None:
     for info in sorted(pkgutil.iter_modules(__path__), key=lambda i: i.name):
         module = importlib.import_module(f"{__name__}.{info.name}")
         for obj in vars(module).values():
-            if (isinstance(obj, type) and issubclass(obj, Scenario) and obj.name
-                    and obj.__module__ == module.__name__):
+            if isinstance(obj, type) and issubclass(obj, Scenario) and obj.name and obj.__module__ == module.__name__:
                 SCENARIOS.setdefault(obj.name, obj)
 
 
@@ -54,8 +62,9 @@ def scenario_class(name: str) -> type[Scenario]:
     except KeyError:
         if is_reference(name):
             return resolve_scenario(name)
-        raise ConfigError(f"unknown scenario {name!r} (known: {', '.join(SCENARIOS)})"
-                          f"{did_you_mean(name, SCENARIOS)}") from None
+        raise ConfigError(
+            f"unknown scenario {name!r} (known: {', '.join(SCENARIOS)}){did_you_mean(name, SCENARIOS)}"
+        ) from None
 
 
 __all__ = [

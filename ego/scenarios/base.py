@@ -60,10 +60,13 @@ class CommonConfig(TimingConfig):
     """Timing of the scenarios that run in SUMO."""
 
     sumo_step: float = param(0.1, "s", "SUMO step, a whole multiple of dt", min=0.01, max=1.0)
-    lateral_resolution: float = param(0.875, "m", "width of SUMO's sublanes (sublane model)",
-                                      min=0.1, max=3.5)
-    plant: str = param("", "-", "an FMI co-simulation FMU (path/to/vehicle.fmu) replacing the ego's "
-                       "vehicle model (see docs/fmi.md); empty: the scenario's own model")
+    lateral_resolution: float = param(0.875, "m", "width of SUMO's sublanes (sublane model)", min=0.1, max=3.5)
+    plant: str = param(
+        "",
+        "-",
+        "an FMI co-simulation FMU (path/to/vehicle.fmu) replacing the ego's "
+        "vehicle model (see docs/fmi.md); empty: the scenario's own model",
+    )
     plant_map: str = param("", "-", "TOML file mapping the plant FMU's variables (default: by name)")
 
     def __post_init__(self) -> None:
@@ -86,8 +89,7 @@ class CommonConfig(TimingConfig):
         return round(self.sumo_step / self.dt)
 
 
-def divergence(state: Sequence[float], offset: float, heading_error: float,
-               road_halfwidth: float) -> str | None:
+def divergence(state: Sequence[float], offset: float, heading_error: float, road_halfwidth: float) -> str | None:
     """Why the ego's state is beyond anything a controller should produce, or None."""
     X, u, Y, v, psi, r = state
     if not all(map(math.isfinite, state)):
@@ -111,8 +113,9 @@ def check_backend(cls: type[Scenario], backend: str) -> None:
 
     registered(backend)  # a name no backend has
     if backend not in cls.backends:
-        raise ConfigError(f"bad value for --backend: {backend!r} (scenario {cls.name} runs on "
-                          f"{' or '.join(cls.backends)} only)")
+        raise ConfigError(
+            f"bad value for --backend: {backend!r} (scenario {cls.name} runs on {' or '.join(cls.backends)} only)"
+        )
 
 
 class Scenario:
@@ -177,9 +180,17 @@ class Scenario:
         """The declared trace columns of this run (default: the class's ``columns``)."""
         return self.columns
 
-    def __init__(self, config, controller: Controller, *, seed: int = 0,
-                 recorder: Recorder | None = None, controller_name: str = "",
-                 backend: str = "sumo", backend_options: Mapping[str, Any] | None = None) -> None:
+    def __init__(
+        self,
+        config,
+        controller: Controller,
+        *,
+        seed: int = 0,
+        recorder: Recorder | None = None,
+        controller_name: str = "",
+        backend: str = "sumo",
+        backend_options: Mapping[str, Any] | None = None,
+    ) -> None:
         check_backend(type(self), backend)
         self.config = config
         #: the traffic simulator (one of ``backends``; ``ego.sim.registry``) and its options
@@ -260,8 +271,10 @@ class Scenario:
             self.traffic = TrafficCollector()
         self._setup(np.random.default_rng(self.seed))
         if self._fmu_plant() and not getattr(self.ego, "is_fmu", False):
-            raise ConfigError(f"--set plant= replaces a bicycle plant; the {self.name} scenario has none "
-                              "(motorway and curve scenarios have)")
+            raise ConfigError(
+                f"--set plant= replaces a bicycle plant; the {self.name} scenario has none "
+                "(motorway and curve scenarios have)"
+            )
         scene = self._scene()
         self._lanes = tuple((w, tuple(map(tuple, pts))) for w, pts in scene.lanes)
         self.recorder.begin(scene, self._series(), self._meta())
@@ -348,8 +361,11 @@ class Scenario:
 
         # a process that ignores a signal (a sweep's worker: the parent handles Ctrl-C) keeps
         # ignoring it
-        old = {sig: signal.signal(sig, request) for sig in (signal.SIGINT, signal.SIGTERM)
-               if signal.getsignal(sig) is not signal.SIG_IGN}
+        old = {
+            sig: signal.signal(sig, request)
+            for sig in (signal.SIGINT, signal.SIGTERM)
+            if signal.getsignal(sig) is not signal.SIG_IGN
+        }
 
         def restore() -> None:
             for sig, handler in old.items():
@@ -398,9 +414,11 @@ class Scenario:
         from ego.sumo.net import net_file
 
         c = self.config
-        return make_sim(self.backend, SimSetup(net_file(self.network), c.sumo_step, self.seed,
-                                               c.lateral_resolution, self.edge, c.duration),
-                        self.backend_options)
+        return make_sim(
+            self.backend,
+            SimSetup(net_file(self.network), c.sumo_step, self.seed, c.lateral_resolution, self.edge, c.duration),
+            self.backend_options,
+        )
 
     def _sumo_step(self) -> None:
         bridge = self.bridge
@@ -421,8 +439,11 @@ class Scenario:
     def _collided(self, c: Collision) -> None:
         """End the run on a collision involving the ego."""
         self.collision = c
-        self._end("collision", f"{c.collider} ({c.collider_speed:.1f} m/s) hit {c.victim} "
-                  f"({c.victim_speed:.1f} m/s): {c.kind}", level="ERROR")
+        self._end(
+            "collision",
+            f"{c.collider} ({c.collider_speed:.1f} m/s) hit {c.victim} ({c.victim_speed:.1f} m/s): {c.kind}",
+            level="ERROR",
+        )
 
     def event(self, kind: str, text: str, level: str = "INFO") -> None:
         """Record an event: the run's event list, the ``ego`` logger and the recording."""
@@ -465,14 +486,26 @@ class Scenario:
         if len(self.backends) > 1:
             metrics["backend"] = self.backend
         metrics.update(self._metrics(trace, columns))
-        metrics.update({
-            "sim_time": json_number(self.t, 4),
-            "wall_time": json_number(self._wall, 4),
-            "steps": self.k,
-        })
-        return RunResult(self.name, self.controller_name, self.seed, self.status, metrics,
-                         list(self.events), columns, trace, self.trace.units(),
-                         self.traffic.log() if self.traffic is not None else None, self._lanes)
+        metrics.update(
+            {
+                "sim_time": json_number(self.t, 4),
+                "wall_time": json_number(self._wall, 4),
+                "steps": self.k,
+            }
+        )
+        return RunResult(
+            self.name,
+            self.controller_name,
+            self.seed,
+            self.status,
+            metrics,
+            list(self.events),
+            columns,
+            trace,
+            self.trace.units(),
+            self.traffic.log() if self.traffic is not None else None,
+            self._lanes,
+        )
 
     # -- one contract for every task: the controlled vehicles by id ------------------------
     # (what a front-end driving one vehicle, ego.gym, reads; the platoon has one per follower)
@@ -604,8 +637,17 @@ class ComposedLoop:
     def bind(sc: Scenario, parts: Parts) -> None:
         sc.parts = parts
         sc.world, sc.view, sc.manoeuvre, sc.safety = parts.world, parts.view, parts.manoeuvre, parts.safety
-        for name in ("_setup", "_act", "_update", "_before_sumo_step", "_after_sumo_step", "_record_boxes",
-                     "_setup_traffic_log", "_log_traffic", "_scene"):
+        for name in (
+            "_setup",
+            "_act",
+            "_update",
+            "_before_sumo_step",
+            "_after_sumo_step",
+            "_record_boxes",
+            "_setup_traffic_log",
+            "_log_traffic",
+            "_scene",
+        ):
             setattr(sc, name, getattr(ComposedLoop, name).__get__(sc))
         # the parts' own methods where the loop's hook is exactly theirs (no wrapper per step)
         sc._check_divergence = parts.view.diverged
@@ -621,8 +663,12 @@ class ComposedLoop:
         bridge = self.bridge
         missing = world.setup(bridge, rng)
         if missing:
-            self.event("traffic", f"SUMO could not place {len(missing)} background vehicles: "
-                       f"{', '.join(missing[:5])}{'...' if len(missing) > 5 else ''}", "WARN")
+            self.event(
+                "traffic",
+                f"SUMO could not place {len(missing)} background vehicles: "
+                f"{', '.join(missing[:5])}{'...' if len(missing) > 5 else ''}",
+                "WARN",
+            )
         self.controlled_ids = (EGO,)
         self.colors.update(world.colors)
         self.lanes = world.lanes
@@ -649,10 +695,33 @@ class ComposedLoop:
         obs, view = self.obs, self.view
         # the row describes time t: the state before this step and the action applied
         d = obs.d
-        self._write_row(self.controller.signals(), (
-            obs.t, view.X, view.Y, view.s, d, obs.d_ref, d - obs.d_ref, view.d_road, obs.speed, view.ds,
-            obs.s_ref, obs.ds_ref, fx, delta, view.ttc_front, view.ttc_rear, view.gap_front, view.gap_rear,
-            ego.lateral_accel, obs.yaw_rate, self.manoeuvre.phase, view.target_lane))
+        self._write_row(
+            self.controller.signals(),
+            (
+                obs.t,
+                view.X,
+                view.Y,
+                view.s,
+                d,
+                obs.d_ref,
+                d - obs.d_ref,
+                view.d_road,
+                obs.speed,
+                view.ds,
+                obs.s_ref,
+                obs.ds_ref,
+                fx,
+                delta,
+                view.ttc_front,
+                view.ttc_rear,
+                view.gap_front,
+                view.gap_rear,
+                ego.lateral_accel,
+                obs.yaw_rate,
+                self.manoeuvre.phase,
+                view.target_lane,
+            ),
+        )
         view.frame()
 
     def _before_sumo_step(self) -> None:
@@ -731,8 +800,12 @@ class RoadScenario(Scenario):
     def _check_divergence(self) -> str | None:
         u, r = self.ego.state[1], self.ego.state[5]
         # comparisons are False for NaN, so anything odd falls through to the full check
-        if (abs(self.d_road) <= self.road_halfwidth and -1.0 <= u <= 80.0 and abs(r) <= 2.5
-                and abs(self.heading_error) <= 1.3):
+        if (
+            abs(self.d_road) <= self.road_halfwidth
+            and -1.0 <= u <= 80.0
+            and abs(r) <= 2.5
+            and abs(self.heading_error) <= 1.3
+        ):
             return None
         return divergence(self.ego.state, self.d_road, self.heading_error, self.road_halfwidth)
 
@@ -776,9 +849,13 @@ COMMON_METRICS = (
     Metric("scenario", "-", "scenario name"),
     Metric("controller", "-", "controller name"),
     Metric("seed", "-", "random seed of the traffic and the controller"),
-    Metric("status", "-", "completed; ended (the duration ran out before the scenario's end, "
-           "not a failure); collision, diverged or timeout (the duration ran out during a "
-           "manoeuvre); interrupted"),
+    Metric(
+        "status",
+        "-",
+        "completed; ended (the duration ran out before the scenario's end, "
+        "not a failure); collision, diverged or timeout (the duration ran out during a "
+        "manoeuvre); interrupted",
+    ),
     Metric("status_detail", "-", "why the run ended"),
     Metric("collision", "-", "the ego (or a controlled vehicle) was in a collision"),
     Metric("collision_with", "-", "the other party of the collision"),
@@ -796,8 +873,7 @@ COMMON_TAIL_METRICS = (
 def signal_series(names: Sequence[str], units: Mapping[str, str]) -> list[Series]:
     """Recording series for a controller's internal signals: one "controller" panel per
     unit (``units``: name -> unit, as the controller declares them)."""
-    return [Series(n, f"plots/controller/{unit_path(units.get(n, ''))}/{n}", units.get(n, ""), n)
-            for n in names]
+    return [Series(n, f"plots/controller/{unit_path(units.get(n, ''))}/{n}", units.get(n, ""), n) for n in names]
 
 
 def vehicle_series() -> list[Series]:

@@ -57,8 +57,7 @@ ONCOMING_PREFIX = "oncoming"
 GEOMETRY = VehicleGeometry(length=4.9, width=1.9, cg_to_front=2.45)
 #: oncoming cars: SUMO does not slow down for curves, so their top speed is the curve's
 #: (30 km/h on the 11.5 m inner arc is a lateral acceleration of 6 m/s^2)
-TRAFFIC_TYPE = VehicleType("traffic", length=4.5, width=1.8, max_speed=30.0 / 3.6,
-                           color=(150, 150, 150))
+TRAFFIC_TYPE = VehicleType("traffic", length=4.5, width=1.8, max_speed=30.0 / 3.6, color=(150, 150, 150))
 LEAD_TYPE = VehicleType("lead", length=4.5, width=1.8, sigma=0.0, color=(160, 60, 220))
 APPROACH, ENGAGED = 0, 1
 PHASE_NAMES = ("approach", "engaged")  #: by phase number
@@ -70,39 +69,45 @@ ONCOMING_SPEED = 25.0 * KMH  #: departure speed of the oncoming cars (m/s)
 class CurveConfig(CommonConfig):
     """Report 002's task: enter the arc at 30 km/h, accelerate at 0.3 m/s^2, steer round it."""
 
-    duration: float = param(20.0, "s", "simulated time limit (status timeout if the ego has not "
-                            "left the arc by then)", min=1.0, max=600.0)
-    entry_speed: float = param(30.0, "km/h", "ego's speed on the approach (report 002: 30 km/h)",
-                               min=5.0, max=60.0)
-    accel: float = param(0.3, "m/s^2", "axial acceleration from the event on (report 002: 0.3)",
-                         min=-2.0, max=2.0)
-    approach: float = param(20.0, "m", "ego's front bumper before the arc start at t = 0",
-                            min=5.0, max=95.0)
-    preview: float = param(2.0, "m", "the controller engages when the route distance from the "
-                           "front bumper to the arc start falls to this", min=0.0, max=50.0)
-    lead: float = param(0.0, "km/h", "speed of a slower car ahead that the ego meets in the "
-                        "curve (0: no car ahead)", min=0.0, max=60.0)
-    lead_gap: float = param(15.0, "m", "gap from the ego's front to the lead's rear at t = 0",
-                            min=3.0, max=80.0)
+    duration: float = param(
+        20.0, "s", "simulated time limit (status timeout if the ego has not left the arc by then)", min=1.0, max=600.0
+    )
+    entry_speed: float = param(30.0, "km/h", "ego's speed on the approach (report 002: 30 km/h)", min=5.0, max=60.0)
+    accel: float = param(0.3, "m/s^2", "axial acceleration from the event on (report 002: 0.3)", min=-2.0, max=2.0)
+    approach: float = param(20.0, "m", "ego's front bumper before the arc start at t = 0", min=5.0, max=95.0)
+    preview: float = param(
+        2.0,
+        "m",
+        "the controller engages when the route distance from the front bumper to the arc start falls to this",
+        min=0.0,
+        max=50.0,
+    )
+    lead: float = param(
+        0.0, "km/h", "speed of a slower car ahead that the ego meets in the curve (0: no car ahead)", min=0.0, max=60.0
+    )
+    lead_gap: float = param(15.0, "m", "gap from the ego's front to the lead's rear at t = 0", min=3.0, max=80.0)
     time_gap: float = param(1.2, "s", "ego's plan behind a lead: time gap it keeps", min=0.1, max=5.0)
     min_gap: float = param(2.0, "m", "ego's plan behind a lead: standstill gap", min=0.5, max=20.0)
-    oncoming: float = param(600.0, "veh/h", "oncoming traffic on the other lane (0: none)",
-                            min=0.0, max=900.0)
+    oncoming: float = param(600.0, "veh/h", "oncoming traffic on the other lane (0: none)", min=0.0, max=900.0)
     max_steer: float = param(0.6, "rad", "front steer limit of the ego", min=0.05, max=1.0)
 
     def __post_init__(self) -> None:
         super().__post_init__()
         if self.preview > self.approach:
-            raise ConfigError(f"bad value for preview: {self.preview} (expected at most "
-                              f"approach={self.approach} m, or the task starts at once)")
+            raise ConfigError(
+                f"bad value for preview: {self.preview} (expected at most "
+                f"approach={self.approach} m, or the task starts at once)"
+            )
 
 
 class CurveScenario(RoadScenario):
     """Report 002's 90-degree curve with a SUMO lead car and oncoming traffic."""
 
     name = "curve"
-    summary = ("report 002: steer a 30 km/h car accelerating at 0.3 m/s^2 round a 90-degree "
-               "arc of radius 15 m (oncoming traffic; --set lead=KMH for a slow car ahead)")
+    summary = (
+        "report 002: steer a 30 km/h car accelerating at 0.3 m/s^2 round a 90-degree "
+        "arc of radius 15 m (oncoming traffic; --set lead=KMH for a slow car ahead)"
+    )
     task = "curve"
     network = "curve"
     config_cls = CurveConfig
@@ -139,17 +144,25 @@ class CurveScenario(RoadScenario):
         Metric("max_lat_accel", "m/s^2", "largest |lateral acceleration| in the arc"),
         Metric("min_gap_front", "m", "smallest gap to the lead", headline=True),
     )
-    plots = tuple(Plot(column, file, label, markers=(
-        Marker("engage", "the curve controller engages", "v"),
-        Marker("arc", "entering the arc", "s"),
-        Marker("collision", "collision", "X"),
-    )) for column, file, label in (
-        ("e_d", "e_d.png", "e_d = distance to the arc centre - R"),
-        ("e_a", "e_a.png", "e_a = heading - tangent"),
-        ("speed", "speed.png", "speed"),
-        ("delta", "steering.png", "front steer angle"),
-        ("a_x", "a_x.png", "axial acceleration"),
-    ))
+    plots = tuple(
+        Plot(
+            column,
+            file,
+            label,
+            markers=(
+                Marker("engage", "the curve controller engages", "v"),
+                Marker("arc", "entering the arc", "s"),
+                Marker("collision", "collision", "X"),
+            ),
+        )
+        for column, file, label in (
+            ("e_d", "e_d.png", "e_d = distance to the arc centre - R"),
+            ("e_a", "e_a.png", "e_a = heading - tangent"),
+            ("speed", "speed.png", "speed"),
+            ("delta", "steering.png", "front steer angle"),
+            ("a_x", "a_x.png", "axial acceleration"),
+        )
+    )
 
     def __init__(self, config, controller, **kwargs) -> None:
         super().__init__(config, controller, **kwargs)
@@ -204,12 +217,22 @@ class CurveScenario(RoadScenario):
         if c.oncoming > 0.0:
             onc_speed = ONCOMING_SPEED
             specs += background_traffic(
-                rng, lanes=[0], start=5.0, end=self.lanes[f"{ONCOMING_EDGE}_0"].length - 5.0,
-                density=c.oncoming / (onc_speed / KMH), speed=onc_speed, min_spacing=20.0,
-                route=ONCOMING_ROUTE, type_id=TRAFFIC_TYPE.id, prefix=ONCOMING_PREFIX,
+                rng,
+                lanes=[0],
+                start=5.0,
+                end=self.lanes[f"{ONCOMING_EDGE}_0"].length - 5.0,
+                density=c.oncoming / (onc_speed / KMH),
+                speed=onc_speed,
+                min_spacing=20.0,
+                route=ONCOMING_ROUTE,
+                type_id=TRAFFIC_TYPE.id,
+                prefix=ONCOMING_PREFIX,
             )
-            self.actors.append(PoissonFlow(rng, ONCOMING_ROUTE, TRAFFIC_TYPE.id, c.oncoming, onc_speed,
-                                           prefix=f"{ONCOMING_PREFIX}_flow"))
+            self.actors.append(
+                PoissonFlow(
+                    rng, ONCOMING_ROUTE, TRAFFIC_TYPE.id, c.oncoming, onc_speed, prefix=f"{ONCOMING_PREFIX}_flow"
+                )
+            )
         bridge.add_vehicles(specs)
         missing = bridge.insert(required=required)
         if missing:
@@ -224,9 +247,16 @@ class CurveScenario(RoadScenario):
 
         x, y, psi = bridge.cg_pose(EGO)
         model = DynamicBicycle(DynamicBicycleParams(slip_speed_floor=1.0))
-        self.ego = self.own_plant(BicyclePlant(model, self.geometry, c.dt, c.substeps,
-                                               ActuatorLimits(max_steer=c.max_steer),
-                                               state=(x, speed, y, 0.0, psi, 0.0)))
+        self.ego = self.own_plant(
+            BicyclePlant(
+                model,
+                self.geometry,
+                c.dt,
+                c.substeps,
+                ActuatorLimits(max_steer=c.max_steer),
+                state=(x, speed, y, 0.0, psi, 0.0),
+            )
+        )
         self._kinematics()
         self._after_sumo_step()
 
@@ -242,10 +272,22 @@ class CurveScenario(RoadScenario):
         d = self.d_road
         self.trace.append(
             self.controller.signals(),
-            t=obs.t, s=self.s, d=d, e_d=-self.arc_sign * d, e_a=self.heading_error, speed=obs.speed,
-            ds=self.ds, a_x=a_x, delta=delta, accel_ref=obs.accel_ref, curvature=self.curvature,
-            gap_front=self.gap_front, lat_accel=ego.lateral_accel, yaw_rate=obs.yaw_rate,
-            phase=self.phase, in_arc=1.0 if self.arc_start <= self.s <= self.arc_end else 0.0,
+            t=obs.t,
+            s=self.s,
+            d=d,
+            e_d=-self.arc_sign * d,
+            e_a=self.heading_error,
+            speed=obs.speed,
+            ds=self.ds,
+            a_x=a_x,
+            delta=delta,
+            accel_ref=obs.accel_ref,
+            curvature=self.curvature,
+            gap_front=self.gap_front,
+            lat_accel=ego.lateral_accel,
+            yaw_rate=obs.yaw_rate,
+            phase=self.phase,
+            in_arc=1.0 if self.arc_start <= self.s <= self.arc_end else 0.0,
         )
         self._kinematics()
 
@@ -262,19 +304,29 @@ class CurveScenario(RoadScenario):
                 self.engage_t = self.t
                 # it takes over from a car held straight: no history, no integral
                 self.controller.reset(seed=self.seed)
-                self.event("engage", f"arc start {max(dist, 0.0):.2f} m ahead (preview "
-                           f"{self.config.preview:g} m): the curve controller takes over")
+                self.event(
+                    "engage",
+                    f"arc start {max(dist, 0.0):.2f} m ahead (preview "
+                    f"{self.config.preview:g} m): the curve controller takes over",
+                )
         self._check_oncoming()
 
     def _check_oncoming(self) -> None:
         """Collision with an oncoming car: box overlap (SUMO does not check across edges)."""
         ids, rows = self.bridge.poses()
         X, u, Y, _, psi, _ = self.ego.state
-        ego_box = (X + (0.5 * self.geometry.length - self.geometry.cg_to_front) * math.cos(psi),
-                   Y + (0.5 * self.geometry.length - self.geometry.cg_to_front) * math.sin(psi),
-                   psi, self.geometry.length, self.geometry.width)
-        near = [(vid, row) for vid, row in zip(ids, rows) if vid.startswith(ONCOMING_PREFIX)
-                and abs(row[0] - X) < 12.0 and abs(row[1] - Y) < 12.0]
+        ego_box = (
+            X + (0.5 * self.geometry.length - self.geometry.cg_to_front) * math.cos(psi),
+            Y + (0.5 * self.geometry.length - self.geometry.cg_to_front) * math.sin(psi),
+            psi,
+            self.geometry.length,
+            self.geometry.width,
+        )
+        near = [
+            (vid, row)
+            for vid, row in zip(ids, rows)
+            if vid.startswith(ONCOMING_PREFIX) and abs(row[0] - X) < 12.0 and abs(row[1] - Y) < 12.0
+        ]
         if not near:
             return
         boxes = sumo_poses_to_boxes([row for _, row in near])
@@ -293,21 +345,24 @@ class CurveScenario(RoadScenario):
             self.event("arc", f"entering the arc at {self.ego.state[1] / KMH:.1f} km/h")
         if s >= self.arc_end and self.arc_exit_t is None:
             self.arc_exit_t = self.t
-            self._end("completed", f"left the arc after {self.t - (self.arc_enter_t or 0.0):.2f} s "
-                      f"at {self.ego.state[1] / KMH:.1f} km/h, e_d {-self.arc_sign * self.d_road:+.3f} m")
+            self._end(
+                "completed",
+                f"left the arc after {self.t - (self.arc_enter_t or 0.0):.2f} s "
+                f"at {self.ego.state[1] / KMH:.1f} km/h, e_d {-self.arc_sign * self.d_road:+.3f} m",
+            )
             return
         plan = c.accel if self.phase == ENGAGED else 0.0
         gap = self._sync_gap
         if gap < INF:
             # extrapolated from the last SUMO step at both cars' speeds
             gap += (self.lead_speed - self.ds) * (self.t - self._sync_t)
-            follow = (0.4 * (gap - c.min_gap - c.time_gap * self.ds)
-                      + 1.0 * (self.lead_speed - self.ds))
+            follow = 0.4 * (gap - c.min_gap - c.time_gap * self.ds) + 1.0 * (self.lead_speed - self.ds)
             if follow < plan:
                 plan = max(follow, -7.0)
         self.gap_front = gap
-        road_observation(obs, self.t, s, self.ds, self.d_road, self.dd, self.ego.state, self.heading_error,
-                         self.curvature)
+        road_observation(
+            obs, self.t, s, self.ds, self.d_road, self.dd, self.ego.state, self.heading_error, self.curvature
+        )
         obs.accel_ref = plan
 
     def _final_status(self) -> tuple[str, str]:
@@ -329,11 +384,14 @@ class CurveScenario(RoadScenario):
             "completed_arc": completed,
             "max_abs_ed": m.json_number(m.max_abs(ed)) if ed.size else None,
             "final_ed": m.json_number(float(ed[-1])) if ed.size else None,
-            "rms_ed": m.json_number(float(np.sqrt(np.mean(ed ** 2)))) if ed.size else None,
+            "rms_ed": m.json_number(float(np.sqrt(np.mean(ed**2)))) if ed.size else None,
             "max_abs_ea": m.json_number(m.max_abs(ea)) if ea.size else None,
             "final_ea": m.json_number(float(ea[-1])) if ea.size else None,
-            "time_in_arc": (m.json_number(self.arc_exit_t - self.arc_enter_t, 4)
-                            if completed and self.arc_enter_t is not None else None),
+            "time_in_arc": (
+                m.json_number(self.arc_exit_t - self.arc_enter_t, 4)
+                if completed and self.arc_enter_t is not None
+                else None
+            ),
             "entry_speed": m.json_number(speed[enter_i] / KMH, 3) if enter_i is not None else None,
             "exit_speed": m.json_number(x[1] / KMH, 3) if completed else None,
             "engage_time": m.json_number(self.engage_t, 4),

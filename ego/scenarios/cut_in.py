@@ -24,8 +24,9 @@ from ego.sim.types import VehicleSpec, VehicleType
 from ego.sumo.traffic import CutInVehicle
 
 CUTTER = "cutter"
-CUTTER_TYPE = VehicleType("cutter", length=4.5, width=1.8, sigma=0.0, max_speed=60.0, accel=4.0,
-                          decel=8.0, color=(255, 80, 160))
+CUTTER_TYPE = VehicleType(
+    "cutter", length=4.5, width=1.8, sigma=0.0, max_speed=60.0, accel=4.0, decel=8.0, color=(255, 80, 160)
+)
 
 
 @dataclass(frozen=True)
@@ -33,28 +34,30 @@ class CutInConfig(EvasiveConfig):
     duration: float = param(30.0, "s", "simulated time", min=1.0, max=3600.0)
     ego_speed: float = param(25.0, "m/s", "ego's cruise speed", min=5.0, max=45.0)
     cut_in_side: str = param("left", "-", "the lane the car comes from", choices=("left", "right"))
-    cut_in_gap: float = param(15.0, "m", "its rear bumper ahead of the ego's front when it cuts in",
-                              min=2.0, max=100.0)
-    cut_in_speed: float = param(5.0, "m/s", "how much slower than the ego it is when it cuts in",
-                                min=0.0, max=20.0)
+    cut_in_gap: float = param(15.0, "m", "its rear bumper ahead of the ego's front when it cuts in", min=2.0, max=100.0)
+    cut_in_speed: float = param(5.0, "m/s", "how much slower than the ego it is when it cuts in", min=0.0, max=20.0)
     cut_in_duration: float = param(2.0, "s", "time it takes across the lane", min=0.5, max=10.0)
     overtake_speed: float = param(5.0, "m/s", "how much faster than the ego it overtakes", min=1.0, max=20.0)
     start_behind: float = param(20.0, "m", "its front bumper behind the ego's at t = 0", min=0.0, max=200.0)
-    brake_decel: float = param(3.0, "m/s^2", "deceleration of the in-lane speed reference (more when "
-                               "braking needs more)", min=0.5, max=12.0)
-    brake_max_lag: float = param(2.0, "m", "how far the in-lane position reference may run from the ego",
-                                 min=0.1, max=50.0)
-    brake_share: float = param(0.8, "-", "brake in lane if that avoids the car at up to this share "
-                               "of the friction limit; else evade", min=0.1, max=1.0)
+    brake_decel: float = param(
+        3.0, "m/s^2", "deceleration of the in-lane speed reference (more when braking needs more)", min=0.5, max=12.0
+    )
+    brake_max_lag: float = param(
+        2.0, "m", "how far the in-lane position reference may run from the ego", min=0.1, max=50.0
+    )
+    brake_share: float = param(0.8, "-", "in-lane braking limit, a share of the friction limit", min=0.1, max=1.0)
 
     def __post_init__(self) -> None:
         super().__post_init__()
         if self.cut_in_speed >= self.ego_speed:
-            raise ConfigError(f"bad value for cut_in_speed: {self.cut_in_speed} (must be below "
-                              f"ego_speed={self.ego_speed} m/s)")
+            raise ConfigError(
+                f"bad value for cut_in_speed: {self.cut_in_speed} (must be below ego_speed={self.ego_speed} m/s)"
+            )
         if self.cut_in_lane not in LANE_NAMES:
-            raise ConfigError(f"bad value for cut_in_side: {self.cut_in_side!r} (no {self.cut_in_side} lane "
-                              f"next to ego_lane={self.ego_lane})")
+            raise ConfigError(
+                f"bad value for cut_in_side: {self.cut_in_side!r} (no {self.cut_in_side} lane "
+                f"next to ego_lane={self.ego_lane})"
+            )
 
     @property
     def cut_in_lane(self) -> int:  # the lane the car cuts in from
@@ -67,14 +70,17 @@ class CutIn(Scenario):
     config_cls = CutInConfig
     network, edge, backends, columns, plots = "highway", EDGE, BACKENDS, COLUMNS, PLOTS
     #: the lane-change metrics stay, but the table shows what a cut-in is judged by
-    metric_specs = tuple(replace(x, headline=x.name in ("max_decel", "lane_change_duration")) for x in METRICS) + (
-        Metric("min_gap", "m", "smallest bumper gap to the front object (the cutting car once it is "
-               "in), from the outlines", headline=True),
-        Metric("min_ttc", "s", "smallest front TTC", headline=True),
-        Metric("reaction_time", "s", "from the start of the cut-in to the trigger", headline=True),
-        Metric("cut_in_time", "s", "when the car started across the lane"),
-        Metric("response", "-", "brake (in lane) or evade (lane change), none without a trigger"),
-    ) + ReachCriterion.METRICS
+    metric_specs = (
+        tuple(replace(x, headline=x.name in ("max_decel", "lane_change_duration")) for x in METRICS)
+        + (
+            Metric("min_gap", "m", "smallest bumper gap to the front object (outlines)", headline=True),
+            Metric("min_ttc", "s", "smallest front TTC", headline=True),
+            Metric("reaction_time", "s", "from the start of the cut-in to the trigger", headline=True),
+            Metric("cut_in_time", "s", "when the car started across the lane"),
+            Metric("response", "-", "brake (in lane) or evade (lane change), none without a trigger"),
+        )
+        + ReachCriterion.METRICS
+    )
     markers = MARKERS + (Marker("cut-in", "the car starts across", "<"),)
 
     compare_plots = classmethod(compare_plots)
@@ -88,11 +94,14 @@ class CutIn(Scenario):
         self._announced = False
         self.reach = ReachCriterion(CUTTER)  # the braking criterion (issue 21)
         world.add_type(CUTTER_TYPE)
-        self.cutter = CutInVehicle(CUTTER, "ego", c.cut_in_lane, c.ego_lane, c.ego_speed + c.overtake_speed,
-                                   c.ego_speed - c.cut_in_speed, c.cut_in_gap, c.cut_in_duration,
-                                   world.lane_width(c.ego_lane), c.sumo_step)
-        world.vehicle(VehicleSpec(CUTTER, CUTTER_TYPE.id, ROUTE, c.cut_in_lane, c.ego_start - c.start_behind,
-                                  c.ego_speed), CUTTER_TYPE, self.cutter)
+        lanes, speeds = (c.cut_in_lane, c.ego_lane), (c.ego_speed + c.overtake_speed, c.ego_speed - c.cut_in_speed)
+        across = (c.cut_in_gap, c.cut_in_duration, world.lane_width(c.ego_lane), c.sumo_step)
+        self.cutter = CutInVehicle(CUTTER, "ego", *lanes, *speeds, *across)
+        world.vehicle(
+            VehicleSpec(CUTTER, CUTTER_TYPE.id, ROUTE, c.cut_in_lane, c.ego_start - c.start_behind, c.ego_speed),
+            CUTTER_TYPE,
+            self.cutter,
+        )
         # the cutting car's lane stays clear: it drives blind (its script is the point)
         world.keep_clear(c.cut_in_lane)
 
@@ -122,7 +131,14 @@ class CutIn(Scenario):
         cut, trigger_t = self.cutter.cut_in_time, self.manoeuvre.trigger_t
         reaction = trigger_t - cut if cut is not None and trigger_t is not None else None
         response = "none" if trigger_t is None else "brake" if self.manoeuvre.chosen is None else "evade"
-        return {**out, "min_gap": out["min_gap_front"], "min_ttc": out["min_ttc_front"],
-                "reaction_time": m.json_number(reaction, 4), "cut_in_time": m.json_number(cut, 4), "response": response,
-                **self.reach.metrics(self.collision is not None, friction_limit(self.ego.model.params),
-                                     self.config.sumo_step)}
+        return {
+            **out,
+            "min_gap": out["min_gap_front"],
+            "min_ttc": out["min_ttc_front"],
+            "reaction_time": m.json_number(reaction, 4),
+            "cut_in_time": m.json_number(cut, 4),
+            "response": response,
+            **self.reach.metrics(
+                self.collision is not None, friction_limit(self.ego.model.params), self.config.sumo_step
+            ),
+        }

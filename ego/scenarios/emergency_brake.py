@@ -45,29 +45,39 @@ SAME_AS_EGO = -1.0
 
 @dataclass(frozen=True)
 class EmergencyBrakeConfig(EvasiveConfig):
-    lead_gap: float = param(30.0, "m", "gap from the ego's front to the lead car's rear at t = 0",
-                            min=5.0, max=300.0)
-    lead_speed: float = param(SAME_AS_EGO, "m/s", "the lead car's speed from t = 0 until it brakes: "
-                              "-1 = ego_speed, 0 = stopped (Euro NCAP CCRs), 5.556 = 20 km/h (CCRm)",
-                              min=-1.0, max=45.0)
-    lead_brake_time: float = param(2.0, "s", "when the lead car starts braking (at most duration)",
-                                   min=0.0, max=3600.0)
+    lead_gap: float = param(30.0, "m", "gap from the ego's front to the lead car's rear at t = 0", min=5.0, max=300.0)
+    lead_speed: float = param(
+        SAME_AS_EGO,
+        "m/s",
+        "the lead car's speed from t = 0 until it brakes: "
+        "-1 = ego_speed, 0 = stopped (Euro NCAP CCRs), 5.556 = 20 km/h (CCRm)",
+        min=-1.0,
+        max=45.0,
+    )
+    lead_brake_time: float = param(2.0, "s", "when the lead car starts braking (at most duration)", min=0.0, max=3600.0)
     lead_decel: float = param(6.0, "m/s^2", "lead car's deceleration", min=0.5, max=12.0)
-    lead_final_speed: float = param(5.0, "m/s", "speed the lead car brakes to; at or above its "
-                                    "speed it never brakes (it never speeds up)", min=0.0, max=40.0)
-    brake_decel: float = param(8.0, "m/s^2", "speed reference's deceleration when braking in lane",
-                               min=0.5, max=12.0)
-    brake_max_lag: float = param(2.0, "m", "how far the braking reference may fall behind the ego",
-                                 min=0.1, max=50.0)
+    lead_final_speed: float = param(
+        5.0,
+        "m/s",
+        "speed the lead car brakes to; at or above its speed it never brakes (it never speeds up)",
+        min=0.0,
+        max=40.0,
+    )
+    brake_decel: float = param(8.0, "m/s^2", "speed reference's deceleration when braking in lane", min=0.5, max=12.0)
+    brake_max_lag: float = param(2.0, "m", "how far the braking reference may fall behind the ego", min=0.1, max=50.0)
 
     def __post_init__(self) -> None:
         super().__post_init__()
         if self.lead_speed != SAME_AS_EGO and self.lead_speed < 0.0:
-            raise ConfigError(f"bad value for lead_speed: {self.lead_speed:g} (expected -1 for "
-                              f"ego_speed, or a speed of at least 0 m/s)")
+            raise ConfigError(
+                f"bad value for lead_speed: {self.lead_speed:g} (expected -1 for "
+                f"ego_speed, or a speed of at least 0 m/s)"
+            )
         if self.lead_brake_time > self.duration:
-            raise ConfigError(f"bad value for lead_brake_time: {self.lead_brake_time:g} (expected at most "
-                              f"duration={self.duration:g} s: the lead would brake after the run)")
+            raise ConfigError(
+                f"bad value for lead_brake_time: {self.lead_brake_time:g} (expected at most "
+                f"duration={self.duration:g} s: the lead would brake after the run)"
+            )
 
     @property
     def lead_cruise_speed(self) -> float:
@@ -137,13 +147,19 @@ class EmergencyBrake(Scenario):
     network, edge, backends = "highway", EDGE, BACKENDS
     columns, plots, markers = COLUMNS, PLOTS, MARKERS
     metric_specs = METRICS + (
-        Metric("impact_speed", "m/s", "the ego's speed along the road at the collision (none: no "
-               "collision)"),
-        Metric("impact_relative_speed", "m/s", "the ego's speed minus the other party's (the lead "
-               "car's) at the collision (none: no collision)"),
-        Metric("collision_avoidable", "-", "true: braking at the friction limit from the trigger "
-               "would have kept the ego behind the lead, so the collision is the controller's or the "
-               "planner's; false: physics left no way out by braking; none: no collision"),
+        Metric("impact_speed", "m/s", "the ego's speed along the road at the collision (none: no collision)"),
+        Metric(
+            "impact_relative_speed",
+            "m/s",
+            "the ego's speed minus the other party's (the lead car's) at the collision (none: no collision)",
+        ),
+        Metric(
+            "collision_avoidable",
+            "-",
+            "true: braking at the friction limit from the trigger "
+            "would have kept the ego behind the lead, so the collision is the controller's or the "
+            "planner's; false: physics left no way out by braking; none: no collision",
+        ),
     )
 
     compare_plots = classmethod(compare_plots)
@@ -161,9 +177,11 @@ class EmergencyBrake(Scenario):
         # a slower car than its own stopping distance; BrakingLeader.start sets the lead's
         # speed before the first step (it does not move in between)
         speed = max(c.ego_speed, c.lead_cruise_speed)
-        world.vehicle(VehicleSpec(LEAD, LEAD_TYPE.id, ROUTE, c.ego_lane, lead_front, speed), LEAD_TYPE,
-                      BrakingLeader(LEAD, c.lead_cruise_speed, c.lead_brake_time, c.lead_decel,
-                                    c.lead_final_speed))
+        world.vehicle(
+            VehicleSpec(LEAD, LEAD_TYPE.id, ROUTE, c.ego_lane, lead_front, speed),
+            LEAD_TYPE,
+            BrakingLeader(LEAD, c.lead_cruise_speed, c.lead_brake_time, c.lead_decel, c.lead_final_speed),
+        )
 
     def on_trigger(self, man) -> None:
         self._trigger_gap, self._trigger_speed = self.view.gap_front, self.view.ds
@@ -200,5 +218,12 @@ class EmergencyBrake(Scenario):
 
         def fn(t):
             return lead_speed(t, c.lead_cruise_speed, c.lead_brake_time, c.lead_decel, c.lead_final_speed)
-        return braking_min_gap(trigger_t, self._trigger_gap, self._trigger_speed,
-                               friction_limit(self.ego.model.params), fn, lead_step=c.sumo_step)
+
+        return braking_min_gap(
+            trigger_t,
+            self._trigger_gap,
+            self._trigger_speed,
+            friction_limit(self.ego.model.params),
+            fn,
+            lead_step=c.sumo_step,
+        )

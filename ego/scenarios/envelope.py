@@ -34,8 +34,16 @@ def lead_speed(t: np.ndarray, speed: float, brake_time: float, decel: float, fin
     return np.maximum(final, speed - decel * np.clip(t - brake_time, 0.0, None))
 
 
-def braking_min_gap(t0: float, gap0: float, ego_speed0: float, decel: float, lead_speed_fn,
-                    horizon: float = 30.0, dt: float = 0.001, lead_step: float | None = None) -> float:
+def braking_min_gap(
+    t0: float,
+    gap0: float,
+    ego_speed0: float,
+    decel: float,
+    lead_speed_fn,
+    horizon: float = 30.0,
+    dt: float = 0.001,
+    lead_step: float | None = None,
+) -> float:
     """Smallest gap (m) over ``horizon`` seconds when the ego brakes at ``decel`` (m/s^2)
     from ``ego_speed0`` at ``t0`` with ``gap0`` to a lead moving at ``lead_speed_fn(t)``.
 
@@ -63,12 +71,17 @@ class ReachCriterion:
 
     __slots__ = ("vehicle", "at")
     METRICS = (
-        Metric("reach_time", "s", "when the cutting car first reached over the ego's outline (became its "
-               "front object)"),
-        Metric("collision_avoidable", "-", "true: braking at the friction limit from the moment the car "
-               "reached over the ego's outline would have kept the ego behind it, so the collision is the "
-               "controller's or the planner's; false: physics (or the car hit the ego's side before it "
-               "reached over its outline); none: no collision"),
+        Metric(
+            "reach_time", "s", "when the cutting car first reached over the ego's outline (became its front object)"
+        ),
+        Metric(
+            "collision_avoidable",
+            "-",
+            "true: braking at the friction limit from the moment the car "
+            "reached over the ego's outline would have kept the ego behind it, so the collision is the "
+            "controller's or the planner's; false: physics (or the car hit the ego's side before it "
+            "reached over its outline); none: no collision",
+        ),
     )
 
     def __init__(self, vehicle: str) -> None:
@@ -93,19 +106,34 @@ class ReachCriterion:
         """``reach_time`` and ``collision_avoidable`` (none without a collision; false when the
         car hit the ego's side before it reached over its outline: no time to brake)."""
         margin = self.margin(decel, lead_step)
-        return {"reach_time": json_number(self.at[0] if self.at else None, 4),
-                "collision_avoidable": None if not collided else False if margin is None else bool(margin > 0.0)}
+        return {
+            "reach_time": json_number(self.at[0] if self.at else None, 4),
+            "collision_avoidable": None if not collided else False if margin is None else bool(margin > 0.0),
+        }
 
 
-def avoidable(metrics: dict, trace_gap_at_trigger: float, ego_speed_at_trigger: float,
-              config, decel_limit: float) -> bool:
+def avoidable(
+    metrics: dict, trace_gap_at_trigger: float, ego_speed_at_trigger: float, config, decel_limit: float
+) -> bool:
     """Would braking at ``decel_limit`` from the trigger have kept the ego behind the lead (the
     lead moving as SUMO moves it, step by step)?"""
+
     def fn(t):
-        return lead_speed(t, config.lead_cruise_speed, config.lead_brake_time, config.lead_decel,
-                          config.lead_final_speed)
-    return braking_min_gap(metrics["trigger_time"], trace_gap_at_trigger, ego_speed_at_trigger,
-                           decel_limit, fn, lead_step=config.sumo_step) > 0.0
+        return lead_speed(
+            t, config.lead_cruise_speed, config.lead_brake_time, config.lead_decel, config.lead_final_speed
+        )
+
+    return (
+        braking_min_gap(
+            metrics["trigger_time"],
+            trace_gap_at_trigger,
+            ego_speed_at_trigger,
+            decel_limit,
+            fn,
+            lead_step=config.sumo_step,
+        )
+        > 0.0
+    )
 
 
 def sample(n: int, seed: int) -> Iterator[dict]:

@@ -40,32 +40,43 @@ from ego.scenarios.trace import Band, Marker, Metric, Plot, Ref, Trajectory
 class EvasiveConfig(HighwayConfig):
     """The manoeuvre shared by the evasive scenarios."""
 
-    ttc_threshold: float = param(3.0, "s", "time-to-collision that triggers the manoeuvre",
-                                 min=0.1, max=20.0)
-    evade_speed: float = param(15.0, "m/s", "speed reference during the lane change", min=1.0,
-                               max=45.0)
-    follow_gap: float = param(5.0, "m", "standstill gap kept to the leader once evading", min=0.0,
-                              max=50.0)
-    follow_headway: float = param(0.5, "s", "time headway kept to the leader once evading",
-                                  min=0.0, max=5.0)
-    accept_gap: float = param(5.0, "m", "gap acceptance: minimum lead and lag gap", min=0.0,
-                              max=100.0)
-    accept_time: float = param(1.5, "s", "gap acceptance: extra gap per m/s of closing speed",
-                               min=0.0, max=10.0)
-    settle_band: float = param(0.2, "m", "lane change is done when |lateral error| stays below",
-                               min=0.01, max=2.0)
+    ttc_threshold: float = param(3.0, "s", "time-to-collision that triggers the manoeuvre", min=0.1, max=20.0)
+    evade_speed: float = param(15.0, "m/s", "speed reference during the lane change", min=1.0, max=45.0)
+    follow_gap: float = param(5.0, "m", "standstill gap kept to the leader once evading", min=0.0, max=50.0)
+    follow_headway: float = param(0.5, "s", "time headway kept to the leader once evading", min=0.0, max=5.0)
+    accept_gap: float = param(5.0, "m", "gap acceptance: minimum lead and lag gap", min=0.0, max=100.0)
+    accept_time: float = param(1.5, "s", "gap acceptance: extra gap per m/s of closing speed", min=0.0, max=10.0)
+    settle_band: float = param(0.2, "m", "lane change is done when |lateral error| stays below", min=0.01, max=2.0)
     block_left: bool = param(False, "-", "a car drives beside the ego in the left lane")
     block_right: bool = param(False, "-", "a car drives beside the ego in the right lane")
-    aeb: bool = param(True, "-", "automatic emergency braking: full braking at the friction limit, "
-                      "overriding the controller's longitudinal command, when braking in lane needs "
-                      "more than aeb_decel or the front TTC falls below aeb_ttc")
-    aeb_decel: float = param(3.0, "m/s^2", "AEB engages when braking in lane needs this much "
-                             "(the front object's deceleration + closing^2 / (2 gap))", min=0.5, max=12.0)
-    aeb_ttc: float = param(1.0, "s", "AEB engages in any phase below this front TTC, unless the ego "
-                           "clears the front object sideways first", min=0.0, max=10.0)
-    evade: bool = param(True, "-", "change lane when gap acceptance finds a lane; false: never "
-                        "change lane, always the in-lane manoeuvre at the trigger (pure emergency "
-                        "braking behind a braking car: what an AEB test measures)")
+    aeb: bool = param(
+        True,
+        "-",
+        "automatic emergency braking: full braking at the friction limit, "
+        "overriding the controller's longitudinal command, when braking in lane needs "
+        "more than aeb_decel or the front TTC falls below aeb_ttc",
+    )
+    aeb_decel: float = param(
+        3.0,
+        "m/s^2",
+        "AEB engages when braking in lane needs this much (the front object's deceleration + closing^2 / (2 gap))",
+        min=0.5,
+        max=12.0,
+    )
+    aeb_ttc: float = param(
+        1.0,
+        "s",
+        "AEB engages in any phase below this front TTC, unless the ego clears the front object sideways first",
+        min=0.0,
+        max=10.0,
+    )
+    evade: bool = param(
+        True,
+        "-",
+        "change lane when gap acceptance finds a lane; false: never "
+        "change lane, always the in-lane manoeuvre at the trigger (pure emergency "
+        "braking behind a braking car: what an AEB test measures)",
+    )
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -74,9 +85,17 @@ class EvasiveConfig(HighwayConfig):
         check_density(self)
 
 
-def compose(scenario, trigger_on: str, in_lane: InLane, traffic: Callable[[MotorwayWorld], None],
-            choose: Callable | None = None, on_trigger: Callable | None = None, *,
-            road: dict | None = None, manoeuvre_cls: type[EvasiveManoeuvre] = EvasiveManoeuvre) -> Parts:
+def compose(
+    scenario,
+    trigger_on: str,
+    in_lane: InLane,
+    traffic: Callable[[MotorwayWorld], None],
+    choose: Callable | None = None,
+    on_trigger: Callable | None = None,
+    *,
+    road: dict | None = None,
+    manoeuvre_cls: type[EvasiveManoeuvre] = EvasiveManoeuvre,
+) -> Parts:
     """The parts of an evasive scenario: the motorway world with ``traffic``, the ego's plant,
     the surround view, the manoeuvre triggered by the ``trigger_on`` TTC with the scenario's
     ``in_lane`` behaviour, and the AEB (when ``aeb`` is on). ``road``: the world's road
@@ -91,8 +110,14 @@ def compose(scenario, trigger_on: str, in_lane: InLane, traffic: Callable[[Motor
         safety = SafetyLayer(c, view, scenario.event, lambda: scenario.t)
         safety.manoeuvre = manoeuvre
         manoeuvre.safety = safety
-    return Parts(MotorwayWorld(c, scenario.geometry, traffic, **(road or {})), view, manoeuvre, safety, ego_plant,
-                 lambda names, units: evasive_series(c, names, units))
+    return Parts(
+        MotorwayWorld(c, scenario.geometry, traffic, **(road or {})),
+        view,
+        manoeuvre,
+        safety,
+        ego_plant,
+        lambda names, units: evasive_series(c, names, units),
+    )
 
 
 #: the events marked on the time axis of every plot
@@ -116,15 +141,27 @@ def compare_plots(scenario_cls, config) -> tuple:
     if config.aeb:
         ttc_refs += (Ref(f"AEB threshold {config.aeb_ttc:g} s", value=config.aeb_ttc),)
     return (
-        Plot("d", "lateral_error.png", "offset from the target lane centre (+ left)",
-             refs=(Ref("lateral reference", "d_ref"),), band=Band(-band, band, f"settle band +-{band:g} m"),
-             markers=markers),
+        Plot(
+            "d",
+            "lateral_error.png",
+            "offset from the target lane centre (+ left)",
+            refs=(Ref("lateral reference", "d_ref"),),
+            band=Band(-band, band, f"settle band +-{band:g} m"),
+            markers=markers,
+        ),
         Plot("speed", "speed.png", "speed", refs=(Ref("speed reference", "speed_ref"),), markers=markers),
         Plot("delta", "steering.png", "front steer angle", markers=markers),
         Plot("Fx", "fx.png", "Fx per driven wheel", markers=markers),
         Plot("gap_front", "gap_front.png", "gap to the front object", markers=markers),
-        Plot("ttc_front", "ttc.png", "time to collision", lines=(("ttc_front", "front"), ("ttc_rear", "rear")),
-             refs=ttc_refs, markers=markers, ylim=(0.0, max(10.0, 3.0 * config.ttc_threshold))),
+        Plot(
+            "ttc_front",
+            "ttc.png",
+            "time to collision",
+            lines=(("ttc_front", "front"), ("ttc_rear", "rear")),
+            refs=ttc_refs,
+            markers=markers,
+            ylim=(0.0, max(10.0, 3.0 * config.ttc_threshold)),
+        ),
         Trajectory(ego_box=EGO_BOX),
     )
 
@@ -135,8 +172,11 @@ def evasive_series(config, signal_names, signal_units) -> list[Series]:
     limits = [Series("", "plots/ttc/trigger", "s", "trigger", constant=c.ttc_threshold)]
     if c.aeb and c.aeb_ttc > 0.0:
         limits.append(Series("", "plots/ttc/aeb", "s", "AEB", constant=c.aeb_ttc))
-    return [*series(signal_names, signal_units), *limits,
-            Series("phase", "states/manoeuvre", "", "manoeuvre", states=PHASE_NAMES)]
+    return [
+        *series(signal_names, signal_units),
+        *limits,
+        Series("phase", "states/manoeuvre", "", "manoeuvre", states=PHASE_NAMES),
+    ]
 
 
 # --- metrics -----------------------------------------------------------------------------
@@ -152,8 +192,7 @@ METRICS = (
     Metric("max_overshoot", "m", "largest overshoot past the target lane centre", headline=True),
     Metric("min_ttc_front", "s", "smallest front TTC (surround sensor)", headline=True),
     Metric("min_ttc_rear", "s", "smallest rear TTC (surround sensor)", headline=True),
-    Metric("min_gap_front", "m", "smallest bumper gap to the front object, from the outlines",
-           headline=True),
+    Metric("min_gap_front", "m", "smallest bumper gap to the front object, from the outlines", headline=True),
     Metric("max_abs_lateral_accel", "m/s^2", "largest |lateral acceleration|", headline=True),
     Metric("max_decel", "m/s^2", "largest deceleration along the road"),
     Metric("aeb_time", "s", "when the AEB first engaged (none: never)"),
@@ -162,8 +201,14 @@ METRICS = (
 )
 
 
-def lane_change_metrics(col: dict[str, np.ndarray], status: str, config, manoeuvre: EvasiveManoeuvre,
-                        target_lane: int, safety: SafetyLayer | None) -> dict:
+def lane_change_metrics(
+    col: dict[str, np.ndarray],
+    status: str,
+    config,
+    manoeuvre: EvasiveManoeuvre,
+    target_lane: int,
+    safety: SafetyLayer | None,
+) -> dict:
     """:data:`METRICS` from the named trace ``col`` and the run's facts: its ``status``, the
     manoeuvre's trigger and choice, the lane it ended in, the AEB's engagements."""
     t = col["t"]
@@ -199,8 +244,14 @@ def lane_change_metrics(col: dict[str, np.ndarray], status: str, config, manoeuv
 
 def evasive_metrics(scenario, trace: np.ndarray, names: tuple[str, ...]) -> dict:
     """:func:`lane_change_metrics` of a composed evasive scenario's run."""
-    return lane_change_metrics(columns(trace, names), scenario.status, scenario.config, scenario.manoeuvre,
-                               scenario.view.target_lane, scenario.safety)
+    return lane_change_metrics(
+        columns(trace, names),
+        scenario.status,
+        scenario.config,
+        scenario.manoeuvre,
+        scenario.view.target_lane,
+        scenario.safety,
+    )
 
 
 def max_decel(t: np.ndarray, speed: np.ndarray, window: float = 0.1) -> float | None:

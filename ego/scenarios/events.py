@@ -54,26 +54,41 @@ class LaneCheck:
     def explain(self) -> str:
         if not self.exists:
             return f"{self.side}: no lane"
+
         def part(name, gap, req):
             g = "free" if gap == INF else f"{gap:.1f} m"
             ok = ">=" if gap >= req else "<"
             return f"{name} gap {g} {ok} {req:.1f} m"
+
         verdict = "accepted" if self.accepted else "rejected"
-        return (f"{self.side}: {part('lead', self.lead_gap, self.lead_required)}, "
-                f"{part('lag', self.lag_gap, self.lag_required)} -> {verdict}")
+        return (
+            f"{self.side}: {part('lead', self.lead_gap, self.lead_required)}, "
+            f"{part('lag', self.lag_gap, self.lag_required)} -> {verdict}"
+        )
 
 
-def check_lane(side: str, exists: bool, ego_speed: float, planned_speed: float,
-               lead_gap: float, lead_speed: float, lag_gap: float, lag_speed: float,
-               rule: GapRule) -> LaneCheck:
+def check_lane(
+    side: str,
+    exists: bool,
+    ego_speed: float,
+    planned_speed: float,
+    lead_gap: float,
+    lead_speed: float,
+    lag_gap: float,
+    lag_speed: float,
+    rule: GapRule,
+) -> LaneCheck:
     """Accept the lane if the gap ahead suits the ego's current speed and the gap behind
     suits a follower closing on the ego at the speed it will drive (``planned_speed``)."""
     if not exists:
         return LaneCheck(side, False)
     return LaneCheck(
-        side, True,
-        lead_gap=lead_gap, lead_required=rule.required(ego_speed - lead_speed),
-        lag_gap=lag_gap, lag_required=rule.required(lag_speed - planned_speed),
+        side,
+        True,
+        lead_gap=lead_gap,
+        lead_required=rule.required(ego_speed - lead_speed),
+        lag_gap=lag_gap,
+        lag_required=rule.required(lag_speed - planned_speed),
     )
 
 
@@ -91,8 +106,7 @@ def choose_lane(left: LaneCheck, right: LaneCheck) -> tuple[str | None, str]:
     return best.side, why
 
 
-def boxes_overlap(a: tuple[float, float, float, float, float],
-                  b: tuple[float, float, float, float, float]) -> bool:
+def boxes_overlap(a: tuple[float, float, float, float, float], b: tuple[float, float, float, float, float]) -> bool:
     """Do two oriented rectangles (centre x, y in m, yaw rad, length, width in m) overlap?
 
     Separating-axis test on the four edge normals: two convex shapes are disjoint iff

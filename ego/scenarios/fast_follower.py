@@ -28,18 +28,20 @@ from ego.sim.types import VehicleSpec, VehicleType
 from ego.sumo.traffic import RecklessFollower
 
 FOLLOWER = "follower"
-FOLLOWER_TYPE = VehicleType("follower", length=4.5, width=1.8, sigma=0.0, max_speed=60.0,
-                            color=(0, 170, 255))
+FOLLOWER_TYPE = VehicleType("follower", length=4.5, width=1.8, sigma=0.0, max_speed=60.0, color=(0, 170, 255))
 
 
 @dataclass(frozen=True)
 class FastFollowerConfig(EvasiveConfig):
-    evade_speed: float = param(25.0, "m/s", "speed reference during the lane change "
-                               "(report 000: X_ref = 25 t)", min=1.0, max=45.0)
-    follower_gap: float = param(60.0, "m", "gap from the follower's front to the ego's rear at t = 0",
-                                min=5.0, max=500.0)
-    follower_speed: float = param(30.0, "m/s", "the follower's speed (>= 1.5 x ego_speed by "
-                                  "default)", min=1.0, max=60.0)
+    evade_speed: float = param(
+        25.0, "m/s", "speed reference during the lane change (report 000: X_ref = 25 t)", min=1.0, max=45.0
+    )
+    follower_gap: float = param(
+        60.0, "m", "gap from the follower's front to the ego's rear at t = 0", min=5.0, max=500.0
+    )
+    follower_speed: float = param(
+        30.0, "m/s", "the follower's speed (>= 1.5 x ego_speed by default)", min=1.0, max=60.0
+    )
 
 
 class AccelerateInLane:
@@ -66,9 +68,7 @@ class FastFollower(Scenario):
     config_cls = FastFollowerConfig
     network, edge, backends = "highway", EDGE, BACKENDS
     columns, plots, markers = COLUMNS, PLOTS, MARKERS
-    metric_specs = METRICS + (
-        Metric("follower_passed", "-", "the follower's front bumper ended ahead of the ego's"),
-    )
+    metric_specs = METRICS + (Metric("follower_passed", "-", "the follower's front bumper ended ahead of the ego's"),)
 
     compare_plots = classmethod(compare_plots)
 
@@ -80,8 +80,11 @@ class FastFollower(Scenario):
         self._follower_x = -INF
         front = c.ego_start - self.geometry.length - c.follower_gap
         # inserted at the ego's speed (SUMO checks insertion safety); it speeds up at once
-        world.vehicle(VehicleSpec(FOLLOWER, FOLLOWER_TYPE.id, ROUTE, c.ego_lane, front, c.ego_speed),
-                      FOLLOWER_TYPE, RecklessFollower(FOLLOWER, c.follower_speed))
+        world.vehicle(
+            VehicleSpec(FOLLOWER, FOLLOWER_TYPE.id, ROUTE, c.ego_lane, front, c.ego_speed),
+            FOLLOWER_TYPE,
+            RecklessFollower(FOLLOWER, c.follower_speed),
+        )
 
     def after_sim_step(self) -> None:
         self._follower_x = self.bridge.front_bumper(FOLLOWER)[0]

@@ -77,30 +77,37 @@ def drive_time(speed: float = DEFAULT_SPEED, start: float = DEFAULT_START) -> fl
 class LaneCenteringConfig(CommonConfig):
     """Report 003's drive: the whole road at constant speed."""
 
-    duration: float = param(600.0, "s", f"simulated time limit (the drive ends {END_MARGIN:g} m before the "
-                            f"end of the {ROAD_LENGTH:.0f} m road: {drive_time():.0f} s at "
-                            f"{DEFAULT_SPEED:g} m/s; a shorter duration ends it first: status ended)",
-                            min=1.0, max=3600.0)
+    duration: float = param(
+        600.0,
+        "s",
+        f"simulated time limit (the drive ends {END_MARGIN:g} m before the "
+        f"end of the {ROAD_LENGTH:.0f} m road: {drive_time():.0f} s at "
+        f"{DEFAULT_SPEED:g} m/s; a shorter duration ends it first: status ended)",
+        min=1.0,
+        max=3600.0,
+    )
     speed: float = param(DEFAULT_SPEED, "m/s", "the ego's constant speed (report 003: 8 m/s)", min=2.0, max=30.0)
     plant: str = param("lateral-error", "-", "the ego's model", choices=("lateral-error", "dynamic-bicycle"))
-    offset: float = param(0.0, "m", "the ego's lateral offset from the lane centre at t = 0 (+ left)",
-                          min=-1.5, max=1.5)
-    start: float = param(DEFAULT_START, "m", "the ego's front bumper along the road at t = 0", min=5.0,
-                         max=2000.0)
+    offset: float = param(
+        0.0, "m", "the ego's lateral offset from the lane centre at t = 0 (+ left)", min=-1.5, max=1.5
+    )
+    start: float = param(DEFAULT_START, "m", "the ego's front bumper along the road at t = 0", min=5.0, max=2000.0)
     traffic_density: float = param(8.0, "veh/km", "traffic in the left lane", min=0.0, max=30.0)
-    traffic_factor: float = param(1.15, "-", "the traffic's speed as a multiple of the ego's",
-                                  min=0.5, max=2.0)
-    max_steer: float = param(math.radians(25.0), "rad", "front steer limit of the ego (report 003: "
-                             "25 deg)", min=0.05, max=1.0)
+    traffic_factor: float = param(1.15, "-", "the traffic's speed as a multiple of the ego's", min=0.5, max=2.0)
+    max_steer: float = param(
+        math.radians(25.0), "rad", "front steer limit of the ego (report 003: 25 deg)", min=0.05, max=1.0
+    )
 
 
 class LaneCenteringScenario(RoadScenario):
     """Report 003's lane centring on its road, traffic in the other lane."""
 
     name = "lane-centering"
-    summary = ("report 003: keep the lane centre over 1000 m straight, a 500 m-radius curve with "
-               "cosine easements and 1000 m straight, at 8 m/s (--set speed=25; --set "
-               "plant=dynamic-bicycle)")
+    summary = (
+        "report 003: keep the lane centre over 1000 m straight, a 500 m-radius curve with "
+        "cosine easements and 1000 m straight, at 8 m/s (--set speed=25; --set "
+        "plant=dynamic-bicycle)"
+    )
     task = "lane-centering"
     network = "lane_centering"
     config_cls = LaneCenteringConfig
@@ -120,8 +127,7 @@ class LaneCenteringScenario(RoadScenario):
     metric_specs = (
         Metric("completed_road", "-", "the ego reached the end of the road"),
         Metric("distance", "m", "distance driven along the lane"),
-        Metric("max_abs_lateral_error", "m", "largest |lateral error| (report 003's goal: < 0.5 m)",
-               headline=True),
+        Metric("max_abs_lateral_error", "m", "largest |lateral error| (report 003's goal: < 0.5 m)", headline=True),
         Metric("mean_abs_lateral_error", "m", "mean |lateral error|"),
         Metric("std_lateral_error", "m", "standard deviation of the lateral error"),
         Metric("rms_lateral_error", "m", "RMS of the lateral error", headline=True),
@@ -130,9 +136,13 @@ class LaneCenteringScenario(RoadScenario):
         Metric("max_abs_lateral_accel", "m/s^2", "largest |lateral acceleration|", headline=True),
     )
     plots = (
-        Plot("d", "lateral_error.png", "lateral error (+ left of the lane centre)",
-             band=Band(-GOAL, GOAL, f"report 003's goal: |e| < {GOAL:g} m"),
-             markers=(Marker("curve", "entering / leaving the curve", "|"),)),
+        Plot(
+            "d",
+            "lateral_error.png",
+            "lateral error (+ left of the lane centre)",
+            band=Band(-GOAL, GOAL, f"report 003's goal: |e| < {GOAL:g} m"),
+            markers=(Marker("curve", "entering / leaving the curve", "|"),),
+        ),
         Plot("speed", "speed.png", "speed"),
         Plot("delta", "steering.png", "front steer angle"),
         Plot("a_x", "a_x.png", "axial acceleration"),
@@ -164,15 +174,35 @@ class LaneCenteringScenario(RoadScenario):
         # the lane's limit (30 m/s)
         bridge.add_type(replace(TRAFFIC_TYPE, max_speed=traffic_speed))
         bridge.add_route(ROUTE, [EDGE])
-        specs = background_traffic(
-            rng, lanes=[TRAFFIC_LANE], start=10.0, end=lane.length - 50.0, density=c.traffic_density,
-            speed=traffic_speed, min_spacing=max(20.0, 1.5 * traffic_speed) + TRAFFIC_TYPE.length,
-            route=ROUTE, type_id=TRAFFIC_TYPE.id,
-        ) if c.traffic_density > 0 else []
+        specs = (
+            background_traffic(
+                rng,
+                lanes=[TRAFFIC_LANE],
+                start=10.0,
+                end=lane.length - 50.0,
+                density=c.traffic_density,
+                speed=traffic_speed,
+                min_spacing=max(20.0, 1.5 * traffic_speed) + TRAFFIC_TYPE.length,
+                route=ROUTE,
+                type_id=TRAFFIC_TYPE.id,
+            )
+            if c.traffic_density > 0
+            else []
+        )
         self.actors = []
         if c.traffic_density > 0:
-            self.actors.append(PoissonFlow(rng, ROUTE, TRAFFIC_TYPE.id, c.traffic_density * traffic_speed * 3.6,
-                                           traffic_speed, min_headway=2.0, prefix="flow", lane=TRAFFIC_LANE))
+            self.actors.append(
+                PoissonFlow(
+                    rng,
+                    ROUTE,
+                    TRAFFIC_TYPE.id,
+                    c.traffic_density * traffic_speed * 3.6,
+                    traffic_speed,
+                    min_headway=2.0,
+                    prefix="flow",
+                    lane=TRAFFIC_LANE,
+                )
+            )
         bridge.add_vehicles([*specs, VehicleSpec(EGO, EGO, ROUTE, EGO_LANE, c.start, c.speed)])
         missing = bridge.insert(required=[EGO])
         if missing:
@@ -193,8 +223,9 @@ class LaneCenteringScenario(RoadScenario):
         else:
             model = DynamicBicycle(dynamic_params_from_lateral(LateralErrorParams(), slip_speed_floor=1.0))
             x, y = lane.offset_point(s0, c.offset)
-            self.ego = BicyclePlant(model, self.geometry, c.dt, c.substeps, limits,
-                                    state=(x, c.speed, y, 0.0, lane.heading_at(s0), 0.0))
+            self.ego = BicyclePlant(
+                model, self.geometry, c.dt, c.substeps, limits, state=(x, c.speed, y, 0.0, lane.heading_at(s0), 0.0)
+            )
         self._kinematics()
 
     # -- per step ---------------------------------------------------------------------------
@@ -205,8 +236,16 @@ class LaneCenteringScenario(RoadScenario):
         obs = self.obs
         self.trace.append(
             self.controller.signals(),
-            t=obs.t, s=self.s, d=self.d_road, heading_error=self.heading_error, vy=obs.vy,
-            yaw_rate=obs.yaw_rate, speed=obs.speed, a_x=a_x, delta=delta, curvature=self.curvature,
+            t=obs.t,
+            s=self.s,
+            d=self.d_road,
+            heading_error=self.heading_error,
+            vy=obs.vy,
+            yaw_rate=obs.yaw_rate,
+            speed=obs.speed,
+            a_x=a_x,
+            delta=delta,
+            curvature=self.curvature,
             lat_accel=ego.lateral_accel,
         )
         self._kinematics()
@@ -214,14 +253,19 @@ class LaneCenteringScenario(RoadScenario):
     def _update(self) -> None:
         s = self.s
         if s >= self._end_s:
-            self._end("completed", f"reached the end of the drive at s = {self._end_s:.0f} m "
-                      f"({END_MARGIN:g} m before the end of the road)")
+            self._end(
+                "completed",
+                f"reached the end of the drive at s = {self._end_s:.0f} m "
+                f"({END_MARGIN:g} m before the end of the road)",
+            )
             return
         inside = any(a <= s <= b for a, b, _ in self.spans)
         if inside != self._in_curve:
             self._in_curve = inside
-            self.event("curve", f"{'entering' if inside else 'leaving'} the curve at s = {s:.0f} m, "
-                       f"lateral error {self.d_road:+.3f} m")
+            self.event(
+                "curve",
+                f"{'entering' if inside else 'leaving'} the curve at s = {s:.0f} m, lateral error {self.d_road:+.3f} m",
+            )
         obs = self.obs
         x = self.ego.state
         road_observation(obs, self.t, s, self.ds, self.d_road, self.dd, x, self.heading_error, self.curvature)
@@ -230,8 +274,10 @@ class LaneCenteringScenario(RoadScenario):
 
     def _final_status(self) -> tuple[str, str]:
         # the speed is the configuration's: the drive's length in time is the user's choice
-        return "ended", (f"the duration ({self.config.duration:g} s) ended the run at s = {self.s:.0f} m "
-                         f"of the drive to s = {self._end_s:.0f} m")
+        return "ended", (
+            f"the duration ({self.config.duration:g} s) ended the run at s = {self.s:.0f} m "
+            f"of the drive to s = {self._end_s:.0f} m"
+        )
 
     # -- results ------------------------------------------------------------------------------
     def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:

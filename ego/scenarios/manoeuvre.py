@@ -74,8 +74,16 @@ class EvasiveManoeuvre:
     (side or None, why)``; :meth:`gap_acceptance` is the default); ``on_trigger(m)`` runs at
     the trigger, before the lane is entered."""
 
-    def __init__(self, config, view, trigger_on: str, in_lane: InLane, event: Callable[..., None],
-                 choose: Callable | None = None, on_trigger: Callable | None = None) -> None:
+    def __init__(
+        self,
+        config,
+        view,
+        trigger_on: str,
+        in_lane: InLane,
+        event: Callable[..., None],
+        choose: Callable | None = None,
+        on_trigger: Callable | None = None,
+    ) -> None:
         self.config = config
         self.view = view
         self.trigger_on = trigger_on
@@ -125,8 +133,7 @@ class EvasiveManoeuvre:
                 self.trigger(ttc)
         if self.safety is not None:
             self.safety.update()
-        if self.phase == LANE_CHANGE and not (self.safety is not None and self.safety.active) \
-                and self._sim_step(t):
+        if self.phase == LANE_CHANGE and not (self.safety is not None and self.safety.active) and self._sim_step(t):
             self.abort_lane_change(aeb=False)  # slowing across two lanes in front of a follower?
         if self.phase == CRUISE:
             s_ref, v_ref = self.s0 + c.ego_speed * t, c.ego_speed
@@ -161,25 +168,35 @@ class EvasiveManoeuvre:
         self.trigger_t, self.trigger_ttc, self.trigger_s = self.t, ttc, view.s
         # "decelerate and change lane": evading a car ahead never speeds up towards it (from
         # below evade_speed the ego keeps its speed); evading one behind does speed up
-        self.evade_speed = (min(c.evade_speed, view.ds) if self.trigger_on == "front" else c.evade_speed)
+        self.evade_speed = min(c.evade_speed, view.ds) if self.trigger_on == "front" else c.evade_speed
         other = view.sensor.front if self.trigger_on == "front" else view.sensor.rear
         gap = view.gap_front if self.trigger_on == "front" else view.gap_rear
         closing = abs(view.ds - other.speed)
         # enough digits that the event never reads "3.00 s < 3.00 s"
         digits = 2 if round(ttc, 2) < round(c.ttc_threshold, 2) else 4
-        self.event("trigger", f"{self.trigger_on} TTC {ttc:.{digits}f} s < {c.ttc_threshold:.{digits}f} s "
-                   f"(gap {gap:.1f} m to {other.id or '?'}, closing at {closing:.1f} m/s)", "WARN")
+        self.event(
+            "trigger",
+            f"{self.trigger_on} TTC {ttc:.{digits}f} s < {c.ttc_threshold:.{digits}f} s "
+            f"(gap {gap:.1f} m to {other.id or '?'}, closing at {closing:.1f} m/s)",
+            "WARN",
+        )
         if self.on_trigger is not None:
             self.on_trigger(self)
         if self.chosen is None:
             self.enter(IN_LANE)
-            self.event("lane", f"stay in the {LANE_NAMES[view.target_lane]} lane "
-                       f"({self.in_lane.action}): {self.choice_reason}", "WARN")
+            self.event(
+                "lane",
+                f"stay in the {LANE_NAMES[view.target_lane]} lane ({self.in_lane.action}): {self.choice_reason}",
+                "WARN",
+            )
         else:
             self.enter(LANE_CHANGE)
             view.target_lane += 1 if self.chosen == "left" else -1
-            self.event("lane", f"change to the {LANE_NAMES[view.target_lane]} lane "
-                       f"(lane index {view.target_lane} of the network): {self.choice_reason}")
+            self.event(
+                "lane",
+                f"change to the {LANE_NAMES[view.target_lane]} lane "
+                f"(lane index {view.target_lane} of the network): {self.choice_reason}",
+            )
 
     def emergency_stop(self) -> None:
         """The safety layer brakes at the friction limit: :meth:`abort_lane_change` decides
@@ -222,8 +239,11 @@ class EvasiveManoeuvre:
             return  # braking alone would not stop it in time and the new lane is clear: carry on
         why = f"; the new lane's follower {threat}" if threat else ""
         what = "emergency braking" if aeb else "braking"
-        self.event("lane", f"lane change aborted at {100 * progress:.0f} % across: {what} "
-                   f"in the {LANE_NAMES[origin]} lane{why}", "WARN")
+        self.event(
+            "lane",
+            f"lane change aborted at {100 * progress:.0f} % across: {what} in the {LANE_NAMES[origin]} lane{why}",
+            "WARN",
+        )
         view.target_lane, self.chosen = origin, None
         self.enter(IN_LANE)
         self.in_lane.start(self)
@@ -245,13 +265,13 @@ class EvasiveManoeuvre:
         v_end = min(v0, max(front.speed, 0.0)) if front.gap != INF else v0
         t_brake = (v0 - v_end) / decel
         t = np.linspace(0.0, horizon, 31)
-        ego_x = np.where(t < t_brake, v0 * t - 0.5 * decel * t * t,
-                         v0 * t_brake - 0.5 * decel * t_brake ** 2 + v_end * (t - t_brake))
+        ego_x = np.where(
+            t < t_brake, v0 * t - 0.5 * decel * t * t, v0 * t_brake - 0.5 * decel * t_brake**2 + v_end * (t - t_brake)
+        )
         closest = float(np.min(follower.gap + ego_x - follower.speed * t))
         if closest >= margin:
             return None
-        return (f"{follower.id} ({follower.gap:.1f} m behind at {follower.speed:.1f} m/s) would close to "
-                f"{closest:.1f} m")
+        return f"{follower.id} ({follower.gap:.1f} m behind at {follower.speed:.1f} m/s) would close to {closest:.1f} m"
 
     def check_done(self) -> None:
         """Online completion: inside the band (or the in-lane manoeuvre settled) for one second."""
@@ -268,16 +288,21 @@ class EvasiveManoeuvre:
             self._inside_since = t
         elif t - self._inside_since >= 1.0:
             what = "lane change" if self.phase == LANE_CHANGE else "in-lane manoeuvre"
-            self.event("done", f"{what} complete: settled since t = {self._inside_since:.2f} s "
-                       f"({self._inside_since - self.trigger_t:.2f} s after the trigger)")
+            self.event(
+                "done",
+                f"{what} complete: settled since t = {self._inside_since:.2f} s "
+                f"({self._inside_since - self.trigger_t:.2f} s after the trigger)",
+            )
             self.enter(DONE)
             self.done_t = self._inside_since
 
     def final_status(self) -> tuple[str, str]:
         """The run's status when its duration runs out."""
         if self.phase in (LANE_CHANGE, IN_LANE):
-            return "timeout", (f"the duration ({self.config.duration:g} s) ended the run before the "
-                               f"manoeuvre ({PHASE_NAMES[self.phase]}) finished")
+            return "timeout", (
+                f"the duration ({self.config.duration:g} s) ended the run before the "
+                f"manoeuvre ({PHASE_NAMES[self.phase]}) finished"
+            )
         if self.phase == CRUISE:
             return "completed", f"the {self.trigger_on} TTC never fell below the threshold: no manoeuvre"
         return "completed", "manoeuvre complete"

@@ -47,8 +47,11 @@ TRAFFIC_TYPE = VehicleType("traffic", length=4.5, width=1.8, color=(150, 150, 15
 BLOCKER_TYPE = VehicleType("blocker", length=4.5, width=1.8, sigma=0.0, color=(160, 60, 220))
 EGO_COLOR = (220, 40, 40)
 #: the ego's outline for the top-down plot: length, width, centre ahead of the CG (m)
-EGO_BOX = (VehicleGeometry().length, VehicleGeometry().width,
-           VehicleGeometry().cg_to_front - 0.5 * VehicleGeometry().length)
+EGO_BOX = (
+    VehicleGeometry().length,
+    VehicleGeometry().width,
+    VehicleGeometry().cg_to_front - 0.5 * VehicleGeometry().length,
+)
 #: m the surroundings subscription reaches at least: the traffic log's radius
 LOG_REACH = RADIUS + REACH_MARGIN
 
@@ -59,17 +62,18 @@ class HighwayConfig(CommonConfig):
 
     ego_speed: float = param(20.0, "m/s", "ego's initial speed (report 000: 20 m/s)", min=1.0, max=45.0)
     ego_lane: int = param(1, "-", "ego's lane: 0 right, 1 middle, 2 left", choices=(0, 1, 2))
-    ego_start: float = param(300.0, "m", "ego's front bumper along the motorway at t = 0",
-                             min=50.0, max=1500.0)
-    traffic_density: float = param(10.0, "veh/km", "background traffic per adjacent lane",
-                                   min=0.0, max=25.0)
+    ego_start: float = param(300.0, "m", "ego's front bumper along the motorway at t = 0", min=50.0, max=1500.0)
+    traffic_density: float = param(10.0, "veh/km", "background traffic per adjacent lane", min=0.0, max=25.0)
     traffic_speed: float = param(20.0, "m/s", "background traffic's speed", min=1.0, max=40.0)
     max_steer: float = param(0.5, "rad", "front steer limit of the ego", min=0.01, max=1.0)
-    abs: bool = param(True, "-", "friction-aware drive and brake (ABS / traction control): the "
-                      "longitudinal force never exceeds what the tyres carry beside the lateral "
-                      "force; false: the report's raw model")
-    sensor_range: float = param(150.0, "m", "radius around the ego the surround sensor sees",
-                                min=20.0, max=500.0)
+    abs: bool = param(
+        True,
+        "-",
+        "friction-aware drive and brake (ABS / traction control): the "
+        "longitudinal force never exceeds what the tyres carry beside the lateral "
+        "force; false: the report's raw model",
+    )
+    sensor_range: float = param(150.0, "m", "radius around the ego the surround sensor sees", min=20.0, max=500.0)
 
 
 def max_traffic_density(traffic_speed: float) -> float:
@@ -82,13 +86,16 @@ def check_density(config: HighwayConfig) -> None:
     """ConfigError when the background cannot be placed (it keeps a safe spacing)."""
     top = max_traffic_density(config.traffic_speed)
     if config.traffic_density > top:
-        raise ConfigError(f"bad value for traffic_density: {config.traffic_density:g} (at most "
-                          f"{top:.1f} veh/km at traffic_speed={config.traffic_speed:g} m/s: the "
-                          f"background keeps {max(20.0, 1.5 * config.traffic_speed) + TRAFFIC_TYPE.length:.1f} m "
-                          f"between cars)")
+        raise ConfigError(
+            f"bad value for traffic_density: {config.traffic_density:g} (at most "
+            f"{top:.1f} veh/km at traffic_speed={config.traffic_speed:g} m/s: the "
+            f"background keeps {max(20.0, 1.5 * config.traffic_speed) + TRAFFIC_TYPE.length:.1f} m "
+            f"between cars)"
+        )
 
 
 # --- the world ---------------------------------------------------------------------------
+
 
 class MotorwayWorld:
     """The simulator with the motorway's traffic: the scenario's own vehicles (``traffic``
@@ -101,10 +108,18 @@ class MotorwayWorld:
     ``route_edges``, the number of lanes and ``refine`` (lane points -> the points the lane
     frame is built on)."""
 
-    def __init__(self, config: HighwayConfig, geometry: VehicleGeometry,
-                 traffic: Callable[[MotorwayWorld], None], *, edge: str = EDGE, route: str = ROUTE,
-                 route_edges: tuple[str, ...] = (EDGE,), n_lanes: int = N_LANES,
-                 refine: Callable[[list], list] | None = None) -> None:
+    def __init__(
+        self,
+        config: HighwayConfig,
+        geometry: VehicleGeometry,
+        traffic: Callable[[MotorwayWorld], None],
+        *,
+        edge: str = EDGE,
+        route: str = ROUTE,
+        route_edges: tuple[str, ...] = (EDGE,),
+        n_lanes: int = N_LANES,
+        refine: Callable[[list], list] | None = None,
+    ) -> None:
         self.config = config
         self.geometry = geometry
         self.traffic = traffic
@@ -143,10 +158,16 @@ class MotorwayWorld:
         c = self.config
         lanes = [lane for lane in (c.ego_lane - 1, c.ego_lane + 1) if 0 <= lane < self.n_lanes]
         return background_traffic(
-            rng, lanes=lanes, start=max(10.0, c.ego_start - 250.0), end=c.ego_start + 700.0,
-            density=c.traffic_density, speed=c.traffic_speed,
+            rng,
+            lanes=lanes,
+            start=max(10.0, c.ego_start - 250.0),
+            end=c.ego_start + 700.0,
+            density=c.traffic_density,
+            speed=c.traffic_speed,
             min_spacing=max(20.0, 1.5 * c.traffic_speed) + TRAFFIC_TYPE.length,
-            route=self.route, type_id=TRAFFIC_TYPE.id, keep_clear=self._clear,
+            route=self.route,
+            type_id=TRAFFIC_TYPE.id,
+            keep_clear=self._clear,
         )
 
     def setup(self, sim: TrafficSim, rng: np.random.Generator) -> list[str]:
@@ -163,11 +184,16 @@ class MotorwayWorld:
         self.traffic(self)
         if hasattr(c, "block_left"):  # a configuration with lane blockers
             self.add_type(BLOCKER_TYPE)
-        for flag, lane, name in ((getattr(c, "block_left", False), c.ego_lane + 1, "blocker_left"),
-                                 (getattr(c, "block_right", False), c.ego_lane - 1, "blocker_right")):
+        for flag, lane, name in (
+            (getattr(c, "block_left", False), c.ego_lane + 1, "blocker_left"),
+            (getattr(c, "block_right", False), c.ego_lane - 1, "blocker_right"),
+        ):
             if flag and 0 <= lane < self.n_lanes:
-                self.vehicle(VehicleSpec(name, BLOCKER_TYPE.id, self.route, lane, c.ego_start, c.ego_speed),
-                             BLOCKER_TYPE, PacedVehicle(name, c.ego_speed))
+                self.vehicle(
+                    VehicleSpec(name, BLOCKER_TYPE.id, self.route, lane, c.ego_start, c.ego_speed),
+                    BLOCKER_TYPE,
+                    PacedVehicle(name, c.ego_speed),
+                )
                 self.keep_clear(lane, c.ego_start - 45.0, c.ego_start + 45.0)
         specs = self._specs + self.background(rng)
         required = self._required
@@ -182,8 +208,11 @@ class MotorwayWorld:
         self.colors[EGO] = EGO_COLOR
         shapes = sim.lane_shapes()
         refine = self.refine
-        self.lanes = {int(lid.rsplit("_", 1)[1]): LanePolyline(refine(pts) if refine else pts, width, lid)
-                      for lid, (width, pts) in shapes.items() if lid.rsplit("_", 1)[0] == self.edge}
+        self.lanes = {
+            int(lid.rsplit("_", 1)[1]): LanePolyline(refine(pts) if refine else pts, width, lid)
+            for lid, (width, pts) in shapes.items()
+            if lid.rsplit("_", 1)[0] == self.edge
+        }
         return missing
 
     def lane_width(self, lane: int) -> float:
@@ -200,13 +229,18 @@ def ego_plant(config: HighwayConfig, geometry: VehicleGeometry, pose: tuple[floa
     # with ABS no demand beyond the whole friction circle reaches the tyres (the model
     # trims it further to what the circle leaves beside the lateral force)
     grip = params.F_max / params.Nw if c.abs else INF
-    return BicyclePlant(NonlinearBicycle(params), geometry, c.dt, c.substeps,
-                        ActuatorLimits(max_steer=c.max_steer, min_command=-grip, max_command=grip,
-                                       stop_speed=0.5),
-                        state=(x, c.ego_speed, y, 0.0, psi, 0.0))
+    return BicyclePlant(
+        NonlinearBicycle(params),
+        geometry,
+        c.dt,
+        c.substeps,
+        ActuatorLimits(max_steer=c.max_steer, min_command=-grip, max_command=grip, stop_speed=0.5),
+        state=(x, c.ego_speed, y, 0.0, psi, 0.0),
+    )
 
 
 # --- the sensors and the observation ------------------------------------------------------
+
 
 class SurroundView:
     """What the ego knows of itself and the traffic, every control period.
@@ -254,8 +288,7 @@ class SurroundView:
         self.ttc_front = self.ttc_rear = INF
         self.gap_front = self.gap_rear = INF
         self.frame()
-        bands = {i: (off - 0.5 * lanes[i].width, off + 0.5 * lanes[i].width)
-                 for i, off in self.lane_offset.items()}
+        bands = {i: (off - 0.5 * lanes[i].width, off + 0.5 * lanes[i].width) for i, off in self.lane_offset.items()}
         self.sensor = SurroundSensor(self.road, bands, g.cg_to_front, g.length, g.width, horizon=c.sumo_step)
         if sim is not None:
             # one subscription for the sensor and the traffic log, as far as either looks
@@ -317,16 +350,29 @@ class SurroundView:
 
     def observe(self, obs, t: float) -> None:
         """The tracking task's observation (the references are the manoeuvre's)."""
-        road_observation(obs, t, self.s, self.ds, self.d_road - self.lane_offset[self.target_lane], self.dd,
-                         self._plant.state, self.heading_error, self.curvature)
+        road_observation(
+            obs,
+            t,
+            self.s,
+            self.ds,
+            self.d_road - self.lane_offset[self.target_lane],
+            self.dd,
+            self._plant.state,
+            self.heading_error,
+            self.curvature,
+        )
 
     def diverged(self) -> str | None:
         """Why the ego's state is beyond any controller's doing, or None."""
         state = self._plant.state
         u, r = state[1], state[5]
         # comparisons are False for NaN, so anything odd falls through to the full check
-        if (abs(self.d_road) <= self.road_halfwidth and -1.0 <= u <= 80.0 and abs(r) <= 2.5
-                and abs(self.heading_error) <= 1.3):
+        if (
+            abs(self.d_road) <= self.road_halfwidth
+            and -1.0 <= u <= 80.0
+            and abs(r) <= 2.5
+            and abs(self.heading_error) <= 1.3
+        ):
             return None
         return divergence(state, self.d_road, self.heading_error, self.road_halfwidth)
 

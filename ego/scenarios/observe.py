@@ -15,8 +15,17 @@ from collections.abc import Sequence
 from ego.control.base import Observation
 
 
-def road_observation(obs: Observation, t: float, s: float, ds: float, d: float, dd: float,
-                     state: Sequence[float], heading_error: float, curvature: float) -> None:
+def road_observation(
+    obs: Observation,
+    t: float,
+    s: float,
+    ds: float,
+    d: float,
+    dd: float,
+    state: Sequence[float],
+    heading_error: float,
+    curvature: float,
+) -> None:
     """Fill ``obs`` in place (it is the controller's, reused every step): time ``t`` (s), the
     centre of gravity at ``s`` along the lane and ``d`` across it (m, + left) moving at
     ``ds``/``dd`` (m/s), the plant's ``state`` (X, u, Y, v, psi, r) for the body speeds and yaw

@@ -67,9 +67,17 @@ FOLLOWER_COLOR = (220, 40, 40)
 VARIANTS: dict[str, dict[str, Any]] = {
     "road": {},
     "scale-model": {
-        "followers": 2, "standstill_gap": 0.4, "start_speed": 0.0,
-        "manoeuvres": "2:1.8:0.5,40:0:0.5", "duration": 60.0, "length": 0.4, "width": 0.2,
-        "max_accel": 1.0, "max_decel": 2.0, "lag": 0.1, "settle_band": 0.02,
+        "followers": 2,
+        "standstill_gap": 0.4,
+        "start_speed": 0.0,
+        "manoeuvres": "2:1.8:0.5,40:0:0.5",
+        "duration": 60.0,
+        "length": 0.4,
+        "width": 0.2,
+        "max_accel": 1.0,
+        "max_decel": 2.0,
+        "lag": 0.1,
+        "settle_band": 0.02,
     },
 }
 
@@ -79,9 +87,11 @@ def parse_manoeuvres(text: str) -> tuple[Manoeuvre, ...]:
     raw = text.strip().lower()
     if raw in ("", "none"):
         return ()
-    bad = ConfigError(f"bad value for manoeuvres: {shown(text)} (expected time s:target km/h:rate m/s^2 "
-                      "items separated by commas with increasing times, e.g. 10:20:2,35:50:1.5,60:0:6; "
-                      "or none)")
+    bad = ConfigError(
+        f"bad value for manoeuvres: {shown(text)} (expected time s:target km/h:rate m/s^2 "
+        "items separated by commas with increasing times, e.g. 10:20:2,35:50:1.5,60:0:6; "
+        "or none)"
+    )
     out = []
     for item in raw.split(","):
         try:
@@ -100,52 +110,77 @@ def parse_manoeuvres(text: str) -> tuple[Manoeuvre, ...]:
 class PlatoonConfig(CommonConfig):
     """Report 004's platoon (``variant=road``, default) or its scale test (``scale-model``)."""
 
-    variant: str = param("road", "-", "road: report 004's simulation (40 km/h, d_s 3 m); scale-model: "
-                         "its 3-car test (leader to 0.5 m/s, 0.4 m gaps: followers=2, "
-                         "standstill_gap=0.4, start_speed=0, manoeuvres=2:1.8:0.5,40:0:0.5, "
-                         "duration=60, length=0.4, width=0.2, max_accel=1, max_decel=2, lag=0.1, "
-                         "settle_band=0.02)", choices=tuple(VARIANTS))
+    variant: str = param(
+        "road",
+        "-",
+        "road: report 004's simulation (40 km/h, d_s 3 m); scale-model: "
+        "its 3-car test (leader to 0.5 m/s, 0.4 m gaps: followers=2, "
+        "standstill_gap=0.4, start_speed=0, manoeuvres=2:1.8:0.5,40:0:0.5, "
+        "duration=60, length=0.4, width=0.2, max_accel=1, max_decel=2, lag=0.1, "
+        "settle_band=0.02)",
+        choices=tuple(VARIANTS),
+    )
     duration: float = param(90.0, "s", "simulated time", min=1.0, max=3600.0)
     followers: int = param(3, "-", "project-controlled followers behind the SUMO leader", min=1, max=10)
-    standstill_gap: float = param(3.0, "m", "d_s: the gap kept at standstill (report 004: 3 m)",
-                                  min=0.1, max=50.0)
-    headway: float = param(2.0, "s", "lambda: time headway of the spacing policy, desired gap "
-                           "d_s + lambda v (report 004: 0.2 s, string unstable with its gains)",
-                           min=0.0, max=5.0)
-    start_speed: float = param(40.0, "km/h", "the platoon's speed at t = 0 (report 004: 40 km/h)",
-                               min=0.0, max=150.0)
-    manoeuvres: str = param("10:20:2,35:50:1.5,60:0:6", "-", "the leader's manoeuvres: time s:target "
-                            "km/h:rate m/s^2, comma-separated (default: brake to 20 km/h at 10 s, "
-                            "accelerate to 50 km/h at 35 s, brake hard to a stop at 60 s); none: cruise")
-    sine_amplitude: float = param(0.0, "km/h", "adds amplitude x sin(sine_omega t) to the leader's "
-                                  "speed; the frequency-domain gains are measured then", min=0.0, max=30.0)
-    sine_omega: float = param(0.9, "rad/s", "angular frequency of the leader's speed oscillation",
-                              min=0.01, max=10.0)
-    sine_transient: float = param(40.0, "s", "left out at the start when measuring the gains at "
-                                  "sine_omega", min=0.0, max=3000.0)
-    start_error: float = param(0.0, "m", "every follower starts this much farther back than its "
-                               "desired gap (negative: closer)", min=-40.0, max=100.0)
-    lag: float = param(0.2, "s", "first-order actuator lag of the followers (report 004: none)",
-                       min=0.0, max=2.0)
+    standstill_gap: float = param(3.0, "m", "d_s: the gap kept at standstill (report 004: 3 m)", min=0.1, max=50.0)
+    headway: float = param(
+        2.0,
+        "s",
+        "lambda: time headway of the spacing policy, desired gap "
+        "d_s + lambda v (report 004: 0.2 s, string unstable with its gains)",
+        min=0.0,
+        max=5.0,
+    )
+    start_speed: float = param(40.0, "km/h", "the platoon's speed at t = 0 (report 004: 40 km/h)", min=0.0, max=150.0)
+    manoeuvres: str = param(
+        "10:20:2,35:50:1.5,60:0:6",
+        "-",
+        "the leader's manoeuvres: time s:target "
+        "km/h:rate m/s^2, comma-separated (default: brake to 20 km/h at 10 s, "
+        "accelerate to 50 km/h at 35 s, brake hard to a stop at 60 s); none: cruise",
+    )
+    sine_amplitude: float = param(
+        0.0,
+        "km/h",
+        "adds amplitude x sin(sine_omega t) to the leader's speed; the frequency-domain gains are measured then",
+        min=0.0,
+        max=30.0,
+    )
+    sine_omega: float = param(0.9, "rad/s", "angular frequency of the leader's speed oscillation", min=0.01, max=10.0)
+    sine_transient: float = param(
+        40.0, "s", "left out at the start when measuring the gains at sine_omega", min=0.0, max=3000.0
+    )
+    start_error: float = param(
+        0.0,
+        "m",
+        "every follower starts this much farther back than its desired gap (negative: closer)",
+        min=-40.0,
+        max=100.0,
+    )
+    lag: float = param(0.2, "s", "first-order actuator lag of the followers (report 004: none)", min=0.0, max=2.0)
     max_accel: float = param(2.5, "m/s^2", "followers' largest acceleration command", min=0.1, max=10.0)
     max_decel: float = param(8.0, "m/s^2", "followers' largest deceleration command", min=0.1, max=12.0)
     length: float = param(4.5, "m", "length of every car", min=0.1, max=20.0)
     width: float = param(1.8, "m", "width of every car", min=0.05, max=3.0)
-    settle_band: float = param(0.2, "m", "the spacing error has settled when |delta_d| stays below",
-                               min=0.001, max=10.0)
+    settle_band: float = param(
+        0.2, "m", "the spacing error has settled when |delta_d| stays below", min=0.001, max=10.0
+    )
 
     def __post_init__(self) -> None:
         super().__post_init__()
         self.profile  # noqa: B018 - parse (and reject) the manoeuvres now
         if self.start_gap <= 0.0:
-            raise ConfigError(f"bad value for start_error: {self.start_error:g} (the followers would "
-                              f"start at a gap of {self.start_gap:.2f} m; expected a positive gap)")
+            raise ConfigError(
+                f"bad value for start_error: {self.start_error:g} (the followers would "
+                f"start at a gap of {self.start_gap:.2f} m; expected a positive gap)"
+            )
 
     @property
     def profile(self) -> SpeedProfile:
         """The leader's speed profile (m/s)."""
-        return SpeedProfile(self.start_speed * KMH, parse_manoeuvres(self.manoeuvres),
-                            self.sine_amplitude * KMH, self.sine_omega)
+        return SpeedProfile(
+            self.start_speed * KMH, parse_manoeuvres(self.manoeuvres), self.sine_amplitude * KMH, self.sine_omega
+        )
 
     @property
     def start_gap(self) -> float:
@@ -159,9 +194,11 @@ def _check_road(c: PlatoonConfig, length: float) -> float:
     lead_pos = TAIL + c.length + c.followers * (c.length + c.start_gap)
     need = lead_pos + c.profile.distance(c.duration) + END_MARGIN
     if need > length:
-        raise ConfigError(f"the platoon and its leader's {c.duration:g} s drive need {need:.0f} m of "
-                          f"road; the platoon network has {length:.0f} m (shorten duration or "
-                          "lower the speeds)")
+        raise ConfigError(
+            f"the platoon and its leader's {c.duration:g} s drive need {need:.0f} m of "
+            f"road; the platoon network has {length:.0f} m (shorten duration or "
+            "lower the speeds)"
+        )
     return lead_pos
 
 
@@ -169,29 +206,43 @@ class PlatoonScenario(Scenario):
     """A SUMO leader and a platoon of project-controlled followers in one lane."""
 
     name = "platoon"
-    summary = ("report 004: a platoon of followers (own model and controller each) behind a SUMO "
-               "leader that brakes, accelerates and stops; string stability measured "
-               "(--set variant=scale-model: the report's 3-car scale test)")
+    summary = (
+        "report 004: a platoon of followers (own model and controller each) behind a SUMO "
+        "leader that brakes, accelerates and stops; string stability measured "
+        "(--set variant=scale-model: the report's 3-car scale test)"
+    )
     task = "car-following"
     network = "platoon"
     config_cls = PlatoonConfig
     metric_specs = (
-        Metric("followers.", "-", "per follower (id): the platoon's metrics below, each in its unit, "
-               "and its settle_times"),
+        Metric(
+            "followers.", "-", "per follower (id): the platoon's metrics below, each in its unit, and its settle_times"
+        ),
         Metric("rms_spacing_error", "m", "worst follower's RMS spacing error delta_d", headline=True),
         Metric("max_abs_spacing_error", "m", "worst follower's largest |delta_d|", headline=True),
         Metric("min_gap", "m", "smallest gap of any follower", headline=True),
         Metric("min_ttc", "s", "smallest time-to-collision of any follower", headline=True),
         Metric("max_abs_accel", "m/s^2", "worst follower's largest |acceleration|", headline=True),
         Metric("max_abs_jerk", "m/s^3", "worst follower's largest |jerk|", headline=True),
-        Metric("settle_times.", "s", "per disturbance window: the slowest follower's time until "
-               "|delta_d| stays within settle_band (None: some never settled)", headline=True),
-        Metric("string_stable", "-", "no disturbance grew down the platoon (None: nothing tells)",
-               headline=True),
-        Metric("amplification.", "-", "per pair of consecutive vehicles: peak and L2 ratios of the "
-               "acceleration and of the spacing error"),
-        Metric("frequency_gain.", "-", "per pair of consecutive vehicles: speed gain at sine_omega "
-               "(with a sinusoidal leader)", headline=True),
+        Metric(
+            "settle_times.",
+            "s",
+            "per disturbance window: the slowest follower's time until "
+            "|delta_d| stays within settle_band (None: some never settled)",
+            headline=True,
+        ),
+        Metric("string_stable", "-", "no disturbance grew down the platoon (None: nothing tells)", headline=True),
+        Metric(
+            "amplification.",
+            "-",
+            "per pair of consecutive vehicles: peak and L2 ratios of the acceleration and of the spacing error",
+        ),
+        Metric(
+            "frequency_gain.",
+            "-",
+            "per pair of consecutive vehicles: speed gain at sine_omega (with a sinusoidal leader)",
+            headline=True,
+        ),
     )
 
     @classmethod
@@ -223,27 +274,57 @@ class PlatoonScenario(Scenario):
         sine = config.sine_amplitude > 0.0
         marks = (Marker("leader", "the leader's manoeuvre starts", "v"), Marker("collision", "collision", "X"))
         return (
-            Plot(f"speed_{ids[0]}", "speed.png", "speed", lines=lines("speed"),
-                 refs=(Ref("leader", "lead_speed"),), markers=marks),
-            Plot(f"e_{ids[0]}", "spacing_error.png", "spacing error delta_d", lines=lines("e"),
-                 band=Band(-config.settle_band, config.settle_band, f"settle band +-{config.settle_band:g} m"),
-                 markers=marks),
-            Plot(f"gap_{ids[0]}", "gap.png", "gap to the car ahead", lines=lines("gap"),
-                 refs=(Ref("standstill gap d_s", value=config.standstill_gap),), markers=marks),
-            Plot(f"accel_{ids[0]}", "accel.png", "acceleration", lines=lines("accel"),
-                 refs=(Ref("leader", "lead_accel"),), markers=marks),
-            FrequencyResponse("string_stability.png", ("lead_speed", *(f"speed_{vid}" for vid in ids)),
-                              (LEADER, *ids), config.headway, config.lag,
-                              config.sine_omega if sine else None,
-                              config.sine_transient if sine else 0.0,
-                              tuple(f"{g}_{vid}" for vid in ids for g in ("kp", "ki", "kd"))),
+            Plot(
+                f"speed_{ids[0]}",
+                "speed.png",
+                "speed",
+                lines=lines("speed"),
+                refs=(Ref("leader", "lead_speed"),),
+                markers=marks,
+            ),
+            Plot(
+                f"e_{ids[0]}",
+                "spacing_error.png",
+                "spacing error delta_d",
+                lines=lines("e"),
+                band=Band(-config.settle_band, config.settle_band, f"settle band +-{config.settle_band:g} m"),
+                markers=marks,
+            ),
+            Plot(
+                f"gap_{ids[0]}",
+                "gap.png",
+                "gap to the car ahead",
+                lines=lines("gap"),
+                refs=(Ref("standstill gap d_s", value=config.standstill_gap),),
+                markers=marks,
+            ),
+            Plot(
+                f"accel_{ids[0]}",
+                "accel.png",
+                "acceleration",
+                lines=lines("accel"),
+                refs=(Ref("leader", "lead_accel"),),
+                markers=marks,
+            ),
+            FrequencyResponse(
+                "string_stability.png",
+                ("lead_speed", *(f"speed_{vid}" for vid in ids)),
+                (LEADER, *ids),
+                config.headway,
+                config.lag,
+                config.sine_omega if sine else None,
+                config.sine_transient if sine else 0.0,
+                tuple(f"{g}_{vid}" for vid in ids for g in ("kp", "ki", "kd")),
+            ),
         )
 
     def trace_columns(self) -> tuple[Column, ...]:
         """The leader's columns, then :data:`PER_FOLLOWER` for every follower."""
-        return LEADER_COLUMNS + tuple(Column(f"{q}_{vid}", unit, f"{vid}: {text}")
-                                      for vid in follower_ids(self.config.followers)
-                                      for q, unit, text in PER_FOLLOWER)
+        return LEADER_COLUMNS + tuple(
+            Column(f"{q}_{vid}", unit, f"{vid}: {text}")
+            for vid in follower_ids(self.config.followers)
+            for q, unit, text in PER_FOLLOWER
+        )
 
     def __init__(self, config, controller, **kwargs) -> None:
         super().__init__(config, controller, **kwargs)
@@ -287,14 +368,26 @@ class PlatoonScenario(Scenario):
         L, gap0, n = c.length, c.start_gap, c.followers
         v0 = self.profile.speed(0.0)
         lead_pos = _check_road(c, lane.length)
-        bridge.add_type(VehicleType(LEADER, length=L, width=c.width, accel=10.0, decel=12.0,
-                                    emergency_decel=12.0, max_speed=60.0, sigma=0.0, color=LEADER_COLOR))
+        bridge.add_type(
+            VehicleType(
+                LEADER,
+                length=L,
+                width=c.width,
+                accel=10.0,
+                decel=12.0,
+                emergency_decel=12.0,
+                max_speed=60.0,
+                sigma=0.0,
+                color=LEADER_COLOR,
+            )
+        )
         bridge.add_type(ego_type("follower", self.geometry, decel=c.max_decel))
         bridge.add_route(ROUTE, [EDGE])
         fronts = [lead_pos - (i + 1) * (L + gap0) for i in range(n)]
-        bridge.add_vehicles([VehicleSpec(LEADER, LEADER, ROUTE, 0, lead_pos, v0)]
-                            + [VehicleSpec(vid, "follower", ROUTE, 0, pos, v0)
-                               for vid, pos in zip(self.ids, fronts)])
+        bridge.add_vehicles(
+            [VehicleSpec(LEADER, LEADER, ROUTE, 0, lead_pos, v0)]
+            + [VehicleSpec(vid, "follower", ROUTE, 0, pos, v0) for vid, pos in zip(self.ids, fronts)]
+        )
         bridge.insert(required=[LEADER, *self.ids])
         self.leader = ProfiledLeader(LEADER, self.profile)
         self.leader.start(bridge)
@@ -305,8 +398,9 @@ class PlatoonScenario(Scenario):
 
         self.chain = [LongitudinalPlant(self.model, lane, self.geometry, c.dt, front, v0) for front in fronts]
         self.plants = dict(zip(self.ids, self.chain))
-        self.obs = [FollowingObservation(policy=self.policy, max_accel=c.max_accel, max_decel=c.max_decel)
-                    for _ in self.ids]
+        self.obs = [
+            FollowingObservation(policy=self.policy, max_accel=c.max_accel, max_decel=c.max_decel) for _ in self.ids
+        ]
         self._bad = None
         self._pushed = [plant.pose() for plant in self.chain]
         self._manoeuvre = 0  #: the leader's next manoeuvre (index into profile.manoeuvres)
@@ -479,8 +573,7 @@ class PlatoonScenario(Scenario):
                 "min_ttc": m.json_number(m.finite_min(col[f"ttc_{vid}"]), 4),
                 "max_abs_accel": m.json_number(m.max_abs(acc)),
                 "max_abs_jerk": m.json_number(m.max_abs(jerk)),
-                "settle_times": {name: _settle(t, e, c.settle_band, start, stop)
-                                 for name, start, stop in windows},
+                "settle_times": {name: _settle(t, e, c.settle_band, start, stop) for name, start, stop in windows},
             }
         per = list(followers.values())
 
@@ -529,8 +622,10 @@ class PlatoonScenario(Scenario):
         accel = [col["lead_accel"]] + [col[f"accel_{vid}"] for vid in self.ids]
         for k in range(len(self.ids)):
             up, down = names[k], names[k + 1]
-            pair = {"peak_accel": _num(ss.peak_ratio(accel[k], accel[k + 1], ACCEL_FLOOR)),
-                    "l2_accel": _num(ss.l2_ratio(accel[k], accel[k + 1], ACCEL_FLOOR))}
+            pair = {
+                "peak_accel": _num(ss.peak_ratio(accel[k], accel[k + 1], ACCEL_FLOOR)),
+                "l2_accel": _num(ss.l2_ratio(accel[k], accel[k + 1], ACCEL_FLOOR)),
+            }
             if k:
                 e_up, e_down = col[f"e_{up}"], col[f"e_{down}"]
                 pair["peak_spacing_error"] = _num(ss.peak_ratio(e_up, e_down, ERROR_FLOOR))
@@ -549,9 +644,12 @@ class PlatoonScenario(Scenario):
             return None
         names = (LEADER, *self.ids)
         speeds = [col["lead_speed"]] + [col[f"speed_{vid}"] for vid in self.ids]
-        return {f"{names[k]}->{names[k + 1]}": _num(ss.sine_gain(t[keep], speeds[k][keep],
-                                                                 speeds[k + 1][keep], c.sine_omega))
-                for k in range(len(self.ids))}
+        return {
+            f"{names[k]}->{names[k + 1]}": _num(
+                ss.sine_gain(t[keep], speeds[k][keep], speeds[k + 1][keep], c.sine_omega)
+            )
+            for k in range(len(self.ids))
+        }
 
     # -- recording ----------------------------------------------------------------------------
     def _record_boxes(self) -> None:
@@ -566,13 +664,19 @@ class PlatoonScenario(Scenario):
         span = c.followers * (c.length + c.standstill_gap + c.headway * top + max(c.start_error, 0.0)) + c.length
         half = 0.6 * span + 2.0 * c.length
         # the wide view: twice the close one (300 m for report 004's platoon at 50 km/h)
-        return Scene(lanes=[(self.lane.width, self.lane.points)], title=self.name, followed="the platoon",
-                     follow_view=(-half, half, -0.25 * half, 0.25 * half),
-                     around_view=(-2.0 * half, 2.0 * half, -0.3 * half, 0.3 * half))
+        return Scene(
+            lanes=[(self.lane.width, self.lane.points)],
+            title=self.name,
+            followed="the platoon",
+            follow_view=(-half, half, -0.25 * half, 0.25 * half),
+            around_view=(-2.0 * half, 2.0 * half, -0.3 * half, 0.3 * half),
+        )
 
     def _series(self) -> list[Series]:
-        out = [Series("lead_speed", "plots/speed/leader", "m/s", "leader"),
-               Series("lead_accel", "plots/accel/leader", "m/s^2", "leader")]
+        out = [
+            Series("lead_speed", "plots/speed/leader", "m/s", "leader"),
+            Series("lead_accel", "plots/accel/leader", "m/s^2", "leader"),
+        ]
         for vid in self.ids:
             out += [
                 Series(f"e_{vid}", f"plots/spacing_error/{vid}", "m", vid),

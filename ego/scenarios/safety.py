@@ -49,8 +49,7 @@ class SafetyLayer:
     the scenario's (``aeb``, ``aeb_decel``, ``aeb_ttc``), ``event(kind, text, level)`` the
     run's event log and ``clock()`` the run's time (s)."""
 
-    __slots__ = ("config", "view", "event", "clock", "manoeuvre", "active", "time", "engagements",
-                 "full_brake")
+    __slots__ = ("config", "view", "event", "clock", "manoeuvre", "active", "time", "engagements", "full_brake")
 
     def __init__(self, config, view, event: Callable[..., None], clock: Callable[[], float]) -> None:
         self.config = config
@@ -93,8 +92,12 @@ class SafetyLayer:
                 self.engagements += 1
                 if self.time is None:
                     self.time = self.clock()
-                self.event("aeb", f"AEB engages: braking at the friction limit (front {front.id}, gap "
-                           f"{front.gap:.1f} m, TTC {view.ttc_front:.2f} s, needs {need:.1f} m/s^2)", "WARN")
+                self.event(
+                    "aeb",
+                    f"AEB engages: braking at the friction limit (front {front.id}, gap "
+                    f"{front.gap:.1f} m, TTC {view.ttc_front:.2f} s, needs {need:.1f} m/s^2)",
+                    "WARN",
+                )
         else:
             need = braking_need(front, view.ds)
             # it brakes until it no longer closes in: a release while closing hands a fast

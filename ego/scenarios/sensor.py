@@ -46,8 +46,13 @@ class Detection:
 
     __slots__ = ("id", "gap", "speed", "accel", "_gap0", "_o", "_lo", "_hi", "_since")
 
-    def __init__(self, id: str = "", gap: float = INF, speed: float = 0.0,  # noqa: A002
-                 accel: float = 0.0) -> None:
+    def __init__(
+        self,
+        id: str = "",
+        gap: float = INF,
+        speed: float = 0.0,  # noqa: A002
+        accel: float = 0.0,
+    ) -> None:
         self.id, self.gap, self.speed, self.accel = id, gap, speed, accel
         self._gap0 = gap  #: the gap at the scan that found it
         self._o = None
@@ -103,12 +108,40 @@ class SurroundSensor:
     ``width`` are the ego's body (m).
     """
 
-    __slots__ = ("lane", "bands", "cg_to_front", "cg_to_rear", "half_width", "front", "rear",
-                 "horizon", "reach", "_objects", "_near", "_lanes", "_straight", "_t_sync", "_t",
-                 "_t_scan", "_s", "_s_scan", "_ego", "_speeds", "_rows")
+    __slots__ = (
+        "lane",
+        "bands",
+        "cg_to_front",
+        "cg_to_rear",
+        "half_width",
+        "front",
+        "rear",
+        "horizon",
+        "reach",
+        "_objects",
+        "_near",
+        "_lanes",
+        "_straight",
+        "_t_sync",
+        "_t",
+        "_t_scan",
+        "_s",
+        "_s_scan",
+        "_ego",
+        "_speeds",
+        "_rows",
+    )
 
-    def __init__(self, lane, bands: dict[int, tuple[float, float]], cg_to_front: float,
-                 length: float, width: float, horizon: float = 0.1, reach: float = 1.0) -> None:
+    def __init__(
+        self,
+        lane,
+        bands: dict[int, tuple[float, float]],
+        cg_to_front: float,
+        length: float,
+        width: float,
+        horizon: float = 0.1,
+        reach: float = 1.0,
+    ) -> None:
         self.lane = lane
         #: the time between two SUMO steps (s) and how far (m) the ego may move sideways in
         #: it (1 m: 10 m/s at 0.1 s, far beyond a lane change): what the front/rear scan
@@ -178,8 +211,12 @@ class SurroundSensor:
         # the CG is not the box centre: take the extreme corners
         f, r = self.cg_to_front, self.cg_to_rear
         fc, rc, fs, rs = f * c, r * c, f * sn, r * sn
-        return (s + (fc if fc < -rc else -rc) - hw * as_, s + (fc if fc > -rc else -rc) + hw * as_,
-                d + (fs if fs < -rs else -rs) - hw * ac, d + (fs if fs > -rs else -rs) + hw * ac)
+        return (
+            s + (fc if fc < -rc else -rc) - hw * as_,
+            s + (fc if fc > -rc else -rc) + hw * as_,
+            d + (fs if fs < -rs else -rs) - hw * ac,
+            d + (fs if fs > -rs else -rs) + hw * ac,
+        )
 
     def scan(self, t: float, s: float, d: float, heading_error: float) -> None:
         """Look: ``front`` and ``rear`` for the ego's centre of gravity at (s, d) (m) with
@@ -194,8 +231,9 @@ class SurroundSensor:
             # the vehicles that can reach across to the ego before the next SUMO step: the
             # ego moves sideways by less than `reach` (m), each of them by |v_d| * horizon
             lo, hi, h, m = ego[2], ego[3], self.horizon, self.reach
-            near = self._near = [o for o in self._objects
-                                 if o[4] + abs(o[6]) * h + m > lo and o[3] - abs(o[6]) * h - m < hi]
+            near = self._near = [
+                o for o in self._objects if o[4] + abs(o[6]) * h + m > lo and o[3] - abs(o[6]) * h - m < hi
+            ]
         self._nearest(near, ego[2], ego[3], self.front, self.rear)
 
     def advance(self, t: float, s: float) -> None:
@@ -291,8 +329,10 @@ class SurroundSensor:
         velocity: (s, d) of its box centre in the lane frame (m), its velocity along and across
         the lane (m/s, + left) and its heading relative to the lane (rad, + left)."""
         since = t - self._t_sync
-        return [(0.5 * (o[1] + o[2]) + o[5] * since, 0.5 * (o[3] + o[4]) + o[6] * since, o[5], o[6], o[8])
-                for o in self._objects]
+        return [
+            (0.5 * (o[1] + o[2]) + o[5] * since, 0.5 * (o[3] + o[4]) + o[6] * since, o[5], o[6], o[8])
+            for o in self._objects
+        ]
 
     def box(self, vid: str) -> tuple[float, float, float, float, float] | None:
         """World box (centre x, y in m, yaw rad, length, width in m) of a sensed vehicle now,

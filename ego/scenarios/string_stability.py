@@ -29,8 +29,9 @@ import numpy as np
 OMEGAS = np.logspace(-3, 2, 5000)
 
 
-def pid_transfer(omega, kp: float, ki: float, kd: float, headway: float, lag: float = 0.0,
-                 delay: float = 0.0) -> np.ndarray:
+def pid_transfer(
+    omega, kp: float, ki: float, kd: float, headway: float, lag: float = 0.0, delay: float = 0.0
+) -> np.ndarray:
     """H(jw) from the predecessor's speed to the follower's (see the module docstring)."""
     s = 1j * np.asarray(omega, dtype=float)
     k = (kp + kd * s + ki / s) * np.exp(-s * delay)
@@ -44,11 +45,13 @@ def peak_gain(transfer, omegas: np.ndarray = OMEGAS) -> tuple[float, float]:
     return float(gains[i]), float(omegas[i])
 
 
-def min_stable_headway(kp: float, ki: float, kd: float, lag: float = 0.0, delay: float = 0.0,
-                       upper: float = 30.0, tol: float = 1e-4) -> float | None:
+def min_stable_headway(
+    kp: float, ki: float, kd: float, lag: float = 0.0, delay: float = 0.0, upper: float = 30.0, tol: float = 1e-4
+) -> float | None:
     """Smallest time headway lambda (s) with max |H| <= 1, by bisection; None above ``upper``.
 
     The low-frequency limit of |H| is 1 from below when stable, so 1 + 1e-9 is the test."""
+
     def stable(h: float) -> bool:
         return peak_gain(lambda w: pid_transfer(w, kp, ki, kd, h, lag, delay))[0] <= 1.0 + 1e-9
 

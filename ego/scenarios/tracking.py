@@ -71,16 +71,22 @@ TRACKING_PLOTS = (
 
 # --- sine tracking in SUMO ------------------------------------------------------------------
 
+
 @dataclass(frozen=True)
 class SineTrackingConfig(HighwayConfig):
     duration: float = param(40.0, "s", "simulated time", min=1.0, max=3600.0)
-    traffic_density: float = param(0.0, "veh/km", "background traffic per adjacent lane (the ego "
-                                   "weaves across them)", min=0.0, max=25.0)
-    omega: float = param(0.2, "rad/s", "lateral reference frequency (report: 0.2 and 0.5)",
-                         min=0.0, max=5.0)
+    traffic_density: float = param(
+        0.0, "veh/km", "background traffic per adjacent lane (the ego weaves across them)", min=0.0, max=25.0
+    )
+    omega: float = param(0.2, "rad/s", "lateral reference frequency (report: 0.2 and 0.5)", min=0.0, max=5.0)
     amplitude: float = param(4.0, "m", "lateral reference amplitude (report: 4)", min=0.0, max=5.0)
-    ref_speed: float = param(25.0, "m/s", "longitudinal reference speed: 25 accelerates (X_ref = "
-                             "25 t), 15 decelerates (X_ref = 15 t)", min=1.0, max=45.0)
+    ref_speed: float = param(
+        25.0,
+        "m/s",
+        "longitudinal reference speed: 25 accelerates (X_ref = 25 t), 15 decelerates (X_ref = 15 t)",
+        min=1.0,
+        max=45.0,
+    )
 
 
 class SineReference:
@@ -124,8 +130,13 @@ class SineTracking(Scenario):
         """The motorway world with its background only, the surround view, the sine reference."""
         self.geometry = VehicleGeometry()
         view = SurroundView(self.config, self.geometry)
-        return Parts(MotorwayWorld(self.config, self.geometry, lambda world: None), view,
-                     SineReference(self.config, view), None, ego_plant)
+        return Parts(
+            MotorwayWorld(self.config, self.geometry, lambda world: None),
+            view,
+            SineReference(self.config, view),
+            None,
+            ego_plant,
+        )
 
     def _series(self):
         return motorway_series(self._signal_names, self._signal_units)
@@ -133,32 +144,31 @@ class SineTracking(Scenario):
     def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
         col = {name: trace[:, i] for i, name in enumerate(columns)}
         out = tracking_metrics(col["t"], col["e_lat"], col["ds"] - col["speed_ref"])
-        out.update({
-            "min_ttc_front": m.json_number(m.finite_min(col["ttc_front"]), 4),
-            "min_ttc_rear": m.json_number(m.finite_min(col["ttc_rear"]), 4),
-            "max_abs_lateral_accel": m.json_number(m.max_abs(col["lat_accel"]), 4),
-            "final_speed": m.json_number(float(col["speed"][-1]) if len(col["t"]) else None, 4),
-        })
+        out.update(
+            {
+                "min_ttc_front": m.json_number(m.finite_min(col["ttc_front"]), 4),
+                "min_ttc_rear": m.json_number(m.finite_min(col["ttc_rear"]), 4),
+                "max_abs_lateral_accel": m.json_number(m.max_abs(col["lat_accel"]), 4),
+                "final_speed": m.json_number(float(col["speed"][-1]) if len(col["t"]) else None, 4),
+            }
+        )
         return out
 
 
 # --- report 000 on the bare model -----------------------------------------------------------
 
+
 @dataclass(frozen=True)
 class Report000Config(TimingConfig):
     duration: float = param(30.0, "s", "simulated time", min=1.0, max=3600.0)
-    case: str = param("step", "-", "step (5 m lane change) or sine (A sin(omega t))",
-                      choices=("step", "sine"))
-    ref_speed: float = param(25.0, "m/s", "X_ref = ref_speed t: 25 accelerates, 15 decelerates",
-                             min=1.0, max=45.0)
+    case: str = param("step", "-", "step (5 m lane change) or sine (A sin(omega t))", choices=("step", "sine"))
+    ref_speed: float = param(25.0, "m/s", "X_ref = ref_speed t: 25 accelerates, 15 decelerates", min=1.0, max=45.0)
     initial_speed: float = param(20.0, "m/s", "u at t = 0 (report: 20)", min=1.0, max=45.0)
     step: float = param(5.0, "m", "lateral step of case=step (report: 5)", min=-10.0, max=10.0)
     omega: float = param(0.2, "rad/s", "case=sine: frequency (report: 0.2 and 0.5)", min=0.0, max=5.0)
     amplitude: float = param(4.0, "m", "case=sine: amplitude (report: 4)", min=0.0, max=10.0)
-    settle_band: float = param(0.2, "m", "lane change done when |Y - Y_ref| stays below", min=0.01,
-                               max=2.0)
-    x_band: float = param(0.5, "m", "X tracking settled when |X - X_ref| stays below", min=0.01,
-                          max=10.0)
+    settle_band: float = param(0.2, "m", "lane change done when |Y - Y_ref| stays below", min=0.01, max=2.0)
+    x_band: float = param(0.5, "m", "X tracking settled when |X - X_ref| stays below", min=0.01, max=10.0)
     max_steer: float = param(0.5, "rad", "front steer limit", min=0.01, max=1.5)
 
 
@@ -185,8 +195,7 @@ class Report000(Scenario):
         Column("yaw_rate", "rad/s", "yaw rate"),
     )
     metric_specs = TRACKING_METRICS + (
-        Metric("lane_change_duration", "s", "case=step: until |Y - Y_ref| stays within settle_band",
-               headline=True),
+        Metric("lane_change_duration", "s", "case=step: until |Y - Y_ref| stays within settle_band", headline=True),
         Metric("lane_change_completed", "-", "case=step: the lane change settled and the run completed"),
         Metric("max_overshoot", "m", "case=step: largest excursion past the target", headline=True),
         Metric("x_settling_time", "s", "until |X - X_ref| stays within x_band", headline=True),
@@ -206,9 +215,14 @@ class Report000(Scenario):
     def _setup(self, rng) -> None:
         c = self.config
         # the report's raw model (no ABS): its published figures are compared with these
-        self.ego = BicyclePlant(NonlinearBicycle(), self.geometry, c.dt, c.substeps,
-                                ActuatorLimits(max_steer=c.max_steer),
-                                state=(0.0, c.initial_speed, 0.0, 0.0, 0.0, 0.0))
+        self.ego = BicyclePlant(
+            NonlinearBicycle(),
+            self.geometry,
+            c.dt,
+            c.substeps,
+            ActuatorLimits(max_steer=c.max_steer),
+            state=(0.0, c.initial_speed, 0.0, 0.0, 0.0, 0.0),
+        )
         self.controlled_ids = ("ego",)
         self._next_pose = 0.0
 
@@ -238,9 +252,20 @@ class Report000(Scenario):
         o = self.obs
         self.trace.append(
             self.controller.signals(),
-            t=o.t, s=o.s, d=o.d, d_ref=o.d_ref, e_lat=o.d - o.d_ref, e_lon=o.s - o.s_ref,
-            speed=o.speed, ds=o.ds, s_ref=o.s_ref, speed_ref=o.ds_ref, Fx=fx, delta=delta,
-            lat_accel=ego.lateral_accel, yaw_rate=o.yaw_rate,
+            t=o.t,
+            s=o.s,
+            d=o.d,
+            d_ref=o.d_ref,
+            e_lat=o.d - o.d_ref,
+            e_lon=o.s - o.s_ref,
+            speed=o.speed,
+            ds=o.ds,
+            s_ref=o.s_ref,
+            speed_ref=o.ds_ref,
+            Fx=fx,
+            delta=delta,
+            lat_accel=ego.lateral_accel,
+            yaw_rate=o.yaw_rate,
         )
 
     def _record_pose(self) -> None:

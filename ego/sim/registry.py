@@ -82,12 +82,24 @@ def register(backend: Backend) -> Backend:
     return backend
 
 
-register(Backend("sumo", "ego.sumo.bridge:make_sim",
-                 Capabilities(sublane=True, scripted_actors=True, video=False, any_network=True)))
-register(Backend("highway-env", "ego.highway_env.bridge:make_sim",
-                 Capabilities(sublane=False, scripted_actors=True, video=True, any_network=False),
-                 options=("video",), requires="highway_env", install="pip install 'ego[highway]'",
-                 check="ego.highway_env.video:check_options"))
+register(
+    Backend(
+        "sumo",
+        "ego.sumo.bridge:make_sim",
+        Capabilities(sublane=True, scripted_actors=True, video=False, any_network=True),
+    )
+)
+register(
+    Backend(
+        "highway-env",
+        "ego.highway_env.bridge:make_sim",
+        Capabilities(sublane=False, scripted_actors=True, video=True, any_network=False),
+        options=("video",),
+        requires="highway_env",
+        install="pip install 'ego[highway]'",
+        check="ego.highway_env.video:check_options",
+    )
+)
 
 
 def backend(name: str) -> Backend:
@@ -95,8 +107,9 @@ def backend(name: str) -> Backend:
     try:
         return BACKENDS[name]
     except KeyError:
-        raise ConfigError(f"bad value for --backend: {name!r} (expected one of: {', '.join(BACKENDS)})"
-                          f"{did_you_mean(name, BACKENDS)}") from None
+        raise ConfigError(
+            f"bad value for --backend: {name!r} (expected one of: {', '.join(BACKENDS)}){did_you_mean(name, BACKENDS)}"
+        ) from None
 
 
 def check_options(name: str, options: Mapping[str, Any]) -> None:
@@ -108,10 +121,11 @@ def check_options(name: str, options: Mapping[str, Any]) -> None:
         if key not in b.options:
             takers = [o.name for o in BACKENDS.values() if key in o.options]
             if takers:
-                raise ConfigError(f"--{key} needs --backend {' or '.join(takers)} (--backend {name} "
-                                  f"takes {', '.join('--' + o for o in b.options) or 'no options'})")
-            raise ConfigError(f"bad backend option {key!r} (--backend {name} takes "
-                              f"{', '.join(b.options) or 'none'})")
+                raise ConfigError(
+                    f"--{key} needs --backend {' or '.join(takers)} (--backend {name} "
+                    f"takes {', '.join('--' + o for o in b.options) or 'no options'})"
+                )
+            raise ConfigError(f"bad backend option {key!r} (--backend {name} takes {', '.join(b.options) or 'none'})")
     if b.check is not None and options:
         b.load(b.check)(options)
 

@@ -75,6 +75,14 @@ def ego_type(type_id: str, geometry: VehicleGeometry, decel: float = 7.0) -> Veh
     its 0.7 friction circle. The simulator never drives it, so its car-following headway
     only matters for insertion: a short ``tau`` lets a scenario start it close behind a leader.
     """
-    return VehicleType(type_id, length=geometry.length, width=geometry.width, min_gap=0.0,
-                       decel=decel, emergency_decel=max(9.0, decel), sigma=0.0, tau=0.2,
-                       color=(220, 40, 40))
+    return VehicleType(
+        type_id,
+        length=geometry.length,
+        width=geometry.width,
+        min_gap=0.0,
+        decel=decel,
+        emergency_decel=max(9.0, decel),
+        sigma=0.0,
+        tau=0.2,
+        color=(220, 40, 40),
+    )

@@ -43,6 +43,7 @@ _DEG = 180.0 / math.pi
 
 # --- configuration -----------------------------------------------------------------------
 
+
 @dataclass(frozen=True)
 class SumoConfig:
     """How to start SUMO. ``step_length`` (s) is SUMO's own step."""
@@ -56,18 +57,29 @@ class SumoConfig:
     def command(self) -> list[str]:
         return [
             str(sumo_binary("sumo")),
-            "--net-file", str(self.net),
-            "--step-length", repr(float(self.step_length)),
-            "--seed", str(int(self.seed)),
-            "--lateral-resolution", repr(float(self.lateral_resolution)),
+            "--net-file",
+            str(self.net),
+            "--step-length",
+            repr(float(self.step_length)),
+            "--seed",
+            str(int(self.seed)),
+            "--lateral-resolution",
+            repr(float(self.lateral_resolution)),
             # report every collision, keep the vehicles (no teleport hides a crash)
-            "--collision.action", "warn",
-            "--collision.mingap-factor", "0",
-            "--collision.check-junctions", "true",
-            "--time-to-teleport", "-1",
-            "--no-step-log", "true",
-            "--no-warnings", "true",
-            "--duration-log.disable", "true",
+            "--collision.action",
+            "warn",
+            "--collision.mingap-factor",
+            "0",
+            "--collision.check-junctions",
+            "true",
+            "--time-to-teleport",
+            "-1",
+            "--no-step-log",
+            "true",
+            "--no-warnings",
+            "true",
+            "--duration-log.disable",
+            "true",
             *self.extra_args,
         ]
 
@@ -163,8 +175,7 @@ class SumoBridge:
         label = f"ego-{os.getpid()}-{SumoBridge._traci_count}"
         SumoBridge.started += 1
         port = traci.getFreeSocketPort()
-        proc = subprocess.Popen([*self.config.command(), "--remote-port", str(port)],
-                                stdout=subprocess.DEVNULL)
+        proc = subprocess.Popen([*self.config.command(), "--remote-port", str(port)], stdout=subprocess.DEVNULL)
         try:
             # poll for SUMO's socket every 20 ms (traci.start waits whole seconds), its retry
             # notes kept off stdout (reserved for results)
@@ -173,8 +184,9 @@ class SumoBridge:
         except Exception as exc:  # noqa: BLE001 - SUMO's reasons went to stderr
             proc.kill()
             proc.wait()
-            raise SumoError(f"SUMO could not start through TraCI on {self.config.net} "
-                            f"({type(exc).__name__}: {exc})") from None
+            raise SumoError(
+                f"SUMO could not start through TraCI on {self.config.net} ({type(exc).__name__}: {exc})"
+            ) from None
         self.via_traci = True
         self._pose_subscribed = set()
 
@@ -184,16 +196,20 @@ class SumoBridge:
             if instances.sharing():
                 self._start_traci()
                 return
-            raise SumoError("a SUMO simulation is already running in this process "
-                            "(libsumo allows one per process; use processes for parallel runs)")
+            raise SumoError(
+                "a SUMO simulation is already running in this process "
+                "(libsumo allows one per process; use processes for parallel runs)"
+            )
         import libsumo
 
         SumoBridge.started += 1
         try:
             libsumo.start(self.config.command())
         except Exception as exc:  # noqa: BLE001 - libsumo says only "Process Error"; SUMO's reasons went to stderr
-            raise SumoError(f"SUMO could not start on {self.config.net} ({type(exc).__name__}: {exc}; "
-                            "SUMO's own messages are on stderr)") from None
+            raise SumoError(
+                f"SUMO could not start on {self.config.net} ({type(exc).__name__}: {exc}; "
+                "SUMO's own messages are on stderr)"
+            ) from None
         SumoBridge._running = True
         instances.claim_exclusive(True)
         self._ls = libsumo
@@ -244,8 +260,14 @@ class SumoBridge:
     def add_vehicles(self, specs: Iterable[VehicleSpec]) -> None:
         veh = self.libsumo.vehicle
         for s in specs:
-            veh.add(s.id, s.route, typeID=s.type_id, departLane=str(s.lane),
-                    departPos=f"{s.pos:.3f}", departSpeed=f"{s.speed:.3f}")
+            veh.add(
+                s.id,
+                s.route,
+                typeID=s.type_id,
+                departLane=str(s.lane),
+                departPos=f"{s.pos:.3f}",
+                departSpeed=f"{s.speed:.3f}",
+            )
             self._vehicle_type[s.id] = s.type_id
             self._pending.append(s)
 
@@ -291,8 +313,7 @@ class SumoBridge:
         return (*front_bumper_to_cg(xf, yf, psi, self.controlled[vid].cg_to_front), psi)
 
     # -- per step -------------------------------------------------------------------------
-    def push(self, vid: str, x: float, y: float, psi: float, speed: float,
-             accel: float | None = None) -> None:
+    def push(self, vid: str, x: float, y: float, psi: float, speed: float, accel: float | None = None) -> None:
         """Place controlled vehicle ``vid`` (centre of gravity x, y in m, yaw psi in rad).
 
         ``speed`` (m/s) becomes SUMO's idea of its speed, so followers react to the truth.
@@ -302,8 +323,15 @@ class SumoBridge:
         c = math.cos(psi)
         s = math.sin(psi)
         veh = self._ls.vehicle
-        veh.moveToXY(vid, "", -1, x + geo.cg_to_front * c, y + geo.cg_to_front * s,
-                     (90.0 - psi * _DEG) % 360.0, self._keep_route[vid])
+        veh.moveToXY(
+            vid,
+            "",
+            -1,
+            x + geo.cg_to_front * c,
+            y + geo.cg_to_front * s,
+            (90.0 - psi * _DEG) % 360.0,
+            self._keep_route[vid],
+        )
         if accel is None:
             veh.setPreviousSpeed(vid, speed)
         else:
@@ -429,8 +457,9 @@ class SumoBridge:
         on from there unless placed again."""
         half = 0.5 * self.dimensions(vid)[0]
         veh = self._ls.vehicle
-        veh.moveToXY(vid, "", -1, x + half * math.cos(psi), y + half * math.sin(psi),
-                     (90.0 - psi * _DEG) % 360.0, keep_route)
+        veh.moveToXY(
+            vid, "", -1, x + half * math.cos(psi), y + half * math.sin(psi), (90.0 - psi * _DEG) % 360.0, keep_route
+        )
         veh.setPreviousSpeed(vid, max(speed, 0.0))
 
     def slow_down(self, vid: str, speed: float, duration: float) -> None:
@@ -451,8 +480,9 @@ class SumoBridge:
     def depart(self, departure: Departure) -> None:
         """A vehicle enters ``departure.route`` at its start now, in its lane at its speed."""
         d = departure
-        self.libsumo.vehicle.add(d.id, d.route, typeID=d.type_id, departLane=str(d.lane), departPos="0",
-                                 departSpeed=f"{d.speed:.3f}")
+        self.libsumo.vehicle.add(
+            d.id, d.route, typeID=d.type_id, departLane=str(d.lane), departPos="0", departSpeed=f"{d.speed:.3f}"
+        )
 
     def front_bumper(self, vid: str) -> tuple[float, float]:
         """Front bumper centre of any vehicle (m), as of the last step."""
@@ -464,8 +494,8 @@ class SumoBridge:
         from libsumo import constants as tc
 
         self.libsumo.vehicle.subscribeContext(
-            vid, tc.CMD_GET_VEHICLE_VARIABLE, float(radius),
-            [tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED])
+            vid, tc.CMD_GET_VEHICLE_VARIABLE, float(radius), [tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED]
+        )
         self._ctx_vars = (tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED)
 
     def surroundings(self, vid: str) -> tuple[list[str], list[tuple[float, ...]]]:
@@ -570,5 +600,8 @@ class SumoBridge:
 
 def make_sim(setup: SimSetup, options: dict) -> SumoBridge:
     """The registry's factory for ``sumo`` (:mod:`ego.sim.registry`; SUMO takes no options)."""
-    return SumoBridge(SumoConfig(setup.net, step_length=setup.step_length, seed=setup.seed,
-                                 lateral_resolution=setup.lateral_resolution))
+    return SumoBridge(
+        SumoConfig(
+            setup.net, step_length=setup.step_length, seed=setup.seed, lateral_resolution=setup.lateral_resolution
+        )
+    )

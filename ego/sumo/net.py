@@ -45,8 +45,7 @@ def nets_dir() -> Path:
         path = _installed_nets() or Path(__file__).resolve().parents[2] / "sumo_nets"
     if not path.is_dir():
         raise ConfigError(
-            f"SUMO networks folder {path} not found (reinstall ego, or set EGO_SUMO_NETS to a "
-            "folder of networks)"
+            f"SUMO networks folder {path} not found (reinstall ego, or set EGO_SUMO_NETS to a folder of networks)"
         )
     return path
 
@@ -71,8 +70,9 @@ def net_file(name: str) -> Path:
     if not path.exists():
         known = available_networks()
         if name in known:  # its sources are there, the built file is not
-            raise ConfigError(f"network {name!r} is not built ({path} is missing); build it with "
-                              "python sumo_nets/build.py")
+            raise ConfigError(
+                f"network {name!r} is not built ({path} is missing); build it with python sumo_nets/build.py"
+            )
         raise ConfigError(f"unknown network {name!r} (known: {', '.join(known)}){did_you_mean(name, known)}")
     check_network(path)
     return path
@@ -128,13 +128,16 @@ def _check_network(path: Path) -> None:
                 if edge in lanes:
                     lanes[edge] += 1
     except ET.ParseError as exc:
-        raise ConfigError(f"the SUMO network {path} is not valid XML ({exc}); rebuild it: "
-                          "python sumo_nets/build.py") from None
+        raise ConfigError(
+            f"the SUMO network {path} is not valid XML ({exc}); rebuild it: python sumo_nets/build.py"
+        ) from None
     except OSError as exc:
         raise ConfigError(f"cannot read the SUMO network {path}: {exc.strerror or exc}") from None
     if root != "net" or not edges:
-        raise ConfigError(f"the SUMO network {path} is not a SUMO network (expected a <net> with edges); "
-                          "rebuild it: python sumo_nets/build.py")
+        raise ConfigError(
+            f"the SUMO network {path} is not a SUMO network (expected a <net> with edges); "
+            "rebuild it: python sumo_nets/build.py"
+        )
     _check_sources(path, lanes)
 
 
@@ -148,8 +151,10 @@ def _check_lane(path: Path, elem) -> None:
     except (TypeError, ValueError):
         length = math.nan
     if not (math.isfinite(length) and length > 0):
-        raise ConfigError(f"the SUMO network {path} has a lane ({elem.get('id')!r}) without a valid length "
-                          f"({text!r}); rebuild it: python sumo_nets/build.py")
+        raise ConfigError(
+            f"the SUMO network {path} has a lane ({elem.get('id')!r}) without a valid length "
+            f"({text!r}); rebuild it: python sumo_nets/build.py"
+        )
 
 
 def _check_sources(path: Path, lanes: dict[str, int]) -> None:
@@ -166,13 +171,17 @@ def _check_sources(path: Path, lanes: dict[str, int]) -> None:
         return  # the sources are netconvert's input, not read by a run
     for edge, count in declared.items():
         if edge not in lanes:
-            raise ConfigError(f"the SUMO network {path} is not the {name} network: it has no edge {edge!r} "
-                              f"(its edges: {', '.join(sorted(lanes)) or 'none'}); rebuild it: "
-                              "python sumo_nets/build.py")
+            raise ConfigError(
+                f"the SUMO network {path} is not the {name} network: it has no edge {edge!r} "
+                f"(its edges: {', '.join(sorted(lanes)) or 'none'}); rebuild it: "
+                "python sumo_nets/build.py"
+            )
         if count is not None and count.isdigit() and int(count) != lanes[edge]:
-            raise ConfigError(f"the SUMO network {path} is not the {name} network: edge {edge!r} has "
-                              f"{lanes[edge]} lanes, its sources say {count}; rebuild it: "
-                              "python sumo_nets/build.py")
+            raise ConfigError(
+                f"the SUMO network {path} is not the {name} network: edge {edge!r} has "
+                f"{lanes[edge]} lanes, its sources say {count}; rebuild it: "
+                "python sumo_nets/build.py"
+            )
 
 
 def build_network(name: str, output: Path | None = None) -> Path:
@@ -188,7 +197,11 @@ def build_network(name: str, output: Path | None = None) -> Path:
     env = dict(os.environ, SUMO_HOME=str(sumo_home()))
     subprocess.run(
         [str(sumo_binary("netconvert")), "-c", cfg.name, "-o", str(out.resolve())],
-        cwd=folder, env=env, check=True, capture_output=True, text=True,
+        cwd=folder,
+        env=env,
+        check=True,
+        capture_output=True,
+        text=True,
     )
     return out
 

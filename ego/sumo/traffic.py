@@ -54,8 +54,7 @@ def background_traffic(
         pos = start + rng.uniform(0.0, mean_spacing)
         while pos < end:
             if not any(lane == kl and lo <= pos <= hi for kl, lo, hi in keep_clear):
-                specs.append(VehicleSpec(f"{prefix}{lane}_{len(specs)}", type_id, route, lane,
-                                         float(pos), speed))
+                specs.append(VehicleSpec(f"{prefix}{lane}_{len(specs)}", type_id, route, lane, float(pos), speed))
             pos += min_spacing + (rng.exponential(extra) if extra > 0 else 0.0)
     return specs
 
@@ -172,7 +171,7 @@ class Manoeuvre:
     rate: float
 
     def kind(self, speed_before: float) -> str:
-        """"stop", "brake" or "accelerate" (or "hold" when already there)."""
+        """ "stop", "brake" or "accelerate" (or "hold" when already there)."""
         if self.speed == 0.0 and speed_before > 0.0:
             return "stop"
         if self.speed < speed_before:

@@ -97,8 +97,12 @@ def node_id() -> str | None:
     return None
 
 
-def drive(executor: Executor, tasks: Iterable[RunTask], on_row: Callable[[RunTask, RunRow], None],
-          progress: Callable[[str, str], None] | None = None) -> bool:
+def drive(
+    executor: Executor,
+    tasks: Iterable[RunTask],
+    on_row: Callable[[RunTask, RunRow], None],
+    progress: Callable[[str, str], None] | None = None,
+) -> bool:
     """Run ``tasks`` on ``executor`` (closed at the end), calling ``on_row(task, row)`` as
     each finishes (a task whose worker died twice is a row with status ``error``) and
     ``progress(what, status)`` after it. Returns whether it was interrupted: a
@@ -109,8 +113,11 @@ def drive(executor: Executor, tasks: Iterable[RunTask], on_row: Callable[[RunTas
 
     def take(outcome: Outcome) -> str:
         task: RunTask = outcome.task
-        row = outcome.value if outcome.value is not None else RunRow(
-            task.run.name, task.run.seed, "error", {}, error=outcome.error)
+        row = (
+            outcome.value
+            if outcome.value is not None
+            else RunRow(task.run.name, task.run.seed, "error", {}, error=outcome.error)
+        )
         row.attempts = outcome.attempts  # 2: its worker (or node) died once
         on_row(task, row)
         if progress is not None:

@@ -21,8 +21,14 @@ from ego.results import summary
 from ego.results.metrics import metric_units, with_unit
 
 #: outcome -> (colour, rank: a point with several runs shows its worst)
-OUTCOMES = {"completed": ("#2ca02c", 0), "ended": ("#98df8a", 1), "timeout": ("#ff7f0e", 2),
-            "collision": ("#d62728", 4), "diverged": ("#000000", 5), "error": ("#9e9e9e", 3)}
+OUTCOMES = {
+    "completed": ("#2ca02c", 0),
+    "ended": ("#98df8a", 1),
+    "timeout": ("#ff7f0e", 2),
+    "collision": ("#d62728", 4),
+    "diverged": ("#000000", 5),
+    "error": ("#9e9e9e", 3),
+}
 
 
 def _unit(scenario: str, metric: str) -> str:
@@ -39,8 +45,15 @@ def write_summary(spec, table, path: Path) -> None:
     (:func:`ego.results.summary.sweep`)."""
     from ego.scenarios import scenario_class
 
-    text = summary.sweep(spec.scenario, spec.source, spec.swept, len(spec.seeds), table.to_pylist(),
-                         spec.controllers, scenario_class(spec.scenario).metrics_declared())
+    text = summary.sweep(
+        spec.scenario,
+        spec.source,
+        spec.swept,
+        len(spec.seeds),
+        table.to_pylist(),
+        spec.controllers,
+        scenario_class(spec.scenario).metrics_declared(),
+    )
     write_text(path, text)
 
 
@@ -52,8 +65,9 @@ def write_plots(spec, table, out: Path, x: str, y: str, metric: str | None) -> P
     data = table.to_pydict()
     rows = 2 if metric else 1
     ncol = len(spec.controllers)
-    fig, axes = plt.subplots(rows, ncol, figsize=(3.6 * ncol + 1.2, 3.3 * rows + 0.6), dpi=110,
-                             squeeze=False, sharex=True, sharey=True)
+    fig, axes = plt.subplots(
+        rows, ncol, figsize=(3.6 * ncol + 1.2, 3.3 * rows + 0.6), dpi=110, squeeze=False, sharex=True, sharey=True
+    )
     values_all = []
     points: dict[str, dict] = {}
     for c in spec.controllers:
@@ -65,8 +79,9 @@ def write_plots(spec, table, out: Path, x: str, y: str, metric: str | None) -> P
             pts.setdefault(key, []).append(i)
         points[c] = pts
         if metric and metric in data:
-            values_all += [v for v in data[metric] if isinstance(v, (int, float)) and not isinstance(v, bool)
-                           and math.isfinite(v)]
+            values_all += [
+                v for v in data[metric] if isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+            ]
     vmin, vmax = (min(values_all), max(values_all)) if values_all else (0.0, 1.0)
     scatter = None
     seen: dict[str, str] = {}
@@ -75,8 +90,11 @@ def write_plots(spec, table, out: Path, x: str, y: str, metric: str | None) -> P
         pts = points[c]
         counts = []
         for status, (colour, _) in OUTCOMES.items():
-            xy = [k for k, idx in pts.items()
-                  if max((data["status"][i] for i in idx), key=lambda s: OUTCOMES.get(s, ("", 5))[1]) == status]
+            xy = [
+                k
+                for k, idx in pts.items()
+                if max((data["status"][i] for i in idx), key=lambda s: OUTCOMES.get(s, ("", 5))[1]) == status
+            ]
             if xy:
                 a = np.array(xy)
                 ax.scatter(a[:, 0], a[:, 1], s=18, c=colour, edgecolors="none")
@@ -88,8 +106,14 @@ def write_plots(spec, table, out: Path, x: str, y: str, metric: str | None) -> P
             ax2 = axes[1][j]
             xs, ys, vs = [], [], []
             for (px, py), idx in pts.items():
-                vals = [data[metric][i] for i in idx if metric in data and isinstance(data[metric][i], (int, float))
-                        and not isinstance(data[metric][i], bool) and math.isfinite(data[metric][i])]
+                vals = [
+                    data[metric][i]
+                    for i in idx
+                    if metric in data
+                    and isinstance(data[metric][i], (int, float))
+                    and not isinstance(data[metric][i], bool)
+                    and math.isfinite(data[metric][i])
+                ]
                 if vals:
                     xs.append(px)
                     ys.append(py)
@@ -104,8 +128,7 @@ def write_plots(spec, table, out: Path, x: str, y: str, metric: str | None) -> P
     # one legend for the outcomes and one colour bar for the metric, beside the plots
     fig.subplots_adjust(right=0.82, top=0.84, hspace=0.4)
     handles = [plt.Line2D([], [], marker="o", linestyle="", color=col, label=st) for st, col in seen.items()]
-    fig.legend(handles=handles, loc="upper right", fontsize=7, title="outcome\n(worst of a point)",
-               title_fontsize=7)
+    fig.legend(handles=handles, loc="upper right", fontsize=7, title="outcome\n(worst of a point)", title_fontsize=7)
     if metric and scatter is not None:
         cax = fig.add_axes([0.85, 0.1, 0.02, 0.3])
         bar = fig.colorbar(scatter, cax=cax)

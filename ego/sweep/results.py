@@ -44,8 +44,9 @@ class ResultStore:
             try:
                 self._table = pq.read_table(self.path)
             except Exception as exc:  # noqa: BLE001 - a damaged file is the user's to resolve
-                raise ConfigError(f"cannot read {self.path} to resume ({type(exc).__name__}: {exc}); "
-                                  "move it away to start over") from None
+                raise ConfigError(
+                    f"cannot read {self.path} to resume ({type(exc).__name__}: {exc}); move it away to start over"
+                ) from None
 
     def check_compatible(self, scenario: str, rows: Iterable[dict]) -> None:
         """Refuse, before anything runs, to add rows to a results file they do not belong in:
@@ -57,13 +58,17 @@ class ResultStore:
         names = self._table.column_names
         where = f"--out: {self.path}"
         if "run_id" not in names:
-            raise ConfigError(f"bad {where} has no run_id column (not the results of an ego sweep); "
-                              "move it away or choose another --out")
+            raise ConfigError(
+                f"bad {where} has no run_id column (not the results of an ego sweep); "
+                "move it away or choose another --out"
+            )
         if "scenario" in names:
             others = sorted({s for s in self._table.column("scenario").to_pylist() if s is not None} - {scenario})
             if others:
-                raise ConfigError(f"bad {where} holds results of {', '.join(others)}, this spec is "
-                                  f"{scenario}; one results file per scenario: choose another --out")
+                raise ConfigError(
+                    f"bad {where} holds results of {', '.join(others)}, this spec is "
+                    f"{scenario}; one results file per scenario: choose another --out"
+                )
         schema = self._table.schema
         for row in rows:
             for key, value in _normalise(row).items():
@@ -71,8 +76,10 @@ class ResultStore:
                     continue
                 have, want = _arrow_kind(schema.field(key).type), _kind(value)
                 if have not in ("null", want):
-                    raise ConfigError(f"bad {where}: its column {key} holds {have}, this spec gives "
-                                      f"{key} = {value!r} ({want}); choose another --out")
+                    raise ConfigError(
+                        f"bad {where}: its column {key} holds {have}, this spec gives "
+                        f"{key} = {value!r} ({want}); choose another --out"
+                    )
 
     def done_ids(self) -> set[str]:
         """The run ids already stored."""
@@ -118,10 +125,12 @@ def _combined(old, rows: list[dict]):
     try:
         batch = pa.Table.from_pylist(rows)
     except (pa.ArrowInvalid, pa.ArrowTypeError):
-        mixed = {k for k in {k for r in rows for k in r}
-                 if len({_kind(r[k]) for r in rows if r.get(k) is not None}) > 1}
-        batch = pa.Table.from_pylist([{k: (str(v) if k in mixed and v is not None else v)
-                                       for k, v in r.items()} for r in rows])
+        mixed = {
+            k for k in {k for r in rows for k in r} if len({_kind(r[k]) for r in rows if r.get(k) is not None}) > 1
+        }
+        batch = pa.Table.from_pylist(
+            [{k: (str(v) if k in mixed and v is not None else v) for k, v in r.items()} for r in rows]
+        )
     if old is None:
         return batch
     try:
@@ -134,6 +143,7 @@ def _combined(old, rows: list[dict]):
             for c in clash:
                 t = t.set_column(t.column_names.index(c), c, t.column(c).cast(pa.string()))
             return t
+
         return pa.concat_tables([as_text(old), as_text(batch)], promote_options="permissive")
 
 

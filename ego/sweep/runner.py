@@ -34,17 +34,24 @@ def task_of(r: Run, rrd: str | None = None, policy: str = "none", requirements=N
     when the run's values do not resolve."""
     from ego.runner import RunSpec, resolve
 
-    resolved = resolve(RunSpec(r.scenario, r.controller, r.seed, r.overrides,
-                               record=rrd if policy == "all" else None, background_recording=False,
-                               requirements=requirements))
+    resolved = resolve(
+        RunSpec(
+            r.scenario,
+            r.controller,
+            r.seed,
+            r.overrides,
+            record=rrd if policy == "all" else None,
+            background_recording=False,
+            requirements=requirements,
+        )
+    )
     return RunTask(resolved, record_failed=rrd if policy == "failed" and rrd else None, key=r)
 
 
 def row_of(r: Run, row: RunRow) -> dict:
     """The results.parquet row of sweep run ``r``: its key columns and overrides, every
     metric flattened, then status, error, the row's wall time (spec to row) and host."""
-    out = {"run_id": r.run_id, "scenario": r.scenario, "controller": r.controller, "seed": r.seed,
-           **r.overrides}
+    out = {"run_id": r.run_id, "scenario": r.scenario, "controller": r.controller, "seed": r.seed, **r.overrides}
     metrics = dict(row.metrics)
     for key in ("wall_time", "scenario", "controller", "seed"):  # the row's own replace them
         metrics.pop(key, None)
@@ -59,9 +66,19 @@ def row_of(r: Run, row: RunRow) -> dict:
 
 
 def error_row(r: Run, error: str) -> dict:
-    return {"run_id": r.run_id, "scenario": r.scenario, "controller": r.controller, "seed": r.seed,
-            **r.overrides, "status": "error", "error": error, "wall_time": None, "host": None,
-            "node": None, "attempts": 1}
+    return {
+        "run_id": r.run_id,
+        "scenario": r.scenario,
+        "controller": r.controller,
+        "seed": r.seed,
+        **r.overrides,
+        "status": "error",
+        "error": error,
+        "wall_time": None,
+        "host": None,
+        "node": None,
+        "attempts": 1,
+    }
 
 
 @dataclass
@@ -74,9 +91,17 @@ class SweepReport:
     interrupted: bool = False
 
 
-def sweep(spec: SweepSpec, out: Path, *, engine: str = "process", jobs: int | None = None,
-          address: str | None = None, record: str = "failed", plots: Sequence[str] = (),
-          progress: Callable[[int], Callable[[str, str], None]] | None = None) -> SweepReport:
+def sweep(
+    spec: SweepSpec,
+    out: Path,
+    *,
+    engine: str = "process",
+    jobs: int | None = None,
+    address: str | None = None,
+    record: str = "failed",
+    plots: Sequence[str] = (),
+    progress: Callable[[int], Callable[[str, str], None]] | None = None,
+) -> SweepReport:
     """Run every run of ``spec`` not yet in ``out/results.parquet``; see the module docstring.
     ``progress``: made with the number of runs to do, called once per finished run
     (:class:`ego.results.progress.Progress`), or None."""
@@ -95,8 +120,16 @@ def sweep(spec: SweepSpec, out: Path, *, engine: str = "process", jobs: int | No
         return _sweep(spec, out, engine, jobs, address, record, plot_specs, progress)
 
 
-def _sweep(spec: SweepSpec, out: Path, engine: str, jobs: int | None, address: str | None, record: str,
-           plot_specs: list, progress: Callable | None) -> SweepReport:
+def _sweep(
+    spec: SweepSpec,
+    out: Path,
+    engine: str,
+    jobs: int | None,
+    address: str | None,
+    record: str,
+    plot_specs: list,
+    progress: Callable | None,
+) -> SweepReport:
     store = ResultStore(out)
     store.check_compatible(spec.scenario, _sample_rows(spec))  # before anything runs
     done = store.done_ids()
@@ -153,8 +186,9 @@ def _sweep(spec: SweepSpec, out: Path, engine: str, jobs: int | None, address: s
             remove_partials(runs_dir)  # recordings of runs killed mid-way; their workers are gone
     if failure is not None:
         kept = len(store) - len(store._pending)
-        raise OutputError(f"{failure} ({kept} results are in {store.path}; the same command resumes "
-                          "once there is room)")
+        raise OutputError(
+            f"{failure} ({kept} results are in {store.path}; the same command resumes once there is room)"
+        )
     table = store.table()
     if table is not None:
         from ego.sweep.report import write_plots, write_summary
@@ -172,8 +206,9 @@ def _sample_rows(spec: SweepSpec, limit: int = 200) -> list[dict]:
     for i, r in enumerate(spec.runs()):
         if i >= limit:
             break
-        rows.append({"run_id": r.run_id, "scenario": r.scenario, "controller": r.controller,
-                     "seed": r.seed, **r.overrides})
+        rows.append(
+            {"run_id": r.run_id, "scenario": r.scenario, "controller": r.controller, "seed": r.seed, **r.overrides}
+        )
     for name, values in spec.grid.items():
         rows.extend({name: v} for v in values)
     return rows
@@ -207,18 +242,21 @@ def parse_plot(text: str, spec: SweepSpec) -> tuple[str, str, str | None]:
     axes, _, metric = text.partition(":")
     names = [a.strip() for a in axes.split(",")]
     if len(names) != 2 or not all(names):
-        raise ConfigError(f"bad --plot {text!r} (expected X,Y or X,Y:METRIC, e.g. "
-                          f"ego_speed,lead_decel:min_gap_front)")
+        raise ConfigError(f"bad --plot {text!r} (expected X,Y or X,Y:METRIC, e.g. ego_speed,lead_decel:min_gap_front)")
     for name in names:
         if name not in spec.swept:
-            raise ConfigError(f"bad --plot {text!r}: {name!r} is not swept by the spec "
-                              f"(swept: {', '.join(spec.swept) or 'nothing'}){did_you_mean(name, spec.swept)}")
+            raise ConfigError(
+                f"bad --plot {text!r}: {name!r} is not swept by the spec "
+                f"(swept: {', '.join(spec.swept) or 'nothing'}){did_you_mean(name, spec.swept)}"
+            )
     metric = metric.strip() or None
     if metric is not None:
         from ego.scenarios import scenario_class
 
         known = {m.name for m in scenario_class(spec.scenario).metrics_declared()}
         if metric not in known:
-            raise ConfigError(f"bad --plot {text!r}: {metric!r} is not a metric of {spec.scenario} "
-                              f"(see ego list){did_you_mean(metric, known)}")
+            raise ConfigError(
+                f"bad --plot {text!r}: {metric!r} is not a metric of {spec.scenario} "
+                f"(see ego list){did_you_mean(metric, known)}"
+            )
     return names[0], names[1], metric

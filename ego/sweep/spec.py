@@ -102,8 +102,9 @@ class SweepSpec:
             overrides = {**self.fixed, **point}
             for controller in self.controllers:
                 for seed in self.seeds:
-                    yield Run(run_id(self.scenario, controller, seed, overrides), self.scenario,
-                              controller, seed, overrides)
+                    yield Run(
+                        run_id(self.scenario, controller, seed, overrides), self.scenario, controller, seed, overrides
+                    )
 
     def _points(self) -> Iterator[dict]:
         names = list(self.grid)
@@ -123,9 +124,17 @@ class SweepSpec:
 
 def run_id(scenario: str, controller: str, seed: int, overrides: dict) -> str:
     """A stable id: the first 16 hex digits of SHA-256 over the canonical JSON of the run."""
-    canon = json.dumps({"scenario": scenario, "controller": controller, "seed": int(seed),
-                        "overrides": {k: overrides[k] for k in sorted(overrides)}},
-                       sort_keys=True, separators=(",", ":"), default=str)
+    canon = json.dumps(
+        {
+            "scenario": scenario,
+            "controller": controller,
+            "seed": int(seed),
+            "overrides": {k: overrides[k] for k in sorted(overrides)},
+        },
+        sort_keys=True,
+        separators=(",", ":"),
+        default=str,
+    )
     return hashlib.sha256(canon.encode()).hexdigest()[:16]
 
 
@@ -172,8 +181,10 @@ def load(path: str | Path) -> SweepSpec:
         with open(path, "rb") as f:
             raw = f.read(MAX_SPEC_BYTES + 1)
         if len(raw) > MAX_SPEC_BYTES:
-            raise ConfigError(f"cannot read the sweep spec {str(path)!r}: larger than "
-                              f"{MAX_SPEC_BYTES // 1024} KiB (a spec is a few lines of TOML)")
+            raise ConfigError(
+                f"cannot read the sweep spec {str(path)!r}: larger than "
+                f"{MAX_SPEC_BYTES // 1024} KiB (a spec is a few lines of TOML)"
+            )
         text = raw.decode("utf-8")
     except UnicodeDecodeError:
         raise ConfigError(f"cannot read the sweep spec {str(path)!r}: not a text file (expected TOML)") from None
@@ -194,6 +205,7 @@ def load(path: str | Path) -> SweepSpec:
 
 def parse(data: dict, source: str = "the spec") -> SweepSpec:
     """Validate a spec's contents (see the module docstring)."""
+
     def bad(msg: str) -> ConfigError:
         return ConfigError(f"{source}: {msg}")
 
@@ -204,7 +216,7 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
         raise bad(f"unknown key {unknown[0]!r} (allowed: {', '.join(_TOP)}){did_you_mean(unknown[0], _TOP)}")
     scenario = data.get("scenario")
     if not isinstance(scenario, str):
-        raise bad("scenario must be a scenario name, e.g. scenario = \"emergency-brake\"")
+        raise bad('scenario must be a scenario name, e.g. scenario = "emergency-brake"')
     from ego.scenarios import scenario_class
 
     try:
@@ -212,9 +224,8 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
     except ConfigError as exc:
         raise bad(str(exc)) from None
     controllers = data.get("controllers")
-    if (not isinstance(controllers, list) or not controllers
-            or not all(isinstance(c, str) for c in controllers)):
-        raise bad("controllers must be a non-empty list of names, e.g. controllers = [\"pid\"]")
+    if not isinstance(controllers, list) or not controllers or not all(isinstance(c, str) for c in controllers):
+        raise bad('controllers must be a non-empty list of names, e.g. controllers = ["pid"]')
     if len(set(controllers)) != len(controllers):
         dup = next(c for c in controllers if controllers.count(c) > 1)
         raise bad(f"controller {dup!r} is listed twice")
@@ -229,8 +240,10 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
     def known(name: str, where: str):
         info = infos.get(name)
         if info is None:
-            raise bad(f"[{where}] unknown parameter {name!r} for {scenario} with "
-                      f"{', '.join(controllers)} (see ego list){did_you_mean(name, infos)}")
+            raise bad(
+                f"[{where}] unknown parameter {name!r} for {scenario} with "
+                f"{', '.join(controllers)} (see ego list){did_you_mean(name, infos)}"
+            )
         return info
 
     fixed = data.get("set", {})
@@ -271,9 +284,12 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
             info = known(name, "sample")
             if info.type not in (int, float) or info.choices is not None:
                 raise bad(f"[sample] {name} is not a number to sample (put it in [grid])")
-            if (not isinstance(rng, list) or len(rng) != 2
-                    or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in rng)
-                    or not rng[0] < rng[1]):
+            if (
+                not isinstance(rng, list)
+                or len(rng) != 2
+                or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in rng)
+                or not rng[0] < rng[1]
+            ):
                 raise bad(f"[sample] {name} must be a range [low, high] with low < high, got {rng!r}")
             if name in fixed or name in grid:
                 raise bad(f"{name} is sampled in [sample] and also in [set] or [grid]")
@@ -290,8 +306,16 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
         from ego.requirements import from_table
 
         requirements = from_table(data["requirements"], source)
-    spec = SweepSpec(scenario, tuple(controllers), seeds, dict(fixed), {k: list(v) for k, v in grid.items()},
-                     sample, source, requirements)
+    spec = SweepSpec(
+        scenario,
+        tuple(controllers),
+        seeds,
+        dict(fixed),
+        {k: list(v) for k, v in grid.items()},
+        sample,
+        source,
+        requirements,
+    )
     total = spec.count()
     if total > MAX_RUNS:
         raise bad(f"expands to {total:,} runs; the limit is {MAX_RUNS:,}")
@@ -299,8 +323,11 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
     # there are not too many, else the first
     points = math.prod(len(v) for v in spec.grid.values()) if spec.grid else 1
     names = list(spec.grid)
-    combos = product(*(spec.grid[n] for n in names)) if points <= MAX_CHECKED_POINTS else [
-        tuple(spec.grid[n][0] for n in names)]
+    combos = (
+        product(*(spec.grid[n] for n in names))
+        if points <= MAX_CHECKED_POINTS
+        else [tuple(spec.grid[n][0] for n in names)]
+    )
     for combo in combos:
         point = dict(zip(names, combo))
         where = "the run with " + ", ".join(f"{k} = {v!r}" for k, v in point.items()) if point else "the first run"
@@ -317,8 +344,7 @@ def check_requirements(first: Run, requirements: dict, bad) -> None:
     """Every formula against the signals of the spec's first run (one line on a problem)."""
     from ego.runner import RunSpec, requirements_of, resolve
 
-    spec = RunSpec(first.scenario, first.controller, first.seed, first.overrides,
-                   requirements=requirements)
+    spec = RunSpec(first.scenario, first.controller, first.seed, first.overrides, requirements=requirements)
     try:
         requirements_of(resolve(spec))
     except ConfigError as exc:
@@ -340,8 +366,7 @@ def _one_kind(name: str, values: list, bad) -> None:
     column of the results holds one type, and one run id is one run."""
     kinds = {_kind(v) for v in values}
     if len(kinds) > 1:
-        raise bad(f"[grid] {name} mixes {' and '.join(sorted(kinds))} ({values!r:.80}); write every "
-                  "value the same way")
+        raise bad(f"[grid] {name} mixes {' and '.join(sorted(kinds))} ({values!r:.80}); write every value the same way")
     seen = []
     for v in values:
         if any(v == s for s in seen):

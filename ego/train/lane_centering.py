@@ -70,8 +70,16 @@ def _plant(setup: Setup) -> list[np.ndarray]:
 
 
 def _law(gains, setup: Setup) -> Cascade:
-    return Cascade(gains, setup.dt, setup.integral_limit, setup.alpha, setup.adaptive,
-                   setup.feedforward, setup.steer_limit, setup.steer_rate)
+    return Cascade(
+        gains,
+        setup.dt,
+        setup.integral_limit,
+        setup.alpha,
+        setup.adaptive,
+        setup.feedforward,
+        setup.steer_limit,
+        setup.steer_rate,
+    )
 
 
 def simulate_single(gains, setup: Setup = Setup(), kappa: np.ndarray | None = None) -> np.ndarray:
@@ -90,8 +98,7 @@ def simulate_single(gains, setup: Setup = Setup(), kappa: np.ndarray | None = No
     return out
 
 
-def simulate_batch(gains: np.ndarray, setup: Setup = Setup(), kappa: np.ndarray | None = None,
-                   record: bool = False):
+def simulate_batch(gains: np.ndarray, setup: Setup = Setup(), kappa: np.ndarray | None = None, record: bool = False):
     """All members at once on one drive: ``gains`` (N, 12). Returns (max|e|, mean|e|,
     std|e|) arrays of shape (N,), and with ``record`` also the errors (N, steps)."""
     kappa = setup.curvature() if kappa is None else kappa
@@ -99,8 +106,9 @@ def simulate_batch(gains: np.ndarray, setup: Setup = Setup(), kappa: np.ndarray 
     return (stats[0], recs[0]) if record else stats[0]
 
 
-def simulate_drives(gains: np.ndarray, setups: list[Setup], kappas: list[np.ndarray] | None = None,
-                    record: bool = False):
+def simulate_drives(
+    gains: np.ndarray, setups: list[Setup], kappas: list[np.ndarray] | None = None, record: bool = False
+):
     """All members on several drives (speeds) in ONE time loop: ``gains`` (N, 12).
 
     Returns a list of (max|e|, mean|e|, std|e|) per drive, and the errors (N, steps) per
@@ -113,8 +121,10 @@ def simulate_drives(gains: np.ndarray, setups: list[Setup], kappas: list[np.ndar
     if G.ndim != 2 or G.shape[1] != 12:
         raise ValueError(f"gains must be (members, 12), got {G.shape}")
     setups = list(setups)
-    kappas = [np.asarray(s.curvature() if kappas is None else k, dtype=float)
-              for s, k in zip(setups, kappas or [None] * len(setups))]
+    kappas = [
+        np.asarray(s.curvature() if kappas is None else k, dtype=float)
+        for s, k in zip(setups, kappas or [None] * len(setups))
+    ]
     base = setups[0]
     drive_only = {"speed": 0, "offset": 0, "duration": 0}
     for st in setups[1:]:
@@ -165,8 +175,7 @@ def simulate_drives(gains: np.ndarray, setups: list[Setup], kappas: list[np.ndar
             k0s.append(max(int(nz[0]) - 1, 0) if nz.size else len(k))
     J = max(n - k0 for n, k0 in zip(ns, k0s))
     # each drive's curvature along the loop, zero once it has ended
-    kap_j = [np.concatenate([k[k0:], np.zeros(J - (n - k0))]).tolist()
-             for k, n, k0 in zip(kappas, ns, k0s)]
+    kap_j = [np.concatenate([k[k0:], np.zeros(J - (n - k0))]).tolist() for k, n, k0 in zip(kappas, ns, k0s)]
     starts_at_zero = [blk for blk, k0 in zip(blocks, k0s) if k0 == 0]
     refs = np.empty((4, C))  # psi_ref, vy_ref, r_ref, delta_fb
     t = np.empty(C)
@@ -187,9 +196,17 @@ def simulate_drives(gains: np.ndarray, setups: list[Setup], kappas: list[np.ndar
 
     def views(buf, nxt):
         """Per-step views of a buffer and the other one (they swap every step)."""
-        return (buf, nxt[:4], tuple(buf), nxt[4], buf[4],
-                [(rec, k0, n, buf[0, blk], buf[5, blk], U3[blk], kaps, ff)
-                 for blk, rec, k0, n, kaps, ff in zip(blocks, recs, k0s, ns, kap_j, ffs)])
+        return (
+            buf,
+            nxt[:4],
+            tuple(buf),
+            nxt[4],
+            buf[4],
+            [
+                (rec, k0, n, buf[0, blk], buf[5, blk], U3[blk], kaps, ff)
+                for blk, rec, k0, n, kaps, ff in zip(blocks, recs, k0s, ns, kap_j, ffs)
+            ],
+        )
 
     va, vb = views(Z, Zn), views(Zn, Z)
     for j in range(J):
@@ -303,11 +320,16 @@ def check_drives(drives, what: str = "drives", text: str | None = None) -> None:
     """(speed, offset) pairs within ``DRIVE_SPEEDS`` and ``MAX_OFFSET``, or ConfigError
     quoting ``text`` (what the user wrote) or the drives."""
     lo, hi = DRIVE_SPEEDS
-    pairs = isinstance(drives, (tuple, list)) and len(drives) > 0 and all(
-        isinstance(d, (tuple, list)) and len(d) == 2 and all(finite_number(x) for x in d) for d in drives)
+    pairs = (
+        isinstance(drives, (tuple, list))
+        and len(drives) > 0
+        and all(isinstance(d, (tuple, list)) and len(d) == 2 and all(finite_number(x) for x in d) for d in drives)
+    )
     if not pairs or any(not lo <= v <= hi or abs(o) > MAX_OFFSET for v, o in drives):
-        raise ConfigError(f"bad value for {what}: {text if text is not None else drives!r:.60} (expected "
-                          f"speeds from {lo:g} to {hi:g} m/s and offsets within {MAX_OFFSET:g} m)")
+        raise ConfigError(
+            f"bad value for {what}: {text if text is not None else drives!r:.60} (expected "
+            f"speeds from {lo:g} to {hi:g} m/s and offsets within {MAX_OFFSET:g} m)"
+        )
 
 
 @dataclass(frozen=True)
@@ -347,8 +369,10 @@ class TuneSpec:
         check_drives(self.drives)
         for name, allowed in (("cost", ("model", "sumo")), ("engine", ENGINES)):
             if getattr(self, name) not in allowed:
-                raise ConfigError(f"bad value for {name}: {getattr(self, name)!r} (expected one of "
-                                  f"{', '.join(allowed)}){did_you_mean(getattr(self, name), allowed)}")
+                raise ConfigError(
+                    f"bad value for {name}: {getattr(self, name)!r} (expected one of "
+                    f"{', '.join(allowed)}){did_you_mean(getattr(self, name), allowed)}"
+                )
         if self.address is not None and not isinstance(self.address, str):
             raise ConfigError(f"bad value for address: {self.address!r} (expected text, e.g. auto)")
         check_number(self.duration, "duration", 1.0, MAX_DURATION, "s")
@@ -398,8 +422,12 @@ class _Objective:
             from ego.processes import exit_with, main_module_hidden
 
             # the workers die with this process, even mid-generation (a killed ego tune)
-            self.pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("forkserver"),
-                                            initializer=exit_with, initargs=(os.getpid(),))
+            self.pool = ProcessPoolExecutor(
+                workers,
+                mp_context=multiprocessing.get_context("forkserver"),
+                initializer=exit_with,
+                initargs=(os.getpid(),),
+            )
             with main_module_hidden():  # warm the workers up (each computes the road once)
                 list(self.pool.map(total_cost, [np.array([REPORT_GAINS])] * workers, [speeds] * workers))
 
@@ -436,8 +464,16 @@ def sumo_cost(task: tuple) -> float:
     cls, config = resolved.scenario_cls, resolved.config
     p = CascadePIDParams(preset="report")
     controller = CascadePID(p, config.dt)
-    controller.law = Cascade(tuple(gains), config.dt, p.integral_limit, p.alpha, p.adaptive,
-                             p.feedforward, math.radians(p.steer_limit), math.radians(p.steer_rate))
+    controller.law = Cascade(
+        tuple(gains),
+        config.dt,
+        p.integral_limit,
+        p.alpha,
+        p.adaptive,
+        p.feedforward,
+        math.radians(p.steer_limit),
+        math.radians(p.steer_rate),
+    )
     result = cls(config, controller, seed=0, controller_name="cascade-pid").run()
     e = np.abs(result.column("d"))
     if result.status not in NOT_FAILED or not e.size:  # ended: a shortened drive
@@ -461,8 +497,11 @@ class _SumoObjective:
         members = np.ascontiguousarray(np.asarray(x).T)
         self.generations += 1
         self.members += len(members)
-        tasks = [(i, (tuple(map(float, g)), v, o, self.spec.duration))
-                 for i, g in enumerate(members) for v, o in self.spec.drives]
+        tasks = [
+            (i, (tuple(map(float, g)), v, o, self.spec.duration))
+            for i, g in enumerate(members)
+            for v, o in self.spec.drives
+        ]
         costs = np.zeros(len(members))
         for outcome in self.executor.run(_indexed_sumo_cost, tasks):
             i = outcome.task[0]
@@ -488,9 +527,11 @@ def drive_figures(gain_sets, spec: tuple[tuple[float, float], ...]) -> list[dict
         figures = {}
         for (v, o), (mx, mn, sd) in zip(spec, stats):
             figures[drive_name(v, o)] = {
-                "cost": float(cost(mx[j:j + 1], mn[j:j + 1], sd[j:j + 1])[0]),
-                "max_abs_lateral_error": float(mx[j]), "mean_abs_lateral_error": float(mn[j]),
-                "std_abs_lateral_error": float(sd[j])}
+                "cost": float(cost(mx[j : j + 1], mn[j : j + 1], sd[j : j + 1])[0]),
+                "max_abs_lateral_error": float(mx[j]),
+                "mean_abs_lateral_error": float(mn[j]),
+                "std_abs_lateral_error": float(sd[j]),
+            }
         out.append(figures)
     return out
 
@@ -507,13 +548,19 @@ def tune(spec: TuneSpec = TuneSpec(), out: Path | None = TUNED_PRESET, log=print
 
     def progress(intermediate_result):
         best.append(float(intermediate_result.fun))
-        log(f"generation {len(best):3d}: best cost {best[-1]:.6f} "
-            f"({time.perf_counter() - t0:6.1f} s)")
+        log(f"generation {len(best):3d}: best cost {best[-1]:.6f} ({time.perf_counter() - t0:6.1f} s)")
 
     try:
         result = differential_evolution(
-            objective, BOUNDS, popsize=spec.popsize, maxiter=spec.maxiter, seed=spec.seed,
-            tol=spec.tol, vectorized=True, updating="deferred", polish=False,
+            objective,
+            BOUNDS,
+            popsize=spec.popsize,
+            maxiter=spec.maxiter,
+            seed=spec.seed,
+            tol=spec.tol,
+            vectorized=True,
+            updating="deferred",
+            polish=False,
             callback=progress,
         )
     finally:
@@ -534,16 +581,25 @@ def tune(spec: TuneSpec = TuneSpec(), out: Path | None = TUNED_PRESET, log=print
         "converged": bool(result.success),
         "message": str(result.message),
         "seconds": round(wall, 2),
-        "differential_evolution": {**asdict(spec), "bounds": BOUNDS, "updating": "deferred",
-                                   "polish": False, "vectorized": True},
+        "differential_evolution": {
+            **asdict(spec),
+            "bounds": BOUNDS,
+            "updating": "deferred",
+            "polish": False,
+            "vectorized": True,
+        },
         "setup": {k: v for k, v in asdict(Setup()).items() if k != "speed"},
         "scipy": scipy_version,
     }
     for v, fig in tuned.items():
-        log(f"  {v}: max |e| {fig['max_abs_lateral_error']:.2e} m, mean {fig['mean_abs_lateral_error']:.2e} m "
-            f"(report 003's gains: max |e| {report[v]['max_abs_lateral_error']:.3f} m)")
-    log(f"best cost {result.fun:.6f} after {result.nit} generations ({objective.members} members "
-        f"simulated on each drive) in {wall:.1f} s")
+        log(
+            f"  {v}: max |e| {fig['max_abs_lateral_error']:.2e} m, mean {fig['mean_abs_lateral_error']:.2e} m "
+            f"(report 003's gains: max |e| {report[v]['max_abs_lateral_error']:.3f} m)"
+        )
+    log(
+        f"best cost {result.fun:.6f} after {result.nit} generations ({objective.members} members "
+        f"simulated on each drive) in {wall:.1f} s"
+    )
     if out is not None:
         out = Path(out)
         out.parent.mkdir(parents=True, exist_ok=True)

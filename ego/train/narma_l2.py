@@ -45,8 +45,7 @@ class DataSpec(Params):
     """How the identification data are generated (``ego train narma-l2``'s options read
     their bounds from here)."""
 
-    samples: int = param(20000, "-", "at least this many (regressor, target) pairs in all",
-                         min=50, max=10_000_000)
+    samples: int = param(20000, "-", "at least this many (regressor, target) pairs in all", min=50, max=10_000_000)
     sample_period: float = param(0.05, "s", "controller sample period h", min=0.001, max=1.0)
     dt: float = param(0.01, "s", "model step: the scenario's control period", min=0.001, max=0.1)
     speed_min: float = param(20.0, "km/h", "entry speed range: low end", min=5.0, max=60.0)
@@ -64,12 +63,14 @@ class DataSpec(Params):
         super().__post_init__()
         for low, high in (("speed_min", "speed_max"), ("accel_min", "accel_max"), ("radius_min", "radius_max")):
             if getattr(self, low) > getattr(self, high):
-                raise ConfigError(f"bad value for {low}: {getattr(self, low):g} (expected at most "
-                                  f"{high}={getattr(self, high):g})")
+                raise ConfigError(
+                    f"bad value for {low}: {getattr(self, low):g} (expected at most {high}={getattr(self, high):g})"
+                )
         ratio = self.sample_period / self.dt
         if abs(ratio - round(ratio)) > 1e-9:
-            raise ConfigError(f"bad value for sample_period: {self.sample_period:g} (expected a whole "
-                              f"multiple of dt={self.dt:g} s)")
+            raise ConfigError(
+                f"bad value for sample_period: {self.sample_period:g} (expected a whole multiple of dt={self.dt:g} s)"
+            )
 
 
 @dataclass(frozen=True)
@@ -139,8 +140,20 @@ def generate(spec: DataSpec, rng: np.random.Generator) -> dict[str, np.ndarray]:
             u = u_ff + k_lat * e_lat + k_head * e_head + level
             u = max(-spec.steer_limit, min(spec.steer_limit, u))
             ds = x[1] * math.cos(err) - x[3] * math.sin(err)
-            row = (e_lat, e_head, hist[0], hist[1], hist[2], hist[3], u_prev[0], u_prev[1],
-                   x[1], a_x, kappa, lane.mean_curvature(s, ds * spec.sample_period))
+            row = (
+                e_lat,
+                e_head,
+                hist[0],
+                hist[1],
+                hist[2],
+                hist[3],
+                u_prev[0],
+                u_prev[1],
+                x[1],
+                a_x,
+                kappa,
+                lane.mean_curvature(s, ds * spec.sample_period),
+            )
             for _ in range(per):
                 x, _ = step(x, a_x, u)
             s1, d1, err1, _ = lane.frame(x[0], x[2], x[4])
@@ -154,8 +167,13 @@ def generate(spec: DataSpec, rng: np.random.Generator) -> dict[str, np.ndarray]:
             if not all(map(math.isfinite, x)):
                 raise RuntimeError("the identification run diverged")
         episode += 1
-    return {"X": np.array(rows), "y0": np.array(y0s), "y1": np.array(y1s), "u": np.array(us),
-            "episode": np.array(episodes)}
+    return {
+        "X": np.array(rows),
+        "y0": np.array(y0s),
+        "y1": np.array(y1s),
+        "u": np.array(us),
+        "episode": np.array(episodes),
+    }
 
 
 def held_out_mask(episode: np.ndarray, every: int) -> np.ndarray:
@@ -164,14 +182,13 @@ def held_out_mask(episode: np.ndarray, every: int) -> np.ndarray:
     if episode.max() + 1 >= every:
         return episode % every == every - 1
     mask = np.zeros(len(episode), dtype=bool)
-    mask[len(episode) - max(1, len(episode) // every):] = True
+    mask[len(episode) - max(1, len(episode) // every) :] = True
     return mask
 
 
 def _mlp(torch, n_in: int, hidden: int):
     nn = torch.nn
-    return nn.Sequential(nn.Linear(n_in, hidden), nn.Tanh(), nn.Linear(hidden, hidden), nn.Tanh(),
-                         nn.Linear(hidden, 1))
+    return nn.Sequential(nn.Linear(n_in, hidden), nn.Tanh(), nn.Linear(hidden, hidden), nn.Tanh(), nn.Linear(hidden, 1))
 
 
 def train(spec: TrainSpec = TrainSpec(), out: Path = DEFAULT_MODEL, log=print) -> dict:
@@ -191,10 +208,11 @@ def train(spec: TrainSpec = TrainSpec(), out: Path = DEFAULT_MODEL, log=print) -
     dy = y1 - y0
     dy_scale = float(np.std(dy[tr]))
     # g's scale: least squares of dy on u (the average effect of a radian of steer)
-    g_scale = float(abs(np.linalg.lstsq(np.column_stack([u[tr], np.ones(tr.sum())]), dy[tr],
-                                        rcond=None)[0][0]))
-    log(f"data: {len(X)} samples from {ep.max() + 1} episodes in {t_data:.1f} s "
-        f"({tr.sum()} training, {held.sum()} held out); g_scale {g_scale:.4f} m/rad")
+    g_scale = float(abs(np.linalg.lstsq(np.column_stack([u[tr], np.ones(tr.sum())]), dy[tr], rcond=None)[0][0]))
+    log(
+        f"data: {len(X)} samples from {ep.max() + 1} episodes in {t_data:.1f} s "
+        f"({tr.sum()} training, {held.sum()} held out); g_scale {g_scale:.4f} m/rad"
+    )
 
     torch.manual_seed(spec.seed)
     torch.use_deterministic_algorithms(True)
@@ -223,17 +241,18 @@ def train(spec: TrainSpec = TrainSpec(), out: Path = DEFAULT_MODEL, log=print) -
             perm = idx_train[torch.randperm(len(idx_train), generator=gen)]
             for i in range(0, len(perm), spec.batch):
                 opt.zero_grad()
-                loss = loss_on(perm[i:i + spec.batch])
+                loss = loss_on(perm[i : i + spec.batch])
                 loss.backward()
                 opt.step()
             sched.step()
             if (epoch + 1) % max(1, spec.epochs // 5) == 0:
                 with torch.no_grad():
-                    log(f"epoch {epoch + 1}/{spec.epochs}: training loss "
-                        f"{float(loss_on(idx_train)):.5f} (relative to var dy)")
+                    log(
+                        f"epoch {epoch + 1}/{spec.epochs}: training loss "
+                        f"{float(loss_on(idx_train)):.5f} (relative to var dy)"
+                    )
         t_train = time.perf_counter() - t1
-        arrays = {"mean": mean, "std": std, "dy_scale": np.array(dy_scale),
-                  "g_scale": np.array(g_scale)}
+        arrays = {"mean": mean, "std": std, "dy_scale": np.array(dy_scale), "g_scale": np.array(g_scale)}
         for name, net in (("f", f_net), ("g", g_net)):
             layers = [m for m in net if isinstance(m, torch.nn.Linear)]
             for j, layer in enumerate(layers, 1):
@@ -268,9 +287,11 @@ def train(spec: TrainSpec = TrainSpec(), out: Path = DEFAULT_MODEL, log=print) -
     meta["errors"] = identification_errors(model, data, held)
     write_text(out.with_suffix(".json"), json.dumps(meta, indent=2) + "\n")
     e = meta["errors"]
-    log(f"one-step error of y (m): training RMS {e['train_rms']:.2e}, held-out RMS "
+    log(
+        f"one-step error of y (m): training RMS {e['train_rms']:.2e}, held-out RMS "
         f"{e['held_out_rms']:.2e} ({100 * e['held_out_relative']:.1f} % of the held-out change "
-        f"of y per sample, RMS {e['held_out_dy_rms']:.2e}); trained in {t_train:.1f} s")
+        f"of y per sample, RMS {e['held_out_dy_rms']:.2e}); trained in {t_train:.1f} s"
+    )
     log(f"wrote {out} and {out.with_suffix('.json').name}")
     return meta
 
@@ -284,7 +305,7 @@ def identification_errors(model, data: dict, held: np.ndarray) -> dict:
     tr = ~held
 
     def rms(a):
-        return float(np.sqrt(np.mean(a ** 2)))
+        return float(np.sqrt(np.mean(a**2)))
 
     return {
         "train_rms": rms(err[tr]),

@@ -102,16 +102,41 @@ COMMON = [("EgoFront", "double", "300"), ("evade", "boolean", "false")]
 
 def main(out: Path = HERE) -> None:
     files = {
-        "ccrs": scenario("Euro NCAP CCRs: the target stands still 100 m ahead",
-                         [("EgoSpeed", "double", "13.889"), ("LeadSpeed", "double", "0"),
-                          ("LeadGap", "double", "100"), ("duration", "double", "60"), *COMMON], False),
-        "ccrm": scenario("Euro NCAP CCRm: the target drives at 20 km/h, 100 m ahead",
-                         [("EgoSpeed", "double", "13.889"), ("LeadSpeed", "double", "5.556"),
-                          ("LeadGap", "double", "100"), ("duration", "double", "60"), *COMMON], False),
-        "ccrb": scenario("Euro NCAP CCRb: both at 50 km/h, the target brakes at t = 2 s",
-                         [("EgoSpeed", "double", "13.889"), ("LeadSpeed", "double", "$EgoSpeed"),
-                          ("LeadGap", "double", "12"), ("LeadDecel", "double", "2"),
-                          ("LeadBrakeTime", "double", "2"), ("duration", "double", "25"), *COMMON], True),
+        "ccrs": scenario(
+            "Euro NCAP CCRs: the target stands still 100 m ahead",
+            [
+                ("EgoSpeed", "double", "13.889"),
+                ("LeadSpeed", "double", "0"),
+                ("LeadGap", "double", "100"),
+                ("duration", "double", "60"),
+                *COMMON,
+            ],
+            False,
+        ),
+        "ccrm": scenario(
+            "Euro NCAP CCRm: the target drives at 20 km/h, 100 m ahead",
+            [
+                ("EgoSpeed", "double", "13.889"),
+                ("LeadSpeed", "double", "5.556"),
+                ("LeadGap", "double", "100"),
+                ("duration", "double", "60"),
+                *COMMON,
+            ],
+            False,
+        ),
+        "ccrb": scenario(
+            "Euro NCAP CCRb: both at 50 km/h, the target brakes at t = 2 s",
+            [
+                ("EgoSpeed", "double", "13.889"),
+                ("LeadSpeed", "double", "$EgoSpeed"),
+                ("LeadGap", "double", "12"),
+                ("LeadDecel", "double", "2"),
+                ("LeadBrakeTime", "double", "2"),
+                ("duration", "double", "25"),
+                *COMMON,
+            ],
+            True,
+        ),
     }
     for name, text in files.items():
         (out / f"{name}.xosc").write_text(text, encoding="utf-8")

@@ -7,8 +7,15 @@ from ego.control import BPPIDController, BPPIDParams, Observation
 
 
 def _obs(rng):
-    return Observation(s_ref=float(rng.normal(0, 2)), s=0.0, ds_ref=float(rng.normal(0, 1)),
-                       ds=0.0, d_ref=float(rng.normal(0, 1)), d=0.0, dd_ref=float(rng.normal(0, 1)))
+    return Observation(
+        s_ref=float(rng.normal(0, 2)),
+        s=0.0,
+        ds_ref=float(rng.normal(0, 1)),
+        ds=0.0,
+        d_ref=float(rng.normal(0, 1)),
+        d=0.0,
+        dd_ref=float(rng.normal(0, 1)),
+    )
 
 
 def test_gains_lie_between_one_and_two_and_the_net_has_the_report_shape():
@@ -38,7 +45,7 @@ def test_stable_backprop_matches_finite_differences():
     c._learn(x, z1, h, k, terms, c.coef * terms, *e)
     # with eta = 1 and no momentum the step is minus the gradient (unclipped: norm < 1)
     g1, g2 = w1 - c.w1, w2 - c.w2
-    assert np.sqrt(np.sum(g1 ** 2) + np.sum(g2 ** 2)) < 1.0
+    assert np.sqrt(np.sum(g1**2) + np.sum(g2**2)) < 1.0
     num1, num2 = np.zeros_like(w1), np.zeros_like(w2)
     eps = 1e-6
     for w, num in ((w1, num1), (w2, num2)):

@@ -20,8 +20,9 @@ DT = 0.01
 
 
 def obs(d=0.0, heading_error=0.0, speed=30 / 3.6, accel_ref=0.3, curvature=0.0):
-    return Observation(d=d, heading_error=heading_error, speed=speed, ds=speed,
-                       accel_ref=accel_ref, curvature=curvature)
+    return Observation(
+        d=d, heading_error=heading_error, speed=speed, ds=speed, accel_ref=accel_ref, curvature=curvature
+    )
 
 
 @pytest.mark.slow
@@ -32,8 +33,13 @@ def test_fast_tables_equal_scikit_fuzzy(table):
     fast = evaluator(table)
     sim = ctrl.ControlSystemSimulation(system, cache=False)
     rng = np.random.default_rng(3)
-    pts = np.vstack([rng.uniform(-1, 1, (40, 2)), rng.uniform(-1.3, 1.3, (10, 2)),
-                     [[0, 0], [0.5, 0.5], [-1, 1], [1, -1], [0.5, -0.25]]])
+    pts = np.vstack(
+        [
+            rng.uniform(-1, 1, (40, 2)),
+            rng.uniform(-1.3, 1.3, (10, 2)),
+            [[0, 0], [0.5, 0.5], [-1, 1], [1, -1], [0.5, -0.25]],
+        ]
+    )
     for v, e in pts:
         sim.input["v"], sim.input["e"] = v, e
         sim.compute()
@@ -59,10 +65,14 @@ def test_angle_table_is_silent_at_standstill_and_odd_in_the_error():
     assert abs(position(1.0, 0.5)) < abs(position(0.5, 0.5))
 
 
-@pytest.mark.parametrize("build", [
-    lambda: CurvePID(CurvePIDParams(), DT),
-    lambda: FuzzyCurve(FuzzyCurveParams(), DT),
-], ids=["pid", "fuzzy-curve"])
+@pytest.mark.parametrize(
+    "build",
+    [
+        lambda: CurvePID(CurvePIDParams(), DT),
+        lambda: FuzzyCurve(FuzzyCurveParams(), DT),
+    ],
+    ids=["pid", "fuzzy-curve"],
+)
 def test_both_errors_ask_for_the_steer_that_corrects_them(build):
     c = build()
     # right of the lane (d < 0): steer left (delta > 0); left of it: steer right

@@ -23,9 +23,15 @@ DT = 0.01
 
 
 def _obs(gap=8.0, speed=10.0, accel=0.0, lead_speed=10.0, max_accel=2.5, max_decel=8.0):
-    return FollowingObservation(gap=gap, speed=speed, accel=accel, lead_speed=lead_speed,
-                                policy=SpacingPolicy(standstill_gap=3.0, headway=0.2),
-                                max_accel=max_accel, max_decel=max_decel)
+    return FollowingObservation(
+        gap=gap,
+        speed=speed,
+        accel=accel,
+        lead_speed=lead_speed,
+        policy=SpacingPolicy(standstill_gap=3.0, headway=0.2),
+        max_accel=max_accel,
+        max_decel=max_decel,
+    )
 
 
 def _free(gap, speed=10.0):
@@ -147,8 +153,10 @@ def test_bp_update_is_gradient_descent_on_the_squared_error():
 
     ctrl.step(o)
     h = 1e-7
-    for w, moved, grad_of in ((w2, ctrl.w2, lambda d: command(w1, w2 + d)),
-                              (w1, ctrl.w1, lambda d: command(w1 + d, w2))):
+    for w, moved, grad_of in (
+        (w2, ctrl.w2, lambda d: command(w1, w2 + d)),
+        (w1, ctrl.w1, lambda d: command(w1 + d, w2)),
+    ):
         numeric = np.zeros_like(w)
         for idx in np.ndindex(w.shape):
             d = np.zeros_like(w)

@@ -39,8 +39,13 @@ def test_report_rule_base_random_points_one_by_one():
     fast = FastMamdani.from_system(system, ["e", "ec"], ["u"])
     sim = ctrl.ControlSystemSimulation(system, cache=False)
     rng = np.random.default_rng(7)
-    pts = np.vstack([rng.uniform(-10, 10, (40, 2)), rng.uniform(-12, 12, (20, 2)),
-                     [[-10, -10], [10, 10], [-10, 10], [10, -10], [0, 0]]])
+    pts = np.vstack(
+        [
+            rng.uniform(-10, 10, (40, 2)),
+            rng.uniform(-12, 12, (20, 2)),
+            [[-10, -10], [10, 10], [-10, 10], [10, -10], [0, 0]],
+        ]
+    )
     for e, c in pts:
         sim.input["e"], sim.input["ec"] = e, c
         sim.compute()
@@ -64,8 +69,14 @@ def test_generic_and_specialised_paths_agree():
 def test_exact_even_on_coarse_output_universes(out_samples):
     # On a coarse output grid scikit-fuzzy's chords over the crossings matter; the
     # evaluator must reproduce them, not the ideal continuous centroid.
-    system = table_system([("e", -10, 10), ("ec", -10, 10)], [("u", -100, 100)], fuzzy.TERMS,
-                          {"u": fuzzy.RULES}, samples=13, output_samples=out_samples)
+    system = table_system(
+        [("e", -10, 10), ("ec", -10, 10)],
+        [("u", -100, 100)],
+        fuzzy.TERMS,
+        {"u": fuzzy.RULES},
+        samples=13,
+        output_samples=out_samples,
+    )
     fast = FastMamdani.from_system(system, ["e", "ec"], ["u"])
     rng = np.random.default_rng(3)
     pts = rng.uniform(-10, 10, (400, 2))
@@ -132,11 +143,9 @@ def test_rejects_or_rules_and_incomplete_tables():
     ec = next(a for a in system.antecedents if a.label == "ec")
     u = next(c for c in system.consequents if c.label == "u")
     with pytest.raises(UnsupportedRuleBase, match="only AND"):
-        FastMamdani.from_system(ctrl.ControlSystem([ctrl.Rule(e["NB"] | ec["NB"], u["NB"])]),
-                                ["e", "ec"], ["u"])
+        FastMamdani.from_system(ctrl.ControlSystem([ctrl.Rule(e["NB"] | ec["NB"], u["NB"])]), ["e", "ec"], ["u"])
     with pytest.raises(UnsupportedRuleBase, match="incomplete"):
-        FastMamdani.from_system(ctrl.ControlSystem([ctrl.Rule(e["NB"] & ec["NB"], u["NB"])]),
-                                ["e", "ec"], ["u"])
+        FastMamdani.from_system(ctrl.ControlSystem([ctrl.Rule(e["NB"] & ec["NB"], u["NB"])]), ["e", "ec"], ["u"])
 
 
 def test_surface_is_odd_and_saturates():

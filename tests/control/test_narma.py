@@ -53,9 +53,9 @@ def test_identification_error_on_fresh_data_is_bounded():
     pred = np.array([model.predict(x, u) for x, u in zip(data["X"], data["u"])])
     err = pred - data["y1"]
     dy = data["y1"] - data["y0"]
-    assert np.sqrt(np.mean(err ** 2)) / np.sqrt(np.mean(dy ** 2)) < 0.08
+    assert np.sqrt(np.mean(err**2)) / np.sqrt(np.mean(dy**2)) < 0.08
     # and far better than predicting no change
-    assert np.sqrt(np.mean(err ** 2)) < 0.1 * np.sqrt(np.mean(dy ** 2)) + 1e-4
+    assert np.sqrt(np.mean(err**2)) < 0.1 * np.sqrt(np.mean(dy**2)) + 1e-4
 
 
 @pytest.mark.parametrize("kmh", [20.0, 30.0, 40.0])

@@ -22,8 +22,14 @@ def test_a_platoon_names_its_members_units_as_their_signals():
     spec = CONTROLLERS["car-following"]["bp-pid-acc"]
     platoon = PlatoonControl([spec.build(spec.params(), 0.01) for _ in range(2)], ("f1", "f2"))
     platoon.reset(seed=0)
-    assert platoon.signal_units == {"kp_f1": "1/s^2", "ki_f1": "1/s^3", "kd_f1": "1/s",
-                                    "kp_f2": "1/s^2", "ki_f2": "1/s^3", "kd_f2": "1/s"}
+    assert platoon.signal_units == {
+        "kp_f1": "1/s^2",
+        "ki_f1": "1/s^3",
+        "kd_f1": "1/s",
+        "kp_f2": "1/s^2",
+        "ki_f2": "1/s^3",
+        "kd_f2": "1/s",
+    }
     assert set(platoon.signal_units) == set(platoon.signals())
 
 

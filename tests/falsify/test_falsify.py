@@ -131,18 +131,11 @@ def test_falsify_finds_verifies_and_resumes(tmp_path, capsys):
     )
     assert code == 1  # violations found
     table = pq.read_table(out / "results.parquet").to_pandas()
-    assert (
-        len(table) == 6
-        and "requirements.far" in table
-        and (table["requirements.far"] < 0).any()
-    )
+    assert len(table) == 6 and "requirements.far" in table and (table["requirements.far"] < 0).any()
     md = (out / "falsified.md").read_text()
     assert "reproduced by the command" in md and "NOT reproduced" not in md
     assert "ego run emergency-brake -c pid --seed 3 --set ego_speed=" in md
-    assert (
-        list((out / "runs").glob("*.rrd"))
-        and (out / "convergence.png").stat().st_size > 1000
-    )
+    assert list((out / "runs").glob("*.rrd")) and (out / "convergence.png").stat().st_size > 1000
     # the same command again: every point is stored, nothing runs
     capsys.readouterr()
     assert (

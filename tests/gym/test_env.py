@@ -98,20 +98,35 @@ def test_default_config_and_configure():
     env.close()
 
 
-@pytest.mark.parametrize("config, message", [
-    ({"ego_speed": 100}, "bad value for ego_speed: 100"),
-    ({"ego_speed": "fast"}, "bad value for ego_speed: 'fast'"),
-    ({"bogus": 1}, "unknown parameter 'bogus'"),
-    ({"observation": {"type": "Pixels"}}, "bad value for observation"),
-    ({"observation": {"type": "Kinematics", "features": ["z"]}}, "unknown Kinematics feature 'z'"),
-    ({"action": {"type": "EgoAction", "steer": True}}, "unknown action option 'steer'"),
-    ({"action": {"type": "ContinuousAction", "lateral": False, "longitudinal": False}}, "both false"),
-    ({"controller": "narma-l2"}, "bad value for controller: 'narma-l2'"),
-    ({"policy_frequency": 3}, "bad value for policy_frequency: 3"),
-    ({"collision_reward": "x"}, "bad value for collision_reward"),
-    ({"reward_speed_range": [30, 10]}, "bad value for reward_speed_range"),
-], ids=["range", "type", "unknown", "observation", "feature", "action-option", "no-channel",
-        "controller", "frequency", "reward", "speed-range"])
+@pytest.mark.parametrize(
+    "config, message",
+    [
+        ({"ego_speed": 100}, "bad value for ego_speed: 100"),
+        ({"ego_speed": "fast"}, "bad value for ego_speed: 'fast'"),
+        ({"bogus": 1}, "unknown parameter 'bogus'"),
+        ({"observation": {"type": "Pixels"}}, "bad value for observation"),
+        ({"observation": {"type": "Kinematics", "features": ["z"]}}, "unknown Kinematics feature 'z'"),
+        ({"action": {"type": "EgoAction", "steer": True}}, "unknown action option 'steer'"),
+        ({"action": {"type": "ContinuousAction", "lateral": False, "longitudinal": False}}, "both false"),
+        ({"controller": "narma-l2"}, "bad value for controller: 'narma-l2'"),
+        ({"policy_frequency": 3}, "bad value for policy_frequency: 3"),
+        ({"collision_reward": "x"}, "bad value for collision_reward"),
+        ({"reward_speed_range": [30, 10]}, "bad value for reward_speed_range"),
+    ],
+    ids=[
+        "range",
+        "type",
+        "unknown",
+        "observation",
+        "feature",
+        "action-option",
+        "no-channel",
+        "controller",
+        "frequency",
+        "reward",
+        "speed-range",
+    ],
+)
 def test_bad_config_is_one_line_config_error(config, message):
     with pytest.raises(ConfigError, match=message.replace("[", r"\[")) as err:
         ego.gym.EgoEnv("emergency-brake", config=config)
@@ -127,8 +142,12 @@ def test_platoon_does_not_steer():
 def test_reset_options_reconfigure_and_rebuild_the_spaces(make):
     env = make("ego/EmergencyBrake-v0")
     assert env.observation_space.shape == (15,)
-    obs, _ = env.reset(seed=0, options={"config": {"observation": {"type": "Kinematics", "vehicles_count": 7},
-                                                   "ego_speed": 25.0, "randomize": {}}})
+    obs, _ = env.reset(
+        seed=0,
+        options={
+            "config": {"observation": {"type": "Kinematics", "vehicles_count": 7}, "ego_speed": 25.0, "randomize": {}}
+        },
+    )
     assert obs.shape == (7, 5) and env.unwrapped.observation_space.shape == (7, 5)
     assert env.unwrapped.scenario.config.ego_speed == 25.0
 
@@ -174,9 +193,19 @@ def test_duration_truncates(make):
 
 @pytest.mark.sumo
 def test_kinematics_rows_in_the_lane_frame(make):
-    env = make("ego/EmergencyBrake-v0", config={"randomize": {}, "observation": {
-        "type": "Kinematics", "normalize": False, "see_behind": True, "vehicles_count": 6,
-        "features": ["presence", "x", "y", "vx", "vy", "heading"]}})
+    env = make(
+        "ego/EmergencyBrake-v0",
+        config={
+            "randomize": {},
+            "observation": {
+                "type": "Kinematics",
+                "normalize": False,
+                "see_behind": True,
+                "vehicles_count": 6,
+                "features": ["presence", "x", "y", "vx", "vy", "heading"],
+            },
+        },
+    )
     obs, _ = env.reset(seed=0)
     sc = env.unwrapped.scenario
     assert obs[0, 0] == 1.0 and obs[0, 1] == pytest.approx(sc.view.s) and obs[0, 3] == pytest.approx(sc.view.ds)
@@ -199,8 +228,10 @@ def test_render_rgb_array(env_id, make):
 
 
 def test_only_ego_gym_imports_gymnasium():
-    code = ("import sys, ego, ego.cli, ego.runner, ego.compare, ego.sweep, ego.scenarios, ego.control; "
-            "assert 'gymnasium' not in sys.modules, 'gymnasium imported'")
+    code = (
+        "import sys, ego, ego.cli, ego.runner, ego.compare, ego.sweep, ego.scenarios, ego.control; "
+        "assert 'gymnasium' not in sys.modules, 'gymnasium imported'"
+    )
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert p.returncode == 0, p.stderr
 

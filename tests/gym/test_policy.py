@@ -49,14 +49,18 @@ def test_pid_policy_on_emergency_brake_gives_ego_runs_metrics():
 
 
 @pytest.mark.sumo
-@pytest.mark.parametrize("env_id, scenario, controller, config", [
-    # the curve resets its controller when it engages: the policy follows
-    ("ego/Curve-v0", "curve", "pid", {}),
-    # the first follower is the agent; the others keep the env's pid
-    ("ego/Platoon-v0", "platoon", "pid", {"duration": 15.0}),
-    # one channel: the agent brakes and drives, the env's pid steers
-    ("ego/CutIn-v0", "cut-in", "pid", {"duration": 10.0, "action_channels": "longitudinal"}),
-], ids=["curve", "platoon", "cut-in-longitudinal-only"])
+@pytest.mark.parametrize(
+    "env_id, scenario, controller, config",
+    [
+        # the curve resets its controller when it engages: the policy follows
+        ("ego/Curve-v0", "curve", "pid", {}),
+        # the first follower is the agent; the others keep the env's pid
+        ("ego/Platoon-v0", "platoon", "pid", {"duration": 15.0}),
+        # one channel: the agent brakes and drives, the env's pid steers
+        ("ego/CutIn-v0", "cut-in", "pid", {"duration": 10.0, "action_channels": "longitudinal"}),
+    ],
+    ids=["curve", "platoon", "cut-in-longitudinal-only"],
+)
 def test_policy_reproduces_ego_run(env_id, scenario, controller, config):
     config = dict(config)
     action = {"type": "EgoAction"}
@@ -94,9 +98,22 @@ def test_policy_needs_the_ego_state_observation():
 
 @pytest.mark.sumo
 def test_behaviour_cloning_example_runs(tmp_path):
-    p = subprocess.run([sys.executable, str(ROOT / "scenarios" / "behaviour_cloning.py"), "--episodes", "2",
-                        "--duration", "3", "--epochs", "5"], capture_output=True, text=True, timeout=600,
-                       cwd=tmp_path)
+    p = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "scenarios" / "behaviour_cloning.py"),
+            "--episodes",
+            "2",
+            "--duration",
+            "3",
+            "--epochs",
+            "5",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        cwd=tmp_path,
+    )
     assert p.returncode == 0, p.stderr
     assert "600 demonstration steps from 2 cascade-pid runs" in p.stdout
     assert "rms_lateral_error" in p.stdout

@@ -32,8 +32,10 @@ MOTORWAY = ["ego/EmergencyBrake-v0", "ego/FastFollower-v0", "ego/CutIn-v0"]
 
 @pytest.mark.parametrize("env_id", MOTORWAY)
 def test_checkers_pass_with_discrete_meta_actions(env_id):
-    env = gym.make(env_id, config={"action": {"type": "DiscreteMetaAction"}, "policy_frequency": 1,
-                                   "observation": {"type": "Kinematics"}})
+    env = gym.make(
+        env_id,
+        config={"action": {"type": "DiscreteMetaAction"}, "policy_frequency": 1, "observation": {"type": "Kinematics"}},
+    )
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -56,9 +58,15 @@ def test_gymnasium_and_sb3_env_checkers_pass(env_id, config):
         env.close()
 
 
-@pytest.mark.parametrize("config", [{}, {"controlled_vehicles": 2, "policy_frequency": 10},
-                                    {"variant": "scale-model", "action": {"type": "EgoAction"}}],
-                         ids=["default", "two-agents-10hz", "scale-model"])
+@pytest.mark.parametrize(
+    "config",
+    [
+        {},
+        {"controlled_vehicles": 2, "policy_frequency": 10},
+        {"variant": "scale-model", "action": {"type": "EgoAction"}},
+    ],
+    ids=["default", "two-agents-10hz", "scale-model"],
+)
 def test_pettingzoo_parallel_api_test_passes(config):
     env = PlatoonParallelEnv(config=config)
     try:
@@ -109,10 +117,15 @@ def test_vector_envs_step_1000_steps(env_id, kind):
 
 
 def test_highway_envs_multi_agent_convention_as_one_gymnasium_env():
-    env = gym.make("ego/PlatoonMultiAgent-v0", config={
-        "controlled_vehicles": 2, "policy_frequency": 10,
-        "action": {"type": "MultiAgentAction", "action_config": {"type": "ContinuousAction", "lateral": False}},
-        "observation": {"type": "MultiAgentObservation", "observation_config": {"type": "EgoState"}}})
+    env = gym.make(
+        "ego/PlatoonMultiAgent-v0",
+        config={
+            "controlled_vehicles": 2,
+            "policy_frequency": 10,
+            "action": {"type": "MultiAgentAction", "action_config": {"type": "ContinuousAction", "lateral": False}},
+            "observation": {"type": "MultiAgentObservation", "observation_config": {"type": "EgoState"}},
+        },
+    )
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")

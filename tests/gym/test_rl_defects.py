@@ -63,14 +63,19 @@ def test_multi_instance_runs_a_second_sumo_through_traci_with_the_same_episode(m
 
 # -- 2. ControllerPolicy at policy_frequency > 0 ----------------------------------------------
 @pytest.mark.sumo
-@pytest.mark.parametrize("env_id, scenario, controller, config", [
-    ("ego/LaneCentering-v0", "lane-centering", "cascade-pid", {"duration": 30.0}),
-    ("ego/Curve-v0", "curve", "pid", {}),
-    ("ego/Platoon-v0", "platoon", "pid", {"duration": 20.0}),
-], ids=["lane-centering", "curve", "platoon"])
+@pytest.mark.parametrize(
+    "env_id, scenario, controller, config",
+    [
+        ("ego/LaneCentering-v0", "lane-centering", "cascade-pid", {"duration": 30.0}),
+        ("ego/Curve-v0", "curve", "pid", {}),
+        ("ego/Platoon-v0", "platoon", "pid", {"duration": 20.0}),
+    ],
+    ids=["lane-centering", "curve", "platoon"],
+)
 @pytest.mark.parametrize("policy_frequency", [0, 10])
 def test_controller_policy_gives_the_controllers_metrics_at_any_policy_frequency(
-        env_id, scenario, controller, config, policy_frequency, make):
+    env_id, scenario, controller, config, policy_frequency, make
+):
     env = make(env_id, config={**config, "policy_frequency": policy_frequency})
     policy = ego.gym.ControllerPolicy(controller, env)
     obs, first = env.reset(seed=2)
@@ -107,13 +112,17 @@ def test_a_nan_action_ends_the_episode_diverged_with_a_finite_reward(env_id, mak
 
 
 @pytest.mark.sumo
-@pytest.mark.parametrize("action", [np.zeros((1, 1)), 0.5, [0.1, 0.2, 0.3], "left"],
-                         ids=["(1,1)", "scalar", "three", "string"])
+@pytest.mark.parametrize(
+    "action", [np.zeros((1, 1)), 0.5, [0.1, 0.2, 0.3], "left"], ids=["(1,1)", "scalar", "three", "string"]
+)
 def test_a_badly_shaped_action_names_the_expected_shape(action, make):
     env = make("ego/CutIn-v0")
     env.reset(seed=0)
-    with pytest.raises(ValueError, match=r"expected an array of shape \(2,\) \(ContinuousAction: "
-                                         r"\[longitudinal, steering\]\)"):
+    with pytest.raises(
+        ValueError,
+        match=r"expected an array of shape \(2,\) \(ContinuousAction: "
+        r"\[longitudinal, steering\]\)",
+    ):
         env.step(action)
 
 
@@ -191,13 +200,17 @@ def test_the_seed_changes_the_controllers_return(make):
     assert len(set(returns)) == 3
 
 
-@pytest.mark.parametrize("randomize, message", [
-    ({"ego_speed": [20, 100]}, "bad value for ego_speed: 100"),
-    ({"ego_sped": [20, 30]}, "unknown parameter 'ego_sped'"),
-    ({"ego_speed": [30, 20]}, r"randomize\[ego_speed\].*low <= high"),
-    ({"cut_in_side": [0, 1]}, r"randomize\[cut_in_side\]: cut_in_side is not a number"),
-    ("wide", "bad value for randomize: 'wide'"),
-], ids=["range", "unknown", "order", "not-a-number", "not-a-dict"])
+@pytest.mark.parametrize(
+    "randomize, message",
+    [
+        ({"ego_speed": [20, 100]}, "bad value for ego_speed: 100"),
+        ({"ego_sped": [20, 30]}, "unknown parameter 'ego_sped'"),
+        ({"ego_speed": [30, 20]}, r"randomize\[ego_speed\].*low <= high"),
+        ({"cut_in_side": [0, 1]}, r"randomize\[cut_in_side\]: cut_in_side is not a number"),
+        ("wide", "bad value for randomize: 'wide'"),
+    ],
+    ids=["range", "unknown", "order", "not-a-number", "not-a-dict"],
+)
 def test_bad_randomize_is_one_line_config_error(randomize, message):
     with pytest.raises(ConfigError, match=message) as err:
         ego.gym.EgoEnv("cut-in", config={"randomize": randomize})
@@ -208,8 +221,10 @@ def test_bad_randomize_is_one_line_config_error(randomize, message):
 @pytest.mark.parametrize("env_id, tracks", [("ego/LaneCentering-v0", False), ("ego/CutIn-v0", True)])
 def test_ego_state_is_normalised_by_default_and_raw_on_request(env_id, tracks, make):
     env = make(env_id, config={"randomize": {}})
-    raw = make(env_id, config={"randomize": {}, "multi_instance": True,
-                               "observation": {"type": "EgoState", "normalize": False}})
+    raw = make(
+        env_id,
+        config={"randomize": {}, "multi_instance": True, "observation": {"type": "EgoState", "normalize": False}},
+    )
     a, _ = env.reset(seed=0)
     b0, _ = raw.reset(seed=0)
     names = env.unwrapped.observation_type.names
@@ -252,10 +267,15 @@ def test_record_video_writes_an_mp4_without_a_system_ffmpeg(tmp_path, monkeypatc
     import imageio_ffmpeg
 
     monkeypatch.setenv("PATH", "/nonexistent")
-    env = gym.wrappers.RecordVideo(gym.make("ego/CutIn-v0", render_mode="rgb_array",
-                                            config={"policy_frequency": 10, "duration": 2.0,
-                                                    "screen_width": 160, "screen_height": 64}),
-                                   str(tmp_path), disable_logger=True)
+    env = gym.wrappers.RecordVideo(
+        gym.make(
+            "ego/CutIn-v0",
+            render_mode="rgb_array",
+            config={"policy_frequency": 10, "duration": 2.0, "screen_width": 160, "screen_height": 64},
+        ),
+        str(tmp_path),
+        disable_logger=True,
+    )
     try:
         env.reset(seed=0)
         while True:
@@ -280,8 +300,15 @@ def test_docs_status_list_names_every_status():
 # -- highway-env's action and observation types ---------------------------------------------------
 @pytest.mark.sumo
 def test_discrete_meta_actions_change_lane_and_speed_through_the_controller(make):
-    env = make("ego/FastFollower-v0", config={"action": {"type": "DiscreteMetaAction"}, "randomize": {},
-                                              "policy_frequency": 1, "traffic_density": 0.0})
+    env = make(
+        "ego/FastFollower-v0",
+        config={
+            "action": {"type": "DiscreteMetaAction"},
+            "randomize": {},
+            "policy_frequency": 1,
+            "traffic_density": 0.0,
+        },
+    )
     env.reset(seed=0)
     u = env.unwrapped
     meta, road = u.action_type, u._view.road  # the composed scenario's road state (its view)
@@ -307,17 +334,26 @@ def test_discrete_meta_action_needs_lanes():
 
 @pytest.mark.sumo
 def test_time_to_collision_and_occupancy_grid_see_the_lead_car(make):
-    env = make("ego/EmergencyBrake-v0", config={"randomize": {}, "traffic_density": 0.0,
-                                                "observation": {"type": "TimeToCollision"}})
+    env = make(
+        "ego/EmergencyBrake-v0",
+        config={"randomize": {}, "traffic_density": 0.0, "observation": {"type": "TimeToCollision"}},
+    )
     env.reset(seed=0)
     for _ in range(300):  # the lead brakes at 2 s: closing in the ego's own lane
         obs, *_ = env.step(np.zeros(2, dtype=np.float32))
     assert obs.shape == (3, 3, 10) and obs[:, 1, :].sum() >= 1.0  # own lane: a predicted collision
     faster, now = obs[2, 1].argmax(), obs[1, 1].argmax()
     assert faster <= now  # faster: sooner
-    grid = make("ego/EmergencyBrake-v0", config={"randomize": {}, "traffic_density": 0.0, "multi_instance": True,
-                                                 "lead_gap": 12.0,
-                                                 "observation": {"type": "OccupancyGrid"}})
+    grid = make(
+        "ego/EmergencyBrake-v0",
+        config={
+            "randomize": {},
+            "traffic_density": 0.0,
+            "multi_instance": True,
+            "lead_gap": 12.0,
+            "observation": {"type": "OccupancyGrid"},
+        },
+    )
     g, _ = grid.reset(seed=0)
     presence = g[0]
     assert g.shape == (4, 11, 11) and presence.sum() >= 1.0

@@ -42,12 +42,17 @@ def make():
 def test_the_road_is_the_sumo_networks_lanes():
     lanes = net_lanes(net_file("highway"), "motorway")
     assert {lid: (w, pts[0][1]) for lid, (w, pts) in lanes.items()} == {
-        "motorway_0": (3.5, -3.5), "motorway_1": (3.5, 0.0), "motorway_2": (3.5, 3.5)}
+        "motorway_0": (3.5, -3.5),
+        "motorway_1": (3.5, 0.0),
+        "motorway_2": (3.5, 3.5),
+    }
 
 
 def test_poses_come_back_in_egos_frame(make):
-    bridge, geometry = make([VehicleSpec("ego", "ego", "r", 1, 100.0, 20.0),
-                             VehicleSpec("left", "car", "r", 2, 150.0, 20.0)], controlled=["ego"])
+    bridge, geometry = make(
+        [VehicleSpec("ego", "ego", "r", 1, 100.0, 20.0), VehicleSpec("left", "car", "r", 2, 150.0, 20.0)],
+        controlled=["ego"],
+    )
     x, y, psi = bridge.cg_pose("ego")
     assert (x, y, psi) == pytest.approx((100.0 - geometry.cg_to_front, 0.0, 0.0))
     bridge.subscribe_surroundings("ego", 100.0)
@@ -94,8 +99,10 @@ def test_a_sideways_move_takes_one_step_and_a_ramp_is_linear(make):
 
 
 def test_the_ego_running_into_a_car_is_a_collision_it_caused(make):
-    bridge, geometry = make([VehicleSpec("ego", "ego", "r", 1, 100.0, 20.0),
-                             VehicleSpec("wall", "car", "r", 1, 115.0, 0.0)], controlled=["ego"])
+    bridge, geometry = make(
+        [VehicleSpec("ego", "ego", "r", 1, 100.0, 20.0), VehicleSpec("wall", "car", "r", 1, 115.0, 0.0)],
+        controlled=["ego"],
+    )
     bridge.start_speed("wall", 0.0)
     x, y, psi = bridge.cg_pose("ego")
     for k in range(1, 20):
@@ -112,8 +119,7 @@ def test_the_ego_running_into_a_car_is_a_collision_it_caused(make):
 
 
 def test_a_crash_in_the_traffic_names_the_car_behind_as_collider(make):
-    bridge, _ = make([VehicleSpec("fast", "car", "r", 0, 100.0, 30.0),
-                      VehicleSpec("slow", "car", "r", 0, 130.0, 0.0)])
+    bridge, _ = make([VehicleSpec("fast", "car", "r", 0, 100.0, 30.0), VehicleSpec("slow", "car", "r", 0, 130.0, 0.0)])
     bridge.drive_blind("fast")
     bridge.set_speed("fast", 30.0)
     bridge.start_speed("slow", 0.0)
@@ -135,4 +141,5 @@ def test_both_traffic_sources_take_every_command_of_the_actors():
             continue
         for source in (SumoBridge, HighwayEnvBridge):
             assert list(inspect.signature(getattr(source, name)).parameters) == list(
-                inspect.signature(member).parameters), (source.__name__, name)
+                inspect.signature(member).parameters
+            ), (source.__name__, name)

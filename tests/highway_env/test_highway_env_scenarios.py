@@ -11,8 +11,7 @@ SCENARIOS = ("emergency-brake", "fast-follower", "cut-in")
 
 
 def _run(scenario, controller="pid", seed=0, backend="highway-env", **overrides):
-    return run(RunSpec(scenario, controller, seed, {k: str(v) for k, v in overrides.items()},
-                       backend=backend))
+    return run(RunSpec(scenario, controller, seed, {k: str(v) for k, v in overrides.items()}, backend=backend))
 
 
 @pytest.mark.parametrize("scenario", SCENARIOS)
@@ -58,8 +57,9 @@ def test_the_recording_has_the_same_layout_on_both_backends(tmp_path):
     paths = {}
     for backend in ("sumo", "highway-env"):
         rrd = tmp_path / f"{backend}.rrd"
-        run(RunSpec("cut-in", "pid", 0, {"duration": "3"}, record=str(rrd), background_recording=False,
-                    backend=backend))
+        run(
+            RunSpec("cut-in", "pid", 0, {"duration": "3"}, record=str(rrd), background_recording=False, backend=backend)
+        )
         paths[backend] = {c.entity_path for c in RrdReader(rrd).stream()}
     assert paths["sumo"] == paths["highway-env"]
     assert "/plots/ttc/front" in paths["highway-env"] and "/events" in paths["highway-env"]

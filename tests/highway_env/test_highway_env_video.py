@@ -29,10 +29,13 @@ def test_a_long_run_keeps_every_kth_frame_at_a_lower_rate(tmp_path):
     assert (writer.stride, writer.fps) == (4, 2.5)
 
 
-@pytest.mark.parametrize("path, why", [
-    ("run.avi", "expected a file ending in .gif or .mp4"),
-    ("run", "expected a file ending in .gif or .mp4"),
-])
+@pytest.mark.parametrize(
+    "path, why",
+    [
+        ("run.avi", "expected a file ending in .gif or .mp4"),
+        ("run", "expected a file ending in .gif or .mp4"),
+    ],
+)
 def test_bad_video_paths_are_refused(path, why):
     with pytest.raises(ConfigError, match=why):
         check_video_path(path)

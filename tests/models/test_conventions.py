@@ -38,8 +38,7 @@ def test_a_round_trip_is_exact(name):
 @pytest.mark.parametrize("name", CARS)
 def test_both_models_have_the_same_understeer_gradient(name):
     lat = CARS[name]
-    assert dynamic_params_from_lateral(lat).understeer_gradient == pytest.approx(lat.understeer_gradient,
-                                                                                rel=1e-12)
+    assert dynamic_params_from_lateral(lat).understeer_gradient == pytest.approx(lat.understeer_gradient, rel=1e-12)
 
 
 @pytest.mark.parametrize("speed", [8.0, 25.0])

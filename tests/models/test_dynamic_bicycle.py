@@ -34,9 +34,9 @@ def test_steady_state_yaw_rate_and_sideslip_match_the_closed_form(u0):
     u, v, r = x[1], x[3], x[5]
     assert abs(u - u0) < 0.05 * u0
     L, K = P.wheelbase, P.understeer_gradient
-    assert r / delta == pytest.approx(u / (L + K * u ** 2), rel=2e-3)
+    assert r / delta == pytest.approx(u / (L + K * u**2), rel=2e-3)
     car = 2 * abs(P.Cr)
-    beta = (P.lr - P.m * P.lf * u ** 2 / (L * car)) / (L + K * u ** 2)
+    beta = (P.lr - P.m * P.lf * u**2 / (L * car)) / (L + K * u**2)
     assert (v / u) / delta == pytest.approx(beta, rel=2e-3)
     assert P.yaw_rate_gain(u) == pytest.approx(r / delta, rel=2e-3)
     assert P.sideslip_gain(u) == pytest.approx((v / u) / delta, rel=2e-3)

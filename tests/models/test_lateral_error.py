@@ -34,7 +34,7 @@ def test_feedforward_alone_holds_the_steady_state(speed, kappa):
         x = Ad @ x + Bd * delta + Ed * kappa
     assert x[0] == pytest.approx(0.0, abs=1e-9)  # no drift off the lane centre
     assert x[3] == pytest.approx(speed * kappa, rel=1e-9)  # yaw rate = v kappa
-    assert model.lateral_accel(x, delta) == pytest.approx(speed ** 2 * kappa, rel=1e-9)
+    assert model.lateral_accel(x, delta) == pytest.approx(speed**2 * kappa, rel=1e-9)
 
 
 def test_the_restored_v_r_term_matters():

@@ -23,8 +23,15 @@ def _measured_response(model: Longitudinal, policy: SpacingPolicy, omega: float)
     periods = 6
     t_settle = 12.0 * model.params.lag  # the lag's transient is gone after 12 tau
     t_end = t_settle + periods * 2 * math.pi / omega
-    sol = solve_ivp(lambda t, x: model.derivatives(x, math.sin(omega * t)), (0.0, t_end),
-                    [0.0, 0.0, 0.0], method="DOP853", rtol=1e-11, atol=1e-12, dense_output=True)
+    sol = solve_ivp(
+        lambda t, x: model.derivatives(x, math.sin(omega * t)),
+        (0.0, t_end),
+        [0.0, 0.0, 0.0],
+        method="DOP853",
+        rtol=1e-11,
+        atol=1e-12,
+        dense_output=True,
+    )
     t = np.linspace(t_settle, t_end, 4000)
     s, v, _ = sol.sol(t)
     return _fit_sine(t, s + policy.headway * v, omega)
@@ -36,7 +43,7 @@ def test_command_to_spacing_is_report_004s_transfer_function(omega):
     model, policy = Longitudinal(), SpacingPolicy()
     assert policy.headway == 0.2 and policy.standstill_gap == 3.0  # the report's defaults
     s = 1j * omega
-    expected = (0.2 * s + 1) / s ** 2
+    expected = (0.2 * s + 1) / s**2
     measured = _measured_response(model, policy, omega)
     assert abs(measured - expected) <= 1e-6 * abs(expected)
     num, den = model.transfer_function(policy)
@@ -47,7 +54,7 @@ def test_command_to_spacing_is_report_004s_transfer_function(omega):
 def test_the_actuator_lag_adds_a_first_order_pole(omega):
     model, policy = Longitudinal(LongitudinalParams(lag=0.3)), SpacingPolicy(headway=0.5)
     s = 1j * omega
-    expected = (0.5 * s + 1) / (s ** 2 * (0.3 * s + 1))
+    expected = (0.5 * s + 1) / (s**2 * (0.3 * s + 1))
     measured = _measured_response(model, policy, omega)
     assert abs(measured - expected) <= 1e-6 * abs(expected)
     num, den = model.transfer_function(policy)
@@ -61,8 +68,9 @@ def test_exact_step_equals_the_integrated_ode():
     rng = np.random.default_rng(4)
     x = (0.0, 15.0, 0.0)
     for u in rng.uniform(-5.0, 2.5, 40):  # within the limits: the ODE then needs no clipping
-        sol = solve_ivp(lambda t, y, u=u: model.derivatives(y, u), (0.0, dt), x, method="DOP853",
-                        rtol=1e-12, atol=1e-12)
+        sol = solve_ivp(
+            lambda t, y, u=u: model.derivatives(y, u), (0.0, dt), x, method="DOP853", rtol=1e-12, atol=1e-12
+        )
         x_ode = sol.y[:, -1]
         x = step(*x, u)
         assert x == pytest.approx(tuple(x_ode), abs=1e-9)
@@ -104,7 +112,7 @@ def test_energy_balance_under_random_commands():
         x1 = step(*x, u)
         work += 0.5 * (x[2] * x[1] + x1[2] * x1[1]) * dt  # trapezoid of a v
         x = x1
-    assert work == pytest.approx(0.5 * (x[1] ** 2 - 12.0 ** 2), abs=1e-4)
+    assert work == pytest.approx(0.5 * (x[1] ** 2 - 12.0**2), abs=1e-4)
 
 
 def test_braking_stops_the_car_at_the_stopping_distance_and_holds_it():
@@ -112,7 +120,7 @@ def test_braking_stops_the_car_at_the_stopping_distance_and_holds_it():
     x = (0.0, 20.0, 0.0)
     for _ in range(1000):  # 10 s of full braking, asking for more than the limit
         x = step(*x, -20.0)
-    assert x == pytest.approx((20.0 ** 2 / (2 * 8.0), 0.0, 0.0), abs=1e-9)  # v^2/(2b), no reversing
+    assert x == pytest.approx((20.0**2 / (2 * 8.0), 0.0, 0.0), abs=1e-9)  # v^2/(2b), no reversing
 
 
 def test_braking_with_a_lag_stops_later_by_tau():
@@ -126,7 +134,7 @@ def test_braking_with_a_lag_stops_later_by_tau():
             stopped_at = (k + 1) * 1e-3
     # a deceleration ramp delayed by tau: stops tau later, v0 tau - b tau^2/2 farther
     assert stopped_at == pytest.approx(v0 / b + tau, abs=2e-3)
-    assert x[0] == pytest.approx(v0 ** 2 / (2 * b) + v0 * tau - b * tau ** 2 / 2, rel=1e-4)
+    assert x[0] == pytest.approx(v0**2 / (2 * b) + v0 * tau - b * tau**2 / 2, rel=1e-4)
     assert x[1] == 0.0 and x[2] == 0.0
 
 

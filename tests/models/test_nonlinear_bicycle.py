@@ -21,9 +21,7 @@ def test_axle_loads_sum_to_weight():
     assert P.Fzf == pytest.approx(1.45 / 2.8 * 1400 * 9.806)
 
 
-@pytest.mark.parametrize(
-    "axle, expected_kn_per_rad", [("front", 92.4), ("rear", 86.0)], ids=["front", "rear"]
-)
+@pytest.mark.parametrize("axle, expected_kn_per_rad", [("front", 92.4), ("rear", 86.0)], ids=["front", "rear"])
 def test_small_slip_cornering_stiffness(axle, expected_kn_per_rad):
     # C_alpha = By*Cy*Dy*Fz per degree -> *180/pi per radian (SPEC: ~92.4 and ~86.0 kN/rad).
     fz = P.Fzf if axle == "front" else P.Fzr

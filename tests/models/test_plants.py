@@ -35,8 +35,14 @@ def nonlinear(limits=None, speed=20.0):
 
 
 def dynamic(limits=None, speed=20.0, substeps=1):
-    return BicyclePlant(DynamicBicycle(DynamicBicycleParams(slip_speed_floor=1.0)), GEOMETRY, DT, substeps, limits,
-                        state=(0.0, speed, 0.0, 0.0, 0.0, 0.0))
+    return BicyclePlant(
+        DynamicBicycle(DynamicBicycleParams(slip_speed_floor=1.0)),
+        GEOMETRY,
+        DT,
+        substeps,
+        limits,
+        state=(0.0, speed, 0.0, 0.0, 0.0, 0.0),
+    )
 
 
 def lane_frame(limits=None, speed=20.0, lane=EAST, e0=0.0):
@@ -135,7 +141,7 @@ def test_a_longitudinal_follower_brakes_to_a_stop_and_never_reverses():
         s, v, a = plant.state
         assert v >= 0.0 and s >= s0
     assert plant.state[1] == 0.0
-    assert plant.state[0] == pytest.approx(s0 + 0.5 ** 2 / (2 * 8.0), rel=1e-9)
+    assert plant.state[0] == pytest.approx(s0 + 0.5**2 / (2 * 8.0), rel=1e-9)
 
 
 def test_a_lane_frame_plant_ignores_the_longitudinal_command():

@@ -32,8 +32,21 @@ def files(tmp_path):
 
 def test_run_records_and_traces(files, capsys):
     rrd, trace = files / "out" / "run.rrd", files / "out" / "trace.csv"
-    rc = main(["run", str(files / "cut_in.xosc"), "-c", "pid", "--record", str(rrd), "--trace", str(trace),
-               "--set", "CutInSpeed=12", "--json"])
+    rc = main(
+        [
+            "run",
+            str(files / "cut_in.xosc"),
+            "-c",
+            "pid",
+            "--record",
+            str(rrd),
+            "--trace",
+            str(trace),
+            "--set",
+            "CutInSpeed=12",
+            "--json",
+        ]
+    )
     out = json.loads(capsys.readouterr().out)
     assert rc == 0 and out["status"] == "completed"
     assert out["trigger_time"] is not None  # the cut-in triggered ego's manoeuvre
@@ -53,8 +66,19 @@ def test_run_is_deterministic(files):
 
 
 def test_set_reaches_the_storyboard(files, capsys):
-    rc = main(["run", str(files / "emergency_brake.xosc"), "-c", "pid", "--set", "LeadBrakeTime=4",
-               "--set", "traffic_density=0", "--json"])
+    rc = main(
+        [
+            "run",
+            str(files / "emergency_brake.xosc"),
+            "-c",
+            "pid",
+            "--set",
+            "LeadBrakeTime=4",
+            "--set",
+            "traffic_density=0",
+            "--json",
+        ]
+    )
     out = json.loads(capsys.readouterr().out)
     assert rc == 0
     assert any("t = 4.00 s: event 'LeadBrakeEvent' starts" in e["text"] for e in out["events"])
@@ -62,8 +86,19 @@ def test_set_reaches_the_storyboard(files, capsys):
 
 def test_ego_is_chosen(files, capsys):
     """--ego Lead: ego drives the lead car, whose braking becomes its speed reference."""
-    rc = main(["run", str(files / "emergency_brake.xosc"), "-c", "pid", "--ego", "lead", "--set",
-               "traffic_density=0", "--json"])
+    rc = main(
+        [
+            "run",
+            str(files / "emergency_brake.xosc"),
+            "-c",
+            "pid",
+            "--ego",
+            "lead",
+            "--set",
+            "traffic_density=0",
+            "--json",
+        ]
+    )
     out = json.loads(capsys.readouterr().out)
     assert rc == 0
     assert out["final_speed"] == pytest.approx(5.0, abs=0.3)  # it braked to LeadFinalSpeed
@@ -77,20 +112,32 @@ def test_list_file(files, capsys):
     assert "Ego                      Vehicle (car)" in text and "<- the ego" in text
     assert "traffic_density" in text and "(sets ego's parameter)" in text
     bad = files / "bad.xosc"
-    bad.write_text((files / "emergency_brake.xosc").read_text().replace(
-        "<Properties/>", "<Properties/><Trailer/>", 1))
+    bad.write_text((files / "emergency_brake.xosc").read_text().replace("<Properties/>", "<Properties/><Trailer/>", 1))
     assert main(["list", str(bad), "--json"]) == 0
     listing = json.loads(capsys.readouterr().out)
     assert listing["supported"] is False
     assert [e for e in listing["elements"] if not e["supported"]] == [
-        {"element": "Trailer", "line": 32, "supported": False}]
+        {"element": "Trailer", "line": 32, "supported": False}
+    ]
     assert listing["ego"] == "Ego"
 
 
 def test_compare(files, capsys):
     out = files / "cmp"
-    rc = main(["compare", str(files / "emergency_brake.xosc"), "--controllers", "pid,fuzzy", "--out", str(out),
-               "--set", "duration=8", "--jobs", "2"])
+    rc = main(
+        [
+            "compare",
+            str(files / "emergency_brake.xosc"),
+            "--controllers",
+            "pid,fuzzy",
+            "--out",
+            str(out),
+            "--set",
+            "duration=8",
+            "--jobs",
+            "2",
+        ]
+    )
     assert rc == 0, capsys.readouterr().err
     assert (out / "metrics.csv").is_file() and (out / "metrics.md").is_file()
     assert (out / "speed.png").is_file() and (out / "ttc.png").is_file()
@@ -98,8 +145,10 @@ def test_compare(files, capsys):
 
 def test_sweep_over_file_parameters(files, capsys):
     spec = files / "spec.toml"
-    spec.write_text('scenario = "emergency_brake.xosc"\ncontrollers = ["pid"]\nseeds = 1\n\n[set]\n'
-                    "duration = 6\ntraffic_density = 0\n\n[grid]\nLeadGap = [20, 40]\n")
+    spec.write_text(
+        'scenario = "emergency_brake.xosc"\ncontrollers = ["pid"]\nseeds = 1\n\n[set]\n'
+        "duration = 6\ntraffic_density = 0\n\n[grid]\nLeadGap = [20, 40]\n"
+    )
     out = files / "sweep"
     rc = main(["sweep", str(spec), "--out", str(out), "--jobs", "2", "--record", "none"])
     assert rc == 0, capsys.readouterr().err

@@ -46,144 +46,341 @@ LEAD_ACTION = '<SpeedActionDynamics dynamicsShape="linear" value="$LeadDecel" dy
 LEAD_TARGET = '<AbsoluteTargetSpeed value="$LeadFinalSpeed"/>'
 EGO_LANE = '<LanePosition roadId="0" laneId="-2" s="${$EgoFront - 2.25}" offset="0"/>'
 SIM_TIME = '<SimulationTimeCondition value="$LeadBrakeTime" rule="greaterOrEqual"/>'
-EGO_SPEED_INIT = '''          <PrivateAction>
+EGO_SPEED_INIT = """          <PrivateAction>
             <LongitudinalAction><SpeedAction>
               <SpeedActionDynamics dynamicsShape="step" value="0" dynamicsDimension="time"/>
               <SpeedActionTarget><AbsoluteTargetSpeed value="$EgoSpeed"/></SpeedActionTarget>
             </SpeedAction></LongitudinalAction>
           </PrivateAction>
         </Private>
-        <Private entityRef="Lead">'''
-LANE_CHANGE = ('<LateralAction><LaneChangeAction><LaneChangeActionDynamics dynamicsShape="cubic" value="2" '
-               'dynamicsDimension="time"/><LaneChangeTarget><AbsoluteTargetLane value="-1"/></LaneChangeTarget>'
-               '</LaneChangeAction></LateralAction>')
+        <Private entityRef="Lead">"""
+LANE_CHANGE = (
+    '<LateralAction><LaneChangeAction><LaneChangeActionDynamics dynamicsShape="cubic" value="2" '
+    'dynamicsDimension="time"/><LaneChangeTarget><AbsoluteTargetLane value="-1"/></LaneChangeTarget>'
+    "</LaneChangeAction></LateralAction>"
+)
 
 #: (id, file text, marker locating the line (None: no line), message after "FILE:LINE: ")
 HAND = [
-    ("mismatched-tag", sub('<Act name="Brake">', '<Act name="Brake"><Oops>'), "</Act>",
-     "malformed XML: mismatched tag (column 9)"),
+    (
+        "mismatched-tag",
+        sub('<Act name="Brake">', '<Act name="Brake"><Oops>'),
+        "</Act>",
+        "malformed XML: mismatched tag (column 9)",
+    ),
     ("not-xml", "this is not XML\n", "this", "malformed XML: syntax error (column 1)"),
     ("empty", "", None, "malformed XML: no element found (column 1)"),
-    ("truncated", BASE[:BASE.index("<Storyboard>")], None, None),
-    ("root", '<?xml version="1.0"?>\n<Scenario/>\n', "<Scenario",
-     "<Scenario> is not an OpenSCENARIO file (expected <OpenSCENARIO> as the root element)"),
-    ("version-1.4", sub('revMinor="2"', 'revMinor="4"'), "<FileHeader",
-     f"OpenSCENARIO 1.4 is not supported by ego (1.0 to 1.3; see {DOCS})"),
-    ("version-2", sub('revMajor="1"', 'revMajor="2"'), "<FileHeader",
-     f"OpenSCENARIO 2.2 is not supported by ego (1.0 to 1.3; see {DOCS})"),
-    ("no-header", sub(BASE[BASE.index("  <FileHeader"):BASE.index("  <ParameterDeclarations>")], ""),
-     "<OpenSCENARIO>", "<OpenSCENARIO> needs a <FileHeader>"),
-    ("undeclared-ref", sub('value="$LeadDecel"', 'value="$LeadDecl"'), 'value="$LeadDecl"',
-     "parameter '$LeadDecl' is not declared (declared: EgoSpeed, EgoFront, LeadGap, LeadSpeed, "
-     "LeadBrakeTime, LeadDecel, LeadFinalSpeed, traffic_density)"),
-    ("undeclared-in-expression", sub('s="${$EgoFront - 2.25}"', 's="${$Nope - 2.25}"'), "$Nope",
-     "parameter '$Nope' in expression '${$Nope - 2.25}' is not declared (declared: EgoSpeed, EgoFront, "
-     "LeadGap, LeadSpeed, LeadBrakeTime, LeadDecel, LeadFinalSpeed, traffic_density)"),
-    ("expression-syntax", sub('s="${$EgoFront - 2.25}"', 's="${$EgoFront -}"'), "${$EgoFront -}",
-     "unexpected the end in expression '${$EgoFront -}' (expected a number, a $parameter or '(')"),
-    ("expression-operator", sub('s="${$EgoFront - 2.25}"', 's="${$EgoFront ^ 2}"'), "${$EgoFront ^ 2}",
-     "unexpected '^' in expression '${$EgoFront ^ 2}' (allowed: numbers, $parameters, + - * / and parentheses)"),
-    ("division-by-zero", sub('s="${$EgoFront - 2.25}"', 's="${$EgoFront / (2 - 2)}"'), "(2 - 2)",
-     "division by zero in expression '${$EgoFront / (2 - 2)}'"),
-    ("unclosed-paren", sub('s="${$EgoFront - 2.25}"', 's="${($EgoFront - 2.25}"'), "${($EgoFront",
-     "missing ')' in expression '${($EgoFront - 2.25}'"),
-    ("bad-number", sub(LEAD_TARGET, '<AbsoluteTargetSpeed value="fast"/>'), 'value="fast"',
-     "bad value for value in <AbsoluteTargetSpeed>: 'fast' (expected a number)"),
-    ("bad-parameter-value", sub('name="LeadGap" parameterType="double" value="30"',
-                                'name="LeadGap" parameterType="double" value="thirty"'), '"thirty"',
-     "bad value for parameter 'LeadGap': 'thirty' (expected a number)"),
-    ("bad-parameter-type", sub('name="LeadGap" parameterType="double"', 'name="LeadGap" parameterType="float"'),
-     'parameterType="float"',
-     "bad parameterType 'float' of parameter 'LeadGap' (allowed: double, integer, unsignedInt, unsignedShort, "
-     "int, string, boolean, dateTime)"),
-    ("duplicate-parameter", sub('<ParameterDeclaration name="LeadGap" parameterType="double" value="30"/>',
-                                '<ParameterDeclaration name="LeadGap" parameterType="double" value="30"/>'
-                                '<ParameterDeclaration name="LeadGap" parameterType="double" value="31"/>'),
-     'name="LeadGap"', "parameter 'LeadGap' is declared twice (first on line 12)"),
-    ("unknown-entity-init", sub('<Private entityRef="Lead">', '<Private entityRef="Leed">'), '"Leed"',
-     "unknown entity 'Leed' in <Private> (entities: Ego, Lead)"),
-    ("unknown-entity-actor", sub('<EntityRef entityRef="Lead"/></Actors>', '<EntityRef entityRef="Truck"/></Actors>'),
-     '"Truck"', "unknown entity 'Truck' in <EntityRef> (entities: Ego, Lead)"),
-    ("duplicate-entity", sub('<ScenarioObject name="Lead">', '<ScenarioObject name="Ego">'),
-     '<ScenarioObject name="Ego">\n      <Vehicle name="lead"', "entity 'Ego' is declared twice"),
+    ("truncated", BASE[: BASE.index("<Storyboard>")], None, None),
+    (
+        "root",
+        '<?xml version="1.0"?>\n<Scenario/>\n',
+        "<Scenario",
+        "<Scenario> is not an OpenSCENARIO file (expected <OpenSCENARIO> as the root element)",
+    ),
+    (
+        "version-1.4",
+        sub('revMinor="2"', 'revMinor="4"'),
+        "<FileHeader",
+        f"OpenSCENARIO 1.4 is not supported by ego (1.0 to 1.3; see {DOCS})",
+    ),
+    (
+        "version-2",
+        sub('revMajor="1"', 'revMajor="2"'),
+        "<FileHeader",
+        f"OpenSCENARIO 2.2 is not supported by ego (1.0 to 1.3; see {DOCS})",
+    ),
+    (
+        "no-header",
+        sub(BASE[BASE.index("  <FileHeader") : BASE.index("  <ParameterDeclarations>")], ""),
+        "<OpenSCENARIO>",
+        "<OpenSCENARIO> needs a <FileHeader>",
+    ),
+    (
+        "undeclared-ref",
+        sub('value="$LeadDecel"', 'value="$LeadDecl"'),
+        'value="$LeadDecl"',
+        "parameter '$LeadDecl' is not declared (declared: EgoSpeed, EgoFront, LeadGap, LeadSpeed, "
+        "LeadBrakeTime, LeadDecel, LeadFinalSpeed, traffic_density)",
+    ),
+    (
+        "undeclared-in-expression",
+        sub('s="${$EgoFront - 2.25}"', 's="${$Nope - 2.25}"'),
+        "$Nope",
+        "parameter '$Nope' in expression '${$Nope - 2.25}' is not declared (declared: EgoSpeed, EgoFront, "
+        "LeadGap, LeadSpeed, LeadBrakeTime, LeadDecel, LeadFinalSpeed, traffic_density)",
+    ),
+    (
+        "expression-syntax",
+        sub('s="${$EgoFront - 2.25}"', 's="${$EgoFront -}"'),
+        "${$EgoFront -}",
+        "unexpected the end in expression '${$EgoFront -}' (expected a number, a $parameter or '(')",
+    ),
+    (
+        "expression-operator",
+        sub('s="${$EgoFront - 2.25}"', 's="${$EgoFront ^ 2}"'),
+        "${$EgoFront ^ 2}",
+        "unexpected '^' in expression '${$EgoFront ^ 2}' (allowed: numbers, $parameters, + - * / and parentheses)",
+    ),
+    (
+        "division-by-zero",
+        sub('s="${$EgoFront - 2.25}"', 's="${$EgoFront / (2 - 2)}"'),
+        "(2 - 2)",
+        "division by zero in expression '${$EgoFront / (2 - 2)}'",
+    ),
+    (
+        "unclosed-paren",
+        sub('s="${$EgoFront - 2.25}"', 's="${($EgoFront - 2.25}"'),
+        "${($EgoFront",
+        "missing ')' in expression '${($EgoFront - 2.25}'",
+    ),
+    (
+        "bad-number",
+        sub(LEAD_TARGET, '<AbsoluteTargetSpeed value="fast"/>'),
+        'value="fast"',
+        "bad value for value in <AbsoluteTargetSpeed>: 'fast' (expected a number)",
+    ),
+    (
+        "bad-parameter-value",
+        sub('name="LeadGap" parameterType="double" value="30"', 'name="LeadGap" parameterType="double" value="thirty"'),
+        '"thirty"',
+        "bad value for parameter 'LeadGap': 'thirty' (expected a number)",
+    ),
+    (
+        "bad-parameter-type",
+        sub('name="LeadGap" parameterType="double"', 'name="LeadGap" parameterType="float"'),
+        'parameterType="float"',
+        "bad parameterType 'float' of parameter 'LeadGap' (allowed: double, integer, unsignedInt, unsignedShort, "
+        "int, string, boolean, dateTime)",
+    ),
+    (
+        "duplicate-parameter",
+        sub(
+            '<ParameterDeclaration name="LeadGap" parameterType="double" value="30"/>',
+            '<ParameterDeclaration name="LeadGap" parameterType="double" value="30"/>'
+            '<ParameterDeclaration name="LeadGap" parameterType="double" value="31"/>',
+        ),
+        'name="LeadGap"',
+        "parameter 'LeadGap' is declared twice (first on line 12)",
+    ),
+    (
+        "unknown-entity-init",
+        sub('<Private entityRef="Lead">', '<Private entityRef="Leed">'),
+        '"Leed"',
+        "unknown entity 'Leed' in <Private> (entities: Ego, Lead)",
+    ),
+    (
+        "unknown-entity-actor",
+        sub('<EntityRef entityRef="Lead"/></Actors>', '<EntityRef entityRef="Truck"/></Actors>'),
+        '"Truck"',
+        "unknown entity 'Truck' in <EntityRef> (entities: Ego, Lead)",
+    ),
+    (
+        "duplicate-entity",
+        sub('<ScenarioObject name="Lead">', '<ScenarioObject name="Ego">'),
+        '<ScenarioObject name="Ego">\n      <Vehicle name="lead"',
+        "entity 'Ego' is declared twice",
+    ),
     ("missing-road", sub('filepath="straight3.xodr"', 'filepath="nowhere.xodr"'), "nowhere.xodr", None),
-    ("road-type", sub('filepath="straight3.xodr"', 'filepath="road.txt"'), "road.txt",
-     "bad road file 'road.txt' (expected an OpenDRIVE .xodr or a SUMO .net.xml)"),
-    ("unsupported-action", sub('<PrivateAction><LongitudinalAction><SpeedAction>\n                  ' + LEAD_ACTION,
-                               '<PrivateAction><VisibilityAction graphics="true" traffic="true" sensors="true"/>'
-                               '<LongitudinalAction><SpeedAction>\n                  ' + LEAD_ACTION),
-     "<VisibilityAction", unsupported("VisibilityAction")),
-    ("unsupported-condition", sub(SIM_TIME, '<TimeOfDayCondition rule="greaterThan" dateTime="2026-01-01T10:00:00"/>'),
-     "<TimeOfDayCondition", unsupported("TimeOfDayCondition")),
-    ("unsupported-position", sub(EGO_LANE, '<GeoPosition latitude="48.1" longitude="11.5"/>'), "<GeoPosition",
-     unsupported("GeoPosition")),
-    ("unsupported-entity", sub('<Vehicle name="lead" vehicleCategory="car">', '<Pedestrian name="walker" mass="80" '
-                               'pedestrianCategory="pedestrian">').replace(
-                                   '<Properties/>\n      </Vehicle>\n    </ScenarioObject>\n  </Entities>',
-                                   '<Properties/>\n      </Pedestrian>\n    </ScenarioObject>\n  </Entities>'),
-     "<Pedestrian", unsupported("Pedestrian")),
-    ("typo-element", sub("<LongitudinalAction><SpeedAction>\n                  " + LEAD_ACTION,
-                         "<LongitudinalAction><SpeedActon>\n                  " + LEAD_ACTION).replace(
-                             "</SpeedAction></LongitudinalAction></PrivateAction>",
-                             "</SpeedActon></LongitudinalAction></PrivateAction>"), "<SpeedActon",
-     unsupported("SpeedActon")),
-    ("global-action", sub("<Actions>\n", "<Actions>\n        <GlobalAction><EnvironmentAction/></GlobalAction>\n"),
-     "<GlobalAction", unsupported("GlobalAction")),
-    ("distribution", sub("<CatalogLocations/>", "<ParameterValueDistribution/>\n  <CatalogLocations/>"),
-     "<ParameterValueDistribution", unsupported("ParameterValueDistribution")),
-    ("bad-shape", sub(LEAD_ACTION, LEAD_ACTION.replace("linear", "quadratic")), "quadratic",
-     "bad value for dynamicsShape in <SpeedActionDynamics>: 'quadratic' (allowed: step, linear, cubic, sinusoidal)"),
-    ("bad-rule", sub(SIM_TIME, SIM_TIME.replace("greaterOrEqual", "bigger")), '"bigger"',
-     "bad value for rule in <SimulationTimeCondition>: 'bigger' (allowed: greaterThan, lessThan, equalTo, "
-     "greaterOrEqual, lessOrEqual, notEqualTo)"),
-    ("bad-edge", sub('<Condition name="BrakeTime" delay="0" conditionEdge="none">',
-                     '<Condition name="BrakeTime" delay="0" conditionEdge="up">'), '"up"',
-     "bad value for conditionEdge in <Condition>: 'up' (allowed: rising, falling, risingOrFalling, none)"),
-    ("bad-priority", sub('priority="overwrite"', 'priority="sometimes"'), '"sometimes"',
-     "bad value for priority in <Event>: 'sometimes' (allowed: overwrite, override, skip, parallel)"),
-    ("negative-delay", sub('<Condition name="BrakeTime" delay="0"', '<Condition name="BrakeTime" delay="-1"'),
-     'delay="-1"', "bad value for delay in <Condition>: -1 (expected >= 0)"),
-    ("missing-attribute", sub(EGO_LANE, '<LanePosition roadId="0" laneId="-2" offset="0"/>'),
-     '<LanePosition roadId="0" laneId="-2" offset="0"/>', "<LanePosition> needs attribute s"),
-    ("no-teleport", sub(BASE[BASE.index('        <Private entityRef="Lead">'):BASE.index("      </Actions>")], ""),
-     '<ScenarioObject name="Lead">',
-     "entity 'Lead' has no TeleportAction in <Init> (ego needs every entity's start position)"),
-    ("element-ref", sub(SIM_TIME, '<StoryboardElementStateCondition storyboardElementType="event" '
-                        'storyboardElementRef="Nope" state="endTransition"/>'), "<Condition name=\"BrakeTime\"",
-     "unknown storyboard element 'Nope' (elements: LeadBrakeAction, LeadBrakeEvent, LeadManeuver, LeadGroup, "
-     "Brake, LeadBrakes)"),
-    ("lane-change-in-init", sub(EGO_SPEED_INIT, EGO_SPEED_INIT.replace(
-        "          <PrivateAction>\n", "          <PrivateAction>" + LANE_CHANGE + "</PrivateAction>\n"
-        "          <PrivateAction>\n", 1)),
-     "<LateralAction><LaneChangeAction",
-     f"<LateralAction> in <Init> is not supported by ego (Init takes TeleportAction and SpeedAction with "
-     f"AbsoluteTargetSpeed; see {DOCS})"),
-    ("two-actions-in-one", sub(EGO_SPEED_INIT, EGO_SPEED_INIT.replace(
-        "<LongitudinalAction><SpeedAction>", "<TeleportAction/><LongitudinalAction><SpeedAction>", 1)),
-     "<PrivateAction>\n            <LongitudinalAction><SpeedAction>\n              <SpeedActionDynamics dynamicsShape=\"step\" value=\"0\" dynamicsDimension=\"time\"/>\n              <SpeedActionTarget><AbsoluteTargetSpeed value=\"$EgoSpeed\"/>".replace(
-         "<LongitudinalAction>", "<TeleportAction/><LongitudinalAction>"),
-     "<PrivateAction> needs exactly one child element (found 2)"),
-    ("lane-beyond-road", sub(EGO_LANE, EGO_LANE.replace('laneId="-2"', 'laneId="-4"')), 'laneId="-4"',
-     "road '0' has 3 lanes on that side at s = 297.75 (lane ids -1, -2, -3)"),
-    ("unknown-road", sub(EGO_LANE, EGO_LANE.replace('roadId="0"', 'roadId="7"')), 'roadId="7"',
-     "unknown road '7' (roads: 0)"),
-    ("bad-boolean", sub('name="traffic_density" parameterType="double" value="10"',
-                        'name="aeb" parameterType="boolean" value="maybe"'), '"maybe"',
-     "bad value for parameter 'aeb': 'maybe' (expected true or false)"),
-    ("missing-catalog", sub('<Vehicle name="lead" vehicleCategory="car">',
-                            '<CatalogReference catalogName="Cars" entryName="car"/><Vehicle name="lead" '
-                            'vehicleCategory="car">'), '<ScenarioObject name="Lead">',
-     "<ScenarioObject> needs exactly one child element (found 2)"),
-    ("catalog-without-location", sub(BASE[BASE.index('      <Vehicle name="lead"'):BASE.index(
-        "    </ScenarioObject>\n  </Entities>")], '      <CatalogReference catalogName="Cars" entryName="car"/>\n'),
-     '<CatalogReference catalogName="Cars"',
-     "<CatalogReference> to 'Cars' but no <VehicleCatalog> in <CatalogLocations>"),
-    ("ego-teleport", sub('<EntityRef entityRef="Lead"/></Actors>', '<EntityRef entityRef="Ego"/></Actors>').replace(
-        BASE[BASE.index("<LongitudinalAction><SpeedAction>\n                  " + LEAD_ACTION):BASE.index(
-            "</SpeedAction></LongitudinalAction></PrivateAction>\n              </Action>")]
-        + "</SpeedAction></LongitudinalAction>",
-        '<TeleportAction><Position><LanePosition roadId="0" laneId="-1" s="400"/></Position></TeleportAction>'),
-     None, None),
+    (
+        "road-type",
+        sub('filepath="straight3.xodr"', 'filepath="road.txt"'),
+        "road.txt",
+        "bad road file 'road.txt' (expected an OpenDRIVE .xodr or a SUMO .net.xml)",
+    ),
+    (
+        "unsupported-action",
+        sub(
+            "<PrivateAction><LongitudinalAction><SpeedAction>\n                  " + LEAD_ACTION,
+            '<PrivateAction><VisibilityAction graphics="true" traffic="true" sensors="true"/>'
+            "<LongitudinalAction><SpeedAction>\n                  " + LEAD_ACTION,
+        ),
+        "<VisibilityAction",
+        unsupported("VisibilityAction"),
+    ),
+    (
+        "unsupported-condition",
+        sub(SIM_TIME, '<TimeOfDayCondition rule="greaterThan" dateTime="2026-01-01T10:00:00"/>'),
+        "<TimeOfDayCondition",
+        unsupported("TimeOfDayCondition"),
+    ),
+    (
+        "unsupported-position",
+        sub(EGO_LANE, '<GeoPosition latitude="48.1" longitude="11.5"/>'),
+        "<GeoPosition",
+        unsupported("GeoPosition"),
+    ),
+    (
+        "unsupported-entity",
+        sub(
+            '<Vehicle name="lead" vehicleCategory="car">',
+            '<Pedestrian name="walker" mass="80" pedestrianCategory="pedestrian">',
+        ).replace(
+            "<Properties/>\n      </Vehicle>\n    </ScenarioObject>\n  </Entities>",
+            "<Properties/>\n      </Pedestrian>\n    </ScenarioObject>\n  </Entities>",
+        ),
+        "<Pedestrian",
+        unsupported("Pedestrian"),
+    ),
+    (
+        "typo-element",
+        sub(
+            "<LongitudinalAction><SpeedAction>\n                  " + LEAD_ACTION,
+            "<LongitudinalAction><SpeedActon>\n                  " + LEAD_ACTION,
+        ).replace(
+            "</SpeedAction></LongitudinalAction></PrivateAction>", "</SpeedActon></LongitudinalAction></PrivateAction>"
+        ),
+        "<SpeedActon",
+        unsupported("SpeedActon"),
+    ),
+    (
+        "global-action",
+        sub("<Actions>\n", "<Actions>\n        <GlobalAction><EnvironmentAction/></GlobalAction>\n"),
+        "<GlobalAction",
+        unsupported("GlobalAction"),
+    ),
+    (
+        "distribution",
+        sub("<CatalogLocations/>", "<ParameterValueDistribution/>\n  <CatalogLocations/>"),
+        "<ParameterValueDistribution",
+        unsupported("ParameterValueDistribution"),
+    ),
+    (
+        "bad-shape",
+        sub(LEAD_ACTION, LEAD_ACTION.replace("linear", "quadratic")),
+        "quadratic",
+        "bad value for dynamicsShape in <SpeedActionDynamics>: 'quadratic' (allowed: step, linear, cubic, sinusoidal)",
+    ),
+    (
+        "bad-rule",
+        sub(SIM_TIME, SIM_TIME.replace("greaterOrEqual", "bigger")),
+        '"bigger"',
+        "bad value for rule in <SimulationTimeCondition>: 'bigger' (allowed: greaterThan, lessThan, equalTo, "
+        "greaterOrEqual, lessOrEqual, notEqualTo)",
+    ),
+    (
+        "bad-edge",
+        sub(
+            '<Condition name="BrakeTime" delay="0" conditionEdge="none">',
+            '<Condition name="BrakeTime" delay="0" conditionEdge="up">',
+        ),
+        '"up"',
+        "bad value for conditionEdge in <Condition>: 'up' (allowed: rising, falling, risingOrFalling, none)",
+    ),
+    (
+        "bad-priority",
+        sub('priority="overwrite"', 'priority="sometimes"'),
+        '"sometimes"',
+        "bad value for priority in <Event>: 'sometimes' (allowed: overwrite, override, skip, parallel)",
+    ),
+    (
+        "negative-delay",
+        sub('<Condition name="BrakeTime" delay="0"', '<Condition name="BrakeTime" delay="-1"'),
+        'delay="-1"',
+        "bad value for delay in <Condition>: -1 (expected >= 0)",
+    ),
+    (
+        "missing-attribute",
+        sub(EGO_LANE, '<LanePosition roadId="0" laneId="-2" offset="0"/>'),
+        '<LanePosition roadId="0" laneId="-2" offset="0"/>',
+        "<LanePosition> needs attribute s",
+    ),
+    (
+        "no-teleport",
+        sub(BASE[BASE.index('        <Private entityRef="Lead">') : BASE.index("      </Actions>")], ""),
+        '<ScenarioObject name="Lead">',
+        "entity 'Lead' has no TeleportAction in <Init> (ego needs every entity's start position)",
+    ),
+    (
+        "element-ref",
+        sub(
+            SIM_TIME,
+            '<StoryboardElementStateCondition storyboardElementType="event" '
+            'storyboardElementRef="Nope" state="endTransition"/>',
+        ),
+        '<Condition name="BrakeTime"',
+        "unknown storyboard element 'Nope' (elements: LeadBrakeAction, LeadBrakeEvent, LeadManeuver, LeadGroup, "
+        "Brake, LeadBrakes)",
+    ),
+    (
+        "lane-change-in-init",
+        sub(
+            EGO_SPEED_INIT,
+            EGO_SPEED_INIT.replace(
+                "          <PrivateAction>\n",
+                "          <PrivateAction>" + LANE_CHANGE + "</PrivateAction>\n          <PrivateAction>\n",
+                1,
+            ),
+        ),
+        "<LateralAction><LaneChangeAction",
+        f"<LateralAction> in <Init> is not supported by ego (Init takes TeleportAction and SpeedAction with "
+        f"AbsoluteTargetSpeed; see {DOCS})",
+    ),
+    (
+        "two-actions-in-one",
+        sub(
+            EGO_SPEED_INIT,
+            EGO_SPEED_INIT.replace(
+                "<LongitudinalAction><SpeedAction>", "<TeleportAction/><LongitudinalAction><SpeedAction>", 1
+            ),
+        ),
+        '<PrivateAction>\n            <LongitudinalAction><SpeedAction>\n              <SpeedActionDynamics dynamicsShape="step" value="0" dynamicsDimension="time"/>\n              <SpeedActionTarget><AbsoluteTargetSpeed value="$EgoSpeed"/>'.replace(
+            "<LongitudinalAction>", "<TeleportAction/><LongitudinalAction>"
+        ),
+        "<PrivateAction> needs exactly one child element (found 2)",
+    ),
+    (
+        "lane-beyond-road",
+        sub(EGO_LANE, EGO_LANE.replace('laneId="-2"', 'laneId="-4"')),
+        'laneId="-4"',
+        "road '0' has 3 lanes on that side at s = 297.75 (lane ids -1, -2, -3)",
+    ),
+    (
+        "unknown-road",
+        sub(EGO_LANE, EGO_LANE.replace('roadId="0"', 'roadId="7"')),
+        'roadId="7"',
+        "unknown road '7' (roads: 0)",
+    ),
+    (
+        "bad-boolean",
+        sub(
+            'name="traffic_density" parameterType="double" value="10"',
+            'name="aeb" parameterType="boolean" value="maybe"',
+        ),
+        '"maybe"',
+        "bad value for parameter 'aeb': 'maybe' (expected true or false)",
+    ),
+    (
+        "missing-catalog",
+        sub(
+            '<Vehicle name="lead" vehicleCategory="car">',
+            '<CatalogReference catalogName="Cars" entryName="car"/><Vehicle name="lead" vehicleCategory="car">',
+        ),
+        '<ScenarioObject name="Lead">',
+        "<ScenarioObject> needs exactly one child element (found 2)",
+    ),
+    (
+        "catalog-without-location",
+        sub(
+            BASE[BASE.index('      <Vehicle name="lead"') : BASE.index("    </ScenarioObject>\n  </Entities>")],
+            '      <CatalogReference catalogName="Cars" entryName="car"/>\n',
+        ),
+        '<CatalogReference catalogName="Cars"',
+        "<CatalogReference> to 'Cars' but no <VehicleCatalog> in <CatalogLocations>",
+    ),
+    (
+        "ego-teleport",
+        sub('<EntityRef entityRef="Lead"/></Actors>', '<EntityRef entityRef="Ego"/></Actors>').replace(
+            BASE[
+                BASE.index("<LongitudinalAction><SpeedAction>\n                  " + LEAD_ACTION) : BASE.index(
+                    "</SpeedAction></LongitudinalAction></PrivateAction>\n              </Action>"
+                )
+            ]
+            + "</SpeedAction></LongitudinalAction>",
+            '<TeleportAction><Position><LanePosition roadId="0" laneId="-1" s="400"/></Position></TeleportAction>',
+        ),
+        None,
+        None,
+    ),
 ]
 
 
@@ -195,8 +392,16 @@ def sg_scenario(condition=None, action=None, extra=None, actor="Lead", speed="$E
     params.add_parameter(xosc.Parameter("EgoSpeed", xosc.ParameterType.double, "20"))
     road = xosc.RoadNetwork(roadfile="straight3.xodr")
     bb = xosc.BoundingBox(1.8, 4.5, 1.5, 0, 0, 0.75)
-    car = xosc.Vehicle("car", xosc.VehicleCategory.car, bb, xosc.Axle(0.5, 0.6, 1.5, 2.7, 0.3),
-                       xosc.Axle(0, 0.6, 1.5, 0, 0.3), 55, 2.6, 4.5)
+    car = xosc.Vehicle(
+        "car",
+        xosc.VehicleCategory.car,
+        bb,
+        xosc.Axle(0.5, 0.6, 1.5, 2.7, 0.3),
+        xosc.Axle(0, 0.6, 1.5, 0, 0.3),
+        55,
+        2.6,
+        4.5,
+    )
     ents = xosc.Entities()
     ents.add_scenario_object("Ego", car)
     ents.add_scenario_object("Lead", car)
@@ -210,19 +415,28 @@ def sg_scenario(condition=None, action=None, extra=None, actor="Lead", speed="$E
     init.add_init_action("Lead", xosc.AbsoluteSpeedAction(20, step))
     if extra is not None:
         init.add_init_action("Other", xosc.TeleportAction(xosc.LanePosition(200, 0, -1, "0")))
-    cond = condition or xosc.ValueTrigger("T", 0, xosc.ConditionEdge.none,
-                                          xosc.SimulationTimeCondition(2, xosc.Rule.greaterThan))
+    cond = condition or xosc.ValueTrigger(
+        "T", 0, xosc.ConditionEdge.none, xosc.SimulationTimeCondition(2, xosc.Rule.greaterThan)
+    )
     event = xosc.Event("Brake", xosc.Priority.override)
-    event.add_action("BrakeAction", action or xosc.AbsoluteSpeedAction(
-        5, xosc.TransitionDynamics(xosc.DynamicsShapes.linear, xosc.DynamicsDimension.rate, 6)))
+    event.add_action(
+        "BrakeAction",
+        action
+        or xosc.AbsoluteSpeedAction(
+            5, xosc.TransitionDynamics(xosc.DynamicsShapes.linear, xosc.DynamicsDimension.rate, 6)
+        ),
+    )
     event.add_trigger(cond)
     man = xosc.Maneuver("M")
     man.add_event(event)
-    sb = xosc.StoryBoard(init, xosc.ValueTrigger("stop", 0, xosc.ConditionEdge.none,
-                                                 xosc.SimulationTimeCondition(20, xosc.Rule.greaterThan), "stop"))
+    sb = xosc.StoryBoard(
+        init,
+        xosc.ValueTrigger(
+            "stop", 0, xosc.ConditionEdge.none, xosc.SimulationTimeCondition(20, xosc.Rule.greaterThan), "stop"
+        ),
+    )
     sb.add_maneuver(man, actor)
     return xosc.Scenario("sg", "ego tests", params, ents, sb, road, xosc.Catalog(), osc_minor_version=2)
-
 
 
 def _sg_cases():
@@ -236,34 +450,89 @@ def _sg_cases():
 
     un = unsupported
     return [
-        ("sg-acceleration", lambda: base(entity_trigger(xosc.AccelerationCondition(2, xosc.Rule.greaterThan))),
-         "<AccelerationCondition", un("AccelerationCondition")),
-        ("sg-standstill", lambda: base(entity_trigger(xosc.StandStillCondition(1))), "<StandStillCondition",
-         un("StandStillCondition")),
-        ("sg-collision", lambda: base(entity_trigger(xosc.CollisionCondition("Lead"))), "<CollisionCondition",
-         un("CollisionCondition")),
-        ("sg-end-of-road", lambda: base(entity_trigger(xosc.EndOfRoadCondition(1))), "<EndOfRoadCondition",
-         un("EndOfRoadCondition")),
-        ("sg-offroad", lambda: base(entity_trigger(xosc.OffroadCondition(1))), "<OffroadCondition",
-         un("OffroadCondition")),
-        ("sg-clearance", lambda: base(entity_trigger(xosc.RelativeClearanceCondition(1, 5, 5))),
-         "<RelativeClearanceCondition", un("RelativeClearanceCondition")),
-        ("sg-longitudinal-distance", lambda: base(action=xosc.LongitudinalDistanceAction("Ego", distance=10)),
-         "<LongitudinalDistanceAction", un("LongitudinalDistanceAction")),
-        ("sg-visibility", lambda: base(action=xosc.VisibilityAction(True, True, True)), "<VisibilityAction",
-         un("VisibilityAction")),
-        ("sg-lateral-distance", lambda: base(action=xosc.LateralDistanceAction("Ego", 2)),
-         "<LateralDistanceAction", un("LateralDistanceAction")),
-        ("sg-pedestrian", lambda: base(extra=xosc.Pedestrian("p", 80, xosc.PedestrianCategory.pedestrian,
-                                                            xosc.BoundingBox(0.5, 0.5, 1.8, 0, 0, 0.9))),
-         "<Pedestrian", un("Pedestrian")),
-        ("sg-relative-world", lambda: base(position=xosc.RelativeWorldPosition("Lead", -30, 0, 0)),
-         "<RelativeWorldPosition", un("RelativeWorldPosition")),
+        (
+            "sg-acceleration",
+            lambda: base(entity_trigger(xosc.AccelerationCondition(2, xosc.Rule.greaterThan))),
+            "<AccelerationCondition",
+            un("AccelerationCondition"),
+        ),
+        (
+            "sg-standstill",
+            lambda: base(entity_trigger(xosc.StandStillCondition(1))),
+            "<StandStillCondition",
+            un("StandStillCondition"),
+        ),
+        (
+            "sg-collision",
+            lambda: base(entity_trigger(xosc.CollisionCondition("Lead"))),
+            "<CollisionCondition",
+            un("CollisionCondition"),
+        ),
+        (
+            "sg-end-of-road",
+            lambda: base(entity_trigger(xosc.EndOfRoadCondition(1))),
+            "<EndOfRoadCondition",
+            un("EndOfRoadCondition"),
+        ),
+        (
+            "sg-offroad",
+            lambda: base(entity_trigger(xosc.OffroadCondition(1))),
+            "<OffroadCondition",
+            un("OffroadCondition"),
+        ),
+        (
+            "sg-clearance",
+            lambda: base(entity_trigger(xosc.RelativeClearanceCondition(1, 5, 5))),
+            "<RelativeClearanceCondition",
+            un("RelativeClearanceCondition"),
+        ),
+        (
+            "sg-longitudinal-distance",
+            lambda: base(action=xosc.LongitudinalDistanceAction("Ego", distance=10)),
+            "<LongitudinalDistanceAction",
+            un("LongitudinalDistanceAction"),
+        ),
+        (
+            "sg-visibility",
+            lambda: base(action=xosc.VisibilityAction(True, True, True)),
+            "<VisibilityAction",
+            un("VisibilityAction"),
+        ),
+        (
+            "sg-lateral-distance",
+            lambda: base(action=xosc.LateralDistanceAction("Ego", 2)),
+            "<LateralDistanceAction",
+            un("LateralDistanceAction"),
+        ),
+        (
+            "sg-pedestrian",
+            lambda: base(
+                extra=xosc.Pedestrian(
+                    "p", 80, xosc.PedestrianCategory.pedestrian, xosc.BoundingBox(0.5, 0.5, 1.8, 0, 0, 0.9)
+                )
+            ),
+            "<Pedestrian",
+            un("Pedestrian"),
+        ),
+        (
+            "sg-relative-world",
+            lambda: base(position=xosc.RelativeWorldPosition("Lead", -30, 0, 0)),
+            "<RelativeWorldPosition",
+            un("RelativeWorldPosition"),
+        ),
         ("sg-geo", lambda: base(position=xosc.GeoPosition(48.1, 11.5)), "<GeoPosition", un("GeoPosition")),
-        ("sg-unknown-actor", lambda: base(actor="Nobody"), 'entityRef="Nobody"',
-         "unknown entity 'Nobody' in <EntityRef> (entities: Ego, Lead)"),
-        ("sg-undeclared", lambda: base(speed="$Fast"), 'value="$Fast"',
-         "parameter '$Fast' is not declared (declared: EgoSpeed)"),
+        (
+            "sg-unknown-actor",
+            lambda: base(actor="Nobody"),
+            'entityRef="Nobody"',
+            "unknown entity 'Nobody' in <EntityRef> (entities: Ego, Lead)",
+        ),
+        (
+            "sg-undeclared",
+            lambda: base(speed="$Fast"),
+            'value="$Fast"',
+            "parameter '$Fast' is not declared (declared: EgoSpeed)",
+        ),
     ]
 
 
@@ -311,9 +580,10 @@ def test_hand_written(case, tmp_path, capsys):
     if case[0] == "missing-road":
         message = f"road file 'nowhere.xodr' not found ({tmp_path / 'nowhere.xodr'})"
     if case[0] == "ego-teleport":
-        marker = "<TeleportAction><Position><LanePosition roadId=\"0\" laneId=\"-1\" s=\"400\""
-        message = ("<TeleportAction> on the ego (Ego) is not supported by ego: the ego moves by its own model "
-                   f"(see {DOCS})")
+        marker = '<TeleportAction><Position><LanePosition roadId="0" laneId="-1" s="400"'
+        message = (
+            f"<TeleportAction> on the ego (Ego) is not supported by ego: the ego moves by its own model (see {DOCS})"
+        )
     _check(path, text, marker, message, tmp_path, capsys)
 
 
@@ -349,8 +619,9 @@ def test_bad_ego_choice(tmp_path, capsys):
     assert main(["run", str(path), "-c", "pid", "--ego", "Truck"]) == 2
     assert capsys.readouterr().err == "ego: error: bad value for --ego: 'Truck' (entities: Ego, Lead)\n"
     assert main(["run", "emergency-brake", "-c", "pid", "--ego", "Ego"]) == 2
-    assert capsys.readouterr().err == ("ego: error: --ego goes with an OpenSCENARIO file (.xosc), not "
-                                       "'emergency-brake'\n")
+    assert capsys.readouterr().err == (
+        "ego: error: --ego goes with an OpenSCENARIO file (.xosc), not 'emergency-brake'\n"
+    )
 
 
 def test_set_undeclared_parameter(tmp_path, capsys):
@@ -366,6 +637,7 @@ def test_bad_road_conversion(tmp_path, capsys):
     (tmp_path / "straight3.xodr").write_text("<OpenDRIVE><road id='0' length='-5'></OpenDRIVE>")
     assert main(["run", str(path), "-c", "pid"]) == 2
     err = capsys.readouterr().err
-    assert err.startswith(f"ego: error: {tmp_path / 'straight3.xodr'}: netconvert cannot convert this "
-                          "OpenDRIVE file: "), err
+    assert err.startswith(
+        f"ego: error: {tmp_path / 'straight3.xodr'}: netconvert cannot convert this OpenDRIVE file: "
+    ), err
     assert err.count("\n") == 1

@@ -42,10 +42,22 @@ def test_emergency_brake_file_equals_builtin(controller, fuzzy_ready):
 
 def test_emergency_brake_file_equals_builtin_with_overrides():
     """The same with ego's parameters and the file's mirrors of the built-in's set."""
-    builtin = run(RunSpec("emergency-brake", "pid", seed=3, overrides={
-        "lead_gap": 25.0, "lead_decel": 8.0, "traffic_density": 15.0, "ttc_threshold": 2.5})).metrics
-    from_file = run(RunSpec(str(XOSC / "emergency_brake.xosc"), "pid", seed=3, overrides={
-        "LeadGap": 25.0, "LeadDecel": 8.0, "traffic_density": 15.0, "ttc_threshold": 2.5})).metrics
+    builtin = run(
+        RunSpec(
+            "emergency-brake",
+            "pid",
+            seed=3,
+            overrides={"lead_gap": 25.0, "lead_decel": 8.0, "traffic_density": 15.0, "ttc_threshold": 2.5},
+        )
+    ).metrics
+    from_file = run(
+        RunSpec(
+            str(XOSC / "emergency_brake.xosc"),
+            "pid",
+            seed=3,
+            overrides={"LeadGap": 25.0, "LeadDecel": 8.0, "traffic_density": 15.0, "ttc_threshold": 2.5},
+        )
+    ).metrics
     _same(builtin, from_file)
 
 

@@ -10,36 +10,49 @@ from ego.openscenario.expressions import ExpressionError, evaluate, resolve
 VALUES = {"a": 10.0, "b": 4, "speed": 13.889, "name": "car", "flag": True}
 
 
-@pytest.mark.parametrize("expr,value", [
-    ("1 + 2 * 3", 7.0),
-    ("(1 + 2) * 3", 9.0),
-    ("$a - $b - 1", 5.0),            # left to right
-    ("$a / $b / 2", 1.25),
-    ("-$a + 3", -7.0),
-    ("-(-$b)", 4.0),
-    ("2 * -3", -6.0),
-    ("$speed * 3.6", 13.889 * 3.6),
-    ("1.5e2 / 3", 50.0),
-    (".5 + .25", 0.75),
-    ("((($a)))", 10.0),
-    ("$a+$b*2-(3-1)/2", 17.0),
-], ids=lambda x: str(x))
+@pytest.mark.parametrize(
+    "expr,value",
+    [
+        ("1 + 2 * 3", 7.0),
+        ("(1 + 2) * 3", 9.0),
+        ("$a - $b - 1", 5.0),  # left to right
+        ("$a / $b / 2", 1.25),
+        ("-$a + 3", -7.0),
+        ("-(-$b)", 4.0),
+        ("2 * -3", -6.0),
+        ("$speed * 3.6", 13.889 * 3.6),
+        ("1.5e2 / 3", 50.0),
+        (".5 + .25", 0.75),
+        ("((($a)))", 10.0),
+        ("$a+$b*2-(3-1)/2", 17.0),
+    ],
+    ids=lambda x: str(x),
+)
 def test_evaluates(expr, value):
     assert evaluate(expr, VALUES) == pytest.approx(value, abs=1e-12)
 
 
-@pytest.mark.parametrize("expr,message", [
-    ("", "empty expression '${}'"),
-    ("1 +", "unexpected the end in expression '${1 +}' (expected a number, a $parameter or '(')"),
-    ("(1 + 2", "missing ')' in expression '${(1 + 2}'"),
-    ("1 + 2)", "unexpected ')' in expression '${1 + 2)}'"),
-    ("2 ** 3", "unexpected '*' in expression '${2 ** 3}' (expected a number, a $parameter or '(')"),
-    ("sqrt(4)", "unexpected 's' in expression '${sqrt(4)}' (allowed: numbers, $parameters, + - * / and parentheses)"),
-    ("$nope + 1", "parameter '$nope' in expression '${$nope + 1}' is not declared (declared: a, b, speed, name, flag)"),
-    ("$name * 2", "parameter '$name' = 'car' in expression '${$name * 2}' is not a number"),
-    ("$flag + 1", "parameter '$flag' in expression '${$flag + 1}' is a boolean, not a number"),
-    ("$a / (2 - 2)", "division by zero in expression '${$a / (2 - 2)}'"),
-])
+@pytest.mark.parametrize(
+    "expr,message",
+    [
+        ("", "empty expression '${}'"),
+        ("1 +", "unexpected the end in expression '${1 +}' (expected a number, a $parameter or '(')"),
+        ("(1 + 2", "missing ')' in expression '${(1 + 2}'"),
+        ("1 + 2)", "unexpected ')' in expression '${1 + 2)}'"),
+        ("2 ** 3", "unexpected '*' in expression '${2 ** 3}' (expected a number, a $parameter or '(')"),
+        (
+            "sqrt(4)",
+            "unexpected 's' in expression '${sqrt(4)}' (allowed: numbers, $parameters, + - * / and parentheses)",
+        ),
+        (
+            "$nope + 1",
+            "parameter '$nope' in expression '${$nope + 1}' is not declared (declared: a, b, speed, name, flag)",
+        ),
+        ("$name * 2", "parameter '$name' = 'car' in expression '${$name * 2}' is not a number"),
+        ("$flag + 1", "parameter '$flag' in expression '${$flag + 1}' is a boolean, not a number"),
+        ("$a / (2 - 2)", "division by zero in expression '${$a / (2 - 2)}'"),
+    ],
+)
 def test_refuses(expr, message):
     with pytest.raises(ExpressionError) as err:
         evaluate(expr, VALUES)
@@ -47,8 +60,8 @@ def test_refuses(expr, message):
 
 
 def test_resolve():
-    assert resolve("12.5", VALUES) == "12.5"          # a literal is the attribute itself
-    assert resolve("$name", VALUES) == "car"          # a whole-value reference
+    assert resolve("12.5", VALUES) == "12.5"  # a literal is the attribute itself
+    assert resolve("$name", VALUES) == "car"  # a whole-value reference
     assert resolve("${$a * 2}", VALUES) == 20.0
     with pytest.raises(ExpressionError, match=r"parameter '\$x' is not declared"):
         resolve("$x", VALUES)

@@ -72,8 +72,9 @@ def test_arc_curvature():
     poly = LanePolyline(refine_shape(edge.lanes[0].shape))
     start, length = 100.0, 0.5 * math.pi * 15.0
     assert poly.length == pytest.approx(200.0 + length, abs=0.05)
-    err = _curvature_error(poly, lambda s: np.where((s > start) & (s < start + length), 1.0 / 15.0, 0.0),
-                           (start, start + length))
+    err = _curvature_error(
+        poly, lambda s: np.where((s > start) & (s < start + length), 1.0 / 15.0, 0.0), (start, start + length)
+    )
     assert err < 1e-3, err
 
 
@@ -87,8 +88,13 @@ def test_clothoid_curvature(tmp_path):
     c, off = make_roads.CLOTHOID_END_CURVATURE / make_roads.CLOTHOID_LENGTH, 1.75
 
     def lane_s(s):  # the lane's arc length at reference-line s
-        return np.where(s < 50, s, np.where(s < 150, s + off * c * (s - 50) ** 2 / 2,
-                                            150 + off * c * 100 ** 2 / 2 + (s - 150) * (1 + off * 0.02)))
+        return np.where(
+            s < 50,
+            s,
+            np.where(
+                s < 150, s + off * c * (s - 50) ** 2 / 2, 150 + off * c * 100**2 / 2 + (s - 150) * (1 + off * 0.02)
+            ),
+        )
 
     s_ref = np.linspace(0.0, 200.0, 20001)
     k_ref = np.where(s_ref < 50, 0.0, np.where(s_ref < 150, (s_ref - 50) * c, 0.02))

@@ -46,47 +46,148 @@ def _pos(s: float, lane: int = -1) -> str:
 #: (event, trigger, storyboard time it must fire at, the hand computation)
 CONDITIONS = [
     ("SimulationTime", trigger([sim_time(1.05)]), 1.1, "t >= 1.05"),
-    ("TraveledDistance", trigger([entity("A", '<TraveledDistanceCondition value="26.25"/>')]), 1.1,
-     "2.5 k >= 26.25"),
-    ("ReachPosition", trigger([entity("A", f'<ReachPositionCondition tolerance="1">{_pos(130)}'
-                                           "</ReachPositionCondition>")]), 1.2, "|100 + 2.5 k - 130| <= 1"),
-    ("Distance", trigger([entity("A", '<DistanceCondition value="10" freespace="false" rule="lessThan">'
-                                      '<Position><WorldPosition x="150" y="3.5"/></Position></DistanceCondition>')]),
-     1.7, "150 - (100 + 2.5 k) < 10"),
-    ("DistanceFreespace", trigger([entity("A", '<DistanceCondition value="10" freespace="true" rule="lessThan">'
-                                               '<Position><WorldPosition x="150" y="3.5"/></Position>'
-                                               "</DistanceCondition>")]), 1.6, "150 - (100 + 2.5 k + 2.25) < 10"),
-    ("RelativeDistance", trigger([entity("A", '<RelativeDistanceCondition entityRef="B" relativeDistanceType='
-                                              '"longitudinal" value="79.5" freespace="false" rule="lessThan"/>')]),
-     2.1, "100 - k < 79.5"),
-    ("RelativeDistanceFreespace", trigger([entity("A", '<RelativeDistanceCondition entityRef="B" '
-                                                       'relativeDistanceType="longitudinal" value="79.5" '
-                                                       'freespace="true" rule="lessThan"/>')]), 1.7,
-     "100 - k - 4.5 < 79.5: k > 16"),
-    ("TimeHeadway", trigger([entity("A", '<TimeHeadwayCondition entityRef="B" value="3.5" freespace="false" '
-                                         'rule="lessThan"/>')]), 1.3, "(100 - k) / 25 < 3.5"),
-    ("TimeHeadwayFreespace", trigger([entity("A", '<TimeHeadwayCondition entityRef="B" value="3.5" '
-                                                  'freespace="true" rule="lessThan"/>')]), 0.9,
-     "(95.5 - k) / 25 < 3.5"),
-    ("TimeToCollision", trigger([entity("A", '<TimeToCollisionCondition value="9.45" freespace="false" '
-                                             'rule="lessThan"><TimeToCollisionConditionTarget><EntityRef '
-                                             'entityRef="B"/></TimeToCollisionConditionTarget>'
-                                             "</TimeToCollisionCondition>")]), 0.6, "(100 - k) / 10 < 9.45"),
-    ("TimeToCollisionPosition", trigger([entity("A", '<TimeToCollisionCondition value="3.05" freespace="false" '
-                                                     'rule="lessThan"><TimeToCollisionConditionTarget>'
-                                                     f"{_pos(180)}</TimeToCollisionConditionTarget>"
-                                                     "</TimeToCollisionCondition>")]), 0.2,
-     "(180 - 100 - 2.5 k) / 25 < 3.05: k > 1.5"),
+    ("TraveledDistance", trigger([entity("A", '<TraveledDistanceCondition value="26.25"/>')]), 1.1, "2.5 k >= 26.25"),
+    (
+        "ReachPosition",
+        trigger([entity("A", f'<ReachPositionCondition tolerance="1">{_pos(130)}</ReachPositionCondition>')]),
+        1.2,
+        "|100 + 2.5 k - 130| <= 1",
+    ),
+    (
+        "Distance",
+        trigger(
+            [
+                entity(
+                    "A",
+                    '<DistanceCondition value="10" freespace="false" rule="lessThan">'
+                    '<Position><WorldPosition x="150" y="3.5"/></Position></DistanceCondition>',
+                )
+            ]
+        ),
+        1.7,
+        "150 - (100 + 2.5 k) < 10",
+    ),
+    (
+        "DistanceFreespace",
+        trigger(
+            [
+                entity(
+                    "A",
+                    '<DistanceCondition value="10" freespace="true" rule="lessThan">'
+                    '<Position><WorldPosition x="150" y="3.5"/></Position>'
+                    "</DistanceCondition>",
+                )
+            ]
+        ),
+        1.6,
+        "150 - (100 + 2.5 k + 2.25) < 10",
+    ),
+    (
+        "RelativeDistance",
+        trigger(
+            [
+                entity(
+                    "A",
+                    '<RelativeDistanceCondition entityRef="B" relativeDistanceType='
+                    '"longitudinal" value="79.5" freespace="false" rule="lessThan"/>',
+                )
+            ]
+        ),
+        2.1,
+        "100 - k < 79.5",
+    ),
+    (
+        "RelativeDistanceFreespace",
+        trigger(
+            [
+                entity(
+                    "A",
+                    '<RelativeDistanceCondition entityRef="B" '
+                    'relativeDistanceType="longitudinal" value="79.5" '
+                    'freespace="true" rule="lessThan"/>',
+                )
+            ]
+        ),
+        1.7,
+        "100 - k - 4.5 < 79.5: k > 16",
+    ),
+    (
+        "TimeHeadway",
+        trigger([entity("A", '<TimeHeadwayCondition entityRef="B" value="3.5" freespace="false" rule="lessThan"/>')]),
+        1.3,
+        "(100 - k) / 25 < 3.5",
+    ),
+    (
+        "TimeHeadwayFreespace",
+        trigger([entity("A", '<TimeHeadwayCondition entityRef="B" value="3.5" freespace="true" rule="lessThan"/>')]),
+        0.9,
+        "(95.5 - k) / 25 < 3.5",
+    ),
+    (
+        "TimeToCollision",
+        trigger(
+            [
+                entity(
+                    "A",
+                    '<TimeToCollisionCondition value="9.45" freespace="false" '
+                    'rule="lessThan"><TimeToCollisionConditionTarget><EntityRef '
+                    'entityRef="B"/></TimeToCollisionConditionTarget>'
+                    "</TimeToCollisionCondition>",
+                )
+            ]
+        ),
+        0.6,
+        "(100 - k) / 10 < 9.45",
+    ),
+    (
+        "TimeToCollisionPosition",
+        trigger(
+            [
+                entity(
+                    "A",
+                    '<TimeToCollisionCondition value="3.05" freespace="false" '
+                    'rule="lessThan"><TimeToCollisionConditionTarget>'
+                    f"{_pos(180)}</TimeToCollisionConditionTarget>"
+                    "</TimeToCollisionCondition>",
+                )
+            ]
+        ),
+        0.2,
+        "(180 - 100 - 2.5 k) / 25 < 3.05: k > 1.5",
+    ),
     ("Speed", trigger([entity("B", '<SpeedCondition value="15.5" rule="greaterThan"/>')]), None, "never: 15"),
-    ("RelativeSpeed", trigger([entity("A", '<RelativeSpeedCondition entityRef="B" value="9.5" '
-                                           'rule="greaterThan"/>')]), 0.0, "25 - 15 > 9.5 from the start"),
-    ("Parameter", trigger([('<Condition name="p" delay="0" conditionEdge="none"><ByValueCondition>'
-                            '<ParameterCondition parameterRef="Flag" value="1" rule="equalTo"/>'
-                            "</ByValueCondition></Condition>")]), 0.0, "Flag = 1"),
-    ("AllOfTwo", trigger([entity("A,B", '<SpeedCondition value="14" rule="greaterThan"/>', rule="all")]), 0.0,
-     "25 > 14 and 15 > 14"),
-    ("AllFails", trigger([entity("A,B", '<SpeedCondition value="20" rule="greaterThan"/>', rule="all")]), None,
-     "15 > 20 never"),
+    (
+        "RelativeSpeed",
+        trigger([entity("A", '<RelativeSpeedCondition entityRef="B" value="9.5" rule="greaterThan"/>')]),
+        0.0,
+        "25 - 15 > 9.5 from the start",
+    ),
+    (
+        "Parameter",
+        trigger(
+            [
+                (
+                    '<Condition name="p" delay="0" conditionEdge="none"><ByValueCondition>'
+                    '<ParameterCondition parameterRef="Flag" value="1" rule="equalTo"/>'
+                    "</ByValueCondition></Condition>"
+                )
+            ]
+        ),
+        0.0,
+        "Flag = 1",
+    ),
+    (
+        "AllOfTwo",
+        trigger([entity("A,B", '<SpeedCondition value="14" rule="greaterThan"/>', rule="all")]),
+        0.0,
+        "25 > 14 and 15 > 14",
+    ),
+    (
+        "AllFails",
+        trigger([entity("A,B", '<SpeedCondition value="20" rule="greaterThan"/>', rule="all")]),
+        None,
+        "15 > 20 never",
+    ),
     # edges and delays
     ("Rising", trigger([sim_time(1.05, edge="rising")]), 1.1, "false at 1.0, true at 1.1"),
     ("Falling", trigger([sim_time(1.05, rule="lessThan", edge="falling")]), 1.1, "true at 1.0, false at 1.1"),
@@ -119,9 +220,15 @@ def test_condition_fires_at_the_hand_computed_step(condition_run, name, expected
 
 def test_parameter_condition_follows_set(tmp_path):
     params = '<ParameterDeclaration name="Flag" parameterType="integer" value="1"/>'
-    cond = trigger([('<Condition name="p" delay="0" conditionEdge="none"><ByValueCondition>'
-                     '<ParameterCondition parameterRef="Flag" value="1" rule="equalTo"/></ByValueCondition>'
-                     "</Condition>")])
+    cond = trigger(
+        [
+            (
+                '<Condition name="p" delay="0" conditionEdge="none"><ByValueCondition>'
+                '<ParameterCondition parameterRef="Flag" value="1" rule="equalTo"/></ByValueCondition>'
+                "</Condition>"
+            )
+        ]
+    )
     sc = run_scene(scene(tmp_path, [event("P", "A", speed(25), cond)], params), 1.0, Flag=0)
     assert starts(sc, "P") == []
 
@@ -129,16 +236,24 @@ def test_parameter_condition_follows_set(tmp_path):
 def test_storyboard_element_states(tmp_path):
     """A step action completes at its first step, its event at the next; a state condition sees
     a transition one step later."""
+
     def state(ref: str, st: str, kind: str = "event") -> str:
-        return trigger([f'<Condition name="s" delay="0" conditionEdge="none"><ByValueCondition>'
-                        f'<StoryboardElementStateCondition storyboardElementType="{kind}" '
-                        f'storyboardElementRef="{ref}" state="{st}"/></ByValueCondition></Condition>'])
-    evs = [event("First", "A", speed(25), trigger([sim_time(0.95)])),
-           event("AfterStart", "B", speed(15), state("First", "startTransition")),
-           event("WhileRunning", "B", speed(15), state("First", "runningState")),
-           event("AfterEnd", "C", speed(15), state("First", "endTransition")),
-           event("WhenComplete", "C", speed(15), state("First", "completeState")),
-           event("ActionDone", "C", speed(15), state("FirstAction", "completeState", "action"))]
+        return trigger(
+            [
+                f'<Condition name="s" delay="0" conditionEdge="none"><ByValueCondition>'
+                f'<StoryboardElementStateCondition storyboardElementType="{kind}" '
+                f'storyboardElementRef="{ref}" state="{st}"/></ByValueCondition></Condition>'
+            ]
+        )
+
+    evs = [
+        event("First", "A", speed(25), trigger([sim_time(0.95)])),
+        event("AfterStart", "B", speed(15), state("First", "startTransition")),
+        event("WhileRunning", "B", speed(15), state("First", "runningState")),
+        event("AfterEnd", "C", speed(15), state("First", "endTransition")),
+        event("WhenComplete", "C", speed(15), state("First", "completeState")),
+        event("ActionDone", "C", speed(15), state("FirstAction", "completeState", "action")),
+    ]
     sc = run_scene(scene(tmp_path, evs), 2.0)
     assert starts(sc, "First") == [pytest.approx(1.0)]
     assert starts(sc, "AfterStart") == [pytest.approx(1.1)]
@@ -190,8 +305,7 @@ SPEED_CASES = [  # shape, dimension, value, target: C from 15 m/s starting at t 
 
 @pytest.mark.parametrize("shape,dim,value,target", SPEED_CASES, ids=[f"{c[0]}-{c[1]}-{c[3]:g}" for c in SPEED_CASES])
 def test_speed_follows_closed_form(tmp_path, shape, dim, value, target):
-    sc = run_scene(scene(tmp_path, [event("S", "C", speed(target, shape, dim, value), trigger([sim_time(0.95)]))]),
-                   6.0)
+    sc = run_scene(scene(tmp_path, [event("S", "C", speed(target, shape, dim, value), trigger([sim_time(0.95)]))]), 6.0)
     t0, v0 = 1.0, 15.0
     profile = Transition(t0, v0, target, speed_duration(shape, dim, value, v0, target), shape)
     hist = sc._history["C"]
@@ -234,9 +348,17 @@ def test_lateral_follows_closed_form(tmp_path, kind, shape, dim, value):
 
 def test_relative_lane_change_and_speed(tmp_path):
     """Relative targets: B moves to A's lane (one left of its own) and to A's speed - 5."""
-    evs = [event("R", "B", lane_change(-1, "cubic", "time", 2.0).replace(
-        '<AbsoluteTargetLane value="-1"/>', '<RelativeTargetLane entityRef="A" value="0"/>'), trigger([sim_time(0.45)])),
-        event("V", "B", speed(-5, "linear", "time", 1.0, relative="A"), trigger([sim_time(0.45)]))]
+    evs = [
+        event(
+            "R",
+            "B",
+            lane_change(-1, "cubic", "time", 2.0).replace(
+                '<AbsoluteTargetLane value="-1"/>', '<RelativeTargetLane entityRef="A" value="0"/>'
+            ),
+            trigger([sim_time(0.45)]),
+        ),
+        event("V", "B", speed(-5, "linear", "time", 1.0, relative="A"), trigger([sim_time(0.45)])),
+    ]
     sc = run_scene(scene(tmp_path, evs), 3.0)
     t, v, d = sc._history["B"][-1]
     a = sc._history["A"][-1]
@@ -248,14 +370,17 @@ def test_teleport_and_trajectory(tmp_path):
     """TeleportAction places A's centre; FollowTrajectoryAction with timing moves C along a
     polyline at the vertices' times."""
     teleport = f"<TeleportAction>{_pos(300, -2)}</TeleportAction>"
-    verts = "".join(f'<Vertex time="{tt}"><Position><WorldPosition x="{x}" y="{y}"/></Position></Vertex>'
-                    for tt, x, y in ((0.0, 420.0, -3.5), (2.0, 460.0, -3.5), (4.0, 500.0, 0.0)))
-    traj = ('<RoutingAction><FollowTrajectoryAction><TrajectoryRef><Trajectory name="t" closed="false"><Shape>'
-            f"<Polyline>{verts}</Polyline></Shape></Trajectory></TrajectoryRef><TimeReference>"
-            '<Timing domainAbsoluteRelative="relative" scale="1" offset="0"/></TimeReference>'
-            '<TrajectoryFollowingMode followingMode="position"/></FollowTrajectoryAction></RoutingAction>')
-    evs = [event("Tp", "A", teleport, trigger([sim_time(0.95)])),
-           event("Tr", "C", traj, trigger([sim_time(0.95)]))]
+    verts = "".join(
+        f'<Vertex time="{tt}"><Position><WorldPosition x="{x}" y="{y}"/></Position></Vertex>'
+        for tt, x, y in ((0.0, 420.0, -3.5), (2.0, 460.0, -3.5), (4.0, 500.0, 0.0))
+    )
+    traj = (
+        '<RoutingAction><FollowTrajectoryAction><TrajectoryRef><Trajectory name="t" closed="false"><Shape>'
+        f"<Polyline>{verts}</Polyline></Shape></Trajectory></TrajectoryRef><TimeReference>"
+        '<Timing domainAbsoluteRelative="relative" scale="1" offset="0"/></TimeReference>'
+        '<TrajectoryFollowingMode followingMode="position"/></FollowTrajectoryAction></RoutingAction>'
+    )
+    evs = [event("Tp", "A", teleport, trigger([sim_time(0.95)])), event("Tr", "C", traj, trigger([sim_time(0.95)]))]
     sc = run_scene(scene(tmp_path, evs), 6.0)
     hist_a = dict((round(t, 6), d) for t, _, d in sc._history["A"])
     # d is measured from the ego's lane (the right one): the middle lane is 3.5 m to its left
@@ -284,8 +409,10 @@ def test_actions_on_the_ego_move_its_references(tmp_path):
     """A LaneChangeAction and a SpeedAction addressed to the ego: its controller tracks them
     (the lateral reference moves to the middle lane along the shape, the speed reference
     follows the linear profile)."""
-    evs = [event("Left", "Ego", lane_change(-2, "cubic", "time", 3.0), trigger([sim_time(0.95)])),
-           event("Faster", "Ego", speed(24.0, "linear", "time", 2.0), trigger([sim_time(0.95)]))]
+    evs = [
+        event("Left", "Ego", lane_change(-2, "cubic", "time", 3.0), trigger([sim_time(0.95)])),
+        event("Faster", "Ego", speed(24.0, "linear", "time", 2.0), trigger([sim_time(0.95)])),
+    ]
     sc = run_scene(scene(tmp_path, evs), 8.0)
     assert sc.status == "completed"
     assert sc.target_lane == 1

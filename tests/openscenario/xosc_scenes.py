@@ -23,49 +23,70 @@ CAR = """<Vehicle name="car" vehicleCategory="car">
 STARTS = {"Ego": (-3, 20.0, 20.0), "A": (-1, 100.0, 25.0), "B": (-2, 200.0, 15.0), "C": (-3, 400.0, 15.0)}
 
 
-def sim_time(value: float, rule: str = "greaterOrEqual", edge: str = "none", delay: float = 0.0,
-             name: str = "c") -> str:
-    return (f'<Condition name="{name}" delay="{delay}" conditionEdge="{edge}"><ByValueCondition>'
-            f'<SimulationTimeCondition value="{value}" rule="{rule}"/></ByValueCondition></Condition>')
+def sim_time(
+    value: float, rule: str = "greaterOrEqual", edge: str = "none", delay: float = 0.0, name: str = "c"
+) -> str:
+    return (
+        f'<Condition name="{name}" delay="{delay}" conditionEdge="{edge}"><ByValueCondition>'
+        f'<SimulationTimeCondition value="{value}" rule="{rule}"/></ByValueCondition></Condition>'
+    )
 
 
 def entity(who: str, body: str, edge: str = "none", delay: float = 0.0, rule: str = "any") -> str:
     refs = "".join(f'<EntityRef entityRef="{w}"/>' for w in who.split(","))
-    return (f'<Condition name="c" delay="{delay}" conditionEdge="{edge}"><ByEntityCondition>'
-            f'<TriggeringEntities triggeringEntitiesRule="{rule}">{refs}</TriggeringEntities>'
-            f"<EntityCondition>{body}</EntityCondition></ByEntityCondition></Condition>")
+    return (
+        f'<Condition name="c" delay="{delay}" conditionEdge="{edge}"><ByEntityCondition>'
+        f'<TriggeringEntities triggeringEntitiesRule="{rule}">{refs}</TriggeringEntities>'
+        f"<EntityCondition>{body}</EntityCondition></ByEntityCondition></Condition>"
+    )
 
 
 def trigger(*groups: list[str]) -> str:
-    return ("<StartTrigger>" + "".join("<ConditionGroup>" + "".join(g) + "</ConditionGroup>" for g in groups)
-            + "</StartTrigger>")
+    return (
+        "<StartTrigger>"
+        + "".join("<ConditionGroup>" + "".join(g) + "</ConditionGroup>" for g in groups)
+        + "</StartTrigger>"
+    )
 
 
 def speed(target: float, shape: str = "step", dim: str = "time", value: float = 0.0, relative: str = "") -> str:
-    tgt = (f'<RelativeTargetSpeed entityRef="{relative}" value="{target}" speedTargetValueType="delta" '
-           f'continuous="false"/>' if relative else f'<AbsoluteTargetSpeed value="{target}"/>')
-    return (f'<LongitudinalAction><SpeedAction><SpeedActionDynamics dynamicsShape="{shape}" value="{value}" '
-            f'dynamicsDimension="{dim}"/><SpeedActionTarget>{tgt}</SpeedActionTarget></SpeedAction>'
-            "</LongitudinalAction>")
+    tgt = (
+        f'<RelativeTargetSpeed entityRef="{relative}" value="{target}" speedTargetValueType="delta" '
+        f'continuous="false"/>'
+        if relative
+        else f'<AbsoluteTargetSpeed value="{target}"/>'
+    )
+    return (
+        f'<LongitudinalAction><SpeedAction><SpeedActionDynamics dynamicsShape="{shape}" value="{value}" '
+        f'dynamicsDimension="{dim}"/><SpeedActionTarget>{tgt}</SpeedActionTarget></SpeedAction>'
+        "</LongitudinalAction>"
+    )
 
 
 def lane_change(lane: int, shape: str, dim: str, value: float, offset: float = 0.0) -> str:
-    return (f'<LateralAction><LaneChangeAction targetLaneOffset="{offset}"><LaneChangeActionDynamics '
-            f'dynamicsShape="{shape}" value="{value}" dynamicsDimension="{dim}"/><LaneChangeTarget>'
-            f'<AbsoluteTargetLane value="{lane}"/></LaneChangeTarget></LaneChangeAction></LateralAction>')
+    return (
+        f'<LateralAction><LaneChangeAction targetLaneOffset="{offset}"><LaneChangeActionDynamics '
+        f'dynamicsShape="{shape}" value="{value}" dynamicsDimension="{dim}"/><LaneChangeTarget>'
+        f'<AbsoluteTargetLane value="{lane}"/></LaneChangeTarget></LaneChangeAction></LateralAction>'
+    )
 
 
 def lane_offset(value: float, shape: str, acc: float) -> str:
-    return (f'<LateralAction><LaneOffsetAction continuous="false"><LaneOffsetActionDynamics '
-            f'maxLateralAcc="{acc}" dynamicsShape="{shape}"/><LaneOffsetTarget><AbsoluteTargetLaneOffset '
-            f'value="{value}"/></LaneOffsetTarget></LaneOffsetAction></LateralAction>')
+    return (
+        f'<LateralAction><LaneOffsetAction continuous="false"><LaneOffsetActionDynamics '
+        f'maxLateralAcc="{acc}" dynamicsShape="{shape}"/><LaneOffsetTarget><AbsoluteTargetLaneOffset '
+        f'value="{value}"/></LaneOffsetTarget></LaneOffsetAction></LateralAction>'
+    )
 
 
-def event(name: str, actor: str, action: str, start: str | None, priority: str = "parallel",
-          count: int = 1) -> tuple[str, str]:
-    return actor, (f'<Event name="{name}" priority="{priority}" maximumExecutionCount="{count}">'
-                   f'<Action name="{name}Action"><PrivateAction>{action}</PrivateAction></Action>'
-                   f'{start or ""}</Event>')
+def event(
+    name: str, actor: str, action: str, start: str | None, priority: str = "parallel", count: int = 1
+) -> tuple[str, str]:
+    return actor, (
+        f'<Event name="{name}" priority="{priority}" maximumExecutionCount="{count}">'
+        f'<Action name="{name}Action"><PrivateAction>{action}</PrivateAction></Action>'
+        f"{start or ''}</Event>"
+    )
 
 
 def scene(tmp: Path, events: list[tuple[str, str]], params: str = "", stop: str = "") -> Path:
@@ -75,13 +96,17 @@ def scene(tmp: Path, events: list[tuple[str, str]], params: str = "", stop: str 
     init = "".join(
         f'<Private entityRef="{n}"><PrivateAction><TeleportAction><Position><LanePosition roadId="0" '
         f'laneId="{lane}" s="{s}" offset="0"/></Position></TeleportAction></PrivateAction><PrivateAction>'
-        f"{speed(v)}</PrivateAction></Private>" for n, (lane, s, v) in STARTS.items())
+        f"{speed(v)}</PrivateAction></Private>"
+        for n, (lane, s, v) in STARTS.items()
+    )
     groups = ""
     for actor in dict.fromkeys(a for a, _ in events):
         evs = "".join(e for a, e in events if a == actor)
-        groups += (f'<ManeuverGroup name="G{actor}" maximumExecutionCount="1"><Actors selectTriggeringEntities="false">'
-                   f'<EntityRef entityRef="{actor}"/></Actors><Maneuver name="M{actor}">{evs}</Maneuver>'
-                   "</ManeuverGroup>")
+        groups += (
+            f'<ManeuverGroup name="G{actor}" maximumExecutionCount="1"><Actors selectTriggeringEntities="false">'
+            f'<EntityRef entityRef="{actor}"/></Actors><Maneuver name="M{actor}">{evs}</Maneuver>'
+            "</ManeuverGroup>"
+        )
     text = f"""<?xml version="1.0"?>
 <OpenSCENARIO>
 <FileHeader revMajor="1" revMinor="2" date="2026-11-24T00:00:00" description="semantics" author="ego tests"/>

@@ -16,10 +16,31 @@ pytestmark = pytest.mark.sumo
 def test_two_writers_to_one_recording_leave_a_valid_file(tmp_path):
     rrd = tmp_path / "same.rrd"
     env = dict(os.environ, XDG_CONFIG_HOME=str(tmp_path), XDG_DATA_HOME=str(tmp_path))
-    procs = [subprocess.Popen([sys.executable, "-m", "ego", "run", "emergency-brake", "-c", "pid", "--seed", str(seed),
-                               "--set", "duration=20", "--record", str(rrd), "--json"],
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
-             for seed in (1, 2)]
+    procs = [
+        subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "ego",
+                "run",
+                "emergency-brake",
+                "-c",
+                "pid",
+                "--seed",
+                str(seed),
+                "--set",
+                "duration=20",
+                "--record",
+                str(rrd),
+                "--json",
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=env,
+        )
+        for seed in (1, 2)
+    ]
     steps = {}
     for seed, p in zip((1, 2), procs):
         out, err = p.communicate(timeout=300)

@@ -29,9 +29,26 @@ def _start_recorded_run(tmp_path, controller):
     """``ego run emergency-brake`` recording to tmp_path/run.rrd, in a session of its own,
     returned once the recording has begun (its partial file exists): past its imports."""
     env = dict(os.environ, XDG_CONFIG_HOME=str(tmp_path), XDG_DATA_HOME=str(tmp_path))
-    p = subprocess.Popen([sys.executable, "-m", "ego", "run", "emergency-brake", "-c", controller, "--record",
-                          str(tmp_path / "run.rrd"), "--set", "duration=3600"], stdout=subprocess.PIPE,
-                         stderr=subprocess.PIPE, text=True, start_new_session=True, env=env)
+    p = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "ego",
+            "run",
+            "emergency-brake",
+            "-c",
+            controller,
+            "--record",
+            str(tmp_path / "run.rrd"),
+            "--set",
+            "duration=3600",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        env=env,
+    )
     wait_for(lambda: list(tmp_path.glob("run.rrd.*.partial")), p, "the recording begin")
     return p
 
@@ -45,9 +62,11 @@ def _verify(path, tmp_path):
 
 # Repeated at several moments: where the signal lands (start-up, a step, a recorder batch)
 # used to decide whether the recording survived.
-@pytest.mark.parametrize("sig, after", [("SIGINT", 0.0), ("SIGINT", 0.4), ("SIGINT", 1.0), ("SIGINT", 1.7),
-                                        ("SIGTERM", 0.2), ("SIGTERM", 1.0)],
-                         ids=["sigint-0s", "sigint-0.4s", "sigint-1s", "sigint-1.7s", "sigterm-0.2s", "sigterm-1s"])
+@pytest.mark.parametrize(
+    "sig, after",
+    [("SIGINT", 0.0), ("SIGINT", 0.4), ("SIGINT", 1.0), ("SIGINT", 1.7), ("SIGTERM", 0.2), ("SIGTERM", 1.0)],
+    ids=["sigint-0s", "sigint-0.4s", "sigint-1s", "sigint-1.7s", "sigterm-0.2s", "sigterm-1s"],
+)
 def test_an_interrupted_recorded_run_keeps_everything_it_simulated(sig, after, tmp_path):
     rrd = tmp_path / "run.rrd"
     p = _start_recorded_run(tmp_path, "fuzzy")

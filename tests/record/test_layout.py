@@ -70,8 +70,11 @@ def entities(path, component: str) -> dict[str, list]:
         rb = chunk.to_record_batch()
         if component not in rb.schema.names:
             continue
-        t = (rb.column("sim_time").cast(pa.int64()).to_numpy() / 1e9 if "sim_time" in rb.schema.names
-             else np.full(rb.num_rows, np.nan))
+        t = (
+            rb.column("sim_time").cast(pa.int64()).to_numpy() / 1e9
+            if "sim_time" in rb.schema.names
+            else np.full(rb.num_rows, np.nan)
+        )
         out.setdefault(chunk.entity_path, []).extend(zip(t, rb.column(component).to_pylist()))
     return {e: sorted(rows, key=lambda r: r[0]) for e, rows in out.items()}
 
@@ -108,9 +111,17 @@ def test_no_panel_mixes_units_and_controller_signals_have_theirs(brake):
         assert f" [{unit}]" in view["display_name"] if unit else "[" not in view["display_name"]
         assert all(e in recorded for e in declared if e.startswith(f"/{view['space_origin']}/"))
     gains = {v["display_name"] for v in plots if v["space_origin"].startswith("plots/controller/")}
-    assert gains == {f"controller [{u}]: {name}" for name, u in (
-        ("kp_lon", "N/m"), ("ki_lon", "N/(m s)"), ("kd_lon", "N s/m"),
-        ("kp_lat", "rad/m"), ("ki_lat", "rad/(m s)"), ("kd_lat", "rad s/m"))}
+    assert gains == {
+        f"controller [{u}]: {name}"
+        for name, u in (
+            ("kp_lon", "N/m"),
+            ("ki_lon", "N/(m s)"),
+            ("kd_lon", "N s/m"),
+            ("kp_lat", "rad/m"),
+            ("ki_lat", "rad/(m s)"),
+            ("kd_lat", "rad s/m"),
+        )
+    }
     assert result.units["kp_lon"] == "N/m"  # the run's units carry them too
 
 
@@ -170,8 +181,7 @@ def test_a_curve_without_a_lead_has_no_empty_panel(curve):
     plots = plot_views(path)
     assert "plots/gap" not in {v["space_origin"] for v in plots}
     for view in plots:
-        values = [v[0] for e, rows in scalars.items() if e.startswith(f"/{view['space_origin']}/")
-                  for _, v in rows]
+        values = [v[0] for e, rows in scalars.items() if e.startswith(f"/{view['space_origin']}/") for _, v in rows]
         assert np.isfinite(values).any(), view["display_name"]
     titles = {v["display_name"] for v in plots}
     assert {"a_x [m/s^2]: applied blue, plan orange", "e_d [m]", "e_a [rad]"} <= titles
@@ -183,8 +193,10 @@ def test_the_platoon_leaders_manoeuvres_are_events(platoon):
     path, result, _ = platoon
     log = entities(path, "TextLog:text")["/events"]
     leader = [(t, text[0]) for t, text in log if text[0].startswith("[leader]")]
-    assert leader == [(10.0, "[leader] leader brakes to 20 km/h at 2 m/s^2 (from 40 km/h)"),
-                      (35.0, "[leader] leader accelerates to 50 km/h at 1.5 m/s^2 (from 20 km/h)")]
+    assert leader == [
+        (10.0, "[leader] leader brakes to 20 km/h at 2 m/s^2 (from 40 km/h)"),
+        (35.0, "[leader] leader accelerates to 50 km/h at 1.5 m/s^2 (from 20 km/h)"),
+    ]
     assert [e.kind for e in result.events].count("leader") == 2
     titles = {v["space_origin"]: v["display_name"] for v in plot_views(path)}
     assert titles["plots/kp"] == "kp [1/s^2]: f1 blue, f2 orange, f3 green"

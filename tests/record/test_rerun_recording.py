@@ -54,8 +54,15 @@ def test_series_have_one_sample_per_step_and_match_the_metrics(recorded):
     assert np.nanmin(ttc) == pytest.approx(m["min_ttc_front"], abs=1e-4)  # inf recorded as gap (NaN)
     _, ay = _series(path, "/plots/lateral_accel/ego")
     assert np.max(np.abs(ay)) == pytest.approx(m["max_abs_lateral_accel"], abs=1e-4)
-    for entity in ("/plots/speed/ego", "/plots/speed/reference", "/plots/Fx/Fx", "/plots/delta/delta",
-                   "/plots/ttc/rear", "/plots/ttc/trigger", "/plots/controller/1/fuzzy_u_lat"):
+    for entity in (
+        "/plots/speed/ego",
+        "/plots/speed/reference",
+        "/plots/Fx/Fx",
+        "/plots/delta/delta",
+        "/plots/ttc/rear",
+        "/plots/ttc/trigger",
+        "/plots/controller/1/fuzzy_u_lat",
+    ):
         assert len(_series(path, entity)[0]) == m["steps"], entity
 
 
@@ -65,9 +72,13 @@ def test_vehicles_are_labelled_oriented_outlines(recorded):
     for chunk in RrdReader(path).stream():
         if chunk.entity_path == "/world/map/vehicles":
             rb = chunk.to_record_batch()
-            rows += list(zip(rb.column("sim_time").cast(pa.int64()).to_numpy() / 1e9,
-                             rb.column("LineStrips2D:labels").to_pylist(),
-                             rb.column("LineStrips2D:strips").to_pylist()))
+            rows += list(
+                zip(
+                    rb.column("sim_time").cast(pa.int64()).to_numpy() / 1e9,
+                    rb.column("LineStrips2D:labels").to_pylist(),
+                    rb.column("LineStrips2D:strips").to_pylist(),
+                )
+            )
     assert len(rows) == result.metrics["steps"] // 10 + 1  # every SUMO step and t = 0
     _, labels, strips = rows[-1]
     assert {"ego", "lead"} <= set(labels)
@@ -106,8 +117,7 @@ def test_a_script_without_a_main_guard_runs_once_with_recording(tmp_path):
         f"r = run(RunSpec('emergency-brake', 'pid', 0, {{'duration': '3'}}, record={str(rrd)!r}))\n"
         "print('STATUS', r.status)\n"
     )
-    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300,
-                         cwd=tmp_path)
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert out.returncode == 0, out.stderr
     assert out.stdout.count("SCRIPT BODY") == 1 and "STATUS completed" in out.stdout
     assert RrdReader(rrd).recordings()
@@ -135,16 +145,22 @@ def test_a_curve_run_records_its_errors_and_the_ego_round_the_arc(tmp_path):
     assert len(t) == m["steps"]
     np.testing.assert_allclose(ed, result.column("e_d"))
     assert np.max(np.abs(ed[result.column("in_arc") > 0])) == pytest.approx(m["max_abs_ed"], abs=1e-6)
-    for entity in ("/plots/e_a/ego", "/plots/a_x/applied", "/plots/a_x/plan", "/plots/gap/lead",
-                   "/plots/controller/m_per_rad/narma_g"):
+    for entity in (
+        "/plots/e_a/ego",
+        "/plots/a_x/applied",
+        "/plots/a_x/plan",
+        "/plots/gap/lead",
+        "/plots/controller/m_per_rad/narma_g",
+    ):
         assert len(_series(path, entity)[0]) == m["steps"], entity
     # the ego's outline turns with the road: heading +x at the start, +y at the end
     outlines = []
     for chunk in RrdReader(path).stream():
         if chunk.entity_path == "/world/map/vehicles":
             rb = chunk.to_record_batch()
-            outlines += list(zip(rb.column("LineStrips2D:labels").to_pylist(),
-                                 rb.column("LineStrips2D:strips").to_pylist()))
+            outlines += list(
+                zip(rb.column("LineStrips2D:labels").to_pylist(), rb.column("LineStrips2D:strips").to_pylist())
+            )
     first, last = (np.array(s[lab.index("ego")]) for lab, s in (outlines[0], outlines[-1]))
     assert {"ego", "lead"} <= set(outlines[-1][0])
 

@@ -22,23 +22,31 @@ def test_percentiles_by_hand():
 
 def test_comparison_table():
     declared = (Metric("gap", "m", "a gap", headline=True), Metric("hidden", "s", "not shown"))
-    rows = [{"controller": "a", "seed": s, "status": "completed", "error": "", "metrics": {"gap": g, "hidden": 1}}
-            for s, g in enumerate((1.0, 3.0))]
+    rows = [
+        {"controller": "a", "seed": s, "status": "completed", "error": "", "metrics": {"gap": g, "hidden": 1}}
+        for s, g in enumerate((1.0, 3.0))
+    ]
     rows.append({"controller": "b", "seed": 0, "status": "error", "error": "Boom: x", "metrics": {}})
     text = summary.comparison("demo", rows, ["a", "b"], declared)
     assert text.splitlines()[:7] == [
-        "# demo: 3 runs", "",
+        "# demo: 3 runs",
+        "",
         "Mean +- standard deviation over seeds; (k/n) when only k of n runs have the value; "
-        "k/n for a yes/no metric: k of n runs say yes.", "",
-        "| controller | runs | gap [m] |", "|---|---|---|",
-        "| a | 2 completed | 2 +- 1.4 |"]
+        "k/n for a yes/no metric: k of n runs say yes.",
+        "",
+        "| controller | runs | gap [m] |",
+        "|---|---|---|",
+        "| a | 2 completed | 2 +- 1.4 |",
+    ]
     assert "| b | 1 error | - |" in text and "- b seed 0: Boom: x" in text
 
 
 def test_sweep_table():
     declared = (Metric("gap", "m", "a gap", headline=True),)
-    rows = [{"controller": "a", "seed": 0, "status": s, "error": "", "gap": g}
-            for s, g in (("completed", 1.0), ("collision", 2.0), ("completed", 3.0))]
+    rows = [
+        {"controller": "a", "seed": 0, "status": s, "error": "", "gap": g}
+        for s, g in (("completed", 1.0), ("collision", 2.0), ("completed", 3.0))
+    ]
     text = summary.sweep("demo", "x.toml", ["v"], 1, rows, ["a"], declared)
     lines = text.splitlines()
     assert "| controller | runs | collision | completed |" in lines
@@ -58,5 +66,8 @@ def test_progress_writes_about_twenty_lines_and_the_last_off_a_terminal():
     show = Progress(3, stream=small)
     for i in range(3):
         show(f"fuzzy seed {i}", "collision")
-    assert [line.split("]")[1].split(",")[0] for line in small.getvalue().splitlines()] == \
-        [" 1/3 runs", " 2/3 runs", " 3/3 runs"]
+    assert [line.split("]")[1].split(",")[0] for line in small.getvalue().splitlines()] == [
+        " 1/3 runs",
+        " 2/3 runs",
+        " 3/3 runs",
+    ]

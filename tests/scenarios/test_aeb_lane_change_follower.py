@@ -62,17 +62,19 @@ def test_aborts_back_into_its_lane_instead_of_stopping_in_front_of_the_follower(
 def test_slowing_early_in_a_change_in_front_of_a_follower_goes_back(seed, case):
     r = run(RunSpec("emergency-brake", "fuzzy", seed, case))
     assert not r.metrics["collision"], r.metrics["status_detail"]
-    assert any(
-        e.kind == "lane" and "aborted" in e.text and "follower" in e.text
-        for e in r.events
-    )
+    assert any(e.kind == "lane" and "aborted" in e.text and "follower" in e.text for e in r.events)
 
 
 def test_a_slow_down_further_across_finishes_the_change():
     # found by ego falsify with a first version that went back up to a quarter across without an
     # emergency stop: fuzzy's lateral lag carried the ego past the lead and swung it back into it
-    case = {"ego_speed": 23.3631, "lead_decel": 4.7189, "lead_gap": 11.2988, "traffic_density": 14.3426,
-            "block_right": True}
+    case = {
+        "ego_speed": 23.3631,
+        "lead_decel": 4.7189,
+        "lead_gap": 11.2988,
+        "traffic_density": 14.3426,
+        "block_right": True,
+    }
     r = run(RunSpec("emergency-brake", "fuzzy", 10216, case))
     assert not r.metrics["collision"], r.metrics["status_detail"]
 

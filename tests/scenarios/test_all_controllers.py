@@ -41,9 +41,13 @@ def test_in_traffic_the_evading_ego_settles_behind_the_new_lanes_leader(fuzzy_re
     assert m["min_gap_front"] > 5.0
 
 
-@pytest.mark.parametrize("controller, overrides", [
-    ("bp-pid", {"variant": "report", "abs": False}),
-], ids=["bp-pid-report"])
+@pytest.mark.parametrize(
+    "controller, overrides",
+    [
+        ("bp-pid", {"variant": "report", "abs": False}),
+    ],
+    ids=["bp-pid-report"],
+)
 def test_the_reports_unstable_form_is_reported_as_such(controller, overrides, tmp_path):
     from rerun.chunk import RrdReader
 

@@ -25,11 +25,11 @@ CCRS = dict(evade=False, lead_speed=0, lead_final_speed=0, lead_gap=100, traffic
 
 
 def _run(controller, seed=0, **overrides):
-    return run(RunSpec("emergency-brake", controller, seed,
-                       {k: str(v).lower() for k, v in overrides.items()}))
+    return run(RunSpec("emergency-brake", controller, seed, {k: str(v).lower() for k, v in overrides.items()}))
 
 
 # -- parameters (no SUMO) ------------------------------------------------------------------------
+
 
 def test_lead_speed_defaults_to_the_ego_speed_and_rejects_other_negatives():
     c, _ = apply_overrides(EmergencyBrakeConfig(), {"ego_speed": 25.0})
@@ -47,6 +47,7 @@ def test_too_dense_background_is_a_config_error():
 
 
 # -- in SUMO -----------------------------------------------------------------------------------
+
 
 @pytest.mark.sumo
 @pytest.mark.parametrize("controller", ["fuzzy", "pid"])
@@ -67,8 +68,14 @@ def test_evade_false_brakes_in_lane_although_a_lane_is_free(controller, fuzzy_re
 def test_a_stopped_lead_stays_put_and_the_sensor_sees_it_from_the_start():
     from ego.runner import build
 
-    sc = build(RunSpec("emergency-brake", "none", 0, {**{k: str(v).lower() for k, v in CCRS.items()},
-                                                      "ego_speed": "5", "duration": "3"}))
+    sc = build(
+        RunSpec(
+            "emergency-brake",
+            "none",
+            0,
+            {**{k: str(v).lower() for k, v in CCRS.items()}, "ego_speed": "5", "duration": "3"},
+        )
+    )
     try:
         sc.reset()
         veh = sc.bridge.libsumo.vehicle
@@ -121,8 +128,16 @@ def test_a_stopped_lead_found_too_late_is_hit_at_the_speed_physics_leaves(contro
 @pytest.mark.sumo
 def test_a_slow_lead_is_hit_at_the_relative_speed():
     # CCRm-like, no controller: the ego at 50 km/h runs into a lead at 20 km/h
-    m = _run("none", ego_speed=13.889, lead_speed=5.556, lead_final_speed=5.556, lead_gap=20,
-             traffic_density=0, evade=False, aeb=False).metrics
+    m = _run(
+        "none",
+        ego_speed=13.889,
+        lead_speed=5.556,
+        lead_final_speed=5.556,
+        lead_gap=20,
+        traffic_density=0,
+        evade=False,
+        aeb=False,
+    ).metrics
     assert m["status"] == "collision" and m["collision_with"] == "lead"
     assert m["impact_relative_speed"] == pytest.approx(m["impact_speed"] - 5.556, abs=1e-3)
     assert 10.0 < m["impact_speed"] <= 13.889
@@ -189,9 +204,9 @@ def test_the_envelope_classifier_knows_a_stopped_lead():
     assert not avoidable({"trigger_time": 0.0}, 30.0, 22.222, stopped, DECEL_LIMIT)
     assert avoidable({"trigger_time": 0.0}, 40.0, 22.222, stopped, DECEL_LIMIT)
     # the same gap to a lead at the ego's speed is no danger at all
-    assert avoidable({"trigger_time": 0.0}, 30.0, 22.222, EmergencyBrakeConfig(ego_speed=22.222,
-                                                                               lead_brake_time=25.0),
-                      DECEL_LIMIT)
+    assert avoidable(
+        {"trigger_time": 0.0}, 30.0, 22.222, EmergencyBrakeConfig(ego_speed=22.222, lead_brake_time=25.0), DECEL_LIMIT
+    )
 
 
 @pytest.mark.sumo
@@ -199,8 +214,16 @@ def test_stopped_by_the_aeb_behind_a_car_that_then_stops_does_not_roll_away(fuzz
     # CCRb 12 m, 2 m/s^2, a late trigger: the AEB stops the ego while the lead still rolls,
     # then the lead stops too. The braking reference used to stay behind the resting ego, so
     # the controller never held it and it rolled backwards until the run diverged
-    r = _run("fuzzy-pid", ego_speed=13.889, lead_final_speed=0, lead_gap=12, lead_decel=2,
-             ttc_threshold=1.0, traffic_density=0, evade=False)
+    r = _run(
+        "fuzzy-pid",
+        ego_speed=13.889,
+        lead_final_speed=0,
+        lead_gap=12,
+        lead_decel=2,
+        ttc_threshold=1.0,
+        traffic_density=0,
+        evade=False,
+    )
     m = r.metrics
     assert m["status"] == "completed" and not m["collision"], m["status_detail"]
     s = r.column("s")

@@ -12,9 +12,24 @@ from ego.scenarios.curve import ONCOMING_ROUTE
 
 pytestmark = pytest.mark.sumo
 ARC = 15.0 * math.pi / 2  # the arc's length on the ego's lane (m)
-FIELDS = ("status", "collision", "completed_arc", "max_abs_ed", "final_ed", "max_abs_ea",
-          "time_in_arc", "exit_speed", "scenario", "controller", "seed", "status_detail",
-          "collision_with", "sim_time", "wall_time", "steps")
+FIELDS = (
+    "status",
+    "collision",
+    "completed_arc",
+    "max_abs_ed",
+    "final_ed",
+    "max_abs_ea",
+    "time_in_arc",
+    "exit_speed",
+    "scenario",
+    "controller",
+    "seed",
+    "status_detail",
+    "collision_with",
+    "sim_time",
+    "wall_time",
+    "steps",
+)
 
 
 @pytest.fixture(scope="module")
@@ -123,8 +138,7 @@ class ParkedOncoming(CurveScenario):
         veh = self.bridge.libsumo.vehicle
         # the oncoming lane runs 100 m down the exit straight, then the inner arc
         # (R 11.5 m) back: 112 m along it is beside the ego's arc
-        veh.add("oncoming_parked", ONCOMING_ROUTE, typeID="traffic", departPos="112",
-                departSpeed="0")
+        veh.add("oncoming_parked", ONCOMING_ROUTE, typeID="traffic", departPos="112", departSpeed="0")
         veh.setSpeed("oncoming_parked", 0.0)
 
 

@@ -48,8 +48,7 @@ def test_the_cutting_car_moves_across_smoothly_in_the_set_time(fuzzy_ready):
 
 
 def test_a_cut_in_closer_than_physics_allows_is_reported_as_a_collision(fuzzy_ready):
-    m = run(RunSpec("cut-in", "pid", 0, {"cut_in_gap": "12", "cut_in_speed": "12",
-                                          "traffic_density": "0"})).metrics
+    m = run(RunSpec("cut-in", "pid", 0, {"cut_in_gap": "12", "cut_in_speed": "12", "traffic_density": "0"})).metrics
     assert m["status"] == "collision" and m["collision_with"] == "cutter"
 
 
@@ -57,6 +56,9 @@ def test_bad_side_is_one_line(tmp_path):
     import subprocess
     import sys
 
-    p = subprocess.run([sys.executable, "-m", "ego", "run", "cut-in", "-c", "pid", "--set", "ego_lane=2"],
-                       capture_output=True, text=True)
+    p = subprocess.run(
+        [sys.executable, "-m", "ego", "run", "cut-in", "-c", "pid", "--set", "ego_lane=2"],
+        capture_output=True,
+        text=True,
+    )
     assert p.returncode == 2 and p.stderr.count("\n") == 1 and "cut_in_side" in p.stderr

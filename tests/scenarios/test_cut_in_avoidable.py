@@ -22,9 +22,7 @@ def test_the_margin_is_the_gap_less_the_closing_speeds_braking_distance():
     p = scenario.ego.model.params
     decel = p.F_max / p.m + p.f * p.g
     # a car at constant speed: the smallest gap is the gap less (v0 - vc)^2 / (2 decel)
-    assert scenario.braking_margin() == pytest.approx(
-        gap - (v0 - vc) ** 2 / (2 * decel), abs=0.05
-    )
+    assert scenario.braking_margin() == pytest.approx(gap - (v0 - vc) ** 2 / (2 * decel), abs=0.05)
     assert r.status == "collision"
     assert r.metrics["collision_avoidable"] is (scenario.braking_margin() > 0)
 
@@ -33,8 +31,6 @@ def test_no_collision_no_verdict_and_a_side_hit_is_physics():
     _, r = _run(cut_in_gap=25, cut_in_speed=5)
     assert r.status == "completed" and r.metrics["collision_avoidable"] is None
     assert r.metrics["reach_time"] is not None
-    scenario, r = _run(
-        cut_in_gap=5, cut_in_speed=12
-    )  # hits the ego's side before reaching over it
+    scenario, r = _run(cut_in_gap=5, cut_in_speed=12)  # hits the ego's side before reaching over it
     assert r.status == "collision" and scenario.reach.at is None
     assert r.metrics["collision_avoidable"] is False

@@ -12,13 +12,18 @@ from ego.scenarios.tracking import SineTracking
 #: scenario -> the runs that between them produce every metric it declares
 RUNS = {
     "curve": [("pid", {}), ("pid", {"lead": "20"})],
-    "lane-centering": [("cascade-pid", {"duration": "20"}),
-                       ("cascade-pid", {"duration": "20", "plant": "dynamic-bicycle"})],
-    "platoon": [("pid", {"duration": "30"}),
-                ("pid", {"duration": "30", "followers": "2", "start_error": "5", "sine_amplitude": "3",
-                         "sine_transient": "10"})],
-    "report-000": [("fuzzy", {"duration": "12"}),
-                   ("rbf-smc", {"duration": "12", "case": "sine", "omega": "0.5"})],
+    "lane-centering": [
+        ("cascade-pid", {"duration": "20"}),
+        ("cascade-pid", {"duration": "20", "plant": "dynamic-bicycle"}),
+    ],
+    "platoon": [
+        ("pid", {"duration": "30"}),
+        (
+            "pid",
+            {"duration": "30", "followers": "2", "start_error": "5", "sine_amplitude": "3", "sine_transient": "10"},
+        ),
+    ],
+    "report-000": [("fuzzy", {"duration": "12"}), ("rbf-smc", {"duration": "12", "case": "sine", "omega": "0.5"})],
 }
 
 
@@ -59,8 +64,9 @@ def test_every_metric_of_a_run_is_declared_and_every_declared_one_shows_up(runs)
         missing = [k for k in keys if not covered(k, names, prefixes)]
         assert not missing, f"{scenario}: undeclared metrics {missing}"
         seen |= set(keys)
-    never = [s.name for s in specs
-             if not (s.name in seen or any(k.startswith(s.name) or f"{k}." == s.name for k in seen))]
+    never = [
+        s.name for s in specs if not (s.name in seen or any(k.startswith(s.name) or f"{k}." == s.name for k in seen))
+    ]
     assert not never, f"{scenario}: declared but never reported: {never}"
 
 
@@ -79,7 +85,7 @@ def test_every_plot_is_a_trace_column_and_every_column_has_a_unit(runs):
                     assert column in result.columns and result.units[column], (plot, column)
             assert "[" not in getattr(plot, "label", "")  # the unit comes from the column
         declared_columns = [c for c in result.units if result.units[c]]
-        assert result.columns[:len(declared_columns)] == tuple(declared_columns)
+        assert result.columns[: len(declared_columns)] == tuple(declared_columns)
         assert result.trace.shape[1] == len(result.columns)
 
 
@@ -87,9 +93,16 @@ def test_sine_tracking_declares_every_metric_it_computes():
     """Its base (the motorway) runs elsewhere; its metrics come from its trace alone."""
     n = 50
     t = np.arange(n) * 0.1
-    cols = {"t": t, "e_lat": np.sin(t), "ds": np.full(n, 20.0), "speed_ref": np.full(n, 25.0),
-            "ttc_front": np.full(n, np.inf), "ttc_rear": np.linspace(9.0, 3.0, n),
-            "lat_accel": np.cos(t), "speed": np.full(n, 20.0)}
+    cols = {
+        "t": t,
+        "e_lat": np.sin(t),
+        "ds": np.full(n, 20.0),
+        "speed_ref": np.full(n, 25.0),
+        "ttc_front": np.full(n, np.inf),
+        "ttc_rear": np.linspace(9.0, 3.0, n),
+        "lat_accel": np.cos(t),
+        "speed": np.full(n, 20.0),
+    }
     columns = tuple(cols)
     trace = np.column_stack([cols[c] for c in columns])
     metrics = SineTracking._metrics(None, trace, columns)

@@ -115,8 +115,9 @@ def test_diverging_controller_ends_cleanly_and_keeps_the_recording(tmp_path):
     from ego.record import RerunRecorder
 
     path = tmp_path / "div.rrd"
-    sc = EmergencyBrake(EmergencyBrakeConfig(), _SteerHard(), seed=0,
-                        recorder=RerunRecorder(path), controller_name="steer-hard")
+    sc = EmergencyBrake(
+        EmergencyBrakeConfig(), _SteerHard(), seed=0, recorder=RerunRecorder(path), controller_name="steer-hard"
+    )
     r = sc.run()
     assert r.status == "diverged"
     assert r.metrics["status_detail"].startswith(("left the road", "yaw rate", "heading"))

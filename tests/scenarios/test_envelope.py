@@ -22,15 +22,13 @@ FAILED_BEFORE = [
     ("fuzzy", 8889, dict(lead_decel=4.72, ego_speed=26.61, lead_gap=39.49, traffic_density=11.7)),
     ("rbf-smc", 1282, dict(lead_decel=5.3, ego_speed=26.73, lead_gap=29.57, traffic_density=21.11)),
     ("fuzzy", 8630, dict(lead_decel=6.46, ego_speed=24.75, lead_gap=35.74, traffic_density=13.54)),
-    ("rbf-smc", 9264, dict(lead_decel=4.32, ego_speed=29.22, lead_gap=54.94, traffic_density=3.52,
-                           block_right=True)),
+    ("rbf-smc", 9264, dict(lead_decel=4.32, ego_speed=29.22, lead_gap=54.94, traffic_density=3.52, block_right=True)),
     ("fuzzy", 384, dict(lead_decel=4.7, ego_speed=27.99, lead_gap=34.98, traffic_density=19.28)),
 ]
 
 
 def _spec(controller, seed, case, **extra):
-    return RunSpec("emergency-brake", controller, seed,
-                   {k: str(v).lower() for k, v in {**case, **extra}.items()})
+    return RunSpec("emergency-brake", controller, seed, {k: str(v).lower() for k, v in {**case, **extra}.items()})
 
 
 def test_braking_min_gap_matches_the_closed_form():
@@ -45,8 +43,7 @@ def test_braking_min_gap_matches_the_closed_form():
 
 
 @pytest.mark.sumo
-@pytest.mark.parametrize("controller, seed, case", FAILED_BEFORE,
-                         ids=[f"{c}-{s}" for c, s, _ in FAILED_BEFORE])
+@pytest.mark.parametrize("controller, seed, case", FAILED_BEFORE, ids=[f"{c}-{s}" for c, s, _ in FAILED_BEFORE])
 def test_cases_that_failed_before_complete(controller, seed, case, fuzzy_ready):
     m = run(_spec(controller, seed, case)).metrics
     assert m["status"] == "completed" and not m["collision"], m["status_detail"]
@@ -93,15 +90,20 @@ def test_the_scenario_classifies_its_collision_by_the_braking_criterion(fuzzy_re
     m = run(_spec("none", 0, {})).metrics
     assert m["collision"] and m["collision_avoidable"] is True
     # a lead braking at 8.5 m/s^2 from 57 m ahead at 32.5 m/s: beyond the tyres
-    r = run(_spec("pid", 3751, dict(ego_speed=32.5, lead_decel=8.52, lead_gap=57.37, traffic_density=22.07,
-                                    block_left=True)))
+    r = run(
+        _spec(
+            "pid", 3751, dict(ego_speed=32.5, lead_decel=8.52, lead_gap=57.37, traffic_density=22.07, block_left=True)
+        )
+    )
     assert r.metrics["collision"] and r.metrics["collision_avoidable"] is False
     # the same verdict from the trace, by the envelope's criterion
-    config = resolve(_spec("pid", 3751, dict(ego_speed=32.5, lead_decel=8.52, lead_gap=57.37,
-                                                         traffic_density=22.07, block_left=True))).config
+    config = resolve(
+        _spec(
+            "pid", 3751, dict(ego_speed=32.5, lead_decel=8.52, lead_gap=57.37, traffic_density=22.07, block_left=True)
+        )
+    ).config
     i = int(np.searchsorted(r.column("t"), r.metrics["trigger_time"]))
-    assert not avoidable(r.metrics, float(r.column("gap_front")[i]), float(r.column("ds")[i]), config,
-                         DECEL_LIMIT)
+    assert not avoidable(r.metrics, float(r.column("gap_front")[i]), float(r.column("ds")[i]), config, DECEL_LIMIT)
     assert run(_spec("pid", 0, {})).metrics["collision_avoidable"] is None  # no collision
 
 

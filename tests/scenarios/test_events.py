@@ -7,14 +7,18 @@ import pytest
 from ego.scenarios.events import GapRule, check_lane, choose_lane, time_to_collision
 
 
-@pytest.mark.parametrize("gap, closing, expected", [
-    (30.0, 10.0, 3.0),
-    (30.0, 0.0, math.inf),      # not closing
-    (30.0, -5.0, math.inf),     # opening
-    (math.inf, 10.0, math.inf),  # nobody there
-    (0.0, 10.0, 0.0),           # touching
-    (-1.0, -3.0, 0.0),          # overlapping
-], ids=["closing", "equal-speed", "opening", "no-vehicle", "touching", "overlap"])
+@pytest.mark.parametrize(
+    "gap, closing, expected",
+    [
+        (30.0, 10.0, 3.0),
+        (30.0, 0.0, math.inf),  # not closing
+        (30.0, -5.0, math.inf),  # opening
+        (math.inf, 10.0, math.inf),  # nobody there
+        (0.0, 10.0, 0.0),  # touching
+        (-1.0, -3.0, 0.0),  # overlapping
+    ],
+    ids=["closing", "equal-speed", "opening", "no-vehicle", "touching", "overlap"],
+)
 def test_time_to_collision(gap, closing, expected):
     assert time_to_collision(gap, closing) == expected
 

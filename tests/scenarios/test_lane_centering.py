@@ -6,9 +6,20 @@ from ego.runner import RunSpec, run
 from ego.scenarios.lane_centering import ROAD_LENGTH, LaneCenteringConfig, drive_time
 
 pytestmark = pytest.mark.sumo
-FIELDS = ("max_abs_lateral_error", "mean_abs_lateral_error", "std_lateral_error",
-          "max_abs_heading_error", "max_abs_steer", "max_abs_lateral_accel", "status", "collision",
-          "completed_road", "sim_time", "wall_time", "steps")
+FIELDS = (
+    "max_abs_lateral_error",
+    "mean_abs_lateral_error",
+    "std_lateral_error",
+    "max_abs_heading_error",
+    "max_abs_steer",
+    "max_abs_lateral_accel",
+    "status",
+    "collision",
+    "completed_road",
+    "sim_time",
+    "wall_time",
+    "steps",
+)
 
 
 @pytest.mark.parametrize("plant", ["lateral-error", "dynamic-bicycle"])
@@ -40,8 +51,10 @@ def test_the_reports_gains_swing_across_the_lane():
 def test_the_road_and_the_drive_are_one_set_of_figures():
     assert ROAD_LENGTH == pytest.approx(2935.4, abs=0.05)  # 2 x 1000 + 2 x 150 + (500 pi / 2 - 150)
     assert drive_time() == pytest.approx((2935.4 - 15 - (20 - 2.2)) / 8, abs=0.01)  # 362.8 s
-    assert "the end of the 2935 m road: 363 s at 8 m/s" in LaneCenteringConfig.__dataclass_fields__[
-        "duration"].metadata["doc"]
+    assert (
+        "the end of the 2935 m road: 363 s at 8 m/s"
+        in LaneCenteringConfig.__dataclass_fields__["duration"].metadata["doc"]
+    )
 
 
 def test_the_reports_fifty_seconds_are_exactly_zero():

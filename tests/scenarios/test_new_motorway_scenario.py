@@ -12,7 +12,7 @@ from ego.scenarios.base import Scenario
 
 PACKAGE = Path(__file__).resolve().parents[2] / "ego" / "scenarios"
 
-MODULE = '''
+MODULE = """
 from dataclasses import dataclass
 
 from ego.params import param
@@ -60,7 +60,7 @@ class StoppedCar(Scenario):
 
     def _metrics(self, trace, names):
         return {**evasive_metrics(self, trace, names), "stopped_at": round(self.view.s, 2)}
-'''
+"""
 
 
 def test_shipped_motorway_scenarios_are_scenario_then_concrete():
@@ -99,7 +99,14 @@ def test_every_named_scenario_of_the_package_is_registered_by_its_module_alone()
     found = {}
     for info in pkgutil.iter_modules(package.__path__):
         module = importlib.import_module(f"ego.scenarios.{info.name}")
-        found.update({obj.name: obj for obj in vars(module).values()
-                      if isinstance(obj, type) and issubclass(obj, Scenario) and obj.name
-                      and obj.__module__ == module.__name__})
+        found.update(
+            {
+                obj.name: obj
+                for obj in vars(module).values()
+                if isinstance(obj, type)
+                and issubclass(obj, Scenario)
+                and obj.name
+                and obj.__module__ == module.__name__
+            }
+        )
     assert found == package.SCENARIOS

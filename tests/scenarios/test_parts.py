@@ -37,8 +37,14 @@ def scene(config, others=()):
 
 def manoeuvre(config, view, plant, events):
     in_lane = BrakeInLane(config, lambda: False)
-    m = EvasiveManoeuvre(config, view, "front", in_lane, lambda kind, text, level="INFO": events.append(kind),
-                         on_trigger=lambda man: in_lane.start(man))
+    m = EvasiveManoeuvre(
+        config,
+        view,
+        "front",
+        in_lane,
+        lambda kind, text, level="INFO": events.append(kind),
+        on_trigger=lambda man: in_lane.start(man),
+    )
     m.reset(plant)
     return m
 
@@ -119,7 +125,7 @@ def test_the_safety_layer_passes_the_action_through_until_the_aeb_engages():
     p = plant.model.params
     assert safety.filter((123.0, 0.01)) == (123.0, 0.01)
     view.look(0.0)
-    assert braking_need(view.sensor.front, view.ds) == pytest.approx(15.0 ** 2 / (2 * 6.0))
+    assert braking_need(view.sensor.front, view.ds) == pytest.approx(15.0**2 / (2 * 6.0))
     safety.update()
     assert safety.active and safety.time == 1.5 and safety.engagements == 1 and events == ["aeb"]
     assert safety.filter((123.0, 0.01)) == (-p.F_max / p.Nw, 0.01)  # full braking, steering kept

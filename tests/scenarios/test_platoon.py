@@ -79,8 +79,15 @@ def test_metrics_per_follower_are_computed_from_the_trace(default_runs):
 
 
 def _sine_run(headway, omega, controller="pid"):
-    return _run(controller, headway=headway, manoeuvres="none", sine_amplitude=1.0, sine_omega=omega,
-                duration=150.0, sine_transient=60.0)
+    return _run(
+        controller,
+        headway=headway,
+        manoeuvres="none",
+        sine_amplitude=1.0,
+        sine_omega=omega,
+        duration=150.0,
+        sine_transient=60.0,
+    )
 
 
 def test_a_short_headway_amplifies_as_the_theory_predicts():
@@ -195,17 +202,21 @@ def test_a_diverging_controller_ends_the_run_and_keeps_the_recording(tmp_path):
     assert RrdReader(path).recordings()
 
 
-@pytest.mark.parametrize("args, message", [
-    (["--set", "period=0.015"], "bad value for period: 0.015"),
-    (["--set", "manoeuvres=10:20"], "bad value for manoeuvres"),
-    (["--set", "followers=11"], "bad value for followers: 11"),
-    (["--set", "variant=toy"], "bad value for variant: 'toy'"),
-    (["--set", "manoeuvres=none", "--set", "start_speed=100", "--set", "duration=200"], "road"),
-    (["--set", "start_error=-40"], "bad value for start_error"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--set", "period=0.015"], "bad value for period: 0.015"),
+        (["--set", "manoeuvres=10:20"], "bad value for manoeuvres"),
+        (["--set", "followers=11"], "bad value for followers: 11"),
+        (["--set", "variant=toy"], "bad value for variant: 'toy'"),
+        (["--set", "manoeuvres=none", "--set", "start_speed=100", "--set", "duration=200"], "road"),
+        (["--set", "start_error=-40"], "bad value for start_error"),
+    ],
+)
 def test_bad_input_is_one_line_and_exit_2(args, message):
-    p = subprocess.run([sys.executable, "-m", "ego", "run", "platoon", "-c", "pid", *args],
-                       capture_output=True, text=True, timeout=120)
+    p = subprocess.run(
+        [sys.executable, "-m", "ego", "run", "platoon", "-c", "pid", *args], capture_output=True, text=True, timeout=120
+    )
     assert p.returncode == 2, p.stderr
     lines = p.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("ego: error:") and message in lines[0], p.stderr
@@ -213,8 +224,9 @@ def test_bad_input_is_one_line_and_exit_2(args, message):
 
 def _step_response(period):
     """Report 004's simulation: one follower, lambda 0.2 s, no lag, 1 m too far back."""
-    r = _run("pid", followers=1, manoeuvres="none", start_error=1.0, headway=0.2, lag=0.0,
-             period=period, duration=120.0)
+    r = _run(
+        "pid", followers=1, manoeuvres="none", start_error=1.0, headway=0.2, lag=0.0, period=period, duration=120.0
+    )
     t, e = r.column("t"), np.abs(r.column("e_f1"))
     return r, [e[(t >= a) & (t < a + 20.0)].max() for a in range(0, 120, 20)]
 

@@ -23,9 +23,10 @@ def corners(x, y, psi, length, width, cg_to_front=None):
     front = 0.5 * length if cg_to_front is None else cg_to_front
     rear = front - length
     c, s = math.cos(psi), math.sin(psi)
-    return [(x + c * lx - s * ly, y + s * lx + c * ly)
-            for lx, ly in ((front, 0.5 * width), (front, -0.5 * width), (rear, -0.5 * width),
-                           (rear, 0.5 * width))]
+    return [
+        (x + c * lx - s * ly, y + s * lx + c * ly)
+        for lx, ly in ((front, 0.5 * width), (front, -0.5 * width), (rear, -0.5 * width), (rear, 0.5 * width))
+    ]
 
 
 def _seg_dist(p, a, b):
@@ -37,8 +38,7 @@ def _seg_dist(p, a, b):
 
 def outline_distance(a, b):
     """Distance between two disjoint convex quadrilaterals (corner lists)."""
-    return min(min(_seg_dist(p, q[i], q[(i + 1) % 4]) for p in r for i in range(4))
-               for r, q in ((a, b), (b, a)))
+    return min(min(_seg_dist(p, q[i], q[(i + 1) % 4]) for p in r for i in range(4)) for r, q in ((a, b), (b, a)))
 
 
 def test_the_car_the_ego_is_leaving_stays_the_front_object():
@@ -47,8 +47,10 @@ def test_the_car_the_ego_is_leaving_stays_the_front_object():
     # lane's car, the sensor's front object is the lead
     sensor = _sensor()
     ids = ["lead", "left_car"]
-    rows = [(30.0, 0.0, 0.0, 10.0, 4.5, 1.8),  # centre x, y, yaw, speed, length, width
-            (60.0, 3.5, 0.0, 20.0, 4.5, 1.8)]
+    rows = [
+        (30.0, 0.0, 0.0, 10.0, 4.5, 1.8),  # centre x, y, yaw, speed, length, width
+        (60.0, 3.5, 0.0, 20.0, 4.5, 1.8),
+    ]
     sensor.sync(0.0, ids, rows)
     sensor.scan(0.0, s=10.0, d=1.75, heading_error=0.1)
     assert sensor.front.id == "lead"
@@ -120,8 +122,9 @@ def test_a_gap_never_exceeds_the_distance_between_the_outlines():
 def test_in_sumo_the_sensor_sees_the_overlapping_lead_that_sumo_s_leader_misses(fuzzy_ready):
     """A constructed overlap in real SUMO: the ego placed half into the left lane, turned
     left, the braking lead still overlapping its right side."""
-    scenario = build(RunSpec("emergency-brake", "none", 0,
-                             {"traffic_density": "0", "lead_gap": "12", "lead_brake_time": "0"}))
+    scenario = build(
+        RunSpec("emergency-brake", "none", 0, {"traffic_density": "0", "lead_gap": "12", "lead_brake_time": "0"})
+    )
     try:
         scenario.reset()
         x = list(scenario.ego.state)

@@ -16,11 +16,15 @@ def test_a_row_is_stored_in_declared_order_whatever_the_call_order():
     assert trace.units() == {"t": "s", "gap": "m", "speed": "m/s", "k_p": ""}
 
 
-@pytest.mark.parametrize("values, message", [
-    (dict(t=0.0, gap=1.0), "missing speed"),
-    (dict(t=0.0, gap=1.0, speed=2.0, sped=3.0), "unknown sped"),
-    (dict(t=0.0, speed=2.0, gapp=1.0), "missing gap; unknown gapp"),
-], ids=["missing", "unknown", "misspelt"])
+@pytest.mark.parametrize(
+    "values, message",
+    [
+        (dict(t=0.0, gap=1.0), "missing speed"),
+        (dict(t=0.0, gap=1.0, speed=2.0, sped=3.0), "unknown sped"),
+        (dict(t=0.0, speed=2.0, gapp=1.0), "missing gap; unknown gapp"),
+    ],
+    ids=["missing", "unknown", "misspelt"],
+)
 def test_a_wrong_row_is_rejected_and_nothing_is_stored(values, message):
     trace = Trace(COLUMNS)
     with pytest.raises(TraceError, match=message):

@@ -12,8 +12,7 @@ def test_sine_at_0_5_rad_s_converges(controller, bound, fuzzy_ready):
     assert m["status"] == "completed"
     assert m["max_abs_lateral_error_after_10s"] < bound
     assert m["rms_lateral_error_after_10s"] <= m["max_abs_lateral_error_after_10s"]
-    for key in ("rms_lateral_error", "max_abs_lateral_error", "rms_lateral_error_after_10s",
-                "rms_speed_error"):
+    for key in ("rms_lateral_error", "max_abs_lateral_error", "rms_lateral_error_after_10s", "rms_speed_error"):
         assert m[key] is not None
 
 

@@ -19,8 +19,8 @@ def test_the_collector_keeps_what_is_within_the_radius_in_first_seen_order(monke
     monkeypatch.setattr(tl, "BATCH", 3)  # several batches and a remainder
     c = TrafficCollector()
     for k in range(7):
-        ids = [f"v{i}" for i in range(8)][::-1 if k % 2 else 1]
-        rows = _rows(8)[::-1 if k % 2 else 1]
+        ids = [f"v{i}" for i in range(8)][:: -1 if k % 2 else 1]
+        rows = _rows(8)[:: -1 if k % 2 else 1]
         c.add(0.1 * k, [(k * 1.0, 0.0)], ids, rows)
     log = c.log()
     assert set(UNITS) == {"t", "vehicle", "x", "y", "heading", "speed", "length", "width"}
@@ -38,8 +38,12 @@ def test_the_collector_keeps_what_is_within_the_radius_in_first_seen_order(monke
 
 def test_the_collector_measures_from_the_nearest_of_several_egos():
     c = TrafficCollector()
-    c.add(0.0, [(0.0, 0.0), (100.0, 0.0)], ["a", "b", "c"], [(40, 0, 0, 1, 4, 2), (50, 60, 0, 1, 4, 2),
-                                                            (140, 0, 0, 1, 4, 2)])
+    c.add(
+        0.0,
+        [(0.0, 0.0), (100.0, 0.0)],
+        ["a", "b", "c"],
+        [(40, 0, 0, 1, 4, 2), (50, 60, 0, 1, 4, 2), (140, 0, 0, 1, 4, 2)],
+    )
     assert c.log().ids == ("a", "c")
     assert len(TrafficCollector().log()) == 0
 
@@ -82,7 +86,8 @@ def test_the_log_holds_every_vehicle_within_50_m_and_none_beyond_as_sumo_has_it(
                 near += 1
                 j = logged.pop(vid)
                 assert (log.x[j], log.y[j], log.speed[j], log.length[j], log.width[j]) == pytest.approx(
-                    (x, y, speed, length, width), abs=1e-6)
+                    (x, y, speed, length, width), abs=1e-6
+                )
                 assert math.remainder(log.heading[j] - yaw, 2 * math.pi) == pytest.approx(0.0, abs=1e-9)
             elif dist > RADIUS + 1e-6:
                 beyond += 1

@@ -37,8 +37,11 @@ def test_sumo_errors_are_sim_errors_and_both_bridges_have_the_protocol():
 
     assert issubclass(SumoError, SimError)
     for bridge in (SumoBridge, HighwayEnvBridge):
-        missing = [name for name in dir(TrafficSim) if not name.startswith("_") and name != "controlled"
-                   and not hasattr(bridge, name)]
+        missing = [
+            name
+            for name in dir(TrafficSim)
+            if not name.startswith("_") and name != "controlled" and not hasattr(bridge, name)
+        ]
         assert missing == [], bridge.__name__
 
 
@@ -53,8 +56,13 @@ def test_no_libsumo_import_outside_ego_sumo():
         if path.parent.name == "sumo":
             continue
         for node in ast.walk(ast.parse(path.read_text())):
-            names = ([a.name for a in node.names] if isinstance(node, ast.Import)
-                     else [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+            names = (
+                [a.name for a in node.names]
+                if isinstance(node, ast.Import)
+                else [node.module or ""]
+                if isinstance(node, ast.ImportFrom)
+                else []
+            )
             if any(n.split(".")[0] == "libsumo" for n in names):
                 offenders.append(str(path.relative_to(PACKAGE)))
     assert offenders == []

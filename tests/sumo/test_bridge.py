@@ -26,8 +26,10 @@ GEO = VehicleGeometry()
 CAR = VehicleType("car", length=4.5, width=1.8, min_gap=2.5, sigma=0.0)
 
 
-@pytest.mark.parametrize("psi, angle", [(0.0, 90.0), (math.pi / 2, 0.0), (math.pi, 270.0),
-                                        (-math.pi / 2, 180.0), (0.1, 90.0 - math.degrees(0.1))])
+@pytest.mark.parametrize(
+    "psi, angle",
+    [(0.0, 90.0), (math.pi / 2, 0.0), (math.pi, 270.0), (-math.pi / 2, 180.0), (0.1, 90.0 - math.degrees(0.1))],
+)
 def test_yaw_and_sumo_angle(psi, angle):
     assert yaw_to_sumo_angle(psi) == pytest.approx(angle)
     back = sumo_angle_to_yaw(angle)
@@ -96,9 +98,9 @@ def test_followers_react_to_the_pushed_speed(reported):
 
 def test_neighbours_in_all_three_lanes_with_bumper_gaps():
     others = [
-        VehicleSpec("ahead", "car", "r", 1, 350.0, 20.0),        # 350-4.5 - 300 = 45.5 m ahead
-        VehicleSpec("behind", "car", "r", 1, 250.0, 20.0),       # 300-4.5 - 250 = 45.5 m behind
-        VehicleSpec("left_ahead", "car", "r", 2, 330.0, 21.0),   # 25.5 m
+        VehicleSpec("ahead", "car", "r", 1, 350.0, 20.0),  # 350-4.5 - 300 = 45.5 m ahead
+        VehicleSpec("behind", "car", "r", 1, 250.0, 20.0),  # 300-4.5 - 250 = 45.5 m behind
+        VehicleSpec("left_ahead", "car", "r", 2, 330.0, 21.0),  # 25.5 m
         VehicleSpec("left_behind", "car", "r", 2, 260.0, 22.0),  # 35.5 m
         VehicleSpec("right_ahead", "car", "r", 0, 340.0, 18.0),  # 35.5 m
         VehicleSpec("right_behind", "car", "r", 0, 280.0, 19.0),  # 15.5 m
@@ -108,9 +110,12 @@ def test_neighbours_in_all_three_lanes_with_bumper_gaps():
         n = b.read_neighbours("ego", Neighbours())
         assert (n.lane, n.n_lanes, n.has_left, n.has_right) == (1, 3, True, True)
         expect = {
-            "leader": ("ahead", 45.5), "follower": ("behind", 45.5),
-            "left_leader": ("left_ahead", 25.5), "left_follower": ("left_behind", 35.5),
-            "right_leader": ("right_ahead", 35.5), "right_follower": ("right_behind", 15.5),
+            "leader": ("ahead", 45.5),
+            "follower": ("behind", 45.5),
+            "left_leader": ("left_ahead", 25.5),
+            "left_follower": ("left_behind", 35.5),
+            "right_leader": ("right_ahead", 35.5),
+            "right_follower": ("right_behind", 15.5),
         }
         for slot, (vid, gap) in expect.items():
             got = getattr(n, slot)

@@ -116,6 +116,7 @@ def test_sources_match_their_generator(tmp_path, name):
 
 # -- lane_centering: report 003's road -------------------------------------------------------------
 
+
 def distance_to_road(road, pts, d):
     """Exact distance from points to the road's offset curve at d (m, + left)."""
     from scipy.spatial import cKDTree

@@ -18,8 +18,11 @@ def test_default_profile_is_report_004s_drive_with_a_hard_stop():
     assert DEFAULT.speed(59.0) == pytest.approx(50 * KMH)
     assert DEFAULT.speed(61.0) == pytest.approx(50 * KMH - 6.0)  # the hard brake
     assert DEFAULT.speed(70.0) == 0.0
-    assert DEFAULT.windows(90.0) == [("brake@10s", 10.0, 35.0), ("accelerate@35s", 35.0, 60.0),
-                                     ("stop@60s", 60.0, 90.0)]
+    assert DEFAULT.windows(90.0) == [
+        ("brake@10s", 10.0, 35.0),
+        ("accelerate@35s", 35.0, 60.0),
+        ("stop@60s", 60.0, 90.0),
+    ]
 
 
 def test_a_ramp_is_cut_short_by_the_next_manoeuvre():

@@ -96,9 +96,7 @@ def test_a_sweep_on_three_nodes_has_every_row_with_its_node(cluster, tmp_path):
     assert "error" not in table["status"]
 
 
-def test_losing_a_worker_node_mid_sweep_costs_only_its_runs_one_retry(
-    cluster, tmp_path
-):
+def test_losing_a_worker_node_mid_sweep_costs_only_its_runs_one_retry(cluster, tmp_path):
     c, workers = cluster
     (tmp_path / "s.toml").write_text(SPEC.format(seeds=6))
     proc = _ego(
@@ -139,9 +137,7 @@ def test_losing_a_worker_node_mid_sweep_costs_only_its_runs_one_retry(
     assert 1 <= len(retried) <= 2, table["attempts"]
     assert all(table["node"][i] != victim.node_id for i in retried)
     assert max(table["attempts"]) == 2
-    c.add_node(
-        num_cpus=1, node_ip_address="127.0.0.1"
-    )  # back to three nodes for the next tests
+    c.add_node(num_cpus=1, node_ip_address="127.0.0.1")  # back to three nodes for the next tests
     workers[0] = next(n for n in c.worker_nodes if n is not workers[1])
     c.wait_for_nodes()
 
@@ -187,13 +183,10 @@ def test_a_sigkilled_sweep_leaves_none_of_its_processes_on_any_node(cluster, tmp
     proc.wait(timeout=30)
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline and (
-        _job_processes(before)
-        or any(d.is_running() and d.status() != "zombie" for d in descendants)
+        _job_processes(before) or any(d.is_running() and d.status() != "zombie" for d in descendants)
     ):
         time.sleep(0.5)
-    assert not _job_processes(before), [
-        p.info["cmdline"] for p in _job_processes(before)
-    ]
+    assert not _job_processes(before), [p.info["cmdline"] for p in _job_processes(before)]
     assert not [d for d in descendants if d.is_running() and d.status() != "zombie"]
 
 
@@ -219,9 +212,7 @@ def test_tune_with_sumo_costs_on_the_cluster(cluster, tmp_path):
     _out, err = proc.communicate(timeout=600)
     assert proc.returncode == 0, err[-3000:]
     preset = json.loads((tmp_path / "g.json").read_text())
-    assert preset["gains"] and all(
-        isinstance(g, float) for g in preset["gains"].values()
-    )
+    assert preset["gains"] and all(isinstance(g, float) for g in preset["gains"].values())
 
 
 # -- without a cluster ------------------------------------------------------------------------------------
@@ -233,9 +224,7 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-@pytest.mark.parametrize(
-    "where", ["nothing", "refused-http", "unknown-host", "blackhole"]
-)
+@pytest.mark.parametrize("where", ["nothing", "refused-http", "unknown-host", "blackhole"])
 def test_an_address_without_a_ray_head_is_one_line_within_seconds(where, tmp_path):
     (tmp_path / "s.toml").write_text(SPEC.format(seeds=1))
     server = None
@@ -279,11 +268,7 @@ def test_an_address_without_a_ray_head_is_one_line_within_seconds(where, tmp_pat
             server.kill()
             server.wait()
     assert proc.returncode == 2, err
-    assert (
-        err.startswith("ego: error: ")
-        and err.count("\n") == 1
-        and "Traceback" not in err
-    ), err
+    assert err.startswith("ego: error: ") and err.count("\n") == 1 and "Traceback" not in err, err
     assert address in err and needle in err
     assert not (tmp_path / "o").exists()
 

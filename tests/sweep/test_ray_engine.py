@@ -66,10 +66,10 @@ def outcomes(executor, fn, tasks) -> list[Outcome]:
 
 # -- the interface ---------------------------------------------------------------------------
 
+
 def test_executor_module_does_not_import_ray():
     code = "import sys, ego.parallel.executor; assert 'ray' not in sys.modules, 'ray imported'"
-    subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT,
-                   env={"PYTHONPATH": str(ROOT), "PATH": ""})
+    subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT, env={"PYTHONPATH": str(ROOT), "PATH": ""})
 
 
 def test_without_ray_the_engine_is_a_config_error(monkeypatch):
@@ -97,10 +97,11 @@ def test_workers_import_the_callers_ego(engine):
 
 # -- values and laziness -----------------------------------------------------------------------
 
+
 def test_values_come_back_once_each(engine):
     got = outcomes(engine, T.square, range(20))
     assert sorted(o.task for o in got) == list(range(20))
-    assert all(o.value == o.task ** 2 and o.error == "" and o.attempts == 1 for o in got)
+    assert all(o.value == o.task**2 and o.error == "" and o.attempts == 1 for o in got)
 
 
 def test_tasks_are_read_lazily(engine):
@@ -114,7 +115,7 @@ def test_tasks_are_read_lazily(engine):
     gen = engine.run(T.square, tasks())
     first = [next(gen) for _ in range(10)]
     gen.close()  # stop early: the engine must not have read ahead more than a few per worker
-    assert all(o.value == o.task ** 2 for o in first)
+    assert all(o.value == o.task**2 for o in first)
     assert next(pulled) <= 10 + 2 * engine.workers + 1
     assert [o.value for o in engine.run(T.square, [5])] == [25]  # still usable after
 
@@ -133,6 +134,7 @@ def test_sumo_runs_give_the_same_metrics_on_both_engines(process_executor, ray_e
 
 
 # -- libsumo: one simulation per process ---------------------------------------------------------
+
 
 @pytest.mark.sumo
 def test_many_sumo_runs_on_two_reused_workers(engine):
@@ -154,6 +156,7 @@ def test_a_second_simulation_in_one_task_is_refused(engine):
 
 # -- failures ------------------------------------------------------------------------------------
 
+
 def test_a_raising_task_is_an_error_outcome_not_retried(engine):
     (outcome,) = outcomes(engine, T.fail, [7])
     assert outcome.error == "ValueError: bad task 7"
@@ -167,8 +170,14 @@ def test_a_dead_worker_costs_one_retry(engine, tmp_path):
 
 
 def test_a_worker_dying_twice_is_an_error_while_the_others_complete(engine, tmp_path):
-    jobs = [("square", 1), ("always_die", 0), ("square", 2), ("fail", 3),
-            ("die_once", str(tmp_path / "marker")), ("square", 4)]
+    jobs = [
+        ("square", 1),
+        ("always_die", 0),
+        ("square", 2),
+        ("fail", 3),
+        ("die_once", str(tmp_path / "marker")),
+        ("square", 4),
+    ]
     got = {o.task: o for o in outcomes(engine, T.call, jobs)}
     assert set(got) == set(jobs)
     dead = got[("always_die", 0)]
@@ -184,6 +193,7 @@ def test_a_worker_dying_twice_is_an_error_while_the_others_complete(engine, tmp_
 
 # -- cost ----------------------------------------------------------------------------------------
 
+
 def test_per_task_overhead_printed(engine):
     """Not asserted: the figure docs/performance.md quotes (200 trivial tasks, 2 workers)."""
     outcomes(engine, T.square, range(10))  # warm
@@ -191,5 +201,7 @@ def test_per_task_overhead_printed(engine):
     got = outcomes(engine, T.square, range(200))
     elapsed = time.perf_counter() - t0
     assert len(got) == 200
-    print(f"\n{type(engine).__name__}({engine.workers}): 200 square tasks in {elapsed:.2f} s, "
-          f"{200 / elapsed:.0f} tasks/s, {elapsed / 200 * 1e3:.2f} ms per task")
+    print(
+        f"\n{type(engine).__name__}({engine.workers}): 200 square tasks in {elapsed:.2f} s, "
+        f"{200 / elapsed:.0f} tasks/s, {elapsed / 200 * 1e3:.2f} ms per task"
+    )

@@ -17,8 +17,11 @@ def spec(**parts):
 
 
 def test_grid_and_sample_expand_to_every_point_controller_and_seed():
-    s = spec(set={"traffic_density": 5}, grid={"ego_speed": [20, 25, 30], "lead_decel": [4, 6, 8]},
-             sample={"method": "sobol", "n": 4, "lead_gap": [20, 60]})
+    s = spec(
+        set={"traffic_density": 5},
+        grid={"ego_speed": [20, 25, 30], "lead_decel": [4, 6, 8]},
+        sample={"method": "sobol", "n": 4, "lead_gap": [20, 60]},
+    )
     runs = list(s.runs())
     assert s.count() == len(runs) == 3 * 3 * 4 * 2 * 2
     assert len({r.run_id for r in runs}) == len(runs)
@@ -26,16 +29,24 @@ def test_grid_and_sample_expand_to_every_point_controller_and_seed():
     assert len(gaps) == 4 and all(20 <= g <= 60 for g in gaps)
     assert all(r.overrides["traffic_density"] == 5 for r in runs)
     assert {(r.overrides["ego_speed"], r.overrides["lead_decel"]) for r in runs} == set(
-        itertools.product([20, 25, 30], [4, 6, 8]))
+        itertools.product([20, 25, 30], [4, 6, 8])
+    )
 
 
 def test_sampling_is_deterministic_and_respects_integer_parameters():
     a = [r.overrides for r in spec(sample={"method": "lhs", "n": 16, "ego_speed": [15, 33]}).runs()]
     b = [r.overrides for r in spec(sample={"method": "lhs", "n": 16, "ego_speed": [15, 33]}).runs()]
     assert a == b
-    followers = [r.overrides["followers"] for r in parse(
-        {"scenario": "platoon", "controllers": ["pid"],
-         "sample": {"method": "random", "n": 20, "seed": 3, "followers": [1, 10]}}).runs()]
+    followers = [
+        r.overrides["followers"]
+        for r in parse(
+            {
+                "scenario": "platoon",
+                "controllers": ["pid"],
+                "sample": {"method": "random", "n": 20, "seed": 3, "followers": [1, 10]},
+            }
+        ).runs()
+    ]
     assert all(isinstance(f, int) and 1 <= f <= 10 for f in followers) and len(set(followers)) > 3
 
 
@@ -43,35 +54,41 @@ def test_run_ids_are_stable_and_depend_on_everything():
     a = run_id("emergency-brake", "pid", 0, {"ego_speed": 20.0, "lead_gap": 30.0})
     assert a == run_id("emergency-brake", "pid", 0, {"lead_gap": 30.0, "ego_speed": 20.0})
     assert len(a) == 16
-    others = {run_id("emergency-brake", "fuzzy", 0, {"ego_speed": 20.0, "lead_gap": 30.0}),
-              run_id("emergency-brake", "pid", 1, {"ego_speed": 20.0, "lead_gap": 30.0}),
-              run_id("emergency-brake", "pid", 0, {"ego_speed": 21.0, "lead_gap": 30.0}),
-              run_id("fast-follower", "pid", 0, {"ego_speed": 20.0, "lead_gap": 30.0})}
+    others = {
+        run_id("emergency-brake", "fuzzy", 0, {"ego_speed": 20.0, "lead_gap": 30.0}),
+        run_id("emergency-brake", "pid", 1, {"ego_speed": 20.0, "lead_gap": 30.0}),
+        run_id("emergency-brake", "pid", 0, {"ego_speed": 21.0, "lead_gap": 30.0}),
+        run_id("fast-follower", "pid", 0, {"ego_speed": 20.0, "lead_gap": 30.0}),
+    }
     assert a not in others and len(others) == 4
 
 
-@pytest.mark.parametrize("parts, message", [
-    ({"scenario": "nowhere"}, "unknown scenario"),
-    ({"controllers": ["pid", "narma-l2"]}, "unknown controller 'narma-l2'"),
-    ({"controllers": ["pid", "pid"]}, "listed twice"),
-    ({"controllers": []}, "non-empty list"),
-    ({"seeds": -1}, "seeds = -1"),
-    ({"seeds": [0, 2**31]}, "seed 2147483648"),
-    ({"seeds": [1, 1]}, "listed twice"),
-    ({"set": {"lead_decel": 50}}, "[set] lead_decel: bad value for lead_decel: 50"),
-    ({"set": {"nonsense": 1}}, "[set] unknown parameter 'nonsense'"),
-    ({"grid": {"ego_speed": [20, "fast"]}}, "bad value for ego_speed: 'fast'"),
-    ({"grid": {"ego_speed": []}}, "non-empty list"),
-    ({"grid": {"block_left": [True, 3]}}, "bad value for block_left"),
-    ({"sample": {"method": "halton", "n": 4, "lead_gap": [20, 60]}}, "method 'halton'"),
-    ({"sample": {"n": 0, "lead_gap": [20, 60]}}, "n must be"),
-    ({"sample": {"n": 4, "lead_gap": [60, 20]}}, "low < high"),
-    ({"sample": {"n": 4, "lead_gap": [20, 900]}}, "bad value for lead_gap: 900"),
-    ({"sample": {"n": 4, "block_left": [0, 1]}}, "not a number to sample"),
-    ({"sample": {"method": "sobol", "n": 100, "lead_gap": [20, 60]}}, "power of 2"),
-    ({"set": {"ego_speed": 20}, "grid": {"ego_speed": [20, 25]}}, "both fixed"),
-    ({"bogus": 1}, "unknown key 'bogus'"),
-], ids=lambda v: str(v)[:40])
+@pytest.mark.parametrize(
+    "parts, message",
+    [
+        ({"scenario": "nowhere"}, "unknown scenario"),
+        ({"controllers": ["pid", "narma-l2"]}, "unknown controller 'narma-l2'"),
+        ({"controllers": ["pid", "pid"]}, "listed twice"),
+        ({"controllers": []}, "non-empty list"),
+        ({"seeds": -1}, "seeds = -1"),
+        ({"seeds": [0, 2**31]}, "seed 2147483648"),
+        ({"seeds": [1, 1]}, "listed twice"),
+        ({"set": {"lead_decel": 50}}, "[set] lead_decel: bad value for lead_decel: 50"),
+        ({"set": {"nonsense": 1}}, "[set] unknown parameter 'nonsense'"),
+        ({"grid": {"ego_speed": [20, "fast"]}}, "bad value for ego_speed: 'fast'"),
+        ({"grid": {"ego_speed": []}}, "non-empty list"),
+        ({"grid": {"block_left": [True, 3]}}, "bad value for block_left"),
+        ({"sample": {"method": "halton", "n": 4, "lead_gap": [20, 60]}}, "method 'halton'"),
+        ({"sample": {"n": 0, "lead_gap": [20, 60]}}, "n must be"),
+        ({"sample": {"n": 4, "lead_gap": [60, 20]}}, "low < high"),
+        ({"sample": {"n": 4, "lead_gap": [20, 900]}}, "bad value for lead_gap: 900"),
+        ({"sample": {"n": 4, "block_left": [0, 1]}}, "not a number to sample"),
+        ({"sample": {"method": "sobol", "n": 100, "lead_gap": [20, 60]}}, "power of 2"),
+        ({"set": {"ego_speed": 20}, "grid": {"ego_speed": [20, 25]}}, "both fixed"),
+        ({"bogus": 1}, "unknown key 'bogus'"),
+    ],
+    ids=lambda v: str(v)[:40],
+)
 def test_bad_specs_are_one_line_errors_naming_the_problem(parts, message):
     with pytest.raises(ConfigError) as err:
         spec(**parts)
@@ -86,8 +103,12 @@ def test_a_huge_spec_fails_by_counting_without_listing_its_runs(monkeypatch):
         raise AssertionError("the runs were listed")
 
     monkeypatch.setattr(spec_module.SweepSpec, "runs", no_listing)
-    grid = {"ego_speed": list(range(10, 40)), "lead_decel": [1, 2, 3, 4, 5, 6, 7, 8, 9],
-            "lead_gap": list(range(10, 300, 2)), "traffic_density": list(range(0, 25))}
+    grid = {
+        "ego_speed": list(range(10, 40)),
+        "lead_decel": [1, 2, 3, 4, 5, 6, 7, 8, 9],
+        "lead_gap": list(range(10, 300, 2)),
+        "traffic_density": list(range(0, 25)),
+    }
     with pytest.raises(ConfigError, match="expands to 1,957,500,000 runs; the limit is 10,000,000"):
         spec(seeds=1000, grid=grid)
 
@@ -96,12 +117,14 @@ def test_the_cli_reports_a_bad_spec_in_one_line_and_writes_nothing(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text('scenario = "emergency-brake"\ncontrollers = ["pid"]\n[grid]\nlead_decel = [3, 99]\n')
     out = tmp_path / "out"
-    p = subprocess.run([sys.executable, "-m", "ego", "sweep", str(bad), "--out", str(out)],
-                       capture_output=True, text=True)
+    p = subprocess.run(
+        [sys.executable, "-m", "ego", "sweep", str(bad), "--out", str(out)], capture_output=True, text=True
+    )
     assert p.returncode == 2 and p.stderr.count("\n") == 1 and "lead_decel" in p.stderr
     assert not out.exists()
     broken = tmp_path / "broken.toml"
     broken.write_text("scenario = \n")
-    p = subprocess.run([sys.executable, "-m", "ego", "sweep", str(broken), "--out", str(out)],
-                       capture_output=True, text=True)
+    p = subprocess.run(
+        [sys.executable, "-m", "ego", "sweep", str(broken), "--out", str(out)], capture_output=True, text=True
+    )
     assert p.returncode == 2 and "not valid TOML" in p.stderr and p.stderr.count("\n") == 1

@@ -17,9 +17,14 @@ from ego.sweep.spec import parse
 
 pytestmark = pytest.mark.sumo
 
-SPEC = {"scenario": "emergency-brake", "controllers": ["pid", "fuzzy"], "seeds": 1,
-        "set": {"duration": 8.0, "traffic_density": 5},
-        "grid": {"ego_speed": [20, 30]}, "sample": {"method": "lhs", "n": 3, "lead_decel": [3, 9]}}
+SPEC = {
+    "scenario": "emergency-brake",
+    "controllers": ["pid", "fuzzy"],
+    "seeds": 1,
+    "set": {"duration": 8.0, "traffic_density": 5},
+    "grid": {"ego_speed": [20, 30]},
+    "sample": {"method": "lhs", "n": 3, "lead_decel": [3, 9]},
+}
 #: what differs between two runs of one spec besides the results
 NOISE = ("wall_time", "host")
 
@@ -37,14 +42,32 @@ def test_one_and_two_workers_give_identical_rows_and_write_everything(tmp_path, 
     ta, tb = pq.read_table(tmp_path / "a" / "results.parquet"), pq.read_table(tmp_path / "b" / "results.parquet")
     assert _rows(ta) == _rows(tb)
     row = ta.to_pylist()[0]
-    for column in ("run_id", "scenario", "controller", "seed", "ego_speed", "lead_decel", "duration",
-                   "traffic_density", "status", "min_gap_front", "wall_time", "host"):
+    for column in (
+        "run_id",
+        "scenario",
+        "controller",
+        "seed",
+        "ego_speed",
+        "lead_decel",
+        "duration",
+        "traffic_density",
+        "status",
+        "min_gap_front",
+        "wall_time",
+        "host",
+    ):
         assert column in row
     # a row is what ego run gives for the same run
     from ego.runner import RunSpec, run
 
-    r = run(RunSpec(row["scenario"], row["controller"], row["seed"],
-                    {k: row[k] for k in ("duration", "traffic_density", "ego_speed", "lead_decel")}))
+    r = run(
+        RunSpec(
+            row["scenario"],
+            row["controller"],
+            row["seed"],
+            {k: row[k] for k in ("duration", "traffic_density", "ego_speed", "lead_decel")},
+        )
+    )
     assert r.metrics["min_gap_front"] == row["min_gap_front"]
     summary = (tmp_path / "a" / "summary.md").read_text()
     assert "| pid | 6 |" in summary and "min_gap_front [m]" in summary
@@ -58,8 +81,9 @@ def test_a_killed_sweep_resumes_with_no_duplicate_and_no_missing_row(tmp_path):
     spec_file = tmp_path / "spec.toml"
     spec_file.write_text(
         'scenario = "emergency-brake"\ncontrollers = ["pid", "fuzzy"]\nseeds = 3\n'
-        '[set]\ntraffic_density = 10\n[grid]\nego_speed = [15, 20, 25, 30, 33]\n'
-        'lead_gap = [20, 40, 60]\n')
+        "[set]\ntraffic_density = 10\n[grid]\nego_speed = [15, 20, 25, 30, 33]\n"
+        "lead_gap = [20, 40, 60]\n"
+    )
     out = tmp_path / "out"
     cmd = [sys.executable, "-m", "ego", "sweep", str(spec_file), "--out", str(out), "--record", "none"]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
@@ -103,8 +127,14 @@ def test_a_dead_worker_costs_one_retry_and_never_stops_the_sweep(tmp_path):
 
 
 def test_failed_runs_are_recorded_by_default_and_an_error_is_a_row(tmp_path):
-    spec = parse({"scenario": "emergency-brake", "controllers": ["none", "pid"], "seeds": 1,
-                  "set": {"duration": 10.0, "traffic_density": 0}})
+    spec = parse(
+        {
+            "scenario": "emergency-brake",
+            "controllers": ["none", "pid"],
+            "seeds": 1,
+            "set": {"duration": 10.0, "traffic_density": 0},
+        }
+    )
     report = sweep(spec, tmp_path, jobs=2)
     assert report.by_status == {"collision": 1, "completed": 1}
     rrds = sorted(p.name for p in (tmp_path / "runs").glob("*.rrd"))

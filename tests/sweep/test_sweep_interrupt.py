@@ -16,8 +16,10 @@ pytestmark = pytest.mark.sumo
 def test_ctrl_c_keeps_the_finished_rows_and_the_same_command_resumes(tmp_path):
     # 60 runs: far more than finish between the first stored batch and the signal
     spec = tmp_path / "spec.toml"
-    spec.write_text('scenario = "emergency-brake"\ncontrollers = ["none", "pid"]\nseeds = 30\n'
-                    '[set]\nduration = 12.0\ntraffic_density = 0\n')
+    spec.write_text(
+        'scenario = "emergency-brake"\ncontrollers = ["none", "pid"]\nseeds = 30\n'
+        "[set]\nduration = 12.0\ntraffic_density = 0\n"
+    )
     out = tmp_path / "out"
     cmd = [sys.executable, "-m", "ego", "sweep", str(spec), "--out", str(out), "--jobs", "2", "--record", "all"]
     p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
