@@ -121,15 +121,15 @@ CONTROLLERS: dict[str, dict[str, ControllerSpec]] = {
                 "pid",
                 "report 004's PID on the spacing error (Kp 0.85, Ki 0.2, Kd 0.3)",
                 FollowingPIDParams,
-                FollowingPID,
-            ),  # type: ignore[arg-type]  # list in, list out
+                FollowingPID,  # type: ignore[arg-type]  # list in, list out
+            ),
             ControllerSpec(
                 "bp-pid-acc",
                 "report 004's 3-5-3 BP neural-network PID (inputs r_in, "
                 "y_out, error; outputs Kp, Ki, Kd; incremental PID)",
                 BPPIDAccParams,
-                BPPIDAcc,
-            ),  # type: ignore[arg-type]
+                BPPIDAcc,  # type: ignore[arg-type]
+            ),
             ControllerSpec(
                 "none", "controller off: zero acceleration command (the followers coast)", NoParams, NoController
             ),
