@@ -47,17 +47,23 @@ def braking_min_gap(
     """Smallest gap (m) over ``horizon`` seconds when the ego brakes at ``decel`` (m/s^2)
     from ``ego_speed0`` at ``t0`` with ``gap0`` to a lead moving at ``lead_speed_fn(t)``.
 
-    With ``lead_step`` (s) the lead moves as SUMO moves it: each step by its speed at the
-    step's end times the step (SUMO's Euler update; a braking car then covers
-    ``decel * step^2 / 2`` less per step than the continuous profile), else by the
-    continuous profile (trapezoidal rule)."""
+    With ``lead_step`` (s) the lead moves as the run sees it: SUMO steps fall on the
+    simulation's clock (multiples of ``lead_step``, not ``t0`` plus multiples: a trigger comes
+    between steps), each moves the lead by its speed at the step's end times the step (SUMO's
+    Euler update; a braking car then covers ``decel * step^2 / 2`` less per step than the
+    continuous profile), and between steps the surround sensor carries it on at its last
+    step's speed, as ``gap0`` was measured. Without it the lead follows the continuous profile
+    (trapezoidal rule)."""
     t = t0 + np.arange(0.0, horizon, dt)
     v_ego = np.maximum(ego_speed0 - decel * (t - t0), 0.0)
     ego_x = np.concatenate(([0.0], np.cumsum(0.5 * (v_ego[1:] + v_ego[:-1]) * dt)))
     if lead_step:
-        tk = t0 + lead_step * np.arange(int(horizon / lead_step) + 2)
-        xk = np.concatenate(([0.0], np.cumsum(lead_speed_fn(tk[1:]) * lead_step)))
-        lead_x = np.interp(t, tk, xk)
+        tk = (np.floor(t0 / lead_step + 1e-9) + np.arange(int(horizon / lead_step) + 2)) * lead_step
+        vk = lead_speed_fn(tk)
+        xk = np.concatenate(([0.0], np.cumsum(vk[1:] * lead_step)))
+        k = np.clip(np.floor((t - tk[0]) / lead_step + 1e-9).astype(int), 0, len(tk) - 2)
+        lead_x = xk[k] + vk[k] * (t - tk[k])
+        lead_x -= lead_x[0]
     else:
         v_lead = lead_speed_fn(t)
         lead_x = np.concatenate(([0.0], np.cumsum(0.5 * (v_lead[1:] + v_lead[:-1]) * dt)))
