@@ -99,7 +99,11 @@ SLOW_TESTS = {
     "tests/test_compare_variants.py": {"test_variants_are_labelled_as_given_everywhere"},
     "tests/test_docs.py": {"test_a_bad_page_or_table_is_one_line_and_exit_2"},
     "tests/test_export.py": {"test_pandas_is_imported_only_when_asked"},
-    "tests/test_layers.py": {"test_no_module_imports_from_a_layer_above_it", "test_every_unit_of_ego_has_a_layer"},
+    "tests/test_layers.py": {
+        "test_the_lower_packages_never_import_scenarios",
+        "test_no_module_imports_from_a_layer_above_it",
+        "test_every_unit_of_ego_has_a_layer",
+    },
     "tests/test_resolve.py": {"test_compare_resolves_each_controller_once_and_its_workers_never"},
 }
 

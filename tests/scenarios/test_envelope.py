@@ -42,7 +42,7 @@ def test_braking_min_gap_matches_the_closed_form():
     assert gap == pytest.approx(10.0 + 20.0**2 / 16.0 - 20.0**2 / 12.0, abs=1e-3)
 
 
-def _sensed_world_min_gap(t0, gap0, v0, decel, speed, step, dt=1e-4, horizon=12.0):
+def _sensed_world_min_gap(t0, gap0, v0, decel, speed, step, dt=2e-4, horizon=7.0):
     """The run's world stepped by hand: the lead moves only at SUMO's steps (multiples of
     ``step`` on the simulation clock, each by its speed at the step's end), the sensor carries
     it on at its last step's speed in between; the ego brakes from ``t0``."""
