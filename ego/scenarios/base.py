@@ -39,6 +39,7 @@ STATUSES = ("completed", "ended", "collision", "diverged", "timeout", "interrupt
 NOT_FAILED = ("completed", "ended")
 _log = logging.getLogger("ego.scenario")
 _LOG_LEVELS = {"INFO": logging.INFO, "WARN": logging.WARNING, "ERROR": logging.ERROR}
+ONE_G = 9.81  #: m/s^2: the default action box of an acceleration command without a limit of its own
 
 
 @dataclass(frozen=True)
@@ -523,6 +524,15 @@ class Scenario:
         """Vehicle ``vid``'s plant."""
         return self.ego
 
+    def action_limits(self, vid: str | None = None) -> tuple[float, float, float]:
+        """Vehicle ``vid``'s action box in its plant's units (None: the agent's vehicle), known
+        from the configuration before a run starts: (most negative and largest longitudinal
+        command, largest |steer| rad). A composed scenario's plant declares it (``Parts.limits``); default: 1 g of
+        acceleration either way and the configuration's steer limit."""
+        if self.parts is not None and self.parts.limits is not None:
+            return self.parts.limits(self.config)
+        return -ONE_G, ONE_G, getattr(self.config, "max_steer", 0.0)
+
     def joint_action(self, own, vid: str, longitudinal: float | None, lateral: float | None):
         """The action :meth:`step` takes when vehicle ``vid`` gets ``longitudinal`` and
         ``lateral`` (None: that channel stays ``own``'s, the scenario's controller's)."""
@@ -615,12 +625,14 @@ class Parts:
     :meth:`Scenario.compose` returns one; the scenario's loop hooks are then these parts'
     methods, bound once per run (no dispatch per step)."""
 
-    __slots__ = ("world", "view", "manoeuvre", "safety", "make_plant", "series")
+    __slots__ = ("world", "view", "manoeuvre", "safety", "make_plant", "series", "limits")
 
-    def __init__(self, world, view, manoeuvre, safety=None, make_plant=None, series=None) -> None:
+    def __init__(self, world, view, manoeuvre, safety=None, make_plant=None, series=None, limits=None) -> None:
         self.world, self.view, self.manoeuvre, self.safety = world, view, manoeuvre, safety
         #: (config, geometry, pose) -> the ego's plant
         self.make_plant = make_plant
+        #: config -> that plant's action box (:meth:`Scenario.action_limits`; None: the default)
+        self.limits = limits
         #: (signal names, signal units) -> the recording's panels (unless the scenario has
         #: its own ``_series``)
         self.series = series

@@ -29,6 +29,7 @@ from ego.scenarios.motorway import (
     MotorwayWorld,
     SurroundView,
     check_density,
+    ego_limits,
     ego_plant,
     series,
 )
@@ -117,6 +118,7 @@ def compose(
         safety,
         ego_plant,
         lambda names, units: evasive_series(c, names, units),
+        ego_limits,
     )
 
 

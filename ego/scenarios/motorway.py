@@ -240,6 +240,14 @@ def ego_plant(config: HighwayConfig, geometry: VehicleGeometry, pose: tuple[floa
     )
 
 
+def ego_limits(config) -> tuple[float, float, float]:
+    """The action box of report 000's car (:func:`ego_plant`, report 000's raw model too): Fx
+    per driven wheel within the whole friction circle (N), the steer limit (rad)."""
+    p = NonlinearBicycleParams()
+    grip = p.F_max / p.Nw
+    return -grip, grip, getattr(config, "max_steer", 0.0)
+
+
 # --- the sensors and the observation ------------------------------------------------------
 
 

@@ -414,6 +414,11 @@ class PlatoonScenario(Scenario):
     def plant(self, vid: str) -> LongitudinalPlant:
         return self.plants[vid]
 
+    def action_limits(self, vid: str | None = None) -> tuple[float, float, float]:
+        """A follower's commanded acceleration (m/s^2) within its limits; it keeps its lane."""
+        c = self.config
+        return -c.max_decel, c.max_accel, 0.0
+
     def joint_action(self, own, vid: str, longitudinal: float | None, lateral: float | None):
         """The controllers' actions (one per follower) with ``vid``'s longitudinal command
         replaced (a follower does not steer)."""
