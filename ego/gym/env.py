@@ -199,7 +199,7 @@ class EgoView:
         c = sc.config
         if self._sensor is None:
             g = sc.geometry
-            self._sensor = SurroundSensor(sc.road, {}, g.cg_to_front, g.length, g.width, horizon=c.sumo_step)
+            self._sensor = SurroundSensor(self.road.road, {}, g.cg_to_front, g.length, g.width, horizon=c.sumo_step)
             sc.bridge.subscribe_surroundings(self.agent, 200.0)
         per = c.control_per_sumo
         look = sc.k // per

@@ -25,7 +25,7 @@ from ego.models.plant import Plant
 from ego.params import ConfigError, Params, param
 from ego.processes import signals_deferred
 from ego.record.base import NullRecorder, Recorder, Scene, Series, unit_path
-from ego.results.metrics import json_number
+from ego.results.metrics import json_number, trace_metrics, trace_metrics_declared
 from ego.results.run import Event, RunResult
 from ego.results.trace import Column, Metric, Plot, Trace
 from ego.results.traffic_log import TrafficCollector
@@ -173,9 +173,11 @@ class Scenario:
 
     @classmethod
     def metrics_declared(cls, config=None) -> tuple[Metric, ...]:
-        """Every metric a run reports: the common ones, then the scenario's own."""
+        """Every metric a run reports: the common ones, then the scenario's own, then the
+        registered trace metrics its trace has the columns of (``ego.results.metrics``)."""
         backend = (BACKEND_METRIC,) if len(cls.backends) > 1 else ()
-        return COMMON_METRICS + backend + cls.metric_specs + COMMON_TAIL_METRICS
+        names = (c.name for c in cls.columns)
+        return COMMON_METRICS + backend + cls.metric_specs + trace_metrics_declared(names) + COMMON_TAIL_METRICS
 
     def trace_columns(self) -> tuple[Column, ...]:
         """The declared trace columns of this run (default: the class's ``columns``)."""
@@ -487,6 +489,7 @@ class Scenario:
         if len(self.backends) > 1:
             metrics["backend"] = self.backend
         metrics.update(self._metrics(trace, columns))
+        metrics.update(trace_metrics(trace, columns, (c.name for c in type(self).columns)))
         metrics.update(
             {
                 "sim_time": json_number(self.t, 4),
