@@ -33,12 +33,12 @@ from ego.lane_frame import LanePolyline
 from ego.models import ActuatorLimits, BicyclePlant, DynamicBicycle, DynamicBicycleParams, VehicleGeometry
 from ego.params import ConfigError, param
 from ego.record.base import Series
-from ego.scenarios import metrics as m
+from ego.results import metrics as m
+from ego.results.trace import Column, Marker, Metric, Plot
 from ego.scenarios.base import CommonConfig, Scenario, signal_series
 from ego.scenarios.events import INF, boxes_overlap
 from ego.scenarios.observe import road_observation
 from ego.scenarios.road import RoadSensor, RoadWorld
-from ego.scenarios.trace import Column, Marker, Metric, Plot
 from ego.sumo.bridge import (
     Collision,
     Neighbours,

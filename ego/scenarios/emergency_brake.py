@@ -17,7 +17,8 @@ from dataclasses import dataclass
 
 from ego.highway_env import BACKENDS
 from ego.params import ConfigError, param
-from ego.scenarios import metrics as m
+from ego.results import metrics as m
+from ego.results.trace import Metric
 from ego.scenarios.base import Parts, Scenario
 from ego.scenarios.evasive import (
     MARKERS,
@@ -30,7 +31,6 @@ from ego.scenarios.evasive import (
 from ego.scenarios.events import INF
 from ego.scenarios.motorway import COLUMNS, EDGE, EGO, PLOTS, ROUTE, MotorwayWorld
 from ego.scenarios.safety import friction_limit
-from ego.scenarios.trace import Metric
 from ego.sim.types import VehicleSpec, VehicleType
 from ego.sumo.traffic import BrakingLeader
 

@@ -46,11 +46,11 @@ from ego.models import (
 )
 from ego.params import param
 from ego.record.base import Series
-from ego.scenarios import metrics as m
+from ego.results import metrics as m
+from ego.results.trace import Band, Column, Marker, Metric, Plot
 from ego.scenarios.base import CommonConfig, Scenario, signal_series
 from ego.scenarios.observe import road_observation
 from ego.scenarios.road import RoadSensor, RoadWorld
-from ego.scenarios.trace import Band, Column, Marker, Metric, Plot
 from ego.sumo.bridge import VehicleSpec, VehicleType, ego_type
 from ego.sumo.traffic import PoissonFlow, background_traffic
 

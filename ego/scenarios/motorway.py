@@ -28,13 +28,13 @@ from ego.models.actuators import ActuatorLimits
 from ego.models.plant import BicyclePlant
 from ego.params import ConfigError, param
 from ego.record.base import Series
+from ego.results.trace import Column, Plot, Ref, Trajectory
+from ego.results.traffic_log import RADIUS, REACH_MARGIN
 from ego.scenarios.base import CommonConfig, signal_series, vehicle_series
 from ego.scenarios.events import INF, boxes_overlap, time_to_collision
 from ego.scenarios.observe import road_observation
 from ego.scenarios.road import RoadSensor
 from ego.scenarios.sensor import SurroundSensor
-from ego.scenarios.trace import Column, Plot, Ref, Trajectory
-from ego.scenarios.traffic_log import RADIUS, REACH_MARGIN
 from ego.sim.protocol import TrafficSim
 from ego.sim.types import Collision, VehicleSpec, VehicleType, ego_type
 from ego.sumo.traffic import PacedVehicle, background_traffic

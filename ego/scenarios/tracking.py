@@ -22,7 +22,8 @@ import numpy as np
 from ego.models import ActuatorLimits, BicyclePlant, NonlinearBicycle, VehicleGeometry
 from ego.params import param
 from ego.record.base import Scene, Series
-from ego.scenarios import metrics as m
+from ego.results import metrics as m
+from ego.results.trace import Column, Metric, Plot
 from ego.scenarios.base import (
     Parts,
     Scenario,
@@ -33,7 +34,6 @@ from ego.scenarios.base import (
 )
 from ego.scenarios.motorway import COLUMNS, EDGE, HighwayConfig, MotorwayWorld, SurroundView, ego_limits, ego_plant
 from ego.scenarios.motorway import series as motorway_series
-from ego.scenarios.trace import Column, Metric, Plot
 
 
 def tracking_metrics(t: np.ndarray, e_lat: np.ndarray, e_speed: np.ndarray, after: float = 10.0) -> dict:

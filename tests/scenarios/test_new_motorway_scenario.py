@@ -16,10 +16,10 @@ MODULE = """
 from dataclasses import dataclass
 
 from ego.params import param
+from ego.results.trace import Metric
 from ego.scenarios.base import Scenario
 from ego.scenarios.evasive import METRICS, EvasiveConfig, compose, evasive_metrics
 from ego.scenarios.motorway import COLUMNS, EDGE, ROUTE
-from ego.scenarios.trace import Metric
 from ego.sim import VehicleSpec, VehicleType
 from ego.sumo.traffic import PacedVehicle
 
