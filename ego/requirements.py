@@ -523,10 +523,12 @@ DEFAULTS: dict[str, tuple[tuple[str, str], ...]] = {
 
 def defaults(scenario: str, cls: type | None = None) -> dict[str, str]:
     """The scenario's default requirements (name -> formula): those of its name, else of the
-    nearest built-in scenario its class ``cls`` builds on (a scenario file's are
-    emergency-brake's); none for a scenario of a user's own."""
+    nearest built-in scenario its class ``cls`` builds on (its ``base_scenario``: a scenario
+    file's are emergency-brake's); none for a scenario of a user's own."""
     if scenario in DEFAULTS or cls is None:
         return dict(DEFAULTS.get(scenario, ()))
+    if getattr(cls, "base_scenario", None) in DEFAULTS:
+        return dict(DEFAULTS[cls.base_scenario])  # type: ignore[attr-defined]
     for base in cls.__mro__:
         name = getattr(base, "name", None)
         if isinstance(name, str) and name in DEFAULTS:

@@ -40,7 +40,6 @@ from ego.checks import MAX_SEED, check_seed
 from ego.control import CONTROLLERS
 from ego.control.tasks import TASKS
 from ego.gym.spaces import action_type, observation_type
-from ego.models import NonlinearBicycleParams
 from ego.params import ConfigError, apply_overrides, describe, param, unknown_parameter
 from ego.runner import RunSpec, parameter_namespace, resolve
 from ego.scenarios import scenario_class
@@ -49,8 +48,6 @@ from ego.sim import sharing_instances
 
 #: the controller that drives the channels the agent leaves, per task
 DEFAULT_CONTROLLER = {"tracking": "pid", "curve": "pid", "lane-centering": "cascade-pid", "car-following": "pid"}
-#: 1 g: the box of ``EgoAction`` for an acceleration command without a limit of its own
-_ONE_G = 9.81
 #: each env's default episode distribution: scenario parameter -> [low, high], sampled at
 #: every reset from the episode's seed (``config["randomize"]``; ``{}``: one fixed scenario)
 DEFAULT_RANDOMIZE: dict[str, dict[str, list[float]]] = {
@@ -202,7 +199,7 @@ class EgoView:
         c = sc.config
         if self._sensor is None:
             g = sc.geometry
-            self._sensor = SurroundSensor(sc.road, {}, g.cg_to_front, g.length, g.width, horizon=c.sumo_step)
+            self._sensor = SurroundSensor(self.road.road, {}, g.cg_to_front, g.length, g.width, horizon=c.sumo_step)
             sc.bridge.subscribe_surroundings(self.agent, 200.0)
         per = c.control_per_sumo
         look = sc.k // per
@@ -379,7 +376,10 @@ class EgoEnv(gym.Env):
         resolved = resolve(RunSpec(self.scenario_name, controller, 0, overrides))
         sc_config, spec, ctrl_params = resolved.config, resolved.controller, resolved.controller_params
         observation = observation_type(cfg["observation"], self.task)
-        action = action_type(cfg["action"], self.task, _native_limits(self.task, sc_config))
+        # the agent's action box as its scenario declares it, and its lanes (no simulator starts)
+        probe = cls(sc_config, AgentSlot(), seed=0)
+        limits = probe.action_limits()
+        action = action_type(cfg["action"], self.task, limits)
         every = 1
         if env.policy_frequency > 0.0:
             ratio = 1.0 / (env.policy_frequency * sc_config.dt)
@@ -399,7 +399,7 @@ class EgoEnv(gym.Env):
                 )
 
         meta = action.type_name == "DiscreteMetaAction"
-        if meta and self.task != "tracking":
+        if meta and getattr(probe.view, "lane_offset", None) is None:  # a view of lanes to change
             raise ConfigError(
                 f"bad value for action: DiscreteMetaAction needs lanes to change (the motorway "
                 f"scenarios: emergency-brake, fast-follower, cut-in), not {self.scenario_name}"
@@ -663,17 +663,3 @@ def _pair(value: Any) -> bool:
         return all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in (lo, hi))
     except (TypeError, ValueError):
         return False
-
-
-def _native_limits(task: str, config) -> tuple[float, float, float]:
-    """(most negative, largest longitudinal command, largest |delta|) of ``EgoAction``'s box in
-    the plant's units: the friction circle's Fx per driven wheel for report 000's model, the
-    followers' acceleration limits, else 1 g; the scenario's steer limit."""
-    steer = getattr(config, "max_steer", 0.0)
-    if task == "tracking":
-        p = NonlinearBicycleParams()
-        grip = p.F_max / p.Nw
-        return -grip, grip, steer
-    if task == "car-following":
-        return -config.max_decel, config.max_accel, 0.0
-    return -_ONE_G, _ONE_G, steer

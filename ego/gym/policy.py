@@ -58,9 +58,10 @@ class ControllerPolicy:
             built, _ = apply_overrides(spec.params(), params or {})
             controller = spec.build(built, self.env.scenario.config.dt)
         self.controller = controller
-        self.following = task == "car-following"
-        self._obs = FollowingObservation() if self.following else Observation()
         names = self.env.observation_type.names
+        # a car-following observation (its spacing policy among the fields) or a road one
+        self.following = "headway" in names
+        self._obs = FollowingObservation() if self.following else Observation()
         self._fields = [(i, n) for i, n in enumerate(names) if n not in ("standstill_gap", "headway")]
         self._policy = [names.index("standstill_gap"), names.index("headway")] if self.following else None
         self._t = names.index("t")

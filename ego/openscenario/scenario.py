@@ -40,12 +40,12 @@ from ego.openscenario.roads import RoadMap, network_file, refine_shape
 from ego.openscenario.runtime import Storyboard
 from ego.openscenario.xmltree import DOCS, ScenarioFileError
 from ego.params import ConfigError, param
-from ego.scenarios.base import Parts
-from ego.scenarios.emergency_brake import BrakeInLane, EmergencyBrake
-from ego.scenarios.evasive import EvasiveConfig, compose
+from ego.scenarios.base import Parts, Scenario
+from ego.scenarios.emergency_brake import BrakeInLane, EmergencyBrake, Impact
+from ego.scenarios.evasive import MARKERS, EvasiveConfig, compare_plots, compose, evasive_metrics
 from ego.scenarios.events import INF
 from ego.scenarios.manoeuvre import CRUISE, EvasiveManoeuvre
-from ego.scenarios.motorway import EGO
+from ego.scenarios.motorway import COLUMNS, EGO, PLOTS
 from ego.sim.types import VehicleSpec, VehicleType
 from ego.sumo.bridge import SumoBridge, SumoConfig
 
@@ -212,10 +212,14 @@ def _file_class(path: str, mtime: float) -> type:
         _file_config,
         (path, {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}),
     )
+    body = {
+        k: v for k, v in vars(FileScenario).items() if k not in ("__dict__", "__weakref__", "__qualname__", "_resolved")
+    }
     return type(
         f"FileScenario[{Path(path).name}]",
-        (FileScenario,),
+        (Scenario,),
         {
+            **body,
             "name": path,
             "config_cls": cfg,
             "file": path,
@@ -241,8 +245,12 @@ def file_scenario_class(name: str) -> type:
     return cls
 
 
-class FileScenario(EmergencyBrake):
-    """A scenario file run with ego's ego (see the module docstring)."""
+class FileScenario(Scenario):
+    """A scenario file run with ego's ego (see the module docstring): emergency-brake's parts,
+    trace, metrics and default requirements (``base_scenario``) on the file's road and
+    entities. Each file's scenario class is this body with the file's name, configuration
+    and parameters (:func:`file_scenario_class`), a direct subclass of Scenario as every
+    scenario is; this class itself runs no file."""
 
     name = ""
     file = ""
@@ -250,6 +258,9 @@ class FileScenario(EmergencyBrake):
     config_cls = FileConfig
     network = None
     backends = ("sumo",)
+    base_scenario = EmergencyBrake.name
+    columns, plots, markers, metric_specs = COLUMNS, PLOTS, MARKERS, EmergencyBrake.metric_specs
+    compare_plots = classmethod(compare_plots)
 
     # -- resolution (before anything runs) ----------------------------------------------------
     @classmethod
@@ -324,12 +335,13 @@ class FileScenario(EmergencyBrake):
             "refine": refine_shape,
         }
         self.in_lane = BrakeInLane(c, lambda: self.safety is not None and self.safety.active)
+        self.impact = Impact(self.in_lane)
         parts = compose(
             self,
             "front",
             self.in_lane,
             self.populate,
-            on_trigger=self.on_trigger,
+            on_trigger=self.impact.on_trigger,
             road=road,
             manoeuvre_cls=FileManoeuvre,
         )
@@ -378,8 +390,7 @@ class FileScenario(EmergencyBrake):
     def populate(self, world) -> None:
         """The file's entities but the ego, as SUMO vehicles the storyboard commands."""
         c = self.config
-        self._impact: tuple[float, float] | None = None  #: (ego, other) speeds at the collision
-        self._trigger_gap, self._trigger_speed = INF, 0.0
+        self.impact.reset()
         self._ego_profile: Transition | None = None
         self._ego_relative: tuple | None = None
         self._ego_lateral: Transition | None = None
@@ -604,13 +615,21 @@ class FileScenario(EmergencyBrake):
             obs.dd_ref = 0.0  # obs.d from the target lane: the surround view's observation
 
     # -- metrics ----------------------------------------------------------------------------
+    def _collided(self, c) -> None:
+        self.impact.collided(self.view, c)
+        Scenario._collided(self, c)
+
+    def _metrics(self, trace, names) -> dict:
+        avoidable = self._avoidable() if self.collision is not None else None
+        return {**evasive_metrics(self, trace, names), **self.impact.metrics(avoidable)}
+
     def _avoidable(self) -> bool | None:
         """The braking criterion of :mod:`ego.scenarios.envelope` with the other party's speed
         as SUMO drove it (after the collision: its last deceleration held down to a stop)."""
         from ego.scenarios.envelope import braking_min_gap
 
-        trigger_t = self.manoeuvre.trigger_t
-        if trigger_t is None or self._trigger_gap == INF or self.collision is None:
+        trigger_t, impact = self.manoeuvre.trigger_t, self.impact
+        if trigger_t is None or impact.trigger_gap == INF or self.collision is None:
             return None
         other = self.collision.victim if self.collision.collider == EGO else self.collision.collider
         hist = self._history.get(other)
@@ -629,8 +648,8 @@ class FileScenario(EmergencyBrake):
         return (
             braking_min_gap(
                 trigger_t,
-                self._trigger_gap,
-                self._trigger_speed,
+                impact.trigger_gap,
+                impact.trigger_speed,
                 p.F_max / p.m + p.f * p.g,
                 fn,
                 lead_step=self.config.sumo_step,
@@ -639,7 +658,7 @@ class FileScenario(EmergencyBrake):
         )
 
     def _meta(self) -> dict:
-        meta = super()._meta()
+        meta = Scenario._meta(self)
         meta["file"] = os.fspath(self.file)
         return meta
 

@@ -4,7 +4,8 @@ their declarations (:class:`~ego.results.trace.Metric`: unit, headline)."""
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -108,3 +109,41 @@ def headline_names(declared: Sequence[Metric], names: Iterable[str]) -> list[str
 def with_unit(name: str, unit: str) -> str:
     """``"min_gap [m]"``; the bare name for a pure number (``"-"``) or an unknown unit (``""``)."""
     return name if unit in ("", "-") else f"{name} [{unit}]"
+
+
+@dataclass(frozen=True)
+class TraceMetric:
+    """A metric every run reports whose scenario's trace has the ``needs`` columns: ``fn``
+    maps the trace (column name -> array, SI units) to a number, a bool or None, declared
+    by ``metric`` (name, unit, description). A pure function of the trace: no scenario state."""
+
+    metric: Metric
+    needs: tuple[str, ...]
+    fn: Callable[[Mapping[str, np.ndarray]], Any]
+
+
+#: the registered trace metrics by name (:func:`register_metric`)
+TRACE_METRICS: dict[str, TraceMetric] = {}
+
+
+def register_metric(metric: TraceMetric) -> TraceMetric:
+    """Make ``metric`` part of every run whose trace has its columns (a later one of the same
+    name replaces it)."""
+    TRACE_METRICS[metric.metric.name] = metric
+    return metric
+
+
+def trace_metrics_declared(columns: Iterable[str]) -> tuple[Metric, ...]:
+    """The declarations of the registered trace metrics a trace with ``columns`` reports."""
+    have = set(columns)
+    return tuple(m.metric for m in TRACE_METRICS.values() if have.issuperset(m.needs))
+
+
+def trace_metrics(trace: np.ndarray, names: Sequence[str], columns: Iterable[str]) -> dict[str, Any]:
+    """The registered trace metrics of a run: ``trace`` (rows x ``names``) of a scenario whose
+    declared trace ``columns`` the metrics are chosen by (:func:`trace_metrics_declared`)."""
+    if not TRACE_METRICS:
+        return {}
+    have = set(columns)
+    named = {n: trace[:, i] for i, n in enumerate(names)}
+    return {m.metric.name: m.fn(named) for m in TRACE_METRICS.values() if have.issuperset(m.needs)}

@@ -29,6 +29,10 @@ SCENARIOS: dict[str, type[Scenario]] = {
 }
 
 
+#: modules moved to ego.results, kept for users' scripts (importing them warns): no scenarios
+_MOVED = ("metrics", "trace", "traffic_log")
+
+
 def _discover() -> None:
     """Register every named Scenario subclass defined in a module of this package (after the
     ones above, in module order): a new scenario is one module here, touching no other file."""
@@ -36,6 +40,8 @@ def _discover() -> None:
     import pkgutil
 
     for info in sorted(pkgutil.iter_modules(__path__), key=lambda i: i.name):
+        if info.name in _MOVED:
+            continue
         module = importlib.import_module(f"{__name__}.{info.name}")
         for obj in vars(module).values():
             if isinstance(obj, type) and issubclass(obj, Scenario) and obj.name and obj.__module__ == module.__name__:

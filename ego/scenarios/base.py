@@ -25,10 +25,10 @@ from ego.models.plant import Plant
 from ego.params import ConfigError, Params, param
 from ego.processes import signals_deferred
 from ego.record.base import NullRecorder, Recorder, Scene, Series, unit_path
-from ego.results.metrics import json_number
+from ego.results.metrics import json_number, trace_metrics, trace_metrics_declared
 from ego.results.run import Event, RunResult
 from ego.results.trace import Column, Metric, Plot, Trace
-from ego.results.traffic_log import RADIUS, REACH_MARGIN, TrafficCollector
+from ego.results.traffic_log import TrafficCollector
 from ego.sim.protocol import TrafficSim
 from ego.sim.registry import SimSetup, make_sim
 from ego.sim.types import Collision
@@ -39,6 +39,7 @@ STATUSES = ("completed", "ended", "collision", "diverged", "timeout", "interrupt
 NOT_FAILED = ("completed", "ended")
 _log = logging.getLogger("ego.scenario")
 _LOG_LEVELS = {"INFO": logging.INFO, "WARN": logging.WARNING, "ERROR": logging.ERROR}
+ONE_G = 9.81  #: m/s^2: the default action box of an acceleration command without a limit of its own
 
 
 @dataclass(frozen=True)
@@ -172,9 +173,11 @@ class Scenario:
 
     @classmethod
     def metrics_declared(cls, config=None) -> tuple[Metric, ...]:
-        """Every metric a run reports: the common ones, then the scenario's own."""
+        """Every metric a run reports: the common ones, then the scenario's own, then the
+        registered trace metrics its trace has the columns of (``ego.results.metrics``)."""
         backend = (BACKEND_METRIC,) if len(cls.backends) > 1 else ()
-        return COMMON_METRICS + backend + cls.metric_specs + COMMON_TAIL_METRICS
+        names = (c.name for c in cls.columns)
+        return COMMON_METRICS + backend + cls.metric_specs + trace_metrics_declared(names) + COMMON_TAIL_METRICS
 
     def trace_columns(self) -> tuple[Column, ...]:
         """The declared trace columns of this run (default: the class's ``columns``)."""
@@ -486,6 +489,7 @@ class Scenario:
         if len(self.backends) > 1:
             metrics["backend"] = self.backend
         metrics.update(self._metrics(trace, columns))
+        metrics.update(trace_metrics(trace, columns, (c.name for c in type(self).columns)))
         metrics.update(
             {
                 "sim_time": json_number(self.t, 4),
@@ -522,6 +526,15 @@ class Scenario:
     def plant(self, vid: str) -> Plant:
         """Vehicle ``vid``'s plant."""
         return self.ego
+
+    def action_limits(self, vid: str | None = None) -> tuple[float, float, float]:
+        """Vehicle ``vid``'s action box in its plant's units (None: the agent's vehicle), known
+        from the configuration before a run starts: (most negative and largest longitudinal
+        command, largest |steer| rad). A composed scenario's plant declares it (``Parts.limits``); default: 1 g of
+        acceleration either way and the configuration's steer limit."""
+        if self.parts is not None and self.parts.limits is not None:
+            return self.parts.limits(self.config)
+        return -ONE_G, ONE_G, getattr(self.config, "max_steer", 0.0)
 
     def joint_action(self, own, vid: str, longitudinal: float | None, lateral: float | None):
         """The action :meth:`step` takes when vehicle ``vid`` gets ``longitudinal`` and
@@ -615,12 +628,14 @@ class Parts:
     :meth:`Scenario.compose` returns one; the scenario's loop hooks are then these parts'
     methods, bound once per run (no dispatch per step)."""
 
-    __slots__ = ("world", "view", "manoeuvre", "safety", "make_plant", "series")
+    __slots__ = ("world", "view", "manoeuvre", "safety", "make_plant", "series", "limits")
 
-    def __init__(self, world, view, manoeuvre, safety=None, make_plant=None, series=None) -> None:
+    def __init__(self, world, view, manoeuvre, safety=None, make_plant=None, series=None, limits=None) -> None:
         self.world, self.view, self.manoeuvre, self.safety = world, view, manoeuvre, safety
         #: (config, geometry, pose) -> the ego's plant
         self.make_plant = make_plant
+        #: config -> that plant's action box (:meth:`Scenario.action_limits`; None: the default)
+        self.limits = limits
         #: (signal names, signal units) -> the recording's panels (unless the scenario has
         #: its own ``_series``)
         self.series = series
@@ -768,80 +783,6 @@ class ComposedLoop:
 
 def _unfiltered(action):
     return action
-
-
-class RoadScenario(Scenario):
-    """A SUMO scenario whose ego (id ``"ego"``) drives along a lane: the lane frame of the
-    ego's centre of gravity every control period, the divergence checks, and the ego's
-    pose pushed into SUMO (with scripted actors updated) before every SUMO step."""
-
-    ego_id: ClassVar[str] = "ego"
-
-    def __init__(self, config, controller: Controller, **kwargs) -> None:
-        super().__init__(config, controller, **kwargs)
-        self.ego: Plant | None = None  #: the ego's plant (state (X, u, Y, v, psi, r))
-        self.road = None  #: the lane the frame is measured on (ego.lane_frame.LanePolyline)
-        self.road_halfwidth = 0.0  #: |d| beyond which the ego has left the road (m)
-        self.actors: list = []  #: scripted SUMO vehicles, ``update(bridge, t)`` each SUMO step
-        self.lanes: dict = {}  #: the lanes drawn in the recording (LanePolyline values)
-        self.s = self.d_road = self.heading_error = self.curvature = self.ds = self.dd = 0.0
-        self.X = self.Y = 0.0  #: world position of the centre of gravity (m)
-
-    def _kinematics(self) -> None:
-        """Lane-frame position and velocity of the ego's centre of gravity."""
-        X, u, Y, v, psi, r = self.ego.state
-        s, d, err, kappa = self.road.frame(X, Y, psi)
-        c, sn = math.cos(err), math.sin(err)
-        self.X, self.Y = X, Y
-        self.s, self.d_road, self.heading_error, self.curvature = s, d, err, kappa
-        self.ds = u * c - v * sn
-        self.dd = u * sn + v * c
-
-    def _check_divergence(self) -> str | None:
-        u, r = self.ego.state[1], self.ego.state[5]
-        # comparisons are False for NaN, so anything odd falls through to the full check
-        if (
-            abs(self.d_road) <= self.road_halfwidth
-            and -1.0 <= u <= 80.0
-            and abs(r) <= 2.5
-            and abs(self.heading_error) <= 1.3
-        ):
-            return None
-        return divergence(self.ego.state, self.d_road, self.heading_error, self.road_halfwidth)
-
-    def _before_sumo_step(self) -> None:
-        x = self.ego.state
-        # SUMO's drivers see the ego's speed along the road (computed by _kinematics)
-        self.bridge.push(self.ego_id, x[0], x[2], x[4], self.ds)
-        for actor in self.actors:
-            actor.update(self.bridge, self.t - self.config.sumo_step)
-
-    def _setup_traffic_log(self) -> None:
-        """The vehicles near the ego, for the traffic log (a scenario with a surround
-        sensor shares its subscription instead, reaching at least as far)."""
-        self.bridge.subscribe_surroundings(self.ego_id, RADIUS + REACH_MARGIN)
-
-    def _surroundings(self) -> tuple[list[str], list[tuple]]:
-        """This SUMO step's vehicles around the ego (see ``TrafficSim.surroundings``)."""
-        return self.bridge.surroundings(self.ego_id)
-
-    def _log_traffic(self) -> None:
-        x = self.ego.state
-        # the box's centre is cg_to_front - length / 2 ahead of the centre of gravity
-        off = self.geometry.cg_to_front - 0.5 * self.geometry.length
-        psi = x[4]
-        ids, rows = self._surroundings()
-        self.traffic.add(self.t, (x[0] + off * math.cos(psi), x[2] + off * math.sin(psi)), ids, rows)
-
-    def _record_boxes(self) -> None:
-        """Every vehicle as SUMO has it; the following view keeps the ego in place."""
-        ids, poses = self.bridge.poses()
-        x = self.ego.state
-        self.recorder.vehicles(self.t, ids, poses, (x[0], x[2]))
-
-    def _scene(self) -> Scene:
-        """Every lane in ``self.lanes`` (id -> LanePolyline)."""
-        return Scene(lanes=[(lane.width, lane.points) for lane in self.lanes.values()], title=self.name)
 
 
 #: metrics every run reports first ...

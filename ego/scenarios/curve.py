@@ -33,11 +33,12 @@ from ego.lane_frame import LanePolyline
 from ego.models import ActuatorLimits, BicyclePlant, DynamicBicycle, DynamicBicycleParams, VehicleGeometry
 from ego.params import ConfigError, param
 from ego.record.base import Series
-from ego.scenarios import metrics as m
-from ego.scenarios.base import CommonConfig, RoadScenario, signal_series
+from ego.results import metrics as m
+from ego.results.trace import Column, Marker, Metric, Plot
+from ego.scenarios.base import CommonConfig, Scenario, signal_series
 from ego.scenarios.events import INF, boxes_overlap
 from ego.scenarios.observe import road_observation
-from ego.scenarios.trace import Column, Marker, Metric, Plot
+from ego.scenarios.road import RoadSensor, RoadWorld
 from ego.sumo.bridge import (
     Collision,
     Neighbours,
@@ -100,8 +101,9 @@ class CurveConfig(CommonConfig):
             )
 
 
-class CurveScenario(RoadScenario):
-    """Report 002's 90-degree curve with a SUMO lead car and oncoming traffic."""
+class CurveScenario(Scenario):
+    """Report 002's 90-degree curve with a SUMO lead car and oncoming traffic: the road's
+    world and sensor (:mod:`ego.scenarios.road`), the curve's plan and engagement here."""
 
     name = "curve"
     summary = (
@@ -167,6 +169,8 @@ class CurveScenario(RoadScenario):
     def __init__(self, config, controller, **kwargs) -> None:
         super().__init__(config, controller, **kwargs)
         self.geometry = GEOMETRY
+        RoadWorld(RoadSensor(GEOMETRY)).bind(self)  # the road's world and sensor: the view
+        self.ego = None
         self.neighbours = Neighbours()
         self.lanes: dict[str, LanePolyline] = {}
         self.arc_start = self.arc_end = 0.0
@@ -174,7 +178,6 @@ class CurveScenario(RoadScenario):
         self._reset_state()
 
     def _reset_state(self) -> None:
-        self.s = self.d_road = self.heading_error = self.curvature = self.ds = self.dd = 0.0
         self.phase = APPROACH
         self.engage_t: float | None = None
         self.arc_enter_t: float | None = None
@@ -188,16 +191,14 @@ class CurveScenario(RoadScenario):
         c = self.config
         self._reset_state()
         bridge = self.bridge
-        shapes = bridge.lane_shapes()
-        self.lanes = {lid: LanePolyline(pts, width, lid) for lid, (width, pts) in shapes.items()}
-        self.road = self.lanes[f"{EDGE}_0"]
-        self.obs.lane = self.road
-        spans = self.road.curved_spans()
+        self.lanes = self.world.setup(bridge)
+        road = self.lanes[f"{EDGE}_0"]
+        self.obs.lane = road
+        spans = road.curved_spans()
         if not spans:
             raise ConfigError(f"the {EDGE} lane of the curve network has no arc")
         self.arc_start, self.arc_end, kappa = spans[0]
         self.arc_sign = 1.0 if kappa > 0 else -1.0
-        self.road_halfwidth = 0.5 * self.road.width + 0.5 * self.geometry.width + 0.5
 
         bridge.add_type(ego_type(EGO, self.geometry))
         bridge.add_type(TRAFFIC_TYPE)
@@ -208,12 +209,12 @@ class CurveScenario(RoadScenario):
         speed = c.entry_speed * KMH
         specs = [VehicleSpec(EGO, EGO, ROUTE, 0, ego_pos, speed)]
         required = [EGO]
-        self.actors = []
+        actors = self.world.actors
         if c.lead > 0.0:
             lead_pos = ego_pos + c.lead_gap + LEAD_TYPE.length
             specs.append(VehicleSpec(LEAD, LEAD_TYPE.id, ROUTE, 0, lead_pos, c.lead * KMH))
             required.append(LEAD)
-            self.actors.append(PacedVehicle(LEAD, c.lead * KMH))
+            actors.append(PacedVehicle(LEAD, c.lead * KMH))
         if c.oncoming > 0.0:
             onc_speed = ONCOMING_SPEED
             specs += background_traffic(
@@ -228,7 +229,7 @@ class CurveScenario(RoadScenario):
                 type_id=TRAFFIC_TYPE.id,
                 prefix=ONCOMING_PREFIX,
             )
-            self.actors.append(
+            actors.append(
                 PoissonFlow(
                     rng, ONCOMING_ROUTE, TRAFFIC_TYPE.id, c.oncoming, onc_speed, prefix=f"{ONCOMING_PREFIX}_flow"
                 )
@@ -237,7 +238,7 @@ class CurveScenario(RoadScenario):
         missing = bridge.insert(required=required)
         if missing:
             self.event("traffic", f"SUMO could not place {len(missing)} oncoming vehicles", "WARN")
-        for actor in self.actors:
+        for actor in actors:
             actor.start(bridge)
         # keepRoute=1: the ego stays mapped on its own lane, never onto the oncoming one
         bridge.control(EGO, self.geometry, keep_route=1)
@@ -257,7 +258,8 @@ class CurveScenario(RoadScenario):
                 state=(x, speed, y, 0.0, psi, 0.0),
             )
         )
-        self._kinematics()
+        self.view.on_lane(road, self.ego)
+        self._frame = self.view.frame
         self._after_sumo_step()
 
     # -- per step ---------------------------------------------------------------------------
@@ -269,27 +271,28 @@ class CurveScenario(RoadScenario):
         ego = self.ego
         ego.step(action)
         a_x, delta = ego.applied
-        d = self.d_road
+        view = self.view
+        d = view.d_road
         self.trace.append(
             self.controller.signals(),
             t=obs.t,
-            s=self.s,
+            s=view.s,
             d=d,
             e_d=-self.arc_sign * d,
-            e_a=self.heading_error,
+            e_a=view.heading_error,
             speed=obs.speed,
-            ds=self.ds,
+            ds=view.ds,
             a_x=a_x,
             delta=delta,
             accel_ref=obs.accel_ref,
-            curvature=self.curvature,
+            curvature=view.curvature,
             gap_front=self.gap_front,
             lat_accel=ego.lateral_accel,
             yaw_rate=obs.yaw_rate,
             phase=self.phase,
-            in_arc=1.0 if self.arc_start <= self.s <= self.arc_end else 0.0,
+            in_arc=1.0 if self.arc_start <= view.s <= self.arc_end else 0.0,
         )
-        self._kinematics()
+        self._frame()
 
     def _after_sumo_step(self) -> None:
         bridge = self.bridge
@@ -338,8 +341,8 @@ class CurveScenario(RoadScenario):
 
     def _update(self) -> None:
         c = self.config
-        obs = self.obs
-        s = self.s
+        obs, view = self.obs, self.view
+        s = view.s
         if self.arc_enter_t is None and s >= self.arc_start:
             self.arc_enter_t = self.t
             self.event("arc", f"entering the arc at {self.ego.state[1] / KMH:.1f} km/h")
@@ -348,20 +351,20 @@ class CurveScenario(RoadScenario):
             self._end(
                 "completed",
                 f"left the arc after {self.t - (self.arc_enter_t or 0.0):.2f} s "
-                f"at {self.ego.state[1] / KMH:.1f} km/h, e_d {-self.arc_sign * self.d_road:+.3f} m",
+                f"at {self.ego.state[1] / KMH:.1f} km/h, e_d {-self.arc_sign * view.d_road:+.3f} m",
             )
             return
         plan = c.accel if self.phase == ENGAGED else 0.0
         gap = self._sync_gap
         if gap < INF:
             # extrapolated from the last SUMO step at both cars' speeds
-            gap += (self.lead_speed - self.ds) * (self.t - self._sync_t)
-            follow = 0.4 * (gap - c.min_gap - c.time_gap * self.ds) + 1.0 * (self.lead_speed - self.ds)
+            gap += (self.lead_speed - view.ds) * (self.t - self._sync_t)
+            follow = 0.4 * (gap - c.min_gap - c.time_gap * view.ds) + 1.0 * (self.lead_speed - view.ds)
             if follow < plan:
                 plan = max(follow, -7.0)
         self.gap_front = gap
         road_observation(
-            obs, self.t, s, self.ds, self.d_road, self.dd, self.ego.state, self.heading_error, self.curvature
+            obs, self.t, s, view.ds, view.d_road, view.dd, self.ego.state, view.heading_error, view.curvature
         )
         obs.accel_ref = plan
 

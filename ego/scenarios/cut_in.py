@@ -12,14 +12,14 @@ from dataclasses import dataclass, replace
 
 from ego.highway_env import BACKENDS
 from ego.params import ConfigError, param
-from ego.scenarios import metrics as m
+from ego.results import metrics as m
+from ego.results.trace import Marker, Metric
 from ego.scenarios.base import Parts, Scenario
 from ego.scenarios.envelope import ReachCriterion
 from ego.scenarios.evasive import MARKERS, METRICS, EvasiveConfig, compare_plots, compose, evasive_metrics
 from ego.scenarios.manoeuvre import FollowInLane
 from ego.scenarios.motorway import COLUMNS, EDGE, LANE_NAMES, PLOTS, ROUTE, MotorwayWorld
 from ego.scenarios.safety import friction_limit
-from ego.scenarios.trace import Marker, Metric
 from ego.sim.types import VehicleSpec, VehicleType
 from ego.sumo.traffic import CutInVehicle
 

@@ -17,7 +17,8 @@ from dataclasses import dataclass
 
 from ego.highway_env import BACKENDS
 from ego.params import ConfigError, param
-from ego.scenarios import metrics as m
+from ego.results import metrics as m
+from ego.results.trace import Metric
 from ego.scenarios.base import Parts, Scenario
 from ego.scenarios.evasive import (
     MARKERS,
@@ -30,7 +31,6 @@ from ego.scenarios.evasive import (
 from ego.scenarios.events import INF
 from ego.scenarios.motorway import COLUMNS, EDGE, EGO, PLOTS, ROUTE, MotorwayWorld
 from ego.scenarios.safety import friction_limit
-from ego.scenarios.trace import Metric
 from ego.sim.types import VehicleSpec, VehicleType
 from ego.sumo.traffic import BrakingLeader
 
@@ -140,6 +140,35 @@ class BrakeInLane:
         return view.ds <= view.sensor.front.speed + 0.1 or view.gap_front == INF
 
 
+class Impact:
+    """What the impact metrics and the braking criterion need of a collision with the car
+    ahead: the front gap and the ego's speed at the trigger (then the in-lane manoeuvre
+    starts), both speeds at the collision."""
+
+    def __init__(self, in_lane: BrakeInLane) -> None:
+        self.in_lane = in_lane
+        self.reset()
+
+    def reset(self) -> None:
+        self.speeds: tuple[float, float] | None = None  #: (ego, other) speeds at the collision
+        self.trigger_gap = self.trigger_speed = INF
+
+    def on_trigger(self, man) -> None:
+        self.trigger_gap, self.trigger_speed = man.view.gap_front, man.view.ds
+        self.in_lane.start(man)
+
+    def collided(self, view, c) -> None:
+        self.speeds = (view.ds, c.victim_speed if c.collider == EGO else c.collider_speed)
+
+    def metrics(self, avoidable: bool | None) -> dict:
+        ego_speed, other = self.speeds if self.speeds is not None else (None, None)
+        return {
+            "impact_speed": m.json_number(ego_speed, 4),
+            "impact_relative_speed": m.json_number(None if ego_speed is None else ego_speed - other, 4),
+            "collision_avoidable": avoidable,
+        }
+
+
 class EmergencyBrake(Scenario):
     name = "emergency-brake"
     summary = "lead car brakes hard; front TTC triggers braking and a lane change by gap acceptance"
@@ -166,12 +195,12 @@ class EmergencyBrake(Scenario):
 
     def compose(self) -> Parts:
         self.in_lane = BrakeInLane(self.config, lambda: self.safety is not None and self.safety.active)
-        return compose(self, "front", self.in_lane, self.populate, on_trigger=self.on_trigger)
+        self.impact = Impact(self.in_lane)
+        return compose(self, "front", self.in_lane, self.populate, on_trigger=self.impact.on_trigger)
 
     def populate(self, world: MotorwayWorld) -> None:
         c = self.config
-        self._impact: tuple[float, float] | None = None  #: (ego, other) speeds at the collision
-        self._trigger_gap = self._trigger_speed = INF
+        self.impact.reset()
         lead_front = c.ego_start + c.lead_gap + LEAD_TYPE.length
         # inserted at the ego's speed at least: SUMO would refuse to insert the ego closer to
         # a slower car than its own stopping distance; BrakingLeader.start sets the lead's
@@ -183,22 +212,13 @@ class EmergencyBrake(Scenario):
             BrakingLeader(LEAD, c.lead_cruise_speed, c.lead_brake_time, c.lead_decel, c.lead_final_speed),
         )
 
-    def on_trigger(self, man) -> None:
-        self._trigger_gap, self._trigger_speed = self.view.gap_front, self.view.ds
-        self.in_lane.start(man)
-
     def _collided(self, c) -> None:
-        other_speed = c.victim_speed if c.collider == EGO else c.collider_speed
-        self._impact = (self.view.ds, other_speed)
+        self.impact.collided(self.view, c)
         super()._collided(c)
 
     def _metrics(self, trace, names) -> dict:
-        out = evasive_metrics(self, trace, names)
-        ego_speed, other = self._impact if self._impact is not None else (None, None)
-        out["impact_speed"] = m.json_number(ego_speed, 4)
-        out["impact_relative_speed"] = m.json_number(None if ego_speed is None else ego_speed - other, 4)
-        out["collision_avoidable"] = self._avoidable() if self.collision is not None else None
-        return out
+        avoidable = self._avoidable() if self.collision is not None else None
+        return {**evasive_metrics(self, trace, names), **self.impact.metrics(avoidable)}
 
     def _avoidable(self) -> bool | None:
         """The braking criterion of :mod:`ego.scenarios.envelope` from this run's trigger."""
@@ -211,8 +231,8 @@ class EmergencyBrake(Scenario):
         positive: braking avoids it); None without a trigger."""
         from ego.scenarios.envelope import braking_min_gap, lead_speed
 
-        trigger_t = self.manoeuvre.trigger_t
-        if trigger_t is None or self._trigger_gap == INF:
+        trigger_t, impact = self.manoeuvre.trigger_t, self.impact
+        if trigger_t is None or impact.trigger_gap == INF:
             return None
         c = self.config
 
@@ -221,8 +241,8 @@ class EmergencyBrake(Scenario):
 
         return braking_min_gap(
             trigger_t,
-            self._trigger_gap,
-            self._trigger_speed,
+            impact.trigger_gap,
+            impact.trigger_speed,
             friction_limit(self.ego.model.params),
             fn,
             lead_step=c.sumo_step,

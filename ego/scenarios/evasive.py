@@ -20,7 +20,8 @@ import numpy as np
 from ego.models import VehicleGeometry
 from ego.params import param
 from ego.record.base import Series
-from ego.scenarios import metrics as m
+from ego.results import metrics as m
+from ego.results.trace import Band, Marker, Metric, Plot, Ref, Trajectory
 from ego.scenarios.base import Parts
 from ego.scenarios.manoeuvre import PHASE_NAMES, EvasiveManoeuvre, InLane
 from ego.scenarios.motorway import (
@@ -29,11 +30,11 @@ from ego.scenarios.motorway import (
     MotorwayWorld,
     SurroundView,
     check_density,
+    ego_limits,
     ego_plant,
     series,
 )
 from ego.scenarios.safety import SafetyLayer
-from ego.scenarios.trace import Band, Marker, Metric, Plot, Ref, Trajectory
 
 
 @dataclass(frozen=True)
@@ -117,6 +118,7 @@ def compose(
         safety,
         ego_plant,
         lambda names, units: evasive_series(c, names, units),
+        ego_limits,
     )
 
 

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 from ego.highway_env import BACKENDS
 from ego.params import param
+from ego.results.trace import Metric
 from ego.scenarios.base import Parts, Scenario
 from ego.scenarios.evasive import (
     MARKERS,
@@ -23,7 +24,6 @@ from ego.scenarios.evasive import (
 )
 from ego.scenarios.events import INF
 from ego.scenarios.motorway import COLUMNS, EDGE, PLOTS, ROUTE, MotorwayWorld
-from ego.scenarios.trace import Metric
 from ego.sim.types import VehicleSpec, VehicleType
 from ego.sumo.traffic import RecklessFollower
 

@@ -46,10 +46,11 @@ from ego.models import (
 )
 from ego.params import param
 from ego.record.base import Series
-from ego.scenarios import metrics as m
-from ego.scenarios.base import CommonConfig, RoadScenario, signal_series
+from ego.results import metrics as m
+from ego.results.trace import Band, Column, Marker, Metric, Plot
+from ego.scenarios.base import CommonConfig, Scenario, signal_series
 from ego.scenarios.observe import road_observation
-from ego.scenarios.trace import Band, Column, Marker, Metric, Plot
+from ego.scenarios.road import RoadSensor, RoadWorld
 from ego.sumo.bridge import VehicleSpec, VehicleType, ego_type
 from ego.sumo.traffic import PoissonFlow, background_traffic
 
@@ -99,8 +100,9 @@ class LaneCenteringConfig(CommonConfig):
     )
 
 
-class LaneCenteringScenario(RoadScenario):
-    """Report 003's lane centring on its road, traffic in the other lane."""
+class LaneCenteringScenario(Scenario):
+    """Report 003's lane centring on its road, traffic in the other lane: the road's world
+    and sensor (:mod:`ego.scenarios.road`), the drive's end and curve events here."""
 
     name = "lane-centering"
     summary = (
@@ -151,6 +153,8 @@ class LaneCenteringScenario(RoadScenario):
     def __init__(self, config, controller, **kwargs) -> None:
         super().__init__(config, controller, **kwargs)
         self.geometry = GEOMETRY
+        RoadWorld(RoadSensor(GEOMETRY)).bind(self)  # the road's world and sensor: the view
+        self.ego = None
         self.lanes: dict[str, LanePolyline] = {}
         self.spans: list[tuple[float, float, float]] = []
         self._in_curve = False
@@ -159,14 +163,12 @@ class LaneCenteringScenario(RoadScenario):
     def _setup(self, rng: np.random.Generator) -> None:
         c = self.config
         bridge = self.bridge
-        shapes = bridge.lane_shapes()
-        self.lanes = {lid: LanePolyline(pts, width, lid) for lid, (width, pts) in shapes.items()}
-        self.road = lane = self.lanes[f"{EDGE}_{EGO_LANE}"]
+        self.lanes = self.world.setup(bridge)
+        lane = self.lanes[f"{EDGE}_{EGO_LANE}"]
         self.obs.lane = lane
         self.spans = lane.curved_spans(min_curvature=1e-4)
         self._in_curve = False
         self._end_s = lane.length - END_MARGIN
-        self.road_halfwidth = 0.5 * lane.width + 0.5 * self.geometry.width + 0.5
 
         traffic_speed = c.traffic_factor * c.speed
         bridge.add_type(ego_type(EGO, self.geometry))
@@ -189,9 +191,8 @@ class LaneCenteringScenario(RoadScenario):
             if c.traffic_density > 0
             else []
         )
-        self.actors = []
         if c.traffic_density > 0:
-            self.actors.append(
+            self.world.actors.append(
                 PoissonFlow(
                     rng,
                     ROUTE,
@@ -226,32 +227,34 @@ class LaneCenteringScenario(RoadScenario):
             self.ego = BicyclePlant(
                 model, self.geometry, c.dt, c.substeps, limits, state=(x, c.speed, y, 0.0, lane.heading_at(s0), 0.0)
             )
-        self._kinematics()
+        self.view.on_lane(lane, self.ego)
+        self._frame = self.view.frame
 
     # -- per step ---------------------------------------------------------------------------
     def _act(self, action: tuple[float, float]) -> None:
         ego = self.ego
         ego.step(action)
         a_x, delta = ego.applied
-        obs = self.obs
+        obs, view = self.obs, self.view
         self.trace.append(
             self.controller.signals(),
             t=obs.t,
-            s=self.s,
-            d=self.d_road,
-            heading_error=self.heading_error,
+            s=view.s,
+            d=view.d_road,
+            heading_error=view.heading_error,
             vy=obs.vy,
             yaw_rate=obs.yaw_rate,
             speed=obs.speed,
             a_x=a_x,
             delta=delta,
-            curvature=self.curvature,
+            curvature=view.curvature,
             lat_accel=ego.lateral_accel,
         )
-        self._kinematics()
+        self._frame()
 
     def _update(self) -> None:
-        s = self.s
+        view = self.view
+        s = view.s
         if s >= self._end_s:
             self._end(
                 "completed",
@@ -264,18 +267,18 @@ class LaneCenteringScenario(RoadScenario):
             self._in_curve = inside
             self.event(
                 "curve",
-                f"{'entering' if inside else 'leaving'} the curve at s = {s:.0f} m, lateral error {self.d_road:+.3f} m",
+                f"{'entering' if inside else 'leaving'} the curve at s = {s:.0f} m, lateral error {view.d_road:+.3f} m",
             )
         obs = self.obs
         x = self.ego.state
-        road_observation(obs, self.t, s, self.ds, self.d_road, self.dd, x, self.heading_error, self.curvature)
+        road_observation(obs, self.t, s, view.ds, view.d_road, view.dd, x, view.heading_error, view.curvature)
         # the plan holds the speed (the lateral-error model's speed is constant anyway)
         obs.accel_ref = 1.0 * (self.config.speed - x[1])
 
     def _final_status(self) -> tuple[str, str]:
         # the speed is the configuration's: the drive's length in time is the user's choice
         return "ended", (
-            f"the duration ({self.config.duration:g} s) ended the run at s = {self.s:.0f} m "
+            f"the duration ({self.config.duration:g} s) ended the run at s = {self.view.s:.0f} m "
             f"of the drive to s = {self._end_s:.0f} m"
         )
 

@@ -28,12 +28,13 @@ from ego.models.actuators import ActuatorLimits
 from ego.models.plant import BicyclePlant
 from ego.params import ConfigError, param
 from ego.record.base import Series
-from ego.scenarios.base import CommonConfig, divergence, signal_series, vehicle_series
+from ego.results.trace import Column, Plot, Ref, Trajectory
+from ego.results.traffic_log import RADIUS, REACH_MARGIN
+from ego.scenarios.base import CommonConfig, signal_series, vehicle_series
 from ego.scenarios.events import INF, boxes_overlap, time_to_collision
 from ego.scenarios.observe import road_observation
+from ego.scenarios.road import RoadSensor
 from ego.scenarios.sensor import SurroundSensor
-from ego.scenarios.trace import Column, Plot, Ref, Trajectory
-from ego.scenarios.traffic_log import RADIUS, REACH_MARGIN
 from ego.sim.protocol import TrafficSim
 from ego.sim.types import Collision, VehicleSpec, VehicleType, ego_type
 from ego.sumo.traffic import PacedVehicle, background_traffic
@@ -239,37 +240,40 @@ def ego_plant(config: HighwayConfig, geometry: VehicleGeometry, pose: tuple[floa
     )
 
 
+def ego_limits(config) -> tuple[float, float, float]:
+    """The action box of report 000's car (:func:`ego_plant`, report 000's raw model too): Fx
+    per driven wheel within the whole friction circle (N), the steer limit (rad)."""
+    p = NonlinearBicycleParams()
+    grip = p.F_max / p.Nw
+    return -grip, grip, getattr(config, "max_steer", 0.0)
+
+
 # --- the sensors and the observation ------------------------------------------------------
 
 
-class SurroundView:
+class SurroundView(RoadSensor):
     """What the ego knows of itself and the traffic, every control period.
 
-    The road sensor: its centre of gravity in the frame of its start lane (``s``,
-    ``d_road`` m, ``heading_error`` rad, ``curvature`` 1/m, ``ds``/``dd`` m/s). The
+    The road sensor (:class:`~ego.scenarios.road.RoadSensor`): its centre of gravity in the
+    frame of its start lane (``s``, ``d_road`` m, ``heading_error`` rad, ``curvature`` 1/m, ``ds``/``dd`` m/s). The
     surround sensor (:class:`~ego.scenarios.sensor.SurroundSensor`): ``front``/``rear``
     objects, their bumper gaps (m) and times to collision (s), looked at every simulator
     step and carried on in between. ``target_lane`` is the lane the observation's ``d`` is
     measured from (the manoeuvre moves it)."""
 
     def __init__(self, config: HighwayConfig, geometry: VehicleGeometry) -> None:
+        super().__init__(geometry)
         self.config = config
-        self.geometry = geometry
         #: the trace columns a motorway step writes, in the order it writes them
         self.row_names = ROW
         self.sensor: SurroundSensor | None = None
         self.lanes: dict[int, LanePolyline] = {}
         self.lane_offset: dict[int, float] = {}
-        self.road: LanePolyline | None = None
-        self.road_halfwidth = 0.0
         self.target_lane = 0
-        self.s = self.d_road = self.heading_error = self.curvature = self.ds = self.dd = 0.0
-        self.X = self.Y = 0.0
         self.ttc_front = self.ttc_rear = INF
         self.gap_front = self.gap_rear = INF
         self.around: tuple[list, list] = ([], [])
         self._looked = False
-        self._plant = None
         self._sim = None
 
     def setup(self, sim: TrafficSim | None, lanes: dict[int, LanePolyline], plant) -> None:
@@ -293,16 +297,6 @@ class SurroundView:
         if sim is not None:
             # one subscription for the sensor and the traffic log, as far as either looks
             sim.subscribe_surroundings(EGO, max(c.sensor_range, LOG_REACH))
-
-    def frame(self) -> None:
-        """Lane-frame position and velocity of the ego's centre of gravity (the road sensor)."""
-        X, u, Y, v, psi, r = self._plant.state
-        s, d, err, kappa = self.road.frame(X, Y, psi)
-        c, sn = math.cos(err), math.sin(err)
-        self.X, self.Y = X, Y
-        self.s, self.d_road, self.heading_error, self.curvature = s, d, err, kappa
-        self.ds = u * c - v * sn
-        self.dd = u * sn + v * c
 
     def sense(self, t: float) -> None:
         """The surround sensor's view at a simulator step."""
@@ -362,32 +356,10 @@ class SurroundView:
             self.curvature,
         )
 
-    def diverged(self) -> str | None:
-        """Why the ego's state is beyond any controller's doing, or None."""
-        state = self._plant.state
-        u, r = state[1], state[5]
-        # comparisons are False for NaN, so anything odd falls through to the full check
-        if (
-            abs(self.d_road) <= self.road_halfwidth
-            and -1.0 <= u <= 80.0
-            and abs(r) <= 2.5
-            and abs(self.heading_error) <= 1.3
-        ):
-            return None
-        return divergence(state, self.d_road, self.heading_error, self.road_halfwidth)
-
-    def push(self, sim: TrafficSim) -> None:
-        """The ego's pose into the simulator (its drivers see the speed along the road)."""
-        x = self._plant.state
-        sim.push(EGO, x[0], x[2], x[4], self.ds)
-
     def traffic_row(self) -> tuple[tuple[float, float], list, list]:
         """The ego's box centre and this step's vehicles, for the traffic log."""
-        x = self._plant.state
-        off = self.geometry.cg_to_front - 0.5 * self.geometry.length
-        psi = x[4]
         ids, rows = self.around
-        return (x[0] + off * math.cos(psi), x[2] + off * math.sin(psi)), ids, rows
+        return self.box_centre(), ids, rows
 
 
 # --- trace, plots and recording ------------------------------------------------------------

@@ -40,11 +40,11 @@ from ego.lane_frame import LanePolyline
 from ego.models import Longitudinal, LongitudinalParams, LongitudinalPlant, SpacingPolicy, VehicleGeometry
 from ego.params import ConfigError, param, shown
 from ego.record.base import Scene, Series
-from ego.scenarios import metrics as m
+from ego.results import metrics as m
+from ego.results.trace import Band, Column, FrequencyResponse, Marker, Metric, Plot, Ref
 from ego.scenarios import string_stability as ss
 from ego.scenarios.base import CommonConfig, Scenario
 from ego.scenarios.events import INF, time_to_collision
-from ego.scenarios.trace import Band, Column, FrequencyResponse, Marker, Metric, Plot, Ref
 from ego.sumo.bridge import (
     Collision,
     Neighbour,
@@ -413,6 +413,11 @@ class PlatoonScenario(Scenario):
 
     def plant(self, vid: str) -> LongitudinalPlant:
         return self.plants[vid]
+
+    def action_limits(self, vid: str | None = None) -> tuple[float, float, float]:
+        """A follower's commanded acceleration (m/s^2) within its limits; it keeps its lane."""
+        c = self.config
+        return -c.max_decel, c.max_accel, 0.0
 
     def joint_action(self, own, vid: str, longitudinal: float | None, lateral: float | None):
         """The controllers' actions (one per follower) with ``vid``'s longitudinal command

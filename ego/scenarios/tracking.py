@@ -22,7 +22,8 @@ import numpy as np
 from ego.models import ActuatorLimits, BicyclePlant, NonlinearBicycle, VehicleGeometry
 from ego.params import param
 from ego.record.base import Scene, Series
-from ego.scenarios import metrics as m
+from ego.results import metrics as m
+from ego.results.trace import Column, Metric, Plot
 from ego.scenarios.base import (
     Parts,
     Scenario,
@@ -31,9 +32,8 @@ from ego.scenarios.base import (
     signal_series,
     vehicle_series,
 )
-from ego.scenarios.motorway import COLUMNS, EDGE, HighwayConfig, MotorwayWorld, SurroundView, ego_plant
+from ego.scenarios.motorway import COLUMNS, EDGE, HighwayConfig, MotorwayWorld, SurroundView, ego_limits, ego_plant
 from ego.scenarios.motorway import series as motorway_series
-from ego.scenarios.trace import Column, Metric, Plot
 
 
 def tracking_metrics(t: np.ndarray, e_lat: np.ndarray, e_speed: np.ndarray, after: float = 10.0) -> dict:
@@ -136,6 +136,7 @@ class SineTracking(Scenario):
             SineReference(self.config, view),
             None,
             ego_plant,
+            limits=ego_limits,
         )
 
     def _series(self):
@@ -276,6 +277,9 @@ class Report000(Scenario):
         pose = (*front, (90.0 - math.degrees(psi)) % 360.0, g.length, g.width)
         self.recorder.vehicles(self.t, ["ego"], [pose], (X, 0.0))
         self._next_pose = self.t + self._RECORD_EVERY
+
+    def action_limits(self, vid: str | None = None) -> tuple[float, float, float]:
+        return ego_limits(self.config)  # report 000's car, as the motorway's
 
     def _check_divergence(self) -> str | None:
         X, u, Y, v, psi, r = self.ego.state

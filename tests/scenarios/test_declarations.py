@@ -5,8 +5,8 @@ trace, and every trace column has a unit."""
 import numpy as np
 import pytest
 
+from ego.results import metrics as m
 from ego.runner import RunSpec, resolve, run
-from ego.scenarios import metrics as m
 from ego.scenarios.tracking import SineTracking
 
 #: scenario -> the runs that between them produce every metric it declares

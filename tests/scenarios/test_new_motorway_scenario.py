@@ -16,10 +16,10 @@ MODULE = """
 from dataclasses import dataclass
 
 from ego.params import param
+from ego.results.trace import Metric
 from ego.scenarios.base import Scenario
 from ego.scenarios.evasive import METRICS, EvasiveConfig, compose, evasive_metrics
 from ego.scenarios.motorway import COLUMNS, EDGE, ROUTE
-from ego.scenarios.trace import Metric
 from ego.sim import VehicleSpec, VehicleType
 from ego.sumo.traffic import PacedVehicle
 
@@ -98,6 +98,8 @@ def test_every_named_scenario_of_the_package_is_registered_by_its_module_alone()
 
     found = {}
     for info in pkgutil.iter_modules(package.__path__):
+        if info.name in package._MOVED:  # old names of ego.results modules (importing them warns)
+            continue
         module = importlib.import_module(f"ego.scenarios.{info.name}")
         found.update(
             {

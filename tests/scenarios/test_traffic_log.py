@@ -6,9 +6,9 @@ import pickle
 import numpy as np
 import pytest
 
+from ego.results import traffic_log as tl
 from ego.results.traffic_log import RADIUS, UNITS, TrafficCollector, TrafficLog
 from ego.runner import RunSpec, build
-from ego.scenarios import traffic_log as tl
 
 
 def _rows(n, x0=0.0):
