@@ -2,6 +2,11 @@
 
     pip install -e ".[rl]"
     python scenarios/rl/train_sb3.py --env ego/CutIn-v0 --algo ppo --seed 0 --steps 5000 [--save model.zip]
+    python scenarios/rl/train_sb3.py --env ego/CutIn-v0 --algo sac --seed 1 --steps 3072 --models runs/rl-baselines
+
+``--models DIR`` writes the model as ``DIR/<env>-<algo>-seed<seed>-<steps>.zip``, where
+``python -m ego.docs results --page rl-baselines`` reads the trained rows' models from
+(``runs/rl-baselines/`` of the checkout; a missing model is trained there by the page itself).
 
 The env runs in its benchmark configuration (``ego.gym.baselines.BENCH_CONFIG``: randomised
 episodes, 10 Hz policy), and the agent is scored on the evaluation episodes
@@ -14,6 +19,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from pathlib import Path
 
 from ego.gym import ENV_IDS
 from ego.gym.baselines import (
@@ -22,6 +28,8 @@ from ego.gym.baselines import (
     controller_policy_act,
     evaluate,
     model_act,
+    model_file,
+    save,
     summary,
     train,
 )
@@ -35,6 +43,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--steps", type=int, default=5000, help="training budget in env steps")
     ap.add_argument("--save", default=None, help="write the trained model here (.zip)")
+    ap.add_argument(
+        "--models", default=None, help="write the trained model into this folder, named as the docs read it"
+    )
+    ap.add_argument("--no-score", action="store_true", help="skip scoring the agent and the controller after training")
     args = ap.parse_args(argv)
     problems = []
     if args.env not in BENCH_CONFIG:
@@ -52,7 +64,12 @@ def main(argv: list[str] | None = None) -> int:
     model = train(args.env, args.algo, args.seed, args.steps)
     print(f"{args.algo} trained {args.steps} env steps on {args.env} in {time.perf_counter() - t0:.0f} s")
     if args.save:
-        model.save(args.save)
+        save(model, args.save)
+    if args.models:
+        Path(args.models).mkdir(parents=True, exist_ok=True)
+        save(model, Path(args.models) / model_file(args.env, args.algo, args.seed, args.steps))
+    if args.no_score:
+        return 0
     from ego.scenarios import scenario_class
 
     controller = DEFAULT_CONTROLLER[scenario_class(ENV_IDS[args.env]).task]
