@@ -97,3 +97,14 @@ def test_a_model_train_sb3_stores_is_the_one_the_page_trains_and_evaluates(algo,
     assert page == evaluate(env_id, model_act(fresh))
     assert len(page["returns"]) == len(EVAL_SEEDS) and all(np.isfinite(page["returns"]))
     assert sorted(f.name for f in tmp_path.iterdir()) == [path.name]  # nothing half-written left
+
+
+@pytest.mark.benchmark  # three PPO trainings of the page's budget (minutes) unless runs/rl-baselines has them
+@pytest.mark.sumo
+def test_a_trained_row_of_the_committed_page_regenerates():
+    from ego import docs
+
+    table = next(t for t in docs.rl_baselines() if t.name == "rl-curve")
+    row = table.row("PPO")
+    line = docs.render_row(row, docs.run_jobs(row.jobs, workers=2, progress=False))
+    assert line in docs.block(docs.page_path("rl-baselines").read_text(), table.name).splitlines()
