@@ -34,6 +34,8 @@ from ego.gym.baselines import (
     train,
 )
 from ego.gym.env import DEFAULT_CONTROLLER
+from ego.params import ConfigError
+from ego.paths import check_file_target, check_folder_target
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -57,6 +59,13 @@ def main(argv: list[str] | None = None) -> int:
         problems.append(f"bad value for --steps: {args.steps} (expected 1 to 10000000)")
     if not 0 <= args.seed <= 2**31 - 1:
         problems.append(f"bad value for --seed: {args.seed} (expected 0 to 2147483647)")
+    try:  # the places the model goes: refused before the training, not after it
+        if args.save:
+            check_file_target(args.save, "--save")
+        if args.models:
+            check_folder_target(args.models, "--models")
+    except ConfigError as exc:
+        problems.append(str(exc))
     if problems:
         print(f"train_sb3.py: error: {problems[0]}", file=sys.stderr)
         return 2

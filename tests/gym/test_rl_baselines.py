@@ -62,6 +62,17 @@ def test_train_sb3_refuses_a_bad_value_in_one_line_before_training(args, bad, tm
     assert not any(tmp_path.iterdir())
 
 
+def test_train_sb3_refuses_a_model_place_it_cannot_write_before_training(tmp_path):
+    (tmp_path / "file").write_text("")
+    for args, why in (
+        (["--models", str(tmp_path / "file")], "bad --models"),
+        (["--save", str(tmp_path)], "bad --save"),
+    ):
+        p = subprocess.run([sys.executable, str(SCRIPT), *args], capture_output=True, text=True, timeout=60)
+        assert p.returncode == 2 and p.stderr.count("\n") == 1 and why in p.stderr, p.stderr
+    assert [f.name for f in tmp_path.iterdir()] == ["file"]
+
+
 @pytest.mark.benchmark  # about a minute of training on a free core: run with -m benchmark
 @pytest.mark.sumo
 @pytest.mark.parametrize(("algo", "steps"), [("ppo", 512), ("sac", 600)])
