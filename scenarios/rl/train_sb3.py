@@ -2,6 +2,11 @@
 
     pip install -e ".[rl]"
     python scenarios/rl/train_sb3.py --env ego/CutIn-v0 --algo ppo --seed 0 --steps 5000 [--save model.zip]
+    python scenarios/rl/train_sb3.py --env ego/CutIn-v0 --algo sac --seed 1 --steps 2048 --models runs/rl-baselines
+
+``--models DIR`` writes the model as ``DIR/<env>-<algo>-seed<seed>-<steps>.zip``, where
+``python -m ego.docs results --page rl-baselines`` reads the trained rows' models from
+(``runs/rl-baselines/`` of the checkout; a missing model is trained there by the page itself).
 
 The env runs in its benchmark configuration (``ego.gym.baselines.BENCH_CONFIG``: randomised
 episodes, 10 Hz policy), and the agent is scored on the evaluation episodes
@@ -14,6 +19,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from pathlib import Path
 
 from ego.gym import ENV_IDS
 from ego.gym.baselines import (
@@ -22,10 +28,14 @@ from ego.gym.baselines import (
     controller_policy_act,
     evaluate,
     model_act,
+    model_file,
+    save,
     summary,
     train,
 )
 from ego.gym.env import DEFAULT_CONTROLLER
+from ego.params import ConfigError
+from ego.paths import check_file_target, check_folder_target
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -35,6 +45,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--steps", type=int, default=5000, help="training budget in env steps")
     ap.add_argument("--save", default=None, help="write the trained model here (.zip)")
+    ap.add_argument(
+        "--models", default=None, help="write the trained model into this folder, named as the docs read it"
+    )
+    ap.add_argument("--no-score", action="store_true", help="skip scoring the agent and the controller after training")
     args = ap.parse_args(argv)
     problems = []
     if args.env not in BENCH_CONFIG:
@@ -45,6 +59,13 @@ def main(argv: list[str] | None = None) -> int:
         problems.append(f"bad value for --steps: {args.steps} (expected 1 to 10000000)")
     if not 0 <= args.seed <= 2**31 - 1:
         problems.append(f"bad value for --seed: {args.seed} (expected 0 to 2147483647)")
+    try:  # the places the model goes: refused before the training, not after it
+        if args.save:
+            check_file_target(args.save, "--save")
+        if args.models:
+            check_folder_target(args.models, "--models")
+    except ConfigError as exc:
+        problems.append(str(exc))
     if problems:
         print(f"train_sb3.py: error: {problems[0]}", file=sys.stderr)
         return 2
@@ -52,7 +73,12 @@ def main(argv: list[str] | None = None) -> int:
     model = train(args.env, args.algo, args.seed, args.steps)
     print(f"{args.algo} trained {args.steps} env steps on {args.env} in {time.perf_counter() - t0:.0f} s")
     if args.save:
-        model.save(args.save)
+        save(model, args.save)
+    if args.models:
+        Path(args.models).mkdir(parents=True, exist_ok=True)
+        save(model, Path(args.models) / model_file(args.env, args.algo, args.seed, args.steps))
+    if args.no_score:
+        return 0
     from ego.scenarios import scenario_class
 
     controller = DEFAULT_CONTROLLER[scenario_class(ENV_IDS[args.env]).task]
