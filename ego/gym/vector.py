@@ -383,12 +383,12 @@ def _worker(index: int, make, conn, inherited: list, buffers: dict, layout, info
                 conn.send(info)
             elif kind == _CALL:
                 name, args, kwargs = conn.recv()
-                value = getattr(env, name)
+                value = env.get_wrapper_attr(name)
                 write(fd, _INFO)
                 conn.send(value(*args, **kwargs) if callable(value) else value)
             elif kind == _SETATTR:
                 name, value = conn.recv()
-                setattr(env, name, value)
+                env.set_wrapper_attr(name, value)
                 write(fd, _DONE)
             else:  # _CLOSE, or the parent's end of file: it is gone
                 break
