@@ -25,6 +25,7 @@ one env in this process: env steps/s of each (target: make_vec >= 1.8x on 2 core
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
 import tempfile
@@ -39,7 +40,7 @@ from gymnasium.vector import AsyncVectorEnv  # noqa: E402
 
 import ego.gym  # noqa: E402
 from ego.gym.env import DEFAULT_CONTROLLER  # noqa: E402
-from ego.gym.vector import _Maker  # noqa: E402
+from ego.gym.vector import EgoVectorEnv, _Maker  # noqa: E402
 from ego.runner import RunSpec, build  # noqa: E402
 from ego.scenarios import scenario_class  # noqa: E402
 
@@ -149,6 +150,41 @@ def vector_speedup(env_id: str, steps: int, config: dict, rounds: int = 1) -> tu
     return best[0], best[1], best[2]
 
 
+class _NoOp(gym.Env):
+    """An env whose step does nothing: a vector env over it costs its round trip alone."""
+
+    observation_space = gym.spaces.Box(-1.0, 1.0, (15,), np.float64)
+    action_space = gym.spaces.Box(-1.0, 1.0, (2,), np.float32)
+    _obs = np.zeros(15)
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        return self._obs.copy(), {}
+
+    def step(self, action):
+        return self._obs.copy(), 0.0, False, False, {"status": "running"}
+
+
+def round_trip(steps: int, rounds: int) -> tuple[float, float]:
+    """Microseconds per step of two no-op envs in ``EgoVectorEnv`` and in ``AsyncVectorEnv``
+    (best of ``rounds``): what a vector step costs beyond the envs' own work."""
+    out = []
+    for envs in (EgoVectorEnv([_NoOp, _NoOp], context="fork"), AsyncVectorEnv([_NoOp, _NoOp], context="fork")):
+        try:
+            envs.reset(seed=0)
+            zeros = np.zeros((2, 2), np.float32)
+            best = math.inf
+            for _ in range(rounds):
+                t0 = time.perf_counter()
+                for _ in range(steps):
+                    envs.step(zeros)
+                best = min(best, (time.perf_counter() - t0) / steps)
+            out.append(best * 1e6)
+        finally:
+            envs.close()
+    return out[0], out[1]
+
+
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5)
@@ -228,6 +264,12 @@ def main(argv: list[str] | None = None) -> dict:
                     f"{other / one:8.2f}x"
                 )
         print("  target: make_vec >= 1.8x on 2 cores")
+        ego_us, async_us = round_trip(args.vector_steps, args.repeat)
+        figures["round_trip_us"] = {"EgoVectorEnv": ego_us, "AsyncVectorEnv": async_us}
+        print(
+            f"a vector step of two no-op envs (the round trip alone), best of {args.repeat}: "
+            f"EgoVectorEnv {ego_us:.0f} us, AsyncVectorEnv {async_us:.0f} us"
+        )
     return figures
 
 
