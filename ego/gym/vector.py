@@ -290,8 +290,9 @@ class EgoVectorEnv(VectorEnv):
             self._fail(None)
             exc.add_note(f"(raised in worker {i} of EgoVectorEnv)\n{trace}")
             raise exc
-        code = self._processes[i].exitcode
-        self._fail(f"worker {i} of EgoVectorEnv ended unexpectedly (exit code {code})")
+        proc = self._processes[i]
+        proc.join(1.0)
+        self._fail(f"worker {i} of EgoVectorEnv ended unexpectedly (exit code {proc.exitcode})")
 
     def _fail(self, message: str | None):
         """The workers reaped; ``message``: raised as a RuntimeError."""
