@@ -48,6 +48,8 @@ def test_gym_wrapper_against_the_raw_step(tmp_path, monkeypatch):
 
     monkeypatch.setenv("MPLCONFIGDIR", str(tmp_path))
     figures = main(["--repeat", "3"])
+    round_trip = figures.pop("round_trip_us")
+    assert round_trip["EgoVectorEnv"] > 0.0 and round_trip["AsyncVectorEnv"] > 0.0
     assert all(row["steps"] > 0 and row["overhead"] >= 0.0 for row in figures.values())
 
 

@@ -165,10 +165,9 @@ class EgoView:
         """(speed along the lane m/s, tracking error m, longitudinal and lateral acceleration
         m/s^2) now; without a measured longitudinal acceleration, the rate of the speed along
         the lane since the last call."""
-        sc = self.scenario
-        speed, error, a_lon, a_lat = sc.agent_signals(self.agent)
+        speed, error, a_lon, a_lat = self._signals()
         if a_lon is None:
-            t = self.obs.t  # the time the observation was taken
+            t = self._obs.t  # the time the observation was taken
             t0, ds0 = self._prev
             self._prev = (t, speed)
             a_lon = (speed - ds0) / (t - t0) if t > t0 else 0.0
@@ -178,7 +177,12 @@ class EgoView:
 
     def reset(self) -> None:
         sc = self.scenario
-        self._prev = (sc.t, sc.agent_signals(self.agent)[0])
+        # the agent's vehicle and its observation hold still over a run (the scenario fills
+        # one observation in place): looked up once here, not at every step
+        agent = self.agent
+        self._obs = sc.observation(agent)
+        self._signals = functools.partial(sc.agent_signals, agent)
+        self._prev = (sc.t, self._signals()[0])
         self._looked = -1
         self._sensor = None
 
@@ -307,6 +311,7 @@ class EgoEnv(gym.Env):
         self._evicted = False
         self._elapsed = 0
         self._limit = None
+        self._limit_steps = math.inf
         self.randomized: dict[str, float] = {}
         self._build()
 
@@ -418,6 +423,7 @@ class EgoEnv(gym.Env):
         self.observation_space = observation.space
         self._observe = observation.observe
         self.action_space = action.space
+        self._native = action.native
         self._every = every
         self._helper = helper
         self._make_scenario(sc_config)
@@ -463,7 +469,7 @@ class EgoEnv(gym.Env):
             seed = int(seed)
         run_seed = check_seed(seed) if seed is not None else int(self.np_random.integers(0, MAX_SEED + 1))
         self._start(run_seed)
-        self._limit = _registered_limit(self.spec)
+        self._set_limit()
         return self.observation_type.observe(self._view), {
             "status": self.scenario.status,
             "randomized": dict(self.randomized),
@@ -494,6 +500,7 @@ class EgoEnv(gym.Env):
         view = self._view
         view.np_random = self.np_random
         view.reset()
+        self._agent = view.agent
         self.observation_type.reset(view)
         if self.action_type.type_name == "DiscreteMetaAction":
             self.action_type.reset(view)
@@ -515,7 +522,7 @@ class EgoEnv(gym.Env):
         self._history.append(command)
         sc = self.scenario
         lon, lat = command
-        sc.step(sc.joint_action(sc.controller.step(sc.obs), sc.agent_id, lon, lat))
+        sc.step(sc.joint_action(sc.controller.step(sc.obs), self._agent, lon, lat))
 
     def _apply_meta(self, command) -> None:
         # a new command tuple is a new env step: the meta action moves the targets once
@@ -528,41 +535,52 @@ class EgoEnv(gym.Env):
         sc.step(sc.controller.step(meta.controller_observation()))
 
     def step(self, action):
+        # the hot path: what holds still over a run is looked up at the reset, not here
         sc = self.scenario
         if sc is None or sc.bridge is None:
             raise RuntimeError(_EVICTED if self._evicted else "call reset() before step()")
-        command = self.action_type.native(action)
+        command = self._native(action)
         lon, lat = command
         check = (0.0 if lon is None else lon) + (0.0 if lat is None else lat)
-        substep, self._substep = self._substep, None
         if check - check != 0.0:  # nan or inf: the episode ends before SUMO or the model see it
+            self._substep = None
             sc._end("diverged", f"the agent's action is not finite: {np.asarray(action).tolist()}", level="ERROR")
+        elif self._every == 1:
+            self._apply(command)
         else:
+            substep, self._substep = self._substep, None
             apply = self._apply
             apply(command)
-            if self._every > 1:
-                for _ in range(self._every - 1):
-                    if sc.status != "running":
-                        break
-                    apply(command if substep is None else substep())
-        self._elapsed += 1
+            for _ in range(self._every - 1):
+                if sc.status != "running":
+                    break
+                apply(command if substep is None else substep())
+        elapsed = self._elapsed = self._elapsed + 1
         status = sc.status
+        if status == "running":
+            reward, terms = self.reward(self._view, False)
+            info = {"status": status, "rewards": terms}
+            if elapsed >= self._limit_steps:
+                # the registered TimeLimit truncates this step: the run's metrics so far (a
+                # TimeLimit of another length cannot be seen from here: env.unwrapped.metrics())
+                info["status_detail"] = f"max_episode_steps ({self._limit}) reached"
+                info["metrics"] = sc.result().metrics
+            return self._observe(self._view), reward, False, False, info
         crashed = status == "collision" or status == "diverged"
         reward, terms = self.reward(self._view, crashed)
-        info = {"status": status, "rewards": terms}
-        terminated = truncated = False
-        if status != "running":
-            # the duration reached is a truncation; anything before it ends the task
-            truncated = not crashed and sc.t >= sc.config.duration - 1e-9
-            terminated = not truncated
-            info["status_detail"] = sc.status_detail
-            info["metrics"] = sc.result().metrics
-        elif self._limit is not None and self._elapsed >= self._limit:
-            # the registered TimeLimit truncates this step: the run's metrics so far (a TimeLimit
-            # of another length cannot be seen from here: env.unwrapped.metrics())
-            info["status_detail"] = f"max_episode_steps ({self._limit}) reached"
-            info["metrics"] = sc.result().metrics
-        return self._observe(self._view), reward, terminated, truncated, info
+        # the duration reached is a truncation; anything before it ends the task
+        truncated = not crashed and sc.t >= sc.config.duration - 1e-9
+        info = {
+            "status": status,
+            "rewards": terms,
+            "status_detail": sc.status_detail,
+            "metrics": sc.result().metrics,
+        }
+        return self._observe(self._view), reward, not truncated, truncated, info
+
+    def _set_limit(self) -> None:
+        self._limit = _registered_limit(self.spec)
+        self._limit_steps = self._limit if self._limit is not None else math.inf
 
     def metrics(self) -> dict:
         """The current run's metrics so far (what ``info["metrics"]`` holds at its end)."""
@@ -608,7 +626,7 @@ class EgoEnv(gym.Env):
         if run is not None:
             seed, history, prev, elapsed = run
             self._start(seed)
-            self._limit = _registered_limit(self.spec)
+            self._set_limit()
             apply = self._apply
             for command in history:  # same seed, same commands: the same run (determinism)
                 apply(command)

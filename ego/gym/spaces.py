@@ -39,6 +39,7 @@ from ego.params import ConfigError
 
 #: the observed fields that are not numbers, and what a vector carries instead
 _NOT_NUMERIC = {"lane": (), "policy": ("policy.standstill_gap", "policy.headway")}
+_array, _F64 = np.array, np.float64
 #: observed fields fixed for a whole run
 _RUN_CONSTANT = ("policy.standstill_gap", "policy.headway", "max_accel", "max_decel")
 
@@ -131,18 +132,19 @@ class EgoStateObservation:
 
     def observe(self, view) -> np.ndarray:
         values = list(self._get(self._source))
-        if not self.normalize:
-            return np.array(values + self._const if self._const else values, dtype=np.float64)
-        values[self._t] *= self._per_duration
-        s = self._s
-        if s is not None:
-            r = self._s_ref
-            if self._tracks:
-                values[s] -= values[r]
-                values[r] = (values[r] - self._s_ref0) * self._per_distance
-            else:
-                values[s] = (values[s] - self._s0) * self._per_distance
-        return np.array(values + self._const if self._const else values, dtype=np.float64)
+        if self.normalize:
+            values[self._t] *= self._per_duration
+            s = self._s
+            if s is not None:
+                r = self._s_ref
+                if self._tracks:
+                    values[s] -= values[r]
+                    values[r] = (values[r] - self._s_ref0) * self._per_distance
+                else:
+                    values[s] = (values[s] - self._s0) * self._per_distance
+        if self._const:
+            values += self._const
+        return _array(values, _F64)
 
 
 class KinematicsObservation:
@@ -469,7 +471,7 @@ class ActionType:
                     f"bad action {_short(action)}: expected an array of shape "
                     f"{self.space.shape} ({self._describe()}), got shape {shape}"
                 )
-        return action
+        return action if type(action) is np.ndarray else np.asarray(action, dtype=np.float64)
 
     def _describe(self) -> str:
         names = [n for n, on in zip(("longitudinal", "steering"), self.channels) if on]
@@ -507,9 +509,12 @@ class ContinuousAction(ActionType):
         self._half = [0.5 * (hi - lo) for lo, hi in ranges]
 
     def native(self, action) -> tuple[float | None, float | None]:
-        action = self._shaped(action)
-        a = np.clip(action, -1.0, 1.0) if self.clip else action
-        values = [mid + half * float(x) for mid, half, x in zip(self._mid, self._half, a)]
+        if type(action) is not np.ndarray or action.shape != self._shape:
+            action = self._shaped(action)
+        values = action.tolist()
+        if self.clip:  # NaN passes through (the env ends the run on it)
+            values = [-1.0 if x < -1.0 else (1.0 if x > 1.0 else x) for x in values]
+        values = [mid + half * x for mid, half, x in zip(self._mid, self._half, values)]
         lon = values.pop(0) * self.force_per_accel if self.longitudinal else None
         lat = values[0] if self.lateral else None
         return lon, lat
@@ -538,11 +543,15 @@ class EgoAction(ActionType):
         self.native = self._both if both else self._one
 
     def _both(self, action) -> tuple[float, float]:
-        action = self._shaped(action)
-        return float(action[0]), float(action[1])
+        if type(action) is not np.ndarray or action.shape != self._shape:
+            action = self._shaped(action)
+        lon, lat = action.tolist()
+        return lon, lat
 
     def _one(self, action) -> tuple[float | None, float | None]:
-        x = float(self._shaped(action)[0])
+        if type(action) is not np.ndarray or action.shape != self._shape:
+            action = self._shaped(action)
+        (x,) = action.tolist()
         return (x, None) if self.longitudinal else (None, x)
 
     def from_native(self, command: float, delta: float) -> np.ndarray:

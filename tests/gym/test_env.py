@@ -10,6 +10,7 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import ego.gym
+from ego.gym.vector import EgoVectorEnv
 from ego.params import ConfigError
 
 pytestmark = pytest.mark.filterwarnings("ignore::UserWarning")  # the checker's unbounded-Box notes
@@ -66,7 +67,7 @@ def test_same_seed_same_episode_and_fresh_arrays(env_id, observation, make):
 @pytest.mark.sumo
 def test_make_vec_by_default_runs_one_sumo_per_subprocess():
     envs = gym.make_vec("ego/EmergencyBrake-v0", num_envs=2, config={"policy_frequency": 10})
-    assert isinstance(envs, gym.vector.AsyncVectorEnv)
+    assert isinstance(envs, EgoVectorEnv)
     try:
         obs, info = envs.reset(seed=[0, 1])
         assert obs.shape == (2, 15) and list(info["status"]) == ["running", "running"]

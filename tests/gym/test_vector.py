@@ -1,0 +1,224 @@
+"""ego's own vector env (``gym.make_vec(id, n)``): one worker process per env, the step's data
+in shared memory. The same results as the same envs stepped one by one, Gymnasium 1.x's
+semantics (NEXT_STEP autoreset, seeds, masks, infos), a worker's error raised in the parent,
+and no worker left behind by close(), a kill or Ctrl-C of the parent."""
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+
+import gymnasium as gym
+import numpy as np
+import psutil
+import pytest
+from gymnasium.vector import AutoresetMode, VectorEnv
+from process_group import survivors, wait_for
+
+import ego.gym  # noqa: F401 - registers the ids
+from ego.gym.vector import EgoVectorEnv, _Maker
+from ego.params import ConfigError
+
+pytestmark = [pytest.mark.sumo, pytest.mark.filterwarnings("ignore::UserWarning")]
+
+#: short episodes (10 env steps of 0.1 s) so the vector env resets some in a few steps
+SHORT = {"duration": 1.0, "policy_frequency": 10}
+
+
+def _actions(space, n_steps, seed=0):
+    rng = np.random.default_rng(seed)
+    return [0.5 * rng.uniform(-1.0, 1.0, (2, *space.shape)).astype(space.dtype) for _ in range(n_steps)]
+
+
+def _same(a, b) -> bool:
+    """Equal values (arrays elementwise, NaN equal to NaN), the metrics' wall time aside (the
+    only value that differs between two runs of the same episode)."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        keys = set(a) - {"wall_time", "_wall_time"}
+        return keys == set(b) - {"wall_time", "_wall_time"} and all(_same(a[k], b[k]) for k in keys)
+    if isinstance(a, np.ndarray) and isinstance(b, np.ndarray):
+        if a.dtype == object or b.dtype == object:
+            return a.shape == b.shape and all(_same(x, y) for x, y in zip(a.tolist(), b.tolist()))
+        return a.dtype == b.dtype and np.array_equal(a, b, equal_nan=a.dtype.kind == "f")
+    if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b))
+    if isinstance(a, (float, np.floating)) and isinstance(b, (float, np.floating)):
+        return a == b or (a != a and b != b)
+    return type(a) is type(b) and a == b
+
+
+class _Merge(VectorEnv):
+    """Gymnasium's own merge of the envs' infos into a vector info (``_add_info``)."""
+
+    num_envs = 2
+
+
+def _one_by_one(env_id, config, seed, actions, n_envs=2):
+    """Each env alone, one after the other, with Gymnasium's NEXT_STEP autoreset by hand:
+    per env the (observations, rewards, terminations, truncations, infos) per step."""
+    runs = []
+    for i in range(n_envs):
+        env = gym.make(env_id, config=config)
+        try:
+            obs, info = env.reset(seed=seed + i)
+            rows = [(obs, 0.0, False, False, info)]
+            autoreset = False
+            for batch in actions:
+                if autoreset:
+                    obs, info = env.reset()
+                    rows.append((obs, 0.0, False, False, info))
+                    autoreset = False
+                    continue
+                obs, reward, terminated, truncated, info = env.step(batch[i])
+                rows.append((obs, reward, terminated, truncated, info))
+                autoreset = terminated or truncated
+        finally:
+            env.close()
+        runs.append(rows)
+    return runs
+
+
+@pytest.mark.parametrize("env_id", ["ego/CutIn-v0", "ego/Platoon-v0"])
+def test_same_results_as_the_envs_stepped_one_by_one(env_id):
+    envs = gym.make_vec(env_id, num_envs=2, config=SHORT, info="all")
+    assert isinstance(envs, EgoVectorEnv)
+    actions = _actions(envs.single_action_space, 25)
+    try:
+        obs, infos = envs.reset(seed=3)
+        vector = [(obs, np.zeros(2), np.zeros(2, bool), np.zeros(2, bool), infos)]
+        for batch in actions:
+            vector.append(envs.step(batch))
+    finally:
+        envs.close()
+    expected = _one_by_one(env_id, SHORT, 3, actions)
+    merge, ends = _Merge(), 0
+    for k, (obs, rewards, terminated, truncated, infos) in enumerate(vector):
+        e_infos: dict = {}
+        for i in range(2):
+            e_obs, e_reward, e_term, e_trunc, e_info = expected[i][k]
+            assert np.array_equal(obs[i], e_obs), (k, i)
+            assert rewards[i] == e_reward and terminated[i] == e_term and truncated[i] == e_trunc, (k, i)
+            e_infos = merge._add_info(e_infos, e_info, i)
+            ends += bool(e_term or e_trunc)
+        assert _same(infos, e_infos), (k, infos, e_infos)
+    assert ends >= 4  # the comparison went through autoresets
+
+
+def test_gymnasium_semantics_and_light_infos():
+    envs = gym.make_vec("ego/CutIn-v0", num_envs=2, config=SHORT)
+    try:
+        assert envs.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP
+        assert envs.single_observation_space.shape == (15,) and envs.observation_space.shape == (2, 15)
+        assert envs.single_action_space.shape == (2,) and envs.action_space.shape == (2, 2)
+        obs, infos = envs.reset(seed=5)
+        assert obs in envs.observation_space and list(infos["status"]) == ["running", "running"]
+        again, infos2 = envs.reset(seed=[5, 6])
+        assert np.array_equal(obs, again) and _same(infos2, infos)
+        zeros = np.zeros((2, 2), np.float32)
+        seen_end = seen_reset = False
+        for _ in range(12):
+            obs, rewards, terminated, truncated, infos = envs.step(zeros)
+            assert rewards.dtype == np.float64 and terminated.dtype == np.bool_
+            ended = terminated | truncated
+            if ended.any():
+                # by default an info crosses only where it carries something: the end's (metrics)
+                assert list(infos["_metrics"]) == list(ended) and list(infos["_rewards"]) == list(ended)
+                seen_end = True
+            elif seen_end and not seen_reset:
+                # the step after an end resets that env (NEXT_STEP): its reset info, reward 0
+                assert "randomized" in infos and rewards[infos["_randomized"]].tolist() == [0.0, 0.0]
+                seen_reset = True
+            else:
+                assert infos == {}
+        assert seen_end and seen_reset
+        # reset_mask: only the masked env restarts
+        before = obs.copy()
+        obs, infos = envs.reset(seed=9, options={"reset_mask": np.array([False, True])})
+        assert np.array_equal(obs[0], before[0]) and list(infos["_status"]) == [False, True]
+        assert envs.get_attr("task") == ("tracking", "tracking")
+        assert [m["steps"] for m in envs.call("metrics")] == [m["steps"] for m in envs.call("metrics")]
+        envs.set_attr("marker", [1, 2])
+        assert envs.get_attr("marker") == (1, 2)
+        # Gymnasium's vector wrappers work over it
+        stats = gym.wrappers.vector.RecordEpisodeStatistics(envs)
+        stats.reset(seed=0)
+        for _ in range(11):
+            _, _, terminated, truncated, infos = stats.step(zeros)
+            if (terminated | truncated).any():
+                break
+        assert list(infos["_episode"]) == list(terminated | truncated) and infos["episode"]["l"].max() == 10
+    finally:
+        envs.close()
+
+
+def test_a_workers_error_is_raised_in_the_parent_and_close_reaps_the_workers():
+    envs = gym.make_vec("ego/CutIn-v0", num_envs=2, config=SHORT)
+    workers = [psutil.Process(p.pid) for p in envs._processes]
+    assert all(w.is_running() for w in workers)
+    with pytest.raises(RuntimeError, match=r"call reset\(\) before step\(\)"):
+        envs.step(np.zeros((2, 2), np.float32))
+    with pytest.raises(RuntimeError, match="workers are gone"):
+        envs.step(np.zeros((2, 2), np.float32))
+    envs.close()
+    assert not any(w.is_running() and w.status() != psutil.STATUS_ZOMBIE for w in workers)
+    # a clean close
+    envs = gym.make_vec("ego/CutIn-v0", num_envs=2, config=SHORT)
+    workers = [psutil.Process(p.pid) for p in envs._processes]
+    envs.reset(seed=0)
+    with pytest.raises(ValueError, match="bad actions: expected shape"):
+        envs.step(np.zeros((2, 3), np.float32))
+    envs.close()
+    envs.close()  # twice is fine
+    assert not any(w.is_running() and w.status() != psutil.STATUS_ZOMBIE for w in workers)
+    with pytest.raises(RuntimeError, match="closed"):
+        envs.reset()
+
+
+def test_bad_configuration_fails_before_any_worker_starts():
+    children = set(psutil.Process().children())
+    with pytest.raises(ConfigError, match="bad value for ego_speed"):
+        gym.make_vec("ego/CutIn-v0", num_envs=2, config={"ego_speed": 1000})
+    with pytest.raises(ConfigError, match="bad value for info"):
+        EgoVectorEnv([_Maker("ego/CutIn-v0", {})] * 2, info="some")
+    assert set(psutil.Process().children()) == children
+
+
+_PARENT = textwrap.dedent(
+    """
+    import sys, time
+    import numpy as np, gymnasium as gym
+    import ego.gym
+    envs = gym.make_vec("ego/Platoon-v0", num_envs=2, config={"policy_frequency": 10})
+    envs.reset(seed=0)
+    print(" ".join(str(p.pid) for p in envs._processes), flush=True)
+    zeros = np.zeros((2, 1), np.float32)
+    while True:
+        envs.step(zeros)
+    """
+)
+
+
+@pytest.mark.parametrize("how", ["SIGKILL", "SIGINT"])
+def test_no_orphan_worker_when_the_parent_is_killed_or_interrupted(how, tmp_path):
+    env = {**os.environ, "MPLCONFIGDIR": str(tmp_path)}
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _PARENT], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, start_new_session=True
+    )
+    try:
+        line = []
+        wait_for(lambda: line.append(proc.stdout.readline()) or line[-1], proc, "the workers' pids")
+        pids = [int(p) for p in line[-1].split()]
+        assert len(pids) == 2 and all(psutil.pid_exists(p) for p in pids)
+        if how == "SIGINT":  # Ctrl-C in a terminal: the whole foreground group gets it
+            os.killpg(proc.pid, signal.SIGINT)
+        else:
+            proc.kill()
+        proc.wait(60)
+        assert survivors(proc.pid, timeout=30.0) == []
+        if how == "SIGINT":
+            assert b"KeyboardInterrupt" in proc.stderr.read()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
