@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 import re
+import types
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
@@ -601,8 +602,30 @@ def _spec(req: Requirement, period: float, names: tuple[str, ...]):
         spec.set_sampling_period(period, "s", 0.1)
         spec.spec = req.rtamt
         spec.parse()
+        interpreter = spec.offline_interpreter
+        interpreter.visitPredicate = types.MethodType(_predicate, interpreter)
         _COMPILED[key] = spec
     return spec
+
+
+def _predicate(self, node, *args, **kwargs):
+    """rtamt's offline predicate (a comparison's robustness per sample), in numpy: the same
+    IEEE differences as rtamt's loop over samples (which reads the operator's enum for each
+    sample, half of a run's requirement checking), handed back as the list rtamt expects."""
+    left = np.asarray(self.visit(node.children[0], *args, **kwargs), dtype=float)
+    right = np.asarray(self.visit(node.children[1], *args, **kwargs), dtype=float)
+    op = node.operator.name
+    if op == "EQ":
+        out = -np.abs(left - right)
+    elif op == "NEQ":
+        out = np.abs(left - right)
+    elif op in ("LEQ", "LESS"):
+        out = right - left
+    elif op in ("GEQ", "GREATER"):
+        out = left - right
+    else:
+        raise RequirementError(f"unknown comparison {op}")
+    return out.tolist()
 
 
 @dataclass(frozen=True)

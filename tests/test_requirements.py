@@ -217,3 +217,45 @@ def test_sweep_spec_requirements_are_checked(tmp_path, capsys):
     assert "units differ" in err and err.count("\n") == 1
     assert not (tmp_path / "out").exists()
     assert math.isfinite(1.0)
+
+
+@pytest.mark.parametrize(
+    "formula",
+    [
+        "always (gap_front >= 2 m or lateral_clear)",
+        "always (aeb_active implies eventually[0:3] (speed <= 1 m/s or not aeb_active))",
+        "always (abs(speed - 1 m/s) < 3 m/s and gap_front > 0.5 m)",
+        "always (speed > -1 m/s) or eventually (speed < 0.5 m/s)",
+        "not collision",
+    ],
+)
+def test_the_numpy_predicate_gives_rtamts_own_robustness_sample_by_sample(formula):
+    """ego evaluates rtamt's comparisons with numpy (its per-sample loop was half of a run's
+    requirement checking): every sample's robustness is exactly rtamt's own."""
+    import rtamt
+
+    from ego.requirements import _spec
+
+    rng = np.random.default_rng(7)
+    n = 400
+    req = parse(formula, UNITS)
+    names = req.signals
+    data = {"time": (0.1 * np.arange(n)).tolist()}
+    for name in names:
+        x = rng.normal(0.0, 3.0, n)
+        x[::17] = 0.5  # exact ties
+        data[name] = (np.sign(x) if UNITS[name] == "bool" else x).tolist()
+    plain = rtamt.StlDiscreteTimeOfflineSpecification()
+    for name in names:
+        plain.declare_var(name, "float")
+    plain.set_sampling_period(0.1, "s", 0.1)
+    plain.spec = req.rtamt
+    plain.parse()
+    expected = [v for _, v in plain.evaluate({k: list(v) for k, v in data.items()})]
+    fast = _spec(req, 0.1, names)
+    got = [v for _, v in fast.evaluate({k: list(v) for k, v in data.items()})]
+    assert got == expected
+    # every node's robustness signal (each comparison's included), in the order rtamt visits
+    nodes = list(plain.offline_interpreter.ast.offline_results.values())
+    assert list(fast.offline_interpreter.ast.offline_results.values()) == nodes
+    assert any(len(set(v)) > 2 for v in nodes)  # not constants: the signals decide

@@ -60,6 +60,15 @@ class RBFSMCParams(Params):
     phi_lat: float = param(0.1, "m/s", "boundary layer on s_Y (fixed variant; 0: sign)", min=0.0, max=100.0)
 
 
+# numpy's own routines without the module wrappers' dispatch (the same numbers): np.einsum
+# without ``optimize`` hands its operands to this C function
+try:
+    from numpy._core.multiarray import c_einsum as _einsum
+except ImportError:  # numpy < 2
+    _einsum = np.einsum
+_exp = np.exp
+
+
 def _switch(s: float, phi: float) -> float:
     """sign(s), or sat(s/phi) inside a boundary layer of width phi."""
     if phi > 0.0:
@@ -75,6 +84,7 @@ class RBFSMCController:
         self.params = params
         self.dt = dt
         self.report = params.variant == "report"
+        self._x = np.empty(4)
         self.reset(seed=0)
 
     def reset(self, *, seed: int | None = None) -> None:
@@ -89,7 +99,7 @@ class RBFSMCController:
     def _basis(self, x: np.ndarray) -> np.ndarray:
         p = self.params
         diff = self.centres - x
-        basis: np.ndarray = p.scale * np.exp(-np.einsum("ij,ij->i", diff, diff) / (2.0 * p.width * p.width))
+        basis: np.ndarray = p.scale * _exp(-_einsum("ij,ij->i", diff, diff) / (2.0 * p.width * p.width))
         return basis
 
     def step(self, obs: Observation) -> tuple[float, float]:
@@ -98,7 +108,9 @@ class RBFSMCController:
         e_y, de_y = obs.d - obs.d_ref, obs.dd - obs.dd_ref
         s_x = p.c_lon * e_x + de_x
         s_y = p.c_lat * e_y + de_y
-        h = self._basis(np.array([obs.s, obs.d, obs.ds, obs.dd]))
+        x = self._x
+        x[0], x[1], x[2], x[3] = obs.s, obs.d, obs.ds, obs.dd
+        h = self._basis(x)
         f_x = float(self.w_lon @ h)
         f_y = float(self.w_lat @ h)
         if self.report:

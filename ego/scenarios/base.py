@@ -467,9 +467,10 @@ class Scenario:
 
     def _flush_now(self) -> None:
         if len(self.trace) > self._flushed:
-            data = self.trace.array(self._flushed)
-            data[np.isinf(data)] = np.nan  # infinite TTC: a gap in the plot
-            self.recorder.write_rows(self.trace.names, data)
+            if type(self.recorder) is not NullRecorder:  # no rows to build for no recording
+                data = self.trace.array(self._flushed)
+                data[np.isinf(data)] = np.nan  # infinite TTC: a gap in the plot
+                self.recorder.write_rows(self.trace.names, data)
             self._flushed = len(self.trace)
         self.recorder.flush()
         self._next_flush = math.floor(self.t) + 1.0

@@ -1,0 +1,96 @@
+"""Where a sweep's run spends its CPU time: the loop, and what lies outside it.
+
+    python benchmarks/bench_run_parts.py [SPEC.toml] [--every 8] [--rows OUT.json]
+
+Runs every ``--every``-th run of a sweep spec (default ``benchmarks/envelope_200.toml``)
+one after another in this process, as a worker does (``ego.sweep.pipeline.execute``: the
+run, its default requirements, its row), after one warm-up run per controller (imports,
+compiled fuzzy tables). Prints CPU milliseconds per run (``time.process_time``: on a shared
+machine the wall clock mostly measures the other jobs), per controller, and split into the
+run's parts: start (SUMO start, network load, traffic insertion: ``Scenario.reset``), the
+loop (the rest), result packing (the trace as an array, the metrics), the requirements
+(rtamt), close. ``--rows`` writes the rows (wall time and host aside) to compare two trees:
+run it once with ``PYTHONPATH=<other tree>`` and compare the files.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+import tomllib
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import ego.requirements  # noqa: E402
+import ego.scenarios.base as base  # noqa: E402
+from ego.sweep.pipeline import execute  # noqa: E402
+from ego.sweep.runner import row_of, task_of  # noqa: E402
+from ego.sweep.spec import parse  # noqa: E402
+
+PARTS = {
+    "start": (base.Scenario, "reset"),
+    "result": (base.Scenario, "result"),
+    "requirements": (ego.requirements, "check_run"),
+    "close": (base.Scenario, "close"),
+}
+
+
+def timed_parts(cpu: dict[str, float]) -> None:
+    """Wrap each part's function so its CPU seconds add up in ``cpu`` (benchmark only)."""
+    for part, (owner, name) in PARTS.items():
+        fn = getattr(owner, name)
+
+        def wrapper(*args, _fn=fn, _part=part, **kwargs):
+            t0 = time.process_time()
+            try:
+                return _fn(*args, **kwargs)
+            finally:
+                cpu[_part] = cpu.get(_part, 0.0) + time.process_time() - t0
+
+        setattr(owner, name, wrapper)
+
+
+def main(argv: list[str] | None = None) -> dict:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("spec", nargs="?", default=str(Path(__file__).with_name("envelope_200.toml")))
+    ap.add_argument("--every", type=int, default=8, help="take every N-th run of the spec")
+    ap.add_argument("--rows", help="write the rows as JSON here")
+    args = ap.parse_args(argv)
+    spec = parse(tomllib.loads(Path(args.spec).read_text()))
+    tasks = [task_of(r, None, "none", spec.requirements) for r in list(spec.runs())[:: args.every]]
+    warm: set[str] = set()
+    for t in tasks:
+        if t.key.controller not in warm:
+            warm.add(t.key.controller)
+            execute(t)
+    cpu: dict[str, float] = {}
+    timed_parts(cpu)
+    per_controller: dict[str, list[float]] = {}
+    rows = []
+    t_all = time.process_time()
+    for t in tasks:
+        t0 = time.process_time()
+        row = execute(t)
+        per_controller.setdefault(t.key.controller, []).append(time.process_time() - t0)
+        rows.append({k: v for k, v in row_of(t.key, row).items() if k not in ("wall_time", "host", "node")})
+    total = time.process_time() - t_all
+    n = len(tasks)
+    cpu["loop"] = total - sum(cpu.values())
+    figures = {"runs": n, "ms_per_run": 1e3 * total / n}
+    print(f"{n} runs of {args.spec}: {1e3 * total / n:.1f} ms CPU a run")
+    for c, times in per_controller.items():
+        figures[f"ms_{c}"] = 1e3 * sum(times) / len(times)
+        print(f"  {c:12s} {figures[f'ms_{c}']:7.1f} ms a run ({len(times)} runs)")
+    for part in ("start", "loop", "result", "requirements", "close"):
+        figures[f"ms_{part}"] = 1e3 * cpu[part] / n
+        print(f"  {part:12s} {figures[f'ms_{part}']:7.1f} ms a run  {100 * cpu[part] / total:5.1f} %")
+    if args.rows:
+        Path(args.rows).write_text(json.dumps(rows, sort_keys=True, default=str))
+    return figures
+
+
+if __name__ == "__main__":
+    main()
