@@ -148,6 +148,13 @@ def _dense_stored(path: str) -> dict:
     return {row["run_id"]: row for row in table.to_pylist()} if table is not None else {}
 
 
+@functools.lru_cache(maxsize=1)
+def _dense_spec():
+    from ego.sweep.spec import load
+
+    return load(DENSE_SPEC)
+
+
 @dataclass(frozen=True)
 class SweepJob:
     """One run of the dense sweep with its requirements: their robustness by name, and the
@@ -161,9 +168,9 @@ class SweepJob:
     def __call__(self) -> dict:
         from ego.requirements import PREFIX
         from ego.runner import RunSpec, run
-        from ego.sweep.spec import load, run_id
+        from ego.sweep.spec import run_id
 
-        spec = load(DENSE_SPEC)
+        spec = _dense_spec()
         overrides = dict(self.overrides)
         row = _dense_stored(str(DENSE_OUT)).get(run_id(spec.scenario, self.controller, self.seed, overrides))
         if row is not None and row.get("status") not in (None, "error", "interrupted"):
@@ -177,9 +184,7 @@ class SweepJob:
 
 
 def dense_jobs() -> list[SweepJob]:
-    from ego.sweep.spec import load
-
-    spec = load(DENSE_SPEC)
+    spec = _dense_spec()
     return [SweepJob(r.seed, tuple(r.overrides.items()), r.controller) for r in spec.runs()]
 
 
