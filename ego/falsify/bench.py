@@ -31,6 +31,8 @@ DENSE_SPEC = ROOT / "benchmarks" / "falsify" / "dense.toml"
 #: where the repetitions keep their runs (resumable; a changed spec gets a folder of its own)
 CACHE = ROOT / "runs" / "bench-falsify"
 OPTIMIZERS = ("cma", "bo", "random", "lhs")
+#: a finished repetition's figures, beside its runs (delete the folder to search again)
+RESULT = "result.json"
 
 
 def bench_spec(requirement: str, path: Path = BENCH_SPEC):
@@ -74,12 +76,18 @@ class BenchJob:
         )
 
     def __call__(self) -> dict:
+        import json
+
         from ego.falsify.search import falsify
+        from ego.outputs import write_text
         from ego.parallel.executor import InlineExecutor
 
         class Batched(InlineExecutor):
             workers = self.batch
 
+        done = self.folder() / RESULT
+        if done.exists():  # a finished repetition: its figures, without replaying the optimiser
+            return json.loads(done.read_text())
         out = {}
         for name in requirements(Path(self.spec)):
             report = falsify(
@@ -97,6 +105,7 @@ class BenchJob:
                 "runs": search.first_violation,
                 "curve": [float(x) for x in search.best_so_far()],
             }
+        write_text(done, json.dumps(out))
         return out
 
 
