@@ -58,3 +58,13 @@ def test_scenario_file_against_builtin():
 
     figures = main(["--repeat", "2"])
     assert figures["ratio"] > 0 and figures["convert_ms"] > 0
+
+
+def test_falsify_runs_to_first_violation():
+    """Issue 21's benchmark on real runs (20 repetitions x 4 optimisers, 300 runs each; it
+    resumes from runs/bench-falsify/): every repetition made, LHS's median the reference."""
+    from bench_falsify import main
+
+    figures = main(["--reps", "20", "--budget", "300"])
+    assert figures and all(len(f["runs"]) == 20 for f in figures.values())
+    assert all(figures[(req, "lhs")]["ratio_to_lhs"] == 1.0 for req, _ in figures)

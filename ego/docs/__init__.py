@@ -172,6 +172,8 @@ class Table:
     header: tuple[str, ...]
     rows: tuple[Row, ...]
     notes: tuple[str, ...] = field(default=())
+    #: writes the table's figures (docs/img/) from the same results, when the page is written
+    figures: Callable[[dict], None] | None = None
 
     def row(self, label: str) -> Row:
         for r in self.rows:
@@ -1130,6 +1132,10 @@ def regenerate(selected: Sequence[Table], check: bool, workers: int | None = Non
                 text = text.replace(old, new)
         if not check and text != original:
             write_text(path, text)
+    if not check:
+        for t in selected:
+            if t.figures is not None:
+                t.figures(results)
     return differ
 
 

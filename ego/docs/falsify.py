@@ -1,33 +1,40 @@
 """The tables of ``docs/results/falsify.md``: the jobs of :mod:`ego.falsify.bench` run
-by ``python -m ego.docs`` (a checkout's, not the wheel's)."""
+by ``python -m ego.docs`` (a checkout's, not the wheel's), and its convergence figure."""
 
 from __future__ import annotations
 
 from ego.falsify.bench import (
-    BENCH_SPEC,
     OPTIMIZERS,
+    ROOT,
     SURROGATE_RADIUS,
     BenchJob,
     SurrogateJob,
+    convergence_figure,
     dense_jobs,
     fmt_runs,
     quartiles,
+    requirements,
+    wilson,
 )
 
 # -- docs/results/falsify.md ----------------------------------------------------------------------
-#: repetitions (optimiser seeds 0..n-1) per optimiser: real runs, and the surrogate
-REAL_REPS = 5
+#: repetitions (optimiser seeds 0..n-1) per optimiser, and the budget of each: real runs, and the surrogate
+REAL_REPS = 16
+REAL_BUDGET = 300
 SURROGATE_REPS = 20
-REAL_BUDGET = 120
 SURROGATE_BUDGET = 400
-REQUIREMENTS = ("keeps_1m", "no_overbraking")
+FIGURE = ROOT / "docs" / "img" / "falsify_convergence.png"
 
 
-def _runs_cells(reps: int, budget: int):
-    """Cells of a runs-to-first row whose jobs are its own ``reps`` then LHS's ``reps``."""
+def _runs_cells(name: str | None, reps: int, budget: int):
+    """Cells of a runs-to-first row whose jobs are its own ``reps`` then LHS's ``reps``
+    (``name``: the requirement whose figures a real repetition's result holds)."""
+
+    def runs(m: dict):
+        return (m if name is None else m[name])["runs"]
 
     def cells(ms: list[dict]) -> list[str]:
-        own, lhs = [m["runs"] for m in ms[:reps]], [m["runs"] for m in ms[reps:]]
+        own, lhs = [runs(m) for m in ms[:reps]], [runs(m) for m in ms[reps:]]
         q1, med, q3, found = quartiles(own, budget)
         _, lhs_med, _, _ = quartiles(lhs, budget)
         ratio = med / lhs_med
@@ -44,31 +51,59 @@ def _runs_cells(reps: int, budget: int):
 
 def _share_cells(name: str):
     def cells(ms: list[dict]) -> list[str]:
-        values = [m.get(name) for m in ms]
-        values = [float(v) for v in values if v is not None]
-        bad = sum(v < 0 for v in values)
+        values = [(float(m[name]), m["point"]) for m in ms if m.get(name) is not None]
+        bad = [p for v, p in values if v < 0]
+        lo, hi = wilson(len(bad), len(values))
+        where = (
+            ", ".join(f"{k} {min(p[k] for p in bad):.3g}-{max(p[k] for p in bad):.3g}" for k in bad[0]) if bad else "-"
+        )
         return [
-            f"{bad}/{len(values)}",
-            f"{100.0 * bad / len(values):.2f} %",
-            f"{min(values):.3g}",
+            f"{len(bad)}/{len(values)}",
+            f"{100.0 * len(bad) / len(values):.2f} % ({100 * lo:.2f}-{100 * hi:.2f} %)",
+            f"{min(v for v, _ in values):.3g}",
+            where,
         ]
 
     return cells
 
 
+def _figure(jobs: dict):
+    """The convergence figure of the real repetitions (``jobs``: optimiser -> its jobs)."""
+
+    def write(results: dict) -> None:
+        curves = {
+            (name, opt): [results[j][name]["curve"] for j in js] for name in requirements() for opt, js in jobs.items()
+        }
+        convergence_figure(curves, REAL_BUDGET, FIGURE)
+
+    return write
+
+
 def docs_tables() -> list:
     """The tables of docs/results/falsify.md (ego.docs builds the page from them)."""
     from ego.docs import Row, Table
-    from ego.falsify.spec import load
+    from ego.falsify.bench import DENSE_SPEC
+    from ego.sweep.spec import load
 
     dense = dense_jobs()
-    spec = load(BENCH_SPEC)
+    formulas = load(DENSE_SPEC).requirements
+    names = requirements()
     landscape = Table(
         "falsify-landscape",
         "falsify",
         ("ego sweep benchmarks/falsify/dense.toml --out runs/falsify-dense",),
-        ("requirement", "violating runs", "share of the space", "smallest robustness"),
-        tuple(Row(f"{name}: {spec.requirements[name]}", tuple(dense), _share_cells(name)) for name in REQUIREMENTS),
+        (
+            "requirement",
+            "violating runs",
+            "share of the space (95 % interval)",
+            "smallest robustness",
+            "where the violating runs lie",
+        ),
+        tuple(Row(f"{name}: {formulas[name]}", tuple(dense), _share_cells(name)) for name in names),
+        (
+            f"A Sobol sequence of {len(dense)} points over the box, one run each; the interval is the Wilson "
+            "score interval of the share.",
+        ),
     )
     header = (
         "requirement, optimiser",
@@ -77,29 +112,24 @@ def docs_tables() -> list:
         "quartiles",
         "median / LHS median",
     )
+    jobs = {opt: tuple(BenchJob(opt, s, REAL_BUDGET) for s in range(REAL_REPS)) for opt in OPTIMIZERS}
     real = Table(
         "falsify-bench",
         "falsify",
-        tuple(
-            f"python benchmarks/bench_falsify.py --requirement {name} --reps {REAL_REPS} --budget {REAL_BUDGET}"
-            for name in REQUIREMENTS
-        ),
+        (f"python benchmarks/bench_falsify.py --reps {REAL_REPS} --budget {REAL_BUDGET}",),
         header,
         tuple(
-            Row(
-                f"{name}, {opt}",
-                tuple(BenchJob(name, opt, s, REAL_BUDGET) for s in range(REAL_REPS))
-                + tuple(BenchJob(name, "lhs", s, REAL_BUDGET) for s in range(REAL_REPS)),
-                _runs_cells(REAL_REPS, REAL_BUDGET),
-            )
-            for name in REQUIREMENTS
+            Row(f"{name}, {opt}", jobs[opt] + jobs["lhs"], _runs_cells(name, REAL_REPS, REAL_BUDGET))
+            for name in names
             for opt in OPTIMIZERS
         ),
         (
-            f"Real ego runs (emergency-brake braking in lane, pid, {REAL_REPS} optimiser seeds each, "
-            f"budget {REAL_BUDGET} runs, batches of 2 as with --jobs 2). '>{REAL_BUDGET}': fewer than half "
-            "the repetitions found one within the budget.",
+            f"Real ego runs (emergency-brake braking in lane, pid, optimiser seeds 0-{REAL_REPS - 1} each, "
+            f"budget {REAL_BUDGET} runs, batches of 2 as with --jobs 2). A repetition that found no violation "
+            f"within the budget counts as more than {REAL_BUDGET} runs ('>{REAL_BUDGET}'; the quartiles are "
+            "then lower bounds, and a ratio against a censored LHS median an upper bound, '<=').",
         ),
+        figures=_figure(jobs),
     )
     surrogate = Table(
         "falsify-surrogate",
@@ -111,13 +141,14 @@ def docs_tables() -> list:
                 opt,
                 tuple(SurrogateJob(opt, s, SURROGATE_BUDGET) for s in range(SURROGATE_REPS))
                 + tuple(SurrogateJob("lhs", s, SURROGATE_BUDGET) for s in range(SURROGATE_REPS)),
-                _runs_cells(SURROGATE_REPS, SURROGATE_BUDGET),
+                _runs_cells(None, SURROGATE_REPS, SURROGATE_BUDGET),
             )
             for opt in OPTIMIZERS
         ),
         (
             f"An analytic stand-in, not ego: a ball of radius {SURROGATE_RADIUS} in [0, 1]^4 (0.04 % of "
-            f"the cube), robustness = distance to it; {SURROGATE_REPS} seeds, budget {SURROGATE_BUDGET}.",
+            f"the cube), robustness = distance to it; {SURROGATE_REPS} seeds, budget {SURROGATE_BUDGET}. "
+            "A check of the optimisers' wiring, not the result.",
         ),
     )
     return [landscape, real, surrogate]

@@ -1,10 +1,13 @@
 """Runs-to-first-violation of each optimiser: the jobs behind ``benchmarks/bench_falsify.py``
-and ``docs/results/falsify.md`` (its tables: :mod:`ego.docs.falsify`).
+and ``docs/results/falsify.md`` (its tables: :mod:`ego.falsify.bench` and :mod:`ego.docs.falsify`).
 
-* :class:`BenchJob`: one repetition on real ego runs - ``ego falsify`` (in this process, one
-  run after another: a docs job already has a worker process of its own) with
-  ``--until first`` over the benchmark spec ``benchmarks/falsify/bench.toml`` for one
-  requirement, one optimiser and one optimiser seed, within a budget.
+* :class:`BenchJob`: one repetition on real ego runs for one optimiser and one optimiser
+  seed: ``ego falsify --until first`` over the benchmark spec ``benchmarks/falsify/bench.toml``
+  (in this process, one run after another, in batches of two as ``--jobs 2`` proposes them:
+  a docs job already has a worker process of its own), once per requirement of the spec.
+  Every run evaluates every requirement, and the searches of one repetition share an output
+  folder under ``runs/bench-falsify/`` (kept: the repetition resumes from it, and a blind
+  baseline's points, the same whatever the target, run once for all requirements).
 * :class:`SurrogateJob`: the same search against an analytic stand-in (no SUMO, clearly
   labelled as such): a violating ball in the unit cube, robustness = distance to it.
 * :class:`SweepJob`: one run of the dense sweep that measures how small each violating
@@ -13,7 +16,9 @@ and ``docs/results/falsify.md`` (its tables: :mod:`ego.docs.falsify`).
 
 from __future__ import annotations
 
-import tempfile
+import functools
+import hashlib
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -23,49 +28,71 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[2]
 BENCH_SPEC = ROOT / "benchmarks" / "falsify" / "bench.toml"
 DENSE_SPEC = ROOT / "benchmarks" / "falsify" / "dense.toml"
+#: where the repetitions keep their runs (resumable; a changed spec gets a folder of its own)
+CACHE = ROOT / "runs" / "bench-falsify"
 OPTIMIZERS = ("cma", "bo", "random", "lhs")
+#: a finished repetition's figures, beside its runs (delete the folder to search again)
+RESULT = "result.json"
 
 
-def bench_spec(requirement: str):
-    """The benchmark spec with ``requirement`` as the target."""
+def bench_spec(requirement: str, path: Path = BENCH_SPEC):
+    """The benchmark spec with ``requirement`` as the target (every requirement still
+    evaluated on every run)."""
     import dataclasses
 
     from ego.falsify.spec import load
 
-    spec = load(BENCH_SPEC)
+    spec = load(path)
     if requirement not in spec.requirements:
         from ego.params import ConfigError
 
         raise ConfigError(f"unknown benchmark requirement {requirement!r} (known: {', '.join(spec.requirements)})")
-    return dataclasses.replace(
-        spec,
-        requirement=requirement,
-        requirements={requirement: spec.requirements[requirement]},
-    )
+    return dataclasses.replace(spec, requirement=requirement)
+
+
+def requirements(path: Path = BENCH_SPEC) -> tuple[str, ...]:
+    from ego.falsify.spec import load
+
+    return tuple(load(path).requirements)
 
 
 @dataclass(frozen=True)
 class BenchJob:
-    """One repetition on real runs: runs to the first violation (None: none within the budget)
-    and the best robustness after each run."""
+    """One repetition on real runs, for each requirement of the spec: runs to the first
+    violation (None: none within the budget) and the best robustness after each run."""
 
-    requirement: str
     optimizer: str
     seed: int
     budget: int
     batch: int = 2  #: points per proposal (the workers of an ``ego falsify --jobs 2``)
+    spec: str = str(BENCH_SPEC)
+    cache: str = ""  #: the folder of the repetitions (default :data:`CACHE`)
+
+    def folder(self) -> Path:
+        text = Path(self.spec).read_bytes()
+        key = hashlib.sha256(text).hexdigest()[:10]
+        return (
+            Path(self.cache or CACHE) / key / f"{self.optimizer}-seed{self.seed}-budget{self.budget}-batch{self.batch}"
+        )
 
     def __call__(self) -> dict:
+        import json
+
         from ego.falsify.search import falsify
+        from ego.outputs import write_text
         from ego.parallel.executor import InlineExecutor
 
         class Batched(InlineExecutor):
             workers = self.batch
 
-        with tempfile.TemporaryDirectory(prefix="ego-bench-falsify-") as tmp:
+        done = self.folder() / RESULT
+        if done.exists():  # a finished repetition: its figures, without replaying the optimiser
+            return json.loads(done.read_text())
+        out = {}
+        for name in requirements(Path(self.spec)):
             report = falsify(
-                bench_spec(self.requirement),
-                Path(tmp),
+                bench_spec(name, Path(self.spec)),
+                self.folder(),
                 optimizer=self.optimizer,
                 budget=self.budget,
                 until="first",
@@ -73,11 +100,13 @@ class BenchJob:
                 verify=False,
                 executor=Batched(),
             )
-        search = report.searches[0]
-        return {
-            "runs": search.first_violation,
-            "curve": [float(x) for x in search.best_so_far()],
-        }
+            search = report.searches[0]
+            out[name] = {
+                "runs": search.first_violation,
+                "curve": [float(x) for x in search.best_so_far()],
+            }
+        write_text(done, json.dumps(out))
+        return out
 
 
 #: the surrogate: a violating ball of this radius in the unit cube of DIMS dimensions
@@ -115,35 +144,56 @@ class SurrogateJob:
         return {"runs": None, "curve": curve}
 
 
+#: where ``ego sweep benchmarks/falsify/dense.toml --out runs/falsify-dense`` keeps its runs
+DENSE_OUT = ROOT / "runs" / "falsify-dense"
+
+
+@functools.lru_cache(maxsize=1)
+def _dense_stored(path: str) -> dict:
+    """The dense sweep's stored rows by run id (empty without that sweep's results)."""
+    from ego.sweep.results import ResultStore
+
+    table = ResultStore(Path(path)).table() if (Path(path) / "results.parquet").exists() else None
+    return {row["run_id"]: row for row in table.to_pylist()} if table is not None else {}
+
+
+@functools.lru_cache(maxsize=1)
+def _dense_spec():
+    from ego.sweep.spec import load
+
+    return load(DENSE_SPEC)
+
+
 @dataclass(frozen=True)
 class SweepJob:
-    """One run of the dense sweep with its requirements: their robustness by name."""
+    """One run of the dense sweep with its requirements: their robustness by name, and the
+    searched values under ``"point"``. A run the dense sweep's own command has stored (in
+    :data:`DENSE_OUT`; the same run, deterministic) is read from there instead of run again."""
 
     seed: int
     overrides: tuple[tuple[str, Any], ...]
     controller: str = "pid"
 
     def __call__(self) -> dict:
+        from ego.requirements import PREFIX
         from ego.runner import RunSpec, run
-        from ego.sweep.spec import load
+        from ego.sweep.spec import run_id
 
-        spec = load(DENSE_SPEC)
-        result = run(
-            RunSpec(
-                spec.scenario,
-                self.controller,
-                self.seed,
-                dict(self.overrides),
-                requirements=spec.requirements,
-            )
-        )
-        return dict(result.metrics.get("requirements", {}))
+        spec = _dense_spec()
+        overrides = dict(self.overrides)
+        row = _dense_stored(str(DENSE_OUT)).get(run_id(spec.scenario, self.controller, self.seed, overrides))
+        if row is not None and row.get("status") not in (None, "error", "interrupted"):
+            out = {name: row.get(PREFIX + name) for name in spec.requirements}
+        else:
+            result = run(RunSpec(spec.scenario, self.controller, self.seed, overrides, requirements=spec.requirements))
+            out = dict(result.metrics.get("requirements", {}))
+        ranges = spec.sample.ranges if spec.sample else {}
+        out["point"] = {k: v for k, v in self.overrides if k in ranges}
+        return out
 
 
 def dense_jobs() -> list[SweepJob]:
-    from ego.sweep.spec import load
-
-    spec = load(DENSE_SPEC)
+    spec = _dense_spec()
     return [SweepJob(r.seed, tuple(r.overrides.items()), r.controller) for r in spec.runs()]
 
 
@@ -158,3 +208,48 @@ def quartiles(runs: list, budget: int) -> tuple[float, float, float, int]:
 
 def fmt_runs(x: float, budget: int) -> str:
     return f">{budget}" if x > budget else f"{x:.0f}"
+
+
+def wilson(k: int, n: int, z: float = 1.96) -> tuple[float, float]:
+    """The 95 % Wilson score interval of a share k/n (sound at k = 0 and for small k)."""
+    if n == 0:
+        return 0.0, 1.0
+    p = k / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+def convergence_figure(curves: dict, budget: int, path: Path) -> Path:
+    """Best robustness so far against runs: per requirement a panel, per optimiser the median
+    over the repetitions and the band between their quartiles. ``curves`` maps (requirement,
+    optimiser) to the repetitions' curves; a repetition that stopped at its first violation
+    keeps its last value."""
+    from ego.plots import pyplot, save
+
+    plt = pyplot()
+    reqs = list(dict.fromkeys(r for r, _ in curves))
+    fig, axes = plt.subplots(1, len(reqs), figsize=(6 * len(reqs), 4.2), squeeze=False)
+    x = np.arange(1, budget + 1)
+    for ax, req in zip(axes[0], reqs):
+        for (r, opt), reps in curves.items():
+            if r != req:
+                continue
+            grid = np.full((len(reps), budget), np.nan)
+            for i, c in enumerate(reps):
+                c = np.clip(np.asarray(c, dtype=float)[:budget], -1e6, 1e6)
+                if len(c):
+                    grid[i, : len(c)] = c
+                    grid[i, len(c) :] = c[-1]
+            q1, med, q3 = np.nanpercentile(grid, [25, 50, 75], axis=0)
+            (line,) = ax.plot(x, med, label=f"{opt} (median)")
+            ax.fill_between(x, q1, q3, color=line.get_color(), alpha=0.15, lw=0)
+        ax.axhline(0.0, color="k", lw=0.8, ls="--")
+        ax.set_yscale("symlog", linthresh=0.1)
+        ax.set_xscale("log")
+        ax.set_xlabel("runs")
+        ax.set_ylabel(f"best robustness of {req} so far")
+        ax.set_title(f"{req}: median and quartiles over {len(reps)} repetitions", fontsize=9)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    return save(fig, path)

@@ -108,7 +108,9 @@ class Bayesian:
 
         optuna.logging.set_verbosity(optuna.logging.WARNING)
         self.d, self.batch = d, batch
-        startup = max(10, 2 * d, batch)
+        # the random initial design: two points per dimension (at least a batch) before the
+        # model proposes; optuna's default of 10 spends a third of a small budget blindly
+        startup = max(2 * d, batch, 4)
         if tpe:
             sampler = optuna.samplers.TPESampler(seed=seed, n_startup_trials=startup, constant_liar=True)
         else:
