@@ -39,7 +39,6 @@ import numpy as np  # noqa: E402
 from gymnasium.vector import AsyncVectorEnv  # noqa: E402
 
 import ego.gym  # noqa: E402
-from ego.gym.env import DEFAULT_CONTROLLER  # noqa: E402
 from ego.gym.vector import EgoVectorEnv, _Maker  # noqa: E402
 from ego.runner import RunSpec, build  # noqa: E402
 from ego.scenarios import scenario_class  # noqa: E402
@@ -217,7 +216,7 @@ def main(argv: list[str] | None = None) -> dict:
     )
     for env_id in args.ids:
         scenario = ego.gym.ENV_IDS[env_id]
-        controller = DEFAULT_CONTROLLER[scenario_class(scenario).task]
+        controller = scenario_class(scenario).reference_controller()
         recorded = demonstration(scenario, controller, overrides)
         actions = np.array(recorded, dtype=np.float64).reshape(len(recorded), -1)
         if scenario_class(scenario).task == "car-following":

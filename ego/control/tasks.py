@@ -43,6 +43,9 @@ class Task:
     observation: str  #: the observation class, ``module:Class``
     observes: tuple[Signal, ...]
     returns: tuple[Signal, ...]
+    #: the controller a run of this task gets when none is named (``ego.gym``'s default
+    #: ``config["controller"]``, the demonstrations of the benchmarks)
+    default_controller: str = "pid"
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -51,6 +54,7 @@ class Task:
             "observation": self.observation,
             "observes": [s.as_dict() for s in self.observes],
             "returns": [s.as_dict() for s in self.returns],
+            "default_controller": self.default_controller,
         }
 
 
@@ -110,6 +114,7 @@ TASKS: dict[str, Task] = {
                 Signal("a_x", "m/s^2", "axial acceleration (ignored: the lateral-error model runs at constant speed)"),
                 _STEER,
             ),
+            default_controller="cascade-pid",
         ),
         Task(
             "car-following",

@@ -46,8 +46,6 @@ from ego.scenarios import scenario_class
 from ego.scenarios.sensor import SurroundSensor
 from ego.sim import sharing_instances
 
-#: the controller that drives the channels the agent leaves, per task
-DEFAULT_CONTROLLER = {"tracking": "pid", "curve": "pid", "lane-centering": "cascade-pid", "car-following": "pid"}
 #: each env's default episode distribution: scenario parameter -> [low, high], sampled at
 #: every reset from the episode's seed (``config["randomize"]``; ``{}``: one fixed scenario)
 DEFAULT_RANDOMIZE: dict[str, dict[str, list[float]]] = {
@@ -327,7 +325,7 @@ class EgoEnv(gym.Env):
                 "longitudinal": True,
                 "lateral": TASKS[sc.task].returns[1].high > 0.0,
             },  # a task that steers
-            "controller": DEFAULT_CONTROLLER[sc.task],
+            "controller": sc.reference_controller(),
             "reward_speed_range": [0.0, 30.0],
             "randomize": {k: list(v) for k, v in DEFAULT_RANDOMIZE.get(scenario, {}).items()},
             "multi_instance": False,

@@ -21,6 +21,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ego.control.base import Controller, ControllerError, ControllerSpec, Observation, signal_units
+from ego.control.tasks import TASKS
 from ego.models.plant import Plant
 from ego.params import ConfigError, Params, param
 from ego.processes import signals_deferred
@@ -132,6 +133,9 @@ class Scenario:
     summary: ClassVar[str] = ""
     #: which controllers drive it (``ego.control.CONTROLLERS[task]``) and what they return
     task: ClassVar[str] = "tracking"
+    #: the controller a run gets where none is named (an env's ``config["controller"]``, a
+    #: benchmark's demonstration); None: its task's (``TASKS[task].default_controller``)
+    default_controller: ClassVar[str | None] = None
     config_cls: ClassVar[type] = CommonConfig
     #: the SUMO network it runs on (``ego.sumo.net.net_file``; checked before any run), or
     #: None without SUMO
@@ -527,6 +531,11 @@ class Scenario:
     def plant(self, vid: str) -> Plant:
         """Vehicle ``vid``'s plant."""
         return self.ego
+
+    @classmethod
+    def reference_controller(cls) -> str:
+        """The controller a run of this scenario gets where none is named."""
+        return cls.default_controller or TASKS[cls.task].default_controller
 
     def action_limits(self, vid: str | None = None) -> tuple[float, float, float]:
         """Vehicle ``vid``'s action box in its plant's units (None: the agent's vehicle), known

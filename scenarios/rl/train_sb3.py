@@ -33,7 +33,6 @@ from ego.gym.baselines import (
     summary,
     train,
 )
-from ego.gym.env import DEFAULT_CONTROLLER
 from ego.params import ConfigError
 from ego.paths import check_file_target, check_folder_target
 
@@ -81,7 +80,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     from ego.scenarios import scenario_class
 
-    controller = DEFAULT_CONTROLLER[scenario_class(ENV_IDS[args.env]).task]
+    controller = scenario_class(ENV_IDS[args.env]).reference_controller()
     for name, act in ((args.algo, model_act(model)), (controller, controller_policy_act(controller))):
         mean, _, ok = summary([evaluate(args.env, act)])
         print(f"  {name:12} mean return {mean:10.2f}   episodes without a crash {100 * ok:5.1f} %")

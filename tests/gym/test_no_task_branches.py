@@ -12,15 +12,20 @@ import pytest
 import ego.gym
 from ego.control.tasks import TASKS
 from ego.models import NonlinearBicycleParams
-from ego.scenarios import scenario_class
+from ego.scenarios import SCENARIOS, scenario_class
 
 GYM = Path(ego.gym.__file__).parent
 
 
 def task_comparisons(source: str) -> list[int]:
-    """Lines comparing something with a task's name (``task == "curve"``, ``x in ("tracking",)``)."""
+    """Lines comparing something with a task's name (``task == "curve"``, ``x in ("tracking",)``)
+    or keying a table by it (``{"tracking": "pid", ...}``; a table keyed by scenario, such as
+    the envs' episode distributions, may hold "curve", the name of a scenario and of its task)."""
     lines = []
+    only_tasks = set(TASKS) - set(SCENARIOS)
     for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Dict) and any(isinstance(k, ast.Constant) and k.value in only_tasks for k in node.keys):
+            lines.append(node.lineno)
         if isinstance(node, ast.Compare):
             for sub in ast.walk(node):
                 if isinstance(sub, ast.Constant) and sub.value in TASKS:
@@ -32,6 +37,22 @@ def test_the_check_finds_a_task_branch():
     assert task_comparisons('if task == "car-following":\n    pass\n') == [1]
     assert task_comparisons('x = sc.task in ("tracking", "curve")\n') == [1]
     assert task_comparisons('if kind == "tracks":\n    pass\n') == []
+    assert task_comparisons('DEFAULT = {"tracking": "pid", "curve": "pid"}\n') == [1]
+
+
+@pytest.mark.parametrize("name", ["emergency-brake", "curve", "lane-centering", "platoon", "sine-tracking"])
+def test_each_scenario_names_a_default_controller_of_its_task(name):
+    from ego.control import CONTROLLERS
+
+    cls = scenario_class(name)
+    assert cls.reference_controller() in CONTROLLERS[cls.task]
+    assert gym_default(name) == cls.reference_controller()
+
+
+def gym_default(name: str) -> str:
+    from ego.gym.env import EgoEnv
+
+    return EgoEnv.default_config(name)["controller"]
 
 
 @pytest.mark.parametrize("path", sorted(GYM.glob("*.py")), ids=lambda p: p.name)

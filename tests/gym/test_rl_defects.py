@@ -363,11 +363,10 @@ def test_time_to_collision_and_occupancy_grid_see_the_lead_car(make):
 
 def test_reward_threshold_is_the_default_controllers_mean_return_on_the_baselines_page():
     from ego.docs import RL_TABLES, block, page_path
-    from ego.gym.env import DEFAULT_CONTROLLER
     from ego.scenarios import scenario_class
 
     text = page_path("rl-baselines").read_text()
     for env_id, table in RL_TABLES.items():
-        controller = DEFAULT_CONTROLLER[scenario_class(ego.gym.ENV_IDS[env_id]).task]
+        controller = scenario_class(ego.gym.ENV_IDS[env_id]).reference_controller()
         row = next(line for line in block(text, table).splitlines() if line.startswith(f"| {controller} |"))
         assert gym.spec(env_id).reward_threshold == float(row.split(" | ")[1]), env_id
