@@ -116,7 +116,9 @@ def env_replay(env_id: str, overrides: dict, observation: dict, actions: np.ndar
 def vector_speedup(env_id: str, steps: int, config: dict, rounds: int = 1) -> tuple[float, float, float]:
     """(one env's steps/s, ``gym.make_vec(env_id, 2)``'s env steps/s (ego's own vector env),
     ``gymnasium.vector.AsyncVectorEnv``'s of the same two envs): zero actions (the scenario's
-    traffic and the ego's model still run), episodes reset as they end. The three take turns
+    traffic and the ego's model still run), episodes reset as they end. ``config`` should fix
+    the scenario (``"randomize": {}``): with the env's episode distribution, the one env and
+    the two would play different scenarios, whose steps cost different times. The three take turns
     in slices of a twentieth of ``steps``, ``rounds`` x ``steps`` steps each in all, so that a
     busy machine's changing load falls on each alike; the vector envs' worker start-up is not
     timed."""
@@ -243,7 +245,7 @@ def main(argv: list[str] | None = None) -> dict:
     if args.vector_steps:
         print(
             f"gym.make_vec(id, 2) (ego's EgoVectorEnv, one process per env) and gymnasium's AsyncVectorEnv "
-            f"against one env, {args.repeat} x {args.vector_steps} steps each (/10 at 10 Hz) in turns of a twentieth, "
+            f"against one env, {args.repeat} x {args.vector_steps} steps each (/2 at 10 Hz), one fixed scenario (no randomisation), in turns of a twentieth, "
             f"{os.cpu_count()} cores"
         )
         print(
@@ -252,8 +254,12 @@ def main(argv: list[str] | None = None) -> dict:
         )
         for env_id in args.ids:
             for pf in (0, 10):
+                # one fixed scenario for all three (the same work a step), the traffic seeded
                 one, two, other = vector_speedup(
-                    env_id, args.vector_steps // (10 if pf else 1), {**overrides, "policy_frequency": pf}, args.repeat
+                    env_id,
+                    args.vector_steps // (2 if pf else 1),
+                    {**overrides, "policy_frequency": pf, "randomize": {}},
+                    args.repeat,
                 )
                 figures[env_id].update(
                     {

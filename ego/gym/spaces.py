@@ -509,15 +509,22 @@ class ContinuousAction(ActionType):
         self._half = [0.5 * (hi - lo) for lo, hi in ranges]
 
     def native(self, action) -> tuple[float | None, float | None]:
+        # the hot path (every env step): one or two floats, no list built
         if type(action) is not np.ndarray or action.shape != self._shape:
             action = self._shaped(action)
-        values = action.tolist()
-        if self.clip:  # NaN passes through (the env ends the run on it)
-            values = [-1.0 if x < -1.0 else (1.0 if x > 1.0 else x) for x in values]
-        values = [mid + half * x for mid, half, x in zip(self._mid, self._half, values)]
-        lon = values.pop(0) * self.force_per_accel if self.longitudinal else None
-        lat = values[0] if self.lateral else None
-        return lon, lat
+        clip = self.clip
+        if self.size == 2:
+            x, y = action.tolist()
+            if clip:  # NaN passes through (the env ends the run on it)
+                x = -1.0 if x < -1.0 else (1.0 if x > 1.0 else x)
+                y = -1.0 if y < -1.0 else (1.0 if y > 1.0 else y)
+            mid, half = self._mid, self._half
+            return (mid[0] + half[0] * x) * self.force_per_accel, mid[1] + half[1] * y
+        (x,) = action.tolist()
+        if clip:
+            x = -1.0 if x < -1.0 else (1.0 if x > 1.0 else x)
+        x = self._mid[0] + self._half[0] * x
+        return (x * self.force_per_accel, None) if self.longitudinal else (None, x)
 
     def from_native(self, command: float, delta: float) -> np.ndarray:
         values = []

@@ -117,3 +117,28 @@ def test_behaviour_cloning_example_runs(tmp_path):
     assert p.returncode == 0, p.stderr
     assert "600 demonstration steps from 2 cascade-pid runs" in p.stdout
     assert "rms_lateral_error" in p.stdout
+
+
+@pytest.mark.parametrize(
+    "task, longitudinal, lateral",
+    [("tracking", True, True), ("tracking", True, False), ("tracking", False, True), ("car-following", True, False)],
+)
+def test_continuous_action_maps_each_channel_onto_its_range(task, longitudinal, lateral):
+    from ego.gym.spaces import ContinuousAction
+
+    at = ContinuousAction(
+        task, (-1.0, 1.0, 0.5), longitudinal, lateral, acceleration_range=(-6.0, 2.0), steering_range=(-0.4, 0.2)
+    )
+    at.set_plant(100.0)  # N per m/s^2
+    ranges = [r for r, on in zip(((-6.0, 2.0), (-0.4, 0.2)), (longitudinal, lateral)) if on]
+    for x in (-3.0, -1.0, -0.25, 0.0, 0.7, 1.0, 2.5, float("nan")):
+        action = np.full(at.size, x, dtype=np.float32)
+        clipped = x if x != x else min(max(float(np.float32(x)), -1.0), 1.0)
+        expect = [lo + (clipped + 1.0) / 2.0 * (hi - lo) for lo, hi in ranges]
+        lon, lat = at.native(action)
+        got = [v for v in (None if lon is None else lon / 100.0, lat) if v is not None]
+        assert (lon is None) == (not longitudinal) and (lat is None) == (not lateral)
+        if x != x:
+            assert all(v != v for v in got)  # NaN passes through: the env ends the run on it
+        else:
+            assert got == pytest.approx(expect, abs=1e-12)
