@@ -52,15 +52,34 @@ def _stop(signum, frame) -> None:
     raise KeyboardInterrupt
 
 
+def _unraisable(hook=sys.unraisablehook):
+    """``sys.unraisablehook`` for the command: a Ctrl-C or SIGTERM whose KeyboardInterrupt
+    lands in a weakref callback or a finaliser (an import's module lock, a file's ``__del__``)
+    cannot propagate, and Python would print it as "Exception ignored in ..." with its
+    traceback. It is dropped quietly instead: the stop it asks for is on record (a run's
+    handler has set its stop, so it ends at its next step; a signal during the imports is in
+    ``_received``, checked once they are done); anything else goes to the default hook."""
+
+    def unraisable(info) -> None:
+        if isinstance(info.exc_value, KeyboardInterrupt):
+            return
+        hook(info)
+
+    return unraisable
+
+
 def main(argv=None) -> int:
     if argv is None:
         signal.signal(signal.SIGINT, _stop)
         signal.signal(signal.SIGTERM, _stop)
+        sys.unraisablehook = _unraisable()
         argv = sys.argv[1:]
     try:
         try:
             from ego.cli import main as cli_main
 
+            if _received:  # a signal whose KeyboardInterrupt an import swallowed
+                raise KeyboardInterrupt
             status = cli_main(argv)
         except KeyboardInterrupt:
             _say("ego: interrupted")

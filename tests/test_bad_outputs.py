@@ -1040,3 +1040,25 @@ def test_a_recorder_whose_writer_never_started_is_collected_quietly():
 
     rec._proc = multiprocessing.get_context("spawn").Process(target=print)  # made, never started
     rec.__del__()
+
+
+def test_a_ctrl_c_landing_in_a_finaliser_prints_nothing_and_other_errors_still_do():
+    # the double Ctrl-C above, when the second KeyboardInterrupt lands in a weakref callback
+    # (an import's module lock): Python would print "Exception ignored in ..." with a traceback
+    code = (
+        "import sys, weakref\n"
+        "import ego._entry as entry\n"
+        "sys.unraisablehook = entry._unraisable()\n"
+        "class A: pass\n"
+        "def interrupted(ref): raise KeyboardInterrupt\n"
+        "def broken(ref): raise ValueError('a real error')\n"
+        "a, b = A(), A()\n"
+        "ra, rb = weakref.ref(a, interrupted), weakref.ref(b, broken)\n"
+        "del a\n"
+        "print('still running', flush=True)\n"
+        "del b\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0 and proc.stdout == "still running\n"
+    assert "KeyboardInterrupt" not in proc.stderr
+    assert "Exception ignored" in proc.stderr and "ValueError: a real error" in proc.stderr
