@@ -113,6 +113,51 @@ def env_replay(env_id: str, overrides: dict, observation: dict, actions: np.ndar
         env.close()
 
 
+def separate_loops(env_id: str, overrides: dict, actions: np.ndarray, repeat: int) -> tuple[float, float]:
+    """(seconds of ``env.step`` over ``actions``, seconds of the raw loop over the same
+    commands), each the best of ``repeat``, the two alternating: the same env reset to seed 0
+    for both, the raw loop stepping its scenario directly (``Scenario.step`` with the actions'
+    native commands; in a platoon ``ego run``'s loop, the controllers of every follower, whose
+    first follower's actions these are) and computing the run's result at the end, as the env
+    does for ``info["metrics"]``. No timer inside either loop, so neither pays for one; the
+    price is that a busy machine's changing load falls on the two unevenly (quote it from a
+    quiet machine)."""
+    env = gym.make(
+        env_id,
+        config={**overrides, "randomize": {}, "observation": {"type": "EgoState"}, "action": {"type": "EgoAction"}},
+    )
+    clock = time.perf_counter
+    best_env = best_raw = math.inf
+    try:
+        u = env.unwrapped
+        env.reset(seed=0)
+        commands = [u.action_type.native(a) for a in actions]
+        platoon = u.task == "car-following"
+        for _ in range(repeat):
+            env.reset(seed=0)
+            sc = u.scenario
+            step = sc.step
+            t0 = clock()
+            if platoon:
+                controller = sc.controller
+                for _cmd in commands:
+                    step(controller.step(sc.obs))
+            else:
+                for cmd in commands:
+                    step(cmd)
+            sc.result()
+            best_raw = min(best_raw, clock() - t0)
+            env.reset(seed=0)
+            env_step = env.step
+            t0 = clock()
+            for a in actions:
+                env_step(a)
+            best_env = min(best_env, clock() - t0)
+    finally:
+        env.close()
+    return best_env, best_raw
+
+
 def vector_speedup(env_id: str, steps: int, config: dict, rounds: int = 1) -> tuple[float, float, float]:
     """(one env's steps/s, ``gym.make_vec(env_id, 2)``'s env steps/s (ego's own vector env),
     ``gymnasium.vector.AsyncVectorEnv``'s of the same two envs): zero actions (the scenario's
@@ -214,7 +259,7 @@ def main(argv: list[str] | None = None) -> dict:
     )
     print(
         f"  {'env id':24} {'steps':>6} {'raw steps/s':>12} {'env steps/s':>12} {'overhead':>9} "
-        f"{'Kinematics steps/s':>19} {'overhead':>9}"
+        f"{'Kinematics steps/s':>19} {'overhead':>9} {'overhead, separate loops':>25}"
     )
     for env_id in args.ids:
         scenario = ego.gym.ENV_IDS[env_id]
@@ -235,13 +280,18 @@ def main(argv: list[str] | None = None) -> dict:
             row.update({f"{key}overhead": overhead, f"{key}env_steps_per_s": n / total})
             if not key:
                 row["raw_steps_per_s"] = n / inner
+        env_s, raw_s = separate_loops(env_id, overrides, actions, args.repeat)
+        row["separate_loops_overhead"] = env_s / raw_s - 1.0
         figures[env_id] = row
         print(
             f"  {env_id:24} {n:6d} {row['raw_steps_per_s']:12.0f} {row['env_steps_per_s']:12.0f} "
             f"{100 * row['overhead']:8.1f}% {row['kinematics_env_steps_per_s']:19.0f} "
-            f"{100 * row['kinematics_overhead']:8.1f}%"
+            f"{100 * row['kinematics_overhead']:8.1f}% {100 * row['separate_loops_overhead']:24.1f}%"
         )
-    print("  target: overhead <= 15 % with EgoState")
+    print(
+        "  target: overhead <= 15 % with EgoState (the first overhead times the raw step inside the env's step, "
+        "robust to a busy machine but paying for its timer in the loop; the last times two loops without a timer)"
+    )
     if args.vector_steps:
         print(
             f"gym.make_vec(id, 2) (ego's EgoVectorEnv, one process per env) and gymnasium's AsyncVectorEnv "
