@@ -19,7 +19,7 @@ from ego.falsify.bench import (
 
 # -- docs/results/falsify.md ----------------------------------------------------------------------
 #: repetitions (optimiser seeds 0..n-1) per optimiser, and the budget of each: real runs, and the surrogate
-REAL_REPS = 16
+REAL_REPS = 20
 REAL_BUDGET = 300
 SURROGATE_REPS = 20
 SURROGATE_BUDGET = 400
