@@ -34,8 +34,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from operator import itemgetter
 
 INF = math.inf
+_LOW_EDGE = itemgetter(1)  #: an object's rearmost extent along the lane: the sort key of a sync
 
 
 class Detection:
@@ -175,12 +177,15 @@ class SurroundSensor:
         straight = self._straight
         frame = self.lane.frame
         objects = []
-        before = self._speeds
+        add = objects.append
+        previous = self._speeds.get
         dt = t - self._t_sync
+        rated = dt > 0.0
         speeds = {}
+        if straight is not None:  # one segment: the frame is a rotation
+            x0, y0, ux, uy, s0, heading = straight
         for vid, (x, y, yaw, v, length, width) in zip(ids, rows):
-            if straight is not None:  # one segment: the frame is a rotation
-                x0, y0, ux, uy, s0, heading = straight
+            if straight is not None:
                 dx, dy = x - x0, y - y0
                 s, d = s0 + dx * ux + dy * uy, dy * ux - dx * uy
                 rel = yaw - heading
@@ -191,11 +196,11 @@ class SurroundSensor:
             hs = 0.5 * (length * ac + width * asn)
             hd = 0.5 * (length * asn + width * ac)
             vs = v * c
-            prev = before.get(vid)
-            accel = (vs - prev) / dt if prev is not None and dt > 0.0 else 0.0
+            prev = previous(vid)
+            accel = (vs - prev) / dt if prev is not None and rated else 0.0
             speeds[vid] = vs
-            objects.append((vid, s - hs, s + hs, d - hd, d + hd, vs, v * sn, accel, rel))
-        objects.sort(key=lambda o: o[1])
+            add((vid, s - hs, s + hs, d - hd, d + hd, vs, v * sn, accel, rel))
+        objects.sort(key=_LOW_EDGE)
         self._objects = objects
         self._near = None
         self._speeds = speeds
