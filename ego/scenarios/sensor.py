@@ -132,6 +132,7 @@ class SurroundSensor:
         "_ego",
         "_speeds",
         "_rows",
+        "_seen",
     )
 
     def __init__(
@@ -164,7 +165,8 @@ class SurroundSensor:
         #: last sync, ordered by s_lo
         self._objects: list[tuple] = []
         self._speeds: dict[str, float] = {}  #: id -> v_s at the last sync
-        self._rows: dict[str, tuple] = {}  #: id -> world row at the last sync
+        self._rows: dict[str, tuple] | None = {}  #: id -> world row at the last sync
+        self._seen: tuple[Sequence[str], Sequence[tuple]] = ((), ())  #: ids, world rows at the last sync
         self._t_sync = 0.0
         self._t = 0.0
         self._ego = (0.0, 0.0, 0.0, 0.0)
@@ -204,7 +206,8 @@ class SurroundSensor:
         self._objects = objects
         self._near = None
         self._speeds = speeds
-        self._rows = dict(zip(ids, rows))
+        self._seen = (ids, rows)
+        self._rows = None  # id -> row, made when box() first asks after this sync
         self._t_sync = t
 
     def ego_extents(self, s: float, d: float, heading_error: float) -> tuple[float, float, float, float]:
@@ -342,7 +345,10 @@ class SurroundSensor:
     def box(self, vid: str) -> tuple[float, float, float, float, float] | None:
         """World box (centre x, y in m, yaw rad, length, width in m) of a sensed vehicle now,
         moved on from the last SUMO step at its speed; None if it was not seen."""
-        row = self._rows.get(vid)
+        rows = self._rows
+        if rows is None:
+            rows = self._rows = dict(zip(*self._seen))
+        row = rows.get(vid)
         if row is None:
             return None
         x, y, yaw, v, length, width = row
