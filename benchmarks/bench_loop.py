@@ -191,8 +191,9 @@ def main(argv: list[str] | None = None) -> dict:
     print(f"  real-time factor           {figures['real_time_factor']:8.1f} x   (target >= 100)")
     print(f"  loop per SUMO step, CPU    {figures['loop_us_per_sumo_step']:8.1f} us")
     print(f"  bare SUMO per step, CPU    {figures['bare_sumo_us_per_step']:8.1f} us")
-    target = 2.8 if figures["recording"] else 1.8
-    print(f"  loop / bare SUMO, CPU      {figures['loop_over_bare_sumo']:8.2f}     (target <= {target:g})")
+    # issue 18's targets are emergency-brake's (the platoon's bare SUMO is nearly free)
+    target = f"(target <= {2.8 if figures['recording'] else 1.8:g})" if args.scenario == "emergency-brake" else ""
+    print(f"  loop / bare SUMO, CPU      {figures['loop_over_bare_sumo']:8.2f}     {target}")
     print(
         f"  loop / bare SUMO, wall     {figures['loop_over_bare_sumo_wall']:8.2f}     (the machine's other jobs included)"
     )
