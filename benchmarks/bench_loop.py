@@ -6,8 +6,15 @@
 Prints the real-time factor of a scenario (default ``emergency-brake`` with fuzzy, recording
 on, dt = 0.01 s) and the ratio of the loop's cost per SUMO step to ``simulationStep()``
 alone on the same traffic (same scenario set-up and seed, no control, no recording).
-Targets (issue 2, emergency-brake): >= 100x real time, loop <= 3x bare SUMO. For the
-platoon: ``--scenario platoon --controller bp-pid-acc [--set followers=10]``.
+Targets (issue 18, emergency-brake): loop <= 2.8x bare SUMO with recording, <= 1.8x without.
+For the platoon: ``--scenario platoon --controller bp-pid-acc [--set followers=10]``.
+
+The ratio is of CPU time (``time.process_time``: what this process computed, not what
+other jobs on a shared machine took from it); the wall-clock ratio is printed beside it. A
+recording is written by a separate process on another core, so the loop's CPU leaves its
+writer out: with recording the benchmark also runs each loop with the writer in the loop's
+process (``background_recording=False``) and prints that ratio, the whole work of a
+recorded run.
 """
 
 from __future__ import annotations
@@ -25,32 +32,33 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from ego.runner import RunSpec, build  # noqa: E402
 
 
-def timed_loop(spec: RunSpec) -> tuple[float, float, int, int]:
-    """(loop seconds, simulated seconds, control steps, SUMO steps) after set-up."""
+def timed_loop(spec: RunSpec) -> tuple[float, float, float, int, int]:
+    """(loop CPU seconds, loop wall seconds, simulated seconds, control steps, SUMO steps)
+    after set-up; closing the recording (the writer finishing the file) included."""
     scenario = build(spec)
     try:
         obs = scenario.reset()
         controller = scenario.controller
-        t0 = time.perf_counter()
+        c0, t0 = time.process_time(), time.perf_counter()
         while not scenario.done:
             obs = scenario.step(controller.step(obs))
         scenario.recorder.close()
-        elapsed = time.perf_counter() - t0
-        return elapsed, scenario.t, scenario.k, scenario.k // scenario.config.control_per_sumo
+        cpu, wall = time.process_time() - c0, time.perf_counter() - t0
+        return cpu, wall, scenario.t, scenario.k, scenario.k // scenario.config.control_per_sumo
     finally:
         scenario.close()
 
 
-def timed_bare_sumo(spec: RunSpec, sumo_steps: int) -> float:
-    """Seconds for ``sumo_steps`` bare simulationStep() calls on the scenario's traffic."""
+def timed_bare_sumo(spec: RunSpec, sumo_steps: int) -> tuple[float, float]:
+    """(CPU, wall) seconds for ``sumo_steps`` bare simulationStep() calls on the scenario's traffic."""
     scenario = build(RunSpec(spec.scenario, "none", spec.seed, spec.overrides))
     try:
         scenario.reset()
         step = scenario.bridge.libsumo.simulationStep
-        t0 = time.perf_counter()
+        c0, t0 = time.process_time(), time.perf_counter()
         for _ in range(sumo_steps):
             step()
-        return time.perf_counter() - t0
+        return time.process_time() - c0, time.perf_counter() - t0
     finally:
         scenario.close()
 
@@ -122,17 +130,30 @@ def main(argv: list[str] | None = None) -> dict:
     overrides = dict(item.split("=", 1) for item in args.overrides)
     os.environ.setdefault("XDG_CONFIG_HOME", tempfile.mkdtemp())
     os.environ.setdefault("XDG_DATA_HOME", tempfile.mkdtemp())
-    loops, bares = [], []
+    loops, bares, walls, bare_walls, inline = [], [], [], [], []
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(args.repeat):
             record = None if args.no_record else str(Path(tmp) / f"run{i}.rrd")
             spec = RunSpec(args.scenario, args.controller, seed=0, overrides=overrides, record=record)
-            loop, sim, steps, sumo_steps = timed_loop(spec)
-            bare = timed_bare_sumo(spec, sumo_steps)
+            loop, wall, sim, steps, sumo_steps = timed_loop(spec)
+            if record is not None:  # the same loop with the writer in this process
+                one = RunSpec(
+                    args.scenario,
+                    args.controller,
+                    seed=0,
+                    overrides=overrides,
+                    record=str(Path(tmp) / f"inline{i}.rrd"),
+                    background_recording=False,
+                )
+                inline.append(timed_loop(one)[0])
+            bare, bare_wall = timed_bare_sumo(spec, sumo_steps)
             loops.append(loop)
             bares.append(bare)
+            walls.append(wall)
+            bare_walls.append(bare_wall)
     loop = statistics.median(loops)
     bare = statistics.median(bares)
+    wall = statistics.median(walls)
     sensor = sensor_cost(spec)
     log_us = traffic_log_cost(spec)
     figures = {
@@ -148,8 +169,11 @@ def main(argv: list[str] | None = None) -> dict:
         "loop_us_per_sumo_step": 1e6 * loop / sumo_steps,
         "bare_sumo_us_per_step": 1e6 * bare / sumo_steps,
         "loop_over_bare_sumo": loop / bare,
+        "loop_over_bare_sumo_wall": wall / statistics.median(bare_walls),
         "traffic_log_us_per_sumo_step": log_us,
     }
+    if inline:
+        figures["loop_with_writer_over_bare_sumo"] = statistics.median(inline) / bare
     figures["traffic_log_share_of_loop"] = log_us / figures["loop_us_per_sumo_step"]
     if sensor is not None:
         per_sumo_step = sensor[0] + (steps / sumo_steps - 1) * sensor[1]
@@ -165,9 +189,19 @@ def main(argv: list[str] | None = None) -> dict:
     )
     print(f"  simulated {sim:.1f} s ({steps} control steps, {sumo_steps} SUMO steps) in {loop:.3f} s")
     print(f"  real-time factor           {figures['real_time_factor']:8.1f} x   (target >= 100)")
-    print(f"  loop per SUMO step         {figures['loop_us_per_sumo_step']:8.1f} us")
-    print(f"  bare SUMO per step         {figures['bare_sumo_us_per_step']:8.1f} us")
-    print(f"  loop / bare SUMO           {figures['loop_over_bare_sumo']:8.2f}     (target <= 3)")
+    print(f"  loop per SUMO step, CPU    {figures['loop_us_per_sumo_step']:8.1f} us")
+    print(f"  bare SUMO per step, CPU    {figures['bare_sumo_us_per_step']:8.1f} us")
+    # issue 18's targets are emergency-brake's (the platoon's bare SUMO is nearly free)
+    target = f"(target <= {2.8 if figures['recording'] else 1.8:g})" if args.scenario == "emergency-brake" else ""
+    print(f"  loop / bare SUMO, CPU      {figures['loop_over_bare_sumo']:8.2f}     {target}")
+    print(
+        f"  loop / bare SUMO, wall     {figures['loop_over_bare_sumo_wall']:8.2f}     (the machine's other jobs included)"
+    )
+    if inline:
+        print(
+            f"  ... writer in-process, CPU {figures['loop_with_writer_over_bare_sumo']:8.2f}     "
+            "(the recording's whole work in the loop's process)"
+        )
     print(
         f"  traffic log per SUMO step  {log_us:8.1f} us   ({100 * figures['traffic_log_share_of_loop']:.1f} % "
         f"of the loop: handing a step's vehicles over, filtered in batches)"

@@ -58,6 +58,7 @@ class ActuatorLimits:
             command = self.min_command
         elif command > self.max_command:
             command = self.max_command
-        if self.stop_speed > 0.0:
-            command = standstill(command, speed, self.stop_speed)
+        stop = self.stop_speed
+        if stop > 0.0 and command < 0.0 and speed < stop:  # standstill(), inline: every control period
+            command = command * (speed if speed > 0.0 else 0.0) / stop
         return command, delta

@@ -709,6 +709,7 @@ class ComposedLoop:
         else:
             self._filter = _unfiltered
         self._write_row = self.trace.bind(view.row_names)
+        self._signals = self.controller.signals
         view.sense(self.t)
         if self.after_setup is not None:
             self.after_setup()
@@ -721,7 +722,7 @@ class ComposedLoop:
         # the row describes time t: the state before this step and the action applied
         d = obs.d
         self._write_row(
-            self.controller.signals(),
+            self._signals(),
             (
                 obs.t,
                 view.X,

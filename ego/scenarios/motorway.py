@@ -31,7 +31,7 @@ from ego.record.base import Series
 from ego.results.trace import Column, Plot, Ref, Trajectory
 from ego.results.traffic_log import RADIUS, REACH_MARGIN
 from ego.scenarios.base import CommonConfig, signal_series, vehicle_series
-from ego.scenarios.events import INF, boxes_overlap, time_to_collision
+from ego.scenarios.events import INF, boxes_overlap
 from ego.scenarios.observe import road_observation
 from ego.scenarios.road import RoadSensor
 from ego.scenarios.sensor import SurroundSensor
@@ -321,12 +321,17 @@ class SurroundView(RoadSensor):
             self._looked = True
         front, rear = sensor.front, sensor.rear
         ds = self.ds
-        gap = self.gap_front = front.gap
-        self.ttc_front = time_to_collision(gap, ds - front.speed)
-        gap = self.gap_rear = rear.gap
-        self.ttc_rear = time_to_collision(gap, rear.speed - ds)
-        if self.gap_front <= 0.0 or self.gap_rear <= 0.0:
-            return self._overlap(front.id if self.gap_front <= 0.0 else rear.id)
+        # time_to_collision(gap, closing), inline: every control period
+        front_gap = self.gap_front = front.gap
+        closing = ds - front.speed
+        self.ttc_front = (
+            0.0 if front_gap <= 0.0 else (INF if closing <= 1e-9 or front_gap == INF else front_gap / closing)
+        )
+        rear_gap = self.gap_rear = rear.gap
+        closing = rear.speed - ds
+        self.ttc_rear = 0.0 if rear_gap <= 0.0 else (INF if closing <= 1e-9 or rear_gap == INF else rear_gap / closing)
+        if front_gap <= 0.0 or rear_gap <= 0.0:
+            return self._overlap(front.id if front_gap <= 0.0 else rear.id)
         return None
 
     def _overlap(self, other: str) -> Collision | None:

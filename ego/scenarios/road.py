@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 
-from ego.lane_frame import LanePolyline
+from ego.lane_frame import LanePolyline, wrap_angle
 from ego.models.geometry import VehicleGeometry
 from ego.record.base import Scene
 from ego.results.traffic_log import RADIUS, REACH_MARGIN
@@ -38,6 +38,8 @@ class RoadSensor:
         self.s = self.d_road = self.heading_error = self.curvature = self.ds = self.dd = 0.0
         self.X = self.Y = 0.0
         self._plant = None
+        self._line_of = None  #: the road ``_line`` belongs to
+        self._line: tuple[float, ...] | None = None  #: its straight segment (LanePolyline.straight)
 
     def on_lane(self, road: LanePolyline, plant) -> None:
         """Measure ``plant`` on the one lane ``road``: off the road beyond its edge by more
@@ -49,7 +51,20 @@ class RoadSensor:
     def frame(self) -> None:
         """Lane-frame position and velocity of the ego's centre of gravity (the road sensor)."""
         X, u, Y, v, psi, r = self._plant.state
-        s, d, err, kappa = self.road.frame(X, Y, psi)
+        road = self.road
+        if road is not self._line_of:  # a new road: is it one straight segment?
+            straight = getattr(road, "straight", None)
+            self._line_of, self._line = road, straight() if straight is not None else None
+        line = self._line
+        if line is not None:  # LanePolyline.frame's rotation, inline: every control period
+            x0, y0, ux, uy, s0, heading = line
+            dx, dy = X - x0, Y - y0
+            err = psi - heading
+            if not -math.pi < err <= math.pi:
+                err = wrap_angle(err)
+            s, d, kappa = s0 + dx * ux + dy * uy, dy * ux - dx * uy, 0.0
+        else:
+            s, d, err, kappa = road.frame(X, Y, psi)
         c, sn = math.cos(err), math.sin(err)
         self.X, self.Y = X, Y
         self.s, self.d_road, self.heading_error, self.curvature = s, d, err, kappa

@@ -82,9 +82,9 @@ class SafetyLayer:
         view = self.view
         front = view.sensor.front
         if not self.active:
-            braking_in_lane = self.manoeuvre.braking_in_lane()
-            if not braking_in_lane and view.ttc_front >= c.aeb_ttc:
+            if view.ttc_front >= c.aeb_ttc and not self.manoeuvre.braking_in_lane():
                 return  # the common case, decided without computing the need
+            braking_in_lane = self.manoeuvre.braking_in_lane()
             need = braking_need(front, view.ds)
             if (braking_in_lane and need >= c.aeb_decel) or self.imminent():
                 self.manoeuvre.emergency_stop()

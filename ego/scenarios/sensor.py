@@ -34,8 +34,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from operator import itemgetter
 
 INF = math.inf
+_LOW_EDGE = itemgetter(1)  #: an object's rearmost extent along the lane: the sort key of a sync
 
 
 class Detection:
@@ -130,6 +132,7 @@ class SurroundSensor:
         "_ego",
         "_speeds",
         "_rows",
+        "_seen",
     )
 
     def __init__(
@@ -162,7 +165,8 @@ class SurroundSensor:
         #: last sync, ordered by s_lo
         self._objects: list[tuple] = []
         self._speeds: dict[str, float] = {}  #: id -> v_s at the last sync
-        self._rows: dict[str, tuple] = {}  #: id -> world row at the last sync
+        self._rows: dict[str, tuple] | None = {}  #: id -> world row at the last sync
+        self._seen: tuple[Sequence[str], Sequence[tuple]] = ((), ())  #: ids, world rows at the last sync
         self._t_sync = 0.0
         self._t = 0.0
         self._ego = (0.0, 0.0, 0.0, 0.0)
@@ -175,12 +179,15 @@ class SurroundSensor:
         straight = self._straight
         frame = self.lane.frame
         objects = []
-        before = self._speeds
+        add = objects.append
+        previous = self._speeds.get
         dt = t - self._t_sync
+        rated = dt > 0.0
         speeds = {}
+        if straight is not None:  # one segment: the frame is a rotation
+            x0, y0, ux, uy, s0, heading = straight
         for vid, (x, y, yaw, v, length, width) in zip(ids, rows):
-            if straight is not None:  # one segment: the frame is a rotation
-                x0, y0, ux, uy, s0, heading = straight
+            if straight is not None:
                 dx, dy = x - x0, y - y0
                 s, d = s0 + dx * ux + dy * uy, dy * ux - dx * uy
                 rel = yaw - heading
@@ -191,15 +198,16 @@ class SurroundSensor:
             hs = 0.5 * (length * ac + width * asn)
             hd = 0.5 * (length * asn + width * ac)
             vs = v * c
-            prev = before.get(vid)
-            accel = (vs - prev) / dt if prev is not None and dt > 0.0 else 0.0
+            prev = previous(vid)
+            accel = (vs - prev) / dt if prev is not None and rated else 0.0
             speeds[vid] = vs
-            objects.append((vid, s - hs, s + hs, d - hd, d + hd, vs, v * sn, accel, rel))
-        objects.sort(key=lambda o: o[1])
+            add((vid, s - hs, s + hs, d - hd, d + hd, vs, v * sn, accel, rel))
+        objects.sort(key=_LOW_EDGE)
         self._objects = objects
         self._near = None
         self._speeds = speeds
-        self._rows = dict(zip(ids, rows))
+        self._seen = (ids, rows)
+        self._rows = None  # id -> row, made when box() first asks after this sync
         self._t_sync = t
 
     def ego_extents(self, s: float, d: float, heading_error: float) -> tuple[float, float, float, float]:
@@ -337,7 +345,10 @@ class SurroundSensor:
     def box(self, vid: str) -> tuple[float, float, float, float, float] | None:
         """World box (centre x, y in m, yaw rad, length, width in m) of a sensed vehicle now,
         moved on from the last SUMO step at its speed; None if it was not seen."""
-        row = self._rows.get(vid)
+        rows = self._rows
+        if rows is None:
+            rows = self._rows = dict(zip(*self._seen))
+        row = rows.get(vid)
         if row is None:
             return None
         x, y, yaw, v, length, width = row

@@ -33,6 +33,9 @@ from ego.sim.registry import SimSetup
 from ego.sim.types import Collision, Departure, SimError, VehicleSpec, VehicleType, ego_type  # noqa: F401 - importable from here too
 from ego.sumo.net import sumo_binary
 
+#: TraCI's variable ids of a vehicle's position and angle (libsumo.constants), read every step
+_VAR_POSITION, _VAR_ANGLE = 0x42, 0x43
+
 # libsumo prints a pyarrow version warning to stdout on import unless told to be quiet;
 # stdout is reserved for results (``ego run --json``).
 os.environ.setdefault("LIBSUMO_AS_TRACI", "quiet")
@@ -548,21 +551,21 @@ class SumoBridge:
         # one call for every vehicle SUMO already reports after each step (a subscription per
         # vehicle, made the first time it is seen), not two per vehicle
         results = veh.getAllSubscriptionResults()
-        subscribed, dims = self._pose_subscribed, self.dimensions
-        from libsumo import constants as tc
-
-        p_key, a_key = tc.VAR_POSITION, tc.VAR_ANGLE
+        subscribed, dims, known = self._pose_subscribed, self.dimensions, self._dims
+        p_key, a_key = _VAR_POSITION, _VAR_ANGLE
         rows = []
+        add = rows.append
         for v in ids:
             r = results.get(v) if v in subscribed else None
             if r is None:  # new: asked directly this once
                 if v not in subscribed:
                     veh.subscribe(v, (p_key, a_key))
                     subscribed.add(v)
-                rows.append((*veh.getPosition(v), veh.getAngle(v), *dims(v)))
+                add((*veh.getPosition(v), veh.getAngle(v), *dims(v)))
             else:
                 x, y = r[p_key]
-                rows.append((x, y, r[a_key], *dims(v)))
+                length, width = known.get(v) or dims(v)
+                add((x, y, r[a_key], length, width))
         return list(ids), rows
 
     def boxes(self) -> tuple[list[str], np.ndarray]:
