@@ -14,10 +14,15 @@ os.environ.setdefault("RERUN_ANALYTICS", "false")
 
 @pytest.fixture(autouse=True)
 def _signal_handlers_restored():
-    """A test that runs ``ego._entry`` in-process leaves SIGINT/SIGTERM ignored (its answer
-    is given); a later test's run would then never see its Ctrl-C. Each test starts with the
-    handlers the session had."""
+    """Something in-process (``ego._entry`` answering a command, a module-scoped fixture's
+    teardown) can leave SIGINT/SIGTERM ignored; a later test's run would then never see its
+    Ctrl-C, nor would the processes it starts (an ignored signal is inherited). Each test
+    starts with Python's default handlers where they were ignored, and gets the old ones back."""
     saved = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
+    if saved[signal.SIGINT] is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+    if saved[signal.SIGTERM] is signal.SIG_IGN:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
     yield
     for sig, handler in saved.items():
         if signal.getsignal(sig) is not handler:
