@@ -36,7 +36,7 @@ import numpy as np
 
 from ego.scenarios.events import INF, GapRule, check_lane, choose_lane
 from ego.scenarios.motorway import LANE_NAMES
-from ego.scenarios.safety import braking_need, friction_limit
+from ego.scenarios.safety import braking_need, clears_sideways, friction_limit
 from ego.scenarios.sensor import Detection
 
 CRUISE, LANE_CHANGE, IN_LANE, DONE = 0, 1, 2, 3
@@ -121,6 +121,21 @@ class EvasiveManoeuvre:
 
     def braking_in_lane(self) -> bool:
         return self.phase == IN_LANE and self.in_lane.action == "brake"
+
+    def changing_lane(self) -> bool:
+        return self.phase == LANE_CHANGE
+
+    def limit_braking_behind(self, need: float) -> bool:
+        """In a lane change, only the friction limit keeps the ego behind the car its outline
+        still overlaps (braking there needs ``need`` m/s^2, more than 0.9 of the limit), and it
+        does not move out of that car's way sideways first: the AEB brakes at the limit while
+        the steering goes on. The lane change's reference keeps the ego behind that car until
+        it has cleared it; a controller that lags it there (easing off while its reference
+        still falls behind) runs into a car braking alone would have stopped it behind."""
+        if self.phase != LANE_CHANGE or need <= 0.9 * friction_limit(self.plant.model.params):
+            return False
+        view = self.view
+        return view.sensor.front.gap != INF and not clears_sideways(view, view.ttc_front)
 
     def plan(self, obs, t: float) -> None:
         """One control period: trigger, the safety layer, the references into ``obs``."""
@@ -260,7 +275,7 @@ class EvasiveManoeuvre:
         """Would the follower in the target lane run into the ego if the ego brakes here at
         ``decel`` (m/s^2) down to the front object's speed? The follower is taken to hold its
         speed (a car whose lane the ego only half occupies may not react to it: SUMO's drivers
-        do not), over ``horizon`` s; a threat is a gap below ``margin`` m. Returns why (its id,
+        do not), over ``horizon`` s or until a second after the ego's braking ends; a threat is a gap below ``margin`` m. Returns why (its id,
         gap and speed), or None when the lane behind is clear. Braking to a near stop across two
         lanes in front of such a follower is how an AEB stop mid-lane-change gets rear-ended."""
         view = self.view
@@ -274,7 +289,9 @@ class EvasiveManoeuvre:
         v_front = front.speed + min(front.accel, 0.0) * horizon
         v_end = min(v0, max(v_front, 0.0)) if front.gap != INF else v0
         t_brake = (v0 - v_end) / decel
-        t = np.linspace(0.0, horizon, 31)
+        # and on for a second after the ego's braking ends: a follower faster than the ego's
+        # end speed still closes in then (a 3 s look missed one 39 m back at 20 m/s)
+        t = np.linspace(0.0, max(horizon, t_brake + 1.0), 41)
         ego_x = np.where(
             t < t_brake, v0 * t - 0.5 * decel * t * t, v0 * t_brake - 0.5 * decel * t_brake**2 + v_end * (t - t_brake)
         )

@@ -36,6 +36,15 @@ def braking_need(front: Detection, ds: float, margin: float = 0.0) -> float:
     return need
 
 
+def clears_sideways(view, ttc: float) -> bool:
+    """The ego moves out of the front object's way sideways within ``ttc`` (s), at the
+    relative speed across the lane it has now."""
+    front = view.sensor.front
+    # the ego moves away from the object's side at this relative speed (m/s)
+    clearing = -front.side * (view.dd - front.lateral_speed)
+    return clearing > 0.0 and front.overlap / clearing < ttc
+
+
 def friction_limit(params) -> float:
     """The largest deceleration (m/s^2) the tyres and the rolling resistance give:
     F_max / m + f g."""
@@ -82,11 +91,17 @@ class SafetyLayer:
         view = self.view
         front = view.sensor.front
         if not self.active:
-            braking_in_lane = self.manoeuvre.braking_in_lane()
-            if not braking_in_lane and view.ttc_front >= c.aeb_ttc:
+            man = self.manoeuvre
+            braking_in_lane = man.braking_in_lane()
+            changing = man.changing_lane()
+            if not braking_in_lane and not changing and view.ttc_front >= c.aeb_ttc:
                 return  # the common case, decided without computing the need
             need = braking_need(front, view.ds)
-            if (braking_in_lane and need >= c.aeb_decel) or self.imminent():
+            if (
+                (braking_in_lane and need >= c.aeb_decel)
+                or (changing and man.limit_braking_behind(need))
+                or self.imminent()
+            ):
                 self.manoeuvre.emergency_stop()
                 self.active = True
                 self.engagements += 1
@@ -114,7 +129,4 @@ class SafetyLayer:
         ttc = view.ttc_front
         if ttc >= self.config.aeb_ttc:
             return False
-        front = view.sensor.front
-        # the ego moves away from the object's side at this relative speed (m/s)
-        clearing = -front.side * (view.dd - front.lateral_speed)
-        return not (clearing > 0.0 and front.overlap / clearing < ttc)
+        return not clears_sideways(view, ttc)
