@@ -3,7 +3,12 @@
 :class:`SafetyLayer` holds the friction limit (the whole friction circle as the largest
 braking command; the plant's ABS trims it further) and the automatic emergency brake
 (AEB): while the AEB is engaged the longitudinal command becomes full braking, whatever
-the controller asked; the steering passes through. Engaging is decided once per control
+the controller asked; the steering passes through. It engages when braking in lane needs
+``aeb_decel``, when a lane change needs the friction limit to stay behind the car its outline
+still overlaps and does not move out of its way first
+(:meth:`ego.scenarios.manoeuvre.EvasiveManoeuvre.limit_braking_behind`: the lane change steers
+on, braking at the limit), or when a collision is imminent.
+Engaging is decided once per control
 period from the surround view (:meth:`SafetyLayer.update`); the manoeuvre is told
 (:meth:`ego.scenarios.manoeuvre.EvasiveManoeuvre.emergency_stop`) so it can leave a lane
 change it should not finish while braking hard.
