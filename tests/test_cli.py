@@ -224,7 +224,7 @@ def test_run_json_is_one_object_with_the_documented_fields(tmp_path):
 
 @pytest.mark.sumo
 def test_a_collision_is_reported_with_exit_status_1():
-    out = ego("run", "emergency-brake", "-c", "none", "--json")
+    out = ego("run", "emergency-brake", "-c", "none", "--set", "aeb=false", "--json")  # no controller, no AEB
     assert out.returncode == 1
     assert json.loads(out.stdout)["status"] == "collision"
 

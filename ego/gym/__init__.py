@@ -43,7 +43,7 @@ ENV_IDS = {
 #: benchmark configuration: ego.gym.baselines.BENCH_CONFIG, 10 Hz), so "solved" means "as
 #: good as the controller" (tests/gym check it against the page)
 REWARD_THRESHOLDS: dict[str, float] = {
-    "ego/EmergencyBrake-v0": 80.85,
+    "ego/EmergencyBrake-v0": 81.11,
     "ego/FastFollower-v0": 116.70,
     "ego/CutIn-v0": 150.97,
     "ego/Curve-v0": 13.77,

@@ -55,7 +55,8 @@ class EvasiveConfig(HighwayConfig):
         "-",
         "automatic emergency braking: full braking at the friction limit, "
         "overriding the controller's longitudinal command, when braking in lane needs "
-        "more than aeb_decel or the front TTC falls below aeb_ttc",
+        "more than aeb_decel, a lane change needs (0.9 of) the friction limit to stay behind the car it still "
+        "overlaps, or the front TTC falls below aeb_ttc",
     )
     aeb_decel: float = param(
         3.0,

@@ -36,7 +36,7 @@ import numpy as np
 
 from ego.scenarios.events import INF, GapRule, check_lane, choose_lane
 from ego.scenarios.motorway import LANE_NAMES
-from ego.scenarios.safety import braking_need, friction_limit
+from ego.scenarios.safety import braking_need, clears_sideways, friction_limit
 from ego.scenarios.sensor import Detection
 
 CRUISE, LANE_CHANGE, IN_LANE, DONE = 0, 1, 2, 3
@@ -122,6 +122,21 @@ class EvasiveManoeuvre:
     def braking_in_lane(self) -> bool:
         return self.phase == IN_LANE and self.in_lane.action == "brake"
 
+    def changing_lane(self) -> bool:
+        return self.phase == LANE_CHANGE
+
+    def limit_braking_behind(self, need: float) -> bool:
+        """In a lane change, only the friction limit keeps the ego behind the car its outline
+        still overlaps (braking there needs ``need`` m/s^2, more than 0.9 of the limit), and it
+        does not move out of that car's way sideways first: the AEB brakes at the limit while
+        the steering goes on. The lane change's reference keeps the ego behind that car until
+        it has cleared it; a controller that lags it there (easing off while its reference
+        still falls behind) runs into a car braking alone would have stopped it behind."""
+        if self.phase != LANE_CHANGE or need <= 0.9 * friction_limit(self.plant.model.params):
+            return False
+        view = self.view
+        return view.sensor.front.gap != INF and not clears_sideways(view, view.ttc_front)
+
     def plan(self, obs, t: float) -> None:
         """One control period: trigger, the safety layer, the references into ``obs``."""
         self.t = t
@@ -165,6 +180,9 @@ class EvasiveManoeuvre:
         c = self.config
         view = self.view
         self.chosen, self.choice_reason = self.choose(self)
+        if self.chosen is not None and (threat := self._braking_threat(self.chosen)):
+            self.choice_reason += f"; {self.chosen}: the new lane's follower {threat}: brake in lane"
+            self.chosen = None
         self.trigger_t, self.trigger_ttc, self.trigger_s = self.t, ttc, view.s
         # "decelerate and change lane": evading a car ahead never speeds up towards it (from
         # below evade_speed the ego keeps its speed); evading one behind does speed up
@@ -224,17 +242,8 @@ class EvasiveManoeuvre:
         limit = friction_limit(self.plant.model.params)
         if progress >= 0.5:
             return  # well across: finish it (the new lane's traffic sees the ego in its lane)
-        threat = None
         front = view.sensor.front
-        # an emergency stop goes back up to a quarter across; a slow-down only at the very start
-        # (further across, a controller's lateral lag can carry the ego past the front car and
-        # swing it back into it)
-        if progress < (0.25 if aeb else 0.1) and front.gap != INF and (aeb or front.speed < view.ds - 0.5):
-            # early in the change, a follower in the new lane that would run into the braking
-            # ego sends it back, if braking stops it behind the front car holding its speed now
-            closing = view.ds - front.speed
-            if closing <= 0.0 or closing * closing / (2.0 * max(front.gap, 0.1)) <= 0.9 * limit:
-                threat = self.target_follower_threat(limit)
+        threat = self._braking_threat(None, aeb) if progress < (0.25 if aeb else 0.1) else None
         if threat is None and (not aeb or braking_need(front, view.ds) > 0.9 * limit):
             return  # braking alone would not stop it in time and the new lane is clear: carry on
         why = f"; the new lane's follower {threat}" if threat else ""
@@ -248,23 +257,41 @@ class EvasiveManoeuvre:
         self.enter(IN_LANE)
         self.in_lane.start(self)
 
-    def target_follower_threat(self, decel: float, horizon: float = 3.0, margin: float = 2.0) -> str | None:
+    def _braking_threat(self, side: str | None, aeb: bool = False) -> str | None:
+        view = self.view
+        front = view.sensor.front
+        if self.in_lane.action != "brake" or front.gap == INF or not (aeb or front.speed < view.ds - 0.5):
+            return None
+        limit = friction_limit(self.plant.model.params)
+        closing = view.ds - front.speed
+        if closing > 0.0 and closing * closing / (2.0 * max(front.gap, 0.1)) > 0.9 * limit:
+            return None
+        lane = None if side is None else view.target_lane + (1 if side == "left" else -1)
+        return self.target_follower_threat(limit, lane=lane)
+
+    def target_follower_threat(
+        self, decel: float, horizon: float = 3.0, margin: float = 2.0, lane: int | None = None
+    ) -> str | None:
         """Would the follower in the target lane run into the ego if the ego brakes here at
         ``decel`` (m/s^2) down to the front object's speed? The follower is taken to hold its
         speed (a car whose lane the ego only half occupies may not react to it: SUMO's drivers
-        do not), over ``horizon`` s; a threat is a gap below ``margin`` m. Returns why (its id,
+        do not), over ``horizon`` s or until a second after the ego's braking ends; a threat is a gap below ``margin`` m. Returns why (its id,
         gap and speed), or None when the lane behind is clear. Braking to a near stop across two
         lanes in front of such a follower is how an AEB stop mid-lane-change gets rear-ended."""
         view = self.view
         follower = self._lane_follower
-        view.sensor.lane_neighbours(view.target_lane, self._lane_leader, follower)
+        view.sensor.lane_neighbours(view.target_lane if lane is None else lane, self._lane_leader, follower)
         if follower.gap == INF or follower.speed <= 0.0:
             return None
         front = view.sensor.front
         v0 = max(view.ds, 0.0)
-        v_end = min(v0, max(front.speed, 0.0)) if front.gap != INF else v0
+        # a braking front car keeps braking: down to where its measured deceleration takes it
+        v_front = front.speed + min(front.accel, 0.0) * horizon
+        v_end = min(v0, max(v_front, 0.0)) if front.gap != INF else v0
         t_brake = (v0 - v_end) / decel
-        t = np.linspace(0.0, horizon, 31)
+        # and on for a second after the ego's braking ends: a follower faster than the ego's
+        # end speed still closes in then (a 3 s look missed one 39 m back at 20 m/s)
+        t = np.linspace(0.0, max(horizon, t_brake + 1.0), 41)
         ego_x = np.where(
             t < t_brake, v0 * t - 0.5 * decel * t * t, v0 * t_brake - 0.5 * decel * t_brake**2 + v_end * (t - t_brake)
         )

@@ -3,7 +3,12 @@
 :class:`SafetyLayer` holds the friction limit (the whole friction circle as the largest
 braking command; the plant's ABS trims it further) and the automatic emergency brake
 (AEB): while the AEB is engaged the longitudinal command becomes full braking, whatever
-the controller asked; the steering passes through. Engaging is decided once per control
+the controller asked; the steering passes through. It engages when braking in lane needs
+``aeb_decel``, when a lane change needs the friction limit to stay behind the car its outline
+still overlaps and does not move out of its way first
+(:meth:`ego.scenarios.manoeuvre.EvasiveManoeuvre.limit_braking_behind`: the lane change steers
+on, braking at the limit), or when a collision is imminent.
+Engaging is decided once per control
 period from the surround view (:meth:`SafetyLayer.update`); the manoeuvre is told
 (:meth:`ego.scenarios.manoeuvre.EvasiveManoeuvre.emergency_stop`) so it can leave a lane
 change it should not finish while braking hard.
@@ -34,6 +39,15 @@ def braking_need(front: Detection, ds: float, margin: float = 0.0) -> float:
         v = max(ds, 0.0)
         need = max(need, v * v / (2.0 * (room + front.speed * front.speed / (2.0 * decel))))
     return need
+
+
+def clears_sideways(view, ttc: float) -> bool:
+    """The ego moves out of the front object's way sideways within ``ttc`` (s), at the
+    relative speed across the lane it has now."""
+    front = view.sensor.front
+    # the ego moves away from the object's side at this relative speed (m/s)
+    clearing = -front.side * (view.dd - front.lateral_speed)
+    return clearing > 0.0 and front.overlap / clearing < ttc
 
 
 def friction_limit(params) -> float:
@@ -82,11 +96,17 @@ class SafetyLayer:
         view = self.view
         front = view.sensor.front
         if not self.active:
-            if view.ttc_front >= c.aeb_ttc and not self.manoeuvre.braking_in_lane():
+            man = self.manoeuvre
+            if view.ttc_front >= c.aeb_ttc and not man.braking_in_lane() and not man.changing_lane():
                 return  # the common case, decided without computing the need
-            braking_in_lane = self.manoeuvre.braking_in_lane()
+            braking_in_lane = man.braking_in_lane()
+            changing = man.changing_lane()
             need = braking_need(front, view.ds)
-            if (braking_in_lane and need >= c.aeb_decel) or self.imminent():
+            if (
+                (braking_in_lane and need >= c.aeb_decel)
+                or (changing and man.limit_braking_behind(need))
+                or self.imminent()
+            ):
                 self.manoeuvre.emergency_stop()
                 self.active = True
                 self.engagements += 1
@@ -114,7 +134,4 @@ class SafetyLayer:
         ttc = view.ttc_front
         if ttc >= self.config.aeb_ttc:
             return False
-        front = view.sensor.front
-        # the ego moves away from the object's side at this relative speed (m/s)
-        clearing = -front.side * (view.dd - front.lateral_speed)
-        return not (clearing > 0.0 and front.overlap / clearing < ttc)
+        return not clears_sideways(view, ttc)

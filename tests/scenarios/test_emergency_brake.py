@@ -54,12 +54,23 @@ def test_both_lanes_blocked_brakes_in_lane_without_hitting_the_leader(controller
 
 
 def test_controller_switched_off_hits_the_leader_and_says_so():
-    r = _run("none")
+    # the AEB off too: with it, a lane change the car does not steer brakes at the friction
+    # limit once only that keeps it behind the lead (issue 21), and stops in time
+    r = _run("none", aeb=False)
     m = r.metrics
     assert m["status"] == "collision" and m["collision"] and m["collision_with"] == "lead"
     assert "hit" in m["status_detail"]
     assert r.events[-1].kind == "collision"
     assert m["sim_time"] < 25.0  # the run stops at the collision
+
+
+def test_controller_switched_off_the_aeb_stops_it_behind_the_leader():
+    # the lane change begins but nothing steers: the ego stays behind the braking lead, and the
+    # AEB brakes at the friction limit once only that keeps it there
+    r = _run("none")
+    m = r.metrics
+    assert not m["collision"] and m["aeb_time"] is not None
+    assert m["min_gap_front"] > 1.0
 
 
 def test_same_seed_same_metrics_and_trace(fuzzy_ready):

@@ -132,7 +132,7 @@ def test_failed_runs_are_recorded_by_default_and_an_error_is_a_row(tmp_path):
             "scenario": "emergency-brake",
             "controllers": ["none", "pid"],
             "seeds": 1,
-            "set": {"duration": 10.0, "traffic_density": 0},
+            "set": {"duration": 10.0, "traffic_density": 0, "aeb": False},  # no controller, no AEB: a collision
         }
     )
     report = sweep(spec, tmp_path, jobs=2)
