@@ -275,8 +275,9 @@ class EvasiveManoeuvre:
         """Would the follower in the target lane run into the ego if the ego brakes here at
         ``decel`` (m/s^2) down to the front object's speed? The follower is taken to hold its
         speed (a car whose lane the ego only half occupies may not react to it: SUMO's drivers
-        do not), over ``horizon`` s or until a second after the ego's braking ends; a threat is a gap below ``margin`` m. Returns why (its id,
-        gap and speed), or None when the lane behind is clear. Braking to a near stop across two
+        do not), over ``horizon`` s or until a second after the ego's braking ends; a threat is
+        a gap below ``margin`` m. Returns why (its id, gap and speed), or None when the lane
+        behind is clear. Braking to a near stop across two
         lanes in front of such a follower is how an AEB stop mid-lane-change gets rear-ended."""
         view = self.view
         follower = self._lane_follower

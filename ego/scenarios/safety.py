@@ -97,16 +97,12 @@ class SafetyLayer:
         front = view.sensor.front
         if not self.active:
             man = self.manoeuvre
-            if view.ttc_front >= c.aeb_ttc and not man.braking_in_lane() and not man.changing_lane():
-                return  # the common case, decided without computing the need
             braking_in_lane = man.braking_in_lane()
-            changing = man.changing_lane()
+            if view.ttc_front >= c.aeb_ttc and not braking_in_lane and not man.changing_lane():
+                return  # the common case, decided without computing the need
             need = braking_need(front, view.ds)
-            if (
-                (braking_in_lane and need >= c.aeb_decel)
-                or (changing and man.limit_braking_behind(need))
-                or self.imminent()
-            ):
+            # limit_braking_behind asks only in a lane change
+            if (braking_in_lane and need >= c.aeb_decel) or man.limit_braking_behind(need) or self.imminent():
                 self.manoeuvre.emergency_stop()
                 self.active = True
                 self.engagements += 1
