@@ -36,7 +36,7 @@ import numpy as np
 
 from ego.scenarios.events import INF, GapRule, check_lane, choose_lane
 from ego.scenarios.motorway import LANE_NAMES
-from ego.scenarios.safety import braking_need, clears_sideways, friction_limit
+from ego.scenarios.safety import braking_impact_speed, braking_need, clears_sideways, friction_limit
 from ego.scenarios.sensor import Detection
 
 CRUISE, LANE_CHANGE, IN_LANE, DONE = 0, 1, 2, 3
@@ -64,6 +64,12 @@ class InLane(Protocol):
 
     def settled(self, m: EvasiveManoeuvre) -> bool:
         """The manoeuvre has done its job (held for a second: done)."""
+
+
+#: s: how long a lane change takes at most to move the ego's outline out of the way of the car
+#: ahead (a car's width sideways); the follower check lets the ego brake behind that car no
+#: longer than this
+CLEAR_SIDEWAYS_TIME = 2.5
 
 
 class EvasiveManoeuvre:
@@ -108,6 +114,8 @@ class EvasiveManoeuvre:
         self.done_t: float | None = None
         self._inside_since: float | None = None
         self._lane_leader, self._lane_follower = Detection(), Detection()
+        self.follower_contact = 0.0  # m/s: how fast the last follower check saw it close in
+        self.weighed = ""  # why the last check kept a lane change despite its follower
         self.s0 = view.s
         self.speed_ref = self.config.ego_speed
         self.evade_speed = self.config.evade_speed
@@ -180,9 +188,12 @@ class EvasiveManoeuvre:
         c = self.config
         view = self.view
         self.chosen, self.choice_reason = self.choose(self)
+        self.weighed = ""
         if self.chosen is not None and (threat := self._braking_threat(self.chosen)):
             self.choice_reason += f"; {self.chosen}: the new lane's follower {threat}: brake in lane"
             self.chosen = None
+        elif self.chosen is not None and self.weighed:
+            self.choice_reason += f"; {self.chosen}: {self.weighed}: change lane"
         self.trigger_t, self.trigger_ttc, self.trigger_s = self.t, ttc, view.s
         # "decelerate and change lane": evading a car ahead never speeds up towards it (from
         # below evade_speed the ego keeps its speed); evading one behind does speed up
@@ -258,6 +269,15 @@ class EvasiveManoeuvre:
         self.in_lane.start(self)
 
     def _braking_threat(self, side: str | None, aeb: bool = False) -> str | None:
+        """Why braking in front of the target lane's follower (``side``'s lane at the trigger,
+        else the lane being entered) is the worse option, or None. Two risks are weighed
+        (issue 21): braking in lane is the better option when it would stop the ego behind
+        the front car were that to hold its speed now (else there is nothing to weigh) and the
+        follower would come within 2 m (:meth:`target_follower_threat`) - unless braking in
+        lane would still hit the front car, should that brake on at its measured deceleration
+        (:func:`~ego.scenarios.safety.braking_impact_speed`), faster than the follower would
+        then be closing in on the ego: then the lane change is the lesser risk, and why is left
+        in :attr:`weighed`."""
         view = self.view
         front = view.sensor.front
         if self.in_lane.action != "brake" or front.gap == INF or not (aeb or front.speed < view.ds - 0.5):
@@ -267,17 +287,30 @@ class EvasiveManoeuvre:
         if closing > 0.0 and closing * closing / (2.0 * max(front.gap, 0.1)) > 0.9 * limit:
             return None
         lane = None if side is None else view.target_lane + (1 if side == "left" else -1)
-        return self.target_follower_threat(limit, lane=lane)
+        threat = self.target_follower_threat(limit, lane=lane)
+        if threat is None:
+            return None
+        in_lane = braking_impact_speed(front.gap, view.ds, front.speed, front.accel, limit)
+        if in_lane > self.follower_contact:  # both bad: the slower impact
+            impact = f", at {self.follower_contact:.1f} m/s within 2 m"
+            self.weighed = (
+                f"braking in lane would hit {front.id or 'the front car'} at {in_lane:.1f} m/s if it brakes on "
+                f"at {max(-front.accel, 0.0):.1f} m/s^2; the new lane's follower {threat}{impact}"
+            )
+            return None
+        return threat
 
     def target_follower_threat(
         self, decel: float, horizon: float = 3.0, margin: float = 2.0, lane: int | None = None
     ) -> str | None:
         """Would the follower in the target lane run into the ego if the ego brakes here at
-        ``decel`` (m/s^2) down to the front object's speed? The follower is taken to hold its
-        speed (a car whose lane the ego only half occupies may not react to it: SUMO's drivers
-        do not), over ``horizon`` s or until a second after the ego's braking ends; a threat is
-        a gap below ``margin`` m. Returns why (its id, gap and speed), or None when the lane
-        behind is clear. Braking to a near stop across two
+        ``decel`` (m/s^2) down to the front object's speed (where its measured deceleration
+        takes it in ``horizon`` s), for at most :data:`CLEAR_SIDEWAYS_TIME`? The follower is
+        taken to hold its speed (a car whose lane the ego only half occupies may not react to
+        it: SUMO's drivers do not), over ``horizon`` s or until a second after the ego's
+        braking ends; a threat is a gap below ``margin`` m. Returns why (its id, gap and
+        speed), or None when the lane behind is clear; :attr:`follower_contact` is then how
+        fast it closes in when it comes within ``margin``. Braking to a near stop across two
         lanes in front of such a follower is how an AEB stop mid-lane-change gets rear-ended."""
         view = self.view
         follower = self._lane_follower
@@ -289,16 +322,25 @@ class EvasiveManoeuvre:
         # a braking front car keeps braking: down to where its measured deceleration takes it
         v_front = front.speed + min(front.accel, 0.0) * horizon
         v_end = min(v0, max(v_front, 0.0)) if front.gap != INF else v0
-        t_brake = (v0 - v_end) / decel
+        # the ego brakes behind the front car only until it has cleared it sideways
+        t_brake = min((v0 - v_end) / decel, CLEAR_SIDEWAYS_TIME)
+        v_end = v0 - decel * t_brake
         # and on for a second after the ego's braking ends: a follower faster than the ego's
         # end speed still closes in then (a 3 s look missed one 39 m back at 20 m/s)
         t = np.linspace(0.0, max(horizon, t_brake + 1.0), 41)
         ego_x = np.where(
             t < t_brake, v0 * t - 0.5 * decel * t * t, v0 * t_brake - 0.5 * decel * t_brake**2 + v_end * (t - t_brake)
         )
-        closest = float(np.min(follower.gap + ego_x - follower.speed * t))
+        gaps = follower.gap + ego_x - follower.speed * t
+        closest = float(np.min(gaps))
         if closest >= margin:
+            self.follower_contact = 0.0
             return None
+        # how fast it closes in when it comes within the margin (a few m/s when it only just
+        # catches up, its speed above the ego's when it would run into a slow ego)
+        i = int(np.flatnonzero(gaps < margin)[0])
+        v_ego = v0 - decel * t[i] if t[i] < t_brake else v_end
+        self.follower_contact = max(follower.speed - float(v_ego), 0.0)
         return f"{follower.id} ({follower.gap:.1f} m behind at {follower.speed:.1f} m/s) would close to {closest:.1f} m"
 
     def check_done(self) -> None:

@@ -41,6 +41,55 @@ def braking_need(front: Detection, ds: float, margin: float = 0.0) -> float:
     return need
 
 
+def braking_impact_speed(gap: float, ds: float, front_speed: float, front_accel: float, decel: float) -> float:
+    """Relative speed (m/s) at which an ego at ``ds`` m/s, braking at ``decel`` m/s^2 from now,
+    reaches a front object ``gap`` m ahead at ``front_speed`` m/s that brakes on at its
+    measured ``front_accel`` (m/s^2, negative when braking) down to a stop; 0 when the ego stops
+    behind it. The pessimistic premise of braking in lane: the ego cannot know where the
+    object stops braking. Exact: the gap is a quadratic in time between the two stops."""
+    if gap == INF or decel <= 0.0:
+        return 0.0
+    ve, vf = max(ds, 0.0), max(front_speed, 0.0)
+    ae, af = decel, max(-front_accel, 0.0)
+    g = gap
+    t_e = ve / ae  # when the ego stops
+    t_f = vf / af if af > 0.0 else INF  # when the front object stops
+    t = 0.0
+    for end in sorted((t_e, t_f, INF)):
+        if end <= t:
+            continue
+        # over [t, end]: gap(tau) = g - (ve - vf) tau - (af - ae) tau^2 / 2 with both speeds as
+        # at t and each deceleration 0 once its car has stopped
+        a_e = ae if t < t_e else 0.0
+        a_f = af if t < t_f else 0.0
+        closing, rel = ve - vf, a_f - a_e  # d(gap)/dtau = -closing - rel tau
+        span = end - t
+        tau = _first_root(g, closing, rel, span)
+        if tau is not None:
+            return max(closing + rel * tau, 0.0)
+        if span == INF:
+            return 0.0
+        g -= closing * span + 0.5 * rel * span * span
+        ve, vf = max(ve - a_e * span, 0.0), max(vf - a_f * span, 0.0)
+        t = end
+    return 0.0
+
+
+def _first_root(g: float, closing: float, rel: float, span: float) -> float | None:
+    """The first tau in [0, span] with g - closing tau - rel tau^2 / 2 = 0 (g > 0), or None."""
+    if g <= 0.0:
+        return 0.0
+    if abs(rel) < 1e-12:
+        return g / closing if closing > 0.0 and g / closing <= span else None
+    # rel/2 tau^2 + closing tau - g = 0
+    disc = closing * closing + 2.0 * rel * g
+    if disc < 0.0:
+        return None
+    root = disc**0.5
+    taus = sorted(r for r in ((-closing + root) / rel, (-closing - root) / rel) if r >= 0.0)
+    return next((r for r in taus if r <= span), None)
+
+
 def clears_sideways(view, ttc: float) -> bool:
     """The ego moves out of the front object's way sideways within ``ttc`` (s), at the
     relative speed across the lane it has now."""

@@ -153,3 +153,35 @@ def test_a_follower_that_would_reach_the_braking_ego_keeps_it_in_its_lane(contro
     assert m["target_side"] is None  # it braked in its own lane
     assert any(e.kind == "lane" and "follower" in e.text and "brake in lane" in e.text for e in r.events)
     assert m["requirements"]["no_avoidable_collision"] > 0
+
+
+# From the envelope sweep (scenarios/sweeps/envelope.toml, seed 0): an ego much faster than
+# the traffic behind a lead braking hard from 42-48 m, the free lane's follower 13-39 m back at
+# 20 m/s. The first fix's follower check had the ego braking at the friction limit down to the
+# lead's speed in front of that follower, refused the lane, braked in lane and hit the lead at
+# 8.9-9.2 m/s. A lane change brakes behind the lead only until it has cleared it sideways
+# (CLEAR_SIDEWAYS_TIME): the ego stays faster than the follower and takes the lane.
+FASTER_THAN_THE_FOLLOWER = [
+    ("pid", {"ego_speed": 32.561507, "lead_decel": 8.896894, "lead_gap": 48.367549, "traffic_density": 13.304811}),
+    ("fuzzy", {"ego_speed": 35.092918, "lead_decel": 6.447693, "lead_gap": 41.624421, "traffic_density": 14.32893}),
+    (
+        "rbf-smc",
+        {
+            "ego_speed": 35.906329,
+            "lead_decel": 7.947406,
+            "lead_gap": 47.95084,
+            "traffic_density": 11.989596,
+            "block_right": True,
+        },
+    ),
+]
+
+
+@pytest.mark.parametrize("controller, case", FASTER_THAN_THE_FOLLOWER, ids=[c for c, _ in FASTER_THAN_THE_FOLLOWER])
+def test_an_ego_faster_than_the_new_lanes_follower_changes_lane_instead_of_hitting_the_lead(controller, case):
+    r = run(RunSpec("emergency-brake", controller, 0, case))
+    m = r.metrics
+    assert not m["collision"], m["status_detail"]
+    assert m["status"] == "completed" and m["lane_change_completed"]
+    lane = next(e.text for e in r.events if e.kind == "lane")
+    assert lane.startswith("change to the") and "follower" not in lane, lane

@@ -14,9 +14,11 @@ from ego.control.base import Observation
 from ego.lane_frame import LanePolyline
 from ego.models import VehicleGeometry
 from ego.scenarios.emergency_brake import BrakeInLane, EmergencyBrakeConfig
+from ego.scenarios.events import INF
 from ego.scenarios.manoeuvre import CRUISE, DONE, IN_LANE, LANE_CHANGE, PHASE_NAMES, TRANSITIONS, EvasiveManoeuvre
 from ego.scenarios.motorway import SurroundView, ego_plant
-from ego.scenarios.safety import SafetyLayer, braking_need
+from ego.scenarios.safety import SafetyLayer, braking_impact_speed, braking_need, friction_limit
+from ego.scenarios.sensor import Detection
 
 WIDTH = 3.2
 G = VehicleGeometry()
@@ -129,3 +131,78 @@ def test_the_safety_layer_passes_the_action_through_until_the_aeb_engages():
     safety.update()
     assert safety.active and safety.time == 1.5 and safety.engagements == 1 and events == ["aeb"]
     assert safety.filter((123.0, 0.01)) == (-p.F_max / p.Nw, 0.01)  # full braking, steering kept
+
+
+@pytest.mark.parametrize(
+    "gap, ds, front_speed, decel, expected",
+    [
+        # a car holding its speed: relative motion at a constant relative deceleration, the
+        # relative speed left after closing the gap is sqrt(closing^2 - 2 decel gap)
+        (20.0, 30.0, 10.0, 6.0, math.sqrt(20.0**2 - 2 * 6.0 * 20.0)),
+        (40.0, 30.0, 10.0, 6.0, 0.0),  # 20^2 / (2 * 6) = 33.3 m < 40 m: it stops closing in time
+        # a standing car: v^2 = v0^2 - 2 decel gap
+        (30.0, 25.0, 0.0, 7.0, math.sqrt(25.0**2 - 2 * 7.0 * 30.0)),
+        (50.0, 25.0, 0.0, 7.0, 0.0),
+    ],
+)
+def test_braking_impact_speed_against_constant_deceleration_kinematics(gap, ds, front_speed, decel, expected):
+    assert braking_impact_speed(gap, ds, front_speed, 0.0, decel) == pytest.approx(expected, rel=1e-9)
+
+
+def test_braking_impact_speed_with_a_front_car_braking_to_a_stop():
+    # the front car (10 m/s, 8 m/s^2) stops 6.25 m further on, at 26.25 m, 1.25 s from now, the
+    # ego (25 m/s at 7 m/s^2) still 0.47 m behind it then: it hits it standing, at
+    # sqrt(25^2 - 2 * 7 * 26.25)
+    v = braking_impact_speed(20.0, 25.0, 10.0, -8.0, 7.0)
+    assert v == pytest.approx(math.sqrt(25.0**2 - 2 * 7.0 * 26.25), rel=1e-9)
+    # closing faster, it reaches the car while both still brake: relative motion at the
+    # relative deceleration 8 - 7 = 1 m/s^2, the gap 30 - 12 tau - tau^2 / 2 closing at
+    # tau = sqrt(12^2 + 2 * 30) - 12, the relative speed then 12 + tau
+    tau = math.sqrt(12.0**2 + 2 * 30.0) - 12.0
+    assert braking_impact_speed(30.0, 32.0, 20.0, -8.0, 7.0) == pytest.approx(12.0 + tau, rel=1e-9)
+    # braking_need agrees: a stop behind needs more than 7 m/s^2 from 20 m, less from 40 m,
+    # where the impact speed is 0
+    assert braking_need(Detection("lead", 20.0, 10.0, -8.0), 25.0) > 7.0
+    assert braking_need(Detection("lead", 40.0, 10.0, -8.0), 25.0) < 7.0
+    assert braking_impact_speed(40.0, 25.0, 10.0, -8.0, 7.0) == 0.0
+    assert braking_impact_speed(INF, 32.0, 20.0, -8.0, 7.0) == 0.0  # nothing ahead
+
+
+def _braking_lead_scene(lead_decel):
+    """ego 28 m/s; the lead 22 m ahead at 18 m/s, braking at ``lead_decel`` over the last
+    0.1 s; a follower in the left lane 22.6 m behind at 24 m/s; the right lane taken."""
+    config = EmergencyBrakeConfig(ego_speed=28.0)
+    lead = 300.0 + G.cg_to_front + 22.0 + 4.5
+    others = [("lead", 1, lead, 18.0), ("fol", 2, 300.0 - 2.25 - 25.0, 24.0), ("r", 0, 300.0, 28.0)]
+    view, plant = scene(config, others)
+    dt = 0.1
+    moved = [
+        ("lead", 1, lead + 18.0 * dt - 0.5 * lead_decel * dt * dt, 18.0 - lead_decel * dt),
+        ("fol", 2, 300.0 - 2.25 - 25.0 + 24.0 * dt, 24.0),
+        ("r", 0, 300.0 + 28.0 * dt, 28.0),
+    ]
+    view.sensor.sync(dt, [o[0] for o in moved], [(x - 2.25, WIDTH * lane, 0.0, v, 4.5, 1.8) for _, lane, x, v in moved])
+    events: list[str] = []
+    m = manoeuvre(config, view, plant, events)
+    view.look(dt)
+    m.plan(Observation(), dt)
+    return m, view
+
+
+def test_the_follower_check_weighs_the_impact_in_lane_against_the_followers():
+    # the follower would come within 2 m closing at 13.4 m/s (the ego braking at the limit
+    # behind the lead for CLEAR_SIDEWAYS_TIME): against a lead braking at 8 m/s^2 braking in lane
+    # is the lesser risk (the ego would hit it slower, if at all) ...
+    m, view = _braking_lead_scene(8.0)
+    limit = friction_limit(m.plant.model.params)
+    front = view.sensor.front
+    assert front.accel == pytest.approx(-8.0, abs=1e-6)
+    in_lane = braking_impact_speed(front.gap, view.ds, front.speed, front.accel, limit)
+    assert m.chosen is None and "fol" in m.choice_reason and m.choice_reason.endswith("brake in lane")
+    assert in_lane <= m.follower_contact == pytest.approx(13.4, abs=0.05)
+    # ... against one braking at 9 m/s^2 the ego would hit it at 14.7 m/s: the lane change is
+    m, view = _braking_lead_scene(9.0)
+    front = view.sensor.front
+    assert braking_impact_speed(front.gap, view.ds, front.speed, front.accel, limit) == pytest.approx(14.7, abs=0.05)
+    assert m.chosen == "left" and m.phase == LANE_CHANGE
+    assert "braking in lane would hit lead at 14.7 m/s" in m.choice_reason and m.choice_reason.endswith("change lane")
