@@ -36,7 +36,7 @@ import numpy as np
 
 from ego.scenarios.events import INF, GapRule, check_lane, choose_lane
 from ego.scenarios.motorway import LANE_NAMES
-from ego.scenarios.safety import braking_impact_speed, braking_need, clears_sideways, friction_limit
+from ego.scenarios.safety import braking_impact_speed, braking_need, braking_reach, clears_sideways, friction_limit
 from ego.scenarios.sensor import Detection
 
 CRUISE, LANE_CHANGE, IN_LANE, DONE = 0, 1, 2, 3
@@ -70,6 +70,11 @@ class InLane(Protocol):
 #: ahead (a car's width sideways); the follower check lets the ego brake behind that car no
 #: longer than this
 CLEAR_SIDEWAYS_TIME = 2.5
+
+#: m: how far the ego travels, braking at the friction limit, before a lane change has moved
+#: its outline out of the way of the car ahead: the default tracking controllers' lane changes
+#: clear it after 29-45 m (bp-pid the farthest; docs/requirements.md)
+CLEAR_SIDEWAYS_DISTANCE = 32.0
 
 
 class EvasiveManoeuvre:
@@ -189,7 +194,10 @@ class EvasiveManoeuvre:
         view = self.view
         self.chosen, self.choice_reason = self.choose(self)
         self.weighed = ""
-        if self.chosen is not None and (threat := self._braking_threat(self.chosen)):
+        if self.chosen is not None and (why := self._cannot_clear_first()):
+            self.choice_reason += f"; {why}: brake in lane"
+            self.chosen = None
+        elif self.chosen is not None and (threat := self._braking_threat(self.chosen)):
             self.choice_reason += f"; {self.chosen}: the new lane's follower {threat}: brake in lane"
             self.chosen = None
         elif self.chosen is not None and self.weighed:
@@ -267,6 +275,29 @@ class EvasiveManoeuvre:
         view.target_lane, self.chosen = origin, None
         self.enter(IN_LANE)
         self.in_lane.start(self)
+
+    def _cannot_clear_first(self) -> str | None:
+        """Why a lane change is not begun at the trigger, or None: stopping behind the front
+        car takes braking at the friction limit (more than 0.9 of it, the front car braking on
+        at its measured deceleration), where a lane change brakes at the limit too
+        (:meth:`limit_braking_behind`), and, braking at the limit, the ego reaches that car (or
+        stops) within :data:`CLEAR_SIDEWAYS_DISTANCE`, before a lane change could have moved
+        it out of the way: steering would only take grip from the braking. In lane it brakes
+        with all of it."""
+        if self.in_lane.action != "brake":
+            return None
+        view = self.view
+        front = view.sensor.front
+        limit = friction_limit(self.plant.model.params)
+        if front.gap == INF or braking_need(front, view.ds) <= 0.9 * limit:
+            return None
+        reach = braking_reach(front.gap, view.ds, front.speed, front.accel, limit)
+        if reach >= CLEAR_SIDEWAYS_DISTANCE:
+            return None
+        return (
+            f"braking at the friction limit it reaches {front.id or 'the front car'} within {reach:.1f} m, "
+            f"before a lane change clears it sideways ({CLEAR_SIDEWAYS_DISTANCE:.0f} m)"
+        )
 
     def _braking_threat(self, side: str | None, aeb: bool = False) -> str | None:
         """Why braking in front of the target lane's follower (``side``'s lane at the trigger,

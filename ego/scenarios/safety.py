@@ -47,8 +47,28 @@ def braking_impact_speed(gap: float, ds: float, front_speed: float, front_accel:
     measured ``front_accel`` (m/s^2, negative when braking) down to a stop; 0 when the ego stops
     behind it. The pessimistic premise of braking in lane: the ego cannot know where the
     object stops braking. Exact: the gap is a quadratic in time between the two stops."""
+    contact = braking_contact(gap, ds, front_speed, front_accel, decel)
+    return 0.0 if contact is None else contact[1]
+
+
+def braking_reach(gap: float, ds: float, front_speed: float, front_accel: float, decel: float) -> float:
+    """How far (m) the ego travels braking at ``decel`` before it reaches the front object
+    (as :func:`braking_impact_speed`) or, if it does not, before it stops."""
+    v0 = max(ds, 0.0)
+    contact = braking_contact(gap, ds, front_speed, front_accel, decel)
+    if contact is None or decel <= 0.0:
+        return v0 * v0 / (2.0 * decel) if decel > 0.0 else INF
+    t = min(contact[0], v0 / decel)
+    return v0 * t - 0.5 * decel * t * t
+
+
+def braking_contact(
+    gap: float, ds: float, front_speed: float, front_accel: float, decel: float
+) -> tuple[float, float] | None:
+    """(time s, relative speed m/s) of the first contact in :func:`braking_impact_speed`'s
+    premise, or None when the ego stops behind the front object."""
     if gap == INF or decel <= 0.0:
-        return 0.0
+        return None
     ve, vf = max(ds, 0.0), max(front_speed, 0.0)
     ae, af = decel, max(-front_accel, 0.0)
     g = gap
@@ -66,13 +86,13 @@ def braking_impact_speed(gap: float, ds: float, front_speed: float, front_accel:
         span = end - t
         tau = _first_root(g, closing, rel, span)
         if tau is not None:
-            return max(closing + rel * tau, 0.0)
+            return t + tau, max(closing + rel * tau, 0.0)
         if span == INF:
-            return 0.0
+            return None
         g -= closing * span + 0.5 * rel * span * span
         ve, vf = max(ve - a_e * span, 0.0), max(vf - a_f * span, 0.0)
         t = end
-    return 0.0
+    return None
 
 
 def _first_root(g: float, closing: float, rel: float, span: float) -> float | None:
