@@ -71,9 +71,12 @@ class InLane(Protocol):
 #: longer than this
 CLEAR_SIDEWAYS_TIME = 2.5
 
-#: m: how far the ego travels, braking at the friction limit, before a lane change has moved
-#: its outline out of the way of the car ahead: the default tracking controllers' lane changes
-#: clear it after 29-45 m (bp-pid the farthest; docs/requirements.md)
+#: m: a lane change whose ego, braking at the friction limit, would reach the car ahead within
+#: this distance is not begun (:meth:`EvasiveManoeuvre._cannot_clear_first`). Measured lane
+#: changes begun while the AEB brakes at the limit clear the car ahead after a median 28 (fuzzy),
+#: 29 (fuzzy-pid), 32 (pid), 38 (rbf-smc) and 39 m (bp-pid); ego falsify found bp-pid's lane
+#: changes hitting the lead where braking straight stops short when it reaches the lead within
+#: 28-31.4 m, and none beyond (docs/requirements.md)
 CLEAR_SIDEWAYS_DISTANCE = 32.0
 
 

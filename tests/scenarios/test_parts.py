@@ -15,9 +15,18 @@ from ego.lane_frame import LanePolyline
 from ego.models import VehicleGeometry
 from ego.scenarios.emergency_brake import BrakeInLane, EmergencyBrakeConfig
 from ego.scenarios.events import INF
-from ego.scenarios.manoeuvre import CRUISE, DONE, IN_LANE, LANE_CHANGE, PHASE_NAMES, TRANSITIONS, EvasiveManoeuvre
+from ego.scenarios.manoeuvre import (
+    CLEAR_SIDEWAYS_DISTANCE,
+    CRUISE,
+    DONE,
+    IN_LANE,
+    LANE_CHANGE,
+    PHASE_NAMES,
+    TRANSITIONS,
+    EvasiveManoeuvre,
+)
 from ego.scenarios.motorway import SurroundView, ego_plant
-from ego.scenarios.safety import SafetyLayer, braking_impact_speed, braking_need, friction_limit
+from ego.scenarios.safety import SafetyLayer, braking_impact_speed, braking_need, braking_reach, friction_limit
 from ego.scenarios.sensor import Detection
 
 WIDTH = 3.2
@@ -168,19 +177,20 @@ def test_braking_impact_speed_with_a_front_car_braking_to_a_stop():
     assert braking_impact_speed(INF, 32.0, 20.0, -8.0, 7.0) == 0.0  # nothing ahead
 
 
-def _braking_lead_scene(lead_decel):
-    """ego 28 m/s; the lead 22 m ahead at 18 m/s, braking at ``lead_decel`` over the last
-    0.1 s; a follower in the left lane 22.6 m behind at 24 m/s; the right lane taken."""
-    config = EmergencyBrakeConfig(ego_speed=28.0)
-    lead = 300.0 + G.cg_to_front + 22.0 + 4.5
-    others = [("lead", 1, lead, 18.0), ("fol", 2, 300.0 - 2.25 - 25.0, 24.0), ("r", 0, 300.0, 28.0)]
+def _braking_lead_scene(lead_decel, ego=28.0, lead_v=18.0, gap=22.0, follower=True):
+    """ego ``ego`` m/s; the lead ``gap`` m ahead at ``lead_v`` m/s, braking at ``lead_decel``
+    over the last 0.1 s; a follower in the left lane 22.6 m behind at 24 m/s (or that lane
+    empty); the right lane taken."""
+    config = EmergencyBrakeConfig(ego_speed=ego)
+    lead = 300.0 + G.cg_to_front + gap + 4.5
+    fol = 300.0 - 2.25 - 25.0
+    others = [("lead", 1, lead, lead_v), ("r", 0, 300.0, ego)] + ([("fol", 2, fol, 24.0)] if follower else [])
     view, plant = scene(config, others)
     dt = 0.1
     moved = [
-        ("lead", 1, lead + 18.0 * dt - 0.5 * lead_decel * dt * dt, 18.0 - lead_decel * dt),
-        ("fol", 2, 300.0 - 2.25 - 25.0 + 24.0 * dt, 24.0),
-        ("r", 0, 300.0 + 28.0 * dt, 28.0),
-    ]
+        ("lead", 1, lead + lead_v * dt - 0.5 * lead_decel * dt * dt, lead_v - lead_decel * dt),
+        ("r", 0, 300.0 + ego * dt, ego),
+    ] + ([("fol", 2, fol + 24.0 * dt, 24.0)] if follower else [])
     view.sensor.sync(dt, [o[0] for o in moved], [(x - 2.25, WIDTH * lane, 0.0, v, 4.5, 1.8) for _, lane, x, v in moved])
     events: list[str] = []
     m = manoeuvre(config, view, plant, events)
@@ -206,3 +216,37 @@ def test_the_follower_check_weighs_the_impact_in_lane_against_the_followers():
     assert braking_impact_speed(front.gap, view.ds, front.speed, front.accel, limit) == pytest.approx(14.7, abs=0.05)
     assert m.chosen == "left" and m.phase == LANE_CHANGE
     assert "braking in lane would hit lead at 14.7 m/s" in m.choice_reason and m.choice_reason.endswith("change lane")
+
+
+def test_braking_reach_is_where_the_front_car_is_at_contact_or_the_stopping_distance():
+    # the contact of the test above at tau = sqrt(12^2 + 2 * 30) - 12: the ego has travelled as
+    # far as the front car (30 m ahead, 20 m/s braking at 8 m/s^2) has, plus the gap
+    tau = math.sqrt(12.0**2 + 2 * 30.0) - 12.0
+    assert braking_reach(30.0, 32.0, 20.0, -8.0, 7.0) == pytest.approx(30.0 + 20.0 * tau - 4.0 * tau * tau, rel=1e-9)
+    # no contact: the stopping distance v^2 / (2 a)
+    assert braking_reach(40.0, 25.0, 10.0, -8.0, 7.0) == pytest.approx(25.0**2 / 14.0, rel=1e-12)
+    assert braking_reach(INF, 25.0, 10.0, 0.0, 7.0) == pytest.approx(25.0**2 / 14.0, rel=1e-12)
+
+
+def test_no_lane_change_is_begun_that_cannot_clear_the_front_car_before_reaching_it():
+    # ego 20 m/s, the lead 10 m ahead at 16 m/s braking at 9 m/s^2, the left lane free: braking at
+    # the friction limit it would reach the lead after ~24 m, short of the 32 m a lane change
+    # needs to clear it sideways; the left lane is accepted by gap acceptance, then refused
+    m, view = _braking_lead_scene(9.0, ego=20.0, lead_v=16.0, gap=10.0, follower=False)
+    front = view.sensor.front
+    limit = friction_limit(m.plant.model.params)
+    assert braking_need(front, view.ds) > limit
+    reach = braking_reach(front.gap, view.ds, front.speed, front.accel, limit)
+    assert reach < CLEAR_SIDEWAYS_DISTANCE
+    assert m.chosen is None and m.phase == IN_LANE
+    assert "left: lead gap free" in m.choice_reason and "accepted" in m.choice_reason
+    assert m.choice_reason.endswith(
+        f"reaches lead within {reach:.1f} m, before a lane change clears it sideways (32 m): brake in lane"
+    )
+    # at 28 m/s, the lead 22 m ahead at 18 m/s braking at 9 m/s^2: the limit is not enough either,
+    # but the ego travels ~40 m before it would reach the lead: the lane change is begun
+    m, view = _braking_lead_scene(9.0, follower=False)
+    front = view.sensor.front
+    assert braking_need(front, view.ds) > limit
+    assert braking_reach(front.gap, view.ds, front.speed, front.accel, limit) > CLEAR_SIDEWAYS_DISTANCE
+    assert m.chosen == "left" and m.phase == LANE_CHANGE
