@@ -298,7 +298,7 @@ class EvasiveManoeuvre:
         if reach >= CLEAR_SIDEWAYS_DISTANCE:
             return None
         return (
-            f"braking at the friction limit it reaches {front.id or 'the front car'} within {reach:.1f} m, "
+            f"braking at the friction limit it reaches the front car within {reach:.1f} m, "
             f"before a lane change clears it sideways ({CLEAR_SIDEWAYS_DISTANCE:.0f} m)"
         )
 
@@ -328,7 +328,7 @@ class EvasiveManoeuvre:
         if in_lane > self.follower_contact:  # both bad: the slower impact
             impact = f", at {self.follower_contact:.1f} m/s within 2 m"
             self.weighed = (
-                f"braking in lane would hit {front.id or 'the front car'} at {in_lane:.1f} m/s if it brakes on "
+                f"braking in lane would hit the front car at {in_lane:.1f} m/s if it brakes on "
                 f"at {max(-front.accel, 0.0):.1f} m/s^2; the new lane's follower {threat}{impact}"
             )
             return None

@@ -215,7 +215,9 @@ def test_the_follower_check_weighs_the_impact_in_lane_against_the_followers():
     front = view.sensor.front
     assert braking_impact_speed(front.gap, view.ds, front.speed, front.accel, limit) == pytest.approx(14.7, abs=0.05)
     assert m.chosen == "left" and m.phase == LANE_CHANGE
-    assert "braking in lane would hit lead at 14.7 m/s" in m.choice_reason and m.choice_reason.endswith("change lane")
+    assert "braking in lane would hit the front car at 14.7 m/s" in m.choice_reason and m.choice_reason.endswith(
+        "change lane"
+    )
 
 
 def test_braking_reach_is_where_the_front_car_is_at_contact_or_the_stopping_distance():
@@ -241,7 +243,7 @@ def test_no_lane_change_is_begun_that_cannot_clear_the_front_car_before_reaching
     assert m.chosen is None and m.phase == IN_LANE
     assert "left: lead gap free" in m.choice_reason and "accepted" in m.choice_reason
     assert m.choice_reason.endswith(
-        f"reaches lead within {reach:.1f} m, before a lane change clears it sideways (32 m): brake in lane"
+        f"reaches the front car within {reach:.1f} m, before a lane change clears it sideways (32 m): brake in lane"
     )
     # at 28 m/s, the lead 22 m ahead at 18 m/s braking at 9 m/s^2: the limit is not enough either,
     # but the ego travels ~40 m before it would reach the lead: the lane change is begun
