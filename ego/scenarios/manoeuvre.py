@@ -72,11 +72,12 @@ class InLane(Protocol):
 CLEAR_SIDEWAYS_TIME = 2.5
 
 #: m: a lane change whose ego, braking at the friction limit, would reach the car ahead within
-#: this distance is not begun (:meth:`EvasiveManoeuvre._cannot_clear_first`). Measured lane
-#: changes begun while the AEB brakes at the limit clear the car ahead after a median 28 (fuzzy),
-#: 29 (fuzzy-pid), 32 (pid), 38 (rbf-smc) and 39 m (bp-pid); ego falsify found bp-pid's lane
-#: changes hitting the lead where braking straight stops short when it reaches the lead within
-#: 28-31.4 m, and none beyond (docs/requirements.md)
+#: this distance is not begun (:meth:`EvasiveManoeuvre._cannot_clear_first`). Lane changes
+#: begun while the AEB brakes at the limit, in the searches' closest runs, clear the car ahead
+#: after a median 27 (fuzzy), 28 (rbf-smc), 30 (pid), 32 (fuzzy-pid) and 35 m (bp-pid, 4 of 11)
+#: (scripts/clearing_distance.py); ego falsify found bp-pid's lane changes hitting the lead
+#: where braking straight stops short when it reaches the lead within 28-31.4 m, and none
+#: beyond (docs/requirements.md)
 CLEAR_SIDEWAYS_DISTANCE = 32.0
 
 
@@ -122,7 +123,7 @@ class EvasiveManoeuvre:
         self.done_t: float | None = None
         self._inside_since: float | None = None
         self._lane_leader, self._lane_follower = Detection(), Detection()
-        self.follower_contact = 0.0  # m/s: how fast the last follower check saw it close in
+        self.follower_contact = 0.0  # m/s: how fast the last threat the follower check found closes in
         self.weighed = ""  # why the last check kept a lane change despite its follower
         self.s0 = view.s
         self.speed_ref = self.config.ego_speed
@@ -292,7 +293,7 @@ class EvasiveManoeuvre:
         view = self.view
         front = view.sensor.front
         limit = friction_limit(self.plant.model.params)
-        if front.gap == INF or braking_need(front, view.ds) <= 0.9 * limit:
+        if braking_need(front, view.ds) <= 0.9 * limit:  # 0 with nothing ahead
             return None
         reach = braking_reach(front.gap, view.ds, front.speed, front.accel, limit)
         if reach >= CLEAR_SIDEWAYS_DISTANCE:
@@ -326,10 +327,10 @@ class EvasiveManoeuvre:
             return None
         in_lane = braking_impact_speed(front.gap, view.ds, front.speed, front.accel, limit)
         if in_lane > self.follower_contact:  # both bad: the slower impact
-            impact = f", at {self.follower_contact:.1f} m/s within 2 m"
             self.weighed = (
                 f"braking in lane would hit the front car at {in_lane:.1f} m/s if it brakes on "
-                f"at {max(-front.accel, 0.0):.1f} m/s^2; the new lane's follower {threat}{impact}"
+                f"at {max(-front.accel, 0.0):.1f} m/s^2; the new lane's follower {threat}, "
+                f"at {self.follower_contact:.1f} m/s within 2 m"
             )
             return None
         return threat
@@ -368,7 +369,6 @@ class EvasiveManoeuvre:
         gaps = follower.gap + ego_x - follower.speed * t
         closest = float(np.min(gaps))
         if closest >= margin:
-            self.follower_contact = 0.0
             return None
         # how fast it closes in when it comes within the margin (a few m/s when it only just
         # catches up, its speed above the ego's when it would run into a slow ego)

@@ -54,11 +54,13 @@ def braking_impact_speed(gap: float, ds: float, front_speed: float, front_accel:
 def braking_reach(gap: float, ds: float, front_speed: float, front_accel: float, decel: float) -> float:
     """How far (m) the ego travels braking at ``decel`` before it reaches the front object
     (as :func:`braking_impact_speed`) or, if it does not, before it stops."""
+    if decel <= 0.0:
+        return INF
     v0 = max(ds, 0.0)
     contact = braking_contact(gap, ds, front_speed, front_accel, decel)
-    if contact is None or decel <= 0.0:
-        return v0 * v0 / (2.0 * decel) if decel > 0.0 else INF
-    t = min(contact[0], v0 / decel)
+    if contact is None:
+        return v0 * v0 / (2.0 * decel)
+    t = contact[0]  # the ego is still moving then: a stopped ego closes no gap
     return v0 * t - 0.5 * decel * t * t
 
 
