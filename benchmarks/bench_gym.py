@@ -17,9 +17,10 @@ end for ``info["metrics"]`` and ``ego run`` computes at the end of its loop. The
 order-enforcing or passive-checker wrapper (the spec disables them: ``EgoEnv`` checks the
 order itself and passes Gymnasium's checker). Best of ``--repeat``.
 
-Then, per id, ``gym.make_vec(id, 2)`` (ego's ``EgoVectorEnv``: one worker process per env, the
-step's data in shared memory) and Gymnasium's ``AsyncVectorEnv`` of the same two envs against
-one env in this process: env steps/s of each (target: make_vec >= 1.8x on 2 cores).
+Then, per id, ``gym.make_vec(id, 2)`` (ego's ``EgoVectorEnv``: the first env in this process,
+the second in a worker, the step's data and signals in shared memory) and Gymnasium's
+``AsyncVectorEnv`` of the same two envs against one env in a process of its own: env steps/s
+of each (target: make_vec >= 1.8x on 2 cores).
 """
 
 from __future__ import annotations
@@ -158,48 +159,80 @@ def separate_loops(env_id: str, overrides: dict, actions: np.ndarray, repeat: in
     return best_env, best_raw
 
 
-def vector_speedup(env_id: str, steps: int, config: dict, rounds: int = 1) -> tuple[float, float, float]:
-    """(one env's steps/s, ``gym.make_vec(env_id, 2)``'s env steps/s (ego's own vector env),
-    ``gymnasium.vector.AsyncVectorEnv``'s of the same two envs): zero actions (the scenario's
-    traffic and the ego's model still run), episodes reset as they end. ``config`` should fix
-    the scenario (``"randomize": {}``): with the env's episode distribution, the one env and
-    the two would play different scenarios, whose steps cost different times. The three take turns
-    in slices of a twentieth of ``steps``, ``rounds`` x ``steps`` steps each in all, so that a
-    busy machine's changing load falls on each alike; the vector envs' worker start-up is not
-    timed."""
-    maker = _Maker(env_id, {"config": config})
-    # the vector envs first: their workers fork from a process without a SUMO of its own
-    vectors = [gym.make_vec(env_id, num_envs=2, config=config), AsyncVectorEnv([maker, maker])]
+def _solo(env_id: str, config: dict, conn) -> None:
+    """One env in a process of its own (its own libsumo): on ``k`` from ``conn``, ``k`` steps of
+    zero actions (episodes reset as they end), replying the seconds they took; None ends it."""
     env = gym.make(env_id, config=config)
     try:
-        for envs in vectors:
-            envs.reset(seed=0)
         env.reset(seed=0)
         zero = np.zeros(env.action_space.shape, dtype=env.action_space.dtype)
+        env.step(zero)
+        conn.send(0.0)
+        clock = time.perf_counter
+        while (k := conn.recv()) is not None:
+            t0 = clock()
+            for _ in range(k):
+                *_, terminated, truncated, _ = env.step(zero)
+                if terminated or truncated:
+                    env.reset()
+            conn.send(clock() - t0)
+    finally:
+        env.close()
+
+
+def vector_speedup(env_id: str, steps: int, config: dict, rounds: int = 1) -> tuple[float, float, float, float]:
+    """(one env's steps/s, ``gym.make_vec(env_id, 2)``'s env steps/s (ego's own vector env),
+    ``gymnasium.vector.AsyncVectorEnv``'s of the same two envs, two envs in two processes of
+    their own stepping at once with no vector env between them: what the machine allows): zero actions (the scenario's
+    traffic and the ego's model still run), episodes reset as they end. ``config`` should fix
+    the scenario (``"randomize": {}``): with the env's episode distribution, the one env and
+    the two would play different scenarios, whose steps cost different times. The one env
+    runs in a process of its own (make_vec steps its first env in this process, whose libsumo
+    it holds), timing its own loop. The three take turns in slices of a twentieth of
+    ``steps``, ``rounds`` x ``steps`` steps each in all, so that a busy machine's changing load
+    falls on each alike; the vector envs' worker start-up is not timed."""
+    import multiprocessing as mp
+
+    maker = _Maker(env_id, {"config": config})
+    ctx = mp.get_context("fork")
+    pipes = [ctx.Pipe() for _ in range(2)]
+    solos = [ctx.Process(target=_solo, args=(env_id, config, there), daemon=True) for _, there in pipes]
+    for solo in solos:
+        solo.start()
+    here, other = pipes[0][0], pipes[1][0]
+    vectors = [gym.make_vec(env_id, num_envs=2, config=config), AsyncVectorEnv([maker, maker])]
+    try:
+        here.recv()
+        other.recv()
+        for envs in vectors:
+            envs.reset(seed=0)
+        zero = np.zeros(vectors[0].single_action_space.shape, dtype=vectors[0].single_action_space.dtype)
         zeros = np.zeros((2, *zero.shape), dtype=zero.dtype)
         for envs in vectors:
             envs.step(zeros)
         chunk = max(steps // 20, 1)
-        spent = [0.0, 0.0, 0.0]
+        spent = [0.0, 0.0, 0.0, 0.0]
         clock = time.perf_counter
         for _ in range(rounds * (steps // chunk)):
-            t0 = clock()
-            for _ in range(chunk):
-                *_, terminated, truncated, _ = env.step(zero)
-                if terminated or truncated:
-                    env.reset()
-            spent[0] += clock() - t0
+            here.send(chunk)
+            spent[0] += here.recv()
+            here.send(chunk)
+            other.send(chunk)
+            spent[3] += max(here.recv(), other.recv())
             for k, envs in enumerate(vectors, 1):
                 t0 = clock()
                 for _ in range(chunk):
                     envs.step(zeros)
                 spent[k] += clock() - t0
     finally:
-        env.close()
+        for conn, _ in pipes:
+            conn.send(None)
+        for solo in solos:
+            solo.join(10)
         for envs in vectors:
             envs.close()
     n = rounds * (steps // chunk) * chunk
-    return n / spent[0], 2 * n / spent[1], 2 * n / spent[2]
+    return n / spent[0], 2 * n / spent[1], 2 * n / spent[2], 2 * n / spent[3]
 
 
 class _NoOp(gym.Env):
@@ -217,11 +250,16 @@ class _NoOp(gym.Env):
         return self._obs.copy(), 0.0, False, False, {"status": "running"}
 
 
-def round_trip(steps: int, rounds: int) -> tuple[float, float]:
-    """Microseconds per step of two no-op envs in ``EgoVectorEnv`` and in ``AsyncVectorEnv``
-    (best of ``rounds``): what a vector step costs beyond the envs' own work."""
+def round_trip(steps: int, rounds: int) -> tuple[float, float, float]:
+    """Microseconds per step of two no-op envs in ``EgoVectorEnv`` (the first env here, the
+    default; every env in a worker, ``host=False``) and in ``AsyncVectorEnv`` (best of
+    ``rounds``): what a vector step costs beyond the envs' own work."""
     out = []
-    for envs in (EgoVectorEnv([_NoOp, _NoOp], context="fork"), AsyncVectorEnv([_NoOp, _NoOp], context="fork")):
+    for envs in (
+        EgoVectorEnv([_NoOp, _NoOp], context="fork"),
+        EgoVectorEnv([_NoOp, _NoOp], context="fork", host=False),
+        AsyncVectorEnv([_NoOp, _NoOp], context="fork"),
+    ):
         try:
             envs.reset(seed=0)
             zeros = np.zeros((2, 2), np.float32)
@@ -234,7 +272,7 @@ def round_trip(steps: int, rounds: int) -> tuple[float, float]:
             out.append(best * 1e6)
         finally:
             envs.close()
-    return out[0], out[1]
+    return out[0], out[1], out[2]
 
 
 def main(argv: list[str] | None = None) -> dict:
@@ -294,18 +332,19 @@ def main(argv: list[str] | None = None) -> dict:
     )
     if args.vector_steps:
         print(
-            f"gym.make_vec(id, 2) (ego's EgoVectorEnv, one process per env) and gymnasium's AsyncVectorEnv "
+            f"gym.make_vec(id, 2) (ego's EgoVectorEnv, the first env here, the second in a worker), gymnasium's "
+            f"AsyncVectorEnv and two envs in processes of their own with no vector env (the machine's own scaling) "
             f"against one env, {args.repeat} x {args.vector_steps} steps each (/2 at 10 Hz), one fixed scenario (no randomisation), in turns of a twentieth, "
             f"{os.cpu_count()} cores"
         )
         print(
             f"  {'env id':24} {'policy_frequency':>16} {'1 env steps/s':>14} {'make_vec steps/s':>17} "
-            f"{'speed-up':>9} {'Async steps/s':>14} {'speed-up':>9}"
+            f"{'speed-up':>9} {'Async steps/s':>14} {'speed-up':>9} {'2 processes':>12}"
         )
         for env_id in args.ids:
             for pf in (0, 10):
                 # one fixed scenario for all three (the same work a step), the traffic seeded
-                one, two, other = vector_speedup(
+                one, two, other, pair = vector_speedup(
                     env_id,
                     args.vector_steps // (2 if pf else 1),
                     {**overrides, "policy_frequency": pf, "randomize": {}},
@@ -318,18 +357,23 @@ def main(argv: list[str] | None = None) -> dict:
                         f"vector_speedup_pf{pf}": two / one,
                         f"async2_steps_per_s_pf{pf}": other,
                         f"async_speedup_pf{pf}": other / one,
+                        f"two_processes_speedup_pf{pf}": pair / one,
                     }
                 )
                 print(
                     f"  {env_id:24} {pf:16d} {one:14.0f} {two:17.0f} {two / one:8.2f}x {other:14.0f} "
-                    f"{other / one:8.2f}x"
+                    f"{other / one:8.2f}x {pair / one:11.2f}x"
                 )
         print("  target: make_vec >= 1.8x on 2 cores")
-        ego_us, async_us = round_trip(args.vector_steps, args.repeat)
-        figures["round_trip_us"] = {"EgoVectorEnv": ego_us, "AsyncVectorEnv": async_us}
+        ego_us, workers_us, async_us = round_trip(args.vector_steps, args.repeat)
+        figures["round_trip_us"] = {
+            "EgoVectorEnv": ego_us,
+            "EgoVectorEnv_host_false": workers_us,
+            "AsyncVectorEnv": async_us,
+        }
         print(
             f"a vector step of two no-op envs (the round trip alone), best of {args.repeat}: "
-            f"EgoVectorEnv {ego_us:.0f} us, AsyncVectorEnv {async_us:.0f} us"
+            f"EgoVectorEnv {ego_us:.1f} us (host=False {workers_us:.0f} us), AsyncVectorEnv {async_us:.0f} us"
         )
     return figures
 

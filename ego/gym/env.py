@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import functools
 import math
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from typing import Any, ClassVar
@@ -275,6 +276,13 @@ _EVICTED = (
     "(DummyVecEnv; the second and later run SUMO through TraCI, slower)"
 )
 
+#: why an env runs its SUMO through TraCI beside a vector env's env in this process
+_SHARED = (
+    "an ego vector env (gym.make_vec) steps its first env in this process through libsumo, which "
+    "runs one simulation per process: this env runs its SUMO through TraCI (slower). "
+    "gym.make_vec(id, n, host=False) keeps every env of the vector env in a worker process"
+)
+
 
 class EgoEnv(gym.Env):
     """An ego scenario as a Gymnasium env (see the module docstring). ``scenario`` is a name
@@ -307,6 +315,8 @@ class EgoEnv(gym.Env):
         self._history: list = []
         self._substep = None
         self._evicted = False
+        #: the first env of an EgoVectorEnv, stepped in the vector env's own process
+        self._hosted = False
         self._elapsed = 0
         self._limit = None
         self._limit_steps = math.inf
@@ -476,9 +486,14 @@ class EgoEnv(gym.Env):
     def _start(self, run_seed: int) -> None:
         """Start the run with ``run_seed`` (the episode's parameters sampled from it)."""
         other = _running[0]
+        share = self._multi
         if other is not None and other is not self and not self._multi:
-            other._evicted = True
-            other.close()
+            if other._hosted or self._hosted:  # a vector env's own env here is never evicted
+                share = True
+                warnings.warn(_SHARED, stacklevel=3)
+            else:
+                other._evicted = True
+                other.close()
         if self._randomize:
             self.randomized = self._sample(run_seed)
             self.scenario.close()
@@ -487,7 +502,7 @@ class EgoEnv(gym.Env):
             ).config
             self._make_scenario(sc_config)
         sc = self.scenario
-        with sharing_instances(self._multi):
+        with sharing_instances(share):
             sc.reset(seed=run_seed)
         if sc.bridge is not None and not getattr(sc.bridge, "via_traci", False):
             _running[0] = self

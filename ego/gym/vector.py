@@ -2,20 +2,30 @@
 
 libsumo runs one SUMO simulation per process, so ``n > 1`` envs in one process cannot all
 run through it. The ids' ``vector_entry_point`` (:func:`make_vector`) therefore gives an
-:class:`EgoVectorEnv`: each env in its own worker process (one libsumo each, the cores used
-in parallel). ``n == 1`` stays in this process (:class:`gymnasium.vector.SyncVectorEnv`).
+:class:`EgoVectorEnv`: the first env in this process (its libsumo, while this process runs no
+other SUMO) and each other env in a worker process of its own, the cores used in parallel.
+``n == 1`` stays in this process (:class:`gymnasium.vector.SyncVectorEnv`).
 
-:class:`EgoVectorEnv` keeps what crosses between the processes per step to the minimum an
-env step of 50-150 us can afford: the actions, observations, rewards, terminations and
-truncations live in shared memory; a step is one byte down each worker's pipe and one byte
-back; an ``info`` crosses (pickled) only where it carries something - a reset's, and an
-episode's end with its ``metrics`` (``info="all"``: every step's, as Gymnasium's own vector
-envs merge them). Otherwise Gymnasium 1.x's semantics: ``AutoresetMode.NEXT_STEP``, seeds
-``seed + i``, ``call`` / ``get_attr`` / ``set_attr``, ``close`` reaps the workers, a worker's
-exception is raised in the parent with its message. A worker exits when the parent goes
-(its pipe's end of file: Ctrl-C, a kill) and ignores SIGINT itself, so no orphan is left.
+:class:`EgoVectorEnv` keeps what a step costs beyond the envs' own work to the minimum an env
+step of 30-150 us can afford: the actions, observations, rewards, terminations and
+truncations live in shared memory; while this process steps its own env the workers step
+theirs. Where the processes fit the cores (``n`` <= the cores, this process counted; x86-64,
+whose memory order makes a counter in shared memory a safe signal) a step is a counter in
+shared memory each way: a worker watches for its next step for ``SPIN_S`` after each one
+(then sleeps on its pipe, woken by a byte), this process watches for the workers' replies;
+otherwise it is one byte down each worker's pipe and one byte back. An ``info`` crosses
+(pickled) only where it carries something - a reset's, and an episode's end with its
+``metrics`` (``info="all"``: every step's, as Gymnasium's own vector envs merge them).
+Otherwise Gymnasium 1.x's semantics: ``AutoresetMode.NEXT_STEP``, seeds ``seed + i``,
+``call`` / ``get_attr`` / ``set_attr``, ``close`` reaps the workers, an env's exception is
+raised in the parent with its message (a worker's traceback as a note). A worker exits when
+the parent goes (its pipe's end of file: Ctrl-C, a kill) and ignores SIGINT itself, so no
+orphan is left.
 
-Several envs in one process (SB3's ``DummyVecEnv``, ``vectorization_mode="sync"``) need
+The env stepped here holds this process's libsumo while the vector env is open: another ego
+env started here meanwhile runs its SUMO through TraCI (slower; a warning says so).
+``host=False`` keeps every env in a worker (then a step is the pipes' round trip). Several
+envs in one process (SB3's ``DummyVecEnv``, ``vectorization_mode="sync"``) need
 ``config={"multi_instance": True}``: the second and later run SUMO through TraCI (see
 docs/gym.md for its cost). ``gymnasium.vector.AsyncVectorEnv`` and SB3's ``SubprocVecEnv``
 of ``gym.make(id)`` work as well.
@@ -27,7 +37,10 @@ import ctypes
 import multiprocessing as mp
 import os
 import pickle
+import platform
+import select
 import signal
+import time
 import traceback
 import weakref
 from collections.abc import Mapping
@@ -43,8 +56,28 @@ from ego.params import ConfigError
 from ego.sim import exclusive_running
 
 # one byte per message on a worker's pipe; the larger messages that follow are pickled
-_STEP, _RESET, _CALL, _SETATTR, _CLOSE = b"s", b"r", b"c", b"a", b"q"
+_STEP, _RESET, _CALL, _SETATTR, _CLOSE, _WAKE = b"s", b"r", b"c", b"a", b"q", b"w"
 _DONE, _INFO, _ERROR = b"d", b"i", b"e"
+#: a step's reply in shared memory (its ``kind`` slot): the same three
+_REPLIES = (_DONE, _INFO, _ERROR)
+#: a worker's control slots in shared memory: the step asked, the step done, the reply's
+#: kind, asleep (on its pipe)
+_CMD, _DONE_AT, _KIND, _ASLEEP, _SLOTS = 0, 1, 2, 3, 4
+#: how long (s) a worker watches shared memory for its next step before it sleeps on its pipe
+SPIN_S = 0.002
+#: how long (ms) a sleeping worker waits on its pipe before it looks at shared memory again
+#: (a byte wakes it; this bounds the rare wake-up lost between its look and its sleep)
+SLEEP_MS = 20
+#: machines whose memory order (total store order) makes plain loads and stores of shared
+#: memory a safe signal: a reader that sees a counter change sees what was written before it
+_TSO_MACHINES = ("x86_64", "amd64", "i386", "i686", "x86")
+
+
+def _cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not Linux
+        return os.cpu_count() or 1
 
 
 def env_id_of(scenario: str) -> str:
@@ -74,10 +107,11 @@ def make_vector(
     config: Mapping[str, Any] | None = None,
     render_mode: str | None = None,
     info: str = "episode",
+    host: bool | None = None,
     **kwargs: Any,
 ):
-    """``num_envs`` envs of ``scenario``'s id, each in its own process when more than one
-    (:class:`EgoVectorEnv`; ``info`` as there).
+    """``num_envs`` envs of ``scenario``'s id: when more than one, an :class:`EgoVectorEnv`
+    (``info`` and ``host`` as there).
 
     Workers start by ``fork`` when no SUMO runs in this process, else by ``forkserver``
     (a fork of a process whose libsumo runs would inherit its simulation)."""
@@ -86,42 +120,58 @@ def make_vector(
     make = _Maker(env_id_of(scenario), {"config": dict(config or {}), "render_mode": render_mode, **kwargs})
     if num_envs == 1:
         return SyncVectorEnv([make])
-    return EgoVectorEnv([make] * num_envs, info=info)
+    return EgoVectorEnv([make] * num_envs, info=info, host=host)
 
 
 class EgoVectorEnv(VectorEnv):
-    """``len(env_fns)`` envs, each stepped in its own worker process, the per-step data in
-    shared memory (see the module docstring). ``env_fns``: picklable callables making the
-    envs (each a Box observation space; all alike). ``info``: ``"episode"`` (default) - the
-    infos of resets and of steps that end an episode or carry ``metrics``; ``"all"`` - every
-    step's (as ``gymnasium.vector.AsyncVectorEnv``, at its cost). ``context``: the start
-    method (default ``fork`` when no SUMO runs in this process, else ``forkserver``)."""
+    """``len(env_fns)`` envs stepped in parallel: the first in this process (``host``), the
+    others each in a worker process, the per-step data in shared memory (see the module
+    docstring). ``env_fns``: picklable callables making the envs (each a Box observation
+    space; all alike). ``info``: ``"episode"`` (default) - the infos of resets and of steps
+    that end an episode or carry ``metrics``; ``"all"`` - every step's (as
+    ``gymnasium.vector.AsyncVectorEnv``, at its cost). ``host``: step the first env in this
+    process (default: when this process runs no SUMO now); False puts every env in a worker.
+    ``context``: the workers' start method (default ``fork`` when no SUMO runs in this
+    process, else ``forkserver``)."""
 
-    def __init__(self, env_fns, info: str = "episode", context: str | None = None) -> None:
+    def __init__(self, env_fns, info: str = "episode", context: str | None = None, host: bool | None = None) -> None:
         if info not in ("episode", "all"):
             raise ConfigError(f"bad value for info: {info!r} (expected episode or all)")
+        if host is not None and not isinstance(host, bool):
+            raise ConfigError(f"bad value for host: {host!r} (expected true, false or None)")
         env_fns = list(env_fns)
         if len(env_fns) < 1:
             raise ConfigError("bad value for env_fns: empty (expected at least one env maker)")
+        if host is None:
+            host = not exclusive_running()
         # the spaces from an env built here (a bad configuration fails now, before any
-        # process starts); an EgoEnv starts no SUMO before its reset
-        dummy = env_fns[0]()
+        # process starts); an EgoEnv starts no SUMO before its reset. Hosted, it stays.
+        first = env_fns[0]()
         try:
-            self.single_observation_space = dummy.observation_space
-            self.single_action_space = dummy.action_space
-            self.metadata = {**dummy.metadata, "autoreset_mode": AutoresetMode.NEXT_STEP}
-            self.render_mode = dummy.render_mode
-            self.spec = dummy.spec
-        finally:
-            dummy.close()
-        obs_space = self.single_observation_space
-        if not isinstance(obs_space, spaces.Box):
-            raise ConfigError(f"bad observation space for EgoVectorEnv: {obs_space} (expected a Box)")
+            self.single_observation_space = first.observation_space
+            self.single_action_space = first.action_space
+            self.metadata = {**first.metadata, "autoreset_mode": AutoresetMode.NEXT_STEP}
+            self.render_mode = first.render_mode
+            self.spec = first.spec
+            obs_space = self.single_observation_space
+            if not isinstance(obs_space, spaces.Box):
+                raise ConfigError(f"bad observation space for EgoVectorEnv: {obs_space} (expected a Box)")
+        except BaseException:
+            first.close()
+            raise
+        if not host:
+            first.close()
+        elif hasattr(first.unwrapped, "_hosted"):  # an ego env: never evicted by another here
+            first.unwrapped._hosted = True
         self.num_envs = n = len(env_fns)
         self.observation_space = batch_space(obs_space, n)
         self.action_space = batch_space(self.single_action_space, n)
         self.autoreset_mode = AutoresetMode.NEXT_STEP
         self._info_all = info == "all"
+        #: the env indices stepped by workers (the first is this process's when hosted)
+        self._indices = list(range(1 if host else 0, n))
+        #: steps are signalled through shared memory (else through the pipes)
+        self.spinning = host and platform.machine().lower() in _TSO_MACHINES and n <= _cores()
 
         act_space = self.single_action_space
         act_shape = act_space.shape if act_space.shape is not None else ()
@@ -139,10 +189,15 @@ class EgoVectorEnv(VectorEnv):
         self._buffers = {
             name: ctx.RawArray(ctypes.c_char, max(1, int(np.prod(shape)) * dt.itemsize)) for name, shape, dt in layout
         }
+        self._ctrl = ctx.RawArray(ctypes.c_int64, _SLOTS * n)
+        self._seq = 0
         self._layout = layout
         views = _views(self._buffers, layout)
         self._obs, self._actions = views["obs"], views["action"]
         self._rewards, self._terminated, self._truncated = views["reward"], views["terminated"], views["truncated"]
+        self._here = _Stepper(first, 0, views, self._info_all) if host else None
+        #: the envs closed with the vector env, however it is dropped (the hosted one)
+        self._hosted: list = [first] if host else []
 
         self._conns: list = []
         self._fds: list[int] = []
@@ -150,14 +205,15 @@ class EgoVectorEnv(VectorEnv):
         self.closed = False
         self._broken = False
         try:
-            for index, fn in enumerate(env_fns):
+            for index in self._indices:
                 parent, child = ctx.Pipe(duplex=True)
                 # a forked worker closes the parents' ends it inherits (else a worker would
                 # hold another's pipe open and miss the parent's end of file)
                 inherited = [*self._conns, parent] if context == "fork" else []
                 proc = ctx.Process(
                     target=_worker,
-                    args=(index, fn, child, inherited, self._buffers, layout, self._info_all),
+                    args=(index, env_fns[index], child, inherited, self._buffers, layout, self._ctrl, self._info_all),
+                    kwargs={"spinning": self.spinning},
                     name=f"EgoVectorEnv-{index}",
                     daemon=True,
                 )
@@ -166,13 +222,13 @@ class EgoVectorEnv(VectorEnv):
                 self._conns.append(parent)
                 self._fds.append(parent.fileno())
                 self._processes.append(proc)
-            for index in range(n):  # each worker reports its env built (or its error)
-                self._receive(index)
+            for k in range(len(self._indices)):  # each worker reports its env built (or its error)
+                self._receive(k)
         except BaseException:
             self._reap(timeout=1.0)
             raise
-        # the workers go with the vector env, however it is dropped
-        self._finalizer = weakref.finalize(self, _reap, self._conns, self._processes, 1.0)
+        # the workers (and the hosted env) go with the vector env, however it is dropped
+        self._finalizer = weakref.finalize(self, _reap, self._conns, self._processes, 1.0, self._hosted)
 
     # -- the Gymnasium vector interface ---------------------------------------------------
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None):
@@ -196,13 +252,14 @@ class EgoVectorEnv(VectorEnv):
                 raise ValueError(
                     f"`options['reset_mask']` must be a numpy bool array of shape ({n},) with a True value, got {mask!r}"
                 )
-        indices = [i for i in range(n) if mask is None or mask[i]]
-        for i in indices:
-            self._send(i, _RESET, (seeds[i], options))
+        asked = [k for k, i in enumerate(self._indices) if mask is None or mask[i]]
+        for k in asked:
+            self._send(k, _RESET, (seeds[self._indices[k]], options))
         infos: dict = {}
-        for i in indices:
-            info = self._receive(i)
-            infos = self._add_info(infos, info, i)
+        if self._here is not None and (mask is None or mask[0]):
+            infos = self._add_info(infos, self._hosted_call(self._here.reset, seeds[0], options), 0)
+        for k in asked:
+            infos = self._add_info(infos, self._receive(k), self._indices[k])
         if mask is None:
             self._terminated[:] = False
             self._truncated[:] = False
@@ -217,16 +274,28 @@ class EgoVectorEnv(VectorEnv):
         if actions.shape != self._actions.shape:
             raise ValueError(f"bad actions: expected shape {self._actions.shape}, got {actions.shape}")
         self._actions[...] = actions
-        write, read, fds = os.write, os.read, self._fds
+        infos: dict = {}
         try:
-            for fd in fds:
-                write(fd, _STEP)
-            infos: dict = {}
-            for i, fd in enumerate(fds):
-                reply = read(fd, 1)
+            if self.spinning:
+                seq = self._seq = self._seq + 1
+                ctrl = self._ctrl
+                for k, i in enumerate(self._indices):  # the actions are written: go
+                    base = _SLOTS * i
+                    ctrl[base + _CMD] = seq
+                    if ctrl[base + _ASLEEP]:
+                        os.write(self._fds[k], _WAKE)
+            else:
+                write = os.write
+                for fd in self._fds:
+                    write(fd, _STEP)
+            if self._here is not None:
+                info = self._hosted_call(self._here.step)
+                if info is not None:
+                    infos = self._add_info(infos, info, 0)
+            for k, i in enumerate(self._indices):
+                reply = self._await(k, i) if self.spinning else os.read(self._fds[k], 1)
                 if reply != _DONE:
-                    info = self._reply(i, reply)
-                    infos = self._add_info(infos, info, i)
+                    infos = self._add_info(infos, self._reply(k, reply), i)
         except OSError as exc:
             self._fail(f"a worker of EgoVectorEnv is gone ({exc})")
         except KeyboardInterrupt:  # mid-step: the workers' replies would be out of step
@@ -240,9 +309,10 @@ class EgoVectorEnv(VectorEnv):
     def call(self, name: str, *args: Any, **kwargs: Any) -> tuple[Any, ...]:
         """``name(*args, **kwargs)`` of every env (or its value if not callable)."""
         self._check_open()
-        for i in range(self.num_envs):
-            self._send(i, _CALL, (name, args, kwargs))
-        return tuple(self._receive(i) for i in range(self.num_envs))
+        for k in range(len(self._indices)):
+            self._send(k, _CALL, (name, args, kwargs))
+        here = (self._hosted_call(_call, self._hosted[0], name, args, kwargs),) if self._here is not None else ()
+        return here + tuple(self._receive(k) for k in range(len(self._indices)))
 
     def get_attr(self, name: str) -> tuple[Any, ...]:
         return self.call(name)
@@ -253,57 +323,124 @@ class EgoVectorEnv(VectorEnv):
             values = [values] * self.num_envs
         if len(values) != self.num_envs:
             raise ValueError(f"values must be a list of length {self.num_envs}, got {len(values)}")
-        for i, value in enumerate(values):
-            self._send(i, _SETATTR, (name, value))
-        for i in range(self.num_envs):
-            self._receive(i)
+        for k, i in enumerate(self._indices):
+            self._send(k, _SETATTR, (name, values[i]))
+        if self._here is not None:
+            self._hosted_call(self._hosted[0].set_wrapper_attr, name, values[0])
+        for k in range(len(self._indices)):
+            self._receive(k)
 
     def close_extras(self, timeout: float = 5.0, terminate: bool = False) -> None:
         self._reap(timeout=0.0 if terminate else timeout)
 
-    # -- the pipes ----------------------------------------------------------------------------
+    # -- the pipes and the shared counters -------------------------------------------------------
     def _check_open(self) -> None:
         if self.closed or self._broken:
             raise RuntimeError("this EgoVectorEnv is closed" if self.closed else "this EgoVectorEnv's workers are gone")
 
-    def _send(self, i: int, kind: bytes, payload: Any) -> None:
+    def _hosted_call(self, fn, *args):
+        """``fn(*args)`` on the env stepped here; its exception ends the vector env (the
+        workers' replies to the same command would be out of step), raised as it is."""
         try:
-            os.write(self._fds[i], kind)
-            self._conns[i].send(payload)
-        except OSError as exc:
-            self._fail(f"worker {i} of EgoVectorEnv is gone ({exc})")
+            return fn(*args)
+        except BaseException:
+            self._fail(None)
+            raise
 
-    def _receive(self, i: int):
+    def _await(self, k: int, i: int) -> bytes:
+        """The reply to step ``self._seq`` of worker ``k`` (env ``i``), watched in shared memory."""
+        ctrl, seq = self._ctrl, self._seq
+        done = _SLOTS * i + _DONE_AT
+        spins = 0
+        while ctrl[done] != seq:
+            spins += 1
+            if not spins & 0xFFF and not self._processes[k].is_alive():
+                return b""  # gone: _reply says how
+        return _REPLIES[ctrl[_SLOTS * i + _KIND]]
+
+    def _send(self, k: int, kind: bytes, payload: Any) -> None:
         try:
-            reply = os.read(self._fds[i], 1)
+            os.write(self._fds[k], kind)
+            self._conns[k].send(payload)
         except OSError as exc:
-            self._fail(f"worker {i} of EgoVectorEnv is gone ({exc})")
-        return self._reply(i, reply)
+            self._fail(f"worker {self._indices[k]} of EgoVectorEnv is gone ({exc})")
 
-    def _reply(self, i: int, reply: bytes):
+    def _receive(self, k: int):
+        try:
+            reply = os.read(self._fds[k], 1)
+        except OSError as exc:
+            self._fail(f"worker {self._indices[k]} of EgoVectorEnv is gone ({exc})")
+        return self._reply(k, reply)
+
+    def _reply(self, k: int, reply: bytes):
+        i = self._indices[k]
         if reply == _DONE:
             return {}
         if reply == _INFO:
-            return self._conns[i].recv()
+            return self._conns[k].recv()
         if reply == _ERROR:
-            exc, trace = self._conns[i].recv()
+            exc, trace = self._conns[k].recv()
             self._fail(None)
             exc.add_note(f"(raised in worker {i} of EgoVectorEnv)\n{trace}")
             raise exc
-        proc = self._processes[i]
+        proc = self._processes[k]
         proc.join(1.0)
         self._fail(f"worker {i} of EgoVectorEnv ended unexpectedly (exit code {proc.exitcode})")
 
     def _fail(self, message: str | None):
-        """The workers reaped; ``message``: raised as a RuntimeError."""
+        """The workers reaped, the hosted env closed; ``message``: raised as a RuntimeError."""
         self._broken = True
         self._reap(timeout=1.0)
         if message is not None:
             raise RuntimeError(message)
 
     def _reap(self, timeout: float) -> None:
-        _reap(self._conns, self._processes, timeout)
+        _reap(self._conns, self._processes, timeout, self._hosted)
         self._fds = []
+        self._here = None
+
+
+def _call(env, name: str, args: tuple, kwargs: dict):
+    value = env.get_wrapper_attr(name)
+    return value(*args, **kwargs) if callable(value) else value
+
+
+class _Stepper:
+    """One env's steps with Gymnasium's NEXT_STEP autoreset, its results written into row
+    ``index`` of the shared buffers: the same in a worker and in the parent."""
+
+    def __init__(self, env, index: int, views: dict, info_all: bool) -> None:
+        self.env, self.index, self.info_all = env, index, info_all
+        self.obs_row, self.action_row = views["obs"][index], views["action"][index]
+        self.rewards, self.terminated, self.truncated = views["reward"], views["terminated"], views["truncated"]
+        self.copy = self.action_row.ndim > 0
+        self.autoreset = False
+
+    def step(self) -> dict | None:
+        """One step (a reset after an episode's end); its info where it carries something."""
+        index = self.index
+        if self.autoreset:
+            obs, info = self.env.reset()
+            self.rewards[index] = 0.0
+            self.terminated[index] = self.truncated[index] = self.autoreset = False
+            self.obs_row[...] = obs
+            return info
+        row = self.action_row
+        obs, reward, term, trunc, info = self.env.step(row.copy() if self.copy else row[()])
+        self.obs_row[...] = obs
+        self.rewards[index] = reward
+        self.terminated[index] = term
+        self.truncated[index] = trunc
+        self.autoreset = term or trunc
+        if self.info_all or self.autoreset or "metrics" in info:
+            return info
+        return None
+
+    def reset(self, seed, options) -> dict:
+        obs, info = self.env.reset(seed=seed, options=options)
+        self.obs_row[...] = obs
+        self.autoreset = False
+        return info
 
 
 def _views(buffers: dict, layout) -> dict[str, np.ndarray]:
@@ -313,13 +450,19 @@ def _views(buffers: dict, layout) -> dict[str, np.ndarray]:
     }
 
 
-def _reap(conns: list, processes: list, timeout: float) -> None:
+def _reap(conns: list, processes: list, timeout: float, hosted: list) -> None:
     """Ask the workers to close their envs, wait ``timeout`` s, then terminate (and kill)
-    the ones left; close the pipes. Safe to call twice."""
+    the ones left; close the pipes and the env stepped here. Safe to call twice."""
     for conn in conns:
         try:
             os.write(conn.fileno(), _CLOSE)
         except (OSError, ValueError):
+            pass
+    while hosted:  # while the workers close theirs
+        env = hosted.pop()
+        try:
+            env.close()
+        except Exception:  # noqa: BLE001 - closing what is left; the workers still go
             pass
     for proc in processes:
         proc.join(timeout)
@@ -336,57 +479,91 @@ def _reap(conns: list, processes: list, timeout: float) -> None:
     processes.clear()
 
 
-def _worker(index: int, make, conn, inherited: list, buffers: dict, layout, info_all: bool) -> None:
-    """One env stepped on the parent's byte (see the module docstring)."""
+def _wait_step(ctrl, base: int, seq: int, poll, clock) -> bool:
+    """A worker's wait in shared memory: True when step ``seq + 1`` is asked, False when its
+    pipe has something (a command, a wake-up byte, the parent's end of file). Watches for
+    ``SPIN_S``, then sleeps on the pipe, looking again every ``SLEEP_MS``."""
+    cmd = base + _CMD
+    if ctrl[cmd] != seq:
+        return True
+    end = clock() + SPIN_S
+    spins = 0
+    while ctrl[cmd] == seq:
+        spins += 1
+        if not spins & 0x3FF:
+            if poll(0):
+                return ctrl[cmd] != seq
+            if clock() > end:
+                break
+    else:
+        return True
+    ctrl[base + _ASLEEP] = 1
+    try:
+        while ctrl[cmd] == seq:
+            if poll(SLEEP_MS):
+                return ctrl[cmd] != seq
+        return True
+    finally:
+        ctrl[base + _ASLEEP] = 0
+
+
+def _worker(
+    index: int, make, conn, inherited: list, buffers: dict, layout, ctrl, info_all: bool, spinning: bool = False
+) -> None:
+    """One env stepped on the parent's counter or byte (see the module docstring)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's; it closes us
     for other in inherited:  # a forked worker's copies of the parent's ends
         other.close()
     fd = conn.fileno()
     write, read = os.write, os.read
+    base = _SLOTS * index
+    seq = 0
+    in_step = False  # a step asked through shared memory, its reply not given yet
     env = None
     try:
-        views = _views(buffers, layout)
-        obs_row, action_row = views["obs"][index], views["action"][index]
-        rewards, terminated, truncated = views["reward"], views["terminated"], views["truncated"]
         env = make()
+        stepper = _Stepper(env, index, _views(buffers, layout), info_all)
         write(fd, _DONE)
-        autoreset = False
-        copy = action_row.ndim > 0
-        step, reset = env.step, env.reset
+        poller = select.poll()
+        poller.register(fd, select.POLLIN)
+        poll, clock = poller.poll, time.perf_counter
         while True:
-            kind = read(fd, 1)
-            if kind == _STEP:
-                if autoreset:
-                    obs, info = reset()
-                    rewards[index] = 0.0
-                    terminated[index] = truncated[index] = autoreset = False
-                    obs_row[...] = obs
-                    write(fd, _INFO)
-                    conn.send(info)
-                    continue
-                obs, reward, term, trunc, info = step(action_row.copy() if copy else action_row[()])
-                obs_row[...] = obs
-                rewards[index] = reward
-                terminated[index] = term
-                truncated[index] = trunc
-                autoreset = term or trunc
-                if info_all or autoreset or "metrics" in info:
-                    write(fd, _INFO)
-                    conn.send(info)
+            if spinning:
+                if _wait_step(ctrl, base, seq, poll, clock):
+                    kind = _STEP
                 else:
+                    kind = read(fd, 1)
+                    if kind == _WAKE or kind == _STEP:  # a hint; the step is in shared memory
+                        continue
+            else:
+                kind = read(fd, 1)
+            if kind == _STEP:
+                if spinning:
+                    seq += 1
+                    in_step = True
+                    info = stepper.step()
+                    in_step = False
+                    ctrl[base + _KIND] = 0 if info is None else 1
+                    ctrl[base + _DONE_AT] = seq
+                    if info is not None:
+                        conn.send(info)
+                    continue
+                info = stepper.step()
+                if info is None:
                     write(fd, _DONE)
+                else:
+                    write(fd, _INFO)
+                    conn.send(info)
             elif kind == _RESET:
                 seed, options = conn.recv()
-                obs, info = reset(seed=seed, options=options)
-                obs_row[...] = obs
-                autoreset = False
+                info = stepper.reset(seed, options)
                 write(fd, _INFO)
                 conn.send(info)
             elif kind == _CALL:
                 name, args, kwargs = conn.recv()
-                value = env.get_wrapper_attr(name)
+                value = _call(env, name, args, kwargs)
                 write(fd, _INFO)
-                conn.send(value(*args, **kwargs) if callable(value) else value)
+                conn.send(value)
             elif kind == _SETATTR:
                 name, value = conn.recv()
                 env.set_wrapper_attr(name, value)
@@ -402,7 +579,11 @@ def _worker(index: int, make, conn, inherited: list, buffers: dict, layout, info
         except Exception:
             exc = RuntimeError(f"{type(exc).__name__}: {exc}")
         try:
-            write(fd, _ERROR)
+            if in_step:
+                ctrl[base + _KIND] = 2
+                ctrl[base + _DONE_AT] = seq
+            else:
+                write(fd, _ERROR)
             conn.send((exc, trace))
         except OSError:
             pass

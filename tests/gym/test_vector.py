@@ -26,9 +26,9 @@ pytestmark = [pytest.mark.sumo, pytest.mark.filterwarnings("ignore::UserWarning"
 SHORT = {"duration": 1.0, "policy_frequency": 10}
 
 
-def _actions(space, n_steps, seed=0):
+def _actions(space, n_steps, seed=0, n_envs=2):
     rng = np.random.default_rng(seed)
-    return [0.5 * rng.uniform(-1.0, 1.0, (2, *space.shape)).astype(space.dtype) for _ in range(n_steps)]
+    return [0.5 * rng.uniform(-1.0, 1.0, (n_envs, *space.shape)).astype(space.dtype) for _ in range(n_steps)]
 
 
 def _same(a, b) -> bool:
@@ -79,23 +79,32 @@ def _one_by_one(env_id, config, seed, actions, n_envs=2):
     return runs
 
 
-@pytest.mark.parametrize("env_id", ["ego/CutIn-v0", "ego/Platoon-v0"])
-def test_same_results_as_the_envs_stepped_one_by_one(env_id):
-    envs = gym.make_vec(env_id, num_envs=2, config=SHORT, info="all")
+@pytest.mark.parametrize(
+    ("env_id", "num_envs", "host"),
+    [("ego/CutIn-v0", 2, None), ("ego/Platoon-v0", 2, None), ("ego/CutIn-v0", 2, False), ("ego/CutIn-v0", 3, None)],
+    ids=["cut-in-hosted", "platoon-hosted", "cut-in-all-workers", "cut-in-3-envs"],
+)
+def test_same_results_as_the_envs_stepped_one_by_one(env_id, num_envs, host):
+    """Hosted (the default: the first env here, signals in shared memory on 2 cores), every env
+    in a worker (pipes), and more envs than cores (the first here, the others on pipes)."""
+    envs = gym.make_vec(env_id, num_envs=num_envs, config=SHORT, info="all", host=host)
     assert isinstance(envs, EgoVectorEnv)
-    actions = _actions(envs.single_action_space, 25)
+    assert len(envs._processes) == num_envs - (host is not False)
+    assert envs.spinning == (host is not False and num_envs <= len(os.sched_getaffinity(0)))
+    actions = _actions(envs.single_action_space, 25, n_envs=num_envs)
     try:
         obs, infos = envs.reset(seed=3)
-        vector = [(obs, np.zeros(2), np.zeros(2, bool), np.zeros(2, bool), infos)]
+        vector = [(obs, np.zeros(num_envs), np.zeros(num_envs, bool), np.zeros(num_envs, bool), infos)]
         for batch in actions:
             vector.append(envs.step(batch))
     finally:
         envs.close()
-    expected = _one_by_one(env_id, SHORT, 3, actions)
+    expected = _one_by_one(env_id, SHORT, 3, actions, n_envs=num_envs)
     merge, ends = _Merge(), 0
+    merge.num_envs = num_envs
     for k, (obs, rewards, terminated, truncated, infos) in enumerate(vector):
         e_infos: dict = {}
-        for i in range(2):
+        for i in range(num_envs):
             e_obs, e_reward, e_term, e_trunc, e_info = expected[i][k]
             assert np.array_equal(obs[i], e_obs), (k, i)
             assert rewards[i] == e_reward and terminated[i] == e_term and truncated[i] == e_trunc, (k, i)
@@ -189,7 +198,7 @@ _PARENT = textwrap.dedent(
     import sys, time
     import numpy as np, gymnasium as gym
     import ego.gym
-    envs = gym.make_vec("ego/Platoon-v0", num_envs=2, config={"policy_frequency": 10})
+    envs = gym.make_vec("ego/Platoon-v0", num_envs=2, config={"policy_frequency": 10}, host=HOST)
     envs.reset(seed=0)
     print(" ".join(str(p.pid) for p in envs._processes), flush=True)
     zeros = np.zeros((2, 1), np.float32)
@@ -200,16 +209,23 @@ _PARENT = textwrap.dedent(
 
 
 @pytest.mark.parametrize("how", ["SIGKILL", "SIGINT"])
-def test_no_orphan_worker_when_the_parent_is_killed_or_interrupted(how, tmp_path):
+@pytest.mark.parametrize("host", [True, False], ids=["hosted", "all-workers"])
+def test_no_orphan_worker_when_the_parent_is_killed_or_interrupted(how, host, tmp_path):
+    """Hosted (the default): the first env here, one worker watching shared memory; else two
+    workers on their pipes."""
     env = {**os.environ, "MPLCONFIGDIR": str(tmp_path)}
     proc = subprocess.Popen(
-        [sys.executable, "-c", _PARENT], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, start_new_session=True
+        [sys.executable, "-c", f"HOST = {host}\n" + _PARENT],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        env=env,
+        start_new_session=True,
     )
     try:
         line = []
         wait_for(lambda: line.append(proc.stdout.readline()) or line[-1], proc, "the workers' pids")
         pids = [int(p) for p in line[-1].split()]
-        assert len(pids) == 2 and all(psutil.pid_exists(p) for p in pids)
+        assert len(pids) == (1 if host else 2) and all(psutil.pid_exists(p) for p in pids)
         if how == "SIGINT":  # Ctrl-C in a terminal: the whole foreground group gets it
             os.killpg(proc.pid, signal.SIGINT)
         else:
@@ -222,3 +238,44 @@ def test_no_orphan_worker_when_the_parent_is_killed_or_interrupted(how, tmp_path
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+
+
+def test_a_second_env_here_beside_the_hosted_one_runs_through_traci_and_evicts_nothing():
+    """The vector env's first env holds this process's libsumo: an ego env started here
+    meanwhile runs its SUMO through TraCI (a warning says so) and neither stops the other;
+    once the vector env is closed a new env runs through libsumo again."""
+    envs = gym.make_vec("ego/CutIn-v0", num_envs=2, config=SHORT)
+    other = gym.make("ego/CutIn-v0", config=SHORT)
+    try:
+        envs.reset(seed=0)
+        with pytest.warns(UserWarning, match="runs its SUMO through TraCI"):
+            other.reset(seed=5)
+        assert other.unwrapped.scenario.bridge.via_traci
+        zeros = np.zeros((2, 2), np.float32)
+        for _ in range(3):
+            envs.step(zeros)
+            other.step(zeros[0])
+        # the hosted env was not evicted: its episode goes on as the same env stepped alone
+        obs, *_ = envs.step(zeros)
+        alone = gym.make("ego/CutIn-v0", config={**SHORT, "multi_instance": True})
+        try:
+            alone.reset(seed=0)
+            for _ in range(4):
+                expected, *_ = alone.step(zeros[0])
+        finally:
+            alone.close()
+        assert np.array_equal(obs[0], expected)
+    finally:
+        other.close()
+        envs.close()
+    env = gym.make("ego/CutIn-v0", config=SHORT)
+    try:
+        env.reset(seed=0)
+        assert not env.unwrapped.scenario.bridge.via_traci
+    finally:
+        env.close()
+
+
+def test_host_must_be_a_bool_or_none():
+    with pytest.raises(ConfigError, match="bad value for host: 'yes'"):
+        gym.make_vec("ego/CutIn-v0", num_envs=2, host="yes")
