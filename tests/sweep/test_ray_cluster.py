@@ -125,6 +125,10 @@ def test_losing_a_worker_node_mid_sweep_costs_only_its_runs_one_retry(cluster, t
     while time.monotonic() < deadline and sum(" runs, " in line for line in lines) < 4:
         time.sleep(0.1)
     assert sum(" runs, " in line for line in lines) >= 4, "".join(lines)[-2000:]
+    # remove it while it runs one of the sweep's runs (a node between two runs holds none)
+    while time.monotonic() < deadline and proc.poll() is None and not _running_a_task(victim):
+        time.sleep(0.005)
+    assert proc.poll() is None, "the sweep ended before the node ran a task: " + "".join(lines)[-2000:]
     c.remove_node(victim)  # its raylet and workers die with the runs in flight
     proc.wait(timeout=300)
     reader.join(timeout=10)
@@ -140,6 +144,21 @@ def test_losing_a_worker_node_mid_sweep_costs_only_its_runs_one_retry(cluster, t
     c.add_node(num_cpus=1, node_ip_address="127.0.0.1")  # back to three nodes for the next tests
     workers[0] = next(n for n in c.worker_nodes if n is not workers[1])
     c.wait_for_nodes()
+
+
+def _running_a_task(node) -> bool:
+    """A Ray worker of ``node`` is running a task now: Ray titles an idle worker ``ray::IDLE``
+    and a busy one ``ray::<function>`` (its agents ``ray::...Agent``)."""
+    raylet = psutil.Process(node.all_processes["raylet"][0].process.pid)
+    for child in raylet.children(recursive=True):
+        try:
+            title = child.cmdline()
+        except psutil.Error:
+            continue
+        name = title[0] if title else ""
+        if name.startswith("ray::") and name.split()[0] != "ray::IDLE" and not name.split()[0].endswith("Agent"):
+            return True
+    return False
 
 
 def _job_processes(before: set[int]) -> list[psutil.Process]:
