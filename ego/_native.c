@@ -4,7 +4,10 @@
  *  - bicycle_step: report 000's nonlinear bicycle integrated by classical RK4, the same
  *    arithmetic, term for term, as NonlinearBicycle.rhs + ego.models.integrate.unrolled_rk4;
  *  - mamdani2: the closed-form Mamdani centroid of ego.control.fuzzy_engine for two inputs
- *    and one output (FastMamdani.single2).
+ *    and one output (FastMamdani.single2);
+ *  - boxes and place: the surround sensor's reading of a SUMO step, as
+ *    SumoBridge.surroundings (the context subscription's vehicles as boxes) and
+ *    SurroundSensor.sync (each box placed in the lane frame) compute it.
  *
  * The Python implementations stay the references: the tests require these kernels to agree
  * with them (and with scikit-fuzzy) on random inputs. Compiled with -ffp-contract=off so the
@@ -206,11 +209,255 @@ static PyObject *mamdani2(PyObject *self, PyObject *const *args, Py_ssize_t narg
     return PyFloat_FromDouble(moment / area);
 }
 
+
+/* ---- the surround sensor's reading of a SUMO step ------------------------------------- */
+
+static const double DEG_TO_RAD = 3.14159265358979323846 / 180.0; /* CPython's math.radians */
+static PyObject *math_hypot = NULL;
+
+static int as_double(PyObject *o, double *out)
+{
+    *out = PyFloat_AsDouble(o);
+    return (*out == -1.0 && PyErr_Occurred()) ? -1 : 0;
+}
+
+/* boxes(results, controlled, known, dims, p_key, a_key, v_key) -> (ids, rows)
+ * SumoBridge.surroundings: each vehicle of a context subscription's results not in
+ * ``controlled``, as (centre x, y, yaw rad, speed, length, width); (length, width) from
+ * ``known`` or dims(id). */
+static PyObject *boxes(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 7 || !PyDict_Check(args[0]) || !PyDict_Check(args[2])) {
+        PyErr_SetString(PyExc_TypeError, "boxes(results: dict, controlled, known: dict, dims, p_key, a_key, v_key)");
+        return NULL;
+    }
+    PyObject *results = args[0], *controlled = args[1], *known = args[2], *dims = args[3];
+    PyObject *p_key = args[4], *a_key = args[5], *v_key = args[6];
+    PyObject *ids = PyList_New(0), *rows = PyList_New(0);
+    if (!ids || !rows) goto fail;
+    Py_ssize_t pos = 0;
+    PyObject *other, *var;
+    while (PyDict_Next(results, &pos, &other, &var)) {
+        int skip = PySequence_Contains(controlled, other);
+        if (skip < 0) goto fail;
+        if (skip) continue;
+        PyObject *xy = PyObject_GetItem(var, p_key);
+        if (!xy) goto fail;
+        double xf = 0.0, yf = 0.0, angle = 0.0;
+        PyObject *fx = PySequence_GetItem(xy, 0), *fy = fx ? PySequence_GetItem(xy, 1) : NULL;
+        Py_DECREF(xy);
+        int bad = !fx || !fy || as_double(fx, &xf) || as_double(fy, &yf);
+        Py_XDECREF(fx);
+        Py_XDECREF(fy);
+        if (bad) goto fail;
+        PyObject *a = PyObject_GetItem(var, a_key);
+        if (!a) goto fail;
+        bad = as_double(a, &angle);
+        Py_DECREF(a);
+        if (bad) goto fail;
+        PyObject *v = PyObject_GetItem(var, v_key);
+        if (!v) goto fail;
+        PyObject *lw = PyDict_GetItemWithError(known, other); /* borrowed */
+        if (lw && !PyObject_IsTrue(lw)) lw = NULL;
+        if (lw) Py_INCREF(lw);
+        else if (PyErr_Occurred()) { Py_DECREF(v); goto fail; }
+        else lw = PyObject_CallOneArg(dims, other);
+        if (!lw) { Py_DECREF(v); goto fail; }
+        PyObject *len_o = PySequence_GetItem(lw, 0), *wid_o = len_o ? PySequence_GetItem(lw, 1) : NULL;
+        Py_DECREF(lw);
+        double length;
+        if (!len_o || !wid_o || as_double(len_o, &length)) {
+            Py_XDECREF(len_o); Py_XDECREF(wid_o); Py_DECREF(v); goto fail;
+        }
+        const double psi = (90.0 - angle) * DEG_TO_RAD;
+        const double half = 0.5 * length;
+        PyObject *row = PyTuple_New(6);
+        if (!row) { Py_DECREF(len_o); Py_DECREF(wid_o); Py_DECREF(v); goto fail; }
+        PyTuple_SET_ITEM(row, 0, PyFloat_FromDouble(xf - half * cos(psi)));
+        PyTuple_SET_ITEM(row, 1, PyFloat_FromDouble(yf - half * sin(psi)));
+        PyTuple_SET_ITEM(row, 2, PyFloat_FromDouble(psi));
+        PyTuple_SET_ITEM(row, 3, v);
+        PyTuple_SET_ITEM(row, 4, len_o);
+        PyTuple_SET_ITEM(row, 5, wid_o);
+        if (!PyTuple_GET_ITEM(row, 0) || !PyTuple_GET_ITEM(row, 1) || !PyTuple_GET_ITEM(row, 2) ||
+            PyList_Append(ids, other) || PyList_Append(rows, row)) {
+            Py_DECREF(row);
+            goto fail;
+        }
+        Py_DECREF(row);
+    }
+    return Py_BuildValue("(NN)", ids, rows);
+fail:
+    Py_XDECREF(ids);
+    Py_XDECREF(rows);
+    return NULL;
+}
+
+/* math.hypot(dx, dy) <= reach, decided without Python where the squares settle it */
+static int within(double dx, double dy, double reach)
+{
+    const double d2 = dx * dx + dy * dy, r2 = reach * reach;
+    if (d2 < r2 * (1.0 - 1e-9)) return 1;
+    if (d2 > r2 * (1.0 + 1e-9)) return 0;
+    PyObject *h = PyObject_CallFunction(math_hypot, "dd", dx, dy);
+    if (!h) return -1;
+    const double value = PyFloat_AsDouble(h);
+    Py_DECREF(h);
+    if (value == -1.0 && PyErr_Occurred()) return -1;
+    return value <= reach;
+}
+
+/* place(ids, rows, front, reach, straight, frame, previous, dt, rated, low_edge)
+ *   -> (ids, rows, objects, speeds)
+ * SurroundSensor.sync after SurroundView.sense's range filter: the vehicles within ``reach``
+ * of ``front`` (x, y) (all when ``front`` is None), each placed in the lane frame (the
+ * rotation ``straight`` = (x0, y0, ux, uy, s0, heading), or frame(x, y, yaw) -> (s, d, rel,
+ * _)), as (id, s_lo, s_hi, d_lo, d_hi, v_s, v_d, accel, rel), sorted by s_lo (stable);
+ * speeds: id -> v_s. */
+static PyObject *place(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 10 || !PyList_Check(args[0]) || !PyList_Check(args[1]) || !PyDict_Check(args[6])) {
+        PyErr_SetString(PyExc_TypeError,
+                        "place(ids: list, rows: list, front, reach, straight, frame, previous: dict, dt, rated, low_edge)");
+        return NULL;
+    }
+    PyObject *ids = args[0], *rows = args[1], *front = args[2], *straight = args[4], *frame = args[5];
+    PyObject *previous = args[6], *low_edge = args[9];
+    const Py_ssize_t n = PyList_GET_SIZE(ids);
+    if (PyList_GET_SIZE(rows) != n) {
+        PyErr_SetString(PyExc_ValueError, "place: ids and rows differ in length");
+        return NULL;
+    }
+    double reach, dt, fx = 0.0, fy = 0.0, st[6] = {0, 0, 0, 0, 0, 0};
+    if (as_double(args[3], &reach) || as_double(args[7], &dt)) return NULL;
+    const int rated = PyObject_IsTrue(args[8]);
+    if (rated < 0) return NULL;
+    const int filter = front != Py_None;
+    if (filter && read_doubles(front, st, 2, "front")) return NULL;
+    fx = st[0];
+    fy = st[1];
+    const int rotation = straight != Py_None;
+    if (rotation && read_doubles(straight, st, 6, "straight")) return NULL;
+
+    PyObject *near_ids = filter ? PyList_New(0) : (Py_INCREF(ids), ids);
+    PyObject *near_rows = filter ? PyList_New(0) : (Py_INCREF(rows), rows);
+    PyObject *objects = PyList_New(0), *speeds = PyDict_New();
+    double *keys = NULL;
+    if (!near_ids || !near_rows || !objects || !speeds) goto fail;
+    int sortable = 1;
+    for (Py_ssize_t i = 0; i < n; i++) {
+        PyObject *vid = PyList_GET_ITEM(ids, i), *row = PyList_GET_ITEM(rows, i);
+        double r[6];
+        if (read_doubles(row, r, 6, "row")) goto fail;
+        if (filter) {
+            int in = within(r[0] - fx, r[1] - fy, reach);
+            if (in < 0) goto fail;
+            if (!in) continue;
+            if (PyList_Append(near_ids, vid) || PyList_Append(near_rows, row)) goto fail;
+        }
+        const double x = r[0], y = r[1], yaw = r[2], v = r[3], length = r[4], width = r[5];
+        double s, d, rel;
+        if (rotation) {
+            const double dx = x - st[0], dy = y - st[1];
+            s = st[4] + dx * st[2] + dy * st[3];
+            d = dy * st[2] - dx * st[3];
+            rel = yaw - st[5];
+        } else {
+            PyObject *placed = PyObject_CallFunction(frame, "ddd", x, y, yaw);
+            if (!placed) goto fail;
+            double f[4];
+            int bad = read_doubles(placed, f, 4, "frame's result");
+            Py_DECREF(placed);
+            if (bad) goto fail;
+            s = f[0];
+            d = f[1];
+            rel = f[2];
+        }
+        const double c = cos(rel), sn = sin(rel), ac = fabs(c), asn = fabs(sn);
+        const double hs = 0.5 * (length * ac + width * asn);
+        const double hd = 0.5 * (length * asn + width * ac);
+        const double vs = v * c;
+        double accel = 0.0;
+        PyObject *prev = PyDict_GetItemWithError(previous, vid); /* borrowed */
+        if (prev && rated) {
+            double p;
+            if (as_double(prev, &p)) goto fail;
+            accel = (vs - p) / dt;
+        } else if (!prev && PyErr_Occurred()) goto fail;
+        PyObject *vs_o = PyFloat_FromDouble(vs);
+        if (!vs_o) goto fail;
+        if (PyDict_SetItem(speeds, vid, vs_o)) { Py_DECREF(vs_o); goto fail; }
+        PyObject *full = PyTuple_New(9);
+        if (!full) { Py_DECREF(vs_o); goto fail; }
+        Py_INCREF(vid);
+        PyTuple_SET_ITEM(full, 0, vid);
+        PyTuple_SET_ITEM(full, 1, PyFloat_FromDouble(s - hs));
+        PyTuple_SET_ITEM(full, 2, PyFloat_FromDouble(s + hs));
+        PyTuple_SET_ITEM(full, 3, PyFloat_FromDouble(d - hd));
+        PyTuple_SET_ITEM(full, 4, PyFloat_FromDouble(d + hd));
+        PyTuple_SET_ITEM(full, 5, vs_o); /* the reference made above, now the tuple's */
+        PyTuple_SET_ITEM(full, 6, PyFloat_FromDouble(v * sn));
+        PyTuple_SET_ITEM(full, 7, PyFloat_FromDouble(accel));
+        PyTuple_SET_ITEM(full, 8, PyFloat_FromDouble(rel));
+        for (int k = 1; k < 9; k++) {
+            if (!PyTuple_GET_ITEM(full, k)) { Py_DECREF(full); goto fail; }
+        }
+        if (s - hs != s - hs) sortable = 0; /* a NaN edge: Python's own sort decides */
+        int bad = PyList_Append(objects, full);
+        Py_DECREF(full);
+        if (bad) goto fail;
+    }
+    /* stable sort by s_lo: an insertion sort, moving an object left past strictly larger keys */
+    const Py_ssize_t m = PyList_GET_SIZE(objects);
+    if (sortable && m > 1) {
+        keys = PyMem_Malloc((size_t)m * sizeof(double));
+        if (!keys) { PyErr_NoMemory(); goto fail; }
+        PyObject **items = ((PyListObject *)objects)->ob_item;
+        for (Py_ssize_t i = 0; i < m; i++) keys[i] = PyFloat_AS_DOUBLE(PyTuple_GET_ITEM(items[i], 1));
+        for (Py_ssize_t i = 1; i < m; i++) {
+            const double key = keys[i];
+            PyObject *item = items[i];
+            Py_ssize_t j = i;
+            while (j > 0 && key < keys[j - 1]) {
+                keys[j] = keys[j - 1];
+                items[j] = items[j - 1];
+                j--;
+            }
+            keys[j] = key;
+            items[j] = item;
+        }
+        PyMem_Free(keys);
+        keys = NULL;
+    } else if (m > 1) {
+        PyObject *sort = PyObject_GetAttrString(objects, "sort");
+        PyObject *kw = sort ? Py_BuildValue("{s:O}", "key", low_edge) : NULL;
+        PyObject *empty = kw ? PyTuple_New(0) : NULL;
+        PyObject *none = empty ? PyObject_Call(sort, empty, kw) : NULL;
+        Py_XDECREF(sort);
+        Py_XDECREF(kw);
+        Py_XDECREF(empty);
+        if (!none) goto fail;
+        Py_DECREF(none);
+    }
+    return Py_BuildValue("(NNNN)", near_ids, near_rows, objects, speeds);
+fail:
+    PyMem_Free(keys);
+    Py_XDECREF(near_ids);
+    Py_XDECREF(near_rows);
+    Py_XDECREF(objects);
+    Py_XDECREF(speeds);
+    return NULL;
+}
+
 static PyMethodDef methods[] = {
     {"bicycle_step", (PyCFunction)(void (*)(void))bicycle_step, METH_FASTCALL,
      "bicycle_step(state, Fx, delta, h, substeps, params) -> (state, lateral_accel)"},
     {"mamdani2", (PyCFunction)(void (*)(void))mamdani2, METH_FASTCALL,
      "mamdani2(peaks0, peaks1, table, coef, out_peaks, grid, x0, x1) -> crisp output"},
+    {"boxes", (PyCFunction)(void (*)(void))boxes, METH_FASTCALL,
+     "boxes(results, controlled, known, dims, p_key, a_key, v_key) -> (ids, rows)"},
+    {"place", (PyCFunction)(void (*)(void))place, METH_FASTCALL,
+     "place(ids, rows, front, reach, straight, frame, previous, dt, rated, low_edge) -> (ids, rows, objects, speeds)"},
     {NULL, NULL, 0, NULL},
 };
 
@@ -219,4 +466,12 @@ static struct PyModuleDef module = {
     methods,
 };
 
-PyMODINIT_FUNC PyInit__native(void) { return PyModule_Create(&module); }
+PyMODINIT_FUNC PyInit__native(void)
+{
+    PyObject *math = PyImport_ImportModule("math");
+    if (!math) return NULL;
+    math_hypot = PyObject_GetAttrString(math, "hypot");
+    Py_DECREF(math);
+    if (!math_hypot) return NULL;
+    return PyModule_Create(&module);
+}

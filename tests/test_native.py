@@ -1,5 +1,6 @@
 """The C twins in ego._native agree with the Python references they accelerate."""
 
+import contextlib
 import json
 import os
 import subprocess
@@ -74,3 +75,113 @@ def test_a_run_gives_the_same_metrics_with_and_without_the_extension():
         return m
 
     assert metrics("0") == metrics("1")
+
+
+class _Vehicles:
+    def __init__(self, results):
+        self.results = results
+
+    def getContextSubscriptionResults(self, vid):  # noqa: N802 - libsumo's name
+        return self.results
+
+
+class _Libsumo:
+    def __init__(self, results):
+        self.vehicle = _Vehicles(results)
+
+
+def _surroundings(results, native: bool):
+    """SumoBridge.surroundings on ``results`` (a context subscription's), in C or in Python."""
+    import ego.sumo.bridge as bridge
+
+    asked = []
+    known = {"k0": (4.5, 1.8), "k1": (12.0, 2.5)}
+    fake = type("Fake", (), {})()
+    fake._ls, fake._ctx_vars = _Libsumo(results), (0x42, 0x43, 0x40)
+    fake.controlled, fake._dims = {"ego": None}, dict(known)
+    fake.dimensions = lambda vid: asked.append(vid) or (5.0 + len(vid) * 0.25, 2.0)
+    saved = bridge._BOXES
+    bridge._BOXES = NATIVE.boxes if native else None
+    try:
+        return bridge.SumoBridge.surroundings(fake, "ego"), asked
+    finally:
+        bridge._BOXES = saved
+
+
+def test_boxes_match_the_bridges_python_loop():
+    rng = np.random.default_rng(1)
+    results = {}
+    for i, vid in enumerate(["k0", "ego", "u1", "k1", "unknown-22", *(f"v{j}" for j in range(30))]):
+        results[vid] = {
+            0x42: (float(rng.uniform(-500, 2000)), float(rng.uniform(-50, 50))),
+            0x43: float(rng.uniform(0, 360)) if i % 7 else 90.0,
+            0x40: float(rng.uniform(0, 40)),
+        }
+    (ids_c, rows_c), asked_c = _surroundings(results, native=True)
+    (ids_p, rows_p), asked_p = _surroundings(results, native=False)
+    assert ids_c == ids_p and "ego" not in ids_c and len(ids_c) == 34
+    assert rows_c == rows_p  # bit for bit
+    assert asked_c == asked_p and "k0" not in asked_c  # the known dimensions are not asked for
+
+
+def _sensor(curved: bool):
+    from ego.lane_frame import LanePolyline
+    from ego.scenarios.sensor import SurroundSensor
+
+    points = [(0.0, 0.0), (400.0, 30.0), (900.0, 10.0)] if curved else [(0.0, 0.0), (2000.0, 50.0)]
+    return SurroundSensor(LanePolyline(points), {0: (-1.75, 1.75)}, cg_to_front=2.25, length=4.5, width=1.8)
+
+
+@contextlib.contextmanager
+def _placing(native: bool):
+    """SurroundSensor.sync_within in C (native) or in Python within the block."""
+    import ego.scenarios.sensor as sensor_module
+
+    saved = sensor_module._PLACE
+    sensor_module._PLACE = NATIVE.place if native else None
+    try:
+        yield
+    finally:
+        sensor_module._PLACE = saved
+
+
+@pytest.mark.parametrize("curved", [False, True], ids=["rotation", "polyline"])
+@pytest.mark.parametrize("front", [None, (300.0, 5.0)], ids=["all", "within-reach"])
+def test_place_matches_the_sensors_python_sync(curved, front):
+    rng = np.random.default_rng(2)
+    ids = [f"v{j}" for j in range(40)]
+    steps = []
+    for k in range(3):  # three syncs: the accelerations from the speeds of the one before
+        rows = []
+        for j in range(40):
+            x, y = 300.0 + float(rng.uniform(-150, 150)), float(rng.uniform(-8, 8))
+            rows.append((x, y, float(rng.normal(0.0, 0.1)), float(rng.uniform(0, 40)), 4.5 + j % 3, 1.8))
+        if k == 2:  # a box centre exactly at the reach (math.hypot decides) and a tie of edges
+            rows[0] = (300.0 + 30.0, 5.0 + 40.0, 0.0, 20.0, 4.5, 1.8)
+            rows[2] = rows[1]
+        steps.append((0.1 * k, list(ids), rows))
+    placed = {}
+    for native in (True, False):
+        sensor = _sensor(curved)
+        out = []
+        with _placing(native):
+            for t, step_ids, rows in steps:
+                near = sensor.sync_within(t, step_ids, rows, front, 50.0)
+                out.append((near, list(sensor._objects), dict(sensor._speeds), sensor._seen))
+        placed[native] = out
+    assert placed[True] == placed[False]  # bit for bit, the order of equal edges included
+    if front is not None:
+        assert "v0" in placed[True][2][0][0]  # at exactly 50 m: within
+        assert 0 < len(placed[True][0][0][0]) < 40
+
+
+def test_place_leaves_an_order_with_nan_edges_to_pythons_sort():
+    rows = [(300.0 + 7.0 * j, 0.0, float("nan") if j in (2, 5) else 0.0, 20.0, 4.5, 1.8) for j in range(8)]
+    rows.reverse()
+    out = {}
+    for native in (True, False):
+        sensor = _sensor(False)
+        with _placing(native):
+            sensor.sync_within(0.0, [f"v{j}" for j in range(8)], list(rows), None, 50.0)
+        out[native] = repr(sensor._objects)
+    assert out[True] == out[False] and "nan" in out[True]

@@ -303,11 +303,8 @@ class SurroundView(RoadSensor):
         sim = self._sim
         ids, rows = self.around = sim.surroundings(EGO)
         reach = self.config.sensor_range
-        if reach < LOG_REACH:  # the subscription reaches farther for the traffic log
-            x, y = sim.front_bumper(EGO)
-            near = [i for i, r in enumerate(rows) if math.hypot(r[0] - x, r[1] - y) <= reach]
-            ids, rows = [ids[i] for i in near], [rows[i] for i in near]
-        self.sensor.sync(t, ids, rows)
+        # the subscription reaches farther for the traffic log
+        self.sensor.sync_within(t, ids, rows, sim.front_bumper(EGO) if reach < LOG_REACH else None, reach)
         self._looked = False
 
     def look(self, t: float) -> Collision | None:

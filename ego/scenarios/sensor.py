@@ -36,8 +36,12 @@ import math
 from collections.abc import Sequence
 from operator import itemgetter
 
+from ego.native import NATIVE
+
 INF = math.inf
 _LOW_EDGE = itemgetter(1)  #: an object's rearmost extent along the lane: the sort key of a sync
+#: :meth:`SurroundSensor.sync_within` in C, or None
+_PLACE = None if NATIVE is None else NATIVE.place
 
 
 class Detection:
@@ -209,6 +213,31 @@ class SurroundSensor:
         self._seen = (ids, rows)
         self._rows = None  # id -> row, made when box() first asks after this sync
         self._t_sync = t
+
+    def sync_within(
+        self, t: float, ids: list[str], rows: list[tuple], front: tuple[float, float] | None, reach: float
+    ) -> tuple[list[str], list[tuple]]:
+        """:meth:`sync` of the vehicles whose box centre lies within ``reach`` (m) of ``front``
+        (x, y; every vehicle when None); returns their ids and rows. In C when the extension
+        is built (``ego._native.place``: the same arithmetic)."""
+        if _PLACE is None:
+            if front is not None:
+                x, y = front
+                near = [i for i, r in enumerate(rows) if math.hypot(r[0] - x, r[1] - y) <= reach]
+                ids, rows = [ids[i] for i in near], [rows[i] for i in near]
+            self.sync(t, ids, rows)
+            return ids, rows
+        if type(ids) is not list or type(rows) is not list:
+            ids, rows = list(ids), list(rows)
+        dt = t - self._t_sync
+        ids, rows, self._objects, self._speeds = _PLACE(
+            ids, rows, front, reach, self._straight, self.lane.frame, self._speeds, dt, dt > 0.0, _LOW_EDGE
+        )
+        self._near = None
+        self._seen = (ids, rows)
+        self._rows = None
+        self._t_sync = t
+        return ids, rows
 
     def ego_extents(self, s: float, d: float, heading_error: float) -> tuple[float, float, float, float]:
         """(s_lo, s_hi, d_lo, d_hi) of the ego's body with its centre of gravity at (s, d),

@@ -28,10 +28,14 @@ from ego.models.geometry import (  # noqa: F401 - the pose conversions are impor
     sumo_poses_to_boxes,
     yaw_to_sumo_angle,
 )
+from ego.native import NATIVE
 from ego.sim import instances
 from ego.sim.registry import SimSetup
 from ego.sim.types import Collision, Departure, SimError, VehicleSpec, VehicleType, ego_type  # noqa: F401 - importable from here too
 from ego.sumo.net import sumo_binary
+
+#: the surroundings' boxes in C, or None (the Python loop of SumoBridge.surroundings)
+_BOXES = None if NATIVE is None else NATIVE.boxes
 
 #: TraCI's variable ids of a vehicle's position and angle (libsumo.constants), read every step
 _VAR_POSITION, _VAR_ANGLE = 0x42, 0x43
@@ -507,6 +511,8 @@ class SumoBridge:
         results = self._ls.vehicle.getContextSubscriptionResults(vid)
         p_key, a_key, v_key = self._ctx_vars
         controlled, dims, known = self.controlled, self.dimensions, self._dims
+        if _BOXES is not None:  # the same arithmetic in C (ego/_native.c)
+            return _BOXES(results, controlled, known, dims, p_key, a_key, v_key)
         cos, sin, rad = math.cos, math.sin, math.radians
         ids, rows = [], []
         for other, var in results.items():
