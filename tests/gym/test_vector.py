@@ -279,3 +279,99 @@ def test_a_second_env_here_beside_the_hosted_one_runs_through_traci_and_evicts_n
 def test_host_must_be_a_bool_or_none():
     with pytest.raises(ConfigError, match="bad value for host: 'yes'"):
         gym.make_vec("ego/CutIn-v0", num_envs=2, host="yes")
+
+
+class _Counter(gym.Env):
+    """A pure-Python env (no SUMO): its observation counts its steps; its step raises at
+    ``fail_at`` (None: never)."""
+
+    observation_space = gym.spaces.Box(-1e6, 1e6, (3,), np.float64)
+    action_space = gym.spaces.Box(-1.0, 1.0, (2,), np.float32)
+
+    def __init__(self, fail_at=None):
+        self.fail_at, self.n = fail_at, 0
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        self.n = 0
+        return np.array([0.0, float(seed or 0), 0.0]), {"seed": seed}
+
+    def step(self, action):
+        self.n += 1
+        if self.fail_at is not None and self.n == self.fail_at:
+            raise ValueError(f"step {self.n} refused")
+        return np.array([float(self.n), float(action[0]), float(action[1])]), 1.0, False, self.n >= 50, {}
+
+
+class _Failing:
+    """Picklable: makes a _Counter failing at ``fail_at``."""
+
+    def __init__(self, fail_at=None):
+        self.fail_at = fail_at
+
+    def __call__(self):
+        return _Counter(self.fail_at)
+
+
+@pytest.mark.parametrize("host", [None, False], ids=["hosted", "all-workers"])
+def test_a_workers_error_mid_step_is_raised_in_the_parent_with_its_note(host):
+    """The error of the second env, raised in its worker during a step (through the shared
+    counters when hosted, the pipe otherwise), reaches the parent with its message and the
+    worker's traceback; the vector env is closed; a healthy run of the same envs before it
+    gives each env's own results."""
+    envs = EgoVectorEnv([_Failing(), _Failing(fail_at=5)], context="fork", host=host)
+    workers = [psutil.Process(p.pid) for p in envs._processes]
+    try:
+        obs, infos = envs.reset(seed=10)
+        assert obs[:, 1].tolist() == [10.0, 11.0] and list(infos["seed"]) == [10, 11]
+        for k in range(1, 5):
+            actions = np.array([[0.5, -0.5], [0.25, k / 10]], np.float32)
+            obs, rewards, terminated, truncated, _ = envs.step(actions)
+            assert obs[:, 0].tolist() == [k, k] and obs[1, 2] == np.float32(k / 10)
+        with pytest.raises(ValueError, match="step 5 refused") as caught:
+            envs.step(np.zeros((2, 2), np.float32))
+        assert any("raised in worker 1 of EgoVectorEnv" in note for note in caught.value.__notes__)
+        with pytest.raises(RuntimeError, match="workers are gone"):
+            envs.step(np.zeros((2, 2), np.float32))
+    finally:
+        envs.close()
+    assert not any(w.is_running() and w.status() != psutil.STATUS_ZOMBIE for w in workers)
+
+
+def test_the_hosted_envs_error_mid_step_closes_the_vector_env():
+    envs = EgoVectorEnv([_Failing(fail_at=3), _Failing()], context="fork")
+    workers = [psutil.Process(p.pid) for p in envs._processes]
+    try:
+        envs.reset(seed=0)
+        envs.step(np.zeros((2, 2), np.float32))
+        envs.step(np.zeros((2, 2), np.float32))
+        with pytest.raises(ValueError, match="step 3 refused"):
+            envs.step(np.zeros((2, 2), np.float32))
+        with pytest.raises(RuntimeError, match="workers are gone"):
+            envs.reset()
+    finally:
+        envs.close()
+    assert not any(w.is_running() and w.status() != psutil.STATUS_ZOMBIE for w in workers)
+
+
+def test_a_worker_asleep_on_its_pipe_is_woken_for_the_next_step():
+    """After a pause longer than its watch (SPIN_S) a worker sleeps on its pipe; the next
+    step wakes it (a byte), and the results go on as before."""
+    import time
+
+    from ego.gym import vector
+
+    envs = EgoVectorEnv([_Failing(), _Failing()], context="fork")
+    try:
+        assert envs.spinning or len(os.sched_getaffinity(0)) < 2
+        envs.reset(seed=0)
+        envs.step(np.zeros((2, 2), np.float32))
+        asleep = vector._SLOTS * 1 + vector._ASLEEP
+        deadline = time.monotonic() + 10
+        while not envs._ctrl[asleep] and time.monotonic() < deadline:
+            time.sleep(vector.SPIN_S)
+        assert envs._ctrl[asleep] == 1  # the worker sleeps on its pipe now
+        obs, *_ = envs.step(np.ones((2, 2), np.float32))
+        assert obs.tolist() == [[2.0, 1.0, 1.0], [2.0, 1.0, 1.0]]
+    finally:
+        envs.close()
