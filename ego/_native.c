@@ -5,6 +5,8 @@
  *    arithmetic, term for term, as NonlinearBicycle.rhs + ego.models.integrate.unrolled_rk4;
  *  - mamdani2: the closed-form Mamdani centroid of ego.control.fuzzy_engine for two inputs
  *    and one output (FastMamdani.single2);
+ *  - fill_obs and reward: ego.gym's EgoState observation vector and default reward
+ *    (EgoStateObservation.observe, Reward.__call__);
  *  - boxes and place: the surround sensor's reading of a SUMO step, as
  *    SumoBridge.surroundings (the context subscription's vehicles as boxes) and
  *    SurroundSensor.sync (each box placed in the lane frame) compute it.
@@ -449,6 +451,115 @@ fail:
     return NULL;
 }
 
+/* ---- the EgoState observation of ego.gym ------------------------------------------------ */
+
+static int value_of(PyObject *o, double *out)
+{
+    if (o == Py_None) { *out = NAN; return 0; } /* as np.array(..., float64) reads None */
+    return as_double(o, out);
+}
+
+/* fill_obs(out, values, norm, const) -> None
+ * EgoStateObservation.observe into ``out`` (a writable float64 buffer of len(values) +
+ * len(const)): ``values`` the fields read this step, normalised by ``norm`` = (t, per_duration,
+ * s, s_ref, tracks, s_ref0, s0, per_distance) (s, s_ref: indices, -1 for none) or None, then
+ * ``const``, the fields that hold still over a run. */
+static PyObject *fill_obs(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 4 || !PyTuple_Check(args[1])) {
+        PyErr_SetString(PyExc_TypeError, "fill_obs(out, values: tuple, norm, const)");
+        return NULL;
+    }
+    PyObject *values = args[1], *norm = args[2];
+    PyObject *cst = PySequence_Fast(args[3], "fill_obs: const must be a sequence");
+    if (!cst) return NULL;
+    const Py_ssize_t n = PyTuple_GET_SIZE(values), m = PySequence_Fast_GET_SIZE(cst);
+    Py_buffer view;
+    if (PyObject_GetBuffer(args[0], &view, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
+        Py_DECREF(cst);
+        return NULL;
+    }
+    PyObject *result = NULL;
+    double *out = (double *)view.buf;
+    if (view.len != (n + m) * (Py_ssize_t)sizeof(double)) {
+        PyErr_Format(PyExc_ValueError, "fill_obs: out holds %zd bytes, the fields %zd", view.len,
+                     (n + m) * (Py_ssize_t)sizeof(double));
+        goto done;
+    }
+    for (Py_ssize_t i = 0; i < n; i++)
+        if (value_of(PyTuple_GET_ITEM(values, i), out + i)) goto done;
+    if (norm != Py_None) {
+        double p[8];
+        if (read_doubles(norm, p, 8, "norm")) goto done;
+        const Py_ssize_t t = (Py_ssize_t)p[0], si = (Py_ssize_t)p[2], ri = (Py_ssize_t)p[3];
+        if (t < 0 || t >= n || si >= n || ri >= n || (si >= 0 && p[4] != 0.0 && ri < 0)) {
+            PyErr_SetString(PyExc_ValueError, "fill_obs: norm's indices out of range");
+            goto done;
+        }
+        out[t] *= p[1];
+        if (si >= 0) {
+            if (p[4] != 0.0) { /* tracks: the station error, the reference since the reset */
+                out[si] -= out[ri];
+                out[ri] = (out[ri] - p[5]) * p[7];
+            } else {
+                out[si] = (out[si] - p[6]) * p[7];
+            }
+        }
+    }
+    PyObject **items = PySequence_Fast_ITEMS(cst);
+    for (Py_ssize_t i = 0; i < m; i++)
+        if (value_of(items[i], out + n + i)) goto done;
+    result = Py_None;
+    Py_INCREF(result);
+done:
+    PyBuffer_Release(&view);
+    Py_DECREF(cst);
+    return result;
+}
+
+/* reward(speed, error, a_lon, a_lat, crashed, params) -> (reward, terms)
+ * ego.gym.env.Reward.__call__'s arithmetic: params = (lo, per_speed, cost, per_accel2,
+ * w_crash, w_progress, w_centring, w_comfort); terms = {"crashed", "progress", "centring",
+ * "discomfort"}; a non-finite term counts 0 in the reward (a diverged ego's signals). */
+static PyObject *key_crashed, *key_progress, *key_centring, *key_discomfort;
+
+static PyObject *reward(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 6) {
+        PyErr_SetString(PyExc_TypeError, "reward(speed, error, a_lon, a_lat, crashed, params)");
+        return NULL;
+    }
+    double speed, error, a_lon, a_lat, p[8];
+    if (as_double(args[0], &speed) || as_double(args[1], &error) || as_double(args[2], &a_lon) ||
+        as_double(args[3], &a_lat) || read_doubles(args[5], p, 8, "params"))
+        return NULL;
+    const int crashed = PyObject_IsTrue(args[4]);
+    if (crashed < 0) return NULL;
+    double progress = (speed - p[0]) * p[1];
+    progress = progress < 0.0 ? 0.0 : (progress > 1.0 ? 1.0 : progress);
+    double centring = 1.0 / (1.0 + p[2] * error * error);
+    double discomfort = (a_lon * a_lon + a_lat * a_lat) * p[3];
+    if (discomfort > 1.0) discomfort = 1.0;
+    const double crash = crashed ? 1.0 : 0.0;
+    double r = p[4] * crash + p[5] * progress + p[6] * centring + p[7] * discomfort;
+    if (r - r != 0.0) {
+        if (!isfinite(progress)) progress = 0.0;
+        if (!isfinite(centring)) centring = 0.0;
+        if (!isfinite(discomfort)) discomfort = 0.0;
+        r = p[4] * crash + p[5] * progress + p[6] * centring + p[7] * discomfort;
+    }
+    PyObject *terms = PyDict_New();
+    if (!terms) return NULL;
+    const double values[4] = {crash, progress, centring, discomfort};
+    PyObject *keys[4] = {key_crashed, key_progress, key_centring, key_discomfort};
+    for (int k = 0; k < 4; k++) {
+        PyObject *v = PyFloat_FromDouble(values[k]);
+        if (!v || PyDict_SetItem(terms, keys[k], v)) { Py_XDECREF(v); Py_DECREF(terms); return NULL; }
+        Py_DECREF(v);
+    }
+    return Py_BuildValue("(dN)", r, terms);
+}
+
 static PyMethodDef methods[] = {
     {"bicycle_step", (PyCFunction)(void (*)(void))bicycle_step, METH_FASTCALL,
      "bicycle_step(state, Fx, delta, h, substeps, params) -> (state, lateral_accel)"},
@@ -456,6 +567,10 @@ static PyMethodDef methods[] = {
      "mamdani2(peaks0, peaks1, table, coef, out_peaks, grid, x0, x1) -> crisp output"},
     {"boxes", (PyCFunction)(void (*)(void))boxes, METH_FASTCALL,
      "boxes(results, controlled, known, dims, p_key, a_key, v_key) -> (ids, rows)"},
+    {"fill_obs", (PyCFunction)(void (*)(void))fill_obs, METH_FASTCALL,
+     "fill_obs(out, values, norm, const) -> None"},
+    {"reward", (PyCFunction)(void (*)(void))reward, METH_FASTCALL,
+     "reward(speed, error, a_lon, a_lat, crashed, params) -> (reward, terms)"},
     {"place", (PyCFunction)(void (*)(void))place, METH_FASTCALL,
      "place(ids, rows, front, reach, straight, frame, previous, dt, rated, low_edge) -> (ids, rows, objects, speeds)"},
     {NULL, NULL, 0, NULL},
@@ -473,5 +588,10 @@ PyMODINIT_FUNC PyInit__native(void)
     math_hypot = PyObject_GetAttrString(math, "hypot");
     Py_DECREF(math);
     if (!math_hypot) return NULL;
+    key_crashed = PyUnicode_InternFromString("crashed");
+    key_progress = PyUnicode_InternFromString("progress");
+    key_centring = PyUnicode_InternFromString("centring");
+    key_discomfort = PyUnicode_InternFromString("discomfort");
+    if (!key_crashed || !key_progress || !key_centring || !key_discomfort) return NULL;
     return PyModule_Create(&module);
 }

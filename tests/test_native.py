@@ -185,3 +185,67 @@ def test_place_leaves_an_order_with_nan_edges_to_pythons_sort():
             sensor.sync_within(0.0, [f"v{j}" for j in range(8)], list(rows), None, 50.0)
         out[native] = repr(sensor._objects)
     assert out[True] == out[False] and "nan" in out[True]
+
+
+@pytest.mark.sumo
+@pytest.mark.parametrize("normalize", [True, False], ids=["normalized", "raw"])
+def test_fill_obs_gives_the_python_observation_of_every_env(normalize, tmp_path, monkeypatch):
+    """EgoStateObservation.observe in C and in Python, on the same state at every step of an
+    episode of each env (its default episode distribution, random actions): equal to the bit."""
+    monkeypatch.setenv("MPLCONFIGDIR", str(tmp_path))
+    import gymnasium as gym
+
+    import ego.gym
+
+    for env_id in ego.gym.ENV_IDS:
+        env = gym.make(env_id, config={"duration": 4.0, "observation": {"type": "EgoState", "normalize": normalize}})
+        try:
+            env.reset(seed=7)
+            env.action_space.seed(7)
+            obs_type = env.unwrapped.observation_type
+            assert obs_type._fill is NATIVE.fill_obs
+            view, steps, done = env.unwrapped._view, 0, False
+            while not done and steps < 150:
+                native = obs_type.observe(view)
+                saved, obs_type._fill = obs_type._fill, None
+                python = obs_type.observe(view)
+                obs_type._fill = saved
+                assert native.dtype == python.dtype == np.float64 and native.shape == python.shape
+                assert np.array_equal(native, python, equal_nan=True), (env_id, steps, native, python)
+                _, _, terminated, truncated, _ = env.step(env.action_space.sample())
+                done, steps = terminated or truncated, steps + 1
+            assert steps >= 10
+        finally:
+            env.close()
+
+
+def test_reward_matches_the_python_reward_including_non_finite_signals():
+    import ego.gym.env as env_module
+    from ego.gym.env import EnvConfig, Reward
+
+    class _View:
+        signals = (0.0, 0.0, 0.0, 0.0)
+
+        def reward_signals(self):
+            return self.signals
+
+    rng = np.random.default_rng(5)
+    cases = [tuple(float(v) for v in rng.normal([25, 0, 0, 0], [10, 1, 4, 4])) for _ in range(500)]
+    cases += [
+        (np.nan, 0.1, 0.0, 0.0),
+        (30.0, np.inf, 1.0, 0.0),
+        (20.0, 0.0, np.nan, np.inf),
+        (1e308, 1e200, 1e300, 0.0),
+    ]
+    cfg = EnvConfig(collision_reward=-1.5, progress_reward=0.6, lane_centering_reward=0.3, comfort_reward=-0.2)
+    reward, view = Reward(cfg, (20.0, 30.0)), _View()
+    for signals in cases:
+        view.signals = signals
+        for crashed in (False, True):
+            native = reward(view, crashed)
+            saved, env_module._REWARD = env_module._REWARD, None
+            try:
+                python = reward(view, crashed)
+            finally:
+                env_module._REWARD = saved
+            assert repr(native) == repr(python), (signals, crashed)

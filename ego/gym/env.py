@@ -41,6 +41,7 @@ from ego.checks import MAX_SEED, check_seed
 from ego.control import CONTROLLERS
 from ego.control.tasks import TASKS
 from ego.gym.spaces import action_type, observation_type
+from ego.native import NATIVE
 from ego.params import ConfigError, apply_overrides, describe, param, unknown_parameter
 from ego.runner import RunSpec, parameter_namespace, resolve
 from ego.scenarios import scenario_class
@@ -212,6 +213,10 @@ class EgoView:
         return self._sensor
 
 
+#: Reward.__call__'s arithmetic in C, or None (its Python lines)
+_REWARD = None if NATIVE is None else NATIVE.reward
+
+
 class Reward:
     """The default reward of an env step and its terms: crashed (1 on the step the ego
     collides or diverges, else 0), progress (the speed along the lane mapped from
@@ -225,9 +230,12 @@ class Reward:
         self._lo, self._per_speed = speed_range[0], 1.0 / (speed_range[1] - speed_range[0])
         self._cost = cfg.lane_centering_cost
         self._per_accel2 = 1.0 / (cfg.comfort_accel * cfg.comfort_accel)
+        self._params = (self._lo, self._per_speed, self._cost, self._per_accel2, *self._weights)
 
     def __call__(self, view: EgoView, crashed: bool) -> tuple[float, dict]:
         speed, error, a_lon, a_lat = view.reward_signals()
+        if _REWARD is not None:  # the same arithmetic in C
+            return _REWARD(speed, error, a_lon, a_lat, crashed, self._params)
         progress = (speed - self._lo) * self._per_speed
         progress = 0.0 if progress < 0.0 else (1.0 if progress > 1.0 else progress)
         centring = 1.0 / (1.0 + self._cost * error * error)

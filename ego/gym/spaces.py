@@ -35,11 +35,14 @@ import numpy as np
 from gymnasium import spaces
 
 from ego.control.tasks import TASKS
+from ego.native import NATIVE
 from ego.params import ConfigError
 
 #: the observed fields that are not numbers, and what a vector carries instead
 _NOT_NUMERIC = {"lane": (), "policy": ("policy.standstill_gap", "policy.headway")}
-_array, _F64 = np.array, np.float64
+_array, _empty, _F64 = np.array, np.empty, np.float64
+#: EgoStateObservation.observe's arithmetic in C, or None (its Python lines)
+_FILL_OBS = None if NATIVE is None else NATIVE.fill_obs
 #: observed fields fixed for a whole run
 _RUN_CONSTANT = ("policy.standstill_gap", "policy.headway", "max_accel", "max_decel")
 
@@ -116,6 +119,9 @@ class EgoStateObservation:
         self._per_duration = 1.0
         self._s_ref0, self._per_distance = 0.0, 1.0
         self._s0, self._tracks = 0.0, True
+        self._size = len(self.names)
+        self._norm: tuple | None = None
+        self._fill = None
 
     def reset(self, view) -> None:
         # the scenario fills one observation in place all run long
@@ -129,8 +135,30 @@ class EgoStateObservation:
             speed = source.ds_ref if self._tracks else source.ds
             self._s_ref0, self._s0 = source.s_ref, source.s
             self._per_distance = self._per_duration / max(abs(speed), 1.0)
+        s, r = self._s, self._s_ref
+        self._norm = (
+            (
+                self._t,
+                self._per_duration,
+                -1 if s is None else s,
+                -1 if r is None else r,
+                self._tracks,
+                self._s_ref0,
+                self._s0,
+                self._per_distance,
+            )
+            if self.normalize
+            else None
+        )
+        # C where the extension is built (a station without its reference stays in Python,
+        # which raises for it as before)
+        self._fill = _FILL_OBS if (s is None or r is not None or not self._tracks) else None
 
     def observe(self, view) -> np.ndarray:
+        if self._fill is not None:  # the same arithmetic in C, into a new array
+            out = _empty(self._size)  # float64, the default dtype (half the cost of naming it)
+            self._fill(out, self._get(self._source), self._norm, self._const)
+            return out
         values = list(self._get(self._source))
         if self.normalize:
             values[self._t] *= self._per_duration
