@@ -330,14 +330,12 @@ static PyObject *place(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
         PyErr_SetString(PyExc_ValueError, "place: ids and rows differ in length");
         return NULL;
     }
-    double reach, dt, fx = 0.0, fy = 0.0, st[6] = {0, 0, 0, 0, 0, 0};
+    double reach, dt, bumper[2] = {0.0, 0.0}, st[6] = {0, 0, 0, 0, 0, 0};
     if (as_double(args[3], &reach) || as_double(args[7], &dt)) return NULL;
     const int rated = PyObject_IsTrue(args[8]);
     if (rated < 0) return NULL;
     const int filter = front != Py_None;
-    if (filter && read_doubles(front, st, 2, "front")) return NULL;
-    fx = st[0];
-    fy = st[1];
+    if (filter && read_doubles(front, bumper, 2, "front")) return NULL;
     const int rotation = straight != Py_None;
     if (rotation && read_doubles(straight, st, 6, "straight")) return NULL;
 
@@ -352,7 +350,7 @@ static PyObject *place(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
         double r[6];
         if (read_doubles(row, r, 6, "row")) goto fail;
         if (filter) {
-            int in = within(r[0] - fx, r[1] - fy, reach);
+            int in = within(r[0] - bumper[0], r[1] - bumper[1], reach);
             if (in < 0) goto fail;
             if (!in) continue;
             if (PyList_Append(near_ids, vid) || PyList_Append(near_rows, row)) goto fail;
@@ -560,21 +558,18 @@ static PyObject *reward(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
     return Py_BuildValue("(dN)", r, terms);
 }
 
+#define FASTCALL(name, doc) {#name, (PyCFunction)(void (*)(void))name, METH_FASTCALL, doc}
 static PyMethodDef methods[] = {
-    {"bicycle_step", (PyCFunction)(void (*)(void))bicycle_step, METH_FASTCALL,
-     "bicycle_step(state, Fx, delta, h, substeps, params) -> (state, lateral_accel)"},
-    {"mamdani2", (PyCFunction)(void (*)(void))mamdani2, METH_FASTCALL,
-     "mamdani2(peaks0, peaks1, table, coef, out_peaks, grid, x0, x1) -> crisp output"},
-    {"boxes", (PyCFunction)(void (*)(void))boxes, METH_FASTCALL,
-     "boxes(results, controlled, known, dims, p_key, a_key, v_key) -> (ids, rows)"},
-    {"fill_obs", (PyCFunction)(void (*)(void))fill_obs, METH_FASTCALL,
-     "fill_obs(out, values, norm, const) -> None"},
-    {"reward", (PyCFunction)(void (*)(void))reward, METH_FASTCALL,
-     "reward(speed, error, a_lon, a_lat, crashed, params) -> (reward, terms)"},
-    {"place", (PyCFunction)(void (*)(void))place, METH_FASTCALL,
-     "place(ids, rows, front, reach, straight, frame, previous, dt, rated, low_edge) -> (ids, rows, objects, speeds)"},
+    FASTCALL(bicycle_step, "bicycle_step(state, Fx, delta, h, substeps, params) -> (state, lateral_accel)"),
+    FASTCALL(mamdani2, "mamdani2(peaks0, peaks1, table, coef, out_peaks, grid, x0, x1) -> crisp output"),
+    FASTCALL(boxes, "boxes(results, controlled, known, dims, p_key, a_key, v_key) -> (ids, rows)"),
+    FASTCALL(fill_obs, "fill_obs(out, values, norm, const) -> None"),
+    FASTCALL(reward, "reward(speed, error, a_lon, a_lat, crashed, params) -> (reward, terms)"),
+    FASTCALL(place, "place(ids, rows, front, reach, straight, frame, previous, dt, rated, low_edge) -> "
+                    "(ids, rows, objects, speeds)"),
     {NULL, NULL, 0, NULL},
 };
+#undef FASTCALL
 
 static struct PyModuleDef module = {
     PyModuleDef_HEAD_INIT, "ego._native", "Native twins of ego's hottest numerical kernels.", -1,

@@ -559,7 +559,7 @@ def _worker(
                     kind = _STEP
                 else:
                     kind = read(fd, 1)
-                    if kind == _WAKE or kind == _STEP:  # a hint; the step is in shared memory
+                    if kind == _WAKE:  # a hint; the step is in shared memory
                         continue
             else:
                 kind = read(fd, 1)
