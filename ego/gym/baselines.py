@@ -109,9 +109,12 @@ def controller_policy_act(controller: str):
     return act
 
 
-def train(env_id: str, algo: str, seed: int, steps: int):
+def train(env_id: str, algo: str, seed: int, steps: int, progress=None):
     """A stable-baselines3 ``algo`` (ppo, sac) trained ``steps`` env steps on ``env_id`` (one
-    env; its episodes drawn from ``seed``); SB3's default hyper-parameters, MLP policy."""
+    env; its episodes drawn from ``seed``); SB3's default hyper-parameters, MLP policy.
+    ``progress``: a text stream (e.g. ``sys.stderr``) that gets ego's progress line as the
+    training goes (:class:`ego.results.progress.Progress`, counting env steps); the model is
+    the same with or without it."""
     import torch
     from stable_baselines3 import PPO, SAC
 
@@ -122,10 +125,36 @@ def train(env_id: str, algo: str, seed: int, steps: int):
         cls = {"ppo": PPO, "sac": SAC}[algo]
         kwargs = {"n_steps": 512, "batch_size": 64} if algo == "ppo" else {"learning_starts": 500}
         model = cls("MlpPolicy", env, seed=seed, verbose=0, device="cpu", **kwargs)
-        model.learn(total_timesteps=steps)
+        callback = None if progress is None else _progress_callback(steps, progress, f"{algo} on {env_id}, seed {seed}")
+        model.learn(total_timesteps=steps, callback=callback)
         return model
     finally:
         env.close()
+
+
+def _progress_callback(steps: int, stream, what: str):
+    """An SB3 callback showing ego's progress line on ``stream``: on a terminal every 1 % of
+    ``steps`` (rewritten in place), elsewhere every 5 % (a line each), and at the end. It
+    only reads the step count: the training is the same without it."""
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    from ego.results.progress import Progress
+
+    shown = Progress(steps, stream, unit="env steps")
+    every = max(1, steps // (100 if stream.isatty() else 20))
+
+    class ShowProgress(BaseCallback):
+        def _on_step(self) -> bool:
+            n = self.num_timesteps
+            if n <= steps and (n % every == 0 or n == steps):  # PPO may step past the budget
+                shown.show("training", what, done=n)
+            return True
+
+        def _on_training_end(self) -> None:
+            if shown.done < shown.total:  # a budget SB3 overshot or cut short: the last line
+                shown.show("training", what, done=shown.total)
+
+    return ShowProgress()
 
 
 def model_act(model):

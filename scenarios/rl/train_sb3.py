@@ -69,7 +69,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"train_sb3.py: error: {problems[0]}", file=sys.stderr)
         return 2
     t0 = time.perf_counter()
-    model = train(args.env, args.algo, args.seed, args.steps)
+    model = train(args.env, args.algo, args.seed, args.steps, progress=sys.stderr)
     print(f"{args.algo} trained {args.steps} env steps on {args.env} in {time.perf_counter() - t0:.0f} s")
     if args.save:
         save(model, args.save)

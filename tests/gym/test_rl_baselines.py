@@ -73,6 +73,23 @@ def test_train_sb3_refuses_a_model_place_it_cannot_write_before_training(tmp_pat
     assert [f.name for f in tmp_path.iterdir()] == ["file"]
 
 
+@pytest.mark.sumo
+def test_a_training_shows_its_progress_and_trains_the_same_model_without_it():
+    import io
+
+    out = io.StringIO()
+    shown = train("ego/CutIn-v0", "ppo", 0, 512, progress=out)
+    lines = out.getvalue().splitlines()
+    # off a terminal: every 25 steps (512 // 20), a line each, and the last at the budget
+    assert len(lines) == 21 and all(" env steps/s, " in line for line in lines)
+    assert lines[0].startswith("[#.......................] 25/512 env steps")
+    assert lines[-1].startswith("[########################] 512/512 env steps")
+    assert lines[-1].endswith("training: ppo on ego/CutIn-v0, seed 0")
+    quiet = train("ego/CutIn-v0", "ppo", 0, 512)
+    a, b = shown.policy.state_dict(), quiet.policy.state_dict()
+    assert a.keys() == b.keys() and all(np.array_equal(a[k].numpy(), b[k].numpy()) for k in a)
+
+
 @pytest.mark.benchmark  # about a minute of training on a free core: run with -m benchmark
 @pytest.mark.sumo
 @pytest.mark.parametrize(("algo", "steps"), [("ppo", 512), ("sac", 600)])

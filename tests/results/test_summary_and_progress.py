@@ -71,3 +71,14 @@ def test_progress_writes_about_twenty_lines_and_the_last_off_a_terminal():
         " 2/3 runs",
         " 3/3 runs",
     ]
+
+
+def test_progress_counts_another_unit_and_shows_a_count_set_by_its_caller():
+    out = io.StringIO()
+    show = Progress(10240, stream=out, unit="env steps")
+    show.show("training", "sac on ego/CutIn-v0, seed 0", done=512)
+    show.show("training", "sac on ego/CutIn-v0, seed 0", done=99999)  # past the total: the total
+    first, last = out.getvalue().splitlines()
+    assert first.startswith("[#.......................] 512/10240 env steps, ") and " env steps/s, " in first
+    assert first.endswith("training: sac on ego/CutIn-v0, seed 0")
+    assert last.startswith("[########################] 10240/10240 env steps")
