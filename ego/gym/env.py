@@ -76,7 +76,8 @@ class EnvConfig:
     """The env's scalar keys (besides ``observation``, ``action``, ``controller`` and
     ``reward_speed_range``). Reward per env step (see :class:`Reward`):
     ``collision_reward * crashed + progress_reward * progress + lane_centering_reward *
-    centring + comfort_reward * discomfort``."""
+    centring + comfort_reward * discomfort``, and on a step that completes the task before
+    ``duration`` the completion term on top (``completion_reward``)."""
 
     policy_frequency: float = param(
         0.0,
@@ -112,6 +113,16 @@ class EnvConfig:
     )
     comfort_accel: float = param(
         5.0, "m/s^2", "acceleration at which the discomfort term saturates", min=0.01, max=100.0
+    )
+    completion_reward: float = param(
+        1.0,
+        "-",
+        "weight of the completion term, on the step that completes the task before duration (the "
+        "curve's arc driven, the lane-centring road's end reached): the env steps left to duration "
+        "times that step's reward (at least 0), so that finishing sooner never earns less than "
+        "lingering; 0: none",
+        min=0.0,
+        max=1e6,
     )
     screen_width: int = param(600, "px", "width of the rgb_array frame", min=16, max=4096)
     screen_height: int = param(150, "px", "height of the rgb_array frame", min=16, max=4096)
@@ -434,6 +445,7 @@ class EgoEnv(gym.Env):
         self._multi = bool(multi)
         self.env_config = env
         self.reward = Reward(env, (float(lo), float(hi)))
+        self._completion = env.completion_reward
         self.observation_type = observation
         self.action_type = action
         self.observation_space = observation.space
@@ -591,6 +603,11 @@ class EgoEnv(gym.Env):
         reward, terms = self.reward(self._view, crashed)
         # the duration reached is a truncation; anything before it ends the task
         truncated = not crashed and sc.t >= sc.config.duration - 1e-9
+        if status == "completed" and not truncated and self._completion:
+            # the task done early: the steps left count at this step's reward (a positive
+            # reward per step must not make lingering pay more than finishing)
+            terms["completion"] = bonus = self._completion * self._steps_left() * (reward if reward > 0.0 else 0.0)
+            reward += bonus
         info = {
             "status": status,
             "rewards": terms,
@@ -598,6 +615,13 @@ class EgoEnv(gym.Env):
             "metrics": sc.result().metrics,
         }
         return self._observe(self._view), reward, not truncated, truncated, info
+
+    def _steps_left(self) -> int:
+        """Env steps from now to the run's duration (or the registered TimeLimit, if sooner)."""
+        sc = self.scenario
+        period = sc.config.dt * self._every
+        most = math.ceil(sc.config.duration / period - 1e-9)
+        return max(0, min(most, self._limit_steps) - self._elapsed)
 
     def _set_limit(self) -> None:
         self._limit = _registered_limit(self.spec)

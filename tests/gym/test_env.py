@@ -190,6 +190,34 @@ def test_duration_truncates(make):
             break
     assert steps == 20 and truncated and not terminated
     assert info["status"] == "completed" and info["metrics"]["steps"] == 200
+    assert "completion" not in info["rewards"]  # the duration reached: nothing left to count
+
+
+@pytest.mark.sumo
+def test_completing_the_task_early_earns_the_steps_left_at_that_steps_reward(make):
+    """The curve's arc driven before duration: the last step's reward is its own terms plus
+    the env steps left to duration times that reward; completion_reward 0 leaves it out."""
+    ends = {}
+    for weight in (1.0, 0.0):
+        env = make("ego/Curve-v0", config={"policy_frequency": 10, "randomize": {}, "completion_reward": weight})
+        obs, _ = env.reset(seed=3)
+        policy = ego.gym.ControllerPolicy("pid", env)
+        steps, total = 0, 0.0
+        while True:
+            obs, reward, terminated, truncated, info = env.step(policy(obs))
+            steps += 1
+            total += reward
+            if terminated or truncated:
+                break
+        ends[weight] = (steps, total, reward, info["rewards"])
+        env.close()
+    (steps, total, reward, terms), (steps0, total0, reward0, terms0) = ends[1.0], ends[0.0]
+    assert steps == steps0 < 200  # 20 s at 10 Hz: completed well before
+    own = -1.0 * terms["crashed"] + 0.4 * terms["progress"] + 0.2 * terms["centring"] - 0.1 * terms["discomfort"]
+    assert own > 0.0 and reward0 == pytest.approx(own, rel=1e-12) and "completion" not in terms0
+    assert terms["completion"] == pytest.approx((200 - steps) * own, rel=1e-12)
+    assert reward == pytest.approx(own + terms["completion"], rel=1e-12)
+    assert total - total0 == pytest.approx(terms["completion"], rel=1e-9)
 
 
 @pytest.mark.sumo
