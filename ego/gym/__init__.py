@@ -43,12 +43,12 @@ ENV_IDS = {
 #: benchmark configuration: ego.gym.baselines.BENCH_CONFIG, 10 Hz), so "solved" means "as
 #: good as the controller" (tests/gym check it against the page)
 REWARD_THRESHOLDS: dict[str, float] = {
-    "ego/EmergencyBrake-v0": 81.11,
-    "ego/FastFollower-v0": 116.70,
-    "ego/CutIn-v0": 150.97,
-    "ego/Curve-v0": 13.77,
-    "ego/LaneCentering-v0": 89.85,
-    "ego/Platoon-v0": 209.74,
+    "ego/EmergencyBrake-v0": 86.18,
+    "ego/FastFollower-v0": 117.36,
+    "ego/CutIn-v0": 152.28,
+    "ego/Curve-v0": 48.46,
+    "ego/LaneCentering-v0": 89.37,
+    "ego/Platoon-v0": 210.26,
 }
 
 

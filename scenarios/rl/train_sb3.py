@@ -2,7 +2,7 @@
 
     pip install -e ".[rl]"
     python scenarios/rl/train_sb3.py --env ego/CutIn-v0 --algo ppo --seed 0 --steps 5000 [--save model.zip]
-    python scenarios/rl/train_sb3.py --env ego/CutIn-v0 --algo sac --seed 1 --steps 2048 --models runs/rl-baselines
+    python scenarios/rl/train_sb3.py --env ego/CutIn-v0 --algo sac --seed 1 --steps 10240 --models runs/rl-baselines
 
 ``--models DIR`` writes the model as ``DIR/<env>-<algo>-seed<seed>-<steps>.zip``, where
 ``python -m ego.docs results --page rl-baselines`` reads the trained rows' models from
