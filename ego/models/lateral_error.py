@@ -21,8 +21,10 @@ scenario use the same matrices, and :meth:`LateralError.rhs` serves the generic 
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -95,7 +97,8 @@ class LateralError:
         M[:n, :n] = self.A
         M[:n, n] = self.B
         M[:n, n + 1] = self.E
-        Md = expm(M * dt)
+        with _one_blas_thread():
+            Md = expm(M * dt)
         return Md[:n, :n].copy(), Md[:n, n].copy(), Md[:n, n + 1].copy()
 
     def columns(self, dt: float) -> list[np.ndarray]:
@@ -130,3 +133,24 @@ class LateralError:
     def lateral_accel(self, x: Sequence[float], delta: float) -> float:
         """a_y = dvy/dt + v r (m/s^2)."""
         return float(self.A[2, 2] * x[2] + self.A[2, 3] * x[3] + self.B[2] * delta + self.speed * x[3])
+
+
+#: the process's BLAS libraries (threadpoolctl), looked up at the first matrix exponential
+_BLAS: list[Any] = []
+
+
+@contextmanager
+def _one_blas_thread() -> Iterator[None]:
+    """The BLAS libraries on one thread for a moment: scipy's ``expm`` of a 6 x 6 matrix wakes
+    OpenBLAS's thread pool, whose threads then spin ~0.1 s on the other core (at every reset of
+    a lane-centring run: a core taken from a sweep's other worker or a vector env's other env)
+    and buy nothing at this size; the result is the same bit for bit."""
+    if not _BLAS:
+        from threadpoolctl import ThreadpoolController
+
+        _BLAS.append(ThreadpoolController().select(user_api="blas"))
+    limiter = _BLAS[0].limit(limits=1)
+    try:
+        yield
+    finally:
+        limiter.restore_original_limits()

@@ -81,3 +81,22 @@ def test_positive_steer_moves_left_and_mirror_symmetry():
     assert d[2] > 0 and d[3] > 0
     x, u = np.array([0.2, 0.01, -0.1, 0.03]), np.array([0.02, 1 / 300])
     np.testing.assert_allclose(model.derivatives(-x, -u), -model.derivatives(x, u), atol=1e-15)
+
+
+def test_the_matrix_exponential_runs_on_one_blas_thread_with_the_same_bits_and_restores_the_pools():
+    """expm of the 6 x 6 augmented system woke OpenBLAS's pool, whose threads then spun on the
+    other core after every lane-centring reset; it now runs on one BLAS thread, the result bit
+    for bit what the pool gives, and the libraries' thread counts are as they were after."""
+    from scipy.linalg import expm
+    from threadpoolctl import threadpool_info
+
+    from ego.models.lateral_error import LateralError, LateralErrorParams
+
+    model = LateralError(LateralErrorParams(), 8.3)
+    before = [(i["filepath"], i["num_threads"]) for i in threadpool_info()]
+    Ad, Bd, Ed = model.discrete(0.01)
+    assert [(i["filepath"], i["num_threads"]) for i in threadpool_info()] == before
+    M = np.zeros((6, 6))
+    M[:4, :4], M[:4, 4], M[:4, 5] = model.A, model.B, model.E
+    Md = expm(M * 0.01)  # the process's own pools
+    assert np.array_equal(Ad, Md[:4, :4]) and np.array_equal(Bd, Md[:4, 4]) and np.array_equal(Ed, Md[:4, 5])
