@@ -68,3 +68,12 @@ def test_falsify_runs_to_first_violation():
     figures = main(["--reps", "20", "--budget", "300"])
     assert figures and all(len(f["runs"]) == 20 for f in figures.values())
     assert all(figures[(req, "lhs")]["ratio_to_lhs"] == 1.0 for req, _ in figures)
+
+
+def test_thread_pools_beside_an_env(tmp_path, monkeypatch):
+    from bench_pool_threads import main
+
+    monkeypatch.setenv("MPLCONFIGDIR", str(tmp_path))
+    figures = main(["--ids", "ego/LaneCentering-v0", "ego/EmergencyBrake-v0", "--rounds", "2", "--steps", "50"])
+    assert set(figures) == {"ego/LaneCentering-v0", "ego/EmergencyBrake-v0"}
+    assert all(len(f["cpu_s"]) == 2 and min(f["wall_s"]) > 0.0 for f in figures.values())

@@ -134,8 +134,9 @@ def train(env_id: str, algo: str, seed: int, steps: int, progress=None):
 
 def _progress_callback(steps: int, stream, what: str):
     """An SB3 callback showing ego's progress line on ``stream``: on a terminal every 1 % of
-    ``steps`` (rewritten in place), elsewhere every 5 % (a line each), and at the end. It
-    only reads the step count: the training is the same without it."""
+    ``steps`` (rewritten in place), elsewhere every 5 % (a line each), and at the budget (one
+    env: the count passes every number). It only reads the step count: the training is the
+    same without it."""
     from stable_baselines3.common.callbacks import BaseCallback
 
     from ego.results.progress import Progress
@@ -149,10 +150,6 @@ def _progress_callback(steps: int, stream, what: str):
             if n <= steps and (n % every == 0 or n == steps):  # PPO may step past the budget
                 shown.show("training", what, done=n)
             return True
-
-        def _on_training_end(self) -> None:
-            if shown.done < shown.total:  # a budget SB3 overshot or cut short: the last line
-                shown.show("training", what, done=shown.total)
 
     return ShowProgress()
 

@@ -445,7 +445,6 @@ class EgoEnv(gym.Env):
         self._multi = bool(multi)
         self.env_config = env
         self.reward = Reward(env, (float(lo), float(hi)))
-        self._completion = env.completion_reward
         self.observation_type = observation
         self.action_type = action
         self.observation_space = observation.space
@@ -603,10 +602,11 @@ class EgoEnv(gym.Env):
         reward, terms = self.reward(self._view, crashed)
         # the duration reached is a truncation; anything before it ends the task
         truncated = not crashed and sc.t >= sc.config.duration - 1e-9
-        if status == "completed" and not truncated and self._completion:
+        weight = self.env_config.completion_reward
+        if status == "completed" and not truncated and weight:
             # the task done early: the steps left count at this step's reward (a positive
             # reward per step must not make lingering pay more than finishing)
-            terms["completion"] = bonus = self._completion * self._steps_left() * (reward if reward > 0.0 else 0.0)
+            terms["completion"] = bonus = weight * self._steps_left() * (reward if reward > 0.0 else 0.0)
             reward += bonus
         info = {
             "status": status,
