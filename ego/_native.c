@@ -515,6 +515,33 @@ done:
     return result;
 }
 
+/* observe(empty, size, get, source, norm, const) -> array
+ * EgoStateObservation.observe in one call (an env step's hot path): ``out = empty(size)``
+ * (numpy.empty: a new float64 array), then fill_obs(out, get(source), norm, const). */
+static PyObject *observe(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 6) {
+        PyErr_SetString(PyExc_TypeError, "observe(empty, size, get, source, norm, const)");
+        return NULL;
+    }
+    PyObject *values = PyObject_CallOneArg(args[2], args[3]);
+    if (!values) return NULL;
+    PyObject *out = PyObject_CallOneArg(args[0], args[1]);
+    if (!out) {
+        Py_DECREF(values);
+        return NULL;
+    }
+    PyObject *const fill_args[4] = {out, values, args[4], args[5]};
+    PyObject *done = fill_obs(self, fill_args, 4);
+    Py_DECREF(values);
+    if (!done) {
+        Py_DECREF(out);
+        return NULL;
+    }
+    Py_DECREF(done);
+    return out;
+}
+
 /* reward(speed, error, a_lon, a_lat, crashed, params) -> (reward, terms)
  * ego.gym.env.Reward.__call__'s arithmetic: params = (lo, per_speed, cost, per_accel2,
  * w_crash, w_progress, w_centring, w_comfort); terms = {"crashed", "progress", "centring",
@@ -564,6 +591,7 @@ static PyMethodDef methods[] = {
     FASTCALL(mamdani2, "mamdani2(peaks0, peaks1, table, coef, out_peaks, grid, x0, x1) -> crisp output"),
     FASTCALL(boxes, "boxes(results, controlled, known, dims, p_key, a_key, v_key) -> (ids, rows)"),
     FASTCALL(fill_obs, "fill_obs(out, values, norm, const) -> None"),
+    FASTCALL(observe, "observe(empty, size, get, source, norm, const) -> array"),
     FASTCALL(reward, "reward(speed, error, a_lon, a_lat, crashed, params) -> (reward, terms)"),
     FASTCALL(place, "place(ids, rows, front, reach, straight, frame, previous, dt, rated, low_edge) -> "
                     "(ids, rows, objects, speeds)"),

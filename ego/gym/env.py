@@ -30,7 +30,7 @@ from __future__ import annotations
 import functools
 import math
 import warnings
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, fields
 from typing import Any, ClassVar
 
@@ -134,6 +134,17 @@ _ENV_SCALARS = tuple(f.name for f in fields(EnvConfig))
 ENV_KEYS = ("observation", "action", "controller", "reward_speed_range", "randomize", "multi_instance", *_ENV_SCALARS)
 
 
+def _signals_reader(sc, vid: str) -> Callable[[], tuple]:
+    """``sc.agent_signals_reader(vid)`` where the class that defines ``agent_signals`` also
+    defines the reader (a subclass that overrides only ``agent_signals`` keeps its own)."""
+    mro = type(sc).__mro__
+    signals = next(k for k in mro if "agent_signals" in vars(k))
+    reader = next((k for k in mro if "agent_signals_reader" in vars(k)), None)
+    if reader is signals:
+        return sc.agent_signals_reader(vid)
+    return functools.partial(sc.agent_signals, vid)
+
+
 class EgoView:
     """What the env reads of a scenario's ego, the same for every task: the controller's
     observation, the speed along the lane, the tracking error, the accelerations and the
@@ -186,13 +197,32 @@ class EgoView:
 
     _prev = (0.0, 0.0)
 
+    def bind_reward(self, reward: Reward) -> Callable[[bool], tuple[float, dict]]:
+        """``reward(self, crashed)`` as a function of ``crashed`` until the run ends (bound
+        after :meth:`reset`): the env step's hot path, one call where the reference makes
+        three (the same arithmetic as :meth:`reward_signals` and :class:`Reward`, in C)."""
+        if _REWARD is None:
+            return functools.partial(reward, self)
+        signals, params, obs = self._signals, reward._params, self._obs
+
+        def step_reward(crashed: bool) -> tuple[float, dict]:
+            speed, error, a_lon, a_lat = signals()
+            if a_lon is None:  # as reward_signals
+                t = obs.t
+                t0, ds0 = self._prev
+                self._prev = (t, speed)
+                a_lon = (speed - ds0) / (t - t0) if t > t0 else 0.0
+            return _REWARD(speed, error, a_lon, a_lat, crashed, params)
+
+        return step_reward
+
     def reset(self) -> None:
         sc = self.scenario
         # the agent's vehicle and its observation hold still over a run (the scenario fills
         # one observation in place): looked up once here, not at every step
         agent = self.agent
         self._obs = sc.observation(agent)
-        self._signals = functools.partial(sc.agent_signals, agent)
+        self._signals = _signals_reader(sc, agent)
         self._prev = (sc.t, self._signals()[0])
         self._looked = -1
         self._sensor = None
@@ -448,7 +478,6 @@ class EgoEnv(gym.Env):
         self.observation_type = observation
         self.action_type = action
         self.observation_space = observation.space
-        self._observe = observation.observe
         self.action_space = action.space
         self._native = action.native
         self._every = every
@@ -469,6 +498,9 @@ class EgoEnv(gym.Env):
             self._apply, self._meta_command = self._apply_meta, None
         else:
             self._apply = self._apply_channels
+        # the agent drives every channel, one scenario step an env step: env.step applies the
+        # command itself (what _apply_both does, without the call)
+        self._direct = not self._helper and self._every == 1
 
     def _sample(self, run_seed: int) -> dict[str, float]:
         """The randomised parameters of the episode with ``run_seed`` (its own stream of the
@@ -532,8 +564,10 @@ class EgoEnv(gym.Env):
         view = self._view
         view.np_random = self.np_random
         view.reset()
+        self._step_reward = view.bind_reward(self.reward)
         self._agent = view.agent
         self.observation_type.reset(view)
+        self._observe = self.observation_type.bind(view)
         if self.action_type.type_name == "DiscreteMetaAction":
             self.action_type.reset(view)
             self._meta_command = None
@@ -577,6 +611,9 @@ class EgoEnv(gym.Env):
         if check - check != 0.0:  # nan or inf: the episode ends before SUMO or the model see it
             self._substep = None
             sc._end("diverged", f"the agent's action is not finite: {np.asarray(action).tolist()}", level="ERROR")
+        elif self._direct:
+            self._history.append(command)
+            sc.step(command)
         elif self._every == 1:
             self._apply(command)
         else:
@@ -590,16 +627,16 @@ class EgoEnv(gym.Env):
         elapsed = self._elapsed = self._elapsed + 1
         status = sc.status
         if status == "running":
-            reward, terms = self.reward(self._view, False)
+            reward, terms = self._step_reward(False)
             info = {"status": status, "rewards": terms}
             if elapsed >= self._limit_steps:
                 # the registered TimeLimit truncates this step: the run's metrics so far (a
                 # TimeLimit of another length cannot be seen from here: env.unwrapped.metrics())
                 info["status_detail"] = f"max_episode_steps ({self._limit}) reached"
                 info["metrics"] = sc.result().metrics
-            return self._observe(self._view), reward, False, False, info
+            return self._observe(), reward, False, False, info
         crashed = status == "collision" or status == "diverged"
-        reward, terms = self.reward(self._view, crashed)
+        reward, terms = self._step_reward(crashed)
         # the duration reached is a truncation; anything before it ends the task
         truncated = not crashed and sc.t >= sc.config.duration - 1e-9
         weight = self.env_config.completion_reward
@@ -614,7 +651,7 @@ class EgoEnv(gym.Env):
             "status_detail": sc.status_detail,
             "metrics": sc.result().metrics,
         }
-        return self._observe(self._view), reward, not truncated, truncated, info
+        return self._observe(), reward, not truncated, truncated, info
 
     def _steps_left(self) -> int:
         """Env steps from now to the run's duration (or the registered TimeLimit, if sooner)."""

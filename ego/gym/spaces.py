@@ -26,8 +26,9 @@ Action types (``config["action"]["type"]``), each with ``longitudinal`` / ``late
 
 from __future__ import annotations
 
+import functools
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from operator import attrgetter
 from typing import Any
 
@@ -43,6 +44,7 @@ _NOT_NUMERIC = {"lane": (), "policy": ("policy.standstill_gap", "policy.headway"
 _array, _empty, _F64 = np.array, np.empty, np.float64
 #: EgoStateObservation.observe's arithmetic in C, or None (its Python lines)
 _FILL_OBS = None if NATIVE is None else NATIVE.fill_obs
+_OBSERVE = None if NATIVE is None else NATIVE.observe
 #: observed fields fixed for a whole run
 _RUN_CONSTANT = ("policy.standstill_gap", "policy.headway", "max_accel", "max_decel")
 
@@ -77,7 +79,15 @@ def _range(name: str, value: Any) -> tuple[float, float]:
 # -- observations ----------------------------------------------------------------------------
 
 
-class EgoStateObservation:
+class _ObservationType:
+    """What the observation types share: :meth:`bind`, the env step's way to observe."""
+
+    def bind(self, view) -> Callable[[], np.ndarray]:
+        """``observe(view)`` as a function of nothing until the run ends (bound after ``reset``)."""
+        return functools.partial(self.observe, view)  # type: ignore[attr-defined]
+
+
+class EgoStateObservation(_ObservationType):
     """The task's own observation as a vector; ``names`` are its fields (``standstill_gap`` and
     ``headway`` stand for the car-following task's spacing policy).
 
@@ -154,6 +164,13 @@ class EgoStateObservation:
         # which raises for it as before)
         self._fill = _FILL_OBS if (s is None or r is not None or not self._tracks) else None
 
+    def bind(self, view) -> Callable[[], np.ndarray]:
+        """:meth:`observe` of ``view`` as a function of nothing until the run ends (bound after
+        :meth:`reset`): the env step's hot path, one call into C where the extension is built."""
+        if self._fill is not None and _OBSERVE is not None:
+            return functools.partial(_OBSERVE, _empty, self._size, self._get, self._source, self._norm, self._const)
+        return functools.partial(self.observe, view)
+
     def observe(self, view) -> np.ndarray:
         if self._fill is not None:  # the same arithmetic in C, into a new array
             out = _empty(self._size)  # float64, the default dtype (half the cost of naming it)
@@ -175,7 +192,7 @@ class EgoStateObservation:
         return _array(values, _F64)
 
 
-class KinematicsObservation:
+class KinematicsObservation(_ObservationType):
     """highway-env's ``Kinematics`` (see the module docstring), built with numpy from the
     vehicles around the ego in its lane's frame (:meth:`ego.gym.env.EgoView.traffic`)."""
 
@@ -298,7 +315,7 @@ def _lane_width(view) -> float:
     return float(getattr(lane, "width", 3.5) or 3.5)
 
 
-class TimeToCollisionObservation:
+class TimeToCollisionObservation(_ObservationType):
     """highway-env's ``TimeToCollision``: a (3, 3, ``horizon``) grid over (ego speed: one
     ``speed_step`` slower, as now, one faster) x (lane: right, own, left) x (time bins of
     1 s): 1 in the bin of the predicted time to collision with the nearest vehicle ahead in
@@ -357,7 +374,7 @@ class TimeToCollisionObservation:
         return out
 
 
-class OccupancyGridObservation:
+class OccupancyGridObservation(_ObservationType):
     """highway-env's ``OccupancyGrid``: ``features`` (presence, vx, vy, on_road) on a grid
     of ``grid_step`` cells over ``grid_size`` (m, [[x_min, x_max], [y_min, y_max]]) around the
     ego, in its lane's frame (x along, y across, + left), velocities relative to the ego

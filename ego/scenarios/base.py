@@ -14,7 +14,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -557,6 +557,15 @@ class Scenario:
         measure it (the rate of the speed stands for it)."""
         o = self.obs
         return o.ds, o.d - o.d_ref, None, self.plant(vid).lateral_accel
+
+    def agent_signals_reader(self, vid: str) -> Callable[[], tuple[float, float, float | None, float]]:
+        """:meth:`agent_signals` of ``vid`` as a function of nothing, valid until the run ends
+        (made after the reset: the observation and the plant it reads hold still over a run).
+        An env calls it at every step, so it looks nothing up. A class that defines
+        ``agent_signals`` defines this beside it (ego.gym falls back to ``agent_signals``
+        where the two come from different classes)."""
+        o, plant = self.obs, self.plant(vid)
+        return lambda: (o.ds, o.d - o.d_ref, None, plant.lateral_accel)
 
     def lane_rows(self, vid: str):
         """(vehicle ``vid``'s row, the other vehicles' rows or None without a surround sensor,

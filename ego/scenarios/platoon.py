@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 import operator
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -426,9 +426,12 @@ class PlatoonScenario(Scenario):
         return own
 
     def agent_signals(self, vid: str) -> tuple[float, float, float | None, float]:
+        return self.agent_signals_reader(vid)()
+
+    def agent_signals_reader(self, vid: str) -> Callable[[], tuple[float, float, float | None, float]]:
         i = self.ids.index(vid)
-        o = self.obs[i]
-        return o.speed, self.e[i], o.accel, 0.0
+        o, e = self.obs[i], self.e  # a run's observations; the errors updated in place
+        return lambda: (o.speed, e[i], o.accel, 0.0)
 
     def lane_rows(self, vid: str):
         """The leader and the followers behind ``vid``, all on the platoon's one lane."""

@@ -1,6 +1,7 @@
 """ego.gym: the env ids against Gymnasium's checker, determinism, vector envs, configuration,
 actions, episode ends, the Kinematics observation and rendering - all on real SUMO."""
 
+import functools
 import subprocess
 import sys
 
@@ -276,3 +277,62 @@ def test_step_before_reset_is_refused():
     with pytest.raises(RuntimeError, match="reset"):
         env.step(env.action_space.sample())
     env.close()
+
+
+@pytest.mark.sumo
+@pytest.mark.parametrize("env_id", ["ego/CutIn-v0", "ego/Curve-v0", "ego/Platoon-v0"])
+def test_the_steps_bound_reward_and_observation_are_the_references_bit_for_bit(env_id, make):
+    """env.step's reward (EgoView.bind_reward: the scenario's signals reader, the rate and the
+    terms in one call) and observation (EgoStateObservation.bind: one call into C) against the
+    reference chains Reward(view, crashed) -> reward_signals -> agent_signals and
+    observe(view), over the same episode (the curve's reward reads the rate of the speed)."""
+
+    env = make(env_id, config={"policy_frequency": 10})
+    actions = [env.action_space.sample() for _ in range(60)]
+
+    def episode(reference):
+        env.reset(seed=5)
+        u = env.unwrapped
+        if reference:
+            u._step_reward = functools.partial(u.reward, u._view)
+            u._observe = functools.partial(u.observation_type.observe, u._view)
+        out = []
+        for a in actions:
+            obs, reward, terminated, truncated, info = env.step(a)
+            out.append((obs.tolist(), reward, info["rewards"]))
+            if terminated or truncated:
+                break
+        return out
+
+    fast, reference = episode(False), episode(True)
+    assert len(fast) > 10 and fast == reference
+
+
+def test_a_scenario_that_overrides_only_agent_signals_keeps_its_own():
+    from ego.gym.env import _signals_reader
+    from ego.scenarios.base import Scenario
+
+    class Own(Scenario):
+        def agent_signals(self, vid):
+            return (1.0, 2.0, 3.0, 4.0)
+
+    class Both(Own):
+        def agent_signals(self, vid):
+            return (5.0, 6.0, 7.0, 8.0)
+
+        def agent_signals_reader(self, vid):
+            return lambda: (5.0, 6.0, 7.0, 8.0)
+
+    own, both = Own.__new__(Own), Both.__new__(Both)
+    assert isinstance(_signals_reader(own, "ego"), functools.partial) and _signals_reader(own, "ego")() == (
+        1.0,
+        2.0,
+        3.0,
+        4.0,
+    )
+    assert not isinstance(_signals_reader(both, "ego"), functools.partial) and _signals_reader(both, "ego")() == (
+        5.0,
+        6.0,
+        7.0,
+        8.0,
+    )
