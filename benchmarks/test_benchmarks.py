@@ -77,3 +77,15 @@ def test_thread_pools_beside_an_env(tmp_path, monkeypatch):
     figures = main(["--ids", "ego/LaneCentering-v0", "ego/EmergencyBrake-v0", "--rounds", "2", "--steps", "50"])
     assert set(figures) == {"ego/LaneCentering-v0", "ego/EmergencyBrake-v0"}
     assert all(len(f["cpu_s"]) == 2 and min(f["wall_s"]) > 0.0 for f in figures.values())
+
+
+def test_gym_wrapper_parts(tmp_path, monkeypatch):
+    from bench_gym_parts import main
+
+    monkeypatch.setenv("MPLCONFIGDIR", str(tmp_path))
+    figures = main(["--rounds", "1", "--duration", "5"])
+    assert set(figures) == {"ego/CutIn-v0", "ego/Platoon-v0"}
+    assert all(
+        row["env_us"] > 0.0 and row["raw_us"] > 0.0 and set(row["saves_us"]) == {"reward", "observation", "action"}
+        for row in figures.values()
+    )

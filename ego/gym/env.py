@@ -498,9 +498,11 @@ class EgoEnv(gym.Env):
             self._apply, self._meta_command = self._apply_meta, None
         else:
             self._apply = self._apply_channels
-        # the agent drives every channel, one scenario step an env step: env.step applies the
-        # command itself (what _apply_both does, without the call)
+        # one scenario step an env step, the agent driving every channel or some (the
+        # scenario's controllers the rest): env.step applies the command itself (what
+        # _apply_both and _apply_channels do, without the call)
         self._direct = not self._helper and self._every == 1
+        self._channels = self._apply == self._apply_channels and self._every == 1
 
     def _sample(self, run_seed: int) -> dict[str, float]:
         """The randomised parameters of the episode with ``run_seed`` (its own stream of the
@@ -614,6 +616,9 @@ class EgoEnv(gym.Env):
         elif self._direct:
             self._history.append(command)
             sc.step(command)
+        elif self._channels:
+            self._history.append(command)
+            sc.step(sc.joint_action(sc.controller.step(sc.obs), self._agent, lon, lat))
         elif self._every == 1:
             self._apply(command)
         else:
