@@ -19,6 +19,7 @@
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 #include <math.h>
+#include <string.h>
 
 #include "_bicycle.h"
 
@@ -542,6 +543,62 @@ static PyObject *observe(PyObject *self, PyObject *const *args, Py_ssize_t nargs
     return out;
 }
 
+/* command(params, action) -> (longitudinal, lateral)
+ * ego.gym's continuous action types' native() for an env step: params = (fallback, n,
+ * scaled, longitudinal, clip, mid0, half0, mid1, half1, force_per_accel). A 1-D buffer of n
+ * float32 or float64 values (a numpy array of the space's shape) gives the command: scaled,
+ * each driven channel's mid + half * x (x clipped to [-1, 1] first when clip; NaN passes),
+ * the longitudinal one times force_per_accel; else the values as they are; a channel not
+ * driven is None. Anything else is fallback(action): the Python reference, its checks and
+ * its messages. */
+static PyObject *command(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 2 || !PyTuple_Check(args[0]) || PyTuple_GET_SIZE(args[0]) != 10) {
+        PyErr_SetString(PyExc_TypeError, "command(params: 10-tuple, action)");
+        return NULL;
+    }
+    PyObject *p = args[0], *action = args[1];
+    PyObject *fallback = PyTuple_GET_ITEM(p, 0);
+    const long n = PyLong_AsLong(PyTuple_GET_ITEM(p, 1));
+    const int scaled = PyObject_IsTrue(PyTuple_GET_ITEM(p, 2));
+    const int lon = PyObject_IsTrue(PyTuple_GET_ITEM(p, 3));
+    const int clip = PyObject_IsTrue(PyTuple_GET_ITEM(p, 4));
+    double c[5];
+    for (int i = 0; i < 5; i++)
+        if (as_double(PyTuple_GET_ITEM(p, 5 + i), c + i)) return NULL;
+    if (PyErr_Occurred() || scaled < 0 || lon < 0 || clip < 0) return NULL;
+    if (n != 1 && n != 2) {
+        PyErr_SetString(PyExc_ValueError, "command: n must be 1 or 2");
+        return NULL;
+    }
+    Py_buffer view;
+    if (!PyObject_CheckBuffer(action) || PyObject_GetBuffer(action, &view, PyBUF_RECORDS_RO) < 0) {
+        PyErr_Clear();
+        return PyObject_CallOneArg(fallback, action);
+    }
+    const char *fmt = view.format;
+    const int f32 = fmt && strcmp(fmt, "f") == 0, f64 = fmt && strcmp(fmt, "d") == 0;
+    if (view.ndim != 1 || view.shape[0] != n || !(f32 || f64)) {
+        PyBuffer_Release(&view);
+        return PyObject_CallOneArg(fallback, action);
+    }
+    double x[2];
+    for (long i = 0; i < n; i++) {
+        const char *at = (const char *)view.buf + i * view.strides[0];
+        x[i] = f32 ? (double)*(const float *)at : *(const double *)at;
+    }
+    PyBuffer_Release(&view);
+    if (scaled) {
+        for (long i = 0; i < n; i++) {
+            if (clip) x[i] = x[i] < -1.0 ? -1.0 : (x[i] > 1.0 ? 1.0 : x[i]);
+            x[i] = c[2 * i] + c[2 * i + 1] * x[i];
+        }
+    }
+    if (n == 2) return Py_BuildValue("(dd)", scaled ? x[0] * c[4] : x[0], x[1]);
+    if (lon) return Py_BuildValue("(dO)", scaled ? x[0] * c[4] : x[0], Py_None);
+    return Py_BuildValue("(Od)", Py_None, x[0]);
+}
+
 /* reward(speed, error, a_lon, a_lat, crashed, params) -> (reward, terms)
  * ego.gym.env.Reward.__call__'s arithmetic: params = (lo, per_speed, cost, per_accel2,
  * w_crash, w_progress, w_centring, w_comfort); terms = {"crashed", "progress", "centring",
@@ -591,6 +648,7 @@ static PyMethodDef methods[] = {
     FASTCALL(mamdani2, "mamdani2(peaks0, peaks1, table, coef, out_peaks, grid, x0, x1) -> crisp output"),
     FASTCALL(boxes, "boxes(results, controlled, known, dims, p_key, a_key, v_key) -> (ids, rows)"),
     FASTCALL(fill_obs, "fill_obs(out, values, norm, const) -> None"),
+    FASTCALL(command, "command(params, action) -> (longitudinal, lateral)"),
     FASTCALL(observe, "observe(empty, size, get, source, norm, const) -> array"),
     FASTCALL(reward, "reward(speed, error, a_lon, a_lat, crashed, params) -> (reward, terms)"),
     FASTCALL(place, "place(ids, rows, front, reach, straight, frame, previous, dt, rated, low_edge) -> "

@@ -479,7 +479,6 @@ class EgoEnv(gym.Env):
         self.action_type = action
         self.observation_space = observation.space
         self.action_space = action.space
-        self._native = action.native
         self._every = every
         self._helper = helper
         self._make_scenario(sc_config)
@@ -577,6 +576,7 @@ class EgoEnv(gym.Env):
             plant = view.plant()
             p = plant.model.params
             self.action_type.set_plant(p.m / p.Nw if plant.input_names[0] == "Fx" else 1.0)
+        self._native = self.action_type.bind()
         self._crashed = False
 
     # one scenario step with the agent's command (also the replay of an unpickled env)

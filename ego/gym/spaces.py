@@ -45,6 +45,7 @@ _array, _empty, _F64 = np.array, np.empty, np.float64
 #: EgoStateObservation.observe's arithmetic in C, or None (its Python lines)
 _FILL_OBS = None if NATIVE is None else NATIVE.fill_obs
 _OBSERVE = None if NATIVE is None else NATIVE.observe
+_COMMAND = None if NATIVE is None else NATIVE.command
 #: observed fields fixed for a whole run
 _RUN_CONSTANT = ("policy.standstill_gap", "policy.headway", "max_accel", "max_decel")
 
@@ -501,6 +502,19 @@ class ActionType:
     def set_plant(self, force_per_accel: float) -> None:
         self.force_per_accel = force_per_accel
 
+    def bind(self) -> Callable[[Any], tuple]:
+        """:meth:`native` for the env step until the run ends (bound after :meth:`set_plant`)."""
+        return self.native
+
+    def _bound_command(self, scaled: bool, clip: bool, mid: Sequence[float], half: Sequence[float]) -> Callable:
+        """``native`` as one call into C (``ego._native.command``: the same arithmetic) where
+        the extension is built; anything but an array of the space's shape goes to ``native``."""
+        if _COMMAND is None:
+            return self.native
+        mid, half = [*mid, 0.0, 0.0], [*half, 1.0, 1.0]
+        params = (self.native, self.size, scaled, self.longitudinal, clip, mid[0], half[0], mid[1], half[1])
+        return functools.partial(_COMMAND, (*params, float(self.force_per_accel)))
+
     def _shaped(self, action) -> np.ndarray:
         """``action`` as an array of the space's shape, or a ValueError naming that shape."""
         shape = getattr(action, "shape", None)
@@ -553,6 +567,9 @@ class ContinuousAction(ActionType):
         self._mid = [0.5 * (lo + hi) for lo, hi in ranges]
         self._half = [0.5 * (hi - lo) for lo, hi in ranges]
 
+    def bind(self) -> Callable[[Any], tuple]:
+        return self._bound_command(True, self.clip, self._mid, self._half)
+
     def native(self, action) -> tuple[float | None, float | None]:
         # the hot path (every env step): one or two floats, no list built
         if type(action) is not np.ndarray or action.shape != self._shape:
@@ -593,6 +610,9 @@ class EgoAction(ActionType):
         self._shape = self.space.shape
         both = self.longitudinal and self.lateral
         self.native = self._both if both else self._one
+
+    def bind(self) -> Callable[[Any], tuple]:
+        return self._bound_command(False, False, (), ())
 
     def _both(self, action) -> tuple[float, float]:
         if type(action) is not np.ndarray or action.shape != self._shape:
