@@ -200,7 +200,7 @@ class EgoView:
     def bind_reward(self, reward: Reward) -> Callable[[bool], tuple[float, dict]]:
         """``reward(self, crashed)`` as a function of ``crashed`` until the run ends (bound
         after :meth:`reset`): the env step's hot path, one call where the reference makes
-        three (the same arithmetic as :meth:`reward_signals` and :class:`Reward`, in C)."""
+        four (the same arithmetic as :meth:`reward_signals` and :class:`Reward`, in C)."""
         if _REWARD is None:
             return functools.partial(reward, self)
         signals, params, obs = self._signals, reward._params, self._obs
