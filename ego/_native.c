@@ -642,6 +642,40 @@ static PyObject *reward(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
     return Py_BuildValue("(dN)", r, terms);
 }
 
+/* reward_of(signals, rate, params, crashed) -> (reward, terms)
+ * reward() of signals() = (speed, error, a_lon, a_lat), a_lon None standing for rate(speed):
+ * an env step's reward in one call (ego.gym.env.EgoView.bind_reward). */
+static PyObject *reward_of(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 4) {
+        PyErr_SetString(PyExc_TypeError, "reward_of(signals, rate, params, crashed)");
+        return NULL;
+    }
+    PyObject *sig = PyObject_CallNoArgs(args[0]);
+    if (!sig) return NULL;
+    if (!PyTuple_Check(sig) || PyTuple_GET_SIZE(sig) != 4) {
+        PyErr_SetString(PyExc_TypeError, "reward_of: signals() must give (speed, error, a_lon, a_lat)");
+        Py_DECREF(sig);
+        return NULL;
+    }
+    PyObject *a_lon = PyTuple_GET_ITEM(sig, 2);
+    Py_INCREF(a_lon);
+    if (a_lon == Py_None) {
+        Py_DECREF(a_lon);
+        a_lon = PyObject_CallOneArg(args[1], PyTuple_GET_ITEM(sig, 0));
+        if (!a_lon) {
+            Py_DECREF(sig);
+            return NULL;
+        }
+    }
+    PyObject *const reward_args[6] = {PyTuple_GET_ITEM(sig, 0), PyTuple_GET_ITEM(sig, 1), a_lon,
+                                      PyTuple_GET_ITEM(sig, 3), args[3], args[2]};
+    PyObject *out = reward(self, reward_args, 6);
+    Py_DECREF(a_lon);
+    Py_DECREF(sig);
+    return out;
+}
+
 #define FASTCALL(name, doc) {#name, (PyCFunction)(void (*)(void))name, METH_FASTCALL, doc}
 static PyMethodDef methods[] = {
     FASTCALL(bicycle_step, "bicycle_step(state, Fx, delta, h, substeps, params) -> (state, lateral_accel)"),
@@ -651,6 +685,7 @@ static PyMethodDef methods[] = {
     FASTCALL(command, "command(params, action) -> (longitudinal, lateral)"),
     FASTCALL(observe, "observe(empty, size, get, source, norm, const) -> array"),
     FASTCALL(reward, "reward(speed, error, a_lon, a_lat, crashed, params) -> (reward, terms)"),
+    FASTCALL(reward_of, "reward_of(signals, rate, params, crashed) -> (reward, terms)"),
     FASTCALL(place, "place(ids, rows, front, reach, straight, frame, previous, dt, rated, low_edge) -> "
                     "(ids, rows, objects, speeds)"),
     {NULL, NULL, 0, NULL},

@@ -189,32 +189,26 @@ class EgoView:
         the lane since the last call."""
         speed, error, a_lon, a_lat = self._signals()
         if a_lon is None:
-            t = self._obs.t  # the time the observation was taken
-            t0, ds0 = self._prev
-            self._prev = (t, speed)
-            a_lon = (speed - ds0) / (t - t0) if t > t0 else 0.0
+            a_lon = self._rate(speed)
         return speed, error, a_lon, a_lat
+
+    def _rate(self, speed: float) -> float:
+        """The rate of the speed along the lane since the last call (m/s^2)."""
+        t = self._obs.t  # the time the observation was taken
+        t0, ds0 = self._prev
+        self._prev = (t, speed)
+        return (speed - ds0) / (t - t0) if t > t0 else 0.0
 
     _prev = (0.0, 0.0)
 
     def bind_reward(self, reward: Reward) -> Callable[[bool], tuple[float, dict]]:
         """``reward(self, crashed)`` as a function of ``crashed`` until the run ends (bound
-        after :meth:`reset`): the env step's hot path, one call where the reference makes
-        four (the same arithmetic as :meth:`reward_signals` and :class:`Reward`, in C)."""
-        if _REWARD is None:
+        after :meth:`reset`): the env step's hot path, one call into C where the reference
+        makes four (``ego._native.reward_of``: the scenario's signals reader, :meth:`_rate`
+        where it measures no longitudinal acceleration, :class:`Reward`'s arithmetic)."""
+        if _REWARD_OF is None:
             return functools.partial(reward, self)
-        signals, params, obs = self._signals, reward._params, self._obs
-
-        def step_reward(crashed: bool) -> tuple[float, dict]:
-            speed, error, a_lon, a_lat = signals()
-            if a_lon is None:  # as reward_signals
-                t = obs.t
-                t0, ds0 = self._prev
-                self._prev = (t, speed)
-                a_lon = (speed - ds0) / (t - t0) if t > t0 else 0.0
-            return _REWARD(speed, error, a_lon, a_lat, crashed, params)
-
-        return step_reward
+        return functools.partial(_REWARD_OF, self._signals, self._rate, reward._params)
 
     def reset(self) -> None:
         sc = self.scenario
@@ -256,6 +250,7 @@ class EgoView:
 
 #: Reward.__call__'s arithmetic in C, or None (its Python lines)
 _REWARD = None if NATIVE is None else NATIVE.reward
+_REWARD_OF = None if NATIVE is None else NATIVE.reward_of
 
 
 class Reward:
