@@ -83,9 +83,12 @@ def _range(name: str, value: Any) -> tuple[float, float]:
 class _ObservationType:
     """What the observation types share: :meth:`bind`, the env step's way to observe."""
 
+    def observe(self, view) -> np.ndarray:
+        raise NotImplementedError
+
     def bind(self, view) -> Callable[[], np.ndarray]:
         """``observe(view)`` as a function of nothing until the run ends (bound after ``reset``)."""
-        return functools.partial(self.observe, view)  # type: ignore[attr-defined]
+        return functools.partial(self.observe, view)
 
 
 class EgoStateObservation(_ObservationType):
