@@ -26,7 +26,7 @@ from functools import lru_cache
 from typing import Any
 
 from ego.control.base import Observation
-from ego.control.fuzzy_engine import FastMamdani, table_system
+from ego.control.fuzzy_engine import FastMamdani, table_rules, table_system
 from ego.control.pid import PID
 from ego.params import HALF_PI, Params, param
 
@@ -58,24 +58,30 @@ INPUT_SAMPLES = 201
 OUTPUT_SAMPLES = 401
 
 
+def table(rules: Any) -> dict[str, Any]:
+    """One of the two tables as :func:`~ego.control.fuzzy_engine.table_rules` takes it, on
+    normalised universes: inputs ``v`` and ``e`` on [-1, 1], output ``theta`` on [-1, 1]."""
+    return {
+        "inputs": [("v", -1.0, 1.0), ("e", -1.0, 1.0)],
+        "outputs": [("theta", -1.0, 1.0)],
+        "term_labels": TERMS,
+        "tables": {"theta": rules},
+        "samples": INPUT_SAMPLES,
+        "output_samples": OUTPUT_SAMPLES,
+    }
+
+
 def rule_base(rules: Any) -> object:
-    """One of the two tables as a scikit-fuzzy ControlSystem on normalised universes:
-    inputs ``v`` and ``e`` on [-1, 1], output ``theta`` on [-1, 1]."""
-    return table_system(
-        inputs=[("v", -1.0, 1.0), ("e", -1.0, 1.0)],
-        outputs=[("theta", -1.0, 1.0)],
-        term_labels=TERMS,
-        tables={"theta": rules},
-        samples=INPUT_SAMPLES,
-        output_samples=OUTPUT_SAMPLES,
-    )
+    """One of the two tables as a scikit-fuzzy ControlSystem (:func:`table`)."""
+    return table_system(**table(rules))
 
 
 @lru_cache(maxsize=2)
-def evaluator(table: str) -> FastMamdani:
-    """The compiled ``"angle"`` or ``"position"`` table, shared in the process."""
-    rules = {"angle": ANGLE_RULES, "position": POSITION_RULES}[table]
-    return FastMamdani.from_system(rule_base(rules), ["v", "e"], ["theta"])
+def evaluator(name: str) -> FastMamdani:
+    """The compiled ``"angle"`` or ``"position"`` table (from its rules, without
+    scikit-fuzzy's ControlSystem), shared in the process."""
+    rules = {"angle": ANGLE_RULES, "position": POSITION_RULES}[name]
+    return FastMamdani.from_rules(table_rules(**table(rules)), ["v", "e"], ["theta"])
 
 
 def lateral_errors(obs: Observation) -> tuple[float, float]:

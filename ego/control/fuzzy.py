@@ -15,7 +15,7 @@ from functools import lru_cache
 from typing import Any
 
 from ego.control.base import Observation
-from ego.control.fuzzy_engine import FastMamdani, table_system
+from ego.control.fuzzy_engine import FastMamdani, table_rules, table_system
 from ego.params import Params, param
 
 TERMS = ("NB", "NM", "NS", "ZO", "PS", "PM", "PB")
@@ -41,22 +41,27 @@ INPUT_SAMPLES = 121
 OUTPUT_SAMPLES = 601
 
 
+#: the rule table as :func:`~ego.control.fuzzy_engine.table_rules` takes it
+TABLE: dict[str, Any] = {
+    "inputs": [("e", -INPUT_RANGE, INPUT_RANGE), ("ec", -INPUT_RANGE, INPUT_RANGE)],
+    "outputs": [("u", -OUTPUT_RANGE, OUTPUT_RANGE)],
+    "term_labels": TERMS,
+    "tables": {"u": RULES},
+    "samples": INPUT_SAMPLES,
+    "output_samples": OUTPUT_SAMPLES,
+}
+
+
 def rule_base() -> Any:
     """Report 000's rule base as a scikit-fuzzy ControlSystem (inputs e, ec; output u)."""
-    return table_system(
-        inputs=[("e", -INPUT_RANGE, INPUT_RANGE), ("ec", -INPUT_RANGE, INPUT_RANGE)],
-        outputs=[("u", -OUTPUT_RANGE, OUTPUT_RANGE)],
-        term_labels=TERMS,
-        tables={"u": RULES},
-        samples=INPUT_SAMPLES,
-        output_samples=OUTPUT_SAMPLES,
-    )
+    return table_system(**TABLE)
 
 
 @lru_cache(maxsize=1)
 def evaluator() -> FastMamdani:
-    """The compiled rule base, shared by every controller instance in the process."""
-    return FastMamdani.from_system(rule_base(), ["e", "ec"], ["u"])
+    """The compiled rule base (its scikit-fuzzy rules, not the ControlSystem scikit-fuzzy
+    would build of them: the same tables), shared by every controller instance in the process."""
+    return FastMamdani.from_rules(table_rules(**TABLE), ["e", "ec"], ["u"])
 
 
 @dataclass(frozen=True)

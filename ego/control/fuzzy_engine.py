@@ -259,10 +259,48 @@ class FastMamdani:
         output_labels: Sequence[str] | None = None,
     ) -> FastMamdani:
         """Compile a ``skfuzzy.control.ControlSystem``."""
+        return cls._compile(system.antecedents, system.consequents, system.rules, input_labels, output_labels)
+
+    @classmethod
+    def from_rules(
+        cls,
+        rules: Sequence[Any],
+        input_labels: Sequence[str] | None = None,
+        output_labels: Sequence[str] | None = None,
+    ) -> FastMamdani:
+        """Compile scikit-fuzzy ``Rule`` objects as :meth:`from_system` compiles a
+        ``ControlSystem`` of them, without building that system (scikit-fuzzy composes a
+        networkx graph per rule added: about 1.4 s for a 7 x 7 table). The variables are
+        the ones the rules' terms belong to."""
+        from skfuzzy.control.term import TermAggregate
+
+        ants: dict[str, Any] = {}
+        cons: dict[str, Any] = {}
+        for rule in rules:
+            stack = [rule.antecedent]
+            while stack:  # every variable the antecedent names (_compile checks its form)
+                node = stack.pop()
+                if isinstance(node, TermAggregate):
+                    stack += [t for t in (node.term1, node.term2) if t is not None]
+                elif hasattr(node, "parent"):
+                    ants.setdefault(node.parent.label, node.parent)
+            for wt in rule.consequent:
+                cons.setdefault(wt.term.parent.label, wt.term.parent)
+        return cls._compile(ants.values(), cons.values(), rules, input_labels, output_labels)
+
+    @classmethod
+    def _compile(
+        cls,
+        antecedents: Any,
+        consequents: Any,
+        rules: Any,
+        input_labels: Sequence[str] | None,
+        output_labels: Sequence[str] | None,
+    ) -> FastMamdani:
         from skfuzzy.control.term import Term, TermAggregate
 
-        ants = {a.label: a for a in system.antecedents}
-        cons = {c.label: c for c in system.consequents}
+        ants = {a.label: a for a in antecedents}
+        cons = {c.label: c for c in consequents}
         input_labels = tuple(input_labels) if input_labels else tuple(sorted(ants))
         output_labels = tuple(output_labels) if output_labels else tuple(sorted(cons))
         if set(input_labels) != set(ants) or set(output_labels) != set(cons):
@@ -283,7 +321,7 @@ class FastMamdani:
             raise UnsupportedRuleBase(f"rule antecedent {node!r}: only AND of terms is supported")
 
         table: dict[tuple[int, ...], list[tuple[int, int]]] = {}
-        for rule in system.rules:
+        for rule in rules:
             if rule.and_func is not np.fmin:
                 raise UnsupportedRuleBase(f"rule {rule}: AND must be min (np.fmin)")
             picked: dict[str, str] = {}
@@ -442,15 +480,17 @@ def uniform_partition(
     return universe, vertices
 
 
-def table_system(
+def table_rules(
     inputs: Sequence[tuple[str, float, float]],
     outputs: Sequence[tuple[str, float, float]],
     term_labels: Sequence[str],
     tables: Mapping[str, Sequence[Sequence[str]]],
     samples: int,
     output_samples: int | None = None,
-) -> Any:
-    """Build a two-input scikit-fuzzy ``ControlSystem`` from rule tables.
+) -> list[Any]:
+    """A two-input rule table as scikit-fuzzy ``Rule`` objects (one per cell, row-major),
+    whose terms belong to ``Antecedent``/``Consequent`` variables: what
+    :func:`table_system` makes a ``ControlSystem`` of.
 
     ``inputs``/``outputs`` are (label, lower, upper); every variable gets the same uniform
     triangular terms ``term_labels``. ``tables[output][row][col]`` is the output term for
@@ -460,7 +500,7 @@ def table_system(
     from skfuzzy import control as ctrl
 
     if len(inputs) != 2:
-        raise ValueError("table_system builds two-input rule tables")
+        raise ValueError(f"a rule table has two inputs, got {len(inputs)}")
 
     def make(kind: Any, spec: tuple[str, float, float], n_samples: int) -> Any:
         label, lo, hi = spec
@@ -477,4 +517,13 @@ def table_system(
         for j, col_term in enumerate(term_labels):
             consequents = [outs[name][tables[name][i][j]] for name in outs]
             rules.append(ctrl.Rule(ins[0][row_term] & ins[1][col_term], consequents))
-    return ctrl.ControlSystem(rules)
+    return rules
+
+
+def table_system(*args: Any, **kwargs: Any) -> Any:
+    """The rules of :func:`table_rules` (same arguments) as a scikit-fuzzy
+    ``ControlSystem``. scikit-fuzzy composes a networkx graph per rule added: about 1.4 s for a
+    7 x 7 table, which :meth:`FastMamdani.from_rules` does not need."""
+    from skfuzzy import control as ctrl
+
+    return ctrl.ControlSystem(table_rules(*args, **kwargs))

@@ -26,7 +26,7 @@ from typing import Any
 
 from ego.control.base import Observation
 from ego.control.fuzzy import INPUT_RANGE, INPUT_SAMPLES, OUTPUT_SAMPLES, TERMS
-from ego.control.fuzzy_engine import FastMamdani, table_system
+from ego.control.fuzzy_engine import FastMamdani, table_rules, table_system
 from ego.control.pid import PID
 from ego.params import HALF_PI, Params, param
 
@@ -57,22 +57,27 @@ DKD = _table(
 REPORT_LAT_SCALES = (0.0005, 0.0, 0.002)
 
 
+#: the three tables as :func:`~ego.control.fuzzy_engine.table_rules` takes them
+TABLE: dict[str, Any] = {
+    "inputs": [("e", -INPUT_RANGE, INPUT_RANGE), ("ec", -INPUT_RANGE, INPUT_RANGE)],
+    "outputs": [("dkp", -1.0, 1.0), ("dki", -1.0, 1.0), ("dkd", -1.0, 1.0)],
+    "term_labels": TERMS,
+    "tables": {"dkp": DKP, "dki": DKI, "dkd": DKD},
+    "samples": INPUT_SAMPLES,
+    "output_samples": OUTPUT_SAMPLES,
+}
+
+
 def rule_base() -> Any:
     """The three 7x7 tables as one scikit-fuzzy ControlSystem (inputs e, ec; outputs dkp,
     dki, dkd on [-1, 1])."""
-    return table_system(
-        inputs=[("e", -INPUT_RANGE, INPUT_RANGE), ("ec", -INPUT_RANGE, INPUT_RANGE)],
-        outputs=[("dkp", -1.0, 1.0), ("dki", -1.0, 1.0), ("dkd", -1.0, 1.0)],
-        term_labels=TERMS,
-        tables={"dkp": DKP, "dki": DKI, "dkd": DKD},
-        samples=INPUT_SAMPLES,
-        output_samples=OUTPUT_SAMPLES,
-    )
+    return table_system(**TABLE)
 
 
 @lru_cache(maxsize=1)
 def evaluator() -> FastMamdani:
-    return FastMamdani.from_system(rule_base(), ["e", "ec"], ["dkp", "dki", "dkd"])
+    """The compiled tables (from their rules, without scikit-fuzzy's ControlSystem)."""
+    return FastMamdani.from_rules(table_rules(**TABLE), ["e", "ec"], ["dkp", "dki", "dkd"])
 
 
 @dataclass(frozen=True)

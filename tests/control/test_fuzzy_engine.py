@@ -6,7 +6,7 @@ import skfuzzy as fuzz
 from skfuzzy import control as ctrl
 
 from ego.control import fuzzy
-from ego.control.fuzzy_engine import FastMamdani, UnsupportedRuleBase, table_system
+from ego.control.fuzzy_engine import FastMamdani, UnsupportedRuleBase, table_rules, table_system
 
 OUT_RANGE = 2 * fuzzy.OUTPUT_RANGE
 TOL = 1e-6 * OUT_RANGE  # the issue's bound: 1e-6 of the output range
@@ -146,6 +146,50 @@ def test_rejects_or_rules_and_incomplete_tables():
         FastMamdani.from_system(ctrl.ControlSystem([ctrl.Rule(e["NB"] | ec["NB"], u["NB"])]), ["e", "ec"], ["u"])
     with pytest.raises(UnsupportedRuleBase, match="incomplete"):
         FastMamdani.from_system(ctrl.ControlSystem([ctrl.Rule(e["NB"] & ec["NB"], u["NB"])]), ["e", "ec"], ["u"])
+
+
+def _same_compiled(a: FastMamdani, b: FastMamdani) -> None:
+    assert a.inputs == b.inputs and a.outputs == b.outputs
+    assert a._table == b._table and a._table2 == b._table2
+    rng = np.random.default_rng(3)
+    for x, y in np.vstack([rng.uniform(-12, 12, (500, 2)), [[0, 0], [10, -10], [1 / 3, 2 / 3]]]):
+        assert a.evaluate2(float(x), float(y)) == b.evaluate2(float(x), float(y))
+
+
+@pytest.mark.slow
+def test_compiled_from_rules_as_from_their_control_system():
+    # the controllers compile their tables' scikit-fuzzy rules without the ControlSystem
+    # (whose networkx graph costs ~1.4 s); the same tables, to the bit
+    from ego.control import curve, fuzzy_pid
+
+    _same_compiled(fuzzy.evaluator(), FastMamdani.from_system(fuzzy.rule_base(), ["e", "ec"], ["u"]))
+    _same_compiled(
+        fuzzy_pid.evaluator(), FastMamdani.from_system(fuzzy_pid.rule_base(), ["e", "ec"], ["dkp", "dki", "dkd"])
+    )
+    for name, rules in (("angle", curve.ANGLE_RULES), ("position", curve.POSITION_RULES)):
+        _same_compiled(curve.evaluator(name), FastMamdani.from_system(curve.rule_base(rules), ["v", "e"], ["theta"]))
+    # a system of rules not made from a table: every variable found through the rules' terms
+    system = _uneven_system()
+    _same_compiled(
+        FastMamdani.from_rules(list(system.rules), ["e", "ec"], ["kp", "ki", "kd"]),
+        FastMamdani.from_system(system, ["e", "ec"], ["kp", "ki", "kd"]),
+    )
+
+
+def test_from_rules_rejects_what_from_system_rejects():
+    rules = table_rules(**fuzzy.TABLE)
+    e, ec = (t.parent for t in (rules[0].antecedent.term1, rules[0].antecedent.term2))
+    u = rules[0].consequent[0].term.parent
+    with pytest.raises(UnsupportedRuleBase, match="only AND"):
+        FastMamdani.from_rules([ctrl.Rule(e["NB"] | ec["NB"], u["NB"])], ["e", "ec"], ["u"])
+    with pytest.raises(UnsupportedRuleBase, match="only AND"):
+        FastMamdani.from_rules([ctrl.Rule(~e["NB"] & ec["NB"], u["NB"])], ["e", "ec"], ["u"])
+    with pytest.raises(UnsupportedRuleBase, match="incomplete"):
+        FastMamdani.from_rules(rules[:-1], ["e", "ec"], ["u"])
+    with pytest.raises(UnsupportedRuleBase, match="do not match"):
+        FastMamdani.from_rules(rules, ["e", "x"], ["u"])
+    with pytest.raises(ValueError, match="two inputs, got 1"):
+        table_rules(**{**fuzzy.TABLE, "inputs": fuzzy.TABLE["inputs"][:1]})
 
 
 def test_surface_is_odd_and_saturates():
