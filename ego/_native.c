@@ -677,6 +677,216 @@ static PyObject *reward_of(PyObject *self, PyObject *const *args, Py_ssize_t nar
 }
 
 #define FASTCALL(name, doc) {#name, (PyCFunction)(void (*)(void))name, METH_FASTCALL, doc}
+/* bp_pid(ctx, e_x, i_lon, de_x, e_y, i_lat, de_y, report, eta, alpha) -> (u_x, u_y)
+ * BPPIDController's step after its integrals (ego/control/bp_pid.py, _step_py): the
+ * network's forward pass, the control law and the learning step, the weights updated in
+ * place. The sums the reference leaves to numpy stay numpy's: its matmul (BLAS), tanh and exp
+ * are called on the work arrays; the pairwise sum of numpy's add.reduce (8 accumulators under
+ * 128 values) is written out. ctx = (work, w1, w2, w1_prev, w2_prev, coef, x, z1, h, z2,
+ * tanh_in, tanh_out, expd, delta3, delta2, w2.T, matmul, tanh, exp, ("out",)) where work is
+ * the float64 array the views x ... gains live in (offsets BP_*); report is the variant
+ * (true: the report's), eta and alpha the learning rate and momentum. */
+enum { BP_X = 0, BP_Z1 = 8, BP_H = 18, BP_Z2 = 28, BP_TIN = 34, BP_TOUT = 52, BP_EXP = 70, BP_D3 = 76,
+       BP_D2 = 82, BP_GAINS = 92, BP_WORK = 98 };
+
+static double np_max(double a, double b) { return isnan(a) ? a : (a > b ? a : b); }
+static double np_min(double a, double b) { return isnan(a) ? a : (a < b ? a : b); }
+
+/* numpy's pairwise summation (its add.reduce of a contiguous float64 array): blocks of up to
+ * 128 values summed with 8 accumulators, longer runs split in halves (multiples of 8) */
+static double np_pairwise(const double *a, Py_ssize_t n)
+{
+    double res;
+    Py_ssize_t i;
+    if (n < 8) {
+        res = 0.0;
+        for (i = 0; i < n; i++) res += a[i];
+        return res;
+    }
+    if (n <= 128) {
+        double r[8];
+        for (i = 0; i < 8; i++) r[i] = a[i];
+        for (i = 8; i < n - (n % 8); i += 8)
+            for (int j = 0; j < 8; j++) r[j] += a[i + j];
+        res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]));
+        for (; i < n; i++) res += a[i];
+        return res;
+    }
+    Py_ssize_t n2 = n / 2;
+    n2 -= n2 % 8;
+    return np_pairwise(a, n2) + np_pairwise(a + n2, n - n2);
+}
+
+/* numpy.add.reduce(a, None) of n contiguous doubles (the reduction starts from add's identity) */
+static double np_sum(const double *a, Py_ssize_t n) { return 0.0 + np_pairwise(a, n); }
+
+/* sum_squares(a) -> float: numpy.add.reduce(a * a, None) of a C-contiguous float64 array */
+static PyObject *sum_squares(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 1) {
+        PyErr_SetString(PyExc_TypeError, "sum_squares(a)");
+        return NULL;
+    }
+    Py_buffer view;
+    if (PyObject_GetBuffer(args[0], &view, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0) return NULL;
+    if (view.itemsize != sizeof(double) || !view.format || strcmp(view.format, "d") != 0) {
+        PyErr_SetString(PyExc_TypeError, "sum_squares: a float64 array");
+        PyBuffer_Release(&view);
+        return NULL;
+    }
+    const Py_ssize_t n = view.len / (Py_ssize_t)sizeof(double);
+    double stack[128], *sq = n <= 128 ? stack : PyMem_Malloc(n * sizeof(double));
+    if (!sq) {
+        PyBuffer_Release(&view);
+        return PyErr_NoMemory();
+    }
+    const double *a = (const double *)view.buf;
+    for (Py_ssize_t i = 0; i < n; i++) sq[i] = a[i] * a[i];
+    const double total = np_sum(sq, n);
+    if (sq != stack) PyMem_Free(sq);
+    PyBuffer_Release(&view);
+    return PyFloat_FromDouble(total);
+}
+
+static int bp_weights(PyObject *arr, Py_buffer *view, Py_ssize_t n)
+{
+    if (PyObject_GetBuffer(arr, view, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) return -1;
+    if (view->len != n * (Py_ssize_t)sizeof(double)) {
+        PyErr_SetString(PyExc_ValueError, "bp_pid: a weight array has the wrong size");
+        PyBuffer_Release(view);
+        return -1;
+    }
+    return 0;
+}
+
+static PyObject *bp_pid(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 10 || !PyTuple_Check(args[0]) || PyTuple_GET_SIZE(args[0]) != 20) {
+        PyErr_SetString(PyExc_TypeError,
+                        "bp_pid(ctx: 20-tuple, e_x, i_lon, de_x, e_y, i_lat, de_y, report, eta, alpha)");
+        return NULL;
+    }
+    PyObject *const *c = &PyTuple_GET_ITEM(args[0], 0);
+    double t[6];
+    for (int i = 0; i < 6; i++) {
+        t[i] = PyFloat_AsDouble(args[1 + i]);
+        if (t[i] == -1.0 && PyErr_Occurred()) return NULL;
+    }
+    const int report = PyObject_IsTrue(args[7]);
+    if (report < 0) return NULL;
+    const double eta = PyFloat_AsDouble(args[8]), alpha = PyFloat_AsDouble(args[9]);
+    if (PyErr_Occurred()) return NULL;
+    PyObject *kw = c[19], *matmul = c[16];
+    Py_buffer bw, b1, b2, b1p, b2p, bc;
+    if (PyObject_GetBuffer(c[0], &bw, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) return NULL;
+    if (bw.len != BP_WORK * (Py_ssize_t)sizeof(double)) {
+        PyErr_SetString(PyExc_ValueError, "bp_pid: the work array has the wrong size");
+        PyBuffer_Release(&bw);
+        return NULL;
+    }
+    if (bp_weights(c[1], &b1, 80)) { PyBuffer_Release(&bw); return NULL; }
+    if (bp_weights(c[2], &b2, 60)) { PyBuffer_Release(&bw); PyBuffer_Release(&b1); return NULL; }
+    if (bp_weights(c[3], &b1p, 80)) { PyBuffer_Release(&bw); PyBuffer_Release(&b1); PyBuffer_Release(&b2); return NULL; }
+    if (bp_weights(c[4], &b2p, 60)) {
+        PyBuffer_Release(&bw); PyBuffer_Release(&b1); PyBuffer_Release(&b2); PyBuffer_Release(&b1p);
+        return NULL;
+    }
+    if (bp_weights(c[5], &bc, 6)) {
+        PyBuffer_Release(&bw); PyBuffer_Release(&b1); PyBuffer_Release(&b2); PyBuffer_Release(&b1p);
+        PyBuffer_Release(&b2p);
+        return NULL;
+    }
+    PyObject *result = NULL;
+    const double *coef = (const double *)bc.buf;
+    double *w = (double *)bw.buf, *w1 = (double *)b1.buf, *w2 = (double *)b2.buf;
+    double *w1p = (double *)b1p.buf, *w2p = (double *)b2p.buf;
+    double *x = w + BP_X, *z1 = w + BP_Z1, *h = w + BP_H, *z2 = w + BP_Z2, *tin = w + BP_TIN;
+    double *tout = w + BP_TOUT, *ex = w + BP_EXP, *d3 = w + BP_D3, *d2 = w + BP_D2, *gains = w + BP_GAINS;
+    double cc[6], k[6], dk[6], g2[60], g1[80];
+    for (int i = 0; i < 6; i++) cc[i] = coef[i] * t[i];
+    if (report) { /* raw inputs */
+        for (int i = 0; i < 3; i++) { x[i] = t[i]; x[4 + i] = t[3 + i]; }
+    } else { /* tanh of the terms, of the errors and of the law's terms in one call */
+        for (int i = 0; i < 6; i++) { tin[i] = t[i]; tin[12 + i] = cc[i]; }
+        for (int i = 0; i < 3; i++) { tin[6 + i] = t[0]; tin[9 + i] = t[3]; }
+        PyObject *argv[2] = {c[10], c[11]};
+        PyObject *r = PyObject_Vectorcall(c[17], argv, 1, kw);
+        if (!r) goto done;
+        Py_DECREF(r);
+        for (int i = 0; i < 3; i++) { x[i] = tout[i]; x[4 + i] = tout[3 + i]; }
+    }
+    { /* forward: z1 = w1 x, h = max(z1, 0), z2 = w2 h, k = sigmoid(clip(z2, -50, 50)) */
+        PyObject *a1[3] = {c[1], c[6], c[7]};
+        PyObject *r = PyObject_Vectorcall(matmul, a1, 2, kw);
+        if (!r) goto done;
+        Py_DECREF(r);
+        for (int i = 0; i < 10; i++) h[i] = np_max(z1[i], 0.0);
+        PyObject *a2[3] = {c[2], c[8], c[9]};
+        r = PyObject_Vectorcall(matmul, a2, 2, kw);
+        if (!r) goto done;
+        Py_DECREF(r);
+        for (int i = 0; i < 6; i++) ex[i] = -np_min(np_max(z2[i], -50.0), 50.0);
+        PyObject *a3[2] = {c[12], c[12]};
+        r = PyObject_Vectorcall(c[18], a3, 1, kw);
+        if (!r) goto done;
+        Py_DECREF(r);
+    }
+    for (int i = 0; i < 6; i++) {
+        k[i] = 1.0 / (1.0 + ex[i]);
+        gains[i] = 1.0 + k[i];
+    }
+    const double u_x = gains[0] * cc[0] + gains[1] * cc[1] + gains[2] * cc[2];
+    const double u_y = gains[3] * cc[3] + gains[4] * cc[4] + gains[5] * cc[5];
+    /* learning */
+    for (int i = 0; i < 6; i++) {
+        dk[i] = k[i] * (1.0 - k[i]);
+        d3[i] = report ? dk[i] * t[i] : (-tout[6 + i]) * tout[12 + i] * dk[i];
+    }
+    {
+        PyObject *a4[3] = {c[15], c[13], c[14]};
+        PyObject *r = PyObject_Vectorcall(matmul, a4, 2, kw);
+        if (!r) goto done;
+        Py_DECREF(r);
+    }
+    for (int i = 0; i < 10; i++) d2[i] = d2[i] * (z1[i] > 0.0 ? 1.0 : 0.0);
+    for (int i = 0; i < 6; i++)
+        for (int j = 0; j < 10; j++) g2[10 * i + j] = d3[i] * h[j];
+    for (int i = 0; i < 10; i++)
+        for (int j = 0; j < 8; j++) g1[8 * i + j] = d2[i] * x[j];
+    if (!report) { /* clip the step, not its direction */
+        double sq2[60], sq1[80];
+        for (int i = 0; i < 60; i++) sq2[i] = g2[i] * g2[i];
+        for (int i = 0; i < 80; i++) sq1[i] = g1[i] * g1[i];
+        const double norm = sqrt(np_sum(sq2, 60) + np_sum(sq1, 80));
+        if (norm > 1.0) {
+            for (int i = 0; i < 60; i++) g2[i] /= norm;
+            for (int i = 0; i < 80; i++) g1[i] /= norm;
+        }
+    }
+    {
+        const double neg_eta = -eta, mom = (report ? -1.0 : 1.0) * alpha;
+        for (int i = 0; i < 60; i++) {
+            const double step = neg_eta * g2[i] + mom * (w2[i] - w2p[i]);
+            w2p[i] = w2[i];
+            w2[i] = w2[i] + step;
+        }
+        for (int i = 0; i < 80; i++) {
+            const double step = neg_eta * g1[i] + mom * (w1[i] - w1p[i]);
+            w1p[i] = w1[i];
+            w1[i] = w1[i] + step;
+        }
+    }
+    result = Py_BuildValue("(dd)", u_x, u_y);
+done:
+    PyBuffer_Release(&bw);
+    PyBuffer_Release(&b1);
+    PyBuffer_Release(&b2);
+    PyBuffer_Release(&b1p);
+    PyBuffer_Release(&b2p);
+    PyBuffer_Release(&bc);
+    return result;
+}
+
 static PyMethodDef methods[] = {
     FASTCALL(bicycle_step, "bicycle_step(state, Fx, delta, h, substeps, params) -> (state, lateral_accel)"),
     FASTCALL(mamdani2, "mamdani2(peaks0, peaks1, table, coef, out_peaks, grid, x0, x1) -> crisp output"),
@@ -685,6 +895,8 @@ static PyMethodDef methods[] = {
     FASTCALL(command, "command(params, action) -> (longitudinal, lateral)"),
     FASTCALL(observe, "observe(empty, size, get, source, norm, const) -> array"),
     FASTCALL(reward, "reward(speed, error, a_lon, a_lat, crashed, params) -> (reward, terms)"),
+    FASTCALL(sum_squares, "sum_squares(a) -> numpy.add.reduce(a * a, None) of a float64 array"),
+    FASTCALL(bp_pid, "bp_pid(ctx, e_x, i_lon, de_x, e_y, i_lat, de_y, report, eta, alpha) -> (u_x, u_y)"),
     FASTCALL(reward_of, "reward_of(signals, rate, params, crashed) -> (reward, terms)"),
     FASTCALL(place, "place(ids, rows, front, reach, straight, frame, previous, dt, rated, low_edge) -> "
                     "(ids, rows, objects, speeds)"),

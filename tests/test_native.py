@@ -59,12 +59,29 @@ def test_mamdani_matches_python_and_scikit_fuzzy():
     assert np.max(np.abs(got - sim.output["u"])) < 1e-6 * 200
 
 
+def test_sum_squares_is_numpys_pairwise_sum():
+    rng = np.random.default_rng(4)
+    for n in (1, 5, 8, 9, 60, 80, 127, 128, 129, 300, 4099):
+        for scale in (1e-200, 1.0, 1e150):
+            a = rng.standard_normal(n) * scale
+            assert NATIVE.sum_squares(a) == float(np.add.reduce(a * a, None))
+            if n % 2 == 0:
+                b = a.reshape(2, -1)  # a C-contiguous array of any shape: its values in order
+                assert NATIVE.sum_squares(b) == float(np.add.reduce(b * b, None))
+    assert NATIVE.sum_squares(np.zeros(0)) == 0.0
+    with pytest.raises(TypeError, match="float64"):
+        NATIVE.sum_squares(np.ones(4, np.float32))
+    with pytest.raises(ValueError, match="contiguous"):
+        NATIVE.sum_squares(np.ones((4, 4))[:, ::2])
+
+
 @pytest.mark.sumo
-def test_a_run_gives_the_same_metrics_with_and_without_the_extension():
+@pytest.mark.parametrize("controller", ["fuzzy", "bp-pid"])
+def test_a_run_gives_the_same_metrics_with_and_without_the_extension(controller):
     def metrics(pure: str) -> dict:
         env = dict(os.environ, EGO_PURE_PYTHON=pure)
         out = subprocess.run(
-            [sys.executable, "-m", "ego", "run", "emergency-brake", "-c", "fuzzy", "--json", "--set", "duration=12"],
+            [sys.executable, "-m", "ego", "run", "emergency-brake", "-c", controller, "--json", "--set", "duration=12"],
             capture_output=True,
             text=True,
             env=env,

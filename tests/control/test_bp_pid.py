@@ -83,3 +83,70 @@ def test_same_seed_same_weights_and_outputs():
     for _ in range(50):
         obs = _obs(rng)
         assert a.step(obs) == b.step(obs)
+
+
+def _pair(params, seed):
+    """The same controller twice: the C twin's step and the Python reference's."""
+    native, python = BPPIDController(params, 0.01), BPPIDController(params, 0.01)
+    python.native = False
+    native.reset(seed=seed)
+    python.reset(seed=seed)
+    return native, python
+
+
+def _same(a, b) -> bool:
+    return all(np.array_equal(x, y, equal_nan=True) for x, y in zip(a, b))
+
+
+@pytest.mark.parametrize("variant", ["stable", "report"])
+def test_the_c_twin_gives_the_python_steps_to_the_bit(variant):
+    rng = np.random.default_rng(11)
+    for trial in range(12):
+        params = BPPIDParams(
+            variant=variant,
+            learning_rate=float(rng.choice([0.0, 0.002, 0.5])),
+            momentum=float(rng.choice([0.0, 0.01, 0.9])),
+        )
+        native, python = _pair(params, trial)
+        assert native.native and not python.native
+        scale = float(rng.choice([0.01, 1.0, 100.0, 1e6]))  # 1e6: saturated sigmoids, clipped steps
+        for k in range(150):
+            v = rng.standard_normal(8) * scale
+            if trial % 4 == 0 and k == 100:  # a non-finite input spreads alike
+                v[rng.integers(8)] = rng.choice([np.nan, np.inf, -np.inf])
+            if trial == 1 and k == 50:  # weights replaced and the rate changed between steps
+                for c in (native, python):
+                    c.w2 = c.w2 * 0.5
+                    c.eta = 0.01
+            obs = Observation(s_ref=v[0], s=v[1], ds_ref=v[2], ds=v[3], d_ref=v[4], d=v[5], dd_ref=v[6], dd=v[7])
+            with np.errstate(all="ignore"):
+                out_n, out_p = native.step(obs), python.step(obs)
+                sig_n, sig_p = native.signals(), python.signals()
+            assert _same(out_n, out_p)
+            assert np.array_equal(np.signbit(out_n), np.signbit(out_p)) or np.isnan(out_n).any()
+            assert _same(
+                (native.w1, native.w2, native.w1_prev, native.w2_prev, native.gains),
+                (python.w1, python.w2, python.w1_prev, python.w2_prev, python.gains),
+            )
+            assert sig_n.keys() == sig_p.keys() and _same(sig_n.values(), sig_p.values())
+
+
+@pytest.mark.parametrize("native", [True, False], ids=["c-twin", "python"])
+def test_a_copy_mid_run_steps_on_as_the_original(native):
+    import copy
+    import pickle
+
+    c = BPPIDController(BPPIDParams(), 0.01)
+    c.native = c.native and native
+    c.reset(seed=2)
+    rng = np.random.default_rng(1)
+    for _ in range(20):
+        c.step(_obs(rng))
+    copies = [pickle.loads(pickle.dumps(c)), copy.deepcopy(c)]
+    for _ in range(30):
+        obs = _obs(rng)
+        out = c.step(obs)
+        for d in copies:
+            assert d.native == c.native and d.step(obs) == out
+            assert np.array_equal(d.w1, c.w1) and np.array_equal(d.gains, c.gains)
+            assert d.signals() == c.signals()
