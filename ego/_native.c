@@ -748,13 +748,23 @@ static PyObject *sum_squares(PyObject *self, PyObject *const *args, Py_ssize_t n
     return PyFloat_FromDouble(total);
 }
 
-static int bp_weights(PyObject *arr, Py_buffer *view, Py_ssize_t n)
+static int writable_doubles(PyObject *arr, Py_buffer *view, Py_ssize_t n)
 {
     if (PyObject_GetBuffer(arr, view, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) return -1;
     if (view->len != n * (Py_ssize_t)sizeof(double)) {
-        PyErr_SetString(PyExc_ValueError, "bp_pid: a weight array has the wrong size");
+        PyErr_SetString(PyExc_ValueError, "a work or weight array has the wrong size");
         PyBuffer_Release(view);
         return -1;
+    }
+    return 0;
+}
+
+/* n float arguments into out; -1 with the error set */
+static int doubles_of(PyObject *const *args, int n, double *out)
+{
+    for (int i = 0; i < n; i++) {
+        out[i] = PyFloat_AsDouble(args[i]);
+        if (out[i] == -1.0 && PyErr_Occurred()) return -1;
     }
     return 0;
 }
@@ -768,10 +778,7 @@ static PyObject *bp_pid(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
     }
     PyObject *const *c = &PyTuple_GET_ITEM(args[0], 0);
     double t[6];
-    for (int i = 0; i < 6; i++) {
-        t[i] = PyFloat_AsDouble(args[1 + i]);
-        if (t[i] == -1.0 && PyErr_Occurred()) return NULL;
-    }
+    if (doubles_of(args + 1, 6, t)) return NULL;
     const int report = PyObject_IsTrue(args[7]);
     if (report < 0) return NULL;
     const double eta = PyFloat_AsDouble(args[8]), alpha = PyFloat_AsDouble(args[9]);
@@ -784,14 +791,14 @@ static PyObject *bp_pid(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
         PyBuffer_Release(&bw);
         return NULL;
     }
-    if (bp_weights(c[1], &b1, 80)) { PyBuffer_Release(&bw); return NULL; }
-    if (bp_weights(c[2], &b2, 60)) { PyBuffer_Release(&bw); PyBuffer_Release(&b1); return NULL; }
-    if (bp_weights(c[3], &b1p, 80)) { PyBuffer_Release(&bw); PyBuffer_Release(&b1); PyBuffer_Release(&b2); return NULL; }
-    if (bp_weights(c[4], &b2p, 60)) {
+    if (writable_doubles(c[1], &b1, 80)) { PyBuffer_Release(&bw); return NULL; }
+    if (writable_doubles(c[2], &b2, 60)) { PyBuffer_Release(&bw); PyBuffer_Release(&b1); return NULL; }
+    if (writable_doubles(c[3], &b1p, 80)) { PyBuffer_Release(&bw); PyBuffer_Release(&b1); PyBuffer_Release(&b2); return NULL; }
+    if (writable_doubles(c[4], &b2p, 60)) {
         PyBuffer_Release(&bw); PyBuffer_Release(&b1); PyBuffer_Release(&b2); PyBuffer_Release(&b1p);
         return NULL;
     }
-    if (bp_weights(c[5], &bc, 6)) {
+    if (writable_doubles(c[5], &bc, 6)) {
         PyBuffer_Release(&bw); PyBuffer_Release(&b1); PyBuffer_Release(&b2); PyBuffer_Release(&b1p);
         PyBuffer_Release(&b2p);
         return NULL;
@@ -887,6 +894,69 @@ done:
     return result;
 }
 
+/* rbf_smc(ctx, s, d, ds, dd, neg_two_w2, scale, k_lon, k_lat, update_lat) -> (f_lon, f_lat)
+ * RBFSMCController's network (ego/control/rbf_smc.py, _network_py): the basis h of x = (s,
+ * d, ds, dd), the estimates f = w . h on both channels, then w_lon += k_lon h and, when
+ * update_lat (not in the report's variant, whose channels share one array), w_lat += k_lat h.
+ * numpy's einsum, exp and matmul (BLAS dot) are called on the work array's views, as the
+ * reference calls them. ctx = (work,
+ * centres, w_lon, w_lat, diff, d2, h, f_lon, f_lat, c_einsum, "ij,ij->i", exp, matmul,
+ * ("out",)): work holds, for n nodes, diff (n x 4), d2 (n), h (n) and the two estimates. */
+static PyObject *rbf_smc(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 10 || !PyTuple_Check(args[0]) || PyTuple_GET_SIZE(args[0]) != 14) {
+        PyErr_SetString(PyExc_TypeError,
+                        "rbf_smc(ctx: 14-tuple, s, d, ds, dd, neg_two_w2, scale, k_lon, k_lat, update_lat)");
+        return NULL;
+    }
+    PyObject *const *c = &PyTuple_GET_ITEM(args[0], 0);
+    double a[8];
+    if (doubles_of(args + 1, 8, a)) return NULL;
+    const double neg = a[4], scale = a[5], k_lon = a[6], k_lat = a[7];
+    const int update_lat = PyObject_IsTrue(args[9]);
+    if (update_lat < 0) return NULL;
+    Py_buffer bw, bc, bl, bt;
+    if (PyObject_GetBuffer(c[2], &bl, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) return NULL;
+    const Py_ssize_t n = bl.len / (Py_ssize_t)sizeof(double);
+    if (writable_doubles(c[0], &bw, 6 * n + 2)) { PyBuffer_Release(&bl); return NULL; }
+    if (writable_doubles(c[1], &bc, 4 * n)) { PyBuffer_Release(&bl); PyBuffer_Release(&bw); return NULL; }
+    if (writable_doubles(c[3], &bt, n)) {
+        PyBuffer_Release(&bl); PyBuffer_Release(&bw); PyBuffer_Release(&bc);
+        return NULL;
+    }
+    PyObject *result = NULL;
+    double *w = (double *)bw.buf, *w_lon = (double *)bl.buf, *w_lat = (double *)bt.buf;
+    const double *centres = (const double *)bc.buf;
+    double *diff = w, *d2 = w + 4 * n, *h = w + 5 * n, *f = w + 6 * n;
+    PyObject *kw = c[13], *r;
+    for (Py_ssize_t i = 0; i < n; i++)
+        for (int j = 0; j < 4; j++) diff[4 * i + j] = centres[4 * i + j] - a[j];
+    PyObject *ein[4] = {c[10], c[4], c[4], c[5]};
+    if (!(r = PyObject_Vectorcall(c[9], ein, 3, kw))) goto done;
+    Py_DECREF(r);
+    for (Py_ssize_t i = 0; i < n; i++) h[i] = d2[i] / neg;
+    PyObject *ex[2] = {c[6], c[6]};
+    if (!(r = PyObject_Vectorcall(c[11], ex, 1, kw))) goto done;
+    Py_DECREF(r);
+    for (Py_ssize_t i = 0; i < n; i++) h[i] = scale * h[i];
+    PyObject *m1[3] = {c[2], c[6], c[7]};
+    if (!(r = PyObject_Vectorcall(c[12], m1, 2, kw))) goto done;
+    Py_DECREF(r);
+    PyObject *m2[3] = {c[3], c[6], c[8]};
+    if (!(r = PyObject_Vectorcall(c[12], m2, 2, kw))) goto done;
+    Py_DECREF(r);
+    for (Py_ssize_t i = 0; i < n; i++) w_lon[i] = w_lon[i] + k_lon * h[i];
+    if (update_lat) /* after w_lon, as the reference (the same array twice if they alias) */
+        for (Py_ssize_t i = 0; i < n; i++) w_lat[i] = w_lat[i] + k_lat * h[i];
+    result = Py_BuildValue("(dd)", f[0], f[1]);
+done:
+    PyBuffer_Release(&bw);
+    PyBuffer_Release(&bc);
+    PyBuffer_Release(&bl);
+    PyBuffer_Release(&bt);
+    return result;
+}
+
 static PyMethodDef methods[] = {
     FASTCALL(bicycle_step, "bicycle_step(state, Fx, delta, h, substeps, params) -> (state, lateral_accel)"),
     FASTCALL(mamdani2, "mamdani2(peaks0, peaks1, table, coef, out_peaks, grid, x0, x1) -> crisp output"),
@@ -896,6 +966,7 @@ static PyMethodDef methods[] = {
     FASTCALL(observe, "observe(empty, size, get, source, norm, const) -> array"),
     FASTCALL(reward, "reward(speed, error, a_lon, a_lat, crashed, params) -> (reward, terms)"),
     FASTCALL(sum_squares, "sum_squares(a) -> numpy.add.reduce(a * a, None) of a float64 array"),
+    FASTCALL(rbf_smc, "rbf_smc(ctx, s, d, ds, dd, neg_two_w2, scale, k_lon, k_lat, update_lat) -> (f_lon, f_lat)"),
     FASTCALL(bp_pid, "bp_pid(ctx, e_x, i_lon, de_x, e_y, i_lat, de_y, report, eta, alpha) -> (u_x, u_y)"),
     FASTCALL(reward_of, "reward_of(signals, rate, params, crashed) -> (reward, terms)"),
     FASTCALL(place, "place(ids, rows, front, reach, straight, frame, previous, dt, rated, low_edge) -> "

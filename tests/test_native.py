@@ -76,7 +76,7 @@ def test_sum_squares_is_numpys_pairwise_sum():
 
 
 @pytest.mark.sumo
-@pytest.mark.parametrize("controller", ["fuzzy", "bp-pid"])
+@pytest.mark.parametrize("controller", ["fuzzy", "bp-pid", "rbf-smc"])
 def test_a_run_gives_the_same_metrics_with_and_without_the_extension(controller):
     def metrics(pure: str) -> dict:
         env = dict(os.environ, EGO_PURE_PYTHON=pure)

@@ -28,10 +28,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from ego.control.base import Observation
+from ego.native import NATIVE
 from ego.params import Params, param
 
 N_NODES = 10
@@ -67,6 +69,7 @@ try:
 except ImportError:  # numpy < 2
     _einsum = np.einsum
 _exp = np.exp
+_RBF_SMC: Any = NATIVE.rbf_smc if NATIVE is not None else None
 
 
 def _switch(s: float, phi: float) -> float:
@@ -86,6 +89,9 @@ class RBFSMCController:
         self.report = params.variant == "report"
         self._x = np.empty(4)
         self._neg_two_w2 = -(2.0 * params.width * params.width)  #: -2 width^2 of the basis functions
+        #: the network's step: the C twin when built, else :meth:`_network_py`
+        self.native = _RBF_SMC is not None
+        self._ctx: tuple[Any, ...] = ()
         self.reset(seed=0)
 
     def reset(self, *, seed: int | None = None) -> None:
@@ -109,22 +115,68 @@ class RBFSMCController:
         e_y, de_y = obs.d - obs.d_ref, obs.dd - obs.dd_ref
         s_x = p.c_lon * e_x + de_x
         s_y = p.c_lat * e_y + de_y
+        report = self.report
+        # the adaptive law's steps: the report's one weight vector moves with s_X + s_Y
+        if report:
+            k_lon = k_lat = self.dt * p.gamma * (s_x + s_y)
+        else:
+            k_lon, k_lat = self.dt * p.gamma * s_x, self.dt * p.gamma * s_y
+        if self.native:
+            ctx = self._ctx
+            if not ctx or ctx[1] is not self.centres or ctx[2] is not self.w_lon or ctx[3] is not self.w_lat:
+                ctx = self._bind()
+            f_x, f_y = _RBF_SMC(ctx, obs.s, obs.d, obs.ds, obs.dd, self._neg_two_w2, p.scale, k_lon, k_lat, not report)
+        else:
+            f_x, f_y = self._network_py(obs, k_lon, k_lat)
+        if report:
+            u_x = -s_x - f_x - p.eta_lon * _switch(s_x, 0.0)
+            u_y = -s_y - f_y - p.eta_lat * _switch(s_x, 0.0)  # sic: the report's sign(s_X)
+        else:
+            u_x = -s_x - f_x - p.eta_lon * _switch(s_x, p.phi_lon)
+            u_y = -s_y - f_y - p.eta_lat * _switch(s_y, p.phi_lat)
+        self.s_lon, self.s_lat, self.f_lon, self.f_lat = s_x, s_y, f_x, f_y
+        return p.fx_gain * u_x, p.delta_gain * u_y
+
+    def _network_py(self, obs: Observation, k_lon: float, k_lat: float) -> tuple[float, float]:
+        """The estimates (f_X, f_Y) = W^T h, then W += k h on each channel (the report's
+        shared vector once): the reference of the C twin ``ego._native.rbf_smc``."""
         x = self._x
         x[0], x[1], x[2], x[3] = obs.s, obs.d, obs.ds, obs.dd
         h = self._basis(x)
         f_x = float(self.w_lon @ h)
         f_y = float(self.w_lat @ h)
-        if self.report:
-            u_x = -s_x - f_x - p.eta_lon * _switch(s_x, 0.0)
-            u_y = -s_y - f_y - p.eta_lat * _switch(s_x, 0.0)  # sic: the report's sign(s_X)
-            self.w_lon += (self.dt * p.gamma * (s_x + s_y)) * h  # shared with w_lat
-        else:
-            u_x = -s_x - f_x - p.eta_lon * _switch(s_x, p.phi_lon)
-            u_y = -s_y - f_y - p.eta_lat * _switch(s_y, p.phi_lat)
-            self.w_lon += (self.dt * p.gamma * s_x) * h
-            self.w_lat += (self.dt * p.gamma * s_y) * h
-        self.s_lon, self.s_lat, self.f_lon, self.f_lat = s_x, s_y, f_x, f_y
-        return p.fx_gain * u_x, p.delta_gain * u_y
+        self.w_lon += k_lon * h
+        if not self.report:
+            self.w_lat += k_lat * h
+        return f_x, f_y
+
+    def _bind(self) -> tuple[Any, ...]:
+        """What the C twin works on: the centres, the weights (in place), a work array's views
+        and numpy's functions; bound again whenever one of those arrays is replaced."""
+        n = len(self.w_lon)
+        work = np.zeros(6 * n + 2)
+        self._ctx = (
+            work,
+            self.centres,
+            self.w_lon,
+            self.w_lat,
+            work[: 4 * n].reshape(n, 4),
+            work[4 * n : 5 * n],
+            work[5 * n : 6 * n],
+            work[6 * n : 6 * n + 1].reshape(()),
+            work[6 * n + 1 : 6 * n + 2].reshape(()),
+            _einsum,
+            "ij,ij->i",
+            _exp,
+            np.matmul,
+            ("out",),
+        )
+        return self._ctx
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        state["_ctx"] = ()  # views of a work array: made again after a copy
+        return state
 
     #: sliding variables s = c e + de, the RBF estimates f and their weights' norms, all in the
     #: units of u before the output gain (m/s: the basis functions are pure numbers)

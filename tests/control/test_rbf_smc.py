@@ -48,3 +48,47 @@ def test_sliding_mode_drives_a_double_integrator_to_its_reference():
         x += 0.001 * v
     assert x == pytest.approx(2.0, abs=1e-3) and abs(v) < 1e-2
     assert math.isfinite(c.signals()["rbf_norm_lon"])
+
+
+@pytest.mark.parametrize("variant", ["fixed", "report"])
+def test_the_c_twin_gives_the_python_steps_to_the_bit(variant):
+    rng = np.random.default_rng(12)
+    for trial in range(12):
+        params = RBFSMCParams(variant=variant, gamma=float(rng.choice([0.0, 1000.0, 1e6])))
+        native, python = RBFSMCController(params, 0.01), RBFSMCController(params, 0.01)
+        python.native = False
+        native.reset(seed=trial)
+        python.reset(seed=trial)
+        assert native.native and not python.native
+        scale = float(rng.choice([0.01, 1.0, 10.0, 1e3]))  # 1e3: the basis underflows to 0
+        for k in range(150):
+            v = rng.standard_normal(8) * scale
+            if trial % 4 == 0 and k == 100:  # a non-finite input spreads alike
+                v[rng.integers(8)] = rng.choice([np.nan, np.inf, -np.inf])
+            if trial == 1 and k == 50:  # weights replaced between steps
+                for c in (native, python):
+                    c.w_lon = c.w_lon * 0.5
+            obs = Observation(s_ref=v[0], s=v[1], ds_ref=v[2], ds=v[3], d_ref=v[4], d=v[5], dd_ref=v[6], dd=v[7])
+            with np.errstate(all="ignore"):
+                out_n, out_p = native.step(obs), python.step(obs)
+                sig_n, sig_p = native.signals(), python.signals()
+            assert np.array_equal(out_n, out_p, equal_nan=True)
+            assert np.array_equal(native.w_lon, python.w_lon, equal_nan=True)
+            assert np.array_equal(native.w_lat, python.w_lat, equal_nan=True)
+            assert (native.w_lat is native.w_lon) == (python.w_lat is python.w_lon)
+            assert np.array_equal(list(sig_n.values()), list(sig_p.values()), equal_nan=True)
+
+
+def test_a_copy_mid_run_steps_on_as_the_original():
+    import copy
+    import pickle
+
+    c = RBFSMCController(RBFSMCParams(), 0.01)
+    obs = Observation(s_ref=1.0, s=0.5, ds_ref=20.0, ds=19.5, d_ref=0.2, d=0.1)
+    for _ in range(10):
+        c.step(obs)
+    copies = [pickle.loads(pickle.dumps(c)), copy.deepcopy(c)]
+    for _ in range(20):
+        out = c.step(obs)
+        for d in copies:
+            assert d.step(obs) == out and np.array_equal(d.w_lon, c.w_lon) and d.signals() == c.signals()
