@@ -16,6 +16,14 @@ def test_fuzzy_speedup():
     assert figures["max_abs_difference"] < 1e-9
 
 
+def test_controller_steps_with_and_without_their_c_twins():
+    from bench_controllers import main
+
+    figures = main(["--steps", "300", "--repeat", "1"])
+    assert figures["bp-pid"]["identical"] and figures["rbf-smc"]["identical"]
+    assert figures["compile_s"]["rules"] > 0.0 and figures["compile_s"]["system"] > 0.0
+
+
 def test_loop_against_bare_sumo(tmp_path, monkeypatch):
     from bench_loop import main
 

@@ -1,5 +1,5 @@
 /*
- * Native twins of ego's two hottest numerical kernels.
+ * Native twins of ego's hottest numerical kernels.
  *
  *  - bicycle_step: report 000's nonlinear bicycle integrated by classical RK4, the same
  *    arithmetic, term for term, as NonlinearBicycle.rhs + ego.models.integrate.unrolled_rk4;
@@ -9,10 +9,14 @@
  *    (EgoStateObservation.observe, Reward.__call__);
  *  - boxes and place: the surround sensor's reading of a SUMO step, as
  *    SumoBridge.surroundings (the context subscription's vehicles as boxes) and
- *    SurroundSensor.sync (each box placed in the lane frame) compute it.
+ *    SurroundSensor.sync (each box placed in the lane frame) compute it;
+ *  - bp_pid and rbf_smc: the learning controllers' steps (BPPIDController._step_py,
+ *    RBFSMCController._network_py), their element-wise arithmetic here and numpy called for
+ *    what numpy computes its own way (BLAS products, tanh, exp, einsum); sum_squares: numpy's
+ *    pairwise sum of squares.
  *
  * The Python implementations stay the references: the tests require these kernels to agree
- * with them (and with scikit-fuzzy) on random inputs. Compiled with -ffp-contract=off so the
+ * with them (and with scikit-fuzzy) on random inputs, to the bit. Compiled with -ffp-contract=off so the
  * arithmetic is not fused differently from CPython's. When the extension is missing, ego
  * falls back to the Python code (slower, same results).
  */

@@ -27,10 +27,10 @@ Two variants (``--set variant=...``):
 
 numpy, not torch: per step the network is a handful of 10x8 and 6x10 products, where
 numpy's call overhead (~1 us) is far below torch's (~5-10 us per operation), and there is
-no batch to amortise it over. Even so its ~45 numpy calls cost ~37 us a step, 15 times a
+no batch to amortise it over. Even so its ~45 numpy calls cost ~40 us a step, many times a
 fuzzy controller's; the C twin ``ego._native.bp_pid`` does the step's element-wise
 arithmetic itself and calls numpy only where the numbers are numpy's own (the products,
-tanh, exp): the same numbers to the bit, ~6x faster.
+tanh, exp): the same numbers to the bit, ~6x faster (``benchmarks/bench_controllers.py``).
 """
 
 from __future__ import annotations
