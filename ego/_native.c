@@ -752,10 +752,16 @@ static PyObject *sum_squares(PyObject *self, PyObject *const *args, Py_ssize_t n
     return PyFloat_FromDouble(total);
 }
 
+/* a writable C-contiguous float64 array of n values (n < 0: any number) */
 static int writable_doubles(PyObject *arr, Py_buffer *view, Py_ssize_t n)
 {
-    if (PyObject_GetBuffer(arr, view, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) return -1;
-    if (view->len != n * (Py_ssize_t)sizeof(double)) {
+    if (PyObject_GetBuffer(arr, view, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0) return -1;
+    if (view->itemsize != sizeof(double) || !view->format || strcmp(view->format, "d") != 0) {
+        PyErr_SetString(PyExc_TypeError, "a work or weight array is not float64");
+        PyBuffer_Release(view);
+        return -1;
+    }
+    if (n >= 0 && view->len != n * (Py_ssize_t)sizeof(double)) {
         PyErr_SetString(PyExc_ValueError, "a work or weight array has the wrong size");
         PyBuffer_Release(view);
         return -1;
@@ -920,7 +926,7 @@ static PyObject *rbf_smc(PyObject *self, PyObject *const *args, Py_ssize_t nargs
     const int update_lat = PyObject_IsTrue(args[9]);
     if (update_lat < 0) return NULL;
     Py_buffer bw, bc, bl, bt;
-    if (PyObject_GetBuffer(c[2], &bl, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) return NULL;
+    if (writable_doubles(c[2], &bl, -1)) return NULL;
     const Py_ssize_t n = bl.len / (Py_ssize_t)sizeof(double);
     if (writable_doubles(c[0], &bw, 6 * n + 2)) { PyBuffer_Release(&bl); return NULL; }
     if (writable_doubles(c[1], &bc, 4 * n)) { PyBuffer_Release(&bl); PyBuffer_Release(&bw); return NULL; }

@@ -178,6 +178,10 @@ class RBFSMCController:
         state["_ctx"] = ()  # views of a work array: made again after a copy
         return state
 
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self.native = self.native and _RBF_SMC is not None  # a process without the extension
+
     #: sliding variables s = c e + de, the RBF estimates f and their weights' norms, all in the
     #: units of u before the output gain (m/s: the basis functions are pure numbers)
     signal_units = {
