@@ -150,3 +150,13 @@ def test_a_copy_mid_run_steps_on_as_the_original(native):
             assert d.native == c.native and d.step(obs) == out
             assert np.array_equal(d.w1, c.w1) and np.array_equal(d.gains, c.gains)
             assert d.signals() == c.signals()
+
+
+@pytest.mark.parametrize("native", [True, False], ids=["c-twin", "python"])
+def test_weights_of_another_dtype_are_refused_not_misread(native):
+    c = BPPIDController(BPPIDParams(), 0.01)
+    c.native = c.native and native
+    c.reset(seed=0)
+    c.w1 = np.zeros((10, 8), dtype=np.int64)  # as many bytes as the float64 weights
+    with pytest.raises(TypeError):
+        c.step(_obs(np.random.default_rng(0)))

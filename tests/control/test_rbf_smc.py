@@ -92,3 +92,10 @@ def test_a_copy_mid_run_steps_on_as_the_original():
         out = c.step(obs)
         for d in copies:
             assert d.step(obs) == out and np.array_equal(d.w_lon, c.w_lon) and d.signals() == c.signals()
+
+
+def test_weights_of_another_dtype_are_refused_by_the_c_twin():
+    c = RBFSMCController(RBFSMCParams(), 0.01)
+    c.w_lon = np.zeros(20, dtype=np.float32)  # as many bytes as ten float64 weights
+    with pytest.raises(TypeError, match="float64"):
+        c.step(Observation(s_ref=1.0))
