@@ -4,8 +4,10 @@
 
 Each tracking controller steps through the same recorded observations (an emergency-brake
 run's, fuzzy controller, seed 0: the errors a controller meets in a run), its ``signals()``
-read after each step as the loop's trace row does. Where a controller has a C twin
-(``bp-pid``: ``ego._native.bp_pid``, ``rbf-smc``: ``ego._native.rbf_smc``) the same steps
+read after each step as the loop's trace row does; report 004's ``bp-pid-acc`` through a
+platoon's first follower's (pid, seed 0), with ``period=0.01`` so that every step is an
+update. Where a controller has a C twin (``bp-pid``: ``ego._native.bp_pid``, ``rbf-smc``:
+``ego._native.rbf_smc``, ``bp-pid-acc``: ``ego._native.bp_pid_acc``) the same steps
 are also timed with the twin switched off (``controller.native = False``, the Python
 reference) and the outputs of both compared to the bit. The variants take turns, best of
 ``--repeat``, so a busy machine slows both alike: the ratio is the figure.
@@ -31,18 +33,21 @@ from ego.control import CONTROLLERS  # noqa: E402
 from ego.runner import RunSpec, build  # noqa: E402
 
 TRACKING = ("pid", "fuzzy", "fuzzy-pid", "bp-pid", "rbf-smc")
+#: report 004's car-following controllers, one follower's, updating every control period here
+FOLLOWING = ("bp-pid-acc",)
 
 
-def observations(n: int) -> list:
-    """``n`` observations of an emergency-brake run (copies; repeated if the run is shorter)."""
+def observations(scenario: str, controller: str, n: int) -> list:
+    """``n`` observations of a run (copies; repeated if the run is shorter): the ego's, or the
+    first follower's in a platoon."""
     import copy
 
-    sc = build(RunSpec("emergency-brake", "fuzzy", 0, {}))
+    sc = build(RunSpec(scenario, controller, 0, {}))
     try:
         obs = sc.reset()
         seen = []
         while not sc.done:
-            seen.append(copy.copy(obs))
+            seen.append(copy.copy(obs[0] if isinstance(obs, list) else obs))
             obs = sc.step(sc.controller.step(obs))
     finally:
         sc.close()
@@ -50,8 +55,10 @@ def observations(n: int) -> list:
 
 
 def make(name: str, native: bool):
-    spec = CONTROLLERS["tracking"][name]
-    controller = spec.build(spec.params(), 0.01)
+    task = "car-following" if name in FOLLOWING else "tracking"
+    spec = CONTROLLERS[task][name]
+    params = spec.params(period=0.01) if task == "car-following" else spec.params()
+    controller = spec.build(params, 0.01)
     if hasattr(controller, "native"):
         controller.native = controller.native and native
     controller.reset(seed=0)
@@ -104,20 +111,27 @@ def main(argv: list[str] | None = None) -> dict:
     args = ap.parse_args(argv)
     if args.steps < 1 or args.repeat < 1:
         ap.error(f"bad value for --steps/--repeat: {args.steps}/{args.repeat} (expected 1 or more)")
-    obs = observations(args.steps)
-    twins = [name for name in TRACKING if getattr(make(name, True), "native", False)]
-    variants = [(name, True) for name in TRACKING] + [(name, False) for name in twins]
+    obs = {
+        "tracking": observations("emergency-brake", "fuzzy", args.steps),
+        "car-following": observations("platoon", "pid", args.steps),
+    }
+    names = TRACKING + FOLLOWING
+    twins = [name for name in names if getattr(make(name, True), "native", False)]
+    variants = [(name, True) for name in names] + [(name, False) for name in twins]
     best: dict = {}
     outputs: dict = {}
     for _ in range(args.repeat):
         for v in variants:
-            seconds, out = timed(*v, obs)
+            seconds, out = timed(*v, obs["car-following" if v[0] in FOLLOWING else "tracking"])
             best[v] = min(best.get(v, seconds), seconds)
             outputs[v] = out
-    print(f"one controller step and its signals, {args.steps} steps of an emergency-brake run, best of {args.repeat}")
+    print(
+        f"one controller step and its signals, {args.steps} steps of an emergency-brake run (bp-pid-acc: of a "
+        f"platoon's first follower, updating every 0.01 s), best of {args.repeat}"
+    )
     print(f"  {'controller':12} {'us a step':>10} {'Python reference':>17} {'speed-up':>9}  outputs")
     figures: dict = {}
-    for name in TRACKING:
+    for name in names:
         us = best[(name, True)] * 1e6
         row = {"us": us}
         if (name, False) in best:

@@ -20,7 +20,7 @@ def test_controller_steps_with_and_without_their_c_twins():
     from bench_controllers import main
 
     figures = main(["--steps", "300", "--repeat", "1"])
-    assert figures["bp-pid"]["identical"] and figures["rbf-smc"]["identical"]
+    assert figures["bp-pid"]["identical"] and figures["rbf-smc"]["identical"] and figures["bp-pid-acc"]["identical"]
     assert figures["compile_s"]["rules"] > 0.0 and figures["compile_s"]["system"] > 0.0
 
 

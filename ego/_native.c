@@ -10,8 +10,8 @@
  *  - boxes and place: the surround sensor's reading of a SUMO step, as
  *    SumoBridge.surroundings (the context subscription's vehicles as boxes) and
  *    SurroundSensor.sync (each box placed in the lane frame) compute it;
- *  - bp_pid and rbf_smc: the learning controllers' steps (BPPIDController._step_py,
- *    RBFSMCController._network_py), their element-wise arithmetic here and numpy called for
+ *  - bp_pid, bp_pid_acc and rbf_smc: the learning controllers' steps
+ *    (BPPIDController._step_py, BPPIDAcc._update_py, RBFSMCController._network_py), their element-wise arithmetic here and numpy called for
  *    what numpy computes its own way (BLAS products, tanh, exp, einsum); sum_squares: numpy's
  *    pairwise sum of squares.
  *
@@ -967,6 +967,89 @@ done:
     return result;
 }
 
+/* bp_pid_acc(ctx, x0, x1, e, t0, t1, t2, u, hi, lo, eta, alpha) -> u
+ * BPPIDAcc's update (ego/control/following.py, _update_py) after its scalars: the 3-5-3
+ * network's forward pass on x = (x0, x1, e), the incremental PID u + gains . terms clipped to
+ * [lo, hi], the learning step with momentum, the weights updated in place. numpy's matmul
+ * (BLAS) and tanh are called on the work array's views as the reference calls them. ctx =
+ * (work, w1, w2, dw1, dw2, x, z1, h, z2, o, gains, terms, dot, delta3, delta2, w2.T, matmul,
+ * tanh, ("out",)); work holds x (3), z1 (5), h (5), z2 (3), o (3), gains (3), terms (3), the
+ * dot product (1), delta3 (3), delta2 (5). */
+enum { BA_X = 0, BA_Z1 = 3, BA_H = 8, BA_Z2 = 13, BA_O = 16, BA_GAINS = 19, BA_TERMS = 22, BA_DOT = 25,
+       BA_D3 = 26, BA_D2 = 29, BA_WORK = 34 };
+
+static PyObject *bp_pid_acc(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 12 || !PyTuple_Check(args[0]) || PyTuple_GET_SIZE(args[0]) != 19) {
+        PyErr_SetString(PyExc_TypeError, "bp_pid_acc(ctx: 19-tuple, x0, x1, e, t0, t1, t2, u, hi, lo, eta, alpha)");
+        return NULL;
+    }
+    PyObject *const *c = &PyTuple_GET_ITEM(args[0], 0);
+    double a[11];
+    if (doubles_of(args + 1, 11, a)) return NULL;
+    const double e = a[2], hi = a[7], lo = a[8], eta = a[9], alpha = a[10];
+    Py_buffer bw, b1, b2, bd1, bd2;
+    if (writable_doubles(c[0], &bw, BA_WORK)) return NULL;
+    if (writable_doubles(c[1], &b1, 15)) { PyBuffer_Release(&bw); return NULL; }
+    if (writable_doubles(c[2], &b2, 15)) { PyBuffer_Release(&bw); PyBuffer_Release(&b1); return NULL; }
+    if (writable_doubles(c[3], &bd1, 15)) { PyBuffer_Release(&bw); PyBuffer_Release(&b1); PyBuffer_Release(&b2); return NULL; }
+    if (writable_doubles(c[4], &bd2, 15)) {
+        PyBuffer_Release(&bw); PyBuffer_Release(&b1); PyBuffer_Release(&b2); PyBuffer_Release(&bd1);
+        return NULL;
+    }
+    PyObject *result = NULL, *kw = c[18], *matmul = c[16], *tanh_ = c[17], *r;
+    double *w = (double *)bw.buf, *w1 = (double *)b1.buf, *w2 = (double *)b2.buf;
+    double *dw1 = (double *)bd1.buf, *dw2 = (double *)bd2.buf;
+    double *x = w + BA_X, *h = w + BA_H, *o = w + BA_O, *gains = w + BA_GAINS, *terms = w + BA_TERMS;
+    double *d3 = w + BA_D3, *d2 = w + BA_D2;
+    x[0] = a[0], x[1] = a[1], x[2] = e;
+    /* h = tanh(w1 x), o = tanh(w2 h) */
+    PyObject *m1[3] = {c[1], c[5], c[6]}, *t1[2] = {c[6], c[7]}, *m2[3] = {c[2], c[7], c[8]}, *t2[2] = {c[8], c[9]};
+    if (!(r = PyObject_Vectorcall(matmul, m1, 2, kw))) goto done;
+    Py_DECREF(r);
+    if (!(r = PyObject_Vectorcall(tanh_, t1, 1, kw))) goto done;
+    Py_DECREF(r);
+    if (!(r = PyObject_Vectorcall(matmul, m2, 2, kw))) goto done;
+    Py_DECREF(r);
+    if (!(r = PyObject_Vectorcall(tanh_, t2, 1, kw))) goto done;
+    Py_DECREF(r);
+    for (int i = 0; i < 3; i++) gains[i] = 0.5 * (1.0 + o[i]);
+    terms[0] = a[3], terms[1] = a[4], terms[2] = a[5];
+    PyObject *m3[3] = {c[10], c[11], c[12]};
+    if (!(r = PyObject_Vectorcall(matmul, m3, 2, kw))) goto done;
+    Py_DECREF(r);
+    double u = a[6] + w[BA_DOT];
+    u = u > hi ? hi : (u < lo ? lo : u);
+    /* learning: dE/dK = -e du/dK, dK/dz = (1 - o^2)/2 */
+    for (int i = 0; i < 3; i++) d3[i] = e * terms[i] * 0.5 * (1.0 - o[i] * o[i]);
+    PyObject *m4[3] = {c[15], c[13], c[14]};
+    if (!(r = PyObject_Vectorcall(matmul, m4, 2, kw))) goto done;
+    Py_DECREF(r);
+    for (int i = 0; i < 5; i++) d2[i] = d2[i] * (1.0 - h[i] * h[i]);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 5; j++) {
+            double *dw = dw2 + 5 * i + j;
+            *dw = *dw * alpha;
+            *dw = *dw + eta * (d3[i] * h[j]);
+        }
+    for (int i = 0; i < 5; i++)
+        for (int j = 0; j < 3; j++) {
+            double *dw = dw1 + 3 * i + j;
+            *dw = *dw * alpha;
+            *dw = *dw + eta * (d2[i] * x[j]);
+        }
+    for (int i = 0; i < 15; i++) w2[i] = w2[i] + dw2[i];
+    for (int i = 0; i < 15; i++) w1[i] = w1[i] + dw1[i];
+    result = PyFloat_FromDouble(u);
+done:
+    PyBuffer_Release(&bw);
+    PyBuffer_Release(&b1);
+    PyBuffer_Release(&b2);
+    PyBuffer_Release(&bd1);
+    PyBuffer_Release(&bd2);
+    return result;
+}
+
 static PyMethodDef methods[] = {
     FASTCALL(bicycle_step, "bicycle_step(state, Fx, delta, h, substeps, params) -> (state, lateral_accel)"),
     FASTCALL(mamdani2, "mamdani2(peaks0, peaks1, table, coef, out_peaks, grid, x0, x1) -> crisp output"),
@@ -977,6 +1060,7 @@ static PyMethodDef methods[] = {
     FASTCALL(reward, "reward(speed, error, a_lon, a_lat, crashed, params) -> (reward, terms)"),
     FASTCALL(sum_squares, "sum_squares(a) -> numpy.add.reduce(a * a, None) of a float64 array"),
     FASTCALL(rbf_smc, "rbf_smc(ctx, s, d, ds, dd, neg_two_w2, scale, k_lon, k_lat, update_lat) -> (f_lon, f_lat)"),
+    FASTCALL(bp_pid_acc, "bp_pid_acc(ctx, x0, x1, e, t0, t1, t2, u, hi, lo, eta, alpha) -> u"),
     FASTCALL(bp_pid, "bp_pid(ctx, e_x, i_lon, de_x, e_y, i_lat, de_y, report, eta, alpha) -> (u_x, u_y)"),
     FASTCALL(reward_of, "reward_of(signals, rate, params, crashed) -> (reward, terms)"),
     FASTCALL(place, "place(ids, rows, front, reach, straight, frame, previous, dt, rated, low_edge) -> "

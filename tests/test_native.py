@@ -76,12 +76,20 @@ def test_sum_squares_is_numpys_pairwise_sum():
 
 
 @pytest.mark.sumo
-@pytest.mark.parametrize("controller", ["fuzzy", "bp-pid", "rbf-smc"])
-def test_a_run_gives_the_same_metrics_with_and_without_the_extension(controller):
+@pytest.mark.parametrize(
+    "scenario, controller",
+    [
+        ("emergency-brake", "fuzzy"),
+        ("emergency-brake", "bp-pid"),
+        ("emergency-brake", "rbf-smc"),
+        ("platoon", "bp-pid-acc"),
+    ],
+)
+def test_a_run_gives_the_same_metrics_with_and_without_the_extension(scenario, controller):
     def metrics(pure: str) -> dict:
         env = dict(os.environ, EGO_PURE_PYTHON=pure)
         out = subprocess.run(
-            [sys.executable, "-m", "ego", "run", "emergency-brake", "-c", controller, "--json", "--set", "duration=12"],
+            [sys.executable, "-m", "ego", "run", scenario, "-c", controller, "--json", "--set", "duration=12"],
             capture_output=True,
             text=True,
             env=env,

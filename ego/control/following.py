@@ -23,6 +23,7 @@ import numpy as np
 from ego.control.base import signal_units
 from ego.control.pid import PID
 from ego.models.longitudinal import SpacingPolicy
+from ego.native import NATIVE
 from ego.params import ConfigError, Params, param
 
 
@@ -158,6 +159,21 @@ class BPPIDAccParams(Params):
 
 
 N_IN, N_HIDDEN, N_OUT = 3, 5, 3
+#: the C twin's work array: (name, offset, length) of its views (ego/_native.c BA_*)
+_WORK = (
+    ("x", 0, N_IN),
+    ("z1", 3, N_HIDDEN),
+    ("h", 8, N_HIDDEN),
+    ("z2", 13, N_OUT),
+    ("o", 16, N_OUT),
+    ("gains", 19, N_OUT),
+    ("terms", 22, N_OUT),
+    ("dot", 25, 1),
+    ("delta3", 26, N_OUT),
+    ("delta2", 29, N_HIDDEN),
+)
+_WORK_SIZE = 34
+_BP_PID_ACC: Any = NATIVE.bp_pid_acc if NATIVE is not None else None
 
 
 class BPPIDAcc(SampledFollower):
@@ -181,9 +197,34 @@ class BPPIDAcc(SampledFollower):
     def __init__(self, params: BPPIDAccParams, dt: float) -> None:
         super().__init__(params.period, dt)
         self.params = params
-        self.x = np.zeros(N_IN)
-        self.terms = np.zeros(N_OUT)
+        #: the C twin's work array and its views (x and terms: the network's input and the
+        #: PID's increments, in either step)
+        self._work = np.zeros(_WORK_SIZE)
+        self._views: dict[str, np.ndarray] = {}
+        self._make_views()
+        #: the update: the C twin when built, else :meth:`_update_py`
+        self.native = _BP_PID_ACC is not None
+        self._ctx: tuple[Any, ...] = ()
         self._reset(0)
+
+    def _make_views(self) -> None:
+        v = self._views = {name: self._work[at : at + n] for name, at, n in _WORK}
+        self.x, self.terms = v["x"], v["terms"]
+
+    def __getstate__(self) -> dict[str, Any]:
+        # a pickled (or deep-copied) view is an array of its own: made again from the work array
+        state = self.__dict__.copy()
+        for name in ("_views", "_ctx", "x", "terms", *(("gains",) if self.native else ())):
+            del state[name]
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._make_views()
+        if self.native:
+            self.gains = self._views["gains"]
+        self.native = self.native and _BP_PID_ACC is not None
+        self._ctx = ()
 
     def _reset(self, seed: int | None) -> None:
         rng = np.random.default_rng(seed)
@@ -193,12 +234,70 @@ class BPPIDAcc(SampledFollower):
         self.dw1 = np.zeros_like(self.w1)
         self.dw2 = np.zeros_like(self.w2)
         self.gains = np.full(N_OUT, 0.5)
+        if self.native:  # the C twin writes the gains into its work array
+            self.gains = self._views["gains"]
+            self.gains[:] = 0.5
         self.e1 = self.e2 = 0.0
         self.u = 0.0
+        self._ctx = ()
+
+    def _bind(self) -> tuple[Any, ...]:
+        """What the C twin works on: the weights and their steps (in place), the work array's
+        views and numpy's functions; bound again whenever one of those arrays is replaced."""
+        v = self._views
+        self._ctx = (
+            self._work,
+            self.w1,
+            self.w2,
+            self.dw1,
+            self.dw2,
+            *(v[n] for n in ("x", "z1", "h", "z2", "o", "gains", "terms")),
+            v["dot"].reshape(()),
+            v["delta3"],
+            v["delta2"],
+            self.w2.T,
+            np.matmul,
+            np.tanh,
+            ("out",),
+        )
+        return self._ctx
 
     def _update(self, obs: FollowingObservation) -> float:
         T = self.period
         e = obs.spacing_error
+        policy = obs.policy
+        e1 = self.e1
+        t0, t1, t2 = e - e1, T * e, (e - 2.0 * e1 + self.e2) / T
+        if self.native:
+            ctx = self._ctx
+            if not ctx or ctx[1] is not self.w1 or ctx[2] is not self.w2 or ctx[3] is not self.dw1:
+                ctx = self._bind()
+            elif ctx[4] is not self.dw2:
+                ctx = self._bind()
+            p = self.params
+            u: float = _BP_PID_ACC(
+                ctx,
+                obs.gap - policy.standstill_gap,
+                policy.headway * obs.speed,
+                e,
+                t0,
+                t1,
+                t2,
+                self.u,
+                obs.max_accel,
+                -obs.max_decel,
+                p.learning_rate,
+                p.momentum,
+            )
+        else:
+            u = self._update_py(obs, e, t0, t1, t2)
+        self.e2, self.e1 = e1, e
+        self.u = u
+        return u
+
+    def _update_py(self, obs: FollowingObservation, e: float, t0: float, t1: float, t2: float) -> float:
+        """The network, the incremental PID and the learning step from the update's scalars:
+        the reference of the C twin ``ego._native.bp_pid_acc``."""
         x = self.x
         x[0] = obs.gap - obs.policy.standstill_gap
         x[1] = obs.policy.headway * obs.speed
@@ -207,9 +306,7 @@ class BPPIDAcc(SampledFollower):
         o = np.tanh(self.w2 @ h)
         self.gains = gains = 0.5 * (1.0 + o)
         terms = self.terms
-        terms[0] = e - self.e1
-        terms[1] = T * e
-        terms[2] = (e - 2.0 * self.e1 + self.e2) / T
+        terms[0], terms[1], terms[2] = t0, t1, t2
         u = self.u + float(gains @ terms)
         hi, lo = obs.max_accel, -obs.max_decel
         u = hi if u > hi else (lo if u < lo else u)
@@ -223,8 +320,6 @@ class BPPIDAcc(SampledFollower):
         self.dw1 += eta * np.outer(delta2, x)
         self.w2 += self.dw2
         self.w1 += self.dw1
-        self.e2, self.e1 = self.e1, e
-        self.u = u
         return u
 
     #: the network's gains, read as the continuous PID's (command in m/s^2 from errors in m)

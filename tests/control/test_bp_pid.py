@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from twins import twin_inputs
 
 from ego.control import BPPIDController, BPPIDParams, Observation
 
@@ -110,11 +111,8 @@ def test_the_c_twin_gives_the_python_steps_to_the_bit(variant):
         native, python = _pair(params, trial)
         assert native.native and not python.native
         scale = float(rng.choice([0.01, 1.0, 100.0, 1e6]))  # 1e6: saturated sigmoids, clipped steps
-        for k in range(150):
-            v = rng.standard_normal(8) * scale
-            if trial % 4 == 0 and k == 100:  # a non-finite input spreads alike
-                v[rng.integers(8)] = rng.choice([np.nan, np.inf, -np.inf])
-            if trial == 1 and k == 50:  # weights replaced and the rate changed between steps
+        for v, replace in twin_inputs(rng, 8, 150, scale, trial, inject_at=100, replace_at=50):
+            if replace:  # weights replaced and the rate changed between steps
                 for c in (native, python):
                     c.w2 = c.w2 * 0.5
                     c.eta = 0.01

@@ -7,6 +7,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from twins import twin_inputs
 
 from ego.control.following import (
     BPPIDAcc,
@@ -205,3 +206,64 @@ def test_platoon_control_gives_each_follower_its_own_controller_and_seed():
     assert list(platoon.signals()) == [f"{k}_{f}" for f in ("f1", "f2", "f3") for k in ("kp", "ki", "kd")]
     with pytest.raises(ValueError):
         PlatoonControl(members, ("f1",))
+
+
+def test_bp_c_twin_gives_the_python_updates_to_the_bit():
+    rng = np.random.default_rng(13)
+    for trial in range(16):
+        params = BPPIDAccParams(
+            learning_rate=float(rng.choice([0.0, 0.25, 1.0])),
+            momentum=float(rng.choice([0.0, 0.01, 0.9])),
+            period=float(rng.choice([0.01, 0.1])),
+        )
+        native, python = BPPIDAcc(params, DT), BPPIDAcc(params, DT)
+        python.native = False
+        native.reset(seed=trial)
+        python.reset(seed=trial)
+        assert native.native and not python.native
+        scale = float(rng.choice([0.1, 1.0, 10.0, 1e4]))  # 1e4: saturated tanh, clipped commands
+        for v, swap in twin_inputs(rng, 5, 200, scale, trial, inject_at=150, replace_at=100):
+            if swap:  # weights replaced between updates
+                for c in (native, python):
+                    c.w2 = c.w2 * 0.5
+            o = FollowingObservation(
+                gap=30.0 + v[0],
+                speed=20.0 + v[1],
+                accel=v[2],
+                lead_speed=20.0 + v[3],
+                lead_accel=v[4],
+                policy=SpacingPolicy(),
+                max_accel=float(rng.choice([2.5, math.inf])),
+                max_decel=8.0,
+            )
+            with np.errstate(all="ignore"):
+                out_n, out_p = native.step(o), python.step(o)
+            assert np.array_equal(out_n, out_p, equal_nan=True)
+            for a, b in (
+                (native.w1, python.w1),
+                (native.w2, python.w2),
+                (native.dw1, python.dw1),
+                (native.dw2, python.dw2),
+                (native.gains, python.gains),
+                ([native.u, native.e1, native.e2], [python.u, python.e1, python.e2]),
+                (list(native.signals().values()), list(python.signals().values())),
+            ):
+                assert np.array_equal(a, b, equal_nan=True)
+
+
+@pytest.mark.parametrize("native", [True, False], ids=["c-twin", "python"])
+def test_bp_copy_mid_run_updates_on_as_the_original(native):
+    import pickle
+
+    ctrl = _bp(learning_rate=0.25, momentum=0.5, period=0.1)
+    ctrl.native = ctrl.native and native
+    ctrl.reset(seed=3)
+    for k in range(30):
+        ctrl.step(_obs(gap=5.0 + 0.1 * k))
+    copies = [pickle.loads(pickle.dumps(ctrl)), copy.deepcopy(ctrl)]
+    for k in range(40):
+        o = _obs(gap=6.0 - 0.05 * k, speed=10.0 + 0.02 * k)
+        out = ctrl.step(o)
+        for twin in copies:
+            assert twin.native == ctrl.native and twin.step(o) == out
+            assert np.array_equal(twin.w1, ctrl.w1) and twin.signals() == ctrl.signals()

@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+from twins import twin_inputs
 
 from ego.control import Observation, RBFSMCController, RBFSMCParams
 
@@ -61,11 +62,8 @@ def test_the_c_twin_gives_the_python_steps_to_the_bit(variant):
         python.reset(seed=trial)
         assert native.native and not python.native
         scale = float(rng.choice([0.01, 1.0, 10.0, 1e3]))  # 1e3: the basis underflows to 0
-        for k in range(150):
-            v = rng.standard_normal(8) * scale
-            if trial % 4 == 0 and k == 100:  # a non-finite input spreads alike
-                v[rng.integers(8)] = rng.choice([np.nan, np.inf, -np.inf])
-            if trial == 1 and k == 50:  # weights replaced between steps
+        for v, replace in twin_inputs(rng, 8, 150, scale, trial, inject_at=100, replace_at=50):
+            if replace:  # weights replaced between steps
                 for c in (native, python):
                     c.w_lon = c.w_lon * 0.5
             obs = Observation(s_ref=v[0], s=v[1], ds_ref=v[2], ds=v[3], d_ref=v[4], d=v[5], dd_ref=v[6], dd=v[7])
