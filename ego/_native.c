@@ -11,14 +11,14 @@
  *    SumoBridge.surroundings (the context subscription's vehicles as boxes) and
  *    SurroundSensor.sync (each box placed in the lane frame) compute it;
  *  - bp_pid, bp_pid_acc and rbf_smc: the learning controllers' steps
- *    (BPPIDController._step_py, BPPIDAcc._update_py, RBFSMCController._network_py), their element-wise arithmetic here and numpy called for
- *    what numpy computes its own way (BLAS products, tanh, exp, einsum); sum_squares: numpy's
- *    pairwise sum of squares.
+ *    (BPPIDController._step_py, BPPIDAcc._update_py, RBFSMCController._network_py): their
+ *    element-wise arithmetic here, numpy called for what numpy computes its own way (BLAS
+ *    products, tanh, exp, einsum); sum_squares: numpy's pairwise sum of squares.
  *
  * The Python implementations stay the references: the tests require these kernels to agree
- * with them (and with scikit-fuzzy) on random inputs, to the bit. Compiled with -ffp-contract=off so the
- * arithmetic is not fused differently from CPython's. When the extension is missing, ego
- * falls back to the Python code (slower, same results).
+ * with them (and with scikit-fuzzy) on random inputs, to the bit. Compiled with
+ * -ffp-contract=off so the arithmetic is not fused differently from CPython's. When the
+ * extension is missing, ego falls back to the Python code (slower, same results).
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -680,7 +680,6 @@ static PyObject *reward_of(PyObject *self, PyObject *const *args, Py_ssize_t nar
     return out;
 }
 
-#define FASTCALL(name, doc) {#name, (PyCFunction)(void (*)(void))name, METH_FASTCALL, doc}
 /* bp_pid(ctx, e_x, i_lon, de_x, e_y, i_lat, de_y, report, eta, alpha) -> (u_x, u_y)
  * BPPIDController's step after its integrals (ego/control/bp_pid.py, _step_py): the
  * network's forward pass, the control law and the learning step, the weights updated in
@@ -769,6 +768,23 @@ static int writable_doubles(PyObject *arr, Py_buffer *view, Py_ssize_t n)
     return 0;
 }
 
+/* the first n items of arrs as writable float64 buffers of sizes[i] values each (< 0: any);
+ * -1 with the error set and none held */
+static int acquire(PyObject *const *arrs, const Py_ssize_t *sizes, int n, Py_buffer *views)
+{
+    for (int i = 0; i < n; i++)
+        if (writable_doubles(arrs[i], &views[i], sizes[i])) {
+            while (i--) PyBuffer_Release(&views[i]);
+            return -1;
+        }
+    return 0;
+}
+
+static void release(Py_buffer *views, int n)
+{
+    for (int i = 0; i < n; i++) PyBuffer_Release(&views[i]);
+}
+
 /* n float arguments into out; -1 with the error set */
 static int doubles_of(PyObject *const *args, int n, double *out)
 {
@@ -794,29 +810,13 @@ static PyObject *bp_pid(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
     const double eta = PyFloat_AsDouble(args[8]), alpha = PyFloat_AsDouble(args[9]);
     if (PyErr_Occurred()) return NULL;
     PyObject *kw = c[19], *matmul = c[16];
-    Py_buffer bw, b1, b2, b1p, b2p, bc;
-    if (PyObject_GetBuffer(c[0], &bw, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) return NULL;
-    if (bw.len != BP_WORK * (Py_ssize_t)sizeof(double)) {
-        PyErr_SetString(PyExc_ValueError, "bp_pid: the work array has the wrong size");
-        PyBuffer_Release(&bw);
-        return NULL;
-    }
-    if (writable_doubles(c[1], &b1, 80)) { PyBuffer_Release(&bw); return NULL; }
-    if (writable_doubles(c[2], &b2, 60)) { PyBuffer_Release(&bw); PyBuffer_Release(&b1); return NULL; }
-    if (writable_doubles(c[3], &b1p, 80)) { PyBuffer_Release(&bw); PyBuffer_Release(&b1); PyBuffer_Release(&b2); return NULL; }
-    if (writable_doubles(c[4], &b2p, 60)) {
-        PyBuffer_Release(&bw); PyBuffer_Release(&b1); PyBuffer_Release(&b2); PyBuffer_Release(&b1p);
-        return NULL;
-    }
-    if (writable_doubles(c[5], &bc, 6)) {
-        PyBuffer_Release(&bw); PyBuffer_Release(&b1); PyBuffer_Release(&b2); PyBuffer_Release(&b1p);
-        PyBuffer_Release(&b2p);
-        return NULL;
-    }
+    static const Py_ssize_t sizes[6] = {BP_WORK, 80, 60, 80, 60, 6};
+    Py_buffer b[6]; /* work, w1, w2, w1_prev, w2_prev, coef */
+    if (acquire(c, sizes, 6, b)) return NULL;
     PyObject *result = NULL;
-    const double *coef = (const double *)bc.buf;
-    double *w = (double *)bw.buf, *w1 = (double *)b1.buf, *w2 = (double *)b2.buf;
-    double *w1p = (double *)b1p.buf, *w2p = (double *)b2p.buf;
+    const double *coef = (const double *)b[5].buf;
+    double *w = (double *)b[0].buf, *w1 = (double *)b[1].buf, *w2 = (double *)b[2].buf;
+    double *w1p = (double *)b[3].buf, *w2p = (double *)b[4].buf;
     double *x = w + BP_X, *z1 = w + BP_Z1, *h = w + BP_H, *z2 = w + BP_Z2, *tin = w + BP_TIN;
     double *tout = w + BP_TOUT, *ex = w + BP_EXP, *d3 = w + BP_D3, *d2 = w + BP_D2, *gains = w + BP_GAINS;
     double cc[6], k[6], dk[6], g2[60], g1[80];
@@ -895,12 +895,7 @@ static PyObject *bp_pid(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
     }
     result = Py_BuildValue("(dd)", u_x, u_y);
 done:
-    PyBuffer_Release(&bw);
-    PyBuffer_Release(&b1);
-    PyBuffer_Release(&b2);
-    PyBuffer_Release(&b1p);
-    PyBuffer_Release(&b2p);
-    PyBuffer_Release(&bc);
+    release(b, 6);
     return result;
 }
 
@@ -925,18 +920,18 @@ static PyObject *rbf_smc(PyObject *self, PyObject *const *args, Py_ssize_t nargs
     const double neg = a[4], scale = a[5], k_lon = a[6], k_lat = a[7];
     const int update_lat = PyObject_IsTrue(args[9]);
     if (update_lat < 0) return NULL;
-    Py_buffer bw, bc, bl, bt;
-    if (writable_doubles(c[2], &bl, -1)) return NULL;
-    const Py_ssize_t n = bl.len / (Py_ssize_t)sizeof(double);
-    if (writable_doubles(c[0], &bw, 6 * n + 2)) { PyBuffer_Release(&bl); return NULL; }
-    if (writable_doubles(c[1], &bc, 4 * n)) { PyBuffer_Release(&bl); PyBuffer_Release(&bw); return NULL; }
-    if (writable_doubles(c[3], &bt, n)) {
-        PyBuffer_Release(&bl); PyBuffer_Release(&bw); PyBuffer_Release(&bc);
+    Py_buffer b[4]; /* work, centres, w_lon, w_lat */
+    const Py_ssize_t any[4] = {-1, -1, -1, -1};
+    if (acquire(c, any, 4, b)) return NULL;
+    const Py_ssize_t n = b[2].len / (Py_ssize_t)sizeof(double);
+    if (b[0].len != (6 * n + 2) * (Py_ssize_t)sizeof(double) || b[1].len != 4 * b[2].len || b[3].len != b[2].len) {
+        PyErr_SetString(PyExc_ValueError, "rbf_smc: the work, centre and weight arrays do not fit n nodes");
+        release(b, 4);
         return NULL;
     }
     PyObject *result = NULL;
-    double *w = (double *)bw.buf, *w_lon = (double *)bl.buf, *w_lat = (double *)bt.buf;
-    const double *centres = (const double *)bc.buf;
+    double *w = (double *)b[0].buf, *w_lon = (double *)b[2].buf, *w_lat = (double *)b[3].buf;
+    const double *centres = (const double *)b[1].buf;
     double *diff = w, *d2 = w + 4 * n, *h = w + 5 * n, *f = w + 6 * n;
     PyObject *kw = c[13], *r;
     for (Py_ssize_t i = 0; i < n; i++)
@@ -960,10 +955,7 @@ static PyObject *rbf_smc(PyObject *self, PyObject *const *args, Py_ssize_t nargs
         for (Py_ssize_t i = 0; i < n; i++) w_lat[i] = w_lat[i] + k_lat * h[i];
     result = Py_BuildValue("(dd)", f[0], f[1]);
 done:
-    PyBuffer_Release(&bw);
-    PyBuffer_Release(&bc);
-    PyBuffer_Release(&bl);
-    PyBuffer_Release(&bt);
+    release(b, 4);
     return result;
 }
 
@@ -988,18 +980,12 @@ static PyObject *bp_pid_acc(PyObject *self, PyObject *const *args, Py_ssize_t na
     double a[11];
     if (doubles_of(args + 1, 11, a)) return NULL;
     const double e = a[2], hi = a[7], lo = a[8], eta = a[9], alpha = a[10];
-    Py_buffer bw, b1, b2, bd1, bd2;
-    if (writable_doubles(c[0], &bw, BA_WORK)) return NULL;
-    if (writable_doubles(c[1], &b1, 15)) { PyBuffer_Release(&bw); return NULL; }
-    if (writable_doubles(c[2], &b2, 15)) { PyBuffer_Release(&bw); PyBuffer_Release(&b1); return NULL; }
-    if (writable_doubles(c[3], &bd1, 15)) { PyBuffer_Release(&bw); PyBuffer_Release(&b1); PyBuffer_Release(&b2); return NULL; }
-    if (writable_doubles(c[4], &bd2, 15)) {
-        PyBuffer_Release(&bw); PyBuffer_Release(&b1); PyBuffer_Release(&b2); PyBuffer_Release(&bd1);
-        return NULL;
-    }
+    static const Py_ssize_t sizes[5] = {BA_WORK, 15, 15, 15, 15};
+    Py_buffer b[5]; /* work, w1, w2, dw1, dw2 */
+    if (acquire(c, sizes, 5, b)) return NULL;
     PyObject *result = NULL, *kw = c[18], *matmul = c[16], *tanh_ = c[17], *r;
-    double *w = (double *)bw.buf, *w1 = (double *)b1.buf, *w2 = (double *)b2.buf;
-    double *dw1 = (double *)bd1.buf, *dw2 = (double *)bd2.buf;
+    double *w = (double *)b[0].buf, *w1 = (double *)b[1].buf, *w2 = (double *)b[2].buf;
+    double *dw1 = (double *)b[3].buf, *dw2 = (double *)b[4].buf;
     double *x = w + BA_X, *h = w + BA_H, *o = w + BA_O, *gains = w + BA_GAINS, *terms = w + BA_TERMS;
     double *d3 = w + BA_D3, *d2 = w + BA_D2;
     x[0] = a[0], x[1] = a[1], x[2] = e;
@@ -1042,14 +1028,11 @@ static PyObject *bp_pid_acc(PyObject *self, PyObject *const *args, Py_ssize_t na
     for (int i = 0; i < 15; i++) w1[i] = w1[i] + dw1[i];
     result = PyFloat_FromDouble(u);
 done:
-    PyBuffer_Release(&bw);
-    PyBuffer_Release(&b1);
-    PyBuffer_Release(&b2);
-    PyBuffer_Release(&bd1);
-    PyBuffer_Release(&bd2);
+    release(b, 5);
     return result;
 }
 
+#define FASTCALL(name, doc) {#name, (PyCFunction)(void (*)(void))name, METH_FASTCALL, doc}
 static PyMethodDef methods[] = {
     FASTCALL(bicycle_step, "bicycle_step(state, Fx, delta, h, substeps, params) -> (state, lateral_accel)"),
     FASTCALL(mamdani2, "mamdani2(peaks0, peaks1, table, coef, out_peaks, grid, x0, x1) -> crisp output"),

@@ -97,3 +97,12 @@ def test_weights_of_another_dtype_are_refused_by_the_c_twin():
     c.w_lon = np.zeros(20, dtype=np.float32)  # as many bytes as ten float64 weights
     with pytest.raises(TypeError, match="float64"):
         c.step(Observation(s_ref=1.0))
+
+
+@pytest.mark.parametrize("native", [True, False], ids=["c-twin", "python"])
+def test_weights_of_another_length_are_refused(native):
+    c = RBFSMCController(RBFSMCParams(), 0.01)
+    c.native = c.native and native
+    c.w_lat = np.zeros(5)  # 10 nodes
+    with pytest.raises(ValueError):
+        c.step(Observation(s_ref=1.0))
