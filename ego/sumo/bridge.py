@@ -151,6 +151,8 @@ class SumoBridge:
         self._pending: list[VehicleSpec] = []
         self._keep_route: dict[str, int] = {}
         self.collisions: list[Collision] = []
+        #: a vehicle was moved by moveToXY since SUMO's last step (see :meth:`close`)
+        self._moved = False
         self._ctx_vars: tuple[int, int, int] = (0, 0, 0)
         #: vehicles whose position and angle SUMO reports after every step (poses())
         self._pose_subscribed: set[str] = set()
@@ -225,6 +227,13 @@ class SumoBridge:
     def close(self) -> None:
         if self._ls is not None:
             try:
+                if self._moved and not self.via_traci:
+                    # libsumo holds each vehicle moved by moveToXY until its next step takes
+                    # the move over; closed before that (a run ended by an exception between
+                    # the pose push and the step), the next simulation this process starts
+                    # crashes on the stale vehicle (a segmentation fault): take the step first
+                    self._moved = False
+                    self._ls.simulationStep()
                 self._ls.close()
             finally:
                 self._ls = None
@@ -286,6 +295,7 @@ class SumoBridge:
         """
         ls = self.libsumo
         ls.simulationStep()
+        self._moved = False
         present = set(ls.vehicle.getIDList())
         missing = [s.id for s in self._pending if s.id not in present]
         self._pending.clear()
@@ -330,6 +340,7 @@ class SumoBridge:
         c = math.cos(psi)
         s = math.sin(psi)
         veh = self._ls.vehicle
+        self._moved = True
         veh.moveToXY(
             vid,
             "",
@@ -348,6 +359,7 @@ class SumoBridge:
         """Advance SUMO one step; returns (and keeps) the collisions of that step."""
         ls = self._ls
         ls.simulationStep()
+        self._moved = False
         if ls.simulation.getCollidingVehiclesNumber():
             self.collisions = [
                 Collision(c.collider, c.victim, c.type, c.colliderSpeed, c.victimSpeed)
@@ -464,6 +476,7 @@ class SumoBridge:
         on from there unless placed again."""
         half = 0.5 * self.dimensions(vid)[0]
         veh = self._ls.vehicle
+        self._moved = True
         veh.moveToXY(
             vid, "", -1, x + half * math.cos(psi), y + half * math.sin(psi), (90.0 - psi * _DEG) % 360.0, keep_route
         )

@@ -166,3 +166,41 @@ def test_several_vehicles_can_be_controlled_at_once():
         assert set(ids) == {"f0", "f1", "f2"}
         centres = {v: boxes[k, :2] for k, v in enumerate(ids)}
         assert centres["f1"] == pytest.approx(np.array([350.0, 0.2]), abs=1e-6)
+
+
+_ENDED_BETWEEN_PUSH_AND_STEP = """
+from ego.runner import RunSpec, build
+
+sc = build(RunSpec("emergency-brake", "pid", 0, {}))
+obs = sc.reset()
+for _ in range(25):
+    obs = sc.step(sc.controller.step(obs))
+
+def fail():  # the loop's hook between the ego's pose push and SUMO's step
+    raise RuntimeError("ended between the push and the step")
+
+sc.before_sim_step = fail
+try:
+    for _ in range(10):
+        obs = sc.step(sc.controller.step(obs))
+except RuntimeError as exc:
+    print("raised:", exc, flush=True)
+finally:
+    sc.close()
+result = build(RunSpec("emergency-brake", "pid", 0, {})).run()
+print("next run:", result.metrics["status"], flush=True)
+"""
+
+
+def test_a_run_ended_between_the_pose_push_and_the_step_leaves_the_process_usable():
+    """libsumo holds a vehicle moved by moveToXY until the next step; a simulation closed
+    before that step used to crash the next one of the process (a segmentation fault)."""
+    import subprocess
+    import sys
+
+    out = subprocess.run(
+        [sys.executable, "-c", _ENDED_BETWEEN_PUSH_AND_STEP], capture_output=True, text=True, timeout=300
+    )
+    assert out.returncode == 0, (out.returncode, out.stderr[-2000:])
+    assert "raised: ended between the push and the step" in out.stdout
+    assert "next run: completed" in out.stdout
