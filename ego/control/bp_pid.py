@@ -155,11 +155,10 @@ class BPPIDController:
         self.w1_prev = self.w1.copy()
         self.w2_prev = self.w2.copy()
         self.i_lon = self.i_lat = 0.0
-        self.gains = np.ones(N_OUT)
+        # the C twin writes the gains into its work array
+        self.gains = self._views["gains"] if self.native else np.empty(N_OUT)
+        self.gains[:] = 1.0
         self._u = (0.0, 0.0)
-        if self.native:  # the C twin writes the gains into its work array
-            self.gains = self._views["gains"]
-            self.gains[:] = 1.0
         self._ctx = ()
 
     def _make_views(self) -> np.ndarray:
@@ -221,9 +220,14 @@ class BPPIDController:
         self.i_lat = min(lim, max(-lim, self.i_lat + dt * e_y))
         if self.native:
             ctx = self._ctx
-            if not ctx or ctx[1] is not self.w1 or ctx[2] is not self.w2 or ctx[3] is not self.w1_prev:
-                ctx = self._bind()
-            elif ctx[4] is not self.w2_prev or ctx[5] is not self.coef:
+            if (
+                not ctx
+                or ctx[1] is not self.w1
+                or ctx[2] is not self.w2
+                or ctx[3] is not self.w1_prev
+                or ctx[4] is not self.w2_prev
+                or ctx[5] is not self.coef
+            ):  # a weight array replaced since the last bind
                 ctx = self._bind()
             u_x, u_y = _BP_PID(ctx, e_x, self.i_lon, de_x, e_y, self.i_lat, de_y, self.report, self.eta, self.alpha)
         else:

@@ -233,10 +233,9 @@ class BPPIDAcc(SampledFollower):
         self.w2 = rng.uniform(-r, r, (N_OUT, N_HIDDEN))
         self.dw1 = np.zeros_like(self.w1)
         self.dw2 = np.zeros_like(self.w2)
-        self.gains = np.full(N_OUT, 0.5)
-        if self.native:  # the C twin writes the gains into its work array
-            self.gains = self._views["gains"]
-            self.gains[:] = 0.5
+        # the C twin writes the gains into its work array
+        self.gains = self._views["gains"] if self.native else np.empty(N_OUT)
+        self.gains[:] = 0.5
         self.e1 = self.e2 = 0.0
         self.u = 0.0
         self._ctx = ()
@@ -270,10 +269,14 @@ class BPPIDAcc(SampledFollower):
         t0, t1, t2 = e - e1, T * e, (e - 2.0 * e1 + self.e2) / T
         if self.native:
             ctx = self._ctx
-            if not ctx or ctx[1] is not self.w1 or ctx[2] is not self.w2 or ctx[3] is not self.dw1:
-                ctx = self._bind()
-            elif ctx[4] is not self.dw2:
-                ctx = self._bind()
+            if (
+                not ctx
+                or ctx[1] is not self.w1
+                or ctx[2] is not self.w2
+                or ctx[3] is not self.dw1
+                or ctx[4] is not self.dw2
+            ):
+                ctx = self._bind()  # a weight array replaced since the last bind
             p = self.params
             u: float = _BP_PID_ACC(
                 ctx,
