@@ -418,7 +418,11 @@ class _Stepper:
 
     def __init__(self, env, index: int, views: dict, info_all: bool) -> None:
         self.env, self.index, self.info_all = env, index, info_all
-        self.obs_row, self.action_row = views["obs"][index], views["action"][index]
+        actions = views["action"]
+        # a slice, then its shape: row ``index`` as a view of the shared buffer even where an
+        # action is a scalar (Discrete), whose plain index would be a copy taken once, here
+        self.obs_row = views["obs"][index]
+        self.action_row = actions[index : index + 1].reshape(actions.shape[1:])
         self.rewards, self.terminated, self.truncated = views["reward"], views["terminated"], views["truncated"]
         self.copy = self.action_row.ndim > 0
         self.autoreset = False

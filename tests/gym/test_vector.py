@@ -114,6 +114,27 @@ def test_same_results_as_the_envs_stepped_one_by_one(env_id, num_envs, host):
     assert ends >= 4  # the comparison went through autoresets
 
 
+@pytest.mark.parametrize("host", [None, False], ids=["hosted", "all-workers"])
+def test_discrete_actions_reach_each_env_and_a_bad_one_is_refused(host):
+    """A Discrete action is a scalar per env: each env steps its own (here one speeds up, the
+    other slows down), as the same envs stepped one by one do, and an action outside the space
+    is the single env's ValueError, not a silent 0."""
+    config = {**SHORT, "duration": 3.0, "action": {"type": "DiscreteMetaAction", "lateral": False}}
+    actions = [np.array([2, 0])] * 6  # FASTER, SLOWER
+    envs = gym.make_vec("ego/EmergencyBrake-v0", num_envs=2, config=config, host=host)
+    try:
+        envs.reset(seed=3)
+        for batch in actions:
+            obs, *_ = envs.step(batch)
+        with pytest.raises(ValueError, match=r"bad action np.int64\(9\): expected an integer from 0 to 2"):
+            envs.step(np.array([9, 1]))
+    finally:
+        envs.close()
+    expected = _one_by_one("ego/EmergencyBrake-v0", config, 3, actions)
+    assert np.array_equal(obs[0], expected[0][-1][0]) and np.array_equal(obs[1], expected[1][-1][0])
+    assert obs[0][6] > obs[1][6]  # the faster one is faster
+
+
 def test_gymnasium_semantics_and_light_infos():
     envs = gym.make_vec("ego/CutIn-v0", num_envs=2, config=SHORT)
     try:
