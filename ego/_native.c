@@ -594,7 +594,7 @@ static PyObject *command(PyObject *self, PyObject *const *args, Py_ssize_t nargs
     PyBuffer_Release(&view);
     if (scaled) {
         for (long i = 0; i < n; i++) {
-            if (clip) x[i] = x[i] < -1.0 ? -1.0 : (x[i] > 1.0 ? 1.0 : x[i]);
+            if (clip && isfinite(x[i])) x[i] = x[i] < -1.0 ? -1.0 : (x[i] > 1.0 ? 1.0 : x[i]); /* NaN, inf: the env ends the run */
             x[i] = c[2 * i] + c[2 * i + 1] * x[i];
         }
     }

@@ -46,6 +46,7 @@ _array, _empty, _F64 = np.array, np.empty, np.float64
 _FILL_OBS = None if NATIVE is None else NATIVE.fill_obs
 _OBSERVE = None if NATIVE is None else NATIVE.observe
 _COMMAND = None if NATIVE is None else NATIVE.command
+INF = math.inf
 #: observed fields fixed for a whole run
 _RUN_CONSTANT = ("policy.standstill_gap", "policy.headway", "max_accel", "max_decel")
 
@@ -580,14 +581,14 @@ class ContinuousAction(ActionType):
         clip = self.clip
         if self.size == 2:
             x, y = action.tolist()
-            if clip:  # NaN passes through (the env ends the run on it)
-                x = -1.0 if x < -1.0 else (1.0 if x > 1.0 else x)
-                y = -1.0 if y < -1.0 else (1.0 if y > 1.0 else y)
+            if clip:  # NaN and infinities pass through (the env ends the run on them)
+                x = -1.0 if -INF < x < -1.0 else (1.0 if 1.0 < x < INF else x)
+                y = -1.0 if -INF < y < -1.0 else (1.0 if 1.0 < y < INF else y)
             mid, half = self._mid, self._half
             return (mid[0] + half[0] * x) * self.force_per_accel, mid[1] + half[1] * y
         (x,) = action.tolist()
         if clip:
-            x = -1.0 if x < -1.0 else (1.0 if x > 1.0 else x)
+            x = -1.0 if -INF < x < -1.0 else (1.0 if 1.0 < x < INF else x)
         x = self._mid[0] + self._half[0] * x
         return (x * self.force_per_accel, None) if self.longitudinal else (None, x)
 

@@ -101,10 +101,12 @@ def test_controller_policy_gives_the_controllers_metrics_at_any_policy_frequency
 # -- 3. NaN and badly shaped actions -----------------------------------------------------------
 @pytest.mark.sumo
 @pytest.mark.parametrize("env_id", ["ego/CutIn-v0", "ego/Platoon-v0"])
-def test_a_nan_action_ends_the_episode_diverged_with_a_finite_reward(env_id, make):
+@pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf])
+def test_a_nan_action_ends_the_episode_diverged_with_a_finite_reward(env_id, value, make):
+    """NaN and infinities alike (the default ContinuousAction clips only finite values)."""
     env = make(env_id)
     env.reset(seed=0)
-    nan = np.full(env.action_space.shape, np.nan, dtype=np.float32)
+    nan = np.full(env.action_space.shape, value, dtype=np.float32)
     obs, reward, terminated, truncated, info = env.step(nan)
     assert np.isfinite(reward) and reward < 0.0 and np.all(np.isfinite(obs))
     assert terminated and not truncated and info["status"] == "diverged"
