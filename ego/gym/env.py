@@ -27,6 +27,7 @@ a platoon whose string stability the metrics measure.
 
 from __future__ import annotations
 
+import copy
 import functools
 import math
 import warnings
@@ -392,10 +393,26 @@ class EgoEnv(gym.Env):
 
     def configure(self, config: Mapping[str, Any]) -> None:
         """Update the configuration (highway-env's: a plain update); it takes effect at
-        construction or at the next ``reset(options={"config": ...})``."""
+        construction or at the next ``reset`` (as an edit of ``env.config`` does), which
+        rebuilds the spaces and types; a configuration the reset rejects is taken back."""
         if not isinstance(config, Mapping):
             raise ConfigError(f"bad value for config: {config!r} (expected a dict)")
         self.config.update(config)
+
+    def _config_changed(self) -> bool:
+        """The configuration differs from the one the env was built on."""
+        try:
+            return bool(self.config != self._built_config)
+        except (ValueError, TypeError):  # an array among the values: compare by rebuilding
+            return True
+
+    def _rebuild(self) -> None:
+        """Build on the (changed) configuration, or take it back to the built one and raise."""
+        try:
+            self._build()
+        except Exception:
+            self.config = copy.deepcopy(self._built_config)
+            raise
 
     # -- building ----------------------------------------------------------------------------
     def _build(self) -> None:
@@ -479,6 +496,7 @@ class EgoEnv(gym.Env):
         self._make_scenario(sc_config)
         # one frame per env step: a video plays in simulated time
         self.metadata = {**type(self).metadata, "render_fps": 1.0 / (every * sc_config.dt)}
+        self._built_config = copy.deepcopy(cfg)
 
     def _make_scenario(self, sc_config) -> None:
         """The scenario object (no SUMO yet) on ``sc_config``, its controller and the view."""
@@ -519,10 +537,9 @@ class EgoEnv(gym.Env):
         super().reset(seed=seed)
         if options and "config" in options:
             self.configure(options["config"])
-            self._build()
-        if isinstance(seed, np.integer):
-            seed = int(seed)
-        run_seed = check_seed(seed) if seed is not None else int(self.np_random.integers(0, MAX_SEED + 1))
+        if self._config_changed():
+            self._rebuild()
+        run_seed = run_seed_of(seed) if seed is not None else int(self.np_random.integers(0, MAX_SEED + 1))
         self._start(run_seed)
         self._set_limit()
         return self.observation_type.observe(self._view), {
@@ -694,7 +711,10 @@ class EgoEnv(gym.Env):
         running = sc is not None and sc.bridge is not None
         return {
             "scenario": self.scenario_name,
-            "config": self.config,
+            # the run replays on the configuration it was built on; a pending one (configure()
+            # since) takes effect at the copy's next reset, as at the original's
+            "config": self._built_config,
+            "pending": self.config,
             "render_mode": self.render_mode,
             "np_random": self._np_random,
             "spec": self.spec,
@@ -714,6 +734,19 @@ class EgoEnv(gym.Env):
                 apply(command)
             self._view._prev, self._elapsed = prev, elapsed
         self._np_random = state["np_random"]
+        self.config = copy.deepcopy(state.get("pending", self.config))
+
+
+def run_seed_of(seed: Any) -> int:
+    """The run's seed (``ego run --seed``) for an env seed: the seed itself up to 2^31 - 1 (the
+    range of SUMO's and ego's seeds); a larger one (Gymnasium takes any non-negative whole
+    number, SB3's ``VecEnv.seed`` draws below 2^32) folded into that range by numpy's
+    ``SeedSequence`` (``env.unwrapped.scenario.seed`` says which run it is)."""
+    if isinstance(seed, np.integer):
+        seed = int(seed)
+    if type(seed) is int and seed > MAX_SEED:
+        return int(np.random.SeedSequence(seed).generate_state(1, np.uint32)[0]) & MAX_SEED
+    return check_seed(seed)
 
 
 def _registered_limit(spec) -> int | None:

@@ -15,11 +15,11 @@ highway-env's convention: ``controlled_vehicles`` (default: every follower) of t
 platoon's followers, ``f1`` (right behind the SUMO leader) first, are agents; the followers
 behind them keep the env's ``controller``. Every other key is the single-agent env's
 (``ego.gym.EgoEnv("platoon", config)``: scenario parameters, ``randomize``, ``policy_frequency``,
-the reward weights, the observation's ``normalize`` and the action type), applied to each
-agent: its own ``EgoState`` observation (the car-following fields of its own car), its own
-action (its acceleration command), and its own reward (progress = its speed, centring = its
-spacing error, discomfort = its acceleration; the crash term for every agent when the run
-crashes). All agents end together: the run's end (a collision, a divergence) terminates
+the reward weights, the observation type and its options, the action type), applied to
+each agent: its own observation of the configured type seen from its own car (``EgoState``:
+its car-following fields), its own action (its acceleration command), and its own reward
+(progress = its speed, centring = its spacing error, discomfort = its acceleration; the
+crash term for every agent when the run crashes). All agents end together: the run's end (a collision, a divergence) terminates
 every agent, the duration truncates them; ``infos[agent]["metrics"]`` then holds the run's
 metrics (per follower under ``followers``).
 """
@@ -35,9 +35,15 @@ from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
 from ego.gym.env import EgoEnv, EgoView
-from ego.gym.spaces import EgoStateObservation
+from ego.gym.spaces import observation_type
 from ego.params import ConfigError
 from ego.scenarios.platoon import follower_ids
+
+
+def _check_randomize(config: Mapping[str, Any]) -> None:
+    randomize = config.get("randomize")
+    if isinstance(randomize, Mapping) and "followers" in randomize:
+        raise ConfigError("bad value for randomize: followers cannot vary (the agents are fixed)")
 
 
 class PlatoonParallelEnv(ParallelEnv):
@@ -52,26 +58,30 @@ class PlatoonParallelEnv(ParallelEnv):
 
     def __init__(self, config: Mapping[str, Any] | None = None, render_mode: str | None = None) -> None:
         config = dict(config or {})
-        k = config.pop("controlled_vehicles", None)
-        randomize = config.get("randomize")
-        if isinstance(randomize, Mapping) and "followers" in randomize:
-            raise ConfigError("bad value for randomize: followers cannot vary (the agents are fixed)")
-        self._env = env = EgoEnv("platoon", config, render_mode)
+        self._controlled = config.pop("controlled_vehicles", None)
+        _check_randomize(config)
+        self._env = EgoEnv("platoon", config, render_mode)
+        self.render_mode = render_mode
+        self.agents: list[str] = []
+        self._derive()
+
+    def _derive(self) -> None:
+        """The agents, their observation types and spaces from the env as built (again after a
+        reset that reconfigured it: other followers, another action or observation type)."""
+        env = self._env
         n = env.scenario.config.followers
-        if k is None:
-            k = n
+        k = n if self._controlled is None else self._controlled
         if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 1 <= k <= n:
             raise ConfigError(
                 f"bad value for controlled_vehicles: {k!r} (expected a whole number from 1 to followers = {n})"
             )
-        self.render_mode = render_mode
         self.possible_agents = list(follower_ids(n)[: int(k)])
-        self.agents: list[str] = []
-        normalize = env.observation_type.normalize
-        self._observers = [EgoStateObservation(env.task, normalize=normalize) for _ in self.possible_agents]
+        # each agent its own instance of the configured observation type (its own car's view)
+        self._observers = [observation_type(env.config["observation"], env.task) for _ in self.possible_agents]
         self._observation_space = self._observers[0].space
         self._action_space = env.action_space
-        self.metadata = {**self.metadata, "render_fps": env.metadata["render_fps"]}
+        self.metadata = {**type(self).metadata, "render_fps": env.metadata["render_fps"]}
+        self._built = env._built_config
 
     def observation_space(self, agent: str):
         return self._observation_space
@@ -85,7 +95,22 @@ class PlatoonParallelEnv(ParallelEnv):
 
     def reset(self, seed: int | None = None, options: Mapping[str, Any] | None = None):
         env = self._env
+        controlled = self._controlled
+        if options and "config" in options:
+            config = options["config"]
+            if isinstance(config, Mapping) and ("controlled_vehicles" in config or "randomize" in config):
+                config = dict(config)
+                _check_randomize(config)
+                controlled = config.pop("controlled_vehicles", controlled)
+                options = {**options, "config": config}
         _, info = env.reset(seed=seed, options=options)
+        if env._built_config is not self._built or controlled != self._controlled:
+            before, self._controlled = self._controlled, controlled
+            try:
+                self._derive()
+            except ConfigError:
+                self._controlled = before
+                raise
         # one view per agent: the scenario's per-vehicle contract (observation, plant, signals)
         sc = env.scenario
         self._views = [EgoView(sc, env.np_random, vid) for vid in self.possible_agents]
@@ -168,25 +193,26 @@ class PlatoonMultiAgentEnv(gym.Env):
     metadata: ClassVar[dict] = {"render_modes": ["rgb_array"], "render_fps": 100}
 
     def __init__(self, config: Mapping[str, Any] | None = None, render_mode: str | None = None) -> None:
-        config = dict(config or {})
-        action, observation = config.get("action"), config.get("observation")
-        if isinstance(action, Mapping) and action.get("type") == "MultiAgentAction":
-            config["action"] = action.get("action_config", {"type": "ContinuousAction", "lateral": False})
-        if isinstance(observation, Mapping) and observation.get("type") == "MultiAgentObservation":
-            config["observation"] = observation.get("observation_config", {"type": "EgoState"})
-        self.parallel = PlatoonParallelEnv(config, render_mode)
+        self.parallel = PlatoonParallelEnv(_single_agent_types(config or {}), render_mode)
         self.render_mode = render_mode
+        self._spaces()
+
+    def _spaces(self) -> None:
+        """The agents' tuples of spaces, from the parallel env as built."""
         agents = self.parallel.possible_agents
         self.controlled_vehicles = tuple(agents)
         self.action_space = spaces.Tuple([self.parallel.action_space(a) for a in agents])
         self.observation_space = spaces.Tuple([self.parallel.observation_space(a) for a in agents])
-        self.metadata = {**self.metadata, "render_fps": self.parallel.metadata["render_fps"]}
+        self.metadata = {**type(self).metadata, "render_fps": self.parallel.metadata["render_fps"]}
 
     def reset(self, *, seed: int | None = None, options: Mapping[str, Any] | None = None):
         super().reset(seed=seed)
         if seed is None:
             seed = int(self.np_random.integers(0, 2**31 - 1))
+        if options and isinstance(options.get("config"), Mapping):
+            options = {**options, "config": _single_agent_types(options["config"])}
         observations, infos = self.parallel.reset(seed=seed, options=options)
+        self._spaces()
         return tuple(observations[a] for a in self.controlled_vehicles), infos[self.controlled_vehicles[0]]
 
     def step(self, action):
@@ -213,3 +239,16 @@ class PlatoonMultiAgentEnv(gym.Env):
 
     def close(self) -> None:
         self.parallel.close()
+
+
+def _single_agent_types(config: Mapping[str, Any]) -> dict:
+    """``config`` with highway-env's multi-agent action and observation types given as the
+    one agent's (``MultiAgentAction``'s ``action_config``, ``MultiAgentObservation``'s
+    ``observation_config``)."""
+    config = dict(config)
+    action, observation = config.get("action"), config.get("observation")
+    if isinstance(action, Mapping) and action.get("type") == "MultiAgentAction":
+        config["action"] = action.get("action_config", {"type": "ContinuousAction", "lateral": False})
+    if isinstance(observation, Mapping) and observation.get("type") == "MultiAgentObservation":
+        config["observation"] = observation.get("observation_config", {"type": "EgoState"})
+    return config

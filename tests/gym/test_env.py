@@ -1,7 +1,9 @@
 """ego.gym: the env ids against Gymnasium's checker, determinism, vector envs, configuration,
 actions, episode ends, the Kinematics observation and rendering - all on real SUMO."""
 
+import copy
 import functools
+import pickle
 import subprocess
 import sys
 
@@ -152,6 +154,53 @@ def test_reset_options_reconfigure_and_rebuild_the_spaces(make):
     )
     assert obs.shape == (7, 5) and env.unwrapped.observation_space.shape == (7, 5)
     assert env.unwrapped.scenario.config.ego_speed == 25.0
+
+
+@pytest.mark.sumo
+def test_configure_or_an_edit_of_config_takes_effect_at_the_next_reset(make):
+    """highway-env's idiom: env.unwrapped.configure(...) (or editing env.unwrapped.config),
+    then reset(); the config never disagrees with the env that runs."""
+    env = make("ego/EmergencyBrake-v0")
+    u = env.unwrapped
+    u.configure({"observation": {"type": "Kinematics"}, "policy_frequency": 10})
+    obs, _ = env.reset(seed=0)
+    assert obs.shape == (5, 5) and u._every == 10 and u.metadata["render_fps"] == 10.0
+    u.config["observation"] = {"type": "EgoState"}
+    obs, _ = env.reset(seed=0)
+    assert obs.shape == (15,) and env.observation_space.shape == (15,)
+
+
+@pytest.mark.sumo
+def test_a_rejected_configuration_is_taken_back(make):
+    env = make("ego/EmergencyBrake-v0")
+    u = env.unwrapped
+    env.reset(seed=0)
+    before = copy.deepcopy(u.config)
+    with pytest.raises(ConfigError, match="bad value for policy_frequency: 3"):
+        env.reset(options={"config": {"policy_frequency": 3}})
+    assert u.config == before
+    env.reset(seed=0)
+    pickle.loads(pickle.dumps(u)).close()
+    env.reset(options={"config": {"policy_frequency": 10}})
+    assert u._every == 10
+
+
+@pytest.mark.sumo
+def test_a_copy_replays_the_built_configuration_and_keeps_a_pending_one(make):
+    env = make("ego/EmergencyBrake-v0")
+    u = env.unwrapped
+    env.reset(seed=0)
+    for _ in range(5):
+        env.step(np.zeros(2, np.float32))
+    u.configure({"observation": {"type": "Kinematics"}})  # pending until the next reset
+    twin = pickle.loads(pickle.dumps(u))
+    try:
+        assert twin.observation_space.shape == (15,) and twin.scenario.k == u.scenario.k
+        assert twin.config == u.config
+        obs, _ = twin.reset(seed=0)
+        assert obs.shape == (5, 5)
+    finally:
+        twin.close()
 
 
 @pytest.mark.sumo

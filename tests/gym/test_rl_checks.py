@@ -14,6 +14,7 @@ from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
 import ego.gym
 from ego.gym.multi_agent import PlatoonParallelEnv
+from ego.params import ConfigError
 from ego.gym.vector import _Maker
 
 pytestmark = [pytest.mark.sumo, pytest.mark.filterwarnings("ignore::UserWarning")]
@@ -64,8 +65,10 @@ def test_gymnasium_and_sb3_env_checkers_pass(env_id, config):
         {},
         {"controlled_vehicles": 2, "policy_frequency": 10},
         {"variant": "scale-model", "action": {"type": "EgoAction"}},
+        {"observation": {"type": "Kinematics"}, "policy_frequency": 10},
+        {"observation": {"type": "OccupancyGrid"}, "policy_frequency": 10},
     ],
-    ids=["default", "two-agents-10hz", "scale-model"],
+    ids=["default", "two-agents-10hz", "scale-model", "kinematics", "occupancy-grid"],
 )
 def test_pettingzoo_parallel_api_test_passes(config):
     env = PlatoonParallelEnv(config=config)
@@ -138,3 +141,38 @@ def test_highway_envs_multi_agent_convention_as_one_gymnasium_env():
             env.step(np.zeros(1))
     finally:
         env.close()
+
+
+def test_the_agents_observe_the_configured_type_each_from_its_own_car():
+    env = PlatoonParallelEnv(config={"observation": {"type": "Kinematics", "vehicles_count": 4}})
+    try:
+        obs, _ = env.reset(seed=0)
+        assert env.observation_space("f1").shape == (4, 5)
+        assert all(o.shape == (4, 5) for o in obs.values())
+        assert not np.array_equal(obs["f1"], obs["f2"])  # f2 has f1 ahead of it, f1 does not
+    finally:
+        env.close()
+
+
+def test_a_reconfiguring_reset_rebuilds_the_agents_spaces_and_frame_rate():
+    env = PlatoonParallelEnv()
+    try:
+        env.reset(seed=0, options={"config": {"followers": 2}})
+        assert env.agents == env.possible_agents == ["f1", "f2"]
+        env.reset(seed=0, options={"config": {"followers": 5, "controlled_vehicles": 3}})
+        assert env.agents == ["f1", "f2", "f3"]
+        env.reset(seed=0, options={"config": {"action": {"type": "EgoAction"}, "policy_frequency": 10}})
+        assert env.action_space("f1") == env._env.action_space and env.action_space("f1").high[0] == 2.5
+        assert env.metadata["render_fps"] == 10.0
+        with pytest.raises(ConfigError, match="bad value for controlled_vehicles: 9"):
+            env.reset(seed=0, options={"config": {"controlled_vehicles": 9}})
+        env.reset(seed=0)
+        assert env.agents == ["f1", "f2", "f3"]
+    finally:
+        env.close()
+    multi = gym.make("ego/PlatoonMultiAgent-v0")
+    try:
+        obs, _ = multi.reset(seed=0, options={"config": {"followers": 2}})
+        assert len(obs) == 2 and len(multi.unwrapped.action_space) == 2
+    finally:
+        multi.close()

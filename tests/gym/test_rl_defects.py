@@ -186,6 +186,26 @@ def test_each_env_is_a_distribution_reproducible_per_seed(env_id, make):
 
 
 @pytest.mark.sumo
+def test_seeds_beyond_2_31_are_folded_into_a_run_seed_and_reproducible(make):
+    """Gymnasium takes any non-negative seed and SB3's VecEnv.seed() draws below 2^32; the
+    run's seed is the seed itself up to 2^31 - 1 (ego run --seed), a larger one folded."""
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    from ego.gym.env import run_seed_of
+
+    assert run_seed_of(7) == 7 and run_seed_of(np.int64(2**31 - 1)) == 2**31 - 1
+    assert 0 <= run_seed_of(2**31) <= 2**31 - 1 and run_seed_of(2**31) != run_seed_of(2**32 - 1)
+    env = make("ego/CutIn-v0")
+    a, _ = env.reset(seed=2**40)
+    seed = env.unwrapped.scenario.seed
+    b, _ = env.reset(seed=2**40)
+    assert np.array_equal(a, b) and seed == env.unwrapped.scenario.seed == run_seed_of(2**40)
+    vec = DummyVecEnv([lambda: make("ego/Platoon-v0")])
+    vec.seed(2**32 - 5)
+    assert vec.reset().shape == (1, 10)
+
+
+@pytest.mark.sumo
 def test_the_seed_changes_the_controllers_return(make):
     env = make("ego/CutIn-v0", config={"duration": 8.0, "policy_frequency": 10})
     policy = ego.gym.ControllerPolicy("pid", env)
