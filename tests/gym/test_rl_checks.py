@@ -14,8 +14,8 @@ from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
 import ego.gym
 from ego.gym.multi_agent import PlatoonParallelEnv
-from ego.params import ConfigError
 from ego.gym.vector import _Maker
+from ego.params import ConfigError
 
 pytestmark = [pytest.mark.sumo, pytest.mark.filterwarnings("ignore::UserWarning")]
 
