@@ -34,6 +34,7 @@ import re
 import types
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from fractions import Fraction
 
 import numpy as np
 
@@ -214,6 +215,8 @@ class Requirement:
     rtamt: str
     signals: tuple[str, ...]
     unit: str
+    #: the interval bounds it uses (s), as written
+    bounds: tuple[float, ...] = ()
 
     @property
     def text(self) -> str:
@@ -228,6 +231,7 @@ class _Parser:
         self.i = 0
         self.used: dict[str, None] = {}
         self.cmp_units: set[str] = set()
+        self.bounds: list[float] = []
 
     def _lex(self, text: str) -> list[str]:
         toks, pos = [], 0
@@ -349,7 +353,15 @@ class _Parser:
             raise self.error(f"interval bound {tok!r} is not a number of seconds")
         if self.peek() == "s":
             self.take()
-        return float(tok)
+        value = self.finite(tok)
+        self.bounds.append(value)
+        return value
+
+    def finite(self, tok: str) -> float:
+        value = float(tok)
+        if not math.isfinite(value):
+            raise self.error(f"{tok} is not a finite number")
+        return value
 
     def comparison(self) -> str:
         left, lu = self.arith()
@@ -407,7 +419,7 @@ class _Parser:
             self.take(")")
             return f"abs({text})", unit
         if _is_number(tok):
-            return repr(float(tok)), self.unit_suffix()
+            return repr(self.finite(tok)), self.unit_suffix()
         if tok in _KEYWORDS or not _is_name(tok):
             raise self.error(f"expected a signal or a number, found {tok!r}")
         if tok not in self.units:
@@ -464,7 +476,30 @@ def parse(formula: str, units: Mapping[str, str], name: str = "requirement") -> 
     p = _Parser(formula.strip(), units)
     text = p.parse()
     unit = next(iter(p.cmp_units)) if len(p.cmp_units) == 1 else "mixed"
-    return Requirement(name, formula.strip(), text, tuple(p.used), unit)
+    return Requirement(name, formula.strip(), text, tuple(p.used), unit, tuple(p.bounds))
+
+
+def sample_stride(bounds: Sequence[float], dt: float, period: float = 0.1) -> int | None:
+    """The most samples of ``dt`` s, at most ``period`` s, that every interval bound of
+    ``bounds`` is a whole multiple of (rtamt refuses a bound between samples; exact, in
+    nanoseconds, as rtamt checks it); None when a bound is not even a multiple of ``dt``."""
+    exact = [Fraction(repr(b)) * 10**9 for b in bounds]
+    for stride in range(max(1, round(period / dt)), 0, -1):
+        ns = round(stride * dt * 1e9)
+        if ns > 0 and all(b % ns == 0 for b in exact):
+            return stride
+    return None
+
+
+def check_bounds(requirements: Sequence[Requirement], dt: float) -> None:
+    """RequirementError unless every interval bound is a whole number of control periods."""
+    for req in requirements:
+        if sample_stride(req.bounds, dt) is None:
+            bad = next(b for b in req.bounds if sample_stride((b,), dt) is None)
+            raise RequirementError(
+                f"requirement {req.name}: interval bound {bad:g} s is not a whole number of "
+                f"control periods (dt = {dt:g} s): the trace has no sample there"
+            )
 
 
 def split(text: str) -> tuple[str, str]:
@@ -660,7 +695,8 @@ def evaluate(req: Requirement, result, period: float = PERIOD, scenario=None) ->
     if len(t_all) < 2:
         return Verdict(req.name, math.nan, None, req.unit)
     dt = float(t_all[1] - t_all[0])
-    stride = max(1, int(round(period / dt))) if period > 0 else 1
+    # every interval bound on a sample (a bound that is none was refused before the run)
+    stride = (sample_stride(req.bounds, dt, period) or 1) if period > 0 else 1
     idx = np.arange(len(t_all) - 1, -1, -stride)[::-1]
     if len(idx) < 2:
         idx = np.arange(len(t_all))
@@ -674,7 +710,7 @@ def evaluate(req: Requirement, result, period: float = PERIOD, scenario=None) ->
     text = req.rtamt[len("always ") :] if always else req.rtamt
     spec = _spec(
         Requirement(req.name, req.formula, text, req.signals, req.unit),
-        stride * dt,
+        round(stride * dt, 9),  # no float residue: rtamt checks the bounds against it exactly
         names,
     )
     rob = np.array([v for _, v in spec.evaluate(data)], dtype=float)

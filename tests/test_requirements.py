@@ -14,6 +14,7 @@ from ego.requirements import (
     RequirementError,
     evaluate,
     parse,
+    sample_stride,
     split,
     summary_lines,
 )
@@ -71,6 +72,9 @@ def test_the_issues_examples_parse(formula):
         ("always (speed >= 1) $", "unexpected character '$'"),
         ("eventually[3:1] (speed >= 1)", "ends before it starts"),
         ("", "empty"),
+        ("always (gap_front >= 1e999 m)", "1e999 is not a finite number"),
+        ("always (gap_front >= -1e999 m)", "1e999 is not a finite number"),
+        ("eventually[0:1e999] (speed >= 1)", "1e999 is not a finite number"),
     ],
 )
 def test_bad_formulas_are_one_line_errors(formula, message):
@@ -185,6 +189,11 @@ def test_a_run_reports_each_requirement_and_its_violation(capsys):
         ("x: always (gap_frnt >= 2 m)", "unknown signal"),
         ("x: always (", "ends early"),
         ("always (gap_front >= 2 m)", "expected NAME: FORMULA"),
+        ("x: always (gap_front >= 1e999 m)", "not a finite number"),
+        (
+            "x: eventually[0:0.015] (gap_front >= 2 m)",
+            "interval bound 0.015 s is not a whole number of control periods",
+        ),
     ],
 )
 @pytest.mark.parametrize("command", ["run", "compare"])
@@ -259,3 +268,37 @@ def test_the_numpy_predicate_gives_rtamts_own_robustness_sample_by_sample(formul
     nodes = list(plain.offline_interpreter.ast.offline_results.values())
     assert list(fast.offline_interpreter.ast.offline_results.values()) == nodes
     assert any(len(set(v)) > 2 for v in nodes)  # not constants: the signals decide
+
+
+def test_bounds_sit_on_samples_at_any_control_period():
+    """rtamt refuses an interval bound between samples: the samples are the most control
+    periods up to 0.1 s apart that every bound is a multiple of."""
+    assert sample_stride((3.0,), 0.01) == 10
+    assert sample_stride((3.0,), 0.03) == 2  # 0.09 s does not divide 3 s, 0.06 s does
+    assert sample_stride((3.0,), 0.015) == 5
+    assert sample_stride((0.05, 2.0), 0.01) == 5
+    assert sample_stride((0.015,), 0.01) is None
+    assert sample_stride((), 0.03) == 3
+
+
+@pytest.mark.sumo
+def test_a_run_at_a_control_period_that_does_not_divide_its_defaults_bounds_is_checked(capsys):
+    """The scenario's default aeb_slows (eventually[0:3]) at dt = 0.03 s: 0.09 s samples put
+    3 s between two; the check samples every 0.06 s instead of failing after the run."""
+    code = main(
+        [
+            "run",
+            "emergency-brake",
+            "-c",
+            "pid",
+            "--set",
+            "dt=0.03",
+            "--set",
+            "sumo_step=0.09",
+            "--set",
+            "duration=2",
+            "--json",
+        ]
+    )
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0 and out["requirements"]["aeb_slows"] is not None
