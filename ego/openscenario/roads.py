@@ -190,7 +190,14 @@ class RoadMap:
         """The SUMO lane and the position along it (m) of OpenDRIVE (road, lane, s)."""
         if lane == 0:
             raise ValueError("lane 0 is the reference line, not a lane")
-        secs = [x for x in self.sections(road) if x[2] == (lane < 0)]
+        every = self.sections(road)
+        secs = [x for x in every if x[2] == (lane < 0)]
+        if every and not secs:
+            ids = sorted({self.lane_id_of(ln) for x in every for ln in x[1].lanes}, key=abs)
+            raise ValueError(
+                f"road {road!r} has no lanes with {'negative' if lane < 0 else 'positive'} ids "
+                f"(lane ids {', '.join(map(str, ids))})"
+            )
         if not secs:
             known = sorted(
                 {(eid.removeprefix("-")).partition(".")[0] for eid in self.edges} if self.converted else self.edges

@@ -127,6 +127,13 @@ def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
             speed = next((a.value for a in actions if isinstance(a, M.SpeedAction)), None)
             centre[name] = (lane, s, off)
             front = s + v.center_x + 0.5 * v.length
+            if not 0.0 <= front <= lane.length + 1e-6:
+                raise ScenarioFileError(
+                    scenario.path,
+                    pos.line,
+                    f"{name} starts beyond its road: its front at {front:.1f} m along a lane "
+                    f"{lane.length:.1f} m long (SUMO lane {lane.id})",
+                )
             out[name] = Placement(lane.edge, lane.index, front, off, speed)
             del pending[name]
         if not pending:
@@ -436,6 +443,27 @@ class FileScenario(Scenario):
         self._observe(-1.0)  # the start positions (no distance travelled)
         for hist in self._history.values():
             hist.clear()
+
+    def after_sim_step(self) -> None:
+        """The run ends, as at the end of its time, when a scripted entity has left the road
+        network (SUMO takes a car off at the end of its route) or the ego has reached the end
+        of its lane frame (its start road): nothing past either is the file's scenario."""
+        if self.status != "running":
+            return
+        gone = [n for n in self.bridge.arrived() if n in self._scripted]
+        if gone:
+            self._road_end(f"{gone[0]} left the road network (the end of its route)")
+        elif self.view.s + self.geometry.cg_to_front >= self.view.road.length:
+            self._road_end(
+                f"the ego reached the end of its road (its lane {self.view.road.lane_id}, "
+                f"{self.view.road.length:.0f} m: ego drives on its start road only)"
+            )
+
+    def _road_end(self, why: str) -> None:
+        status, detail = self._final_status()
+        if status == "timeout":
+            detail = "before the manoeuvre finished"
+        self._end(status, f"{why} at t = {self.t:.2f} s, {detail}", level="WARN")
 
     def _story_event(self, kind: str, text: str) -> None:
         self.event("storyboard", text)

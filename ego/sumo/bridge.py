@@ -504,6 +504,10 @@ class SumoBridge:
             d.id, d.route, typeID=d.type_id, departLane=str(d.lane), departPos="0", departSpeed=f"{d.speed:.3f}"
         )
 
+    def arrived(self) -> tuple[str, ...]:
+        """The vehicles that left the simulation in the last step (the end of their route)."""
+        return self._ls.simulation.getArrivedIDList()
+
     def front_bumper(self, vid: str) -> tuple[float, float]:
         """Front bumper centre of any vehicle (m), as of the last step."""
         return self._ls.vehicle.getPosition(vid)

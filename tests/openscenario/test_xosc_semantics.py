@@ -427,3 +427,35 @@ def test_actions_on_the_ego_move_its_references(tmp_path):
     assert t[i, cols.index("speed_ref")] == pytest.approx(22.0, abs=1e-9)
     i = round(2.6 / 0.01)  # storyboard time 2.5, halfway across: 1.75 m short of the lane
     assert t[i, cols.index("d_ref")] == pytest.approx(-1.75, abs=1e-9)
+
+
+@pytest.mark.parametrize("who", ["Ego", "C"])
+def test_a_start_beyond_the_road_is_refused_at_load(tmp_path, who):
+    from ego.openscenario.xmltree import ScenarioFileError
+
+    with pytest.raises(ScenarioFileError, match=rf"scene.xosc:\d+: {who} starts beyond its road: its front at 3\d\d\d"):
+        run_scene(scene(tmp_path, [], at={who: (-3, 3100.0, 15.0)}), 1.0)
+
+
+def test_a_lane_on_a_side_without_lanes_is_named(tmp_path):
+    from ego.openscenario.xmltree import ScenarioFileError
+
+    with pytest.raises(ScenarioFileError, match=r"road '0' has no lanes with positive ids \(lane ids -1, -2, -3\)"):
+        run_scene(scene(tmp_path, [], at={"C": (1, 400.0, 15.0)}), 1.0)
+
+
+def test_a_car_leaving_the_road_network_ends_the_run_as_its_time_would(tmp_path):
+    """straight3 is 3000 m long: C, 40 m before its end at 20 m/s, leaves SUMO at the end of
+    its route after about 2 s; the run ends there (no TraCI error), the metrics complete."""
+    sc = run_scene(scene(tmp_path, [], at={"C": (-1, 2960.0, 20.0)}), 8.0)
+    assert sc.status == "completed" and 1.5 < sc.t < 3.0
+    assert sc.status_detail.startswith("C left the road network (the end of its route) at t = ")
+    assert sc.result().metrics["status"] == "completed"
+
+
+def test_the_ego_reaching_the_end_of_its_road_ends_the_run(tmp_path):
+    sc = run_scene(scene(tmp_path, [], at={"Ego": (-3, 2960.0, 20.0), "C": (-1, 400.0, 15.0)}), 8.0)
+    assert sc.status == "completed" and 1.5 < sc.t < 2.5
+    assert "the ego reached the end of its road" in sc.status_detail
+    x_end = sc.view.road.length
+    assert sc.view.s + sc.geometry.cg_to_front == pytest.approx(x_end, abs=0.1 * 20.0 + 0.5)

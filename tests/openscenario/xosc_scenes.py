@@ -89,15 +89,17 @@ def event(
     )
 
 
-def scene(tmp: Path, events: list[tuple[str, str]], params: str = "", stop: str = "") -> Path:
-    """Write the scene with ``events`` (from :func:`event`), one maneuver group per actor."""
+def scene(tmp: Path, events: list[tuple[str, str]], params: str = "", stop: str = "", at: dict | None = None) -> Path:
+    """Write the scene with ``events`` (from :func:`event`), one maneuver group per actor;
+    ``at`` replaces some starts (name -> (lane, s, speed))."""
     shutil.copy(SHIPPED / "straight3.xodr", tmp / "straight3.xodr")
-    ents = "".join(f'<ScenarioObject name="{n}">{CAR}</ScenarioObject>' for n in STARTS)
+    begin = {**STARTS, **(at or {})}
+    ents = "".join(f'<ScenarioObject name="{n}">{CAR}</ScenarioObject>' for n in begin)
     init = "".join(
         f'<Private entityRef="{n}"><PrivateAction><TeleportAction><Position><LanePosition roadId="0" '
         f'laneId="{lane}" s="{s}" offset="0"/></Position></TeleportAction></PrivateAction><PrivateAction>'
         f"{speed(v)}</PrivateAction></Private>"
-        for n, (lane, s, v) in STARTS.items()
+        for n, (lane, s, v) in begin.items()
     )
     groups = ""
     for actor in dict.fromkeys(a for a, _ in events):
