@@ -123,6 +123,13 @@ def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
                 lane, s, off = _place(pos, roads, centre)
             except ValueError as exc:
                 raise ScenarioFileError(scenario.path, pos.line, str(exc)) from None
+            if getattr(pos, "offset", 0.0):
+                raise ScenarioFileError(
+                    scenario.path,
+                    pos.line,
+                    f"{name} starts {pos.offset:g} m off its lane's centre: entities start on lane "
+                    "centres (offset 0; a LaneOffsetAction at t = 0 moves one off it)",
+                )
             v = scenario.entities[name].vehicle
             speed = next((a.value for a in actions if isinstance(a, M.SpeedAction)), None)
             centre[name] = (lane, s, off)

@@ -459,3 +459,13 @@ def test_the_ego_reaching_the_end_of_its_road_ends_the_run(tmp_path):
     assert "the ego reached the end of its road" in sc.status_detail
     x_end = sc.view.road.length
     assert sc.view.s + sc.geometry.cg_to_front == pytest.approx(x_end, abs=0.1 * 20.0 + 0.5)
+
+
+def test_a_start_off_the_lane_centre_is_refused_not_ignored(tmp_path):
+    from ego.openscenario.xmltree import ScenarioFileError
+
+    path = scene(tmp_path, [])
+    text = path.read_text().replace('laneId="-2" s="200.0" offset="0"', 'laneId="-2" s="200.0" offset="1.2"')
+    path.write_text(text)
+    with pytest.raises(ScenarioFileError, match=r"scene.xosc:\d+: B starts 1.2 m off its lane's centre"):
+        run_scene(path, 1.0)
