@@ -447,6 +447,7 @@ class FileScenario(Scenario):
         self.board = Storyboard(self.model, self.ego_name, self, self.config.sumo_step, self._story_event)
         self._scripted = [n for n in self.model.entities if n != self.ego_name]
         self._history = {n: [] for n in self._scripted}
+        self._ego_then = self._ego_now()
         self._observe(-1.0)  # the start positions (no distance travelled)
         for hist in self._history.values():
             hist.clear()
@@ -481,17 +482,19 @@ class FileScenario(Scenario):
         road frame, the distance travelled (summed from the centres' moves); the scripted
         entities' (t, speed, d) history for the tests and the braking criterion."""
         states = self.board.states
-        x = self.ego.state
+        # the ego as of time t, as SUMO's cars are: its state one SUMO step ago (the loop has
+        # integrated it to t + sumo_step by the time SUMO steps)
+        X, Y, psi, u, s_cg, d = self._ego_then
         g = self.geometry
         off = g.cg_to_front - 0.5 * g.length
         e = states[self.ego_name]
-        bx, by = x[0] + off * math.cos(x[4]), x[2] + off * math.sin(x[4])
+        bx, by = X + off * math.cos(psi), Y + off * math.sin(psi)
         if t >= 0.0:
             e.traveled += math.hypot(bx - e.x, by - e.y)
-        e.x, e.y, e.yaw = bx, by, x[4]
-        e.speed = x[1]
-        e.s, e.d = self.s + off, self.d_road
-        e.d_front = self.d_road
+        e.x, e.y, e.yaw = bx, by, psi
+        e.speed = u
+        e.s, e.d = s_cg + off, d
+        e.d_front = d
         project = self.road.project
         box = self.bridge.box
         history = self._history
@@ -508,12 +511,18 @@ class FileScenario(Scenario):
             st.d_front = project(bx + half * math.cos(yaw), by + half * math.sin(yaw))[1]
             history[name].append((t, speed, st.d_front))
 
+    def _ego_now(self) -> tuple[float, float, float, float, float, float]:
+        """The ego's world pose, speed and lane-frame position (its centre of gravity) now."""
+        x = self.ego.state
+        return x[0], x[2], x[4], x[1], self.s, self.d_road
+
     def before_sim_step(self) -> None:
         """The storyboard's step, after the actors' updates before a simulator step."""
         board = self.board
         t = self.t - self.config.sumo_step
         self._observe(t)
         board.step(t)
+        self._ego_then = self._ego_now()  # what the next step's storyboard time sees
         if board.stopped and self.status == "running":
             self._end("completed", "the storyboard's StopTrigger ended the scenario")
 

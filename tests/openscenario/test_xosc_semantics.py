@@ -469,3 +469,37 @@ def test_a_start_off_the_lane_centre_is_refused_not_ignored(tmp_path):
     path.write_text(text)
     with pytest.raises(ScenarioFileError, match=r"scene.xosc:\d+: B starts 1.2 m off its lane's centre"):
         run_scene(path, 1.0)
+
+
+def test_the_storyboard_sees_the_ego_at_its_own_time_as_it_sees_sumos_cars(tmp_path):
+    """At storyboard time t every entity is as of t: the ego's state there is the trace's row
+    at t (its model runs ahead of SUMO by a SUMO step by the time the storyboard steps; it was
+    seen there, 0.1 s early: 2 m at 20 m/s for a distance condition)."""
+    from ego.runner import RunSpec, build
+
+    sc = build(RunSpec(str(scene(tmp_path, [])), "pid", overrides={"duration": 3.0}))
+    seen = []
+    sc.reset()
+    step = sc.board.step
+
+    def spy(t):
+        e = sc.board.states["Ego"]
+        seen.append((t, e.s, e.speed))
+        step(t)
+
+    sc.board.step = spy
+    controller = sc.controller
+    obs = sc.obs
+    while not sc.done:
+        obs = sc.step(controller.step(obs))
+    trace = sc.trace.array()
+    names = sc.trace.names
+    g = sc.geometry
+    off = g.cg_to_front - 0.5 * g.length
+    sc.close()
+    assert len(seen) > 20
+    for t, s, u in seen:
+        row = trace[round(t / sc.config.dt)]
+        assert row[names.index("t")] == pytest.approx(t)
+        assert s - off == pytest.approx(row[names.index("s")], abs=1e-9)
+        assert u == pytest.approx(row[names.index("speed")], abs=1e-12)
