@@ -1065,6 +1065,46 @@ def rl_baselines() -> list[Table]:
     return out
 
 
+def rl_thresholds() -> Table:
+    """docs/results/rl-baselines.md: each env's ``reward_threshold``, its default controller's
+    mean return on the evaluation episodes with ``gym.make(id)``'s own defaults."""
+    from ego.gym.baselines import EVAL_SEEDS, ThresholdEval
+    from ego.scenarios import scenario_class
+
+    rows = []
+    for env_id, name in RL_TABLES.items():
+        controller = scenario_class(name.removeprefix("rl-")).reference_controller()
+        rows.append(Row(f"{env_id} ({controller})", (ThresholdEval(env_id),), _rl_threshold_cells))
+    return Table(
+        "rl-thresholds",
+        "rl-baselines",
+        (
+            'python -c "import numpy as np; from ego.gym.baselines import ThresholdEval; '
+            "print(np.mean(ThresholdEval('ego/CutIn-v0')()['returns']))\"",
+        ),
+        (
+            "env id (default controller)",
+            "reward_threshold: mean return",
+            "episodes without a crash",
+            "mean episode length (env steps)",
+        ),
+        tuple(rows),
+        (
+            f"Evaluation episodes: seeds {EVAL_SEEDS[0]}-{EVAL_SEEDS[-1]}, each env as `gym.make(id)` makes it "
+            "(every 0.01 s control step an env step, the scenario's full duration, the default randomisation); "
+            "the controller through `ego.gym.ControllerPolicy`, one deterministic run of the episodes.",
+        ),
+    )
+
+
+def _rl_threshold_cells(results: list) -> list[str]:
+    from ego.gym.baselines import summary
+
+    _, _, ok = summary(results)
+    lengths = results[0]["lengths"]
+    return [f"{np.mean(results[0]['returns']):.2f}", f"{100 * ok:.0f} %", f"{sum(lengths) / len(lengths):.0f}"]
+
+
 def tables() -> list[Table]:
     """Every table of docs/results/, page by page."""
     from ego.docs.falsify import docs_tables
@@ -1078,6 +1118,7 @@ def tables() -> list[Table]:
         + envelope()
         + cross_simulator()
         + rl_baselines()
+        + [rl_thresholds()]
         + openscenario()
         + docs_tables()
     )

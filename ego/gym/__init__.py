@@ -39,16 +39,17 @@ ENV_IDS = {
 }
 
 #: env id -> the mean return an agent must reach to count as solving it: the env's default
-#: controller's mean return on the evaluation episodes of docs/results/rl-baselines.md (the
-#: benchmark configuration: ego.gym.baselines.BENCH_CONFIG, 10 Hz), so "solved" means "as
-#: good as the controller" (tests/gym check it against the page)
+#: controller's mean return on the evaluation episodes of docs/results/rl-baselines.md in the
+#: env as gym.make(id) makes it (its rl-thresholds table: every control step an env step, the
+#: full duration), so "solved" means "as good as the controller" in the registered env
+#: (tests/gym check it against the page)
 REWARD_THRESHOLDS: dict[str, float] = {
-    "ego/EmergencyBrake-v0": 86.18,
-    "ego/FastFollower-v0": 117.36,
-    "ego/CutIn-v0": 152.28,
-    "ego/Curve-v0": 48.46,
-    "ego/LaneCentering-v0": 89.37,
-    "ego/Platoon-v0": 210.26,
+    "ego/EmergencyBrake-v0": 862.26,
+    "ego/FastFollower-v0": 1173.12,
+    "ego/CutIn-v0": 1522.96,
+    "ego/Curve-v0": 485.04,
+    "ego/LaneCentering-v0": 17943.61,
+    "ego/Platoon-v0": 2102.58,
 }
 
 

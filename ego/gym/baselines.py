@@ -63,18 +63,20 @@ def load(algo: str, path):
     return {"ppo": PPO, "sac": SAC}[algo].load(path, device="cpu")
 
 
-def make_env(env_id: str):
+def make_env(env_id: str, config: dict | None = None):
+    """``gym.make(env_id)`` in its benchmark configuration, or with ``config`` (``{}``: the
+    registered defaults)."""
     import gymnasium as gym
 
     import ego.gym  # noqa: F401 - registers the ids
 
-    return gym.make(env_id, config=BENCH_CONFIG[env_id])
+    return gym.make(env_id, config=BENCH_CONFIG[env_id] if config is None else config)
 
 
-def evaluate(env_id: str, act) -> dict:
+def evaluate(env_id: str, act, config: dict | None = None) -> dict:
     """``act(env, obs) -> action`` on every episode of :data:`EVAL_SEEDS`: the returns, the
-    statuses and the episode lengths (env steps)."""
-    env = make_env(env_id)
+    statuses and the episode lengths (env steps); the env as :func:`make_env` makes it."""
+    env = make_env(env_id, config)
     returns, statuses, lengths = [], [], []
     try:
         for seed in EVAL_SEEDS:
@@ -171,6 +173,22 @@ class ControllerEval:
 
     def __call__(self) -> dict:
         return evaluate(self.env_id, controller_policy_act(self.controller))
+
+
+@dataclass(frozen=True)
+class ThresholdEval:
+    """A docs job: the env's default controller on its evaluation episodes in the env as
+    ``gym.make(env_id)`` makes it (the registered defaults: every control step an env step,
+    the full duration): its mean return is the spec's ``reward_threshold``."""
+
+    env_id: str
+
+    def __call__(self) -> dict:
+        import ego.gym
+        from ego.scenarios import scenario_class
+
+        controller = scenario_class(ego.gym.ENV_IDS[self.env_id]).reference_controller()
+        return evaluate(self.env_id, controller_policy_act(controller), config={})
 
 
 @dataclass(frozen=True)
