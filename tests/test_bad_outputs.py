@@ -45,6 +45,12 @@ SPEC = (
     'scenario = "emergency-brake"\ncontrollers = ["pid"]\n[set]\nduration = 4\n'
     "[grid]\nego_speed = [20, 25]\nlead_gap = [30]\n"
 )
+FSPEC = (
+    'scenario = "emergency-brake"\ncontroller = "pid"\nrequirement = "far"\nseed = 3\nbudget = 2\n'
+    '[requirements]\nfar = "always (gap_front >= 25 m)"\n[set]\nduration = 4\n'
+    "[search]\nego_speed = [15, 30]\nlead_gap = [20, 60]\n"
+)
+FALSIFY = ["falsify", "{fspec}", "--out", "{out}", "--optimizer", "lhs"]
 LONG = "x" * 250  # a valid name (<= 255) that the temporary suffix makes too long
 TOO_LONG = "y" * 256
 DEEP = "/".join(["d" * 200] * 25)  # longer than PATH_MAX in all
@@ -320,6 +326,13 @@ CASES += [
         "'\u0663'",
     ),
     C("train-seed-underscore", ["train", "narma-l2", "--seed", "1_0"], "'1_0'"),
+    C("falsify-jobs-underscore", [*FALSIFY, "--jobs", "1_0"], "--jobs: invalid whole number (digits 0-9) value: '1_0'"),
+    C(
+        "falsify-budget-underscore",
+        [*FALSIFY, "--budget", "1_0"],
+        "--budget: invalid whole number (digits 0-9) value: '1_0'",
+    ),
+    C("falsify-optimizer-seed-arabic-digit", [*FALSIFY, "--optimizer-seed", "\u0663"], "'\u0663'"),
     C(
         "compare-seeds-underscore",
         [
@@ -429,10 +442,11 @@ def test_a_bad_output_place_is_one_line_exit_2_before_anything_runs(
     out = tmp_path / "out"
     spec = tmp_path / "spec.toml"
     spec.write_text(SPEC)
+    (tmp_path / "fspec.toml").write_text(FSPEC)
     if not MOUNT:  # the tiny filesystem stands for itself only when mounted: raise the floor instead
         if "{tiny}" in " ".join(args):
             monkeypatch.setenv("EGO_MIN_FREE_MB", str(10**9))
-    paths = {**places, "out": str(out), "spec": str(spec)}
+    paths = {**places, "out": str(out), "spec": str(spec), "fspec": str(tmp_path / "fspec.toml")}
     occupy = [a for a in args if a.startswith("@")]
     args = [a for a in args if not a.startswith("@")]
     for o in occupy:
