@@ -551,6 +551,7 @@ def test_odd_inputs_in_python_are_config_errors(tmp_path, monkeypatch):
     from ego.compare import compare
     from ego.control.cascade import load_preset
     from ego.control.narma import NarmaModel
+    from ego.falsify import spec as falsify_spec
     from ego.runner import RunSpec, resolve
     from ego.sweep import spec as sweep_spec
 
@@ -559,6 +560,8 @@ def test_odd_inputs_in_python_are_config_errors(tmp_path, monkeypatch):
         "spec.parse([])": (lambda: sweep_spec.parse([]), "expected a table"),
         "spec.load(5)": (lambda: sweep_spec.load(5), "bad sweep spec path 5"),
         "spec.load(/dev/zero)": (lambda: sweep_spec.load("/dev/zero"), "larger than"),
+        "falsify load(/dev/zero)": (lambda: falsify_spec.load("/dev/zero"), "larger than"),
+        "falsify load(folder)": (lambda: falsify_spec.load(str(tmp_path)), "it is a folder"),
         "spec.load(folder)": (lambda: sweep_spec.load(str(tmp_path)), "it is a folder"),
         "compare(out=5)": (
             lambda: compare("emergency-brake", ["pid"], 1, {}, 5),
