@@ -204,6 +204,8 @@ for key, (args, _what) in DIR_OPTIONS.items():
         C(f"{key}-out-read-only", [*args, "{ro}"], "{ro}"),
         C(f"{key}-out-read-only-sub", [*args, "{ro}/out"], "{ro}"),
         C(f"{key}-out-tiny-filesystem", [*args, "{tiny}/out"], "free"),
+        # a folder PATH_MAX allows whose files' temporary names it does not: nothing made
+        C(f"{key}-out-too-long-for-its-files", [*args, "{long}"], "too long"),
     ]
 
 # names occupied inside an --out folder: (what to make, relative path), the option's args
@@ -425,6 +427,15 @@ def _occupy(folder: Path, spec: str) -> None:
     }[kind](target)
 
 
+def _near_path_max(folder: Path, length: int = 4070) -> str:
+    """A path below ``folder`` ``length`` bytes long (PATH_MAX is 4096): a valid folder name
+    that ``results.parquet.<pid>.partial`` inside it makes too long."""
+    path = str(folder.absolute())
+    while len(path) < length:
+        path += "/" + "l" * min(200, max(1, length - len(path) - 1))
+    return path
+
+
 def _fill(args, paths) -> list[str]:
     out = []
     for a in args:
@@ -446,7 +457,13 @@ def test_a_bad_output_place_is_one_line_exit_2_before_anything_runs(
     if not MOUNT:  # the tiny filesystem stands for itself only when mounted: raise the floor instead
         if "{tiny}" in " ".join(args):
             monkeypatch.setenv("EGO_MIN_FREE_MB", str(10**9))
-    paths = {**places, "out": str(out), "spec": str(spec), "fspec": str(tmp_path / "fspec.toml")}
+    paths = {
+        **places,
+        "out": str(out),
+        "spec": str(spec),
+        "fspec": str(tmp_path / "fspec.toml"),
+        "long": _near_path_max(out),
+    }
     occupy = [a for a in args if a.startswith("@")]
     args = [a for a in args if not a.startswith("@")]
     for o in occupy:
