@@ -206,6 +206,9 @@ for key, (args, _what) in DIR_OPTIONS.items():
         C(f"{key}-out-tiny-filesystem", [*args, "{tiny}/out"], "free"),
         # a folder PATH_MAX allows whose files' temporary names it does not: nothing made
         C(f"{key}-out-too-long-for-its-files", [*args, "{long}"], "too long"),
+        C(f"{key}-out-the-package", [*args, str(DEFAULT_MODEL.parents[2])], "inside the ego package"),
+        C(f"{key}-out-inside-the-package", [*args, str(DEFAULT_MODEL.parent)], "inside the ego package"),
+        C(f"{key}-out-new-in-the-package", [*args, str(DEFAULT_MODEL.parent / "out")], "inside the ego package"),
     ]
 
 # names occupied inside an --out folder: (what to make, relative path), the option's args
@@ -472,6 +475,7 @@ def test_a_bad_output_place_is_one_line_exit_2_before_anything_runs(
     before, started = _tree(tmp_path), SumoBridge.started
     root_before = _tree(Path(places["root"])) if MOUNT or not os.access(places["ro"], os.W_OK) else None
     shipped = {p: hashlib.sha256(p.read_bytes()).hexdigest() for p in (DEFAULT_MODEL, TUNED_PRESET)}
+    package = _tree(DEFAULT_MODEL.parent)
     t0 = time.monotonic()
     status = main(_fill(args, paths))
     res = capsys.readouterr()
@@ -485,6 +489,7 @@ def test_a_bad_output_place_is_one_line_exit_2_before_anything_runs(
         assert _tree(Path(places["root"])) == root_before
     assert SumoBridge.started == started
     assert {p: hashlib.sha256(p.read_bytes()).hexdigest() for p in shipped} == shipped
+    assert _tree(DEFAULT_MODEL.parent) == package
     assert time.monotonic() - t0 < 15
 
 
