@@ -150,6 +150,7 @@ DIR_OPTIONS = {
         "--out",
     ),
     "sweep": (["sweep", "{spec}", "--out"], "--out"),
+    "falsify": (["falsify", "{fspec}", "--out"], "--out"),
 }
 
 CASES = []
@@ -247,6 +248,12 @@ OCCUPIED = [
         ["--plot", "ego_speed,lead_gap"],
     ),
     ("sweep", "fifo", "summary.md", []),
+    ("falsify", "dir", "results.parquet", []),
+    ("falsify", "dir", "falsified.md", []),
+    ("falsify", "fifo", "falsified.md", []),
+    ("falsify", "dir", "convergence.png", []),
+    ("falsify", "dir", ".ego.lock", []),
+    ("falsify", "file", "runs", []),
 ]
 for command, kind, name, extra in OCCUPIED:
     if name.startswith("runs/pppp"):
@@ -378,6 +385,7 @@ CASES += [
         ],
         "127.0.0.1:1",
     ),
+    C("falsify-address-nothing-listening", [*FALSIFY, "--engine", "ray", "--address", "127.0.0.1:1"], "127.0.0.1:1"),
     C(
         "sweep-address-malformed",
         [

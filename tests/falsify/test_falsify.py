@@ -111,6 +111,32 @@ def test_bad_options_exit_2(tmp_path, capsys):
         parse(__import__("tomllib").loads(one), "x").check_optimizer("cma")
 
 
+@pytest.mark.parametrize(
+    "column, values, message",
+    [
+        ("scenario", ["fast-follower"], "holds results of fast-follower"),
+        ("ego_speed", ["fast"], "column ego_speed holds text"),
+        ("optimizer_seed", ["zero"], "column optimizer_seed holds text"),
+    ],
+)
+def test_results_that_cannot_take_the_new_rows_are_refused_before_running(column, values, message, tmp_path, capsys):
+    """As ``ego sweep``: no rows of another scenario (or of another kind) added to --out."""
+    import pyarrow as pa
+
+    path = tmp_path / "f.toml"
+    path.write_text(SPEC)
+    out = tmp_path / "out"
+    out.mkdir()
+    rows = {"run_id": ["a"], "scenario": ["emergency-brake"], "controller": ["pid"], "seed": [3], column: values}
+    pq.write_table(pa.table(rows), out / "results.parquet")
+    before = (out / "results.parquet").read_bytes()
+    assert main(["falsify", str(path), "--out", str(out), "--budget", "2", "--optimizer", "lhs"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("ego: error: bad --out") and message in err and err.count("\n") == 1, err
+    assert [p.name for p in out.iterdir()] == ["results.parquet"]  # nothing run, nothing written
+    assert (out / "results.parquet").read_bytes() == before
+
+
 @pytest.mark.sumo
 def test_falsify_finds_verifies_and_resumes(tmp_path, capsys):
     path = tmp_path / "f.toml"
