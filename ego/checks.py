@@ -116,19 +116,21 @@ def check_not_shipped(path: Path, what: str, text: str) -> None:
         return
     if target == package or package in target.parents:
         raise ConfigError(
-            f"bad {what} {text!r}: it is inside the ego package ({package}); the files "
-            "shipped there are replaced only with --install"
+            f"bad {what} {text!r}: it is inside the ego package ({package}); ego writes there "
+            "only to replace the files it ships (train/tune --install)"
         )
 
 
 def check_output_dir(text: str | None, what: str) -> Path:
-    """An output folder: non-empty, a folder if it exists, else creatable, and writable."""
+    """An output folder: non-empty, not inside the ego package, a folder if it exists, else
+    creatable, and writable."""
     if text is None or not str(text).strip():
         raise ConfigError(f"bad {what} {text!r} (expected a folder)")
     path = Path(text)
     from ego.paths import check_folder_target, check_path_names
 
     check_path_names(path, what, text, partial=False)
+    check_not_shipped(path, what, text)
     if path.exists():
         if not path.is_dir():
             raise ConfigError(f"bad {what} {text!r}: it is a file (expected a folder)")

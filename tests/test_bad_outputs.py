@@ -45,6 +45,12 @@ SPEC = (
     'scenario = "emergency-brake"\ncontrollers = ["pid"]\n[set]\nduration = 4\n'
     "[grid]\nego_speed = [20, 25]\nlead_gap = [30]\n"
 )
+FSPEC = (
+    'scenario = "emergency-brake"\ncontroller = "pid"\nrequirement = "far"\nseed = 3\nbudget = 2\n'
+    '[requirements]\nfar = "always (gap_front >= 25 m)"\n[set]\nduration = 4\n'
+    "[search]\nego_speed = [15, 30]\nlead_gap = [20, 60]\n"
+)
+FALSIFY = ["falsify", "{fspec}", "--out", "{out}", "--optimizer", "lhs"]
 LONG = "x" * 250  # a valid name (<= 255) that the temporary suffix makes too long
 TOO_LONG = "y" * 256
 DEEP = "/".join(["d" * 200] * 25)  # longer than PATH_MAX in all
@@ -144,6 +150,7 @@ DIR_OPTIONS = {
         "--out",
     ),
     "sweep": (["sweep", "{spec}", "--out"], "--out"),
+    "falsify": (["falsify", "{fspec}", "--out"], "--out"),
 }
 
 CASES = []
@@ -198,6 +205,11 @@ for key, (args, _what) in DIR_OPTIONS.items():
         C(f"{key}-out-read-only", [*args, "{ro}"], "{ro}"),
         C(f"{key}-out-read-only-sub", [*args, "{ro}/out"], "{ro}"),
         C(f"{key}-out-tiny-filesystem", [*args, "{tiny}/out"], "free"),
+        # a folder PATH_MAX allows whose files' temporary names it does not: nothing made
+        C(f"{key}-out-too-long-for-its-files", [*args, "{long}"], "too long"),
+        C(f"{key}-out-the-package", [*args, str(DEFAULT_MODEL.parents[2])], "inside the ego package"),
+        C(f"{key}-out-inside-the-package", [*args, str(DEFAULT_MODEL.parent)], "inside the ego package"),
+        C(f"{key}-out-new-in-the-package", [*args, str(DEFAULT_MODEL.parent / "out")], "inside the ego package"),
     ]
 
 # names occupied inside an --out folder: (what to make, relative path), the option's args
@@ -236,6 +248,12 @@ OCCUPIED = [
         ["--plot", "ego_speed,lead_gap"],
     ),
     ("sweep", "fifo", "summary.md", []),
+    ("falsify", "dir", "results.parquet", []),
+    ("falsify", "dir", "falsified.md", []),
+    ("falsify", "fifo", "falsified.md", []),
+    ("falsify", "dir", "convergence.png", []),
+    ("falsify", "dir", ".ego.lock", []),
+    ("falsify", "file", "runs", []),
 ]
 for command, kind, name, extra in OCCUPIED:
     if name.startswith("runs/pppp"):
@@ -320,6 +338,13 @@ CASES += [
         "'\u0663'",
     ),
     C("train-seed-underscore", ["train", "narma-l2", "--seed", "1_0"], "'1_0'"),
+    C("falsify-jobs-underscore", [*FALSIFY, "--jobs", "1_0"], "--jobs: invalid whole number (digits 0-9) value: '1_0'"),
+    C(
+        "falsify-budget-underscore",
+        [*FALSIFY, "--budget", "1_0"],
+        "--budget: invalid whole number (digits 0-9) value: '1_0'",
+    ),
+    C("falsify-optimizer-seed-arabic-digit", [*FALSIFY, "--optimizer-seed", "\u0663"], "'\u0663'"),
     C(
         "compare-seeds-underscore",
         [
@@ -360,6 +385,7 @@ CASES += [
         ],
         "127.0.0.1:1",
     ),
+    C("falsify-address-nothing-listening", [*FALSIFY, "--engine", "ray", "--address", "127.0.0.1:1"], "127.0.0.1:1"),
     C(
         "sweep-address-malformed",
         [
@@ -412,6 +438,15 @@ def _occupy(folder: Path, spec: str) -> None:
     }[kind](target)
 
 
+def _near_path_max(folder: Path, length: int = 4070) -> str:
+    """A path below ``folder`` ``length`` bytes long (PATH_MAX is 4096): a valid folder name
+    that ``results.parquet.<pid>.partial`` inside it makes too long."""
+    path = str(folder.absolute())
+    while len(path) < length:
+        path += "/" + "l" * min(200, max(1, length - len(path) - 1))
+    return path
+
+
 def _fill(args, paths) -> list[str]:
     out = []
     for a in args:
@@ -429,10 +464,17 @@ def test_a_bad_output_place_is_one_line_exit_2_before_anything_runs(
     out = tmp_path / "out"
     spec = tmp_path / "spec.toml"
     spec.write_text(SPEC)
+    (tmp_path / "fspec.toml").write_text(FSPEC)
     if not MOUNT:  # the tiny filesystem stands for itself only when mounted: raise the floor instead
         if "{tiny}" in " ".join(args):
             monkeypatch.setenv("EGO_MIN_FREE_MB", str(10**9))
-    paths = {**places, "out": str(out), "spec": str(spec)}
+    paths = {
+        **places,
+        "out": str(out),
+        "spec": str(spec),
+        "fspec": str(tmp_path / "fspec.toml"),
+        "long": _near_path_max(out),
+    }
     occupy = [a for a in args if a.startswith("@")]
     args = [a for a in args if not a.startswith("@")]
     for o in occupy:
@@ -441,6 +483,7 @@ def test_a_bad_output_place_is_one_line_exit_2_before_anything_runs(
     before, started = _tree(tmp_path), SumoBridge.started
     root_before = _tree(Path(places["root"])) if MOUNT or not os.access(places["ro"], os.W_OK) else None
     shipped = {p: hashlib.sha256(p.read_bytes()).hexdigest() for p in (DEFAULT_MODEL, TUNED_PRESET)}
+    package = _tree(DEFAULT_MODEL.parent)
     t0 = time.monotonic()
     status = main(_fill(args, paths))
     res = capsys.readouterr()
@@ -454,6 +497,7 @@ def test_a_bad_output_place_is_one_line_exit_2_before_anything_runs(
         assert _tree(Path(places["root"])) == root_before
     assert SumoBridge.started == started
     assert {p: hashlib.sha256(p.read_bytes()).hexdigest() for p in shipped} == shipped
+    assert _tree(DEFAULT_MODEL.parent) == package
     assert time.monotonic() - t0 < 15
 
 
@@ -537,6 +581,7 @@ def test_odd_inputs_in_python_are_config_errors(tmp_path, monkeypatch):
     from ego.compare import compare
     from ego.control.cascade import load_preset
     from ego.control.narma import NarmaModel
+    from ego.falsify import spec as falsify_spec
     from ego.runner import RunSpec, resolve
     from ego.sweep import spec as sweep_spec
 
@@ -545,6 +590,8 @@ def test_odd_inputs_in_python_are_config_errors(tmp_path, monkeypatch):
         "spec.parse([])": (lambda: sweep_spec.parse([]), "expected a table"),
         "spec.load(5)": (lambda: sweep_spec.load(5), "bad sweep spec path 5"),
         "spec.load(/dev/zero)": (lambda: sweep_spec.load("/dev/zero"), "larger than"),
+        "falsify load(/dev/zero)": (lambda: falsify_spec.load("/dev/zero"), "larger than"),
+        "falsify load(folder)": (lambda: falsify_spec.load(str(tmp_path)), "it is a folder"),
         "spec.load(folder)": (lambda: sweep_spec.load(str(tmp_path)), "it is a folder"),
         "compare(out=5)": (
             lambda: compare("emergency-brake", ["pid"], 1, {}, 5),

@@ -36,6 +36,13 @@ def test_an_output_folder_has_one_holder_at_a_time(tmp_path):
         pass
 
 
+def test_a_folder_that_cannot_be_made_is_one_line(tmp_path):
+    """The lock makes its folder (the commands no longer do it before their checks)."""
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(ConfigError, match=r"^cannot create --out folder '.*/file/out': Not a directory$"):
+        FolderLock(tmp_path / "file" / "out").acquire()
+
+
 def test_partial_files_are_removed_and_nothing_else(tmp_path):
     for name in ("a.rrd", "a.rrd.123.partial", "b.rrd.9.partial", "notes.txt"):
         (tmp_path / name).write_text("x")

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ego.checks import whole_number
+
 OPTIMIZERS = ("cma", "bo", "bo-tpe", "random", "lhs")
 UNTIL = ("first", "budget")
 
@@ -46,7 +48,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     fal.add_argument("--engine", default="process", metavar="ENGINE", help="process (default) or ray")
     fal.add_argument(
         "--jobs",
-        type=int,
+        type=whole_number("--jobs"),
         default=None,
         metavar="N",
         help="parallel runs (default: the CPUs)",
@@ -59,7 +61,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     )
     fal.add_argument(
         "--budget",
-        type=int,
+        type=whole_number("--budget"),
         default=None,
         metavar="N",
         help="runs at most (default: the spec's)",
@@ -72,7 +74,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     )
     fal.add_argument(
         "--optimizer-seed",
-        type=int,
+        type=whole_number("--optimizer-seed"),
         default=0,
         metavar="N",
         help="the optimiser's seed (default 0)",
@@ -92,7 +94,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
 
 
 def command(args) -> int:
-    from ego.checks import check_count, check_output_dir, check_seed
+    from ego.checks import MAX_JOBS, check_count, check_output_dir, check_seed
     from ego.falsify.search import falsify
     from ego.falsify.spec import load
     from ego.parallel.executor import ENGINES
@@ -106,17 +108,13 @@ def command(args) -> int:
     ):
         if value not in allowed:
             raise ConfigError(f"bad value for {what}: {value!r} (allowed: {', '.join(allowed)})")
-    check_count(args.jobs, "--jobs", 1, 1024)
+    check_count(args.jobs, "--jobs", 1, MAX_JOBS)
     check_count(args.budget, "--budget", 1, 10_000_000)
     check_seed(args.optimizer_seed, "--optimizer-seed")
     if args.address is not None and args.engine != "ray":
         raise ConfigError("--address needs --engine ray")
     spec.check_optimizer(args.optimizer)
-    out = check_output_dir(args.out, "--out")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ConfigError(f"cannot create --out folder {args.out!r}: {exc.strerror}") from None
+    out = check_output_dir(args.out, "--out")  # falsify() checks the names inside it, then makes it
     report = falsify(
         spec,
         out,

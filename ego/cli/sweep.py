@@ -37,11 +37,7 @@ def command(args: Any) -> int:
     choice(args.record, RECORD, "--record")
     for p in args.plot:
         parse_plot(p, spec)
-    out = check_output_dir(args.out, "--out")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ConfigError(f"cannot create --out folder {args.out!r}: {exc.strerror}") from None
+    out = check_output_dir(args.out, "--out")  # sweep() checks the names inside it, then makes it
     report = sweep(
         spec,
         out,

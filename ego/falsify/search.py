@@ -128,9 +128,18 @@ def falsify(
 ) -> FalsifyReport:
     """Run the search (see the module docstring); ``executor`` overrides ``engine``/``jobs``."""
     from ego.parallel.executor import make_executor
+    from ego.sweep.runner import check_results_folder
 
     out = Path(out)
     budget = budget or spec.budget
+    # every name it writes, the results it would add to and the cluster: before --out is touched
+    check_results_folder(out, ["falsified.md", "convergence.png"], spec.controllers if verify else ())
+    if (out / "results.parquet").is_file():
+        ResultStore(out).check_compatible(spec.scenario, _sample_rows(spec, optimizer, optimizer_seed))
+    if executor is None and engine == "ray" and address is not None:
+        from ego.cluster import check_address
+
+        check_address(address)
     with FolderLock(out, "--out"):
         store = ResultStore(out)
         table = store.table()
@@ -186,6 +195,27 @@ def falsify(
             spec.requirement,
         )
     return report
+
+
+def _sample_rows(spec: FalsifySpec, optimizer: str, optimizer_seed: int) -> list[dict]:
+    """The key columns, overrides and optimiser columns of each controller's runs at the
+    corners of the search: what the results file's columns will be asked to hold."""
+    rows = []
+    for controller in spec.controllers:
+        for u in (np.zeros(len(spec.dims)), np.ones(len(spec.dims))):
+            seed, overrides = spec.point(u)
+            rows.append(
+                {
+                    "run_id": spec.run_id(controller, seed, overrides),
+                    "scenario": spec.scenario,
+                    "controller": controller,
+                    "seed": seed,
+                    **overrides,
+                    "optimizer": optimizer,
+                    "optimizer_seed": optimizer_seed,
+                }
+            )
+    return rows
 
 
 def _search(

@@ -21,14 +21,13 @@ formulas as ``--require`` checks them: one line, before anything runs.
 
 from __future__ import annotations
 
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ego.params import ConfigError, did_you_mean
-from ego.sweep.spec import MAX_SEED, _check, _param_types, run_id
+from ego.sweep.spec import MAX_SEED, _check, _param_types, read_toml, run_id
 
 _TOP = (
     "scenario",
@@ -111,16 +110,9 @@ class FalsifySpec:
 
 
 def load(path: str | Path) -> FalsifySpec:
+    """Read and validate a spec file (at most 1 MiB, as ``ego sweep`` reads its spec)."""
     path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except UnicodeDecodeError:
-        raise ConfigError(f"cannot read the falsification spec {str(path)!r}: not a text file") from None
-    except OSError as exc:
-        raise ConfigError(f"cannot read the falsification spec {str(path)!r}: {exc.strerror or exc}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{path}: not valid TOML: {exc}") from None
-    return parse(data, str(path))
+    return parse(read_toml(path, "falsification spec"), str(path))
 
 
 def parse(data: dict, source: str = "the spec") -> FalsifySpec:

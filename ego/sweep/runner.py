@@ -215,25 +215,33 @@ def _sample_rows(spec: SweepSpec, limit: int = 200) -> list[dict]:
 
 
 def check_outputs(spec: SweepSpec, out: Path, record: str, plot_specs: Sequence = ()) -> None:
-    """Every name the sweep creates in ``out`` - results.parquet, summary.md, the plots, the
-    lock, runs/ and its recordings (the longest controller name) - free and writable, before
+    """Every name the sweep creates in ``out`` - summary.md, the plots, the recordings already
+    named in runs/ and those of :func:`check_results_folder` - free and writable, before
     anything runs (:mod:`ego.paths`)."""
+    files = ["summary.md"]
+    files += [f"envelope_{x}_{y}" + (f"_{m}" if m else "") + ".png" for x, y, m in plot_specs]
+    runs = out / "runs"
+    if record != "none" and runs.is_dir():  # a recording's name taken by a folder, a FIFO...
+        for r in spec.runs() if spec.count() <= 100_000 else ():
+            name = f"{r.controller}-{r.run_id}.rrd"
+            if os.path.lexists(runs / name):
+                files.append(f"runs/{name}")
+    check_results_folder(out, files, spec.controllers if record != "none" else ())
+
+
+def check_results_folder(out: Path, files: Sequence[str], recorded: Sequence[str] = ()) -> None:
+    """``out`` and the names a results folder of ``ego sweep`` or ``ego falsify`` gets inside
+    it - results.parquet, the lock, ``files`` and, when runs of the controllers ``recorded``
+    may be recorded, runs/ and a recording of the longest controller name - free and
+    writable, before anything runs (:mod:`ego.paths`)."""
     from ego.paths import check_folder_contents, check_folder_target
 
     check_folder_target(out, "--out", str(out))
-    files = ["results.parquet", "summary.md", LOCK_FILE]
-    files += [f"envelope_{x}_{y}" + (f"_{m}" if m else "") + ".png" for x, y, m in plot_specs]
+    files = ["results.parquet", LOCK_FILE, *files]
     folders = []
-    if record != "none":
+    if recorded:
         folders.append("runs")
-        longest = max(spec.controllers, key=len)
-        files.append(f"runs/{longest}-{'0' * 16}.rrd")
-        runs = out / "runs"
-        if runs.is_dir():  # a recording's name taken by a folder, a FIFO...
-            for r in spec.runs() if spec.count() <= 100_000 else ():
-                name = f"{r.controller}-{r.run_id}.rrd"
-                if os.path.lexists(runs / name):
-                    files.append(f"runs/{name}")
+        files.append(f"runs/{max(recorded, key=len)}-{'0' * 16}.rrd")
     check_folder_contents(out, "--out", files=files, folders=folders, text=str(out))
 
 

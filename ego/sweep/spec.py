@@ -175,32 +175,39 @@ def load(path: str | Path) -> SweepSpec:
     if not isinstance(path, (str, Path)) and not hasattr(path, "__fspath__"):
         raise ConfigError(f"bad sweep spec path {path!r:.60} (expected a path to a .toml file)")
     path = Path(path)
-    try:
-        if path.is_dir():
-            raise ConfigError(f"cannot read the sweep spec {str(path)!r}: it is a folder (expected a TOML file)")
-        with open(path, "rb") as f:
-            raw = f.read(MAX_SPEC_BYTES + 1)
-        if len(raw) > MAX_SPEC_BYTES:
-            raise ConfigError(
-                f"cannot read the sweep spec {str(path)!r}: larger than "
-                f"{MAX_SPEC_BYTES // 1024} KiB (a spec is a few lines of TOML)"
-            )
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError:
-        raise ConfigError(f"cannot read the sweep spec {str(path)!r}: not a text file (expected TOML)") from None
-    except OSError as exc:
-        raise ConfigError(f"cannot read the sweep spec {str(path)!r}: {exc.strerror or exc}") from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{path}: not valid TOML: {exc}") from None
-    except RecursionError:
-        raise ConfigError(f"{path}: nested too deeply to be a sweep spec") from None
+    data = read_toml(path, "sweep spec")
     scenario = data.get("scenario")
     if isinstance(scenario, str) and scenario.lower().endswith(".xosc") and not Path(scenario).is_absolute():
         # an OpenSCENARIO file is named relative to the spec's folder
         data["scenario"] = os.path.normpath(path.parent / scenario)
     return parse(data, str(path))
+
+
+def read_toml(path: Path, what: str) -> dict:
+    """The TOML table in ``path`` (a ``what``: "sweep spec"), at most :data:`MAX_SPEC_BYTES`
+    read; ConfigError (one line, naming the file) if it is a folder, larger, not text or not
+    TOML."""
+    try:
+        if path.is_dir():
+            raise ConfigError(f"cannot read the {what} {str(path)!r}: it is a folder (expected a TOML file)")
+        with open(path, "rb") as f:
+            raw = f.read(MAX_SPEC_BYTES + 1)
+        if len(raw) > MAX_SPEC_BYTES:
+            raise ConfigError(
+                f"cannot read the {what} {str(path)!r}: larger than "
+                f"{MAX_SPEC_BYTES // 1024} KiB (a spec is a few lines of TOML)"
+            )
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise ConfigError(f"cannot read the {what} {str(path)!r}: not a text file (expected TOML)") from None
+    except OSError as exc:
+        raise ConfigError(f"cannot read the {what} {str(path)!r}: {exc.strerror or exc}") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{path}: not valid TOML: {exc}") from None
+    except RecursionError:
+        raise ConfigError(f"{path}: nested too deeply to be a {what}") from None
 
 
 def parse(data: dict, source: str = "the spec") -> SweepSpec:

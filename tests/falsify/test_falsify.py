@@ -77,6 +77,7 @@ def test_cma_finds_a_small_region_faster_than_random():
         (SPEC.replace("seed = 3", "seed = [5, 2]"), "seed must be"),
         ("budget = 0\n" + SPEC, "budget must be"),
         ("bogus = 1\n" + SPEC, "unknown key 'bogus'"),
+        ("#" * (1 << 20) + "\n" + SPEC, "larger than 1024 KiB"),
     ],
 )
 def test_bad_specs_are_one_line_exit_2(text, what, tmp_path, capsys):
@@ -108,6 +109,32 @@ def test_bad_options_exit_2(tmp_path, capsys):
     one = SPEC.replace("lead_gap = [20, 60]\n", "")
     with pytest.raises(ConfigError, match="cma needs at least 2"):
         parse(__import__("tomllib").loads(one), "x").check_optimizer("cma")
+
+
+@pytest.mark.parametrize(
+    "column, values, message",
+    [
+        ("scenario", ["fast-follower"], "holds results of fast-follower"),
+        ("ego_speed", ["fast"], "column ego_speed holds text"),
+        ("optimizer_seed", ["zero"], "column optimizer_seed holds text"),
+    ],
+)
+def test_results_that_cannot_take_the_new_rows_are_refused_before_running(column, values, message, tmp_path, capsys):
+    """As ``ego sweep``: no rows of another scenario (or of another kind) added to --out."""
+    import pyarrow as pa
+
+    path = tmp_path / "f.toml"
+    path.write_text(SPEC)
+    out = tmp_path / "out"
+    out.mkdir()
+    rows = {"run_id": ["a"], "scenario": ["emergency-brake"], "controller": ["pid"], "seed": [3], column: values}
+    pq.write_table(pa.table(rows), out / "results.parquet")
+    before = (out / "results.parquet").read_bytes()
+    assert main(["falsify", str(path), "--out", str(out), "--budget", "2", "--optimizer", "lhs"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("ego: error: bad --out") and message in err and err.count("\n") == 1, err
+    assert [p.name for p in out.iterdir()] == ["results.parquet"]  # nothing run, nothing written
+    assert (out / "results.parquet").read_bytes() == before
 
 
 @pytest.mark.sumo
