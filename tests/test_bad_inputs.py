@@ -39,6 +39,8 @@ PLATOON = ["run", "platoon", "-c", "bp-pid-acc"]
 CMP = ["compare", "emergency-brake", "--out", "{out}"]
 TRAIN = ["train", "narma-l2", "--samples", "400", "--epochs", "1"]
 TUNE = ["tune", "lane-centering", "--quick"]
+FMU = ["export-fmu", "nonlinear-bicycle", "--out", "{out}/e2.fmu", "--set"]
+LINEAR_FMU = ["export-fmu", "linear-bicycle", "--out", "{out}/e2.fmu", "--set"]
 SWEEP_OK = 'scenario = "emergency-brake"\ncontrollers = ["pid"]\n[grid]\nego_speed = [20, 25]\n'
 
 
@@ -639,6 +641,21 @@ CLI = [
     C("tune-seed", [*TUNE, "--seed", "2147483648"], "bad value for --seed: 2147483648"),
     C("tune-out-suffix", [*TUNE, "--out", "{out}/g.txt"], "expected a file ending in .json"),
     C("tune-unknown-task", ["tune", "lane-centring"], "did you mean 'lane-centering'?"),
+    # -- export-fmu: a start value the model cannot run from -----------------------------------------------
+    C("fmu-mass-negative", [*FMU, "m=-1"], "bad value for m: -1 (expected a number above 0 and up to 100000 (kg))"),
+    C("fmu-mass-zero", [*LINEAR_FMU, "m=0"], "bad value for m: 0 (expected a number above 0"),
+    C("fmu-inertia-zero", [*FMU, "Iz=0"], "bad value for Iz: 0"),
+    C("fmu-axle-zero", [*FMU, "a=0"], "bad value for a: 0"),
+    C("fmu-friction-negative", [*FMU, "F_max=-5"], "bad value for F_max: -5"),
+    C("fmu-substeps-zero", [*FMU, "substeps=0"], "bad value for substeps: 0 (expected a whole number from 1 to 100)"),
+    C("fmu-substeps-negative", [*LINEAR_FMU, "substeps=-3"], "bad value for substeps: -3"),
+    C("fmu-substeps-fraction", [*LINEAR_FMU, "substeps=1.5"], "bad value for substeps: '1.5'"),
+    C("fmu-wheels-negative", [*FMU, "Nw=-1"], "bad value for Nw: -1 (expected a whole number from 1 to 4)"),
+    C("fmu-abs-five", [*FMU, "abs=5"], "bad value for abs: '5' (expected true or false)"),
+    C("fmu-abs-negative", [*FMU, "abs=-1"], "bad value for abs: '-1'"),
+    C("fmu-speed-huge", [*LINEAR_FMU, "u0=1e6"], "bad value for u0: 1000000 (expected a number from 0 to 100 (m/s))"),
+    C("fmu-stiffness-positive", [*LINEAR_FMU, "Cf=5"], "bad value for Cf: 5"),
+    C("fmu-nan", [*LINEAR_FMU, "m=nan"], "bad value for m: nan"),
 ]
 
 
