@@ -39,6 +39,7 @@ PLATOON = ["run", "platoon", "-c", "bp-pid-acc"]
 CMP = ["compare", "emergency-brake", "--out", "{out}"]
 TRAIN = ["train", "narma-l2", "--samples", "400", "--epochs", "1"]
 TUNE = ["tune", "lane-centering", "--quick"]
+XOSC = str(Path(__file__).resolve().parents[1] / "scenarios" / "openscenario" / "cut_in.xosc")
 FMU = ["export-fmu", "nonlinear-bicycle", "--out", "{out}/e2.fmu", "--set"]
 LINEAR_FMU = ["export-fmu", "linear-bicycle", "--out", "{out}/e2.fmu", "--set"]
 SWEEP_OK = 'scenario = "emergency-brake"\ncontrollers = ["pid"]\n[grid]\nego_speed = [20, 25]\n'
@@ -159,6 +160,8 @@ FILES = {
     "spec_mix.toml": lambda p: p.write_text(SWEEP_OK.replace("ego_speed = [20, 25]", "dt = [0.03]")),
     "spec_ok.toml": lambda p: p.write_text(SWEEP_OK),
     "file.txt": lambda p: p.write_text("x"),
+    "folder.fmu": lambda p: p.mkdir(),
+    "syntax_error.py": lambda p: p.write_text("def x(:\n"),
     "folder.rrd": lambda p: p.mkdir(),
 }
 
@@ -245,6 +248,18 @@ CLI = [
     C("misspelt-command", ["runn"], "invalid choice: 'runn'"),
     C("misspelt-command-suggests", ["comprae"], "did you mean 'compare'?"),
     C("list-unknown-option", ["list", "--jsn"], "unrecognized arguments: --jsn"),
+    C("list-unknown-controller", ["list", "nosuch"], "unknown controller 'nosuch' (known: fuzzy, pid"),
+    C("list-misspelt-controller", ["list", "narma"], "unknown controller 'narma'; did you mean 'narma-l2'?"),
+    C("list-missing-file", ["list", "nosuch.py:X"], "no file 'nosuch.py'"),
+    C("list-missing-module", ["list", "nosuchmod:X"], "cannot import 'nosuchmod'"),
+    C("list-missing-class", ["list", "ego.control.pid:Nothing"], "'ego.control.pid' has no 'Nothing'"),
+    C("list-syntax-error", ["list", "{syntax_error.py}:X"], "SyntaxError"),
+    C("list-fmu-folder", ["list", "{folder.fmu}"], "it is a folder (expected a file ending in .fmu"),
+    C(
+        "list-xosc-unknown-ego",
+        ["list", XOSC, "--ego", "Nobody"],
+        "bad value for --ego: 'Nobody' (entities: Ego, CutIn)",
+    ),
     C("run-json-with-value", [*EB, "--json=1"], "--json"),
     # -- scenario values: type, then range ----------------------------------------------------------------
     C(
