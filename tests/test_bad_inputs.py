@@ -244,6 +244,24 @@ CLI = [
     C("run-parameter-of-another-controller", [*EB, "--set", "fx_gain=100"], "unknown parameter 'fx_gain'"),
     C("run-set-without-equals", [*EB, "--set", "ego_speed"], "bad --set item 'ego_speed' (expected key=value)"),
     C("run-set-without-key", [*EB, "--set", "=5"], "bad --set item '=5'"),
+    C(
+        "run-require-twice",
+        [*EB, "--require", "a: always (gap_front >= 2 m)", "--require", "a : always (gap_front >= 3 m)"],
+        "--require a is given twice ('always (gap_front >= 2 m)' and 'always (gap_front >= 3 m)')",
+    ),
+    C(
+        "compare-require-twice",
+        [
+            *CMP,
+            "--controllers",
+            "pid",
+            "--require",
+            "a: always (gap_front >= 2 m)",
+            "--require",
+            "a: eventually (t >= 1 s)",
+        ],
+        "--require a is given twice",
+    ),
     C("run-set-twice", [*EB, "--set", "dt=0.01", "--set", "dt=0.02"], "--set dt is given twice"),
     C("misspelt-command", ["runn"], "invalid choice: 'runn'"),
     C("misspelt-command-suggests", ["comprae"], "did you mean 'compare'?"),
@@ -623,6 +641,16 @@ CLI = [
         "sweep-plot-metric",
         _sweep("spec_ok.toml", "--plot", "ego_speed,ego_speed:min_gap_frnt"),
         "did you mean 'min_gap_front'?",
+    ),
+    C(
+        "sweep-plot-against-itself",
+        _sweep("spec_ok.toml", "--plot", "ego_speed,ego_speed"),
+        "bad --plot 'ego_speed,ego_speed': X and Y are both 'ego_speed'",
+    ),
+    C(
+        "sweep-require-twice",
+        _sweep("spec_ok.toml", "--require", "a: always (speed >= 0 m/s)", "--require", "a: always (speed >= 1 m/s)"),
+        "--require a is given twice",
     ),
     C("sweep-out-a-file", ["sweep", "{spec_ok.toml}", "--out", "{file.txt}"], "it is a file"),
     # -- train ---------------------------------------------------------------------------------------------
