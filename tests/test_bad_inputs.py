@@ -666,6 +666,12 @@ CLI = [
     C("train-accels", [*TRAIN, "--accels=-5,5"], "bad value for --accels: '-5,5'"),
     C("train-out-suffix", [*TRAIN, "--out", "{out}/x.pt"], "expected a file ending in .npz"),
     C("train-out-and-install", [*TRAIN, "--out", "{out}/a.npz", "--install"], "give --out or --install, not both"),
+    C("train-out-empty", [*TRAIN, "--out", ""], "bad --out path '' (expected a file ending in .npz)"),
+    C(
+        "train-negative-accels-as-two-words",
+        [*TRAIN, "--accels", "-1,0"],
+        "argument --accels: expected one argument (a value that starts with - is written --accels=VALUE)",
+    ),
     C("train-unknown-model", ["train", "narma"], "did you mean 'narma-l2'?"),
     C("train-seed", [*TRAIN, "--seed", "-1"], "bad value for --seed: -1"),
     # -- tune ----------------------------------------------------------------------------------------------
@@ -674,6 +680,11 @@ CLI = [
     C("tune-drive-nan", [*TUNE, "--drives", "8:nan"], "bad value for --drives: '8:nan'"),
     C("tune-drive-three-parts", [*TUNE, "--drives", "8:1:2"], "bad value for --drives: '8:1:2'"),
     C("tune-drive-fast", [*TUNE, "--drives", "100"], "expected speeds from 2 to 30 m/s"),
+    C(
+        "tune-drive-zero",
+        [*TUNE, "--drives", "0"],
+        "bad value for --drives: '0' (expected speeds from 2 to 30 m/s and offsets within",
+    ),
     C("tune-drive-empty", [*TUNE, "--drives", ""], "bad value for --drives: ''"),
     C("tune-cost-misspelt", [*TUNE, "--cost", "sumoo"], "did you mean 'sumo'?"),
     C("tune-engine-misspelt", [*TUNE, "--cost", "sumo", "--engine", "rayy"], "did you mean 'ray'?"),
@@ -682,6 +693,8 @@ CLI = [
     C("tune-duration-nan", [*TUNE, "--cost", "sumo", "--duration", "nan"], "bad value for --duration: nan"),
     C("tune-address-without-ray", [*TUNE, "--cost", "sumo", "--address", "auto"], "--address needs --engine ray"),
     C("tune-seed", [*TUNE, "--seed", "2147483648"], "bad value for --seed: 2147483648"),
+    C("tune-out-empty", [*TUNE, "--out", ""], "bad --out path '' (expected a file ending in .json)"),
+    C("tune-out-empty-and-install", [*TUNE, "--out", "", "--install"], "give --out or --install, not both"),
     C("tune-out-suffix", [*TUNE, "--out", "{out}/g.txt"], "expected a file ending in .json"),
     C("tune-unknown-task", ["tune", "lane-centring"], "did you mean 'lane-centering'?"),
     # -- export-fmu: a start value the model cannot run from -----------------------------------------------

@@ -292,8 +292,26 @@ def test_bad_input_is_one_line_and_exit_2(args, message):
 def test_help_explains_the_run_command():
     out = ego("run", "--help")
     assert out.returncode == 0
-    for word in ("--controller", "--record", "--seed", "--set", "--json", "Exit status"):
+    for word in ("--controller", "--record", "--seed", "--set", "--json", "Exit status", "130 interrupted"):
         assert word in out.stdout
+
+
+def _help(*args, capsys) -> str:
+    with pytest.raises(SystemExit) as stop:
+        main([*args, "--help"])
+    assert stop.value.code == 0
+    return " ".join(capsys.readouterr().out.split())  # argparse wraps lines
+
+
+def test_help_says_where_train_and_tune_write_and_how_their_output_is_used(capsys):
+    train, tune, top = _help("train", capsys=capsys), _help("tune", capsys=capsys), _help(capsys=capsys)
+    assert "rewrites" not in train + tune
+    assert "(writes runs/narma_l2.npz; use it with --set model=runs/narma_l2.npz" in train and "--install)" in train
+    assert "writes runs/cascade_pid_tuned.json, --install replaces the shipped preset" in tune
+    assert "loads by default." not in tune  # only the --install one is
+    # the model a command line trains is the one the next one runs
+    trained = "ego train narma-l2 --seed 1 --out runs/narma_s1.npz"
+    assert f"{trained} ego run curve --controller narma-l2 --set model=runs/narma_s1.npz" in top
 
 
 @pytest.mark.slow
