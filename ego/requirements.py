@@ -514,6 +514,18 @@ def split(text: str) -> tuple[str, str]:
     return name, formula.strip()
 
 
+def from_options(texts: Sequence[str]) -> dict[str, str]:
+    """``--require`` options as name -> formula; a name given twice is refused (the later
+    one would silently win, as a ``--set`` key given twice would)."""
+    out: dict[str, str] = {}
+    for text in texts:
+        name, formula = split(text)
+        if name in out:
+            raise RequirementError(f"--require {name} is given twice ({out[name]!r} and {formula!r})")
+        out[name] = formula
+    return out
+
+
 def from_table(table, source: str) -> dict[str, str]:
     """A TOML ``[requirements]`` table (name = "formula") checked for shape."""
     if not isinstance(table, dict):
@@ -774,7 +786,7 @@ def with_defaults(scenario: str, texts: Sequence[str]) -> tuple[tuple[str, str],
     again replaces the default); None (the defaults) without options."""
     if not texts:
         return None
-    given = dict(split(t) for t in texts)
+    options = from_options(texts)
     cls = None
     if scenario not in DEFAULTS:  # a scenario file or a user's class: its base's defaults
         from ego.params import ConfigError
@@ -784,4 +796,4 @@ def with_defaults(scenario: str, texts: Sequence[str]) -> tuple[tuple[str, str],
             cls = scenario_class(scenario)
         except ConfigError:
             cls = None  # named wrongly: resolving the run says so
-    return tuple({**defaults(scenario, cls), **given}.items())
+    return tuple({**defaults(scenario, cls), **options}.items())

@@ -39,6 +39,9 @@ PLATOON = ["run", "platoon", "-c", "bp-pid-acc"]
 CMP = ["compare", "emergency-brake", "--out", "{out}"]
 TRAIN = ["train", "narma-l2", "--samples", "400", "--epochs", "1"]
 TUNE = ["tune", "lane-centering", "--quick"]
+XOSC = str(Path(__file__).resolve().parents[1] / "scenarios" / "openscenario" / "cut_in.xosc")
+FMU = ["export-fmu", "nonlinear-bicycle", "--out", "{out}/e2.fmu", "--set"]
+LINEAR_FMU = ["export-fmu", "linear-bicycle", "--out", "{out}/e2.fmu", "--set"]
 SWEEP_OK = 'scenario = "emergency-brake"\ncontrollers = ["pid"]\n[grid]\nego_speed = [20, 25]\n'
 
 
@@ -157,6 +160,8 @@ FILES = {
     "spec_mix.toml": lambda p: p.write_text(SWEEP_OK.replace("ego_speed = [20, 25]", "dt = [0.03]")),
     "spec_ok.toml": lambda p: p.write_text(SWEEP_OK),
     "file.txt": lambda p: p.write_text("x"),
+    "folder.fmu": lambda p: p.mkdir(),
+    "syntax_error.py": lambda p: p.write_text("def x(:\n"),
     "folder.rrd": lambda p: p.mkdir(),
 }
 
@@ -239,10 +244,40 @@ CLI = [
     C("run-parameter-of-another-controller", [*EB, "--set", "fx_gain=100"], "unknown parameter 'fx_gain'"),
     C("run-set-without-equals", [*EB, "--set", "ego_speed"], "bad --set item 'ego_speed' (expected key=value)"),
     C("run-set-without-key", [*EB, "--set", "=5"], "bad --set item '=5'"),
+    C(
+        "run-require-twice",
+        [*EB, "--require", "a: always (gap_front >= 2 m)", "--require", "a : always (gap_front >= 3 m)"],
+        "--require a is given twice ('always (gap_front >= 2 m)' and 'always (gap_front >= 3 m)')",
+    ),
+    C(
+        "compare-require-twice",
+        [
+            *CMP,
+            "--controllers",
+            "pid",
+            "--require",
+            "a: always (gap_front >= 2 m)",
+            "--require",
+            "a: eventually (t >= 1 s)",
+        ],
+        "--require a is given twice",
+    ),
     C("run-set-twice", [*EB, "--set", "dt=0.01", "--set", "dt=0.02"], "--set dt is given twice"),
     C("misspelt-command", ["runn"], "invalid choice: 'runn'"),
     C("misspelt-command-suggests", ["comprae"], "did you mean 'compare'?"),
     C("list-unknown-option", ["list", "--jsn"], "unrecognized arguments: --jsn"),
+    C("list-unknown-controller", ["list", "nosuch"], "unknown controller 'nosuch' (known: fuzzy, pid"),
+    C("list-misspelt-controller", ["list", "narma"], "unknown controller 'narma'; did you mean 'narma-l2'?"),
+    C("list-missing-file", ["list", "nosuch.py:X"], "no file 'nosuch.py'"),
+    C("list-missing-module", ["list", "nosuchmod:X"], "cannot import 'nosuchmod'"),
+    C("list-missing-class", ["list", "ego.control.pid:Nothing"], "'ego.control.pid' has no 'Nothing'"),
+    C("list-syntax-error", ["list", "{syntax_error.py}:X"], "SyntaxError"),
+    C("list-fmu-folder", ["list", "{folder.fmu}"], "it is a folder (expected a file ending in .fmu"),
+    C(
+        "list-xosc-unknown-ego",
+        ["list", XOSC, "--ego", "Nobody"],
+        "bad value for --ego: 'Nobody' (entities: Ego, CutIn)",
+    ),
     C("run-json-with-value", [*EB, "--json=1"], "--json"),
     # -- scenario values: type, then range ----------------------------------------------------------------
     C(
@@ -607,6 +642,16 @@ CLI = [
         _sweep("spec_ok.toml", "--plot", "ego_speed,ego_speed:min_gap_frnt"),
         "did you mean 'min_gap_front'?",
     ),
+    C(
+        "sweep-plot-against-itself",
+        _sweep("spec_ok.toml", "--plot", "ego_speed,ego_speed"),
+        "bad --plot 'ego_speed,ego_speed': X and Y are both 'ego_speed'",
+    ),
+    C(
+        "sweep-require-twice",
+        _sweep("spec_ok.toml", "--require", "a: always (speed >= 0 m/s)", "--require", "a: always (speed >= 1 m/s)"),
+        "--require a is given twice",
+    ),
     C("sweep-out-a-file", ["sweep", "{spec_ok.toml}", "--out", "{file.txt}"], "it is a file"),
     # -- train ---------------------------------------------------------------------------------------------
     C("train-samples-few", [*TRAIN, "--samples", "5"], "bad value for --samples: 5"),
@@ -621,6 +666,12 @@ CLI = [
     C("train-accels", [*TRAIN, "--accels=-5,5"], "bad value for --accels: '-5,5'"),
     C("train-out-suffix", [*TRAIN, "--out", "{out}/x.pt"], "expected a file ending in .npz"),
     C("train-out-and-install", [*TRAIN, "--out", "{out}/a.npz", "--install"], "give --out or --install, not both"),
+    C("train-out-empty", [*TRAIN, "--out", ""], "bad --out path '' (expected a file ending in .npz)"),
+    C(
+        "train-negative-accels-as-two-words",
+        [*TRAIN, "--accels", "-1,0"],
+        "argument --accels: expected one argument (a value that starts with - is written --accels=VALUE)",
+    ),
     C("train-unknown-model", ["train", "narma"], "did you mean 'narma-l2'?"),
     C("train-seed", [*TRAIN, "--seed", "-1"], "bad value for --seed: -1"),
     # -- tune ----------------------------------------------------------------------------------------------
@@ -629,6 +680,11 @@ CLI = [
     C("tune-drive-nan", [*TUNE, "--drives", "8:nan"], "bad value for --drives: '8:nan'"),
     C("tune-drive-three-parts", [*TUNE, "--drives", "8:1:2"], "bad value for --drives: '8:1:2'"),
     C("tune-drive-fast", [*TUNE, "--drives", "100"], "expected speeds from 2 to 30 m/s"),
+    C(
+        "tune-drive-zero",
+        [*TUNE, "--drives", "0"],
+        "bad value for --drives: '0' (expected speeds from 2 to 30 m/s and offsets within",
+    ),
     C("tune-drive-empty", [*TUNE, "--drives", ""], "bad value for --drives: ''"),
     C("tune-cost-misspelt", [*TUNE, "--cost", "sumoo"], "did you mean 'sumo'?"),
     C("tune-engine-misspelt", [*TUNE, "--cost", "sumo", "--engine", "rayy"], "did you mean 'ray'?"),
@@ -637,8 +693,25 @@ CLI = [
     C("tune-duration-nan", [*TUNE, "--cost", "sumo", "--duration", "nan"], "bad value for --duration: nan"),
     C("tune-address-without-ray", [*TUNE, "--cost", "sumo", "--address", "auto"], "--address needs --engine ray"),
     C("tune-seed", [*TUNE, "--seed", "2147483648"], "bad value for --seed: 2147483648"),
+    C("tune-out-empty", [*TUNE, "--out", ""], "bad --out path '' (expected a file ending in .json)"),
+    C("tune-out-empty-and-install", [*TUNE, "--out", "", "--install"], "give --out or --install, not both"),
     C("tune-out-suffix", [*TUNE, "--out", "{out}/g.txt"], "expected a file ending in .json"),
     C("tune-unknown-task", ["tune", "lane-centring"], "did you mean 'lane-centering'?"),
+    # -- export-fmu: a start value the model cannot run from -----------------------------------------------
+    C("fmu-mass-negative", [*FMU, "m=-1"], "bad value for m: -1 (expected a number above 0 and up to 100000 (kg))"),
+    C("fmu-mass-zero", [*LINEAR_FMU, "m=0"], "bad value for m: 0 (expected a number above 0"),
+    C("fmu-inertia-zero", [*FMU, "Iz=0"], "bad value for Iz: 0"),
+    C("fmu-axle-zero", [*FMU, "a=0"], "bad value for a: 0"),
+    C("fmu-friction-negative", [*FMU, "F_max=-5"], "bad value for F_max: -5"),
+    C("fmu-substeps-zero", [*FMU, "substeps=0"], "bad value for substeps: 0 (expected a whole number from 1 to 100)"),
+    C("fmu-substeps-negative", [*LINEAR_FMU, "substeps=-3"], "bad value for substeps: -3"),
+    C("fmu-substeps-fraction", [*LINEAR_FMU, "substeps=1.5"], "bad value for substeps: '1.5'"),
+    C("fmu-wheels-negative", [*FMU, "Nw=-1"], "bad value for Nw: -1 (expected a whole number from 1 to 4)"),
+    C("fmu-abs-five", [*FMU, "abs=5"], "bad value for abs: '5' (expected true or false)"),
+    C("fmu-abs-negative", [*FMU, "abs=-1"], "bad value for abs: '-1'"),
+    C("fmu-speed-huge", [*LINEAR_FMU, "u0=1e6"], "bad value for u0: 1000000 (expected a number from 0 to 100 (m/s))"),
+    C("fmu-stiffness-positive", [*LINEAR_FMU, "Cf=5"], "bad value for Cf: 5"),
+    C("fmu-nan", [*LINEAR_FMU, "m=nan"], "bad value for m: nan"),
 ]
 
 

@@ -292,8 +292,26 @@ def test_bad_input_is_one_line_and_exit_2(args, message):
 def test_help_explains_the_run_command():
     out = ego("run", "--help")
     assert out.returncode == 0
-    for word in ("--controller", "--record", "--seed", "--set", "--json", "Exit status"):
+    for word in ("--controller", "--record", "--seed", "--set", "--json", "Exit status", "130 interrupted"):
         assert word in out.stdout
+
+
+def _help(*args, capsys) -> str:
+    with pytest.raises(SystemExit) as stop:
+        main([*args, "--help"])
+    assert stop.value.code == 0
+    return " ".join(capsys.readouterr().out.split())  # argparse wraps lines
+
+
+def test_help_says_where_train_and_tune_write_and_how_their_output_is_used(capsys):
+    train, tune, top = _help("train", capsys=capsys), _help("tune", capsys=capsys), _help(capsys=capsys)
+    assert "rewrites" not in train + tune
+    assert "(writes runs/narma_l2.npz; use it with --set model=runs/narma_l2.npz" in train and "--install)" in train
+    assert "writes runs/cascade_pid_tuned.json, --install replaces the shipped preset" in tune
+    assert "loads by default." not in tune  # only the --install one is
+    # the model a command line trains is the one the next one runs
+    trained = "ego train narma-l2 --seed 1 --out runs/narma_s1.npz"
+    assert f"{trained} ego run curve --controller narma-l2 --set model=runs/narma_s1.npz" in top
 
 
 @pytest.mark.slow
@@ -403,3 +421,29 @@ def test_the_duration_that_ends_a_run_is_named_and_a_shortened_drive_is_no_failu
     assert main(["run", "emergency-brake", "-c", "pid", "--set", "duration=5"]) == 1
     first = capsys.readouterr().out.splitlines()[0]
     assert first.endswith("TIMEOUT - the duration (5 s) ended the run before the manoeuvre (lane change) finished")
+
+
+def test_list_of_a_name_shows_each_tasks_controller_and_parameters(capsys):
+    assert main(["list", "pid"]) == 0
+    text = capsys.readouterr().out
+    assert text.startswith("pid: a controller of its own in each task\n")
+    tracking = text[text.index("in the tracking task (emergency-brake") : text.index("in the curve task (curve)")]
+    following = text[text.index("in the car-following task (platoon)") :]
+    assert "kp_lat" in tracking and "kp_lat" not in following
+    assert "\n      kp " in following and "\n      kp " not in tracking
+    assert main(["list", "pid", "--json"]) == 0
+    listed = json.loads(capsys.readouterr().out)
+    assert "parameters" not in listed and list(listed["per_task"]) == ["tracking", "curve", "car-following"]
+    assert main(["list", "fuzzy"]) == 0  # one task: one list, as before
+    text = capsys.readouterr().out
+    assert text.startswith("fuzzy: report 000's") and "\n  parameters (--set key=value):\n    fx_gain" in text
+
+
+def test_list_of_a_class_that_fits_no_task_says_why_and_exits_0(tmp_path, capsys):
+    (tmp_path / "other.py").write_text(
+        "class X:\n    'Drives a task ego has not.'\n    task = 'flying'\n"
+        "    def reset(self): pass\n    def step(self, obs): pass\n    def signals(self): return {}\n"
+    )
+    assert main(["list", f"{tmp_path / 'other.py'}:X"]) == 0
+    text = capsys.readouterr().out
+    assert "connects to no task as it is:" in text and "drives the flying task, not tracking" in text

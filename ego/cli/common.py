@@ -34,6 +34,9 @@ class Parser(argparse.ArgumentParser):
         choice = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
         if choice:  # a misspelt command or choice: name the closest
             message += did_you_mean(choice.group(1), re.findall(r"'([^']*)'", choice.group(2)))
+        value = re.fullmatch(r"argument (--[\w-]+)\S*: expected one argument", message)
+        if value:  # argparse takes "--accels -1,0" for an option -1,0: the value goes after "="
+            message += f" (a value that starts with - is written {value.group(1)}=VALUE)"
         raise ConfigError(message)
 
     def _print_message(self, message: str, file=None) -> None:
@@ -78,8 +81,8 @@ def model_out(args, shipped, default: str, suffix: str):
     """Where ``ego train``/``ego tune`` write: --out, the shipped file with --install (and
     only then), else ``default`` in the working directory."""
 
-    if args.install and args.out:
+    if args.install and args.out is not None:
         raise ConfigError("give --out or --install, not both")
     if args.install:
         return Path(shipped)
-    return check_output_file(args.out or default, "--out path", suffix)
+    return check_output_file(default if args.out is None else args.out, "--out path", suffix)  # "" is refused

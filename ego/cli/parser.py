@@ -37,7 +37,8 @@ def parser() -> argparse.ArgumentParser:
         "  ego compare fast-follower --controllers pid,fuzzy,rbf-smc --seeds 3 --out runs/ff\n"
         "  ego run curve --controller narma-l2 --set entry_speed=40\n"
         "  ego compare curve --controllers pid,fuzzy-curve,narma-l2 --out runs/curve\n"
-        "  ego train narma-l2 --seed 0\n"
+        "  ego train narma-l2 --seed 1 --out runs/narma_s1.npz\n"
+        "  ego run curve --controller narma-l2 --set model=runs/narma_s1.npz\n"
         "  ego run lane-centering --controller cascade-pid --set speed=25\n"
         "  ego tune lane-centering --quick\n"
         "  ego run platoon --controller bp-pid-acc --set followers=5 --record runs/platoon.rrd\n"
@@ -53,7 +54,8 @@ def parser() -> argparse.ArgumentParser:
         help="run one scenario with one controller",
         description="Run one scenario with one controller and print its metrics.",
         epilog="Exit status: 0 completed or ended (the duration ran out first, not a failure); "
-        "1 collision, diverged or timeout; 2 bad input.\n"
+        "1 collision, diverged or timeout; 2 bad input; 130 interrupted (Ctrl-C or SIGTERM: "
+        "the metrics so far printed, the recording closed).\n"
         "Every parameter, its unit and default: ego list",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -282,7 +284,8 @@ def parser() -> argparse.ArgumentParser:
         description="Generate identification data from the ego's model and train a learned "
         "controller's networks (torch, CPU, seeded: the same seed gives the same "
         "weights). Writes the weights (.npz) and their training metadata (.json).",
-        epilog="Example: ego train narma-l2 --seed 0   (rewrites the model shipped with ego)\n"
+        epilog="Example: ego train narma-l2 --seed 0   (writes runs/narma_l2.npz; use it with "
+        "--set model=runs/narma_l2.npz, or replace the model shipped with ego: --install)\n"
         "The report's setting (100 samples at one operating point): ego train narma-l2 "
         "--samples 100 --speeds 30,30 --accels 0.3,0.3 --radii 15,15 --out runs/narma_report.npz; "
         "use it with --set model=runs/narma_report.npz",
@@ -304,7 +307,10 @@ def parser() -> argparse.ArgumentParser:
     )
     trn.add_argument("--speeds", default="20,40", metavar="LO,HI", help="entry speed range in km/h (default 20,40)")
     trn.add_argument(
-        "--accels", default="0,0.6", metavar="LO,HI", help="axial acceleration range in m/s^2 (default 0,0.6)"
+        "--accels",
+        default="0,0.6",
+        metavar="LO,HI",
+        help="axial acceleration range in m/s^2 (default 0,0.6); one starting with - is written --accels=-1,0",
     )
     trn.add_argument("--radii", default="12,60", metavar="LO,HI", help="curve radius range in m (default 12,60)")
     trn.add_argument("--out", default=None, metavar="PATH", help="weights file (.npz; default: runs/narma_l2.npz)")
@@ -319,8 +325,10 @@ def parser() -> argparse.ArgumentParser:
         "settings (population 15 x 12 gains, at most 100 generations, its cost), each "
         "generation simulated as one vectorised batch over the whole road. Writes the "
         "gains and how they were found to a preset file (.json) that the "
-        "lane-centering scenario loads by default.",
-        epilog="Example: ego tune lane-centering   (about two minutes; rewrites the shipped preset)\n"
+        "lane-centering scenario loads with --set gains_file=PATH (with --install: the "
+        "shipped preset it loads by default).",
+        epilog="Example: ego tune lane-centering   (about two minutes; writes runs/cascade_pid_tuned.json, "
+        "--install replaces the shipped preset)\n"
         "         ego tune lane-centering --quick --out runs/quick.json   (seconds)\n"
         "Use a preset with: ego run lane-centering -c cascade-pid --set gains_file=PATH",
         formatter_class=argparse.RawDescriptionHelpFormatter,

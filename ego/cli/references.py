@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from ego.params import ConfigError
+from ego.params import ConfigError, did_you_mean
 
 
 def load_plugins() -> None:
@@ -30,12 +30,15 @@ def describe_reference(ref: str) -> dict:
             for i in describe(cls)
         ]
 
+    check_reference(ref)
     out: dict = {"reference": ref}
     fits, errors = [], {}
     spec = None
+    variants = {}  # task -> what the reference is there: a name may stand for another controller per task
     for task in TASKS:
         try:
             spec = controller_spec(ref, task)
+            variants[task] = {"summary": spec.summary, "parameters": params(spec.params)}
             if ref.lower().endswith(".fmu"):  # connects by name to this task's signals?
                 from ego.fmi.controller import mapping_for
 
@@ -71,17 +74,40 @@ def describe_reference(ref: str) -> dict:
     else:
         out["kind"] = "class"
     out["tasks"] = fits
-    if spec is not None:
-        out["summary"] = spec.summary
-        out["parameters"] = params(spec.params)
+    shown = [variants[t] for t in fits] or list(variants.values())[-1:]
+    if shown and all(v == shown[0] for v in shown):
+        out.update(shown[0])
+    elif shown:  # pid: a controller of its own in each task, with parameters of its own
+        out["per_task"] = {t: variants[t] for t in fits}
     if not fits:
         out["why_not"] = errors
     return out
 
 
+def check_reference(ref: str) -> None:
+    """ConfigError unless ``ref`` names something to describe: a registered controller, a
+    class (or spec) that imports, or an FMU (whose own checks follow); a reference that fits
+    no task is still described, with why not."""
+    from ego.control import controller_names
+    from ego.plugins import file_resolver, is_reference, load_object
+
+    if not is_reference(ref):
+        known = controller_names()
+        if ref not in known:
+            raise ConfigError(
+                f"unknown controller {ref!r}{did_you_mean(ref, known)} (known: {', '.join(known)}; or a reference: "
+                "package.module:Class, path/to/file.py:Class or path/to/controller.fmu)"
+            )
+    elif file_resolver(ref) is None:  # a missing file, module or name, or one that does not import
+        load_object(ref, "controller")
+
+
 def print_reference(d: dict) -> None:
     """``ego list REF`` as text."""
-    print(f"{d['reference']}: {d.get('summary', '')}")
+    from ego.scenarios import SCENARIOS
+
+    load_plugins()
+    print(f"{d['reference']}: {d.get('summary', 'a controller of its own in each task' if 'per_task' in d else '')}")
     if d["kind"] == "fmu":
         step = "any communication step" if d["variable_step"] else f"fixed step {d['default_step']} s"
         print(
@@ -102,17 +128,26 @@ def print_reference(d: dict) -> None:
                 )
     if d["tasks"]:
         print(
-            f"  drives the {', '.join(d['tasks'])} task{'s' if len(d['tasks']) > 1 else ''} "
-            "(connected by name, or by --set fmu_map=map.toml)"
+            f"  drives the {', '.join(d['tasks'])} task{'s' if len(d['tasks']) > 1 else ''}"
+            + (" (connected by name, or by --set fmu_map=map.toml)" if d["kind"] == "fmu" else "")
         )
     else:
         print("  connects to no task as it is:")
         for task, why in d.get("why_not", {}).items():
             print(f"    {task}: {why}")
-    if d.get("parameters"):
-        w = max(len(p["name"]) for p in d["parameters"])
-        print("  parameters (--set key=value):")
-        for p in d["parameters"]:
+    print_parameters(d.get("parameters"), "  ")
+    for task, variant in d.get("per_task", {}).items():
+        scenarios = ", ".join(n for n, c in SCENARIOS.items() if c.task == task)
+        print(f"  in the {task} task ({scenarios}): {variant['summary']}")
+        print_parameters(variant["parameters"], "    ")
+
+
+def print_parameters(rows: list[dict] | None, indent: str) -> None:
+    """A reference's parameters, one a line: name, default with unit, description."""
+    if rows:
+        w = max(len(p["name"]) for p in rows)
+        print(f"{indent}parameters (--set key=value):")
+        for p in rows:
             default = repr(p["default"]) if isinstance(p["default"], str) else f"{p['default']:g}"
             unit = "" if p["unit"] in ("", "-") else f" {p['unit']}"
-            print(f"    {p['name']:<{w}}  {default}{unit}  {p['description']}")
+            print(f"{indent}  {p['name']:<{w}}  {default}{unit}  {p['description']}")

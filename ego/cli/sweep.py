@@ -20,10 +20,10 @@ def command(args: Any) -> int:
     if args.require:
         import dataclasses
 
-        from ego.requirements import defaults, split
+        from ego.requirements import defaults, from_options
 
         base = spec.requirements if spec.requirements is not None else defaults(spec.scenario)
-        reqs = {**base, **dict(split(t) for t in args.require)}
+        reqs = {**base, **from_options(args.require)}
         sweep_spec.check_requirements(next(spec.runs()), reqs, ConfigError)
         spec = dataclasses.replace(spec, requirements=reqs)
     choice(args.engine, ENGINES, "--engine")

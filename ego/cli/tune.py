@@ -26,7 +26,7 @@ def command(args: Any) -> int:
         raise ConfigError(
             f"bad value for --drives: {args.drives!r} (expected speeds in m/s with optional offsets in m, e.g. 8,25:1)"
         ) from None
-    check_drives(drives, "--drives", repr(args.drives))
+    check_drives(drives, "--drives", args.drives)
     check_seed(args.seed, "--seed")
     out = model_out(args, TUNED_PRESET, "runs/cascade_pid_tuned.json", ".json")
     from ego.parallel.executor import ENGINES

@@ -20,7 +20,7 @@ import os
 from pathlib import Path
 
 from ego.fmi.build import FRAME_DIR, ModelSpec, Var, build_fmu
-from ego.params import ConfigError
+from ego.params import ConfigError, ParamInfo, check_value, parse_value
 
 EGO_DIR = Path(__file__).resolve().parent.parent
 STATE = (
@@ -31,6 +31,50 @@ STATE = (
     ("psi", "rad", "yaw, counter-clockwise from world X"),
     ("r", "rad/s", "yaw rate"),
 )
+
+
+#: what ``--set`` allows each parameter of either model: name -> (type, min, max, min
+#: exclusive); as ``ego run --set`` holds ``substeps`` and ``abs`` (TimingConfig,
+#: HighwayConfig), the constants positive where the model divides by them or needs them so
+LIMITS: dict[str, tuple[type, float | None, float | None, bool]] = {
+    "X0": (float, -1e7, 1e7, False),
+    "u0": (float, 0.0, 100.0, False),
+    "Y0": (float, -1e7, 1e7, False),
+    "v0": (float, -50.0, 50.0, False),
+    "psi0": (float, -math.pi, math.pi, False),
+    "r0": (float, -10.0, 10.0, False),
+    "substeps": (int, 1, 100, False),
+    "Nw": (int, 1, 4, False),
+    "rolling": (float, 0.0, 1e5, False),
+    "m": (float, 0.0, 1e5, True),
+    "Iz": (float, 0.0, 1e6, True),
+    "a": (float, 0.0, 10.0, True),
+    "b": (float, 0.0, 10.0, True),
+    "lf": (float, 0.0, 10.0, True),
+    "lr": (float, 0.0, 10.0, True),
+    "DFzf": (float, 0.0, 1e6, True),
+    "DFzr": (float, 0.0, 1e6, True),
+    "F_max": (float, 0.0, 1e6, True),
+    "By": (float, 0.0, 100.0, True),
+    "Cy": (float, 0.0, 10.0, True),
+    "Ey": (float, -10.0, 1.0, False),
+    "Shy": (float, -90.0, 90.0, False),
+    "Svy": (float, -1e5, 1e5, False),
+    "Cf": (float, -1e6, 0.0, False),
+    "Cr": (float, -1e6, 0.0, False),
+    "slip_speed_floor": (float, 0.0, 50.0, False),
+    "abs": (bool, None, None, False),
+}
+
+
+def start_value(var: Var, text: str) -> float:
+    """``--set name=text`` of parameter ``var`` as its start value, or ConfigError naming the
+    value and what :data:`LIMITS` allows (checked as ``ego run --set`` checks its values)."""
+    kind, lo, hi, above = LIMITS[var.name]
+    info = ParamInfo(var.name, kind, var.start, var.unit, var.description, lo, hi, None, above)
+    value = parse_value(info, text)
+    check_value(info, value)
+    return float(value)
 
 
 def _state_vars(x0) -> tuple[Var, ...]:
@@ -140,13 +184,7 @@ def export_fmu(model: str, out: str | os.PathLike, starts: dict[str, str] | None
             raise ConfigError(
                 f"unknown parameter {key!r} of {model}{did_you_mean(key, params)} (known: {', '.join(params)})"
             )
-        try:
-            value = float(text)
-        except ValueError:
-            raise ConfigError(f"bad value for {key}: {text!r} (expected a number)") from None
-        if not math.isfinite(value):
-            raise ConfigError(f"bad value for {key}: {text!r} (expected a finite number)")
-        changed[key] = dataclasses.replace(params[key], start=value)
+        changed[key] = dataclasses.replace(params[key], start=start_value(params[key], text))
     spec = dataclasses.replace(
         spec, variables=tuple(changed.get(v.name, v) if v.causality == "parameter" else v for v in spec.variables)
     )

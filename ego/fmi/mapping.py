@@ -52,23 +52,24 @@ class Mapping:
     extra_units: tuple[str, ...]
 
 
-def read_map_file(path: str) -> dict:
-    """The [inputs]/[outputs] tables of a mapping file (ConfigError naming what is wrong)."""
+def read_map_file(path: str, key: str = "fmu_map") -> dict:
+    """The [inputs]/[outputs] tables of a mapping file, the value of parameter ``key``
+    (ConfigError naming it and what is wrong)."""
     p = Path(path).expanduser()
     if not p.is_file():
-        raise ConfigError(f"bad value for fmu_map: no file {path!r} (expected a TOML mapping file)")
+        raise ConfigError(f"bad value for {key}: no file {path!r} (expected a TOML mapping file)")
     try:
         data = tomllib.loads(p.read_text())
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"bad fmu_map {path!r}: not TOML ({exc})") from None
+        raise ConfigError(f"bad {key} {path!r}: not TOML ({exc})") from None
     bad = set(data) - {"inputs", "outputs"}
     if bad:
-        raise ConfigError(f"bad fmu_map {path!r}: unknown table {sorted(bad)[0]!r} (expected [inputs] and [outputs])")
+        raise ConfigError(f"bad {key} {path!r}: unknown table {sorted(bad)[0]!r} (expected [inputs] and [outputs])")
     out = {}
     for table in ("inputs", "outputs"):
         items = data.get(table, {})
         if not isinstance(items, dict) or not all(isinstance(v, str) for v in items.values()):
-            raise ConfigError(f'bad fmu_map {path!r}: [{table}] must hold FMU_VARIABLE = "signal" lines')
+            raise ConfigError(f'bad {key} {path!r}: [{table}] must hold FMU_VARIABLE = "signal" lines')
         out[table] = dict(items)
     return out
 
@@ -81,27 +82,29 @@ def build_mapping(
     map_file: str = "",
     *,
     outputs_word: str = "action",
+    key: str = "fmu_map",
 ) -> Mapping:
     """Connect ``info``'s variables to ``observes`` (signal -> unit) and ``actions``
-    (action -> unit, in order). ConfigError names the FMU and the offending variable."""
-    explicit = read_map_file(map_file) if map_file else {"inputs": {}, "outputs": {}}
+    (action -> unit, in order); ``map_file`` is the value of parameter ``key``. ConfigError
+    names the FMU and the offending variable."""
+    explicit = read_map_file(map_file, key) if map_file else {"inputs": {}, "outputs": {}}
     by_name = {v.name: v for v in info.variables}
     for table, causality in (("inputs", "input"), ("outputs", "output")):
         for var, signal in explicit[table].items():
             v = by_name.get(var)
             if v is None:
                 raise ConfigError(
-                    f"bad fmu_map for {name!r}: the FMU has no variable {var!r}{did_you_mean(var, by_name)}"
+                    f"bad {key} for {name!r}: the FMU has no variable {var!r}{did_you_mean(var, by_name)}"
                 )
             if v.causality != causality:
                 raise ConfigError(
-                    f"bad fmu_map for {name!r}: FMU variable {var!r} is {_a(v.causality)}, not an {causality}"
+                    f"bad {key} for {name!r}: FMU variable {var!r} is {_a(v.causality)}, not an {causality}"
                 )
             known = observes if table == "inputs" else actions
             if signal not in known:
                 what = "observation signal" if table == "inputs" else outputs_word
                 raise ConfigError(
-                    f"bad fmu_map for {name!r}: unknown {what} {signal!r} for {var!r} (known: "
+                    f"bad {key} for {name!r}: unknown {what} {signal!r} for {var!r} (known: "
                     f"{', '.join(known)}){did_you_mean(signal, known)}"
                 )
     inputs = []
@@ -110,7 +113,7 @@ def build_mapping(
         if signal not in observes:
             raise ConfigError(
                 f"FMU {name!r}: input {v.name!r} is connected to no observation signal (known: "
-                f"{', '.join(observes)}); name it in a mapping file (--set fmu_map=map.toml)"
+                f"{', '.join(observes)}); name it in a mapping file (--set {key}=map.toml)"
             )
         _real(v, name)
         f, o = conversion(v.unit, info.units, observes[signal], f"FMU {name!r} input {v.name!r}")
@@ -125,7 +128,7 @@ def build_mapping(
             outs = ", ".join(o.name for o in info.of("output")) or "none"
             raise ConfigError(
                 f"FMU {name!r}: no output for the {outputs_word} {action!r} ({unit}); its outputs: "
-                f"{outs}; name it in a mapping file (--set fmu_map=map.toml)"
+                f"{outs}; name it in a mapping file (--set {key}=map.toml)"
             )
         if v.causality != "output":
             raise ConfigError(

@@ -99,6 +99,8 @@ def inspect_fmu(path: str | os.PathLike) -> FmuInfo:
     ConfigError (one line, the file named) otherwise."""
     shown = os.fspath(path)
     p = Path(shown).expanduser()
+    if p.is_dir():  # an unpacked FMU, say
+        raise ConfigError(f"bad FMU {shown!r}: it is a folder (expected a file ending in .fmu, a zip archive)")
     if not p.is_file():
         raise ConfigError(f"bad FMU {shown!r}: no such file")
     digest = file_digest(p)

@@ -45,7 +45,13 @@ def check_plant_fmu(path: str, map_file: str = "") -> None:
 def _mapping(info, commands, name, map_file, partial_inputs=False):
     observes = {c: COMMANDS[c] for c in commands}
     mapping = build_mapping(
-        info, observes if not partial_inputs else COMMANDS, STATE, name, map_file, outputs_word="plant output"
+        info,
+        observes if not partial_inputs else COMMANDS,
+        STATE,
+        name,
+        map_file,
+        outputs_word="plant output",
+        key="plant_map",
     )
     if not partial_inputs and {link.signal for link in mapping.inputs} != set(observes):
         raise ConfigError(

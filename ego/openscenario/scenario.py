@@ -84,7 +84,11 @@ _PY = {"float": float, "int": int, "bool": bool, "str": str}
 
 def find_ego(scenario: M.Scenario, wanted: str) -> str:
     """The ego entity: ``wanted`` (exact, else case-insensitive), else the one named Ego."""
-    names = list(scenario.entities)
+    return pick_ego(list(scenario.entities), wanted, scenario.path)
+
+
+def pick_ego(names: list[str], wanted: str, path: str | os.PathLike[str]) -> str:
+    """:func:`find_ego` among the entity ``names`` of the file ``path``."""
     target = wanted or "Ego"
     if target in names:
         return target
@@ -93,7 +97,7 @@ def find_ego(scenario: M.Scenario, wanted: str) -> str:
         return folded[0]
     if wanted:
         raise ConfigError(f"bad value for --ego: {wanted!r} (entities: {', '.join(names)})")
-    raise ConfigError(f"{scenario.path}: no entity named Ego; choose the ego with --ego (entities: {', '.join(names)})")
+    raise ConfigError(f"{path}: no entity named Ego; choose the ego with --ego (entities: {', '.join(names)})")
 
 
 @dataclass(frozen=True)
@@ -776,8 +780,12 @@ def file_listing(path: str, ego: str = "") -> dict:
             kind = f"CatalogReference {body.attrs.get('catalogName', '?')}/{body.attrs.get('entryName', '?')}"
         entities.append({"name": so.attrs.get("name", "?"), "kind": kind, "line": so.line})
     names = [e["name"] for e in entities]
-    target = ego or "Ego"
-    chosen = target if target in names else next((n for n in names if n.lower() == target.lower()), None)
+    try:
+        chosen: str | None = pick_ego(names, ego, path)
+    except ConfigError:
+        if ego:  # an --ego the file does not have is refused, as ego run refuses it
+            raise
+        chosen = None  # noted in the listing: the file is listed to find out why
     els = elements(root)
     own = {f.name for f in dataclasses.fields(FileConfig)}
     return {

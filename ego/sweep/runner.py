@@ -246,7 +246,7 @@ def check_results_folder(out: Path, files: Sequence[str], recorded: Sequence[str
 
 
 def parse_plot(text: str, spec: SweepSpec) -> tuple[str, str, str | None]:
-    """``X,Y`` or ``X,Y:METRIC`` -> (x, y, metric or None); X and Y must be swept."""
+    """``X,Y`` or ``X,Y:METRIC`` -> (x, y, metric or None); X and Y must be two swept parameters."""
     axes, _, metric = text.partition(":")
     names = [a.strip() for a in axes.split(",")]
     if len(names) != 2 or not all(names):
@@ -267,4 +267,8 @@ def parse_plot(text: str, spec: SweepSpec) -> tuple[str, str, str | None]:
                 f"bad --plot {text!r}: {metric!r} is not a metric of {spec.scenario} "
                 f"(see ego list){did_you_mean(metric, known)}"
             )
+    if names[0] == names[1]:  # a plot of a parameter against itself is a line, not an envelope
+        raise ConfigError(
+            f"bad --plot {text!r}: X and Y are both {names[0]!r} (expected two different swept parameters)"
+        )
     return names[0], names[1], metric

@@ -34,7 +34,7 @@ from ego.checks import MAX_JOBS, check_count, check_number, check_seed, finite_n
 from ego.control.cascade import GAIN_NAMES, REPORT_GAINS, TUNED_PRESET, Cascade
 from ego.models.lateral_error import LateralError, LateralErrorParams
 from ego.outputs import write_text
-from ego.params import ConfigError, did_you_mean
+from ego.params import ConfigError, did_you_mean, shown
 
 MAX_ERROR = 0.5  #: the report's goal (m)
 DIVERGED = 1e3  #: |e| (m) beyond which a member is lost (its cost is then >= 1e4)
@@ -327,7 +327,7 @@ def check_drives(drives, what: str = "drives", text: str | None = None) -> None:
     )
     if not pairs or any(not lo <= v <= hi or abs(o) > MAX_OFFSET for v, o in drives):
         raise ConfigError(
-            f"bad value for {what}: {text if text is not None else drives!r:.60} (expected "
+            f"bad value for {what}: {shown(text if text is not None else drives)} (expected "
             f"speeds from {lo:g} to {hi:g} m/s and offsets within {MAX_OFFSET:g} m)"
         )
 

@@ -58,9 +58,11 @@ def test_plant_fmus_are_checked_before_anything_runs(tmp_path, fmus):
     assert "input 's_ref' is connected to no observation signal (known: Fx, a_x, delta)" in ego_error(
         "emergency-brake", "-c", "pid", "--set", f"plant={fmus['pid']}"
     )
-    # outputs named otherwise need a mapping
-    assert "no output for the plant output 'X'" in ego_error(
-        "emergency-brake", "-c", "pid", "--set", f"plant={fmus['error']}"
+    # outputs named otherwise need a mapping: plant_map (fmu_map is a controller FMU's)
+    unmapped = ego_error("emergency-brake", "-c", "pid", "--set", f"plant={fmus['error']}")
+    assert "no output for the plant output 'X'" in unmapped and "(--set plant_map=map.toml)" in unmapped
+    assert "bad value for plant_map: no file 'nowhere.toml'" in ego_error(
+        "emergency-brake", "-c", "pid", "--set", f"plant={fmus['error']}", "--set", "plant_map=nowhere.toml"
     )
     assert "plant_map needs plant" in ego_error("emergency-brake", "-c", "pid", "--set", "plant_map=m.toml")
     # lane centring has a plant parameter of its own (its model)
