@@ -230,8 +230,17 @@ def check_step(info: FmuInfo, dt: float, name: str) -> None:
         raise ConfigError(
             f"bad FMU {name!r}: it cannot take a communication step of dt = {dt:g} s (it takes "
             f"only {fixed:g} s steps: canHandleVariableCommunicationStepSize is false; "
-            f"set --set dt={fixed:g})"
+            f"set {_workable_step(fixed)})"
         )
+
+
+def _workable_step(step: float) -> str:
+    """The ``--set`` options that run an FMU of fixed step ``step``: dt = the step, and SUMO's
+    0.1 s step or the nearest whole multiple of it above (SUMO's step is whole control periods)."""
+    if _multiple(0.1, step):
+        return f"--set dt={step:g}"
+    sumo = round(math.ceil(0.1 / step - 1e-9) * step, 9)
+    return f"--set dt={step:g} --set sumo_step={sumo:g}"
 
 
 def _multiple(dt: float, step: float) -> bool:

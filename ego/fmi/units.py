@@ -3,8 +3,9 @@
 A unit is (SI base exponents, factor, offset) with ``value_SI = factor * value + offset``,
 as FMI's ``UnitDefinitions`` give it (base units kg, m, s, A, K, mol, cd and rad). ego's
 task signals are in SI (``m``, ``m/s``, ``m/s^2``, ``rad``, ``N``, ``1/m``...). An FMU unit
-comes from its ``UnitDefinitions``; a unit the FMU names without defining it is read as
-one of the common names below (``km/h``, ``deg``, ``kN``...). Two units convert when their
+comes from its ``UnitDefinitions``; a unit listed there by name only (no ``BaseUnit``) is
+read as one of the common names below (``km/h``, ``deg``, ``kN``...); one not listed at all
+fmpy's validation refuses first. Two units convert when their
 exponents agree; otherwise it is a ConfigError naming both.
 """
 
@@ -78,8 +79,8 @@ def parse(text: str) -> Unit | None:
 
 
 def fmu_unit(name: str, definitions: dict) -> Unit | None:
-    """The FMU's unit ``name``: its definition if it has one, else the common name; None when
-    neither says what it is."""
+    """The FMU's unit ``name``: its definition if it has one with a ``BaseUnit``, else (listed by
+    name only) the common name; None when neither says what it is."""
     d = definitions.get(name)
     if d is not None:
         return d

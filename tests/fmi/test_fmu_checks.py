@@ -108,6 +108,21 @@ def test_unknown_input_signal(fmus, tmp_path):
 def test_a_step_the_fmu_cannot_take(fmus):
     msg = ego_error("-c", fmus["fixed"])
     assert "cannot take a communication step of dt = 0.01 s (it takes only 0.02 s steps" in msg
+    assert msg.rstrip().endswith("set --set dt=0.02)")
+
+
+def test_the_suggested_steps_are_ones_ego_takes():
+    """The suggestion for a fixed-step FMU is a dt and, where 0.1 s is no whole number of
+    its steps, a SUMO step that is (the configuration accepts both)."""
+    from ego.fmi.model import _workable_step
+    from ego.params import apply_overrides
+    from ego.scenarios.emergency_brake import EmergencyBrakeConfig
+
+    for step, expected in ((0.02, "--set dt=0.02"), (0.003, "--set dt=0.003 --set sumo_step=0.102")):
+        suggestion = _workable_step(step)
+        assert suggestion == expected
+        values = dict(part.split("=") for part in suggestion.replace("--set ", "").split())
+        apply_overrides(EmergencyBrakeConfig(), {k: float(v) for k, v in values.items()})
 
 
 def test_unknown_and_bad_parameters(fmus):

@@ -52,6 +52,25 @@ def test_units_km_h_kn_and_degrees_are_converted(fmus):
     same(metrics(RunSpec("cut-in", "pid")), metrics(RunSpec("cut-in", fmus["pid_units"])), rel=1e-7)
 
 
+def test_a_unit_listed_by_name_only_is_read_as_the_common_unit(fmus, tmp_path):
+    """km/h in the FMU's UnitDefinitions without a BaseUnit: read as ego's km/h, the same run
+    as with the full definition."""
+    import re
+    import zipfile
+
+    full = fmus["pid_units"]
+    with zipfile.ZipFile(full) as z:
+        md = z.read("modelDescription.xml").decode()
+        named = re.sub(r'<Unit name="km/h"><BaseUnit[^/]*/></Unit>', '<Unit name="km/h"/>', md)
+        assert named != md
+        path = tmp_path / "pid_named_units.fmu"
+        with zipfile.ZipFile(path, "w") as out:
+            for name in z.namelist():
+                out.writestr(name, named if name == "modelDescription.xml" else z.read(name))
+    over = {"duration": 8.0}
+    same(metrics(RunSpec("cut-in", full, overrides=over)), metrics(RunSpec("cut-in", str(path), overrides=over)))
+
+
 def test_a_mapping_file_connects_other_names_and_units(fmus, tmp_path):
     mapping = tmp_path / "map.toml"
     mapping.write_text('[outputs]\nforce = "Fx"\nsteer = "delta"\n')
