@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from ego.params import ConfigError, did_you_mean
-from ego.sweep.spec import MAX_SEED, _check, _param_types, read_toml, run_id
+from ego.sweep.spec import MAX_SEED, _check, _param_types, read_spec, run_id
 
 _TOP = (
     "scenario",
@@ -112,7 +112,7 @@ class FalsifySpec:
 def load(path: str | Path) -> FalsifySpec:
     """Read and validate a spec file (at most 1 MiB, as ``ego sweep`` reads its spec)."""
     path = Path(path)
-    return parse(read_toml(path, "falsification spec"), str(path))
+    return parse(read_spec(path, "falsification spec"), str(path))
 
 
 def parse(data: dict, source: str = "the spec") -> FalsifySpec:
@@ -149,7 +149,7 @@ def parse(data: dict, source: str = "the spec") -> FalsifySpec:
             controller_spec(name, cls.task)
         except ConfigError as exc:
             raise bad(str(exc)) from None
-    requirements = from_table(data["requirements"], source) if "requirements" in data else defaults(scenario)
+    requirements = from_table(data["requirements"], source) if "requirements" in data else defaults(scenario, cls)
     target = data.get("requirement")
     if not isinstance(target, str) or target not in requirements:
         raise bad(

@@ -175,12 +175,17 @@ def load(path: str | Path) -> SweepSpec:
     if not isinstance(path, (str, Path)) and not hasattr(path, "__fspath__"):
         raise ConfigError(f"bad sweep spec path {path!r:.60} (expected a path to a .toml file)")
     path = Path(path)
-    data = read_toml(path, "sweep spec")
+    return parse(read_spec(path, "sweep spec"), str(path))
+
+
+def read_spec(path: Path, what: str) -> dict:
+    """:func:`read_toml`, with a ``scenario`` that is an OpenSCENARIO file named relative to
+    the spec's folder (sweep and falsification specs alike)."""
+    data = read_toml(path, what)
     scenario = data.get("scenario")
     if isinstance(scenario, str) and scenario.lower().endswith(".xosc") and not Path(scenario).is_absolute():
-        # an OpenSCENARIO file is named relative to the spec's folder
         data["scenario"] = os.path.normpath(path.parent / scenario)
-    return parse(data, str(path))
+    return data
 
 
 def read_toml(path: Path, what: str) -> dict:

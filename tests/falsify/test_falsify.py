@@ -1,5 +1,7 @@
 """``ego falsify`` end to end on real SUMO runs (issue 21, point 2)."""
 
+from pathlib import Path
+
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
@@ -87,6 +89,24 @@ def test_bad_specs_are_one_line_exit_2(text, what, tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.startswith("ego: error:") and what in err and err.count("\n") == 1
     assert not (tmp_path / "out").exists()
+
+
+def test_an_openscenario_file_is_named_relative_to_the_spec(tmp_path, monkeypatch):
+    """As in a sweep spec: the spec beside its .xosc works from any current folder."""
+    import shutil
+
+    xosc = Path(__file__).resolve().parents[2] / "scenarios" / "openscenario"
+    folder = tmp_path / "specs"
+    folder.mkdir()
+    for name in ("emergency_brake.xosc", "straight3.xodr"):
+        shutil.copy(xosc / name, folder / name)
+    (folder / "f.toml").write_text(
+        'scenario = "emergency_brake.xosc"\ncontroller = "pid"\nrequirement = "no_collision"\n'
+        "[search]\nLeadGap = [20, 40]\n"
+    )
+    monkeypatch.chdir(tmp_path)
+    spec = load("specs/f.toml")
+    assert spec.scenario == str(Path("specs") / "emergency_brake.xosc")
 
 
 def test_bad_options_exit_2(tmp_path, capsys):
