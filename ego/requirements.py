@@ -34,7 +34,6 @@ import re
 import types
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from fractions import Fraction
 
 import numpy as np
 
@@ -124,6 +123,18 @@ def _braking_margin(result, t: np.ndarray, scenario=None) -> np.ndarray:
     return np.full(len(t), 1e9 if margin is None else float(margin))
 
 
+def _accel(result, t: np.ndarray, scenario=None) -> np.ndarray:
+    """The ego's longitudinal acceleration: the change of its speed to the next sample over
+    the time between them (the last sample keeps the one before)."""
+    v = result.column("speed")
+    if len(v) < 2:
+        return np.zeros(len(t))
+    a = np.empty(len(v))
+    a[:-1] = np.diff(v) / np.diff(result.column("t"))
+    a[-1] = a[-2]
+    return a
+
+
 @dataclass(frozen=True)
 class Derived:
     """A signal computed from a finished run (its trace, events and metrics)."""
@@ -191,6 +202,13 @@ DERIVED = {
             "min(gap_min, 0) - 1 m (negative exactly when the ego collided)",
             ("gap_front", "gap_rear"),
             _clearance,
+        ),
+        Derived(
+            "accel",
+            "m/s^2",
+            "the ego's longitudinal acceleration (the change of speed to the next control step)",
+            ("speed",),
+            _accel,
         ),
         Derived(
             "gap_min",
@@ -479,27 +497,24 @@ def parse(formula: str, units: Mapping[str, str], name: str = "requirement") -> 
     return Requirement(name, formula.strip(), text, tuple(p.used), unit, tuple(p.bounds))
 
 
-def sample_stride(bounds: Sequence[float], dt: float, period: float = 0.1) -> int | None:
+def sample_stride(bounds: Sequence[float], dt: float, period: float = 0.1) -> int:
     """The most samples of ``dt`` s, at most ``period`` s, that every interval bound of
-    ``bounds`` is a whole multiple of (rtamt refuses a bound between samples; exact, in
-    nanoseconds, as rtamt checks it); None when a bound is not even a multiple of ``dt``."""
-    exact = [Fraction(repr(b)) * 10**9 for b in bounds]
-    for stride in range(max(1, round(period / dt)), 0, -1):
-        ns = round(stride * dt * 1e9)
-        if ns > 0 and all(b % ns == 0 for b in exact):
+    ``bounds`` is a whole number of (to 1e-6 of a sample); 1 when there is none: the bounds
+    are then taken at the nearest control step."""
+    for stride in range(max(1, round(period / dt)), 1, -1):
+        step = stride * dt
+        if all(abs(b / step - round(b / step)) < 1e-6 for b in bounds):
             return stride
-    return None
+    return 1
 
 
-def check_bounds(requirements: Sequence[Requirement], dt: float) -> None:
-    """RequirementError unless every interval bound is a whole number of control periods."""
-    for req in requirements:
-        if sample_stride(req.bounds, dt) is None:
-            bad = next(b for b in req.bounds if sample_stride((b,), dt) is None)
-            raise RequirementError(
-                f"requirement {req.name}: interval bound {bad:g} s is not a whole number of "
-                f"control periods (dt = {dt:g} s): the trace has no sample there"
-            )
+_INTERVAL = re.compile(r"\[([^:\]]+):([^\]]+)\]")
+
+
+def in_samples(rtamt_text: str, step: float) -> str:
+    """The formula with its interval bounds (s) as whole numbers of samples ``step`` s apart
+    (the nearest), which rtamt reads exactly against a sampling period of 1."""
+    return _INTERVAL.sub(lambda m: f"[{round(float(m.group(1)) / step)}:{round(float(m.group(2)) / step)}]", rtamt_text)
 
 
 def split(text: str) -> tuple[str, str]:
@@ -549,7 +564,7 @@ DEFAULTS: dict[str, tuple[tuple[str, str], ...]] = {
         ("gap_or_clear", "always (gap_front >= 2 m or lateral_clear)"),
         (
             "aeb_slows",
-            "always (aeb_active implies eventually[0:3] (speed <= 1 m/s or not aeb_active))",
+            "always (aeb_active implies eventually[0:1] (accel <= -4 m/s^2 or speed <= 1 m/s or not aeb_active))",
         ),
     ),
     "cut-in": (
@@ -634,10 +649,10 @@ def signal(result, name: str, scenario=None) -> np.ndarray:
 _COMPILED: dict[tuple[str, float], object] = {}
 
 
-def _spec(req: Requirement, period: float, names: tuple[str, ...]):
-    """A parsed rtamt specification of ``req`` for samples ``period`` s apart (cached per
-    process: parsing is the expensive part)."""
-    key = (req.rtamt, round(period, 9))
+def _spec(req: Requirement, names: tuple[str, ...]):
+    """A parsed rtamt specification of ``req``, its interval bounds counted in samples (a
+    sampling period of 1; cached per process: parsing is the expensive part)."""
+    key = req.rtamt
     spec = _COMPILED.get(key)
     if spec is None:
         import rtamt
@@ -646,7 +661,7 @@ def _spec(req: Requirement, period: float, names: tuple[str, ...]):
         spec.name = req.name
         for n in names:
             spec.declare_var(n, "float")
-        spec.set_sampling_period(period, "s", 0.1)
+        spec.set_sampling_period(1, "s", 0.1)
         spec.spec = req.rtamt
         spec.parse()
         interpreter = spec.offline_interpreter
@@ -707,24 +722,22 @@ def evaluate(req: Requirement, result, period: float = PERIOD, scenario=None) ->
     if len(t_all) < 2:
         return Verdict(req.name, math.nan, None, req.unit)
     dt = float(t_all[1] - t_all[0])
-    # every interval bound on a sample (a bound that is none was refused before the run)
-    stride = (sample_stride(req.bounds, dt, period) or 1) if period > 0 else 1
+    # samples every interval bound falls on (else every control step, the bounds at the
+    # nearest one)
+    stride = sample_stride(req.bounds, dt, period) if period > 0 else 1
     idx = np.arange(len(t_all) - 1, -1, -stride)[::-1]
     if len(idx) < 2:
         idx = np.arange(len(t_all))
         stride = 1
     t = t_all[idx]
     names = tuple(req.signals) or ("t",)
-    data = {"time": (t - t[0]).tolist()}
+    # time in samples: rtamt checks interval bounds against the sampling period exactly
+    data = {"time": [float(i) for i in range(len(idx))]}
     for n in names:
         data[n] = signal(result, n, scenario)[idx].tolist()
     always = req.rtamt.startswith("always (") and _outer_parens(req.rtamt[len("always ") :])
     text = req.rtamt[len("always ") :] if always else req.rtamt
-    spec = _spec(
-        Requirement(req.name, req.formula, text, req.signals, req.unit),
-        round(stride * dt, 9),  # no float residue: rtamt checks the bounds against it exactly
-        names,
-    )
+    spec = _spec(Requirement(req.name, req.formula, in_samples(text, stride * dt), req.signals, req.unit), names)
     rob = np.array([v for _, v in spec.evaluate(data)], dtype=float)
     value = float(rob.min()) if always else float(rob[0])
     at = None

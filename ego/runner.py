@@ -270,7 +270,7 @@ def requirements_of(resolved: ResolvedRun, controller: Controller | None = None)
     """The run's requirements parsed against its signals (the scenario's defaults when
     ``spec.requirements`` is None; with ``controller``, its signals too); RequirementError
     before anything runs."""
-    from ego.requirements import check_bounds, defaults, signal_units
+    from ego.requirements import defaults, signal_units
     from ego.requirements import resolve as resolve_requirements
 
     spec, cls, config = resolved.spec, resolved.scenario_cls, resolved.config
@@ -286,9 +286,7 @@ def requirements_of(resolved: ResolvedRun, controller: Controller | None = None)
         except Exception:  # noqa: BLE001 - a controller that needs a reset first: its signals stay unnamed
             pass
     metrics = [m.name for m in cls.metrics_declared(config)]
-    reqs = resolve_requirements(texts, signal_units(columns, metrics, cls))
-    check_bounds(reqs, config.dt)
-    return reqs
+    return resolve_requirements(texts, signal_units(columns, metrics, cls))
 
 
 def run(what: RunSpec | ResolvedRun) -> RunResult:

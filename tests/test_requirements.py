@@ -13,6 +13,7 @@ from ego.requirements import (
     DERIVED,
     RequirementError,
     evaluate,
+    in_samples,
     parse,
     sample_stride,
     split,
@@ -190,10 +191,6 @@ def test_a_run_reports_each_requirement_and_its_violation(capsys):
         ("x: always (", "ends early"),
         ("always (gap_front >= 2 m)", "expected NAME: FORMULA"),
         ("x: always (gap_front >= 1e999 m)", "not a finite number"),
-        (
-            "x: eventually[0:0.015] (gap_front >= 2 m)",
-            "interval bound 0.015 s is not a whole number of control periods",
-        ),
     ],
 )
 @pytest.mark.parametrize("command", ["run", "compare"])
@@ -240,10 +237,11 @@ def test_sweep_spec_requirements_are_checked(tmp_path, capsys):
 )
 def test_the_numpy_predicate_gives_rtamts_own_robustness_sample_by_sample(formula):
     """ego evaluates rtamt's comparisons with numpy (its per-sample loop was half of a run's
-    requirement checking): every sample's robustness is exactly rtamt's own."""
+    requirement checking), its interval bounds counted in samples: every sample's robustness
+    is exactly rtamt's own on the formula in seconds."""
     import rtamt
 
-    from ego.requirements import _spec
+    from ego.requirements import Requirement, _spec
 
     rng = np.random.default_rng(7)
     n = 400
@@ -261,24 +259,41 @@ def test_the_numpy_predicate_gives_rtamts_own_robustness_sample_by_sample(formul
     plain.spec = req.rtamt
     plain.parse()
     expected = [v for _, v in plain.evaluate({k: list(v) for k, v in data.items()})]
-    fast = _spec(req, 0.1, names)
-    got = [v for _, v in fast.evaluate({k: list(v) for k, v in data.items()})]
+    fast = _spec(Requirement(req.name, req.formula, in_samples(req.rtamt, 0.1), req.signals, req.unit), names)
+    samples = {**data, "time": [float(i) for i in range(n)]}
+    got = [v for _, v in fast.evaluate({k: list(v) for k, v in samples.items()})]
     assert got == expected
+
     # every node's robustness signal (each comparison's included), in the order rtamt visits
-    nodes = list(plain.offline_interpreter.ast.offline_results.values())
-    assert list(fast.offline_interpreter.ast.offline_results.values()) == nodes
-    assert any(len(set(v)) > 2 for v in nodes)  # not constants: the signals decide
+    # (the time stamps aside: in seconds in one, in samples in the other)
+    def values(spec):
+        return [v for k, v in spec.offline_interpreter.ast.offline_results.items() if k != "time"]
+
+    nodes = values(plain)
+    assert values(fast) == nodes
+    assert any(len(set(v)) > 1 for v in nodes)  # not constants: the signals decide
 
 
 def test_bounds_sit_on_samples_at_any_control_period():
-    """rtamt refuses an interval bound between samples: the samples are the most control
-    periods up to 0.1 s apart that every bound is a multiple of."""
+    """The samples are the most control periods up to 0.1 s apart that every interval bound
+    is a whole number of; where there are none, every control step, a bound at the nearest."""
     assert sample_stride((3.0,), 0.01) == 10
     assert sample_stride((3.0,), 0.03) == 2  # 0.09 s does not divide 3 s, 0.06 s does
     assert sample_stride((3.0,), 0.015) == 5
     assert sample_stride((0.05, 2.0), 0.01) == 5
-    assert sample_stride((0.015,), 0.01) is None
+    assert sample_stride((1.0,), 1 / 30) == 3  # 0.1 s, to a float's precision
+    assert sample_stride((0.015,), 0.01) == 1
     assert sample_stride((), 0.03) == 3
+    assert in_samples("eventually[0.0:3.0] (a > 0) and once[0.5:0.015] (b)", 0.01) == (
+        "eventually[0:300] (a > 0) and once[50:2] (b)"
+    )
+
+
+def test_a_bound_between_control_steps_is_taken_at_the_nearest():
+    t = np.round(np.arange(0.0, 2.0, 0.01), 2)
+    r = _result(t, speed=np.where(t >= 1.02, 0.5, 10.0))
+    assert evaluate(parse("eventually[0:1.016] (speed <= 1 m/s)", UNITS), r).robustness > 0  # 1.02
+    assert evaluate(parse("eventually[0:1.014] (speed <= 1 m/s)", UNITS), r).robustness < 0  # 1.01
 
 
 @pytest.mark.sumo
@@ -302,3 +317,22 @@ def test_a_run_at_a_control_period_that_does_not_divide_its_defaults_bounds_is_c
     )
     out = json.loads(capsys.readouterr().out)
     assert code == 0 and out["requirements"]["aeb_slows"] is not None
+
+
+def test_aeb_slows_holds_for_a_stop_at_any_speed_and_fails_an_aeb_that_does_not_brake():
+    """The default aeb_slows asks the AEB to decelerate (at least 4 m/s^2 within every second it
+    is engaged, unless the car has stopped or the AEB released): a friction-limited stop from
+    30 m/s takes 3.75 s at 8 m/s^2 and passes (a 'stopped within 3 s' form failed it); an
+    engaged AEB under which the car keeps its speed fails from its engagement."""
+    from ego.requirements import DEFAULTS, signal_units
+
+    formula = dict(DEFAULTS["emergency-brake"])["aeb_slows"]
+    units = signal_units({"t": "s", "speed": "m/s"})
+    req = parse(formula, units, "aeb_slows")
+    t = np.round(np.arange(0.0, 8.0, 0.01), 2)
+    events = [Event(1.0, "aeb", "AEB engages: ..."), Event(4.8, "aeb", "AEB releases (...)")]
+    stop = np.where(t < 1.0, 30.0, np.maximum(30.0 - 8.0 * (t - 1.0), 0.0))
+    assert evaluate(req, _result(t, events, speed=stop)).passed
+    coasting = np.full(len(t), 30.0)
+    v = evaluate(req, _result(t, events, speed=coasting))
+    assert not v.passed and 1.0 <= v.violated_at <= 1.1
