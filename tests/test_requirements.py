@@ -298,8 +298,9 @@ def test_a_bound_between_control_steps_is_taken_at_the_nearest():
 
 @pytest.mark.sumo
 def test_a_run_at_a_control_period_that_does_not_divide_its_defaults_bounds_is_checked(capsys):
-    """The scenario's default aeb_slows (eventually[0:3]) at dt = 0.03 s: 0.09 s samples put
-    3 s between two; the check samples every 0.06 s instead of failing after the run."""
+    """The scenario's default aeb_slows (eventually[0:1]) at dt = 0.03 s: no number of 0.03 s
+    steps makes 1 s; the check samples every step, the bound at 0.99 s, instead of failing
+    (rtamt refused a bound between samples, after the run)."""
     code = main(
         [
             "run",
