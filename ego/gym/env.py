@@ -775,6 +775,11 @@ def _check_randomize(value: Any, config_cls, base) -> dict[str, tuple]:
             raise unknown_parameter(name, set(infos))
         if info.type not in (int, float):
             raise ConfigError(f"bad value for randomize[{name}]: {name} is not a number (a {info.type.__name__})")
+        if name in ("dt", "sumo_step"):  # valid values are not an interval: whole multiples
+            raise ConfigError(
+                f"bad value for randomize[{name}]: the control period and SUMO's step cannot vary "
+                "(SUMO's step must be a whole number of control periods at every draw)"
+            )
         if not _pair(bounds) or not bounds[0] <= bounds[1]:
             raise ConfigError(f"bad value for randomize[{name}]: {bounds!r} (expected [low, high] with low <= high)")
         lo, hi = bounds

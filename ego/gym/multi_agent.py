@@ -34,7 +34,7 @@ import numpy as np
 from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
-from ego.gym.env import EgoEnv, EgoView
+from ego.gym.env import _EVICTED, EgoEnv, EgoView
 from ego.gym.spaces import observation_type
 from ego.params import ConfigError
 from ego.scenarios.platoon import follower_ids
@@ -127,7 +127,7 @@ class PlatoonParallelEnv(ParallelEnv):
         env = self._env
         sc = env.scenario
         if sc is None or sc.bridge is None or not self.agents:
-            raise RuntimeError("call reset() before step()")
+            raise RuntimeError(_EVICTED if env._evicted and self.agents else "call reset() before step()")
         native = env.action_type.native
         missing = [a for a in self.agents if a not in actions]
         if missing:

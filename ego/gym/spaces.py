@@ -68,6 +68,21 @@ def _flag(name: str, value: Any) -> bool:
     return bool(value)
 
 
+def _features(kind: str, value: Any, known: Sequence[str]) -> tuple[str, ...]:
+    """A list of distinct feature names, each one of ``known`` (a string is refused, not split
+    into letters; an empty list too: an observation of nothing)."""
+    if isinstance(value, str) or not isinstance(value, (list, tuple)) or not value:
+        raise ConfigError(
+            f"bad value for features: {value!r} (expected a non-empty list of {kind} features: {', '.join(known)})"
+        )
+    for f in value:
+        if f not in known:
+            raise ConfigError(f"unknown {kind} feature {f!r} (known: {', '.join(known)})")
+    if len(set(value)) != len(value):
+        raise ConfigError(f"bad value for features: {value!r} (each {kind} feature once)")
+    return tuple(value)
+
+
 def _range(name: str, value: Any) -> tuple[float, float]:
     try:
         lo, hi = (float(v) for v in value)
@@ -230,10 +245,7 @@ class KinematicsObservation(_ObservationType):
         see_behind: bool = False,
         perception_distance: float = 200.0,
     ) -> None:
-        self.features = tuple(features) if features is not None else self.FEATURES
-        for f in self.features:
-            if f not in self.KNOWN:
-                raise ConfigError(f"unknown Kinematics feature {f!r} (known: {', '.join(self.KNOWN)})")
+        self.features = _features("Kinematics", features, self.KNOWN) if features is not None else self.FEATURES
         if (
             isinstance(vehicles_count, bool)
             or not isinstance(vehicles_count, (int, np.integer))
@@ -396,10 +408,7 @@ class OccupancyGridObservation(_ObservationType):
         grid_step: Sequence[float] = (5.0, 5.0),
         features_range: Mapping[str, Sequence[float]] | None = None,
     ) -> None:
-        self.features = tuple(features)
-        for f in self.features:
-            if f not in self.KNOWN:
-                raise ConfigError(f"unknown OccupancyGrid feature {f!r} (known: {', '.join(self.KNOWN)})")
+        self.features = _features("OccupancyGrid", features, self.KNOWN)
         try:
             (x0, x1), (y0, y1) = ((float(a), float(b)) for a, b in grid_size)
             sx, sy = (float(v) for v in grid_step)
@@ -520,21 +529,26 @@ class ActionType:
         return functools.partial(_COMMAND, (*params, float(self.force_per_accel)))
 
     def _shaped(self, action) -> np.ndarray:
-        """``action`` as an array of the space's shape, or a ValueError naming that shape."""
+        """``action`` as a float array of the space's shape, or a ValueError naming the action
+        given and what the space takes (complex numbers and what is no number refused)."""
+        given = action
         shape = getattr(action, "shape", None)
-        if shape != self._shape:
+        kind = getattr(getattr(action, "dtype", None), "kind", "")
+        if kind == "c" or isinstance(action, (str, bytes)) or action is None:
+            shape = None
+        else:
             try:
                 action = np.asarray(action, dtype=np.float64)
             except (TypeError, ValueError):
                 shape = None
             else:
                 shape = action.shape
-            if shape != self._shape:
-                raise ValueError(
-                    f"bad action {_short(action)}: expected an array of shape "
-                    f"{self.space.shape} ({self._describe()}), got shape {shape}"
-                )
-        return action if type(action) is np.ndarray else np.asarray(action, dtype=np.float64)
+        if shape != self._shape:
+            raise ValueError(
+                f"bad action {_short(given)}: expected real numbers in an array of shape "
+                f"{self.space.shape} ({self._describe()})" + (f", got shape {shape}" if shape is not None else "")
+            )
+        return action
 
     def _describe(self) -> str:
         names = [n for n, on in zip(("longitudinal", "steering"), self.channels) if on]
@@ -576,7 +590,7 @@ class ContinuousAction(ActionType):
 
     def native(self, action) -> tuple[float | None, float | None]:
         # the hot path (every env step): one or two floats, no list built
-        if type(action) is not np.ndarray or action.shape != self._shape:
+        if type(action) is not np.ndarray or action.shape != self._shape or action.dtype.kind not in "fiub":
             action = self._shaped(action)
         clip = self.clip
         if self.size == 2:
@@ -619,13 +633,13 @@ class EgoAction(ActionType):
         return self._bound_command(False, False, (), ())
 
     def _both(self, action) -> tuple[float, float]:
-        if type(action) is not np.ndarray or action.shape != self._shape:
+        if type(action) is not np.ndarray or action.shape != self._shape or action.dtype.kind not in "fiub":
             action = self._shaped(action)
         lon, lat = action.tolist()
         return lon, lat
 
     def _one(self, action) -> tuple[float | None, float | None]:
-        if type(action) is not np.ndarray or action.shape != self._shape:
+        if type(action) is not np.ndarray or action.shape != self._shape or action.dtype.kind not in "fiub":
             action = self._shaped(action)
         (x,) = action.tolist()
         return (x, None) if self.longitudinal else (None, x)

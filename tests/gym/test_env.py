@@ -116,6 +116,10 @@ def test_default_config_and_configure():
         ({"policy_frequency": 3}, "bad value for policy_frequency: 3"),
         ({"collision_reward": "x"}, "bad value for collision_reward"),
         ({"reward_speed_range": [30, 10]}, "bad value for reward_speed_range"),
+        ({"observation": {"type": "Kinematics", "features": []}}, "bad value for features: []"),
+        ({"observation": {"type": "Kinematics", "features": "presence"}}, "bad value for features: 'presence'"),
+        ({"observation": {"type": "OccupancyGrid", "features": []}}, "non-empty list of OccupancyGrid features"),
+        ({"observation": {"type": "Kinematics", "features": ["x", "x"]}}, "each Kinematics feature once"),
     ],
     ids=[
         "range",
@@ -129,6 +133,10 @@ def test_default_config_and_configure():
         "frequency",
         "reward",
         "speed-range",
+        "no-features",
+        "features-as-text",
+        "grid-no-features",
+        "repeated-feature",
     ],
 )
 def test_bad_config_is_one_line_config_error(config, message):

@@ -176,3 +176,16 @@ def test_a_reconfiguring_reset_rebuilds_the_agents_spaces_and_frame_rate():
         assert len(obs) == 2 and len(multi.unwrapped.action_space) == 2
     finally:
         multi.close()
+
+
+def test_a_parallel_env_whose_run_another_env_ended_says_so():
+    env = PlatoonParallelEnv()
+    other = gym.make("ego/CutIn-v0")
+    try:
+        env.reset(seed=0)
+        other.reset(seed=0)  # libsumo: one simulation per process
+        with pytest.raises(RuntimeError, match="ended by the reset of another ego env"):
+            env.step({a: np.zeros(1, np.float32) for a in env.agents})
+    finally:
+        other.close()
+        env.close()

@@ -115,17 +115,21 @@ def test_a_nan_action_ends_the_episode_diverged_with_a_finite_reward(env_id, val
 
 @pytest.mark.sumo
 @pytest.mark.parametrize(
-    "action", [np.zeros((1, 1)), 0.5, [0.1, 0.2, 0.3], "left"], ids=["(1,1)", "scalar", "three", "string"]
+    "action",
+    [np.zeros((1, 1)), 0.5, [0.1, 0.2, 0.3], "left", None, np.array([1 + 2j, 0.0])],
+    ids=["(1,1)", "scalar", "three", "string", "none", "complex"],
 )
-def test_a_badly_shaped_action_names_the_expected_shape(action, make):
-    env = make("ego/CutIn-v0")
+@pytest.mark.parametrize("action_type", ["ContinuousAction", "EgoAction"])
+def test_a_badly_shaped_action_names_the_expected_shape(action, action_type, make):
+    """The action as given (None is not shown as the nan it converts to) and what the space
+    takes; complex numbers are refused (they reached the model's comparisons: a TypeError)."""
+    env = make("ego/CutIn-v0", config={"action": {"type": action_type}})
     env.reset(seed=0)
-    with pytest.raises(
-        ValueError,
-        match=r"expected an array of shape \(2,\) \(ContinuousAction: "
-        r"\[longitudinal, steering\]\)",
-    ):
+    with pytest.raises(ValueError) as err:
         env.step(action)
+    text = str(err.value)
+    assert text.startswith(f"bad action {action!r}"[:40])
+    assert f"expected real numbers in an array of shape (2,) ({action_type}: [longitudinal, steering])" in text
 
 
 # -- 4. pickling --------------------------------------------------------------------------------
@@ -230,8 +234,9 @@ def test_the_seed_changes_the_controllers_return(make):
         ({"ego_speed": [30, 20]}, r"randomize\[ego_speed\].*low <= high"),
         ({"cut_in_side": [0, 1]}, r"randomize\[cut_in_side\]: cut_in_side is not a number"),
         ("wide", "bad value for randomize: 'wide'"),
+        ({"dt": [0.01, 0.02]}, r"randomize\[dt\]: the control period and SUMO's step cannot vary"),
     ],
-    ids=["range", "unknown", "order", "not-a-number", "not-a-dict"],
+    ids=["range", "unknown", "order", "not-a-number", "not-a-dict", "dt"],
 )
 def test_bad_randomize_is_one_line_config_error(randomize, message):
     with pytest.raises(ConfigError, match=message) as err:
