@@ -77,7 +77,7 @@ class Clone(torch.nn.Module):
             loss = torch.nn.functional.mse_loss(self.net(xs), ys)
             loss.backward()
             opt.step()
-        return float(loss)
+        return loss.item()
 
     def policy(self, columns: list[int]):
         def act(obs: np.ndarray) -> np.ndarray:
@@ -102,6 +102,9 @@ def main(argv: list[str] | None = None) -> dict:
         "start": 800.0,
         "duration": args.duration,
         "action": {"type": "EgoAction", "longitudinal": False},
+        # the script chooses the speed and each run's offset: no episode randomisation (the
+        # env's default draws both, and its draw would win over the values set here)
+        "randomize": {},
     }
     env = gym.make(ENV_ID, config=config)
     try:
