@@ -445,8 +445,11 @@ class EgoEnv(gym.Env):
         base = cls.config_cls()
         overrides = {k: v for k, v in params.items() if not (hasattr(base, k) and getattr(base, k) == v)}
         randomize = _check_randomize(cfg["randomize"], cls.config_cls, base)
-        if "variant" in overrides and cfg["randomize"] == DEFAULT_RANDOMIZE.get(self.scenario_name):
-            randomize = {}  # the defaults are the road's: a preset (scale-model) runs as it is
+        if cfg["randomize"] == DEFAULT_RANDOMIZE.get(self.scenario_name):
+            if "variant" in overrides:
+                randomize = {}  # the defaults are the road's: a preset (scale-model) runs as it is
+            else:  # a parameter set to a value of its own keeps it: the default draws the rest
+                randomize = {k: v for k, v in randomize.items() if k not in overrides}
         resolved = resolve(RunSpec(self.scenario_name, controller, 0, overrides))
         sc_config, spec, ctrl_params = resolved.config, resolved.controller, resolved.controller_params
         observation = observation_type(cfg["observation"], self.task)

@@ -401,3 +401,16 @@ def test_reward_threshold_is_the_default_controllers_mean_return_in_the_register
         row = next(line for line in text.splitlines() if line.startswith(f"| {env_id} ({controller}) |"))
         assert gym.spec(env_id).reward_threshold == float(row.split(" | ")[1]), env_id
         assert gym.make(env_id).unwrapped.config["policy_frequency"] == 0  # the env the table ran
+
+
+@pytest.mark.sumo
+def test_a_parameter_set_to_its_own_value_is_left_out_of_the_default_randomisation(make):
+    env = make("ego/EmergencyBrake-v0", config={"ego_speed": 30.0})
+    _, info = env.reset(seed=0)
+    assert "ego_speed" not in info["randomized"] and "lead_gap" in info["randomized"]
+    assert env.unwrapped.scenario.config.ego_speed == 30.0
+    env.reset(seed=0, options={"config": {"lead_gap": 33.0}})
+    assert env.unwrapped.scenario.config.lead_gap == 33.0 and "lead_gap" not in env.unwrapped.randomized
+    # a randomize given in the config draws what it names, over a plain value
+    env.reset(seed=0, options={"config": {"randomize": {"ego_speed": [20, 22]}}})
+    assert set(env.unwrapped.randomized) == {"ego_speed"} and 20 <= env.unwrapped.scenario.config.ego_speed <= 22
