@@ -321,6 +321,13 @@ _EVICTED = (
     "(DummyVecEnv; the second and later run SUMO through TraCI, slower)"
 )
 
+#: why an env runs its SUMO through TraCI beside a multi_instance env in this process
+_BESIDE_MULTI = (
+    "an ego env made with multi_instance=True runs its SUMO through libsumo in this process (one "
+    "simulation per process): this env runs its SUMO through TraCI (slower) rather than end that "
+    "env's run"
+)
+
 #: why an env runs its SUMO through TraCI beside a vector env's env in this process
 _SHARED = (
     "an ego vector env (gym.make_vec) steps its first env in this process through libsumo, which "
@@ -558,6 +565,9 @@ class EgoEnv(gym.Env):
             if other._hosted or self._hosted:  # a vector env's own env here is never evicted
                 share = True
                 warnings.warn(_SHARED, stacklevel=3)
+            elif other._multi:  # it runs beside others by choice: this one goes through TraCI
+                share = True
+                warnings.warn(_BESIDE_MULTI, stacklevel=3)
             else:
                 other._evicted = True
                 other.close()

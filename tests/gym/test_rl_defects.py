@@ -61,6 +61,22 @@ def test_multi_instance_runs_a_second_sumo_through_traci_with_the_same_episode(m
     assert np.array_equal(a, b) and ra == rb
 
 
+@pytest.mark.sumo
+def test_an_env_made_without_multi_instance_does_not_end_one_made_with_it(make):
+    """The multi_instance env chose to share the process: a later plain env (an evaluation
+    env beside training envs) runs through TraCI, with a warning, instead of ending it."""
+    shared = make("ego/CutIn-v0", config={"multi_instance": True})
+    plain = make("ego/CutIn-v0")
+    a, _ = shared.reset(seed=5)
+    with pytest.warns(UserWarning, match="multi_instance=True runs its SUMO through libsumo"):
+        b, _ = plain.reset(seed=5)
+    assert plain.unwrapped.scenario.bridge.via_traci and np.array_equal(a, b)
+    action = np.array([0.2, 0.0], dtype=np.float32)
+    a, *_ = shared.step(action)
+    b, *_ = plain.step(action)
+    assert np.array_equal(a, b)
+
+
 # -- 2. ControllerPolicy at policy_frequency > 0 ----------------------------------------------
 @pytest.mark.sumo
 @pytest.mark.parametrize(
