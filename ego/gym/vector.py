@@ -189,6 +189,7 @@ class EgoVectorEnv(VectorEnv):
         ]
         if context is None:
             context = "forkserver" if exclusive_running() else "fork"
+        self._context = context
         ctx = mp.get_context(context)
         self._buffers = {
             name: ctx.RawArray(ctypes.c_char, max(1, int(np.prod(shape)) * dt.itemsize)) for name, shape, dt in layout
@@ -392,7 +393,15 @@ class EgoVectorEnv(VectorEnv):
             raise exc
         proc = self._processes[k]
         proc.join(1.0)
-        self._fail(f"worker {i} of EgoVectorEnv ended unexpectedly (exit code {proc.exitcode})")
+        hint = ""
+        if self._context != "fork":
+            hint = (
+                f"; its workers start by {self._context} (this process ran a SUMO when the vector env "
+                "was made), which imports the main script again in each worker: put the script's "
+                "code under `if __name__ == '__main__':` (Python's multiprocessing rule), or close the "
+                "other ego env before gym.make_vec"
+            )
+        self._fail(f"worker {i} of EgoVectorEnv ended unexpectedly (exit code {proc.exitcode}){hint}")
 
     def _fail(self, message: str | None):
         """The workers reaped, the hosted env closed; ``message``: raised as a RuntimeError."""

@@ -396,3 +396,27 @@ def test_a_worker_asleep_on_its_pipe_is_woken_for_the_next_step():
         assert obs.tolist() == [[2.0, 1.0, 1.0], [2.0, 1.0, 1.0]]
     finally:
         envs.close()
+
+
+def test_a_script_without_a_main_guard_is_told_what_the_forkserver_needs(tmp_path):
+    """With a SUMO running here the workers start by forkserver, which imports the main script
+    again: a script without `if __name__ == "__main__":` gets the rule in the error."""
+    script = tmp_path / "no_guard.py"
+    script.write_text(
+        textwrap.dedent(
+            """
+            import warnings
+            import numpy as np, gymnasium as gym
+            import ego.gym
+            warnings.simplefilter("ignore")
+            env = gym.make("ego/CutIn-v0")
+            env.reset(seed=0)
+            envs = gym.make_vec("ego/CutIn-v0", 2)
+            envs.reset(seed=0)
+            envs.step(np.zeros((2, 2), np.float32))
+            """
+        )
+    )
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert out.returncode != 0
+    assert "its workers start by forkserver" in out.stderr and "if __name__ == '__main__':" in out.stderr
