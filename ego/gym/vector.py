@@ -150,6 +150,8 @@ class EgoVectorEnv(VectorEnv):
             host = not exclusive_running()
         # the spaces from an env built here (a bad configuration fails now, before any
         # process starts); an EgoEnv starts no SUMO before its reset. Hosted, it stays.
+        self._make_first = env_fns[0]
+        self._configured: dict = {}  # what reset(options={"config": ...}) has set since
         first = env_fns[0]()
         try:
             self.single_observation_space = first.observation_space
@@ -257,6 +259,8 @@ class EgoVectorEnv(VectorEnv):
                 raise ValueError(
                     f"`options['reset_mask']` must be a numpy bool array of shape ({n},) with a True value, got {mask!r}"
                 )
+        if options is not None and "config" in options:
+            self._check_config(options["config"])
         asked = [k for k, i in enumerate(self._indices) if mask is None or mask[i]]
         for k in asked:
             self._send(k, _RESET, (seeds[self._indices[k]], options))
@@ -272,6 +276,31 @@ class EgoVectorEnv(VectorEnv):
             self._terminated[mask] = False
             self._truncated[mask] = False
         return self._obs.copy(), infos
+
+    def _check_config(self, config) -> None:
+        """A reset's new configuration, checked on an env built here (no SUMO starts) before any
+        env takes it: valid, and keeping the spaces the shared buffers were made for."""
+        probe = self._make_first()
+        try:
+            env = probe.unwrapped
+            if not hasattr(env, "configure"):
+                return
+            env.configure({**self._configured, **config})
+            if env._config_changed():
+                env._rebuild()
+            for what, old, new in (
+                ("observation", self.single_observation_space, env.observation_space),
+                ("action", self.single_action_space, env.action_space),
+            ):
+                if old != new:
+                    raise ConfigError(
+                        f"bad options['config'] for a vector env: it changes the {what} space ({old} -> "
+                        f"{new}), and the vector env's shared buffers hold the one it was made with; "
+                        "make a new vector env (gym.make_vec) with that configuration"
+                    )
+        finally:
+            probe.close()
+        self._configured.update(config)
 
     def step(self, actions):
         self._check_open()

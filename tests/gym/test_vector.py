@@ -420,3 +420,20 @@ def test_a_script_without_a_main_guard_is_told_what_the_forkserver_needs(tmp_pat
     out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert out.returncode != 0
     assert "its workers start by forkserver" in out.stderr and "if __name__ == '__main__':" in out.stderr
+
+
+def test_a_reset_that_would_change_the_spaces_is_refused_and_the_vector_env_goes_on():
+    envs = gym.make_vec("ego/CutIn-v0", num_envs=2, config=SHORT)
+    try:
+        envs.reset(seed=0)
+        with pytest.raises(ConfigError, match=r"changes the observation space .* make a new vector env"):
+            envs.reset(seed=0, options={"config": {"observation": {"type": "Kinematics"}}})
+        with pytest.raises(ConfigError, match=r"changes the action space"):
+            envs.reset(seed=0, options={"config": {"action": {"type": "ContinuousAction", "lateral": False}}})
+        with pytest.raises(ConfigError, match="bad value for policy_frequency: 3"):
+            envs.reset(seed=0, options={"config": {"policy_frequency": 3}})
+        obs, _ = envs.reset(seed=0, options={"config": {"ego_speed": 25.0}})  # the spaces kept
+        obs, *_ = envs.step(np.zeros((2, 2), np.float32))
+        assert obs.shape == (2, 15) and envs.get_attr("config")[1]["ego_speed"] == 25.0
+    finally:
+        envs.close()
