@@ -240,7 +240,7 @@ class EgoView:
         if self._sensor is None:
             g = sc.geometry
             self._sensor = SurroundSensor(self.road.road, {}, g.cg_to_front, g.length, g.width, horizon=c.sumo_step)
-            sc.bridge.subscribe_surroundings(self.agent, 200.0)
+            sc.bridge.subscribe_surroundings(self.agent, OWN_SENSOR_REACH)
         per = c.control_per_sumo
         look = sc.k // per
         if look != self._looked:
@@ -460,6 +460,9 @@ class EgoEnv(gym.Env):
         resolved = resolve(RunSpec(self.scenario_name, controller, 0, overrides))
         sc_config, spec, ctrl_params = resolved.config, resolved.controller, resolved.controller_params
         observation = observation_type(cfg["observation"], self.task)
+        self._reach = sensor_reach(self.task, sc_config)
+        if hasattr(observation, "set_reach"):
+            observation.set_reach(*self._reach)
         # the agent's action box as its scenario declares it, and its lanes (no simulator starts)
         probe = cls(sc_config, AgentSlot(), seed=0)
         limits = probe.action_limits()
@@ -748,6 +751,21 @@ class EgoEnv(gym.Env):
             self._view._prev, self._elapsed = prev, elapsed
         self._np_random = state["np_random"]
         self.config = copy.deepcopy(state.get("pending", self.config))
+
+
+#: how far the env's own surround sensor sees (m), for a scenario without one (curve, lane centring)
+OWN_SENSOR_REACH = 200.0
+
+
+def sensor_reach(task: str, config) -> tuple[float, str]:
+    """How far an env's surround view reaches (m) and how to see farther: the scenario's
+    ``sensor_range`` (motorway scenarios), the env's own sensor's reach, or no limit (the
+    platoon's rows come from its own states)."""
+    if hasattr(config, "sensor_range"):
+        return float(config.sensor_range), ": its sensor_range, up to 500 m"
+    if task == "car-following":
+        return math.inf, ""
+    return OWN_SENSOR_REACH, ""
 
 
 def run_seed_of(seed: Any) -> int:

@@ -78,6 +78,9 @@ class PlatoonParallelEnv(ParallelEnv):
         self.possible_agents = list(follower_ids(n)[: int(k)])
         # each agent its own instance of the configured observation type (its own car's view)
         self._observers = [observation_type(env.config["observation"], env.task) for _ in self.possible_agents]
+        for observer in self._observers:
+            if hasattr(observer, "set_reach"):
+                observer.set_reach(*env._reach)
         self._observation_space = self._observers[0].space
         self._action_space = env.action_space
         self.metadata = {**type(self).metadata, "render_fps": env.metadata["render_fps"]}

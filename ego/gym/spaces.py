@@ -243,7 +243,7 @@ class KinematicsObservation(_ObservationType):
         normalize: bool = True,
         clip: bool = True,
         see_behind: bool = False,
-        perception_distance: float = 200.0,
+        perception_distance: float | None = None,
     ) -> None:
         self.features = _features("Kinematics", features, self.KNOWN) if features is not None else self.FEATURES
         if (
@@ -261,7 +261,11 @@ class KinematicsObservation(_ObservationType):
             if key not in ("x", "y", "vx", "vy"):
                 raise ConfigError(f"unknown features_range key {key!r} (known: x, y, vx, vy)")
             ranges[key] = _range(f"features_range[{key}]", value)
-        if not (isinstance(perception_distance, (int, float)) and 0.0 < perception_distance <= 1000.0):
+        if perception_distance is not None and not (
+            isinstance(perception_distance, (int, float))
+            and not isinstance(perception_distance, bool)
+            and 0.0 < perception_distance <= 1000.0
+        ):
             raise ConfigError(
                 f"bad value for perception_distance: {perception_distance!r} (expected a "
                 "number above 0 and up to 1000 (m))"
@@ -272,7 +276,9 @@ class KinematicsObservation(_ObservationType):
         self.clip = _flag("clip", clip)
         self.see_behind = _flag("see_behind", see_behind)
         self.order = order
-        self.perception_distance = float(perception_distance)
+        #: as asked (None: highway-env's 200 m, cut where the env's sensor stops seeing)
+        self._asked = None if perception_distance is None else float(perception_distance)
+        self.perception_distance = 200.0 if perception_distance is None else float(perception_distance)
         self.names = self.features
         self.space = spaces.Box(-np.inf, np.inf, (self.vehicles_count, len(self.features)), np.float32)
         # per feature: the column of the (s, d, v_s, v_d, heading) rows, or how to derive it
@@ -281,6 +287,15 @@ class KinematicsObservation(_ObservationType):
         self._scaled = np.array([f in ranges for f in self.features])
         self._lo, self._span = lo, hi - lo
         self._rng = np.random.default_rng()
+
+    def set_reach(self, reach: float, how: str = "") -> None:
+        """The farthest the env's surround sensor sees (m; ``how`` says how to see farther): a
+        larger distance asked for is refused (it would be cut there, silently); the default,
+        highway-env's 200 m, is whatever the sensor sees up to that."""
+        if self._asked is not None and self._asked > reach:
+            raise ConfigError(
+                f"bad value for perception_distance: {self._asked:g} (this env's surround sensor sees {reach:g} m{how})"
+            )
 
     def reset(self, view) -> None:
         self._rng = view.np_random

@@ -2,12 +2,14 @@
 against the action types' own ``native``, value for value; pure numerics, no SUMO."""
 
 import math
+import re
 
 import numpy as np
 import pytest
 
 from ego.gym.spaces import ContinuousAction, EgoAction
 from ego.native import NATIVE
+from ego.params import ConfigError
 
 LIMITS = (-5000.0, 4000.0, 0.5)
 VALUES = [0.0, -0.0, 0.3, -0.7, 1.0, -1.0, 2.5, -3.0, 1e-30, math.nan, math.inf, -math.inf]
@@ -65,3 +67,27 @@ def test_the_bound_command_is_native_value_for_value(action_type):
             assert str(info.value) == str(exc)
         else:
             assert _same(bound(bad), expected)
+
+
+@pytest.mark.parametrize(
+    "env_id, config, message",
+    [
+        (
+            "ego/EmergencyBrake-v0",
+            {},
+            "perception_distance: 1000 (this env's surround sensor sees 150 m: its sensor_range",
+        ),
+        ("ego/Curve-v0", {}, "perception_distance: 1000 (this env's surround sensor sees 200 m)"),
+    ],
+)
+def test_a_perception_distance_beyond_the_sensor_is_refused_not_cut(env_id, config, message):
+    import gymnasium as gym
+
+    import ego.gym  # noqa: F401
+
+    with pytest.raises(ConfigError, match=re.escape(message)):
+        gym.make(env_id, config={**config, "observation": {"type": "Kinematics", "perception_distance": 1000}})
+    # the sensor reaching farther, or a platoon (its rows are its own states), takes it
+    for env_id, extra in (("ego/EmergencyBrake-v0", {"sensor_range": 400.0}), ("ego/Platoon-v0", {})):
+        obs = {"type": "Kinematics", "perception_distance": 400}
+        gym.make(env_id, config={**extra, "observation": obs}).close()
