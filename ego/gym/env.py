@@ -460,7 +460,7 @@ class EgoEnv(gym.Env):
         resolved = resolve(RunSpec(self.scenario_name, controller, 0, overrides))
         sc_config, spec, ctrl_params = resolved.config, resolved.controller, resolved.controller_params
         observation = observation_type(cfg["observation"], self.task)
-        self._reach = sensor_reach(self.task, sc_config)
+        self._reach = sensor_reach(cls, sc_config)
         if hasattr(observation, "set_reach"):
             observation.set_reach(*self._reach)
         # the agent's action box as its scenario declares it, and its lanes (no simulator starts)
@@ -757,14 +757,16 @@ class EgoEnv(gym.Env):
 OWN_SENSOR_REACH = 200.0
 
 
-def sensor_reach(task: str, config) -> tuple[float, str]:
-    """How far an env's surround view reaches (m) and how to see farther: the scenario's
-    ``sensor_range`` (motorway scenarios), the env's own sensor's reach, or no limit (the
-    platoon's rows come from its own states)."""
+def sensor_reach(cls, config) -> tuple[float, str]:
+    """How far an env's surround view reaches (m) and how to see farther: no limit where the
+    scenario gives the rows itself (the platoon: from its own states), else its
+    ``sensor_range`` (the motorway scenarios), else the env's own sensor's reach."""
+    from ego.scenarios.base import Scenario
+
+    if cls.lane_rows is not Scenario.lane_rows:
+        return math.inf, ""
     if hasattr(config, "sensor_range"):
         return float(config.sensor_range), ": its sensor_range, up to 500 m"
-    if task == "car-following":
-        return math.inf, ""
     return OWN_SENSOR_REACH, ""
 
 
