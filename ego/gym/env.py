@@ -171,6 +171,27 @@ class EgoView:
         sc = self.scenario
         return getattr(sc, "view", None) or sc
 
+    def lane_centres(self) -> list[float]:
+        """The road's lane centres (m, + left) in the frame of the agent's start lane: the
+        surround view's lanes, else the scenario's lanes met along the agent's lane (a curve's
+        oncoming lane), else its own lane alone."""
+        road = self.road
+        offsets = getattr(road, "lane_offset", None)
+        if offsets:
+            return sorted(offsets.values())
+        frame = getattr(road, "road", None)
+        lanes = getattr(self.scenario, "lanes", None)
+        out = {0.0}
+        if frame is not None and isinstance(lanes, Mapping):
+            for lane in lanes.values():
+                points = getattr(lane, "points", None)
+                if not points:
+                    continue
+                s, d, _ = frame.project(*points[len(points) // 2])
+                if 0.0 < s < frame.length and abs(d) < 20.0:
+                    out.add(round(d, 2))
+        return sorted(out)
+
     @property
     def steers(self) -> bool:
         """The agent's vehicle steers (False: it keeps its one lane, the platoon's followers)."""

@@ -352,8 +352,9 @@ class TimeToCollisionObservation(_ObservationType):
     ``speed_step`` slower, as now, one faster) x (lane: right, own, left) x (time bins of
     1 s): 1 in the bin of the predicted time to collision with the nearest vehicle ahead in
     that lane at that speed (vehicles closing from behind count as well), else 0. Built from
-    the same vehicles as ``Kinematics``, in the ego's lane frame; lanes that do not exist
-    are 1 throughout (highway-env marks off-road lanes as occupied)."""
+    the same vehicles as ``Kinematics``, in the ego's lane frame; lanes that do not exist,
+    seen from where the ego is (:meth:`ego.gym.env.EgoView.lane_centres`), are 1 throughout
+    (highway-env marks off-road lanes as occupied)."""
 
     type_name = "TimeToCollision"
     OPTIONS = ("horizon", "speed_step")
@@ -369,18 +370,15 @@ class TimeToCollisionObservation(_ObservationType):
 
     def reset(self, view) -> None:
         self._width = _lane_width(view)
-        sc = view.road
-        offsets = getattr(sc, "lane_offset", None)
-        lane = getattr(sc, "target_lane", None)
-        #: which of (right, own, left) exist
-        if offsets and lane is not None and lane in offsets:
-            self._exists = [lane - 1 in offsets, True, lane + 1 in offsets]
-        else:
-            self._exists = [True, True, True] if view.steers else [False, True, False]
+        #: the road's lane centres (m, + left, the ego's start-lane frame)
+        self._centres = view.lane_centres()
 
     def observe(self, view) -> np.ndarray:
         ego, others, _ = view.traffic()
         out = np.zeros((3, 3, self.horizon), dtype=np.float32)
+        # which of (right, own, left) exist, seen from where the ego is now
+        d, w = ego[1], self._width
+        self._exists = [dl == 0 or any(abs(c - d - dl * w) < 0.5 * w for c in self._centres) for dl in (-1, 0, 1)]
         for j, exists in enumerate(self._exists):
             if not exists:
                 out[:, j, :] = 1.0
@@ -449,14 +447,9 @@ class OccupancyGridObservation(_ObservationType):
         self.space = spaces.Box(-1.0, 1.0, self.shape, np.float32)
 
     def reset(self, view) -> None:
-        sc = view.road
-        width = _lane_width(view)
-        offsets = getattr(sc, "lane_offset", None)
-        lane = getattr(sc, "target_lane", None)
-        # the road's lateral extent in the ego's start-lane frame (y of lane centres +- half a lane)
-        centres = list(offsets.values()) if offsets else [0.0]
-        self._road = (min(centres) - 0.5 * width, max(centres) + 0.5 * width)
-        del lane
+        # the road's lanes in the ego's start-lane frame (y of lane centres, half a lane)
+        self._centres = np.array(view.lane_centres())
+        self._half = 0.5 * _lane_width(view)
 
     def observe(self, view) -> np.ndarray:
         ego, others, _ = view.traffic()
@@ -465,7 +458,7 @@ class OccupancyGridObservation(_ObservationType):
         (x0, y0), (sx, sy) = self._origin, self._step
         if "on_road" in self.features:
             y = y0 + sy * (np.arange(ny) + 0.5) + ego[1]
-            road = ((y >= self._road[0]) & (y <= self._road[1])).astype(np.float32)
+            road = (np.abs(y[:, None] - self._centres[None, :]).min(axis=1) <= self._half).astype(np.float32)
             out[self.features.index("on_road")] = road[None, :]
         if others:
             rows = np.asarray(others, dtype=np.float64).reshape(-1, 5)

@@ -430,3 +430,35 @@ def test_a_parameter_set_to_its_own_value_is_left_out_of_the_default_randomisati
     # a randomize given in the config draws what it names, over a plain value
     env.reset(seed=0, options={"config": {"randomize": {"ego_speed": [20, 22]}}})
     assert set(env.unwrapped.randomized) == {"ego_speed"} and 20 <= env.unwrapped.scenario.config.ego_speed <= 22
+
+
+@pytest.mark.sumo
+def test_the_lanes_that_exist_follow_the_ego_and_the_road(make):
+    """TimeToCollision marks a lane that is not there as 1 throughout, seen from where the
+    ego is now (after a change into the leftmost lane its left is off the road), on any road
+    (the curve: no lane to its right, the oncoming lane to its left); OccupancyGrid's on_road
+    covers every lane (the curve's oncoming one too)."""
+    env = make(
+        "ego/FastFollower-v0",
+        config={
+            "action": {"type": "DiscreteMetaAction"},
+            "observation": {"type": "TimeToCollision"},
+            "randomize": {},
+            "policy_frequency": 1,
+            "traffic_density": 0.0,
+        },
+    )
+    obs, _ = env.reset(seed=0)
+    meta = env.unwrapped.action_type
+    assert meta.lane == 1 and not obs[:, 2, :].all() and not obs[:, 0, :].all()  # the middle lane
+    env.step(meta.actions_indexes["LANE_LEFT"])
+    for _ in range(7):
+        obs, *_ = env.step(meta.actions_indexes["IDLE"])
+    assert meta.lane == 2 and obs[:, 2, :].all() and not obs[:, 0, :].all()  # the leftmost
+    curve = make("ego/Curve-v0", config={"multi_instance": True, "observation": {"type": "TimeToCollision"}})
+    obs, _ = curve.reset(seed=0)
+    assert obs[:, 0, :].all() and not obs[:, 2, :].all()  # no lane to the right; the oncoming one
+    grid = make("ego/Curve-v0", config={"multi_instance": True, "observation": {"type": "OccupancyGrid"}})
+    g, _ = grid.reset(seed=0)
+    on_road = g[grid.unwrapped.observation_type.features.index("on_road"), 0]
+    assert on_road[5] == 1.0 and on_road[6] == 1.0 and on_road[4] == 0.0  # own, oncoming, right of it
