@@ -437,7 +437,12 @@ class _Parser:
             self.take(")")
             return f"abs({text})", unit
         if _is_number(tok):
-            return repr(self.finite(tok)), self.unit_suffix()
+            value, unit = repr(self.finite(tok)), self.unit_suffix()
+            after = self.peek()
+            if unit is None and after is not None and _is_name(after) and after not in _KEYWORDS:
+                units = sorted((set(KNOWN_UNITS) | {u for u in self.units.values() if u and u != BOOL}) - {"-"})
+                raise self.error(f"unknown unit {after!r} after {tok} (units: {', '.join(units)}; SI only)")
+            return value, unit
         if tok in _KEYWORDS or not _is_name(tok):
             raise self.error(f"expected a signal or a number, found {tok!r}")
         if tok not in self.units:

@@ -74,6 +74,7 @@ def test_the_issues_examples_parse(formula):
         ("eventually[3:1] (speed >= 1)", "ends before it starts"),
         ("", "empty"),
         ("always (gap_front >= 1e999 m)", "1e999 is not a finite number"),
+        ("always (speed >= 36 km/h)", "unknown unit 'km' after 36 (units: "),
         ("always (gap_front >= -1e999 m)", "1e999 is not a finite number"),
         ("eventually[0:1e999] (speed >= 1)", "1e999 is not a finite number"),
     ],

@@ -788,6 +788,12 @@ def file_listing(path: str, ego: str = "") -> dict:
         chosen = None  # noted in the listing: the file is listed to find out why
     els = elements(root)
     own = {f.name for f in dataclasses.fields(FileConfig)}
+    # the ego's parameters as a run of this file starts them (its Init's speed, lane, start);
+    # FileConfig's own defaults where the file is refused
+    try:
+        start = file_scenario_class(path).default_config({"ego_entity": chosen} if ego else {})
+    except ConfigError:
+        start = FileConfig()
     return {
         "file": path,
         "parameters": [
@@ -797,7 +803,7 @@ def file_listing(path: str, ego: str = "") -> dict:
         "entities": entities,
         "ego": chosen,
         "ego_parameters": [
-            {"name": i.name, "default": i.default, "unit": i.unit, "description": i.doc}
+            {"name": i.name, "default": getattr(start, i.name), "unit": i.unit, "description": i.doc}
             for i in describe(FileConfig)
             if i.name not in params
         ],

@@ -120,6 +120,14 @@ def test_list_file(files, capsys):
         {"element": "Trailer", "line": 32, "supported": False}
     ]
     assert listing["ego"] == "Ego"
+    # the ego's parameters as a run of the file starts them (its Init), not FileConfig's
+    assert main(["list", str(files / "cut_in.xosc"), "--json"]) == 0
+    own = {p["name"]: p["default"] for p in json.loads(capsys.readouterr().out)["ego_parameters"]}
+    from ego.runner import RunSpec, resolve
+
+    start = resolve(RunSpec(str(files / "cut_in.xosc"), "pid")).config
+    assert (own["ego_speed"], own["ego_lane"], own["ego_start"]) == (start.ego_speed, start.ego_lane, start.ego_start)
+    assert own["ego_start"] != 300.0  # FileConfig's default
 
 
 def test_compare(files, capsys):
