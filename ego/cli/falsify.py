@@ -54,6 +54,14 @@ def add_parser(sub) -> argparse.ArgumentParser:
         help="parallel runs (default: the CPUs)",
     )
     fal.add_argument(
+        "--batch",
+        type=whole_number("--batch"),
+        default=None,
+        metavar="N",
+        help="points the optimiser proposes at a time (default 2); the search depends on it, not "
+        "on --jobs: more workers than that only help with a larger batch",
+    )
+    fal.add_argument(
         "--address",
         default=None,
         metavar="ADDR",
@@ -95,7 +103,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
 
 def command(args) -> int:
     from ego.checks import MAX_JOBS, check_count, check_output_dir, check_seed
-    from ego.falsify.search import falsify
+    from ego.falsify.search import BATCH, falsify
     from ego.falsify.spec import load
     from ego.parallel.executor import ENGINES
     from ego.params import ConfigError
@@ -109,6 +117,7 @@ def command(args) -> int:
         if value not in allowed:
             raise ConfigError(f"bad value for {what}: {value!r} (allowed: {', '.join(allowed)})")
     check_count(args.jobs, "--jobs", 1, MAX_JOBS)
+    check_count(args.batch, "--batch", 1, 1024)
     check_count(args.budget, "--budget", 1, 10_000_000)
     check_seed(args.optimizer_seed, "--optimizer-seed")
     if args.address is not None and args.engine != "ray":
@@ -127,6 +136,7 @@ def command(args) -> int:
         optimizer_seed=args.optimizer_seed,
         verify=not args.no_verify,
         progress=True,
+        batch=args.batch or BATCH,
     )
     print(report.text())
     if report.interrupted:

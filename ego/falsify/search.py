@@ -1,7 +1,8 @@
 """``ego falsify``: search a spec's ranges for runs that violate a requirement.
 
 For each controller of the spec, an optimiser (:mod:`ego.falsify.optimizers`) proposes a
-batch of points (as many as the executor has workers), the sweep machinery runs them
+batch of points (:data:`BATCH`, or ``--batch``: the same search for any number of workers),
+the sweep machinery runs them
 (:func:`ego.sweep.pipeline.execute` on :func:`ego.parallel.executor.make_executor`, rows into
 :class:`ego.sweep.results.ResultStore`), and the optimiser learns the target requirement's
 robustness of each. Outputs in ``--out``:
@@ -37,6 +38,10 @@ from ego.sweep.spec import Run
 
 #: violations checked by running their command again (each is a fresh ``ego run`` process)
 VERIFY_AT_MOST = 5
+
+#: points an optimiser proposes at a time: the search depends on it, not on the workers
+#: (--jobs), so it is the same on any machine
+BATCH = 2
 
 
 @dataclass
@@ -125,8 +130,10 @@ def falsify(
     verify: bool = True,
     progress: bool = False,
     executor=None,
+    batch: int = BATCH,
 ) -> FalsifyReport:
-    """Run the search (see the module docstring); ``executor`` overrides ``engine``/``jobs``."""
+    """Run the search (see the module docstring); ``executor`` overrides ``engine``/``jobs``.
+    ``batch``: points per proposal, which the search depends on (not the workers)."""
     from ego.parallel.executor import make_executor
     from ego.sweep.runner import check_results_folder
 
@@ -168,6 +175,7 @@ def falsify(
                     known,
                     search,
                     progress,
+                    batch,
                 )
         except KeyboardInterrupt:
             interrupted = True
@@ -230,11 +238,12 @@ def _search(
     known: dict,
     search: Search,
     progress: bool,
+    batch: int = 2,
 ) -> None:
     from ego.sweep.pipeline import execute
     from ego.sweep.runner import error_row, row_of, task_of
 
-    opt = make(optimizer, len(spec.dims), max(1, executor.workers), seed, budget)
+    opt = make(optimizer, len(spec.dims), batch, seed, budget)
 
     def keep(row: dict) -> None:
         row.update(optimizer=optimizer, optimizer_seed=seed)
@@ -250,6 +259,7 @@ def _search(
         ids = [spec.run_id(controller, s, o) for s, o in points]
         tasks = {}
         fresh = set()
+        done: dict[str, dict] = {}  # the batch's rows, kept in the order of the proposal
         for rid, (s, o) in zip(ids, points):
             if rid not in known and rid not in fresh:
                 fresh.add(rid)
@@ -257,16 +267,21 @@ def _search(
                 try:
                     tasks[rid] = task_of(r, None, "none", spec.requirements)
                 except Exception as exc:  # noqa: BLE001 - values no run takes: the run's row says so
-                    keep(error_row(r, f"{type(exc).__name__}: {exc}"))
-        for outcome in executor.run(execute, tasks.values()):
-            task = outcome.task
-            if outcome.value is None:
-                row = error_row(task.key, outcome.error or "the worker died")
-            else:
-                row = row_of(task.key, outcome.value)
-            if row["status"] == "interrupted":
-                raise KeyboardInterrupt
-            keep(row)
+                    done[rid] = error_row(r, f"{type(exc).__name__}: {exc}")
+        try:
+            for outcome in executor.run(execute, tasks.values()):
+                task = outcome.task
+                if outcome.value is None:
+                    row = error_row(task.key, outcome.error or "the worker died")
+                else:
+                    row = row_of(task.key, outcome.value)
+                if row["status"] == "interrupted":
+                    raise KeyboardInterrupt
+                done[row["run_id"]] = row
+        finally:  # what finished is kept, interrupted or not, in the same order every time
+            for rid in ids:
+                if rid in done and rid not in known:
+                    keep(done[rid])
         for rid, (s, o) in zip(ids, points):
             row = known[rid]
             search.evaluations.append(

@@ -208,6 +208,41 @@ def test_falsify_finds_verifies_and_resumes(tmp_path, capsys):
 
 
 @pytest.mark.sumo
+def test_the_search_is_the_same_for_any_number_of_workers(tmp_path, capsys):
+    """The batch (not --jobs) decides what the optimiser proposes, and a batch's rows are kept
+    in the order of the proposal: --jobs 1 and --jobs 2 write the same results, and one
+    resumes the other without running anything."""
+    path = tmp_path / "f.toml"
+    path.write_text(SPEC)
+    tables = []
+    for jobs in ("1", "2"):
+        out = tmp_path / f"out{jobs}"
+        args = ["falsify", str(path), "--out", str(out), "--budget", "6", "--optimizer", "cma", "--no-verify"]
+        main([*args, "--jobs", jobs])
+        tables.append(pq.read_table(out / "results.parquet").to_pandas())
+    one, two = tables
+    assert list(one["run_id"]) == list(two["run_id"])
+    assert list(one["requirements.far"]) == list(two["requirements.far"])
+    capsys.readouterr()
+    main(
+        [
+            "falsify",
+            str(path),
+            "--out",
+            str(tmp_path / "out1"),
+            "--budget",
+            "6",
+            "--optimizer",
+            "cma",
+            "--no-verify",
+            "--jobs",
+            "2",
+        ]
+    )
+    assert "0 runs ran now" in capsys.readouterr().out
+
+
+@pytest.mark.sumo
 def test_until_first_stops_at_the_first_batch_with_a_violation(tmp_path):
     from ego.parallel.executor import ProcessExecutor
 
