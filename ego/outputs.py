@@ -48,6 +48,13 @@ def output_error(path: str | Path, exc: BaseException, result=None) -> OutputErr
     return OutputError(f"cannot write {path}: {why}", result)
 
 
+def final_path(path: str | Path) -> Path:
+    """The file a write to ``path`` replaces: ``path``, or where it links to (a symlink is
+    written through, as the checks before the run follow it; the link stays)."""
+    path = Path(path)
+    return Path(os.path.realpath(path)) if path.is_symlink() else path
+
+
 def partial_path(path: str | Path, pid: int | None = None) -> Path:
     """The temporary name of ``path`` while process ``pid`` (default: this one) writes it.
     The pid keeps two writers of one file apart; the suffix says what the file is if its
@@ -67,7 +74,7 @@ def remove_partials(folder: str | Path) -> None:
 def atomic_path(path: str | Path) -> Iterator[Path]:
     """Yield a temporary path to write; it replaces ``path`` when the block ends normally
     and is removed when the block raises."""
-    path = Path(path)
+    path = final_path(path)
     tmp = partial_path(path)
     try:
         yield tmp

@@ -296,21 +296,24 @@ def run(what: RunSpec | ResolvedRun) -> RunResult:
 
     resolved = what if isinstance(what, ResolvedRun) else resolve(what)
     scenario = build(resolved)
+    failed: OutputError | None = None
     try:
         result = scenario.run()
     except OutputError as exc:  # the recording could not be written: the run's metrics stand
-        exc.result = scenario.result()
-        raise
-    if resolved.spec.trace is not None:
+        result = exc.result = scenario.result()
+        failed = exc
+    if resolved.spec.trace is not None:  # written whatever became of the recording
         from ego.results.export import write_trace
 
         try:
             write_trace(result, resolved.spec.trace)
         except OutputError as exc:
             exc.result = result
-            raise
+            raise failed or exc from None
         except OSError as exc:
-            raise output_error(resolved.spec.trace, exc, result) from None
+            raise failed or output_error(resolved.spec.trace, exc, result) from None
+    if failed is not None:
+        raise failed
     return result
 
 

@@ -48,3 +48,59 @@ def test_partial_files_are_removed_and_nothing_else(tmp_path):
         (tmp_path / name).write_text("x")
     remove_partials(tmp_path)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.rrd", "notes.txt"]
+
+
+def test_a_symlink_is_written_through_and_stays(tmp_path):
+    """The checks before a run follow a link (a link to a folder is refused as a folder); the
+    write does too: the file it points to is replaced, the link stays a link."""
+    target = tmp_path / "keep" / "real.txt"
+    target.parent.mkdir()
+    target.write_text("old")
+    link = tmp_path / "link.txt"
+    link.symlink_to(target)
+    write_text(link, "new")
+    assert link.is_symlink() and target.read_text() == "new"
+    dangling = tmp_path / "dangling.txt"
+    dangling.symlink_to(tmp_path / "keep" / "later.txt")
+    write_text(dangling, "made")
+    assert dangling.is_symlink() and (tmp_path / "keep" / "later.txt").read_text() == "made"
+
+
+@pytest.mark.sumo
+def test_a_run_records_and_traces_through_links(tmp_path):
+    from ego.runner import RunSpec, run
+
+    (tmp_path / "keep").mkdir()
+    rrd, csv = tmp_path / "link.rrd", tmp_path / "link.csv"
+    rrd.symlink_to(tmp_path / "keep" / "run.rrd")
+    csv.symlink_to(tmp_path / "keep" / "run.csv")
+    run(RunSpec("emergency-brake", "pid", overrides={"duration": 3.0}, record=str(rrd), trace=str(csv)))
+    assert rrd.is_symlink() and csv.is_symlink()
+    assert (tmp_path / "keep" / "run.rrd").stat().st_size > 0 and (tmp_path / "keep" / "run.csv").stat().st_size > 0
+
+
+@pytest.mark.sumo
+def test_the_trace_is_written_when_the_recording_fails(tmp_path, monkeypatch):
+    """A recording that cannot be written (a full disk) is reported; the trace, whose folder
+    is fine, is written all the same (docs/traces.md: whatever the run's status)."""
+    from ego.outputs import OutputError
+    from ego.record import rerun_recorder
+    from ego.runner import RunSpec, run
+
+    close = rerun_recorder.RerunRecorder.close
+
+    def full_disk(self, *args, **kwargs):
+        close(self, *args, **kwargs)
+        raise OutputError(f"cannot write {self.path}: [Errno 28] No space left on device")
+
+    monkeypatch.setattr(rerun_recorder.RerunRecorder, "close", full_disk)
+    spec = RunSpec(
+        "emergency-brake",
+        "pid",
+        overrides={"duration": 3.0},
+        record=str(tmp_path / "r.rrd"),
+        trace=str(tmp_path / "t.csv"),
+    )
+    with pytest.raises(OutputError, match="No space left on device") as err:
+        run(spec)
+    assert err.value.result.metrics["status"] and (tmp_path / "t.csv").stat().st_size > 0

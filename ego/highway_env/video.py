@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ego.outputs import final_path
 from ego.params import ConfigError
 
 FORMATS = (".gif", ".mp4")
@@ -60,7 +61,7 @@ class VideoWriter:
     """
 
     def __init__(self, path: str | os.PathLike, fps: float, frames_expected: int) -> None:
-        self.path = Path(path)
+        self.path = final_path(path)
         self.stride = max(1, -(-int(frames_expected) // MAX_FRAMES))
         self.fps = fps / self.stride
         self._count = 0
@@ -112,6 +113,10 @@ class VideoWriter:
                 str(self._tmp),
             ],
             stdin=subprocess.PIPE,
+            # its own session: a Ctrl-C to the run's process group must not end the encoder
+            # (the run stops at its next step and then closes the video); it ends at the end
+            # of its input whenever ego does
+            start_new_session=True,
         )
 
     def close(self) -> None:
@@ -119,10 +124,11 @@ class VideoWriter:
         try:
             if self._ffmpeg is not None:
                 self._ffmpeg.stdin.close()
-                if self._ffmpeg.wait() != 0:
+                code = self._ffmpeg.wait()
+                if code != 0:
                     from ego.outputs import OutputError
 
-                    raise OutputError(f"cannot write {self.path}: ffmpeg failed (a full disk?)")
+                    raise OutputError(f"cannot write {self.path}: ffmpeg ended with status {code} (its message above)")
             elif self._frames:
                 self.path.parent.mkdir(parents=True, exist_ok=True)
                 first, *rest = self._frames

@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ego.outputs import partial_path
+from ego.outputs import final_path, partial_path
 from ego.processes import main_module_hidden, signals_deferred
 from ego.record.base import Scene, Series, box_outlines, lane_edges
 
@@ -82,7 +82,7 @@ class RerunRecorder:
     def __init__(
         self, path: str | Path, *, application_id: str = "ego", recording_id: str | None = None, background: bool = True
     ) -> None:
-        self.path = Path(path)
+        self.path = final_path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._box_t: list[float] = []
         self._box_n: list[int] = []
@@ -290,7 +290,7 @@ class RerunWriter:
     def __init__(self, path: str, application_id: str = "ego", recording_id: str | None = None) -> None:
         import rerun as rr
 
-        self.path = Path(path)
+        self.path = final_path(path)
         self._partial = partial_path(self.path)
         self._rr = rr
         self._rec = rr.RecordingStream(application_id, recording_id=recording_id)

@@ -72,3 +72,33 @@ def test_video_needs_the_highway_env_backend(tmp_path):
     with pytest.raises(ConfigError, match="--video needs --backend highway-env"):
         run(RunSpec("cut-in", "pid", video=str(tmp_path / "v.gif")))
     assert not (tmp_path / "v.gif").exists()
+
+
+@pytest.mark.sumo
+def test_ctrl_c_keeps_the_mp4_and_the_trace(tmp_path):
+    """A terminal's Ctrl-C reaches the whole process group: the mp4 encoder runs in a session
+    of its own, so the run stops at its next step and writes the video of what it simulated
+    and its trace (the encoder died with the run's group before: exit 1, neither written)."""
+    import os
+    import signal
+    import subprocess
+    import sys
+
+    from process_group import wait_for
+
+    video, trace = tmp_path / "v.mp4", tmp_path / "v.csv"
+    args = ["run", "emergency-brake", "-c", "pid", "--backend", "highway-env", "--set", "duration=3000"]
+    args += ["--set", "traffic_density=0", "--video", str(video), "--trace", str(trace)]
+    p = subprocess.Popen(
+        [sys.executable, "-m", "ego", *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        env={**os.environ, "MPLCONFIGDIR": str(tmp_path)},
+    )
+    wait_for(lambda: any(tmp_path.glob(".v.mp4.part*")), p, "the encoder's partial file")
+    os.killpg(p.pid, signal.SIGINT)  # the whole process group, as a terminal does
+    out, err = p.communicate(timeout=120)
+    assert p.returncode == 130, err
+    assert video.stat().st_size > 1000 and trace.stat().st_size > 1000
