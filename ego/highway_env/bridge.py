@@ -125,11 +125,20 @@ class ScriptedVehicle(Vehicle):
         else:
             v = _approach(v, target, (self.accel if target > v else self.decel) * dt)
         self.acceleration = (v - v0) / dt
-        # SUMO's Euler update (the new speed over the whole step), along the road
+        # SUMO's Euler update (the new speed over the whole step), along the road, and its
+        # sideways move, both of the front bumper (SUMO's reference point: a script that steers
+        # by the bumper's y sees exactly what it asked); the body turned to the move
         dx, dy = v * dt, self.shift
         self.shift = 0.0
-        self.position = self.position + np.array((dx, dy))
-        self.heading = math.atan2(dy, dx) if (dx or dy) else 0.0
+        heading = math.atan2(dy, dx) if (dx or dy) else 0.0
+        half = 0.5 * self.LENGTH
+        self.position = self.position + np.array(
+            (
+                dx + half * (math.cos(self.heading) - math.cos(heading)),
+                dy + half * (math.sin(self.heading) - math.sin(heading)),
+            )
+        )
+        self.heading = heading
         self.speed = v
         self.on_state_update()
 

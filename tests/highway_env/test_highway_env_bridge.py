@@ -93,9 +93,10 @@ def test_a_sideways_move_takes_one_step_and_a_ramp_is_linear(make):
     bridge.change_sublane("cut", -1.0)  # 1 m to the right
     bridge.step()
     assert bridge.speed("cut") == pytest.approx(29.5)
-    # the centre moved 1 m right, the car heading where it went (as SUMO's sublane model)
+    # the front bumper (SUMO's reference point) moved 1 m right, the car heading where it went
+    # (as SUMO's sublane model)
     car = bridge.env.road.vehicles[0]  # highway-env's frame: y and heading mirrored
-    assert (-car.position[1], -car.heading) == pytest.approx((2.5, math.atan2(-1.0, 2.95)))
+    assert (bridge.front_bumper("cut")[1], -car.heading) == pytest.approx((2.5, math.atan2(-1.0, 2.95)))
 
 
 def test_the_ego_running_into_a_car_is_a_collision_it_caused(make):

@@ -26,6 +26,26 @@ def test_each_scenario_runs_its_manoeuvre_on_highway_env(scenario):
     assert list(flatten(m)) == [x.name for x in resolve(RunSpec(scenario, "pid")).metrics_declared()]
 
 
+@pytest.mark.parametrize("side", ["left", "right"])
+def test_the_cutting_car_settles_in_the_egos_lane_as_on_sumo(side, tmp_path):
+    """The cutter steers by its front bumper's offset, which on highway-env moves as asked (it
+    swung from side to side and ended half in the far lane: the bumper's y carried the body's
+    turn); it ends on the ego's lane centre on both simulators, with about the same gaps."""
+    import pandas as pd
+
+    ends, gaps = {}, {}
+    for backend in ("sumo", "highway-env"):
+        trace = tmp_path / f"{backend}.csv"
+        spec = RunSpec("cut-in", "pid", 0, {"duration": "14", "cut_in_side": side}, backend=backend, trace=str(trace))
+        gaps[backend] = run(spec).metrics["min_gap_front"]
+        traffic = pd.read_csv(tmp_path / f"{backend}.traffic.csv")
+        cutter = traffic[traffic.vehicle == "cutter"]
+        ends[backend] = cutter[cutter.t >= 13.0][["y", "heading"]].abs().max()
+    for backend, end in ends.items():
+        assert end["y"] < 0.15 and end["heading"] < 0.01, (backend, end)
+    assert abs(gaps["highway-env"] - gaps["sumo"]) < 0.5
+
+
 def test_the_same_seed_gives_the_same_metrics():
     a, b = (_run("cut-in", seed=3, duration=12).metrics for _ in range(2))
     a.pop("wall_time"), b.pop("wall_time")
