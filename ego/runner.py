@@ -247,9 +247,7 @@ def build(what: RunSpec | ResolvedRun) -> Scenario:
     if spec.record is not None:
         path = Path(os.fspath(spec.record))
         path.parent.mkdir(parents=True, exist_ok=True)
-        recorder = RerunRecorder(
-            path, recording_id=f"{spec.scenario}-{spec.name}-{spec.seed}", background=spec.background_recording
-        )
+        recorder = RerunRecorder(path, recording_id=recording_id(spec), background=spec.background_recording)
     scenario = resolved.scenario_cls(
         resolved.config,
         controller,
@@ -264,6 +262,21 @@ def build(what: RunSpec | ResolvedRun) -> Scenario:
 
         scenario.on_result = lambda sc, result: check_run(sc, result, reqs)
     return scenario
+
+
+def recording_id(spec: RunSpec) -> str:
+    """A run's recording id, one per run (recordings opened together merge by id):
+    scenario, controller, the backend other than SUMO, a digest of the parameters set, and the
+    seed last."""
+    import hashlib
+
+    parts = [str(spec.scenario), spec.name]
+    if spec.backend != "sumo":
+        parts.append(spec.backend)
+    if spec.overrides:
+        text = repr(sorted((str(k), str(v)) for k, v in spec.overrides.items()))
+        parts.append(hashlib.sha256(text.encode()).hexdigest()[:8])
+    return "-".join([*parts, str(spec.seed)])
 
 
 def requirements_of(resolved: ResolvedRun, controller: Controller | None = None) -> tuple:

@@ -214,3 +214,22 @@ def test_ego_run_trace_checks_the_path_first_and_writes_the_file(tmp_path):
     good = subprocess.run([*ego, "--trace", str(tmp_path / "t.parquet")], capture_output=True, text=True, timeout=300)
     assert f"trace: {tmp_path / 't.parquet'}" in good.stdout
     assert pq.read_table(tmp_path / "t.parquet").num_rows == 200
+
+
+def test_recordings_of_different_runs_have_different_ids_and_say_their_simulator():
+    """Recordings opened together merge by id: the id tells the backend and the parameters
+    apart, the seed last; the trace's metadata names the simulator where there are two."""
+    from ego.results.export import run_info
+    from ego.results.run import RunResult
+    from ego.runner import RunSpec, recording_id
+
+    ids = {
+        recording_id(RunSpec("emergency-brake", "pid", 0)),
+        recording_id(RunSpec("emergency-brake", "pid", 0, backend="highway-env")),
+        recording_id(RunSpec("emergency-brake", "pid", 0, {"ego_speed": "25"})),
+        recording_id(RunSpec("emergency-brake", "pid", 0, {"ego_speed": "26"})),
+    }
+    assert len(ids) == 4 and all(i.rsplit("-", 1)[1] == "0" for i in ids)
+    assert recording_id(RunSpec("emergency-brake", "pid", 3)) == "emergency-brake-pid-3"
+    result = RunResult("cut-in", "pid", 0, "completed", {"backend": "highway-env"}, [], ("t",), None)
+    assert run_info(result)["backend"] == "highway-env"

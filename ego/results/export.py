@@ -100,13 +100,17 @@ def traffic_columns(log: TrafficLog) -> dict[str, np.ndarray]:
 
 
 def run_info(result: RunResult) -> dict[str, str]:
-    """What run a file holds: scenario, controller, seed, status (as text)."""
-    return {
+    """What run a file holds: scenario, controller, seed, status (as text), and the traffic
+    simulator where the scenario has several."""
+    info = {
         "scenario": result.scenario,
         "controller": result.controller,
         "seed": str(result.seed),
         "status": result.status,
     }
+    if result.metrics.get("backend"):
+        info["backend"] = str(result.metrics["backend"])
+    return info
 
 
 # -- csv ----------------------------------------------------------------------------------------

@@ -625,6 +625,8 @@ class Scenario:
     def _meta(self) -> dict:
         """What the recording's "run" panel lists: names, seed and every parameter."""
         meta = {"scenario": self.name, "controller": self.controller_name, "seed": self.seed}
+        if len(type(self).backends) > 1:  # which traffic simulator ran (the /run panel says so)
+            meta["backend"] = self.backend
         meta.update({k: getattr(self.config, k) for k in self.config.__dataclass_fields__})
         if self.colors:
             meta["colors"] = self.colors
