@@ -104,3 +104,24 @@ def test_the_trace_is_written_when_the_recording_fails(tmp_path, monkeypatch):
     with pytest.raises(OutputError, match="No space left on device") as err:
         run(spec)
     assert err.value.result.metrics["status"] and (tmp_path / "t.csv").stat().st_size > 0
+
+
+def test_a_finished_row_reaches_the_file_within_the_flush_time_without_another_row(tmp_path):
+    """A row waits for the file at most flush_seconds, even when no other row follows (a long
+    run after it, a slow executor shutdown): a kill -9 then loses only the last moments."""
+    import time
+
+    import pyarrow.parquet as pq
+
+    from ego.sweep.results import ResultStore
+
+    store = ResultStore(tmp_path, flush_rows=1000, flush_seconds=0.2)
+    store.add({"run_id": "a", "scenario": "x", "status": "completed"})
+    deadline = time.monotonic() + 5.0
+    while not (tmp_path / "results.parquet").exists():
+        assert time.monotonic() < deadline, "the row never reached the file"
+        time.sleep(0.05)
+    assert pq.read_table(tmp_path / "results.parquet").column("run_id").to_pylist() == ["a"]
+    store.add({"run_id": "b", "scenario": "x", "status": "completed"})
+    store.flush()
+    assert len(pq.read_table(tmp_path / "results.parquet")) == 2

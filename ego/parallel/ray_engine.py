@@ -60,8 +60,15 @@ class RayExecutor:
             quiet: dict[str, Any] = dict(
                 include_dashboard=False, logging_level=logging.ERROR, log_to_driver=False, ignore_reinit_error=True
             )
+            # ray.init puts in its own SIGTERM handler (it exits with the signal's number, skipping
+            # ego's interrupted end: exit 130, what finished kept, the summary): ego's comes back
+            import signal
+            import threading
+
             from ego.cluster import check_address, joining, reap_with_this_process
 
+            main_thread = threading.current_thread() is threading.main_thread()
+            term = signal.getsignal(signal.SIGTERM) if main_thread else None
             if address is None:
                 reap_with_this_process()  # its processes end with this one, even SIGKILLed mid-start
                 # "local": always a private instance, never a cluster found by chance
@@ -72,6 +79,8 @@ class RayExecutor:
                 check_address(address)  # nothing listening: one line in seconds, not minutes
                 with joining(address):
                     ray.init(address=address, **quiet)
+            if main_thread and term is not None:
+                signal.signal(signal.SIGTERM, term)
             self._started = True
         if workers:
             self.workers = max(1, int(workers))

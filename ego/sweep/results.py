@@ -10,6 +10,7 @@ next run of the same command skips the run ids already there.
 
 from __future__ import annotations
 
+import threading
 import time
 from collections.abc import Iterable
 from pathlib import Path
@@ -38,6 +39,11 @@ class ResultStore:
         self.flush_seconds = flush_seconds
         self._pending: list[dict] = []
         self._last = time.monotonic()
+        # a row waits at most flush_seconds for the file, whether another row follows or not
+        # (a long run after it, an executor's slow shutdown): a timer writes it
+        self._lock = threading.Lock()
+        self._timer: threading.Timer | None = None
+        self._error: BaseException | None = None  #: the timer's failed write, raised on the next call
         self._table = None
         if self.path.exists():
             _, pq = _pa()
@@ -91,12 +97,39 @@ class ResultStore:
         return (0 if self._table is None else self._table.num_rows) + len(self._pending)
 
     def add(self, row: dict) -> None:
-        self._pending.append(row)
-        if len(self._pending) >= self.flush_rows or time.monotonic() - self._last >= self.flush_seconds:
-            self.flush()
+        with self._lock:
+            self._raise_timers_error()
+            self._pending.append(row)
+            if len(self._pending) >= self.flush_rows or time.monotonic() - self._last >= self.flush_seconds:
+                self._flush()
+            elif self._timer is None:
+                self._timer = threading.Timer(self.flush_seconds, self._flush_on_time)
+                self._timer.daemon = True
+                self._timer.start()
+
+    def _flush_on_time(self) -> None:
+        with self._lock:
+            self._timer = None
+            try:
+                self._flush()
+            except BaseException as exc:  # noqa: BLE001 - raised in the caller's thread, next call
+                self._error = exc
+
+    def _raise_timers_error(self) -> None:
+        if self._error is not None:
+            error, self._error = self._error, None
+            raise error
 
     def flush(self) -> None:
         """Write the pending rows (the whole table, atomically)."""
+        with self._lock:
+            if self._timer is not None:
+                self._timer.cancel()
+                self._timer = None
+            self._raise_timers_error()
+            self._flush()
+
+    def _flush(self) -> None:
         self._last = time.monotonic()
         if not self._pending:
             return

@@ -42,3 +42,22 @@ def test_ctrl_c_keeps_the_finished_rows_and_the_same_command_resumes(tmp_path):
     assert again.returncode == 0, again.stderr
     assert f"{len(table)} were already in" in again.stdout and f"{60 - len(table)} ran now" in again.stdout
     assert len(pq.read_table(results)) == 60
+
+
+def test_sigterm_ends_a_ray_sweep_as_ctrl_c_does(tmp_path):
+    """ray.init puts in its own SIGTERM handler (exit 15, a native crash dump, no summary);
+    ego's comes back, so a SIGTERM ends a Ray sweep as Ctrl-C does."""
+    pytest.importorskip("ray")
+    spec = tmp_path / "spec.toml"
+    spec.write_text(
+        'scenario = "emergency-brake"\ncontrollers = ["pid"]\nseeds = 60\n[set]\nduration = 12.0\ntraffic_density = 0\n'
+    )
+    out = tmp_path / "out"
+    cmd = [sys.executable, "-m", "ego", "sweep", str(spec), "--out", str(out), "--jobs", "2", "--engine", "ray"]
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    wait_for((out / "results.parquet").exists, p, "the first batch of results")
+    os.kill(p.pid, signal.SIGTERM)
+    stdout, stderr = p.communicate(timeout=120)
+    assert p.returncode == 130, stderr
+    assert "runs remain; the same command resumes" in stderr and "SIGTERM received" not in stderr
+    assert (out / "summary.md").exists()
