@@ -171,7 +171,9 @@ def _sweep(
     failure: OutputError | None = None
     try:
         if todo:
-            interrupted = drive(make_executor(engine, jobs, address), tasks(), keep, shown)
+            # no more workers than runs to do (--jobs 200 for one run started 200 processes)
+            workers = min(jobs, todo) if jobs else None
+            interrupted = drive(make_executor(engine, workers, address), tasks(), keep, shown)
     except OutputError as exc:  # the results file cannot be written (a full disk): stop
         failure = exc
     finally:
