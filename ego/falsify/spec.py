@@ -132,6 +132,7 @@ def parse(data: dict, source: str = "the spec") -> FalsifySpec:
         raise bad('scenario must be a scenario name, e.g. scenario = "emergency-brake"')
     try:
         cls = scenario_class(scenario)
+        cls.default_config({})  # a scenario file whose road is missing: said of the file, not of a key
     except ConfigError as exc:
         raise bad(str(exc)) from None
     if "controller" in data and "controllers" in data:

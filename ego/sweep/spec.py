@@ -233,6 +233,7 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
 
     try:
         cls = scenario_class(scenario)
+        cls.default_config({})  # a scenario file whose road is missing: said of the file, not of a key
     except ConfigError as exc:
         raise bad(str(exc)) from None
     controllers = data.get("controllers")

@@ -175,3 +175,16 @@ def test_sweep_refuses_undeclared_parameter(files, capsys):
     err = capsys.readouterr().err
     assert "unknown parameter 'LeadGapp'" in err and err.count("\n") == 1
     assert not (files / "s").exists()
+
+
+@pytest.mark.parametrize("command", ["sweep", "falsify"])
+def test_a_spec_whose_file_lacks_its_road_names_the_file_not_a_key(files, capsys, command):
+    folder = files / "alone"
+    folder.mkdir()
+    shutil.copy(files / "emergency_brake.xosc", folder / "emergency_brake.xosc")  # no .xodr beside it
+    spec = folder / "spec.toml"
+    ranges = "[grid]" if command == "sweep" else 'requirement = "no_collision"\n[search]'
+    spec.write_text(f'scenario = "emergency_brake.xosc"\ncontrollers = ["pid"]\n{ranges}\nLeadGap = [20, 40]\n')
+    assert main([command, str(spec), "--out", str(files / f"o-{command}")]) == 2
+    err = capsys.readouterr().err
+    assert "road file 'straight3.xodr' not found" in err and "LeadGap" not in err and err.count("\n") == 1
