@@ -2,6 +2,7 @@
 scenario's declarations (the point-mass scenario needs no SUMO)."""
 
 import csv
+import os
 import subprocess
 import sys
 
@@ -316,3 +317,32 @@ def test_compare_checks_the_control_period_before_starting(tmp_path):
     )
     assert p.returncode == 2 and "bad value for period: 0.015" in p.stderr
     assert not (tmp_path / "x").exists()
+
+
+def test_the_plots_listed_are_the_ones_this_comparison_wrote(tmp_path, capsys):
+    """An earlier comparison's plots in the same --out are not listed as written now."""
+    from ego.cli import main
+
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "e_d.png").write_bytes(b"an earlier comparison's plot")
+    os.utime(out / "e_d.png", (0, 0))
+    assert (
+        main(
+            [
+                "compare",
+                "emergency-brake",
+                "--controllers",
+                "pid",
+                "--seeds",
+                "1",
+                "--set",
+                "duration=3",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
+    written = capsys.readouterr().out.rsplit("wrote into", 1)[1]
+    assert "e_d.png" not in written and "gap_front.png" in written

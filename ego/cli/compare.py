@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+import time
 from collections.abc import Sequence
 from typing import Any
 
@@ -21,6 +22,7 @@ def command(args: Any) -> int:
     check_count(args.jobs, "--jobs", 1, MAX_JOBS)
     labels = [n.strip() for n in args.controllers.split(",") if n.strip()]
     out = check_output_dir(args.out, "--out")
+    started = time.time()
     rows = compare(
         args.scenario,
         labels,
@@ -33,7 +35,9 @@ def command(args: Any) -> int:
         requirements=with_defaults(args.scenario, args.require),
     )
     print((out / "metrics.md").read_text(), end="")
-    files = ["metrics.csv", UNITS_FILE, "metrics.md"] + sorted(p.name for p in out.glob("*.png"))
+    # the plots this command wrote (an earlier comparison's in the same --out are not these)
+    plots = sorted(p.name for p in out.glob("*.png") if p.stat().st_mtime >= started - 0.01)
+    files = ["metrics.csv", UNITS_FILE, "metrics.md"] + plots
     recorded = sum(1 for r in rows if r.recording)
     traces = f" and their traces ({args.traces}) in traces/" if args.traces else ""
     print(f"\nwrote into {out}/: {', '.join(files)} and {recorded} of {len(rows)} recordings in runs/{traces}")
