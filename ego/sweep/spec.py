@@ -26,6 +26,7 @@ is a hash of scenario, controller, seed and overrides, stable across machines an
 from __future__ import annotations
 
 import hashlib
+import itertools
 import json
 import math
 import os
@@ -291,6 +292,9 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
         if not isinstance(sseed, int) or isinstance(sseed, bool) or not 0 <= sseed <= MAX_SEED:
             raise bad(f"[sample] seed must be a whole number from 0 to {MAX_SEED}, got {sseed!r}")
         ranges = {}
+        # a range's ends with the grid's points too (a duration in [grid] bounds a sampled
+        # brake time): the first 64 of them, each check a few milliseconds
+        points = [dict(zip(grid, combo)) for combo in itertools.islice(itertools.product(*grid.values()), 64)]
         for name, rng in sample_data.items():
             if name in ("method", "n", "seed"):
                 continue
@@ -307,7 +311,9 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
             if name in fixed or name in grid:
                 raise bad(f"{name} is sampled in [sample] and also in [set] or [grid]")
             for end in rng:
-                _check(scenario, controllers, {**fixed, name: end}, f"[sample] {name}", bad)
+                for point in points or [{}]:
+                    with_grid = "".join(f" with [grid] {k} = {v!r}" for k, v in point.items())
+                    _check(scenario, controllers, {**fixed, **point, name: end}, f"[sample] {name}{with_grid}", bad)
             ranges[name] = (float(rng[0]), float(rng[1]))
         if not ranges:
             raise bad("[sample] names no parameter range")

@@ -82,6 +82,10 @@ def test_run_ids_are_stable_and_depend_on_everything():
         ({"sample": {"n": 0, "lead_gap": [20, 60]}}, "n must be"),
         ({"sample": {"n": 4, "lead_gap": [60, 20]}}, "low < high"),
         ({"sample": {"n": 4, "lead_gap": [20, 900]}}, "bad value for lead_gap: 900"),
+        (
+            {"grid": {"duration": [3, 30]}, "sample": {"n": 4, "lead_brake_time": [0.5, 5]}},
+            "[sample] lead_brake_time with [grid] duration = 3: bad value for lead_brake_time: 5",
+        ),
         ({"sample": {"n": 4, "block_left": [0, 1]}}, "not a number to sample"),
         ({"sample": {"method": "sobol", "n": 100, "lead_gap": [20, 60]}}, "power of 2"),
         ({"set": {"ego_speed": 20}, "grid": {"ego_speed": [20, 25]}}, "both fixed"),
