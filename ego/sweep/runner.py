@@ -19,6 +19,7 @@ from pathlib import Path
 from ego.outputs import LOCK_FILE, FolderLock, OutputError, output_error, remove_partials
 from ego.parallel.executor import make_executor
 from ego.params import ConfigError, did_you_mean
+from ego.processes import signals_deferred
 from ego.results.run import RunRow
 from ego.sweep.pipeline import RunTask, drive
 from ego.sweep.results import ResultStore
@@ -191,13 +192,15 @@ def _sweep(
         raise OutputError(
             f"{failure} ({kept} results are in {store.path}; the same command resumes once there is room)"
         )
-    table = store.table()
-    if table is not None:
-        from ego.sweep.report import write_plots, write_summary
+    # a Ctrl-C now (every run may be done) waits until the summary and the plots are whole
+    with signals_deferred():
+        table = store.table()
+        if table is not None:
+            from ego.sweep.report import write_plots, write_summary
 
-        write_summary(spec, table, out / "summary.md")
-        for p in plot_specs:
-            write_plots(spec, table, out, *p)
+            write_summary(spec, table, out / "summary.md")
+            for p in plot_specs:
+                write_plots(spec, table, out, *p)
     return SweepReport(total, already, ran, by_status, time.perf_counter() - started, interrupted)
 
 

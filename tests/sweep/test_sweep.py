@@ -165,3 +165,22 @@ def test_no_more_workers_than_runs_to_do(tmp_path, monkeypatch):
     report = sweep(spec, tmp_path / "out", jobs=200, record="none")
     assert asked == [1] and len(pq.read_table(tmp_path / "out" / "results.parquet")) == 1
     assert report is not None
+
+
+@pytest.mark.sumo
+def test_a_ctrl_c_while_the_summary_is_written_waits_for_it(tmp_path, monkeypatch):
+    """A signal after the last run (every run done) lands while the summary is written: the
+    summary is written whole, then the interruption is raised."""
+    import ego.sweep.report as report
+
+    write = report.write_summary
+
+    def interrupted_while_writing(*args, **kwargs):
+        os.kill(os.getpid(), signal.SIGINT)
+        return write(*args, **kwargs)
+
+    monkeypatch.setattr(report, "write_summary", interrupted_while_writing)
+    spec = parse({"scenario": "emergency-brake", "controllers": ["pid"], "seeds": 1, "set": {"duration": 3.0}})
+    with pytest.raises(KeyboardInterrupt):
+        sweep(spec, tmp_path / "out", jobs=1, record="none")
+    assert "emergency-brake" in (tmp_path / "out" / "summary.md").read_text()
