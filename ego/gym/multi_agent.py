@@ -19,9 +19,11 @@ the reward weights, the observation type and its options, the action type), appl
 each agent: its own observation of the configured type seen from its own car (``EgoState``:
 its car-following fields), its own action (its acceleration command), and its own reward
 (progress = its speed, centring = its spacing error, discomfort = its acceleration; the
-crash term for every agent when the run crashes). All agents end together: the run's end (a collision, a divergence) terminates
-every agent, the duration truncates them; ``infos[agent]["metrics"]`` then holds the run's
-metrics (per follower under ``followers``).
+crash term for every agent when the run crashes). All agents end together: the run's end (a
+collision, a divergence) terminates every agent, the duration truncates them;
+``infos[agent]["metrics"]`` then holds the run's metrics (per follower under ``followers``).
+A reset that reconfigures the env (``options={"config": ...}``, ``controlled_vehicles``
+included) rebuilds the agents, their spaces and the frame rate.
 """
 
 from __future__ import annotations
