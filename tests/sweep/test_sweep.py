@@ -181,6 +181,11 @@ def test_a_ctrl_c_while_the_summary_is_written_waits_for_it(tmp_path, monkeypatc
 
     monkeypatch.setattr(report, "write_summary", interrupted_while_writing)
     spec = parse({"scenario": "emergency-brake", "controllers": ["pid"], "seeds": 1, "set": {"duration": 3.0}})
-    with pytest.raises(KeyboardInterrupt):
-        sweep(spec, tmp_path / "out", jobs=1, record="none")
+    # Python's own Ctrl-C handler, whatever the test runner's worker put there
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            sweep(spec, tmp_path / "out", jobs=1, record="none")
+    finally:
+        signal.signal(signal.SIGINT, previous)
     assert "emergency-brake" in (tmp_path / "out" / "summary.md").read_text()
