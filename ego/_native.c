@@ -1032,6 +1032,227 @@ done:
     return result;
 }
 
+/* ---------------------------------------------------------------------------------------
+ * The loop's per-control-period glue (ego/scenarios/base.py ComposedLoop._act):
+ *  - plant_step: BicyclePlant.step of the nonlinear bicycle (ActuatorLimits.apply, the RK4
+ *    step of bicycle_step, the standstill hold), the plant's attributes set as it sets them;
+ *  - trace_write: Trace.bind's writer for a row in the declared order (the Python writer is
+ *    called for anything else, so every check and message stays its own);
+ *  - road_frame: RoadSensor.frame on a straight lane (else the Python method runs).
+ * ------------------------------------------------------------------------------------- */
+static PyObject *s_state, *s_applied, *s_lateral_accel, *s_plant, *s_road, *s_line_of, *s_line;
+static PyObject *s_X, *s_Y, *s_s, *s_d_road, *s_heading_error, *s_curvature, *s_ds, *s_dd, *s_frame;
+
+#define LIMITS_N 8 /* max_steer, max_steer_rate, min_command, max_command, stop_speed, dt, h, substeps */
+
+static PyObject *float_tuple(const double *x, Py_ssize_t n)
+{
+    PyObject *t = PyTuple_New(n);
+    if (!t) return NULL;
+    for (Py_ssize_t i = 0; i < n; i++) {
+        PyObject *f = PyFloat_FromDouble(x[i]);
+        if (!f) { Py_DECREF(t); return NULL; }
+        PyTuple_SET_ITEM(t, i, f);
+    }
+    return t;
+}
+
+static int item_double(PyObject *seq, Py_ssize_t i, double *out)
+{
+    PyObject *o = PySequence_GetItem(seq, i);
+    if (!o) return -1;
+    *out = PyFloat_AsDouble(o);
+    Py_DECREF(o);
+    return (*out == -1.0 && PyErr_Occurred()) ? -1 : 0;
+}
+
+/* plant_step(plant, action, packed) -> None; packed: LIMITS_N + BIKE_NPARAM doubles */
+static PyObject *plant_step(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 3) {
+        PyErr_SetString(PyExc_TypeError, "plant_step(plant, action, packed)");
+        return NULL;
+    }
+    PyObject *plant = args[0];
+    const double *k = params_of(args[2], LIMITS_N + BIKE_NPARAM, "packed");
+    if (!k) return NULL;
+    double x[NX], y[NX], k1[NX], command, delta, previous;
+    PyObject *state = PyObject_GetAttr(plant, s_state);
+    if (!state) return NULL;
+    int bad = read_doubles(state, x, NX, "state");
+    Py_DECREF(state);
+    if (bad < 0) return NULL;
+    PyObject *applied = PyObject_GetAttr(plant, s_applied);
+    if (!applied) return NULL;
+    bad = item_double(applied, 1, &previous);
+    Py_DECREF(applied);
+    if (bad < 0 || item_double(args[1], 0, &command) < 0 || item_double(args[1], 1, &delta) < 0) return NULL;
+    /* ActuatorLimits.apply, comparison for comparison */
+    const double ms = k[0], rate = k[1], lo_c = k[2], hi_c = k[3], stop = k[4], dt = k[5];
+    delta = delta > ms ? ms : (delta < -ms ? -ms : delta);
+    if (rate != Py_HUGE_VAL) {
+        const double step = rate * dt, lo = previous - step, hi = previous + step;
+        delta = delta < lo ? lo : (delta > hi ? hi : delta);
+    }
+    if (command < lo_c) command = lo_c;
+    else if (command > hi_c) command = hi_c;
+    const double speed = x[1];
+    if (stop > 0.0 && command < 0.0 && speed < stop) command = command * (speed > 0.0 ? speed : 0.0) / stop;
+    /* the model's step (bicycle_step) */
+    memcpy(y, x, sizeof x);
+    const long substeps = (long)k[7];
+    bike_rk4(k + LIMITS_N, y, command, delta, k[6], k1);
+    for (long i = 1; i < substeps; i++) bike_rk4(k + LIMITS_N, y, command, delta, k[6], NULL);
+    const double lateral = k1[3] + x[1] * x[5];
+    /* at rest with no drive the brakes hold the car */
+    if (y[1] < 0.0 && 0.0 <= x[1] && command <= 0.0 && stop > 0.0) y[1] = 0.0;
+    const double pair_[2] = {command, delta};
+    PyObject *new_applied = float_tuple(pair_, 2);
+    if (!new_applied) return NULL;
+    bad = PyObject_SetAttr(plant, s_applied, new_applied);
+    Py_DECREF(new_applied);
+    if (bad < 0) return NULL;
+    PyObject *new_state = float_tuple(y, NX);
+    if (!new_state) return NULL;
+    bad = PyObject_SetAttr(plant, s_state, new_state);
+    Py_DECREF(new_state);
+    if (bad < 0) return NULL;
+    PyObject *lat = PyFloat_FromDouble(lateral);
+    if (!lat) return NULL;
+    bad = PyObject_SetAttr(plant, s_lateral_accel, lat);
+    Py_DECREF(lat);
+    if (bad < 0) return NULL;
+    Py_RETURN_NONE;
+}
+
+/* trace_write(rows, width, signals, fallback, sigs, values): rows.append(values +
+ * tuple(sigs.values())) when values is a tuple of width items and sigs a dict whose keys are
+ * signals in order; else fallback(sigs, values) (the Python writer: its checks, its errors) */
+static PyObject *trace_write(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 6) {
+        PyErr_SetString(PyExc_TypeError, "trace_write(rows, width, signals, fallback, sigs, values)");
+        return NULL;
+    }
+    PyObject *rows = args[0], *names = args[2], *sigs = args[4], *values = args[5];
+    const Py_ssize_t width = PyLong_AsSsize_t(args[1]);
+    if (width == -1 && PyErr_Occurred()) return NULL;
+    if (!PyList_CheckExact(rows) || !PyTuple_CheckExact(names)) {
+        PyErr_SetString(PyExc_TypeError, "trace_write: rows must be a list and signals a tuple");
+        return NULL;
+    }
+    const Py_ssize_t nsig = PyTuple_GET_SIZE(names);
+    int fast = PyTuple_CheckExact(values) && PyTuple_GET_SIZE(values) == width && PyDict_CheckExact(sigs)
+               && PyDict_GET_SIZE(sigs) == nsig;
+    PyObject *key, *value;
+    Py_ssize_t pos = 0, i = 0;
+    while (fast && PyDict_Next(sigs, &pos, &key, &value)) {
+        PyObject *name = PyTuple_GET_ITEM(names, i++);
+        if (key != name) {
+            int eq = PyObject_RichCompareBool(key, name, Py_EQ);
+            if (eq < 0) return NULL;
+            fast = eq;
+        }
+    }
+    if (!fast) return PyObject_CallFunctionObjArgs(args[3], sigs, values, NULL);
+    PyObject *row = PyTuple_New(width + nsig);
+    if (!row) return NULL;
+    for (i = 0; i < width; i++) {
+        PyObject *v = PyTuple_GET_ITEM(values, i);
+        Py_INCREF(v);
+        PyTuple_SET_ITEM(row, i, v);
+    }
+    pos = 0;
+    while (PyDict_Next(sigs, &pos, &key, &value)) {
+        Py_INCREF(value);
+        PyTuple_SET_ITEM(row, i++, value);
+    }
+    int bad = PyList_Append(rows, row);
+    Py_DECREF(row);
+    if (bad < 0) return NULL;
+    Py_RETURN_NONE;
+}
+
+static int set_double(PyObject *obj, PyObject *name, double value)
+{
+    PyObject *f = PyFloat_FromDouble(value);
+    if (!f) return -1;
+    int bad = PyObject_SetAttr(obj, name, f);
+    Py_DECREF(f);
+    return bad;
+}
+
+/* road_frame(view) -> None: RoadSensor.frame's straight-lane rotation (LanePolyline.frame's
+ * arithmetic); a road other than the one view._line was taken from, or a curved one: the
+ * Python method */
+static PyObject *road_frame(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 1) {
+        PyErr_SetString(PyExc_TypeError, "road_frame(view)");
+        return NULL;
+    }
+    PyObject *view = args[0];
+    double x[NX], line[6];
+    PyObject *road = PyObject_GetAttr(view, s_road);
+    if (!road) return NULL;
+    PyObject *line_of = PyObject_GetAttr(view, s_line_of);
+    if (!line_of) { Py_DECREF(road); return NULL; }
+    const int same = road == line_of;
+    Py_DECREF(road);
+    Py_DECREF(line_of);
+    PyObject *line_obj = same ? PyObject_GetAttr(view, s_line) : NULL;
+    if (same && !line_obj) return NULL;
+    if (!same || line_obj == Py_None) {
+        Py_XDECREF(line_obj);
+        return PyObject_CallMethodNoArgs(view, s_frame);
+    }
+    int bad = read_doubles(line_obj, line, 6, "line");
+    Py_DECREF(line_obj);
+    if (bad < 0) return NULL;
+    PyObject *plant = PyObject_GetAttr(view, s_plant);
+    if (!plant) return NULL;
+    PyObject *state = PyObject_GetAttr(plant, s_state);
+    Py_DECREF(plant);
+    if (!state) return NULL;
+    bad = read_doubles(state, x, NX, "state");
+    Py_DECREF(state);
+    if (bad < 0) return NULL;
+    const double X = x[0], u = x[1], Y = x[2], v = x[3], psi = x[4];
+    const double x0 = line[0], y0 = line[1], ux = line[2], uy = line[3], s0 = line[4], heading = line[5];
+    const double dx = X - x0, dy = Y - y0;
+    double err = psi - heading;
+    if (isinf(err)) return PyObject_CallMethodNoArgs(view, s_frame); /* math.fmod raises there */
+    if (!(-Py_MATH_PI < err && err <= Py_MATH_PI)) { /* lane_frame.wrap_angle */
+        double a = fmod(err + Py_MATH_PI, 2.0 * Py_MATH_PI);
+        if (a <= 0.0) a += 2.0 * Py_MATH_PI;
+        err = a - Py_MATH_PI;
+    }
+    const double s = s0 + dx * ux + dy * uy, d = dy * ux - dx * uy;
+    const double c = cos(err), sn = sin(err);
+    if (set_double(view, s_X, X) < 0 || set_double(view, s_Y, Y) < 0 || set_double(view, s_s, s) < 0
+        || set_double(view, s_d_road, d) < 0 || set_double(view, s_heading_error, err) < 0
+        || set_double(view, s_curvature, 0.0) < 0 || set_double(view, s_ds, u * c - v * sn) < 0
+        || set_double(view, s_dd, u * sn + v * c) < 0)
+        return NULL;
+    Py_RETURN_NONE;
+}
+
+static int intern_loop_names(void)
+{
+    struct { PyObject **slot; const char *name; } names[] = {
+        {&s_state, "state"}, {&s_applied, "applied"}, {&s_lateral_accel, "lateral_accel"},
+        {&s_plant, "_plant"}, {&s_road, "road"}, {&s_line_of, "_line_of"}, {&s_line, "_line"},
+        {&s_X, "X"}, {&s_Y, "Y"}, {&s_s, "s"}, {&s_d_road, "d_road"},
+        {&s_heading_error, "heading_error"}, {&s_curvature, "curvature"}, {&s_ds, "ds"},
+        {&s_dd, "dd"}, {&s_frame, "frame"},
+    };
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
+        *names[i].slot = PyUnicode_InternFromString(names[i].name);
+        if (!*names[i].slot) return -1;
+    }
+    return 0;
+}
+
 #define FASTCALL(name, doc) {#name, (PyCFunction)(void (*)(void))name, METH_FASTCALL, doc}
 static PyMethodDef methods[] = {
     FASTCALL(bicycle_step, "bicycle_step(state, Fx, delta, h, substeps, params) -> (state, lateral_accel)"),
@@ -1046,6 +1267,9 @@ static PyMethodDef methods[] = {
     FASTCALL(bp_pid_acc, "bp_pid_acc(ctx, x0, x1, e, t0, t1, t2, u, hi, lo, eta, alpha) -> u"),
     FASTCALL(bp_pid, "bp_pid(ctx, e_x, i_lon, de_x, e_y, i_lat, de_y, report, eta, alpha) -> (u_x, u_y)"),
     FASTCALL(reward_of, "reward_of(signals, rate, params, crashed) -> (reward, terms)"),
+    FASTCALL(plant_step, "plant_step(plant, action, packed) -> None (BicyclePlant.step)"),
+    FASTCALL(trace_write, "trace_write(rows, width, signals, fallback, sigs, values) -> None"),
+    FASTCALL(road_frame, "road_frame(view) -> None (RoadSensor.frame)"),
     FASTCALL(place, "place(ids, rows, front, reach, straight, frame, previous, dt, rated, low_edge) -> "
                     "(ids, rows, objects, speeds)"),
     {NULL, NULL, 0, NULL},
@@ -1069,5 +1293,6 @@ PyMODINIT_FUNC PyInit__native(void)
     key_centring = PyUnicode_InternFromString("centring");
     key_discomfort = PyUnicode_InternFromString("discomfort");
     if (!key_crashed || !key_progress || !key_centring || !key_discomfort) return NULL;
+    if (intern_loop_names() < 0) return NULL;
     return PyModule_Create(&module);
 }

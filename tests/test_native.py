@@ -274,3 +274,148 @@ def test_reward_matches_the_python_reward_including_non_finite_signals():
             finally:
                 env_module._REWARD = saved
             assert repr(native) == repr(python), (signals, crashed)
+
+
+# --- the loop's per-period glue: plant_step, trace_write, road_frame ---------------------
+
+
+def _bits(values) -> tuple:
+    """Floats compared to the bit as Python prints them (the sign of zero kept, every NaN alike)."""
+    return tuple(repr(float(v)) for v in values)
+
+
+def _plant_pair(limits, substeps):
+    from ego.models import VehicleGeometry
+    from ego.models.plant import BicyclePlant
+
+    model = NonlinearBicycle(NonlinearBicycleParams())
+    native = BicyclePlant(model, VehicleGeometry(), 0.01, substeps, limits)
+    python = BicyclePlant(model, VehicleGeometry(), 0.01, substeps, limits)
+    python._kernel = None  # the Python step: ActuatorLimits.apply, then the model's stepper
+    assert native._kernel is not None
+    return native, python
+
+
+@pytest.mark.parametrize("substeps", [1, 3])
+@pytest.mark.parametrize(
+    "limits",
+    [
+        {},
+        {"max_steer_rate": 0.6, "min_command": -4000.0, "max_command": 2000.0},
+        {"stop_speed": 0.0, "max_steer": 0.1},
+    ],
+    ids=["default", "rate-and-command", "no-standstill"],
+)
+def test_plant_step_matches_the_python_step(limits, substeps):
+    from ego.models.actuators import ActuatorLimits
+
+    native, python = _plant_pair(ActuatorLimits(**limits), substeps)
+    rng = np.random.default_rng(1)
+    odd = [np.nan, np.inf, -np.inf, -0.0, 1e300]
+    for i in range(3000):
+        if i % 200 == 0:  # a fresh state: cruising, crawling or at rest
+            x = rng.normal([100, 15, 1, 0, 0, 0], [50, 8, 3, 1, 0.2, 0.5])
+            x[1] = (abs(x[1]), 0.3, 0.0)[i // 200 % 3]
+            native.state = python.state = tuple(float(v) for v in x)
+            native.applied = python.applied = (0.0, 0.0)
+        fx, delta = float(rng.normal(-500, 4000)), float(rng.normal(0, 0.3))
+        if i % 97 == 5:
+            fx = odd[i % len(odd)]
+        if i % 89 == 7:
+            delta = odd[(i + 2) % len(odd)]
+        action = [(fx, delta), np.array([fx, delta]), (int(fx) if np.isfinite(fx) else fx, delta)][i % 3]
+        native.step(action)
+        python.step(action)
+        assert _bits(native.state) == _bits(python.state), i
+        assert _bits(native.applied) == _bits(python.applied), i
+        assert repr(native.lateral_accel) == repr(python.lateral_accel), i
+        if not all(np.isfinite(native.state)):  # start again from a finite state
+            native.state = python.state = tuple(float(v) for v in rng.normal([0, 10, 0, 0, 0, 0], 1.0))
+
+
+def test_trace_write_matches_the_python_writer(monkeypatch):
+    import ego.results.trace as trace_module
+    from ego.results.trace import Column, Trace, TraceError
+
+    columns = [Column("t", "s"), Column("x", "m"), Column("v", "m/s")]
+
+    def writers():
+        native = Trace(columns, ("a", "b"))
+        write_native = native.bind(("t", "x", "v"))
+        monkeypatch.setattr(trace_module, "_TRACE_WRITE", None)
+        python = Trace(columns, ("a", "b"))
+        write_python = python.bind(("t", "x", "v"))
+        monkeypatch.undo()
+        assert write_native is not write_python and not hasattr(write_python, "func")
+        assert write_native.func is NATIVE.trace_write
+        return (native, write_native), (python, write_python)
+
+    pairs = writers()
+    good = [
+        ({"a": 1.0, "b": -0.0}, (0.0, 1.5, np.float64(2.0))),
+        ({"a": np.nan, "b": 2}, [0.1, 2.5, 3.0]),  # a list: the Python writer's own path
+        (type("Sigs", (dict,), {})(a=1.0, b=2.0), (0.2, 2.5, 3.0)),  # not exactly a dict
+    ]
+    bad = [
+        ({"a": 1.0, "b": 2.0}, (0.0, 1.0)),  # too short
+        ({"b": 1.0, "a": 2.0}, (0.0, 1.0, 2.0)),  # signals in another order
+        ({"a": 1.0}, (0.0, 1.0, 2.0)),  # one missing
+        ({"a": 1.0, "b": 2.0, "c": 3.0}, (0.0, 1.0, 2.0)),  # one too many
+    ]
+    for sigs, values in good:
+        for _trace, write in pairs:
+            write(sigs, values)
+    (native, _), (python, _) = pairs
+    assert [_bits(r) for r in native.rows] == [_bits(r) for r in python.rows]
+    assert [tuple(map(type, r)) for r in native.rows] == [tuple(map(type, r)) for r in python.rows]
+    for sigs, values in bad:
+        messages = []
+        for _trace, write in pairs:
+            with pytest.raises(TraceError) as err:
+                write(sigs, values)
+            messages.append(str(err.value))
+        assert messages[0] == messages[1]
+    assert len(native.rows) == len(python.rows) == len(good)
+
+
+@pytest.mark.parametrize("curved", [False, True], ids=["straight", "polyline"])
+def test_road_frame_matches_the_python_frame(curved):
+    from ego.lane_frame import LanePolyline
+    from ego.models import VehicleGeometry
+    from ego.scenarios.road import RoadSensor
+
+    points = [(0.0, 0.0), (400.0, 30.0), (900.0, 10.0)] if curved else [(-50.0, 2.0), (2000.0, 60.0)]
+    road = LanePolyline(points)
+
+    class Plant:
+        state = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+    plants = Plant(), Plant()
+    native, python = RoadSensor(VehicleGeometry()), RoadSensor(VehicleGeometry())
+    native.on_lane(road, plants[0])
+    python.on_lane(road, plants[1])
+    rng = np.random.default_rng(2)
+    names = ("X", "Y", "s", "d_road", "heading_error", "curvature", "ds", "dd")
+    for i in range(2000):
+        x = rng.normal([500, 20, 20, 0, 0, 0], [300, 10, 5, 1, 1.0, 0.5])
+        if i % 50 == 1:
+            x[4] += rng.choice([-1, 1]) * rng.uniform(3.0, 40.0)  # far beyond +-pi: wrapped
+        if i % 50 == 2:
+            x[4] = (np.pi, -np.pi, np.nan, np.inf, 3 * np.pi)[i // 50 % 5]
+        if i % 50 == 3:
+            x[0] = np.nan
+        plants[0].state = plants[1].state = tuple(float(v) for v in x)
+        errors = []
+        for run in (lambda: NATIVE.road_frame(native), python.frame):
+            try:
+                run()
+            except ValueError as exc:  # an infinite heading: math.fmod's domain error, from both
+                errors.append(str(exc))
+        assert len(errors) in (0, 2) and len(set(errors)) <= 1, errors
+        assert _bits(getattr(native, n) for n in names) == _bits(getattr(python, n) for n in names), i
+    if not curved:  # a new road: the C kernel leaves it to the Python method, which takes it up
+        native.road = python.road = LanePolyline([(0.0, 0.0), (100.0, 0.0)])
+        NATIVE.road_frame(native)
+        python.frame()
+        assert native._line_of is native.road
+        assert _bits(getattr(native, n) for n in names) == _bits(getattr(python, n) for n in names)

@@ -233,6 +233,10 @@ class NonlinearBicycle:
         """(alpha_f deg, alpha_r deg, F_yf N, F_yr N, Fx N), Fx after the friction circle."""
         return self._forces(x[State.U], x[State.V], x[State.R], u[Input.FX], u[Input.DELTA])
 
+    def packed(self) -> bytes:
+        """The parameters as the C twin takes them (``ego/_bicycle.h``: 16 packed doubles)."""
+        return struct.pack(f"{len(self._c) + 2}d", *self._c, self._floor, float(self._abs))
+
     def stepper(self, h: float, substeps: int = 1) -> Stepper:
         """``step(state, Fx, delta) -> (state, lateral_accel)``: ``substeps`` RK4 steps of
         ``h`` (s) with the input held; ``lateral_accel`` = dv/dt + u r at the start (m/s^2).
@@ -244,7 +248,7 @@ class NonlinearBicycle:
 
         if NATIVE is not None:
             native_step = NATIVE.bicycle_step
-            packed = struct.pack(f"{len(self._c) + 2}d", *self._c, self._floor, float(self._abs))
+            packed = self.packed()
 
             def native(state: Sequence[float], fx: float, delta: float) -> tuple[tuple[float, ...], float]:
                 result: tuple[tuple[float, ...], float] = native_step(state, fx, delta, h, substeps, packed)

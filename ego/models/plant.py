@@ -16,6 +16,7 @@ Every plant saturates its input with :meth:`ego.models.actuators.ActuatorLimits.
 from __future__ import annotations
 
 import math
+import struct
 from typing import Protocol, runtime_checkable
 
 from ego.models.actuators import ActuatorLimits, standstill
@@ -24,6 +25,9 @@ from ego.models.geometry import VehicleGeometry
 from ego.models.lateral_error import LateralError
 from ego.models.longitudinal import Longitudinal
 from ego.models.nonlinear_bicycle import NonlinearBicycle
+from ego.native import NATIVE
+
+_PLANT_STEP = NATIVE.plant_step if NATIVE is not None else None
 
 #: the world state of every bicycle-like plant: X (m), u (m/s), Y (m), v (m/s), psi (rad), r (rad/s)
 WORLD_STATE = ("X", "U", "Y", "V", "PSI", "R")
@@ -77,6 +81,7 @@ class BicyclePlant:
         "input_units",
         "_step",
         "_apply",
+        "_kernel",
     )
 
     def __init__(
@@ -102,6 +107,25 @@ class BicyclePlant:
         self.lateral_accel = 0.0
         self._step = model.stepper(dt / substeps, substeps)
         self._apply = self.limits.apply
+        #: the whole step in C (``ego._native.plant_step``: the same arithmetic) for report
+        #: 000's bicycle, when the extension is built
+        self._kernel = None
+        if _PLANT_STEP is not None and isinstance(model, NonlinearBicycle):
+            lim = self.limits
+            self._kernel = (
+                struct.pack(
+                    "8d",
+                    lim.max_steer,
+                    lim.max_steer_rate,
+                    lim.min_command,
+                    lim.max_command,
+                    lim.stop_speed,
+                    dt,
+                    dt / substeps,
+                    substeps,
+                )
+                + model.packed()
+            )
 
     @property
     def speed(self) -> float:
@@ -112,6 +136,10 @@ class BicyclePlant:
         return x[0], x[2], x[4]
 
     def step(self, action: tuple[float, float]) -> None:
+        kernel = self._kernel
+        if kernel is not None:
+            _PLANT_STEP(self, action, kernel)
+            return
         x = self.state
         command, delta = self._apply(action[0], action[1], x[1], self.applied[1], self.dt)
         self.applied = (command, delta)

@@ -14,11 +14,16 @@ units and headlines from these declarations; they keep no tables of their own.
 
 from __future__ import annotations
 
+import functools
 import keyword
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+
+from ego.native import NATIVE
+
+_TRACE_WRITE = NATIVE.trace_write if NATIVE is not None else None
 
 
 class TraceError(ValueError):
@@ -229,6 +234,10 @@ class Trace:
             row = (values if type(values) is tuple else tuple(values)) if identity else tuple(values[i] for i in order)
             add(row + tuple(sigs.values()))
 
+        if identity and _TRACE_WRITE is not None:
+            # the same rows from C (ego._native.trace_write), which hands anything but a tuple
+            # of the row's width and a dict of exactly the declared signals to ``write``
+            return functools.partial(_TRACE_WRITE, self.rows, width, signals, write)
         return write
 
     def _bad_signals(self, signals: Iterable[str]) -> None:

@@ -11,6 +11,7 @@ traffic (the bare model) simply have no bridge.
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 import time
@@ -23,6 +24,7 @@ import numpy as np
 from ego.control.base import Controller, ControllerError, ControllerSpec, Observation, signal_units
 from ego.control.tasks import TASKS
 from ego.models.plant import Plant
+from ego.native import NATIVE
 from ego.params import ConfigError, Params, param
 from ego.processes import signals_deferred
 from ego.record.base import NullRecorder, Recorder, Scene, Series, unit_path
@@ -33,6 +35,8 @@ from ego.results.traffic_log import TrafficCollector
 from ego.sim.protocol import TrafficSim
 from ego.sim.registry import SimSetup, make_sim
 from ego.sim.types import Collision
+
+_ROAD_FRAME = NATIVE.road_frame if NATIVE is not None else None
 
 STATUSES = ("completed", "ended", "collision", "diverged", "timeout", "interrupted", "error")
 #: the statuses that are no failure: the scenario's own end, or the duration ran out in a
@@ -721,6 +725,12 @@ class ComposedLoop:
             self._filter = _unfiltered
         self._write_row = self.trace.bind(view.row_names)
         self._signals = self.controller.signals
+        from ego.scenarios.road import RoadSensor
+
+        self._frame = view.frame
+        if _ROAD_FRAME is not None and type(view).frame is RoadSensor.frame:
+            # its straight-lane rotation in C (ego._native.road_frame: the same arithmetic)
+            self._frame = functools.partial(_ROAD_FRAME, view)
         view.sense(self.t)
         if self.after_setup is not None:
             self.after_setup()
@@ -759,7 +769,7 @@ class ComposedLoop:
                 view.target_lane,
             ),
         )
-        view.frame()
+        self._frame()
 
     def _before_sumo_step(self) -> None:
         bridge = self.bridge

@@ -29,6 +29,7 @@ The scenario supplies an :class:`InLane` behaviour: what to do and when it is se
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import Protocol
 
@@ -113,6 +114,11 @@ class EvasiveManoeuvre:
     def reset(self, plant=None) -> None:
         view = self.view
         self.plant = plant
+        #: the plant's friction limit (m/s^2), asked every control period of a lane change
+        self.limit = friction_limit(plant.model.params) if plant is not None else math.nan
+        c = self.config
+        #: control periods per simulator step, and the period (s): :meth:`_sim_step`
+        self._per, self._dt = c.control_per_sumo, c.dt
         self.phase = CRUISE
         self.t = 0.0
         self.trigger_t: float | None = None
@@ -149,7 +155,7 @@ class EvasiveManoeuvre:
         the steering goes on. The lane change's reference keeps the ego behind that car until
         it has cleared it; a controller that lags it there (easing off while its reference
         still falls behind) runs into a car braking alone would have stopped it behind."""
-        if self.phase != LANE_CHANGE or need <= 0.9 * friction_limit(self.plant.model.params):
+        if self.phase != LANE_CHANGE or need <= 0.9 * self.limit:
             return False
         view = self.view
         return view.sensor.front.gap != INF and not clears_sideways(view, view.ttc_front)
@@ -175,10 +181,21 @@ class EvasiveManoeuvre:
             # the ego's body still overlaps (the sensor's front object) until it has cleared it
             v_evade = self.evade_speed
             s_ref, v_ref = self.trigger_s + v_evade * (t - self.trigger_t), v_evade
-            for leader in (self.target_leader(), view.sensor.front):
-                fs, fv = self.follow_reference(leader)
+            # follow_reference of target_leader() and of the front object, inline
+            sensor = view.sensor
+            leader = sensor.lane_leader_now(view.target_lane)
+            if leader is not None:
+                gap, speed = leader
+                if gap != INF:
+                    fs = view.s + gap - c.follow_gap - c.follow_headway * speed
+                    if fs < s_ref:
+                        s_ref, v_ref = fs, speed
+            front = sensor.front
+            gap = front.gap
+            if gap != INF:
+                fs = view.s + gap - c.follow_gap - c.follow_headway * front.speed
                 if fs < s_ref:
-                    s_ref, v_ref = fs, fv
+                    s_ref, v_ref = fs, front.speed
         else:
             s_ref, v_ref = self.in_lane.reference(self)
         self.speed_ref = v_ref
@@ -189,8 +206,8 @@ class EvasiveManoeuvre:
 
     def _sim_step(self, t: float) -> bool:
         """A SUMO step came just before this control period (the traffic moved)."""
-        per = self.config.control_per_sumo
-        return bool(per) and round(t / self.config.dt) % per == 0
+        per = self._per
+        return bool(per) and round(t / self._dt) % per == 0
 
     def trigger(self, ttc: float) -> None:
         """Triggered: gap acceptance, then the lane change or the in-lane manoeuvre."""
@@ -262,7 +279,7 @@ class EvasiveManoeuvre:
         origin = view.target_lane - (1 if self.chosen == "left" else -1)
         span = view.lane_offset[view.target_lane] - view.lane_offset[origin]
         progress = (view.d_road - view.lane_offset[origin]) / span if span else 1.0
-        limit = friction_limit(self.plant.model.params)
+        limit = self.limit
         if progress >= 0.5:
             return  # well across: finish it (the new lane's traffic sees the ego in its lane)
         front = view.sensor.front
@@ -292,7 +309,7 @@ class EvasiveManoeuvre:
             return None
         view = self.view
         front = view.sensor.front
-        limit = friction_limit(self.plant.model.params)
+        limit = self.limit
         if braking_need(front, view.ds) <= 0.9 * limit:  # 0 with nothing ahead
             return None
         reach = braking_reach(front.gap, view.ds, front.speed, front.accel, limit)
@@ -317,7 +334,7 @@ class EvasiveManoeuvre:
         front = view.sensor.front
         if self.in_lane.action != "brake" or front.gap == INF or not (aeb or front.speed < view.ds - 0.5):
             return None
-        limit = friction_limit(self.plant.model.params)
+        limit = self.limit
         closing = view.ds - front.speed
         if closing > 0.0 and closing * closing / (2.0 * max(front.gap, 0.1)) > 0.9 * limit:
             return None

@@ -313,6 +313,15 @@ class SurroundSensor:
         else:
             behind._found(rear, best_behind, lo, hi, since)
 
+    def _scan_lane(self, lane: int, band: tuple[float, float]) -> tuple[Detection, Detection]:
+        """The nearest vehicles ahead of and behind the ego overlapping ``band`` across the
+        lane, at the last scan (kept for ``lane`` until the next)."""
+        lo, hi, h = band[0], band[1], self.horizon
+        near = [o for o in self._objects if o[4] + abs(o[6]) * h > lo and o[3] - abs(o[6]) * h < hi]
+        found = self._lanes[lane] = (Detection(), Detection())
+        self._nearest(near, lo, hi, *found)
+        return found
+
     def lane_neighbours(self, lane: int, leader: Detection, follower: Detection) -> bool:
         """Fill ``leader``/``follower`` with the nearest vehicles ahead of / behind the ego
         whose extent overlaps lane ``lane``'s band (seen at the last :meth:`scan`, gaps
@@ -322,12 +331,7 @@ class SurroundSensor:
             leader.clear()
             follower.clear()
             return False
-        found = self._lanes.get(lane)
-        if found is None:
-            lo, hi, h = band[0], band[1], self.horizon
-            near = [o for o in self._objects if o[4] + abs(o[6]) * h > lo and o[3] - abs(o[6]) * h < hi]
-            found = self._lanes[lane] = (Detection(), Detection())
-            self._nearest(near, lo, hi, *found)
+        found = self._lanes.get(lane) or self._scan_lane(lane, band)
         moved = self._s - self._s_scan
         since = self._t - self._t_scan
         ahead, behind = found
@@ -342,24 +346,35 @@ class SurroundSensor:
         return True
 
     def lane_leader(self, lane: int, leader: Detection) -> bool:
-        """:meth:`lane_neighbours` for the leader alone (the lane change's reference asks for
-        it every control period; the follower is not needed there)."""
+        """:meth:`lane_neighbours` for the leader alone (:meth:`lane_leader_now` gives its gap
+        and speed alone)."""
         band = self.bands.get(lane)
         if band is None:
             leader.clear()
             return False
-        found = self._lanes.get(lane)
-        if found is None:
-            lo, hi, h = band[0], band[1], self.horizon
-            near = [o for o in self._objects if o[4] + abs(o[6]) * h > lo and o[3] - abs(o[6]) * h < hi]
-            found = self._lanes[lane] = (Detection(), Detection())
-            self._nearest(near, lo, hi, *found)
+        found = self._lanes.get(lane) or self._scan_lane(lane, band)
         ahead = found[0]
         if ahead._o is None:
             leader.clear()
         else:
             leader._copy(ahead, ahead._gap0 + ahead.speed * (self._t - self._t_scan) - (self._s - self._s_scan))
         return True
+
+    def lane_leader_now(self, lane: int) -> tuple[float, float] | None:
+        """(gap m, speed m/s) of :meth:`lane_leader`'s vehicle, or None when there is none or
+        no such lane: the lane change's reference every control period, without filling a
+        :class:`Detection`."""
+        found = self._lanes.get(lane)
+        if found is None:
+            band = self.bands.get(lane)
+            if band is None:
+                return None
+            found = self._scan_lane(lane, band)
+        ahead = found[0]
+        if ahead._o is None:
+            return None
+        speed = ahead.speed
+        return ahead._gap0 + speed * (self._t - self._t_scan) - (self._s - self._s_scan), speed
 
     def tracks(self, t: float) -> list[tuple[float, float, float, float, float]]:
         """Every vehicle seen at the last SUMO step, moved on to time ``t`` (s) at its

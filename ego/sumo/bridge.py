@@ -171,6 +171,9 @@ class SumoBridge:
 
     #: True when this bridge talks TraCI (a second simulation of the process), not libsumo
     via_traci = False
+    #: libsumo's own step (without the step listeners' turn) and its listeners (see start)
+    _raw_step = None
+    _listeners: dict = {}  # noqa: RUF012 - never written: a stand-in until start
 
     def _start_traci(self) -> None:
         import contextlib
@@ -223,6 +226,13 @@ class SumoBridge:
         instances.claim_exclusive(True)
         self._ls = libsumo
         self._pose_subscribed = set()
+        # libsumo's simulationStep() is its step plus the step listeners' turn: the step alone
+        # while nobody has added a listener (ego adds none; a user's still run)
+        manager = getattr(libsumo, "_stepManager", None)
+        raw = getattr(libsumo, "_libsumo_step", None)
+        listeners = getattr(manager, "_stepListeners", None)
+        if raw is not None and type(listeners) is dict:
+            self._raw_step, self._listeners = raw, listeners
 
     def close(self) -> None:
         if self._ls is not None:
@@ -237,6 +247,7 @@ class SumoBridge:
                 self._ls.close()
             finally:
                 self._ls = None
+                self._raw_step = None
                 if self.via_traci:
                     self.via_traci = False
                 else:
@@ -358,7 +369,11 @@ class SumoBridge:
     def step(self) -> list[Collision]:
         """Advance SUMO one step; returns (and keeps) the collisions of that step."""
         ls = self._ls
-        ls.simulationStep()
+        raw = self._raw_step
+        if raw is not None and not self._listeners:
+            raw()
+        else:
+            ls.simulationStep()
         self._moved = False
         if ls.simulation.getCollidingVehiclesNumber():
             self.collisions = [
