@@ -11,6 +11,12 @@ run's parts: start (SUMO start, network load, traffic insertion: ``Scenario.rese
 loop (the rest), result packing (the trace as an array, the metrics), the requirements
 (rtamt), close. ``--rows`` writes the rows (wall time and host aside) to compare two trees:
 run it once with ``PYTHONPATH=<other tree>`` and compare the files.
+
+Then SUMO's own share, the floor no change to ego can go below: for each run, bare
+``simulationStep()`` calls on the same traffic (the run's scenario, seed and values, no
+control: ``benchmarks/bench_loop.py``'s baseline) for as many SUMO steps as the run took,
+and what that makes of a sweep of such runs on ``--jobs`` workers (``--sweep-runs``, default
+the 2,500 runs of ``scenarios/sweeps/envelope.toml``).
 """
 
 from __future__ import annotations
@@ -58,6 +64,9 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("spec", nargs="?", default=str(Path(__file__).with_name("envelope_200.toml")))
     ap.add_argument("--every", type=int, default=8, help="take every N-th run of the spec")
     ap.add_argument("--rows", help="write the rows as JSON here")
+    ap.add_argument("--sweep-runs", type=int, default=2500, help="runs of the sweep the floor is scaled to")
+    ap.add_argument("--jobs", type=int, default=2, help="workers of that sweep")
+    ap.add_argument("--no-floor", action="store_true", help="skip the bare-SUMO floor")
     args = ap.parse_args(argv)
     spec = parse(tomllib.loads(Path(args.spec).read_text()))
     tasks = [task_of(r, None, "none", spec.requirements) for r in list(spec.runs())[:: args.every]]
@@ -87,9 +96,40 @@ def main(argv: list[str] | None = None) -> dict:
     for part in ("start", "loop", "result", "requirements", "close"):
         figures[f"ms_{part}"] = 1e3 * cpu[part] / n
         print(f"  {part:12s} {figures[f'ms_{part}']:7.1f} ms a run  {100 * cpu[part] / total:5.1f} %")
+    if not args.no_floor:
+        bare = sum(bare_sumo(t, row["steps"]) for t, row in zip(tasks, rows))
+        figures["ms_bare_sumo"] = 1e3 * bare / n
+        floor = args.sweep_runs / args.jobs * bare / n
+        print(
+            f"  bare SUMO    {figures['ms_bare_sumo']:7.1f} ms a run  {100 * bare / total:5.1f} % "
+            f"(SUMO's own stepping of the same traffic, the same steps)"
+        )
+        print(
+            f"  a sweep of {args.sweep_runs} such runs on {args.jobs} workers: {args.sweep_runs / args.jobs * total / n:.0f} s "
+            f"of CPU a worker, of it {floor:.0f} s SUMO's own stepping (its floor)"
+        )
+        figures["sweep_floor_s"] = floor
     if args.rows:
         Path(args.rows).write_text(json.dumps(rows, sort_keys=True, default=str))
     return figures
+
+
+def bare_sumo(task, steps: int) -> float:
+    """CPU seconds of ``steps`` control periods' worth of bare SUMO steps on ``task``'s traffic."""
+    from ego.runner import RunSpec, build
+
+    key = task.key
+    scenario = build(RunSpec(key.scenario, "none", key.seed, key.overrides))
+    try:
+        scenario.reset()
+        step = scenario.bridge.libsumo.simulationStep
+        n = int(steps) // scenario.config.control_per_sumo
+        c0 = time.process_time()
+        for _ in range(n):
+            step()
+        return time.process_time() - c0
+    finally:
+        scenario.close()
 
 
 if __name__ == "__main__":

@@ -117,7 +117,8 @@ class EvasiveManoeuvre:
         #: the plant's friction limit (m/s^2), asked every control period of a lane change
         self.limit = friction_limit(plant.model.params) if plant is not None else math.nan
         c = self.config
-        #: control periods per simulator step, and the period (s): :meth:`_sim_step`
+        #: control periods per simulator step, and the period (s): whether a simulator step
+        #: came just before a control period (the traffic moved)
         self._per, self._dt = c.control_per_sumo, c.dt
         self.phase = CRUISE
         self.t = 0.0
@@ -171,7 +172,12 @@ class EvasiveManoeuvre:
                 self.trigger(ttc)
         if self.safety is not None:
             self.safety.update()
-        if self.phase == LANE_CHANGE and not (self.safety is not None and self.safety.active) and self._sim_step(t):
+        if (
+            self.phase == LANE_CHANGE
+            and not (self.safety is not None and self.safety.active)
+            and self._per
+            and round(t / self._dt) % self._per == 0  # a simulator step came just before
+        ):
             self.abort_lane_change(aeb=False)  # slowing across two lanes in front of a follower?
         if self.phase == CRUISE:
             s_ref, v_ref = self.s0 + c.ego_speed * t, c.ego_speed
@@ -203,11 +209,6 @@ class EvasiveManoeuvre:
         obs.d_ref = obs.dd_ref = 0.0
         if self.phase in (LANE_CHANGE, IN_LANE):
             self.check_done()
-
-    def _sim_step(self, t: float) -> bool:
-        """A SUMO step came just before this control period (the traffic moved)."""
-        per = self._per
-        return bool(per) and round(t / self._dt) % per == 0
 
     def trigger(self, ttc: float) -> None:
         """Triggered: gap acceptance, then the lane change or the in-lane manoeuvre."""
