@@ -1042,6 +1042,8 @@ done:
  * ------------------------------------------------------------------------------------- */
 static PyObject *s_state, *s_applied, *s_lateral_accel, *s_plant, *s_road, *s_line_of, *s_line;
 static PyObject *s_X, *s_Y, *s_s, *s_d_road, *s_heading_error, *s_curvature, *s_ds, *s_dd, *s_frame;
+static PyObject *s_looked, *s_look, *s_sensor, *s_t_, *s_s_, *s_s_scan, *s_t_scan, *s_front, *s_rear, *s_o;
+static PyObject *s_gap0, *s_speed, *s_gap, *s_gap_front, *s_ttc_front, *s_gap_rear, *s_ttc_rear, *s_id, *s_overlap;
 
 #define LIMITS_N 8 /* max_steer, max_steer_rate, min_command, max_command, stop_speed, dt, h, substeps */
 
@@ -1066,15 +1068,16 @@ static int item_double(PyObject *seq, Py_ssize_t i, double *out)
     return (*out == -1.0 && PyErr_Occurred()) ? -1 : 0;
 }
 
-/* plant_step(plant, action, packed) -> None; packed: LIMITS_N + BIKE_NPARAM doubles */
+/* plant_step(plant, packed, action) -> None; packed: LIMITS_N + BIKE_NPARAM doubles (the
+ * action last, so functools.partial can bind the plant and its packed numbers) */
 static PyObject *plant_step(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
     if (nargs != 3) {
-        PyErr_SetString(PyExc_TypeError, "plant_step(plant, action, packed)");
+        PyErr_SetString(PyExc_TypeError, "plant_step(plant, packed, action)");
         return NULL;
     }
     PyObject *plant = args[0];
-    const double *k = params_of(args[2], LIMITS_N + BIKE_NPARAM, "packed");
+    const double *k = params_of(args[1], LIMITS_N + BIKE_NPARAM, "packed");
     if (!k) return NULL;
     double x[NX], y[NX], k1[NX], command, delta, previous;
     PyObject *state = PyObject_GetAttr(plant, s_state);
@@ -1086,7 +1089,7 @@ static PyObject *plant_step(PyObject *self, PyObject *const *args, Py_ssize_t na
     if (!applied) return NULL;
     bad = item_double(applied, 1, &previous);
     Py_DECREF(applied);
-    if (bad < 0 || item_double(args[1], 0, &command) < 0 || item_double(args[1], 1, &delta) < 0) return NULL;
+    if (bad < 0 || item_double(args[2], 0, &command) < 0 || item_double(args[2], 1, &delta) < 0) return NULL;
     /* ActuatorLimits.apply, comparison for comparison */
     const double ms = k[0], rate = k[1], lo_c = k[2], hi_c = k[3], stop = k[4], dt = k[5];
     delta = delta > ms ? ms : (delta < -ms ? -ms : delta);
@@ -1237,6 +1240,92 @@ static PyObject *road_frame(PyObject *self, PyObject *const *args, Py_ssize_t na
     Py_RETURN_NONE;
 }
 
+/* look_between(view, t) -> Collision | None: SurroundView.look between two SUMO steps
+ * (SurroundSensor.advance, then the gaps and TTCs); at the first look after a SUMO step, the
+ * Python method (the scan), and where a gap closed, its _overlap */
+static int get_double(PyObject *obj, PyObject *name, double *out)
+{
+    PyObject *o = PyObject_GetAttr(obj, name);
+    if (!o) return -1;
+    *out = PyFloat_AsDouble(o);
+    Py_DECREF(o);
+    return (*out == -1.0 && PyErr_Occurred()) ? -1 : 0;
+}
+
+static int carry_on(PyObject *det, double sign, double moved, double since)
+{
+    /* front: gap0 + speed * since - moved; rear (sign -1): gap0 + moved - speed * since */
+    PyObject *o = PyObject_GetAttr(det, s_o);
+    if (!o) return -1;
+    const int none = o == Py_None;
+    Py_DECREF(o);
+    if (none) return 0;
+    double gap0, speed;
+    if (get_double(det, s_gap0, &gap0) < 0 || get_double(det, s_speed, &speed) < 0) return -1;
+    const double gap = sign > 0.0 ? gap0 + speed * since - moved : gap0 + moved - speed * since;
+    return set_double(det, s_gap, gap);
+}
+
+static double ttc_of(double gap, double closing)
+{
+    return gap <= 0.0 ? 0.0 : ((closing <= 1e-9 || gap == Py_HUGE_VAL) ? Py_HUGE_VAL : gap / closing);
+}
+
+static PyObject *look_between(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 2) {
+        PyErr_SetString(PyExc_TypeError, "look_between(view, t)");
+        return NULL;
+    }
+    PyObject *view = args[0], *t_obj = args[1];
+    PyObject *looked = PyObject_GetAttr(view, s_looked);
+    if (!looked) return NULL;
+    const int is_looked = PyObject_IsTrue(looked);
+    Py_DECREF(looked);
+    if (is_looked < 0) return NULL;
+    if (!is_looked) return PyObject_CallMethodOneArg(view, s_look, t_obj);
+    const double t = PyFloat_AsDouble(t_obj);
+    if (t == -1.0 && PyErr_Occurred()) return NULL;
+    PyObject *sensor = PyObject_GetAttr(view, s_sensor);
+    if (!sensor) return NULL;
+    PyObject *front = NULL, *rear = NULL, *s_obj = NULL, *result = NULL;
+    double s, s_scan, t_scan, ds, front_gap, rear_gap, front_speed, rear_speed;
+    s_obj = PyObject_GetAttr(view, s_s);
+    if (!s_obj) goto done;
+    s = PyFloat_AsDouble(s_obj);
+    if (s == -1.0 && PyErr_Occurred()) goto done;
+    /* SurroundSensor.advance(t, s) */
+    if (PyObject_SetAttr(sensor, s_t_, t_obj) < 0 || PyObject_SetAttr(sensor, s_s_, s_obj) < 0) goto done;
+    if (get_double(sensor, s_s_scan, &s_scan) < 0 || get_double(sensor, s_t_scan, &t_scan) < 0) goto done;
+    const double moved = s - s_scan, since = t - t_scan;
+    front = PyObject_GetAttr(sensor, s_front);
+    rear = front ? PyObject_GetAttr(sensor, s_rear) : NULL;
+    if (!rear) goto done;
+    if (carry_on(front, 1.0, moved, since) < 0 || carry_on(rear, -1.0, moved, since) < 0) goto done;
+    /* the gaps and TTCs */
+    if (get_double(view, s_ds, &ds) < 0 || get_double(front, s_gap, &front_gap) < 0
+        || get_double(front, s_speed, &front_speed) < 0 || get_double(rear, s_gap, &rear_gap) < 0
+        || get_double(rear, s_speed, &rear_speed) < 0)
+        goto done;
+    if (set_double(view, s_gap_front, front_gap) < 0 || set_double(view, s_ttc_front, ttc_of(front_gap, ds - front_speed)) < 0
+        || set_double(view, s_gap_rear, rear_gap) < 0 || set_double(view, s_ttc_rear, ttc_of(rear_gap, rear_speed - ds)) < 0)
+        goto done;
+    if (front_gap <= 0.0 || rear_gap <= 0.0) {
+        PyObject *vid = PyObject_GetAttr(front_gap <= 0.0 ? front : rear, s_id);
+        if (!vid) goto done;
+        result = PyObject_CallMethodOneArg(view, s_overlap, vid);
+        Py_DECREF(vid);
+        goto done;
+    }
+    result = Py_NewRef(Py_None);
+done:
+    Py_DECREF(sensor);
+    Py_XDECREF(s_obj);
+    Py_XDECREF(front);
+    Py_XDECREF(rear);
+    return result;
+}
+
 static int intern_loop_names(void)
 {
     struct { PyObject **slot; const char *name; } names[] = {
@@ -1245,6 +1334,11 @@ static int intern_loop_names(void)
         {&s_X, "X"}, {&s_Y, "Y"}, {&s_s, "s"}, {&s_d_road, "d_road"},
         {&s_heading_error, "heading_error"}, {&s_curvature, "curvature"}, {&s_ds, "ds"},
         {&s_dd, "dd"}, {&s_frame, "frame"},
+        {&s_looked, "_looked"}, {&s_look, "look"}, {&s_sensor, "sensor"}, {&s_t_, "_t"}, {&s_s_, "_s"},
+        {&s_s_scan, "_s_scan"}, {&s_t_scan, "_t_scan"}, {&s_front, "front"}, {&s_rear, "rear"},
+        {&s_o, "_o"}, {&s_gap0, "_gap0"}, {&s_speed, "speed"}, {&s_gap, "gap"},
+        {&s_gap_front, "gap_front"}, {&s_ttc_front, "ttc_front"}, {&s_gap_rear, "gap_rear"},
+        {&s_ttc_rear, "ttc_rear"}, {&s_id, "id"}, {&s_overlap, "_overlap"},
     };
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
         *names[i].slot = PyUnicode_InternFromString(names[i].name);
@@ -1267,9 +1361,10 @@ static PyMethodDef methods[] = {
     FASTCALL(bp_pid_acc, "bp_pid_acc(ctx, x0, x1, e, t0, t1, t2, u, hi, lo, eta, alpha) -> u"),
     FASTCALL(bp_pid, "bp_pid(ctx, e_x, i_lon, de_x, e_y, i_lat, de_y, report, eta, alpha) -> (u_x, u_y)"),
     FASTCALL(reward_of, "reward_of(signals, rate, params, crashed) -> (reward, terms)"),
-    FASTCALL(plant_step, "plant_step(plant, action, packed) -> None (BicyclePlant.step)"),
+    FASTCALL(plant_step, "plant_step(plant, packed, action) -> None (BicyclePlant.step)"),
     FASTCALL(trace_write, "trace_write(rows, width, signals, fallback, sigs, values) -> None"),
     FASTCALL(road_frame, "road_frame(view) -> None (RoadSensor.frame)"),
+    FASTCALL(look_between, "look_between(view, t) -> Collision | None (SurroundView.look)"),
     FASTCALL(place, "place(ids, rows, front, reach, straight, frame, previous, dt, rated, low_edge) -> "
                     "(ids, rows, objects, speeds)"),
     {NULL, NULL, 0, NULL},

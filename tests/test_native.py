@@ -310,6 +310,8 @@ def test_plant_step_matches_the_python_step(limits, substeps):
     from ego.models.actuators import ActuatorLimits
 
     native, python = _plant_pair(ActuatorLimits(**limits), substeps)
+    bound = native.bind_step()  # the loop's: the kernel itself
+    assert bound.func is NATIVE.plant_step and python.bind_step() == python.step
     rng = np.random.default_rng(1)
     odd = [np.nan, np.inf, -np.inf, -0.0, 1e300]
     for i in range(3000):
@@ -324,7 +326,7 @@ def test_plant_step_matches_the_python_step(limits, substeps):
         if i % 89 == 7:
             delta = odd[(i + 2) % len(odd)]
         action = [(fx, delta), np.array([fx, delta]), (int(fx) if np.isfinite(fx) else fx, delta)][i % 3]
-        native.step(action)
+        (native.step if i % 2 else bound)(action)
         python.step(action)
         assert _bits(native.state) == _bits(python.state), i
         assert _bits(native.applied) == _bits(python.applied), i
@@ -419,3 +421,55 @@ def test_road_frame_matches_the_python_frame(curved):
         python.frame()
         assert native._line_of is native.road
         assert _bits(getattr(native, n) for n in names) == _bits(getattr(python, n) for n in names)
+
+
+def test_look_between_matches_the_python_look():
+    # two views fed the same scene by hand; the ego and the traffic move between looks, one
+    # through ego._native.look_between, the other through SurroundView.look
+    from ego.lane_frame import LanePolyline
+    from ego.models import VehicleGeometry
+    from ego.scenarios.emergency_brake import EmergencyBrakeConfig
+    from ego.scenarios.motorway import SurroundView, ego_plant
+
+    config = EmergencyBrakeConfig()
+    geometry = VehicleGeometry()
+    lanes = {i: LanePolyline([(0.0, 3.2 * i), (3000.0, 3.2 * i)], 3.2, f"motorway_{i}") for i in range(3)}
+    names = ("gap_front", "ttc_front", "gap_rear", "ttc_rear", "s")
+    rng = np.random.default_rng(3)
+    for case in range(40):
+        views = []
+        # ahead and behind in the ego's lane (the one ahead touching it in every fifth case)
+        ahead = 300.0 + rng.uniform(2.0, 40.0) * (1 if case % 5 else 0.0)
+        rows = [
+            (ahead, 3.2, 0.0, rng.uniform(0.0, 30.0), 4.5, 1.8),
+            (300.0 - rng.uniform(4.0, 40.0), 3.2, 0.0, rng.uniform(0.0, 40.0), 4.5, 1.8),
+        ]
+        for native in (True, False):
+            plant = ego_plant(config, geometry, (300.0, 3.2 * config.ego_lane, 0.0))
+            view = SurroundView(config, geometry)
+            view.setup(None, lanes, plant)
+            view.sensor.sync(0.0, ["lead", "back"], rows)
+            look = view.bind_look() if native else view.look
+            views.append((view, plant, look))
+        assert views[0][2].func is NATIVE.look_between
+        speed = rng.uniform(0.0, 35.0)
+        if case == 11:  # bumpers exactly touching, nothing moving: a gap of exactly 0
+            speed = 0.0
+            for view, _plant, _look in views:
+                view.look(0.0)
+                front = view.sensor.front
+                front._gap0, front.speed = 0.0, 0.0
+        for k in range(10):
+            t = 0.01 * k
+            found = []
+            for view, plant, look in views:
+                plant.state = (300.0 + speed * t, speed, 3.2, 0.0, 0.0, 0.0)
+                view.frame()
+                if case == 7 and k == 4:
+                    view.s = float("nan")
+                found.append(look(t))
+            a, b = views[0][0], views[1][0]
+            assert _bits(getattr(a, n) for n in names) == _bits(getattr(b, n) for n in names), (case, k)
+            assert _bits((a.sensor.front.gap, a.sensor.rear.gap)) == _bits((b.sensor.front.gap, b.sensor.rear.gap))
+            assert repr(found[0]) == repr(found[1]), (case, k)
+            assert (a._looked, a.sensor._t, a.sensor._s is a.s) == (b._looked, b.sensor._t, b.sensor._s is b.s)

@@ -15,8 +15,10 @@ Every plant saturates its input with :meth:`ego.models.actuators.ActuatorLimits.
 
 from __future__ import annotations
 
+import functools
 import math
 import struct
+from collections.abc import Callable
 from typing import Protocol, runtime_checkable
 
 from ego.models.actuators import ActuatorLimits, standstill
@@ -135,10 +137,16 @@ class BicyclePlant:
         x = self.state
         return x[0], x[2], x[4]
 
+    def bind_step(self) -> Callable[[tuple[float, float]], None]:
+        """:meth:`step` for a loop, bound once a run: the C kernel itself where there is one."""
+        if self._kernel is not None:
+            return functools.partial(_PLANT_STEP, self, self._kernel)
+        return self.step
+
     def step(self, action: tuple[float, float]) -> None:
         kernel = self._kernel
         if kernel is not None:
-            _PLANT_STEP(self, action, kernel)
+            _PLANT_STEP(self, kernel, action)
             return
         x = self.state
         command, delta = self._apply(action[0], action[1], x[1], self.applied[1], self.dt)

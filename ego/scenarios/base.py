@@ -11,7 +11,6 @@ traffic (the bare model) simply have no bridge.
 
 from __future__ import annotations
 
-import functools
 import logging
 import math
 import time
@@ -24,7 +23,6 @@ import numpy as np
 from ego.control.base import Controller, ControllerError, ControllerSpec, Observation, signal_units
 from ego.control.tasks import TASKS
 from ego.models.plant import Plant
-from ego.native import NATIVE
 from ego.params import ConfigError, Params, param
 from ego.processes import signals_deferred
 from ego.record.base import NullRecorder, Recorder, Scene, Series, unit_path
@@ -35,8 +33,6 @@ from ego.results.traffic_log import TrafficCollector
 from ego.sim.protocol import TrafficSim
 from ego.sim.registry import SimSetup, make_sim
 from ego.sim.types import Collision
-
-_ROAD_FRAME = NATIVE.road_frame if NATIVE is not None else None
 
 STATUSES = ("completed", "ended", "collision", "diverged", "timeout", "interrupted", "error")
 #: the statuses that are no failure: the scenario's own end, or the duration ran out in a
@@ -470,6 +466,9 @@ class Scenario:
         self._wall = time.perf_counter() - self._wall0
 
     def _flush(self) -> None:
+        if type(self.recorder) is NullRecorder:  # no batch to keep whole
+            self._flush_now()
+            return
         with signals_deferred():  # Ctrl-C lands before or after a batch, never inside it
             self._flush_now()
 
@@ -725,19 +724,18 @@ class ComposedLoop:
             self._filter = _unfiltered
         self._write_row = self.trace.bind(view.row_names)
         self._signals = self.controller.signals
-        from ego.scenarios.road import RoadSensor
-
-        self._frame = view.frame
-        if _ROAD_FRAME is not None and type(view).frame is RoadSensor.frame:
-            # its straight-lane rotation in C (ego._native.road_frame: the same arithmetic)
-            self._frame = functools.partial(_ROAD_FRAME, view)
+        # the view's own fast paths for the loop where it has them (C kernels of ego._native)
+        self._frame = view.bind_frame() if hasattr(view, "bind_frame") else view.frame
+        self._look = view.bind_look() if hasattr(view, "bind_look") else view.look
+        ego = self.ego
+        self._plant_step = ego.bind_step() if hasattr(ego, "bind_step") else ego.step
         view.sense(self.t)
         if self.after_setup is not None:
             self.after_setup()
 
     def _act(self, action: tuple[float, float]) -> None:
         ego = self.ego
-        ego.step(self._filter(action))
+        self._plant_step(self._filter(action))
         fx, delta = ego.applied
         obs, view = self.obs, self.view
         # the row describes time t: the state before this step and the action applied
@@ -801,7 +799,7 @@ class ComposedLoop:
 
     def _update(self) -> None:
         view, t = self.view, self.t
-        collision = view.look(t)
+        collision = self._look(t)
         if collision is not None and self.status == "running":
             self._collided(collision)
             if self.status != "running":

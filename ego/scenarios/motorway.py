@@ -16,6 +16,7 @@ A concrete scenario (``emergency_brake.py``, ``cut_in.py``...) subclasses
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
@@ -26,6 +27,7 @@ from ego.lane_frame import LanePolyline
 from ego.models import NonlinearBicycle, NonlinearBicycleParams, VehicleGeometry
 from ego.models.actuators import ActuatorLimits
 from ego.models.plant import BicyclePlant
+from ego.native import NATIVE
 from ego.params import ConfigError, param
 from ego.record.base import Series
 from ego.results.trace import Column, Plot, Ref, Trajectory
@@ -38,6 +40,8 @@ from ego.scenarios.sensor import SurroundSensor
 from ego.sim.protocol import TrafficSim
 from ego.sim.types import Collision, VehicleSpec, VehicleType, ego_type
 from ego.sumo.traffic import PacedVehicle, background_traffic
+
+_LOOK_BETWEEN = NATIVE.look_between if NATIVE is not None else None
 
 EGO = "ego"
 ROUTE = "motorway_route"
@@ -330,6 +334,14 @@ class SurroundView(RoadSensor):
         if front_gap <= 0.0 or rear_gap <= 0.0:
             return self._overlap(front.id if front_gap <= 0.0 else rear.id)
         return None
+
+    def bind_look(self) -> Callable[[float], Collision | None]:
+        """:meth:`look` for the loop, bound once a run: between two simulator steps in C where
+        the extension is built (``ego._native.look_between``: the sensor's carrying on and the
+        TTCs, the same arithmetic; the first look after a step goes to :meth:`look`)."""
+        if _LOOK_BETWEEN is not None and type(self).look is SurroundView.look:
+            return functools.partial(_LOOK_BETWEEN, self)
+        return self.look
 
     def _overlap(self, other: str) -> Collision | None:
         box = self.sensor.box(other)

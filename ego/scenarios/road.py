@@ -13,16 +13,20 @@ observation builder is :func:`ego.scenarios.observe.road_observation`.
 
 from __future__ import annotations
 
+import functools
 import math
+from collections.abc import Callable
 
 from ego.lane_frame import LanePolyline, wrap_angle
 from ego.models.geometry import VehicleGeometry
+from ego.native import NATIVE
 from ego.record.base import Scene
 from ego.results.traffic_log import RADIUS, REACH_MARGIN
 from ego.scenarios.base import divergence
 from ego.sim.protocol import TrafficSim
 
 EGO = "ego"
+_ROAD_FRAME = NATIVE.road_frame if NATIVE is not None else None
 
 
 class RoadSensor:
@@ -70,6 +74,14 @@ class RoadSensor:
         self.s, self.d_road, self.heading_error, self.curvature = s, d, err, kappa
         self.ds = u * c - v * sn
         self.dd = u * sn + v * c
+
+    def bind_frame(self) -> Callable[[], None]:
+        """:meth:`frame` for the loop, bound once a run: in C where the extension is built
+        (``ego._native.road_frame``: the straight lane's rotation, the same arithmetic; any
+        other road goes to :meth:`frame`)."""
+        if _ROAD_FRAME is not None and type(self).frame is RoadSensor.frame:
+            return functools.partial(_ROAD_FRAME, self)
+        return self.frame
 
     def diverged(self) -> str | None:
         """Why the ego's state is beyond any controller's doing, or None."""
