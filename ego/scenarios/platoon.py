@@ -458,7 +458,7 @@ class PlatoonScenario(Scenario):
             plant.step((cmd,))
             # in PER_FOLLOWER order
             values += (gap[i], e[i], v, a, plant.applied[0], ttc[i])
-        self._write_row(self.controller.signals(), values)
+        self._write_row(self.controller.signals(), tuple(values))  # a tuple: the writer's C path
 
     def _before_sumo_step(self) -> None:
         bridge = self.bridge
