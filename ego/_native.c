@@ -13,7 +13,11 @@
  *  - bp_pid, bp_pid_acc and rbf_smc: the learning controllers' steps
  *    (BPPIDController._step_py, BPPIDAcc._update_py, RBFSMCController._network_py): their
  *    element-wise arithmetic here, numpy called for what numpy computes its own way (BLAS
- *    products, tanh, exp, einsum); sum_squares: numpy's pairwise sum of squares.
+ *    products, tanh, exp, einsum); sum_squares: numpy's pairwise sum of squares;
+ *  - plant_step, trace_write, road_frame and look_between: the scenario loop's glue every
+ *    control period (BicyclePlant.step, Trace.bind's writer, RoadSensor.frame,
+ *    SurroundView.look between two SUMO steps), each handing what it does not cover to the
+ *    Python code it stands for.
  *
  * The Python implementations stay the references: the tests require these kernels to agree
  * with them (and with scikit-fuzzy) on random inputs, to the bit. Compiled with
