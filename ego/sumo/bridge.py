@@ -308,13 +308,17 @@ class SumoBridge:
         ls.simulationStep()
         self._moved = False
         present = set(ls.vehicle.getIDList())
-        missing = [s.id for s in self._pending if s.id not in present]
+        pending = list(self._pending)
+        missing = [s.id for s in pending if s.id not in present]
         self._pending.clear()
         for vid in missing:
             ls.vehicle.remove(vid)
         lost = sorted(set(required) & set(missing))
         if lost:
-            raise SumoError(f"SUMO could not insert {', '.join(lost)} (too close to other vehicles?)")
+            raise SumoError(
+                f"SUMO could not insert {', '.join(_placed(vid, pending) for vid in lost)}: too close to "
+                "another vehicle for SUMO's insertion check at that speed"
+            )
         return missing
 
     def control(self, vid: str, geometry: VehicleGeometry, keep_route: int = 2) -> None:
@@ -637,6 +641,22 @@ class SumoBridge:
         """Route distance (m) from ``vid``'s front bumper to ``pos`` (m) on ``edge``; SUMO
         answers a huge negative number once that point is behind the vehicle."""
         return self._ls.vehicle.getDrivingDistance(vid, edge, pos, lane)
+
+
+def _placed(vid: str, specs: Sequence[VehicleSpec]) -> str:
+    """``vid`` with where it was to start and its nearest neighbours on that lane (ahead and
+    behind) among ``specs``, for the message of a vehicle SUMO could not insert."""
+    spec = next(s for s in specs if s.id == vid)
+    same = [s for s in specs if s.id != vid and s.route == spec.route and s.lane == spec.lane]
+    ahead = min((s for s in same if s.pos >= spec.pos), key=lambda s: s.pos, default=None)
+    behind = max((s for s in same if s.pos < spec.pos), key=lambda s: s.pos, default=None)
+    near = [
+        f"{s.id} {abs(s.pos - spec.pos):.1f} m {'ahead' if s is ahead else 'behind'} (front to front) at {s.speed:g} m/s"
+        for s in (ahead, behind)
+        if s is not None
+    ]
+    where = f"{vid} (lane {spec.lane} at {spec.pos:g} m, {spec.speed:g} m/s"
+    return where + (f"; {', '.join(near)})" if near else ")")
 
 
 def make_sim(setup: SimSetup, options: dict) -> SumoBridge:

@@ -204,3 +204,20 @@ def test_a_run_ended_between_the_pose_push_and_the_step_leaves_the_process_usabl
     assert out.returncode == 0, (out.returncode, out.stderr[-2000:])
     assert "raised: ended between the push and the step" in out.stdout
     assert "next run: completed" in out.stdout
+
+
+def test_a_vehicle_sumo_cannot_insert_is_named_with_its_place_and_neighbours():
+    # fast-follower's follower starts 60 m behind the ego at the ego's speed: from about 28 m/s
+    # that is too close for SUMO's insertion check; the message says where and beside whom
+    from ego.runner import RunSpec, build
+
+    scenario = build(RunSpec("fast-follower", "pid", 0, {"ego_speed": 30.0, "traffic_density": 0.0}))
+    try:
+        with pytest.raises(SumoError) as err:
+            scenario.reset()
+    finally:
+        scenario.close()
+    message = str(err.value)
+    assert message.startswith("SUMO could not insert ego (lane 1 at ")
+    assert "30 m/s; follower 64.5 m behind (front to front) at 30 m/s)" in message
+    assert message.endswith("too close to another vehicle for SUMO's insertion check at that speed")
