@@ -12,9 +12,10 @@ loop (the rest), result packing (the trace as an array, the metrics), the requir
 (rtamt), close. ``--rows`` writes the rows (wall time and host aside) to compare two trees:
 run it once with ``PYTHONPATH=<other tree>`` and compare the files.
 
-Then SUMO's own share, the floor no change to ego can go below: for each run, bare
-``simulationStep()`` calls on the same traffic (the run's scenario, seed and values, no
-control: ``benchmarks/bench_loop.py``'s baseline) for as many SUMO steps as the run took,
+Then SUMO's own share, about the floor no change to ego alone can go below (an estimate:
+there the ego is not moved by a controller): for each run, bare ``simulationStep()`` calls on
+the same traffic (the run's scenario, seed and values, no control:
+``benchmarks/bench_loop.py``'s baseline) for as many SUMO steps as the run took,
 and what that makes of a sweep of such runs on ``--jobs`` workers (``--sweep-runs``, default
 the 2,500 runs of ``scenarios/sweeps/envelope.toml``).
 """
