@@ -1330,6 +1330,284 @@ done:
     return result;
 }
 
+/* plan_steady(fallback, packed, ego_speed, man, safety, obs, t) -> None:
+ * EvasiveManoeuvre.plan for a control period that changes no state of the machine: no
+ * trigger, the safety layer staying off, no lane change to weigh aborting, the references
+ * (the in-lane manoeuvre's own from its Python reference), the lane change's one-second
+ * settling clock. Anything else - a trigger, the AEB engaged or to weigh, a SUMO step of a
+ * braking lane change, a manoeuvre done - is fallback(man, obs, t), the Python method, from
+ * the start (nothing of the period has been decided here yet), or, once the references are
+ * written, its check_done. packed: the configuration's doubles, PLAN_* below. */
+static PyObject *s_phase, *s_view, *s_safety, *s_active, *s_in_lane, *s_action, *s_brake, *s_limit;
+static PyObject *s_chosen, *s_evade_speed, *s_trigger_s, *s_trigger_t, *s_target_lane, *s_lanes;
+static PyObject *s_lane_leader_now, *s_reference, *s_speed_ref, *s_s_ref, *s_ds_ref, *s_d_ref, *s_dd_ref;
+static PyObject *s_lane_offset, *s_inside_since, *s_check_done, *s_t, *s_s0, *s_accel, *float_zero;
+
+enum {
+    PLAN_TTC_THRESHOLD, PLAN_TRIGGER_FRONT, PLAN_AEB_TTC, PLAN_AEB_DECEL, PLAN_FOLLOW_GAP,
+    PLAN_FOLLOW_HEADWAY, PLAN_SETTLE_BAND, PLAN_EGO_SPEED, PLAN_DT, PLAN_PER, PLAN_N
+};
+
+/* ego.scenarios.safety.braking_need(front, ds) (margin 0), Python's max() order kept */
+static double braking_need_of(double gap, double speed, double accel, double ds)
+{
+    if (gap == Py_HUGE_VAL) return 0.0;
+    const double g = gap - 0.0;
+    const double room = 0.1 > g ? 0.1 : g;
+    const double closing = ds - speed;
+    double need = closing > 0.0 ? closing * closing / (2.0 * room) : 0.0;
+    const double decel = -accel;
+    if (decel > 0.5) {
+        const double v = 0.0 > ds ? 0.0 : ds;
+        const double b = v * v / (2.0 * (room + speed * speed / (2.0 * decel)));
+        need = b > need ? b : need;
+    }
+    return need;
+}
+
+/* in_lane.action == "brake": 1, 0, or -1 for an action that is not a str (Python decides) */
+static int is_brake(PyObject *in_lane)
+{
+    PyObject *action = PyObject_GetAttr(in_lane, s_action);
+    if (!action) return -2;
+    int r = PyUnicode_CheckExact(action) ? PyUnicode_Compare(action, s_brake) == 0 : -1;
+    Py_DECREF(action);
+    return r;
+}
+
+static PyObject *plan_steady(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 7) {
+        PyErr_SetString(PyExc_TypeError, "plan_steady(fallback, packed, ego_speed, man, safety, obs, t)");
+        return NULL;
+    }
+    PyObject *fallback = args[0], *ego_speed = args[2], *man = args[3], *safety = args[4];
+    PyObject *obs = args[5], *t_obj = args[6];
+    const double *P = params_of(args[1], PLAN_N, "packed");
+    if (!P) return NULL;
+    const double t = PyFloat_AsDouble(t_obj);
+    if (t == -1.0 && PyErr_Occurred()) return NULL;
+    PyObject *view = NULL, *sensor = NULL, *front = NULL, *in_lane = NULL, *obj = NULL;
+    PyObject *s_ref_obj = NULL, *v_obj = NULL, *result = NULL;
+    int python = 0;
+    if (PyObject_SetAttr(man, s_t, t_obj) < 0) return NULL;
+    obj = PyObject_GetAttr(man, s_phase);
+    if (!obj) return NULL;
+    if (!PyLong_CheckExact(obj)) { Py_DECREF(obj); goto python; }
+    const long phase = PyLong_AsLong(obj);
+    Py_CLEAR(obj);
+    if (phase == -1 && PyErr_Occurred()) return NULL;
+    if (phase < 0 || phase > 3) goto python;
+    if (!(view = PyObject_GetAttr(man, s_view)) || !(in_lane = PyObject_GetAttr(man, s_in_lane))) goto done;
+    double ttc;
+    if (phase == 0) { /* cruise: the trigger is Python's */
+        if (get_double(view, P[PLAN_TRIGGER_FRONT] != 0.0 ? s_ttc_front : s_ttc_rear, &ttc) < 0) goto done;
+        if (ttc < P[PLAN_TTC_THRESHOLD]) { python = 1; goto done; }
+    }
+    if (!(obj = PyObject_GetAttr(man, s_safety))) goto done;
+    const int same_safety = obj == safety;
+    Py_CLEAR(obj);
+    if (!same_safety) { python = 1; goto done; }
+    if (!(sensor = PyObject_GetAttr(view, s_sensor)) || !(front = PyObject_GetAttr(sensor, s_front))) goto done;
+    if (safety != Py_None) { /* SafetyLayer.update, while it stays off */
+        if (!(obj = PyObject_GetAttr(safety, s_active))) goto done;
+        const int active = PyObject_IsTrue(obj);
+        Py_CLEAR(obj);
+        if (active < 0) goto done;
+        if (active) { python = 1; goto done; }
+        int braking_in_lane = 0;
+        if (phase == 2) {
+            braking_in_lane = is_brake(in_lane);
+            if (braking_in_lane == -2) goto done;
+            if (braking_in_lane < 0) { python = 1; goto done; }
+        }
+        double ttc_front;
+        if (get_double(view, s_ttc_front, &ttc_front) < 0) goto done;
+        if (!(ttc_front >= P[PLAN_AEB_TTC] && !braking_in_lane && phase != 1)) {
+            double gap, speed, accel, ds, limit;
+            if (get_double(front, s_gap, &gap) < 0 || get_double(front, s_speed, &speed) < 0
+                || get_double(front, s_accel, &accel) < 0 || get_double(view, s_ds, &ds) < 0
+                || get_double(man, s_limit, &limit) < 0)
+                goto done;
+            const double need = braking_need_of(gap, speed, accel, ds);
+            /* engaging (braking in lane, limit_braking_behind, imminent) is Python's */
+            if ((braking_in_lane && need >= P[PLAN_AEB_DECEL]) || (phase == 1 && !(need <= 0.9 * limit))
+                || !(ttc_front >= P[PLAN_AEB_TTC])) {
+                python = 1;
+                goto done;
+            }
+        }
+    }
+    /* a simulator step just came in a lane change: abort_lane_change(aeb=False) weighs a
+     * braking one (Python's) */
+    if (phase == 1 && P[PLAN_PER] != 0.0 && fmod(nearbyint(t / P[PLAN_DT]), P[PLAN_PER]) == 0.0) {
+        const int brake = is_brake(in_lane);
+        if (brake == -2) goto done;
+        if (brake != 0) { python = 1; goto done; }
+    }
+    /* the references */
+    if (phase == 0) {
+        double s0;
+        if (get_double(man, s_s0, &s0) < 0) goto done;
+        if (!(s_ref_obj = PyFloat_FromDouble(s0 + P[PLAN_EGO_SPEED] * t))) goto done;
+        v_obj = Py_NewRef(ego_speed);
+    } else {
+        if (!(obj = PyObject_GetAttr(man, s_chosen))) goto done;
+        const int chosen = obj != Py_None;
+        Py_CLEAR(obj);
+        if (chosen) {
+            double v_evade, trigger_s, trigger_t, s, gap, speed;
+            if (!(v_obj = PyObject_GetAttr(man, s_evade_speed))) goto done;
+            v_evade = PyFloat_AsDouble(v_obj);
+            if ((v_evade == -1.0 && PyErr_Occurred()) || get_double(man, s_trigger_s, &trigger_s) < 0
+                || get_double(man, s_trigger_t, &trigger_t) < 0 || get_double(view, s_s, &s) < 0)
+                goto done;
+            double s_ref = trigger_s + v_evade * (t - trigger_t);
+            /* SurroundSensor.lane_leader_now(view.target_lane): a lane scanned since the last
+             * look in C, else the method (which scans it) */
+            PyObject *lane = PyObject_GetAttr(view, s_target_lane), *found = NULL, *lanes = NULL;
+            if (lane && (lanes = PyObject_GetAttr(sensor, s_lanes)) && PyDict_CheckExact(lanes))
+                found = PyDict_GetItemWithError(lanes, lane);
+            Py_XDECREF(lanes);
+            if (PyErr_Occurred()) { Py_XDECREF(lane); goto done; }
+            PyObject *leader_speed = NULL; /* new reference when there is a leader */
+            double leader_gap = 0.0;
+            if (found && PyTuple_CheckExact(found) && PyTuple_GET_SIZE(found) == 2) {
+                PyObject *ahead = PyTuple_GET_ITEM(found, 0);
+                PyObject *o = PyObject_GetAttr(ahead, s_o);
+                if (!o) { Py_DECREF(lane); goto done; }
+                const int none = o == Py_None;
+                Py_DECREF(o);
+                if (!none) {
+                    double gap0, st, st_scan, ss, ss_scan;
+                    if (!(leader_speed = PyObject_GetAttr(ahead, s_speed))) { Py_DECREF(lane); goto done; }
+                    speed = PyFloat_AsDouble(leader_speed);
+                    if ((speed == -1.0 && PyErr_Occurred()) || get_double(ahead, s_gap0, &gap0) < 0
+                        || get_double(sensor, s_t_, &st) < 0 || get_double(sensor, s_t_scan, &st_scan) < 0
+                        || get_double(sensor, s_s_, &ss) < 0 || get_double(sensor, s_s_scan, &ss_scan) < 0) {
+                        Py_DECREF(lane);
+                        Py_DECREF(leader_speed);
+                        goto done;
+                    }
+                    leader_gap = gap0 + speed * (st - st_scan) - (ss - ss_scan);
+                }
+            } else {
+                PyObject *r = PyObject_CallMethodOneArg(sensor, s_lane_leader_now, lane);
+                if (!r) { Py_DECREF(lane); goto done; }
+                if (r != Py_None) {
+                    if (!PyTuple_CheckExact(r) || PyTuple_GET_SIZE(r) != 2) {
+                        Py_DECREF(r);
+                        Py_DECREF(lane);
+                        PyErr_SetString(PyExc_TypeError, "lane_leader_now must give (gap, speed) or None");
+                        goto done;
+                    }
+                    leader_gap = PyFloat_AsDouble(PyTuple_GET_ITEM(r, 0));
+                    leader_speed = Py_NewRef(PyTuple_GET_ITEM(r, 1));
+                    speed = PyFloat_AsDouble(leader_speed);
+                }
+                Py_DECREF(r);
+                if (PyErr_Occurred()) { Py_XDECREF(leader_speed); Py_DECREF(lane); goto done; }
+            }
+            Py_DECREF(lane);
+            if (leader_speed) {
+                if (leader_gap != Py_HUGE_VAL) {
+                    const double fs = s + leader_gap - P[PLAN_FOLLOW_GAP] - P[PLAN_FOLLOW_HEADWAY] * speed;
+                    if (fs < s_ref) {
+                        s_ref = fs;
+                        Py_SETREF(v_obj, Py_NewRef(leader_speed));
+                    }
+                }
+                Py_DECREF(leader_speed);
+            }
+            PyObject *front_speed = PyObject_GetAttr(front, s_speed);
+            if (!front_speed) goto done;
+            speed = PyFloat_AsDouble(front_speed);
+            if ((speed == -1.0 && PyErr_Occurred()) || get_double(front, s_gap, &gap) < 0) {
+                Py_DECREF(front_speed);
+                goto done;
+            }
+            if (gap != Py_HUGE_VAL) {
+                const double fs = s + gap - P[PLAN_FOLLOW_GAP] - P[PLAN_FOLLOW_HEADWAY] * speed;
+                if (fs < s_ref) {
+                    s_ref = fs;
+                    Py_SETREF(v_obj, Py_NewRef(front_speed));
+                }
+            }
+            Py_DECREF(front_speed);
+            if (!(s_ref_obj = PyFloat_FromDouble(s_ref))) goto done;
+        } else { /* the in-lane manoeuvre's references */
+            PyObject *r = PyObject_CallMethodOneArg(in_lane, s_reference, man);
+            if (!r) goto done;
+            PyObject *seq = PySequence_Fast(r, "cannot unpack the in-lane reference");
+            Py_DECREF(r);
+            if (!seq) goto done;
+            if (PySequence_Fast_GET_SIZE(seq) != 2) {
+                PyErr_Format(PyExc_ValueError, "the in-lane reference must be (s_ref, speed_ref), got %zd values",
+                             PySequence_Fast_GET_SIZE(seq));
+                Py_DECREF(seq);
+                goto done;
+            }
+            s_ref_obj = Py_NewRef(PySequence_Fast_GET_ITEM(seq, 0));
+            v_obj = Py_NewRef(PySequence_Fast_GET_ITEM(seq, 1));
+            Py_DECREF(seq);
+        }
+    }
+    if (PyObject_SetAttr(man, s_speed_ref, v_obj) < 0 || PyObject_SetAttr(obs, s_s_ref, s_ref_obj) < 0
+        || PyObject_SetAttr(obs, s_ds_ref, v_obj) < 0 || PyObject_SetAttr(obs, s_d_ref, float_zero) < 0
+        || PyObject_SetAttr(obs, s_dd_ref, float_zero) < 0)
+        goto done;
+    /* check_done: the lane change's settling clock here, the rest Python's */
+    if (phase == 2) {
+        result = PyObject_CallMethodNoArgs(man, s_check_done);
+        goto done;
+    }
+    if (phase == 1) {
+        double d_road, band_off;
+        PyObject *offsets = PyObject_GetAttr(view, s_lane_offset);
+        if (!offsets) goto done;
+        PyObject *lane = PyObject_GetAttr(view, s_target_lane);
+        PyObject *off = lane ? PyObject_GetItem(offsets, lane) : NULL;
+        Py_DECREF(offsets);
+        Py_XDECREF(lane);
+        if (!off) goto done;
+        band_off = PyFloat_AsDouble(off);
+        Py_DECREF(off);
+        if ((band_off == -1.0 && PyErr_Occurred()) || get_double(view, s_d_road, &d_road) < 0) goto done;
+        if (!(fabs(d_road - band_off) < P[PLAN_SETTLE_BAND])) {
+            if (PyObject_SetAttr(man, s_inside_since, Py_None) < 0) goto done;
+        } else {
+            PyObject *since = PyObject_GetAttr(man, s_inside_since);
+            if (!since) goto done;
+            if (since == Py_None) {
+                Py_DECREF(since);
+                if (PyObject_SetAttr(man, s_inside_since, t_obj) < 0) goto done;
+            } else {
+                const double t0 = PyFloat_AsDouble(since);
+                Py_DECREF(since);
+                if (t0 == -1.0 && PyErr_Occurred()) goto done;
+                if (t - t0 >= 1.0) { /* done: the event and the transition are Python's */
+                    result = PyObject_CallMethodNoArgs(man, s_check_done);
+                    goto done;
+                }
+            }
+        }
+    }
+    result = Py_NewRef(Py_None);
+done:
+    Py_XDECREF(view);
+    Py_XDECREF(sensor);
+    Py_XDECREF(front);
+    Py_XDECREF(in_lane);
+    Py_XDECREF(s_ref_obj);
+    Py_XDECREF(v_obj);
+    if (!python) return result;
+python:
+    {
+        PyObject *call[3] = {man, obs, t_obj};
+        return PyObject_Vectorcall(fallback, call, 3, NULL);
+    }
+}
+
 static int intern_loop_names(void)
 {
     struct { PyObject **slot; const char *name; } names[] = {
@@ -1343,12 +1621,21 @@ static int intern_loop_names(void)
         {&s_o, "_o"}, {&s_gap0, "_gap0"}, {&s_speed, "speed"}, {&s_gap, "gap"},
         {&s_gap_front, "gap_front"}, {&s_ttc_front, "ttc_front"}, {&s_gap_rear, "gap_rear"},
         {&s_ttc_rear, "ttc_rear"}, {&s_id, "id"}, {&s_overlap, "_overlap"},
+        {&s_phase, "phase"}, {&s_view, "view"}, {&s_safety, "safety"}, {&s_active, "active"},
+        {&s_in_lane, "in_lane"}, {&s_action, "action"}, {&s_brake, "brake"}, {&s_limit, "limit"},
+        {&s_chosen, "chosen"}, {&s_evade_speed, "evade_speed"}, {&s_trigger_s, "trigger_s"},
+        {&s_trigger_t, "trigger_t"}, {&s_target_lane, "target_lane"}, {&s_lanes, "_lanes"},
+        {&s_lane_leader_now, "lane_leader_now"}, {&s_reference, "reference"}, {&s_speed_ref, "speed_ref"},
+        {&s_s_ref, "s_ref"}, {&s_ds_ref, "ds_ref"}, {&s_d_ref, "d_ref"}, {&s_dd_ref, "dd_ref"},
+        {&s_lane_offset, "lane_offset"}, {&s_inside_since, "_inside_since"}, {&s_check_done, "check_done"},
+        {&s_t, "t"}, {&s_s0, "s0"}, {&s_accel, "accel"},
     };
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
         *names[i].slot = PyUnicode_InternFromString(names[i].name);
         if (!*names[i].slot) return -1;
     }
-    return 0;
+    float_zero = PyFloat_FromDouble(0.0);
+    return float_zero ? 0 : -1;
 }
 
 #define FASTCALL(name, doc) {#name, (PyCFunction)(void (*)(void))name, METH_FASTCALL, doc}
@@ -1369,6 +1656,8 @@ static PyMethodDef methods[] = {
     FASTCALL(trace_write, "trace_write(rows, width, signals, fallback, sigs, values) -> None"),
     FASTCALL(road_frame, "road_frame(view) -> None (RoadSensor.frame)"),
     FASTCALL(look_between, "look_between(view, t) -> Collision | None (SurroundView.look)"),
+    FASTCALL(plan_steady, "plan_steady(fallback, packed, ego_speed, man, safety, obs, t) -> None "
+                          "(EvasiveManoeuvre.plan)"),
     FASTCALL(place, "place(ids, rows, front, reach, straight, frame, previous, dt, rated, low_edge) -> "
                     "(ids, rows, objects, speeds)"),
     {NULL, NULL, 0, NULL},

@@ -473,3 +473,53 @@ def test_look_between_matches_the_python_look():
             assert _bits((a.sensor.front.gap, a.sensor.rear.gap)) == _bits((b.sensor.front.gap, b.sensor.rear.gap))
             assert repr(found[0]) == repr(found[1]), (case, k)
             assert (a._looked, a.sensor._t, a.sensor._s is a.s) == (b._looked, b.sensor._t, b.sensor._s is b.s)
+
+
+@pytest.mark.sumo
+@pytest.mark.parametrize(
+    "scenario, controller, overrides",
+    [
+        # a lane change, settled (done), with the AEB watching
+        ("emergency-brake", "fuzzy", {}),
+        # no acceptable lane: braking in lane, the AEB engaging and releasing
+        ("emergency-brake", "pid", {"block_left": "true", "block_right": "true", "duration": "12"}),
+        # no AEB at all
+        ("emergency-brake", "rbf-smc", {"aeb": "false", "duration": "12"}),
+        # triggered from behind: accelerating in lane or changing lane away from the follower
+        ("fast-follower", "pid", {"duration": "12"}),
+        ("fast-follower", "fuzzy-pid", {"block_left": "true", "block_right": "true", "duration": "12"}),
+        ("cut-in", "bp-pid", {"duration": "12"}),
+        # slow traffic: the new lane's leader holds the lane change's reference back
+        ("emergency-brake", "pid", {"traffic_density": "15", "traffic_speed": "12", "duration": "12", "seed": 0}),
+    ],
+)
+def test_plan_steady_gives_the_python_plans_every_row(scenario, controller, overrides, monkeypatch):
+    overrides = dict(overrides)
+    seed = overrides.pop("seed", 1)
+    # the whole run twice in this process, the manoeuvre's control periods through
+    # ego._native.plan_steady and through EvasiveManoeuvre.plan alone: every trace row to the
+    # bit and every event the same; the C handles most periods, Python the transitions
+    import ego.scenarios.manoeuvre as manoeuvre
+    from ego.runner import RunSpec, run
+
+    python_plan = manoeuvre.EvasiveManoeuvre.plan
+    calls = []
+
+    def counted(self, obs, t):
+        calls.append(self.phase)
+        return python_plan(self, obs, t)
+
+    monkeypatch.setattr(manoeuvre.EvasiveManoeuvre, "plan", counted)
+    results = []
+    for native in (True, False):
+        if not native:
+            monkeypatch.setattr(manoeuvre, "_PLAN_STEADY", None)
+        calls.clear()
+        spec = RunSpec(scenario, controller, seed=seed, overrides=overrides)
+        results.append((run(spec), list(calls)))
+    (c_run, c_calls), (py_run, py_calls) = results
+    assert c_run.trace.shape == py_run.trace.shape
+    assert c_run.trace.tobytes() == py_run.trace.tobytes()
+    assert [(e.t, e.kind, e.text) for e in c_run.events] == [(e.t, e.kind, e.text) for e in py_run.events]
+    assert len(py_calls) >= c_run.metrics["steps"]  # every period went to Python there
+    assert 0 < len(c_calls) < len(py_calls) / 2, (len(c_calls), len(py_calls))

@@ -729,6 +729,8 @@ class ComposedLoop:
         self._look = view.bind_look() if hasattr(view, "bind_look") else view.look
         ego = self.ego
         self._plant_step = ego.bind_step() if hasattr(ego, "bind_step") else ego.step
+        man = self.manoeuvre
+        self._plan = man.bind_plan() if hasattr(man, "bind_plan") else man.plan
         view.sense(self.t)
         if self.after_setup is not None:
             self.after_setup()
@@ -807,7 +809,7 @@ class ComposedLoop:
         obs = self.obs
         if self.before_plan is not None:
             self.before_plan()
-        self.manoeuvre.plan(obs, t)
+        self._plan(obs, t)
         view.observe(obs, t)
 
 
