@@ -1608,6 +1608,121 @@ python:
     }
 }
 
+/* ---------------------------------------------------------------------------------------
+ * The surround sensor's search (ego/scenarios/sensor.py SurroundSensor):
+ *  - near(objects, lo, hi, h, m): the objects whose extent across the lane, widened by
+ *    |v_d| h + m, overlaps (lo, hi): scan's and _scan_lane's filter (m = 0 there: x + 0.0
+ *    compares as x);
+ *  - nearest(objects, lo, hi, e_lo, e_hi, since, ahead, behind): _nearest, the Detections
+ *    filled as Detection._found and Detection.clear fill them.
+ * An object is the sensor's tuple (id, s_lo, s_hi, d_lo, d_hi, v_s, v_d, accel, rel).
+ * ------------------------------------------------------------------------------------- */
+static PyObject *s_lo_, *s_hi_, *s_since_, *str_empty, *float_inf;
+
+static int object_doubles(PyObject *o, double *x)
+{
+    if (!PyTuple_CheckExact(o) || PyTuple_GET_SIZE(o) < 8) {
+        PyErr_SetString(PyExc_TypeError, "a sensed object must be a tuple (id, s_lo, s_hi, d_lo, d_hi, v_s, v_d, accel, ...)");
+        return -1;
+    }
+    for (int i = 1; i < 7; i++) {
+        x[i] = PyFloat_AsDouble(PyTuple_GET_ITEM(o, i));
+        if (x[i] == -1.0 && PyErr_Occurred()) return -1;
+    }
+    return 0;
+}
+
+static PyObject *near(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 5 || !PyList_CheckExact(args[0])) {
+        PyErr_SetString(PyExc_TypeError, "near(objects: list, lo, hi, h, m)");
+        return NULL;
+    }
+    PyObject *objects = args[0];
+    double lim[4];
+    for (int i = 0; i < 4; i++) {
+        lim[i] = PyFloat_AsDouble(args[i + 1]);
+        if (lim[i] == -1.0 && PyErr_Occurred()) return NULL;
+    }
+    const double lo = lim[0], hi = lim[1], h = lim[2], m = lim[3];
+    PyObject *out = PyList_New(0);
+    if (!out) return NULL;
+    for (Py_ssize_t i = 0; i < PyList_GET_SIZE(objects); i++) {
+        PyObject *o = PyList_GET_ITEM(objects, i);
+        double x[8];
+        if (object_doubles(o, x) < 0) { Py_DECREF(out); return NULL; }
+        const double reach = fabs(x[6]) * h;
+        if (x[4] + reach + m > lo && x[3] - reach - m < hi && PyList_Append(out, o) < 0) {
+            Py_DECREF(out);
+            return NULL;
+        }
+    }
+    return out;
+}
+
+static int detection_found(PyObject *det, PyObject *o, double gap, PyObject *lo, PyObject *hi, PyObject *since)
+{
+    PyObject *g = PyFloat_FromDouble(gap);
+    if (!g) return -1;
+    int bad = PyObject_SetAttr(det, s_id, PyTuple_GET_ITEM(o, 0)) < 0 || PyObject_SetAttr(det, s_gap, g) < 0
+              || PyObject_SetAttr(det, s_speed, PyTuple_GET_ITEM(o, 5)) < 0
+              || PyObject_SetAttr(det, s_accel, PyTuple_GET_ITEM(o, 7)) < 0 || PyObject_SetAttr(det, s_gap0, g) < 0
+              || PyObject_SetAttr(det, s_o, o) < 0 || PyObject_SetAttr(det, s_lo_, lo) < 0
+              || PyObject_SetAttr(det, s_hi_, hi) < 0 || PyObject_SetAttr(det, s_since_, since) < 0;
+    Py_DECREF(g);
+    return bad ? -1 : 0;
+}
+
+static int detection_clear(PyObject *det)
+{
+    return (PyObject_SetAttr(det, s_id, str_empty) < 0 || PyObject_SetAttr(det, s_gap, float_inf) < 0
+            || PyObject_SetAttr(det, s_speed, float_zero) < 0 || PyObject_SetAttr(det, s_accel, float_zero) < 0
+            || PyObject_SetAttr(det, s_o, Py_None) < 0)
+               ? -1
+               : 0;
+}
+
+static PyObject *nearest(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 8 || !PyList_CheckExact(args[0])) {
+        PyErr_SetString(PyExc_TypeError, "nearest(objects: list, lo, hi, e_lo, e_hi, since, ahead, behind)");
+        return NULL;
+    }
+    PyObject *objects = args[0], *lo_obj = args[1], *hi_obj = args[2], *ahead = args[6], *behind = args[7];
+    double lim[5];
+    for (int i = 0; i < 5; i++) {
+        lim[i] = PyFloat_AsDouble(args[i + 1]);
+        if (lim[i] == -1.0 && PyErr_Occurred()) return NULL;
+    }
+    const double lo = lim[0], hi = lim[1], e_lo = lim[2], e_hi = lim[3], since = lim[4];
+    const double twice_mid = e_lo + e_hi;
+    double best_ahead = Py_HUGE_VAL, best_behind = Py_HUGE_VAL;
+    PyObject *front = NULL, *rear = NULL;
+    for (Py_ssize_t i = 0; i < PyList_GET_SIZE(objects); i++) {
+        PyObject *o = PyList_GET_ITEM(objects, i);
+        double x[8];
+        if (object_doubles(o, x) < 0) return NULL;
+        const double shift = x[6] * since;
+        if (x[4] + shift <= lo || x[3] + shift >= hi) continue;
+        const double move = x[5] * since;
+        const double a = x[1] + move, b = x[2] + move;
+        if (a + b >= twice_mid) {
+            if (a - e_hi < best_ahead) {
+                best_ahead = a - e_hi;
+                front = o;
+            }
+        } else if (e_lo - b < best_behind) {
+            best_behind = e_lo - b;
+            rear = o;
+        }
+    }
+    PyObject *since_obj = args[5];
+    if ((front ? detection_found(ahead, front, best_ahead, lo_obj, hi_obj, since_obj) : detection_clear(ahead)) < 0
+        || (rear ? detection_found(behind, rear, best_behind, lo_obj, hi_obj, since_obj) : detection_clear(behind)) < 0)
+        return NULL;
+    Py_RETURN_NONE;
+}
+
 static int intern_loop_names(void)
 {
     struct { PyObject **slot; const char *name; } names[] = {
@@ -1628,14 +1743,16 @@ static int intern_loop_names(void)
         {&s_lane_leader_now, "lane_leader_now"}, {&s_reference, "reference"}, {&s_speed_ref, "speed_ref"},
         {&s_s_ref, "s_ref"}, {&s_ds_ref, "ds_ref"}, {&s_d_ref, "d_ref"}, {&s_dd_ref, "dd_ref"},
         {&s_lane_offset, "lane_offset"}, {&s_inside_since, "_inside_since"}, {&s_check_done, "check_done"},
-        {&s_t, "t"}, {&s_s0, "s0"}, {&s_accel, "accel"},
+        {&s_t, "t"}, {&s_s0, "s0"}, {&s_accel, "accel"}, {&s_lo_, "_lo"}, {&s_hi_, "_hi"},
+        {&s_since_, "_since"}, {&str_empty, ""},
     };
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
         *names[i].slot = PyUnicode_InternFromString(names[i].name);
         if (!*names[i].slot) return -1;
     }
     float_zero = PyFloat_FromDouble(0.0);
-    return float_zero ? 0 : -1;
+    float_inf = PyFloat_FromDouble(Py_HUGE_VAL);
+    return float_zero && float_inf ? 0 : -1;
 }
 
 #define FASTCALL(name, doc) {#name, (PyCFunction)(void (*)(void))name, METH_FASTCALL, doc}
@@ -1656,6 +1773,9 @@ static PyMethodDef methods[] = {
     FASTCALL(trace_write, "trace_write(rows, width, signals, fallback, sigs, values) -> None"),
     FASTCALL(road_frame, "road_frame(view) -> None (RoadSensor.frame)"),
     FASTCALL(look_between, "look_between(view, t) -> Collision | None (SurroundView.look)"),
+    FASTCALL(near, "near(objects, lo, hi, h, m) -> the objects within reach (SurroundSensor.scan's filter)"),
+    FASTCALL(nearest, "nearest(objects, lo, hi, e_lo, e_hi, since, ahead, behind) -> None "
+                      "(SurroundSensor._nearest)"),
     FASTCALL(plan_steady, "plan_steady(fallback, packed, ego_speed, man, safety, obs, t) -> None "
                           "(EvasiveManoeuvre.plan)"),
     FASTCALL(place, "place(ids, rows, front, reach, straight, frame, previous, dt, rated, low_edge) -> "

@@ -523,3 +523,62 @@ def test_plan_steady_gives_the_python_plans_every_row(scenario, controller, over
     assert [(e.t, e.kind, e.text) for e in c_run.events] == [(e.t, e.kind, e.text) for e in py_run.events]
     assert len(py_calls) >= c_run.metrics["steps"]  # every period went to Python there
     assert 0 < len(c_calls) < len(py_calls) / 2, (len(c_calls), len(py_calls))
+
+
+def test_near_and_nearest_match_the_sensors_python_search(monkeypatch):
+    # one scene, searched twice: through ego._native.near/nearest and through the Python
+    # loops of SurroundSensor.scan, _scan_lane and _nearest; every Detection to the bit
+    import ego.scenarios.sensor as sensor_module
+    from ego.lane_frame import LanePolyline
+    from ego.models import VehicleGeometry
+    from ego.scenarios.emergency_brake import EmergencyBrakeConfig
+    from ego.scenarios.motorway import SurroundView, ego_plant
+
+    config = EmergencyBrakeConfig()
+    geometry = VehicleGeometry()
+    lanes = {i: LanePolyline([(0.0, 3.2 * i), (3000.0, 3.2 * i)], 3.2, f"motorway_{i}") for i in range(3)}
+    fields = ("id", "gap", "speed", "accel", "_gap0", "_lo", "_hi", "_since")
+    rng = np.random.default_rng(5)
+
+    def search(rows, native: bool, t_scan: float, heading: float):
+        if not native:
+            monkeypatch.setattr(sensor_module, "_NEAR", None)
+            monkeypatch.setattr(sensor_module, "_NEAREST", None)
+        try:
+            plant = ego_plant(config, geometry, (300.0, 3.2 * config.ego_lane, 0.0))
+            view = SurroundView(config, geometry)
+            view.setup(None, lanes, plant)
+            sensor = view.sensor
+            sensor.sync(0.0, [f"v{i}" for i in range(len(rows))], rows)
+            sensor.scan(t_scan, 300.0 - geometry.cg_to_front, 3.2, heading)
+            found = [sensor.front, sensor.rear]
+            for lane in (0, 1, 2, 7):
+                pair = sensor_module.Detection(), sensor_module.Detection()
+                sensor.lane_neighbours(lane, *pair)
+                found.extend(pair)
+            return found, sensor._near
+        finally:
+            monkeypatch.undo()
+
+    seen = 0
+    for case in range(60):
+        n = int(rng.integers(0, 14))
+        rows = []
+        for _ in range(n):
+            x = 300.0 + rng.uniform(-60.0, 60.0)
+            y = rng.choice([0.0, 3.2, 6.4]) + rng.uniform(-1.8, 1.8)
+            yaw = rng.uniform(-0.3, 0.3)
+            rows.append((x, y, yaw, rng.uniform(0.0, 40.0), 4.5, 1.8))
+        if case % 3 == 1 and rows:  # two cars in one place: the first found is kept in both
+            rows.append(rows[-1])
+        if case % 7 == 3 and rows:  # a NaN position: every comparison with it False in both
+            rows[0] = (float("nan"), 3.2, 0.0, 20.0, 4.5, 1.8)
+        t_scan, heading = (0.0 if case % 2 else 0.05), float(rng.uniform(-0.2, 0.2))
+        c_found, c_near = search(rows, True, t_scan, heading)
+        py_found, py_near = search(rows, False, t_scan, heading)
+        assert [o[0] for o in c_near] == [o[0] for o in py_near], case
+        for a, b in zip(c_found, py_found, strict=True):
+            assert (a.id, repr(a._o)) == (b.id, repr(b._o)), case
+            assert _bits(getattr(a, f) for f in fields[1:]) == _bits(getattr(b, f) for f in fields[1:]), case
+        seen += sum(d._o is not None for d in c_found)
+    assert seen > 100  # the searches found something

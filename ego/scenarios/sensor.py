@@ -42,6 +42,10 @@ INF = math.inf
 _LOW_EDGE = itemgetter(1)  #: an object's rearmost extent along the lane: the sort key of a sync
 #: :meth:`SurroundSensor.sync_within` in C, or None
 _PLACE = None if NATIVE is None else NATIVE.place
+#: the search's loops in C (the same arithmetic): the filter of :meth:`SurroundSensor.scan`
+#: and ``_scan_lane``, and ``_nearest``
+_NEAR = None if NATIVE is None else NATIVE.near
+_NEAREST = None if NATIVE is None else NATIVE.nearest
 
 
 class Detection:
@@ -268,9 +272,12 @@ class SurroundSensor:
             # the vehicles that can reach across to the ego before the next SUMO step: the
             # ego moves sideways by less than `reach` (m), each of them by |v_d| * horizon
             lo, hi, h, m = ego[2], ego[3], self.horizon, self.reach
-            near = self._near = [
-                o for o in self._objects if o[4] + abs(o[6]) * h + m > lo and o[3] - abs(o[6]) * h - m < hi
-            ]
+            if _NEAR is not None and type(self._objects) is list:
+                near = self._near = _NEAR(self._objects, lo, hi, h, m)
+            else:
+                near = self._near = [
+                    o for o in self._objects if o[4] + abs(o[6]) * h + m > lo and o[3] - abs(o[6]) * h - m < hi
+                ]
         self._nearest(near, ego[2], ego[3], self.front, self.rear)
 
     def advance(self, t: float, s: float) -> None:
@@ -290,6 +297,9 @@ class SurroundSensor:
         lane, at the last scan."""
         since = self._t_scan - self._t_sync
         e_lo, e_hi = self._ego[0], self._ego[1]
+        if _NEAREST is not None and type(objects) is list:
+            _NEAREST(objects, lo, hi, e_lo, e_hi, since, ahead, behind)
+            return
         twice_mid = e_lo + e_hi
         best_ahead = best_behind = INF
         front = rear = None
@@ -317,7 +327,10 @@ class SurroundSensor:
         """The nearest vehicles ahead of and behind the ego overlapping ``band`` across the
         lane, at the last scan (kept for ``lane`` until the next)."""
         lo, hi, h = band[0], band[1], self.horizon
-        near = [o for o in self._objects if o[4] + abs(o[6]) * h > lo and o[3] - abs(o[6]) * h < hi]
+        if _NEAR is not None and type(self._objects) is list:
+            near = _NEAR(self._objects, lo, hi, h, 0.0)  # x + 0.0 compares as x
+        else:
+            near = [o for o in self._objects if o[4] + abs(o[6]) * h > lo and o[3] - abs(o[6]) * h < hi]
         found = self._lanes[lane] = (Detection(), Detection())
         self._nearest(near, lo, hi, *found)
         return found
