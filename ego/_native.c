@@ -14,10 +14,13 @@
  *    (BPPIDController._step_py, BPPIDAcc._update_py, RBFSMCController._network_py): their
  *    element-wise arithmetic here, numpy called for what numpy computes its own way (BLAS
  *    products, tanh, exp, einsum); sum_squares: numpy's pairwise sum of squares;
- *  - plant_step, trace_write, road_frame and look_between: the scenario loop's glue every
- *    control period (BicyclePlant.step, Trace.bind's writer, RoadSensor.frame,
- *    SurroundView.look between two SUMO steps), each handing what it does not cover to the
- *    Python code it stands for.
+ *  - plant_step, trace_write, road_frame, look_between and plan_steady: the scenario loop's
+ *    glue every control period (BicyclePlant.step, Trace.bind's writer, RoadSensor.frame,
+ *    SurroundView.look between two SUMO steps, EvasiveManoeuvre.plan in a period that
+ *    changes no state of the machine), each handing what it does not cover to the Python
+ *    code it stands for;
+ *  - near and nearest: the surround sensor's search at a look (SurroundSensor.scan's and
+ *    _scan_lane's filter, _nearest).
  *
  * The Python implementations stay the references: the tests require these kernels to agree
  * with them (and with scikit-fuzzy) on random inputs, to the bit. Compiled with
