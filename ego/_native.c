@@ -1378,6 +1378,13 @@ static int is_brake(PyObject *in_lane)
     return r;
 }
 
+/* *slot, or owner.name fetched into it once (a new reference the caller releases) */
+static PyObject *attr_once(PyObject **slot, PyObject *owner, PyObject *name)
+{
+    if (!*slot) *slot = PyObject_GetAttr(owner, name);
+    return *slot;
+}
+
 static PyObject *plan_steady(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
     if (nargs != 7) {
@@ -1401,7 +1408,7 @@ static PyObject *plan_steady(PyObject *self, PyObject *const *args, Py_ssize_t n
     Py_CLEAR(obj);
     if (phase == -1 && PyErr_Occurred()) return NULL;
     if (phase < 0 || phase > 3) goto python;
-    if (!(view = PyObject_GetAttr(man, s_view)) || !(in_lane = PyObject_GetAttr(man, s_in_lane))) goto done;
+    if (!(view = PyObject_GetAttr(man, s_view))) goto done;
     double ttc;
     if (phase == 0) { /* cruise: the trigger is Python's */
         if (get_double(view, P[PLAN_TRIGGER_FRONT] != 0.0 ? s_ttc_front : s_ttc_rear, &ttc) < 0) goto done;
@@ -1411,7 +1418,6 @@ static PyObject *plan_steady(PyObject *self, PyObject *const *args, Py_ssize_t n
     const int same_safety = obj == safety;
     Py_CLEAR(obj);
     if (!same_safety) { python = 1; goto done; }
-    if (!(sensor = PyObject_GetAttr(view, s_sensor)) || !(front = PyObject_GetAttr(sensor, s_front))) goto done;
     if (safety != Py_None) { /* SafetyLayer.update, while it stays off */
         if (!(obj = PyObject_GetAttr(safety, s_active))) goto done;
         const int active = PyObject_IsTrue(obj);
@@ -1420,6 +1426,7 @@ static PyObject *plan_steady(PyObject *self, PyObject *const *args, Py_ssize_t n
         if (active) { python = 1; goto done; }
         int braking_in_lane = 0;
         if (phase == 2) {
+            if (!attr_once(&in_lane, man, s_in_lane)) goto done;
             braking_in_lane = is_brake(in_lane);
             if (braking_in_lane == -2) goto done;
             if (braking_in_lane < 0) { python = 1; goto done; }
@@ -1428,7 +1435,8 @@ static PyObject *plan_steady(PyObject *self, PyObject *const *args, Py_ssize_t n
         if (get_double(view, s_ttc_front, &ttc_front) < 0) goto done;
         if (!(ttc_front >= P[PLAN_AEB_TTC] && !braking_in_lane && phase != 1)) {
             double gap, speed, accel, ds, limit;
-            if (get_double(front, s_gap, &gap) < 0 || get_double(front, s_speed, &speed) < 0
+            if (!attr_once(&sensor, view, s_sensor) || !attr_once(&front, sensor, s_front)
+                || get_double(front, s_gap, &gap) < 0 || get_double(front, s_speed, &speed) < 0
                 || get_double(front, s_accel, &accel) < 0 || get_double(view, s_ds, &ds) < 0
                 || get_double(man, s_limit, &limit) < 0)
                 goto done;
@@ -1444,6 +1452,7 @@ static PyObject *plan_steady(PyObject *self, PyObject *const *args, Py_ssize_t n
     /* a simulator step just came in a lane change: abort_lane_change(aeb=False) weighs a
      * braking one (Python's) */
     if (phase == 1 && P[PLAN_PER] != 0.0 && fmod(nearbyint(t / P[PLAN_DT]), P[PLAN_PER]) == 0.0) {
+        if (!attr_once(&in_lane, man, s_in_lane)) goto done;
         const int brake = is_brake(in_lane);
         if (brake == -2) goto done;
         if (brake != 0) { python = 1; goto done; }
@@ -1460,7 +1469,9 @@ static PyObject *plan_steady(PyObject *self, PyObject *const *args, Py_ssize_t n
         Py_CLEAR(obj);
         if (chosen) {
             double v_evade, trigger_s, trigger_t, s, gap, speed;
-            if (!(v_obj = PyObject_GetAttr(man, s_evade_speed))) goto done;
+            if (!attr_once(&sensor, view, s_sensor) || !attr_once(&front, sensor, s_front)
+                || !(v_obj = PyObject_GetAttr(man, s_evade_speed)))
+                goto done;
             v_evade = PyFloat_AsDouble(v_obj);
             if ((v_evade == -1.0 && PyErr_Occurred()) || get_double(man, s_trigger_s, &trigger_s) < 0
                 || get_double(man, s_trigger_t, &trigger_t) < 0 || get_double(view, s_s, &s) < 0)
@@ -1539,6 +1550,7 @@ static PyObject *plan_steady(PyObject *self, PyObject *const *args, Py_ssize_t n
             Py_DECREF(front_speed);
             if (!(s_ref_obj = PyFloat_FromDouble(s_ref))) goto done;
         } else { /* the in-lane manoeuvre's references */
+            if (!attr_once(&in_lane, man, s_in_lane)) goto done;
             PyObject *r = PyObject_CallMethodOneArg(in_lane, s_reference, man);
             if (!r) goto done;
             PyObject *seq = PySequence_Fast(r, "cannot unpack the in-lane reference");

@@ -233,8 +233,10 @@ class EvasiveManoeuvre:
             _PLAN_STEADY is None
             or type(self) is not EvasiveManoeuvre
             or type(view.sensor) is not SurroundSensor
-            or (safety is not None and (type(safety) is not SafetyLayer or safety.view is not view))
-            or (safety is not None and safety.manoeuvre is not self)
+            or (
+                safety is not None
+                and (type(safety) is not SafetyLayer or safety.view is not view or safety.manoeuvre is not self)
+            )
         ):
             return self.plan
         s = safety.config if safety is not None else c
