@@ -35,6 +35,16 @@ def test_loop_against_bare_sumo(tmp_path, monkeypatch):
     assert figures["control_steps"] == 9000
 
 
+def test_loop_parts():
+    from bench_loop_parts import main
+
+    figures = main(["--runs", "1"])
+    # every part was met in the run, the plan in each state through C and through Python
+    for part in ("controller", "simulationStep", "moveToXY", "period, between", "plan Python, lane change"):
+        assert figures[part] > 0.0
+    assert figures["plan as bound, lane change"] > 0.0
+
+
 def test_tuning_batch_against_the_per_member_loop():
     from bench_tune import main
 
