@@ -32,6 +32,11 @@
 #include <math.h>
 #include <string.h>
 
+/* numpy's C API (its headers at build time, setup.py): new arrays and their data without the
+ * buffer protocol, whose export costs as much as the rest of an env step's observation */
+#define NPY_NO_DEPRECATED_API NPY_1_7_API_VERSION
+#include <numpy/arrayobject.h>
+
 #include "_bicycle.h"
 
 static int read_doubles(PyObject *seq, double *out, Py_ssize_t n, const char *what)
@@ -469,42 +474,19 @@ static int value_of(PyObject *o, double *out)
     return as_double(o, out);
 }
 
-/* fill_obs(out, values, norm, const) -> None
- * EgoStateObservation.observe into ``out`` (a writable float64 buffer of len(values) +
- * len(const)): ``values`` the fields read this step, normalised by ``norm`` = (t, per_duration,
- * s, s_ref, tracks, s_ref0, s0, per_distance) (s, s_ref: indices, -1 for none) or None, then
- * ``const``, the fields that hold still over a run. */
-static PyObject *fill_obs(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+/* the fields of fill_obs into out[0 .. n + m) (n = len(values), m = len(cst)) */
+static int fill_fields(double *out, PyObject *values, PyObject *norm, PyObject *cst)
 {
-    if (nargs != 4 || !PyTuple_Check(args[1])) {
-        PyErr_SetString(PyExc_TypeError, "fill_obs(out, values: tuple, norm, const)");
-        return NULL;
-    }
-    PyObject *values = args[1], *norm = args[2];
-    PyObject *cst = PySequence_Fast(args[3], "fill_obs: const must be a sequence");
-    if (!cst) return NULL;
     const Py_ssize_t n = PyTuple_GET_SIZE(values), m = PySequence_Fast_GET_SIZE(cst);
-    Py_buffer view;
-    if (PyObject_GetBuffer(args[0], &view, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
-        Py_DECREF(cst);
-        return NULL;
-    }
-    PyObject *result = NULL;
-    double *out = (double *)view.buf;
-    if (view.len != (n + m) * (Py_ssize_t)sizeof(double)) {
-        PyErr_Format(PyExc_ValueError, "fill_obs: out holds %zd bytes, the fields %zd", view.len,
-                     (n + m) * (Py_ssize_t)sizeof(double));
-        goto done;
-    }
     for (Py_ssize_t i = 0; i < n; i++)
-        if (value_of(PyTuple_GET_ITEM(values, i), out + i)) goto done;
+        if (value_of(PyTuple_GET_ITEM(values, i), out + i)) return -1;
     if (norm != Py_None) {
         double p[8];
-        if (read_doubles(norm, p, 8, "norm")) goto done;
+        if (read_doubles(norm, p, 8, "norm")) return -1;
         const Py_ssize_t t = (Py_ssize_t)p[0], si = (Py_ssize_t)p[2], ri = (Py_ssize_t)p[3];
         if (t < 0 || t >= n || si >= n || ri >= n || (si >= 0 && p[4] != 0.0 && ri < 0)) {
             PyErr_SetString(PyExc_ValueError, "fill_obs: norm's indices out of range");
-            goto done;
+            return -1;
         }
         out[t] *= p[1];
         if (si >= 0) {
@@ -518,39 +500,86 @@ static PyObject *fill_obs(PyObject *self, PyObject *const *args, Py_ssize_t narg
     }
     PyObject **items = PySequence_Fast_ITEMS(cst);
     for (Py_ssize_t i = 0; i < m; i++)
-        if (value_of(items[i], out + n + i)) goto done;
-    result = Py_None;
-    Py_INCREF(result);
-done:
-    PyBuffer_Release(&view);
+        if (value_of(items[i], out + n + i)) return -1;
+    return 0;
+}
+
+/* an ndarray's own float64 data to write in place (C-contiguous, aligned, writable, native
+ * byte order), or NULL for anything else */
+static double *own_doubles(PyObject *o)
+{
+    if (!PyArray_Check(o)) return NULL;
+    PyArrayObject *a = (PyArrayObject *)o;
+    if (PyArray_TYPE(a) != NPY_DOUBLE || !PyArray_ISCARRAY(a) || !PyArray_ISNOTSWAPPED(a)) return NULL;
+    return (double *)PyArray_DATA(a);
+}
+
+/* fill_obs(out, values, norm, const) -> None
+ * EgoStateObservation.observe into ``out`` (a writable float64 buffer of len(values) +
+ * len(const)): ``values`` the fields read this step, normalised by ``norm`` = (t, per_duration,
+ * s, s_ref, tracks, s_ref0, s0, per_distance) (s, s_ref: indices, -1 for none) or None, then
+ * ``const``, the fields that hold still over a run. */
+static PyObject *fill_obs(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 4 || !PyTuple_Check(args[1])) {
+        PyErr_SetString(PyExc_TypeError, "fill_obs(out, values: tuple, norm, const)");
+        return NULL;
+    }
+    PyObject *cst = PySequence_Fast(args[3], "fill_obs: const must be a sequence");
+    if (!cst) return NULL;
+    const Py_ssize_t size = PyTuple_GET_SIZE(args[1]) + PySequence_Fast_GET_SIZE(cst);
+    Py_buffer view;
+    view.obj = NULL;
+    double *out = own_doubles(args[0]);
+    Py_ssize_t len = out ? PyArray_NBYTES((PyArrayObject *)args[0]) : 0;
+    if (!out) {
+        if (PyObject_GetBuffer(args[0], &view, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
+            Py_DECREF(cst);
+            return NULL;
+        }
+        out = (double *)view.buf;
+        len = view.len;
+    }
+    PyObject *result = NULL;
+    if (len != size * (Py_ssize_t)sizeof(double))
+        PyErr_Format(PyExc_ValueError, "fill_obs: out holds %zd bytes, the fields %zd", len,
+                     size * (Py_ssize_t)sizeof(double));
+    else if (fill_fields(out, args[1], args[2], cst) == 0)
+        result = Py_NewRef(Py_None);
+    if (view.obj) PyBuffer_Release(&view);
     Py_DECREF(cst);
     return result;
 }
 
-/* observe(empty, size, get, source, norm, const) -> array
- * EgoStateObservation.observe in one call (an env step's hot path): ``out = empty(size)``
- * (numpy.empty: a new float64 array), then fill_obs(out, get(source), norm, const). */
+/* observe(size, get, source, norm, const) -> array
+ * EgoStateObservation.observe in one call (an env step's hot path): a new float64 array of
+ * ``size`` (what numpy.empty(size) gives) filled as fill_obs(out, get(source), norm, const). */
 static PyObject *observe(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
-    if (nargs != 6) {
-        PyErr_SetString(PyExc_TypeError, "observe(empty, size, get, source, norm, const)");
+    if (nargs != 5) {
+        PyErr_SetString(PyExc_TypeError, "observe(size, get, source, norm, const)");
         return NULL;
     }
-    PyObject *values = PyObject_CallOneArg(args[2], args[3]);
-    if (!values) return NULL;
-    PyObject *out = PyObject_CallOneArg(args[0], args[1]);
-    if (!out) {
-        Py_DECREF(values);
+    npy_intp dims[1];
+    dims[0] = PyLong_AsSsize_t(args[0]);
+    if (dims[0] < 0) {
+        if (!PyErr_Occurred()) PyErr_SetString(PyExc_ValueError, "observe: size must be >= 0");
         return NULL;
     }
-    PyObject *const fill_args[4] = {out, values, args[4], args[5]};
-    PyObject *done = fill_obs(self, fill_args, 4);
-    Py_DECREF(values);
-    if (!done) {
-        Py_DECREF(out);
-        return NULL;
+    PyObject *cst = PySequence_Fast(args[4], "observe: const must be a sequence");
+    if (!cst) return NULL;
+    PyObject *values = PyObject_CallOneArg(args[1], args[2]);
+    PyObject *out = NULL;
+    if (!values) goto done;
+    if (!PyTuple_Check(values) || PyTuple_GET_SIZE(values) + PySequence_Fast_GET_SIZE(cst) != dims[0]) {
+        PyErr_SetString(PyExc_ValueError, "observe: get(source) must give a tuple of size - len(const) fields");
+        goto done;
     }
-    Py_DECREF(done);
+    out = PyArray_SimpleNew(1, dims, NPY_DOUBLE);
+    if (out && fill_fields((double *)PyArray_DATA((PyArrayObject *)out), values, args[3], cst)) Py_CLEAR(out);
+done:
+    Py_XDECREF(values);
+    Py_DECREF(cst);
     return out;
 }
 
@@ -582,23 +611,42 @@ static PyObject *command(PyObject *self, PyObject *const *args, Py_ssize_t nargs
         PyErr_SetString(PyExc_ValueError, "command: n must be 1 or 2");
         return NULL;
     }
-    Py_buffer view;
-    if (!PyObject_CheckBuffer(action) || PyObject_GetBuffer(action, &view, PyBUF_RECORDS_RO) < 0) {
-        PyErr_Clear();
-        return PyObject_CallOneArg(fallback, action);
-    }
-    const char *fmt = view.format;
-    const int f32 = fmt && strcmp(fmt, "f") == 0, f64 = fmt && strcmp(fmt, "d") == 0;
-    if (view.ndim != 1 || view.shape[0] != n || !(f32 || f64)) {
-        PyBuffer_Release(&view);
-        return PyObject_CallOneArg(fallback, action);
-    }
     double x[2];
-    for (long i = 0; i < n; i++) {
-        const char *at = (const char *)view.buf + i * view.strides[0];
-        x[i] = f32 ? (double)*(const float *)at : *(const double *)at;
+    if (PyArray_Check(action)) { /* an ndarray: its data read directly */
+        PyArrayObject *a = (PyArrayObject *)action;
+        const int type = PyArray_TYPE(a);
+        if (PyArray_NDIM(a) != 1 || PyArray_DIM(a, 0) != n || !(type == NPY_FLOAT || type == NPY_DOUBLE) ||
+            !PyArray_ISNOTSWAPPED(a))
+            return PyObject_CallOneArg(fallback, action);
+        const char *data = PyArray_BYTES(a);
+        const npy_intp stride = PyArray_STRIDE(a, 0);
+        for (long i = 0; i < n; i++) {
+            if (type == NPY_FLOAT) {
+                float v;
+                memcpy(&v, data + i * stride, sizeof v);
+                x[i] = (double)v;
+            } else {
+                memcpy(x + i, data + i * stride, sizeof(double));
+            }
+        }
+    } else { /* another buffer: its format read */
+        Py_buffer view;
+        if (!PyObject_CheckBuffer(action) || PyObject_GetBuffer(action, &view, PyBUF_RECORDS_RO) < 0) {
+            PyErr_Clear();
+            return PyObject_CallOneArg(fallback, action);
+        }
+        const char *fmt = view.format;
+        const int f32 = fmt && strcmp(fmt, "f") == 0, f64 = fmt && strcmp(fmt, "d") == 0;
+        if (view.ndim != 1 || view.shape[0] != n || !(f32 || f64)) {
+            PyBuffer_Release(&view);
+            return PyObject_CallOneArg(fallback, action);
+        }
+        for (long i = 0; i < n; i++) {
+            const char *at = (const char *)view.buf + i * view.strides[0];
+            x[i] = f32 ? (double)*(const float *)at : *(const double *)at;
+        }
+        PyBuffer_Release(&view);
     }
-    PyBuffer_Release(&view);
     if (scaled) {
         for (long i = 0; i < n; i++) {
             if (clip && isfinite(x[i])) x[i] = x[i] < -1.0 ? -1.0 : (x[i] > 1.0 ? 1.0 : x[i]); /* NaN, inf: the env ends the run */
@@ -653,13 +701,17 @@ static PyObject *reward(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
     return Py_BuildValue("(dN)", r, terms);
 }
 
-/* reward_of(signals, rate, params, crashed) -> (reward, terms)
- * reward() of signals() = (speed, error, a_lon, a_lat), a_lon None standing for rate(speed):
- * an env step's reward in one call (ego.gym.env.EgoView.bind_reward). */
+/* reward_of(signals, obs, prev, params, crashed) -> (reward, terms)
+ * reward() of signals() = (speed, error, a_lon, a_lat): an env step's reward in one call
+ * (ego.gym.env.EgoView.bind_reward). a_lon None stands for the rate of the speed since the
+ * last call, EgoView._rate's: (speed - ds0) / (t - t0) if t > t0 else 0, t = obs.t, with
+ * prev = [t0, ds0] (a list) set to [t, speed]. */
+static PyObject *s_t_obs;
+
 static PyObject *reward_of(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
-    if (nargs != 4) {
-        PyErr_SetString(PyExc_TypeError, "reward_of(signals, rate, params, crashed)");
+    if (nargs != 5 || !PyList_Check(args[2]) || PyList_GET_SIZE(args[2]) != 2) {
+        PyErr_SetString(PyExc_TypeError, "reward_of(signals, obs, prev: [t0, ds0], params, crashed)");
         return NULL;
     }
     PyObject *sig = PyObject_CallNoArgs(args[0]);
@@ -669,20 +721,26 @@ static PyObject *reward_of(PyObject *self, PyObject *const *args, Py_ssize_t nar
         Py_DECREF(sig);
         return NULL;
     }
-    PyObject *a_lon = PyTuple_GET_ITEM(sig, 2);
+    PyObject *speed = PyTuple_GET_ITEM(sig, 0), *a_lon = PyTuple_GET_ITEM(sig, 2), *out = NULL;
     Py_INCREF(a_lon);
     if (a_lon == Py_None) {
-        Py_DECREF(a_lon);
-        a_lon = PyObject_CallOneArg(args[1], PyTuple_GET_ITEM(sig, 0));
-        if (!a_lon) {
-            Py_DECREF(sig);
-            return NULL;
+        PyObject *prev = args[2], *t = PyObject_GetAttr(args[1], s_t_obs);
+        double v, t1, t0, ds0;
+        if (!t || as_double(t, &t1) || as_double(PyList_GET_ITEM(prev, 0), &t0) ||
+            as_double(PyList_GET_ITEM(prev, 1), &ds0) || as_double(speed, &v)) {
+            Py_XDECREF(t);
+            goto done;
         }
+        PyList_SetItem(prev, 0, t); /* steals t */
+        PyList_SetItem(prev, 1, Py_NewRef(speed));
+        Py_SETREF(a_lon, PyFloat_FromDouble(t1 > t0 ? (v - ds0) / (t1 - t0) : 0.0));
+        if (!a_lon) goto done;
     }
-    PyObject *const reward_args[6] = {PyTuple_GET_ITEM(sig, 0), PyTuple_GET_ITEM(sig, 1), a_lon,
-                                      PyTuple_GET_ITEM(sig, 3), args[3], args[2]};
-    PyObject *out = reward(self, reward_args, 6);
-    Py_DECREF(a_lon);
+    PyObject *const reward_args[6] = {speed, PyTuple_GET_ITEM(sig, 1), a_lon, PyTuple_GET_ITEM(sig, 3), args[4],
+                                      args[3]};
+    out = reward(self, reward_args, 6);
+done:
+    Py_XDECREF(a_lon);
     Py_DECREF(sig);
     return out;
 }
@@ -1815,7 +1873,10 @@ PyMODINIT_FUNC PyInit__native(void)
     key_progress = PyUnicode_InternFromString("progress");
     key_centring = PyUnicode_InternFromString("centring");
     key_discomfort = PyUnicode_InternFromString("discomfort");
+    s_t_obs = PyUnicode_InternFromString("t");
+    if (!s_t_obs) return NULL;
     if (!key_crashed || !key_progress || !key_centring || !key_discomfort) return NULL;
     if (intern_loop_names() < 0) return NULL;
+    import_array(); /* numpy's C API: returns NULL with numpy's error when it cannot */
     return PyModule_Create(&module);
 }

@@ -244,6 +244,25 @@ def test_fill_obs_gives_the_python_observation_of_every_env(normalize, tmp_path,
             env.close()
 
 
+def test_fill_obs_writes_an_ndarray_and_any_other_float64_buffer_alike():
+    values, const = (12.0, None, 3.5, -0.25, 800.0), [2.0, 1.5]
+    norm = (0, 0.05, 4, 1, 1.0, 10.0, 0.0, 0.01)  # t scaled; s -= s_ref; s_ref from its start
+    array = np.full(7, 9.0)
+    NATIVE.fill_obs(array, values, norm, const)
+    buffer = memoryview(bytearray(7 * 8)).cast("d")
+    NATIVE.fill_obs(buffer, values, norm, const)
+    expected = [12.0 * 0.05, float("nan"), 3.5, -0.25, 800.0 - float("nan"), 2.0, 1.5]
+    assert _bits(array) == _bits(buffer.tolist())
+    assert _bits(array)[:4] == _bits(expected)[:4] and np.isnan(array[4]) and array[5:].tolist() == const
+    out = NATIVE.observe(7, lambda o: o, values, norm, const)
+    assert out.dtype == np.float64 and out.flags.c_contiguous and _bits(out) == _bits(array)
+    for bad in (np.zeros(6), np.zeros(7, np.float32), np.zeros(14)[::2]):
+        with pytest.raises((ValueError, BufferError)):
+            NATIVE.fill_obs(bad, values, norm, const)
+    with pytest.raises(ValueError, match="size - len"):
+        NATIVE.observe(8, lambda o: o, values, norm, const)
+
+
 def test_reward_matches_the_python_reward_including_non_finite_signals():
     import ego.gym.env as env_module
     from ego.gym.env import EnvConfig, Reward

@@ -32,7 +32,7 @@ def test_a_wheel_installed_elsewhere_runs_a_scenario(tmp_path):
     ignore = shutil.ignore_patterns("__pycache__", "*.so", "*.rrd")
     for folder in ("ego", "sumo_nets"):
         shutil.copytree(ROOT / folder, src / folder, ignore=ignore)
-    for name in ("pyproject.toml", "README.md"):
+    for name in ("pyproject.toml", "setup.py", "README.md"):
         shutil.copy(ROOT / name, src / name)
     pip = [sys.executable, "-m", "pip", "--disable-pip-version-check", "-q"]
     subprocess.run(

@@ -157,6 +157,7 @@ class EgoView:
         self._vid = vid
         self._sensor: SurroundSensor | None = None
         self._looked = -1
+        self._prev = [0.0, 0.0]  # (t, speed along the lane) at the last reward: _rate
 
     @property
     def agent(self) -> str:
@@ -217,20 +218,19 @@ class EgoView:
     def _rate(self, speed: float) -> float:
         """The rate of the speed along the lane since the last call (m/s^2)."""
         t = self._obs.t  # the time the observation was taken
-        t0, ds0 = self._prev
-        self._prev = (t, speed)
+        prev = self._prev  # [t0, ds0], updated in place (the bound reward holds it)
+        t0, ds0 = prev
+        prev[0], prev[1] = t, speed
         return (speed - ds0) / (t - t0) if t > t0 else 0.0
-
-    _prev = (0.0, 0.0)
 
     def bind_reward(self, reward: Reward) -> Callable[[bool], tuple[float, dict]]:
         """``reward(self, crashed)`` as a function of ``crashed`` until the run ends (bound
         after :meth:`reset`): the env step's hot path, one call into C where the reference
-        makes four (``ego._native.reward_of``: the scenario's signals reader, :meth:`_rate`
-        where it measures no longitudinal acceleration, :class:`Reward`'s arithmetic)."""
+        makes four (``ego._native.reward_of``: the scenario's signals reader, :meth:`_rate`'s
+        arithmetic where it measures no longitudinal acceleration, :class:`Reward`'s)."""
         if _REWARD_OF is None:
             return functools.partial(reward, self)
-        return functools.partial(_REWARD_OF, self._signals, self._rate, reward._params)
+        return functools.partial(_REWARD_OF, self._signals, self._obs, self._prev, reward._params)
 
     def reset(self) -> None:
         sc = self.scenario
@@ -239,7 +239,7 @@ class EgoView:
         agent = self.agent
         self._obs = sc.observation(agent)
         self._signals = _signals_reader(sc, agent)
-        self._prev = (sc.t, self._signals()[0])
+        self._prev = [sc.t, self._signals()[0]]
         self._looked = -1
         self._sensor = None
 
@@ -755,7 +755,7 @@ class EgoEnv(gym.Env):
             "render_mode": self.render_mode,
             "np_random": self._np_random,
             "spec": self.spec,
-            "run": (sc.seed, list(self._history), self._view._prev, self._elapsed) if running else None,
+            "run": (sc.seed, list(self._history), tuple(self._view._prev), self._elapsed) if running else None,
         }
 
     def __setstate__(self, state: dict) -> None:
@@ -769,7 +769,7 @@ class EgoEnv(gym.Env):
             apply = self._apply
             for command in history:  # same seed, same commands: the same run (determinism)
                 apply(command)
-            self._view._prev, self._elapsed = prev, elapsed
+            self._view._prev[:], self._elapsed = prev, elapsed  # in place: the bound reward holds it
         self._np_random = state["np_random"]
         self.config = copy.deepcopy(state.get("pending", self.config))
 

@@ -188,7 +188,7 @@ class EgoStateObservation(_ObservationType):
         """:meth:`observe` of ``view`` as a function of nothing until the run ends (bound after
         :meth:`reset`): the env step's hot path, one call into C where the extension is built."""
         if self._fill is not None and _OBSERVE is not None:
-            return functools.partial(_OBSERVE, _empty, self._size, self._get, self._source, self._norm, self._const)
+            return functools.partial(_OBSERVE, self._size, self._get, self._source, self._norm, self._const)
         return functools.partial(self.observe, view)
 
     def observe(self, view) -> np.ndarray:

@@ -53,10 +53,13 @@ def test_the_bound_command_is_native_value_for_value(action_type):
     rows = [np.array(rng.choice(VALUES, n)) for _ in range(200)] + [rng.uniform(-2, 2, n) for _ in range(200)]
     for row in rows:
         for dtype in (np.float32, np.float64):
-            x = row.astype(dtype)
-            assert _same(bound(x), action_type.native(x)), (x, bound(x), action_type.native(x))
+            # native byte order (read in C) and swapped (the Python reference's)
+            for x in (row.astype(dtype), row.astype(np.dtype(dtype).newbyteorder())):
+                assert _same(bound(x), action_type.native(x)), (x, bound(x), action_type.native(x))
         strided = np.repeat(row, 2)[::2]  # a view with a stride of two elements
         assert _same(bound(strided), action_type.native(strided))
+        buffer = memoryview(row.astype(np.float64))  # a buffer that is no ndarray: its format read
+        assert _same(bound(buffer), action_type.native(buffer))
         assert _same(bound(list(row)), action_type.native(list(row)))  # the fallback
     for bad in (np.zeros((1, n)), np.zeros(n + 1), "x", None, np.zeros(n, dtype=np.int64)):
         try:
