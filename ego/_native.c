@@ -5,8 +5,10 @@
  *    arithmetic, term for term, as NonlinearBicycle.rhs + ego.models.integrate.unrolled_rk4;
  *  - mamdani2: the closed-form Mamdani centroid of ego.control.fuzzy_engine for two inputs
  *    and one output (FastMamdani.single2);
- *  - fill_obs and reward: ego.gym's EgoState observation vector and default reward
- *    (EgoStateObservation.observe, Reward.__call__);
+ *  - fill_obs, observe, command, reward, reward_of and env_step: ego.gym's EgoState
+ *    observation vector, continuous action and default reward (EgoStateObservation.observe,
+ *    ContinuousAction.native, Reward.__call__), and EgoEnv._step for an env step that ends
+ *    nothing, handing the rest to the Python step;
  *  - boxes and place: the surround sensor's reading of a SUMO step, as
  *    SumoBridge.surroundings (the context subscription's vehicles as boxes) and
  *    SurroundSensor.sync (each box placed in the lane frame) compute it;
@@ -474,12 +476,21 @@ static int value_of(PyObject *o, double *out)
     return as_double(o, out);
 }
 
-/* the fields of fill_obs into out[0 .. n + m) (n = len(values), m = len(cst)) */
-static int fill_fields(double *out, PyObject *values, PyObject *norm, PyObject *cst)
+/* the fields of fill_obs into out[0 .. n + m) (n = len(values), m = len(cst)); source not
+ * NULL: values is a tuple of attribute names, each field read from source */
+static int fill_fields(double *out, PyObject *values, PyObject *source, PyObject *norm, PyObject *cst)
 {
     const Py_ssize_t n = PyTuple_GET_SIZE(values), m = PySequence_Fast_GET_SIZE(cst);
-    for (Py_ssize_t i = 0; i < n; i++)
-        if (value_of(PyTuple_GET_ITEM(values, i), out + i)) return -1;
+    for (Py_ssize_t i = 0; i < n; i++) {
+        if (!source) {
+            if (value_of(PyTuple_GET_ITEM(values, i), out + i)) return -1;
+            continue;
+        }
+        PyObject *v = PyObject_GetAttr(source, PyTuple_GET_ITEM(values, i));
+        const int bad = !v || value_of(v, out + i);
+        Py_XDECREF(v);
+        if (bad) return -1;
+    }
     if (norm != Py_None) {
         double p[8];
         if (read_doubles(norm, p, 8, "norm")) return -1;
@@ -544,7 +555,7 @@ static PyObject *fill_obs(PyObject *self, PyObject *const *args, Py_ssize_t narg
     if (len != size * (Py_ssize_t)sizeof(double))
         PyErr_Format(PyExc_ValueError, "fill_obs: out holds %zd bytes, the fields %zd", len,
                      size * (Py_ssize_t)sizeof(double));
-    else if (fill_fields(out, args[1], args[2], cst) == 0)
+    else if (fill_fields(out, args[1], NULL, args[2], cst) == 0)
         result = Py_NewRef(Py_None);
     if (view.obj) PyBuffer_Release(&view);
     Py_DECREF(cst);
@@ -553,7 +564,9 @@ static PyObject *fill_obs(PyObject *self, PyObject *const *args, Py_ssize_t narg
 
 /* observe(size, get, source, norm, const) -> array
  * EgoStateObservation.observe in one call (an env step's hot path): a new float64 array of
- * ``size`` (what numpy.empty(size) gives) filled as fill_obs(out, get(source), norm, const). */
+ * ``size`` (what numpy.empty(size) gives) filled as fill_obs(out, get(source), norm, const);
+ * ``get`` a tuple of attribute names (str) reads those attributes of source, as
+ * operator.attrgetter(*get) would, without building the tuple. */
 static PyObject *observe(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
     if (nargs != 5) {
@@ -568,7 +581,8 @@ static PyObject *observe(PyObject *self, PyObject *const *args, Py_ssize_t nargs
     }
     PyObject *cst = PySequence_Fast(args[4], "observe: const must be a sequence");
     if (!cst) return NULL;
-    PyObject *values = PyObject_CallOneArg(args[1], args[2]);
+    const int names = PyTuple_Check(args[1]);
+    PyObject *values = names ? Py_NewRef(args[1]) : PyObject_CallOneArg(args[1], args[2]);
     PyObject *out = NULL;
     if (!values) goto done;
     if (!PyTuple_Check(values) || PyTuple_GET_SIZE(values) + PySequence_Fast_GET_SIZE(cst) != dims[0]) {
@@ -576,7 +590,8 @@ static PyObject *observe(PyObject *self, PyObject *const *args, Py_ssize_t nargs
         goto done;
     }
     out = PyArray_SimpleNew(1, dims, NPY_DOUBLE);
-    if (out && fill_fields((double *)PyArray_DATA((PyArrayObject *)out), values, args[3], cst)) Py_CLEAR(out);
+    if (out && fill_fields((double *)PyArray_DATA((PyArrayObject *)out), values, names ? args[2] : NULL, args[3], cst))
+        Py_CLEAR(out);
 done:
     Py_XDECREF(values);
     Py_DECREF(cst);
@@ -653,9 +668,22 @@ static PyObject *command(PyObject *self, PyObject *const *args, Py_ssize_t nargs
             x[i] = c[2 * i] + c[2 * i + 1] * x[i];
         }
     }
-    if (n == 2) return Py_BuildValue("(dd)", scaled ? x[0] * c[4] : x[0], x[1]);
-    if (lon) return Py_BuildValue("(dO)", scaled ? x[0] * c[4] : x[0], Py_None);
-    return Py_BuildValue("(Od)", Py_None, x[0]);
+    PyObject *out = PyTuple_New(2), *first, *second;
+    if (!out) return NULL;
+    if (n == 2) {
+        first = PyFloat_FromDouble(scaled ? x[0] * c[4] : x[0]);
+        second = PyFloat_FromDouble(x[1]);
+    } else if (lon) {
+        first = PyFloat_FromDouble(scaled ? x[0] * c[4] : x[0]);
+        second = Py_NewRef(Py_None);
+    } else {
+        first = Py_NewRef(Py_None);
+        second = PyFloat_FromDouble(x[0]);
+    }
+    PyTuple_SET_ITEM(out, 0, first);
+    PyTuple_SET_ITEM(out, 1, second);
+    if (!first || !second) Py_CLEAR(out);
+    return out;
 }
 
 /* reward(speed, error, a_lon, a_lat, crashed, params) -> (reward, terms)
@@ -664,41 +692,67 @@ static PyObject *command(PyObject *self, PyObject *const *args, Py_ssize_t nargs
  * "discomfort"}; a non-finite term counts 0 in the reward (a diverged ego's signals). */
 static PyObject *key_crashed, *key_progress, *key_centring, *key_discomfort;
 
-static PyObject *reward(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+/* reward's arithmetic: the reward into *r, the terms dict returned (NULL on error) */
+static PyObject *reward_terms(double speed, double error, double a_lon, double a_lat, int crashed, const double *p,
+                              double *r)
 {
-    if (nargs != 6) {
-        PyErr_SetString(PyExc_TypeError, "reward(speed, error, a_lon, a_lat, crashed, params)");
-        return NULL;
-    }
-    double speed, error, a_lon, a_lat, p[8];
-    if (as_double(args[0], &speed) || as_double(args[1], &error) || as_double(args[2], &a_lon) ||
-        as_double(args[3], &a_lat) || read_doubles(args[5], p, 8, "params"))
-        return NULL;
-    const int crashed = PyObject_IsTrue(args[4]);
-    if (crashed < 0) return NULL;
     double progress = (speed - p[0]) * p[1];
     progress = progress < 0.0 ? 0.0 : (progress > 1.0 ? 1.0 : progress);
     double centring = 1.0 / (1.0 + p[2] * error * error);
     double discomfort = (a_lon * a_lon + a_lat * a_lat) * p[3];
     if (discomfort > 1.0) discomfort = 1.0;
     const double crash = crashed ? 1.0 : 0.0;
-    double r = p[4] * crash + p[5] * progress + p[6] * centring + p[7] * discomfort;
-    if (r - r != 0.0) {
+    *r = p[4] * crash + p[5] * progress + p[6] * centring + p[7] * discomfort;
+    if (*r - *r != 0.0) {
         if (!isfinite(progress)) progress = 0.0;
         if (!isfinite(centring)) centring = 0.0;
         if (!isfinite(discomfort)) discomfort = 0.0;
-        r = p[4] * crash + p[5] * progress + p[6] * centring + p[7] * discomfort;
+        *r = p[4] * crash + p[5] * progress + p[6] * centring + p[7] * discomfort;
     }
-    PyObject *terms = PyDict_New();
+    PyObject *terms = _PyDict_NewPresized(4);
     if (!terms) return NULL;
     const double values[4] = {crash, progress, centring, discomfort};
     PyObject *keys[4] = {key_crashed, key_progress, key_centring, key_discomfort};
     for (int k = 0; k < 4; k++) {
         PyObject *v = PyFloat_FromDouble(values[k]);
-        if (!v || PyDict_SetItem(terms, keys[k], v)) { Py_XDECREF(v); Py_DECREF(terms); return NULL; }
+        if (!v || PyDict_SetItem(terms, keys[k], v)) {
+            Py_XDECREF(v);
+            Py_DECREF(terms);
+            return NULL;
+        }
         Py_DECREF(v);
     }
-    return Py_BuildValue("(dN)", r, terms);
+    return terms;
+}
+
+/* (reward, terms) as a new tuple; terms stolen (NULL: an error already set) */
+static PyObject *reward_pair(double r, PyObject *terms)
+{
+    if (!terms) return NULL;
+    PyObject *out = PyTuple_New(2), *value = out ? PyFloat_FromDouble(r) : NULL;
+    if (!value) {
+        Py_XDECREF(out);
+        Py_DECREF(terms);
+        return NULL;
+    }
+    PyTuple_SET_ITEM(out, 0, value);
+    PyTuple_SET_ITEM(out, 1, terms);
+    return out;
+}
+
+static PyObject *reward(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 6) {
+        PyErr_SetString(PyExc_TypeError, "reward(speed, error, a_lon, a_lat, crashed, params)");
+        return NULL;
+    }
+    double speed, error, a_lon, a_lat, p[8], r;
+    if (as_double(args[0], &speed) || as_double(args[1], &error) || as_double(args[2], &a_lon) ||
+        as_double(args[3], &a_lat) || read_doubles(args[5], p, 8, "params"))
+        return NULL;
+    const int crashed = PyObject_IsTrue(args[4]);
+    if (crashed < 0) return NULL;
+    return reward_pair(r, reward_terms(speed, error, a_lon, a_lat, crashed, p, &r));
 }
 
 /* reward_of(signals, obs, prev, params, crashed) -> (reward, terms)
@@ -708,40 +762,170 @@ static PyObject *reward(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
  * prev = [t0, ds0] (a list) set to [t, speed]. */
 static PyObject *s_t_obs;
 
-static PyObject *reward_of(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+/* reward_of's work on args = (signals, obs, prev, params, crashed): the reward into *r, the
+ * terms returned */
+static PyObject *reward_of_terms(PyObject *const *args, double *r)
 {
-    if (nargs != 5 || !PyList_Check(args[2]) || PyList_GET_SIZE(args[2]) != 2) {
+    if (!PyList_Check(args[2]) || PyList_GET_SIZE(args[2]) != 2) {
         PyErr_SetString(PyExc_TypeError, "reward_of(signals, obs, prev: [t0, ds0], params, crashed)");
         return NULL;
     }
+    double p[8], x[4];
+    const int crashed = PyObject_IsTrue(args[4]);
+    if (crashed < 0 || read_doubles(args[3], p, 8, "params")) return NULL;
     PyObject *sig = PyObject_CallNoArgs(args[0]);
     if (!sig) return NULL;
+    PyObject *out = NULL;
     if (!PyTuple_Check(sig) || PyTuple_GET_SIZE(sig) != 4) {
         PyErr_SetString(PyExc_TypeError, "reward_of: signals() must give (speed, error, a_lon, a_lat)");
-        Py_DECREF(sig);
-        return NULL;
+        goto done;
     }
-    PyObject *speed = PyTuple_GET_ITEM(sig, 0), *a_lon = PyTuple_GET_ITEM(sig, 2), *out = NULL;
-    Py_INCREF(a_lon);
-    if (a_lon == Py_None) {
+    PyObject *speed = PyTuple_GET_ITEM(sig, 0), *a_lon = PyTuple_GET_ITEM(sig, 2);
+    if (as_double(speed, x) || as_double(PyTuple_GET_ITEM(sig, 1), x + 1) || as_double(PyTuple_GET_ITEM(sig, 3), x + 3))
+        goto done;
+    if (a_lon == Py_None) { /* the rate of the speed since the last call (EgoView._rate) */
         PyObject *prev = args[2], *t = PyObject_GetAttr(args[1], s_t_obs);
-        double v, t1, t0, ds0;
+        double t1, t0, ds0;
         if (!t || as_double(t, &t1) || as_double(PyList_GET_ITEM(prev, 0), &t0) ||
-            as_double(PyList_GET_ITEM(prev, 1), &ds0) || as_double(speed, &v)) {
+            as_double(PyList_GET_ITEM(prev, 1), &ds0)) {
             Py_XDECREF(t);
             goto done;
         }
         PyList_SetItem(prev, 0, t); /* steals t */
         PyList_SetItem(prev, 1, Py_NewRef(speed));
-        Py_SETREF(a_lon, PyFloat_FromDouble(t1 > t0 ? (v - ds0) / (t1 - t0) : 0.0));
-        if (!a_lon) goto done;
+        x[2] = t1 > t0 ? (x[0] - ds0) / (t1 - t0) : 0.0;
+    } else if (as_double(a_lon, x + 2)) {
+        goto done;
     }
-    PyObject *const reward_args[6] = {speed, PyTuple_GET_ITEM(sig, 1), a_lon, PyTuple_GET_ITEM(sig, 3), args[4],
-                                      args[3]};
-    out = reward(self, reward_args, 6);
+    out = reward_terms(x[0], x[1], x[2], x[3], crashed, p, r);
 done:
-    Py_XDECREF(a_lon);
     Py_DECREF(sig);
+    return out;
+}
+
+static PyObject *reward_of(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 5) {
+        PyErr_SetString(PyExc_TypeError, "reward_of(signals, obs, prev: [t0, ds0], params, crashed)");
+        return NULL;
+    }
+    double r;
+    return reward_pair(r, reward_of_terms(args, &r));
+}
+
+/* env_step(ctx, action) -> (observation, reward, terminated, truncated, info)
+ * ego.gym.env.EgoEnv._step for an env step that ends nothing (an EgoState observation, the
+ * default reward, a continuous action, one scenario step an env step), in one call:
+ * ctx = (fallback, ended, env, scenario, command_params, history, agent, reward_args,
+ * observe_args, limit_steps). The command (command()), appended to history; the scenario's
+ * step with it (agent None), or scenario.step_joint(agent, lon, lat) where the agent drives
+ * ``agent``'s vehicle beside the scenario's controllers; env._elapsed counted; then, the run still running, the reward
+ * (reward_of(*reward_args, False)), {"status", "rewards"} and the observation
+ * (observe(*observe_args)); the run ended, ended(status) gives the step's return. The methods
+ * are looked up at each step, as Python's step does. fallback(action) (the Python step) runs
+ * the whole step instead where the run's SUMO is closed, the step reaches limit_steps (the
+ * TimeLimit's truncation) or the command is not finite. */
+static PyObject *s_bridge, *s_elapsed_, *s_step, *s_step_joint, *s_status, *s_rewards, *s_running;
+
+static PyObject *env_step(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 2 || !PyTuple_Check(args[0]) || PyTuple_GET_SIZE(args[0]) != 10) {
+        PyErr_SetString(PyExc_TypeError, "env_step(ctx: 10-tuple, action)");
+        return NULL;
+    }
+    PyObject *ctx = args[0], *action = args[1];
+    PyObject *fallback = PyTuple_GET_ITEM(ctx, 0), *env = PyTuple_GET_ITEM(ctx, 2), *sc = PyTuple_GET_ITEM(ctx, 3);
+    PyObject *history = PyTuple_GET_ITEM(ctx, 5), *agent = PyTuple_GET_ITEM(ctx, 6);
+    PyObject *rw_args = PyTuple_GET_ITEM(ctx, 7), *ob_args = PyTuple_GET_ITEM(ctx, 8);
+    if (!PyList_Check(history) || !PyTuple_Check(rw_args) || PyTuple_GET_SIZE(rw_args) != 4 ||
+        !PyTuple_Check(ob_args) || PyTuple_GET_SIZE(ob_args) != 5) {
+        PyErr_SetString(PyExc_TypeError, "env_step: history must be a list, reward_args 4 and observe_args 5 items");
+        return NULL;
+    }
+    PyObject *bridge = PyObject_GetAttr(sc, s_bridge);
+    if (!bridge) return NULL;
+    const int closed = bridge == Py_None;
+    Py_DECREF(bridge);
+    PyObject *count = PyObject_GetAttr(env, s_elapsed_);
+    if (!count) return NULL;
+    const long long elapsed = PyLong_AsLongLong(count);
+    Py_DECREF(count);
+    double limit;
+    if ((elapsed == -1 && PyErr_Occurred()) || as_double(PyTuple_GET_ITEM(ctx, 9), &limit)) return NULL;
+    if (closed || (double)(elapsed + 1) >= limit) return PyObject_CallOneArg(fallback, action);
+
+    PyObject *const cmd_args[2] = {PyTuple_GET_ITEM(ctx, 4), action};
+    PyObject *cmd = command(self, cmd_args, 2);
+    if (!cmd) return NULL;
+    if (!PyTuple_Check(cmd) || PyTuple_GET_SIZE(cmd) != 2) {
+        Py_DECREF(cmd);
+        PyErr_SetString(PyExc_TypeError, "env_step: the command must be a (longitudinal, lateral) tuple");
+        return NULL;
+    }
+    PyObject *lon = PyTuple_GET_ITEM(cmd, 0), *lat = PyTuple_GET_ITEM(cmd, 1);
+    double x = 0.0, y = 0.0;
+    if ((lon != Py_None && as_double(lon, &x)) || (lat != Py_None && as_double(lat, &y))) {
+        Py_DECREF(cmd);
+        return NULL;
+    }
+    const double check = x + y;
+    if (check - check != 0.0) { /* nan or inf: the Python step ends the run, saying why */
+        Py_DECREF(cmd);
+        return PyObject_CallOneArg(fallback, action);
+    }
+    if (PyList_Append(history, cmd)) {
+        Py_DECREF(cmd);
+        return NULL;
+    }
+    PyObject *done;
+    if (agent == Py_None) {
+        PyObject *const call[2] = {sc, cmd};
+        done = PyObject_VectorcallMethod(s_step, call, 2 | PY_VECTORCALL_ARGUMENTS_OFFSET, NULL);
+    } else {
+        PyObject *const call[4] = {sc, agent, lon, lat};
+        done = PyObject_VectorcallMethod(s_step_joint, call, 4 | PY_VECTORCALL_ARGUMENTS_OFFSET, NULL);
+    }
+    Py_DECREF(cmd);
+    if (!done) return NULL;
+    Py_DECREF(done);
+    count = PyLong_FromLongLong(elapsed + 1);
+    if (!count) return NULL;
+    const int set = PyObject_SetAttr(env, s_elapsed_, count);
+    Py_DECREF(count);
+    if (set) return NULL;
+
+    PyObject *status = PyObject_GetAttr(sc, s_status);
+    if (!status) return NULL;
+    int running = status == s_running;
+    if (!running && PyUnicode_Check(status)) running = PyUnicode_Compare(status, s_running) == 0;
+    if (!running) {
+        PyObject *out = PyErr_Occurred() ? NULL : PyObject_CallOneArg(PyTuple_GET_ITEM(ctx, 1), status);
+        Py_DECREF(status);
+        return out;
+    }
+    PyObject *const rw_call[5] = {PyTuple_GET_ITEM(rw_args, 0), PyTuple_GET_ITEM(rw_args, 1),
+                                  PyTuple_GET_ITEM(rw_args, 2), PyTuple_GET_ITEM(rw_args, 3), Py_False};
+    double r;
+    PyObject *terms = reward_of_terms(rw_call, &r), *info = NULL, *ob = NULL, *value = NULL, *out = NULL;
+    if (!terms) goto fail;
+    info = _PyDict_NewPresized(2);
+    if (!info || PyDict_SetItem(info, s_status, status) || PyDict_SetItem(info, s_rewards, terms)) goto fail;
+    ob = observe(self, &PyTuple_GET_ITEM(ob_args, 0), 5);
+    value = ob ? PyFloat_FromDouble(r) : NULL;
+    out = value ? PyTuple_New(5) : NULL;
+    if (!out) goto fail;
+    PyTuple_SET_ITEM(out, 0, ob);
+    PyTuple_SET_ITEM(out, 1, value);
+    PyTuple_SET_ITEM(out, 2, Py_NewRef(Py_False));
+    PyTuple_SET_ITEM(out, 3, Py_NewRef(Py_False));
+    PyTuple_SET_ITEM(out, 4, info);
+    ob = value = info = NULL; /* the tuple's now */
+fail:
+    Py_XDECREF(ob);
+    Py_XDECREF(value);
+    Py_XDECREF(info);
+    Py_XDECREF(terms);
+    Py_DECREF(status);
     return out;
 }
 
@@ -1817,7 +2001,9 @@ static int intern_loop_names(void)
         {&s_s_ref, "s_ref"}, {&s_ds_ref, "ds_ref"}, {&s_d_ref, "d_ref"}, {&s_dd_ref, "dd_ref"},
         {&s_lane_offset, "lane_offset"}, {&s_inside_since, "_inside_since"}, {&s_check_done, "check_done"},
         {&s_t, "t"}, {&s_s0, "s0"}, {&s_accel, "accel"}, {&s_lo_, "_lo"}, {&s_hi_, "_hi"},
-        {&s_since_, "_since"}, {&str_empty, ""},
+        {&s_since_, "_since"}, {&str_empty, ""}, {&s_bridge, "bridge"}, {&s_elapsed_, "_elapsed"},
+        {&s_step, "step"}, {&s_step_joint, "step_joint"},
+        {&s_status, "status"}, {&s_rewards, "rewards"}, {&s_running, "running"},
     };
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
         *names[i].slot = PyUnicode_InternFromString(names[i].name);
@@ -1835,13 +2021,15 @@ static PyMethodDef methods[] = {
     FASTCALL(boxes, "boxes(results, controlled, known, dims, p_key, a_key, v_key) -> (ids, rows)"),
     FASTCALL(fill_obs, "fill_obs(out, values, norm, const) -> None"),
     FASTCALL(command, "command(params, action) -> (longitudinal, lateral)"),
-    FASTCALL(observe, "observe(empty, size, get, source, norm, const) -> array"),
+    FASTCALL(observe, "observe(size, get, source, norm, const) -> array"),
     FASTCALL(reward, "reward(speed, error, a_lon, a_lat, crashed, params) -> (reward, terms)"),
     FASTCALL(sum_squares, "sum_squares(a) -> numpy.add.reduce(a * a, None) of a float64 array"),
     FASTCALL(rbf_smc, "rbf_smc(ctx, s, d, ds, dd, neg_two_w2, scale, k_lon, k_lat, update_lat) -> (f_lon, f_lat)"),
     FASTCALL(bp_pid_acc, "bp_pid_acc(ctx, x0, x1, e, t0, t1, t2, u, hi, lo, eta, alpha) -> u"),
     FASTCALL(bp_pid, "bp_pid(ctx, e_x, i_lon, de_x, e_y, i_lat, de_y, report, eta, alpha) -> (u_x, u_y)"),
-    FASTCALL(reward_of, "reward_of(signals, rate, params, crashed) -> (reward, terms)"),
+    FASTCALL(reward_of, "reward_of(signals, obs, prev, params, crashed) -> (reward, terms)"),
+    FASTCALL(env_step, "env_step(ctx, action) -> (observation, reward, terminated, truncated, info) "
+                       "(EgoEnv._step)"),
     FASTCALL(plant_step, "plant_step(plant, packed, action) -> None (BicyclePlant.step)"),
     FASTCALL(trace_write, "trace_write(rows, width, signals, fallback, sigs, values) -> None"),
     FASTCALL(road_frame, "road_frame(view) -> None (RoadSensor.frame)"),

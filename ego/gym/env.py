@@ -273,6 +273,8 @@ class EgoView:
 #: Reward.__call__'s arithmetic in C, or None (its Python lines)
 _REWARD = None if NATIVE is None else NATIVE.reward
 _REWARD_OF = None if NATIVE is None else NATIVE.reward_of
+_ENV_STEP = None if NATIVE is None else NATIVE.env_step
+_COMMAND, _OBSERVE = (None, None) if NATIVE is None else (NATIVE.command, NATIVE.observe)
 
 
 class Reward:
@@ -393,6 +395,7 @@ class EgoEnv(gym.Env):
         self._elapsed = 0
         self._limit = None
         self._limit_steps = math.inf
+        self._fast_step: functools.partial | None = None
         self.randomized: dict[str, float] = {}
         self._build()
 
@@ -576,6 +579,7 @@ class EgoEnv(gym.Env):
         run_seed = run_seed_of(seed) if seed is not None else int(self.np_random.integers(0, MAX_SEED + 1))
         self._start(run_seed)
         self._set_limit()
+        self._fast_step = self._bind_step()
         return self.observation_type.observe(self._view), {
             "status": self.scenario.status,
             "randomized": dict(self.randomized),
@@ -637,9 +641,8 @@ class EgoEnv(gym.Env):
         # the scenario's controllers step as in a run; the agent's vehicle takes the agent's
         # channels (the platoon's other followers keep theirs)
         self._history.append(command)
-        sc = self.scenario
         lon, lat = command
-        sc.step(sc.joint_action(sc.controller.step(sc.obs), self._agent, lon, lat))
+        self.scenario.step_joint(self._agent, lon, lat)
 
     def _apply_meta(self, command) -> None:
         # a new command tuple is a new env step: the meta action moves the targets once
@@ -652,6 +655,12 @@ class EgoEnv(gym.Env):
         sc.step(sc.controller.step(meta.controller_observation()))
 
     def step(self, action):
+        fast = self._fast_step
+        if fast is not None:  # the step below in one call into C (see _bind_step)
+            return fast(action)
+        return self._step(action)
+
+    def _step(self, action):
         # the hot path: what holds still over a run is looked up at the reset, not here
         sc = self.scenario
         if sc is None or sc.bridge is None:
@@ -667,7 +676,7 @@ class EgoEnv(gym.Env):
             sc.step(command)
         elif self._channels:
             self._history.append(command)
-            sc.step(sc.joint_action(sc.controller.step(sc.obs), self._agent, lon, lat))
+            sc.step_joint(self._agent, lon, lat)
         elif self._every == 1:
             self._apply(command)
         else:
@@ -689,6 +698,11 @@ class EgoEnv(gym.Env):
                 info["status_detail"] = f"max_episode_steps ({self._limit}) reached"
                 info["metrics"] = sc.result().metrics
             return self._observe(), reward, False, False, info
+        return self._ended(status)
+
+    def _ended(self, status: str):
+        """The return of the env step at which the run ended with ``status``."""
+        sc = self.scenario
         crashed = status == "collision" or status == "diverged"
         reward, terms = self._step_reward(crashed)
         # the duration reached is a truncation; anything before it ends the task
@@ -706,6 +720,22 @@ class EgoEnv(gym.Env):
             "metrics": sc.result().metrics,
         }
         return self._observe(), reward, not truncated, truncated, info
+
+    def _bind_step(self) -> functools.partial | None:
+        """:meth:`_step` in one call into C (``ego._native.env_step``) until the run ends, where
+        the env step is one scenario step with the default reward, the ``EgoState``
+        observation and a continuous action, each bound to C (the extension built); else None.
+        Bound after the reset and its TimeLimit (the step that reaches it runs in Python)."""
+        parts = (self._native, self._step_reward, self._observe)
+        natives = (_COMMAND, _REWARD_OF, _OBSERVE)
+        if _ENV_STEP is None or not (self._direct or self._channels):
+            return None
+        if not all(isinstance(p, functools.partial) and p.func is f for p, f in zip(parts, natives)):
+            return None
+        agent = None if self._direct else self._agent
+        limit = float(self._limit_steps)
+        ctx = (self._step, self._ended, self, self.scenario, self._native.args[0], self._history, agent)
+        return functools.partial(_ENV_STEP, (*ctx, self._step_reward.args, self._observe.args, limit))
 
     def _steps_left(self) -> int:
         """Env steps from now to the run's duration (or the registered TimeLimit, if sooner)."""
@@ -734,6 +764,7 @@ class EgoEnv(gym.Env):
         return self._renderer.draw(self.scenario, self._view)
 
     def close(self) -> None:
+        self._fast_step = None
         if _running[0] is self:
             _running[0] = None
         if self.scenario is not None:
@@ -770,6 +801,7 @@ class EgoEnv(gym.Env):
             for command in history:  # same seed, same commands: the same run (determinism)
                 apply(command)
             self._view._prev[:], self._elapsed = prev, elapsed  # in place: the bound reward holds it
+            self._fast_step = self._bind_step()
         self._np_random = state["np_random"]
         self.config = copy.deepcopy(state.get("pending", self.config))
 

@@ -141,6 +141,8 @@ class EgoStateObservation(_ObservationType):
         dynamic = paths[: len(paths) - n_const]
         get = attrgetter(*dynamic)
         self._get = get if len(dynamic) > 1 else (lambda o: (get(o),))
+        # what the bound observation reads in C: the attribute names where none is a path
+        self._read = tuple(dynamic) if not any("." in p for p in dynamic) else self._get
         self.space = spaces.Box(-np.inf, np.inf, (len(self.names),), np.float64)
         names = self.names
         self._t = names.index("t")
@@ -188,7 +190,7 @@ class EgoStateObservation(_ObservationType):
         """:meth:`observe` of ``view`` as a function of nothing until the run ends (bound after
         :meth:`reset`): the env step's hot path, one call into C where the extension is built."""
         if self._fill is not None and _OBSERVE is not None:
-            return functools.partial(_OBSERVE, self._size, self._get, self._source, self._norm, self._const)
+            return functools.partial(_OBSERVE, self._size, self._read, self._source, self._norm, self._const)
         return functools.partial(self.observe, view)
 
     def observe(self, view) -> np.ndarray:

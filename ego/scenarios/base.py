@@ -554,6 +554,12 @@ class Scenario:
         ``lateral`` (None: that channel stays ``own``'s, the scenario's controller's)."""
         return (own[0] if longitudinal is None else longitudinal, own[1] if lateral is None else lateral)
 
+    def step_joint(self, vid: str, longitudinal: float | None, lateral: float | None) -> Any:
+        """One :meth:`step` in which vehicle ``vid`` takes ``longitudinal`` and ``lateral`` (None:
+        that channel stays the scenario's controller's) and every other vehicle its controller's
+        command: the step of an agent driving ``vid`` beside the scenario's controllers."""
+        return self.step(self.joint_action(self.controller.step(self.obs), vid, longitudinal, lateral))
+
     def agent_signals(self, vid: str) -> tuple[float, float, float | None, float]:
         """Vehicle ``vid`` now: (speed along its lane m/s, tracking error m, longitudinal and
         lateral acceleration m/s^2); the longitudinal one None when the scenario does not

@@ -351,6 +351,7 @@ def test_the_steps_bound_reward_and_observation_are_the_references_bit_for_bit(e
         env.reset(seed=5)
         u = env.unwrapped
         if reference:
+            u._fast_step = None  # the whole step in Python (policy_frequency 10 has none anyway)
             u._step_reward = functools.partial(u.reward, u._view)
             u._observe = functools.partial(u.observation_type.observe, u._view)
         out = []
@@ -363,6 +364,65 @@ def test_the_steps_bound_reward_and_observation_are_the_references_bit_for_bit(e
 
     fast, reference = episode(False), episode(True)
     assert len(fast) > 10 and fast == reference
+
+
+def _bits(step_return) -> str:
+    """An env step's return to the bit (every float as Python prints it, NaN included), the
+    run's wall time aside."""
+    obs, reward, terminated, truncated, info = step_return
+    if "metrics" in info:
+        info = {**info, "metrics": {k: v for k, v in info["metrics"].items() if k != "wall_time"}}
+    return repr((obs.dtype, obs.tolist(), reward, terminated, truncated, info))
+
+
+@pytest.mark.sumo
+@pytest.mark.parametrize("env_id", list(ego.gym.ENV_IDS))
+def test_the_step_in_c_gives_the_python_steps_every_return(env_id, make, monkeypatch):
+    """EgoEnv.step through ego._native.env_step against EgoEnv._step alone, over whole episodes
+    of random actions: every observation, reward, flag and info (the metrics at the end) the
+    same to the bit. Three episodes each: one to the run's end, one cut by a registered
+    TimeLimit of 40 steps (the step that reaches it runs in Python) and one with a NaN action at
+    step 25 (the run ends diverged, through Python)."""
+    from ego.gym.env import EgoEnv
+
+    short = "ego-test/" + env_id.split("/")[1]  # the env id registered with 40 steps
+    spec = gym.spec(env_id)
+    gym.register(short, entry_point=spec.entry_point, kwargs=spec.kwargs, max_episode_steps=40)
+    try:
+        _compare_steps(env_id, short, make, monkeypatch, EgoEnv)
+    finally:
+        gym.registry.pop(short, None)
+
+
+def _compare_steps(env_id, short, make, monkeypatch, EgoEnv):
+    cases = [(env_id, None), (short, None), (env_id, 25)]
+    bind = EgoEnv._bind_step
+    for made, nan_at in cases:
+        env = make(made, config={"duration": 3.0})
+        env.action_space.seed(3)
+        actions = [env.action_space.sample() for _ in range(400)]
+        if nan_at is not None:
+            actions[nan_at] = np.full_like(actions[nan_at], np.nan)
+        out = {}
+        for fast in (True, False):
+            monkeypatch.setattr(EgoEnv, "_bind_step", bind if fast else lambda self: None)
+            obs, _ = env.reset(seed=11)
+            assert (env.unwrapped._fast_step is not None) == fast
+            returns = [repr(obs.tolist())]
+            for a in actions:
+                step = env.step(a)
+                returns.append(_bits(step))
+                if step[2] or step[3]:
+                    break
+            out[fast] = returns
+        assert len(out[True]) > 20 and out[True] == out[False], (made, nan_at)
+        last = out[True][-1]
+        assert "'metrics'" in last
+        if nan_at is not None:
+            assert "'diverged'" in last and len(out[True]) == nan_at + 2
+        if made == short:
+            assert "max_episode_steps (40) reached" in last and len(out[True]) == 41
+        env.close()
 
 
 def test_a_scenario_that_overrides_only_agent_signals_keeps_its_own():
