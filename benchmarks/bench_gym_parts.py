@@ -6,7 +6,10 @@
 Timing each piece alone (``timeit`` in a warm loop) undercounts it: inside a run its code and
 data come cold, between SUMO's and the scenario's. So this replays the default controller's
 actions (as bench_gym does: ``EgoState`` observation, ``EgoAction``) through ``env.step``
-with one piece at a time replaced by a stand-in that returns a constant of the same shape:
+as the env steps by default (an env step that ends nothing in one call into C,
+``ego._native.env_step``), through the Python step (``EgoEnv._step``, its pieces still bound
+to C), and through the Python step with one piece at a time replaced by a stand-in that returns
+a constant of the same shape:
 
 * ``reward``: the reward and its terms (``EgoEnv._step_reward``, bound at the reset);
 * ``observation``: the observation vector (``EgoEnv._observe``, bound at the reset);
@@ -15,8 +18,9 @@ with one piece at a time replaced by a stand-in that returns a constant of the s
 and the raw loop (the scenario stepping the same commands, in a platoon its controllers for
 the other followers, as bench_gym's raw step counts them, and the run's result at the end). The variants take turns, the
 episodes alike (seed 0, no randomisation), so a busy machine's load falls on each alike.
-Printed per piece: the median time per env step, and what leaving the piece out saves (its
-cost in the loop). Only a measurement: the stand-ins change what the env returns.
+Printed: the median time per env step, what the step in C saves over the Python step, and
+per piece what leaving it out of the Python step saves (its cost in the loop). Only a
+measurement: the stand-ins change what the env returns.
 """
 
 from __future__ import annotations
@@ -72,7 +76,7 @@ def measure(env_id: str, scenario: str, rounds: int, duration: float) -> dict[st
             "observation": ("_observe", lambda: zero),
             "action": ("_native", lambda action: command_of[id(action)]),
         }
-        times: dict[str, list[float]] = {name: [] for name in ("env", *PIECES, "raw")}
+        times: dict[str, list[float]] = {name: [] for name in ("env", "python", *PIECES, "raw")}
         clock = time.perf_counter
         for _ in range(rounds):
             for name in times:
@@ -91,6 +95,8 @@ def measure(env_id: str, scenario: str, rounds: int, duration: float) -> dict[st
                     sc.result()  # the run's metrics, which the env computes at the episode's end
                     times[name].append(clock() - t0)
                     continue
+                if name != "env":  # the Python step, which the stand-ins replace pieces of
+                    u._fast_step = None
                 if name in stand_ins:
                     attr, fn = stand_ins[name]
                     setattr(u, attr, fn)
@@ -122,16 +128,26 @@ def main(argv: list[str] | None = None) -> dict:
         ap.error(f"bad value for --rounds: {args.rounds} (expected 1 or more)")
     os.environ.setdefault("MPLCONFIGDIR", tempfile.mkdtemp(prefix="ego-mpl-"))
     print(f"the wrapper's pieces inside the loop, dt = 0.01 s, {args.duration:g} s runs, median of {args.rounds}")
-    print(f"  {'env id':22s} {'env step':>9s} {'raw step':>9s} {'wrapper':>8s}   without (saves):")
+    print(
+        f"  {'env id':22s} {'env step':>9s} {'raw step':>9s} {'wrapper':>8s} {'step in C saves':>16s}"
+        "   without, from the Python step (saves):"
+    )
     figures = {}
     for env_id in args.ids:
         t = measure(env_id, known[env_id], args.rounds, args.duration)
         us = {k: v * 1e6 for k, v in t.items()}
-        saves = {p: us["env"] - us[p] for p in PIECES}
+        saves = {p: us["python"] - us[p] for p in PIECES}
         parts = "  ".join(f"{p} {saves[p]:.2f} us" for p in PIECES)
-        wrapper = us["env"] - us["raw"]
-        print(f"  {env_id:22s} {us['env']:7.2f}us {us['raw']:7.2f}us {wrapper:6.2f}us   {parts}")
-        figures[env_id] = {"env_us": us["env"], "raw_us": us["raw"], "wrapper_us": wrapper, "saves_us": saves}
+        wrapper, in_c = us["env"] - us["raw"], us["python"] - us["env"]
+        print(f"  {env_id:22s} {us['env']:7.2f}us {us['raw']:7.2f}us {wrapper:6.2f}us {in_c:14.2f}us   {parts}")
+        figures[env_id] = {
+            "env_us": us["env"],
+            "python_step_us": us["python"],
+            "raw_us": us["raw"],
+            "wrapper_us": wrapper,
+            "step_in_c_saves_us": in_c,
+            "saves_us": saves,
+        }
     return figures
 
 

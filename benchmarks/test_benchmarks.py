@@ -104,6 +104,9 @@ def test_gym_wrapper_parts(tmp_path, monkeypatch):
     figures = main(["--rounds", "1", "--duration", "5"])
     assert set(figures) == {"ego/CutIn-v0", "ego/Platoon-v0"}
     assert all(
-        row["env_us"] > 0.0 and row["raw_us"] > 0.0 and set(row["saves_us"]) == {"reward", "observation", "action"}
+        row["env_us"] > 0.0
+        and row["raw_us"] > 0.0
+        and row["python_step_us"] > 0.0
+        and set(row["saves_us"]) == {"reward", "observation", "action"}
         for row in figures.values()
     )
