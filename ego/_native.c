@@ -709,7 +709,7 @@ static PyObject *reward_terms(double speed, double error, double a_lon, double a
         if (!isfinite(discomfort)) discomfort = 0.0;
         *r = p[4] * crash + p[5] * progress + p[6] * centring + p[7] * discomfort;
     }
-    PyObject *terms = _PyDict_NewPresized(4);
+    PyObject *terms = PyDict_New();
     if (!terms) return NULL;
     const double values[4] = {crash, progress, centring, discomfort};
     PyObject *keys[4] = {key_crashed, key_progress, key_centring, key_discomfort};
@@ -908,7 +908,7 @@ static PyObject *env_step(PyObject *self, PyObject *const *args, Py_ssize_t narg
     double r;
     PyObject *terms = reward_of_terms(rw_call, &r), *info = NULL, *ob = NULL, *value = NULL, *out = NULL;
     if (!terms) goto fail;
-    info = _PyDict_NewPresized(2);
+    info = PyDict_New();
     if (!info || PyDict_SetItem(info, s_status, status) || PyDict_SetItem(info, s_rewards, terms)) goto fail;
     ob = observe(self, &PyTuple_GET_ITEM(ob_args, 0), 5);
     value = ob ? PyFloat_FromDouble(r) : NULL;
