@@ -41,7 +41,7 @@ import numpy as np
 from ego.checks import MAX_SEED, check_seed
 from ego.control import CONTROLLERS
 from ego.control.tasks import TASKS
-from ego.gym.spaces import action_type, observation_type
+from ego.gym.spaces import _COMMAND, _OBSERVE, action_type, observation_type
 from ego.native import NATIVE
 from ego.params import ConfigError, apply_overrides, describe, param, unknown_parameter
 from ego.runner import RunSpec, parameter_namespace, resolve
@@ -274,7 +274,6 @@ class EgoView:
 _REWARD = None if NATIVE is None else NATIVE.reward
 _REWARD_OF = None if NATIVE is None else NATIVE.reward_of
 _ENV_STEP = None if NATIVE is None else NATIVE.env_step
-_COMMAND, _OBSERVE = (None, None) if NATIVE is None else (NATIVE.command, NATIVE.observe)
 
 
 class Reward:
