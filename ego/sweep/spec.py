@@ -25,6 +25,7 @@ is a hash of scenario, controller, seed and overrides, stable across machines an
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import itertools
 import json
@@ -89,9 +90,18 @@ class SweepSpec:
         return tuple(self.grid) + (tuple(self.sample.ranges) if self.sample else ())
 
     def points(self) -> int:
-        """How many parameter points: grid combinations x sample points."""
+        """How many parameter points: grid combinations x distinct sample points."""
         n = math.prod(len(v) for v in self.grid.values()) if self.grid else 1
-        return n * (self.sample.n if self.sample else 1)
+        return n * (self._sample_points_count if self.sample else 1)
+
+    @functools.cached_property
+    def _sample_points_count(self) -> int:
+        """The sample's distinct points: ``n``, or fewer when whole-number parameters alone
+        are sampled and two draws fall on the same numbers (counted by drawing them)."""
+        assert self.sample is not None
+        if not _whole_numbers(self.sample, self._types):
+            return self.sample.n
+        return sum(1 for _ in _sample_points(self.sample, self._types))
 
     def count(self) -> int:
         """How many runs: points x controllers x seeds."""
@@ -145,8 +155,20 @@ def _param_types(scenario: str, controllers) -> dict:
     return parameter_namespace(scenario, controllers)
 
 
+def _whole_numbers(sample: Sample, infos: dict) -> bool:
+    """True when every sampled parameter is a whole number: then two draws can be one point."""
+    return all(infos[name].type is int for name in sample.ranges)
+
+
 def _sample_points(sample: Sample, infos: dict, chunk: int = 4096) -> Iterator[dict]:
-    """``sample.n`` points over the ranges (scipy.stats.qmc), whole numbers for int parameters."""
+    """``sample.n`` points over the ranges (scipy.stats.qmc), in the order drawn.
+
+    A whole-number parameter takes each whole number of its range ``[low, high]`` with the
+    same chance (the unit interval cut into ``high - low + 1`` equal parts; an LHS then
+    spreads its points over them evenly). When whole-number parameters alone are sampled,
+    a point drawn again is left out: the same run twice would count twice in the summary. A
+    real-valued parameter (rounded to 6 decimals) makes a repeat as good as impossible, so
+    points are not remembered then and a sample of millions costs no memory."""
     import numpy as np
     from scipy.stats import qmc
 
@@ -162,12 +184,22 @@ def _sample_points(sample: Sample, infos: dict, chunk: int = 4096) -> Iterator[d
     else:
         rng = np.random.default_rng(sample.seed)
         blocks = (rng.random((min(chunk, sample.n - i), d)) for i in range(0, sample.n, chunk))
+    whole = [infos[name].type is int for name in names]
+    # a whole number's share of the unit interval: high - low + 1 parts
+    parts = np.array([hi[i] - lo[i] + 1.0 if w else 0.0 for i, w in enumerate(whole)])
+    seen: set[tuple] | None = set() if all(whole) else None
     for block in blocks:
-        for row in lo + block * (hi - lo):
+        scaled = lo + block * (hi - lo)
+        wholes = lo + np.minimum(np.floor(block * parts), parts - 1.0)
+        for row, whole_row in zip(scaled, wholes):
             point = {}
-            for name, value in zip(names, row):
-                value = float(value)
-                point[name] = int(round(value)) if infos[name].type is int else round(value, 6)
+            for name, w, value, k in zip(names, whole, row, whole_row):
+                point[name] = int(k) if w else round(float(value), 6)
+            if seen is not None:
+                key = tuple(point.values())
+                if key in seen:
+                    continue
+                seen.add(key)
             yield point
 
 

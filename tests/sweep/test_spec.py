@@ -50,6 +50,39 @@ def test_sampling_is_deterministic_and_respects_integer_parameters():
     assert all(isinstance(f, int) and 1 <= f <= 10 for f in followers) and len(set(followers)) > 3
 
 
+def test_whole_numbers_alone_are_each_run_once():
+    # an LHS of 8 points over followers 2..4 draws 2, 3 and 4 again and again: each point
+    # is one run (the same run twice counted twice in the summary), and the count says so
+    for method in ("lhs", "random", "sobol"):
+        s = parse(
+            {
+                "scenario": "platoon",
+                "controllers": ["pid", "bp-pid-acc"],
+                "seeds": 2,
+                "grid": {"headway": [1.0, 2.0]},
+                "sample": {"method": method, "n": 8, "followers": [2, 4]},
+            }
+        )
+        runs = list(s.runs())
+        assert len({r.run_id for r in runs}) == len(runs) == s.count() == 2 * 3 * 2 * 2
+        assert {r.overrides["followers"] for r in runs} == {2, 3, 4}
+
+
+def test_a_whole_number_takes_each_value_of_its_range_alike():
+    # beside a real-valued parameter (no repeats to leave out), an LHS of 30 points gives each
+    # of 2, 3 and 4 exactly ten times; rounding the range [2, 4] gave its ends half a share
+    s = parse(
+        {
+            "scenario": "platoon",
+            "controllers": ["pid"],
+            "sample": {"method": "lhs", "n": 30, "followers": [2, 4], "headway": [1.0, 3.0]},
+        }
+    )
+    followers = [r.overrides["followers"] for r in s.runs()]
+    assert s.count() == len(followers) == 30
+    assert sorted(followers) == [2] * 10 + [3] * 10 + [4] * 10
+
+
 def test_run_ids_are_stable_and_depend_on_everything():
     a = run_id("emergency-brake", "pid", 0, {"ego_speed": 20.0, "lead_gap": 30.0})
     assert a == run_id("emergency-brake", "pid", 0, {"lead_gap": 30.0, "ego_speed": 20.0})
