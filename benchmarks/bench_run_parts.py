@@ -12,8 +12,13 @@ loop (the rest), result packing (the trace as an array, the metrics), the requir
 (rtamt), close. ``--rows`` writes the rows (wall time and host aside) to compare two trees:
 run it once with ``PYTHONPATH=<other tree>`` and compare the files.
 
-Then SUMO's own share, about the floor no change to ego alone can go below (an estimate:
-there the ego is not moved by a controller): for each run, bare ``simulationStep()`` calls on
+SUMO's own step inside those runs is timed too (libsumo's step function, wrapped for the
+benchmark: the same calls the runs make, with the ego driven and the traffic reacting to
+it): the floor of a sweep of these runs that no change to ego's own code can go below while
+every figure stays, since SUMO's work is the traffic.
+
+Then SUMO's own share as an estimate without the runs (there the ego is not moved by a
+controller): for each run, bare ``simulationStep()`` calls on
 the same traffic (the run's scenario, seed and values, no control:
 ``benchmarks/bench_loop.py``'s baseline) for as many SUMO steps as the run took,
 and what that makes of a sweep of such runs on ``--jobs`` workers (``--sweep-runs``, default
@@ -60,6 +65,25 @@ def timed_parts(cpu: dict[str, float]) -> None:
         setattr(owner, name, wrapper)
 
 
+def timed_sumo_step(cpu: dict[str, float]) -> None:
+    """Wrap libsumo's step (what ``SumoBridge.start`` binds) so its CPU seconds add up in
+    ``cpu["sumo_step"]`` (benchmark only)."""
+    import libsumo
+
+    step = libsumo._libsumo_step
+    clock = time.process_time
+
+    def wrapper(*args, **kwargs):
+        t0 = clock()
+        try:
+            return step(*args, **kwargs)
+        finally:
+            cpu["sumo_step"] += clock() - t0
+
+    cpu["sumo_step"] = 0.0
+    libsumo._libsumo_step = wrapper
+
+
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("spec", nargs="?", default=str(Path(__file__).with_name("envelope_200.toml")))
@@ -78,6 +102,8 @@ def main(argv: list[str] | None = None) -> dict:
             execute(t)
     cpu: dict[str, float] = {}
     timed_parts(cpu)
+    sumo: dict[str, float] = {}
+    timed_sumo_step(sumo)
     per_controller: dict[str, list[float]] = {}
     rows = []
     t_all = time.process_time()
@@ -97,6 +123,12 @@ def main(argv: list[str] | None = None) -> dict:
     for part in ("start", "loop", "result", "requirements", "close"):
         figures[f"ms_{part}"] = 1e3 * cpu[part] / n
         print(f"  {part:12s} {figures[f'ms_{part}']:7.1f} ms a run  {100 * cpu[part] / total:5.1f} %")
+    figures["ms_sumo_step"] = 1e3 * sumo["sumo_step"] / n
+    figures["sweep_sumo_s"] = args.sweep_runs / args.jobs * sumo["sumo_step"] / n
+    print(
+        f"  of it SUMO's step in the runs {figures['ms_sumo_step']:7.1f} ms a run  {100 * sumo['sumo_step'] / total:5.1f} %: "
+        f"{figures['sweep_sumo_s']:.0f} s of CPU a worker in a sweep of {args.sweep_runs} such runs on {args.jobs} workers"
+    )
     if not args.no_floor:
         bare = sum(bare_sumo(t, row["steps"]) for t, row in zip(tasks, rows))
         figures["ms_bare_sumo"] = 1e3 * bare / n

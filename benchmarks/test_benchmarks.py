@@ -45,6 +45,18 @@ def test_loop_parts():
     assert figures["plan as bound, lane change"] > 0.0
 
 
+def test_run_parts():
+    from bench_run_parts import main
+
+    figures = main(["--every", "40"])  # 5 runs of the 200-run envelope, one per controller
+    assert figures["runs"] == 5
+    # SUMO's step is timed inside the loop: a part of it, and what a worker of the sweep
+    # spends in it is scaled from the same runs
+    assert 0.0 < figures["ms_sumo_step"] < figures["ms_loop"]
+    assert figures["sweep_sumo_s"] == pytest.approx(2500 / 2 * figures["ms_sumo_step"] / 1e3)
+    assert figures["ms_bare_sumo"] > 0.0
+
+
 def test_tuning_batch_against_the_per_member_loop():
     from bench_tune import main
 

@@ -1,0 +1,169 @@
+"""The loop against bare SUMO in instructions, which a busy machine does not change.
+
+    python benchmarks/bench_loop_instructions.py [--scenario emergency-brake] [--controller fuzzy]
+                                                 [--set key=value ...] [--tree PATH]
+
+``benchmarks/bench_loop.py`` divides CPU times, and on a shared VM the same code reads
+1.65-2.3x from one minute to the next (bare SUMO's step itself moves from ~200 to ~360 us).
+This script counts instructions instead, with valgrind's callgrind: two processes, each with
+one warm-up run (imports, caches) and then one measured part, collection switched on and off
+around it by callgrind's client request (a small C helper compiled here):
+
+* the loop: ``scenario.step(controller.step(obs))`` until the run ends, no recording;
+* bare SUMO: ``simulationStep()`` on the same traffic (the same scenario, seed and values,
+  no control), as many SUMO steps as the loop took.
+
+Printed: both counts, their ratio (issue 18's target: <= 1.8 without recording) and ego's
+own instructions per SUMO step. ``--tree`` measures another checkout (``git worktree add``)
+with this script, to compare two versions in the same session. Needs ``valgrind`` and its
+headers (Debian: ``apt-get install valgrind``) and a C compiler; each count takes one to
+two minutes (the two run at once on two cores).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+
+_HELPER = """#include <valgrind/callgrind.h>
+void ego_bench_toggle(void) { CALLGRIND_TOGGLE_COLLECT; }
+"""
+
+#: the measured process: argv = tree, helper, mode, scenario, controller, steps, overrides...
+_CHILD = r"""
+import ctypes, sys
+tree, helper, mode, scenario, controller, steps = sys.argv[1:7]
+sys.path.insert(0, tree)
+from ego.params import parse_overrides
+from ego.runner import RunSpec, build
+toggle = ctypes.CDLL(helper).ego_bench_toggle
+overrides = parse_overrides(sys.argv[7:])
+
+def loop(measure):
+    sc = build(RunSpec(scenario, controller, 0, overrides))
+    try:
+        obs = sc.reset()
+        ctrl = sc.controller
+        if measure:
+            toggle()
+        while not sc.done:
+            obs = sc.step(ctrl.step(obs))
+        if measure:
+            toggle()
+        return sc.k // sc.config.control_per_sumo
+    finally:
+        sc.close()
+
+def bare(measure, n):
+    sc = build(RunSpec(scenario, "none", 0, overrides))
+    try:
+        sc.reset()
+        step = sc.bridge.libsumo.simulationStep
+        if measure:
+            toggle()
+        for _ in range(n):
+            step()
+        if measure:
+            toggle()
+        return n
+    finally:
+        sc.close()
+
+if mode == "loop":
+    loop(False)
+    print("sumo_steps", loop(True))
+else:
+    bare(False, int(steps))
+    print("sumo_steps", bare(True, int(steps)))
+"""
+
+
+def _collected(text: str) -> int:
+    m = re.search(r"Collected\s*:\s*(\d+)", text)
+    if m is None:
+        raise RuntimeError(f"callgrind printed no count:\n{text[-2000:]}")
+    return int(m.group(1))
+
+
+def _start(work: Path, tree: str, mode: str, args, steps: int) -> subprocess.Popen:
+    env = {
+        **os.environ,
+        "PYTHONHASHSEED": "0",
+        "XDG_CONFIG_HOME": str(work),
+        "XDG_DATA_HOME": str(work),
+        "PYTHONPATH": tree,
+    }
+    cmd = [
+        "valgrind",
+        "--tool=callgrind",
+        "--collect-atstart=no",
+        f"--callgrind-out-file={work / (mode + '.out')}",
+        sys.executable,
+        str(work / "child.py"),
+        tree,
+        str(work / "libhelper.so"),
+        mode,
+        args.scenario,
+        args.controller,
+        str(steps),
+        *args.set,
+    ]
+    return subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def main(argv: list[str] | None = None) -> dict:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scenario", default="emergency-brake")
+    ap.add_argument("--controller", default="fuzzy")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a scenario override")
+    ap.add_argument("--tree", default=str(HERE.parent), help="the checkout to measure (default: this one)")
+    ap.add_argument("--steps", type=int, default=250, help="bare SUMO steps when they cannot be read from the loop")
+    args = ap.parse_args(argv)
+    for tool in ("valgrind", "cc"):
+        if shutil.which(tool) is None:
+            raise SystemExit(f"bench_loop_instructions: needs {tool} on PATH (apt-get install valgrind gcc)")
+    with tempfile.TemporaryDirectory(prefix="ego-instructions-") as tmp:
+        work = Path(tmp)
+        (work / "helper.c").write_text(_HELPER)
+        (work / "child.py").write_text(_CHILD)
+        subprocess.run(
+            ["cc", "-O2", "-shared", "-fPIC", str(work / "helper.c"), "-o", str(work / "libhelper.so")], check=True
+        )
+        # the loop's SUMO steps are known only after it; the default duration's steps
+        # (250) start the bare count at the same time, and it is run again if they differ
+        loop = _start(work, args.tree, "loop", args, args.steps)
+        bare = _start(work, args.tree, "bare", args, args.steps)
+        out_loop, err_loop = loop.communicate()
+        out_bare, err_bare = bare.communicate()
+        if loop.returncode or bare.returncode:
+            raise SystemExit(f"bench_loop_instructions: a measured process failed:\n{(err_loop + err_bare)[-3000:]}")
+        steps = int(out_loop.split()[-1])
+        if steps != int(out_bare.split()[-1]):
+            bare = _start(work, args.tree, "bare", args, steps)
+            out_bare, err_bare = bare.communicate()
+        n_loop, n_bare = _collected(err_loop), _collected(err_bare)
+    figures = {
+        "sumo_steps": steps,
+        "loop_instructions": n_loop,
+        "bare_instructions": n_bare,
+        "ratio": n_loop / n_bare,
+        "ego_per_sumo_step": (n_loop - n_bare) / steps,
+    }
+    print(f"{args.scenario}, {args.controller}, no recording, {steps} SUMO steps, tree {args.tree}")
+    print(f"  the loop                 {n_loop / 1e6:9.1f} M instructions")
+    print(f"  bare SUMO, same traffic  {n_bare / 1e6:9.1f} M instructions")
+    print(f"  loop / bare SUMO         {figures['ratio']:9.2f}     (target <= 1.8)")
+    print(f"  ego's own per SUMO step  {figures['ego_per_sumo_step'] / 1e3:9.1f} k instructions")
+    return figures
+
+
+if __name__ == "__main__":
+    main()
