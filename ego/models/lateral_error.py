@@ -21,10 +21,9 @@ scenario use the same matrices, and :meth:`LateralError.rhs` serves the generic 
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -89,16 +88,14 @@ class LateralError:
 
     def discrete(self, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(Ad, Bd, Ed): x(k+1) = Ad x(k) + Bd delta(k) + Ed kappa(k), exact for inputs held
-        over ``dt`` (the matrix exponential of the augmented system)."""
-        from scipy.linalg import expm
-
+        over ``dt`` (the matrix exponential of the augmented system, :func:`expm_fixed_order`:
+        the same bits on every processor)."""
         n = 4
         M = np.zeros((n + 2, n + 2))
         M[:n, :n] = self.A
         M[:n, n] = self.B
         M[:n, n + 1] = self.E
-        with _one_blas_thread():
-            Md = expm(M * dt)
+        Md = expm_fixed_order(M * dt)
         return Md[:n, :n].copy(), Md[:n, n].copy(), Md[:n, n + 1].copy()
 
     def columns(self, dt: float) -> list[np.ndarray]:
@@ -135,22 +132,53 @@ class LateralError:
         return float(self.A[2, 2] * x[2] + self.A[2, 3] * x[3] + self.B[2] * delta + self.speed * x[3])
 
 
-#: the process's BLAS libraries (threadpoolctl), looked up at the first matrix exponential
-_BLAS: list[Any] = []
+#: Taylor terms of exp(X) for ||X||_1 <= 1/2: the first left out, 0.5^19 / 19!, is ~1e-23
+_TAYLOR_TERMS = 18
 
 
-@contextmanager
-def _one_blas_thread() -> Iterator[None]:
-    """The BLAS libraries on one thread for a moment: scipy's ``expm`` of a 6 x 6 matrix wakes
-    OpenBLAS's thread pool, whose threads then spin ~0.1 s on the other core (at every reset of
-    a lane-centring run: a core taken from a sweep's other worker or a vector env's other env)
-    and buy nothing at this size; the result is the same bit for bit."""
-    if not _BLAS:
-        from threadpoolctl import ThreadpoolController
+def expm_fixed_order(m: np.ndarray) -> np.ndarray:
+    """exp(m) of a small square matrix with every sum in one fixed order on Python floats:
+    the same bits on every processor.
 
-        _BLAS.append(ThreadpoolController().select(user_api="blas"))
-    limiter = _BLAS[0].limit(limits=1)
-    try:
-        yield
-    finally:
-        limiter.restore_original_limits()
+    Scaling and squaring of a Taylor series: m / 2^s with ``||m / 2^s||_1 <= 1/2``, the
+    series to a fixed 18 terms (the next would be below 1e-22 of the sum), then s squarings.
+    scipy's ``expm`` gives the same matrix to a few units in the last place, but it multiplies
+    through BLAS, whose kernels (picked by the processor: OpenBLAS's Haswell, SkylakeX, ...)
+    add in different orders; report 003's unstable gains amplify that last bit into another
+    run, so a results table made on one processor did not regenerate on another. The 6 x 6
+    of a lane-centring plant takes ~1 ms, once per run and speed."""
+    a = [[float(v) for v in row] for row in np.asarray(m, dtype=float)]
+    n = len(a)
+    if any(len(row) != n for row in a):
+        raise ValueError(f"expm_fixed_order needs a square matrix, got {np.shape(m)}")
+    norm = max((sum(abs(a[i][j]) for i in range(n)) for j in range(n)), default=0.0)
+    if not math.isfinite(norm):
+        raise ValueError("expm_fixed_order needs a finite matrix")
+    s = 0
+    while norm > 0.5:
+        norm *= 0.5
+        s += 1
+    scale = 0.5**s  # a power of two: exact
+    x = [[v * scale for v in row] for row in a]
+
+    def mul(p: list[list[float]], q: list[list[float]]) -> list[list[float]]:
+        out = []
+        for i in range(n):
+            pi = p[i]
+            row = []
+            for j in range(n):
+                acc = 0.0
+                for k in range(n):
+                    acc += pi[k] * q[k][j]
+                row.append(acc)
+            out.append(row)
+        return out
+
+    result = [[1.0 if i == j else 0.0 for j in range(n)] for i in range(n)]
+    term = [row[:] for row in result]
+    for k in range(1, _TAYLOR_TERMS + 1):
+        term = [[v / k for v in row] for row in mul(term, x)]
+        result = [[r + t for r, t in zip(rr, tr)] for rr, tr in zip(result, term)]
+    for _ in range(s):
+        result = mul(result, result)
+    return np.array(result)

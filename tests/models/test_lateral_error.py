@@ -83,20 +83,57 @@ def test_positive_steer_moves_left_and_mirror_symmetry():
     np.testing.assert_allclose(model.derivatives(-x, -u), -model.derivatives(x, u), atol=1e-15)
 
 
-def test_the_matrix_exponential_runs_on_one_blas_thread_with_the_same_bits_and_restores_the_pools():
-    """expm of the 6 x 6 augmented system woke OpenBLAS's pool, whose threads then spun on the
-    other core after every lane-centring reset; it now runs on one BLAS thread, the result bit
-    for bit what the pool gives, and the libraries' thread counts are as they were after."""
+def test_the_matrix_exponential_matches_scipy_and_its_bits_do_not_depend_on_the_blas_kernel():
+    """The zero-order hold's matrix exponential is computed in one fixed order on plain floats:
+    scipy's expm agrees to a few units in the last place, and the bits are the same whichever
+    kernel OpenBLAS picks for the processor. (scipy's expm multiplies through BLAS: with
+    OPENBLAS_CORETYPE=Haswell and SkylakeX it gave different bits, and report 003's unstable
+    gains turned the last bit into a different results table.)"""
+    import subprocess
+    import sys
+
     from scipy.linalg import expm
+
+    from ego.models.lateral_error import LateralError, LateralErrorParams, expm_fixed_order
+
+    for speed in (2.0, 8.3, 25.0, 40.0):
+        model = LateralError(LateralErrorParams(), speed)
+        M = np.zeros((6, 6))
+        M[:4, :4], M[:4, 4], M[:4, 5] = model.A, model.B, model.E
+        for dt in (0.001, 0.01, 0.1):
+            np.testing.assert_allclose(expm_fixed_order(M * dt), expm(M * dt), rtol=1e-13, atol=1e-15)
+    assert np.array_equal(expm_fixed_order(np.zeros((3, 3))), np.eye(3))
+    np.testing.assert_allclose(expm_fixed_order(np.array([[1.0, 1.0], [0.0, 1.0]])), np.e * np.array([[1, 1], [0, 1]]))
+    for bad in (np.zeros((2, 3)), np.array([[np.inf]])):
+        with pytest.raises(ValueError):
+            expm_fixed_order(bad)
+
+    # the bits under two OpenBLAS kernels every x86-64 processor of these years runs (a fresh
+    # process each: OpenBLAS reads the variable when it loads)
+    code = (
+        "import hashlib, numpy as np; from ego.models.lateral_error import LateralError; "
+        "Ad, Bd, Ed = LateralError(speed=8.3).discrete(0.01); "
+        "print(hashlib.sha256(np.concatenate([Ad.ravel(), Bd, Ed]).tobytes()).hexdigest())"
+    )
+    here = LateralError(LateralErrorParams(), 8.3).discrete(0.01)
+    import hashlib
+    import os
+
+    expected = hashlib.sha256(np.concatenate([here[0].ravel(), here[1], here[2]]).tobytes()).hexdigest()
+    for kernel in ("Haswell", "Nehalem"):
+        env = {**os.environ, "OPENBLAS_CORETYPE": kernel}
+        out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+        assert out.stdout.strip() == expected, kernel
+
+
+def test_the_matrix_exponential_wakes_no_blas_thread_pool():
+    """It uses no BLAS at all: the libraries' thread counts stay as they were (scipy's expm of
+    this 6 x 6 woke OpenBLAS's pool, whose threads then spun on the other core after every
+    lane-centring reset)."""
     from threadpoolctl import threadpool_info
 
     from ego.models.lateral_error import LateralError, LateralErrorParams
 
-    model = LateralError(LateralErrorParams(), 8.3)
     before = [(i["filepath"], i["num_threads"]) for i in threadpool_info()]
-    Ad, Bd, Ed = model.discrete(0.01)
+    LateralError(LateralErrorParams(), 8.3).discrete(0.01)
     assert [(i["filepath"], i["num_threads"]) for i in threadpool_info()] == before
-    M = np.zeros((6, 6))
-    M[:4, :4], M[:4, 4], M[:4, 5] = model.A, model.B, model.E
-    Md = expm(M * 0.01)  # the process's own pools
-    assert np.array_equal(Ad, Md[:4, :4]) and np.array_equal(Bd, Md[:4, 4]) and np.array_equal(Ed, Md[:4, 5])
