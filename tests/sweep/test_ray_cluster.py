@@ -29,7 +29,7 @@ import pyarrow.parquet as pq
 import pytest
 
 SPEC = (
-    'scenario = "emergency-brake"\ncontrollers = ["pid"]\nseeds = {seeds}\n[set]\nduration = 3\n'
+    'scenario = "emergency-brake"\ncontrollers = ["pid"]\nseeds = {seeds}\n[set]\nduration = {duration}\n'
     "[grid]\nego_speed = [18, 20, 22, 24]\n"
 )
 
@@ -71,7 +71,7 @@ def _node_ids(c) -> set[str]:
 
 def test_a_sweep_on_three_nodes_has_every_row_with_its_node(cluster, tmp_path):
     c, _ = cluster
-    (tmp_path / "s.toml").write_text(SPEC.format(seeds=3))
+    (tmp_path / "s.toml").write_text(SPEC.format(seeds=3, duration=3))
     proc = _ego(
         "sweep",
         "s.toml",
@@ -98,7 +98,9 @@ def test_a_sweep_on_three_nodes_has_every_row_with_its_node(cluster, tmp_path):
 
 def test_losing_a_worker_node_mid_sweep_costs_only_its_runs_one_retry(cluster, tmp_path):
     c, workers = cluster
-    (tmp_path / "s.toml").write_text(SPEC.format(seeds=6))
+    # 10 s runs (~4x the others'): with 3 s runs the sweep could finish the 20 runs left after
+    # the fourth progress line before the victim was seen running one on a busy machine
+    (tmp_path / "s.toml").write_text(SPEC.format(seeds=6, duration=10))
     proc = _ego(
         "sweep",
         "s.toml",
@@ -178,7 +180,7 @@ def _job_processes(before: set[int]) -> list[psutil.Process]:
 
 def test_a_sigkilled_sweep_leaves_none_of_its_processes_on_any_node(cluster, tmp_path):
     c, _ = cluster
-    (tmp_path / "s.toml").write_text(SPEC.format(seeds=10))
+    (tmp_path / "s.toml").write_text(SPEC.format(seeds=10, duration=3))
     before = {p.pid for p in psutil.process_iter()}
     proc = _ego(
         "sweep",
@@ -245,7 +247,7 @@ def _free_port() -> int:
 
 @pytest.mark.parametrize("where", ["nothing", "refused-http", "unknown-host", "blackhole"])
 def test_an_address_without_a_ray_head_is_one_line_within_seconds(where, tmp_path):
-    (tmp_path / "s.toml").write_text(SPEC.format(seeds=1))
+    (tmp_path / "s.toml").write_text(SPEC.format(seeds=1, duration=3))
     server = None
     if where == "nothing":
         address, needle = "127.0.0.1:1", "Connection refused"
@@ -293,7 +295,7 @@ def test_an_address_without_a_ray_head_is_one_line_within_seconds(where, tmp_pat
 
 
 def test_a_sigkilled_sweep_on_a_private_ray_leaves_no_ray_process(tmp_path):
-    (tmp_path / "s.toml").write_text(SPEC.format(seeds=20))
+    (tmp_path / "s.toml").write_text(SPEC.format(seeds=20, duration=3))
     proc = _ego(
         "sweep",
         "s.toml",
