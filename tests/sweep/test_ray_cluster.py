@@ -98,9 +98,10 @@ def test_a_sweep_on_three_nodes_has_every_row_with_its_node(cluster, tmp_path):
 
 def test_losing_a_worker_node_mid_sweep_costs_only_its_runs_one_retry(cluster, tmp_path):
     c, workers = cluster
-    # 10 s runs (~4x the others'): with 3 s runs the sweep could finish the 20 runs left after
-    # the fourth progress line before the victim was seen running one on a busy machine
-    (tmp_path / "s.toml").write_text(SPEC.format(seeds=6, duration=10))
+    # 80 runs of 10 s (~3 s of work a node): with 24 runs of 3 s the head and the other
+    # node could finish them all while the victim's Ray worker was still starting (seen on a
+    # slower machine, twice)
+    (tmp_path / "s.toml").write_text(SPEC.format(seeds=20, duration=10))
     proc = _ego(
         "sweep",
         "s.toml",
@@ -136,7 +137,7 @@ def test_losing_a_worker_node_mid_sweep_costs_only_its_runs_one_retry(cluster, t
     reader.join(timeout=10)
     assert proc.returncode == 0, "".join(lines)[-3000:]
     table = pq.read_table(tmp_path / "o" / "results.parquet").to_pydict()
-    assert len(table["run_id"]) == 24 and len(set(table["run_id"])) == 24
+    assert len(table["run_id"]) == 80 and len(set(table["run_id"])) == 80
     assert "error" not in table["status"]
     retried = [i for i, a in enumerate(table["attempts"]) if a == 2]
     # only the runs the lost node had in flight (at most 2 per CPU: ray_engine.IN_FLIGHT_PER_WORKER)
