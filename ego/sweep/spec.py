@@ -99,9 +99,10 @@ class SweepSpec:
         """The sample's distinct points: ``n``, or fewer when whole-number parameters alone
         are sampled and two draws fall on the same numbers (counted by drawing them)."""
         assert self.sample is not None
-        if not _whole_numbers(self.sample, self._types):
+        types = self._types
+        if not _whole_numbers(self.sample, types):
             return self.sample.n
-        return sum(1 for _ in _sample_points(self.sample, self._types))
+        return sum(1 for _ in _sample_points(self.sample, types))
 
     def count(self) -> int:
         """How many runs: points x controllers x seeds."""
@@ -188,6 +189,8 @@ def _sample_points(sample: Sample, infos: dict, chunk: int = 4096) -> Iterator[d
     # a whole number's share of the unit interval: high - low + 1 parts
     parts = np.array([hi[i] - lo[i] + 1.0 if w else 0.0 for i, w in enumerate(whole)])
     seen: set[tuple] | None = set() if all(whole) else None
+    # every whole-number point there is: once all are drawn, the rest of n can only repeat them
+    every = math.prod(int(k) for k in parts) if seen is not None else 0
     for block in blocks:
         scaled = lo + block * (hi - lo)
         wholes = lo + np.minimum(np.floor(block * parts), parts - 1.0)
@@ -200,6 +203,10 @@ def _sample_points(sample: Sample, infos: dict, chunk: int = 4096) -> Iterator[d
                 if key in seen:
                     continue
                 seen.add(key)
+                yield point
+                if len(seen) == every:
+                    return
+                continue
             yield point
 
 
