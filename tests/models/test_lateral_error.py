@@ -89,6 +89,8 @@ def test_the_matrix_exponential_matches_scipy_and_its_bits_do_not_depend_on_the_
     kernel OpenBLAS picks for the processor. (scipy's expm multiplies through BLAS: with
     OPENBLAS_CORETYPE=Haswell and SkylakeX it gave different bits, and report 003's unstable
     gains turned the last bit into a different results table.)"""
+    import hashlib
+    import os
     import subprocess
     import sys
 
@@ -116,9 +118,6 @@ def test_the_matrix_exponential_matches_scipy_and_its_bits_do_not_depend_on_the_
         "print(hashlib.sha256(np.concatenate([Ad.ravel(), Bd, Ed]).tobytes()).hexdigest())"
     )
     here = LateralError(LateralErrorParams(), 8.3).discrete(0.01)
-    import hashlib
-    import os
-
     expected = hashlib.sha256(np.concatenate([here[0].ravel(), here[1], here[2]]).tobytes()).hexdigest()
     for kernel in ("Haswell", "Nehalem"):
         env = {**os.environ, "OPENBLAS_CORETYPE": kernel}
