@@ -30,7 +30,8 @@ CHILDREN: dict[str, set[str]] = {
         "Entities",
         "Storyboard",
     },
-    "FileHeader": set(),
+    "FileHeader": {"License"},
+    "License": set(),
     "ParameterDeclarations": {"ParameterDeclaration"},
     "ParameterDeclaration": set(),
     "CatalogLocations": {"VehicleCatalog"},
@@ -53,8 +54,9 @@ CHILDREN: dict[str, set[str]] = {
     "FrontAxle": set(),
     "RearAxle": set(),
     "AdditionalAxle": set(),
-    "Properties": {"Property"},
+    "Properties": {"Property", "File"},
     "Property": set(),
+    "File": set(),
     "Storyboard": {"Init", "Story", "StopTrigger"},
     "Init": {"Actions"},
     "Actions": {"Private"},
@@ -88,7 +90,7 @@ CHILDREN: dict[str, set[str]] = {
     "RoutingAction": {"FollowTrajectoryAction"},
     "FollowTrajectoryAction": {"Trajectory", "TrajectoryRef", "TimeReference", "TrajectoryFollowingMode"},
     "TrajectoryRef": {"Trajectory"},
-    "Trajectory": {"Shape"},
+    "Trajectory": {"ParameterDeclarations", "Shape"},
     "Shape": {"Polyline"},
     "Polyline": {"Vertex"},
     "Vertex": {"Position"},
@@ -96,7 +98,7 @@ CHILDREN: dict[str, set[str]] = {
     "None": set(),
     "Timing": set(),
     "TrajectoryFollowingMode": set(),
-    "Story": {"Act"},
+    "Story": {"ParameterDeclarations", "Act"},
     "Act": {"ManeuverGroup", "StartTrigger", "StopTrigger"},
     "ManeuverGroup": {"Actors", "Maneuver"},
     "Actors": {"EntityRef"},
@@ -140,6 +142,8 @@ NOT_USED = {
     "SceneGraphFile": "the 3D scene is not drawn",
     "Axles": "ego's own body for the ego; SUMO's for others",
     "Properties": "no property is read",
+    "License": "descriptive",
+    "File": "descriptive (a file the vehicle's properties name)",
     "Orientation": "the lane's heading is used",
 }
 
@@ -500,7 +504,22 @@ class _Builder:
             if ref is None:
                 raise self.error(inner, "<FollowTrajectoryAction> needs a <Trajectory>")
             traj_node = self.one(ref, "Trajectory")
-        poly = self.one(self.one(traj_node, "Shape"), "Polyline")
+        outer_values = self.values
+        self.values = self.scoped(traj_node)  # the trajectory's own parameters
+        try:
+            poly = self.one(self.one(traj_node, "Shape"), "Polyline")
+            vertices = self.vertices(poly)
+        finally:
+            self.values = outer_values
+        return self.follow_trajectory(inner, vertices, poly)
+
+    def scoped(self, node: Node) -> dict[str, object]:
+        """The parameter values inside ``node``: its own ``ParameterDeclarations`` (possibly
+        empty) on top of the values outside it (an inner name shadows an outer one)."""
+        decl = _declarations(self.path, node.child("ParameterDeclarations"), self.values)
+        return {**self.values, **{k: p.value for k, p in decl.items()}} if decl else self.values
+
+    def vertices(self, poly: Node) -> list[M.Vertex]:
         vertices = []
         for v in poly.all("Vertex"):
             t = self.raw(v, "time", None)
@@ -509,6 +528,9 @@ class _Builder:
             )
         if len(vertices) < 2:
             raise self.error(poly, f"<Polyline> needs at least two <Vertex> (found {len(vertices)})")
+        return vertices
+
+    def follow_trajectory(self, inner: Node, vertices: list[M.Vertex], poly: Node) -> M.FollowTrajectoryAction:
         timing = None
         tr = inner.child("TimeReference")
         if tr is not None and tr.child("Timing") is not None:
@@ -559,7 +581,12 @@ class _Builder:
                         c, f"parameter {ref!r} is not declared (declared: {', '.join(self.values) or 'none'})"
                     )
                 return M.Condition(
-                    kind=c.tag, rule=self.enum(c, "rule", M.RULES), value=self.str_(c, "value"), parameter=ref, **base
+                    kind=c.tag,
+                    rule=self.enum(c, "rule", M.RULES),
+                    value=self.str_(c, "value"),
+                    parameter=ref,
+                    parameter_value=self.values[ref],
+                    **base,
                 )
             return M.Condition(
                 kind=c.tag,
@@ -737,6 +764,9 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
     stories = []
     names: dict[str, int] = {}
     for st in sb.all("Story"):
+        # the story's own parameters: visible inside it, shadowing the file's
+        outer_values = b.values
+        b.values = b.scoped(st)
         acts = []
         for act in st.all("Act"):
             groups = []
@@ -784,6 +814,7 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
                 )
             )
             names.setdefault(acts[-1].name, act.line)
+        b.values = outer_values
         stories.append(M.Story(b.str_(st, "name", ""), tuple(acts), st.line))
         names.setdefault(stories[-1].name, st.line)
     stop = b.trigger(sb.child("StopTrigger"))

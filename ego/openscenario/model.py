@@ -183,6 +183,9 @@ class Condition:
     element_ref: str = ""
     state: str = ""
     parameter: str = ""
+    #: the parameter's value where the condition is (a story's own declaration shadows the
+    #: file's); parameters do not change during a run
+    parameter_value: object = None
     line: int = 0
 
 

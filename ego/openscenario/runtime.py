@@ -270,7 +270,7 @@ class Storyboard:
         if kind == "SimulationTimeCondition":
             return compare(c.rule, t, c.value)  # type: ignore[arg-type]
         if kind == "ParameterCondition":
-            value = self.scenario.values[c.parameter]
+            value = c.parameter_value
             if isinstance(value, (int, float)) and not isinstance(value, bool):
                 try:
                     return compare(c.rule, float(value), float(c.value))  # type: ignore[arg-type]

@@ -1,0 +1,102 @@
+"""Forms the industry's files use that ego's own files did not: parameters declared inside a
+Story and inside a Trajectory (empty too) with the standard's scoping, descriptive elements
+(License, File), speed dynamics of value 0 (a step) and negative rates (read by magnitude, as
+the reference player reads them). Each file here is hand-written for the test."""
+
+from __future__ import annotations
+
+import pytest
+from xosc_scenes import event, scene, sim_time, speed, trigger
+
+from ego.openscenario import model as M
+from ego.openscenario.loader import load
+
+
+@pytest.fixture(autouse=True)
+def _cache(tmp_path_factory, monkeypatch):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
+
+
+def _edit(path, old: str, new: str) -> None:
+    text = path.read_text()
+    assert old in text, old
+    path.write_text(text.replace(old, new, 1))
+
+
+def _actions(sc: M.Scenario) -> dict[str, M.PrivateAction]:
+    return {
+        a.name: a.action
+        for st in sc.stories
+        for act in st.acts
+        for g in act.groups
+        for man in g.maneuvers
+        for ev in man.events
+        for a in ev.actions
+    }
+
+
+def test_story_parameters_are_scoped_to_their_story(tmp_path):
+    """A Story's ParameterDeclarations are seen inside it and shadow the file's; outside the
+    story (here: the Init) the file's value holds."""
+    path = scene(
+        tmp_path,
+        [event("E", "A", speed("$Target"), trigger([sim_time("$When")]))],
+        params='<ParameterDeclaration name="Target" parameterType="double" value="10"/>'
+        '<ParameterDeclaration name="When" parameterType="double" value="1"/>',
+    )
+    _edit(
+        path,
+        '<Story name="S">',
+        '<Story name="S"><ParameterDeclarations>'
+        '<ParameterDeclaration name="Target" parameterType="double" value="${$When * 30}"/>'
+        "</ParameterDeclarations>",
+    )
+    sc = load(path)
+    action = _actions(sc)["EAction"]
+    assert isinstance(action, M.SpeedAction) and action.value == 30.0
+    assert sc.values["Target"] == 10.0  # the file's own value is unchanged
+    # --set reaches the file's parameter the story's declaration refers to
+    assert _actions(load(path, {"When": 2.0}))["EAction"].value == 60.0  # type: ignore[union-attr]
+
+
+def test_trajectory_parameters_and_descriptive_elements(tmp_path):
+    verts = "".join(
+        f'<Vertex time="{t}"><Position><WorldPosition x="{x}" y="-3.5"/></Position></Vertex>'
+        for t, x in ((0, 420), (2, "$EndX"))
+    )
+    traj = (
+        '<RoutingAction><FollowTrajectoryAction><Trajectory name="t" closed="false"><ParameterDeclarations>'
+        '<ParameterDeclaration name="EndX" parameterType="double" value="460"/></ParameterDeclarations>'
+        f"<Shape><Polyline>{verts}</Polyline></Shape></Trajectory><TimeReference><None/></TimeReference>"
+        "</FollowTrajectoryAction></RoutingAction>"
+    )
+    empty = traj.replace(
+        '<ParameterDeclarations><ParameterDeclaration name="EndX" parameterType="double" value="460"/>'
+        "</ParameterDeclarations>",
+        "<ParameterDeclarations/>",
+    ).replace("$EndX", "470")
+    path = scene(
+        tmp_path, [event("T", "C", traj, trigger([sim_time(1)])), event("U", "B", empty, trigger([sim_time(1)]))]
+    )
+    _edit(path, 'author="ego tests"/>', 'author="ego tests"><License name="CC-BY-SA-4.0"/></FileHeader>')
+    _edit(
+        path,
+        'maxDeceleration="4.5"/>',
+        'maxDeceleration="4.5"/><Properties><Property name="p" value="1"/><File filepath="car.osgb"/></Properties>',
+    )
+    actions = _actions(load(path))
+    assert actions["TAction"].vertices[1].position.x == 460.0  # type: ignore[union-attr]
+    assert actions["UAction"].vertices[1].position.x == 470.0  # type: ignore[union-attr]
+
+
+def test_a_trajectory_parameter_is_not_seen_outside_it(tmp_path):
+    traj = (
+        '<RoutingAction><FollowTrajectoryAction><Trajectory name="t" closed="false"><ParameterDeclarations>'
+        '<ParameterDeclaration name="EndX" parameterType="double" value="460"/></ParameterDeclarations>'
+        '<Shape><Polyline><Vertex><Position><WorldPosition x="420" y="-3.5"/></Position></Vertex>'
+        '<Vertex><Position><WorldPosition x="$EndX" y="-3.5"/></Position></Vertex></Polyline></Shape>'
+        "</Trajectory><TimeReference><None/></TimeReference></FollowTrajectoryAction></RoutingAction>"
+    )
+    path = scene(tmp_path, [event("T", "C", traj, trigger([sim_time(1)])), event("V", "B", speed("$EndX"), None)])
+    with pytest.raises(Exception, match=r"scene.xosc:\d+: parameter '\$EndX' is not declared"):
+        load(path)
