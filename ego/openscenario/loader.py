@@ -447,11 +447,15 @@ class _Builder:
         shape = self.enum(node, "dynamicsShape", M.SHAPES)
         dims = M.DIMENSIONS if rate_ok else ("time", "distance")
         dim = self.enum(node, "dynamicsDimension", dims)
-        value = self.num(node, "value", nonneg=True)
-        if shape != "step" and value <= 0.0:
-            raise self.error(
-                node, f"bad value for value in <{node.tag}>: {value:g} (expected > 0 for dynamicsShape {shape})"
-            )
+        # a rate is read by its magnitude, as the reference player (esmini) reads the negative
+        # braking rates its files write; a duration or distance must not be negative
+        value = self.num(node, "value")
+        if dim == "rate":
+            value = abs(value)
+        elif value < 0.0:
+            raise self.error(node, f"bad value for value in <{node.tag}>: {value:g} (expected >= 0)")
+        if value == 0.0:
+            return M.Dynamics("step", dim, 0.0)  # a transition of no duration is a step (the standard)
         return M.Dynamics(shape, dim, value)
 
     def private_action(self, node: Node) -> M.PrivateAction:

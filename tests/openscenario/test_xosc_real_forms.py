@@ -6,9 +6,10 @@ the reference player reads them). Each file here is hand-written for the test.""
 from __future__ import annotations
 
 import pytest
-from xosc_scenes import event, scene, sim_time, speed, trigger
+from xosc_scenes import event, run_scene, scene, sim_time, speed, trigger
 
 from ego.openscenario import model as M
+from ego.openscenario.dynamics import Transition, speed_duration
 from ego.openscenario.loader import load
 
 
@@ -100,3 +101,41 @@ def test_a_trajectory_parameter_is_not_seen_outside_it(tmp_path):
     path = scene(tmp_path, [event("T", "C", traj, trigger([sim_time(1)])), event("V", "B", speed("$EndX"), None)])
     with pytest.raises(Exception, match=r"scene.xosc:\d+: parameter '\$EndX' is not declared"):
         load(path)
+
+
+def test_zero_value_is_a_step_and_negative_rates_are_read_by_magnitude(tmp_path):
+    path = scene(
+        tmp_path,
+        [
+            event("Zero", "A", speed(20, "linear", "time", 0.0), trigger([sim_time(1)])),
+            event("ZeroRate", "B", speed(20, "linear", "rate", 0.0), trigger([sim_time(1)])),
+            event("Brake", "C", speed(7, "linear", "rate", -4.0), trigger([sim_time(1)])),
+        ],
+    )
+    actions = _actions(load(path))
+    assert actions["ZeroAction"].dynamics == M.Dynamics("step", "time", 0.0)  # type: ignore[union-attr]
+    assert actions["ZeroRateAction"].dynamics == M.Dynamics("step", "rate", 0.0)  # type: ignore[union-attr]
+    assert actions["BrakeAction"].dynamics == M.Dynamics("linear", "rate", 4.0)  # type: ignore[union-attr]
+
+
+def test_a_negative_duration_is_still_refused(tmp_path):
+    path = scene(tmp_path, [event("N", "A", speed(20, "linear", "time", -1.0), trigger([sim_time(1)]))])
+    with pytest.raises(Exception, match=r"bad value for value in <SpeedActionDynamics>: -1 \(expected >= 0\)"):
+        load(path)
+
+
+@pytest.mark.sumo
+def test_a_negative_braking_rate_brakes_as_its_magnitude(tmp_path):
+    """C brakes from 15 to 7 m/s at -4 m/s^2 (the reference player's form): SUMO's speed is the
+    closed-form linear profile of rate 4 within 1e-6, and A's value-0 change is a step."""
+    evs = [
+        event("Brake", "C", speed(7, "linear", "rate", -4.0), trigger([sim_time(0.95)])),
+        event("Zero", "A", speed(20, "linear", "time", 0.0), trigger([sim_time(0.95)])),
+    ]
+    sc = run_scene(scene(tmp_path, evs), 4.0)
+    brake = Transition(1.0, 15.0, 7.0, speed_duration("linear", "rate", 4.0, 15.0, 7.0), "linear")
+    step = Transition(1.0, 25.0, 20.0, 0.0, "step")
+    for t, v, _ in sc._history["C"]:
+        assert v == pytest.approx(brake.value(t), abs=1e-6), t
+    for t, v, _ in sc._history["A"]:
+        assert v == pytest.approx(step.value(t), abs=1e-6), t
