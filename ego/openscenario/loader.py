@@ -597,6 +597,7 @@ class _Builder:
                 element_type=self.enum(c, "storyboardElementType", M.ELEMENT_TYPES),
                 element_ref=self.str_(c, "storyboardElementRef"),
                 state=self.enum(c, "state", M.STATES),
+                ref_line=c.line,
                 **base,
             )
         te = self.one(inner, "TriggeringEntities")
@@ -852,12 +853,34 @@ def _conditions(scenario: M.Scenario):
             yield from group
 
 
+def _paths(scenario: M.Scenario):
+    """(element type, path of names from its story down) of every storyboard element."""
+    for st in scenario.stories:
+        yield "story", (st.name,)
+        for act in st.acts:
+            pa = (st.name, act.name)
+            yield "act", pa
+            for g in act.groups:
+                pg = (*pa, g.name)
+                yield "maneuverGroup", pg
+                for man in g.maneuvers:
+                    pm = (*pg, man.name)
+                    yield "maneuver", pm
+                    for ev in man.events:
+                        yield "event", (*pm, ev.name)
+                        for a in ev.actions:
+                            yield "action", (*pm, ev.name, a.name)
+
+
 def _check_refs(scenario: M.Scenario, names: dict[str, int]) -> None:
-    """StoryboardElementStateConditions name existing elements."""
+    """StoryboardElementStateConditions name existing elements of their type, by name or
+    qualified (``Event::Action``, OpenSCENARIO 1.1); an error names the line of the reference."""
+    known = {(kind, q) for kind, path in _paths(scenario) for q in M.qualified_names(path)}
     for c in _conditions(scenario):
-        if c.kind == "StoryboardElementStateCondition" and c.element_ref not in names:
+        if c.kind == "StoryboardElementStateCondition" and (c.element_type, c.element_ref) not in known:
             raise ScenarioFileError(
                 scenario.path,
-                c.line,
-                f"unknown storyboard element {c.element_ref!r} (elements: {', '.join(names) or 'none'})",
+                c.ref_line or c.line,
+                f"unknown storyboard {c.element_type} {c.element_ref!r} "
+                f"(elements: {', '.join(names) or 'none'}; qualify with '::', e.g. 'Event::Action')",
             )

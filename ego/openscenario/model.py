@@ -187,6 +187,7 @@ class Condition:
     #: file's); parameters do not change during a run
     parameter_value: object = None
     line: int = 0
+    ref_line: int = 0  #: the line of the StoryboardElementStateCondition (its reference)
 
 
 @dataclass(frozen=True)
@@ -263,3 +264,10 @@ class Scenario:
     stories: tuple[Story, ...]
     stop: Trigger | None
     elements: list[tuple[str, str, int, bool]] = field(default_factory=list)  #: (tag, note, line, supported)
+
+
+def qualified_names(path: tuple[str, ...]) -> list[str]:
+    """The names a storyboard element at ``path`` (its enclosing elements' names, outermost
+    first, then its own) is referred to by: its own name and, OpenSCENARIO 1.1's qualified
+    forms, every ``Outer::...::Name`` that ends with it (``CutInEvent::CutInAction``)."""
+    return ["::".join(path[i:]) for i in range(len(path) - 1, -1, -1)]

@@ -166,23 +166,28 @@ class Storyboard:
             self.states[name].length, self.states[name].width = ent.vehicle.length, ent.vehicle.width
         self.conditions: dict[int, ConditionState] = {}
         self.by_name: dict[tuple[str, str], list[Element]] = {}
+        self.elements: list[Element] = []
         self.stories: list[Element] = []
         for st in scenario.stories:
-            story = self._element("story", st.name, st)
+            story = self._element("story", (st.name,), st)
             for act in st.acts:
-                a = self._element("act", act.name, act)
+                pa = (st.name, act.name)
+                a = self._element("act", pa, act)
                 story.children.append(a)
                 for g in act.groups:
-                    mg = self._element("maneuverGroup", g.name, g, g.max_count)
+                    pg = (*pa, g.name)
+                    mg = self._element("maneuverGroup", pg, g, g.max_count)
                     a.children.append(mg)
                     for man in g.maneuvers:
-                        mm = self._element("maneuver", man.name, man)
+                        pm = (*pg, man.name)
+                        mm = self._element("maneuver", pm, man)
                         mg.children.append(mm)
                         for ev in man.events:
-                            e = self._element("event", ev.name, ev, ev.max_count)
+                            pe = (*pm, ev.name)
+                            e = self._element("event", pe, ev, ev.max_count)
                             mm.children.append(e)
                             for action in ev.actions:
-                                e.children.append(self._element("action", action.name, action))
+                                e.children.append(self._element("action", (*pe, action.name), action))
             self.stories.append(story)
         for cond in self._all_conditions():
             self.conditions[id(cond)] = ConditionState(cond)
@@ -194,9 +199,13 @@ class Storyboard:
         self.t = 0.0
         self._fired: dict[int, bool] = {}
 
-    def _element(self, kind: str, name: str, node, max_count: int = 1) -> Element:
-        el = Element(kind, name, node, max_count)
-        self.by_name.setdefault((kind, name), []).append(el)
+    def _element(self, kind: str, path: tuple[str, ...], node, max_count: int = 1) -> Element:
+        """The element at ``path`` (names from its story down), found by its name and by every
+        qualified form of it."""
+        el = Element(kind, path[-1], node, max_count)
+        self.elements.append(el)
+        for name in M.qualified_names(path):
+            self.by_name.setdefault((kind, name), []).append(el)
         return el
 
     def _all_conditions(self):
@@ -309,9 +318,8 @@ class Storyboard:
         commands for [t, t + step]."""
         self.t = t
         self._evaluate(t)
-        for els in self.by_name.values():
-            for el in els:
-                el.transitions.clear()
+        for el in self.elements:
+            el.transitions.clear()
         if self._trigger(self.scenario.stop, False) and not self.stopped:
             self.stopped = True
             self.log("storyboard", f"t = {t:.2f} s: storyboard StopTrigger: the scenario ends")

@@ -297,9 +297,20 @@ HAND = [
             '<StoryboardElementStateCondition storyboardElementType="event" '
             'storyboardElementRef="Nope" state="endTransition"/>',
         ),
-        '<Condition name="BrakeTime"',
-        "unknown storyboard element 'Nope' (elements: LeadBrakeAction, LeadBrakeEvent, LeadManeuver, LeadGroup, "
-        "Brake, LeadBrakes)",
+        'storyboardElementRef="Nope"',
+        "unknown storyboard event 'Nope' (elements: LeadBrakeAction, LeadBrakeEvent, LeadManeuver, LeadGroup, "
+        "Brake, LeadBrakes; qualify with '::', e.g. 'Event::Action')",
+    ),
+    (
+        "element-ref-qualified-wrongly",
+        sub(
+            SIM_TIME,
+            '<StoryboardElementStateCondition storyboardElementType="action" '
+            'storyboardElementRef="LeadManeuver::LeadBrakeAction" state="endTransition"/>',
+        ),
+        'storyboardElementRef="LeadManeuver::',
+        "unknown storyboard action 'LeadManeuver::LeadBrakeAction' (elements: LeadBrakeAction, LeadBrakeEvent, "
+        "LeadManeuver, LeadGroup, Brake, LeadBrakes; qualify with '::', e.g. 'Event::Action')",
     ),
     (
         "lane-change-in-init",

@@ -6,7 +6,7 @@ the reference player reads them). Each file here is hand-written for the test.""
 from __future__ import annotations
 
 import pytest
-from xosc_scenes import event, run_scene, scene, sim_time, speed, trigger
+from xosc_scenes import event, run_scene, scene, sim_time, speed, starts, trigger
 
 from ego.openscenario import model as M
 from ego.openscenario.dynamics import Transition, speed_duration
@@ -139,3 +139,41 @@ def test_a_negative_braking_rate_brakes_as_its_magnitude(tmp_path):
         assert v == pytest.approx(brake.value(t), abs=1e-6), t
     for t, v, _ in sc._history["A"]:
         assert v == pytest.approx(step.value(t), abs=1e-6), t
+
+
+def _state(ref: str, st: str, kind: str) -> str:
+    return trigger(
+        [
+            f'<Condition name="s" delay="0" conditionEdge="none"><ByValueCondition>'
+            f'<StoryboardElementStateCondition storyboardElementType="{kind}" '
+            f'storyboardElementRef="{ref}" state="{st}"/></ByValueCondition></Condition>'
+        ]
+    )
+
+
+@pytest.mark.sumo
+def test_qualified_references_resolve(tmp_path):
+    """``Event::Action`` and ``Story::Act::Group::Maneuver::Event`` (OpenSCENARIO 1.1) name
+    the element they end with: the dependent events start as the plain names' would (a
+    state condition sees a transition one step after it happened)."""
+    evs = [
+        event("First", "A", speed(25), trigger([sim_time(0.95)])),
+        event("ByAction", "C", speed(15), _state("First::FirstAction", "completeState", "action")),
+        event("ByPath", "B", speed(15), _state("S::Act::GA::MA::First", "startTransition", "event")),
+    ]
+    sc = run_scene(scene(tmp_path, evs), 2.0)
+    assert starts(sc, "First") == [pytest.approx(1.0)]
+    assert starts(sc, "ByPath") == [pytest.approx(1.1)]
+    assert starts(sc, "ByAction") == [pytest.approx(1.2)]
+
+
+def test_an_unknown_reference_names_its_own_line(tmp_path):
+    evs = [
+        event("First", "A", speed(25), trigger([sim_time(0.95)])),
+        event("Bad", "C", speed(15), _state("Other::FirstAction", "completeState", "action")),
+    ]
+    path = scene(tmp_path, evs)
+    path.write_text(path.read_text().replace("<StoryboardElementStateCondition", "\n<StoryboardElementStateCondition"))
+    line = next(i for i, t in enumerate(path.read_text().splitlines(), 1) if "StoryboardElementStateCondition" in t)
+    with pytest.raises(Exception, match=rf"scene.xosc:{line}: unknown storyboard action 'Other::FirstAction'"):
+        load(path)
