@@ -26,6 +26,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
@@ -767,8 +768,13 @@ def file_listing(path: str, ego: str = "") -> dict:
     from ego.params import describe
 
     root = read_tree(path)
-    decl = root.child("ParameterDeclarations")
-    params = _declarations(path, decl, {}) if decl is not None else {}
+    try:
+        params = declared_parameters(path)
+    except ScenarioFileError:  # refused (the check below names why): its own declarations if readable
+        try:
+            params = _declarations(path, root.child("ParameterDeclarations"), {})
+        except ScenarioFileError:
+            params = {}
     ents = root.child("Entities")
     entities = []
     for so in ents.all("ScenarioObject") if ents is not None else ():
@@ -788,12 +794,14 @@ def file_listing(path: str, ego: str = "") -> dict:
         chosen = None  # noted in the listing: the file is listed to find out why
     els = elements(root)
     own = {f.name for f in dataclasses.fields(FileConfig)}
-    # the ego's parameters as a run of this file starts them (its Init's speed, lane, start);
-    # FileConfig's own defaults where the file is refused
+    # the checks of ego run, the same calls (one validation path): the ego's parameters as a
+    # run of this file starts them (its Init's speed, lane, start), or the run's first error
+    # and FileConfig's own defaults where the file is refused
+    error = None
     try:
-        start = file_scenario_class(path).default_config({"ego_entity": chosen} if ego else {})
-    except ConfigError:
-        start = FileConfig()
+        start = check_file(path, {"ego_entity": chosen} if ego else {})
+    except ConfigError as exc:
+        error, start = str(exc), FileConfig()
     return {
         "file": path,
         "parameters": [
@@ -808,14 +816,28 @@ def file_listing(path: str, ego: str = "") -> dict:
             if i.name not in params
         ],
         "elements": [{"element": tag, "line": line, "supported": ok} for tag, line, ok in els],
-        "supported": all(ok for _, _, ok in els),
+        "supported": error is None and all(ok for _, _, ok in els),
+        "error": error,
     }
+
+
+def check_file(path: str, overrides: Mapping[str, object]):
+    """What ``ego run FILE`` checks before it runs (its configuration with ``overrides``, as
+    the runner makes it), shared by ``ego list FILE``: the configuration, or the first error."""
+    cls = file_scenario_class(path)
+    config = cls.default_config(overrides)
+    cls.check_config(config)
+    return config
 
 
 def print_listing(listing: dict) -> str:
     """The listing as text."""
     out = [
         f"{listing['file']}: {'every element supported' if listing['supported'] else 'NOT SUPPORTED (see below)'}",
+    ]
+    if listing.get("error"):
+        out.append(f"  ego run refuses it: {listing['error']}")
+    out += [
         "",
         "parameters (--set NAME=VALUE):",
     ]

@@ -5,12 +5,18 @@ the reference player reads them). Each file here is hand-written for the test.""
 
 from __future__ import annotations
 
+import json
+import shutil
+from pathlib import Path
+
 import pytest
 from xosc_scenes import event, run_scene, scene, sim_time, speed, starts, trigger
 
 from ego.openscenario import model as M
 from ego.openscenario.dynamics import Transition, speed_duration
 from ego.openscenario.loader import load
+
+SHIPPED = Path(__file__).resolve().parents[2] / "scenarios" / "openscenario"
 
 
 @pytest.fixture(autouse=True)
@@ -177,3 +183,90 @@ def test_an_unknown_reference_names_its_own_line(tmp_path):
     line = next(i for i, t in enumerate(path.read_text().splitlines(), 1) if "StoryboardElementStateCondition" in t)
     with pytest.raises(Exception, match=rf"scene.xosc:{line}: unknown storyboard action 'Other::FirstAction'"):
         load(path)
+
+
+# -- one validation path: ego list checks what ego run checks ------------------------------------
+def _cut_in(tmp_path):
+    shutil.copytree(SHIPPED / "catalogs", tmp_path / "catalogs")
+    shutil.copy(SHIPPED / "straight3.xodr", tmp_path / "straight3.xodr")
+    path = tmp_path / "cut_in.xosc"
+    path.write_text((SHIPPED / "cut_in.xosc").read_text())
+    return path
+
+
+def _list_and_run(path, capsys) -> tuple[dict, str]:
+    from ego.cli import main
+
+    assert main(["list", str(path), "--json"]) == 0
+    listing = json.loads(capsys.readouterr().out)
+    assert main(["run", str(path), "-c", "pid", "--set", "duration=1"]) == 2
+    return listing, capsys.readouterr().err.strip()
+
+
+def _line(path, marker: str) -> int:
+    text = path.read_text()
+    return text.count("\n", 0, text.index(marker)) + 1
+
+
+def test_list_refuses_what_run_refuses(tmp_path, capsys):
+    """A TrailerHitch inside a vehicle catalog entry, a bad attribute value and an Init action
+    outside the subset: ego list says NOT SUPPORTED with ego run's own one-line error, which
+    names the line of the element itself."""
+    path = _cut_in(tmp_path)
+    cat = tmp_path / "catalogs" / "VehicleCatalog.xosc"
+    cat.write_text(cat.read_text().replace("</Axles>", '</Axles>\n      <TrailerHitch dx="-1"/>'))
+    listing, err = _list_and_run(path, capsys)
+    assert listing["supported"] is False
+    assert listing["error"] == f"{cat}:{_line(cat, '<TrailerHitch')}: " + unsupported_text("TrailerHitch")
+    assert err == f"ego: error: {listing['error']}"
+
+    path = _cut_in(tmp_path / "b")
+    text = path.read_text()
+    path.write_text(text.replace('maximumExecutionCount="1"', 'maximumExecutionCount="once"', 1))
+    listing, err = _list_and_run(path, capsys)
+    assert listing["supported"] is False and err == f"ego: error: {listing['error']}"
+    assert listing["error"].startswith(f"{path}:{_line(path, 'maximumExecutionCount=')}: bad value")
+
+    path = _cut_in(tmp_path / "c")
+    text = path.read_text()
+    relative = (
+        '<PrivateAction><LongitudinalAction><SpeedAction><SpeedActionDynamics dynamicsShape="step" value="0" '
+        'dynamicsDimension="time"/><SpeedActionTarget>\n<RelativeTargetSpeed entityRef="Ego" value="1" '
+        'speedTargetValueType="delta" continuous="false"/></SpeedActionTarget></SpeedAction>'
+        "</LongitudinalAction></PrivateAction>"
+    )
+    i = text.index("</Private>", text.index("<Init>"))
+    path.write_text(text[:i] + relative + text[i:])
+    listing, err = _list_and_run(path, capsys)
+    assert listing["supported"] is False and err == f"ego: error: {listing['error']}"
+    assert listing["error"].startswith(f"{path}:{text.count(chr(10), 0, i) + 1}: <LongitudinalAction> in <Init>")
+
+
+def unsupported_text(tag: str) -> str:
+    return f"<{tag}> is not supported by ego (see docs/openscenario.md)"
+
+
+def test_a_parameter_declared_twice_is_handled_alike(tmp_path, capsys):
+    """Twice in different scopes (the file's and a story's) is shadowing: list and run accept
+    it; twice in one scope both name the second declaration's line."""
+    from ego.cli import main
+
+    path = _cut_in(tmp_path)
+    text = path.read_text()
+    first = text[text.index("<ParameterDeclaration ") : text.index("/>", text.index("<ParameterDeclaration ")) + 2]
+    path.write_text(_story_decl(text, first))
+    assert main(["list", str(path), "--json"]) == 0
+    listing = json.loads(capsys.readouterr().out)
+    assert listing["supported"] is True and listing["error"] is None
+    assert main(["run", str(path), "-c", "pid", "--set", "duration=1"]) == 0
+    capsys.readouterr()
+
+    path.write_text(text.replace(first, first + "\n    " + first, 1))
+    listing, err = _list_and_run(path, capsys)
+    assert listing["supported"] is False and err == f"ego: error: {listing['error']}"
+    assert f":{_line(path, first) + 1}: parameter " in listing["error"] and "declared twice" in listing["error"]
+
+
+def _story_decl(text: str, decl: str) -> str:
+    i = text.index(">", text.index("<Story ")) + 1
+    return text[:i] + f"<ParameterDeclarations>{decl}</ParameterDeclarations>" + text[i:]
