@@ -16,6 +16,7 @@ from __future__ import annotations
 import hashlib
 import math
 import os
+import re
 import subprocess
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
@@ -68,13 +69,21 @@ def network_file(road: Path) -> Path:
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_name(f".{key}.{os.getpid()}.net.xml")
     env = {**os.environ, "SUMO_HOME": str(exe.parent.parent)}
-    proc = subprocess.run(
-        [str(exe), "--opendrive-files", str(road), "-o", str(tmp), *OPTIONS],
-        capture_output=True,
-        text=True,
-        env=env,
-        check=False,
-    )
+    source, patched = road, _signal_types(data)
+    if patched is not None:  # netconvert's copy with the signals' empty types filled in
+        source = out.with_name(f".{key}.{os.getpid()}.xodr")
+        source.write_bytes(patched)
+    try:
+        proc = subprocess.run(
+            [str(exe), "--opendrive-files", str(source), "-o", str(tmp), *OPTIONS],
+            capture_output=True,
+            text=True,
+            env=env,
+            check=False,
+        )
+    finally:
+        if source != road:
+            source.unlink(missing_ok=True)
     if proc.returncode != 0 or not tmp.is_file():
         tmp.unlink(missing_ok=True)
         lines = [ln.strip() for ln in (proc.stderr + proc.stdout).splitlines() if ln.strip()]
@@ -92,6 +101,20 @@ def network_file(road: Path) -> Path:
         )
     os.replace(tmp, out)
     return out
+
+
+_EMPTY_TYPE = re.compile(rb"""(\s(?:sub)?type\s*=\s*)(["'])\2""")
+_SIGNAL = re.compile(rb"<signal\b[^>]*>")
+
+
+def _signal_types(data: bytes) -> bytes | None:
+    """``data`` with every road signal's empty ``type``/``subtype`` written ``-1`` (OpenDRIVE's
+    "none"; netconvert refuses the whole file over an empty one, and ego uses no signal), or
+    None when there is none to fill in."""
+    if b"<signal" not in data:
+        return None
+    fixed = _SIGNAL.sub(lambda m: _EMPTY_TYPE.sub(rb'\1"-1"', m.group(0)), data)
+    return None if fixed == data else fixed
 
 
 @dataclass(frozen=True)
@@ -174,16 +197,29 @@ class RoadMap:
         if not self.converted:
             e = self.edges.get(road)
             return [(0.0, e, True)] if e is not None else []
-        out = []
+        # netconvert splits some roads (a road that loops onto itself: ``-1#0``, ``-1#1``):
+        # the pieces of one lane section follow each other in driving order, so a piece
+        # starts where the ones before it end (on the side driven against s, the other way)
+        pieces: dict[tuple[float, bool], list[tuple[int, Edge]]] = {}
         for eid, e in self.edges.items():
             right = eid.startswith("-")
-            base = eid[1:] if right else eid
+            base, _, piece = (eid[1:] if right else eid).partition("#")
             name, _, start = base.partition(".")
-            if name == road:
+            if name == road and e.lanes:
                 try:
-                    out.append((float(start) if start else 0.0, e, right))
+                    key = (float(start) if start else 0.0, right)
+                    pieces.setdefault(key, []).append((int(piece) if piece else 0, e))
                 except ValueError:
                     continue
+        out = []
+        for (start, right), parts in pieces.items():
+            parts.sort(key=lambda x: x[0])
+            if not right:
+                parts.reverse()  # driven against s: the last piece starts the section
+            s0 = start
+            for _, e in parts:
+                out.append((s0, e, right))
+                s0 += e.lanes[-1].length  # the lane next to the reference line
         return sorted(out, key=lambda x: x[0])
 
     def lane_position(self, road: str, lane: int, s: float) -> tuple[Lane, float]:
@@ -200,7 +236,9 @@ class RoadMap:
             )
         if not secs:
             known = sorted(
-                {(eid.removeprefix("-")).partition(".")[0] for eid in self.edges} if self.converted else self.edges
+                {(eid.removeprefix("-")).partition("#")[0].partition(".")[0] for eid in self.edges}
+                if self.converted
+                else self.edges
             )
             raise ValueError(f"unknown road {road!r} (roads: {', '.join(known)})")
         start, edge, right = secs[0]

@@ -270,3 +270,58 @@ def test_a_parameter_declared_twice_is_handled_alike(tmp_path, capsys):
 def _story_decl(text: str, decl: str) -> str:
     i = text.index(">", text.index("<Story ")) + 1
     return text[:i] + f"<ParameterDeclarations>{decl}</ParameterDeclarations>" + text[i:]
+
+
+# -- roads netconvert splits or refuses -----------------------------------------------------------
+LOOP = """<?xml version="1.0" encoding="UTF-8"?>
+<OpenDRIVE>
+  <header revMajor="1" revMinor="6" name="loop" version="1.0"/>
+  <road name="loop" length="628.3185307179586" id="1" junction="-1">
+    <link><predecessor elementType="road" elementId="1" contactPoint="end"/>
+    <successor elementType="road" elementId="1" contactPoint="start"/></link>
+    <planView><geometry s="0" x="0" y="-100" hdg="0" length="628.3185307179586"><arc curvature="0.01"/></geometry>
+    </planView>
+    <lanes><laneSection s="0"><center><lane id="0" type="none" level="false"/></center><right>
+      <lane id="-1" type="driving" level="false"><link/><width sOffset="0" a="3.5" b="0" c="0" d="0"/></lane>
+    </right></laneSection></lanes>
+  </road>
+</OpenDRIVE>
+"""
+
+
+def test_a_road_netconvert_splits_resolves(tmp_path):
+    """A road that loops onto itself is split by netconvert into ``-1#0`` and ``-1#1``; an s
+    past the first piece is on the second, at s minus the first piece's length."""
+    from ego.openscenario.roads import RoadMap, network_file
+
+    road = tmp_path / "loop.xodr"
+    road.write_text(LOOP)
+    roads = RoadMap(network_file(road), converted=True)
+    assert sorted(roads.edges) == ["-1#0", "-1#1"]
+    first = roads.edges["-1#0"].lanes[0].length
+    lane, pos = roads.lane_position("1", -1, 100.0)
+    assert (lane.edge, pos) == ("-1#0", 100.0)
+    lane, pos = roads.lane_position("1", -1, first + 50.0)
+    assert lane.edge == "-1#1" and pos == pytest.approx(50.0, abs=1e-9)
+    # the lane's centre is the circle of radius 100 + 1.75 about the origin
+    x, y = lane.shape[0]
+    assert (x * x + y * y) ** 0.5 == pytest.approx(101.75, abs=1e-3)
+    with pytest.raises(ValueError, match=r"unknown road '2' \(roads: 1\)"):
+        roads.lane_position("2", -1, 10.0)
+
+
+def test_a_signal_with_an_empty_type_converts(tmp_path):
+    from ego.openscenario.roads import RoadMap, network_file
+
+    text = (SHIPPED / "straight3.xodr").read_text()
+    signal = (
+        '<signals><signal s="500" t="-6" id="s1" name="sign" dynamic="no" orientation="+" zOffset="1" '
+        'country="DE" type="" subtype="" value="-1" height="1" width="1"/></signals>'
+    )
+    road = tmp_path / "signed.xodr"
+    road.write_text(text.replace("  </road>", signal + "\n  </road>"))
+    roads = RoadMap(network_file(road), converted=True)
+    lane, pos = roads.lane_position("0", -2, 600.0)
+    assert (lane.edge, pos) == ("-0", 600.0)
+    assert ' type="" subtype=""' in road.read_text()  # the file itself is not changed
+    assert not [p for p in network_file(road).parent.iterdir() if p.suffix == ".xodr"]
