@@ -214,7 +214,7 @@ def convert(kind: str, raw: object, what: str) -> object:
             raise ValueError(f"bad value for {what}: {raw!r} (expected an integer)") from None
         if f != int(f) or (kind.startswith("unsigned") and f < 0):
             raise ValueError(
-                f"bad value for {what}: {raw!r} (expected a{'' if kind[0] == 'i' else 'n unsigned'} integer)"
+                f"bad value for {what}: {raw!r} (expected {'an' if kind[0] == 'i' else 'an unsigned'} integer)"
             )
         return int(f)
     if kind == "boolean":

@@ -302,6 +302,33 @@ HAND = [
         "Brake, LeadBrakes; qualify with '::', e.g. 'Event::Action')",
     ),
     (
+        "story-parameter-twice",
+        sub(
+            '<Story name="LeadBrakes">',
+            '<Story name="LeadBrakes"><ParameterDeclarations>\n'
+            '<ParameterDeclaration name="Lag" parameterType="double" value="1"/>\n'
+            '<ParameterDeclaration name="Lag" parameterType="double" value="2"/></ParameterDeclarations>',
+        ),
+        'value="2"/></ParameterDeclarations>',
+        "parameter 'Lag' is declared twice (first on line 75)",
+    ),
+    (
+        "story-parameter-bad-value",
+        sub(
+            '<Story name="LeadBrakes">',
+            '<Story name="LeadBrakes"><ParameterDeclarations>\n'
+            '<ParameterDeclaration name="Lag" parameterType="integer" value="1.5"/></ParameterDeclarations>',
+        ),
+        'name="Lag"',
+        "bad value for parameter 'Lag': '1.5' (expected an integer)",
+    ),
+    (
+        "negative-duration",
+        sub(LEAD_ACTION, '<SpeedActionDynamics dynamicsShape="linear" value="-2" dynamicsDimension="time"/>'),
+        'value="-2"',
+        "bad value for value in <SpeedActionDynamics>: -2 (expected >= 0)",
+    ),
+    (
         "element-ref-qualified-wrongly",
         sub(
             SIM_TIME,
