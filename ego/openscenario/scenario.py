@@ -647,7 +647,10 @@ class FileScenario(Scenario):
     def cruise_references(self, obs, t: float) -> None:
         """The cruise references moved by the storyboard's actions on the ego (called by
         :class:`FileManoeuvre` after emergency-brake's own references)."""
-        t_board = t - self.config.sumo_step
+        # on the storyboard's clock: the storyboard at time t sees the ego as of t, so the
+        # reference at the ego's time t is the profile's value at t (an action started at t0
+        # reaches the ego's loop a SUMO step later, from where it is on the profile's time)
+        t_board = t
         if self._ego_profile is not None:
             v = self._ego_profile.value(t_board)
             if self._ego_relative is not None and self._ego_profile.done(t_board):

@@ -421,12 +421,15 @@ def test_actions_on_the_ego_move_its_references(tmp_path):
     t = sc.trace.array(0)
     cols = sc.trace.names
     times = t[:, cols.index("t")]
-    # a row at time t holds the references of storyboard time t - 0.1 (one SUMO step)
-    i = round(2.1 / 0.01)  # storyboard time 2.0, halfway along the speed ramp: 22 m/s
-    assert times[i] == pytest.approx(2.1)
+    # a row at time t holds the references of storyboard time t (the actions start at 1.0 on
+    # the storyboard's clock, as the scripted cars' do, not a SUMO step later)
+    i = round(2.0 / 0.01)  # halfway along the speed ramp: 22 m/s
+    assert times[i] == pytest.approx(2.0)
     assert t[i, cols.index("speed_ref")] == pytest.approx(22.0, abs=1e-9)
-    i = round(2.6 / 0.01)  # storyboard time 2.5, halfway across: 1.75 m short of the lane
+    i = round(2.5 / 0.01)  # halfway across: 1.75 m short of the lane
     assert t[i, cols.index("d_ref")] == pytest.approx(-1.75, abs=1e-9)
+    for k in range(round(1.1 / 0.01), round(3.0 / 0.01), 7):  # on the linear profile at every row
+        assert t[k, cols.index("speed_ref")] == pytest.approx(20.0 + 2.0 * (times[k] - 1.0), abs=1e-9)
 
 
 @pytest.mark.parametrize("who", ["Ego", "C"])
