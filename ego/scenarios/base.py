@@ -32,7 +32,7 @@ from ego.results.trace import Column, Metric, Plot, Trace
 from ego.results.traffic_log import TrafficCollector
 from ego.sim.protocol import TrafficSim
 from ego.sim.registry import SimSetup, make_sim
-from ego.sim.types import Collision
+from ego.sim.types import EGO, Collision
 
 STATUSES = ("completed", "ended", "collision", "diverged", "timeout", "interrupted", "error")
 #: the statuses that are no failure: the scenario's own end, or the duration ran out in a
@@ -701,8 +701,6 @@ class ComposedLoop:
             sc._series = lambda: parts.series(sc._signal_names, sc._signal_units)
 
     def _setup(self, rng: np.random.Generator) -> None:
-        from ego.scenarios.motorway import EGO
-
         parts = self.parts
         world, view = parts.world, parts.view
         bridge = self.bridge
