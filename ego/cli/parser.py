@@ -7,7 +7,7 @@ import argparse
 from ego import __version__
 from ego.checks import whole_number
 from ego.cli.common import Parser
-from ego.highway_env import BACKENDS
+from ego.sim.registry import backend_names
 
 
 def controllers_help() -> str:
@@ -25,6 +25,8 @@ def controllers_help() -> str:
 
 def parser() -> argparse.ArgumentParser:
     from ego.scenarios import SCENARIOS
+
+    backends = backend_names()  # the registry as it is now, plugins included
 
     ap = Parser(
         prog="ego",
@@ -97,7 +99,7 @@ def parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--backend",
         default="sumo",
-        choices=BACKENDS,
+        choices=backends,
         help="traffic simulator (default sumo; highway-env runs emergency-brake, fast-follower and cut-in)",
     )
     run.add_argument(
@@ -156,7 +158,7 @@ def parser() -> argparse.ArgumentParser:
         metavar="J",
         help="parallel processes (default: the number of CPUs)",
     )
-    cmp_.add_argument("--backend", default="sumo", choices=BACKENDS, help="traffic simulator (default sumo)")
+    cmp_.add_argument("--backend", default="sumo", choices=backends, help="traffic simulator (default sumo)")
     cmp_.add_argument(
         "--traces",
         default=None,
