@@ -4,7 +4,7 @@ or through others): every import in every module of ego, lazy ones in functions 
     foundation (params, checks, outputs, processes, native)
     < models, control, sim, results, parallel, record, sumo, highway_env, geometry
     < scenarios
-    < runner, plots, requirements
+    < runner, plots, requirements, specs
     < compare, sweep, falsify, gym, train, docs, cli
 """
 
@@ -45,7 +45,7 @@ LAYERS = [
         "ego.cluster",
     },
     {"ego.scenarios", "ego.openscenario"},
-    {"ego.runner", "ego.plots", "ego.requirements"},
+    {"ego.runner", "ego.plots", "ego.requirements", "ego.specs"},
     {
         "ego.compare",
         "ego.sweep",
