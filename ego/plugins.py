@@ -17,11 +17,19 @@ declare the task it drives in a ``task`` attribute (default: any task).
 Scenarios are named the same way (``package.module:Name`` or ``file.py:Name``, a
 :class:`ego.scenarios.Scenario` subclass).
 
-Installed packages register under names through entry points, groups ``ego.controllers``
-and ``ego.scenarios``::
+Installed packages register under names through entry points, groups ``ego.controllers``,
+``ego.scenarios``, ``ego.metrics`` and ``ego.backends``::
 
     [project.entry-points."ego.controllers"]
     my-pid = "my_package.control:MyPID"       # a class (its ``task`` attribute) or a spec
+    [project.entry-points."ego.metrics"]
+    my-metric = "my_package.metrics:METRIC"   # an ego.results.metrics.TraceMetric
+    [project.entry-points."ego.backends"]
+    my-sim = "my_package.sim:BACKEND"         # an ego.sim.registry.Backend
+
+Metrics and backends load where ego first reads their registry (the metrics a run reports
+or declares, a backend looked up by name or listed for ``--backend``), in the parent and in
+every process or Ray worker alike.
 
 Controller references resolve in :mod:`ego.control.references`, scenario references in
 :mod:`ego.scenarios.references`; this module holds what both share (importing a reference,
@@ -44,6 +52,10 @@ from ego.params import ConfigError
 
 CONTROLLER_GROUP = "ego.controllers"
 SCENARIO_GROUP = "ego.scenarios"
+#: a :class:`ego.results.metrics.TraceMetric` each (loaded by ego.results.metrics)
+METRIC_GROUP = "ego.metrics"
+#: a :class:`ego.sim.registry.Backend` each (loaded by ego.sim.registry)
+BACKEND_GROUP = "ego.backends"
 
 _lock = threading.Lock()
 _loaded_groups: set[str] = set()

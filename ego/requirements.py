@@ -559,49 +559,21 @@ def from_table(table, source: str) -> dict[str, str]:
 
 
 # -- defaults ---------------------------------------------------------------------------------------
-_NO_COLLISION = ("no_collision", "always (not collision)")
-_NO_AVOIDABLE = ("no_avoidable_collision", "always (not avoidable_collision)")
-#: the requirements every run of a scenario checks unless told otherwise (docs/requirements.md)
-DEFAULTS: dict[str, tuple[tuple[str, str], ...]] = {
-    "emergency-brake": (
-        _NO_AVOIDABLE,
-        _NO_COLLISION,
-        ("gap_or_clear", "always (gap_front >= 2 m or lateral_clear)"),
-        (
-            "aeb_slows",
-            "always (aeb_active implies eventually[0:1] (accel <= -4 m/s^2 or speed <= 1 m/s or not aeb_active))",
-        ),
-    ),
-    "cut-in": (
-        _NO_AVOIDABLE,
-        _NO_COLLISION,
-        ("ttc_or_clear", "always (ttc_front >= 1 s or lateral_clear)"),
-    ),
-    "fast-follower": (
-        _NO_COLLISION,
-        ("rear_ttc", "always (ttc_rear >= 0.5 s or lateral_clear)"),
-    ),
-    "curve": (_NO_COLLISION, ("friction", "always (abs(lat_accel) <= 7 m/s^2)")),
-    "lane-centering": (("in_lane", "always (abs(d) <= 1 m)"),),
-    "platoon": (_NO_COLLISION,),
-    "sine-tracking": (("tracks", "always (abs(e_lat) <= 2 m)"),),
-    "report-000": (("tracks", "always (abs(e_lat) <= 2 m)"),),
-}
-
-
 def defaults(scenario: str, cls: type | None = None) -> dict[str, str]:
-    """The scenario's default requirements (name -> formula): those of its name, else of the
-    nearest built-in scenario its class ``cls`` builds on (its ``base_scenario``: a scenario
-    file's are emergency-brake's); none for a scenario of a user's own."""
-    if scenario in DEFAULTS or cls is None:
-        return dict(DEFAULTS.get(scenario, ()))
-    if getattr(cls, "base_scenario", None) in DEFAULTS:
-        return dict(DEFAULTS[cls.base_scenario])  # type: ignore[attr-defined]
-    for base in cls.__mro__:
-        name = getattr(base, "name", None)
-        if isinstance(name, str) and name in DEFAULTS:
-            return dict(DEFAULTS[name])
-    return {}
+    """The scenario's default requirements (name -> formula), as its class declares them
+    (``Scenario.requirements``): ``cls``, else the registered scenario ``scenario``; a class
+    that names a ``base_scenario`` (a scenario file: emergency-brake) has that one's. None
+    for a name no scenario has (a reference resolves its class first)."""
+    from ego.scenarios import SCENARIOS
+
+    if cls is None:
+        cls = SCENARIOS.get(scenario)
+        if cls is None:
+            return {}
+    base = getattr(cls, "base_scenario", None)
+    if base in SCENARIOS:
+        cls = SCENARIOS[base]
+    return dict(getattr(cls, "requirements", ()))
 
 
 # -- resolving and evaluating -----------------------------------------------------------------------
@@ -805,13 +777,11 @@ def with_defaults(scenario: str, texts: Sequence[str]) -> tuple[tuple[str, str],
     if not texts:
         return None
     options = from_options(texts)
-    cls = None
-    if scenario not in DEFAULTS:  # a scenario file or a user's class: its base's defaults
-        from ego.params import ConfigError
-        from ego.scenarios import scenario_class
+    from ego.params import ConfigError
+    from ego.scenarios import scenario_class
 
-        try:
-            cls = scenario_class(scenario)
-        except ConfigError:
-            cls = None  # named wrongly: resolving the run says so
+    try:
+        cls = scenario_class(scenario)  # a scenario file or a user's class: its base's defaults
+    except ConfigError:
+        cls = None  # named wrongly: resolving the run says so
     return tuple({**defaults(scenario, cls), **options}.items())

@@ -326,9 +326,9 @@ def test_aeb_slows_holds_for_a_stop_at_any_speed_and_fails_an_aeb_that_does_not_
     is engaged, unless the car has stopped or the AEB released): a friction-limited stop from
     30 m/s takes 3.75 s at 8 m/s^2 and passes (a 'stopped within 3 s' form failed it); an
     engaged AEB under which the car keeps its speed fails from its engagement."""
-    from ego.requirements import DEFAULTS, signal_units
+    from ego.requirements import defaults, signal_units
 
-    formula = dict(DEFAULTS["emergency-brake"])["aeb_slows"]
+    formula = defaults("emergency-brake")["aeb_slows"]
     units = signal_units({"t": "s", "speed": "m/s"})
     req = parse(formula, units, "aeb_slows")
     t = np.round(np.arange(0.0, 8.0, 0.01), 2)
@@ -338,3 +338,40 @@ def test_aeb_slows_holds_for_a_stop_at_any_speed_and_fails_an_aeb_that_does_not_
     coasting = np.full(len(t), 30.0)
     v = evaluate(req, _result(t, events, speed=coasting))
     assert not v.passed and 1.0 <= v.violated_at <= 1.1
+
+
+def test_each_scenario_declares_its_default_requirements_and_a_subclass_inherits_them():
+    from ego.requirements import defaults
+    from ego.scenarios import SCENARIOS
+    from ego.scenarios.emergency_brake import EmergencyBrake
+
+    # the class attribute is the one place: defaults() by name reads it
+    for name, cls in SCENARIOS.items():
+        assert cls.requirements and defaults(name) == dict(cls.requirements)
+    assert defaults("curve") == {
+        "no_collision": "always (not collision)",
+        "friction": "always (abs(lat_accel) <= 7 m/s^2)",
+    }
+
+    class MyBrake(EmergencyBrake):
+        name = "my-brake"
+
+    assert defaults("my-brake", MyBrake) == defaults("emergency-brake")
+    assert defaults("no-such-scenario") == {}
+
+
+def test_a_backend_lacking_a_capability_the_scenario_needs_is_refused_in_one_line():
+    from ego.scenarios.base import check_backend
+    from ego.scenarios.tracking import SineTracking
+
+    class OffRoad(SineTracking):
+        name = "off-road"
+        backends = ("sumo", "highway-env")
+        needs = ("any_network",)
+
+    check_backend(OffRoad, "sumo")
+    with pytest.raises(ConfigError) as e:
+        check_backend(OffRoad, "highway-env")
+    assert str(e.value) == (
+        "bad value for --backend: 'highway-env' (scenario off-road needs any_network; backend highway-env lacks it)"
+    )

@@ -45,6 +45,49 @@ class Parser(argparse.ArgumentParser):
             (file or sys.stderr).write(message)
 
 
+# -- option groups every front end shares (ego run, compare, sweep, falsify, tune) -----------
+REQUIRE_HELP = (
+    "a requirement in signal temporal logic over the trace's signals, on top of the "
+    "scenario's defaults (repeatable; docs/requirements.md), e.g. "
+    '"keep_gap: always (gap_front >= 2 m)"'
+)
+
+
+def add_out(p: argparse.ArgumentParser, help: str, metavar: str = "DIR", required: bool = True) -> None:
+    """``--out``: the folder (or file) the command writes."""
+    if required:
+        p.add_argument("--out", required=True, metavar=metavar, help=help)
+    else:
+        p.add_argument("--out", default=None, metavar=metavar, help=help)
+
+
+def add_jobs(p: argparse.ArgumentParser, help: str, metavar: str = "N") -> None:
+    """``--jobs``: how many runs at once (a whole number; checked against MAX_JOBS later)."""
+    from ego.checks import whole_number
+
+    p.add_argument("--jobs", type=whole_number("--jobs"), default=None, metavar=metavar, help=help)
+
+
+def add_engine(p: argparse.ArgumentParser, help: str) -> None:
+    """``--engine``: process or ray (checked against ego.parallel.ENGINES later)."""
+    p.add_argument("--engine", default="process", metavar="ENGINE", help=help)
+
+
+def add_address(p: argparse.ArgumentParser, help: str) -> None:
+    """``--address``: with ``--engine ray``, the cluster to join."""
+    p.add_argument("--address", default=None, metavar="ADDR", help=help)
+
+
+def add_require(p: argparse.ArgumentParser, help: str = REQUIRE_HELP) -> None:
+    """``--require "NAME: FORMULA"``, repeatable."""
+    p.add_argument("--require", action="append", default=[], metavar='"NAME: FORMULA"', help=help)
+
+
+def add_set(p: argparse.ArgumentParser, help: str) -> None:
+    """``--set KEY=VALUE``, repeatable, into ``args.overrides``."""
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE", help=help)
+
+
 def ego_entity(args, overrides: dict) -> dict:
     """``--ego ENTITY`` (``ego run`` / ``ego compare``) as the file scenario's ``ego_entity``
     parameter; ConfigError with a built-in scenario."""

@@ -6,6 +6,7 @@ import argparse
 import sys
 
 from ego.checks import whole_number
+from ego.cli.common import add_address, add_engine, add_jobs, add_out
 
 OPTIMIZERS = ("cma", "bo", "bo-tpe", "random", "lhs")
 UNTIL = ("first", "budget")
@@ -39,20 +40,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     fal.add_argument("spec", metavar="SPEC.toml", help="the falsification specification")
-    fal.add_argument(
-        "--out",
-        required=True,
-        metavar="DIR",
-        help="output folder (resumed if it holds results)",
-    )
-    fal.add_argument("--engine", default="process", metavar="ENGINE", help="process (default) or ray")
-    fal.add_argument(
-        "--jobs",
-        type=whole_number("--jobs"),
-        default=None,
-        metavar="N",
-        help="parallel runs (default: the CPUs)",
-    )
+    add_out(fal, "output folder (resumed if it holds results)")
+    add_engine(fal, "process (default) or ray")
+    add_jobs(fal, "parallel runs (default: the CPUs)")
     fal.add_argument(
         "--batch",
         type=whole_number("--batch"),
@@ -61,12 +51,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         help="points the optimiser proposes at a time (default 2); the search depends on it, not "
         "on --jobs: more workers than that only help with a larger batch",
     )
-    fal.add_argument(
-        "--address",
-        default=None,
-        metavar="ADDR",
-        help="with --engine ray: join this cluster",
-    )
+    add_address(fal, "with --engine ray: join this cluster")
     fal.add_argument(
         "--budget",
         type=whole_number("--budget"),

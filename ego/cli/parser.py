@@ -6,8 +6,8 @@ import argparse
 
 from ego import __version__
 from ego.checks import whole_number
-from ego.cli.common import Parser
-from ego.highway_env import BACKENDS
+from ego.cli.common import Parser, add_address, add_engine, add_jobs, add_out, add_require, add_set
+from ego.sim.registry import backend_names
 
 
 def controllers_help() -> str:
@@ -25,6 +25,8 @@ def controllers_help() -> str:
 
 def parser() -> argparse.ArgumentParser:
     from ego.scenarios import SCENARIOS
+
+    backends = backend_names()  # the registry as it is now, plugins included
 
     ap = Parser(
         prog="ego",
@@ -79,14 +81,7 @@ def parser() -> argparse.ArgumentParser:
         metavar="N",
         help="seed of the traffic and of SUMO (default 0)",
     )
-    run.add_argument(
-        "--set",
-        dest="overrides",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a scenario or controller parameter (repeatable)",
-    )
+    add_set(run, "override a scenario or controller parameter (repeatable)")
     run.add_argument(
         "--trace",
         metavar="PATH",
@@ -97,21 +92,13 @@ def parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--backend",
         default="sumo",
-        choices=BACKENDS,
+        choices=backends,
         help="traffic simulator (default sumo; highway-env runs emergency-brake, fast-follower and cut-in)",
     )
     run.add_argument(
         "--video", metavar="PATH", help="with --backend highway-env: a video of the run (.gif, or .mp4 with ffmpeg)"
     )
-    run.add_argument(
-        "--require",
-        action="append",
-        default=[],
-        metavar='"NAME: FORMULA"',
-        help="a requirement in signal temporal logic over the trace's signals, on top of the "
-        "scenario's defaults (repeatable; docs/requirements.md), e.g. "
-        '"keep_gap: always (gap_front >= 2 m)"',
-    )
+    add_require(run)
 
     cmp_ = sub.add_parser(
         "compare",
@@ -140,38 +127,17 @@ def parser() -> argparse.ArgumentParser:
         f"NAME@key=value[@key=value...] (pid@kp_lat=0.02), from: {controllers_help()}",
     )
     cmp_.add_argument("--seeds", type=whole_number("--seeds"), default=1, metavar="N", help="seeds 0..N-1 (default 1)")
-    cmp_.add_argument(
-        "--set",
-        dest="overrides",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a parameter (repeatable)",
-    )
-    cmp_.add_argument("--out", required=True, metavar="DIR", help="output folder")
-    cmp_.add_argument(
-        "--jobs",
-        type=whole_number("--jobs"),
-        default=None,
-        metavar="J",
-        help="parallel processes (default: the number of CPUs)",
-    )
-    cmp_.add_argument("--backend", default="sumo", choices=BACKENDS, help="traffic simulator (default sumo)")
+    add_set(cmp_, "override a parameter (repeatable)")
+    add_out(cmp_, "output folder")
+    add_jobs(cmp_, "parallel processes (default: the number of CPUs)", metavar="J")
+    cmp_.add_argument("--backend", default="sumo", choices=backends, help="traffic simulator (default sumo)")
     cmp_.add_argument(
         "--traces",
         default=None,
         metavar="FORMAT",
         help="also write every run's trace to traces/<label>-seed<N>.FORMAT: csv, parquet or mat (see docs/traces.md)",
     )
-    cmp_.add_argument(
-        "--require",
-        action="append",
-        default=[],
-        metavar='"NAME: FORMULA"',
-        help="a requirement in signal temporal logic over the trace's signals, on top of the "
-        "scenario's defaults (repeatable; docs/requirements.md), e.g. "
-        '"keep_gap: always (gap_front >= 2 m)"',
-    )
+    add_require(cmp_)
 
     swp = sub.add_parser(
         "sweep",
@@ -196,23 +162,10 @@ def parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     swp.add_argument("spec", metavar="SPEC.toml", help="the sweep specification")
-    swp.add_argument("--out", required=True, metavar="DIR", help="output folder (resumed if it holds results)")
-    swp.add_argument(
-        "--engine", default="process", metavar="ENGINE", help="process (default: a pool of worker processes) or ray"
-    )
-    swp.add_argument(
-        "--jobs",
-        type=whole_number("--jobs"),
-        default=None,
-        metavar="N",
-        help="parallel runs (default: the number of CPUs)",
-    )
-    swp.add_argument(
-        "--address",
-        default=None,
-        metavar="ADDR",
-        help="with --engine ray: join this Ray cluster (e.g. auto or ray://host:10001)",
-    )
+    add_out(swp, "output folder (resumed if it holds results)")
+    add_engine(swp, "process (default: a pool of worker processes) or ray")
+    add_jobs(swp, "parallel runs (default: the number of CPUs)")
+    add_address(swp, "with --engine ray: join this Ray cluster (e.g. auto or ray://host:10001)")
     swp.add_argument(
         "--record",
         default="failed",
@@ -226,12 +179,9 @@ def parser() -> argparse.ArgumentParser:
         metavar="X,Y[:METRIC]",
         help="an envelope plot over two swept parameters (repeatable)",
     )
-    swp.add_argument(
-        "--require",
-        action="append",
-        default=[],
-        metavar='"NAME: FORMULA"',
-        help="a requirement on top of the spec's [requirements] (or the scenario's defaults); "
+    add_require(
+        swp,
+        "a requirement on top of the spec's [requirements] (or the scenario's defaults); "
         "repeatable, see docs/requirements.md",
     )
     from ego.cli.falsify import add_parser as add_falsify
@@ -268,15 +218,8 @@ def parser() -> argparse.ArgumentParser:
         epilog="Example: ego export-fmu nonlinear-bicycle --out runs/bicycle.fmu",
     )
     exf.add_argument("model", metavar="MODEL", help="nonlinear-bicycle (report 000) or linear-bicycle (report 002)")
-    exf.add_argument("--out", required=True, metavar="FILE.fmu", help="the FMU to write")
-    exf.add_argument(
-        "--set",
-        dest="overrides",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="a parameter's start value in the FMU (repeatable), e.g. abs=1",
-    )
+    add_out(exf, "the FMU to write", metavar="FILE.fmu")
+    add_set(exf, "a parameter's start value in the FMU (repeatable), e.g. abs=1")
 
     trn = sub.add_parser(
         "train",
@@ -313,7 +256,7 @@ def parser() -> argparse.ArgumentParser:
         help="axial acceleration range in m/s^2 (default 0,0.6); one starting with - is written --accels=-1,0",
     )
     trn.add_argument("--radii", default="12,60", metavar="LO,HI", help="curve radius range in m (default 12,60)")
-    trn.add_argument("--out", default=None, metavar="PATH", help="weights file (.npz; default: runs/narma_l2.npz)")
+    add_out(trn, "weights file (.npz; default: runs/narma_l2.npz)", metavar="PATH", required=False)
     trn.add_argument(
         "--install", action="store_true", help="replace the model shipped in the package (what ego run uses by default)"
     )
@@ -362,13 +305,8 @@ def parser() -> argparse.ArgumentParser:
         "simulation) or sumo (each member's cost from SUMO runs of lane-centering on "
         "the dynamic bicycle, through --engine)",
     )
-    tun.add_argument(
-        "--engine",
-        default="process",
-        metavar="ENGINE",
-        help="with --cost sumo: process (default) or ray; --workers runs at once",
-    )
-    tun.add_argument("--address", default=None, metavar="ADDR", help="with --engine ray: join this cluster")
+    add_engine(tun, "with --cost sumo: process (default) or ray; --workers runs at once")
+    add_address(tun, "with --engine ray: join this cluster")
     tun.add_argument(
         "--duration",
         type=float,
@@ -376,9 +314,7 @@ def parser() -> argparse.ArgumentParser:
         metavar="S",
         help="with --cost sumo: simulated seconds of each run (default: the whole road)",
     )
-    tun.add_argument(
-        "--out", default=None, metavar="PATH", help="preset file (.json; default: runs/cascade_pid_tuned.json)"
-    )
+    add_out(tun, "preset file (.json; default: runs/cascade_pid_tuned.json)", metavar="PATH", required=False)
     tun.add_argument(
         "--install", action="store_true", help="replace the tuned preset shipped in the package (cascade-pid's default)"
     )

@@ -7,14 +7,19 @@ from ego.params import ConfigError, did_you_mean
 
 
 def load_plugins() -> None:
-    """Register every installed plugin (both groups) into ego's registries."""
+    """Register every installed plugin (controllers, scenarios, metrics, backends) into
+    ego's registries."""
     from ego.control import CONTROLLERS
     from ego.control.references import load_controller_plugins
+    from ego.results.metrics import load_metric_plugins
     from ego.scenarios import SCENARIOS
     from ego.scenarios.references import load_scenario_plugins
+    from ego.sim.registry import load_backend_plugins
 
     load_controller_plugins(CONTROLLERS)
     load_scenario_plugins(SCENARIOS)
+    load_metric_plugins()
+    load_backend_plugins()
 
 
 def describe_reference(ref: str) -> dict:

@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
-from ego.control.base import Controller, ControllerSpec, Observation
+from ego.control.base import Controller, ControllerSpec, NoParams, Observation
 from ego.control.bp_pid import BPPIDController, BPPIDParams
 from ego.control.cascade import CascadePID, CascadePIDParams
 from ego.control.curve import CurvePID, CurvePIDParams, FuzzyCurve, FuzzyCurveParams
@@ -23,13 +21,8 @@ from ego.control.pid import PID, PIDController, PIDParams
 from ego.control.rbf_smc import RBFSMCController, RBFSMCParams
 from ego.control.references import load_controller_plugins, resolve_controller
 from ego.control.tasks import TASKS, Signal, Task
-from ego.params import ConfigError, Params, did_you_mean
+from ego.params import ConfigError, did_you_mean
 from ego.plugins import is_reference
-
-
-@dataclass(frozen=True)
-class NoParams(Params):
-    """No parameters."""
 
 
 class NoController:

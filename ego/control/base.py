@@ -14,6 +14,8 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
+from ego.params import Params
+
 
 class ControllerError(RuntimeError):
     """A controller failed mid-run (an FMU returned an error, a non-finite command): the run
@@ -90,3 +92,8 @@ class ControllerSpec:
     summary: str
     params: type
     build: Callable[[Any, float], Controller]  #: (params, control period dt in s) -> Controller
+
+
+@dataclass(frozen=True)
+class NoParams(Params):
+    """No parameters."""

@@ -43,7 +43,7 @@ def controller_spec_of(obj: Any, name: str, task: str, where: str) -> Controller
                 "(a controller has reset, step and signals)"
             )
         params = getattr(obj, "Params", None)
-        from ego.control import NoParams
+        from ego.control.base import NoParams
         from ego.params import Params
 
         if params is not None and not (inspect.isclass(params) and issubclass(params, Params)):

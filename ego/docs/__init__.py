@@ -24,49 +24,31 @@ import math
 import os
 import sys
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from ego.docs.common import (
+    CURVE,
+    FOLLOWING,
+    KMH,
+    RESULTS,
+    ROOT,
+    SWEEPS,
+    TRACKING,
+    Row,
+    Sim,
+    Table,
+    _table_metrics,
+    ccr_cell,
+    sim,
+)
 from ego.outputs import write_text
-
-ROOT = Path(__file__).resolve().parents[2]
-RESULTS = ROOT / "docs" / "results"
-SWEEPS = ROOT / "scenarios" / "sweeps"
-TRACKING = ("pid", "fuzzy", "fuzzy-pid", "bp-pid", "rbf-smc")
-CURVE = ("pid", "fuzzy-curve", "narma-l2")
-FOLLOWING = ("pid", "bp-pid-acc")
-KMH = 3.6
 
 
 # -- jobs: what a row needs run (picklable, hashable, deterministic) -------------------------
-@dataclass(frozen=True)
-class Sim:
-    """One ``ego run``: scenario, controller, seed and ``--set`` overrides (name, value)."""
-
-    scenario: str
-    controller: str
-    seed: int = 0
-    overrides: tuple[tuple[str, Any], ...] = ()
-
-    def __call__(self) -> dict:
-        from ego.runner import RunSpec, run
-
-        return _table_metrics(run(RunSpec(self.scenario, self.controller, self.seed, dict(self.overrides))))
-
-
-def _table_metrics(result) -> dict:
-    """A run's metrics as a table reads them: without the wall time (it differs run to run)
-    and the event list."""
-    return {k: v for k, v in result.metrics.items() if k not in ("wall_time", "events")}
-
-
-def sim(scenario: str, controller: str, seed: int = 0, **overrides: Any) -> Sim:
-    return Sim(scenario, controller, seed, tuple(sorted(overrides.items())))
-
-
 @dataclass(frozen=True)
 class NarmaAsReport:
     """Train NARMA-L2 as report 002 did (100 samples at 30 km/h, 0.3 m/s^2, R 15 m; the
@@ -154,34 +136,6 @@ def _call(job: Callable[[], Any]) -> Any:
 
 
 # -- tables ------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class Row:
-    """One table row: its label (first cell), the jobs it needs and how its other cells
-    come from their results (in the order of ``jobs``)."""
-
-    label: str
-    jobs: tuple
-    cells: Callable[[list], list[str]]
-
-
-@dataclass(frozen=True)
-class Table:
-    name: str
-    page: str  #: docs/results/<page>.md
-    commands: tuple[str, ...]  #: what a user runs for the same runs
-    header: tuple[str, ...]
-    rows: tuple[Row, ...]
-    notes: tuple[str, ...] = field(default=())
-    #: writes the table's figures (docs/img/) from the same results, when the page is written
-    figures: Callable[[dict], None] | None = None
-
-    def row(self, label: str) -> Row:
-        for r in self.rows:
-            if r.label == label:
-                return r
-        raise KeyError(f"{self.name} has no row {label!r} (rows: {', '.join(r.label for r in self.rows)})")
-
-
 def _line(cells: Sequence[str]) -> str:
     return "| " + " | ".join(cells) + " |"
 
@@ -834,19 +788,6 @@ def _outcomes(ms: list[dict]) -> list[str]:
         str(s.count("diverged")),
         str(s.count("timeout")),
     ]
-
-
-def ccr_cell(m: dict) -> str:
-    """``no (6.8 m)``: avoided, the smallest bumper gap; ``HIT 24.7 (20.1)``: the impact speed and
-    in brackets the relative impact speed, km/h; ``HIT <id>``: a collision with another vehicle
-    than the lead; a status: the run neither completed nor collided."""
-    if m["status"] not in ("completed", "collision"):
-        return m["status"]
-    if not m["collision"]:
-        return f"no ({m['min_gap_front']:.1f} m)"
-    if m["collision_with"] != "lead":  # not what the test is about: say what it hit
-        return f"HIT {m['collision_with']}"
-    return f"HIT {m['impact_speed'] * KMH:.1f} ({m['impact_relative_speed'] * KMH:.1f})"
 
 
 def ccr_header(path: Path) -> tuple[str, ...]:

@@ -81,7 +81,7 @@ def _figure(jobs: dict):
 
 def docs_tables() -> list:
     """The tables of docs/results/falsify.md (ego.docs builds the page from them)."""
-    from ego.docs import Row, Table
+    from ego.docs.common import Row, Table
     from ego.falsify.bench import DENSE_SPEC
     from ego.sweep.spec import load
 

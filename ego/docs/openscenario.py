@@ -7,7 +7,7 @@ from __future__ import annotations
 import itertools
 from pathlib import Path
 
-from ego.docs import KMH, ROOT, SWEEPS, TRACKING, Row, Table, ccr_cell, sim
+from ego.docs.common import KMH, ROOT, SWEEPS, TRACKING, Row, Table, ccr_cell, sim
 
 XOSC = ROOT / "scenarios" / "openscenario"
 PAGE = "openscenario"

@@ -32,7 +32,7 @@ import numpy as np
 from ego.falsify.optimizers import make, squash
 from ego.falsify.spec import FalsifySpec
 from ego.outputs import FolderLock, write_text
-from ego.requirements import DEFAULTS, PREFIX
+from ego.requirements import PREFIX, defaults
 from ego.sweep.results import ResultStore
 from ego.sweep.spec import Run
 
@@ -317,7 +317,7 @@ def command(spec: FalsifySpec, e: Evaluation, record: str | None = None) -> str:
     parts = ["ego", "run", spec.scenario, "-c", e.controller, "--seed", str(e.seed)]
     for k, v in e.overrides.items():
         parts += ["--set", f"{k}={str(v).lower() if isinstance(v, bool) else v}"]
-    if dict(DEFAULTS.get(spec.scenario, ())).get(spec.requirement) != spec.formula:
+    if defaults(spec.scenario).get(spec.requirement) != spec.formula:
         parts += ["--require", f"{spec.requirement}: {spec.formula}"]
     if record:
         parts += ["--record", record]

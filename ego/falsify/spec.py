@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from ego.params import ConfigError, did_you_mean
-from ego.sweep.spec import MAX_SEED, _check, _param_types, read_spec, run_id
+from ego.specs import MAX_SEED, check_controllers, check_keys, check_values, param_types, read_spec, run_id, scenario_of
 
 _TOP = (
     "scenario",
@@ -117,24 +117,13 @@ def load(path: str | Path) -> FalsifySpec:
 
 def parse(data: dict, source: str = "the spec") -> FalsifySpec:
     """Validate a spec's contents (see the module docstring)."""
-    from ego.control import controller_spec
     from ego.requirements import defaults, from_table
-    from ego.scenarios import scenario_class
 
     def bad(msg: str) -> ConfigError:
         return ConfigError(f"{source}: {msg}")
 
-    unknown = [k for k in data if k not in _TOP]
-    if unknown:
-        raise bad(f"unknown key {unknown[0]!r} (allowed: {', '.join(_TOP)}){did_you_mean(unknown[0], _TOP)}")
-    scenario = data.get("scenario")
-    if not isinstance(scenario, str):
-        raise bad('scenario must be a scenario name, e.g. scenario = "emergency-brake"')
-    try:
-        cls = scenario_class(scenario)
-        cls.default_config({})  # a scenario file whose road is missing: said of the file, not of a key
-    except ConfigError as exc:
-        raise bad(str(exc)) from None
+    check_keys(data, _TOP, bad)
+    scenario, cls = scenario_of(data, bad)
     if "controller" in data and "controllers" in data:
         raise bad("give controller or controllers, not both")
     controllers = data.get("controllers", [data["controller"]] if "controller" in data else None)
@@ -145,11 +134,7 @@ def parse(data: dict, source: str = "the spec") -> FalsifySpec:
         or len(set(controllers)) != len(controllers)
     ):
         raise bad('controllers must be a non-empty list of distinct names, e.g. controllers = ["pid"]')
-    for name in controllers:
-        try:
-            controller_spec(name, cls.task)
-        except ConfigError as exc:
-            raise bad(str(exc)) from None
+    check_controllers(controllers, cls, bad)
     requirements = from_table(data["requirements"], source) if "requirements" in data else defaults(scenario, cls)
     target = data.get("requirement")
     if not isinstance(target, str) or target not in requirements:
@@ -160,7 +145,7 @@ def parse(data: dict, source: str = "the spec") -> FalsifySpec:
     budget = data.get("budget", 200)
     if not isinstance(budget, int) or isinstance(budget, bool) or not 1 <= budget <= 10_000_000:
         raise bad(f"budget must be a whole number of runs from 1 to 10000000, got {budget!r}")
-    infos = _param_types(scenario, controllers)
+    infos = param_types(scenario, controllers)
     fixed = data.get("set", {})
     search = data.get("search", {})
     for section, value in (("set", fixed), ("search", search)):
@@ -169,7 +154,7 @@ def parse(data: dict, source: str = "the spec") -> FalsifySpec:
     for name, value in fixed.items():
         if name not in infos:
             raise bad(f"[set] unknown parameter {name!r} for {scenario} (see ego list){did_you_mean(name, infos)}")
-        _check(scenario, controllers, {name: value}, f"[set] {name}", bad)
+        check_values(scenario, controllers, {name: value}, f"[set] {name}", bad)
     dims = []
     for name, rng in search.items():
         info = infos.get(name)
@@ -192,7 +177,7 @@ def parse(data: dict, source: str = "the spec") -> FalsifySpec:
         ):
             raise bad(f"[search] {name} must be a range [low, high] with low < high, got {rng!r}")
         for end in rng:
-            _check(scenario, controllers, {name: end}, f"[search] {name}", bad)
+            check_values(scenario, controllers, {name: end}, f"[search] {name}", bad)
         dims.append(
             Dim(
                 name,
@@ -230,7 +215,7 @@ def parse(data: dict, source: str = "the spec") -> FalsifySpec:
     # the corners as a whole (combinations a value-by-value check cannot see) and the formulas
     for u in (np.zeros(len(dims)), np.ones(len(dims))):
         _, overrides = spec.point(u)
-        _check(scenario, controllers, overrides, "the search's corner", bad)
+        check_values(scenario, controllers, overrides, "the search's corner", bad)
     from ego.sweep.spec import Run, check_requirements
 
     seed0, over0 = spec.point(np.zeros(len(dims)))

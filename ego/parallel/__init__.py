@@ -5,6 +5,7 @@ name with :func:`make_executor`. Generic: it knows nothing of scenarios; ``ego c
 ``ego sweep``, the docs generator and ``ego tune`` run on it.
 """
 
-from ego.parallel.executor import ENGINES, Executor, InlineExecutor, Outcome, ProcessExecutor, make_executor
+from ego.parallel.executor import ENGINES, Executor, InlineExecutor, ProcessExecutor, make_executor
+from ego.parallel.outcome import Outcome
 
 __all__ = ["ENGINES", "Executor", "InlineExecutor", "Outcome", "ProcessExecutor", "make_executor"]

@@ -15,24 +15,13 @@ from __future__ import annotations
 import multiprocessing
 import os
 from collections.abc import Callable, Iterable, Iterator
-from dataclasses import dataclass
 from multiprocessing.connection import Connection
 from typing import Any, Protocol
 
+from ego.parallel.outcome import Outcome, default_workers
 from ego.processes import exit_with, main_module_hidden
 
 ENGINES = ("process", "ray")
-
-
-@dataclass
-class Outcome:
-    """One task's result: ``value`` (what the function returned) or ``error`` (why there is
-    none: the worker died twice, or the function raised)."""
-
-    task: Any
-    value: Any = None
-    error: str = ""
-    attempts: int = 1
 
 
 class Executor(Protocol):
@@ -47,10 +36,6 @@ class Executor(Protocol):
 
     def close(self) -> None:
         """Stop the workers (safe to call twice)."""
-
-
-def default_workers() -> int:
-    return max(1, os.cpu_count() or 1)
 
 
 def _worker_main(conn: Connection, parent: int) -> None:

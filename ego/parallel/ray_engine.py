@@ -25,7 +25,7 @@ import os
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
-from ego.parallel.executor import Outcome, default_workers
+from ego.parallel.outcome import Outcome, default_workers
 from ego.params import ConfigError
 
 #: tasks in flight per worker: enough to keep every worker busy while results travel back,

@@ -31,7 +31,6 @@ import csv
 import os
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -39,11 +38,10 @@ from ego.checks import check_output_file
 from ego.outputs import atomic_path
 from ego.params import ConfigError
 from ego.paths import trace_files
+from ego.results.run import RunResult, trace_units
+from ego.results.traffic_log import COLUMNS as TRAFFIC_COLUMNS
 from ego.results.traffic_log import UNITS as TRAFFIC_UNITS
-from ego.results.traffic_log import TrafficLog
-
-if TYPE_CHECKING:
-    from ego.results.run import RunResult
+from ego.results.traffic_log import traffic_columns
 
 __all__ = [
     "TRACE_SUFFIXES",
@@ -58,8 +56,6 @@ __all__ = [
 ]
 
 TRACE_SUFFIXES = (".csv", ".parquet", ".mat")
-#: the columns of a traffic table, in order (``vehicle``: the id in csv and Parquet)
-TRAFFIC_COLUMNS = tuple(TRAFFIC_UNITS)
 
 
 def check_trace_path(text: str | None, what: str = "--trace path") -> Path:
@@ -83,20 +79,6 @@ def write_trace(result: RunResult, path: str | os.PathLike[str]) -> list[Path]:
     ]
     writer(result, out)
     return trace_files(out, result.traffic is not None)
-
-
-def trace_units(result: RunResult) -> dict[str, str]:
-    """Trace column -> unit, every column in order (``""``: a controller's signal)."""
-    return {c: result.units.get(c, "") for c in result.columns}
-
-
-def traffic_columns(log: TrafficLog) -> dict[str, np.ndarray]:
-    """The traffic log as columns (:data:`TRAFFIC_COLUMNS`), ``vehicle`` as the vehicles' ids."""
-    ids = np.array(log.ids, dtype=object)
-    return {
-        name: ids[np.asarray(log.vehicle, dtype=np.intp)] if name == "vehicle" else getattr(log, name)
-        for name in TRAFFIC_COLUMNS
-    }
 
 
 def run_info(result: RunResult) -> dict[str, str]:

@@ -4,12 +4,14 @@ their declarations (:class:`~ego.results.trace.Metric`: unit, headline)."""
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from ego.plugins import METRIC_GROUP, entry_points
 from ego.results.trace import Metric
 
 
@@ -133,8 +135,25 @@ def register_metric(metric: TraceMetric) -> TraceMetric:
     return metric
 
 
+def load_metric_plugins() -> None:
+    """Register the ``ego.metrics`` entry points (a :class:`TraceMetric` each), once per
+    process; a plugin that fails to load is a warning, not an error."""
+    for ep in entry_points(METRIC_GROUP):
+        try:
+            obj = ep.load()
+            if not isinstance(obj, TraceMetric):
+                raise TypeError("not an ego.results.metrics.TraceMetric")
+            TRACE_METRICS.setdefault(obj.metric.name, obj)
+        except Exception as exc:  # noqa: BLE001
+            print(
+                f"ego: warning: metric plugin {ep.name!r} ({ep.value}) not loaded: {type(exc).__name__}: {exc}",
+                file=sys.stderr,
+            )
+
+
 def trace_metrics_declared(columns: Iterable[str]) -> tuple[Metric, ...]:
     """The declarations of the registered trace metrics a trace with ``columns`` reports."""
+    load_metric_plugins()
     have = set(columns)
     return tuple(m.metric for m in TRACE_METRICS.values() if have.issuperset(m.needs))
 
@@ -142,6 +161,7 @@ def trace_metrics_declared(columns: Iterable[str]) -> tuple[Metric, ...]:
 def trace_metrics(trace: np.ndarray, names: Sequence[str], columns: Iterable[str]) -> dict[str, Any]:
     """The registered trace metrics of a run: ``trace`` (rows x ``names``) of a scenario whose
     declared trace ``columns`` the metrics are chosen by (:func:`trace_metrics_declared`)."""
+    load_metric_plugins()
     if not TRACE_METRICS:
         return {}
     have = set(columns)

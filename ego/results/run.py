@@ -57,7 +57,8 @@ class RunResult:
         pandas is imported here, not with ego."""
         import pandas as pd
 
-        from ego.results.export import TRAFFIC_UNITS, trace_units, traffic_columns
+        from ego.results.traffic_log import UNITS as TRAFFIC_UNITS
+        from ego.results.traffic_log import traffic_columns
 
         if traffic:
             if self.traffic is None:
@@ -68,6 +69,11 @@ class RunResult:
         df.attrs["units"] = units
         df.attrs.update(scenario=self.scenario, controller=self.controller, seed=self.seed, status=self.status)
         return df
+
+
+def trace_units(result: RunResult) -> dict[str, str]:
+    """Trace column -> unit, every column in order (``""``: a controller's signal)."""
+    return {c: result.units.get(c, "") for c in result.columns}
 
 
 @dataclass

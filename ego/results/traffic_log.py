@@ -26,6 +26,8 @@ BATCH = 256
 
 #: the unit of every field of :class:`TrafficLog`
 UNITS = {"t": "s", "vehicle": "-", "x": "m", "y": "m", "heading": "rad", "speed": "m/s", "length": "m", "width": "m"}
+#: the traffic log's columns as the exports write them, in order
+COLUMNS = tuple(UNITS)
 
 
 @dataclass(frozen=True)
@@ -53,6 +55,15 @@ class TrafficLog:
     def of(self, vid: str) -> np.ndarray:
         """The row indices of vehicle ``vid`` (time order)."""
         return np.flatnonzero(self.vehicle == self.ids.index(vid))
+
+
+def traffic_columns(log: TrafficLog) -> dict[str, np.ndarray]:
+    """The traffic log as columns (:data:`COLUMNS`), ``vehicle`` as the vehicles' ids."""
+    ids = np.array(log.ids, dtype=object)
+    return {
+        name: ids[np.asarray(log.vehicle, dtype=np.intp)] if name == "vehicle" else getattr(log, name)
+        for name in COLUMNS
+    }
 
 
 _FIELDS = ("x", "y", "heading", "speed", "length", "width")

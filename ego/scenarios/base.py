@@ -32,7 +32,7 @@ from ego.results.trace import Column, Metric, Plot, Trace
 from ego.results.traffic_log import TrafficCollector
 from ego.sim.protocol import TrafficSim
 from ego.sim.registry import SimSetup, make_sim
-from ego.sim.types import Collision
+from ego.sim.types import EGO, Collision
 
 STATUSES = ("completed", "ended", "collision", "diverged", "timeout", "interrupted", "error")
 #: the statuses that are no failure: the scenario's own end, or the duration ran out in a
@@ -109,14 +109,25 @@ def divergence(state: Sequence[float], offset: float, heading_error: float, road
     return None
 
 
+#: default requirements several scenarios share (Scenario.requirements)
+NO_COLLISION = ("no_collision", "always (not collision)")
+NO_AVOIDABLE_COLLISION = ("no_avoidable_collision", "always (not avoidable_collision)")
+
+
 def check_backend(cls: type[Scenario], backend: str) -> None:
     """ConfigError unless scenario ``cls`` runs on traffic simulator ``backend``."""
     from ego.sim.registry import backend as registered
 
-    registered(backend)  # a name no backend has
+    found = registered(backend)  # a name no backend has
     if backend not in cls.backends:
         raise ConfigError(
             f"bad value for --backend: {backend!r} (scenario {cls.name} runs on {' or '.join(cls.backends)} only)"
+        )
+    lacking = [need for need in cls.needs if not getattr(found.capabilities, need)]
+    if lacking:
+        raise ConfigError(
+            f"bad value for --backend: {backend!r} (scenario {cls.name} needs {', '.join(lacking)}; "
+            f"backend {backend} lacks it)"
         )
 
 
@@ -151,6 +162,12 @@ class Scenario:
     plots: ClassVar[tuple[Plot, ...]] = ()
     #: the traffic simulators it runs on (``ego run --backend``; ego.highway_env.BACKENDS)
     backends: ClassVar[tuple[str, ...]] = ("sumo",)
+    #: what it needs of a traffic simulator: field names of ego.sim.registry.Capabilities
+    #: (``check_backend`` refuses a backend that lacks one)
+    needs: ClassVar[tuple[str, ...]] = ()
+    #: the requirements every run checks unless told otherwise: (name, formula) each
+    #: (ego.requirements.defaults; docs/requirements.md)
+    requirements: ClassVar[tuple[tuple[str, str], ...]] = ()
 
     @classmethod
     def default_config(cls, overrides: Mapping[str, Any]):
@@ -701,8 +718,6 @@ class ComposedLoop:
             sc._series = lambda: parts.series(sc._signal_names, sc._signal_units)
 
     def _setup(self, rng: np.random.Generator) -> None:
-        from ego.scenarios.motorway import EGO
-
         parts = self.parts
         world, view = parts.world, parts.view
         bridge = self.bridge

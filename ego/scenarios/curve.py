@@ -35,7 +35,7 @@ from ego.params import ConfigError, param
 from ego.record.base import Series
 from ego.results import metrics as m
 from ego.results.trace import Column, Marker, Metric, Plot
-from ego.scenarios.base import CommonConfig, Scenario, signal_series
+from ego.scenarios.base import NO_COLLISION, CommonConfig, Scenario, signal_series
 from ego.scenarios.events import INF, boxes_overlap
 from ego.scenarios.observe import road_observation
 from ego.scenarios.road import RoadSensor, RoadWorld
@@ -106,6 +106,8 @@ class CurveScenario(Scenario):
     world and sensor (:mod:`ego.scenarios.road`), the curve's plan and engagement here."""
 
     name = "curve"
+    needs = ("any_network",)
+    requirements = (NO_COLLISION, ("friction", "always (abs(lat_accel) <= 7 m/s^2)"))
     summary = (
         "report 002: steer a 30 km/h car accelerating at 0.3 m/s^2 round a 90-degree "
         "arc of radius 15 m (oncoming traffic; --set lead=KMH for a slow car ahead)"

@@ -19,7 +19,7 @@ from ego.highway_env import BACKENDS
 from ego.params import ConfigError, param
 from ego.results import metrics as m
 from ego.results.trace import Metric
-from ego.scenarios.base import Parts, Scenario
+from ego.scenarios.base import NO_AVOIDABLE_COLLISION, NO_COLLISION, Parts, Scenario
 from ego.scenarios.evasive import (
     MARKERS,
     METRICS,
@@ -171,6 +171,16 @@ class Impact:
 
 class EmergencyBrake(Scenario):
     name = "emergency-brake"
+    needs = ("scripted_actors",)
+    requirements = (
+        NO_AVOIDABLE_COLLISION,
+        NO_COLLISION,
+        ("gap_or_clear", "always (gap_front >= 2 m or lateral_clear)"),
+        (
+            "aeb_slows",
+            "always (aeb_active implies eventually[0:1] (accel <= -4 m/s^2 or speed <= 1 m/s or not aeb_active))",
+        ),
+    )
     summary = "lead car brakes hard; front TTC triggers braking and a lane change by gap acceptance"
     config_cls = EmergencyBrakeConfig
     network, edge, backends = "highway", EDGE, BACKENDS

@@ -105,6 +105,7 @@ class LaneCenteringScenario(Scenario):
     and sensor (:mod:`ego.scenarios.road`), the drive's end and curve events here."""
 
     name = "lane-centering"
+    requirements = (("in_lane", "always (abs(d) <= 1 m)"),)
     summary = (
         "report 003: keep the lane centre over 1000 m straight, a 500 m-radius curve with "
         "cosine easements and 1000 m straight, at 8 m/s (--set speed=25; --set "

@@ -43,7 +43,7 @@ from ego.record.base import Scene, Series
 from ego.results import metrics as m
 from ego.results.trace import Band, Column, FrequencyResponse, Marker, Metric, Plot, Ref
 from ego.scenarios import string_stability as ss
-from ego.scenarios.base import CommonConfig, Scenario
+from ego.scenarios.base import NO_COLLISION, CommonConfig, Scenario
 from ego.scenarios.events import INF, time_to_collision
 from ego.sumo.bridge import (
     Collision,
@@ -206,6 +206,7 @@ class PlatoonScenario(Scenario):
     """A SUMO leader and a platoon of project-controlled followers in one lane."""
 
     name = "platoon"
+    requirements = (NO_COLLISION,)
     summary = (
         "report 004: a platoon of followers (own model and controller each) behind a SUMO "
         "leader that brakes, accelerates and stops; string stability measured "

@@ -24,8 +24,8 @@ from ego.record.base import Scene
 from ego.results.traffic_log import RADIUS, REACH_MARGIN
 from ego.scenarios.base import divergence
 from ego.sim.protocol import TrafficSim
+from ego.sim.types import EGO
 
-EGO = "ego"
 _ROAD_FRAME = NATIVE.road_frame if NATIVE is not None else None
 
 

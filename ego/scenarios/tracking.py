@@ -115,6 +115,7 @@ class SineReference:
 
 class SineTracking(Scenario):
     name = "sine-tracking"
+    requirements = (("tracks", "always (abs(e_lat) <= 2 m)"),)
     summary = "lateral reference A sin(omega t) across the motorway while X_ref = 25 t or 15 t"
     config_cls = SineTrackingConfig
     network, edge, columns = "highway", EDGE, COLUMNS
@@ -177,6 +178,7 @@ class Report000(Scenario):
     """The report's Simulink experiments: the exact model, no traffic, no road."""
 
     name = "report-000"
+    requirements = (("tracks", "always (abs(e_lat) <= 2 m)"),)
     summary = "report 000's experiments on the bare model (no SUMO): X_ref = 25t/15t, Y step or sine"
     config_cls = Report000Config
     columns = (

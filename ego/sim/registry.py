@@ -13,12 +13,14 @@ from __future__ import annotations
 
 import importlib
 import importlib.util
+import sys
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from ego.params import ConfigError, did_you_mean
+from ego.plugins import BACKEND_GROUP, entry_points
 from ego.sim.protocol import TrafficSim
 
 
@@ -102,8 +104,31 @@ register(
 )
 
 
+def load_backend_plugins() -> None:
+    """Register the ``ego.backends`` entry points (a :class:`Backend` each), once per process;
+    a plugin that fails to load is a warning, not an error."""
+    for ep in entry_points(BACKEND_GROUP):
+        try:
+            obj = ep.load()
+            if not isinstance(obj, Backend):
+                raise TypeError("not an ego.sim.registry.Backend")
+            BACKENDS.setdefault(obj.name, obj)
+        except Exception as exc:  # noqa: BLE001
+            print(
+                f"ego: warning: backend plugin {ep.name!r} ({ep.value}) not loaded: {type(exc).__name__}: {exc}",
+                file=sys.stderr,
+            )
+
+
+def backend_names() -> tuple[str, ...]:
+    """Every registered backend's name, plugins included (``--backend``'s choices)."""
+    load_backend_plugins()
+    return tuple(BACKENDS)
+
+
 def backend(name: str) -> Backend:
     """The registered backend ``name``, or a ConfigError naming the known ones."""
+    load_backend_plugins()
     try:
         return BACKENDS[name]
     except KeyError:

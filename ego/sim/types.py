@@ -10,6 +10,9 @@ from dataclasses import dataclass
 
 from ego.models.geometry import VehicleGeometry
 
+#: the ego vehicle's id in the traffic simulator (the single ego of the motorway scenarios)
+EGO = "ego"
+
 
 class SimError(RuntimeError):
     """A traffic simulator refused something (a vehicle could not be inserted, a second

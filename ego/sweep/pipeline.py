@@ -18,7 +18,8 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any
 
-from ego.parallel.executor import Executor, Outcome
+from ego.parallel.executor import Executor
+from ego.parallel.outcome import Outcome
 from ego.results.run import RunRow
 from ego.runner import ResolvedRun
 

@@ -26,29 +26,30 @@ is a hash of scenario, controller, seed and overrides, stable across machines an
 from __future__ import annotations
 
 import functools
-import hashlib
 import itertools
-import json
 import math
-import os
-import tomllib
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from itertools import product
 from pathlib import Path
 from typing import Any
 
-from ego.control import controller_spec
-from ego.params import ConfigError, apply_overrides, describe, did_you_mean
+from ego.params import ConfigError, did_you_mean
+from ego.specs import (
+    MAX_SEED,
+    check_controllers,
+    check_keys,
+    check_values,
+    param_types,
+    read_spec,
+    run_id,
+    scenario_of,
+)
 
-#: SUMO takes seeds 0..2^31-1
-MAX_SEED = 2**31 - 1
 #: more runs than this is a mistake, not a sweep
 MAX_RUNS = 10_000_000
 METHODS = ("random", "lhs", "sobol")
 _TOP = ("scenario", "controllers", "seeds", "set", "grid", "sample", "requirements")
-#: a spec larger than this is not a spec (``ego sweep /dev/zero``)
-MAX_SPEC_BYTES = 1 << 20
 #: grids with at most this many points are checked point by point (combinations of values)
 MAX_CHECKED_POINTS = 10_000
 
@@ -131,29 +132,7 @@ class SweepSpec:
 
     @property
     def _types(self) -> dict:
-        return _param_types(self.scenario, self.controllers)
-
-
-def run_id(scenario: str, controller: str, seed: int, overrides: dict) -> str:
-    """A stable id: the first 16 hex digits of SHA-256 over the canonical JSON of the run."""
-    canon = json.dumps(
-        {
-            "scenario": scenario,
-            "controller": controller,
-            "seed": int(seed),
-            "overrides": {k: overrides[k] for k in sorted(overrides)},
-        },
-        sort_keys=True,
-        separators=(",", ":"),
-        default=str,
-    )
-    return hashlib.sha256(canon.encode()).hexdigest()[:16]
-
-
-def _param_types(scenario: str, controllers) -> dict:
-    from ego.runner import parameter_namespace
-
-    return parameter_namespace(scenario, controllers)
+        return param_types(self.scenario, self.controllers)
 
 
 def _whole_numbers(sample: Sample, infos: dict) -> bool:
@@ -218,43 +197,6 @@ def load(path: str | Path) -> SweepSpec:
     return parse(read_spec(path, "sweep spec"), str(path))
 
 
-def read_spec(path: Path, what: str) -> dict:
-    """:func:`read_toml`, with a ``scenario`` that is an OpenSCENARIO file named relative to
-    the spec's folder (sweep and falsification specs alike)."""
-    data = read_toml(path, what)
-    scenario = data.get("scenario")
-    if isinstance(scenario, str) and scenario.lower().endswith(".xosc") and not Path(scenario).is_absolute():
-        data["scenario"] = os.path.normpath(path.parent / scenario)
-    return data
-
-
-def read_toml(path: Path, what: str) -> dict:
-    """The TOML table in ``path`` (a ``what``: "sweep spec"), at most :data:`MAX_SPEC_BYTES`
-    read; ConfigError (one line, naming the file) if it is a folder, larger, not text or not
-    TOML."""
-    try:
-        if path.is_dir():
-            raise ConfigError(f"cannot read the {what} {str(path)!r}: it is a folder (expected a TOML file)")
-        with open(path, "rb") as f:
-            raw = f.read(MAX_SPEC_BYTES + 1)
-        if len(raw) > MAX_SPEC_BYTES:
-            raise ConfigError(
-                f"cannot read the {what} {str(path)!r}: larger than "
-                f"{MAX_SPEC_BYTES // 1024} KiB (a spec is a few lines of TOML)"
-            )
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError:
-        raise ConfigError(f"cannot read the {what} {str(path)!r}: not a text file (expected TOML)") from None
-    except OSError as exc:
-        raise ConfigError(f"cannot read the {what} {str(path)!r}: {exc.strerror or exc}") from None
-    try:
-        return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{path}: not valid TOML: {exc}") from None
-    except RecursionError:
-        raise ConfigError(f"{path}: nested too deeply to be a {what}") from None
-
-
 def parse(data: dict, source: str = "the spec") -> SweepSpec:
     """Validate a spec's contents (see the module docstring)."""
 
@@ -263,32 +205,17 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
 
     if not isinstance(data, dict):
         raise bad(f"expected a table of scenario, controllers, ... (got {type(data).__name__})")
-    unknown = [k for k in data if k not in _TOP]
-    if unknown:
-        raise bad(f"unknown key {unknown[0]!r} (allowed: {', '.join(_TOP)}){did_you_mean(unknown[0], _TOP)}")
-    scenario = data.get("scenario")
-    if not isinstance(scenario, str):
-        raise bad('scenario must be a scenario name, e.g. scenario = "emergency-brake"')
-    from ego.scenarios import scenario_class
-
-    try:
-        cls = scenario_class(scenario)
-        cls.default_config({})  # a scenario file whose road is missing: said of the file, not of a key
-    except ConfigError as exc:
-        raise bad(str(exc)) from None
+    check_keys(data, _TOP, bad)
+    scenario, cls = scenario_of(data, bad)
     controllers = data.get("controllers")
     if not isinstance(controllers, list) or not controllers or not all(isinstance(c, str) for c in controllers):
         raise bad('controllers must be a non-empty list of names, e.g. controllers = ["pid"]')
     if len(set(controllers)) != len(controllers):
         dup = next(c for c in controllers if controllers.count(c) > 1)
         raise bad(f"controller {dup!r} is listed twice")
-    for name in controllers:
-        try:
-            controller_spec(name, cls.task)
-        except ConfigError as exc:
-            raise bad(str(exc)) from None
+    check_controllers(controllers, cls, bad)
     seeds = _seeds(data.get("seeds", 1), bad)
-    infos = _param_types(scenario, controllers)
+    infos = param_types(scenario, controllers)
 
     def known(name: str, where: str):
         info = infos.get(name)
@@ -307,7 +234,7 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
             raise bad(f"[{section}] must be a table of parameter = value")
     for name, value in fixed.items():
         known(name, "set")
-        _check(scenario, controllers, {name: value}, f"[set] {name}", bad)
+        check_values(scenario, controllers, {name: value}, f"[set] {name}", bad)
     for name, values in grid.items():
         known(name, "grid")
         if not isinstance(values, list) or not values:
@@ -315,7 +242,7 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
         if name in fixed:
             raise bad(f"{name} is both fixed in [set] and swept in [grid]")
         for v in values:
-            _check(scenario, controllers, {**fixed, name: v}, f"[grid] {name}", bad)
+            check_values(scenario, controllers, {**fixed, name: v}, f"[grid] {name}", bad)
         _one_kind(name, values, bad)
     sample = None
     if sample_data is not None:
@@ -352,7 +279,9 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
             for end in rng:
                 for point in points or [{}]:
                     with_grid = "".join(f" with [grid] {k} = {v!r}" for k, v in point.items())
-                    _check(scenario, controllers, {**fixed, **point, name: end}, f"[sample] {name}{with_grid}", bad)
+                    check_values(
+                        scenario, controllers, {**fixed, **point, name: end}, f"[sample] {name}{with_grid}", bad
+                    )
             ranges[name] = (float(rng[0]), float(rng[1]))
         if not ranges:
             raise bad("[sample] names no parameter range")
@@ -389,10 +318,10 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
     for combo in combos:
         point = dict(zip(names, combo))
         where = "the run with " + ", ".join(f"{k} = {v!r}" for k, v in point.items()) if point else "the first run"
-        _check(scenario, controllers, {**spec.fixed, **point}, where, bad)
+        check_values(scenario, controllers, {**spec.fixed, **point}, where, bad)
     first = next(spec.runs())
     if sample is not None:
-        _check(scenario, controllers, first.overrides, "the first run", bad)
+        check_values(scenario, controllers, first.overrides, "the first run", bad)
     if requirements:
         check_requirements(first, requirements, bad)
     return spec
@@ -445,21 +374,3 @@ def _seeds(value: Any, bad) -> tuple[int, ...]:
             raise bad("a seed is listed twice")
         return tuple(value)
     raise bad(f"seeds must be a count or a list of seeds, got {value!r}")
-
-
-def _check(scenario: str, controllers, overrides: dict, where: str, bad) -> None:
-    """The values against the scenario's and every controller's parameters, as --set does."""
-    from ego.scenarios import scenario_class
-
-    cls = scenario_class(scenario)
-    try:
-        config, rest = apply_overrides(cls.default_config(overrides), overrides, strict=False)
-        cls.check_config(config)
-        for name in controllers:
-            params = controller_spec(name, cls.task).params
-            mine = {k: v for k, v in rest.items() if k in {i.name for i in describe(params)}}
-            apply_overrides(params(), mine)
-    except ConfigError as exc:
-        raise bad(f"{where}: {exc}") from None
-    except (TypeError, ValueError) as exc:
-        raise bad(f"{where}: {exc}") from None

@@ -1,7 +1,8 @@
 """Plugins: a package installed into a temporary environment (pip install --target, on the
-PYTHONPATH) registers a controller and a scenario through the ``ego.controllers`` and
-``ego.scenarios`` entry points; ego run, ego compare --jobs 2 and ego sweep --engine ray find
-them, their workers importing the plugin themselves."""
+PYTHONPATH) registers a controller, a scenario, a metric and a backend through the
+``ego.controllers``, ``ego.scenarios``, ``ego.metrics`` and ``ego.backends`` entry points;
+ego run, ego compare --jobs 2 and ego sweep --engine ray find them, their workers importing
+the plugin themselves."""
 
 import csv
 import json
@@ -29,12 +30,25 @@ demo-pid = "ego_demo_plugin:DemoPID"
 
 [project.entry-points."ego.scenarios"]
 demo-brake = "ego_demo_plugin:DemoBrake"
+
+[project.entry-points."ego.metrics"]
+demo-rows = "ego_demo_plugin:DEMO_ROWS"
+
+[project.entry-points."ego.backends"]
+demo-road = "ego_demo_plugin:DEMO_ROAD"
 """
 
 MODULE = '''
-"""A plugin: ego's pid under another name, and emergency-brake as a scenario of its own."""
+"""A plugin: ego's pid under another name, emergency-brake as a scenario of its own, a
+metric (the trace's rows) and a backend (SUMO under another name)."""
 from ego.control.pid import PIDController, PIDParams
+from ego.results.metrics import TraceMetric
+from ego.results.trace import Metric
 from ego.scenarios import EmergencyBrake
+from ego.sim.registry import Backend, Capabilities
+
+DEMO_ROWS = TraceMetric(Metric("demo_rows", "-", "rows of the trace"), ("t",), lambda trace: len(trace["t"]))
+DEMO_ROAD = Backend("demo-road", "ego.sumo.bridge:make_sim", Capabilities(any_network=True))
 
 
 class DemoPID(PIDController):
@@ -107,9 +121,18 @@ def test_ego_list_and_run_find_the_plugins(plugin_env):
     for key in ("status", "min_gap_front", "max_abs_lateral_accel", "steps"):
         assert runs["pid"][key] == runs["demo-pid"][key]
     assert runs["demo-pid"]["scenario"] == "demo-brake"
+    # the plugin's metric: one trace row per control step, 4 s / 0.01 s
+    assert runs["demo-pid"]["demo_rows"] == runs["demo-pid"]["steps"] == 400
+    # the plugin's backend is a --backend choice (the parser reads the registry when it is
+    # built); emergency-brake does not list it
+    proc, _ = ego(plugin_env, "run", "emergency-brake", "-c", "pid", "--backend", "demo-road")
+    assert proc.returncode == 2
+    assert proc.stderr.strip().endswith("(scenario emergency-brake runs on sumo or highway-env only)"), proc.stderr
     # without the plugin, the names are unknown
     plain, _ = ego(dict(os.environ), "run", "emergency-brake", "-c", "demo-pid")
     assert plain.returncode == 2 and "unknown controller 'demo-pid'" in plain.stderr
+    plain, _ = ego(dict(os.environ), "run", "emergency-brake", "-c", "pid", "--backend", "demo-road")
+    assert plain.returncode == 2 and "invalid choice: 'demo-road'" in plain.stderr
 
 
 def test_compare_jobs_2_runs_the_plugin_in_its_workers(plugin_env, tmp_path):
@@ -160,6 +183,8 @@ def test_sweep_on_ray_runs_the_plugin_in_its_workers(plugin_env, tmp_path):
     ]
     by = {(r["controller"], r["seed"]): (r["status"], r["min_gap_front"]) for r in rows}
     assert by[("demo-pid", 0)] == by[("pid", 0)] and by[("demo-pid", 1)] == by[("pid", 1)]
+    # the plugin's metric, computed in the Ray workers: one trace row per control step
+    assert [r["demo_rows"] for r in rows] == [r["steps"] for r in rows] == [300] * 4
 
 
 def test_a_scenario_named_by_file_reference(tmp_path):
