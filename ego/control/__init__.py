@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 from ego.control.base import Controller, ControllerSpec, Observation
 from ego.control.bp_pid import BPPIDController, BPPIDParams
+from ego.control.careful import CarefulDriver, CarefulDriverParams
 from ego.control.cascade import CascadePID, CascadePIDParams
 from ego.control.curve import CurvePID, CurvePIDParams, FuzzyCurve, FuzzyCurveParams
 from ego.control.following import (
@@ -79,6 +80,13 @@ CONTROLLERS: dict[str, dict[str, ControllerSpec]] = {
                 BPPIDController,
             ),
             ControllerSpec("rbf-smc", "report 000's RBF adaptive sliding-mode control", RBFSMCParams, RBFSMCController),
+            ControllerSpec(
+                "careful-driver",
+                "UN R157 Annex 4 Appendix 3's competent and careful human driver (keeps its lane; "
+                "brakes 0.4 + 0.75 s after a risk, up to 0.774 g in 0.6 s)",
+                CarefulDriverParams,
+                CarefulDriver,
+            ),
             _NONE,
         )
     },
@@ -176,6 +184,8 @@ __all__ = [
     "BPPIDParams",
     "CONTROLLERS",
     "TASKS",
+    "CarefulDriver",
+    "CarefulDriverParams",
     "CascadePID",
     "CascadePIDParams",
     "CurvePID",
