@@ -112,6 +112,13 @@ def parser() -> argparse.ArgumentParser:
         "scenario's defaults (repeatable; docs/requirements.md), e.g. "
         '"keep_gap: always (gap_front >= 2 m)"',
     )
+    run.add_argument(
+        "--preventable",
+        action="store_true",
+        help="report collision_preventable even without a collision: run UN R157's careful "
+        "driver on the same scenario too (it is reported after every collision anyway; "
+        "docs/requirements.md)",
+    )
 
     cmp_ = sub.add_parser(
         "compare",
