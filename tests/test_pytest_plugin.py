@@ -39,6 +39,10 @@ def test_the_example_project_fails_exactly_its_planted_item_and_reports_metrics(
             "-n",
             "2",
             "--junitxml=r.xml",
+            "--ego-record",
+            "failed",
+            "--ego-record-dir",
+            "rec",
             "-p",
             "no:cacheprovider",
         ],
@@ -65,6 +69,10 @@ def test_the_example_project_fails_exactly_its_planted_item_and_reports_metrics(
         assert "ego.requirements.no_collision" in props and "ego.max_decel" in props, name
         assert props["ego.command"].startswith("ego run "), name
     planted = {p.get("name"): p.get("value") for p in cases[PLANTED].iter("property")}
+    # --ego-record failed: a recording of the failing item alone
+    assert [p.name for p in (project / "rec").iterdir()] == ["test_planted_failure_keeps_50_m_seed0_.rrd"]
+    assert planted["ego.recording"].endswith("test_planted_failure_keeps_50_m_seed0_.rrd")
+    assert (project / "rec" / "test_planted_failure_keeps_50_m_seed0_.rrd").stat().st_size > 0
     assert float(planted["ego.requirements.keep_50m"]) == pytest.approx(-43.2094, abs=1e-4)
     # the reproducer gives the same verdict
     argv = shlex.split(reproduce)
