@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -55,6 +55,10 @@ class RunSpec:
     #: requirements checked on the run (``ego.requirements``): ((name, formula), ...) or a
     #: mapping; None: the scenario's defaults; (): none
     requirements: Any = None
+    #: ``collision_preventable`` (:func:`collision_preventable`): None computes it when the
+    #: run ends in a collision, True always (where the careful driver can drive the
+    #: scenario), False never
+    preventable: bool | None = None
 
     @property
     def sim_options(self) -> dict[str, Any]:
@@ -98,6 +102,8 @@ class RunSpec:
             object.__setattr__(self, "requirements", pairs)
         if not isinstance(self.background_recording, bool):
             raise ConfigError(f"bad background_recording {self.background_recording!r} (expected true or false)")
+        if self.preventable is not None and not isinstance(self.preventable, bool):
+            raise ConfigError(f"bad preventable {self.preventable!r} (expected true, false or None)")
 
 
 def parameter_namespace(scenario: type[Scenario] | str, controllers: Iterable[str] = ()) -> dict[str, ParamInfo]:
@@ -327,7 +333,64 @@ def run(what: RunSpec | ResolvedRun) -> RunResult:
             raise failed or output_error(resolved.spec.trace, exc, result) from None
     if failed is not None:
         raise failed
+    spec = resolved.spec
+    if spec.preventable or (spec.preventable is None and result.metrics.get("collision")):
+        preventable = collision_preventable(resolved, result)
+        if preventable is not None:
+            result.metrics["collision_preventable"] = preventable
     return result
+
+
+#: the reference driver of :func:`collision_preventable` (UN R157 Annex 4 Appendix 3)
+REFERENCE_DRIVER = "careful-driver"
+#: the ego's own systems the reference driver drives without: the scenario's evasion and AEB
+REFERENCE_OFF = {"evade": False, "aeb": False}
+
+
+def reference_run(resolved: ResolvedRun) -> ResolvedRun | None:
+    """The same concrete scenario (the same file, configuration, seed, traffic and backend)
+    with UN R157's careful driver (``careful-driver``) in place of the run's controller and
+    the ego's own evasion and AEB switched off; no outputs, no requirements. None where the
+    careful driver cannot drive the scenario (it is not in the scenario's task)."""
+    cls = resolved.scenario_cls
+    if REFERENCE_DRIVER not in CONTROLLERS.get(cls.task, {}):
+        return None
+    names = {f.name for f in fields(resolved.config)}
+    config = replace(resolved.config, **{k: v for k, v in REFERENCE_OFF.items() if k in names})
+    options = {k: v for k, v in resolved.spec.backend_options.items() if k != "video"}
+    spec = replace(
+        resolved.spec,
+        controller=REFERENCE_DRIVER,
+        overrides={},
+        record=None,
+        trace=None,
+        video=None,
+        backend_options=options,
+        label="",
+        requirements=(),
+        preventable=False,
+    )
+    driver = CONTROLLERS[cls.task][REFERENCE_DRIVER]
+    return ResolvedRun(spec, cls, config, driver, driver.params())
+
+
+def collision_preventable(resolved: ResolvedRun, result: RunResult) -> bool | None:
+    """UN R157's question for a run: would the competent and careful human driver (Annex 4,
+    Appendix 3: :mod:`ego.control.careful`) have avoided the collision? True when the run
+    collided and the careful driver, on the same concrete scenario
+    (:func:`reference_run`), does not; False when it collides too, or when the run did not
+    collide (there was nothing to prevent). None where it cannot be asked: the careful
+    driver is not a controller of the scenario's task, or the scenario has no traffic."""
+    if result.traffic is None or REFERENCE_DRIVER not in CONTROLLERS.get(resolved.scenario_cls.task, {}):
+        return None
+    if not result.metrics.get("collision"):
+        return False
+    if resolved.controller.name == REFERENCE_DRIVER and resolved.spec.controller == REFERENCE_DRIVER:
+        return False  # the careful driver itself collided
+    reference = reference_run(resolved)
+    if reference is None:
+        return None
+    return not run(reference).metrics.get("collision")
 
 
 def declared_metrics(what: RunSpec | ResolvedRun) -> tuple[Metric, ...]:

@@ -5,7 +5,7 @@ or through others): every import in every module of ego, lazy ones in functions 
     < models, control, sim, results, parallel, record, sumo, highway_env, geometry
     < scenarios
     < runner, plots, requirements, specs
-    < compare, sweep, falsify, gym, train, docs, cli
+    < compare, sweep, falsify, gym, train, docs, cli, pytest_plugin
 """
 
 import ast
@@ -56,6 +56,7 @@ LAYERS = [
         "ego.cli",
         "ego.__main__",
         "ego._entry",
+        "ego.pytest_plugin",
     },
 ]
 LEVEL = {unit: i for i, layer in enumerate(LAYERS) for unit in layer}

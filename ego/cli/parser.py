@@ -99,6 +99,13 @@ def parser() -> argparse.ArgumentParser:
         "--video", metavar="PATH", help="with --backend highway-env: a video of the run (.gif, or .mp4 with ffmpeg)"
     )
     add_require(run)
+    run.add_argument(
+        "--preventable",
+        action="store_true",
+        help="report collision_preventable even without a collision: run UN R157's careful "
+        "driver on the same scenario too (it is reported after every collision anyway; "
+        "docs/requirements.md)",
+    )
 
     cmp_ = sub.add_parser(
         "compare",

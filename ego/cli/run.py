@@ -28,6 +28,7 @@ def command(args: Any) -> int:
         backend=args.backend,
         video=args.video,
         requirements=with_defaults(args.scenario, args.require),
+        preventable=True if args.preventable else None,
     )
     resolved = resolve(spec)  # every name, value and path checked before anything runs
     from ego.outputs import OutputError

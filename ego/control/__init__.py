@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from ego.control.base import Controller, ControllerSpec, NoParams, Observation
 from ego.control.bp_pid import BPPIDController, BPPIDParams
+from ego.control.careful import CarefulDriver, CarefulDriverParams
 from ego.control.cascade import CascadePID, CascadePIDParams
 from ego.control.curve import CurvePID, CurvePIDParams, FuzzyCurve, FuzzyCurveParams
 from ego.control.following import (
@@ -72,6 +73,13 @@ CONTROLLERS: dict[str, dict[str, ControllerSpec]] = {
                 BPPIDController,
             ),
             ControllerSpec("rbf-smc", "report 000's RBF adaptive sliding-mode control", RBFSMCParams, RBFSMCController),
+            ControllerSpec(
+                "careful-driver",
+                "UN R157 Annex 4 Appendix 3's competent and careful human driver (keeps its lane; "
+                "brakes 0.4 + 0.75 s after a risk, up to 0.774 g in 0.6 s)",
+                CarefulDriverParams,
+                CarefulDriver,
+            ),
             _NONE,
         )
     },
@@ -169,6 +177,8 @@ __all__ = [
     "BPPIDParams",
     "CONTROLLERS",
     "TASKS",
+    "CarefulDriver",
+    "CarefulDriverParams",
     "CascadePID",
     "CascadePIDParams",
     "CurvePID",

@@ -48,6 +48,10 @@ class Observation:
     #: the lane ``s`` is measured along (:class:`ego.lane_frame.LanePolyline`), for controllers
     #: that preview the road (curvature ahead); None where there is no road
     lane: Any = None
+    #: the motorway's surround sensor (:class:`ego.scenarios.sensor.SurroundSensor`: ``front``
+    #: and ``rear`` detections, :meth:`~ego.scenarios.sensor.SurroundSensor.wandering`) for
+    #: controllers that look at the traffic (``careful-driver``); None where there is none
+    surround: Any = None
 
     @property
     def e_lon(self) -> float:

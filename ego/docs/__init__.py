@@ -969,7 +969,8 @@ def rl_baselines() -> list[Table]:
         rows = [
             Row(controller, (ControllerEval(env_id, controller),), _rl_cells)
             for controller in CONTROLLERS[scenario_class(scenario).task]
-            if controller != "none"
+            # the R157 reference driver is a yardstick for preventability, not a baseline
+            if controller not in ("none", "careful-driver")
         ]
         rows += [
             Row(

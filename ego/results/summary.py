@@ -206,6 +206,16 @@ def sweep(
             for c in controllers:
                 k = sum(1 for r in runs.get(c, ()) if r.get(extra) is True)
                 lines.append(f"- {c}: {k}")
+    if "collision_preventable" in names:
+        lines += [
+            "",
+            "Collisions UN R157's careful driver avoids on the same scenario (`collision_preventable`):",
+            "",
+        ]
+        for c in controllers:
+            k = sum(1 for r in runs.get(c, ()) if r.get("collision_preventable") is True)
+            n = sum(1 for r in runs.get(c, ()) if r.get("collision_preventable") is not None)
+            lines.append(f"- {c}: {k} of {n}")
     lines += requirement_lines(runs)
     errors = [r for r in rows if r["status"] == "error"]
     if errors:

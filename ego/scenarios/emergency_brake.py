@@ -20,17 +20,10 @@ from ego.params import ConfigError, param
 from ego.results import metrics as m
 from ego.results.trace import Metric
 from ego.scenarios.base import NO_AVOIDABLE_COLLISION, NO_COLLISION, Parts, Scenario
-from ego.scenarios.evasive import (
-    MARKERS,
-    METRICS,
-    EvasiveConfig,
-    compare_plots,
-    compose,
-    evasive_metrics,
-)
+from ego.scenarios.evasive import MARKERS, METRICS, EvasiveConfig, compare_plots, compose, evasive_metrics
 from ego.scenarios.events import INF
 from ego.scenarios.motorway import COLUMNS, EDGE, EGO, PLOTS, ROUTE, MotorwayWorld
-from ego.scenarios.safety import friction_limit
+from ego.scenarios.safety import AEB_SLOWS, friction_limit
 from ego.sim.types import VehicleSpec, VehicleType
 from ego.sumo.traffic import BrakingLeader
 
@@ -41,6 +34,7 @@ STOPPED, MOVING = 0.05, 0.5
 LEAD_TYPE = VehicleType("lead", length=4.5, width=1.8, sigma=0.0, color=(255, 150, 0))
 #: ``lead_speed`` = SAME_AS_EGO: the lead car drives at ``ego_speed``
 SAME_AS_EGO = -1.0
+GAP_OR_CLEAR = ("gap_or_clear", "always (gap_front >= 2 m or lateral_clear)")
 
 
 @dataclass(frozen=True)
@@ -172,15 +166,7 @@ class Impact:
 class EmergencyBrake(Scenario):
     name = "emergency-brake"
     needs = ("scripted_actors",)
-    requirements = (
-        NO_AVOIDABLE_COLLISION,
-        NO_COLLISION,
-        ("gap_or_clear", "always (gap_front >= 2 m or lateral_clear)"),
-        (
-            "aeb_slows",
-            "always (aeb_active implies eventually[0:1] (accel <= -4 m/s^2 or speed <= 1 m/s or not aeb_active))",
-        ),
-    )
+    requirements = (NO_AVOIDABLE_COLLISION, NO_COLLISION, GAP_OR_CLEAR, AEB_SLOWS)
     summary = "lead car brakes hard; front TTC triggers braking and a lane change by gap acceptance"
     config_cls = EmergencyBrakeConfig
     network, edge, backends = "highway", EDGE, BACKENDS

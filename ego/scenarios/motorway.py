@@ -368,6 +368,7 @@ class SurroundView(RoadSensor):
             self.heading_error,
             self.curvature,
         )
+        obs.surround = self.sensor
 
     def traffic_row(self) -> tuple[tuple[float, float], list, list]:
         """The ego's box centre and this step's vehicles, for the traffic log."""

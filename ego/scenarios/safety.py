@@ -21,6 +21,13 @@ from collections.abc import Callable
 from ego.scenarios.events import INF
 from ego.scenarios.sensor import Detection
 
+#: the AEB's own requirement: once active it brakes hard within 1 s (or the ego is nearly
+#: stopped, or the AEB has let go)
+AEB_SLOWS = (
+    "aeb_slows",
+    "always (aeb_active implies eventually[0:1] (accel <= -4 m/s^2 or speed <= 1 m/s or not aeb_active))",
+)
+
 
 def braking_need(front: Detection, ds: float, margin: float = 0.0) -> float:
     """Constant deceleration (m/s^2) that keeps the ego (speed ``ds`` m/s along the road)

@@ -335,6 +335,32 @@ class SurroundSensor:
         self._nearest(near, lo, hi, *found)
         return found
 
+    def wandering(self) -> tuple[str, float, float, float]:
+        """The vehicle ahead in a lane next to the ego's that has moved farthest from its own
+        lane's centre towards the ego's lane, at the last look: (id, that lateral
+        displacement in m, its bumper gap ahead of the ego in m, its speed along the lane in
+        m/s); ("", -inf, inf, 0) when there is none. The ego's lane is the band holding
+        the reference lane's centre line (d = 0): R157's careful driver perceives a cut-in
+        when this displacement exceeds the lateral wandering distance."""
+        best = ("", -INF, INF, 0.0)
+        own = next(((lo, hi) for lo, hi in self.bands.values() if lo <= 0.0 < hi), None)
+        if own is None:
+            return best
+        front = self._ego[1]
+        for o in self._objects:
+            gap = o[1] - front
+            if gap < 0.0:
+                continue
+            centre = 0.5 * (o[3] + o[4])
+            for lo, hi in self.bands.values():
+                if (lo, hi) == own or not lo <= centre < hi:
+                    continue
+                mid = 0.5 * (lo + hi)
+                towards = (centre - mid) if mid < 0.0 else (mid - centre)
+                if towards > best[1]:
+                    best = (o[0], towards, gap, o[5])
+        return best
+
     def lane_neighbours(self, lane: int, leader: Detection, follower: Detection) -> bool:
         """Fill ``leader``/``follower`` with the nearest vehicles ahead of / behind the ego
         whose extent overlaps lane ``lane``'s band (seen at the last :meth:`scan`, gaps

@@ -1,0 +1,56 @@
+"""collision_preventable: UN R157's careful driver on the same concrete scenario."""
+
+import pytest
+
+from ego.runner import RunSpec, collision_preventable, reference_run, resolve, run
+
+pytestmark = pytest.mark.sumo
+
+OFF = {"evade": "false", "aeb": "false"}
+
+
+def _careful_collides(scenario: str, seed: int, overrides: dict) -> bool:
+    """The careful driver's own run, set up by hand: same scenario, seed and overrides, the
+    ego's evasion and AEB off."""
+    return bool(run(RunSpec(scenario, "careful-driver", seed, {**overrides, **OFF})).metrics["collision"])
+
+
+def test_a_collision_the_careful_driver_avoids_is_preventable():
+    overrides = {**OFF, "traffic_density": "0"}
+    r = run(RunSpec("cut-in", "none", 0, overrides))
+    assert r.metrics["collision"]
+    assert not _careful_collides("cut-in", 0, overrides)
+    assert r.metrics["collision_preventable"] is True
+
+
+def test_a_collision_the_careful_driver_has_too_is_not_preventable():
+    overrides = {**OFF, "cut_in_gap": "4", "cut_in_speed": "12"}
+    r = run(RunSpec("cut-in", "none", 3, overrides))
+    assert r.metrics["collision"]
+    assert _careful_collides("cut-in", 3, overrides)
+    assert r.metrics["collision_preventable"] is False
+
+
+def test_the_reference_is_the_same_concrete_scenario_with_its_own_systems_off():
+    resolved = resolve(RunSpec("emergency-brake", "pid", 7, {"lead_decel": "9", "kp_lat": "0.02"}))
+    ref = reference_run(resolved)
+    assert ref is not None and ref.spec.controller == "careful-driver" and ref.spec.seed == 7
+    assert ref.config.lead_decel == 9.0 and ref.config.evade is False and ref.config.aeb is False
+    # every other field of the scenario's configuration as the run had it
+    assert ref.config == resolved.config.__class__(**{**vars(resolved.config), "evade": False, "aeb": False})
+    assert ref.spec.record is None and ref.spec.trace is None and ref.spec.requirements == ()
+
+
+def test_only_after_a_collision_or_when_asked():
+    spec = RunSpec("cut-in", "pid", 0)
+    r = run(spec)
+    assert not r.metrics["collision"] and "collision_preventable" not in r.metrics
+    asked = run(RunSpec("cut-in", "pid", 0, preventable=True))
+    assert asked.metrics["collision_preventable"] is False  # nothing to prevent
+    # the run's own figures are the same either way
+    assert {k: v for k, v in asked.metrics.items() if k not in ("collision_preventable", "wall_time")} == {
+        k: v for k, v in r.metrics.items() if k != "wall_time"
+    }
+    # a task the careful driver does not drive (the curve's a_x and steer): it cannot be asked
+    curve = resolve(RunSpec("curve", "pid", 0))
+    assert collision_preventable(curve, run(curve)) is None

@@ -1,0 +1,82 @@
+"""ego's pytest plugin on a user's project: scenarios/pytest_example copied to a fresh
+temporary folder and run by pytest in a subprocess, two workers (pytest-xdist), JUnit XML.
+
+The plugin is loaded with ``-p ego.pytest_plugin``: the pytest11 entry point registers it
+where ego is installed from its wheel, and the venv's editable install here may be another
+checkout's (the entry point takes the same name, so both together load it once)."""
+
+import json
+import os
+import shlex
+import shutil
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pytest
+
+pytestmark = pytest.mark.sumo
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLE = ROOT / "scenarios" / "pytest_example"
+PLANTED = "test_planted_failure_keeps_50_m[seed0]"
+
+
+def test_the_example_project_fails_exactly_its_planted_item_and_reports_metrics(tmp_path):
+    project = tmp_path / "project"
+    shutil.copytree(EXAMPLE, project)
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    env.pop("PYTEST_ADDOPTS", None)
+    env.pop("PYTEST_XDIST_WORKER", None)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pytest",
+            "-p",
+            "ego.pytest_plugin",
+            "-n",
+            "2",
+            "--junitxml=r.xml",
+            "--ego-record",
+            "failed",
+            "--ego-record-dir",
+            "rec",
+            "-p",
+            "no:cacheprovider",
+        ],
+        cwd=project,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 1, proc.stdout[-3000:] + proc.stderr[-3000:]
+    cases = {c.get("name"): c for c in ET.parse(project / "r.xml").getroot().iter("testcase")}
+    assert set(cases) == {"seed0", "test_emergency_brake_keeps_its_distance[seed0]", PLANTED}
+    failed = {n for n, c in cases.items() if c.find("failure") is not None or c.find("error") is not None}
+    assert failed == {PLANTED}
+    message = cases[PLANTED].find("failure").get("message") + cases[PLANTED].find("failure").text
+    # the violated requirement, its robustness, its first violation and the reproducer
+    assert "requirement keep_50m violated: robustness -43.2094, first violation at 0.09 s" in message
+    reproduce = "ego run emergency-brake --controller pid --seed 0 --set traffic_density=0 --require 'keep_50m: always (gap_front >= 50 m)'"
+    assert f"reproduce: {reproduce}" in message
+    for name, case in cases.items():
+        props = {p.get("name"): p.get("value") for p in case.iter("property")}
+        assert props["ego.status"] == "completed", name
+        assert props["ego.collision"] == "False", name
+        assert "ego.requirements.no_collision" in props and "ego.max_decel" in props, name
+        assert props["ego.command"].startswith("ego run "), name
+    planted = {p.get("name"): p.get("value") for p in cases[PLANTED].iter("property")}
+    # --ego-record failed: a recording of the failing item alone
+    assert [p.name for p in (project / "rec").iterdir()] == ["test_planted_failure_keeps_50_m_seed0_.rrd"]
+    assert planted["ego.recording"].endswith("test_planted_failure_keeps_50_m_seed0_.rrd")
+    assert (project / "rec" / "test_planted_failure_keeps_50_m_seed0_.rrd").stat().st_size > 0
+    assert float(planted["ego.requirements.keep_50m"]) == pytest.approx(-43.2094, abs=1e-4)
+    # the reproducer gives the same verdict
+    argv = shlex.split(reproduce)
+    rerun = subprocess.run(
+        [sys.executable, "-m", *argv, "--json"], cwd=project, env=env, capture_output=True, text=True, timeout=300
+    )
+    assert json.loads(rerun.stdout)["requirements"]["keep_50m"] == pytest.approx(-43.2094, abs=1e-4), rerun.stderr
