@@ -17,8 +17,10 @@ reports (also where the registered ``TimeLimit`` truncates). A non-finite action
 
 Each reset draws the episode's ``randomize`` parameters from its seed (:data:`DEFAULT_RANDOMIZE`),
 so an env is a distribution of scenarios. An env pickles (mid-episode: the episode's commands
-are replayed in a new SUMO). ``multi_instance`` lets a second env of the process run its SUMO
-through TraCI.
+are replayed in a new SUMO). Several envs run in one process (``multi_instance``, true by
+default): the one that starts while another's SUMO holds the process's libsumo runs its SUMO
+through TraCI, with the same results; ``multi_instance=False`` is one env per process (its
+reset ends the run of any other).
 
 The platoon: the agent drives the first follower (``f1``, right behind the SUMO leader); the
 followers behind it keep the scenario's controller, so the agent's driving propagates down
@@ -337,10 +339,10 @@ _running: list = [None]
 
 #: why a step is refused after another env's reset ended this env's run
 _EVICTED = (
-    "this env's SUMO run was ended by the reset of another ego env in this process: libsumo "
-    "runs one simulation per process. Use gym.make_vec(id, n) (one process per env), SB3's "
-    "SubprocVecEnv, or config={'multi_instance': True} for several envs in one process "
-    "(DummyVecEnv; the second and later run SUMO through TraCI, slower)"
+    "this env's SUMO run was ended by the reset of another ego env in this process made with "
+    "multi_instance=False: libsumo runs one simulation per process. Leave multi_instance at its "
+    "default (true) for several envs in one process (the second and later run SUMO through "
+    "TraCI, slower), or use gym.make_vec(id, n) or SB3's SubprocVecEnv (one process per env)"
 )
 
 #: why an env runs its SUMO through TraCI beside a multi_instance env in this process
@@ -362,11 +364,12 @@ class EgoEnv(gym.Env):
     """An ego scenario as a Gymnasium env (see the module docstring). ``scenario`` is a name
     of ``ego list``; ``config`` updates :meth:`default_config`.
 
-    libsumo runs one simulation per process, so by default one env per process runs at a
-    time: ``reset`` ends the run of any other ego env of the process (whose next ``step`` then
-    raises, saying so). ``config["multi_instance"] = True`` lets an env start while another
-    runs: its SUMO then runs through TraCI (a ``sumo`` subprocess behind a socket). Envs in
-    parallel live in their own processes: ``gym.make_vec(id, n)`` does that by default.
+    libsumo runs one simulation per process: an env that starts while another env of the
+    process runs through libsumo runs its SUMO through TraCI (a ``sumo`` subprocess behind a
+    socket; the same episode for the same seed and actions). ``config["multi_instance"] =
+    False`` keeps one env per process instead: its ``reset`` ends the run of any other ego env
+    of the process (whose next ``step`` then raises, saying so). Envs in parallel live in
+    their own processes: ``gym.make_vec(id, n)`` does that by default.
     """
 
     metadata: ClassVar[dict] = {"render_modes": ["rgb_array"], "render_fps": 100}
@@ -413,7 +416,7 @@ class EgoEnv(gym.Env):
             "controller": sc.reference_controller(),
             "reward_speed_range": [0.0, 30.0],
             "randomize": {k: list(v) for k, v in DEFAULT_RANDOMIZE.get(scenario, {}).items()},
-            "multi_instance": False,
+            "multi_instance": True,
         }
         env = EnvConfig()
         config.update({name: getattr(env, name) for name in _ENV_SCALARS})

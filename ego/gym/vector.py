@@ -25,9 +25,8 @@ orphan is left.
 The env stepped here holds this process's libsumo while the vector env is open: another ego
 env started here meanwhile runs its SUMO through TraCI (slower; a warning says so).
 ``host=False`` keeps every env in a worker (then a step is the pipes' round trip). Several
-envs in one process (SB3's ``DummyVecEnv``, ``vectorization_mode="sync"``) need
-``config={"multi_instance": True}``: the second and later run SUMO through TraCI (see
-docs/gym.md for its cost). ``gymnasium.vector.AsyncVectorEnv`` and SB3's ``SubprocVecEnv``
+envs in one process (SB3's ``DummyVecEnv``, ``vectorization_mode="sync"``) work with the
+default config: the second and later run SUMO through TraCI (see docs/gym.md for its cost). ``gymnasium.vector.AsyncVectorEnv`` and SB3's ``SubprocVecEnv``
 of ``gym.make(id)`` work as well.
 """
 

@@ -51,3 +51,99 @@ def test_a_standstill_while_steering_reaches_sumo_as_speed_0_on_libsumo_and_trac
     assert lib[3] == traci[3]
     for (a, ra), (b, rb) in zip(lib[1], traci[1], strict=True):  # the same episode either way
         assert np.array_equal(a, b) and ra == rb
+
+
+# -- 2. the default config with the standard clients ---------------------------------------------
+def _trajectory(envs, steps, seed):
+    """Observations and rewards of a vec env (SB3's or Gymnasium's) under fixed actions."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(steps):
+        actions = rng.uniform(-0.3, 0.3, (envs.num_envs, 2)).astype(np.float32)
+        result = envs.step(actions)
+        out.append((np.array(result[0]), np.array(result[1])))
+    return out
+
+
+@pytest.mark.sumo
+def test_two_default_envs_in_one_process_give_the_trajectories_of_one_each():
+    config = {"policy_frequency": 10}
+    pair = gym.make_vec("ego/CutIn-v0", num_envs=2, vectorization_mode="sync", config=config)
+    try:
+        obs, _ = pair.reset(seed=[3, 4])
+        both = [(obs, np.zeros(2))] + _trajectory(pair, 40, 0)
+        assert pair.unwrapped.envs[1].unwrapped.scenario.bridge.via_traci  # chosen by itself
+    finally:
+        pair.close()
+    for i, seed in enumerate((3, 4)):
+        single = gym.make("ego/CutIn-v0", config=config)
+        try:
+            obs, _ = single.reset(seed=seed)
+            rng = np.random.default_rng(0)
+            alone = [obs]
+            for _ in range(40):
+                action = rng.uniform(-0.3, 0.3, (2, 2)).astype(np.float32)[i]
+                obs, reward, terminated, truncated, _ = single.step(action)
+                alone.append((obs, reward))
+                if terminated or truncated:
+                    break
+        finally:
+            single.close()
+        assert np.array_equal(both[0][0][i], alone[0])
+        for (o, r), (a, ra) in zip([b for b in both[1:]][: len(alone) - 1], alone[1:], strict=True):
+            assert np.array_equal(o[i], a) and r[i] == ra
+
+
+@pytest.mark.sumo
+def test_pettingzoo_parallel_tests_pass_on_the_default_platoon():
+    from pettingzoo.test import parallel_api_test, parallel_seed_test
+
+    from ego.gym.multi_agent import PlatoonParallelEnv
+
+    env = PlatoonParallelEnv()
+    try:
+        parallel_api_test(env, num_cycles=50)
+    finally:
+        env.close()
+    parallel_seed_test(PlatoonParallelEnv, num_cycles=50)
+
+
+@pytest.mark.sumo
+def test_sb3_ppo_learns_on_two_default_envs_in_one_process():
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.env_util import make_vec_env
+
+    envs = make_vec_env("ego/EmergencyBrake-v0", n_envs=2, seed=0)  # DummyVecEnv, the default config
+    try:
+        PPO("MlpPolicy", envs, n_steps=128, batch_size=64, n_epochs=1, seed=0, device="cpu").learn(256)
+    finally:
+        envs.close()
+
+
+@pytest.mark.sumo
+@pytest.mark.parametrize("mode", ["sync", "async", None])
+def test_make_vec_in_every_mode_with_the_default_config(mode):
+    kwargs = {} if mode is None else {"vectorization_mode": mode}
+    envs = gym.make_vec("ego/CutIn-v0", num_envs=2, **kwargs)
+    try:
+        envs.reset(seed=0)
+        for _ in range(5):
+            envs.step(envs.action_space.sample())
+    finally:
+        envs.close()
+
+
+@pytest.mark.sumo
+@pytest.mark.parametrize("kind", ["dummy", "subproc"])
+def test_sb3_vec_envs_with_the_default_config(kind):
+    from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
+
+    cls = DummyVecEnv if kind == "dummy" else SubprocVecEnv
+    envs = make_vec_env("ego.gym:ego/CutIn-v0", n_envs=2, seed=0, vec_env_cls=cls)  # module: id, for forkserver
+    try:
+        envs.reset()
+        for _ in range(5):
+            envs.step(np.zeros((2, 2), np.float32))
+    finally:
+        envs.close()
