@@ -126,6 +126,13 @@ def make_vector(
     return EgoVectorEnv([make] * num_envs, info=info, host=host)
 
 
+def _brief(space) -> str:
+    """A space in a line: a Box by its shape and dtype (its bounds are arrays)."""
+    if isinstance(space, spaces.Box):
+        return f"Box{space.shape} {space.dtype}"
+    return str(space)
+
+
 class EgoVectorEnv(VectorEnv):
     """``len(env_fns)`` envs stepped in parallel: the first in this process (``host``), the
     others each in a worker process, the per-step data in shared memory (see the module
@@ -293,8 +300,8 @@ class EgoVectorEnv(VectorEnv):
             ):
                 if old != new:
                     raise ConfigError(
-                        f"bad options['config'] for a vector env: it changes the {what} space ({old} -> "
-                        f"{new}), and the vector env's shared buffers hold the one it was made with; "
+                        f"bad options['config'] for a vector env: it changes the {what} space "
+                        f"({_brief(old)} -> {_brief(new)}), and the vector env's shared buffers hold the one it was made with; "
                         "make a new vector env (gym.make_vec) with that configuration"
                     )
         finally:

@@ -147,3 +147,57 @@ def test_sb3_vec_envs_with_the_default_config(kind):
             envs.step(np.zeros((2, 2), np.float32))
     finally:
         envs.close()
+
+
+# -- 3. finite, physical observation bounds ------------------------------------------------------
+IDS = [
+    "ego/EmergencyBrake-v0",
+    "ego/FastFollower-v0",
+    "ego/CutIn-v0",
+    "ego/Curve-v0",
+    "ego/LaneCentering-v0",
+    "ego/Platoon-v0",
+]
+
+
+@pytest.mark.sumo
+@pytest.mark.parametrize("env_id", IDS)
+def test_the_checkers_are_silent_on_the_default_config(env_id):
+    import warnings
+
+    from gymnasium.utils.env_checker import check_env
+    from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+    for config, sb3 in (({}, True), ({"observation": {"type": "Kinematics"}}, False)):
+        env = gym.make(env_id, config=config)
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("error")  # any warning fails the test
+                check_env(env.unwrapped, skip_render_check=True)
+                if sb3:  # SB3's also advises a 1-D shape for the (rows, features) table
+                    sb3_check_env(env.unwrapped, warn=True)
+            assert np.isfinite(env.observation_space.low).all() and np.isfinite(env.observation_space.high).all()
+        finally:
+            env.close()
+
+
+@pytest.mark.sumo
+@pytest.mark.parametrize("env_id", IDS)
+@pytest.mark.parametrize("normalize", [True, False])
+def test_every_observation_of_a_whole_episode_lies_in_the_bounds(env_id, normalize):
+    config = {"policy_frequency": 10, "observation": {"type": "EgoState", "normalize": normalize}}
+    if env_id == "ego/LaneCentering-v0":
+        config["duration"] = 20.0
+    env = gym.make(env_id, config=config)
+    try:
+        obs, _ = env.reset(seed=1)
+        assert env.observation_space.contains(obs)
+        zero = np.zeros(env.action_space.shape, np.float32)
+        while True:
+            obs, _, terminated, truncated, info = env.step(zero)
+            if info["status"] != "diverged":
+                assert env.observation_space.contains(obs), (obs, info["status"])
+            if terminated or truncated:
+                break
+    finally:
+        env.close()
