@@ -360,6 +360,33 @@ _SHARED = (
 )
 
 
+#: the scenarios whose task has an end of its own (the curve's arc, the lane-centring road):
+#: there only status ``completed`` is a success
+_ENDING_TASKS = ("curve", "lane-centering")
+
+
+def outcome(sc, reason: str, metrics: Mapping[str, Any]) -> dict[str, Any]:
+    """The episode's outcome as RL benchmarks report it, for the ``info`` of its last step:
+    ``is_success`` (SB3's key: no collision, divergence or error, and, where the task has an
+    end of its own, that end reached), ``collision``, ``collision_avoidable`` (the scenario's
+    metric, None where it has none), ``off_road`` (diverged by leaving the road),
+    ``completion`` (the share of the run's duration elapsed when it ended, 1 when the task
+    was completed) and ``termination_reason`` (the status, or ``max_episode_steps`` where the
+    registered TimeLimit cut it)."""
+    collision = reason == "collision"
+    failed = collision or reason in ("diverged", "error")
+    ending = sc.name in _ENDING_TASKS
+    duration = sc.config.duration
+    return {
+        "is_success": not failed and (reason == "completed" if ending else True),
+        "collision": collision,
+        "collision_avoidable": metrics.get("collision_avoidable") if collision else None,
+        "off_road": reason == "diverged" and "left the road" in str(sc.status_detail or ""),
+        "completion": 1.0 if reason == "completed" else min(1.0, max(0.0, sc.t / duration)),
+        "termination_reason": reason,
+    }
+
+
 class EgoEnv(gym.Env):
     """An ego scenario as a Gymnasium env (see the module docstring). ``scenario`` is a name
     of ``ego list``; ``config`` updates :meth:`default_config`.
@@ -699,6 +726,7 @@ class EgoEnv(gym.Env):
                 # TimeLimit of another length cannot be seen from here: env.unwrapped.metrics())
                 info["status_detail"] = f"max_episode_steps ({self._limit}) reached"
                 info["metrics"] = sc.result().metrics
+                info.update(outcome(sc, "max_episode_steps", info["metrics"]))
             return self._observe(), reward, False, False, info
         return self._ended(status)
 
@@ -715,12 +743,9 @@ class EgoEnv(gym.Env):
             # reward per step must not make lingering pay more than finishing)
             terms["completion"] = bonus = weight * self._steps_left() * (reward if reward > 0.0 else 0.0)
             reward += bonus
-        info = {
-            "status": status,
-            "rewards": terms,
-            "status_detail": sc.status_detail,
-            "metrics": sc.result().metrics,
-        }
+        metrics = sc.result().metrics
+        info = {"status": status, "rewards": terms, "status_detail": sc.status_detail, "metrics": metrics}
+        info.update(outcome(sc, status, metrics))
         return self._observe(), reward, not truncated, truncated, info
 
     def _bind_step(self) -> functools.partial | None:

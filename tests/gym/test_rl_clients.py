@@ -6,7 +6,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-import ego.gym  # noqa: F401 - registers the ids
+import ego.gym
 
 pytestmark = pytest.mark.filterwarnings("ignore::UserWarning")
 
@@ -201,3 +201,87 @@ def test_every_observation_of_a_whole_episode_lies_in_the_bounds(env_id, normali
                 break
     finally:
         env.close()
+
+
+# -- 4. the outcome of every episode, and evaluate ---------------------------------------------
+OUTCOME = {"is_success", "collision", "collision_avoidable", "off_road", "completion", "termination_reason"}
+
+
+def _last_info(env, action, seed=0):
+    env.reset(seed=seed)
+    while True:
+        _, _, terminated, truncated, info = env.step(np.array(action, np.float32))
+        if terminated or truncated:
+            return info
+
+
+@pytest.mark.sumo
+def test_the_last_info_carries_the_outcome():
+    env = gym.make("ego/CutIn-v0", config={"policy_frequency": 10})
+    try:
+        info = _last_info(env, [0.0, 0.3])  # steered off the road
+        assert OUTCOME <= set(info)
+        assert info["termination_reason"] == "diverged" and info["off_road"] and not info["is_success"]
+        assert not info["collision"] and 0.0 < info["completion"] < 1.0
+    finally:
+        env.close()
+    env = gym.make("ego/EmergencyBrake-v0", config={"policy_frequency": 10, "randomize": {}})
+    try:
+        info = _last_info(env, [1.0, 0.0])  # full throttle into the braking lead
+        assert info["termination_reason"] == "collision" and info["collision"] and not info["is_success"]
+        assert info["collision_avoidable"] == info["metrics"]["collision_avoidable"] and not info["off_road"]
+        # stopped short of the lead through the whole run: a success, completion 1
+        info = _last_info(env, [-1.0, 0.0])  # full braking from the start: stopped, no collision
+        assert info["termination_reason"] == "completed" and info["is_success"] and info["completion"] == 1.0
+    finally:
+        env.close()
+
+
+def test_wilson_and_t_intervals_against_hand_numbers():
+    from ego.gym.evaluate import t_interval, wilson
+
+    low, high = wilson(0, 3)  # upper z^2 / (n + z^2)
+    assert low == 0.0 and high == pytest.approx(1.959963984540054**2 / (3 + 1.959963984540054**2))
+    low, high = wilson(5, 10)  # symmetric about 1/2: 0.5 -+ z sqrt(0.025 + z^2/400) / (1 + z^2/10)
+    z = 1.959963984540054
+    half = z * np.sqrt(0.025 + z * z / 400) / (1 + z * z / 10)
+    assert (low, high) == pytest.approx((0.5 - half, 0.5 + half))
+    low, high = t_interval([1.0, 2.0, 3.0])  # t(0.975, 2) = 4.302653, sd 1
+    assert (low, high) == pytest.approx((2 - 4.302653 / np.sqrt(3), 2 + 4.302653 / np.sqrt(3)), rel=1e-6)
+
+
+@pytest.mark.sumo
+def test_evaluate_reports_the_rates_and_the_mean_return_with_intervals():
+    config = {"policy_frequency": 10}
+    report = ego.gym.evaluate("pid", "ego/EmergencyBrake-v0", episodes=3, seeds=[0, 1, 2], config=config)
+    rows = report["per_episode"]
+    assert report["episodes"] == 3 and [r["seed"] for r in rows] == [0, 1, 2]
+    assert report["success_rate"] == sum(r["is_success"] for r in rows) / 3
+    assert report["collision_rate"] == sum(r["collision"] for r in rows) / 3
+    assert report["mean_return"] == pytest.approx(np.mean([r["return"] for r in rows]))
+    for key, value in (("success_interval", "success_rate"), ("collision_interval", "collision_rate")):
+        low, high = report[key]
+        assert 0.0 <= low <= report[value] <= high <= 1.0
+    low, high = report["return_interval"]
+    assert low <= report["mean_return"] <= high
+    # the same episodes by hand: the returns agree
+    env = gym.make("ego/EmergencyBrake-v0", config=config)
+    try:
+        policy = ego.gym.ControllerPolicy("pid", env.unwrapped)
+        obs, _ = env.reset(seed=1)
+        total = 0.0
+        while True:
+            obs, reward, terminated, truncated, _ = env.step(policy(obs))
+            total += reward
+            if terminated or truncated:
+                break
+    finally:
+        env.close()
+    assert rows[1]["return"] == total
+
+
+def test_evaluate_refuses_bad_episodes():
+    from ego.params import ConfigError
+
+    with pytest.raises(ConfigError, match="bad value for episodes: 0"):
+        ego.gym.evaluate("pid", "ego/EmergencyBrake-v0", episodes=0)
