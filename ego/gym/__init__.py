@@ -17,6 +17,7 @@ from __future__ import annotations
 import gymnasium
 
 from ego.gym.env import ENV_KEYS, EgoEnv, EgoView, EnvConfig, Reward
+from ego.gym.evaluate import evaluate
 from ego.gym.policy import ControllerPolicy
 from ego.gym.spaces import (
     ContinuousAction,
@@ -101,4 +102,5 @@ __all__ = [
     "OccupancyGridObservation",
     "Reward",
     "TimeToCollisionObservation",
+    "evaluate",
 ]

@@ -17,8 +17,10 @@ reports (also where the registered ``TimeLimit`` truncates). A non-finite action
 
 Each reset draws the episode's ``randomize`` parameters from its seed (:data:`DEFAULT_RANDOMIZE`),
 so an env is a distribution of scenarios. An env pickles (mid-episode: the episode's commands
-are replayed in a new SUMO). ``multi_instance`` lets a second env of the process run its SUMO
-through TraCI.
+are replayed in a new SUMO). Several envs run in one process (``multi_instance``, true by
+default): the one that starts while another's SUMO holds the process's libsumo runs its SUMO
+through TraCI, with the same results; ``multi_instance=False`` is one env per process (its
+reset ends the run of any other).
 
 The platoon: the agent drives the first follower (``f1``, right behind the SUMO leader); the
 followers behind it keep the scenario's controller, so the agent's driving propagates down
@@ -337,10 +339,10 @@ _running: list = [None]
 
 #: why a step is refused after another env's reset ended this env's run
 _EVICTED = (
-    "this env's SUMO run was ended by the reset of another ego env in this process: libsumo "
-    "runs one simulation per process. Use gym.make_vec(id, n) (one process per env), SB3's "
-    "SubprocVecEnv, or config={'multi_instance': True} for several envs in one process "
-    "(DummyVecEnv; the second and later run SUMO through TraCI, slower)"
+    "this env's SUMO run was ended by the reset of another ego env in this process made with "
+    "multi_instance=False: libsumo runs one simulation per process. Leave multi_instance at its "
+    "default (true) for several envs in one process (the second and later run SUMO through "
+    "TraCI, slower), or use gym.make_vec(id, n) or SB3's SubprocVecEnv (one process per env)"
 )
 
 #: why an env runs its SUMO through TraCI beside a multi_instance env in this process
@@ -358,15 +360,43 @@ _SHARED = (
 )
 
 
+#: the scenarios whose task has an end of its own (the curve's arc, the lane-centring road):
+#: there only status ``completed`` is a success
+_ENDING_TASKS = ("curve", "lane-centering")
+
+
+def outcome(sc, reason: str, metrics: Mapping[str, Any]) -> dict[str, Any]:
+    """The episode's outcome as RL benchmarks report it, for the ``info`` of its last step:
+    ``is_success`` (SB3's key: no collision, divergence or error, and, where the task has an
+    end of its own, that end reached), ``collision``, ``collision_avoidable`` (the scenario's
+    metric, None where it has none), ``off_road`` (diverged by leaving the road),
+    ``completion`` (the share of the run's duration elapsed when it ended, 1 when the task
+    was completed) and ``termination_reason`` (the status, or ``max_episode_steps`` where the
+    registered TimeLimit cut it)."""
+    collision = reason == "collision"
+    failed = collision or reason in ("diverged", "error")
+    ending = sc.name in _ENDING_TASKS
+    duration = sc.config.duration
+    return {
+        "is_success": not failed and (reason == "completed" if ending else True),
+        "collision": collision,
+        "collision_avoidable": metrics.get("collision_avoidable") if collision else None,
+        "off_road": reason == "diverged" and "left the road" in str(sc.status_detail or ""),
+        "completion": 1.0 if reason == "completed" else min(1.0, max(0.0, sc.t / duration)),
+        "termination_reason": reason,
+    }
+
+
 class EgoEnv(gym.Env):
     """An ego scenario as a Gymnasium env (see the module docstring). ``scenario`` is a name
     of ``ego list``; ``config`` updates :meth:`default_config`.
 
-    libsumo runs one simulation per process, so by default one env per process runs at a
-    time: ``reset`` ends the run of any other ego env of the process (whose next ``step`` then
-    raises, saying so). ``config["multi_instance"] = True`` lets an env start while another
-    runs: its SUMO then runs through TraCI (a ``sumo`` subprocess behind a socket). Envs in
-    parallel live in their own processes: ``gym.make_vec(id, n)`` does that by default.
+    libsumo runs one simulation per process: an env that starts while another env of the
+    process runs through libsumo runs its SUMO through TraCI (a ``sumo`` subprocess behind a
+    socket; the same episode for the same seed and actions). ``config["multi_instance"] =
+    False`` keeps one env per process instead: its ``reset`` ends the run of any other ego env
+    of the process (whose next ``step`` then raises, saying so). Envs in parallel live in
+    their own processes: ``gym.make_vec(id, n)`` does that by default.
     """
 
     metadata: ClassVar[dict] = {"render_modes": ["rgb_array"], "render_fps": 100}
@@ -413,7 +443,7 @@ class EgoEnv(gym.Env):
             "controller": sc.reference_controller(),
             "reward_speed_range": [0.0, 30.0],
             "randomize": {k: list(v) for k, v in DEFAULT_RANDOMIZE.get(scenario, {}).items()},
-            "multi_instance": False,
+            "multi_instance": True,
         }
         env = EnvConfig()
         config.update({name: getattr(env, name) for name in _ENV_SCALARS})
@@ -696,6 +726,7 @@ class EgoEnv(gym.Env):
                 # TimeLimit of another length cannot be seen from here: env.unwrapped.metrics())
                 info["status_detail"] = f"max_episode_steps ({self._limit}) reached"
                 info["metrics"] = sc.result().metrics
+                info.update(outcome(sc, "max_episode_steps", info["metrics"]))
             return self._observe(), reward, False, False, info
         return self._ended(status)
 
@@ -712,12 +743,9 @@ class EgoEnv(gym.Env):
             # reward per step must not make lingering pay more than finishing)
             terms["completion"] = bonus = weight * self._steps_left() * (reward if reward > 0.0 else 0.0)
             reward += bonus
-        info = {
-            "status": status,
-            "rewards": terms,
-            "status_detail": sc.status_detail,
-            "metrics": sc.result().metrics,
-        }
+        metrics = sc.result().metrics
+        info = {"status": status, "rewards": terms, "status_detail": sc.status_detail, "metrics": metrics}
+        info.update(outcome(sc, status, metrics))
         return self._observe(), reward, not truncated, truncated, info
 
     def _bind_step(self) -> functools.partial | None:

@@ -50,6 +50,50 @@ INF = math.inf
 #: observed fields fixed for a whole run
 _RUN_CONSTANT = ("policy.standstill_gap", "policy.headway", "max_accel", "max_decel")
 
+#: physical bounds (SI) of the EgoState fields, finite so that Gymnasium's and SB3's checkers
+#: are silent. A run stays well inside them while it runs: the divergence check ends it at a
+#: speed along the ego's axis beyond -1 or 80 m/s, a yaw rate beyond 2.5 rad/s, a heading
+#: error beyond 75 deg or the road's edge; the last observation of a diverged run (a state
+#: gone wild, even NaN) may lie outside. Stations up to 1000 km, times up to 10^6 s.
+STATION, SPEED, ACCEL = 1.0e6, 100.0, 100.0
+EGO_STATE_BOUNDS: dict[str, tuple[float, float]] = {
+    "t": (0.0, 1.0e6),
+    "s_ref": (-STATION, STATION),
+    "ds_ref": (-SPEED, SPEED),
+    "d_ref": (-SPEED, SPEED),  # m: across a road of any number of lanes
+    "dd_ref": (-SPEED, SPEED),
+    "s": (-STATION, STATION),
+    "ds": (-SPEED, SPEED),
+    "d": (-SPEED, SPEED),  # m
+    "dd": (-SPEED, SPEED),
+    "speed": (-SPEED, SPEED),
+    "yaw_rate": (-10.0, 10.0),
+    "vy": (-SPEED, SPEED),
+    "heading_error": (-math.pi, math.pi),
+    "curvature": (-1.0, 1.0),  # 1/m: no lane is tighter than a radius of 1 m
+    "accel_ref": (-ACCEL, ACCEL),
+    "gap": (-STATION, STATION),
+    "accel": (-ACCEL, ACCEL),
+    "lead_speed": (-SPEED, SPEED),
+    "lead_accel": (-ACCEL, ACCEL),
+    "standstill_gap": (0.0, 1000.0),
+    "headway": (0.0, 100.0),
+    "max_accel": (0.0, ACCEL),
+    "max_decel": (0.0, ACCEL),
+}
+#: raw bounds of the Kinematics features (positions up to STATION: the ego's row is absolute;
+#: velocities relative to the ego up to twice SPEED)
+KINEMATICS_BOUNDS: dict[str, tuple[float, float]] = {
+    "presence": (0.0, 1.0),
+    "x": (-STATION, STATION),
+    "y": (-STATION, STATION),
+    "vx": (-2.0 * SPEED, 2.0 * SPEED),
+    "vy": (-2.0 * SPEED, 2.0 * SPEED),
+    "heading": (-math.pi, math.pi),
+    "cos_h": (-1.0, 1.0),
+    "sin_h": (-1.0, 1.0),
+}
+
 
 def _options(kind: str, given: Mapping[str, Any], allowed: Sequence[str]) -> dict:
     """``given`` without its ``type``, every key one of ``allowed``."""
@@ -143,7 +187,7 @@ class EgoStateObservation(_ObservationType):
         self._get = get if len(dynamic) > 1 else (lambda o: (get(o),))
         # what the bound observation reads in C: the attribute names where none is a path
         self._read = tuple(dynamic) if not any("." in p for p in dynamic) else self._get
-        self.space = spaces.Box(-np.inf, np.inf, (len(self.names),), np.float64)
+        self.space = spaces.Box(*self._bounds(self.names, self.normalize), dtype=np.float64)
         names = self.names
         self._t = names.index("t")
         self._s = names.index("s") if "s" in names else None
@@ -154,6 +198,15 @@ class EgoStateObservation(_ObservationType):
         self._size = len(self.names)
         self._norm: tuple | None = None
         self._fill = None
+
+    @staticmethod
+    def _bounds(names: Sequence[str], normalize: bool) -> tuple[np.ndarray, np.ndarray]:
+        """The space's low and high: :data:`EGO_STATE_BOUNDS`; normalised, ``t`` in [0, 1] (the
+        relative stations keep the station's bounds)."""
+        low, high = np.array([EGO_STATE_BOUNDS[n] for n in names], dtype=np.float64).T
+        if normalize:
+            high[names.index("t")] = 1.0
+        return low, high
 
     def reset(self, view) -> None:
         # the scenario fills one observation in place all run long
@@ -282,12 +335,27 @@ class KinematicsObservation(_ObservationType):
         self._asked = None if perception_distance is None else float(perception_distance)
         self.perception_distance = 200.0 if perception_distance is None else float(perception_distance)
         self.names = self.features
-        self.space = spaces.Box(-np.inf, np.inf, (self.vehicles_count, len(self.features)), np.float32)
         # per feature: the column of the (s, d, v_s, v_d, heading) rows, or how to derive it
         lo = np.array([ranges[f][0] if f in ranges else -1.0 for f in self.features])
         hi = np.array([ranges[f][1] if f in ranges else 1.0 for f in self.features])
         self._scaled = np.array([f in ranges for f in self.features])
         self._lo, self._span = lo, hi - lo
+        # finite bounds: each feature's physical ones (KINEMATICS_BOUNDS), normalised as the
+        # observation is; [-1, 1] where normalised and clipped
+        low, high = np.array([KINEMATICS_BOUNDS[f] for f in self.features], dtype=np.float64).T
+        if self.normalize:
+            scaled = self._scaled
+            low[scaled] = (low[scaled] - lo[scaled]) / self._span[scaled] * 2.0 - 1.0
+            high[scaled] = (high[scaled] - lo[scaled]) / self._span[scaled] * 2.0 - 1.0
+            if self.clip:
+                low[scaled], high[scaled] = -1.0, 1.0
+        shape = (self.vehicles_count, len(self.features))
+        self.space = spaces.Box(
+            np.broadcast_to(low, shape).astype(np.float32),
+            np.broadcast_to(high, shape).astype(np.float32),
+            shape,
+            np.float32,
+        )
         self._rng = np.random.default_rng()
 
     def set_reach(self, reach: float, how: str = "") -> None:

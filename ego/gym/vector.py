@@ -25,9 +25,8 @@ orphan is left.
 The env stepped here holds this process's libsumo while the vector env is open: another ego
 env started here meanwhile runs its SUMO through TraCI (slower; a warning says so).
 ``host=False`` keeps every env in a worker (then a step is the pipes' round trip). Several
-envs in one process (SB3's ``DummyVecEnv``, ``vectorization_mode="sync"``) need
-``config={"multi_instance": True}``: the second and later run SUMO through TraCI (see
-docs/gym.md for its cost). ``gymnasium.vector.AsyncVectorEnv`` and SB3's ``SubprocVecEnv``
+envs in one process (SB3's ``DummyVecEnv``, ``vectorization_mode="sync"``) work with the
+default config: the second and later run SUMO through TraCI (see docs/gym.md for its cost). ``gymnasium.vector.AsyncVectorEnv`` and SB3's ``SubprocVecEnv``
 of ``gym.make(id)`` work as well.
 """
 
@@ -125,6 +124,13 @@ def make_vector(
     if num_envs == 1:
         return SyncVectorEnv([make])
     return EgoVectorEnv([make] * num_envs, info=info, host=host)
+
+
+def _brief(space) -> str:
+    """A space in a line: a Box by its shape and dtype (its bounds are arrays)."""
+    if isinstance(space, spaces.Box):
+        return f"Box{space.shape} {space.dtype}"
+    return str(space)
 
 
 class EgoVectorEnv(VectorEnv):
@@ -294,8 +300,8 @@ class EgoVectorEnv(VectorEnv):
             ):
                 if old != new:
                     raise ConfigError(
-                        f"bad options['config'] for a vector env: it changes the {what} space ({old} -> "
-                        f"{new}), and the vector env's shared buffers hold the one it was made with; "
+                        f"bad options['config'] for a vector env: it changes the {what} space "
+                        f"({_brief(old)} -> {_brief(new)}), and the vector env's shared buffers hold the one it was made with; "
                         "make a new vector env (gym.make_vec) with that configuration"
                     )
         finally:

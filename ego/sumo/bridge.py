@@ -349,8 +349,12 @@ class SumoBridge:
         """Place controlled vehicle ``vid`` (centre of gravity x, y in m, yaw psi in rad).
 
         ``speed`` (m/s) becomes SUMO's idea of its speed, so followers react to the truth.
-        Takes effect in the next :meth:`step`.
+        SUMO's speeds are magnitudes along the lane (TraCI refuses a negative one, libsumo
+        takes it unchecked): the ego's signed speed along its lane, a hair below 0 when it
+        stands steering, goes to SUMO as 0. Takes effect in the next :meth:`step`.
         """
+        if not speed > 0.0:  # NaN too: SUMO never sees a negative or undefined speed
+            speed = 0.0
         geo = self.controlled[vid]
         c = math.cos(psi)
         s = math.sin(psi)
@@ -463,12 +467,13 @@ class SumoBridge:
 
     def set_speed(self, vid: str, speed: float) -> None:
         """``vid`` drives towards ``speed`` (m/s) at its own acceleration and deceleration
-        (at once when it drives blind) and holds it."""
-        self._ls.vehicle.setSpeed(vid, speed)
+        (at once when it drives blind) and holds it (a negative speed: 0, see :meth:`push`)."""
+        self._ls.vehicle.setSpeed(vid, max(speed, 0.0))
 
     def start_speed(self, vid: str, speed: float) -> None:
         """Before the first step: ``vid`` drives ``speed`` (m/s) from now on, set without its
         deceleration limit and without moving it."""
+        speed = max(speed, 0.0)
         veh = self._ls.vehicle
         if veh.getSpeed(vid) != speed:
             veh.setPreviousSpeed(vid, speed, 0.0)
@@ -503,7 +508,7 @@ class SumoBridge:
 
     def slow_down(self, vid: str, speed: float, duration: float) -> None:
         """``vid`` changes its speed linearly to ``speed`` (m/s) over ``duration`` (s)."""
-        self._ls.vehicle.slowDown(vid, speed, duration)
+        self._ls.vehicle.slowDown(vid, max(speed, 0.0), duration)
 
     def free_lateral(self, vid: str, max_lateral_speed: float) -> None:
         """Lateral moves of ``vid`` (:meth:`change_sublane`) are limited only by

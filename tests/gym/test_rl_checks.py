@@ -179,8 +179,8 @@ def test_a_reconfiguring_reset_rebuilds_the_agents_spaces_and_frame_rate():
 
 
 def test_a_parallel_env_whose_run_another_env_ended_says_so():
-    env = PlatoonParallelEnv()
-    other = gym.make("ego/CutIn-v0")
+    env = PlatoonParallelEnv(config={"multi_instance": False})
+    other = gym.make("ego/CutIn-v0", config={"multi_instance": False})
     try:
         env.reset(seed=0)
         other.reset(seed=0)  # libsumo: one simulation per process

@@ -36,11 +36,11 @@ def make():
 
 # -- 1. vectorisation --------------------------------------------------------------------------
 @pytest.mark.sumo
-def test_sync_envs_in_one_process_without_multi_instance_name_the_cause():
-    envs = gym.make_vec("ego/CutIn-v0", num_envs=2, vectorization_mode="sync")
+def test_sync_envs_in_one_process_with_multi_instance_false_name_the_cause():
+    envs = gym.make_vec("ego/CutIn-v0", num_envs=2, vectorization_mode="sync", config={"multi_instance": False})
     try:
         envs.reset(seed=0)
-        with pytest.raises(RuntimeError, match="libsumo runs one simulation per process.*multi_instance"):
+        with pytest.raises(RuntimeError, match="multi_instance=False: libsumo runs one simulation per process"):
             envs.step(envs.action_space.sample())
     finally:
         envs.close()
@@ -62,11 +62,11 @@ def test_multi_instance_runs_a_second_sumo_through_traci_with_the_same_episode(m
 
 
 @pytest.mark.sumo
-def test_an_env_made_without_multi_instance_does_not_end_one_made_with_it(make):
-    """The multi_instance env chose to share the process: a later plain env (an evaluation
-    env beside training envs) runs through TraCI, with a warning, instead of ending it."""
+def test_an_env_made_with_multi_instance_false_does_not_end_one_made_with_it(make):
+    """The multi_instance env chose to share the process: a later one-per-process env runs
+    through TraCI, with a warning, instead of ending it."""
     shared = make("ego/CutIn-v0", config={"multi_instance": True})
-    plain = make("ego/CutIn-v0")
+    plain = make("ego/CutIn-v0", config={"multi_instance": False})
     a, _ = shared.reset(seed=5)
     with pytest.warns(UserWarning, match="multi_instance=True runs its SUMO through libsumo"):
         b, _ = plain.reset(seed=5)

@@ -266,7 +266,7 @@ def test_a_second_env_here_beside_the_hosted_one_runs_through_traci_and_evicts_n
     meanwhile runs its SUMO through TraCI (a warning says so) and neither stops the other;
     once the vector env is closed a new env runs through libsumo again."""
     envs = gym.make_vec("ego/CutIn-v0", num_envs=2, config=SHORT)
-    other = gym.make("ego/CutIn-v0", config=SHORT)
+    other = gym.make("ego/CutIn-v0", config={**SHORT, "multi_instance": False})  # even one-per-process
     try:
         envs.reset(seed=0)
         with pytest.warns(UserWarning, match="runs its SUMO through TraCI"):
