@@ -121,13 +121,11 @@ class GuardedController:
     """A user's controller, every call through :func:`call_user`; its results checked.
     Other attributes (``signal_units``, ``close``, ...) pass through."""
 
-    def __init__(self, inner: Any, name: str, user_file: str | None) -> None:
-        from ego.control.base import UserControllerError
-
+    def __init__(self, inner: Any, name: str, user_file: str | None, error: type) -> None:
         self._inner = inner
         self._name = name
         self._file = user_file
-        self._error = UserControllerError
+        self._error = error
 
     def __getattr__(self, attr: str) -> Any:
         return getattr(self._inner, attr)
@@ -160,9 +158,10 @@ def _show(value: Any) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
-def guarded_build(cls: type, build: Callable[..., Any]) -> Callable[[Any, float], Any]:
+def guarded_build(cls: type, build: Callable[..., Any], error: type) -> Callable[[Any, float], Any]:
     """``build`` (params, dt -> an instance of ``cls``) with ``__init__`` failures as a
-    ConfigError and the instance a :class:`GuardedController`."""
+    ConfigError and the instance a :class:`GuardedController` raising ``error`` (the
+    controllers' UserControllerError) for failures during the run."""
     from ego.params import ConfigError
 
     name = getattr(cls, "__name__", str(cls))
@@ -170,6 +169,6 @@ def guarded_build(cls: type, build: Callable[..., Any]) -> Callable[[Any, float]
 
     def build_guarded(params: Any, dt: float) -> GuardedController:
         inner = call_user(build, f"controller {name}.__init__", user_file, ConfigError, params, dt)
-        return GuardedController(inner, name, user_file)
+        return GuardedController(inner, name, user_file, error)
 
     return build_guarded
