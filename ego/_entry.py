@@ -13,6 +13,8 @@ import os
 import signal
 import sys
 
+from ego.usercode import SignalInterrupt
+
 EXIT_NOT_COMPLETED, EXIT_INTERRUPTED = 1, 130
 
 
@@ -49,7 +51,7 @@ def _stop(signum, frame) -> None:
     """SIGINT and SIGTERM: noted (an import they break may raise something else), then a
     KeyboardInterrupt, which the command answers with ``ego: interrupted`` and exit 130."""
     _received.append(signum)
-    raise KeyboardInterrupt
+    raise SignalInterrupt
 
 
 def _unraisable(hook=sys.unraisablehook):

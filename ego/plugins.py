@@ -49,6 +49,7 @@ from pathlib import Path
 from typing import Any
 
 from ego.params import ConfigError
+from ego.usercode import call_user
 
 CONTROLLER_GROUP = "ego.controllers"
 SCENARIO_GROUP = "ego.scenarios"
@@ -94,11 +95,11 @@ def _import_file(path: str, what: str) -> Any:
         module = importlib.util.module_from_spec(spec)
         # registered before it runs: dataclasses and pickling look classes up by module name
         sys.modules[mod_name] = module
-        try:
-            spec.loader.exec_module(module)
-        except Exception as exc:  # noqa: BLE001 - the user's file is at fault: say which and why
+        try:  # an exception, sys.exit/os._exit or a self-raised KeyboardInterrupt: one line
+            call_user(spec.loader.exec_module, f"importing {path!r}", str(p), ConfigError, module)
+        except ConfigError as exc:
             sys.modules.pop(mod_name, None)
-            raise ConfigError(f"bad {what} reference: importing {path!r} failed: {type(exc).__name__}: {exc}") from None
+            raise ConfigError(f"bad {what} reference: {exc}") from None
         _file_modules[key] = module
         return module
 

@@ -27,6 +27,7 @@ LAYERS = [
         "ego.native",
         "ego._native",
         "ego.plugins",
+        "ego.usercode",
         "ego.paths",
         "ego.reaper",
     },

@@ -24,7 +24,9 @@ def choice(value: str, allowed, what: str) -> str:
 
 def terminate(signum, frame) -> None:
     """SIGTERM ends a run like Ctrl-C: status interrupted, metrics so far, recording closed."""
-    raise KeyboardInterrupt
+    from ego.usercode import SignalInterrupt
+
+    raise SignalInterrupt
 
 
 class Parser(argparse.ArgumentParser):

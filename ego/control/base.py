@@ -22,6 +22,12 @@ class ControllerError(RuntimeError):
     ends with status ``error`` and this message, everything closed."""
 
 
+class UserControllerError(ControllerError):
+    """A user's controller class failed in a call (:mod:`ego.usercode`): raised, exited or
+    returned something else than it must; the message is one line naming the class, the
+    method and the line of the user's file."""
+
+
 @dataclass(slots=True)
 class Observation:
     """One control step's view of the tracking task (road frame, SI units).

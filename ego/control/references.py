@@ -9,8 +9,10 @@ from collections.abc import Callable
 from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
+from ego.control.base import UserControllerError
 from ego.params import ConfigError
 from ego.plugins import CONTROLLER_GROUP, entry_points, file_resolver, load_object
+from ego.usercode import guarded_build
 
 if TYPE_CHECKING:
     from ego.control.base import ControllerSpec
@@ -33,7 +35,7 @@ def controller_spec_of(obj: Any, name: str, task: str, where: str) -> Controller
     from ego.control.base import ControllerSpec
 
     if isinstance(obj, ControllerSpec):
-        spec = replace(obj, name=name)
+        spec = replace(obj, name=name, build=guarded_build(type(obj), obj.build, UserControllerError))
         obj_task = getattr(obj, "task", None)
     elif inspect.isclass(obj):
         missing = [m for m in ("reset", "step", "signals") if not callable(getattr(obj, m, None))]
@@ -49,7 +51,9 @@ def controller_spec_of(obj: Any, name: str, task: str, where: str) -> Controller
         if params is not None and not (inspect.isclass(params) and issubclass(params, Params)):
             raise ConfigError(f"bad controller {where}: {obj.__name__}.Params is not an ego.params.Params dataclass")
         doc = (inspect.getdoc(obj) or obj.__name__).strip().splitlines()[0]
-        spec = ControllerSpec(name, doc, params or NoParams, _builder(obj, params is not None))
+        spec = ControllerSpec(
+            name, doc, params or NoParams, guarded_build(obj, _builder(obj, params is not None), UserControllerError)
+        )
         obj_task = getattr(obj, "task", None)
     else:
         raise ConfigError(

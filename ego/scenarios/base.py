@@ -20,7 +20,14 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ego.control.base import Controller, ControllerError, ControllerSpec, Observation, signal_units
+from ego.control.base import (
+    Controller,
+    ControllerError,
+    ControllerSpec,
+    Observation,
+    UserControllerError,
+    signal_units,
+)
 from ego.control.tasks import TASKS
 from ego.models.plant import Plant
 from ego.params import ConfigError, Params, param
@@ -284,8 +291,11 @@ class Scenario:
         bind = getattr(self.controller, "bind_events", None)
         if bind is not None:  # an FMU controller's log messages become the run's events
             bind(self.event)
-        self.controller.reset(seed=self.seed)
-        self._signal_names = tuple(self.controller.signals())
+        try:
+            self.controller.reset(seed=self.seed)
+            self._signal_names = tuple(self.controller.signals())
+        except UserControllerError as exc:  # a user's class failed before the run: bad input
+            raise ConfigError(str(exc)) from None
         self._signal_units = signal_units(self.controller)
         self.bridge = self._make_bridge()
         self.trace = Trace(self.trace_columns(), self._signal_names, self._signal_units)
@@ -380,7 +390,9 @@ class Scenario:
 
         def request(signum, frame) -> None:
             if self._stop:  # asked twice: stop now
-                raise KeyboardInterrupt
+                from ego.usercode import SignalInterrupt
+
+                raise SignalInterrupt
             self._stop = True
 
         # a process that ignores a signal (a sweep's worker: the parent handles Ctrl-C) keeps
