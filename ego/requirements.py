@@ -104,6 +104,21 @@ def _lateral_clear(result, t: np.ndarray, scenario=None) -> np.ndarray:
     return offset >= 0.5 * width + 0.5 * VehicleGeometry().width
 
 
+def _lane_departure(result, t: np.ndarray, scenario=None) -> np.ndarray:
+    """How far the ego's side reaches beyond its lane's marking outside a commanded lane
+    change (m; inside the lane minus the margin left, -inf during a commanded lane change;
+    :func:`ego.lane_frame.lane_departure`)."""
+    from ego.lane_frame import lane_departure
+    from ego.models.geometry import VehicleGeometry
+
+    if not result.lanes:
+        return np.zeros(len(t))
+    geometry = getattr(scenario, "geometry", None) or VehicleGeometry()
+    return lane_departure(
+        result.column("d"), result.column("d_ref"), result.column("phase"), result.lanes[0][0], geometry.width, True
+    )
+
+
 def _gap_min(result, t: np.ndarray, scenario=None) -> np.ndarray:
     return np.minimum(result.column("gap_front"), result.column("gap_rear"))
 
@@ -185,6 +200,15 @@ DERIVED = {
             "the ego's outline has left its start lane (|lane_offset| >= half a lane + half the ego's width)",
             ("lane_offset",),
             _lateral_clear,
+        ),
+        Derived(
+            "lane_departure",
+            "m",
+            "how far the ego's side reaches beyond the outer edge of its lane's marking outside a "
+            "commanded lane change (negative: the margin left inside; -1e9 during a lane change; "
+            "metric max_lane_departure)",
+            ("d", "d_ref", "phase"),
+            _lane_departure,
         ),
         Derived(
             "braking_margin",
@@ -561,11 +585,13 @@ def from_table(table, source: str) -> dict[str, str]:
 # -- defaults ---------------------------------------------------------------------------------------
 _NO_COLLISION = ("no_collision", "always (not collision)")
 _NO_AVOIDABLE = ("no_avoidable_collision", "always (not avoidable_collision)")
+_STAYS_IN_LANE = ("stays_in_lane", "always (lane_departure <= 0 m)")
 #: the requirements every run of a scenario checks unless told otherwise (docs/requirements.md)
 DEFAULTS: dict[str, tuple[tuple[str, str], ...]] = {
     "emergency-brake": (
         _NO_AVOIDABLE,
         _NO_COLLISION,
+        _STAYS_IN_LANE,
         ("gap_or_clear", "always (gap_front >= 2 m or lateral_clear)"),
         (
             "aeb_slows",
@@ -575,10 +601,12 @@ DEFAULTS: dict[str, tuple[tuple[str, str], ...]] = {
     "cut-in": (
         _NO_AVOIDABLE,
         _NO_COLLISION,
+        _STAYS_IN_LANE,
         ("ttc_or_clear", "always (ttc_front >= 1 s or lateral_clear)"),
     ),
     "fast-follower": (
         _NO_COLLISION,
+        _STAYS_IN_LANE,
         ("rear_ttc", "always (ttc_rear >= 0.5 s or lateral_clear)"),
     ),
     "curve": (_NO_COLLISION, ("friction", "always (abs(lat_accel) <= 7 m/s^2)")),
