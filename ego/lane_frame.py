@@ -213,3 +213,33 @@ class LanePolyline:
         u = min(max(along, 0.0), length)
         across = d - seg[9] * u * (length - u) * 0.5
         return x0 + along * ux - across * uy, y0 + along * uy + across * ux
+
+
+#: the lane marking's width (m) the departure is measured to the outer edge of (a motorway's
+#: broken line, 0.15 m, centred on the lane boundary SUMO's lane widths run to)
+MARKING_WIDTH = 0.15
+#: the trace's ``phase`` of a commanded lane change (``ego.scenarios.manoeuvre.LANE_CHANGE``)
+LANE_CHANGE_PHASE = 1
+
+
+def lane_departure(d, d_ref, phase, lane_width: float, body_width: float, signed: bool = False):
+    """How far (m, >= 0, per sample) the ego's outline reaches beyond the outer edge of its
+    lane's marking: ``|d| + body_width / 2 - (lane_width / 2 + MARKING_WIDTH / 2)`` floored at
+    0, with ``d`` the centre of gravity's offset from the centre line of the lane it keeps (m).
+    Samples of a commanded lateral motion count 0: a lane change (``phase``
+    :data:`LANE_CHANGE_PHASE`) or a reference off the lane centre (``d_ref`` != 0). With
+    ``signed`` nothing is floored: inside the lane the value is minus the margin left, and a
+    commanded sample is -inf (a requirement's robustness then reads the smallest margin).
+
+    UN R157 5.2.1 measures the outer edge of the front tyre; this measures the body's side at
+    the centre of gravity (half its width, which the tyres sit inside: never less than R157's
+    figure on a straight lane) and leaves the heading out (at a heading error psi the front
+    tyre sits lf sin(psi) further out: 0.03 m at 0.02 rad)."""
+    import numpy as np
+
+    d = np.asarray(d, float)
+    out = np.abs(d) + 0.5 * body_width - 0.5 * (lane_width + MARKING_WIDTH)
+    commanded = (np.asarray(phase) == LANE_CHANGE_PHASE) | (np.asarray(d_ref, float) != 0.0)
+    if signed:
+        return np.where(commanded, -np.inf, out)
+    return np.where(commanded | ~(out > 0.0), 0.0, out)

@@ -104,6 +104,21 @@ def _lateral_clear(result, t: np.ndarray, scenario=None) -> np.ndarray:
     return offset >= 0.5 * width + 0.5 * VehicleGeometry().width
 
 
+def _lane_departure(result, t: np.ndarray, scenario=None) -> np.ndarray:
+    """How far the ego's side reaches beyond its lane's marking outside a commanded lane
+    change (m; inside the lane minus the margin left, -inf during a commanded lane change;
+    :func:`ego.lane_frame.lane_departure`)."""
+    from ego.lane_frame import lane_departure
+    from ego.models.geometry import VehicleGeometry
+
+    if not result.lanes:
+        return np.zeros(len(t))
+    geometry = getattr(scenario, "geometry", None) or VehicleGeometry()
+    return lane_departure(
+        result.column("d"), result.column("d_ref"), result.column("phase"), result.lanes[0][0], geometry.width, True
+    )
+
+
 def _gap_min(result, t: np.ndarray, scenario=None) -> np.ndarray:
     return np.minimum(result.column("gap_front"), result.column("gap_rear"))
 
@@ -185,6 +200,15 @@ DERIVED = {
             "the ego's outline has left its start lane (|lane_offset| >= half a lane + half the ego's width)",
             ("lane_offset",),
             _lateral_clear,
+        ),
+        Derived(
+            "lane_departure",
+            "m",
+            "how far the ego's side reaches beyond the outer edge of its lane's marking outside a "
+            "commanded lane change (negative: the margin left inside; -1e9 during a lane change; "
+            "metric max_lane_departure)",
+            ("d", "d_ref", "phase"),
+            _lane_departure,
         ),
         Derived(
             "braking_margin",

@@ -172,6 +172,7 @@ def test_a_run_reports_each_requirement_and_its_violation(capsys):
     assert set(req) == {
         "no_avoidable_collision",
         "no_collision",
+        "stays_in_lane",
         "gap_or_clear",
         "aeb_slows",
         "far",

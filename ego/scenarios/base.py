@@ -41,7 +41,7 @@ from ego.sim.protocol import TrafficSim
 from ego.sim.registry import SimSetup, make_sim
 from ego.sim.types import EGO, Collision
 
-STATUSES = ("completed", "ended", "collision", "diverged", "timeout", "interrupted", "error")
+STATUSES = ("completed", "ended", "collision", "diverged", "timeout", "interrupted", "error", "failed")
 #: the statuses that are no failure: the scenario's own end, or the duration ran out in a
 #: scenario whose end the controller does not decide (``ended``: a shortened run)
 NOT_FAILED = ("completed", "ended")
@@ -119,6 +119,8 @@ def divergence(state: Sequence[float], offset: float, heading_error: float, road
 #: default requirements several scenarios share (Scenario.requirements)
 NO_COLLISION = ("no_collision", "always (not collision)")
 NO_AVOIDABLE_COLLISION = ("no_avoidable_collision", "always (not avoidable_collision)")
+#: the ego stays inside its lane's markings outside a commanded lane change (``lane_departure``)
+STAYS_IN_LANE = ("stays_in_lane", "always (lane_departure <= 0 m)")
 
 
 def check_backend(cls: type[Scenario], backend: str) -> None:
@@ -205,7 +207,9 @@ class Scenario:
         registered trace metrics its trace has the columns of (``ego.results.metrics``)."""
         backend = (BACKEND_METRIC,) if len(cls.backends) > 1 else ()
         names = (c.name for c in cls.columns)
-        return COMMON_METRICS + backend + cls.metric_specs + trace_metrics_declared(names) + COMMON_TAIL_METRICS
+        names = tuple(names)
+        lanes = (LANE_DEPARTURE_METRIC,) if set(LANE_DEPARTURE_NEEDS) <= set(names) else ()
+        return COMMON_METRICS + backend + cls.metric_specs + trace_metrics_declared(names) + lanes + COMMON_TAIL_METRICS
 
     def trace_columns(self) -> tuple[Column, ...]:
         """The declared trace columns of this run (default: the class's ``columns``)."""
@@ -511,6 +515,27 @@ class Scenario:
         self.recorder.flush()
         self._next_flush = math.floor(self.t) + 1.0
 
+    def _lane_departure(self, trace: np.ndarray, columns: Sequence[str], events: list) -> float | None:
+        """The run's largest lane departure (m); a ``lane_departure`` event (into ``events``, in
+        time order) where the first one starts."""
+        from ego.lane_frame import lane_departure
+
+        col = {n: i for i, n in enumerate(columns)}
+        if not len(trace):
+            return None
+        width = getattr(getattr(self, "geometry", None), "width", None) or 1.8
+        out = lane_departure(
+            trace[:, col["d"]], trace[:, col["d_ref"]], trace[:, col["phase"]], self._lanes[0][0], width
+        )
+        worst = float(out.max())
+        if worst > 0.0:
+            i = int(np.argmax(out > 0.0))
+            t0 = float(trace[i, col["t"]])
+            text = f"lane departure: the ego's side beyond its lane's marking, by up to {worst:.2f} m"
+            at = next((k for k, e in enumerate(events) if e.t > t0), len(events))
+            events.insert(at, Event(t0, "lane_departure", text, "WARN"))
+        return json_number(worst, 4)
+
     def result(self) -> RunResult:
         columns = self.trace.names
         trace = self.trace.array()
@@ -527,6 +552,16 @@ class Scenario:
             metrics["backend"] = self.backend
         metrics.update(self._metrics(trace, columns))
         metrics.update(trace_metrics(trace, columns, (c.name for c in type(self).columns)))
+        events = list(self.events)
+        if self._lanes and set(LANE_DEPARTURE_NEEDS) <= set(columns):
+            worst = metrics["max_lane_departure"] = self._lane_departure(trace, columns, events)
+            if worst and self.status in NOT_FAILED:  # a run that left its lane did not complete
+                first = next(e for e in events if e.kind == "lane_departure")
+                self.status = metrics["status"] = "failed"
+                self.status_detail = metrics["status_detail"] = (
+                    f"left its lane at t = {first.t:.2f} s (outside a lane change: the ego's side up to "
+                    f"{worst:.2f} m beyond the marking; requirement stays_in_lane)"
+                )
         metrics.update(
             {
                 "sim_time": json_number(self.t, 4),
@@ -538,9 +573,9 @@ class Scenario:
             self.name,
             self.controller_name,
             self.seed,
-            self.status,
+            metrics["status"],
             metrics,
-            list(self.events),
+            events,
             columns,
             trace,
             self.trace.units(),
@@ -869,6 +904,14 @@ COMMON_METRICS = (
 #: ... then, for a scenario with several traffic simulators, which one ran ...
 BACKEND_METRIC = Metric("backend", "-", "traffic simulator: sumo or highway-env")
 #: ... and last
+#: the trace columns the lane departure is measured from (``ego.lane_frame.lane_departure``)
+LANE_DEPARTURE_NEEDS = ("d", "d_ref", "phase")
+LANE_DEPARTURE_METRIC = Metric(
+    "max_lane_departure",
+    "m",
+    "largest reach of the ego's side beyond the outer edge of its lane's marking outside a "
+    "commanded lane change (0: it stayed in its lane; UN R157 5.2.1, docs/scenarios.md)",
+)
 COMMON_TAIL_METRICS = (
     Metric("sim_time", "s", "simulated time"),
     Metric("wall_time", "s", "wall-clock time of the run"),

@@ -14,7 +14,7 @@ from ego.highway_env import BACKENDS
 from ego.params import ConfigError, param
 from ego.results import metrics as m
 from ego.results.trace import Marker, Metric
-from ego.scenarios.base import NO_AVOIDABLE_COLLISION, NO_COLLISION, Parts, Scenario
+from ego.scenarios.base import NO_AVOIDABLE_COLLISION, NO_COLLISION, STAYS_IN_LANE, Parts, Scenario
 from ego.scenarios.envelope import ReachCriterion
 from ego.scenarios.evasive import MARKERS, METRICS, EvasiveConfig, compare_plots, compose, evasive_metrics
 from ego.scenarios.manoeuvre import FollowInLane
@@ -70,6 +70,7 @@ class CutIn(Scenario):
     requirements = (
         NO_AVOIDABLE_COLLISION,
         NO_COLLISION,
+        STAYS_IN_LANE,
         ("ttc_or_clear", "always (ttc_front >= 1 s or lateral_clear)"),
     )
     summary = "a car overtakes and cuts in 15 m ahead, 5 m/s slower; front TTC triggers braking or evasion"

@@ -19,7 +19,7 @@ from ego.highway_env import BACKENDS
 from ego.params import ConfigError, param
 from ego.results import metrics as m
 from ego.results.trace import Metric
-from ego.scenarios.base import NO_AVOIDABLE_COLLISION, NO_COLLISION, Parts, Scenario
+from ego.scenarios.base import NO_AVOIDABLE_COLLISION, NO_COLLISION, STAYS_IN_LANE, Parts, Scenario
 from ego.scenarios.evasive import MARKERS, METRICS, EvasiveConfig, compare_plots, compose, evasive_metrics
 from ego.scenarios.events import INF
 from ego.scenarios.motorway import COLUMNS, EDGE, EGO, PLOTS, ROUTE, MotorwayWorld
@@ -166,7 +166,7 @@ class Impact:
 class EmergencyBrake(Scenario):
     name = "emergency-brake"
     needs = ("scripted_actors",)
-    requirements = (NO_AVOIDABLE_COLLISION, NO_COLLISION, GAP_OR_CLEAR, AEB_SLOWS)
+    requirements = (NO_AVOIDABLE_COLLISION, NO_COLLISION, STAYS_IN_LANE, GAP_OR_CLEAR, AEB_SLOWS)
     summary = "lead car brakes hard; front TTC triggers braking and a lane change by gap acceptance"
     config_cls = EmergencyBrakeConfig
     network, edge, backends = "highway", EDGE, BACKENDS

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from ego.highway_env import BACKENDS
 from ego.params import param
 from ego.results.trace import Metric
-from ego.scenarios.base import NO_COLLISION, Parts, Scenario
+from ego.scenarios.base import NO_COLLISION, STAYS_IN_LANE, Parts, Scenario
 from ego.scenarios.evasive import (
     MARKERS,
     METRICS,
@@ -65,7 +65,7 @@ class AccelerateInLane:
 class FastFollower(Scenario):
     name = "fast-follower"
     needs = ("scripted_actors",)
-    requirements = (NO_COLLISION, ("rear_ttc", "always (ttc_rear >= 0.5 s or lateral_clear)"))
+    requirements = (NO_COLLISION, STAYS_IN_LANE, ("rear_ttc", "always (ttc_rear >= 0.5 s or lateral_clear)"))
     summary = "a car closes from behind at 1.5x the ego's speed; rear TTC triggers accelerating and a lane change"
     config_cls = FastFollowerConfig
     network, edge, backends = "highway", EDGE, BACKENDS
