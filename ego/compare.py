@@ -119,6 +119,7 @@ def plan(
     traces: str | None = None,
     backend: str = "sumo",
     requirements=None,
+    preventable: bool = False,
 ) -> list[RunSpec]:
     """Validate names, variants and overrides, and list the runs (before any process starts).
 
@@ -183,6 +184,7 @@ def plan(
                     label=label,
                     backend=backend,
                     requirements=requirements,
+                    preventable=None if preventable else False,
                 )
             )
     return specs
@@ -200,6 +202,7 @@ def compare(
     traces: str | None = None,
     backend: str = "sumo",
     requirements=None,
+    preventable: bool = False,
 ) -> list[RunRow]:
     """Run everything, write the outputs, return the rows (in controller, seed order).
     ``controllers`` are labels (:func:`plan`: names or variants); ``traces`` a format of
@@ -213,6 +216,8 @@ def compare(
     e.g. ``InlineExecutor`` for a scenario without SUMO). ``backend`` is the traffic
     simulator of every run ("sumo" or "highway-env"). ``progress``: made with the number of
     runs, called once per finished run (:class:`ego.results.progress.Progress`), or None.
+    ``preventable``: after every collision also run UN R157's careful driver on the same
+    concrete scenario (``collision_preventable``, :func:`ego.runner.collision_preventable`).
 
     ``out`` is locked while it runs (:class:`ego.outputs.FolderLock`: ConfigError if another
     process holds it). A KeyboardInterrupt (Ctrl-C; SIGTERM in the ``ego`` command) stops
@@ -222,7 +227,7 @@ def compare(
     if not isinstance(out, (str, os.PathLike)):
         raise ConfigError(f"bad out {out!r:.60} (expected a folder path)")
     out = Path(out)
-    specs = plan(scenario, controllers, seeds, overrides, out, traces, backend, requirements)
+    specs = plan(scenario, controllers, seeds, overrides, out, traces, backend, requirements, preventable)
     from ego.paths import check_compare_outputs
 
     check_compare_outputs(out, specs, traces)  # every file it writes, before anything runs

@@ -227,7 +227,10 @@ def lane_departure(d, d_ref, phase, lane_width: float, body_width: float, signed
     lane's marking: ``|d| + body_width / 2 - (lane_width / 2 + MARKING_WIDTH / 2)`` floored at
     0, with ``d`` the centre of gravity's offset from the centre line of the lane it keeps (m).
     Samples of a commanded lateral motion count 0: a lane change (``phase``
-    :data:`LANE_CHANGE_PHASE`) or a reference off the lane centre (``d_ref`` != 0). With
+    :data:`LANE_CHANGE_PHASE`) or a reference off the lane centre (``d_ref`` != 0), and so do
+    the samples right after one while the ego is still settling into its lane (until its
+    outline is first back inside the marking: a slow controller that lags the lane change's
+    reference has not left its lane, it has not arrived yet). With
     ``signed`` nothing is floored: inside the lane the value is minus the margin left, and a
     commanded sample is -inf (a requirement's robustness then reads the smallest margin).
 
@@ -240,6 +243,10 @@ def lane_departure(d, d_ref, phase, lane_width: float, body_width: float, signed
     d = np.asarray(d, float)
     out = np.abs(d) + 0.5 * body_width - 0.5 * (lane_width + MARKING_WIDTH)
     commanded = (np.asarray(phase) == LANE_CHANGE_PHASE) | (np.asarray(d_ref, float) != 0.0)
+    outside = out > 0.0
+    for i in np.flatnonzero(commanded[:-1] & ~commanded[1:] & outside[1:]) + 1:  # a command's settling
+        stop = np.flatnonzero(~outside[i:] | commanded[i:])
+        commanded[i : i + (stop[0] if len(stop) else len(outside) - i)] = True
     if signed:
         return np.where(commanded, -np.inf, out)
     return np.where(commanded | ~(out > 0.0), 0.0, out)

@@ -56,9 +56,10 @@ class RunSpec:
     #: mapping; None: the scenario's defaults; (): none
     requirements: Any = None
     #: ``collision_preventable`` (:func:`collision_preventable`): None computes it when the
-    #: run ends in a collision, True always (where the careful driver can drive the
-    #: scenario), False never
-    preventable: bool | None = None
+    #: run ends in a collision (``ego run``'s default), True always (where the careful driver
+    #: can drive the scenario), False never (the default: a sweep, a falsification or a
+    #: comparison asks for the second run explicitly, ``--preventable``)
+    preventable: bool | None = False
 
     @property
     def sim_options(self) -> dict[str, Any]:

@@ -19,17 +19,19 @@ CURVE = Path(__file__).resolve().parents[1] / "scenarios" / "openscenario" / "cu
 def test_departure_by_hand():
     # a 3.5 m lane, a 1.8 m car: the side reaches the marking's outer edge (1.75 + 0.075 m
     # from the centre) when its centre of gravity is 1.825 - 0.9 = 0.925 m off the centre
-    d = np.array([0.0, 0.925, -1.025, 1.2, 1.2, 1.2])
-    d_ref = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.5])
-    phase = np.array([0, 0, 2, 1, 3, 0])
+    d = np.array([0.0, 0.925, -1.025, 1.2, 1.2, 0.5, 1.2, 1.2])
+    d_ref = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.5])
+    phase = np.array([0, 0, 2, 1, 3, 0, 0, 0])
     out = lane_departure(d, d_ref, phase, 3.5, 1.8)
     assert MARKING_WIDTH == 0.15
-    # in the lane; on the edge; 0.1 m beyond on the right; a lane change; 0.275 m beyond after
-    # it; a reference off the centre (a commanded lateral motion)
-    assert out == pytest.approx([0.0, 0.0, 0.1, 0.0, 0.275, 0.0], abs=1e-12)
+    # in the lane; on the edge; 0.1 m beyond on the right; a lane change; still settling into
+    # the lane right after it (not yet back inside the marking); back inside; 0.275 m beyond,
+    # now a departure; a reference off the centre (a commanded lateral motion)
+    assert out == pytest.approx([0.0, 0.0, 0.1, 0.0, 0.0, 0.0, 0.275, 0.0], abs=1e-12)
     signed = lane_departure(d, d_ref, phase, 3.5, 1.8, signed=True)
     assert signed[:3] == pytest.approx([-0.925, 0.0, 0.1], abs=1e-12)
-    assert signed[3] == -math.inf and signed[5] == -math.inf
+    assert signed[5:7] == pytest.approx([-0.425, 0.275], abs=1e-12)
+    assert signed[3] == signed[4] == signed[7] == -math.inf
 
 
 def test_stays_in_lane_is_a_default_of_the_lane_scenarios_and_reads_the_margin():

@@ -33,6 +33,7 @@ def command(args: Any) -> int:
         traces=args.traces,
         backend=args.backend,
         requirements=with_defaults(args.scenario, args.require),
+        preventable=args.preventable,
     )
     print((out / "metrics.md").read_text(), end="")
     # the plots this command wrote (an earlier comparison's in the same --out are not these)

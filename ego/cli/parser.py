@@ -145,6 +145,12 @@ def parser() -> argparse.ArgumentParser:
         help="also write every run's trace to traces/<label>-seed<N>.FORMAT: csv, parquet or mat (see docs/traces.md)",
     )
     add_require(cmp_)
+    cmp_.add_argument(
+        "--preventable",
+        action="store_true",
+        help="after every collision also run UN R157's careful driver on the same scenario and "
+        "report collision_preventable (a second run per collision; docs/requirements.md)",
+    )
 
     swp = sub.add_parser(
         "sweep",

@@ -76,6 +76,7 @@ ROAD_FRAME = (
     Signal("curvature", "1/m", "the lane's curvature at the projection (+ turning left)"),
     Signal("accel_ref", "m/s^2", "planned axial acceleration (tasks commanding a_x)"),
     Signal("lane", "-", "the lane s is measured along (road preview), or None"),
+    Signal("surround", "-", "the motorway's surround sensor (front and rear detections), or None"),
 )
 _OBSERVATION = "ego.control.base:Observation"
 _STEER = Signal("delta", "rad", "front steer angle (+ left); the plant saturates it")

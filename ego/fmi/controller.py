@@ -27,7 +27,7 @@ from ego.fmi.model import FmuInfo, check_step, inspect_fmu
 from ego.params import ConfigError, Params, param
 
 #: observation signals that are objects, not numbers: never FMU inputs
-NOT_SIGNALS = ("lane", "policy")
+NOT_SIGNALS = ("lane", "policy", "surround")
 #: error properties of the road-frame observation an FMU may take besides its fields
 DERIVED = {"e_lon": "m", "e_lat": "m"}
 

@@ -40,7 +40,7 @@ from ego.native import NATIVE
 from ego.params import ConfigError
 
 #: the observed fields that are not numbers, and what a vector carries instead
-_NOT_NUMERIC = {"lane": (), "policy": ("policy.standstill_gap", "policy.headway")}
+_NOT_NUMERIC = {"lane": (), "surround": (), "policy": ("policy.standstill_gap", "policy.headway")}
 _array, _empty, _F64 = np.array, np.empty, np.float64
 #: EgoStateObservation.observe's arithmetic in C, or None (its Python lines)
 _FILL_OBS = None if NATIVE is None else NATIVE.fill_obs

@@ -141,9 +141,18 @@ def comparison(scenario: str, rows: Sequence[Row], controllers: Sequence[str], d
         "",
         *table(controllers, _by_controller(rows, controllers), columns),
     ]
-    lines += requirement_lines(
-        {c: [r["metrics"] for r in mine] for c, mine in _by_controller(rows, controllers).items()}
-    )
+    by = {c: [r["metrics"] for r in mine] for c, mine in _by_controller(rows, controllers).items()}
+    if any("collision_preventable" in m for ms in by.values() for m in ms):  # ego compare --preventable
+        lines += [
+            "",
+            "Collisions UN R157's careful driver avoids on the same scenario (`collision_preventable`):",
+            "",
+        ]
+        for c in controllers:
+            k = sum(1 for m in by.get(c, ()) if m.get("collision_preventable") is True)
+            n = sum(1 for m in by.get(c, ()) if m.get("collision_preventable") is not None)
+            lines.append(f"- {c}: {k} of {n}")
+    lines += requirement_lines(by)
     errors = [r for r in rows if r["error"]]
     if errors:
         lines += ["", "Errors:", ""] + [f"- {r['controller']} seed {r['seed']}: {r['error']}" for r in errors]
@@ -206,16 +215,6 @@ def sweep(
             for c in controllers:
                 k = sum(1 for r in runs.get(c, ()) if r.get(extra) is True)
                 lines.append(f"- {c}: {k}")
-    if "collision_preventable" in names:
-        lines += [
-            "",
-            "Collisions UN R157's careful driver avoids on the same scenario (`collision_preventable`):",
-            "",
-        ]
-        for c in controllers:
-            k = sum(1 for r in runs.get(c, ()) if r.get("collision_preventable") is True)
-            n = sum(1 for r in runs.get(c, ()) if r.get("collision_preventable") is not None)
-            lines.append(f"- {c}: {k} of {n}")
     lines += requirement_lines(runs)
     errors = [r for r in rows if r["status"] == "error"]
     if errors:

@@ -28,6 +28,9 @@ CUTTER_TYPE = VehicleType(
     "cutter", length=4.5, width=1.8, sigma=0.0, max_speed=60.0, accel=4.0, decel=8.0, color=(255, 80, 160)
 )
 
+#: cut-in's own requirement: the front TTC stays above 1 s unless the ego is clear sideways
+TTC_OR_CLEAR = ("ttc_or_clear", "always (ttc_front >= 1 s or lateral_clear)")
+
 
 @dataclass(frozen=True)
 class CutInConfig(EvasiveConfig):
@@ -67,12 +70,7 @@ class CutInConfig(EvasiveConfig):
 class CutIn(Scenario):
     name = "cut-in"
     needs = ("scripted_actors",)
-    requirements = (
-        NO_AVOIDABLE_COLLISION,
-        NO_COLLISION,
-        STAYS_IN_LANE,
-        ("ttc_or_clear", "always (ttc_front >= 1 s or lateral_clear)"),
-    )
+    requirements = (NO_AVOIDABLE_COLLISION, NO_COLLISION, STAYS_IN_LANE, TTC_OR_CLEAR)
     summary = "a car overtakes and cuts in 15 m ahead, 5 m/s slower; front TTC triggers braking or evasion"
     config_cls = CutInConfig
     network, edge, backends, columns, plots = "highway", EDGE, BACKENDS, COLUMNS, PLOTS

@@ -17,7 +17,7 @@ def _careful_collides(scenario: str, seed: int, overrides: dict) -> bool:
 
 def test_a_collision_the_careful_driver_avoids_is_preventable():
     overrides = {**OFF, "traffic_density": "0"}
-    r = run(RunSpec("cut-in", "none", 0, overrides))
+    r = run(RunSpec("cut-in", "none", 0, overrides, preventable=None))
     assert r.metrics["collision"]
     assert not _careful_collides("cut-in", 0, overrides)
     assert r.metrics["collision_preventable"] is True
@@ -25,7 +25,7 @@ def test_a_collision_the_careful_driver_avoids_is_preventable():
 
 def test_a_collision_the_careful_driver_has_too_is_not_preventable():
     overrides = {**OFF, "cut_in_gap": "4", "cut_in_speed": "12"}
-    r = run(RunSpec("cut-in", "none", 3, overrides))
+    r = run(RunSpec("cut-in", "none", 3, overrides, preventable=None))
     assert r.metrics["collision"]
     assert _careful_collides("cut-in", 3, overrides)
     assert r.metrics["collision_preventable"] is False
@@ -42,7 +42,8 @@ def test_the_reference_is_the_same_concrete_scenario_with_its_own_systems_off():
 
 
 def test_only_after_a_collision_or_when_asked():
-    spec = RunSpec("cut-in", "pid", 0)
+    assert RunSpec("cut-in", "pid", 0).preventable is False  # a sweep's, a table's: one run each
+    spec = RunSpec("cut-in", "pid", 0, preventable=None)
     r = run(spec)
     assert not r.metrics["collision"] and "collision_preventable" not in r.metrics
     asked = run(RunSpec("cut-in", "pid", 0, preventable=True))
@@ -54,3 +55,18 @@ def test_only_after_a_collision_or_when_asked():
     # a task the careful driver does not drive (the curve's a_x and steer): it cannot be asked
     curve = resolve(RunSpec("curve", "pid", 0))
     assert collision_preventable(curve, run(curve)) is None
+
+
+def test_compare_runs_the_careful_driver_after_each_collision_only_when_asked(tmp_path):
+    from ego.compare import compare
+    from ego.parallel.executor import InlineExecutor
+
+    overrides = {**OFF, "traffic_density": "0", "duration": "16"}
+    args = ("cut-in", ["none", "pid"], 1, overrides)
+    plain = compare(*args, tmp_path / "plain", progress=None, executor=InlineExecutor())
+    asked = compare(*args, tmp_path / "asked", progress=None, executor=InlineExecutor(), preventable=True)
+    assert all("collision_preventable" not in r.metrics for r in plain)
+    by = {r.controller: r.metrics for r in asked}
+    assert by["none"]["collision"] and by["none"]["collision_preventable"] is True
+    assert not by["pid"]["collision"] and "collision_preventable" not in by["pid"]
+    assert "- none: 1 of 1" in (tmp_path / "asked" / "metrics.md").read_text()
