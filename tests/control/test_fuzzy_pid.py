@@ -23,6 +23,7 @@ def test_tables_are_complete_7x7():
 
 
 @pytest.mark.slow
+@pytest.mark.long  # a minute; test_random_points_one_by_one_match_scikit_fuzzy runs by default
 def test_dense_grid_and_edges_match_scikit_fuzzy(system):
     engine = fuzzy_pid.evaluator()
     axis = np.unique(np.concatenate([np.linspace(-11, 11, 45), np.linspace(-10, 10, 31)]))

@@ -156,6 +156,7 @@ def test_compare_jobs_2_runs_the_plugin_in_its_workers(plugin_env, tmp_path):
     assert rows["demo-pid"]["status"] == rows["pid"]["status"] == "timeout"
 
 
+@pytest.mark.long  # Ray start-up; test_compare_jobs_2_runs_the_plugin_in_its_workers runs by default
 def test_sweep_on_ray_runs_the_plugin_in_its_workers(plugin_env, tmp_path):
     spec = tmp_path / "sweep.toml"
     spec.write_text('scenario = "demo-brake"\ncontrollers = ["demo-pid", "pid"]\nseeds = 2\n[set]\nduration = 3\n')

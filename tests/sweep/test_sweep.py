@@ -77,6 +77,7 @@ def test_one_and_two_workers_give_identical_rows_and_write_everything(tmp_path, 
     assert again.already == 12 and again.ran == 0
 
 
+@pytest.mark.long  # a minute; the interrupted-and-resumed sweep of test_sweep_interrupt.py runs by default
 def test_a_killed_sweep_resumes_with_no_duplicate_and_no_missing_row(tmp_path):
     spec_file = tmp_path / "spec.toml"
     spec_file.write_text(

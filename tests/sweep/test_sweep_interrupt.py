@@ -44,6 +44,7 @@ def test_ctrl_c_keeps_the_finished_rows_and_the_same_command_resumes(tmp_path):
     assert len(pq.read_table(results)) == 60
 
 
+@pytest.mark.long  # 40 s of Ray start-up; the process engine's Ctrl-C runs by default
 def test_sigterm_ends_a_ray_sweep_as_ctrl_c_does(tmp_path):
     """ray.init puts in its own SIGTERM handler (exit 15, a native crash dump, no summary);
     ego's comes back, so a SIGTERM ends a Ray sweep as Ctrl-C does."""
