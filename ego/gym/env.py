@@ -367,20 +367,25 @@ _ENDING_TASKS = ("curve", "lane-centering")
 
 def outcome(sc, reason: str, metrics: Mapping[str, Any]) -> dict[str, Any]:
     """The episode's outcome as RL benchmarks report it, for the ``info`` of its last step:
-    ``is_success`` (SB3's key: no collision, divergence or error, and, where the task has an
-    end of its own, that end reached), ``collision``, ``collision_avoidable`` (the scenario's
-    metric, None where it has none), ``off_road`` (diverged by leaving the road),
-    ``completion`` (the share of the run's duration elapsed when it ended, 1 when the task
-    was completed) and ``termination_reason`` (the status, or ``max_episode_steps`` where the
-    registered TimeLimit cut it)."""
+    ``is_success`` (SB3's key: no collision, divergence, error or lane departure, and, where
+    the task has an end of its own, that end reached), ``collision``, ``collision_avoidable``
+    (the scenario's metric, None where it has none), ``lane_departure`` (the run's
+    ``max_lane_departure`` metric above 0 m: the ego's side beyond its lane's marking outside a
+    commanded lane change; None where the scenario does not measure it), ``off_road``
+    (diverged by leaving the road), ``completion`` (the share of the run's duration elapsed
+    when it ended, 1 when the task was completed) and ``termination_reason`` (the status, or
+    ``max_episode_steps`` where the registered TimeLimit cut it)."""
     collision = reason == "collision"
     failed = collision or reason in ("diverged", "error")
     ending = sc.name in _ENDING_TASKS
     duration = sc.config.duration
+    departure = metrics.get("max_lane_departure")
+    departed = None if departure is None else bool(departure > 0.0)
     return {
-        "is_success": not failed and (reason == "completed" if ending else True),
+        "is_success": not failed and not departed and (reason == "completed" if ending else True),
         "collision": collision,
         "collision_avoidable": metrics.get("collision_avoidable") if collision else None,
+        "lane_departure": departed,
         "off_road": reason == "diverged" and "left the road" in str(sc.status_detail or ""),
         "completion": 1.0 if reason == "completed" else min(1.0, max(0.0, sc.t / duration)),
         "termination_reason": reason,
