@@ -405,6 +405,9 @@ class EgoEnv(gym.Env):
     """
 
     metadata: ClassVar[dict] = {"render_modes": ["rgb_array"], "render_fps": 100}
+    #: the configuration keys that are the env's own (every other is a scenario or controller
+    #: parameter)
+    own_keys: ClassVar[tuple[str, ...]] = ENV_KEYS
 
     def __init__(
         self, scenario: str = "emergency-brake", config: Mapping[str, Any] | None = None, render_mode: str | None = None
@@ -491,8 +494,8 @@ class EgoEnv(gym.Env):
             raise ConfigError(
                 f"bad value for controller: {controller!r} (the {self.task} task's controllers: {', '.join(names)})"
             )
-        params = {k: v for k, v in cfg.items() if k not in ENV_KEYS}
-        known = set(ENV_KEYS) | set(parameter_namespace(cls, [controller]))
+        params = {k: v for k, v in cfg.items() if k not in self.own_keys}
+        known = set(self.own_keys) | set(parameter_namespace(cls, [controller]))
         for key in cfg:
             if key not in known:
                 raise unknown_parameter(key, known)
@@ -537,11 +540,14 @@ class EgoEnv(gym.Env):
         # the corners of the distribution must make valid runs: checked now, not at a reset
         for corner in (0, 1):
             if randomize:
-                resolve(
-                    RunSpec(
-                        self.scenario_name, controller, 0, {**overrides, **{k: v[corner] for k, v in randomize.items()}}
-                    )
-                )
+                values = {k: v[corner] for k, v in randomize.items()}
+                try:
+                    resolve(RunSpec(self.scenario_name, controller, 0, {**overrides, **values}))
+                except ConfigError as exc:
+                    shown = ", ".join(f"{k}={v:g}" for k, v in values.items())
+                    raise ConfigError(
+                        f"bad value for randomize: its {('low', 'high')[corner]} corner ({shown}) makes no valid run: {exc}"
+                    ) from None
 
         meta = action.type_name == "DiscreteMetaAction"
         if meta and getattr(probe.view, "lane_offset", None) is None:  # a view of lanes to change
