@@ -170,3 +170,76 @@ def test_make_vec_of_a_file_env():
         assert np.isfinite(reward).all()
     finally:
         envs.close()
+
+
+# -- an OpenSCENARIO ParameterValueDistribution file ---------------------------------------------
+def _distribution(tmp_path, body: str, target: str | None = None) -> str:
+    """A ParameterValueDistribution file in ``tmp_path`` over ``target`` (default: ccrb.xosc,
+    named relative to the distribution file) with ``body`` after the ScenarioFile."""
+    import os
+
+    target = os.path.relpath(CCRB, tmp_path) if target is None else target
+    path = tmp_path / "distribution.xosc"
+    path.write_text(
+        '<?xml version="1.0" encoding="UTF-8"?>\n<OpenSCENARIO>\n'
+        '  <FileHeader revMajor="1" revMinor="2" date="2026-11-28T00:00:00" description="d" author="ego"/>\n'
+        f'  <ParameterValueDistribution>\n    <ScenarioFile filepath="{target}"/>\n{body}\n'
+        "  </ParameterValueDistribution>\n</OpenSCENARIO>\n"
+    )
+    return str(path)
+
+
+def _uniform(name: str, low: str, high: str) -> str:
+    return (
+        f'      <StochasticDistribution parameterName="{name}">\n'
+        f'        <UniformDistribution><Range lowerLimit="{low}" upperLimit="{high}"/></UniformDistribution>\n'
+        "      </StochasticDistribution>"
+    )
+
+
+@pytest.mark.sumo
+def test_a_distribution_file_is_its_scenario_randomised_over_its_uniform_ranges(tmp_path):
+    body = f'    <Stochastic numberOfTestRuns="5" randomSeed="1">\n{_uniform("EgoSpeed", "8", "20")}\n{_uniform("LeadGap", "12", "40")}\n    </Stochastic>'
+    path = _distribution(tmp_path, body)
+    env = gym.make("ego/Scenario-v0", config={"scenario": path, "policy_frequency": 10})
+    plain = gym.make("ego/Scenario-v0", config=CONFIGS["xosc"])  # the same ranges in the config
+    try:
+        u = env.unwrapped
+        assert u.scenario_name == str(Path(CCRB)) and u.source == path and u.config["scenario"] == path
+        assert u.config["randomize"] == u.default_config()["randomize"] == CCRB_RANDOM
+        mine, theirs = _episode(env, 5, steps=20), _episode(plain, 5, steps=20)
+        copy = pickle.loads(pickle.dumps(env))  # mid-episode: rebuilt from the distribution file
+        copy.close()
+    finally:
+        env.close()
+        plain.close()
+    assert mine[1]["randomized"] == theirs[1]["randomized"]
+    for a, b in zip(mine[0][1:], theirs[0][1:], strict=True):
+        assert np.array_equal(a[0], b[0]) and a[1] == b[1]
+
+
+@pytest.mark.parametrize(
+    "body, message",
+    [
+        (
+            "    <Deterministic/>",
+            ":6: <Deterministic> is not supported by ego's environments (a <Stochastic> one is)",
+        ),
+        (
+            '    <Stochastic numberOfTestRuns="5" randomSeed="1">\n      <StochasticDistribution parameterName="EgoSpeed">\n'
+            '        <NormalDistribution expectedValue="10" variance="1"/>\n      </StochasticDistribution>\n    </Stochastic>',
+            ":7: <NormalDistribution> of 'EgoSpeed' is not supported by ego's environments",
+        ),
+        (
+            f'    <Stochastic numberOfTestRuns="5" randomSeed="1">\n{_uniform("Speed", "8", "20")}\n    </Stochastic>',
+            ":7: parameter 'Speed' is not one of",
+        ),
+    ],
+    ids=["deterministic", "normal", "unknown-parameter"],
+)
+def test_a_distribution_ego_cannot_draw_is_one_line_with_its_line(tmp_path, body, message):
+    path = _distribution(tmp_path, body)
+    with pytest.raises(ConfigError) as exc:
+        gym.make("ego/Scenario-v0", config={"scenario": path})
+    text = str(exc.value)
+    assert text.startswith(path + message) and "\n" not in text
