@@ -49,6 +49,8 @@ def check_scenario(value: Any) -> str:
     if not isinstance(value, (str, os.PathLike)) or not os.fspath(value):
         raise ConfigError(f"bad value for scenario: {value!r} (expected {allowed})")
     name = os.fspath(value)
+    if name.lower().endswith(".xosc") and not Path(name).is_file():
+        raise ConfigError(f"bad value for scenario: {name!r} is not a file (expected {allowed})")
     if _distribution_root(name) is not None:
         return name
     try:

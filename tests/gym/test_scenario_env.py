@@ -136,7 +136,10 @@ def test_a_file_env_pickles_mid_episode():
         ({}, "missing config key scenario (expected a scenario of ego list with traffic (emergency-brake"),
         ({"scenario": "cut_in"}, "bad value for scenario: 'cut_in' (expected a scenario of ego list with traffic"),
         ({"scenario": "report-000"}, "bad value for scenario: 'report-000' runs no traffic simulator"),
-        ({"scenario": "missing.xosc"}, "bad value for scenario: scenario file 'missing.xosc' not found"),
+        (
+            {"scenario": "missing.xosc"},
+            "bad value for scenario: 'missing.xosc' is not a file (expected a scenario of ego list with traffic",
+        ),
         ({"scenario": 3}, "bad value for scenario: 3 (expected a scenario of ego list"),
         ({"scenario": CCRB, "randomize": {"evade": [0, 1]}}, "bad value for randomize[evade]: evade is not a number"),
         ({"scenario": CCRB, "randomize": {"EgoSpeed": [-5.0, 2.0]}}, "bad value for randomize: its low corner"),
