@@ -1,6 +1,7 @@
 """Cost of the Gymnasium wrapper over the raw scenario step, and env steps/s, in one run.
 
     python benchmarks/bench_gym.py [--repeat 3] [--duration 20] [--ids ego/CutIn-v0 ...] [--vector-steps 2000]
+                                   [--scenarios scenarios/openscenario/emergency_brake.xosc ...]
 
 For every env id: the scenario's default controller drives one run (seed 0) and its actions
 are kept; then the same actions are replayed (same trajectory, no controller cost) through
@@ -21,6 +22,10 @@ Then, per id, ``gym.make_vec(id, 2)`` (ego's ``EgoVectorEnv``: the first env in 
 the second in a worker, the step's data and signals in shared memory) and Gymnasium's
 ``AsyncVectorEnv`` of the same two envs against one env in a process of its own: env steps/s
 of each (target: make_vec >= 1.8x on 2 cores).
+
+``--scenarios`` adds rows of ``ego/Scenario-v0`` (``config={"scenario": NAME_OR_FILE}``), the
+same measures on a built-in scenario or an OpenSCENARIO file (default: the shipped
+``emergency_brake.xosc``), its default controller's actions replayed the same way.
 """
 
 from __future__ import annotations
@@ -33,14 +38,17 @@ import tempfile
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
 
 import gymnasium as gym  # noqa: E402
 import numpy as np  # noqa: E402
 from gymnasium.vector import AsyncVectorEnv  # noqa: E402
 
 import ego.gym  # noqa: E402
+from ego.gym.scenario_env import check_scenario  # noqa: E402
 from ego.gym.vector import EgoVectorEnv, _Maker  # noqa: E402
+from ego.params import ConfigError  # noqa: E402
 from ego.runner import RunSpec, build  # noqa: E402
 from ego.scenarios import scenario_class  # noqa: E402
 
@@ -281,6 +289,12 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--duration", type=float, default=20.0, help="simulated seconds per run")
     ap.add_argument("--ids", nargs="*", default=list(ego.gym.ENV_IDS))
     ap.add_argument(
+        "--scenarios",
+        nargs="*",
+        default=[str(ROOT / "scenarios/openscenario/emergency_brake.xosc")],
+        help="scenarios (names or .xosc files) measured as ego/Scenario-v0 (none: skip)",
+    )
+    ap.add_argument(
         "--vector-steps",
         type=int,
         default=2000,
@@ -288,7 +302,17 @@ def main(argv: list[str] | None = None) -> dict:
     )
     args = ap.parse_args(argv)
     os.environ.setdefault("MPLCONFIGDIR", tempfile.mkdtemp())
-    overrides = {"duration": args.duration}
+    # rows: (label, env id, scenario, the env's own config keys beside the scenario's)
+    rows = [(env_id, env_id, ego.gym.ENV_IDS[env_id], {}) for env_id in args.ids]
+    for name in args.scenarios:
+        try:
+            check_scenario(name)
+        except ConfigError as exc:
+            ap.error(str(exc))
+        label = f"{ego.gym.SCENARIO_ENV_ID}:{Path(name).name}"
+        rows.append((label, ego.gym.SCENARIO_ENV_ID, name, {"scenario": name}))
+    duration = {"duration": args.duration}
+    width = max([24, *(len(row[0]) for row in rows)])
     figures = {}
     timer = _timer_cost()
     print(
@@ -296,13 +320,13 @@ def main(argv: list[str] | None = None) -> dict:
         f"runs, best of {args.repeat}"
     )
     print(
-        f"  {'env id':24} {'steps':>6} {'raw steps/s':>12} {'env steps/s':>12} {'overhead':>9} "
+        f"  {'env id':{width}} {'steps':>6} {'raw steps/s':>12} {'env steps/s':>12} {'overhead':>9} "
         f"{'Kinematics steps/s':>19} {'overhead':>9} {'overhead, separate loops':>25}"
     )
-    for env_id in args.ids:
-        scenario = ego.gym.ENV_IDS[env_id]
+    for label, env_id, scenario, own in rows:
+        overrides = {**duration, **own}
         controller = scenario_class(scenario).reference_controller()
-        recorded = demonstration(scenario, controller, overrides)
+        recorded = demonstration(scenario, controller, duration)
         actions = np.array(recorded, dtype=np.float64).reshape(len(recorded), -1)
         if scenario_class(scenario).task == "car-following":
             actions = actions[:, :1]
@@ -320,9 +344,9 @@ def main(argv: list[str] | None = None) -> dict:
                 row["raw_steps_per_s"] = n / inner
         env_s, raw_s = separate_loops(env_id, overrides, actions, args.repeat)
         row["separate_loops_overhead"] = env_s / raw_s - 1.0
-        figures[env_id] = row
+        figures[label] = row
         print(
-            f"  {env_id:24} {n:6d} {row['raw_steps_per_s']:12.0f} {row['env_steps_per_s']:12.0f} "
+            f"  {label:{width}} {n:6d} {row['raw_steps_per_s']:12.0f} {row['env_steps_per_s']:12.0f} "
             f"{100 * row['overhead']:8.1f}% {row['kinematics_env_steps_per_s']:19.0f} "
             f"{100 * row['kinematics_overhead']:8.1f}% {100 * row['separate_loops_overhead']:24.1f}%"
         )
@@ -338,19 +362,19 @@ def main(argv: list[str] | None = None) -> dict:
             f"{os.cpu_count()} cores"
         )
         print(
-            f"  {'env id':24} {'policy_frequency':>16} {'1 env steps/s':>14} {'make_vec steps/s':>17} "
+            f"  {'env id':{width}} {'policy_frequency':>16} {'1 env steps/s':>14} {'make_vec steps/s':>17} "
             f"{'speed-up':>9} {'Async steps/s':>14} {'speed-up':>9} {'2 processes':>12}"
         )
-        for env_id in args.ids:
+        for label, env_id, _, own in rows:
             for pf in (0, 10):
                 # one fixed scenario for all three (the same work a step), the traffic seeded
                 one, two, other, pair = vector_speedup(
                     env_id,
                     args.vector_steps // (2 if pf else 1),
-                    {**overrides, "policy_frequency": pf, "randomize": {}},
+                    {**duration, **own, "policy_frequency": pf, "randomize": {}},
                     args.repeat,
                 )
-                figures[env_id].update(
+                figures[label].update(
                     {
                         f"one_env_steps_per_s_pf{pf}": one,
                         f"make_vec2_steps_per_s_pf{pf}": two,
@@ -361,7 +385,7 @@ def main(argv: list[str] | None = None) -> dict:
                     }
                 )
                 print(
-                    f"  {env_id:24} {pf:16d} {one:14.0f} {two:17.0f} {two / one:8.2f}x {other:14.0f} "
+                    f"  {label:{width}} {pf:16d} {one:14.0f} {two:17.0f} {two / one:8.2f}x {other:14.0f} "
                     f"{other / one:8.2f}x {pair / one:11.2f}x"
                 )
         print("  target: make_vec >= 1.8x on 2 cores")

@@ -19,6 +19,7 @@ import gymnasium
 from ego.gym.env import ENV_KEYS, EgoEnv, EgoView, EnvConfig, Reward
 from ego.gym.evaluate import evaluate
 from ego.gym.policy import ControllerPolicy
+from ego.gym.scenario_env import ScenarioEnv
 from ego.gym.spaces import (
     ContinuousAction,
     DiscreteMetaAction,
@@ -78,6 +79,20 @@ for _id, _scenario in ENV_IDS.items():
             disable_env_checker=True,
         )
 
+#: the id of the env over any scenario: gym.make(SCENARIO_ENV_ID, config={"scenario": NAME_OR_FILE})
+SCENARIO_ENV_ID = "ego/Scenario-v0"
+
+# no max_episode_steps nor reward_threshold: they belong to a scenario (its duration truncates)
+if SCENARIO_ENV_ID not in gymnasium.registry:
+    gymnasium.register(
+        SCENARIO_ENV_ID,
+        entry_point="ego.gym.scenario_env:ScenarioEnv",
+        kwargs={"scenario": None},
+        vector_entry_point="ego.gym.vector:make_vector",
+        order_enforce=False,
+        disable_env_checker=True,
+    )
+
 if "ego/PlatoonMultiAgent-v0" not in gymnasium.registry:
     gymnasium.register(
         "ego/PlatoonMultiAgent-v0",
@@ -90,6 +105,7 @@ if "ego/PlatoonMultiAgent-v0" not in gymnasium.registry:
 __all__ = [
     "ENV_IDS",
     "ENV_KEYS",
+    "SCENARIO_ENV_ID",
     "ContinuousAction",
     "ControllerPolicy",
     "DiscreteMetaAction",
@@ -101,6 +117,7 @@ __all__ = [
     "KinematicsObservation",
     "OccupancyGridObservation",
     "Reward",
+    "ScenarioEnv",
     "TimeToCollisionObservation",
     "evaluate",
 ]

@@ -367,20 +367,25 @@ _ENDING_TASKS = ("curve", "lane-centering")
 
 def outcome(sc, reason: str, metrics: Mapping[str, Any]) -> dict[str, Any]:
     """The episode's outcome as RL benchmarks report it, for the ``info`` of its last step:
-    ``is_success`` (SB3's key: no collision, divergence or error, and, where the task has an
-    end of its own, that end reached), ``collision``, ``collision_avoidable`` (the scenario's
-    metric, None where it has none), ``off_road`` (diverged by leaving the road),
-    ``completion`` (the share of the run's duration elapsed when it ended, 1 when the task
-    was completed) and ``termination_reason`` (the status, or ``max_episode_steps`` where the
-    registered TimeLimit cut it)."""
+    ``is_success`` (SB3's key: no collision, divergence, error or lane departure, and, where
+    the task has an end of its own, that end reached), ``collision``, ``collision_avoidable``
+    (the scenario's metric, None where it has none), ``lane_departure`` (the run's
+    ``max_lane_departure`` metric above 0 m: the ego's side beyond its lane's marking outside a
+    commanded lane change; None where the scenario does not measure it), ``off_road``
+    (diverged by leaving the road), ``completion`` (the share of the run's duration elapsed
+    when it ended, 1 when the task was completed) and ``termination_reason`` (the status, or
+    ``max_episode_steps`` where the registered TimeLimit cut it)."""
     collision = reason == "collision"
     failed = collision or reason in ("diverged", "error")
     ending = sc.name in _ENDING_TASKS
     duration = sc.config.duration
+    departure = metrics.get("max_lane_departure")
+    departed = None if departure is None else bool(departure > 0.0)
     return {
-        "is_success": not failed and (reason == "completed" if ending else True),
+        "is_success": not failed and not departed and (reason == "completed" if ending else True),
         "collision": collision,
         "collision_avoidable": metrics.get("collision_avoidable") if collision else None,
+        "lane_departure": departed,
         "off_road": reason == "diverged" and "left the road" in str(sc.status_detail or ""),
         "completion": 1.0 if reason == "completed" else min(1.0, max(0.0, sc.t / duration)),
         "termination_reason": reason,
@@ -400,6 +405,9 @@ class EgoEnv(gym.Env):
     """
 
     metadata: ClassVar[dict] = {"render_modes": ["rgb_array"], "render_fps": 100}
+    #: the configuration keys that are the env's own (every other is a scenario or controller
+    #: parameter)
+    own_keys: ClassVar[tuple[str, ...]] = ENV_KEYS
 
     def __init__(
         self, scenario: str = "emergency-brake", config: Mapping[str, Any] | None = None, render_mode: str | None = None
@@ -486,8 +494,8 @@ class EgoEnv(gym.Env):
             raise ConfigError(
                 f"bad value for controller: {controller!r} (the {self.task} task's controllers: {', '.join(names)})"
             )
-        params = {k: v for k, v in cfg.items() if k not in ENV_KEYS}
-        known = set(ENV_KEYS) | set(parameter_namespace(cls, [controller]))
+        params = {k: v for k, v in cfg.items() if k not in self.own_keys}
+        known = set(self.own_keys) | set(parameter_namespace(cls, [controller]))
         for key in cfg:
             if key not in known:
                 raise unknown_parameter(key, known)
@@ -532,11 +540,14 @@ class EgoEnv(gym.Env):
         # the corners of the distribution must make valid runs: checked now, not at a reset
         for corner in (0, 1):
             if randomize:
-                resolve(
-                    RunSpec(
-                        self.scenario_name, controller, 0, {**overrides, **{k: v[corner] for k, v in randomize.items()}}
-                    )
-                )
+                values = {k: v[corner] for k, v in randomize.items()}
+                try:
+                    resolve(RunSpec(self.scenario_name, controller, 0, {**overrides, **values}))
+                except ConfigError as exc:
+                    shown = ", ".join(f"{k}={v:g}" for k, v in values.items())
+                    raise ConfigError(
+                        f"bad value for randomize: its {('low', 'high')[corner]} corner ({shown}) makes no valid run: {exc}"
+                    ) from None
 
         meta = action.type_name == "DiscreteMetaAction"
         if meta and getattr(probe.view, "lane_offset", None) is None:  # a view of lanes to change

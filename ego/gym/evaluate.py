@@ -104,6 +104,7 @@ def evaluate(
                             "is_success",
                             "collision",
                             "collision_avoidable",
+                            "lane_departure",
                             "off_road",
                             "completion",
                             "termination_reason",

@@ -733,7 +733,12 @@ class DiscreteMetaAction(ActionType):
     ``controller`` then tracks them: its observation gets the references (the target lane's
     centre as ``d_ref``; a station reference moving at the target speed, at most
     ``max_lag`` m from the ego) in place of the scenario's planner's. Motorway scenarios only
-    (they have lanes); the scenario's AEB still brakes when a collision is imminent."""
+    (they have lanes); the scenario's AEB still brakes when a collision is imminent, and
+    once it has engaged the longitudinal target **holds behind the front object** until the
+    agent chooses FASTER: the speed target at most the front object's speed, the station
+    reference at most ``follow_gap + follow_headway * v_front`` (the scenario's, m and s)
+    behind its rear - as a car's AEB cancels its cruise control - so that IDLE (or SLOWER, or
+    a lane change) does not drive the ego back into what the AEB braked for."""
 
     type_name = "DiscreteMetaAction"
     OPTIONS = ("longitudinal", "lateral", "target_speeds", "max_lag")
@@ -772,11 +777,19 @@ class DiscreteMetaAction(ActionType):
         self._shape = ()
         self.lane, self.speed_index = 0, 0
         self._s_ref = 0.0
+        #: the AEB has engaged since the agent last chose FASTER: the target holds behind the
+        #: front object
+        self.held = False
 
     def reset(self, view) -> None:
         road, obs = view.road, view.obs
         self._view = view
         self._offsets = road.lane_offset
+        self._safety = getattr(view.scenario, "safety", None)
+        self._sensor = getattr(road, "sensor", None)
+        c = view.scenario.config
+        self._follow = (getattr(c, "follow_gap", 5.0), getattr(c, "follow_headway", 0.5))
+        self.held = False
         self.lane = road.target_lane
         self.speed_index = int(np.argmin([abs(v - obs.ds) for v in self.target_speeds]))
         self._s_ref = obs.s
@@ -817,6 +830,7 @@ class DiscreteMetaAction(ActionType):
             self.lane -= 1
         elif name == "FASTER":
             self.speed_index = min(self.speed_index + 1, len(self.target_speeds) - 1)
+            self.held = False  # the agent's own choice ends the hold behind the front object
         elif name == "SLOWER":
             self.speed_index = max(self.speed_index - 1, 0)
 
@@ -833,7 +847,19 @@ class DiscreteMetaAction(ActionType):
             v = self.target_speeds[self.speed_index]
             s = src.s
             lag = self.max_lag
-            self._s_ref = min(max(self._s_ref + v * self._dt, s - lag), s + lag)
+            s_ref = self._s_ref
+            safety = self._safety
+            if safety is not None and safety.active:
+                self.held = True
+            if self.held and self._sensor is not None and self._sensor.front.gap < INF:
+                front = self._sensor.front  # behind it: no faster, and not closer than the follow distance
+                lead = max(front.speed, 0.0)
+                gap, headway = self._follow
+                v = min(v, lead)
+                s_ref = min(s_ref + v * self._dt, s + front.gap - gap - headway * lead)
+            else:
+                s_ref += v * self._dt
+            self._s_ref = min(max(s_ref, s - lag), s + lag)
             o.s_ref, o.ds_ref, o.accel_ref = self._s_ref, v, 0.0
         return o
 

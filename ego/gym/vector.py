@@ -83,8 +83,12 @@ def _cores() -> int:
         return os.cpu_count() or 1
 
 
-def env_id_of(scenario: str) -> str:
-    from ego.gym import ENV_IDS
+def env_id_of(scenario: str | None) -> str:
+    """The id of ``scenario``'s env; None: ``ego/Scenario-v0`` (its config names the scenario)."""
+    from ego.gym import ENV_IDS, SCENARIO_ENV_ID
+
+    if scenario is None:
+        return SCENARIO_ENV_ID
 
     for env_id, name in ENV_IDS.items():
         if name == scenario:
@@ -106,14 +110,15 @@ class _Maker:
 
 def make_vector(
     num_envs: int = 1,
-    scenario: str = "emergency-brake",
+    scenario: str | None = "emergency-brake",
     config: Mapping[str, Any] | None = None,
     render_mode: str | None = None,
     info: str = "episode",
     host: bool | None = None,
     **kwargs: Any,
 ):
-    """``num_envs`` envs of ``scenario``'s id: when more than one, an :class:`EgoVectorEnv`
+    """``num_envs`` envs of ``scenario``'s id (None: ``ego/Scenario-v0``, the scenario in
+    ``config``): when more than one, an :class:`EgoVectorEnv`
     (``info`` and ``host`` as there).
 
     Workers start by ``fork`` when no SUMO runs in this process, else by ``forkserver``

@@ -204,7 +204,15 @@ def test_every_observation_of_a_whole_episode_lies_in_the_bounds(env_id, normali
 
 
 # -- 4. the outcome of every episode, and evaluate ---------------------------------------------
-OUTCOME = {"is_success", "collision", "collision_avoidable", "off_road", "completion", "termination_reason"}
+OUTCOME = {
+    "is_success",
+    "collision",
+    "collision_avoidable",
+    "lane_departure",
+    "off_road",
+    "completion",
+    "termination_reason",
+}
 
 
 def _last_info(env, action, seed=0):
@@ -233,6 +241,27 @@ def test_the_last_info_carries_the_outcome():
         # stopped short of the lead through the whole run: a success, completion 1
         info = _last_info(env, [-1.0, 0.0])  # full braking from the start: stopped, no collision
         assert info["termination_reason"] == "completed" and info["is_success"] and info["completion"] == 1.0
+    finally:
+        env.close()
+
+
+@pytest.mark.sumo
+def test_a_lane_departure_is_flagged_and_is_no_success():
+    # a 0.5 s steer pulse of 0.02 rad and back: the ego's side crosses its lane's marking
+    # (max_lane_departure > 0, status failed in the run's result) but stays on the road
+    config = {"policy_frequency": 10, "randomize": {}, "lead_decel": 0.5, "lead_final_speed": 19}
+    env = gym.make("ego/EmergencyBrake-v0", config=config)
+    try:
+        for steer, departed in ((0.04, True), (0.0, False)):
+            env.reset(seed=0)
+            for k in range(1000):
+                action = [0.0, steer if k < 5 else (-steer if k < 10 else 0.0)]
+                _, _, terminated, truncated, info = env.step(np.array(action, np.float32))
+                if terminated or truncated:
+                    break
+            assert info["lane_departure"] is departed and (info["metrics"]["max_lane_departure"] > 0) is departed
+            assert info["is_success"] is not departed and not info["off_road"] and not info["collision"]
+            assert info["termination_reason"] == "completed"
     finally:
         env.close()
 
