@@ -164,18 +164,25 @@ def _running_a_task(node) -> bool:
     return False
 
 
-def _job_processes(before: set[int]) -> list[psutil.Process]:
-    """Processes that ran ego's tasks (Ray workers with ego imported) and are not from before."""
+def _job_processes(c, before: set[int]) -> list[psutil.Process]:
+    """Processes of the cluster ``c`` that ran ego's tasks (its raylets' workers with ego
+    imported) and are not from before. Only this cluster's workers count: an ``ego run`` or a
+    Ray of another test file (pytest -n) running meanwhile is not the sweep's."""
     found = []
-    for p in psutil.process_iter(["pid", "cmdline", "name"]):
-        if p.info["pid"] in before:
-            continue
+    for node in c.list_all_nodes():
         try:
-            maps = Path(f"/proc/{p.pid}/maps").read_text()
-        except OSError:
+            workers = psutil.Process(node.all_processes["raylet"][0].process.pid).children(recursive=True)
+        except psutil.Error:
             continue
-        if "/ego/" in maps and ("libsumo" in maps or "_native" in maps):
-            found.append(p)
+        for p in workers:
+            if p.pid in before:
+                continue
+            try:
+                maps = Path(f"/proc/{p.pid}/maps").read_text()
+            except OSError:
+                continue
+            if "/ego/" in maps and ("libsumo" in maps or "_native" in maps):
+                found.append(p)
     return found
 
 
@@ -197,18 +204,18 @@ def test_a_sigkilled_sweep_leaves_none_of_its_processes_on_any_node(cluster, tmp
         cwd=tmp_path,
     )
     deadline = time.monotonic() + 120
-    while time.monotonic() < deadline and not _job_processes(before):
+    while time.monotonic() < deadline and not _job_processes(c, before):
         time.sleep(0.2)
-    assert _job_processes(before), "no task of the sweep started"
+    assert _job_processes(c, before), "no task of the sweep started"
     descendants = psutil.Process(proc.pid).children(recursive=True)
     proc.kill()
     proc.wait(timeout=30)
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline and (
-        _job_processes(before) or any(d.is_running() and d.status() != "zombie" for d in descendants)
+        _job_processes(c, before) or any(d.is_running() and d.status() != "zombie" for d in descendants)
     ):
         time.sleep(0.5)
-    assert not _job_processes(before), [p.info["cmdline"] for p in _job_processes(before)]
+    assert not _job_processes(c, before), [p.pid for p in _job_processes(c, before)]
     assert not [d for d in descendants if d.is_running() and d.status() != "zombie"]
 
 
