@@ -365,6 +365,18 @@ _SHARED = (
 _ENDING_TASKS = ("curve", "lane-centering")
 
 
+#: the keys of an episode's outcome (:func:`outcome`), in the order it gives them
+OUTCOME_KEYS = (
+    "is_success",
+    "collision",
+    "collision_avoidable",
+    "lane_departure",
+    "off_road",
+    "completion",
+    "termination_reason",
+)
+
+
 def outcome(sc, reason: str, metrics: Mapping[str, Any]) -> dict[str, Any]:
     """The episode's outcome as RL benchmarks report it, for the ``info`` of its last step:
     ``is_success`` (SB3's key: no collision, divergence, error or lane departure, and, where

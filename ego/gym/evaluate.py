@@ -11,6 +11,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from ego.gym.env import OUTCOME_KEYS
 from ego.params import ConfigError
 
 #: the two-sided normal quantile of the 95 % intervals
@@ -98,18 +99,7 @@ def evaluate(
                 {
                     "seed": seed,
                     "return": total,
-                    **{
-                        k: info.get(k)
-                        for k in (
-                            "is_success",
-                            "collision",
-                            "collision_avoidable",
-                            "lane_departure",
-                            "off_road",
-                            "completion",
-                            "termination_reason",
-                        )
-                    },
+                    **{k: info.get(k) for k in OUTCOME_KEYS},
                 }
             )
     finally:
