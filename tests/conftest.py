@@ -1,12 +1,15 @@
 """Test-wide set-up: keep Rerun's and matplotlib's config out of the user's home."""
 
+import atexit
 import os
+import shutil
 import signal
 import tempfile
 
 import pytest
 
 _TMP = tempfile.mkdtemp(prefix="ego-tests-")
+atexit.register(shutil.rmtree, _TMP, True)  # each process (pytest, an xdist worker) its own
 for var in ("XDG_CONFIG_HOME", "XDG_DATA_HOME", "MPLCONFIGDIR"):
     os.environ.setdefault(var, os.path.join(_TMP, var.lower()))
 os.environ.setdefault("RERUN_ANALYTICS", "false")

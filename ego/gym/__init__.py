@@ -40,27 +40,45 @@ ENV_IDS = {
     "ego/Platoon-v0": "platoon",
 }
 
+#: env id -> the benchmark's setting, which ``gym.make(id)`` makes by default and
+#: docs/results/rl-baselines.md trains and scores in: ten env steps a simulated second (the
+#: action held over ten 0.01 s control periods), the lane-centring drive cut to 30 s.
+#: ``config={"policy_frequency": 0}`` gives one env step per control period (100 Hz; then
+#: pass ``max_episode_steps`` to gym.make too, or the TimeLimit cuts the run short)
+BENCHMARK: dict[str, dict] = {
+    "ego/EmergencyBrake-v0": {"policy_frequency": 10},
+    "ego/FastFollower-v0": {"policy_frequency": 10},
+    "ego/CutIn-v0": {"policy_frequency": 10},
+    "ego/Curve-v0": {"policy_frequency": 10},
+    "ego/LaneCentering-v0": {"policy_frequency": 10, "duration": 30.0},
+    "ego/Platoon-v0": {"policy_frequency": 10},
+}
+
 #: env id -> the mean return an agent must reach to count as solving it: the env's default
 #: controller's mean return on the evaluation episodes of docs/results/rl-baselines.md in the
-#: env as gym.make(id) makes it (its rl-thresholds table: every control step an env step, the
-#: full duration), so "solved" means "as good as the controller" in the registered env
-#: (tests/gym check it against the page)
+#: env as gym.make(id) makes it (its rl-thresholds table: the benchmark's setting), so
+#: "solved" means "as good as the controller" in the registered env (tests/gym check it
+#: against the page)
 REWARD_THRESHOLDS: dict[str, float] = {
-    "ego/EmergencyBrake-v0": 862.26,
-    "ego/FastFollower-v0": 1173.12,
-    "ego/CutIn-v0": 1522.96,
-    "ego/Curve-v0": 485.04,
-    "ego/LaneCentering-v0": 17943.61,
-    "ego/Platoon-v0": 2102.58,
+    "ego/EmergencyBrake-v0": 86.18,
+    "ego/FastFollower-v0": 117.36,
+    "ego/CutIn-v0": 152.28,
+    "ego/Curve-v0": 48.46,
+    "ego/LaneCentering-v0": 89.37,
+    "ego/Platoon-v0": 210.26,
 }
 
 
-def _max_episode_steps(scenario: str) -> int:
-    """Env steps of a default run: its duration over the control period (policy_frequency 0)."""
+def _max_episode_steps(scenario: str, setting: dict | None = None) -> int:
+    """Env steps of a default run in ``setting``: its duration over the env step (the control
+    period dt where policy_frequency is 0)."""
     from ego.scenarios import scenario_class
 
     c = scenario_class(scenario).config_cls()
-    return round(c.duration / c.dt)
+    setting = setting or {}
+    duration = setting.get("duration", c.duration)
+    frequency = setting.get("policy_frequency", 0)
+    return round(duration * frequency) if frequency else round(duration / c.dt)
 
 
 # EgoEnv refuses a step before reset itself, and passes gymnasium's checker (tests/gym): the
@@ -71,9 +89,9 @@ for _id, _scenario in ENV_IDS.items():
         gymnasium.register(
             _id,
             entry_point="ego.gym.env:EgoEnv",
-            kwargs={"scenario": _scenario},
+            kwargs={"scenario": _scenario, "defaults": BENCHMARK[_id]},
             vector_entry_point="ego.gym.vector:make_vector",
-            max_episode_steps=_max_episode_steps(_scenario),
+            max_episode_steps=_max_episode_steps(_scenario, BENCHMARK[_id]),
             reward_threshold=REWARD_THRESHOLDS.get(_id),
             order_enforce=False,
             disable_env_checker=True,
@@ -103,6 +121,7 @@ if "ego/PlatoonMultiAgent-v0" not in gymnasium.registry:
     )
 
 __all__ = [
+    "BENCHMARK",
     "ENV_IDS",
     "ENV_KEYS",
     "SCENARIO_ENV_ID",

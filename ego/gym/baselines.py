@@ -20,15 +20,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: env id -> config of the benchmark (on top of the env's defaults)
-BENCH_CONFIG: dict[str, dict] = {
-    "ego/EmergencyBrake-v0": {"policy_frequency": 10},
-    "ego/FastFollower-v0": {"policy_frequency": 10},
-    "ego/CutIn-v0": {"policy_frequency": 10},
-    "ego/Curve-v0": {"policy_frequency": 10},
-    "ego/LaneCentering-v0": {"policy_frequency": 10, "duration": 30.0},
-    "ego/Platoon-v0": {"policy_frequency": 10},
-}
+from ego.gym import BENCHMARK
+
+#: env id -> config of the benchmark: gym.make(id)'s own defaults (ego.gym.BENCHMARK)
+BENCH_CONFIG: dict[str, dict] = BENCHMARK
 #: the evaluation episodes' seeds (never used in training: training seeds its episodes from 0)
 EVAL_SEEDS = tuple(range(1000, 1010))
 #: the training budget of the committed table, the same for every env and algorithm: env
@@ -64,13 +59,13 @@ def load(algo: str, path):
 
 
 def make_env(env_id: str, config: dict | None = None):
-    """``gym.make(env_id)`` in its benchmark configuration, or with ``config`` (``{}``: the
-    registered defaults)."""
+    """``gym.make(env_id)``: its registered defaults are the benchmark's setting
+    (:data:`ego.gym.BENCHMARK`), ``config`` overrides them key by key."""
     import gymnasium as gym
 
     import ego.gym  # noqa: F401 - registers the ids
 
-    return gym.make(env_id, config=BENCH_CONFIG[env_id] if config is None else config)
+    return gym.make(env_id, config=config or {})
 
 
 def evaluate(env_id: str, act, config: dict | None = None) -> dict:
@@ -178,8 +173,8 @@ class ControllerEval:
 @dataclass(frozen=True)
 class ThresholdEval:
     """A docs job: the env's default controller on its evaluation episodes in the env as
-    ``gym.make(env_id)`` makes it (the registered defaults: every control step an env step,
-    the full duration): its mean return is the spec's ``reward_threshold``."""
+    ``gym.make(env_id)`` makes it (the registered defaults: the benchmark's setting): its mean
+    return is the spec's ``reward_threshold``."""
 
     env_id: str
 

@@ -422,8 +422,14 @@ class EgoEnv(gym.Env):
     own_keys: ClassVar[tuple[str, ...]] = ENV_KEYS
 
     def __init__(
-        self, scenario: str = "emergency-brake", config: Mapping[str, Any] | None = None, render_mode: str | None = None
+        self,
+        scenario: str = "emergency-brake",
+        config: Mapping[str, Any] | None = None,
+        render_mode: str | None = None,
+        defaults: Mapping[str, Any] | None = None,
     ) -> None:
+        """``defaults``: keys set before ``config`` (the registered ids' benchmark setting,
+        :data:`ego.gym.BENCHMARK`); ``config`` overrides them key by key."""
         if render_mode not in (None, *self.metadata["render_modes"]):
             raise ConfigError(f"bad value for render_mode: {render_mode!r} (expected rgb_array or None)")
         self.scenario_name = scenario
@@ -433,6 +439,8 @@ class EgoEnv(gym.Env):
         # env.default_config() lists this env's scenario (the class method takes a name)
         self.default_config = functools.partial(type(self).default_config, scenario)
         self.config = self.default_config()
+        if defaults:
+            self.configure(defaults)
         self.configure(config or {})
         self.scenario = None
         self._renderer = None
@@ -744,10 +752,14 @@ class EgoEnv(gym.Env):
         if status == "running":
             reward, terms = self._step_reward(False)
             info = {"status": status, "rewards": terms}
-            if elapsed >= self._limit_steps:
+            if elapsed > self._limit_steps:
+                # stepped past the registered limit: gym.make was given another max_episode_steps
+                self._limit, self._limit_steps = None, math.inf
+                self._fast_step = self._bind_step()
+            elif elapsed == self._limit_steps:
                 # the registered TimeLimit truncates this step: the run's metrics so far (a
                 # TimeLimit of another length cannot be seen from here: env.unwrapped.metrics())
-                info["status_detail"] = f"max_episode_steps ({self._limit}) reached"
+                info["status_detail"] = self._limit_detail()
                 info["metrics"] = sc.result().metrics
                 info.update(outcome(sc, "max_episode_steps", info["metrics"]))
             return self._observe(), reward, False, False, info
@@ -793,6 +805,20 @@ class EgoEnv(gym.Env):
         period = sc.config.dt * self._every
         most = math.ceil(sc.config.duration / period - 1e-9)
         return max(0, min(most, self._limit_steps) - self._elapsed)
+
+    def _limit_detail(self) -> str:
+        """Why the registered TimeLimit ends the episode, and, where that is before the run's
+        duration (another policy_frequency than the benchmark's), what keeps the whole run."""
+        sc = self.scenario
+        whole = math.ceil(sc.config.duration / (sc.config.dt * self._every) - 1e-9)
+        detail = f"max_episode_steps ({self._limit}) reached"
+        if self._limit is not None and self._limit < whole:
+            detail += (
+                f" at {self._limit * sc.config.dt * self._every:g} s of the run's {sc.config.duration:g} s "
+                f"(policy_frequency {self.env_config.policy_frequency:g}; gym.make(..., "
+                f"max_episode_steps={whole}) keeps the whole run)"
+            )
+        return detail
 
     def _set_limit(self) -> None:
         self._limit = _registered_limit(self.spec)

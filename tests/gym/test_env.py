@@ -398,7 +398,7 @@ def _compare_steps(env_id, short, make, monkeypatch, EgoEnv):
     cases = [(env_id, None), (short, None), (env_id, 25)]
     bind = EgoEnv._bind_step
     for made, nan_at in cases:
-        env = make(made, config={"duration": 3.0})
+        env = make(made, config={"duration": 3.0, "policy_frequency": 0})  # the C step's rate
         env.action_space.seed(3)
         actions = [env.action_space.sample() for _ in range(400)]
         if nan_at is not None:

@@ -48,8 +48,9 @@ def test_sync_envs_in_one_process_with_multi_instance_false_name_the_cause():
 
 @pytest.mark.sumo
 def test_multi_instance_runs_a_second_sumo_through_traci_with_the_same_episode(make):
-    first = make("ego/CutIn-v0", config={"multi_instance": True})
-    second = make("ego/CutIn-v0", config={"multi_instance": True})
+    config = {"multi_instance": True, "policy_frequency": 0}  # 150 steps: 1.5 s
+    first = make("ego/CutIn-v0", config=config)
+    second = make("ego/CutIn-v0", config=config)
     a, _ = first.reset(seed=5)
     b, _ = second.reset(seed=5)
     assert not first.unwrapped.scenario.bridge.via_traci and second.unwrapped.scenario.bridge.via_traci
@@ -92,7 +93,9 @@ def test_an_env_made_with_multi_instance_false_does_not_end_one_made_with_it(mak
 def test_controller_policy_gives_the_controllers_metrics_at_any_policy_frequency(
     env_id, scenario, controller, config, policy_frequency, make
 ):
-    env = make(env_id, config={**config, "policy_frequency": policy_frequency})
+    # at 100 Hz the registered TimeLimit (the benchmark's 10 Hz steps) would cut the run
+    limit = {} if policy_frequency else {"max_episode_steps": 10**6}
+    env = make(env_id, config={**config, "policy_frequency": policy_frequency}, **limit)
     policy = ego.gym.ControllerPolicy(controller, env)
     obs, first = env.reset(seed=2)
     steps = 0
@@ -172,24 +175,30 @@ def test_pickle_before_and_after_reset_continues_the_same_episode(make):
 # -- 5. TimeLimit keeps the metrics --------------------------------------------------------------
 @pytest.mark.sumo
 def test_time_limit_truncation_carries_the_runs_metrics(make):
-    # a run longer than the registered max_episode_steps (9000): gym.make's TimeLimit ends it
+    # a run longer than the registered max_episode_steps (900 at 10 Hz): gym.make's TimeLimit
+    # ends it, after 9000 control steps
     env = make("ego/Platoon-v0", config={"duration": 200.0, "randomize": {}, "manoeuvres": "none"})
-    assert env.spec.max_episode_steps == 9000
+    assert env.spec.max_episode_steps == 900
     env.reset(seed=0)
     hold = np.zeros(1, dtype=np.float32)
-    for _ in range(9000):
+    for _ in range(900):
         _, _, terminated, truncated, info = env.step(hold)
         if terminated or truncated:
             break
     assert truncated and not terminated and info["status"] == "running"
-    assert info["metrics"]["steps"] == 9000 and "max_episode_steps (9000)" in info["status_detail"]
+    assert info["metrics"]["steps"] == 9000 and "max_episode_steps (900)" in info["status_detail"]
     assert env.unwrapped.metrics()["steps"] == 9000
 
 
 def test_every_spec_has_max_episode_steps_and_a_vector_entry_point():
-    for env_id in ego.gym.ENV_IDS:
+    """max_episode_steps is the benchmark's whole run: its duration at 10 env steps a second."""
+    from ego.scenarios import scenario_class
+
+    for env_id, name in ego.gym.ENV_IDS.items():
         spec = gym.spec(env_id)
-        assert spec.max_episode_steps >= 1000 and spec.vector_entry_point == "ego.gym.vector:make_vector"
+        duration = ego.gym.BENCHMARK[env_id].get("duration", scenario_class(name).config_cls().duration)
+        assert spec.max_episode_steps == round(10 * duration) >= 200
+        assert spec.vector_entry_point == "ego.gym.vector:make_vector"
 
 
 # -- 6. randomised episodes, normalised observations ---------------------------------------------
@@ -263,10 +272,15 @@ def test_bad_randomize_is_one_line_config_error(randomize, message):
 @pytest.mark.sumo
 @pytest.mark.parametrize("env_id, tracks", [("ego/LaneCentering-v0", False), ("ego/CutIn-v0", True)])
 def test_ego_state_is_normalised_by_default_and_raw_on_request(env_id, tracks, make):
-    env = make(env_id, config={"randomize": {}})
+    env = make(env_id, config={"randomize": {}, "policy_frequency": 0})  # 100 steps: 1 s
     raw = make(
         env_id,
-        config={"randomize": {}, "multi_instance": True, "observation": {"type": "EgoState", "normalize": False}},
+        config={
+            "randomize": {},
+            "policy_frequency": 0,
+            "multi_instance": True,
+            "observation": {"type": "EgoState", "normalize": False},
+        },
     )
     a, _ = env.reset(seed=0)
     b0, _ = raw.reset(seed=0)
@@ -379,7 +393,12 @@ def test_discrete_meta_action_needs_lanes():
 def test_time_to_collision_and_occupancy_grid_see_the_lead_car(make):
     env = make(
         "ego/EmergencyBrake-v0",
-        config={"randomize": {}, "traffic_density": 0.0, "observation": {"type": "TimeToCollision"}},
+        config={
+            "randomize": {},
+            "traffic_density": 0.0,
+            "policy_frequency": 0,
+            "observation": {"type": "TimeToCollision"},
+        },
     )
     env.reset(seed=0)
     for _ in range(300):  # the lead brakes at 2 s: closing in the ego's own lane
@@ -405,18 +424,59 @@ def test_time_to_collision_and_occupancy_grid_see_the_lead_car(make):
 
 
 def test_reward_threshold_is_the_default_controllers_mean_return_in_the_registered_env():
-    """The threshold is of returns in the env gym.make(id) makes (100 Hz, the full duration),
-    the rl-thresholds table of the baselines page; the benchmark tables (10 Hz) are another
-    configuration."""
+    """The threshold is of returns in the env gym.make(id) makes, which is the benchmark's
+    setting (10 Hz, the lane-centring drive cut to 30 s): the rl-thresholds table of the
+    baselines page, and the default controller's row of the env's own table."""
     from ego.docs import RL_TABLES, block, page_path
     from ego.scenarios import scenario_class
 
-    text = block(page_path("rl-baselines").read_text(), "rl-thresholds")
-    for env_id in RL_TABLES:
+    page = page_path("rl-baselines").read_text()
+    text = block(page, "rl-thresholds")
+    for env_id, table in RL_TABLES.items():
         controller = scenario_class(ego.gym.ENV_IDS[env_id]).reference_controller()
         row = next(line for line in text.splitlines() if line.startswith(f"| {env_id} ({controller}) |"))
         assert gym.spec(env_id).reward_threshold == float(row.split(" | ")[1]), env_id
-        assert gym.make(env_id).unwrapped.config["policy_frequency"] == 0  # the env the table ran
+        own = next(line for line in block(page, table).splitlines() if line.startswith(f"| {controller} |"))
+        assert float(own.split(" | ")[1]) == gym.spec(env_id).reward_threshold, env_id
+        env = gym.make(env_id)
+        assert env.unwrapped.config["policy_frequency"] == 10  # the env the tables ran
+        assert env.unwrapped.config["duration"] == ego.gym.BENCHMARK[env_id].get(
+            "duration", env.unwrapped.config["duration"]
+        )
+        env.close()
+
+
+@pytest.mark.sumo
+def test_the_100_hz_form_is_one_key_away_and_a_short_time_limit_is_named(make):
+    """config={"policy_frequency": 0} steps every control period; the registered TimeLimit
+    (the benchmark's 250 steps) then ends the run at 2.5 s, and the last info says so and
+    which max_episode_steps keeps the whole run; given that, the env runs on past 250 steps."""
+    hold = np.zeros(2, dtype=np.float32)
+    env = make("ego/EmergencyBrake-v0", config={"policy_frequency": 0, "randomize": {}})
+    assert env.unwrapped.config["policy_frequency"] == 0
+    env.reset(seed=0)
+    steps = 0
+    while True:
+        _, _, terminated, truncated, info = env.step(hold)
+        steps += 1
+        if terminated or truncated:
+            break
+    assert truncated and steps == 250 and info["metrics"]["steps"] == 250
+    assert "at 2.5 s of the run's 25 s" in info["status_detail"]
+    assert "max_episode_steps=2500) keeps the whole run" in info["status_detail"]
+    env = make(
+        "ego/EmergencyBrake-v0",
+        config={"policy_frequency": 0, "randomize": {}, "multi_instance": True},
+        max_episode_steps=2500,
+    )
+    env.reset(seed=0)
+    for k in range(1, 301):
+        _, _, terminated, truncated, info = env.step(hold)
+        assert not (terminated or truncated)
+        # the env cannot see gym.make's TimeLimit: at the registered step it says what it
+        # would be; stepped past it, it knows the limit is another and says nothing more
+        assert ("status_detail" in info) == (k == 250)
+    assert env.unwrapped.scenario.t == pytest.approx(3.0) and env.unwrapped._fast_step is not None
 
 
 @pytest.mark.sumo
