@@ -99,7 +99,9 @@ def env_replay(env_id: str, overrides: dict, observation: dict, actions: np.ndar
     machine slows both alike."""
     # the demonstration's own scenario: no randomisation
     env = gym.make(
-        env_id, config={**overrides, "randomize": {}, "observation": observation, "action": {"type": "EgoAction"}}
+        env_id,
+        config={**overrides, "randomize": {}, "observation": observation, "action": {"type": "EgoAction"}},
+        max_episode_steps=len(actions),
     )
     try:
         env.reset(seed=0)
@@ -134,6 +136,7 @@ def separate_loops(env_id: str, overrides: dict, actions: np.ndarray, repeat: in
     env = gym.make(
         env_id,
         config={**overrides, "randomize": {}, "observation": {"type": "EgoState"}, "action": {"type": "EgoAction"}},
+        max_episode_steps=len(actions),
     )
     clock = time.perf_counter
     best_env = best_raw = math.inf
@@ -324,7 +327,8 @@ def main(argv: list[str] | None = None) -> dict:
         f"{'Kinematics steps/s':>19} {'overhead':>9} {'overhead, separate loops':>25}"
     )
     for label, env_id, scenario, own in rows:
-        overrides = {**duration, **own}
+        # one env step per control period, as the raw scenario step (the ids' default is 10 Hz)
+        overrides = {**duration, **own, "policy_frequency": 0}
         controller = scenario_class(scenario).reference_controller()
         recorded = demonstration(scenario, controller, duration)
         actions = np.array(recorded, dtype=np.float64).reshape(len(recorded), -1)

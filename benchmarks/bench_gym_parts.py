@@ -54,10 +54,12 @@ def measure(env_id: str, scenario: str, rounds: int, duration: float) -> dict[st
         env_id,
         config={
             "duration": duration,
+            "policy_frequency": 0,  # one env step per control period, as the raw loop's
             "randomize": {},
             "observation": {"type": "EgoState"},
             "action": {"type": "EgoAction"},
         },
+        max_episode_steps=len(actions),
     )
     u = env.unwrapped
     platoon = u.task == "car-following"

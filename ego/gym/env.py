@@ -32,6 +32,7 @@ from __future__ import annotations
 import copy
 import functools
 import math
+import sys
 import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, fields
@@ -638,7 +639,7 @@ class EgoEnv(gym.Env):
             self._rebuild()
         run_seed = run_seed_of(seed) if seed is not None else int(self.np_random.integers(0, MAX_SEED + 1))
         self._start(run_seed)
-        self._set_limit()
+        self._set_limit(_time_limit_calling(self, sys._getframe(1)))
         self._fast_step = self._bind_step()
         return self.observation_type.observe(self._view), {
             "status": self.scenario.status,
@@ -752,13 +753,8 @@ class EgoEnv(gym.Env):
         if status == "running":
             reward, terms = self._step_reward(False)
             info = {"status": status, "rewards": terms}
-            if elapsed > self._limit_steps:
-                # stepped past the registered limit: gym.make was given another max_episode_steps
-                self._limit, self._limit_steps = None, math.inf
-                self._fast_step = self._bind_step()
-            elif elapsed == self._limit_steps:
-                # the registered TimeLimit truncates this step: the run's metrics so far (a
-                # TimeLimit of another length cannot be seen from here: env.unwrapped.metrics())
+            if elapsed >= self._limit_steps:
+                # the TimeLimit around the env truncates this step: the run's metrics so far
                 info["status_detail"] = self._limit_detail()
                 info["metrics"] = sc.result().metrics
                 info.update(outcome(sc, "max_episode_steps", info["metrics"]))
@@ -820,8 +816,12 @@ class EgoEnv(gym.Env):
             )
         return detail
 
-    def _set_limit(self) -> None:
-        self._limit = _registered_limit(self.spec)
+    def _set_limit(self, limit: int | float | None = math.nan) -> None:
+        """The step at which the episode is truncated: ``limit`` (None: no TimeLimit), by
+        default the registered ``max_episode_steps`` (an unpickled env)."""
+        if limit is not None and math.isnan(limit):
+            limit = _registered_limit(self.spec)
+        self._limit = limit
         self._limit_steps = self._limit if self._limit is not None else math.inf
 
     def metrics(self) -> dict:
@@ -909,6 +909,21 @@ def run_seed_of(seed: Any) -> int:
     if type(seed) is int and seed > MAX_SEED:
         return int(np.random.SeedSequence(seed).generate_state(1, np.uint32)[0]) & MAX_SEED
     return check_seed(seed)
+
+
+def _time_limit_calling(env, frame) -> int | None:
+    """The ``max_episode_steps`` of the TimeLimit wrapper whose ``reset`` called ``env``'s
+    (gym.make's, from the registration or its ``max_episode_steps`` argument, or one added by
+    hand), from the calling frames: gymnasium gives a wrapped env no reference to its
+    wrappers. None where no TimeLimit wraps it (EgoEnv made directly, max_episode_steps=-1)."""
+    for _ in range(16):
+        if frame is None:
+            return None
+        wrapper = frame.f_locals.get("self")
+        if isinstance(wrapper, gym.wrappers.TimeLimit) and wrapper.unwrapped is env:
+            return int(wrapper._max_episode_steps)
+        frame = frame.f_back
+    return None
 
 
 def _registered_limit(spec) -> int | None:
