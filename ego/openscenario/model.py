@@ -28,11 +28,20 @@ ELEMENT_TYPES = ("story", "act", "maneuverGroup", "maneuver", "event", "action")
 
 
 @dataclass(frozen=True)
+class ValueConstraint:
+    rule: str  #: one of RULES
+    value: object  #: resolved (it may be an expression of other parameters)
+    line: int
+
+
+@dataclass(frozen=True)
 class Parameter:
     name: str
     type: str  #: double, integer, unsignedInt, unsignedShort, string, boolean, dateTime
     value: object  #: the declared default, converted to the type
     line: int
+    #: ConstraintGroups (OpenSCENARIO 1.2): OR of ANDs of value constraints
+    constraints: tuple[tuple[ValueConstraint, ...], ...] = ()
 
 
 # --- positions -------------------------------------------------------------------------------
@@ -94,6 +103,9 @@ class Vehicle:
     max_accel: float
     max_decel: float
     line: int
+    #: what the entity is: vehicle, pedestrian or miscObject (the last two stand still unless
+    #: the storyboard moves them)
+    kind: str = "vehicle"
 
 
 @dataclass(frozen=True)
@@ -161,7 +173,17 @@ class FollowTrajectoryAction:
     line: int = 0
 
 
-PrivateAction = SpeedAction | LaneChangeAction | LaneOffsetAction | TeleportAction | FollowTrajectoryAction
+@dataclass(frozen=True)
+class ControllerAction:
+    """Activate (or assign) a controller: the ego keeps ego's controller (``-c``), the others
+    SUMO's driver or their script; accepted and done at once."""
+
+    line: int = 0
+
+
+PrivateAction = (
+    SpeedAction | LaneChangeAction | LaneOffsetAction | TeleportAction | FollowTrajectoryAction | ControllerAction
+)
 
 
 # --- conditions ------------------------------------------------------------------------------

@@ -497,8 +497,10 @@ class ActionRun:
                 else:
                     centre = drv.lane_centre(0, b.states[a.relative_to].d, a.relative_lanes)  # type: ignore[index]
                 target = centre + a.target_offset
-                T = lateral_duration(a.dynamics.shape, a.dynamics.dimension, a.dynamics.value, me.speed)
-                shape = a.dynamics.shape
+                here = drv.ego_references()[1] if self.is_ego else me.d_front
+                dyn = a.dynamics
+                T = lateral_duration(dyn.shape, dyn.dimension, dyn.value, me.speed, target - here)
+                shape = dyn.shape
             else:
                 base = b.states[a.relative_to].d if a.relative_to is not None else drv.lane_centre_of(me.d)
                 target = base + a.value

@@ -119,7 +119,7 @@ HAND = [
         "expression-operator",
         sub('s="${$EgoFront - 2.25}"', 's="${$EgoFront ^ 2}"'),
         "${$EgoFront ^ 2}",
-        "unexpected '^' in expression '${$EgoFront ^ 2}' (allowed: numbers, $parameters, + - * / and parentheses)",
+        "unexpected '^' in expression '${$EgoFront ^ 2}' (allowed: numbers, $parameters, + - * /, parentheses and functions)",
     ),
     (
         "division-by-zero",
@@ -213,13 +213,13 @@ HAND = [
         "unsupported-entity",
         sub(
             '<Vehicle name="lead" vehicleCategory="car">',
-            '<Pedestrian name="walker" mass="80" pedestrianCategory="pedestrian">',
+            '<ExternalObjectReference name="walker">',
         ).replace(
             "<Properties/>\n      </Vehicle>\n    </ScenarioObject>\n  </Entities>",
-            "<Properties/>\n      </Pedestrian>\n    </ScenarioObject>\n  </Entities>",
+            "<Properties/>\n      </ExternalObjectReference>\n    </ScenarioObject>\n  </Entities>",
         ),
-        "<Pedestrian",
-        unsupported("Pedestrian"),
+        "<ExternalObjectReference",
+        unsupported("ExternalObjectReference"),
     ),
     (
         "typo-element",
@@ -350,8 +350,8 @@ HAND = [
             ),
         ),
         "<LateralAction><LaneChangeAction",
-        f"<LateralAction> in <Init> is not supported by ego (Init takes TeleportAction and SpeedAction with "
-        f"AbsoluteTargetSpeed; see {DOCS})",
+        f"<LateralAction> in <Init> is not supported by ego (Init takes TeleportAction, ControllerAction and "
+        f"SpeedAction with AbsoluteTargetSpeed or a non-continuous RelativeTargetSpeed; see {DOCS})",
     ),
     (
         "two-actions-in-one",
@@ -370,7 +370,8 @@ HAND = [
         "lane-beyond-road",
         sub(EGO_LANE, EGO_LANE.replace('laneId="-2"', 'laneId="-4"')),
         'laneId="-4"',
-        "road '0' has 3 lanes on that side at s = 297.75 (lane ids -1, -2, -3)",
+        "road '0' has no lane -4 on that side at s = 297.75 (lane ids -1, -2, -3; netconvert keeps driving and "
+        "stop lanes)",
     ),
     (
         "unknown-road",
@@ -541,16 +542,6 @@ def _sg_cases():
             lambda: base(action=xosc.LateralDistanceAction("Ego", 2)),
             "<LateralDistanceAction",
             un("LateralDistanceAction"),
-        ),
-        (
-            "sg-pedestrian",
-            lambda: base(
-                extra=xosc.Pedestrian(
-                    "p", 80, xosc.PedestrianCategory.pedestrian, xosc.BoundingBox(0.5, 0.5, 1.8, 0, 0, 0.9)
-                )
-            ),
-            "<Pedestrian",
-            un("Pedestrian"),
         ),
         (
             "sg-relative-world",
