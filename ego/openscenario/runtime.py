@@ -452,6 +452,8 @@ class ActionRun:
             self.domains: tuple[str, ...] = ("long",)
         elif isinstance(action, (M.LaneChangeAction, M.LaneOffsetAction)):
             self.domains = ("lat",)
+        elif isinstance(action, M.ControllerAction):
+            self.domains = ()  # the ego keeps ego's controller, the others their driver
         else:
             self.domains = ("long", "lat")
 
@@ -514,6 +516,9 @@ class ActionRun:
                 drv.ego_lateral(self.profile)
                 self.finished = True
                 return
+        elif isinstance(a, M.ControllerAction):
+            self.finished = True
+            return
         elif isinstance(a, M.TeleportAction):
             x, y, h = drv.position_xy(a.position, b.states)
             drv.teleport(self.actor, x, y, h)

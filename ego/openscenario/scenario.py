@@ -478,11 +478,20 @@ class FileScenario(Scenario):
             world.vehicle(
                 VehicleSpec(name, vt.id, self._route(start.edge), start.index, start.front, speed),
                 vt,
-                ScriptedEntity(name, own, start.offset, c.sumo_step),
+                ScriptedEntity(name, own),
             )
 
     def after_setup(self) -> None:
-        """The storyboard starts from the entities' start positions."""
+        """The storyboard starts from the entities' start positions; an entity off its lane's
+        centre (an Init offset) is moved across there in SUMO's first step (SUMO inserts on
+        lane centres)."""
+        for name, start in self.starts.items():
+            if name != self.ego_name and start.offset:
+                lane = self.roads.edges[start.edge].lanes[start.index]
+                poly = LanePolyline(lane.shape, lane.width, lane.id)
+                along = start.front - 0.5 * self.model.entities[name].vehicle.length
+                x, y = poly.offset_point(along, start.offset)
+                self.bridge.place(name, x, y, poly.heading_at(along), start.speed or 0.0)
         self.board = Storyboard(self.model, self.ego_name, self, self.config.sumo_step, self._story_event)
         self._scripted = [n for n in self.model.entities if n != self.ego_name]
         self._history = {n: [] for n in self._scripted}
@@ -753,17 +762,13 @@ class ScriptedEntity:
     """A file entity SUMO drives: lane changes off, its Init speed from the first step; the
     storyboard (not this actor) commands it afterwards."""
 
-    def __init__(self, vid: str, speed: float | None, offset: float = 0.0, step: float = 0.1) -> None:
-        self.vid, self.speed, self.offset, self.step = vid, speed, offset, step
+    def __init__(self, vid: str, speed: float | None) -> None:
+        self.vid, self.speed = vid, speed
 
     def start(self, sim) -> None:
         sim.keep_lane(self.vid)
         if self.speed is not None:
             sim.start_speed(self.vid, self.speed)
-        if self.offset:
-            # its Init offset from the lane's centre, taken in the first step (sublane model)
-            sim.free_lateral(self.vid, abs(self.offset) / self.step + 1.0)
-            sim.change_sublane(self.vid, self.offset)
 
     def update(self, sim, t: float) -> None:
         pass
