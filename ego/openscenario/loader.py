@@ -90,7 +90,9 @@ CHILDREN: dict[str, set[str]] = {
     "RelativeLanePosition": {"Orientation"},
     "RelativeRoadPosition": {"Orientation"},
     "Orientation": set(),
-    "LongitudinalAction": {"SpeedAction"},
+    "LongitudinalAction": {"SpeedAction", "LongitudinalDistanceAction"},
+    "LongitudinalDistanceAction": {"DynamicConstraints"},
+    "DynamicConstraints": set(),
     "SpeedAction": {"SpeedActionDynamics", "SpeedActionTarget"},
     "SpeedActionDynamics": set(),
     "SpeedActionTarget": {"AbsoluteTargetSpeed", "RelativeTargetSpeed"},
@@ -656,6 +658,8 @@ class _Builder:
         if a.tag == "TeleportAction":
             return M.TeleportAction(self.position(self.one(a, "Position")), a.line)
         inner = self.one(a)
+        if inner.tag == "LongitudinalDistanceAction":
+            return self.distance_action(inner)
         if inner.tag == "SpeedAction":
             dyn = self.dynamics(self.one(inner, "SpeedActionDynamics"))
             target = self.one(self.one(inner, "SpeedActionTarget"))
@@ -744,6 +748,31 @@ class _Builder:
                 raise self.error(poly, "<Vertex> times must increase")
         return M.FollowTrajectoryAction(
             tuple(vertices), timing, self.num(inner, "initialDistanceOffset", 0.0), inner.line
+        )
+
+    def distance_action(self, n: Node) -> M.LongitudinalDistanceAction:
+        has_d, has_t = "distance" in n.attrs, "timeGap" in n.attrs
+        if has_d == has_t:
+            raise self.error(n, "<LongitudinalDistanceAction> needs one of distance and timeGap")
+        disp = self.enum(n, "displacement", ("trailingReferencedEntity", "leadingReferencedEntity", "any"), "any")
+        limits: dict[str, float] = {}
+        dc = n.child("DynamicConstraints")
+        for attr, key in (
+            ("maxAcceleration", "max_accel"),
+            ("maxDeceleration", "max_decel"),
+            ("maxSpeed", "max_speed"),
+        ):
+            if dc is not None and attr in dc.attrs:
+                limits[key] = self.num(dc, attr, positive=True)
+        return M.LongitudinalDistanceAction(
+            self.entity_ref(n),
+            self.num(n, "distance", nonneg=True) if has_d else None,
+            self.num(n, "timeGap", nonneg=True) if has_t else None,
+            self.bool_(n, "freespace"),
+            self.bool_(n, "continuous"),
+            disp == "leadingReferencedEntity",
+            line=n.line,
+            **limits,
         )
 
     # -- triggers ---------------------------------------------------------------------------

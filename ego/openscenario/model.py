@@ -6,6 +6,7 @@ reference line); ``line`` is where the element starts in its file.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -174,6 +175,24 @@ class FollowTrajectoryAction:
 
 
 @dataclass(frozen=True)
+class LongitudinalDistanceAction:
+    """Hold a longitudinal distance (m) or time gap (s, times the actor's own speed) to
+    ``entity``: behind it (trailingReferencedEntity, the default) or ahead (leading);
+    ``freespace`` measures between the boxes, else between their centres."""
+
+    entity: str
+    distance: float | None
+    time_gap: float | None
+    freespace: bool
+    continuous: bool
+    leading: bool = False  #: the actor ahead of the entity
+    max_accel: float = math.inf
+    max_decel: float = math.inf
+    max_speed: float = math.inf
+    line: int = 0
+
+
+@dataclass(frozen=True)
 class ControllerAction:
     """Activate (or assign) a controller: the ego keeps ego's controller (``-c``), the others
     SUMO's driver or their script; accepted and done at once."""
@@ -182,7 +201,13 @@ class ControllerAction:
 
 
 PrivateAction = (
-    SpeedAction | LaneChangeAction | LaneOffsetAction | TeleportAction | FollowTrajectoryAction | ControllerAction
+    SpeedAction
+    | LaneChangeAction
+    | LaneOffsetAction
+    | TeleportAction
+    | FollowTrajectoryAction
+    | ControllerAction
+    | LongitudinalDistanceAction
 )
 
 

@@ -796,7 +796,9 @@ def _check_ego_actions(model: M.Scenario, ego: str) -> None:
                 for man in g.maneuvers:
                     for ev in man.events:
                         for a in ev.actions:
-                            if isinstance(a.action, (M.TeleportAction, M.FollowTrajectoryAction)):
+                            if isinstance(
+                                a.action, (M.TeleportAction, M.FollowTrajectoryAction, M.LongitudinalDistanceAction)
+                            ):
                                 raise ScenarioFileError(
                                     model.path,
                                     a.action.line,

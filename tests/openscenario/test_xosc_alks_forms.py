@@ -13,7 +13,7 @@ import json
 import math
 
 import pytest
-from xosc_scenes import event, lane_change, run_scene, scene, sim_time, trigger
+from xosc_scenes import event, lane_change, run_scene, scene, sim_time, speed, starts, trigger
 
 from ego.cli import main
 from ego.openscenario.dynamics import PEAK_SPEED, Transition
@@ -259,3 +259,56 @@ def test_opendrive_lane_ids_are_netconverts_origins_past_border_lanes(tmp_path):
     # the lanes' centres are 3.5 m apart, as the file's widths say
     (x0, y0), (x1, y1) = left.shape[0], right.shape[0]
     assert math.hypot(x1 - x0, y1 - y0) == pytest.approx(3.5, abs=1e-3)
+
+
+# -- LongitudinalDistanceAction -------------------------------------------------------------------
+def distance_action(ref: str, attr: str, freespace: bool = False, continuous: bool = True, limits: str = "") -> str:
+    dc = f"<DynamicConstraints {limits}/>" if limits else ""
+    return (
+        f'<LongitudinalAction><LongitudinalDistanceAction entityRef="{ref}" {attr} freespace="{str(freespace).lower()}" '
+        f'continuous="{str(continuous).lower()}">{dc}</LongitudinalDistanceAction></LongitudinalAction>'
+    )
+
+
+@pytest.mark.parametrize("freespace", [False, True])
+def test_longitudinal_distance_is_held_behind_the_entity(tmp_path, freespace):
+    """B (lane -2) holds 50 m behind C (lane -3, 15 m/s): reached in one step (35 m/s), then
+    exact every step; freespace measures between the boxes (4.5 m long each)."""
+    start = 348.0 - (4.5 if freespace else 0.0)
+    ev = event("D", "B", distance_action("C", 'distance="50"', freespace), trigger([sim_time(0)]))
+    sc = run_scene(scene(tmp_path, [ev], at={"B": (-2, start, 15.0)}), 3.0)
+    b, c = sc.board.states["B"], sc.board.states["C"]
+    assert c.s - b.s - (4.5 if freespace else 0.0) == pytest.approx(50.0, abs=1e-6)
+    assert all(v == pytest.approx(15.0, abs=1e-6) for t, v, _ in sc._history["B"] if t >= 0.2 - 1e-9)
+
+
+def test_time_gap_is_the_actors_own_speed_times_the_gap(tmp_path):
+    """timeGap 2 s behind C: every step the gap is 2 s times B's speed, which settles to C's."""
+    ev = event("D", "B", distance_action("C", 'timeGap="2"'), trigger([sim_time(0)]))
+    sc = run_scene(scene(tmp_path, [ev], at={"B": (-2, 365.0, 15.0)}), 4.0)
+    b, c = sc.board.states["B"], sc.board.states["C"]
+    assert c.s - b.s == pytest.approx(2.0 * b.speed, abs=1e-6)
+    assert b.speed == pytest.approx(15.0, abs=0.5)
+
+
+def test_distance_within_dynamic_constraints_and_ending(tmp_path):
+    """With maxAcceleration 2 the approach is limited to 2 m/s^2 and slows at most at
+    maxDeceleration; a non-continuous action ends once the distance is held (within 1 cm)."""
+    limits = 'maxAcceleration="2" maxDeceleration="6" maxSpeed="40"'
+    ended = (
+        '<Condition name="e" delay="0" conditionEdge="none"><ByValueCondition><StoryboardElementStateCondition '
+        'storyboardElementType="action" storyboardElementRef="DAction" state="completeState"/></ByValueCondition>'
+        "</Condition>"
+    )
+    evs = [
+        event("D", "B", distance_action("C", 'distance="40"', continuous=False, limits=limits), trigger([sim_time(0)])),
+        event("E", "A", speed(25.0), trigger([ended])),
+    ]
+    sc = run_scene(scene(tmp_path, evs, at={"B": (-2, 300.0, 15.0)}), 12.0)
+    hist = sc._history["B"]
+    rates = [(v1 - v0) / (t1 - t0) for (t0, v0, _), (t1, v1, _) in zip(hist, hist[1:])]
+    assert max(rates) <= 2.0 + 1e-6 and min(rates) >= -6.0 - 1e-6
+    assert starts(sc, "E"), "the action did not end"
+    b, c = sc.board.states["B"], sc.board.states["C"]
+    # held within 1 cm when it ended; B drives on at its last speed since
+    assert c.s - b.s == pytest.approx(40.0, abs=0.1)

@@ -673,10 +673,11 @@ def _sg_cases():
             un("RelativeClearanceCondition"),
         ),
         (
-            "sg-longitudinal-distance",
-            lambda: base(action=xosc.LongitudinalDistanceAction("Ego", distance=10)),
+            "sg-longitudinal-distance-on-ego",
+            lambda: base(action=xosc.LongitudinalDistanceAction("Lead", distance=10), actor="Ego"),
             "<LongitudinalDistanceAction",
-            un("LongitudinalDistanceAction"),
+            "<LongitudinalDistanceAction> on the ego (Ego) is not supported by ego: the ego moves by its own "
+            f"model (see {DOCS})",
         ),
         (
             "sg-visibility",
