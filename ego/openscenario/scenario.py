@@ -334,7 +334,16 @@ class FileScenario(Scenario):
         roads = RoadMap(net, converted=not str(model.road).endswith(".net.xml"))
         ego = find_ego(model, config.ego_entity)
         _check_ego_actions(model, ego)
-        return model, roads, ego, placements(model, roads)
+        starts = placements(model, roads)
+        if starts[ego].offset:
+            pos = next(a for a in model.init[ego] if isinstance(a, M.TeleportAction)).position
+            raise ScenarioFileError(
+                model.path,
+                pos.line,
+                f"the ego {ego!r} starts {starts[ego].offset:g} m off its lane's centre: the ego starts on "
+                "its lane's centre (offset 0; a LaneOffsetAction moves it)",
+            )
+        return model, roads, ego, starts
 
     @classmethod
     def default_config(cls, overrides):
