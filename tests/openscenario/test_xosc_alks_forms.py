@@ -324,3 +324,44 @@ def test_the_ego_off_its_lane_centre_is_refused_with_its_line(tmp_path, capsys):
         f"ego: error: {path}:{line}: the ego 'Ego' starts 0.4 m off its lane's centre: the ego starts on its "
         "lane's centre (offset 0; a LaneOffsetAction moves it)\n"
     )
+
+
+@pytest.mark.parametrize(
+    "ref,message",
+    [
+        (
+            '<ObjectController><CatalogReference catalogName="PedestrianCatalog" entryName="walker"/></ObjectController>',
+            "catalog entry 'walker' is a <Pedestrian>, not a <Controller> (in {cat})",
+        ),
+        (
+            '<ObjectController><CatalogReference catalogName="ControllerCatalog" entryName="Nobody"/></ObjectController>',
+            "no entry 'Nobody' in catalog 'ControllerCatalog' (entries: Driver)",
+        ),
+        (
+            '<ObjectController><CatalogReference catalogName="Drivers" entryName="Driver"/></ObjectController>',
+            None,
+        ),
+    ],
+    ids=["wrong-kind", "no-entry", "no-catalog"],
+)
+def test_bad_catalog_references_are_one_line(tmp_path, capsys, ref, message):
+    """A reference to an entry of another kind, to an entry or a catalog that is not there:
+    one line with the reference's line, exit 2, nothing written."""
+    path = _standing_scene(tmp_path)
+    text = path.read_text()
+    text = text.replace(
+        '<ObjectController><CatalogReference catalogName="ControllerCatalog" entryName="Driver"/></ObjectController>',
+        "\n" + ref,
+    )
+    path.write_text(text)
+    line = text.count("\n", 0, text.index(ref)) + 1
+    out = tmp_path / "out"
+    assert main(["run", str(path), "-c", "pid", "--trace", str(out / "t.csv")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(f"ego: error: {path}:{line}: "), err
+    if message is not None:
+        cat = tmp_path / "catalogs" / "Pedestrians" / "PedestrianCatalog.xosc"
+        assert err == f"ego: error: {path}:{line}: {message.format(cat=cat)}\n"
+    else:
+        assert "catalog 'Drivers' not found (looked for " in err
+    assert not out.exists()
