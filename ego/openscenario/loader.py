@@ -631,10 +631,9 @@ class _Builder:
         return M.RelativeRoadPosition(self.entity_ref(p), self.num(p, "ds"), self.num(p, "dt"), p.line)
 
     # -- actions ------------------------------------------------------------------------------
-    def dynamics(self, node: Node, rate_ok: bool = True) -> M.Dynamics:
+    def dynamics(self, node: Node) -> M.Dynamics:
         shape = self.enum(node, "dynamicsShape", M.SHAPES)
-        dims = M.DIMENSIONS if rate_ok else ("time", "distance")
-        dim = self.enum(node, "dynamicsDimension", dims)
+        dim = self.enum(node, "dynamicsDimension", M.DIMENSIONS)
         # a rate is read by its magnitude, as the reference player (esmini) reads the negative
         # braking rates its files write; a duration or distance must not be negative
         value = self.num(node, "value")
