@@ -80,12 +80,21 @@ def speed_duration(shape: str, dimension: str, value: float, v0: float, v1: floa
     return value / mean
 
 
-def lateral_duration(shape: str, dimension: str, value: float, speed: float) -> float:
-    """T (s) of a lane change over ``value`` s or m at ``speed`` (m/s)."""
+#: a lateral profile's peak speed over its mean speed (|D| / T): linear 1, cubic 3/2,
+#: sinusoidal pi/2
+PEAK_SPEED = {"step": math.inf, "linear": 1.0, "cubic": 1.5, "sinusoidal": 0.5 * math.pi}
+
+
+def lateral_duration(shape: str, dimension: str, value: float, speed: float, displacement: float = 0.0) -> float:
+    """T (s) of a lane change over ``value`` s or m at ``speed`` (m/s), or (dimension rate)
+    of ``displacement`` (m) whose peak lateral speed is ``value`` (m/s): T = k |D| / rate,
+    k = :data:`PEAK_SPEED` of the shape."""
     if shape == "step":
         return 0.0
     if dimension == "time":
         return value
+    if dimension == "rate":
+        return PEAK_SPEED[shape] * abs(displacement) / value
     if speed <= 0.0:
         raise ValueError("a lane change over a distance needs a moving vehicle")
     return value / speed

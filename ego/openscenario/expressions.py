@@ -2,8 +2,9 @@
 
 An attribute's value is a literal, a reference ``$name`` to a declared parameter (the whole
 value), or (OpenSCENARIO 1.1) an expression ``${...}``: numbers, ``$name`` references,
-``+ - * /``, unary minus and parentheses, evaluated left to right with the usual precedence
-(``* /`` before ``+ -``). Anything else in an expression is an error naming it.
+``+ - * /``, unary minus, parentheses and the standard's functions (``sqrt(x)``, ``abs(x)``,
+``pow(x, y)``, ``min``, ``max``... :data:`FUNCTIONS`), evaluated left to right with the usual
+precedence (``* /`` before ``+ -``). Anything else in an expression is an error naming it.
 """
 
 from __future__ import annotations
@@ -12,7 +13,31 @@ import math
 import re
 from collections.abc import Mapping
 
-_TOKEN = re.compile(r"\s*(?:(\d+\.?\d*(?:[eE][+-]?\d+)?|\.\d+(?:[eE][+-]?\d+)?)|\$([A-Za-z_][\w]*)|(.))")
+_TOKEN = re.compile(r"\s*(?:(\d+\.?\d*(?:[eE][+-]?\d+)?|\.\d+(?:[eE][+-]?\d+)?)|\$([A-Za-z_][\w]*)|([A-Za-z_]\w*)|(.))")
+
+
+def _sign(x: float) -> float:
+    return float((x > 0) - (x < 0))
+
+
+#: the functions of OpenSCENARIO 1.1+ expressions: name -> (arity, function)
+FUNCTIONS = {
+    "round": (1, lambda x: float(math.floor(x + 0.5))),
+    "floor": (1, lambda x: float(math.floor(x))),
+    "ceil": (1, lambda x: float(math.ceil(x))),
+    "sqrt": (1, math.sqrt),
+    "abs": (1, abs),
+    "sign": (1, _sign),
+    "sin": (1, math.sin),
+    "cos": (1, math.cos),
+    "tan": (1, math.tan),
+    "asin": (1, math.asin),
+    "acos": (1, math.acos),
+    "atan": (1, math.atan),
+    "pow": (2, math.pow),
+    "min": (2, min),
+    "max": (2, max),
+}
 
 
 class ExpressionError(ValueError):
@@ -52,7 +77,7 @@ def evaluate(expr: str, values: Mapping[str, object]) -> float:
         m = _TOKEN.match(expr, pos)
         if m is None:  # only trailing blanks are left
             break
-        number, name, other = m.groups()
+        number, name, func, other = m.groups()
         pos = m.end()
         if number is not None:
             tokens.append(("num", float(number)))
@@ -62,12 +87,18 @@ def evaluate(expr: str, values: Mapping[str, object]) -> float:
                     f"parameter '${name}' in expression '${{{expr}}}' is not declared" + _known(values)
                 )
             tokens.append(("num", _number(name, values[name], expr)))
-        elif other in "+-*/()":
+        elif func is not None:
+            if func not in FUNCTIONS:
+                raise ExpressionError(
+                    f"unknown function {func!r} in expression '${{{expr}}}' (functions: {', '.join(FUNCTIONS)})"
+                )
+            tokens.append(("fn", func))
+        elif other in "+-*/(),":
             tokens.append((other, None))
         else:
             raise ExpressionError(
                 f"unexpected {other!r} in expression '${{{expr}}}' (allowed: numbers, "
-                "$parameters, + - * / and parentheses)"
+                "$parameters, + - * /, parentheses and functions)"
             )
     if not tokens:
         raise ExpressionError("empty expression '${}'")
@@ -136,6 +167,8 @@ class _Parser:
             value = self.tokens[self.i][1]
             self.i += 1
             return value  # type: ignore[return-value]
+        if kind == "fn":
+            return self.call()
         if kind == "(":
             self.i += 1
             value = self.sum()
@@ -147,3 +180,29 @@ class _Parser:
         raise ExpressionError(
             f"unexpected {what} in expression '${{{self.expr}}}' (expected a number, a $parameter or '(')"
         )
+
+    def call(self) -> float:
+        name = self.tokens[self.i][1]
+        arity, fn = FUNCTIONS[name]  # type: ignore[index]
+        self.i += 1
+        if self._peek() != "(":
+            raise ExpressionError(f"missing '(' after {name} in expression '${{{self.expr}}}'")
+        self.i += 1
+        args = [self.sum()]
+        while self._peek() == ",":
+            self.i += 1
+            args.append(self.sum())
+        if self._peek() != ")":
+            raise ExpressionError(f"missing ')' in expression '${{{self.expr}}}'")
+        self.i += 1
+        if len(args) != arity:
+            raise ExpressionError(
+                f"{name} takes {arity} argument{'s' if arity > 1 else ''}, not {len(args)}, "
+                f"in expression '${{{self.expr}}}'"
+            )
+        try:
+            return float(fn(*args))
+        except (ValueError, OverflowError):
+            raise ExpressionError(
+                f"{name}({', '.join(f'{a:g}' for a in args)}) is undefined in expression '${{{self.expr}}}'"
+            ) from None

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Mapping
+from dataclasses import replace
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -33,15 +34,24 @@ CHILDREN: dict[str, set[str]] = {
     "FileHeader": {"License"},
     "License": set(),
     "ParameterDeclarations": {"ParameterDeclaration"},
-    "ParameterDeclaration": set(),
-    "CatalogLocations": {"VehicleCatalog"},
+    "ParameterDeclaration": {"ConstraintGroup"},
+    "ConstraintGroup": {"ValueConstraint"},
+    "ValueConstraint": set(),
+    "CatalogLocations": {"VehicleCatalog", "PedestrianCatalog", "MiscObjectCatalog", "ControllerCatalog"},
     "VehicleCatalog": {"Directory"},
+    "PedestrianCatalog": {"Directory"},
+    "MiscObjectCatalog": {"Directory"},
+    "ControllerCatalog": {"Directory"},
     "Directory": set(),
     "RoadNetwork": {"LogicFile", "SceneGraphFile"},
     "LogicFile": set(),
     "SceneGraphFile": set(),
     "Entities": {"ScenarioObject"},
-    "ScenarioObject": {"Vehicle", "CatalogReference"},
+    "ScenarioObject": {"Vehicle", "Pedestrian", "MiscObject", "CatalogReference", "ObjectController"},
+    "ObjectController": {"Controller", "CatalogReference"},
+    "Controller": {"ParameterDeclarations", "Properties"},
+    "Pedestrian": {"ParameterDeclarations", "BoundingBox", "Properties"},
+    "MiscObject": {"ParameterDeclarations", "BoundingBox", "Properties"},
     "CatalogReference": {"ParameterAssignments"},
     "ParameterAssignments": {"ParameterAssignment"},
     "ParameterAssignment": set(),
@@ -61,7 +71,17 @@ CHILDREN: dict[str, set[str]] = {
     "Init": {"Actions"},
     "Actions": {"Private"},
     "Private": {"PrivateAction"},
-    "PrivateAction": {"TeleportAction", "LongitudinalAction", "LateralAction", "RoutingAction"},
+    "PrivateAction": {
+        "TeleportAction",
+        "LongitudinalAction",
+        "LateralAction",
+        "RoutingAction",
+        "ControllerAction",
+        "ActivateControllerAction",
+    },
+    "ControllerAction": {"ActivateControllerAction", "AssignControllerAction"},
+    "ActivateControllerAction": set(),
+    "AssignControllerAction": {"Controller", "CatalogReference"},
     "TeleportAction": {"Position"},
     "Position": {"WorldPosition", "LanePosition", "RoadPosition", "RelativeLanePosition", "RelativeRoadPosition"},
     "WorldPosition": set(),
@@ -70,7 +90,9 @@ CHILDREN: dict[str, set[str]] = {
     "RelativeLanePosition": {"Orientation"},
     "RelativeRoadPosition": {"Orientation"},
     "Orientation": set(),
-    "LongitudinalAction": {"SpeedAction"},
+    "LongitudinalAction": {"SpeedAction", "LongitudinalDistanceAction"},
+    "LongitudinalDistanceAction": {"DynamicConstraints"},
+    "DynamicConstraints": set(),
     "SpeedAction": {"SpeedActionDynamics", "SpeedActionTarget"},
     "SpeedActionDynamics": set(),
     "SpeedActionTarget": {"AbsoluteTargetSpeed", "RelativeTargetSpeed"},
@@ -145,9 +167,43 @@ NOT_USED = {
     "License": "descriptive",
     "File": "descriptive (a file the vehicle's properties name)",
     "Orientation": "the lane's heading is used",
+    "Controller": "the ego is driven by ego's controller (-c), the others by SUMO's driver or their script",
+    "ObjectController": "the ego is driven by ego's controller (-c), the others by SUMO's driver or their script",
+    "ActivateControllerAction": "done at once: ego's controller is always active on the ego",
+    "AssignControllerAction": "done at once: the ego keeps ego's controller (-c)",
 }
 
+#: the catalog element (in CatalogLocations) each catalog entry kind is looked for in
+CATALOG_OF = {
+    "Vehicle": "VehicleCatalog",
+    "Pedestrian": "PedestrianCatalog",
+    "MiscObject": "MiscObjectCatalog",
+    "Controller": "ControllerCatalog",
+}
+PEDESTRIAN_CATEGORIES = ("pedestrian", "wheelchair", "animal")
+MISC_CATEGORIES = (
+    "none",
+    "obstacle",
+    "pole",
+    "tree",
+    "vegetation",
+    "barrier",
+    "building",
+    "parkingSpace",
+    "patch",
+    "railing",
+    "trafficIsland",
+    "crosswalk",
+    "streetLamp",
+    "gantry",
+    "soundBarrier",
+    "wind",
+    "roadMark",
+)
+
 VEHICLE_CATEGORIES = ("car", "van", "truck", "trailer", "semitrailer", "bus", "motorbike")
+#: SUMO's limits for a pedestrian's or misc object's body (it is moved only by the storyboard)
+STANDING_MAX_SPEED, STANDING_ACCEL = 30.0, 10.0
 
 
 def unsupported(path, node: Node) -> ScenarioFileError:
@@ -254,7 +310,8 @@ def _declarations(
         return out
     values = dict(outer)
     overrides = overrides or {}
-    for d in node.all("ParameterDeclaration"):
+    decls = node.all("ParameterDeclaration")
+    for d in decls:
         name = d.attrs.get("name")
         kind = d.attrs.get("parameterType")
         if not name:
@@ -277,7 +334,75 @@ def _declarations(
             raise ScenarioFileError(path, d.line, str(exc)) from None
         out[name] = M.Parameter(name, kind, value, d.line)
         values[name] = value
+    # value constraints (1.2) after every declaration: a constraint may name a later parameter
+    for d in decls:
+        name = d.attrs["name"]
+        groups = tuple(_constraint_group(path, g, values) for g in d.all("ConstraintGroup"))
+        if groups:
+            out[name] = replace(out[name], constraints=groups)
+            _check_constraints(path, out[name], d.line)
     return out
+
+
+def _constraint_group(path, g: Node, values: Mapping[str, object]) -> tuple[M.ValueConstraint, ...]:
+    out = []
+    for vc in g.all("ValueConstraint"):
+        rule, raw = vc.attrs.get("rule"), vc.attrs.get("value")
+        if rule not in M.RULES:
+            raise ScenarioFileError(
+                path, vc.line, f"bad value for rule in <ValueConstraint>: {rule!r} (allowed: {', '.join(M.RULES)})"
+            )
+        if raw is None:
+            raise ScenarioFileError(path, vc.line, "<ValueConstraint> needs attribute value")
+        try:
+            out.append(M.ValueConstraint(rule, resolve(raw, values), vc.line))
+        except ExpressionError as exc:
+            raise ScenarioFileError(path, vc.line, str(exc)) from None
+    if not out:
+        raise ScenarioFileError(path, g.line, "<ConstraintGroup> needs at least one <ValueConstraint>")
+    return tuple(out)
+
+
+def satisfies(value: object, c: M.ValueConstraint) -> bool:
+    """Whether a parameter's ``value`` meets one value constraint: numbers compared as numbers
+    (also a string parameter holding one, as lane ids are), other values as text (equalTo,
+    notEqualTo only; an ordering rule on text is false)."""
+    try:
+        lhs, rhs = float(value), float(c.value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        lhs_s = str(value).lower() if isinstance(value, bool) else str(value)
+        rhs_s = str(c.value).lower() if isinstance(c.value, bool) else str(c.value)
+        if c.rule == "equalTo":
+            return lhs_s == rhs_s
+        return c.rule == "notEqualTo" and lhs_s != rhs_s
+    return {
+        "greaterThan": lhs > rhs,
+        "lessThan": lhs < rhs,
+        "greaterOrEqual": lhs >= rhs,
+        "lessOrEqual": lhs <= rhs,
+        "equalTo": lhs == rhs,
+        "notEqualTo": lhs != rhs,
+    }[c.rule]
+
+
+def _fmt(v: object) -> str:
+    return f"{v:g}" if isinstance(v, float) else str(v)
+
+
+def _check_constraints(path, p: M.Parameter, line: int) -> None:
+    """One ConstraintGroup met (all its constraints) or a one-line error: the parameter, its
+    value, the rule it breaks and that rule's line (with several groups, each group's first
+    broken rule)."""
+    broken = []
+    for g in p.constraints:
+        bad = [c for c in g if not satisfies(p.value, c)]
+        if not bad:
+            return
+        broken.append(bad[0])
+    first = broken[0]
+    rules = "; ".join(f"{c.rule} {_fmt(c.value)} (line {c.line})" for c in broken)
+    what = "its value constraint" if len(broken) == 1 else "a rule of each of its constraint groups"
+    raise ScenarioFileError(path, first.line, f"parameter {p.name!r} = {_fmt(p.value)} breaks {what}: {rules}")
 
 
 class _Builder:
@@ -286,7 +411,7 @@ class _Builder:
     def __init__(self, path: Path, values: dict[str, object]) -> None:
         self.path, self.values = path, values
         self.entities: dict[str, M.Entity] = {}
-        self.catalog_dirs: list[Path] = []
+        self.catalog_dirs: dict[str, list[Path]] = {}
 
     # -- attributes ----------------------------------------------------------------------------
     def error(self, node: Node, message: str) -> ScenarioFileError:
@@ -377,45 +502,108 @@ class _Builder:
             line=node.line,
         )
 
-    def catalog_vehicle(self, node: Node) -> M.Vehicle:
-        catalog, entry = self.str_(node, "catalogName"), self.str_(node, "entryName")
-        if not self.catalog_dirs:
-            raise self.error(node, f"<CatalogReference> to {catalog!r} but no <VehicleCatalog> in <CatalogLocations>")
-        files = [d / f"{catalog}.xosc" for d in self.catalog_dirs]
+    def body(self, node: Node, name: str) -> M.Vehicle:
+        """A Vehicle, Pedestrian or MiscObject element (or a catalog reference to one)."""
+        if node.tag == "CatalogReference":
+            return self.catalog_entry(node, ("Vehicle", "Pedestrian", "MiscObject"), name)  # type: ignore[return-value]
+        if node.tag == "Vehicle":
+            return self.vehicle(node, name)
+        return self.standing(node, name)
+
+    def standing(self, node: Node, name: str) -> M.Vehicle:
+        """A pedestrian or misc object: a body of its bounding box that stands still unless
+        the storyboard moves it."""
+        ped = node.tag == "Pedestrian"
+        if ped:
+            cat = self.enum(node, "pedestrianCategory", PEDESTRIAN_CATEGORIES)
+        else:
+            cat = self.enum(node, "miscObjectCategory", MISC_CATEGORIES)
+        self.num(node, "mass", nonneg=True)
+        bb = self.one(node, "BoundingBox")
+        center, dims = self.one(bb, "Center"), self.one(bb, "Dimensions")
+        return M.Vehicle(
+            name=name,
+            category=cat,
+            length=self.num(dims, "length", positive=True),
+            width=self.num(dims, "width", positive=True),
+            height=self.num(dims, "height", positive=True),
+            center_x=self.num(center, "x"),
+            max_speed=STANDING_MAX_SPEED,
+            max_accel=STANDING_ACCEL,
+            max_decel=STANDING_ACCEL,
+            line=node.line,
+            kind="pedestrian" if ped else "miscObject",
+        )
+
+    def catalog_file(self, node: Node, catalog: str, kinds: tuple[str, ...]) -> Path:
+        """The catalog file named ``catalog`` in the file's catalog directories: the file
+        ``catalog.xosc``, else the file whose <Catalog name> is ``catalog``."""
+        dirs = [d for k in kinds for d in self.catalog_dirs.get(CATALOG_OF[k], [])]
+        dirs += [d for ds in self.catalog_dirs.values() for d in ds if d not in dirs]
+        if not dirs:
+            raise self.error(
+                node, f"<CatalogReference> to {catalog!r} but no <{CATALOG_OF[kinds[0]]}> in <CatalogLocations>"
+            )
+        files = [d / f"{catalog}.xosc" for d in dirs]
         file = next((f for f in files if f.is_file()), None)
         if file is None:
-            raise self.error(
-                node, f"vehicle catalog {catalog!r} not found (looked for {', '.join(str(f) for f in files)})"
-            )
+            for d in dirs:
+                for f in sorted(d.glob("*.xosc")) if d.is_dir() else ():
+                    cat = read_tree(f).child("Catalog")
+                    if cat is not None and cat.attrs.get("name") == catalog:
+                        return f
+            raise self.error(node, f"catalog {catalog!r} not found (looked for {', '.join(str(f) for f in files)})")
+        return file
+
+    def catalog_entry(self, node: Node, kinds: tuple[str, ...], name: str) -> M.Vehicle | None:
+        """The entry a CatalogReference names, of one of ``kinds`` (a Controller entry is
+        checked and gives None)."""
+        catalog, entry = self.str_(node, "catalogName"), self.str_(node, "entryName")
+        file = self.catalog_file(node, catalog, kinds)
         root = read_tree(file)
         cat = root.child("Catalog")
         if root.tag != "OpenSCENARIO" or cat is None:
             raise ScenarioFileError(file, root.line, "not an OpenSCENARIO catalog (expected <Catalog>)")
         for v in cat.children:
-            if v.tag != "Vehicle":
+            if v.tag not in CATALOG_OF:
                 raise unsupported(file, v)
-            if v.attrs.get("name") == entry:
-                _check_tree(file, v)
-                # the catalog's own parameters, then the reference's assignments
-                decl = _declarations(file, v.child("ParameterDeclarations"), self.values)
-                values = {**self.values, **{k: p.value for k, p in decl.items()}}
-                assigns = node.child("ParameterAssignments")
-                for a in assigns.all("ParameterAssignment") if assigns is not None else ():
-                    ref = self.str_(a, "parameterRef")
-                    if ref not in decl:
-                        raise self.error(
-                            a,
-                            f"catalog entry {entry!r} declares no parameter {ref!r}"
-                            f" (declared: {', '.join(decl) or 'none'})",
-                        )
-                    try:
-                        values[ref] = convert(decl[ref].type, self.raw(a, "value"), f"parameter {ref!r}")
-                    except ValueError as exc:
-                        raise self.error(a, str(exc)) from None
-                inner = _Builder(file, values)
-                return inner.vehicle(v, entry)
+            if v.attrs.get("name") != entry:
+                continue
+            if v.tag not in kinds:
+                raise self.error(
+                    node, f"catalog entry {entry!r} is a <{v.tag}>, not a <{'> or <'.join(kinds)}> (in {file})"
+                )
+            _check_tree(file, v)
+            # the catalog's own parameters, then the reference's assignments
+            decl = _declarations(file, v.child("ParameterDeclarations"), self.values)
+            values = {**self.values, **{k: p.value for k, p in decl.items()}}
+            assigns = node.child("ParameterAssignments")
+            for a in assigns.all("ParameterAssignment") if assigns is not None else ():
+                ref = self.str_(a, "parameterRef")
+                if ref not in decl:
+                    raise self.error(
+                        a,
+                        f"catalog entry {entry!r} declares no parameter {ref!r}"
+                        f" (declared: {', '.join(decl) or 'none'})",
+                    )
+                try:
+                    values[ref] = convert(decl[ref].type, self.raw(a, "value"), f"parameter {ref!r}")
+                except ValueError as exc:
+                    raise self.error(a, str(exc)) from None
+            if v.tag == "Controller":
+                return None
+            return _Builder(file, values).body(v, name)
         names = [v.attrs.get("name", "?") for v in cat.children]
-        raise self.error(node, f"no vehicle {entry!r} in catalog {catalog!r} (entries: {', '.join(names)})")
+        raise self.error(node, f"no entry {entry!r} in catalog {catalog!r} (entries: {', '.join(names)})")
+
+    def controller(self, node: Node) -> None:
+        """An ObjectController or AssignControllerAction: its controller (inline or from a
+        catalog) is checked; ego drives the ego with ``-c``'s controller, SUMO the others."""
+        c = self.one(node)
+        if c.tag == "CatalogReference":
+            self.catalog_entry(c, ("Controller",), "")
+        else:
+            self.str_(c, "name")
 
     # -- positions ------------------------------------------------------------------------------
     def position(self, node: Node) -> M.Position:
@@ -443,10 +631,9 @@ class _Builder:
         return M.RelativeRoadPosition(self.entity_ref(p), self.num(p, "ds"), self.num(p, "dt"), p.line)
 
     # -- actions ------------------------------------------------------------------------------
-    def dynamics(self, node: Node, rate_ok: bool = True) -> M.Dynamics:
+    def dynamics(self, node: Node) -> M.Dynamics:
         shape = self.enum(node, "dynamicsShape", M.SHAPES)
-        dims = M.DIMENSIONS if rate_ok else ("time", "distance")
-        dim = self.enum(node, "dynamicsDimension", dims)
+        dim = self.enum(node, "dynamicsDimension", M.DIMENSIONS)
         # a rate is read by its magnitude, as the reference player (esmini) reads the negative
         # braking rates its files write; a duration or distance must not be negative
         value = self.num(node, "value")
@@ -460,9 +647,18 @@ class _Builder:
 
     def private_action(self, node: Node) -> M.PrivateAction:
         a = self.one(node)
+        if a.tag == "ActivateControllerAction":
+            return M.ControllerAction(a.line)
+        if a.tag == "ControllerAction":
+            for c in a.children:
+                if c.tag == "AssignControllerAction":
+                    self.controller(c)
+            return M.ControllerAction(a.line)
         if a.tag == "TeleportAction":
             return M.TeleportAction(self.position(self.one(a, "Position")), a.line)
         inner = self.one(a)
+        if inner.tag == "LongitudinalDistanceAction":
+            return self.distance_action(inner)
         if inner.tag == "SpeedAction":
             dyn = self.dynamics(self.one(inner, "SpeedActionDynamics"))
             target = self.one(self.one(inner, "SpeedActionTarget"))
@@ -477,7 +673,7 @@ class _Builder:
                 inner.line,
             )
         if inner.tag == "LaneChangeAction":
-            dyn = self.dynamics(self.one(inner, "LaneChangeActionDynamics"), rate_ok=False)
+            dyn = self.dynamics(self.one(inner, "LaneChangeActionDynamics"))
             target = self.one(self.one(inner, "LaneChangeTarget"))
             offset = self.num(inner, "targetLaneOffset", 0.0)
             if target.tag == "AbsoluteTargetLane":
@@ -551,6 +747,31 @@ class _Builder:
                 raise self.error(poly, "<Vertex> times must increase")
         return M.FollowTrajectoryAction(
             tuple(vertices), timing, self.num(inner, "initialDistanceOffset", 0.0), inner.line
+        )
+
+    def distance_action(self, n: Node) -> M.LongitudinalDistanceAction:
+        has_d, has_t = "distance" in n.attrs, "timeGap" in n.attrs
+        if has_d == has_t:
+            raise self.error(n, "<LongitudinalDistanceAction> needs one of distance and timeGap")
+        disp = self.enum(n, "displacement", ("trailingReferencedEntity", "leadingReferencedEntity", "any"), "any")
+        limits: dict[str, float] = {}
+        dc = n.child("DynamicConstraints")
+        for attr, key in (
+            ("maxAcceleration", "max_accel"),
+            ("maxDeceleration", "max_decel"),
+            ("maxSpeed", "max_speed"),
+        ):
+            if dc is not None and attr in dc.attrs:
+                limits[key] = self.num(dc, attr, positive=True)
+        return M.LongitudinalDistanceAction(
+            self.entity_ref(n),
+            self.num(n, "distance", nonneg=True) if has_d else None,
+            self.num(n, "timeGap", nonneg=True) if has_t else None,
+            self.bool_(n, "freespace"),
+            self.bool_(n, "continuous"),
+            disp == "leadingReferencedEntity",
+            line=n.line,
+            **limits,
         )
 
     # -- triggers ---------------------------------------------------------------------------
@@ -707,9 +928,9 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
     params = defaults
     b = _Builder(path, values)
     cl = root.child("CatalogLocations")
-    for vc in cl.all("VehicleCatalog") if cl is not None else ():
+    for vc in cl.children if cl is not None else ():
         d = b.one(vc, "Directory")
-        b.catalog_dirs.append((path.parent / b.str_(d, "path")).resolve())
+        b.catalog_dirs.setdefault(vc.tag, []).append((path.parent / b.str_(d, "path")).resolve())
 
     net = root.child("RoadNetwork")
     logic = net.child("LogicFile") if net is not None else None
@@ -731,9 +952,12 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
         name = b.str_(so, "name")
         if name in b.entities:
             raise b.error(so, f"entity {name!r} is declared twice")
-        body = b.one(so)
-        v = b.vehicle(body, name) if body.tag == "Vehicle" else b.catalog_vehicle(body)
-        b.entities[name] = M.Entity(name, v, so.line)
+        kids = [c for c in so.children if c.tag != "ObjectController"]
+        if len(kids) != 1:
+            raise b.error(so, f"<ScenarioObject> needs exactly one child element (found {len(kids)})")
+        for oc in so.all("ObjectController"):
+            b.controller(oc)
+        b.entities[name] = M.Entity(name, b.body(kids[0], name), so.line)
     if not b.entities:
         raise ScenarioFileError(path, (ents or root).line, "the scenario needs at least one entity")
 
@@ -747,15 +971,17 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
         ref = b.entity_ref(priv)
         for pa in priv.all("PrivateAction"):
             act = b.private_action(pa)
+            if isinstance(act, M.ControllerAction):
+                continue
             if not isinstance(act, (M.TeleportAction, M.SpeedAction)) or (
-                isinstance(act, M.SpeedAction) and act.relative_to is not None
+                isinstance(act, M.SpeedAction) and act.relative_to is not None and act.continuous
             ):
                 raise ScenarioFileError(
                     path,
                     pa.children[0].line,
                     f"<{pa.children[0].tag}> in <Init> is not "
-                    f"supported by ego (Init takes TeleportAction and SpeedAction with "
-                    f"AbsoluteTargetSpeed; see {DOCS})",
+                    f"supported by ego (Init takes TeleportAction, ControllerAction and SpeedAction "
+                    f"with AbsoluteTargetSpeed or a non-continuous RelativeTargetSpeed; see {DOCS})",
                 )
             init[ref].append(act)
     for name, acts in init.items():

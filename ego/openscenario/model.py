@@ -6,6 +6,7 @@ reference line); ``line`` is where the element starts in its file.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -28,11 +29,20 @@ ELEMENT_TYPES = ("story", "act", "maneuverGroup", "maneuver", "event", "action")
 
 
 @dataclass(frozen=True)
+class ValueConstraint:
+    rule: str  #: one of RULES
+    value: object  #: resolved (it may be an expression of other parameters)
+    line: int
+
+
+@dataclass(frozen=True)
 class Parameter:
     name: str
     type: str  #: double, integer, unsignedInt, unsignedShort, string, boolean, dateTime
     value: object  #: the declared default, converted to the type
     line: int
+    #: ConstraintGroups (OpenSCENARIO 1.2): OR of ANDs of value constraints
+    constraints: tuple[tuple[ValueConstraint, ...], ...] = ()
 
 
 # --- positions -------------------------------------------------------------------------------
@@ -94,6 +104,9 @@ class Vehicle:
     max_accel: float
     max_decel: float
     line: int
+    #: what the entity is: vehicle, pedestrian or miscObject (the last two stand still unless
+    #: the storyboard moves them)
+    kind: str = "vehicle"
 
 
 @dataclass(frozen=True)
@@ -161,7 +174,41 @@ class FollowTrajectoryAction:
     line: int = 0
 
 
-PrivateAction = SpeedAction | LaneChangeAction | LaneOffsetAction | TeleportAction | FollowTrajectoryAction
+@dataclass(frozen=True)
+class LongitudinalDistanceAction:
+    """Hold a longitudinal distance (m) or time gap (s, times the actor's own speed) to
+    ``entity``: behind it (trailingReferencedEntity, the default) or ahead (leading);
+    ``freespace`` measures between the boxes, else between their centres."""
+
+    entity: str
+    distance: float | None
+    time_gap: float | None
+    freespace: bool
+    continuous: bool
+    leading: bool = False  #: the actor ahead of the entity
+    max_accel: float = math.inf
+    max_decel: float = math.inf
+    max_speed: float = math.inf
+    line: int = 0
+
+
+@dataclass(frozen=True)
+class ControllerAction:
+    """Activate (or assign) a controller: the ego keeps ego's controller (``-c``), the others
+    SUMO's driver or their script; accepted and done at once."""
+
+    line: int = 0
+
+
+PrivateAction = (
+    SpeedAction
+    | LaneChangeAction
+    | LaneOffsetAction
+    | TeleportAction
+    | FollowTrajectoryAction
+    | ControllerAction
+    | LongitudinalDistanceAction
+)
 
 
 # --- conditions ------------------------------------------------------------------------------

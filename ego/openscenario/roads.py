@@ -245,19 +245,24 @@ class RoadMap:
         for x in secs:
             if x[0] <= s + 1e-9:
                 start, edge, right = x
-        k = abs(lane)
         n = len(edge.lanes)
-        if k > n:
+        ids = [self.lane_id_of(ln) for ln in reversed(edge.lanes)]  # from the reference line out
+        if lane not in ids:
             raise ValueError(
-                f"road {road!r} has {n} lane{'s' if n != 1 else ''} on that side at s = {s:g} "
-                f"(lane ids {', '.join(str(-i if right else i) for i in range(1, n + 1))})"
+                f"road {road!r} has no lane {lane} on that side at s = {s:g} "
+                f"(lane ids {', '.join(map(str, ids))}; netconvert keeps driving and stop lanes)"
             )
-        sumo_lane = edge.lanes[n - k]
+        sumo_lane = edge.lanes[n - 1 - ids.index(lane)]
         pos = s - start if right else sumo_lane.length - (s - start)
         return sumo_lane, min(max(pos, 0.0), sumo_lane.length)
 
     def lane_id_of(self, sumo_lane: Lane) -> int:
-        """The OpenDRIVE-style lane id of a SUMO lane (-1 = leftmost of its edge)."""
+        """The OpenDRIVE lane id of a SUMO lane: its origin's (netconvert keeps only some lane
+        types: a road's border lanes next to the reference line have no SUMO lane), else by
+        count (-1 = leftmost of its edge)."""
+        tail = sumo_lane.orig.rpartition("_")[2] if self.converted else ""
+        if tail.lstrip("-").isdigit():
+            return int(tail)
         n = len(self.edges[sumo_lane.edge].lanes)
         k = n - sumo_lane.index
         return -k if (not self.converted or sumo_lane.edge.startswith("-")) else k

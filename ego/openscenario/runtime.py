@@ -448,10 +448,12 @@ class ActionRun:
         self.board, self.element, self.actor, self.action = board, element, actor, action
         self.finished = False
         self.profile: Transition | None = None
-        if isinstance(action, M.SpeedAction):
+        if isinstance(action, (M.SpeedAction, M.LongitudinalDistanceAction)):
             self.domains: tuple[str, ...] = ("long",)
         elif isinstance(action, (M.LaneChangeAction, M.LaneOffsetAction)):
             self.domains = ("lat",)
+        elif isinstance(action, M.ControllerAction):
+            self.domains = ()  # the ego keeps ego's controller, the others their driver
         else:
             self.domains = ("long", "lat")
 
@@ -497,8 +499,10 @@ class ActionRun:
                 else:
                     centre = drv.lane_centre(0, b.states[a.relative_to].d, a.relative_lanes)  # type: ignore[index]
                 target = centre + a.target_offset
-                T = lateral_duration(a.dynamics.shape, a.dynamics.dimension, a.dynamics.value, me.speed)
-                shape = a.dynamics.shape
+                here = drv.ego_references()[1] if self.is_ego else me.d_front
+                dyn = a.dynamics
+                T = lateral_duration(dyn.shape, dyn.dimension, dyn.value, me.speed, target - here)
+                shape = dyn.shape
             else:
                 base = b.states[a.relative_to].d if a.relative_to is not None else drv.lane_centre_of(me.d)
                 target = base + a.value
@@ -512,6 +516,11 @@ class ActionRun:
                 drv.ego_lateral(self.profile)
                 self.finished = True
                 return
+        elif isinstance(a, M.ControllerAction):
+            self.finished = True
+            return
+        elif isinstance(a, M.LongitudinalDistanceAction):
+            return  # commanded step by step (:meth:`_keep_distance`)
         elif isinstance(a, M.TeleportAction):
             x, y, h = drv.position_xy(a.position, b.states)
             drv.teleport(self.actor, x, y, h)
@@ -519,6 +528,44 @@ class ActionRun:
             return
         else:
             self._trajectory_start(t)
+
+    def _keep_distance(self, a: M.LongitudinalDistanceAction, t: float) -> None:
+        """The speed over [t, t + step] that puts the actor at the held distance from the
+        entity at t + step (the entity as it drives on at its speed at t), within the
+        action's dynamic constraints; a non-continuous action ends once the distance is
+        held (within 1 cm)."""
+        b = self.board
+        h = b.h
+        me, ref = b.states[self.actor], b.states[a.entity]
+        sign = 1.0 if a.leading else -1.0  # the actor ahead of (+) or behind (-) the entity
+        extra = 0.5 * (me.length + ref.length) if a.freespace else 0.0
+        ref_next = ref.s + ref.speed * h
+        constrained = math.isfinite(a.max_accel) or math.isfinite(a.max_decel)
+        if a.distance is not None or constrained:
+            # the position error now; unconstrained it is closed in one step, else at the
+            # speed from which the deceleration limit still stops at the goal
+            held = a.distance if a.distance is not None else (a.time_gap or 0.0) * ref.speed
+            err = ref.s + sign * (held + extra) - me.s
+            close = abs(err) / h
+            stop = a.max_decel if err > 0.0 else a.max_accel  # what ends the closing
+            if math.isfinite(stop):
+                # the relative speed from which ``stop`` still ends at the goal, a step later
+                close = min(-stop * h + math.sqrt((stop * h) ** 2 + 2.0 * stop * abs(err)), close)
+            v = ref.speed + math.copysign(close, err)
+        else:
+            # s + v h = ref_next + sign (tg v + extra): the gap is tg times the actor's speed
+            tg = a.time_gap or 0.0
+            denom = h - sign * tg
+            v = (ref_next + sign * extra - me.s) / denom if abs(denom) > EPS else me.speed
+        lo = max(me.speed - a.max_decel * h, 0.0)
+        hi = min(me.speed + a.max_accel * h, a.max_speed)
+        v = min(max(v, lo), hi)
+        rate = abs(v - me.speed) / h
+        b.driver.speed(self.actor, v, rate if constrained else INF)
+        gap = sign * (me.s - ref.s) - extra
+        held = a.distance if a.distance is not None else (a.time_gap or 0.0) * me.speed
+        if not a.continuous and abs(gap - held) < 0.01:
+            self.finished = True
 
     def _trajectory_start(self, t: float) -> None:
         b, a = self.board, self.action
@@ -586,6 +633,8 @@ class ActionRun:
             if p.done(t + h) and not getattr(a, "continuous", False):  # type: ignore[union-attr]
                 self.finished = True
                 drv.release(self.actor)
+        elif isinstance(a, M.LongitudinalDistanceAction):
+            self._keep_distance(a, t)
         elif isinstance(a, M.FollowTrajectoryAction):
             x, y, heading, speed, end = self._trajectory_point(t + h)
             drv.place(self.actor, x, y, heading, speed)

@@ -128,15 +128,11 @@ def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
                 lane, s, off = _place(pos, roads, centre)
             except ValueError as exc:
                 raise ScenarioFileError(scenario.path, pos.line, str(exc)) from None
-            if getattr(pos, "offset", 0.0):
-                raise ScenarioFileError(
-                    scenario.path,
-                    pos.line,
-                    f"{name} starts {pos.offset:g} m off its lane's centre: entities start on lane "
-                    "centres (offset 0; a LaneOffsetAction at t = 0 moves one off it)",
-                )
+            if off:
+                # an offset reaching into a neighbour lane starts the entity in that lane
+                lane, s, off = _lane_at(roads.edges[lane.edge], lane, off, s)
             v = scenario.entities[name].vehicle
-            speed = next((a.value for a in actions if isinstance(a, M.SpeedAction)), None)
+            speed = _init_speed(scenario, name)
             centre[name] = (lane, s, off)
             front = s + v.center_x + 0.5 * v.length
             if not 0.0 <= front <= lane.length + 1e-6:
@@ -158,6 +154,37 @@ def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
             f"the start positions of {', '.join(pending)} refer to each other",
         )
     return out
+
+
+def stop_time(model: M.Scenario) -> float | None:
+    """The simulation time (s) from which the storyboard's StopTrigger holds, when one of its
+    condition groups is a SimulationTimeCondition (greaterThan, greaterOrEqual or equalTo)
+    alone; else None."""
+    times = []
+    for group in model.stop.groups if model.stop is not None else ():
+        if len(group) == 1 and group[0].kind == "SimulationTimeCondition":
+            c = group[0]
+            if c.rule in ("greaterThan", "greaterOrEqual", "equalTo"):
+                times.append(float(c.value) + c.delay)  # type: ignore[arg-type]
+    return min(times) if times else None
+
+
+def _init_speed(scenario: M.Scenario, name: str, seen: tuple[str, ...] = ()) -> float | None:
+    """An entity's Init speed: absolute, or relative to another entity's Init speed (a delta
+    or factor, as the standard's RelativeTargetSpeed at t = 0); None without a SpeedAction."""
+    sa = next((a for a in scenario.init[name] if isinstance(a, M.SpeedAction)), None)
+    if sa is None:
+        return None
+    if sa.relative_to is None:
+        return sa.value
+    ref = _init_speed(scenario, sa.relative_to, (*seen, name)) if sa.relative_to not in seen else None
+    if ref is None:
+        raise ScenarioFileError(
+            scenario.path,
+            sa.line,
+            f"{name}'s Init speed is relative to {sa.relative_to}, which has no Init speed",
+        )
+    return max(ref + sa.value if sa.relative_kind == "delta" else ref * sa.value, 0.0)
 
 
 def _place(pos: M.Position, roads: RoadMap, centre: dict) -> tuple:
@@ -307,7 +334,16 @@ class FileScenario(Scenario):
         roads = RoadMap(net, converted=not str(model.road).endswith(".net.xml"))
         ego = find_ego(model, config.ego_entity)
         _check_ego_actions(model, ego)
-        return model, roads, ego, placements(model, roads)
+        starts = placements(model, roads)
+        if starts[ego].offset:
+            pos = next(a for a in model.init[ego] if isinstance(a, M.TeleportAction)).position
+            raise ScenarioFileError(
+                model.path,
+                pos.line,
+                f"the ego {ego!r} starts {starts[ego].offset:g} m off its lane's centre: the ego starts on "
+                "its lane's centre (offset 0; a LaneOffsetAction moves it)",
+            )
+        return model, roads, ego, starts
 
     @classmethod
     def default_config(cls, overrides):
@@ -328,7 +364,12 @@ class FileScenario(Scenario):
                 f"the ego {ego!r} needs a SpeedAction in <Init> (its initial speed is its reference)",
             )
         del known
-        return replace(cfg, ego_speed=float(start.speed), ego_lane=int(start.index), ego_start=float(start.front))
+        cfg = replace(cfg, ego_speed=float(start.speed), ego_lane=int(start.index), ego_start=float(start.front))
+        end = stop_time(model)
+        if "duration" not in cls.file_params and end is not None and end >= cfg.duration:
+            # the run lasts until the StopTrigger's time (--set duration=... still rules)
+            cfg = replace(cfg, duration=min(end + cfg.sumo_step, 3600.0))
+        return cfg
 
     @classmethod
     def check_config(cls, config) -> None:
@@ -439,16 +480,27 @@ class FileScenario(Scenario):
             )
             self._types[name] = vt
             # inserted at the ego's speed at least (SUMO's insertion check), its own speed set
-            # before the first step (as emergency-brake's lead)
-            speed = max(c.ego_speed, start.speed if start.speed is not None else 0.0)
+            # before the first step (as emergency-brake's lead); a pedestrian or misc object
+            # stands still (speed 0) unless the storyboard moves it
+            own = start.speed if v.kind == "vehicle" else (start.speed or 0.0)
+            speed = max(c.ego_speed, own if own is not None else 0.0) if v.kind == "vehicle" else own
             world.vehicle(
                 VehicleSpec(name, vt.id, self._route(start.edge), start.index, start.front, speed),
                 vt,
-                ScriptedEntity(name, start.speed),
+                ScriptedEntity(name, own),
             )
 
     def after_setup(self) -> None:
-        """The storyboard starts from the entities' start positions."""
+        """The storyboard starts from the entities' start positions; an entity off its lane's
+        centre (an Init offset) is moved across there in SUMO's first step (SUMO inserts on
+        lane centres)."""
+        for name, start in self.starts.items():
+            if name != self.ego_name and start.offset:
+                lane = self.roads.edges[start.edge].lanes[start.index]
+                poly = LanePolyline(lane.shape, lane.width, lane.id)
+                along = start.front - 0.5 * self.model.entities[name].vehicle.length
+                x, y = poly.offset_point(along, start.offset)
+                self.bridge.place(name, x, y, poly.heading_at(along), start.speed or 0.0)
         self.board = Storyboard(self.model, self.ego_name, self, self.config.sumo_step, self._story_event)
         self._scripted = [n for n in self.model.entities if n != self.ego_name]
         self._history = {n: [] for n in self._scripted}
@@ -753,7 +805,9 @@ def _check_ego_actions(model: M.Scenario, ego: str) -> None:
                 for man in g.maneuvers:
                     for ev in man.events:
                         for a in ev.actions:
-                            if isinstance(a.action, (M.TeleportAction, M.FollowTrajectoryAction)):
+                            if isinstance(
+                                a.action, (M.TeleportAction, M.FollowTrajectoryAction, M.LongitudinalDistanceAction)
+                            ):
                                 raise ScenarioFileError(
                                     model.path,
                                     a.action.line,

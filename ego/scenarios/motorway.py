@@ -46,7 +46,16 @@ _LOOK_BETWEEN = NATIVE.look_between if NATIVE is not None else None
 ROUTE = "motorway_route"
 EDGE = "motorway"
 N_LANES = 3
-LANE_NAMES = {0: "right", 1: "middle", 2: "left"}
+
+
+class _LaneNames(dict):
+    """Lane names by SUMO index; a road of more lanes (a file's) names the others by index."""
+
+    def __missing__(self, index: int) -> str:
+        return f"#{index} (from the right)"
+
+
+LANE_NAMES = _LaneNames({0: "right", 1: "middle", 2: "left"})
 TRAFFIC_TYPE = VehicleType("traffic", length=4.5, width=1.8, color=(150, 150, 150))
 BLOCKER_TYPE = VehicleType("blocker", length=4.5, width=1.8, sigma=0.0, color=(160, 60, 220))
 EGO_COLOR = (220, 40, 40)

@@ -119,7 +119,7 @@ HAND = [
         "expression-operator",
         sub('s="${$EgoFront - 2.25}"', 's="${$EgoFront ^ 2}"'),
         "${$EgoFront ^ 2}",
-        "unexpected '^' in expression '${$EgoFront ^ 2}' (allowed: numbers, $parameters, + - * / and parentheses)",
+        "unexpected '^' in expression '${$EgoFront ^ 2}' (allowed: numbers, $parameters, + - * /, parentheses and functions)",
     ),
     (
         "division-by-zero",
@@ -213,13 +213,13 @@ HAND = [
         "unsupported-entity",
         sub(
             '<Vehicle name="lead" vehicleCategory="car">',
-            '<Pedestrian name="walker" mass="80" pedestrianCategory="pedestrian">',
+            '<ExternalObjectReference name="walker">',
         ).replace(
             "<Properties/>\n      </Vehicle>\n    </ScenarioObject>\n  </Entities>",
-            "<Properties/>\n      </Pedestrian>\n    </ScenarioObject>\n  </Entities>",
+            "<Properties/>\n      </ExternalObjectReference>\n    </ScenarioObject>\n  </Entities>",
         ),
-        "<Pedestrian",
-        unsupported("Pedestrian"),
+        "<ExternalObjectReference",
+        unsupported("ExternalObjectReference"),
     ),
     (
         "typo-element",
@@ -350,8 +350,8 @@ HAND = [
             ),
         ),
         "<LateralAction><LaneChangeAction",
-        f"<LateralAction> in <Init> is not supported by ego (Init takes TeleportAction and SpeedAction with "
-        f"AbsoluteTargetSpeed; see {DOCS})",
+        f"<LateralAction> in <Init> is not supported by ego (Init takes TeleportAction, ControllerAction and "
+        f"SpeedAction with AbsoluteTargetSpeed or a non-continuous RelativeTargetSpeed; see {DOCS})",
     ),
     (
         "two-actions-in-one",
@@ -370,7 +370,8 @@ HAND = [
         "lane-beyond-road",
         sub(EGO_LANE, EGO_LANE.replace('laneId="-2"', 'laneId="-4"')),
         'laneId="-4"',
-        "road '0' has 3 lanes on that side at s = 297.75 (lane ids -1, -2, -3)",
+        "road '0' has no lane -4 on that side at s = 297.75 (lane ids -1, -2, -3; netconvert keeps driving and "
+        "stop lanes)",
     ),
     (
         "unknown-road",
@@ -404,6 +405,153 @@ HAND = [
         ),
         '<CatalogReference catalogName="Cars"',
         "<CatalogReference> to 'Cars' but no <VehicleCatalog> in <CatalogLocations>",
+    ),
+    # -- the ALKS files' forms (value constraints, catalogs, controllers, standing bodies) --
+    (
+        "constraint-broken",
+        sub(
+            '<ParameterDeclaration name="EgoSpeed" parameterType="double" value="20"/>',
+            '<ParameterDeclaration name="EgoSpeed" parameterType="double" value="20">\n'
+            '      <ConstraintGroup><ValueConstraint rule="lessOrEqual" value="16.7"/></ConstraintGroup>\n'
+            "    </ParameterDeclaration>",
+        ),
+        '<ValueConstraint rule="lessOrEqual"',
+        "parameter 'EgoSpeed' = 20 breaks its value constraint: lessOrEqual 16.7 (line 11)",
+    ),
+    (
+        "constraint-groups",
+        sub(
+            '<ParameterDeclaration name="LeadGap" parameterType="double" value="30"/>',
+            '<ParameterDeclaration name="LeadGap" parameterType="double" value="30">\n'
+            '      <ConstraintGroup><ValueConstraint rule="equalTo" value="10"/></ConstraintGroup>\n'
+            '      <ConstraintGroup><ValueConstraint rule="greaterThan" value="${$EgoFront / 3}"/></ConstraintGroup>\n'
+            "    </ParameterDeclaration>",
+        ),
+        '<ConstraintGroup><ValueConstraint rule="equalTo"',
+        "parameter 'LeadGap' = 30 breaks a rule of each of its constraint groups: equalTo 10 (line 13); "
+        "greaterThan 100 (line 14)",
+    ),
+    (
+        "constraint-rule",
+        sub(
+            '<ParameterDeclaration name="EgoSpeed" parameterType="double" value="20"/>',
+            '<ParameterDeclaration name="EgoSpeed" parameterType="double" value="20">\n'
+            '      <ConstraintGroup><ValueConstraint rule="atMost" value="30"/></ConstraintGroup>\n'
+            "    </ParameterDeclaration>",
+        ),
+        '<ValueConstraint rule="atMost"',
+        "bad value for rule in <ValueConstraint>: 'atMost' (allowed: greaterThan, lessThan, equalTo, "
+        "greaterOrEqual, lessOrEqual, notEqualTo)",
+    ),
+    (
+        "constraint-empty-group",
+        sub(
+            '<ParameterDeclaration name="EgoSpeed" parameterType="double" value="20"/>',
+            '<ParameterDeclaration name="EgoSpeed" parameterType="double" value="20">\n'
+            "      <ConstraintGroup/>\n    </ParameterDeclaration>",
+        ),
+        "<ConstraintGroup/>",
+        "<ConstraintGroup> needs at least one <ValueConstraint>",
+    ),
+    (
+        "constraint-no-value",
+        sub(
+            '<ParameterDeclaration name="EgoSpeed" parameterType="double" value="20"/>',
+            '<ParameterDeclaration name="EgoSpeed" parameterType="double" value="20">\n'
+            '      <ConstraintGroup><ValueConstraint rule="lessThan"/></ConstraintGroup>\n'
+            "    </ParameterDeclaration>",
+        ),
+        '<ValueConstraint rule="lessThan"',
+        "<ValueConstraint> needs attribute value",
+    ),
+    (
+        "pedestrian-category",
+        sub(
+            BASE[BASE.index('      <Vehicle name="lead"') : BASE.index("    </ScenarioObject>\n  </Entities>")],
+            '      <Pedestrian name="p" mass="80" pedestrianCategory="robot"><BoundingBox><Center x="0" y="0" z="1"/>'
+            '<Dimensions width="0.5" length="0.3" height="1.8"/></BoundingBox><Properties/></Pedestrian>\n',
+        ),
+        "<Pedestrian name=",
+        "bad value for pedestrianCategory in <Pedestrian>: 'robot' (allowed: pedestrian, wheelchair, animal)",
+    ),
+    (
+        "pedestrian-no-box",
+        sub(
+            BASE[BASE.index('      <Vehicle name="lead"') : BASE.index("    </ScenarioObject>\n  </Entities>")],
+            '      <Pedestrian name="p" mass="80" pedestrianCategory="pedestrian"><Properties/></Pedestrian>\n',
+        ),
+        "<Pedestrian name=",
+        "<Pedestrian> needs exactly one <BoundingBox> (found 0)",
+    ),
+    (
+        "misc-object-category",
+        sub(
+            BASE[BASE.index('      <Vehicle name="lead"') : BASE.index("    </ScenarioObject>\n  </Entities>")],
+            '      <MiscObject name="m" mass="10" miscObjectCategory="rock"><BoundingBox><Center x="0" y="0" z="1"/>'
+            '<Dimensions width="1" length="1" height="1"/></BoundingBox><Properties/></MiscObject>\n',
+        ),
+        "<MiscObject name=",
+        None,
+    ),
+    (
+        "controller-child",
+        sub(
+            "    </ScenarioObject>\n  </Entities>",
+            '      <ObjectController><Controller name="c"><Axles/></Controller></ObjectController>\n'
+            "    </ScenarioObject>\n  </Entities>",
+        ),
+        "<Axles/></Controller>",
+        unsupported("Axles"),
+    ),
+    (
+        "controller-without-catalog",
+        sub(
+            "    </ScenarioObject>\n  </Entities>",
+            '      <ObjectController><CatalogReference catalogName="ControllerCatalog" entryName="ALKS"/>'
+            "</ObjectController>\n    </ScenarioObject>\n  </Entities>",
+        ),
+        '<CatalogReference catalogName="ControllerCatalog"',
+        "<CatalogReference> to 'ControllerCatalog' but no <ControllerCatalog> in <CatalogLocations>",
+    ),
+    (
+        "controller-override",
+        sub(
+            LEAD_SPEED_HEAD := "<PrivateAction><LongitudinalAction><SpeedAction>\n                  " + LEAD_ACTION,
+            "<PrivateAction><ControllerAction><OverrideControllerValueAction/></ControllerAction></PrivateAction>"
+            + LEAD_SPEED_HEAD,
+        ),
+        "<OverrideControllerValueAction",
+        unsupported("OverrideControllerValueAction"),
+    ),
+    (
+        "unknown-function",
+        sub('s="${$EgoFront - 2.25}"', 's="${cbrt($EgoFront)}"'),
+        "${cbrt($EgoFront)}",
+        "unknown function 'cbrt' in expression '${cbrt($EgoFront)}' (functions: round, floor, ceil, sqrt, abs, "
+        "sign, sin, cos, tan, asin, acos, atan, pow, min, max)",
+    ),
+    (
+        "function-arity",
+        sub('s="${$EgoFront - 2.25}"', 's="${pow($EgoFront)}"'),
+        "${pow($EgoFront)}",
+        "pow takes 2 arguments, not 1, in expression '${pow($EgoFront)}'",
+    ),
+    (
+        "function-domain",
+        sub('s="${$EgoFront - 2.25}"', 's="${sqrt(-$EgoFront)}"'),
+        "${sqrt(-$EgoFront)}",
+        "sqrt(-300) is undefined in expression '${sqrt(-$EgoFront)}'",
+    ),
+    (
+        "init-relative-continuous",
+        sub(
+            '<SpeedActionTarget><AbsoluteTargetSpeed value="$LeadSpeed"/></SpeedActionTarget>',
+            '<SpeedActionTarget><RelativeTargetSpeed entityRef="Ego" value="0" speedTargetValueType="delta" '
+            'continuous="true"/></SpeedActionTarget>',
+        ),
+        '<LongitudinalAction><SpeedAction>\n              <SpeedActionDynamics dynamicsShape="step" value="0" '
+        'dynamicsDimension="time"/>\n              <SpeedActionTarget><RelativeTargetSpeed',
+        None,
     ),
     (
         "ego-teleport",
@@ -525,10 +673,11 @@ def _sg_cases():
             un("RelativeClearanceCondition"),
         ),
         (
-            "sg-longitudinal-distance",
-            lambda: base(action=xosc.LongitudinalDistanceAction("Ego", distance=10)),
+            "sg-longitudinal-distance-on-ego",
+            lambda: base(action=xosc.LongitudinalDistanceAction("Lead", distance=10), actor="Ego"),
             "<LongitudinalDistanceAction",
-            un("LongitudinalDistanceAction"),
+            "<LongitudinalDistanceAction> on the ego (Ego) is not supported by ego: the ego moves by its own "
+            f"model (see {DOCS})",
         ),
         (
             "sg-visibility",
@@ -541,16 +690,6 @@ def _sg_cases():
             lambda: base(action=xosc.LateralDistanceAction("Ego", 2)),
             "<LateralDistanceAction",
             un("LateralDistanceAction"),
-        ),
-        (
-            "sg-pedestrian",
-            lambda: base(
-                extra=xosc.Pedestrian(
-                    "p", 80, xosc.PedestrianCategory.pedestrian, xosc.BoundingBox(0.5, 0.5, 1.8, 0, 0, 0.9)
-                )
-            ),
-            "<Pedestrian",
-            un("Pedestrian"),
         ),
         (
             "sg-relative-world",

@@ -41,8 +41,9 @@ def test_evaluates(expr, value):
         ("1 + 2)", "unexpected ')' in expression '${1 + 2)}'"),
         ("2 ** 3", "unexpected '*' in expression '${2 ** 3}' (expected a number, a $parameter or '(')"),
         (
-            "sqrt(4)",
-            "unexpected 's' in expression '${sqrt(4)}' (allowed: numbers, $parameters, + - * / and parentheses)",
+            "cbrt(4)",
+            "unknown function 'cbrt' in expression '${cbrt(4)}' (functions: round, floor, ceil, sqrt, abs, sign, "
+            "sin, cos, tan, asin, acos, atan, pow, min, max)",
         ),
         (
             "$nope + 1",

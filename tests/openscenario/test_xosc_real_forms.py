@@ -232,7 +232,7 @@ def test_list_refuses_what_run_refuses(tmp_path, capsys):
     relative = (
         '<PrivateAction><LongitudinalAction><SpeedAction><SpeedActionDynamics dynamicsShape="step" value="0" '
         'dynamicsDimension="time"/><SpeedActionTarget>\n<RelativeTargetSpeed entityRef="Ego" value="1" '
-        'speedTargetValueType="delta" continuous="false"/></SpeedActionTarget></SpeedAction>'
+        'speedTargetValueType="delta" continuous="true"/></SpeedActionTarget></SpeedAction>'
         "</LongitudinalAction></PrivateAction>"
     )
     i = text.index("</Private>", text.index("<Init>"))

@@ -464,14 +464,17 @@ def test_the_ego_reaching_the_end_of_its_road_ends_the_run(tmp_path):
     assert sc.view.s + sc.geometry.cg_to_front == pytest.approx(x_end, abs=0.1 * 20.0 + 0.5)
 
 
-def test_a_start_off_the_lane_centre_is_refused_not_ignored(tmp_path):
-    from ego.openscenario.xmltree import ScenarioFileError
-
+def test_a_start_off_the_lane_centre_is_taken_in_the_first_step(tmp_path):
+    """An Init LanePosition offset: SUMO inserts on the lane's centre and its sublane model
+    moves the car across in the first step (0.1 s), where it then stays."""
     path = scene(tmp_path, [])
     text = path.read_text().replace('laneId="-2" s="200.0" offset="0"', 'laneId="-2" s="200.0" offset="1.2"')
     path.write_text(text)
-    with pytest.raises(ScenarioFileError, match=r"scene.xosc:\d+: B starts 1.2 m off its lane's centre"):
-        run_scene(path, 1.0)
+    sc = run_scene(path, 3.0)
+    hist = [(t, d) for t, _, d in sc._history["B"] if t >= 0.1 - 1e-9]
+    assert len(hist) > 20
+    for t, d in hist:
+        assert d == pytest.approx(3.5 + 1.2, abs=1e-6), t
 
 
 def test_the_storyboard_sees_the_ego_at_its_own_time_as_it_sees_sumos_cars(tmp_path):
