@@ -226,6 +226,14 @@ class MotorwayWorld:
         }
         return missing
 
+    def lane_frame(self) -> Callable[[float, float], tuple[float, float, float]] | None:
+        """On a curved road (a configuration's ``road`` other than straight): (x, y) -> (s, d,
+        heading) in the frame of the ego's start lane (m, m, rad), for actors that measure
+        along the road; None on the straight motorway (world x and y are the road's)."""
+        if getattr(self.config, "road", "straight") == "straight":
+            return None
+        return lambda x, y: self.lanes[self.config.ego_lane].project(x, y)
+
     def lane_width(self, lane: int) -> float:
         """The width (m) of ``lane`` as the simulator has it (before :meth:`setup` returns)."""
         return self.sim.lane_shapes()[f"{self.edge}_{lane}"][0]
