@@ -77,7 +77,9 @@ ROAD_FRAME = (
     Signal(
         "steer_ff",
         "rad",
-        "curvature feed-forward: the plant's steady-state front steer on that curvature at its speed (+ left)",
+        "curvature feed-forward: the plant's steady-state front steer on the lane's curvature at its "
+        "speed (+ left; the motorway and file scenarios: the target lane's mean curvature over the "
+        "next 0.4 s)",
     ),
     Signal("accel_ref", "m/s^2", "planned axial acceleration (tasks commanding a_x)"),
     Signal("lane", "-", "the lane s is measured along (road preview), or None"),

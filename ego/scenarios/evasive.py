@@ -96,8 +96,8 @@ class MotorwayRoadConfig(EvasiveConfig):
         "straight",
         "-",
         "the motorway: straight, or an arc of the middle lane's radius 250 m (180 deg) or 1000 m "
-        "(90 deg) to the left or right, 350 m after its start (the ego in the arc from about "
-        "t = 2 s); the gaps and TTCs along the lane (sumo backend only)",
+        "(90 deg) to the left or right, 350 m after its start (at the default ego_start the ego enters it within "
+        "3 s); gaps and TTCs along the lane (sumo backend only)",
         choices=tuple(MOTORWAY_ROADS),
     )
 
