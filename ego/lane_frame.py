@@ -43,7 +43,7 @@ GRID = 10.0
 class LanePolyline:
     """A lane centre line made of straight segments, with a fast local projection."""
 
-    __slots__ = ("lane_id", "width", "points", "_seg", "_hint", "_single", "_grid")
+    __slots__ = ("lane_id", "width", "points", "_seg", "_hint", "_single", "_grid", "_at")
 
     def __init__(self, points: Sequence[tuple[float, float]], width: float = 3.5, lane_id: str = "") -> None:
         if len(points) < 2:
@@ -82,6 +82,7 @@ class LanePolyline:
             change = wrap_angle(heading[i + 1] - heading[i])
             self._seg.append((*raw[i], heading[i], change, change / raw[i][4]))
         self._hint = 0
+        self._at = 0  #: the segment :meth:`_segment_at` found last
         #: (cell of GRID m) -> the segments passing through it, so a point far from the
         #: previous answer (the surround sensor projecting one car after another along a
         #: curve) starts its search next to its own segment instead of walking there
@@ -200,14 +201,23 @@ class LanePolyline:
         return self._seg[self._segment_at(s)][9]
 
     def _segment_at(self, s: float) -> int:
+        """The last segment starting at or before ``s`` (the first when none does)."""
         seg = self._seg
-        lo, hi = 0, len(seg) - 1
+        last = len(seg) - 1
+        i = self._at
+        if seg[i][5] <= s and (i == last or s < seg[i + 1][5]):  # where the last call was
+            return i
+        if i < last and seg[i + 1][5] <= s and (i + 1 == last or s < seg[i + 2][5]):  # the next one
+            self._at = i + 1
+            return i + 1
+        lo, hi = 0, last
         while lo < hi:
             mid = (lo + hi + 1) // 2
             if seg[mid][5] <= s:
                 lo = mid
             else:
                 hi = mid - 1
+        self._at = lo
         return lo
 
     def curved_spans(self, min_curvature: float = 1e-3) -> list[tuple[float, float, float]]:
