@@ -104,3 +104,16 @@ def test_a_bad_road_is_one_line_and_exit_2(capsys):
     assert "road" in err and "left-250" in err and "Traceback" not in err
     assert main(["run", "cut-in", "-c", "pid", "--backend", "highway-env", "--set", "road=left-250"]) == 2
     assert "sumo backend only" in capsys.readouterr().err
+
+
+def test_a_file_scenario_on_a_curved_opendrive_road_follows_its_lane():
+    """curve200.xosc (three lanes, R 200 m left arc, 20 m/s; scripts/curved_lane_drift.py):
+    pid's largest |lateral error| 1.390 m without the feed-forward (it leaves its lane), 0.048 m
+    with it."""
+    from pathlib import Path
+
+    xosc = str(Path(__file__).resolve().parents[1] / "scenarios" / "openscenario" / "curve200.xosc")
+    on = run(RunSpec(xosc, "pid", overrides={"duration": 22}))
+    off = run(RunSpec(xosc, "pid", overrides={"duration": 22, "feedforward": False}))
+    assert on.status == "completed" and np.abs(on.column("e_lat")).max() <= 0.06
+    assert off.status == "failed" and np.abs(off.column("e_lat")).max() > 1.0
