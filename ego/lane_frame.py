@@ -36,10 +36,14 @@ def wrap_angle(a: float) -> float:
     return a - math.pi
 
 
+#: m, the cell of a lane's segment index (LanePolyline._grid)
+GRID = 10.0
+
+
 class LanePolyline:
     """A lane centre line made of straight segments, with a fast local projection."""
 
-    __slots__ = ("lane_id", "width", "points", "_seg", "_hint", "_single")
+    __slots__ = ("lane_id", "width", "points", "_seg", "_hint", "_single", "_grid", "_at")
 
     def __init__(self, points: Sequence[tuple[float, float]], width: float = 3.5, lane_id: str = "") -> None:
         if len(points) < 2:
@@ -78,6 +82,16 @@ class LanePolyline:
             change = wrap_angle(heading[i + 1] - heading[i])
             self._seg.append((*raw[i], heading[i], change, change / raw[i][4]))
         self._hint = 0
+        self._at = 0  #: the segment :meth:`_segment_at` found last
+        #: (cell of GRID m) -> the segments passing through it, so a point far from the
+        #: previous answer (the surround sensor projecting one car after another along a
+        #: curve) starts its search next to its own segment instead of walking there
+        self._grid: dict[tuple[int, int], list[int]] = {}
+        for i, (x0, y0, ux, uy, length) in enumerate(s[:5] for s in raw):
+            for k in range(int(length // (0.5 * GRID)) + 2):
+                u = min(k * 0.5 * GRID, length)
+                cell = (int(math.floor((x0 + u * ux) / GRID)), int(math.floor((y0 + u * uy) / GRID)))
+                self._grid.setdefault(cell, [i])  # one segment per cell: the search walks on
         #: one straight segment: frame() is a rotation, done without a search
         self._single = self._seg[0] if n == 1 else None
 
@@ -114,6 +128,16 @@ class LanePolyline:
         n = len(seg)
         i = self._hint
         best = self._local(i, x, y)
+        if best[2] > GRID * GRID:  # far from the previous answer: start next to this point
+            cx, cy = int(math.floor(x / GRID)), int(math.floor(y / GRID))
+            grid = self._grid
+            near = grid.get((cx, cy))
+            if near is None:
+                near = [j for a in (-1, 0, 1) for b in (-1, 0, 1) for j in grid.get((cx + a, cy + b), ())]
+            for j in near:
+                cand = self._local(j, x, y)
+                if cand[2] < best[2]:
+                    i, best = j, cand
         for step in (1, -1):
             j = i + step
             while 0 <= j < n:
@@ -177,14 +201,23 @@ class LanePolyline:
         return self._seg[self._segment_at(s)][9]
 
     def _segment_at(self, s: float) -> int:
+        """The last segment starting at or before ``s`` (the first when none does)."""
         seg = self._seg
-        lo, hi = 0, len(seg) - 1
+        last = len(seg) - 1
+        i = self._at
+        if seg[i][5] <= s and (i == last or s < seg[i + 1][5]):  # where the last call was
+            return i
+        if i < last and seg[i + 1][5] <= s and (i + 1 == last or s < seg[i + 2][5]):  # the next one
+            self._at = i + 1
+            return i + 1
+        lo, hi = 0, last
         while lo < hi:
             mid = (lo + hi + 1) // 2
             if seg[mid][5] <= s:
                 lo = mid
             else:
                 hi = mid - 1
+        self._at = lo
         return lo
 
     def curved_spans(self, min_curvature: float = 1e-3) -> list[tuple[float, float, float]]:

@@ -236,6 +236,11 @@ def resolve(spec: RunSpec) -> ResolvedRun:
     if rest:
         raise unknown_parameter(next(iter(rest)), parameter_namespace(cls, [ctrl.name]))
     cls.check_config(config)
+    network = cls.network_of(config)
+    if network != cls.network:  # a curved road: SUMO's network (highway-env builds a straight road)
+        net_file(network)
+        if spec.backend != "sumo":
+            raise ConfigError(f"road={config.road} runs on the sumo backend only (highway-env builds a straight road)")
     check = getattr(ctrl_params, "check", None)  # parameters that check themselves as a whole (an FMU's mapping)
     if check is not None:
         check()

@@ -47,9 +47,9 @@ def test_stays_in_lane_is_a_default_of_the_lane_scenarios_and_reads_the_margin()
 
 
 def test_a_run_that_leaves_its_lane_fails(capsys):
-    """The shipped R 15 m curve with pid: the tracking controller drifts out of its lane (no
-    curvature feed-forward yet); cut at 12 s, before it leaves the road, the run is failed."""
-    code = main(["run", str(CURVE), "-c", "pid", "--set", "duration=12", "--json"])
+    """The shipped R 15 m curve with pid, its curvature feed-forward switched off: the tracking
+    controller drifts out of its lane; cut at 12 s, before it leaves the road, the run is failed."""
+    code = main(["run", str(CURVE), "-c", "pid", "--set", "duration=12", "--set", "feedforward=false", "--json"])
     out = json.loads(capsys.readouterr().out)
     assert code == 1 and out["status"] == "failed"
     assert "left its lane" in out["status_detail"]

@@ -14,7 +14,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
-from ego.params import Params
+from ego.params import Params, param
 
 
 class ControllerError(RuntimeError):
@@ -50,6 +50,9 @@ class Observation:
     vy: float = 0.0  #: body lateral speed v (m/s, + left)
     heading_error: float = 0.0  #: yaw minus the lane's heading at the projection (rad, + left)
     curvature: float = 0.0  #: the lane's curvature at the projection (1/m, + turning left)
+    #: the plant's steady-state steer on that curvature at its speed (rad, + left;
+    #: :mod:`ego.models.cornering`): the tracking controllers' curvature feed-forward
+    steer_ff: float = 0.0
     accel_ref: float = 0.0  #: planned axial acceleration, tasks commanding a_x (m/s^2)
     #: the lane ``s`` is measured along (:class:`ego.lane_frame.LanePolyline`), for controllers
     #: that preview the road (curvature ahead); None where there is no road
@@ -102,6 +105,19 @@ class ControllerSpec:
     summary: str
     params: type
     build: Callable[[Any, float], Controller]  #: (params, control period dt in s) -> Controller
+
+
+def feedforward_param() -> Any:
+    """The tracking controllers' ``feedforward`` switch (a :func:`~ego.params.param`): with it
+    their steer is the feedback's plus ``Observation.steer_ff``, the plant's steady-state
+    steer on the lane's curvature, so the feedback only corrects the residual (on a straight
+    lane ``steer_ff`` is 0 and nothing changes)."""
+    return param(
+        True,
+        "-",
+        "add the curvature feed-forward steer_ff (the plant's steady-state steer on the lane's "
+        "curvature) to the feedback's steer",
+    )
 
 
 @dataclass(frozen=True)

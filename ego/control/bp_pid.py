@@ -41,7 +41,7 @@ from typing import Any
 
 import numpy as np
 
-from ego.control.base import Observation
+from ego.control.base import Observation, feedforward_param
 from ego.native import NATIVE
 from ego.params import Params, param
 
@@ -117,6 +117,7 @@ class BPPIDParams(Params):
     init_scale: float = param(
         0.1, "-", "initial weights ~ N(0, init_scale^2), stable variant (report: 1)", min=0.0, max=10.0
     )
+    feedforward: bool = feedforward_param()
 
 
 class BPPIDController:
@@ -233,7 +234,8 @@ class BPPIDController:
         else:
             u_x, u_y = self._step_py(e_x, de_x, e_y, de_y)
         self._u = (u_x, u_y)
-        return p.fx_gain * u_x, p.delta_gain * u_y
+        delta = p.delta_gain * u_y
+        return p.fx_gain * u_x, (delta + obs.steer_ff if p.feedforward else delta)
 
     def _step_py(self, e_x: float, de_x: float, e_y: float, de_y: float) -> tuple[float, float]:
         """The network's forward pass, the control law (u_x, u_y) and the learning step: the

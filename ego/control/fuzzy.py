@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
 
-from ego.control.base import Observation
+from ego.control.base import Observation, feedforward_param
 from ego.control.fuzzy_engine import FastMamdani, table_rules, table_system
 from ego.params import Params, param
 
@@ -74,6 +74,7 @@ class FuzzyParams(Params):
     kec_lon: float = param(1.0, "s/m", "longitudinal error-rate input gain", min=0, max=1000.0)
     ke_lat: float = param(1.0, "1/m", "lateral error input gain", min=0, max=1000.0)
     kec_lat: float = param(1.0, "s/m", "lateral error-rate input gain", min=0, max=1000.0)
+    feedforward: bool = feedforward_param()
 
 
 class FuzzyController:
@@ -84,6 +85,7 @@ class FuzzyController:
         self._eval = evaluator().single2
         p = params
         self._gains = (p.ke_lon, p.kec_lon, p.ke_lat, p.kec_lat, p.fx_gain, p.delta_gain)
+        self._ff = p.feedforward
         self._u_lon = 0.0
         self._u_lat = 0.0
 
@@ -96,7 +98,8 @@ class FuzzyController:
         u_lat = self._eval(ke_lat * (obs.d_ref - obs.d), kec_lat * (obs.dd_ref - obs.dd))
         self._u_lon = u_lon
         self._u_lat = u_lat
-        return fx_gain * u_lon, delta_gain * u_lat
+        delta = delta_gain * u_lat
+        return fx_gain * u_lon, (delta + obs.steer_ff if self._ff else delta)
 
     #: the rule base's outputs before the output gains: pure numbers
     signal_units = {"fuzzy_u_lon": "-", "fuzzy_u_lat": "-"}

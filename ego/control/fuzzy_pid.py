@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
 
-from ego.control.base import Observation
+from ego.control.base import Observation, feedforward_param
 from ego.control.fuzzy import INPUT_RANGE, INPUT_SAMPLES, OUTPUT_SAMPLES, TERMS
 from ego.control.fuzzy_engine import FastMamdani, table_rules, table_system
 from ego.control.pid import PID
@@ -106,6 +106,7 @@ class FuzzyPIDParams(Params):
         4805.0, "N", "|Fx| limit per driven wheel (0.7 m g / Nw)", min=0, max=20000.0, min_exclusive=True
     )
     steer_limit: float = param(0.5, "rad", "|delta| limit", min=0, max=HALF_PI, min_exclusive=True)
+    feedforward: bool = feedforward_param()
 
 
 class _Channel:
@@ -164,7 +165,7 @@ class FuzzyPIDController:
     def step(self, obs: Observation) -> tuple[float, float]:
         fx = self.lon.step(obs.s_ref - obs.s, obs.ds_ref - obs.ds)
         delta = self.lat.step(obs.d_ref - obs.d, obs.dd_ref - obs.dd)
-        return fx, delta
+        return fx, (delta + obs.steer_ff if self.params.feedforward else delta)
 
     #: the scheduled gains: Fx (N) and delta (rad) per m of error, per m s, per m/s
     signal_units = {

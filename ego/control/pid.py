@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ego.control.base import Observation
+from ego.control.base import Observation, feedforward_param
 from ego.params import HALF_PI, Params, param
 
 
@@ -80,6 +80,7 @@ class PIDParams(Params):
         4805.0, "N", "|Fx| limit per driven wheel (0.7 m g / Nw)", min=0, max=20000.0, min_exclusive=True
     )
     steer_limit: float = param(0.5, "rad", "|delta| limit", min=0, max=HALF_PI, min_exclusive=True)
+    feedforward: bool = feedforward_param()
 
 
 class PIDController:
@@ -90,6 +91,7 @@ class PIDController:
         self.params = p
         self.lon = PID(p.kp_lon, p.ki_lon, p.kd_lon, dt, -p.fx_limit, p.fx_limit, p.tau_d)
         self.lat = PID(p.kp_lat, p.ki_lat, p.kd_lat, dt, -p.steer_limit, p.steer_limit, p.tau_d)
+        self._ff = p.feedforward
 
     def reset(self, *, seed: int | None = None) -> None:
         self.lon.reset()
@@ -98,7 +100,7 @@ class PIDController:
     def step(self, obs: Observation) -> tuple[float, float]:
         fx = self.lon.step(obs.s_ref - obs.s, obs.ds_ref - obs.ds)
         delta = self.lat.step(obs.d_ref - obs.d, obs.dd_ref - obs.dd)
-        return fx, delta
+        return fx, (delta + obs.steer_ff if self._ff else delta)
 
     signal_units = {"integral_lon": "m s", "integral_lat": "m s"}  #: integrals of the errors
 

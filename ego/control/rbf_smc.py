@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from ego.control.base import Observation
+from ego.control.base import Observation, feedforward_param
 from ego.native import NATIVE
 from ego.params import Params, param
 
@@ -60,6 +60,7 @@ class RBFSMCParams(Params):
     delta_gain: float = param(0.6, "rad s/m", "delta = delta_gain * u_Y (report: 0.6)", min=0.0, max=10.0)
     phi_lon: float = param(0.5, "m/s", "boundary layer on s_X (fixed variant; 0: sign)", min=0.0, max=100.0)
     phi_lat: float = param(0.1, "m/s", "boundary layer on s_Y (fixed variant; 0: sign)", min=0.0, max=100.0)
+    feedforward: bool = feedforward_param()
 
 
 # numpy's own routines without the module wrappers' dispatch (the same numbers): np.einsum
@@ -135,7 +136,8 @@ class RBFSMCController:
             u_x = -s_x - f_x - p.eta_lon * _switch(s_x, p.phi_lon)
             u_y = -s_y - f_y - p.eta_lat * _switch(s_y, p.phi_lat)
         self.s_lon, self.s_lat, self.f_lon, self.f_lat = s_x, s_y, f_x, f_y
-        return p.fx_gain * u_x, p.delta_gain * u_y
+        delta = p.delta_gain * u_y
+        return p.fx_gain * u_x, (delta + obs.steer_ff if p.feedforward else delta)
 
     def _network_py(self, obs: Observation, k_lon: float, k_lat: float) -> tuple[float, float]:
         """The estimates (f_X, f_Y) = W^T h, then W += k h on each channel (the report's

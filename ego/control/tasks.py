@@ -74,6 +74,13 @@ ROAD_FRAME = (
     Signal("vy", "m/s", "body lateral speed v (+ left)"),
     Signal("heading_error", "rad", "yaw minus the lane's heading (+ left)", -math.pi, math.pi),
     Signal("curvature", "1/m", "the lane's curvature at the projection (+ turning left)"),
+    Signal(
+        "steer_ff",
+        "rad",
+        "curvature feed-forward: the plant's steady-state front steer on the lane's curvature at its "
+        "speed (+ left; the motorway and file scenarios: the target lane's mean curvature over the "
+        "next 0.4 s)",
+    ),
     Signal("accel_ref", "m/s^2", "planned axial acceleration (tasks commanding a_x)"),
     Signal("lane", "-", "the lane s is measured along (road preview), or None"),
     Signal("surround", "-", "the motorway's surround sensor (front and rear detections), or None"),

@@ -71,6 +71,7 @@ EGO_STATE_BOUNDS: dict[str, tuple[float, float]] = {
     "vy": (-SPEED, SPEED),
     "heading_error": (-math.pi, math.pi),
     "curvature": (-1.0, 1.0),  # 1/m: no lane is tighter than a radius of 1 m
+    "steer_ff": (-10.0, 10.0),  # rad: kappa (L + K_us v^2) at |kappa| <= 1 1/m
     "accel_ref": (-ACCEL, ACCEL),
     "gap": (-STATION, STATION),
     "accel": (-ACCEL, ACCEL),

@@ -185,6 +185,17 @@ class Scenario:
         return cls.config_cls()
 
     @classmethod
+    def network_of(cls, config) -> str | None:
+        """The SUMO network a run of ``config`` drives on: ``network``, or for a configuration
+        with a ``road`` the motorway it names (``ego.sumo.net.MOTORWAY_ROADS``)."""
+        road = getattr(config, "road", None)
+        if cls.network is None or road is None:
+            return cls.network
+        from ego.sumo.net import MOTORWAY_ROADS
+
+        return MOTORWAY_ROADS[road]
+
+    @classmethod
     def check_config(cls, config) -> None:
         """Checks of a configuration that need more than the configuration (the network's
         geometry, say), made by ``ego.runner.resolve`` before anything runs: ConfigError.
@@ -456,7 +467,7 @@ class Scenario:
         c = self.config
         return make_sim(
             self.backend,
-            SimSetup(net_file(self.network), c.sumo_step, self.seed, c.lateral_resolution, self.edge, c.duration),
+            SimSetup(net_file(self.network_of(c)), c.sumo_step, self.seed, c.lateral_resolution, self.edge, c.duration),
             self.backend_options,
         )
 

@@ -366,7 +366,16 @@ class CurveScenario(Scenario):
                 plan = max(follow, -7.0)
         self.gap_front = gap
         road_observation(
-            obs, self.t, s, view.ds, view.d_road, view.dd, self.ego.state, view.heading_error, view.curvature
+            obs,
+            self.t,
+            s,
+            view.ds,
+            view.d_road,
+            view.dd,
+            self.ego.state,
+            view.heading_error,
+            view.curvature,
+            view.steady,
         )
         obs.accel_ref = plan
 

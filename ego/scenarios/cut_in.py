@@ -16,7 +16,7 @@ from ego.results import metrics as m
 from ego.results.trace import Marker, Metric
 from ego.scenarios.base import NO_AVOIDABLE_COLLISION, NO_COLLISION, STAYS_IN_LANE, Parts, Scenario
 from ego.scenarios.envelope import ReachCriterion
-from ego.scenarios.evasive import MARKERS, METRICS, EvasiveConfig, compare_plots, compose, evasive_metrics
+from ego.scenarios.evasive import MARKERS, METRICS, MotorwayRoadConfig, compare_plots, compose, evasive_metrics
 from ego.scenarios.manoeuvre import FollowInLane
 from ego.scenarios.motorway import COLUMNS, EDGE, LANE_NAMES, PLOTS, ROUTE, MotorwayWorld
 from ego.scenarios.safety import friction_limit
@@ -33,7 +33,7 @@ TTC_OR_CLEAR = ("ttc_or_clear", "always (ttc_front >= 1 s or lateral_clear)")
 
 
 @dataclass(frozen=True)
-class CutInConfig(EvasiveConfig):
+class CutInConfig(MotorwayRoadConfig):
     duration: float = param(30.0, "s", "simulated time", min=1.0, max=3600.0)
     ego_speed: float = param(25.0, "m/s", "ego's cruise speed", min=5.0, max=45.0)
     cut_in_side: str = param("left", "-", "the lane the car comes from", choices=("left", "right"))
@@ -101,7 +101,7 @@ class CutIn(Scenario):
         world.add_type(CUTTER_TYPE)
         lanes, speeds = (c.cut_in_lane, c.ego_lane), (c.ego_speed + c.overtake_speed, c.ego_speed - c.cut_in_speed)
         across = (c.cut_in_gap, c.cut_in_duration, world.lane_width(c.ego_lane), c.sumo_step)
-        self.cutter = CutInVehicle(CUTTER, "ego", *lanes, *speeds, *across)
+        self.cutter = CutInVehicle(CUTTER, "ego", *lanes, *speeds, *across, frame=world.lane_frame())
         world.vehicle(
             VehicleSpec(CUTTER, CUTTER_TYPE.id, ROUTE, c.cut_in_lane, c.ego_start - c.start_behind, c.ego_speed),
             CUTTER_TYPE,

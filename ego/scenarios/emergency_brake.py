@@ -20,7 +20,7 @@ from ego.params import ConfigError, param
 from ego.results import metrics as m
 from ego.results.trace import Metric
 from ego.scenarios.base import NO_AVOIDABLE_COLLISION, NO_COLLISION, STAYS_IN_LANE, Parts, Scenario
-from ego.scenarios.evasive import MARKERS, METRICS, EvasiveConfig, compare_plots, compose, evasive_metrics
+from ego.scenarios.evasive import MARKERS, METRICS, MotorwayRoadConfig, compare_plots, compose, evasive_metrics
 from ego.scenarios.events import INF
 from ego.scenarios.motorway import COLUMNS, EDGE, EGO, PLOTS, ROUTE, MotorwayWorld
 from ego.scenarios.safety import AEB_SLOWS, friction_limit
@@ -38,7 +38,7 @@ GAP_OR_CLEAR = ("gap_or_clear", "always (gap_front >= 2 m or lateral_clear)")
 
 
 @dataclass(frozen=True)
-class EmergencyBrakeConfig(EvasiveConfig):
+class EmergencyBrakeConfig(MotorwayRoadConfig):
     lead_gap: float = param(30.0, "m", "gap from the ego's front to the lead car's rear at t = 0", min=5.0, max=300.0)
     lead_speed: float = param(
         SAME_AS_EGO,

@@ -35,6 +35,7 @@ from ego.scenarios.motorway import (
     series,
 )
 from ego.scenarios.safety import SafetyLayer
+from ego.sumo.net import MOTORWAY_ROADS
 
 
 @dataclass(frozen=True)
@@ -85,6 +86,20 @@ class EvasiveConfig(HighwayConfig):
         # the background keeps a safe spacing; a denser flow cannot be placed, so say so
         # before the simulator starts
         check_density(self)
+
+
+@dataclass(frozen=True)
+class MotorwayRoadConfig(EvasiveConfig):
+    """An evasive scenario on the built-in motorway, straight or curved."""
+
+    road: str = param(
+        "straight",
+        "-",
+        "the motorway: straight, or an arc of the middle lane's radius 250 m (180 deg) or 1000 m "
+        "(90 deg) to the left or right, 350 m after its start (at the default ego_start the ego enters it within "
+        "3 s); gaps and TTCs along the lane (sumo backend only)",
+        choices=tuple(MOTORWAY_ROADS),
+    )
 
 
 def compose(

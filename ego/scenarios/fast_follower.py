@@ -17,7 +17,7 @@ from ego.scenarios.base import NO_COLLISION, STAYS_IN_LANE, Parts, Scenario
 from ego.scenarios.evasive import (
     MARKERS,
     METRICS,
-    EvasiveConfig,
+    MotorwayRoadConfig,
     compare_plots,
     compose,
     evasive_metrics,
@@ -32,7 +32,7 @@ FOLLOWER_TYPE = VehicleType("follower", length=4.5, width=1.8, sigma=0.0, max_sp
 
 
 @dataclass(frozen=True)
-class FastFollowerConfig(EvasiveConfig):
+class FastFollowerConfig(MotorwayRoadConfig):
     evade_speed: float = param(
         25.0, "m/s", "speed reference during the lane change (report 000: X_ref = 25 t)", min=1.0, max=45.0
     )
@@ -80,6 +80,7 @@ class FastFollower(Scenario):
     def populate(self, world: MotorwayWorld) -> None:
         c = self.config
         self._follower_x = -INF
+        self._along = world.lane_frame()  # a curved road: along the ego's lane
         front = c.ego_start - self.geometry.length - c.follower_gap
         # inserted at the ego's speed (SUMO checks insertion safety); it speeds up at once
         world.vehicle(
@@ -89,10 +90,12 @@ class FastFollower(Scenario):
         )
 
     def after_sim_step(self) -> None:
-        self._follower_x = self.bridge.front_bumper(FOLLOWER)[0]
+        x, y = self.bridge.front_bumper(FOLLOWER)
+        self._follower_x = x if self._along is None else self._along(x, y)[0]
 
     def _metrics(self, trace, names) -> dict:
         out = evasive_metrics(self, trace, names)
         # passed: the follower's front bumper ended ahead of the ego's
-        out["follower_passed"] = bool(self._follower_x > self.ego.state[0] + self.geometry.cg_to_front)
+        ego_front = (self.ego.state[0] if self._along is None else self.view.s) + self.geometry.cg_to_front
+        out["follower_passed"] = bool(self._follower_x > ego_front)
         return out

@@ -272,7 +272,9 @@ class LaneCenteringScenario(Scenario):
             )
         obs = self.obs
         x = self.ego.state
-        road_observation(obs, self.t, s, view.ds, view.d_road, view.dd, x, view.heading_error, view.curvature)
+        road_observation(
+            obs, self.t, s, view.ds, view.d_road, view.dd, x, view.heading_error, view.curvature, view.steady
+        )
         # the plan holds the speed (the lateral-error model's speed is constant anyway)
         obs.accel_ref = 1.0 * (self.config.speed - x[1])
 

@@ -25,11 +25,14 @@ def road_observation(
     state: Sequence[float],
     heading_error: float,
     curvature: float,
+    steady=None,
 ) -> None:
     """Fill ``obs`` in place (it is the controller's, reused every step): time ``t`` (s), the
     centre of gravity at ``s`` along the lane and ``d`` across it (m, + left) moving at
     ``ds``/``dd`` (m/s), the plant's ``state`` (X, u, Y, v, psi, r) for the body speeds and yaw
-    rate, the heading error (rad) and the lane's curvature (1/m)."""
+    rate, the heading error (rad) and the lane's curvature (1/m); ``steady`` (the plant's
+    :class:`~ego.models.cornering.SteadySteer`) makes ``steer_ff`` its steady-state steer on
+    that curvature at the body speed (rad; without it 0)."""
     obs.t = t
     obs.s = s
     obs.ds = ds
@@ -40,3 +43,6 @@ def road_observation(
     obs.vy = state[3]
     obs.heading_error = heading_error
     obs.curvature = curvature
+    if steady is not None:  # SteadySteer.__call__, inline: every control period
+        u = state[1]
+        obs.steer_ff = curvature * (steady.wheelbase + steady.understeer * u * u)

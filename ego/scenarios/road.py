@@ -18,6 +18,7 @@ import math
 from collections.abc import Callable
 
 from ego.lane_frame import LanePolyline, wrap_angle
+from ego.models.cornering import SteadySteer, steady_steer
 from ego.models.geometry import VehicleGeometry
 from ego.native import NATIVE
 from ego.record.base import Scene
@@ -41,6 +42,8 @@ class RoadSensor:
         self.road_halfwidth = 0.0
         self.s = self.d_road = self.heading_error = self.curvature = self.ds = self.dd = 0.0
         self.X = self.Y = 0.0
+        #: the plant's steady-state cornering (the curvature feed-forward, ``steer_ff``)
+        self.steady = SteadySteer(0.0)
         self._plant = None
         self._line_of = None  #: the road ``_line`` belongs to
         self._line: tuple[float, ...] | None = None  #: its straight segment (LanePolyline.straight)
@@ -49,6 +52,7 @@ class RoadSensor:
         """Measure ``plant`` on the one lane ``road``: off the road beyond its edge by more
         than half a car (and 0.5 m)."""
         self.road, self._plant = road, plant
+        self.steady = steady_steer(plant)
         self.road_halfwidth = 0.5 * road.width + 0.5 * self.geometry.width + 0.5
         self.frame()
 

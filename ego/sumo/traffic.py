@@ -10,7 +10,7 @@ highway-env (``PoissonFlow`` adds its cars through :meth:`TrafficSim.depart`).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -282,6 +282,17 @@ class CutInVehicle:
     slow_time: float = 2.0
     phase: str = "overtake"
     cut_in_time: float | None = None  #: when it started across the lane (s)
+    #: a curved road's lane frame, (x, y) -> (s, d, ...) in m: the gap and the move across
+    #: are measured along and across the lane; None (a straight road along +x): world x and y
+    frame: Callable[[float, float], tuple[float, ...]] | None = None
+
+    def _where(self, bridge: TrafficCommands, vid: str) -> tuple[float, float]:
+        """A front bumper along and across the road (m)."""
+        x, y = bridge.front_bumper(vid)
+        if self.frame is None:
+            return x, y
+        s, d = self.frame(x, y)[:2]
+        return s, d
 
     def start(self, bridge: TrafficCommands) -> None:
         bridge.drive_blind(self.vid)
@@ -293,22 +304,22 @@ class CutInVehicle:
         """Call before every SUMO step from ``t`` (s); True on the step it starts across."""
         started = False
         if self.phase == "overtake":
-            rear = bridge.front_bumper(self.vid)[0] - bridge.dimensions(self.vid)[0]
+            rear = self._where(bridge, self.vid)[0] - bridge.dimensions(self.vid)[0]
             # while it slows, the gap changes by the mean relative speed times slow_time
             v = bridge.speed(self.target)
             change = 0.5 * self.slow_time * ((self.overtake_speed - v) + (self.speed - v))
-            if rear - bridge.front_bumper(self.target)[0] >= self.gap - change:
+            if rear - self._where(bridge, self.target)[0] >= self.gap - change:
                 bridge.slow_down(self.vid, self.speed, self.slow_time)
                 self.phase, self._until = "slow", t + self.slow_time
         elif self.phase == "slow" and t >= self._until - 1e-9:
             bridge.set_speed(self.vid, self.speed)
             self.phase, self.cut_in_time, started = "cut in", t, True
-            self._y0 = bridge.front_bumper(self.vid)[1]
+            self._y0 = self._where(bridge, self.vid)[1]
             self._sign = 1.0 if self.lane > self.source_lane else -1.0
         if self.phase == "cut in":
             u = (t + self.step - self.cut_in_time) / self.duration
             want = self._sign * self.lane_width * min_jerk(u)
-            bridge.change_sublane(self.vid, want - (bridge.front_bumper(self.vid)[1] - self._y0))
+            bridge.change_sublane(self.vid, want - (self._where(bridge, self.vid)[1] - self._y0))
             if u >= 1.0:
                 self.phase = "in lane"
         return started

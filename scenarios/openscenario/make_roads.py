@@ -8,6 +8,9 @@
   left lane, index 2; lane -3 the right lane, index 0).
 * ``arc15.xodr``: report 002's curve: 100 m straight along +x, a left 90-degree arc whose
   single right-hand lane's centre line has radius 15 m, 100 m straight along +y; 50 km/h.
+* ``arc200.xodr``: the motorway bending left: 300 m straight along +x, a left 90-degree arc
+  whose middle lane's centre line has radius 200 m, 200 m straight along +y; three 3.5 m
+  right-hand lanes at 130 km/h (the middle lane's centre on y = 0 along the straight).
 * ``clothoid.xodr`` (tests): 50 m straight, a 100 m clothoid from curvature 0 to 1/50 1/m
   (reference line), 50 m of arc at 1/50 1/m.
 """
@@ -81,6 +84,27 @@ def arc15() -> str:
     )
 
 
+#: the R 200 m arc: its middle lane's centre radius and the straight before and after it
+ARC200_LANE_RADIUS = 200.0
+ARC200_APPROACH, ARC200_EXIT = 300.0, 200.0
+
+
+def arc200() -> str:
+    y0 = 1.5 * LANE_WIDTH  # the reference line (the left edge): the middle lane's centre on y = 0
+    r = ARC200_LANE_RADIUS - y0
+    cx, cy = ARC200_APPROACH, y0 + r  # the arc's centre
+    return road(
+        "arc200",
+        [
+            (0.0, y0, 0.0, ARC200_APPROACH, "<line/>"),
+            (ARC200_APPROACH, y0, 0.0, 0.5 * math.pi * r, f'<arc curvature="{1.0 / r:.15g}"/>'),
+            (cx + r, cy, 0.5 * math.pi, ARC200_EXIT, "<line/>"),
+        ],
+        3,
+        130.0 / 3.6,
+    )
+
+
 #: the clothoid's reference-line curvature at its end (1/m) and its length (m)
 CLOTHOID_END_CURVATURE = 1.0 / 50.0
 CLOTHOID_LENGTH = 100.0
@@ -109,7 +133,7 @@ def clothoid() -> str:
 
 
 def main(out: Path = HERE) -> None:
-    for name, text in (("straight3", straight3()), ("arc15", arc15())):
+    for name, text in (("straight3", straight3()), ("arc15", arc15()), ("arc200", arc200())):
         (out / f"{name}.xodr").write_text(text, encoding="utf-8")
 
 

@@ -73,10 +73,10 @@ def test_make_vec_by_default_runs_one_sumo_per_subprocess():
     assert isinstance(envs, EgoVectorEnv)
     try:
         obs, info = envs.reset(seed=[0, 1])
-        assert obs.shape == (2, 15) and list(info["status"]) == ["running", "running"]
+        assert obs.shape == (2, 16) and list(info["status"]) == ["running", "running"]
         for _ in range(5):
             obs, reward, terminated, truncated, info = envs.step(envs.action_space.sample())
-        assert obs.shape == (2, 15) and reward.shape == (2,)
+        assert obs.shape == (2, 16) and reward.shape == (2,)
         # t after 5 x 0.1 s, over the 25 s duration (normalised)
         assert obs[0, 0] == pytest.approx(0.5 / 25) and obs[1, 0] == pytest.approx(0.5 / 25)
     finally:
@@ -153,7 +153,7 @@ def test_platoon_does_not_steer():
 @pytest.mark.sumo
 def test_reset_options_reconfigure_and_rebuild_the_spaces(make):
     env = make("ego/EmergencyBrake-v0")
-    assert env.observation_space.shape == (15,)
+    assert env.observation_space.shape == (16,)
     obs, _ = env.reset(
         seed=0,
         options={
@@ -175,7 +175,7 @@ def test_configure_or_an_edit_of_config_takes_effect_at_the_next_reset(make):
     assert obs.shape == (5, 5) and u._every == 10 and u.metadata["render_fps"] == 10.0
     u.config["observation"] = {"type": "EgoState"}
     obs, _ = env.reset(seed=0)
-    assert obs.shape == (15,) and env.observation_space.shape == (15,)
+    assert obs.shape == (16,) and env.observation_space.shape == (16,)
 
 
 @pytest.mark.sumo
@@ -203,7 +203,7 @@ def test_a_copy_replays_the_built_configuration_and_keeps_a_pending_one(make):
     u.configure({"observation": {"type": "Kinematics"}})  # pending until the next reset
     twin = pickle.loads(pickle.dumps(u))
     try:
-        assert twin.observation_space.shape == (15,) and twin.scenario.k == u.scenario.k
+        assert twin.observation_space.shape == (16,) and twin.scenario.k == u.scenario.k
         assert twin.config == u.config
         obs, _ = twin.reset(seed=0)
         assert obs.shape == (5, 5)

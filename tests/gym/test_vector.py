@@ -139,7 +139,7 @@ def test_gymnasium_semantics_and_light_infos():
     envs = gym.make_vec("ego/CutIn-v0", num_envs=2, config=SHORT)
     try:
         assert envs.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP
-        assert envs.single_observation_space.shape == (15,) and envs.observation_space.shape == (2, 15)
+        assert envs.single_observation_space.shape == (16,) and envs.observation_space.shape == (2, 16)
         assert envs.single_action_space.shape == (2,) and envs.action_space.shape == (2, 2)
         obs, infos = envs.reset(seed=5)
         assert obs in envs.observation_space and list(infos["status"]) == ["running", "running"]
@@ -434,6 +434,6 @@ def test_a_reset_that_would_change_the_spaces_is_refused_and_the_vector_env_goes
             envs.reset(seed=0, options={"config": {"policy_frequency": 3}})
         obs, _ = envs.reset(seed=0, options={"config": {"ego_speed": 25.0}})  # the spaces kept
         obs, *_ = envs.step(np.zeros((2, 2), np.float32))
-        assert obs.shape == (2, 15) and envs.get_attr("config")[1]["ego_speed"] == 25.0
+        assert obs.shape == (2, 16) and envs.get_attr("config")[1]["ego_speed"] == 25.0
     finally:
         envs.close()
