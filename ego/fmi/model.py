@@ -97,6 +97,9 @@ def _this_platform(version: str) -> str:
 def inspect_fmu(path: str | os.PathLike) -> FmuInfo:
     """The model description of the co-simulation FMU at ``path``, checked for this machine;
     ConfigError (one line, the file named) otherwise."""
+    from ego.fmi.guard import step_limit
+
+    step_limit()  # EGO_FMU_STEP_LIMIT checked before anything runs
     shown = os.fspath(path)
     p = Path(shown).expanduser()
     if p.is_dir():  # an unpacked FMU, say
