@@ -89,26 +89,33 @@ class CoSim:
 
     # -- life cycle -----------------------------------------------------------------------------
     def _load(self) -> None:
-        from fmpy import extract
+        from ego.fmi.model import extract
 
         st = self._state
         folder = extraction_dir(self.info.model_name)
         st["folder"] = folder
-        extract(self.info.path, unzipdir=folder)
+        try:
+            extract(self.info.path, folder)
+        except ConfigError as exc:  # an archive that lied about its sizes
+            raise FmuError(str(exc)) from None
         kw = dict(
             guid=self.info.guid,
             unzipDirectory=folder,
             modelIdentifier=self.info.model_identifier,
             instanceName=self.instance_name,
         )
-        if self.v3:
-            from fmpy.fmi3 import FMU3Slave
+        try:
+            if self.v3:
+                from fmpy.fmi3 import FMU3Slave
 
-            fmu = FMU3Slave(**kw)
-        else:
-            from fmpy.fmi2 import FMU2Slave
+                fmu = FMU3Slave(**kw)
+            else:
+                from fmpy.fmi2 import FMU2Slave
 
-            fmu = FMU2Slave(**kw)
+                fmu = FMU2Slave(**kw)
+        except Exception as exc:  # noqa: BLE001 - not a shared library, or one for another machine
+            text = " ".join(str(exc).split())[:200]
+            raise FmuError(f"FMU {self.info.model_name}: its binary cannot be loaded: {text}") from None
         dll = fmu.dll
         prefix = "fmi3" if self.v3 else "fmi2"
         names = (
