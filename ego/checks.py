@@ -192,3 +192,73 @@ def read_json(text: str | os.PathLike, what: str) -> Any:
 def finite_number(value: Any) -> bool:
     """A real number (not a bool, not text) that is neither NaN nor infinite."""
     return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+MIB = 1024 * 1024
+#: the largest input files ego reads (docs/reliability.md, "Limits"): checked before reading
+MAX_XOSC_BYTES = 16 * MIB  #: an OpenSCENARIO file or catalog
+MAX_ROAD_BYTES = 256 * MIB  #: an OpenDRIVE .xodr or a SUMO .net.xml
+MAX_MAP_BYTES = 1 * MIB  #: an FMU mapping file (TOML)
+
+
+def _size(n: int) -> str:
+    return f"{n // MIB} MiB" if n >= MIB and n % MIB == 0 else f"{n // 1024} KiB"
+
+
+def read_limited(path: str | os.PathLike, what: str, limit: int, fail: Any = None) -> bytes:
+    """The bytes of the regular file ``path`` (a ``what``: "scenario file"), at most ``limit``
+    of them. Refused in one line before anything is read: a folder, a FIFO, a device (a link
+    to /dev/zero), a socket, a symlink loop, a file larger than ``limit``; and a file that
+    grows past it while read. ``fail(reason)`` makes the exception (default: ConfigError
+    ``cannot read the <what> '<path>': <reason>``)."""
+    import stat
+
+    shown = os.fspath(path)
+
+    def refuse(reason: str) -> Exception:
+        return fail(reason) if fail is not None else ConfigError(f"cannot read the {what} {shown!r}: {reason}")
+
+    try:
+        # O_NONBLOCK: opening a FIFO with no writer must not wait for one
+        fd = os.open(shown, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
+    except FileNotFoundError:
+        raise refuse("no such file") from None
+    except OSError as exc:
+        import errno
+
+        if exc.errno == errno.ELOOP:
+            raise refuse("a symbolic link loop") from None
+        if exc.errno == errno.EISDIR:
+            raise refuse("it is a folder") from None
+        raise refuse(exc.strerror or str(exc)) from None
+    try:
+        st = os.fstat(fd)
+        if stat.S_ISDIR(st.st_mode):
+            raise refuse("it is a folder")
+        if not stat.S_ISREG(st.st_mode):
+            kind = "a FIFO" if stat.S_ISFIFO(st.st_mode) else "a device" if stat.S_ISCHR(st.st_mode) else "special"
+            raise refuse(f"not a regular file ({kind}; ego reads only regular files)")
+        if st.st_size > limit:
+            raise refuse(f"{st.st_size / MIB:.1f} MiB, larger than the limit of {_size(limit)}")
+        chunks, total = [], 0
+        while True:
+            chunk = os.read(fd, min(limit + 1 - total, 1 << 20))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            total += len(chunk)
+            if total > limit:
+                raise refuse(f"larger than the limit of {_size(limit)}")
+        return b"".join(chunks)
+    except OSError as exc:
+        raise refuse(exc.strerror or str(exc)) from None
+    finally:
+        os.close(fd)
+
+
+def resolved(path: Path, what: str) -> Path:
+    """``path`` with its links resolved; a symlink loop is one line (ConfigError)."""
+    try:
+        return path.resolve()
+    except (RuntimeError, OSError):
+        raise ConfigError(f"bad {what} {str(path)!r}: a symbolic link loop") from None

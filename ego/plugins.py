@@ -70,9 +70,14 @@ def is_reference(name: str) -> bool:
 
 
 def file_digest(path: str | os.PathLike) -> str:
-    """sha256 of a file's content (hex)."""
+    """sha256 of a file's content (hex); OSError for anything but a regular file (a FIFO or
+    a link to /dev/zero would never end)."""
+    import stat
+
     h = hashlib.sha256()
-    with open(path, "rb") as f:
+    with open(path, "rb", opener=lambda p, flags: os.open(p, flags | getattr(os, "O_NONBLOCK", 0))) as f:
+        if not stat.S_ISREG(os.fstat(f.fileno()).st_mode):
+            raise OSError(f"{os.fspath(path)!r} is not a regular file")
         for block in iter(lambda: f.read(1 << 20), b""):
             h.update(block)
     return h.hexdigest()

@@ -265,12 +265,22 @@ class Requirement:
         return f"{self.name}: {self.formula}"
 
 
+#: limits of a requirement formula (docs/reliability.md): tokens, nesting of not, temporal
+#: operators, parentheses, signs and abs(), and interval bounds (s; also at most the run)
+MAX_TOKENS = 2000
+MAX_NESTING = 100
+MAX_BOUND = 86400.0
+
+
 class _Parser:
     def __init__(self, formula: str, units: Mapping[str, str]) -> None:
         self.formula = formula
         self.units = units
         self.toks = self._lex(formula)
+        if len(self.toks) > MAX_TOKENS:
+            raise self.error(f"{len(self.toks):,} tokens (the limit is {MAX_TOKENS:,})")
         self.i = 0
+        self.depth = 0
         self.used: dict[str, None] = {}
         self.cmp_units: set[str] = set()
         self.bounds: list[float] = []
@@ -287,7 +297,13 @@ class _Parser:
         return toks
 
     def error(self, msg: str) -> RequirementError:
-        return RequirementError(f"bad requirement formula {self.formula!r}: {msg}")
+        shown = self.formula if len(self.formula) <= 120 else self.formula[:117] + "..."
+        return RequirementError(f"bad requirement formula {shown!r}: {msg}")
+
+    def deeper(self) -> None:
+        self.depth += 1
+        if self.depth > MAX_NESTING:
+            raise self.error(f"nested deeper than {MAX_NESTING} levels (the limit)")
 
     def peek(self, k: int = 0) -> str | None:
         j = self.i + k
@@ -351,10 +367,17 @@ class _Parser:
         tok = self.peek()
         if tok in ("not", "~"):
             self.take()
-            return f"not ({self.unary()})"
+            self.deeper()
+            inner = self.unary()
+            self.depth -= 1
+            return f"not ({inner})"
         if tok in _TEMPORAL:
             self.take()
-            return f"{tok}{self.interval()} ({self.unary()})"
+            bounds = self.interval()
+            self.deeper()
+            inner = self.unary()
+            self.depth -= 1
+            return f"{tok}{bounds} ({inner})"
         if tok in ("true", "false"):
             self.take()
             return "(1 > 0)" if tok == "true" else "(0 > 1)"
@@ -365,7 +388,9 @@ class _Parser:
             except RequirementError:
                 self.i = start
             self.take("(")
+            self.deeper()
             inner = self.formula_()
+            self.depth -= 1
             self.take(")")
             return f"({inner})"
         if tok is not None and tok not in _KEYWORDS and _is_name(tok) and self.units.get(tok) == BOOL:
@@ -396,6 +421,8 @@ class _Parser:
         if self.peek() == "s":
             self.take()
         value = self.finite(tok)
+        if value > MAX_BOUND:
+            raise self.error(f"interval bound {tok} s is longer than a day ({MAX_BOUND:g} s, the limit)")
         self.bounds.append(value)
         return value
 
@@ -439,6 +466,8 @@ class _Parser:
         while self.peek() in ("*", "/"):
             op = self.take()
             rt, ru = self.factor()
+            if op == "/" and _is_number(rt.lstrip("-")) and float(rt) == 0.0:
+                raise self.error(f"divides by zero ({text} / {rt})")
             if unit is None or unit == "-":
                 unit = ru if op == "*" else (None if ru in (None, "-") else f"1/({ru})")
             elif ru not in (None, "-"):
@@ -448,18 +477,19 @@ class _Parser:
 
     def factor(self) -> tuple[str, str | None]:
         tok = self.next("a signal or a number")
-        if tok == "-":
-            text, unit = self.factor()
-            return f"-{text}", unit
-        if tok == "(":
-            text, unit = self.arith()
-            self.take(")")
-            return f"({text})", unit
-        if tok == "abs":
-            self.take("(")
-            text, unit = self.arith()
-            self.take(")")
-            return f"abs({text})", unit
+        if tok in ("-", "(", "abs"):
+            self.deeper()
+            if tok == "-":
+                text, unit = self.factor()
+                text = f"-{text}"
+            else:
+                if tok == "abs":
+                    self.take("(")
+                text, unit = self.arith()
+                self.take(")")
+                text = f"abs({text})" if tok == "abs" else f"({text})"
+            self.depth -= 1
+            return text, unit
         if _is_number(tok):
             value, unit = repr(self.finite(tok)), self.unit_suffix()
             after = self.peek()
@@ -739,7 +769,12 @@ def evaluate(req: Requirement, result, period: float = PERIOD, scenario=None) ->
     always = req.rtamt.startswith("always (") and _outer_parens(req.rtamt[len("always ") :])
     text = req.rtamt[len("always ") :] if always else req.rtamt
     spec = _spec(Requirement(req.name, req.formula, in_samples(text, stride * dt), req.signals, req.unit), names)
-    rob = np.array([v for _, v in spec.evaluate(data)], dtype=float)
+    try:
+        rob = np.array([v for _, v in spec.evaluate(data)], dtype=float)
+    except (ArithmeticError, ValueError, MemoryError, RecursionError):  # rtamt could not: no number
+        return Verdict(req.name, math.nan, None, req.unit)
+    if not len(rob):
+        return Verdict(req.name, math.nan, None, req.unit)
     value = float(rob.min()) if always else float(rob[0])
     at = None
     if value < 0.0:

@@ -311,7 +311,19 @@ def requirements_of(resolved: ResolvedRun, controller: Controller | None = None)
         except Exception:  # noqa: BLE001 - a controller that needs a reset first: its signals stay unnamed
             pass
     metrics = [m.name for m in cls.metrics_declared(config)]
-    return resolve_requirements(texts, signal_units(columns, metrics, cls))
+    reqs = resolve_requirements(texts, signal_units(columns, metrics, cls))
+    duration = getattr(config, "duration", None)
+    if spec.requirements is not None and isinstance(duration, (int, float)):
+        from ego.requirements import RequirementError
+
+        for req in reqs:  # a window longer than the run holds no sample
+            longest = max(req.bounds, default=0.0)
+            if longest > duration:
+                raise RequirementError(
+                    f"bad requirement {req.name!r}: its interval bound {longest:g} s is longer than the run "
+                    f"(duration {duration:g} s)"
+                )
+    return reqs
 
 
 def run(what: RunSpec | ResolvedRun) -> RunResult:

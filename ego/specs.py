@@ -63,16 +63,10 @@ def read_toml(path: Path, what: str) -> dict:
     """The TOML table in ``path`` (a ``what``: "sweep spec"), at most :data:`MAX_SPEC_BYTES`
     read; ConfigError (one line, naming the file) if it is a folder, larger, not text or not
     TOML."""
+    from ego.checks import read_limited
+
+    raw = read_limited(path, what, MAX_SPEC_BYTES)
     try:
-        if path.is_dir():
-            raise ConfigError(f"cannot read the {what} {str(path)!r}: it is a folder (expected a TOML file)")
-        with open(path, "rb") as f:
-            raw = f.read(MAX_SPEC_BYTES + 1)
-        if len(raw) > MAX_SPEC_BYTES:
-            raise ConfigError(
-                f"cannot read the {what} {str(path)!r}: larger than "
-                f"{MAX_SPEC_BYTES // 1024} KiB (a spec is a few lines of TOML)"
-            )
         text = raw.decode("utf-8")
     except UnicodeDecodeError:
         raise ConfigError(f"cannot read the {what} {str(path)!r}: not a text file (expected TOML)") from None

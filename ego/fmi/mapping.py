@@ -55,11 +55,14 @@ class Mapping:
 def read_map_file(path: str, key: str = "fmu_map") -> dict:
     """The [inputs]/[outputs] tables of a mapping file, the value of parameter ``key``
     (ConfigError naming it and what is wrong)."""
+    from ego.checks import MAX_MAP_BYTES, read_limited
+
     p = Path(path).expanduser()
-    if not p.is_file():
+    if not p.exists() and not p.is_symlink():
         raise ConfigError(f"bad value for {key}: no file {path!r} (expected a TOML mapping file)")
+    raw = read_limited(p, f"{key} file", MAX_MAP_BYTES)
     try:
-        data = tomllib.loads(p.read_text())
+        data = tomllib.loads(raw.decode("utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ConfigError(f"bad {key} {path!r}: not TOML ({exc})") from None
     bad = set(data) - {"inputs", "outputs"}

@@ -78,6 +78,79 @@ class FmuInfo:
 
 _cache: dict[tuple[str, str], FmuInfo] = {}
 
+#: limits of an FMU archive, checked before anything is extracted (docs/reliability.md)
+MAX_ENTRIES = 10_000
+MAX_ENTRY_BYTES = 512 * 1024 * 1024  #: one entry, uncompressed (declared and real)
+MAX_TOTAL_BYTES = 1024 * 1024 * 1024  #: all entries, uncompressed (declared and real)
+MAX_DESCRIPTION_BYTES = 16 * 1024 * 1024  #: modelDescription.xml
+
+
+def _mib(n: int) -> str:
+    return f"{n / (1024 * 1024):.0f} MiB"
+
+
+def check_archive(z: zipfile.ZipFile, shown: str) -> None:
+    """The archive's entries: how many, their names (inside the archive) and declared sizes;
+    ConfigError (one line) before anything is read or extracted."""
+    infos = z.infolist()
+    if len(infos) > MAX_ENTRIES:
+        raise ConfigError(f"bad FMU {shown!r}: {len(infos):,} entries in the archive (the limit is {MAX_ENTRIES:,})")
+    total = 0
+    for i in infos:
+        name = i.filename
+        parts = name.replace("\\", "/").split("/")
+        if name.startswith(("/", "\\")) or ".." in parts or (len(name) > 1 and name[1] == ":"):
+            raise ConfigError(f"bad FMU {shown!r}: the entry {name[:80]!r} points outside the archive's folder")
+        if i.file_size > MAX_ENTRY_BYTES:
+            raise ConfigError(
+                f"bad FMU {shown!r}: {name[:80]!r} is {_mib(i.file_size)} uncompressed "
+                f"(the limit is {_mib(MAX_ENTRY_BYTES)} an entry)"
+            )
+        total += i.file_size
+    if total > MAX_TOTAL_BYTES:
+        raise ConfigError(
+            f"bad FMU {shown!r}: {_mib(total)} uncompressed (the limit is {_mib(MAX_TOTAL_BYTES)} an archive)"
+        )
+
+
+def read_entry(z: zipfile.ZipFile, name: str, limit: int, shown: str) -> bytes:
+    """Entry ``name``, decompressed as a stream and refused past ``limit`` bytes (whatever
+    its header declares)."""
+    out, n = [], 0
+    with z.open(name) as f:
+        while chunk := f.read(1 << 20):
+            n += len(chunk)
+            if n > limit:
+                raise ConfigError(f"bad FMU {shown!r}: {name!r} inflates past {_mib(limit)} (the limit)")
+            out.append(chunk)
+    return b"".join(out)
+
+
+def extract(path: str, folder: str) -> None:
+    """The archive at ``path`` into ``folder``, each entry streamed with the limits of
+    :func:`check_archive` on the real (not only the declared) sizes."""
+    shown = os.path.basename(path)
+    total = 0
+    with zipfile.ZipFile(path) as z:
+        check_archive(z, shown)
+        for info in z.infolist():
+            target = os.path.join(folder, *info.filename.split("/"))
+            if info.is_dir():
+                os.makedirs(target, exist_ok=True)
+                continue
+            os.makedirs(os.path.dirname(target), exist_ok=True)
+            n = 0
+            with z.open(info) as src, open(target, "wb") as dst:
+                while chunk := src.read(1 << 20):
+                    n += len(chunk)
+                    total += len(chunk)
+                    if n > MAX_ENTRY_BYTES or total > MAX_TOTAL_BYTES:
+                        raise ConfigError(
+                            f"bad FMU {shown!r}: {info.filename[:80]!r} inflates past the limit "
+                            f"({_mib(MAX_ENTRY_BYTES)} an entry, {_mib(MAX_TOTAL_BYTES)} an archive)"
+                        )
+                    dst.write(chunk)
+
 
 def _platforms(z: zipfile.ZipFile) -> list[str]:
     out = set()
@@ -97,6 +170,9 @@ def _this_platform(version: str) -> str:
 def inspect_fmu(path: str | os.PathLike) -> FmuInfo:
     """The model description of the co-simulation FMU at ``path``, checked for this machine;
     ConfigError (one line, the file named) otherwise."""
+    from ego.fmi.guard import step_limit
+
+    step_limit()  # EGO_FMU_STEP_LIMIT checked before anything runs
     shown = os.fspath(path)
     p = Path(shown).expanduser()
     if p.is_dir():  # an unpacked FMU, say
@@ -114,16 +190,26 @@ def inspect_fmu(path: str | os.PathLike) -> FmuInfo:
         raise ConfigError("FMUs need fmpy: pip install 'ego[fmi]'") from None
     if not zipfile.is_zipfile(p):
         raise ConfigError(f"bad FMU {shown!r}: not a zip file (an FMU is a zip archive with a modelDescription.xml)")
-    with zipfile.ZipFile(p) as z:
-        names = set(z.namelist())
-        if "modelDescription.xml" not in names:
-            raise ConfigError(f"bad FMU {shown!r}: no modelDescription.xml in the archive")
-        platforms = _platforms(z)
-        import re
+    import zlib
 
-        head = z.read("modelDescription.xml")[:4000].decode("utf-8", "replace")
-        m = re.search(r'fmiVersion\s*=\s*"([^"]*)"', head)
-        version = m.group(1) if m else ""
+    try:
+        with zipfile.ZipFile(p) as z:
+            check_archive(z, shown)
+            names = set(z.namelist())
+            if "modelDescription.xml" not in names:
+                raise ConfigError(f"bad FMU {shown!r}: no modelDescription.xml in the archive")
+            if z.getinfo("modelDescription.xml").file_size > MAX_DESCRIPTION_BYTES:
+                raise ConfigError(
+                    f"bad FMU {shown!r}: modelDescription.xml is larger than {_mib(MAX_DESCRIPTION_BYTES)} (the limit)"
+                )
+            platforms = _platforms(z)
+            import re
+
+            head = read_entry(z, "modelDescription.xml", MAX_DESCRIPTION_BYTES, shown)[:4000].decode("utf-8", "replace")
+            m = re.search(r'fmiVersion\s*=\s*"([^"]*)"', head)
+            version = m.group(1) if m else ""
+    except (zipfile.BadZipFile, zlib.error, NotImplementedError, RuntimeError, EOFError) as exc:
+        raise ConfigError(f"bad FMU {shown!r}: a damaged or unsupported zip archive ({exc})") from None
     if version.startswith("1"):
         raise ConfigError(f"bad FMU {shown!r}: FMI {version} is not supported (FMI 2.0 or 3.0 co-simulation)")
     try:

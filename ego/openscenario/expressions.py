@@ -120,12 +120,26 @@ def _number(name: str, value: object, expr: str) -> float:
         raise ExpressionError(f"parameter '${name}' = {value!r} in expression '${{{expr}}}' is not a number") from None
 
 
+#: parentheses and unary signs nested deeper than this are refused
+MAX_NESTING = 100
+
+
 class _Parser:
     """Recursive descent: sum := product (('+'|'-') product)*; product := unary (('*'|'/')
     unary)*; unary := '-' unary | '+' unary | atom; atom := number | '(' sum ')'."""
 
     def __init__(self, tokens: list[tuple[str, object]], expr: str) -> None:
         self.tokens, self.i, self.expr = tokens, 0, expr
+        self.depth = 0
+
+    def _deeper(self) -> None:
+        self.depth += 1
+        if self.depth > MAX_NESTING:
+            short = self.expr if len(self.expr) <= 60 else self.expr[:57] + "..."
+            raise ExpressionError(
+                f"expression '${{{short}}}' is nested deeper than {MAX_NESTING} levels "
+                "(parentheses and signs; the limit)"
+            )
 
     def _peek(self) -> str | None:
         return self.tokens[self.i][0] if self.i < len(self.tokens) else None
@@ -157,7 +171,9 @@ class _Parser:
         kind = self._peek()
         if kind in ("-", "+"):
             self.i += 1
+            self._deeper()
             value = self.unary()
+            self.depth -= 1
             return -value if kind == "-" else value
         return self.atom()
 
@@ -171,7 +187,9 @@ class _Parser:
             return self.call()
         if kind == "(":
             self.i += 1
+            self._deeper()
             value = self.sum()
+            self.depth -= 1
             if self._peek() != ")":
                 raise ExpressionError(f"missing ')' in expression '${{{self.expr}}}'")
             self.i += 1

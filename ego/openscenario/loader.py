@@ -16,6 +16,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
+from ego.checks import resolved
 from ego.openscenario import model as M
 from ego.openscenario.expressions import ExpressionError, resolve
 from ego.openscenario.xmltree import DOCS, Node, ScenarioFileError, parse_file
@@ -247,10 +248,19 @@ def read_tree(path: str | os.PathLike) -> Node:
         st = p.stat()
     except OSError:
         return parse_file(p)  # parse_file names the problem
-    return _read(str(p.resolve()), st.st_mtime, st.st_size)
+    return _read(str(resolved(p, "scenario file")), st.st_mtime, st.st_size)
 
 
 TYPES = ("double", "integer", "unsignedInt", "unsignedShort", "int", "string", "boolean", "dateTime")
+
+
+#: the value ranges of OpenSCENARIO's integer parameter types (XML Schema's)
+INT_RANGES = {
+    "int": (-(2**31), 2**31 - 1),
+    "integer": (-(2**31), 2**31 - 1),
+    "unsignedInt": (0, 2**32 - 1),
+    "unsignedShort": (0, 65535),
+}
 
 
 def convert(kind: str, raw: object, what: str) -> object:
@@ -268,10 +278,14 @@ def convert(kind: str, raw: object, what: str) -> object:
             f = float(raw)  # type: ignore[arg-type]
         except (TypeError, ValueError):
             raise ValueError(f"bad value for {what}: {raw!r} (expected an integer)") from None
-        if f != int(f) or (kind.startswith("unsigned") and f < 0):
+        lo, hi = INT_RANGES[kind]
+        shown = repr(raw) if len(str(raw)) <= 40 else f"{str(raw)[:20]!r}... ({len(str(raw))} characters)"
+        if not math.isfinite(f) or f != int(f) or (kind.startswith("unsigned") and f < 0):
             raise ValueError(
-                f"bad value for {what}: {raw!r} (expected {'an' if kind[0] == 'i' else 'an unsigned'} integer)"
+                f"bad value for {what}: {shown} (expected {'an' if kind[0] == 'i' else 'an unsigned'} integer)"
             )
+        if not lo <= f <= hi:
+            raise ValueError(f"bad value for {what}: {shown} (expected an {kind}: a whole number from {lo} to {hi})")
         return int(f)
     if kind == "boolean":
         if isinstance(raw, bool):
@@ -930,7 +944,7 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
     cl = root.child("CatalogLocations")
     for vc in cl.children if cl is not None else ():
         d = b.one(vc, "Directory")
-        b.catalog_dirs.setdefault(vc.tag, []).append((path.parent / b.str_(d, "path")).resolve())
+        b.catalog_dirs.setdefault(vc.tag, []).append(resolved(path.parent / b.str_(d, "path"), "catalog folder"))
 
     net = root.child("RoadNetwork")
     logic = net.child("LogicFile") if net is not None else None
@@ -940,7 +954,7 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
             (net or root).line,
             "the scenario needs <RoadNetwork><LogicFile filepath=...> (an .xodr or a SUMO .net.xml)",
         )
-    road = (path.parent / b.str_(logic, "filepath")).resolve()
+    road = resolved(path.parent / b.str_(logic, "filepath"), "road file")
     rel = b.str_(logic, "filepath")
     if not rel.endswith((".xodr", ".net.xml")):
         raise b.error(logic, f"bad road file {rel!r} (expected an OpenDRIVE .xodr or a SUMO .net.xml)")

@@ -58,8 +58,10 @@ def network_file(road: Path) -> Path:
     A failed conversion is one line naming the file and netconvert's first error."""
     if str(road).endswith(".net.xml"):
         return road
-    data = road.read_bytes()
+    from ego.checks import MAX_ROAD_BYTES, read_limited
     from ego.sumo.net import sumo_binary
+
+    data = read_limited(road, "road file", MAX_ROAD_BYTES)
 
     exe = sumo_binary("netconvert")
     key = hashlib.sha256(data + "\0".join(OPTIONS).encode() + str(exe).encode()).hexdigest()[:24]

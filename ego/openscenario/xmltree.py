@@ -49,16 +49,23 @@ class Node:
 def parse_file(path: str | os.PathLike) -> Node:
     """The root element of the XML file ``path``; malformed XML or an unreadable file is a
     :class:`ScenarioFileError` naming the line."""
+    from ego.checks import MAX_XOSC_BYTES, read_limited
+
     path = Path(path)
-    try:
-        data = path.read_bytes()
-    except FileNotFoundError:
-        raise ScenarioFileError(path, None, "no such file") from None
-    except IsADirectoryError:
-        raise ScenarioFileError(path, None, "is a folder, expected an .xosc file") from None
-    except OSError as exc:
-        raise ScenarioFileError(path, None, f"cannot read: {exc.strerror}") from None
+
+    def fail(reason: str) -> ScenarioFileError:
+        if reason == "it is a folder":
+            reason = "is a folder, expected an .xosc file"
+        return ScenarioFileError(path, None, reason if reason == "no such file" else f"cannot read: {reason}")
+
+    data = read_limited(path, "scenario file", MAX_XOSC_BYTES, fail)
     return parse_bytes(data, path)
+
+
+#: elements nested deeper than this are refused (an OpenSCENARIO file needs ~15)
+MAX_DEPTH = 200
+#: more parameter declarations than this in one file are refused (while parsing)
+MAX_DECLARATIONS = 10_000
 
 
 def parse_bytes(data: bytes, path: str | os.PathLike = "<string>") -> Node:
@@ -67,7 +74,19 @@ def parse_bytes(data: bytes, path: str | os.PathLike = "<string>") -> Node:
     stack: list[Node] = []
     root: list[Node] = []
 
+    declarations = [0]
+
     def start(tag: str, attrs: dict[str, str]) -> None:
+        if len(stack) >= MAX_DEPTH:
+            raise ScenarioFileError(
+                path, parser.CurrentLineNumber, f"elements nested deeper than {MAX_DEPTH} levels (the limit)"
+            )
+        if tag == "ParameterDeclaration":
+            declarations[0] += 1
+            if declarations[0] > MAX_DECLARATIONS:
+                raise ScenarioFileError(
+                    path, parser.CurrentLineNumber, f"more than {MAX_DECLARATIONS:,} parameter declarations (the limit)"
+                )
         node = Node(tag, attrs, parser.CurrentLineNumber)
         if stack:
             stack[-1].children.append(node)
@@ -86,4 +105,8 @@ def parse_bytes(data: bytes, path: str | os.PathLike = "<string>") -> Node:
         raise ScenarioFileError(
             path, exc.lineno, f"malformed XML: {expat.ErrorString(exc.code)} (column {exc.offset + 1})"
         ) from None
+    except LookupError as exc:  # <?xml encoding="..."?> names an encoding Python does not know
+        raise ScenarioFileError(path, 1, f"unknown XML encoding ({exc})") from None
+    except (ValueError, UnicodeError) as exc:
+        raise ScenarioFileError(path, parser.CurrentLineNumber, f"cannot decode the XML: {exc}") from None
     return root[0]

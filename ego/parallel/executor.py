@@ -78,7 +78,9 @@ class _Worker:
         self.conn = parent
         self.job: tuple[Any, int] | None = None  # (task, attempt) it is running
 
-    def stop(self) -> None:
+    def stop(self) -> str:
+        """Stop it; what it left: its FMU extraction folders removed, a note naming the
+        signal that killed it and the FMUs it had loaded (for a dead worker's row)."""
         try:
             self.conn.close()
         finally:
@@ -86,6 +88,13 @@ class _Worker:
             if self.process.is_alive():
                 self.process.kill()
                 self.process.join()
+        from ego.fmi.guard import left_by, signal_name
+
+        fmus = left_by(self.process.pid) if self.process.pid else []
+        code = self.process.exitcode
+        notes = [f"killed by {signal_name(-code)}"] if code is not None and code < 0 else []
+        notes += [f"FMU {', '.join(repr(f) for f in fmus)} loaded"] if fmus else []
+        return f" ({'; '.join(notes)})" if notes else ""
 
 
 class ProcessExecutor:
@@ -149,13 +158,13 @@ class ProcessExecutor:
                 try:
                     ok, value = worker.conn.recv()
                 except (EOFError, OSError):  # it died with the task
-                    worker.stop()
+                    note = worker.stop()
                     self._pool[self._pool.index(worker)] = worker = _Worker(self._ctx)
                     if attempt <= self.retries:
                         retry.append((task, attempt))
                     else:
                         yield Outcome(
-                            task, error=f"the worker process died {attempt} times running it", attempts=attempt
+                            task, error=f"the worker process died {attempt} times running it{note}", attempts=attempt
                         )
                 else:
                     yield Outcome(task, value if ok else None, "" if ok else value, attempt)

@@ -369,15 +369,20 @@ class Scenario:
         (a second signal interrupts at once)."""
         restore = self._catch_stop_signals()
         try:
-            obs = self.reset()
-            controller = self.controller
-            step = self.step
             try:
+                obs = self.reset()
+                controller = self.controller
+                step = self.step
                 while self.status == "running" and not self._stop:
                     obs = step(controller.step(obs))
             except ControllerError as exc:  # an FMU's error or a non-finite command
-                self._end("error", str(exc), level="ERROR")
-                self._flush()
+                if getattr(exc, "interrupted", False):  # Ctrl-C/SIGTERM while an FMU was in a call
+                    self._stop = True
+                    self._end("interrupted", str(exc), level="WARN")
+                    self._flush()
+                else:
+                    self._end("error", str(exc), level="ERROR")
+                    self._flush()
             if self._stop and self.status == "running":
                 self._end("interrupted", "interrupted (SIGINT or SIGTERM)", level="WARN")
                 self._flush()

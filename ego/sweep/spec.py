@@ -232,6 +232,12 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
     for section, value in (("set", fixed), ("grid", grid)):
         if not isinstance(value, dict):
             raise bad(f"[{section}] must be a table of parameter = value")
+    # the grid's size before any value is checked (each check builds a scenario: 20 million
+    # of them would take hours); a [sample] multiplies it by n, checked below
+    if all(isinstance(v, list) for v in grid.values()):
+        early = math.prod(len(v) for v in grid.values()) * len(controllers) * len(seeds)
+        if early > MAX_RUNS:
+            raise bad(f"expands to {early:,} runs; the limit is {MAX_RUNS:,}")
     for name, value in fixed.items():
         known(name, "set")
         check_values(scenario, controllers, {name: value}, f"[set] {name}", bad)

@@ -149,3 +149,23 @@ def renamed() -> ModelSpec:
         defines=("VR_Fx=VR_force", "VR_delta=VR_steer"),
         units=(("kN", (("kg", 1), ("m", 1), ("s", -2)), 1000.0, 0.0), ("deg", (("rad", 1),), math.pi / 180, 0.0)),
     )
+
+
+MISBEHAVE = {"hang": ("HANG",), "segv": ("SEGV",), "kill": ("KILL",), "abort": ("MODEL_ON_INSTANTIATE=abort()",)}
+
+
+def misbehave(kind: str) -> ModelSpec:
+    """A controller that hangs (``hang``) or segfaults (``segv``) in doStep at step
+    ``fail_step``, kills itself with SIGKILL (``kill``), or aborts in fmi2Instantiate (``abort``): tests/fmi/c/misbehave.c."""
+    return ModelSpec(
+        f"{kind}_fmu",
+        f"misbehaves: {kind}",
+        (
+            Var("fail_step", "parameter", 20.0, "", "the step it misbehaves at"),
+            Var("hold_fx", "parameter", 100.0, "N"),
+            Var("Fx", "output", 0.0, "N"),
+            Var("delta", "output", 0.0, "rad"),
+        ),
+        (C / "misbehave.c",),
+        defines=MISBEHAVE[kind],
+    )

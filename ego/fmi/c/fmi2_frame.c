@@ -61,6 +61,9 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid, f
                        "wrong FMU type or GUID (expected co-simulation and " MODEL_GUID ")");
         return NULL;
     }
+#ifdef MODEL_ON_INSTANTIATE
+    MODEL_ON_INSTANTIATE; /* a test model's hook (tests/fmi/c/misbehave.c) */
+#endif
     Instance *inst = (Instance *)calloc(1, sizeof(Instance));
     if (!inst) return NULL;
     if (cb) inst->cb = *cb;
