@@ -448,7 +448,7 @@ th,td{border:1px solid #bbb;padding:2px 6px;text-align:right}
 th{background:#eee}td:nth-child(-n+3){text-align:left}
 .pass{color:#1a7f1a;font-weight:bold}.fail{color:#c01818;font-weight:bold}
 .note{background:#fff6d5;padding:4px}pre.cmd{background:#f4f4f4;padding:4px;white-space:pre-wrap}
-figure.plot img{max-width:100%}div.scroll{overflow-x:auto}
+figure.plot img,figure.plot svg{max-width:100%;height:auto}div.scroll{overflow-x:auto}
 """
 
 
@@ -481,5 +481,10 @@ def write(folder: str | Path, out: str | Path | None = None, force: bool = False
     campaign = load(folder)
     path = Path(out) if out is not None else Path(folder) / "report.html"
     check_out(path, force)
-    write_text(path, render(campaign, path))
+    text = render(campaign, path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ConfigError(f"bad --out {str(path)!r}: cannot create its folder ({exc.strerror})") from None
+    write_text(path, text)
     return campaign, path
