@@ -295,11 +295,9 @@ def verdicts(c: Campaign) -> list[dict]:
 
 def _robustness_svg(c: Campaign) -> str:
     """Every run's robustness per requirement and controller, as an inline SVG (matplotlib)."""
-    import matplotlib
+    from ego.plots import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()  # the Agg backend: no display needed
     reqs = c.requirements
     if not reqs:
         return ""
@@ -387,7 +385,7 @@ def render(c: Campaign, out: Path) -> str:
             rec = c.recording(r)
             link = f' <a href="{_e(os.path.relpath(rec, base))}">recording</a>' if rec else ""
             items.append(
-                f'<li id="run-{i}">run {i} ({_e(r["controller"])}, seed {_e(r["seed"])}): '
+                f'<li id="run-{i}">run {i} ({_e(r["controller"])}, seed {_e(_plain(r["seed"]))}): '
                 f'{_e(", ".join(c.failures(r)))}{link}<pre class="cmd">{_e(c.command(r))}</pre></li>'
             )
         parts.append(f'<ul class="failing">{"".join(items)}</ul>')
@@ -409,7 +407,7 @@ def render(c: Campaign, out: Path) -> str:
         rec = c.recording(r)
         verdict = f'<a class="fail" href="#run-{i}">fail</a>' if bad else '<span class="pass">pass</span>'
         body.append(
-            [str(i), _e(r["controller"]), _e(r["seed"]), *(_e(_fmt(r.get(p))) for p in c.params)]
+            [str(i), _e(r["controller"]), _e(_plain(r["seed"])), *(_e(_fmt(r.get(p))) for p in c.params)]
             + [_e(r.get("status")), verdict]
             + [_e(_fmt(c.robustness(r, n))) for n in reqs]
             + [_e(_fmt(r.get(m))) for m in metrics]
