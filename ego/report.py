@@ -2,7 +2,7 @@
 sweep`` or ``ego falsify`` (docs/report.md).
 
 What it reads (nothing else): ``metrics.csv`` and ``metrics_units.csv`` (compare), or
-``results.parquet`` with ``summary.md`` (sweep) or ``falsified.md`` (falsify); the PNG plots
+``results.parquet`` (sweep; with ``falsified.md``: falsify); the PNG plots
 in the folder; the recordings (``.rrd``) under it. What it writes: a verdict table per
 scenario x controller x requirement (runs passed and failed, the worst robustness with its
 unit, collisions), every run's metrics, the plots inline (base64 PNG and an inline SVG of
@@ -30,8 +30,8 @@ from ego.results.summary import REQUIREMENTS_PREFIX
 #: the marker of a file ``ego report`` wrote (another file is replaced only with --force)
 GENERATOR = "ego report"
 EXPECTED = (
-    "expected the --out folder of ego compare (metrics.csv), ego sweep (results.parquet and "
-    "summary.md) or ego falsify (results.parquet and falsified.md)"
+    "expected the --out folder of ego compare (metrics.csv), ego sweep (results.parquet) or "
+    "ego falsify (results.parquet and falsified.md)"
 )
 #: columns that are no metric of a run (text, bookkeeping)
 _NOT_METRICS = {
@@ -149,9 +149,7 @@ def load(folder: str | Path) -> Campaign:
     folder = Path(folder)
     if not folder.is_dir():
         raise ConfigError(f"bad DIR {str(folder)!r}: no such folder ({EXPECTED})")
-    if (folder / "results.parquet").is_file() and (
-        (folder / "falsified.md").is_file() or (folder / "summary.md").is_file()
-    ):
+    if (folder / "results.parquet").is_file():  # an interrupted sweep has no summary.md yet
         return _load_parquet(folder, "falsify" if (folder / "falsified.md").is_file() else "sweep")
     if (folder / "metrics.csv").is_file():
         return _load_compare(folder)
