@@ -90,9 +90,11 @@ class Campaign:
         from ego.runner import run_command
 
         controller, params = str(row["controller"]), {}
-        if self.kind == "compare":  # a variant label: pid@kp_lat=0.02
-            controller, _, rest = controller.partition("@")
-            params = dict(p.split("=", 1) for p in rest.split("@") if "=" in p)
+        if self.kind == "compare" and "@" in controller:  # a variant label: pid@kp_lat=0.02
+            from ego.compare import parse_variant
+            from ego.scenarios import scenario_class
+
+            controller, params = parse_variant(controller, scenario_class(self.scenario).task)
         for p in self.params:
             if row.get(p) is not None and not (isinstance(row[p], float) and math.isnan(row[p])):
                 params[p] = _plain(row[p])

@@ -201,6 +201,14 @@ def test_compare_reports_its_missing_set_values(cmp_dir):
     assert any(link == "runs/pid-seed0.rrd" for link in page(cmp_dir).links)
 
 
+def test_a_compare_variant_label_becomes_its_set_values(cmp_dir):
+    from ego.report import load
+
+    c = load(cmp_dir)
+    row = {**c.rows[0], "controller": "pid@kp_lat=0.02"}
+    assert c.command(row) == "ego run emergency-brake -c pid --seed 0 --set kp_lat=0.02"
+
+
 def test_out_elsewhere_links_relative_to_it_and_a_foreign_file_is_kept(sweep_dir, tmp_path, capsys):
     folders = sweep_dir.parent
     out = tmp_path / "sub" / "r.html"
