@@ -1,7 +1,7 @@
 """``ego report``: one self-contained HTML file from the folder of ``ego compare``, ``ego
 sweep`` or ``ego falsify`` (docs/report.md).
 
-What it reads (nothing else): ``metrics.csv`` and ``metrics_units.csv`` (compare), or
+What it reads (nothing else): ``metrics.csv``, ``metrics_units.csv`` and ``compare.json`` (compare), or
 ``results.parquet`` (sweep; with ``falsified.md``: falsify); the PNG plots
 in the folder; the recordings (``.rrd``) under it. What it writes: a verdict table per
 scenario x controller x requirement (runs passed and failed, the worst robustness with its
@@ -68,6 +68,7 @@ class Campaign:
     units: dict[str, str] = field(default_factory=dict)
     formulas: dict[str, str | None] = field(default_factory=dict)  #: requirement -> formula (None: not stored)
     notes: list[str] = field(default_factory=list)
+    fixed: dict = field(default_factory=dict)  #: --set values every run shares (compare.json)
 
     @property
     def requirements(self) -> list[str]:
@@ -89,12 +90,13 @@ class Campaign:
         from ego.requirements import defaults
         from ego.runner import run_command
 
-        controller, params = str(row["controller"]), {}
+        controller, params = str(row["controller"]), dict(self.fixed)
         if self.kind == "compare" and "@" in controller:  # a variant label: pid@kp_lat=0.02
             from ego.compare import parse_variant
             from ego.scenarios import scenario_class
 
-            controller, params = parse_variant(controller, scenario_class(self.scenario).task)
+            controller, variant = parse_variant(controller, scenario_class(self.scenario).task)
+            params.update(variant)
         for p in self.params:
             if row.get(p) is not None and not (isinstance(row[p], float) and math.isnan(row[p])):
                 params[p] = _plain(row[p])
@@ -171,11 +173,31 @@ def _load_compare(folder: Path) -> Campaign:
     if not rows or not {"controller", "seed", "scenario"} <= set(rows[0]):
         raise ConfigError(f"bad DIR {str(folder)!r}: its metrics.csv has no runs of ego compare ({EXPECTED})")
     c = Campaign(folder, "compare", str(rows[0]["scenario"]), rows, [], units)
-    c.notes.append(
-        "ego compare keeps no --set values in its folder: add the ones the comparison was run with to each command."
-    )
+    settings = _compare_settings(folder)
+    if settings is None:  # written before ego compare kept compare.json
+        c.notes.append(
+            "This folder has no compare.json (an older ego compare): add the --set values the "
+            "comparison was run with to each command."
+        )
+    else:
+        c.fixed = dict(settings.get("set") or {})
+        c.formulas.update(settings.get("requirements") or {})
+        if settings.get("backend", "sumo") != "sumo":
+            c.notes.append(f"The runs used --backend {settings['backend']}: add it to each command.")
     _requirements(c)
     return c
+
+
+def _compare_settings(folder: Path) -> dict | None:
+    import json
+
+    from ego.compare import SETTINGS_FILE
+
+    try:
+        settings = json.loads((folder / SETTINGS_FILE).read_text())
+    except (OSError, ValueError):
+        return None
+    return settings if isinstance(settings, dict) else None
 
 
 def _load_parquet(folder: Path, kind: str) -> Campaign:
@@ -330,6 +352,9 @@ def render(c: Campaign, out: Path) -> str:
         f"<p>Folder <code>{_e(c.folder)}</code>: {len(c.rows)} runs, {len(reqs)} requirements. "
         "A requirement passes where its robustness is 0 or more.</p>",
     ]
+    if c.fixed:
+        shared = " ".join(f"--set {k}={v}" for k, v in c.fixed.items())
+        parts.append(f"<p>Every run: <code>{_e(shared)}</code>.</p>")
     parts += [f'<p class="note">{_e(n)}</p>' for n in c.notes]
     # verdicts
     body = []

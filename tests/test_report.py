@@ -195,9 +195,19 @@ def test_falsify_commands_carry_the_spec_requirement(falsify_dir):
     assert p.commands and all("--require 'keep_30m: always (gap_front >= 30 m)'" in c for c in p.commands)
 
 
-def test_compare_reports_its_missing_set_values(cmp_dir):
-    text = (cmp_dir / "report.html").read_text()
-    assert "keeps no --set values" in text
+def test_compare_commands_carry_its_set_values(cmp_dir):
+    from ego.report import load
+
+    c = load(cmp_dir)
+    assert c.command(c.rows[0]) == "ego run emergency-brake -c pid --seed 0 --set duration=3"
+    # a folder of an older ego compare (no compare.json): said, not guessed
+    (cmp_dir / "compare.json").rename(cmp_dir / "compare.json.bak")
+    try:
+        old = load(cmp_dir)
+        assert old.command(old.rows[0]) == "ego run emergency-brake -c pid --seed 0"
+        assert any("no compare.json" in n for n in old.notes)
+    finally:
+        (cmp_dir / "compare.json.bak").rename(cmp_dir / "compare.json")
     assert any(link == "runs/pid-seed0.rrd" for link in page(cmp_dir).links)
 
 
@@ -206,7 +216,7 @@ def test_a_compare_variant_label_becomes_its_set_values(cmp_dir):
 
     c = load(cmp_dir)
     row = {**c.rows[0], "controller": "pid@kp_lat=0.02"}
-    assert c.command(row) == "ego run emergency-brake -c pid --seed 0 --set kp_lat=0.02"
+    assert c.command(row) == "ego run emergency-brake -c pid --seed 0 --set duration=3 --set kp_lat=0.02"
 
 
 def test_out_elsewhere_links_relative_to_it_and_a_foreign_file_is_kept(sweep_dir, tmp_path, capsys):
