@@ -20,6 +20,9 @@ Outputs in ``--out``:
   :mod:`ego.plots` draws them) - every seed of every controller, references dashed, bands
   shaded, events marked, the y axis labelled with the trace column's unit; the top-down
   ``trajectory.png`` from the traffic log; a platoon's ``string_stability.png``;
+* ``compare.json`` - what was asked: ``scenario``, ``set`` (the ``--set`` values as given),
+  ``requirements`` (name -> formula; null: the scenario's defaults) and ``backend``, from
+  which ``ego report`` writes each run's ``ego run`` command;
 * ``runs/<controller>-seed<N>.rrd`` - every run's recording (none for a run that could
   not start or did not finish).
 
@@ -59,6 +62,9 @@ from ego.sweep.pipeline import RunTask, drive, execute
 #: the columns metrics.csv starts with, before the metrics
 RUN_COLUMNS = ("controller", "seed", "status", "error")
 UNITS_FILE = "metrics_units.csv"
+#: what the comparison was asked (scenario, --set values, requirements, backend): what
+#: ``ego report`` needs to write each run's ``ego run`` command
+SETTINGS_FILE = "compare.json"
 #: ``--traces`` formats: the suffixes :func:`ego.results.export.write_trace` knows, without the dot
 TRACE_FORMATS = tuple(suffix[1:] for suffix in TRACE_SUFFIXES)
 #: more seeds than this is a sweep (ego sweep), not a comparison
@@ -267,10 +273,24 @@ def compare(
         columns = csv_columns(rows)
         with signals_deferred():  # a second Ctrl-C waits until every file is whole
             write_csv(rows, out / "metrics.csv", columns)
+            write_settings(out / SETTINGS_FILE, scenario, overrides, requirements, backend)
             write_units(columns, declared, out / UNITS_FILE)
             write_markdown(scenario, rows, list(controllers), out / "metrics.md", declared)
             write_plots(scenario, rows, list(controllers), out, plots, params)
     return rows
+
+
+def write_settings(path: Path, scenario: str, overrides: Mapping, requirements, backend: str) -> None:
+    """``compare.json`` (see the module docstring)."""
+    import json
+
+    settings = {
+        "scenario": str(scenario),
+        "set": {str(k): str(v).lower() if isinstance(v, bool) else str(v) for k, v in overrides.items()},
+        "requirements": None if requirements is None else {str(n): str(f) for n, f in dict(requirements).items()},
+        "backend": backend,
+    }
+    write_text(path, json.dumps(settings, indent=1) + "\n")
 
 
 def csv_columns(rows: Sequence[RunRow]) -> list[str]:

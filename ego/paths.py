@@ -301,7 +301,7 @@ def check_compare_outputs(out: str | os.PathLike, specs, traces: str | None) -> 
     out = Path(out)
     check_folder_target(out, "--out", str(out))
     folders = ["runs"] + (["traces"] if traces else [])
-    files = ["metrics.csv", "metrics_units.csv", "metrics.md", LOCK_FILE]
+    files = ["metrics.csv", "metrics_units.csv", "metrics.md", "compare.json", LOCK_FILE]
     for spec in specs:
         for attr in ("record", "trace"):
             value = getattr(spec, attr)

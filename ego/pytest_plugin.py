@@ -28,7 +28,6 @@ failing item once more with a recording (the run is deterministic per seed) into
 
 from __future__ import annotations
 
-import shlex
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -114,12 +113,9 @@ class ScenarioCase:
 
     def command(self) -> str:
         """The ``ego run`` command that reproduces this run."""
-        parts = ["ego", "run", self.scenario, "--controller", self.controller, "--seed", str(self.seed)]
-        for k, v in self.params.items():
-            parts += ["--set", f"{k}={v}"]
-        for name, formula in self.extra:
-            parts += ["--require", f"{name}: {formula}"]
-        return " ".join(shlex.quote(p) for p in parts)
+        from ego.runner import run_command
+
+        return run_command(self.scenario, self.controller, self.seed, self.params, self.extra)
 
 
 class ScenarioFailure(Exception):

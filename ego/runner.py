@@ -276,6 +276,30 @@ def build(what: RunSpec | ResolvedRun) -> Scenario:
     return scenario
 
 
+def run_command(
+    scenario: str,
+    controller: str,
+    seed: int,
+    overrides: Mapping[str, Any] | None = None,
+    require: Iterable[tuple[str, str]] = (),
+    record: str | None = None,
+) -> str:
+    """The ``ego run`` command that makes one run, shell-quoted: ``overrides`` as ``--set``
+    (booleans as ``true``/``false``), ``require`` (name, formula) pairs as ``--require``, and
+    a recording. The one place every reproducer (the pytest plugin, ``ego falsify``, ``ego
+    report``) builds it."""
+    import shlex
+
+    parts = ["ego", "run", str(scenario), "-c", str(controller), "--seed", str(int(seed))]
+    for k, v in (overrides or {}).items():
+        parts += ["--set", f"{k}={str(v).lower() if isinstance(v, bool) else v}"]
+    for name, formula in require:
+        parts += ["--require", f"{name}: {formula}"]
+    if record:
+        parts += ["--record", record]
+    return shlex.join(parts)
+
+
 def recording_id(spec: RunSpec) -> str:
     """A run's recording id, one per run (recordings opened together merge by id):
     scenario, controller, the backend other than SUMO, a digest of the parameters set, and the

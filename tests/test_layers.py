@@ -51,6 +51,7 @@ LAYERS = [
         "ego.compare",
         "ego.sweep",
         "ego.falsify",
+        "ego.report",
         "ego.gym",
         "ego.train",
         "ego.docs",

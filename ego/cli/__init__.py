@@ -9,6 +9,7 @@
               [--record none|failed|all] [--plot X,Y[:METRIC] ...] [--require "NAME: FORMULA" ...]
     ego falsify SPEC.toml --out DIR [--engine process|ray] [--jobs N] [--budget N]
                 [--optimizer cma|bo|bo-tpe|random|lhs] [--until first|budget]
+    ego report DIR [--out FILE.html] [--force]
     ego list [--json]
     ego train narma-l2 [--seed N] [--samples N] [--epochs N] [--out PATH]
     ego tune lane-centering [--quick] [--workers N] [--seed N] [--drives V[:OFF],...] [--out PATH]
@@ -33,7 +34,7 @@ result); 1 some run ended in ``error`` (ego could not run it); 130 interrupted (
 finished is written); 2 bad input, or ``--out`` held by another ego process.
 docs/reliability.md has the details.
 
-The package holds one module per command (``ego.cli.run``, ``compare``, ``sweep``, ``falsify``, ``list``
+The package holds one module per command (``ego.cli.run``, ``compare``, ``sweep``, ``falsify``, ``report``, ``list``
 as ``catalogue``, ``train``, ``tune``), each with ``command(args) -> exit status``;
 :data:`COMMANDS` maps a command's name to its module and :func:`main` dispatches through it.
 """
@@ -57,6 +58,7 @@ COMMANDS = {
     "train": "ego.cli.train",
     "tune": "ego.cli.tune",
     "export-fmu": "ego.cli.export_fmu",
+    "report": "ego.cli.report",
 }
 
 

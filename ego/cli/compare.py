@@ -13,7 +13,7 @@ from ego.params import ConfigError, parse_overrides
 
 
 def command(args: Any) -> int:
-    from ego.compare import MAX_SEEDS, UNITS_FILE, compare
+    from ego.compare import MAX_SEEDS, SETTINGS_FILE, UNITS_FILE, compare
     from ego.requirements import with_defaults
 
     if args.seeds > MAX_SEEDS:
@@ -38,7 +38,7 @@ def command(args: Any) -> int:
     print((out / "metrics.md").read_text(), end="")
     # the plots this command wrote (an earlier comparison's in the same --out are not these)
     plots = sorted(p.name for p in out.glob("*.png") if p.stat().st_mtime >= started - 0.01)
-    files = ["metrics.csv", UNITS_FILE, "metrics.md"] + plots
+    files = ["metrics.csv", UNITS_FILE, "metrics.md", SETTINGS_FILE] + plots
     recorded = sum(1 for r in rows if r.recording)
     traces = f" and their traces ({args.traces}) in traces/" if args.traces else ""
     print(f"\nwrote into {out}/: {', '.join(files)} and {recorded} of {len(rows)} recordings in runs/{traces}")

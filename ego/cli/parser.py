@@ -200,6 +200,9 @@ def parser() -> argparse.ArgumentParser:
     from ego.cli.falsify import add_parser as add_falsify
 
     add_falsify(sub)
+    from ego.cli.report import add_parser as add_report
+
+    add_report(sub)
 
     lst = sub.add_parser(
         "list",

@@ -314,14 +314,12 @@ def _search(
 def command(spec: FalsifySpec, e: Evaluation, record: str | None = None) -> str:
     """The ``ego run`` command that makes the run ``e`` (the target requirement given with
     ``--require`` unless it is one of the scenario's defaults, unchanged)."""
-    parts = ["ego", "run", spec.scenario, "-c", e.controller, "--seed", str(e.seed)]
-    for k, v in e.overrides.items():
-        parts += ["--set", f"{k}={str(v).lower() if isinstance(v, bool) else v}"]
-    if defaults(spec.scenario).get(spec.requirement) != spec.formula:
-        parts += ["--require", f"{spec.requirement}: {spec.formula}"]
-    if record:
-        parts += ["--record", record]
-    return shlex.join(parts)
+    from ego.runner import run_command
+
+    require = (
+        [] if defaults(spec.scenario).get(spec.requirement) == spec.formula else [(spec.requirement, spec.formula)]
+    )
+    return run_command(spec.scenario, e.controller, e.seed, e.overrides, require, record)
 
 
 def _verify(spec: FalsifySpec, search: Search, out: Path) -> None:
