@@ -79,7 +79,7 @@ def test_cma_finds_a_small_region_faster_than_random():
         (SPEC.replace("seed = 3", "seed = [5, 2]"), "seed must be"),
         ("budget = 0\n" + SPEC, "budget must be"),
         ("bogus = 1\n" + SPEC, "unknown key 'bogus'"),
-        ("#" * (1 << 20) + "\n" + SPEC, "larger than 1024 KiB"),
+        ("#" * (1 << 20) + "\n" + SPEC, "larger than the limit of 1 MiB"),
     ],
 )
 def test_bad_specs_are_one_line_exit_2(text, what, tmp_path, capsys):

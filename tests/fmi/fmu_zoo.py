@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import os
+import tempfile
 from pathlib import Path
 
 from ego.fmi.build import ModelSpec, Var, build_fmu
@@ -169,3 +170,24 @@ def misbehave(kind: str) -> ModelSpec:
         (C / "misbehave.c",),
         defines=MISBEHAVE[kind],
     )
+
+
+def fmu_folders(tmp: str | None = None) -> set[str]:
+    """The FMU extraction folders (``ego-fmu-<pid>-*``) in the temporary folder."""
+    tmp = tmp or tempfile.gettempdir()
+    return {n for n in os.listdir(tmp) if n.startswith("ego-fmu-") and n.split("-")[2].isdigit()}
+
+
+def fmu_folders_left(before: set[str]) -> set[str]:
+    """FMU extraction folders made since ``before`` whose process has ended: what a run left
+    behind. A test running beside this one (pytest -n) has folders of live processes, and the
+    FMU builder's ``ego-fmu-build-*`` are no run's."""
+    left = set()
+    for name in fmu_folders() - before:
+        try:
+            os.kill(int(name.split("-")[2]), 0)
+        except ProcessLookupError:
+            left.add(name)
+        except OSError:
+            pass
+    return left

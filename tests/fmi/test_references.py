@@ -5,13 +5,12 @@ temporary folder is left behind."""
 
 import csv
 import json
-import os
 import subprocess
 import sys
-import tempfile
 
 import pyarrow.parquet as pq
 import pytest
+from fmu_zoo import fmu_folders, fmu_folders_left
 from process_group import survivors
 
 from ego.params import ConfigError
@@ -91,7 +90,7 @@ def ego(*args, cwd=None, timeout=600):
 
 
 def test_compare_jobs_2_with_a_file_class_and_fmus(user_file, fmus, tmp_path):
-    before = {n for n in os.listdir(tempfile.gettempdir()) if n.startswith("ego-fmu-")}
+    before = fmu_folders()
     controllers = ",".join(["pid", f"{user_file}:MyPID", fmus["pid"], f"{fmus['pid']}@fmu.kp_lat=0.02", fmus["error"]])
     proc, left = ego(
         "compare",
@@ -116,12 +115,12 @@ def test_compare_jobs_2_with_a_file_class_and_fmus(user_file, fmus, tmp_path):
     assert {k: rows[f"{fmus['pid']}@fmu.kp_lat=0.02"][k] for k in keep} != {k: rows["pid"][k] for k in keep}
     bad = rows[fmus["error"]]
     assert bad["status"] == "error" and "actuator model diverged at t = 0.20 s" in bad["error"]
-    assert {n for n in os.listdir(tempfile.gettempdir()) if n.startswith("ego-fmu-")} == before
+    assert not fmu_folders_left(before)
 
 
 @pytest.mark.parametrize("engine", ["process", "ray"])
 def test_sweep_with_a_file_class_and_fmus(user_file, fmus, tmp_path, engine):
-    before = {n for n in os.listdir(tempfile.gettempdir()) if n.startswith("ego-fmu-")}
+    before = fmu_folders()
     spec = tmp_path / "sweep.toml"
     names = ["pid", f"{user_file}:MyPID", fmus["pid"], fmus["error"]]
     spec.write_text(
@@ -143,7 +142,7 @@ def test_sweep_with_a_file_class_and_fmus(user_file, fmus, tmp_path, engine):
     for name in names[1:3]:  # the same runs as the built-in pid
         assert {r["ego_speed"]: r["max_abs_lateral_accel"] for r in by[name]} == pid
         assert all(r["status"] in ("completed", "ended") for r in by[name])
-    assert {n for n in os.listdir(tempfile.gettempdir()) if n.startswith("ego-fmu-")} == before
+    assert not fmu_folders_left(before)
 
 
 def test_an_fmu_parameter_is_swept_like_any_other(fmus, tmp_path):
