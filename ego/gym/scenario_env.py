@@ -69,12 +69,10 @@ def check_scenario(value: Any) -> str:
 def _distribution_root(name: str):
     """The ``<ParameterValueDistribution>`` element of the .xosc file ``name``, or None (not
     such a file, or no file at all)."""
-    if not name.lower().endswith(".xosc") or not Path(name).is_file():
-        return None
-    from ego.openscenario.xmltree import parse_file
+    from ego.openscenario.distribution import root_of
 
     try:
-        return parse_file(name).child("ParameterValueDistribution")
+        return root_of(name)
     except ConfigError:
         return None  # malformed: the scenario loader names the line
 
@@ -89,15 +87,10 @@ def resolve_scenario(value: Any) -> tuple[str, dict[str, list[float]] | None]:
     root = _distribution_root(name)
     if root is None:
         return name, None
+    from ego.openscenario.distribution import scenario_file
     from ego.openscenario.xmltree import ScenarioFileError
 
-    scenario_file = root.child("ScenarioFile")
-    target = scenario_file.attrs.get("filepath", "") if scenario_file is not None else ""
-    if not target:
-        raise ScenarioFileError(name, root.line, "<ParameterValueDistribution> needs <ScenarioFile filepath=...>")
-    target = os.path.normpath(Path(name).parent / target)  # relative to the distribution file
-    if _distribution_root(target) is not None:
-        raise ScenarioFileError(name, scenario_file.line, f"{target} is a distribution too (expected a scenario file)")
+    target = scenario_file(name, root)
     check_scenario(target)
     stochastic = root.child("Stochastic")
     if stochastic is None:
