@@ -16,6 +16,8 @@ from ego.params import ConfigError, did_you_mean
 from ego.specs import check_controllers, check_values, scenario_of
 from ego.sweep.spec import MAX_RUNS, SweepSpec
 
+_WHOLE = ("integer", "int", "unsignedInt", "unsignedShort")
+
 
 @dataclass(frozen=True)
 class Variation:
@@ -42,6 +44,9 @@ def load(path: str, controllers: list[str], sample: int | None = None, seed: int
     check_controllers(controllers, cls, bad)
     if dist.total * len(controllers) > MAX_RUNS:
         raise bad(f"expands to {dist.total * len(controllers):,} runs; the limit is {MAX_RUNS:,}")
+    for name, col in dist.columns.items():  # a drawn number for a whole-number parameter: the nearest one
+        if dist.kind == "stochastic" and params[name].type in _WHOLE and col.dtype == float:
+            dist.columns[name] = np.rint(col)
     mask = distribution.constraint_mask(dist, params)
     keep = np.flatnonzero(mask)
     remaining = len(keep)

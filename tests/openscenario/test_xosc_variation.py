@@ -174,3 +174,23 @@ def test_sweep_writes_results_and_resumes(files, capsys, monkeypatch):
     assert {"LeadGap", "LeadDecel"} <= set(rows.columns) and set(rows.LeadGap) <= {5.0, 10.0, 15.0}
     assert main(args) == 0
     assert "2 were already in" in capsys.readouterr().out
+
+
+def test_stochastic_whole_number_parameter_is_rounded(files):
+    text = (
+        (files / "ccrb.xosc")
+        .read_text()
+        .replace(
+            '<ParameterDeclaration name="LeadGap" parameterType="double" value="12"/>',
+            '<ParameterDeclaration name="LeadGap" parameterType="integer" value="12"/>',
+        )
+    )
+    (files / "ccrb_int.xosc").write_text(text)
+    body = (
+        '<Stochastic numberOfTestRuns="50" randomSeed="1"><StochasticDistribution parameterName="LeadGap">'
+        '<UniformDistribution><Range lowerLimit="10" upperLimit="12"/></UniformDistribution>'
+        "</StochasticDistribution></Stochastic>"
+    )
+    var = sweep_xosc.load(write(files, body, "ccrb_int.xosc"), ["pid"])
+    gaps = [p["LeadGap"] for p in var.spec.listed]
+    assert var.total == 50 and all(isinstance(g, int) for g in gaps) and set(gaps) <= {10, 11, 12}
