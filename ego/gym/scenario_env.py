@@ -87,38 +87,12 @@ def resolve_scenario(value: Any) -> tuple[str, dict[str, list[float]] | None]:
     root = _distribution_root(name)
     if root is None:
         return name, None
-    from ego.openscenario.distribution import scenario_file
-    from ego.openscenario.xmltree import ScenarioFileError
+    from ego.openscenario.distribution import scenario_file, uniform_ranges
 
     target = scenario_file(name, root)
     check_scenario(target)
-    stochastic = root.child("Stochastic")
-    if stochastic is None:
-        other = next((c for c in root.children if c.tag != "ScenarioFile"), root)
-        raise ScenarioFileError(
-            name, other.line, f"<{other.tag}> is not supported by ego's environments (a <Stochastic> one is)"
-        )
     params = {i.name for i in describe(scenario_class(target).config_cls)}
-    ranges: dict[str, list[float]] = {}
-    for node in stochastic.all("StochasticDistribution"):
-        param_name = node.attrs.get("parameterName", "")
-        uniform = node.child("UniformDistribution")
-        bounds = uniform.child("Range") if uniform is not None else None
-        if bounds is None:
-            kind = node.children[0].tag if node.children else "nothing"
-            raise ScenarioFileError(
-                name,
-                node.line,
-                f"<{kind}> of {param_name!r} is not supported by ego's environments "
-                "(a <UniformDistribution> with a <Range> is)",
-            )
-        if param_name not in params:
-            raise ScenarioFileError(name, node.line, f"parameter {param_name!r} is not one of {target}'s")
-        try:
-            ranges[param_name] = [float(bounds.attrs["lowerLimit"]), float(bounds.attrs["upperLimit"])]
-        except (KeyError, ValueError):
-            raise ScenarioFileError(name, bounds.line, "<Range> needs numbers lowerLimit and upperLimit") from None
-    return target, ranges
+    return target, uniform_ranges(name, root, target, params)
 
 
 class ScenarioEnv(EgoEnv):

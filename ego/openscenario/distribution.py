@@ -327,6 +327,38 @@ def read(path: str | os.PathLike, seed: int | None = None) -> Distribution:
     return Distribution(name, target, kind, cols, total)
 
 
+def uniform_ranges(path: str, root: Node, target: str, params: set[str]) -> dict[str, list[float]]:
+    """For ego's environments (``ego/Scenario-v0``): per parameter of a ``<Stochastic>``'s
+    ``<UniformDistribution>``s, ``[lowerLimit, upperLimit]`` (its randomize ranges); any other
+    distribution is refused with its line."""
+    stochastic = root.child("Stochastic")
+    if stochastic is None:
+        other = next((c for c in root.children if c.tag != "ScenarioFile"), root)
+        raise ScenarioFileError(
+            path, other.line, f"<{other.tag}> is not supported by ego's environments (a <Stochastic> one is)"
+        )
+    ranges: dict[str, list[float]] = {}
+    for node in stochastic.all("StochasticDistribution"):
+        param_name = node.attrs.get("parameterName", "")
+        uniform = node.child("UniformDistribution")
+        bounds = uniform.child("Range") if uniform is not None else None
+        if bounds is None:
+            kind = node.children[0].tag if node.children else "nothing"
+            raise ScenarioFileError(
+                path,
+                node.line,
+                f"<{kind}> of {param_name!r} is not supported by ego's environments "
+                "(a <UniformDistribution> with a <Range> is)",
+            )
+        if param_name not in params:
+            raise ScenarioFileError(path, node.line, f"parameter {param_name!r} is not one of {target}'s")
+        try:
+            ranges[param_name] = [float(bounds.attrs["lowerLimit"]), float(bounds.attrs["upperLimit"])]
+        except (KeyError, ValueError):
+            raise ScenarioFileError(path, bounds.line, "<Range> needs numbers lowerLimit and upperLimit") from None
+    return ranges
+
+
 def _codes(col: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     uniq, inverse = np.unique(col, return_inverse=True)
     return uniq, inverse.reshape(-1)
