@@ -174,7 +174,27 @@ def parser() -> argparse.ArgumentParser:
         ),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    swp.add_argument("spec", metavar="SPEC.toml", help="the sweep specification")
+    swp.add_argument(
+        "spec",
+        metavar="SPEC.toml",
+        help="the sweep specification, or an OpenSCENARIO ParameterValueDistribution file (FILE.xosc, "
+        "with -c; docs/openscenario.md)",
+    )
+    swp.add_argument(
+        "-c",
+        "--controllers",
+        default=None,
+        metavar="NAMES",
+        help="with FILE.xosc: the controller(s) to run, comma-separated",
+    )
+    swp.add_argument(
+        "--sample",
+        type=int,
+        default=None,
+        metavar="N",
+        help="with FILE.xosc: run a seeded subsample of N of the combinations that meet the value constraints",
+    )
+    swp.add_argument("--seed", type=int, default=0, metavar="S", help="with --sample: its seed (default 0)")
     add_out(swp, "output folder (resumed if it holds results)")
     add_engine(swp, "process (default: a pool of worker processes) or ray")
     add_jobs(swp, "parallel runs (default: the number of CPUs)")

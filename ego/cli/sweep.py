@@ -16,7 +16,7 @@ def command(args: Any) -> int:
     from ego.sweep import spec as sweep_spec
     from ego.sweep.runner import RECORD, parse_plot, sweep
 
-    spec = sweep_spec.load(args.spec)
+    spec = _load(args, sweep_spec)
     if args.require:
         import dataclasses
 
@@ -67,6 +67,30 @@ def command(args: Any) -> int:
         )
         return EXIT_NOT_COMPLETED
     return EXIT_OK
+
+
+def _load(args: Any, sweep_spec: Any) -> Any:
+    """A TOML spec, or a ParameterValueDistribution file (its counts printed)."""
+    xosc = str(args.spec).lower().endswith(".xosc")
+    if not xosc:
+        for opt, value in (("-c", args.controllers), ("--sample", args.sample)):
+            if value is not None:
+                raise ConfigError(
+                    f"{opt} is for a ParameterValueDistribution file (FILE.xosc); a TOML spec names its own"
+                )
+        return sweep_spec.load(args.spec)
+    from ego.sweep import xosc as sweep_xosc
+
+    if not args.controllers:
+        raise ConfigError("ego sweep FILE.xosc needs -c CONTROLLER (comma-separated for several)")
+    controllers = [c.strip() for c in args.controllers.split(",") if c.strip()]
+    var = sweep_xosc.load(args.spec, controllers, args.sample, args.seed)
+    print(
+        f"{args.spec}: {var.total:,} combinations, {var.discarded:,} discarded by the value constraints of "
+        f"{var.spec.scenario}, {var.remaining:,} remain"
+        + (f"; running a sample of {var.spec.points():,} (seed {args.seed})" if args.sample is not None else "")
+    )
+    return var.spec
 
 
 def plot_names(plots, spec) -> list[str]:

@@ -69,12 +69,10 @@ def check_scenario(value: Any) -> str:
 def _distribution_root(name: str):
     """The ``<ParameterValueDistribution>`` element of the .xosc file ``name``, or None (not
     such a file, or no file at all)."""
-    if not name.lower().endswith(".xosc") or not Path(name).is_file():
-        return None
-    from ego.openscenario.xmltree import parse_file
+    from ego.openscenario.distribution import root_of
 
     try:
-        return parse_file(name).child("ParameterValueDistribution")
+        return root_of(name)
     except ConfigError:
         return None  # malformed: the scenario loader names the line
 
@@ -89,43 +87,12 @@ def resolve_scenario(value: Any) -> tuple[str, dict[str, list[float]] | None]:
     root = _distribution_root(name)
     if root is None:
         return name, None
-    from ego.openscenario.xmltree import ScenarioFileError
+    from ego.openscenario.distribution import scenario_file, uniform_ranges
 
-    scenario_file = root.child("ScenarioFile")
-    target = scenario_file.attrs.get("filepath", "") if scenario_file is not None else ""
-    if not target:
-        raise ScenarioFileError(name, root.line, "<ParameterValueDistribution> needs <ScenarioFile filepath=...>")
-    target = os.path.normpath(Path(name).parent / target)  # relative to the distribution file
-    if _distribution_root(target) is not None:
-        raise ScenarioFileError(name, scenario_file.line, f"{target} is a distribution too (expected a scenario file)")
+    target = scenario_file(name, root)
     check_scenario(target)
-    stochastic = root.child("Stochastic")
-    if stochastic is None:
-        other = next((c for c in root.children if c.tag != "ScenarioFile"), root)
-        raise ScenarioFileError(
-            name, other.line, f"<{other.tag}> is not supported by ego's environments (a <Stochastic> one is)"
-        )
     params = {i.name for i in describe(scenario_class(target).config_cls)}
-    ranges: dict[str, list[float]] = {}
-    for node in stochastic.all("StochasticDistribution"):
-        param_name = node.attrs.get("parameterName", "")
-        uniform = node.child("UniformDistribution")
-        bounds = uniform.child("Range") if uniform is not None else None
-        if bounds is None:
-            kind = node.children[0].tag if node.children else "nothing"
-            raise ScenarioFileError(
-                name,
-                node.line,
-                f"<{kind}> of {param_name!r} is not supported by ego's environments "
-                "(a <UniformDistribution> with a <Range> is)",
-            )
-        if param_name not in params:
-            raise ScenarioFileError(name, node.line, f"parameter {param_name!r} is not one of {target}'s")
-        try:
-            ranges[param_name] = [float(bounds.attrs["lowerLimit"]), float(bounds.attrs["upperLimit"])]
-        except (KeyError, ValueError):
-            raise ScenarioFileError(name, bounds.line, "<Range> needs numbers lowerLimit and upperLimit") from None
-    return target, ranges
+    return target, uniform_ranges(name, root, target, params)
 
 
 class ScenarioEnv(EgoEnv):

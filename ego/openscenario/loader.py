@@ -369,7 +369,7 @@ def _constraint_group(path, g: Node, values: Mapping[str, object]) -> tuple[M.Va
         if raw is None:
             raise ScenarioFileError(path, vc.line, "<ValueConstraint> needs attribute value")
         try:
-            out.append(M.ValueConstraint(rule, resolve(raw, values), vc.line))
+            out.append(M.ValueConstraint(rule, resolve(raw, values), vc.line, raw))
         except ExpressionError as exc:
             raise ScenarioFileError(path, vc.line, str(exc)) from None
     if not out:

@@ -33,6 +33,7 @@ class ValueConstraint:
     rule: str  #: one of RULES
     value: object  #: resolved (it may be an expression of other parameters)
     line: int
+    raw: str = ""  #: as written (a distribution file re-resolves it per combination)
 
 
 @dataclass(frozen=True)

@@ -84,14 +84,20 @@ class SweepSpec:
     source: str = ""
     #: [requirements] name -> formula, checked on every run (None: the scenario's defaults)
     requirements: dict | None = None
+    #: the points as a list (a ParameterValueDistribution file's combinations), instead of grid x sample
+    listed: tuple | None = None
 
     @property
     def swept(self) -> tuple[str, ...]:
         """The parameters that vary between runs (grid, then sample)."""
+        if self.listed is not None:
+            return tuple(self.listed[0]) if self.listed else ()
         return tuple(self.grid) + (tuple(self.sample.ranges) if self.sample else ())
 
     def points(self) -> int:
         """How many parameter points: grid combinations x distinct sample points."""
+        if self.listed is not None:
+            return len(self.listed)
         n = math.prod(len(v) for v in self.grid.values()) if self.grid else 1
         return n * (self._sample_points_count if self.sample else 1)
 
@@ -120,6 +126,9 @@ class SweepSpec:
                     )
 
     def _points(self) -> Iterator[dict]:
+        if self.listed is not None:
+            yield from self.listed
+            return
         names = list(self.grid)
         combos = product(*(self.grid[n] for n in names)) if names else [()]
         for combo in combos:
