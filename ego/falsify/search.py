@@ -209,14 +209,15 @@ def falsify(
 
 
 def resume_key(spec: FalsifySpec, optimizer: str, optimizer_seed: int) -> dict:
-    """What a stored search's rows mean beyond their run ids: the ranges, the requirements
-    and the optimiser. Resuming with any of them changed is refused
-    (:meth:`ego.sweep.results.ResultStore.check_spec`); the budget and the controllers may
-    change (more runs of the same search, another search)."""
+    """What a stored search's rows mean beyond their run ids: the ranges, the fixed values,
+    the requirements' formulas (every one is checked on every run) and the optimiser.
+    Resuming with any of them changed is refused
+    (:meth:`ego.sweep.results.ResultStore.check_spec`); the budget, the controllers and the
+    target among the same requirements may change (more runs of the same search, another
+    search over the same rows: ``ego.falsify.bench`` shares them between targets)."""
     return {
         "ranges": {d.name: ("false/true" if d.kind == "bool" else [d.lo, d.hi]) for d in spec.dims},
         "fixed values": {**spec.fixed, **({} if spec.seed is None else {"seed": spec.seed})},
-        "requirement": f"{spec.requirement}: {spec.formula}",
         "requirements": dict(spec.requirements),
         "optimizer": f"{optimizer} (seed {optimizer_seed})",
     }

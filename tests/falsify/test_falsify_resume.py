@@ -30,7 +30,7 @@ ARGS = ["--budget", "4", "--optimizer", "random", "--no-verify", "--jobs", "1"]
     "old, new, what",
     [
         ("lead_gap = [20, 60]", "lead_gap = [20, 50]", "ranges changed"),
-        ('far = "always (gap_front >= 25 m)"', 'far = "always (gap_front >= 5 m)"', "requirement changed"),
+        ('far = "always (gap_front >= 25 m)"', 'far = "always (gap_front >= 5 m)"', "requirements changed"),
     ],
 )
 def test_a_resume_whose_search_changed_is_refused_in_one_line(old, new, what, tmp_path, capsys):
