@@ -86,8 +86,18 @@ def files(tmp_path_factory):
     xodr = (XOSC_DIR / "straight3.xodr").read_text()
     (d / "negative.xodr").write_text(xodr.replace('a="3.5"', 'a="-3.5"', 1))
     (d / "negative_road.xosc").write_text(EB_XOSC.replace('filepath="straight3.xodr"', 'filepath="negative.xodr"'))
+    # a file declares its parameters' ranges with OpenSCENARIO 1.2 constraints (here the
+    # built-in scenario's 5..300 m): a grid value outside is refused before the sweep starts
+    ranged = EB_XOSC.replace(
+        '<ParameterDeclaration name="LeadGap" parameterType="double" value="30"/>',
+        '<ParameterDeclaration name="LeadGap" parameterType="double" value="30"><ConstraintGroup>'
+        '<ValueConstraint rule="greaterOrEqual" value="5"/><ValueConstraint rule="lessOrEqual" value="300"/>'
+        "</ConstraintGroup></ParameterDeclaration>",
+    )
+    assert ranged != EB_XOSC
+    (d / "ranged.xosc").write_text(ranged)
     (d / "behind.toml").write_text(
-        f'scenario = "{d / "ok.xosc"}"\ncontrollers = ["pid"]\n[grid]\nLeadGap = [-40, 30]\n'
+        f'scenario = "{d / "ranged.xosc"}"\ncontrollers = ["pid"]\n[grid]\nLeadGap = [-40, 30]\n'
     )
     base = fmu_zoo.build(fmu_zoo.pid_tracking(), d)
     (d / "zero.toml").symlink_to("/dev/zero")
