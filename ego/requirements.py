@@ -481,7 +481,8 @@ class _Parser:
             self.deeper()
             if tok == "-":
                 text, unit = self.factor()
-                text = f"-{text}"
+                # rtamt's grammar takes a sign before a number only: -speed is 0 - speed
+                text = f"-{text}" if _is_number(text) and not text.startswith("-") else f"(0.0 - {text})"
             else:
                 if tok == "abs":
                     self.take("(")

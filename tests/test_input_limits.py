@@ -215,3 +215,15 @@ def test_an_infinite_robustness_is_reported_as_the_bound_with_its_verdict(tmp_pa
     out = capsys.readouterr()
     assert status == 0, out.err
     assert json.loads(out.out.strip().splitlines()[-1])["requirements"]["r"] == MAX_ROBUSTNESS
+
+
+def test_a_sign_before_a_signal_is_evaluated_not_a_traceback(capsys):
+    """rtamt takes a sign before a number only: -speed goes to it as 0 - speed."""
+    import json
+
+    req = ["r: always -speed > -100", "q: always - -speed < 100 m/s", "p: always speed < 100 m/s"]
+    status = main([*RUN, "--set", "duration=3", "--json", *[a for r in req for a in ("--require", r)]])
+    out = capsys.readouterr()
+    assert status == 0 and "Traceback" not in out.err, out.err
+    rob = json.loads(out.out.strip().splitlines()[-1])["requirements"]
+    assert rob["r"] == rob["q"] == rob["p"] > 0
