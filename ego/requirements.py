@@ -481,7 +481,8 @@ class _Parser:
             self.deeper()
             if tok == "-":
                 text, unit = self.factor()
-                text = f"-{text}"
+                # rtamt's grammar takes a sign before a number only: -speed is 0 - speed
+                text = f"-{text}" if _is_number(text) and not text.startswith("-") else f"(0.0 - {text})"
             else:
                 if tok == "abs":
                     self.take("(")
@@ -737,6 +738,11 @@ class Verdict:
         return self.robustness >= 0.0
 
 
+#: an infinite robustness (a formula's arithmetic past the float range) is reported as this
+#: bound with its sign, the one signals are clamped to (:func:`signal`): the verdict stays,
+#: the number is one JSON and Parquet take (docs/reliability.md, "Limits")
+MAX_ROBUSTNESS = 1e9
+
 #: requirements are evaluated on the trace's samples this far apart (s; the SUMO step, at
 #: which the traffic's signals change): rtamt's offline monitor costs about 30 us per sample
 #: and operator, so every 0.01 s control step would cost a third of a run's time
@@ -776,6 +782,8 @@ def evaluate(req: Requirement, result, period: float = PERIOD, scenario=None) ->
     if not len(rob):
         return Verdict(req.name, math.nan, None, req.unit)
     value = float(rob.min()) if always else float(rob[0])
+    if math.isinf(value):  # arithmetic past the float range (speed * 1e300 * 1e300): the
+        value = math.copysign(MAX_ROBUSTNESS, value)  # verdict kept, the bound signals have
     at = None
     if value < 0.0:
         bad = np.flatnonzero(rob < 0.0)

@@ -127,3 +127,21 @@ def check_values(scenario: str, controllers: Iterable[str], overrides: dict, whe
         raise bad(f"{where}: {exc}") from None
     except (TypeError, ValueError) as exc:
         raise bad(f"{where}: {exc}") from None
+
+
+def changed(stored: dict, now: dict) -> str | None:
+    """The first entry of a spec's resume key (``name -> JSON-able value``) that differs
+    between the stored results and this spec, said in a few words ("ranges changed from
+    {...} to {...}"); None when they agree. Entries the stored key lacks are not compared."""
+    for name, value in now.items():
+        if name not in stored:
+            continue
+        old = stored[name]
+        if json.dumps(old, sort_keys=True, default=str) != json.dumps(value, sort_keys=True, default=str):
+            return f"{name} changed from {_short(old)} to {_short(value)}"
+    return None
+
+
+def _short(value: Any) -> str:
+    text = json.dumps(value, sort_keys=True, default=str)
+    return text if len(text) <= 200 else text[:197] + "..."

@@ -75,6 +75,30 @@ def files(tmp_path_factory):
         f"LeadGap = [{', '.join(str(30 + i * 0.01) for i in range(4000))}]\n"
     )
     (d / "ok.xosc").write_text(EB_XOSC)
+    (d / "decel.xosc").write_text(
+        EB_XOSC.replace(
+            'name="LeadDecel" parameterType="double" value="6"',
+            'name="LeadDecel" parameterType="double" value="1e308"',
+            1,
+        )
+    )
+    (d / "delay.xosc").write_text(EB_XOSC.replace('name="BrakeTime" delay="0"', 'name="BrakeTime" delay="1e308"', 1))
+    xodr = (XOSC_DIR / "straight3.xodr").read_text()
+    (d / "negative.xodr").write_text(xodr.replace('a="3.5"', 'a="-3.5"', 1))
+    (d / "negative_road.xosc").write_text(EB_XOSC.replace('filepath="straight3.xodr"', 'filepath="negative.xodr"'))
+    # a file declares its parameters' ranges with OpenSCENARIO 1.2 constraints (here the
+    # built-in scenario's 5..300 m): a grid value outside is refused before the sweep starts
+    ranged = EB_XOSC.replace(
+        '<ParameterDeclaration name="LeadGap" parameterType="double" value="30"/>',
+        '<ParameterDeclaration name="LeadGap" parameterType="double" value="30"><ConstraintGroup>'
+        '<ValueConstraint rule="greaterOrEqual" value="5"/><ValueConstraint rule="lessOrEqual" value="300"/>'
+        "</ConstraintGroup></ParameterDeclaration>",
+    )
+    assert ranged != EB_XOSC
+    (d / "ranged.xosc").write_text(ranged)
+    (d / "behind.toml").write_text(
+        f'scenario = "{d / "ranged.xosc"}"\ncontrollers = ["pid"]\n[grid]\nLeadGap = [-40, 30]\n'
+    )
     base = fmu_zoo.build(fmu_zoo.pid_tracking(), d)
     (d / "zero.toml").symlink_to("/dev/zero")
     _fmu_with(d / "entries.fmu", base, {f"resources/r{i}": b"" for i in range(10_001)})
@@ -126,6 +150,12 @@ CASES = [
     ("fmu-absolute-entry", ["list", "{absolute.fmu}"], "points outside the archive's folder"),
     ("fmu-bomb", ["list", "{bomb.fmu}"], "528 MiB uncompressed (the limit is 512 MiB an entry)"),
     ("fmu-not-a-library", ["run", "emergency-brake", "-c", "{notlib.fmu}"], "its binary cannot be loaded"),
+    ("xosc-decel-1e308", ["run", "{decel.xosc}", "-c", "pid"], "1e+308 (expected at most 100 m/s^2"),
+    ("xosc-delay-1e308", ["run", "{delay.xosc}", "-c", "pid"], "1e+308 (expected at most 86400 s"),
+    ("xodr-negative-width", ["run", "{negative_road.xosc}", "-c", "pid"], "bad lane width a=-3.5 m (allowed: 0"),
+    ("ego-empty", ["run", "{ok.xosc}", "-c", "pid", "--ego", ""], "bad value for --ego: ''"),
+    ("list-ego-empty", ["list", "{ok.xosc}", "--ego", ""], "bad value for --ego: ''"),
+    ("sweep-lead-behind", ["sweep", "{behind.toml}", "--out", "{out}"], "'LeadGap' = -40 breaks its value constraint"),
     ("stl-1000-not", [*REQ, "r: " + "not " * 1000 + "speed > 0"], "nested deeper than 100 levels"),
     ("stl-1000-always", [*REQ, "r: " + "always " * 1000 + "speed > 0"], "nested deeper than 100 levels"),
     ("stl-400-abs", [*REQ, "r: " + "abs(" * 400 + "speed" + ")" * 400 + " > 0"], "nested deeper than 100"),
@@ -171,3 +201,29 @@ def test_robustness_that_cannot_be_evaluated_is_nan_not_a_traceback(tmp_path, ca
     import json
 
     assert json.loads(out.out)["requirements"]["r"] is None  # NaN: no number
+
+
+def test_an_infinite_robustness_is_reported_as_the_bound_with_its_verdict(tmp_path, capsys, monkeypatch):
+    """Arithmetic past the float range gives rtamt an infinite robustness: reported as
+    +-1e9 (ego.requirements.MAX_ROBUSTNESS, the bound signals are clamped to), valid JSON."""
+    import json
+
+    from ego.requirements import MAX_ROBUSTNESS
+
+    monkeypatch.chdir(tmp_path)
+    status = main([*RUN, "--set", "duration=2", "--require", "r: always speed * 1e300 * 1e300 > 0", "--json"])
+    out = capsys.readouterr()
+    assert status == 0, out.err
+    assert json.loads(out.out.strip().splitlines()[-1])["requirements"]["r"] == MAX_ROBUSTNESS
+
+
+def test_a_sign_before_a_signal_is_evaluated_not_a_traceback(capsys):
+    """rtamt takes a sign before a number only: -speed goes to it as 0 - speed."""
+    import json
+
+    req = ["r: always -speed > -100", "q: always - -speed < 100 m/s", "p: always speed < 100 m/s"]
+    status = main([*RUN, "--set", "duration=3", "--json", *[a for r in req for a in ("--require", r)]])
+    out = capsys.readouterr()
+    assert status == 0 and "Traceback" not in out.err, out.err
+    rob = json.loads(out.out.strip().splitlines()[-1])["requirements"]
+    assert rob["r"] == rob["q"] == rob["p"] > 0

@@ -11,8 +11,10 @@ from ego.params import ConfigError, describe
 
 
 def command(args: Any) -> int:
+    from ego.cli.common import check_ego_name
     from ego.openscenario import is_scenario_file
 
+    check_ego_name(args.ego)
     if args.ego and not (args.reference and is_scenario_file(args.reference)):
         raise ConfigError("--ego goes with a scenario file: ego list FILE.xosc --ego ENTITY")
     if args.reference and is_scenario_file(args.reference):

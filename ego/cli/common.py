@@ -90,11 +90,18 @@ def add_set(p: argparse.ArgumentParser, help: str) -> None:
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE", help=help)
 
 
+def check_ego_name(name: str | None) -> None:
+    """``--ego ""`` (or blanks) is no entity: refused rather than read as the default Ego."""
+    if name is not None and not name.strip():
+        raise ConfigError(f"bad value for --ego: {name!r} (an entity of the .xosc file, e.g. --ego Ego)")
+
+
 def ego_entity(args, overrides: dict) -> dict:
     """``--ego ENTITY`` (``ego run`` / ``ego compare``) as the file scenario's ``ego_entity``
     parameter; ConfigError with a built-in scenario."""
     if args.ego is None:
         return overrides
+    check_ego_name(args.ego)
     from ego.openscenario import is_scenario_file
 
     if not is_scenario_file(args.scenario):

@@ -141,14 +141,17 @@ def falsify(
     budget = budget or spec.budget
     # every name it writes, the results it would add to and the cluster: before --out is touched
     check_results_folder(out, ["falsified.md", "convergence.png"], spec.controllers if verify else ())
+    key = resume_key(spec, optimizer, optimizer_seed)
     if (out / "results.parquet").is_file():
-        ResultStore(out).check_compatible(spec.scenario, _sample_rows(spec, optimizer, optimizer_seed))
+        stored = ResultStore(out)
+        stored.check_compatible(spec.scenario, _sample_rows(spec, optimizer, optimizer_seed))
+        stored.check_spec(key, "search")
     if executor is None and engine == "ray" and address is not None:
         from ego.cluster import check_address
 
         check_address(address)
     with FolderLock(out, "--out"):
-        store = ResultStore(out)
+        store = ResultStore(out, spec_key=key)
         table = store.table()
         known: dict[str, dict] = {}
         if table is not None:
@@ -205,6 +208,21 @@ def falsify(
     return report
 
 
+def resume_key(spec: FalsifySpec, optimizer: str, optimizer_seed: int) -> dict:
+    """What a stored search's rows mean beyond their run ids: the ranges, the fixed values,
+    the requirements' formulas (every one is checked on every run) and the optimiser.
+    Resuming with any of them changed is refused
+    (:meth:`ego.sweep.results.ResultStore.check_spec`); the budget, the controllers and the
+    target among the same requirements may change (more runs of the same search, another
+    search over the same rows: ``ego.falsify.bench`` shares them between targets)."""
+    return {
+        "ranges": {d.name: ("false/true" if d.kind == "bool" else [d.lo, d.hi]) for d in spec.dims},
+        "fixed values": {**spec.fixed, **({} if spec.seed is None else {"seed": spec.seed})},
+        "requirements": dict(spec.requirements),
+        "optimizer": f"{optimizer} (seed {optimizer_seed})",
+    }
+
+
 def _sample_rows(spec: FalsifySpec, optimizer: str, optimizer_seed: int) -> list[dict]:
     """The key columns, overrides and optimiser columns of each controller's runs at the
     corners of the search: what the results file's columns will be asked to hold."""
@@ -259,7 +277,7 @@ def _search(
         ids = [spec.run_id(controller, s, o) for s, o in points]
         tasks = {}
         fresh = set()
-        done: dict[str, dict] = {}  # the batch's rows, kept in the order of the proposal
+        done: dict[str, dict] = {}  # the batch's error rows of values no run takes
         for rid, (s, o) in zip(ids, points):
             if rid not in known and rid not in fresh:
                 fresh.add(rid)
@@ -277,8 +295,8 @@ def _search(
                     row = row_of(task.key, outcome.value)
                 if row["status"] == "interrupted":
                     raise KeyboardInterrupt
-                done[row["run_id"]] = row
-        finally:  # what finished is kept, interrupted or not, in the same order every time
+                keep(row)  # into the store as it finishes: on disk within the store's 2 s
+        finally:  # the rows no run made (values no run takes) are kept too, interrupted or not
             for rid in ids:
                 if rid in done and rid not in known:
                     keep(done[rid])

@@ -254,6 +254,18 @@ def read_tree(path: str | os.PathLike) -> Node:
 TYPES = ("double", "integer", "unsignedInt", "unsignedShort", "int", "string", "boolean", "dateTime")
 
 
+#: physical upper bounds of a transition's value (a braking rate of 1e308 is no car's) and of
+#: a condition's delay: a rate in m/s^2 (a speed change) or m/s (a lane change), a time, a
+#: distance (docs/reliability.md, "Limits")
+MAX_RATE = 100.0
+MAX_SECONDS = 86400.0
+MAX_DISTANCE = 1e6
+DYNAMICS_LIMITS = {
+    "rate": (MAX_RATE, "m/s^2 (m/s for a lateral rate)"),
+    "time": (MAX_SECONDS, "s: a day"),
+    "distance": (MAX_DISTANCE, "m"),
+}
+
 #: the value ranges of OpenSCENARIO's integer parameter types (XML Schema's)
 INT_RANGES = {
     "int": (-(2**31), 2**31 - 1),
@@ -441,7 +453,15 @@ class _Builder:
         except ExpressionError as exc:
             raise self.error(node, str(exc)) from None
 
-    def num(self, node: Node, name: str, default: object = ..., positive: bool = False, nonneg: bool = False) -> float:
+    def num(
+        self,
+        node: Node,
+        name: str,
+        default: object = ...,
+        positive: bool = False,
+        nonneg: bool = False,
+        at_most: tuple[float, str] | None = None,
+    ) -> float:
         v = self.raw(node, name, default)
         if v is None:
             return v  # type: ignore[return-value]
@@ -453,6 +473,9 @@ class _Builder:
             raise self.error(node, f"bad value for {name} in <{node.tag}>: {f:g} (expected > 0)")
         if nonneg and f < 0.0:
             raise self.error(node, f"bad value for {name} in <{node.tag}>: {f:g} (expected >= 0)")
+        if at_most is not None and abs(f) > at_most[0]:
+            limit, unit = at_most
+            raise self.error(node, f"bad value for {name} in <{node.tag}>: {f:g} (expected at most {limit:g} {unit})")
         return f  # type: ignore[return-value]
 
     def int_(self, node: Node, name: str, default: object = ..., minimum: int | None = None) -> int:
@@ -650,7 +673,7 @@ class _Builder:
         dim = self.enum(node, "dynamicsDimension", M.DIMENSIONS)
         # a rate is read by its magnitude, as the reference player (esmini) reads the negative
         # braking rates its files write; a duration or distance must not be negative
-        value = self.num(node, "value")
+        value = self.num(node, "value", at_most=DYNAMICS_LIMITS[dim])
         if dim == "rate":
             value = abs(value)
         elif value < 0.0:
@@ -804,7 +827,7 @@ class _Builder:
         name = self.str_(node, "name")
         base: dict[str, Any] = {
             "name": name,
-            "delay": self.num(node, "delay", nonneg=True),
+            "delay": self.num(node, "delay", nonneg=True, at_most=(MAX_SECONDS, "s: a day")),
             "edge": self.enum(node, "conditionEdge", M.EDGES),
             "line": node.line,
         }

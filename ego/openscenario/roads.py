@@ -62,6 +62,7 @@ def network_file(road: Path) -> Path:
     from ego.sumo.net import sumo_binary
 
     data = read_limited(road, "road file", MAX_ROAD_BYTES)
+    check_lane_widths(road, data)
 
     exe = sumo_binary("netconvert")
     key = hashlib.sha256(data + "\0".join(OPTIONS).encode() + str(exe).encode()).hexdigest()[:24]
@@ -103,6 +104,38 @@ def network_file(road: Path) -> Path:
         )
     os.replace(tmp, out)
     return out
+
+
+#: a lane wider than this is no lane (docs/reliability.md, "Limits")
+MAX_LANE_WIDTH = 50.0
+_LANE = re.compile(rb"<lane\b([^>]*?)(/>|>(.*?)</lane>)", re.S)
+_WIDTH = re.compile(rb"<width\b[^>]*>")
+_ATTR = re.compile(rb"""\b(type|a|b|c|d)\s*=\s*(["'])(.*?)\2""")
+
+
+def check_lane_widths(road: Path, data: bytes) -> None:
+    """Every lane width record of an OpenDRIVE file: its width at the record's start (``a``)
+    a number from 0 to :data:`MAX_LANE_WIDTH` m, and a driving lane's record not zero
+    everywhere (netconvert would make a lane no car fits or fail far from the cause).
+    ScenarioFileError naming the line."""
+    for lane in _LANE.finditer(data):
+        kind = dict((k, v) for k, _, v in _ATTR.findall(lane.group(1))).get(b"type", b"")
+        for w in _WIDTH.finditer(lane.group(3) or b""):
+            attrs = {k.decode(): v.decode(errors="replace") for k, _, v in _ATTR.findall(w.group(0))}
+            line = data.count(b"\n", 0, lane.start(3) + w.start()) + 1
+            try:
+                coef = [float(attrs.get(k, "0")) for k in "abcd"]
+            except ValueError:
+                raise ScenarioFileError(road, line, f"bad lane width a={attrs.get('a')!r}: not a number") from None
+            a = coef[0]
+            if not (0.0 <= a <= MAX_LANE_WIDTH) or not all(math.isfinite(c) for c in coef):
+                raise ScenarioFileError(
+                    road, line, f"bad lane width a={a:g} m (allowed: 0 to {MAX_LANE_WIDTH:g} m, finite coefficients)"
+                )
+            if kind == b"driving" and not any(coef):
+                raise ScenarioFileError(
+                    road, line, "bad lane width 0 m everywhere for a driving lane (allowed: more than 0 m)"
+                )
 
 
 _EMPTY_TYPE = re.compile(rb"""(\s(?:sub)?type\s*=\s*)(["'])\2""")

@@ -10,6 +10,7 @@ next run of the same command skips the run ids already there.
 
 from __future__ import annotations
 
+import json
 import threading
 import time
 from collections.abc import Iterable
@@ -21,6 +22,8 @@ from ego.params import ConfigError
 #: columns every row has, first
 KEY_COLUMNS = ("run_id", "scenario", "controller", "seed")
 TAIL_COLUMNS = ("wall_time", "host", "node", "attempts", "error")
+#: the file metadata key of :attr:`ResultStore.spec_key`
+SPEC_META = b"ego.spec"
 
 
 def _pa():
@@ -33,8 +36,13 @@ def _pa():
 class ResultStore:
     """Results of one sweep directory (see the module docstring)."""
 
-    def __init__(self, directory: Path, flush_rows: int = 200, flush_seconds: float = 2.0) -> None:
+    def __init__(
+        self, directory: Path, flush_rows: int = 200, flush_seconds: float = 2.0, spec_key: dict | None = None
+    ) -> None:
         self.path = Path(directory) / "results.parquet"
+        #: what the rows' meaning depends on beyond their columns (a search's ranges, its
+        #: requirement): kept in the file's metadata, compared on resume (:meth:`check_spec`)
+        self.spec_key = spec_key
         self.flush_rows = flush_rows
         self.flush_seconds = flush_seconds
         self._pending: list[dict] = []
@@ -86,6 +94,28 @@ class ResultStore:
                         f"bad {where}: its column {key} holds {have}, this spec gives "
                         f"{key} = {value!r} ({want}); choose another --out"
                     )
+
+    def check_spec(self, key: dict, what: str) -> None:
+        """Refuse to resume a results file written for another ``key`` (:func:`ego.specs.changed`
+        names the first difference): ConfigError, one line. A file without a key (written
+        before keys were kept) is accepted."""
+        from ego.specs import changed
+
+        if self._table is None:
+            return
+        raw = (self._table.schema.metadata or {}).get(SPEC_META)
+        if raw is None:
+            return
+        try:
+            stored = json.loads(raw)
+        except ValueError:
+            stored = {}
+        difference = changed(stored, key)
+        if difference:
+            raise ConfigError(
+                f"bad --out: {self.path} holds a {what} whose {difference}; resume only the same "
+                f"{what}: to start fresh choose another --out or move {self.path.name} away"
+            )
 
     def done_ids(self) -> set[str]:
         """The run ids already stored."""
@@ -139,6 +169,10 @@ class ResultStore:
         except Exception as exc:  # noqa: BLE001 - reported in one line, never a hang
             raise output_error(self.path, exc) from None
         table = table.select(_ordered(table.column_names))
+        if self.spec_key is not None:
+            meta = dict(table.schema.metadata or {})
+            meta[SPEC_META] = json.dumps(self.spec_key, sort_keys=True, default=str).encode()
+            table = table.replace_schema_metadata(meta)
         with atomic_path(self.path) as tmp:  # OSError -> OutputError, no partial left
             pq.write_table(table, tmp)
         self._table = table
