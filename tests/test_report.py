@@ -274,14 +274,16 @@ def test_bad_out_is_refused(sweep_dir, tmp_path, capsys):
 # -- a real browser ----------------------------------------------------------------------------
 
 
+CHROMIUM = next((p for n in ("chromium", "chromium-browser", "google-chrome") if (p := shutil.which(n))), None)
+
+
 def chromium() -> str:
-    for name in ("chromium", "chromium-browser", "google-chrome"):
-        if shutil.which(name):
-            return shutil.which(name) or name
-    pytest.skip("no chromium on this machine (apt-get install chromium)")
+    assert CHROMIUM is not None
+    return CHROMIUM
 
 
 @pytest.mark.browser
+@pytest.mark.skipif(CHROMIUM is None, reason="needs Chromium, an optional system package (apt-get install chromium)")
 @pytest.mark.parametrize("name", ["sweep", "cmp"])
 def test_headless_chromium_draws_the_report_without_console_errors(folders, tmp_path, name):
     import numpy as np

@@ -523,21 +523,27 @@ class _Builder:
     # -- entities ---------------------------------------------------------------------------
     def vehicle(self, node: Node, name: str) -> M.Vehicle:
         cat = self.enum(node, "vehicleCategory", VEHICLE_CATEGORIES)
-        bb = self.one(node, "BoundingBox")
-        center, dims = self.one(bb, "Center"), self.one(bb, "Dimensions")
         perf = self.one(node, "Performance")
         return M.Vehicle(
             name=name,
             category=cat,
-            length=self.num(dims, "length", positive=True),
-            width=self.num(dims, "width", positive=True),
-            height=self.num(dims, "height", positive=True),
-            center_x=self.num(center, "x"),
+            **self.box(node),
             max_speed=self.num(perf, "maxSpeed", positive=True),
             max_accel=self.num(perf, "maxAcceleration", positive=True),
             max_decel=self.num(perf, "maxDeceleration", positive=True),
             line=node.line,
         )
+
+    def box(self, node: Node) -> dict[str, float]:
+        """An entity's BoundingBox: its dimensions and the centre's x from the reference point."""
+        bb = self.one(node, "BoundingBox")
+        center, dims = self.one(bb, "Center"), self.one(bb, "Dimensions")
+        return {
+            "length": self.num(dims, "length", positive=True),
+            "width": self.num(dims, "width", positive=True),
+            "height": self.num(dims, "height", positive=True),
+            "center_x": self.num(center, "x"),
+        }
 
     def body(self, node: Node, name: str) -> M.Vehicle:
         """A Vehicle, Pedestrian or MiscObject element (or a catalog reference to one)."""
@@ -556,15 +562,10 @@ class _Builder:
         else:
             cat = self.enum(node, "miscObjectCategory", MISC_CATEGORIES)
         self.num(node, "mass", nonneg=True)
-        bb = self.one(node, "BoundingBox")
-        center, dims = self.one(bb, "Center"), self.one(bb, "Dimensions")
         return M.Vehicle(
             name=name,
             category=cat,
-            length=self.num(dims, "length", positive=True),
-            width=self.num(dims, "width", positive=True),
-            height=self.num(dims, "height", positive=True),
-            center_x=self.num(center, "x"),
+            **self.box(node),
             max_speed=STANDING_MAX_SPEED,
             max_accel=STANDING_ACCEL,
             max_decel=STANDING_ACCEL,
