@@ -5,10 +5,13 @@ so far written, no ``ego-fmu-*`` folder left in TMPDIR."""
 
 from __future__ import annotations
 
+import atexit
 import os
+import shutil
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -29,12 +32,24 @@ def env_with(tmp: Path, **extra: str) -> dict:
     return env
 
 
+_SHORT: dict[Path, Path] = {}
+
+
+def short_tmp(tmp: Path) -> Path:
+    """The TMPDIR of a test's ego processes: a short folder of its own (multiprocessing's
+    AF_UNIX socket paths must stay under 108 bytes, which a pytest tmp_path can exceed),
+    removed at exit."""
+    if tmp not in _SHORT:
+        _SHORT[tmp] = Path(tempfile.mkdtemp(prefix="ewd-"))
+        atexit.register(shutil.rmtree, _SHORT[tmp], True)
+    return _SHORT[tmp]
+
+
 def ego(args, tmp: Path, timeout: float = 120, **extra: str) -> subprocess.CompletedProcess:
-    (tmp / "tmp").mkdir(exist_ok=True)
     return subprocess.run(
         [sys.executable, "-m", "ego", *args],
         cwd=tmp,
-        env=env_with(tmp / "tmp", **extra),
+        env=env_with(short_tmp(tmp), **extra),
         capture_output=True,
         text=True,
         timeout=timeout,
@@ -56,7 +71,7 @@ def one_message(text: str, word: str) -> str:
 
 def assert_clean(proc, tmp: Path) -> None:
     assert "Traceback" not in proc.stdout + proc.stderr
-    assert not list((tmp / "tmp").glob("ego-fmu-*"))
+    assert not list((short_tmp(tmp)).glob("ego-fmu-*"))
 
 
 def test_a_hanging_do_step_ends_the_run_at_the_limit(bad_fmus, tmp_path):
@@ -90,18 +105,17 @@ def test_an_abort_in_instantiate_is_one_line(bad_fmus, tmp_path):
 
 
 def test_sigterm_while_an_fmu_hangs_interrupts_the_run(bad_fmus, tmp_path):
-    (tmp_path / "tmp").mkdir()
     proc = subprocess.Popen(
         [sys.executable, "-m", "ego", "run", "emergency-brake", "-c", bad_fmus["hang"], "--trace", "t.csv"],
         cwd=tmp_path,
-        env=env_with(tmp_path / "tmp", EGO_FMU_STEP_LIMIT="600"),
+        env=env_with(short_tmp(tmp_path), EGO_FMU_STEP_LIMIT="600"),
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
         text=True,
     )
     try:
         deadline = time.monotonic() + 60
-        while not list((tmp_path / "tmp").glob("ego-fmu-*")) and time.monotonic() < deadline:
+        while not list((short_tmp(tmp_path)).glob("ego-fmu-*")) and time.monotonic() < deadline:
             time.sleep(0.1)
         time.sleep(1.5)  # in the hang: step 20 is 0.2 s of simulated time after the start
         proc.send_signal(signal.SIGTERM)
@@ -114,7 +128,7 @@ def test_sigterm_while_an_fmu_hangs_interrupts_the_run(bad_fmus, tmp_path):
     line = one_message(out, "interrupted (SIGTERM)")
     assert "FMU 'hang_fmu' was in doStep at t = 0.200 s" in line
     assert (tmp_path / "t.csv").exists()
-    assert "Traceback" not in out and not list((tmp_path / "tmp").glob("ego-fmu-*"))
+    assert "Traceback" not in out and not list((short_tmp(tmp_path)).glob("ego-fmu-*"))
 
 
 def test_compare_in_workers_names_the_fmu_in_each_row(bad_fmus, tmp_path):
