@@ -421,10 +421,10 @@ HAND = [
     (
         "constraint-groups",
         sub(
-            '      <ConstraintGroup>\n'
+            "      <ConstraintGroup>\n"
             '        <ValueConstraint rule="greaterOrEqual" value="5"/>\n'
             '        <ValueConstraint rule="lessOrEqual" value="300"/>\n'
-            '      </ConstraintGroup>\n',
+            "      </ConstraintGroup>\n",
             '      <ConstraintGroup><ValueConstraint rule="equalTo" value="10"/></ConstraintGroup>\n'
             '      <ConstraintGroup><ValueConstraint rule="greaterThan" value="${$EgoFront / 3}"/></ConstraintGroup>\n',
         ),
