@@ -223,6 +223,9 @@ def parser() -> argparse.ArgumentParser:
     from ego.cli.report import add_parser as add_report
 
     add_report(sub)
+    from ego.cli.concrete import add_parser as add_concrete
+
+    add_concrete(sub)
 
     lst = sub.add_parser(
         "list",
