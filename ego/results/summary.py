@@ -78,7 +78,7 @@ def percentiles(values: Sequence[Any]) -> str:
     return f"{p50:.3g} [{p5:.3g}, {p95:.3g}] ({a.min():.3g} to {a.max():.3g}), {a.size}"
 
 
-def preventable_lines(by: Mapping[str, Sequence[Mapping]], controllers: Sequence[str]) -> list[str]:
+def preventable_lines(by: Mapping[str, Sequence[Mapping[str, Any]]], controllers: Sequence[str]) -> list[str]:
     """Per controller, of its runs that computed ``collision_preventable`` (``--preventable``:
     the collisions), how many UN R157's careful driver avoids; nothing if none computed it."""
     if not any(m.get("collision_preventable") is not None for ms in by.values() for m in ms):
