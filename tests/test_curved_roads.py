@@ -9,6 +9,7 @@ import pytest
 
 from ego.cli import main
 from ego.control import TASKS
+from ego.docs.curved import lane_keeping_overrides
 from ego.fmi.controller import observes
 from ego.models import (
     BicyclePlant,
@@ -62,9 +63,7 @@ def test_the_curved_networks_are_built_with_three_lanes_of_the_motorway():
 
 
 def _lane_keeping(controller, road="left-250", speed=60 / 3.6, duration=12, **extra):
-    overrides = dict(
-        road=road, ego_speed=speed, traffic_density=0, lead_gap=300, lead_final_speed=40, duration=duration, **extra
-    )
+    overrides = {**lane_keeping_overrides(road, speed, duration), **extra}
     r = run(RunSpec("emergency-brake", controller, overrides=overrides, requirements=()))
     t, e, s = r.column("t"), r.column("e_lat"), r.column("s")
     entry = t[np.searchsorted(s, 350.0)]  # the arc starts 350 m along the middle lane
