@@ -12,6 +12,7 @@ the manoeuvre tables' runs with these cells (:func:`manoeuvre_cells`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,18 +20,17 @@ import numpy as np
 from ego.docs.common import KMH, TRACKING, Row, Table, sim
 
 PAGE = "curved-roads"
-#: m along the middle lane where every curved road starts to curve (motorway_arcs.LEAD_IN)
-CURVE_START = 350.0
-#: s after the ego's centre of gravity passes CURVE_START that the entry transient is over
+#: s after the ego's centre of gravity enters a curve that the entry transient is over
 SETTLE = 3.0
-#: the lane-keeping cases: road, speed (km/h), duration (s: the ego stays in the curved part)
+#: the lane-keeping cases: road, speed (km/h), duration (s: the ego leaves the curved part 5 s
+#: or more before the end)
 LANE_KEEPING = (
-    ("straight", 130.0, 40.0),
-    ("left-1000", 130.0, 40.0),
-    ("right-1000", 130.0, 40.0),
-    ("left-250", 60.0, 40.0),
-    ("right-250", 60.0, 40.0),
-    ("clothoid", 80.0, 55.0),
+    ("straight", 130.0, 50.0),
+    ("left-1000", 130.0, 50.0),
+    ("right-1000", 130.0, 50.0),
+    ("left-250", 60.0, 56.0),
+    ("right-250", 60.0, 56.0),
+    ("clothoid", 80.0, 58.0),
 )
 #: the roads of the manoeuvre tables, the straight one first (the reference)
 ROADS = ("straight", "left-250", "right-250", "left-1000", "right-1000", "clothoid")
@@ -38,9 +38,8 @@ ROADS = ("straight", "left-250", "right-250", "left-1000", "right-1000", "clotho
 
 @dataclass(frozen=True)
 class LaneKeeping:
-    """One lane-keeping run (no other traffic near): its status, the largest and RMS
-    |lateral error| (m, the trace's ``e_lat``) over the run, the largest from SETTLE s after
-    the ego enters the curve (``after``) and the largest lane departure (m)."""
+    """One lane-keeping run (no other traffic near): its status, :func:`lane_keeping_figures`
+    and the largest lane departure (m)."""
 
     controller: str
     road: str
@@ -54,7 +53,7 @@ class LaneKeeping:
         r = run(RunSpec("emergency-brake", self.controller, overrides=overrides, requirements=()))
         return {
             "status": r.status,
-            **lane_keeping_figures(r.column("t"), r.column("s"), r.column("e_lat")),
+            **lane_keeping_figures(r.column("t"), r.column("s"), r.column("e_lat"), curved_span(self.road)),
             "max_lane_departure": r.metrics.get("max_lane_departure"),
         }
 
@@ -72,17 +71,32 @@ def lane_keeping_overrides(road: str, speed: float, duration: float) -> dict:
     }
 
 
-def lane_keeping_figures(t: np.ndarray, s: np.ndarray, e_lat: np.ndarray) -> dict:
-    """max and RMS |e_lat| (m) over the run, max from SETTLE s after the centre of gravity
-    passes CURVE_START (None when the run ends before)."""
+def curved_span(road: str) -> tuple[float, float] | None:
+    """(start, end) m along the middle lane of ``road``'s curved part (its arc, or the road of
+    changing curvature's clothoids and arcs); None for the straight road."""
+    from sumo_nets.motorway_arcs import ARCS, CLOTHOID, LEAD_IN
+
+    if road == "clothoid":
+        return LEAD_IN, LEAD_IN + sum(piece[0] for piece in CLOTHOID)
+    if road in ARCS:
+        _, radius, turn, _ = ARCS[road]
+        return LEAD_IN, LEAD_IN + radius * math.radians(turn)
+    return None
+
+
+def lane_keeping_figures(t: np.ndarray, s: np.ndarray, e_lat: np.ndarray, span: tuple[float, float] | None) -> dict:
+    """max and RMS |e_lat| (m) over the run, and the max in the curve (``max_e_lat_in``): from
+    SETTLE s after the centre of gravity passes ``span``'s start until it passes its end (None
+    without a span or when the run leaves no such time)."""
     e = np.abs(e_lat)
-    entered = np.flatnonzero(s >= CURVE_START)
-    late = e[t >= t[entered[0]] + SETTLE] if entered.size else e[:0]
-    return {
-        "max_e_lat": float(e.max()),
-        "rms_e_lat": float(np.sqrt(np.mean(e * e))),
-        "max_e_lat_after": float(late.max()) if late.size else None,
-    }
+    inside = None
+    if span is not None:
+        entered, left = np.flatnonzero(s >= span[0]), np.flatnonzero(s >= span[1])
+        if entered.size:
+            end = t[left[0]] if left.size else np.inf
+            window = e[(t >= t[entered[0]] + SETTLE) & (t <= end)]
+            inside = float(window.max()) if window.size else None
+    return {"max_e_lat": float(e.max()), "rms_e_lat": float(np.sqrt(np.mean(e * e))), "max_e_lat_in": inside}
 
 
 def _m(v, digits: int = 3) -> str:
@@ -94,7 +108,7 @@ def _lane_keeping_cells(ms: list[dict]) -> list[str]:
     return [
         m["status"],
         _m(m["max_e_lat"]),
-        _m(m["max_e_lat_after"]),
+        _m(m["max_e_lat_in"]),
         _m(m["rms_e_lat"]),
         _m(m["max_lane_departure"]),
     ]
@@ -111,13 +125,13 @@ def lane_keeping_table() -> Table:
         PAGE,
         (
             "ego run emergency-brake -c pid --set road=left-1000 --set ego_speed=36.111 --set traffic_density=0 "
-            "--set lead_gap=300 --set lead_final_speed=40 --set duration=40",
+            "--set lead_gap=300 --set lead_final_speed=40 --set duration=50",
         ),
         (
             "road, speed, controller",
             "status",
             "max \\|e_lat\\| [m]",
-            f"max \\|e_lat\\| from {SETTLE:g} s into the curve [m]",
+            f"max \\|e_lat\\| in the curve, from {SETTLE:g} s after its start [m]",
             "RMS e_lat [m]",
             "max lane departure [m]",
         ),
@@ -125,12 +139,12 @@ def lane_keeping_table() -> Table:
         (
             "No other traffic near: emergency-brake with traffic_density=0, lead_gap=300 and "
             "lead_final_speed=40 (the lead 300 m ahead, never slower than the ego), seed 0. e_lat: the "
-            f"ego's centre of gravity from its lane's centre line. Every curved road starts to curve "
-            f"{CURVE_START:g} m along (the ego's front starts at 300 m); the 'from {SETTLE:g} s' column "
-            "leaves the entry transient out (on the road of changing curvature it still covers its "
-            "clothoids and arcs). Durations: 40 s (the ego stays in the R 1000 m arc at 130 km/h and "
-            "the R 250 m arc at 60 km/h), 55 s on the road of changing curvature at 80 km/h (past its "
-            "last clothoid, 1450 m along).",
+            "ego's centre of gravity from its lane's centre line. Every curved road starts to curve 350 m "
+            "along (the ego's front starts at 300 m), and each run lasts until 5 s or more after the ego "
+            "leaves the curved part: the first error column covers the entry and the exit. The second "
+            f"leaves the entry transient out: from {SETTLE:g} s after the centre of gravity enters the "
+            "curved part until it leaves it (on the road of changing curvature, 350 - 1450 m along, that "
+            "is still its clothoids and arcs).",
         ),
     )
 
