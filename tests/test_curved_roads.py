@@ -182,3 +182,22 @@ def test_unscheduled_pid_diverges_at_130_kmh():
     unstable (ego.control.base.lateral_gain) and the car leaves the road."""
     r, _, _, _ = _lane_keeping("pid", road="left-1000", speed=130 / 3.6, duration=40, lat_speed=45)
     assert r.status == "diverged"
+
+
+def test_the_gym_env_drives_the_changing_curvature_road():
+    import gymnasium as gym
+
+    import ego.gym  # noqa: F401 - registers the ids
+    from ego.gym import ControllerPolicy
+
+    env = gym.make("ego/CutIn-v0", config={"road": "clothoid"})
+    try:
+        obs, info = env.reset(seed=0)
+        policy = ControllerPolicy("pid", env)
+        done = False
+        while not done:
+            obs, _, term, trunc, info = env.step(policy(obs))
+            done = term or trunc
+        assert info["status"] == "completed" and not info["collision"]
+    finally:
+        env.close()
