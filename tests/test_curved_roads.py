@@ -201,3 +201,17 @@ def test_the_gym_env_drives_the_changing_curvature_road():
         assert info["status"] == "completed" and not info["collision"]
     finally:
         env.close()
+
+
+def test_the_lateral_schedule_holds_the_tuned_gains_up_to_lat_speed():
+    from ego.control import PIDController, PIDParams
+    from ego.control.base import Observation, lateral_gain
+
+    assert lateral_gain(27.5, 20.0) == 1.0 and lateral_gain(27.5, 27.5) == 1.0
+    assert lateral_gain(27.5, 36.11) == pytest.approx((27.5 / 36.11) ** 4)
+    c = PIDController(PIDParams(), 0.01)
+    obs = Observation()
+    for speed, factor in ((25.0, 1.0), (36.11, (27.5 / 36.11) ** 4), (20.0, 1.0)):
+        obs.speed = speed
+        c.step(obs)
+        assert (c.lat.kp, c.lat.kd) == pytest.approx((0.01 * factor, 0.02 * factor))
