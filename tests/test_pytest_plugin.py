@@ -80,3 +80,43 @@ def test_the_example_project_fails_exactly_its_planted_item_and_reports_metrics(
         [sys.executable, "-m", *argv, "--json"], cwd=project, env=env, capture_output=True, text=True, timeout=300
     )
     assert json.loads(rerun.stdout)["requirements"]["keep_50m"] == pytest.approx(-43.2094, abs=1e-4), rerun.stderr
+
+
+@pytest.mark.long
+def test_the_example_project_with_ego_installed_from_its_wheel(tmp_path):
+    """As a user has it: ego built into a wheel and installed (``pip install --target``, the
+    dependencies from this environment), the plugin found through its ``pytest11`` entry
+    point - no ``-p`` - in a copy of scenarios/pytest_example, two workers, JUnit XML."""
+    sys.path.insert(0, str(ROOT / "tests"))
+    from test_wheel import install_wheel
+
+    site = install_wheel(tmp_path)
+    project = tmp_path / "project"
+    shutil.copytree(EXAMPLE, project)
+    env = {**os.environ, "PYTHONPATH": str(site)}
+    for var in ("PYTEST_ADDOPTS", "PYTEST_XDIST_WORKER", "EGO_SUMO_NETS"):
+        env.pop(var, None)
+    proc = subprocess.run(
+        [sys.executable, "-m", "pytest", "-n", "2", "--junitxml=r.xml", "-p", "no:cacheprovider"],
+        cwd=project,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    assert proc.returncode == 1, proc.stdout[-3000:] + proc.stderr[-3000:]
+    cases = {c.get("name"): c for c in ET.parse(project / "r.xml").getroot().iter("testcase")}
+    failed = {n for n, c in cases.items() if c.find("failure") is not None or c.find("error") is not None}
+    assert failed == {PLANTED}, proc.stdout[-3000:]
+    for name, case in cases.items():
+        props = {p.get("name"): p.get("value") for p in case.iter("property")}
+        assert props["ego.status"] == "completed" and props["ego.command"].startswith("ego run "), name
+    where = subprocess.run(
+        [sys.executable, "-c", "import ego.pytest_plugin as p; print(p.__file__)"],
+        cwd=project,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert where.stdout.startswith(str(site)), where.stdout + where.stderr  # the wheel's plugin, not the checkout's

@@ -25,9 +25,10 @@ def test_the_packages_listed_for_the_wheel_are_every_package_of_ego():
     assert sorted(listed) == sorted([p for p in found if p not in CHECKOUT_ONLY] + ["ego.sumo_nets"])
 
 
-@pytest.mark.sumo
-def test_a_wheel_installed_elsewhere_runs_a_scenario(tmp_path):
-    # build from a copy, so the checkout gets no build/ folder
+def install_wheel(tmp_path: Path) -> Path:
+    """ego built as a wheel from a copy of the checkout (so the checkout gets no build/
+    folder) and installed with ``pip install --target``: the folder to put on PYTHONPATH
+    (the dependencies come from this environment)."""
     src = tmp_path / "src"
     ignore = shutil.ignore_patterns("__pycache__", "*.so", "*.rrd")
     for folder in ("ego", "sumo_nets"):
@@ -51,6 +52,12 @@ def test_a_wheel_installed_elsewhere_runs_a_scenario(tmp_path):
     subprocess.run(
         pip + ["install", "--no-deps", "--target", str(site), str(wheel)], check=True, capture_output=True, timeout=300
     )
+    return site
+
+
+@pytest.mark.sumo
+def test_a_wheel_installed_elsewhere_runs_a_scenario(tmp_path):
+    site = install_wheel(tmp_path)
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
     env = {k: v for k, v in os.environ.items() if k != "EGO_SUMO_NETS"}
