@@ -55,6 +55,11 @@ def _from_folder(folder: Path, run_id: str | None) -> tuple[str, str, int, dict]
     row = rows[0]
     values = dict(campaign.fixed)
     values.update({p: row[p] for p in campaign.params if row.get(p) is not None and row[p] == row[p]})
+    if not Path(campaign.scenario).is_file():  # a spec's relative path: relative to where the sweep ran
+        raise ConfigError(
+            f"the runs of {str(folder)!r} name their scenario {campaign.scenario!r}, which is not a file "
+            "from here: run ego concrete in the folder the sweep or search ran in"
+        )
     return campaign.scenario, str(row["controller"]), int(row["seed"]), values
 
 
