@@ -56,7 +56,19 @@ CHILDREN: dict[str, set[str]] = {
     "CatalogReference": {"ParameterAssignments"},
     "ParameterAssignments": {"ParameterAssignment"},
     "ParameterAssignment": set(),
-    "Vehicle": {"ParameterDeclarations", "BoundingBox", "Performance", "Axles", "Properties"},
+    "Vehicle": {
+        "ParameterDeclarations",
+        "BoundingBox",
+        "Performance",
+        "Axles",
+        "Properties",
+        "TrailerHitch",
+        "TrailerCoupler",
+        "Trailer",
+    },
+    "TrailerHitch": set(),
+    "TrailerCoupler": set(),
+    "Trailer": {"EntityRef", "CatalogReference"},
     "BoundingBox": {"Center", "Dimensions"},
     "Center": set(),
     "Dimensions": set(),
@@ -70,7 +82,17 @@ CHILDREN: dict[str, set[str]] = {
     "File": set(),
     "Storyboard": {"Init", "Story", "StopTrigger"},
     "Init": {"Actions"},
-    "Actions": {"Private"},
+    "Actions": {"Private", "GlobalAction"},
+    "GlobalAction": {"EnvironmentAction"},
+    "EnvironmentAction": {"Environment"},
+    "Environment": {"ParameterDeclarations", "TimeOfDay", "Weather", "RoadCondition"},
+    "TimeOfDay": set(),
+    "Weather": {"Sun", "Fog", "Precipitation", "Wind"},
+    "Sun": set(),
+    "Fog": set(),
+    "Precipitation": set(),
+    "Wind": set(),
+    "RoadCondition": {"Properties"},
     "Private": {"PrivateAction"},
     "PrivateAction": {
         "TeleportAction",
@@ -128,7 +150,7 @@ CHILDREN: dict[str, set[str]] = {
     "EntityRef": set(),
     "Maneuver": {"Event"},
     "Event": {"Action", "StartTrigger"},
-    "Action": {"PrivateAction"},
+    "Action": {"PrivateAction", "GlobalAction"},
     "StartTrigger": {"ConditionGroup"},
     "StopTrigger": {"ConditionGroup"},
     "ConditionGroup": {"Condition"},
@@ -165,9 +187,14 @@ NOT_USED = {
     "SceneGraphFile": "the 3D scene is not drawn",
     "Axles": "ego's own body for the ego; SUMO's for others",
     "Properties": "no property is read",
+    "TrailerHitch": "descriptive (where a trailer would be hitched; ego tows none)",
+    "TrailerCoupler": "descriptive (where the vehicle would be coupled as a trailer)",
+    "Trailer": "only when it attaches nothing (an empty entityRef or entryName, as the reference player's catalogs write)",
     "License": "descriptive",
     "File": "descriptive (a file the vehicle's properties name)",
-    "Orientation": "the lane's heading is used",
+    "EnvironmentAction": "done at once: time of day and weather change nothing in ego's dynamics; a RoadCondition"
+    " whose frictionScaleFactor is not 1 is refused",
+    "Orientation": "the lane's heading is used (a relative h turning the entity against its lane is refused)",
     "Controller": "the ego is driven by ego's controller (-c), the others by SUMO's driver or their script",
     "ObjectController": "the ego is driven by ego's controller (-c), the others by SUMO's driver or their script",
     "ActivateControllerAction": "done at once: ego's controller is always active on the ego",
@@ -202,7 +229,7 @@ MISC_CATEGORIES = (
     "roadMark",
 )
 
-VEHICLE_CATEGORIES = ("car", "van", "truck", "trailer", "semitrailer", "bus", "motorbike")
+VEHICLE_CATEGORIES = ("car", "van", "truck", "trailer", "semitrailer", "bus", "motorbike", "bicycle")
 #: SUMO's limits for a pedestrian's or misc object's body (it is moved only by the storyboard)
 STANDING_MAX_SPEED, STANDING_ACCEL = 30.0, 10.0
 
@@ -524,6 +551,7 @@ class _Builder:
     def vehicle(self, node: Node, name: str) -> M.Vehicle:
         cat = self.enum(node, "vehicleCategory", VEHICLE_CATEGORIES)
         perf = self.one(node, "Performance")
+        self.no_trailer(node)
         return M.Vehicle(
             name=name,
             category=cat,
@@ -533,6 +561,20 @@ class _Builder:
             max_decel=self.num(perf, "maxDeceleration", positive=True),
             line=node.line,
         )
+
+    def no_trailer(self, node: Node) -> None:
+        """A vehicle's <Trailer> is accepted when it attaches nothing (an empty entityRef or
+        entryName: the reference player's catalog entries carry one for every car); a
+        trailer that is really attached is refused (ego drives single bodies)."""
+        for tr in node.all("Trailer"):
+            for ref in tr.children:
+                attr = "entityRef" if ref.tag == "EntityRef" else "entryName"
+                name = self.str_(ref, attr)
+                if name:
+                    raise self.error(
+                        ref,
+                        f"a trailer ({attr} {name!r}) is not supported by ego: it runs single vehicles (see {DOCS})",
+                    )
 
     def box(self, node: Node) -> dict[str, float]:
         """An entity's BoundingBox: its dimensions and the centre's x from the reference point."""
@@ -647,6 +689,15 @@ class _Builder:
     def position(self, node: Node) -> M.Position:
         p = self.one(node)
         tag = p.tag
+        o = p.child("Orientation")
+        if o is not None and self.enum(o, "type", ("relative", "absolute"), "relative") == "relative":
+            h = self.num(o, "h", 0.0)
+            if math.cos(h) < 0.0:  # turned more than 90 degrees from its lane's direction
+                raise self.error(
+                    o,
+                    f"an <Orientation> turning the entity against its lane's direction (relative h = {h:g} rad)"
+                    f" is not supported by ego: SUMO drives every lane its own way (see {DOCS})",
+                )
         if tag == "WorldPosition":
             h = self.raw(p, "h", None)
             return M.WorldPosition(self.num(p, "x"), self.num(p, "y"), None if h is None else self.num(p, "h"), p.line)
@@ -671,9 +722,13 @@ class _Builder:
     # -- actions ------------------------------------------------------------------------------
     def dynamics(self, node: Node) -> M.Dynamics:
         shape = self.enum(node, "dynamicsShape", M.SHAPES)
-        dim = self.enum(node, "dynamicsDimension", M.DIMENSIONS)
+        # a step has no duration: its dimension and value change nothing (the reference
+        # player's files often omit them; the schema asks for both)
+        dim = self.enum(node, "dynamicsDimension", M.DIMENSIONS, "time" if shape == "step" else ...)
         # a rate is read by its magnitude, as the reference player (esmini) reads the negative
         # braking rates its files write; a duration or distance must not be negative
+        if shape == "step" and "value" not in node.attrs:
+            return M.Dynamics("step", dim, 0.0)
         value = self.num(node, "value", at_most=DYNAMICS_LIMITS[dim])
         if dim == "rate":
             value = abs(value)
@@ -751,6 +806,33 @@ class _Builder:
             self.values = outer_values
         return self.follow_trajectory(inner, vertices, poly)
 
+    def global_action(self, node: Node) -> M.EnvironmentAction:
+        """A GlobalAction: an EnvironmentAction is checked (every attribute resolves; a
+        RoadCondition must keep the friction: frictionScaleFactor 1) and changes nothing."""
+        env_action = self.one(node, "EnvironmentAction")
+        env = self.one(env_action, "Environment")
+        outer = self.values
+        self.values = self.scoped(env)
+        try:
+            stack = [env]
+            while stack:
+                n = stack.pop()
+                for attr in n.attrs:
+                    self.raw(n, attr)
+                stack.extend(c for c in n.children if c.tag != "ParameterDeclarations")
+            rc = env.child("RoadCondition")
+            if rc is not None:
+                f = self.num(rc, "frictionScaleFactor", nonneg=True)
+                if f != 1.0:
+                    raise self.error(
+                        rc,
+                        f"a RoadCondition frictionScaleFactor of {f:g} is not supported by ego: the tyres' friction"
+                        f" is the plant's own (1, no change, is accepted; see {DOCS})",
+                    )
+        finally:
+            self.values = outer
+        return M.EnvironmentAction(env_action.line)
+
     def scoped(self, node: Node) -> dict[str, object]:
         """The parameter values inside ``node``: its own ``ParameterDeclarations`` (possibly
         empty) on top of the values outside it (an inner name shadows an outer one)."""
@@ -825,11 +907,17 @@ class _Builder:
         return M.Trigger(tuple(groups))
 
     def condition(self, node: Node) -> M.Condition:
-        name = self.str_(node, "name")
+        # a condition's name identifies nothing (conditions are not storyboard elements): one
+        # whose expression does not evaluate (the reference player's cut-in.xosc writes
+        # "${BrakeCondition_HWT + _ + $HeadwayTime_Brake}") is kept as its text
+        try:
+            name = self.str_(node, "name")
+        except ScenarioFileError:
+            name = str(node.attrs.get("name", ""))
         base: dict[str, Any] = {
             "name": name,
             "delay": self.num(node, "delay", nonneg=True, at_most=(MAX_SECONDS, "s: a day")),
-            "edge": self.enum(node, "conditionEdge", M.EDGES),
+            "edge": self.enum(node, "conditionEdge", M.EDGES, "none"),  # the schema requires it; esmini reads none
             "line": node.line,
         }
         inner = self.one(node)
@@ -1005,6 +1093,8 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
     init: dict[str, list[M.PrivateAction]] = {name: [] for name in b.entities}
     init_node = sb.child("Init")
     actions = init_node.child("Actions") if init_node is not None else None
+    for ga in actions.all("GlobalAction") if actions is not None else ():
+        b.global_action(ga)
     for priv in actions.all("Private") if actions is not None else ():
         ref = b.entity_ref(priv)
         for pa in priv.all("PrivateAction"):
@@ -1047,7 +1137,13 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
                     events = []
                     for ev in man.all("Event"):
                         acts_ = tuple(
-                            M.Action(b.str_(a, "name"), b.private_action(b.one(a, "PrivateAction")), a.line)
+                            M.Action(
+                                b.str_(a, "name"),
+                                b.global_action(a.children[0])
+                                if a.children and a.children[0].tag == "GlobalAction"
+                                else b.private_action(b.one(a, "PrivateAction")),
+                                a.line,
+                            )
                             for a in ev.all("Action")
                         )
                         if not acts_:

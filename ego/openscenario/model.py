@@ -201,6 +201,14 @@ class ControllerAction:
     line: int = 0
 
 
+@dataclass(frozen=True)
+class EnvironmentAction:
+    """A GlobalAction's EnvironmentAction (time of day, weather, a road condition of friction
+    scale 1): nothing in ego's dynamics depends on it; accepted and done at once."""
+
+    line: int = 0
+
+
 PrivateAction = (
     SpeedAction
     | LaneChangeAction
@@ -209,6 +217,7 @@ PrivateAction = (
     | FollowTrajectoryAction
     | ControllerAction
     | LongitudinalDistanceAction
+    | EnvironmentAction
 )
 
 

@@ -68,6 +68,10 @@ class Driver(Protocol):
 
     def speed(self, name: str, v_next: float, peak_rate: float) -> None: ...
     def speed_rate(self, name: str, target: float, rate: float) -> None: ...
+    def blind(self, name: str) -> bool:
+        """Whether ``name`` is moved sideways by a script (SUMO then takes a set speed at
+        once, whatever its deceleration)."""
+
     def lateral(self, name: str, d_next: float, peak_speed: float) -> None: ...
     def teleport(self, name: str, x: float, y: float, heading: float) -> None: ...
     def place(self, name: str, x: float, y: float, heading: float, speed: float) -> None: ...
@@ -452,7 +456,7 @@ class ActionRun:
             self.domains: tuple[str, ...] = ("long",)
         elif isinstance(action, (M.LaneChangeAction, M.LaneOffsetAction)):
             self.domains = ("lat",)
-        elif isinstance(action, M.ControllerAction):
+        elif isinstance(action, (M.ControllerAction, M.EnvironmentAction)):
             self.domains = ()  # the ego keeps ego's controller, the others their driver
         else:
             self.domains = ("long", "lat")
@@ -487,7 +491,7 @@ class ActionRun:
                 drv.ego_speed(self.profile, rel)
                 self.finished = not a.continuous
                 return
-            if dyn.shape == "linear" and dyn.dimension == "rate" and v0 != target:
+            if dyn.shape == "linear" and dyn.dimension == "rate" and v0 != target and not drv.blind(self.actor):
                 drv.speed_rate(self.actor, target, dyn.value)  # SUMO's own per-step rate: exact
                 self._native = True
             else:
@@ -516,7 +520,7 @@ class ActionRun:
                 drv.ego_lateral(self.profile)
                 self.finished = True
                 return
-        elif isinstance(a, M.ControllerAction):
+        elif isinstance(a, (M.ControllerAction, M.EnvironmentAction)):
             self.finished = True
             return
         elif isinstance(a, M.LongitudinalDistanceAction):
@@ -623,6 +627,10 @@ class ActionRun:
                 target = max(ref + a.value if a.relative_kind == "delta" else ref * a.value, 0.0)
                 drv.speed(self.actor, target, INF)
                 return
+            if self._native and drv.blind(self.actor):
+                # a scripted lateral move makes SUMO take a set speed at once (no braking
+                # limit): the rest of the profile is commanded step by step
+                self._native = False
             if not self._native:
                 drv.speed(self.actor, p.value(t + h), max(p.peak_rate, 0.0))  # type: ignore[union-attr]
             if p.done(t + h) and not a.continuous:  # type: ignore[union-attr]

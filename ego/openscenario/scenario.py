@@ -644,6 +644,9 @@ class FileScenario(Scenario):
         self._limit(name, peak_rate)
         self.bridge.set_speed(name, v_next)
 
+    def blind(self, name: str) -> bool:
+        return name in self._lateral_free
+
     def speed_rate(self, name: str, target: float, rate: float) -> None:
         if target < self.board.states[name].speed:
             self.bridge.set_decel(name, rate)
