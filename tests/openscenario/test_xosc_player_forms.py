@@ -1,0 +1,157 @@
+"""Forms the reference player's (esmini's) example files use: a vehicle catalog entry with a
+trailer hitch and an empty trailer reference, GlobalAction EnvironmentActions, a step written
+without value or dimension, a Condition without conditionEdge, a condition name that is not a
+valid expression; and the refusals beside them (an attached trailer, a friction scale, an entity
+turned against its lane). Each file here is hand-written for the test."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+from xosc_scenes import event, lane_change, run_scene, scene, sim_time, speed, trigger
+
+from ego.openscenario import model as M
+from ego.openscenario.dynamics import Transition, speed_duration
+from ego.openscenario.loader import load
+from ego.openscenario.xmltree import ScenarioFileError
+
+PERF = '<Performance maxSpeed="55" maxAcceleration="2.6" maxDeceleration="4.5"/>'
+
+
+@pytest.fixture(autouse=True)
+def _cache(tmp_path_factory, monkeypatch):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
+
+
+def _edit(path, old: str, new: str, count: int = 1) -> None:
+    text = path.read_text()
+    assert old in text, old
+    path.write_text(text.replace(old, new, count))
+
+
+def _line_of(path, needle: str) -> int:
+    return next(i for i, ln in enumerate(path.read_text().splitlines(), 1) if needle in ln)
+
+
+def test_a_trailer_that_attaches_nothing_is_accepted(tmp_path):
+    path = scene(tmp_path, [])
+    hitch = (
+        '<TrailerHitch dx="-1.2"/><Trailer><EntityRef entityRef=""/>'
+        '<CatalogReference catalogName="VehicleCatalog" entryName=""/></Trailer>'
+    )
+    _edit(path, PERF, PERF + '<TrailerCoupler dx="3.0"/>' + hitch, count=-1)
+    sc = load(path)
+    assert sc.entities["A"].vehicle.length == 4.5
+
+
+def test_an_attached_trailer_is_refused_in_one_line(tmp_path):
+    path = scene(tmp_path, [])
+    text = path.read_text().replace(PERF, PERF + '\n<Trailer><EntityRef entityRef="B"/></Trailer>', 1)
+    path.write_text(text)
+    with pytest.raises(ScenarioFileError, match=r"a trailer \(entityRef 'B'\) is not supported by ego") as exc:
+        load(path)
+    assert exc.value.line == _line_of(path, '<Trailer><EntityRef entityRef="B"/>')
+    proc = subprocess.run(
+        [sys.executable, "-m", "ego", "run", str(path), "-c", "pid", "--trace", str(tmp_path / "o.csv")],
+        capture_output=True,
+        text=True,
+    )
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1 and "scene.xosc:" in proc.stderr
+    assert not (tmp_path / "o.csv").exists()
+
+
+ENV = (
+    '<GlobalAction><EnvironmentAction><Environment name="e"><TimeOfDay animation="false" '
+    'dateTime="2025-06-13T12:00:00"/><Weather cloudState="free"><Sun intensity="1000" azimuth="0" '
+    'elevation="1.3"/><Fog visualRange="200"/><Precipitation precipitationType="dry" intensity="0"/>'
+    "</Weather>{road}</Environment></EnvironmentAction></GlobalAction>"
+)
+
+
+def test_environment_actions_are_accepted_in_init_and_in_events(tmp_path):
+    path = scene(tmp_path, [event("Brake", "A", speed(10, "linear", "rate", 4.0), trigger([sim_time(1)]))])
+    _edit(path, "<Init><Actions>", "<Init><Actions>" + ENV.format(road='<RoadCondition frictionScaleFactor="1"/>'))
+    # an event whose action is a GlobalAction: done at once
+    _edit(
+        path,
+        '<Action name="BrakeAction">',
+        '<Action name="Weather">' + ENV.format(road="") + '</Action><Action name="BrakeAction">',
+    )
+    sc = load(path)
+    acts = [e for st in sc.stories for act in st.acts for g in act.groups for m in g.maneuvers for e in m.events]
+    kinds = [type(a.action).__name__ for a in acts[0].actions]
+    assert kinds == ["EnvironmentAction", "SpeedAction"]
+
+
+def test_a_friction_scale_is_refused_with_its_line(tmp_path):
+    path = scene(tmp_path, [])
+    _edit(path, "<Init><Actions>", "<Init><Actions>\n" + ENV.format(road='<RoadCondition frictionScaleFactor="0.5"/>'))
+    with pytest.raises(ScenarioFileError, match=r"RoadCondition frictionScaleFactor of 0.5 is not supported") as exc:
+        load(path)
+    assert exc.value.line == _line_of(path, "<GlobalAction>")
+
+
+def test_a_step_without_value_or_dimension_and_a_condition_without_edge(tmp_path):
+    path = scene(tmp_path, [event("Jump", "A", speed(20), trigger([sim_time(1)]))])
+    _edit(
+        path,
+        'dynamicsShape="step" value="0.0" dynamicsDimension="time"/><SpeedActionTarget><AbsoluteTargetSpeed value="20"',
+        'dynamicsShape="step"/><SpeedActionTarget><AbsoluteTargetSpeed value="20"',
+    )
+    _edit(
+        path,
+        '<Condition name="c" delay="0.0" conditionEdge="none"><ByValueCondition><SimulationTimeCondition value="1"',
+        '<Condition name="${Brake + _ + 1}" delay="0.0"><ByValueCondition><SimulationTimeCondition value="1"',
+    )
+    sc = load(path)
+    ev = sc.stories[0].acts[0].groups[0].maneuvers[0].events[0]
+    assert ev.actions[0].action.dynamics == M.Dynamics("step", "time", 0.0)  # type: ignore[union-attr]
+    cond = ev.start.groups[0][0]  # type: ignore[union-attr]
+    assert cond.edge == "none" and cond.name == "${Brake + _ + 1}"
+
+
+def test_a_step_of_another_shape_still_needs_its_value(tmp_path):
+    path = scene(tmp_path, [event("Slow", "A", speed(20, "linear", "time", 2.0), trigger([sim_time(1)]))])
+    _edit(path, 'dynamicsShape="linear" value="2.0"', 'dynamicsShape="linear"')
+    with pytest.raises(ScenarioFileError, match=r"<SpeedActionDynamics> needs attribute value"):
+        load(path)
+
+
+def test_an_entity_turned_against_its_lane_is_refused(tmp_path):
+    path = scene(tmp_path, [])
+    _edit(
+        path,
+        'laneId="-1" s="100.0" offset="0"/>',
+        'laneId="-1" s="100.0" offset="0"><Orientation type="relative" h="3.141593"/></LanePosition>',
+    )
+    with pytest.raises(ScenarioFileError, match=r"<Orientation> turning the entity against its lane's direction"):
+        load(path)
+    # a small relative heading is accepted (the lane's heading is used)
+    path = scene(tmp_path, [])
+    _edit(
+        path,
+        'laneId="-1" s="100.0" offset="0"/>',
+        'laneId="-1" s="100.0" offset="0"><Orientation type="relative" h="0.1"/></LanePosition>',
+    )
+    load(path)
+
+
+@pytest.mark.sumo
+def test_braking_at_a_rate_during_a_lane_change_follows_the_closed_form(tmp_path):
+    """C changes to lane -2 over 3 s from t = 1 s and brakes from 15 to 7 m/s at -4 m/s^2 from
+    t = 2 s (the reference player's cut-in: a brake while the car is moved sideways). Its speed
+    is the linear profile within 1e-6 at every step (it was a stop in one step: SUMO takes a set
+    speed at once while a script moves the car sideways)."""
+    evs = [
+        event("Change", "C", lane_change(-2, "sinusoidal", "time", 3.0), trigger([sim_time(0.95)])),
+        event("Brake", "C", speed(7, "linear", "rate", -4.0), trigger([sim_time(1.95)])),
+    ]
+    sc = run_scene(scene(tmp_path, evs), 6.0)
+    brake = Transition(2.0, 15.0, 7.0, speed_duration("linear", "rate", 4.0, 15.0, 7.0), "linear")
+    hist = sc._history["C"]
+    assert hist and max(t for t, _, _ in hist) > 4.5
+    for t, v, _ in hist:
+        assert v == pytest.approx(brake.value(t), abs=1e-6), t
