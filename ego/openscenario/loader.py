@@ -166,7 +166,11 @@ CHILDREN: dict[str, set[str]] = {
         "SpeedCondition",
         "RelativeSpeedCondition",
         "TraveledDistanceCondition",
+        "StandStillCondition",
+        "AccelerationCondition",
     },
+    "StandStillCondition": set(),
+    "AccelerationCondition": set(),
     "TimeHeadwayCondition": set(),
     "TimeToCollisionCondition": {"TimeToCollisionConditionTarget"},
     "TimeToCollisionConditionTarget": {"Position", "EntityRef"},
@@ -959,7 +963,24 @@ class _Builder:
             return self.reach(c, base)
         if tag == "TraveledDistanceCondition":
             return M.Condition(kind=tag, rule="greaterOrEqual", value=self.num(c, "value", nonneg=True), **base)
+        if tag == "StandStillCondition":
+            return M.Condition(
+                kind=tag,
+                rule="greaterOrEqual",
+                value=self.num(c, "duration", nonneg=True, at_most=(MAX_SECONDS, "s: a day")),
+                **base,
+            )
         rule = self.enum(c, "rule", M.RULES)
+        if tag == "AccelerationCondition":
+            # OpenSCENARIO 1.2's direction; without it the acceleration vector's magnitude
+            direction = "total"
+            if "direction" in c.attrs:
+                direction = self.enum(c, "direction", ("longitudinal", "lateral", "vertical"))
+            if direction == "vertical":
+                raise self.error(
+                    c, f"a vertical <AccelerationCondition> is not supported by ego (its roads are planar; see {DOCS})"
+                )
+            return M.Condition(kind=tag, rule=rule, value=self.num(c, "value"), distance_type=direction, **base)
         if tag == "SpeedCondition":
             return M.Condition(kind=tag, rule=rule, value=self.num(c, "value"), **base)
         if tag == "RelativeSpeedCondition":

@@ -31,6 +31,7 @@ from ego.openscenario.dynamics import (
 
 INF = math.inf
 EPS = 1e-9
+STILL = 1e-3  #: a speed (m/s) below which an entity stands still (StandStillCondition)
 STANDBY, RUNNING, COMPLETE = "standby", "running", "complete"
 
 
@@ -50,6 +51,12 @@ class EntityState:
     width: float = 1.8
     traveled: float = 0.0
     d_front: float = 0.0
+    #: longitudinal and lateral (+ left) acceleration (m/s^2) over the last storyboard step
+    #: (the change of speed, and speed times the change of heading), and the time (s) the
+    #: entity has stood still (speed below 1 mm/s) up to now
+    accel: float = 0.0
+    lat_accel: float = 0.0
+    still_for: float = 0.0
 
 
 class Driver(Protocol):
@@ -202,6 +209,7 @@ class Storyboard:
         self.stopped = False
         self.t = 0.0
         self._fired: dict[int, bool] = {}
+        self._prev: dict[str, tuple[float, float]] = {}  #: entity -> (speed, yaw) a step ago
 
     def _element(self, kind: str, path: tuple[str, ...], node, max_count: int = 1) -> Element:
         """The element at ``path`` (names from its story down), found by its name and by every
@@ -235,6 +243,16 @@ class Storyboard:
             return compare(c.rule, e.speed - st[c.entity].speed, c.value)  # type: ignore[index, arg-type]
         if kind == "TraveledDistanceCondition":
             return e.traveled >= c.value - EPS  # type: ignore[operator]
+        if kind == "StandStillCondition":
+            return e.still_for >= c.value - EPS  # type: ignore[operator]
+        if kind == "AccelerationCondition":
+            if c.distance_type == "longitudinal":
+                acc = e.accel
+            elif c.distance_type == "lateral":
+                acc = e.lat_accel
+            else:
+                acc = math.hypot(e.accel, e.lat_accel)
+            return compare(c.rule, acc, c.value)  # type: ignore[arg-type]
         if kind == "ReachPositionCondition":
             x, y, _ = self.driver.position_xy(c.position, st)  # type: ignore[arg-type]
             return math.hypot(e.x - x, e.y - y) <= c.value + EPS  # type: ignore[operator]
@@ -305,6 +323,21 @@ class Storyboard:
         results = (self._entity_value(c, name) for name in c.triggering)
         return any(results) if c.triggering_rule == "any" else all(results)
 
+    def _kinematics(self, t: float) -> None:
+        """Each entity's accelerations over the step that ends at ``t`` and its time standing
+        still (from the states at the previous step; zero at the first)."""
+        prev = self._prev
+        dt = t - self.t
+        for name, e in self.states.items():
+            before = prev.get(name)
+            if before is not None and dt > 0.0:
+                v0, yaw0 = before
+                e.accel = (e.speed - v0) / dt
+                dyaw = math.atan2(math.sin(e.yaw - yaw0), math.cos(e.yaw - yaw0))
+                e.lat_accel = 0.5 * (e.speed + v0) * dyaw / dt
+                e.still_for = e.still_for + dt if (e.speed < STILL and v0 < STILL) else 0.0
+            prev[name] = (e.speed, e.yaw)
+
     def _evaluate(self, t: float) -> None:
         fired = self._fired
         for key, cs in self.conditions.items():
@@ -320,6 +353,7 @@ class Storyboard:
     def step(self, t: float) -> None:
         """One storyboard step at time ``t`` (s): conditions, transitions, then the actions'
         commands for [t, t + step]."""
+        self._kinematics(t)
         self.t = t
         self._evaluate(t)
         for el in self.elements:

@@ -10,7 +10,7 @@ import subprocess
 import sys
 
 import pytest
-from xosc_scenes import event, lane_change, run_scene, scene, sim_time, speed, trigger
+from xosc_scenes import event, lane_change, run_scene, scene, sim_time, speed, starts, trigger
 
 from ego.openscenario import model as M
 from ego.openscenario.dynamics import Transition, speed_duration
@@ -155,3 +155,46 @@ def test_braking_at_a_rate_during_a_lane_change_follows_the_closed_form(tmp_path
     assert hist and max(t for t, _, _ in hist) > 4.5
     for t, v, _ in hist:
         assert v == pytest.approx(brake.value(t), abs=1e-6), t
+
+
+def _cond(body: str) -> str:
+    return (
+        '<Condition name="k" delay="0" conditionEdge="none"><ByEntityCondition><TriggeringEntities '
+        'triggeringEntitiesRule="any"><EntityRef entityRef="C"/></TriggeringEntities><EntityCondition>'
+        f"{body}</EntityCondition></ByEntityCondition></Condition>"
+    )
+
+
+@pytest.mark.sumo
+def test_stand_still_and_acceleration_conditions(tmp_path):
+    """C brakes from 15 m/s at 5 m/s^2 from storyboard time 1 s: it stands at 4.0 s, so a
+    StandStillCondition of 1 s holds from 5.0 s; its longitudinal acceleration is -5 m/s^2 from
+    the step after the brake starts (1.1 s) until it stands, the magnitude 5 the same."""
+    evs = [
+        event("Brake", "C", speed(0, "linear", "rate", 5.0), trigger([sim_time(0.95)])),
+        event("Still", "A", speed(25), trigger([_cond('<StandStillCondition duration="1"/>')])),
+        event(
+            "Lon",
+            "B",
+            speed(15),
+            trigger([_cond('<AccelerationCondition value="-4.9" rule="lessThan" direction="longitudinal"/>')]),
+        ),
+        event("Total", "A", speed(25), trigger([_cond('<AccelerationCondition value="4.9" rule="greaterThan"/>')])),
+    ]
+    sc = run_scene(scene(tmp_path, evs), 6.0)
+    assert starts(sc, "Still") == [pytest.approx(5.0)]
+    assert starts(sc, "Lon") == [pytest.approx(1.1)]
+    assert starts(sc, "Total") == [pytest.approx(1.1)]
+
+
+def test_a_vertical_acceleration_condition_is_refused(tmp_path):
+    evs = [
+        event(
+            "V",
+            "A",
+            speed(25),
+            trigger([_cond('<AccelerationCondition value="1" rule="greaterThan" direction="vertical"/>')]),
+        )
+    ]
+    with pytest.raises(ScenarioFileError, match=r"a vertical <AccelerationCondition> is not supported"):
+        load(scene(tmp_path, evs))
