@@ -234,9 +234,9 @@ HAND = [
     ),
     (
         "global-action",
-        sub("<Actions>\n", "<Actions>\n        <GlobalAction><EnvironmentAction/></GlobalAction>\n"),
-        "<GlobalAction",
-        unsupported("GlobalAction"),
+        sub("<Actions>\n", "<Actions>\n        <GlobalAction><TrafficAction/></GlobalAction>\n"),
+        "<TrafficAction",
+        unsupported("TrafficAction"),
     ),
     (
         "distribution",
@@ -637,16 +637,18 @@ def _sg_cases():
     un = unsupported
     return [
         (
-            "sg-acceleration",
-            lambda: base(entity_trigger(xosc.AccelerationCondition(2, xosc.Rule.greaterThan))),
+            "sg-acceleration-vertical",
+            lambda: base(
+                entity_trigger(xosc.AccelerationCondition(2, xosc.Rule.greaterThan, xosc.DirectionalDimension.vertical))
+            ),
             "<AccelerationCondition",
-            un("AccelerationCondition"),
+            f"a vertical <AccelerationCondition> is not supported by ego (its roads are planar; see {DOCS})",
         ),
         (
-            "sg-standstill",
-            lambda: base(entity_trigger(xosc.StandStillCondition(1))),
+            "sg-standstill-negative",
+            lambda: base(entity_trigger(xosc.StandStillCondition(-1))),
             "<StandStillCondition",
-            un("StandStillCondition"),
+            "bad value for duration in <StandStillCondition>: -1 (expected >= 0)",
         ),
         (
             "sg-collision",
