@@ -27,6 +27,7 @@ CHILDREN: dict[str, set[str]] = {
     "OpenSCENARIO": {
         "FileHeader",
         "ParameterDeclarations",
+        "VariableDeclarations",
         "CatalogLocations",
         "RoadNetwork",
         "Entities",
@@ -37,6 +38,8 @@ CHILDREN: dict[str, set[str]] = {
     "ParameterDeclarations": {"ParameterDeclaration"},
     "ParameterDeclaration": {"ConstraintGroup"},
     "ConstraintGroup": {"ValueConstraint"},
+    "VariableDeclarations": {"VariableDeclaration"},
+    "VariableDeclaration": set(),
     "ValueConstraint": set(),
     "CatalogLocations": {"VehicleCatalog", "PedestrianCatalog", "MiscObjectCatalog", "ControllerCatalog"},
     "VehicleCatalog": {"Directory"},
@@ -83,7 +86,14 @@ CHILDREN: dict[str, set[str]] = {
     "Storyboard": {"Init", "Story", "StopTrigger"},
     "Init": {"Actions"},
     "Actions": {"Private", "GlobalAction"},
-    "GlobalAction": {"EnvironmentAction"},
+    "GlobalAction": {"EnvironmentAction", "ParameterAction", "VariableAction"},
+    "ParameterAction": {"SetAction", "ModifyAction"},
+    "VariableAction": {"SetAction", "ModifyAction"},
+    "SetAction": set(),
+    "ModifyAction": {"Rule"},
+    "Rule": {"AddValue", "MultiplyByValue"},
+    "AddValue": set(),
+    "MultiplyByValue": set(),
     "EnvironmentAction": {"Environment"},
     "Environment": {"ParameterDeclarations", "TimeOfDay", "Weather", "RoadCondition"},
     "TimeOfDay": set(),
@@ -180,7 +190,13 @@ CHILDREN: dict[str, set[str]] = {
     "SpeedCondition": set(),
     "RelativeSpeedCondition": set(),
     "TraveledDistanceCondition": set(),
-    "ByValueCondition": {"SimulationTimeCondition", "StoryboardElementStateCondition", "ParameterCondition"},
+    "ByValueCondition": {
+        "SimulationTimeCondition",
+        "StoryboardElementStateCondition",
+        "ParameterCondition",
+        "VariableCondition",
+    },
+    "VariableCondition": set(),
     "SimulationTimeCondition": set(),
     "StoryboardElementStateCondition": set(),
     "ParameterCondition": set(),
@@ -401,6 +417,30 @@ def _declarations(
     return out
 
 
+def _variables(path, node: Node | None, values: Mapping[str, object]) -> dict[str, M.Parameter]:
+    """The file's VariableDeclarations (1.2): name, type and initial value (an expression may
+    name parameters)."""
+    out: dict[str, M.Parameter] = {}
+    for d in node.all("VariableDeclaration") if node is not None else ():
+        name, kind = d.attrs.get("name"), d.attrs.get("variableType")
+        if not name or "value" not in d.attrs:
+            raise ScenarioFileError(path, d.line, "<VariableDeclaration> needs attributes name and value")
+        if kind not in TYPES:
+            raise ScenarioFileError(
+                path, d.line, f"bad variableType {kind!r} of variable {name!r} (allowed: {', '.join(TYPES)})"
+            )
+        if name in out:
+            raise ScenarioFileError(
+                path, d.line, f"variable {name!r} is declared twice (first on line {out[name].line})"
+            )
+        try:
+            value = convert(kind, resolve(d.attrs["value"], values), f"variable {name!r}")
+        except (ExpressionError, ValueError) as exc:
+            raise ScenarioFileError(path, d.line, str(exc)) from None
+        out[name] = M.Parameter(name, kind, value, d.line)
+    return out
+
+
 def _constraint_group(path, g: Node, values: Mapping[str, object]) -> tuple[M.ValueConstraint, ...]:
     out = []
     for vc in g.all("ValueConstraint"):
@@ -469,6 +509,7 @@ class _Builder:
         self.path, self.values = path, values
         self.entities: dict[str, M.Entity] = {}
         self.catalog_dirs: dict[str, list[Path]] = {}
+        self.variables: dict[str, M.Parameter] = {}  #: the file's VariableDeclarations (1.2)
 
     # -- attributes ----------------------------------------------------------------------------
     def error(self, node: Node, message: str) -> ScenarioFileError:
@@ -810,9 +851,37 @@ class _Builder:
             self.values = outer_values
         return self.follow_trajectory(inner, vertices, poly)
 
-    def global_action(self, node: Node) -> M.EnvironmentAction:
+    def value_action(self, node: Node) -> M.ParameterAction:
+        """A ParameterAction or VariableAction: set, add to or multiply a declared value."""
+        kind = "parameter" if node.tag == "ParameterAction" else "variable"
+        ref_attr = "parameterRef" if kind == "parameter" else "variableRef"
+        name = self.str_(node, ref_attr)
+        if kind == "parameter":
+            declared = {k: (type(v), v) for k, v in self.values.items()}
+        else:
+            declared = {k: (type(p.value), p.value) for k, p in self.variables.items()}
+        if name not in declared:
+            raise self.error(node, f"{kind} {name!r} is not declared (declared: {', '.join(declared) or 'none'})")
+        initial = declared[name][1]
+        op_node = self.one(node)
+        if op_node.tag == "SetAction":
+            value: object = self.str_(op_node, "value")
+            if isinstance(initial, (int, float)) and not isinstance(initial, bool):
+                value = self.num(op_node, "value")
+            return M.ParameterAction(kind, name, "set", value, initial, node.line)
+        rule = self.one(self.one(op_node, "Rule"))
+        if isinstance(initial, bool) or not isinstance(initial, (int, float)):
+            raise self.error(rule, f"<{rule.tag}> needs a numeric {kind} ({name!r} is {initial!r})")
+        op = "add" if rule.tag == "AddValue" else "multiply"
+        return M.ParameterAction(kind, name, op, self.num(rule, "value"), initial, node.line)
+
+    def global_action(self, node: Node) -> M.EnvironmentAction | M.ParameterAction:
         """A GlobalAction: an EnvironmentAction is checked (every attribute resolves; a
-        RoadCondition must keep the friction: frictionScaleFactor 1) and changes nothing."""
+        RoadCondition must keep the friction: frictionScaleFactor 1) and changes nothing; a
+        ParameterAction or VariableAction changes a value at once."""
+        inner = self.one(node)
+        if inner.tag in ("ParameterAction", "VariableAction"):
+            return self.value_action(inner)
         env_action = self.one(node, "EnvironmentAction")
         env = self.one(env_action, "Environment")
         outer = self.values
@@ -929,6 +998,20 @@ class _Builder:
             c = self.one(inner)
             if c.tag == "SimulationTimeCondition":
                 return M.Condition(kind=c.tag, rule=self.enum(c, "rule", M.RULES), value=self.num(c, "value"), **base)
+            if c.tag == "VariableCondition":
+                ref = self.str_(c, "variableRef")
+                if ref not in self.variables:
+                    raise self.error(
+                        c, f"variable {ref!r} is not declared (declared: {', '.join(self.variables) or 'none'})"
+                    )
+                return M.Condition(
+                    kind=c.tag,
+                    rule=self.enum(c, "rule", M.RULES),
+                    value=self.str_(c, "value"),
+                    parameter=ref,
+                    parameter_value=self.variables[ref].value,
+                    **base,
+                )
             if c.tag == "ParameterCondition":
                 ref = self.str_(c, "parameterRef")
                 if ref not in self.values:
@@ -1074,6 +1157,7 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
     values: dict[str, object] = {k: p.value for k, p in params.items()}
     params = defaults
     b = _Builder(path, values)
+    b.variables = _variables(path, root.child("VariableDeclarations"), values)
     cl = root.child("CatalogLocations")
     for vc in cl.children if cl is not None else ():
         d = b.one(vc, "Directory")
@@ -1115,7 +1199,12 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
     init_node = sb.child("Init")
     actions = init_node.child("Actions") if init_node is not None else None
     for ga in actions.all("GlobalAction") if actions is not None else ():
-        b.global_action(ga)
+        if isinstance(b.global_action(ga), M.ParameterAction):
+            raise ScenarioFileError(
+                path,
+                ga.children[0].line,
+                f"<{ga.children[0].tag}> in <Init> is not supported by ego (declare the value it sets; see {DOCS})",
+            )
     for priv in actions.all("Private") if actions is not None else ():
         ref = b.entity_ref(priv)
         for pa in priv.all("PrivateAction"):

@@ -209,6 +209,21 @@ class EnvironmentAction:
     line: int = 0
 
 
+@dataclass(frozen=True)
+class ParameterAction:
+    """A GlobalAction's ParameterAction or VariableAction (1.2): sets a parameter's or
+    variable's value, or adds to it or multiplies it, at once. What it changes is what
+    ParameterConditions and VariableConditions see; attributes keep the values they were
+    read with before the run."""
+
+    kind: str  #: "parameter" or "variable"
+    name: str
+    op: str  #: "set", "add" or "multiply"
+    value: object
+    initial: object  #: the declared value (what the first modification starts from)
+    line: int = 0
+
+
 PrivateAction = (
     SpeedAction
     | LaneChangeAction
@@ -218,6 +233,7 @@ PrivateAction = (
     | ControllerAction
     | LongitudinalDistanceAction
     | EnvironmentAction
+    | ParameterAction
 )
 
 
@@ -240,8 +256,9 @@ class Condition:
     element_ref: str = ""
     state: str = ""
     parameter: str = ""
-    #: the parameter's value where the condition is (a story's own declaration shadows the
-    #: file's); parameters do not change during a run
+    #: the parameter's (or variable's) declared value where the condition is (a story's own
+    #: declaration shadows the file's); a ParameterAction or VariableAction changes what the
+    #: condition sees during the run (the storyboard's store)
     parameter_value: object = None
     line: int = 0
     ref_line: int = 0  #: the line of the StoryboardElementStateCondition (its reference)

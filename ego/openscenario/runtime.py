@@ -210,6 +210,8 @@ class Storyboard:
         self.t = 0.0
         self._fired: dict[int, bool] = {}
         self._prev: dict[str, tuple[float, float]] = {}  #: entity -> (speed, yaw) a step ago
+        #: (kind, name) -> the value a ParameterAction or VariableAction gave it
+        self.store: dict[tuple[str, str], object] = {}
 
     def _element(self, kind: str, path: tuple[str, ...], node, max_count: int = 1) -> Element:
         """The element at ``path`` (names from its story down), found by its name and by every
@@ -300,8 +302,9 @@ class Storyboard:
         kind = c.kind
         if kind == "SimulationTimeCondition":
             return compare(c.rule, t, c.value)  # type: ignore[arg-type]
-        if kind == "ParameterCondition":
-            value = c.parameter_value
+        if kind in ("ParameterCondition", "VariableCondition"):
+            store = "parameter" if kind == "ParameterCondition" else "variable"
+            value = self.store.get((store, c.parameter), c.parameter_value)
             if isinstance(value, (int, float)) and not isinstance(value, bool):
                 try:
                     return compare(c.rule, float(value), float(c.value))  # type: ignore[arg-type]
@@ -322,6 +325,17 @@ class Storyboard:
             return False
         results = (self._entity_value(c, name) for name in c.triggering)
         return any(results) if c.triggering_rule == "any" else all(results)
+
+    def assign(self, a: M.ParameterAction) -> None:
+        """Do a parameter or variable action: set, add to or multiply the current value."""
+        key = (a.kind, a.name)
+        if a.op == "set":
+            self.store[key] = a.value
+        else:
+            current = float(self.store.get(key, a.initial))  # type: ignore[arg-type]
+            step = float(a.value)  # type: ignore[arg-type]
+            self.store[key] = current + step if a.op == "add" else current * step
+        self.log("action", f"t = {self.t:.2f} s: {a.kind} {a.name!r} = {self.store[key]}")
 
     def _kinematics(self, t: float) -> None:
         """Each entity's accelerations over the step that ends at ``t`` and its time standing
@@ -439,6 +453,12 @@ class Storyboard:
                 for a in ev.children:
                     a.state = STANDBY
                     a.go(RUNNING, "startTransition")
+                    act = a.node.action
+                    if isinstance(act, (M.EnvironmentAction, M.ParameterAction)):
+                        # a global action: done once, at once, whoever the actors are
+                        if isinstance(act, M.ParameterAction):
+                            self.assign(act)
+                        continue
                     for actor in actors:
                         runs.append(self._start_action(a, actor, t))
                 self.running[id(ev)] = runs
@@ -490,7 +510,7 @@ class ActionRun:
             self.domains: tuple[str, ...] = ("long",)
         elif isinstance(action, (M.LaneChangeAction, M.LaneOffsetAction)):
             self.domains = ("lat",)
-        elif isinstance(action, (M.ControllerAction, M.EnvironmentAction)):
+        elif isinstance(action, (M.ControllerAction, M.EnvironmentAction, M.ParameterAction)):
             self.domains = ()  # the ego keeps ego's controller, the others their driver
         else:
             self.domains = ("long", "lat")

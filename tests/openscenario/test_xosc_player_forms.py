@@ -198,3 +198,96 @@ def test_a_vertical_acceleration_condition_is_refused(tmp_path):
     ]
     with pytest.raises(ScenarioFileError, match=r"a vertical <AccelerationCondition> is not supported"):
         load(scene(tmp_path, evs))
+
+
+def _global_event(name: str, actor: str, action: str, start: str) -> tuple[str, str]:
+    return actor, (
+        f'<Event name="{name}" priority="parallel" maximumExecutionCount="1"><Action name="{name}Action">'
+        f"<GlobalAction>{action}</GlobalAction></Action>{start}</Event>"
+    )
+
+
+def _param_cond(ref: str, value: str, kind: str = "Parameter") -> str:
+    attr = "parameterRef" if kind == "Parameter" else "variableRef"
+    return (
+        f'<Condition name="p" delay="0" conditionEdge="none"><ByValueCondition><{kind}Condition {attr}="{ref}" '
+        f'value="{value}" rule="equalTo"/></ByValueCondition></Condition>'
+    )
+
+
+@pytest.mark.sumo
+def test_parameter_and_variable_actions_change_what_conditions_see(tmp_path):
+    """Count = 0 gets + 2 at 1.0 s and x 3 at 2.0 s: a ParameterCondition Count == 6 holds from the
+    next storyboard step (2.1 s); a VariableSetAction at 1.0 s makes Phase == 'b' hold at 1.1 s;
+    each global action is done once although its maneuver group has an actor."""
+    params = '<ParameterDeclaration name="Count" parameterType="double" value="0"/>'
+    evs = [
+        _global_event(
+            "Add",
+            "A",
+            '<ParameterAction parameterRef="Count"><ModifyAction><Rule><AddValue value="2"/></Rule>'
+            "</ModifyAction></ParameterAction>",
+            trigger([sim_time(0.95)]),
+        ),
+        _global_event(
+            "Times",
+            "A",
+            '<ParameterAction parameterRef="Count"><ModifyAction><Rule><MultiplyByValue value="3"/>'
+            "</Rule></ModifyAction></ParameterAction>",
+            trigger([sim_time(1.95)]),
+        ),
+        _global_event(
+            "Phase",
+            "B",
+            '<VariableAction variableRef="Phase"><SetAction value="b"/></VariableAction>',
+            trigger([sim_time(0.95)]),
+        ),
+        event("Six", "C", speed(20), trigger([_param_cond("Count", "6")])),
+        event("B", "C", speed(18), trigger([_param_cond("Phase", "b", "Variable")])),
+    ]
+    path = scene(tmp_path, evs, params=params)
+    _edit(
+        path,
+        "</ParameterDeclarations>",
+        "</ParameterDeclarations><VariableDeclarations><VariableDeclaration "
+        'name="Phase" variableType="string" value="a"/></VariableDeclarations>',
+    )
+    sc = run_scene(path, 3.0)
+    assert starts(sc, "Six") == [pytest.approx(2.1)]
+    assert starts(sc, "B") == [pytest.approx(1.1)]
+
+
+@pytest.mark.parametrize(
+    ("action", "message"),
+    [
+        (
+            '<ParameterAction parameterRef="Nope"><SetAction value="1"/></ParameterAction>',
+            r"parameter 'Nope' is not declared",
+        ),
+        (
+            '<ParameterAction parameterRef="Name"><ModifyAction><Rule><AddValue value="1"/></Rule></ModifyAction>'
+            "</ParameterAction>",
+            r"<AddValue> needs a numeric parameter \('Name' is 'x'\)",
+        ),
+        ('<VariableAction variableRef="V"><SetAction value="1"/></VariableAction>', r"variable 'V' is not declared"),
+    ],
+)
+def test_bad_parameter_actions_are_refused_in_one_line(tmp_path, action, message):
+    params = '<ParameterDeclaration name="Name" parameterType="string" value="x"/>'
+    path = scene(tmp_path, [_global_event("G", "A", action, trigger([sim_time(1)]))], params=params)
+    with pytest.raises(ScenarioFileError, match=message):
+        load(path)
+
+
+def test_a_parameter_action_in_init_is_refused(tmp_path):
+    params = '<ParameterDeclaration name="Count" parameterType="double" value="0"/>'
+    path = scene(tmp_path, [], params=params)
+    _edit(
+        path,
+        "<Init><Actions>",
+        '<Init><Actions>\n<GlobalAction><ParameterAction parameterRef="Count"><SetAction '
+        'value="1"/></ParameterAction></GlobalAction>',
+    )
+    with pytest.raises(ScenarioFileError, match=r"<ParameterAction> in <Init> is not supported by ego") as exc:
+        load(path)
+    assert exc.value.line == _line_of(path, "<ParameterAction")
