@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 import os
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -109,11 +110,27 @@ def _unsupported(path, node: Node, where: str, allowed: tuple[str, ...]) -> Scen
 
 
 def _column(values: list) -> np.ndarray:
-    """Numbers as float64, anything else as an object array of strings."""
+    """Numbers as float64 (a value left out, None: NaN), anything else as an object array of
+    strings (None kept): :func:`fill_defaults` gives the left-out values the template's."""
     try:
-        return np.asarray([float(v) for v in values], dtype=float)
+        return np.asarray([math.nan if v is None else float(v) for v in values], dtype=float)
     except (TypeError, ValueError):
-        return np.asarray([str(v) for v in values], dtype=object)
+        return np.asarray([None if v is None else str(v) for v in values], dtype=object)
+
+
+def fill_defaults(dist: Distribution, defaults: Mapping[str, object]) -> None:
+    """Give every value a ParameterValueSet left out (NaN or None) the scenario file's
+    declared value of that parameter."""
+    for name, col in dist.columns.items():
+        missing = np.isnan(col) if col.dtype == float else np.asarray([v is None for v in col], dtype=bool)
+        if not missing.any():
+            continue
+        default = defaults[name]
+        if col.dtype == float and not isinstance(default, (int, float)):
+            col = col.astype(object)
+            col[~missing] = [str(v) for v in col[~missing]]
+        col[missing] = default if col.dtype == object else float(default)  # type: ignore[arg-type]
+        dist.columns[name] = col
 
 
 def _single(path, node: Node) -> tuple[str, np.ndarray]:
@@ -168,14 +185,11 @@ def _multi(path, node: Node) -> dict[str, list]:
             row[ref] = value
         if not row:
             raise ScenarioFileError(path, s.line, "<ParameterValueSet> is empty (expected <ParameterAssignment>s)")
-        if rows and set(row) != set(rows[0][1]):
-            raise ScenarioFileError(
-                path,
-                s.line,
-                f"<ParameterValueSet> assigns {sorted(row)}, the first one {sorted(rows[0][1])} (expected the same)",
-            )
         rows.append((s.line, row))
-    return {name: [r[name] for _, r in rows] for name in rows[0][1]}
+    # a set that leaves out a parameter another set assigns keeps the scenario file's value
+    # for it (filled in by fill_defaults, once the scenario file is known)
+    names = list(dict.fromkeys(n for _, r in rows for n in r))
+    return {name: [r.get(name) for _, r in rows] for name in names}
 
 
 def _deterministic(path, det: Node) -> tuple[dict[str, np.ndarray], int]:

@@ -194,3 +194,21 @@ def test_stochastic_whole_number_parameter_is_rounded(files):
     var = sweep_xosc.load(write(files, body, "ccrb_int.xosc"), ["pid"])
     gaps = [p["LeadGap"] for p in var.spec.listed]
     assert var.total == 50 and all(isinstance(g, int) for g in gaps) and set(gaps) <= {10, 11, 12}
+
+
+def test_a_value_set_that_leaves_a_parameter_out_keeps_the_template_value(files):
+    """The reference player's cut-in_parameter_set.xosc form: the second ParameterValueSet
+    assigns only one of the two parameters the first assigns; the other keeps the scenario
+    file's declared value (LeadBrakeTime 2 in ccrb.xosc)."""
+    multi = (
+        "<DeterministicMultiParameterDistribution><ValueSetDistribution>"
+        '<ParameterValueSet><ParameterAssignment parameterRef="EgoSpeed" value="10"/>'
+        '<ParameterAssignment parameterRef="LeadBrakeTime" value="1"/></ParameterValueSet>'
+        '<ParameterValueSet><ParameterAssignment parameterRef="EgoSpeed" value="20"/></ParameterValueSet>'
+        "</ValueSetDistribution></DeterministicMultiParameterDistribution>"
+    )
+    var = sweep_xosc.load(write(files, f"<Deterministic>{multi}</Deterministic>"), ["pid"])
+    assert var.spec.listed == (
+        {"EgoSpeed": 10.0, "LeadBrakeTime": 1.0},
+        {"EgoSpeed": 20.0, "LeadBrakeTime": 2.0},
+    )
