@@ -41,7 +41,14 @@ CHILDREN: dict[str, set[str]] = {
     "VariableDeclarations": {"VariableDeclaration"},
     "VariableDeclaration": set(),
     "ValueConstraint": set(),
-    "CatalogLocations": {"VehicleCatalog", "PedestrianCatalog", "MiscObjectCatalog", "ControllerCatalog"},
+    "CatalogLocations": {
+        "VehicleCatalog",
+        "PedestrianCatalog",
+        "MiscObjectCatalog",
+        "ControllerCatalog",
+        "ManeuverCatalog",
+    },
+    "ManeuverCatalog": {"Directory"},
     "VehicleCatalog": {"Directory"},
     "PedestrianCatalog": {"Directory"},
     "MiscObjectCatalog": {"Directory"},
@@ -109,6 +116,7 @@ CHILDREN: dict[str, set[str]] = {
         "LongitudinalAction",
         "LateralAction",
         "RoutingAction",
+        "SynchronizeAction",
         "ControllerAction",
         "ActivateControllerAction",
     },
@@ -116,6 +124,18 @@ CHILDREN: dict[str, set[str]] = {
     "ActivateControllerAction": set(),
     "AssignControllerAction": {"Controller", "CatalogReference"},
     "TeleportAction": {"Position"},
+    "SynchronizeAction": {"TargetPositionMaster", "TargetPosition", "FinalSpeed"},
+    "TargetPositionMaster": {
+        "WorldPosition",
+        "LanePosition",
+        "RoadPosition",
+        "RelativeLanePosition",
+        "RelativeRoadPosition",
+    },
+    "TargetPosition": {"WorldPosition", "LanePosition", "RoadPosition", "RelativeLanePosition", "RelativeRoadPosition"},
+    "FinalSpeed": {"AbsoluteSpeed", "RelativeSpeedToMaster"},
+    "AbsoluteSpeed": set(),
+    "RelativeSpeedToMaster": set(),
     "Position": {"WorldPosition", "LanePosition", "RoadPosition", "RelativeLanePosition", "RelativeRoadPosition"},
     "WorldPosition": set(),
     "LanePosition": {"Orientation"},
@@ -155,10 +175,10 @@ CHILDREN: dict[str, set[str]] = {
     "TrajectoryFollowingMode": set(),
     "Story": {"ParameterDeclarations", "Act"},
     "Act": {"ManeuverGroup", "StartTrigger", "StopTrigger"},
-    "ManeuverGroup": {"Actors", "Maneuver"},
+    "ManeuverGroup": {"Actors", "Maneuver", "CatalogReference"},
     "Actors": {"EntityRef"},
     "EntityRef": set(),
-    "Maneuver": {"Event"},
+    "Maneuver": {"ParameterDeclarations", "Event"},
     "Event": {"Action", "StartTrigger"},
     "Action": {"PrivateAction", "GlobalAction"},
     "StartTrigger": {"ConditionGroup"},
@@ -227,6 +247,7 @@ CATALOG_OF = {
     "Pedestrian": "PedestrianCatalog",
     "MiscObject": "MiscObjectCatalog",
     "Controller": "ControllerCatalog",
+    "Maneuver": "ManeuverCatalog",
 }
 PEDESTRIAN_CATEGORIES = ("pedestrian", "wheelchair", "animal")
 MISC_CATEGORIES = (
@@ -417,6 +438,15 @@ def _declarations(
     return out
 
 
+def _assigned_name(a: Node) -> str:
+    """A ParameterAssignment's parameterRef: the parameter's name (a leading ``$``, as the
+    reference player's files write it, is the same name)."""
+    ref = a.attrs.get("parameterRef", "")
+    if not ref:
+        raise ScenarioFileError("", a.line, "<ParameterAssignment> needs attribute parameterRef")
+    return ref[1:] if ref.startswith("$") and not ref.startswith("${") else ref
+
+
 def _variables(path, node: Node | None, values: Mapping[str, object]) -> dict[str, M.Parameter]:
     """The file's VariableDeclarations (1.2): name, type and initial value (an expression may
     name parameters)."""
@@ -510,6 +540,8 @@ class _Builder:
         self.entities: dict[str, M.Entity] = {}
         self.catalog_dirs: dict[str, list[Path]] = {}
         self.variables: dict[str, M.Parameter] = {}  #: the file's VariableDeclarations (1.2)
+        #: the last Maneuver a catalog reference found: (catalog file, its node, its values)
+        self.maneuver_entry: tuple[Path, Node, dict[str, object]] | None = None
 
     # -- attributes ----------------------------------------------------------------------------
     def error(self, node: Node, message: str) -> ScenarioFileError:
@@ -704,7 +736,7 @@ class _Builder:
             values = {**self.values, **{k: p.value for k, p in decl.items()}}
             assigns = node.child("ParameterAssignments")
             for a in assigns.all("ParameterAssignment") if assigns is not None else ():
-                ref = self.str_(a, "parameterRef")
+                ref = _assigned_name(a)
                 if ref not in decl:
                     raise self.error(
                         a,
@@ -716,6 +748,9 @@ class _Builder:
                 except ValueError as exc:
                     raise self.error(a, str(exc)) from None
             if v.tag == "Controller":
+                return None
+            if v.tag == "Maneuver":
+                self.maneuver_entry = (file, v, values)
                 return None
             return _Builder(file, values).body(v, name)
         names = [v.attrs.get("name", "?") for v in cat.children]
@@ -794,6 +829,8 @@ class _Builder:
             return M.ControllerAction(a.line)
         if a.tag == "TeleportAction":
             return M.TeleportAction(self.position(self.one(a, "Position")), a.line)
+        if a.tag == "SynchronizeAction":
+            return self.synchronize(a)
         inner = self.one(a)
         if inner.tag == "LongitudinalDistanceAction":
             return self.distance_action(inner)
@@ -850,6 +887,25 @@ class _Builder:
         finally:
             self.values = outer_values
         return self.follow_trajectory(inner, vertices, poly)
+
+    def synchronize(self, a: Node) -> M.SynchronizeAction:
+        final, kind = None, "absolute"
+        fs = a.child("FinalSpeed")
+        if fs is not None:
+            sp = self.one(fs)
+            if sp.tag == "AbsoluteSpeed":
+                final = self.num(sp, "value", nonneg=True)
+            else:
+                kind = self.enum(sp, "speedTargetValueType", ("delta", "factor"))
+                final = self.num(sp, "value")
+        return M.SynchronizeAction(
+            self.entity_ref(a, "masterEntityRef"),
+            self.position(self.one(a, "TargetPositionMaster")),
+            self.position(self.one(a, "TargetPosition")),
+            final,
+            kind,
+            a.line,
+        )
 
     def value_action(self, node: Node) -> M.ParameterAction:
         """A ParameterAction or VariableAction: set, add to or multiply a declared value."""
@@ -1243,36 +1299,18 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
                 actors_node = b.one(mg, "Actors")
                 actors = tuple(b.entity_ref(e) for e in actors_node.all("EntityRef"))
                 mans = []
-                for man in mg.all("Maneuver"):
-                    events = []
-                    for ev in man.all("Event"):
-                        acts_ = tuple(
-                            M.Action(
-                                b.str_(a, "name"),
-                                b.global_action(a.children[0])
-                                if a.children and a.children[0].tag == "GlobalAction"
-                                else b.private_action(b.one(a, "PrivateAction")),
-                                a.line,
-                            )
-                            for a in ev.all("Action")
-                        )
-                        if not acts_:
-                            raise b.error(ev, "<Event> needs at least one <Action>")
-                        events.append(
-                            M.Event(
-                                b.str_(ev, "name"),
-                                b.enum(ev, "priority", M.PRIORITIES),
-                                b.int_(ev, "maximumExecutionCount", 1, minimum=1),
-                                acts_,
-                                b.trigger(ev.child("StartTrigger")),
-                                ev.line,
-                            )
-                        )
-                        for a in acts_:
-                            names.setdefault(a.name, a.line)
-                        names.setdefault(events[-1].name, ev.line)
-                    mans.append(M.Maneuver(b.str_(man, "name"), tuple(events), man.line))
-                    names.setdefault(mans[-1].name, man.line)
+                for man in mg.children:
+                    if man.tag == "Maneuver":
+                        mans.append(_maneuver(b, man, names))
+                    elif man.tag == "CatalogReference":
+                        # a Maneuver from a ManeuverCatalog: built with its catalog's
+                        # parameters and the reference's assignments, errors in its own file
+                        b.maneuver_entry = None
+                        b.catalog_entry(man, ("Maneuver",), "")
+                        file, node, cat_values = b.maneuver_entry  # type: ignore[misc]
+                        cb = _Builder(file, cat_values)
+                        cb.entities, cb.catalog_dirs, cb.variables = b.entities, b.catalog_dirs, b.variables
+                        mans.append(_maneuver(cb, node, names, scoped=False))
                 groups.append(
                     M.ManeuverGroup(
                         b.str_(mg, "name"), b.int_(mg, "maximumExecutionCount", minimum=1), actors, tuple(mans), mg.line
@@ -1308,6 +1346,49 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
     )
     _check_refs(scenario, names)
     return scenario
+
+
+def _maneuver(b: _Builder, man: Node, names: dict[str, int], scoped: bool = True) -> M.Maneuver:
+    """A Maneuver element (inline or a catalog entry) with its events; an inline one's own
+    ParameterDeclarations are seen inside it (a catalog entry's are in ``b``'s values with the
+    reference's assignments: ``scoped`` False)."""
+    if scoped:
+        outer = b.values
+        b.values = b.scoped(man)
+        try:
+            return _maneuver(b, man, names, scoped=False)
+        finally:
+            b.values = outer
+    events = []
+    for ev in man.all("Event"):
+        acts_ = tuple(
+            M.Action(
+                b.str_(a, "name"),
+                b.global_action(a.children[0])
+                if a.children and a.children[0].tag == "GlobalAction"
+                else b.private_action(b.one(a, "PrivateAction")),
+                a.line,
+            )
+            for a in ev.all("Action")
+        )
+        if not acts_:
+            raise b.error(ev, "<Event> needs at least one <Action>")
+        events.append(
+            M.Event(
+                b.str_(ev, "name"),
+                b.enum(ev, "priority", M.PRIORITIES),
+                b.int_(ev, "maximumExecutionCount", 1, minimum=1),
+                acts_,
+                b.trigger(ev.child("StartTrigger")),
+                ev.line,
+            )
+        )
+        for a in acts_:
+            names.setdefault(a.name, a.line)
+        names.setdefault(events[-1].name, ev.line)
+    out = M.Maneuver(b.str_(man, "name"), tuple(events), man.line)
+    names.setdefault(out.name, man.line)
+    return out
 
 
 def _conditions(scenario: M.Scenario):

@@ -202,6 +202,20 @@ class ControllerAction:
 
 
 @dataclass(frozen=True)
+class SynchronizeAction:
+    """Reach ``target`` when the master entity reaches ``master_target`` (both along the road),
+    with a final speed: absolute, or the master's speed plus a delta or times a factor (at
+    each step); none keeps the speed that arrives in time. Ends when the master arrives."""
+
+    master: str
+    master_target: Position
+    target: Position
+    final_speed: float | None = None
+    final_kind: str = "absolute"  #: "absolute", "delta" or "factor"
+    line: int = 0
+
+
+@dataclass(frozen=True)
 class EnvironmentAction:
     """A GlobalAction's EnvironmentAction (time of day, weather, a road condition of friction
     scale 1): nothing in ego's dynamics depends on it; accepted and done at once."""
@@ -234,6 +248,7 @@ PrivateAction = (
     | LongitudinalDistanceAction
     | EnvironmentAction
     | ParameterAction
+    | SynchronizeAction
 )
 
 

@@ -506,7 +506,7 @@ class ActionRun:
         self.board, self.element, self.actor, self.action = board, element, actor, action
         self.finished = False
         self.profile: Transition | None = None
-        if isinstance(action, (M.SpeedAction, M.LongitudinalDistanceAction)):
+        if isinstance(action, (M.SpeedAction, M.LongitudinalDistanceAction, M.SynchronizeAction)):
             self.domains: tuple[str, ...] = ("long",)
         elif isinstance(action, (M.LaneChangeAction, M.LaneOffsetAction)):
             self.domains = ("lat",)
@@ -577,8 +577,8 @@ class ActionRun:
         elif isinstance(a, (M.ControllerAction, M.EnvironmentAction)):
             self.finished = True
             return
-        elif isinstance(a, M.LongitudinalDistanceAction):
-            return  # commanded step by step (:meth:`_keep_distance`)
+        elif isinstance(a, (M.LongitudinalDistanceAction, M.SynchronizeAction)):
+            return  # commanded step by step (:meth:`_keep_distance`, :meth:`_synchronize`)
         elif isinstance(a, M.TeleportAction):
             x, y, h = drv.position_xy(a.position, b.states)
             drv.teleport(self.actor, x, y, h)
@@ -624,6 +624,41 @@ class ActionRun:
         held = a.distance if a.distance is not None else (a.time_gap or 0.0) * me.speed
         if not a.continuous and abs(gap - held) < 0.01:
             self.finished = True
+
+    def _synchronize(self, a: M.SynchronizeAction) -> None:
+        """The speed over the next step on the profile that puts the actor at its target when
+        the master reaches its own, the master driving on at its speed (re-planned every
+        step): with a final speed v_f, v(tau) = v + b tau + c tau^2 with v(T) = v_f and its
+        integral over [0, T] the distance left; without, the constant speed d / T. Ends when
+        the master is at its target."""
+        b = self.board
+        h, drv = b.h, b.driver
+        me, master = b.states[self.actor], b.states[a.master]
+        s_m = drv.road_frame(*drv.position_xy(a.master_target, b.states)[:2])[0]
+        s_a = drv.road_frame(*drv.position_xy(a.target, b.states)[:2])[0]
+        d_m, d = s_m - master.s, s_a - me.s
+        if d_m <= EPS:
+            self.finished = True
+            return
+        if master.speed <= EPS:
+            return  # the master stands: no arrival time to meet
+        T = d_m / master.speed
+        if a.final_speed is None:
+            v = d / T
+        else:
+            vf = a.final_speed
+            if a.final_kind == "delta":
+                vf = master.speed + a.final_speed
+            elif a.final_kind == "factor":
+                vf = master.speed * a.final_speed
+            if T <= h:
+                v = vf
+            else:
+                dv, dd = vf - me.speed, d - me.speed * T
+                c = (3.0 * dv * T - 6.0 * dd) / T**3
+                bb = (dv - c * T * T) / T
+                v = me.speed + bb * h + c * h * h
+        drv.speed(self.actor, max(v, 0.0), INF)
 
     def _trajectory_start(self, t: float) -> None:
         b, a = self.board, self.action
@@ -697,6 +732,8 @@ class ActionRun:
                 drv.release(self.actor)
         elif isinstance(a, M.LongitudinalDistanceAction):
             self._keep_distance(a, t)
+        elif isinstance(a, M.SynchronizeAction):
+            self._synchronize(a)
         elif isinstance(a, M.FollowTrajectoryAction):
             x, y, heading, speed, end = self._trajectory_point(t + h)
             drv.place(self.actor, x, y, heading, speed)

@@ -809,7 +809,13 @@ def _check_ego_actions(model: M.Scenario, ego: str) -> None:
                     for ev in man.events:
                         for a in ev.actions:
                             if isinstance(
-                                a.action, (M.TeleportAction, M.FollowTrajectoryAction, M.LongitudinalDistanceAction)
+                                a.action,
+                                (
+                                    M.TeleportAction,
+                                    M.FollowTrajectoryAction,
+                                    M.LongitudinalDistanceAction,
+                                    M.SynchronizeAction,
+                                ),
                             ):
                                 raise ScenarioFileError(
                                     model.path,

@@ -291,3 +291,112 @@ def test_a_parameter_action_in_init_is_refused(tmp_path):
     with pytest.raises(ScenarioFileError, match=r"<ParameterAction> in <Init> is not supported by ego") as exc:
         load(path)
     assert exc.value.line == _line_of(path, "<ParameterAction")
+
+
+def _sync(master: str, ms: float, s: float, final: str = "") -> str:
+    def lane_pos(lane: int, at: float) -> str:
+        return f'<LanePosition roadId="0" laneId="{lane}" s="{at}" offset="0"/>'
+
+    return (
+        f'<SynchronizeAction masterEntityRef="{master}"><TargetPositionMaster>{lane_pos(-1, ms)}'
+        f"</TargetPositionMaster><TargetPosition>{lane_pos(-2, s)}</TargetPosition>{final}</SynchronizeAction>"
+    )
+
+
+@pytest.mark.sumo
+@pytest.mark.parametrize(
+    ("final", "v_end"),
+    [
+        ("", None),
+        ('<FinalSpeed><AbsoluteSpeed value="10"/></FinalSpeed>', 10.0),
+        ('<FinalSpeed><RelativeSpeedToMaster speedTargetValueType="delta" value="-15"/></FinalSpeed>', 10.0),
+    ],
+)
+def test_synchronize_arrives_with_the_master(tmp_path, monkeypatch, final, v_end):
+    """A (master, 25 m/s from s = 100) reaches s = 300 at 8 s; B (15 m/s from s = 200) is to
+    reach s = 250 then: it arrives within one step's travel of it when A arrives (and with the
+    final speed within 0.5 m/s); the action ends there."""
+    from ego.openscenario import runtime
+
+    seen: list[tuple[float, float, float, float]] = []
+    orig = runtime.Storyboard._kinematics
+
+    def record(self, t):
+        orig(self, t)
+        a, b = self.states["A"], self.states["B"]
+        seen.append((t, a.s, b.s, b.speed))
+
+    monkeypatch.setattr(runtime.Storyboard, "_kinematics", record)
+    done = (
+        '<Condition name="e" delay="0" conditionEdge="none"><ByValueCondition><StoryboardElementStateCondition '
+        'storyboardElementType="action" storyboardElementRef="SyncAction" state="completeState"/></ByValueCondition>'
+        "</Condition>"
+    )
+    evs = [
+        event("Sync", "B", _sync("A", 300.0, 250.0, final), trigger([sim_time(0)])),
+        event("Done", "C", speed(15), trigger([done])),
+    ]
+    sc = run_scene(scene(tmp_path, evs), 9.0)
+    arrival = next(row for row in seen if row[1] >= 300.0 - 1e-9)
+    t, _, s_b, v_b = arrival
+    assert t == pytest.approx(8.0, abs=0.11)
+    assert abs(s_b - 250.0) <= max(v_b, 1.0) * 0.1 + 1e-6
+    if v_end is not None:
+        assert v_b == pytest.approx(v_end, abs=0.5)
+    assert starts(sc, "Done") and starts(sc, "Done")[0] == pytest.approx(t + 0.1, abs=0.11)
+
+
+def test_synchronize_on_the_ego_is_refused(tmp_path, capsys):
+    from ego.cli import main
+
+    path = scene(tmp_path, [event("Sync", "Ego", _sync("A", 300.0, 250.0), trigger([sim_time(0)]))])
+    assert main(["run", str(path), "-c", "pid"]) == 2
+    assert "<SynchronizeAction> on the ego (Ego) is not supported" in capsys.readouterr().err
+
+
+MANEUVERS = """<?xml version="1.0"?>
+<OpenSCENARIO><FileHeader revMajor="1" revMinor="0" date="2026-01-01T00:00:00" description="m" author="t"/>
+<Catalog name="Moves">
+  <Maneuver name="Brake">
+    <ParameterDeclarations><ParameterDeclaration name="Target" parameterType="double" value="5"/>
+    </ParameterDeclarations>
+    <Event name="BrakeEvent" priority="overwrite"><Action name="BrakeAction"><PrivateAction>
+      <LongitudinalAction><SpeedAction><SpeedActionDynamics dynamicsShape="step"/><SpeedActionTarget>
+      <AbsoluteTargetSpeed value="$Target"/></SpeedActionTarget></SpeedAction></LongitudinalAction>
+    </PrivateAction></Action>{start}</Event>
+  </Maneuver>
+</Catalog></OpenSCENARIO>
+"""
+
+
+def _catalog_scene(tmp_path, assign: str):
+    (tmp_path / "man").mkdir(exist_ok=True)
+    (tmp_path / "man" / "Moves.xosc").write_text(MANEUVERS.format(start=trigger([sim_time(0.95)])))
+    path = scene(tmp_path, [event("X", "C", speed(15), trigger([sim_time(5)]))])
+    _edit(
+        path,
+        "<RoadNetwork>",
+        '<CatalogLocations><ManeuverCatalog><Directory path="man"/></ManeuverCatalog></CatalogLocations><RoadNetwork>',
+    )
+    ref = (
+        '<ManeuverGroup name="GA" maximumExecutionCount="1"><Actors selectTriggeringEntities="false">'
+        '<EntityRef entityRef="A"/></Actors><CatalogReference catalogName="Moves" entryName="Brake">'
+        f"<ParameterAssignments>{assign}</ParameterAssignments></CatalogReference></ManeuverGroup>"
+    )
+    _edit(path, '<ManeuverGroup name="GC"', ref + '<ManeuverGroup name="GC"')
+    return path
+
+
+def test_a_maneuver_from_a_maneuver_catalog(tmp_path):
+    """A ManeuverGroup's CatalogReference to a ManeuverCatalog entry: its own parameters, the
+    reference's assignments (a parameterRef written with a leading $, as the reference player's
+    files write it, names the same parameter), its events in the storyboard."""
+    path = _catalog_scene(tmp_path, '<ParameterAssignment parameterRef="$Target" value="12"/>')
+    sc = load(path)
+    group = sc.stories[0].acts[0].groups[0]
+    assert group.actors == ("A",) and group.maneuvers[0].name == "Brake"
+    ev = group.maneuvers[0].events[0]
+    assert ev.name == "BrakeEvent" and ev.actions[0].action.value == 12.0  # type: ignore[union-attr]
+    path = _catalog_scene(tmp_path, '<ParameterAssignment parameterRef="Nope" value="12"/>')
+    with pytest.raises(ScenarioFileError, match=r"catalog entry 'Brake' declares no parameter 'Nope'"):
+        load(path)
