@@ -416,3 +416,47 @@ def constraint_mask(dist: Distribution, params: dict) -> np.ndarray:
             ok[i] = good
         mask &= ok[where.reshape(-1)]
     return mask
+
+
+def search_ranges(path: str) -> tuple[str, dict[str, list[float]]]:
+    """For ``ego falsify FILE.xosc``: the distribution's scenario file and, per distributed
+    parameter, the range ``[low, high]`` it spans: a DistributionRange's or a Range's limits,
+    a set's (or a histogram's bins') smallest and largest number. A distribution with no
+    numeric range (a ValueSetDistribution, a set of names, an unbounded normal) is refused
+    with its line: there is nothing to search between."""
+    root = root_of(path)
+    if root is None:
+        raise ScenarioFileError(
+            path, 1, "not a ParameterValueDistribution file (expected <ParameterValueDistribution>)"
+        )
+    target = scenario_file(path, root)
+    ranges: dict[str, list[float]] = {}
+    for kind in ("Deterministic", "Stochastic"):
+        node = root.child(kind)
+        for d in node.children if node is not None else ():
+            name = d.attrs.get("parameterName", "")
+            if d.tag not in ("DeterministicSingleParameterDistribution", "StochasticDistribution") or not name:
+                raise ScenarioFileError(
+                    path, d.line, f"<{d.tag}> has no numeric range to search (ego falsify searches ranges)"
+                )
+            bounds = [n for n in _walk(d) if n.tag == "Range"]
+            values = [n.attrs.get("value") for n in _walk(d) if n.tag == "Element"]
+            try:
+                nums = [float(b.attrs[k]) for b in bounds for k in ("lowerLimit", "upperLimit")]
+                nums += [float(v) for v in values if v is not None]
+            except (KeyError, ValueError):
+                nums = []
+            if len(nums) < 2 or not min(nums) < max(nums):
+                raise ScenarioFileError(
+                    path, d.line, f"parameter {name!r} has no numeric range to search (ego falsify searches ranges)"
+                )
+            ranges[name] = [min(nums), max(nums)]
+    if not ranges:
+        raise ScenarioFileError(path, root.line, "the distribution names no parameter range to search")
+    return target, ranges
+
+
+def _walk(node: Node):
+    yield node
+    for c in node.children:
+        yield from _walk(c)

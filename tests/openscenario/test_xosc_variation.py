@@ -212,3 +212,54 @@ def test_a_value_set_that_leaves_a_parameter_out_keeps_the_template_value(files)
         {"EgoSpeed": 10.0, "LeadBrakeTime": 1.0},
         {"EgoSpeed": 20.0, "LeadBrakeTime": 2.0},
     )
+
+
+STOCHASTIC_RANGES = (
+    '<Stochastic numberOfTestRuns="10" randomSeed="1"><StochasticDistribution parameterName="LeadGap">'
+    '<UniformDistribution><Range lowerLimit="12" upperLimit="40"/></UniformDistribution></StochasticDistribution>'
+    '<StochasticDistribution parameterName="LeadDecel"><NormalDistribution expectedValue="4" variance="1">'
+    '<Range lowerLimit="2" upperLimit="6"/></NormalDistribution></StochasticDistribution></Stochastic>'
+)
+
+
+def test_falsify_searches_a_distributions_ranges(files):
+    from ego.falsify.spec import from_distribution
+
+    spec = from_distribution(write(files, STOCHASTIC_RANGES), ["pid"], None, 7)
+    assert [(d.name, d.lo, d.hi) for d in spec.dims] == [("LeadGap", 12.0, 40.0), ("LeadDecel", 2.0, 6.0)]
+    assert (spec.requirement, spec.budget, spec.seed) == ("no_collision", 7, 0)
+    det = write(
+        files,
+        f"<Deterministic>{single('LeadGap', step(10, 20, 5))}{single('LeadDecel', elements(2, 4))}</Deterministic>",
+    )
+    spec = from_distribution(det, ["pid"], "no_collision", None)
+    assert [(d.name, d.lo, d.hi) for d in spec.dims] == [("LeadGap", 10.0, 20.0), ("LeadDecel", 2.0, 4.0)]
+
+
+def test_falsify_refuses_a_distribution_without_ranges_in_one_line(files, capsys):
+    multi = (
+        "<Deterministic><DeterministicMultiParameterDistribution><ValueSetDistribution><ParameterValueSet>"
+        '<ParameterAssignment parameterRef="LeadGap" value="10"/></ParameterValueSet></ValueSetDistribution>'
+        "</DeterministicMultiParameterDistribution></Deterministic>"
+    )
+    path = write(files, multi)
+    assert main(["falsify", path, "-c", "pid", "--out", str(files / "f")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "<DeterministicMultiParameterDistribution> has no numeric range" in err
+    assert main(["falsify", path, "--out", str(files / "f")]) == 2
+    assert "needs -c CONTROLLER" in capsys.readouterr().err
+    assert not (files / "f").exists()
+
+
+@pytest.mark.sumo
+def test_falsify_runs_over_a_distribution_file(files, capsys):
+    out = files / "fal"
+    path = write(files, STOCHASTIC_RANGES)
+    code = main(["falsify", path, "-c", "pid", "--budget", "2", "--optimizer", "random", "--out", str(out),
+                 "--jobs", "1", "--no-verify"])  # fmt: skip
+    assert code in (0, 1)
+    import pandas as pd
+
+    rows = pd.read_parquet(out / "results.parquet")
+    assert len(rows) == 2
+    assert rows["LeadGap"].between(12, 40).all() and rows["LeadDecel"].between(2, 6).all()
