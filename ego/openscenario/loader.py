@@ -198,7 +198,10 @@ CHILDREN: dict[str, set[str]] = {
         "TraveledDistanceCondition",
         "StandStillCondition",
         "AccelerationCondition",
+        "CollisionCondition",
     },
+    "CollisionCondition": {"EntityRef", "ByType"},
+    "ByType": set(),
     "StandStillCondition": set(),
     "AccelerationCondition": set(),
     "TimeHeadwayCondition": set(),
@@ -1102,6 +1105,12 @@ class _Builder:
             return self.reach(c, base)
         if tag == "TraveledDistanceCondition":
             return M.Condition(kind=tag, rule="greaterOrEqual", value=self.num(c, "value", nonneg=True), **base)
+        if tag == "CollisionCondition":
+            target = self.one(c)
+            if target.tag == "EntityRef":
+                return M.Condition(kind=tag, entity=self.entity_ref(target), **base)
+            otype = self.enum(target, "objectType", ("vehicle", "pedestrian", "miscellaneous"))
+            return M.Condition(kind=tag, value=otype, **base)
         if tag == "StandStillCondition":
             return M.Condition(
                 kind=tag,

@@ -111,6 +111,25 @@ def box_point_distance(e: EntityState, x: float, y: float) -> float:
     return math.hypot(max(lx - 0.5 * e.length, 0.0), max(ly - 0.5 * e.width, 0.0))
 
 
+def boxes_overlap(a: EntityState, b: EntityState) -> bool:
+    """Whether two entities' boxes (oriented rectangles) overlap or touch: no separating axis
+    among the four edge normals."""
+
+    def corners(e: EntityState) -> list[tuple[float, float]]:
+        c, s = math.cos(e.yaw), math.sin(e.yaw)
+        hl, hw = 0.5 * e.length, 0.5 * e.width
+        return [(e.x + c * u - s * v, e.y + s * u + c * v) for u, v in ((hl, hw), (hl, -hw), (-hl, -hw), (-hl, hw))]
+
+    ca, cb = corners(a), corners(b)
+    for e in (a, b):
+        for ax, ay in ((math.cos(e.yaw), math.sin(e.yaw)), (-math.sin(e.yaw), math.cos(e.yaw))):
+            pa = [ax * x + ay * y for x, y in ca]
+            pb = [ax * x + ay * y for x, y in cb]
+            if max(pa) < min(pb) - EPS or max(pb) < min(pa) - EPS:
+                return False
+    return True
+
+
 class ConditionState:
     """One condition's edge and delay bookkeeping."""
 
@@ -173,6 +192,11 @@ class Storyboard:
         self.scenario, self.ego, self.driver, self.h = scenario, ego, driver, step
         self.log = log or (lambda kind, text: None)
         self.states: dict[str, EntityState] = {name: EntityState() for name in scenario.entities}
+        #: entity -> its object type for a CollisionCondition ByType: vehicle, pedestrian, miscellaneous
+        self.kinds = {
+            name: {"miscObject": "miscellaneous"}.get(ent.vehicle.kind, ent.vehicle.kind)
+            for name, ent in scenario.entities.items()
+        }
         for name, ent in scenario.entities.items():
             self.states[name].length, self.states[name].width = ent.vehicle.length, ent.vehicle.width
         self.conditions: dict[int, ConditionState] = {}
@@ -245,6 +269,9 @@ class Storyboard:
             return compare(c.rule, e.speed - st[c.entity].speed, c.value)  # type: ignore[index, arg-type]
         if kind == "TraveledDistanceCondition":
             return e.traveled >= c.value - EPS  # type: ignore[operator]
+        if kind == "CollisionCondition":
+            others = [c.entity] if c.entity is not None else [n for n in self.kinds if self.kinds[n] == c.value]
+            return any(o != name and boxes_overlap(e, st[o]) for o in others)
         if kind == "StandStillCondition":
             return e.still_for >= c.value - EPS  # type: ignore[operator]
         if kind == "AccelerationCondition":

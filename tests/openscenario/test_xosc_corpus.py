@@ -651,10 +651,10 @@ def _sg_cases():
             "bad value for duration in <StandStillCondition>: -1 (expected >= 0)",
         ),
         (
-            "sg-collision",
-            lambda: base(entity_trigger(xosc.CollisionCondition("Lead"))),
-            "<CollisionCondition",
-            un("CollisionCondition"),
+            "sg-collision-unknown",
+            lambda: base(entity_trigger(xosc.CollisionCondition("Truck"))),
+            'entityRef="Truck"',
+            "unknown entity 'Truck' in <EntityRef> (entities: Ego, Lead)",
         ),
         (
             "sg-end-of-road",

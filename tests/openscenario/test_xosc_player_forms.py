@@ -6,6 +6,7 @@ turned against its lane). Each file here is hand-written for the test."""
 
 from __future__ import annotations
 
+import math
 import subprocess
 import sys
 
@@ -400,3 +401,40 @@ def test_a_maneuver_from_a_maneuver_catalog(tmp_path):
     path = _catalog_scene(tmp_path, '<ParameterAssignment parameterRef="Nope" value="12"/>')
     with pytest.raises(ScenarioFileError, match=r"catalog entry 'Brake' declares no parameter 'Nope'"):
         load(path)
+
+
+def test_boxes_overlap_is_the_oriented_rectangles_test():
+    from ego.openscenario.runtime import EntityState, boxes_overlap
+
+    a = EntityState(x=0.0, y=0.0, yaw=0.0, length=4.0, width=2.0)
+    assert boxes_overlap(a, EntityState(x=3.9, y=0.0, length=4.0, width=2.0))
+    assert not boxes_overlap(a, EntityState(x=4.1, y=0.0, length=4.0, width=2.0))
+    assert not boxes_overlap(a, EntityState(x=0.0, y=2.05, length=4.0, width=2.0))
+    # turned 45 degrees: its corner reaches (2 + 1) cos 45 = 2.121 m along x, so they touch
+    # while its centre is within 2 + 2.121 = 4.121 m
+    assert boxes_overlap(a, EntityState(x=4.1, y=0.0, yaw=math.pi / 4, length=4.0, width=2.0))
+    assert not boxes_overlap(a, EntityState(x=4.15, y=0.0, yaw=math.pi / 4, length=4.0, width=2.0))
+
+
+@pytest.mark.sumo
+def test_collision_condition_fires_when_the_boxes_touch(tmp_path):
+    """C drives beside B (lane -3 and -2, both 15 m/s) and changes into B's lane over 1 s from
+    1 s (a scripted move, blind to B): the CollisionCondition of C with B fires once their boxes
+    touch (C 1.8 m wide, the lanes 3.5 m apart: half way across, 1.3-1.9 s), ByType vehicle at
+    the same step, ByType pedestrian never."""
+    coll = (
+        '<Condition name="k" delay="0" conditionEdge="none"><ByEntityCondition><TriggeringEntities '
+        'triggeringEntitiesRule="any"><EntityRef entityRef="C"/></TriggeringEntities><EntityCondition>'
+        "<CollisionCondition>{}</CollisionCondition></EntityCondition></ByEntityCondition></Condition>"
+    )
+    evs = [
+        event("Move", "C", lane_change(-2, "linear", "time", 1.0), trigger([sim_time(0.95)])),
+        event("Hit", "A", speed(20), trigger([coll.format('<EntityRef entityRef="B"/>')])),
+        event("Any", "A", speed(21), trigger([coll.format('<ByType objectType="vehicle"/>')])),
+        event("Walker", "A", speed(22), trigger([coll.format('<ByType objectType="pedestrian"/>')])),
+    ]
+    sc = run_scene(scene(tmp_path, evs, at={"C": (-3, 200.0, 15.0)}), 2.5)
+    hit = starts(sc, "Hit")
+    assert len(hit) == 1 and 1.3 <= hit[0] <= 1.9
+    assert starts(sc, "Any") == starts(sc, "Hit")
+    assert starts(sc, "Walker") == []
