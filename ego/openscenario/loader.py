@@ -143,7 +143,9 @@ CHILDREN: dict[str, set[str]] = {
     "RelativeLanePosition": {"Orientation"},
     "RelativeRoadPosition": {"Orientation"},
     "Orientation": set(),
-    "LongitudinalAction": {"SpeedAction", "LongitudinalDistanceAction"},
+    "LongitudinalAction": {"SpeedAction", "LongitudinalDistanceAction", "SpeedProfileAction"},
+    "SpeedProfileAction": {"DynamicConstraints", "SpeedProfileEntry"},
+    "SpeedProfileEntry": set(),
     "LongitudinalDistanceAction": {"DynamicConstraints"},
     "DynamicConstraints": set(),
     "SpeedAction": {"SpeedActionDynamics", "SpeedActionTarget"},
@@ -835,6 +837,8 @@ class _Builder:
         if a.tag == "SynchronizeAction":
             return self.synchronize(a)
         inner = self.one(a)
+        if inner.tag == "SpeedProfileAction":
+            return self.speed_profile(inner)
         if inner.tag == "LongitudinalDistanceAction":
             return self.distance_action(inner)
         if inner.tag == "SpeedAction":
@@ -890,6 +894,22 @@ class _Builder:
         finally:
             self.values = outer_values
         return self.follow_trajectory(inner, vertices, poly)
+
+    def speed_profile(self, n: Node) -> M.SpeedProfileAction:
+        entries = []
+        for e in n.all("SpeedProfileEntry"):
+            time = self.num(e, "time", nonneg=True, at_most=DYNAMICS_LIMITS["time"]) if "time" in e.attrs else None
+            entries.append((self.num(e, "speed"), time))
+        if not entries:
+            raise self.error(n, "<SpeedProfileAction> needs at least one <SpeedProfileEntry>")
+        limits: dict[str, float] = {}
+        dc = n.child("DynamicConstraints")
+        for attr, key in (("maxAcceleration", "max_accel"), ("maxDeceleration", "max_decel")):
+            if dc is not None and attr in dc.attrs:
+                limits[key] = self.num(dc, attr, positive=True)
+        rel = self.entity_ref(n) if "entityRef" in n.attrs else None
+        mode = self.enum(n, "followingMode", ("position", "follow"))
+        return M.SpeedProfileAction(tuple(entries), rel, mode, line=n.line, **limits)
 
     def synchronize(self, a: Node) -> M.SynchronizeAction:
         final, kind = None, "absolute"

@@ -202,6 +202,20 @@ class ControllerAction:
 
 
 @dataclass(frozen=True)
+class SpeedProfileAction:
+    """OpenSCENARIO 1.2: the speed goes linearly through ``entries`` (speed m/s, time s to
+    reach it: None or 0 at the acceleration limit, a step without one), relative to
+    ``relative_to``'s speed at the start when given; ``follow`` mode keeps the limits."""
+
+    entries: tuple[tuple[float, float | None], ...]
+    relative_to: str | None = None
+    mode: str = "follow"
+    max_accel: float = math.inf
+    max_decel: float = math.inf
+    line: int = 0
+
+
+@dataclass(frozen=True)
 class SynchronizeAction:
     """Reach ``target`` when the master entity reaches ``master_target`` (both along the road),
     with a final speed: absolute, or the master's speed plus a delta or times a factor (at
@@ -249,6 +263,7 @@ PrivateAction = (
     | EnvironmentAction
     | ParameterAction
     | SynchronizeAction
+    | SpeedProfileAction
 )
 
 

@@ -21,6 +21,8 @@ from collections import deque
 from dataclasses import dataclass
 from typing import Protocol
 
+import numpy as np
+
 from ego.openscenario import model as M
 from ego.openscenario.dynamics import (
     Transition,
@@ -109,6 +111,25 @@ def box_point_distance(e: EntityState, x: float, y: float) -> float:
     dx, dy = x - e.x, y - e.y
     lx, ly = abs(c * dx + s * dy), abs(-s * dx + c * dy)
     return math.hypot(max(lx - 0.5 * e.length, 0.0), max(ly - 0.5 * e.width, 0.0))
+
+
+def speed_profile_knots(a: M.SpeedProfileAction, t0: float, v0: float, ref: float) -> tuple[list[float], list[float]]:
+    """The (times, speeds) a SpeedProfileAction's speed goes through linearly from (t0, v0):
+    each entry's speed (plus ``ref``, the entity's speed, when relative) reached in its time;
+    no time (or 0) at the acceleration or deceleration limit (a step without one); in follow
+    mode no faster than the limits."""
+    ts, vs = [t0], [v0]
+    for speed, time in a.entries:
+        target = max(speed + ref, 0.0)
+        dv = target - vs[-1]
+        limit = a.max_accel if dv > 0 else a.max_decel
+        least = abs(dv) / limit if math.isfinite(limit) else 0.0
+        dur = time if time else least
+        if a.mode == "follow":
+            dur = max(dur, least)
+        ts.append(ts[-1] + dur)
+        vs.append(target)
+    return ts, vs
 
 
 def boxes_overlap(a: EntityState, b: EntityState) -> bool:
@@ -533,7 +554,7 @@ class ActionRun:
         self.board, self.element, self.actor, self.action = board, element, actor, action
         self.finished = False
         self.profile: Transition | None = None
-        if isinstance(action, (M.SpeedAction, M.LongitudinalDistanceAction, M.SynchronizeAction)):
+        if isinstance(action, (M.SpeedAction, M.LongitudinalDistanceAction, M.SynchronizeAction, M.SpeedProfileAction)):
             self.domains: tuple[str, ...] = ("long",)
         elif isinstance(action, (M.LaneChangeAction, M.LaneOffsetAction)):
             self.domains = ("lat",)
@@ -606,6 +627,9 @@ class ActionRun:
             return
         elif isinstance(a, (M.LongitudinalDistanceAction, M.SynchronizeAction)):
             return  # commanded step by step (:meth:`_keep_distance`, :meth:`_synchronize`)
+        elif isinstance(a, M.SpeedProfileAction):
+            self.knots = speed_profile_knots(a, t, me.speed, b.states[a.relative_to].speed if a.relative_to else 0.0)
+            return
         elif isinstance(a, M.TeleportAction):
             x, y, h = drv.position_xy(a.position, b.states)
             drv.teleport(self.actor, x, y, h)
@@ -761,6 +785,13 @@ class ActionRun:
             self._keep_distance(a, t)
         elif isinstance(a, M.SynchronizeAction):
             self._synchronize(a)
+        elif isinstance(a, M.SpeedProfileAction):
+            ts, vs = self.knots
+            t1 = t + h
+            v = vs[-1] if t1 >= ts[-1] else float(np.interp(t1, ts, vs))
+            drv.speed(self.actor, max(v, 0.0), INF)
+            if t1 >= ts[-1] - EPS:
+                self.finished = True
         elif isinstance(a, M.FollowTrajectoryAction):
             x, y, heading, speed, end = self._trajectory_point(t + h)
             drv.place(self.actor, x, y, heading, speed)

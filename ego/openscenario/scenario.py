@@ -815,6 +815,7 @@ def _check_ego_actions(model: M.Scenario, ego: str) -> None:
                                     M.FollowTrajectoryAction,
                                     M.LongitudinalDistanceAction,
                                     M.SynchronizeAction,
+                                    M.SpeedProfileAction,
                                 ),
                             ):
                                 raise ScenarioFileError(

@@ -438,3 +438,47 @@ def test_collision_condition_fires_when_the_boxes_touch(tmp_path):
     assert len(hit) == 1 and 1.3 <= hit[0] <= 1.9
     assert starts(sc, "Any") == starts(sc, "Hit")
     assert starts(sc, "Walker") == []
+
+
+def _profile(mode: str, entries: str, limits: str = "") -> str:
+    dc = f"<DynamicConstraints {limits}/>" if limits else ""
+    return (
+        f'<LongitudinalAction><SpeedProfileAction followingMode="{mode}">{dc}{entries}</SpeedProfileAction>'
+        "</LongitudinalAction>"
+    )
+
+
+def test_speed_profile_knots():
+    from ego.openscenario.runtime import speed_profile_knots
+
+    entries = ((10.0, 4.0), (4.0, 4.0), (8.0, None))
+    a = M.SpeedProfileAction(entries, None, "position", max_accel=2.0, max_decel=3.0)
+    assert speed_profile_knots(a, 1.0, 0.0, 0.0) == ([1.0, 5.0, 9.0, 11.0], [0.0, 10.0, 4.0, 8.0])
+    # follow: no faster than the limits (10 m/s in 4 s is 2.5 m/s^2 > 2: 5 s)
+    a = M.SpeedProfileAction(entries, None, "follow", max_accel=2.0, max_decel=3.0)
+    assert speed_profile_knots(a, 1.0, 0.0, 0.0) == ([1.0, 6.0, 10.0, 12.0], [0.0, 10.0, 4.0, 8.0])
+    # relative to an entity driving 5 m/s; no limits: an entry without time is a step
+    a = M.SpeedProfileAction(((1.0, None),), "B", "position")
+    assert speed_profile_knots(a, 0.0, 3.0, 5.0) == ([0.0, 0.0], [3.0, 6.0])
+
+
+@pytest.mark.sumo
+def test_speed_profile_is_followed_step_by_step(tmp_path):
+    """B (15 m/s) goes to 25 m/s in 2 s, then to 5 m/s in 4 s, from 1 s: its speed is the
+    piecewise-linear profile within 1e-6 at every step."""
+    entries = '<SpeedProfileEntry speed="25" time="2"/><SpeedProfileEntry speed="5" time="4"/>'
+    ev = event("P", "B", _profile("position", entries), trigger([sim_time(0.95)]))
+    sc = run_scene(scene(tmp_path, [ev]), 8.0)
+    import numpy as np
+
+    for t, v, _ in sc._history["B"]:
+        want = float(np.interp(t, [1.0, 3.0, 7.0], [15.0, 25.0, 5.0]))
+        assert v == pytest.approx(want, abs=1e-6), t
+
+
+def test_a_speed_profile_on_the_ego_is_refused(tmp_path, capsys):
+    from ego.cli import main
+
+    ev = event("P", "Ego", _profile("position", '<SpeedProfileEntry speed="25" time="2"/>'), trigger([sim_time(1)]))
+    assert main(["run", str(scene(tmp_path, [ev])), "-c", "pid"]) == 2
+    assert "<SpeedProfileAction> on the ego (Ego) is not supported" in capsys.readouterr().err
