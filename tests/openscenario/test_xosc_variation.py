@@ -3,6 +3,7 @@ the template's value constraints applied before running, --sample, a real sweep 
 
 from __future__ import annotations
 
+import json
 import shutil
 from pathlib import Path
 
@@ -263,3 +264,20 @@ def test_falsify_runs_over_a_distribution_file(files, capsys):
     rows = pd.read_parquet(out / "results.parquet")
     assert len(rows) == 2
     assert rows["LeadGap"].between(12, 40).all() and rows["LeadDecel"].between(2, 6).all()
+
+
+def test_list_describes_a_distribution_file(files, capsys):
+    path = write(
+        files,
+        f"<Deterministic>{single('LeadGap', step(10, 20, 5))}{single('LeadDecel', elements(2, 4))}</Deterministic>",
+    )
+    assert main(["list", path]) == 0
+    out = capsys.readouterr().out
+    assert "a ParameterValueDistribution of" in out and "combinations  6 (0 outside" in out
+    assert f"ego sweep {path} --out DIR -c CONTROLLER" in out
+    assert main(["list", path, "--json"]) == 0
+    listing = json.loads(capsys.readouterr().out)
+    assert (listing["parameters"], listing["combinations"]) == (["LeadGap", "LeadDecel"], 6)
+    bad = write(files, f"<Deterministic>{single('Nope', elements(1, 2))}</Deterministic>", name="bad.xosc")
+    assert main(["list", bad]) == 2
+    assert "unknown parameter 'Nope'" in capsys.readouterr().err
