@@ -21,6 +21,16 @@ from ego.openscenario import model as M
 from ego.openscenario.expressions import ExpressionError, resolve
 from ego.openscenario.xmltree import DOCS, Node, ScenarioFileError, parse_file
 
+#: the position elements ego reads (the children of a Position and its kind)
+POSITIONS = {
+    "WorldPosition",
+    "LanePosition",
+    "RoadPosition",
+    "RelativeLanePosition",
+    "RelativeRoadPosition",
+    "RelativeObjectPosition",
+}
+
 #: what each supported element may contain (tag -> allowed child tags); a child outside
 #: its set is refused as not supported
 CHILDREN: dict[str, set[str]] = {
@@ -125,23 +135,18 @@ CHILDREN: dict[str, set[str]] = {
     "AssignControllerAction": {"Controller", "CatalogReference"},
     "TeleportAction": {"Position"},
     "SynchronizeAction": {"TargetPositionMaster", "TargetPosition", "FinalSpeed"},
-    "TargetPositionMaster": {
-        "WorldPosition",
-        "LanePosition",
-        "RoadPosition",
-        "RelativeLanePosition",
-        "RelativeRoadPosition",
-    },
-    "TargetPosition": {"WorldPosition", "LanePosition", "RoadPosition", "RelativeLanePosition", "RelativeRoadPosition"},
+    "TargetPositionMaster": POSITIONS,
+    "TargetPosition": POSITIONS,
     "FinalSpeed": {"AbsoluteSpeed", "RelativeSpeedToMaster"},
     "AbsoluteSpeed": set(),
     "RelativeSpeedToMaster": set(),
-    "Position": {"WorldPosition", "LanePosition", "RoadPosition", "RelativeLanePosition", "RelativeRoadPosition"},
+    "Position": POSITIONS,
     "WorldPosition": set(),
     "LanePosition": {"Orientation"},
     "RoadPosition": {"Orientation"},
     "RelativeLanePosition": {"Orientation"},
     "RelativeRoadPosition": {"Orientation"},
+    "RelativeObjectPosition": {"Orientation"},
     "Orientation": set(),
     "LongitudinalAction": {"SpeedAction", "LongitudinalDistanceAction", "SpeedProfileAction"},
     "SpeedProfileAction": {"DynamicConstraints", "SpeedProfileEntry"},
@@ -802,6 +807,8 @@ class _Builder:
             return M.RelativeLanePosition(
                 self.entity_ref(p), self.int_(p, "dLane"), self.num(p, "ds", 0.0), self.num(p, "offset", 0.0), p.line
             )
+        if tag == "RelativeObjectPosition":
+            return M.RelativeObjectPosition(self.entity_ref(p), self.num(p, "dx"), self.num(p, "dy", 0.0), p.line)
         return M.RelativeRoadPosition(self.entity_ref(p), self.num(p, "ds"), self.num(p, "dt"), p.line)
 
     # -- actions ------------------------------------------------------------------------------

@@ -89,7 +89,19 @@ class RelativeRoadPosition:
     line: int
 
 
-Position = WorldPosition | LanePosition | RoadPosition | RelativeLanePosition | RelativeRoadPosition
+@dataclass(frozen=True)
+class RelativeObjectPosition:
+    """``dx`` ahead of and ``dy`` left of the entity's reference point, in its own frame."""
+
+    entity: str
+    dx: float
+    dy: float
+    line: int
+
+
+Position = (
+    WorldPosition | LanePosition | RoadPosition | RelativeLanePosition | RelativeRoadPosition | RelativeObjectPosition
+)
 
 
 # --- entities --------------------------------------------------------------------------------

@@ -482,3 +482,35 @@ def test_a_speed_profile_on_the_ego_is_refused(tmp_path, capsys):
     ev = event("P", "Ego", _profile("position", '<SpeedProfileEntry speed="25" time="2"/>'), trigger([sim_time(1)]))
     assert main(["run", str(scene(tmp_path, [ev])), "-c", "pid"]) == 2
     assert "<SpeedProfileAction> on the ego (Ego) is not supported" in capsys.readouterr().err
+
+
+@pytest.mark.sumo
+def test_relative_object_positions(tmp_path, monkeypatch):
+    """A starts 30 m behind C and 3.5 m to its left (RelativeObjectPosition in Init: C's lane
+    -3 is straight, so lane -2); at 1 s B is teleported 20 m ahead of C in C's own frame."""
+    from ego.openscenario import runtime
+
+    seen: dict[float, dict[str, tuple[float, float]]] = {}
+    orig = runtime.Storyboard._kinematics
+
+    def record(self, t):
+        orig(self, t)
+        seen[round(t, 3)] = {n: (e.s, e.d) for n, e in self.states.items()}
+
+    monkeypatch.setattr(runtime.Storyboard, "_kinematics", record)
+    to = '<TeleportAction><Position><RelativeObjectPosition entityRef="C" dx="20" dy="0"/></Position></TeleportAction>'
+    path = scene(tmp_path, [event("Jump", "B", to, trigger([sim_time(0.95)]))])
+    _edit(
+        path,
+        '<LanePosition roadId="0" laneId="-1" s="100.0" offset="0"/>',
+        '<RelativeObjectPosition entityRef="C" dx="-30" dy="3.5"/>',
+    )
+    run_scene(path, 1.5)
+    a, c = seen[0.0]["A"], seen[0.0]["C"]
+    assert a[0] == pytest.approx(c[0] - 30.0, abs=1e-3) and a[1] == pytest.approx(c[1] + 3.5, abs=1e-3)
+    b, c = seen[1.1]["B"], seen[1.1]["C"]
+    assert b[1] == pytest.approx(c[1], abs=1e-3)
+    # the teleport (started at 1.0) puts B 20 m ahead of where C was at 1.0, at 1.1 (as every
+    # TeleportAction: the position is read from the states at the step it starts), while C
+    # drove on 1.5 m in that step
+    assert b[0] - c[0] == pytest.approx(20.0 - 1.5, abs=0.05)
