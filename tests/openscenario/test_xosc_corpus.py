@@ -682,6 +682,31 @@ def _sg_cases():
             f"model (see {DOCS})",
         ),
         (
+            "sg-synchronize-on-ego",
+            lambda: base(
+                action=xosc.SynchronizeAction(
+                    "Lead", xosc.LanePosition(300, 0, -2, "0"), xosc.LanePosition(250, 0, -1, "0")
+                ),
+                actor="Ego",
+            ),
+            "<SynchronizeAction",
+            "<SynchronizeAction> on the ego (Ego) is not supported by ego: the ego moves by its own "
+            f"model (see {DOCS})",
+        ),
+        (
+            "sg-speed-profile-on-ego",
+            lambda: base(action=xosc.SpeedProfileAction([20, 10], xosc.FollowingMode.position, [2, 2]), actor="Ego"),
+            "<SpeedProfileAction",
+            "<SpeedProfileAction> on the ego (Ego) is not supported by ego: the ego moves by its own "
+            f"model (see {DOCS})",
+        ),
+        (
+            "sg-variable-undeclared",
+            lambda: base(action=xosc.VariableAddAction("Nope", 1)),
+            "<VariableAction",
+            "variable 'Nope' is not declared (declared: none)",
+        ),
+        (
             "sg-visibility",
             lambda: base(action=xosc.VisibilityAction(True, True, True)),
             "<VisibilityAction",
