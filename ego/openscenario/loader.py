@@ -780,7 +780,7 @@ class _Builder:
         p = self.one(node)
         tag = p.tag
         o = p.child("Orientation")
-        if o is not None and self.enum(o, "type", ("relative", "absolute"), "relative") == "relative":
+        if o is not None and self.enum(o, "type", ("relative", "absolute"), "absolute") == "relative":
             h = self.num(o, "h", 0.0)
             if math.cos(h) < 0.0:  # turned more than 90 degrees from its lane's direction
                 raise self.error(
