@@ -509,9 +509,10 @@ class _Parser:
         return tok, self.units[tok] or "-"
 
     def unit_suffix(self) -> str | None:
-        """The unit written after a number (tokens up to the longest known unit), or None."""
+        """The unit written after a number (tokens up to the longest known unit), or None. A
+        dimensionless number is written bare: ``-`` after a number is a minus (``100 - speed``)."""
         for unit in sorted(
-            set(KNOWN_UNITS) | {u for u in self.units.values() if u and u != BOOL},
+            (set(KNOWN_UNITS) | {u for u in self.units.values() if u and u != BOOL}) - {"-"},
             key=len,
             reverse=True,
         ):

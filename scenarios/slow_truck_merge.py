@@ -11,7 +11,7 @@ What the kit gives (see docs/architecture.md, "Writing a scenario from the kit")
   vehicles' outlines), the manoeuvre state machine (TTC trigger, gap acceptance, lane change
   or in-lane manoeuvre) and the safety layer (AEB); ``METRICS`` and ``evasive_metrics``, all
   declared with units;
-* scripted actors (``ego.sumo.traffic``): ``PacedVehicle`` holds a speed, ``CutInVehicle``
+* scripted actors (``ego.sim.traffic``): ``PacedVehicle`` holds a speed, ``CutInVehicle``
   overtakes and merges, ``BrakingLeader`` brakes, ``RecklessFollower`` never brakes;
   ``VehicleType`` and ``VehicleSpec`` (``ego.sim``) put them on the road;
 * ``RerunRecorder``: the recording with its layout (``rerun FILE.rrd`` to review it).
@@ -34,7 +34,7 @@ from ego.scenarios.base import Scenario
 from ego.scenarios.evasive import METRICS, EvasiveConfig, compose, evasive_metrics
 from ego.scenarios.motorway import COLUMNS, EDGE, PLOTS, ROUTE
 from ego.sim import VehicleSpec, VehicleType
-from ego.sumo.traffic import CutInVehicle, PacedVehicle
+from ego.sim.traffic import CutInVehicle, PacedVehicle
 
 TRUCK = VehicleType("truck", length=12.0, width=2.5, sigma=0.0, accel=1.0, decel=4.0, color=(120, 90, 60))
 MERGER = VehicleType(

@@ -4,8 +4,11 @@ per tracking controller (default parameters, seed 0, real SUMO).
     python scripts/curved_manoeuvres.py
     python scripts/curved_manoeuvres.py --scenarios cut-in --roads straight left-250 --controllers pid
 
-Prints per scenario, road and controller: status, collision, lane change duration (s), max
-overshoot (m), min front gap (m, along the lane) and min front TTC (s), max lane departure (m).
+Prints per scenario a markdown table, a row per road and controller, with the cells of
+docs/results/curved-roads.md (``ego.docs.curved.manoeuvre_cells``): status, collision, the
+lane change's duration (s) and overshoot (m) or the cut-in's response and largest
+deceleration (m/s^2), min front gap (m, along the lane), min front TTC (s), max lane
+departure (m).
 """
 
 from __future__ import annotations
@@ -19,24 +22,19 @@ CONTROLLERS = ("pid", "fuzzy", "fuzzy-pid", "bp-pid", "rbf-smc")
 SCENARIOS = ("emergency-brake", "cut-in")
 
 
-def _fmt(value, digits: int = 2) -> str:
-    return "-" if value is None else (f"{value:.{digits}f}" if isinstance(value, float) else str(value))
-
-
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], epilog=__doc__.split("\n\n", 1)[1])
     ap.add_argument("--scenarios", nargs="+", default=list(SCENARIOS), choices=SCENARIOS)
     ap.add_argument("--roads", nargs="+", default=list(MOTORWAY_ROADS), choices=list(MOTORWAY_ROADS))
     ap.add_argument("--controllers", nargs="+", default=list(CONTROLLERS))
     args = ap.parse_args(argv)
+    from ego.docs.curved import ALONG_THE_LANE, MANOEUVRE_HEADER, manoeuvre_cells
     from ego.params import ConfigError
     from ego.runner import RunSpec, run
 
-    print(
-        "| scenario | road | controller | status | collision | lane change (s) | overshoot (m) | min gap (m) | min TTC (s) | departure (m) |"
-    )
-    print("|---|---|---|---|---|---|---|---|---|---|")
     for scenario in args.scenarios:
+        header = ("road", "controller", *MANOEUVRE_HEADER[scenario], *ALONG_THE_LANE)
+        print(f"\n{scenario}\n\n| " + " | ".join(header) + " |\n|" + "---|" * len(header))
         for road in args.roads:
             for name in args.controllers:
                 try:
@@ -44,17 +42,8 @@ def main(argv: list[str] | None = None) -> int:
                 except ConfigError as exc:
                     print(f"curved_manoeuvres.py: error: {exc}", file=sys.stderr)
                     return 2
-                m = r.metrics
-                cells = (
-                    r.status,
-                    m.get("collision"),
-                    _fmt(m.get("lane_change_duration")),
-                    _fmt(m.get("max_overshoot"), 3),
-                    _fmt(m.get("min_gap_front")),
-                    _fmt(m.get("min_ttc_front")),
-                    _fmt(m.get("max_lane_departure"), 3),
-                )
-                print(f"| {scenario} | {road} | {name} | " + " | ".join(map(str, cells)) + " |", flush=True)
+                cells = manoeuvre_cells(scenario, {"status": r.status, **r.metrics})
+                print(f"| {road} | {name} | " + " | ".join(cells) + " |", flush=True)
     return 0
 
 

@@ -12,6 +12,13 @@ ego (its front at ego_start = 300 m by default) is in the arc for the whole of a
 and the exit straight never comes near the lead-in. The arc is written as shape points
 every ~SEGMENT m, so the chords stay within R (1 - cos(SEGMENT / 2R)) (8 mm at R 250 m) of
 the circle; the lane frame measures to the arc each chord stands for.
+
+``road=clothoid`` is the road of changing curvature (UN R157's reference roads: straight, arcs
+of 250 m and 1000 m, a road whose curvature changes): after the LEAD_IN straight, the middle
+lane's curvature changes linearly along clothoids (Euler spirals) between constant arcs -
+left R 500 m, through an inflection to right R 250 m, back through one to left R 1000 m and
+out to straight (:data:`CLOTHOID`). Its shape points are exact points of that curve, every
+~SEGMENT m, from the Fresnel integrals (:func:`clothoid_points`).
 """
 
 from __future__ import annotations
@@ -33,6 +40,72 @@ ARCS = {
     "left-1000": ("highway_left_1000", 1000.0, 90.0, 1),
     "right-1000": ("highway_right_1000", 1000.0, 90.0, -1),
 }
+
+
+#: the road of changing curvature: (length m, curvature at its start 1/m, at its end 1/m, + left)
+#: of each piece after the LEAD_IN straight; a clothoid where the two differ (curvature linear in
+#: arc length), an arc where they agree; straight after the last piece to LENGTH.
+CLOTHOID = (
+    (100.0, 0.0, 1 / 500),  # clothoid into the left R 500 m arc (A = 224 m)
+    (150.0, 1 / 500, 1 / 500),  # left arc R 500 m
+    (150.0, 1 / 500, -1 / 250),  # clothoid through the inflection (A = 158 m)
+    (150.0, -1 / 250, -1 / 250),  # right arc R 250 m
+    (150.0, -1 / 250, 1 / 1000),  # clothoid through the second inflection (A = 173 m)
+    (300.0, 1 / 1000, 1 / 1000),  # left arc R 1000 m
+    (100.0, 1 / 1000, 0.0),  # clothoid out to the straight (A = 316 m)
+)
+#: the road of changing curvature's network
+CLOTHOID_NET = "highway_clothoid"
+
+
+def clothoid_points(
+    x: float, y: float, heading: float, length: float, k0: float, k1: float
+) -> list[tuple[float, float, float]]:
+    """Points (x, y, heading) every ~SEGMENT m along a piece of ``length`` m starting at (x, y)
+    with ``heading`` (rad) whose curvature runs linearly from ``k0`` to ``k1`` (1/m): exact,
+    from the Fresnel integrals (scipy.special.fresnel) for a clothoid, from the circle for an
+    arc, the line for a straight; the first point is the start."""
+    import numpy as np
+    from scipy.special import fresnel
+
+    n = max(1, math.ceil(length / SEGMENT))
+    s = np.linspace(0.0, length, n + 1)
+    c = (k1 - k0) / length  # curvature's rate of change, 1/m^2
+    theta = heading + k0 * s + 0.5 * c * s * s
+    if abs(c) > 1e-15:
+        # theta(s) = theta_m + (c / 2) (s + k0 / c)^2 with theta_m = heading - k0^2 / (2c); with
+        # u = sqrt(|c| / pi) (s + k0 / c): cos/sin(theta) = cos/sin(theta_m + sign(c) pi u^2 / 2),
+        # and int_0^u cos(pi t^2 / 2) dt = C(u), int_0^u sin(pi t^2 / 2) dt = S(u)
+        sign = 1.0 if c > 0 else -1.0
+        scale = math.sqrt(math.pi / abs(c))
+        theta_m = heading - k0 * k0 / (2.0 * c)
+        u = (s + k0 / c) / scale
+        fs, fc = fresnel(u)
+        fs0, fc0 = fresnel(u[0])
+        dc, ds_ = fc - fc0, sign * (fs - fs0)
+        px = x + scale * (math.cos(theta_m) * dc - math.sin(theta_m) * ds_)
+        py = y + scale * (math.sin(theta_m) * dc + math.cos(theta_m) * ds_)
+    elif abs(k0) > 1e-15:  # an arc of radius 1 / k0 (+ left)
+        px = x + (np.sin(theta) - math.sin(heading)) / k0
+        py = y - (np.cos(theta) - math.cos(heading)) / k0
+    else:
+        px = x + s * math.cos(heading)
+        py = y + s * math.sin(heading)
+    return list(zip(px.tolist(), py.tolist(), theta.tolist()))
+
+
+def clothoid_line(pieces=CLOTHOID) -> list[tuple[float, float]]:
+    """The road of changing curvature's middle-lane centre line: lead-in, ``pieces``, exit."""
+    pts = [(0.0, 0.0)]
+    x, y, heading = LEAD_IN, 0.0, 0.0
+    for length, k0, k1 in pieces:
+        piece = clothoid_points(x, y, heading, length, k0, k1)
+        pts += [(px, py) for px, py, _ in piece]
+        x, y, heading = piece[-1]
+    exit_ = LENGTH - LEAD_IN - sum(p[0] for p in pieces)
+    pts.append((x + exit_ * math.cos(heading), y + exit_ * math.sin(heading)))
+    # drop the repeated joins (a piece starts where the last one ended)
+    return [p for i, p in enumerate(pts) if i == 0 or math.dist(p, pts[i - 1]) > 1e-9]
 
 
 def centre_line(radius: float, turn_deg: float, side: int) -> list[tuple[float, float]]:
@@ -79,16 +152,31 @@ CONFIG = """<?xml version="1.0" encoding="UTF-8"?>
 """
 
 
+def _describe(pieces) -> str:
+    def radius(k: float) -> str:
+        return "straight" if k == 0 else f"{'left' if k > 0 else 'right'} R {1 / abs(k):g} m"
+
+    return ", ".join(
+        f"{length:g} m arc {radius(k0)}" if k0 == k1 else f"{length:g} m clothoid {radius(k0)} -> {radius(k1)}"
+        for length, k0, k1 in pieces
+    )
+
+
 def write_sources(road: str, out: Path = HERE) -> Path:
-    """The sources of ``road`` (a key of ARCS) in ``out/<network>/``; returns the folder."""
-    name, radius, turn, side = ARCS[road]
+    """The sources of ``road`` (a key of ARCS, or ``clothoid``) in ``out/<network>/``; returns
+    the folder."""
+    if road == "clothoid":
+        name, pts = CLOTHOID_NET, clothoid_line()
+        shape_note = f"then {_describe(CLOTHOID)} (curvature linear along each clothoid; Fresnel integrals)"
+    else:
+        name, radius, turn, side = ARCS[road]
+        pts = centre_line(radius, turn, side)
+        shape_note = f"a {'left' if side > 0 else 'right'} {turn:g}-degree arc of the middle lane's radius {radius:g} m"
     folder = out / name
     folder.mkdir(parents=True, exist_ok=True)
-    pts = centre_line(radius, turn, side)
     note = (
         f"<!-- Generated by sumo_nets/motorway_arcs.py (road={road}): {LEAD_IN:g} m straight along +x, "
-        f"a {'left' if side > 0 else 'right'} {turn:g}-degree arc of the middle lane's radius {radius:g} m, "
-        f"straight to {LENGTH:g} m; three 3.5 m lanes, lane 0 the right lane. -->\n"
+        f"{shape_note}, straight to {LENGTH:g} m; three 3.5 m lanes, lane 0 the right lane. -->\n"
     )
     (folder / f"{name}.nod.xml").write_text(
         HEADER + note + '<nodes xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance" '
@@ -124,6 +212,8 @@ def main() -> None:
     for road, (name, *_) in ARCS.items():
         write_sources(road)
         print(f"{road}: built {build_network(name)}")
+    write_sources("clothoid")
+    print(f"clothoid: built {build_network(CLOTHOID_NET)}")
 
 
 if __name__ == "__main__":

@@ -10,7 +10,8 @@ import pytest
 
 _TMP = tempfile.mkdtemp(prefix="ego-tests-")
 atexit.register(shutil.rmtree, _TMP, True)  # each process (pytest, an xdist worker) its own
-for var in ("XDG_CONFIG_HOME", "XDG_DATA_HOME", "MPLCONFIGDIR"):
+# SB3_LOGDIR: stable-baselines3's default logger makes a folder there on every ``learn``
+for var in ("XDG_CONFIG_HOME", "XDG_DATA_HOME", "MPLCONFIGDIR", "SB3_LOGDIR"):
     os.environ.setdefault(var, os.path.join(_TMP, var.lower()))
 os.environ.setdefault("RERUN_ANALYTICS", "false")
 

@@ -34,6 +34,8 @@ ROWS = [
     ("rl-cut-in", "pid"),
     ("xosc-equivalence", "emergency_brake.xosc / emergency-brake, pid"),
     ("falsify-surrogate", "cma"),  # the analytic stand-in: no SUMO, seconds
+    ("curved-lane-keeping", "left-1000, 130 km/h, pid"),
+    ("curved-cut-in", "left-250, pid"),
 ]
 TABLES = {t.name: t for t in docs.tables()}
 

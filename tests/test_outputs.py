@@ -125,3 +125,22 @@ def test_a_finished_row_reaches_the_file_within_the_flush_time_without_another_r
     store.add({"run_id": "b", "scenario": "x", "status": "completed"})
     store.flush()
     assert len(pq.read_table(tmp_path / "results.parquet")) == 2
+
+
+def test_a_column_only_later_rows_of_a_batch_have_is_kept(tmp_path):
+    """collision_preventable exists only in the rows that collided: in a batch whose first
+    row has no such key, pyarrow's from_pylist would drop the column (it did: 7 of 16 verdicts
+    of a 200-run R157 sweep were lost)."""
+    import pyarrow.parquet as pq
+
+    from ego.sweep.results import ResultStore
+
+    store = ResultStore(tmp_path, flush_rows=1000)
+    store.add({"run_id": "a", "scenario": "x", "status": "completed", "collision": False})
+    store.add({"run_id": "b", "scenario": "x", "status": "collision", "collision": True, "collision_preventable": True})
+    store.flush()
+    rows = pq.read_table(tmp_path / "results.parquet").to_pylist()
+    assert [r["collision_preventable"] for r in rows] == [None, True]
+    store.add({"run_id": "c", "scenario": "x", "status": "completed", "collision": False, "later": 1.5})
+    store.flush()
+    assert pq.read_table(tmp_path / "results.parquet").column("later").to_pylist() == [None, None, 1.5]

@@ -100,6 +100,22 @@ def test_robustness_of_always_is_the_smallest_margin_and_the_first_violation_tim
     assert v10.violated_at == pytest.approx(4.09)
 
 
+def test_a_number_minus_a_signal_is_a_difference_not_a_unit():
+    """``-`` is also the dimensionless unit's name in the units table; after a number it is
+    the minus sign (``100 - speed`` was refused as "100 in -" followed by a signal)."""
+    t = np.arange(0.0, 2.0, 0.01)
+    gap = 30.0 - 5.0 * t
+    r = _result(t, gap_front=gap)
+    for formula in (
+        "always (40 - gap_front >= 0)",
+        "always (40 m - gap_front >= 0 m)",
+        "always (40 - 2*gap_front >= -30)",
+    ):
+        v = evaluate(parse(formula, UNITS, "diff"), r, period=0)
+        assert v.unit == "m"
+        assert v.robustness == pytest.approx(10.0)  # the gap starts at its largest, 30 m
+
+
 def test_bounded_eventually_counts_seconds_not_samples():
     t = np.arange(0.0, 10.0, 0.01)
     events = [

@@ -10,6 +10,7 @@
     ego falsify SPEC.toml --out DIR [--engine process|ray] [--jobs N] [--budget N]
                 [--optimizer cma|bo|bo-tpe|random|lhs] [--until first|budget]
     ego report DIR [--out FILE.html] [--force]
+    ego concrete FILE.xosc|DIR --out FILE.xosc [--set key=value ...] [--run RUN_ID] [--force]
     ego list [--json]
     ego train narma-l2 [--seed N] [--samples N] [--epochs N] [--out PATH]
     ego tune lane-centering [--quick] [--workers N] [--seed N] [--drives V[:OFF],...] [--out PATH]
@@ -34,7 +35,7 @@ result); 1 some run ended in ``error`` (ego could not run it); 130 interrupted (
 finished is written); 2 bad input, or ``--out`` held by another ego process.
 docs/reliability.md has the details.
 
-The package holds one module per command (``ego.cli.run``, ``compare``, ``sweep``, ``falsify``, ``report``, ``list``
+The package holds one module per command (``ego.cli.run``, ``compare``, ``sweep``, ``falsify``, ``report``, ``concrete``, ``list``
 as ``catalogue``, ``train``, ``tune``), each with ``command(args) -> exit status``;
 :data:`COMMANDS` maps a command's name to its module and :func:`main` dispatches through it.
 """
@@ -59,6 +60,7 @@ COMMANDS = {
     "tune": "ego.cli.tune",
     "export-fmu": "ego.cli.export_fmu",
     "report": "ego.cli.report",
+    "concrete": "ego.cli.concrete",
 }
 
 

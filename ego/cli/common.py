@@ -85,6 +85,16 @@ def add_require(p: argparse.ArgumentParser, help: str = REQUIRE_HELP) -> None:
     p.add_argument("--require", action="append", default=[], metavar='"NAME: FORMULA"', help=help)
 
 
+def add_preventable(p: argparse.ArgumentParser) -> None:
+    """``--preventable`` of ``ego compare`` and ``ego sweep``."""
+    p.add_argument(
+        "--preventable",
+        action="store_true",
+        help="after every collision also run UN R157's careful driver on the same scenario and "
+        "report collision_preventable (a second run per collision; docs/requirements.md)",
+    )
+
+
 def add_set(p: argparse.ArgumentParser, help: str) -> None:
     """``--set KEY=VALUE``, repeatable, into ``args.overrides``."""
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE", help=help)

@@ -6,7 +6,7 @@ import argparse
 
 from ego import __version__
 from ego.checks import whole_number
-from ego.cli.common import Parser, add_address, add_engine, add_jobs, add_out, add_require, add_set
+from ego.cli.common import Parser, add_address, add_engine, add_jobs, add_out, add_preventable, add_require, add_set
 from ego.sim.registry import backend_names
 
 
@@ -145,12 +145,7 @@ def parser() -> argparse.ArgumentParser:
         help="also write every run's trace to traces/<label>-seed<N>.FORMAT: csv, parquet or mat (see docs/traces.md)",
     )
     add_require(cmp_)
-    cmp_.add_argument(
-        "--preventable",
-        action="store_true",
-        help="after every collision also run UN R157's careful driver on the same scenario and "
-        "report collision_preventable (a second run per collision; docs/requirements.md)",
-    )
+    add_preventable(cmp_)
 
     swp = sub.add_parser(
         "sweep",
@@ -217,12 +212,16 @@ def parser() -> argparse.ArgumentParser:
         "a requirement on top of the spec's [requirements] (or the scenario's defaults); "
         "repeatable, see docs/requirements.md",
     )
+    add_preventable(swp)
     from ego.cli.falsify import add_parser as add_falsify
 
     add_falsify(sub)
     from ego.cli.report import add_parser as add_report
 
     add_report(sub)
+    from ego.cli.concrete import add_parser as add_concrete
+
+    add_concrete(sub)
 
     lst = sub.add_parser(
         "list",

@@ -26,6 +26,10 @@ def command(args: Any) -> int:
         reqs = {**base, **from_options(args.require)}
         sweep_spec.check_requirements(next(spec.runs()), reqs, ConfigError)
         spec = dataclasses.replace(spec, requirements=reqs)
+    if args.preventable:
+        import dataclasses
+
+        spec = dataclasses.replace(spec, preventable=True)
     choice(args.engine, ENGINES, "--engine")
     check_count(args.jobs, "--jobs", 1, MAX_JOBS)
     if args.address is not None and args.engine != "ray":

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
 
-from ego.control.base import Observation, feedforward_param
+from ego.control.base import Observation, feedforward_param, lateral_gain, lateral_speed_param
 from ego.control.fuzzy import INPUT_RANGE, INPUT_SAMPLES, OUTPUT_SAMPLES, TERMS
 from ego.control.fuzzy_engine import FastMamdani, table_rules, table_system
 from ego.control.pid import PID
@@ -107,12 +107,13 @@ class FuzzyPIDParams(Params):
     )
     steer_limit: float = param(0.5, "rad", "|delta| limit", min=0, max=HALF_PI, min_exclusive=True)
     feedforward: bool = feedforward_param()
+    lat_speed: float = lateral_speed_param()
 
 
 class _Channel:
     """One PID whose gains the rule base re-schedules every step."""
 
-    __slots__ = ("pid", "scales", "adapt", "ke", "kec", "dk", "_rules")
+    __slots__ = ("pid", "scales", "adapt", "ke", "kec", "dk", "_rules", "gain")
 
     def __init__(
         self,
@@ -131,6 +132,7 @@ class _Channel:
         self.pid = PID(*scales, dt, -limit, limit, tau_d)
         self.dk = (0.0, 0.0, 0.0)
         self._rules = rules
+        self.gain = 1.0  #: a factor on the three scales (the lateral channel's speed schedule)
 
     def step(self, e: float, de: float) -> float:
         x0, x1 = self.ke * e, self.kec * de
@@ -138,6 +140,9 @@ class _Channel:
         a = self.adapt
         pid = self.pid
         kp, ki, kd = self.scales
+        if self.gain != 1.0:
+            g = self.gain
+            kp, ki, kd = kp * g, ki * g, kd * g
         pid.kp = kp * (1.0 + a * dk[0])
         pid.ki = ki * (1.0 + a * dk[1])
         pid.kd = kd * (1.0 + a * dk[2])
@@ -164,6 +169,7 @@ class FuzzyPIDController:
 
     def step(self, obs: Observation) -> tuple[float, float]:
         fx = self.lon.step(obs.s_ref - obs.s, obs.ds_ref - obs.ds)
+        self.lat.gain = lateral_gain(self.params.lat_speed, obs.speed)
         delta = self.lat.step(obs.d_ref - obs.d, obs.dd_ref - obs.dd)
         return fx, (delta + obs.steer_ff if self.params.feedforward else delta)
 

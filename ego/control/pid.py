@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ego.control.base import Observation, feedforward_param
+from ego.control.base import Observation, feedforward_param, lateral_gain, lateral_speed_param
 from ego.params import HALF_PI, Params, param
 
 
@@ -81,6 +81,7 @@ class PIDParams(Params):
     )
     steer_limit: float = param(0.5, "rad", "|delta| limit", min=0, max=HALF_PI, min_exclusive=True)
     feedforward: bool = feedforward_param()
+    lat_speed: float = lateral_speed_param()
 
 
 class PIDController:
@@ -92,6 +93,8 @@ class PIDController:
         self.lon = PID(p.kp_lon, p.ki_lon, p.kd_lon, dt, -p.fx_limit, p.fx_limit, p.tau_d)
         self.lat = PID(p.kp_lat, p.ki_lat, p.kd_lat, dt, -p.steer_limit, p.steer_limit, p.tau_d)
         self._ff = p.feedforward
+        self._lat_speed = p.lat_speed
+        self._scale = 1.0  #: the lateral gains' speed schedule now (ego.control.base.lateral_gain)
 
     def reset(self, *, seed: int | None = None) -> None:
         self.lon.reset()
@@ -99,6 +102,11 @@ class PIDController:
 
     def step(self, obs: Observation) -> tuple[float, float]:
         fx = self.lon.step(obs.s_ref - obs.s, obs.ds_ref - obs.ds)
+        scale = lateral_gain(self._lat_speed, obs.speed)
+        if scale != self._scale:
+            p, lat = self.params, self.lat
+            self._scale = scale
+            lat.kp, lat.ki, lat.kd = p.kp_lat * scale, p.ki_lat * scale, p.kd_lat * scale
         delta = self.lat.step(obs.d_ref - obs.d, obs.dd_ref - obs.dd)
         return fx, (delta + obs.steer_ff if self._ff else delta)
 

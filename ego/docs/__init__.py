@@ -1049,6 +1049,7 @@ def _rl_threshold_cells(results: list) -> list[str]:
 
 def tables() -> list[Table]:
     """Every table of docs/results/, page by page."""
+    from ego.docs.curved import tables as curved
     from ego.docs.falsify import docs_tables
     from ego.docs.openscenario import tables as openscenario
 
@@ -1063,6 +1064,7 @@ def tables() -> list[Table]:
         + [rl_thresholds()]
         + openscenario()
         + docs_tables()
+        + curved()
     )
 
 

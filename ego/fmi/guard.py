@@ -116,11 +116,11 @@ def extraction_dir(name: str) -> str:
     """A new folder to extract FMU ``name`` into: ``ego-fmu-<pid>-<name>-*`` in the temporary
     folder, so the parent of a worker that died can name the FMU and remove what it left."""
     safe = "".join(c if c.isalnum() or c in "_." else "_" for c in name)[:40] or "fmu"
-    _remove_orphans()
+    remove_orphans()
     return tempfile.mkdtemp(prefix=f"ego-fmu-{os.getpid()}-{safe}-")
 
 
-def _remove_orphans() -> None:
+def remove_orphans() -> None:
     """Remove the folders of processes that no longer exist (killed with SIGKILL mid-run)."""
     for path in glob.glob(os.path.join(tempfile.gettempdir(), "ego-fmu-*-*")):
         pid = os.path.basename(path).split("-")[2]

@@ -122,11 +122,20 @@ def train(env_id: str, algo: str, seed: int, steps: int, progress=None):
         cls = {"ppo": PPO, "sac": SAC}[algo]
         kwargs = {"n_steps": 512, "batch_size": 64} if algo == "ppo" else {"learning_starts": 500}
         model = cls("MlpPolicy", env, seed=seed, verbose=0, device="cpu", **kwargs)
+        model.set_logger(quiet_logger())  # SB3's own would leave an empty /tmp/SB3-* folder per run
         callback = None if progress is None else _progress_callback(steps, progress, f"{algo} on {env_id}, seed {seed}")
         model.learn(total_timesteps=steps, callback=callback)
         return model
     finally:
         env.close()
+
+
+def quiet_logger():
+    """An SB3 logger that writes nowhere: SB3's default makes a ``SB3-<date>`` folder in the
+    temp dir on every ``learn`` and never removes it."""
+    from stable_baselines3.common.logger import Logger
+
+    return Logger(folder=None, output_formats=[])
 
 
 def _progress_callback(steps: int, stream, what: str):

@@ -9,7 +9,7 @@ simulators drive the same geometry. Vehicles:
 * background traffic (:class:`TrafficVehicle`): highway-env's IDM car-following (MOBIL lane
   changes unless the scenario keeps it in lane), which never rolls backwards;
 * scripted actors (:class:`ScriptedVehicle`): speeds and sideways moves set by the actors of
-  :mod:`ego.sumo.traffic` through the same commands SUMO gets (a braking lead may brake
+  :mod:`ego.sim.traffic` through the same commands SUMO gets (a braking lead may brake
   harder than IDM's 6 m/s^2 cap).
 
 Coordinates: ego's (and SUMO's) frame has y to the left of the road; highway-env draws y

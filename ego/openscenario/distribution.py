@@ -63,7 +63,7 @@ def scenario_file(path: str, root: Node) -> str:
     target = node.attrs.get("filepath", "") if node is not None else ""
     if not target:
         raise ScenarioFileError(path, root.line, "<ParameterValueDistribution> needs <ScenarioFile filepath=...>")
-    full = os.path.normpath(Path(path).parent / target)
+    full = os.path.abspath(Path(path).parent / target)  # absolute: a row's reproducer works from anywhere
     assert node is not None
     if not Path(full).is_file():
         raise ScenarioFileError(path, node.line, f"ScenarioFile {target!r} not found (looked for {full})")

@@ -78,6 +78,19 @@ def percentiles(values: Sequence[Any]) -> str:
     return f"{p50:.3g} [{p5:.3g}, {p95:.3g}] ({a.min():.3g} to {a.max():.3g}), {a.size}"
 
 
+def preventable_lines(by: Mapping[str, Sequence[Mapping[str, Any]]], controllers: Sequence[str]) -> list[str]:
+    """Per controller, of its runs that computed ``collision_preventable`` (``--preventable``:
+    the collisions), how many UN R157's careful driver avoids; nothing if none computed it."""
+    if not any(m.get("collision_preventable") is not None for ms in by.values() for m in ms):
+        return []
+    lines = ["", "Collisions UN R157's careful driver avoids on the same scenario (`collision_preventable`):", ""]
+    for c in controllers:
+        k = sum(1 for m in by.get(c, ()) if m.get("collision_preventable") is True)
+        n = sum(1 for m in by.get(c, ()) if m.get("collision_preventable") is not None)
+        lines.append(f"- {c}: {k} of {n}")
+    return lines
+
+
 def requirement_lines(groups: Mapping[str, Sequence[Mapping[str, Any]]]) -> list[str]:
     """A markdown table of passes and failures per requirement (columns) and group (rows:
     e.g. controllers), from flattened metric rows (``requirements.<name>`` robustness); no
@@ -142,16 +155,7 @@ def comparison(scenario: str, rows: Sequence[Row], controllers: Sequence[str], d
         *table(controllers, _by_controller(rows, controllers), columns),
     ]
     by = {c: [r["metrics"] for r in mine] for c, mine in _by_controller(rows, controllers).items()}
-    if any("collision_preventable" in m for ms in by.values() for m in ms):  # ego compare --preventable
-        lines += [
-            "",
-            "Collisions UN R157's careful driver avoids on the same scenario (`collision_preventable`):",
-            "",
-        ]
-        for c in controllers:
-            k = sum(1 for m in by.get(c, ()) if m.get("collision_preventable") is True)
-            n = sum(1 for m in by.get(c, ()) if m.get("collision_preventable") is not None)
-            lines.append(f"- {c}: {k} of {n}")
+    lines += preventable_lines(by, controllers)
     lines += requirement_lines(by)
     errors = [r for r in rows if r["error"]]
     if errors:
@@ -215,6 +219,7 @@ def sweep(
             for c in controllers:
                 k = sum(1 for r in runs.get(c, ()) if r.get(extra) is True)
                 lines.append(f"- {c}: {k}")
+    lines += preventable_lines(runs, controllers)
     lines += requirement_lines(runs)
     errors = [r for r in rows if r["status"] == "error"]
     if errors:

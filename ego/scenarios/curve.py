@@ -31,6 +31,7 @@ import numpy as np
 
 from ego.lane_frame import LanePolyline
 from ego.models import ActuatorLimits, BicyclePlant, DynamicBicycle, DynamicBicycleParams, VehicleGeometry
+from ego.models.geometry import sumo_poses_to_boxes
 from ego.params import ConfigError, param
 from ego.record.base import Series
 from ego.results import metrics as m
@@ -39,15 +40,8 @@ from ego.scenarios.base import NO_COLLISION, CommonConfig, Scenario, signal_seri
 from ego.scenarios.events import INF, boxes_overlap
 from ego.scenarios.observe import road_observation
 from ego.scenarios.road import RoadSensor, RoadWorld
-from ego.sumo.bridge import (
-    Collision,
-    Neighbours,
-    VehicleSpec,
-    VehicleType,
-    ego_type,
-    sumo_poses_to_boxes,
-)
-from ego.sumo.traffic import PacedVehicle, PoissonFlow, background_traffic
+from ego.sim.traffic import PacedVehicle, PoissonFlow, background_traffic
+from ego.sim.types import Collision, Neighbours, VehicleSpec, VehicleType, ego_type
 
 EGO = "ego"
 LEAD = "lead"

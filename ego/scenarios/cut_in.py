@@ -20,8 +20,8 @@ from ego.scenarios.evasive import MARKERS, METRICS, MotorwayRoadConfig, compare_
 from ego.scenarios.manoeuvre import FollowInLane
 from ego.scenarios.motorway import COLUMNS, EDGE, LANE_NAMES, PLOTS, ROUTE, MotorwayWorld
 from ego.scenarios.safety import friction_limit
+from ego.sim.traffic import CutInVehicle
 from ego.sim.types import VehicleSpec, VehicleType
-from ego.sumo.traffic import CutInVehicle
 
 CUTTER = "cutter"
 CUTTER_TYPE = VehicleType(

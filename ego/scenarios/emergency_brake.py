@@ -7,7 +7,7 @@ leader's speed. The AEB (:mod:`ego.scenarios.safety`) brakes at the friction lim
 braking in lane needs more than ``aeb_decel`` or a collision is imminent. With
 ``lead_speed`` and ``evade=false`` it is Euro NCAP's CCRs / CCRm / CCRb.
 
-Composed of: the motorway world with the lead car (:class:`~ego.sumo.traffic.BrakingLeader`),
+Composed of: the motorway world with the lead car (:class:`~ego.sim.traffic.BrakingLeader`),
 the surround view, the evasive manoeuvre with :class:`BrakeInLane`, and the safety layer.
 """
 
@@ -24,8 +24,8 @@ from ego.scenarios.evasive import MARKERS, METRICS, MotorwayRoadConfig, compare_
 from ego.scenarios.events import INF
 from ego.scenarios.motorway import COLUMNS, EDGE, EGO, PLOTS, ROUTE, MotorwayWorld
 from ego.scenarios.safety import AEB_SLOWS, friction_limit
+from ego.sim.traffic import BrakingLeader
 from ego.sim.types import VehicleSpec, VehicleType
-from ego.sumo.traffic import BrakingLeader
 
 LEAD = "lead"
 #: the ego comes to rest at or below this speed along the road, and moves again above

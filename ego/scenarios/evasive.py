@@ -97,7 +97,8 @@ class MotorwayRoadConfig(EvasiveConfig):
         "-",
         "the motorway: straight, or an arc of the middle lane's radius 250 m (180 deg) or 1000 m "
         "(90 deg) to the left or right, 350 m after its start (at the default ego_start the ego enters it within "
-        "3 s); gaps and TTCs along the lane (sumo backend only)",
+        "3 s), or clothoid: the road of changing curvature (clothoids between arcs of 500, 250 and 1000 m from "
+        "350 to 1450 m); gaps and TTCs along the lane (sumo backend only)",
         choices=tuple(MOTORWAY_ROADS),
     )
 

@@ -24,8 +24,8 @@ from ego.scenarios.evasive import (
 )
 from ego.scenarios.events import INF
 from ego.scenarios.motorway import COLUMNS, EDGE, PLOTS, ROUTE, MotorwayWorld
+from ego.sim.traffic import RecklessFollower
 from ego.sim.types import VehicleSpec, VehicleType
-from ego.sumo.traffic import RecklessFollower
 
 FOLLOWER = "follower"
 FOLLOWER_TYPE = VehicleType("follower", length=4.5, width=1.8, sigma=0.0, max_speed=60.0, color=(0, 170, 255))

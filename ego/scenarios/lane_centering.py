@@ -51,8 +51,8 @@ from ego.results.trace import Band, Column, Marker, Metric, Plot
 from ego.scenarios.base import CommonConfig, Scenario, signal_series
 from ego.scenarios.observe import road_observation
 from ego.scenarios.road import RoadSensor, RoadWorld
-from ego.sumo.bridge import VehicleSpec, VehicleType, ego_type
-from ego.sumo.traffic import PoissonFlow, background_traffic
+from ego.sim.traffic import PoissonFlow, background_traffic
+from ego.sim.types import VehicleSpec, VehicleType, ego_type
 
 EGO = "ego"
 EDGE, ROUTE = "road", "road_route"

@@ -39,8 +39,8 @@ from ego.scenarios.observe import road_observation
 from ego.scenarios.road import RoadSensor
 from ego.scenarios.sensor import SurroundSensor
 from ego.sim.protocol import TrafficSim
+from ego.sim.traffic import PacedVehicle, background_traffic
 from ego.sim.types import EGO, Collision, VehicleSpec, VehicleType, ego_type
-from ego.sumo.traffic import PacedVehicle, background_traffic
 
 _LOOK_BETWEEN = NATIVE.look_between if NATIVE is not None else None
 

@@ -45,15 +45,9 @@ from ego.results.trace import Band, Column, FrequencyResponse, Marker, Metric, P
 from ego.scenarios import string_stability as ss
 from ego.scenarios.base import NO_COLLISION, CommonConfig, Scenario
 from ego.scenarios.events import INF, time_to_collision
-from ego.sumo.bridge import (
-    Collision,
-    Neighbour,
-    VehicleSpec,
-    VehicleType,
-    ego_type,
-)
+from ego.sim.traffic import Manoeuvre, ProfiledLeader, SpeedProfile
+from ego.sim.types import Collision, Neighbour, VehicleSpec, VehicleType, ego_type
 from ego.sumo.net import lane_length
-from ego.sumo.traffic import Manoeuvre, ProfiledLeader, SpeedProfile
 
 LEADER = "leader"
 EDGE, ROUTE = "road", "road_route"

@@ -6,7 +6,8 @@ route are front-bumper positions from the route's start.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, field
 
 from ego.models.geometry import VehicleGeometry
 
@@ -89,3 +90,39 @@ def ego_type(type_id: str, geometry: VehicleGeometry, decel: float = 7.0) -> Veh
         tau=0.2,
         color=(220, 40, 40),
     )
+
+
+@dataclass(slots=True)
+class Neighbour:
+    """The nearest vehicle in one slot; ``gap`` is bumper to bumper (m), inf when none."""
+
+    id: str = ""
+    gap: float = math.inf
+    speed: float = 0.0
+
+    def clear(self) -> None:
+        self.id = ""
+        self.gap = math.inf
+        self.speed = 0.0
+
+
+@dataclass(slots=True)
+class Neighbours:
+    """Leader and follower in the vehicle's lane and both adjacent lanes, filled in place."""
+
+    lane: int = 0
+    n_lanes: int = 1
+    leader: Neighbour = field(default_factory=Neighbour)
+    follower: Neighbour = field(default_factory=Neighbour)
+    left_leader: Neighbour = field(default_factory=Neighbour)
+    left_follower: Neighbour = field(default_factory=Neighbour)
+    right_leader: Neighbour = field(default_factory=Neighbour)
+    right_follower: Neighbour = field(default_factory=Neighbour)
+
+    @property
+    def has_left(self) -> bool:
+        return self.lane + 1 < self.n_lanes
+
+    @property
+    def has_right(self) -> bool:
+        return self.lane > 0

@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -31,7 +31,16 @@ from ego.models.geometry import (  # noqa: F401 - the pose conversions are impor
 from ego.native import NATIVE
 from ego.sim import instances
 from ego.sim.registry import SimSetup
-from ego.sim.types import Collision, Departure, SimError, VehicleSpec, VehicleType, ego_type  # noqa: F401 - importable from here too
+from ego.sim.types import (  # noqa: F401 - importable from here too
+    Collision,
+    Departure,
+    Neighbour,
+    Neighbours,
+    SimError,
+    VehicleSpec,
+    VehicleType,
+    ego_type,
+)
 from ego.sumo.net import sumo_binary
 
 #: the surroundings' boxes in C, or None (the Python loop of SumoBridge.surroundings)
@@ -89,42 +98,6 @@ class SumoConfig:
             "true",
             *self.extra_args,
         ]
-
-
-@dataclass(slots=True)
-class Neighbour:
-    """The nearest vehicle in one slot; ``gap`` is bumper to bumper (m), inf when none."""
-
-    id: str = ""
-    gap: float = INF
-    speed: float = 0.0
-
-    def clear(self) -> None:
-        self.id = ""
-        self.gap = INF
-        self.speed = 0.0
-
-
-@dataclass(slots=True)
-class Neighbours:
-    """Leader and follower in the vehicle's lane and both adjacent lanes, filled in place."""
-
-    lane: int = 0
-    n_lanes: int = 1
-    leader: Neighbour = field(default_factory=Neighbour)
-    follower: Neighbour = field(default_factory=Neighbour)
-    left_leader: Neighbour = field(default_factory=Neighbour)
-    left_follower: Neighbour = field(default_factory=Neighbour)
-    right_leader: Neighbour = field(default_factory=Neighbour)
-    right_follower: Neighbour = field(default_factory=Neighbour)
-
-    @property
-    def has_left(self) -> bool:
-        return self.lane + 1 < self.n_lanes
-
-    @property
-    def has_right(self) -> bool:
-        return self.lane > 0
 
 
 class SumoError(SimError):
@@ -457,7 +430,7 @@ class SumoBridge:
         """SUMO's driver of ``vid`` never changes lanes (it still drives and brakes)."""
         self._ls.vehicle.setLaneChangeMode(vid, 0)
 
-    # -- commands of the scripted actors (ego.sumo.traffic); every traffic source has them --
+    # -- commands of the scripted actors (ego.sim.traffic); every traffic source has them --
     def drive_blind(self, vid: str) -> None:
         """``vid`` no longer changes lanes nor checks safe speeds or its own limits: the
         speed set is the speed driven (SUMO's speed mode 0)."""

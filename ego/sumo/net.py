@@ -18,7 +18,8 @@ from ego.params import ConfigError, did_you_mean
 
 #: ``--set road=`` of the motorway scenarios (emergency-brake, fast-follower, cut-in) -> the
 #: network it drives on: the straight motorway, or it bent into an arc of the middle lane's
-#: radius 250 m or 1000 m, left or right, after 350 m of straight
+#: radius 250 m or 1000 m, left or right, after 350 m of straight, or the road of changing
+#: curvature (clothoids between arcs of 500, 250 and 1000 m, after the same straight)
 #: (``sumo_nets/motorway_arcs.py`` writes their sources)
 MOTORWAY_ROADS = {
     "straight": "highway",
@@ -26,6 +27,7 @@ MOTORWAY_ROADS = {
     "right-250": "highway_right_250",
     "left-1000": "highway_left_1000",
     "right-1000": "highway_right_1000",
+    "clothoid": "highway_clothoid",
 }
 
 _HEADER = re.compile(r"^<\?xml[^>]*>\s*(<!--.*?-->\s*)?", re.S)

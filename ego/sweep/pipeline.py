@@ -98,6 +98,43 @@ def node_id() -> str | None:
     return None
 
 
+def row_of(outcome: Outcome) -> RunRow:
+    """The row of a :class:`RunTask`'s outcome: its run's own row, or (its worker died
+    twice) a row with status ``error`` naming the FMUs the run loads."""
+    task: RunTask = outcome.task
+    row = (
+        outcome.value
+        if outcome.value is not None
+        else RunRow(task.run.name, task.run.seed, "error", {}, error=_naming_fmus(outcome.error, task.run))
+    )
+    row.attempts = outcome.attempts  # 2: its worker (or node) died once
+    return row
+
+
+def _naming_fmus(error: str, run: ResolvedRun) -> str:
+    """A dead worker's error naming the FMUs its run loads, where the executor could not (a
+    Ray worker, maybe on another node, leaves the driver no process to look at): "the
+    worker process died 2 times running it (WorkerCrashedError; FMU 'x' loaded)"."""
+    if "FMU " in error:
+        return error
+    from ego.fmi.model import inspect_fmu
+
+    names = []
+    for ref in (run.spec.controller, getattr(run.config, "plant", "")):
+        if isinstance(ref, str) and ref.lower().endswith(".fmu"):
+            try:
+                names.append(inspect_fmu(ref).model_name)
+            except Exception:  # noqa: BLE001 - a label for an error row; the file's own name will do
+                names.append(os.path.basename(ref))
+    if not names:
+        return error
+    from ego.fmi.guard import remove_orphans
+
+    remove_orphans()  # the dead worker's extraction folder, where it ran on this machine
+    loaded = f"FMU {', '.join(repr(n) for n in names)} loaded"
+    return f"{error[:-1]}; {loaded})" if error.endswith(")") else f"{error} ({loaded})"
+
+
 def drive(
     executor: Executor,
     tasks: Iterable[RunTask],
@@ -114,12 +151,7 @@ def drive(
 
     def take(outcome: Outcome) -> str:
         task: RunTask = outcome.task
-        row = (
-            outcome.value
-            if outcome.value is not None
-            else RunRow(task.run.name, task.run.seed, "error", {}, error=outcome.error)
-        )
-        row.attempts = outcome.attempts  # 2: its worker (or node) died once
+        row = row_of(outcome)
         on_row(task, row)
         if progress is not None:
             progress(f"{row.controller} seed {row.seed}", row.status)

@@ -189,6 +189,10 @@ def _combined(old, rows: list[dict]):
     type (text in one row, a number in another: a metric of an odd run) is kept as text
     rather than losing the rows."""
     pa, _ = _pa()
+    # every row with every column of the batch: from_pylist takes its columns from the first
+    # row alone, so a metric only later rows have (collision_preventable) would be dropped
+    keys = list(dict.fromkeys(k for r in rows for k in r))
+    rows = [{k: r.get(k) for k in keys} for r in rows]
     try:
         batch = pa.Table.from_pylist(rows)
     except (pa.ArrowInvalid, pa.ArrowTypeError):

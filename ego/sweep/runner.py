@@ -28,11 +28,14 @@ from ego.sweep.spec import Run, SweepSpec
 RECORD = ("none", "failed", "all")
 
 
-def task_of(r: Run, rrd: str | None = None, policy: str = "none", requirements=None) -> RunTask:
+def task_of(
+    r: Run, rrd: str | None = None, policy: str = "none", requirements=None, preventable: bool = False
+) -> RunTask:
     """The pipeline's task for sweep run ``r`` (resolved here, once): recorded to ``rrd``
     always (``policy`` ``all``) or only when it fails (``failed``), checked against
-    ``requirements`` (the spec's [requirements]; None: the scenario's defaults). ConfigError
-    when the run's values do not resolve."""
+    ``requirements`` (the spec's [requirements]; None: the scenario's defaults), with
+    ``collision_preventable`` after a collision if ``preventable``. ConfigError when the
+    run's values do not resolve."""
     from ego.runner import RunSpec, resolve
 
     resolved = resolve(
@@ -44,6 +47,7 @@ def task_of(r: Run, rrd: str | None = None, policy: str = "none", requirements=N
             record=rrd if policy == "all" else None,
             background_recording=False,
             requirements=requirements,
+            preventable=None if preventable else False,
         )
     )
     return RunTask(resolved, record_failed=rrd if policy == "failed" and rrd else None, key=r)
@@ -157,7 +161,7 @@ def _sweep(
             if r.run_id not in done:
                 rrd = str(runs_dir / f"{r.controller}-{r.run_id}.rrd") if record != "none" else None
                 try:
-                    yield task_of(r, rrd, record, spec.requirements)
+                    yield task_of(r, rrd, record, spec.requirements, spec.preventable)
                 except Exception as exc:  # noqa: BLE001 - values no run takes: the run's row says so
                     store_row(error_row(r, f"{type(exc).__name__}: {exc}"))
                     if shown is not None:

@@ -86,6 +86,9 @@ class SweepSpec:
     requirements: dict | None = None
     #: the points as a list (a ParameterValueDistribution file's combinations), instead of grid x sample
     listed: tuple | None = None
+    #: after each collision, run UN R157's careful driver on the same run too and report
+    #: ``collision_preventable`` (``ego sweep --preventable``; a second run per collision)
+    preventable: bool = False
 
     @property
     def swept(self) -> tuple[str, ...]:

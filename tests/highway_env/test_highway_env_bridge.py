@@ -134,8 +134,8 @@ def test_a_crash_in_the_traffic_names_the_car_behind_as_collider(make):
 def test_both_traffic_sources_take_every_command_of_the_actors():
     import inspect
 
+    from ego.sim.traffic import TrafficCommands
     from ego.sumo.bridge import SumoBridge
-    from ego.sumo.traffic import TrafficCommands
 
     for name, member in vars(TrafficCommands).items():
         if name.startswith("_") or not callable(member):

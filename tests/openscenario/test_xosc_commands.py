@@ -121,7 +121,7 @@ def test_list_file(files, capsys):
     listing = json.loads(capsys.readouterr().out)
     assert listing["supported"] is False
     assert [e for e in listing["elements"] if not e["supported"]] == [
-        {"element": "Vehicle", "line": 32, "supported": False}
+        {"element": "Vehicle", "line": 51, "supported": False}
     ]
     assert listing["ego"] == "Ego"
     # the ego's parameters as a run of the file starts them (its Init), not FileConfig's
@@ -178,6 +178,17 @@ def test_sweep_refuses_undeclared_parameter(files, capsys):
     assert main(["sweep", str(spec), "--out", str(files / "s")]) == 2
     err = capsys.readouterr().err
     assert "unknown parameter 'LeadGapp'" in err and err.count("\n") == 1
+    assert not (files / "s").exists()
+
+
+def test_sweep_refuses_a_value_the_file_constrains(files, capsys):
+    """The shipped file bounds LeadGap as the built-in scenario does (5-300 m): a gap that puts
+    the lead behind the ego is one line before anything runs, not a SUMO error row."""
+    spec = files / "spec.toml"
+    spec.write_text('scenario = "emergency_brake.xosc"\ncontrollers = ["pid"]\n\n[grid]\nLeadGap = [-40, 20]\n')
+    assert main(["sweep", str(spec), "--out", str(files / "s")]) == 2
+    err = capsys.readouterr().err
+    assert "parameter 'LeadGap' = -40 breaks its value constraint: greaterOrEqual 5" in err and err.count("\n") == 1
     assert not (files / "s").exists()
 
 

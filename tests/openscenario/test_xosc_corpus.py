@@ -155,12 +155,12 @@ HAND = [
     (
         "duplicate-parameter",
         sub(
-            '<ParameterDeclaration name="LeadGap" parameterType="double" value="30"/>',
-            '<ParameterDeclaration name="LeadGap" parameterType="double" value="30"/>'
-            '<ParameterDeclaration name="LeadGap" parameterType="double" value="31"/>',
+            '<ParameterDeclaration name="EgoFront" parameterType="double" value="300"/>',
+            '<ParameterDeclaration name="EgoFront" parameterType="double" value="300"/>'
+            '<ParameterDeclaration name="EgoFront" parameterType="double" value="301"/>',
         ),
-        'name="LeadGap"',
-        "parameter 'LeadGap' is declared twice (first on line 12)",
+        'name="EgoFront"',
+        "parameter 'EgoFront' is declared twice (first on line 11)",
     ),
     (
         "unknown-entity-init",
@@ -310,7 +310,7 @@ HAND = [
             '<ParameterDeclaration name="Lag" parameterType="double" value="2"/></ParameterDeclarations>',
         ),
         'value="2"/></ParameterDeclarations>',
-        "parameter 'Lag' is declared twice (first on line 75)",
+        "parameter 'Lag' is declared twice (first on line 94)",
     ),
     (
         "story-parameter-bad-value",
@@ -421,11 +421,12 @@ HAND = [
     (
         "constraint-groups",
         sub(
-            '<ParameterDeclaration name="LeadGap" parameterType="double" value="30"/>',
-            '<ParameterDeclaration name="LeadGap" parameterType="double" value="30">\n'
+            "      <ConstraintGroup>\n"
+            '        <ValueConstraint rule="greaterOrEqual" value="5"/>\n'
+            '        <ValueConstraint rule="lessOrEqual" value="300"/>\n'
+            "      </ConstraintGroup>\n",
             '      <ConstraintGroup><ValueConstraint rule="equalTo" value="10"/></ConstraintGroup>\n'
-            '      <ConstraintGroup><ValueConstraint rule="greaterThan" value="${$EgoFront / 3}"/></ConstraintGroup>\n'
-            "    </ParameterDeclaration>",
+            '      <ConstraintGroup><ValueConstraint rule="greaterThan" value="${$EgoFront / 3}"/></ConstraintGroup>\n',
         ),
         '<ConstraintGroup><ValueConstraint rule="equalTo"',
         "parameter 'LeadGap' = 30 breaks a rule of each of its constraint groups: equalTo 10 (line 13); "

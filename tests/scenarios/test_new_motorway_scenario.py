@@ -21,7 +21,7 @@ from ego.scenarios.base import Scenario
 from ego.scenarios.evasive import METRICS, EvasiveConfig, compose, evasive_metrics
 from ego.scenarios.motorway import COLUMNS, EDGE, ROUTE
 from ego.sim import VehicleSpec, VehicleType
-from ego.sumo.traffic import PacedVehicle
+from ego.sim.traffic import PacedVehicle
 
 BROKEN = VehicleType("broken", length=4.5, width=1.8, sigma=0.0, color=(255, 0, 0))
 

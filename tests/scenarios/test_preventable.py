@@ -70,3 +70,22 @@ def test_compare_runs_the_careful_driver_after_each_collision_only_when_asked(tm
     assert by["none"]["collision"] and by["none"]["collision_preventable"] is True
     assert not by["pid"]["collision"] and "collision_preventable" not in by["pid"]
     assert "- none: 1 of 1" in (tmp_path / "asked" / "metrics.md").read_text()
+
+
+def test_sweep_carries_collision_preventable_when_asked(tmp_path, capsys):
+    """``ego sweep --preventable``: the careful driver after each collision, its verdict a
+    results.parquet column (null where there was no collision) and a line of summary.md."""
+    import pyarrow.parquet as pq
+
+    from ego.cli import main
+
+    spec = tmp_path / "s.toml"
+    spec.write_text(
+        'scenario = "cut-in"\ncontrollers = ["none", "pid"]\n\n[set]\nevade = false\naeb = false\n'
+        "traffic_density = 0\nduration = 16\n"
+    )
+    assert main(["sweep", str(spec), "--out", str(tmp_path / "sw"), "--jobs", "1", "--preventable"]) == 0
+    rows = {r["controller"]: r for r in pq.read_table(tmp_path / "sw" / "results.parquet").to_pylist()}
+    assert rows["none"]["collision"] and rows["none"]["collision_preventable"] is True
+    assert not rows["pid"]["collision"] and rows["pid"]["collision_preventable"] is None
+    assert "- none: 1 of 1" in (tmp_path / "sw" / "summary.md").read_text()

@@ -4,7 +4,7 @@ import pytest
 
 from ego.params import ConfigError
 from ego.scenarios.platoon import KMH, PlatoonConfig, parse_manoeuvres
-from ego.sumo.traffic import Manoeuvre, SpeedProfile
+from ego.sim.traffic import Manoeuvre, SpeedProfile
 
 DEFAULT = PlatoonConfig().profile
 

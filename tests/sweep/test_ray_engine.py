@@ -191,6 +191,27 @@ def test_a_worker_dying_twice_is_an_error_while_the_others_complete(engine, tmp_
     assert sorted(o.value for o in engine.run(T.square, range(4))) == [0, 1, 4, 9]
 
 
+def test_a_dead_ray_workers_row_names_the_fmu_its_run_loaded(ray_executor, tmp_path):
+    """An FMU that SIGKILLs its process: Ray's error names no process (the process engine
+    names the FMU from the folder its worker left: tests/fmi/test_fmu_watchdog.py), so the
+    row names it from the run itself; no extraction folder stays."""
+    sys.path.insert(0, str(ROOT / "tests" / "fmi"))
+    import fmu_zoo
+
+    from ego.runner import RunSpec, resolve
+    from ego.sweep.pipeline import RunTask, execute, row_of
+
+    fmu = str(fmu_zoo.build(fmu_zoo.misbehave("kill"), tmp_path))
+    task = RunTask(resolve(RunSpec("emergency-brake", fmu, overrides={"duration": 3.0})))
+    (outcome,) = outcomes(ray_executor, execute, [task])
+    row = row_of(outcome)
+    assert row.status == "error" and row.attempts == 2
+    assert row.error.startswith("the worker process died 2 times running it (") and row.error.endswith(
+        "FMU 'kill_fmu' loaded)"
+    ), row.error
+    assert not fmu_zoo.fmu_folders_left(set()), "a dead worker's FMU folder stayed"
+
+
 # -- cost ----------------------------------------------------------------------------------------
 
 

@@ -49,7 +49,7 @@ def background_traffic(
             f"minimum safe spacing {min_spacing:.1f} m"
         )
     extra = mean_spacing - min_spacing
-    specs = []
+    specs: list[VehicleSpec] = []
     for lane in lanes:
         pos = start + rng.uniform(0.0, mean_spacing)
         while pos < end:
@@ -317,6 +317,7 @@ class CutInVehicle:
             self._y0 = self._where(bridge, self.vid)[1]
             self._sign = 1.0 if self.lane > self.source_lane else -1.0
         if self.phase == "cut in":
+            assert self.cut_in_time is not None  # set as the phase began
             u = (t + self.step - self.cut_in_time) / self.duration
             want = self._sign * self.lane_width * min_jerk(u)
             bridge.change_sublane(self.vid, want - (self._where(bridge, self.vid)[1] - self._y0))
