@@ -82,6 +82,17 @@ def add_parser(sub) -> argparse.ArgumentParser:
         metavar="WHEN",
         help="first: stop at the first violation; budget (default): use the whole budget",
     )
+    _add_distribution_options(fal)
+    fal.add_argument(
+        "--no-verify",
+        action="store_true",
+        help="do not rerun each violation to check that its ego run command reproduces it",
+    )
+    return fal
+
+
+def _add_distribution_options(fal: argparse.ArgumentParser) -> None:
+    """The options a ParameterValueDistribution FILE.xosc needs (a TOML spec names them)."""
     fal.add_argument(
         "-c",
         "--controller",
@@ -95,12 +106,6 @@ def add_parser(sub) -> argparse.ArgumentParser:
         metavar="NAME",
         help="with FILE.xosc: the requirement to falsify (default no_collision)",
     )
-    fal.add_argument(
-        "--no-verify",
-        action="store_true",
-        help="do not rerun each violation to check that its ego run command reproduces it",
-    )
-    return fal
 
 
 def command(args) -> int:

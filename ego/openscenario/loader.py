@@ -1081,45 +1081,50 @@ class _Builder:
         }
         inner = self.one(node)
         if inner.tag == "ByValueCondition":
-            c = self.one(inner)
-            if c.tag == "SimulationTimeCondition":
-                return M.Condition(kind=c.tag, rule=self.enum(c, "rule", M.RULES), value=self.num(c, "value"), **base)
-            if c.tag == "VariableCondition":
-                ref = self.str_(c, "variableRef")
-                if ref not in self.variables:
-                    raise self.error(
-                        c, f"variable {ref!r} is not declared (declared: {', '.join(self.variables) or 'none'})"
-                    )
-                return M.Condition(
-                    kind=c.tag,
-                    rule=self.enum(c, "rule", M.RULES),
-                    value=self.str_(c, "value"),
-                    parameter=ref,
-                    parameter_value=self.variables[ref].value,
-                    **base,
-                )
-            if c.tag == "ParameterCondition":
-                ref = self.str_(c, "parameterRef")
-                if ref not in self.values:
-                    raise self.error(
-                        c, f"parameter {ref!r} is not declared (declared: {', '.join(self.values) or 'none'})"
-                    )
-                return M.Condition(
-                    kind=c.tag,
-                    rule=self.enum(c, "rule", M.RULES),
-                    value=self.str_(c, "value"),
-                    parameter=ref,
-                    parameter_value=self.values[ref],
-                    **base,
+            return self.value_condition(self.one(inner), base)
+        return self.entity_condition(inner, base)
+
+    def value_condition(self, c: Node, base: dict[str, Any]) -> M.Condition:
+        """A ByValueCondition's condition."""
+        if c.tag == "SimulationTimeCondition":
+            return M.Condition(kind=c.tag, rule=self.enum(c, "rule", M.RULES), value=self.num(c, "value"), **base)
+        if c.tag == "VariableCondition":
+            ref = self.str_(c, "variableRef")
+            if ref not in self.variables:
+                raise self.error(
+                    c, f"variable {ref!r} is not declared (declared: {', '.join(self.variables) or 'none'})"
                 )
             return M.Condition(
                 kind=c.tag,
-                element_type=self.enum(c, "storyboardElementType", M.ELEMENT_TYPES),
-                element_ref=self.str_(c, "storyboardElementRef"),
-                state=self.enum(c, "state", M.STATES),
-                ref_line=c.line,
+                rule=self.enum(c, "rule", M.RULES),
+                value=self.str_(c, "value"),
+                parameter=ref,
+                parameter_value=self.variables[ref].value,
                 **base,
             )
+        if c.tag == "ParameterCondition":
+            ref = self.str_(c, "parameterRef")
+            if ref not in self.values:
+                raise self.error(c, f"parameter {ref!r} is not declared (declared: {', '.join(self.values) or 'none'})")
+            return M.Condition(
+                kind=c.tag,
+                rule=self.enum(c, "rule", M.RULES),
+                value=self.str_(c, "value"),
+                parameter=ref,
+                parameter_value=self.values[ref],
+                **base,
+            )
+        return M.Condition(
+            kind=c.tag,
+            element_type=self.enum(c, "storyboardElementType", M.ELEMENT_TYPES),
+            element_ref=self.str_(c, "storyboardElementRef"),
+            state=self.enum(c, "state", M.STATES),
+            ref_line=c.line,
+            **base,
+        )
+
+    def entity_condition(self, inner: Node, base: dict[str, Any]) -> M.Condition:
+        """A ByEntityCondition: its triggering entities and its condition."""
         te = self.one(inner, "TriggeringEntities")
         refs = tuple(self.entity_ref(e) for e in te.all("EntityRef"))
         if not refs:
