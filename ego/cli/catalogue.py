@@ -18,6 +18,10 @@ def command(args: Any) -> int:
     if args.ego and not (args.reference and is_scenario_file(args.reference)):
         raise ConfigError("--ego goes with a scenario file: ego list FILE.xosc --ego ENTITY")
     if args.reference and is_scenario_file(args.reference):
+        from ego.openscenario.distribution import root_of
+
+        if root_of(args.reference) is not None:
+            return _distribution(args.reference, args.json)
         from ego.openscenario.scenario import file_listing, print_listing
 
         listing = file_listing(args.reference, args.ego or "")
@@ -36,6 +40,35 @@ def command(args: Any) -> int:
         print(parameters_markdown(cat), end="")
     else:
         print_catalogue(cat)
+    return EXIT_OK
+
+
+def _distribution(path: str, as_json: bool) -> int:
+    """``ego list`` of a ParameterValueDistribution file: its scenario file, the parameters
+    it distributes, how many combinations (and how many the scenario's value constraints
+    discard), and the command that runs it; checked as ``ego sweep`` checks it."""
+    from ego.sweep.xosc import load
+
+    var = load(path, ["pid"])
+    listing = {
+        "distribution": path,
+        "scenario": var.spec.scenario,
+        "parameters": list(var.spec.listed[0]) if var.spec.listed else [],
+        "combinations": var.total,
+        "discarded": var.discarded,
+        "remaining": var.remaining,
+        "run": f"ego sweep {path} --out DIR -c CONTROLLER",
+    }
+    if as_json:
+        print(json.dumps(listing, indent=2))
+        return EXIT_OK
+    print(f"{path}: a ParameterValueDistribution of {listing['scenario']}")
+    print(f"  parameters    {', '.join(listing['parameters'])}")
+    print(
+        f"  combinations  {var.total:,} ({var.discarded:,} outside the scenario's value constraints, "
+        f"{var.remaining:,} to run)"
+    )
+    print(f"  run it with   {listing['run']}")
     return EXIT_OK
 
 

@@ -39,7 +39,11 @@ def add_parser(sub) -> argparse.ArgumentParser:
         ),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    fal.add_argument("spec", metavar="SPEC.toml", help="the falsification specification")
+    fal.add_argument(
+        "spec",
+        metavar="SPEC.toml",
+        help="the falsification specification, or a ParameterValueDistribution FILE.xosc (its ranges searched)",
+    )
     add_out(fal, "output folder (resumed if it holds results)")
     add_engine(fal, "process (default) or ray")
     add_jobs(fal, "parallel runs (default: the CPUs)")
@@ -78,12 +82,30 @@ def add_parser(sub) -> argparse.ArgumentParser:
         metavar="WHEN",
         help="first: stop at the first violation; budget (default): use the whole budget",
     )
+    _add_distribution_options(fal)
     fal.add_argument(
         "--no-verify",
         action="store_true",
         help="do not rerun each violation to check that its ego run command reproduces it",
     )
     return fal
+
+
+def _add_distribution_options(fal: argparse.ArgumentParser) -> None:
+    """The options a ParameterValueDistribution FILE.xosc needs (a TOML spec names them)."""
+    fal.add_argument(
+        "-c",
+        "--controller",
+        default=None,
+        metavar="NAMES",
+        help="with a ParameterValueDistribution FILE.xosc: the controllers (comma-separated)",
+    )
+    fal.add_argument(
+        "--requirement",
+        default=None,
+        metavar="NAME",
+        help="with FILE.xosc: the requirement to falsify (default no_collision)",
+    )
 
 
 def command(args) -> int:
@@ -93,7 +115,17 @@ def command(args) -> int:
     from ego.parallel.executor import ENGINES
     from ego.params import ConfigError
 
-    spec = load(args.spec)
+    if str(args.spec).lower().endswith(".xosc"):
+        from ego.falsify.spec import from_distribution
+
+        if not args.controller:
+            raise ConfigError("ego falsify FILE.xosc needs -c CONTROLLER (a TOML spec names its controllers)")
+        controllers = [c.strip() for c in args.controller.split(",") if c.strip()]
+        spec = from_distribution(str(args.spec), controllers, args.requirement, args.budget)
+    elif args.controller is not None or args.requirement is not None:
+        raise ConfigError("-c and --requirement are for a FILE.xosc distribution; a TOML spec names them")
+    else:
+        spec = load(args.spec)
     for value, allowed, what in (
         (args.optimizer, OPTIMIZERS, "--optimizer"),
         (args.until, UNTIL, "--until"),

@@ -115,6 +115,29 @@ def load(path: str | Path) -> FalsifySpec:
     return parse(read_spec(path, "falsification spec"), str(path))
 
 
+def from_distribution(path: str, controllers: list[str], requirement: str | None, budget: int | None) -> FalsifySpec:
+    """The search over a ParameterValueDistribution file's ranges (``ego falsify FILE.xosc
+    -c CONTROLLER``): its scenario file, each distributed parameter searched over the range
+    its distribution spans, one seed (0), the requirement named (default ``no_collision``)."""
+    from ego.openscenario.distribution import search_ranges
+    from ego.openscenario.xmltree import ScenarioFileError
+
+    try:
+        scenario, ranges = search_ranges(path)
+    except ScenarioFileError as exc:
+        raise ConfigError(str(exc)) from None
+    data: dict = {
+        "scenario": scenario,
+        "controllers": controllers,
+        "requirement": requirement or "no_collision",
+        "search": ranges,
+        "seed": 0,
+    }
+    if budget is not None:
+        data["budget"] = budget
+    return parse(data, path)
+
+
 def parse(data: dict, source: str = "the spec") -> FalsifySpec:
     """Validate a spec's contents (see the module docstring)."""
     from ego.requirements import defaults, from_table

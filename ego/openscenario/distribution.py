@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 import os
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -109,11 +110,27 @@ def _unsupported(path, node: Node, where: str, allowed: tuple[str, ...]) -> Scen
 
 
 def _column(values: list) -> np.ndarray:
-    """Numbers as float64, anything else as an object array of strings."""
+    """Numbers as float64 (a value left out, None: NaN), anything else as an object array of
+    strings (None kept): :func:`fill_defaults` gives the left-out values the template's."""
     try:
-        return np.asarray([float(v) for v in values], dtype=float)
+        return np.asarray([math.nan if v is None else float(v) for v in values], dtype=float)
     except (TypeError, ValueError):
-        return np.asarray([str(v) for v in values], dtype=object)
+        return np.asarray([None if v is None else str(v) for v in values], dtype=object)
+
+
+def fill_defaults(dist: Distribution, defaults: Mapping[str, object]) -> None:
+    """Give every value a ParameterValueSet left out (NaN or None) the scenario file's
+    declared value of that parameter."""
+    for name, col in dist.columns.items():
+        missing = np.isnan(col) if col.dtype == float else np.asarray([v is None for v in col], dtype=bool)
+        if not missing.any():
+            continue
+        default = defaults[name]
+        if col.dtype == float and not isinstance(default, (int, float)):
+            col = col.astype(object)
+            col[~missing] = [str(v) for v in col[~missing]]
+        col[missing] = default if col.dtype == object else float(default)  # type: ignore[arg-type]
+        dist.columns[name] = col
 
 
 def _single(path, node: Node) -> tuple[str, np.ndarray]:
@@ -168,14 +185,11 @@ def _multi(path, node: Node) -> dict[str, list]:
             row[ref] = value
         if not row:
             raise ScenarioFileError(path, s.line, "<ParameterValueSet> is empty (expected <ParameterAssignment>s)")
-        if rows and set(row) != set(rows[0][1]):
-            raise ScenarioFileError(
-                path,
-                s.line,
-                f"<ParameterValueSet> assigns {sorted(row)}, the first one {sorted(rows[0][1])} (expected the same)",
-            )
         rows.append((s.line, row))
-    return {name: [r[name] for _, r in rows] for name in rows[0][1]}
+    # a set that leaves out a parameter another set assigns keeps the scenario file's value
+    # for it (filled in by fill_defaults, once the scenario file is known)
+    names = list(dict.fromkeys(n for _, r in rows for n in r))
+    return {name: [r.get(name) for _, r in rows] for name in names}
 
 
 def _deterministic(path, det: Node) -> tuple[dict[str, np.ndarray], int]:
@@ -402,3 +416,47 @@ def constraint_mask(dist: Distribution, params: dict) -> np.ndarray:
             ok[i] = good
         mask &= ok[where.reshape(-1)]
     return mask
+
+
+def search_ranges(path: str) -> tuple[str, dict[str, list[float]]]:
+    """For ``ego falsify FILE.xosc``: the distribution's scenario file and, per distributed
+    parameter, the range ``[low, high]`` it spans: a DistributionRange's or a Range's limits,
+    a set's (or a histogram's bins') smallest and largest number. A distribution with no
+    numeric range (a ValueSetDistribution, a set of names, an unbounded normal) is refused
+    with its line: there is nothing to search between."""
+    root = root_of(path)
+    if root is None:
+        raise ScenarioFileError(
+            path, 1, "not a ParameterValueDistribution file (expected <ParameterValueDistribution>)"
+        )
+    target = scenario_file(path, root)
+    ranges: dict[str, list[float]] = {}
+    for kind in ("Deterministic", "Stochastic"):
+        node = root.child(kind)
+        for d in node.children if node is not None else ():
+            name = d.attrs.get("parameterName", "")
+            if d.tag not in ("DeterministicSingleParameterDistribution", "StochasticDistribution") or not name:
+                raise ScenarioFileError(
+                    path, d.line, f"<{d.tag}> has no numeric range to search (ego falsify searches ranges)"
+                )
+            bounds = [n for n in _walk(d) if n.tag == "Range"]
+            values = [n.attrs.get("value") for n in _walk(d) if n.tag == "Element"]
+            try:
+                nums = [float(b.attrs[k]) for b in bounds for k in ("lowerLimit", "upperLimit")]
+                nums += [float(v) for v in values if v is not None]
+            except (KeyError, ValueError):
+                nums = []
+            if len(nums) < 2 or not min(nums) < max(nums):
+                raise ScenarioFileError(
+                    path, d.line, f"parameter {name!r} has no numeric range to search (ego falsify searches ranges)"
+                )
+            ranges[name] = [min(nums), max(nums)]
+    if not ranges:
+        raise ScenarioFileError(path, root.line, "the distribution names no parameter range to search")
+    return target, ranges
+
+
+def _walk(node: Node):
+    yield node
+    for c in node.children:
+        yield from _walk(c)

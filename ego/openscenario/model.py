@@ -89,7 +89,19 @@ class RelativeRoadPosition:
     line: int
 
 
-Position = WorldPosition | LanePosition | RoadPosition | RelativeLanePosition | RelativeRoadPosition
+@dataclass(frozen=True)
+class RelativeObjectPosition:
+    """``dx`` ahead of and ``dy`` left of the entity's reference point, in its own frame."""
+
+    entity: str
+    dx: float
+    dy: float
+    line: int
+
+
+Position = (
+    WorldPosition | LanePosition | RoadPosition | RelativeLanePosition | RelativeRoadPosition | RelativeObjectPosition
+)
 
 
 # --- entities --------------------------------------------------------------------------------
@@ -201,6 +213,57 @@ class ControllerAction:
     line: int = 0
 
 
+@dataclass(frozen=True)
+class SpeedProfileAction:
+    """OpenSCENARIO 1.2: the speed goes linearly through ``entries`` (speed m/s, time s to
+    reach it: None or 0 at the acceleration limit, a step without one), relative to
+    ``relative_to``'s speed at the start when given; ``follow`` mode keeps the limits."""
+
+    entries: tuple[tuple[float, float | None], ...]
+    relative_to: str | None = None
+    mode: str = "follow"
+    max_accel: float = math.inf
+    max_decel: float = math.inf
+    line: int = 0
+
+
+@dataclass(frozen=True)
+class SynchronizeAction:
+    """Reach ``target`` when the master entity reaches ``master_target`` (both along the road),
+    with a final speed: absolute, or the master's speed plus a delta or times a factor (at
+    each step); none keeps the speed that arrives in time. Ends when the master arrives."""
+
+    master: str
+    master_target: Position
+    target: Position
+    final_speed: float | None = None
+    final_kind: str = "absolute"  #: "absolute", "delta" or "factor"
+    line: int = 0
+
+
+@dataclass(frozen=True)
+class EnvironmentAction:
+    """A GlobalAction's EnvironmentAction (time of day, weather, a road condition of friction
+    scale 1): nothing in ego's dynamics depends on it; accepted and done at once."""
+
+    line: int = 0
+
+
+@dataclass(frozen=True)
+class ParameterAction:
+    """A GlobalAction's ParameterAction or VariableAction (1.2): sets a parameter's or
+    variable's value, or adds to it or multiplies it, at once. What it changes is what
+    ParameterConditions and VariableConditions see; attributes keep the values they were
+    read with before the run."""
+
+    kind: str  #: "parameter" or "variable"
+    name: str
+    op: str  #: "set", "add" or "multiply"
+    value: object
+    initial: object  #: the declared value (what the first modification starts from)
+    line: int = 0
+
+
 PrivateAction = (
     SpeedAction
     | LaneChangeAction
@@ -209,6 +272,10 @@ PrivateAction = (
     | FollowTrajectoryAction
     | ControllerAction
     | LongitudinalDistanceAction
+    | EnvironmentAction
+    | ParameterAction
+    | SynchronizeAction
+    | SpeedProfileAction
 )
 
 
@@ -231,8 +298,9 @@ class Condition:
     element_ref: str = ""
     state: str = ""
     parameter: str = ""
-    #: the parameter's value where the condition is (a story's own declaration shadows the
-    #: file's); parameters do not change during a run
+    #: the parameter's (or variable's) declared value where the condition is (a story's own
+    #: declaration shadows the file's); a ParameterAction or VariableAction changes what the
+    #: condition sees during the run (the storyboard's store)
     parameter_value: object = None
     line: int = 0
     ref_line: int = 0  #: the line of the StoryboardElementStateCondition (its reference)

@@ -21,6 +21,8 @@ from collections import deque
 from dataclasses import dataclass
 from typing import Protocol
 
+import numpy as np
+
 from ego.openscenario import model as M
 from ego.openscenario.dynamics import (
     Transition,
@@ -31,6 +33,7 @@ from ego.openscenario.dynamics import (
 
 INF = math.inf
 EPS = 1e-9
+STILL = 1e-3  #: a speed (m/s) below which an entity stands still (StandStillCondition)
 STANDBY, RUNNING, COMPLETE = "standby", "running", "complete"
 
 
@@ -50,6 +53,12 @@ class EntityState:
     width: float = 1.8
     traveled: float = 0.0
     d_front: float = 0.0
+    #: longitudinal and lateral (+ left) acceleration (m/s^2) over the last storyboard step
+    #: (the change of speed, and speed times the change of heading), and the time (s) the
+    #: entity has stood still (speed below 1 mm/s) up to now
+    accel: float = 0.0
+    lat_accel: float = 0.0
+    still_for: float = 0.0
 
 
 class Driver(Protocol):
@@ -68,6 +77,10 @@ class Driver(Protocol):
 
     def speed(self, name: str, v_next: float, peak_rate: float) -> None: ...
     def speed_rate(self, name: str, target: float, rate: float) -> None: ...
+    def blind(self, name: str) -> bool:
+        """Whether ``name`` is moved sideways by a script (SUMO then takes a set speed at
+        once, whatever its deceleration)."""
+
     def lateral(self, name: str, d_next: float, peak_speed: float) -> None: ...
     def teleport(self, name: str, x: float, y: float, heading: float) -> None: ...
     def place(self, name: str, x: float, y: float, heading: float, speed: float) -> None: ...
@@ -98,6 +111,44 @@ def box_point_distance(e: EntityState, x: float, y: float) -> float:
     dx, dy = x - e.x, y - e.y
     lx, ly = abs(c * dx + s * dy), abs(-s * dx + c * dy)
     return math.hypot(max(lx - 0.5 * e.length, 0.0), max(ly - 0.5 * e.width, 0.0))
+
+
+def speed_profile_knots(a: M.SpeedProfileAction, t0: float, v0: float, ref: float) -> tuple[list[float], list[float]]:
+    """The (times, speeds) a SpeedProfileAction's speed goes through linearly from (t0, v0):
+    each entry's speed (plus ``ref``, the entity's speed, when relative) reached in its time;
+    no time (or 0) at the acceleration or deceleration limit (a step without one); in follow
+    mode no faster than the limits."""
+    ts, vs = [t0], [v0]
+    for speed, time in a.entries:
+        target = max(speed + ref, 0.0)
+        dv = target - vs[-1]
+        limit = a.max_accel if dv > 0 else a.max_decel
+        least = abs(dv) / limit if math.isfinite(limit) else 0.0
+        dur = time if time else least
+        if a.mode == "follow":
+            dur = max(dur, least)
+        ts.append(ts[-1] + dur)
+        vs.append(target)
+    return ts, vs
+
+
+def boxes_overlap(a: EntityState, b: EntityState) -> bool:
+    """Whether two entities' boxes (oriented rectangles) overlap or touch: no separating axis
+    among the four edge normals."""
+
+    def corners(e: EntityState) -> list[tuple[float, float]]:
+        c, s = math.cos(e.yaw), math.sin(e.yaw)
+        hl, hw = 0.5 * e.length, 0.5 * e.width
+        return [(e.x + c * u - s * v, e.y + s * u + c * v) for u, v in ((hl, hw), (hl, -hw), (-hl, -hw), (-hl, hw))]
+
+    ca, cb = corners(a), corners(b)
+    for e in (a, b):
+        for ax, ay in ((math.cos(e.yaw), math.sin(e.yaw)), (-math.sin(e.yaw), math.cos(e.yaw))):
+            pa = [ax * x + ay * y for x, y in ca]
+            pb = [ax * x + ay * y for x, y in cb]
+            if max(pa) < min(pb) - EPS or max(pb) < min(pa) - EPS:
+                return False
+    return True
 
 
 class ConditionState:
@@ -162,6 +213,11 @@ class Storyboard:
         self.scenario, self.ego, self.driver, self.h = scenario, ego, driver, step
         self.log = log or (lambda kind, text: None)
         self.states: dict[str, EntityState] = {name: EntityState() for name in scenario.entities}
+        #: entity -> its object type for a CollisionCondition ByType: vehicle, pedestrian, miscellaneous
+        self.kinds = {
+            name: {"miscObject": "miscellaneous"}.get(ent.vehicle.kind, ent.vehicle.kind)
+            for name, ent in scenario.entities.items()
+        }
         for name, ent in scenario.entities.items():
             self.states[name].length, self.states[name].width = ent.vehicle.length, ent.vehicle.width
         self.conditions: dict[int, ConditionState] = {}
@@ -198,6 +254,9 @@ class Storyboard:
         self.stopped = False
         self.t = 0.0
         self._fired: dict[int, bool] = {}
+        self._prev: dict[str, tuple[float, float]] = {}  #: entity -> (speed, yaw) a step ago
+        #: (kind, name) -> the value a ParameterAction or VariableAction gave it
+        self.store: dict[tuple[str, str], object] = {}
 
     def _element(self, kind: str, path: tuple[str, ...], node, max_count: int = 1) -> Element:
         """The element at ``path`` (names from its story down), found by its name and by every
@@ -231,6 +290,19 @@ class Storyboard:
             return compare(c.rule, e.speed - st[c.entity].speed, c.value)  # type: ignore[index, arg-type]
         if kind == "TraveledDistanceCondition":
             return e.traveled >= c.value - EPS  # type: ignore[operator]
+        if kind == "CollisionCondition":
+            others = [c.entity] if c.entity is not None else [n for n in self.kinds if self.kinds[n] == c.value]
+            return any(o != name and boxes_overlap(e, st[o]) for o in others)
+        if kind == "StandStillCondition":
+            return e.still_for >= c.value - EPS  # type: ignore[operator]
+        if kind == "AccelerationCondition":
+            if c.distance_type == "longitudinal":
+                acc = e.accel
+            elif c.distance_type == "lateral":
+                acc = e.lat_accel
+            else:
+                acc = math.hypot(e.accel, e.lat_accel)
+            return compare(c.rule, acc, c.value)  # type: ignore[arg-type]
         if kind == "ReachPositionCondition":
             x, y, _ = self.driver.position_xy(c.position, st)  # type: ignore[arg-type]
             return math.hypot(e.x - x, e.y - y) <= c.value + EPS  # type: ignore[operator]
@@ -278,8 +350,9 @@ class Storyboard:
         kind = c.kind
         if kind == "SimulationTimeCondition":
             return compare(c.rule, t, c.value)  # type: ignore[arg-type]
-        if kind == "ParameterCondition":
-            value = c.parameter_value
+        if kind in ("ParameterCondition", "VariableCondition"):
+            store = "parameter" if kind == "ParameterCondition" else "variable"
+            value = self.store.get((store, c.parameter), c.parameter_value)
             if isinstance(value, (int, float)) and not isinstance(value, bool):
                 try:
                     return compare(c.rule, float(value), float(c.value))  # type: ignore[arg-type]
@@ -301,6 +374,32 @@ class Storyboard:
         results = (self._entity_value(c, name) for name in c.triggering)
         return any(results) if c.triggering_rule == "any" else all(results)
 
+    def assign(self, a: M.ParameterAction) -> None:
+        """Do a parameter or variable action: set, add to or multiply the current value."""
+        key = (a.kind, a.name)
+        if a.op == "set":
+            self.store[key] = a.value
+        else:
+            current = float(self.store.get(key, a.initial))  # type: ignore[arg-type]
+            step = float(a.value)  # type: ignore[arg-type]
+            self.store[key] = current + step if a.op == "add" else current * step
+        self.log("action", f"t = {self.t:.2f} s: {a.kind} {a.name!r} = {self.store[key]}")
+
+    def _kinematics(self, t: float) -> None:
+        """Each entity's accelerations over the step that ends at ``t`` and its time standing
+        still (from the states at the previous step; zero at the first)."""
+        prev = self._prev
+        dt = t - self.t
+        for name, e in self.states.items():
+            before = prev.get(name)
+            if before is not None and dt > 0.0:
+                v0, yaw0 = before
+                e.accel = (e.speed - v0) / dt
+                dyaw = math.atan2(math.sin(e.yaw - yaw0), math.cos(e.yaw - yaw0))
+                e.lat_accel = 0.5 * (e.speed + v0) * dyaw / dt
+                e.still_for = e.still_for + dt if (e.speed < STILL and v0 < STILL) else 0.0
+            prev[name] = (e.speed, e.yaw)
+
     def _evaluate(self, t: float) -> None:
         fired = self._fired
         for key, cs in self.conditions.items():
@@ -316,6 +415,7 @@ class Storyboard:
     def step(self, t: float) -> None:
         """One storyboard step at time ``t`` (s): conditions, transitions, then the actions'
         commands for [t, t + step]."""
+        self._kinematics(t)
         self.t = t
         self._evaluate(t)
         for el in self.elements:
@@ -401,6 +501,12 @@ class Storyboard:
                 for a in ev.children:
                     a.state = STANDBY
                     a.go(RUNNING, "startTransition")
+                    act = a.node.action
+                    if isinstance(act, (M.EnvironmentAction, M.ParameterAction)):
+                        # a global action: done once, at once, whoever the actors are
+                        if isinstance(act, M.ParameterAction):
+                            self.assign(act)
+                        continue
                     for actor in actors:
                         runs.append(self._start_action(a, actor, t))
                 self.running[id(ev)] = runs
@@ -448,11 +554,11 @@ class ActionRun:
         self.board, self.element, self.actor, self.action = board, element, actor, action
         self.finished = False
         self.profile: Transition | None = None
-        if isinstance(action, (M.SpeedAction, M.LongitudinalDistanceAction)):
+        if isinstance(action, (M.SpeedAction, M.LongitudinalDistanceAction, M.SynchronizeAction, M.SpeedProfileAction)):
             self.domains: tuple[str, ...] = ("long",)
         elif isinstance(action, (M.LaneChangeAction, M.LaneOffsetAction)):
             self.domains = ("lat",)
-        elif isinstance(action, M.ControllerAction):
+        elif isinstance(action, (M.ControllerAction, M.EnvironmentAction, M.ParameterAction)):
             self.domains = ()  # the ego keeps ego's controller, the others their driver
         else:
             self.domains = ("long", "lat")
@@ -487,7 +593,7 @@ class ActionRun:
                 drv.ego_speed(self.profile, rel)
                 self.finished = not a.continuous
                 return
-            if dyn.shape == "linear" and dyn.dimension == "rate" and v0 != target:
+            if dyn.shape == "linear" and dyn.dimension == "rate" and v0 != target and not drv.blind(self.actor):
                 drv.speed_rate(self.actor, target, dyn.value)  # SUMO's own per-step rate: exact
                 self._native = True
             else:
@@ -516,11 +622,14 @@ class ActionRun:
                 drv.ego_lateral(self.profile)
                 self.finished = True
                 return
-        elif isinstance(a, M.ControllerAction):
+        elif isinstance(a, (M.ControllerAction, M.EnvironmentAction)):
             self.finished = True
             return
-        elif isinstance(a, M.LongitudinalDistanceAction):
-            return  # commanded step by step (:meth:`_keep_distance`)
+        elif isinstance(a, (M.LongitudinalDistanceAction, M.SynchronizeAction)):
+            return  # commanded step by step (:meth:`_keep_distance`, :meth:`_synchronize`)
+        elif isinstance(a, M.SpeedProfileAction):
+            self.knots = speed_profile_knots(a, t, me.speed, b.states[a.relative_to].speed if a.relative_to else 0.0)
+            return
         elif isinstance(a, M.TeleportAction):
             x, y, h = drv.position_xy(a.position, b.states)
             drv.teleport(self.actor, x, y, h)
@@ -566,6 +675,41 @@ class ActionRun:
         held = a.distance if a.distance is not None else (a.time_gap or 0.0) * me.speed
         if not a.continuous and abs(gap - held) < 0.01:
             self.finished = True
+
+    def _synchronize(self, a: M.SynchronizeAction) -> None:
+        """The speed over the next step on the profile that puts the actor at its target when
+        the master reaches its own, the master driving on at its speed (re-planned every
+        step): with a final speed v_f, v(tau) = v + b tau + c tau^2 with v(T) = v_f and its
+        integral over [0, T] the distance left; without, the constant speed d / T. Ends when
+        the master is at its target."""
+        b = self.board
+        h, drv = b.h, b.driver
+        me, master = b.states[self.actor], b.states[a.master]
+        s_m = drv.road_frame(*drv.position_xy(a.master_target, b.states)[:2])[0]
+        s_a = drv.road_frame(*drv.position_xy(a.target, b.states)[:2])[0]
+        d_m, d = s_m - master.s, s_a - me.s
+        if d_m <= EPS:
+            self.finished = True
+            return
+        if master.speed <= EPS:
+            return  # the master stands: no arrival time to meet
+        T = d_m / master.speed
+        if a.final_speed is None:
+            v = d / T
+        else:
+            vf = a.final_speed
+            if a.final_kind == "delta":
+                vf = master.speed + a.final_speed
+            elif a.final_kind == "factor":
+                vf = master.speed * a.final_speed
+            if T <= h:
+                v = vf
+            else:
+                dv, dd = vf - me.speed, d - me.speed * T
+                c = (3.0 * dv * T - 6.0 * dd) / T**3
+                bb = (dv - c * T * T) / T
+                v = me.speed + bb * h + c * h * h
+        drv.speed(self.actor, max(v, 0.0), INF)
 
     def _trajectory_start(self, t: float) -> None:
         b, a = self.board, self.action
@@ -623,6 +767,10 @@ class ActionRun:
                 target = max(ref + a.value if a.relative_kind == "delta" else ref * a.value, 0.0)
                 drv.speed(self.actor, target, INF)
                 return
+            if self._native and drv.blind(self.actor):
+                # a scripted lateral move makes SUMO take a set speed at once (no braking
+                # limit): the rest of the profile is commanded step by step
+                self._native = False
             if not self._native:
                 drv.speed(self.actor, p.value(t + h), max(p.peak_rate, 0.0))  # type: ignore[union-attr]
             if p.done(t + h) and not a.continuous:  # type: ignore[union-attr]
@@ -635,6 +783,15 @@ class ActionRun:
                 drv.release(self.actor)
         elif isinstance(a, M.LongitudinalDistanceAction):
             self._keep_distance(a, t)
+        elif isinstance(a, M.SynchronizeAction):
+            self._synchronize(a)
+        elif isinstance(a, M.SpeedProfileAction):
+            ts, vs = self.knots
+            t1 = t + h
+            v = vs[-1] if t1 >= ts[-1] else float(np.interp(t1, ts, vs))
+            drv.speed(self.actor, max(v, 0.0), INF)
+            if t1 >= ts[-1] - EPS:
+                self.finished = True
         elif isinstance(a, M.FollowTrajectoryAction):
             x, y, heading, speed, end = self._trajectory_point(t + h)
             drv.place(self.actor, x, y, heading, speed)

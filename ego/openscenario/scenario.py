@@ -206,6 +206,9 @@ def _place(pos: M.Position, roads: RoadMap, centre: dict) -> tuple:
         if not 0 <= index < len(edge.lanes):
             raise ValueError(f"dLane {pos.dlane} from {pos.entity}'s lane leaves the road ({len(edge.lanes)} lanes)")
         return edge.lanes[index], s + pos.ds, pos.offset
+    if isinstance(pos, M.RelativeObjectPosition):
+        # at the start the entity lies along its lane: dx along it, dy across
+        return _lane_at(edge, lane, off + pos.dy, s + pos.dx)
     return _lane_at(edge, lane, off + pos.dt, s + pos.ds)
 
 
@@ -599,6 +602,12 @@ class FileScenario(Scenario):
             x, y = poly.offset_point(pos, d_extra)
             return x, y, poly.heading_at(pos)
         e = states[position.entity]
+        if isinstance(position, M.RelativeObjectPosition):
+            # from the entity's reference point (its box centre less the box's centre x)
+            back = self.board.scenario.entities[position.entity].vehicle.center_x
+            c, s_ = math.cos(e.yaw), math.sin(e.yaw)
+            rx, ry = e.x - back * c, e.y - back * s_
+            return rx + c * position.dx - s_ * position.dy, ry + s_ * position.dx + c * position.dy, e.yaw
         if isinstance(position, M.RelativeLanePosition):
             s, d = e.s + position.ds, self.lane_centre(0, e.d, position.dlane) + position.offset
         else:
@@ -643,6 +652,9 @@ class FileScenario(Scenario):
             return
         self._limit(name, peak_rate)
         self.bridge.set_speed(name, v_next)
+
+    def blind(self, name: str) -> bool:
+        return name in self._lateral_free
 
     def speed_rate(self, name: str, target: float, rate: float) -> None:
         if target < self.board.states[name].speed:
@@ -806,7 +818,14 @@ def _check_ego_actions(model: M.Scenario, ego: str) -> None:
                     for ev in man.events:
                         for a in ev.actions:
                             if isinstance(
-                                a.action, (M.TeleportAction, M.FollowTrajectoryAction, M.LongitudinalDistanceAction)
+                                a.action,
+                                (
+                                    M.TeleportAction,
+                                    M.FollowTrajectoryAction,
+                                    M.LongitudinalDistanceAction,
+                                    M.SynchronizeAction,
+                                    M.SpeedProfileAction,
+                                ),
                             ):
                                 raise ScenarioFileError(
                                     model.path,

@@ -40,6 +40,7 @@ def load(path: str, controllers: list[str], sample: int | None = None, seed: int
     for name in dist.columns:
         if name not in params:
             raise bad(f"unknown parameter {name!r} (not declared in {dist.scenario}){did_you_mean(name, params)}")
+    distribution.fill_defaults(dist, {k: p.value for k, p in params.items()})
     scenario, cls = scenario_of({"scenario": dist.scenario}, bad)
     check_controllers(controllers, cls, bad)
     if dist.total * len(controllers) > MAX_RUNS:

@@ -112,12 +112,16 @@ def test_list_file(files, capsys):
     assert "Ego                      Vehicle (car)" in text and "<- the ego" in text
     assert "traffic_density" in text and "(sets ego's parameter)" in text
     bad = files / "bad.xosc"
-    bad.write_text((files / "emergency_brake.xosc").read_text().replace("<Properties/>", "<Properties/><Trailer/>", 1))
+    bad.write_text(
+        (files / "emergency_brake.xosc")
+        .read_text()
+        .replace("<Properties/>", "<Properties/><Trailer><Vehicle/></Trailer>", 1)
+    )
     assert main(["list", str(bad), "--json"]) == 0
     listing = json.loads(capsys.readouterr().out)
     assert listing["supported"] is False
     assert [e for e in listing["elements"] if not e["supported"]] == [
-        {"element": "Trailer", "line": 51, "supported": False}
+        {"element": "Vehicle", "line": 51, "supported": False}
     ]
     assert listing["ego"] == "Ego"
     # the ego's parameters as a run of the file starts them (its Init), not FileConfig's

@@ -234,9 +234,9 @@ HAND = [
     ),
     (
         "global-action",
-        sub("<Actions>\n", "<Actions>\n        <GlobalAction><EnvironmentAction/></GlobalAction>\n"),
-        "<GlobalAction",
-        unsupported("GlobalAction"),
+        sub("<Actions>\n", "<Actions>\n        <GlobalAction><TrafficAction/></GlobalAction>\n"),
+        "<TrafficAction",
+        unsupported("TrafficAction"),
     ),
     (
         "distribution",
@@ -638,22 +638,24 @@ def _sg_cases():
     un = unsupported
     return [
         (
-            "sg-acceleration",
-            lambda: base(entity_trigger(xosc.AccelerationCondition(2, xosc.Rule.greaterThan))),
+            "sg-acceleration-vertical",
+            lambda: base(
+                entity_trigger(xosc.AccelerationCondition(2, xosc.Rule.greaterThan, xosc.DirectionalDimension.vertical))
+            ),
             "<AccelerationCondition",
-            un("AccelerationCondition"),
+            f"a vertical <AccelerationCondition> is not supported by ego (its roads are planar; see {DOCS})",
         ),
         (
-            "sg-standstill",
-            lambda: base(entity_trigger(xosc.StandStillCondition(1))),
+            "sg-standstill-negative",
+            lambda: base(entity_trigger(xosc.StandStillCondition(-1))),
             "<StandStillCondition",
-            un("StandStillCondition"),
+            "bad value for duration in <StandStillCondition>: -1 (expected >= 0)",
         ),
         (
-            "sg-collision",
-            lambda: base(entity_trigger(xosc.CollisionCondition("Lead"))),
-            "<CollisionCondition",
-            un("CollisionCondition"),
+            "sg-collision-unknown",
+            lambda: base(entity_trigger(xosc.CollisionCondition("Truck"))),
+            'entityRef="Truck"',
+            "unknown entity 'Truck' in <EntityRef> (entities: Ego, Lead)",
         ),
         (
             "sg-end-of-road",
@@ -679,6 +681,31 @@ def _sg_cases():
             "<LongitudinalDistanceAction",
             "<LongitudinalDistanceAction> on the ego (Ego) is not supported by ego: the ego moves by its own "
             f"model (see {DOCS})",
+        ),
+        (
+            "sg-synchronize-on-ego",
+            lambda: base(
+                action=xosc.SynchronizeAction(
+                    "Lead", xosc.LanePosition(300, 0, -2, "0"), xosc.LanePosition(250, 0, -1, "0")
+                ),
+                actor="Ego",
+            ),
+            "<SynchronizeAction",
+            "<SynchronizeAction> on the ego (Ego) is not supported by ego: the ego moves by its own "
+            f"model (see {DOCS})",
+        ),
+        (
+            "sg-speed-profile-on-ego",
+            lambda: base(action=xosc.SpeedProfileAction([20, 10], xosc.FollowingMode.position, [2, 2]), actor="Ego"),
+            "<SpeedProfileAction",
+            "<SpeedProfileAction> on the ego (Ego) is not supported by ego: the ego moves by its own "
+            f"model (see {DOCS})",
+        ),
+        (
+            "sg-variable-undeclared",
+            lambda: base(action=xosc.VariableAddAction("Nope", 1)),
+            "<VariableAction",
+            "variable 'Nope' is not declared (declared: none)",
         ),
         (
             "sg-visibility",

@@ -209,15 +209,22 @@ def _line(path, marker: str) -> int:
 
 
 def test_list_refuses_what_run_refuses(tmp_path, capsys):
-    """A TrailerHitch inside a vehicle catalog entry, a bad attribute value and an Init action
+    """A trailer attached in a vehicle catalog entry, a bad attribute value and an Init action
     outside the subset: ego list says NOT SUPPORTED with ego run's own one-line error, which
     names the line of the element itself."""
     path = _cut_in(tmp_path)
     cat = tmp_path / "catalogs" / "VehicleCatalog.xosc"
-    cat.write_text(cat.read_text().replace("</Axles>", '</Axles>\n      <TrailerHitch dx="-1"/>'))
+    cat.write_text(
+        cat.read_text().replace(
+            "</Axles>", '</Axles>\n      <TrailerHitch dx="-1"/><Trailer><EntityRef entityRef="T"/></Trailer>'
+        )
+    )
     listing, err = _list_and_run(path, capsys)
     assert listing["supported"] is False
-    assert listing["error"] == f"{cat}:{_line(cat, '<TrailerHitch')}: " + unsupported_text("TrailerHitch")
+    assert listing["error"] == (
+        f"{cat}:{_line(cat, '<Trailer>')}: a trailer (entityRef 'T') is not supported by ego: it runs single vehicles"
+        " (see docs/openscenario.md)"
+    )
     assert err == f"ego: error: {listing['error']}"
 
     path = _cut_in(tmp_path / "b")

@@ -3,6 +3,7 @@ the template's value constraints applied before running, --sample, a real sweep 
 
 from __future__ import annotations
 
+import json
 import shutil
 from pathlib import Path
 
@@ -194,3 +195,89 @@ def test_stochastic_whole_number_parameter_is_rounded(files):
     var = sweep_xosc.load(write(files, body, "ccrb_int.xosc"), ["pid"])
     gaps = [p["LeadGap"] for p in var.spec.listed]
     assert var.total == 50 and all(isinstance(g, int) for g in gaps) and set(gaps) <= {10, 11, 12}
+
+
+def test_a_value_set_that_leaves_a_parameter_out_keeps_the_template_value(files):
+    """The reference player's cut-in_parameter_set.xosc form: the second ParameterValueSet
+    assigns only one of the two parameters the first assigns; the other keeps the scenario
+    file's declared value (LeadBrakeTime 2 in ccrb.xosc)."""
+    multi = (
+        "<DeterministicMultiParameterDistribution><ValueSetDistribution>"
+        '<ParameterValueSet><ParameterAssignment parameterRef="EgoSpeed" value="10"/>'
+        '<ParameterAssignment parameterRef="LeadBrakeTime" value="1"/></ParameterValueSet>'
+        '<ParameterValueSet><ParameterAssignment parameterRef="EgoSpeed" value="20"/></ParameterValueSet>'
+        "</ValueSetDistribution></DeterministicMultiParameterDistribution>"
+    )
+    var = sweep_xosc.load(write(files, f"<Deterministic>{multi}</Deterministic>"), ["pid"])
+    assert var.spec.listed == (
+        {"EgoSpeed": 10.0, "LeadBrakeTime": 1.0},
+        {"EgoSpeed": 20.0, "LeadBrakeTime": 2.0},
+    )
+
+
+STOCHASTIC_RANGES = (
+    '<Stochastic numberOfTestRuns="10" randomSeed="1"><StochasticDistribution parameterName="LeadGap">'
+    '<UniformDistribution><Range lowerLimit="12" upperLimit="40"/></UniformDistribution></StochasticDistribution>'
+    '<StochasticDistribution parameterName="LeadDecel"><NormalDistribution expectedValue="4" variance="1">'
+    '<Range lowerLimit="2" upperLimit="6"/></NormalDistribution></StochasticDistribution></Stochastic>'
+)
+
+
+def test_falsify_searches_a_distributions_ranges(files):
+    from ego.falsify.spec import from_distribution
+
+    spec = from_distribution(write(files, STOCHASTIC_RANGES), ["pid"], None, 7)
+    assert [(d.name, d.lo, d.hi) for d in spec.dims] == [("LeadGap", 12.0, 40.0), ("LeadDecel", 2.0, 6.0)]
+    assert (spec.requirement, spec.budget, spec.seed) == ("no_collision", 7, 0)
+    det = write(
+        files,
+        f"<Deterministic>{single('LeadGap', step(10, 20, 5))}{single('LeadDecel', elements(2, 4))}</Deterministic>",
+    )
+    spec = from_distribution(det, ["pid"], "no_collision", None)
+    assert [(d.name, d.lo, d.hi) for d in spec.dims] == [("LeadGap", 10.0, 20.0), ("LeadDecel", 2.0, 4.0)]
+
+
+def test_falsify_refuses_a_distribution_without_ranges_in_one_line(files, capsys):
+    multi = (
+        "<Deterministic><DeterministicMultiParameterDistribution><ValueSetDistribution><ParameterValueSet>"
+        '<ParameterAssignment parameterRef="LeadGap" value="10"/></ParameterValueSet></ValueSetDistribution>'
+        "</DeterministicMultiParameterDistribution></Deterministic>"
+    )
+    path = write(files, multi)
+    assert main(["falsify", path, "-c", "pid", "--out", str(files / "f")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "<DeterministicMultiParameterDistribution> has no numeric range" in err
+    assert main(["falsify", path, "--out", str(files / "f")]) == 2
+    assert "needs -c CONTROLLER" in capsys.readouterr().err
+    assert not (files / "f").exists()
+
+
+@pytest.mark.sumo
+def test_falsify_runs_over_a_distribution_file(files, capsys):
+    out = files / "fal"
+    path = write(files, STOCHASTIC_RANGES)
+    code = main(["falsify", path, "-c", "pid", "--budget", "2", "--optimizer", "random", "--out", str(out),
+                 "--jobs", "1", "--no-verify"])  # fmt: skip
+    assert code in (0, 1)
+    import pandas as pd
+
+    rows = pd.read_parquet(out / "results.parquet")
+    assert len(rows) == 2
+    assert rows["LeadGap"].between(12, 40).all() and rows["LeadDecel"].between(2, 6).all()
+
+
+def test_list_describes_a_distribution_file(files, capsys):
+    path = write(
+        files,
+        f"<Deterministic>{single('LeadGap', step(10, 20, 5))}{single('LeadDecel', elements(2, 4))}</Deterministic>",
+    )
+    assert main(["list", path]) == 0
+    out = capsys.readouterr().out
+    assert "a ParameterValueDistribution of" in out and "combinations  6 (0 outside" in out
+    assert f"ego sweep {path} --out DIR -c CONTROLLER" in out
+    assert main(["list", path, "--json"]) == 0
+    listing = json.loads(capsys.readouterr().out)
+    assert (listing["parameters"], listing["combinations"]) == (["LeadGap", "LeadDecel"], 6)
+    bad = write(files, f"<Deterministic>{single('Nope', elements(1, 2))}</Deterministic>", name="bad.xosc")
+    assert main(["list", bad]) == 2
+    assert "unknown parameter 'Nope'" in capsys.readouterr().err
