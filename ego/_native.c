@@ -333,8 +333,8 @@ static int within(double dx, double dy, double reach)
  * SurroundSensor.sync after SurroundView.sense's range filter: the vehicles within ``reach``
  * of ``front`` (x, y) (all when ``front`` is None), each placed in the lane frame (the
  * rotation ``straight`` = (x0, y0, ux, uy, s0, heading), or frame(x, y, yaw) -> (s, d, rel,
- * _)), as (id, s_lo, s_hi, d_lo, d_hi, v_s, v_d, accel, rel), sorted by s_lo (stable);
- * speeds: id -> v_s. */
+ * _) or, LanePolyline.place, (s, d, rel, turn, kappa)), as (id, s_lo, s_hi, d_lo, d_hi, v_s,
+ * v_d, accel, rel[, turn, kappa]), sorted by s_lo (stable); speeds: id -> v_s. */
 static PyObject *place(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
     if (nargs != 10 || !PyList_Check(args[0]) || !PyList_Check(args[1]) || !PyDict_Check(args[6])) {
@@ -375,7 +375,8 @@ static PyObject *place(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
             if (PyList_Append(near_ids, vid) || PyList_Append(near_rows, row)) goto fail;
         }
         const double x = r[0], y = r[1], yaw = r[2], v = r[3], length = r[4], width = r[5];
-        double s, d, rel;
+        double s, d, rel, bend[2] = {0.0, 0.0};
+        int bent = 0;
         if (rotation) {
             const double dx = x - st[0], dy = y - st[1];
             s = st[4] + dx * st[2] + dy * st[3];
@@ -384,13 +385,16 @@ static PyObject *place(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
         } else {
             PyObject *placed = PyObject_CallFunction(frame, "ddd", x, y, yaw);
             if (!placed) goto fail;
-            double f[4];
-            int bad = read_doubles(placed, f, 4, "frame's result");
+            double f[5] = {0.0, 0.0, 0.0, 0.0, 0.0};
+            bent = PyTuple_Check(placed) && PyTuple_GET_SIZE(placed) == 5;
+            int bad = read_doubles(placed, f, bent ? 5 : 4, "frame's result");
             Py_DECREF(placed);
             if (bad) goto fail;
             s = f[0];
             d = f[1];
             rel = f[2];
+            bend[0] = f[3];
+            bend[1] = f[4];
         }
         const double c = cos(rel), sn = sin(rel), ac = fabs(c), asn = fabs(sn);
         const double hs = 0.5 * (length * ac + width * asn);
@@ -406,7 +410,8 @@ static PyObject *place(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
         PyObject *vs_o = PyFloat_FromDouble(vs);
         if (!vs_o) goto fail;
         if (PyDict_SetItem(speeds, vid, vs_o)) { Py_DECREF(vs_o); goto fail; }
-        PyObject *full = PyTuple_New(9);
+        const int width_of = bent ? 11 : 9;
+        PyObject *full = PyTuple_New(width_of);
         if (!full) { Py_DECREF(vs_o); goto fail; }
         Py_INCREF(vid);
         PyTuple_SET_ITEM(full, 0, vid);
@@ -418,7 +423,11 @@ static PyObject *place(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
         PyTuple_SET_ITEM(full, 6, PyFloat_FromDouble(v * sn));
         PyTuple_SET_ITEM(full, 7, PyFloat_FromDouble(accel));
         PyTuple_SET_ITEM(full, 8, PyFloat_FromDouble(rel));
-        for (int k = 1; k < 9; k++) {
+        if (bent) {
+            PyTuple_SET_ITEM(full, 9, PyFloat_FromDouble(bend[0]));
+            PyTuple_SET_ITEM(full, 10, PyFloat_FromDouble(bend[1]));
+        }
+        for (int k = 1; k < width_of; k++) {
             if (!PyTuple_GET_ITEM(full, k)) { Py_DECREF(full); goto fail; }
         }
         if (s - hs != s - hs) sortable = 0; /* a NaN edge: Python's own sort decides */
@@ -1501,9 +1510,13 @@ static int get_double(PyObject *obj, PyObject *name, double *out)
     return (*out == -1.0 && PyErr_Occurred()) ? -1 : 0;
 }
 
-static int carry_on(PyObject *det, double sign, double moved, double since)
+static PyObject *s_d_, *s_along, *s_turn, *s_turn_, *s_turn_scan, *s_station, *s_rate_;
+
+static int carry_on(PyObject *det, double sign, double moved, double since, double turned)
 {
-    /* front: gap0 + speed * since - moved; rear (sign -1): gap0 + moved - speed * since */
+    /* SurroundSensor._carried: front: gap0 + speed * since - moved; rear (sign -1): gap0 +
+     * moved - speed * since; on a curved lane (turned: the lane's turn since the scan, not
+     * NaN... any value; det._d not None) moved less _d * turned */
     PyObject *o = PyObject_GetAttr(det, s_o);
     if (!o) return -1;
     const int none = o == Py_None;
@@ -1511,6 +1524,14 @@ static int carry_on(PyObject *det, double sign, double moved, double since)
     if (none) return 0;
     double gap0, speed;
     if (get_double(det, s_gap0, &gap0) < 0 || get_double(det, s_speed, &speed) < 0) return -1;
+    PyObject *line = PyObject_GetAttr(det, s_d_);
+    if (!line) return -1;
+    if (line != Py_None) {
+        const double d = PyFloat_AsDouble(line);
+        if (d == -1.0 && PyErr_Occurred()) { Py_DECREF(line); return -1; }
+        moved -= d * turned;
+    }
+    Py_DECREF(line);
     const double gap = sign > 0.0 ? gap0 + speed * since - moved : gap0 + moved - speed * since;
     return set_double(det, s_gap, gap);
 }
@@ -1539,7 +1560,12 @@ static PyObject *look_between(PyObject *self, PyObject *const *args, Py_ssize_t 
     if (!sensor) return NULL;
     PyObject *front = NULL, *rear = NULL, *s_obj = NULL, *result = NULL;
     double s, s_scan, t_scan, ds, front_gap, rear_gap, front_speed, rear_speed;
-    s_obj = PyObject_GetAttr(view, s_s);
+    /* a curved lane (sensor._along set): the ego's station and the lane's turn there */
+    PyObject *along = PyObject_GetAttr(sensor, s_along);
+    if (!along) goto done;
+    const int curved = along != Py_None;
+    Py_DECREF(along);
+    s_obj = PyObject_GetAttr(view, curved ? s_station : s_s);
     if (!s_obj) goto done;
     s = PyFloat_AsDouble(s_obj);
     if (s == -1.0 && PyErr_Occurred()) goto done;
@@ -1547,12 +1573,29 @@ static PyObject *look_between(PyObject *self, PyObject *const *args, Py_ssize_t 
     if (PyObject_SetAttr(sensor, s_t_, t_obj) < 0 || PyObject_SetAttr(sensor, s_s_, s_obj) < 0) goto done;
     if (get_double(sensor, s_s_scan, &s_scan) < 0 || get_double(sensor, s_t_scan, &t_scan) < 0) goto done;
     const double moved = s - s_scan, since = t - t_scan;
+    double turned = 0.0;
+    {
+        if (curved) {
+            PyObject *turn = PyObject_GetAttr(view, s_turn);
+            if (!turn) goto done;
+            const int bad = PyObject_SetAttr(sensor, s_turn_, turn);
+            double now = PyFloat_AsDouble(turn), then;
+            Py_DECREF(turn);
+            if (bad < 0 || (now == -1.0 && PyErr_Occurred()) || get_double(sensor, s_turn_scan, &then) < 0) goto done;
+            turned = now - then;
+        }
+    }
     front = PyObject_GetAttr(sensor, s_front);
     rear = front ? PyObject_GetAttr(sensor, s_rear) : NULL;
     if (!rear) goto done;
-    if (carry_on(front, 1.0, moved, since) < 0 || carry_on(rear, -1.0, moved, since) < 0) goto done;
+    if (carry_on(front, 1.0, moved, since, turned) < 0 || carry_on(rear, -1.0, moved, since, turned) < 0) goto done;
     /* the gaps and TTCs */
-    if (get_double(view, s_ds, &ds) < 0 || get_double(front, s_gap, &front_gap) < 0
+    if (curved) { /* the ego's speed along the line the gaps are measured along */
+        double rate;
+        if (get_double(view, s_ds, &ds) < 0 || get_double(sensor, s_rate_, &rate) < 0) goto done;
+        ds = ds * rate;
+    } else if (get_double(view, s_ds, &ds) < 0) goto done;
+    if (get_double(front, s_gap, &front_gap) < 0
         || get_double(front, s_speed, &front_speed) < 0 || get_double(rear, s_gap, &rear_gap) < 0
         || get_double(rear, s_speed, &rear_speed) < 0)
         goto done;
@@ -1870,8 +1913,9 @@ python:
  *  - near(objects, lo, hi, h, m): the objects whose extent across the lane, widened by
  *    |v_d| h + m, overlaps (lo, hi): scan's and _scan_lane's filter (m = 0 there: x + 0.0
  *    compares as x);
- *  - nearest(objects, lo, hi, e_lo, e_hi, since, ahead, behind): _nearest, the Detections
- *    filled as Detection._found and Detection.clear fill them.
+ *  - nearest(objects, lo, hi, e_lo, e_hi, since, ahead, behind[, along]): _nearest, the
+ *    Detections filled as Detection._found and Detection.clear fill them; with ``along`` =
+ *    (d_min, d_max, turn, ego_front, ego_rear) (a curved lane), _nearest_along and Detection._found_along.
  * An object is the sensor's tuple (id, s_lo, s_hi, d_lo, d_hi, v_s, v_d, accel, rel).
  * ------------------------------------------------------------------------------------- */
 static PyObject *s_lo_, *s_hi_, *s_since_, *str_empty, *float_inf;
@@ -1930,6 +1974,14 @@ static int detection_found(PyObject *det, PyObject *o, double gap, PyObject *lo,
     return bad ? -1 : 0;
 }
 
+/* Detection._found_along(o, gap, lo, hi, since, line, speed) */
+static int detection_found_along(PyObject *det, PyObject *o, double gap, PyObject *lo, PyObject *hi, PyObject *since,
+                                 double line, double speed)
+{
+    if (detection_found(det, o, gap, lo, hi, since) < 0) return -1;
+    return (set_double(det, s_speed, speed) < 0 || set_double(det, s_d_, line) < 0) ? -1 : 0;
+}
+
 static int detection_clear(PyObject *det)
 {
     return (PyObject_SetAttr(det, s_id, str_empty) < 0 || PyObject_SetAttr(det, s_gap, float_inf) < 0
@@ -1939,10 +1991,95 @@ static int detection_clear(PyObject *det)
                : 0;
 }
 
+/* SurroundSensor._nearest_along: the same arithmetic, in the same order */
+static PyObject *nearest_along(PyObject *const *args, const double *lim, const double *along)
+{
+    PyObject *objects = args[0], *lo_obj = args[1], *hi_obj = args[2], *ahead = args[6], *behind = args[7];
+    const double lo = lim[0], hi = lim[1], e_lo = lim[2], e_hi = lim[3], since = lim[4];
+    const double d_min = along[0], d_max = along[1], turn = along[2], ego_front = along[3], ego_rear = along[4];
+    const double twice_mid = e_lo + e_hi;
+    double best_ahead = Py_HUGE_VAL, best_behind = Py_HUGE_VAL, d_ahead = 0.0, d_behind = 0.0;
+    PyObject *front = NULL, *rear = NULL;
+    for (Py_ssize_t i = 0; i < PyList_GET_SIZE(objects); i++) {
+        PyObject *o = PyList_GET_ITEM(objects, i);
+        double x[11];
+        if (object_doubles(o, x) < 0) return NULL;
+        if (PyTuple_GET_SIZE(o) < 11) {
+            PyErr_SetString(PyExc_TypeError, "a sensed object on a curved lane must carry its turn and curvature");
+            return NULL;
+        }
+        const double shift = x[6] * since;
+        if (x[4] + shift <= lo || x[3] + shift >= hi) continue;
+        for (int k = 9; k < 11; k++) {
+            x[k] = PyFloat_AsDouble(PyTuple_GET_ITEM(o, k));
+            if (x[k] == -1.0 && PyErr_Occurred()) return NULL;
+        }
+        const double move = x[5] * since;
+        const double a = x[1] + move, b = x[2] + move;
+        const double kappa = x[10];
+        const double bend = x[9] + kappa * move - turn;
+        const double d_o = 0.5 * (x[3] + x[4]) + shift;
+        const double half = 0.5 * (x[2] - x[1]);
+        const double grow = half * kappa / (1.0 - kappa * d_o);
+        const double k = fabs(kappa), w = 0.5 * (x[4] - x[3]);
+        const double corner = half * k * w / (1.0 - k * w);
+        double g0, g1;
+        if (a + b >= twice_mid) {
+            const double raw = a - e_hi;
+            g0 = raw - d_min * bend;
+            g1 = raw - d_max * bend;
+        } else {
+            const double raw = e_lo - b;
+            g0 = raw + d_min * bend;
+            g1 = raw + d_max * bend;
+        }
+        double extra = grow * (d_o - d_min);
+        if (extra > 0.0) g0 -= extra;
+        extra = grow * (d_o - d_max);
+        if (extra > 0.0) g1 -= extra;
+        const int outer = g1 < g0;
+        double gap = outer ? g1 : g0;
+        const double line = outer ? d_max : d_min;
+        if (a + b >= twice_mid) {
+            gap = gap - corner - ego_front;
+            if (gap < best_ahead) {
+                best_ahead = gap;
+                front = o;
+                d_ahead = line;
+            }
+        } else {
+            gap = gap - corner - ego_rear;
+            if (gap < best_behind) {
+                best_behind = gap;
+                rear = o;
+                d_behind = line;
+            }
+        }
+    }
+    PyObject *since_obj = args[5];
+    PyObject *dets[2] = {ahead, behind}, *found[2] = {front, rear};
+    const double gaps[2] = {best_ahead, best_behind}, lines[2] = {d_ahead, d_behind};
+    for (int k = 0; k < 2; k++) {
+        PyObject *o = found[k];
+        if (!o) {
+            if (detection_clear(dets[k]) < 0) return NULL;
+            continue;
+        }
+        double x[11];
+        if (object_doubles(o, x) < 0) return NULL;
+        const double kappa = PyFloat_AsDouble(PyTuple_GET_ITEM(o, 10));
+        if (kappa == -1.0 && PyErr_Occurred()) return NULL;
+        const double rate = (1.0 - kappa * lines[k]) / (1.0 - kappa * (0.5 * (x[3] + x[4]) + x[6] * since));
+        if (detection_found_along(dets[k], o, gaps[k], lo_obj, hi_obj, since_obj, lines[k], x[5] * rate) < 0)
+            return NULL;
+    }
+    Py_RETURN_NONE;
+}
+
 static PyObject *nearest(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
-    if (nargs != 8 || !PyList_CheckExact(args[0])) {
-        PyErr_SetString(PyExc_TypeError, "nearest(objects: list, lo, hi, e_lo, e_hi, since, ahead, behind)");
+    if ((nargs != 8 && nargs != 9) || !PyList_CheckExact(args[0])) {
+        PyErr_SetString(PyExc_TypeError, "nearest(objects: list, lo, hi, e_lo, e_hi, since, ahead, behind[, along])");
         return NULL;
     }
     PyObject *objects = args[0], *lo_obj = args[1], *hi_obj = args[2], *ahead = args[6], *behind = args[7];
@@ -1950,6 +2087,11 @@ static PyObject *nearest(PyObject *self, PyObject *const *args, Py_ssize_t nargs
     for (int i = 0; i < 5; i++) {
         lim[i] = PyFloat_AsDouble(args[i + 1]);
         if (lim[i] == -1.0 && PyErr_Occurred()) return NULL;
+    }
+    if (nargs == 9 && args[8] != Py_None) {
+        double along[5];
+        if (read_doubles(args[8], along, 5, "along")) return NULL;
+        return nearest_along(args, lim, along);
     }
     const double lo = lim[0], hi = lim[1], e_lo = lim[2], e_hi = lim[3], since = lim[4];
     const double twice_mid = e_lo + e_hi;
@@ -2001,7 +2143,8 @@ static int intern_loop_names(void)
         {&s_s_ref, "s_ref"}, {&s_ds_ref, "ds_ref"}, {&s_d_ref, "d_ref"}, {&s_dd_ref, "dd_ref"},
         {&s_lane_offset, "lane_offset"}, {&s_inside_since, "_inside_since"}, {&s_check_done, "check_done"},
         {&s_t, "t"}, {&s_s0, "s0"}, {&s_accel, "accel"}, {&s_lo_, "_lo"}, {&s_hi_, "_hi"},
-        {&s_since_, "_since"}, {&str_empty, ""}, {&s_bridge, "bridge"}, {&s_elapsed_, "_elapsed"},
+        {&s_since_, "_since"}, {&s_d_, "_d"}, {&s_along, "_along"}, {&s_turn, "turn"},
+        {&s_turn_, "_turn"}, {&s_turn_scan, "_turn_scan"}, {&s_station, "station"}, {&s_rate_, "_rate"}, {&str_empty, ""}, {&s_bridge, "bridge"}, {&s_elapsed_, "_elapsed"},
         {&s_step, "step"}, {&s_step_joint, "step_joint"},
         {&s_status, "status"}, {&s_rewards, "rewards"}, {&s_running, "running"},
     };
@@ -2035,7 +2178,7 @@ static PyMethodDef methods[] = {
     FASTCALL(road_frame, "road_frame(view) -> None (RoadSensor.frame)"),
     FASTCALL(look_between, "look_between(view, t) -> Collision | None (SurroundView.look)"),
     FASTCALL(near, "near(objects, lo, hi, h, m) -> the objects within reach (SurroundSensor.scan's filter)"),
-    FASTCALL(nearest, "nearest(objects, lo, hi, e_lo, e_hi, since, ahead, behind) -> None "
+    FASTCALL(nearest, "nearest(objects, lo, hi, e_lo, e_hi, since, ahead, behind[, along]) -> None "
                       "(SurroundSensor._nearest)"),
     FASTCALL(plan_steady, "plan_steady(fallback, packed, ego_speed, man, safety, obs, t) -> None "
                           "(EvasiveManoeuvre.plan)"),

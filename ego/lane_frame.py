@@ -76,11 +76,14 @@ class LanePolyline:
             heading.append(raw[i - 1][6] + turn * after / (before + after))
         heading.append(raw[-1][6])
         # segment: x0, y0, ux, uy, length, s0, direction, heading at start, heading
-        # change along it, curvature
+        # change along it, curvature, the lane's turn (unwrapped heading change) from its
+        # start to the segment's
         self._seg = []
+        turn = 0.0
         for i in range(n):
             change = wrap_angle(heading[i + 1] - heading[i])
-            self._seg.append((*raw[i], heading[i], change, change / raw[i][4]))
+            self._seg.append((*raw[i], heading[i], change, change / raw[i][4], turn))
+            turn += change
         self._hint = 0
         self._at = 0  #: the segment :meth:`_segment_at` found last
         #: (cell of GRID m) -> the segments passing through it, so a point far from the
@@ -183,6 +186,48 @@ class LanePolyline:
             wrap_angle(psi - seg[7] - u / seg[4] * seg[8]),
             seg[9],
         )
+
+    def place(self, x: float, y: float, yaw: float) -> tuple[float, float, float, float, float]:
+        """(station, d, heading error, turn, curvature) of a pose, for the surround sensor:
+        :meth:`frame`'s offset, heading error and curvature, the lane's turn from its start
+        to there (rad, unwrapped: the heading change it has curved through; :meth:`turn_at`)
+        and the point's station: its arc length along the centre line where the radius
+        through it meets it (``s`` projects on the chord: off a curved lane by d it is off
+        by up to d kappa L / 2 within each segment of length L; the station is not).
+
+        The arc length between stations s0 and s1 along the line ``d`` m left of the centre
+        line is then ``s1 - s0 - d (turn(s1) - turn(s0))``: each segment is an arc of its
+        curvature, and a parallel line d m to its left runs ``1 - kappa d`` as far."""
+        s, d, err, kappa, turn, station = self.locate(x, y, yaw)
+        return station, d, err, turn, kappa
+
+    def locate(self, x: float, y: float, psi: float) -> tuple[float, float, float, float, float, float]:
+        """:meth:`frame`'s (s, d, heading error, curvature), then the turn and the station of
+        :meth:`place`."""
+        i, along, across = self._closest(x, y)
+        seg = self._seg[i]
+        length = seg[4]
+        u = min(max(along, 0.0), length)
+        kappa = seg[9]
+        d = across + kappa * u * (length - u) * 0.5
+        frac = u / length
+        s = seg[5] + along
+        station = s
+        if kappa != 0.0:
+            q = 1.0 - kappa * d
+            if q > 0.5:  # the point nearer the line than half the radius: the arc's station
+                half = 0.5 * length
+                # along the chord unclamped: outside a bend's vertex the closest point is
+                # the vertex for a few cm, the radius through the point moves on
+                along = (x - seg[0]) * seg[2] + (y - seg[1]) * seg[3]
+                station = seg[5] + half + (along - half) / q
+        return s, d, wrap_angle(psi - seg[7] - frac * seg[8]), kappa, seg[10] + frac * seg[8], station
+
+    def turn_at(self, s: float) -> float:
+        """The lane's turn from its start to arc length ``s`` (rad, unwrapped, + left): the
+        integral of its curvature; constant beyond the ends."""
+        seg = self._seg[self._segment_at(s)]
+        return seg[10] + min(max((s - seg[5]) / seg[4], 0.0), 1.0) * seg[8]
 
     def heading_at(self, s: float) -> float:
         """The centre line's (interpolated tangent) heading at arc length ``s`` (rad)."""

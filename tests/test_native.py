@@ -2,6 +2,7 @@
 
 import contextlib
 import json
+import math
 import os
 import subprocess
 import sys
@@ -442,7 +443,29 @@ def test_road_frame_matches_the_python_frame(curved):
         assert _bits(getattr(native, n) for n in names) == _bits(getattr(python, n) for n in names)
 
 
+def _arc_lanes(width: float = 3.2, radius: float = 250.0):
+    """Three concentric lanes bending left (the middle one of ``radius`` m through (300,
+    ``width``), heading +x there), as LanePolylines of 2 m chords: a curved motorway."""
+    from ego.lane_frame import LanePolyline
+
+    cy = width + radius
+    lanes = {}
+    for i in range(3):
+        r = radius - (i - 1) * width
+        pts = [(300.0 + r * math.sin(a), cy - r * math.cos(a)) for a in np.linspace(-0.9, 0.9, int(1.8 * r / 2.0))]
+        lanes[i] = LanePolyline(pts, width, f"motorway_{i}")
+    return lanes
+
+
 def test_look_between_matches_the_python_look():
+    _look_between_matches(curved=False)
+
+
+def test_look_between_matches_the_python_look_on_a_curved_lane():
+    _look_between_matches(curved=True)
+
+
+def _look_between_matches(curved: bool):
     # two views fed the same scene by hand; the ego and the traffic move between looks, one
     # through ego._native.look_between, the other through SurroundView.look
     from ego.lane_frame import LanePolyline
@@ -452,22 +475,35 @@ def test_look_between_matches_the_python_look():
 
     config = EmergencyBrakeConfig()
     geometry = VehicleGeometry()
-    lanes = {i: LanePolyline([(0.0, 3.2 * i), (3000.0, 3.2 * i)], 3.2, f"motorway_{i}") for i in range(3)}
-    names = ("gap_front", "ttc_front", "gap_rear", "ttc_rear", "s")
+    if curved:
+        lanes = _arc_lanes()
+    else:
+        lanes = {i: LanePolyline([(0.0, 3.2 * i), (3000.0, 3.2 * i)], 3.2, f"motorway_{i}") for i in range(3)}
+    names = ("gap_front", "ttc_front", "gap_rear", "ttc_rear", "s", "station", "turn")
     rng = np.random.default_rng(3)
+    middle = lanes[1]
+    s_ego = middle.project(300.0, 3.2)[0]
+
+    def pose(s: float, d: float = 0.0) -> tuple[float, float, float]:
+        x, y = middle.offset_point(s, d)
+        return x, y, middle.heading_at(s)
+
     for case in range(40):
         views = []
-        # ahead and behind in the ego's lane (the one ahead touching it in every fifth case)
-        ahead = 300.0 + rng.uniform(2.0, 40.0) * (1 if case % 5 else 0.0)
+        # ahead and behind in the ego's lane (the one ahead touching it in every fifth case),
+        # on a curve a third car in the inner lane half across the ego's
+        ahead = rng.uniform(2.0, 40.0) * (1 if case % 5 else 0.0)
         rows = [
-            (ahead, 3.2, 0.0, rng.uniform(0.0, 30.0), 4.5, 1.8),
-            (300.0 - rng.uniform(4.0, 40.0), 3.2, 0.0, rng.uniform(0.0, 40.0), 4.5, 1.8),
+            (*pose(s_ego + 2.25 + 2.25 + ahead), rng.uniform(0.0, 30.0), 4.5, 1.8),
+            (*pose(s_ego - rng.uniform(4.0, 40.0)), rng.uniform(0.0, 40.0), 4.5, 1.8),
         ]
+        if curved:
+            rows.append((*pose(s_ego + rng.uniform(6.0, 30.0), 2.0), rng.uniform(0.0, 40.0), 4.5, 1.8))
         for native in (True, False):
             plant = ego_plant(config, geometry, (300.0, 3.2 * config.ego_lane, 0.0))
             view = SurroundView(config, geometry)
             view.setup(None, lanes, plant)
-            view.sensor.sync(0.0, ["lead", "back"], rows)
+            view.sensor.sync(0.0, ["lead", "back", "inner"][: len(rows)], rows)
             look = view.bind_look() if native else view.look
             views.append((view, plant, look))
         assert views[0][2].func is NATIVE.look_between
@@ -482,7 +518,8 @@ def test_look_between_matches_the_python_look():
             t = 0.01 * k
             found = []
             for view, plant, look in views:
-                plant.state = (300.0 + speed * t, speed, 3.2, 0.0, 0.0, 0.0)
+                x, y, psi = pose(s_ego + speed * t, 0.3 * k / 10)
+                plant.state = (x, speed, y, 0.0, psi, 0.0)
                 view.frame()
                 if case == 7 and k == 4:
                     view.s = float("nan")
@@ -491,7 +528,15 @@ def test_look_between_matches_the_python_look():
             assert _bits(getattr(a, n) for n in names) == _bits(getattr(b, n) for n in names), (case, k)
             assert _bits((a.sensor.front.gap, a.sensor.rear.gap)) == _bits((b.sensor.front.gap, b.sensor.rear.gap))
             assert repr(found[0]) == repr(found[1]), (case, k)
-            assert (a._looked, a.sensor._t, a.sensor._s is a.s) == (b._looked, b.sensor._t, b.sensor._s is b.s)
+            own = "station" if curved else "s"
+            assert (a._looked, a.sensor._t, a.sensor._s is getattr(a, own)) == (
+                b._looked,
+                b.sensor._t,
+                b.sensor._s is getattr(b, own),
+            )
+            assert _bits((a.sensor._turn, a.sensor.front.speed)) == _bits((b.sensor._turn, b.sensor.front.speed))
+        if curved:
+            assert views[0][0].sensor._along is not None and views[0][0].sensor.front._d is not None
 
 
 @pytest.mark.sumo
@@ -544,7 +589,8 @@ def test_plan_steady_gives_the_python_plans_every_row(scenario, controller, over
     assert 0 < len(c_calls) < len(py_calls) / 2, (len(c_calls), len(py_calls))
 
 
-def test_near_and_nearest_match_the_sensors_python_search(monkeypatch):
+@pytest.mark.parametrize("curved", [False, True], ids=["straight", "curved"])
+def test_near_and_nearest_match_the_sensors_python_search(monkeypatch, curved):
     # one scene, searched twice: through ego._native.near/nearest and through the Python
     # loops of SurroundSensor.scan, _scan_lane and _nearest; every Detection to the bit
     import ego.scenarios.sensor as sensor_module
@@ -556,8 +602,12 @@ def test_near_and_nearest_match_the_sensors_python_search(monkeypatch):
     config = EmergencyBrakeConfig()
     geometry = VehicleGeometry()
     lanes = {i: LanePolyline([(0.0, 3.2 * i), (3000.0, 3.2 * i)], 3.2, f"motorway_{i}") for i in range(3)}
-    fields = ("id", "gap", "speed", "accel", "_gap0", "_lo", "_hi", "_since")
+    if curved:
+        lanes = _arc_lanes()
+    fields = ("id", "gap", "speed", "accel", "_gap0", "_lo", "_hi", "_since", "_d")
     rng = np.random.default_rng(5)
+    middle = lanes[1]
+    s_ego = middle.project(300.0, 3.2)[0]
 
     def search(rows, native: bool, t_scan: float, heading: float):
         if not native:
@@ -569,7 +619,11 @@ def test_near_and_nearest_match_the_sensors_python_search(monkeypatch):
             view.setup(None, lanes, plant)
             sensor = view.sensor
             sensor.sync(0.0, [f"v{i}" for i in range(len(rows))], rows)
-            sensor.scan(t_scan, 300.0 - geometry.cg_to_front, 3.2, heading)
+            s = s_ego - geometry.cg_to_front
+            if curved:
+                sensor.scan(t_scan, s, 0.0, heading, middle.turn_at(s), middle.curvature_at(s))
+            else:
+                sensor.scan(t_scan, s, 3.2, heading)
             found = [sensor.front, sensor.rear]
             for lane in (0, 1, 2, 7):
                 pair = sensor_module.Detection(), sensor_module.Detection()
@@ -587,6 +641,10 @@ def test_near_and_nearest_match_the_sensors_python_search(monkeypatch):
             x = 300.0 + rng.uniform(-60.0, 60.0)
             y = rng.choice([0.0, 3.2, 6.4]) + rng.uniform(-1.8, 1.8)
             yaw = rng.uniform(-0.3, 0.3)
+            if curved:  # the same scene bent along the lanes
+                s = s_ego + x - 300.0
+                x, y = middle.offset_point(s, y - 3.2)
+                yaw += middle.heading_at(s)
             rows.append((x, y, yaw, rng.uniform(0.0, 40.0), 4.5, 1.8))
         if case % 3 == 1 and rows:  # two cars in one place: the first found is kept in both
             rows.append(rows[-1])
@@ -598,6 +656,8 @@ def test_near_and_nearest_match_the_sensors_python_search(monkeypatch):
         assert [o[0] for o in c_near] == [o[0] for o in py_near], case
         for a, b in zip(c_found, py_found, strict=True):
             assert (a.id, repr(a._o)) == (b.id, repr(b._o)), case
-            assert _bits(getattr(a, f) for f in fields[1:]) == _bits(getattr(b, f) for f in fields[1:]), case
+            assert (a._d is None) == (b._d is None) == (not curved or a._o is None), case
+            values = [f for f in fields[1:] if f != "_d" or a._d is not None]
+            assert _bits(getattr(a, f) for f in values) == _bits(getattr(b, f) for f in values), case
         seen += sum(d._o is not None for d in c_found)
     assert seen > 100  # the searches found something

@@ -339,13 +339,16 @@ class SurroundView(RoadSensor):
         """Gaps and TTCs now; a collision the simulator has not reported (yet) when the
         outlines overlap."""
         sensor = self.sensor
+        curved = self._line is None  # the sensor's stations: where the radius through the ego meets the lane
         if self._looked:  # between simulator steps: the same vehicles, moved on
-            sensor.advance(t, self.s)
+            sensor.advance(t, self.station if curved else self.s, self.turn)
         else:
-            sensor.scan(t, self.s, self.d_road, self.heading_error)
+            sensor.scan(
+                t, self.station if curved else self.s, self.d_road, self.heading_error, self.turn, self.curvature
+            )
             self._looked = True
         front, rear = sensor.front, sensor.rear
-        ds = self.ds
+        ds = self.ds if sensor._along is None else self.ds * sensor._rate  # along the line the gaps are
         # time_to_collision(gap, closing), inline: every control period
         front_gap = self.gap_front = front.gap
         closing = ds - front.speed
