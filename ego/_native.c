@@ -328,6 +328,198 @@ static int within(double dx, double dy, double reach)
     return value <= reach;
 }
 
+/* ---- LanePolyline's projection on plain data (ego.lane_frame: _closest, locate, place) -----
+ * A lane's ``_c`` = (segments, grid_x, grid_y, grid_seg): its segments as 11 doubles each
+ * (x0, y0, ux, uy, length, s0, direction, heading at start, heading change, curvature, turn)
+ * and its grid (cells of GRID m, sorted by (x, y), each with its one segment), built once per
+ * lane; ``_hint`` the segment the last projection found. The same arithmetic as the Python
+ * methods, in the same order: Python's min/max (the first argument unless the second is
+ * strictly beyond it, so NaN goes through as there). A point the Python method would raise
+ * on (an infinite coordinate into math.floor, an infinite angle into math.fmod) is left to it. */
+static PyObject *s_c_, *s_hint_, *s_turn, *s_station;
+#define LANE_GRID 10.0
+#define SEG_W 11
+
+typedef struct {
+    Py_buffer views[4];
+    const double *seg;
+    const long long *gx, *gy, *gs;
+    Py_ssize_t n, ng;
+} LaneData;
+
+static double py_max(double a, double b) { return b > a ? b : a; }
+static double py_min(double a, double b) { return b < a ? b : a; }
+
+static void lane_release(LaneData *L)
+{
+    for (int k = 0; k < 4; k++) PyBuffer_Release(&L->views[k]);
+}
+
+/* 0 with L filled, -1 with an exception, 1 when ``lane`` has no packed data */
+static int lane_acquire(PyObject *packed, LaneData *L)
+{
+    if (!PyTuple_Check(packed) || PyTuple_GET_SIZE(packed) != 4) return 1;
+    int k;
+    for (k = 0; k < 4; k++) {
+        if (PyObject_GetBuffer(PyTuple_GET_ITEM(packed, k), &L->views[k], PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0) break;
+        const char *fmt = L->views[k].format;
+        const int want_double = k == 0;
+        if ((want_double && strcmp(fmt, "d") != 0) || (!want_double && strcmp(fmt, "q") != 0)) {
+            PyBuffer_Release(&L->views[k]);
+            PyErr_SetString(PyExc_TypeError, "a lane's _c must be (array('d'), array('q') x 3)");
+            break;
+        }
+    }
+    if (k < 4) {
+        while (k-- > 0) PyBuffer_Release(&L->views[k]);
+        return -1;
+    }
+    L->seg = (const double *)L->views[0].buf;
+    L->n = L->views[0].len / (Py_ssize_t)(SEG_W * sizeof(double));
+    L->gx = (const long long *)L->views[1].buf;
+    L->gy = (const long long *)L->views[2].buf;
+    L->gs = (const long long *)L->views[3].buf;
+    L->ng = L->views[1].len / (Py_ssize_t)sizeof(long long);
+    if (L->n < 1 || L->views[2].len != L->views[1].len || L->views[3].len != L->views[1].len) {
+        lane_release(L);
+        PyErr_SetString(PyExc_ValueError, "a lane's _c is inconsistent");
+        return -1;
+    }
+    return 0;
+}
+
+/* LanePolyline._local */
+static void lane_local(const LaneData *L, Py_ssize_t i, double x, double y, double *out)
+{
+    const double *sg = L->seg + i * SEG_W;
+    const double x0 = sg[0], y0 = sg[1], ux = sg[2], uy = sg[3], length = sg[4];
+    const double dx = x - x0, dy = y - y0;
+    const double along = dx * ux + dy * uy;
+    const double across = uy * -dx + ux * dy;
+    out[0] = along;
+    out[1] = across;
+    if (along < 0.0) {
+        out[2] = dx * dx + dy * dy;
+    } else if (along > length) {
+        const double ex = dx - length * ux, ey = dy - length * uy;
+        out[2] = ex * ex + ey * ey;
+    } else {
+        out[2] = across * across;
+    }
+}
+
+/* the grid's segment of cell (cx, cy), or -1 */
+static long long lane_cell(const LaneData *L, long long cx, long long cy)
+{
+    Py_ssize_t lo = 0, hi = L->ng;
+    while (lo < hi) {
+        const Py_ssize_t mid = (lo + hi) / 2;
+        if (L->gx[mid] < cx || (L->gx[mid] == cx && L->gy[mid] < cy)) lo = mid + 1;
+        else hi = mid;
+    }
+    return (lo < L->ng && L->gx[lo] == cx && L->gy[lo] == cy) ? L->gs[lo] : -1;
+}
+
+/* LanePolyline._closest from segment *hint (updated): 0, or 1 where the Python method
+ * must decide (it raises there) */
+static int lane_closest(const LaneData *L, Py_ssize_t *hint, double x, double y, Py_ssize_t *seg_i, double *along,
+                        double *across)
+{
+    const Py_ssize_t n = L->n;
+    Py_ssize_t i = *hint;
+    if (i < 0 || i >= n) return 1;
+    double best[3], cand[3];
+    lane_local(L, i, x, y, best);
+    if (best[2] > LANE_GRID * LANE_GRID) {
+        const double fx = floor(x / LANE_GRID), fy = floor(y / LANE_GRID);
+        if (!isfinite(fx) || !isfinite(fy) || fabs(fx) > 1e15 || fabs(fy) > 1e15) return 1;
+        const long long cx = (long long)fx, cy = (long long)fy;
+        const long long own = lane_cell(L, cx, cy);
+        for (int a = -1; a <= 1; a++) {
+            for (int b = -1; b <= 1; b++) {
+                long long j;
+                if (own >= 0) {
+                    if (a != 0 || b != 0) continue;
+                    j = own;
+                } else {
+                    j = lane_cell(L, cx + a, cy + b);
+                    if (j < 0) continue;
+                }
+                lane_local(L, (Py_ssize_t)j, x, y, cand);
+                if (cand[2] < best[2]) {
+                    i = (Py_ssize_t)j;
+                    best[0] = cand[0], best[1] = cand[1], best[2] = cand[2];
+                }
+            }
+        }
+    }
+    for (int step = 1; step >= -1; step -= 2) {
+        Py_ssize_t j = i + step;
+        while (0 <= j && j < n) {
+            lane_local(L, j, x, y, cand);
+            if (cand[2] < best[2]) {
+                i = j;
+                best[0] = cand[0], best[1] = cand[1], best[2] = cand[2];
+                j += step;
+            } else {
+                break;
+            }
+        }
+    }
+    *hint = i;
+    double a = best[0];
+    const double length = L->seg[i * SEG_W + 4];
+    if (0 < i && a < 0.0) a = 0.0;
+    if (i < n - 1 && a > length) a = length;
+    *seg_i = i;
+    *along = a;
+    *across = best[1];
+    return 0;
+}
+
+/* lane_frame.wrap_angle of a finite angle */
+static double wrap_finite(double a)
+{
+    a = fmod(a + Py_MATH_PI, 2.0 * Py_MATH_PI);
+    if (a <= 0.0) a += 2.0 * Py_MATH_PI;
+    return a - Py_MATH_PI;
+}
+
+/* LanePolyline.locate: out = (s, d, heading error, curvature, turn, station); 0, or 1 where
+ * the Python method must decide; *hint updated only on 0 */
+static int lane_locate(const LaneData *L, Py_ssize_t *hint, double x, double y, double psi, double *out)
+{
+    Py_ssize_t i, h = *hint;
+    double along, across;
+    if (lane_closest(L, &h, x, y, &i, &along, &across)) return 1;
+    const double *sg = L->seg + i * SEG_W;
+    const double length = sg[4];
+    const double u = py_min(py_max(along, 0.0), length);
+    const double kappa = sg[9];
+    const double d = across + kappa * u * (length - u) * 0.5;
+    const double frac = u / length;
+    const double s = sg[5] + along;
+    double station = s;
+    if (kappa != 0.0) {
+        const double q = 1.0 - kappa * d;
+        if (q > 0.5) {
+            const double half = 0.5 * length;
+            const double raw = (x - sg[0]) * sg[2] + (y - sg[1]) * sg[3];
+            station = sg[5] + half + (raw - half) / q;
+        }
+    }
+    const double err = psi - sg[7] - frac * sg[8];
+    if (isinf(err)) return 1; /* math.fmod raises there */
+    out[0] = s;
+    out[1] = d;
+    out[2] = wrap_finite(err);
+    out[3] = kappa;
+    out[4] = sg[10] + frac * sg[8];
+    out[5] = station;
+    *hint = h;
+    return 0;
+}
+
 /* place(ids, rows, front, reach, straight, frame, previous, dt, rated, low_edge)
  *   -> (ids, rows, objects, speeds)
  * SurroundSensor.sync after SurroundView.sense's range filter: the vehicles within ``reach``
@@ -357,6 +549,25 @@ static PyObject *place(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
     if (filter && read_doubles(front, bumper, 2, "front")) return NULL;
     const int rotation = straight != Py_None;
     if (rotation && read_doubles(straight, st, 6, "straight")) return NULL;
+    /* a lane with packed data (LanePolyline): its place, on that data, from its _hint */
+    LaneData L;
+    int packed_lane = 0;
+    Py_ssize_t hint = 0;
+    if (!rotation && !PyCallable_Check(frame)) {
+        PyObject *packed = PyObject_GetAttr(frame, s_c_);
+        if (!packed) return NULL;
+        const int got = lane_acquire(packed, &L);
+        Py_DECREF(packed);
+        if (got != 0) {
+            if (got > 0) PyErr_SetString(PyExc_TypeError, "place: a lane without packed data");
+            return NULL;
+        }
+        PyObject *h = PyObject_GetAttr(frame, s_hint_);
+        hint = h ? PyLong_AsSsize_t(h) : -1;
+        Py_XDECREF(h);
+        if (hint == -1 && (!h || PyErr_Occurred())) { lane_release(&L); return NULL; }
+        packed_lane = 1;
+    }
 
     PyObject *near_ids = filter ? PyList_New(0) : (Py_INCREF(ids), ids);
     PyObject *near_rows = filter ? PyList_New(0) : (Py_INCREF(rows), rows);
@@ -375,16 +586,37 @@ static PyObject *place(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
             if (PyList_Append(near_ids, vid) || PyList_Append(near_rows, row)) goto fail;
         }
         const double x = r[0], y = r[1], yaw = r[2], v = r[3], length = r[4], width = r[5];
-        double s, d, rel, bend[2] = {0.0, 0.0};
+        double s, d, rel, bend[2] = {0.0, 0.0}, fl[6];
         int bent = 0;
         if (rotation) {
             const double dx = x - st[0], dy = y - st[1];
             s = st[4] + dx * st[2] + dy * st[3];
             d = dy * st[2] - dx * st[3];
             rel = yaw - st[5];
+        } else if (packed_lane && lane_locate(&L, &hint, x, y, yaw, fl) == 0) {
+            s = fl[5];
+            d = fl[1];
+            rel = fl[2];
+            bend[0] = fl[4];
+            bend[1] = fl[3];
+            bent = 1;
         } else {
-            PyObject *placed = PyObject_CallFunction(frame, "ddd", x, y, yaw);
+            PyObject *placed = NULL;
+            if (packed_lane) { /* the Python method decides (it raises) from the same hint */
+                PyObject *h = PyLong_FromSsize_t(hint);
+                if (!h || PyObject_SetAttr(frame, s_hint_, h) < 0) { Py_XDECREF(h); goto fail; }
+                Py_DECREF(h);
+                placed = PyObject_CallMethod(frame, "place", "ddd", x, y, yaw);
+            } else {
+                placed = PyObject_CallFunction(frame, "ddd", x, y, yaw);
+            }
             if (!placed) goto fail;
+            if (packed_lane) { /* where the Python method left the hint */
+                PyObject *h = PyObject_GetAttr(frame, s_hint_);
+                hint = h ? PyLong_AsSsize_t(h) : -1;
+                Py_XDECREF(h);
+                if (hint == -1 && (!h || PyErr_Occurred())) { Py_DECREF(placed); goto fail; }
+            }
             double f[5] = {0.0, 0.0, 0.0, 0.0, 0.0};
             bent = PyTuple_Check(placed) && PyTuple_GET_SIZE(placed) == 5;
             int bad = read_doubles(placed, f, bent ? 5 : 4, "frame's result");
@@ -467,8 +699,16 @@ static PyObject *place(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
         if (!none) goto fail;
         Py_DECREF(none);
     }
+    if (packed_lane) {
+        lane_release(&L);
+        packed_lane = 0;
+        PyObject *h = PyLong_FromSsize_t(hint);
+        if (!h || PyObject_SetAttr(frame, s_hint_, h) < 0) { Py_XDECREF(h); goto fail; }
+        Py_DECREF(h);
+    }
     return Py_BuildValue("(NNNN)", near_ids, near_rows, objects, speeds);
 fail:
+    if (packed_lane) lane_release(&L);
     PyMem_Free(keys);
     Py_XDECREF(near_ids);
     Py_XDECREF(near_rows);
@@ -1443,9 +1683,54 @@ static int set_double(PyObject *obj, PyObject *name, double value)
     return bad;
 }
 
-/* road_frame(view) -> None: RoadSensor.frame's straight-lane rotation (LanePolyline.frame's
- * arithmetic); a road other than the one view._line was taken from, or a curved one: the
- * Python method */
+
+/* RoadSensor.frame on a curved lane with packed data (LanePolyline.locate); else, or where
+ * the Python method decides, that method */
+static PyObject *road_frame_curved(PyObject *view, PyObject *road)
+{
+    PyObject *packed = PyObject_GetAttr(road, s_c_);
+    if (!packed) {
+        if (!PyErr_ExceptionMatches(PyExc_AttributeError)) return NULL;
+        PyErr_Clear();
+        return PyObject_CallMethodNoArgs(view, s_frame);
+    }
+    LaneData L;
+    const int got = lane_acquire(packed, &L);
+    Py_DECREF(packed);
+    if (got < 0) return NULL;
+    if (got > 0) return PyObject_CallMethodNoArgs(view, s_frame);
+    double x[NX], f[6];
+    PyObject *plant = PyObject_GetAttr(view, s_plant);
+    PyObject *state = plant ? PyObject_GetAttr(plant, s_state) : NULL;
+    Py_XDECREF(plant);
+    PyObject *hint_obj = state ? PyObject_GetAttr(road, s_hint_) : NULL;
+    if (!hint_obj) { Py_XDECREF(state); lane_release(&L); return NULL; }
+    Py_ssize_t hint = PyLong_AsSsize_t(hint_obj);
+    Py_DECREF(hint_obj);
+    int bad = (hint == -1 && PyErr_Occurred()) ? -1 : read_doubles(state, x, NX, "state");
+    Py_DECREF(state);
+    if (bad < 0) { lane_release(&L); return NULL; }
+    const double X = x[0], u = x[1], Y = x[2], v = x[3], psi = x[4];
+    const int defer = lane_locate(&L, &hint, X, Y, psi, f);
+    lane_release(&L);
+    if (defer) return PyObject_CallMethodNoArgs(view, s_frame);
+    PyObject *h = PyLong_FromSsize_t(hint);
+    if (!h) return NULL;
+    bad = PyObject_SetAttr(road, s_hint_, h);
+    Py_DECREF(h);
+    const double err = f[2], c = cos(err), sn = sin(err);
+    if (bad < 0 || set_double(view, s_turn, f[4]) < 0 || set_double(view, s_station, f[5]) < 0
+        || set_double(view, s_X, X) < 0 || set_double(view, s_Y, Y) < 0 || set_double(view, s_s, f[0]) < 0
+        || set_double(view, s_d_road, f[1]) < 0 || set_double(view, s_heading_error, err) < 0
+        || set_double(view, s_curvature, f[3]) < 0 || set_double(view, s_ds, u * c - v * sn) < 0
+        || set_double(view, s_dd, u * sn + v * c) < 0)
+        return NULL;
+    Py_RETURN_NONE;
+}
+
+/* road_frame(view) -> None: RoadSensor.frame: the straight lane's rotation (LanePolyline.frame's
+ * arithmetic), a curved lane's LanePolyline.locate on its packed data; a road other than the
+ * one view._line was taken from, or a lane without packed data: the Python method */
 static PyObject *road_frame(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
     if (nargs != 1) {
@@ -1459,10 +1744,16 @@ static PyObject *road_frame(PyObject *self, PyObject *const *args, Py_ssize_t na
     PyObject *line_of = PyObject_GetAttr(view, s_line_of);
     if (!line_of) { Py_DECREF(road); return NULL; }
     const int same = road == line_of;
-    Py_DECREF(road);
     Py_DECREF(line_of);
     PyObject *line_obj = same ? PyObject_GetAttr(view, s_line) : NULL;
-    if (same && !line_obj) return NULL;
+    if (same && !line_obj) { Py_DECREF(road); return NULL; }
+    if (same && line_obj == Py_None) { /* a curved lane: LanePolyline.locate on its packed data */
+        Py_DECREF(line_obj);
+        PyObject *result = road_frame_curved(view, road);
+        Py_DECREF(road);
+        return result;
+    }
+    Py_DECREF(road);
     if (!same || line_obj == Py_None) {
         Py_XDECREF(line_obj);
         return PyObject_CallMethodNoArgs(view, s_frame);
@@ -1510,7 +1801,7 @@ static int get_double(PyObject *obj, PyObject *name, double *out)
     return (*out == -1.0 && PyErr_Occurred()) ? -1 : 0;
 }
 
-static PyObject *s_d_, *s_along, *s_turn, *s_turn_, *s_turn_scan, *s_station, *s_rate_;
+static PyObject *s_d_, *s_along, *s_turn_, *s_turn_scan, *s_rate_;
 
 static int carry_on(PyObject *det, double sign, double moved, double since, double turned)
 {
@@ -2144,7 +2435,7 @@ static int intern_loop_names(void)
         {&s_lane_offset, "lane_offset"}, {&s_inside_since, "_inside_since"}, {&s_check_done, "check_done"},
         {&s_t, "t"}, {&s_s0, "s0"}, {&s_accel, "accel"}, {&s_lo_, "_lo"}, {&s_hi_, "_hi"},
         {&s_since_, "_since"}, {&s_d_, "_d"}, {&s_along, "_along"}, {&s_turn, "turn"},
-        {&s_turn_, "_turn"}, {&s_turn_scan, "_turn_scan"}, {&s_station, "station"}, {&s_rate_, "_rate"}, {&str_empty, ""}, {&s_bridge, "bridge"}, {&s_elapsed_, "_elapsed"},
+        {&s_turn_, "_turn"}, {&s_turn_scan, "_turn_scan"}, {&s_station, "station"}, {&s_rate_, "_rate"}, {&s_c_, "_c"}, {&s_hint_, "_hint"}, {&str_empty, ""}, {&s_bridge, "bridge"}, {&s_elapsed_, "_elapsed"},
         {&s_step, "step"}, {&s_step_joint, "step_joint"},
         {&s_status, "status"}, {&s_rewards, "rewards"}, {&s_running, "running"},
     };

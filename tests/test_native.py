@@ -150,12 +150,24 @@ def test_boxes_match_the_bridges_python_loop():
     assert asked_c == asked_p and "k0" not in asked_c  # the known dimensions are not asked for
 
 
-def _sensor(curved: bool):
+def _motorway_arc() -> list[tuple[float, float]]:
+    """The middle lane of left-250 (sumo_nets/motorway_arcs.py): 350 m straight, a 180-degree
+    arc of radius 250 m in 4 m chords, the exit straight."""
+    arc = [(350.0 + 250.0 * math.sin(a), 250.0 - 250.0 * math.cos(a)) for a in np.linspace(0.0, math.pi, 197)]
+    return [(0.0, 0.0), *arc, (-1000.0, 500.0)]
+
+
+def _points(curved) -> list[tuple[float, float]]:
+    if curved == "arc":
+        return _motorway_arc()
+    return [(0.0, 0.0), (400.0, 30.0), (900.0, 10.0)] if curved else [(0.0, 0.0), (2000.0, 50.0)]
+
+
+def _sensor(curved):
     from ego.lane_frame import LanePolyline
     from ego.scenarios.sensor import SurroundSensor
 
-    points = [(0.0, 0.0), (400.0, 30.0), (900.0, 10.0)] if curved else [(0.0, 0.0), (2000.0, 50.0)]
-    return SurroundSensor(LanePolyline(points), {0: (-1.75, 1.75)}, cg_to_front=2.25, length=4.5, width=1.8)
+    return SurroundSensor(LanePolyline(_points(curved)), {0: (-1.75, 1.75)}, cg_to_front=2.25, length=4.5, width=1.8)
 
 
 @contextlib.contextmanager
@@ -171,7 +183,7 @@ def _placing(native: bool):
         sensor_module._PLACE = saved
 
 
-@pytest.mark.parametrize("curved", [False, True], ids=["rotation", "polyline"])
+@pytest.mark.parametrize("curved", [False, True, "arc"], ids=["rotation", "polyline", "arc"])
 @pytest.mark.parametrize("front", [None, (300.0, 5.0)], ids=["all", "within-reach"])
 def test_place_matches_the_sensors_python_sync(curved, front):
     rng = np.random.default_rng(2)
@@ -185,6 +197,8 @@ def test_place_matches_the_sensors_python_sync(curved, front):
         if k == 2:  # a box centre exactly at the reach (math.hypot decides) and a tie of edges
             rows[0] = (300.0 + 30.0, 5.0 + 40.0, 0.0, 20.0, 4.5, 1.8)
             rows[2] = rows[1]
+        if curved == "arc" and k == 1:  # points the C leaves to Python (it raises there): none
+            rows[3] = (float("nan"), 5.0, 0.0, 20.0, 4.5, 1.8)
         steps.append((0.1 * k, list(ids), rows))
     placed = {}
     for native in (True, False):
@@ -193,7 +207,8 @@ def test_place_matches_the_sensors_python_sync(curved, front):
         with _placing(native):
             for t, step_ids, rows in steps:
                 near = sensor.sync_within(t, step_ids, rows, front, 50.0)
-                out.append((near, list(sensor._objects), dict(sensor._speeds), sensor._seen))
+                objects = (repr(sensor._objects), repr(sensor._speeds), repr(sensor._seen), sensor.lane._hint)
+                out.append((near, *objects))
         placed[native] = out
     assert placed[True] == placed[False]  # bit for bit, the order of equal edges included
     if front is not None:
@@ -400,13 +415,13 @@ def test_trace_write_matches_the_python_writer(monkeypatch):
     assert len(native.rows) == len(python.rows) == len(good)
 
 
-@pytest.mark.parametrize("curved", [False, True], ids=["straight", "polyline"])
+@pytest.mark.parametrize("curved", [False, True, "arc"], ids=["straight", "polyline", "arc"])
 def test_road_frame_matches_the_python_frame(curved):
     from ego.lane_frame import LanePolyline
     from ego.models import VehicleGeometry
     from ego.scenarios.road import RoadSensor
 
-    points = [(0.0, 0.0), (400.0, 30.0), (900.0, 10.0)] if curved else [(-50.0, 2.0), (2000.0, 60.0)]
+    points = _points(curved) if curved else [(-50.0, 2.0), (2000.0, 60.0)]
     road = LanePolyline(points)
 
     class Plant:
@@ -415,11 +430,17 @@ def test_road_frame_matches_the_python_frame(curved):
     plants = Plant(), Plant()
     native, python = RoadSensor(VehicleGeometry()), RoadSensor(VehicleGeometry())
     native.on_lane(road, plants[0])
-    python.on_lane(road, plants[1])
+    python.on_lane(LanePolyline(points), plants[1])  # a lane each: each its own hint
     rng = np.random.default_rng(2)
-    names = ("X", "Y", "s", "d_road", "heading_error", "curvature", "ds", "dd")
+    names = ("X", "Y", "s", "d_road", "heading_error", "curvature", "ds", "dd", "turn", "station")
     for i in range(2000):
         x = rng.normal([500, 20, 20, 0, 0, 0], [300, 10, 5, 1, 1.0, 0.5])
+        if curved == "arc" and i % 2:  # near the arc, as a car driving it: the walk from the hint
+            a = rng.uniform(0.0, 3.2)
+            r = 250.0 + rng.normal(0.0, 2.0)
+            x[0], x[2] = 350.0 + r * math.sin(a), 250.0 - r * math.cos(a)
+        if i % 50 == 4:
+            x[2] = np.inf  # math.floor raises for the grid's cell: from both
         if i % 50 == 1:
             x[4] += rng.choice([-1, 1]) * rng.uniform(3.0, 40.0)  # far beyond +-pi: wrapped
         if i % 50 == 2:
@@ -431,10 +452,11 @@ def test_road_frame_matches_the_python_frame(curved):
         for run in (lambda: NATIVE.road_frame(native), python.frame):
             try:
                 run()
-            except ValueError as exc:  # an infinite heading: math.fmod's domain error, from both
+            except (ValueError, OverflowError) as exc:  # math.fmod's / math.floor's, from both
                 errors.append(str(exc))
         assert len(errors) in (0, 2) and len(set(errors)) <= 1, errors
         assert _bits(getattr(native, n) for n in names) == _bits(getattr(python, n) for n in names), i
+        assert native.road._hint == python.road._hint, i
     if not curved:  # a new road: the C kernel leaves it to the Python method, which takes it up
         native.road = python.road = LanePolyline([(0.0, 0.0), (100.0, 0.0)])
         NATIVE.road_frame(native)

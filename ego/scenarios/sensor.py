@@ -152,6 +152,7 @@ class SurroundSensor:
         "_lanes",
         "_straight",
         "_place",
+        "_placing",
         "_along",
         "_turn",
         "_turn_scan",
@@ -190,6 +191,8 @@ class SurroundSensor:
         #: on a curved lane: (x, y, yaw) -> (s, d, rel, turn, kappa) (LanePolyline.place);
         #: the objects then carry the lane's turn and curvature at their centre
         self._place = getattr(lane, "place", None) if self._straight is None else None
+        #: what ego._native.place places the cars with: the lane (its packed data) or a callable
+        self._placing = (lane if hasattr(lane, "_c") else self._place) if self._place is not None else lane.frame
         #: on a curved lane, at the last scan: (the innermost and outermost lines the gaps
         #: may be measured along, m; the lane's turn at the ego, rad; how far the ego's corners reach
         #: beyond its extent ahead and behind, m); None on a straight one
@@ -278,13 +281,15 @@ class SurroundSensor:
         if type(ids) is not list or type(rows) is not list:
             ids, rows = list(ids), list(rows)
         dt = t - self._t_sync
+        # on a curved lane the lane itself (its packed data: ego._native.place projects every
+        # car in C, as LanePolyline.place does), else a callable placing one
         ids, rows, self._objects, self._speeds = _PLACE(
             ids,
             rows,
             front,
             reach,
             self._straight,
-            self._place or self.lane.frame,
+            self._placing,
             self._speeds,
             dt,
             dt > 0.0,
@@ -333,10 +338,16 @@ class SurroundSensor:
             # (where SUMO maps it too)
             nose = d + self.cg_to_front * math.sin(heading_error)
             line = min((0.5 * (lo + hi) for lo, hi in self.bands.values()), key=lambda c: abs(c - nose), default=d)
-            k = abs(kappa)
-            w = max(ego[3] - line if kappa > 0.0 else line - ego[2], 0.0)  # its inner side beyond the line
-            corner = k * w / (1.0 - k * w)  # per metre of the body's reach along the lane
-            self._along = (line, line, turn, (ego[1] - s) * corner, (s - ego[0]) * corner)
+            # its inner side beyond the line, its corners' reach per metre of its length: at
+            # each end the larger curvature of the centre's and that end's (an end in an arc
+            # the centre has not reached yet)
+            reach = []
+            for end in (ego[1], ego[0]):
+                k = self.lane.curvature_at(end) if hasattr(self.lane, "curvature_at") else kappa
+                k = kappa if abs(kappa) >= abs(k) else k
+                w = max(ego[3] - line if k > 0.0 else line - ego[2], 0.0)
+                reach.append(abs(k) * w / (1.0 - abs(k) * w))
+            self._along = (line, line, turn, (ego[1] - s) * reach[0], (s - ego[0]) * reach[1])
             self._turn = self._turn_scan = turn
             self._rate = (1.0 - kappa * line) / (1.0 - kappa * d)
         self._lanes = {}
