@@ -520,6 +520,91 @@ static int lane_locate(const LaneData *L, Py_ssize_t *hint, double x, double y, 
     return 0;
 }
 
+/* lane_mean_curvature(lane, s, ahead) -> float: LanePolyline.mean_curvature on the lane's
+ * packed data (_c) and its remembered segments (_at, a list of two ints), the same
+ * arithmetic; an infinite angle (math.fmod raises) or a lane without packed data: the
+ * Python method */
+static Py_ssize_t lane_segment_at(const LaneData *L, Py_ssize_t i, double s)
+{
+    const Py_ssize_t last = L->n - 1;
+    const double *sg = L->seg;
+#define S0(k) sg[(k) * SEG_W + 5]
+    if (i < 0 || i > last) i = 0; /* (Python would raise on a bad index: never made) */
+    if (S0(i) <= s && (i == last || s < S0(i + 1))) return i;
+    if (i < last && S0(i + 1) <= s && (i + 1 == last || s < S0(i + 2))) return i + 1;
+    Py_ssize_t lo = 0, hi = last;
+    while (lo < hi) {
+        const Py_ssize_t mid = (lo + hi + 1) / 2;
+        if (S0(mid) <= s) lo = mid;
+        else hi = mid - 1;
+    }
+#undef S0
+    return lo;
+}
+
+static double lane_heading_raw(const LaneData *L, Py_ssize_t i, double s)
+{
+    const double *sg = L->seg + i * SEG_W;
+    const double t = py_min(py_max((s - sg[5]) / sg[4], 0.0), 1.0);
+    return sg[7] + t * sg[8];
+}
+
+static PyObject *s_at_, *s_mean_curvature;
+
+static PyObject *lane_mean_curvature(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 3) {
+        PyErr_SetString(PyExc_TypeError, "lane_mean_curvature(lane, s, ahead)");
+        return NULL;
+    }
+    PyObject *lane = args[0];
+    const double s = PyFloat_AsDouble(args[1]), ahead = PyFloat_AsDouble(args[2]);
+    if (PyErr_Occurred()) return NULL;
+    PyObject *packed = PyObject_GetAttr(lane, s_c_);
+    if (!packed) return NULL;
+    LaneData L;
+    const int got = lane_acquire(packed, &L);
+    Py_DECREF(packed);
+    if (got < 0) return NULL;
+    PyObject *at = got == 0 ? PyObject_GetAttr(lane, s_at_) : NULL;
+    if (got > 0 || (at && !(PyList_CheckExact(at) && PyList_GET_SIZE(at) == 2))) {
+        Py_XDECREF(at);
+        if (got == 0) lane_release(&L);
+        return PyObject_CallMethodObjArgs(lane, s_mean_curvature, args[1], args[2], NULL);
+    }
+    if (!at) { lane_release(&L); return NULL; }
+    Py_ssize_t slot[2];
+    for (int k = 0; k < 2; k++) {
+        slot[k] = PyLong_AsSsize_t(PyList_GET_ITEM(at, k));
+        if (slot[k] == -1 && PyErr_Occurred()) { Py_DECREF(at); lane_release(&L); return NULL; }
+    }
+    double result;
+    Py_ssize_t i0 = slot[0], i1 = slot[1];
+    if (ahead <= 0.0) { /* curvature_at(s), slot 0 */
+        i0 = lane_segment_at(&L, slot[0], s);
+        result = L.seg[i0 * SEG_W + 9];
+    } else { /* NaN included, as in the Python method */
+        i1 = lane_segment_at(&L, slot[1], s + ahead);
+        i0 = lane_segment_at(&L, slot[0], s);
+        const double a = lane_heading_raw(&L, i1, s + ahead), b = lane_heading_raw(&L, i0, s);
+        if (isinf(a) || isinf(b)) goto python;
+        result = wrap_finite(wrap_finite(a) - wrap_finite(b)) / ahead;
+    }
+    lane_release(&L);
+    for (int k = 0; k < 2; k++) {
+        const Py_ssize_t v = k ? i1 : i0;
+        if (v == slot[k]) continue;
+        PyObject *o = PyLong_FromSsize_t(v);
+        if (!o || PyList_SetItem(at, k, o) < 0) { Py_DECREF(at); return NULL; } /* steals o */
+    }
+    Py_DECREF(at);
+    return PyFloat_FromDouble(result);
+python:
+    lane_release(&L);
+    Py_DECREF(at);
+    return PyObject_CallMethodObjArgs(lane, s_mean_curvature, args[1], args[2], NULL);
+}
+
 /* place(ids, rows, front, reach, straight, frame, previous, dt, rated, low_edge)
  *   -> (ids, rows, objects, speeds)
  * SurroundSensor.sync after SurroundView.sense's range filter: the vehicles within ``reach``
@@ -2435,7 +2520,8 @@ static int intern_loop_names(void)
         {&s_lane_offset, "lane_offset"}, {&s_inside_since, "_inside_since"}, {&s_check_done, "check_done"},
         {&s_t, "t"}, {&s_s0, "s0"}, {&s_accel, "accel"}, {&s_lo_, "_lo"}, {&s_hi_, "_hi"},
         {&s_since_, "_since"}, {&s_d_, "_d"}, {&s_along, "_along"}, {&s_turn, "turn"},
-        {&s_turn_, "_turn"}, {&s_turn_scan, "_turn_scan"}, {&s_station, "station"}, {&s_rate_, "_rate"}, {&s_c_, "_c"}, {&s_hint_, "_hint"}, {&str_empty, ""}, {&s_bridge, "bridge"}, {&s_elapsed_, "_elapsed"},
+        {&s_turn_, "_turn"}, {&s_turn_scan, "_turn_scan"}, {&s_station, "station"}, {&s_rate_, "_rate"}, {&s_c_, "_c"}, {&s_hint_, "_hint"}, {&s_at_, "_at"},
+        {&s_mean_curvature, "mean_curvature"}, {&str_empty, ""}, {&s_bridge, "bridge"}, {&s_elapsed_, "_elapsed"},
         {&s_step, "step"}, {&s_step_joint, "step_joint"},
         {&s_status, "status"}, {&s_rewards, "rewards"}, {&s_running, "running"},
     };
@@ -2473,6 +2559,7 @@ static PyMethodDef methods[] = {
                       "(SurroundSensor._nearest)"),
     FASTCALL(plan_steady, "plan_steady(fallback, packed, ego_speed, man, safety, obs, t) -> None "
                           "(EvasiveManoeuvre.plan)"),
+    FASTCALL(lane_mean_curvature, "lane_mean_curvature(lane, s, ahead) -> LanePolyline.mean_curvature(s, ahead)"),
     FASTCALL(place, "place(ids, rows, front, reach, straight, frame, previous, dt, rated, low_edge) -> "
                     "(ids, rows, objects, speeds)"),
     {NULL, NULL, 0, NULL},

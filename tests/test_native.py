@@ -683,3 +683,27 @@ def test_near_and_nearest_match_the_sensors_python_search(monkeypatch, curved):
             assert _bits(getattr(a, f) for f in values) == _bits(getattr(b, f) for f in values), case
         seen += sum(d._o is not None for d in c_found)
     assert seen > 100  # the searches found something
+
+
+@pytest.mark.parametrize("curved", [True, "arc"], ids=["polyline", "arc"])
+def test_lane_mean_curvature_matches_the_python_method(curved):
+    # the curvature feed-forward's preview (SurroundView.observe) every control period: one
+    # lane through ego._native.lane_mean_curvature, its twin through LanePolyline's method;
+    # every value to the bit and both remembered segments alike, odd inputs included
+    from ego.lane_frame import LanePolyline
+
+    native, python = LanePolyline(_points(curved)), LanePolyline(_points(curved))
+    rng = np.random.default_rng(1)
+    s = 0.0
+    for i in range(3000):
+        s += float(rng.normal(0.3, 0.05)) if i % 100 else float(rng.uniform(-50.0, 1500.0)) - s
+        ahead = float(rng.uniform(-1.0, 20.0)) if i % 37 else (0.0, -1.0, math.nan, math.inf)[i // 37 % 4]
+        at = s if i % 41 else (math.nan, math.inf, -math.inf)[i // 41 % 3]
+        found = []
+        for run, lane in ((NATIVE.lane_mean_curvature, native), (LanePolyline.mean_curvature, python)):
+            try:
+                found.append(repr(run(lane, at, ahead)))
+            except ValueError as exc:  # an infinite heading: math.fmod's, from both
+                found.append(str(exc))
+        assert found[0] == found[1], (i, at, ahead)
+        assert native._at == python._at, i

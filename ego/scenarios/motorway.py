@@ -43,6 +43,8 @@ from ego.sim.types import EGO, Collision, VehicleSpec, VehicleType, ego_type
 from ego.sumo.traffic import PacedVehicle, background_traffic
 
 _LOOK_BETWEEN = NATIVE.look_between if NATIVE is not None else None
+#: LanePolyline.mean_curvature in C (the curvature feed-forward's preview, every control period)
+_MEAN_CURVATURE = NATIVE.lane_mean_curvature if NATIVE is not None else None
 
 ROUTE = "motorway_route"
 EDGE = "motorway"
@@ -399,7 +401,11 @@ class SurroundView(RoadSensor):
         obs.surround = self.sensor
         if self._line is None:  # a curved road: the feed-forward on the target lane, previewed
             u = self._plant.state[1]
-            kappa = self.road.mean_curvature(self.s, FF_PREVIEW * u)
+            road = self.road
+            if _MEAN_CURVATURE is not None and hasattr(road, "_c"):  # in C on its packed data
+                kappa = _MEAN_CURVATURE(road, self.s, FF_PREVIEW * u)
+            else:
+                kappa = road.mean_curvature(self.s, FF_PREVIEW * u)
             # the target lane's centre line is concentric with the start lane's, ``off`` to its left
             kappa /= 1.0 - kappa * self.lane_offset[self.target_lane]
             steady = self.steady
