@@ -79,12 +79,15 @@ def sensor_cost(spec: RunSpec, at: float = 5.0, number: int = 2000) -> tuple[flo
         while not scenario.done and scenario.t < at:
             obs = scenario.step(scenario.controller.step(obs))
 
+        curved = getattr(view, "_line", True) is None  # stations and the lane's turn (SurroundView.look)
+        s = view.station if curved else view.s
+
         def look():
             view.sense(scenario.t)
-            sensor.scan(scenario.t, view.s, view.d_road, view.heading_error)
+            sensor.scan(scenario.t, s, view.d_road, view.heading_error, view.turn, view.curvature)
 
         def carry_on():
-            sensor.advance(scenario.t, view.s)
+            sensor.advance(scenario.t, s, view.turn)
 
         per_sumo = min(timeit.repeat(look, number=number, repeat=5)) / number
         per_control = min(timeit.repeat(carry_on, number=number, repeat=5)) / number

@@ -328,13 +328,290 @@ static int within(double dx, double dy, double reach)
     return value <= reach;
 }
 
+/* ---- LanePolyline's projection on plain data (ego.lane_frame: _closest, locate, place) -----
+ * A lane's ``_c`` = (segments, grid_x, grid_y, grid_seg): its segments as 11 doubles each
+ * (x0, y0, ux, uy, length, s0, direction, heading at start, heading change, curvature, turn)
+ * and its grid (cells of GRID m, sorted by (x, y), each with its one segment), built once per
+ * lane; ``_hint`` the segment the last projection found. The same arithmetic as the Python
+ * methods, in the same order: Python's min/max (the first argument unless the second is
+ * strictly beyond it, so NaN goes through as there). A point the Python method would raise
+ * on (an infinite coordinate into math.floor, an infinite angle into math.fmod) is left to it. */
+static PyObject *s_c_, *s_hint_, *s_turn, *s_station;
+#define LANE_GRID 10.0
+#define SEG_W 11
+
+typedef struct {
+    Py_buffer views[4];
+    const double *seg;
+    const long long *gx, *gy, *gs;
+    Py_ssize_t n, ng;
+} LaneData;
+
+static double py_max(double a, double b) { return b > a ? b : a; }
+static double py_min(double a, double b) { return b < a ? b : a; }
+
+static void lane_release(LaneData *L)
+{
+    for (int k = 0; k < 4; k++) PyBuffer_Release(&L->views[k]);
+}
+
+/* 0 with L filled, -1 with an exception, 1 when ``lane`` has no packed data */
+static int lane_acquire(PyObject *packed, LaneData *L)
+{
+    if (!PyTuple_Check(packed) || PyTuple_GET_SIZE(packed) != 4) return 1;
+    int k;
+    for (k = 0; k < 4; k++) {
+        if (PyObject_GetBuffer(PyTuple_GET_ITEM(packed, k), &L->views[k], PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0) break;
+        const char *fmt = L->views[k].format;
+        const int want_double = k == 0;
+        if ((want_double && strcmp(fmt, "d") != 0) || (!want_double && strcmp(fmt, "q") != 0)) {
+            PyBuffer_Release(&L->views[k]);
+            PyErr_SetString(PyExc_TypeError, "a lane's _c must be (array('d'), array('q') x 3)");
+            break;
+        }
+    }
+    if (k < 4) {
+        while (k-- > 0) PyBuffer_Release(&L->views[k]);
+        return -1;
+    }
+    L->seg = (const double *)L->views[0].buf;
+    L->n = L->views[0].len / (Py_ssize_t)(SEG_W * sizeof(double));
+    L->gx = (const long long *)L->views[1].buf;
+    L->gy = (const long long *)L->views[2].buf;
+    L->gs = (const long long *)L->views[3].buf;
+    L->ng = L->views[1].len / (Py_ssize_t)sizeof(long long);
+    if (L->n < 1 || L->views[2].len != L->views[1].len || L->views[3].len != L->views[1].len) {
+        lane_release(L);
+        PyErr_SetString(PyExc_ValueError, "a lane's _c is inconsistent");
+        return -1;
+    }
+    return 0;
+}
+
+/* LanePolyline._local */
+static void lane_local(const LaneData *L, Py_ssize_t i, double x, double y, double *out)
+{
+    const double *sg = L->seg + i * SEG_W;
+    const double x0 = sg[0], y0 = sg[1], ux = sg[2], uy = sg[3], length = sg[4];
+    const double dx = x - x0, dy = y - y0;
+    const double along = dx * ux + dy * uy;
+    const double across = uy * -dx + ux * dy;
+    out[0] = along;
+    out[1] = across;
+    if (along < 0.0) {
+        out[2] = dx * dx + dy * dy;
+    } else if (along > length) {
+        const double ex = dx - length * ux, ey = dy - length * uy;
+        out[2] = ex * ex + ey * ey;
+    } else {
+        out[2] = across * across;
+    }
+}
+
+/* the grid's segment of cell (cx, cy), or -1 */
+static long long lane_cell(const LaneData *L, long long cx, long long cy)
+{
+    Py_ssize_t lo = 0, hi = L->ng;
+    while (lo < hi) {
+        const Py_ssize_t mid = (lo + hi) / 2;
+        if (L->gx[mid] < cx || (L->gx[mid] == cx && L->gy[mid] < cy)) lo = mid + 1;
+        else hi = mid;
+    }
+    return (lo < L->ng && L->gx[lo] == cx && L->gy[lo] == cy) ? L->gs[lo] : -1;
+}
+
+/* LanePolyline._closest from segment *hint (updated): 0, or 1 where the Python method
+ * must decide (it raises there) */
+static int lane_closest(const LaneData *L, Py_ssize_t *hint, double x, double y, Py_ssize_t *seg_i, double *along,
+                        double *across)
+{
+    const Py_ssize_t n = L->n;
+    Py_ssize_t i = *hint;
+    if (i < 0 || i >= n) return 1;
+    double best[3], cand[3];
+    lane_local(L, i, x, y, best);
+    if (best[2] > LANE_GRID * LANE_GRID) {
+        const double fx = floor(x / LANE_GRID), fy = floor(y / LANE_GRID);
+        if (!isfinite(fx) || !isfinite(fy) || fabs(fx) > 1e15 || fabs(fy) > 1e15) return 1;
+        const long long cx = (long long)fx, cy = (long long)fy;
+        const long long own = lane_cell(L, cx, cy);
+        for (int a = -1; a <= 1; a++) {
+            for (int b = -1; b <= 1; b++) {
+                long long j;
+                if (own >= 0) {
+                    if (a != 0 || b != 0) continue;
+                    j = own;
+                } else {
+                    j = lane_cell(L, cx + a, cy + b);
+                    if (j < 0) continue;
+                }
+                lane_local(L, (Py_ssize_t)j, x, y, cand);
+                if (cand[2] < best[2]) {
+                    i = (Py_ssize_t)j;
+                    best[0] = cand[0], best[1] = cand[1], best[2] = cand[2];
+                }
+            }
+        }
+    }
+    for (int step = 1; step >= -1; step -= 2) {
+        Py_ssize_t j = i + step;
+        while (0 <= j && j < n) {
+            lane_local(L, j, x, y, cand);
+            if (cand[2] < best[2]) {
+                i = j;
+                best[0] = cand[0], best[1] = cand[1], best[2] = cand[2];
+                j += step;
+            } else {
+                break;
+            }
+        }
+    }
+    *hint = i;
+    double a = best[0];
+    const double length = L->seg[i * SEG_W + 4];
+    if (0 < i && a < 0.0) a = 0.0;
+    if (i < n - 1 && a > length) a = length;
+    *seg_i = i;
+    *along = a;
+    *across = best[1];
+    return 0;
+}
+
+/* lane_frame.wrap_angle of a finite angle */
+static double wrap_finite(double a)
+{
+    a = fmod(a + Py_MATH_PI, 2.0 * Py_MATH_PI);
+    if (a <= 0.0) a += 2.0 * Py_MATH_PI;
+    return a - Py_MATH_PI;
+}
+
+/* LanePolyline.locate: out = (s, d, heading error, curvature, turn, station); 0, or 1 where
+ * the Python method must decide; *hint updated only on 0 */
+static int lane_locate(const LaneData *L, Py_ssize_t *hint, double x, double y, double psi, double *out)
+{
+    Py_ssize_t i, h = *hint;
+    double along, across;
+    if (lane_closest(L, &h, x, y, &i, &along, &across)) return 1;
+    const double *sg = L->seg + i * SEG_W;
+    const double length = sg[4];
+    const double u = py_min(py_max(along, 0.0), length);
+    const double kappa = sg[9];
+    const double d = across + kappa * u * (length - u) * 0.5;
+    const double frac = u / length;
+    const double s = sg[5] + along;
+    double station = s;
+    if (kappa != 0.0) {
+        const double q = 1.0 - kappa * d;
+        if (q > 0.5) {
+            const double half = 0.5 * length;
+            const double raw = (x - sg[0]) * sg[2] + (y - sg[1]) * sg[3];
+            station = sg[5] + half + (raw - half) / q;
+        }
+    }
+    const double err = psi - sg[7] - frac * sg[8];
+    if (isinf(err)) return 1; /* math.fmod raises there */
+    out[0] = s;
+    out[1] = d;
+    out[2] = wrap_finite(err);
+    out[3] = kappa;
+    out[4] = sg[10] + frac * sg[8];
+    out[5] = station;
+    *hint = h;
+    return 0;
+}
+
+/* lane_mean_curvature(lane, s, ahead) -> float: LanePolyline.mean_curvature on the lane's
+ * packed data (_c) and its remembered segments (_at, a list of two ints), the same
+ * arithmetic; an infinite angle (math.fmod raises) or a lane without packed data: the
+ * Python method */
+static Py_ssize_t lane_segment_at(const LaneData *L, Py_ssize_t i, double s)
+{
+    const Py_ssize_t last = L->n - 1;
+    const double *sg = L->seg;
+#define S0(k) sg[(k) * SEG_W + 5]
+    if (i < 0 || i > last) i = 0; /* (Python would raise on a bad index: never made) */
+    if (S0(i) <= s && (i == last || s < S0(i + 1))) return i;
+    if (i < last && S0(i + 1) <= s && (i + 1 == last || s < S0(i + 2))) return i + 1;
+    Py_ssize_t lo = 0, hi = last;
+    while (lo < hi) {
+        const Py_ssize_t mid = (lo + hi + 1) / 2;
+        if (S0(mid) <= s) lo = mid;
+        else hi = mid - 1;
+    }
+#undef S0
+    return lo;
+}
+
+static double lane_heading_raw(const LaneData *L, Py_ssize_t i, double s)
+{
+    const double *sg = L->seg + i * SEG_W;
+    const double t = py_min(py_max((s - sg[5]) / sg[4], 0.0), 1.0);
+    return sg[7] + t * sg[8];
+}
+
+static PyObject *s_at_, *s_mean_curvature;
+
+static PyObject *lane_mean_curvature(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 3) {
+        PyErr_SetString(PyExc_TypeError, "lane_mean_curvature(lane, s, ahead)");
+        return NULL;
+    }
+    PyObject *lane = args[0];
+    const double s = PyFloat_AsDouble(args[1]), ahead = PyFloat_AsDouble(args[2]);
+    if (PyErr_Occurred()) return NULL;
+    PyObject *packed = PyObject_GetAttr(lane, s_c_);
+    if (!packed) return NULL;
+    LaneData L;
+    const int got = lane_acquire(packed, &L);
+    Py_DECREF(packed);
+    if (got < 0) return NULL;
+    PyObject *at = got == 0 ? PyObject_GetAttr(lane, s_at_) : NULL;
+    if (got > 0 || (at && !(PyList_CheckExact(at) && PyList_GET_SIZE(at) == 2))) {
+        Py_XDECREF(at);
+        if (got == 0) lane_release(&L);
+        return PyObject_CallMethodObjArgs(lane, s_mean_curvature, args[1], args[2], NULL);
+    }
+    if (!at) { lane_release(&L); return NULL; }
+    Py_ssize_t slot[2];
+    for (int k = 0; k < 2; k++) {
+        slot[k] = PyLong_AsSsize_t(PyList_GET_ITEM(at, k));
+        if (slot[k] == -1 && PyErr_Occurred()) { Py_DECREF(at); lane_release(&L); return NULL; }
+    }
+    double result;
+    Py_ssize_t i0 = slot[0], i1 = slot[1];
+    if (ahead <= 0.0) { /* curvature_at(s), slot 0 */
+        i0 = lane_segment_at(&L, slot[0], s);
+        result = L.seg[i0 * SEG_W + 9];
+    } else { /* NaN included, as in the Python method */
+        i1 = lane_segment_at(&L, slot[1], s + ahead);
+        i0 = lane_segment_at(&L, slot[0], s);
+        const double a = lane_heading_raw(&L, i1, s + ahead), b = lane_heading_raw(&L, i0, s);
+        if (isinf(a) || isinf(b)) goto python;
+        result = wrap_finite(wrap_finite(a) - wrap_finite(b)) / ahead;
+    }
+    lane_release(&L);
+    for (int k = 0; k < 2; k++) {
+        const Py_ssize_t v = k ? i1 : i0;
+        if (v == slot[k]) continue;
+        PyObject *o = PyLong_FromSsize_t(v);
+        if (!o || PyList_SetItem(at, k, o) < 0) { Py_DECREF(at); return NULL; } /* steals o */
+    }
+    Py_DECREF(at);
+    return PyFloat_FromDouble(result);
+python:
+    lane_release(&L);
+    Py_DECREF(at);
+    return PyObject_CallMethodObjArgs(lane, s_mean_curvature, args[1], args[2], NULL);
+}
+
 /* place(ids, rows, front, reach, straight, frame, previous, dt, rated, low_edge)
  *   -> (ids, rows, objects, speeds)
  * SurroundSensor.sync after SurroundView.sense's range filter: the vehicles within ``reach``
  * of ``front`` (x, y) (all when ``front`` is None), each placed in the lane frame (the
  * rotation ``straight`` = (x0, y0, ux, uy, s0, heading), or frame(x, y, yaw) -> (s, d, rel,
- * _)), as (id, s_lo, s_hi, d_lo, d_hi, v_s, v_d, accel, rel), sorted by s_lo (stable);
- * speeds: id -> v_s. */
+ * _) or, LanePolyline.place, (s, d, rel, turn, kappa)), as (id, s_lo, s_hi, d_lo, d_hi, v_s,
+ * v_d, accel, rel[, turn, kappa]), sorted by s_lo (stable); speeds: id -> v_s. */
 static PyObject *place(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
     if (nargs != 10 || !PyList_Check(args[0]) || !PyList_Check(args[1]) || !PyDict_Check(args[6])) {
@@ -357,6 +634,25 @@ static PyObject *place(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
     if (filter && read_doubles(front, bumper, 2, "front")) return NULL;
     const int rotation = straight != Py_None;
     if (rotation && read_doubles(straight, st, 6, "straight")) return NULL;
+    /* a lane with packed data (LanePolyline): its place, on that data, from its _hint */
+    LaneData L;
+    int packed_lane = 0;
+    Py_ssize_t hint = 0;
+    if (!rotation && !PyCallable_Check(frame)) {
+        PyObject *packed = PyObject_GetAttr(frame, s_c_);
+        if (!packed) return NULL;
+        const int got = lane_acquire(packed, &L);
+        Py_DECREF(packed);
+        if (got != 0) {
+            if (got > 0) PyErr_SetString(PyExc_TypeError, "place: a lane without packed data");
+            return NULL;
+        }
+        PyObject *h = PyObject_GetAttr(frame, s_hint_);
+        hint = h ? PyLong_AsSsize_t(h) : -1;
+        Py_XDECREF(h);
+        if (hint == -1 && (!h || PyErr_Occurred())) { lane_release(&L); return NULL; }
+        packed_lane = 1;
+    }
 
     PyObject *near_ids = filter ? PyList_New(0) : (Py_INCREF(ids), ids);
     PyObject *near_rows = filter ? PyList_New(0) : (Py_INCREF(rows), rows);
@@ -375,22 +671,47 @@ static PyObject *place(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
             if (PyList_Append(near_ids, vid) || PyList_Append(near_rows, row)) goto fail;
         }
         const double x = r[0], y = r[1], yaw = r[2], v = r[3], length = r[4], width = r[5];
-        double s, d, rel;
+        double s, d, rel, bend[2] = {0.0, 0.0}, fl[6];
+        int bent = 0;
         if (rotation) {
             const double dx = x - st[0], dy = y - st[1];
             s = st[4] + dx * st[2] + dy * st[3];
             d = dy * st[2] - dx * st[3];
             rel = yaw - st[5];
+        } else if (packed_lane && lane_locate(&L, &hint, x, y, yaw, fl) == 0) {
+            s = fl[5];
+            d = fl[1];
+            rel = fl[2];
+            bend[0] = fl[4];
+            bend[1] = fl[3];
+            bent = 1;
         } else {
-            PyObject *placed = PyObject_CallFunction(frame, "ddd", x, y, yaw);
+            PyObject *placed = NULL;
+            if (packed_lane) { /* the Python method decides (it raises) from the same hint */
+                PyObject *h = PyLong_FromSsize_t(hint);
+                if (!h || PyObject_SetAttr(frame, s_hint_, h) < 0) { Py_XDECREF(h); goto fail; }
+                Py_DECREF(h);
+                placed = PyObject_CallMethod(frame, "place", "ddd", x, y, yaw);
+            } else {
+                placed = PyObject_CallFunction(frame, "ddd", x, y, yaw);
+            }
             if (!placed) goto fail;
-            double f[4];
-            int bad = read_doubles(placed, f, 4, "frame's result");
+            if (packed_lane) { /* where the Python method left the hint */
+                PyObject *h = PyObject_GetAttr(frame, s_hint_);
+                hint = h ? PyLong_AsSsize_t(h) : -1;
+                Py_XDECREF(h);
+                if (hint == -1 && (!h || PyErr_Occurred())) { Py_DECREF(placed); goto fail; }
+            }
+            double f[5] = {0.0, 0.0, 0.0, 0.0, 0.0};
+            bent = PyTuple_Check(placed) && PyTuple_GET_SIZE(placed) == 5;
+            int bad = read_doubles(placed, f, bent ? 5 : 4, "frame's result");
             Py_DECREF(placed);
             if (bad) goto fail;
             s = f[0];
             d = f[1];
             rel = f[2];
+            bend[0] = f[3];
+            bend[1] = f[4];
         }
         const double c = cos(rel), sn = sin(rel), ac = fabs(c), asn = fabs(sn);
         const double hs = 0.5 * (length * ac + width * asn);
@@ -406,7 +727,8 @@ static PyObject *place(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
         PyObject *vs_o = PyFloat_FromDouble(vs);
         if (!vs_o) goto fail;
         if (PyDict_SetItem(speeds, vid, vs_o)) { Py_DECREF(vs_o); goto fail; }
-        PyObject *full = PyTuple_New(9);
+        const int width_of = bent ? 11 : 9;
+        PyObject *full = PyTuple_New(width_of);
         if (!full) { Py_DECREF(vs_o); goto fail; }
         Py_INCREF(vid);
         PyTuple_SET_ITEM(full, 0, vid);
@@ -418,7 +740,11 @@ static PyObject *place(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
         PyTuple_SET_ITEM(full, 6, PyFloat_FromDouble(v * sn));
         PyTuple_SET_ITEM(full, 7, PyFloat_FromDouble(accel));
         PyTuple_SET_ITEM(full, 8, PyFloat_FromDouble(rel));
-        for (int k = 1; k < 9; k++) {
+        if (bent) {
+            PyTuple_SET_ITEM(full, 9, PyFloat_FromDouble(bend[0]));
+            PyTuple_SET_ITEM(full, 10, PyFloat_FromDouble(bend[1]));
+        }
+        for (int k = 1; k < width_of; k++) {
             if (!PyTuple_GET_ITEM(full, k)) { Py_DECREF(full); goto fail; }
         }
         if (s - hs != s - hs) sortable = 0; /* a NaN edge: Python's own sort decides */
@@ -458,8 +784,16 @@ static PyObject *place(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
         if (!none) goto fail;
         Py_DECREF(none);
     }
+    if (packed_lane) {
+        lane_release(&L);
+        packed_lane = 0;
+        PyObject *h = PyLong_FromSsize_t(hint);
+        if (!h || PyObject_SetAttr(frame, s_hint_, h) < 0) { Py_XDECREF(h); goto fail; }
+        Py_DECREF(h);
+    }
     return Py_BuildValue("(NNNN)", near_ids, near_rows, objects, speeds);
 fail:
+    if (packed_lane) lane_release(&L);
     PyMem_Free(keys);
     Py_XDECREF(near_ids);
     Py_XDECREF(near_rows);
@@ -1434,9 +1768,54 @@ static int set_double(PyObject *obj, PyObject *name, double value)
     return bad;
 }
 
-/* road_frame(view) -> None: RoadSensor.frame's straight-lane rotation (LanePolyline.frame's
- * arithmetic); a road other than the one view._line was taken from, or a curved one: the
- * Python method */
+
+/* RoadSensor.frame on a curved lane with packed data (LanePolyline.locate); else, or where
+ * the Python method decides, that method */
+static PyObject *road_frame_curved(PyObject *view, PyObject *road)
+{
+    PyObject *packed = PyObject_GetAttr(road, s_c_);
+    if (!packed) {
+        if (!PyErr_ExceptionMatches(PyExc_AttributeError)) return NULL;
+        PyErr_Clear();
+        return PyObject_CallMethodNoArgs(view, s_frame);
+    }
+    LaneData L;
+    const int got = lane_acquire(packed, &L);
+    Py_DECREF(packed);
+    if (got < 0) return NULL;
+    if (got > 0) return PyObject_CallMethodNoArgs(view, s_frame);
+    double x[NX], f[6];
+    PyObject *plant = PyObject_GetAttr(view, s_plant);
+    PyObject *state = plant ? PyObject_GetAttr(plant, s_state) : NULL;
+    Py_XDECREF(plant);
+    PyObject *hint_obj = state ? PyObject_GetAttr(road, s_hint_) : NULL;
+    if (!hint_obj) { Py_XDECREF(state); lane_release(&L); return NULL; }
+    Py_ssize_t hint = PyLong_AsSsize_t(hint_obj);
+    Py_DECREF(hint_obj);
+    int bad = (hint == -1 && PyErr_Occurred()) ? -1 : read_doubles(state, x, NX, "state");
+    Py_DECREF(state);
+    if (bad < 0) { lane_release(&L); return NULL; }
+    const double X = x[0], u = x[1], Y = x[2], v = x[3], psi = x[4];
+    const int defer = lane_locate(&L, &hint, X, Y, psi, f);
+    lane_release(&L);
+    if (defer) return PyObject_CallMethodNoArgs(view, s_frame);
+    PyObject *h = PyLong_FromSsize_t(hint);
+    if (!h) return NULL;
+    bad = PyObject_SetAttr(road, s_hint_, h);
+    Py_DECREF(h);
+    const double err = f[2], c = cos(err), sn = sin(err);
+    if (bad < 0 || set_double(view, s_turn, f[4]) < 0 || set_double(view, s_station, f[5]) < 0
+        || set_double(view, s_X, X) < 0 || set_double(view, s_Y, Y) < 0 || set_double(view, s_s, f[0]) < 0
+        || set_double(view, s_d_road, f[1]) < 0 || set_double(view, s_heading_error, err) < 0
+        || set_double(view, s_curvature, f[3]) < 0 || set_double(view, s_ds, u * c - v * sn) < 0
+        || set_double(view, s_dd, u * sn + v * c) < 0)
+        return NULL;
+    Py_RETURN_NONE;
+}
+
+/* road_frame(view) -> None: RoadSensor.frame: the straight lane's rotation (LanePolyline.frame's
+ * arithmetic), a curved lane's LanePolyline.locate on its packed data; a road other than the
+ * one view._line was taken from, or a lane without packed data: the Python method */
 static PyObject *road_frame(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
     if (nargs != 1) {
@@ -1450,10 +1829,16 @@ static PyObject *road_frame(PyObject *self, PyObject *const *args, Py_ssize_t na
     PyObject *line_of = PyObject_GetAttr(view, s_line_of);
     if (!line_of) { Py_DECREF(road); return NULL; }
     const int same = road == line_of;
-    Py_DECREF(road);
     Py_DECREF(line_of);
     PyObject *line_obj = same ? PyObject_GetAttr(view, s_line) : NULL;
-    if (same && !line_obj) return NULL;
+    if (same && !line_obj) { Py_DECREF(road); return NULL; }
+    if (same && line_obj == Py_None) { /* a curved lane: LanePolyline.locate on its packed data */
+        Py_DECREF(line_obj);
+        PyObject *result = road_frame_curved(view, road);
+        Py_DECREF(road);
+        return result;
+    }
+    Py_DECREF(road);
     if (!same || line_obj == Py_None) {
         Py_XDECREF(line_obj);
         return PyObject_CallMethodNoArgs(view, s_frame);
@@ -1501,9 +1886,13 @@ static int get_double(PyObject *obj, PyObject *name, double *out)
     return (*out == -1.0 && PyErr_Occurred()) ? -1 : 0;
 }
 
-static int carry_on(PyObject *det, double sign, double moved, double since)
+static PyObject *s_d_, *s_along, *s_turn_, *s_turn_scan, *s_rate_;
+
+static int carry_on(PyObject *det, double sign, double moved, double since, double turned)
 {
-    /* front: gap0 + speed * since - moved; rear (sign -1): gap0 + moved - speed * since */
+    /* SurroundSensor._carried: front: gap0 + speed * since - moved; rear (sign -1): gap0 +
+     * moved - speed * since; on a curved lane (turned: the lane's turn since the scan, not
+     * NaN... any value; det._d not None) moved less _d * turned */
     PyObject *o = PyObject_GetAttr(det, s_o);
     if (!o) return -1;
     const int none = o == Py_None;
@@ -1511,6 +1900,14 @@ static int carry_on(PyObject *det, double sign, double moved, double since)
     if (none) return 0;
     double gap0, speed;
     if (get_double(det, s_gap0, &gap0) < 0 || get_double(det, s_speed, &speed) < 0) return -1;
+    PyObject *line = PyObject_GetAttr(det, s_d_);
+    if (!line) return -1;
+    if (line != Py_None) {
+        const double d = PyFloat_AsDouble(line);
+        if (d == -1.0 && PyErr_Occurred()) { Py_DECREF(line); return -1; }
+        moved -= d * turned;
+    }
+    Py_DECREF(line);
     const double gap = sign > 0.0 ? gap0 + speed * since - moved : gap0 + moved - speed * since;
     return set_double(det, s_gap, gap);
 }
@@ -1539,7 +1936,12 @@ static PyObject *look_between(PyObject *self, PyObject *const *args, Py_ssize_t 
     if (!sensor) return NULL;
     PyObject *front = NULL, *rear = NULL, *s_obj = NULL, *result = NULL;
     double s, s_scan, t_scan, ds, front_gap, rear_gap, front_speed, rear_speed;
-    s_obj = PyObject_GetAttr(view, s_s);
+    /* a curved lane (sensor._along set): the ego's station and the lane's turn there */
+    PyObject *along = PyObject_GetAttr(sensor, s_along);
+    if (!along) goto done;
+    const int curved = along != Py_None;
+    Py_DECREF(along);
+    s_obj = PyObject_GetAttr(view, curved ? s_station : s_s);
     if (!s_obj) goto done;
     s = PyFloat_AsDouble(s_obj);
     if (s == -1.0 && PyErr_Occurred()) goto done;
@@ -1547,12 +1949,29 @@ static PyObject *look_between(PyObject *self, PyObject *const *args, Py_ssize_t 
     if (PyObject_SetAttr(sensor, s_t_, t_obj) < 0 || PyObject_SetAttr(sensor, s_s_, s_obj) < 0) goto done;
     if (get_double(sensor, s_s_scan, &s_scan) < 0 || get_double(sensor, s_t_scan, &t_scan) < 0) goto done;
     const double moved = s - s_scan, since = t - t_scan;
+    double turned = 0.0;
+    {
+        if (curved) {
+            PyObject *turn = PyObject_GetAttr(view, s_turn);
+            if (!turn) goto done;
+            const int bad = PyObject_SetAttr(sensor, s_turn_, turn);
+            double now = PyFloat_AsDouble(turn), then;
+            Py_DECREF(turn);
+            if (bad < 0 || (now == -1.0 && PyErr_Occurred()) || get_double(sensor, s_turn_scan, &then) < 0) goto done;
+            turned = now - then;
+        }
+    }
     front = PyObject_GetAttr(sensor, s_front);
     rear = front ? PyObject_GetAttr(sensor, s_rear) : NULL;
     if (!rear) goto done;
-    if (carry_on(front, 1.0, moved, since) < 0 || carry_on(rear, -1.0, moved, since) < 0) goto done;
+    if (carry_on(front, 1.0, moved, since, turned) < 0 || carry_on(rear, -1.0, moved, since, turned) < 0) goto done;
     /* the gaps and TTCs */
-    if (get_double(view, s_ds, &ds) < 0 || get_double(front, s_gap, &front_gap) < 0
+    if (curved) { /* the ego's speed along the line the gaps are measured along */
+        double rate;
+        if (get_double(view, s_ds, &ds) < 0 || get_double(sensor, s_rate_, &rate) < 0) goto done;
+        ds = ds * rate;
+    } else if (get_double(view, s_ds, &ds) < 0) goto done;
+    if (get_double(front, s_gap, &front_gap) < 0
         || get_double(front, s_speed, &front_speed) < 0 || get_double(rear, s_gap, &rear_gap) < 0
         || get_double(rear, s_speed, &rear_speed) < 0)
         goto done;
@@ -1870,8 +2289,9 @@ python:
  *  - near(objects, lo, hi, h, m): the objects whose extent across the lane, widened by
  *    |v_d| h + m, overlaps (lo, hi): scan's and _scan_lane's filter (m = 0 there: x + 0.0
  *    compares as x);
- *  - nearest(objects, lo, hi, e_lo, e_hi, since, ahead, behind): _nearest, the Detections
- *    filled as Detection._found and Detection.clear fill them.
+ *  - nearest(objects, lo, hi, e_lo, e_hi, since, ahead, behind[, along]): _nearest, the
+ *    Detections filled as Detection._found and Detection.clear fill them; with ``along`` =
+ *    (d_min, d_max, turn, ego_front, ego_rear) (a curved lane), _nearest_along and Detection._found_along.
  * An object is the sensor's tuple (id, s_lo, s_hi, d_lo, d_hi, v_s, v_d, accel, rel).
  * ------------------------------------------------------------------------------------- */
 static PyObject *s_lo_, *s_hi_, *s_since_, *str_empty, *float_inf;
@@ -1930,6 +2350,14 @@ static int detection_found(PyObject *det, PyObject *o, double gap, PyObject *lo,
     return bad ? -1 : 0;
 }
 
+/* Detection._found_along(o, gap, lo, hi, since, line, speed) */
+static int detection_found_along(PyObject *det, PyObject *o, double gap, PyObject *lo, PyObject *hi, PyObject *since,
+                                 double line, double speed)
+{
+    if (detection_found(det, o, gap, lo, hi, since) < 0) return -1;
+    return (set_double(det, s_speed, speed) < 0 || set_double(det, s_d_, line) < 0) ? -1 : 0;
+}
+
 static int detection_clear(PyObject *det)
 {
     return (PyObject_SetAttr(det, s_id, str_empty) < 0 || PyObject_SetAttr(det, s_gap, float_inf) < 0
@@ -1939,10 +2367,95 @@ static int detection_clear(PyObject *det)
                : 0;
 }
 
+/* SurroundSensor._nearest_along: the same arithmetic, in the same order */
+static PyObject *nearest_along(PyObject *const *args, const double *lim, const double *along)
+{
+    PyObject *objects = args[0], *lo_obj = args[1], *hi_obj = args[2], *ahead = args[6], *behind = args[7];
+    const double lo = lim[0], hi = lim[1], e_lo = lim[2], e_hi = lim[3], since = lim[4];
+    const double d_min = along[0], d_max = along[1], turn = along[2], ego_front = along[3], ego_rear = along[4];
+    const double twice_mid = e_lo + e_hi;
+    double best_ahead = Py_HUGE_VAL, best_behind = Py_HUGE_VAL, d_ahead = 0.0, d_behind = 0.0;
+    PyObject *front = NULL, *rear = NULL;
+    for (Py_ssize_t i = 0; i < PyList_GET_SIZE(objects); i++) {
+        PyObject *o = PyList_GET_ITEM(objects, i);
+        double x[11];
+        if (object_doubles(o, x) < 0) return NULL;
+        if (PyTuple_GET_SIZE(o) < 11) {
+            PyErr_SetString(PyExc_TypeError, "a sensed object on a curved lane must carry its turn and curvature");
+            return NULL;
+        }
+        const double shift = x[6] * since;
+        if (x[4] + shift <= lo || x[3] + shift >= hi) continue;
+        for (int k = 9; k < 11; k++) {
+            x[k] = PyFloat_AsDouble(PyTuple_GET_ITEM(o, k));
+            if (x[k] == -1.0 && PyErr_Occurred()) return NULL;
+        }
+        const double move = x[5] * since;
+        const double a = x[1] + move, b = x[2] + move;
+        const double kappa = x[10];
+        const double bend = x[9] + kappa * move - turn;
+        const double d_o = 0.5 * (x[3] + x[4]) + shift;
+        const double half = 0.5 * (x[2] - x[1]);
+        const double grow = half * kappa / (1.0 - kappa * d_o);
+        const double k = fabs(kappa), w = 0.5 * (x[4] - x[3]);
+        const double corner = half * k * w / (1.0 - k * w);
+        double g0, g1;
+        if (a + b >= twice_mid) {
+            const double raw = a - e_hi;
+            g0 = raw - d_min * bend;
+            g1 = raw - d_max * bend;
+        } else {
+            const double raw = e_lo - b;
+            g0 = raw + d_min * bend;
+            g1 = raw + d_max * bend;
+        }
+        double extra = grow * (d_o - d_min);
+        if (extra > 0.0) g0 -= extra;
+        extra = grow * (d_o - d_max);
+        if (extra > 0.0) g1 -= extra;
+        const int outer = g1 < g0;
+        double gap = outer ? g1 : g0;
+        const double line = outer ? d_max : d_min;
+        if (a + b >= twice_mid) {
+            gap = gap - corner - ego_front;
+            if (gap < best_ahead) {
+                best_ahead = gap;
+                front = o;
+                d_ahead = line;
+            }
+        } else {
+            gap = gap - corner - ego_rear;
+            if (gap < best_behind) {
+                best_behind = gap;
+                rear = o;
+                d_behind = line;
+            }
+        }
+    }
+    PyObject *since_obj = args[5];
+    PyObject *dets[2] = {ahead, behind}, *found[2] = {front, rear};
+    const double gaps[2] = {best_ahead, best_behind}, lines[2] = {d_ahead, d_behind};
+    for (int k = 0; k < 2; k++) {
+        PyObject *o = found[k];
+        if (!o) {
+            if (detection_clear(dets[k]) < 0) return NULL;
+            continue;
+        }
+        double x[11];
+        if (object_doubles(o, x) < 0) return NULL;
+        const double kappa = PyFloat_AsDouble(PyTuple_GET_ITEM(o, 10));
+        if (kappa == -1.0 && PyErr_Occurred()) return NULL;
+        const double rate = (1.0 - kappa * lines[k]) / (1.0 - kappa * (0.5 * (x[3] + x[4]) + x[6] * since));
+        if (detection_found_along(dets[k], o, gaps[k], lo_obj, hi_obj, since_obj, lines[k], x[5] * rate) < 0)
+            return NULL;
+    }
+    Py_RETURN_NONE;
+}
+
 static PyObject *nearest(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
-    if (nargs != 8 || !PyList_CheckExact(args[0])) {
-        PyErr_SetString(PyExc_TypeError, "nearest(objects: list, lo, hi, e_lo, e_hi, since, ahead, behind)");
+    if ((nargs != 8 && nargs != 9) || !PyList_CheckExact(args[0])) {
+        PyErr_SetString(PyExc_TypeError, "nearest(objects: list, lo, hi, e_lo, e_hi, since, ahead, behind[, along])");
         return NULL;
     }
     PyObject *objects = args[0], *lo_obj = args[1], *hi_obj = args[2], *ahead = args[6], *behind = args[7];
@@ -1950,6 +2463,11 @@ static PyObject *nearest(PyObject *self, PyObject *const *args, Py_ssize_t nargs
     for (int i = 0; i < 5; i++) {
         lim[i] = PyFloat_AsDouble(args[i + 1]);
         if (lim[i] == -1.0 && PyErr_Occurred()) return NULL;
+    }
+    if (nargs == 9 && args[8] != Py_None) {
+        double along[5];
+        if (read_doubles(args[8], along, 5, "along")) return NULL;
+        return nearest_along(args, lim, along);
     }
     const double lo = lim[0], hi = lim[1], e_lo = lim[2], e_hi = lim[3], since = lim[4];
     const double twice_mid = e_lo + e_hi;
@@ -2001,7 +2519,9 @@ static int intern_loop_names(void)
         {&s_s_ref, "s_ref"}, {&s_ds_ref, "ds_ref"}, {&s_d_ref, "d_ref"}, {&s_dd_ref, "dd_ref"},
         {&s_lane_offset, "lane_offset"}, {&s_inside_since, "_inside_since"}, {&s_check_done, "check_done"},
         {&s_t, "t"}, {&s_s0, "s0"}, {&s_accel, "accel"}, {&s_lo_, "_lo"}, {&s_hi_, "_hi"},
-        {&s_since_, "_since"}, {&str_empty, ""}, {&s_bridge, "bridge"}, {&s_elapsed_, "_elapsed"},
+        {&s_since_, "_since"}, {&s_d_, "_d"}, {&s_along, "_along"}, {&s_turn, "turn"},
+        {&s_turn_, "_turn"}, {&s_turn_scan, "_turn_scan"}, {&s_station, "station"}, {&s_rate_, "_rate"}, {&s_c_, "_c"}, {&s_hint_, "_hint"}, {&s_at_, "_at"},
+        {&s_mean_curvature, "mean_curvature"}, {&str_empty, ""}, {&s_bridge, "bridge"}, {&s_elapsed_, "_elapsed"},
         {&s_step, "step"}, {&s_step_joint, "step_joint"},
         {&s_status, "status"}, {&s_rewards, "rewards"}, {&s_running, "running"},
     };
@@ -2035,10 +2555,11 @@ static PyMethodDef methods[] = {
     FASTCALL(road_frame, "road_frame(view) -> None (RoadSensor.frame)"),
     FASTCALL(look_between, "look_between(view, t) -> Collision | None (SurroundView.look)"),
     FASTCALL(near, "near(objects, lo, hi, h, m) -> the objects within reach (SurroundSensor.scan's filter)"),
-    FASTCALL(nearest, "nearest(objects, lo, hi, e_lo, e_hi, since, ahead, behind) -> None "
+    FASTCALL(nearest, "nearest(objects, lo, hi, e_lo, e_hi, since, ahead, behind[, along]) -> None "
                       "(SurroundSensor._nearest)"),
     FASTCALL(plan_steady, "plan_steady(fallback, packed, ego_speed, man, safety, obs, t) -> None "
                           "(EvasiveManoeuvre.plan)"),
+    FASTCALL(lane_mean_curvature, "lane_mean_curvature(lane, s, ahead) -> LanePolyline.mean_curvature(s, ahead)"),
     FASTCALL(place, "place(ids, rows, front, reach, straight, frame, previous, dt, rated, low_edge) -> "
                     "(ids, rows, objects, speeds)"),
     {NULL, NULL, 0, NULL},

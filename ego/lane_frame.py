@@ -23,6 +23,7 @@ positive when the vehicle points left of the lane).
 from __future__ import annotations
 
 import math
+from array import array
 from collections.abc import Sequence
 
 _TWO_PI = 2.0 * math.pi
@@ -43,7 +44,7 @@ GRID = 10.0
 class LanePolyline:
     """A lane centre line made of straight segments, with a fast local projection."""
 
-    __slots__ = ("lane_id", "width", "points", "_seg", "_hint", "_single", "_grid", "_at")
+    __slots__ = ("lane_id", "width", "points", "_seg", "_hint", "_single", "_grid", "_at", "_c")
 
     def __init__(self, points: Sequence[tuple[float, float]], width: float = 3.5, lane_id: str = "") -> None:
         if len(points) < 2:
@@ -76,13 +77,16 @@ class LanePolyline:
             heading.append(raw[i - 1][6] + turn * after / (before + after))
         heading.append(raw[-1][6])
         # segment: x0, y0, ux, uy, length, s0, direction, heading at start, heading
-        # change along it, curvature
+        # change along it, curvature, the lane's turn (unwrapped heading change) from its
+        # start to the segment's
         self._seg = []
+        turn = 0.0
         for i in range(n):
             change = wrap_angle(heading[i + 1] - heading[i])
-            self._seg.append((*raw[i], heading[i], change, change / raw[i][4]))
+            self._seg.append((*raw[i], heading[i], change, change / raw[i][4], turn))
+            turn += change
         self._hint = 0
-        self._at = 0  #: the segment :meth:`_segment_at` found last
+        self._at = [0, 0]  #: the segments :meth:`_segment_at` found last, per slot
         #: (cell of GRID m) -> the segments passing through it, so a point far from the
         #: previous answer (the surround sensor projecting one car after another along a
         #: curve) starts its search next to its own segment instead of walking there
@@ -94,6 +98,15 @@ class LanePolyline:
                 self._grid.setdefault(cell, [i])  # one segment per cell: the search walks on
         #: one straight segment: frame() is a rotation, done without a search
         self._single = self._seg[0] if n == 1 else None
+        #: the segments and the grid as plain arrays, for ego._native (road_frame, place):
+        #: the same projection in C, without a Python call per point
+        cells = sorted(self._grid)
+        self._c = (
+            array("d", [v for seg in self._seg for v in seg]),
+            array("q", [c[0] for c in cells]),
+            array("q", [c[1] for c in cells]),
+            array("q", [self._grid[c][0] for c in cells]),
+        )
 
     def straight(self) -> tuple[float, float, float, float, float, float] | None:
         """(x0, y0, ux, uy, s0, heading) when the lane is one straight segment (its frame is a
@@ -184,31 +197,78 @@ class LanePolyline:
             seg[9],
         )
 
-    def heading_at(self, s: float) -> float:
-        """The centre line's (interpolated tangent) heading at arc length ``s`` (rad)."""
+    def place(self, x: float, y: float, yaw: float) -> tuple[float, float, float, float, float]:
+        """(station, d, heading error, turn, curvature) of a pose, for the surround sensor:
+        :meth:`frame`'s offset, heading error and curvature, the lane's turn from its start
+        to there (rad, unwrapped: the heading change it has curved through; :meth:`turn_at`)
+        and the point's station: its arc length along the centre line where the radius
+        through it meets it (``s`` projects on the chord: off a curved lane by d it is off
+        by up to d kappa L / 2 within each segment of length L; the station is not).
+
+        The arc length between stations s0 and s1 along the line ``d`` m left of the centre
+        line is then ``s1 - s0 - d (turn(s1) - turn(s0))``: each segment is an arc of its
+        curvature, and a parallel line d m to its left runs ``1 - kappa d`` as far."""
+        s, d, err, kappa, turn, station = self.locate(x, y, yaw)
+        return station, d, err, turn, kappa
+
+    def locate(self, x: float, y: float, psi: float) -> tuple[float, float, float, float, float, float]:
+        """:meth:`frame`'s (s, d, heading error, curvature), then the turn and the station of
+        :meth:`place`."""
+        i, along, across = self._closest(x, y)
+        seg = self._seg[i]
+        length = seg[4]
+        u = min(max(along, 0.0), length)
+        kappa = seg[9]
+        d = across + kappa * u * (length - u) * 0.5
+        frac = u / length
+        s = seg[5] + along
+        station = s
+        if kappa != 0.0:
+            q = 1.0 - kappa * d
+            if q > 0.5:  # the point nearer the line than half the radius: the arc's station
+                half = 0.5 * length
+                # along the chord unclamped: outside a bend's vertex the closest point is
+                # the vertex for a few cm, the radius through the point moves on
+                along = (x - seg[0]) * seg[2] + (y - seg[1]) * seg[3]
+                station = seg[5] + half + (along - half) / q
+        return s, d, wrap_angle(psi - seg[7] - frac * seg[8]), kappa, seg[10] + frac * seg[8], station
+
+    def turn_at(self, s: float) -> float:
+        """The lane's turn from its start to arc length ``s`` (rad, unwrapped, + left): the
+        integral of its curvature; constant beyond the ends."""
         seg = self._seg[self._segment_at(s)]
+        return seg[10] + min(max((s - seg[5]) / seg[4], 0.0), 1.0) * seg[8]
+
+    def heading_at(self, s: float, slot: int = 0) -> float:
+        """The centre line's (interpolated tangent) heading at arc length ``s`` (rad);
+        ``slot``: which of :meth:`_segment_at`'s remembered segments to start from."""
+        seg = self._seg[self._segment_at(s, slot)]
         t = min(max((s - seg[5]) / seg[4], 0.0), 1.0)
         return wrap_angle(seg[7] + t * seg[8])
 
     def mean_curvature(self, s: float, ahead: float) -> float:
-        """Mean curvature over [s, s + ahead] (1/m): the lane's turn there over ``ahead``."""
+        """Mean curvature over [s, s + ahead] (1/m): the lane's turn there over ``ahead``
+        (every control period: the two ends each from where their last call found them)."""
         if ahead <= 0.0:
             return self.curvature_at(s)
-        return wrap_angle(self.heading_at(s + ahead) - self.heading_at(s)) / ahead
+        return wrap_angle(self.heading_at(s + ahead, 1) - self.heading_at(s)) / ahead
 
     def curvature_at(self, s: float) -> float:
         """Signed curvature (1/m) at arc length ``s``."""
         return self._seg[self._segment_at(s)][9]
 
-    def _segment_at(self, s: float) -> int:
-        """The last segment starting at or before ``s`` (the first when none does)."""
+    def _segment_at(self, s: float, slot: int = 0) -> int:
+        """The last segment starting at or before ``s`` (the first when none does); ``slot``
+        (0 or 1) is which remembered answer to try first (two lookups moving along together
+        each keep their own)."""
         seg = self._seg
         last = len(seg) - 1
-        i = self._at
+        at = self._at
+        i = at[slot]
         if seg[i][5] <= s and (i == last or s < seg[i + 1][5]):  # where the last call was
             return i
         if i < last and seg[i + 1][5] <= s and (i + 1 == last or s < seg[i + 2][5]):  # the next one
-            self._at = i + 1
+            at[slot] = i + 1
             return i + 1
         lo, hi = 0, last
         while lo < hi:
@@ -217,7 +277,7 @@ class LanePolyline:
                 lo = mid
             else:
                 hi = mid - 1
-        self._at = lo
+        at[slot] = lo
         return lo
 
     def curved_spans(self, min_curvature: float = 1e-3) -> list[tuple[float, float, float]]:

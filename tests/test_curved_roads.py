@@ -92,9 +92,53 @@ def test_emergency_brake_in_the_left_r250_arc_completes_in_its_lanes():
     assert r.status == "completed" and not m["collision"] and m["lane_change_completed"]
     assert m["max_lane_departure"] == 0.0
     assert abs(m["max_overshoot"] - m0["max_overshoot"]) <= 0.1
-    # the gap along the lane: within 0.2 m of the straight road's at the same speeds
-    assert m["min_gap_front"] == pytest.approx(m0["min_gap_front"], abs=0.2)
+    # the gap along the lane the ego is in (the inner one while its nose is there: 1.4 %
+    # shorter than the start lane's): within 0.3 m of the straight road's at the same speeds
+    assert m["min_gap_front"] == pytest.approx(m0["min_gap_front"], abs=0.3)
     assert math.isfinite(m["min_ttc_front"])
+
+
+def _gap_check():
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "scripts" / "curved_gap_check.py"
+    spec = importlib.util.spec_from_file_location("curved_gap_check", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+#: m: SUMO's lane is the chords of the design arc, 8 mm shorter over the R 250 m arc's 785 m
+CHORDS = 0.001
+
+
+def _never_overstated(r: dict, under: float) -> None:
+    assert r["pairs"] > 40 and r["ttc_pairs"] > 0, r
+    assert r["over"] <= CHORDS, r  # the gap never longer than the arc between the outlines
+    assert r["under"] <= under, r
+    assert r["ttc_over"] <= 0.01, r  # s
+
+
+def test_the_front_gap_and_ttc_are_never_overstated_in_the_inner_lane_of_a_curve():
+    # seed 0 changes to the left (inner) lane of the R 250 m arc: the gap is measured along
+    # it, against the arc between SUMO's outlines (scripts/curved_gap_check.py); measured
+    # along the start lane it was 1.13 m (1.4 %) too long here
+    check = _gap_check().check
+    r = check("left-250", "pid", 0)
+    _never_overstated(r, under=0.1)
+    assert r["sumo_over"] > 0.3  # SUMO's getLeader is longer there: lane positions, not the arc
+
+
+@pytest.mark.long
+@pytest.mark.parametrize("road", ["left-250", "right-250", "left-1000", "right-1000", "straight"])
+def test_the_front_gap_and_ttc_are_never_overstated_on_any_road(road):
+    # 6 seeds x 5 controllers (the table in docs/scenarios.md); the understatement is the
+    # instant SUMO has the ego's front bumper in one lane and the sensor in the next
+    check = _gap_check().check
+    for controller in TRACKING:
+        for seed in range(6):
+            _never_overstated(check(road, controller, seed), under=0.25)
 
 
 def test_a_bad_road_is_one_line_and_exit_2(capsys):

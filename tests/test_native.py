@@ -2,6 +2,7 @@
 
 import contextlib
 import json
+import math
 import os
 import subprocess
 import sys
@@ -149,12 +150,24 @@ def test_boxes_match_the_bridges_python_loop():
     assert asked_c == asked_p and "k0" not in asked_c  # the known dimensions are not asked for
 
 
-def _sensor(curved: bool):
+def _motorway_arc() -> list[tuple[float, float]]:
+    """The middle lane of left-250 (sumo_nets/motorway_arcs.py): 350 m straight, a 180-degree
+    arc of radius 250 m in 4 m chords, the exit straight."""
+    arc = [(350.0 + 250.0 * math.sin(a), 250.0 - 250.0 * math.cos(a)) for a in np.linspace(0.0, math.pi, 197)]
+    return [(0.0, 0.0), *arc, (-1000.0, 500.0)]
+
+
+def _points(curved) -> list[tuple[float, float]]:
+    if curved == "arc":
+        return _motorway_arc()
+    return [(0.0, 0.0), (400.0, 30.0), (900.0, 10.0)] if curved else [(0.0, 0.0), (2000.0, 50.0)]
+
+
+def _sensor(curved):
     from ego.lane_frame import LanePolyline
     from ego.scenarios.sensor import SurroundSensor
 
-    points = [(0.0, 0.0), (400.0, 30.0), (900.0, 10.0)] if curved else [(0.0, 0.0), (2000.0, 50.0)]
-    return SurroundSensor(LanePolyline(points), {0: (-1.75, 1.75)}, cg_to_front=2.25, length=4.5, width=1.8)
+    return SurroundSensor(LanePolyline(_points(curved)), {0: (-1.75, 1.75)}, cg_to_front=2.25, length=4.5, width=1.8)
 
 
 @contextlib.contextmanager
@@ -170,7 +183,7 @@ def _placing(native: bool):
         sensor_module._PLACE = saved
 
 
-@pytest.mark.parametrize("curved", [False, True], ids=["rotation", "polyline"])
+@pytest.mark.parametrize("curved", [False, True, "arc"], ids=["rotation", "polyline", "arc"])
 @pytest.mark.parametrize("front", [None, (300.0, 5.0)], ids=["all", "within-reach"])
 def test_place_matches_the_sensors_python_sync(curved, front):
     rng = np.random.default_rng(2)
@@ -184,6 +197,8 @@ def test_place_matches_the_sensors_python_sync(curved, front):
         if k == 2:  # a box centre exactly at the reach (math.hypot decides) and a tie of edges
             rows[0] = (300.0 + 30.0, 5.0 + 40.0, 0.0, 20.0, 4.5, 1.8)
             rows[2] = rows[1]
+        if curved == "arc" and k == 1:  # points the C leaves to Python (it raises there): none
+            rows[3] = (float("nan"), 5.0, 0.0, 20.0, 4.5, 1.8)
         steps.append((0.1 * k, list(ids), rows))
     placed = {}
     for native in (True, False):
@@ -192,7 +207,8 @@ def test_place_matches_the_sensors_python_sync(curved, front):
         with _placing(native):
             for t, step_ids, rows in steps:
                 near = sensor.sync_within(t, step_ids, rows, front, 50.0)
-                out.append((near, list(sensor._objects), dict(sensor._speeds), sensor._seen))
+                objects = (repr(sensor._objects), repr(sensor._speeds), repr(sensor._seen), sensor.lane._hint)
+                out.append((near, *objects))
         placed[native] = out
     assert placed[True] == placed[False]  # bit for bit, the order of equal edges included
     if front is not None:
@@ -399,13 +415,13 @@ def test_trace_write_matches_the_python_writer(monkeypatch):
     assert len(native.rows) == len(python.rows) == len(good)
 
 
-@pytest.mark.parametrize("curved", [False, True], ids=["straight", "polyline"])
+@pytest.mark.parametrize("curved", [False, True, "arc"], ids=["straight", "polyline", "arc"])
 def test_road_frame_matches_the_python_frame(curved):
     from ego.lane_frame import LanePolyline
     from ego.models import VehicleGeometry
     from ego.scenarios.road import RoadSensor
 
-    points = [(0.0, 0.0), (400.0, 30.0), (900.0, 10.0)] if curved else [(-50.0, 2.0), (2000.0, 60.0)]
+    points = _points(curved) if curved else [(-50.0, 2.0), (2000.0, 60.0)]
     road = LanePolyline(points)
 
     class Plant:
@@ -414,11 +430,17 @@ def test_road_frame_matches_the_python_frame(curved):
     plants = Plant(), Plant()
     native, python = RoadSensor(VehicleGeometry()), RoadSensor(VehicleGeometry())
     native.on_lane(road, plants[0])
-    python.on_lane(road, plants[1])
+    python.on_lane(LanePolyline(points), plants[1])  # a lane each: each its own hint
     rng = np.random.default_rng(2)
-    names = ("X", "Y", "s", "d_road", "heading_error", "curvature", "ds", "dd")
+    names = ("X", "Y", "s", "d_road", "heading_error", "curvature", "ds", "dd", "turn", "station")
     for i in range(2000):
         x = rng.normal([500, 20, 20, 0, 0, 0], [300, 10, 5, 1, 1.0, 0.5])
+        if curved == "arc" and i % 2:  # near the arc, as a car driving it: the walk from the hint
+            a = rng.uniform(0.0, 3.2)
+            r = 250.0 + rng.normal(0.0, 2.0)
+            x[0], x[2] = 350.0 + r * math.sin(a), 250.0 - r * math.cos(a)
+        if i % 50 == 4:
+            x[2] = np.inf  # math.floor raises for the grid's cell: from both
         if i % 50 == 1:
             x[4] += rng.choice([-1, 1]) * rng.uniform(3.0, 40.0)  # far beyond +-pi: wrapped
         if i % 50 == 2:
@@ -430,10 +452,11 @@ def test_road_frame_matches_the_python_frame(curved):
         for run in (lambda: NATIVE.road_frame(native), python.frame):
             try:
                 run()
-            except ValueError as exc:  # an infinite heading: math.fmod's domain error, from both
+            except (ValueError, OverflowError) as exc:  # math.fmod's / math.floor's, from both
                 errors.append(str(exc))
         assert len(errors) in (0, 2) and len(set(errors)) <= 1, errors
         assert _bits(getattr(native, n) for n in names) == _bits(getattr(python, n) for n in names), i
+        assert native.road._hint == python.road._hint, i
     if not curved:  # a new road: the C kernel leaves it to the Python method, which takes it up
         native.road = python.road = LanePolyline([(0.0, 0.0), (100.0, 0.0)])
         NATIVE.road_frame(native)
@@ -442,7 +465,29 @@ def test_road_frame_matches_the_python_frame(curved):
         assert _bits(getattr(native, n) for n in names) == _bits(getattr(python, n) for n in names)
 
 
+def _arc_lanes(width: float = 3.2, radius: float = 250.0):
+    """Three concentric lanes bending left (the middle one of ``radius`` m through (300,
+    ``width``), heading +x there), as LanePolylines of 2 m chords: a curved motorway."""
+    from ego.lane_frame import LanePolyline
+
+    cy = width + radius
+    lanes = {}
+    for i in range(3):
+        r = radius - (i - 1) * width
+        pts = [(300.0 + r * math.sin(a), cy - r * math.cos(a)) for a in np.linspace(-0.9, 0.9, int(1.8 * r / 2.0))]
+        lanes[i] = LanePolyline(pts, width, f"motorway_{i}")
+    return lanes
+
+
 def test_look_between_matches_the_python_look():
+    _look_between_matches(curved=False)
+
+
+def test_look_between_matches_the_python_look_on_a_curved_lane():
+    _look_between_matches(curved=True)
+
+
+def _look_between_matches(curved: bool):
     # two views fed the same scene by hand; the ego and the traffic move between looks, one
     # through ego._native.look_between, the other through SurroundView.look
     from ego.lane_frame import LanePolyline
@@ -452,22 +497,35 @@ def test_look_between_matches_the_python_look():
 
     config = EmergencyBrakeConfig()
     geometry = VehicleGeometry()
-    lanes = {i: LanePolyline([(0.0, 3.2 * i), (3000.0, 3.2 * i)], 3.2, f"motorway_{i}") for i in range(3)}
-    names = ("gap_front", "ttc_front", "gap_rear", "ttc_rear", "s")
+    if curved:
+        lanes = _arc_lanes()
+    else:
+        lanes = {i: LanePolyline([(0.0, 3.2 * i), (3000.0, 3.2 * i)], 3.2, f"motorway_{i}") for i in range(3)}
+    names = ("gap_front", "ttc_front", "gap_rear", "ttc_rear", "s", "station", "turn")
     rng = np.random.default_rng(3)
+    middle = lanes[1]
+    s_ego = middle.project(300.0, 3.2)[0]
+
+    def pose(s: float, d: float = 0.0) -> tuple[float, float, float]:
+        x, y = middle.offset_point(s, d)
+        return x, y, middle.heading_at(s)
+
     for case in range(40):
         views = []
-        # ahead and behind in the ego's lane (the one ahead touching it in every fifth case)
-        ahead = 300.0 + rng.uniform(2.0, 40.0) * (1 if case % 5 else 0.0)
+        # ahead and behind in the ego's lane (the one ahead touching it in every fifth case),
+        # on a curve a third car in the inner lane half across the ego's
+        ahead = rng.uniform(2.0, 40.0) * (1 if case % 5 else 0.0)
         rows = [
-            (ahead, 3.2, 0.0, rng.uniform(0.0, 30.0), 4.5, 1.8),
-            (300.0 - rng.uniform(4.0, 40.0), 3.2, 0.0, rng.uniform(0.0, 40.0), 4.5, 1.8),
+            (*pose(s_ego + 2.25 + 2.25 + ahead), rng.uniform(0.0, 30.0), 4.5, 1.8),
+            (*pose(s_ego - rng.uniform(4.0, 40.0)), rng.uniform(0.0, 40.0), 4.5, 1.8),
         ]
+        if curved:
+            rows.append((*pose(s_ego + rng.uniform(6.0, 30.0), 2.0), rng.uniform(0.0, 40.0), 4.5, 1.8))
         for native in (True, False):
             plant = ego_plant(config, geometry, (300.0, 3.2 * config.ego_lane, 0.0))
             view = SurroundView(config, geometry)
             view.setup(None, lanes, plant)
-            view.sensor.sync(0.0, ["lead", "back"], rows)
+            view.sensor.sync(0.0, ["lead", "back", "inner"][: len(rows)], rows)
             look = view.bind_look() if native else view.look
             views.append((view, plant, look))
         assert views[0][2].func is NATIVE.look_between
@@ -482,7 +540,8 @@ def test_look_between_matches_the_python_look():
             t = 0.01 * k
             found = []
             for view, plant, look in views:
-                plant.state = (300.0 + speed * t, speed, 3.2, 0.0, 0.0, 0.0)
+                x, y, psi = pose(s_ego + speed * t, 0.3 * k / 10)
+                plant.state = (x, speed, y, 0.0, psi, 0.0)
                 view.frame()
                 if case == 7 and k == 4:
                     view.s = float("nan")
@@ -491,7 +550,15 @@ def test_look_between_matches_the_python_look():
             assert _bits(getattr(a, n) for n in names) == _bits(getattr(b, n) for n in names), (case, k)
             assert _bits((a.sensor.front.gap, a.sensor.rear.gap)) == _bits((b.sensor.front.gap, b.sensor.rear.gap))
             assert repr(found[0]) == repr(found[1]), (case, k)
-            assert (a._looked, a.sensor._t, a.sensor._s is a.s) == (b._looked, b.sensor._t, b.sensor._s is b.s)
+            own = "station" if curved else "s"
+            assert (a._looked, a.sensor._t, a.sensor._s is getattr(a, own)) == (
+                b._looked,
+                b.sensor._t,
+                b.sensor._s is getattr(b, own),
+            )
+            assert _bits((a.sensor._turn, a.sensor.front.speed)) == _bits((b.sensor._turn, b.sensor.front.speed))
+        if curved:
+            assert views[0][0].sensor._along is not None and views[0][0].sensor.front._d is not None
 
 
 @pytest.mark.sumo
@@ -544,7 +611,8 @@ def test_plan_steady_gives_the_python_plans_every_row(scenario, controller, over
     assert 0 < len(c_calls) < len(py_calls) / 2, (len(c_calls), len(py_calls))
 
 
-def test_near_and_nearest_match_the_sensors_python_search(monkeypatch):
+@pytest.mark.parametrize("curved", [False, True], ids=["straight", "curved"])
+def test_near_and_nearest_match_the_sensors_python_search(monkeypatch, curved):
     # one scene, searched twice: through ego._native.near/nearest and through the Python
     # loops of SurroundSensor.scan, _scan_lane and _nearest; every Detection to the bit
     import ego.scenarios.sensor as sensor_module
@@ -556,8 +624,12 @@ def test_near_and_nearest_match_the_sensors_python_search(monkeypatch):
     config = EmergencyBrakeConfig()
     geometry = VehicleGeometry()
     lanes = {i: LanePolyline([(0.0, 3.2 * i), (3000.0, 3.2 * i)], 3.2, f"motorway_{i}") for i in range(3)}
-    fields = ("id", "gap", "speed", "accel", "_gap0", "_lo", "_hi", "_since")
+    if curved:
+        lanes = _arc_lanes()
+    fields = ("id", "gap", "speed", "accel", "_gap0", "_lo", "_hi", "_since", "_d")
     rng = np.random.default_rng(5)
+    middle = lanes[1]
+    s_ego = middle.project(300.0, 3.2)[0]
 
     def search(rows, native: bool, t_scan: float, heading: float):
         if not native:
@@ -569,7 +641,11 @@ def test_near_and_nearest_match_the_sensors_python_search(monkeypatch):
             view.setup(None, lanes, plant)
             sensor = view.sensor
             sensor.sync(0.0, [f"v{i}" for i in range(len(rows))], rows)
-            sensor.scan(t_scan, 300.0 - geometry.cg_to_front, 3.2, heading)
+            s = s_ego - geometry.cg_to_front
+            if curved:
+                sensor.scan(t_scan, s, 0.0, heading, middle.turn_at(s), middle.curvature_at(s))
+            else:
+                sensor.scan(t_scan, s, 3.2, heading)
             found = [sensor.front, sensor.rear]
             for lane in (0, 1, 2, 7):
                 pair = sensor_module.Detection(), sensor_module.Detection()
@@ -587,6 +663,10 @@ def test_near_and_nearest_match_the_sensors_python_search(monkeypatch):
             x = 300.0 + rng.uniform(-60.0, 60.0)
             y = rng.choice([0.0, 3.2, 6.4]) + rng.uniform(-1.8, 1.8)
             yaw = rng.uniform(-0.3, 0.3)
+            if curved:  # the same scene bent along the lanes
+                s = s_ego + x - 300.0
+                x, y = middle.offset_point(s, y - 3.2)
+                yaw += middle.heading_at(s)
             rows.append((x, y, yaw, rng.uniform(0.0, 40.0), 4.5, 1.8))
         if case % 3 == 1 and rows:  # two cars in one place: the first found is kept in both
             rows.append(rows[-1])
@@ -598,6 +678,32 @@ def test_near_and_nearest_match_the_sensors_python_search(monkeypatch):
         assert [o[0] for o in c_near] == [o[0] for o in py_near], case
         for a, b in zip(c_found, py_found, strict=True):
             assert (a.id, repr(a._o)) == (b.id, repr(b._o)), case
-            assert _bits(getattr(a, f) for f in fields[1:]) == _bits(getattr(b, f) for f in fields[1:]), case
+            assert (a._d is None) == (b._d is None) == (not curved or a._o is None), case
+            values = [f for f in fields[1:] if f != "_d" or a._d is not None]
+            assert _bits(getattr(a, f) for f in values) == _bits(getattr(b, f) for f in values), case
         seen += sum(d._o is not None for d in c_found)
     assert seen > 100  # the searches found something
+
+
+@pytest.mark.parametrize("curved", [True, "arc"], ids=["polyline", "arc"])
+def test_lane_mean_curvature_matches_the_python_method(curved):
+    # the curvature feed-forward's preview (SurroundView.observe) every control period: one
+    # lane through ego._native.lane_mean_curvature, its twin through LanePolyline's method;
+    # every value to the bit and both remembered segments alike, odd inputs included
+    from ego.lane_frame import LanePolyline
+
+    native, python = LanePolyline(_points(curved)), LanePolyline(_points(curved))
+    rng = np.random.default_rng(1)
+    s = 0.0
+    for i in range(3000):
+        s += float(rng.normal(0.3, 0.05)) if i % 100 else float(rng.uniform(-50.0, 1500.0)) - s
+        ahead = float(rng.uniform(-1.0, 20.0)) if i % 37 else (0.0, -1.0, math.nan, math.inf)[i // 37 % 4]
+        at = s if i % 41 else (math.nan, math.inf, -math.inf)[i // 41 % 3]
+        found = []
+        for run, lane in ((NATIVE.lane_mean_curvature, native), (LanePolyline.mean_curvature, python)):
+            try:
+                found.append(repr(run(lane, at, ahead)))
+            except ValueError as exc:  # an infinite heading: math.fmod's, from both
+                found.append(str(exc))
+        assert found[0] == found[1], (i, at, ahead)
+        assert native._at == python._at, i

@@ -43,6 +43,8 @@ from ego.sim.traffic import PacedVehicle, background_traffic
 from ego.sim.types import EGO, Collision, VehicleSpec, VehicleType, ego_type
 
 _LOOK_BETWEEN = NATIVE.look_between if NATIVE is not None else None
+#: LanePolyline.mean_curvature in C (the curvature feed-forward's preview, every control period)
+_MEAN_CURVATURE = NATIVE.lane_mean_curvature if NATIVE is not None else None
 
 ROUTE = "motorway_route"
 EDGE = "motorway"
@@ -339,13 +341,16 @@ class SurroundView(RoadSensor):
         """Gaps and TTCs now; a collision the simulator has not reported (yet) when the
         outlines overlap."""
         sensor = self.sensor
+        curved = self._line is None  # the sensor's stations: where the radius through the ego meets the lane
         if self._looked:  # between simulator steps: the same vehicles, moved on
-            sensor.advance(t, self.s)
+            sensor.advance(t, self.station if curved else self.s, self.turn)
         else:
-            sensor.scan(t, self.s, self.d_road, self.heading_error)
+            sensor.scan(
+                t, self.station if curved else self.s, self.d_road, self.heading_error, self.turn, self.curvature
+            )
             self._looked = True
         front, rear = sensor.front, sensor.rear
-        ds = self.ds
+        ds = self.ds if sensor._along is None else self.ds * sensor._rate  # along the line the gaps are
         # time_to_collision(gap, closing), inline: every control period
         front_gap = self.gap_front = front.gap
         closing = ds - front.speed
@@ -396,7 +401,11 @@ class SurroundView(RoadSensor):
         obs.surround = self.sensor
         if self._line is None:  # a curved road: the feed-forward on the target lane, previewed
             u = self._plant.state[1]
-            kappa = self.road.mean_curvature(self.s, FF_PREVIEW * u)
+            road = self.road
+            if _MEAN_CURVATURE is not None and hasattr(road, "_c"):  # in C on its packed data
+                kappa = _MEAN_CURVATURE(road, self.s, FF_PREVIEW * u)
+            else:
+                kappa = road.mean_curvature(self.s, FF_PREVIEW * u)
             # the target lane's centre line is concentric with the start lane's, ``off`` to its left
             kappa /= 1.0 - kappa * self.lane_offset[self.target_lane]
             steady = self.steady

@@ -42,6 +42,12 @@ class RoadSensor:
         self.road_halfwidth = 0.0
         self.s = self.d_road = self.heading_error = self.curvature = self.ds = self.dd = 0.0
         self.X = self.Y = 0.0
+        #: the lane's turn from its start to ``s`` (rad; 0 on a straight lane): the surround
+        #: sensor's arc lengths along lines parallel to the lane (LanePolyline.place)
+        self.turn = 0.0
+        #: the ego's station on a curved lane (LanePolyline.place): ``s`` where the radius
+        #: through it meets the centre line, as the surround sensor places every car
+        self.station = 0.0
         #: the plant's steady-state cornering (the curvature feed-forward, ``steer_ff``)
         self.steady = SteadySteer(0.0)
         self._plant = None
@@ -71,6 +77,8 @@ class RoadSensor:
             if not -math.pi < err <= math.pi:
                 err = wrap_angle(err)
             s, d, kappa = s0 + dx * ux + dy * uy, dy * ux - dx * uy, 0.0
+        elif hasattr(road, "locate"):
+            s, d, err, kappa, self.turn, self.station = road.locate(X, Y, psi)
         else:
             s, d, err, kappa = road.frame(X, Y, psi)
         c, sn = math.cos(err), math.sin(err)

@@ -28,6 +28,14 @@ projected on the lane direction, which is never more than the distance between t
 outlines themselves (a projection never lengthens a distance), so the sensor never
 overstates clearance; while the ego is turned by a few degrees it is conservative by up
 to its width times the sine of its heading error.
+
+On a curved road the stations ``s`` are those of the reference (start) lane, and a lane
+``D`` m to its left runs ``1 - kappa D`` m per metre of them: a gap is the arc length along
+the centre line of the lane the ego is in (:meth:`SurroundSensor.scan`), the station
+difference scaled by the turn between the two (``LanePolyline.place``); each car's length
+and speed are scaled from its own line to that one where that shortens the gap, and its
+inner corners' reach past its extent is left out, so the gap is never longer than the arc
+along the ego's lane between the outlines.
 """
 
 from __future__ import annotations
@@ -54,7 +62,7 @@ class Detection:
     last SUMO step (m/s^2). ``overlap``, ``side`` and ``lateral_speed`` say how it sits
     across the band it was found in."""
 
-    __slots__ = ("id", "gap", "speed", "accel", "_gap0", "_o", "_lo", "_hi", "_since")
+    __slots__ = ("id", "gap", "speed", "accel", "_gap0", "_o", "_lo", "_hi", "_since", "_d")
 
     def __init__(
         self,
@@ -67,6 +75,9 @@ class Detection:
         self._gap0 = gap  #: the gap at the scan that found it
         self._o = None
         self._lo = self._hi = self._since = 0.0
+        #: on a curved road, the offset (m, + left of the reference lane) of the line its gap
+        #: is measured along; None on a straight one
+        self._d: float | None = None
 
     def __repr__(self) -> str:
         return f"Detection(id={self.id!r}, gap={self.gap!r}, speed={self.speed!r}, accel={self.accel!r})"
@@ -83,10 +94,18 @@ class Detection:
         self._gap0 = gap
         self._o, self._lo, self._hi, self._since = o, lo, hi, since
 
+    def _found_along(self, o: tuple, gap: float, lo: float, hi: float, since: float, d: float, speed: float) -> None:
+        """:meth:`_found` on a curved road: the gap along the line ``d`` (m), ``speed`` the
+        object's along that line (m/s)."""
+        self.id, self.gap, self.speed, self.accel = o[0], gap, speed, o[7]
+        self._gap0 = gap
+        self._o, self._lo, self._hi, self._since, self._d = o, lo, hi, since, d
+
     def _copy(self, other: Detection, gap: float) -> None:
         self.id, self.gap, self.speed, self.accel = other.id, gap, other.speed, other.accel
         self._gap0 = other._gap0
         self._o, self._lo, self._hi, self._since = other._o, other._lo, other._hi, other._since
+        self._d = other._d
 
     @property
     def lateral_speed(self) -> float:
@@ -132,6 +151,12 @@ class SurroundSensor:
         "_near",
         "_lanes",
         "_straight",
+        "_place",
+        "_placing",
+        "_along",
+        "_turn",
+        "_turn_scan",
+        "_rate",
         "_t_sync",
         "_t",
         "_t_scan",
@@ -163,14 +188,28 @@ class SurroundSensor:
         self._lanes: dict[int, tuple[Detection, Detection]] = {}  #: per lane, at the last scan
         self._t_scan = self._s = self._s_scan = 0.0
         self._straight = lane.straight() if hasattr(lane, "straight") else None
+        #: on a curved lane: (x, y, yaw) -> (s, d, rel, turn, kappa) (LanePolyline.place);
+        #: the objects then carry the lane's turn and curvature at their centre
+        self._place = getattr(lane, "place", None) if self._straight is None else None
+        #: what ego._native.place places the cars with: the lane (its packed data) or a callable
+        self._placing = (lane if hasattr(lane, "_c") else self._place) if self._place is not None else lane.frame
+        #: on a curved lane, at the last scan: (the innermost and outermost lines the gaps
+        #: may be measured along, m; the lane's turn at the ego, rad; how far the ego's corners reach
+        #: beyond its extent ahead and behind, m); None on a straight one
+        self._along: tuple[float, float, float, float, float] | None = None
+        self._turn = self._turn_scan = 0.0  #: the lane's turn at the ego now / at the last scan
+        #: on a curved lane, at the last scan: the ego's speed along the line its gaps are
+        #: measured along per m/s of its speed along the lane where it is
+        self._rate = 1.0
         self.bands = dict(bands)
         self.cg_to_front = cg_to_front
         self.cg_to_rear = length - cg_to_front
         self.half_width = 0.5 * width
         self.front = Detection()
         self.rear = Detection()
-        #: (id, s_lo, s_hi, d_lo, d_hi, v_s, v_d, a_s, heading relative to the lane) at the
-        #: last sync, ordered by s_lo
+        #: (id, s_lo, s_hi, d_lo, d_hi, v_s, v_d, a_s, heading relative to the lane[, the
+        #: lane's turn and curvature at its centre on a curved lane]) at the last sync,
+        #: ordered by s_lo
         self._objects: list[tuple] = []
         self._speeds: dict[str, float] = {}  #: id -> v_s at the last sync
         self._rows: dict[str, tuple] | None = {}  #: id -> world row at the last sync
@@ -186,6 +225,7 @@ class SurroundSensor:
         cos, sin = math.cos, math.sin
         straight = self._straight
         frame = self.lane.frame
+        place = self._place
         objects = []
         add = objects.append
         previous = self._speeds.get
@@ -195,10 +235,14 @@ class SurroundSensor:
         if straight is not None:  # one segment: the frame is a rotation
             x0, y0, ux, uy, s0, heading = straight
         for vid, (x, y, yaw, v, length, width) in zip(ids, rows):
+            bend = None
             if straight is not None:
                 dx, dy = x - x0, y - y0
                 s, d = s0 + dx * ux + dy * uy, dy * ux - dx * uy
                 rel = yaw - heading
+            elif place is not None:
+                s, d, rel, turn, kappa = place(x, y, yaw)
+                bend = (turn, kappa)
             else:
                 s, d, rel, _ = frame(x, y, yaw)
             c, sn = cos(rel), sin(rel)
@@ -209,7 +253,10 @@ class SurroundSensor:
             prev = previous(vid)
             accel = (vs - prev) / dt if prev is not None and rated else 0.0
             speeds[vid] = vs
-            add((vid, s - hs, s + hs, d - hd, d + hd, vs, v * sn, accel, rel))
+            if bend is None:
+                add((vid, s - hs, s + hs, d - hd, d + hd, vs, v * sn, accel, rel))
+            else:
+                add((vid, s - hs, s + hs, d - hd, d + hd, vs, v * sn, accel, rel, *bend))
         objects.sort(key=_LOW_EDGE)
         self._objects = objects
         self._near = None
@@ -234,8 +281,19 @@ class SurroundSensor:
         if type(ids) is not list or type(rows) is not list:
             ids, rows = list(ids), list(rows)
         dt = t - self._t_sync
+        # on a curved lane the lane itself (its packed data: ego._native.place projects every
+        # car in C, as LanePolyline.place does), else a callable placing one
         ids, rows, self._objects, self._speeds = _PLACE(
-            ids, rows, front, reach, self._straight, self.lane.frame, self._speeds, dt, dt > 0.0, _LOW_EDGE
+            ids,
+            rows,
+            front,
+            reach,
+            self._straight,
+            self._placing,
+            self._speeds,
+            dt,
+            dt > 0.0,
+            _LOW_EDGE,
         )
         self._near = None
         self._seen = (ids, rows)
@@ -259,13 +317,39 @@ class SurroundSensor:
             d + (fs if fs > -rs else -rs) + hw * ac,
         )
 
-    def scan(self, t: float, s: float, d: float, heading_error: float) -> None:
+    def scan(self, t: float, s: float, d: float, heading_error: float, turn: float = 0.0, kappa: float = 0.0) -> None:
         """Look: ``front`` and ``rear`` for the ego's centre of gravity at (s, d) (m) with
-        ``heading_error`` (rad) at time ``t`` (s). Called at every SUMO step (the sensor's
-        rate); :meth:`advance` carries the gaps on in between."""
+        ``heading_error`` (rad) at time ``t`` (s); ``turn`` and ``kappa`` are the reference
+        lane's turn and curvature there (rad, 1/m, ``LanePolyline.place``; curved lanes
+        only, where ``s`` is the station). Called at every SUMO step (the sensor's rate);
+        :meth:`advance` carries the gaps on in between.
+
+        On a curved lane the gaps are arc lengths along the centre line of the lane the ego
+        is in (the lane whose centre is nearest the middle of its front bumper, as SUMO
+        maps it). A straight body's corners on the inner side reach past its extent along
+        the lane by about its reach times ``kappa`` times how far they sit inside the line
+        (1 cm for a car in an R 250 m arc): the gap leaves that out for both cars. The
+        ego's speed along the line is ``ds`` times :attr:`_rate`."""
         ego = self._ego = self.ego_extents(s, d, heading_error)
         self._t = self._t_scan = t
         self._s = self._s_scan = s
+        if self._place is not None:
+            # the ego's lane: the one whose centre is nearest the middle of its front bumper
+            # (where SUMO maps it too)
+            nose = d + self.cg_to_front * math.sin(heading_error)
+            line = min((0.5 * (lo + hi) for lo, hi in self.bands.values()), key=lambda c: abs(c - nose), default=d)
+            # its inner side beyond the line, its corners' reach per metre of its length: at
+            # each end the larger curvature of the centre's and that end's (an end in an arc
+            # the centre has not reached yet)
+            reach = []
+            for end in (ego[1], ego[0]):
+                k = self.lane.curvature_at(end) if hasattr(self.lane, "curvature_at") else kappa
+                k = kappa if abs(kappa) >= abs(k) else k
+                w = max(ego[3] - line if k > 0.0 else line - ego[2], 0.0)
+                reach.append(abs(k) * w / (1.0 - abs(k) * w))
+            self._along = (line, line, turn, (ego[1] - s) * reach[0], (s - ego[0]) * reach[1])
+            self._turn = self._turn_scan = turn
+            self._rate = (1.0 - kappa * line) / (1.0 - kappa * d)
         self._lanes = {}
         near = self._near
         if near is None:
@@ -280,25 +364,39 @@ class SurroundSensor:
                 ]
         self._nearest(near, ego[2], ego[3], self.front, self.rear)
 
-    def advance(self, t: float, s: float) -> None:
+    def advance(self, t: float, s: float, turn: float = 0.0) -> None:
         """Between two looks: the gaps at time ``t`` (s) with the ego's centre of gravity at
-        ``s`` (m) along the lane, each detected vehicle moving at its speed."""
-        self._t, self._s = t, s
-        moved = s - self._s_scan
-        since = t - self._t_scan
+        ``s`` (m) along the lane (where the lane has turned by ``turn``, rad: curved lanes),
+        each detected vehicle moving at its speed."""
+        self._t, self._s, self._turn = t, s, turn
         front, rear = self.front, self.rear
         if front._o is not None:
-            front.gap = front._gap0 + front.speed * since - moved
+            front.gap = self._carried(front, True)
         if rear._o is not None:
-            rear.gap = rear._gap0 + moved - rear.speed * since
+            rear.gap = self._carried(rear, False)
+
+    def _carried(self, det: Detection, ahead: bool) -> float:
+        """``det``'s gap carried on from the last scan to now: it moved at its speed, the ego
+        by its arc along the line the gap is measured along."""
+        moved = self._s - self._s_scan
+        since = self._t - self._t_scan
+        if det._d is not None:
+            moved -= det._d * (self._turn - self._turn_scan)
+        if ahead:
+            return det._gap0 + det.speed * since - moved
+        return det._gap0 + moved - det.speed * since
 
     def _nearest(self, objects, lo: float, hi: float, ahead: Detection, behind: Detection) -> None:
         """Nearest of ``objects`` ahead of and behind the ego overlapping [lo, hi] across the
         lane, at the last scan."""
         since = self._t_scan - self._t_sync
         e_lo, e_hi = self._ego[0], self._ego[1]
+        along = self._along
         if _NEAREST is not None and type(objects) is list:
-            _NEAREST(objects, lo, hi, e_lo, e_hi, since, ahead, behind)
+            _NEAREST(objects, lo, hi, e_lo, e_hi, since, ahead, behind, along)
+            return
+        if along is not None:
+            self._nearest_along(objects, lo, hi, ahead, behind, since, along)
             return
         twice_mid = e_lo + e_hi
         best_ahead = best_behind = INF
@@ -322,6 +420,58 @@ class SurroundSensor:
             behind.clear()
         else:
             behind._found(rear, best_behind, lo, hi, since)
+
+    def _nearest_along(self, objects, lo, hi, ahead: Detection, behind: Detection, since: float, along) -> None:
+        """:meth:`_nearest` on a curved lane: each gap the shortest arc between the outlines
+        along the lines ``along`` bounds (the innermost and outermost, m), the other car's
+        length scaled from its line to that one where it grows there, its speed along it."""
+        e_lo, e_hi = self._ego[0], self._ego[1]
+        d_min, d_max, turn, ego_front, ego_rear = along
+        twice_mid = e_lo + e_hi
+        best_ahead = best_behind = INF
+        front = rear = None
+        d_ahead = d_behind = 0.0
+        for o in objects:
+            shift = o[6] * since
+            if o[4] + shift <= lo or o[3] + shift >= hi:
+                continue
+            move = o[5] * since
+            a, b = o[1] + move, o[2] + move
+            kappa = o[10]
+            bend = o[9] + kappa * move - turn  # the lane's turn from the ego to it
+            d_o = 0.5 * (o[3] + o[4]) + shift
+            half = 0.5 * (o[2] - o[1])
+            grow = half * kappa / (1.0 - kappa * d_o)  # its half length's, per m inwards
+            k, w = abs(kappa), 0.5 * (o[4] - o[3])
+            corner = half * k * w / (1.0 - k * w)  # its inner corners' reach beyond its extent
+            if a + b >= twice_mid:
+                raw = a - e_hi
+                g0, g1 = raw - d_min * bend, raw - d_max * bend
+            else:
+                raw = e_lo - b
+                g0, g1 = raw + d_min * bend, raw + d_max * bend
+            extra = grow * (d_o - d_min)
+            if extra > 0.0:
+                g0 -= extra
+            extra = grow * (d_o - d_max)
+            if extra > 0.0:
+                g1 -= extra
+            gap, line = (g1, d_max) if g1 < g0 else (g0, d_min)
+            if a + b >= twice_mid:
+                gap = gap - corner - ego_front
+                if gap < best_ahead:
+                    best_ahead, front, d_ahead = gap, o, line
+            else:
+                gap = gap - corner - ego_rear
+                if gap < best_behind:
+                    best_behind, rear, d_behind = gap, o, line
+        for det, o, gap, line in ((ahead, front, best_ahead, d_ahead), (behind, rear, best_behind, d_behind)):
+            if o is None:
+                det.clear()
+            else:
+                kappa = o[10]
+                rate = (1.0 - kappa * line) / (1.0 - kappa * (0.5 * (o[3] + o[4]) + o[6] * since))
+                det._found_along(o, gap, lo, hi, since, line, o[5] * rate)
 
     def _scan_lane(self, lane: int, band: tuple[float, float]) -> tuple[Detection, Detection]:
         """The nearest vehicles ahead of and behind the ego overlapping ``band`` across the
@@ -371,17 +521,15 @@ class SurroundSensor:
             follower.clear()
             return False
         found = self._lanes.get(lane) or self._scan_lane(lane, band)
-        moved = self._s - self._s_scan
-        since = self._t - self._t_scan
         ahead, behind = found
         if ahead._o is None:
             leader.clear()
         else:
-            leader._copy(ahead, ahead._gap0 + ahead.speed * since - moved)
+            leader._copy(ahead, self._carried(ahead, True))
         if behind._o is None:
             follower.clear()
         else:
-            follower._copy(behind, behind._gap0 + moved - behind.speed * since)
+            follower._copy(behind, self._carried(behind, False))
         return True
 
     def lane_leader(self, lane: int, leader: Detection) -> bool:
@@ -396,7 +544,7 @@ class SurroundSensor:
         if ahead._o is None:
             leader.clear()
         else:
-            leader._copy(ahead, ahead._gap0 + ahead.speed * (self._t - self._t_scan) - (self._s - self._s_scan))
+            leader._copy(ahead, self._carried(ahead, True))
         return True
 
     def lane_leader_now(self, lane: int) -> tuple[float, float] | None:
@@ -412,8 +560,7 @@ class SurroundSensor:
         ahead = found[0]
         if ahead._o is None:
             return None
-        speed = ahead.speed
-        return ahead._gap0 + speed * (self._t - self._t_scan) - (self._s - self._s_scan), speed
+        return self._carried(ahead, True), ahead.speed
 
     def tracks(self, t: float) -> list[tuple[float, float, float, float, float]]:
         """Every vehicle seen at the last SUMO step, moved on to time ``t`` (s) at its
