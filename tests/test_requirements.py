@@ -94,8 +94,9 @@ def test_robustness_of_always_is_the_smallest_margin_and_the_first_violation_tim
     assert v.robustness == pytest.approx(gap[-1] - 2.0)
     assert v.violated_at == pytest.approx(4.01)  # the first sample with gap < 2 m (gap = 1.98 m)
     assert v.unit == "m"
-    # at the 0.1 s period, counted back from the last sample: the end is a sample
-    v10 = evaluate(parse("always (gap_front >= 2 m)", UNITS, "keep"), r)
+    assert evaluate(parse("always (gap_front >= 2 m)", UNITS, "keep"), r) == v  # full rate: the default
+    # on the 0.1 s grid, counted back from the last sample: the end is a sample
+    v10 = evaluate(parse("always (gap_front >= 2 m)", UNITS, "keep"), r, period=0.1)
     assert v10.robustness == pytest.approx(v.robustness)
     assert v10.violated_at == pytest.approx(4.09)
 
@@ -131,7 +132,7 @@ def test_a_boolean_proposition_is_plus_or_minus_one():
     assert evaluate(parse("not collision_avoidable", UNITS), r).robustness == -1.0
     v = evaluate(parse("always (not collision)", UNITS), r, period=0)
     assert v.robustness == -1.0 and v.violated_at == pytest.approx(1.5)
-    v = evaluate(parse("always (not collision)", UNITS), r)  # every 0.1 s: within one period
+    v = evaluate(parse("always (not collision)", UNITS), r, period=0.1)  # every 0.1 s: within one period
     assert v.robustness == -1.0 and 1.5 <= v.violated_at < 1.6
     clear = DERIVED["clearance"].fn(r, t)
     assert clear[0] == 1.0 and clear[-1] == -1.0
@@ -227,53 +228,53 @@ def test_sweep_spec_requirements_are_checked(tmp_path, capsys):
     assert math.isfinite(1.0)
 
 
-@pytest.mark.parametrize(
-    "formula",
-    [
-        "always (gap_front >= 2 m or lateral_clear)",
-        "always (aeb_active implies eventually[0:3] (speed <= 1 m/s or not aeb_active))",
-        "always (abs(speed - 1 m/s) < 3 m/s and gap_front > 0.5 m)",
-        "always (speed > -1 m/s) or eventually (speed < 0.5 m/s)",
-        "not collision",
-    ],
-)
-def test_the_numpy_predicate_gives_rtamts_own_robustness_sample_by_sample(formula):
-    """ego evaluates rtamt's comparisons with numpy (its per-sample loop was half of a run's
-    requirement checking), its interval bounds counted in samples: every sample's robustness
-    is exactly rtamt's own on the formula in seconds."""
+CROSS_CHECKED = [
+    "always (gap_front >= 2 m or lateral_clear)",
+    "always (aeb_active implies eventually[0:3] (speed <= 1 m/s or not aeb_active))",
+    "always ((ttc_front <= 3 s) implies eventually[0:1.5] (accel <= -1 m/s^2))",
+    "always (abs(speed - 1 m/s) < 3 m/s and 2 * gap_front - 3 m > 0.5 m / 2)",
+    "always (speed > -1 m/s) or eventually (speed < 0.5 m/s)",
+    "always[0.5:2] (speed > 0) and eventually[0.02:0.05] (speed > 0)",
+    "historically[0.2:1] (speed > -1) and once[0:0.7] (gap_front > 1) and historically (speed < 5) and once (speed > 1)",
+    "(speed > 0) until[0.3:1.2] (gap_front < 0)",
+    "(speed > 0) until (gap_front < -2)",
+    "(speed > 0) until[0:0.5] (gap_front < -2)",
+    "eventually[1:2] (not (speed == 0.5)) -> always[0:0.1] (speed <= 0.5)",
+    "always (-speed > -3 m/s)",
+    "not collision",
+    "true and not false",
+]
+
+
+@pytest.mark.parametrize("n, step", [(400, 0.01), (150, 0.1)])
+@pytest.mark.parametrize("formula", CROSS_CHECKED)
+def test_the_numpy_monitor_gives_rtamts_own_robustness_sample_by_sample(formula, n, step):
+    """ego evaluates formulas with numpy (ego.stl: sliding-window min/max, no loop over
+    samples): every sample's robustness is exactly rtamt's own (offline, discrete time, the
+    interval bounds counted in samples) at the trace's full rate and on the 0.1 s grid."""
     import rtamt
 
-    from ego.requirements import Requirement, _spec
+    from ego.stl import robustness
 
     rng = np.random.default_rng(7)
-    n = 400
-    req = parse(formula, UNITS)
-    names = req.signals
-    data = {"time": (0.1 * np.arange(n)).tolist()}
-    for name in names:
+    req = parse(formula, {**UNITS, "accel": "m/s^2"})
+    signals = {}
+    for name in req.signals:
         x = rng.normal(0.0, 3.0, n)
         x[::17] = 0.5  # exact ties
-        data[name] = (np.sign(x) if UNITS[name] == "bool" else x).tolist()
+        signals[name] = np.sign(x) if UNITS.get(name) == "bool" else x
     plain = rtamt.StlDiscreteTimeOfflineSpecification()
-    for name in names:
+    for name in req.signals or ("t",):
         plain.declare_var(name, "float")
-    plain.set_sampling_period(0.1, "s", 0.1)
-    plain.spec = req.rtamt
+    plain.set_sampling_period(1, "s", 0.1)
+    plain.spec = in_samples(req.rtamt, step)
     plain.parse()
-    expected = [v for _, v in plain.evaluate({k: list(v) for k, v in data.items()})]
-    fast = _spec(Requirement(req.name, req.formula, in_samples(req.rtamt, 0.1), req.signals, req.unit), names)
-    samples = {**data, "time": [float(i) for i in range(n)]}
-    got = [v for _, v in fast.evaluate({k: list(v) for k, v in samples.items()})]
-    assert got == expected
-
-    # every node's robustness signal (each comparison's included), in the order rtamt visits
-    # (the time stamps aside: in seconds in one, in samples in the other)
-    def values(spec):
-        return [v for k, v in spec.offline_interpreter.ast.offline_results.items() if k != "time"]
-
-    nodes = values(plain)
-    assert values(fast) == nodes
-    assert any(len(set(v)) > 1 for v in nodes)  # not constants: the signals decide
+    data = {"time": [float(i) for i in range(n)], **{k: v.tolist() for k, v in signals.items()}}
+    if not req.signals:
+        data["t"] = [0.0] * n
+    expected = np.array([v for _, v in plain.evaluate(data)])
+    got = robustness(req.tree, signals, n, step)
+    assert np.array_equal(got, expected)
 
 
 def test_bounds_sit_on_samples_at_any_control_period():
