@@ -377,3 +377,27 @@ def test_a_backend_lacking_a_capability_the_scenario_needs_is_refused_in_one_lin
     assert str(e.value) == (
         "bad value for --backend: 'highway-env' (scenario off-road needs any_network; backend highway-env lacks it)"
     )
+
+
+@pytest.mark.sumo
+def test_full_rate_by_default_the_grid_on_request_and_the_first_violation_stored(capsys):
+    """Every 0.01 s sample by default; ``--requirement-period 0.1`` evaluates on the 0.1 s grid
+    counted back from the run's end (a minimum over fewer samples: never below the full
+    rate's); each requirement's first violation time is a metric (None: held)."""
+    args = ["run", "emergency-brake", "-c", "pid", "--set", "duration=6", "--json"]
+    args += ["--require", "ttc_brakes: always ((ttc_front <= 3 s) implies eventually[0:1.5] (accel <= -1 m/s^2))"]
+    args += ["--require", "soft: always (accel >= -3 m/s^2)"]
+    got = {}
+    for period in ("0", "0.1"):
+        assert main([*args, "--requirement-period", period]) in (0, 1)
+        got[period] = json.loads(capsys.readouterr().out)
+    full, grid = got["0"], got["0.1"]
+    assert full["requirements"]["soft"] < grid["requirements"]["soft"] < 0  # a sample between grid points
+    first, later = full["first_violation"], grid["first_violation"]
+    assert first["no_collision"] is None and first["soft"] < later["soft"]
+    assert 0 < first["ttc_brakes"] < later["ttc_brakes"] <= 6
+    for name in ("soft", "ttc_brakes"):
+        event = next(e for e in full["events"] if e["kind"] == "requirement" and f" {name} " in e["text"])
+        assert event["t"] == pytest.approx(first[name])
+    assert main([*args, "--requirement-period", "-0.1"]) == 2
+    assert "bad --requirement-period '-0.1'" in capsys.readouterr().err
