@@ -401,3 +401,36 @@ def test_full_rate_by_default_the_grid_on_request_and_the_first_violation_stored
         assert event["t"] == pytest.approx(first[name])
     assert main([*args, "--requirement-period", "-0.1"]) == 2
     assert "bad --requirement-period '-0.1'" in capsys.readouterr().err
+
+
+@pytest.mark.sumo
+def test_a_sweep_spec_keeps_the_grid_with_requirement_period(tmp_path, capsys):
+    """``requirement_period = 0.1`` in a sweep spec: the runs' requirements on the 0.1 s grid,
+    as ``ego run --requirement-period 0.1`` gives them; a bad value is one line, exit 2."""
+    import pyarrow.parquet as pq
+
+    body = (
+        'scenario = "emergency-brake"\ncontrollers = ["pid"]\n[set]\nduration = 6\n'
+        '[requirements]\nsoft = "always (accel >= -3 m/s^2)"\n'
+    )
+    got = {}
+    for period in ("0", "0.1"):
+        spec = tmp_path / f"s{period}.toml"
+        spec.write_text(f"requirement_period = {period}\n" + body)
+        assert main(["sweep", str(spec), "--out", str(tmp_path / period)]) == 0
+        row = pq.read_table(tmp_path / period / "results.parquet").to_pylist()[0]
+        got[period] = (row["requirements.soft"], row["first_violation.soft"])
+    capsys.readouterr()
+    main(
+        ["run", "emergency-brake", "-c", "pid", "--set", "duration=6", "--json", "--requirement-period", "0.1"]
+        + ["--require", "soft: always (accel >= -3 m/s^2)"]
+    )
+    run = json.loads(capsys.readouterr().out)
+    assert got["0.1"] == (run["requirements"]["soft"], run["first_violation"]["soft"])
+    assert got["0"][0] < got["0.1"][0] < 0 and got["0"][1] < got["0.1"][1]
+    bad = tmp_path / "bad.toml"
+    bad.write_text("requirement_period = -1\n" + body)
+    assert main(["sweep", str(bad), "--out", str(tmp_path / "bad")]) == 2
+    err = capsys.readouterr().err
+    assert "requirement_period -1 (expected seconds from 0" in err and err.count("\n") == 1
+    assert not (tmp_path / "bad").exists()

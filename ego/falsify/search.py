@@ -221,8 +221,10 @@ def resume_key(spec: FalsifySpec, optimizer: str, optimizer_seed: int) -> dict:
         "requirements": dict(spec.requirements),
         "optimizer": f"{optimizer} (seed {optimizer_seed})",
     }
-    if spec.seeds_per_point != 1:  # a spec without it keeps its key (and its stored searches)
+    if spec.seeds_per_point != 1:  # a spec without them keeps its key (and its stored searches)
         key["seeds per point"] = spec.seeds_per_point
+    if spec.requirement_period:
+        key["requirement period"] = spec.requirement_period
     return key
 
 
@@ -289,7 +291,7 @@ def _search(
                 fresh.add(rid)
                 r = Run(rid, spec.scenario, controller, s, o)
                 try:
-                    tasks[rid] = task_of(r, None, "none", spec.requirements)
+                    tasks[rid] = task_of(r, None, "none", spec.requirements, spec.requirement_period)
                 except Exception as exc:  # noqa: BLE001 - values no run takes: the run's row says so
                     done[rid] = error_row(r, f"{type(exc).__name__}: {exc}")
         try:

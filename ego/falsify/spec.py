@@ -47,6 +47,7 @@ _TOP = (
     "budget",
     "seeds_per_point",
     "requirements",
+    "requirement_period",
     "set",
     "search",
 )
@@ -94,6 +95,8 @@ class FalsifySpec:
     source: str = ""
     #: each point runs with this many seeds (its seed, seed + 1, ...), the worst robustness kept
     seeds_per_point: int = 1
+    #: requirements on every sample of the trace (0) or on a grid this many seconds apart
+    requirement_period: float = 0.0
 
     @property
     def formula(self) -> str:
@@ -149,6 +152,7 @@ def load(path: str | Path) -> FalsifySpec:
 def parse(data: dict, source: str = "the spec") -> FalsifySpec:
     """Validate a spec's contents (see the module docstring)."""
     from ego.requirements import defaults, from_table
+    from ego.sweep.spec import spec_period
 
     def bad(msg: str) -> ConfigError:
         return ConfigError(f"{source}: {msg}")
@@ -254,6 +258,7 @@ def parse(data: dict, source: str = "the spec") -> FalsifySpec:
         budget,
         source,
         per_point,
+        spec_period(data, bad),
     )
     # the corners as a whole (combinations a value-by-value check cannot see) and the formulas
     for u in (np.zeros(len(dims)), np.ones(len(dims))):

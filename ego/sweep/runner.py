@@ -28,7 +28,9 @@ from ego.sweep.spec import Run, SweepSpec
 RECORD = ("none", "failed", "all")
 
 
-def task_of(r: Run, rrd: str | None = None, policy: str = "none", requirements=None) -> RunTask:
+def task_of(
+    r: Run, rrd: str | None = None, policy: str = "none", requirements=None, requirement_period: float = 0.0
+) -> RunTask:
     """The pipeline's task for sweep run ``r`` (resolved here, once): recorded to ``rrd``
     always (``policy`` ``all``) or only when it fails (``failed``), checked against
     ``requirements`` (the spec's [requirements]; None: the scenario's defaults). ConfigError
@@ -44,6 +46,7 @@ def task_of(r: Run, rrd: str | None = None, policy: str = "none", requirements=N
             record=rrd if policy == "all" else None,
             background_recording=False,
             requirements=requirements,
+            requirement_period=requirement_period,
         )
     )
     return RunTask(resolved, record_failed=rrd if policy == "failed" and rrd else None, key=r)
@@ -157,7 +160,7 @@ def _sweep(
             if r.run_id not in done:
                 rrd = str(runs_dir / f"{r.controller}-{r.run_id}.rrd") if record != "none" else None
                 try:
-                    yield task_of(r, rrd, record, spec.requirements)
+                    yield task_of(r, rrd, record, spec.requirements, spec.requirement_period)
                 except Exception as exc:  # noqa: BLE001 - values no run takes: the run's row says so
                     store_row(error_row(r, f"{type(exc).__name__}: {exc}"))
                     if shown is not None:

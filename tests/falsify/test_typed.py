@@ -127,3 +127,19 @@ def test_each_point_runs_over_its_seeds_and_the_optimiser_learns_the_worst(tmp_p
     squashed = np.sign(rob) * np.log1p(np.abs(rob))
     assert np.allclose(np.concatenate(told), squashed)
     assert "each point run with 2 seeds" in (tmp_path / "o" / "falsified.md").read_text()
+
+
+def test_a_falsify_spec_takes_requirement_period_into_its_runs_and_its_resume_key(tmp_path, capsys):
+    import tomllib
+
+    from ego.falsify.search import resume_key
+
+    spec = parse(tomllib.loads("requirement_period = 0.1\n" + SPEC))
+    assert spec.requirement_period == 0.1
+    assert resume_key(spec, "cma", 0)["requirement period"] == 0.1
+    assert "requirement period" not in resume_key(parse(tomllib.loads(SPEC)), "cma", 0)
+    path = tmp_path / "f.toml"
+    path.write_text('requirement_period = "fast"\n' + SPEC)
+    assert main(["falsify", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "requirement_period 'fast' (expected seconds" in err and err.count("\n") == 1
