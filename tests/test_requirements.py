@@ -434,3 +434,15 @@ def test_a_sweep_spec_keeps_the_grid_with_requirement_period(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "requirement_period -1 (expected seconds from 0" in err and err.count("\n") == 1
     assert not (tmp_path / "bad").exists()
+
+
+def test_the_sliding_window_is_the_min_and_max_of_each_window():
+    from ego.stl import sliding
+
+    rng = np.random.default_rng(0)
+    for n in (1, 2, 5, 17, 100):
+        for w in (1, 2, 3, 7, 16, 150):
+            y = rng.normal(size=n)
+            for low in (True, False):
+                expected = [(min if low else max)(y[i : i + w]) for i in range(n)]
+                assert sliding(y, w, low).tolist() == expected, (n, w, low)
