@@ -13,23 +13,25 @@ from ego.falsify.spec import load, parse
 KINDS = (Kind(), Kind("int", 5), Kind("bool", 2))
 
 
-@pytest.mark.parametrize("name", ["cma", "bo", "bo-tpe"])
-def test_typed_optimisers_propose_only_levels_and_replay_identically(name):
-    def sequence():
-        opt = make(name, 3, 2, 5, 40, KINDS)
-        out = []
-        for _ in range(4):
-            x = opt.ask()
-            assert np.all((x >= 0) & (x <= 1))
-            opt.tell(x, np.abs(x[:, 0] - 0.3) + np.abs(x[:, 1] - 0.75) + (1 - x[:, 2]))
-            out.append(x)
-        return np.concatenate(out)
+def _proposals(name: str, rounds: int = 4) -> np.ndarray:
+    opt = make(name, 3, 2, 5, 40, KINDS)
+    out = []
+    for _ in range(rounds):
+        x = opt.ask()
+        assert np.all((x >= 0) & (x <= 1))
+        opt.tell(x, np.abs(x[:, 0] - 0.3) + np.abs(x[:, 1] - 0.75) + (1 - x[:, 2]))
+        out.append(x)
+    return np.concatenate(out)
 
-    x = sequence()
-    assert np.array_equal(x, sequence())
+
+@pytest.mark.parametrize("name", ["cma", "bo", "bo-tpe"])
+def test_typed_optimisers_propose_only_levels(name):
+    x = _proposals(name)
     assert set(np.round(x[:, 1] * 4, 12)) <= {0.0, 1.0, 2.0, 3.0, 4.0}  # a whole-number level
     assert set(x[:, 2]) <= {0.0, 1.0}  # false or true
     assert len(set(x[:, 0])) > 4  # the float stays continuous
+    if name != "bo":  # (bo's replay: tests/falsify/test_falsify.py; its GP costs seconds a proposal)
+        assert np.array_equal(x, _proposals(name))
 
 
 def test_optuna_sees_a_boolean_as_categorical_and_a_whole_number_as_an_integer():
