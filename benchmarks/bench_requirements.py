@@ -52,6 +52,7 @@ def main(argv=None) -> dict:
     for s in scenarios:  # warm-up: imports, compiled tables
         run(RunSpec(s, args.controller, 0, requirement_period=0.1))
     turn = 0
+    cut_in: dict[float, float] = {}
     for _ in range(args.rounds):
         for s in scenarios:
             reqs = {**defaults(s), EXTRA[0]: EXTRA[1]} if s == "cut-in" else None
@@ -69,11 +70,18 @@ def main(argv=None) -> dict:
                     row[2] += 1
                     if s == "cut-in" and seed == 0:
                         rob = result.metrics["requirements"][EXTRA[0]]
+                        cut_in[period] = rob
                         print(f"cut-in seed 0, period {period:g} s: {EXTRA[0]} robustness {rob}")
     out = {}
     for period, (total, checks, n) in totals.items():
         ratio = checks / total
-        out[period] = {"runs": n, "run_ms": 1e3 * total / n, "check_ms": 1e3 * checks / n, "ratio": ratio}
+        out[period] = {
+            "runs": n,
+            "run_ms": 1e3 * total / n,
+            "check_ms": 1e3 * checks / n,
+            "ratio": ratio,
+            "robustness": cut_in.get(period),
+        }
         label = "full rate" if period == 0 else f"{period:g} s grid"
         print(
             f"{label:<11} {n} runs: {1e3 * total / n:7.1f} ms CPU a run, requirements {1e3 * checks / n:6.2f} ms "
