@@ -1,11 +1,12 @@
 """Requirements in signal temporal logic over a run's named, unit-carrying trace signals.
 
 A requirement is ``name: formula``. The formula is STL over the trace's columns and a few
-derived signals (:data:`DERIVED`), evaluated by ``rtamt`` (offline, discrete time) on the
-trace's own sample times after the run; its **robustness** (how far the run is from
-violating it, in the unit of its comparisons; negative: violated) becomes the metric
-``requirements.<name>``, and a violation's first time becomes a ``requirement`` event of
-the run and its recording.
+derived signals (:data:`DERIVED`), evaluated after the run on every sample of the trace
+(or on a grid, ``period``) with rtamt's offline discrete-time semantics in numpy
+(:mod:`ego.stl`; rtamt itself is the tests' reference); its **robustness** (how far the run
+is from violating it, in the unit of its comparisons; negative: violated) becomes the metric
+``requirements.<name>``, and a violation's first time the metric ``first_violation.<name>``
+and a ``requirement`` event of the run and its recording.
 
 Grammar (``docs/requirements.md`` has the full story)::
 
@@ -672,7 +673,7 @@ def resolve(texts: Mapping[str, str], units: Mapping[str, str]) -> tuple[Require
 
 def signal(result, name: str, scenario=None) -> np.ndarray:
     """Signal ``name`` of a finished run as floats (booleans +1/-1; infinities clipped to
-    +-1e9, so rtamt's min/max stay finite)."""
+    +-1e9, so the min/max stay finite)."""
     t = result.column("t")
     if name in result.columns:
         x = result.column(name).astype(float)
