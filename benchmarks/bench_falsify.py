@@ -1,7 +1,9 @@
 """Falsification: runs to the first violation per optimiser (issue 21, point 3).
 
-    python benchmarks/bench_falsify.py [--reps 20] [--budget 300] [--optimizers cma,bo,random,lhs]
+    python benchmarks/bench_falsify.py [--repetitions 20] [--budget 300] [--optimizers cma,bo,random,lhs]
                                        [--jobs 2] [--surrogate] [--docs] [--plot PNG]
+
+    python benchmarks/bench_falsify.py --repetitions 10 --budget 150   # the fixed-budget table
 
 For each optimiser, ``--reps`` repetitions (optimiser seeds 0..reps-1) of ``ego falsify
 --until first`` over ``benchmarks/falsify/bench.toml`` on real ego runs, within ``--budget``
@@ -9,7 +11,11 @@ runs, once per requirement of the spec (batches of two points, as ``--jobs 2`` p
 them). The repetitions keep their runs under ``runs/bench-falsify/`` and resume from them.
 Printed per requirement and optimiser: how many repetitions found a violation, the median
 and quartiles of runs to the first violation (a repetition that found none counts as more
-than the budget) and the ratio of the median to LHS's (target: CMA-ES or BO <= 0.2).
+than the budget), the ratio of the median to LHS's (target: CMA-ES or BO <= 0.2) and the
+falsification rate at the budget (the share of repetitions that found a violation within
+it, with its 95 % Wilson interval: how ARCH-COMP's falsification category compares tools).
+``--reps`` is ``--repetitions``. psy-taliro's optimisers are rows only where psy-taliro is
+installed (``import staliro``); it is not a dependency of ego.
 ``--surrogate`` runs the analytic stand-in instead (no SUMO; clearly not ego). ``--docs``
 (with the defaults) writes docs/results/falsify.md and its figure from the same runs, as
 ``python -m ego.docs results --page falsify`` does.
@@ -31,7 +37,7 @@ from ego.falsify import bench  # noqa: E402
 
 def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--reps", type=int, default=None)
+    ap.add_argument("--repetitions", "--reps", dest="reps", type=int, default=None)
     ap.add_argument("--budget", type=int, default=None)
     ap.add_argument("--optimizers", default=",".join(bench.OPTIMIZERS))
     ap.add_argument("--jobs", type=int, default=2)
@@ -60,7 +66,7 @@ def main(argv=None) -> dict:
     # seeds outer, optimisers inner: an interrupted run leaves every optimiser as far along
     results = run_jobs([js[s] for s in range(reps) for js in jobs.values()], workers=args.jobs)
     figures: dict = {}
-    print(f"{'requirement':<12} {'optimiser':<8} found  median  [q1, q3]   median/LHS")
+    print(f"{'requirement':<12} {'optimiser':<8} found  median  [q1, q3]   median/LHS  rate (95 %)")
     for name in names:
 
         def runs(js, name=name):
@@ -71,9 +77,12 @@ def main(argv=None) -> dict:
             q1, med, q3, found = bench.quartiles(runs(js), budget)
             figures[(name or "surrogate", opt)] = {"runs": runs(js), "median": med, "ratio_to_lhs": med / lhs}
             fmt = bench.fmt_runs
+            lo, hi = bench.wilson(found, len(js))
+            figures[(name or "surrogate", opt)]["rate"] = found / len(js)
             print(
                 f"{name or 'surrogate':<12} {opt:<8} {found:>2}/{len(js):<3} {fmt(med, budget):>6}  "
-                f"[{fmt(q1, budget)}, {fmt(q3, budget)}]  {med / lhs:.2f}"
+                f"[{fmt(q1, budget)}, {fmt(q3, budget)}]  {med / lhs:.2f}        "
+                f"{100 * found / len(js):.0f} % ({100 * lo:.0f}-{100 * hi:.0f} %)"
             )
     print(f"{time.perf_counter() - started:.0f} s")
     if args.plot and not args.surrogate:

@@ -9,7 +9,7 @@ compiled fuzzy tables). Prints CPU milliseconds per run (``time.process_time``: 
 machine the wall clock mostly measures the other jobs), per controller, and split into the
 run's parts: start (SUMO start, network load, traffic insertion: ``Scenario.reset``), the
 loop (the rest), result packing (the trace as an array, the metrics), the requirements
-(rtamt), close. ``--rows`` writes the rows (wall time and host aside) to compare two trees:
+(ego.stl, every sample), close. ``--rows`` writes the rows (wall time and host aside) to compare two trees:
 run it once with ``PYTHONPATH=<other tree>`` and compare the files.
 
 SUMO's own step inside those runs is timed too (libsumo's step function, wrapped for the

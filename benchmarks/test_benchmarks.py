@@ -100,6 +100,17 @@ def test_falsify_runs_to_first_violation():
     assert all(figures[(req, "lhs")]["ratio_to_lhs"] == 1.0 for req, _ in figures)
 
 
+def test_requirements_cost_at_full_rate_and_on_the_grid():
+    """Issue 40's requirement check: its CPU share of a run at full rate and on the 0.1 s
+    grid, alternating (printed; no time asserted), and the full rate's robustness never above
+    the grid's on the cut-in formula."""
+    from bench_requirements import main
+
+    figures = main(["--seeds", "1", "--rounds", "1"])
+    assert figures[0.0]["runs"] == figures[0.1]["runs"] == 3
+    assert figures[0.0]["robustness"] <= figures[0.1]["robustness"]
+
+
 def test_thread_pools_beside_an_env(tmp_path, monkeypatch):
     from bench_pool_threads import main
 

@@ -126,6 +126,7 @@ def plan(
     backend: str = "sumo",
     requirements=None,
     preventable: bool = False,
+    requirement_period: float = 0.0,
 ) -> list[RunSpec]:
     """Validate names, variants and overrides, and list the runs (before any process starts).
 
@@ -191,6 +192,7 @@ def plan(
                     backend=backend,
                     requirements=requirements,
                     preventable=None if preventable else False,
+                    requirement_period=requirement_period,
                 )
             )
     return specs
@@ -209,6 +211,7 @@ def compare(
     backend: str = "sumo",
     requirements=None,
     preventable: bool = False,
+    requirement_period: float = 0.0,
 ) -> list[RunRow]:
     """Run everything, write the outputs, return the rows (in controller, seed order).
     ``controllers`` are labels (:func:`plan`: names or variants); ``traces`` a format of
@@ -233,7 +236,9 @@ def compare(
     if not isinstance(out, (str, os.PathLike)):
         raise ConfigError(f"bad out {out!r:.60} (expected a folder path)")
     out = Path(out)
-    specs = plan(scenario, controllers, seeds, overrides, out, traces, backend, requirements, preventable)
+    specs = plan(
+        scenario, controllers, seeds, overrides, out, traces, backend, requirements, preventable, requirement_period
+    )
     from ego.paths import check_compare_outputs
 
     check_compare_outputs(out, specs, traces)  # every file it writes, before anything runs

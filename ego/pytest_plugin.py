@@ -137,6 +137,9 @@ def _properties(result: Any) -> list[tuple[str, Any]]:
             out.append((f"ego.{name}", value if isinstance(value, (str, bool, int, float)) else str(value)))
     for name, rob in (m.get("requirements") or {}).items():
         out.append((f"ego.requirements.{name}", rob))
+    for name, at in (m.get("first_violation") or {}).items():
+        if at is not None:  # a violated requirement's first violation (s)
+            out.append((f"ego.first_violation.{name}", at))
     return out
 
 
@@ -147,11 +150,12 @@ def _violations(result: Any) -> list[tuple[str, float, float | None, str]]:
         if e.kind == "requirement" and e.text.startswith("requirement "):
             name = e.text.split()[1]
             first.setdefault(name, (e.t, e.text.partition("): ")[2]))
+    times = result.metrics.get("first_violation") or {}
     out = []
     for name, rob in (result.metrics.get("requirements") or {}).items():
         if rob is not None and rob < 0.0:
             at, formula = first.get(name, (None, ""))
-            out.append((name, float(rob), at, formula))
+            out.append((name, float(rob), times.get(name, at), formula))
     return out
 
 

@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from ego.params import ConfigError
-from ego.results.summary import REQUIREMENTS_PREFIX
+from ego.results.summary import FIRST_VIOLATION_PREFIX, REQUIREMENTS_PREFIX
 
 #: the marker of a file ``ego report`` wrote (another file is replaced only with --force)
 GENERATOR = "ego report"
@@ -79,6 +79,15 @@ class Campaign:
 
     def robustness(self, row: dict, name: str) -> float | None:
         return _number(row.get(REQUIREMENTS_PREFIX + name))
+
+    def violated_at(self, row: dict, name: str) -> float | None:
+        """The first time ``name`` is violated in ``row``'s run (s); None where the run passed
+        it or its folder does not store the time (written before ego kept it)."""
+        return _number(row.get(FIRST_VIOLATION_PREFIX + name))
+
+    @property
+    def stores_times(self) -> bool:
+        return any(k.startswith(FIRST_VIOLATION_PREFIX) for r in self.rows for k in r)
 
     def failures(self, row: dict) -> list[str]:
         """Why ``row`` fails: each violated requirement (robustness < 0) and a collision."""
@@ -246,7 +255,11 @@ def _requirements(c: Campaign) -> None:
         from ego.sweep.report import _unit
 
         for k in c.rows[0]:
-            if k not in c.units and k not in _NOT_METRICS and not k.startswith(REQUIREMENTS_PREFIX):
+            if (
+                k not in c.units
+                and k not in _NOT_METRICS
+                and not k.startswith((REQUIREMENTS_PREFIX, FIRST_VIOLATION_PREFIX))
+            ):
                 try:
                     c.units[k] = _unit(c.scenario, k)
                 except Exception:  # noqa: BLE001 - an undeclared column: no unit
@@ -293,7 +306,8 @@ def _table(head: list[str], body: list[list[str]], cls: str = "") -> str:
 
 def verdicts(c: Campaign) -> list[dict]:
     """One entry per scenario x controller x requirement: runs, passed, failed, worst
-    robustness and the collisions among those runs."""
+    robustness, the earliest first violation (s; None: none, or not stored) and the
+    collisions among those runs."""
     out = []
     controllers = list(dict.fromkeys(str(r["controller"]) for r in c.rows))
     for ctl in controllers:
@@ -309,6 +323,10 @@ def verdicts(c: Campaign) -> list[dict]:
                     "passed": sum(v >= 0.0 for v in values),
                     "failed": sum(v < 0.0 for v in values),
                     "worst": min(values) if values else None,
+                    "first_violation": min(
+                        (t for r in rows if (t := c.violated_at(r, n)) is not None),
+                        default=None,
+                    ),
                     "collisions": sum(_true(r.get("collision")) for r in rows),
                 }
             )
@@ -371,7 +389,7 @@ def render(c: Campaign, out: Path) -> str:
                 f'<span class="pass">{v["passed"]}</span>',
                 f'<span class="{cls}">{v["failed"]}</span>',
                 _e(worst),
-                "-",
+                "-" if v["first_violation"] is None else f"{v['first_violation']:.2f}",
                 str(v["collisions"]),
             ]
         )
@@ -394,8 +412,12 @@ def render(c: Campaign, out: Path) -> str:
         )
     )
     parts.append(
-        "<p>First violation: the folders keep each run's robustness, not the time; the run's "
-        "command below prints it (<code>requirement ... violated</code> event).</p>"
+        "<p>First violation: the earliest time, over the failing runs, at which the requirement "
+        "is first violated (each failing run's own below).</p>"
+        if c.stores_times
+        else "<p>First violation: this folder keeps each run's robustness, not the time (written "
+        "before ego stored it); the run's command below prints it (<code>requirement ... "
+        "violated</code> event).</p>"
     )
     formulas = "".join(
         f"<li><code>{_e(n)}: {_e(f or '(formula not stored)')}</code></li>" for n, f in c.formulas.items()
@@ -409,9 +431,10 @@ def render(c: Campaign, out: Path) -> str:
         for i, r in failing:
             rec = c.recording(r)
             link = f' <a href="{_e(os.path.relpath(rec, base))}">recording</a>' if rec else ""
+            why = [f"{n} (from {t:.2f} s)" if (t := c.violated_at(r, n)) is not None else n for n in c.failures(r)]
             items.append(
                 f'<li id="run-{i}">run {i} ({_e(r["controller"])}, seed {_e(_plain(r["seed"]))}): '
-                f'{_e(", ".join(c.failures(r)))}{link}<pre class="cmd">{_e(c.command(r))}</pre></li>'
+                f'{_e(", ".join(why))}{link}<pre class="cmd">{_e(c.command(r))}</pre></li>'
             )
         parts.append(f'<ul class="failing">{"".join(items)}</ul>')
     else:
@@ -421,6 +444,7 @@ def render(c: Campaign, out: Path) -> str:
         k
         for k in dict.fromkeys(k for r in c.rows for k in r)
         if k not in _NOT_METRICS and k not in c.params and not k.startswith(REQUIREMENTS_PREFIX)
+        if not k.startswith(FIRST_VIOLATION_PREFIX)
         if any(_number(r.get(k)) is not None or isinstance(r.get(k), bool) for r in c.rows)
     ]
     head = ["run", "controller", "seed", *map(_e, c.params), "status", "verdict"]

@@ -1,11 +1,12 @@
 """Requirements in signal temporal logic over a run's named, unit-carrying trace signals.
 
 A requirement is ``name: formula``. The formula is STL over the trace's columns and a few
-derived signals (:data:`DERIVED`), evaluated by ``rtamt`` (offline, discrete time) on the
-trace's own sample times after the run; its **robustness** (how far the run is from
-violating it, in the unit of its comparisons; negative: violated) becomes the metric
-``requirements.<name>``, and a violation's first time becomes a ``requirement`` event of
-the run and its recording.
+derived signals (:data:`DERIVED`), evaluated after the run on every sample of the trace
+(or on a grid, ``period``) with rtamt's offline discrete-time semantics in numpy
+(:mod:`ego.stl`; rtamt itself is the tests' reference); its **robustness** (how far the run
+is from violating it, in the unit of its comparisons; negative: violated) becomes the metric
+``requirements.<name>``, and a violation's first time the metric ``first_violation.<name>``
+and a ``requirement`` event of the run and its recording.
 
 Grammar (``docs/requirements.md`` has the full story)::
 
@@ -31,14 +32,14 @@ from __future__ import annotations
 
 import math
 import re
-import types
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ego.params import ConfigError, did_you_mean
 from ego.results.summary import REQUIREMENTS_PREFIX, requirement_lines
+from ego.stl import render, robustness
 
 BOOL = "bool"
 #: units a number may carry (besides the units of the trace's own columns)
@@ -259,6 +260,8 @@ class Requirement:
     unit: str
     #: the interval bounds it uses (s), as written
     bounds: tuple[float, ...] = ()
+    #: the parsed formula (:mod:`ego.stl`'s tree; ``rtamt`` is its text)
+    tree: tuple = field(default=(), compare=False, repr=False)
 
     @property
     def text(self) -> str:
@@ -326,7 +329,7 @@ class _Parser:
         self.i += 1
         return tok
 
-    def parse(self) -> str:
+    def parse(self) -> tuple:
         if not self.toks:
             raise self.error("empty")
         out = self.formula_()
@@ -334,53 +337,54 @@ class _Parser:
             raise self.error(f"unexpected {self.peek()!r}")
         return out
 
-    # formulas (return rtamt text)
-    def formula_(self) -> str:
+    # formulas (return ego.stl trees; ego.stl.render gives rtamt's text)
+    def formula_(self) -> tuple:
         left = self.until()
         if self.peek() in ("implies", "->"):
             self.take()
-            return f"({left}) implies ({self.formula_()})"
+            return ("implies", left, self.formula_())
         return left
 
-    def until(self) -> str:
+    def until(self) -> tuple:
         left = self.or_()
         if self.peek() == "until":
             self.take()
-            return f"({left}) until{self.interval()} ({self.or_()})"
+            bounds = self.interval()
+            return ("until", bounds, left, self.or_())
         return left
 
-    def or_(self) -> str:
+    def or_(self) -> tuple:
         parts = [self.and_()]
         while self.peek() in ("or", "|"):
             self.take()
             parts.append(self.and_())
-        return parts[0] if len(parts) == 1 else " or ".join(f"({p})" for p in parts)
+        return parts[0] if len(parts) == 1 else ("or", tuple(parts))
 
-    def and_(self) -> str:
+    def and_(self) -> tuple:
         parts = [self.unary()]
         while self.peek() in ("and", "&"):
             self.take()
             parts.append(self.unary())
-        return parts[0] if len(parts) == 1 else " and ".join(f"({p})" for p in parts)
+        return parts[0] if len(parts) == 1 else ("and", tuple(parts))
 
-    def unary(self) -> str:
+    def unary(self) -> tuple:
         tok = self.peek()
         if tok in ("not", "~"):
             self.take()
             self.deeper()
             inner = self.unary()
             self.depth -= 1
-            return f"not ({inner})"
+            return ("not", inner)
         if tok in _TEMPORAL:
             self.take()
             bounds = self.interval()
             self.deeper()
             inner = self.unary()
             self.depth -= 1
-            return f"{tok}{bounds} ({inner})"
+            return ("temporal", tok, bounds, inner)
         if tok in ("true", "false"):
             self.take()
-            return "(1 > 0)" if tok == "true" else "(0 > 1)"
+            return ("const", tok == "true")
         if tok == "(":
             start = self.i
             try:  # a parenthesised comparison's left side, e.g. (a - b) >= 2 m
@@ -392,19 +396,19 @@ class _Parser:
             inner = self.formula_()
             self.depth -= 1
             self.take(")")
-            return f"({inner})"
+            return ("group", inner)
         if tok is not None and tok not in _KEYWORDS and _is_name(tok) and self.units.get(tok) == BOOL:
             nxt = self.peek(1)
             if nxt not in _CMP:
                 self.take()
                 self.used[tok] = None
                 self.cmp_units.add(BOOL)
-                return f"({tok} > 0)"
+                return ("bool", tok)
         return self.comparison()
 
-    def interval(self) -> str:
+    def interval(self) -> tuple[float, float] | None:
         if self.peek() != "[":
-            return ""
+            return None
         self.take("[")
         lo = self.seconds()
         self.take(":")
@@ -412,7 +416,7 @@ class _Parser:
         self.take("]")
         if hi < lo:
             raise self.error(f"interval [{lo:g}:{hi:g}] ends before it starts")
-        return f"[{lo!r}:{hi!r}]"
+        return (lo, hi)
 
     def seconds(self) -> float:
         tok = self.next("a time in s")
@@ -432,72 +436,75 @@ class _Parser:
             raise self.error(f"{tok} is not a finite number")
         return value
 
-    def comparison(self) -> str:
+    def comparison(self) -> tuple:
         left, lu = self.arith()
         op = self.peek()
         if op not in _CMP:
             raise self.error(
-                f"expected a comparison ({' '.join(_CMP)}) after {left!r}, found "
+                f"expected a comparison ({' '.join(_CMP)}) after {render(left)!r}, found "
                 f"{op if op is not None else 'the end'!r}"
             )
         self.take()
         right, ru = self.arith()
         unit = _join(lu, ru)
         if unit is False:
-            raise self.error(f"compares {left!r} in {lu} with {right!r} in {ru} (units differ)")
+            raise self.error(f"compares {render(left)!r} in {lu} with {render(right)!r} in {ru} (units differ)")
         if unit == BOOL:
-            raise self.error(f"compares booleans ({left} {op} {right}): use the signal alone, or not")
+            raise self.error(f"compares booleans ({render(left)} {op} {render(right)}): use the signal alone, or not")
         self.cmp_units.add(unit or "-")
-        return f"({left} {op} {right})"
+        return ("cmp", op, left, right)
 
-    def arith(self) -> tuple[str, str | None]:
-        text, unit = self.term()
+    def arith(self) -> tuple[tuple, str | None]:
+        node, unit = self.term()
         while self.peek() in ("+", "-"):
             op = self.take()
             rt, ru = self.term()
             joined = _join(unit, ru)
             if joined is False:
-                raise self.error(f"{text!r} in {unit} {op} {rt!r} in {ru} (units differ)")
-            text, unit = f"{text} {op} {rt}", joined
-        return text, unit
+                raise self.error(f"{render(node)!r} in {unit} {op} {render(rt)!r} in {ru} (units differ)")
+            node, unit = ("bin", op, node, rt), joined
+        return node, unit
 
-    def term(self) -> tuple[str, str | None]:
-        text, unit = self.factor()
+    def term(self) -> tuple[tuple, str | None]:
+        node, unit = self.factor()
         while self.peek() in ("*", "/"):
             op = self.take()
             rt, ru = self.factor()
-            if op == "/" and _is_number(rt.lstrip("-")) and float(rt) == 0.0:
-                raise self.error(f"divides by zero ({text} / {rt})")
+            if op == "/" and rt[0] == "num" and float(rt[1]) == 0.0:
+                raise self.error(f"divides by zero ({render(node)} / {render(rt)})")
             if unit is None or unit == "-":
                 unit = ru if op == "*" else (None if ru in (None, "-") else f"1/({ru})")
             elif ru not in (None, "-"):
                 unit = f"({unit}){op}({ru})"
-            text = f"{text} {op} {rt}"
-        return text, unit
+            node = ("bin", op, node, rt)
+        return node, unit
 
-    def factor(self) -> tuple[str, str | None]:
+    def factor(self) -> tuple[tuple, str | None]:
         tok = self.next("a signal or a number")
         if tok in ("-", "(", "abs"):
             self.deeper()
             if tok == "-":
-                text, unit = self.factor()
+                node, unit = self.factor()
                 # rtamt's grammar takes a sign before a number only: -speed is 0 - speed
-                text = f"-{text}" if _is_number(text) and not text.startswith("-") else f"(0.0 - {text})"
+                if node[0] == "num" and not node[1].startswith("-"):
+                    node = ("num", f"-{node[1]}")
+                else:
+                    node = ("paren", ("bin", "-", ("num", "0.0"), node))
             else:
                 if tok == "abs":
                     self.take("(")
-                text, unit = self.arith()
+                node, unit = self.arith()
                 self.take(")")
-                text = f"abs({text})" if tok == "abs" else f"({text})"
+                node = ("abs", node) if tok == "abs" else ("paren", node)
             self.depth -= 1
-            return text, unit
+            return node, unit
         if _is_number(tok):
             value, unit = repr(self.finite(tok)), self.unit_suffix()
             after = self.peek()
             if unit is None and after is not None and _is_name(after) and after not in _KEYWORDS:
                 units = sorted((set(KNOWN_UNITS) | {u for u in self.units.values() if u and u != BOOL}) - {"-"})
                 raise self.error(f"unknown unit {after!r} after {tok} (units: {', '.join(units)}; SI only)")
-            return value, unit
+            return ("num", value), unit
         if tok in _KEYWORDS or not _is_name(tok):
             raise self.error(f"expected a signal or a number, found {tok!r}")
         if tok not in self.units:
@@ -506,7 +513,7 @@ class _Parser:
         if self.units[tok] == BOOL:
             raise self.error(f"{tok} is a boolean signal: use it alone as a proposition (e.g. not {tok})")
         self.used[tok] = None
-        return tok, self.units[tok] or "-"
+        return ("sig", tok), self.units[tok] or "-"
 
     def unit_suffix(self) -> str | None:
         """The unit written after a number (tokens up to the longest known unit), or None. A
@@ -553,9 +560,9 @@ def parse(formula: str, units: Mapping[str, str], name: str = "requirement") -> 
     if not isinstance(formula, str):
         raise RequirementError(f"bad requirement {name!r}: the formula must be text, got {formula!r}")
     p = _Parser(formula.strip(), units)
-    text = p.parse()
+    tree = p.parse()
     unit = next(iter(p.cmp_units)) if len(p.cmp_units) == 1 else "mixed"
-    return Requirement(name, formula.strip(), text, tuple(p.used), unit, tuple(p.bounds))
+    return Requirement(name, formula.strip(), render(tree), tuple(p.used), unit, tuple(p.bounds), tree)
 
 
 def sample_stride(bounds: Sequence[float], dt: float, period: float = 0.1) -> int:
@@ -667,7 +674,7 @@ def resolve(texts: Mapping[str, str], units: Mapping[str, str]) -> tuple[Require
 
 def signal(result, name: str, scenario=None) -> np.ndarray:
     """Signal ``name`` of a finished run as floats (booleans +1/-1; infinities clipped to
-    +-1e9, so rtamt's min/max stay finite)."""
+    +-1e9, so the min/max stay finite)."""
     t = result.column("t")
     if name in result.columns:
         x = result.column(name).astype(float)
@@ -677,50 +684,6 @@ def signal(result, name: str, scenario=None) -> np.ndarray:
             return np.where(x, 1.0, -1.0)
     x = np.nan_to_num(x, nan=0.0, posinf=1e9, neginf=-1e9)
     return x
-
-
-_COMPILED: dict[tuple[str, float], object] = {}
-
-
-def _spec(req: Requirement, names: tuple[str, ...]):
-    """A parsed rtamt specification of ``req``, its interval bounds counted in samples (a
-    sampling period of 1; cached per process: parsing is the expensive part)."""
-    key = req.rtamt
-    spec = _COMPILED.get(key)
-    if spec is None:
-        import rtamt
-
-        spec = rtamt.StlDiscreteTimeOfflineSpecification()
-        spec.name = req.name
-        for n in names:
-            spec.declare_var(n, "float")
-        spec.set_sampling_period(1, "s", 0.1)
-        spec.spec = req.rtamt
-        spec.parse()
-        interpreter = spec.offline_interpreter
-        interpreter.visitPredicate = types.MethodType(_predicate, interpreter)
-        _COMPILED[key] = spec
-    return spec
-
-
-def _predicate(self, node, *args, **kwargs):
-    """rtamt's offline predicate (a comparison's robustness per sample), in numpy: the same
-    IEEE differences as rtamt's loop over samples (which reads the operator's enum for each
-    sample, half of a run's requirement checking), handed back as the list rtamt expects."""
-    left = np.asarray(self.visit(node.children[0], *args, **kwargs), dtype=float)
-    right = np.asarray(self.visit(node.children[1], *args, **kwargs), dtype=float)
-    op = node.operator.name
-    if op == "EQ":
-        out = -np.abs(left - right)
-    elif op == "NEQ":
-        out = np.abs(left - right)
-    elif op in ("LEQ", "LESS"):
-        out = right - left
-    elif op in ("GEQ", "GREATER"):
-        out = left - right
-    else:
-        raise RequirementError(f"unknown comparison {op}")
-    return out.tolist()
 
 
 @dataclass(frozen=True)
@@ -744,18 +707,36 @@ class Verdict:
 #: the number is one JSON and Parquet take (docs/reliability.md, "Limits")
 MAX_ROBUSTNESS = 1e9
 
-#: requirements are evaluated on the trace's samples this far apart (s; the SUMO step, at
-#: which the traffic's signals change): rtamt's offline monitor costs about 30 us per sample
-#: and operator, so every 0.01 s control step would cost a third of a run's time
-PERIOD = 0.1
+#: requirements are evaluated on every sample of the trace by default (0: the control step,
+#: 0.01 s); a period > 0 (``--requirement-period 0.1``, a spec's ``requirement_period``)
+#: evaluates them on a grid of samples that far apart instead (the SUMO step, at which the
+#: traffic's signals change; a violation shorter than it can be missed)
+PERIOD = 0.0
+#: the largest grid period accepted (s)
+MAX_PERIOD = 10.0
+
+
+def check_period(value, what: str = "--requirement-period") -> float:
+    """``value`` as a requirement period (s): 0 (every sample) up to MAX_PERIOD; ConfigError
+    naming it otherwise."""
+    try:
+        period = float(value)
+    except (TypeError, ValueError):
+        period = math.nan
+    if isinstance(value, bool) or not (0.0 <= period <= MAX_PERIOD):
+        raise RequirementError(
+            f"bad {what} {value!r} (expected seconds from 0, every sample of the trace, to {MAX_PERIOD:g})"
+        )
+    return period
 
 
 def evaluate(req: Requirement, result, period: float = PERIOD, scenario=None) -> Verdict:
-    """Evaluate ``req`` on a finished run with rtamt (offline, discrete time) on the trace's
-    own samples, every ``period`` s (0: every sample), counted back from the last one so the
-    run's end (a collision) is always a sample. An ``always`` formula is evaluated as its
-    body's robustness signal, whose minimum is the formula's robustness (the same number,
-    and its first negative sample is the first violation)."""
+    """Evaluate ``req`` on a finished run (rtamt's offline discrete-time semantics, in numpy:
+    :mod:`ego.stl`) on every sample of the trace (``period`` 0, the default) or on samples
+    every ``period`` s, counted back from the last one so the run's end (a collision) is
+    always a sample. An ``always`` formula is evaluated as its body's robustness signal,
+    whose minimum is the formula's robustness (the same number, and its first negative
+    sample is the first violation)."""
     t_all = result.column("t")
     if len(t_all) < 2:
         return Verdict(req.name, math.nan, None, req.unit)
@@ -767,22 +748,20 @@ def evaluate(req: Requirement, result, period: float = PERIOD, scenario=None) ->
     if len(idx) < 2:
         idx = np.arange(len(t_all))
         stride = 1
-    t = t_all[idx]
-    names = tuple(req.signals) or ("t",)
-    # time in samples: rtamt checks interval bounds against the sampling period exactly
-    data = {"time": [float(i) for i in range(len(idx))]}
-    for n in names:
-        data[n] = signal(result, n, scenario)[idx].tolist()
-    always = req.rtamt.startswith("always (") and _outer_parens(req.rtamt[len("always ") :])
-    text = req.rtamt[len("always ") :] if always else req.rtamt
-    spec = _spec(Requirement(req.name, req.formula, in_samples(text, stride * dt), req.signals, req.unit), names)
+    t = t_all[idx] if stride > 1 else t_all
+    tree = req.tree or parse(req.formula, {n: DERIVED[n].unit if n in DERIVED else "-" for n in req.signals}).tree
+    always = tree[0] == "temporal" and tree[1] == "always" and tree[2] is None
+    body = tree[3] if always else tree
+    data = {n: (signal(result, n, scenario)[idx] if stride > 1 else signal(result, n, scenario)) for n in req.signals}
     try:
-        rob = np.array([v for _, v in spec.evaluate(data)], dtype=float)
-    except (ArithmeticError, ValueError, MemoryError, RecursionError):  # rtamt could not: no number
+        rob = robustness(body, data, len(idx), stride * dt)
+    except (ArithmeticError, ValueError, MemoryError, RecursionError):  # no number
         return Verdict(req.name, math.nan, None, req.unit)
     if not len(rob):
         return Verdict(req.name, math.nan, None, req.unit)
     value = float(rob.min()) if always else float(rob[0])
+    if math.isnan(value):
+        return Verdict(req.name, math.nan, None, req.unit)
     if math.isinf(value):  # arithmetic past the float range (speed * 1e300 * 1e300): the
         value = math.copysign(MAX_ROBUSTNESS, value)  # verdict kept, the bound signals have
     at = None
@@ -792,30 +771,22 @@ def evaluate(req: Requirement, result, period: float = PERIOD, scenario=None) ->
     return Verdict(req.name, value, at, req.unit)
 
 
-def _outer_parens(text: str) -> bool:
-    """``text`` is one parenthesised group (so ``always (a) until (b)`` is not an always)."""
-    depth = 0
-    for i, ch in enumerate(text):
-        depth += ch == "("
-        depth -= ch == ")"
-        if depth == 0:
-            return i == len(text) - 1
-    return False
-
-
-def check_run(scenario, result, requirements: Sequence[Requirement]) -> list[Verdict]:
+def check_run(scenario, result, requirements: Sequence[Requirement], period: float = PERIOD) -> list[Verdict]:
     """Evaluate ``requirements`` on ``result`` (a run of ``scenario`` that has not closed its
-    recording yet): the robustness of each into ``result.metrics["requirements"]``, each
-    violation as a ``requirement`` event of the run (in time order, before the run's own
-    events of that moment) and of its recording."""
+    recording yet; every sample of its trace, or a grid ``period`` s apart): the robustness
+    of each into ``result.metrics["requirements"]``, the first violation's time of each into
+    ``result.metrics["first_violation"]`` (None: not violated), each violation as a
+    ``requirement`` event of the run (in time order, before the run's own events of that
+    moment) and of its recording."""
     from ego.scenarios.base import Event
 
     verdicts = []
-    rob = {}
+    rob, first = {}, {}
     for req in requirements:
-        v = evaluate(req, result, scenario=scenario)
+        v = evaluate(req, result, period, scenario=scenario)
         verdicts.append(v)
         rob[req.name] = None if math.isnan(v.robustness) else round(v.robustness, 6)
+        first[req.name] = None if v.violated_at is None else round(v.violated_at, 6)
         if v.violated_at is not None:
             text = (
                 f"requirement {req.name} violated (robustness {v.robustness:.3g}"
@@ -827,6 +798,7 @@ def check_run(scenario, result, requirements: Sequence[Requirement]) -> list[Ver
             scenario.recorder.event(v.violated_at, f"[requirement] {text}", "WARN")
     if requirements:
         result.metrics["requirements"] = rob
+        result.metrics["first_violation"] = first
     return verdicts
 
 

@@ -60,6 +60,9 @@ class RunSpec:
     #: can drive the scenario), False never (the default: a sweep, a falsification or a
     #: comparison asks for the second run explicitly, ``--preventable``)
     preventable: bool | None = False
+    #: requirements are evaluated on every sample of the trace (0, the default) or on a grid
+    #: of samples this many seconds apart (e.g. 0.1, the SUMO step; docs/requirements.md)
+    requirement_period: float = 0.0
 
     @property
     def sim_options(self) -> dict[str, Any]:
@@ -105,6 +108,10 @@ class RunSpec:
             raise ConfigError(f"bad background_recording {self.background_recording!r} (expected true or false)")
         if self.preventable is not None and not isinstance(self.preventable, bool):
             raise ConfigError(f"bad preventable {self.preventable!r} (expected true, false or None)")
+        if self.requirement_period != 0.0:
+            from ego.requirements import check_period
+
+            object.__setattr__(self, "requirement_period", check_period(self.requirement_period, "requirement_period"))
 
 
 def parameter_namespace(scenario: type[Scenario] | str, controllers: Iterable[str] = ()) -> dict[str, ParamInfo]:
@@ -173,14 +180,23 @@ class ResolvedRun:
 
     def metrics_declared(self) -> tuple[Metric, ...]:
         """Every metric the run reports, as its scenario declares them (units, headline),
-        and its requirements' robustness (``requirements.<name>``)."""
-        return tuple(self.scenario_cls.metrics_declared(self.config)) + tuple(
-            Metric(
-                f"requirements.{r.name}",
-                "-" if r.unit in ("bool", "mixed") else r.unit,
-                f"robustness of {r.formula} (negative: violated)",
+        its requirements' robustness (``requirements.<name>``) and first violation time
+        (``first_violation.<name>``)."""
+        reqs = requirements_of(self)
+        return (
+            tuple(self.scenario_cls.metrics_declared(self.config))
+            + tuple(
+                Metric(
+                    f"requirements.{r.name}",
+                    "-" if r.unit in ("bool", "mixed") else r.unit,
+                    f"robustness of {r.formula} (negative: violated)",
+                )
+                for r in reqs
             )
-            for r in requirements_of(self)
+            + tuple(
+                Metric(f"first_violation.{r.name}", "s", f"the first time {r.name} is violated (empty: never)")
+                for r in reqs
+            )
         )
 
     def plots(self) -> tuple:
@@ -272,7 +288,8 @@ def build(what: RunSpec | ResolvedRun) -> Scenario:
     if reqs:
         from ego.requirements import check_run
 
-        scenario.on_result = lambda sc, result: check_run(sc, result, reqs)
+        period = spec.requirement_period
+        scenario.on_result = lambda sc, result: check_run(sc, result, reqs, period)
     return scenario
 
 

@@ -1,7 +1,7 @@
 """ego's packages import downwards only, and no two packages import each other (directly
 or through others): every import in every module of ego, lazy ones in functions included.
 
-    foundation (params, checks, outputs, processes, native)
+    foundation (params, checks, outputs, processes, native, stl)
     < models, control, sim, results, parallel, record, sumo, highway_env, geometry
     < scenarios
     < runner, plots, requirements, specs
@@ -30,6 +30,7 @@ LAYERS = [
         "ego.usercode",
         "ego.paths",
         "ego.reaper",
+        "ego.stl",
     },
     {
         "ego.models",

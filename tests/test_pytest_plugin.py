@@ -59,7 +59,7 @@ def test_the_example_project_fails_exactly_its_planted_item_and_reports_metrics(
     assert failed == {PLANTED}
     message = cases[PLANTED].find("failure").get("message") + cases[PLANTED].find("failure").text
     # the violated requirement, its robustness, its first violation and the reproducer
-    assert "requirement keep_50m violated: robustness -43.2094, first violation at 0.09 s" in message
+    assert "requirement keep_50m violated: robustness -43.2094, first violation at 0.00 s" in message
     reproduce = "ego run emergency-brake -c pid --seed 0 --set traffic_density=0 --require 'keep_50m: always (gap_front >= 50 m)'"
     assert f"reproduce: {reproduce}" in message
     for name, case in cases.items():
@@ -74,6 +74,9 @@ def test_the_example_project_fails_exactly_its_planted_item_and_reports_metrics(
     assert planted["ego.recording"].endswith("test_planted_failure_keeps_50_m_seed0_.rrd")
     assert (project / "rec" / "test_planted_failure_keeps_50_m_seed0_.rrd").stat().st_size > 0
     assert float(planted["ego.requirements.keep_50m"]) == pytest.approx(-43.2094, abs=1e-4)
+    assert float(planted["ego.first_violation.keep_50m"]) == 0.0  # every sample: the first one
+    passing = {p.get("name") for p in cases["seed0"].iter("property")}
+    assert not any(k.startswith("ego.first_violation.") for k in passing)  # a passing item: none
     # the reproducer gives the same verdict
     argv = shlex.split(reproduce)
     rerun = subprocess.run(

@@ -62,6 +62,7 @@ class Page(HTMLParser):
         self.rows: list[list[str]] = []
         self.commands: list[str] = []
         self.tags: list[str] = []
+        self.text = text
         self._cell: list[str] | None = None
         self._row: list[str] | None = None
         self._pre = False
@@ -185,9 +186,17 @@ def test_every_failing_run_has_its_command_and_it_reproduces_the_verdict(sweep_d
     args = shlex.split(cmd)[2:] + ["--json"]
     proc = subprocess.run([sys.executable, "-m", "ego", "run", *args], capture_output=True, text=True, timeout=120)
     assert proc.returncode == 1, proc.stderr[-2000:]  # the collision again
-    got = json.loads(proc.stdout)["requirements"]
-    for name, value in got.items():
+    out = json.loads(proc.stdout)
+    for name, value in out["requirements"].items():
         assert value == pytest.approx(failing[0][f"requirements.{name}"], abs=1e-6), name
+    # the first violation's time: stored in the row, shown in the verdicts and the failing run,
+    # the time of the run's own requirement event
+    hit = failing[0]["first_violation.no_collision"]
+    events = [e["t"] for e in out["events"] if e["kind"] == "requirement" and " no_collision " in e["text"]]
+    assert events and hit == pytest.approx(events[0], abs=1e-6)
+    verdict = {r[2]: r for r in p.rows if r and r[0] == "emergency-brake"}["no_collision"]
+    assert verdict[7] == f"{hit:.2f}"
+    assert f"no_collision (from {hit:.2f} s)" in p.text
 
 
 def test_falsify_commands_carry_the_spec_requirement(falsify_dir):

@@ -94,8 +94,9 @@ def test_robustness_of_always_is_the_smallest_margin_and_the_first_violation_tim
     assert v.robustness == pytest.approx(gap[-1] - 2.0)
     assert v.violated_at == pytest.approx(4.01)  # the first sample with gap < 2 m (gap = 1.98 m)
     assert v.unit == "m"
-    # at the 0.1 s period, counted back from the last sample: the end is a sample
-    v10 = evaluate(parse("always (gap_front >= 2 m)", UNITS, "keep"), r)
+    assert evaluate(parse("always (gap_front >= 2 m)", UNITS, "keep"), r) == v  # full rate: the default
+    # on the 0.1 s grid, counted back from the last sample: the end is a sample
+    v10 = evaluate(parse("always (gap_front >= 2 m)", UNITS, "keep"), r, period=0.1)
     assert v10.robustness == pytest.approx(v.robustness)
     assert v10.violated_at == pytest.approx(4.09)
 
@@ -147,7 +148,7 @@ def test_a_boolean_proposition_is_plus_or_minus_one():
     assert evaluate(parse("not collision_avoidable", UNITS), r).robustness == -1.0
     v = evaluate(parse("always (not collision)", UNITS), r, period=0)
     assert v.robustness == -1.0 and v.violated_at == pytest.approx(1.5)
-    v = evaluate(parse("always (not collision)", UNITS), r)  # every 0.1 s: within one period
+    v = evaluate(parse("always (not collision)", UNITS), r, period=0.1)  # every 0.1 s: within one period
     assert v.robustness == -1.0 and 1.5 <= v.violated_at < 1.6
     clear = DERIVED["clearance"].fn(r, t)
     assert clear[0] == 1.0 and clear[-1] == -1.0
@@ -243,53 +244,53 @@ def test_sweep_spec_requirements_are_checked(tmp_path, capsys):
     assert math.isfinite(1.0)
 
 
-@pytest.mark.parametrize(
-    "formula",
-    [
-        "always (gap_front >= 2 m or lateral_clear)",
-        "always (aeb_active implies eventually[0:3] (speed <= 1 m/s or not aeb_active))",
-        "always (abs(speed - 1 m/s) < 3 m/s and gap_front > 0.5 m)",
-        "always (speed > -1 m/s) or eventually (speed < 0.5 m/s)",
-        "not collision",
-    ],
-)
-def test_the_numpy_predicate_gives_rtamts_own_robustness_sample_by_sample(formula):
-    """ego evaluates rtamt's comparisons with numpy (its per-sample loop was half of a run's
-    requirement checking), its interval bounds counted in samples: every sample's robustness
-    is exactly rtamt's own on the formula in seconds."""
+CROSS_CHECKED = [
+    "always (gap_front >= 2 m or lateral_clear)",
+    "always (aeb_active implies eventually[0:3] (speed <= 1 m/s or not aeb_active))",
+    "always ((ttc_front <= 3 s) implies eventually[0:1.5] (accel <= -1 m/s^2))",
+    "always (abs(speed - 1 m/s) < 3 m/s and 2 * gap_front - 3 m > 0.5 m / 2)",
+    "always (speed > -1 m/s) or eventually (speed < 0.5 m/s)",
+    "always[0.5:2] (speed > 0) and eventually[0.02:0.05] (speed > 0)",
+    "historically[0.2:1] (speed > -1) and once[0:0.7] (gap_front > 1) and historically (speed < 5) and once (speed > 1)",
+    "(speed > 0) until[0.3:1.2] (gap_front < 0)",
+    "(speed > 0) until (gap_front < -2)",
+    "(speed > 0) until[0:0.5] (gap_front < -2)",
+    "eventually[1:2] (not (speed == 0.5)) -> always[0:0.1] (speed <= 0.5)",
+    "always (-speed > -3 m/s)",
+    "not collision",
+    "true and not false",
+]
+
+
+@pytest.mark.parametrize("n, step", [(400, 0.01), (150, 0.1)])
+@pytest.mark.parametrize("formula", CROSS_CHECKED)
+def test_the_numpy_monitor_gives_rtamts_own_robustness_sample_by_sample(formula, n, step):
+    """ego evaluates formulas with numpy (ego.stl: sliding-window min/max, no loop over
+    samples): every sample's robustness is exactly rtamt's own (offline, discrete time, the
+    interval bounds counted in samples) at the trace's full rate and on the 0.1 s grid."""
     import rtamt
 
-    from ego.requirements import Requirement, _spec
+    from ego.stl import robustness
 
     rng = np.random.default_rng(7)
-    n = 400
-    req = parse(formula, UNITS)
-    names = req.signals
-    data = {"time": (0.1 * np.arange(n)).tolist()}
-    for name in names:
+    req = parse(formula, {**UNITS, "accel": "m/s^2"})
+    signals = {}
+    for name in req.signals:
         x = rng.normal(0.0, 3.0, n)
         x[::17] = 0.5  # exact ties
-        data[name] = (np.sign(x) if UNITS[name] == "bool" else x).tolist()
+        signals[name] = np.sign(x) if UNITS.get(name) == "bool" else x
     plain = rtamt.StlDiscreteTimeOfflineSpecification()
-    for name in names:
+    for name in req.signals or ("t",):
         plain.declare_var(name, "float")
-    plain.set_sampling_period(0.1, "s", 0.1)
-    plain.spec = req.rtamt
+    plain.set_sampling_period(1, "s", 0.1)
+    plain.spec = in_samples(req.rtamt, step)
     plain.parse()
-    expected = [v for _, v in plain.evaluate({k: list(v) for k, v in data.items()})]
-    fast = _spec(Requirement(req.name, req.formula, in_samples(req.rtamt, 0.1), req.signals, req.unit), names)
-    samples = {**data, "time": [float(i) for i in range(n)]}
-    got = [v for _, v in fast.evaluate({k: list(v) for k, v in samples.items()})]
-    assert got == expected
-
-    # every node's robustness signal (each comparison's included), in the order rtamt visits
-    # (the time stamps aside: in seconds in one, in samples in the other)
-    def values(spec):
-        return [v for k, v in spec.offline_interpreter.ast.offline_results.items() if k != "time"]
-
-    nodes = values(plain)
-    assert values(fast) == nodes
-    assert any(len(set(v)) > 1 for v in nodes)  # not constants: the signals decide
+    data = {"time": [float(i) for i in range(n)], **{k: v.tolist() for k, v in signals.items()}}
+    if not req.signals:
+        data["t"] = [0.0] * n
+    expected = np.array([v for _, v in plain.evaluate(data)])
+    got = robustness(req.tree, signals, n, step)
+    assert np.array_equal(got, expected)
 
 
 def test_bounds_sit_on_samples_at_any_control_period():
@@ -392,3 +393,72 @@ def test_a_backend_lacking_a_capability_the_scenario_needs_is_refused_in_one_lin
     assert str(e.value) == (
         "bad value for --backend: 'highway-env' (scenario off-road needs any_network; backend highway-env lacks it)"
     )
+
+
+@pytest.mark.sumo
+def test_full_rate_by_default_the_grid_on_request_and_the_first_violation_stored(capsys):
+    """Every 0.01 s sample by default; ``--requirement-period 0.1`` evaluates on the 0.1 s grid
+    counted back from the run's end (a minimum over fewer samples: never below the full
+    rate's); each requirement's first violation time is a metric (None: held)."""
+    args = ["run", "emergency-brake", "-c", "pid", "--set", "duration=6", "--json"]
+    args += ["--require", "ttc_brakes: always ((ttc_front <= 3 s) implies eventually[0:1.5] (accel <= -1 m/s^2))"]
+    args += ["--require", "soft: always (accel >= -3 m/s^2)"]
+    got = {}
+    for period in ("0", "0.1"):
+        assert main([*args, "--requirement-period", period]) in (0, 1)
+        got[period] = json.loads(capsys.readouterr().out)
+    full, grid = got["0"], got["0.1"]
+    assert full["requirements"]["soft"] < grid["requirements"]["soft"] < 0  # a sample between grid points
+    first, later = full["first_violation"], grid["first_violation"]
+    assert first["no_collision"] is None and first["soft"] < later["soft"]
+    assert 0 < first["ttc_brakes"] < later["ttc_brakes"] <= 6
+    for name in ("soft", "ttc_brakes"):
+        event = next(e for e in full["events"] if e["kind"] == "requirement" and f" {name} " in e["text"])
+        assert event["t"] == pytest.approx(first[name])
+    assert main([*args, "--requirement-period", "-0.1"]) == 2
+    assert "bad --requirement-period '-0.1'" in capsys.readouterr().err
+
+
+@pytest.mark.sumo
+def test_a_sweep_spec_keeps_the_grid_with_requirement_period(tmp_path, capsys):
+    """``requirement_period = 0.1`` in a sweep spec: the runs' requirements on the 0.1 s grid,
+    as ``ego run --requirement-period 0.1`` gives them; a bad value is one line, exit 2."""
+    import pyarrow.parquet as pq
+
+    body = (
+        'scenario = "emergency-brake"\ncontrollers = ["pid"]\n[set]\nduration = 6\n'
+        '[requirements]\nsoft = "always (accel >= -3 m/s^2)"\n'
+    )
+    got = {}
+    for period in ("0", "0.1"):
+        spec = tmp_path / f"s{period}.toml"
+        spec.write_text(f"requirement_period = {period}\n" + body)
+        assert main(["sweep", str(spec), "--out", str(tmp_path / period)]) == 0
+        row = pq.read_table(tmp_path / period / "results.parquet").to_pylist()[0]
+        got[period] = (row["requirements.soft"], row["first_violation.soft"])
+    capsys.readouterr()
+    main(
+        ["run", "emergency-brake", "-c", "pid", "--set", "duration=6", "--json", "--requirement-period", "0.1"]
+        + ["--require", "soft: always (accel >= -3 m/s^2)"]
+    )
+    run = json.loads(capsys.readouterr().out)
+    assert got["0.1"] == (run["requirements"]["soft"], run["first_violation"]["soft"])
+    assert got["0"][0] < got["0.1"][0] < 0 and got["0"][1] < got["0.1"][1]
+    bad = tmp_path / "bad.toml"
+    bad.write_text("requirement_period = -1\n" + body)
+    assert main(["sweep", str(bad), "--out", str(tmp_path / "bad")]) == 2
+    err = capsys.readouterr().err
+    assert "requirement_period -1 (expected seconds from 0" in err and err.count("\n") == 1
+    assert not (tmp_path / "bad").exists()
+
+
+def test_the_sliding_window_is_the_min_and_max_of_each_window():
+    from ego.stl import sliding
+
+    rng = np.random.default_rng(0)
+    for n in (1, 2, 5, 17, 100):
+        for w in (1, 2, 3, 7, 16, 150):
+            y = rng.normal(size=n)
+            for low in (True, False):
+                expected = [(min if low else max)(y[i : i + w]) for i in range(n)]
+                assert sliding(y, w, low).tolist() == expected, (n, w, low)

@@ -95,6 +95,18 @@ def add_preventable(p: argparse.ArgumentParser) -> None:
     )
 
 
+def add_requirement_period(p: argparse.ArgumentParser) -> None:
+    """``--requirement-period S``: requirements on a grid of samples S s apart (0: every
+    sample of the trace, the default)."""
+    p.add_argument(
+        "--requirement-period",
+        default=0.0,
+        metavar="S",
+        help="evaluate the requirements on samples S s apart (e.g. 0.1, the SUMO step) instead of "
+        "every sample of the trace (0, the default; docs/requirements.md)",
+    )
+
+
 def add_set(p: argparse.ArgumentParser, help: str) -> None:
     """``--set KEY=VALUE``, repeatable, into ``args.overrides``."""
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE", help=help)

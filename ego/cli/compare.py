@@ -14,7 +14,7 @@ from ego.params import ConfigError, parse_overrides
 
 def command(args: Any) -> int:
     from ego.compare import MAX_SEEDS, SETTINGS_FILE, UNITS_FILE, compare
-    from ego.requirements import with_defaults
+    from ego.requirements import check_period, with_defaults
 
     if args.seeds > MAX_SEEDS:
         raise ConfigError(f"bad value for --seeds: {args.seeds} (expected at most {MAX_SEEDS}; use ego sweep for more)")
@@ -34,6 +34,7 @@ def command(args: Any) -> int:
         backend=args.backend,
         requirements=with_defaults(args.scenario, args.require),
         preventable=args.preventable,
+        requirement_period=check_period(args.requirement_period),
     )
     print((out / "metrics.md").read_text(), end="")
     # the plots this command wrote (an earlier comparison's in the same --out are not these)

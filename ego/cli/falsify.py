@@ -29,10 +29,12 @@ def add_parser(sub) -> argparse.ArgumentParser:
             '  scenario = "emergency-brake"\n  controller = "fuzzy-pid"\n'
             '  requirement = "no_avoidable_collision"   # a name from [requirements] or the defaults\n'
             "  seed = [0, 99999]          # a range searched, or one fixed seed\n"
+            "  seeds_per_point = 1        # each point over its seed and the next k-1, the worst kept\n"
+            "  requirement_period = 0     # requirements on every sample (or a grid of S seconds)\n"
             "  budget = 500               # runs (--budget overrides)\n"
             '  [requirements]\n  no_avoidable_collision = "always (not avoidable_collision)"\n'
             "  [set]\n  traffic_density = 5\n"
-            "  [search]                   # ranges: floats, whole numbers, [false, true]\n"
+            "  [search]                   # ranges: floats, whole numbers (integer), [false, true] (categorical)\n"
             "  ego_speed = [10, 36]\n  block_left = [false, true]\n\n"
             "Exit status: 0 no violation found; 1 a violation found (see falsified.md); 130 "
             "interrupted (the same command resumes); 2 bad input or --out in use."

@@ -6,7 +6,17 @@ import argparse
 
 from ego import __version__
 from ego.checks import whole_number
-from ego.cli.common import Parser, add_address, add_engine, add_jobs, add_out, add_preventable, add_require, add_set
+from ego.cli.common import (
+    Parser,
+    add_address,
+    add_engine,
+    add_jobs,
+    add_out,
+    add_preventable,
+    add_require,
+    add_requirement_period,
+    add_set,
+)
 from ego.sim.registry import backend_names
 
 
@@ -99,6 +109,7 @@ def parser() -> argparse.ArgumentParser:
         "--video", metavar="PATH", help="with --backend highway-env: a video of the run (.gif, or .mp4 with ffmpeg)"
     )
     add_require(run)
+    add_requirement_period(run)
     run.add_argument(
         "--preventable",
         action="store_true",
@@ -145,6 +156,7 @@ def parser() -> argparse.ArgumentParser:
         help="also write every run's trace to traces/<label>-seed<N>.FORMAT: csv, parquet or mat (see docs/traces.md)",
     )
     add_require(cmp_)
+    add_requirement_period(cmp_)
     add_preventable(cmp_)
 
     swp = sub.add_parser(

@@ -12,7 +12,7 @@ from ego.params import parse_overrides
 
 
 def command(args: Any) -> int:
-    from ego.requirements import with_defaults
+    from ego.requirements import check_period, with_defaults
     from ego.results.export import trace_files
     from ego.results.metrics import flatten, metric_units
     from ego.runner import RunSpec, resolve, run
@@ -29,6 +29,7 @@ def command(args: Any) -> int:
         video=args.video,
         requirements=with_defaults(args.scenario, args.require),
         preventable=True if args.preventable else None,
+        requirement_period=check_period(args.requirement_period),
     )
     resolved = resolve(spec)  # every name, value and path checked before anything runs
     from ego.outputs import OutputError
@@ -89,6 +90,8 @@ def _print_result(result, units: dict[str, str]) -> None:
     skip = {"scenario", "controller", "seed", "status", "status_detail", "lane_choice"}
     width = max(len(k) for k in m)
     for key, value in m.items():
+        if key.startswith("first_violation.") and value is None:
+            continue  # a requirement that holds: no time (its events list the violations)
         if key not in skip:
             unit = units.get(key, "")
             number = isinstance(value, (int, float)) and not isinstance(value, bool)

@@ -215,12 +215,17 @@ def resume_key(spec: FalsifySpec, optimizer: str, optimizer_seed: int) -> dict:
     (:meth:`ego.sweep.results.ResultStore.check_spec`); the budget, the controllers and the
     target among the same requirements may change (more runs of the same search, another
     search over the same rows: ``ego.falsify.bench`` shares them between targets)."""
-    return {
+    key = {
         "ranges": {d.name: ("false/true" if d.kind == "bool" else [d.lo, d.hi]) for d in spec.dims},
         "fixed values": {**spec.fixed, **({} if spec.seed is None else {"seed": spec.seed})},
         "requirements": dict(spec.requirements),
         "optimizer": f"{optimizer} (seed {optimizer_seed})",
     }
+    if spec.seeds_per_point != 1:  # a spec without them keeps its key (and its stored searches)
+        key["seeds per point"] = spec.seeds_per_point
+    if spec.requirement_period:
+        key["requirement period"] = spec.requirement_period
+    return key
 
 
 def _sample_rows(spec: FalsifySpec, optimizer: str, optimizer_seed: int) -> list[dict]:
@@ -261,7 +266,8 @@ def _search(
     from ego.sweep.pipeline import execute
     from ego.sweep.runner import error_row, row_of, task_of
 
-    opt = make(optimizer, len(spec.dims), batch, seed, budget)
+    opt = make(optimizer, len(spec.dims), batch, seed, budget, spec.kinds)
+    k = spec.seeds_per_point
 
     def keep(row: dict) -> None:
         row.update(optimizer=optimizer, optimizer_seed=seed)
@@ -272,8 +278,10 @@ def _search(
     while len(search.evaluations) < budget:
         units = opt.ask()
         full = len(units)
-        units = units[: budget - len(search.evaluations)]
-        points = [spec.point(u) for u in units]
+        left = budget - len(search.evaluations)
+        units = units[: max(1, left // k)]
+        # each point's runs (its seeds), within the budget
+        points = [run for u in units for run in spec.runs_of(*spec.point(u))][:left]
         ids = [spec.run_id(controller, s, o) for s, o in points]
         tasks = {}
         fresh = set()
@@ -283,7 +291,7 @@ def _search(
                 fresh.add(rid)
                 r = Run(rid, spec.scenario, controller, s, o)
                 try:
-                    tasks[rid] = task_of(r, None, "none", spec.requirements)
+                    tasks[rid] = task_of(r, None, "none", spec.requirements, spec.requirement_period)
                 except Exception as exc:  # noqa: BLE001 - values no run takes: the run's row says so
                     done[rid] = error_row(r, f"{type(exc).__name__}: {exc}")
         try:
@@ -314,9 +322,11 @@ def _search(
                     cached=rid not in fresh,
                 )
             )
-        if len(units) == full:
-            scores = np.array([squash(e.robustness) for e in search.evaluations[-full:]])
-            opt.tell(units, scores)
+        if len(units) == full and len(points) == full * k:
+            # a point's score: its worst robustness over its seeds (NaN only when none has one)
+            rob = np.array([e.robustness for e in search.evaluations[-full * k :]]).reshape(full, k)
+            worst = [float(np.nanmin(r)) if not np.isnan(r).all() else math.nan for r in rob]
+            opt.tell(units, np.array([squash(w) for w in worst]))
         if progress:
             best = search.best_so_far()[-1]
             found = len(search.violations)
@@ -390,6 +400,11 @@ def markdown(report: FalsifyReport, budget: int) -> str:
         "Searched: "
         + ", ".join(f"{d.name} {'false/true' if d.kind == 'bool' else f'{d.lo:g}..{d.hi:g}'}" for d in spec.dims)
         + ("" if spec.seed is None else f"; seed fixed at {spec.seed}")
+        + (
+            f"; each point run with {spec.seeds_per_point} seeds, its worst robustness kept"
+            if spec.seeds_per_point > 1
+            else ""
+        )
         + ("; fixed: " + ", ".join(f"{k}={v}" for k, v in spec.fixed.items()) if spec.fixed else ""),
         "",
         "| controller | runs | violations | runs to the first violation | best robustness |",

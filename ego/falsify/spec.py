@@ -4,16 +4,25 @@
 scenario = "emergency-brake"
 controllers = ["fuzzy-pid"]          # one search per controller, one after another
 requirement = "no_avoidable_collision"   # a name from [requirements] or the scenario's defaults
-seed = [0, 99999]                    # SUMO's seed: a range searched as a whole number, or one seed
+seed = 0                             # SUMO's seed (or a range [low, high] searched as a whole number)
+seeds_per_point = 3                  # optional: each point runs with seeds seed..seed+2, its
+                                     # robustness the worst of them (default 1: the seed alone)
 budget = 500                         # runs per controller (--budget overrides)
 [requirements]                       # optional: name = "formula" (default: the scenario's set)
 no_avoidable_collision = "always (not avoidable_collision)"
 [set]                                # fixed for every run
 lead_speed = -1
 [search]                             # the dimensions: [low, high] numbers (a whole-number
-ego_speed = [10, 36]                 # parameter is rounded), or [false, true]
-block_left = [false, true]
+ego_speed = [10, 36]                 # parameter is an integer dimension), or [false, true]
+block_left = [false, true]           # (a categorical dimension)
 ```
+
+The optimisers see each dimension's type (:meth:`FalsifySpec.kinds`): a boolean is
+categorical, a whole-number parameter with whole-number ends (and a searched seed range) an
+integer dimension; the blind baselines sample the cube and the value is rounded. The SUMO
+seed is noise, not a smooth dimension (neighbouring seeds are unrelated): fix it, or with
+``seeds_per_point = k`` run each point with k seeds and keep the worst robustness (k runs of
+the budget per point).
 
 Every name and value is checked as ``ego sweep`` checks its spec (the same helpers), the
 formulas as ``--require`` checks them: one line, before anything runs.
@@ -36,7 +45,9 @@ _TOP = (
     "requirement",
     "seed",
     "budget",
+    "seeds_per_point",
     "requirements",
+    "requirement_period",
     "set",
     "search",
 )
@@ -82,10 +93,33 @@ class FalsifySpec:
     seed: int | None = 0  #: the fixed seed, None when searched
     budget: int = 200
     source: str = ""
+    #: each point runs with this many seeds (its seed, seed + 1, ...), the worst robustness kept
+    seeds_per_point: int = 1
+    #: requirements on every sample of the trace (0) or on a grid this many seconds apart
+    requirement_period: float = 0.0
 
     @property
     def formula(self) -> str:
         return self.requirements[self.requirement]
+
+    @property
+    def kinds(self) -> tuple:
+        """Each dimension's type for the optimisers (:class:`ego.falsify.optimizers.Kind`)."""
+        from ego.falsify.optimizers import Kind
+
+        out = []
+        for d in self.dims:
+            if d.kind == "bool":
+                out.append(Kind("bool", 2))
+            elif d.kind in ("int", "seed") and d.lo.is_integer() and d.hi.is_integer():
+                out.append(Kind("int", int(d.hi - d.lo) + 1))
+            else:
+                out.append(Kind())
+        return tuple(out)
+
+    def runs_of(self, seed: int, overrides: dict) -> list[tuple[int, dict]]:
+        """The runs of one point: its seed and the next ``seeds_per_point - 1``."""
+        return [(seed + j, overrides) for j in range(self.seeds_per_point)]
 
     def point(self, u: np.ndarray) -> tuple[int, dict]:
         """(seed, overrides) of the run at ``u`` in the unit cube."""
@@ -141,6 +175,7 @@ def from_distribution(path: str, controllers: list[str], requirement: str | None
 def parse(data: dict, source: str = "the spec") -> FalsifySpec:
     """Validate a spec's contents (see the module docstring)."""
     from ego.requirements import defaults, from_table
+    from ego.sweep.spec import spec_period
 
     def bad(msg: str) -> ConfigError:
         return ConfigError(f"{source}: {msg}")
@@ -224,6 +259,17 @@ def parse(data: dict, source: str = "the spec") -> FalsifySpec:
         raise bad(f"seed must be one seed or a range [low, high] of seeds within 0..{MAX_SEED}, got {seed!r}")
     if not dims:
         raise bad("[search] names nothing to search (and the seed is fixed)")
+    per_point = data.get("seeds_per_point", 1)
+    top_seed = fixed_seed if fixed_seed is not None else seed[1]
+    if (
+        not isinstance(per_point, int)
+        or isinstance(per_point, bool)
+        or not 1 <= per_point <= 100
+        or top_seed + per_point - 1 > MAX_SEED
+    ):
+        raise bad(
+            f"seeds_per_point must be a whole number from 1 to 100 (the seeds up to {MAX_SEED}), got {per_point!r}"
+        )
     spec = FalsifySpec(
         scenario,
         tuple(controllers),
@@ -234,6 +280,8 @@ def parse(data: dict, source: str = "the spec") -> FalsifySpec:
         fixed_seed,
         budget,
         source,
+        per_point,
+        spec_period(data, bad),
     )
     # the corners as a whole (combinations a value-by-value check cannot see) and the formulas
     for u in (np.zeros(len(dims)), np.ones(len(dims))):

@@ -20,6 +20,8 @@ from ego.results.trace import Metric
 
 #: the flattened metrics of a run's requirements: ``requirements.<name>`` (robustness)
 REQUIREMENTS_PREFIX = "requirements."
+#: the flattened metrics of the first time each requirement is violated (s): ``first_violation.<name>``
+FIRST_VIOLATION_PREFIX = "first_violation."
 #: one run's flattened metrics (status and error among them)
 Row = Mapping[str, Any]
 

@@ -29,11 +29,17 @@ RECORD = ("none", "failed", "all")
 
 
 def task_of(
-    r: Run, rrd: str | None = None, policy: str = "none", requirements=None, preventable: bool = False
+    r: Run,
+    rrd: str | None = None,
+    policy: str = "none",
+    requirements=None,
+    requirement_period: float = 0.0,
+    preventable: bool = False,
 ) -> RunTask:
     """The pipeline's task for sweep run ``r`` (resolved here, once): recorded to ``rrd``
     always (``policy`` ``all``) or only when it fails (``failed``), checked against
-    ``requirements`` (the spec's [requirements]; None: the scenario's defaults), with
+    ``requirements`` (the spec's [requirements]; None: the scenario's defaults; on samples
+    ``requirement_period`` s apart, 0 every sample), with
     ``collision_preventable`` after a collision if ``preventable``. ConfigError when the
     run's values do not resolve."""
     from ego.runner import RunSpec, resolve
@@ -47,6 +53,7 @@ def task_of(
             record=rrd if policy == "all" else None,
             background_recording=False,
             requirements=requirements,
+            requirement_period=requirement_period,
             preventable=None if preventable else False,
         )
     )
@@ -161,7 +168,7 @@ def _sweep(
             if r.run_id not in done:
                 rrd = str(runs_dir / f"{r.controller}-{r.run_id}.rrd") if record != "none" else None
                 try:
-                    yield task_of(r, rrd, record, spec.requirements, spec.preventable)
+                    yield task_of(r, rrd, record, spec.requirements, spec.requirement_period, spec.preventable)
                 except Exception as exc:  # noqa: BLE001 - values no run takes: the run's row says so
                     store_row(error_row(r, f"{type(exc).__name__}: {exc}"))
                     if shown is not None:

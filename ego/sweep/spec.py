@@ -49,7 +49,7 @@ from ego.specs import (
 #: more runs than this is a mistake, not a sweep
 MAX_RUNS = 10_000_000
 METHODS = ("random", "lhs", "sobol")
-_TOP = ("scenario", "controllers", "seeds", "set", "grid", "sample", "requirements")
+_TOP = ("scenario", "controllers", "seeds", "set", "grid", "sample", "requirements", "requirement_period")
 #: grids with at most this many points are checked point by point (combinations of values)
 MAX_CHECKED_POINTS = 10_000
 
@@ -86,6 +86,8 @@ class SweepSpec:
     requirements: dict | None = None
     #: the points as a list (a ParameterValueDistribution file's combinations), instead of grid x sample
     listed: tuple | None = None
+    #: requirements on every sample of the trace (0) or on a grid this many seconds apart
+    requirement_period: float = 0.0
     #: after each collision, run UN R157's careful driver on the same run too and report
     #: ``collision_preventable`` (``ego sweep --preventable``; a second run per collision)
     preventable: bool = False
@@ -311,6 +313,7 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
         from ego.requirements import from_table
 
         requirements = from_table(data["requirements"], source)
+    period = spec_period(data, bad)
     spec = SweepSpec(
         scenario,
         tuple(controllers),
@@ -320,6 +323,7 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
         sample,
         source,
         requirements,
+        requirement_period=period,
     )
     total = spec.count()
     if total > MAX_RUNS:
@@ -343,6 +347,16 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
     if requirements:
         check_requirements(first, requirements, bad)
     return spec
+
+
+def spec_period(data: dict, bad) -> float:
+    """A spec's ``requirement_period`` (s; default 0: every sample of the trace)."""
+    from ego.requirements import RequirementError, check_period
+
+    try:
+        return check_period(data.get("requirement_period", 0.0), "requirement_period")
+    except RequirementError as exc:
+        raise bad(str(exc).removeprefix("bad ")) from None
 
 
 def check_requirements(first: Run, requirements: dict, bad) -> None:

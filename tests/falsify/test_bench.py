@@ -34,11 +34,12 @@ def test_bench_runs_a_tiny_budget_resumes_and_plots(tmp_path):
         sys.path.remove(str(ROOT / "benchmarks"))
     names = bench.requirements()
     assert len(names) >= 2
-    args = ["--reps", "1", "--budget", "3", "--optimizers", "cma", "--jobs", "2", "--cache", str(tmp_path / "c")]
+    args = ["--repetitions", "1", "--budget", "3", "--optimizers", "cma", "--jobs", "2", "--cache", str(tmp_path / "c")]
     figures = main(args + ["--plot", str(tmp_path / "conv.png")])
     assert set(figures) == {(n, o) for n in names for o in ("cma", "lhs")}
     for fig in figures.values():
         assert len(fig["runs"]) == 1 and all(r is None or 1 <= r <= 3 for r in fig["runs"])
+        assert fig["rate"] == (fig["runs"][0] is not None)  # the falsification rate at the budget
     assert (tmp_path / "conv.png").stat().st_size > 0
     folders = sorted((tmp_path / "c").glob("*/*"))
     assert [f.name for f in folders] == [f"{o}-seed0-budget3-batch2" for o in ("cma", "lhs")]
