@@ -111,7 +111,7 @@ def scenario(
 ) -> str:
     return (
         HEAD.format(comment=comment, name=name, desc=desc)
-        + f"  <ParameterDeclarations>\n{params}  </ParameterDeclarations>\n"
+        + f"  <ParameterDeclarations>\n{params}{EVADE}  </ParameterDeclarations>\n"
         + f'  <CatalogLocations/>\n  <RoadNetwork><LogicFile filepath="{road}"/></RoadNetwork>\n'
         + f"  <Entities>\n{entities}  </Entities>\n"
         + f"  <Storyboard>\n    <Init><Actions>\n{inits}    </Actions></Init>\n{stories}  </Storyboard>\n</OpenSCENARIO>\n"
@@ -126,7 +126,8 @@ def variation(name: str, comment: str, dists: dict[str, tuple[float, float, floa
     )
     return (
         f'<?xml version="1.0" encoding="UTF-8"?>\n<!-- {comment}\n'
-        f"       ego sweep scenarios/alks/{name}_variation.xosc -c pid --sample 8 --seed 1 --out runs/{name} -->\n"
+        f"       ego sweep scenarios/alks/{name}_variation.xosc -c pid  (a subsample: sample N, seed S options)\n"
+        "       (XML comments cannot hold two dashes, docs/openscenario.md has the full command) -->\n"
         "<OpenSCENARIO>\n"
         f'  <FileHeader revMajor="1" revMinor="2" date="2026-11-29T00:00:00" description="{name} variation" author="ego"/>\n'
         f'  <ParameterValueDistribution>\n    <ScenarioFile filepath="{name}.xosc"/>\n'
@@ -143,6 +144,12 @@ GAP = param(
     "TimeGap", "1.6", "1.0", "3.0", "R157 5.2.3.3: minimum following time gap 1.0 s (7.2 km/h) - 1.6 s (60 km/h)"
 )
 DURATION = param("duration", "20")
+#: R157's original series keeps the vehicle in its lane (5.2.1; lane changes came with the 2022
+#: amendment): ego's evasive lane change is off, it brakes in lane (`--set evade=true` allows it)
+EVADE = (
+    "    <!-- R157 5.2.1: the ALKS keeps its lane; ego's evasive lane change off -->\n"
+    '    <ParameterDeclaration name="evade" parameterType="boolean" value="false"/>\n'
+)
 
 
 def lead_brake() -> tuple[str, str, dict]:
