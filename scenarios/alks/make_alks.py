@@ -12,6 +12,7 @@ avoidable when TTC at lane intrusion (0.3 m over the marking) > v_rel / (2 * 6 m
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
@@ -302,39 +303,40 @@ def blocking() -> tuple[str, str, dict]:
     )
 
 
-def lane_keeping() -> tuple[str, str, dict]:
+def lane_keeping(side: str, radius: int) -> tuple[str, str, dict]:
+    net = f"highway_{side}_{radius}"
     params = EGO_SPEED + GAP + param("duration", "60")
     inits = init("Ego", "motorway", "-2", "250", EGO_V) + init(
         "Lead", "motorway", "-2", "${250 + 4.5 + $TimeGap * $EgoSpeed_kph / 3.6 + 10}", EGO_V
     )
     comment = (
-        "UN R157 Annex 5 4.1 (lane keeping): the ego drives the middle lane of sumo_nets/highway_left_250\n"
-        "     (350 m straight, a left half circle of R = 250 m, straight) behind a passenger car lead (4.1.2 (b))\n"
-        "     and must not leave its lane. 60 s, not 4.1.2 (a)'s 5 minutes: the road ends."
+        f"UN R157 Annex 5 4.1 (lane keeping): the ego drives the middle lane of sumo_nets/{net}\n"
+        f"     (350 m straight, then a {side} arc of R = {radius} m) behind a passenger car lead (4.1.2 (b))\n"
+        "     and must not leave its lane (5.2.1). 60 s, not 4.1.2 (a)'s 5 minutes: the road ends."
     )
-    return (
-        scenario(
-            "alks_4_1_lane_keeping",
-            comment,
-            "R157 4.1 lane keeping on R 250 m",
-            params,
-            "../../sumo_nets/highway_left_250/highway_left_250.net.xml",
-            car("Ego", 7) + car("Lead"),
-            inits,
-            "",
-        ),
+    name = f"alks_4_1_lane_keeping_{side}_{radius}"
+    text = scenario(
+        name,
         comment,
-        {"EgoSpeed_kph": (30, 60, 10), "TimeGap": (1.0, 2.0, 0.5)},
+        f"R157 4.1 lane keeping, {side} R {radius} m",
+        params,
+        f"../../sumo_nets/{net}/{net}.net.xml",
+        car("Ego", 7) + car("Lead"),
+        inits,
+        "",
     )
+    return text, comment, {"EgoSpeed_kph": (30, 60, 10), "TimeGap": (1.0, 2.0, 0.5)}
 
 
-MAKERS = {
+MAKERS: dict[str, Callable[[], tuple[str, str, dict]]] = {
     "alks_4_3_lead_brake": lead_brake,
     "alks_4_4_cut_in": cut_in,
     "alks_4_5_cut_out": cut_out,
     "alks_4_2_blocking": blocking,
-    "alks_4_1_lane_keeping": lane_keeping,
 }
+for _side in ("left", "right"):
+    for _radius in (250, 1000):
+        MAKERS[f"alks_4_1_lane_keeping_{_side}_{_radius}"] = lambda s=_side, r=_radius: lane_keeping(s, r)
 
 
 def main() -> None:
