@@ -307,7 +307,7 @@ def lane_keeping(side: str, radius: int) -> tuple[str, str, dict]:
     net = f"highway_{side}_{radius}"
     params = EGO_SPEED + GAP + param("duration", "60")
     inits = init("Ego", "motorway", "-2", "250", EGO_V) + init(
-        "Lead", "motorway", "-2", "${250 + 4.5 + $TimeGap * $EgoSpeed_kph / 3.6 + 10}", EGO_V
+        "Lead", "motorway", "-2", "${250 + 4.5 + $TimeGap * $EgoSpeed_kph / 3.6}", EGO_V
     )
     comment = (
         f"UN R157 Annex 5 4.1 (lane keeping): the ego drives the middle lane of sumo_nets/{net}\n"
