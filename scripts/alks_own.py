@@ -6,7 +6,7 @@ error| and max lane departure (the table in docs/openscenario.md).
     python scripts/alks_own.py --controllers pid --files alks_4_4_cut_in
 
 Each run is ``ego run scenarios/alks/FILE.xosc -c CONTROLLER`` (seed 0, the file's defaults,
-real SUMO); min front TTC is over the run (inf when never closing); the lateral error is the
+real SUMO); min front TTC is over the run (inf when never closing or above 100 s); the lateral error is the
 trace's ``e_lat`` (offset from the lane centre); lane departure is how far a front tyre's outer
 edge went over the lane's marking (R157 5.2.1), 0 when it never did.
 """
@@ -42,7 +42,7 @@ def measure(path: Path, controller: str) -> dict:
         "status": result.status,
         "collision": bool(m.get("collision")),
         "gap": m.get("min_gap_front"),
-        "ttc": math.inf if ttc is None or ttc > 1e3 else float(ttc),
+        "ttc": math.inf if ttc is None or ttc > 100 else float(ttc),
         "e_lat": float(np.max(np.abs(e_lat))),
         "departure": float(m.get("max_lane_departure") or 0.0),
     }
