@@ -329,11 +329,38 @@ def lane_keeping(side: str, radius: int) -> tuple[str, str, dict]:
     return text, comment, {"EgoSpeed_kph": (30, 60, 10), "TimeGap": (1.0, 2.0, 0.5)}
 
 
+def side_vehicle() -> tuple[str, str, dict]:
+    net = "highway_left_250"
+    params = (
+        EGO_SPEED
+        + param("SideOffset", "-0.5", "-0.8", "0", "the side car's offset from its lane's centre, towards the ego (m)")
+        + param("duration", "60")
+    )
+    inits = init("Ego", "motorway", "-2", "250", EGO_V) + init("Side", "motorway", "-1", "250", EGO_V, "$SideOffset")
+    comment = (
+        f"UN R157 Annex 5 4.1 (lane keeping) with 4.1.2 (d), another vehicle driving close beside in the\n"
+        f"     adjacent lane: a car in the left lane of sumo_nets/{net}, level with the ego, SideOffset from its\n"
+        "     lane's centre towards the ego, through the R = 250 m arc; the ego must keep its lane (5.2.1)."
+    )
+    text = scenario(
+        "alks_4_1_side_vehicle",
+        comment,
+        "R157 4.1 side vehicle, left R 250 m",
+        params,
+        f"../../sumo_nets/{net}/{net}.net.xml",
+        car("Ego", 7) + car("Side"),
+        inits,
+        "",
+    )
+    return text, comment, {"EgoSpeed_kph": (30, 60, 10), "SideOffset": (-0.8, 0.0, 0.2)}
+
+
 MAKERS: dict[str, Callable[[], tuple[str, str, dict]]] = {
     "alks_4_3_lead_brake": lead_brake,
     "alks_4_4_cut_in": cut_in,
     "alks_4_5_cut_out": cut_out,
     "alks_4_2_blocking": blocking,
+    "alks_4_1_side_vehicle": side_vehicle,
 }
 for _side in ("left", "right"):
     for _radius in (250, 1000):
