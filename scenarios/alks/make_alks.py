@@ -92,13 +92,13 @@ def at_time(t: str) -> str:
     return f'<Condition name="At" delay="0" conditionEdge="none"><ByValueCondition><SimulationTimeCondition value="{t}" rule="greaterOrEqual"/></ByValueCondition></Condition>'
 
 
-def story(actor: str, actions: list[str], condition: str) -> str:
+def story(actor: str, actions: list[str], condition: str, tag: str = "") -> str:
     acts = "".join(f'<Action name="A{i}">{a}</Action>' for i, a in enumerate(actions))
     return (
-        f'    <Story name="{actor}Story"><Act name="{actor}Act">\n'
-        f'      <ManeuverGroup name="{actor}Group" maximumExecutionCount="1">'
+        f'    <Story name="{actor}{tag}Story"><Act name="{actor}{tag}Act">\n'
+        f'      <ManeuverGroup name="{actor}{tag}Group" maximumExecutionCount="1">'
         f'<Actors selectTriggeringEntities="false"><EntityRef entityRef="{actor}"/></Actors>\n'
-        f'        <Maneuver name="{actor}Maneuver"><Event name="{actor}Event" priority="overwrite" maximumExecutionCount="1">\n'
+        f'        <Maneuver name="{actor}{tag}Maneuver"><Event name="{actor}{tag}Event" priority="overwrite" maximumExecutionCount="1">\n'
         f"          {acts}\n"
         f"          <StartTrigger><ConditionGroup>{condition}</ConditionGroup></StartTrigger>\n"
         "        </Event></Maneuver>\n      </ManeuverGroup>\n"
@@ -355,12 +355,75 @@ def side_vehicle() -> tuple[str, str, dict]:
     return text, comment, {"EgoSpeed_kph": (30, 60, 10), "SideOffset": (-0.8, 0.0, 0.2)}
 
 
+def lane_offset(value: str) -> str:
+    return (
+        '<PrivateAction><LateralAction><LaneOffsetAction continuous="false">'
+        '<LaneOffsetActionDynamics maxLateralAcc="$SwerveLatAcc" dynamicsShape="sinusoidal"/>'
+        f'<LaneOffsetTarget><AbsoluteTargetLaneOffset value="{value}"/></LaneOffsetTarget>'
+        "</LaneOffsetAction></LateralAction></PrivateAction>"
+    )
+
+
+def ended(event: str) -> str:
+    return (
+        '<Condition name="After" delay="0" conditionEdge="none"><ByValueCondition>'
+        f'<StoryboardElementStateCondition storyboardElementType="event" storyboardElementRef="{event}" state="endTransition"/>'
+        "</ByValueCondition></Condition>"
+    )
+
+
+def swerving_lead() -> tuple[str, str, dict]:
+    net = "highway_left_250"
+    params = (
+        EGO_SPEED
+        + GAP
+        + param(
+            "SwerveAmplitude",
+            "1.0",
+            "0",
+            "1.5",
+            "how far the lead swerves each way from its lane's centre (m; ego's choice)",
+        )
+        + param("SwerveLatAcc", "0.5", "0.1", "2", "the swerve's peak lateral acceleration (m/s^2; ego's choice)")
+        + param("duration", "60")
+    )
+    inits = init("Ego", "motorway", "-2", "250", EGO_V) + init(
+        "Lead", "motorway", "-2", "${250 + 4.5 + $TimeGap * $EgoSpeed_kph / 3.6}", EGO_V
+    )
+    stories = (
+        story("Lead", [lane_offset("$SwerveAmplitude")], at_time("5"), "1")
+        + story("Lead", [lane_offset("${-$SwerveAmplitude}")], ended("Lead1Event"), "2")
+        + story("Lead", [lane_offset("0")], ended("Lead2Event"), "3")
+    )
+    comment = (
+        "UN R157 Annex 5 4.1 (lane keeping) with 4.1.2 (c), a lead vehicle swerving in its lane: the lead,\n"
+        f"     at the 5.2.3.3 gap, swerves SwerveAmplitude left, then right, then back to its centre\n"
+        f"     (sinusoidal lane offsets) on sumo_nets/{net} (R = 250 m arc); the ego must keep its lane."
+    )
+    text = scenario(
+        "alks_4_1_swerving_lead",
+        comment,
+        "R157 4.1 swerving lead, left R 250 m",
+        params,
+        f"../../sumo_nets/{net}/{net}.net.xml",
+        car("Ego", 7) + car("Lead"),
+        inits,
+        stories,
+    )
+    return (
+        text,
+        comment,
+        {"EgoSpeed_kph": (30, 60, 10), "SwerveAmplitude": (0.5, 1.5, 0.5), "SwerveLatAcc": (0.5, 1.5, 0.5)},
+    )
+
+
 MAKERS: dict[str, Callable[[], tuple[str, str, dict]]] = {
     "alks_4_3_lead_brake": lead_brake,
     "alks_4_4_cut_in": cut_in,
     "alks_4_5_cut_out": cut_out,
     "alks_4_2_blocking": blocking,
     "alks_4_1_side_vehicle": side_vehicle,
+    "alks_4_1_swerving_lead": swerving_lead,
 }
 for _side in ("left", "right"):
     for _radius in (250, 1000):

@@ -32,7 +32,7 @@ def test_the_files_are_make_alks_output():
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     assert {p.stem for p in CONCRETE} == set(mod.MAKERS)
-    assert len(VARIATIONS) == len(CONCRETE) == 9
+    assert len(VARIATIONS) == len(CONCRETE) == 10
     for name, make in mod.MAKERS.items():
         text, comment, dists = make()
         assert (ALKS / f"{name}.xosc").read_text() == text
@@ -47,11 +47,10 @@ def test_concrete_file_runs_in_lane_without_collision(path):
     m = r.metrics
     assert r.status == "completed" and not m["collision"]
     assert (m["max_lane_departure"] or 0.0) == 0.0  # R157 5.2.1: no marking crossed
-    if "side_vehicle" in path.stem:  # 4.1.2 (d): a car close beside through the arc
+    if path.stem.startswith("alks_4_1_"):  # lane keeping: on the lane's centre through the arc
         assert np.abs(r.column("e_lat")).max() < 0.1
-    elif "lane_keeping" in path.stem:  # the ego keeps behind its lead, at the 5.2.3.3 time gap
-        assert m["min_gap_front"] == pytest.approx(1.6 * 60 / 3.6, abs=0.5)
-        assert np.abs(r.column("e_lat")).max() < 0.1
+        if "side_vehicle" not in path.stem:  # behind its lead at the 5.2.3.3 time gap
+            assert m["min_gap_front"] == pytest.approx(1.6 * 60 / 3.6, abs=0.5)
     else:  # evade=false: it answers in its lane, by braking
         assert not m["lane_change_completed"] and m["max_decel"] > 2.0 and m["min_gap_front"] > 0.0
     if path.stem in ("alks_4_3_lead_brake", "alks_4_5_cut_out", "alks_4_2_blocking"):
