@@ -417,6 +417,60 @@ def swerving_lead() -> tuple[str, str, dict]:
     )
 
 
+PTW = (
+    '    <ScenarioObject name="Target">\n'
+    '      <Vehicle name="ptw" vehicleCategory="motorbike">\n'
+    '        <BoundingBox><Center x="0" y="0" z="0.7"/><Dimensions width="0.8" length="2.2" height="1.4"/></BoundingBox>\n'
+    '        <Performance maxSpeed="40" maxAcceleration="3" maxDeceleration="9"/>\n'
+    "        <Axles>\n"
+    '          <FrontAxle maxSteering="0.5" wheelDiameter="0.6" trackWidth="0.1" positionX="1.4" positionZ="0.3"/>\n'
+    '          <RearAxle maxSteering="0" wheelDiameter="0.6" trackWidth="0.1" positionX="0" positionZ="0.3"/>\n'
+    "        </Axles>\n"
+    "      </Vehicle>\n    </ScenarioObject>\n"
+)
+PEDESTRIAN = (
+    '    <ScenarioObject name="Target">\n'
+    '      <Pedestrian name="pedestrian" mass="75" model3d="" pedestrianCategory="pedestrian">\n'
+    '        <BoundingBox><Center x="0" y="0" z="0.9"/><Dimensions width="0.5" length="0.3" height="1.8"/></BoundingBox>\n'
+    "        <Properties/>\n"
+    "      </Pedestrian>\n    </ScenarioObject>\n"
+)
+
+
+def blocking_target(kind: str) -> tuple[str, str, dict]:
+    """4.2 with the regulation's other targets: a PTW or a pedestrian standing in the lane."""
+    what = {"ptw": "a standing PTW (motorbike, 0.8 m x 2.2 m)", "pedestrian": "a pedestrian standing"}[kind]
+    params = (
+        EGO_SPEED
+        + param("TargetDistance", "120", "30", "400", "the target ahead of the ego's start")
+        + param("TargetOffset", "0", "-1.5", "1.5", "Annex 5 4.2: offset from the lane's centre")
+        + DURATION
+    )
+    inits = init("Ego", "0", "-2", "300", EGO_V) + init(
+        "Target", "0", "-2", "${300 + $TargetDistance}", "0", "$TargetOffset"
+    )
+    comment = (
+        f"UN R157 Annex 5 4.2 (a road user blocking the lane): {what} in the ego's lane\n"
+        "     TargetDistance ahead, TargetOffset from the lane's centre; the ego must not hit it."
+    )
+    name = f"alks_4_2_blocking_{kind}"
+    text = scenario(
+        name,
+        comment,
+        f"R157 4.2 blocking {kind}",
+        params,
+        STRAIGHT,
+        car("Ego", 7) + (PTW if kind == "ptw" else PEDESTRIAN),
+        inits,
+        "",
+    )
+    return (
+        text,
+        comment,
+        {"EgoSpeed_kph": (20, 60, 10), "TargetDistance": (60, 180, 40), "TargetOffset": (-1.0, 1.0, 0.5)},
+    )
+
+
 MAKERS: dict[str, Callable[[], tuple[str, str, dict]]] = {
     "alks_4_3_lead_brake": lead_brake,
     "alks_4_4_cut_in": cut_in,
@@ -424,6 +478,8 @@ MAKERS: dict[str, Callable[[], tuple[str, str, dict]]] = {
     "alks_4_2_blocking": blocking,
     "alks_4_1_side_vehicle": side_vehicle,
     "alks_4_1_swerving_lead": swerving_lead,
+    "alks_4_2_blocking_ptw": lambda: blocking_target("ptw"),
+    "alks_4_2_blocking_pedestrian": lambda: blocking_target("pedestrian"),
 }
 for _side in ("left", "right"):
     for _radius in (250, 1000):
