@@ -471,6 +471,34 @@ def blocking_target(kind: str) -> tuple[str, str, dict]:
     )
 
 
+def forward_range() -> tuple[str, str, dict]:
+    params = (
+        EGO_SPEED
+        + param(
+            "sensor_range", "46", "46", "500", "R157 7.1.1: forward detection range at least 46 m (ego's sensor radius)"
+        )
+        + param("TargetDistance", "150", "60", "400", "stationary car ahead of the ego's start")
+        + DURATION
+    )
+    inits = init("Ego", "0", "-2", "300", EGO_V) + init("Target", "0", "-2", "${300 + $TargetDistance}", "0")
+    comment = (
+        "UN R157 Annex 5 4.6 (forward detection range): ego's surround sensor reaches only\n"
+        "     sensor_range (R157 7.1.1's minimum, 46 m); a standing car TargetDistance ahead in its lane\n"
+        "     comes into range at 46 m and the ego must still stop before it."
+    )
+    text = scenario(
+        "alks_4_6_forward_range",
+        comment,
+        "R157 4.6 forward detection range",
+        params,
+        STRAIGHT,
+        car("Ego", 7) + car("Target"),
+        inits,
+        "",
+    )
+    return text, comment, {"EgoSpeed_kph": (20, 60, 10), "sensor_range": (46, 106, 20)}
+
+
 MAKERS: dict[str, Callable[[], tuple[str, str, dict]]] = {
     "alks_4_3_lead_brake": lead_brake,
     "alks_4_4_cut_in": cut_in,
@@ -480,6 +508,7 @@ MAKERS: dict[str, Callable[[], tuple[str, str, dict]]] = {
     "alks_4_1_swerving_lead": swerving_lead,
     "alks_4_2_blocking_ptw": lambda: blocking_target("ptw"),
     "alks_4_2_blocking_pedestrian": lambda: blocking_target("pedestrian"),
+    "alks_4_6_forward_range": forward_range,
 }
 for _side in ("left", "right"):
     for _radius in (250, 1000):

@@ -32,7 +32,7 @@ def test_the_files_are_make_alks_output():
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     assert {p.stem for p in CONCRETE} == set(mod.MAKERS)
-    assert len(VARIATIONS) == len(CONCRETE) == 12
+    assert len(VARIATIONS) == len(CONCRETE) == 13
     for name, make in mod.MAKERS.items():
         text, comment, dists = make()
         assert (ALKS / f"{name}.xosc").read_text() == text
@@ -53,7 +53,7 @@ def test_concrete_file_runs_in_lane_without_collision(path):
             assert m["min_gap_front"] == pytest.approx(1.6 * 60 / 3.6, abs=0.5)
     else:  # evade=false: it answers in its lane, by braking
         assert not m["lane_change_completed"] and m["max_decel"] > 2.0 and m["min_gap_front"] > 0.0
-    if path.stem.startswith(("alks_4_2_", "alks_4_3_", "alks_4_5_")):
+    if path.stem.startswith(("alks_4_2_", "alks_4_3_", "alks_4_5_", "alks_4_6_")):
         assert m["final_speed"] == pytest.approx(0.0, abs=0.05)  # stopped behind the standing target
 
 
