@@ -107,7 +107,12 @@ def test_controller_policy_gives_the_controllers_metrics_at_any_policy_frequency
     env.close()  # libsumo: one simulation per process
     reference = run(RunSpec(scenario, controller, 2, {**config, **first["randomized"]})).metrics
     for key, value in reference.items():
-        if key in ("wall_time", "controller", "requirements", "first_violation"):  # ego run evaluates requirements; an env does not
+        if key in (
+            "wall_time",
+            "controller",
+            "requirements",
+            "first_violation",
+        ):  # ego run evaluates requirements; an env does not
             continue
         if isinstance(value, float):
             assert info["metrics"][key] == pytest.approx(value, rel=1e-9, abs=1e-9), key
