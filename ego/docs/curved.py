@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ego.docs.common import KMH, TRACKING, Row, Table, sim
+from ego.docs.common import KMH, ROOT, TRACKING, Row, Table, sim
 
 PAGE = "curved-roads"
 #: s after the ego's centre of gravity enters a curve that the entry transient is over
@@ -71,11 +71,29 @@ def lane_keeping_overrides(road: str, speed: float, duration: float) -> dict:
     }
 
 
+def _road_design():
+    """The roads' design, ``sumo_nets/motorway_arcs.py`` of the checkout, loaded by its path:
+    the checkout's root is on no worker's ``sys.path`` (a pool worker of the page's runs, CI
+    without ``PYTHONPATH``)."""
+    import importlib.util
+    import sys
+
+    name = "ego_docs_motorway_arcs"
+    module = sys.modules.get(name)
+    if module is None:
+        spec = importlib.util.spec_from_file_location(name, ROOT / "sumo_nets" / "motorway_arcs.py")
+        assert spec is not None and spec.loader is not None
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module
+        spec.loader.exec_module(module)
+    return module
+
+
 def curved_span(road: str) -> tuple[float, float] | None:
     """(start, end) m along the middle lane of ``road``'s curved part (its arc, or the road of
     changing curvature's clothoids and arcs); None for the straight road."""
-    from sumo_nets.motorway_arcs import ARCS, CLOTHOID, LEAD_IN
-
+    arcs = _road_design()
+    ARCS, CLOTHOID, LEAD_IN = arcs.ARCS, arcs.CLOTHOID, arcs.LEAD_IN
     if road == "clothoid":
         return LEAD_IN, LEAD_IN + sum(piece[0] for piece in CLOTHOID)
     if road in ARCS:
