@@ -254,6 +254,7 @@ def test_bad_input_is_rejected_before_anything_runs(tmp_path):
 
 
 @pytest.mark.sumo
+@pytest.mark.long  # tens of seconds; the docs' envelope and platoon tables run the same code
 def test_compare_the_platoon_controllers(tmp_path):
     out = tmp_path / "platoon"
     p = subprocess.run(

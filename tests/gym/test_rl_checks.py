@@ -87,8 +87,21 @@ def _step(envs, n_steps: int, sample) -> np.ndarray:
     return obs
 
 
-@pytest.mark.parametrize("kind", ["make_vec", "async", "subproc", "dummy"])
-@pytest.mark.parametrize("env_id", list(ego.gym.ENV_IDS))
+#: every vectoriser on the first env, one (``dummy``: two SUMOs in one process) on every env by
+#: default; the other pairs are minutes together (``-m long`` runs them)
+_VECTOR_CASES = [
+    pytest.param(
+        env_id,
+        kind,
+        id=f"{env_id}-{kind}",
+        marks=() if env_id == next(iter(ego.gym.ENV_IDS)) or kind == "dummy" else pytest.mark.long,
+    )
+    for env_id in ego.gym.ENV_IDS
+    for kind in ("make_vec", "async", "subproc", "dummy")
+]
+
+
+@pytest.mark.parametrize("env_id, kind", _VECTOR_CASES)
 def test_vector_envs_step_1000_steps(env_id, kind):
     maker = _Maker(env_id, {"config": {"multi_instance": kind == "dummy"}})
     if kind == "make_vec":

@@ -176,6 +176,7 @@ def test_the_scenario_classifies_its_collision_by_the_braking_criterion(fuzzy_re
 
 
 @pytest.mark.sumo
+@pytest.mark.long  # tens of seconds; the docs' envelope and platoon tables run the same code
 def test_the_envelope_has_no_divergence_and_no_avoidable_collision(fuzzy_ready):
     cases = list(sample(20, seed=1))
     jobs = [(c, case) for c in CONTROLLERS for case in cases]
