@@ -37,6 +37,7 @@ from ego.lane_frame import LanePolyline
 from ego.openscenario import model as M
 from ego.openscenario.dynamics import Transition
 from ego.openscenario.loader import declared_parameters, load
+from ego.openscenario.registry import action_of
 from ego.openscenario.roads import RoadMap, network_file, refine_shape
 from ego.openscenario.runtime import Storyboard
 from ego.openscenario.xmltree import DOCS, ScenarioFileError
@@ -817,20 +818,12 @@ def _check_ego_actions(model: M.Scenario, ego: str) -> None:
                 for man in g.maneuvers:
                     for ev in man.events:
                         for a in ev.actions:
-                            if isinstance(
-                                a.action,
-                                (
-                                    M.TeleportAction,
-                                    M.FollowTrajectoryAction,
-                                    M.LongitudinalDistanceAction,
-                                    M.SynchronizeAction,
-                                    M.SpeedProfileAction,
-                                ),
-                            ):
+                            kind = action_of(a.action)
+                            if not kind.on_ego:
                                 raise ScenarioFileError(
                                     model.path,
                                     a.action.line,
-                                    f"<{type(a.action).__name__}> on the ego ({ego}) is not "
+                                    f"<{kind.tag}> on the ego ({ego}) is not "
                                     f"supported by ego: the ego moves by its own model (see "
                                     f"{DOCS})",
                                 )
