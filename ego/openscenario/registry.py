@@ -24,8 +24,11 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar
 
 if TYPE_CHECKING:
-    from ego.openscenario.runtime import ActionRun, Storyboard
     from ego.openscenario.xmltree import Node
+
+#: the runtime's ActionRun and Storyboard (ego.openscenario.runtime imports this module)
+ActionRun = Any
+Storyboard = Any
 
 #: the sections of the subset table, in order
 SECTIONS = ("file", "storyboard", "actions", "global", "conditions", "other")
