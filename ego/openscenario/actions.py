@@ -149,34 +149,28 @@ class Speed(ActionKind):
             run.finished = True
 
 
-class _Lateral(ActionKind):
-    """What the lane change and the lane offset share: a lateral profile, stepped."""
-
-    within, domains, on_ego, releases = ("LateralAction",), ("lat",), True, True
-
-    def target(self, run: ActionRun) -> tuple[float, float, str]:
-        """(target d, duration, shape) of the move from where the actor is."""
-        raise NotImplementedError
-
-    def start(self, run: ActionRun, t: float) -> None:
-        drv, me = run.board.driver, run.board.states[run.actor]
-        target, T, shape = self.target(run)
-        start = drv.ego_references()[1] if run.is_ego else me.d_front
-        run.profile = Transition(t, start, target, T, shape)
-        if run.is_ego:
-            drv.ego_lateral(run.profile)
-            run.finished = True
-
-    def step(self, run: ActionRun, t: float) -> None:
-        drv, p = run.board.driver, run.profile
-        drv.lateral(run.actor, p.value(t + run.board.h), p.peak_rate)
-        if p.done(t + run.board.h) and not getattr(run.action, "continuous", False):
-            run.finished = True
-            drv.release(run.actor)
+def _lateral_start(run: ActionRun, t: float, target: float, T: float, shape: str) -> None:
+    """Start a lateral profile (lane change, lane offset) from where the actor is to ``target``."""
+    drv, me = run.board.driver, run.board.states[run.actor]
+    start = drv.ego_references()[1] if run.is_ego else me.d_front
+    run.profile = Transition(t, start, target, T, shape)
+    if run.is_ego:
+        drv.ego_lateral(run.profile)
+        run.finished = True
 
 
-class LaneChange(_Lateral):
-    tag, model = "LaneChangeAction", M.LaneChangeAction
+def _lateral_step(run: ActionRun, t: float) -> None:
+    """Move the actor along its lateral profile for [t, t + step] (SUMO's sublane model)."""
+    drv, p = run.board.driver, run.profile
+    drv.lateral(run.actor, p.value(t + run.board.h), p.peak_rate)
+    if p.done(t + run.board.h) and not getattr(run.action, "continuous", False):
+        run.finished = True
+        drv.release(run.actor)
+
+
+class LaneChange(ActionKind):
+    tag, within, model = "LaneChangeAction", ("LateralAction",), M.LaneChangeAction
+    domains, on_ego, releases = ("lat",), True, True
     contains = ("LaneChangeActionDynamics", "LaneChangeTarget")
     parts = {
         "LaneChangeActionDynamics": (),
@@ -202,7 +196,7 @@ class LaneChange(_Lateral):
             return M.LaneChangeAction(dyn, b.int_(target, "value"), None, 0, offset, node.line)
         return M.LaneChangeAction(dyn, None, b.entity_ref(target), b.int_(target, "value"), offset, node.line)
 
-    def target(self, run: ActionRun) -> tuple[float, float, str]:
+    def start(self, run: ActionRun, t: float) -> None:
         a, b = run.action, run.board
         drv, me = b.driver, b.states[run.actor]
         if a.target_lane is not None:
@@ -212,11 +206,17 @@ class LaneChange(_Lateral):
         target = centre + a.target_offset
         here = drv.ego_references()[1] if run.is_ego else me.d_front
         dyn = a.dynamics
-        return target, lateral_duration(dyn.shape, dyn.dimension, dyn.value, me.speed, target - here), dyn.shape
+        _lateral_start(
+            run, t, target, lateral_duration(dyn.shape, dyn.dimension, dyn.value, me.speed, target - here), dyn.shape
+        )
+
+    def step(self, run: ActionRun, t: float) -> None:
+        _lateral_step(run, t)
 
 
-class LaneOffset(_Lateral):
-    tag, model = "LaneOffsetAction", M.LaneOffsetAction
+class LaneOffset(ActionKind):
+    tag, within, model = "LaneOffsetAction", ("LateralAction",), M.LaneOffsetAction
+    domains, on_ego, releases = ("lat",), True, True
     contains = ("LaneOffsetActionDynamics", "LaneOffsetTarget")
     parts = {
         "LaneOffsetActionDynamics": (),
@@ -246,13 +246,16 @@ class LaneOffset(_Lateral):
             node.line,
         )
 
-    def target(self, run: ActionRun) -> tuple[float, float, str]:
+    def start(self, run: ActionRun, t: float) -> None:
         a, b = run.action, run.board
         drv, me = b.driver, b.states[run.actor]
         base = b.states[a.relative_to].d if a.relative_to is not None else drv.lane_centre_of(me.d)
         target = base + a.value
         here = drv.ego_references()[1] if run.is_ego else me.d_front
-        return target, offset_duration(a.shape, a.max_lateral_acc, target - here), a.shape
+        _lateral_start(run, t, target, offset_duration(a.shape, a.max_lateral_acc, target - here), a.shape)
+
+    def step(self, run: ActionRun, t: float) -> None:
+        _lateral_step(run, t)
 
 
 class LongitudinalDistance(ActionKind):
@@ -577,23 +580,45 @@ class FollowTrajectory(ActionKind):
             run.board.driver.release(run.actor)
 
 
-class _Global(ActionKind):
-    within, domains, on_ego, is_global, section = ("GlobalAction",), (), True, True, "global"
+#: a ParameterAction's and a VariableAction's own elements
+VALUE_PARTS: dict[str, tuple[str, ...]] = {
+    "SetAction": (),
+    "ModifyAction": ("Rule",),
+    "Rule": ("AddValue", "MultiplyByValue"),
+    "AddValue": (),
+    "MultiplyByValue": (),
+}
 
 
-class Parameter(_Global):
-    """A ParameterAction (a VariableAction: :class:`Variable`): set, add to or multiply a
-    declared value when its event starts."""
+def _value_action(b: Any, node: Node, kind: str) -> M.ParameterAction:
+    """A ParameterAction or VariableAction: set, add to or multiply a declared value."""
+    name = b.str_(node, "parameterRef" if kind == "parameter" else "variableRef")
+    if kind == "parameter":
+        declared = {k: (type(v), v) for k, v in b.values.items()}
+    else:
+        declared = {k: (type(p.value), p.value) for k, p in b.variables.items()}
+    if name not in declared:
+        raise b.error(node, f"{kind} {name!r} is not declared (declared: {', '.join(declared) or 'none'})")
+    initial = declared[name][1]
+    op_node = b.one(node)
+    if op_node.tag == "SetAction":
+        value: object = b.str_(op_node, "value")
+        if isinstance(initial, (int, float)) and not isinstance(initial, bool):
+            value = b.num(op_node, "value")
+        return M.ParameterAction(kind, name, "set", value, initial, node.line)
+    rule = b.one(b.one(op_node, "Rule"))
+    if isinstance(initial, bool) or not isinstance(initial, (int, float)):
+        raise b.error(rule, f"<{rule.tag}> needs a numeric {kind} ({name!r} is {initial!r})")
+    op = "add" if rule.tag == "AddValue" else "multiply"
+    return M.ParameterAction(kind, name, op, b.num(rule, "value"), initial, node.line)
 
-    tag, model, kind = "ParameterAction", M.ParameterAction, "parameter"
-    contains = ("SetAction", "ModifyAction")
-    parts = {
-        "SetAction": (),
-        "ModifyAction": ("Rule",),
-        "Rule": ("AddValue", "MultiplyByValue"),
-        "AddValue": (),
-        "MultiplyByValue": (),
-    }
+
+class Parameter(ActionKind):
+    """A GlobalAction's ParameterAction: done once when its event starts, whoever the actors."""
+
+    tag, within, model = "ParameterAction", ("GlobalAction",), M.ParameterAction
+    domains, on_ego, is_global, section = (), True, True, "global"
+    contains, parts = ("SetAction", "ModifyAction"), VALUE_PARTS
     label = "`GlobalAction`/`ParameterAction`, `VariableAction` (1.2), `VariableDeclarations`, `VariableCondition`"
     also = ("VariableAction", "VariableDeclarations", "VariableCondition")
     note = (
@@ -606,37 +631,30 @@ class Parameter(_Global):
     )
 
     def build(self, b: Any, node: Node) -> M.ParameterAction:
-        kind = self.kind
-        name = b.str_(node, "parameterRef" if kind == "parameter" else "variableRef")
-        if kind == "parameter":
-            declared = {k: (type(v), v) for k, v in b.values.items()}
-        else:
-            declared = {k: (type(p.value), p.value) for k, p in b.variables.items()}
-        if name not in declared:
-            raise b.error(node, f"{kind} {name!r} is not declared (declared: {', '.join(declared) or 'none'})")
-        initial = declared[name][1]
-        op_node = b.one(node)
-        if op_node.tag == "SetAction":
-            value: object = b.str_(op_node, "value")
-            if isinstance(initial, (int, float)) and not isinstance(initial, bool):
-                value = b.num(op_node, "value")
-            return M.ParameterAction(kind, name, "set", value, initial, node.line)
-        rule = b.one(b.one(op_node, "Rule"))
-        if isinstance(initial, bool) or not isinstance(initial, (int, float)):
-            raise b.error(rule, f"<{rule.tag}> needs a numeric {kind} ({name!r} is {initial!r})")
-        op = "add" if rule.tag == "AddValue" else "multiply"
-        return M.ParameterAction(kind, name, op, b.num(rule, "value"), initial, node.line)
+        return _value_action(b, node, "parameter")
 
     def apply(self, board: Storyboard, action: M.ParameterAction) -> None:
         board.assign(action)
 
 
-class Variable(Parameter):
-    tag, kind, note = "VariableAction", "variable", ""
+class Variable(ActionKind):
+    """A GlobalAction's VariableAction (1.2): as a ParameterAction, on a declared variable
+    (documented in :class:`Parameter`'s row)."""
+
+    tag, within, model = "VariableAction", ("GlobalAction",), M.ParameterAction
+    domains, on_ego, is_global, section = (), True, True, "global"
+    contains, parts = ("SetAction", "ModifyAction"), VALUE_PARTS
+
+    def build(self, b: Any, node: Node) -> M.ParameterAction:
+        return _value_action(b, node, "variable")
+
+    def apply(self, board: Storyboard, action: M.ParameterAction) -> None:
+        board.assign(action)
 
 
-class Environment(_Global):
-    tag, model, in_init = "EnvironmentAction", M.EnvironmentAction, "ignored"
+class Environment(ActionKind):
+    tag, within, model, in_init = "EnvironmentAction", ("GlobalAction",), M.EnvironmentAction, "ignored"
+    domains, on_ego, is_global, section = (), True, True, "global"
     contains = ("Environment",)
     parts = {
         "Environment": ("ParameterDeclarations", "TimeOfDay", "Weather", "RoadCondition"),
