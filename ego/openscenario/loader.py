@@ -18,11 +18,12 @@ from typing import Any
 
 from ego.checks import resolved
 from ego.openscenario import actions as _actions  # noqa: F401 - registers the actions
+from ego.openscenario import conditions as _condition_kinds  # noqa: F401 - registers the conditions
 from ego.openscenario import model as M
 from ego.openscenario import structure as _structure  # noqa: F401 - declares the structural elements
 from ego.openscenario.dynamics import DYNAMICS_LIMITS, MAX_SECONDS
 from ego.openscenario.expressions import ExpressionError, resolve
-from ego.openscenario.registry import ACTIONS, action_of, allowed, init_kinds
+from ego.openscenario.registry import ACTIONS, CONDITIONS, action_of, allowed, init_kinds
 from ego.openscenario.xmltree import DOCS, Node, ScenarioFileError, parse_file
 
 #: the catalog element (in CatalogLocations) each catalog entry kind is looked for in
@@ -648,46 +649,11 @@ class _Builder:
         return self.entity_condition(inner, base)
 
     def value_condition(self, c: Node, base: dict[str, Any]) -> M.Condition:
-        """A ByValueCondition's condition."""
-        if c.tag == "SimulationTimeCondition":
-            return M.Condition(kind=c.tag, rule=self.enum(c, "rule", M.RULES), value=self.num(c, "value"), **base)
-        if c.tag == "VariableCondition":
-            ref = self.str_(c, "variableRef")
-            if ref not in self.variables:
-                raise self.error(
-                    c, f"variable {ref!r} is not declared (declared: {', '.join(self.variables) or 'none'})"
-                )
-            return M.Condition(
-                kind=c.tag,
-                rule=self.enum(c, "rule", M.RULES),
-                value=self.str_(c, "value"),
-                parameter=ref,
-                parameter_value=self.variables[ref].value,
-                **base,
-            )
-        if c.tag == "ParameterCondition":
-            ref = self.str_(c, "parameterRef")
-            if ref not in self.values:
-                raise self.error(c, f"parameter {ref!r} is not declared (declared: {', '.join(self.values) or 'none'})")
-            return M.Condition(
-                kind=c.tag,
-                rule=self.enum(c, "rule", M.RULES),
-                value=self.str_(c, "value"),
-                parameter=ref,
-                parameter_value=self.values[ref],
-                **base,
-            )
-        return M.Condition(
-            kind=c.tag,
-            element_type=self.enum(c, "storyboardElementType", M.ELEMENT_TYPES),
-            element_ref=self.str_(c, "storyboardElementRef"),
-            state=self.enum(c, "state", M.STATES),
-            ref_line=c.line,
-            **base,
-        )
+        """A ByValueCondition's condition, read by its registered kind."""
+        return CONDITIONS[c.tag].build(self, c, base)
 
     def entity_condition(self, inner: Node, base: dict[str, Any]) -> M.Condition:
-        """A ByEntityCondition: its triggering entities and its condition."""
+        """A ByEntityCondition: its triggering entities and its condition (read by its kind)."""
         te = self.one(inner, "TriggeringEntities")
         refs = tuple(self.entity_ref(e) for e in te.all("EntityRef"))
         if not refs:
@@ -695,96 +661,7 @@ class _Builder:
         base["triggering"] = refs
         base["triggering_rule"] = self.enum(te, "triggeringEntitiesRule", ("any", "all"))
         c = self.one(self.one(inner, "EntityCondition"))
-        tag = c.tag
-        if tag == "ReachPositionCondition":
-            return self.reach(c, base)
-        if tag == "TraveledDistanceCondition":
-            return M.Condition(kind=tag, rule="greaterOrEqual", value=self.num(c, "value", nonneg=True), **base)
-        if tag == "CollisionCondition":
-            target = self.one(c)
-            if target.tag == "EntityRef":
-                return M.Condition(kind=tag, entity=self.entity_ref(target), **base)
-            otype = self.enum(target, "objectType", ("vehicle", "pedestrian", "miscellaneous"))
-            return M.Condition(kind=tag, value=otype, **base)
-        if tag == "StandStillCondition":
-            return M.Condition(
-                kind=tag,
-                rule="greaterOrEqual",
-                value=self.num(c, "duration", nonneg=True, at_most=(MAX_SECONDS, "s: a day")),
-                **base,
-            )
-        rule = self.enum(c, "rule", M.RULES)
-        if tag == "AccelerationCondition":
-            # OpenSCENARIO 1.2's direction; without it the acceleration vector's magnitude
-            direction = "total"
-            if "direction" in c.attrs:
-                direction = self.enum(c, "direction", ("longitudinal", "lateral", "vertical"))
-            if direction == "vertical":
-                raise self.error(
-                    c, f"a vertical <AccelerationCondition> is not supported by ego (its roads are planar; see {DOCS})"
-                )
-            return M.Condition(kind=tag, rule=rule, value=self.num(c, "value"), distance_type=direction, **base)
-        if tag == "SpeedCondition":
-            return M.Condition(kind=tag, rule=rule, value=self.num(c, "value"), **base)
-        if tag == "RelativeSpeedCondition":
-            return M.Condition(kind=tag, rule=rule, value=self.num(c, "value"), entity=self.entity_ref(c), **base)
-        if tag == "TimeHeadwayCondition":
-            return M.Condition(
-                kind=tag,
-                rule=rule,
-                value=self.num(c, "value"),
-                entity=self.entity_ref(c),
-                freespace=self.bool_(c, "freespace"),
-                **base,
-            )
-        if tag == "RelativeDistanceCondition":
-            dtype = self.enum(
-                c, "relativeDistanceType", ("longitudinal", "lateral", "cartesianDistance", "euclidianDistance")
-            )
-            return M.Condition(
-                kind=tag,
-                rule=rule,
-                value=self.num(c, "value"),
-                entity=self.entity_ref(c),
-                freespace=self.bool_(c, "freespace"),
-                distance_type=dtype,
-                **base,
-            )
-        if tag == "TimeToCollisionCondition":
-            target = self.one(self.one(c, "TimeToCollisionConditionTarget"))
-            entity = self.entity_ref(target) if target.tag == "EntityRef" else None
-            pos = self.position_of(target) if target.tag == "Position" else None
-            return M.Condition(
-                kind=tag,
-                rule=rule,
-                value=self.num(c, "value"),
-                entity=entity,
-                position=pos,
-                freespace=self.bool_(c, "freespace"),
-                **base,
-            )
-        if tag == "DistanceCondition":
-            return M.Condition(
-                kind=tag,
-                rule=rule,
-                value=self.num(c, "value"),
-                freespace=self.bool_(c, "freespace"),
-                position=self.position(self.one(c, "Position")),
-                **base,
-            )
-        raise AssertionError(tag)  # every EntityCondition in CHILDREN is handled
-
-    def position_of(self, position_node: Node) -> M.Position:
-        return self.position(position_node)
-
-    def reach(self, c: Node, base: dict[str, Any]) -> M.Condition:
-        return M.Condition(
-            kind=c.tag,
-            rule="lessOrEqual",
-            value=self.num(c, "tolerance", nonneg=True),
-            position=self.position(self.one(c, "Position")),
-            **base,
-        )
+        return CONDITIONS[c.tag].build(self, c, base)
 
 
 def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None) -> M.Scenario:

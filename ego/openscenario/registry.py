@@ -157,26 +157,63 @@ class ActionKind:
         """A global action: what it does when its event starts."""
 
 
-def register(kind: ActionKind) -> ActionKind:
-    """Register an action kind: its element and sub-elements join the allow-list, its model
-    class the runtime dispatch, its note the subset table."""
-    ACTIONS[kind.tag] = kind
-    if kind.model is not None:
-        _BY_MODEL.setdefault(kind.model, kind)
+class ConditionKind:
+    """One OpenSCENARIO condition element (in an EntityCondition or a ByValueCondition):
+    declared, read into a :class:`~ego.openscenario.model.Condition`, evaluated every
+    storyboard step. Subclass it and :func:`register_condition` an instance."""
+
+    tag: ClassVar[str]
+    within: ClassVar[tuple[str, ...]] = ("EntityCondition",)
+    contains: ClassVar[tuple[str, ...]] = ()
+    parts: ClassVar[Mapping[str, tuple[str, ...] | str]] = {}
+    note: ClassVar[str] = ""
+    label: ClassVar[str] = ""
+    also: ClassVar[tuple[str, ...]] = ()
+    section: ClassVar[str] = "conditions"
+
+    def build(self, b: Any, node: Node, base: dict[str, Any]) -> Any:
+        """The model (``base``: name, delay, edge, line and, for an entity condition, the
+        triggering entities), read with the loader's builder ``b``."""
+        raise NotImplementedError
+
+    def holds(self, board: Storyboard, c: Any, e: Any, name: str) -> bool:
+        """An entity condition: whether it holds for the triggering entity ``name`` (state ``e``)."""
+        raise NotImplementedError
+
+    def raw(self, board: Storyboard, c: Any, t: float) -> bool:
+        """A value condition: whether it holds at storyboard time ``t``."""
+        raise NotImplementedError
+
+
+CONDITIONS: dict[str, ConditionKind] = {}  #: element tag -> its kind
+
+
+def _declare_kind(kind: ActionKind | ConditionKind) -> None:
     declare(
-        kind.tag,
-        kind.within,
-        kind.contains,
-        note=kind.note,
-        label=kind.label,
-        also=kind.also,
-        section=kind.section,
+        kind.tag, kind.within, kind.contains, note=kind.note, label=kind.label, also=kind.also, section=kind.section
     )
     for part, holds in kind.parts.items():
         if isinstance(holds, str):
             declare(part, like=holds)
         else:
             declare(part, contains=holds)
+
+
+def register_condition(kind: ConditionKind) -> ConditionKind:
+    """Register a condition kind: its element joins the allow-list, its tag the dispatch of
+    the loader and of the storyboard, its note the subset table."""
+    CONDITIONS[kind.tag] = kind
+    _declare_kind(kind)
+    return kind
+
+
+def register(kind: ActionKind) -> ActionKind:
+    """Register an action kind: its element and sub-elements join the allow-list, its model
+    class the runtime dispatch, its note the subset table."""
+    ACTIONS[kind.tag] = kind
+    if kind.model is not None:
+        _BY_MODEL.setdefault(kind.model, kind)
+    _declare_kind(kind)
     return kind
 
 

@@ -23,7 +23,7 @@ from typing import Protocol
 
 from ego.openscenario import model as M
 from ego.openscenario.dynamics import Transition
-from ego.openscenario.registry import action_of
+from ego.openscenario.registry import CONDITIONS, action_of
 
 INF = math.inf
 EPS = 1e-9
@@ -274,98 +274,15 @@ class Storyboard:
                 yield from group
 
     # -- conditions -------------------------------------------------------------------------
-    def _entity_value(self, c: M.Condition, name: str) -> bool:
-        st = self.states
-        e = st[name]
-        kind = c.kind
-        if kind == "SpeedCondition":
-            return compare(c.rule, e.speed, c.value)  # type: ignore[arg-type]
-        if kind == "RelativeSpeedCondition":
-            return compare(c.rule, e.speed - st[c.entity].speed, c.value)  # type: ignore[index, arg-type]
-        if kind == "TraveledDistanceCondition":
-            return e.traveled >= c.value - EPS  # type: ignore[operator]
-        if kind == "CollisionCondition":
-            others = [c.entity] if c.entity is not None else [n for n in self.kinds if self.kinds[n] == c.value]
-            return any(o != name and boxes_overlap(e, st[o]) for o in others)
-        if kind == "StandStillCondition":
-            return e.still_for >= c.value - EPS  # type: ignore[operator]
-        if kind == "AccelerationCondition":
-            if c.distance_type == "longitudinal":
-                acc = e.accel
-            elif c.distance_type == "lateral":
-                acc = e.lat_accel
-            else:
-                acc = math.hypot(e.accel, e.lat_accel)
-            return compare(c.rule, acc, c.value)  # type: ignore[arg-type]
-        if kind == "ReachPositionCondition":
-            x, y, _ = self.driver.position_xy(c.position, st)  # type: ignore[arg-type]
-            return math.hypot(e.x - x, e.y - y) <= c.value + EPS  # type: ignore[operator]
-        if kind == "DistanceCondition":
-            x, y, _ = self.driver.position_xy(c.position, st)  # type: ignore[arg-type]
-            dist = box_point_distance(e, x, y) if c.freespace else math.hypot(e.x - x, e.y - y)
-            return compare(c.rule, dist, c.value)  # type: ignore[arg-type]
-        if kind == "RelativeDistanceCondition":
-            o = st[c.entity]  # type: ignore[index]
-            ds, dd = abs(o.s - e.s), abs(o.d - e.d)
-            if c.freespace:
-                ds -= 0.5 * (o.length + e.length)
-                dd -= 0.5 * (o.width + e.width)
-            if c.distance_type == "longitudinal":
-                dist = ds
-            elif c.distance_type == "lateral":
-                dist = dd
-            elif c.freespace:
-                dist = math.hypot(max(ds, 0.0), max(dd, 0.0))
-            else:
-                dist = math.hypot(o.x - e.x, o.y - e.y)
-            return compare(c.rule, dist, c.value)  # type: ignore[arg-type]
-        if kind == "TimeHeadwayCondition":
-            o = st[c.entity]  # type: ignore[index]
-            gap = o.s - e.s - (0.5 * (o.length + e.length) if c.freespace else 0.0)
-            thw = gap / e.speed if (o.s > e.s and e.speed > 0.0) else INF
-            return compare(c.rule, thw, c.value)  # type: ignore[arg-type]
-        if kind == "TimeToCollisionCondition":
-            if c.entity is not None:
-                o = st[c.entity]
-                ahead = o.s >= e.s
-                gap = abs(o.s - e.s) - (0.5 * (o.length + e.length) if c.freespace else 0.0)
-                closing = (e.speed - o.speed) if ahead else (o.speed - e.speed)
-            else:
-                x, y, _ = self.driver.position_xy(c.position, st)  # type: ignore[arg-type]
-                ps, _ = self.driver.road_frame(x, y)
-                gap = ps - e.s - (0.5 * e.length if c.freespace else 0.0)
-                closing = e.speed if gap >= 0.0 else -e.speed
-                gap = abs(gap)
-            ttc = gap / closing if closing > 0.0 else INF
-            return compare(c.rule, max(ttc, 0.0), c.value)  # type: ignore[arg-type]
-        raise AssertionError(kind)
-
     def _raw(self, c: M.Condition, t: float) -> bool:
-        kind = c.kind
-        if kind == "SimulationTimeCondition":
-            return compare(c.rule, t, c.value)  # type: ignore[arg-type]
-        if kind in ("ParameterCondition", "VariableCondition"):
-            store = "parameter" if kind == "ParameterCondition" else "variable"
-            value = self.store.get((store, c.parameter), c.parameter_value)
-            if isinstance(value, (int, float)) and not isinstance(value, bool):
-                try:
-                    return compare(c.rule, float(value), float(c.value))  # type: ignore[arg-type]
-                except ValueError:
-                    return False
-            text = str(value).lower() if isinstance(value, bool) else str(value)
-            equal = text == str(c.value)
-            return equal if c.rule == "equalTo" else (not equal if c.rule == "notEqualTo" else False)
-        if kind == "StoryboardElementStateCondition":
-            els = self.by_name.get((c.element_type, c.element_ref), [])
-            want = c.state
-            for el in els:
-                if want.endswith("State"):
-                    if el.state == want[:-5]:
-                        return True
-                elif want in el.transitions:
-                    return True
-            return False
-        results = (self._entity_value(c, name) for name in c.triggering)
+        """Whether condition ``c`` holds at ``t`` (before its edge and delay): a value
+        condition, or an entity condition for any or all of its triggering entities; what
+        each condition means is its kind's (:mod:`ego.openscenario.conditions`)."""
+        kind = CONDITIONS[c.kind]
+        if not c.triggering:
+            return kind.raw(self, c, t)
+        st = self.states
+        results = (kind.holds(self, c, st[name], name) for name in c.triggering)
         return any(results) if c.triggering_rule == "any" else all(results)
 
     def assign(self, a: M.ParameterAction) -> None:

@@ -1,6 +1,6 @@
-"""The structural elements ego reads (file, entities, storyboard, triggers, positions,
-conditions), declared in :mod:`ego.openscenario.registry`; the actions are in
-:mod:`ego.openscenario.actions`. Each ``note`` is the element's row of the subset table in
+"""The structural elements ego reads (file, entities, storyboard, triggers, positions),
+declared in :mod:`ego.openscenario.registry`; the actions are in
+:mod:`ego.openscenario.actions`, the conditions in :mod:`ego.openscenario.conditions`. Each ``note`` is the element's row of the subset table in
 docs/openscenario.md (``python -m ego.docs openscenario-table`` writes it)."""
 
 from __future__ import annotations
@@ -15,27 +15,6 @@ POSITIONS = (
     "RelativeLanePosition",
     "RelativeRoadPosition",
     "RelativeObjectPosition",
-)
-
-#: the conditions of a ByEntityCondition and of a ByValueCondition
-ENTITY_CONDITIONS = (
-    "TimeHeadwayCondition",
-    "TimeToCollisionCondition",
-    "RelativeDistanceCondition",
-    "DistanceCondition",
-    "ReachPositionCondition",
-    "SpeedCondition",
-    "RelativeSpeedCondition",
-    "TraveledDistanceCondition",
-    "StandStillCondition",
-    "AccelerationCondition",
-    "CollisionCondition",
-)
-VALUE_CONDITIONS = (
-    "SimulationTimeCondition",
-    "StoryboardElementStateCondition",
-    "ParameterCondition",
-    "VariableCondition",
 )
 
 # -- the file -------------------------------------------------------------------------------
@@ -278,75 +257,8 @@ declare("ConditionGroup", contains=("Condition",))
 declare("Condition", contains=("ByEntityCondition", "ByValueCondition"))
 declare("ByEntityCondition", contains=("TriggeringEntities", "EntityCondition"))
 declare("TriggeringEntities", contains=("EntityRef",))
-declare("EntityCondition", contains=ENTITY_CONDITIONS)
-declare("ByValueCondition", contains=VALUE_CONDITIONS)
-declare(
-    "SimulationTimeCondition",
-    note=(
-        "a state condition sees a transition one storyboard step after it happened; `storyboardElementRef` is a "
-        "name or a qualified name (1.1: `CutInEvent::CutInAction`, any tail of "
-        "`Story::Act::ManeuverGroup::Maneuver::Event::Action`), of an element of the given "
-        "`storyboardElementType`; an unknown reference is refused with the line of the condition element naming "
-        "it"
-    ),
-    label="`SimulationTimeCondition`, `ParameterCondition`, `StoryboardElementStateCondition`",
-    also=("ParameterCondition", "StoryboardElementStateCondition"),
-    section="conditions",
-)
-declare("StoryboardElementStateCondition")
-declare("ParameterCondition")
-declare("VariableCondition")
-declare(
-    "SpeedCondition",
-    note="speeds as SUMO has them (the ego: its body speed)",
-    label="`SpeedCondition`, `RelativeSpeedCondition`, `TraveledDistanceCondition`",
-    also=("RelativeSpeedCondition", "TraveledDistanceCondition"),
-    section="conditions",
-)
-declare("RelativeSpeedCondition")
-declare("TraveledDistanceCondition")
-declare(
-    "CollisionCondition",
-    contains=("EntityRef", "ByType"),
-    note=(
-        "a triggering entity's box (its bounding box, oriented by its heading) overlaps or touches the "
-        "`EntityRef`'s, or any entity's of the `ByType` object type (vehicle; pedestrian; miscellaneous: a misc "
-        "object). A collision of the ego also ends the run (as any run of ego's: status collision), so a "
-        "condition on the ego sees at most the step it happens in"
-    ),
-    section="conditions",
-)
-declare("ByType")
-declare(
-    "StandStillCondition",
-    note=(
-        "standing still: speed below 1 mm/s, held for `duration` (counted from the first step at which it stood "
-        "at both ends); acceleration over the last storyboard step (0.1 s): `direction` longitudinal (the change "
-        "of speed, signed), lateral (speed times the change of heading, + left), none (1.0, 1.1: the magnitude of "
-        "both); `vertical` is refused (ego's roads are planar)"
-    ),
-    label="`StandStillCondition`, `AccelerationCondition`",
-    also=("AccelerationCondition",),
-    section="conditions",
-)
-declare("AccelerationCondition")
-declare(
-    "TimeHeadwayCondition",
-    note=(
-        "along the ego's start lane (s, d of box centres); freespace subtracts half lengths (longitudinal), half "
-        "widths (lateral), or is the distance to the box (Distance); `alongRoute`/`coordinateSystem` are read as "
-        "road coordinates"
-    ),
-    label="`TimeHeadwayCondition`, `TimeToCollisionCondition`, `RelativeDistanceCondition`, `DistanceCondition`,"
-    " `ReachPositionCondition`",
-    also=("TimeToCollisionCondition", "RelativeDistanceCondition", "DistanceCondition", "ReachPositionCondition"),
-    section="conditions",
-)
-declare("TimeToCollisionCondition", contains=("TimeToCollisionConditionTarget",))
-declare("TimeToCollisionConditionTarget", contains=("Position", "EntityRef"))
-declare("RelativeDistanceCondition")
-declare("DistanceCondition", contains=("Position",))
-declare("ReachPositionCondition", contains=("Position",))
+declare("EntityCondition")  # the conditions: ego/openscenario/conditions.py
+declare("ByValueCondition")
 refuse(
     "every other element (e.g. `EndOfRoadCondition`, `OffroadCondition`, `EntityAction`, `TrafficAction` and the"
     " other `GlobalAction`s, `LateralDistanceAction`, `TrafficSignals`; a `ParameterValueDistribution` runs with"
