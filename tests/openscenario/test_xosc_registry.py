@@ -23,12 +23,14 @@ def block(section: str) -> str:
     return text.split(f"\n## {section}\n")[1].split("\n## ")[0].split("```python\n")[1].split("```")[0]
 
 
-def test_every_action_model_has_one_kind_and_every_kind_is_declared():
+def test_every_action_and_condition_has_one_kind_and_every_kind_is_declared():
     allowed = registry.allowed()
     for tag, kind in registry.ACTIONS.items():
         assert tag in allowed and kind.tag == tag
         assert all(tag in allowed[parent] for parent in kind.within)
         assert all(child in allowed[tag] for child in kind.contains)
+    # every condition ego reads is one registered kind, and nothing else is in the condition slots
+    assert allowed["EntityCondition"] | allowed["ByValueCondition"] == set(registry.CONDITIONS)
     for model in (
         M.SpeedAction,
         M.LaneChangeAction,
