@@ -3,18 +3,21 @@
 Each element is declared with where it may appear (its parent elements) and what it may
 contain; an action is one :class:`ActionKind` (its element, its own sub-elements, how it is
 read, which domains of its actor it drives, whether it may act on the ego or in ``Init``, and
-how it runs: start, step, stop) registered with :func:`register`. From these declarations:
+how it runs: start, step, stop) registered with :func:`register`, a condition one
+:class:`ConditionKind` (read, evaluated) registered with :func:`register_condition`. From
+these declarations:
 
 * :func:`allowed` - the allow-list (element -> the children it may hold) that both
   ``ego run`` (:func:`ego.openscenario.loader.load`) and ``ego list`` check files against;
-* :func:`action_of` - the runtime dispatch from a read action to its kind;
+* :func:`action_of` and :data:`CONDITIONS` - the dispatch of the loader and of the storyboard
+  from an element or a read action to its kind;
 * :func:`table_rows` - the supported-subset table of docs/openscenario.md
   (``python -m ego.docs openscenario-table``), each row's notes written beside the element.
 
-The structural elements (file, entities, storyboard, triggers, positions, conditions) are
-declared in :mod:`ego.openscenario.structure`, the actions in
-:mod:`ego.openscenario.actions`; an element added from outside the package registers the
-same way (docs/architecture.md, "Adding an OpenSCENARIO action").
+The structural elements (file, entities, storyboard, triggers, positions) are declared in
+:mod:`ego.openscenario.structure`, the actions in :mod:`ego.openscenario.actions`, the
+conditions in :mod:`ego.openscenario.conditions`; an element added from outside the package
+registers the same way (docs/architecture.md, "Adding an OpenSCENARIO action").
 """
 
 from __future__ import annotations
