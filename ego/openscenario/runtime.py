@@ -148,10 +148,11 @@ def boxes_overlap(a: EntityState, b: EntityState) -> bool:
 class ConditionState:
     """One condition's edge and delay bookkeeping."""
 
-    __slots__ = ("c", "history", "prev")
+    __slots__ = ("c", "history", "kind", "prev")
 
     def __init__(self, c: M.Condition) -> None:
         self.c = c
+        self.kind = CONDITIONS[c.kind]
         self.prev: bool | None = None
         self.history: deque[tuple[float, bool]] = deque()
 
@@ -274,17 +275,6 @@ class Storyboard:
                 yield from group
 
     # -- conditions -------------------------------------------------------------------------
-    def _raw(self, c: M.Condition, t: float) -> bool:
-        """Whether condition ``c`` holds at ``t`` (before its edge and delay): a value
-        condition, or an entity condition for any or all of its triggering entities; what
-        each condition means is its kind's (:mod:`ego.openscenario.conditions`)."""
-        kind = CONDITIONS[c.kind]
-        if not c.triggering:
-            return kind.raw(self, c, t)
-        st = self.states
-        results = (kind.holds(self, c, st[name], name) for name in c.triggering)
-        return any(results) if c.triggering_rule == "any" else all(results)
-
     def assign(self, a: M.ParameterAction) -> None:
         """Do a parameter or variable action: set, add to or multiply the current value."""
         key = (a.kind, a.name)
@@ -312,9 +302,18 @@ class Storyboard:
             prev[name] = (e.speed, e.yaw)
 
     def _evaluate(self, t: float) -> None:
-        fired = self._fired
+        """Every condition at ``t`` through its edge and delay: a value condition as its kind
+        evaluates it, an entity condition for any or all of its triggering entities (what
+        each condition means is its kind's: :mod:`ego.openscenario.conditions`)."""
+        fired, st = self._fired, self.states
         for key, cs in self.conditions.items():
-            fired[key] = cs.update(t, self._raw(cs.c, t))
+            c, kind = cs.c, cs.kind
+            if c.triggering:
+                results = (kind.holds(self, c, st[name], name) for name in c.triggering)
+                raw = any(results) if c.triggering_rule == "any" else all(results)
+            else:
+                raw = kind.raw(self, c, t)
+            fired[key] = cs.update(t, raw)
 
     def _trigger(self, trig: M.Trigger | None, default: bool) -> bool:
         if trig is None or trig.empty:
@@ -340,7 +339,7 @@ class Storyboard:
         for runs in list(self.running.values()):
             for run in runs:
                 if not run.finished:
-                    run.step(t)
+                    run.kind.step(run, t)
 
     def _story(self, story: Element, t: float) -> None:
         if story.state == STANDBY:
@@ -453,7 +452,7 @@ class Storyboard:
             if old is not None and not old.finished:
                 old.stop()
             self.slots[(actor, domain)] = run
-        self.log("action", f"t = {t:.2f} s: {type(action.action).__name__} {action.name!r} on {actor}")
+        self.log("action", f"t = {t:.2f} s: {run.kind.tag} {action.name!r} on {actor}")
         run.start(t)
         return run
 
