@@ -159,8 +159,9 @@ def _lateral_start(run: ActionRun, t: float, target: float, T: float, shape: str
         run.finished = True
 
 
-def _lateral_step(run: ActionRun, t: float) -> None:
-    """Move the actor along its lateral profile for [t, t + step] (SUMO's sublane model)."""
+def _lateral_step(kind: ActionKind, run: ActionRun, t: float) -> None:
+    """Move the actor along its lateral profile for [t, t + step] (SUMO's sublane model): the
+    ``step`` of a lane change and of a lane offset."""
     drv, p = run.board.driver, run.profile
     drv.lateral(run.actor, p.value(t + run.board.h), p.peak_rate)
     if p.done(t + run.board.h) and not getattr(run.action, "continuous", False):
@@ -210,8 +211,7 @@ class LaneChange(ActionKind):
             run, t, target, lateral_duration(dyn.shape, dyn.dimension, dyn.value, me.speed, target - here), dyn.shape
         )
 
-    def step(self, run: ActionRun, t: float) -> None:
-        _lateral_step(run, t)
+    step = _lateral_step
 
 
 class LaneOffset(ActionKind):
@@ -254,8 +254,7 @@ class LaneOffset(ActionKind):
         here = drv.ego_references()[1] if run.is_ego else me.d_front
         _lateral_start(run, t, target, offset_duration(a.shape, a.max_lateral_acc, target - here), a.shape)
 
-    def step(self, run: ActionRun, t: float) -> None:
-        _lateral_step(run, t)
+    step = _lateral_step
 
 
 class LongitudinalDistance(ActionKind):
