@@ -712,6 +712,8 @@ MAX_ROBUSTNESS = 1e9
 #: evaluates them on a grid of samples that far apart instead (the SUMO step, at which the
 #: traffic's signals change; a violation shorter than it can be missed)
 PERIOD = 0.0
+#: the metrics :func:`check_run` adds to a run (absent where requirements are not evaluated: a Gym env)
+METRIC_KEYS = ("requirements", "first_violation")
 #: the largest grid period accepted (s)
 MAX_PERIOD = 10.0
 
@@ -797,8 +799,7 @@ def check_run(scenario, result, requirements: Sequence[Requirement], period: flo
             result.events.insert(at, Event(v.violated_at, "requirement", text, "WARN"))
             scenario.recorder.event(v.violated_at, f"[requirement] {text}", "WARN")
     if requirements:
-        result.metrics["requirements"] = rob
-        result.metrics["first_violation"] = first
+        result.metrics.update(zip(METRIC_KEYS, (rob, first), strict=True))
     return verdicts
 
 
