@@ -158,6 +158,7 @@ def test_results_that_cannot_take_the_new_rows_are_refused_before_running(column
 
 
 @pytest.mark.sumo
+@pytest.mark.long
 def test_falsify_finds_verifies_and_resumes(tmp_path, capsys):
     path = tmp_path / "f.toml"
     path.write_text(SPEC)
