@@ -162,13 +162,68 @@ def test_a_file_scenario_on_a_curved_opendrive_road_follows_its_lane():
     assert off.status == "failed" and np.abs(off.column("e_lat")).max() > 1.0
 
 
-def _middle_lane(name):
+def _lane_parts(name, index):
+    """Lane ``index`` of each edge of a curved motorway, in driving order (motorway, motorway.1, ...)."""
     import xml.etree.ElementTree as ET
 
-    from ego.lane_frame import LanePolyline
+    root = ET.parse(net_file(name)).getroot()
+    edges = [e for e in root.iter("edge") if e.get("function") != "internal"]
+    edges.sort(key=lambda e: int(e.get("id").partition(".")[2] or 0))
+    return [
+        [tuple(map(float, p.split(","))) for p in e.find(f"lane[@index='{index}']").get("shape").split()] for e in edges
+    ]
 
-    lane = ET.parse(net_file(name)).getroot().find(".//lane[@id='motorway_1']")
-    return LanePolyline([tuple(map(float, p.split(","))) for p in lane.get("shape").split()])
+
+def _middle_lane(name):
+    from ego.lane_frame import LanePolyline
+    from ego.scenarios.motorway import join_lanes
+
+    return LanePolyline(join_lanes(_lane_parts(name, 1)))
+
+
+def test_the_curved_motorways_are_short_edges_whose_lanes_join_to_the_design():
+    """Each curved road is cut into edges of about 100 m (SUMO maps the ego onto few shape
+    points a step); joined, each lane is the one-edge road's: the middle lane's points are the
+    design's centre line (sumo_nets/motorway_arcs.py) to the networks' 0.1 mm precision."""
+    import sys
+
+    sys.path.insert(0, str(net_file("highway").parents[1]))
+    from motorway_arcs import ARCS, PIECE, centre_line, clothoid_line
+
+    from ego.scenarios.motorway import join_lanes
+
+    for road, name in MOTORWAY_ROADS.items():
+        if road == "straight":
+            continue
+        design = clothoid_line() if road == "clothoid" else centre_line(*ARCS[road][1:])
+        parts = _lane_parts(name, 1)
+        assert len(parts) >= 8, road
+        assert max(len(p) for p in parts[1:-1]) <= PIECE / 4 + 3, road  # a few points a lane
+        middle = join_lanes(parts)
+        assert len(middle) == len(design), road
+        assert max(math.dist(a, b) for a, b in zip(middle, design)) < 2e-4, road
+        for side in (0, 2):  # the outer lanes meet at every joint too
+            assert len(join_lanes(_lane_parts(name, side))) == len(design), (road, side)
+
+
+def test_cars_depart_beyond_the_first_edge_of_a_curved_motorway():
+    """The background reaches 700 m past the ego, many edges into the road: every car departs
+    where it is meant to (SumoBridge.add_vehicles starts it on the edge it is on), along the
+    ego's lane as on the straight road."""
+    from ego.runner import build
+    from ego.sim.types import EGO
+
+    for road in ("straight", "left-250"):
+        scenario = build(RunSpec("emergency-brake", "pid", overrides={"road": road, "traffic_density": 0.3}))
+        try:
+            scenario.reset()
+            world = scenario.world
+            ids, rows = scenario.bridge.poses()
+            lane = world.lanes[world.config.ego_lane]
+            stations = sorted(lane.project(r[0], r[1])[0] for vid, r in zip(ids, rows) if vid != EGO)
+            assert stations[-1] > 900.0, road  # past 400 m, the first edge of left-250
+        finally:
+            scenario.close()
 
 
 def test_the_changing_curvature_road_is_its_clothoids():

@@ -119,6 +119,24 @@ def check_density(config: HighwayConfig) -> None:
 # --- the world ---------------------------------------------------------------------------
 
 
+#: m: how far from the ego's pose SUMO looks for lanes to map it on, on a road of many edges
+#: (SumoBridge.control): beyond the lane edge by more than half a car the run ends off the road
+MATCH_RADIUS = 10.0
+
+
+def join_lanes(parts: list[list[tuple[float, float]]]) -> list[tuple[float, float]]:
+    """One lane's centre line through consecutive edges (``parts``, each the lane's points on
+    one edge, in driving order). The curved motorways are cut in the middle of a chord
+    (``sumo_nets/motorway_arcs.py``): the joint, the last point of one part and the first of
+    the next, is dropped, and the lane is the one-edge road's, point for point."""
+    pts = list(parts[0])
+    for part in parts[1:]:
+        if math.dist(pts[-1], part[0]) > 1e-3:
+            raise ValueError(f"lane parts do not meet: {pts[-1]} vs {part[0]}")
+        pts = pts[:-1] + list(part[1:])
+    return pts
+
+
 class MotorwayWorld:
     """The simulator with the motorway's traffic: the scenario's own vehicles (``traffic``
     adds them with :meth:`vehicle`), lane blockers, the seeded background in the lanes next
@@ -202,7 +220,11 @@ class MotorwayWorld:
         # the background's top speed is traffic_speed: the simulator's drivers would otherwise
         # speed up to the motorway's limit (130 km/h)
         self.add_type(replace(TRAFFIC_TYPE, max_speed=c.traffic_speed))
-        sim.add_route(self.route, list(self.route_edges))
+        shapes = sim.lane_shapes()
+        edges = self.route_edges
+        while edges[0] == EDGE and f"{EDGE}.{len(edges)}_0" in shapes:  # a curved motorway: EDGE, EDGE.1, ...
+            edges = (*edges, f"{EDGE}.{len(edges)}")
+        sim.add_route(self.route, list(edges))
         self.traffic(self)
         if hasattr(c, "block_left"):  # a configuration with lane blockers
             self.add_type(BLOCKER_TYPE)
@@ -226,15 +248,19 @@ class MotorwayWorld:
                 sim.keep_lane(spec.id)
         for actor in self.actors:
             actor.start(sim)
-        sim.control(EGO, self.geometry)
+        if len(edges) > 1:  # SUMO need not look 100 m around the ego for lanes to map it on
+            sim.control(EGO, self.geometry, match_radius=MATCH_RADIUS)
+        else:
+            sim.control(EGO, self.geometry)
         self.colors[EGO] = EGO_COLOR
-        shapes = sim.lane_shapes()
         refine = self.refine
-        self.lanes = {
-            int(lid.rsplit("_", 1)[1]): LanePolyline(refine(pts) if refine else pts, width, lid)
-            for lid, (width, pts) in shapes.items()
-            if lid.rsplit("_", 1)[0] == self.edge
-        }
+        joined = (self.edge,) if edges == self.route_edges else edges
+        self.lanes = {}
+        for lid, (width, pts) in shapes.items():
+            edge, index = lid.rsplit("_", 1)
+            if edge == joined[0]:
+                pts = join_lanes([shapes[f"{e}_{index}"][1] for e in joined]) if len(joined) > 1 else pts
+                self.lanes[int(index)] = LanePolyline(refine(pts) if refine else pts, width, lid)
         return missing
 
     def lane_frame(self) -> Callable[[float, float], tuple[float, float, float]] | None:
