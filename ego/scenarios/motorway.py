@@ -330,6 +330,8 @@ class SurroundView(RoadSensor):
         self.around: tuple[list, list] = ([], [])
         self._looked = False
         self._sim = None
+        #: (t, speed) at the last observation and the speed's rate of change (m/s^2) since
+        self._u_last, self._accel = (-math.inf, 0.0), 0.0
 
     def setup(self, sim: TrafficSim | None, lanes: dict[int, LanePolyline], plant) -> None:
         """Measure in ``lanes`` (index -> lane; the start lane ``ego_lane``) for ``plant``;
@@ -347,6 +349,7 @@ class SurroundView(RoadSensor):
         self.target_lane = c.ego_lane
         self.ttc_front = self.ttc_rear = INF
         self.gap_front = self.gap_rear = INF
+        self._u_last, self._accel = (-math.inf, 0.0), 0.0
         self.frame()
         bands = {i: (off - 0.5 * lanes[i].width, off + 0.5 * lanes[i].width) for i, off in self.lane_offset.items()}
         self.sensor = SurroundSensor(self.road, bands, g.cg_to_front, g.length, g.width, horizon=c.sumo_step)
@@ -435,7 +438,12 @@ class SurroundView(RoadSensor):
             # the target lane's centre line is concentric with the start lane's, ``off`` to its left
             kappa /= 1.0 - kappa * self.lane_offset[self.target_lane]
             steady = self.steady
-            obs.steer_ff = kappa * (steady.wheelbase + steady.understeer * u * u)
+            # the speed's rate of change since the last observation (SteadySteer.transient)
+            t_last, u_last = self._u_last
+            if t > t_last:
+                self._accel = (u - u_last) / (t - t_last)
+                self._u_last = (t, u)
+            obs.steer_ff = kappa * (steady.wheelbase + steady.understeer * u * u + steady.transient * self._accel)
         else:
             obs.steer_ff = 0.0
 
