@@ -11,7 +11,12 @@ lane. The R 250 m arc turns 180 degrees (785 m), the R 1000 m arc 90 degrees (15
 ego (its front at ego_start = 300 m by default) is in the arc for the whole of a default run,
 and the exit straight never comes near the lead-in. The arc is written as shape points
 every ~SEGMENT m, so the chords stay within R (1 - cos(SEGMENT / 2R)) (8 mm at R 250 m) of
-the circle; the lane frame measures to the arc each chord stands for.
+the circle; the lane frame measures to the arc each chord stands for. The road is cut into
+edges ``motorway`` (the lead-in and the curve's first ~PIECE m), ``motorway.1``, ... of ~PIECE m
+(the last ends with the exit straight), each cut in the middle of a chord
+(:func:`split_points`): the lanes joined across the edges are the one-edge road's, and SUMO,
+which maps the ego onto the lanes around it every step (moveToXY), walks a few shape points
+instead of the whole curve's.
 
 ``road=clothoid`` is the road of changing curvature (UN R157's reference roads: straight, arcs
 of 250 m and 1000 m, a road whose curvature changes): after the LEAD_IN straight, the middle

@@ -38,6 +38,56 @@ def test_steady_steer_of_the_plants():
     assert steady_steer(linear)(1 / 200, 20.0) == pytest.approx((d.lf + d.lr + k_us * 400.0) / 200)
 
 
+def _path_turn_error_braking(with_speed_term: bool, kappa: float = 1 / 250, decel: float = 4.0) -> float:
+    """Report 000's car settled on a curve of ``kappa`` at 20 m/s on its feed-forward steer alone,
+    then braking at ``decel`` for 2 s, steered by the feed-forward (open loop): how far (rad) its
+    path's heading (yaw + side slip) has turned beyond kappa times the distance driven."""
+    p = NonlinearBicycleParams()
+    car = BicyclePlant(NonlinearBicycle(p), VehicleGeometry(), 0.01, state=(0.0, 20.0, 0.0, 0.0, 0.0, 20.0 * kappa))
+    ff = steady_steer(car)
+    hold = p.f * p.m * p.g / p.Nw  # the rolling resistance: a constant speed
+
+    def path_heading():
+        _, u, _, v, psi, _ = car.state
+        return psi + math.atan2(v, u)
+
+    for _ in range(800):
+        car.step((hold, ff(kappa, car.state[1])))
+    start, s, accel = path_heading(), 0.0, 0.0
+    for _ in range(200):
+        u = car.state[1]
+        car.step((hold - p.m * decel / p.Nw, ff(kappa, u, accel if with_speed_term else 0.0)))
+        accel = (car.state[1] - u) / 0.01
+        s += 0.01 * math.hypot(car.state[1], car.state[3])
+    return path_heading() - start - kappa * s
+
+
+def test_the_feedforward_holds_the_curve_while_braking():
+    """The speed change's term (SteadySteer.transient, from the bicycle's kinematics): braking at
+    4 m/s^2 from 20 m/s in the R 250 m arc, report 000's car on the steady-state steer alone turns
+    in by 0.011 rad beyond the arc in 2 s (its path tightens: 0.13 m off its lane in the cut-in);
+    with the term by 0.0003 rad. A speed change on a straight road adds nothing."""
+    without, with_term = _path_turn_error_braking(False), _path_turn_error_braking(True)
+    assert without > 0.008  # turned in, towards the curve's centre
+    assert abs(with_term) < 0.05 * without
+    car = BicyclePlant(NonlinearBicycle(NonlinearBicycleParams()), VehicleGeometry(), 0.01)
+    ff = steady_steer(car)
+    assert ff.transient == pytest.approx(0.0653, abs=1e-4)
+    assert ff(0.0, 20.0, -8.0) == 0.0
+
+
+def test_the_emergency_lane_change_overshoots_in_the_r250_arcs_as_on_the_straight_road():
+    """fuzzy (the largest overshoot, 1.23 m straight) brakes through its lane change: within
+    0.1 m of its straight-road overshoot in either arc (left-250 was +0.132 m without the
+    feed-forward's speed-change term; docs/results/curved-roads.md)."""
+    overshoot = {
+        road: run(RunSpec("emergency-brake", "fuzzy", overrides={"road": road})).metrics["max_overshoot"]
+        for road in ("straight", "left-250", "right-250")
+    }
+    for road in ("left-250", "right-250"):
+        assert abs(overshoot[road] - overshoot["straight"]) <= 0.1, overshoot
+
+
 def test_the_dynamic_bicycle_holds_the_curve_on_its_steady_steer():
     """Independent of the formula: the linear bicycle integrated on its steady steer settles at
     the yaw rate v kappa."""
