@@ -173,10 +173,12 @@ def _never_overstated(r: dict, under: float) -> None:
 def test_the_front_gap_and_ttc_are_never_overstated_in_the_inner_lane_of_a_curve():
     # seed 0 changes to the left (inner) lane of the R 250 m arc: the gap is measured along
     # it, against the arc between SUMO's outlines (scripts/curved_gap_check.py); measured
-    # along the start lane it was 1.13 m (1.4 %) too long here
+    # along the start lane it was 1.13 m (1.4 %) too long here. Understated by up to 0.20 m at
+    # the instant SUMO has the ego's front bumper in one lane and the sensor in the next (as on
+    # any road, the long test below)
     check = _gap_check().check
     r = check("left-250", "pid", 0)
-    _never_overstated(r, under=0.1)
+    _never_overstated(r, under=0.25)
     assert r["sumo_over"] > 0.3  # SUMO's getLeader is longer there: lane positions, not the arc
 
 
