@@ -258,6 +258,25 @@ def test_the_curved_motorways_are_short_edges_whose_lanes_join_to_the_design():
             assert len(join_lanes(_lane_parts(name, side))) == len(design), (road, side)
 
 
+def test_a_file_scenario_drives_the_whole_cut_road():
+    """A scenario file on a curved motorway's .net.xml names road ``motorway`` (its first edge):
+    a LanePosition s runs on through the edges after it, and the ego's road is the joined
+    lane, so ALKS 4.1 drives its 60 s (on the first edge alone it ended at 448 m, 11.8 s)."""
+    from pathlib import Path
+
+    from ego.openscenario.roads import RoadMap
+
+    roads = RoadMap(net_file(MOTORWAY_ROADS["left-250"]), False)
+    lane, pos = roads.lane_position("motorway", -2, 1000.0)
+    first = roads.lane_position("motorway", -2, 10.0)[0]
+    assert lane.edge.startswith("motorway.") and 0 < pos < lane.length
+    assert sum(e.lanes[0].length for _, e, _ in roads.sections("motorway")) == pytest.approx(3000.0, abs=0.01)
+    assert first.edge == "motorway"
+    xosc = Path(__file__).resolve().parents[1] / "scenarios" / "alks" / "alks_4_1_lane_keeping_left_250.xosc"
+    r = run(RunSpec(str(xosc), "pid"))
+    assert r.status == "completed" and r.metrics["sim_time"] == pytest.approx(60.0, abs=0.05), r.metrics
+
+
 def test_cars_depart_beyond_the_first_edge_of_a_curved_motorway():
     """The background reaches 700 m past the ego, many edges into the road: every car departs
     where it is meant to (SumoBridge.add_vehicles starts it on the edge it is on), along the

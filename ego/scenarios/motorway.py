@@ -221,9 +221,12 @@ class MotorwayWorld:
         # speed up to the motorway's limit (130 km/h)
         self.add_type(replace(TRAFFIC_TYPE, max_speed=c.traffic_speed))
         shapes = sim.lane_shapes()
-        edges = self.route_edges
-        while edges[0] == EDGE and f"{EDGE}.{len(edges)}_0" in shapes:  # a curved motorway: EDGE, EDGE.1, ...
-            edges = (*edges, f"{EDGE}.{len(edges)}")
+        # a curved motorway is cut into edges edge, edge.1, edge.2, ... (sumo_nets/motorway_arcs.py):
+        # its lanes are joined across them, and the default route runs through them all
+        chain = (self.edge,)
+        while f"{self.edge}.{len(chain)}_0" in shapes:
+            chain = (*chain, f"{self.edge}.{len(chain)}")
+        edges = chain if self.route_edges == (EDGE,) else self.route_edges
         sim.add_route(self.route, list(edges))
         self.traffic(self)
         if hasattr(c, "block_left"):  # a configuration with lane blockers
@@ -248,18 +251,17 @@ class MotorwayWorld:
                 sim.keep_lane(spec.id)
         for actor in self.actors:
             actor.start(sim)
-        if len(edges) > 1:  # SUMO need not look 100 m around the ego for lanes to map it on
+        if len(chain) > 1:  # SUMO need not look 100 m around the ego for lanes to map it on
             sim.control(EGO, self.geometry, match_radius=MATCH_RADIUS)
         else:
             sim.control(EGO, self.geometry)
         self.colors[EGO] = EGO_COLOR
         refine = self.refine
-        joined = (self.edge,) if edges == self.route_edges else edges
         self.lanes = {}
         for lid, (width, pts) in shapes.items():
             edge, index = lid.rsplit("_", 1)
-            if edge == joined[0]:
-                pts = join_lanes([shapes[f"{e}_{index}"][1] for e in joined]) if len(joined) > 1 else pts
+            if edge == self.edge:
+                pts = join_lanes([shapes[f"{e}_{index}"][1] for e in chain]) if len(chain) > 1 else pts
                 self.lanes[int(index)] = LanePolyline(refine(pts) if refine else pts, width, lid)
         return missing
 
