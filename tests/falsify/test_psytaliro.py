@@ -82,3 +82,13 @@ def test_psytaliro_falsifies_an_easy_requirement_on_ego_runs_and_resumes(kind, t
     capsys.readouterr()
     assert main([*args, "--until", "first", "--no-verify"]) == 1
     assert "0 runs ran now" in capsys.readouterr().out
+
+
+def test_without_psytaliro_the_optimizer_is_one_line_and_exit_2(tmp_path, monkeypatch, capsys):
+    monkeypatch.setitem(__import__("sys").modules, "staliro", None)  # as if not installed
+    path = tmp_path / "f.toml"
+    path.write_text(SPEC)
+    out = tmp_path / "out"
+    assert main(["falsify", str(path), "--out", str(out), "--optimizer", "psytaliro-annealing"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "psytaliro-annealing" in err and "pip install psy-taliro" in err and "\n" not in err
