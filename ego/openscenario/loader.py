@@ -164,6 +164,12 @@ def declared_parameters(path: str | os.PathLike) -> dict[str, M.Parameter]:
     return _declarations(path, root.child("ParameterDeclarations"), {})
 
 
+def header_description(path: str | os.PathLike) -> str:
+    """The file's FileHeader description ("" without one)."""
+    header = read_tree(path).child("FileHeader")
+    return header.attrs.get("description", "") if header is not None else ""
+
+
 def _check_root(path, root: Node) -> None:
     if root.tag != "OpenSCENARIO":
         raise ScenarioFileError(

@@ -26,6 +26,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from functools import lru_cache
@@ -36,13 +37,13 @@ import numpy as np
 from ego.lane_frame import LanePolyline
 from ego.openscenario import model as M
 from ego.openscenario.dynamics import Transition
-from ego.openscenario.loader import declared_parameters, load
+from ego.openscenario.loader import declared_parameters, header_description, load
 from ego.openscenario.registry import action_of
 from ego.openscenario.roads import RoadMap, network_file, refine_shape
 from ego.openscenario.runtime import Storyboard
 from ego.openscenario.xmltree import DOCS, ScenarioFileError
 from ego.params import ConfigError, param
-from ego.scenarios.base import Parts, Scenario
+from ego.scenarios.base import NO_PREVENTABLE_COLLISION, Parts, Scenario
 from ego.scenarios.emergency_brake import BrakeInLane, EmergencyBrake, Impact
 from ego.scenarios.evasive import MARKERS, EvasiveConfig, compare_plots, compose, evasive_metrics
 from ego.scenarios.events import INF
@@ -275,8 +276,19 @@ def _file_class(path: str, mtime: float) -> type:
             "file": path,
             "file_params": tuple(params),
             "summary": f"OpenSCENARIO file {path}",
+            "extra_requirements": (NO_PREVENTABLE_COLLISION,) if declares_r157(path) else (),
         },
     )
+
+
+#: a FileHeader description that names UN R157 (or its ALKS): "R157 4.4 cut-in", "UN R 157 ..."
+_R157 = re.compile(r"\bR\s?157\b|\bALKS\b")
+
+
+def declares_r157(path: str) -> bool:
+    """Whether the file declares itself an UN R157 (ALKS) scenario in its FileHeader's
+    description: its default requirements then add ``no_preventable_collision``."""
+    return bool(_R157.search(header_description(path)))
 
 
 def _file_config(path: str, values: dict):
@@ -309,6 +321,8 @@ class FileScenario(Scenario):
     network = None
     backends = ("sumo",)
     base_scenario = EmergencyBrake.name
+    #: requirements the file adds to emergency-brake's (an UN R157 file: no_preventable_collision)
+    extra_requirements: tuple[tuple[str, str], ...] = ()
     columns, plots, markers, metric_specs = COLUMNS, PLOTS, MARKERS, EmergencyBrake.metric_specs
     compare_plots = classmethod(compare_plots)
 
