@@ -100,23 +100,9 @@ def write_text(path: str | Path, text: str) -> None:
         tmp.write_text(text)
 
 
-def check_generated(out: Path, force: bool, suffix: str, marker: str, command: str, head: int = 4096) -> None:
-    """``out`` (an ``--out`` file ending in ``suffix``) may be written: a new file, one whose
-    first ``head`` bytes carry ``marker`` (so ``command`` wrote it), or any with ``force``."""
-    from ego.checks import check_output_file
-
-    check_output_file(str(out), "--out", suffix)
-    if out.exists() and not force:
-        with open(out, "rb") as f:
-            start = f.read(head)
-        if marker.encode() not in start:
-            raise ConfigError(
-                f"bad --out {str(out)!r}: the file exists and {command} did not write it (give --force to replace it)"
-            )
-
-
 def write_generated(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` (checked by :func:`check_generated`) atomically, making its folder."""
+    """Write ``text`` to ``path`` (checked by :func:`ego.checks.check_generated`) atomically,
+    making its folder."""
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:

@@ -509,7 +509,7 @@ def _page(title: str, body: str) -> str:
 
 def check_out(out: Path, force: bool) -> None:
     """``out`` may be written: a new file, one ``ego report`` wrote, or any with ``force``."""
-    from ego.outputs import check_generated
+    from ego.checks import check_generated
 
     check_generated(out, force, ".html", f'content="{GENERATOR}"', "ego report")
 

@@ -98,7 +98,7 @@ def concrete_xml(template: str | os.PathLike, values: Mapping[str, object], out:
 
 def check_out(out: Path, force: bool) -> None:
     """``out`` may be written: a new ``.xosc``, one ``ego concrete`` wrote, or any with ``force``."""
-    from ego.outputs import check_generated
+    from ego.checks import check_generated
 
     check_generated(out, force, ".xosc", GENERATOR, "ego concrete", head=512)
 
