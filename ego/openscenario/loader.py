@@ -566,13 +566,10 @@ class _Builder:
             h = self.raw(p, "h", None)
             return M.WorldPosition(self.num(p, "x"), self.num(p, "y"), None if h is None else self.num(p, "h"), p.line)
         if tag == "LanePosition":
-            return M.LanePosition(
-                self.str_(p, "roadId"),
-                self.int_(p, "laneId"),
-                self.num(p, "s", nonneg=True),
-                self.num(p, "offset", 0.0),
-                p.line,
-            )
+            road, lane, s = self.str_(p, "roadId"), self.int_(p, "laneId"), self.num(p, "s", nonneg=True)
+            if lane == 0:  # OpenDRIVE's lane 0 is the reference line: offset is t from it
+                return M.RoadPosition(road, s, self.num(p, "offset", 0.0), p.line)
+            return M.LanePosition(road, lane, s, self.num(p, "offset", 0.0), p.line)
         if tag == "RoadPosition":
             return M.RoadPosition(self.str_(p, "roadId"), self.num(p, "s", nonneg=True), self.num(p, "t"), p.line)
         if tag == "RelativeLanePosition":

@@ -27,7 +27,7 @@ import dataclasses
 import math
 import os
 import re
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
@@ -353,6 +353,7 @@ class FileScenario(Scenario):
         ego = find_ego(model, config.ego_entity)
         _check_ego_actions(model, ego)
         starts = placements(model, roads)
+        _check_road_references(model, roads, len(roads.edges[starts[ego].edge].lanes))
         if starts[ego].offset:
             pos = next(a for a in model.init[ego] if isinstance(a, M.TeleportAction)).position
             raise ScenarioFileError(
@@ -841,6 +842,42 @@ def _check_ego_actions(model: M.Scenario, ego: str) -> None:
                                     f"supported by ego: the ego moves by its own model (see "
                                     f"{DOCS})",
                                 )
+
+
+def _model_nodes(node: object) -> Iterator[object]:
+    """Every value of the model below ``node`` (its dataclasses, lists, tuples and dicts)."""
+    stack = [node]
+    while stack:
+        x = stack.pop()
+        yield x
+        if dataclasses.is_dataclass(x) and not isinstance(x, type):
+            stack.extend(getattr(x, f.name) for f in dataclasses.fields(x))
+        elif isinstance(x, (list, tuple)):
+            stack.extend(x)
+        elif isinstance(x, dict):
+            stack.extend(x.values())
+
+
+def _check_road_references(model: M.Scenario, roads: RoadMap, ego_lanes: int) -> None:
+    """Every road position of the file (in its actions and conditions too, not only its Init)
+    names a lane of the road network, and no lane change asks for more lanes beside its
+    reference than the ego's road has: what the run would find only when it got there."""
+    for x in _model_nodes(model.stories):
+        try:
+            if isinstance(x, M.LanePosition):
+                roads.lane_position(x.road, x.lane, x.s)
+            elif isinstance(x, M.RoadPosition):
+                roads.lane_position(x.road, -1, x.s)
+        except ValueError as exc:
+            raise ScenarioFileError(model.path, x.line, str(exc)) from None
+        if isinstance(x, M.LaneChangeAction) and x.relative_to is not None and abs(x.relative_lanes) >= ego_lanes:
+            raise ScenarioFileError(
+                model.path,
+                x.line,
+                f"a lane change {x.relative_lanes:+d} lanes from {x.relative_to}'s lane: the ego's road has "
+                f"{ego_lanes} lane{'s' if ego_lanes != 1 else ''} in its direction (ego models the lanes of the "
+                f"ego's direction of travel; see {DOCS})",
+            )
 
 
 def file_listing(path: str, ego: str = "") -> dict:
