@@ -700,6 +700,8 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
     b.variables = _variables(path, root.child("VariableDeclarations"), values)
     cl = root.child("CatalogLocations")
     for vc in cl.children if cl is not None else ():
+        if not vc.children:  # <RouteCatalog/>: the reference player's files write empty ones; it locates nothing
+            continue
         d = b.one(vc, "Directory")
         b.catalog_dirs.setdefault(vc.tag, []).append(resolved(path.parent / b.str_(d, "path"), "catalog folder"))
 

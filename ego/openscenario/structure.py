@@ -75,23 +75,29 @@ declare("ValueConstraint")
 declare("VariableDeclarations", contains=("VariableDeclaration",))
 declare("VariableDeclaration")
 CATALOGS = ("VehicleCatalog", "PedestrianCatalog", "MiscObjectCatalog", "ControllerCatalog", "ManeuverCatalog")
+#: catalogs whose entries ego reads nowhere: their locations are accepted (the reference
+#: player's files declare them whether used or not), a reference to an entry is refused where
+#: it stands (the element holding it is outside the subset)
+LOCATED_ONLY = ("RouteCatalog", "EnvironmentCatalog", "TrajectoryCatalog")
 declare(
     "CatalogLocations",
-    contains=CATALOGS,
+    contains=CATALOGS + LOCATED_ONLY,
     note=(
         "`catalogName` is the file `catalogName.xosc` in a catalog directory (the reference's kind first, then "
         "the others), else the file whose `<Catalog name>` it is; entries `Vehicle`, `Pedestrian`, `MiscObject`, "
         "`Controller`, `Maneuver` (a `ManeuverGroup`'s `CatalogReference`, its errors named in the catalog file); "
         "`ParameterAssignments` to the entry's `ParameterDeclarations` (a `parameterRef` written `$Name`, as the "
         "reference player's files do, names `Name`); the entry sees the file's parameters too; an entry of "
-        "another kind than the reference needs is one line; other catalogs (routes, environments, trajectories) "
-        "refused"
+        "another kind than the reference needs is one line; the locations of `RouteCatalog`, `EnvironmentCatalog` "
+        "and `TrajectoryCatalog` are accepted (the reference player's files declare them, used or not) and their "
+        "entries read nowhere: an element referring to one is refused; a location without its `Directory` (the "
+        "schema asks for one; the reference player's files write `<RouteCatalog/>`) locates nothing"
     ),
     label="`CatalogLocations` (`VehicleCatalog`, `PedestrianCatalog`, `MiscObjectCatalog`, `ControllerCatalog`,"
     " `ManeuverCatalog`), `CatalogReference`",
     also=(*CATALOGS, "CatalogReference"),
 )
-for _catalog in CATALOGS:
+for _catalog in CATALOGS + LOCATED_ONLY:
     declare(_catalog, contains=("Directory",))
 declare("Directory")
 declare("RoadNetwork", contains=("LogicFile", "SceneGraphFile"))

@@ -575,3 +575,23 @@ def test_a_lane_change_past_the_ego_roads_lanes_is_refused_by_list_and_run_alike
         [sys.executable, "-m", "ego", "run", str(path), "-c", "pid"], capture_output=True, text=True, timeout=300
     )
     assert run.returncode == 2 and want in run.stderr and len(run.stderr.strip().splitlines()) == 1, run.stderr
+
+
+def test_route_environment_and_trajectory_catalog_locations_are_accepted(tmp_path):
+    """The reference player's files declare these catalogs whether they use them or not,
+    often as an empty ``<RouteCatalog/>``: a location reads nothing, so the file lists as
+    supported and runs; an empty vehicle catalog location is accepted the same way."""
+    from ego.openscenario.scenario import file_listing
+
+    path = scene(tmp_path, [event("Go", "A", speed(26), trigger([sim_time(1)]))])
+    (tmp_path / "Routes").mkdir()
+    _edit(
+        path,
+        "<RoadNetwork>",
+        '<CatalogLocations><RouteCatalog/><VehicleCatalog/><EnvironmentCatalog><Directory path="Routes"/>'
+        '</EnvironmentCatalog><TrajectoryCatalog><Directory path="Routes"/></TrajectoryCatalog></CatalogLocations>'
+        "<RoadNetwork>",
+    )
+    listing = file_listing(str(path))
+    assert listing["supported"], listing["error"]
+    assert starts(run_scene(path, 2.0), "Go") == [pytest.approx(1.0)]
