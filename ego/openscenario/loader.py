@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from collections.abc import Mapping
 from dataclasses import replace
 from functools import lru_cache
@@ -677,7 +678,7 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
     if header is None:
         raise ScenarioFileError(path, root.line, "<OpenSCENARIO> needs a <FileHeader>")
     try:
-        version = (int(header.attrs.get("revMajor", "")), int(header.attrs.get("revMinor", "")))
+        version = (_rev(header.attrs.get("revMajor", "")), _rev(header.attrs.get("revMinor", "")))
     except ValueError:
         raise ScenarioFileError(path, header.line, "<FileHeader> needs integer revMajor and revMinor") from None
     if version[0] != 1 or not 0 <= version[1] <= 3:
@@ -831,6 +832,14 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
     return scenario
 
 
+def _rev(text: str) -> int:
+    """A FileHeader revision by its leading number: the reference player's files write "1+"."""
+    m = re.match(r"\s*(\d+)", text)
+    if m is None:
+        raise ValueError(text)
+    return int(m.group(1))
+
+
 def _maneuver(b: _Builder, man: Node, names: dict[str, int], scoped: bool = True) -> M.Maneuver:
     """A Maneuver element (inline or a catalog entry) with its events; an inline one's own
     ParameterDeclarations are seen inside it (a catalog entry's are in ``b``'s values with the
@@ -869,7 +878,9 @@ def _maneuver(b: _Builder, man: Node, names: dict[str, int], scoped: bool = True
         for a in acts_:
             names.setdefault(a.name, a.line)
         names.setdefault(events[-1].name, ev.line)
-    out = M.Maneuver(b.str_(man, "name"), tuple(events), man.line)
+    # the schema asks for a name; the reference player's files sometimes leave it out (it only
+    # matters to a reference, which then cannot name it), as a Story's
+    out = M.Maneuver(b.str_(man, "name", ""), tuple(events), man.line)
     names.setdefault(out.name, man.line)
     return out
 

@@ -34,7 +34,7 @@ declare(
 declare(
     "FileHeader",
     contains=("License",),
-    note="revMajor 1, revMinor 0-3; `License` accepted (descriptive)",
+    note="revMajor 1, revMinor 0-3 (read by the leading number: `1+` as the reference player's files write it is 1); `License` accepted (descriptive)",
     also=("License",),
 )
 declare("License")

@@ -595,3 +595,25 @@ def test_route_environment_and_trajectory_catalog_locations_are_accepted(tmp_pat
     listing = file_listing(str(path))
     assert listing["supported"], listing["error"]
     assert starts(run_scene(path, 2.0), "Go") == [pytest.approx(1.0)]
+
+
+@pytest.mark.parametrize(
+    "old, new, ok",
+    [
+        ('<Maneuver name="MA">', "<Maneuver>", True),  # esmini's alks_decelerate.xosc
+        ('revMinor="2"', 'revMinor="1+"', True),  # esmini's speed-profile.xosc
+        ('revMinor="2"', 'revMinor="x"', False),
+    ],
+    ids=["maneuver-without-name", "revMinor-1+", "revMinor-x"],
+)
+def test_the_reference_players_loose_header_and_maneuver_forms(tmp_path, old, new, ok):
+    """A Maneuver without its name (only a reference needs it) and a revision written "1+"
+    (read by its leading number) are read as the reference player reads them; a revision
+    without a number is still one line."""
+    path = scene(tmp_path, [event("Go", "A", speed(26), trigger([sim_time(1)]))])
+    _edit(path, old, new)
+    if ok:
+        assert starts(run_scene(path, 2.0), "Go") == [pytest.approx(1.0)]
+    else:
+        with pytest.raises(ScenarioFileError, match="needs integer revMajor and revMinor"):
+            load(path)
