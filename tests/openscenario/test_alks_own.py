@@ -78,3 +78,25 @@ def test_variations_expand_with_the_regulations_constraints():
         kept += gap_at_intrusion / vrel > vrel / 12 + 0.35
     assert counts["alks_4_4_cut_in"] == (4 * 5 * 5 * 6, kept)
     assert 0 < kept < 600
+
+
+@pytest.mark.sumo
+def test_a_slow_cut_in_is_a_target_from_its_lane_intrusion_and_is_avoided():
+    # the 4.4 variation's row that every controller hit side-on while ego took a car for a
+    # target only once it overlapped the ego's own outline (0.85 m inside the lane's edge,
+    # by then beside the ego): 30 km/h, 5 km/h slower, 0.5 m/s across, from a 4 m gap
+    from ego.results.traffic_log import traffic_columns
+
+    case = {"EgoSpeed_kph": 30, "RelSpeed_kph": 5, "LateralVelocity": 0.5, "CutInGap": 4}
+    r = run(RunSpec(str(ALKS / "alks_4_4_cut_in.xosc"), "pid", overrides=case, requirements=()))
+    assert r.status == "completed" and not r.metrics["collision"]
+    assert r.metrics["min_gap_front"] > 0.5
+    log = traffic_columns(r.traffic)
+    mine = log["vehicle"] == "CutIn"
+    t, y, yaw = log["t"][mine], log["y"][mine], log["heading"][mine]
+    # its outline's lowest corner across the lane (the ego's lane is y in [-1.75, 1.75])
+    reach = 0.5 * (4.5 * np.abs(np.sin(yaw)) + 1.8 * np.cos(yaw))
+    intruding = t[y - reach < 1.75]
+    seen = r.column("t")[np.isfinite(r.column("gap_front"))]
+    # seen at the first SUMO step its outline is over the lane's edge (a look every 0.1 s)
+    assert intruding[0] <= seen[0] <= intruding[0] + 0.1 + 1e-9
