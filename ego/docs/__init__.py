@@ -839,7 +839,7 @@ def envelope() -> list[Table]:
             "controller",
             "completed",
             "collision",
-            "of which avoidable by braking from the car's reach over the ego's outline",
+            "of which avoidable by braking from the car's intrusion into the ego's lane",
             "diverged",
             "timeout",
         ),

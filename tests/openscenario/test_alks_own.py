@@ -32,7 +32,7 @@ def test_the_files_are_make_alks_output():
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     assert {p.stem for p in CONCRETE} == set(mod.MAKERS)
-    assert len(VARIATIONS) == len(CONCRETE) == 13
+    assert len(VARIATIONS) == len(CONCRETE) == 14
     for name, make in mod.MAKERS.items():
         text, comment, dists = make()
         assert (ALKS / f"{name}.xosc").read_text() == text
@@ -78,6 +78,14 @@ def test_variations_expand_with_the_regulations_constraints():
         kept += gap_at_intrusion / vrel > vrel / 12 + 0.35
     assert counts["alks_4_4_cut_in"] == (4 * 5 * 5 * 6, kept)
     assert 0 < kept < 600
+    # crossing pedestrian: the same form, the ego's speed closing on a pedestrian 3.55 m of
+    # walking from 0.3 m into the ego's lane (from the right road edge, 0.5 m wide)
+    kept = 0
+    for v_kph, walk, gap in itertools.product(range(20, 61, 10), (0.5, 0.9, 1.3), range(20, 101, 20)):
+        v = v_kph / 3.6
+        kept += (gap - v * 3.55 / walk) / v > v / 12 + 0.35
+    assert counts["alks_4_2_crossing_pedestrian"] == (5 * 3 * 5, kept)
+    assert 0 < kept < 75
 
 
 @pytest.mark.sumo
