@@ -471,6 +471,43 @@ def blocking_target(kind: str) -> tuple[str, str, dict]:
     )
 
 
+def multiple_blocking() -> tuple[str, str, dict]:
+    """4.2 with more than one target: a standing pedestrian, partially blocking, and a standing
+    car SecondGap beyond it, fully blocking; the nearer one is what the ego must stop for."""
+    params = (
+        EGO_SPEED
+        + param("TargetDistance", "120", "30", "400", "the pedestrian ahead of the ego's start")
+        + param("TargetOffset", "0.5", "-1.5", "1.5", "the pedestrian's offset from the lane's centre (partially blocking)")
+        + param("SecondGap", "10", "2", "100", "the standing car's distance beyond the pedestrian (ego's choice)")
+        + DURATION
+    )
+    pedestrian = PEDESTRIAN.replace('name="Target"', 'name="Pedestrian"')
+    inits = (
+        init("Ego", "0", "-2", "300", EGO_V)
+        + init("Pedestrian", "0", "-2", "${300 + $TargetDistance}", "0", "$TargetOffset")
+        + init("Target", "0", "-2", "${300 + $TargetDistance + $SecondGap}", "0")
+    )
+    comment = (
+        "UN R157 Annex 5 4.2 (multiple road users blocking the lane): a pedestrian standing in the ego's\n"
+        "     lane TargetDistance ahead, TargetOffset from its centre, and a standing car SecondGap beyond it;\n"
+        "     the ego must hit neither."
+    )
+    return (
+        scenario(
+            "alks_4_2_multiple_blocking",
+            comment,
+            "R157 4.2 multiple blocking targets",
+            params,
+            STRAIGHT,
+            car("Ego", 7) + pedestrian + car("Target"),
+            inits,
+            "",
+        ),
+        comment,
+        {"EgoSpeed_kph": (20, 60, 10), "TargetOffset": (-1.0, 1.0, 0.5), "SecondGap": (5, 25, 10)},
+    )
+
+
 def walk(speed: str) -> str:
     """The pedestrian's walk across the road: from where it stands (the right road edge) to the
     left one (lane -1's outer edge), 10.5 m at ``speed`` (m/s), along a straight polyline."""
@@ -575,6 +612,7 @@ MAKERS: dict[str, Callable[[], tuple[str, str, dict]]] = {
     "alks_4_2_blocking_pedestrian": lambda: blocking_target("pedestrian"),
     "alks_4_6_forward_range": forward_range,
     "alks_4_2_crossing_pedestrian": crossing_pedestrian,
+    "alks_4_2_multiple_blocking": multiple_blocking,
 }
 for _side in ("left", "right"):
     for _radius in (250, 1000):

@@ -32,7 +32,7 @@ def test_the_files_are_make_alks_output():
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     assert {p.stem for p in CONCRETE} == set(mod.MAKERS)
-    assert len(VARIATIONS) == len(CONCRETE) == 14
+    assert len(VARIATIONS) == len(CONCRETE) == 15
     for name, make in mod.MAKERS.items():
         text, comment, dists = make()
         assert (ALKS / f"{name}.xosc").read_text() == text
@@ -67,6 +67,7 @@ def test_variations_expand_with_the_regulations_constraints():
         assert mask.sum() > 0
     assert counts["alks_4_3_lead_brake"] == (5 * 6 * 6, 5 * 6 * 6)  # 20-60 km/h, 1.0-2.0 s, 2-9.5 m/s^2
     assert counts["alks_4_1_lane_keeping_left_250"] == (4 * 3, 4 * 3)
+    assert counts["alks_4_2_multiple_blocking"] == (5 * 5 * 3, 5 * 5 * 3)
     # cut-in: kept exactly when R157 5.2.5.2 calls it avoidable, computed here independently:
     # TTC at 0.3 m lane intrusion (1.15 m lateral travel on 3.5 m lanes) > v_rel / 12 + 0.35 s
     kept = 0
