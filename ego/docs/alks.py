@@ -15,11 +15,15 @@ from __future__ import annotations
 from pathlib import Path
 
 from ego.docs.common import KMH, ROOT, TRACKING, Row, Table, sim
+from ego.runner import REFERENCE_DRIVER, REFERENCE_OFF
 
 PAGE = "alks"
 ALKS = ROOT / "scenarios" / "alks"
 #: the rows of every table: the tracking controllers, then the reference driver
-DRIVERS = (*TRACKING, "careful-driver")
+DRIVERS = (*TRACKING, REFERENCE_DRIVER)
+#: the reference row drives as ``collision_preventable``'s reference run does: without ego's
+#: own AEB and evasion (R157's careful driver has neither; the files set ``evade=false``)
+OFF = tuple(sorted(REFERENCE_OFF.items()))
 #: a variation file with more combinations than this runs a seeded subsample of this many
 SAMPLE = 40
 SEED = 0
@@ -69,20 +73,28 @@ def _concrete_cells(reference: bool):
     return cells
 
 
+def _job(scenario: str, controller: str, overrides: dict):
+    """One run of a row: a tracking controller with ``collision_preventable`` after a
+    collision, the reference driver as the reference run drives."""
+    if controller == REFERENCE_DRIVER:
+        return sim(scenario, controller, **overrides, **dict(OFF))
+    return sim(scenario, controller, preventable=None, **overrides)
+
+
 def concrete_table() -> Table:
     rows = tuple(
-        Row(
-            f"{path.stem} / {c}",
-            (sim(str(path), c, preventable=None),),
-            _concrete_cells(c == "careful-driver"),
-        )
+        Row(f"{path.stem} / {c}", (_job(str(path), c, {}),), _concrete_cells(c == REFERENCE_DRIVER))
         for path in concrete_files()
         for c in DRIVERS
     )
+    off = " ".join(f"--set {k}={str(v).lower()}" for k, v in OFF)
     return Table(
         "alks-concrete",
         PAGE,
-        (f"ego compare scenarios/alks/FILE.xosc --controllers {','.join(DRIVERS)} --preventable --out runs/alks",),
+        (
+            f"ego compare scenarios/alks/FILE.xosc --controllers {','.join(TRACKING)} --preventable --out runs/alks",
+            f"ego run scenarios/alks/FILE.xosc -c {REFERENCE_DRIVER} {off}",
+        ),
         (
             "file / controller",
             "collision (with, relative impact speed)",
@@ -94,8 +106,9 @@ def concrete_table() -> Table:
         rows,
         (
             "FILE: the first column's file. A front gap or TTC of `-`: no vehicle ever in the ego's path "
-            "ahead. Preventable: the careful driver, on the same concrete scenario (without ego's AEB and "
-            "evasion), avoids the collision; `-`: nothing to prevent.",
+            "ahead. careful-driver: R157's reference driver, without ego's AEB and evasion, as the "
+            "preventability question runs it. Preventable: the careful driver, on the same concrete "
+            "scenario, avoids the collision; `-`: nothing to prevent.",
         ),
     )
 
@@ -132,18 +145,18 @@ def variation_table(path: Path) -> Table:
     from ego.sweep.xosc import load
 
     variation = load(str(path), list(DRIVERS), SAMPLE if SAMPLE else None, SEED)
-    runs = variation.spec.runs()
+    runs = list(variation.spec.runs())
     sampled = variation.remaining > SAMPLE
     rows = tuple(
         Row(
             c,
-            tuple(sim(r.scenario, c, r.seed, preventable=None, **r.overrides) for r in runs if r.controller == c),
-            _variation_cells(c == "careful-driver"),
+            tuple(_job(r.scenario, c, r.overrides) for r in runs if r.controller == c),
+            _variation_cells(c == REFERENCE_DRIVER),
         )
         for c in DRIVERS
     )
     short = path.stem.removesuffix("_variation")
-    cmd = f"ego sweep scenarios/alks/{path.name} -c {','.join(DRIVERS)} --preventable --out runs/{short}"
+    cmd = f"ego sweep scenarios/alks/{path.name} -c {','.join(TRACKING)} --preventable --out runs/{short}"
     if sampled:
         cmd += f" --sample {SAMPLE} --seed {SEED}"
     which = (
@@ -166,7 +179,12 @@ def variation_table(path: Path) -> Table:
             "largest lane departure [m]",
         ),
         rows,
-        (f"Runs: {which} that meet the value constraints ({kept}), one per controller.",),
+        (
+            f"Runs: {which} that meet the value constraints ({kept}), one per controller. "
+            f"careful-driver: the same points with {', '.join(f'`{k}={str(v).lower()}`' for k, v in OFF)} "
+            "(R157's reference, as `--preventable` runs it after a collision); its collisions are the "
+            "points where no collision is preventable.",
+        ),
     )
 
 
