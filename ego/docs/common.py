@@ -44,8 +44,8 @@ def _table_metrics(result) -> dict:
     return {k: v for k, v in result.metrics.items() if k not in ("wall_time", "events")}
 
 
-def sim(scenario: str, controller: str, seed: int = 0, **overrides: Any) -> Sim:
-    return Sim(scenario, controller, seed, tuple(sorted(overrides.items())))
+def sim(scenario: str, controller: str, seed: int = 0, preventable: bool | None = False, **overrides: Any) -> Sim:
+    return Sim(scenario, controller, seed, tuple(sorted(overrides.items())), preventable)
 
 
 @dataclass(frozen=True)
