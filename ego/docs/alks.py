@@ -41,6 +41,11 @@ def _fixed(v, digits: int = 2) -> str:
     return "-" if v is None else f"{v:.{digits}f}"
 
 
+def _ttc(v) -> str:
+    """A TTC (s): ``> 100`` above 100 s (never closing in earnest)."""
+    return "-" if v is None else "> 100" if v > 100.0 else f"{v:.2f}"
+
+
 def _collision(m: dict) -> str:
     if m["status"] not in ("completed", "collision", "timeout"):
         return m["status"]
@@ -65,7 +70,7 @@ def _concrete_cells(reference: bool):
         return [
             _collision(m),
             _fixed(m.get("min_gap_front")),
-            _fixed(m.get("min_ttc_front")),
+            _ttc(m.get("min_ttc_front")),
             _fixed(m.get("max_lane_departure")),
             _preventable(m, reference),
         ]
@@ -113,9 +118,9 @@ def concrete_table() -> Table:
     )
 
 
-def _lowest(ms: list[dict], key: str) -> str:
+def _lowest(ms: list[dict], key: str, cell=_fixed) -> str:
     values = [m[key] for m in ms if isinstance(m.get(key), (int, float))]
-    return _fixed(min(values)) if values else "-"
+    return cell(min(values)) if values else "-"
 
 
 def _highest(ms: list[dict], key: str) -> str:
@@ -128,13 +133,13 @@ def _variation_cells(reference: bool):
         hits = [m for m in ms if m.get("collision")]
         prevented = sum(m.get("collision_preventable") is True for m in hits)
         kept = sum(m.get("collision_preventable") is False for m in hits)
-        other = sum(m["status"] not in ("completed", "collision") for m in ms)
+        other = [m["status"] for m in ms if m["status"] not in ("completed", "collision")]
         return [
-            f"{len(hits)}/{len(ms)}" + (f" ({other} neither completed nor collided)" if other else ""),
+            f"{len(hits)}/{len(ms)}" + (f" ({len(other)} {', '.join(sorted(set(other)))})" if other else ""),
             "(reference)" if reference else str(prevented),
             "(reference)" if reference else str(kept),
             _lowest(ms, "min_gap_front"),
-            _lowest(ms, "min_ttc_front"),
+            _lowest(ms, "min_ttc_front", _ttc),
             _highest(ms, "max_lane_departure"),
         ]
 

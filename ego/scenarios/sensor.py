@@ -12,9 +12,10 @@ the ego's outline in the same frame (:meth:`SurroundSensor.scan`), finds
 * ``front``: the nearest vehicle ahead whose extent across the lane overlaps the ego's path:
   the ego's own extent across the lane (in whatever lane, the car it is leaving during a
   lane change included) or the lane it is in (the one whose centre is nearest the middle of
-  its front bumper). A car that intrudes into the ego's lane is a target from then on, as
-  UN R157 judges a cut-in (the TTC at its intrusion into the lane, 5.2.5.2), not only once
-  it is beside the ego; ``gap`` from the ego's foremost point to its rearmost point (m,
+  its front bumper) unless it is moving out of that lane. A car that intrudes into the ego's
+  lane is a target from then on, as UN R157 judges a cut-in (the TTC at its intrusion into
+  the lane, 5.2.5.2), not only once it is beside the ego; a lead leaving the lane (a
+  cut-out) stops hiding what is ahead of it once it is clear of the ego's outline; ``gap`` from the ego's foremost point to its rearmost point (m,
   <= 0 when they overlap along the lane); ``speed`` its velocity along the lane (m/s),
   ``accel`` its acceleration;
 * ``rear``: the same behind;
@@ -374,11 +375,30 @@ class SurroundSensor:
                     o for o in self._objects if o[4] + abs(o[6]) * h + m > lo and o[3] - abs(o[6]) * h - m < hi
                 ]
         front, rear = self.front, self.rear
+        if own is not None:
+            near = self._in_path(near, ego[2], ego[3], own)
         self._nearest(near, lo, hi, front, rear)
         # their overlap and side: with the ego's own extent, which it must clear sideways
         for det in (front, rear):
             if det._o is not None:
                 det._lo, det._hi = ego[2], ego[3]
+
+    def _in_path(self, objects: list, e_lo: float, e_hi: float, own: tuple[float, float]) -> list:
+        """Of ``objects``, those in the ego's path at the last scan: overlapping the ego's own
+        extent across the lane (``e_lo``, ``e_hi``), or intruding into its lane ``own`` (lo,
+        hi) unless moving out of it. A car leaving the lane (a cut-out) stops hiding what is
+        ahead of it once it is clear of the ego's outline, as a car entering it (a cut-in)
+        is a target from its intrusion: both where the ego, keeping its line, could hit it."""
+        since = self._t_scan - self._t_sync
+        l_lo, l_hi = own
+        twice_centre = l_lo + l_hi
+        out = []
+        for o in objects:
+            shift = o[6] * since
+            a, b = o[3] + shift, o[4] + shift
+            if (b > e_lo and a < e_hi) or (b > l_lo and a < l_hi and (a + b - twice_centre) * o[6] <= 0.0):
+                out.append(o)
+        return out
 
     def advance(self, t: float, s: float, turn: float = 0.0) -> None:
         """Between two looks: the gaps at time ``t`` (s) with the ego's centre of gravity at

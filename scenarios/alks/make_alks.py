@@ -477,7 +477,9 @@ def multiple_blocking() -> tuple[str, str, dict]:
     params = (
         EGO_SPEED
         + param("TargetDistance", "120", "30", "400", "the pedestrian ahead of the ego's start")
-        + param("TargetOffset", "0.5", "-1.5", "1.5", "the pedestrian's offset from the lane's centre (partially blocking)")
+        + param(
+            "TargetOffset", "0.5", "-1.5", "1.5", "the pedestrian's offset from the lane's centre (partially blocking)"
+        )
         + param("SecondGap", "10", "2", "100", "the standing car's distance beyond the pedestrian (ego's choice)")
         + DURATION
     )

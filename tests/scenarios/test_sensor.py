@@ -121,6 +121,26 @@ def test_a_car_intruding_into_the_ego_s_lane_is_a_target_before_it_is_beside_the
     assert sensor.front.id == "" and sensor.rear.id == "cut"
 
 
+def test_a_lead_leaving_the_lane_stops_hiding_the_car_ahead_of_it_once_clear_of_the_ego():
+    # a cut-out: the lead moves left at 1 m/s; a standing car 40 m ahead. While the lead's
+    # outline still reaches into the ego's lane, but no longer over the ego's own extent, the
+    # standing car is the front object (the lead, moving out, cannot be hit keeping the line)
+    yaw = math.atan2(1.0, 16.0)
+    v = math.hypot(1.0, 16.0)
+    half = _half_across(yaw)
+    sensor = _sensor()
+    for edge, front in ((0.9 - 0.01, "lead"), (0.9 + 0.01, "target")):  # its right edge
+        rows = [(15.0, edge + half, yaw, v, 4.5, 1.8), (40.0, 0.0, 0.0, 0.0, 4.5, 1.8)]
+        sensor.sync(0.0, ["lead", "target"], rows)
+        sensor.scan(0.0, s=0.0, d=0.0, heading_error=0.0)
+        assert sensor.front.id == front
+    # the same car coming in (moving right) at the same place is a target: a cut-in
+    rows = [(15.0, 0.9 + 0.01 + half, -yaw, v, 4.5, 1.8), (40.0, 0.0, 0.0, 0.0, 4.5, 1.8)]
+    sensor.sync(0.0, ["lead", "target"], rows)
+    sensor.scan(0.0, s=0.0, d=0.0, heading_error=0.0)
+    assert sensor.front.id == "lead"
+
+
 def _along(yaw: float, length: float = 4.5, width: float = 1.8) -> float:
     """A box turned by ``yaw`` from the lane: its extent along the lane (m)."""
     return length * math.cos(yaw) + width * abs(math.sin(yaw))
