@@ -3,7 +3,8 @@
     python benchmarks/bench_falsify.py [--repetitions 20] [--budget 300] [--optimizers cma,bo,random,lhs]
                                        [--jobs 2] [--surrogate] [--docs] [--plot PNG]
 
-    python benchmarks/bench_falsify.py --repetitions 10 --budget 150   # the fixed-budget table
+    python benchmarks/bench_falsify.py --rate [--repetitions 10 --budget 150]   # the fixed-budget table
+    python benchmarks/bench_falsify.py --region    # how small each of its requirements' region is
 
 For each optimiser, ``--reps`` repetitions (optimiser seeds 0..reps-1) of ``ego falsify
 --until first`` over ``benchmarks/falsify/bench.toml`` on real ego runs, within ``--budget``
@@ -14,8 +15,12 @@ and quartiles of runs to the first violation (a repetition that found none count
 than the budget), the ratio of the median to LHS's (target: CMA-ES or BO <= 0.2) and the
 falsification rate at the budget (the share of repetitions that found a violation within
 it, with its 95 % Wilson interval: how ARCH-COMP's falsification category compares tools).
-``--reps`` is ``--repetitions``. psy-taliro's optimisers are rows only where psy-taliro is
-installed (``import staliro``); it is not a dependency of ego.
+``--reps`` is ``--repetitions``. ``--rate``: the fixed-budget table's spec
+(``benchmarks/falsify/rate.toml``: a third requirement with a violating region under 0.2 %
+of the box), 10 repetitions of 150 runs, and psy-taliro's uniform random and dual annealing
+as two more optimisers where psy-taliro is installed (``import staliro``; ego's ``test``
+extra, not a dependency of ego). ``--region``: runs on a coarse grid over the box and a fine
+grid over the corner that holds the violations, and each requirement's violating share.
 ``--surrogate`` runs the analytic stand-in instead (no SUMO; clearly not ego). ``--docs``
 (with the defaults) writes docs/results/falsify.md and its figure from the same runs, as
 ``python -m ego.docs results --page falsify`` does.
@@ -39,7 +44,9 @@ def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repetitions", "--reps", dest="reps", type=int, default=None)
     ap.add_argument("--budget", type=int, default=None)
-    ap.add_argument("--optimizers", default=",".join(bench.OPTIMIZERS))
+    ap.add_argument("--optimizers", default=None, help="default cma,bo,random,lhs (--rate: and psy-taliro's two)")
+    ap.add_argument("--rate", action="store_true", help="the fixed-budget table's spec, budget and optimisers")
+    ap.add_argument("--region", action="store_true", help="the rate spec's requirements' violating shares (grids)")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--surrogate", action="store_true")
     ap.add_argument("--docs", action="store_true")
@@ -47,7 +54,14 @@ def main(argv=None) -> dict:
     ap.add_argument("--spec", default=str(bench.BENCH_SPEC), help=argparse.SUPPRESS)
     ap.add_argument("--cache", default="", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
-    optimizers = [o.strip() for o in args.optimizers.split(",")]
+    if args.region:
+        return region(args.jobs, args.docs)
+    if args.rate:
+        args.spec = str(bench.RATE_SPEC)
+        args.reps = args.reps or docs_falsify.RATE_REPS
+        args.budget = args.budget or docs_falsify.RATE_BUDGET
+    default = bench.available() if args.rate else bench.OPTIMIZERS
+    optimizers = [o.strip() for o in (args.optimizers or ",".join(default)).split(",")]
     if "lhs" not in optimizers:
         optimizers.append("lhs")
     reps = args.reps or (docs_falsify.SURROGATE_REPS if args.surrogate else docs_falsify.REAL_REPS)
@@ -95,6 +109,24 @@ def main(argv=None) -> dict:
         )
         print("wrote docs/results/falsify.md and docs/img/falsify_convergence.png")
     return figures
+
+
+def region(jobs: int, docs: bool) -> dict:
+    """The rate spec's requirements' violating shares of the box (the grids of
+    :func:`ego.docs.falsify.region_table`); ``docs``: its table into docs/results/falsify.md."""
+    from ego.docs import block, page_path, render, run_jobs
+    from ego.outputs import write_text
+
+    table = docs_falsify.region_table()
+    results = run_jobs([j for r in table.rows for j in r.jobs], workers=jobs)
+    text = render(table, results)
+    print(text)
+    if docs:
+        path = page_path(table.page)
+        page = path.read_text()
+        write_text(path, page.replace(block(page, table.name), text))
+        print(f"wrote the {table.name} table of {path}")
+    return results
 
 
 if __name__ == "__main__":

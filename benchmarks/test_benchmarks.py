@@ -100,6 +100,16 @@ def test_falsify_runs_to_first_violation():
     assert all(figures[(req, "lhs")]["ratio_to_lhs"] == 1.0 for req, _ in figures)
 
 
+def test_falsify_rate_at_a_fixed_budget():
+    """Issue 40's table: 10 repetitions of 150 runs per optimiser, psy-taliro's two included,
+    on three requirements (one violating 0.144 % of the box); it resumes from runs/bench-falsify/."""
+    from bench_falsify import main
+
+    figures = main(["--rate"])
+    assert {o for _, o in figures} >= {"cma", "bo", "random", "lhs", "psytaliro-uniform", "psytaliro-annealing"}
+    assert all(len(f["runs"]) == 10 for f in figures.values())
+
+
 def test_requirements_cost_at_full_rate_and_on_the_grid():
     """Issue 40's requirement check: its CPU share of a run at full rate and on the 0.1 s
     grid, alternating (printed; no time asserted), and the full rate's robustness never above

@@ -262,3 +262,16 @@ def resolved(path: Path, what: str) -> Path:
         return path.resolve()
     except (RuntimeError, OSError):
         raise ConfigError(f"bad {what} {str(path)!r}: a symbolic link loop") from None
+
+
+def check_generated(out: Path, force: bool, suffix: str, marker: str, command: str, head: int = 4096) -> None:
+    """``out`` (an ``--out`` file ending in ``suffix``) may be written: a new file, one whose
+    first ``head`` bytes carry ``marker`` (so ``command`` wrote it), or any with ``force``."""
+    check_output_file(str(out), "--out", suffix)
+    if out.exists() and not force:
+        with open(out, "rb") as f:
+            start = f.read(head)
+        if marker.encode() not in start:
+            raise ConfigError(
+                f"bad --out {str(out)!r}: the file exists and {command} did not write it (give --force to replace it)"
+            )

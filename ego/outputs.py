@@ -100,6 +100,16 @@ def write_text(path: str | Path, text: str) -> None:
         tmp.write_text(text)
 
 
+def write_generated(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` (checked by :func:`ego.checks.check_generated`) atomically,
+    making its folder."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ConfigError(f"bad --out {str(path)!r}: cannot create its folder ({exc.strerror})") from None
+    write_text(path, text)
+
+
 class FolderLock:
     """This process's hold on an output folder (see the module docstring).
 

@@ -509,29 +509,17 @@ def _page(title: str, body: str) -> str:
 
 def check_out(out: Path, force: bool) -> None:
     """``out`` may be written: a new file, one ``ego report`` wrote, or any with ``force``."""
-    from ego.checks import check_output_file
+    from ego.checks import check_generated
 
-    check_output_file(str(out), "--out", ".html")
-    if out.exists() and not force:
-        with open(out, "rb") as f:
-            head = f.read(4096)
-        if f'content="{GENERATOR}"'.encode() not in head:
-            raise ConfigError(
-                f"bad --out {str(out)!r}: the file exists and ego report did not write it (give --force to replace it)"
-            )
+    check_generated(out, force, ".html", f'content="{GENERATOR}"', "ego report")
 
 
 def write(folder: str | Path, out: str | Path | None = None, force: bool = False) -> tuple[Campaign, Path]:
     """Read ``folder``, write its report to ``out`` (default ``folder/report.html``)."""
-    from ego.outputs import write_text
+    from ego.outputs import write_generated
 
     campaign = load(folder)
     path = Path(out) if out is not None else Path(folder) / "report.html"
     check_out(path, force)
-    text = render(campaign, path)
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ConfigError(f"bad --out {str(path)!r}: cannot create its folder ({exc.strerror})") from None
-    write_text(path, text)
+    write_generated(path, render(campaign, path))
     return campaign, path

@@ -74,6 +74,15 @@ def _avoidable_collision(result, t: np.ndarray, scenario=None) -> np.ndarray:
     return _collision(result, t) & bool(result.metrics.get("collision_avoidable"))
 
 
+def _preventable_collision(result, t: np.ndarray, scenario=None) -> np.ndarray:
+    return _collision(result, t) & bool(result.metrics.get("collision_preventable"))
+
+
+#: the signal whose requirement makes a run compute ``collision_preventable`` after a collision
+#: (UN R157's careful driver on the same concrete scenario: a second run, ego.runner)
+PREVENTABLE_SIGNAL = "preventable_collision"
+
+
 def _collision_avoidable(result, t: np.ndarray, scenario=None) -> np.ndarray:
     return np.full(len(t), bool(result.metrics.get("collision_avoidable")))
 
@@ -187,6 +196,15 @@ DERIVED = {
             "true from the ego's collision on when that collision was avoidable (collision_avoidable)",
             ("metric:collision_avoidable",),
             _avoidable_collision,
+        ),
+        Derived(
+            PREVENTABLE_SIGNAL,
+            BOOL,
+            "true from the ego's collision on when UN R157's careful driver, on the same concrete "
+            "scenario, avoids it (collision_preventable; a requirement naming it makes a colliding "
+            "run compute that with a second run)",
+            (),
+            _preventable_collision,
         ),
         Derived(
             "aeb_active",
@@ -625,8 +643,9 @@ def from_table(table, source: str) -> dict[str, str]:
 def defaults(scenario: str, cls: type | None = None) -> dict[str, str]:
     """The scenario's default requirements (name -> formula), as its class declares them
     (``Scenario.requirements``): ``cls``, else the registered scenario ``scenario``; a class
-    that names a ``base_scenario`` (a scenario file: emergency-brake) has that one's. None
-    for a name no scenario has (a reference resolves its class first)."""
+    that names a ``base_scenario`` (a scenario file: emergency-brake) has that one's and its
+    own ``extra_requirements`` (an UN R157 file: ``no_preventable_collision``). None for a
+    name no scenario has (a reference resolves its class first)."""
     from ego.scenarios import SCENARIOS
 
     if cls is None:
@@ -634,9 +653,10 @@ def defaults(scenario: str, cls: type | None = None) -> dict[str, str]:
         if cls is None:
             return {}
     base = getattr(cls, "base_scenario", None)
+    own = dict(getattr(cls, "extra_requirements", ()))  # a file's own (an R157 file's)
     if base in SCENARIOS:
         cls = SCENARIOS[base]
-    return dict(getattr(cls, "requirements", ()))
+    return {**dict(getattr(cls, "requirements", ())), **own}
 
 
 # -- resolving and evaluating -----------------------------------------------------------------------
@@ -712,6 +732,8 @@ MAX_ROBUSTNESS = 1e9
 #: evaluates them on a grid of samples that far apart instead (the SUMO step, at which the
 #: traffic's signals change; a violation shorter than it can be missed)
 PERIOD = 0.0
+#: the metrics :func:`check_run` adds to a run (absent where requirements are not evaluated: a Gym env)
+METRIC_KEYS = ("requirements", "first_violation")
 #: the largest grid period accepted (s)
 MAX_PERIOD = 10.0
 
@@ -797,8 +819,7 @@ def check_run(scenario, result, requirements: Sequence[Requirement], period: flo
             result.events.insert(at, Event(v.violated_at, "requirement", text, "WARN"))
             scenario.recorder.event(v.violated_at, f"[requirement] {text}", "WARN")
     if requirements:
-        result.metrics["requirements"] = rob
-        result.metrics["first_violation"] = first
+        result.metrics.update(zip(METRIC_KEYS, (rob, first), strict=True))
     return verdicts
 
 

@@ -286,10 +286,23 @@ def build(what: RunSpec | ResolvedRun) -> Scenario:
         backend_options=spec.sim_options,
     )
     if reqs:
-        from ego.requirements import check_run
+        from ego.requirements import PREVENTABLE_SIGNAL, check_run
 
         period = spec.requirement_period
-        scenario.on_result = lambda sc, result: check_run(sc, result, reqs, period)
+        preventable = any(PREVENTABLE_SIGNAL in r.signals for r in reqs)
+
+        def on_result(sc: Scenario, result: RunResult) -> None:
+            if preventable and result.metrics.get("collision") and "collision_preventable" not in result.metrics:
+                # no_preventable_collision's question, asked before the verdicts: the careful
+                # driver's run on the same scenario (libsumo runs one simulation per process:
+                # this run's is closed first; its trace and metrics are complete)
+                sc._close_bridge()
+                answer = collision_preventable(resolved, result)
+                if answer is not None:
+                    result.metrics["collision_preventable"] = answer
+            check_run(sc, result, reqs, period)
+
+        scenario.on_result = on_result
     return scenario
 
 
@@ -393,7 +406,8 @@ def run(what: RunSpec | ResolvedRun) -> RunResult:
     if failed is not None:
         raise failed
     spec = resolved.spec
-    if spec.preventable or (spec.preventable is None and result.metrics.get("collision")):
+    asked = "collision_preventable" in result.metrics  # by a requirement (no_preventable_collision)
+    if not asked and (spec.preventable or (spec.preventable is None and result.metrics.get("collision"))):
         preventable = collision_preventable(resolved, result)
         if preventable is not None:
             result.metrics["collision_preventable"] = preventable

@@ -1,6 +1,7 @@
 """The worked examples of docs/architecture.md run as written: a controller, a metric and a
 traffic simulator added from outside the package, each checked against facts derived by hand
-(the scenario example: tests/test_kit_example.py)."""
+(the scenario example: tests/test_kit_example.py; the OpenSCENARIO action example:
+tests/openscenario/test_xosc_registry.py)."""
 
 from __future__ import annotations
 

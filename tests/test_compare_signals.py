@@ -129,6 +129,7 @@ def test_a_killed_compare_leaves_no_process_behind(sig, tmp_path):
 
 
 @pytest.mark.sumo
+@pytest.mark.long
 def test_a_second_compare_into_a_busy_folder_is_refused(tmp_path):
     out = tmp_path / "cmp"
     p = _compare(out, "--controllers", "pid", "--seeds", "2")

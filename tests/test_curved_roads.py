@@ -38,6 +38,56 @@ def test_steady_steer_of_the_plants():
     assert steady_steer(linear)(1 / 200, 20.0) == pytest.approx((d.lf + d.lr + k_us * 400.0) / 200)
 
 
+def _path_turn_error_braking(with_speed_term: bool, kappa: float = 1 / 250, decel: float = 4.0) -> float:
+    """Report 000's car settled on a curve of ``kappa`` at 20 m/s on its feed-forward steer alone,
+    then braking at ``decel`` for 2 s, steered by the feed-forward (open loop): how far (rad) its
+    path's heading (yaw + side slip) has turned beyond kappa times the distance driven."""
+    p = NonlinearBicycleParams()
+    car = BicyclePlant(NonlinearBicycle(p), VehicleGeometry(), 0.01, state=(0.0, 20.0, 0.0, 0.0, 0.0, 20.0 * kappa))
+    ff = steady_steer(car)
+    hold = p.f * p.m * p.g / p.Nw  # the rolling resistance: a constant speed
+
+    def path_heading():
+        _, u, _, v, psi, _ = car.state
+        return psi + math.atan2(v, u)
+
+    for _ in range(800):
+        car.step((hold, ff(kappa, car.state[1])))
+    start, s, accel = path_heading(), 0.0, 0.0
+    for _ in range(200):
+        u = car.state[1]
+        car.step((hold - p.m * decel / p.Nw, ff(kappa, u, accel if with_speed_term else 0.0)))
+        accel = (car.state[1] - u) / 0.01
+        s += 0.01 * math.hypot(car.state[1], car.state[3])
+    return path_heading() - start - kappa * s
+
+
+def test_the_feedforward_holds_the_curve_while_braking():
+    """The speed change's term (SteadySteer.transient, from the bicycle's kinematics): braking at
+    4 m/s^2 from 20 m/s in the R 250 m arc, report 000's car on the steady-state steer alone turns
+    in by 0.011 rad beyond the arc in 2 s (its path tightens: 0.13 m off its lane in the cut-in);
+    with the term by 0.0003 rad. A speed change on a straight road adds nothing."""
+    without, with_term = _path_turn_error_braking(False), _path_turn_error_braking(True)
+    assert without > 0.008  # turned in, towards the curve's centre
+    assert abs(with_term) < 0.05 * without
+    car = BicyclePlant(NonlinearBicycle(NonlinearBicycleParams()), VehicleGeometry(), 0.01)
+    ff = steady_steer(car)
+    assert ff.transient == pytest.approx(0.0653, abs=1e-4)
+    assert ff(0.0, 20.0, -8.0) == 0.0
+
+
+def test_the_emergency_lane_change_overshoots_in_the_r250_arcs_as_on_the_straight_road():
+    """fuzzy (the largest overshoot, 1.23 m straight) brakes through its lane change: within
+    0.1 m of its straight-road overshoot in either arc (left-250 was +0.132 m without the
+    feed-forward's speed-change term; docs/results/curved-roads.md)."""
+    overshoot = {
+        road: run(RunSpec("emergency-brake", "fuzzy", overrides={"road": road})).metrics["max_overshoot"]
+        for road in ("straight", "left-250", "right-250")
+    }
+    for road in ("left-250", "right-250"):
+        assert abs(overshoot[road] - overshoot["straight"]) <= 0.1, overshoot
+
+
 def test_the_dynamic_bicycle_holds_the_curve_on_its_steady_steer():
     """Independent of the formula: the linear bicycle integrated on its steady steer settles at
     the yaw rate v kappa."""
@@ -123,10 +173,12 @@ def _never_overstated(r: dict, under: float) -> None:
 def test_the_front_gap_and_ttc_are_never_overstated_in_the_inner_lane_of_a_curve():
     # seed 0 changes to the left (inner) lane of the R 250 m arc: the gap is measured along
     # it, against the arc between SUMO's outlines (scripts/curved_gap_check.py); measured
-    # along the start lane it was 1.13 m (1.4 %) too long here
+    # along the start lane it was 1.13 m (1.4 %) too long here. Understated by up to 0.20 m at
+    # the instant SUMO has the ego's front bumper in one lane and the sensor in the next (as on
+    # any road, the long test below)
     check = _gap_check().check
     r = check("left-250", "pid", 0)
-    _never_overstated(r, under=0.1)
+    _never_overstated(r, under=0.25)
     assert r["sumo_over"] > 0.3  # SUMO's getLeader is longer there: lane positions, not the arc
 
 
@@ -162,13 +214,87 @@ def test_a_file_scenario_on_a_curved_opendrive_road_follows_its_lane():
     assert off.status == "failed" and np.abs(off.column("e_lat")).max() > 1.0
 
 
-def _middle_lane(name):
+def _lane_parts(name, index):
+    """Lane ``index`` of each edge of a curved motorway, in driving order (motorway, motorway.1, ...)."""
     import xml.etree.ElementTree as ET
 
-    from ego.lane_frame import LanePolyline
+    root = ET.parse(net_file(name)).getroot()
+    edges = [e for e in root.iter("edge") if e.get("function") != "internal"]
+    edges.sort(key=lambda e: int(e.get("id").partition(".")[2] or 0))
+    return [
+        [tuple(map(float, p.split(","))) for p in e.find(f"lane[@index='{index}']").get("shape").split()] for e in edges
+    ]
 
-    lane = ET.parse(net_file(name)).getroot().find(".//lane[@id='motorway_1']")
-    return LanePolyline([tuple(map(float, p.split(","))) for p in lane.get("shape").split()])
+
+def _middle_lane(name):
+    from ego.lane_frame import LanePolyline
+    from ego.scenarios.motorway import join_lanes
+
+    return LanePolyline(join_lanes(_lane_parts(name, 1)))
+
+
+def test_the_curved_motorways_are_short_edges_whose_lanes_join_to_the_design():
+    """Each curved road is cut into edges of about 100 m (SUMO maps the ego onto few shape
+    points a step); joined, each lane is the one-edge road's: the middle lane's points are the
+    design's centre line (sumo_nets/motorway_arcs.py) to the networks' 0.1 mm precision."""
+    import sys
+
+    sys.path.insert(0, str(net_file("highway").parents[1]))
+    from motorway_arcs import ARCS, PIECE, centre_line, clothoid_line
+
+    from ego.scenarios.motorway import join_lanes
+
+    for road, name in MOTORWAY_ROADS.items():
+        if road == "straight":
+            continue
+        design = clothoid_line() if road == "clothoid" else centre_line(*ARCS[road][1:])
+        parts = _lane_parts(name, 1)
+        assert len(parts) >= 8, road
+        assert max(len(p) for p in parts[1:-1]) <= PIECE / 4 + 3, road  # a few points a lane
+        middle = join_lanes(parts)
+        assert len(middle) == len(design), road
+        assert max(math.dist(a, b) for a, b in zip(middle, design)) < 2e-4, road
+        for side in (0, 2):  # the outer lanes meet at every joint too
+            assert len(join_lanes(_lane_parts(name, side))) == len(design), (road, side)
+
+
+def test_a_file_scenario_drives_the_whole_cut_road():
+    """A scenario file on a curved motorway's .net.xml names road ``motorway`` (its first edge):
+    a LanePosition s runs on through the edges after it, and the ego's road is the joined
+    lane, so ALKS 4.1 drives its 60 s (on the first edge alone it ended at 448 m, 11.8 s)."""
+    from pathlib import Path
+
+    from ego.openscenario.roads import RoadMap
+
+    roads = RoadMap(net_file(MOTORWAY_ROADS["left-250"]), False)
+    lane, pos = roads.lane_position("motorway", -2, 1000.0)
+    first = roads.lane_position("motorway", -2, 10.0)[0]
+    assert lane.edge.startswith("motorway.") and 0 < pos < lane.length
+    assert sum(e.lanes[0].length for _, e, _ in roads.sections("motorway")) == pytest.approx(3000.0, abs=0.01)
+    assert first.edge == "motorway"
+    xosc = Path(__file__).resolve().parents[1] / "scenarios" / "alks" / "alks_4_1_lane_keeping_left_250.xosc"
+    r = run(RunSpec(str(xosc), "pid"))
+    assert r.status == "completed" and r.metrics["sim_time"] == pytest.approx(60.0, abs=0.05), r.metrics
+
+
+def test_cars_depart_beyond_the_first_edge_of_a_curved_motorway():
+    """The background reaches 700 m past the ego, many edges into the road: every car departs
+    where it is meant to (SumoBridge.add_vehicles starts it on the edge it is on), along the
+    ego's lane as on the straight road."""
+    from ego.runner import build
+    from ego.sim.types import EGO
+
+    for road in ("straight", "left-250"):
+        scenario = build(RunSpec("emergency-brake", "pid", overrides={"road": road, "traffic_density": 0.3}))
+        try:
+            scenario.reset()
+            world = scenario.world
+            ids, rows = scenario.bridge.poses()
+            lane = world.lanes[world.config.ego_lane]
+            stations = sorted(lane.project(r[0], r[1])[0] for vid, r in zip(ids, rows) if vid != EGO)
+            assert stations[-1] > 900.0, road  # past 400 m, the first edge of left-250
+        finally:
+            scenario.close()
 
 
 def test_the_changing_curvature_road_is_its_clothoids():

@@ -120,3 +120,19 @@ def test_a_bad_page_or_table_is_one_line_and_exit_2(capsys):
     err = capsys.readouterr().err.strip()
     assert err.startswith("python -m ego.docs: error: unknown page 'nope' (known: ") and "\n" not in err
     assert docs.main(["results", "--table", "nope"]) == 2
+
+
+def test_the_openscenario_subset_table_is_the_registrys(capsys):
+    """docs/openscenario.md's supported-subset table is what the element registry makes
+    (``python -m ego.docs openscenario-table`` rewrites it), beside esmini's recorded coverage."""
+    from ego.docs import subset
+
+    assert docs.main(["openscenario-table", "--check"]) == 0, "run: python -m ego.docs openscenario-table"
+    assert "is the registry's" in capsys.readouterr().out
+    data = subset.esmini()
+    assert re.fullmatch(r"[0-9a-f]{40}", data["commit"]) and data["commit"] in data["source"]
+    assert subset.esmini_cell(("SpeedAction",), data["elements"]) == "yes"
+    assert subset.esmini_cell(("CatalogLocations", "MiscObjectCatalog"), data["elements"]) == (
+        "yes; `MiscObjectCatalog` no"
+    )
+    assert subset.esmini_cell(("License",), data["elements"]) == "not listed"

@@ -93,6 +93,7 @@ def test_failure_during_the_run_ends_it_in_error_exit_1(tmp_path, case):
     assert (tmp_path / "t.csv").exists()  # the trace so far is kept
 
 
+@pytest.mark.long
 def test_os_exit_in_a_compare_worker_is_an_error_row(tmp_path):
     ref = _file(tmp_path, step="os._exit(0)")
     r = _ego(tmp_path, "compare", "emergency-brake", "--controllers", f"pid,{ref}", "--jobs", "2", "--out", "o")

@@ -8,7 +8,8 @@ import sys
 from ego.checks import whole_number
 from ego.cli.common import add_address, add_engine, add_jobs, add_out
 
-OPTIMIZERS = ("cma", "bo", "bo-tpe", "random", "lhs")
+#: the optimisers (psy-taliro's two where psy-taliro is installed: ego's test extra)
+OPTIMIZERS = ("cma", "bo", "bo-tpe", "random", "lhs", "psytaliro-uniform", "psytaliro-annealing")
 UNTIL = ("first", "budget")
 
 

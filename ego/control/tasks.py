@@ -79,7 +79,7 @@ ROAD_FRAME = (
         "rad",
         "curvature feed-forward: the plant's steady-state front steer on the lane's curvature at its "
         "speed (+ left; the motorway and file scenarios: the target lane's mean curvature over the "
-        "next 0.4 s)",
+        "next 0.4 s, and for report 000's car the steer its speed's change takes on that curvature)",
     ),
     Signal("accel_ref", "m/s^2", "planned axial acceleration (tasks commanding a_x)"),
     Signal("lane", "-", "the lane s is measured along (road preview), or None"),

@@ -1140,7 +1140,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     res.add_argument("--table", action="append", default=[], help="only this table (the marker's NAME)")
     res.add_argument("--check", action="store_true", help="compare with the committed text, write nothing")
     res.add_argument("--jobs", type=int, default=None, help="worker processes (default: one per CPU)")
+    osc = sub.add_parser(
+        "openscenario-table", help="rewrite docs/openscenario.md's supported-subset table from the element registry"
+    )
+    osc.add_argument("--check", action="store_true", help="compare with the committed text, write nothing")
     args = ap.parse_args(argv)
+    if args.command == "openscenario-table":
+        from ego.docs import subset
+
+        current = subset.regenerate(args.check)
+        if args.check:
+            print(f"{subset.PAGE.name}: the subset table {'is' if current else 'differs from'} the registry's")
+            return 0 if current else 1
+        print(f"{'kept' if current else 'rewrote'} the subset table of {subset.PAGE.name}")
+        return 0
     try:
         if not RESULTS.is_dir():
             raise ConfigError(

@@ -1,4 +1,5 @@
-"""``python -m ego.docs results [--page NAME] [--table NAME] [--check]``."""
+"""``python -m ego.docs results [--page NAME] [--table NAME] [--check]``,
+``python -m ego.docs openscenario-table [--check]``."""
 
 import sys
 

@@ -4,15 +4,22 @@ by ``python -m ego.docs`` (a checkout's, not the wheel's), and its convergence f
 from __future__ import annotations
 
 from ego.falsify.bench import (
+    COARSE_CELLS,
     OPTIMIZERS,
+    RATE_SPEC,
+    REGION_BOX,
+    REGION_CELLS,
     ROOT,
     SURROGATE_RADIUS,
     BenchJob,
     SurrogateJob,
+    available,
     convergence_figure,
     dense_jobs,
     fmt_runs,
+    grid_jobs,
     quartiles,
+    region_share,
     requirements,
     wilson,
 )
@@ -172,11 +179,14 @@ def docs_tables() -> list:
             "A check of the optimisers' wiring, not the result.",
         ),
     )
-    rate_jobs = {opt: tuple(BenchJob(opt, s, RATE_BUDGET) for s in range(RATE_REPS)) for opt in OPTIMIZERS}
+    rate_opts = available()
+    rate_jobs = {
+        opt: tuple(BenchJob(opt, s, RATE_BUDGET, spec=str(RATE_SPEC)) for s in range(RATE_REPS)) for opt in rate_opts
+    }
     rate = Table(
         "falsify-rate",
         "falsify",
-        (f"python benchmarks/bench_falsify.py --repetitions {RATE_REPS} --budget {RATE_BUDGET}",),
+        (f"python benchmarks/bench_falsify.py --rate --repetitions {RATE_REPS} --budget {RATE_BUDGET}",),
         (
             "requirement, optimiser",
             "falsified",
@@ -186,13 +196,60 @@ def docs_tables() -> list:
         ),
         tuple(
             Row(f"{name}, {opt}", rate_jobs[opt], _rate_cells(name, RATE_REPS, RATE_BUDGET))
-            for name in names
-            for opt in OPTIMIZERS
+            for name in requirements(RATE_SPEC)
+            for opt in rate_opts
         ),
         (
-            f"Real ego runs as above, a fixed budget of {RATE_BUDGET} runs, optimiser seeds 0-{RATE_REPS - 1}; "
-            "the rate is the share of repetitions that found a violation within the budget, with its "
-            f"Wilson score interval; a repetition that found none counts as more than {RATE_BUDGET} runs.",
+            f"Real ego runs as above (benchmarks/falsify/rate.toml: bench.toml with min_speed_low), a fixed "
+            f"budget of {RATE_BUDGET} runs, optimiser seeds 0-{RATE_REPS - 1}; the rate is the share of "
+            "repetitions that found a violation within the budget, with its Wilson score interval; a "
+            f"repetition that found none counts as more than {RATE_BUDGET} runs. psy-taliro's rows: its "
+            "UniformRandom and DualAnnealing driving ego's runs through ego.falsify (psy-taliro 3.2.0).",
         ),
     )
-    return [landscape, real, rate, surrogate]
+    return [landscape, real, rate, region_table(), surrogate]
+
+
+def _region_cells(name: str, coarse_n: int):
+    def cells(ms: list[list[dict]]) -> list[str]:
+        coarse = [p for m in ms[:coarse_n] for p in m]
+        fine = [p for m in ms[coarse_n:] for p in m]
+        r = region_share(coarse, fine, name)
+        return [
+            f"{r['coarse_bad']}/{r['coarse_n']}",
+            f"{r['outside_bad']} ({r['outside_min']:.3g})",
+            f"{r['fine_bad']}/{r['fine_n']}",
+            f"{100 * r['volume']:.2f} %",
+            f"{100 * r['share']:.3f} %",
+        ]
+
+    return cells
+
+
+def region_table():
+    """How much of the box each requirement of the rate spec violates, on grids of runs."""
+    from ego.docs.common import Row, Table
+
+    coarse = grid_jobs(((0.0, 1.0),) * 3, COARSE_CELLS)
+    fine = grid_jobs(REGION_BOX, REGION_CELLS)
+    jobs = tuple(coarse) + tuple(fine)
+    return Table(
+        "falsify-region",
+        "falsify",
+        ("python benchmarks/bench_falsify.py --region",),
+        (
+            "requirement",
+            "violating cells, coarse grid",
+            "of them outside the sub-box (smallest robustness there)",
+            "violating cells, fine grid of the sub-box",
+            "sub-box's share of the box",
+            "violating share of the box",
+        ),
+        tuple(Row(name, jobs, _region_cells(name, len(coarse))) for name in requirements(RATE_SPEC)),
+        (
+            f"Runs at the centres of a {'x'.join(map(str, COARSE_CELLS))} grid of cells over the whole box, "
+            f"and of a {'x'.join(map(str, REGION_CELLS))} grid over the sub-box ego_speed 16.5-25 m/s, lead_gap "
+            "10-32 m, lead_decel 5.8-9 m/s^2; the violating share is the fine grid's share times the sub-box's "
+            "volume, which holds where no coarse cell outside the sub-box violates.",
+        ),
+    )

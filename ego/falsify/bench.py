@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import itertools
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,10 +28,25 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
 BENCH_SPEC = ROOT / "benchmarks" / "falsify" / "bench.toml"
+#: the fixed-budget table's spec: bench.toml's space and requirements and one whose violating
+#: region is under 0.2 % of the box
+RATE_SPEC = ROOT / "benchmarks" / "falsify" / "rate.toml"
 DENSE_SPEC = ROOT / "benchmarks" / "falsify" / "dense.toml"
 #: where the repetitions keep their runs (resumable; a changed spec gets a folder of its own)
 CACHE = ROOT / "runs" / "bench-falsify"
 OPTIMIZERS = ("cma", "bo", "random", "lhs")
+#: psy-taliro's uniform random and dual annealing (rows where psy-taliro is installed)
+PSYTALIRO = ("psytaliro-uniform", "psytaliro-annealing")
+
+
+def available(optimizers=OPTIMIZERS + PSYTALIRO) -> tuple[str, ...]:
+    """``optimizers`` without psy-taliro's where it is not installed (not a dependency of ego)."""
+    import importlib.util
+
+    have = importlib.util.find_spec("staliro") is not None
+    return tuple(o for o in optimizers if have or o not in PSYTALIRO)
+
+
 #: a finished repetition's figures, beside its runs (delete the folder to search again)
 RESULT = "result.json"
 
@@ -131,17 +147,82 @@ class SurrogateJob:
         centre = np.array(SURROGATE_CENTRE)
         opt = make(self.optimizer, len(centre), self.batch, self.seed, self.budget)
         n, best, curve = 0, np.inf, []
-        while n < self.budget:
-            x = opt.ask()
-            rob = np.linalg.norm(x - centre, axis=1) - SURROGATE_RADIUS
-            for r in rob:
-                n += 1
-                best = min(best, float(r))
-                curve.append(best)
-                if r < 0:
-                    return {"runs": n, "curve": curve}
-            opt.tell(x, np.array([squash(float(r)) for r in rob]))
-        return {"runs": None, "curve": curve}
+        try:
+            while n < self.budget:
+                x = opt.ask()
+                rob = np.linalg.norm(x - centre, axis=1) - SURROGATE_RADIUS
+                for r in rob:
+                    n += 1
+                    best = min(best, float(r))
+                    curve.append(best)
+                    if r < 0:
+                        return {"runs": n, "curve": curve}
+                opt.tell(x, np.array([squash(float(r)) for r in rob]))
+            return {"runs": None, "curve": curve}
+        finally:
+            getattr(opt, "close", lambda: None)()
+
+
+#: the grids that measure the small requirement's region (:class:`GridJob`): cells per
+#: dimension over the whole box, and over the sub-box (in the unit cube) that holds every
+#: violation the coarse grid and the dense Sobol sweep found, with a margin
+COARSE_CELLS = (12, 12, 12)
+REGION_BOX = ((6.5 / 15, 1.0), (0.0, 22 / 90), (3.8 / 7, 1.0))  # ego_speed 16.5-25, lead_gap 10-32, lead_decel 5.8-9
+REGION_CELLS = (24, 24, 16)
+
+
+@dataclass(frozen=True)
+class GridJob:
+    """One slice of a grid of cells over a box of the unit cube (``box``: (lo, hi) per
+    dimension): a run at the centre of every cell whose first coordinate is cell ``index``;
+    each point's unit coordinates and the robustness of every requirement of ``spec``."""
+
+    box: tuple[tuple[float, float], ...]
+    cells: tuple[int, ...]
+    index: int
+    spec: str = str(RATE_SPEC)
+
+    def points(self) -> list[np.ndarray]:
+        axes = [lo + (hi - lo) * (np.arange(n) + 0.5) / n for (lo, hi), n in zip(self.box, self.cells)]
+        axes[0] = axes[0][self.index : self.index + 1]
+        return [np.array(p) for p in itertools.product(*axes)]
+
+    def __call__(self) -> list[dict]:
+        from ego.falsify.spec import load
+        from ego.runner import RunSpec, run
+
+        spec = load(Path(self.spec))
+        out = []
+        for u in self.points():
+            seed, overrides = spec.point(u)
+            result = run(RunSpec(spec.scenario, spec.controllers[0], seed, overrides, requirements=spec.requirements))
+            out.append({"u": [float(x) for x in u], **result.metrics["requirements"]})
+        return out
+
+
+def grid_jobs(box: tuple[tuple[float, float], ...], cells: tuple[int, ...], spec: Path = RATE_SPEC) -> list[GridJob]:
+    return [GridJob(box, cells, i, str(spec)) for i in range(cells[0])]
+
+
+def region_share(coarse: list[dict], fine: list[dict], name: str, box=REGION_BOX) -> dict:
+    """The share of the unit cube where ``name`` is violated: the share of the fine grid's
+    cells (over ``box``) that violate times the box's volume, valid when no coarse cell
+    outside ``box`` violates (``outside``: the count that do, and their smallest robustness)."""
+    inside = np.array([[lo <= x <= hi for x, (lo, hi) in zip(p["u"], box)] for p in coarse]).all(axis=1)
+    rob = np.array([p[name] for p in coarse], dtype=float)
+    fine_rob = np.array([p[name] for p in fine], dtype=float)
+    volume = float(np.prod([hi - lo for lo, hi in box]))
+    bad = int((fine_rob < 0).sum())
+    return {
+        "share": volume * bad / len(fine_rob),
+        "fine_bad": bad,
+        "fine_n": len(fine_rob),
+        "volume": volume,
+        "coarse_bad": int((rob < 0).sum()),
+        "coarse_n": len(rob),
+        "outside_bad": int((rob[~inside] < 0).sum()),
+        "outside_min": float(rob[~inside].min()) if (~inside).any() else math.inf,
+    }
 
 
 #: where ``ego sweep benchmarks/falsify/dense.toml --out runs/falsify-dense`` keeps its runs

@@ -11,6 +11,12 @@ point for point (how ``ego falsify`` resumes).
   the batch, restarted with a doubled population when it converges (IPOP).
 * ``bo``: Bayesian optimisation with optuna's Gaussian-process sampler (it accounts for
   the trials of a batch still running), or its TPE sampler (``bo-tpe``) where a GP does not fit.
+* ``psytaliro-uniform`` and ``psytaliro-annealing``: psy-taliro's ``UniformRandom`` and
+  ``DualAnnealing`` (scipy's generalised simulated annealing without local search), run by
+  psy-taliro's own test loop (``staliro.staliro`` with a cost function) in a helper thread
+  whose cost function hands each sample to :meth:`PsyTaliro.ask` and waits for the run's
+  robustness from :meth:`PsyTaliro.tell`: one point at a time, as psy-taliro proposes them.
+  psy-taliro is not a dependency of ego (``pip install psy-taliro``; ego's ``test`` extra).
 
 The dimensions have types (``kinds``: one :class:`Kind` per dimension, default every one
 continuous): a boolean is a categorical dimension for optuna (``suggest_categorical``) and an
@@ -56,7 +62,9 @@ def on_levels(u: np.ndarray, kinds: Sequence[Kind]) -> np.ndarray:
     return u + 0.0  # no -0.0
 
 
-NAMES = ("cma", "bo", "bo-tpe", "random", "lhs")
+NAMES = ("cma", "bo", "bo-tpe", "random", "lhs", "psytaliro-uniform", "psytaliro-annealing")
+#: psy-taliro's optimisers by ego's name for them
+PSYTALIRO = {"psytaliro-uniform": "UniformRandom", "psytaliro-annealing": "DualAnnealing"}
 
 
 def squash(y: float) -> float:
@@ -199,6 +207,94 @@ class Bayesian:
             self.study.tell(trial, float(s))
 
 
+def unsquash(s: float) -> float:
+    """The robustness a :func:`squash` score stands for (a clipped infinity: +-1e9)."""
+    return math.copysign(math.expm1(abs(s)), s)
+
+
+class _Stop(Exception):
+    """Raised in psy-taliro's thread by its cost function once the search no longer asks."""
+
+
+class PsyTaliro:
+    """psy-taliro's optimiser ``kind`` (:data:`PSYTALIRO`) over the unit cube, driven by
+    ``staliro.staliro`` (one optimisation of ``budget`` samples, seeded with ``seed``) in a
+    helper thread. Its cost function puts each sample on a queue for :meth:`ask` and returns
+    the robustness :meth:`tell` gives back (unsquashed: psy-taliro sees the requirement's
+    robustness, as its users give it). When psy-taliro's optimisation ends before the search
+    does, a new one starts with the next seed. Deterministic given ``seed``."""
+
+    def __init__(self, d: int, seed: int, budget: int, kind: str, kinds: Sequence[Kind] | None = None) -> None:
+        try:
+            import staliro  # noqa: F401
+        except ImportError:
+            from ego.params import ConfigError
+
+            raise ConfigError(
+                f"optimizer {kind!r} needs psy-taliro, which is not installed (pip install psy-taliro)"
+            ) from None
+        import queue
+
+        self.d, self.seed, self.budget, self.kind = d, seed, budget, kind
+        self.kinds = _kinds(kinds, d)
+        self.restarts = 0
+        self._samples: queue.Queue = queue.Queue(maxsize=1)
+        self._costs: queue.Queue = queue.Queue()
+        self._start()
+
+    def _start(self) -> None:
+        import threading
+
+        import staliro
+        from staliro import optimizers
+
+        optimizer = getattr(optimizers, PSYTALIRO[self.kind])()
+        options = staliro.TestOptions(
+            static_inputs={f"x{i}": (0.0, 1.0) for i in range(self.d)},
+            iterations=self.budget,
+            runs=1,
+            seed=1 + self.seed + 1_000_003 * self.restarts,  # psy-taliro takes seeds > 0
+        )
+
+        @staliro.costfunc
+        def cost(inputs) -> float:
+            self._samples.put(np.array([inputs.static[f"x{i}"] for i in range(self.d)], dtype=float))
+            value = self._costs.get()
+            if value is None:
+                raise _Stop
+            return value
+
+        def optimise() -> None:
+            try:
+                staliro.staliro(cost, optimizer, options)
+                self._samples.put(None)  # its budget is spent: the next ask starts another
+            except _Stop:
+                pass
+            except BaseException as exc:  # noqa: BLE001 - psy-taliro's error, raised by the next ask
+                self._samples.put(exc)
+
+        self._thread = threading.Thread(target=optimise, name=f"ego-{self.kind}", daemon=True)
+        self._thread.start()
+
+    def ask(self) -> np.ndarray:
+        x = self._samples.get()
+        if isinstance(x, BaseException):
+            raise x
+        if x is None:
+            self.restarts += 1
+            self._start()
+            return self.ask()
+        return on_levels(np.clip(x, 0.0, 1.0)[None, :], self.kinds)
+
+    def tell(self, points: np.ndarray, scores: np.ndarray) -> None:
+        self._costs.put(unsquash(float(scores[0])))
+
+    def close(self) -> None:
+        """End psy-taliro's thread (it waits for a cost once it has proposed a point)."""
+        if self._thread.is_alive():
+            self._costs.put(None)
+
+
 def make(name: str, d: int, batch: int, seed: int, budget: int, kinds: Sequence[Kind] | None = None):
     """The optimiser ``name`` (:data:`NAMES`) for ``d`` dimensions of ``kinds`` (default all
     continuous), proposing ``batch`` points."""
@@ -210,6 +306,8 @@ def make(name: str, d: int, batch: int, seed: int, budget: int, kinds: Sequence[
         return CMAES(d, batch, seed, budget, kinds)
     if name in ("bo", "bo-tpe"):
         return Bayesian(d, batch, seed, budget, tpe=name == "bo-tpe", kinds=kinds)
+    if name in PSYTALIRO:
+        return PsyTaliro(d, seed, budget, name, kinds)
     from ego.params import ConfigError
 
     raise ConfigError(f"unknown optimizer {name!r} (known: {', '.join(NAMES)})")

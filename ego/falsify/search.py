@@ -275,68 +275,73 @@ def _search(
         store.add(row)
         search.ran += 1
 
-    while len(search.evaluations) < budget:
-        units = opt.ask()
-        full = len(units)
-        left = budget - len(search.evaluations)
-        units = units[: max(1, left // k)]
-        # each point's runs (its seeds), within the budget
-        points = [run for u in units for run in spec.runs_of(*spec.point(u))][:left]
-        ids = [spec.run_id(controller, s, o) for s, o in points]
-        tasks = {}
-        fresh = set()
-        done: dict[str, dict] = {}  # the batch's error rows of values no run takes
-        for rid, (s, o) in zip(ids, points):
-            if rid not in known and rid not in fresh:
-                fresh.add(rid)
-                r = Run(rid, spec.scenario, controller, s, o)
-                try:
-                    tasks[rid] = task_of(r, None, "none", spec.requirements, spec.requirement_period)
-                except Exception as exc:  # noqa: BLE001 - values no run takes: the run's row says so
-                    done[rid] = error_row(r, f"{type(exc).__name__}: {exc}")
-        try:
-            for outcome in executor.run(execute, tasks.values()):
-                task = outcome.task
-                if outcome.value is None:
-                    row = error_row(task.key, outcome.error or "the worker died")
-                else:
-                    row = row_of(task.key, outcome.value)
-                if row["status"] == "interrupted":
-                    raise KeyboardInterrupt
-                keep(row)  # into the store as it finishes: on disk within the store's 2 s
-        finally:  # the rows no run made (values no run takes) are kept too, interrupted or not
-            for rid in ids:
-                if rid in done and rid not in known:
-                    keep(done[rid])
-        for rid, (s, o) in zip(ids, points):
-            row = known[rid]
-            search.evaluations.append(
-                Evaluation(
-                    len(search.evaluations),
-                    controller,
-                    s,
-                    o,
-                    rid,
-                    robustness_of(row, spec.requirement),
-                    row.get("status", ""),
-                    cached=rid not in fresh,
+    try:
+        while len(search.evaluations) < budget:
+            units = opt.ask()
+            full = len(units)
+            left = budget - len(search.evaluations)
+            units = units[: max(1, left // k)]
+            # each point's runs (its seeds), within the budget
+            points = [run for u in units for run in spec.runs_of(*spec.point(u))][:left]
+            ids = [spec.run_id(controller, s, o) for s, o in points]
+            tasks = {}
+            fresh = set()
+            done: dict[str, dict] = {}  # the batch's error rows of values no run takes
+            for rid, (s, o) in zip(ids, points):
+                if rid not in known and rid not in fresh:
+                    fresh.add(rid)
+                    r = Run(rid, spec.scenario, controller, s, o)
+                    try:
+                        tasks[rid] = task_of(r, None, "none", spec.requirements, spec.requirement_period)
+                    except Exception as exc:  # noqa: BLE001 - values no run takes: the run's row says so
+                        done[rid] = error_row(r, f"{type(exc).__name__}: {exc}")
+            try:
+                for outcome in executor.run(execute, tasks.values()):
+                    task = outcome.task
+                    if outcome.value is None:
+                        row = error_row(task.key, outcome.error or "the worker died")
+                    else:
+                        row = row_of(task.key, outcome.value)
+                    if row["status"] == "interrupted":
+                        raise KeyboardInterrupt
+                    keep(row)  # into the store as it finishes: on disk within the store's 2 s
+            finally:  # the rows no run made (values no run takes) are kept too, interrupted or not
+                for rid in ids:
+                    if rid in done and rid not in known:
+                        keep(done[rid])
+            for rid, (s, o) in zip(ids, points):
+                row = known[rid]
+                search.evaluations.append(
+                    Evaluation(
+                        len(search.evaluations),
+                        controller,
+                        s,
+                        o,
+                        rid,
+                        robustness_of(row, spec.requirement),
+                        row.get("status", ""),
+                        cached=rid not in fresh,
+                    )
                 )
-            )
-        if len(units) == full and len(points) == full * k:
-            # a point's score: its worst robustness over its seeds (NaN only when none has one)
-            rob = np.array([e.robustness for e in search.evaluations[-full * k :]]).reshape(full, k)
-            worst = [float(np.nanmin(r)) if not np.isnan(r).all() else math.nan for r in rob]
-            opt.tell(units, np.array([squash(w) for w in worst]))
-        if progress:
-            best = search.best_so_far()[-1]
-            found = len(search.violations)
-            sys.stderr.write(
-                f"{controller}: {len(search.evaluations)}/{budget} runs, best robustness "
-                f"{best:.4g}, {found} violation(s)\n"
-            )
-            sys.stderr.flush()
-        if until == "first" and search.violations:
-            break
+            if len(units) == full and len(points) == full * k:
+                # a point's score: its worst robustness over its seeds (NaN only when none has one)
+                rob = np.array([e.robustness for e in search.evaluations[-full * k :]]).reshape(full, k)
+                worst = [float(np.nanmin(r)) if not np.isnan(r).all() else math.nan for r in rob]
+                opt.tell(units, np.array([squash(w) for w in worst]))
+            if progress:
+                best = search.best_so_far()[-1]
+                found = len(search.violations)
+                sys.stderr.write(
+                    f"{controller}: {len(search.evaluations)}/{budget} runs, best robustness "
+                    f"{best:.4g}, {found} violation(s)\n"
+                )
+                sys.stderr.flush()
+            if until == "first" and search.violations:
+                break
+    finally:  # psy-taliro's optimisers end their thread
+        close = getattr(opt, "close", None)
+        if close is not None:
+            close()
 
 
 def command(spec: FalsifySpec, e: Evaluation, record: str | None = None) -> str:

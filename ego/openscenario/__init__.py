@@ -2,6 +2,9 @@
 
 * :mod:`~ego.openscenario.xmltree` - the XML tree with line numbers, the one-line errors;
 * :mod:`~ego.openscenario.expressions` - ``$param`` references and ``${...}`` expressions;
+* :mod:`~ego.openscenario.registry` - the element registry: one declaration per element ego
+  reads (:mod:`~ego.openscenario.structure`, :mod:`~ego.openscenario.actions`,
+  :mod:`~ego.openscenario.conditions`), the allow-list, the dispatch and the subset table;
 * :mod:`~ego.openscenario.loader` - the supported subset, checked and read into
   :mod:`~ego.openscenario.model`;
 * :mod:`~ego.openscenario.roads` - .xodr to SUMO with netconvert (cached), lane positions;

@@ -23,7 +23,6 @@ from pathlib import Path
 from xml.sax.saxutils import escape, quoteattr
 
 from ego.openscenario.xmltree import Node, ScenarioFileError
-from ego.params import ConfigError
 
 #: element -> its attribute that names a file or a folder (relative to the scenario file)
 PATH_ATTRIBUTES = {"LogicFile": "filepath", "SceneGraphFile": "filepath", "File": "filepath", "Directory": "path"}
@@ -99,16 +98,9 @@ def concrete_xml(template: str | os.PathLike, values: Mapping[str, object], out:
 
 def check_out(out: Path, force: bool) -> None:
     """``out`` may be written: a new ``.xosc``, one ``ego concrete`` wrote, or any with ``force``."""
-    from ego.checks import check_output_file
+    from ego.checks import check_generated
 
-    check_output_file(str(out), "--out", ".xosc")
-    if out.exists() and not force:
-        with open(out, "rb") as f:
-            head = f.read(512)
-        if GENERATOR.encode() not in head:
-            raise ConfigError(
-                f"bad --out {str(out)!r}: the file exists and ego concrete did not write it (give --force to replace it)"
-            )
+    check_generated(out, force, ".xosc", GENERATOR, "ego concrete", head=512)
 
 
 def write(
@@ -116,14 +108,9 @@ def write(
 ) -> Path:
     """Write the concrete scenario of ``template`` with ``values`` (its own parameters only)
     to ``out``, atomically; nothing is written if a value or the file is refused."""
-    from ego.outputs import write_text
+    from ego.outputs import write_generated
 
     path = Path(out)
     check_out(path, force)
-    text = concrete_xml(template, values, path)
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ConfigError(f"bad --out {str(path)!r}: cannot create its folder ({exc.strerror})") from None
-    write_text(path, text)
+    write_generated(path, concrete_xml(template, values, path))
     return path

@@ -19,6 +19,18 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+#: physical upper bounds of a transition's value (a braking rate of 1e308 is no car's) and of
+#: a condition's delay: a rate in m/s^2 (a speed change) or m/s (a lane change), a time, a
+#: distance (docs/reliability.md, "Limits")
+MAX_RATE = 100.0
+MAX_SECONDS = 86400.0
+MAX_DISTANCE = 1e6
+DYNAMICS_LIMITS = {
+    "rate": (MAX_RATE, "m/s^2 (m/s for a lateral rate)"),
+    "time": (MAX_SECONDS, "s: a day"),
+    "distance": (MAX_DISTANCE, "m"),
+}
+
 #: max |f'| and max |f''| per shape (for rate limits and lateral acceleration)
 PEAK_RATE = {"step": math.inf, "linear": 1.0, "cubic": 1.5, "sinusoidal": 0.5 * math.pi}
 PEAK_CURVATURE = {"step": math.inf, "linear": math.inf, "cubic": 6.0, "sinusoidal": 0.5 * math.pi**2}

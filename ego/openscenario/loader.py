@@ -17,239 +17,14 @@ from pathlib import Path
 from typing import Any
 
 from ego.checks import resolved
+from ego.openscenario import actions as _actions  # noqa: F401 - registers the actions
+from ego.openscenario import conditions as _condition_kinds  # noqa: F401 - registers the conditions
 from ego.openscenario import model as M
+from ego.openscenario import structure as _structure  # noqa: F401 - declares the structural elements
+from ego.openscenario.dynamics import DYNAMICS_LIMITS, MAX_SECONDS
 from ego.openscenario.expressions import ExpressionError, resolve
+from ego.openscenario.registry import ACTIONS, CONDITIONS, action_of, allowed, init_kinds
 from ego.openscenario.xmltree import DOCS, Node, ScenarioFileError, parse_file
-
-#: the position elements ego reads (the children of a Position and its kind)
-POSITIONS = {
-    "WorldPosition",
-    "LanePosition",
-    "RoadPosition",
-    "RelativeLanePosition",
-    "RelativeRoadPosition",
-    "RelativeObjectPosition",
-}
-
-#: what each supported element may contain (tag -> allowed child tags); a child outside
-#: its set is refused as not supported
-CHILDREN: dict[str, set[str]] = {
-    "OpenSCENARIO": {
-        "FileHeader",
-        "ParameterDeclarations",
-        "VariableDeclarations",
-        "CatalogLocations",
-        "RoadNetwork",
-        "Entities",
-        "Storyboard",
-    },
-    "FileHeader": {"License"},
-    "License": set(),
-    "ParameterDeclarations": {"ParameterDeclaration"},
-    "ParameterDeclaration": {"ConstraintGroup"},
-    "ConstraintGroup": {"ValueConstraint"},
-    "VariableDeclarations": {"VariableDeclaration"},
-    "VariableDeclaration": set(),
-    "ValueConstraint": set(),
-    "CatalogLocations": {
-        "VehicleCatalog",
-        "PedestrianCatalog",
-        "MiscObjectCatalog",
-        "ControllerCatalog",
-        "ManeuverCatalog",
-    },
-    "ManeuverCatalog": {"Directory"},
-    "VehicleCatalog": {"Directory"},
-    "PedestrianCatalog": {"Directory"},
-    "MiscObjectCatalog": {"Directory"},
-    "ControllerCatalog": {"Directory"},
-    "Directory": set(),
-    "RoadNetwork": {"LogicFile", "SceneGraphFile"},
-    "LogicFile": set(),
-    "SceneGraphFile": set(),
-    "Entities": {"ScenarioObject"},
-    "ScenarioObject": {"Vehicle", "Pedestrian", "MiscObject", "CatalogReference", "ObjectController"},
-    "ObjectController": {"Controller", "CatalogReference"},
-    "Controller": {"ParameterDeclarations", "Properties"},
-    "Pedestrian": {"ParameterDeclarations", "BoundingBox", "Properties"},
-    "MiscObject": {"ParameterDeclarations", "BoundingBox", "Properties"},
-    "CatalogReference": {"ParameterAssignments"},
-    "ParameterAssignments": {"ParameterAssignment"},
-    "ParameterAssignment": set(),
-    "Vehicle": {
-        "ParameterDeclarations",
-        "BoundingBox",
-        "Performance",
-        "Axles",
-        "Properties",
-        "TrailerHitch",
-        "TrailerCoupler",
-        "Trailer",
-    },
-    "TrailerHitch": set(),
-    "TrailerCoupler": set(),
-    "Trailer": {"EntityRef", "CatalogReference"},
-    "BoundingBox": {"Center", "Dimensions"},
-    "Center": set(),
-    "Dimensions": set(),
-    "Performance": set(),
-    "Axles": {"FrontAxle", "RearAxle", "AdditionalAxle"},
-    "FrontAxle": set(),
-    "RearAxle": set(),
-    "AdditionalAxle": set(),
-    "Properties": {"Property", "File"},
-    "Property": set(),
-    "File": set(),
-    "Storyboard": {"Init", "Story", "StopTrigger"},
-    "Init": {"Actions"},
-    "Actions": {"Private", "GlobalAction"},
-    "GlobalAction": {"EnvironmentAction", "ParameterAction", "VariableAction"},
-    "ParameterAction": {"SetAction", "ModifyAction"},
-    "VariableAction": {"SetAction", "ModifyAction"},
-    "SetAction": set(),
-    "ModifyAction": {"Rule"},
-    "Rule": {"AddValue", "MultiplyByValue"},
-    "AddValue": set(),
-    "MultiplyByValue": set(),
-    "EnvironmentAction": {"Environment"},
-    "Environment": {"ParameterDeclarations", "TimeOfDay", "Weather", "RoadCondition"},
-    "TimeOfDay": set(),
-    "Weather": {"Sun", "Fog", "Precipitation", "Wind"},
-    "Sun": set(),
-    "Fog": set(),
-    "Precipitation": set(),
-    "Wind": set(),
-    "RoadCondition": {"Properties"},
-    "Private": {"PrivateAction"},
-    "PrivateAction": {
-        "TeleportAction",
-        "LongitudinalAction",
-        "LateralAction",
-        "RoutingAction",
-        "SynchronizeAction",
-        "ControllerAction",
-        "ActivateControllerAction",
-    },
-    "ControllerAction": {"ActivateControllerAction", "AssignControllerAction"},
-    "ActivateControllerAction": set(),
-    "AssignControllerAction": {"Controller", "CatalogReference"},
-    "TeleportAction": {"Position"},
-    "SynchronizeAction": {"TargetPositionMaster", "TargetPosition", "FinalSpeed"},
-    "TargetPositionMaster": POSITIONS,
-    "TargetPosition": POSITIONS,
-    "FinalSpeed": {"AbsoluteSpeed", "RelativeSpeedToMaster"},
-    "AbsoluteSpeed": set(),
-    "RelativeSpeedToMaster": set(),
-    "Position": POSITIONS,
-    "WorldPosition": set(),
-    "LanePosition": {"Orientation"},
-    "RoadPosition": {"Orientation"},
-    "RelativeLanePosition": {"Orientation"},
-    "RelativeRoadPosition": {"Orientation"},
-    "RelativeObjectPosition": {"Orientation"},
-    "Orientation": set(),
-    "LongitudinalAction": {"SpeedAction", "LongitudinalDistanceAction", "SpeedProfileAction"},
-    "SpeedProfileAction": {"DynamicConstraints", "SpeedProfileEntry"},
-    "SpeedProfileEntry": set(),
-    "LongitudinalDistanceAction": {"DynamicConstraints"},
-    "DynamicConstraints": set(),
-    "SpeedAction": {"SpeedActionDynamics", "SpeedActionTarget"},
-    "SpeedActionDynamics": set(),
-    "SpeedActionTarget": {"AbsoluteTargetSpeed", "RelativeTargetSpeed"},
-    "AbsoluteTargetSpeed": set(),
-    "RelativeTargetSpeed": set(),
-    "LateralAction": {"LaneChangeAction", "LaneOffsetAction"},
-    "LaneChangeAction": {"LaneChangeActionDynamics", "LaneChangeTarget"},
-    "LaneChangeActionDynamics": set(),
-    "LaneChangeTarget": {"AbsoluteTargetLane", "RelativeTargetLane"},
-    "AbsoluteTargetLane": set(),
-    "RelativeTargetLane": set(),
-    "LaneOffsetAction": {"LaneOffsetActionDynamics", "LaneOffsetTarget"},
-    "LaneOffsetActionDynamics": set(),
-    "LaneOffsetTarget": {"AbsoluteTargetLaneOffset", "RelativeTargetLaneOffset"},
-    "AbsoluteTargetLaneOffset": set(),
-    "RelativeTargetLaneOffset": set(),
-    "RoutingAction": {"FollowTrajectoryAction"},
-    "FollowTrajectoryAction": {"Trajectory", "TrajectoryRef", "TimeReference", "TrajectoryFollowingMode"},
-    "TrajectoryRef": {"Trajectory"},
-    "Trajectory": {"ParameterDeclarations", "Shape"},
-    "Shape": {"Polyline"},
-    "Polyline": {"Vertex"},
-    "Vertex": {"Position"},
-    "TimeReference": {"None", "Timing"},
-    "None": set(),
-    "Timing": set(),
-    "TrajectoryFollowingMode": set(),
-    "Story": {"ParameterDeclarations", "Act"},
-    "Act": {"ManeuverGroup", "StartTrigger", "StopTrigger"},
-    "ManeuverGroup": {"Actors", "Maneuver", "CatalogReference"},
-    "Actors": {"EntityRef"},
-    "EntityRef": set(),
-    "Maneuver": {"ParameterDeclarations", "Event"},
-    "Event": {"Action", "StartTrigger"},
-    "Action": {"PrivateAction", "GlobalAction"},
-    "StartTrigger": {"ConditionGroup"},
-    "StopTrigger": {"ConditionGroup"},
-    "ConditionGroup": {"Condition"},
-    "Condition": {"ByEntityCondition", "ByValueCondition"},
-    "ByEntityCondition": {"TriggeringEntities", "EntityCondition"},
-    "TriggeringEntities": {"EntityRef"},
-    "EntityCondition": {
-        "TimeHeadwayCondition",
-        "TimeToCollisionCondition",
-        "RelativeDistanceCondition",
-        "DistanceCondition",
-        "ReachPositionCondition",
-        "SpeedCondition",
-        "RelativeSpeedCondition",
-        "TraveledDistanceCondition",
-        "StandStillCondition",
-        "AccelerationCondition",
-        "CollisionCondition",
-    },
-    "CollisionCondition": {"EntityRef", "ByType"},
-    "ByType": set(),
-    "StandStillCondition": set(),
-    "AccelerationCondition": set(),
-    "TimeHeadwayCondition": set(),
-    "TimeToCollisionCondition": {"TimeToCollisionConditionTarget"},
-    "TimeToCollisionConditionTarget": {"Position", "EntityRef"},
-    "RelativeDistanceCondition": set(),
-    "DistanceCondition": {"Position"},
-    "ReachPositionCondition": {"Position"},
-    "SpeedCondition": set(),
-    "RelativeSpeedCondition": set(),
-    "TraveledDistanceCondition": set(),
-    "ByValueCondition": {
-        "SimulationTimeCondition",
-        "StoryboardElementStateCondition",
-        "ParameterCondition",
-        "VariableCondition",
-    },
-    "VariableCondition": set(),
-    "SimulationTimeCondition": set(),
-    "StoryboardElementStateCondition": set(),
-    "ParameterCondition": set(),
-}
-
-#: elements accepted and not used (the subset table in docs/openscenario.md says so)
-NOT_USED = {
-    "SceneGraphFile": "the 3D scene is not drawn",
-    "Axles": "ego's own body for the ego; SUMO's for others",
-    "Properties": "no property is read",
-    "TrailerHitch": "descriptive (where a trailer would be hitched; ego tows none)",
-    "TrailerCoupler": "descriptive (where the vehicle would be coupled as a trailer)",
-    "Trailer": "only when it attaches nothing (an empty entityRef or entryName, as the reference player's catalogs write)",
-    "License": "descriptive",
-    "File": "descriptive (a file the vehicle's properties name)",
-    "EnvironmentAction": "done at once: time of day and weather change nothing in ego's dynamics; a RoadCondition"
-    " whose frictionScaleFactor is not 1 is refused",
-    "Orientation": "the lane's heading is used (a relative h turning the entity against its lane is refused)",
-    "Controller": "the ego is driven by ego's controller (-c), the others by SUMO's driver or their script",
-    "ObjectController": "the ego is driven by ego's controller (-c), the others by SUMO's driver or their script",
-    "ActivateControllerAction": "done at once: ego's controller is always active on the ego",
-    "AssignControllerAction": "done at once: the ego keeps ego's controller (-c)",
-}
 
 #: the catalog element (in CatalogLocations) each catalog entry kind is looked for in
 CATALOG_OF = {
@@ -291,24 +66,29 @@ def unsupported(path, node: Node) -> ScenarioFileError:
 
 def _check_tree(path, node: Node) -> None:
     """Refuse the first element outside the subset (depth first, in file order)."""
-    allowed = CHILDREN.get(node.tag)
-    if allowed is None:
+    _check_against(path, node, allowed())
+
+
+def _check_against(path, node: Node, children: dict[str, frozenset[str]]) -> None:
+    kids = children.get(node.tag)
+    if kids is None:
         raise unsupported(path, node)
     for c in node.children:
-        if c.tag not in allowed:
+        if c.tag not in kids:
             raise unsupported(path, c)
-        _check_tree(path, c)
+        _check_against(path, c, children)
 
 
 def elements(root: Node) -> list[tuple[str, int, bool]]:
     """Every element of the file: (tag, line, supported), in file order (``ego list``)."""
     out = []
+    children = allowed()
 
-    def walk(node: Node, allowed: set[str] | None) -> None:
-        ok = (allowed is None or node.tag in allowed) and node.tag in CHILDREN
+    def walk(node: Node, within: frozenset[str] | None) -> None:
+        ok = (within is None or node.tag in within) and node.tag in children
         out.append((node.tag, node.line, ok))
         for c in node.children:
-            walk(c, CHILDREN.get(node.tag, set()) if ok else set())
+            walk(c, children.get(node.tag, frozenset()) if ok else frozenset())
 
     walk(root, None)
     return out
@@ -331,18 +111,6 @@ def read_tree(path: str | os.PathLike) -> Node:
 
 TYPES = ("double", "integer", "unsignedInt", "unsignedShort", "int", "string", "boolean", "dateTime")
 
-
-#: physical upper bounds of a transition's value (a braking rate of 1e308 is no car's) and of
-#: a condition's delay: a rate in m/s^2 (a speed change) or m/s (a lane change), a time, a
-#: distance (docs/reliability.md, "Limits")
-MAX_RATE = 100.0
-MAX_SECONDS = 86400.0
-MAX_DISTANCE = 1e6
-DYNAMICS_LIMITS = {
-    "rate": (MAX_RATE, "m/s^2 (m/s for a lateral rate)"),
-    "time": (MAX_SECONDS, "s: a day"),
-    "distance": (MAX_DISTANCE, "m"),
-}
 
 #: the value ranges of OpenSCENARIO's integer parameter types (XML Schema's)
 INT_RANGES = {
@@ -394,6 +162,12 @@ def declared_parameters(path: str | os.PathLike) -> dict[str, M.Parameter]:
     root = read_tree(path)
     _check_root(path, root)
     return _declarations(path, root.child("ParameterDeclarations"), {})
+
+
+def header_description(path: str | os.PathLike) -> str:
+    """The file's FileHeader description ("" without one)."""
+    header = read_tree(path).child("FileHeader")
+    return header.attrs.get("description", "") if header is not None else ""
 
 
 def _check_root(path, root: Node) -> None:
@@ -792,13 +566,10 @@ class _Builder:
             h = self.raw(p, "h", None)
             return M.WorldPosition(self.num(p, "x"), self.num(p, "y"), None if h is None else self.num(p, "h"), p.line)
         if tag == "LanePosition":
-            return M.LanePosition(
-                self.str_(p, "roadId"),
-                self.int_(p, "laneId"),
-                self.num(p, "s", nonneg=True),
-                self.num(p, "offset", 0.0),
-                p.line,
-            )
+            road, lane, s = self.str_(p, "roadId"), self.int_(p, "laneId"), self.num(p, "s", nonneg=True)
+            if lane == 0:  # OpenDRIVE's lane 0 is the reference line: offset is t from it
+                return M.RoadPosition(road, s, self.num(p, "offset", 0.0), p.line)
+            return M.LanePosition(road, lane, s, self.num(p, "offset", 0.0), p.line)
         if tag == "RoadPosition":
             return M.RoadPosition(self.str_(p, "roadId"), self.num(p, "s", nonneg=True), self.num(p, "t"), p.line)
         if tag == "RelativeLanePosition":
@@ -831,227 +602,23 @@ class _Builder:
         return M.Dynamics(shape, dim, value)
 
     def private_action(self, node: Node) -> M.PrivateAction:
+        """A PrivateAction: its action (directly in it, or in a LongitudinalAction,
+        LateralAction or RoutingAction) read by its registered kind."""
         a = self.one(node)
-        if a.tag == "ActivateControllerAction":
-            return M.ControllerAction(a.line)
-        if a.tag == "ControllerAction":
-            for c in a.children:
-                if c.tag == "AssignControllerAction":
-                    self.controller(c)
-            return M.ControllerAction(a.line)
-        if a.tag == "TeleportAction":
-            return M.TeleportAction(self.position(self.one(a, "Position")), a.line)
-        if a.tag == "SynchronizeAction":
-            return self.synchronize(a)
-        inner = self.one(a)
-        if inner.tag == "SpeedProfileAction":
-            return self.speed_profile(inner)
-        if inner.tag == "LongitudinalDistanceAction":
-            return self.distance_action(inner)
-        if inner.tag == "SpeedAction":
-            dyn = self.dynamics(self.one(inner, "SpeedActionDynamics"))
-            target = self.one(self.one(inner, "SpeedActionTarget"))
-            if target.tag == "AbsoluteTargetSpeed":
-                return M.SpeedAction(dyn, self.num(target, "value", nonneg=True), line=inner.line)
-            return M.SpeedAction(
-                dyn,
-                self.num(target, "value"),
-                self.entity_ref(target),
-                self.enum(target, "speedTargetValueType", ("delta", "factor")),
-                self.bool_(target, "continuous"),
-                inner.line,
-            )
-        if inner.tag == "LaneChangeAction":
-            dyn = self.dynamics(self.one(inner, "LaneChangeActionDynamics"))
-            target = self.one(self.one(inner, "LaneChangeTarget"))
-            offset = self.num(inner, "targetLaneOffset", 0.0)
-            if target.tag == "AbsoluteTargetLane":
-                return M.LaneChangeAction(dyn, self.int_(target, "value"), None, 0, offset, inner.line)
-            return M.LaneChangeAction(
-                dyn, None, self.entity_ref(target), self.int_(target, "value"), offset, inner.line
-            )
-        if inner.tag == "LaneOffsetAction":
-            d = self.one(inner, "LaneOffsetActionDynamics")
-            acc = self.raw(d, "maxLateralAcc", None)
-            shape = self.enum(d, "dynamicsShape", M.SHAPES)
-            if acc is None and shape != "step":
-                raise self.error(d, f"<LaneOffsetActionDynamics> needs maxLateralAcc for dynamicsShape {shape}")
-            target = self.one(self.one(inner, "LaneOffsetTarget"))
-            rel = self.entity_ref(target) if target.tag == "RelativeTargetLaneOffset" else None
-            return M.LaneOffsetAction(
-                shape,
-                None if acc is None else self.num(d, "maxLateralAcc", positive=True),
-                self.num(target, "value"),
-                rel,
-                self.bool_(inner, "continuous"),
-                inner.line,
-            )
-        # FollowTrajectoryAction
-        traj_node = inner.child("Trajectory")
-        if traj_node is None:
-            ref = inner.child("TrajectoryRef")
-            if ref is None:
-                raise self.error(inner, "<FollowTrajectoryAction> needs a <Trajectory>")
-            traj_node = self.one(ref, "Trajectory")
-        outer_values = self.values
-        self.values = self.scoped(traj_node)  # the trajectory's own parameters
-        try:
-            poly = self.one(self.one(traj_node, "Shape"), "Polyline")
-            vertices = self.vertices(poly)
-        finally:
-            self.values = outer_values
-        return self.follow_trajectory(inner, vertices, poly)
-
-    def speed_profile(self, n: Node) -> M.SpeedProfileAction:
-        entries = []
-        for e in n.all("SpeedProfileEntry"):
-            time = self.num(e, "time", nonneg=True, at_most=DYNAMICS_LIMITS["time"]) if "time" in e.attrs else None
-            entries.append((self.num(e, "speed"), time))
-        if not entries:
-            raise self.error(n, "<SpeedProfileAction> needs at least one <SpeedProfileEntry>")
-        limits: dict[str, float] = {}
-        dc = n.child("DynamicConstraints")
-        for attr, key in (("maxAcceleration", "max_accel"), ("maxDeceleration", "max_decel")):
-            if dc is not None and attr in dc.attrs:
-                limits[key] = self.num(dc, attr, positive=True)
-        rel = self.entity_ref(n) if "entityRef" in n.attrs else None
-        mode = self.enum(n, "followingMode", ("position", "follow"))
-        return M.SpeedProfileAction(tuple(entries), rel, mode, line=n.line, **limits)
-
-    def synchronize(self, a: Node) -> M.SynchronizeAction:
-        final, kind = None, "absolute"
-        fs = a.child("FinalSpeed")
-        if fs is not None:
-            sp = self.one(fs)
-            if sp.tag == "AbsoluteSpeed":
-                final = self.num(sp, "value", nonneg=True)
-            else:
-                kind = self.enum(sp, "speedTargetValueType", ("delta", "factor"))
-                final = self.num(sp, "value")
-        return M.SynchronizeAction(
-            self.entity_ref(a, "masterEntityRef"),
-            self.position(self.one(a, "TargetPositionMaster")),
-            self.position(self.one(a, "TargetPosition")),
-            final,
-            kind,
-            a.line,
-        )
-
-    def value_action(self, node: Node) -> M.ParameterAction:
-        """A ParameterAction or VariableAction: set, add to or multiply a declared value."""
-        kind = "parameter" if node.tag == "ParameterAction" else "variable"
-        ref_attr = "parameterRef" if kind == "parameter" else "variableRef"
-        name = self.str_(node, ref_attr)
-        if kind == "parameter":
-            declared = {k: (type(v), v) for k, v in self.values.items()}
-        else:
-            declared = {k: (type(p.value), p.value) for k, p in self.variables.items()}
-        if name not in declared:
-            raise self.error(node, f"{kind} {name!r} is not declared (declared: {', '.join(declared) or 'none'})")
-        initial = declared[name][1]
-        op_node = self.one(node)
-        if op_node.tag == "SetAction":
-            value: object = self.str_(op_node, "value")
-            if isinstance(initial, (int, float)) and not isinstance(initial, bool):
-                value = self.num(op_node, "value")
-            return M.ParameterAction(kind, name, "set", value, initial, node.line)
-        rule = self.one(self.one(op_node, "Rule"))
-        if isinstance(initial, bool) or not isinstance(initial, (int, float)):
-            raise self.error(rule, f"<{rule.tag}> needs a numeric {kind} ({name!r} is {initial!r})")
-        op = "add" if rule.tag == "AddValue" else "multiply"
-        return M.ParameterAction(kind, name, op, self.num(rule, "value"), initial, node.line)
+        if a.tag not in ACTIONS:
+            a = self.one(a)
+        return ACTIONS[a.tag].build(self, a)
 
     def global_action(self, node: Node) -> M.EnvironmentAction | M.ParameterAction:
-        """A GlobalAction: an EnvironmentAction is checked (every attribute resolves; a
-        RoadCondition must keep the friction: frictionScaleFactor 1) and changes nothing; a
-        ParameterAction or VariableAction changes a value at once."""
+        """A GlobalAction's action, read by its registered kind."""
         inner = self.one(node)
-        if inner.tag in ("ParameterAction", "VariableAction"):
-            return self.value_action(inner)
-        env_action = self.one(node, "EnvironmentAction")
-        env = self.one(env_action, "Environment")
-        outer = self.values
-        self.values = self.scoped(env)
-        try:
-            stack = [env]
-            while stack:
-                n = stack.pop()
-                for attr in n.attrs:
-                    self.raw(n, attr)
-                stack.extend(c for c in n.children if c.tag != "ParameterDeclarations")
-            rc = env.child("RoadCondition")
-            if rc is not None:
-                f = self.num(rc, "frictionScaleFactor", nonneg=True)
-                if f != 1.0:
-                    raise self.error(
-                        rc,
-                        f"a RoadCondition frictionScaleFactor of {f:g} is not supported by ego: the tyres' friction"
-                        f" is the plant's own (1, no change, is accepted; see {DOCS})",
-                    )
-        finally:
-            self.values = outer
-        return M.EnvironmentAction(env_action.line)
+        return ACTIONS[inner.tag].build(self, inner)
 
     def scoped(self, node: Node) -> dict[str, object]:
         """The parameter values inside ``node``: its own ``ParameterDeclarations`` (possibly
         empty) on top of the values outside it (an inner name shadows an outer one)."""
         decl = _declarations(self.path, node.child("ParameterDeclarations"), self.values)
         return {**self.values, **{k: p.value for k, p in decl.items()}} if decl else self.values
-
-    def vertices(self, poly: Node) -> list[M.Vertex]:
-        vertices = []
-        for v in poly.all("Vertex"):
-            t = self.raw(v, "time", None)
-            vertices.append(
-                M.Vertex(None if t is None else self.num(v, "time"), self.position(self.one(v, "Position")))
-            )
-        if len(vertices) < 2:
-            raise self.error(poly, f"<Polyline> needs at least two <Vertex> (found {len(vertices)})")
-        return vertices
-
-    def follow_trajectory(self, inner: Node, vertices: list[M.Vertex], poly: Node) -> M.FollowTrajectoryAction:
-        timing = None
-        tr = inner.child("TimeReference")
-        if tr is not None and tr.child("Timing") is not None:
-            tm = tr.child("Timing")
-            timing = (
-                self.enum(tm, "domainAbsoluteRelative", ("absolute", "relative")),
-                self.num(tm, "scale", positive=True),
-                self.num(tm, "offset"),
-            )
-            times = [v.time for v in vertices]
-            if any(t is None for t in times):
-                raise self.error(poly, "every <Vertex> needs a time when the trajectory has <Timing>")
-            if any(b <= a for a, b in zip(times, times[1:])):  # type: ignore[operator]
-                raise self.error(poly, "<Vertex> times must increase")
-        return M.FollowTrajectoryAction(
-            tuple(vertices), timing, self.num(inner, "initialDistanceOffset", 0.0), inner.line
-        )
-
-    def distance_action(self, n: Node) -> M.LongitudinalDistanceAction:
-        has_d, has_t = "distance" in n.attrs, "timeGap" in n.attrs
-        if has_d == has_t:
-            raise self.error(n, "<LongitudinalDistanceAction> needs one of distance and timeGap")
-        disp = self.enum(n, "displacement", ("trailingReferencedEntity", "leadingReferencedEntity", "any"), "any")
-        limits: dict[str, float] = {}
-        dc = n.child("DynamicConstraints")
-        for attr, key in (
-            ("maxAcceleration", "max_accel"),
-            ("maxDeceleration", "max_decel"),
-            ("maxSpeed", "max_speed"),
-        ):
-            if dc is not None and attr in dc.attrs:
-                limits[key] = self.num(dc, attr, positive=True)
-        return M.LongitudinalDistanceAction(
-            self.entity_ref(n),
-            self.num(n, "distance", nonneg=True) if has_d else None,
-            self.num(n, "timeGap", nonneg=True) if has_t else None,
-            self.bool_(n, "freespace"),
-            self.bool_(n, "continuous"),
-            disp == "leadingReferencedEntity",
-            line=n.line,
-            **limits,
-        )
 
     # -- triggers ---------------------------------------------------------------------------
     def trigger(self, node: Node | None) -> M.Trigger | None:
@@ -1085,46 +652,11 @@ class _Builder:
         return self.entity_condition(inner, base)
 
     def value_condition(self, c: Node, base: dict[str, Any]) -> M.Condition:
-        """A ByValueCondition's condition."""
-        if c.tag == "SimulationTimeCondition":
-            return M.Condition(kind=c.tag, rule=self.enum(c, "rule", M.RULES), value=self.num(c, "value"), **base)
-        if c.tag == "VariableCondition":
-            ref = self.str_(c, "variableRef")
-            if ref not in self.variables:
-                raise self.error(
-                    c, f"variable {ref!r} is not declared (declared: {', '.join(self.variables) or 'none'})"
-                )
-            return M.Condition(
-                kind=c.tag,
-                rule=self.enum(c, "rule", M.RULES),
-                value=self.str_(c, "value"),
-                parameter=ref,
-                parameter_value=self.variables[ref].value,
-                **base,
-            )
-        if c.tag == "ParameterCondition":
-            ref = self.str_(c, "parameterRef")
-            if ref not in self.values:
-                raise self.error(c, f"parameter {ref!r} is not declared (declared: {', '.join(self.values) or 'none'})")
-            return M.Condition(
-                kind=c.tag,
-                rule=self.enum(c, "rule", M.RULES),
-                value=self.str_(c, "value"),
-                parameter=ref,
-                parameter_value=self.values[ref],
-                **base,
-            )
-        return M.Condition(
-            kind=c.tag,
-            element_type=self.enum(c, "storyboardElementType", M.ELEMENT_TYPES),
-            element_ref=self.str_(c, "storyboardElementRef"),
-            state=self.enum(c, "state", M.STATES),
-            ref_line=c.line,
-            **base,
-        )
+        """A ByValueCondition's condition, read by its registered kind."""
+        return CONDITIONS[c.tag].build(self, c, base)
 
     def entity_condition(self, inner: Node, base: dict[str, Any]) -> M.Condition:
-        """A ByEntityCondition: its triggering entities and its condition."""
+        """A ByEntityCondition: its triggering entities and its condition (read by its kind)."""
         te = self.one(inner, "TriggeringEntities")
         refs = tuple(self.entity_ref(e) for e in te.all("EntityRef"))
         if not refs:
@@ -1132,96 +664,7 @@ class _Builder:
         base["triggering"] = refs
         base["triggering_rule"] = self.enum(te, "triggeringEntitiesRule", ("any", "all"))
         c = self.one(self.one(inner, "EntityCondition"))
-        tag = c.tag
-        if tag == "ReachPositionCondition":
-            return self.reach(c, base)
-        if tag == "TraveledDistanceCondition":
-            return M.Condition(kind=tag, rule="greaterOrEqual", value=self.num(c, "value", nonneg=True), **base)
-        if tag == "CollisionCondition":
-            target = self.one(c)
-            if target.tag == "EntityRef":
-                return M.Condition(kind=tag, entity=self.entity_ref(target), **base)
-            otype = self.enum(target, "objectType", ("vehicle", "pedestrian", "miscellaneous"))
-            return M.Condition(kind=tag, value=otype, **base)
-        if tag == "StandStillCondition":
-            return M.Condition(
-                kind=tag,
-                rule="greaterOrEqual",
-                value=self.num(c, "duration", nonneg=True, at_most=(MAX_SECONDS, "s: a day")),
-                **base,
-            )
-        rule = self.enum(c, "rule", M.RULES)
-        if tag == "AccelerationCondition":
-            # OpenSCENARIO 1.2's direction; without it the acceleration vector's magnitude
-            direction = "total"
-            if "direction" in c.attrs:
-                direction = self.enum(c, "direction", ("longitudinal", "lateral", "vertical"))
-            if direction == "vertical":
-                raise self.error(
-                    c, f"a vertical <AccelerationCondition> is not supported by ego (its roads are planar; see {DOCS})"
-                )
-            return M.Condition(kind=tag, rule=rule, value=self.num(c, "value"), distance_type=direction, **base)
-        if tag == "SpeedCondition":
-            return M.Condition(kind=tag, rule=rule, value=self.num(c, "value"), **base)
-        if tag == "RelativeSpeedCondition":
-            return M.Condition(kind=tag, rule=rule, value=self.num(c, "value"), entity=self.entity_ref(c), **base)
-        if tag == "TimeHeadwayCondition":
-            return M.Condition(
-                kind=tag,
-                rule=rule,
-                value=self.num(c, "value"),
-                entity=self.entity_ref(c),
-                freespace=self.bool_(c, "freespace"),
-                **base,
-            )
-        if tag == "RelativeDistanceCondition":
-            dtype = self.enum(
-                c, "relativeDistanceType", ("longitudinal", "lateral", "cartesianDistance", "euclidianDistance")
-            )
-            return M.Condition(
-                kind=tag,
-                rule=rule,
-                value=self.num(c, "value"),
-                entity=self.entity_ref(c),
-                freespace=self.bool_(c, "freespace"),
-                distance_type=dtype,
-                **base,
-            )
-        if tag == "TimeToCollisionCondition":
-            target = self.one(self.one(c, "TimeToCollisionConditionTarget"))
-            entity = self.entity_ref(target) if target.tag == "EntityRef" else None
-            pos = self.position_of(target) if target.tag == "Position" else None
-            return M.Condition(
-                kind=tag,
-                rule=rule,
-                value=self.num(c, "value"),
-                entity=entity,
-                position=pos,
-                freespace=self.bool_(c, "freespace"),
-                **base,
-            )
-        if tag == "DistanceCondition":
-            return M.Condition(
-                kind=tag,
-                rule=rule,
-                value=self.num(c, "value"),
-                freespace=self.bool_(c, "freespace"),
-                position=self.position(self.one(c, "Position")),
-                **base,
-            )
-        raise AssertionError(tag)  # every EntityCondition in CHILDREN is handled
-
-    def position_of(self, position_node: Node) -> M.Position:
-        return self.position(position_node)
-
-    def reach(self, c: Node, base: dict[str, Any]) -> M.Condition:
-        return M.Condition(
-            kind=c.tag,
-            rule="lessOrEqual",
-            value=self.num(c, "tolerance", nonneg=True),
-            position=self.position(self.one(c, "Position")),
-            **base,
-        )
+        return CONDITIONS[c.tag].build(self, c, base)
 
 
 def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None) -> M.Scenario:
@@ -1296,7 +739,7 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
     init_node = sb.child("Init")
     actions = init_node.child("Actions") if init_node is not None else None
     for ga in actions.all("GlobalAction") if actions is not None else ():
-        if isinstance(b.global_action(ga), M.ParameterAction):
+        if action_of(b.global_action(ga)).in_init == "no":
             raise ScenarioFileError(
                 path,
                 ga.children[0].line,
@@ -1306,17 +749,14 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
         ref = b.entity_ref(priv)
         for pa in priv.all("PrivateAction"):
             act = b.private_action(pa)
-            if isinstance(act, M.ControllerAction):
+            kind = action_of(act)
+            if kind.in_init == "ignored":
                 continue
-            if not isinstance(act, (M.TeleportAction, M.SpeedAction)) or (
-                isinstance(act, M.SpeedAction) and act.relative_to is not None and act.continuous
-            ):
+            if kind.in_init != "yes" or not kind.init_ok(act):
                 raise ScenarioFileError(
                     path,
                     pa.children[0].line,
-                    f"<{pa.children[0].tag}> in <Init> is not "
-                    f"supported by ego (Init takes TeleportAction, ControllerAction and SpeedAction "
-                    f"with AbsoluteTargetSpeed or a non-continuous RelativeTargetSpeed; see {DOCS})",
+                    f"<{pa.children[0].tag}> in <Init> is not supported by ego (Init takes {init_kinds()}; see {DOCS})",
                 )
             init[ref].append(act)
     for name, acts in init.items():

@@ -230,8 +230,15 @@ class RoadMap:
     def sections(self, road: str) -> list[tuple[float, Edge, bool]]:
         """(start s, edge, right-hand) of the road's edges, by start."""
         if not self.converted:
+            # a road cut into edges road, road.1, road.2, ... (ego's curved motorways,
+            # sumo_nets/motorway_arcs.py): each starts where the one before ends
+            out, s0 = [], 0.0
             e = self.edges.get(road)
-            return [(0.0, e, True)] if e is not None else []
+            while e is not None:
+                out.append((s0, e, True))
+                s0 += e.lanes[0].length if e.lanes else 0.0
+                e = self.edges.get(f"{road}.{len(out)}")
+            return out
         # netconvert splits some roads (a road that loops onto itself: ``-1#0``, ``-1#1``):
         # the pieces of one lane section follow each other in driving order, so a piece
         # starts where the ones before it end (on the side driven against s, the other way)

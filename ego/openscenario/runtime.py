@@ -21,15 +21,9 @@ from collections import deque
 from dataclasses import dataclass
 from typing import Protocol
 
-import numpy as np
-
 from ego.openscenario import model as M
-from ego.openscenario.dynamics import (
-    Transition,
-    lateral_duration,
-    offset_duration,
-    speed_duration,
-)
+from ego.openscenario.dynamics import Transition
+from ego.openscenario.registry import CONDITIONS, action_of
 
 INF = math.inf
 EPS = 1e-9
@@ -154,10 +148,11 @@ def boxes_overlap(a: EntityState, b: EntityState) -> bool:
 class ConditionState:
     """One condition's edge and delay bookkeeping."""
 
-    __slots__ = ("c", "history", "prev")
+    __slots__ = ("c", "history", "kind", "prev")
 
     def __init__(self, c: M.Condition) -> None:
         self.c = c
+        self.kind = CONDITIONS[c.kind]
         self.prev: bool | None = None
         self.history: deque[tuple[float, bool]] = deque()
 
@@ -280,100 +275,6 @@ class Storyboard:
                 yield from group
 
     # -- conditions -------------------------------------------------------------------------
-    def _entity_value(self, c: M.Condition, name: str) -> bool:
-        st = self.states
-        e = st[name]
-        kind = c.kind
-        if kind == "SpeedCondition":
-            return compare(c.rule, e.speed, c.value)  # type: ignore[arg-type]
-        if kind == "RelativeSpeedCondition":
-            return compare(c.rule, e.speed - st[c.entity].speed, c.value)  # type: ignore[index, arg-type]
-        if kind == "TraveledDistanceCondition":
-            return e.traveled >= c.value - EPS  # type: ignore[operator]
-        if kind == "CollisionCondition":
-            others = [c.entity] if c.entity is not None else [n for n in self.kinds if self.kinds[n] == c.value]
-            return any(o != name and boxes_overlap(e, st[o]) for o in others)
-        if kind == "StandStillCondition":
-            return e.still_for >= c.value - EPS  # type: ignore[operator]
-        if kind == "AccelerationCondition":
-            if c.distance_type == "longitudinal":
-                acc = e.accel
-            elif c.distance_type == "lateral":
-                acc = e.lat_accel
-            else:
-                acc = math.hypot(e.accel, e.lat_accel)
-            return compare(c.rule, acc, c.value)  # type: ignore[arg-type]
-        if kind == "ReachPositionCondition":
-            x, y, _ = self.driver.position_xy(c.position, st)  # type: ignore[arg-type]
-            return math.hypot(e.x - x, e.y - y) <= c.value + EPS  # type: ignore[operator]
-        if kind == "DistanceCondition":
-            x, y, _ = self.driver.position_xy(c.position, st)  # type: ignore[arg-type]
-            dist = box_point_distance(e, x, y) if c.freespace else math.hypot(e.x - x, e.y - y)
-            return compare(c.rule, dist, c.value)  # type: ignore[arg-type]
-        if kind == "RelativeDistanceCondition":
-            o = st[c.entity]  # type: ignore[index]
-            ds, dd = abs(o.s - e.s), abs(o.d - e.d)
-            if c.freespace:
-                ds -= 0.5 * (o.length + e.length)
-                dd -= 0.5 * (o.width + e.width)
-            if c.distance_type == "longitudinal":
-                dist = ds
-            elif c.distance_type == "lateral":
-                dist = dd
-            elif c.freespace:
-                dist = math.hypot(max(ds, 0.0), max(dd, 0.0))
-            else:
-                dist = math.hypot(o.x - e.x, o.y - e.y)
-            return compare(c.rule, dist, c.value)  # type: ignore[arg-type]
-        if kind == "TimeHeadwayCondition":
-            o = st[c.entity]  # type: ignore[index]
-            gap = o.s - e.s - (0.5 * (o.length + e.length) if c.freespace else 0.0)
-            thw = gap / e.speed if (o.s > e.s and e.speed > 0.0) else INF
-            return compare(c.rule, thw, c.value)  # type: ignore[arg-type]
-        if kind == "TimeToCollisionCondition":
-            if c.entity is not None:
-                o = st[c.entity]
-                ahead = o.s >= e.s
-                gap = abs(o.s - e.s) - (0.5 * (o.length + e.length) if c.freespace else 0.0)
-                closing = (e.speed - o.speed) if ahead else (o.speed - e.speed)
-            else:
-                x, y, _ = self.driver.position_xy(c.position, st)  # type: ignore[arg-type]
-                ps, _ = self.driver.road_frame(x, y)
-                gap = ps - e.s - (0.5 * e.length if c.freespace else 0.0)
-                closing = e.speed if gap >= 0.0 else -e.speed
-                gap = abs(gap)
-            ttc = gap / closing if closing > 0.0 else INF
-            return compare(c.rule, max(ttc, 0.0), c.value)  # type: ignore[arg-type]
-        raise AssertionError(kind)
-
-    def _raw(self, c: M.Condition, t: float) -> bool:
-        kind = c.kind
-        if kind == "SimulationTimeCondition":
-            return compare(c.rule, t, c.value)  # type: ignore[arg-type]
-        if kind in ("ParameterCondition", "VariableCondition"):
-            store = "parameter" if kind == "ParameterCondition" else "variable"
-            value = self.store.get((store, c.parameter), c.parameter_value)
-            if isinstance(value, (int, float)) and not isinstance(value, bool):
-                try:
-                    return compare(c.rule, float(value), float(c.value))  # type: ignore[arg-type]
-                except ValueError:
-                    return False
-            text = str(value).lower() if isinstance(value, bool) else str(value)
-            equal = text == str(c.value)
-            return equal if c.rule == "equalTo" else (not equal if c.rule == "notEqualTo" else False)
-        if kind == "StoryboardElementStateCondition":
-            els = self.by_name.get((c.element_type, c.element_ref), [])
-            want = c.state
-            for el in els:
-                if want.endswith("State"):
-                    if el.state == want[:-5]:
-                        return True
-                elif want in el.transitions:
-                    return True
-            return False
-        results = (self._entity_value(c, name) for name in c.triggering)
-        return any(results) if c.triggering_rule == "any" else all(results)
-
     def assign(self, a: M.ParameterAction) -> None:
         """Do a parameter or variable action: set, add to or multiply the current value."""
         key = (a.kind, a.name)
@@ -401,9 +302,18 @@ class Storyboard:
             prev[name] = (e.speed, e.yaw)
 
     def _evaluate(self, t: float) -> None:
-        fired = self._fired
+        """Every condition at ``t`` through its edge and delay: a value condition as its kind
+        evaluates it, an entity condition for any or all of its triggering entities (what
+        each condition means is its kind's: :mod:`ego.openscenario.conditions`)."""
+        fired, st = self._fired, self.states
         for key, cs in self.conditions.items():
-            fired[key] = cs.update(t, self._raw(cs.c, t))
+            c, kind = cs.c, cs.kind
+            if c.triggering:
+                results = (kind.holds(self, c, st[name], name) for name in c.triggering)
+                raw = any(results) if c.triggering_rule == "any" else all(results)
+            else:
+                raw = kind.raw(self, c, t)
+            fired[key] = cs.update(t, raw)
 
     def _trigger(self, trig: M.Trigger | None, default: bool) -> bool:
         if trig is None or trig.empty:
@@ -429,7 +339,7 @@ class Storyboard:
         for runs in list(self.running.values()):
             for run in runs:
                 if not run.finished:
-                    run.step(t)
+                    run.kind.step(run, t)
 
     def _story(self, story: Element, t: float) -> None:
         if story.state == STANDBY:
@@ -502,10 +412,10 @@ class Storyboard:
                     a.state = STANDBY
                     a.go(RUNNING, "startTransition")
                     act = a.node.action
-                    if isinstance(act, (M.EnvironmentAction, M.ParameterAction)):
+                    kind = action_of(act)
+                    if kind.is_global:
                         # a global action: done once, at once, whoever the actors are
-                        if isinstance(act, M.ParameterAction):
-                            self.assign(act)
+                        kind.apply(self, act)
                         continue
                     for actor in actors:
                         runs.append(self._start_action(a, actor, t))
@@ -542,26 +452,27 @@ class Storyboard:
             if old is not None and not old.finished:
                 old.stop()
             self.slots[(actor, domain)] = run
-        self.log("action", f"t = {t:.2f} s: {type(action.action).__name__} {action.name!r} on {actor}")
+        self.log("action", f"t = {t:.2f} s: {run.kind.tag} {action.name!r} on {actor}")
         run.start(t)
         return run
 
 
 class ActionRun:
-    """One private action on one actor, from its start to its end (or its stop)."""
+    """One private action on one actor, from its start to its end (or its stop): what it
+    does is its kind's (:mod:`ego.openscenario.actions`); the run holds its state."""
 
     def __init__(self, board: Storyboard, element: Element, actor: str, action: M.PrivateAction) -> None:
         self.board, self.element, self.actor, self.action = board, element, actor, action
+        self.kind = action_of(action)
+        self.domains: tuple[str, ...] = self.kind.domains
         self.finished = False
         self.profile: Transition | None = None
-        if isinstance(action, (M.SpeedAction, M.LongitudinalDistanceAction, M.SynchronizeAction, M.SpeedProfileAction)):
-            self.domains: tuple[str, ...] = ("long",)
-        elif isinstance(action, (M.LaneChangeAction, M.LaneOffsetAction)):
-            self.domains = ("lat",)
-        elif isinstance(action, (M.ControllerAction, M.EnvironmentAction, M.ParameterAction)):
-            self.domains = ()  # the ego keeps ego's controller, the others their driver
-        else:
-            self.domains = ("long", "lat")
+        self.native = False  #: a speed change run by SUMO's own per-step rate
+        self.knots: tuple[list[float], list[float]] = ([], [])
+        self.xy: list[tuple[float, float]] = []
+        self.cum: list[float] = []
+        self.times: list[float] | None = None
+        self.v = self.t0 = self.s0 = 0.0
 
     @property
     def is_ego(self) -> bool:
@@ -569,232 +480,12 @@ class ActionRun:
 
     def stop(self) -> None:
         self.finished = True
-        if self.is_ego:
-            return
-        if isinstance(self.action, (M.FollowTrajectoryAction, M.LaneChangeAction, M.LaneOffsetAction)):
+        if not self.is_ego and self.kind.releases:
             self.board.driver.release(self.actor)
 
     def start(self, t: float) -> None:
-        b, a, me = self.board, self.action, self.board.states[self.actor]
-        drv = b.driver
-        if isinstance(a, M.SpeedAction):
-            # the ego's references move on from where they are (its measured speed wobbles)
-            v0 = drv.ego_references()[0] if self.is_ego else me.speed
-            target = a.value
-            if a.relative_to is not None:
-                ref = b.states[a.relative_to].speed
-                target = ref + a.value if a.relative_kind == "delta" else ref * a.value
-            target = max(target, 0.0)
-            dyn = a.dynamics
-            T = speed_duration(dyn.shape, dyn.dimension, dyn.value, v0, target)
-            self.profile = Transition(t, v0, target, T, dyn.shape)
-            if self.is_ego:
-                rel = (a.relative_to, a.relative_kind, a.value) if (a.relative_to and a.continuous) else None
-                drv.ego_speed(self.profile, rel)
-                self.finished = not a.continuous
-                return
-            if dyn.shape == "linear" and dyn.dimension == "rate" and v0 != target and not drv.blind(self.actor):
-                drv.speed_rate(self.actor, target, dyn.value)  # SUMO's own per-step rate: exact
-                self._native = True
-            else:
-                self._native = False
-        elif isinstance(a, (M.LaneChangeAction, M.LaneOffsetAction)):
-            if isinstance(a, M.LaneChangeAction):
-                if a.target_lane is not None:
-                    centre = drv.lane_centre(a.target_lane)
-                else:
-                    centre = drv.lane_centre(0, b.states[a.relative_to].d, a.relative_lanes)  # type: ignore[index]
-                target = centre + a.target_offset
-                here = drv.ego_references()[1] if self.is_ego else me.d_front
-                dyn = a.dynamics
-                T = lateral_duration(dyn.shape, dyn.dimension, dyn.value, me.speed, target - here)
-                shape = dyn.shape
-            else:
-                base = b.states[a.relative_to].d if a.relative_to is not None else drv.lane_centre_of(me.d)
-                target = base + a.value
-                shape = a.shape
-                T = offset_duration(
-                    shape, a.max_lateral_acc, target - (drv.ego_references()[1] if self.is_ego else me.d_front)
-                )
-            start = drv.ego_references()[1] if self.is_ego else me.d_front
-            self.profile = Transition(t, start, target, T, shape)
-            if self.is_ego:
-                drv.ego_lateral(self.profile)
-                self.finished = True
-                return
-        elif isinstance(a, (M.ControllerAction, M.EnvironmentAction)):
-            self.finished = True
-            return
-        elif isinstance(a, (M.LongitudinalDistanceAction, M.SynchronizeAction)):
-            return  # commanded step by step (:meth:`_keep_distance`, :meth:`_synchronize`)
-        elif isinstance(a, M.SpeedProfileAction):
-            self.knots = speed_profile_knots(a, t, me.speed, b.states[a.relative_to].speed if a.relative_to else 0.0)
-            return
-        elif isinstance(a, M.TeleportAction):
-            x, y, h = drv.position_xy(a.position, b.states)
-            drv.teleport(self.actor, x, y, h)
-            self.finished = True
-            return
-        else:
-            self._trajectory_start(t)
-
-    def _keep_distance(self, a: M.LongitudinalDistanceAction, t: float) -> None:
-        """The speed over [t, t + step] that puts the actor at the held distance from the
-        entity at t + step (the entity as it drives on at its speed at t), within the
-        action's dynamic constraints; a non-continuous action ends once the distance is
-        held (within 1 cm)."""
-        b = self.board
-        h = b.h
-        me, ref = b.states[self.actor], b.states[a.entity]
-        sign = 1.0 if a.leading else -1.0  # the actor ahead of (+) or behind (-) the entity
-        extra = 0.5 * (me.length + ref.length) if a.freespace else 0.0
-        ref_next = ref.s + ref.speed * h
-        constrained = math.isfinite(a.max_accel) or math.isfinite(a.max_decel)
-        if a.distance is not None or constrained:
-            # the position error now; unconstrained it is closed in one step, else at the
-            # speed from which the deceleration limit still stops at the goal
-            held = a.distance if a.distance is not None else (a.time_gap or 0.0) * ref.speed
-            err = ref.s + sign * (held + extra) - me.s
-            close = abs(err) / h
-            stop = a.max_decel if err > 0.0 else a.max_accel  # what ends the closing
-            if math.isfinite(stop):
-                # the relative speed from which ``stop`` still ends at the goal, a step later
-                close = min(-stop * h + math.sqrt((stop * h) ** 2 + 2.0 * stop * abs(err)), close)
-            v = ref.speed + math.copysign(close, err)
-        else:
-            # s + v h = ref_next + sign (tg v + extra): the gap is tg times the actor's speed
-            tg = a.time_gap or 0.0
-            denom = h - sign * tg
-            v = (ref_next + sign * extra - me.s) / denom if abs(denom) > EPS else me.speed
-        lo = max(me.speed - a.max_decel * h, 0.0)
-        hi = min(me.speed + a.max_accel * h, a.max_speed)
-        v = min(max(v, lo), hi)
-        rate = abs(v - me.speed) / h
-        b.driver.speed(self.actor, v, rate if constrained else INF)
-        gap = sign * (me.s - ref.s) - extra
-        held = a.distance if a.distance is not None else (a.time_gap or 0.0) * me.speed
-        if not a.continuous and abs(gap - held) < 0.01:
-            self.finished = True
-
-    def _synchronize(self, a: M.SynchronizeAction) -> None:
-        """The speed over the next step on the profile that puts the actor at its target when
-        the master reaches its own, the master driving on at its speed (re-planned every
-        step): with a final speed v_f, v(tau) = v + b tau + c tau^2 with v(T) = v_f and its
-        integral over [0, T] the distance left; without, the constant speed d / T. Ends when
-        the master is at its target."""
-        b = self.board
-        h, drv = b.h, b.driver
-        me, master = b.states[self.actor], b.states[a.master]
-        s_m = drv.road_frame(*drv.position_xy(a.master_target, b.states)[:2])[0]
-        s_a = drv.road_frame(*drv.position_xy(a.target, b.states)[:2])[0]
-        d_m, d = s_m - master.s, s_a - me.s
-        if d_m <= EPS:
-            self.finished = True
-            return
-        if master.speed <= EPS:
-            return  # the master stands: no arrival time to meet
-        T = d_m / master.speed
-        if a.final_speed is None:
-            v = d / T
-        else:
-            vf = a.final_speed
-            if a.final_kind == "delta":
-                vf = master.speed + a.final_speed
-            elif a.final_kind == "factor":
-                vf = master.speed * a.final_speed
-            if T <= h:
-                v = vf
-            else:
-                dv, dd = vf - me.speed, d - me.speed * T
-                c = (3.0 * dv * T - 6.0 * dd) / T**3
-                bb = (dv - c * T * T) / T
-                v = me.speed + bb * h + c * h * h
-        drv.speed(self.actor, max(v, 0.0), INF)
-
-    def _trajectory_start(self, t: float) -> None:
-        b, a = self.board, self.action
-        pts = [b.driver.position_xy(v.position, b.states) for v in a.vertices]  # type: ignore[union-attr]
-        self.xy = [(p[0], p[1]) for p in pts]
-        self.cum = [0.0]
-        for (x0, y0), (x1, y1) in zip(self.xy, self.xy[1:]):
-            self.cum.append(self.cum[-1] + math.hypot(x1 - x0, y1 - y0))
-        self.times: list[float] | None
-        if a.timing is not None:  # type: ignore[union-attr]
-            domain, scale, offset = a.timing  # type: ignore[union-attr]
-            base = 0.0 if domain == "absolute" else t
-            self.times = [base + v.time * scale + offset for v in a.vertices]  # type: ignore[union-attr, operator]
-        else:
-            self.times = None
-            self.v = b.states[self.actor].speed
-            self.t0 = t
-            self.s0 = a.initial_distance_offset  # type: ignore[union-attr]
-
-    def _trajectory_point(self, t: float) -> tuple[float, float, float, float, bool]:
-        """(x, y, heading, speed, at the end) on the trajectory at time ``t``."""
-        xy, cum = self.xy, self.cum
-        if self.times is not None:
-            times = self.times
-            if t <= times[0]:
-                i, u = 0, 0.0
-            elif t >= times[-1]:
-                i, u = len(times) - 2, 1.0
-            else:
-                i = max(k for k in range(len(times) - 1) if times[k] <= t)
-                u = (t - times[i]) / (times[i + 1] - times[i])
-            seg = cum[i + 1] - cum[i]
-            speed = seg / (times[i + 1] - times[i])
-            end = t >= times[-1] - EPS
-        else:
-            s = min(self.s0 + self.v * (t - self.t0), cum[-1])
-            i = max(k for k in range(len(cum) - 1) if cum[k] <= s) if s > 0 else 0
-            i = min(i, len(cum) - 2)
-            seg = cum[i + 1] - cum[i]
-            u = (s - cum[i]) / seg if seg > 0 else 1.0
-            speed, end = self.v, s >= cum[-1] - EPS
-        (x0, y0), (x1, y1) = xy[i], xy[i + 1]
-        heading = math.atan2(y1 - y0, x1 - x0)
-        return x0 + u * (x1 - x0), y0 + u * (y1 - y0), heading, speed, end
+        self.kind.start(self, t)
 
     def step(self, t: float) -> None:
         """Command the actor for [t, t + step]."""
-        b, a = self.board, self.action
-        h = b.h
-        drv = b.driver
-        if isinstance(a, M.SpeedAction):
-            p = self.profile
-            if a.continuous and a.relative_to is not None and p.done(t):  # type: ignore[union-attr]
-                ref = b.states[a.relative_to].speed
-                target = max(ref + a.value if a.relative_kind == "delta" else ref * a.value, 0.0)
-                drv.speed(self.actor, target, INF)
-                return
-            if self._native and drv.blind(self.actor):
-                # a scripted lateral move makes SUMO take a set speed at once (no braking
-                # limit): the rest of the profile is commanded step by step
-                self._native = False
-            if not self._native:
-                drv.speed(self.actor, p.value(t + h), max(p.peak_rate, 0.0))  # type: ignore[union-attr]
-            if p.done(t + h) and not a.continuous:  # type: ignore[union-attr]
-                self.finished = True
-        elif isinstance(a, (M.LaneChangeAction, M.LaneOffsetAction)):
-            p = self.profile
-            drv.lateral(self.actor, p.value(t + h), p.peak_rate)  # type: ignore[union-attr]
-            if p.done(t + h) and not getattr(a, "continuous", False):  # type: ignore[union-attr]
-                self.finished = True
-                drv.release(self.actor)
-        elif isinstance(a, M.LongitudinalDistanceAction):
-            self._keep_distance(a, t)
-        elif isinstance(a, M.SynchronizeAction):
-            self._synchronize(a)
-        elif isinstance(a, M.SpeedProfileAction):
-            ts, vs = self.knots
-            t1 = t + h
-            v = vs[-1] if t1 >= ts[-1] else float(np.interp(t1, ts, vs))
-            drv.speed(self.actor, max(v, 0.0), INF)
-            if t1 >= ts[-1] - EPS:
-                self.finished = True
-        elif isinstance(a, M.FollowTrajectoryAction):
-            x, y, heading, speed, end = self._trajectory_point(t + h)
-            drv.place(self.actor, x, y, heading, speed)
-            if end:
-                self.finished = True
-                drv.release(self.actor)
+        self.kind.step(self, t)

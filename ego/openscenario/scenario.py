@@ -26,7 +26,8 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-from collections.abc import Mapping
+import re
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
@@ -36,12 +37,13 @@ import numpy as np
 from ego.lane_frame import LanePolyline
 from ego.openscenario import model as M
 from ego.openscenario.dynamics import Transition
-from ego.openscenario.loader import declared_parameters, load
+from ego.openscenario.loader import declared_parameters, header_description, load
+from ego.openscenario.registry import action_of
 from ego.openscenario.roads import RoadMap, network_file, refine_shape
 from ego.openscenario.runtime import Storyboard
 from ego.openscenario.xmltree import DOCS, ScenarioFileError
 from ego.params import ConfigError, param
-from ego.scenarios.base import Parts, Scenario
+from ego.scenarios.base import NO_PREVENTABLE_COLLISION, Parts, Scenario
 from ego.scenarios.emergency_brake import BrakeInLane, EmergencyBrake, Impact
 from ego.scenarios.evasive import MARKERS, EvasiveConfig, compare_plots, compose, evasive_metrics
 from ego.scenarios.events import INF
@@ -274,8 +276,19 @@ def _file_class(path: str, mtime: float) -> type:
             "file": path,
             "file_params": tuple(params),
             "summary": f"OpenSCENARIO file {path}",
+            "extra_requirements": (NO_PREVENTABLE_COLLISION,) if declares_r157(path) else (),
         },
     )
+
+
+#: a FileHeader description that names UN R157 (or its ALKS): "R157 4.4 cut-in", "UN R 157 ..."
+_R157 = re.compile(r"\bR\s?157\b|\bALKS\b")
+
+
+def declares_r157(path: str) -> bool:
+    """Whether the file declares itself an UN R157 (ALKS) scenario in its FileHeader's
+    description: its default requirements then add ``no_preventable_collision``."""
+    return bool(_R157.search(header_description(path)))
 
 
 def _file_config(path: str, values: dict):
@@ -308,6 +321,8 @@ class FileScenario(Scenario):
     network = None
     backends = ("sumo",)
     base_scenario = EmergencyBrake.name
+    #: requirements the file adds to emergency-brake's (an UN R157 file: no_preventable_collision)
+    extra_requirements: tuple[tuple[str, str], ...] = ()
     columns, plots, markers, metric_specs = COLUMNS, PLOTS, MARKERS, EmergencyBrake.metric_specs
     compare_plots = classmethod(compare_plots)
 
@@ -338,6 +353,7 @@ class FileScenario(Scenario):
         ego = find_ego(model, config.ego_entity)
         _check_ego_actions(model, ego)
         starts = placements(model, roads)
+        _check_road_references(model, roads, len(roads.edges[starts[ego].edge].lanes))
         if starts[ego].offset:
             pos = next(a for a in model.init[ego] if isinstance(a, M.TeleportAction)).position
             raise ScenarioFileError(
@@ -817,23 +833,51 @@ def _check_ego_actions(model: M.Scenario, ego: str) -> None:
                 for man in g.maneuvers:
                     for ev in man.events:
                         for a in ev.actions:
-                            if isinstance(
-                                a.action,
-                                (
-                                    M.TeleportAction,
-                                    M.FollowTrajectoryAction,
-                                    M.LongitudinalDistanceAction,
-                                    M.SynchronizeAction,
-                                    M.SpeedProfileAction,
-                                ),
-                            ):
+                            kind = action_of(a.action)
+                            if not kind.on_ego:
                                 raise ScenarioFileError(
                                     model.path,
                                     a.action.line,
-                                    f"<{type(a.action).__name__}> on the ego ({ego}) is not "
+                                    f"<{kind.tag}> on the ego ({ego}) is not "
                                     f"supported by ego: the ego moves by its own model (see "
                                     f"{DOCS})",
                                 )
+
+
+def _model_nodes(node: object) -> Iterator[object]:
+    """Every value of the model below ``node`` (its dataclasses, lists, tuples and dicts)."""
+    stack = [node]
+    while stack:
+        x = stack.pop()
+        yield x
+        if dataclasses.is_dataclass(x) and not isinstance(x, type):
+            stack.extend(getattr(x, f.name) for f in dataclasses.fields(x))
+        elif isinstance(x, (list, tuple)):
+            stack.extend(x)
+        elif isinstance(x, dict):
+            stack.extend(x.values())
+
+
+def _check_road_references(model: M.Scenario, roads: RoadMap, ego_lanes: int) -> None:
+    """Every road position of the file (in its actions and conditions too, not only its Init)
+    names a lane of the road network, and no lane change asks for more lanes beside its
+    reference than the ego's road has: what the run would find only when it got there."""
+    for x in _model_nodes(model.stories):
+        try:
+            if isinstance(x, M.LanePosition):
+                roads.lane_position(x.road, x.lane, x.s)
+            elif isinstance(x, M.RoadPosition):
+                roads.lane_position(x.road, -1, x.s)
+        except ValueError as exc:
+            raise ScenarioFileError(model.path, x.line, str(exc)) from None
+        if isinstance(x, M.LaneChangeAction) and x.relative_to is not None and abs(x.relative_lanes) >= ego_lanes:
+            raise ScenarioFileError(
+                model.path,
+                x.line,
+                f"a lane change {x.relative_lanes:+d} lanes from {x.relative_to}'s lane: the ego's road has "
+                f"{ego_lanes} lane{'s' if ego_lanes != 1 else ''} in its direction (ego models the lanes of the "
+                f"ego's direction of travel; see {DOCS})",
+            )
 
 
 def file_listing(path: str, ego: str = "") -> dict:

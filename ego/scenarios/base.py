@@ -119,6 +119,9 @@ def divergence(state: Sequence[float], offset: float, heading_error: float, road
 #: default requirements several scenarios share (Scenario.requirements)
 NO_COLLISION = ("no_collision", "always (not collision)")
 NO_AVOIDABLE_COLLISION = ("no_avoidable_collision", "always (not avoidable_collision)")
+#: UN R157's verdict: no collision the competent and careful driver would have avoided
+#: (``preventable_collision``; the default of the R157 scenario files, ego.openscenario)
+NO_PREVENTABLE_COLLISION = ("no_preventable_collision", "always (not preventable_collision)")
 #: the ego stays inside its lane's markings outside a commanded lane change (``lane_departure``)
 STAYS_IN_LANE = ("stays_in_lane", "always (lane_departure <= 0 m)")
 

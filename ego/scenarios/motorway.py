@@ -119,6 +119,24 @@ def check_density(config: HighwayConfig) -> None:
 # --- the world ---------------------------------------------------------------------------
 
 
+#: m: how far from the ego's pose SUMO looks for lanes to map it on, on a road of many edges
+#: (SumoBridge.control): beyond the lane edge by more than half a car the run ends off the road
+MATCH_RADIUS = 10.0
+
+
+def join_lanes(parts: list[list[tuple[float, float]]]) -> list[tuple[float, float]]:
+    """One lane's centre line through consecutive edges (``parts``, each the lane's points on
+    one edge, in driving order). The curved motorways are cut in the middle of a chord
+    (``sumo_nets/motorway_arcs.py``): the joint, the last point of one part and the first of
+    the next, is dropped, and the lane is the one-edge road's, point for point."""
+    pts = list(parts[0])
+    for part in parts[1:]:
+        if math.dist(pts[-1], part[0]) > 1e-3:
+            raise ValueError(f"lane parts do not meet: {pts[-1]} vs {part[0]}")
+        pts = pts[:-1] + list(part[1:])
+    return pts
+
+
 class MotorwayWorld:
     """The simulator with the motorway's traffic: the scenario's own vehicles (``traffic``
     adds them with :meth:`vehicle`), lane blockers, the seeded background in the lanes next
@@ -202,7 +220,14 @@ class MotorwayWorld:
         # the background's top speed is traffic_speed: the simulator's drivers would otherwise
         # speed up to the motorway's limit (130 km/h)
         self.add_type(replace(TRAFFIC_TYPE, max_speed=c.traffic_speed))
-        sim.add_route(self.route, list(self.route_edges))
+        shapes = sim.lane_shapes()
+        # a curved motorway is cut into edges edge, edge.1, edge.2, ... (sumo_nets/motorway_arcs.py):
+        # its lanes are joined across them, and the default route runs through them all
+        chain = (self.edge,)
+        while f"{self.edge}.{len(chain)}_0" in shapes:
+            chain = (*chain, f"{self.edge}.{len(chain)}")
+        edges = chain if self.route_edges == (EDGE,) else self.route_edges
+        sim.add_route(self.route, list(edges))
         self.traffic(self)
         if hasattr(c, "block_left"):  # a configuration with lane blockers
             self.add_type(BLOCKER_TYPE)
@@ -226,15 +251,18 @@ class MotorwayWorld:
                 sim.keep_lane(spec.id)
         for actor in self.actors:
             actor.start(sim)
-        sim.control(EGO, self.geometry)
+        if len(chain) > 1:  # SUMO need not look 100 m around the ego for lanes to map it on
+            sim.control(EGO, self.geometry, match_radius=MATCH_RADIUS)
+        else:
+            sim.control(EGO, self.geometry)
         self.colors[EGO] = EGO_COLOR
-        shapes = sim.lane_shapes()
         refine = self.refine
-        self.lanes = {
-            int(lid.rsplit("_", 1)[1]): LanePolyline(refine(pts) if refine else pts, width, lid)
-            for lid, (width, pts) in shapes.items()
-            if lid.rsplit("_", 1)[0] == self.edge
-        }
+        self.lanes = {}
+        for lid, (width, pts) in shapes.items():
+            edge, index = lid.rsplit("_", 1)
+            if edge == self.edge:
+                pts = join_lanes([shapes[f"{e}_{index}"][1] for e in chain]) if len(chain) > 1 else pts
+                self.lanes[int(index)] = LanePolyline(refine(pts) if refine else pts, width, lid)
         return missing
 
     def lane_frame(self) -> Callable[[float, float], tuple[float, float, float]] | None:
@@ -304,6 +332,8 @@ class SurroundView(RoadSensor):
         self.around: tuple[list, list] = ([], [])
         self._looked = False
         self._sim = None
+        #: (t, speed) at the last observation and the speed's rate of change (m/s^2) since
+        self._u_last, self._accel = (-math.inf, 0.0), 0.0
 
     def setup(self, sim: TrafficSim | None, lanes: dict[int, LanePolyline], plant) -> None:
         """Measure in ``lanes`` (index -> lane; the start lane ``ego_lane``) for ``plant``;
@@ -321,6 +351,7 @@ class SurroundView(RoadSensor):
         self.target_lane = c.ego_lane
         self.ttc_front = self.ttc_rear = INF
         self.gap_front = self.gap_rear = INF
+        self._u_last, self._accel = (-math.inf, 0.0), 0.0
         self.frame()
         bands = {i: (off - 0.5 * lanes[i].width, off + 0.5 * lanes[i].width) for i, off in self.lane_offset.items()}
         self.sensor = SurroundSensor(self.road, bands, g.cg_to_front, g.length, g.width, horizon=c.sumo_step)
@@ -409,7 +440,12 @@ class SurroundView(RoadSensor):
             # the target lane's centre line is concentric with the start lane's, ``off`` to its left
             kappa /= 1.0 - kappa * self.lane_offset[self.target_lane]
             steady = self.steady
-            obs.steer_ff = kappa * (steady.wheelbase + steady.understeer * u * u)
+            # the speed's rate of change since the last observation (SteadySteer.transient)
+            t_last, u_last = self._u_last
+            if t > t_last:
+                self._accel = (u - u_last) / (t - t_last)
+                self._u_last = (t, u)
+            obs.steer_ff = kappa * (steady.wheelbase + steady.understeer * u * u + steady.transient * self._accel)
         else:
             obs.steer_ff = 0.0
 

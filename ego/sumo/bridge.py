@@ -123,6 +123,10 @@ class SumoBridge:
         self._lanes_of_edge: dict[str, int] = {}
         self._pending: list[VehicleSpec] = []
         self._keep_route: dict[str, int] = {}
+        self._match: dict[str, float] = {}
+        #: route id -> its edges and their lengths (a departure beyond the first edge starts
+        #: on the edge it is on, :meth:`add_vehicles`)
+        self._routes: dict[str, tuple[str, ...]] = {}
         self.collisions: list[Collision] = []
         #: a vehicle was moved by moveToXY since SUMO's last step (see :meth:`close`)
         self._moved = False
@@ -256,16 +260,35 @@ class SumoBridge:
 
     def add_route(self, route_id: str, edges: Sequence[str]) -> None:
         self.libsumo.route.add(route_id, list(edges))
+        self._routes[route_id] = tuple(edges)
+
+    def _departure(self, route: str, pos: float) -> tuple[str, float]:
+        """(route, position on its first edge) of a vehicle ``pos`` m along ``route``: a
+        position beyond the route's first edge departs on the edge it is on, with the rest of
+        the route (route ``<route>@<k>``, added once); SUMO takes a departure on the first edge only."""
+        edges = self._routes.get(route, ())
+        lane = self.libsumo.lane
+        k = 0
+        while k + 1 < len(edges) and pos > (length := lane.getLength(f"{edges[k]}_0")):
+            pos -= length
+            k += 1
+        if k == 0:
+            return route, pos
+        rid = f"{route}@{k}"
+        if rid not in self._routes:
+            self.add_route(rid, edges[k:])
+        return rid, pos
 
     def add_vehicles(self, specs: Iterable[VehicleSpec]) -> None:
         veh = self.libsumo.vehicle
         for s in specs:
+            route, pos = self._departure(s.route, s.pos)
             veh.add(
                 s.id,
-                s.route,
+                route,
                 typeID=s.type_id,
                 departLane=str(s.lane),
-                departPos=f"{s.pos:.3f}",
+                departPos=f"{pos:.3f}",
                 departSpeed=f"{s.speed:.3f}",
             )
             self._vehicle_type[s.id] = s.type_id
@@ -294,12 +317,15 @@ class SumoBridge:
             )
         return missing
 
-    def control(self, vid: str, geometry: VehicleGeometry, keep_route: int = 2) -> None:
+    def control(self, vid: str, geometry: VehicleGeometry, keep_route: int = 2, match_radius: float = 100.0) -> None:
         """Take ``vid`` away from SUMO: its pose comes from :meth:`push` from now on.
 
         ``keep_route`` is moveToXY's mapping mode: 2 (default) maps the pose onto any
         lane of the network, 1 only onto the vehicle's route (so on a two-way road an ego
-        drifting left is never mapped onto the oncoming lane).
+        drifting left is never mapped onto the oncoming lane). ``match_radius`` (m, SUMO's
+        default 100 m) is how far from the pose moveToXY looks for edges to map it on: on a
+        road of many short edges (the curved motorways) a few metres keep it to the edges
+        the ego is on, instead of walking every lane within 100 m each step.
         """
         if keep_route not in (0, 1, 2):
             raise ValueError(f"keep_route must be 0, 1 or 2, got {keep_route}")
@@ -308,6 +334,7 @@ class SumoBridge:
         veh.setLaneChangeMode(vid, 0)
         self.controlled[vid] = geometry
         self._keep_route[vid] = keep_route
+        self._match[vid] = float(match_radius)
 
     def cg_pose(self, vid: str) -> tuple[float, float, float]:
         """Centre of gravity (x, y in m) and yaw (rad) of controlled vehicle ``vid`` where
@@ -341,6 +368,7 @@ class SumoBridge:
             y + geo.cg_to_front * s,
             (90.0 - psi * _DEG) % 360.0,
             self._keep_route[vid],
+            self._match[vid],
         )
         if accel is None:
             veh.setPreviousSpeed(vid, speed)

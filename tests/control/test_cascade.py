@@ -44,6 +44,7 @@ def population():
 
 
 @pytest.mark.slow
+@pytest.mark.long
 def test_batch_equals_single_runs_member_by_member(kappas, population):
     """The tuner's vectorised simulation (both speeds in one time loop) against the plain
     single-run simulation with the scenario's controller: the same errors at every step."""
@@ -92,6 +93,7 @@ def test_cost_is_the_reports():
 
 
 @pytest.mark.slow
+@pytest.mark.long
 def test_a_quick_tuning_improves_on_its_initial_population(tmp_path):
     out = tmp_path / "quick.json"
     preset = tune(TuneSpec.quick(seed=1), out, log=lambda *_: None)

@@ -34,6 +34,7 @@ def test_report_rule_base_dense_grid_including_edges_and_beyond():
 
 
 @pytest.mark.slow
+@pytest.mark.long
 def test_report_rule_base_random_points_one_by_one():
     system = fuzzy.rule_base()
     fast = FastMamdani.from_system(system, ["e", "ec"], ["u"])

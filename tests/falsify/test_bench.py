@@ -56,3 +56,25 @@ def test_convergence_figure_draws_median_and_quartile_bands(tmp_path):
     curves = {("a", "cma"): [[3.0, 1.0, -0.5], [2.0, 2.0, 2.0]], ("a", "lhs"): [[4.0, 4.0, 3.0]] * 2}
     path = bench.convergence_figure(curves, 3, tmp_path / "c.png")
     assert path.stat().st_size > 0
+
+
+def test_region_share_of_grids_matches_a_ball_in_a_corner_analytically():
+    """The grids' geometry and the share arithmetic, without SUMO: a ball of radius 0.15
+    around the corner (1, 0, 1) violates; its share of the unit cube is an eighth of the
+    ball's volume, pi/6 * 0.15^3 = 0.1767 %."""
+    import math
+
+    import numpy as np
+
+    corner = np.array([1.0, 0.0, 1.0])
+
+    def measure(jobs):
+        return [{"u": list(p), "r": float(np.linalg.norm(p - corner) - 0.15)} for j in jobs for p in j.points()]
+
+    coarse = measure(bench.grid_jobs(((0.0, 1.0),) * 3, (12, 12, 12)))
+    box = ((0.8, 1.0), (0.0, 0.2), (0.8, 1.0))
+    fine = measure(bench.grid_jobs(box, (40, 40, 40)))
+    r = bench.region_share(coarse, fine, "r", box)
+    assert r["coarse_n"] == 1728 and r["fine_n"] == 64000 and r["outside_bad"] == 0
+    assert math.isclose(r["volume"], 0.008)
+    assert abs(r["share"] - math.pi / 6 * 0.15**3) < 0.02 * math.pi / 6 * 0.15**3

@@ -14,6 +14,7 @@ pytestmark = pytest.mark.sumo
 DOC = Path(__file__).resolve().parents[2] / "docs" / "fmi.md"
 
 
+@pytest.mark.long
 def test_the_worked_example_runs(tmp_path):
     text = DOC.read_text()
     files = re.findall(r"<!-- file: (\S+) -->\n```\w+\n(.*?)```", text, re.S)

@@ -131,6 +131,7 @@ def test_sigterm_while_an_fmu_hangs_interrupts_the_run(bad_fmus, tmp_path):
     assert "Traceback" not in out and not list((short_tmp(tmp_path)).glob("ego-fmu-*"))
 
 
+@pytest.mark.long
 def test_compare_in_workers_names_the_fmu_in_each_row(bad_fmus, tmp_path):
     ctrls = ",".join(bad_fmus[k] for k in ("hang", "segv", "abort", "kill")) + ",pid"
     proc = ego(

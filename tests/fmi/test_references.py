@@ -118,7 +118,7 @@ def test_compare_jobs_2_with_a_file_class_and_fmus(user_file, fmus, tmp_path):
     assert not fmu_folders_left(before)
 
 
-@pytest.mark.parametrize("engine", ["process", "ray"])
+@pytest.mark.parametrize("engine", ["process", pytest.param("ray", marks=pytest.mark.long)])
 def test_sweep_with_a_file_class_and_fmus(user_file, fmus, tmp_path, engine):
     before = fmu_folders()
     spec = tmp_path / "sweep.toml"

@@ -97,6 +97,7 @@ def test_policy_needs_the_ego_state_observation():
 
 
 @pytest.mark.sumo
+@pytest.mark.long
 def test_behaviour_cloning_example_runs(tmp_path):
     p = subprocess.run(
         [

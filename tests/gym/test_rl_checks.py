@@ -87,14 +87,14 @@ def _step(envs, n_steps: int, sample) -> np.ndarray:
     return obs
 
 
-#: every vectoriser on the first env, one (``dummy``: two SUMOs in one process) on every env by
-#: default; the other pairs are minutes together (``-m long`` runs them)
+#: every vectoriser on the first env by default (``dummy``: two SUMOs in one process); the
+#: other envs' pairs are minutes together (``-m long`` runs them)
 _VECTOR_CASES = [
     pytest.param(
         env_id,
         kind,
         id=f"{env_id}-{kind}",
-        marks=() if env_id == next(iter(ego.gym.ENV_IDS)) or kind == "dummy" else pytest.mark.long,
+        marks=() if env_id == next(iter(ego.gym.ENV_IDS)) else pytest.mark.long,
     )
     for env_id in ego.gym.ENV_IDS
     for kind in ("make_vec", "async", "subproc", "dummy")

@@ -134,6 +134,7 @@ def test_list_file(files, capsys):
     assert own["ego_start"] != 300.0  # FileConfig's default
 
 
+@pytest.mark.long
 def test_compare(files, capsys):
     out = files / "cmp"
     rc = main(

@@ -514,3 +514,64 @@ def test_relative_object_positions(tmp_path, monkeypatch):
     # TeleportAction: the position is read from the states at the step it starts), while C
     # drove on 1.5 m in that step
     assert b[0] - c[0] == pytest.approx(20.0 - 1.5, abs=0.05)
+
+
+def _reach(position: str) -> str:
+    return _cond(f'<ReachPositionCondition tolerance="12"><Position>{position}</Position></ReachPositionCondition>')
+
+
+def test_a_lane_position_on_lane_0_is_the_reference_line(tmp_path):
+    """OpenDRIVE's lane 0 is the reference line (esmini's controller_test.xosc reaches a
+    LanePosition with laneId 0): its offset is t from the line, so the condition fires when a
+    RoadPosition with that t does. C drives lane -3 (its centre 8.75 m right of the line) from
+    s = 400 m at 15 m/s: within 12 m of (500, -2) once 6.75 m across and 9.92 m before it."""
+    evs = [
+        event("Lane0", "A", speed(26), trigger([_reach('<LanePosition roadId="0" laneId="0" s="500" offset="-2"/>')])),
+        event("Road", "B", speed(16), trigger([_reach('<RoadPosition roadId="0" s="500" t="-2"/>')])),
+    ]
+    sc = run_scene(scene(tmp_path, evs), 8.0)
+    reach = (100 - math.sqrt(12**2 - 6.75**2)) / 15
+    assert starts(sc, "Lane0") == starts(sc, "Road") == [pytest.approx(reach, abs=0.1)]
+
+
+@pytest.mark.parametrize(
+    "position, message",
+    [
+        ('<LanePosition roadId="7" laneId="-1" s="300"/>', "unknown road '7'"),
+        ('<LanePosition roadId="0" laneId="2" s="300"/>', "has no lanes with positive ids"),
+    ],
+)
+def test_a_bad_position_in_a_condition_is_refused_by_list_and_run_alike(tmp_path, position, message):
+    """Found before the run, at the position's own line, by ``ego list`` as by ``ego run``
+    (it used to be found when the condition was first evaluated, or not at all)."""
+    from ego.openscenario.scenario import file_listing
+
+    path = scene(tmp_path, [event("Reach", "A", speed(26), trigger([_reach(position)]))])
+    listing = file_listing(str(path))
+    assert not listing["supported"] and message in listing["error"], listing["error"]
+    run = subprocess.run(
+        [sys.executable, "-m", "ego", "run", str(path), "-c", "pid"], capture_output=True, text=True, timeout=300
+    )
+    assert run.returncode == 2 and len(run.stderr.strip().splitlines()) == 1, run.stderr
+    assert message in run.stderr and listing["error"] in run.stderr, run.stderr
+
+
+def test_a_lane_change_past_the_ego_roads_lanes_is_refused_by_list_and_run_alike(tmp_path):
+    """esmini's acc-test/aeb-test/alks-test change lanes to the ego's left on a road with one
+    lane each way; ego models the lanes of the ego's direction only. Refused before the run at
+    the LaneChangeAction's line (ego list said supported and ego run failed mid-run)."""
+    from ego.openscenario.scenario import file_listing
+
+    relative = (
+        '<LateralAction><LaneChangeAction><LaneChangeActionDynamics dynamicsShape="sinusoidal" value="2" '
+        'dynamicsDimension="time"/><LaneChangeTarget><RelativeTargetLane entityRef="Ego" value="3"/>'
+        "</LaneChangeTarget></LaneChangeAction></LateralAction>"
+    )
+    path = scene(tmp_path, [event("Far", "A", relative, trigger([sim_time(1)]))])
+    listing = file_listing(str(path))
+    want = f"scene.xosc:{_line_of(path, '<LaneChangeAction>')}: a lane change +3 lanes from Ego's lane"
+    assert not listing["supported"] and want in listing["error"], listing["error"]
+    run = subprocess.run(
+        [sys.executable, "-m", "ego", "run", str(path), "-c", "pid"], capture_output=True, text=True, timeout=300
+    )
+    assert run.returncode == 2 and want in run.stderr and len(run.stderr.strip().splitlines()) == 1, run.stderr

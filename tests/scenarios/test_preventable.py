@@ -89,3 +89,46 @@ def test_sweep_carries_collision_preventable_when_asked(tmp_path, capsys):
     assert rows["none"]["collision"] and rows["none"]["collision_preventable"] is True
     assert not rows["pid"]["collision"] and rows["pid"]["collision_preventable"] is None
     assert "- none: 1 of 1" in (tmp_path / "sw" / "summary.md").read_text()
+
+
+ALKS_CUT_IN = "scenarios/alks/alks_4_4_cut_in.xosc"
+
+
+def test_r157_files_default_to_no_preventable_collision_and_other_files_do_not():
+    from ego.requirements import defaults
+    from ego.scenarios import scenario_class
+
+    def names(path):
+        return defaults(path, scenario_class(path))
+
+    assert names(ALKS_CUT_IN)["no_preventable_collision"] == "always (not preventable_collision)"
+    assert "no_preventable_collision" in names("scenarios/alks/alks_4_2_blocking.xosc")
+    assert "no_preventable_collision" not in names("scenarios/openscenario/cut_in.xosc")
+    assert "no_preventable_collision" not in defaults("cut-in")
+
+
+def test_an_r157_run_whose_collision_the_careful_driver_avoids_fails_no_preventable_collision(tmp_path, capsys):
+    from ego.cli import main
+
+    overrides = {"aeb": "false"}  # the ALKS file's own evasion is off already
+    r = run(RunSpec(ALKS_CUT_IN, "none", 0, overrides))
+    assert r.metrics["collision"] and r.metrics["collision_preventable"] is True
+    assert not _careful_collides(ALKS_CUT_IN, 0, overrides)
+    assert r.metrics["requirements"]["no_preventable_collision"] < 0
+    hit = next(e.t for e in r.events if e.kind == "collision")
+    assert r.metrics["first_violation"]["no_preventable_collision"] == pytest.approx(hit, abs=0.011)
+    # the command line says why it failed
+    assert main(["run", ALKS_CUT_IN, "-c", "none", "--set", "aeb=false"]) == 1
+    assert "no_preventable_collision" in capsys.readouterr().out
+
+
+def test_an_r157_collision_the_careful_driver_has_too_passes_no_preventable_collision():
+    overrides = {"aeb": "false", "CutInGap": "8", "RelSpeed_kph": "20", "LateralVelocity": "3.0", "CutInTTCMargin": "0"}
+    r = run(RunSpec(ALKS_CUT_IN, "none", 0, overrides))
+    assert r.metrics["collision"] and r.metrics["collision_preventable"] is False
+    assert _careful_collides(ALKS_CUT_IN, 0, overrides)
+    assert r.metrics["requirements"]["no_preventable_collision"] > 0
+    # without a collision there is no second run: nothing to prevent
+    calm = run(RunSpec(ALKS_CUT_IN, "pid", 0))
+    assert not calm.metrics["collision"] and "collision_preventable" not in calm.metrics
+    assert calm.metrics["requirements"]["no_preventable_collision"] > 0

@@ -28,6 +28,9 @@ import psutil
 import pyarrow.parquet as pq
 import pytest
 
+#: a three-node Ray cluster takes a minute to start and stop: ``-m long`` runs these
+pytestmark = pytest.mark.long
+
 SPEC = (
     'scenario = "emergency-brake"\ncontrollers = ["pid"]\nseeds = {seeds}\n[set]\nduration = {duration}\n'
     "[grid]\nego_speed = [18, 20, 22, 24]\n"

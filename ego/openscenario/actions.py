@@ -1,0 +1,718 @@
+"""The OpenSCENARIO actions ego runs: one :class:`~ego.openscenario.registry.ActionKind`
+each (its element and sub-elements, how it is read, what it drives, how it runs), registered
+by element name. Adding an action is one class here (or in a module of its own that
+registers it: docs/architecture.md, "Adding an OpenSCENARIO action")."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from ego.openscenario import model as M
+from ego.openscenario.dynamics import DYNAMICS_LIMITS, Transition, lateral_duration, offset_duration, speed_duration
+from ego.openscenario.registry import ActionKind, register
+from ego.openscenario.runtime import EPS, INF, ActionRun, Storyboard, speed_profile_knots
+from ego.openscenario.xmltree import DOCS, Node
+
+# the builder's (``b``) readers: num, int_, bool_, str_, enum, one, entity_ref, position,
+# dynamics, scoped, vertices (ego.openscenario.loader._Builder)
+
+
+class Teleport(ActionKind):
+    tag, within, contains, model = "TeleportAction", ("PrivateAction",), ("Position",), M.TeleportAction
+    in_init, init_note = "yes", "TeleportAction"
+    note = "not on the ego"
+
+    def build(self, b: Any, node: Node) -> M.TeleportAction:
+        return M.TeleportAction(b.position(b.one(node, "Position")), node.line)
+
+    def start(self, run: ActionRun, t: float) -> None:
+        drv = run.board.driver
+        x, y, h = drv.position_xy(run.action.position, run.board.states)
+        drv.teleport(run.actor, x, y, h)
+        run.finished = True
+
+
+class Controller(ActionKind):
+    tag, within, model = "ControllerAction", ("PrivateAction",), M.ControllerAction
+    contains = ("ActivateControllerAction", "AssignControllerAction")
+    parts = {"AssignControllerAction": ("Controller", "CatalogReference")}
+    domains, on_ego, in_init, init_note = (), True, "ignored", "ControllerAction"
+    label = (
+        "`ControllerAction` (`ActivateControllerAction`, `AssignControllerAction`), `ActivateControllerAction` (1.0)"
+    )
+    also = ("ActivateControllerAction", "AssignControllerAction")
+    note = (
+        "done at once; the ego keeps ego's controller, the others their driver or script (see `ObjectController`);"
+        " `OverrideControllerValueAction` refused"
+    )
+
+    def build(self, b: Any, node: Node) -> M.ControllerAction:
+        for c in node.children:
+            if c.tag == "AssignControllerAction":
+                b.controller(c)
+        return M.ControllerAction(node.line)
+
+
+class ActivateController(ActionKind):
+    """OpenSCENARIO 1.0's ActivateControllerAction (directly in a PrivateAction)."""
+
+    tag, within, model = "ActivateControllerAction", ("PrivateAction",), M.ControllerAction
+    domains, on_ego, in_init = (), True, "ignored"
+
+    def build(self, b: Any, node: Node) -> M.ControllerAction:
+        return M.ControllerAction(node.line)
+
+
+class Speed(ActionKind):
+    tag, within, model = "SpeedAction", ("LongitudinalAction",), M.SpeedAction
+    contains = ("SpeedActionDynamics", "SpeedActionTarget")
+    parts = {
+        "SpeedActionDynamics": (),
+        "SpeedActionTarget": ("AbsoluteTargetSpeed", "RelativeTargetSpeed"),
+        "AbsoluteTargetSpeed": (),
+        "RelativeTargetSpeed": (),
+    }
+    domains, on_ego, in_init = ("long",), True, "yes"
+    init_note = "SpeedAction with AbsoluteTargetSpeed or a non-continuous RelativeTargetSpeed"
+    note = (
+        "`AbsoluteTargetSpeed`, `RelativeTargetSpeed` (delta, factor, continuous); shapes step, linear, cubic, "
+        "sinusoidal over time, rate (the mean rate for cubic and sinusoidal) or distance; a `value` of 0 is a "
+        "step (the standard); a step may leave out `value` and `dynamicsDimension` (the schema asks for both; a "
+        "step has no duration, and the reference player's files omit them); a negative rate is read by its "
+        "magnitude (**deviation**: the standard requires a rate >= 0, but the reference player esmini plays the "
+        "negative braking rates its example files write, `-4`, `-6`, as their magnitude, and ego follows it so "
+        "those files run as they do there); a negative time or distance is refused; linear-over-rate is SUMO's "
+        "own per-step deceleration (exactly emergency-brake's lead), except while a lane change moves the car "
+        "(SUMO then takes a set speed at once: the profile is commanded step by step, within 1e-6 of the closed "
+        "form, `test_xosc_player_forms.py`); the others are commanded step by step along the closed form"
+    )
+
+    def build(self, b: Any, node: Node) -> M.SpeedAction:
+        dyn = b.dynamics(b.one(node, "SpeedActionDynamics"))
+        target = b.one(b.one(node, "SpeedActionTarget"))
+        if target.tag == "AbsoluteTargetSpeed":
+            return M.SpeedAction(dyn, b.num(target, "value", nonneg=True), line=node.line)
+        return M.SpeedAction(
+            dyn,
+            b.num(target, "value"),
+            b.entity_ref(target),
+            b.enum(target, "speedTargetValueType", ("delta", "factor")),
+            b.bool_(target, "continuous"),
+            node.line,
+        )
+
+    def init_ok(self, action: M.SpeedAction) -> bool:
+        return action.relative_to is None or not action.continuous
+
+    def start(self, run: ActionRun, t: float) -> None:
+        b, a, drv = run.board, run.action, run.board.driver
+        me = b.states[run.actor]
+        # the ego's references move on from where they are (its measured speed wobbles)
+        v0 = drv.ego_references()[0] if run.is_ego else me.speed
+        target = a.value
+        if a.relative_to is not None:
+            ref = b.states[a.relative_to].speed
+            target = ref + a.value if a.relative_kind == "delta" else ref * a.value
+        target = max(target, 0.0)
+        dyn = a.dynamics
+        T = speed_duration(dyn.shape, dyn.dimension, dyn.value, v0, target)
+        run.profile = Transition(t, v0, target, T, dyn.shape)
+        if run.is_ego:
+            rel = (a.relative_to, a.relative_kind, a.value) if (a.relative_to and a.continuous) else None
+            drv.ego_speed(run.profile, rel)
+            run.finished = not a.continuous
+            return
+        if dyn.shape == "linear" and dyn.dimension == "rate" and v0 != target and not drv.blind(run.actor):
+            drv.speed_rate(run.actor, target, dyn.value)  # SUMO's own per-step rate: exact
+            run.native = True
+        else:
+            run.native = False
+
+    def step(self, run: ActionRun, t: float) -> None:
+        b, a, drv = run.board, run.action, run.board.driver
+        p = run.profile
+        if a.continuous and a.relative_to is not None and p.done(t):
+            ref = b.states[a.relative_to].speed
+            target = max(ref + a.value if a.relative_kind == "delta" else ref * a.value, 0.0)
+            drv.speed(run.actor, target, INF)
+            return
+        if run.native and drv.blind(run.actor):
+            # a scripted lateral move makes SUMO take a set speed at once (no braking
+            # limit): the rest of the profile is commanded step by step
+            run.native = False
+        if not run.native:
+            drv.speed(run.actor, p.value(t + b.h), max(p.peak_rate, 0.0))
+        if p.done(t + b.h) and not a.continuous:
+            run.finished = True
+
+
+def _lateral_start(run: ActionRun, t: float, target: float, T: float, shape: str) -> None:
+    """Start a lateral profile (lane change, lane offset) from where the actor is to ``target``."""
+    drv, me = run.board.driver, run.board.states[run.actor]
+    start = drv.ego_references()[1] if run.is_ego else me.d_front
+    run.profile = Transition(t, start, target, T, shape)
+    if run.is_ego:
+        drv.ego_lateral(run.profile)
+        run.finished = True
+
+
+def _lateral_step(kind: ActionKind, run: ActionRun, t: float) -> None:
+    """Move the actor along its lateral profile for [t, t + step] (SUMO's sublane model): the
+    ``step`` of a lane change and of a lane offset."""
+    drv, p = run.board.driver, run.profile
+    drv.lateral(run.actor, p.value(t + run.board.h), p.peak_rate)
+    if p.done(t + run.board.h) and not getattr(run.action, "continuous", False):
+        run.finished = True
+        drv.release(run.actor)
+
+
+class LaneChange(ActionKind):
+    tag, within, model = "LaneChangeAction", ("LateralAction",), M.LaneChangeAction
+    domains, on_ego, releases = ("lat",), True, True
+    contains = ("LaneChangeActionDynamics", "LaneChangeTarget")
+    parts = {
+        "LaneChangeActionDynamics": (),
+        "LaneChangeTarget": ("AbsoluteTargetLane", "RelativeTargetLane"),
+        "AbsoluteTargetLane": (),
+        "RelativeTargetLane": (),
+    }
+    note = (
+        "`AbsoluteTargetLane`, `RelativeTargetLane`, `targetLaneOffset`; shapes over time, distance (distance at "
+        "the speed at the start) or rate (the peak lateral speed in m/s, as the ALKS files' `MaxLateralVelocity`: "
+        "T = k \\|D\\| / rate, k = 1 linear, 3/2 cubic, pi/2 sinusoidal, D from where the entity is to the target); "
+        "moved through SUMO's sublane model step by step as cut-in's car (blind to others while moving); a step "
+        "is one placement. **Known deviation (open, issue 39):** the profile moves SUMO's front bumper, not the "
+        "entity's reference point: SUMO turns the car from its front and back positions, so its box centre lags "
+        "the shape and reaches the target lane a few steps after the front"
+    )
+
+    def build(self, b: Any, node: Node) -> M.LaneChangeAction:
+        dyn = b.dynamics(b.one(node, "LaneChangeActionDynamics"))
+        target = b.one(b.one(node, "LaneChangeTarget"))
+        offset = b.num(node, "targetLaneOffset", 0.0)
+        if target.tag == "AbsoluteTargetLane":
+            return M.LaneChangeAction(dyn, b.int_(target, "value"), None, 0, offset, node.line)
+        return M.LaneChangeAction(dyn, None, b.entity_ref(target), b.int_(target, "value"), offset, node.line)
+
+    def start(self, run: ActionRun, t: float) -> None:
+        a, b = run.action, run.board
+        drv, me = b.driver, b.states[run.actor]
+        if a.target_lane is not None:
+            centre = drv.lane_centre(a.target_lane)
+        else:
+            centre = drv.lane_centre(0, b.states[a.relative_to].d, a.relative_lanes)
+        target = centre + a.target_offset
+        here = drv.ego_references()[1] if run.is_ego else me.d_front
+        dyn = a.dynamics
+        _lateral_start(
+            run, t, target, lateral_duration(dyn.shape, dyn.dimension, dyn.value, me.speed, target - here), dyn.shape
+        )
+
+    step = _lateral_step
+
+
+class LaneOffset(ActionKind):
+    tag, within, model = "LaneOffsetAction", ("LateralAction",), M.LaneOffsetAction
+    domains, on_ego, releases = ("lat",), True, True
+    contains = ("LaneOffsetActionDynamics", "LaneOffsetTarget")
+    parts = {
+        "LaneOffsetActionDynamics": (),
+        "LaneOffsetTarget": ("AbsoluteTargetLaneOffset", "RelativeTargetLaneOffset"),
+        "AbsoluteTargetLaneOffset": (),
+        "RelativeTargetLaneOffset": (),
+    }
+    note = (
+        "absolute and relative targets; the duration from `maxLateralAcc`: cubic sqrt(6 D / a), sinusoidal pi "
+        "sqrt(D / (2 a)), linear 2 sqrt(D / a)"
+    )
+
+    def build(self, b: Any, node: Node) -> M.LaneOffsetAction:
+        d = b.one(node, "LaneOffsetActionDynamics")
+        acc = b.raw(d, "maxLateralAcc", None)
+        shape = b.enum(d, "dynamicsShape", M.SHAPES)
+        if acc is None and shape != "step":
+            raise b.error(d, f"<LaneOffsetActionDynamics> needs maxLateralAcc for dynamicsShape {shape}")
+        target = b.one(b.one(node, "LaneOffsetTarget"))
+        rel = b.entity_ref(target) if target.tag == "RelativeTargetLaneOffset" else None
+        return M.LaneOffsetAction(
+            shape,
+            None if acc is None else b.num(d, "maxLateralAcc", positive=True),
+            b.num(target, "value"),
+            rel,
+            b.bool_(node, "continuous"),
+            node.line,
+        )
+
+    def start(self, run: ActionRun, t: float) -> None:
+        a, b = run.action, run.board
+        drv, me = b.driver, b.states[run.actor]
+        base = b.states[a.relative_to].d if a.relative_to is not None else drv.lane_centre_of(me.d)
+        target = base + a.value
+        here = drv.ego_references()[1] if run.is_ego else me.d_front
+        _lateral_start(run, t, target, offset_duration(a.shape, a.max_lateral_acc, target - here), a.shape)
+
+    step = _lateral_step
+
+
+class LongitudinalDistance(ActionKind):
+    tag, within, model = "LongitudinalDistanceAction", ("LongitudinalAction",), M.LongitudinalDistanceAction
+    contains = ("DynamicConstraints",)
+    parts = {"DynamicConstraints": ()}
+    domains = ("long",)
+    note = (
+        "`distance` or `timeGap` (times the actor's own speed, as the standard), `freespace` (between the boxes) "
+        "or centres, `displacement` trailing (default, `any`) or leading, `continuous` (else it ends once held "
+        "within 1 cm); without `DynamicConstraints` the actor is at the distance after one step and then exactly "
+        "there every step (within 1e-6: `test_xosc_alks_forms.py`); with them it keeps `maxAcceleration`, "
+        "`maxDeceleration`, `maxSpeed` and closes at the speed from which its braking limit still stops at the "
+        "distance a step later; not on the ego"
+    )
+
+    def build(self, b: Any, n: Node) -> M.LongitudinalDistanceAction:
+        has_d, has_t = "distance" in n.attrs, "timeGap" in n.attrs
+        if has_d == has_t:
+            raise b.error(n, "<LongitudinalDistanceAction> needs one of distance and timeGap")
+        disp = b.enum(n, "displacement", ("trailingReferencedEntity", "leadingReferencedEntity", "any"), "any")
+        limits = _limits(
+            b, n, ("maxAcceleration", "max_accel"), ("maxDeceleration", "max_decel"), ("maxSpeed", "max_speed")
+        )
+        return M.LongitudinalDistanceAction(
+            b.entity_ref(n),
+            b.num(n, "distance", nonneg=True) if has_d else None,
+            b.num(n, "timeGap", nonneg=True) if has_t else None,
+            b.bool_(n, "freespace"),
+            b.bool_(n, "continuous"),
+            disp == "leadingReferencedEntity",
+            line=n.line,
+            **limits,
+        )
+
+    def start(self, run: ActionRun, t: float) -> None:
+        pass  # commanded step by step
+
+    def step(self, run: ActionRun, t: float) -> None:
+        """The speed over [t, t + step] that puts the actor at the held distance from the
+        entity at t + step (the entity as it drives on at its speed at t), within the
+        action's dynamic constraints; a non-continuous action ends once the distance is
+        held (within 1 cm)."""
+        b, a = run.board, run.action
+        h = b.h
+        me, ref = b.states[run.actor], b.states[a.entity]
+        sign = 1.0 if a.leading else -1.0  # the actor ahead of (+) or behind (-) the entity
+        extra = 0.5 * (me.length + ref.length) if a.freespace else 0.0
+        ref_next = ref.s + ref.speed * h
+        constrained = math.isfinite(a.max_accel) or math.isfinite(a.max_decel)
+        if a.distance is not None or constrained:
+            # the position error now; unconstrained it is closed in one step, else at the
+            # speed from which the deceleration limit still stops at the goal
+            held = a.distance if a.distance is not None else (a.time_gap or 0.0) * ref.speed
+            err = ref.s + sign * (held + extra) - me.s
+            close = abs(err) / h
+            stop = a.max_decel if err > 0.0 else a.max_accel  # what ends the closing
+            if math.isfinite(stop):
+                # the relative speed from which ``stop`` still ends at the goal, a step later
+                close = min(-stop * h + math.sqrt((stop * h) ** 2 + 2.0 * stop * abs(err)), close)
+            v = ref.speed + math.copysign(close, err)
+        else:
+            # s + v h = ref_next + sign (tg v + extra): the gap is tg times the actor's speed
+            tg = a.time_gap or 0.0
+            denom = h - sign * tg
+            v = (ref_next + sign * extra - me.s) / denom if abs(denom) > EPS else me.speed
+        lo = max(me.speed - a.max_decel * h, 0.0)
+        hi = min(me.speed + a.max_accel * h, a.max_speed)
+        v = min(max(v, lo), hi)
+        rate = abs(v - me.speed) / h
+        b.driver.speed(run.actor, v, rate if constrained else INF)
+        gap = sign * (me.s - ref.s) - extra
+        held = a.distance if a.distance is not None else (a.time_gap or 0.0) * me.speed
+        if not a.continuous and abs(gap - held) < 0.01:
+            run.finished = True
+
+
+def _limits(b: Any, n: Node, *names: tuple[str, str]) -> dict[str, float]:
+    """The DynamicConstraints' limits given (attribute -> model field), each > 0."""
+    limits: dict[str, float] = {}
+    dc = n.child("DynamicConstraints")
+    for attr, key in names:
+        if dc is not None and attr in dc.attrs:
+            limits[key] = b.num(dc, attr, positive=True)
+    return limits
+
+
+class SpeedProfile(ActionKind):
+    tag, within, model = "SpeedProfileAction", ("LongitudinalAction",), M.SpeedProfileAction
+    contains = ("DynamicConstraints", "SpeedProfileEntry")
+    parts = {"DynamicConstraints": (), "SpeedProfileEntry": ()}
+    domains = ("long",)
+    label = "`SpeedProfileAction` (1.2)"
+    note = (
+        "the speed goes linearly through its `SpeedProfileEntry`s, each entry's `speed` reached in its `time` "
+        "(none or 0: at the `DynamicConstraints`' `maxAcceleration`/`maxDeceleration`, a step without them), plus "
+        "the `entityRef`'s speed at the start when given; `followingMode` follow keeps those limits (an entry too "
+        "quick for them takes longer), position follows the times; commanded step by step (within 1e-6 of the "
+        "profile, `test_xosc_player_forms.py`). **Deviation:** the jerk limits (`maxAccelerationRate`, "
+        "`maxDecelerationRate`) are read and not applied (the reference player smooths with them in follow mode); "
+        "not on the ego"
+    )
+
+    def build(self, b: Any, n: Node) -> M.SpeedProfileAction:
+        entries = []
+        for e in n.all("SpeedProfileEntry"):
+            time = b.num(e, "time", nonneg=True, at_most=DYNAMICS_LIMITS["time"]) if "time" in e.attrs else None
+            entries.append((b.num(e, "speed"), time))
+        if not entries:
+            raise b.error(n, "<SpeedProfileAction> needs at least one <SpeedProfileEntry>")
+        limits = _limits(b, n, ("maxAcceleration", "max_accel"), ("maxDeceleration", "max_decel"))
+        rel = b.entity_ref(n) if "entityRef" in n.attrs else None
+        mode = b.enum(n, "followingMode", ("position", "follow"))
+        return M.SpeedProfileAction(tuple(entries), rel, mode, line=n.line, **limits)
+
+    def start(self, run: ActionRun, t: float) -> None:
+        a, states = run.action, run.board.states
+        ref = states[a.relative_to].speed if a.relative_to else 0.0
+        run.knots = speed_profile_knots(a, t, states[run.actor].speed, ref)
+
+    def step(self, run: ActionRun, t: float) -> None:
+        ts, vs = run.knots
+        t1 = t + run.board.h
+        v = vs[-1] if t1 >= ts[-1] else float(np.interp(t1, ts, vs))
+        run.board.driver.speed(run.actor, max(v, 0.0), INF)
+        if t1 >= ts[-1] - EPS:
+            run.finished = True
+
+
+class Synchronize(ActionKind):
+    tag, within, model = "SynchronizeAction", ("PrivateAction",), M.SynchronizeAction
+    contains = ("TargetPositionMaster", "TargetPosition", "FinalSpeed")
+    parts = {
+        "TargetPositionMaster": "Position",
+        "TargetPosition": "Position",
+        "FinalSpeed": ("AbsoluteSpeed", "RelativeSpeedToMaster"),
+        "AbsoluteSpeed": (),
+        "RelativeSpeedToMaster": (),
+    }
+    domains = ("long",)
+    note = (
+        "the actor reaches `TargetPosition` when the master reaches `TargetPositionMaster` (positions as s along "
+        "the ego's start lane frame), the master taken to drive on at its speed and the plan redone every step: "
+        "without `FinalSpeed` the constant speed d / T (a step at the start, as the standard gives the action no "
+        "dynamics), with `FinalSpeed` (`AbsoluteSpeed`, `RelativeSpeedToMaster` delta or factor of the master's "
+        "speed at each step) the speed profile v + b t + c t^2 that ends at the final speed and covers the "
+        "distance; ends when the master arrives. Measured (`test_xosc_player_forms.py`: master at 25 m/s 200 m "
+        "from its target, actor 50 m from its own): the actor is at its target to 1e-6 m when the master arrives, "
+        "6 cm past it with a final speed of 10 m/s (10.0000 m/s at arrival); not on the ego; the actor keeps its "
+        "lane"
+    )
+
+    def build(self, b: Any, a: Node) -> M.SynchronizeAction:
+        final, kind = None, "absolute"
+        fs = a.child("FinalSpeed")
+        if fs is not None:
+            sp = b.one(fs)
+            if sp.tag == "AbsoluteSpeed":
+                final = b.num(sp, "value", nonneg=True)
+            else:
+                kind = b.enum(sp, "speedTargetValueType", ("delta", "factor"))
+                final = b.num(sp, "value")
+        return M.SynchronizeAction(
+            b.entity_ref(a, "masterEntityRef"),
+            b.position(b.one(a, "TargetPositionMaster")),
+            b.position(b.one(a, "TargetPosition")),
+            final,
+            kind,
+            a.line,
+        )
+
+    def start(self, run: ActionRun, t: float) -> None:
+        pass  # commanded step by step
+
+    def step(self, run: ActionRun, t: float) -> None:
+        """The speed over the next step on the profile that puts the actor at its target when
+        the master reaches its own, the master driving on at its speed (re-planned every
+        step): with a final speed v_f, v(tau) = v + b tau + c tau^2 with v(T) = v_f and its
+        integral over [0, T] the distance left; without, the constant speed d / T. Ends when
+        the master is at its target."""
+        b, a = run.board, run.action
+        h, drv = b.h, b.driver
+        me, master = b.states[run.actor], b.states[a.master]
+        s_m = drv.road_frame(*drv.position_xy(a.master_target, b.states)[:2])[0]
+        s_a = drv.road_frame(*drv.position_xy(a.target, b.states)[:2])[0]
+        d_m, d = s_m - master.s, s_a - me.s
+        if d_m <= EPS:
+            run.finished = True
+            return
+        if master.speed <= EPS:
+            return  # the master stands: no arrival time to meet
+        T = d_m / master.speed
+        if a.final_speed is None:
+            v = d / T
+        else:
+            vf = a.final_speed
+            if a.final_kind == "delta":
+                vf = master.speed + a.final_speed
+            elif a.final_kind == "factor":
+                vf = master.speed * a.final_speed
+            if T <= h:
+                v = vf
+            else:
+                dv, dd = vf - me.speed, d - me.speed * T
+                c = (3.0 * dv * T - 6.0 * dd) / T**3
+                bb = (dv - c * T * T) / T
+                v = me.speed + bb * h + c * h * h
+        drv.speed(run.actor, max(v, 0.0), INF)
+
+
+class FollowTrajectory(ActionKind):
+    tag, within, model = "FollowTrajectoryAction", ("RoutingAction",), M.FollowTrajectoryAction
+    contains = ("Trajectory", "TrajectoryRef", "TimeReference", "TrajectoryFollowingMode")
+    parts = {
+        "Trajectory": ("ParameterDeclarations", "Shape"),
+        "TrajectoryRef": ("Trajectory",),
+        "TimeReference": ("None", "Timing"),
+        "TrajectoryFollowingMode": (),
+        "Shape": ("Polyline",),
+        "Polyline": ("Vertex",),
+        "Vertex": ("Position",),
+        "None": (),
+        "Timing": (),
+    }
+    releases = True
+    label = "`FollowTrajectoryAction` with `Polyline`"
+    also = ("Polyline",)
+    note = (
+        "`Timing` absolute or relative with scale and offset (vertex times), or none (the entity's speed at the "
+        "start); `initialDistanceOffset`; not on the ego; `Clothoid`, `Nurbs`, catalog trajectories refused"
+    )
+
+    def build(self, b: Any, inner: Node) -> M.FollowTrajectoryAction:
+        traj_node = inner.child("Trajectory")
+        if traj_node is None:
+            ref = inner.child("TrajectoryRef")
+            if ref is None:
+                raise b.error(inner, "<FollowTrajectoryAction> needs a <Trajectory>")
+            traj_node = b.one(ref, "Trajectory")
+        outer_values = b.values
+        b.values = b.scoped(traj_node)  # the trajectory's own parameters
+        try:
+            poly = b.one(b.one(traj_node, "Shape"), "Polyline")
+            vertices = self.vertices(b, poly)
+        finally:
+            b.values = outer_values
+        timing = None
+        tr = inner.child("TimeReference")
+        tm = tr.child("Timing") if tr is not None else None
+        if tm is not None:
+            timing = (
+                b.enum(tm, "domainAbsoluteRelative", ("absolute", "relative")),
+                b.num(tm, "scale", positive=True),
+                b.num(tm, "offset"),
+            )
+            times = [v.time for v in vertices]
+            if any(t is None for t in times):
+                raise b.error(poly, "every <Vertex> needs a time when the trajectory has <Timing>")
+            if any(y <= x for x, y in zip(times, times[1:])):  # type: ignore[operator]
+                raise b.error(poly, "<Vertex> times must increase")
+        return M.FollowTrajectoryAction(tuple(vertices), timing, b.num(inner, "initialDistanceOffset", 0.0), inner.line)
+
+    @staticmethod
+    def vertices(b: Any, poly: Node) -> list[M.Vertex]:
+        vertices = []
+        for v in poly.all("Vertex"):
+            t = b.raw(v, "time", None)
+            vertices.append(M.Vertex(None if t is None else b.num(v, "time"), b.position(b.one(v, "Position"))))
+        if len(vertices) < 2:
+            raise b.error(poly, f"<Polyline> needs at least two <Vertex> (found {len(vertices)})")
+        return vertices
+
+    def start(self, run: ActionRun, t: float) -> None:
+        b, a = run.board, run.action
+        pts = [b.driver.position_xy(v.position, b.states) for v in a.vertices]
+        run.xy = [(p[0], p[1]) for p in pts]
+        run.cum = [0.0]
+        for (x0, y0), (x1, y1) in zip(run.xy, run.xy[1:]):
+            run.cum.append(run.cum[-1] + math.hypot(x1 - x0, y1 - y0))
+        if a.timing is not None:
+            domain, scale, offset = a.timing
+            base = 0.0 if domain == "absolute" else t
+            run.times = [base + v.time * scale + offset for v in a.vertices]
+        else:
+            run.times = None
+            run.v = b.states[run.actor].speed
+            run.t0 = t
+            run.s0 = a.initial_distance_offset
+
+    @staticmethod
+    def point(run: ActionRun, t: float) -> tuple[float, float, float, float, bool]:
+        """(x, y, heading, speed, at the end) on the trajectory at time ``t``."""
+        xy, cum = run.xy, run.cum
+        if run.times is not None:
+            times = run.times
+            if t <= times[0]:
+                i, u = 0, 0.0
+            elif t >= times[-1]:
+                i, u = len(times) - 2, 1.0
+            else:
+                i = max(k for k in range(len(times) - 1) if times[k] <= t)
+                u = (t - times[i]) / (times[i + 1] - times[i])
+            seg = cum[i + 1] - cum[i]
+            speed = seg / (times[i + 1] - times[i])
+            end = t >= times[-1] - EPS
+        else:
+            s = min(run.s0 + run.v * (t - run.t0), cum[-1])
+            i = max(k for k in range(len(cum) - 1) if cum[k] <= s) if s > 0 else 0
+            i = min(i, len(cum) - 2)
+            seg = cum[i + 1] - cum[i]
+            u = (s - cum[i]) / seg if seg > 0 else 1.0
+            speed, end = run.v, s >= cum[-1] - EPS
+        (x0, y0), (x1, y1) = xy[i], xy[i + 1]
+        heading = math.atan2(y1 - y0, x1 - x0)
+        return x0 + u * (x1 - x0), y0 + u * (y1 - y0), heading, speed, end
+
+    def step(self, run: ActionRun, t: float) -> None:
+        x, y, heading, speed, end = self.point(run, t + run.board.h)
+        run.board.driver.place(run.actor, x, y, heading, speed)
+        if end:
+            run.finished = True
+            run.board.driver.release(run.actor)
+
+
+#: a ParameterAction's and a VariableAction's own elements
+VALUE_PARTS: dict[str, tuple[str, ...]] = {
+    "SetAction": (),
+    "ModifyAction": ("Rule",),
+    "Rule": ("AddValue", "MultiplyByValue"),
+    "AddValue": (),
+    "MultiplyByValue": (),
+}
+
+
+def _value_action(b: Any, node: Node, kind: str) -> M.ParameterAction:
+    """A ParameterAction or VariableAction: set, add to or multiply a declared value."""
+    name = b.str_(node, "parameterRef" if kind == "parameter" else "variableRef")
+    if kind == "parameter":
+        declared = {k: (type(v), v) for k, v in b.values.items()}
+    else:
+        declared = {k: (type(p.value), p.value) for k, p in b.variables.items()}
+    if name not in declared:
+        raise b.error(node, f"{kind} {name!r} is not declared (declared: {', '.join(declared) or 'none'})")
+    initial = declared[name][1]
+    op_node = b.one(node)
+    if op_node.tag == "SetAction":
+        value: object = b.str_(op_node, "value")
+        if isinstance(initial, (int, float)) and not isinstance(initial, bool):
+            value = b.num(op_node, "value")
+        return M.ParameterAction(kind, name, "set", value, initial, node.line)
+    rule = b.one(b.one(op_node, "Rule"))
+    if isinstance(initial, bool) or not isinstance(initial, (int, float)):
+        raise b.error(rule, f"<{rule.tag}> needs a numeric {kind} ({name!r} is {initial!r})")
+    op = "add" if rule.tag == "AddValue" else "multiply"
+    return M.ParameterAction(kind, name, op, b.num(rule, "value"), initial, node.line)
+
+
+class Parameter(ActionKind):
+    """A GlobalAction's ParameterAction: done once when its event starts, whoever the actors."""
+
+    tag, within, model = "ParameterAction", ("GlobalAction",), M.ParameterAction
+    domains, on_ego, is_global, section = (), True, True, "global"
+    contains, parts = ("SetAction", "ModifyAction"), VALUE_PARTS
+    label = "`GlobalAction`/`ParameterAction`, `VariableAction` (1.2), `VariableDeclarations`, `VariableCondition`"
+    also = ("VariableAction", "VariableDeclarations", "VariableCondition")
+    note = (
+        "in an `Action` (not in `Init`: declare the value instead), done once when its event starts, whatever the "
+        "maneuver group's actors: `SetAction`, `ModifyAction` with `AddValue` or `MultiplyByValue` (a numeric "
+        "parameter or variable only); what changes is what `ParameterCondition`s and `VariableCondition`s see "
+        "from the next storyboard step on (the standard's parameters are read before the run: every attribute "
+        "keeps the value it was read with); a value is one per name (a story's parameter of the same name as the "
+        "file's shares it)"
+    )
+
+    def build(self, b: Any, node: Node) -> M.ParameterAction:
+        return _value_action(b, node, "parameter")
+
+    def apply(self, board: Storyboard, action: M.ParameterAction) -> None:
+        board.assign(action)
+
+
+class Variable(ActionKind):
+    """A GlobalAction's VariableAction (1.2): as a ParameterAction, on a declared variable
+    (documented in :class:`Parameter`'s row)."""
+
+    tag, within, model = "VariableAction", ("GlobalAction",), M.ParameterAction
+    domains, on_ego, is_global, section = (), True, True, "global"
+    contains, parts = ("SetAction", "ModifyAction"), VALUE_PARTS
+
+    def build(self, b: Any, node: Node) -> M.ParameterAction:
+        return _value_action(b, node, "variable")
+
+    def apply(self, board: Storyboard, action: M.ParameterAction) -> None:
+        board.assign(action)
+
+
+class Environment(ActionKind):
+    tag, within, model, in_init = "EnvironmentAction", ("GlobalAction",), M.EnvironmentAction, "ignored"
+    domains, on_ego, is_global, section = (), True, True, "global"
+    contains = ("Environment",)
+    parts = {
+        "Environment": ("ParameterDeclarations", "TimeOfDay", "Weather", "RoadCondition"),
+        "TimeOfDay": (),
+        "Weather": ("Sun", "Fog", "Precipitation", "Wind"),
+        "Sun": (),
+        "Fog": (),
+        "Precipitation": (),
+        "Wind": (),
+        "RoadCondition": ("Properties",),
+    }
+    label = "`GlobalAction`/`EnvironmentAction` (in `Init` or an `Action`)"
+    note = (
+        "done at once: `TimeOfDay` and `Weather` (sun, fog, precipitation, wind) change nothing in ego's dynamics "
+        "or its sensor; a `RoadCondition` must keep the friction (`frictionScaleFactor` 1): any other scale is "
+        "refused in one line (the plant's tyres have their own friction; scaling it is issue 39's open part); an "
+        "`Environment` from an `EnvironmentCatalog` is refused"
+    )
+
+    def build(self, b: Any, env_action: Node) -> M.EnvironmentAction:
+        """Checked (every attribute resolves; a RoadCondition must keep the friction:
+        frictionScaleFactor 1); it changes nothing."""
+        env = b.one(env_action, "Environment")
+        outer = b.values
+        b.values = b.scoped(env)
+        try:
+            stack = [env]
+            while stack:
+                n = stack.pop()
+                for attr in n.attrs:
+                    b.raw(n, attr)
+                stack.extend(c for c in n.children if c.tag != "ParameterDeclarations")
+            rc = env.child("RoadCondition")
+            if rc is not None:
+                f = b.num(rc, "frictionScaleFactor", nonneg=True)
+                if f != 1.0:
+                    raise b.error(
+                        rc,
+                        f"a RoadCondition frictionScaleFactor of {f:g} is not supported by ego: the tyres' friction"
+                        f" is the plant's own (1, no change, is accepted; see {DOCS})",
+                    )
+        finally:
+            b.values = outer
+        return M.EnvironmentAction(env_action.line)
+
+
+for _kind in (
+    Teleport,
+    Controller,
+    ActivateController,
+    Speed,
+    LaneChange,
+    LaneOffset,
+    LongitudinalDistance,
+    SpeedProfile,
+    Synchronize,
+    FollowTrajectory,
+    Parameter,
+    Variable,
+    Environment,
+):
+    register(_kind())

@@ -1,0 +1,276 @@
+"""The structural elements ego reads (file, entities, storyboard, triggers, positions),
+declared in :mod:`ego.openscenario.registry`; the actions are in
+:mod:`ego.openscenario.actions`, the conditions in :mod:`ego.openscenario.conditions`. Each ``note`` is the element's row of the subset table in
+docs/openscenario.md (``python -m ego.docs openscenario-table`` writes it)."""
+
+from __future__ import annotations
+
+from ego.openscenario.registry import declare, refuse
+
+#: the position elements ego reads (in a Position, or where an element holds what a Position does)
+POSITIONS = (
+    "WorldPosition",
+    "LanePosition",
+    "RoadPosition",
+    "RelativeLanePosition",
+    "RelativeRoadPosition",
+    "RelativeObjectPosition",
+)
+
+# -- the file -------------------------------------------------------------------------------
+declare(
+    "OpenSCENARIO",
+    (),
+    (
+        "FileHeader",
+        "ParameterDeclarations",
+        "VariableDeclarations",
+        "CatalogLocations",
+        "RoadNetwork",
+        "Entities",
+        "Storyboard",
+    ),
+)
+declare(
+    "FileHeader",
+    contains=("License",),
+    note="revMajor 1, revMinor 0-3; `License` accepted (descriptive)",
+    also=("License",),
+)
+declare("License")
+declare(
+    "ParameterDeclarations",
+    contains=("ParameterDeclaration",),
+    note=(
+        "types double, integer, unsignedInt, unsignedShort, string, boolean, dateTime (as text); expressions with "
+        "numbers, `$refs`, `+ - * /`, unary minus, parentheses and the standard's functions `round floor ceil "
+        "sqrt abs sign sin cos tan asin acos atan pow min max` (1.1; an unknown function, a wrong number of "
+        "arguments or `sqrt(-1)` is one line); `%`, comparisons and boolean operators are refused. Scopes as the "
+        "standard has them: the file's, a catalog entry's, a `Story`'s and a `Trajectory`'s (possibly empty) "
+        "declarations are seen inside their element only, an inner name shadowing an outer one; `--set` and "
+        "sweeps set the file's"
+    ),
+    label="`ParameterDeclarations`, `$name`, `${...}`",
+    also=("ParameterDeclaration",),
+)
+declare(
+    "ParameterDeclaration",
+    contains=("ConstraintGroup",),
+)
+declare(
+    "ConstraintGroup",
+    contains=("ValueConstraint",),
+    note=(
+        "checked before the run on the defaults and on `--set`/sweep values: at least one group holds (OR of "
+        "ANDs); a constraint's value may be an expression of any parameter of the scope (declared before or after "
+        'it); numbers compare as numbers, also in a string parameter (lane ids `"-4"`), other text by '
+        "`equalTo`/`notEqualTo`. A value outside: `FILE:LINE: parameter 'Ego_InitSpeed_Ve0_kph' = 70 breaks its "
+        "value constraint: lessOrEqual 60 (line 10)`, LINE the broken rule's (with several groups, each group's "
+        "first broken rule)"
+    ),
+    label="`ConstraintGroup`, `ValueConstraint` (1.2)",
+    also=("ValueConstraint",),
+)
+declare("ValueConstraint")
+declare("VariableDeclarations", contains=("VariableDeclaration",))
+declare("VariableDeclaration")
+CATALOGS = ("VehicleCatalog", "PedestrianCatalog", "MiscObjectCatalog", "ControllerCatalog", "ManeuverCatalog")
+declare(
+    "CatalogLocations",
+    contains=CATALOGS,
+    note=(
+        "`catalogName` is the file `catalogName.xosc` in a catalog directory (the reference's kind first, then "
+        "the others), else the file whose `<Catalog name>` it is; entries `Vehicle`, `Pedestrian`, `MiscObject`, "
+        "`Controller`, `Maneuver` (a `ManeuverGroup`'s `CatalogReference`, its errors named in the catalog file); "
+        "`ParameterAssignments` to the entry's `ParameterDeclarations` (a `parameterRef` written `$Name`, as the "
+        "reference player's files do, names `Name`); the entry sees the file's parameters too; an entry of "
+        "another kind than the reference needs is one line; other catalogs (routes, environments, trajectories) "
+        "refused"
+    ),
+    label="`CatalogLocations` (`VehicleCatalog`, `PedestrianCatalog`, `MiscObjectCatalog`, `ControllerCatalog`,"
+    " `ManeuverCatalog`), `CatalogReference`",
+    also=(*CATALOGS, "CatalogReference"),
+)
+for _catalog in CATALOGS:
+    declare(_catalog, contains=("Directory",))
+declare("Directory")
+declare("RoadNetwork", contains=("LogicFile", "SceneGraphFile"))
+declare("LogicFile")
+declare("SceneGraphFile")
+
+# -- entities -------------------------------------------------------------------------------
+declare("Entities", contains=("ScenarioObject",))
+declare("ScenarioObject", contains=("Vehicle", "Pedestrian", "MiscObject", "CatalogReference", "ObjectController"))
+declare(
+    "Vehicle",
+    contains=(
+        "ParameterDeclarations",
+        "BoundingBox",
+        "Performance",
+        "Axles",
+        "Properties",
+        "TrailerHitch",
+        "TrailerCoupler",
+        "Trailer",
+    ),
+    note=(
+        "`BoundingBox` (length, width, center x), `Performance`, `vehicleCategory` car, van, truck, trailer, "
+        "semitrailer, bus, motorbike, bicycle (recorded, not used by SUMO); `Axles` and `Properties` (with "
+        "`Property` and `File`) accepted and not used; `TrailerHitch`, `TrailerCoupler` (1.3) accepted and not "
+        "used, and a `Trailer` that attaches nothing (an empty `entityRef` or `entryName`: the reference player's "
+        'catalog gives every car one, `$TrailerRef` = `""`); a trailer really attached is refused in one line (`a '
+        "trailer (entityRef 'B') is not supported by ego`: ego runs single bodies)"
+    ),
+    label="`Entities/ScenarioObject/Vehicle`",
+    also=("Axles", "Properties", "TrailerHitch", "TrailerCoupler", "Trailer"),
+)
+declare(
+    "Pedestrian",
+    contains=("ParameterDeclarations", "BoundingBox", "Properties"),
+    note=(
+        "a standing body in SUMO: a vehicle of the entity's bounding box (length, width, centre x) at its Init "
+        "position (offset included) with speed 0, moved only by the storyboard (e.g. a FollowTrajectoryAction: "
+        "the crossing pedestrian of ALKS 4.2_3); seen by the surround sensor and found by the collision check as "
+        "any car; `pedestrianCategory` pedestrian, wheelchair, animal; `miscObjectCategory` any of the "
+        "standard's; `mass`, `model3d` read and not used"
+    ),
+    label="`Pedestrian`, `MiscObject`",
+    also=("MiscObject",),
+)
+declare("MiscObject", contains=("ParameterDeclarations", "BoundingBox", "Properties"))
+declare(
+    "ObjectController",
+    contains=("Controller", "CatalogReference"),
+    note=(
+        "**deviation:** the ego is driven by ego's controller (`-c`), whatever the file assigns it (its "
+        "`Properties` are not mapped onto ego parameters); the other entities keep SUMO's driver unless the "
+        "storyboard scripts them. The controller reference is checked (a missing entry is one line)"
+    ),
+    label="`ObjectController`, `Controller` (inline or from a `ControllerCatalog`)",
+    also=("Controller",),
+)
+declare("Controller", contains=("ParameterDeclarations", "Properties"))
+declare("CatalogReference", contains=("ParameterAssignments",))
+declare("ParameterAssignments", contains=("ParameterAssignment",))
+declare("ParameterAssignment")
+declare("TrailerHitch")
+declare("TrailerCoupler")
+declare("Trailer", contains=("EntityRef", "CatalogReference"))
+declare("BoundingBox", contains=("Center", "Dimensions"))
+declare("Center")
+declare("Dimensions")
+declare("Performance")
+declare("Axles", contains=("FrontAxle", "RearAxle", "AdditionalAxle"))
+declare("FrontAxle")
+declare("RearAxle")
+declare("AdditionalAxle")
+declare("Properties", contains=("Property", "File"))
+declare("Property")
+declare("File")
+refuse("`ExternalObjectReference`, `EntitySelection`", ("ExternalObjectReference", "EntitySelection"), section="file")
+
+# -- the storyboard ---------------------------------------------------------------------------
+declare(
+    "Init",
+    within=("Storyboard",),
+    contains=("Actions",),
+    note=(
+        "the start is immediate whatever the dynamics; every entity needs a TeleportAction, the ego a "
+        "SpeedAction; a relative speed is the other entity's Init speed plus the delta (or times the factor); a "
+        "continuous one is refused; a controller action in Init is accepted and not used"
+    ),
+    label="`Init`: `TeleportAction`, `SpeedAction` with `AbsoluteTargetSpeed` or a non-continuous"
+    " `RelativeTargetSpeed`, `ControllerAction`, `GlobalAction`/`EnvironmentAction`",
+    section="storyboard",
+)
+declare("Actions", contains=("Private", "GlobalAction"))
+declare("Private", contains=("PrivateAction",))
+declare("PrivateAction")
+declare("LongitudinalAction", within=("PrivateAction",))
+declare("LateralAction", within=("PrivateAction",))
+declare("RoutingAction", within=("PrivateAction",))
+declare("GlobalAction")
+declare("Position", contains=POSITIONS)
+declare(
+    "LanePosition",
+    contains=("Orientation",),
+    note=(
+        "`RelativeObjectPosition`: `dx` ahead, `dy` left of the entity's reference point in its own frame (during "
+        "the run from its box and heading; in `Init` along and across its lane, exact on straight roads); `dz` "
+        "and its `Orientation` as for the others; a relative `Orientation` turning the entity more than 90 "
+        "degrees from its lane (esmini's `alks_cut-in.xosc` starts a car in the oncoming lane turned round, `h = "
+        "3.141593`) is refused: SUMO drives every lane its own way; an `offset` (lane and relative lane "
+        "positions): an entity starts that far from its lane's centre (into the neighbour lane if it reaches it): "
+        "SUMO inserts on the lane's centre and ego places it across in SUMO's first step (exact from t = 0.1 s; "
+        "the ego itself starts on its lane's centre); `Orientation` accepted, the lane's heading is used; "
+        "`WorldPosition` places on the nearest lane; `dsLane`, `RoutePosition`, `GeoPosition`, "
+        "`RelativeWorldPosition`, `TrajectoryPosition` refused"
+    ),
+    label="`LanePosition`, `RoadPosition`, `WorldPosition`, `RelativeLanePosition` (`ds`), `RelativeRoadPosition`,"
+    " `RelativeObjectPosition`",
+    also=POSITIONS[:1] + POSITIONS[2:],
+    section="storyboard",
+)
+declare("WorldPosition")
+for _position in ("RoadPosition", "RelativeLanePosition", "RelativeRoadPosition", "RelativeObjectPosition"):
+    declare(_position, contains=("Orientation",))
+declare("Orientation")
+declare(
+    "Storyboard",
+    within=("OpenSCENARIO",),
+    contains=("Story", "StopTrigger"),
+    note=(
+        "states standby / running / complete; `maximumExecutionCount` of events and maneuver groups; `priority` "
+        "overwrite / override (stops the maneuver's other running events), skip (does not start while another "
+        "event of the maneuver runs), parallel"
+    ),
+    label="`Storyboard`, `Story`, `Act`, `ManeuverGroup`, `Maneuver`, `Event`",
+    also=("Story", "Act", "ManeuverGroup", "Maneuver", "Event"),
+    section="storyboard",
+)
+declare("Story", contains=("ParameterDeclarations", "Act"))
+declare("Act", contains=("ManeuverGroup", "StartTrigger", "StopTrigger"))
+declare("ManeuverGroup", contains=("Actors", "Maneuver", "CatalogReference"))
+declare("Actors", contains=("EntityRef",))
+declare("EntityRef")
+declare("Maneuver", contains=("ParameterDeclarations", "Event"))
+declare("Event", contains=("Action", "StartTrigger"))
+declare("Action", contains=("PrivateAction", "GlobalAction"))
+declare(
+    "StartTrigger",
+    contains=("ConditionGroup",),
+    note=(
+        "OR of ANDs; `conditionEdge` rising, falling, risingOrFalling (no edge on the first evaluation), none; "
+        "`delay` (the value from `delay` seconds before). **Deviations, as the reference player reads its "
+        "files:** a missing `conditionEdge` (the schema requires one) is `none`; a condition's `name` identifies "
+        "nothing, so one whose expression does not evaluate (esmini's `cut-in.xosc`: `${BrakeCondition_HWT + _ + "
+        "$HeadwayTime_Brake}`) is kept as its text"
+    ),
+    label="`StartTrigger`, `StopTrigger`, `ConditionGroup`, `Condition`",
+    also=("StopTrigger", "ConditionGroup", "Condition"),
+    section="storyboard",
+)
+declare("StopTrigger", contains=("ConditionGroup",))
+declare("ConditionGroup", contains=("Condition",))
+
+# -- conditions -------------------------------------------------------------------------------
+declare("Condition", contains=("ByEntityCondition", "ByValueCondition"))
+declare("ByEntityCondition", contains=("TriggeringEntities", "EntityCondition"))
+declare("TriggeringEntities", contains=("EntityRef",))
+declare("EntityCondition")  # the conditions: ego/openscenario/conditions.py
+declare("ByValueCondition")
+refuse(
+    "every other element (e.g. `EndOfRoadCondition`, `OffroadCondition`, `EntityAction`, `TrafficAction` and the"
+    " other `GlobalAction`s, `LateralDistanceAction`, `TrafficSignals`; a `ParameterValueDistribution` runs with"
+    " `ego sweep`, below)",
+    (
+        "EndOfRoadCondition",
+        "OffroadCondition",
+        "EntityAction",
+        "TrafficAction",
+        "LateralDistanceAction",
+        "TrafficSignals",
+        "ParameterValueDistribution",
+    ),
+    "refused with its line",
+)
