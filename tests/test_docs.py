@@ -36,6 +36,9 @@ ROWS = [
     ("falsify-surrogate", "cma"),  # the analytic stand-in: no SUMO, seconds
     ("curved-lane-keeping", "left-1000, 130 km/h, pid"),
     ("curved-cut-in", "left-250, pid"),
+    ("alks-concrete", "alks_4_4_cut_in / pid"),
+    ("alks-concrete", "alks_4_4_cut_in / careful-driver"),
+    ("alks-4-6-forward-range", "pid"),
 ]
 TABLES = {t.name: t for t in docs.tables()}
 

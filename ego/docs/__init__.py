@@ -839,7 +839,7 @@ def envelope() -> list[Table]:
             "controller",
             "completed",
             "collision",
-            "of which avoidable by braking from the car's reach over the ego's outline",
+            "of which avoidable by braking from the car's intrusion into the ego's lane",
             "diverged",
             "timeout",
         ),
@@ -1049,6 +1049,7 @@ def _rl_threshold_cells(results: list) -> list[str]:
 
 def tables() -> list[Table]:
     """Every table of docs/results/, page by page."""
+    from ego.docs.alks import tables as alks
     from ego.docs.curved import tables as curved
     from ego.docs.falsify import docs_tables
     from ego.docs.openscenario import tables as openscenario
@@ -1065,6 +1066,7 @@ def tables() -> list[Table]:
         + openscenario()
         + docs_tables()
         + curved()
+        + alks()
     )
 
 

@@ -28,11 +28,14 @@ class Sim:
     controller: str
     seed: int = 0
     overrides: tuple[tuple[str, Any], ...] = ()
+    #: ``collision_preventable``: False never, None after a collision (``--preventable``)
+    preventable: bool | None = False
 
     def __call__(self) -> dict:
         from ego.runner import RunSpec, run
 
-        return _table_metrics(run(RunSpec(self.scenario, self.controller, self.seed, dict(self.overrides))))
+        spec = RunSpec(self.scenario, self.controller, self.seed, dict(self.overrides), preventable=self.preventable)
+        return _table_metrics(run(spec))
 
 
 def _table_metrics(result) -> dict:
@@ -41,8 +44,8 @@ def _table_metrics(result) -> dict:
     return {k: v for k, v in result.metrics.items() if k not in ("wall_time", "events")}
 
 
-def sim(scenario: str, controller: str, seed: int = 0, **overrides: Any) -> Sim:
-    return Sim(scenario, controller, seed, tuple(sorted(overrides.items())))
+def sim(scenario: str, controller: str, seed: int = 0, preventable: bool | None = False, **overrides: Any) -> Sim:
+    return Sim(scenario, controller, seed, tuple(sorted(overrides.items())), preventable)
 
 
 @dataclass(frozen=True)

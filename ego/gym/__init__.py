@@ -62,7 +62,7 @@ BENCHMARK: dict[str, dict] = {
 REWARD_THRESHOLDS: dict[str, float] = {
     "ego/EmergencyBrake-v0": 86.18,
     "ego/FastFollower-v0": 117.36,
-    "ego/CutIn-v0": 152.28,
+    "ego/CutIn-v0": 152.25,
     "ego/Curve-v0": 48.46,
     "ego/LaneCentering-v0": 89.37,
     "ego/Platoon-v0": 210.26,

@@ -119,7 +119,7 @@ class CutIn(Scenario):
         self.reach.watch(self.t, self.view.sensor.front, self.view.ds)
 
     def braking_margin(self) -> float | None:
-        """:meth:`ReachCriterion.margin` at the friction limit (m; None: the car never reached over)."""
+        """:meth:`ReachCriterion.margin` at the friction limit (m; None: the car never intruded into the ego's lane)."""
         return self.reach.margin(friction_limit(self.ego.model.params), self.config.sumo_step)
 
     def choose(self, man):

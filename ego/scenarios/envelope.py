@@ -72,27 +72,25 @@ def braking_min_gap(
 
 class ReachCriterion:
     """The braking criterion of a car that cuts in (cut-in's, issue 21): braking at the
-    friction limit from the moment the car ``vehicle`` first reaches over the ego's outline
+    friction limit from the moment the car ``vehicle`` first intrudes into the ego's lane
     (becomes its front object), the car holding its speed from then on."""
 
     __slots__ = ("vehicle", "at")
     METRICS = (
-        Metric(
-            "reach_time", "s", "when the cutting car first reached over the ego's outline (became its front object)"
-        ),
+        Metric("reach_time", "s", "when the cutting car first intruded into the ego's lane (became its front object)"),
         Metric(
             "collision_avoidable",
             "-",
             "true: braking at the friction limit from the moment the car "
-            "reached over the ego's outline would have kept the ego behind it, so the collision is the "
+            "intruded into the ego's lane would have kept the ego behind it, so the collision is the "
             "controller's or the planner's; false: physics (or the car hit the ego's side before it "
-            "reached over its outline); none: no collision",
+            "intruded into its lane); none: no collision",
         ),
     )
 
     def __init__(self, vehicle: str) -> None:
         self.vehicle = vehicle
-        #: (t s, gap m, ego speed m/s, car's speed m/s) when the car first reached over the ego's outline
+        #: (t s, gap m, ego speed m/s, car's speed m/s) when the car first intruded into the ego's lane
         self.at: tuple[float, float, float, float] | None = None
 
     def watch(self, t: float, front, ds: float) -> None:
@@ -102,7 +100,7 @@ class ReachCriterion:
 
     def margin(self, decel: float, lead_step: float) -> float | None:
         """The smallest gap (m) braking at ``decel`` from the reach would leave (the car moved
-        as SUMO moves it, every ``lead_step`` s); None if the car never reached over."""
+        as SUMO moves it, every ``lead_step`` s); None if the car never intruded."""
         if self.at is None:
             return None
         t0, gap, speed, car_speed = self.at
@@ -110,7 +108,7 @@ class ReachCriterion:
 
     def metrics(self, collided: bool, decel: float, lead_step: float) -> dict:
         """``reach_time`` and ``collision_avoidable`` (none without a collision; false when the
-        car hit the ego's side before it reached over its outline: no time to brake)."""
+        car hit the ego's side before it intruded into its lane: no time to brake)."""
         margin = self.margin(decel, lead_step)
         return {
             "reach_time": json_number(self.at[0] if self.at else None, 4),

@@ -9,9 +9,15 @@ expresses each in the frame of a reference lane (its extent along the lane ``[s_
 s_hi]`` and across it ``[d_lo, d_hi]``, its velocity along and across the lane) and, with
 the ego's outline in the same frame (:meth:`SurroundSensor.scan`), finds
 
-* ``front``: the nearest vehicle ahead whose extent across the lane overlaps the ego's, in
-  whatever lane; ``gap`` from the ego's foremost point to its rearmost point (m, <= 0 when
-  they overlap); ``speed`` its velocity along the lane (m/s), ``accel`` its acceleration;
+* ``front``: the nearest vehicle ahead whose extent across the lane overlaps the ego's path:
+  the ego's own extent across the lane (in whatever lane, the car it is leaving during a
+  lane change included) or the lane it is in (the one whose centre is nearest the middle of
+  its front bumper) unless it is moving out of that lane. A car that intrudes into the ego's
+  lane is a target from then on, as UN R157 judges a cut-in (the TTC at its intrusion into
+  the lane, 5.2.5.2), not only once it is beside the ego; a lead leaving the lane (a
+  cut-out) stops hiding what is ahead of it once it is clear of the ego's outline; ``gap`` from the ego's foremost point to its rearmost point (m,
+  <= 0 when they overlap along the lane); ``speed`` its velocity along the lane (m/s),
+  ``accel`` its acceleration;
 * ``rear``: the same behind;
 * :meth:`SurroundSensor.lane_neighbours`: the nearest vehicles ahead of and behind the
   ego overlapping a lane's band (gap acceptance, following a lane's leader).
@@ -60,7 +66,7 @@ class Detection:
     """One sensed vehicle: ``gap`` bumper to bumper along the lane (m; inf: none), ``speed``
     its velocity along the lane (m/s), ``accel`` its acceleration along the lane over the
     last SUMO step (m/s^2). ``overlap``, ``side`` and ``lateral_speed`` say how it sits
-    across the band it was found in."""
+    across the band it was found in (for ``front`` and ``rear``: the ego's own extent)."""
 
     __slots__ = ("id", "gap", "speed", "accel", "_gap0", "_o", "_lo", "_hi", "_since", "_d")
 
@@ -333,11 +339,17 @@ class SurroundSensor:
         ego = self._ego = self.ego_extents(s, d, heading_error)
         self._t = self._t_scan = t
         self._s = self._s_scan = s
+        # the ego's lane: the one whose centre is nearest the middle of its front bumper
+        # (where SUMO maps it too)
+        nose = d + self.cg_to_front * math.sin(heading_error)
+        own = min(self.bands.values(), key=lambda b: abs(0.5 * (b[0] + b[1]) - nose), default=None)
+        # what counts as in the ego's path: its own extent across the lane and its lane (R157:
+        # a car that intrudes into the ego's lane is a target, not only one already beside it)
+        lo, hi = ego[2], ego[3]
+        if own is not None:
+            lo, hi = (own[0] if own[0] < lo else lo), (own[1] if own[1] > hi else hi)
         if self._place is not None:
-            # the ego's lane: the one whose centre is nearest the middle of its front bumper
-            # (where SUMO maps it too)
-            nose = d + self.cg_to_front * math.sin(heading_error)
-            line = min((0.5 * (lo + hi) for lo, hi in self.bands.values()), key=lambda c: abs(c - nose), default=d)
+            line = d if own is None else 0.5 * (own[0] + own[1])
             # its inner side beyond the line, its corners' reach per metre of its length: at
             # each end the larger curvature of the centre's and that end's (an end in an arc
             # the centre has not reached yet)
@@ -353,16 +365,40 @@ class SurroundSensor:
         self._lanes = {}
         near = self._near
         if near is None:
-            # the vehicles that can reach across to the ego before the next SUMO step: the
-            # ego moves sideways by less than `reach` (m), each of them by |v_d| * horizon
-            lo, hi, h, m = ego[2], ego[3], self.horizon, self.reach
+            # the vehicles that can reach across into the ego's path before the next SUMO step:
+            # the ego moves sideways by less than `reach` (m), each of them by |v_d| * horizon
+            h, m = self.horizon, self.reach
             if _NEAR is not None and type(self._objects) is list:
                 near = self._near = _NEAR(self._objects, lo, hi, h, m)
             else:
                 near = self._near = [
                     o for o in self._objects if o[4] + abs(o[6]) * h + m > lo and o[3] - abs(o[6]) * h - m < hi
                 ]
-        self._nearest(near, ego[2], ego[3], self.front, self.rear)
+        front, rear = self.front, self.rear
+        if own is not None:
+            near = self._in_path(near, ego[2], ego[3], own)
+        self._nearest(near, lo, hi, front, rear)
+        # their overlap and side: with the ego's own extent, which it must clear sideways
+        for det in (front, rear):
+            if det._o is not None:
+                det._lo, det._hi = ego[2], ego[3]
+
+    def _in_path(self, objects: list, e_lo: float, e_hi: float, own: tuple[float, float]) -> list:
+        """Of ``objects``, those in the ego's path at the last scan: overlapping the ego's own
+        extent across the lane (``e_lo``, ``e_hi``), or intruding into its lane ``own`` (lo,
+        hi) unless moving out of it. A car leaving the lane (a cut-out) stops hiding what is
+        ahead of it once it is clear of the ego's outline, as a car entering it (a cut-in)
+        is a target from its intrusion: both where the ego, keeping its line, could hit it."""
+        since = self._t_scan - self._t_sync
+        l_lo, l_hi = own
+        twice_centre = l_lo + l_hi
+        out = []
+        for o in objects:
+            shift = o[6] * since
+            a, b = o[3] + shift, o[4] + shift
+            if (b > e_lo and a < e_hi) or (b > l_lo and a < l_hi and (a + b - twice_centre) * o[6] <= 0.0):
+                out.append(o)
+        return out
 
     def advance(self, t: float, s: float, turn: float = 0.0) -> None:
         """Between two looks: the gaps at time ``t`` (s) with the ego's centre of gravity at

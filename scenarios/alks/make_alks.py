@@ -471,6 +471,110 @@ def blocking_target(kind: str) -> tuple[str, str, dict]:
     )
 
 
+def multiple_blocking() -> tuple[str, str, dict]:
+    """4.2 with more than one target: a standing pedestrian, partially blocking, and a standing
+    car SecondGap beyond it, fully blocking; the nearer one is what the ego must stop for."""
+    params = (
+        EGO_SPEED
+        + param("TargetDistance", "120", "30", "400", "the pedestrian ahead of the ego's start")
+        + param(
+            "TargetOffset", "0.5", "-1.5", "1.5", "the pedestrian's offset from the lane's centre (partially blocking)"
+        )
+        + param("SecondGap", "10", "2", "100", "the standing car's distance beyond the pedestrian (ego's choice)")
+        + DURATION
+    )
+    pedestrian = PEDESTRIAN.replace('name="Target"', 'name="Pedestrian"')
+    inits = (
+        init("Ego", "0", "-2", "300", EGO_V)
+        + init("Pedestrian", "0", "-2", "${300 + $TargetDistance}", "0", "$TargetOffset")
+        + init("Target", "0", "-2", "${300 + $TargetDistance + $SecondGap}", "0")
+    )
+    comment = (
+        "UN R157 Annex 5 4.2 (multiple road users blocking the lane): a pedestrian standing in the ego's\n"
+        "     lane TargetDistance ahead, TargetOffset from its centre, and a standing car SecondGap beyond it;\n"
+        "     the ego must hit neither."
+    )
+    return (
+        scenario(
+            "alks_4_2_multiple_blocking",
+            comment,
+            "R157 4.2 multiple blocking targets",
+            params,
+            STRAIGHT,
+            car("Ego", 7) + pedestrian + car("Target"),
+            inits,
+            "",
+        ),
+        comment,
+        {"EgoSpeed_kph": (20, 60, 10), "TargetOffset": (-1.0, 1.0, 0.5), "SecondGap": (5, 25, 10)},
+    )
+
+
+def walk(speed: str) -> str:
+    """The pedestrian's walk across the road: from where it stands (the right road edge) to the
+    left one (lane -1's outer edge), 10.5 m at ``speed`` (m/s), along a straight polyline."""
+    verts = "".join(
+        f'<Vertex time="{t}"><Position><LanePosition roadId="0" laneId="{lane}" s="$PedS" offset="{off}"/></Position></Vertex>'
+        for t, lane, off in (("0", "-3", "-1.75"), (f"${{10.5 / {speed}}}", "-1", "1.75"))
+    )
+    return (
+        '<PrivateAction><RoutingAction><FollowTrajectoryAction><TrajectoryRef><Trajectory name="Walk" closed="false">'
+        f"<Shape><Polyline>{verts}</Polyline></Shape></Trajectory></TrajectoryRef><TimeReference>"
+        '<Timing domainAbsoluteRelative="relative" scale="1" offset="0"/></TimeReference>'
+        '<TrajectoryFollowingMode followingMode="position"/></FollowTrajectoryAction></RoutingAction></PrivateAction>'
+    )
+
+
+def crossing_pedestrian() -> tuple[str, str, dict]:
+    ego_v = "($EgoSpeed_kph / 3.6)"
+    # the pedestrian (0.5 m across) walks from the right road edge (its centre 5.25 m right of
+    # the ego's lane centre) until it is 0.3 m into the ego's lane: 5.25 - 1.75 - 0.25 + 0.3 = 3.55 m
+    tmin = f"${{{ego_v} * (3.55 / $WalkSpeed + {ego_v} / 12 + $TTCMargin)}}"
+    params = (
+        EGO_SPEED
+        + param("WalkSpeed", "1.35", "0.3", "1.4", "the pedestrian's walking speed across the road (m/s; <= 5 km/h)")
+        + param("TTCMargin", "0.35", "0", "1", "the constant of R157 5.2.5.2's TTC formula, applied here too (s)")
+        + "    <!-- the pedestrian starts walking when the ego is WalkStartGap from it; constrained so that the\n"
+        "         TTC at its intrusion into the ego's lane (0.3 m) > v / (2 * 6) + TTCMargin, 5.2.5.2's form -->\n"
+        + '    <ParameterDeclaration name="WalkStartGap" parameterType="double" value="80"><ConstraintGroup>'
+        f'<ValueConstraint rule="greaterThan" value="{tmin}"/><ValueConstraint rule="lessOrEqual" value="200"/></ConstraintGroup></ParameterDeclaration>\n'
+        + '    <ParameterDeclaration name="PedS" parameterType="double" value="${300 + 4.5 + $WalkStartGap + 20}"/>\n'
+        + param("duration", "30")
+    )
+    inits = init("Ego", "0", "-2", "300", EGO_V) + (
+        '      <Private entityRef="Target">\n'
+        '        <PrivateAction><TeleportAction><Position><LanePosition roadId="0" laneId="-3" s="$PedS" offset="-1.75"/></Position></TeleportAction></PrivateAction>\n'
+        "      </Private>\n"
+    )
+    trigger = (
+        '<Condition name="Close" delay="0" conditionEdge="rising"><ByEntityCondition>'
+        '<TriggeringEntities triggeringEntitiesRule="any"><EntityRef entityRef="Ego"/></TriggeringEntities>'
+        '<EntityCondition><RelativeDistanceCondition entityRef="Target" relativeDistanceType="longitudinal" value="$WalkStartGap" freespace="true" rule="lessThan"/></EntityCondition>'
+        "</ByEntityCondition></Condition>"
+    )
+    st = story("Target", [walk("$WalkSpeed")], trigger)
+    comment = (
+        "UN R157 Annex 5 4.2 (a pedestrian crossing the lane; 5.2.5.3): a pedestrian standing on the right\n"
+        "     road edge starts to walk across the road at WalkSpeed when the ego is WalkStartGap from it\n"
+        "     (bumper to body); WalkStartGap is constrained so that the TTC when it is 0.3 m into the ego's\n"
+        "     lane > v / 12 + TTCMargin (5.2.5.2's form, ego's choice for a pedestrian). The ego must not hit it."
+    )
+    return (
+        scenario(
+            "alks_4_2_crossing_pedestrian",
+            comment,
+            "R157 4.2 crossing pedestrian",
+            params,
+            STRAIGHT,
+            car("Ego", 7) + PEDESTRIAN,
+            inits,
+            st,
+        ),
+        comment,
+        {"EgoSpeed_kph": (20, 60, 10), "WalkSpeed": (0.5, 1.3, 0.4), "WalkStartGap": (20, 100, 20)},
+    )
+
+
 def forward_range() -> tuple[str, str, dict]:
     params = (
         EGO_SPEED
@@ -509,6 +613,8 @@ MAKERS: dict[str, Callable[[], tuple[str, str, dict]]] = {
     "alks_4_2_blocking_ptw": lambda: blocking_target("ptw"),
     "alks_4_2_blocking_pedestrian": lambda: blocking_target("pedestrian"),
     "alks_4_6_forward_range": forward_range,
+    "alks_4_2_crossing_pedestrian": crossing_pedestrian,
+    "alks_4_2_multiple_blocking": multiple_blocking,
 }
 for _side in ("left", "right"):
     for _radius in (250, 1000):

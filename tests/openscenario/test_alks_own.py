@@ -32,7 +32,7 @@ def test_the_files_are_make_alks_output():
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     assert {p.stem for p in CONCRETE} == set(mod.MAKERS)
-    assert len(VARIATIONS) == len(CONCRETE) == 13
+    assert len(VARIATIONS) == len(CONCRETE) == 15
     for name, make in mod.MAKERS.items():
         text, comment, dists = make()
         assert (ALKS / f"{name}.xosc").read_text() == text
@@ -67,6 +67,7 @@ def test_variations_expand_with_the_regulations_constraints():
         assert mask.sum() > 0
     assert counts["alks_4_3_lead_brake"] == (5 * 6 * 6, 5 * 6 * 6)  # 20-60 km/h, 1.0-2.0 s, 2-9.5 m/s^2
     assert counts["alks_4_1_lane_keeping_left_250"] == (4 * 3, 4 * 3)
+    assert counts["alks_4_2_multiple_blocking"] == (5 * 5 * 3, 5 * 5 * 3)
     # cut-in: kept exactly when R157 5.2.5.2 calls it avoidable, computed here independently:
     # TTC at 0.3 m lane intrusion (1.15 m lateral travel on 3.5 m lanes) > v_rel / 12 + 0.35 s
     kept = 0
@@ -78,3 +79,33 @@ def test_variations_expand_with_the_regulations_constraints():
         kept += gap_at_intrusion / vrel > vrel / 12 + 0.35
     assert counts["alks_4_4_cut_in"] == (4 * 5 * 5 * 6, kept)
     assert 0 < kept < 600
+    # crossing pedestrian: the same form, the ego's speed closing on a pedestrian 3.55 m of
+    # walking from 0.3 m into the ego's lane (from the right road edge, 0.5 m wide)
+    kept = 0
+    for v_kph, walk, gap in itertools.product(range(20, 61, 10), (0.5, 0.9, 1.3), range(20, 101, 20)):
+        v = v_kph / 3.6
+        kept += (gap - v * 3.55 / walk) / v > v / 12 + 0.35
+    assert counts["alks_4_2_crossing_pedestrian"] == (5 * 3 * 5, kept)
+    assert 0 < kept < 75
+
+
+@pytest.mark.sumo
+def test_a_slow_cut_in_is_a_target_from_its_lane_intrusion_and_is_avoided():
+    # the 4.4 variation's row that every controller hit side-on while ego took a car for a
+    # target only once it overlapped the ego's own outline (0.85 m inside the lane's edge,
+    # by then beside the ego): 30 km/h, 5 km/h slower, 0.5 m/s across, from a 4 m gap
+    from ego.results.traffic_log import traffic_columns
+
+    case = {"EgoSpeed_kph": 30, "RelSpeed_kph": 5, "LateralVelocity": 0.5, "CutInGap": 4}
+    r = run(RunSpec(str(ALKS / "alks_4_4_cut_in.xosc"), "pid", overrides=case, requirements=()))
+    assert r.status == "completed" and not r.metrics["collision"]
+    assert r.metrics["min_gap_front"] > 0.5
+    log = traffic_columns(r.traffic)
+    mine = log["vehicle"] == "CutIn"
+    t, y, yaw = log["t"][mine], log["y"][mine], log["heading"][mine]
+    # its outline's lowest corner across the lane (the ego's lane is y in [-1.75, 1.75])
+    reach = 0.5 * (4.5 * np.abs(np.sin(yaw)) + 1.8 * np.cos(yaw))
+    intruding = t[y - reach < 1.75]
+    seen = r.column("t")[np.isfinite(r.column("gap_front"))]
+    # seen at the first SUMO step its outline is over the lane's edge (a look every 0.1 s)
+    assert intruding[0] <= seen[0] <= intruding[0] + 0.1 + 1e-9

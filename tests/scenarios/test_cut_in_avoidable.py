@@ -1,5 +1,5 @@
 """cut-in's per-run braking criterion (issue 21, point 5): braking at the friction limit from
-the moment the cutting car reaches over the ego's outline."""
+the moment the cutting car intrudes into the ego's lane (becomes its front object)."""
 
 import pytest
 
@@ -31,6 +31,6 @@ def test_no_collision_no_verdict_and_a_side_hit_is_physics():
     _, r = _run(cut_in_gap=25, cut_in_speed=5)
     assert r.status == "completed" and r.metrics["collision_avoidable"] is None
     assert r.metrics["reach_time"] is not None
-    scenario, r = _run(cut_in_gap=5, cut_in_speed=12)  # hits the ego's side before reaching over it
+    scenario, r = _run(cut_in_gap=5, cut_in_speed=12)  # hits the ego's side before intruding into its lane
     assert r.status == "collision" and scenario.reach.at is None
     assert r.metrics["collision_avoidable"] is False

@@ -82,13 +82,85 @@ def test_between_sumo_steps_objects_move_at_their_velocity():
     # a car cutting in from the left: 2 m/s across, 15 m/s along, heading turned accordingly
     yaw = math.atan2(-2.0, 15.0)
     v = math.hypot(2.0, 15.0)
-    sensor.sync(0.0, ["cut"], [(25.0, 2.2, yaw, v, 4.5, 1.8)])
+    # turned, the box reaches 1.19 m across either side of its centre: 0.06 m short of the
+    # ego's lane (its left edge at 1.75 m)
+    sensor.sync(0.0, ["cut"], [(25.0, 3.0, yaw, v, 4.5, 1.8)])
     sensor.scan(0.0, s=0.0, d=0.0, heading_error=0.0)
     assert sensor.front.id == ""  # not yet over the ego's lane
     sensor.scan(0.08, s=0.0, d=0.0, heading_error=0.0)
     assert sensor.front.id == "cut"
     assert sensor.front.speed == pytest.approx(15.0)
     assert sensor.front.lateral_speed == pytest.approx(-2.0)
+
+
+def _half_across(yaw: float, length: float = 4.5, width: float = 1.8) -> float:
+    """How far a box turned by ``yaw`` from the lane reaches across it from its centre (m)."""
+    return 0.5 * (length * abs(math.sin(yaw)) + width * math.cos(yaw))
+
+
+def test_a_car_intruding_into_the_ego_s_lane_is_a_target_before_it_is_beside_the_ego():
+    # R157 5.2.5.2 measures a cut-in's TTC from its intrusion into the ego's lane: from then
+    # on it is the front object, while it is still 0.8 m clear of the ego's own extent
+    # (which ends 0.9 m left of the lane centre)
+    yaw = math.atan2(-0.5, 8.0)
+    v = math.hypot(0.5, 8.0)
+    half = _half_across(yaw)
+    sensor = _sensor()
+    for edge, seen in ((1.75 + 0.01, False), (1.75 - 0.01, True)):
+        sensor.sync(0.0, ["cut"], [(12.0, edge + half, yaw, v, 4.5, 1.8)])
+        sensor.scan(0.0, s=0.0, d=0.0, heading_error=0.0)
+        assert (sensor.front.id == "cut") is seen
+    assert sensor.front.gap == pytest.approx(12.0 - 0.5 * _along(yaw) - 2.25, abs=1e-9)
+    # its overlap is still with the ego's own extent, which it has not reached: the ego
+    # clears it sideways unless one of them moves across
+    assert sensor.front.overlap == pytest.approx(0.9 - (1.74), abs=1e-9)
+    assert sensor.front.side == 1.0
+    # behind the ego the same: a car intruding into its lane from behind is the rear object
+    sensor.sync(0.0, ["cut"], [(-12.0, 1.74 + half, yaw, v, 4.5, 1.8)])
+    sensor.scan(0.0, s=0.0, d=0.0, heading_error=0.0)
+    assert sensor.front.id == "" and sensor.rear.id == "cut"
+
+
+def test_a_lead_leaving_the_lane_stops_hiding_the_car_ahead_of_it_once_clear_of_the_ego():
+    # a cut-out: the lead moves left at 1 m/s; a standing car 40 m ahead. While the lead's
+    # outline still reaches into the ego's lane, but no longer over the ego's own extent, the
+    # standing car is the front object (the lead, moving out, cannot be hit keeping the line)
+    yaw = math.atan2(1.0, 16.0)
+    v = math.hypot(1.0, 16.0)
+    half = _half_across(yaw)
+    sensor = _sensor()
+    for edge, front in ((0.9 - 0.01, "lead"), (0.9 + 0.01, "target")):  # its right edge
+        rows = [(15.0, edge + half, yaw, v, 4.5, 1.8), (40.0, 0.0, 0.0, 0.0, 4.5, 1.8)]
+        sensor.sync(0.0, ["lead", "target"], rows)
+        sensor.scan(0.0, s=0.0, d=0.0, heading_error=0.0)
+        assert sensor.front.id == front
+    # the same car coming in (moving right) at the same place is a target: a cut-in
+    rows = [(15.0, 0.9 + 0.01 + half, -yaw, v, 4.5, 1.8), (40.0, 0.0, 0.0, 0.0, 4.5, 1.8)]
+    sensor.sync(0.0, ["lead", "target"], rows)
+    sensor.scan(0.0, s=0.0, d=0.0, heading_error=0.0)
+    assert sensor.front.id == "lead"
+
+
+def _along(yaw: float, length: float = 4.5, width: float = 1.8) -> float:
+    """A box turned by ``yaw`` from the lane: its extent along the lane (m)."""
+    return length * math.cos(yaw) + width * abs(math.sin(yaw))
+
+
+def test_a_neighbour_wandering_within_its_own_lane_is_not_a_target():
+    # R157's lateral wandering distance (0.375 m) towards the ego leaves a car 0.475 m clear
+    # of the ego's lane: not in its path
+    sensor = _sensor()
+    sensor.sync(0.0, ["left"], [(12.0, 3.5 - 0.375, 0.0, 8.0, 4.5, 1.8)])
+    sensor.scan(0.0, s=0.0, d=0.0, heading_error=0.0)
+    assert sensor.front.id == "" and sensor.rear.id == ""
+    # the ego changing lanes: its lane is the one the middle of its front bumper is over, so
+    # a car in the left lane (here 0.375 m beyond its centre, clear of the ego's outline) is
+    # ahead of it once its nose has crossed the marking, not before
+    sensor.sync(0.0, ["left"], [(12.0, 3.5 + 0.375, 0.0, 8.0, 4.5, 1.8)])
+    for d, seen in ((1.4, False), (1.6, True)):  # the nose at d + 2.25 sin(0.1) = d + 0.22 m
+        sensor.scan(0.0, s=0.0, d=d, heading_error=0.1)
+        assert sensor.ego_extents(0.0, d, 0.1)[3] < 3.875 - 0.9
+        assert (sensor.front.id == "left") is seen
 
 
 def test_accelerations_are_measured_between_sumo_steps():
