@@ -617,3 +617,30 @@ def test_the_reference_players_loose_header_and_maneuver_forms(tmp_path, old, ne
     else:
         with pytest.raises(ScenarioFileError, match="needs integer revMajor and revMinor"):
             load(path)
+
+
+def test_a_start_closer_than_sumos_safe_gap_runs_where_the_file_places_it(tmp_path):
+    """esmini's cut-in_simple.xosc starts a faster car 20 m behind the ego: closer than SUMO's
+    drivers' safe gap, so SUMO refused to insert the ego (``ego list`` had said supported).
+    A file's Init places its entities; SUMO now refuses only an overlap. B starts 8 m behind
+    A's tail at 5 m/s more and both are where the file put them."""
+    path = scene(tmp_path, [event("Go", "A", speed(26), trigger([sim_time(0.5)]))], at={"B": (-1, 87.0, 30.0)})
+    sc = run_scene(path, 1.0)  # SUMO refused it: SumoError before the first step
+    assert sc.status in ("completed", "ended"), sc.status_detail
+    assert starts(sc, "Go") == [pytest.approx(0.5)]
+
+
+def test_entities_starting_in_one_place_are_refused_by_list_and_run_alike(tmp_path):
+    """Two bodies overlapping at the start (esmini's python_scenario.xosc starts Target1 0.4 m
+    ahead of the ego in its lane) are a file error at the TeleportAction's line, found by
+    ``ego list`` as by ``ego run`` (SUMO used to refuse it mid-start)."""
+    from ego.openscenario.scenario import file_listing
+
+    path = scene(tmp_path, [event("Go", "A", speed(26), trigger([sim_time(1)]))], at={"B": (-1, 102.0, 25.0)})
+    listing = file_listing(str(path))
+    assert not listing["supported"] and "B starts overlapping A" in listing["error"], listing["error"]
+    run = subprocess.run(
+        [sys.executable, "-m", "ego", "run", str(path), "-c", "pid"], capture_output=True, text=True, timeout=300
+    )
+    assert run.returncode == 2 and listing["error"] in run.stderr, run.stderr
+    assert len(run.stderr.strip().splitlines()) == 1, run.stderr
