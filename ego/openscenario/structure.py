@@ -208,7 +208,11 @@ declare(
         "3.141593`) is refused: SUMO drives every lane its own way; an `offset` (lane and relative lane "
         "positions): an entity starts that far from its lane's centre (into the neighbour lane if it reaches it): "
         "SUMO inserts on the lane's centre and ego places it across in SUMO's first step (exact from t = 0.1 s; "
-        "the ego itself starts on its lane's centre); `Orientation` accepted, the lane's heading is used; "
+        "the ego itself starts on its lane's centre); an entity starts where its `Init` puts it, however close "
+        "to another (SUMO's insertion check refuses only an overlap), and two bodies starting in one place are "
+        "a file error at the `TeleportAction`'s line; `laneId` 0 is the reference line (OpenDRIVE's lane 0: "
+        "`offset` is `t`); every road position of the storyboard (actions, conditions) must name a lane of the "
+        "network, checked before the run; `Orientation` accepted, the lane's heading is used; "
         "`WorldPosition` places on the nearest lane; `dsLane`, `RoutePosition`, `GeoPosition`, "
         "`RelativeWorldPosition`, `TrajectoryPosition` refused"
     ),
