@@ -172,11 +172,33 @@ def header_description(path: str | os.PathLike) -> str:
 
 
 def _check_root(path, root: Node) -> None:
+    """An OpenSCENARIO file of a version ego reads (checked before its elements: a 0.9 file is
+    refused for its version, not for its first element of the older schema), every element in
+    ego's subset."""
     if root.tag != "OpenSCENARIO":
         raise ScenarioFileError(
             path, root.line, f"<{root.tag}> is not an OpenSCENARIO file (expected <OpenSCENARIO> as the root element)"
         )
+    _version(path, root)
     _check_tree(path, root)
+
+
+def _version(path, root: Node) -> tuple[int, int]:
+    """(revMajor, revMinor) of the file's FileHeader: 1.0 to 1.3."""
+    header = root.child("FileHeader")
+    if header is None:
+        raise ScenarioFileError(path, root.line, "<OpenSCENARIO> needs a <FileHeader>")
+    try:
+        version = (_rev(header.attrs.get("revMajor", "")), _rev(header.attrs.get("revMinor", "")))
+    except ValueError:
+        raise ScenarioFileError(path, header.line, "<FileHeader> needs integer revMajor and revMinor") from None
+    if version[0] != 1 or not 0 <= version[1] <= 3:
+        raise ScenarioFileError(
+            path,
+            header.line,
+            f"OpenSCENARIO {version[0]}.{version[1]} is not supported by ego (1.0 to 1.3; see {DOCS})",
+        )
+    return version
 
 
 def _declarations(
@@ -675,18 +697,7 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
     root = read_tree(path)
     _check_root(path, root)
     header = root.child("FileHeader")
-    if header is None:
-        raise ScenarioFileError(path, root.line, "<OpenSCENARIO> needs a <FileHeader>")
-    try:
-        version = (_rev(header.attrs.get("revMajor", "")), _rev(header.attrs.get("revMinor", "")))
-    except ValueError:
-        raise ScenarioFileError(path, header.line, "<FileHeader> needs integer revMajor and revMinor") from None
-    if version[0] != 1 or not 0 <= version[1] <= 3:
-        raise ScenarioFileError(
-            path,
-            header.line,
-            f"OpenSCENARIO {version[0]}.{version[1]} is not supported by ego (1.0 to 1.3; see {DOCS})",
-        )
+    version = _version(path, root)
     defaults = _declarations(path, root.child("ParameterDeclarations"), {})
     given = {k: v for k, v in (overrides or {}).items() if k in defaults}
     try:
