@@ -217,14 +217,7 @@ def _declarations(
         kind = d.attrs.get("parameterType")
         if not name:
             raise ScenarioFileError(path, d.line, "<ParameterDeclaration> needs attribute name")
-        if kind not in TYPES:
-            raise ScenarioFileError(
-                path, d.line, f"bad parameterType {kind!r} of parameter {name!r} (allowed: {', '.join(TYPES)})"
-            )
-        if name in out:
-            raise ScenarioFileError(
-                path, d.line, f"parameter {name!r} is declared twice (first on line {out[name].line})"
-            )
+        _check_declared(path, d, name, kind, "parameter", out)
         if "value" not in d.attrs:
             raise ScenarioFileError(path, d.line, f"parameter {name!r} needs attribute value")
         raw = d.attrs["value"]
@@ -245,6 +238,16 @@ def _declarations(
     return out
 
 
+def _check_declared(path, d: Node, name: str, kind: str | None, what: str, out: Mapping[str, M.Parameter]) -> None:
+    """A parameter's or variable's (``what``) declaration: a known type, declared once."""
+    if kind not in TYPES:
+        raise ScenarioFileError(
+            path, d.line, f"bad {what}Type {kind!r} of {what} {name!r} (allowed: {', '.join(TYPES)})"
+        )
+    if name in out:
+        raise ScenarioFileError(path, d.line, f"{what} {name!r} is declared twice (first on line {out[name].line})")
+
+
 def _assigned_name(a: Node) -> str:
     """A ParameterAssignment's parameterRef: the parameter's name (a leading ``$``, as the
     reference player's files write it, is the same name)."""
@@ -262,14 +265,7 @@ def _variables(path, node: Node | None, values: Mapping[str, object]) -> dict[st
         name, kind = d.attrs.get("name"), d.attrs.get("variableType")
         if not name or "value" not in d.attrs:
             raise ScenarioFileError(path, d.line, "<VariableDeclaration> needs attributes name and value")
-        if kind not in TYPES:
-            raise ScenarioFileError(
-                path, d.line, f"bad variableType {kind!r} of variable {name!r} (allowed: {', '.join(TYPES)})"
-            )
-        if name in out:
-            raise ScenarioFileError(
-                path, d.line, f"variable {name!r} is declared twice (first on line {out[name].line})"
-            )
+        _check_declared(path, d, name, kind, "variable", out)
         try:
             value = convert(kind, resolve(d.attrs["value"], values), f"variable {name!r}")
         except (ExpressionError, ValueError) as exc:
