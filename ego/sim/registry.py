@@ -2,9 +2,9 @@
 
 A scenario asks for a simulator with :func:`make_sim` and declares what it needs of one
 (``needs``: field names of :class:`Capabilities`); :func:`check_needs` refuses a backend
-that lacks one, in one line naming both, when the run is resolved (before anything starts),
-and :func:`backends_for` lists the backends that have them all. Backend options (highway-env's ``video``, say) travel as data: a mapping
-handed to the factory, checked by the backend's ``check_options``.
+that lacks one, in one line naming both, when the run is resolved (before anything
+starts). Backend options (highway-env's ``video``, say) travel as data: a mapping handed to
+the factory, checked by the backend's ``check_options``.
 
 A backend module is imported only when its factory runs, so SUMO runs never load
 highway-env and the registry costs nothing to import.
@@ -152,11 +152,6 @@ def check_needs(who: str, needs: Sequence[str], name: str) -> Backend:
             f"bad value for --backend: {name!r} ({who} needs {', '.join(lacking)}; backend {name} lacks it)"
         )
     return found
-
-
-def backends_for(needs: Sequence[str]) -> tuple[str, ...]:
-    """Every registered backend (plugins included) that has all of ``needs``."""
-    return tuple(n for n in backend_names() if not BACKENDS[n].lacks(needs))
 
 
 def check_options(name: str, options: Mapping[str, Any]) -> None:
