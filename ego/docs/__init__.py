@@ -895,8 +895,10 @@ def envelope() -> list[Table]:
     return tables
 
 
-#: the traffic simulators of the cross-simulator page (ego.highway_env.BACKENDS)
-BACKENDS = ("sumo", "highway-env")
+#: the two registered traffic simulators the cross-simulator page compares, by their names in
+#: the page's header (a choice of the page, not a copy of the registry: a plugin backend
+#: adds no column)
+CROSS_BACKENDS = {"sumo": "SUMO", "highway-env": "highway-env"}
 #: per scenario: (metric, header) of the cross-simulator page; min_gap_rear_after from CrossSim
 CROSS_FIGURES = {
     "emergency-brake": (
@@ -922,10 +924,10 @@ def _cross_cells(figures: tuple, seeds: int) -> Callable[[list], list[str]]:
     mean over the seeds on SUMO beside highway-env (``k/n`` for a yes/no figure)."""
 
     def cells(ms: list[dict]) -> list[str]:
-        by = {b: ms[i * seeds : (i + 1) * seeds] for i, b in enumerate(BACKENDS)}
-        out = [statuses(by[b]) for b in BACKENDS]
+        by = {b: ms[i * seeds : (i + 1) * seeds] for i, b in enumerate(CROSS_BACKENDS)}
+        out = [statuses(by[b]) for b in CROSS_BACKENDS]
         for key, _ in figures:
-            for b in BACKENDS:
+            for b in CROSS_BACKENDS:
                 values = [m.get(key) for m in by[b]]
                 out.append(count(values) if all(isinstance(v, bool) for v in values) else mean_sd(values))
         return out
@@ -937,13 +939,13 @@ def cross_simulator(seeds: int = 3) -> list[Table]:
     """Each motorway controller on SUMO beside highway-env (docs/results/cross-simulator.md)."""
     out = []
     for scenario, figures in CROSS_FIGURES.items():
-        header = ["controller"] + [f"runs ({b})" for b in ("SUMO", "highway-env")]
+        header = ["controller"] + [f"runs ({shown})" for shown in CROSS_BACKENDS.values()]
         for _, label in figures:
             header += [f"{label} SUMO", f"{label} highway-env"]
         rows = tuple(
             Row(
                 c,
-                tuple(CrossSim(scenario, c, seed, b) for b in BACKENDS for seed in range(seeds)),
+                tuple(CrossSim(scenario, c, seed, b) for b in CROSS_BACKENDS for seed in range(seeds)),
                 _cross_cells(figures, seeds),
             )
             for c in TRACKING
@@ -955,7 +957,7 @@ def cross_simulator(seeds: int = 3) -> list[Table]:
                 tuple(
                     f"ego compare {scenario} --controllers {','.join(TRACKING)} --seeds {seeds} "
                     f"--backend {b} --out runs/{scenario}-{b}"
-                    for b in BACKENDS
+                    for b in CROSS_BACKENDS
                 ),
                 tuple(header),
                 rows,
