@@ -196,11 +196,10 @@ def parse(data: dict, source: str = "the spec") -> FalsifySpec:
     search = r.table("search")
     r.fixed()
     dims = _dims(r, fixed, search)
-    fixed_seed = _seed(r, dims)
+    fixed_seed, top_seed = _seed(r, dims)
     if not dims:
         raise r.bad("[search] names nothing to search (and the seed is fixed)")
     per_point = data.get("seeds_per_point", 1)
-    top_seed = fixed_seed if fixed_seed is not None else int(dims[-1].hi)
     if not is_whole(per_point, 1, 100) or top_seed + per_point - 1 > MAX_SEED:
         raise r.bad(
             f"seeds_per_point must be a whole number from 1 to 100 (the seeds up to {MAX_SEED}), got {per_point!r}"
@@ -247,13 +246,14 @@ def _dims(r: SpecReader, fixed: dict, search: dict) -> list[Dim]:
     return dims
 
 
-def _seed(r: SpecReader, dims: list[Dim]) -> int | None:
-    """``seed``: one fixed seed (returned), or a range ``[low, high]`` searched as a whole
-    number (appended to ``dims``; None returned)."""
+def _seed(r: SpecReader, dims: list[Dim]) -> tuple[int | None, int]:
+    """``seed``: one fixed seed, or a range ``[low, high]`` searched as a whole number
+    (appended to ``dims``; the fixed seed None). Returns the fixed seed and the highest
+    seed a point starts from."""
     seed = r.data.get("seed", 0)
     if is_whole(seed, 0, MAX_SEED):
-        return int(seed)
+        return int(seed), int(seed)
     if isinstance(seed, list) and len(seed) == 2 and all(is_whole(s, 0, MAX_SEED) for s in seed) and seed[0] < seed[1]:
         dims.append(Dim("seed", "seed", float(seed[0]), float(seed[1])))
-        return None
+        return None, seed[1]
     raise r.bad(f"seed must be one seed or a range [low, high] of seeds within 0..{MAX_SEED}, got {seed!r}")
