@@ -129,18 +129,14 @@ STAYS_IN_LANE = ("stays_in_lane", "always (lane_departure <= 0 m)")
 def check_backend(cls: type[Scenario], backend: str) -> None:
     """ConfigError unless scenario ``cls`` runs on traffic simulator ``backend``."""
     from ego.sim.registry import backend as registered
+    from ego.sim.registry import check_needs
 
-    found = registered(backend)  # a name no backend has
+    registered(backend)  # a name no backend has
     if backend not in cls.backends:
         raise ConfigError(
             f"bad value for --backend: {backend!r} (scenario {cls.name} runs on {' or '.join(cls.backends)} only)"
         )
-    lacking = [need for need in cls.needs if not getattr(found.capabilities, need)]
-    if lacking:
-        raise ConfigError(
-            f"bad value for --backend: {backend!r} (scenario {cls.name} needs {', '.join(lacking)}; "
-            f"backend {backend} lacks it)"
-        )
+    check_needs(f"scenario {cls.name}", cls.needs, backend)  # the registry matches needs to capabilities
 
 
 class Scenario:
