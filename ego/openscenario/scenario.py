@@ -575,7 +575,7 @@ class FileScenario(Scenario):
             )
 
     def _road_end(self, why: str) -> None:
-        status, detail = self._final_status()
+        status, detail = self.loop.final_status()
         if status == "timeout":
             detail = "before the manoeuvre finished"
         self._end(status, f"{why} at t = {self.t:.2f} s, {detail}", level="WARN")

@@ -16,7 +16,7 @@ import math
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -268,12 +268,18 @@ class Scenario:
         self.controlled_ids: tuple[str, ...] = ()
         #: vehicle id -> RGB for the recording (others: grey)
         self.colors: dict[str, tuple[int, int, int]] = {}
-        parts = self.compose()
+        parts = self.parts = self.compose()
         if parts is not None:
-            ComposedLoop.bind(self, parts)
+            self.world, self.view, self.manoeuvre, self.safety = parts.world, parts.view, parts.manoeuvre, parts.safety
+        #: the run's loop: what :meth:`reset` and :meth:`step` call (:class:`Loop`)
+        self.loop: Loop = self.make_loop()
 
     #: a composed scenario's parts (:meth:`compose`; None: the scenario implements the hooks)
-    parts = world = view = manoeuvre = safety = None
+    parts: Parts | None = None
+    world: Any = None
+    view: Any = None
+    manoeuvre: Any = None
+    safety: Any = None
     #: a composed scenario's own work after the actors' updates before a simulator step, and
     #: after the step's surround sensing (None: nothing)
     before_sim_step = None
@@ -288,6 +294,13 @@ class Scenario:
         """The scenario's parts (:class:`Parts`), or None for one that implements the loop
         hooks itself."""
         return None
+
+    def make_loop(self) -> Loop:
+        """The loop object of this scenario's runs: the parts' (:class:`ComposedLoop`) for a
+        composed scenario, else the scenario's own hooks (:class:`HookLoop`)."""
+        if self.parts is not None:
+            return ComposedLoop(self, self.parts)
+        return HookLoop(self)
 
     # -- Gymnasium-style interface -----------------------------------------------------------
     def reset(self, *, seed: int | None = None) -> Observation:
@@ -317,21 +330,22 @@ class Scenario:
         if self.bridge is not None:
             self.bridge.start()
             self.traffic = TrafficCollector()
-        self._setup(np.random.default_rng(self.seed))
+        loop = self.loop
+        loop.setup(np.random.default_rng(self.seed))
         if self._fmu_plant() and not getattr(self.ego, "is_fmu", False):
             raise ConfigError(
                 f"--set plant= replaces a bicycle plant; the {self.name} scenario has none "
                 "(motorway and curve scenarios have)"
             )
-        scene = self._scene()
+        scene = loop.scene()
         self._lanes = tuple((w, tuple(map(tuple, pts))) for w, pts in scene.lanes)
-        self.recorder.begin(scene, self._series(), self._meta())
+        self.recorder.begin(scene, loop.series(), self._meta())
         if self._outlines:
-            self._record_boxes()
+            loop.record_boxes()
         if self.traffic is not None:
-            self._setup_traffic_log()
-            self._log_traffic()
-        self._update()
+            loop.subscribe_traffic()
+            loop.log_traffic()
+        loop.update()
         return self.obs
 
     @property
@@ -343,19 +357,20 @@ class Scenario:
         Fx per driven wheel (N) in tracking scenarios, a_x (m/s^2) in the curve task."""
         if self.status != "running":
             raise RuntimeError(f"the run has ended ({self.status}); call reset()")
-        self._act(action)
+        loop = self.loop
+        loop.act(action)
         k = self.k = self.k + 1
         t = self.t = k * self._dt
         if self._per_sumo and k % self._per_sumo == 0:
             self._sumo_step()
         if self.status == "running":
-            reason = self._check_divergence()
+            reason = loop.diverged()
             if reason is not None:
                 self._end("diverged", reason, level="ERROR")
             else:
-                self._update()
+                loop.update()
                 if t >= self._t_end and self.status == "running":
-                    self._end(*self._final_status())
+                    self._end(*loop.final_status())
         if t >= self._next_flush or self.status != "running":
             self._flush()
         return self.obs
@@ -477,12 +492,13 @@ class Scenario:
 
     def _sumo_step(self) -> None:
         bridge = self.bridge
-        self._before_sumo_step()
+        loop = self.loop
+        loop.before_sim_step()
         collisions = bridge.step()
-        self._after_sumo_step()
+        loop.after_sim_step()
         if self._outlines:
-            self._record_boxes()
-        self._log_traffic()
+            loop.record_boxes()
+        loop.log_traffic()
         if collisions:
             mine = [c for c in collisions if c.collider in bridge.controlled or c.victim in bridge.controlled]
             if mine:
@@ -734,8 +750,8 @@ class Parts:
     * ``safety``: the filter between the controller's action and the plant
       (:class:`ego.scenarios.safety.SafetyLayer`), or None.
 
-    :meth:`Scenario.compose` returns one; the scenario's loop hooks are then these parts'
-    methods, bound once per run (no dispatch per step)."""
+    :meth:`Scenario.compose` returns one; the scenario's loop is then a
+    :class:`ComposedLoop` calling these parts' methods, bound once per run."""
 
     __slots__ = ("world", "view", "manoeuvre", "safety", "make_plant", "series", "limits")
 
@@ -750,79 +766,221 @@ class Parts:
         self.series = series
 
 
+class Loop(Protocol):
+    """What :meth:`Scenario.reset` and :meth:`Scenario.step` call on a run: one object per
+    scenario (``Scenario.loop``), made once by :meth:`Scenario.make_loop`. The scenario owns
+    the run's state (time, status, trace, events, the simulator) and the order of the calls;
+    the loop object owns what a scenario does in them."""
+
+    def setup(self, rng: np.random.Generator) -> None:
+        """The run's vehicles, plants and sensors (the simulator started; ``rng`` seeded)."""
+
+    def act(self, action: Any) -> None:
+        """One control period of the plants under ``action`` and the trace row of time t."""
+
+    def before_sim_step(self) -> None:
+        """Before a simulator step: the ego pushed, the scripted actors."""
+
+    def after_sim_step(self) -> None:
+        """After a simulator step: read the scene."""
+
+    def diverged(self) -> str | None:
+        """Why the run diverged, or None."""
+
+    def update(self) -> None:
+        """Events, references and the observation of time t."""
+
+    def final_status(self) -> tuple[str, str]:
+        """Status and detail when the duration runs out."""
+
+    def scene(self) -> Scene:
+        """The recording's static scene (lanes)."""
+
+    def series(self) -> list[Series]:
+        """The recording's panels."""
+
+    def record_boxes(self) -> None:
+        """Every vehicle's outline into the recording (a simulator step)."""
+
+    def subscribe_traffic(self) -> None:
+        """Ask the simulator for what :meth:`log_traffic` reads (after :meth:`setup`)."""
+
+    def log_traffic(self) -> None:
+        """This simulator step's vehicles into the traffic log."""
+
+
+# -- the fast paths a part may offer the composed loop (bound once a run; C where built) ---
+@runtime_checkable
+class BindsStep(Protocol):
+    """A plant whose step the loop binds once a run (``BicyclePlant``: ego._native)."""
+
+    def bind_step(self) -> Callable[[tuple[float, float]], None]: ...
+
+
+@runtime_checkable
+class BindsFrame(Protocol):
+    """A road sensor whose lane frame the loop binds once a run (``RoadSensor``)."""
+
+    def bind_frame(self) -> Callable[[], None]: ...
+
+
+@runtime_checkable
+class BindsLook(Protocol):
+    """A surround view whose look the loop binds once a run (``SurroundView``)."""
+
+    def bind_look(self) -> Callable[[float], Collision | None]: ...
+
+
+@runtime_checkable
+class BindsPlan(Protocol):
+    """A manoeuvre whose plan the loop binds once a run (``EvasiveManoeuvre``)."""
+
+    def bind_plan(self) -> Callable[[Any, float], None]: ...
+
+
+class PartsLoop:
+    """What a loop does where a scenario's parts have nothing to do: no simulator work, no
+    divergence check, the duration's end is a completed run, no lanes, the controller's
+    panels. A scenario's loop subclasses it and says what its parts do."""
+
+    def __init__(self, sc: Scenario) -> None:
+        self.sc = sc
+
+    def before_sim_step(self) -> None:
+        pass
+
+    def after_sim_step(self) -> None:
+        pass
+
+    def diverged(self) -> str | None:
+        return None
+
+    def final_status(self) -> tuple[str, str]:
+        return "completed", "reached the end of the simulated time"
+
+    def scene(self) -> Scene:
+        return Scene(lanes=())
+
+    def series(self) -> list[Series]:
+        sc = self.sc
+        return signal_series(sc._signal_names, sc._signal_units)
+
+    def record_boxes(self) -> None:
+        pass
+
+    def subscribe_traffic(self) -> None:
+        pass
+
+    def log_traffic(self) -> None:
+        pass
+
+
+class HookLoop:
+    """The loop of a scenario that implements the hooks itself (``_setup``, ``_act``,
+    ``_update``... on its class): each call goes to the scenario's hook."""
+
+    __slots__ = ("sc",)
+
+    def __init__(self, sc: Scenario) -> None:
+        self.sc = sc
+
+    def setup(self, rng: np.random.Generator) -> None:
+        self.sc._setup(rng)
+
+    def act(self, action: Any) -> None:
+        self.sc._act(action)
+
+    def before_sim_step(self) -> None:
+        self.sc._before_sumo_step()
+
+    def after_sim_step(self) -> None:
+        self.sc._after_sumo_step()
+
+    def diverged(self) -> str | None:
+        return self.sc._check_divergence()
+
+    def update(self) -> None:
+        self.sc._update()
+
+    def final_status(self) -> tuple[str, str]:
+        return self.sc._final_status()
+
+    def scene(self) -> Scene:
+        return self.sc._scene()
+
+    def series(self) -> list[Series]:
+        return self.sc._series()
+
+    def record_boxes(self) -> None:
+        self.sc._record_boxes()
+
+    def subscribe_traffic(self) -> None:
+        self.sc._setup_traffic_log()
+
+    def log_traffic(self) -> None:
+        self.sc._log_traffic()
+
+
 class ComposedLoop:
-    """The loop hooks of a composed scenario (:class:`Parts`): :meth:`Scenario.__init__`
-    binds them onto the scenario in place of the template hooks, so one step calls the
-    parts directly: safety filter -> plant -> trace row -> road sensor; at a simulator
-    step: ego pushed, actors, step, surround sensor; then divergence, the surround view,
-    the manoeuvre and the observation."""
+    """The loop of a composed scenario (:class:`Parts`): one step calls the parts directly:
+    safety filter -> plant -> trace row -> road sensor; at a simulator step: ego pushed,
+    actors, step, surround sensor; then divergence, the surround view, the manoeuvre and the
+    observation. The scenario's own optional work (``after_setup``, ``before_sim_step``,
+    ``after_sim_step``, ``before_plan``: None or a method) is called at its place."""
 
-    @staticmethod
-    def bind(sc: Scenario, parts: Parts) -> None:
-        sc.parts = parts
-        sc.world, sc.view, sc.manoeuvre, sc.safety = parts.world, parts.view, parts.manoeuvre, parts.safety
-        for name in (
-            "_setup",
-            "_act",
-            "_update",
-            "_before_sumo_step",
-            "_after_sumo_step",
-            "_record_boxes",
-            "_setup_traffic_log",
-            "_log_traffic",
-            "_scene",
-        ):
-            setattr(sc, name, getattr(ComposedLoop, name).__get__(sc))
-        # the parts' own methods where the loop's hook is exactly theirs (no wrapper per step)
-        sc._check_divergence = parts.view.diverged
-        sc._final_status = parts.manoeuvre.final_status
-        if parts.series is not None and type(sc)._series is Scenario._series:
-            sc._series = lambda: parts.series(sc._signal_names, sc._signal_units)
+    def __init__(self, sc: Scenario, parts: Parts) -> None:
+        self.sc, self.parts = sc, parts
+        self.view, self.world, self.manoeuvre = parts.view, parts.world, parts.manoeuvre
+        # the parts' own methods where the loop's call is exactly theirs
+        self.diverged: Callable[[], str | None] = parts.view.diverged
+        self.final_status: Callable[[], tuple[str, str]] = parts.manoeuvre.final_status
+        self._road_y = 0.0
 
-    def _setup(self, rng: np.random.Generator) -> None:
-        parts = self.parts
+    def setup(self, rng: np.random.Generator) -> None:
+        sc, parts = self.sc, self.parts
         world, view = parts.world, parts.view
-        bridge = self.bridge
+        bridge = sc.bridge
         missing = world.setup(bridge, rng)
         if missing:
-            self.event(
+            sc.event(
                 "traffic",
                 f"SUMO could not place {len(missing)} background vehicles: "
                 f"{', '.join(missing[:5])}{'...' if len(missing) > 5 else ''}",
                 "WARN",
             )
-        self.controlled_ids = (EGO,)
-        self.colors.update(world.colors)
-        self.lanes = world.lanes
-        self.ego = self.own_plant(parts.make_plant(self.config, self.geometry, bridge.cg_pose(EGO)))
-        self.plants = {EGO: self.ego}
-        view.setup(bridge, world.lanes, self.ego)
-        self.obs.lane = view.road
+        sc.controlled_ids = (EGO,)
+        sc.colors.update(world.colors)
+        sc.lanes = world.lanes
+        ego = self.ego = sc.ego = sc.own_plant(parts.make_plant(sc.config, sc.geometry, bridge.cg_pose(EGO)))
+        sc.plants = {EGO: ego}
+        view.setup(bridge, world.lanes, ego)
+        sc.obs.lane = view.road
         self._road_y = view.road.points[0][1]
-        self.manoeuvre.reset(self.ego)
-        if self.safety is not None:
-            self.safety.reset(self.ego)
-            self._filter = self.safety.filter
+        self.manoeuvre.reset(ego)
+        safety = parts.safety
+        if safety is not None:
+            safety.reset(ego)
+            self._filter = safety.filter
         else:
             self._filter = _unfiltered
-        self._write_row = self.trace.bind(view.row_names)
-        self._signals = self.controller.signals
-        # the view's own fast paths for the loop where it has them (C kernels of ego._native)
-        self._frame = view.bind_frame() if hasattr(view, "bind_frame") else view.frame
-        self._look = view.bind_look() if hasattr(view, "bind_look") else view.look
-        ego = self.ego
-        self._plant_step = ego.bind_step() if hasattr(ego, "bind_step") else ego.step
+        self._write_row = sc.trace.bind(view.row_names)
+        self._signals = sc.controller.signals
+        self._obs = sc.obs
+        # the parts' own fast paths where they declare them (C kernels of ego._native)
+        self._frame = view.bind_frame() if isinstance(view, BindsFrame) else view.frame
+        self._look = view.bind_look() if isinstance(view, BindsLook) else view.look
+        self._plant_step = ego.bind_step() if isinstance(ego, BindsStep) else ego.step
         man = self.manoeuvre
-        self._plan = man.bind_plan() if hasattr(man, "bind_plan") else man.plan
-        view.sense(self.t)
-        if self.after_setup is not None:
-            self.after_setup()
+        self._plan = man.bind_plan() if isinstance(man, BindsPlan) else man.plan
+        view.sense(sc.t)
+        if sc.after_setup is not None:
+            sc.after_setup()
 
-    def _act(self, action: tuple[float, float]) -> None:
+    def act(self, action: tuple[float, float]) -> None:
         ego = self.ego
         self._plant_step(self._filter(action))
         fx, delta = ego.applied
-        obs, view = self.obs, self.view
+        obs, view = self._obs, self.view
         # the row describes time t: the state before this step and the action applied
         d = obs.d
         self._write_row(
@@ -854,46 +1012,92 @@ class ComposedLoop:
         )
         self._frame()
 
-    def _before_sumo_step(self) -> None:
-        bridge = self.bridge
+    def before_sim_step(self) -> None:
+        sc = self.sc
+        bridge = sc.bridge
         self.view.push(bridge)
-        t = self.t - self.config.sumo_step
+        t = sc.t - sc.config.sumo_step
         for actor in self.world.actors:
             actor.update(bridge, t)
-        if self.before_sim_step is not None:
-            self.before_sim_step()
+        if sc.before_sim_step is not None:
+            sc.before_sim_step()
 
-    def _after_sumo_step(self) -> None:
-        self.view.sense(self.t)
-        if self.after_sim_step is not None:
-            self.after_sim_step()
+    def after_sim_step(self) -> None:
+        sc = self.sc
+        self.view.sense(sc.t)
+        if sc.after_sim_step is not None:
+            sc.after_sim_step()
 
-    def _scene(self) -> Scene:
-        return Scene(lanes=[(lane.width, lane.points) for lane in self.lanes.values()], title=self.name)
+    def scene(self) -> Scene:
+        return Scene(lanes=[(lane.width, lane.points) for lane in self.world.lanes.values()], title=self.sc.name)
 
-    def _record_boxes(self) -> None:
-        ids, poses = self.bridge.poses()
-        self.recorder.vehicles(self.t, ids, poses, (self.ego.state[0], self._road_y))
+    def series(self) -> list[Series]:
+        sc, series = self.sc, self.parts.series
+        if series is None:
+            return sc._series()
+        return series(sc._signal_names, sc._signal_units)
 
-    def _setup_traffic_log(self) -> None:
+    def record_boxes(self) -> None:
+        sc = self.sc
+        ids, poses = sc.bridge.poses()
+        sc.recorder.vehicles(sc.t, ids, poses, (self.ego.state[0], self._road_y))
+
+    def subscribe_traffic(self) -> None:
         pass  # the surround sensor's subscription reaches as far
 
-    def _log_traffic(self) -> None:
+    def log_traffic(self) -> None:
+        sc = self.sc
         centre, ids, rows = self.view.traffic_row()
-        self.traffic.add(self.t, centre, ids, rows)
+        sc.traffic.add(sc.t, centre, ids, rows)
 
-    def _update(self) -> None:
-        view, t = self.view, self.t
+    def update(self) -> None:
+        sc = self.sc
+        t = sc.t
         collision = self._look(t)
-        if collision is not None and self.status == "running":
-            self._collided(collision)
-            if self.status != "running":
+        if collision is not None and sc.status == "running":
+            sc._collided(collision)
+            if sc.status != "running":
                 return
-        obs = self.obs
-        if self.before_plan is not None:
-            self.before_plan()
+        obs = self._obs
+        if sc.before_plan is not None:
+            sc.before_plan()
         self._plan(obs, t)
-        view.observe(obs, t)
+        self.view.observe(obs, t)
+
+
+class RoadLoop(HookLoop):
+    """The loop of a scenario on one lane of a simulator's road that implements its own
+    ``_setup``, ``_act``, ``_update`` (curve, lane centring) with the road's parts
+    (:class:`ego.scenarios.road.RoadWorld` and its sensor, the ``view``): the divergence
+    check is the sensor's; before every simulator step the ego is pushed and the actors
+    act; the traffic log, the recording's vehicles and lanes are the world's."""
+
+    __slots__ = ("world",)
+
+    def __init__(self, sc: Scenario, world: Any) -> None:
+        super().__init__(sc)
+        self.world = world
+
+    def diverged(self) -> str | None:
+        return self.world.view.diverged()
+
+    def before_sim_step(self) -> None:
+        sc = self.sc
+        self.world.before_step(sc.t - sc.config.sumo_step)
+
+    def scene(self) -> Scene:
+        return Scene(lanes=[(lane.width, lane.points) for lane in self.world.lanes.values()], title=self.sc.name)
+
+    def record_boxes(self) -> None:
+        sc = self.sc
+        self.world.record(sc.recorder, sc.t)
+
+    def subscribe_traffic(self) -> None:
+        self.world.subscribe()
+
+    def log_traffic(self) -> None:
+        sc = self.sc
+        self.world.log(sc.traffic, sc.t)
 
 
 def _unfiltered(action):

@@ -36,7 +36,7 @@ from ego.params import ConfigError, param
 from ego.record.base import Series
 from ego.results import metrics as m
 from ego.results.trace import Column, Marker, Metric, Plot
-from ego.scenarios.base import NO_COLLISION, CommonConfig, Scenario, signal_series
+from ego.scenarios.base import NO_COLLISION, CommonConfig, Loop, RoadLoop, Scenario, signal_series
 from ego.scenarios.events import INF, boxes_overlap
 from ego.scenarios.observe import road_observation
 from ego.scenarios.road import RoadSensor, RoadWorld
@@ -165,13 +165,18 @@ class CurveScenario(Scenario):
     def __init__(self, config, controller, **kwargs) -> None:
         super().__init__(config, controller, **kwargs)
         self.geometry = GEOMETRY
-        RoadWorld(RoadSensor(GEOMETRY)).bind(self)  # the road's world and sensor: the view
         self.ego = None
         self.neighbours = Neighbours()
         self.lanes: dict[str, LanePolyline] = {}
         self.arc_start = self.arc_end = 0.0
         self.arc_sign = 1.0
         self._reset_state()
+
+    def make_loop(self) -> Loop:
+        """The road's world and sensor (the ``view``) around the scenario's own hooks."""
+        self.world = RoadWorld(RoadSensor(GEOMETRY))
+        self.view = self.world.view
+        return RoadLoop(self, self.world)
 
     def _reset_state(self) -> None:
         self.phase = APPROACH

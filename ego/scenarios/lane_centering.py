@@ -48,7 +48,7 @@ from ego.params import param
 from ego.record.base import Series
 from ego.results import metrics as m
 from ego.results.trace import Band, Column, Marker, Metric, Plot
-from ego.scenarios.base import CommonConfig, Scenario, signal_series
+from ego.scenarios.base import CommonConfig, Loop, RoadLoop, Scenario, signal_series
 from ego.scenarios.observe import road_observation
 from ego.scenarios.road import RoadSensor, RoadWorld
 from ego.sim.traffic import PoissonFlow, background_traffic
@@ -154,12 +154,17 @@ class LaneCenteringScenario(Scenario):
     def __init__(self, config, controller, **kwargs) -> None:
         super().__init__(config, controller, **kwargs)
         self.geometry = GEOMETRY
-        RoadWorld(RoadSensor(GEOMETRY)).bind(self)  # the road's world and sensor: the view
         self.ego = None
         self.lanes: dict[str, LanePolyline] = {}
         self.spans: list[tuple[float, float, float]] = []
         self._in_curve = False
         self._end_s = 0.0
+
+    def make_loop(self) -> Loop:
+        """The road's world and sensor (the ``view``) around the scenario's own hooks."""
+        self.world = RoadWorld(RoadSensor(GEOMETRY))
+        self.view = self.world.view
+        return RoadLoop(self, self.world)
 
     def _setup(self, rng: np.random.Generator) -> None:
         c = self.config
