@@ -839,40 +839,64 @@ class BindsPlan(Protocol):
 
 
 class PartsLoop:
-    """What a loop does where a scenario's parts have nothing to do: no simulator work, no
-    divergence check, the duration's end is a completed run, no lanes, the controller's
-    panels. A scenario's loop subclasses it and says what its parts do."""
+    """The loop of a scenario whose parts are a plant (or several, keyed by vehicle id),
+    optionally a road's ``world`` (:class:`ego.scenarios.road.RoadWorld`: the lanes, the
+    scripted actors, the traffic log, the recording's vehicles) with its road sensor
+    (``world.view``: the lane frame, the divergence check, the ego's push) and the
+    scenario's plan. A scenario's loop subclasses it with ``setup``, ``act`` and ``update``;
+    what the world does is done here: before every simulator step the ego is pushed and the
+    actors act, and the traffic log, the recording's vehicles and lanes are the world's.
+    Without a world: no simulator work, no divergence check, no lanes."""
 
-    def __init__(self, sc: Scenario) -> None:
+    def __init__(self, sc: Scenario, world: Any = None) -> None:
         self.sc = sc
+        self.world = world
+        self.view = world.view if world is not None else None
+
+    def setup(self, rng: np.random.Generator) -> None:
+        raise NotImplementedError
+
+    def act(self, action: Any) -> None:
+        raise NotImplementedError
+
+    def update(self) -> None:
+        raise NotImplementedError
 
     def before_sim_step(self) -> None:
-        pass
+        sc = self.sc
+        self.world.before_step(sc.t - sc.config.sumo_step)
 
     def after_sim_step(self) -> None:
         pass
 
     def diverged(self) -> str | None:
-        return None
+        view = self.view
+        return view.diverged() if view is not None else None
 
     def final_status(self) -> tuple[str, str]:
         return "completed", "reached the end of the simulated time"
 
     def scene(self) -> Scene:
-        return Scene(lanes=())
+        lanes = self.world.lanes.values() if self.world is not None else ()
+        return Scene(lanes=[(lane.width, lane.points) for lane in lanes], title=self.sc.name)
 
     def series(self) -> list[Series]:
         sc = self.sc
         return signal_series(sc._signal_names, sc._signal_units)
 
     def record_boxes(self) -> None:
-        pass
+        if self.world is not None:
+            sc = self.sc
+            self.world.record(sc.recorder, sc.t)
 
     def subscribe_traffic(self) -> None:
-        pass
+        if self.world is not None:
+            self.world.subscribe()
 
     def log_traffic(self) -> None:
-        pass
+        if self.world is not None:
+            sc = self.sc
+            self.world.log(sc.traffic, sc.t)
 
 
 class HookLoop:
