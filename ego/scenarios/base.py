@@ -1089,41 +1089,6 @@ class ComposedLoop:
         self.view.observe(obs, t)
 
 
-class RoadLoop(HookLoop):
-    """The loop of a scenario on one lane of a simulator's road that implements its own
-    ``_setup``, ``_act``, ``_update`` (curve, lane centring) with the road's parts
-    (:class:`ego.scenarios.road.RoadWorld` and its sensor, the ``view``): the divergence
-    check is the sensor's; before every simulator step the ego is pushed and the actors
-    act; the traffic log, the recording's vehicles and lanes are the world's."""
-
-    __slots__ = ("world",)
-
-    def __init__(self, sc: Scenario, world: Any) -> None:
-        super().__init__(sc)
-        self.world = world
-
-    def diverged(self) -> str | None:
-        return self.world.view.diverged()
-
-    def before_sim_step(self) -> None:
-        sc = self.sc
-        self.world.before_step(sc.t - sc.config.sumo_step)
-
-    def scene(self) -> Scene:
-        return Scene(lanes=[(lane.width, lane.points) for lane in self.world.lanes.values()], title=self.sc.name)
-
-    def record_boxes(self) -> None:
-        sc = self.sc
-        self.world.record(sc.recorder, sc.t)
-
-    def subscribe_traffic(self) -> None:
-        self.world.subscribe()
-
-    def log_traffic(self) -> None:
-        sc = self.sc
-        self.world.log(sc.traffic, sc.t)
-
-
 def _unfiltered(action):
     return action
 
