@@ -167,7 +167,9 @@ class CurveScenario(Scenario):
         self.geometry = GEOMETRY
         self.ego = None
         self.lanes: dict[str, LanePolyline] = {}
-        return CurveLoop(self, RoadWorld(RoadSensor(GEOMETRY)))
+        self.world = RoadWorld(RoadSensor(GEOMETRY))
+        self.view = self.world.view  # the road sensor: the lane frame (lane_rows, ego.gym)
+        return CurveLoop(self, self.world)
 
     # -- results ------------------------------------------------------------------------------
     def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:

@@ -156,7 +156,9 @@ class LaneCenteringScenario(Scenario):
         self.geometry = GEOMETRY
         self.ego = None
         self.lanes: dict[str, LanePolyline] = {}
-        return LaneCenteringLoop(self, RoadWorld(RoadSensor(GEOMETRY)))
+        self.world = RoadWorld(RoadSensor(GEOMETRY))
+        self.view = self.world.view  # the road sensor: the lane frame (lane_rows, ego.gym)
+        return LaneCenteringLoop(self, self.world)
 
     # -- results ------------------------------------------------------------------------------
     def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
