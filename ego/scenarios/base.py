@@ -140,12 +140,15 @@ def check_backend(cls: type[Scenario], backend: str) -> None:
 
 
 class Scenario:
-    """Base of every scenario.
+    """Base of every scenario: a declaration (``name``, ``config_cls``, trace ``columns``,
+    ``metric_specs``, default ``requirements``, the ``needs`` of a simulator) and the run's
+    state and order (:meth:`reset`, :meth:`step`, the flush, :meth:`result`).
 
-    Subclasses set ``name``/``config_cls`` and implement the ``_setup`` (traffic, ego),
-    ``_act`` (apply the action, write the trace row), ``_update`` (events, references,
-    observation) and ``_metrics`` hooks; SUMO scenarios also ``_make_bridge`` and the
-    ``_before_sumo_step`` (scripted actors) / ``_after_sumo_step`` (read the scene) hooks.
+    What a scenario does in a run is its loop object (:attr:`loop`, a :class:`Loop`): a
+    motorway scenario returns its :class:`Parts` from :meth:`compose` and runs on their
+    :class:`ComposedLoop`; a scenario off the motorway returns its own loop from
+    :meth:`make_loop` (a :class:`PartsLoop`). No method is replaced on an instance. Its
+    results are ``_metrics`` (and ``_meta`` for the recording's run panel).
     """
 
     name: ClassVar[str] = ""
@@ -296,11 +299,15 @@ class Scenario:
         return None
 
     def make_loop(self) -> Loop:
-        """The loop object of this scenario's runs: the parts' (:class:`ComposedLoop`) for a
-        composed scenario, else the scenario's own hooks (:class:`HookLoop`)."""
-        if self.parts is not None:
-            return ComposedLoop(self, self.parts)
-        return HookLoop(self)
+        """The loop object of this scenario's runs (:class:`Loop`, made once, from the
+        constructor): a composed scenario's is the :class:`ComposedLoop` of its parts; a
+        scenario off the motorway returns its own (a :class:`PartsLoop` with ``setup``,
+        ``act`` and ``update``: curve, lane-centering, platoon, report-000)."""
+        if self.parts is None:
+            raise NotImplementedError(
+                f"scenario {self.name} returns its parts from compose() or its loop from make_loop()"
+            )
+        return ComposedLoop(self, self.parts)
 
     # -- Gymnasium-style interface -----------------------------------------------------------
     def reset(self, *, seed: int | None = None) -> Observation:
@@ -686,45 +693,9 @@ class Scenario:
             return None
         return c.victim if c.collider in self.controlled_ids else c.collider
 
-    # -- hooks -------------------------------------------------------------------------------
-    def _setup(self, rng: np.random.Generator) -> None:
-        raise NotImplementedError
-
-    def _act(self, action: tuple[float, float]) -> None:
-        raise NotImplementedError
-
-    def _before_sumo_step(self) -> None:
-        pass
-
-    def _after_sumo_step(self) -> None:
-        pass
-
-    def _record_boxes(self) -> None:
-        pass
-
-    def _setup_traffic_log(self) -> None:
-        """Ask SUMO for what :meth:`_log_traffic` reads (after ``_setup``)."""
-
-    def _log_traffic(self) -> None:
-        """Hand this SUMO step's vehicles to ``self.traffic`` (a SUMO scenario's duty)."""
-
-    def _check_divergence(self) -> str | None:
-        return None
-
-    def _update(self) -> None:
-        raise NotImplementedError
-
-    def _final_status(self) -> tuple[str, str]:
-        return "completed", "reached the end of the simulated time"
-
+    # -- what a run reports --------------------------------------------------------------------
     def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
         return {}
-
-    def _scene(self) -> Scene:
-        return Scene(lanes=())
-
-    def _series(self) -> list[Series]:
-        return []
 
     def _meta(self) -> dict:
         """What the recording's "run" panel lists: names, seed and every parameter."""
@@ -761,8 +732,7 @@ class Parts:
         self.make_plant = make_plant
         #: config -> that plant's action box (:meth:`Scenario.action_limits`; None: the default)
         self.limits = limits
-        #: (signal names, signal units) -> the recording's panels (unless the scenario has
-        #: its own ``_series``)
+        #: (signal names, signal units) -> the recording's panels (None: the controller's)
         self.series = series
 
 
@@ -899,52 +869,6 @@ class PartsLoop:
             self.world.log(sc.traffic, sc.t)
 
 
-class HookLoop:
-    """The loop of a scenario that implements the hooks itself (``_setup``, ``_act``,
-    ``_update``... on its class): each call goes to the scenario's hook."""
-
-    __slots__ = ("sc",)
-
-    def __init__(self, sc: Scenario) -> None:
-        self.sc = sc
-
-    def setup(self, rng: np.random.Generator) -> None:
-        self.sc._setup(rng)
-
-    def act(self, action: Any) -> None:
-        self.sc._act(action)
-
-    def before_sim_step(self) -> None:
-        self.sc._before_sumo_step()
-
-    def after_sim_step(self) -> None:
-        self.sc._after_sumo_step()
-
-    def diverged(self) -> str | None:
-        return self.sc._check_divergence()
-
-    def update(self) -> None:
-        self.sc._update()
-
-    def final_status(self) -> tuple[str, str]:
-        return self.sc._final_status()
-
-    def scene(self) -> Scene:
-        return self.sc._scene()
-
-    def series(self) -> list[Series]:
-        return self.sc._series()
-
-    def record_boxes(self) -> None:
-        self.sc._record_boxes()
-
-    def subscribe_traffic(self) -> None:
-        self.sc._setup_traffic_log()
-
-    def log_traffic(self) -> None:
-        self.sc._log_traffic()
-
-
 class ComposedLoop:
     """The loop of a composed scenario (:class:`Parts`): one step calls the parts directly:
     safety filter -> plant -> trace row -> road sensor; at a simulator step: ego pushed,
@@ -1058,7 +982,7 @@ class ComposedLoop:
     def series(self) -> list[Series]:
         sc, series = self.sc, self.parts.series
         if series is None:
-            return sc._series()
+            return signal_series(sc._signal_names, sc._signal_units)
         return series(sc._signal_names, sc._signal_units)
 
     def record_boxes(self) -> None:
