@@ -181,13 +181,13 @@ class Scenario:
     requirements: ClassVar[tuple[tuple[str, str], ...]] = ()
 
     @classmethod
-    def default_config(cls, overrides: Mapping[str, Any]):
+    def default_config(cls, overrides: Mapping[str, Any]) -> Any:
         """The configuration the overrides apply to: the defaults of ``config_cls``; a
         scenario with variants starts from the variant's preset (``--set variant=...``)."""
         return cls.config_cls()
 
     @classmethod
-    def network_of(cls, config) -> str | None:
+    def network_of(cls, config: Any) -> str | None:
         """The SUMO network a run of ``config`` drives on: ``network``, or for a configuration
         with a ``road`` the motorway it names (``ego.sumo.net.MOTORWAY_ROADS``)."""
         road = getattr(config, "road", None)
@@ -198,29 +198,28 @@ class Scenario:
         return MOTORWAY_ROADS[road]
 
     @classmethod
-    def check_config(cls, config) -> None:
+    def check_config(cls, config: Any) -> None:
         """Checks of a configuration that need more than the configuration (the network's
         geometry, say), made by ``ego.runner.resolve`` before anything runs: ConfigError.
         Default: none."""
 
     @classmethod
-    def build_controller(cls, spec: ControllerSpec, params: Any, config) -> Controller:
+    def build_controller(cls, spec: ControllerSpec, params: Any, config: Any) -> Controller:
         """The controller the loop drives: one of ``spec`` stepping every ``config.dt``;
         a scenario with several controlled vehicles builds one per vehicle."""
         return spec.build(params, config.dt)
 
     @classmethod
-    def compare_plots(cls, config) -> tuple[Plot, ...]:
+    def compare_plots(cls, config: Any) -> tuple[Plot, ...]:
         """Trace columns ``ego compare`` plots for this configuration (default: ``plots``)."""
         return cls.plots
 
     @classmethod
-    def metrics_declared(cls, config=None) -> tuple[Metric, ...]:
+    def metrics_declared(cls, config: Any = None) -> tuple[Metric, ...]:
         """Every metric a run reports: the common ones, then the scenario's own, then the
         registered trace metrics its trace has the columns of (``ego.results.metrics``)."""
         backend = (BACKEND_METRIC,) if len(cls.backends) > 1 else ()
-        names = (c.name for c in cls.columns)
-        names = tuple(names)
+        names = tuple(c.name for c in cls.columns)
         lanes = (LANE_DEPARTURE_METRIC,) if set(LANE_DEPARTURE_NEEDS) <= set(names) else ()
         return COMMON_METRICS + backend + cls.metric_specs + trace_metrics_declared(names) + lanes + COMMON_TAIL_METRICS
 
@@ -230,7 +229,7 @@ class Scenario:
 
     def __init__(
         self,
-        config,
+        config: Any,
         controller: Controller,
         *,
         seed: int = 0,
@@ -253,7 +252,7 @@ class Scenario:
         self._outlines = not isinstance(self.recorder, NullRecorder)
         self.bridge: TrafficSim | None = None
         self.traffic: TrafficCollector | None = None
-        self._lanes: tuple = ()
+        self._lanes: tuple[tuple[float, tuple[tuple[float, ...], ...]], ...] = ()
         self.obs = Observation()
         self.events: list[Event] = []
         self.trace = Trace(self.trace_columns())
@@ -277,7 +276,13 @@ class Scenario:
         #: the run's loop: what :meth:`reset` and :meth:`step` call (:class:`Loop`)
         self.loop: Loop = self.make_loop()
 
-    #: a composed scenario's parts (:meth:`compose`; None: the scenario implements the hooks)
+    #: once a run has started: the ego's plant, every controlled vehicle's plant by id, the
+    #: lanes (lane id -> LanePolyline) and the ego's body (set by the scenario's loop)
+    ego: Any
+    plants: dict[str, Any]
+    lanes: Any
+    geometry: Any
+    #: a composed scenario's parts (:meth:`compose`; None: the scenario returns its own loop)
     parts: Parts | None = None
     world: Any = None
     view: Any = None
@@ -345,7 +350,7 @@ class Scenario:
                 "(motorway and curve scenarios have)"
             )
         scene = loop.scene()
-        self._lanes = tuple((w, tuple(map(tuple, pts))) for w, pts in scene.lanes)
+        self._lanes = tuple((w, tuple(tuple(p) for p in pts)) for w, pts in scene.lanes)
         self.recorder.begin(scene, loop.series(), self._meta())
         if self._outlines:
             loop.record_boxes()
@@ -420,7 +425,7 @@ class Scenario:
     #: closes (ego.runner sets it to check the run's requirements)
     on_result = None
 
-    def _catch_stop_signals(self):
+    def _catch_stop_signals(self) -> Callable[[], None]:
         """Make SIGINT and SIGTERM request a stop at the next step; returns the undo."""
         import signal
         import threading
@@ -429,7 +434,7 @@ class Scenario:
         if threading.current_thread() is not threading.main_thread():
             return lambda: None
 
-        def request(signum, frame) -> None:
+        def request(signum: int, frame: Any) -> None:
             if self._stop:  # asked twice: stop now
                 from ego.usercode import SignalInterrupt
 
@@ -461,7 +466,8 @@ class Scenario:
             return plant
         from ego.fmi.plant import fmu_plant
 
-        return fmu_plant(self, plant)
+        fmu: Plant = fmu_plant(self, plant)  # an FmuPlant
+        return fmu
 
     def close(self) -> None:
         """Close SUMO, the recording and the controller's resources (an FMU instance); safe
@@ -491,14 +497,17 @@ class Scenario:
         from ego.sumo.net import net_file
 
         c = self.config
+        network = self.network_of(c)
+        assert network is not None  # a scenario with a network drives on one
         return make_sim(
             self.backend,
-            SimSetup(net_file(self.network_of(c)), c.sumo_step, self.seed, c.lateral_resolution, self.edge, c.duration),
+            SimSetup(net_file(network), c.sumo_step, self.seed, c.lateral_resolution, self.edge, c.duration),
             self.backend_options,
         )
 
     def _sumo_step(self) -> None:
         bridge = self.bridge
+        assert bridge is not None  # a scenario with simulator steps has a simulator
         loop = self.loop
         loop.before_sim_step()
         collisions = bridge.step()
@@ -553,7 +562,7 @@ class Scenario:
         self.recorder.flush()
         self._next_flush = math.floor(self.t) + 1.0
 
-    def _lane_departure(self, trace: np.ndarray, columns: Sequence[str], events: list) -> float | None:
+    def _lane_departure(self, trace: np.ndarray, columns: Sequence[str], events: list[Event]) -> float | None:
         """The run's largest lane departure (m); a ``lane_departure`` event (into ``events``, in
         time order) where the first one starts."""
         from ego.lane_frame import lane_departure
@@ -611,7 +620,7 @@ class Scenario:
             self.name,
             self.controller_name,
             self.seed,
-            metrics["status"],
+            self.status,
             metrics,
             events,
             columns,
@@ -629,13 +638,14 @@ class Scenario:
         follower)."""
         return self.controlled_ids[0]
 
-    def observation(self, vid: str):
+    def observation(self, vid: str) -> Any:
         """What vehicle ``vid``'s controller observes now (its task's observation)."""
         return self.obs
 
     def plant(self, vid: str) -> Plant:
         """Vehicle ``vid``'s plant."""
-        return self.ego
+        plant: Plant = self.ego
+        return plant
 
     @classmethod
     def reference_controller(cls) -> str:
@@ -651,7 +661,7 @@ class Scenario:
             return self.parts.limits(self.config)
         return -ONE_G, ONE_G, getattr(self.config, "max_steer", 0.0)
 
-    def joint_action(self, own, vid: str, longitudinal: float | None, lateral: float | None):
+    def joint_action(self, own: Any, vid: str, longitudinal: float | None, lateral: float | None) -> Any:
         """The action :meth:`step` takes when vehicle ``vid`` gets ``longitudinal`` and
         ``lateral`` (None: that channel stays ``own``'s, the scenario's controller's)."""
         return (own[0] if longitudinal is None else longitudinal, own[1] if lateral is None else lateral)
@@ -678,11 +688,11 @@ class Scenario:
         o, plant = self.obs, self.plant(vid)
         return lambda: (o.ds, o.d - o.d_ref, None, plant.lateral_accel)
 
-    def lane_rows(self, vid: str):
+    def lane_rows(self, vid: str) -> tuple[tuple[float, ...], Any, float]:
         """(vehicle ``vid``'s row, the other vehicles' rows or None without a surround sensor,
         its length m); a row is (s, d, v_s, v_d, heading) of a box centre in its lane's frame
         (m, m/s, rad; + left)."""
-        road = self.view or self  # a composed scenario's road and surround sensors are its view
+        road: Any = self.view or self  # a composed scenario's road and surround sensors are its view
         ego = (road.s, road.d_road, road.ds, road.dd, road.heading_error)
         sensor = getattr(road, "sensor", None)
         return ego, (sensor.tracks(self.t) if sensor is not None else None), self.geometry.length
@@ -694,10 +704,10 @@ class Scenario:
         return c.victim if c.collider in self.controlled_ids else c.collider
 
     # -- what a run reports --------------------------------------------------------------------
-    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
+    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict[str, Any]:
         return {}
 
-    def _meta(self) -> dict:
+    def _meta(self) -> dict[str, Any]:
         """What the recording's "run" panel lists: names, seed and every parameter."""
         meta = {"scenario": self.name, "controller": self.controller_name, "seed": self.seed}
         if len(type(self).backends) > 1:  # which traffic simulator ran (the /run panel says so)
@@ -726,7 +736,16 @@ class Parts:
 
     __slots__ = ("world", "view", "manoeuvre", "safety", "make_plant", "series", "limits")
 
-    def __init__(self, world, view, manoeuvre, safety=None, make_plant=None, series=None, limits=None) -> None:
+    def __init__(
+        self,
+        world: Any,
+        view: Any,
+        manoeuvre: Any,
+        safety: Any = None,
+        make_plant: Callable[[Any, Any, tuple[float, float, float]], Plant] | None = None,
+        series: Callable[[Sequence[str], Mapping[str, str]], list[Series]] | None = None,
+        limits: Callable[[Any], tuple[float, float, float]] | None = None,
+    ) -> None:
         self.world, self.view, self.manoeuvre, self.safety = world, view, manoeuvre, safety
         #: (config, geometry, pose) -> the ego's plant
         self.make_plant = make_plant
@@ -899,6 +918,7 @@ class ComposedLoop:
         sc.controlled_ids = (EGO,)
         sc.colors.update(world.colors)
         sc.lanes = world.lanes
+        assert bridge is not None and parts.make_plant is not None  # a composed scenario's simulator and plant
         ego = self.ego = sc.ego = sc.own_plant(parts.make_plant(sc.config, sc.geometry, bridge.cg_pose(EGO)))
         sc.plants = {EGO: ego}
         view.setup(bridge, world.lanes, ego)
@@ -987,6 +1007,7 @@ class ComposedLoop:
 
     def record_boxes(self) -> None:
         sc = self.sc
+        assert sc.bridge is not None
         ids, poses = sc.bridge.poses()
         sc.recorder.vehicles(sc.t, ids, poses, (self.ego.state[0], self._road_y))
 
@@ -996,6 +1017,7 @@ class ComposedLoop:
     def log_traffic(self) -> None:
         sc = self.sc
         centre, ids, rows = self.view.traffic_row()
+        assert sc.traffic is not None
         sc.traffic.add(sc.t, centre, ids, rows)
 
     def update(self) -> None:
@@ -1013,7 +1035,7 @@ class ComposedLoop:
         self.view.observe(obs, t)
 
 
-def _unfiltered(action):
+def _unfiltered(action: tuple[float, float]) -> tuple[float, float]:
     return action
 
 
