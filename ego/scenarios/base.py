@@ -742,7 +742,7 @@ class Parts:
         view: Any,
         manoeuvre: Any,
         safety: Any = None,
-        make_plant: Callable[[Any, Any, tuple[float, float, float]], Plant] | None = None,
+        make_plant: Callable[[Any, Any, tuple[float, float, float]], Any] | None = None,
         series: Callable[[Sequence[str], Mapping[str, str]], list[Series]] | None = None,
         limits: Callable[[Any], tuple[float, float, float]] | None = None,
     ) -> None:

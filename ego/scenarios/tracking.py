@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -38,7 +39,7 @@ from ego.scenarios.motorway import series as motorway_series
 from ego.sim.types import EGO
 
 
-def tracking_metrics(t: np.ndarray, e_lat: np.ndarray, e_speed: np.ndarray, after: float = 10.0) -> dict:
+def tracking_metrics(t: np.ndarray, e_lat: np.ndarray, e_speed: np.ndarray, after: float = 10.0) -> dict[str, Any]:
     """RMS and largest lateral error over the run and after ``after`` seconds; RMS speed error."""
     late = t >= after
 
@@ -96,14 +97,14 @@ class SineReference:
 
     phase = 0
 
-    def __init__(self, config, view) -> None:
+    def __init__(self, config: SineTrackingConfig, view: SurroundView) -> None:
         self.config, self.view = config, view
         self.s0 = 0.0
 
-    def reset(self, plant) -> None:
+    def reset(self, plant: object) -> None:
         self.s0 = self.view.s
 
-    def plan(self, obs, t: float) -> None:
+    def plan(self, obs: Observation, t: float) -> None:
         c = self.config
         wt = c.omega * t
         obs.s_ref = self.s0 + c.ref_speed * t
@@ -143,7 +144,7 @@ class SineTracking(Scenario):
             ego_limits,
         )
 
-    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
+    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict[str, Any]:
         col = {name: trace[:, i] for i, name in enumerate(columns)}
         out = tracking_metrics(col["t"], col["e_lat"], col["ds"] - col["speed_ref"])
         out.update(
@@ -217,10 +218,10 @@ class Report000(Scenario):
     def action_limits(self, vid: str | None = None) -> tuple[float, float, float]:
         return ego_limits(self.config)  # report 000's car, as the motorway's
 
-    def _meta(self) -> dict:
+    def _meta(self) -> dict[str, Any]:
         return {**super()._meta(), "colors": {"ego": (220, 40, 40)}}
 
-    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
+    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict[str, Any]:
         col = {name: trace[:, i] for i, name in enumerate(columns)}
         c = self.config
         t = col["t"]
@@ -264,8 +265,10 @@ class Report000Loop(PartsLoop):
     def __init__(self, sc: Report000) -> None:
         super().__init__(sc)
         self.references = Report000References(sc.config)
-        self.ego: BicyclePlant | None = None
         self._next_pose = 0.0
+
+    #: the ego's plant (made by :meth:`setup`)
+    ego: BicyclePlant
 
     def setup(self, rng: np.random.Generator) -> None:
         sc = self.sc
