@@ -299,8 +299,8 @@ class Scenario:
     before_plan = None
 
     def compose(self) -> Parts | None:
-        """The scenario's parts (:class:`Parts`), or None for one that implements the loop
-        hooks itself."""
+        """The scenario's parts (:class:`Parts`), or None for one that returns its own loop
+        from :meth:`make_loop`."""
         return None
 
     def make_loop(self) -> Loop:

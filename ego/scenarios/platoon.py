@@ -478,7 +478,7 @@ class PlatoonLoop(PartsLoop):
         super().__init__(sc)
         c = sc.config
         self.ids = sc.ids
-        #: the trace columns in the order _act collects a row's values
+        #: the trace columns in the order act collects a row's values
         self._row_names = tuple(c.name for c in sc.trace_columns())
         self.profile = sc.profile
         self.policy = SpacingPolicy(c.standstill_gap, c.headway)
