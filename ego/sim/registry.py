@@ -52,6 +52,10 @@ class SimSetup:
     edge: str | None = None
     #: the run's simulated time (s), for a backend that renders a video
     duration: float = 0.0
+    #: start every vehicle exactly where the scenario places it, refusing only a start that
+    #: overlaps another vehicle (not one closer than its drivers' safe gap): a scenario file's
+    #: Init (SUMO: ``--insertion-checks collision``)
+    exact_starts: bool = False
 
 
 @dataclass(frozen=True)
