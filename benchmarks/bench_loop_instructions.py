@@ -15,7 +15,8 @@ around it by callgrind's client request (a small C helper compiled here):
 
 Printed: both counts, their ratio (issue 18's target: <= 1.8 without recording) and ego's
 own instructions per SUMO step. ``--tree`` measures another checkout (``git worktree add``)
-with this script, to compare two versions in the same session. Needs ``valgrind`` and its
+with this script, to compare two versions in the same session (its code and its
+``sumo_nets``). Needs ``valgrind`` and its
 headers (Debian: ``apt-get install valgrind``) and a C compiler; each count takes one to
 two minutes (the two run at once on two cores).
 """
@@ -100,6 +101,8 @@ def _start(work: Path, tree: str, mode: str, args, steps: int) -> subprocess.Pop
         "XDG_CONFIG_HOME": str(work),
         "XDG_DATA_HOME": str(work),
         "PYTHONPATH": tree,
+        # the tree's own networks (the curved motorways are data: two trees may differ there)
+        "EGO_SUMO_NETS": str(Path(tree) / "sumo_nets"),
     }
     cmd = [
         "valgrind",
