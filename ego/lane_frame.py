@@ -39,12 +39,6 @@ def wrap_angle(a: float) -> float:
 
 #: m, the cell of a lane's segment index (LanePolyline._grid)
 GRID = 10.0
-#: a vertex whose segments' lengths differ more than this many times is a straight meeting a
-#: sampled curve: its tangent is the straight's direction where the share of the turn the
-#: straight would get otherwise bows it by more than BOW (m); 4 mm in the middle of the curved
-#: motorways' 350 m lead-in with 4 m chords at R 250 m, 25 mm with 10 m chords
-JUNCTION = 10.0
-BOW = 0.001
 
 
 class LanePolyline:
@@ -80,15 +74,7 @@ class LanePolyline:
         for i in range(1, n):
             before, after = raw[i - 1][4], raw[i][4]
             turn = wrap_angle(raw[i][6] - raw[i - 1][6])
-            share = after / (before + after)
-            # a straight meeting a sampled curve's chord (or leaving one): the straight keeps its
-            # own direction where its share of the turn would bow it (the sagitta correction of
-            # a straight's spurious curvature) by more than BOW
-            if share * JUNCTION < 1.0 and abs(turn) * share * before > 8.0 * BOW:
-                share = 0.0
-            elif (1.0 - share) * JUNCTION < 1.0 and abs(turn) * (1.0 - share) * after > 8.0 * BOW:
-                share = 1.0
-            heading.append(raw[i - 1][6] + turn * share)
+            heading.append(raw[i - 1][6] + turn * after / (before + after))
         heading.append(raw[-1][6])
         # segment: x0, y0, ux, uy, length, s0, direction, heading at start, heading
         # change along it, curvature, the lane's turn (unwrapped heading change) from its

@@ -82,26 +82,3 @@ def test_the_arc_is_found_as_one_curved_span():
     spans = LanePolyline(pts).curved_spans()
     assert len(spans) == 2 and spans[0][2] > 0 > spans[1][2]
     assert spans[0][2] == pytest.approx(1 / R, rel=0.05) and spans[1][2] == pytest.approx(-1 / R, rel=0.05)
-
-
-@pytest.mark.parametrize("radius, chord", [(250.0, 10.0), (1000.0, 20.0), (250.0, 4.0)])
-def test_a_long_straight_meeting_an_arc_of_long_chords_stays_straight(radius, chord):
-    """The curved motorways' lead-in (350 m) meets an arc sampled every ``chord`` m: the
-    straight keeps its direction up to the junction (before, a share of the first vertex's turn
-    bowed it by up to chord^2 / (16 R): 12 mm where a car starts at 300 m with 10 m chords at
-    R 250 m), and points on the true straight, circle and exit straight are all at d = 0."""
-    n = round(0.5 * math.pi * radius / chord)
-    arc = [
-        (350.0 + radius * math.sin(a), radius - radius * math.cos(a))
-        for a in (k * 0.5 * math.pi / n for k in range(n + 1))
-    ]
-    lane = LanePolyline([(0.0, 0.0), *arc, (350.0 + radius, radius + 500.0)])
-    for x in (10.0, 175.0, 300.0, 349.0):
-        s, d, err, kappa = lane.frame(x, 0.0, 0.0)
-        assert s == pytest.approx(x, abs=1e-9) and abs(d) < 1e-9 and abs(err) < 1e-12 and kappa == 0.0
-    for a in (0.001, 0.3, 0.77, 1.5):  # on the circle, between and at vertices: the chord plus the
-        # sagitta profile kappa u (L - u) / 2 is the circle to 0.01 mm
-        s, d, err, kappa = lane.frame(350.0 + radius * math.sin(a), radius - radius * math.cos(a), a)
-        assert abs(d) < 1e-5 and abs(err) < 1e-6 and kappa == pytest.approx(1 / radius, rel=1e-4)
-    s, d, err, kappa = lane.frame(350.0 + radius + 0.3, radius + 200.0, 0.5 * math.pi)
-    assert d == pytest.approx(-0.3, abs=1e-9) and abs(err) < 1e-12 and kappa == 0.0
