@@ -10,29 +10,30 @@ radius R to the left or right, then straight to a total length of LENGTH m along
 lane. The R 250 m arc turns 180 degrees (785 m), the R 1000 m arc 90 degrees (1571 m): the
 ego (its front at ego_start = 300 m by default) is in the arc for the whole of a default run,
 and the exit straight never comes near the lead-in. The arc is written as shape points
-every :func:`chord` m (10 m at R 250 m, 20 m at R 1000 m): the longest chord that stays within
-TOLERANCE (5 cm) of the circle, R (1 - cos(chord / 2R)); the lane frame measures to the arc each
-chord stands for, so ego's own lane geometry is the exact circle at any chord length, and
-TOLERANCE is what SUMO's traffic, driving the chords, strays from it. The road is cut into
-edges ``motorway`` (the lead-in and the curve's first EDGE_POINTS points), ``motorway.1``, ...
-of EDGE_POINTS points each (200 m at R 250 m; the last ends with the exit straight), each cut in
-the middle of a chord (:func:`split_points`): the lanes joined across the edges are the one-edge
-road's, and SUMO, which maps the ego onto the lanes around it every step (moveToXY) and walks
-each candidate lane's whole shape several times, walks a few shape points instead of the whole
-curve's, while the traffic's drivers, who look up to ~150 m ahead and behind, seldom look
-across an edge (SUMO's step gets dearer the more edges its lookups cross: ~100 m edges cost it
-13 % more than one edge). Shape points per edge against SUMO's step: docs/performance.md.
+every ~SEGMENT m, so the chords stay within R (1 - cos(SEGMENT / 2R)) (8 mm at R 250 m) of
+the circle; the lane frame measures to the arc each chord stands for. The road is cut into
+edges ``motorway`` (the lead-in and the curve's first ~PIECE m), ``motorway.1``, ... of ~PIECE m
+(the last ends with the exit straight), each cut in the middle of a chord
+(:func:`split_points`): the lanes joined across the edges are the one-edge road's. The cut
+weighs two costs per SUMO step (docs/performance.md): SUMO's moveToXY, which maps the ego onto
+the lanes around it and walks each candidate lane's whole shape several times (~1 M
+instructions over a 250-step run per shape point of the ego's edge), against SUMO's own step,
+whose drivers look ~150 m ahead and behind and cost more the more edges those looks cross
+(~100 m edges: +43 M over the same run, ~200 m: +6 M). The road of changing curvature keeps
+its ~CLOTHOID_PIECE m edges (not measured again).
+
+Longer chords were tried and not taken: 10 m chords (5 cm from the R 250 m circle) with ~200
+m edges cut the curved run's extra instructions from 91 M to 59 M, but SUMO's traffic then
+drives up to 5 cm inside the design arc, and on the R 250 m road that flips bp-pid's emergency
+lane change past the lead from a 2.0 m miss into an AEB brake mid-change (overshoot 0.018 ->
+0.268 m, beyond the issue's 0.1 m of the straight road's); 6.3 m chords (2 cm) flip it too.
 
 ``road=clothoid`` is the road of changing curvature (UN R157's reference roads: straight, arcs
 of 250 m and 1000 m, a road whose curvature changes): after the LEAD_IN straight, the middle
 lane's curvature changes linearly along clothoids (Euler spirals) between constant arcs -
 left R 500 m, through an inflection to right R 250 m, back through one to left R 1000 m and
 out to straight (:data:`CLOTHOID`). Its shape points are exact points of that curve, every
-~SEGMENT m, from the Fresnel integrals (:func:`clothoid_points`): ego's lane frame takes each
-chord for an arc, so where the curvature changes the chords must be short for it to follow, and
-chords of different lengths meeting would bend its tangent there (it splits a vertex's turn for
-an arc of even chords, or a straight meeting one), so its arcs keep the clothoids' chords. It is
-cut every CLOTHOID_EDGE_POINTS points (~100 m).
+~SEGMENT m, from the Fresnel integrals (:func:`clothoid_points`).
 """
 
 from __future__ import annotations
@@ -43,19 +44,12 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 LEAD_IN = 350.0  #: m of straight before the arc
 LENGTH = 3000.0  #: m along the middle lane, as the straight motorway
-#: m, the most a lane's chords stray from the curve they stand for (the sagitta of a chord of
-#: a constant arc; the outer lanes' vertices, offset by netconvert, stray as far outward)
-TOLERANCE = 0.05
-#: m, about, between the shape points of the road of changing curvature: the lane frame's
-#: curvature is constant along each chord, and its mean over 20 m then stays within 2e-5 1/m of
-#: the design's (tests/test_curved_roads.py)
-SEGMENT = 4.0
-#: shape points of each edge a constant arc is split into: SUMO maps the ego's pose onto the
-#: lanes near it every step (moveToXY), walking each candidate lane's whole shape several
-#: times (~1.3 M instructions over a 250-step run per point an edge's lanes have)
-EDGE_POINTS = 20
-#: shape points of each edge of the road of changing curvature (its 4 m chords: ~100 m)
-CLOTHOID_EDGE_POINTS = 25
+SEGMENT = 4.0  #: m, about, between the arc's shape points
+#: m, about, of each edge an arc is split into: few shape points for SUMO's moveToXY to walk
+#: every step, few edges for its drivers to look across (the module doc)
+PIECE = 200.0
+#: m, about, of each edge of the road of changing curvature
+CLOTHOID_PIECE = 100.0
 LANE_WIDTH = 3.5
 SPEED = 36.11  #: m/s, 130 km/h
 #: road name (``--set road=``) -> (network, radius of the middle lane's centre m, turn deg,
@@ -82,13 +76,6 @@ CLOTHOID = (
 )
 #: the road of changing curvature's network
 CLOTHOID_NET = "highway_clothoid"
-
-
-def chord(curvature: float) -> float:
-    """The chord (m) of a constant arc of ``curvature`` (1/m) whose sagitta is TOLERANCE:
-    2 R acos(1 - TOLERANCE / R) (10.0 m at R 250 m, 20.0 m at R 1000 m)."""
-    radius = 1.0 / abs(curvature)
-    return 2.0 * radius * math.acos(1.0 - TOLERANCE / radius)
 
 
 def clothoid_points(
@@ -145,7 +132,7 @@ def centre_line(radius: float, turn_deg: float, side: int) -> list[tuple[float, 
     """The middle lane's centre line: lead-in, arc, exit, in driving order."""
     turn = math.radians(turn_deg)
     arc = radius * turn
-    n = max(2, math.ceil(arc / chord(1.0 / radius)))
+    n = max(2, math.ceil(arc / SEGMENT))
     cx, cy = LEAD_IN, side * radius  # the arc's centre
     pts = [(0.0, 0.0)]
     for k in range(n + 1):
@@ -164,13 +151,13 @@ def edge_id(k: int) -> str:
     return "motorway" if k == 0 else f"motorway.{k}"
 
 
-def split_points(pts: list[tuple[float, float]], edge_points: int = EDGE_POINTS) -> list[list[tuple[float, float]]]:
+def split_points(pts: list[tuple[float, float]], piece: float = PIECE) -> list[list[tuple[float, float]]]:
     """``pts`` (lead-in, curved part, exit) split into the shapes of consecutive edges: the
-    curved part cut every ``edge_points`` points in the middle of a chord, so the two halves of a
-    cut chord are collinear and every lane of the one-edge road passes each joint unchanged
-    (each edge's lanes are offset from its own shape; the joint is in both)."""
+    curved part cut every ~``piece`` m in the middle of a chord, so the two halves of a cut chord
+    are collinear and every lane of the one-edge road passes each joint unchanged (each edge's
+    lanes are offset from its own shape; the joint is in both)."""
     last = len(pts) - 1  # pts[last - 1] -> pts[last] is the exit straight, pts[0] -> pts[1] the lead-in
-    step = edge_points
+    step = max(1, round(piece / SEGMENT))
     shapes, shape = [], [pts[0]]
     for i in range(1, last + 1):
         shape.append(pts[i])
@@ -249,7 +236,7 @@ def write_sources(road: str, out: Path = HERE) -> Path:
         f"<!-- Generated by sumo_nets/motorway_arcs.py (road={road}): {LEAD_IN:g} m straight along +x, "
         f"{shape_note}, straight to {LENGTH:g} m; three 3.5 m lanes, lane 0 the right lane. -->\n"
     )
-    shapes = split_points(pts, CLOTHOID_EDGE_POINTS if road == "clothoid" else EDGE_POINTS)
+    shapes = split_points(pts, CLOTHOID_PIECE if road == "clothoid" else PIECE)
     joints = [sh[0] for sh in shapes[1:]]
     nodes = [("start", *pts[0], "")]
     nodes += [(f"j{k}", x, y, _joint_shape(sh)) for k, ((x, y), sh) in enumerate(zip(joints, shapes[1:]), 1)]

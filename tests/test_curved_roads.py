@@ -234,13 +234,13 @@ def _middle_lane(name):
 
 
 def test_the_curved_motorways_are_short_edges_whose_lanes_join_to_the_design():
-    """Each curved road is cut into edges of EDGE_POINTS shape points (the road of changing
-    curvature: CLOTHOID_EDGE_POINTS; SUMO maps the ego onto few shape points a step); joined, each lane is the one-edge road's: the middle lane's points
-    are the design's centre line (sumo_nets/motorway_arcs.py) to the networks' 0.1 mm precision."""
+    """Each curved road is cut into edges of about 200 m (the road of changing curvature: 100 m;
+    SUMO maps the ego onto few shape points a step); joined, each lane is the one-edge road's: the middle lane's points are the
+    design's centre line (sumo_nets/motorway_arcs.py) to the networks' 0.1 mm precision."""
     import sys
 
     sys.path.insert(0, str(net_file("highway").parents[1]))
-    from motorway_arcs import ARCS, CLOTHOID_EDGE_POINTS, EDGE_POINTS, centre_line, clothoid_line
+    from motorway_arcs import ARCS, CLOTHOID_PIECE, PIECE, SEGMENT, centre_line, clothoid_line
 
     from ego.scenarios.motorway import join_lanes
 
@@ -250,8 +250,8 @@ def test_the_curved_motorways_are_short_edges_whose_lanes_join_to_the_design():
         design = clothoid_line() if road == "clothoid" else centre_line(*ARCS[road][1:])
         parts = _lane_parts(name, 1)
         assert len(parts) >= 4, road
-        most = CLOTHOID_EDGE_POINTS if road == "clothoid" else EDGE_POINTS
-        assert max(len(p) for p in parts[1:-1]) <= most + 2, road  # a few points a lane
+        piece = CLOTHOID_PIECE if road == "clothoid" else PIECE
+        assert max(len(p) for p in parts[1:-1]) <= piece / SEGMENT + 3, road  # a few points a lane
         middle = join_lanes(parts)
         assert len(middle) == len(design), road
         assert max(math.dist(a, b) for a, b in zip(middle, design)) < 2e-4, road
@@ -271,10 +271,7 @@ def test_a_file_scenario_drives_the_whole_cut_road():
     lane, pos = roads.lane_position("motorway", -2, 1000.0)
     first = roads.lane_position("motorway", -2, 10.0)[0]
     assert lane.edge.startswith("motorway.") and 0 < pos < lane.length
-    # the lane is the arc's 79 chords of ~10 m (sagitta 5 cm), each R (theta - 2 sin(theta / 2))
-    # = 0.66 mm shorter than its arc: 5.2 cm over the 785 m arc
-    length = sum(e.lanes[0].length for _, e, _ in roads.sections("motorway"))
-    assert length == pytest.approx(3000.0 - 0.052, abs=0.01)
+    assert sum(e.lanes[0].length for _, e, _ in roads.sections("motorway")) == pytest.approx(3000.0, abs=0.01)
     assert first.edge == "motorway"
     xosc = Path(__file__).resolve().parents[1] / "scenarios" / "alks" / "alks_4_1_lane_keeping_left_250.xosc"
     r = run(RunSpec(str(xosc), "pid"))
