@@ -16,8 +16,8 @@ around it by callgrind's client request (a small C helper compiled here):
 Printed: both counts, their ratio (issue 18's target: <= 1.8 without recording) and ego's
 own instructions per SUMO step; with ``--parts``, the loop's count split (inclusive, by
 ``callgrind_annotate``) into SUMO's step, SUMO's ``moveToXY`` (the ego's pose pushed every
-step), the C kernels of ``ego._native`` the loop calls, and the rest (Python, other libsumo
-calls). Comparing two roads part by part says which side a difference is on (issue 38). ``--tree`` measures another checkout (``git worktree add``)
+step) and ego's own (the rest: Python, the C kernels of ``ego._native``, each also printed, and
+libsumo's other calls). Comparing two roads part by part says which side a difference is on (issue 38). ``--tree`` measures another checkout (``git worktree add``)
 with this script, to compare two versions in the same session (its code and its
 ``sumo_nets``). Needs ``valgrind`` and its
 headers (Debian: ``apt-get install valgrind``) and a C compiler; each count takes one to
@@ -210,13 +210,13 @@ def main(argv: list[str] | None = None) -> dict:
     print(f"  loop / bare SUMO         {figures['ratio']:9.2f}     (target <= 1.8)")
     print(f"  ego's own per SUMO step  {figures['ego_per_sumo_step'] / 1e3:9.1f} k instructions")
     if split:
-        # the kernels nest (road_frame calls no other; look_between may call the Python look,
-        # which calls place and nearest): the rest is the loop less SUMO's two parts
+        # the kernels nest (look_between may call the Python look, which calls place and
+        # nearest): ego's own is the loop less SUMO's two parts
         print("  the loop's parts (inclusive; the C kernels can nest):")
         for label, count in sorted(split.items(), key=lambda kv: -kv[1]):
             print(f"    {label:<38} {count / 1e6:9.1f} M")
         sumo = sum(split.get(label, 0) for label in PARTS)
-        print(f"    {'the rest (Python, other libsumo calls)':<38} {(n_loop - sumo) / 1e6:9.1f} M")
+        print(f"    {'ego own: the loop less the two above':<38} {(n_loop - sumo) / 1e6:9.1f} M")
         figures["parts"] = split
     return figures
 
