@@ -101,11 +101,13 @@ class BicyclePlant:
         self.dt = dt
         self.state = tuple(state) if state is not None else tuple(model.x0)
         self.state_names = tuple(model.state_names)
+        self.input_names: tuple[str, ...]
+        self.input_units: tuple[str, ...]
         if isinstance(model, NonlinearBicycle):
             self.input_names, self.input_units = ("Fx", "delta"), ("N", "rad")
         else:
             self.input_names, self.input_units = ("a_x", "delta"), ("m/s^2", "rad")
-        self.applied = (0.0, 0.0)
+        self.applied: tuple[float, ...] = (0.0, 0.0)
         self.lateral_accel = 0.0
         self._step = model.stepper(dt / substeps, substeps)
         self._apply = self.limits.apply
@@ -143,7 +145,7 @@ class BicyclePlant:
             return functools.partial(_PLANT_STEP, self, self._kernel)
         return self.step
 
-    def step(self, action: tuple[float, float]) -> None:
+    def step(self, action: tuple[float, ...]) -> None:
         kernel = self._kernel
         if kernel is not None:
             _PLANT_STEP(self, kernel, action)
