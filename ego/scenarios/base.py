@@ -35,7 +35,7 @@ from ego.processes import signals_deferred
 from ego.record.base import NullRecorder, Recorder, Scene, Series, unit_path
 from ego.results.metrics import json_number, trace_metrics, trace_metrics_declared
 from ego.results.run import Event, RunResult
-from ego.results.trace import Column, Metric, Plot, Trace
+from ego.results.trace import Column, FrequencyResponse, Metric, Plot, Trace
 from ego.results.traffic_log import TrafficCollector
 from ego.sim.protocol import TrafficSim
 from ego.sim.registry import SimSetup, make_sim
@@ -210,7 +210,7 @@ class Scenario:
         return spec.build(params, config.dt)
 
     @classmethod
-    def compare_plots(cls, config: Any) -> tuple[Plot, ...]:
+    def compare_plots(cls, config: Any) -> tuple[Plot | FrequencyResponse, ...]:
         """Trace columns ``ego compare`` plots for this configuration (default: ``plots``)."""
         return cls.plots
 
