@@ -42,7 +42,7 @@ from ego.models import Longitudinal, LongitudinalParams, LongitudinalPlant, Spac
 from ego.params import ConfigError, param, shown
 from ego.record.base import Scene, Series
 from ego.results import metrics as m
-from ego.results.trace import Band, Column, FrequencyResponse, Marker, Metric, Plot, Ref
+from ego.results.trace import Band, Column, FrequencyResponse, Marker, Metric, Plot, PlotSpec, Ref
 from ego.scenarios import string_stability as ss
 from ego.scenarios.base import NO_COLLISION, CommonConfig, PartsLoop, Scenario
 from ego.scenarios.events import INF, time_to_collision
@@ -278,7 +278,7 @@ class PlatoonScenario(Scenario):
         return PlatoonControl([spec.build(params, config.dt) for _ in ids], ids)
 
     @classmethod
-    def compare_plots(cls, config: Any) -> tuple[Plot | FrequencyResponse, ...]:
+    def compare_plots(cls, config: Any) -> tuple[PlotSpec, ...]:
         """Every follower's speed (the leader's dashed), spacing error (the settle band
         shaded), gap and acceleration, one line per follower in a panel per controller; the
         string stability's |H(jw)|."""
