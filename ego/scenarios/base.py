@@ -127,16 +127,18 @@ STAYS_IN_LANE = ("stays_in_lane", "always (lane_departure <= 0 m)")
 
 
 def check_backend(cls: type[Scenario], backend: str) -> None:
-    """ConfigError unless scenario ``cls`` runs on traffic simulator ``backend``."""
+    """ConfigError unless scenario ``cls`` runs on traffic simulator ``backend``: a backend
+    that lacks one of its ``needs`` is refused naming what it lacks (before the list of
+    ``backends`` it has been run on is asked: curve on highway-env lacks any_network)."""
     from ego.sim.registry import backend as registered
     from ego.sim.registry import check_needs
 
     registered(backend)  # a name no backend has
+    check_needs(f"scenario {cls.name}", cls.needs, backend)  # the registry matches needs to capabilities
     if backend not in cls.backends:
         raise ConfigError(
             f"bad value for --backend: {backend!r} (scenario {cls.name} runs on {' or '.join(cls.backends)} only)"
         )
-    check_needs(f"scenario {cls.name}", cls.needs, backend)  # the registry matches needs to capabilities
 
 
 class Scenario:
