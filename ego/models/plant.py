@@ -101,11 +101,13 @@ class BicyclePlant:
         self.dt = dt
         self.state = tuple(state) if state is not None else tuple(model.x0)
         self.state_names = tuple(model.state_names)
+        self.input_names: tuple[str, ...]
+        self.input_units: tuple[str, ...]
         if isinstance(model, NonlinearBicycle):
             self.input_names, self.input_units = ("Fx", "delta"), ("N", "rad")
         else:
             self.input_names, self.input_units = ("a_x", "delta"), ("m/s^2", "rad")
-        self.applied = (0.0, 0.0)
+        self.applied: tuple[float, ...] = (0.0, 0.0)
         self.lateral_accel = 0.0
         self._step = model.stepper(dt / substeps, substeps)
         self._apply = self.limits.apply
@@ -143,7 +145,7 @@ class BicyclePlant:
             return functools.partial(_PLANT_STEP, self, self._kernel)
         return self.step
 
-    def step(self, action: tuple[float, float]) -> None:
+    def step(self, action: tuple[float, ...]) -> None:
         kernel = self._kernel
         if kernel is not None:
             _PLANT_STEP(self, kernel, action)
@@ -266,9 +268,9 @@ class LongitudinalPlant:
 
     __slots__ = ("model", "lane", "geometry", "limits", "dt", "state", "applied", "_step", "_lo", "_hi")
 
-    state_names = Longitudinal.state_names
-    input_names = ("command",)
-    input_units = ("m/s^2",)
+    state_names: tuple[str, ...] = Longitudinal.state_names
+    input_names: tuple[str, ...] = ("command",)
+    input_units: tuple[str, ...] = ("m/s^2",)
     lateral_accel = 0.0
 
     def __init__(
@@ -292,8 +294,8 @@ class LongitudinalPlant:
             else ActuatorLimits(max_steer=0.0, min_command=-p.max_decel, max_command=p.max_accel, stop_speed=0.0)
         )
         self.dt = dt
-        self.state = (s0, v0, a0)
-        self.applied = (0.0,)
+        self.state: tuple[float, ...] = (s0, v0, a0)
+        self.applied: tuple[float, ...] = (0.0,)
         self._step = model.stepper(dt)
         # the only limits a longitudinal command has, taken out of the dataclass once
         self._lo, self._hi = self.limits.min_command, self.limits.max_command

@@ -151,6 +151,10 @@ class FrequencyResponse:
         return self.speeds + self.gain_columns
 
 
+#: what a scenario declares for ``ego compare`` to draw (``Scenario.plots``)
+PlotSpec = Plot | Trajectory | FrequencyResponse
+
+
 class Trace:
     """Rows of declared columns, written by name, then the controller's signals.
 

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from ego.params import ConfigError, did_you_mean
 from ego.plugins import is_reference
-from ego.scenarios.base import CommonConfig, Event, RunResult, Scenario
+from ego.results.run import Event, RunResult
+from ego.scenarios.base import CommonConfig, Scenario
 from ego.scenarios.curve import CurveConfig, CurveScenario
 from ego.scenarios.cut_in import CutIn, CutInConfig
 from ego.scenarios.emergency_brake import EmergencyBrake, EmergencyBrakeConfig

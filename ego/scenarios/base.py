@@ -35,7 +35,7 @@ from ego.processes import signals_deferred
 from ego.record.base import NullRecorder, Recorder, Scene, Series, unit_path
 from ego.results.metrics import json_number, trace_metrics, trace_metrics_declared
 from ego.results.run import Event, RunResult
-from ego.results.trace import Column, Metric, Plot, Trace
+from ego.results.trace import Column, Metric, PlotSpec, Trace
 from ego.results.traffic_log import TrafficCollector
 from ego.sim.protocol import TrafficSim
 from ego.sim.registry import SimSetup, make_sim
@@ -127,16 +127,18 @@ STAYS_IN_LANE = ("stays_in_lane", "always (lane_departure <= 0 m)")
 
 
 def check_backend(cls: type[Scenario], backend: str) -> None:
-    """ConfigError unless scenario ``cls`` runs on traffic simulator ``backend``."""
+    """ConfigError unless scenario ``cls`` runs on traffic simulator ``backend``: a backend
+    that lacks one of its ``needs`` is refused naming what it lacks (before the list of
+    ``backends`` it has been run on is asked: curve on highway-env lacks any_network)."""
     from ego.sim.registry import backend as registered
     from ego.sim.registry import check_needs
 
     registered(backend)  # a name no backend has
+    check_needs(f"scenario {cls.name}", cls.needs, backend)  # the registry matches needs to capabilities
     if backend not in cls.backends:
         raise ConfigError(
             f"bad value for --backend: {backend!r} (scenario {cls.name} runs on {' or '.join(cls.backends)} only)"
         )
-    check_needs(f"scenario {cls.name}", cls.needs, backend)  # the registry matches needs to capabilities
 
 
 class Scenario:
@@ -170,7 +172,7 @@ class Scenario:
     #: the columns of ``ego compare``'s metrics.md
     metric_specs: ClassVar[tuple[Metric, ...]] = ()
     #: trace columns ``ego compare`` plots, one line per controller
-    plots: ClassVar[tuple[Plot, ...]] = ()
+    plots: ClassVar[tuple[PlotSpec, ...]] = ()
     #: the traffic simulators it runs on (``ego run --backend``; ego.highway_env.BACKENDS)
     backends: ClassVar[tuple[str, ...]] = ("sumo",)
     #: what it needs of a traffic simulator: field names of ego.sim.registry.Capabilities
@@ -210,7 +212,7 @@ class Scenario:
         return spec.build(params, config.dt)
 
     @classmethod
-    def compare_plots(cls, config: Any) -> tuple[Plot, ...]:
+    def compare_plots(cls, config: Any) -> tuple[PlotSpec, ...]:
         """Trace columns ``ego compare`` plots for this configuration (default: ``plots``)."""
         return cls.plots
 
@@ -290,13 +292,13 @@ class Scenario:
     safety: Any = None
     #: a composed scenario's own work after the actors' updates before a simulator step, and
     #: after the step's surround sensing (None: nothing)
-    before_sim_step = None
-    after_sim_step = None
+    before_sim_step: Callable[[], None] | None = None
+    after_sim_step: Callable[[], None] | None = None
     #: a composed scenario's own work once its parts are set up, before the first
     #: observation (None: nothing)
-    after_setup = None
+    after_setup: Callable[[], None] | None = None
     #: ... and each control period before the manoeuvre plans (the surround view updated)
-    before_plan = None
+    before_plan: Callable[[], None] | None = None
 
     def compose(self) -> Parts | None:
         """The scenario's parts (:class:`Parts`), or None for one that returns its own loop

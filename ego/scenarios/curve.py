@@ -26,12 +26,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any, Protocol, cast
 
 import numpy as np
 
 from ego.lane_frame import LanePolyline
 from ego.models import ActuatorLimits, BicyclePlant, DynamicBicycle, DynamicBicycleParams, VehicleGeometry
 from ego.models.geometry import sumo_poses_to_boxes
+from ego.models.plant import Plant
 from ego.params import ConfigError, param
 from ego.record.base import Series
 from ego.results import metrics as m
@@ -40,6 +42,7 @@ from ego.scenarios.base import NO_COLLISION, CommonConfig, PartsLoop, Scenario
 from ego.scenarios.events import INF, boxes_overlap
 from ego.scenarios.observe import road_observation
 from ego.scenarios.road import RoadSensor, RoadWorld
+from ego.sim.protocol import TrafficSim
 from ego.sim.traffic import PacedVehicle, PoissonFlow, background_traffic
 from ego.sim.types import Collision, Neighbours, VehicleSpec, VehicleType, ego_type
 
@@ -95,6 +98,14 @@ class CurveConfig(CommonConfig):
             )
 
 
+class CurveSim(TrafficSim, Protocol):
+    """What the curve asks of its simulator besides :class:`TrafficSim` (SUMO's bridge:
+    the lead and the route distance to the arc)."""
+
+    def read_neighbours(self, vid: str, out: Neighbours) -> Neighbours: ...
+    def driving_distance(self, vid: str, edge: str, pos: float, lane: int = 0) -> float: ...
+
+
 class CurveScenario(Scenario):
     """Report 002's 90-degree curve with a SUMO lead car and oncoming traffic: the road's
     world and sensor (:mod:`ego.scenarios.road`), the curve's plan and engagement here."""
@@ -109,6 +120,7 @@ class CurveScenario(Scenario):
     task = "curve"
     network = "curve"
     config_cls = CurveConfig
+    loop: CurveLoop
     columns = (
         Column("t", "s", "time"),
         Column("s", "m", "centre of gravity along the lane"),
@@ -172,7 +184,7 @@ class CurveScenario(Scenario):
         return CurveLoop(self, self.world)
 
     # -- results ------------------------------------------------------------------------------
-    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
+    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict[str, Any]:
         col = {name: trace[:, i] for i, name in enumerate(columns)} if trace.size else {}
         arc = col["in_arc"] > 0.5 if col else np.zeros(0, dtype=bool)
         ed = col["e_d"][arc] if col else np.zeros(0)
@@ -180,7 +192,8 @@ class CurveScenario(Scenario):
         speed = col["speed"] if col else np.zeros(0)
         engaged = col["phase"] > 0.5 if col else np.zeros(0, dtype=bool)
         loop = self.loop
-        completed = loop.arc_exit_t is not None and self.status == "completed"
+        exit_t, enter_t = loop.arc_exit_t, loop.arc_enter_t
+        completed = exit_t is not None and self.status == "completed"
         enter_i = int(np.argmax(arc)) if arc.any() else None
         x = self.ego.state if self.ego is not None else (0.0,) * 6
         return {
@@ -191,9 +204,7 @@ class CurveScenario(Scenario):
             "max_abs_ea": m.json_number(m.max_abs(ea)) if ea.size else None,
             "final_ea": m.json_number(float(ea[-1])) if ea.size else None,
             "time_in_arc": (
-                m.json_number(loop.arc_exit_t - loop.arc_enter_t, 4)
-                if completed and loop.arc_enter_t is not None
-                else None
+                m.json_number(exit_t - enter_t, 4) if completed and exit_t is not None and enter_t is not None else None
             ),
             "entry_speed": m.json_number(speed[enter_i] / KMH, 3) if enter_i is not None else None,
             "exit_speed": m.json_number(x[1] / KMH, 3) if completed else None,
@@ -209,9 +220,16 @@ class CurveLoop(PartsLoop):
     002's plant, and the plan: held straight on the approach, engaged at the preview, the
     report's a_x (below it behind a slower lead), the arc's entry and exit."""
 
+    sc: CurveScenario
+    world: RoadWorld
+    view: RoadSensor
+    #: the simulator of the run (set by :meth:`setup`)
+    sim: CurveSim
+
     def __init__(self, sc: CurveScenario, world: RoadWorld) -> None:
         super().__init__(sc, world)
-        self.ego: BicyclePlant | None = None
+        #: the ego's plant (None before :meth:`setup`)
+        self.ego: Plant | None = None
         self.neighbours = Neighbours()
         self.arc_start = self.arc_end = 0.0
         self.arc_sign = 1.0
@@ -232,6 +250,8 @@ class CurveLoop(PartsLoop):
         c = sc.config
         self._reset_state()
         bridge = sc.bridge
+        assert bridge is not None  # the curve has a network
+        self.sim = cast(CurveSim, bridge)
         sc.lanes = lanes = self.world.setup(bridge)
         road = lanes[f"{EDGE}_0"]
         sc.obs.lane = road
@@ -289,7 +309,7 @@ class CurveLoop(PartsLoop):
 
         x, y, psi = bridge.cg_pose(EGO)
         model = DynamicBicycle(DynamicBicycleParams(slip_speed_floor=1.0))
-        self.ego = sc.ego = sc.own_plant(
+        self.ego = ego = sc.ego = sc.own_plant(
             BicyclePlant(
                 model,
                 sc.geometry,
@@ -299,7 +319,7 @@ class CurveLoop(PartsLoop):
                 state=(x, speed, y, 0.0, psi, 0.0),
             )
         )
-        self.view.on_lane(road, self.ego)
+        self.view.on_lane(road, ego)
         self.after_sim_step()
 
     # -- per step ---------------------------------------------------------------------------
@@ -310,6 +330,7 @@ class CurveLoop(PartsLoop):
             # before the event the ego holds its lane and its plan; commands are ignored
             action = (obs.accel_ref, 0.0)
         ego = self.ego
+        assert ego is not None  # set up
         ego.step(action)
         a_x, delta = ego.applied
         view = self.view
@@ -337,7 +358,7 @@ class CurveLoop(PartsLoop):
 
     def after_sim_step(self) -> None:
         sc = self.sc
-        bridge = sc.bridge
+        bridge = self.sim
         lead = bridge.read_neighbours(EGO, self.neighbours).leader
         self._sync_gap, self.lead_speed, self._sync_t = lead.gap, lead.speed, sc.t
         if self.phase == APPROACH:
@@ -359,8 +380,10 @@ class CurveLoop(PartsLoop):
     def _check_oncoming(self) -> None:
         """Collision with an oncoming car: box overlap (SUMO does not check across edges)."""
         sc = self.sc
-        ids, rows = sc.bridge.poses()
-        X, u, Y, _, psi, _ = self.ego.state
+        ego = self.ego
+        assert ego is not None  # set up
+        ids, rows = self.sim.poses()
+        X, u, Y, _, psi, _ = ego.state
         ego_box = (
             X + (0.5 * sc.geometry.length - sc.geometry.cg_to_front) * math.cos(psi),
             Y + (0.5 * sc.geometry.length - sc.geometry.cg_to_front) * math.sin(psi),
@@ -378,7 +401,7 @@ class CurveLoop(PartsLoop):
         boxes = sumo_poses_to_boxes([row for _, row in near])
         for (vid, _), box in zip(near, boxes):
             if boxes_overlap(ego_box, tuple(box)):
-                speed = sc.bridge.speed(vid)
+                speed = self.sim.speed(vid)
                 sc._collided(Collision(EGO, vid, "oncoming", u, speed))
                 return
 
@@ -386,16 +409,18 @@ class CurveLoop(PartsLoop):
         sc = self.sc
         c = sc.config
         obs, view = sc.obs, self.view
+        ego = self.ego
+        assert ego is not None  # set up
         s = view.s
         if self.arc_enter_t is None and s >= self.arc_start:
             self.arc_enter_t = sc.t
-            sc.event("arc", f"entering the arc at {self.ego.state[1] / KMH:.1f} km/h")
+            sc.event("arc", f"entering the arc at {ego.state[1] / KMH:.1f} km/h")
         if s >= self.arc_end and self.arc_exit_t is None:
             self.arc_exit_t = sc.t
             sc._end(
                 "completed",
                 f"left the arc after {sc.t - (self.arc_enter_t or 0.0):.2f} s "
-                f"at {self.ego.state[1] / KMH:.1f} km/h, e_d {-self.arc_sign * view.d_road:+.3f} m",
+                f"at {ego.state[1] / KMH:.1f} km/h, e_d {-self.arc_sign * view.d_road:+.3f} m",
             )
             return
         plan = c.accel if self.phase == ENGAGED else 0.0
@@ -414,7 +439,7 @@ class CurveLoop(PartsLoop):
             view.ds,
             view.d_road,
             view.dd,
-            self.ego.state,
+            ego.state,
             view.heading_error,
             view.curvature,
             view.steady,

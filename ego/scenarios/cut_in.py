@@ -9,6 +9,9 @@ limit avoids the car, else it evades by gap acceptance (in lane, with the AEB, i
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
 
 from ego.highway_env import BACKENDS
 from ego.params import ConfigError, param
@@ -17,7 +20,7 @@ from ego.results.trace import Marker, Metric
 from ego.scenarios.base import NO_AVOIDABLE_COLLISION, NO_COLLISION, STAYS_IN_LANE, Parts, Scenario
 from ego.scenarios.envelope import ReachCriterion
 from ego.scenarios.evasive import MARKERS, METRICS, MotorwayRoadConfig, compare_plots, compose, evasive_metrics
-from ego.scenarios.manoeuvre import FollowInLane
+from ego.scenarios.manoeuvre import EvasiveManoeuvre, FollowInLane
 from ego.scenarios.motorway import COLUMNS, EDGE, LANE_NAMES, PLOTS, ROUTE, MotorwayWorld
 from ego.scenarios.safety import friction_limit
 from ego.sim.traffic import CutInVehicle
@@ -122,7 +125,7 @@ class CutIn(Scenario):
         """:meth:`ReachCriterion.margin` at the friction limit (m; None: the car never intruded into the ego's lane)."""
         return self.reach.margin(friction_limit(self.ego.model.params), self.config.sumo_step)
 
-    def choose(self, man):
+    def choose(self, man: EvasiveManoeuvre) -> tuple[str | None, str]:
         # brake in lane when that is enough; evade by gap acceptance only when it is not
         limit = self.config.brake_share * friction_limit(self.ego.model.params)
         need = man.braking_need()
@@ -131,7 +134,7 @@ class CutIn(Scenario):
         lane, why = man.gap_acceptance()
         return lane, f"braking needs {need:.1f} m/s^2 > {limit:.1f} m/s^2; {why}"
 
-    def _metrics(self, trace, names) -> dict:
+    def _metrics(self, trace: np.ndarray, names: tuple[str, ...]) -> dict[str, Any]:
         out = evasive_metrics(self, trace, names)
         cut, trigger_t = self.cutter.cut_in_time, self.manoeuvre.trigger_t
         reaction = trigger_t - cut if cut is not None and trigger_t is not None else None

@@ -13,7 +13,11 @@ the surround view, the evasive manoeuvre with :class:`BrakeInLane`, and the safe
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
 
 from ego.highway_env import BACKENDS
 from ego.params import ConfigError, param
@@ -22,10 +26,11 @@ from ego.results.trace import Metric
 from ego.scenarios.base import NO_AVOIDABLE_COLLISION, NO_COLLISION, STAYS_IN_LANE, Parts, Scenario
 from ego.scenarios.evasive import MARKERS, METRICS, MotorwayRoadConfig, compare_plots, compose, evasive_metrics
 from ego.scenarios.events import INF
-from ego.scenarios.motorway import COLUMNS, EDGE, EGO, PLOTS, ROUTE, MotorwayWorld
+from ego.scenarios.manoeuvre import EvasiveManoeuvre
+from ego.scenarios.motorway import COLUMNS, EDGE, PLOTS, ROUTE, MotorwayWorld
 from ego.scenarios.safety import AEB_SLOWS, friction_limit
 from ego.sim.traffic import BrakingLeader
-from ego.sim.types import VehicleSpec, VehicleType
+from ego.sim.types import EGO, Collision, VehicleSpec, VehicleType
 
 LEAD = "lead"
 #: the ego comes to rest at or below this speed along the road, and moves again above
@@ -85,19 +90,19 @@ class BrakeInLane:
 
     action = "brake"
 
-    def __init__(self, config, safety_active) -> None:
+    def __init__(self, config: Any, safety_active: Callable[[], bool]) -> None:
         self.config = config
         self.safety_active = safety_active  #: () -> the AEB is braking
         self.ramp_s = self.ramp_v = 0.0
         self.rest_s: float | None = None  #: where the ego came to rest behind a stopped car
         self.moving = True  #: it has moved (faster than MOVING) since it last came to rest
 
-    def start(self, man) -> None:
+    def start(self, man: EvasiveManoeuvre) -> None:
         view = man.view
         self.ramp_s, self.ramp_v = view.s - self.config.dt * view.ds, view.ds
         self.rest_s, self.moving = None, True
 
-    def reference(self, man) -> tuple[float, float]:
+    def reference(self, man: EvasiveManoeuvre) -> tuple[float, float]:
         c, view = self.config, man.view
         dt = c.dt
         front = view.sensor.front
@@ -129,9 +134,9 @@ class BrakeInLane:
                 s_ref, v_ref = max(s_ref, self.rest_s), 0.0
         return s_ref, v_ref
 
-    def settled(self, man) -> bool:
+    def settled(self, man: EvasiveManoeuvre) -> bool:
         view = man.view
-        return view.ds <= view.sensor.front.speed + 0.1 or view.gap_front == INF
+        return bool(view.ds <= view.sensor.front.speed + 0.1 or view.gap_front == INF)
 
 
 class Impact:
@@ -147,18 +152,18 @@ class Impact:
         self.speeds: tuple[float, float] | None = None  #: (ego, other) speeds at the collision
         self.trigger_gap = self.trigger_speed = INF
 
-    def on_trigger(self, man) -> None:
+    def on_trigger(self, man: EvasiveManoeuvre) -> None:
         self.trigger_gap, self.trigger_speed = man.view.gap_front, man.view.ds
         self.in_lane.start(man)
 
-    def collided(self, view, c) -> None:
+    def collided(self, view: Any, c: Collision) -> None:
         self.speeds = (view.ds, c.victim_speed if c.collider == EGO else c.collider_speed)
 
-    def metrics(self, avoidable: bool | None) -> dict:
-        ego_speed, other = self.speeds if self.speeds is not None else (None, None)
+    def metrics(self, avoidable: bool | None) -> dict[str, Any]:
+        speeds = self.speeds
         return {
-            "impact_speed": m.json_number(ego_speed, 4),
-            "impact_relative_speed": m.json_number(None if ego_speed is None else ego_speed - other, 4),
+            "impact_speed": m.json_number(speeds[0] if speeds is not None else None, 4),
+            "impact_relative_speed": m.json_number(None if speeds is None else speeds[0] - speeds[1], 4),
             "collision_avoidable": avoidable,
         }
 
@@ -208,11 +213,11 @@ class EmergencyBrake(Scenario):
             BrakingLeader(LEAD, c.lead_cruise_speed, c.lead_brake_time, c.lead_decel, c.lead_final_speed),
         )
 
-    def _collided(self, c) -> None:
+    def _collided(self, c: Collision) -> None:
         self.impact.collided(self.view, c)
         super()._collided(c)
 
-    def _metrics(self, trace, names) -> dict:
+    def _metrics(self, trace: np.ndarray, names: tuple[str, ...]) -> dict[str, Any]:
         avoidable = self._avoidable() if self.collision is not None else None
         return {**evasive_metrics(self, trace, names), **self.impact.metrics(avoidable)}
 
@@ -232,7 +237,7 @@ class EmergencyBrake(Scenario):
             return None
         c = self.config
 
-        def fn(t):
+        def fn(t: np.ndarray) -> np.ndarray:
             return lead_speed(t, c.lead_cruise_speed, c.lead_brake_time, c.lead_decel, c.lead_final_speed)
 
         return braking_min_gap(

@@ -10,12 +10,14 @@ evasion could), and is reported as such, never hidden.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from typing import Any
 
 import numpy as np
 
 from ego.results.metrics import json_number
 from ego.results.trace import Metric
+from ego.scenarios.sensor import Detection
 
 #: the envelope the issue asks for: (low, high) per parameter
 RANGES = {
@@ -39,7 +41,7 @@ def braking_min_gap(
     gap0: float,
     ego_speed0: float,
     decel: float,
-    lead_speed_fn,
+    lead_speed_fn: Callable[[np.ndarray], np.ndarray],
     horizon: float = 30.0,
     dt: float = 0.001,
     lead_step: float | None = None,
@@ -93,7 +95,7 @@ class ReachCriterion:
         #: (t s, gap m, ego speed m/s, car's speed m/s) when the car first intruded into the ego's lane
         self.at: tuple[float, float, float, float] | None = None
 
-    def watch(self, t: float, front, ds: float) -> None:
+    def watch(self, t: float, front: Detection, ds: float) -> None:
         """Each control period: ``front`` is the sensor's front object, ``ds`` the ego's speed."""
         if self.at is None and front.id == self.vehicle and front.gap != float("inf"):
             self.at = (t, front.gap, ds, front.speed)
@@ -106,7 +108,7 @@ class ReachCriterion:
         t0, gap, speed, car_speed = self.at
         return braking_min_gap(t0, gap, speed, decel, lambda t: np.full_like(t, car_speed), lead_step=lead_step)
 
-    def metrics(self, collided: bool, decel: float, lead_step: float) -> dict:
+    def metrics(self, collided: bool, decel: float, lead_step: float) -> dict[str, Any]:
         """``reach_time`` and ``collision_avoidable`` (none without a collision; false when the
         car hit the ego's side before it intruded into its lane: no time to brake)."""
         margin = self.margin(decel, lead_step)
@@ -117,12 +119,12 @@ class ReachCriterion:
 
 
 def avoidable(
-    metrics: dict, trace_gap_at_trigger: float, ego_speed_at_trigger: float, config, decel_limit: float
+    metrics: dict[str, Any], trace_gap_at_trigger: float, ego_speed_at_trigger: float, config: Any, decel_limit: float
 ) -> bool:
     """Would braking at ``decel_limit`` from the trigger have kept the ego behind the lead (the
     lead moving as SUMO moves it, step by step)?"""
 
-    def fn(t):
+    def fn(t: np.ndarray) -> np.ndarray:
         return lead_speed(
             t, config.lead_cruise_speed, config.lead_brake_time, config.lead_decel, config.lead_final_speed
         )
@@ -140,7 +142,7 @@ def avoidable(
     )
 
 
-def sample(n: int, seed: int) -> Iterator[dict]:
+def sample(n: int, seed: int) -> Iterator[dict[str, Any]]:
     """``n`` Latin-hypercube cases over :data:`RANGES` with random lane blockers (about one
     case in four blocks a lane, one in eight both)."""
     from scipy.stats import qmc
@@ -151,7 +153,7 @@ def sample(n: int, seed: int) -> Iterator[dict]:
     points = qmc.scale(qmc.LatinHypercube(d=len(names), seed=seed).random(n), lo, hi)
     rng = np.random.default_rng(seed)
     for row in points:
-        case = {k: round(float(v), 2) for k, v in zip(names, row)}
+        case: dict[str, Any] = {k: round(float(v), 2) for k, v in zip(names, row)}
         u = rng.random()
         case["block_left"] = bool(u < 0.125 or 0.25 <= u < 0.375)
         case["block_right"] = bool(u < 0.25)

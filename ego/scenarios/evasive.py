@@ -12,8 +12,9 @@ The scenarios themselves (``emergency_brake.py``, ``fast_follower.py``, ``cut_in
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -21,8 +22,8 @@ from ego.models import VehicleGeometry
 from ego.params import param
 from ego.record.base import Series
 from ego.results import metrics as m
-from ego.results.trace import Band, Marker, Metric, Plot, Ref, Trajectory
-from ego.scenarios.base import Parts
+from ego.results.trace import Band, Marker, Metric, Plot, PlotSpec, Ref, Trajectory
+from ego.scenarios.base import Parts, Scenario
 from ego.scenarios.manoeuvre import PHASE_NAMES, EvasiveManoeuvre, InLane
 from ego.scenarios.motorway import (
     EGO_BOX,
@@ -104,14 +105,14 @@ class MotorwayRoadConfig(EvasiveConfig):
 
 
 def compose(
-    scenario,
+    scenario: Scenario,
     trigger_on: str,
     in_lane: InLane,
     traffic: Callable[[MotorwayWorld], None],
-    choose: Callable | None = None,
-    on_trigger: Callable | None = None,
+    choose: Callable[..., Any] | None = None,
+    on_trigger: Callable[..., Any] | None = None,
     *,
-    road: dict | None = None,
+    road: dict[str, Any] | None = None,
     manoeuvre_cls: type[EvasiveManoeuvre] = EvasiveManoeuvre,
 ) -> Parts:
     """The parts of an evasive scenario: the motorway world with ``traffic``, the ego's plant,
@@ -127,7 +128,7 @@ def compose(
     if c.aeb:
         safety = SafetyLayer(c, view, scenario.event, lambda: scenario.t)
         safety.manoeuvre = manoeuvre
-        manoeuvre.safety = safety
+        manoeuvre.safety = safety  # type: ignore[assignment]  # manoeuvre.py types its safety as None only
     return Parts(
         MotorwayWorld(c, scenario.geometry, traffic, **(road or {})),
         view,
@@ -149,14 +150,14 @@ MARKERS = (
 )
 
 
-def compare_plots(scenario_cls, config) -> tuple:
+def compare_plots(scenario_cls: Any, config: Any) -> tuple[PlotSpec, ...]:
     """The lateral position against its reference and the settle band, the speed against
     its reference, the actuators, the gap, front and rear TTC against the trigger's
     threshold, every one with the scenario's ``markers`` (events) marked; the top-down
     trajectory. A scenario's ``compare_plots = classmethod(compare_plots)``."""
     markers = scenario_cls.markers
     band = config.settle_band
-    ttc_refs = (Ref(f"trigger threshold {config.ttc_threshold:g} s", value=config.ttc_threshold),)
+    ttc_refs: tuple[Ref, ...] = (Ref(f"trigger threshold {config.ttc_threshold:g} s", value=config.ttc_threshold),)
     if config.aeb:
         ttc_refs += (Ref(f"AEB threshold {config.aeb_ttc:g} s", value=config.aeb_ttc),)
     return (
@@ -185,7 +186,7 @@ def compare_plots(scenario_cls, config) -> tuple:
     )
 
 
-def evasive_series(config, signal_names, signal_units) -> list[Series]:
+def evasive_series(config: Any, signal_names: Sequence[str], signal_units: Mapping[str, str]) -> list[Series]:
     """The motorway's panels, the thresholds on the TTC panel and the manoeuvre's state."""
     c = config
     limits = [Series("", "plots/ttc/trigger", "s", "trigger", constant=c.ttc_threshold)]
@@ -223,11 +224,11 @@ METRICS = (
 def lane_change_metrics(
     col: dict[str, np.ndarray],
     status: str,
-    config,
+    config: Any,
     manoeuvre: EvasiveManoeuvre,
     target_lane: int,
     safety: SafetyLayer | None,
-) -> dict:
+) -> dict[str, Any]:
     """:data:`METRICS` from the named trace ``col`` and the run's facts: its ``status``, the
     manoeuvre's trigger and choice, the lane it ended in, the AEB's engagements."""
     t = col["t"]
@@ -236,6 +237,7 @@ def lane_change_metrics(
     lane_change = triggered and chosen is not None
     duration = overshoot = None
     if lane_change:
+        assert trigger_t is not None  # a lane change follows a trigger
         after = t >= trigger_t
         duration = m.settling_time(t, col["d"], config.settle_band, trigger_t)
         direction = 1.0 if chosen == "left" else -1.0
@@ -261,7 +263,7 @@ def lane_change_metrics(
     }
 
 
-def evasive_metrics(scenario, trace: np.ndarray, names: tuple[str, ...]) -> dict:
+def evasive_metrics(scenario: Scenario, trace: np.ndarray, names: tuple[str, ...]) -> dict[str, Any]:
     """:func:`lane_change_metrics` of a composed evasive scenario's run."""
     return lane_change_metrics(
         columns(trace, names),

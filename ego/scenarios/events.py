@@ -55,7 +55,7 @@ class LaneCheck:
         if not self.exists:
             return f"{self.side}: no lane"
 
-        def part(name, gap, req):
+        def part(name: str, gap: float, req: float) -> str:
             g = "free" if gap == INF else f"{gap:.1f} m"
             ok = ">=" if gap >= req else "<"
             return f"{name} gap {g} {ok} {req:.1f} m"

@@ -9,6 +9,9 @@ up in its lane (braking would make it worse), keeping the follow distance to any
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
 
 from ego.highway_env import BACKENDS
 from ego.params import param
@@ -23,6 +26,7 @@ from ego.scenarios.evasive import (
     evasive_metrics,
 )
 from ego.scenarios.events import INF
+from ego.scenarios.manoeuvre import EvasiveManoeuvre
 from ego.scenarios.motorway import COLUMNS, EDGE, PLOTS, ROUTE, MotorwayWorld
 from ego.sim.traffic import RecklessFollower
 from ego.sim.types import VehicleSpec, VehicleType
@@ -50,16 +54,17 @@ class AccelerateInLane:
 
     action = "accelerate"
 
-    def start(self, man) -> None:
+    def start(self, man: EvasiveManoeuvre) -> None:
         pass
 
-    def reference(self, man) -> tuple[float, float]:
+    def reference(self, man: EvasiveManoeuvre) -> tuple[float, float]:
         c = man.config
+        assert man.trigger_t is not None  # the in-lane action follows the trigger
         s_ref = man.trigger_s + c.evade_speed * (man.t - man.trigger_t)
         return man.behind_front(s_ref, c.evade_speed)
 
-    def settled(self, man) -> bool:
-        return man.view.ttc_rear == INF
+    def settled(self, man: EvasiveManoeuvre) -> bool:
+        return bool(man.view.ttc_rear == INF)
 
 
 class FastFollower(Scenario):
@@ -90,10 +95,12 @@ class FastFollower(Scenario):
         )
 
     def after_sim_step(self) -> None:
-        x, y = self.bridge.front_bumper(FOLLOWER)
+        bridge = self.bridge
+        assert bridge is not None  # a simulator step has a simulator
+        x, y = bridge.front_bumper(FOLLOWER)
         self._follower_x = x if self._along is None else self._along(x, y)[0]
 
-    def _metrics(self, trace, names) -> dict:
+    def _metrics(self, trace: np.ndarray, names: tuple[str, ...]) -> dict[str, Any]:
         out = evasive_metrics(self, trace, names)
         # passed: the follower's front bumper ended ahead of the ego's
         ego_front = (self.ego.state[0] if self._along is None else self.view.s) + self.geometry.cg_to_front

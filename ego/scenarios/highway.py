@@ -6,7 +6,6 @@ from __future__ import annotations
 
 from ego.scenarios.motorway import (  # noqa: F401 - re-exported
     EDGE,
-    EGO,
     EGO_BOX,
     LANE_NAMES,
     LOG_REACH,
@@ -15,3 +14,4 @@ from ego.scenarios.motorway import (  # noqa: F401 - re-exported
     TRAFFIC_TYPE,
     HighwayConfig,
 )
+from ego.sim.types import EGO  # noqa: F401 - re-exported

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -161,7 +162,7 @@ class LaneCenteringScenario(Scenario):
         return LaneCenteringLoop(self, self.world)
 
     # -- results ------------------------------------------------------------------------------
-    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
+    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict[str, Any]:
         if not trace.size:
             return {"completed_road": False}
         col = {name: trace[:, i] for i, name in enumerate(columns)}
@@ -184,6 +185,10 @@ class LaneCenteringLoop(PartsLoop):
     ego's plant (report 003's lateral-error model on the lane or the dynamic bicycle), and the
     plan: the speed held, the curves' entry and exit, the drive's end."""
 
+    sc: LaneCenteringScenario
+    world: RoadWorld
+    view: RoadSensor
+
     def __init__(self, sc: LaneCenteringScenario, world: RoadWorld) -> None:
         super().__init__(sc, world)
         self.ego: BicyclePlant | LaneFramePlant | None = None
@@ -195,6 +200,7 @@ class LaneCenteringLoop(PartsLoop):
         sc = self.sc
         c = sc.config
         bridge = sc.bridge
+        assert bridge is not None  # lane centring drives in SUMO
         sc.lanes = lanes = self.world.setup(bridge)
         lane = lanes[f"{EDGE}_{EGO_LANE}"]
         sc.obs.lane = lane
@@ -251,13 +257,13 @@ class LaneCenteringLoop(PartsLoop):
         s0 = lane.project(x, y)[0]
         limits = ActuatorLimits(max_steer=c.max_steer)
         if c.plant == "lateral-error":
-            model = LateralError(LateralErrorParams(), c.speed)
-            self.ego = sc.ego = LaneFramePlant(model, lane, sc.geometry, c.dt, s0, c.offset, limits)
+            lateral = LateralError(LateralErrorParams(), c.speed)
+            self.ego = sc.ego = LaneFramePlant(lateral, lane, sc.geometry, c.dt, s0, c.offset, limits)
         else:
-            model = DynamicBicycle(dynamic_params_from_lateral(LateralErrorParams(), slip_speed_floor=1.0))
+            bicycle = DynamicBicycle(dynamic_params_from_lateral(LateralErrorParams(), slip_speed_floor=1.0))
             x, y = lane.offset_point(s0, c.offset)
             self.ego = sc.ego = BicyclePlant(
-                model, sc.geometry, c.dt, c.substeps, limits, state=(x, c.speed, y, 0.0, lane.heading_at(s0), 0.0)
+                bicycle, sc.geometry, c.dt, c.substeps, limits, state=(x, c.speed, y, 0.0, lane.heading_at(s0), 0.0)
             )
         self.view.on_lane(lane, self.ego)
 
@@ -265,6 +271,7 @@ class LaneCenteringLoop(PartsLoop):
     def act(self, action: tuple[float, float]) -> None:
         sc = self.sc
         ego = self.ego
+        assert ego is not None  # set up
         ego.step(action)
         a_x, delta = ego.applied
         obs, view = sc.obs, self.view
@@ -303,6 +310,7 @@ class LaneCenteringLoop(PartsLoop):
                 f"{'entering' if inside else 'leaving'} the curve at s = {s:.0f} m, lateral error {view.d_road:+.3f} m",
             )
         obs = sc.obs
+        assert self.ego is not None  # set up
         x = self.ego.state
         road_observation(
             obs, sc.t, s, view.ds, view.d_road, view.dd, x, view.heading_error, view.curvature, view.steady

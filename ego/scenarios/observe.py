@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from ego.control.base import Observation
+from ego.models.cornering import SteadySteer
 
 
 def road_observation(
@@ -25,7 +26,7 @@ def road_observation(
     state: Sequence[float],
     heading_error: float,
     curvature: float,
-    steady=None,
+    steady: SteadySteer | None = None,
 ) -> None:
     """Fill ``obs`` in place (it is the controller's, reused every step): time ``t`` (s), the
     centre of gravity at ``s`` along the lane and ``d`` across it (m, + left) moving at

@@ -31,20 +31,22 @@ import math
 import operator
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, Protocol, cast
 
 import numpy as np
 
+from ego.control.base import ControllerSpec
 from ego.control.following import FollowingObservation, PlatoonControl
 from ego.lane_frame import LanePolyline
 from ego.models import Longitudinal, LongitudinalParams, LongitudinalPlant, SpacingPolicy, VehicleGeometry
 from ego.params import ConfigError, param, shown
 from ego.record.base import Scene, Series
 from ego.results import metrics as m
-from ego.results.trace import Band, Column, FrequencyResponse, Marker, Metric, Plot, Ref
+from ego.results.trace import Band, Column, FrequencyResponse, Marker, Metric, Plot, PlotSpec, Ref
 from ego.scenarios import string_stability as ss
 from ego.scenarios.base import NO_COLLISION, CommonConfig, PartsLoop, Scenario
 from ego.scenarios.events import INF, time_to_collision
+from ego.sim.protocol import TrafficSim
 from ego.sim.traffic import Manoeuvre, ProfiledLeader, SpeedProfile
 from ego.sim.types import Collision, Neighbour, VehicleSpec, VehicleType, ego_type
 from ego.sumo.net import lane_length
@@ -86,7 +88,7 @@ def parse_manoeuvres(text: str) -> tuple[Manoeuvre, ...]:
         "items separated by commas with increasing times, e.g. 10:20:2,35:50:1.5,60:0:6; "
         "or none)"
     )
-    out = []
+    out: list[Manoeuvre] = []
     for item in raw.split(","):
         try:
             t, v, rate = (float(x) for x in item.split(":"))
@@ -196,6 +198,17 @@ def _check_road(c: PlatoonConfig, length: float) -> float:
     return lead_pos
 
 
+class PlatoonSim(TrafficSim, Protocol):
+    """What the platoon asks of its simulator besides :class:`TrafficSim` (SUMO's bridge:
+    the followers pushed with their acceleration, the leader's and who leads whom)."""
+
+    def push(self, vid: str, x: float, y: float, psi: float, speed: float, accel: float | None = None) -> None: ...
+    def acceleration(self, vid: str) -> float: ...
+    def lane_position(self, vid: str) -> float: ...
+    def read_leader(self, vid: str, out: Neighbour) -> Neighbour: ...
+    def box(self, vid: str) -> tuple[float, float, float, float, float, float]: ...
+
+
 class PlatoonScenario(Scenario):
     """A SUMO leader and a platoon of project-controlled followers in one lane."""
 
@@ -209,6 +222,12 @@ class PlatoonScenario(Scenario):
     task = "car-following"
     network = "platoon"
     config_cls = PlatoonConfig
+    #: one observation per follower, in platoon order (the controllers' PlatoonControl
+    #: steps on them all), not the one Observation of a scenario with one ego
+    obs: list[FollowingObservation]  # type: ignore[assignment]
+    loop: PlatoonLoop
+    ids: tuple[str, ...]
+    profile: SpeedProfile
     metric_specs = (
         Metric(
             "followers.", "-", "per follower (id): the platoon's metrics below, each in its unit, and its settle_times"
@@ -252,12 +271,14 @@ class PlatoonScenario(Scenario):
         return replace(base, variant=str(overrides["variant"]).strip(), **preset) if preset else base
 
     @classmethod
-    def build_controller(cls, spec, params, config) -> PlatoonControl:
+    def build_controller(  # type: ignore[override]  # one controller per follower, stepped on their observations
+        cls, spec: ControllerSpec, params: Any, config: Any
+    ) -> PlatoonControl:
         ids = follower_ids(config.followers)
         return PlatoonControl([spec.build(params, config.dt) for _ in ids], ids)
 
     @classmethod
-    def compare_plots(cls, config) -> tuple:
+    def compare_plots(cls, config: Any) -> tuple[PlotSpec, ...]:
         """Every follower's speed (the leader's dashed), spacing error (the settle band
         shaded), gap and acceleration, one line per follower in a panel per controller; the
         string stability's |H(jw)|."""
@@ -328,7 +349,7 @@ class PlatoonScenario(Scenario):
         self.ids = follower_ids(c.followers)
         self.profile = c.profile
         self.geometry = VehicleGeometry(length=c.length, width=c.width, cg_to_front=0.5 * c.length)
-        self.obs: list[FollowingObservation] = []
+        self.obs = []
         self.plants: dict[str, LongitudinalPlant] = {}
         self.lane: LanePolyline | None = None  #: the platoon's one lane (once a run has started)
         return PlatoonLoop(self)
@@ -345,7 +366,7 @@ class PlatoonScenario(Scenario):
         c = self.config
         return -c.max_decel, c.max_accel, 0.0
 
-    def joint_action(self, own, vid: str, longitudinal: float | None, lateral: float | None):
+    def joint_action(self, own: Any, vid: str, longitudinal: float | None, lateral: float | None) -> Any:
         """The controllers' actions (one per follower) with ``vid``'s longitudinal command
         replaced (a follower does not steer)."""
         own[self.ids.index(vid)] = (longitudinal, 0.0)
@@ -359,7 +380,7 @@ class PlatoonScenario(Scenario):
         o, e = self.obs[i], self.loop.e  # a run's observations; the errors updated in place
         return lambda: (o.speed, e[i], o.accel, 0.0)
 
-    def lane_rows(self, vid: str):
+    def lane_rows(self, vid: str) -> tuple[tuple[float, ...], Any, float]:
         """The leader and the followers behind ``vid``, all on the platoon's one lane."""
         i = self.ids.index(vid)
         half = 0.5 * self.config.length
@@ -372,14 +393,14 @@ class PlatoonScenario(Scenario):
         return ego, rows, self.config.length
 
     # -- results ------------------------------------------------------------------------------
-    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
+    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict[str, Any]:
         if not trace.size:
             return {"string_stable": None}
         c = self.config
         col = {name: trace[:, j] for j, name in enumerate(columns)}
         t = col["t"]
         windows = self.windows(float(t[-1]) + c.dt)
-        followers: dict[str, dict] = {}
+        followers: dict[str, dict[str, Any]] = {}
         for vid in self.ids:
             e, acc = col[f"e_{vid}"], col[f"accel_{vid}"]
             jerk = np.diff(acc) / c.dt if len(acc) > 1 else np.zeros(1)
@@ -394,7 +415,7 @@ class PlatoonScenario(Scenario):
             }
         per = list(followers.values())
 
-        def worst(key: str, pick=max):
+        def worst(key: str, pick: Callable[[list[Any]], Any] = max) -> Any:
             values = [f[key] for f in per if f[key] is not None]
             return pick(values) if values else None
 
@@ -407,7 +428,7 @@ class PlatoonScenario(Scenario):
         ratios = [r["l2_accel"] for r in amplification.values()]
         ratios += [r["l2_spacing_error"] for r in amplification.values() if "l2_spacing_error" in r]
         ratios += list(gains.values()) if gains else []
-        ratios = [r for r in ratios if r is not None]
+        stable = _string_stable([r for r in ratios if r is not None], self.status)
         return {
             "followers": followers,
             "rms_spacing_error": worst("rms_spacing_error"),
@@ -417,7 +438,7 @@ class PlatoonScenario(Scenario):
             "max_abs_accel": worst("max_abs_accel"),
             "max_abs_jerk": worst("max_abs_jerk"),
             "settle_times": settle,
-            "string_stable": _string_stable(ratios, self.status),
+            "string_stable": stable,
             "amplification": amplification,
             "frequency_gain": gains,
         }
@@ -431,7 +452,7 @@ class PlatoonScenario(Scenario):
             out.insert(0, ("start@0s", 0.0, first))
         return out
 
-    def _amplification(self, col: dict) -> dict[str, dict]:
+    def _amplification(self, col: dict[str, np.ndarray]) -> dict[str, dict[str, float | None]]:
         """Ratios between consecutive vehicles, over the whole run: peak and L2 of the
         acceleration (from the leader on) and of the spacing error (between followers)."""
         out = {}
@@ -450,7 +471,7 @@ class PlatoonScenario(Scenario):
             out[f"{up}->{down}"] = pair
         return out
 
-    def _sine_gains(self, col: dict) -> dict[str, float | None] | None:
+    def _sine_gains(self, col: dict[str, np.ndarray]) -> dict[str, float | None] | None:
         """With a sinusoidal leader: |V_i / V_(i-1)| at its frequency, after the transient."""
         c = self.config
         if c.sine_amplitude <= 0.0:
@@ -473,6 +494,10 @@ class PlatoonLoop(PartsLoop):
     """The platoon's loop: the followers' plants (keyed by vehicle id, in platoon order), the
     SUMO leader on its speed profile (the leader's manoeuvres are its events), the gaps read
     from SUMO every step and carried forward between steps, every follower's observation."""
+
+    sc: PlatoonScenario
+    #: the simulator of the run (set by :meth:`setup`)
+    sim: PlatoonSim
 
     def __init__(self, sc: PlatoonScenario) -> None:
         super().__init__(sc)
@@ -512,6 +537,8 @@ class PlatoonLoop(PartsLoop):
         self._write_row = sc.trace.bind(self._row_names)
         c = sc.config
         bridge = sc.bridge
+        assert bridge is not None  # the platoon drives in SUMO
+        self.sim = sim = cast(PlatoonSim, bridge)
         width, points = bridge.lane_shapes()[f"{EDGE}_0"]
         self.lane = lane = sc.lane = LanePolyline(points, width, f"{EDGE}_0")
         L, gap0, n = c.length, c.start_gap, c.followers
@@ -539,7 +566,7 @@ class PlatoonLoop(PartsLoop):
         )
         bridge.insert(required=[LEADER, *self.ids])
         self.leader = ProfiledLeader(LEADER, self.profile)
-        self.leader.start(bridge)
+        self.leader.start(sim)
         for vid in self.ids:
             bridge.control(vid, self.geometry, keep_route=1)
         sc.controlled_ids = self.ids
@@ -557,7 +584,7 @@ class PlatoonLoop(PartsLoop):
         self.after_sim_step()
 
     # -- per step ---------------------------------------------------------------------------
-    def act(self, actions) -> None:
+    def act(self, actions: Any) -> None:
         """Every follower's command through its plant; the trace row for t (states before
         the step, the command as the actuator took it)."""
         sc = self.sc
@@ -575,7 +602,7 @@ class PlatoonLoop(PartsLoop):
 
     def before_sim_step(self) -> None:
         sc = self.sc
-        bridge = sc.bridge
+        bridge = self.sim
         self.leader.update(bridge, sc.t)
         pushed = self._pushed = []
         for vid, plant in zip(self.ids, self.chain):
@@ -587,7 +614,7 @@ class PlatoonLoop(PartsLoop):
     def after_sim_step(self) -> None:
         """Read who leads whom and the gaps from SUMO; the leader's speed and acceleration."""
         sc = self.sc
-        bridge = sc.bridge
+        bridge = self.sim
         lead_v, self._lead_a = bridge.speed(LEADER), bridge.acceleration(LEADER)
         # SUMO moves its vehicles at their new speed for the whole step (Euler): the leader
         # keeps its acceleration, so until the next step it drives at v + a * step
@@ -610,11 +637,13 @@ class PlatoonLoop(PartsLoop):
         """Every vehicle within RADIUS of a follower (every follower is an ego): the
         followers where they were pushed into SUMO for this step, the leader from SUMO."""
         sc = self.sc
-        rows = [sc.bridge.box(LEADER)]
+        rows = [self.sim.box(LEADER)]
         L, W = sc.config.length, sc.config.width
         for plant, (x, y, psi) in zip(self.chain, self._pushed):
             rows.append((x, y, psi, plant.state[1], L, W))  # the CG is the box centre here
-        sc.traffic.add(sc.t, [p[:2] for p in self._pushed], self._log_ids, rows)
+        traffic = sc.traffic
+        assert traffic is not None  # a run in SUMO logs its traffic
+        traffic.add(sc.t, [p[:2] for p in self._pushed], self._log_ids, rows)
 
     def diverged(self) -> str | None:
         if self._bad is not None:
@@ -683,8 +712,9 @@ class PlatoonLoop(PartsLoop):
     # -- recording ----------------------------------------------------------------------------
     def record_boxes(self) -> None:
         sc = self.sc
-        ids, poses = sc.bridge.poses()
+        ids, poses = self.sim.poses()
         back = self.chain[-1].state[0] - sc.config.length
+        assert self.lane is not None  # set up
         x, y = self.lane.offset_point(0.5 * (self._lead_s_sync + back), 0.0)
         sc.recorder.vehicles(sc.t, ids, poses, (x, y))
 
@@ -694,9 +724,11 @@ class PlatoonLoop(PartsLoop):
         top = max(self.profile.speed(k * 0.5) for k in range(int(c.duration * 2) + 1))
         span = c.followers * (c.length + c.standstill_gap + c.headway * top + max(c.start_error, 0.0)) + c.length
         half = 0.6 * span + 2.0 * c.length
+        lane = self.lane
+        assert lane is not None  # set up
         # the wide view: twice the close one (300 m for report 004's platoon at 50 km/h)
         return Scene(
-            lanes=[(self.lane.width, self.lane.points)],
+            lanes=[(lane.width, lane.points)],
             title=sc.name,
             followed="the platoon",
             follow_view=(-half, half, -0.25 * half, 0.25 * half),

@@ -5,13 +5,16 @@ from __future__ import annotations
 
 import inspect
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ego.params import ConfigError
 from ego.plugins import SCENARIO_GROUP, entry_points, load_object
 
+if TYPE_CHECKING:
+    from ego.scenarios.base import Scenario
 
-def resolve_scenario(ref: str):
+
+def resolve_scenario(ref: str) -> type[Scenario]:
     """The scenario class a ``module:Name`` or ``file.py:Name`` reference names."""
     from ego.scenarios.base import Scenario
 

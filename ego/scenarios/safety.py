@@ -17,7 +17,9 @@ change it should not finish while braking hard.
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any, Protocol
 
+from ego.models.nonlinear_bicycle import NonlinearBicycleParams
 from ego.scenarios.events import INF
 from ego.scenarios.sensor import Detection
 
@@ -119,19 +121,28 @@ def _first_root(g: float, closing: float, rel: float, span: float) -> float | No
     return next((r for r in taus if r <= span), None)
 
 
-def clears_sideways(view, ttc: float) -> bool:
+def clears_sideways(view: Any, ttc: float) -> bool:
     """The ego moves out of the front object's way sideways within ``ttc`` (s), at the
     relative speed across the lane it has now."""
-    front = view.sensor.front
+    front: Detection = view.sensor.front
     # the ego moves away from the object's side at this relative speed (m/s)
-    clearing = -front.side * (view.dd - front.lateral_speed)
+    clearing: float = -front.side * (view.dd - front.lateral_speed)
     return clearing > 0.0 and front.overlap / clearing < ttc
 
 
-def friction_limit(params) -> float:
+def friction_limit(params: NonlinearBicycleParams) -> float:
     """The largest deceleration (m/s^2) the tyres and the rolling resistance give:
     F_max / m + f g."""
     return params.F_max / params.m + params.f * params.g
+
+
+class AebManoeuvre(Protocol):
+    """What the AEB asks of the manoeuvre it guards (:class:`ego.scenarios.manoeuvre.EvasiveManoeuvre`)."""
+
+    def braking_in_lane(self) -> bool: ...
+    def changing_lane(self) -> bool: ...
+    def limit_braking_behind(self, need: float) -> bool: ...
+    def emergency_stop(self) -> None: ...
 
 
 class SafetyLayer:
@@ -143,18 +154,18 @@ class SafetyLayer:
 
     __slots__ = ("config", "view", "event", "clock", "manoeuvre", "active", "time", "engagements", "full_brake")
 
-    def __init__(self, config, view, event: Callable[..., None], clock: Callable[[], float]) -> None:
+    def __init__(self, config: Any, view: Any, event: Callable[..., None], clock: Callable[[], float]) -> None:
         self.config = config
         self.view = view
         self.event = event
         self.clock = clock
-        self.manoeuvre = None  #: told when the AEB engages (``emergency_stop``)
+        self.manoeuvre: AebManoeuvre | None = None  #: told when the AEB engages (``emergency_stop``)
         self.active = False
         self.time: float | None = None  #: when the AEB first engaged
         self.engagements = 0
         self.full_brake = 0.0
 
-    def reset(self, plant) -> None:
+    def reset(self, plant: Any) -> None:
         p = plant.model.params
         self.active = False
         self.time = None
@@ -175,13 +186,14 @@ class SafetyLayer:
         front = view.sensor.front
         if not self.active:
             man = self.manoeuvre
+            assert man is not None  # compose gives the AEB its manoeuvre
             braking_in_lane = man.braking_in_lane()
             if view.ttc_front >= c.aeb_ttc and not braking_in_lane and not man.changing_lane():
                 return  # the common case, decided without computing the need
             need = braking_need(front, view.ds)
             # limit_braking_behind asks only in a lane change
             if (braking_in_lane and need >= c.aeb_decel) or man.limit_braking_behind(need) or self.imminent():
-                self.manoeuvre.emergency_stop()
+                man.emergency_stop()
                 self.active = True
                 self.engagements += 1
                 if self.time is None:

@@ -22,15 +22,17 @@ signal between consecutive vehicles, and the gain at the frequency of a sinusoid
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 #: frequencies scanned for the peak gain (rad/s)
 OMEGAS = np.logspace(-3, 2, 5000)
 
 
 def pid_transfer(
-    omega, kp: float, ki: float, kd: float, headway: float, lag: float = 0.0, delay: float = 0.0
+    omega: ArrayLike, kp: float, ki: float, kd: float, headway: float, lag: float = 0.0, delay: float = 0.0
 ) -> np.ndarray:
     """H(jw) from the predecessor's speed to the follower's (see the module docstring)."""
     s = 1j * np.asarray(omega, dtype=float)
@@ -38,7 +40,7 @@ def pid_transfer(
     return k / (s * s * (lag * s + 1.0) + k * (headway * s + 1.0))
 
 
-def peak_gain(transfer, omegas: np.ndarray = OMEGAS) -> tuple[float, float]:
+def peak_gain(transfer: Callable[[np.ndarray], np.ndarray], omegas: np.ndarray = OMEGAS) -> tuple[float, float]:
     """(max |H(jw)|, the w where it peaks) of a callable H(omega) -> complex array."""
     gains = np.abs(transfer(omegas))
     i = int(np.argmax(gains))

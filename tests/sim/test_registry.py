@@ -109,3 +109,17 @@ def test_check_needs_names_the_scenario_the_backend_and_what_it_lacks():
     assert str(err.value) == (
         "bad value for --backend: 'highway-env' (scenario curve needs any_network; backend highway-env lacks it)"
     )
+
+
+def test_a_scenario_on_a_backend_lacking_its_needs_is_refused_naming_what_it_lacks():
+    """The needs are matched before the scenario's list of backends: curve (sumo only) on
+    highway-env hears what highway-env lacks, not only that it is not sumo."""
+    from ego.scenarios.base import check_backend
+    from ego.scenarios.curve import CurveScenario
+
+    with pytest.raises(ConfigError) as err:
+        check_backend(CurveScenario, "highway-env")
+    assert str(err.value) == (
+        "bad value for --backend: 'highway-env' (scenario curve needs any_network; backend highway-env lacks it)"
+    )
+    check_backend(CurveScenario, "sumo")
