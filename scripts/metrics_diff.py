@@ -1,9 +1,17 @@
 """Diff two snapshots of scripts/metrics_snapshot.py with plain equality: exit 1 on any change."""
 
+import argparse
 import json
 import sys
 
-a, b = (json.load(open(p)) for p in sys.argv[1:3])
+ap = argparse.ArgumentParser(description=__doc__)
+ap.add_argument("old", metavar="OLD.json")
+ap.add_argument("new", metavar="NEW.json")
+args = ap.parse_args()
+try:
+    a, b = (json.load(open(p)) for p in (args.old, args.new))
+except (OSError, ValueError) as e:
+    ap.error(f"cannot read a snapshot: {e}")
 bad = 0
 for key in sorted(set(a) | set(b)):
     if key not in a or key not in b:

@@ -10,9 +10,10 @@ emergency-brake, fast-follower and cut-in with ``pid``.
 
 from __future__ import annotations
 
+import argparse
 import json
 import multiprocessing as mp
-import sys
+import os
 
 
 def _one(job):
@@ -47,16 +48,31 @@ def jobs(only=()):
 
 
 def main() -> None:
-    out_path, *rest = sys.argv[1:]
-    only = rest[1:] if rest[:1] == ["--only"] else ()
-    todo = jobs(only)
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], epilog=__doc__.split("\n\n", 1)[1])
+    ap.add_argument(
+        "out", metavar="OUT.json", help="where the snapshot is written (compare two with scripts/metrics_diff.py)"
+    )
+    ap.add_argument("--only", nargs="+", default=(), metavar="SCENARIO", help="only these scenarios (default: all)")
+    ap.add_argument("--jobs", type=int, default=2, help="worker processes (default: 2)")
+    args = ap.parse_args()
+    from ego.scenarios import SCENARIOS
+
+    unknown = [n for n in args.only if n not in SCENARIOS]
+    if unknown:
+        ap.error(f"unknown scenario {unknown[0]!r} (expected one of: {', '.join(SCENARIOS)})")
+    if args.jobs < 1:
+        ap.error(f"bad value for --jobs: {args.jobs} (expected >= 1)")
+    out_path = args.out
+    todo = jobs(tuple(args.only))
     result = {}
-    with mp.get_context("spawn").Pool(2, maxtasksperchild=1) as pool:
+    with mp.get_context("spawn").Pool(args.jobs, maxtasksperchild=1) as pool:
         for job, res in pool.imap_unordered(_one, todo):
             result["|".join(map(str, job))] = res
             print(len(result), "/", len(todo), *job, res.get("status", res.get("error")), flush=True)
-    with open(out_path, "w") as f:
+    tmp = f"{out_path}.part"
+    with open(tmp, "w") as f:
         json.dump(dict(sorted(result.items())), f, indent=1, sort_keys=True)
+    os.replace(tmp, out_path)
 
 
 if __name__ == "__main__":
