@@ -76,7 +76,7 @@ class Speed(ActionKind):
         "RelativeTargetSpeed": (),
     }
     domains, on_ego, in_init = ("long",), True, "yes"
-    init_note = "SpeedAction with AbsoluteTargetSpeed or a non-continuous RelativeTargetSpeed"
+    init_note = "SpeedAction"
     note = (
         "`AbsoluteTargetSpeed`, `RelativeTargetSpeed` (delta, factor, continuous); shapes step, linear, cubic, "
         "sinusoidal over time, rate (the mean rate for cubic and sinusoidal) or distance; a `value` of 0 is a "
@@ -104,8 +104,10 @@ class Speed(ActionKind):
             node.line,
         )
 
-    def init_ok(self, action: M.SpeedAction) -> bool:
-        return action.relative_to is None or not action.continuous
+    def init_runs(self, action: M.SpeedAction) -> bool:
+        # a continuous relative speed: the start is the other's Init speed plus the delta,
+        # and the action keeps following it from t = 0
+        return action.relative_to is not None and action.continuous
 
     def start(self, run: ActionRun, t: float) -> None:
         b, a, drv = run.board, run.action, run.board.driver
@@ -171,6 +173,7 @@ def _lateral_step(kind: ActionKind, run: ActionRun, t: float) -> None:
 
 class LaneChange(ActionKind):
     tag, within, model = "LaneChangeAction", ("LateralAction",), M.LaneChangeAction
+    in_init, init_note = "runs", "LaneChangeAction"
     domains, on_ego, releases = ("lat",), True, True
     contains = ("LaneChangeActionDynamics", "LaneChangeTarget")
     parts = {
@@ -216,6 +219,7 @@ class LaneChange(ActionKind):
 
 class LaneOffset(ActionKind):
     tag, within, model = "LaneOffsetAction", ("LateralAction",), M.LaneOffsetAction
+    in_init, init_note = "runs", "LaneOffsetAction"
     domains, on_ego, releases = ("lat",), True, True
     contains = ("LaneOffsetActionDynamics", "LaneOffsetTarget")
     parts = {
@@ -259,6 +263,7 @@ class LaneOffset(ActionKind):
 
 class LongitudinalDistance(ActionKind):
     tag, within, model = "LongitudinalDistanceAction", ("LongitudinalAction",), M.LongitudinalDistanceAction
+    in_init, init_note = "runs", "LongitudinalDistanceAction"
     contains = ("DynamicConstraints",)
     parts = {"DynamicConstraints": ()}
     domains = ("long",)
@@ -344,6 +349,7 @@ def _limits(b: Any, n: Node, *names: tuple[str, str]) -> dict[str, float]:
 
 class SpeedProfile(ActionKind):
     tag, within, model = "SpeedProfileAction", ("LongitudinalAction",), M.SpeedProfileAction
+    in_init, init_note = "runs", "SpeedProfileAction"
     contains = ("DynamicConstraints", "SpeedProfileEntry")
     parts = {"DynamicConstraints": (), "SpeedProfileEntry": ()}
     domains = ("long",)
@@ -386,6 +392,7 @@ class SpeedProfile(ActionKind):
 
 class Synchronize(ActionKind):
     tag, within, model = "SynchronizeAction", ("PrivateAction",), M.SynchronizeAction
+    in_init, init_note = "runs", "SynchronizeAction"
     contains = ("TargetPositionMaster", "TargetPosition", "FinalSpeed")
     parts = {
         "TargetPositionMaster": "Position",
@@ -467,6 +474,7 @@ class Synchronize(ActionKind):
 
 class FollowTrajectory(ActionKind):
     tag, within, model = "FollowTrajectoryAction", ("RoutingAction",), M.FollowTrajectoryAction
+    in_init, init_note = "runs", "FollowTrajectoryAction"
     contains = ("Trajectory", "TrajectoryRef", "TimeReference", "TrajectoryFollowingMode")
     parts = {
         "Trajectory": ("ParameterDeclarations", "Shape"),

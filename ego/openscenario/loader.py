@@ -746,6 +746,7 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
     if sb is None:
         raise ScenarioFileError(path, root.line, "<OpenSCENARIO> needs a <Storyboard>")
     init: dict[str, list[M.PrivateAction]] = {name: [] for name in b.entities}
+    init_runs: dict[str, list[M.PrivateAction]] = {}
     init_node = sb.child("Init")
     actions = init_node.child("Actions") if init_node is not None else None
     for ga in actions.all("GlobalAction") if actions is not None else ():
@@ -762,13 +763,16 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
             kind = action_of(act)
             if kind.in_init == "ignored":
                 continue
-            if kind.in_init != "yes" or not kind.init_ok(act):
+            if kind.in_init not in ("yes", "runs") or not kind.init_ok(act):
                 raise ScenarioFileError(
                     path,
                     pa.children[0].line,
                     f"<{pa.children[0].tag}> in <Init> is not supported by ego (Init takes {init_kinds()}; see {DOCS})",
                 )
-            init[ref].append(act)
+            if kind.in_init == "yes":
+                init[ref].append(act)
+            if kind.init_runs(act):
+                init_runs.setdefault(ref, []).append(act)
     for name, acts in init.items():
         if not any(isinstance(a, M.TeleportAction) for a in acts):
             raise ScenarioFileError(
@@ -834,6 +838,7 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
         init,
         tuple(stories),
         stop,
+        init_runs=init_runs,
     )
     _check_refs(scenario, names)
     return scenario

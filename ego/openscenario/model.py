@@ -380,6 +380,9 @@ class Scenario:
     stories: tuple[Story, ...]
     stop: Trigger | None
     elements: list[tuple[str, str, int, bool]] = field(default_factory=list)  #: (tag, note, line, supported)
+    #: entity -> Init actions that keep running from t = 0 (a continuous relative speed, a
+    #: distance held...): the storyboard starts them at its first step
+    init_runs: dict[str, list[PrivateAction]] = field(default_factory=dict)
 
 
 def qualified_names(path: tuple[str, ...]) -> list[str]:

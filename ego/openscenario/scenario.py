@@ -856,6 +856,14 @@ class FileManoeuvre(EvasiveManoeuvre):
 
 def _check_ego_actions(model: M.Scenario, ego: str) -> None:
     """Actions ego cannot apply to its own vehicle, refused before the run."""
+    for act in model.init_runs.get(ego, ()):
+        if not action_of(act).on_ego:
+            raise ScenarioFileError(
+                model.path,
+                act.line,
+                f"<{action_of(act).tag}> on the ego ({ego}) is not supported by ego: the ego moves by its own "
+                f"model (see {DOCS})",
+            )
     for st in model.stories:
         for act in st.acts:
             for g in act.groups:

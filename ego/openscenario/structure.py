@@ -181,12 +181,17 @@ declare(
     within=("Storyboard",),
     contains=("Actions",),
     note=(
-        "the start is immediate whatever the dynamics; every entity needs a TeleportAction, the ego a "
+        "a TeleportAction and a SpeedAction are the start, immediate whatever the dynamics (**deviation**: the "
+        "standard runs a speed change with a duration from t = 0); every entity needs a TeleportAction, the ego a "
         "SpeedAction; a relative speed is the other entity's Init speed plus the delta (or times the factor); a "
-        "continuous one is refused; a controller action in Init is accepted and not used"
+        "continuous relative speed, a `LaneChangeAction`, `LaneOffsetAction`, `LongitudinalDistanceAction`, "
+        "`SpeedProfileAction`, `SynchronizeAction` or `FollowTrajectoryAction` in Init is started at t = 0 and "
+        "left running, as the standard runs a non-instantaneous Init action (8.5.1.2), until it ends or a later "
+        "action on the same domain of the entity overrides it (on the ego only what an event may do to it); a "
+        "controller action in Init is accepted and not used"
     ),
-    label="`Init`: `TeleportAction`, `SpeedAction` with `AbsoluteTargetSpeed` or a non-continuous"
-    " `RelativeTargetSpeed`, `ControllerAction`, `GlobalAction`/`EnvironmentAction`",
+    label="`Init`: `TeleportAction`, `SpeedAction`, the running private actions, `ControllerAction`,"
+    " `GlobalAction`/`EnvironmentAction`",
     section="storyboard",
 )
 declare("Actions", contains=("Private", "GlobalAction"))

@@ -1,0 +1,85 @@
+"""Actions in Init that take time (the standard's non-instantaneous Init actions, 8.5.1.2):
+started at t = 0 and left running until they end or a later action on the same domain of the
+entity overrides them. Each file is hand-written for the test (xosc_scenes' straight road)."""
+
+from __future__ import annotations
+
+import pytest
+from xosc_scenes import event, run_scene, scene, sim_time, speed, trigger
+
+from ego.openscenario.loader import load
+from ego.openscenario.xmltree import ScenarioFileError
+
+
+@pytest.fixture(autouse=True)
+def _cache(tmp_path_factory, monkeypatch):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
+
+
+def _init(path, who: str, action: str) -> None:
+    """Add ``action`` (a PrivateAction's content) to ``who``'s Init."""
+    text = path.read_text()
+    tag = f'<Private entityRef="{who}">'
+    assert tag in text
+    path.write_text(text.replace(tag, f"{tag}<PrivateAction>{action}</PrivateAction>", 1))
+
+
+def _follow(ref: str, delta: float) -> str:
+    return (
+        '<LongitudinalAction><SpeedAction><SpeedActionDynamics dynamicsShape="step" value="0" '
+        f'dynamicsDimension="time"/><SpeedActionTarget><RelativeTargetSpeed entityRef="{ref}" value="{delta}" '
+        'speedTargetValueType="delta" continuous="true"/></SpeedActionTarget></SpeedAction></LongitudinalAction>'
+    )
+
+
+def _distance(ref: str, distance: float) -> str:
+    return (
+        f'<LongitudinalAction><LongitudinalDistanceAction entityRef="{ref}" distance="{distance}" '
+        'freespace="false" continuous="true"/></LongitudinalAction>'
+    )
+
+
+def test_a_continuous_relative_speed_in_init_starts_and_keeps_following(tmp_path):
+    """B's Init speed is A's minus 5 m/s (continuous): 20 m/s from the start, and when A steps
+    to 15 m/s at t = 1 s, B is at 10 m/s one step after A's change."""
+    path = scene(tmp_path, [event("E", "A", speed(15.0), trigger([sim_time(1.0)]))])
+    text = path.read_text()
+    # B's own Init speed is replaced by the continuous relative one
+    old = '<Private entityRef="B"><PrivateAction><TeleportAction>'
+    assert old in text
+    b_init = text[text.index(old) :].split("</Private>", 1)[0]
+    new_b = b_init.rsplit("<PrivateAction>", 1)[0] + f"<PrivateAction>{_follow('A', -5.0)}</PrivateAction>"
+    path.write_text(text.replace(b_init, new_b, 1))
+    sc = load(path)
+    assert [type(a).__name__ for a in sc.init_runs["B"]] == ["SpeedAction"]
+    run = run_scene(path, 3.0)
+    hist = {round(t, 1): v for t, v, _ in run._history["B"]}
+    a_hist = {round(t, 1): v for t, v, _ in run._history["A"]}
+    assert hist[0.0] == pytest.approx(20.0, abs=1e-9)
+    assert all(hist[t] == pytest.approx(a_hist[t] - 5.0, abs=1e-6) for t in hist if t <= 1.0 or t >= 1.3)
+    assert hist[2.0] == pytest.approx(10.0, abs=1e-6)
+
+
+def test_a_distance_in_init_is_held_from_the_first_step(tmp_path):
+    """B (lane -2) keeps 50 m behind C (lane -3, 15 m/s) from Init: exact after one step."""
+    path = scene(tmp_path, [], at={"B": (-2, 348.0, 15.0)})
+    _init(path, "B", _distance("C", 50.0))
+    run = run_scene(path, 2.0)
+    b, c = run.board.states["B"], run.board.states["C"]
+    assert c.s - b.s == pytest.approx(50.0, abs=1e-6)
+    assert any("LongitudinalDistanceAction in Init on B" in e.text for e in run.events)
+
+
+def test_a_later_action_overrides_the_running_init_action(tmp_path):
+    """A SpeedAction at t = 1 s on B takes B's speed from the distance action of its Init."""
+    path = scene(tmp_path, [event("E", "B", speed(5.0), trigger([sim_time(1.0)]))], at={"B": (-2, 348.0, 15.0)})
+    _init(path, "B", _distance("C", 50.0))
+    run = run_scene(path, 3.0)
+    assert run.board.states["B"].speed == pytest.approx(5.0, abs=1e-6)
+
+
+def test_an_init_action_the_ego_cannot_do_is_refused_with_its_line(tmp_path):
+    path = scene(tmp_path, [])
+    _init(path, "Ego", _distance("A", 30.0))
+    with pytest.raises(ScenarioFileError, match=r"<LongitudinalDistanceAction> on the ego \(Ego\) is not supported"):
+        run_scene(path, 1.0)
