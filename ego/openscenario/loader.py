@@ -183,6 +183,16 @@ def _check_root(path, root: Node) -> None:
     _check_tree(path, root)
 
 
+def _trajectory_start(actions) -> M.TeleportAction | None:
+    """A TeleportAction to the start of the first trajectory among an entity's running Init
+    actions (its first vertex or control point, a clothoid's start position), if it has one."""
+    for a in actions:
+        start = getattr(a, "start_position", None)
+        if start is not None:
+            return M.TeleportAction(start, a.line)
+    return None
+
+
 def _version(path, root: Node) -> tuple[int, int]:
     """(revMajor, revMinor) of the file's FileHeader: 1.0 to 1.3."""
     header = root.child("FileHeader")
@@ -774,6 +784,11 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
             if kind.init_runs(act):
                 init_runs.setdefault(ref, []).append(act)
     for name, acts in init.items():
+        start = _trajectory_start(init_runs.get(name, ()))
+        if start is not None and not any(isinstance(a, M.TeleportAction) for a in acts):
+            # no TeleportAction, a trajectory from t = 0: the entity starts at its first point
+            # (the reference player puts it there at its first step)
+            acts.insert(0, start)
         if not any(isinstance(a, M.TeleportAction) for a in acts):
             raise ScenarioFileError(
                 path,

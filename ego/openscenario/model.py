@@ -186,6 +186,11 @@ class FollowTrajectoryAction:
     initial_distance_offset: float
     line: int = 0
 
+    @property
+    def start_position(self) -> Position | None:
+        """Where the trajectory starts (an entity without a TeleportAction starts there)."""
+        return self.vertices[0].position if self.vertices else None
+
 
 @dataclass(frozen=True)
 class LongitudinalDistanceAction:

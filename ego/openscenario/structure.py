@@ -182,8 +182,9 @@ declare(
     contains=("Actions",),
     note=(
         "a TeleportAction and a SpeedAction are the start, immediate whatever the dynamics (**deviation**: the "
-        "standard runs a speed change with a duration from t = 0); every entity needs a TeleportAction, the ego a "
-        "SpeedAction; a relative speed is the other entity's Init speed plus the delta (or times the factor); a "
+        "standard runs a speed change with a duration from t = 0); every entity needs a TeleportAction (or, **as the reference player reads it**, a "
+        "`FollowTrajectoryAction` in Init: it starts at the trajectory's first point, where esmini puts it at its "
+        "first step; the standard leaves such a start undefined), the ego a SpeedAction; a relative speed is the other entity's Init speed plus the delta (or times the factor); a "
         "continuous relative speed, a `LaneChangeAction`, `LaneOffsetAction`, `LongitudinalDistanceAction`, "
         "`SpeedProfileAction`, `SynchronizeAction` or `FollowTrajectoryAction` in Init is started at t = 0 and "
         "left running, as the standard runs a non-instantaneous Init action (8.5.1.2), until it ends or a later "

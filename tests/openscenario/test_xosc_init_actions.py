@@ -83,3 +83,35 @@ def test_an_init_action_the_ego_cannot_do_is_refused_with_its_line(tmp_path):
     _init(path, "Ego", _distance("A", 30.0))
     with pytest.raises(ScenarioFileError, match=r"<LongitudinalDistanceAction> on the ego \(Ego\) is not supported"):
         run_scene(path, 1.0)
+
+
+def _trajectory(points) -> str:
+    verts = "".join(
+        f'<Vertex time="{tt}"><Position><WorldPosition x="{x}" y="{y}"/></Position></Vertex>' for tt, x, y in points
+    )
+    return (
+        '<RoutingAction><FollowTrajectoryAction><Trajectory name="t" closed="false"><Shape>'
+        f"<Polyline>{verts}</Polyline></Shape></Trajectory><TimeReference>"
+        '<Timing domainAbsoluteRelative="relative" scale="1" offset="0"/></TimeReference>'
+        '<TrajectoryFollowingMode followingMode="position"/></FollowTrajectoryAction></RoutingAction>'
+    )
+
+
+def test_a_trajectory_in_init_without_a_teleport_starts_the_entity_at_its_first_vertex(tmp_path):
+    """C has no TeleportAction, only a timed trajectory in Init (the reference player's
+    alks_pedestrian.xosc form): it starts at the first vertex (s = 420 m on the ego's lane) and
+    drives the first leg's 40 m in 2 s, the second (sqrt(40^2 + 3.5^2) m) in the next 2 s."""
+    path = scene(tmp_path, [])
+    text = path.read_text()
+    old = text[text.index('<Private entityRef="C">') :].split("</Private>", 1)[0] + "</Private>"
+    traj = _trajectory(((0.0, 420.0, -3.5), (2.0, 460.0, -3.5), (4.0, 500.0, 0.0)))
+    path.write_text(text.replace(old, f'<Private entityRef="C"><PrivateAction>{traj}</PrivateAction></Private>'))
+    sc = load(path)
+    assert type(sc.init["C"][0]).__name__ == "TeleportAction"
+    run = run_scene(path, 5.0)
+    hist = {round(t, 6): (v, d) for t, v, d in run._history["C"]}
+    assert sc.init["C"][0].position.x == 420.0  # type: ignore[union-attr]
+    for t in (0.0, 0.5, 1.0, 1.5, 1.9):
+        assert hist[t][0] == pytest.approx(20.0, abs=1e-6)
+        assert hist[t][1] == pytest.approx(0.0, abs=1e-6)
+    assert hist[3.0][0] == pytest.approx((40.0**2 + 3.5**2) ** 0.5 / 2.0, abs=1e-6)
