@@ -605,10 +605,16 @@ class _Builder:
             if "dsLane" in p.attrs:
                 raise self.error(p, f"dsLane in <RelativeLanePosition> is not supported by ego (use ds; see {DOCS})")
             return M.RelativeLanePosition(
-                self.entity_ref(p), self.int_(p, "dLane"), self.num(p, "ds", 0.0), self.num(p, "offset", 0.0), p.line
+                # a missing dLane (the schema requires it) is 0, as the reference player reads it
+                self.entity_ref(p),
+                self.int_(p, "dLane", 0),
+                self.num(p, "ds", 0.0),
+                self.num(p, "offset", 0.0),
+                p.line,
             )
         if tag == "RelativeObjectPosition":
-            return M.RelativeObjectPosition(self.entity_ref(p), self.num(p, "dx"), self.num(p, "dy", 0.0), p.line)
+            # dx and dy are required by the schema; the reference player reads a missing one as 0
+            return M.RelativeObjectPosition(self.entity_ref(p), self.num(p, "dx", 0.0), self.num(p, "dy", 0.0), p.line)
         return M.RelativeRoadPosition(self.entity_ref(p), self.num(p, "ds"), self.num(p, "dt"), p.line)
 
     # -- actions ------------------------------------------------------------------------------
@@ -882,7 +888,7 @@ def _maneuver(b: _Builder, man: Node, names: dict[str, int], scoped: bool = True
     for ev in man.all("Event"):
         acts_ = tuple(
             M.Action(
-                b.str_(a, "name"),
+                b.str_(a, "name", ""),  # nameless as the reference player reads it (see Storyboard)
                 b.global_action(a.children[0])
                 if a.children and a.children[0].tag == "GlobalAction"
                 else b.private_action(b.one(a, "PrivateAction")),

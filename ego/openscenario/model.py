@@ -180,16 +180,50 @@ class Vertex:
 
 
 @dataclass(frozen=True)
+class ClothoidSegment:
+    """A clothoid (or one segment of a clothoid spline): from ``start`` (None: where the
+    previous segment ends, or the entity for the first), its heading turned by ``h_offset``,
+    curvature ``k0`` to ``k1`` (1/m) over ``length`` (m); ``time`` at its start (s) or None."""
+
+    start: Position | None
+    k0: float
+    k1: float
+    length: float
+    h_offset: float = 0.0
+    time: float | None = None
+
+
+@dataclass(frozen=True)
+class Nurbs:
+    """A NURBS curve: control points (position, time) with weights, its knots and order."""
+
+    order: int
+    points: tuple[Vertex, ...]
+    weights: tuple[float, ...]
+    knots: tuple[float, ...]
+
+
+@dataclass(frozen=True)
 class FollowTrajectoryAction:
+    """A trajectory: a polyline's ``vertices``, or clothoid ``segments`` (one for a Clothoid,
+    several for a ClothoidSpline; ``end_time`` the time at the end of the last), or a NURBS."""
+
     vertices: tuple[Vertex, ...]
     timing: tuple[str, float, float] | None  #: (absolute|relative, scale, offset) or None
     initial_distance_offset: float
     line: int = 0
+    segments: tuple[ClothoidSegment, ...] = ()
+    end_time: float | None = None
+    nurbs: Nurbs | None = None
 
     @property
     def start_position(self) -> Position | None:
         """Where the trajectory starts (an entity without a TeleportAction starts there)."""
-        return self.vertices[0].position if self.vertices else None
+        if self.vertices:
+            return self.vertices[0].position
+        if self.segments:
+            return self.segments[0].start
+        return self.nurbs.points[0].position if self.nurbs is not None else None
 
 
 @dataclass(frozen=True)

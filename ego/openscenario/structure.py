@@ -207,7 +207,8 @@ declare(
     "LanePosition",
     contains=("Orientation",),
     note=(
-        "`RelativeObjectPosition`: `dx` ahead, `dy` left of the entity's reference point in its own frame (during "
+        "a missing `dx`/`dy` of a `RelativeObjectPosition` or `dLane` of a `RelativeLanePosition` (the schema "
+        "requires them) is 0, as the reference player reads them; `RelativeObjectPosition`: `dx` ahead, `dy` left of the entity's reference point in its own frame (during "
         "the run from its box and heading; in `Init` along and across its lane, exact on straight roads); `dz` "
         "and its `Orientation` as for the others; a relative `Orientation` turning the entity more than 90 "
         "degrees from its lane (esmini's `alks_cut-in.xosc` starts a car in the oncoming lane turned round, `h = "
@@ -238,7 +239,8 @@ declare(
     note=(
         "states standby / running / complete; `maximumExecutionCount` of events and maneuver groups; `priority` "
         "overwrite / override (stops the maneuver's other running events), skip (does not start while another "
-        "event of the maneuver runs), parallel"
+        "event of the maneuver runs), parallel. **As the reference player reads its files:** a `Maneuver` or an "
+        "`Action` without its `name` (the schema requires one) is read nameless (no condition can refer to it)"
     ),
     label="`Storyboard`, `Story`, `Act`, `ManeuverGroup`, `Maneuver`, `Event`",
     also=("Story", "Act", "ManeuverGroup", "Maneuver", "Event"),
