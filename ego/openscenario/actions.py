@@ -138,6 +138,8 @@ class Speed(ActionKind):
     def step(self, run: ActionRun, t: float) -> None:
         b, a, drv = run.board, run.action, run.board.driver
         p = run.profile
+        if run.is_ego:
+            return  # the ego's references follow the other's speed themselves (ego_speed's relative)
         if a.continuous and a.relative_to is not None and p.done(t):
             ref = b.states[a.relative_to].speed
             target = max(ref + a.value if a.relative_kind == "delta" else ref * a.value, 0.0)
@@ -189,7 +191,10 @@ class LaneChange(ActionKind):
         "the speed at the start) or rate (the peak lateral speed in m/s, as the ALKS files' `MaxLateralVelocity`: "
         "T = k \\|D\\| / rate, k = 1 linear, 3/2 cubic, pi/2 sinusoidal, D from where the entity is to the target); "
         "moved through SUMO's sublane model step by step as cut-in's car (blind to others while moving); a step "
-        "is one placement. **Known deviation (open, issue 39):** the profile moves SUMO's front bumper, not the "
+        "is one placement; a scripted car changing across the centre line into the other direction's lanes "
+        "(the reference player's `acc-test.xosc` overtaking, `RelativeTargetLane` +1 from a one-lane "
+        "direction) is driven by ego from where it crosses (as a car turned against its lane, see the "
+        "positions' row: its reference point on the profile) and stays so. **Known deviation (open, issue 39):** the profile moves SUMO's front bumper, not the "
         "entity's reference point: SUMO turns the car from its front and back positions, so its box centre lags "
         "the shape and reaches the target lane a few steps after the front"
     )

@@ -183,6 +183,23 @@ def _check_root(path, root: Node) -> None:
     _check_tree(path, root)
 
 
+def turned_message(what: str) -> str:
+    """The refusal of an entity turned against its lane's direction where ego cannot take it."""
+    return (
+        f"an <Orientation> turning the entity against its lane's direction ({what}) is not supported by ego: "
+        f"SUMO drives every lane its own way; ego drives a car against its lane only from an Init "
+        f"<LanePosition> on the ego's road (see {DOCS})"
+    )
+
+
+def _check_turned(path, stories, init_runs) -> None:
+    """An entity turned against its lane is an Init start only (a car ego drives itself along
+    its lane the other way); anywhere else it is refused with the Orientation's line."""
+    for x in M.walk((stories, init_runs)):
+        if isinstance(x, M.LanePosition) and x.turned:
+            raise ScenarioFileError(path, x.turned, turned_message("outside <Init>"))
+
+
 def _trajectory_start(actions) -> M.TeleportAction | None:
     """A TeleportAction to the start of the first trajectory among an entity's running Init
     actions (its first vertex or control point, a clothoid's start position), if it has one."""
@@ -583,14 +600,13 @@ class _Builder:
         p = self.one(node)
         tag = p.tag
         o = p.child("Orientation")
+        turned = 0
         if o is not None and self.enum(o, "type", ("relative", "absolute"), "absolute") == "relative":
             h = self.num(o, "h", 0.0)
             if math.cos(h) < 0.0:  # turned more than 90 degrees from its lane's direction
-                raise self.error(
-                    o,
-                    f"an <Orientation> turning the entity against its lane's direction (relative h = {h:g} rad)"
-                    f" is not supported by ego: SUMO drives every lane its own way (see {DOCS})",
-                )
+                if tag != "LanePosition":
+                    raise self.error(o, turned_message(f"relative h = {h:g} rad, in a <{tag}>"))
+                turned = o.line  # an Init start of a car driving against its lane: checked by load
         if tag == "WorldPosition":
             h = self.raw(p, "h", None)
             return M.WorldPosition(self.num(p, "x"), self.num(p, "y"), None if h is None else self.num(p, "h"), p.line)
@@ -598,7 +614,7 @@ class _Builder:
             road, lane, s = self.str_(p, "roadId"), self.int_(p, "laneId"), self.num(p, "s", nonneg=True)
             if lane == 0:  # OpenDRIVE's lane 0 is the reference line: offset is t from it
                 return M.RoadPosition(road, s, self.num(p, "offset", 0.0), p.line)
-            return M.LanePosition(road, lane, s, self.num(p, "offset", 0.0), p.line)
+            return M.LanePosition(road, lane, s, self.num(p, "offset", 0.0), p.line, turned)
         if tag == "RoadPosition":
             return M.RoadPosition(self.str_(p, "roadId"), self.num(p, "s", nonneg=True), self.num(p, "t"), p.line)
         if tag == "RelativeLanePosition":
@@ -847,6 +863,7 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
         stories.append(M.Story(b.str_(st, "name", ""), tuple(acts), st.line))
         names.setdefault(stories[-1].name, st.line)
     stop = b.trigger(sb.child("StopTrigger"))
+    _check_turned(path, stories, init_runs)
     scenario = M.Scenario(
         path,
         header.attrs.get("description", ""),

@@ -6,6 +6,7 @@ reference line); ``line`` is where the element starts in its file.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -62,6 +63,8 @@ class LanePosition:
     s: float
     offset: float
     line: int
+    #: the line of an Orientation turning the entity against its lane's direction (0: none)
+    turned: int = 0
 
 
 @dataclass(frozen=True)
@@ -429,3 +432,17 @@ def qualified_names(path: tuple[str, ...]) -> list[str]:
     first, then its own) is referred to by: its own name and, OpenSCENARIO 1.1's qualified
     forms, every ``Outer::...::Name`` that ends with it (``CutInEvent::CutInAction``)."""
     return ["::".join(path[i:]) for i in range(len(path) - 1, -1, -1)]
+
+
+def walk(node: object):
+    """Every value of the model below ``node`` (its dataclasses, lists, tuples and dicts)."""
+    stack = [node]
+    while stack:
+        x = stack.pop()
+        yield x
+        if dataclasses.is_dataclass(x) and not isinstance(x, type):
+            stack.extend(getattr(x, f.name) for f in dataclasses.fields(x))
+        elif isinstance(x, (list, tuple)):
+            stack.extend(x)
+        elif isinstance(x, dict):
+            stack.extend(x.values())

@@ -27,7 +27,7 @@ import dataclasses
 import math
 import os
 import re
-from collections.abc import Iterator, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
@@ -37,6 +37,7 @@ import numpy as np
 from ego.lane_frame import LanePolyline
 from ego.openscenario import model as M
 from ego.openscenario.dynamics import Transition
+from ego.openscenario.kinematic import Kinematic
 from ego.openscenario.loader import declared_parameters, header_description, load
 from ego.openscenario.registry import action_of
 from ego.openscenario.roads import RoadMap, network_file, refine_shape
@@ -375,8 +376,10 @@ class FileScenario(Scenario):
         roads = RoadMap(net, converted=not str(model.road).endswith(".net.xml"))
         ego = find_ego(model, config.ego_entity)
         _check_ego_actions(model, ego)
+        _check_turned(model, ego)
         starts = placements(model, roads)
-        _check_road_references(model, roads, len(roads.edges[starts[ego].edge].lanes))
+        edge = starts[ego].edge
+        _check_road_references(model, roads, len(roads.edges[edge].lanes), len(_opposite_lanes(roads, edge)))
         if starts[ego].offset:
             pos = next(a for a in model.init[ego] if isinstance(a, M.TeleportAction)).position
             raise ScenarioFileError(
@@ -551,6 +554,7 @@ class FileScenario(Scenario):
                 along = start.front - 0.5 * self.model.entities[name].vehicle.length
                 x, y = poly.offset_point(along, start.offset)
                 self.bridge.place(name, x, y, poly.heading_at(along), start.speed or 0.0)
+        self._start_kinematic()
         self.board = Storyboard(self.model, self.ego_name, self, self.config.sumo_step, self._story_event)
         self._scripted = [n for n in self.model.entities if n != self.ego_name]
         self._history = {n: [] for n in self._scripted}
@@ -559,6 +563,30 @@ class FileScenario(Scenario):
         for hist in self._history.values():
             hist.clear()
 
+    def _start_kinematic(self) -> None:
+        """The cars that start turned against their lane: ego drives them (kinematic.py), from
+        their Init position, the lanes of the other direction beside the ego's in its frame."""
+        road = self.road
+        self._kin = Kinematic(road, self.bridge.place, self.config.sumo_step)
+        lanes = _opposite_lanes(self.roads, self.starts[self.ego_name].edge)
+        own = self.lane_offset
+        self._lanes_all = dict(own)
+        for k, lane in enumerate(lanes):
+            mid = lane.shape[len(lane.shape) // 2]
+            self._lanes_all[len(own) + k] = road.project(mid[0], mid[1])[1]
+        for name, start in self.starts.items():
+            tp = next(a for a in self.model.init[name] if isinstance(a, M.TeleportAction))
+            if name == self.ego_name or not getattr(tp.position, "turned", 0):
+                continue
+            x, y, h = self.position_xy(tp.position, {})
+            heading = h + math.pi  # turned round on its lane
+            cx = self.model.entities[name].vehicle.center_x
+            x, y = x + cx * math.cos(heading), y + cx * math.sin(heading)
+            s, d, _ = road.project(x, y)
+            direction = 1 if math.cos(heading - road.heading_at(s)) > 0.0 else -1
+            self._kin.add(name, s, d, start.speed or 0.0, direction)
+            self.bridge.place(name, x, y, heading, start.speed or 0.0)
+
     def after_sim_step(self) -> None:
         """The run ends, as at the end of its time, when a scripted entity has left the road
         network (SUMO takes a car off at the end of its route) or the ego has reached the end
@@ -566,7 +594,10 @@ class FileScenario(Scenario):
         if self.status != "running":
             return
         gone = [n for n in self.bridge.arrived() if n in self._scripted]
-        if gone:
+        away = self._kin.beyond()
+        if away is not None:
+            self._road_end(f"{away} left its road (driven against its lane, at the road's end)")
+        elif gone:
             self._road_end(f"{gone[0]} left the road network (the end of its route)")
         elif self.view.s + self.geometry.cg_to_front >= self.view.road.length:
             self._road_end(
@@ -611,12 +642,13 @@ class FileScenario(Scenario):
             if t >= 0.0:
                 st.traveled += math.hypot(bx - st.x, by - st.y)
             st.x, st.y, st.yaw = bx, by, yaw
-            st.speed = speed
+            # a car ego drives against its lane: its own speed (SUMO's reads its placement)
+            st.speed = speed if name not in self._kin else self._kin.cars[name].v
             s, d, _ = project(bx, by)
             half = 0.5 * st.length
             st.s, st.d = s, d
             st.d_front = project(bx + half * math.cos(yaw), by + half * math.sin(yaw))[1]
-            history[name].append((t, speed, st.d_front))
+            history[name].append((t, st.speed, st.d_front))
 
     def _ego_now(self) -> tuple[float, float, float, float, float, float]:
         """The ego's world pose, speed and lane-frame position (its centre of gravity) now."""
@@ -629,6 +661,7 @@ class FileScenario(Scenario):
         t = self.t - self.config.sumo_step
         self._observe(t)
         board.step(t)
+        self._kin.advance()
         self._ego_then = self._ego_now()  # what the next step's storyboard time sees
         if board.stopped and self.status == "running":
             self._end("completed", "the storyboard's StopTrigger ended the scenario")
@@ -670,17 +703,20 @@ class FileScenario(Scenario):
         return min(self.lane_offset.values(), key=lambda off: abs(d - off))
 
     def lane_centre(self, lane_id: int, relative_to: float | None = None, dlane: int = 0) -> float:
+        # the ego's direction's lanes (index 0 the rightmost), then the other direction's from
+        # the centre line outwards (a scripted car changing into them is driven by ego)
+        lanes = self._lanes_all
         n = len(self.lanes)
         if relative_to is None:
-            index = n - abs(lane_id)
+            index = n - abs(lane_id) if lane_id < 0 else n - 1 + lane_id
         else:
-            index = min(self.lane_offset, key=lambda i: abs(relative_to - self.lane_offset[i])) + dlane
-        if index not in self.lane_offset:
+            index = min(lanes, key=lambda i: abs(relative_to - lanes[i])) + dlane
+        if index not in lanes:
             raise ConfigError(
                 f"lane {lane_id if relative_to is None else f'{dlane:+d} from the reference'} does "
                 f"not exist on the ego's road ({n} lanes)"
             )
-        return self.lane_offset[index]
+        return lanes[index]
 
     def _limit(self, name: str, rate: float) -> None:
         """Let SUMO follow a commanded speed change of ``rate`` (m/s^2) per step."""
@@ -694,6 +730,9 @@ class FileScenario(Scenario):
             self._limits[name] = (acc, dec)
 
     def speed(self, name: str, v_next: float, peak_rate: float) -> None:
+        if name in self._kin:
+            self._kin.speed(name, v_next)
+            return
         if not math.isfinite(peak_rate):
             self.bridge.start_speed(name, v_next)  # a step: at once
             return
@@ -701,7 +740,7 @@ class FileScenario(Scenario):
         self.bridge.set_speed(name, v_next)
 
     def blind(self, name: str) -> bool:
-        return name in self._lateral_free
+        return name in self._lateral_free or name in self._kin
 
     def speed_rate(self, name: str, target: float, rate: float) -> None:
         if target < self.board.states[name].speed:
@@ -712,6 +751,14 @@ class FileScenario(Scenario):
 
     def lateral(self, name: str, d_next: float, peak_speed: float) -> None:
         st = self.board.states[name]
+        if name not in self._kin and d_next > 0.5 * (
+            max(self.lane_offset.values()) + self._lanes_all.get(len(self.lanes), INF)
+        ):
+            # across the centre line into the other direction's lanes: ego drives it from here
+            self._kin.add(name, st.s, st.d, st.speed, 1 if math.cos(st.yaw - self.road.heading_at(st.s)) > 0 else -1)
+        if name in self._kin:
+            self._kin.lateral(name, d_next)  # its reference point on the profile
+            return
         if not math.isfinite(peak_speed):
             # a step: the sublane model moves a car at most a lane-width fraction a step, so
             # the car is placed across at once (where it would be after the step)
@@ -730,9 +777,14 @@ class FileScenario(Scenario):
 
     def teleport(self, name: str, x: float, y: float, heading: float) -> None:
         self.bridge.place(name, x, y, heading, self.board.states[name].speed, keep_route=1)
+        if name in self._kin:
+            self._kin.moved(name, *self.road_frame(x, y))
 
     def place(self, name: str, x: float, y: float, heading: float, speed: float) -> None:
         self.bridge.place(name, x, y, heading, speed)
+        if name in self._kin:
+            self._kin.moved(name, *self.road_frame(x, y))
+            self._kin.speed(name, speed)
         self.bridge.set_speed(name, speed)  # SUMO's own speed too (it drives on from there)
 
     def release(self, name: str) -> None:
@@ -883,25 +935,32 @@ def _check_ego_actions(model: M.Scenario, ego: str) -> None:
                                 )
 
 
-def _model_nodes(node: object) -> Iterator[object]:
-    """Every value of the model below ``node`` (its dataclasses, lists, tuples and dicts)."""
-    stack = [node]
-    while stack:
-        x = stack.pop()
-        yield x
-        if dataclasses.is_dataclass(x) and not isinstance(x, type):
-            stack.extend(getattr(x, f.name) for f in dataclasses.fields(x))
-        elif isinstance(x, (list, tuple)):
-            stack.extend(x)
-        elif isinstance(x, dict):
-            stack.extend(x.values())
+def _opposite_lanes(roads: RoadMap, edge: str) -> list:
+    """The lanes of the other direction beside the ego's start road (its edge ``-r`` and ``r``),
+    from the centre line outwards (SUMO's lane index counts from the outer edge)."""
+    other = edge[1:] if edge.startswith("-") else "-" + edge
+    if other not in roads.edges:
+        return []
+    return list(reversed(roads.edges[other].lanes))
 
 
-def _check_road_references(model: M.Scenario, roads: RoadMap, ego_lanes: int) -> None:
+def _check_turned(model: M.Scenario, ego: str) -> None:
+    """The ego turned against its lane is refused: it drives its lane frame's way."""
+    tp = next(a for a in model.init[ego] if isinstance(a, M.TeleportAction))
+    if getattr(tp.position, "turned", 0):
+        raise ScenarioFileError(
+            model.path,
+            tp.position.turned,  # type: ignore[union-attr]
+            f"an <Orientation> turning the ego against its lane's direction is not supported by ego: the ego "
+            f"drives its lane's way (see {DOCS})",
+        )
+
+
+def _check_road_references(model: M.Scenario, roads: RoadMap, ego_lanes: int, other_lanes: int = 0) -> None:
     """Every road position of the file (in its actions and conditions too, not only its Init)
     names a lane of the road network, and no lane change asks for more lanes beside its
     reference than the ego's road has: what the run would find only when it got there."""
-    for x in _model_nodes(model.stories):
+    for x in M.walk(model.stories):
         try:
             if isinstance(x, M.LanePosition):
                 roads.lane_position(x.road, x.lane, x.s)
@@ -909,13 +968,17 @@ def _check_road_references(model: M.Scenario, roads: RoadMap, ego_lanes: int) ->
                 roads.lane_position(x.road, -1, x.s)
         except ValueError as exc:
             raise ScenarioFileError(model.path, x.line, str(exc)) from None
-        if isinstance(x, M.LaneChangeAction) and x.relative_to is not None and abs(x.relative_lanes) >= ego_lanes:
+        if (
+            isinstance(x, M.LaneChangeAction)
+            and x.relative_to is not None
+            and (-x.relative_lanes >= ego_lanes or x.relative_lanes >= ego_lanes + other_lanes)
+        ):
             raise ScenarioFileError(
                 model.path,
                 x.line,
                 f"a lane change {x.relative_lanes:+d} lanes from {x.relative_to}'s lane: the ego's road has "
-                f"{ego_lanes} lane{'s' if ego_lanes != 1 else ''} in its direction (ego models the lanes of the "
-                f"ego's direction of travel; see {DOCS})",
+                f"{ego_lanes} lane{'s' if ego_lanes != 1 else ''} in its direction and {other_lanes} in the other "
+                f"(ego models the lanes of the ego's road; see {DOCS})",
             )
 
 

@@ -115,3 +115,23 @@ def test_a_trajectory_in_init_without_a_teleport_starts_the_entity_at_its_first_
         assert hist[t][0] == pytest.approx(20.0, abs=1e-6)
         assert hist[t][1] == pytest.approx(0.0, abs=1e-6)
     assert hist[3.0][0] == pytest.approx((40.0**2 + 3.5**2) ** 0.5 / 2.0, abs=1e-6)
+
+
+def test_a_continuous_relative_speed_of_the_ego_moves_its_speed_reference(tmp_path):
+    """The ego follows A's speed less 5 m/s from Init: when A steps down to 15 m/s at t = 1 s the
+    ego's speed reference is 10 m/s, and pid brings the ego there (its speed within 0.5 m/s at
+    t = 10 s). (Before, a continuous relative speed on the ego ended in a traceback once its
+    profile was done: the SUMO command meant for the others was sent to the ego.)"""
+    path = scene(tmp_path, [event("E", "A", speed(15.0), trigger([sim_time(1.0)]))])
+    _init(path, "Ego", _follow("A", -5.0))
+    run = run_scene(path, 10.0)
+    assert run.status in ("completed", "timeout")
+    assert run.ego.state[1] == pytest.approx(10.0, abs=0.5)
+
+
+def test_a_continuous_relative_speed_on_the_ego_in_an_event_runs(tmp_path):
+    """The same in an event (a traceback before: SUMO has no vehicle 'Ego' to command)."""
+    path = scene(tmp_path, [event("F", "Ego", _follow("A", -5.0), trigger([sim_time(1.0)]))])
+    run = run_scene(path, 6.0)
+    assert run.status in ("completed", "timeout")
+    assert run.ego.state[1] == pytest.approx(20.0, abs=0.5)

@@ -89,6 +89,19 @@ def event(
     )
 
 
+def maneuver_groups(events) -> str:
+    """One maneuver group per actor of ``events`` (from :func:`event`), in order."""
+    groups = ""
+    for actor in dict.fromkeys(a for a, _ in events):
+        evs = "".join(e for a, e in events if a == actor)
+        groups += (
+            f'<ManeuverGroup name="G{actor}" maximumExecutionCount="1"><Actors selectTriggeringEntities="false">'
+            f'<EntityRef entityRef="{actor}"/></Actors><Maneuver name="M{actor}">{evs}</Maneuver>'
+            "</ManeuverGroup>"
+        )
+    return groups
+
+
 def scene(tmp: Path, events: list[tuple[str, str]], params: str = "", stop: str = "", at: dict | None = None) -> Path:
     """Write the scene with ``events`` (from :func:`event`), one maneuver group per actor;
     ``at`` replaces some starts (name -> (lane, s, speed))."""
@@ -101,14 +114,7 @@ def scene(tmp: Path, events: list[tuple[str, str]], params: str = "", stop: str 
         f"{speed(v)}</PrivateAction></Private>"
         for n, (lane, s, v) in begin.items()
     )
-    groups = ""
-    for actor in dict.fromkeys(a for a, _ in events):
-        evs = "".join(e for a, e in events if a == actor)
-        groups += (
-            f'<ManeuverGroup name="G{actor}" maximumExecutionCount="1"><Actors selectTriggeringEntities="false">'
-            f'<EntityRef entityRef="{actor}"/></Actors><Maneuver name="M{actor}">{evs}</Maneuver>'
-            "</ManeuverGroup>"
-        )
+    groups = maneuver_groups(events)
     text = f"""<?xml version="1.0"?>
 <OpenSCENARIO>
 <FileHeader revMajor="1" revMinor="2" date="2026-11-24T00:00:00" description="semantics" author="ego tests"/>
