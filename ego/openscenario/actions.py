@@ -726,6 +726,150 @@ class FollowTrajectory(ActionKind):
             run.board.driver.release(run.actor)
 
 
+#: a vehicle category's body when a TrafficDefinition names only the category (ego's choices:
+#: (length, width, max speed) of a typical one; the standard gives none)
+CATEGORY_BODIES = {
+    "car": (4.5, 1.8, 55.0),
+    "van": (5.2, 2.0, 45.0),
+    "truck": (12.0, 2.55, 30.0),
+    "bus": (12.0, 2.55, 30.0),
+    "semitrailer": (16.5, 2.55, 30.0),
+    "trailer": (8.0, 2.55, 30.0),
+    "motorbike": (2.2, 0.8, 50.0),
+    "bicycle": (1.8, 0.6, 12.0),
+}
+
+
+def _category_body(category: str, line: int) -> M.Vehicle:
+    length, width, vmax = CATEGORY_BODIES[category]
+    return M.Vehicle(f"traffic {category}", category, length, width, 1.5, 0.0, vmax, 3.0, 6.0, line)
+
+
+class Traffic(ActionKind):
+    """A TrafficAction (source, sink, swarm, stop): done at once, it starts (or stops) a traffic
+    process that runs with the simulation (``ego/openscenario/traffic.py``)."""
+
+    tag, within, model = "TrafficAction", ("GlobalAction",), M.TrafficAction
+    contains = ("TrafficSourceAction", "TrafficSinkAction", "TrafficSwarmAction", "TrafficStopAction")
+    parts = {
+        "TrafficSourceAction": ("Position", "TrafficDefinition", "TrafficDistribution"),
+        "TrafficSinkAction": ("Position", "TrafficDefinition", "TrafficDistribution"),
+        "TrafficSwarmAction": (
+            "CentralObject",
+            "TrafficDefinition",
+            "TrafficDistribution",
+            "InitialSpeedRange",
+            "DirectionOfTravelDistribution",
+        ),
+        "TrafficStopAction": (),
+        "CentralObject": (),
+        "InitialSpeedRange": (),
+        "DirectionOfTravelDistribution": (),
+        "TrafficDefinition": ("VehicleCategoryDistribution", "ControllerDistribution", "VehicleRoleDistribution"),
+        "VehicleCategoryDistribution": ("VehicleCategoryDistributionEntry",),
+        "VehicleCategoryDistributionEntry": (),
+        "ControllerDistribution": ("ControllerDistributionEntry",),
+        "ControllerDistributionEntry": ("Controller", "CatalogReference"),
+        "VehicleRoleDistribution": ("VehicleRoleDistributionEntry",),
+        "VehicleRoleDistributionEntry": (),
+        "TrafficDistribution": ("TrafficDistributionEntry",),
+        "TrafficDistributionEntry": ("EntityDistribution", "Properties"),
+        "EntityDistribution": ("EntityDistributionEntry",),
+        "EntityDistributionEntry": ("ScenarioObjectTemplate",),
+        "ScenarioObjectTemplate": ("CatalogReference", "Vehicle", "ObjectController"),
+    }
+    domains, on_ego, is_global, in_init, section = (), True, True, "yes", "global"
+    label = "`GlobalAction`/`TrafficAction`: `TrafficSourceAction`, `TrafficSinkAction`, `TrafficSwarmAction`, "
+    label += "`TrafficStopAction` (1.2)"
+    also = ("TrafficSourceAction", "TrafficSinkAction", "TrafficSwarmAction", "TrafficStopAction")
+    note = (
+        "SUMO vehicles driven by SUMO's drivers (the reference player has no sources or sinks): a source adds "
+        "`rate` vehicles a second (the first at its start) on the lane nearest its `Position`, within `radius` "
+        "along it, inserted at the highest speed SUMO's driver finds safe there up to `speed` (its top speed "
+        "from then on); a sink removes, up to `rate` a second (every one without `rate`), the vehicles the "
+        "file's traffic actions added whose centre comes within `radius` of its position (**deviation**: not "
+        "the file's entities, which the storyboard refers to, nor ego's own background traffic); a swarm keeps "
+        "`numberOfVehicles` in the ellipse around its `CentralObject` (`semiMajorAxis` along the object's "
+        "heading, `semiMinorAxis` across) and outside `innerRadius`, on the lanes of the ego's road in its "
+        "direction, up to `velocity` (or `InitialSpeedRange`'s middle) as a source's, removing the ones that "
+        "leave it and adding new ones anywhere in it (at most 5 a step after the first fill); the vehicles: a "
+        "`TrafficDefinition`'s categories by weight (ego's typical bodies: a car 4.5 m x 1.8 m...) or a "
+        "`TrafficDistribution`'s (1.3) `ScenarioObjectTemplate`s by the product of the weights (a swarm without "
+        "either, as the reference player reads it: cars), drawn and placed seeded by the run's seed; seen by "
+        "the surround sensor and the collision check as any car; `TrafficStopAction` (1.2) ends the traffic "
+        "action of its `trafficName`; in `Init` or an `Action`"
+    )
+
+    def build(self, b: Any, node: Node) -> M.TrafficAction:
+        name = b.str_(node, "trafficName", "")
+        inner = b.one(node)
+        kind = {
+            "TrafficSourceAction": "source",
+            "TrafficSinkAction": "sink",
+            "TrafficSwarmAction": "swarm",
+            "TrafficStopAction": "stop",
+        }[inner.tag]
+        if kind == "stop":
+            if not name:
+                raise b.error(node, "<TrafficStopAction> needs the TrafficAction's trafficName")
+            return M.TrafficAction("stop", name, line=node.line)
+        bodies = self.bodies(b, inner)
+        if kind == "swarm":
+            central = b.entity_ref(b.one(inner, "CentralObject"))
+            speed = b.num(inner, "velocity", None, nonneg=True)
+            rng = inner.child("InitialSpeedRange")
+            if speed is None and rng is not None:
+                speed = 0.5 * (b.num(rng, "lowerLimit") + b.num(rng, "upperLimit"))
+            inner_r = b.num(inner, "innerRadius", nonneg=True)
+            major, minor = b.num(inner, "semiMajorAxis", positive=True), b.num(inner, "semiMinorAxis", positive=True)
+            count = b.int_(inner, "numberOfVehicles", minimum=0)
+            return M.TrafficAction(
+                kind, name, None, 0.0, math.inf, speed, bodies, central, inner_r, major, minor, count, node.line
+            )
+        position = b.position(b.one(inner, "Position"))
+        radius = b.num(inner, "radius", nonneg=True)
+        if kind == "source":
+            rate = b.num(inner, "rate", positive=True)
+            speed = b.num(inner, "speed", None, nonneg=True)
+            if speed is None:
+                speed = b.num(inner, "velocity", None, nonneg=True)
+        else:
+            rate = b.num(inner, "rate", positive=True) if "rate" in inner.attrs else math.inf
+            speed = None
+        return M.TrafficAction(kind, name, position, radius, rate, speed, bodies, line=node.line)
+
+    @staticmethod
+    def bodies(b: Any, inner: Node) -> tuple[tuple[float, M.Vehicle], ...]:
+        out: list[tuple[float, M.Vehicle]] = []
+        td = inner.child("TrafficDefinition")
+        if td is not None:
+            vcd = b.one(td, "VehicleCategoryDistribution")
+            for e in vcd.all("VehicleCategoryDistributionEntry"):
+                cat = b.enum(e, "category", tuple(CATEGORY_BODIES))
+                out.append((b.num(e, "weight", nonneg=True), _category_body(cat, e.line)))
+        dist = inner.child("TrafficDistribution")
+        if dist is not None:
+            for te in dist.all("TrafficDistributionEntry"):
+                w0 = b.num(te, "weight", nonneg=True)
+                for ee in b.one(te, "EntityDistribution").all("EntityDistributionEntry"):
+                    tmpl = b.one(ee, "ScenarioObjectTemplate")
+                    obj = next((c for c in tmpl.children if c.tag in ("CatalogReference", "Vehicle")), None)
+                    if obj is None:
+                        raise b.error(tmpl, "<ScenarioObjectTemplate> needs a <Vehicle> or <CatalogReference>")
+                    out.append((w0 * b.num(ee, "weight", nonneg=True), b.body(obj, "traffic")))
+        if td is None and dist is None:
+            if inner.tag == "TrafficSourceAction":
+                raise b.error(inner, f"<{inner.tag}> needs a <TrafficDefinition> or a <TrafficDistribution>")
+            out.append((1.0, _category_body("car", inner.line)))  # a sink's are unused
+        if not out or sum(w for w, _ in out) <= 0.0:
+            raise b.error(inner, f"<{inner.tag}>'s vehicles have no positive weight")
+        return tuple(out)
+
+    def apply(self, board: Storyboard, action: M.TrafficAction) -> None:
+        board.driver.traffic_action(action)
+        board.log("action", f"t = {board.t:.2f} s: traffic {action.kind} {action.name!r}".replace(" ''", ""))
+
+
 #: a ParameterAction's and a VariableAction's own elements
 VALUE_PARTS: dict[str, tuple[str, ...]] = {
     "SetAction": (),
@@ -861,5 +1005,6 @@ for _kind in (
     Parameter,
     Variable,
     Environment,
+    Traffic,
 ):
     register(_kind())

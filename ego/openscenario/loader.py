@@ -781,13 +781,17 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
     init_runs: dict[str, list[M.PrivateAction]] = {}
     init_node = sb.child("Init")
     actions = init_node.child("Actions") if init_node is not None else None
+    init_globals: list[object] = []
     for ga in actions.all("GlobalAction") if actions is not None else ():
-        if action_of(b.global_action(ga)).in_init == "no":
+        global_action = b.global_action(ga)
+        if action_of(global_action).in_init == "no":
             raise ScenarioFileError(
                 path,
                 ga.children[0].line,
                 f"<{ga.children[0].tag}> in <Init> is not supported by ego (declare the value it sets; see {DOCS})",
             )
+        if action_of(global_action).in_init == "yes":
+            init_globals.append(global_action)  # done at the storyboard's first step
     for priv in actions.all("Private") if actions is not None else ():
         ref = b.entity_ref(priv)
         for pa in priv.all("PrivateAction"):
@@ -877,6 +881,7 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
         tuple(stories),
         stop,
         init_runs=init_runs,
+        init_globals=tuple(init_globals),
     )
     _check_refs(scenario, names)
     return scenario

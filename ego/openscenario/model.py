@@ -126,6 +126,29 @@ class Vehicle:
 
 
 @dataclass(frozen=True)
+class TrafficAction:
+    """A TrafficAction: a ``source`` (``rate`` vehicles a second at ``position`` within
+    ``radius``, at ``speed``), a ``sink`` (removes up to ``rate`` vehicles a second within
+    ``radius`` of ``position``), a ``swarm`` (``count`` vehicles in the ellipse ``major`` x
+    ``minor`` around ``central``, outside ``inner``, at ``speed``) or a ``stop`` of the traffic
+    action named ``name``; ``bodies`` the vehicles drawn by weight."""
+
+    kind: str
+    name: str
+    position: Position | None = None
+    radius: float = 0.0
+    rate: float = math.inf
+    speed: float | None = None
+    bodies: tuple[tuple[float, Vehicle], ...] = ()
+    central: str = ""
+    inner: float = 0.0
+    major: float = 0.0
+    minor: float = 0.0
+    count: int = 0
+    line: int = 0
+
+
+@dataclass(frozen=True)
 class Entity:
     name: str
     vehicle: Vehicle
@@ -425,6 +448,8 @@ class Scenario:
     #: entity -> Init actions that keep running from t = 0 (a continuous relative speed, a
     #: distance held...): the storyboard starts them at its first step
     init_runs: dict[str, list[PrivateAction]] = field(default_factory=dict)
+    #: GlobalActions of the Init done at the storyboard's first step (traffic actions)
+    init_globals: tuple[object, ...] = ()
 
 
 def qualified_names(path: tuple[str, ...]) -> list[str]:

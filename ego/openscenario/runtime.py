@@ -81,6 +81,9 @@ class Driver(Protocol):
     def release(self, name: str) -> None: ...
     def ego_speed(self, profile: Transition | None, relative: tuple[str, str, float] | None) -> None: ...
     def ego_lateral(self, profile: Transition) -> None: ...
+    def traffic_action(self, action: M.TrafficAction) -> None:
+        """Start (or stop) a traffic source, sink or swarm."""
+
     def ego_references(self) -> tuple[float, float]:
         """The ego's speed reference (m/s) and lateral reference (d, m) now."""
 
@@ -254,7 +257,7 @@ class Storyboard:
         self.store: dict[tuple[str, str], object] = {}
         #: the Init actions that keep running (started at the first step), None once started
         self._init: Element | None = None
-        if scenario.init_runs:
+        if scenario.init_runs or scenario.init_globals:
             self._init = Element("action", "Init", None)
 
     def _start_init(self, t: float) -> None:
@@ -264,6 +267,8 @@ class Storyboard:
         el, self._init = self._init, None
         assert el is not None
         el.go(RUNNING, "startTransition")
+        for global_action in self.scenario.init_globals:
+            action_of(global_action).apply(self, global_action)
         runs = []
         for actor, actions in self.scenario.init_runs.items():
             for action in actions:

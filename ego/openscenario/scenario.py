@@ -42,6 +42,7 @@ from ego.openscenario.loader import declared_parameters, header_description, loa
 from ego.openscenario.registry import action_of
 from ego.openscenario.roads import RoadMap, network_file, refine_shape
 from ego.openscenario.runtime import Storyboard
+from ego.openscenario.traffic import TrafficActions, sumo_type
 from ego.openscenario.xmltree import DOCS, ScenarioFileError
 from ego.params import ConfigError, param
 from ego.scenarios.base import NO_PREVENTABLE_COLLISION, Parts, Scenario
@@ -520,17 +521,7 @@ class FileScenario(Scenario):
             v = ent.vehicle
             start = self.starts[name]
             color = ENTITY_COLORS[(k - 1) % len(ENTITY_COLORS)]
-            vt = VehicleType(
-                f"xosc_{name}",
-                length=v.length,
-                width=v.width,
-                accel=v.max_accel,
-                decel=v.max_decel,
-                emergency_decel=max(9.0, v.max_decel),
-                max_speed=v.max_speed,
-                sigma=0.0,
-                color=color,
-            )
+            vt = sumo_type(f"xosc_{name}", v, color)
             self._types[name] = vt
             # inserted at the ego's speed at least (SUMO's insertion check), its own speed set
             # before the first step (as emergency-brake's lead); a pedestrian or misc object
@@ -555,6 +546,16 @@ class FileScenario(Scenario):
                 x, y = poly.offset_point(along, start.offset)
                 self.bridge.place(name, x, y, poly.heading_at(along), start.speed or 0.0)
         self._start_kinematic()
+        self._traffic = TrafficActions(
+            self.bridge,
+            lambda pos: self.position_xy(pos, self.board.states)[:2],
+            self._route,
+            self._pose,
+            self.road,
+            sorted(self.lane_offset.values()),
+            self.config.sumo_step,
+            np.random.default_rng([int(self.seed), 39]),
+        )
         self.board = Storyboard(self.model, self.ego_name, self, self.config.sumo_step, self._story_event)
         self._scripted = [n for n in self.model.entities if n != self.ego_name]
         self._history = {n: [] for n in self._scripted}
@@ -662,6 +663,7 @@ class FileScenario(Scenario):
         self._observe(t)
         board.step(t)
         self._kin.advance()
+        self._traffic.step()
         self._ego_then = self._ego_now()  # what the next step's storyboard time sees
         if board.stopped and self.status == "running":
             self._end("completed", "the storyboard's StopTrigger ended the scenario")
@@ -774,6 +776,13 @@ class FileScenario(Scenario):
             self.bridge.free_lateral(name, max(10.0, speed))
             self._lateral_free.add(name)
         self.bridge.change_sublane(name, d_next - st.d_front)
+
+    def _pose(self, name: str) -> tuple[float, float, float]:
+        e = self.board.states[name]
+        return e.x, e.y, e.yaw
+
+    def traffic_action(self, action: M.TrafficAction) -> None:
+        self._traffic.start(action)
 
     def teleport(self, name: str, x: float, y: float, heading: float) -> None:
         self.bridge.place(name, x, y, heading, self.board.states[name].speed, keep_route=1)

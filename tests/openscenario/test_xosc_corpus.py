@@ -233,9 +233,26 @@ HAND = [
     ),
     (
         "global-action",
+        sub("<Actions>\n", "<Actions>\n        <GlobalAction><InfrastructureAction/></GlobalAction>\n"),
+        "<InfrastructureAction",
+        unsupported("InfrastructureAction"),
+    ),
+    (
+        "traffic-action-empty",
         sub("<Actions>\n", "<Actions>\n        <GlobalAction><TrafficAction/></GlobalAction>\n"),
         "<TrafficAction",
-        unsupported("TrafficAction"),
+        "<TrafficAction> needs exactly one child element (found 0)",
+    ),
+    (
+        "traffic-source-without-vehicles",
+        sub(
+            "<Actions>\n",
+            '<Actions>\n        <GlobalAction><TrafficAction><TrafficSourceAction rate="1" radius="0"><Position>'
+            '<LanePosition roadId="0" laneId="-1" s="50" offset="0"/></Position></TrafficSourceAction>'
+            "</TrafficAction></GlobalAction>\n",
+        ),
+        "<TrafficAction",
+        "<TrafficSourceAction> needs a <TrafficDefinition> or a <TrafficDistribution>",
     ),
     (
         "distribution",
