@@ -411,6 +411,17 @@ class FileScenario(Scenario):
             )
         del known
         cfg = replace(cfg, ego_speed=float(start.speed), ego_lane=int(start.index), ego_start=float(start.front))
+        # an ego parameter the file declares by an expression of its other parameters (the ALKS
+        # files' duration) follows their set values unless set itself
+        types = {f.name: f.type for f in dataclasses.fields(FileConfig)}
+        follow = {
+            k: _PY[types[k]](model.values[k])
+            for k in cls.file_params
+            if k in types and k not in overrides and k in model.values and k != "ego_entity"
+        }
+        follow = {k: v for k, v in follow.items() if v != getattr(cfg, k)}
+        if follow:
+            cfg = replace(cfg, **follow)
         end = stop_time(model)
         if "duration" not in cls.file_params and end is not None and end >= cfg.duration:
             # the run lasts until the StopTrigger's time (--set duration=... still rules)
