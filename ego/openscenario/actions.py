@@ -68,6 +68,36 @@ class ActivateController(ActionKind):
         return M.ControllerAction(node.line)
 
 
+class Appearance(ActionKind):
+    """AppearanceAction's LightStateAction (1.2): a vehicle's lights."""
+
+    tag, within, model = "AppearanceAction", ("PrivateAction",), M.AppearanceAction
+    contains = ("LightStateAction",)
+    parts = {
+        "LightStateAction": ("LightType", "LightState"),
+        "LightType": ("VehicleLight", "UserDefinedLight"),
+        "VehicleLight": (),
+        "UserDefinedLight": (),
+        "LightState": ("Color",),
+        "Color": ("ColorRgb", "ColorCmyk"),
+        "ColorRgb": (),
+        "ColorCmyk": (),
+    }
+    domains, on_ego, in_init, init_note = (), True, "ignored", "AppearanceAction"
+    label = "`AppearanceAction`/`LightStateAction` (1.2)"
+    note = (
+        "read (the light's `mode` on, off or flashing) and done at once, changing nothing: ego draws no lights, "
+        "and neither the plant, SUMO's drivers nor the surround sensor depend on them; `AnimationAction` refused"
+    )
+
+    def build(self, b: Any, node: Node) -> M.AppearanceAction:
+        lsa = b.one(node, "LightStateAction")
+        b.one(lsa, "LightType")
+        b.enum(b.one(lsa, "LightState"), "mode", ("on", "off", "flashing"))
+        b.num(lsa, "transitionTime", 0.0, nonneg=True)
+        return M.AppearanceAction(node.line)
+
+
 class Speed(ActionKind):
     tag, within, model = "SpeedAction", ("LongitudinalAction",), M.SpeedAction
     contains = ("SpeedActionDynamics", "SpeedActionTarget")
@@ -995,6 +1025,7 @@ for _kind in (
     Teleport,
     Controller,
     ActivateController,
+    Appearance,
     Speed,
     LaneChange,
     LaneOffset,

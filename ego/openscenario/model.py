@@ -279,6 +279,13 @@ class ControllerAction:
 
 
 @dataclass(frozen=True)
+class AppearanceAction:
+    """A light state change (1.2): nothing ego simulates depends on it; done at once."""
+
+    line: int = 0
+
+
+@dataclass(frozen=True)
 class SpeedProfileAction:
     """OpenSCENARIO 1.2: the speed goes linearly through ``entries`` (speed m/s, time s to
     reach it: None or 0 at the acceleration limit, a step without one), relative to

@@ -135,3 +135,24 @@ def test_a_continuous_relative_speed_on_the_ego_in_an_event_runs(tmp_path):
     run = run_scene(path, 6.0)
     assert run.status in ("completed", "timeout")
     assert run.ego.state[1] == pytest.approx(20.0, abs=0.5)
+
+
+def _light(mode: str) -> str:
+    return (
+        '<AppearanceAction><LightStateAction transitionTime="0"><LightType><VehicleLight vehicleLightType="fogLights"/>'
+        f'</LightType><LightState mode="{mode}" luminousIntensity="0"/></LightStateAction></AppearanceAction>'
+    )
+
+
+def test_a_light_state_changes_nothing_and_a_bad_mode_is_one_line(tmp_path):
+    """AppearanceAction/LightStateAction (1.2), in Init and in an event: accepted, done at once,
+    the run as without it (A's speeds alike); a mode outside on/off/flashing is refused."""
+    (tmp_path / "plain").mkdir()
+    plain = run_scene(scene(tmp_path / "plain", []), 2.0)
+    path = scene(tmp_path, [event("L", "A", _light("on"), trigger([sim_time(0.5)]))])
+    _init(path, "A", _light("off"))
+    lit = run_scene(path, 2.0)
+    assert [v for _, v, _ in lit._history["A"]] == [v for _, v, _ in plain._history["A"]]
+    path = scene(tmp_path, [event("L", "A", _light("dim"), trigger([sim_time(0.5)]))])
+    with pytest.raises(ScenarioFileError, match=r"bad value for mode in <LightState>: 'dim'"):
+        load(path)

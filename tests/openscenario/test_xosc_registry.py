@@ -47,7 +47,7 @@ def test_every_action_and_condition_has_one_kind_and_every_kind_is_declared():
         assert registry.action_of(model.__new__(model)).model is model
     # what the refusals name is derived from the kinds
     assert registry.init_kinds() == (
-        "TeleportAction, ControllerAction, SpeedAction, LaneChangeAction, LaneOffsetAction, "
+        "TeleportAction, ControllerAction, AppearanceAction, SpeedAction, LaneChangeAction, LaneOffsetAction, "
         "LongitudinalDistanceAction, SpeedProfileAction, SynchronizeAction and FollowTrajectoryAction"
     )
     assert {k.tag for k in registry.ACTIONS.values() if not k.on_ego} == {
