@@ -283,15 +283,23 @@ declare("TriggeringEntities", contains=("EntityRef",))
 declare("EntityCondition")  # the conditions: ego/openscenario/conditions.py
 declare("ByValueCondition")
 refuse(
-    "every other element (e.g. `EndOfRoadCondition`, `OffroadCondition`, `EntityAction`, `TrafficAction` and the"
-    " other `GlobalAction`s, `LateralDistanceAction`, `TrafficSignals`; a `ParameterValueDistribution` runs with"
+    "`EndOfRoadCondition`, `OffroadCondition`",
+    ("EndOfRoadCondition", "OffroadCondition"),
+    "refused with its line: `EndOfRoadCondition` could never hold during a run of ego (a run ends when the "
+    "ego reaches the end of its road or a scripted car leaves the network, SUMO taking it off at its route's "
+    "end; the reference player keeps a car standing there); `OffroadCondition` needs a road-boundary model of "
+    "every entity, which ego does not have",
+    section="conditions",
+)
+refuse(
+    "every other element (e.g. `EntityAction`, the other `GlobalAction`s (`InfrastructureAction`...), "
+    "`LateralDistanceAction`, `VisibilityAction`, `TrafficSignals`; a `ParameterValueDistribution` runs with"
     " `ego sweep`, below)",
     (
-        "EndOfRoadCondition",
-        "OffroadCondition",
         "EntityAction",
-        "TrafficAction",
+        "InfrastructureAction",
         "LateralDistanceAction",
+        "VisibilityAction",
         "TrafficSignals",
         "ParameterValueDistribution",
     ),
