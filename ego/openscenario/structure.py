@@ -120,7 +120,10 @@ declare(
         "Trailer",
     ),
     note=(
-        "`BoundingBox` (length, width, center x), `Performance`, `vehicleCategory` car, van, truck, trailer, "
+        "`BoundingBox` (length, width, center x), `Performance` (`maxSpeed`, `maxAcceleration` and "
+        "`maxDeceleration` each required, as the schema has them in 1.0 to 1.3: a missing one is refused in one "
+        "line; the reference player fills in its own defaults and plays esmini's `straight_500m.xosc`, which "
+        "leaves out `maxAcceleration`), `vehicleCategory` car, van, truck, trailer, "
         "semitrailer, bus, motorbike, bicycle (recorded, not used by SUMO); `Axles` and `Properties` (with "
         "`Property` and `File`) accepted and not used; `TrailerHitch`, `TrailerCoupler` (1.3) accepted and not "
         "used, and a `Trailer` that attaches nothing (an empty `entityRef` or `entryName`: the reference player's "
