@@ -122,7 +122,7 @@ def network_file(road: Path) -> Path:
         lines = [ln.strip() for ln in (proc.stderr + proc.stdout).splitlines() if ln.strip()]
         first = next((ln for ln in lines if ln.startswith("Error")), lines[0] if lines else "no output")
         if "bad_alloc" in proc.stderr or proc.returncode in (-6, -9, 134, 137):
-            first = f"it needed more than {NETCONVERT_MEMORY >> 30} GiB of memory"
+            first = f"it needed more than {NETCONVERT_MEMORY / 2**30:g} GiB of memory"
         raise ScenarioFileError(road, None, f"netconvert cannot convert this OpenDRIVE file: {first}")
     try:
         _parse(tmp)
