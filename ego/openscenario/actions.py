@@ -509,6 +509,54 @@ class Synchronize(ActionKind):
         drv.speed(run.actor, max(v, 0.0), INF)
 
 
+class AssignRoute(ActionKind):
+    tag, within, model = "AssignRouteAction", ("RoutingAction",), M.AssignRouteAction
+    contains = ("Route",)
+    parts = {"Route": ("ParameterDeclarations", "Waypoint"), "Waypoint": ("Position",)}
+    domains, in_init, init_note = ("route",), "runs", "AssignRouteAction"
+    label = "`AssignRouteAction` with a `Route`, `AcquirePositionAction`"
+    also = ("Route", "AcquirePositionAction")
+    note = (
+        "the entity's SUMO route becomes the shortest way (by length, whatever the `routeStrategy`) from the "
+        "road it is on through each `Waypoint`'s road in turn, then straight on while a road has one successor "
+        "(so the car does not stop at the last waypoint; it leaves the network where that way ends); SUMO's "
+        "driver drives it (speed and lane changes as without a route); an `AcquirePositionAction` is a route to "
+        "its one position; a waypoint whose road cannot be reached from the one before is refused before the "
+        "run with its line; a `Route` from a `RouteCatalog`, `RoutePosition` and `closed` routes refused; not "
+        "on the ego (it drives its start road) nor on a car ego drives against its lane"
+    )
+
+    def build(self, b: Any, node: Node) -> M.AssignRouteAction:
+        route = b.one(node, "Route")
+        if b.bool_(route, "closed", False):
+            raise b.error(route, f"a closed <Route> is not supported by ego (see {DOCS})")
+        outer = b.values
+        b.values = b.scoped(route)
+        try:
+            points = []
+            for wp in route.all("Waypoint"):
+                b.enum(wp, "routeStrategy", ("fastest", "shortest", "leastIntersections", "random"))
+                points.append(b.position(b.one(wp, "Position")))
+        finally:
+            b.values = outer
+        if len(points) < 2:
+            raise b.error(route, f"<Route> needs at least two <Waypoint> (found {len(points)})")
+        return M.AssignRouteAction(tuple(points), node.line)
+
+    def start(self, run: ActionRun, t: float) -> None:
+        run.board.driver.route(run.actor, run.action.waypoints)
+        run.finished = True
+
+
+class AcquirePosition(AssignRoute):
+    tag, within, model = "AcquirePositionAction", ("RoutingAction",), M.AssignRouteAction
+    contains, parts = ("Position",), {}
+    init_note, note = "AcquirePositionAction", ""
+
+    def build(self, b: Any, node: Node) -> M.AssignRouteAction:
+        return M.AssignRouteAction((b.position(b.one(node, "Position")),), node.line)
+
+
 class FollowTrajectory(ActionKind):
     tag, within, model = "FollowTrajectoryAction", ("RoutingAction",), M.FollowTrajectoryAction
     in_init, init_note = "runs", "FollowTrajectoryAction"
@@ -1032,6 +1080,8 @@ for _kind in (
     LongitudinalDistance,
     SpeedProfile,
     Synchronize,
+    AssignRoute,
+    AcquirePosition,
     FollowTrajectory,
     Parameter,
     Variable,

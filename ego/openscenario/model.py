@@ -253,6 +253,15 @@ class FollowTrajectoryAction:
 
 
 @dataclass(frozen=True)
+class AssignRouteAction:
+    """Drive through ``waypoints`` in turn (an AcquirePositionAction: its one position), by
+    SUMO's driver along the shortest way between them."""
+
+    waypoints: tuple[Position, ...]
+    line: int = 0
+
+
+@dataclass(frozen=True)
 class LongitudinalDistanceAction:
     """Hold a longitudinal distance (m) or time gap (s, times the actor's own speed) to
     ``entity``: behind it (trailingReferencedEntity, the default) or ahead (leading);

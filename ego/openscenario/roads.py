@@ -351,6 +351,36 @@ class RoadMap:
             route.append(nxt[0])
         return route
 
+    def path(self, edges: list[str]) -> list[str] | None:
+        """The shortest way (by length) from the first edge through each of the others in turn,
+        every edge once where consecutive ones meet; None when one cannot be reached."""
+        import heapq
+
+        out = [edges[0]]
+        for goal in edges[1:]:
+            start = out[-1]
+            if goal == start:
+                continue
+            dist, prev, heap = {start: 0.0}, {}, [(0.0, start)]
+            while heap:
+                d, e = heapq.heappop(heap)
+                if e == goal:
+                    break
+                if d > dist.get(e, math.inf):
+                    continue
+                for nxt in self.edges[e].successors:
+                    nd = d + self.edges[nxt].lanes[0].length
+                    if nd < dist.get(nxt, math.inf):
+                        dist[nxt], prev[nxt] = nd, e
+                        heapq.heappush(heap, (nd, nxt))
+            if goal not in prev:
+                return None
+            leg = [goal]
+            while leg[-1] != start:
+                leg.append(prev[leg[-1]])
+            out += leg[-2::-1]
+        return out
+
     def nearest_lane(self, x: float, y: float) -> tuple[Lane, float, float]:
         """The lane whose centre line is nearest to (x, y): (lane, s along it, d + left)."""
         from ego.lane_frame import LanePolyline

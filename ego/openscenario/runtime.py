@@ -81,6 +81,9 @@ class Driver(Protocol):
     def release(self, name: str) -> None: ...
     def ego_speed(self, profile: Transition | None, relative: tuple[str, str, float] | None) -> None: ...
     def ego_lateral(self, profile: Transition) -> None: ...
+    def route(self, name: str, waypoints: tuple[M.Position, ...]) -> None:
+        """Route ``name`` through the waypoints' roads (SUMO's driver drives it)."""
+
     def traffic_action(self, action: M.TrafficAction) -> None:
         """Start (or stop) a traffic source, sink or swarm."""
 

@@ -381,6 +381,7 @@ class FileScenario(Scenario):
         starts = placements(model, roads)
         edge = starts[ego].edge
         _check_road_references(model, roads, len(roads.edges[edge].lanes), len(_opposite_lanes(roads, edge)))
+        _check_routes(model, roads)
         if starts[ego].offset:
             pos = next(a for a in model.init[ego] if isinstance(a, M.TeleportAction)).position
             raise ScenarioFileError(
@@ -788,6 +789,21 @@ class FileScenario(Scenario):
             self._lateral_free.add(name)
         self.bridge.change_sublane(name, d_next - st.d_front)
 
+    def route(self, name: str, waypoints: tuple[M.Position, ...]) -> None:
+        if name in self._kin:
+            return  # a car ego drives against its lane keeps to the ego's road
+        ls = self.bridge.libsumo
+        here = ls.vehicle.getRoadID(name)
+        if here.startswith(":"):  # inside a junction: from the edge it enters next
+            here = ls.vehicle.getRoute(name)[ls.vehicle.getRouteIndex(name) + 1]
+        goals = [_waypoint_edge(self.roads, self.position_xy(p, self.board.states)) for p in waypoints]
+        path = self.roads.path([here, *goals])
+        if path is None:
+            raise ScenarioFileError(
+                self.model.path, waypoints[0].line, f"no way along the roads from {name}'s road {here!r} to its route"
+            )
+        ls.vehicle.setRoute(name, path + self.roads.route_from(path[-1])[1:])
+
     def _pose(self, name: str) -> tuple[float, float, float]:
         e = self.board.states[name]
         return e.x, e.y, e.yaw
@@ -962,6 +978,33 @@ def _opposite_lanes(roads: RoadMap, edge: str) -> list:
     if other not in roads.edges:
         return []
     return list(reversed(roads.edges[other].lanes))
+
+
+def _waypoint_edge(roads: RoadMap, xyh: tuple[float, float, float]) -> str:
+    """The road (SUMO edge) a waypoint lies on: the one of the lane nearest its point."""
+    return roads.nearest_lane(xyh[0], xyh[1])[0].edge
+
+
+def _check_routes(model: M.Scenario, roads: RoadMap) -> None:
+    """Every route's waypoints (those given on the road or in the world) follow each other
+    along the roads: what the run would find only when the route was assigned."""
+    for x in M.walk(model.stories):
+        if not isinstance(x, M.AssignRouteAction):
+            continue
+        edges = []
+        for p in x.waypoints:
+            if isinstance(p, M.LanePosition):
+                edges.append(roads.lane_position(p.road, p.lane, p.s)[0].edge)
+            elif isinstance(p, M.WorldPosition):
+                edges.append(_waypoint_edge(roads, (p.x, p.y, 0.0)))
+            else:
+                edges = []
+                break
+        for a, b, p in zip(edges, edges[1:], x.waypoints[1:]):
+            if roads.path([a, b]) is None:
+                raise ScenarioFileError(
+                    model.path, p.line, f"this waypoint's road {b!r} cannot be reached from the one before ({a!r})"
+                )
 
 
 def _check_turned(model: M.Scenario, ego: str) -> None:

@@ -48,7 +48,8 @@ def test_every_action_and_condition_has_one_kind_and_every_kind_is_declared():
     # what the refusals name is derived from the kinds
     assert registry.init_kinds() == (
         "TeleportAction, ControllerAction, AppearanceAction, SpeedAction, LaneChangeAction, LaneOffsetAction, "
-        "LongitudinalDistanceAction, SpeedProfileAction, SynchronizeAction and FollowTrajectoryAction"
+        "LongitudinalDistanceAction, SpeedProfileAction, SynchronizeAction, AssignRouteAction, AcquirePositionAction "
+        "and FollowTrajectoryAction"
     )
     assert {k.tag for k in registry.ACTIONS.values() if not k.on_ego} == {
         "TeleportAction",
@@ -56,6 +57,8 @@ def test_every_action_and_condition_has_one_kind_and_every_kind_is_declared():
         "LongitudinalDistanceAction",
         "SynchronizeAction",
         "SpeedProfileAction",
+        "AssignRouteAction",
+        "AcquirePositionAction",
     }
 
 
