@@ -7,7 +7,7 @@ files on a hand-written two-way road: lane +1 (the other direction) beside lanes
 from __future__ import annotations
 
 import pytest
-from xosc_scenes import CAR, event, maneuver_groups, run_scene, sim_time, speed, trigger
+from xosc_scenes import event, run_scene, sim_time, speed, trigger, write_file
 
 from ego.openscenario.runtime import Storyboard
 from ego.openscenario.xmltree import ScenarioFileError
@@ -43,29 +43,9 @@ def _cache(tmp_path_factory, monkeypatch):
 def _scene(tmp, starts: dict, events: list[tuple[str, str]] = ()) -> object:
     """``starts``: name -> (lane, s, speed, turned)."""
     (tmp / "twoway.xodr").write_text(ROAD)
-    ents = "".join(f'<ScenarioObject name="{n}">{CAR}</ScenarioObject>' for n in starts)
-    init = ""
-    for n, (lane, s, v, turned) in starts.items():
-        o = '<Orientation type="relative" h="3.141593"/>' if turned else ""
-        init += (
-            f'<Private entityRef="{n}"><PrivateAction><TeleportAction><Position><LanePosition roadId="1" '
-            f'laneId="{lane}" s="{s}" offset="0">{o}</LanePosition></Position></TeleportAction></PrivateAction>'
-            f"<PrivateAction>{speed(v)}</PrivateAction></Private>"
-        )
-    groups = maneuver_groups(events)
-    path = tmp / "against.xosc"
-    path.write_text(
-        f"""<?xml version="1.0"?>
-<OpenSCENARIO>
-<FileHeader revMajor="1" revMinor="2" date="2026-11-29T00:00:00" description="against" author="ego tests"/>
-<RoadNetwork><LogicFile filepath="twoway.xodr"/></RoadNetwork>
-<Entities>{ents}</Entities>
-<Storyboard><Init><Actions>{init}</Actions></Init>
-<Story name="S"><Act name="Act">{groups}{trigger([sim_time(0)])}</Act></Story></Storyboard>
-</OpenSCENARIO>
-"""
-    )
-    return path
+    turned = '<Orientation type="relative" h="3.141593"/>'
+    rows = [(n, "1", lane, s, v, turned if t else "") for n, (lane, s, v, t) in starts.items()]
+    return write_file(tmp / "against.xosc", "twoway.xodr", rows, list(events))
 
 
 def _record(monkeypatch, name: str) -> dict[float, tuple[float, float, float, float]]:

@@ -7,7 +7,7 @@ from __future__ import annotations
 import subprocess
 
 import pytest
-from xosc_scenes import CAR, event, maneuver_groups, run_scene, sim_time, speed, trigger
+from xosc_scenes import event, run_scene, trigger, write_file
 
 from ego.openscenario.runtime import Storyboard
 from ego.openscenario.xmltree import ScenarioFileError
@@ -53,30 +53,12 @@ def _net(tmp) -> None:
 
 def _scene(tmp, action: str, start: str = '<SimulationTimeCondition value="1" rule="greaterOrEqual"/>'):
     _net(tmp)
-    ents = "".join(f'<ScenarioObject name="{n}">{CAR}</ScenarioObject>' for n in ("Ego", "R"))
-    init = "".join(
-        f'<Private entityRef="{n}"><PrivateAction><TeleportAction><Position><LanePosition roadId="AB" '
-        f'laneId="{lane}" s="{s}" offset="0"/></Position></TeleportAction></PrivateAction>'
-        f"<PrivateAction>{speed(v)}</PrivateAction></Private>"
-        for n, lane, s, v in (("Ego", -2, 20.0, 20.0), ("R", -1, 300.0, 25.0))
-    )
+    starts = [("Ego", "AB", -2, 20.0, 20.0, ""), ("R", "AB", -1, 300.0, 25.0, "")]
     cond = (
         f'<Condition name="c" delay="0" conditionEdge="none"><ByValueCondition>{start}</ByValueCondition></Condition>'
     )
-    groups = maneuver_groups([event("Go", "R", f"<RoutingAction>{action}</RoutingAction>", trigger([cond]))])
-    path = tmp / "route.xosc"
-    path.write_text(
-        f"""<?xml version="1.0"?>
-<OpenSCENARIO>
-<FileHeader revMajor="1" revMinor="2" date="2026-11-29T00:00:00" description="route" author="ego tests"/>
-<RoadNetwork><LogicFile filepath="fork.net.xml"/></RoadNetwork>
-<Entities>{ents}</Entities>
-<Storyboard><Init><Actions>{init}</Actions></Init>
-<Story name="S"><Act name="Act">{groups}{trigger([sim_time(0)])}</Act></Story></Storyboard>
-</OpenSCENARIO>
-"""
-    )
-    return path
+    events = [event("Go", "R", f"<RoutingAction>{action}</RoutingAction>", trigger([cond]))]
+    return write_file(tmp / "route.xosc", "fork.net.xml", starts, events)
 
 
 def _route(*points: tuple[str, float]) -> str:
