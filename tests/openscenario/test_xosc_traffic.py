@@ -80,7 +80,7 @@ def test_a_source_adds_rate_vehicles_a_second_on_its_lane(tmp_path, monkeypatch)
     snaps = _watch(monkeypatch)
     path = _with_globals(tmp_path, [_global("Src", _source(2.5, -1, 60.0, 20.0), trigger([sim_time(0)]))])
     sc = run_scene(path, 4.0)
-    p = sc._traffic.processes[0]
+    p = sc.story._traffic.processes[0]
     assert p.added == 1 + int(0.25 * (len(snaps) - 1))
     # 8 m apart at 20 m/s is closer than SUMO's drivers insert: the later ones queue for a
     # place (SUMO's insertion), the ones inserted slow down behind the first
@@ -101,7 +101,7 @@ def test_a_sink_removes_the_traffic_that_reaches_it(tmp_path, monkeypatch):
     ]
     snaps = _watch(monkeypatch)
     sc = run_scene(_with_globals(tmp_path, events), 8.0)
-    src = sc._traffic.processes[0]
+    src = sc.story._traffic.processes[0]
     assert src.added >= 7
     for snap in snaps:
         for x, y, _ in _cars(snap).values():
@@ -116,7 +116,7 @@ def test_a_stop_ends_the_named_source(tmp_path, monkeypatch):
     ]
     snaps = _watch(monkeypatch)
     sc = run_scene(_with_globals(tmp_path, events), 3.0)
-    assert sc._traffic.processes == []
+    assert sc.story._traffic.processes == []
     ids = sorted(int(v.split("_")[1]) for v in _cars(snaps[-1]))
     assert ids and max(ids) <= 5  # 1 at t = 0, then 0.5 a step up to t = 1 s
 
@@ -133,7 +133,7 @@ def test_a_swarm_keeps_its_vehicles_in_the_ellipse_around_the_ego(tmp_path, monk
     path.write_text(text.replace("<Init><Actions>", f"<Init><Actions>{swarm}", 1))
     snaps = _watch(monkeypatch)
     sc = run_scene(path, 3.0)
-    p = sc._traffic.processes[0]
+    p = sc.story._traffic.processes[0]
     assert len(p.live) == 12
     assert len(_cars(snaps[-1])) == 12
     # each one appears (one SUMO step after it was added) outside the inner 30 m, less the
