@@ -6,11 +6,13 @@ registers it: docs/architecture.md, "Adding an OpenSCENARIO action")."""
 from __future__ import annotations
 
 import math
+from bisect import bisect_right
 from typing import Any
 
 import numpy as np
 
 from ego.openscenario import model as M
+from ego.openscenario.curves import clothoid, nurbs
 from ego.openscenario.dynamics import DYNAMICS_LIMITS, Transition, lateral_duration, offset_duration, speed_duration
 from ego.openscenario.registry import ActionKind, register
 from ego.openscenario.runtime import EPS, INF, ActionRun, Storyboard, speed_profile_knots
@@ -66,6 +68,36 @@ class ActivateController(ActionKind):
         return M.ControllerAction(node.line)
 
 
+class Appearance(ActionKind):
+    """AppearanceAction's LightStateAction (1.2): a vehicle's lights."""
+
+    tag, within, model = "AppearanceAction", ("PrivateAction",), M.AppearanceAction
+    contains = ("LightStateAction",)
+    parts = {
+        "LightStateAction": ("LightType", "LightState"),
+        "LightType": ("VehicleLight", "UserDefinedLight"),
+        "VehicleLight": (),
+        "UserDefinedLight": (),
+        "LightState": ("Color",),
+        "Color": ("ColorRgb", "ColorCmyk"),
+        "ColorRgb": (),
+        "ColorCmyk": (),
+    }
+    domains, on_ego, in_init, init_note = (), True, "ignored", "AppearanceAction"
+    label = "`AppearanceAction`/`LightStateAction` (1.2)"
+    note = (
+        "read (the light's `mode` on, off or flashing) and done at once, changing nothing: ego draws no lights, "
+        "and neither the plant, SUMO's drivers nor the surround sensor depend on them; `AnimationAction` refused"
+    )
+
+    def build(self, b: Any, node: Node) -> M.AppearanceAction:
+        lsa = b.one(node, "LightStateAction")
+        b.one(lsa, "LightType")
+        b.enum(b.one(lsa, "LightState"), "mode", ("on", "off", "flashing"))
+        b.num(lsa, "transitionTime", 0.0, nonneg=True)
+        return M.AppearanceAction(node.line)
+
+
 class Speed(ActionKind):
     tag, within, model = "SpeedAction", ("LongitudinalAction",), M.SpeedAction
     contains = ("SpeedActionDynamics", "SpeedActionTarget")
@@ -76,7 +108,7 @@ class Speed(ActionKind):
         "RelativeTargetSpeed": (),
     }
     domains, on_ego, in_init = ("long",), True, "yes"
-    init_note = "SpeedAction with AbsoluteTargetSpeed or a non-continuous RelativeTargetSpeed"
+    init_note = "SpeedAction"
     note = (
         "`AbsoluteTargetSpeed`, `RelativeTargetSpeed` (delta, factor, continuous); shapes step, linear, cubic, "
         "sinusoidal over time, rate (the mean rate for cubic and sinusoidal) or distance; a `value` of 0 is a "
@@ -104,8 +136,10 @@ class Speed(ActionKind):
             node.line,
         )
 
-    def init_ok(self, action: M.SpeedAction) -> bool:
-        return action.relative_to is None or not action.continuous
+    def init_runs(self, action: M.SpeedAction) -> bool:
+        # a continuous relative speed: the start is the other's Init speed plus the delta,
+        # and the action keeps following it from t = 0
+        return action.relative_to is not None and action.continuous
 
     def start(self, run: ActionRun, t: float) -> None:
         b, a, drv = run.board, run.action, run.board.driver
@@ -134,6 +168,8 @@ class Speed(ActionKind):
     def step(self, run: ActionRun, t: float) -> None:
         b, a, drv = run.board, run.action, run.board.driver
         p = run.profile
+        if run.is_ego:
+            return  # the ego's references follow the other's speed themselves (ego_speed's relative)
         if a.continuous and a.relative_to is not None and p.done(t):
             ref = b.states[a.relative_to].speed
             target = max(ref + a.value if a.relative_kind == "delta" else ref * a.value, 0.0)
@@ -171,6 +207,7 @@ def _lateral_step(kind: ActionKind, run: ActionRun, t: float) -> None:
 
 class LaneChange(ActionKind):
     tag, within, model = "LaneChangeAction", ("LateralAction",), M.LaneChangeAction
+    in_init, init_note = "runs", "LaneChangeAction"
     domains, on_ego, releases = ("lat",), True, True
     contains = ("LaneChangeActionDynamics", "LaneChangeTarget")
     parts = {
@@ -184,7 +221,10 @@ class LaneChange(ActionKind):
         "the speed at the start) or rate (the peak lateral speed in m/s, as the ALKS files' `MaxLateralVelocity`: "
         "T = k \\|D\\| / rate, k = 1 linear, 3/2 cubic, pi/2 sinusoidal, D from where the entity is to the target); "
         "moved through SUMO's sublane model step by step as cut-in's car (blind to others while moving); a step "
-        "is one placement. **Known deviation (open, issue 39):** the profile moves SUMO's front bumper, not the "
+        "is one placement; a scripted car changing across the centre line into the other direction's lanes "
+        "(the reference player's `acc-test.xosc` overtaking, `RelativeTargetLane` +1 from a one-lane "
+        "direction) is driven by ego from where it crosses (as a car turned against its lane, see the "
+        "positions' row: its reference point on the profile) and stays so. **Known deviation (open, issue 39):** the profile moves SUMO's front bumper, not the "
         "entity's reference point: SUMO turns the car from its front and back positions, so its box centre lags "
         "the shape and reaches the target lane a few steps after the front"
     )
@@ -216,6 +256,7 @@ class LaneChange(ActionKind):
 
 class LaneOffset(ActionKind):
     tag, within, model = "LaneOffsetAction", ("LateralAction",), M.LaneOffsetAction
+    in_init, init_note = "runs", "LaneOffsetAction"
     domains, on_ego, releases = ("lat",), True, True
     contains = ("LaneOffsetActionDynamics", "LaneOffsetTarget")
     parts = {
@@ -259,6 +300,7 @@ class LaneOffset(ActionKind):
 
 class LongitudinalDistance(ActionKind):
     tag, within, model = "LongitudinalDistanceAction", ("LongitudinalAction",), M.LongitudinalDistanceAction
+    in_init, init_note = "runs", "LongitudinalDistanceAction"
     contains = ("DynamicConstraints",)
     parts = {"DynamicConstraints": ()}
     domains = ("long",)
@@ -344,6 +386,7 @@ def _limits(b: Any, n: Node, *names: tuple[str, str]) -> dict[str, float]:
 
 class SpeedProfile(ActionKind):
     tag, within, model = "SpeedProfileAction", ("LongitudinalAction",), M.SpeedProfileAction
+    in_init, init_note = "runs", "SpeedProfileAction"
     contains = ("DynamicConstraints", "SpeedProfileEntry")
     parts = {"DynamicConstraints": (), "SpeedProfileEntry": ()}
     domains = ("long",)
@@ -386,6 +429,7 @@ class SpeedProfile(ActionKind):
 
 class Synchronize(ActionKind):
     tag, within, model = "SynchronizeAction", ("PrivateAction",), M.SynchronizeAction
+    in_init, init_note = "runs", "SynchronizeAction"
     contains = ("TargetPositionMaster", "TargetPosition", "FinalSpeed")
     parts = {
         "TargetPositionMaster": "Position",
@@ -465,26 +509,93 @@ class Synchronize(ActionKind):
         drv.speed(run.actor, max(v, 0.0), INF)
 
 
+class AssignRoute(ActionKind):
+    tag, within, model = "AssignRouteAction", ("RoutingAction",), M.AssignRouteAction
+    contains = ("Route",)
+    parts = {"Route": ("ParameterDeclarations", "Waypoint"), "Waypoint": ("Position",)}
+    domains, in_init, init_note = ("route",), "runs", "AssignRouteAction"
+    label = "`AssignRouteAction` with a `Route`, `AcquirePositionAction`"
+    also = ("Route", "AcquirePositionAction")
+    note = (
+        "the entity's SUMO route becomes the shortest way (by length, whatever the `routeStrategy`) from the "
+        "road it is on through each `Waypoint`'s road in turn, then straight on while a road has one successor "
+        "(so the car does not stop at the last waypoint; it leaves the network where that way ends); SUMO's "
+        "driver drives it (speed and lane changes as without a route); an `AcquirePositionAction` is a route to "
+        "its one position; a waypoint whose road cannot be reached from the one before is refused before the "
+        "run with its line; a `Route` from a `RouteCatalog`, `RoutePosition` and `closed` routes refused; not "
+        "on the ego (it drives its start road) nor on a car ego drives against its lane"
+    )
+
+    def build(self, b: Any, node: Node) -> M.AssignRouteAction:
+        route = b.one(node, "Route")
+        if b.bool_(route, "closed", False):
+            raise b.error(route, f"a closed <Route> is not supported by ego (see {DOCS})")
+        outer = b.values
+        b.values = b.scoped(route)
+        try:
+            points = []
+            for wp in route.all("Waypoint"):
+                b.enum(wp, "routeStrategy", ("fastest", "shortest", "leastIntersections", "random"))
+                points.append(b.position(b.one(wp, "Position")))
+        finally:
+            b.values = outer
+        if len(points) < 2:
+            raise b.error(route, f"<Route> needs at least two <Waypoint> (found {len(points)})")
+        return M.AssignRouteAction(tuple(points), node.line)
+
+    def start(self, run: ActionRun, t: float) -> None:
+        run.board.driver.route(run.actor, run.action.waypoints)
+        run.finished = True
+
+
+class AcquirePosition(AssignRoute):
+    tag, within, model = "AcquirePositionAction", ("RoutingAction",), M.AssignRouteAction
+    contains, parts = ("Position",), {}
+    init_note, note = "AcquirePositionAction", ""
+
+    def build(self, b: Any, node: Node) -> M.AssignRouteAction:
+        return M.AssignRouteAction((b.position(b.one(node, "Position")),), node.line)
+
+
 class FollowTrajectory(ActionKind):
     tag, within, model = "FollowTrajectoryAction", ("RoutingAction",), M.FollowTrajectoryAction
+    in_init, init_note = "runs", "FollowTrajectoryAction"
     contains = ("Trajectory", "TrajectoryRef", "TimeReference", "TrajectoryFollowingMode")
     parts = {
         "Trajectory": ("ParameterDeclarations", "Shape"),
         "TrajectoryRef": ("Trajectory",),
         "TimeReference": ("None", "Timing"),
         "TrajectoryFollowingMode": (),
-        "Shape": ("Polyline",),
+        "Shape": ("Polyline", "Clothoid", "ClothoidSpline", "Nurbs"),
         "Polyline": ("Vertex",),
         "Vertex": ("Position",),
+        "Clothoid": ("Position",),
+        "ClothoidSpline": ("Segment",),
+        "Segment": ("PositionStart",),
+        "PositionStart": "Position",
+        "Nurbs": ("ControlPoint", "Knot"),
+        "ControlPoint": ("Position",),
+        "Knot": (),
         "None": (),
         "Timing": (),
     }
     releases = True
-    label = "`FollowTrajectoryAction` with `Polyline`"
-    also = ("Polyline",)
+    label = "`FollowTrajectoryAction` with `Polyline`, `Clothoid`, `ClothoidSpline` (1.3) or `Nurbs`"
+    also = ("Polyline", "Clothoid", "ClothoidSpline", "Nurbs")
     note = (
-        "`Timing` absolute or relative with scale and offset (vertex times), or none (the entity's speed at the "
-        "start); `initialDistanceOffset`; not on the ego; `Clothoid`, `Nurbs`, catalog trajectories refused"
+        "the entity's reference point (its box centre less the box's `center.x`) moves along the shape; `Timing` "
+        "absolute or relative with scale and offset (vertex, control point or clothoid times), or none (the "
+        "entity's speed at the start); `initialDistanceOffset`; not on the ego. A `Clothoid` (curvature, "
+        "`curvaturePrime`; the 1.0 `curvatureDot` read as the same rate per metre, as the reference player reads "
+        "it) and a `ClothoidSpline`'s `Segment`s (`curvatureStart` to `curvatureEnd`, `hOffset`, `PositionStart`; "
+        "the first without one starts at the entity; the reference player's pre-standard `curvStart`/`curvEnd` "
+        "are refused: the standard requires both curvatures) start at their position with its heading "
+        "and are integrated exactly (Simpson on 2 cm panels, sampled every 0.1 m: within 1e-6 m of the Fresnel "
+        "integrals, `test_xosc_trajectories.py`); their times: `startTime`/`stopTime` (a spline's `timeStart`s "
+        "and `timeEnd`), linear in length between them. A `Nurbs` (order, `ControlPoint`s with weights, "
+        "`Knot`s: as many as points plus order, non-decreasing) is the rational B-spline sampled at 2001 "
+        "parameters; a control point's time is combined like its position (as the reference player does; the "
+        "standard gives no time between control points); catalog trajectories refused"
     )
 
     def build(self, b: Any, inner: Node) -> M.FollowTrajectoryAction:
@@ -496,9 +607,27 @@ class FollowTrajectory(ActionKind):
             traj_node = b.one(ref, "Trajectory")
         outer_values = b.values
         b.values = b.scoped(traj_node)  # the trajectory's own parameters
+        vertices: tuple[M.Vertex, ...] = ()
+        segments: tuple[M.ClothoidSegment, ...] = ()
+        nurbs, end_time = None, None
         try:
-            poly = b.one(b.one(traj_node, "Shape"), "Polyline")
-            vertices = self.vertices(b, poly)
+            shape = b.one(b.one(traj_node, "Shape"))
+            if shape.tag == "Polyline":
+                vertices = tuple(self.vertices(b, shape))
+                times = [v.time for v in vertices]
+            elif shape.tag == "Clothoid":
+                segments = (self.clothoid(b, shape),)
+                end_time = b.num(shape, "stopTime", None, nonneg=True)
+                times = [segments[0].time, end_time]
+            elif shape.tag == "ClothoidSpline":
+                segments = tuple(self.segment(b, seg) for seg in shape.all("Segment"))
+                if not segments:
+                    raise b.error(shape, "<ClothoidSpline> needs at least one <Segment>")
+                end_time = b.num(shape, "timeEnd", None, nonneg=True)
+                times = [sg.time for sg in segments] + [end_time]
+            else:
+                nurbs = self.nurbs(b, shape)
+                times = [p.time for p in nurbs.points]
         finally:
             b.values = outer_values
         timing = None
@@ -510,12 +639,25 @@ class FollowTrajectory(ActionKind):
                 b.num(tm, "scale", positive=True),
                 b.num(tm, "offset"),
             )
-            times = [v.time for v in vertices]
             if any(t is None for t in times):
-                raise b.error(poly, "every <Vertex> needs a time when the trajectory has <Timing>")
+                what = {"Polyline": "<Vertex>", "Nurbs": "<ControlPoint>"}.get(shape.tag)
+                raise b.error(
+                    shape,
+                    f"every {what} needs a time when the trajectory has <Timing>"
+                    if what
+                    else f"<{shape.tag}> needs its times (start and end) when the trajectory has <Timing>",
+                )
             if any(y <= x for x, y in zip(times, times[1:])):  # type: ignore[operator]
-                raise b.error(poly, "<Vertex> times must increase")
-        return M.FollowTrajectoryAction(tuple(vertices), timing, b.num(inner, "initialDistanceOffset", 0.0), inner.line)
+                raise b.error(shape, f"the times of <{shape.tag}> must increase")
+        return M.FollowTrajectoryAction(
+            vertices,
+            timing,
+            b.num(inner, "initialDistanceOffset", 0.0),
+            inner.line,
+            segments=segments,
+            end_time=end_time,
+            nurbs=nurbs,
+        )
 
     @staticmethod
     def vertices(b: Any, poly: Node) -> list[M.Vertex]:
@@ -527,22 +669,104 @@ class FollowTrajectory(ActionKind):
             raise b.error(poly, f"<Polyline> needs at least two <Vertex> (found {len(vertices)})")
         return vertices
 
+    @staticmethod
+    def clothoid(b: Any, node: Node) -> M.ClothoidSegment:
+        k0, length = b.num(node, "curvature"), b.num(node, "length", positive=True)
+        prime = b.num(node, "curvaturePrime", None)
+        if prime is None:
+            prime = b.num(node, "curvatureDot", 0.0)  # 1.0's name, read as the same rate per metre
+        start = b.position(b.one(node, "Position"))
+        return M.ClothoidSegment(
+            start, k0, k0 + prime * length, length, 0.0, b.num(node, "startTime", None, nonneg=True)
+        )
+
+    @staticmethod
+    def segment(b: Any, node: Node) -> M.ClothoidSegment:
+        k0, k1 = b.num(node, "curvatureStart"), b.num(node, "curvatureEnd")
+        ps = node.child("PositionStart")
+        start = b.position(ps) if ps is not None else None
+        h_offset = b.num(node, "hOffset", 0.0)
+        if abs(h_offset) >= math.pi:
+            raise b.error(node, f"bad value for hOffset in <Segment>: {h_offset:g} (expected within ]-pi, pi[)")
+        time = b.num(node, "timeStart", None, nonneg=True)
+        return M.ClothoidSegment(start, k0, k1, b.num(node, "length", positive=True), h_offset, time)
+
+    @staticmethod
+    def nurbs(b: Any, node: Node) -> M.Nurbs:
+        order = b.int_(node, "order", minimum=2)
+        points, weights = [], []
+        for cp in node.all("ControlPoint"):
+            t = b.raw(cp, "time", None)
+            points.append(M.Vertex(None if t is None else b.num(cp, "time"), b.position(b.one(cp, "Position"))))
+            weights.append(b.num(cp, "weight", 1.0, positive=True))
+        knots = [b.num(k, "value") for k in node.all("Knot")]
+        if len(points) < order:
+            raise b.error(node, f"<Nurbs> of order {order} needs at least {order} <ControlPoint> (found {len(points)})")
+        if len(knots) != len(points) + order:
+            raise b.error(
+                node,
+                f"<Nurbs> needs {len(points) + order} <Knot> ({len(points)} control points + order {order}; "
+                f"found {len(knots)})",
+            )
+        if any(y < x for x, y in zip(knots, knots[1:])) or knots[len(points)] <= knots[order - 1]:
+            raise b.error(node, "the <Knot> values of <Nurbs> must not decrease and must span its curve")
+        return M.Nurbs(order, tuple(points), tuple(weights), tuple(knots))
+
     def start(self, run: ActionRun, t: float) -> None:
         b, a = run.board, run.action
-        pts = [b.driver.position_xy(v.position, b.states) for v in a.vertices]
-        run.xy = [(p[0], p[1]) for p in pts]
+        xy, times = self.path(run)
+        run.xy = xy
         run.cum = [0.0]
         for (x0, y0), (x1, y1) in zip(run.xy, run.xy[1:]):
             run.cum.append(run.cum[-1] + math.hypot(x1 - x0, y1 - y0))
-        if a.timing is not None:
+        if a.timing is not None and times is not None:
             domain, scale, offset = a.timing
             base = 0.0 if domain == "absolute" else t
-            run.times = [base + v.time * scale + offset for v in a.vertices]
+            run.times = [base + tt * scale + offset for tt in times]
         else:
             run.times = None
             run.v = b.states[run.actor].speed
             run.t0 = t
             run.s0 = a.initial_distance_offset
+
+    @staticmethod
+    def path(run: ActionRun) -> tuple[list[tuple[float, float]], list[float] | None]:
+        """The shape's points (the entity's reference point) and their times (None: no times)."""
+        b, a = run.board, run.action
+        pos = b.driver.position_xy
+        if a.vertices:
+            pts = [pos(v.position, b.states) for v in a.vertices]
+            return [(p[0], p[1]) for p in pts], [v.time for v in a.vertices]  # type: ignore[misc]
+        if a.nurbs is not None:
+            nb = a.nurbs
+            ctrl = [pos(p.position, b.states)[:2] for p in nb.points]
+            ptimes = [p.time for p in nb.points]
+            has_times = all(tt is not None for tt in ptimes)
+            x, y, tt = nurbs(ctrl, nb.weights, nb.knots, nb.order, ptimes if has_times else None)  # type: ignore[arg-type]
+            return list(zip(x.tolist(), y.tolist())), (None if tt is None else tt.tolist())
+        me = b.states[run.actor]
+        cx = b.scenario.entities[run.actor].vehicle.center_x
+        x0, y0, h0 = me.x - cx * math.cos(me.yaw), me.y - cx * math.sin(me.yaw), me.yaw
+        xy: list[tuple[float, float]] = []
+        times: list[float] | None = []
+        for k, seg in enumerate(a.segments):
+            if seg.start is not None:
+                x0, y0, h0 = pos(seg.start, b.states)
+            h0 += seg.h_offset
+            xs, ys, hs, ss = clothoid(x0, y0, h0, seg.k0, seg.k1, seg.length)
+            pts = list(zip(xs.tolist(), ys.tolist()))
+            xy.extend(pts if not xy else pts[1:])
+            x0, y0, h0 = float(xs[-1]), float(ys[-1]), float(hs[-1])
+            if times is not None and seg.time is not None:
+                t1 = a.segments[k + 1].time if k + 1 < len(a.segments) else a.end_time
+                if t1 is None:
+                    times = None
+                    continue
+                seg_times = (seg.time + (t1 - seg.time) * ss / seg.length).tolist()
+                times.extend(seg_times if not times else seg_times[1:])
+            else:
+                times = None
+        return xy, times
 
     @staticmethod
     def point(run: ActionRun, t: float) -> tuple[float, float, float, float, bool]:
@@ -555,15 +779,14 @@ class FollowTrajectory(ActionKind):
             elif t >= times[-1]:
                 i, u = len(times) - 2, 1.0
             else:
-                i = max(k for k in range(len(times) - 1) if times[k] <= t)
+                i = min(bisect_right(times, t) - 1, len(times) - 2)
                 u = (t - times[i]) / (times[i + 1] - times[i])
             seg = cum[i + 1] - cum[i]
             speed = seg / (times[i + 1] - times[i])
             end = t >= times[-1] - EPS
         else:
             s = min(run.s0 + run.v * (t - run.t0), cum[-1])
-            i = max(k for k in range(len(cum) - 1) if cum[k] <= s) if s > 0 else 0
-            i = min(i, len(cum) - 2)
+            i = min(max(bisect_right(cum, s) - 1, 0), len(cum) - 2) if s > 0 else 0
             seg = cum[i + 1] - cum[i]
             u = (s - cum[i]) / seg if seg > 0 else 1.0
             speed, end = run.v, s >= cum[-1] - EPS
@@ -573,10 +796,156 @@ class FollowTrajectory(ActionKind):
 
     def step(self, run: ActionRun, t: float) -> None:
         x, y, heading, speed, end = self.point(run, t + run.board.h)
-        run.board.driver.place(run.actor, x, y, heading, speed)
+        # the path is the reference point's: SUMO places the box centre center.x ahead of it
+        cx = run.board.scenario.entities[run.actor].vehicle.center_x
+        run.board.driver.place(run.actor, x + cx * math.cos(heading), y + cx * math.sin(heading), heading, speed)
         if end:
             run.finished = True
             run.board.driver.release(run.actor)
+
+
+#: a vehicle category's body when a TrafficDefinition names only the category (ego's choices:
+#: (length, width, max speed) of a typical one; the standard gives none)
+CATEGORY_BODIES = {
+    "car": (4.5, 1.8, 55.0),
+    "van": (5.2, 2.0, 45.0),
+    "truck": (12.0, 2.55, 30.0),
+    "bus": (12.0, 2.55, 30.0),
+    "semitrailer": (16.5, 2.55, 30.0),
+    "trailer": (8.0, 2.55, 30.0),
+    "motorbike": (2.2, 0.8, 50.0),
+    "bicycle": (1.8, 0.6, 12.0),
+}
+
+
+def _category_body(category: str, line: int) -> M.Vehicle:
+    length, width, vmax = CATEGORY_BODIES[category]
+    return M.Vehicle(f"traffic {category}", category, length, width, 1.5, 0.0, vmax, 3.0, 6.0, line)
+
+
+class Traffic(ActionKind):
+    """A TrafficAction (source, sink, swarm, stop): done at once, it starts (or stops) a traffic
+    process that runs with the simulation (``ego/openscenario/traffic.py``)."""
+
+    tag, within, model = "TrafficAction", ("GlobalAction",), M.TrafficAction
+    contains = ("TrafficSourceAction", "TrafficSinkAction", "TrafficSwarmAction", "TrafficStopAction")
+    parts = {
+        "TrafficSourceAction": ("Position", "TrafficDefinition", "TrafficDistribution"),
+        "TrafficSinkAction": ("Position", "TrafficDefinition", "TrafficDistribution"),
+        "TrafficSwarmAction": (
+            "CentralObject",
+            "TrafficDefinition",
+            "TrafficDistribution",
+            "InitialSpeedRange",
+            "DirectionOfTravelDistribution",
+        ),
+        "TrafficStopAction": (),
+        "CentralObject": (),
+        "InitialSpeedRange": (),
+        "DirectionOfTravelDistribution": (),
+        "TrafficDefinition": ("VehicleCategoryDistribution", "ControllerDistribution", "VehicleRoleDistribution"),
+        "VehicleCategoryDistribution": ("VehicleCategoryDistributionEntry",),
+        "VehicleCategoryDistributionEntry": (),
+        "ControllerDistribution": ("ControllerDistributionEntry",),
+        "ControllerDistributionEntry": ("Controller", "CatalogReference"),
+        "VehicleRoleDistribution": ("VehicleRoleDistributionEntry",),
+        "VehicleRoleDistributionEntry": (),
+        "TrafficDistribution": ("TrafficDistributionEntry",),
+        "TrafficDistributionEntry": ("EntityDistribution", "Properties"),
+        "EntityDistribution": ("EntityDistributionEntry",),
+        "EntityDistributionEntry": ("ScenarioObjectTemplate",),
+        "ScenarioObjectTemplate": ("CatalogReference", "Vehicle", "ObjectController"),
+    }
+    domains, on_ego, is_global, in_init, section = (), True, True, "yes", "global"
+    label = "`GlobalAction`/`TrafficAction`: `TrafficSourceAction`, `TrafficSinkAction`, `TrafficSwarmAction`, "
+    label += "`TrafficStopAction` (1.2)"
+    also = ("TrafficSourceAction", "TrafficSinkAction", "TrafficSwarmAction", "TrafficStopAction")
+    note = (
+        "SUMO vehicles driven by SUMO's drivers (the reference player has no sources or sinks): a source adds "
+        "`rate` vehicles a second (the first at its start) on the lane nearest its `Position`, within `radius` "
+        "along it, inserted at the highest speed SUMO's driver finds safe there up to `speed` (its top speed "
+        "from then on); a sink removes, up to `rate` a second (every one without `rate`), the vehicles the "
+        "file's traffic actions added whose centre comes within `radius` of its position (**deviation**: not "
+        "the file's entities, which the storyboard refers to, nor ego's own background traffic); a swarm keeps "
+        "`numberOfVehicles` in the ellipse around its `CentralObject` (`semiMajorAxis` along the object's "
+        "heading, `semiMinorAxis` across) and outside `innerRadius`, on the lanes of the ego's road in its "
+        "direction, up to `velocity` (or `InitialSpeedRange`'s middle) as a source's, removing the ones that "
+        "leave it and adding new ones anywhere in it (at most 5 a step after the first fill); the vehicles: a "
+        "`TrafficDefinition`'s categories by weight (ego's typical bodies: a car 4.5 m x 1.8 m...) or a "
+        "`TrafficDistribution`'s (1.3) `ScenarioObjectTemplate`s by the product of the weights (a swarm without "
+        "either, as the reference player reads it: cars), drawn and placed seeded by the run's seed; seen by "
+        "the surround sensor and the collision check as any car; `TrafficStopAction` (1.2) ends the traffic "
+        "action of its `trafficName`; in `Init` or an `Action`"
+    )
+
+    def build(self, b: Any, node: Node) -> M.TrafficAction:
+        name = b.str_(node, "trafficName", "")
+        inner = b.one(node)
+        kind = {
+            "TrafficSourceAction": "source",
+            "TrafficSinkAction": "sink",
+            "TrafficSwarmAction": "swarm",
+            "TrafficStopAction": "stop",
+        }[inner.tag]
+        if kind == "stop":
+            if not name:
+                raise b.error(node, "<TrafficStopAction> needs the TrafficAction's trafficName")
+            return M.TrafficAction("stop", name, line=node.line)
+        bodies = self.bodies(b, inner)
+        if kind == "swarm":
+            central = b.entity_ref(b.one(inner, "CentralObject"))
+            speed = b.num(inner, "velocity", None, nonneg=True)
+            rng = inner.child("InitialSpeedRange")
+            if speed is None and rng is not None:
+                speed = 0.5 * (b.num(rng, "lowerLimit") + b.num(rng, "upperLimit"))
+            inner_r = b.num(inner, "innerRadius", nonneg=True)
+            major, minor = b.num(inner, "semiMajorAxis", positive=True), b.num(inner, "semiMinorAxis", positive=True)
+            count = b.int_(inner, "numberOfVehicles", minimum=0)
+            return M.TrafficAction(
+                kind, name, None, 0.0, math.inf, speed, bodies, central, inner_r, major, minor, count, node.line
+            )
+        position = b.position(b.one(inner, "Position"))
+        radius = b.num(inner, "radius", nonneg=True)
+        if kind == "source":
+            rate = b.num(inner, "rate", positive=True)
+            speed = b.num(inner, "speed", None, nonneg=True)
+            if speed is None:
+                speed = b.num(inner, "velocity", None, nonneg=True)
+        else:
+            rate = b.num(inner, "rate", positive=True) if "rate" in inner.attrs else math.inf
+            speed = None
+        return M.TrafficAction(kind, name, position, radius, rate, speed, bodies, line=node.line)
+
+    @staticmethod
+    def bodies(b: Any, inner: Node) -> tuple[tuple[float, M.Vehicle], ...]:
+        out: list[tuple[float, M.Vehicle]] = []
+        td = inner.child("TrafficDefinition")
+        if td is not None:
+            vcd = b.one(td, "VehicleCategoryDistribution")
+            for e in vcd.all("VehicleCategoryDistributionEntry"):
+                cat = b.enum(e, "category", tuple(CATEGORY_BODIES))
+                out.append((b.num(e, "weight", nonneg=True), _category_body(cat, e.line)))
+        dist = inner.child("TrafficDistribution")
+        if dist is not None:
+            for te in dist.all("TrafficDistributionEntry"):
+                w0 = b.num(te, "weight", nonneg=True)
+                for ee in b.one(te, "EntityDistribution").all("EntityDistributionEntry"):
+                    tmpl = b.one(ee, "ScenarioObjectTemplate")
+                    obj = next((c for c in tmpl.children if c.tag in ("CatalogReference", "Vehicle")), None)
+                    if obj is None:
+                        raise b.error(tmpl, "<ScenarioObjectTemplate> needs a <Vehicle> or <CatalogReference>")
+                    out.append((w0 * b.num(ee, "weight", nonneg=True), b.body(obj, "traffic")))
+        if td is None and dist is None:
+            if inner.tag == "TrafficSourceAction":
+                raise b.error(inner, f"<{inner.tag}> needs a <TrafficDefinition> or a <TrafficDistribution>")
+            out.append((1.0, _category_body("car", inner.line)))  # a sink's are unused
+        if not out or sum(w for w, _ in out) <= 0.0:
+            raise b.error(inner, f"<{inner.tag}>'s vehicles have no positive weight")
+        return tuple(out)
+
+    def apply(self, board: Storyboard, action: M.TrafficAction) -> None:
+        board.driver.traffic_action(action)
+        board.log("action", f"t = {board.t:.2f} s: traffic {action.kind} {action.name!r}".replace(" ''", ""))
 
 
 #: a ParameterAction's and a VariableAction's own elements
@@ -704,15 +1073,19 @@ for _kind in (
     Teleport,
     Controller,
     ActivateController,
+    Appearance,
     Speed,
     LaneChange,
     LaneOffset,
     LongitudinalDistance,
     SpeedProfile,
     Synchronize,
+    AssignRoute,
+    AcquirePosition,
     FollowTrajectory,
     Parameter,
     Variable,
     Environment,
+    Traffic,
 ):
     register(_kind())

@@ -183,6 +183,33 @@ def _check_root(path, root: Node) -> None:
     _check_tree(path, root)
 
 
+def turned_message(what: str) -> str:
+    """The refusal of an entity turned against its lane's direction where ego cannot take it."""
+    return (
+        f"an <Orientation> turning the entity against its lane's direction ({what}) is not supported by ego: "
+        f"SUMO drives every lane its own way; ego drives a car against its lane only from an Init "
+        f"<LanePosition> on the ego's road (see {DOCS})"
+    )
+
+
+def _check_turned(path, stories, init_runs) -> None:
+    """An entity turned against its lane is an Init start only (a car ego drives itself along
+    its lane the other way); anywhere else it is refused with the Orientation's line."""
+    for x in M.walk((stories, init_runs)):
+        if isinstance(x, M.LanePosition) and x.turned:
+            raise ScenarioFileError(path, x.turned, turned_message("outside <Init>"))
+
+
+def _trajectory_start(actions) -> M.TeleportAction | None:
+    """A TeleportAction to the start of the first trajectory among an entity's running Init
+    actions (its first vertex or control point, a clothoid's start position), if it has one."""
+    for a in actions:
+        start = getattr(a, "start_position", None)
+        if start is not None:
+            return M.TeleportAction(start, a.line)
+    return None
+
+
 def _version(path, root: Node) -> tuple[int, int]:
     """(revMajor, revMinor) of the file's FileHeader: 1.0 to 1.3."""
     header = root.child("FileHeader")
@@ -573,14 +600,13 @@ class _Builder:
         p = self.one(node)
         tag = p.tag
         o = p.child("Orientation")
+        turned = 0
         if o is not None and self.enum(o, "type", ("relative", "absolute"), "absolute") == "relative":
             h = self.num(o, "h", 0.0)
             if math.cos(h) < 0.0:  # turned more than 90 degrees from its lane's direction
-                raise self.error(
-                    o,
-                    f"an <Orientation> turning the entity against its lane's direction (relative h = {h:g} rad)"
-                    f" is not supported by ego: SUMO drives every lane its own way (see {DOCS})",
-                )
+                if tag != "LanePosition":
+                    raise self.error(o, turned_message(f"relative h = {h:g} rad, in a <{tag}>"))
+                turned = o.line  # an Init start of a car driving against its lane: checked by load
         if tag == "WorldPosition":
             h = self.raw(p, "h", None)
             return M.WorldPosition(self.num(p, "x"), self.num(p, "y"), None if h is None else self.num(p, "h"), p.line)
@@ -588,17 +614,23 @@ class _Builder:
             road, lane, s = self.str_(p, "roadId"), self.int_(p, "laneId"), self.num(p, "s", nonneg=True)
             if lane == 0:  # OpenDRIVE's lane 0 is the reference line: offset is t from it
                 return M.RoadPosition(road, s, self.num(p, "offset", 0.0), p.line)
-            return M.LanePosition(road, lane, s, self.num(p, "offset", 0.0), p.line)
+            return M.LanePosition(road, lane, s, self.num(p, "offset", 0.0), p.line, turned)
         if tag == "RoadPosition":
             return M.RoadPosition(self.str_(p, "roadId"), self.num(p, "s", nonneg=True), self.num(p, "t"), p.line)
         if tag == "RelativeLanePosition":
             if "dsLane" in p.attrs:
                 raise self.error(p, f"dsLane in <RelativeLanePosition> is not supported by ego (use ds; see {DOCS})")
             return M.RelativeLanePosition(
-                self.entity_ref(p), self.int_(p, "dLane"), self.num(p, "ds", 0.0), self.num(p, "offset", 0.0), p.line
+                # a missing dLane (the schema requires it) is 0, as the reference player reads it
+                self.entity_ref(p),
+                self.int_(p, "dLane", 0),
+                self.num(p, "ds", 0.0),
+                self.num(p, "offset", 0.0),
+                p.line,
             )
         if tag == "RelativeObjectPosition":
-            return M.RelativeObjectPosition(self.entity_ref(p), self.num(p, "dx"), self.num(p, "dy", 0.0), p.line)
+            # dx and dy are required by the schema; the reference player reads a missing one as 0
+            return M.RelativeObjectPosition(self.entity_ref(p), self.num(p, "dx", 0.0), self.num(p, "dy", 0.0), p.line)
         return M.RelativeRoadPosition(self.entity_ref(p), self.num(p, "ds"), self.num(p, "dt"), p.line)
 
     # -- actions ------------------------------------------------------------------------------
@@ -746,15 +778,20 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
     if sb is None:
         raise ScenarioFileError(path, root.line, "<OpenSCENARIO> needs a <Storyboard>")
     init: dict[str, list[M.PrivateAction]] = {name: [] for name in b.entities}
+    init_runs: dict[str, list[M.PrivateAction]] = {}
     init_node = sb.child("Init")
     actions = init_node.child("Actions") if init_node is not None else None
+    init_globals: list[object] = []
     for ga in actions.all("GlobalAction") if actions is not None else ():
-        if action_of(b.global_action(ga)).in_init == "no":
+        global_action = b.global_action(ga)
+        if action_of(global_action).in_init == "no":
             raise ScenarioFileError(
                 path,
                 ga.children[0].line,
                 f"<{ga.children[0].tag}> in <Init> is not supported by ego (declare the value it sets; see {DOCS})",
             )
+        if action_of(global_action).in_init == "yes":
+            init_globals.append(global_action)  # done at the storyboard's first step
     for priv in actions.all("Private") if actions is not None else ():
         ref = b.entity_ref(priv)
         for pa in priv.all("PrivateAction"):
@@ -762,14 +799,22 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
             kind = action_of(act)
             if kind.in_init == "ignored":
                 continue
-            if kind.in_init != "yes" or not kind.init_ok(act):
+            if kind.in_init not in ("yes", "runs") or not kind.init_ok(act):
                 raise ScenarioFileError(
                     path,
                     pa.children[0].line,
                     f"<{pa.children[0].tag}> in <Init> is not supported by ego (Init takes {init_kinds()}; see {DOCS})",
                 )
-            init[ref].append(act)
+            if kind.in_init == "yes":
+                init[ref].append(act)
+            if kind.init_runs(act):
+                init_runs.setdefault(ref, []).append(act)
     for name, acts in init.items():
+        start = _trajectory_start(init_runs.get(name, ()))
+        if start is not None and not any(isinstance(a, M.TeleportAction) for a in acts):
+            # no TeleportAction, a trajectory from t = 0: the entity starts at its first point
+            # (the reference player puts it there at its first step)
+            acts.insert(0, start)
         if not any(isinstance(a, M.TeleportAction) for a in acts):
             raise ScenarioFileError(
                 path,
@@ -822,6 +867,7 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
         stories.append(M.Story(b.str_(st, "name", ""), tuple(acts), st.line))
         names.setdefault(stories[-1].name, st.line)
     stop = b.trigger(sb.child("StopTrigger"))
+    _check_turned(path, stories, init_runs)
     scenario = M.Scenario(
         path,
         header.attrs.get("description", ""),
@@ -834,6 +880,8 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
         init,
         tuple(stories),
         stop,
+        init_runs=init_runs,
+        init_globals=tuple(init_globals),
     )
     _check_refs(scenario, names)
     return scenario
@@ -862,7 +910,7 @@ def _maneuver(b: _Builder, man: Node, names: dict[str, int], scoped: bool = True
     for ev in man.all("Event"):
         acts_ = tuple(
             M.Action(
-                b.str_(a, "name"),
+                b.str_(a, "name", ""),  # nameless as the reference player reads it (see Storyboard)
                 b.global_action(a.children[0])
                 if a.children and a.children[0].tag == "GlobalAction"
                 else b.private_action(b.one(a, "PrivateAction")),

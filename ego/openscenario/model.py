@@ -6,6 +6,7 @@ reference line); ``line`` is where the element starts in its file.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -62,6 +63,8 @@ class LanePosition:
     s: float
     offset: float
     line: int
+    #: the line of an Orientation turning the entity against its lane's direction (0: none)
+    turned: int = 0
 
 
 @dataclass(frozen=True)
@@ -123,6 +126,29 @@ class Vehicle:
 
 
 @dataclass(frozen=True)
+class TrafficAction:
+    """A TrafficAction: a ``source`` (``rate`` vehicles a second at ``position`` within
+    ``radius``, at ``speed``), a ``sink`` (removes up to ``rate`` vehicles a second within
+    ``radius`` of ``position``), a ``swarm`` (``count`` vehicles in the ellipse ``major`` x
+    ``minor`` around ``central``, outside ``inner``, at ``speed``) or a ``stop`` of the traffic
+    action named ``name``; ``bodies`` the vehicles drawn by weight."""
+
+    kind: str
+    name: str
+    position: Position | None = None
+    radius: float = 0.0
+    rate: float = math.inf
+    speed: float | None = None
+    bodies: tuple[tuple[float, Vehicle], ...] = ()
+    central: str = ""
+    inner: float = 0.0
+    major: float = 0.0
+    minor: float = 0.0
+    count: int = 0
+    line: int = 0
+
+
+@dataclass(frozen=True)
 class Entity:
     name: str
     vehicle: Vehicle
@@ -180,10 +206,58 @@ class Vertex:
 
 
 @dataclass(frozen=True)
+class ClothoidSegment:
+    """A clothoid (or one segment of a clothoid spline): from ``start`` (None: where the
+    previous segment ends, or the entity for the first), its heading turned by ``h_offset``,
+    curvature ``k0`` to ``k1`` (1/m) over ``length`` (m); ``time`` at its start (s) or None."""
+
+    start: Position | None
+    k0: float
+    k1: float
+    length: float
+    h_offset: float = 0.0
+    time: float | None = None
+
+
+@dataclass(frozen=True)
+class Nurbs:
+    """A NURBS curve: control points (position, time) with weights, its knots and order."""
+
+    order: int
+    points: tuple[Vertex, ...]
+    weights: tuple[float, ...]
+    knots: tuple[float, ...]
+
+
+@dataclass(frozen=True)
 class FollowTrajectoryAction:
+    """A trajectory: a polyline's ``vertices``, or clothoid ``segments`` (one for a Clothoid,
+    several for a ClothoidSpline; ``end_time`` the time at the end of the last), or a NURBS."""
+
     vertices: tuple[Vertex, ...]
     timing: tuple[str, float, float] | None  #: (absolute|relative, scale, offset) or None
     initial_distance_offset: float
+    line: int = 0
+    segments: tuple[ClothoidSegment, ...] = ()
+    end_time: float | None = None
+    nurbs: Nurbs | None = None
+
+    @property
+    def start_position(self) -> Position | None:
+        """Where the trajectory starts (an entity without a TeleportAction starts there)."""
+        if self.vertices:
+            return self.vertices[0].position
+        if self.segments:
+            return self.segments[0].start
+        return self.nurbs.points[0].position if self.nurbs is not None else None
+
+
+@dataclass(frozen=True)
+class AssignRouteAction:
+    """Drive through ``waypoints`` in turn (an AcquirePositionAction: its one position), by
+    SUMO's driver along the shortest way between them."""
+
+    waypoints: tuple[Position, ...]
     line: int = 0
 
 
@@ -209,6 +283,13 @@ class LongitudinalDistanceAction:
 class ControllerAction:
     """Activate (or assign) a controller: the ego keeps ego's controller (``-c``), the others
     SUMO's driver or their script; accepted and done at once."""
+
+    line: int = 0
+
+
+@dataclass(frozen=True)
+class AppearanceAction:
+    """A light state change (1.2): nothing ego simulates depends on it; done at once."""
 
     line: int = 0
 
@@ -380,6 +461,11 @@ class Scenario:
     stories: tuple[Story, ...]
     stop: Trigger | None
     elements: list[tuple[str, str, int, bool]] = field(default_factory=list)  #: (tag, note, line, supported)
+    #: entity -> Init actions that keep running from t = 0 (a continuous relative speed, a
+    #: distance held...): the storyboard starts them at its first step
+    init_runs: dict[str, list[PrivateAction]] = field(default_factory=dict)
+    #: GlobalActions of the Init done at the storyboard's first step (traffic actions)
+    init_globals: tuple[object, ...] = ()
 
 
 def qualified_names(path: tuple[str, ...]) -> list[str]:
@@ -387,3 +473,17 @@ def qualified_names(path: tuple[str, ...]) -> list[str]:
     first, then its own) is referred to by: its own name and, OpenSCENARIO 1.1's qualified
     forms, every ``Outer::...::Name`` that ends with it (``CutInEvent::CutInAction``)."""
     return ["::".join(path[i:]) for i in range(len(path) - 1, -1, -1)]
+
+
+def walk(node: object):
+    """Every value of the model below ``node`` (its dataclasses, lists, tuples and dicts)."""
+    stack = [node]
+    while stack:
+        x = stack.pop()
+        yield x
+        if dataclasses.is_dataclass(x) and not isinstance(x, type):
+            stack.extend(getattr(x, f.name) for f in dataclasses.fields(x))
+        elif isinstance(x, (list, tuple)):
+            stack.extend(x)
+        elif isinstance(x, dict):
+            stack.extend(x.values())

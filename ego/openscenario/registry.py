@@ -130,7 +130,8 @@ class ActionKind:
     model: ClassVar[type | None] = None  #: the model class :meth:`build` returns (dispatch)
     domains: ClassVar[tuple[str, ...]] = ("long", "lat")  #: what of its actor it drives
     on_ego: ClassVar[bool] = False  #: allowed on the ego (it moves the ego's references)
-    #: in Init: "no", "yes" (kept: the start), or "ignored" (checked, not used)
+    #: in Init: "no", "yes" (kept: the start), "runs" (started at t = 0 and left running, as
+    #: the standard runs a non-instantaneous Init action: 8.5.1.2), or "ignored" (checked, not used)
     in_init: ClassVar[str] = "no"
     init_note: ClassVar[str] = ""  #: how the Init refusal names it ("" = not named)
     is_global: ClassVar[bool] = False  #: a GlobalAction: done once, whoever the actors
@@ -146,8 +147,13 @@ class ActionKind:
         raise NotImplementedError
 
     def init_ok(self, action: Any) -> bool:
-        """Whether this read action may stand in Init (when :attr:`in_init` is "yes")."""
+        """Whether this read action may stand in Init (when :attr:`in_init` is "yes" or "runs")."""
         return True
+
+    def init_runs(self, action: Any) -> bool:
+        """Whether this read action, in Init, keeps running from t = 0 (the storyboard starts
+        it at its first step; a later action on the same domain overrides it)."""
+        return self.in_init == "runs"
 
     def start(self, run: ActionRun, t: float) -> None:
         """Start on ``run.actor`` at ``t`` (default: done at once)."""

@@ -53,6 +53,29 @@ def cache_dir() -> Path:
     return Path(base) / "ego" / "opendrive"
 
 
+#: netconvert's bounds: a road it cannot convert in this time or memory is refused (esmini's
+#: crest-curve.xodr, a 50 m wide border lane on an elevated clothoid, took > 7 GiB and minutes)
+NETCONVERT_SECONDS = 120
+NETCONVERT_MEMORY = 4 << 30
+
+
+def _bounded() -> None:  # pragma: no cover - runs in the child before exec
+    """netconvert's limits: its address space, and it dies with the process that started it."""
+    try:
+        import resource
+
+        resource.setrlimit(resource.RLIMIT_AS, (NETCONVERT_MEMORY, NETCONVERT_MEMORY))
+    except (ImportError, ValueError, OSError):
+        pass
+    try:
+        import ctypes
+        import signal
+
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, int(signal.SIGKILL))  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+
+
 def network_file(road: Path) -> Path:
     """The SUMO network of ``road``: a ``.net.xml`` itself, an ``.xodr`` converted (cached).
     A failed conversion is one line naming the file and netconvert's first error."""
@@ -83,7 +106,14 @@ def network_file(road: Path) -> Path:
             text=True,
             env=env,
             check=False,
+            timeout=NETCONVERT_SECONDS,
+            preexec_fn=_bounded,
         )
+    except subprocess.TimeoutExpired:
+        tmp.unlink(missing_ok=True)
+        raise ScenarioFileError(
+            road, None, f"netconvert did not convert this OpenDRIVE file within {NETCONVERT_SECONDS} s"
+        ) from None
     finally:
         if source != road:
             source.unlink(missing_ok=True)
@@ -91,6 +121,8 @@ def network_file(road: Path) -> Path:
         tmp.unlink(missing_ok=True)
         lines = [ln.strip() for ln in (proc.stderr + proc.stdout).splitlines() if ln.strip()]
         first = next((ln for ln in lines if ln.startswith("Error")), lines[0] if lines else "no output")
+        if "bad_alloc" in proc.stderr or proc.returncode in (-6, -9, 134, 137):
+            first = f"it needed more than {NETCONVERT_MEMORY / 2**30:g} GiB of memory"
         raise ScenarioFileError(road, None, f"netconvert cannot convert this OpenDRIVE file: {first}")
     try:
         _parse(tmp)
@@ -318,6 +350,36 @@ class RoadMap:
                 break
             route.append(nxt[0])
         return route
+
+    def path(self, edges: list[str]) -> list[str] | None:
+        """The shortest way (by length) from the first edge through each of the others in turn,
+        every edge once where consecutive ones meet; None when one cannot be reached."""
+        import heapq
+
+        out = [edges[0]]
+        for goal in edges[1:]:
+            start = out[-1]
+            if goal == start:
+                continue
+            dist, prev, heap = {start: 0.0}, {}, [(0.0, start)]
+            while heap:
+                d, e = heapq.heappop(heap)
+                if e == goal:
+                    break
+                if d > dist.get(e, math.inf):
+                    continue
+                for nxt in self.edges[e].successors:
+                    nd = d + self.edges[nxt].lanes[0].length
+                    if nd < dist.get(nxt, math.inf):
+                        dist[nxt], prev[nxt] = nd, e
+                        heapq.heappush(heap, (nd, nxt))
+            if goal not in prev:
+                return None
+            leg = [goal]
+            while leg[-1] != start:
+                leg.append(prev[leg[-1]])
+            out += leg[-2::-1]
+        return out
 
     def nearest_lane(self, x: float, y: float) -> tuple[Lane, float, float]:
         """The lane whose centre line is nearest to (x, y): (lane, s along it, d + left)."""

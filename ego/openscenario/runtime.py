@@ -81,6 +81,12 @@ class Driver(Protocol):
     def release(self, name: str) -> None: ...
     def ego_speed(self, profile: Transition | None, relative: tuple[str, str, float] | None) -> None: ...
     def ego_lateral(self, profile: Transition) -> None: ...
+    def route(self, name: str, waypoints: tuple[M.Position, ...]) -> None:
+        """Route ``name`` through the waypoints' roads (SUMO's driver drives it)."""
+
+    def traffic_action(self, action: M.TrafficAction) -> None:
+        """Start (or stop) a traffic source, sink or swarm."""
+
     def ego_references(self) -> tuple[float, float]:
         """The ego's speed reference (m/s) and lateral reference (d, m) now."""
 
@@ -252,6 +258,30 @@ class Storyboard:
         self._prev: dict[str, tuple[float, float]] = {}  #: entity -> (speed, yaw) a step ago
         #: (kind, name) -> the value a ParameterAction or VariableAction gave it
         self.store: dict[tuple[str, str], object] = {}
+        #: the Init actions that keep running (started at the first step), None once started
+        self._init: Element | None = None
+        if scenario.init_runs or scenario.init_globals:
+            self._init = Element("action", "Init", None)
+
+    def _start_init(self, t: float) -> None:
+        """Start the Init actions that keep running (the standard's non-instantaneous Init
+        actions: running when the storyboard starts, overridden by any later action on the
+        same domain of their entity)."""
+        el, self._init = self._init, None
+        assert el is not None
+        el.go(RUNNING, "startTransition")
+        for global_action in self.scenario.init_globals:
+            action_of(global_action).apply(self, global_action)
+        runs = []
+        for actor, actions in self.scenario.init_runs.items():
+            for action in actions:
+                run = ActionRun(self, el, actor, action)
+                for domain in run.domains:
+                    self.slots[(actor, domain)] = run
+                self.log("action", f"t = {t:.2f} s: {run.kind.tag} in Init on {actor}")
+                run.start(t)
+                runs.append(run)
+        self.running[id(el)] = runs
 
     def _element(self, kind: str, path: tuple[str, ...], node, max_count: int = 1) -> Element:
         """The element at ``path`` (names from its story down), found by its name and by every
@@ -334,6 +364,8 @@ class Storyboard:
             self.stopped = True
             self.log("storyboard", f"t = {t:.2f} s: storyboard StopTrigger: the scenario ends")
             return
+        if self._init is not None:
+            self._start_init(t)
         for story in self.stories:
             self._story(story, t)
         for runs in list(self.running.values()):

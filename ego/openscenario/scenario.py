@@ -27,7 +27,7 @@ import dataclasses
 import math
 import os
 import re
-from collections.abc import Iterator, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
@@ -37,10 +37,12 @@ import numpy as np
 from ego.lane_frame import LanePolyline
 from ego.openscenario import model as M
 from ego.openscenario.dynamics import Transition
+from ego.openscenario.kinematic import Kinematic
 from ego.openscenario.loader import declared_parameters, header_description, load
 from ego.openscenario.registry import action_of
 from ego.openscenario.roads import RoadMap, network_file, refine_shape
 from ego.openscenario.runtime import Storyboard
+from ego.openscenario.traffic import TrafficActions, sumo_type
 from ego.openscenario.xmltree import DOCS, ScenarioFileError
 from ego.params import ConfigError, param
 from ego.scenarios.base import NO_PREVENTABLE_COLLISION, Parts, Scenario
@@ -376,8 +378,11 @@ class FileScenario(Scenario):
         roads = RoadMap(net, converted=not str(model.road).endswith(".net.xml"))
         ego = find_ego(model, config.ego_entity)
         _check_ego_actions(model, ego)
+        _check_turned(model, ego)
         starts = placements(model, roads)
-        _check_road_references(model, roads, len(roads.edges[starts[ego].edge].lanes))
+        edge = starts[ego].edge
+        _check_road_references(model, roads, len(roads.edges[edge].lanes), len(_opposite_lanes(roads, edge)))
+        _check_routes(model, roads)
         if starts[ego].offset:
             pos = next(a for a in model.init[ego] if isinstance(a, M.TeleportAction)).position
             raise ScenarioFileError(
@@ -408,6 +413,17 @@ class FileScenario(Scenario):
             )
         del known
         cfg = replace(cfg, ego_speed=float(start.speed), ego_lane=int(start.index), ego_start=float(start.front))
+        # an ego parameter the file declares by an expression of its other parameters (the ALKS
+        # files' duration) follows their set values unless set itself
+        types = {f.name: f.type for f in dataclasses.fields(FileConfig)}
+        follow = {
+            k: _PY[types[k]](model.values[k])
+            for k in cls.file_params
+            if k in types and k not in overrides and k in model.values and k != "ego_entity"
+        }
+        follow = {k: v for k, v in follow.items() if v != getattr(cfg, k)}
+        if follow:
+            cfg = replace(cfg, **follow)
         end = stop_time(model)
         if "duration" not in cls.file_params and end is not None and end >= cfg.duration:
             # the run lasts until the StopTrigger's time (--set duration=... still rules)
@@ -600,17 +616,7 @@ class StoryDriver:
             v = ent.vehicle
             start = sc.starts[name]
             color = ENTITY_COLORS[(k - 1) % len(ENTITY_COLORS)]
-            vt = VehicleType(
-                f"xosc_{name}",
-                length=v.length,
-                width=v.width,
-                accel=v.max_accel,
-                decel=v.max_decel,
-                emergency_decel=max(9.0, v.max_decel),
-                max_speed=v.max_speed,
-                sigma=0.0,
-                color=color,
-            )
+            vt = sumo_type(f"xosc_{name}", v, color)
             self._types[name] = vt
             # inserted at the ego's speed at least (SUMO's insertion check), its own speed set
             # before the first step (as emergency-brake's lead); a pedestrian or misc object
@@ -635,6 +641,17 @@ class StoryDriver:
                 along = start.front - 0.5 * sc.model.entities[name].vehicle.length
                 x, y = poly.offset_point(along, start.offset)
                 sc.bridge.place(name, x, y, poly.heading_at(along), start.speed or 0.0)
+        self._start_kinematic()
+        self._traffic = TrafficActions(
+            sc.bridge,
+            lambda pos: self.position_xy(pos, self.board.states)[:2],  # type: ignore[union-attr]
+            self._route,
+            self._pose,
+            sc.road,
+            sorted(sc.lane_offset.values()),
+            sc.config.sumo_step,
+            np.random.default_rng([int(sc.seed), 39]),
+        )
         self.board = Storyboard(sc.model, sc.ego_name, self, sc.config.sumo_step, self._story_event)
         self._scripted = [n for n in sc.model.entities if n != sc.ego_name]
         self.history = {n: [] for n in self._scripted}
@@ -642,6 +659,31 @@ class StoryDriver:
         self._observe(-1.0)  # the start positions (no distance travelled)
         for hist in self.history.values():
             hist.clear()
+
+    def _start_kinematic(self) -> None:
+        """The cars that start turned against their lane: ego drives them (kinematic.py), from
+        their Init position; the lanes of the other direction beside the ego's in its frame."""
+        sc = self.sc
+        road = sc.road
+        self._kin = Kinematic(road, sc.bridge.place, sc.config.sumo_step)
+        lanes = _opposite_lanes(sc.roads, sc.starts[sc.ego_name].edge)
+        own = sc.lane_offset
+        self._lanes_all = dict(own)
+        for k, lane in enumerate(lanes):
+            mid = lane.shape[len(lane.shape) // 2]
+            self._lanes_all[len(own) + k] = road.project(mid[0], mid[1])[1]
+        for name, start in sc.starts.items():
+            tp = next(a for a in sc.model.init[name] if isinstance(a, M.TeleportAction))
+            if name == sc.ego_name or not getattr(tp.position, "turned", 0):
+                continue
+            x, y, h = self.position_xy(tp.position, {})
+            heading = h + math.pi  # turned round on its lane
+            cx = sc.model.entities[name].vehicle.center_x
+            x, y = x + cx * math.cos(heading), y + cx * math.sin(heading)
+            s, d, _ = road.project(x, y)
+            direction = 1 if math.cos(heading - road.heading_at(s)) > 0.0 else -1
+            self._kin.add(name, s, d, start.speed or 0.0, direction)
+            sc.bridge.place(name, x, y, heading, start.speed or 0.0)
 
     def after_sim_step(self) -> None:
         """The run ends, as at the end of its time, when a scripted entity has left the road
@@ -651,7 +693,10 @@ class StoryDriver:
         if sc.status != "running":
             return
         gone = [n for n in sc.bridge.arrived() if n in self._scripted]
-        if gone:
+        away = self._kin.beyond()
+        if away is not None:
+            self._road_end(f"{away} left its road (driven against its lane, at the road's end)")
+        elif gone:
             self._road_end(f"{gone[0]} left the road network (the end of its route)")
         elif sc.view.s + sc.geometry.cg_to_front >= sc.view.road.length:
             self._road_end(
@@ -699,12 +744,13 @@ class StoryDriver:
             if t >= 0.0:
                 st.traveled += math.hypot(bx - st.x, by - st.y)
             st.x, st.y, st.yaw = bx, by, yaw
-            st.speed = speed
+            # a car ego drives against its lane: its own speed (SUMO's reads its placement)
+            st.speed = speed if name not in self._kin else self._kin.cars[name].v
             s, d, _ = project(bx, by)
             half = 0.5 * st.length
             st.s, st.d = s, d
             st.d_front = project(bx + half * math.cos(yaw), by + half * math.sin(yaw))[1]
-            history[name].append((t, speed, st.d_front))
+            history[name].append((t, st.speed, st.d_front))
 
     def _ego_now(self) -> tuple[float, float, float, float, float, float]:
         """The ego's world pose, speed and lane-frame position (its centre of gravity) now."""
@@ -719,6 +765,8 @@ class StoryDriver:
         t = sc.t - sc.config.sumo_step
         self._observe(t)
         board.step(t)
+        self._kin.advance()
+        self._traffic.step()
         self._ego_then = self._ego_now()  # what the next step's storyboard time sees
         if board.stopped and sc.status == "running":
             sc._end("completed", "the storyboard's StopTrigger ended the scenario")
@@ -763,18 +811,21 @@ class StoryDriver:
         return min(sc.lane_offset.values(), key=lambda off: abs(d - off))
 
     def lane_centre(self, lane_id: int, relative_to: float | None = None, dlane: int = 0) -> float:
+        # the ego's direction's lanes (index 0 the rightmost), then the other direction's from
+        # the centre line outwards (a scripted car changing into them is driven by ego)
         sc = self.sc
+        lanes = self._lanes_all
         n = len(sc.lanes)
         if relative_to is None:
-            index = n - abs(lane_id)
+            index = n - abs(lane_id) if lane_id < 0 else n - 1 + lane_id
         else:
-            index = min(sc.lane_offset, key=lambda i: abs(relative_to - sc.lane_offset[i])) + dlane
-        if index not in sc.lane_offset:
+            index = min(lanes, key=lambda i: abs(relative_to - lanes[i])) + dlane
+        if index not in lanes:
             raise ConfigError(
                 f"lane {lane_id if relative_to is None else f'{dlane:+d} from the reference'} does "
                 f"not exist on the ego's road ({n} lanes)"
             )
-        return sc.lane_offset[index]
+        return lanes[index]
 
     def _limit(self, name: str, rate: float) -> None:
         """Let SUMO follow a commanded speed change of ``rate`` (m/s^2) per step."""
@@ -790,6 +841,9 @@ class StoryDriver:
 
     def speed(self, name: str, v_next: float, peak_rate: float) -> None:
         sc = self.sc
+        if name in self._kin:
+            self._kin.speed(name, v_next)
+            return
         if not math.isfinite(peak_rate):
             sc.bridge.start_speed(name, v_next)  # a step: at once
             return
@@ -797,7 +851,7 @@ class StoryDriver:
         sc.bridge.set_speed(name, v_next)
 
     def blind(self, name: str) -> bool:
-        return name in self._lateral_free
+        return name in self._lateral_free or name in self._kin
 
     def speed_rate(self, name: str, target: float, rate: float) -> None:
         sc = self.sc
@@ -810,6 +864,14 @@ class StoryDriver:
     def lateral(self, name: str, d_next: float, peak_speed: float) -> None:
         sc = self.sc
         st = self.board.states[name]
+        centre_line = 0.5 * (max(sc.lane_offset.values()) + self._lanes_all.get(len(sc.lanes), INF))
+        if name not in self._kin and d_next > centre_line:
+            # across the centre line into the other direction's lanes: ego drives it from here
+            ahead = math.cos(st.yaw - sc.road.heading_at(st.s)) > 0
+            self._kin.add(name, st.s, st.d, st.speed, 1 if ahead else -1)
+        if name in self._kin:
+            self._kin.lateral(name, d_next)  # its reference point on the profile
+            return
         if not math.isfinite(peak_speed):
             # a step: the sublane model moves a car at most a lane-width fraction a step, so
             # the car is placed across at once (where it would be after the step)
@@ -829,11 +891,39 @@ class StoryDriver:
     def teleport(self, name: str, x: float, y: float, heading: float) -> None:
         sc = self.sc
         sc.bridge.place(name, x, y, heading, self.board.states[name].speed, keep_route=1)
+        if name in self._kin:
+            self._kin.moved(name, *self.road_frame(x, y))
 
     def place(self, name: str, x: float, y: float, heading: float, speed: float) -> None:
         sc = self.sc
         sc.bridge.place(name, x, y, heading, speed)
         sc.bridge.set_speed(name, speed)  # SUMO's own speed too (it drives on from there)
+        if name in self._kin:
+            self._kin.moved(name, *self.road_frame(x, y))
+            self._kin.speed(name, speed)
+
+    def route(self, name: str, waypoints: tuple[M.Position, ...]) -> None:
+        if name in self._kin:
+            return  # a car ego drives against its lane keeps to the ego's road
+        sc = self.sc
+        ls = sc.bridge.libsumo
+        here = ls.vehicle.getRoadID(name)
+        if here.startswith(":"):  # inside a junction: from the edge it enters next
+            here = ls.vehicle.getRoute(name)[ls.vehicle.getRouteIndex(name) + 1]
+        goals = [_waypoint_edge(sc.roads, self.position_xy(p, self.board.states)) for p in waypoints]
+        path = sc.roads.path([here, *goals])
+        if path is None:
+            raise ScenarioFileError(
+                sc.model.path, waypoints[0].line, f"no way along the roads from {name}'s road {here!r} to its route"
+            )
+        ls.vehicle.setRoute(name, path + sc.roads.route_from(path[-1])[1:])
+
+    def _pose(self, name: str) -> tuple[float, float, float]:
+        e = self.board.states[name]  # type: ignore[union-attr]
+        return e.x, e.y, e.yaw
+
+    def traffic_action(self, action: M.TrafficAction) -> None:
+        self._traffic.start(action)
 
     def release(self, name: str) -> None:
         """A scripted move ended: SUMO drives the car on from where it is, minding others."""
@@ -914,6 +1004,14 @@ class FileManoeuvre(EvasiveManoeuvre):
 
 def _check_ego_actions(model: M.Scenario, ego: str) -> None:
     """Actions ego cannot apply to its own vehicle, refused before the run."""
+    for act in model.init_runs.get(ego, ()):
+        if not action_of(act).on_ego:
+            raise ScenarioFileError(
+                model.path,
+                act.line,
+                f"<{action_of(act).tag}> on the ego ({ego}) is not supported by ego: the ego moves by its own "
+                f"model (see {DOCS})",
+            )
     for st in model.stories:
         for act in st.acts:
             for g in act.groups:
@@ -933,25 +1031,59 @@ def _check_ego_actions(model: M.Scenario, ego: str) -> None:
                                 )
 
 
-def _model_nodes(node: object) -> Iterator[object]:
-    """Every value of the model below ``node`` (its dataclasses, lists, tuples and dicts)."""
-    stack = [node]
-    while stack:
-        x = stack.pop()
-        yield x
-        if dataclasses.is_dataclass(x) and not isinstance(x, type):
-            stack.extend(getattr(x, f.name) for f in dataclasses.fields(x))
-        elif isinstance(x, (list, tuple)):
-            stack.extend(x)
-        elif isinstance(x, dict):
-            stack.extend(x.values())
+def _opposite_lanes(roads: RoadMap, edge: str) -> list:
+    """The lanes of the other direction beside the ego's start road (its edge ``-r`` and ``r``),
+    from the centre line outwards (SUMO's lane index counts from the outer edge)."""
+    other = edge[1:] if edge.startswith("-") else "-" + edge
+    if other not in roads.edges:
+        return []
+    return list(reversed(roads.edges[other].lanes))
 
 
-def _check_road_references(model: M.Scenario, roads: RoadMap, ego_lanes: int) -> None:
+def _waypoint_edge(roads: RoadMap, xyh: tuple[float, float, float]) -> str:
+    """The road (SUMO edge) a waypoint lies on: the one of the lane nearest its point."""
+    return roads.nearest_lane(xyh[0], xyh[1])[0].edge
+
+
+def _check_routes(model: M.Scenario, roads: RoadMap) -> None:
+    """Every route's waypoints (those given on the road or in the world) follow each other
+    along the roads: what the run would find only when the route was assigned."""
+    for x in M.walk(model.stories):
+        if not isinstance(x, M.AssignRouteAction):
+            continue
+        edges = []
+        for p in x.waypoints:
+            if isinstance(p, M.LanePosition):
+                edges.append(roads.lane_position(p.road, p.lane, p.s)[0].edge)
+            elif isinstance(p, M.WorldPosition):
+                edges.append(_waypoint_edge(roads, (p.x, p.y, 0.0)))
+            else:
+                edges = []
+                break
+        for a, b, p in zip(edges, edges[1:], x.waypoints[1:]):
+            if roads.path([a, b]) is None:
+                raise ScenarioFileError(
+                    model.path, p.line, f"this waypoint's road {b!r} cannot be reached from the one before ({a!r})"
+                )
+
+
+def _check_turned(model: M.Scenario, ego: str) -> None:
+    """The ego turned against its lane is refused: it drives its lane frame's way."""
+    tp = next(a for a in model.init[ego] if isinstance(a, M.TeleportAction))
+    if getattr(tp.position, "turned", 0):
+        raise ScenarioFileError(
+            model.path,
+            tp.position.turned,  # type: ignore[union-attr]
+            f"an <Orientation> turning the ego against its lane's direction is not supported by ego: the ego "
+            f"drives its lane's way (see {DOCS})",
+        )
+
+
+def _check_road_references(model: M.Scenario, roads: RoadMap, ego_lanes: int, other_lanes: int = 0) -> None:
     """Every road position of the file (in its actions and conditions too, not only its Init)
     names a lane of the road network, and no lane change asks for more lanes beside its
     reference than the ego's road has: what the run would find only when it got there."""
-    for x in _model_nodes(model.stories):
+    for x in M.walk(model.stories):
         try:
             if isinstance(x, M.LanePosition):
                 roads.lane_position(x.road, x.lane, x.s)
@@ -959,13 +1091,17 @@ def _check_road_references(model: M.Scenario, roads: RoadMap, ego_lanes: int) ->
                 roads.lane_position(x.road, -1, x.s)
         except ValueError as exc:
             raise ScenarioFileError(model.path, x.line, str(exc)) from None
-        if isinstance(x, M.LaneChangeAction) and x.relative_to is not None and abs(x.relative_lanes) >= ego_lanes:
+        if (
+            isinstance(x, M.LaneChangeAction)
+            and x.relative_to is not None
+            and (-x.relative_lanes >= ego_lanes or x.relative_lanes >= ego_lanes + other_lanes)
+        ):
             raise ScenarioFileError(
                 model.path,
                 x.line,
                 f"a lane change {x.relative_lanes:+d} lanes from {x.relative_to}'s lane: the ego's road has "
-                f"{ego_lanes} lane{'s' if ego_lanes != 1 else ''} in its direction (ego models the lanes of the "
-                f"ego's direction of travel; see {DOCS})",
+                f"{ego_lanes} lane{'s' if ego_lanes != 1 else ''} in its direction and {other_lanes} in the other "
+                f"(ego models the lanes of the ego's road; see {DOCS})",
             )
 
 

@@ -120,7 +120,10 @@ declare(
         "Trailer",
     ),
     note=(
-        "`BoundingBox` (length, width, center x), `Performance`, `vehicleCategory` car, van, truck, trailer, "
+        "`BoundingBox` (length, width, center x), `Performance` (`maxSpeed`, `maxAcceleration` and "
+        "`maxDeceleration` each required, as the schema has them in 1.0 to 1.3: a missing one is refused in one "
+        "line; the reference player fills in its own defaults and plays esmini's `straight_500m.xosc`, which "
+        "leaves out `maxAcceleration`), `vehicleCategory` car, van, truck, trailer, "
         "semitrailer, bus, motorbike, bicycle (recorded, not used by SUMO); `Axles` and `Properties` (with "
         "`Property` and `File`) accepted and not used; `TrailerHitch`, `TrailerCoupler` (1.3) accepted and not "
         "used, and a `Trailer` that attaches nothing (an empty `entityRef` or `entryName`: the reference player's "
@@ -181,12 +184,18 @@ declare(
     within=("Storyboard",),
     contains=("Actions",),
     note=(
-        "the start is immediate whatever the dynamics; every entity needs a TeleportAction, the ego a "
-        "SpeedAction; a relative speed is the other entity's Init speed plus the delta (or times the factor); a "
-        "continuous one is refused; a controller action in Init is accepted and not used"
+        "a TeleportAction and a SpeedAction are the start, immediate whatever the dynamics (**deviation**: the "
+        "standard runs a speed change with a duration from t = 0); every entity needs a TeleportAction (or, **as the reference player reads it**, a "
+        "`FollowTrajectoryAction` in Init: it starts at the trajectory's first point, where esmini puts it at its "
+        "first step; the standard leaves such a start undefined), the ego a SpeedAction; a relative speed is the other entity's Init speed plus the delta (or times the factor); a "
+        "continuous relative speed, a `LaneChangeAction`, `LaneOffsetAction`, `LongitudinalDistanceAction`, "
+        "`SpeedProfileAction`, `SynchronizeAction` or `FollowTrajectoryAction` in Init is started at t = 0 and "
+        "left running, as the standard runs a non-instantaneous Init action (8.5.1.2), until it ends or a later "
+        "action on the same domain of the entity overrides it (on the ego only what an event may do to it); a "
+        "controller action in Init is accepted and not used"
     ),
-    label="`Init`: `TeleportAction`, `SpeedAction` with `AbsoluteTargetSpeed` or a non-continuous"
-    " `RelativeTargetSpeed`, `ControllerAction`, `GlobalAction`/`EnvironmentAction`",
+    label="`Init`: `TeleportAction`, `SpeedAction`, the running private actions, `ControllerAction`,"
+    " `GlobalAction`/`EnvironmentAction`",
     section="storyboard",
 )
 declare("Actions", contains=("Private", "GlobalAction"))
@@ -201,11 +210,17 @@ declare(
     "LanePosition",
     contains=("Orientation",),
     note=(
-        "`RelativeObjectPosition`: `dx` ahead, `dy` left of the entity's reference point in its own frame (during "
+        "a missing `dx`/`dy` of a `RelativeObjectPosition` or `dLane` of a `RelativeLanePosition` (the schema "
+        "requires them) is 0, as the reference player reads them; `RelativeObjectPosition`: `dx` ahead, `dy` left of the entity's reference point in its own frame (during "
         "the run from its box and heading; in `Init` along and across its lane, exact on straight roads); `dz` "
-        "and its `Orientation` as for the others; a relative `Orientation` turning the entity more than 90 "
-        "degrees from its lane (esmini's `alks_cut-in.xosc` starts a car in the oncoming lane turned round, `h = "
-        "3.141593`) is refused: SUMO drives every lane its own way; an `offset` (lane and relative lane "
+        "and its `Orientation` as for the others; a relative `Orientation` turning a car more than 90 degrees "
+        "from its lane (relative to the lane's driving direction, as the reference player reads it: esmini's "
+        "`alks_cut-in.xosc` starts a car in the oncoming lane turned round, `h = 3.141593`, to drive the ego's "
+        "way) in an Init `LanePosition` on the ego's road: SUMO drives every lane its own way, so ego drives "
+        "that car itself along the ego's lane frame, one placement a step (`kinematic.py`: exactly at its "
+        "speed and lateral profiles, within 1e-6 m, `test_xosc_against_lane.py`; it does not car-follow, and "
+        "leaving the road at either end ends the run as a car leaving the network does); the ego turned, or a "
+        "turned position anywhere else, is refused with the Orientation's line; an `offset` (lane and relative lane "
         "positions): an entity starts that far from its lane's centre (into the neighbour lane if it reaches it): "
         "SUMO inserts on the lane's centre and ego places it across in SUMO's first step (exact from t = 0.1 s; "
         "the ego itself starts on its lane's centre); an entity starts where its `Init` puts it, however close "
@@ -232,7 +247,8 @@ declare(
     note=(
         "states standby / running / complete; `maximumExecutionCount` of events and maneuver groups; `priority` "
         "overwrite / override (stops the maneuver's other running events), skip (does not start while another "
-        "event of the maneuver runs), parallel"
+        "event of the maneuver runs), parallel. **As the reference player reads its files:** a `Maneuver` or an "
+        "`Action` without its `name` (the schema requires one) is read nameless (no condition can refer to it)"
     ),
     label="`Storyboard`, `Story`, `Act`, `ManeuverGroup`, `Maneuver`, `Event`",
     also=("Story", "Act", "ManeuverGroup", "Maneuver", "Event"),
@@ -270,15 +286,23 @@ declare("TriggeringEntities", contains=("EntityRef",))
 declare("EntityCondition")  # the conditions: ego/openscenario/conditions.py
 declare("ByValueCondition")
 refuse(
-    "every other element (e.g. `EndOfRoadCondition`, `OffroadCondition`, `EntityAction`, `TrafficAction` and the"
-    " other `GlobalAction`s, `LateralDistanceAction`, `TrafficSignals`; a `ParameterValueDistribution` runs with"
+    "`EndOfRoadCondition`, `OffroadCondition`",
+    ("EndOfRoadCondition", "OffroadCondition"),
+    "refused with its line: `EndOfRoadCondition` could never hold during a run of ego (a run ends when the "
+    "ego reaches the end of its road or a scripted car leaves the network, SUMO taking it off at its route's "
+    "end; the reference player keeps a car standing there); `OffroadCondition` needs a road-boundary model of "
+    "every entity, which ego does not have",
+    section="conditions",
+)
+refuse(
+    "every other element (e.g. `EntityAction`, the other `GlobalAction`s (`InfrastructureAction`...), "
+    "`LateralDistanceAction`, `VisibilityAction`, `TrafficSignals`; a `ParameterValueDistribution` runs with"
     " `ego sweep`, below)",
     (
-        "EndOfRoadCondition",
-        "OffroadCondition",
         "EntityAction",
-        "TrafficAction",
+        "InfrastructureAction",
         "LateralDistanceAction",
+        "VisibilityAction",
         "TrafficSignals",
         "ParameterValueDistribution",
     ),

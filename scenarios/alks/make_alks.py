@@ -145,6 +145,13 @@ GAP = param(
     "TimeGap", "1.6", "1.0", "3.0", "R157 5.2.3.3: minimum following time gap 1.0 s (7.2 km/h) - 1.6 s (60 km/h)"
 )
 DURATION = param("duration", "20")
+#: until the ego has reached a standing target TargetDistance ahead and 10 s more (at least 20 s):
+#: at 20 km/h a target 180 m ahead is 32 s away
+REACH = param(
+    "duration",
+    "${max(20, $TargetDistance / ($EgoSpeed_kph / 3.6) + 10)}",
+    note="20 s, or until the ego has reached the target and 10 s more",
+)
 #: R157's original series keeps the vehicle in its lane (5.2.1; lane changes came with the 2022
 #: amendment): ego's evasive lane change is off, it brakes in lane (`--set evade=true` allows it)
 EVADE = (
@@ -207,7 +214,11 @@ def cut_in() -> tuple[str, str, dict]:
         + "    <!-- R157 5.2.5.2: the collision must be avoidable: TTC at lane intrusion (0.3 m) > v_rel / (2 * 6) + CutInTTCMargin -->\n"
         + f'    <ParameterDeclaration name="CutInGap" parameterType="double" value="10"><ConstraintGroup>'
         f'<ValueConstraint rule="greaterThan" value="{tmin}"/><ValueConstraint rule="lessOrEqual" value="60"/></ConstraintGroup></ParameterDeclaration>\n'
-        + DURATION
+        + param(
+            "duration",
+            "${max(20, 20 / ($RelSpeed_kph / 3.6) + 3.5 / $LateralVelocity + 8)}",
+            note="20 s, or the 20 m closing at RelSpeed, the lane change and 8 s more (a slow cut-in takes ~30 s)",
+        )
     )
     inits = init("Ego", "0", "-2", "300", EGO_V) + init(
         "CutIn", "0", "-1", "${300 + 4.5 + $CutInGap + 20}", "${($EgoSpeed_kph - $RelSpeed_kph) / 3.6}"
@@ -279,7 +290,7 @@ def blocking() -> tuple[str, str, dict]:
         EGO_SPEED
         + param("TargetDistance", "120", "30", "400", "stationary car ahead of the ego's start")
         + param("TargetOffset", "0", "-1.5", "1.5", "Annex 5 4.2: fully (0) or partially (|offset| > 0) blocking")
-        + DURATION
+        + REACH
     )
     inits = init("Ego", "0", "-2", "300", EGO_V) + init(
         "Target", "0", "-2", "${300 + $TargetDistance}", "0", "$TargetOffset"
@@ -444,7 +455,7 @@ def blocking_target(kind: str) -> tuple[str, str, dict]:
         EGO_SPEED
         + param("TargetDistance", "120", "30", "400", "the target ahead of the ego's start")
         + param("TargetOffset", "0", "-1.5", "1.5", "Annex 5 4.2: offset from the lane's centre")
-        + DURATION
+        + REACH
     )
     inits = init("Ego", "0", "-2", "300", EGO_V) + init(
         "Target", "0", "-2", "${300 + $TargetDistance}", "0", "$TargetOffset"
@@ -481,7 +492,7 @@ def multiple_blocking() -> tuple[str, str, dict]:
             "TargetOffset", "0.5", "-1.5", "1.5", "the pedestrian's offset from the lane's centre (partially blocking)"
         )
         + param("SecondGap", "10", "2", "100", "the standing car's distance beyond the pedestrian (ego's choice)")
-        + DURATION
+        + REACH
     )
     pedestrian = PEDESTRIAN.replace('name="Target"', 'name="Pedestrian"')
     inits = (
@@ -582,7 +593,7 @@ def forward_range() -> tuple[str, str, dict]:
             "sensor_range", "46", "46", "500", "R157 7.1.1: forward detection range at least 46 m (ego's sensor radius)"
         )
         + param("TargetDistance", "150", "60", "400", "stationary car ahead of the ego's start")
-        + DURATION
+        + REACH
     )
     inits = init("Ego", "0", "-2", "300", EGO_V) + init("Target", "0", "-2", "${300 + $TargetDistance}", "0")
     comment = (

@@ -109,3 +109,26 @@ def test_a_slow_cut_in_is_a_target_from_its_lane_intrusion_and_is_avoided():
     seen = r.column("t")[np.isfinite(r.column("gap_front"))]
     # seen at the first SUMO step its outline is over the lane's edge (a look every 0.1 s)
     assert intruding[0] <= seen[0] <= intruding[0] + 0.1 + 1e-9
+
+
+@pytest.mark.parametrize(
+    "name,overrides,duration",
+    [
+        # the defaults keep 20 s
+        ("alks_4_4_cut_in", {}, 20.0),
+        ("alks_4_2_blocking", {}, 20.0),
+        # a slow cut-in: 20 m closed at 5 km/h (14.4 s), 3.5 m at 0.5 m/s (7 s), 8 s more
+        ("alks_4_4_cut_in", {"EgoSpeed_kph": 30, "RelSpeed_kph": 5, "LateralVelocity": 0.5, "CutInGap": 8}, 29.4),
+        # a target 180 m ahead at 20 km/h: reached after 32.4 s, 10 s more
+        ("alks_4_2_blocking", {"EgoSpeed_kph": 20, "TargetDistance": 180}, 42.4),
+        # set itself, it rules
+        ("alks_4_2_blocking", {"EgoSpeed_kph": 20, "TargetDistance": 180, "duration": 25}, 25.0),
+    ],
+)
+def test_the_duration_follows_the_variations_parameters(name, overrides, duration):
+    """The 4.2 and 4.4 files end 10 s (8 s) after the ego can have met their target, at least 20 s:
+    a fixed 20 s ended slow cut-ins and far targets before anything happened."""
+    from ego.runner import resolve
+
+    resolved = resolve(RunSpec(str(ALKS / f"{name}.xosc"), "pid", overrides=overrides))
+    assert resolved.config.duration == pytest.approx(duration, abs=1e-9)

@@ -54,10 +54,9 @@ EGO_SPEED_INIT = """          <PrivateAction>
           </PrivateAction>
         </Private>
         <Private entityRef="Lead">"""
-LANE_CHANGE = (
-    '<LateralAction><LaneChangeAction><LaneChangeActionDynamics dynamicsShape="cubic" value="2" '
-    'dynamicsDimension="time"/><LaneChangeTarget><AbsoluteTargetLane value="-1"/></LaneChangeTarget>'
-    "</LaneChangeAction></LateralAction>"
+EGO_DISTANCE = (
+    '<LongitudinalAction><LongitudinalDistanceAction entityRef="Lead" distance="30" freespace="false" '
+    'continuous="true"/></LongitudinalAction>'
 )
 
 #: (id, file text, marker locating the line (None: no line), message after "FILE:LINE: ")
@@ -234,9 +233,26 @@ HAND = [
     ),
     (
         "global-action",
+        sub("<Actions>\n", "<Actions>\n        <GlobalAction><InfrastructureAction/></GlobalAction>\n"),
+        "<InfrastructureAction",
+        unsupported("InfrastructureAction"),
+    ),
+    (
+        "traffic-action-empty",
         sub("<Actions>\n", "<Actions>\n        <GlobalAction><TrafficAction/></GlobalAction>\n"),
         "<TrafficAction",
-        unsupported("TrafficAction"),
+        "<TrafficAction> needs exactly one child element (found 0)",
+    ),
+    (
+        "traffic-source-without-vehicles",
+        sub(
+            "<Actions>\n",
+            '<Actions>\n        <GlobalAction><TrafficAction><TrafficSourceAction rate="1" radius="0"><Position>'
+            '<LanePosition roadId="0" laneId="-1" s="50" offset="0"/></Position></TrafficSourceAction>'
+            "</TrafficAction></GlobalAction>\n",
+        ),
+        "<TrafficAction",
+        "<TrafficSourceAction> needs a <TrafficDefinition> or a <TrafficDistribution>",
     ),
     (
         "distribution",
@@ -340,18 +356,20 @@ HAND = [
         "LeadManeuver, LeadGroup, Brake, LeadBrakes; qualify with '::', e.g. 'Event::Action')",
     ),
     (
-        "lane-change-in-init",
+        # an Init action that takes time runs from t = 0 (a lane change of the ego's does), but
+        # not one the ego cannot do
+        "ego-distance-in-init",
         sub(
             EGO_SPEED_INIT,
             EGO_SPEED_INIT.replace(
                 "          <PrivateAction>\n",
-                "          <PrivateAction>" + LANE_CHANGE + "</PrivateAction>\n          <PrivateAction>\n",
+                "          <PrivateAction>" + EGO_DISTANCE + "</PrivateAction>\n          <PrivateAction>\n",
                 1,
             ),
         ),
-        "<LateralAction><LaneChangeAction",
-        f"<LateralAction> in <Init> is not supported by ego (Init takes TeleportAction, ControllerAction and "
-        f"SpeedAction with AbsoluteTargetSpeed or a non-continuous RelativeTargetSpeed; see {DOCS})",
+        "<LongitudinalAction><LongitudinalDistanceAction",
+        f"<LongitudinalDistanceAction> on the ego (Ego) is not supported by ego: the ego moves by its own model "
+        f"(see {DOCS})",
     ),
     (
         "two-actions-in-one",
@@ -544,15 +562,17 @@ HAND = [
         "sqrt(-300) is undefined in expression '${sqrt(-$EgoFront)}'",
     ),
     (
-        "init-relative-continuous",
+        # a continuous relative speed in Init runs from t = 0 (the standard's running Init
+        # action), but its start needs the other's Init speed: not its own
+        "init-relative-continuous-to-itself",
         sub(
             '<SpeedActionTarget><AbsoluteTargetSpeed value="$LeadSpeed"/></SpeedActionTarget>',
-            '<SpeedActionTarget><RelativeTargetSpeed entityRef="Ego" value="0" speedTargetValueType="delta" '
+            '<SpeedActionTarget><RelativeTargetSpeed entityRef="Lead" value="0" speedTargetValueType="delta" '
             'continuous="true"/></SpeedActionTarget>',
         ),
         '<LongitudinalAction><SpeedAction>\n              <SpeedActionDynamics dynamicsShape="step" value="0" '
         'dynamicsDimension="time"/>\n              <SpeedActionTarget><RelativeTargetSpeed',
-        None,
+        "Lead's Init speed is relative to Lead, which has no Init speed",
     ),
     (
         "ego-teleport",

@@ -121,15 +121,27 @@ def test_a_step_of_another_shape_still_needs_its_value(tmp_path):
         load(path)
 
 
-def test_an_entity_turned_against_its_lane_is_refused(tmp_path):
+def test_an_entity_turned_against_its_lane_is_an_init_lane_start_only(tmp_path):
+    """Turned round on its lane in Init: a car ego drives itself (test_xosc_against_lane.py);
+    turned in any other position form it is refused with the Orientation's line."""
     path = scene(tmp_path, [])
     _edit(
         path,
         'laneId="-1" s="100.0" offset="0"/>',
         'laneId="-1" s="100.0" offset="0"><Orientation type="relative" h="3.141593"/></LanePosition>',
     )
-    with pytest.raises(ScenarioFileError, match=r"<Orientation> turning the entity against its lane's direction"):
+    tp = load(path).init["A"][0]
+    assert tp.position.turned == _line_of(path, 'h="3.141593"')  # type: ignore[union-attr]
+    path = scene(tmp_path, [])
+    _edit(
+        path,
+        '<LanePosition roadId="0" laneId="-1" s="100.0" offset="0"/>',
+        '<RelativeLanePosition entityRef="C" dLane="2" ds="-300"><Orientation type="relative" h="3.141593"/>'
+        "</RelativeLanePosition>",
+    )
+    with pytest.raises(ScenarioFileError, match=r"<Orientation> turning the entity against its lane's direction") as e:
         load(path)
+    assert e.value.line == _line_of(path, 'h="3.141593"')
     # a small relative heading is accepted (the lane's heading is used)
     path = scene(tmp_path, [])
     _edit(

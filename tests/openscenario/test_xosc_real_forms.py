@@ -236,17 +236,14 @@ def test_list_refuses_what_run_refuses(tmp_path, capsys):
 
     path = _cut_in(tmp_path / "c")
     text = path.read_text()
-    relative = (
-        '<PrivateAction><LongitudinalAction><SpeedAction><SpeedActionDynamics dynamicsShape="step" value="0" '
-        'dynamicsDimension="time"/><SpeedActionTarget>\n<RelativeTargetSpeed entityRef="Ego" value="1" '
-        'speedTargetValueType="delta" continuous="true"/></SpeedActionTarget></SpeedAction>'
-        "</LongitudinalAction></PrivateAction>"
-    )
-    i = text.index("</Private>", text.index("<Init>"))
-    path.write_text(text[:i] + relative + text[i:])
+    # (an action that takes time runs from t = 0 in Init; a parameter's value is declared)
+    name = text.split('<ParameterDeclaration name="', 1)[1].split('"', 1)[0]
+    setting = f'<GlobalAction>\n<ParameterAction parameterRef="{name}"><SetAction value="1"/></ParameterAction></GlobalAction>'
+    i = text.index("<Private", text.index("<Init>"))
+    path.write_text(text[:i] + setting + text[i:])
     listing, err = _list_and_run(path, capsys)
     assert listing["supported"] is False and err == f"ego: error: {listing['error']}"
-    assert listing["error"].startswith(f"{path}:{text.count(chr(10), 0, i) + 1}: <LongitudinalAction> in <Init>")
+    assert listing["error"].startswith(f"{path}:{text.count(chr(10), 0, i) + 2}: <ParameterAction> in <Init>")
 
 
 def unsupported_text(tag: str) -> str:

@@ -45,10 +45,11 @@ def test_every_action_and_condition_has_one_kind_and_every_kind_is_declared():
         M.SpeedProfileAction,
     ):
         assert registry.action_of(model.__new__(model)).model is model
-    # what the refusals name is derived, the same words as before the registry
+    # what the refusals name is derived from the kinds
     assert registry.init_kinds() == (
-        "TeleportAction, ControllerAction and SpeedAction with AbsoluteTargetSpeed or a non-continuous "
-        "RelativeTargetSpeed"
+        "TeleportAction, ControllerAction, AppearanceAction, SpeedAction, LaneChangeAction, LaneOffsetAction, "
+        "LongitudinalDistanceAction, SpeedProfileAction, SynchronizeAction, AssignRouteAction, AcquirePositionAction "
+        "and FollowTrajectoryAction"
     )
     assert {k.tag for k in registry.ACTIONS.values() if not k.on_ego} == {
         "TeleportAction",
@@ -56,6 +57,8 @@ def test_every_action_and_condition_has_one_kind_and_every_kind_is_declared():
         "LongitudinalDistanceAction",
         "SynchronizeAction",
         "SpeedProfileAction",
+        "AssignRouteAction",
+        "AcquirePositionAction",
     }
 
 

@@ -57,6 +57,25 @@ def test_conversion_is_cached(tmp_path):
     assert network_file(src) != first  # new content, new conversion
 
 
+def test_netconvert_is_bounded_in_time_and_memory(tmp_path, monkeypatch):
+    """A conversion that takes too long (here: any, with a 1 ms bound) or too much memory (here:
+    any, with 1 MiB) is one line naming the road, and nothing is cached."""
+    from ego.openscenario import roads as roads_module
+    from ego.openscenario.xmltree import ScenarioFileError
+
+    src = tmp_path / "road.xodr"
+    shutil.copy(SHIPPED / "straight3.xodr", src)
+    monkeypatch.setattr(roads_module, "NETCONVERT_SECONDS", 0.001)
+    with pytest.raises(ScenarioFileError, match=r"netconvert did not convert this OpenDRIVE file within 0.001 s"):
+        network_file(src)
+    monkeypatch.setattr(roads_module, "NETCONVERT_SECONDS", 120)
+    monkeypatch.setattr(roads_module, "NETCONVERT_MEMORY", 1 << 20)
+    with pytest.raises(ScenarioFileError, match=r"netconvert cannot convert this OpenDRIVE file") as exc:
+        network_file(src)
+    assert str(src) in str(exc.value)
+    assert not list(cache_dir().glob("*.net.xml"))
+
+
 def _curvature_error(poly: LanePolyline, analytic, joints, margin: float = 1.0) -> float:
     ss = np.linspace(margin, poly.length - margin, 6000)
     keep = np.ones_like(ss, bool)

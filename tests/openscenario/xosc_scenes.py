@@ -89,6 +89,44 @@ def event(
     )
 
 
+def maneuver_groups(events) -> str:
+    """One maneuver group per actor of ``events`` (from :func:`event`), in order."""
+    groups = ""
+    for actor in dict.fromkeys(a for a, _ in events):
+        evs = "".join(e for a, e in events if a == actor)
+        groups += (
+            f'<ManeuverGroup name="G{actor}" maximumExecutionCount="1"><Actors selectTriggeringEntities="false">'
+            f'<EntityRef entityRef="{actor}"/></Actors><Maneuver name="M{actor}">{evs}</Maneuver>'
+            "</ManeuverGroup>"
+        )
+    return groups
+
+
+def write_file(path: Path, road: str, starts: list[tuple[str, str, float, float, str]], events) -> Path:
+    """A scenario file at ``path`` on ``road`` (its LogicFile): one CAR per start (name, road id,
+    lane, s, speed, and an Orientation element or ""), ``events`` (from :func:`event`) in one
+    story that starts at once."""
+    ents = "".join(f'<ScenarioObject name="{n}">{CAR}</ScenarioObject>' for n, *_ in starts)
+    init = "".join(
+        f'<Private entityRef="{n}"><PrivateAction><TeleportAction><Position><LanePosition roadId="{r}" '
+        f'laneId="{lane}" s="{s}" offset="0">{o}</LanePosition></Position></TeleportAction></PrivateAction>'
+        f"<PrivateAction>{speed(v)}</PrivateAction></Private>"
+        for n, r, lane, s, v, o in starts
+    )
+    path.write_text(
+        f"""<?xml version="1.0"?>
+<OpenSCENARIO>
+<FileHeader revMajor="1" revMinor="2" date="2026-11-29T00:00:00" description="{path.stem}" author="ego tests"/>
+<RoadNetwork><LogicFile filepath="{road}"/></RoadNetwork>
+<Entities>{ents}</Entities>
+<Storyboard><Init><Actions>{init}</Actions></Init>
+<Story name="S"><Act name="Act">{maneuver_groups(events)}{trigger([sim_time(0)])}</Act></Story></Storyboard>
+</OpenSCENARIO>
+"""
+    )
+    return path
+
+
 def scene(tmp: Path, events: list[tuple[str, str]], params: str = "", stop: str = "", at: dict | None = None) -> Path:
     """Write the scene with ``events`` (from :func:`event`), one maneuver group per actor;
     ``at`` replaces some starts (name -> (lane, s, speed))."""
@@ -101,14 +139,7 @@ def scene(tmp: Path, events: list[tuple[str, str]], params: str = "", stop: str 
         f"{speed(v)}</PrivateAction></Private>"
         for n, (lane, s, v) in begin.items()
     )
-    groups = ""
-    for actor in dict.fromkeys(a for a, _ in events):
-        evs = "".join(e for a, e in events if a == actor)
-        groups += (
-            f'<ManeuverGroup name="G{actor}" maximumExecutionCount="1"><Actors selectTriggeringEntities="false">'
-            f'<EntityRef entityRef="{actor}"/></Actors><Maneuver name="M{actor}">{evs}</Maneuver>'
-            "</ManeuverGroup>"
-        )
+    groups = maneuver_groups(events)
     text = f"""<?xml version="1.0"?>
 <OpenSCENARIO>
 <FileHeader revMajor="1" revMinor="2" date="2026-11-24T00:00:00" description="semantics" author="ego tests"/>

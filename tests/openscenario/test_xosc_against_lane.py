@@ -1,0 +1,138 @@
+"""Cars driving against their lane's direction, which SUMO cannot drive and ego drives itself
+(ego/openscenario/kinematic.py): a car started in the oncoming lane turned round (the
+reference player's ALKS cut-in form), a wrong-way driver in the ego's lane, and a car changing
+lanes across the centre line into the oncoming lane and back (an overtaking form). Hand-written
+files on a hand-written two-way road: lane +1 (the other direction) beside lanes -1 and -2."""
+
+from __future__ import annotations
+
+import pytest
+from xosc_scenes import event, run_scene, sim_time, speed, trigger, write_file
+
+from ego.openscenario.runtime import Storyboard
+from ego.openscenario.xmltree import ScenarioFileError
+
+ROAD = """<?xml version="1.0" encoding="UTF-8"?>
+<OpenDRIVE>
+  <header revMajor="1" revMinor="6" name="twoway" version="1.0"/>
+  <road name="twoway" length="1000" id="1" junction="-1">
+    <link/>
+    <planView><geometry s="0" x="0" y="0" hdg="0" length="1000"><line/></geometry></planView>
+    <lanes>
+      <laneSection s="0">
+        <left>
+        <lane id="1" type="driving" level="false"><link/><width sOffset="0" a="3.5" b="0" c="0" d="0"/></lane>
+        </left>
+        <center><lane id="0" type="none" level="false"/></center>
+        <right>
+        <lane id="-1" type="driving" level="false"><link/><width sOffset="0" a="3.5" b="0" c="0" d="0"/></lane>
+        <lane id="-2" type="driving" level="false"><link/><width sOffset="0" a="3.5" b="0" c="0" d="0"/></lane>
+        </right>
+      </laneSection>
+    </lanes>
+  </road>
+</OpenDRIVE>
+"""
+
+
+@pytest.fixture(autouse=True)
+def _cache(tmp_path_factory, monkeypatch):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
+
+
+def _scene(tmp, starts: dict, events: list[tuple[str, str]] = ()) -> object:
+    """``starts``: name -> (lane, s, speed, turned)."""
+    (tmp / "twoway.xodr").write_text(ROAD)
+    turned = '<Orientation type="relative" h="3.141593"/>'
+    rows = [(n, "1", lane, s, v, turned if t else "") for n, (lane, s, v, t) in starts.items()]
+    return write_file(tmp / "against.xosc", "twoway.xodr", rows, list(events))
+
+
+def _record(monkeypatch, name: str) -> dict[float, tuple[float, float, float, float]]:
+    """Storyboard time -> (s, d, speed, yaw) of ``name`` as the storyboard sees it."""
+    rows: dict[float, tuple[float, float, float, float]] = {}
+    step = Storyboard.step
+
+    def recording(self, t):
+        e = self.states[name]
+        rows[round(t, 6)] = (e.s, e.d, e.speed, e.yaw)
+        step(self, t)
+
+    monkeypatch.setattr(Storyboard, "step", recording)
+    return rows
+
+
+def _lane_change(lanes: int, ref: str = "Ego", duration: float = 2.0) -> str:
+    return (
+        '<LateralAction><LaneChangeAction><LaneChangeActionDynamics dynamicsShape="sinusoidal" '
+        f'value="{duration}" dynamicsDimension="time"/><LaneChangeTarget><RelativeTargetLane entityRef="{ref}" '
+        f'value="{lanes}"/></LaneChangeTarget></LaneChangeAction></LateralAction>'
+    )
+
+
+def test_a_car_turned_round_in_the_oncoming_lane_drives_the_egos_way(tmp_path, monkeypatch):
+    """T starts in lane +1 at s = 80 turned round (h = pi from its lane), 15 m/s: it drives
+    the ego's way, 1.5 m a step, 3.5 m left of the ego's lane (d measured from lane -1)."""
+    rows = _record(monkeypatch, "T")
+    path = _scene(tmp_path, {"Ego": (-1, 30.0, 20.0, False), "T": (1, 80.0, 15.0, True)})
+    sc = run_scene(path, 3.0)
+    assert sc.status == "completed"
+    s0 = rows[0.1][0]
+    for k in range(1, 25):
+        s, d, v, _ = rows[round(0.1 * k, 6)]
+        assert s - s0 == pytest.approx(1.5 * (k - 1), abs=1e-6)
+        assert d == pytest.approx(3.5, abs=1e-6)
+        assert v == pytest.approx(15.0, abs=1e-9)
+
+
+def test_a_wrong_way_driver_in_the_egos_lane_comes_towards_it(tmp_path, monkeypatch):
+    """W in the ego's lane at s = 400 turned round, 10 m/s: s falls 1 m a step; a speed
+    change on it is followed exactly (step to 5 m/s at t = 1 s)."""
+    rows = _record(monkeypatch, "W")
+    evs = [event("Slow", "W", speed(5.0), trigger([sim_time(0.95)]))]
+    path = _scene(tmp_path, {"Ego": (-1, 30.0, 20.0, False), "W": (-1, 400.0, 10.0, True)}, evs)
+    run_scene(path, 3.0)
+    s1 = rows[1.0][0]
+    assert rows[0.5][0] - rows[0.6][0] == pytest.approx(1.0, abs=1e-6)
+    assert rows[2.0][0] == pytest.approx(s1 - 0.5 * 10, abs=1e-6)
+    assert rows[2.0][1] == pytest.approx(0.0, abs=1e-6)
+    assert rows[2.0][2] == pytest.approx(5.0, abs=1e-9)
+
+
+def test_a_lane_change_into_the_oncoming_lane_and_back(tmp_path, monkeypatch):
+    """A (ahead in the ego's lane, 25 m/s) changes to the ego's lane +1 (the oncoming lane, 3.5 m
+    left) over 2 s from t = 1 s and back at t = 4 s: it follows the sinusoidal profile across the
+    centre line (ego drives it once it crosses) and ends on the lanes' centres."""
+    rows = _record(monkeypatch, "A")
+    evs = [
+        event("Out", "A", _lane_change(1), trigger([sim_time(0.95)])),
+        event("Back", "A", _lane_change(0), trigger([sim_time(3.95)])),
+    ]
+    path = _scene(tmp_path, {"Ego": (-1, 30.0, 20.0, False), "A": (-1, 120.0, 25.0, False)}, evs)
+    sc = run_scene(path, 6.5)
+    assert sc.status == "completed"
+    assert rows[3.5][1] == pytest.approx(3.5, abs=1e-6)
+    assert rows[6.3][1] == pytest.approx(0.0, abs=1e-6)
+    # across the centre line it drives on at its speed
+    assert all(rows[round(0.1 * k, 6)][2] == pytest.approx(25.0, abs=1e-6) for k in range(25, 60))
+
+
+def test_the_ego_turned_against_its_lane_is_refused_with_its_line(tmp_path):
+    path = _scene(tmp_path, {"Ego": (1, 30.0, 20.0, True), "A": (-1, 120.0, 25.0, False)})
+    with pytest.raises(ScenarioFileError, match=r"turning the ego against its lane's direction") as exc:
+        run_scene(path, 1.0)
+    assert exc.value.line == next(i for i, ln in enumerate(path.read_text().splitlines(), 1) if "Orientation" in ln)
+
+
+def test_a_car_turned_against_its_lane_outside_init_is_refused(tmp_path):
+    teleport = (
+        '<TeleportAction><Position><LanePosition roadId="1" laneId="-1" s="200" offset="0">'
+        '<Orientation type="relative" h="3.141593"/></LanePosition></Position></TeleportAction>'
+    )
+    path = _scene(
+        tmp_path,
+        {"Ego": (-1, 30.0, 20.0, False), "A": (-1, 120.0, 25.0, False)},
+        [event("Tp", "A", teleport, trigger([sim_time(1.0)]))],
+    )
+    with pytest.raises(ScenarioFileError, match=r"against its lane's direction \(outside <Init>\)"):
+        run_scene(path, 1.0)

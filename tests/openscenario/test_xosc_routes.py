@@ -1,0 +1,116 @@
+"""AssignRouteAction and AcquirePositionAction: a scripted car routed through waypoints by
+SUMO's driver, on a hand-built network with a fork (A -> B, then B -> C straight on or B -> D
+turning left)."""
+
+from __future__ import annotations
+
+import subprocess
+
+import pytest
+from xosc_scenes import event, run_scene, trigger, write_file
+
+from ego.openscenario.runtime import Storyboard
+from ego.openscenario.xmltree import ScenarioFileError
+from ego.sumo.net import sumo_binary
+
+NODES = """<nodes>
+  <node id="A" x="0" y="0"/><node id="B" x="600" y="0"/><node id="C" x="1200" y="0"/>
+  <node id="D" x="900" y="400"/><node id="E" x="0" y="400"/>
+</nodes>"""
+EDGES = """<edges>
+  <edge id="AB" from="A" to="B" numLanes="2" speed="36"/>
+  <edge id="BC" from="B" to="C" numLanes="2" speed="36"/>
+  <edge id="BD" from="B" to="D" numLanes="1" speed="36"/>
+  <edge id="DE" from="D" to="E" numLanes="1" speed="36"/>
+</edges>"""
+
+
+@pytest.fixture(autouse=True)
+def _cache(tmp_path_factory, monkeypatch):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
+
+
+def _net(tmp) -> None:
+    (tmp / "fork.nod.xml").write_text(NODES)
+    (tmp / "fork.edg.xml").write_text(EDGES)
+    subprocess.run(
+        [
+            str(sumo_binary("netconvert")),
+            "-n",
+            "fork.nod.xml",
+            "-e",
+            "fork.edg.xml",
+            "-o",
+            "fork.net.xml",
+            "--no-turnarounds",
+            "true",
+        ],
+        cwd=tmp,
+        check=True,
+        capture_output=True,
+    )
+
+
+def _scene(tmp, action: str, start: str = '<SimulationTimeCondition value="1" rule="greaterOrEqual"/>'):
+    _net(tmp)
+    starts = [("Ego", "AB", -2, 20.0, 20.0, ""), ("R", "AB", -1, 300.0, 25.0, "")]
+    cond = (
+        f'<Condition name="c" delay="0" conditionEdge="none"><ByValueCondition>{start}</ByValueCondition></Condition>'
+    )
+    events = [event("Go", "R", f"<RoutingAction>{action}</RoutingAction>", trigger([cond]))]
+    return write_file(tmp / "route.xosc", "fork.net.xml", starts, events)
+
+
+def _route(*points: tuple[str, float]) -> str:
+    wps = "".join(
+        f'<Waypoint routeStrategy="shortest"><Position><LanePosition roadId="{r}" laneId="-1" s="{s}" offset="0"/>'
+        "</Position></Waypoint>"
+        for r, s in points
+    )
+    return f'<AssignRouteAction><Route name="r" closed="false">{wps}</Route></AssignRouteAction>'
+
+
+def _ys(monkeypatch) -> list[float]:
+    ys: list[float] = []
+    step = Storyboard.step
+
+    def recording(self, t):
+        ys.append(self.states["R"].y)
+        step(self, t)
+
+    monkeypatch.setattr(Storyboard, "step", recording)
+    return ys
+
+
+@pytest.mark.parametrize(
+    "action",
+    [
+        _route(("AB", 310.0), ("BD", 100.0)),
+        '<AcquirePositionAction><Position><LanePosition roadId="BD" laneId="-1" s="100" offset="0"/>'
+        "</Position></AcquirePositionAction>",
+    ],
+    ids=["route", "acquire"],
+)
+def test_a_routed_car_turns_off_at_the_fork(tmp_path, monkeypatch, action):
+    """R (AB, 300 m, 25 m/s) is routed onto BD: at the fork (12 s later) it turns left and
+    climbs towards D (y grows), where without a route it would go straight on to C (y = 0)."""
+    ys = _ys(monkeypatch)
+    sc = run_scene(_scene(tmp_path, action), 18.0)
+    assert sc.status in ("completed", "timeout")
+    assert max(ys) > 20.0
+
+
+def test_routed_straight_on_the_car_stays_on_the_main_road(tmp_path, monkeypatch):
+    ys = _ys(monkeypatch)
+    path = _scene(tmp_path, _route(("AB", 310.0), ("BC", 100.0)))
+    run_scene(path, 18.0)
+    assert max(abs(y) for y in ys) < 10.0
+
+
+def test_an_unreachable_waypoint_is_refused_before_the_run(tmp_path):
+    """From BD (leading away to D and E) AB is not reachable: refused with the waypoint's line."""
+    path = _scene(tmp_path, _route(("BD", 10.0), ("AB", 100.0)))
+    with pytest.raises(
+        ScenarioFileError, match=r"this waypoint's road 'AB' cannot be reached from the one before \('BD'\)"
+    ):
+        run_scene(path, 1.0)
