@@ -329,10 +329,10 @@ static int within(double dx, double dy, double reach)
 }
 
 /* ---- LanePolyline's projection on plain data (ego.lane_frame: _closest, locate, place) -----
- * A lane's ``_c`` = (segments, grid_x, grid_y, grid_seg): its segments as 11 doubles each
+ * A lane's ``packed`` = (segments, grid_x, grid_y, grid_seg): its segments as 11 doubles each
  * (x0, y0, ux, uy, length, s0, direction, heading at start, heading change, curvature, turn)
  * and its grid (cells of GRID m, sorted by (x, y), each with its one segment), built once per
- * lane; ``_hint`` the segment the last projection found. The same arithmetic as the Python
+ * lane; ``hint`` the segment the last projection found. The same arithmetic as the Python
  * methods, in the same order: Python's min/max (the first argument unless the second is
  * strictly beyond it, so NaN goes through as there). A point the Python method would raise
  * on (an infinite coordinate into math.floor, an infinite angle into math.fmod) is left to it. */
@@ -366,7 +366,7 @@ static int lane_acquire(PyObject *packed, LaneData *L)
         const int want_double = k == 0;
         if ((want_double && strcmp(fmt, "d") != 0) || (!want_double && strcmp(fmt, "q") != 0)) {
             PyBuffer_Release(&L->views[k]);
-            PyErr_SetString(PyExc_TypeError, "a lane's _c must be (array('d'), array('q') x 3)");
+            PyErr_SetString(PyExc_TypeError, "a lane's packed must be (array('d'), array('q') x 3)");
             break;
         }
     }
@@ -382,7 +382,7 @@ static int lane_acquire(PyObject *packed, LaneData *L)
     L->ng = L->views[1].len / (Py_ssize_t)sizeof(long long);
     if (L->n < 1 || L->views[2].len != L->views[1].len || L->views[3].len != L->views[1].len) {
         lane_release(L);
-        PyErr_SetString(PyExc_ValueError, "a lane's _c is inconsistent");
+        PyErr_SetString(PyExc_ValueError, "a lane's packed is inconsistent");
         return -1;
     }
     return 0;
@@ -521,7 +521,7 @@ static int lane_locate(const LaneData *L, Py_ssize_t *hint, double x, double y, 
 }
 
 /* lane_mean_curvature(lane, s, ahead) -> float: LanePolyline.mean_curvature on the lane's
- * packed data (_c) and its remembered segments (_at, a list of two ints), the same
+ * packed data (packed) and its remembered segments (at, a list of two ints), the same
  * arithmetic; an infinite angle (math.fmod raises) or a lane without packed data: the
  * Python method */
 static Py_ssize_t lane_segment_at(const LaneData *L, Py_ssize_t i, double s)
@@ -2506,21 +2506,21 @@ static int intern_loop_names(void)
         {&s_X, "X"}, {&s_Y, "Y"}, {&s_s, "s"}, {&s_d_road, "d_road"},
         {&s_heading_error, "heading_error"}, {&s_curvature, "curvature"}, {&s_ds, "ds"},
         {&s_dd, "dd"}, {&s_frame, "frame"},
-        {&s_looked, "_looked"}, {&s_look, "look"}, {&s_sensor, "sensor"}, {&s_t_, "_t"}, {&s_s_, "_s"},
-        {&s_s_scan, "_s_scan"}, {&s_t_scan, "_t_scan"}, {&s_front, "front"}, {&s_rear, "rear"},
-        {&s_o, "_o"}, {&s_gap0, "_gap0"}, {&s_speed, "speed"}, {&s_gap, "gap"},
+        {&s_looked, "_looked"}, {&s_look, "look"}, {&s_sensor, "sensor"}, {&s_t_, "t"}, {&s_s_, "s"},
+        {&s_s_scan, "s_scan"}, {&s_t_scan, "t_scan"}, {&s_front, "front"}, {&s_rear, "rear"},
+        {&s_o, "obj"}, {&s_gap0, "gap0"}, {&s_speed, "speed"}, {&s_gap, "gap"},
         {&s_gap_front, "gap_front"}, {&s_ttc_front, "ttc_front"}, {&s_gap_rear, "gap_rear"},
         {&s_ttc_rear, "ttc_rear"}, {&s_id, "id"}, {&s_overlap, "_overlap"},
         {&s_phase, "phase"}, {&s_view, "view"}, {&s_safety, "safety"}, {&s_active, "active"},
         {&s_in_lane, "in_lane"}, {&s_action, "action"}, {&s_brake, "brake"}, {&s_limit, "limit"},
         {&s_chosen, "chosen"}, {&s_evade_speed, "evade_speed"}, {&s_trigger_s, "trigger_s"},
-        {&s_trigger_t, "trigger_t"}, {&s_target_lane, "target_lane"}, {&s_lanes, "_lanes"},
+        {&s_trigger_t, "trigger_t"}, {&s_target_lane, "target_lane"}, {&s_lanes, "lanes"},
         {&s_lane_leader_now, "lane_leader_now"}, {&s_reference, "reference"}, {&s_speed_ref, "speed_ref"},
         {&s_s_ref, "s_ref"}, {&s_ds_ref, "ds_ref"}, {&s_d_ref, "d_ref"}, {&s_dd_ref, "dd_ref"},
         {&s_lane_offset, "lane_offset"}, {&s_inside_since, "_inside_since"}, {&s_check_done, "check_done"},
-        {&s_t, "t"}, {&s_s0, "s0"}, {&s_accel, "accel"}, {&s_lo_, "_lo"}, {&s_hi_, "_hi"},
-        {&s_since_, "_since"}, {&s_d_, "_d"}, {&s_along, "_along"}, {&s_turn, "turn"},
-        {&s_turn_, "_turn"}, {&s_turn_scan, "_turn_scan"}, {&s_station, "station"}, {&s_rate_, "_rate"}, {&s_c_, "_c"}, {&s_hint_, "_hint"}, {&s_at_, "_at"},
+        {&s_t, "t"}, {&s_s0, "s0"}, {&s_accel, "accel"}, {&s_lo_, "lo"}, {&s_hi_, "hi"},
+        {&s_since_, "since"}, {&s_d_, "line"}, {&s_along, "along"}, {&s_turn, "turn"},
+        {&s_turn_, "turn"}, {&s_turn_scan, "turn_scan"}, {&s_station, "station"}, {&s_rate_, "rate"}, {&s_c_, "packed"}, {&s_hint_, "hint"}, {&s_at_, "at"},
         {&s_mean_curvature, "mean_curvature"}, {&str_empty, ""}, {&s_bridge, "bridge"}, {&s_elapsed_, "_elapsed"},
         {&s_step, "step"}, {&s_step_joint, "step_joint"},
         {&s_status, "status"}, {&s_rewards, "rewards"}, {&s_running, "running"},

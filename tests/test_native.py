@@ -207,7 +207,7 @@ def test_place_matches_the_sensors_python_sync(curved, front):
         with _placing(native):
             for t, step_ids, rows in steps:
                 near = sensor.sync_within(t, step_ids, rows, front, 50.0)
-                objects = (repr(sensor._objects), repr(sensor._speeds), repr(sensor._seen), sensor.lane._hint)
+                objects = (repr(sensor._objects), repr(sensor._speeds), repr(sensor._seen), sensor.lane.hint)
                 out.append((near, *objects))
         placed[native] = out
     assert placed[True] == placed[False]  # bit for bit, the order of equal edges included
@@ -456,7 +456,7 @@ def test_road_frame_matches_the_python_frame(curved):
                 errors.append(str(exc))
         assert len(errors) in (0, 2) and len(set(errors)) <= 1, errors
         assert _bits(getattr(native, n) for n in names) == _bits(getattr(python, n) for n in names), i
-        assert native.road._hint == python.road._hint, i
+        assert native.road.hint == python.road.hint, i
     if not curved:  # a new road: the C kernel leaves it to the Python method, which takes it up
         native.road = python.road = LanePolyline([(0.0, 0.0), (100.0, 0.0)])
         NATIVE.road_frame(native)
@@ -535,7 +535,7 @@ def _look_between_matches(curved: bool):
             for view, _plant, _look in views:
                 view.look(0.0)
                 front = view.sensor.front
-                front._gap0, front.speed = 0.0, 0.0
+                front.gap0, front.speed = 0.0, 0.0
         for k in range(10):
             t = 0.01 * k
             found = []
@@ -551,14 +551,14 @@ def _look_between_matches(curved: bool):
             assert _bits((a.sensor.front.gap, a.sensor.rear.gap)) == _bits((b.sensor.front.gap, b.sensor.rear.gap))
             assert repr(found[0]) == repr(found[1]), (case, k)
             own = "station" if curved else "s"
-            assert (a._looked, a.sensor._t, a.sensor._s is getattr(a, own)) == (
+            assert (a._looked, a.sensor.t, a.sensor.s is getattr(a, own)) == (
                 b._looked,
-                b.sensor._t,
-                b.sensor._s is getattr(b, own),
+                b.sensor.t,
+                b.sensor.s is getattr(b, own),
             )
-            assert _bits((a.sensor._turn, a.sensor.front.speed)) == _bits((b.sensor._turn, b.sensor.front.speed))
+            assert _bits((a.sensor.turn, a.sensor.front.speed)) == _bits((b.sensor.turn, b.sensor.front.speed))
         if curved:
-            assert views[0][0].sensor._along is not None and views[0][0].sensor.front._d is not None
+            assert views[0][0].sensor.along is not None and views[0][0].sensor.front.line is not None
 
 
 @pytest.mark.sumo
@@ -626,7 +626,7 @@ def test_near_and_nearest_match_the_sensors_python_search(monkeypatch, curved):
     lanes = {i: LanePolyline([(0.0, 3.2 * i), (3000.0, 3.2 * i)], 3.2, f"motorway_{i}") for i in range(3)}
     if curved:
         lanes = _arc_lanes()
-    fields = ("id", "gap", "speed", "accel", "_gap0", "_lo", "_hi", "_since", "_d")
+    fields = ("id", "gap", "speed", "accel", "gap0", "lo", "hi", "since", "line")
     rng = np.random.default_rng(5)
     middle = lanes[1]
     s_ego = middle.project(300.0, 3.2)[0]
@@ -677,11 +677,11 @@ def test_near_and_nearest_match_the_sensors_python_search(monkeypatch, curved):
         py_found, py_near = search(rows, False, t_scan, heading)
         assert [o[0] for o in c_near] == [o[0] for o in py_near], case
         for a, b in zip(c_found, py_found, strict=True):
-            assert (a.id, repr(a._o)) == (b.id, repr(b._o)), case
-            assert (a._d is None) == (b._d is None) == (not curved or a._o is None), case
-            values = [f for f in fields[1:] if f != "_d" or a._d is not None]
+            assert (a.id, repr(a.obj)) == (b.id, repr(b.obj)), case
+            assert (a.line is None) == (b.line is None) == (not curved or a.obj is None), case
+            values = [f for f in fields[1:] if f != "line" or a.line is not None]
             assert _bits(getattr(a, f) for f in values) == _bits(getattr(b, f) for f in values), case
-        seen += sum(d._o is not None for d in c_found)
+        seen += sum(d.obj is not None for d in c_found)
     assert seen > 100  # the searches found something
 
 
@@ -706,4 +706,4 @@ def test_lane_mean_curvature_matches_the_python_method(curved):
             except ValueError as exc:  # an infinite heading: math.fmod's, from both
                 found.append(str(exc))
         assert found[0] == found[1], (i, at, ahead)
-        assert native._at == python._at, i
+        assert native.at == python.at, i

@@ -381,7 +381,7 @@ class SurroundView(RoadSensor):
             )
             self._looked = True
         front, rear = sensor.front, sensor.rear
-        ds = self.ds if sensor._along is None else self.ds * sensor._rate  # along the line the gaps are
+        ds = self.ds if sensor.along is None else self.ds * sensor.rate  # along the line the gaps are
         # time_to_collision(gap, closing), inline: every control period
         front_gap = self.gap_front = front.gap
         closing = ds - front.speed
@@ -433,7 +433,7 @@ class SurroundView(RoadSensor):
         if self._line is None:  # a curved road: the feed-forward on the target lane, previewed
             u = self._plant.state[1]
             road = self.road
-            if _MEAN_CURVATURE is not None and hasattr(road, "_c"):  # in C on its packed data
+            if _MEAN_CURVATURE is not None and hasattr(road, "packed"):  # in C on its packed data
                 kappa = _MEAN_CURVATURE(road, self.s, FF_PREVIEW * u)
             else:
                 kappa = road.mean_curvature(self.s, FF_PREVIEW * u)
