@@ -330,7 +330,7 @@ class SurroundView(RoadSensor):
         self.ttc_front = self.ttc_rear = INF
         self.gap_front = self.gap_rear = INF
         self.around: tuple[list, list] = ([], [])
-        self._looked = False
+        self.looked = False
         self._sim = None
         #: (t, speed) at the last observation and the speed's rate of change (m/s^2) since
         self._u_last, self._accel = (-math.inf, 0.0), 0.0
@@ -366,20 +366,20 @@ class SurroundView(RoadSensor):
         reach = self.config.sensor_range
         # the subscription reaches farther for the traffic log
         self.sensor.sync_within(t, ids, rows, sim.front_bumper(EGO) if reach < LOG_REACH else None, reach)
-        self._looked = False
+        self.looked = False
 
     def look(self, t: float) -> Collision | None:
         """Gaps and TTCs now; a collision the simulator has not reported (yet) when the
         outlines overlap."""
         sensor = self.sensor
         curved = self._line is None  # the sensor's stations: where the radius through the ego meets the lane
-        if self._looked:  # between simulator steps: the same vehicles, moved on
+        if self.looked:  # between simulator steps: the same vehicles, moved on
             sensor.advance(t, self.station if curved else self.s, self.turn)
         else:
             sensor.scan(
                 t, self.station if curved else self.s, self.d_road, self.heading_error, self.turn, self.curvature
             )
-            self._looked = True
+            self.looked = True
         front, rear = sensor.front, sensor.rear
         ds = self.ds if sensor.along is None else self.ds * sensor.rate  # along the line the gaps are
         # time_to_collision(gap, closing), inline: every control period
@@ -399,8 +399,9 @@ class SurroundView(RoadSensor):
         """:meth:`look` for the loop, bound once a run: between two simulator steps in C where
         the extension is built (``ego._native.look_between``: the sensor's carrying on and the
         TTCs, the same arithmetic; the first look after a step goes to :meth:`look`)."""
-        if _LOOK_BETWEEN is not None and type(self).look is SurroundView.look:
-            return functools.partial(_LOOK_BETWEEN, self)
+        if _LOOK_BETWEEN is not None and type(self).look is SurroundView.look and type(self.sensor) is SurroundSensor:
+            sensor = self.sensor
+            return functools.partial(_LOOK_BETWEEN, self.look, self._overlap, self, sensor, sensor.front, sensor.rear)
         return self.look
 
     def _overlap(self, other: str) -> Collision | None:
