@@ -11,8 +11,9 @@ from __future__ import annotations
 
 import os
 import types
+from typing import Any
 
-NATIVE = None
+NATIVE: Any = None
 try:
     from ego import _native as _MODULE
 except ImportError:  # not compiled (no C compiler at install time)
@@ -24,4 +25,4 @@ elif _MODULE is not None:
     _off = {name.strip() for name in _PURE.split(",")} - {""}
     _names = [name for name in dir(_MODULE) if not name.startswith("__")]
     if _off <= set(_names):  # named kernels only; any other value: every kernel off
-        NATIVE = types.SimpleNamespace(**{n: None if n in _off else getattr(_MODULE, n) for n in _names})  # type: ignore[assignment]
+        NATIVE = types.SimpleNamespace(**{n: None if n in _off else getattr(_MODULE, n) for n in _names})
