@@ -486,6 +486,17 @@ static int lane_acquire(PyObject *packed, LaneData *L)
     return 0;
 }
 
+/* lane_acquire on lane.packed (a LanePolyline's): 0 with L filled, -1 with an exception, 1 when
+ * its packed data is not the four arrays */
+static int lane_packed(PyObject *lane, LaneData *L)
+{
+    PyObject *packed = PyObject_GetAttr(lane, s_c_);
+    if (!packed) return -1;
+    const int got = lane_acquire(packed, L);
+    Py_DECREF(packed);
+    return got;
+}
+
 /* LanePolyline._local */
 static void lane_local(const LaneData *L, Py_ssize_t i, double x, double y, double *out)
 {
@@ -657,11 +668,8 @@ static PyObject *lane_mean_curvature(PyObject *self, PyObject *const *args, Py_s
     PyObject *lane = args[0];
     const double s = PyFloat_AsDouble(args[1]), ahead = PyFloat_AsDouble(args[2]);
     if (PyErr_Occurred()) return NULL;
-    PyObject *packed = PyObject_GetAttr(lane, s_c_);
-    if (!packed) return NULL;
     LaneData L;
-    const int got = lane_acquire(packed, &L);
-    Py_DECREF(packed);
+    const int got = lane_packed(lane, &L);
     if (got < 0) return NULL;
     PyObject *at = got == 0 ? PyObject_GetAttr(lane, s_at_) : NULL;
     if (got > 0 || (at && !(PyList_CheckExact(at) && PyList_GET_SIZE(at) == 2))) {
@@ -736,10 +744,7 @@ static PyObject *place(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
     int packed_lane = 0;
     Py_ssize_t hint = 0;
     if (!rotation && !PyCallable_Check(frame)) {
-        PyObject *packed = PyObject_GetAttr(frame, s_c_);
-        if (!packed) return NULL;
-        const int got = lane_acquire(packed, &L);
-        Py_DECREF(packed);
+        const int got = lane_packed(frame, &L);
         if (got != 0) {
             if (got > 0) PyErr_SetString(PyExc_TypeError, "place: a lane without packed data");
             return NULL;
@@ -1898,11 +1903,8 @@ static PyObject *road_frame(PyObject *self, PyObject *const *args, Py_ssize_t na
     if (bad < 0) return NULL;
     const double X = x[0], u = x[1], Y = x[2], v = x[3], psi = x[4];
     if (line_obj == Py_None) { /* a curved lane: LanePolyline.locate on its packed data */
-        PyObject *packed = PyObject_GetAttr(road, s_c_);
-        if (!packed) return NULL;
         LaneData L;
-        const int got = lane_acquire(packed, &L);
-        Py_DECREF(packed);
+        const int got = lane_packed(road, &L);
         if (got < 0) return NULL;
         if (got > 0) return PyObject_CallNoArgs(frame);
         PyObject *hint_obj = PyObject_GetAttr(road, s_hint_);
