@@ -16,11 +16,10 @@
  *    (BPPIDController._step_py, BPPIDAcc._update_py, RBFSMCController._network_py): their
  *    element-wise arithmetic here, numpy called for what numpy computes its own way (BLAS
  *    products, tanh, exp, einsum); sum_squares: numpy's pairwise sum of squares;
- *  - plant_step, trace_write, road_frame, look_between and plan_steady: the scenario loop's
- *    glue every control period (BicyclePlant.step, Trace.bind's writer, RoadSensor.frame,
- *    SurroundView.look between two SUMO steps, EvasiveManoeuvre.plan in a period that
- *    changes no state of the machine), each handing what it does not cover to the Python
- *    code it stands for;
+ *  - plant_step, trace_write and road_frame: the scenario loop's glue every control period
+ *    (BicyclePlant.step, Trace.bind's writer, RoadSensor.frame) on the records they are
+ *    bound to (FIELDS below), each handing what it does not cover to the Python code it
+ *    stands for (look_between and plan_steady went back to Python: docs/performance.md);
  *  - near and nearest: the surround sensor's search at a look (SurroundSensor.scan's and
  *    _scan_lane's filter, _nearest).
  *
@@ -49,8 +48,8 @@
  * its record, so a rename in Python fails that test instead of silently cutting a kernel off. */
 static PyObject *s_state, *s_applied, *s_lateral_accel;                         /* plant */
 static PyObject *s_road, *s_X, *s_Y, *s_s, *s_d_road, *s_heading_error, *s_curvature, *s_ds, *s_dd;
-static PyObject *s_turn, *s_station, *s_looked, *s_gap_front, *s_ttc_front, *s_gap_rear, *s_ttc_rear; /* view */
-static PyObject *s_t, *s_t_scan, *s_s_scan, *s_turn_scan, *s_rate_, *s_along;  /* sensor */
+static PyObject *s_turn, *s_station;                                            /* view */
+static PyObject *s_t;                                                           /* observation */
 static PyObject *s_id, *s_gap, *s_speed, *s_accel, *s_gap0, *s_o, *s_lo_, *s_hi_, *s_since_, *s_d_; /* detection */
 static PyObject *s_c_, *s_hint_, *s_at_, *s_mean_curvature;                    /* lane */
 static PyObject *s_elapsed_, *s_bridge, *s_status, *s_step, *s_step_joint;    /* env, scenario */
@@ -75,19 +74,6 @@ static const struct {
     {"ego.scenarios.road.RoadSensor", &s_dd, "dd"},
     {"ego.scenarios.road.RoadSensor", &s_turn, "turn"},
     {"ego.scenarios.road.RoadSensor", &s_station, "station"},
-    {"ego.scenarios.motorway.SurroundView", &s_looked, "looked"},
-    {"ego.scenarios.motorway.SurroundView", &s_gap_front, "gap_front"},
-    {"ego.scenarios.motorway.SurroundView", &s_ttc_front, "ttc_front"},
-    {"ego.scenarios.motorway.SurroundView", &s_gap_rear, "gap_rear"},
-    {"ego.scenarios.motorway.SurroundView", &s_ttc_rear, "ttc_rear"},
-    {"ego.scenarios.sensor.SurroundSensor", &s_t, "t"},
-    {"ego.scenarios.sensor.SurroundSensor", &s_s, "s"},
-    {"ego.scenarios.sensor.SurroundSensor", &s_t_scan, "t_scan"},
-    {"ego.scenarios.sensor.SurroundSensor", &s_s_scan, "s_scan"},
-    {"ego.scenarios.sensor.SurroundSensor", &s_turn, "turn"},
-    {"ego.scenarios.sensor.SurroundSensor", &s_turn_scan, "turn_scan"},
-    {"ego.scenarios.sensor.SurroundSensor", &s_rate_, "rate"},
-    {"ego.scenarios.sensor.SurroundSensor", &s_along, "along"},
     {"ego.scenarios.sensor.Detection", &s_id, "id"},
     {"ego.scenarios.sensor.Detection", &s_gap, "gap"},
     {"ego.scenarios.sensor.Detection", &s_speed, "speed"},
@@ -1939,120 +1925,6 @@ static PyObject *road_frame(PyObject *self, PyObject *const *args, Py_ssize_t na
     Py_RETURN_NONE;
 }
 
-/* look_between's reading of a double field */
-static int get_double(PyObject *obj, PyObject *name, double *out)
-{
-    PyObject *o = PyObject_GetAttr(obj, name);
-    if (!o) return -1;
-    *out = PyFloat_AsDouble(o);
-    Py_DECREF(o);
-    return (*out == -1.0 && PyErr_Occurred()) ? -1 : 0;
-}
-
-
-static int carry_on(PyObject *det, double sign, double moved, double since, double turned)
-{
-    /* SurroundSensor._carried: front: gap0 + speed * since - moved; rear (sign -1): gap0 +
-     * moved - speed * since; on a curved lane (turned: the lane's turn since the scan, not
-     * NaN... any value; det._d not None) moved less _d * turned */
-    PyObject *o = PyObject_GetAttr(det, s_o);
-    if (!o) return -1;
-    const int none = o == Py_None;
-    Py_DECREF(o);
-    if (none) return 0;
-    double gap0, speed;
-    if (get_double(det, s_gap0, &gap0) < 0 || get_double(det, s_speed, &speed) < 0) return -1;
-    PyObject *line = PyObject_GetAttr(det, s_d_);
-    if (!line) return -1;
-    if (line != Py_None) {
-        const double d = PyFloat_AsDouble(line);
-        if (d == -1.0 && PyErr_Occurred()) { Py_DECREF(line); return -1; }
-        moved -= d * turned;
-    }
-    Py_DECREF(line);
-    const double gap = sign > 0.0 ? gap0 + speed * since - moved : gap0 + moved - speed * since;
-    return set_double(det, s_gap, gap);
-}
-
-static double ttc_of(double gap, double closing)
-{
-    return gap <= 0.0 ? 0.0 : ((closing <= 1e-9 || gap == Py_HUGE_VAL) ? Py_HUGE_VAL : gap / closing);
-}
-
-/* look_between(look, overlap, view, sensor, front, rear, t) -> Collision | None:
- * SurroundView.look between two SUMO steps (SurroundSensor.advance, then the gaps and TTCs)
- * on its records: the view's frame and gap fields, the sensor's scan clock, its two
- * Detections; at the first look after a SUMO step (view.looked false) look(t), the Python
- * method (the scan), and where a gap closed overlap(id) (SurroundView._overlap). */
-static PyObject *look_between(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
-{
-    if (nargs != 7) {
-        PyErr_SetString(PyExc_TypeError, "look_between(look, overlap, view, sensor, front, rear, t)");
-        return NULL;
-    }
-    PyObject *view = args[2], *sensor = args[3], *front = args[4], *rear = args[5], *t_obj = args[6];
-    PyObject *looked = PyObject_GetAttr(view, s_looked);
-    if (!looked) return NULL;
-    const int is_looked = PyObject_IsTrue(looked);
-    Py_DECREF(looked);
-    if (is_looked < 0) return NULL;
-    if (!is_looked) return PyObject_CallOneArg(args[0], t_obj);
-    const double t = PyFloat_AsDouble(t_obj);
-    if (t == -1.0 && PyErr_Occurred()) return NULL;
-    PyObject *s_obj = NULL, *result = NULL;
-    double s, s_scan, t_scan, ds, front_gap, rear_gap, front_speed, rear_speed;
-    /* a curved lane (sensor.along set): the ego's station and the lane's turn there */
-    PyObject *along = PyObject_GetAttr(sensor, s_along);
-    if (!along) goto done;
-    const int curved = along != Py_None;
-    Py_DECREF(along);
-    s_obj = PyObject_GetAttr(view, curved ? s_station : s_s);
-    if (!s_obj) goto done;
-    s = PyFloat_AsDouble(s_obj);
-    if (s == -1.0 && PyErr_Occurred()) goto done;
-    /* SurroundSensor.advance(t, s) */
-    if (PyObject_SetAttr(sensor, s_t, t_obj) < 0 || PyObject_SetAttr(sensor, s_s, s_obj) < 0) goto done;
-    if (get_double(sensor, s_s_scan, &s_scan) < 0 || get_double(sensor, s_t_scan, &t_scan) < 0) goto done;
-    const double moved = s - s_scan, since = t - t_scan;
-    double turned = 0.0;
-    {
-        if (curved) {
-            PyObject *turn = PyObject_GetAttr(view, s_turn);
-            if (!turn) goto done;
-            const int bad = PyObject_SetAttr(sensor, s_turn, turn);
-            double now = PyFloat_AsDouble(turn), then;
-            Py_DECREF(turn);
-            if (bad < 0 || (now == -1.0 && PyErr_Occurred()) || get_double(sensor, s_turn_scan, &then) < 0) goto done;
-            turned = now - then;
-        }
-    }
-    if (carry_on(front, 1.0, moved, since, turned) < 0 || carry_on(rear, -1.0, moved, since, turned) < 0) goto done;
-    /* the gaps and TTCs */
-    if (curved) { /* the ego's speed along the line the gaps are measured along */
-        double rate;
-        if (get_double(view, s_ds, &ds) < 0 || get_double(sensor, s_rate_, &rate) < 0) goto done;
-        ds = ds * rate;
-    } else if (get_double(view, s_ds, &ds) < 0) goto done;
-    if (get_double(front, s_gap, &front_gap) < 0
-        || get_double(front, s_speed, &front_speed) < 0 || get_double(rear, s_gap, &rear_gap) < 0
-        || get_double(rear, s_speed, &rear_speed) < 0)
-        goto done;
-    if (set_double(view, s_gap_front, front_gap) < 0 || set_double(view, s_ttc_front, ttc_of(front_gap, ds - front_speed)) < 0
-        || set_double(view, s_gap_rear, rear_gap) < 0 || set_double(view, s_ttc_rear, ttc_of(rear_gap, rear_speed - ds)) < 0)
-        goto done;
-    if (front_gap <= 0.0 || rear_gap <= 0.0) {
-        PyObject *vid = PyObject_GetAttr(front_gap <= 0.0 ? front : rear, s_id);
-        if (!vid) goto done;
-        result = PyObject_CallOneArg(args[1], vid);
-        Py_DECREF(vid);
-        goto done;
-    }
-    result = Py_NewRef(Py_None);
-done:
-    Py_XDECREF(s_obj);
-    return result;
-}
-
 /* ---------------------------------------------------------------------------------------
  * The surround sensor's search (ego/scenarios/sensor.py SurroundSensor):
  *  - near(objects, lo, hi, h, m): the objects whose extent across the lane, widened by
@@ -2285,7 +2157,6 @@ static PyMethodDef methods[] = {
     FASTCALL(plant_step, "plant_step(plant, packed, action) -> None (BicyclePlant.step)"),
     FASTCALL(trace_write, "trace_write(rows, width, signals, fallback, sigs, values) -> None"),
     FASTCALL(road_frame, "road_frame(view) -> None (RoadSensor.frame)"),
-    FASTCALL(look_between, "look_between(view, t) -> Collision | None (SurroundView.look)"),
     FASTCALL(near, "near(objects, lo, hi, h, m) -> the objects within reach (SurroundSensor.scan's filter)"),
     FASTCALL(nearest, "nearest(objects, lo, hi, e_lo, e_hi, since, ahead, behind[, along]) -> None "
                       "(SurroundSensor._nearest)"),

@@ -380,80 +380,6 @@ def _arc_lanes(width: float = 3.2, radius: float = 250.0):
     return lanes
 
 
-def check_look_between(curved: bool):
-    # two views fed the same scene by hand; the ego and the traffic move between looks, one
-    # through ego._native.look_between, the other through SurroundView.look
-    from ego.lane_frame import LanePolyline
-    from ego.models import VehicleGeometry
-    from ego.scenarios.emergency_brake import EmergencyBrakeConfig
-    from ego.scenarios.motorway import SurroundView, ego_plant
-
-    config = EmergencyBrakeConfig()
-    geometry = VehicleGeometry()
-    if curved:
-        lanes = _arc_lanes()
-    else:
-        lanes = {i: LanePolyline([(0.0, 3.2 * i), (3000.0, 3.2 * i)], 3.2, f"motorway_{i}") for i in range(3)}
-    names = ("gap_front", "ttc_front", "gap_rear", "ttc_rear", "s", "station", "turn")
-    rng = np.random.default_rng(3)
-    middle = lanes[1]
-    s_ego = middle.project(300.0, 3.2)[0]
-
-    def pose(s: float, d: float = 0.0) -> tuple[float, float, float]:
-        x, y = middle.offset_point(s, d)
-        return x, y, middle.heading_at(s)
-
-    for case in range(40):
-        views = []
-        # ahead and behind in the ego's lane (the one ahead touching it in every fifth case),
-        # on a curve a third car in the inner lane half across the ego's
-        ahead = rng.uniform(2.0, 40.0) * (1 if case % 5 else 0.0)
-        rows = [
-            (*pose(s_ego + 2.25 + 2.25 + ahead), rng.uniform(0.0, 30.0), 4.5, 1.8),
-            (*pose(s_ego - rng.uniform(4.0, 40.0)), rng.uniform(0.0, 40.0), 4.5, 1.8),
-        ]
-        if curved:
-            rows.append((*pose(s_ego + rng.uniform(6.0, 30.0), 2.0), rng.uniform(0.0, 40.0), 4.5, 1.8))
-        for native in (True, False):
-            plant = ego_plant(config, geometry, (300.0, 3.2 * config.ego_lane, 0.0))
-            view = SurroundView(config, geometry)
-            view.setup(None, lanes, plant)
-            view.sensor.sync(0.0, ["lead", "back", "inner"][: len(rows)], rows)
-            look = view.bind_look() if native else view.look
-            views.append((view, plant, look))
-        assert views[0][2].func is NATIVE.look_between
-        speed = rng.uniform(0.0, 35.0)
-        if case == 11:  # bumpers exactly touching, nothing moving: a gap of exactly 0
-            speed = 0.0
-            for view, _plant, _look in views:
-                view.look(0.0)
-                front = view.sensor.front
-                front.gap0, front.speed = 0.0, 0.0
-        for k in range(10):
-            t = 0.01 * k
-            found = []
-            for view, plant, look in views:
-                x, y, psi = pose(s_ego + speed * t, 0.3 * k / 10)
-                plant.state = (x, speed, y, 0.0, psi, 0.0)
-                view.frame()
-                if case == 7 and k == 4:
-                    view.s = float("nan")
-                found.append(look(t))
-            a, b = views[0][0], views[1][0]
-            assert bits(getattr(a, n) for n in names) == bits(getattr(b, n) for n in names), (case, k)
-            assert bits((a.sensor.front.gap, a.sensor.rear.gap)) == bits((b.sensor.front.gap, b.sensor.rear.gap))
-            assert repr(found[0]) == repr(found[1]), (case, k)
-            own = "station" if curved else "s"
-            assert (a.looked, a.sensor.t, a.sensor.s is getattr(a, own)) == (
-                b.looked,
-                b.sensor.t,
-                b.sensor.s is getattr(b, own),
-            )
-            assert bits((a.sensor.turn, a.sensor.front.speed)) == bits((b.sensor.turn, b.sensor.front.speed))
-        if curved:
-            assert views[0][0].sensor.along is not None and views[0][0].sensor.front.line is not None
-
-
 def check_search(curved, monkeypatch):
     # one scene, searched twice: through ego._native.near/nearest and through the Python
     # loops of SurroundSensor.scan, _scan_lane and _nearest; every Detection to the bit
@@ -649,7 +575,6 @@ TWINS: tuple[Twin, ...] = (
     ),
     Twin(("trace_write",), "ego.results.trace.Trace.bind", check=check_trace_write),
     Twin(("road_frame",), "ego.scenarios.road.RoadSensor.frame", tuple((c,) for c in _CURVES), check_road_frame),
-    Twin(("look_between",), "ego.scenarios.motorway.SurroundView.look", ((False,), (True,)), check_look_between),
     Twin(("near", "nearest"), "ego.scenarios.sensor.SurroundSensor._nearest", ((False,), (True,)), check_search),
     Twin(
         ("lane_mean_curvature",),

@@ -16,7 +16,6 @@ A concrete scenario (``emergency_brake.py``, ``cut_in.py``...) subclasses
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
@@ -42,7 +41,6 @@ from ego.sim.protocol import TrafficSim
 from ego.sim.traffic import PacedVehicle, background_traffic
 from ego.sim.types import EGO, Collision, VehicleSpec, VehicleType, ego_type
 
-_LOOK_BETWEEN = NATIVE.look_between if NATIVE is not None else None
 #: LanePolyline.mean_curvature in C (the curvature feed-forward's preview, every control period)
 _MEAN_CURVATURE = NATIVE.lane_mean_curvature if NATIVE is not None else None
 
@@ -394,15 +392,6 @@ class SurroundView(RoadSensor):
         if front_gap <= 0.0 or rear_gap <= 0.0:
             return self._overlap(front.id if front_gap <= 0.0 else rear.id)
         return None
-
-    def bind_look(self) -> Callable[[float], Collision | None]:
-        """:meth:`look` for the loop, bound once a run: between two simulator steps in C where
-        the extension is built (``ego._native.look_between``: the sensor's carrying on and the
-        TTCs, the same arithmetic; the first look after a step goes to :meth:`look`)."""
-        if _LOOK_BETWEEN is not None and type(self).look is SurroundView.look and type(self.sensor) is SurroundSensor:
-            sensor = self.sensor
-            return functools.partial(_LOOK_BETWEEN, self.look, self._overlap, self, sensor, sensor.front, sensor.rear)
-        return self.look
 
     def _overlap(self, other: str) -> Collision | None:
         box = self.sensor.box(other)
