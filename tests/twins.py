@@ -506,13 +506,17 @@ def check_fill_obs(normalize):
             env.close()
 
 
+def mamdani_points(rng) -> np.ndarray:
+    """The fuzzy controller's (e, ec) inputs: 2000 random ones and the partition's corners."""
+    return np.vstack([rng.uniform(-12, 12, (2000, 2)), [[-10, -10], [10, 10], [0, 0], [10 / 3, 0]]])
+
+
 def check_mamdani2():
     from ego.control import fuzzy
 
     engine = fuzzy.evaluator()
     assert engine.single2 is not engine.single2_py
-    rng = np.random.default_rng(2)
-    pts = np.vstack([rng.uniform(-12, 12, (2000, 2)), [[-10, -10], [10, 10], [0, 0], [10 / 3, 0]]])
+    pts = mamdani_points(np.random.default_rng(2))
     for e, c in pts:
         assert engine.single2(float(e), float(c)) == pytest.approx(engine.single2_py(float(e), float(c)), abs=1e-11)
 
