@@ -1851,53 +1851,77 @@ static int set_double(PyObject *obj, PyObject *name, double value)
 }
 
 
-/* road_frame(frame, view, plant, road) -> None: RoadSensor.frame on a curved lane, on its
- * records: the plant's state in, LanePolyline.locate on the packed data of ``road`` (the lane
- * the view measured in when the loop bound it), the view's frame fields out (X, Y, s, d_road,
- * heading_error, curvature, ds, dd, turn, station). view.road another lane, or a point the
- * Python method decides (it raises there): frame(), the Python method. (A straight lane's
- * rotation stays Python's: in C it cost more instructions, docs/performance.md.) */
+/* road_frame(frame, view, plant, road, line) -> None: RoadSensor.frame on its records: the
+ * plant's state in, the view's frame fields out (X, Y, s, d_road, heading_error, curvature,
+ * ds, dd; on a curved lane turn and station too). ``road`` is the lane the view measured in
+ * when the loop bound it, ``line`` its straight segment (LanePolyline.straight) or None: a
+ * straight lane's rotation (LanePolyline.frame's arithmetic), a curved lane's
+ * LanePolyline.locate on its packed data. view.road another lane, or a point the Python
+ * method decides (it raises there): frame(), the Python method. */
+static int frame_out(PyObject *view, double X, double Y, double s, double d, double err, double kappa, double u,
+                     double v)
+{
+    const double c = cos(err), sn = sin(err);
+    return (set_double(view, s_X, X) < 0 || set_double(view, s_Y, Y) < 0 || set_double(view, s_s, s) < 0
+            || set_double(view, s_d_road, d) < 0 || set_double(view, s_heading_error, err) < 0
+            || set_double(view, s_curvature, kappa) < 0 || set_double(view, s_ds, u * c - v * sn) < 0
+            || set_double(view, s_dd, u * sn + v * c) < 0)
+               ? -1
+               : 0;
+}
+
 static PyObject *road_frame(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
-    if (nargs != 4) {
-        PyErr_SetString(PyExc_TypeError, "road_frame(frame, view, plant, road)");
+    if (nargs != 5) {
+        PyErr_SetString(PyExc_TypeError, "road_frame(frame, view, plant, road, line)");
         return NULL;
     }
-    PyObject *frame = args[0], *view = args[1], *plant = args[2], *road = args[3];
+    PyObject *frame = args[0], *view = args[1], *plant = args[2], *road = args[3], *line_obj = args[4];
     PyObject *now = PyObject_GetAttr(view, s_road);
     if (!now) return NULL;
     Py_DECREF(now);
     if (now != road) return PyObject_CallNoArgs(frame);
-    double x[NX], f[6];
+    double x[NX], line[6];
     PyObject *state = PyObject_GetAttr(plant, s_state);
     if (!state) return NULL;
     int bad = read_doubles(state, x, NX, "state");
     Py_DECREF(state);
     if (bad < 0) return NULL;
-    LaneData L;
-    const int got = lane_packed(road, &L);
-    if (got < 0) return NULL;
-    if (got > 0) return PyObject_CallNoArgs(frame);
-    PyObject *hint_obj = PyObject_GetAttr(road, s_hint_);
-    if (!hint_obj) { lane_release(&L); return NULL; }
-    Py_ssize_t hint = PyLong_AsSsize_t(hint_obj);
-    Py_DECREF(hint_obj);
-    if (hint == -1 && PyErr_Occurred()) { lane_release(&L); return NULL; }
     const double X = x[0], u = x[1], Y = x[2], v = x[3], psi = x[4];
-    const int defer = lane_locate(&L, &hint, X, Y, psi, f);
-    lane_release(&L);
-    if (defer) return PyObject_CallNoArgs(frame);
-    PyObject *h = PyLong_FromSsize_t(hint);
-    if (!h) return NULL;
-    bad = PyObject_SetAttr(road, s_hint_, h);
-    Py_DECREF(h);
-    const double err = f[2], c = cos(err), sn = sin(err);
-    if (bad < 0 || set_double(view, s_turn, f[4]) < 0 || set_double(view, s_station, f[5]) < 0
-        || set_double(view, s_X, X) < 0 || set_double(view, s_Y, Y) < 0 || set_double(view, s_s, f[0]) < 0
-        || set_double(view, s_d_road, f[1]) < 0 || set_double(view, s_heading_error, err) < 0
-        || set_double(view, s_curvature, f[3]) < 0 || set_double(view, s_ds, u * c - v * sn) < 0
-        || set_double(view, s_dd, u * sn + v * c) < 0)
-        return NULL;
+    if (line_obj == Py_None) { /* a curved lane: LanePolyline.locate on its packed data */
+        LaneData L;
+        const int got = lane_packed(road, &L);
+        if (got < 0) return NULL;
+        if (got > 0) return PyObject_CallNoArgs(frame);
+        PyObject *hint_obj = PyObject_GetAttr(road, s_hint_);
+        if (!hint_obj) { lane_release(&L); return NULL; }
+        Py_ssize_t hint = PyLong_AsSsize_t(hint_obj);
+        Py_DECREF(hint_obj);
+        if (hint == -1 && PyErr_Occurred()) { lane_release(&L); return NULL; }
+        double f[6];
+        const int defer = lane_locate(&L, &hint, X, Y, psi, f);
+        lane_release(&L);
+        if (defer) return PyObject_CallNoArgs(frame);
+        PyObject *h = PyLong_FromSsize_t(hint);
+        if (!h) return NULL;
+        bad = PyObject_SetAttr(road, s_hint_, h);
+        Py_DECREF(h);
+        if (bad < 0 || set_double(view, s_turn, f[4]) < 0 || set_double(view, s_station, f[5]) < 0
+            || frame_out(view, X, Y, f[0], f[1], f[2], f[3], u, v) < 0)
+            return NULL;
+        Py_RETURN_NONE;
+    }
+    if (read_doubles(line_obj, line, 6, "line") < 0) return NULL;
+    const double x0 = line[0], y0 = line[1], ux = line[2], uy = line[3], s0 = line[4], heading = line[5];
+    const double dx = X - x0, dy = Y - y0;
+    double err = psi - heading;
+    if (isinf(err)) return PyObject_CallNoArgs(frame); /* math.fmod raises there */
+    if (!(-Py_MATH_PI < err && err <= Py_MATH_PI)) { /* lane_frame.wrap_angle */
+        double a = fmod(err + Py_MATH_PI, 2.0 * Py_MATH_PI);
+        if (a <= 0.0) a += 2.0 * Py_MATH_PI;
+        err = a - Py_MATH_PI;
+    }
+    if (frame_out(view, X, Y, s0 + dx * ux + dy * uy, dy * ux - dx * uy, err, 0.0, u, v) < 0) return NULL;
     Py_RETURN_NONE;
 }
 
@@ -2132,7 +2156,7 @@ static PyMethodDef methods[] = {
                        "(EgoEnv._step)"),
     FASTCALL(plant_step, "plant_step(plant, packed, action) -> None (BicyclePlant.step)"),
     FASTCALL(trace_write, "trace_write(rows, width, signals, fallback, sigs, values) -> None"),
-    FASTCALL(road_frame, "road_frame(frame, view, plant, road) -> None (RoadSensor.frame on a curved lane)"),
+    FASTCALL(road_frame, "road_frame(view) -> None (RoadSensor.frame)"),
     FASTCALL(near, "near(objects, lo, hi, h, m) -> the objects within reach (SurroundSensor.scan's filter)"),
     FASTCALL(nearest, "nearest(objects, lo, hi, e_lo, e_hi, since, ahead, behind[, along]) -> None "
                       "(SurroundSensor._nearest)"),

@@ -88,18 +88,17 @@ class RoadSensor:
         self.dd = u * sn + v * c
 
     def bind_frame(self) -> Callable[[], None]:
-        """:meth:`frame` for the loop, bound once a run: on a curved lane in C where the
-        extension is built (``ego._native.road_frame`` on the plant's state and the lane's
-        packed data: ``LanePolyline.locate``'s arithmetic; a change of ``road`` goes to
-        :meth:`frame`). A straight lane's rotation stays here (inline, fewer instructions
-        than the call into C)."""
+        """:meth:`frame` for the loop, bound once a run: in C where the extension is built
+        (``ego._native.road_frame`` on the plant's state, this lane's rotation or packed data:
+        the same arithmetic; a change of ``road`` goes to :meth:`frame`)."""
         road, plant = self.road, self._plant
         if _ROAD_FRAME is None or type(self).frame is not RoadSensor.frame or plant is None:
             return self.frame
         straight = getattr(road, "straight", None)
-        if (straight is not None and straight() is not None) or not hasattr(road, "packed"):
+        line = straight() if straight is not None else None
+        if line is None and not hasattr(road, "packed"):  # neither a rotation nor packed data
             return self.frame
-        return functools.partial(_ROAD_FRAME, self.frame, self, plant, road)
+        return functools.partial(_ROAD_FRAME, self.frame, self, plant, road, line)
 
     def diverged(self) -> str | None:
         """Why the ego's state is beyond any controller's doing, or None."""
