@@ -109,7 +109,7 @@ def traffic_log_cost(spec: RunSpec, at: float = 5.0, number: int = 2048) -> floa
             obs = scenario.step(scenario.controller.step(obs))
         if scenario.traffic is None:
             return 0.0
-        per_step = min(timeit.repeat(scenario._log_traffic, number=number, repeat=5)) / number
+        per_step = min(timeit.repeat(scenario.loop.log_traffic, number=number, repeat=5)) / number
         return 1e6 * per_step
     finally:
         scenario.close()

@@ -14,8 +14,12 @@ around it by callgrind's client request (a small C helper compiled here):
   no control), as many SUMO steps as the loop took.
 
 Printed: both counts, their ratio (issue 18's target: <= 1.8 without recording) and ego's
-own instructions per SUMO step. ``--tree`` measures another checkout (``git worktree add``)
-with this script, to compare two versions in the same session. Needs ``valgrind`` and its
+own instructions per SUMO step; with ``--parts``, the loop's count split (inclusive, by
+``callgrind_annotate``) into SUMO's step, SUMO's ``moveToXY`` (the ego's pose pushed every
+step) and ego's own (the rest: Python, the C kernels of ``ego._native``, each also printed, and
+libsumo's other calls). Comparing two roads part by part says which side a difference is on (issue 38). ``--tree`` measures another checkout (``git worktree add``)
+with this script, to compare two versions in the same session (its code and its
+``sumo_nets``). Needs ``valgrind`` and its
 headers (Debian: ``apt-get install valgrind``) and a C compiler; each count takes one to
 two minutes (the two run at once on two cores).
 """
@@ -100,6 +104,8 @@ def _start(work: Path, tree: str, mode: str, args, steps: int) -> subprocess.Pop
         "XDG_CONFIG_HOME": str(work),
         "XDG_DATA_HOME": str(work),
         "PYTHONPATH": tree,
+        # the tree's own networks (the curved motorways are data: two trees may differ there)
+        "EGO_SUMO_NETS": str(Path(tree) / "sumo_nets"),
     }
     cmd = [
         "valgrind",
@@ -119,6 +125,45 @@ def _start(work: Path, tree: str, mode: str, args, steps: int) -> subprocess.Pop
     return subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
+#: the loop's parts (--parts): label -> the function whose inclusive count is the part
+PARTS = {
+    "SUMO's step (simulationStep)": "libsumo::Simulation::step(double)",
+    "SUMO's moveToXY (the ego's pose)": "libsumo::Vehicle::moveToXY(",
+}
+
+
+def parts(out_file: Path) -> dict[str, int]:
+    """Inclusive instructions of the loop's parts in a callgrind output (:data:`PARTS`, then
+    every function of ``ego._native`` the loop called, by name; a function listed more than
+    once (recursion) counts its largest figure)."""
+    try:
+        import ego._native as native
+
+        kernels = {name for name in dir(native) if not name.startswith("_")}
+    except ImportError:
+        kernels = set()
+    text = subprocess.run(
+        ["callgrind_annotate", "--inclusive=yes", "--threshold=100", str(out_file)],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
+    found: dict[str, int] = {}
+    for line in text.splitlines():
+        m = re.match(r"\s*([\d,]+)\s+\([^)]*\)\s+(\S.*)$", line)
+        if m is None or "=>" in line:
+            continue
+        count, name = int(m.group(1).replace(",", "")), m.group(2)
+        for label, function in PARTS.items():
+            if function in name and label not in found:
+                found[label] = count
+        kernel = re.search(r"_native\.c:(\w+) ", name)
+        if kernel is not None and kernel.group(1) in kernels:
+            label = f"ego._native.{kernel.group(1)}"
+            found[label] = max(found.get(label, 0), count)
+    return found
+
+
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scenario", default="emergency-brake")
@@ -126,6 +171,7 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a scenario override")
     ap.add_argument("--tree", default=str(HERE.parent), help="the checkout to measure (default: this one)")
     ap.add_argument("--steps", type=int, default=250, help="bare SUMO steps when they cannot be read from the loop")
+    ap.add_argument("--parts", action="store_true", help="split the loop's count into its parts")
     args = ap.parse_args(argv)
     for tool in ("valgrind", "cc"):
         if shutil.which(tool) is None:
@@ -150,6 +196,7 @@ def main(argv: list[str] | None = None) -> dict:
             bare = _start(work, args.tree, "bare", args, steps)
             out_bare, err_bare = bare.communicate()
         n_loop, n_bare = _collected(err_loop), _collected(err_bare)
+        split = parts(work / "loop.out") if args.parts else {}
     figures = {
         "sumo_steps": steps,
         "loop_instructions": n_loop,
@@ -162,6 +209,15 @@ def main(argv: list[str] | None = None) -> dict:
     print(f"  bare SUMO, same traffic  {n_bare / 1e6:9.1f} M instructions")
     print(f"  loop / bare SUMO         {figures['ratio']:9.2f}     (target <= 1.8)")
     print(f"  ego's own per SUMO step  {figures['ego_per_sumo_step'] / 1e3:9.1f} k instructions")
+    if split:
+        # the kernels nest (look_between may call the Python look, which calls place and
+        # nearest): ego's own is the loop less SUMO's two parts
+        print("  the loop's parts (inclusive; the C kernels can nest):")
+        for label, count in sorted(split.items(), key=lambda kv: -kv[1]):
+            print(f"    {label:<38} {count / 1e6:9.1f} M")
+        sumo = sum(split.get(label, 0) for label in PARTS)
+        print(f"    {'ego own: the loop less the two above':<38} {(n_loop - sumo) / 1e6:9.1f} M")
+        figures["parts"] = split
     return figures
 
 

@@ -63,14 +63,14 @@ def one_run(spec: RunSpec, samples: dict, plan_label: str | None = None) -> None
         obs = sc.reset()
         step, control = sc.step, sc.controller.step
         if plan_label is not None:
-            plan, man = sc._plan, sc.manoeuvre
+            plan, man = sc.loop._plan, sc.manoeuvre
 
             def timed_plan(o, t):
                 t0 = clock()
                 plan(o, t)
                 samples[f"plan {plan_label}, {manoeuvre.PHASE_NAMES[man.phase]}"].append(clock() - t0)
 
-            sc._plan = timed_plan
+            sc.loop._plan = timed_plan
             while not sc.done:
                 obs = step(control(obs))
             return

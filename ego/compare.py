@@ -242,15 +242,7 @@ def compare(
     from ego.paths import check_compare_outputs
 
     check_compare_outputs(out, specs, traces)  # every file it writes, before anything runs
-    # every value too (a bad --set value) before any process starts: once per controller,
-    # since the seed changes nothing that is checked (100000 seeds would take a minute)
-    variants: dict[str, ResolvedRun] = {}
-    for spec in specs:
-        if spec.name not in variants:
-            variants[spec.name] = resolve(spec)
-            # the requirements too, against the trace's and the controller's signals
-            requirements_of(variants[spec.name], variants[spec.name].build_controller())
-    runs = [variants[s.name].with_outputs(seed=s.seed, record=s.record, trace=s.trace) for s in specs]
+    variants, runs = _resolve_variants(specs)
     first = runs[0]
     plots = first.plots()
     declared = first.metrics_declared()
@@ -283,6 +275,19 @@ def compare(
             write_markdown(scenario, rows, list(controllers), out / "metrics.md", declared)
             write_plots(scenario, rows, list(controllers), out, plots, params)
     return rows
+
+
+def _resolve_variants(specs: Sequence[RunSpec]) -> tuple[dict[str, ResolvedRun], list[ResolvedRun]]:
+    """Every value (a bad --set value) checked before any process starts: each controller
+    variant resolved once, since the seed changes nothing that is checked (100000 seeds
+    would take a minute), with its requirements against the trace's and the controller's
+    signals; then every run derived from its variant."""
+    variants: dict[str, ResolvedRun] = {}
+    for spec in specs:
+        if spec.name not in variants:
+            variants[spec.name] = resolve(spec)
+            requirements_of(variants[spec.name], variants[spec.name].build_controller())
+    return variants, [variants[s.name].with_outputs(seed=s.seed, record=s.record, trace=s.trace) for s in specs]
 
 
 def write_settings(path: Path, scenario: str, overrides: Mapping, requirements, backend: str) -> None:

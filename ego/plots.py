@@ -286,41 +286,10 @@ def _trajectory_panel(ax, decl: Trajectory, r, colour) -> None:
         if m is not None
     ]
     if log is not None and len(log):
-        steps = np.diff(np.unique(log.t))
-        # a vehicle's outline is drawn at its logged pose nearest to the moment, one SUMO step off at most
-        reach = 1.0001 * float(steps.min()) if len(steps) else 0.0
-        cmap = pyplot().get_cmap("tab20b")  # apart from the controllers' tab10 colours
-        for i, vid in enumerate(log.ids):
-            rows = np.flatnonzero(log.vehicle == i)
-            vx, vy = log.x[rows], log.y[rows]
-            col = cmap((4 * i + i // 5) % 20)  # a new hue for each of the first five
-            ax.plot(vx, vy, color=col, lw=1.0, alpha=0.8)
-            ax.annotate(vid, (vx[0], vy[0]), fontsize=6, color=col, xytext=(0, 3), textcoords="offset points")
-            lo_y, hi_y = min(lo_y, float(vy.min())), max(hi_y, float(vy.max()))
-            for when, style, _ in moments:  # its outline at the trigger and at the closest approach
-                j = rows[np.argmin(np.abs(log.t[rows] - when))]
-                if abs(log.t[j] - when) <= reach:
-                    _box(
-                        ax, log.x[j], log.y[j], log.heading[j], log.length[j], log.width[j], color=col, lw=1.0, ls=style
-                    )
+        lo_y, hi_y = _traffic_outlines(ax, log, moments, lo_y, hi_y)
     ax.plot(ex, ey, color=colour, lw=1.6, label=f"ego ({r.controller})")
     if decl.ego_box is not None:
-        length, width, ahead = decl.ego_box
-        for when, style, _ in moments:
-            k = _at(t, when)
-            k0, k1 = max(k - 1, 0), min(k + 1, len(t) - 1)
-            heading = math.atan2(ey[k1] - ey[k0], ex[k1] - ex[k0]) if k1 > k0 else 0.0
-            _box(
-                ax,
-                ex[k] + ahead * math.cos(heading),
-                ey[k] + ahead * math.sin(heading),
-                heading,
-                length,
-                width,
-                color=colour,
-                lw=1.4,
-                ls=style,
-            )
+        _ego_outlines(ax, decl.ego_box, t, ex, ey, moments, colour)
     for _, style, what in moments:
         ax.plot([], [], color="0.3", ls=style, lw=1.0, label=f"outlines at the {what}")
     if trig is not None:
@@ -354,6 +323,48 @@ def _trajectory_panel(ax, decl: Trajectory, r, colour) -> None:
     ax.set_title(f"{r.controller} seed {r.seed}: {r.status}", fontsize=9)
     ax.grid(True, alpha=0.2)
     ax.legend(loc="best", fontsize=7, ncol=3)
+
+
+def _traffic_outlines(ax, log, moments: list, lo_y: float, hi_y: float) -> tuple[float, float]:
+    """Every logged vehicle's path, its name, and its outline at each moment (one SUMO step
+    off at most); the y range widened to the paths."""
+    steps = np.diff(np.unique(log.t))
+    # a vehicle's outline is drawn at its logged pose nearest to the moment, one SUMO step off at most
+    reach = 1.0001 * float(steps.min()) if len(steps) else 0.0
+    cmap = pyplot().get_cmap("tab20b")  # apart from the controllers' tab10 colours
+    for i, vid in enumerate(log.ids):
+        rows = np.flatnonzero(log.vehicle == i)
+        vx, vy = log.x[rows], log.y[rows]
+        col = cmap((4 * i + i // 5) % 20)  # a new hue for each of the first five
+        ax.plot(vx, vy, color=col, lw=1.0, alpha=0.8)
+        ax.annotate(vid, (vx[0], vy[0]), fontsize=6, color=col, xytext=(0, 3), textcoords="offset points")
+        lo_y, hi_y = min(lo_y, float(vy.min())), max(hi_y, float(vy.max()))
+        for when, style, _ in moments:  # its outline at the trigger and at the closest approach
+            j = rows[np.argmin(np.abs(log.t[rows] - when))]
+            if abs(log.t[j] - when) <= reach:
+                _box(ax, log.x[j], log.y[j], log.heading[j], log.length[j], log.width[j], color=col, lw=1.0, ls=style)
+    return lo_y, hi_y
+
+
+def _ego_outlines(ax, ego_box: tuple, t, ex, ey, moments: list, colour) -> None:
+    """The ego's outline (``ego_box``: length, width, centre ahead of the traced point) at
+    each moment, heading along its path."""
+    length, width, ahead = ego_box
+    for when, style, _ in moments:
+        k = _at(t, when)
+        k0, k1 = max(k - 1, 0), min(k + 1, len(t) - 1)
+        heading = math.atan2(ey[k1] - ey[k0], ex[k1] - ex[k0]) if k1 > k0 else 0.0
+        _box(
+            ax,
+            ex[k] + ahead * math.cos(heading),
+            ey[k] + ahead * math.sin(heading),
+            heading,
+            length,
+            width,
+            color=colour,
+            lw=1.4,
+            ls=style,
+        )
 
 
 # --- string stability ------------------------------------------------------------------------

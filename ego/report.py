@@ -362,8 +362,17 @@ def _robustness_svg(c: Campaign) -> str:
 
 
 def render(c: Campaign, out: Path) -> str:
-    """The report of ``c`` as one HTML document; links are relative to ``out``'s folder."""
+    """The report of ``c`` as one HTML document; links are relative to ``out``'s folder: the
+    header, then each section in turn."""
     base = out.resolve().parent
+    parts = _header(c)
+    for section in (_verdicts, _failing, _every_run, _plots, _recordings):
+        parts += section(c, base)
+    return _page(f"ego {c.kind}: {c.scenario}", "\n".join(parts))
+
+
+def _header(c: Campaign) -> list[str]:
+    """The title, the folder, the values every run shares and the campaign's notes."""
     reqs = c.requirements
     parts = [
         f"<h1>ego {c.kind}: {_e(c.scenario)}</h1>",
@@ -374,7 +383,13 @@ def render(c: Campaign, out: Path) -> str:
         shared = " ".join(f"--set {k}={v}" for k, v in c.fixed.items())
         parts.append(f"<p>Every run: <code>{_e(shared)}</code>.</p>")
     parts += [f'<p class="note">{_e(n)}</p>' for n in c.notes]
-    # verdicts
+    return parts
+
+
+def _verdicts(c: Campaign, base: Path) -> list[str]:
+    """Per scenario, controller and requirement: runs, passed, failed, the worst
+    robustness, the first violation; the formulas."""
+    parts: list[str] = []
     body = []
     for v in verdicts(c):
         unit = c.units.get(REQUIREMENTS_PREFIX + v["requirement"], "")
@@ -423,7 +438,12 @@ def render(c: Campaign, out: Path) -> str:
         f"<li><code>{_e(n)}: {_e(f or '(formula not stored)')}</code></li>" for n, f in c.formulas.items()
     )
     parts.append(f"<ul>{formulas}</ul>")
-    # failing runs
+    return parts
+
+
+def _failing(c: Campaign, base: Path) -> list[str]:
+    """Each failing run: why, from when, its recording and the command that reproduces it."""
+    parts: list[str] = []
     failing = [(i, r) for i, r in enumerate(c.rows) if c.failures(r)]
     parts.append(f'<h2 id="failing">Failing runs ({len(failing)} of {len(c.rows)})</h2>')
     if failing:
@@ -439,7 +459,13 @@ def render(c: Campaign, out: Path) -> str:
         parts.append(f'<ul class="failing">{"".join(items)}</ul>')
     else:
         parts.append("<p>None: every run passed every requirement without a collision.</p>")
-    # every run
+    return parts
+
+
+def _every_run(c: Campaign, base: Path) -> list[str]:
+    """Every run: its parameters, status, verdict, each requirement's robustness and each
+    metric."""
+    parts: list[str] = []
     metrics = [
         k
         for k in dict.fromkeys(k for r in c.rows for k in r)
@@ -448,7 +474,7 @@ def render(c: Campaign, out: Path) -> str:
         if any(_number(r.get(k)) is not None or isinstance(r.get(k), bool) for r in c.rows)
     ]
     head = ["run", "controller", "seed", *map(_e, c.params), "status", "verdict"]
-    head += [_e(_with_unit(n, c.units.get(REQUIREMENTS_PREFIX + n))) for n in reqs]
+    head += [_e(_with_unit(n, c.units.get(REQUIREMENTS_PREFIX + n))) for n in c.requirements]
     head += [_e(_with_unit(m, c.units.get(m))) for m in metrics] + ["recording"]
     body = []
     for i, r in enumerate(c.rows):
@@ -458,13 +484,18 @@ def render(c: Campaign, out: Path) -> str:
         body.append(
             [str(i), _e(r["controller"]), _e(_plain(r["seed"])), *(_e(_fmt(r.get(p))) for p in c.params)]
             + [_e(r.get("status")), verdict]
-            + [_e(_fmt(c.robustness(r, n))) for n in reqs]
+            + [_e(_fmt(c.robustness(r, n))) for n in c.requirements]
             + [_e(_fmt(r.get(m))) for m in metrics]
             + [f'<a href="{_e(os.path.relpath(rec, base))}">.rrd</a>' if rec else "-"]
         )
     parts.append('<h2 id="runs">Every run</h2>')
     parts.append(f'<div class="scroll">{_table(head, body, "runs")}</div>')
-    # plots
+    return parts
+
+
+def _plots(c: Campaign, base: Path) -> list[str]:
+    """The robustness plot and the folder's PNG plots, inline."""
+    parts: list[str] = []
     parts.append('<h2 id="plots">Plots</h2>')
     svg = _robustness_svg(c)
     if svg:
@@ -475,7 +506,12 @@ def render(c: Campaign, out: Path) -> str:
             f'<figure class="plot"><img alt="{_e(png.name)}" src="data:image/png;base64,{data}">'
             f"<figcaption>{_e(png.name)}</figcaption></figure>"
         )
-    # recordings
+    return parts
+
+
+def _recordings(c: Campaign, base: Path) -> list[str]:
+    """Links to the folder's recordings."""
+    parts: list[str] = []
     recs = sorted(c.folder.rglob("*.rrd"))
     parts.append(f'<h2 id="recordings">Recordings ({len(recs)})</h2>')
     if recs:
@@ -485,7 +521,7 @@ def render(c: Campaign, out: Path) -> str:
         parts.append(f"<p>Open one with <code>rerun FILE.rrd</code>.</p><ul>{links}</ul>")
     else:
         parts.append("<p>None in the folder.</p>")
-    return _page(f"ego {c.kind}: {c.scenario}", "\n".join(parts))
+    return parts
 
 
 _STYLE = """

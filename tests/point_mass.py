@@ -15,7 +15,7 @@ import numpy as np
 from ego.params import param
 from ego.results.metrics import json_number, settling_time
 from ego.results.trace import Column, Metric, Plot
-from ego.scenarios.base import Scenario, TimingConfig
+from ego.scenarios.base import PartsLoop, Scenario, TimingConfig
 
 DRIVEN_WHEELS = 2
 
@@ -54,36 +54,45 @@ class PointMass(Scenario):
         Plot("e_lon", "lon_error.png", "position error"),
     )
 
-    def _setup(self, rng: np.random.Generator) -> None:
-        self.position = 0.0
-        self.velocity = 0.0
-
-    def _act(self, action: tuple[float, float]) -> None:
-        fx, _ = action
-        c = self.config
-        self.trace.append(
-            self.controller.signals(),
-            t=self.t,
-            s=self.position,
-            speed=self.velocity,
-            e_lon=self.position - c.ref_speed * self.t,
-            Fx=fx,
-        )
-        self.velocity += DRIVEN_WHEELS * fx / c.mass * c.dt
-        self.position += self.velocity * c.dt
-
-    def _update(self) -> None:
-        obs, c = self.obs, self.config
-        obs.t = self.t
-        obs.s_ref, obs.ds_ref = c.ref_speed * self.t, c.ref_speed
-        obs.s, obs.ds, obs.speed = self.position, self.velocity, self.velocity
+    def make_loop(self) -> PointMassLoop:
+        return PointMassLoop(self)
 
     def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
         t = trace[:, columns.index("t")]
         error = trace[:, columns.index("speed")] - self.config.ref_speed
         return {
             "rms_speed_error": json_number(math.sqrt(float(np.mean(error**2)))),
-            "final_position": json_number(self.position),
+            "final_position": json_number(self.loop.position),
             "settle_times": {f"band{band:g}": json_number(settling_time(t, error, band, 0.0)) for band in (5.0, 1.0)},
             "reached_speed": bool(np.any(np.abs(error) < 1.0)),
         }
+
+
+class PointMassLoop(PartsLoop):
+    """The point mass's loop: its own explicit Euler step, the reference of time, no simulator."""
+
+    def setup(self, rng: np.random.Generator) -> None:
+        self.position = 0.0
+        self.velocity = 0.0
+
+    def act(self, action: tuple[float, float]) -> None:
+        sc = self.sc
+        fx, _ = action
+        c = sc.config
+        sc.trace.append(
+            sc.controller.signals(),
+            t=sc.t,
+            s=self.position,
+            speed=self.velocity,
+            e_lon=self.position - c.ref_speed * sc.t,
+            Fx=fx,
+        )
+        self.velocity += DRIVEN_WHEELS * fx / c.mass * c.dt
+        self.position += self.velocity * c.dt
+
+    def update(self) -> None:
+        sc = self.sc
+        obs, c = sc.obs, sc.config
+        obs.t = sc.t
+        obs.s_ref, obs.ds_ref = c.ref_speed * sc.t, c.ref_speed
+        obs.s, obs.ds, obs.speed = self.position, self.velocity, self.velocity

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import asdict
 from typing import Any
 
 from ego.cli.common import EXIT_OK
@@ -83,6 +84,7 @@ def catalogue() -> dict:
     from ego.scenarios.base import COMMON_METRICS, COMMON_TAIL_METRICS
 
     load_plugins()
+    from ego.sim.registry import backend, backend_names
 
     def params(cls) -> list[dict]:
         return [
@@ -97,6 +99,7 @@ def catalogue() -> dict:
             "task": cls.task,
             "summary": cls.summary,
             "backends": list(cls.backends),
+            "needs": list(cls.needs),
             "parameters": params(cls.config_cls),
             "metrics": [
                 {"name": m.name, "unit": m.unit, "description": m.description, "headline": m.headline}
@@ -110,6 +113,14 @@ def catalogue() -> dict:
     return {
         "scenarios": [scenario(n, c) for n, c in SCENARIOS.items()],
         "common_metrics": [m.name for m in COMMON_METRICS + COMMON_TAIL_METRICS],
+        "backends": [
+            {
+                "name": name,
+                "capabilities": [k for k, v in asdict(b.capabilities).items() if v],
+                "options": list(b.options),
+            }
+            for name, b in ((n, backend(n)) for n in backend_names())
+        ],
         "tasks": [TASKS[t].as_dict() for t in CONTROLLERS],
         "controllers": [
             {"name": n, "task": t, "summary": s.summary, "parameters": params(s.params)}
@@ -180,9 +191,16 @@ def print_catalogue(cat: dict) -> None:
         )
     for s in cat["scenarios"]:
         on = "" if s["backends"] == ["sumo"] else f"; --backend {' or '.join(s['backends'])}"
+        on += f"; needs {', '.join(s['needs'])}" if s["needs"] else ""
         print(f"\n  {s['name']} [{s['task']} task{on}]: {s['summary']}")
         table(s["parameters"])
         metrics(s["metrics"])
+    print(
+        "\nTraffic simulators (--backend NAME; a scenario runs on those it lists that have every capability it needs):"
+    )
+    for b in cat["backends"]:
+        options = f" (options: {', '.join('--' + o for o in b['options'])})" if b["options"] else ""
+        print(f"  {b['name']}: {', '.join(b['capabilities']) or 'no capabilities'}{options}")
     for task in cat["tasks"]:
         print(
             f"\nControllers of the {task['name']} task ({task['summary']}; --controller NAME, "

@@ -34,33 +34,77 @@ def controllers_help() -> str:
 
 
 def parser() -> argparse.ArgumentParser:
-    from ego.scenarios import SCENARIOS
-
-    backends = backend_names()  # the registry as it is now, plugins included
-
+    """The whole command line: built anew on each call, so the scenario, controller and
+    backend names in choices and help are the registries' as they are now (plugins included)."""
     ap = Parser(
         prog="ego",
         description="Run an ego vehicle's own model and controller inside real SUMO traffic.",
-        epilog="Examples:\n"
-        "  ego list\n"
-        "  ego run emergency-brake --controller fuzzy --record runs/eb.rrd\n"
-        "  ego run emergency-brake --controller pid --set block_left=true --json\n"
-        "  ego run emergency-brake --controller pid --backend highway-env --video runs/eb.gif\n"
-        "  ego compare fast-follower --controllers pid,fuzzy,rbf-smc --seeds 3 --out runs/ff\n"
-        "  ego run curve --controller narma-l2 --set entry_speed=40\n"
-        "  ego compare curve --controllers pid,fuzzy-curve,narma-l2 --out runs/curve\n"
-        "  ego train narma-l2 --seed 1 --out runs/narma_s1.npz\n"
-        "  ego run curve --controller narma-l2 --set model=runs/narma_s1.npz\n"
-        "  ego run lane-centering --controller cascade-pid --set speed=25\n"
-        "  ego tune lane-centering --quick\n"
-        "  ego run platoon --controller bp-pid-acc --set followers=5 --record runs/platoon.rrd\n"
-        "  ego compare platoon --controllers pid,bp-pid-acc --seeds 3 --out runs/platoon\n"
-        "  rerun runs/eb.rrd   # review the recording",
+        epilog="Examples:\n" + "".join(f"  {line}\n" for line in EXAMPLES).rstrip("\n"),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     ap.add_argument("--version", action="version", version=f"ego {__version__}")
     sub = ap.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
+    backends = backend_names()  # the registry as it is now, plugins included
+    add_run(sub, backends)
+    add_compare(sub, backends)
+    add_sweep(sub)
+    from ego.cli.concrete import add_parser as add_concrete
+    from ego.cli.falsify import add_parser as add_falsify
+    from ego.cli.report import add_parser as add_report
 
+    add_falsify(sub)
+    add_report(sub)
+    add_concrete(sub)
+    add_list(sub)
+    add_export_fmu(sub)
+    add_train(sub)
+    add_tune(sub)
+    return ap
+
+
+#: ``ego --help``'s examples, one command each
+EXAMPLES = (
+    "ego list",
+    "ego run emergency-brake --controller fuzzy --record runs/eb.rrd",
+    "ego run emergency-brake --controller pid --set block_left=true --json",
+    "ego run emergency-brake --controller pid --backend highway-env --video runs/eb.gif",
+    "ego compare fast-follower --controllers pid,fuzzy,rbf-smc --seeds 3 --out runs/ff",
+    "ego run curve --controller narma-l2 --set entry_speed=40",
+    "ego compare curve --controllers pid,fuzzy-curve,narma-l2 --out runs/curve",
+    "ego train narma-l2 --seed 1 --out runs/narma_s1.npz",
+    "ego run curve --controller narma-l2 --set model=runs/narma_s1.npz",
+    "ego run lane-centering --controller cascade-pid --set speed=25",
+    "ego tune lane-centering --quick",
+    "ego run platoon --controller bp-pid-acc --set followers=5 --record runs/platoon.rrd",
+    "ego compare platoon --controllers pid,bp-pid-acc --seeds 3 --out runs/platoon",
+    "rerun runs/eb.rrd   # review the recording",
+)
+
+REFERENCE_HELP = "package.module:Class, path/to/file.py:Class or path/to/controller.fmu (docs/fmi.md)"
+
+
+def add_scenario(p: argparse.ArgumentParser) -> None:
+    """``SCENARIO`` (a registered name or an .xosc file) and ``--ego ENTITY``: ego run and
+    ego compare."""
+    from ego.scenarios import SCENARIOS
+
+    p.add_argument(
+        "scenario", metavar="SCENARIO", help=f"one of: {', '.join(SCENARIOS)}; or an OpenSCENARIO file (.xosc)"
+    )
+    p.add_argument("--ego", metavar="ENTITY", help="with an .xosc file: the entity ego drives (default Ego)")
+
+
+def add_backend(p: argparse.ArgumentParser, backends: tuple[str, ...], help: str) -> None:
+    """``--backend``: a registered traffic simulator (choices: the registry when built)."""
+    p.add_argument("--backend", default="sumo", choices=backends, help=help)
+
+
+def add_seed(p: argparse.ArgumentParser, help: str) -> None:
+    """``--seed N``: a whole number, default 0."""
+    p.add_argument("--seed", type=whole_number("--seed"), default=0, metavar="N", help=help)
+
+
+def add_run(sub, backends: tuple[str, ...]) -> None:
     run = sub.add_parser(
         "run",
         help="run one scenario with one controller",
@@ -71,26 +115,16 @@ def parser() -> argparse.ArgumentParser:
         "Every parameter, its unit and default: ego list",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    run.add_argument(
-        "scenario", metavar="SCENARIO", help=f"one of: {', '.join(SCENARIOS)}; or an OpenSCENARIO file (.xosc)"
-    )
-    run.add_argument("--ego", metavar="ENTITY", help="with an .xosc file: the entity ego drives (default Ego)")
+    add_scenario(run)
     run.add_argument(
         "--controller",
         "-c",
         required=True,
         metavar="NAME",
-        help=f"one of: {controllers_help()}; or a reference: package.module:Class, "
-        "path/to/file.py:Class or path/to/controller.fmu (docs/fmi.md)",
+        help=f"one of: {controllers_help()}; or a reference: {REFERENCE_HELP}",
     )
     run.add_argument("--record", metavar="PATH", help="write a Rerun recording (.rrd) here")
-    run.add_argument(
-        "--seed",
-        type=whole_number("--seed"),
-        default=0,
-        metavar="N",
-        help="seed of the traffic and of SUMO (default 0)",
-    )
+    add_seed(run, "seed of the traffic and of SUMO (default 0)")
     add_set(run, "override a scenario or controller parameter (repeatable)")
     run.add_argument(
         "--trace",
@@ -99,11 +133,8 @@ def parser() -> argparse.ArgumentParser:
         "PATH: .csv, .parquet or .mat (MATLAB); see docs/traces.md",
     )
     run.add_argument("--json", action="store_true", help="print one JSON object instead of text")
-    run.add_argument(
-        "--backend",
-        default="sumo",
-        choices=backends,
-        help="traffic simulator (default sumo; highway-env runs emergency-brake, fast-follower and cut-in)",
+    add_backend(
+        run, backends, "traffic simulator (default sumo; highway-env runs emergency-brake, fast-follower and cut-in)"
     )
     run.add_argument(
         "--video", metavar="PATH", help="with --backend highway-env: a video of the run (.gif, or .mp4 with ffmpeg)"
@@ -118,6 +149,8 @@ def parser() -> argparse.ArgumentParser:
         "docs/requirements.md)",
     )
 
+
+def add_compare(sub, backends: tuple[str, ...]) -> None:
     cmp_ = sub.add_parser(
         "compare",
         help="every controller x seed of one scenario, in parallel processes",
@@ -133,10 +166,7 @@ def parser() -> argparse.ArgumentParser:
         "130 interrupted (finished runs written); 2 bad input or --out in use.",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    cmp_.add_argument(
-        "scenario", metavar="SCENARIO", help=f"one of: {', '.join(SCENARIOS)}; or an OpenSCENARIO file (.xosc)"
-    )
-    cmp_.add_argument("--ego", metavar="ENTITY", help="with an .xosc file: the entity ego drives (default Ego)")
+    add_scenario(cmp_)
     cmp_.add_argument(
         "--controllers",
         required=True,
@@ -148,7 +178,7 @@ def parser() -> argparse.ArgumentParser:
     add_set(cmp_, "override a parameter (repeatable)")
     add_out(cmp_, "output folder")
     add_jobs(cmp_, "parallel processes (default: the number of CPUs)", metavar="J")
-    cmp_.add_argument("--backend", default="sumo", choices=backends, help="traffic simulator (default sumo)")
+    add_backend(cmp_, backends, "traffic simulator (default sumo)")
     cmp_.add_argument(
         "--traces",
         default=None,
@@ -159,6 +189,23 @@ def parser() -> argparse.ArgumentParser:
     add_requirement_period(cmp_)
     add_preventable(cmp_)
 
+
+SWEEP_EPILOG = (
+    "Spec format (see scenarios/sweeps/*.toml):\n"
+    '  scenario = "emergency-brake"\n  controllers = ["pid", "fuzzy"]\n'
+    "  seeds = 2                 # or a list [0, 7, 9]\n"
+    "  [set]                     # fixed for every run\n  traffic_density = 5\n"
+    "  [grid]                    # full factorial\n  ego_speed = [20, 25, 30]\n"
+    "  [sample]                  # n points over ranges: random | lhs | sobol\n"
+    '  method = "sobol"\n  n = 256\n  lead_gap = [20, 60]\n\n'
+    "Example: ego sweep scenarios/sweeps/envelope.toml --out runs/envelope "
+    "--plot ego_speed,lead_decel:min_gap_front\n"
+    "Exit status: 0 every run gave a result; 1 some run ended in an error; 130 "
+    "interrupted (the same command resumes); 2 bad input or --out in use."
+)
+
+
+def add_sweep(sub) -> None:
     swp = sub.add_parser(
         "sweep",
         help="many runs over a parameter space (a TOML spec), resumable Parquet results",
@@ -166,19 +213,7 @@ def parser() -> argparse.ArgumentParser:
         "grid and/or a sample over ranges) on a process pool or a Ray cluster. Results "
         "go to DIR/results.parquet as runs finish; the same command again resumes. "
         "DIR/summary.md sums them up per controller.",
-        epilog=(
-            "Spec format (see scenarios/sweeps/*.toml):\n"
-            '  scenario = "emergency-brake"\n  controllers = ["pid", "fuzzy"]\n'
-            "  seeds = 2                 # or a list [0, 7, 9]\n"
-            "  [set]                     # fixed for every run\n  traffic_density = 5\n"
-            "  [grid]                    # full factorial\n  ego_speed = [20, 25, 30]\n"
-            "  [sample]                  # n points over ranges: random | lhs | sobol\n"
-            '  method = "sobol"\n  n = 256\n  lead_gap = [20, 60]\n\n'
-            "Example: ego sweep scenarios/sweeps/envelope.toml --out runs/envelope "
-            "--plot ego_speed,lead_decel:min_gap_front\n"
-            "Exit status: 0 every run gave a result; 1 some run ended in an error; 130 "
-            "interrupted (the same command resumes); 2 bad input or --out in use."
-        ),
+        epilog=SWEEP_EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     swp.add_argument(
@@ -225,16 +260,9 @@ def parser() -> argparse.ArgumentParser:
         "repeatable, see docs/requirements.md",
     )
     add_preventable(swp)
-    from ego.cli.falsify import add_parser as add_falsify
 
-    add_falsify(sub)
-    from ego.cli.report import add_parser as add_report
 
-    add_report(sub)
-    from ego.cli.concrete import add_parser as add_concrete
-
-    add_concrete(sub)
-
+def add_list(sub) -> None:
     lst = sub.add_parser(
         "list",
         help="scenarios, controllers and every parameter",
@@ -257,6 +285,8 @@ def parser() -> argparse.ArgumentParser:
         "(the reference in docs/inputs.md)",
     )
 
+
+def add_export_fmu(sub) -> None:
     exf = sub.add_parser(
         "export-fmu",
         help="write one of ego's vehicle models as an FMI 2.0 co-simulation FMU",
@@ -268,6 +298,14 @@ def parser() -> argparse.ArgumentParser:
     add_out(exf, "the FMU to write", metavar="FILE.fmu")
     add_set(exf, "a parameter's start value in the FMU (repeatable), e.g. abs=1")
 
+
+def add_install(p: argparse.ArgumentParser, out_help: str, install_help: str) -> None:
+    """``--out PATH`` (optional) and ``--install``: where ``ego train``/``ego tune`` write."""
+    add_out(p, out_help, metavar="PATH", required=False)
+    p.add_argument("--install", action="store_true", help=install_help)
+
+
+def add_train(sub) -> None:
     trn = sub.add_parser(
         "train",
         help="train a learned controller (narma-l2)",
@@ -282,9 +320,7 @@ def parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     trn.add_argument("what", metavar="MODEL", choices=["narma-l2"], help="narma-l2")
-    trn.add_argument(
-        "--seed", type=whole_number("--seed"), default=0, metavar="N", help="seed of data and training (default 0)"
-    )
+    add_seed(trn, "seed of data and training (default 0)")
     trn.add_argument(
         "--samples",
         type=whole_number("--samples"),
@@ -303,11 +339,14 @@ def parser() -> argparse.ArgumentParser:
         help="axial acceleration range in m/s^2 (default 0,0.6); one starting with - is written --accels=-1,0",
     )
     trn.add_argument("--radii", default="12,60", metavar="LO,HI", help="curve radius range in m (default 12,60)")
-    add_out(trn, "weights file (.npz; default: runs/narma_l2.npz)", metavar="PATH", required=False)
-    trn.add_argument(
-        "--install", action="store_true", help="replace the model shipped in the package (what ego run uses by default)"
+    add_install(
+        trn,
+        "weights file (.npz; default: runs/narma_l2.npz)",
+        "replace the model shipped in the package (what ego run uses by default)",
     )
 
+
+def add_tune(sub) -> None:
     tun = sub.add_parser(
         "tune",
         help="tune a controller's gains (lane-centering: differential evolution)",
@@ -334,9 +373,7 @@ def parser() -> argparse.ArgumentParser:
         metavar="N",
         help="processes sharing each generation (default 1)",
     )
-    tun.add_argument(
-        "--seed", type=whole_number("--seed"), default=0, metavar="N", help="seed of the evolution (default 0)"
-    )
+    add_seed(tun, "seed of the evolution (default 0)")
     tun.add_argument(
         "--drives",
         default="8,25:1",
@@ -361,8 +398,8 @@ def parser() -> argparse.ArgumentParser:
         metavar="S",
         help="with --cost sumo: simulated seconds of each run (default: the whole road)",
     )
-    add_out(tun, "preset file (.json; default: runs/cascade_pid_tuned.json)", metavar="PATH", required=False)
-    tun.add_argument(
-        "--install", action="store_true", help="replace the tuned preset shipped in the package (cascade-pid's default)"
+    add_install(
+        tun,
+        "preset file (.json; default: runs/cascade_pid_tuned.json)",
+        "replace the tuned preset shipped in the package (cascade-pid's default)",
     )
-    return ap

@@ -274,14 +274,22 @@ def _sine_cell(m: dict) -> str:
     return f"{m['max_abs_lateral_error_after_10s']:.3f} m"
 
 
+#: ``--controllers`` of report 000's commands
+TRACKING_NAMES = ",".join(TRACKING)
+
+
 def report_000() -> list[Table]:
-    names = ",".join(TRACKING)
-    traffic = Table(
+    return [_traffic_table(), _cut_in_table(), _bare_table(), _sine_table()]
+
+
+def _traffic_table() -> Table:
+    """Emergency-brake and fast-follower in traffic: every tracking controller, three seeds."""
+    return Table(
         "traffic",
         "report-000",
         (
-            f"ego compare emergency-brake --controllers {names} --seeds 3 --out runs/eb",
-            f"ego compare fast-follower --controllers {names} --seeds 3 --out runs/ff",
+            f"ego compare emergency-brake --controllers {TRACKING_NAMES} --seeds 3 --out runs/eb",
+            f"ego compare fast-follower --controllers {TRACKING_NAMES} --seeds 3 --out runs/ff",
             "the same with --controllers bp-pid --set variant=report [--set abs=false]",
         ),
         (
@@ -307,10 +315,14 @@ def report_000() -> list[Table]:
             "of the n runs have the value (a lane change that never settled).",
         ),
     )
-    cut_in = Table(
+
+
+def _cut_in_table() -> Table:
+    """The cut-in: how each tracking controller responds, three seeds."""
+    return Table(
         "cut-in",
         "report-000",
-        (f"ego compare cut-in --controllers {names} --seeds 3 --out runs/cut-in",),
+        (f"ego compare cut-in --controllers {TRACKING_NAMES} --seeds 3 --out runs/cut-in",),
         (
             "controller",
             "runs",
@@ -322,7 +334,11 @@ def report_000() -> list[Table]:
         ),
         tuple(Row(c, tuple(sim("cut-in", c, s) for s in range(3)), _cut_in_cells) for c in TRACKING),
     )
-    bare = Table(
+
+
+def _bare_table() -> Table:
+    """The bare model's lane change (no traffic), beside what report 000 says."""
+    return Table(
         "bare-model",
         "report-000",
         (
@@ -345,10 +361,16 @@ def report_000() -> list[Table]:
             "stays below 0.2 m.",
         ),
     )
-    sine = Table(
+
+
+def _sine_table() -> Table:
+    """Tracking 4 sin(0.5 t), accelerating and decelerating."""
+    return Table(
         "sine",
         "report-000",
-        (f"ego compare sine-tracking --controllers {names} --set omega=0.5 --set ref_speed=25|15 --out runs/sine",),
+        (
+            f"ego compare sine-tracking --controllers {TRACKING_NAMES} --set omega=0.5 --set ref_speed=25|15 --out runs/sine",
+        ),
         ("controller", "accelerating (X_ref = 25 t)", "decelerating (X_ref = 15 t)"),
         tuple(
             Row(
@@ -360,7 +382,6 @@ def report_000() -> list[Table]:
         ),
         ("Largest lateral error after 10 s tracking 4 sin(0.5 t) on the SUMO motorway.",),
     )
-    return [traffic, cut_in, bare, sine]
 
 
 # -- report 002 ----------------------------------------------------------------------------------
@@ -650,7 +671,12 @@ def _scale_cells(ms: list[dict]) -> list[str]:
 
 
 def report_004() -> list[Table]:
-    platoon = Table(
+    return [_platoon_table(), _followers_table(), _convergence_table(), _headway_table(), _scale_table()]
+
+
+def _platoon_table() -> Table:
+    """The platoon's worst follower, three and ten seeds."""
+    return Table(
         "platoon",
         "report-004",
         ("ego compare platoon --controllers pid,bp-pid-acc --seeds 3 --out runs/platoon", "... --seeds 10"),
@@ -679,7 +705,11 @@ def report_004() -> list[Table]:
             "window.",
         ),
     )
-    followers = Table(
+
+
+def _followers_table() -> Table:
+    """Each follower of the platoon, seed 0."""
+    return Table(
         "followers",
         "report-004",
         ("ego run platoon -c NAME --json",),
@@ -698,6 +728,10 @@ def report_004() -> list[Table]:
         ),
         ("Seed 0, the default drive; f1 is right behind the leader.",),
     )
+
+
+def _convergence_table() -> Table:
+    """One follower converging from 3 m too far back, in three settings."""
     settings = (
         ("ours (lambda 2 s, lag 0.2 s, period 0.1 s; 60 s)", {"duration": 60}),
         (
@@ -706,7 +740,7 @@ def report_004() -> list[Table]:
         ),
         ("the report's at period 0.1 s (lambda 0.2 s, no lag; 120 s)", {"headway": 0.2, "lag": 0, "duration": 120}),
     )
-    convergence = Table(
+    return Table(
         "convergence",
         "report-004",
         (
@@ -728,7 +762,11 @@ def report_004() -> list[Table]:
             "stays below 0.15 m (5 %); ten seeds.",
         ),
     )
-    headway = Table(
+
+
+def _headway_table() -> Table:
+    """String stability against the headway: theory beside SUMO."""
+    return Table(
         "headway",
         "report-004",
         ("python scenarios/platoon_headway.py",),
@@ -741,7 +779,11 @@ def report_004() -> list[Table]:
             "oscillating 1 km/h at 0.5 rad/s for the measured gain.",
         ),
     )
-    scale = Table(
+
+
+def _scale_table() -> Table:
+    """Report 004's 3-car scale model."""
+    return Table(
         "scale-model",
         "report-004",
         (
@@ -763,7 +805,6 @@ def report_004() -> list[Table]:
             "(0.3 m + 0.2 s x 0.5 m/s with the report's headway); ten seeds.",
         ),
     )
-    return [platoon, followers, convergence, headway, scale]
 
 
 # -- sweeps: the envelope, cut-in, Euro NCAP AEB ---------------------------------------------
@@ -854,8 +895,10 @@ def envelope() -> list[Table]:
     return tables
 
 
-#: the traffic simulators of the cross-simulator page (ego.highway_env.BACKENDS)
-BACKENDS = ("sumo", "highway-env")
+#: the two registered traffic simulators the cross-simulator page compares, by their names in
+#: the page's header (a choice of the page, not a copy of the registry: a plugin backend
+#: adds no column)
+CROSS_BACKENDS = {"sumo": "SUMO", "highway-env": "highway-env"}
 #: per scenario: (metric, header) of the cross-simulator page; min_gap_rear_after from CrossSim
 CROSS_FIGURES = {
     "emergency-brake": (
@@ -881,10 +924,10 @@ def _cross_cells(figures: tuple, seeds: int) -> Callable[[list], list[str]]:
     mean over the seeds on SUMO beside highway-env (``k/n`` for a yes/no figure)."""
 
     def cells(ms: list[dict]) -> list[str]:
-        by = {b: ms[i * seeds : (i + 1) * seeds] for i, b in enumerate(BACKENDS)}
-        out = [statuses(by[b]) for b in BACKENDS]
+        by = {b: ms[i * seeds : (i + 1) * seeds] for i, b in enumerate(CROSS_BACKENDS)}
+        out = [statuses(by[b]) for b in CROSS_BACKENDS]
         for key, _ in figures:
-            for b in BACKENDS:
+            for b in CROSS_BACKENDS:
                 values = [m.get(key) for m in by[b]]
                 out.append(count(values) if all(isinstance(v, bool) for v in values) else mean_sd(values))
         return out
@@ -896,13 +939,13 @@ def cross_simulator(seeds: int = 3) -> list[Table]:
     """Each motorway controller on SUMO beside highway-env (docs/results/cross-simulator.md)."""
     out = []
     for scenario, figures in CROSS_FIGURES.items():
-        header = ["controller"] + [f"runs ({b})" for b in ("SUMO", "highway-env")]
+        header = ["controller"] + [f"runs ({shown})" for shown in CROSS_BACKENDS.values()]
         for _, label in figures:
             header += [f"{label} SUMO", f"{label} highway-env"]
         rows = tuple(
             Row(
                 c,
-                tuple(CrossSim(scenario, c, seed, b) for b in BACKENDS for seed in range(seeds)),
+                tuple(CrossSim(scenario, c, seed, b) for b in CROSS_BACKENDS for seed in range(seeds)),
                 _cross_cells(figures, seeds),
             )
             for c in TRACKING
@@ -914,7 +957,7 @@ def cross_simulator(seeds: int = 3) -> list[Table]:
                 tuple(
                     f"ego compare {scenario} --controllers {','.join(TRACKING)} --seeds {seeds} "
                     f"--backend {b} --out runs/{scenario}-{b}"
-                    for b in BACKENDS
+                    for b in CROSS_BACKENDS
                 ),
                 tuple(header),
                 rows,

@@ -109,14 +109,28 @@ def _figure(jobs: dict):
 
 def docs_tables() -> list:
     """The tables of docs/results/falsify.md (ego.docs builds the page from them)."""
+    return [_landscape_table(), _bench_table(), _rate_table(), region_table(), _surrogate_table()]
+
+
+#: the header of the runs-to-the-first-violation tables (the real runs' and the surrogate's)
+RUNS_HEADER = (
+    "requirement, optimiser",
+    "found",
+    "median runs to the first violation",
+    "quartiles",
+    "median / LHS median",
+)
+
+
+def _landscape_table():
+    """Each requirement's violating share of the dense Sobol sweep."""
     from ego.docs.common import Row, Table
     from ego.falsify.bench import DENSE_SPEC
     from ego.sweep.spec import load
 
     dense = dense_jobs()
     formulas = load(DENSE_SPEC).requirements
-    names = requirements()
-    landscape = Table(
+    return Table(
         "falsify-landscape",
         "falsify",
         ("ego sweep benchmarks/falsify/dense.toml --out runs/falsify-dense",),
@@ -127,28 +141,27 @@ def docs_tables() -> list:
             "smallest robustness",
             "where the violating runs lie",
         ),
-        tuple(Row(f"{name}: {formulas[name]}", tuple(dense), _share_cells(name)) for name in names),
+        tuple(Row(f"{name}: {formulas[name]}", tuple(dense), _share_cells(name)) for name in requirements()),
         (
             f"A Sobol sequence of {len(dense)} points over the box, one run each; the interval is the Wilson "
             "score interval of the share.",
         ),
     )
-    header = (
-        "requirement, optimiser",
-        "found",
-        "median runs to the first violation",
-        "quartiles",
-        "median / LHS median",
-    )
+
+
+def _bench_table():
+    """Runs to the first violation per requirement and optimiser, real ego runs."""
+    from ego.docs.common import Row, Table
+
     jobs = {opt: tuple(BenchJob(opt, s, REAL_BUDGET) for s in range(REAL_REPS)) for opt in OPTIMIZERS}
-    real = Table(
+    return Table(
         "falsify-bench",
         "falsify",
         (f"python benchmarks/bench_falsify.py --reps {REAL_REPS} --budget {REAL_BUDGET}",),
-        header,
+        RUNS_HEADER,
         tuple(
             Row(f"{name}, {opt}", jobs[opt] + jobs["lhs"], _runs_cells(name, REAL_REPS, REAL_BUDGET))
-            for name in names
+            for name in requirements()
             for opt in OPTIMIZERS
         ),
         (
@@ -159,11 +172,17 @@ def docs_tables() -> list:
         ),
         figures=_figure(jobs),
     )
-    surrogate = Table(
+
+
+def _surrogate_table():
+    """The optimisers on an analytic stand-in (a check of their wiring)."""
+    from ego.docs.common import Row, Table
+
+    return Table(
         "falsify-surrogate",
         "falsify",
         ("python benchmarks/bench_falsify.py --surrogate",),
-        ("optimiser (SURROGATE, not ego runs)",) + header[1:],
+        ("optimiser (SURROGATE, not ego runs)",) + RUNS_HEADER[1:],
         tuple(
             Row(
                 opt,
@@ -179,11 +198,17 @@ def docs_tables() -> list:
             "A check of the optimisers' wiring, not the result.",
         ),
     )
+
+
+def _rate_table():
+    """The falsification rate at a fixed budget, per requirement and optimiser."""
+    from ego.docs.common import Row, Table
+
     rate_opts = available()
     rate_jobs = {
         opt: tuple(BenchJob(opt, s, RATE_BUDGET, spec=str(RATE_SPEC)) for s in range(RATE_REPS)) for opt in rate_opts
     }
-    rate = Table(
+    return Table(
         "falsify-rate",
         "falsify",
         (f"python benchmarks/bench_falsify.py --rate --repetitions {RATE_REPS} --budget {RATE_BUDGET}",),
@@ -207,7 +232,6 @@ def docs_tables() -> list:
             "UniformRandom and DualAnnealing driving ego's runs through ego.falsify (psy-taliro 3.2.0).",
         ),
     )
-    return [landscape, real, rate, region_table(), surrogate]
 
 
 def _region_cells(name: str, coarse_n: int):

@@ -24,6 +24,7 @@ import shlex
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -153,10 +154,7 @@ def falsify(
     with FolderLock(out, "--out"):
         store = ResultStore(out, spec_key=key)
         table = store.table()
-        known: dict[str, dict] = {}
-        if table is not None:
-            for row in table.to_pylist():
-                known[row["run_id"]] = row
+        known: dict[str, dict] = {row["run_id"]: row for row in table.to_pylist()} if table is not None else {}
         own = executor is None
         executor = make_executor(engine, jobs, address) if own else executor
         started = time.perf_counter()
@@ -190,22 +188,19 @@ def falsify(
         if verify and not interrupted:
             for search in searches:
                 _verify(spec, search, out)
-        report = FalsifyReport(
-            spec,
-            optimizer,
-            searches,
-            time.perf_counter() - started,
-            ran,
-            interrupted,
-            out,
-        )
-        write_text(out / "falsified.md", markdown(report, budget))
-        plot_convergence(
-            [(f"{s.controller} ({optimizer})", s.best_so_far()) for s in searches],
-            out / "convergence.png",
-            spec.requirement,
-        )
+        report = FalsifyReport(spec, optimizer, searches, time.perf_counter() - started, ran, interrupted, out)
+        _write_outputs(report, budget, out)
     return report
+
+
+def _write_outputs(report: FalsifyReport, budget: int, out: Path) -> None:
+    """falsified.md and convergence.png (the best robustness against runs, per controller)."""
+    write_text(out / "falsified.md", markdown(report, budget))
+    plot_convergence(
+        [(f"{s.controller} ({report.optimizer})", s.best_so_far()) for s in report.searches],
+        out / "convergence.png",
+        report.spec.requirement,
+    )
 
 
 def resume_key(spec: FalsifySpec, optimizer: str, optimizer_seed: int) -> dict:
@@ -263,9 +258,6 @@ def _search(
     progress: bool,
     batch: int = 2,
 ) -> None:
-    from ego.sweep.pipeline import execute
-    from ego.sweep.runner import error_row, row_of, task_of
-
     opt = make(optimizer, len(spec.dims), batch, seed, budget, spec.kinds)
     k = spec.seeds_per_point
 
@@ -284,31 +276,7 @@ def _search(
             # each point's runs (its seeds), within the budget
             points = [run for u in units for run in spec.runs_of(*spec.point(u))][:left]
             ids = [spec.run_id(controller, s, o) for s, o in points]
-            tasks = {}
-            fresh = set()
-            done: dict[str, dict] = {}  # the batch's error rows of values no run takes
-            for rid, (s, o) in zip(ids, points):
-                if rid not in known and rid not in fresh:
-                    fresh.add(rid)
-                    r = Run(rid, spec.scenario, controller, s, o)
-                    try:
-                        tasks[rid] = task_of(r, None, "none", spec.requirements, spec.requirement_period)
-                    except Exception as exc:  # noqa: BLE001 - values no run takes: the run's row says so
-                        done[rid] = error_row(r, f"{type(exc).__name__}: {exc}")
-            try:
-                for outcome in executor.run(execute, tasks.values()):
-                    task = outcome.task
-                    if outcome.value is None:
-                        row = error_row(task.key, outcome.error or "the worker died")
-                    else:
-                        row = row_of(task.key, outcome.value)
-                    if row["status"] == "interrupted":
-                        raise KeyboardInterrupt
-                    keep(row)  # into the store as it finishes: on disk within the store's 2 s
-            finally:  # the rows no run made (values no run takes) are kept too, interrupted or not
-                for rid in ids:
-                    if rid in done and rid not in known:
-                        keep(done[rid])
+            fresh = _run_batch(spec, controller, ids, points, known, executor, keep)
             for rid, (s, o) in zip(ids, points):
                 row = known[rid]
                 search.evaluations.append(
@@ -342,6 +310,43 @@ def _search(
         close = getattr(opt, "close", None)
         if close is not None:
             close()
+
+
+def _run_batch(
+    spec: FalsifySpec, controller: str, ids: list[str], points: list, known: dict, executor, keep: Callable
+) -> set[str]:
+    """Run the batch's points not already known (on ``executor``), each row to ``keep`` as
+    it finishes; the ids that ran now. A point whose values no run takes is an error row,
+    kept too, interrupted or not."""
+    from ego.sweep.pipeline import execute
+    from ego.sweep.runner import error_row, row_of, task_of
+
+    tasks = {}
+    fresh = set()
+    done: dict[str, dict] = {}  # the batch's error rows of values no run takes
+    for rid, (s, o) in zip(ids, points):
+        if rid not in known and rid not in fresh:
+            fresh.add(rid)
+            r = Run(rid, spec.scenario, controller, s, o)
+            try:
+                tasks[rid] = task_of(r, None, "none", spec.requirements, spec.requirement_period)
+            except Exception as exc:  # noqa: BLE001 - values no run takes: the run's row says so
+                done[rid] = error_row(r, f"{type(exc).__name__}: {exc}")
+    try:
+        for outcome in executor.run(execute, tasks.values()):
+            task = outcome.task
+            if outcome.value is None:
+                row = error_row(task.key, outcome.error or "the worker died")
+            else:
+                row = row_of(task.key, outcome.value)
+            if row["status"] == "interrupted":
+                raise KeyboardInterrupt
+            keep(row)  # into the store as it finishes: on disk within the store's 2 s
+    finally:
+        for rid in ids:
+            if rid in done and rid not in known:
+                keep(done[rid])
+    return fresh
 
 
 def command(spec: FalsifySpec, e: Evaluation, record: str | None = None) -> str:

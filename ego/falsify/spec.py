@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from ego.params import ConfigError, did_you_mean
-from ego.specs import MAX_SEED, check_controllers, check_keys, check_values, param_types, read_spec, run_id, scenario_of
+from ego.specs import MAX_SEED, SpecReader, check_requirements, is_whole, read_spec, run_id
 
 _TOP = (
     "scenario",
@@ -174,104 +174,38 @@ def from_distribution(path: str, controllers: list[str], requirement: str | None
 
 def parse(data: dict, source: str = "the spec") -> FalsifySpec:
     """Validate a spec's contents (see the module docstring)."""
-    from ego.requirements import defaults, from_table
-    from ego.sweep.spec import spec_period
+    from ego.requirements import defaults
 
-    def bad(msg: str) -> ConfigError:
-        return ConfigError(f"{source}: {msg}")
-
-    check_keys(data, _TOP, bad)
-    scenario, cls = scenario_of(data, bad)
+    r = SpecReader(data, source, _TOP)
     if "controller" in data and "controllers" in data:
-        raise bad("give controller or controllers, not both")
-    controllers = data.get("controllers", [data["controller"]] if "controller" in data else None)
-    if (
-        not isinstance(controllers, list)
-        or not controllers
-        or not all(isinstance(c, str) for c in controllers)
-        or len(set(controllers)) != len(controllers)
-    ):
-        raise bad('controllers must be a non-empty list of distinct names, e.g. controllers = ["pid"]')
-    check_controllers(controllers, cls, bad)
-    requirements = from_table(data["requirements"], source) if "requirements" in data else defaults(scenario, cls)
+        raise r.bad("give controller or controllers, not both")
+    controllers = r.read_controllers(data.get("controllers", [data["controller"]] if "controller" in data else None))
+    requirements = r.requirements()
+    if requirements is None:
+        requirements = defaults(r.scenario, r.cls)
     target = data.get("requirement")
     if not isinstance(target, str) or target not in requirements:
-        raise bad(
+        raise r.bad(
             f"requirement = {target!r}: name one of the spec's requirements "
             f"({', '.join(requirements) or 'none'}){did_you_mean(str(target), requirements)}"
         )
     budget = data.get("budget", 200)
-    if not isinstance(budget, int) or isinstance(budget, bool) or not 1 <= budget <= 10_000_000:
-        raise bad(f"budget must be a whole number of runs from 1 to 10000000, got {budget!r}")
-    infos = param_types(scenario, controllers)
-    fixed = data.get("set", {})
-    search = data.get("search", {})
-    for section, value in (("set", fixed), ("search", search)):
-        if not isinstance(value, dict):
-            raise bad(f"[{section}] must be a table of parameter = value")
-    for name, value in fixed.items():
-        if name not in infos:
-            raise bad(f"[set] unknown parameter {name!r} for {scenario} (see ego list){did_you_mean(name, infos)}")
-        check_values(scenario, controllers, {name: value}, f"[set] {name}", bad)
-    dims = []
-    for name, rng in search.items():
-        info = infos.get(name)
-        if info is None:
-            raise bad(f"[search] unknown parameter {name!r} for {scenario} (see ego list){did_you_mean(name, infos)}")
-        if name in fixed:
-            raise bad(f"{name} is both fixed in [set] and searched in [search]")
-        if info.type is bool:
-            if rng != [False, True]:
-                raise bad(f"[search] {name} is true or false: search it as [false, true], got {rng!r}")
-            dims.append(Dim(name, "bool", 0.0, 1.0))
-            continue
-        if info.type not in (int, float) or info.choices is not None:
-            raise bad(f"[search] {name} is not a number to search (fix it in [set])")
-        if (
-            not isinstance(rng, list)
-            or len(rng) != 2
-            or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in rng)
-            or not rng[0] < rng[1]
-        ):
-            raise bad(f"[search] {name} must be a range [low, high] with low < high, got {rng!r}")
-        for end in rng:
-            check_values(scenario, controllers, {name: end}, f"[search] {name}", bad)
-        dims.append(
-            Dim(
-                name,
-                "int" if info.type is int else "float",
-                float(rng[0]),
-                float(rng[1]),
-            )
-        )
-    seed = data.get("seed", 0)
-    fixed_seed: int | None = None
-    if isinstance(seed, int) and not isinstance(seed, bool) and 0 <= seed <= MAX_SEED:
-        fixed_seed = seed
-    elif (
-        isinstance(seed, list)
-        and len(seed) == 2
-        and all(isinstance(s, int) and not isinstance(s, bool) for s in seed)
-        and 0 <= seed[0] < seed[1] <= MAX_SEED
-    ):
-        dims.append(Dim("seed", "seed", float(seed[0]), float(seed[1])))
-    else:
-        raise bad(f"seed must be one seed or a range [low, high] of seeds within 0..{MAX_SEED}, got {seed!r}")
+    if not is_whole(budget, 1, 10_000_000):
+        raise r.bad(f"budget must be a whole number of runs from 1 to 10000000, got {budget!r}")
+    fixed = r.table("set")
+    search = r.table("search")
+    r.fixed()
+    dims = _dims(r, fixed, search)
+    fixed_seed, top_seed = _seed(r, dims)
     if not dims:
-        raise bad("[search] names nothing to search (and the seed is fixed)")
+        raise r.bad("[search] names nothing to search (and the seed is fixed)")
     per_point = data.get("seeds_per_point", 1)
-    top_seed = fixed_seed if fixed_seed is not None else seed[1]
-    if (
-        not isinstance(per_point, int)
-        or isinstance(per_point, bool)
-        or not 1 <= per_point <= 100
-        or top_seed + per_point - 1 > MAX_SEED
-    ):
-        raise bad(
+    if not is_whole(per_point, 1, 100) or top_seed + per_point - 1 > MAX_SEED:
+        raise r.bad(
             f"seeds_per_point must be a whole number from 1 to 100 (the seeds up to {MAX_SEED}), got {per_point!r}"
         )
     spec = FalsifySpec(
-        scenario,
+        r.scenario,
         tuple(controllers),
         target,
         requirements,
@@ -281,14 +215,45 @@ def parse(data: dict, source: str = "the spec") -> FalsifySpec:
         budget,
         source,
         per_point,
-        spec_period(data, bad),
+        r.period(),
     )
     # the corners as a whole (combinations a value-by-value check cannot see) and the formulas
     for u in (np.zeros(len(dims)), np.ones(len(dims))):
         _, overrides = spec.point(u)
-        check_values(scenario, controllers, overrides, "the search's corner", bad)
-    from ego.sweep.spec import Run, check_requirements
-
+        r.check(overrides, "the search's corner")
     seed0, over0 = spec.point(np.zeros(len(dims)))
-    check_requirements(Run("", scenario, controllers[0], seed0, over0), requirements, bad)
+    check_requirements(r.scenario, controllers[0], seed0, over0, requirements, r.bad)
     return spec
+
+
+def _dims(r: SpecReader, fixed: dict, search: dict) -> list[Dim]:
+    """``[search]``: a dimension per parameter, true/false as [false, true] (categorical), a
+    number over ``[low, high]`` (both ends checked)."""
+    dims = []
+    for name, rng in search.items():
+        info = r.known(name, "search")
+        if name in fixed:
+            raise r.bad(f"{name} is both fixed in [set] and searched in [search]")
+        if info.type is bool:
+            if rng != [False, True]:
+                raise r.bad(f"[search] {name} is true or false: search it as [false, true], got {rng!r}")
+            dims.append(Dim(name, "bool", 0.0, 1.0))
+            continue
+        lo, hi = r.number_range("search", name, info, rng, "fix it in [set]")
+        for end in rng:
+            r.check({name: end}, f"[search] {name}")
+        dims.append(Dim(name, "int" if info.type is int else "float", lo, hi))
+    return dims
+
+
+def _seed(r: SpecReader, dims: list[Dim]) -> tuple[int | None, int]:
+    """``seed``: one fixed seed, or a range ``[low, high]`` searched as a whole number
+    (appended to ``dims``; the fixed seed None). Returns the fixed seed and the highest
+    seed a point starts from."""
+    seed = r.data.get("seed", 0)
+    if is_whole(seed, 0, MAX_SEED):
+        return int(seed), int(seed)
+    if isinstance(seed, list) and len(seed) == 2 and all(is_whole(s, 0, MAX_SEED) for s in seed) and seed[0] < seed[1]:
+        dims.append(Dim("seed", "seed", float(seed[0]), float(seed[1])))
+        return None, seed[1]
+    raise r.bad(f"seed must be one seed or a range [low, high] of seeds within 0..{MAX_SEED}, got {seed!r}")

@@ -130,26 +130,7 @@ def model_description(spec: ModelSpec) -> str:
             lines.append(f'      <File name="{src}"/>')
         lines.append("    </SourceFiles>")
         lines.append("  </CoSimulation>")
-    units = list(spec.units)
-    defined = {u[0] for u in units}
-    for v in spec.variables:  # every unit a variable names is defined (fmpy validates that)
-        if v.unit and v.unit not in defined:
-            from ego.fmi.units import parse
-
-            parsed = parse(v.unit)
-            if parsed is None:
-                raise ValueError(f"unit {v.unit!r} of {v.name!r}: define it in ModelSpec.units")
-            units.append((v.unit, tuple(sorted(parsed[0].items())), parsed[1], parsed[2]))
-            defined.add(v.unit)
-    if units:
-        lines.append("  <UnitDefinitions>")
-        for name, exps, factor, offset in units:
-            attrs = " ".join(f'{k}="{e}"' for k, e in exps)
-            lines.append(
-                f'    <Unit name={quoteattr(name)}><BaseUnit {attrs} factor="{_num(factor)}" '
-                f'offset="{_num(offset)}"/></Unit>'
-            )
-        lines.append("  </UnitDefinitions>")
+    lines.extend(_unit_definitions(spec))
     if spec.step_size:
         lines.append(f'  <DefaultExperiment startTime="0.0" stepSize="{_num(spec.step_size)}"/>')
     lines.append("  <ModelVariables>")
@@ -158,6 +139,49 @@ def model_description(spec: ModelSpec) -> str:
             f'    <Float64 name="time" valueReference="{len(spec.variables)}" causality="independent" '
             'variability="continuous" description="simulation time"/>'
         )
+    outputs = _model_variables(spec, v3, lines)
+    lines.append("  </ModelVariables>")
+    lines.append("  <ModelStructure>")
+    if v3:
+        lines.extend(f'    <Output valueReference="{vr}"/>' for vr in outputs)
+    else:
+        lines.append("    <Outputs>")
+        lines.extend(f'      <Unknown index="{vr + 1}"/>' for vr in outputs)
+        lines.append("    </Outputs>")
+    lines.append("  </ModelStructure>")
+    lines.append("</fmiModelDescription>")
+    return "\n".join(lines) + "\n"
+
+
+def _unit_definitions(spec: ModelSpec) -> list[str]:
+    """``<UnitDefinitions>``: the spec's units and every unit a variable names (fmpy
+    validates that each is defined); no lines without units."""
+    units = list(spec.units)
+    defined = {u[0] for u in units}
+    for v in spec.variables:
+        if v.unit and v.unit not in defined:
+            from ego.fmi.units import parse
+
+            parsed = parse(v.unit)
+            if parsed is None:
+                raise ValueError(f"unit {v.unit!r} of {v.name!r}: define it in ModelSpec.units")
+            units.append((v.unit, tuple(sorted(parsed[0].items())), parsed[1], parsed[2]))
+            defined.add(v.unit)
+    if not units:
+        return []
+    lines = ["  <UnitDefinitions>"]
+    for name, exps, factor, offset in units:
+        attrs = " ".join(f'{k}="{e}"' for k, e in exps)
+        lines.append(
+            f'    <Unit name={quoteattr(name)}><BaseUnit {attrs} factor="{_num(factor)}" offset="{_num(offset)}"/></Unit>'
+        )
+    lines.append("  </UnitDefinitions>")
+    return lines
+
+
+def _model_variables(spec: ModelSpec, v3: bool, lines: list[str]) -> list[int]:
+    """Each variable's element (FMI 3.0's ``Float64`` or 2.0's ``ScalarVariable``) onto
+    ``lines``; the value references of the outputs."""
     outputs = []
     for vr, v in enumerate(spec.variables):
         variability = v.variability or ("tunable" if v.causality == "parameter" else "continuous")
@@ -180,17 +204,7 @@ def model_description(spec: ModelSpec) -> str:
             lines.append("    </ScalarVariable>")
         if v.causality == "output":
             outputs.append(vr)
-    lines.append("  </ModelVariables>")
-    lines.append("  <ModelStructure>")
-    if v3:
-        lines.extend(f'    <Output valueReference="{vr}"/>' for vr in outputs)
-    else:
-        lines.append("    <Outputs>")
-        lines.extend(f'      <Unknown index="{vr + 1}"/>' for vr in outputs)
-        lines.append("    </Outputs>")
-    lines.append("  </ModelStructure>")
-    lines.append("</fmiModelDescription>")
-    return "\n".join(lines) + "\n"
+    return outputs
 
 
 def model_vars_h(spec: ModelSpec) -> str:

@@ -14,6 +14,7 @@ import os
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from ego.params import ConfigError
 from ego.plugins import file_digest
@@ -190,6 +191,46 @@ def inspect_fmu(path: str | os.PathLike) -> FmuInfo:
         raise ConfigError("FMUs need fmpy: pip install 'ego[fmi]'") from None
     if not zipfile.is_zipfile(p):
         raise ConfigError(f"bad FMU {shown!r}: not a zip file (an FMU is a zip archive with a modelDescription.xml)")
+    names, platforms, version = _read_archive(p, shown)
+    if version.startswith("1"):
+        raise ConfigError(f"bad FMU {shown!r}: FMI {version} is not supported (FMI 2.0 or 3.0 co-simulation)")
+    try:
+        md = read_model_description(str(p), validate=True)
+    except Exception as exc:  # noqa: BLE001 - fmpy's reasons vary: an XML or schema error
+        text = " ".join(str(exc).split())
+        raise ConfigError(f"bad FMU {shown!r}: invalid modelDescription.xml: {text[:300]}") from None
+    version = md.fmiVersion
+    if not (version.startswith("2") or version.startswith("3")):
+        raise ConfigError(f"bad FMU {shown!r}: FMI {version} is not supported (FMI 2.0 or 3.0 co-simulation)")
+    _check_interface(md, shown, version, names, platforms)
+    ident = md.coSimulation.modelIdentifier
+    units, variables = _units(md), _variables(md)
+    de = md.defaultExperiment
+    cs = md.coSimulation
+    fixed = getattr(cs, "fixedInternalStepSize", None)
+    info = FmuInfo(
+        path=str(p.resolve()),
+        digest=digest,
+        fmi_version="3.0" if version.startswith("3") else "2.0",
+        model_name=md.modelName or ident,
+        model_identifier=ident,
+        guid=(md.guid if version.startswith("2") else getattr(md, "instantiationToken", None) or md.guid) or "",
+        description=md.description or "",
+        variables=tuple(variables),
+        units=units,
+        variable_step=bool(getattr(cs, "canHandleVariableCommunicationStepSize", False)),
+        fixed_step=float(fixed) if fixed not in (None, "") else None,
+        default_step=float(de.stepSize) if de is not None and de.stepSize not in (None, "") else None,
+        generation_tool=md.generationTool or "",
+    )
+    _cache[key] = info
+    return info
+
+
+def _read_archive(p: Path, shown: str) -> tuple[set[str], list[str], str]:
+    """The FMU's archive checked (sizes, a modelDescription.xml): its entry names, the
+    platforms it has binaries for and the fmiVersion its description declares."""
+    import re
     import zlib
 
     try:
@@ -203,23 +244,16 @@ def inspect_fmu(path: str | os.PathLike) -> FmuInfo:
                     f"bad FMU {shown!r}: modelDescription.xml is larger than {_mib(MAX_DESCRIPTION_BYTES)} (the limit)"
                 )
             platforms = _platforms(z)
-            import re
-
             head = read_entry(z, "modelDescription.xml", MAX_DESCRIPTION_BYTES, shown)[:4000].decode("utf-8", "replace")
             m = re.search(r'fmiVersion\s*=\s*"([^"]*)"', head)
-            version = m.group(1) if m else ""
+            return names, platforms, m.group(1) if m else ""
     except (zipfile.BadZipFile, zlib.error, NotImplementedError, RuntimeError, EOFError) as exc:
         raise ConfigError(f"bad FMU {shown!r}: a damaged or unsupported zip archive ({exc})") from None
-    if version.startswith("1"):
-        raise ConfigError(f"bad FMU {shown!r}: FMI {version} is not supported (FMI 2.0 or 3.0 co-simulation)")
-    try:
-        md = read_model_description(str(p), validate=True)
-    except Exception as exc:  # noqa: BLE001 - fmpy's reasons vary: an XML or schema error
-        text = " ".join(str(exc).split())
-        raise ConfigError(f"bad FMU {shown!r}: invalid modelDescription.xml: {text[:300]}") from None
-    version = md.fmiVersion
-    if not (version.startswith("2") or version.startswith("3")):
-        raise ConfigError(f"bad FMU {shown!r}: FMI {version} is not supported (FMI 2.0 or 3.0 co-simulation)")
+
+
+def _check_interface(md: Any, shown: str, version: str, names: set[str], platforms: list[str]) -> None:
+    """A co-simulation interface with a binary for this platform, or one line saying what
+    the FMU has instead."""
     if md.coSimulation is None:
         kinds = [
             k
@@ -242,7 +276,11 @@ def inspect_fmu(path: str | os.PathLike) -> FmuInfo:
         raise ConfigError(f"bad FMU {shown!r}: no binary for this platform ({here}); it has binaries for {has}{srcs}")
     if not any(n.startswith(f"binaries/{here}/{ident}.") for n in names):
         raise ConfigError(f"bad FMU {shown!r}: binaries/{here}/ has no {ident} library")
-    units = {}
+
+
+def _units(md: Any) -> dict:
+    """Unit name -> (SI exponents, factor, offset), None for a unit without a base unit."""
+    units: dict = {}
     for u in md.unitDefinitions or ():
         b = u.baseUnit
         if b is None:
@@ -250,6 +288,11 @@ def inspect_fmu(path: str | os.PathLike) -> FmuInfo:
             continue
         exps = {k: int(getattr(b, k, 0) or 0) for k in ("kg", "m", "s", "A", "K", "mol", "cd", "rad")}
         units[u.name] = ({k: e for k, e in exps.items() if e}, float(b.factor or 1.0), float(b.offset or 0.0))
+    return units
+
+
+def _variables(md: Any) -> list[FmuVar]:
+    """Every model variable with its unit (its own or its declared type's) and real start."""
     types = {t.name: t for t in md.typeDefinitions or ()}
     variables = []
     for v in md.modelVariables:
@@ -276,26 +319,7 @@ def inspect_fmu(path: str | os.PathLike) -> FmuInfo:
                 v.description or "",
             )
         )
-    de = md.defaultExperiment
-    cs = md.coSimulation
-    fixed = getattr(cs, "fixedInternalStepSize", None)
-    info = FmuInfo(
-        path=str(p.resolve()),
-        digest=digest,
-        fmi_version="3.0" if version.startswith("3") else "2.0",
-        model_name=md.modelName or ident,
-        model_identifier=ident,
-        guid=(md.guid if version.startswith("2") else getattr(md, "instantiationToken", None) or md.guid) or "",
-        description=md.description or "",
-        variables=tuple(variables),
-        units=units,
-        variable_step=bool(getattr(cs, "canHandleVariableCommunicationStepSize", False)),
-        fixed_step=float(fixed) if fixed not in (None, "") else None,
-        default_step=float(de.stepSize) if de is not None and de.stepSize not in (None, "") else None,
-        generation_tool=md.generationTool or "",
-    )
-    _cache[key] = info
-    return info
+    return variables
 
 
 def check_step(info: FmuInfo, dt: float, name: str) -> None:

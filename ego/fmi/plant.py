@@ -23,6 +23,7 @@ car that stopped braking at standstill, an FMU plant's model decides that itself
 from __future__ import annotations
 
 import math
+from typing import Any
 
 from ego.fmi.cosim import CoSim, FmuError
 from ego.fmi.mapping import build_mapping
@@ -150,7 +151,7 @@ class FmuPlant:
         self.cosim.close()
 
 
-def fmu_plant(scenario, base):
+def fmu_plant(scenario: Any, base: Any) -> Any:
     """The FMU of ``scenario.config.plant`` in place of ``base``, the plant the scenario built
     for its ego (its initial state and geometry)."""
     c = scenario.config

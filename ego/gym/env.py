@@ -405,6 +405,20 @@ def outcome(sc, reason: str, metrics: Mapping[str, Any]) -> dict[str, Any]:
     }
 
 
+def _control_periods_per_action(policy_frequency: float, dt: float) -> int:
+    """Control periods an action is held (``policy_frequency`` in Hz; 0: every period);
+    ConfigError unless 1 / dt is a whole multiple of it."""
+    if policy_frequency <= 0.0:
+        return 1
+    ratio = 1.0 / (policy_frequency * dt)
+    if abs(ratio - round(ratio)) > 1e-6 or round(ratio) < 1:
+        raise ConfigError(
+            f"bad value for policy_frequency: {policy_frequency:g} (expected "
+            f"1 / dt = {1.0 / dt:g} Hz divided by a whole number)"
+        )
+    return round(ratio)
+
+
 class EgoEnv(gym.Env):
     """An ego scenario as a Gymnasium env (see the module docstring). ``scenario`` is a name
     of ``ego list``; ``config`` updates :meth:`default_config`.
@@ -550,27 +564,8 @@ class EgoEnv(gym.Env):
         probe = cls(sc_config, AgentSlot(), seed=0)
         limits = probe.action_limits()
         action = action_type(cfg["action"], self.task, limits)
-        every = 1
-        if env.policy_frequency > 0.0:
-            ratio = 1.0 / (env.policy_frequency * sc_config.dt)
-            if abs(ratio - round(ratio)) > 1e-6 or round(ratio) < 1:
-                raise ConfigError(
-                    f"bad value for policy_frequency: {env.policy_frequency:g} (expected "
-                    f"1 / dt = {1.0 / sc_config.dt:g} Hz divided by a whole number)"
-                )
-            every = round(ratio)
-        # the corners of the distribution must make valid runs: checked now, not at a reset
-        for corner in (0, 1):
-            if randomize:
-                values = {k: v[corner] for k, v in randomize.items()}
-                try:
-                    resolve(RunSpec(self.scenario_name, controller, 0, {**overrides, **values}))
-                except ConfigError as exc:
-                    shown = ", ".join(f"{k}={v:g}" for k, v in values.items())
-                    raise ConfigError(
-                        f"bad value for randomize: its {('low', 'high')[corner]} corner ({shown}) makes no valid run: {exc}"
-                    ) from None
-
+        every = _control_periods_per_action(env.policy_frequency, sc_config.dt)
+        self._check_corners(controller, overrides, randomize)
         meta = action.type_name == "DiscreteMetaAction"
         if meta and getattr(probe.view, "lane_offset", None) is None:  # a view of lanes to change
             raise ConfigError(
@@ -596,6 +591,20 @@ class EgoEnv(gym.Env):
         # one frame per env step: a video plays in simulated time
         self.metadata = {**type(self).metadata, "render_fps": 1.0 / (every * sc_config.dt)}
         self._built_config = copy.deepcopy(cfg)
+
+    def _check_corners(self, controller: str, overrides: dict, randomize: dict) -> None:
+        """The corners of the randomised distribution must make valid runs: checked when the
+        env is built, not at a reset."""
+        for corner in (0, 1):
+            if randomize:
+                values = {k: v[corner] for k, v in randomize.items()}
+                try:
+                    resolve(RunSpec(self.scenario_name, controller, 0, {**overrides, **values}))
+                except ConfigError as exc:
+                    shown = ", ".join(f"{k}={v:g}" for k, v in values.items())
+                    raise ConfigError(
+                        f"bad value for randomize: its {('low', 'high')[corner]} corner ({shown}) makes no valid run: {exc}"
+                    ) from None
 
     def _make_scenario(self, sc_config) -> None:
         """The scenario object (no SUMO yet) on ``sc_config``, its controller and the view."""

@@ -190,16 +190,7 @@ class EgoVectorEnv(VectorEnv):
         #: steps are signalled through shared memory (else through the pipes)
         self.spinning = host and platform.machine().lower() in _TSO_MACHINES and n <= _cores()
 
-        act_space = self.single_action_space
-        act_shape = act_space.shape if act_space.shape is not None else ()
-        act_dtype = np.dtype(act_space.dtype if act_space.dtype is not None else np.int64)
-        layout = [
-            ("obs", (n, *obs_space.shape), np.dtype(obs_space.dtype)),
-            ("action", (n, *act_shape), act_dtype),
-            ("reward", (n,), np.dtype(np.float64)),
-            ("terminated", (n,), np.dtype(np.bool_)),
-            ("truncated", (n,), np.dtype(np.bool_)),
-        ]
+        layout = _layout(obs_space, self.single_action_space, n)
         if context is None:
             context = "forkserver" if exclusive_running() else "fork"
         self._context = context
@@ -223,30 +214,35 @@ class EgoVectorEnv(VectorEnv):
         self.closed = False
         self._broken = False
         try:
-            for index in self._indices:
-                parent, child = ctx.Pipe(duplex=True)
-                # a forked worker closes the parents' ends it inherits (else a worker would
-                # hold another's pipe open and miss the parent's end of file)
-                inherited = [*self._conns, parent] if context == "fork" else []
-                proc = ctx.Process(
-                    target=_worker,
-                    args=(index, env_fns[index], child, inherited, self._buffers, layout, self._ctrl, self._info_all),
-                    kwargs={"spinning": self.spinning},
-                    name=f"EgoVectorEnv-{index}",
-                    daemon=True,
-                )
-                proc.start()
-                child.close()
-                self._conns.append(parent)
-                self._fds.append(parent.fileno())
-                self._processes.append(proc)
-            for k in range(len(self._indices)):  # each worker reports its env built (or its error)
-                self._receive(k)
+            self._start_workers(env_fns, ctx, context, layout)
         except BaseException:
             self._reap(timeout=1.0)
             raise
         # the workers (and the hosted env) go with the vector env, however it is dropped
         self._finalizer = weakref.finalize(self, _reap, self._conns, self._processes, 1.0, self._hosted)
+
+    def _start_workers(self, env_fns: list, ctx, context: str, layout: list) -> None:
+        """A worker process per env index it steps (the hosted one excepted), each reporting
+        its env built (or its error) before this returns."""
+        for index in self._indices:
+            parent, child = ctx.Pipe(duplex=True)
+            # a forked worker closes the parents' ends it inherits (else a worker would
+            # hold another's pipe open and miss the parent's end of file)
+            inherited = [*self._conns, parent] if context == "fork" else []
+            proc = ctx.Process(
+                target=_worker,
+                args=(index, env_fns[index], child, inherited, self._buffers, layout, self._ctrl, self._info_all),
+                kwargs={"spinning": self.spinning},
+                name=f"EgoVectorEnv-{index}",
+                daemon=True,
+            )
+            proc.start()
+            child.close()
+            self._conns.append(parent)
+            self._fds.append(parent.fileno())
+            self._processes.append(proc)
+        for k in range(len(self._indices)):
+            self._receive(k)
 
     # -- the Gymnasium vector interface ---------------------------------------------------
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None):
@@ -585,6 +581,42 @@ def _wait_step(ctrl, base: int, seq: int, poll, clock) -> bool:
         ctrl[base + _ASLEEP] = 0
 
 
+def _layout(obs_space, act_space, n: int) -> list:
+    """The shared buffers' layout: (name, shape, dtype) of the observations, actions,
+    rewards and end flags of ``n`` envs."""
+    act_shape = act_space.shape if act_space.shape is not None else ()
+    act_dtype = np.dtype(act_space.dtype if act_space.dtype is not None else np.int64)
+    return [
+        ("obs", (n, *obs_space.shape), np.dtype(obs_space.dtype)),
+        ("action", (n, *act_shape), act_dtype),
+        ("reward", (n,), np.dtype(np.float64)),
+        ("terminated", (n,), np.dtype(np.bool_)),
+        ("truncated", (n,), np.dtype(np.bool_)),
+    ]
+
+
+def _answer(kind: bytes, env, stepper: _Stepper, conn, fd: int) -> bool:
+    """A worker's answer to a message other than a step (reset, a method call, an
+    attribute set); False for _CLOSE or the parent's end of file: it is gone."""
+    if kind == _RESET:
+        seed, options = conn.recv()
+        info = stepper.reset(seed, options)
+        os.write(fd, _INFO)
+        conn.send(info)
+    elif kind == _CALL:
+        name, args, kwargs = conn.recv()
+        value = _call(env, name, args, kwargs)
+        os.write(fd, _INFO)
+        conn.send(value)
+    elif kind == _SETATTR:
+        name, value = conn.recv()
+        env.set_wrapper_attr(name, value)
+        os.write(fd, _DONE)
+    else:
+        return False
+    return True
+
+
 def _worker(
     index: int, make, conn, inherited: list, buffers: dict, layout, ctrl, info_all: bool, spinning: bool = False
 ) -> None:
@@ -633,21 +665,7 @@ def _worker(
                 else:
                     write(fd, _INFO)
                     conn.send(info)
-            elif kind == _RESET:
-                seed, options = conn.recv()
-                info = stepper.reset(seed, options)
-                write(fd, _INFO)
-                conn.send(info)
-            elif kind == _CALL:
-                name, args, kwargs = conn.recv()
-                value = _call(env, name, args, kwargs)
-                write(fd, _INFO)
-                conn.send(value)
-            elif kind == _SETATTR:
-                name, value = conn.recv()
-                env.set_wrapper_attr(name, value)
-                write(fd, _DONE)
-            else:  # _CLOSE, or the parent's end of file: it is gone
+            elif not _answer(kind, env, stepper, conn, fd):  # _CLOSE, or the parent's end of file
                 break
     except (KeyboardInterrupt, BrokenPipeError, ConnectionResetError, EOFError):
         pass

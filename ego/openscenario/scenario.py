@@ -49,8 +49,9 @@ from ego.scenarios.evasive import MARKERS, EvasiveConfig, compare_plots, compose
 from ego.scenarios.events import INF
 from ego.scenarios.manoeuvre import CRUISE, EvasiveManoeuvre
 from ego.scenarios.motorway import COLUMNS, EGO, PLOTS
+from ego.sim.protocol import TrafficSim
+from ego.sim.registry import SimSetup, make_sim
 from ego.sim.types import VehicleSpec, VehicleType
-from ego.sumo.bridge import SumoBridge, SumoConfig
 
 ENTITY_COLORS = ((255, 150, 0), (0, 170, 255), (160, 60, 220), (40, 180, 90), (230, 200, 0))
 
@@ -438,31 +439,28 @@ class FileScenario(Scenario):
         }
         self.in_lane = BrakeInLane(c, lambda: self.safety is not None and self.safety.active)
         self.impact = Impact(self.in_lane)
+        #: the storyboard's driver: the file's entities, the storyboard, the ego's references
+        self.story = StoryDriver(self)
         parts = compose(
             self,
             "front",
             self.in_lane,
-            self.populate,
+            self.story.populate,
             on_trigger=self.impact.on_trigger,
             road=road,
             manoeuvre_cls=FileManoeuvre,
         )
-        parts.manoeuvre.story = self
+        parts.manoeuvre.story = self.story
         return parts
 
-    def _make_bridge(self) -> SumoBridge:
+    def _make_bridge(self) -> TrafficSim:
         c = self.config
-        # a file places its entities where its Init says: SUMO refuses only a start overlapping
-        # another vehicle, not one closer than its drivers' safe gap
-        return SumoBridge(
-            SumoConfig(
-                self.roads.net,
-                step_length=c.sumo_step,
-                seed=self.seed,
-                lateral_resolution=c.lateral_resolution,
-                extra_args=("--insertion-checks", "collision"),
-            )
+        # a file places its entities where its Init says: the simulator refuses only a start
+        # overlapping another vehicle, not one closer than its drivers' safe gap
+        setup = SimSetup(
+            self.roads.net, c.sumo_step, self.seed, c.lateral_resolution, duration=c.duration, exact_starts=True
         )
+        return make_sim(self.backend, setup, self.backend_options)
 
     # the ego's frame as the storyboard and the tests read it: the surround view's
     @property
@@ -489,293 +487,23 @@ class FileScenario(Scenario):
     def target_lane(self, lane: int) -> None:
         self.view.target_lane = lane
 
-    def _route(self, edge: str) -> str:
-        world = self.world
-        rid = f"route_{edge}"
-        if rid != world.route and rid not in self._routes:
-            world.sim.add_route(rid, self.roads.route_from(edge))
-            self._routes.add(rid)
-        return rid
-
-    def populate(self, world) -> None:
-        """The file's entities but the ego, as SUMO vehicles the storyboard commands."""
-        c = self.config
-        self.impact.reset()
-        self._ego_profile: Transition | None = None
-        self._ego_relative: tuple | None = None
-        self._ego_lateral: Transition | None = None
-        self._cruise_s: float | None = None
-        self._cruise_v = 0.0
-        self._history: dict[str, list[tuple[float, float, float]]] = {}
-        self._limits: dict[str, tuple[float, float]] = {}
-        self._lateral_free: set[str] = set()
-        self._routes: set[str] = set()
-        self._types: dict[str, VehicleType] = {}
-        for k, (name, ent) in enumerate(self.model.entities.items()):
-            if name == self.ego_name:
-                continue
-            v = ent.vehicle
-            start = self.starts[name]
-            color = ENTITY_COLORS[(k - 1) % len(ENTITY_COLORS)]
-            vt = VehicleType(
-                f"xosc_{name}",
-                length=v.length,
-                width=v.width,
-                accel=v.max_accel,
-                decel=v.max_decel,
-                emergency_decel=max(9.0, v.max_decel),
-                max_speed=v.max_speed,
-                sigma=0.0,
-                color=color,
-            )
-            self._types[name] = vt
-            # inserted at the ego's speed at least (SUMO's insertion check), its own speed set
-            # before the first step (as emergency-brake's lead); a pedestrian or misc object
-            # stands still (speed 0) unless the storyboard moves it
-            own = start.speed if v.kind == "vehicle" else (start.speed or 0.0)
-            speed = max(c.ego_speed, own if own is not None else 0.0) if v.kind == "vehicle" else own
-            world.vehicle(
-                VehicleSpec(name, vt.id, self._route(start.edge), start.index, start.front, speed),
-                vt,
-                ScriptedEntity(name, own),
-            )
-
     def after_setup(self) -> None:
-        """The storyboard starts from the entities' start positions; an entity off its lane's
-        centre (an Init offset) is moved across there in SUMO's first step (SUMO inserts on
-        lane centres)."""
-        for name, start in self.starts.items():
-            if name != self.ego_name and start.offset:
-                lane = self.roads.edges[start.edge].lanes[start.index]
-                poly = LanePolyline(lane.shape, lane.width, lane.id)
-                along = start.front - 0.5 * self.model.entities[name].vehicle.length
-                x, y = poly.offset_point(along, start.offset)
-                self.bridge.place(name, x, y, poly.heading_at(along), start.speed or 0.0)
-        self.board = Storyboard(self.model, self.ego_name, self, self.config.sumo_step, self._story_event)
-        self._scripted = [n for n in self.model.entities if n != self.ego_name]
-        self._history = {n: [] for n in self._scripted}
-        self._ego_then = self._ego_now()
-        self._observe(-1.0)  # the start positions (no distance travelled)
-        for hist in self._history.values():
-            hist.clear()
-
-    def after_sim_step(self) -> None:
-        """The run ends, as at the end of its time, when a scripted entity has left the road
-        network (SUMO takes a car off at the end of its route) or the ego has reached the end
-        of its lane frame (its start road): nothing past either is the file's scenario."""
-        if self.status != "running":
-            return
-        gone = [n for n in self.bridge.arrived() if n in self._scripted]
-        if gone:
-            self._road_end(f"{gone[0]} left the road network (the end of its route)")
-        elif self.view.s + self.geometry.cg_to_front >= self.view.road.length:
-            self._road_end(
-                f"the ego reached the end of its road (its lane {self.view.road.lane_id}, "
-                f"{self.view.road.length:.0f} m: ego drives on its start road only)"
-            )
-
-    def _road_end(self, why: str) -> None:
-        status, detail = self._final_status()
-        if status == "timeout":
-            detail = "before the manoeuvre finished"
-        self._end(status, f"{why} at t = {self.t:.2f} s, {detail}", level="WARN")
-
-    def _story_event(self, kind: str, text: str) -> None:
-        self.event("storyboard", text)
-
-    # -- the storyboard's view of the world ---------------------------------------------------
-    def _observe(self, t: float) -> None:
-        """Every entity's state at storyboard time ``t`` for the conditions: box centres, the
-        road frame, the distance travelled (summed from the centres' moves); the scripted
-        entities' (t, speed, d) history for the tests and the braking criterion."""
-        states = self.board.states
-        # the ego as of time t, as SUMO's cars are: its state one SUMO step ago (the loop has
-        # integrated it to t + sumo_step by the time SUMO steps)
-        X, Y, psi, u, s_cg, d = self._ego_then
-        g = self.geometry
-        off = g.cg_to_front - 0.5 * g.length
-        e = states[self.ego_name]
-        bx, by = X + off * math.cos(psi), Y + off * math.sin(psi)
-        if t >= 0.0:
-            e.traveled += math.hypot(bx - e.x, by - e.y)
-        e.x, e.y, e.yaw = bx, by, psi
-        e.speed = u
-        e.s, e.d = s_cg + off, d
-        e.d_front = d
-        project = self.road.project
-        box = self.bridge.box
-        history = self._history
-        for name in self._scripted:
-            st = states[name]
-            bx, by, yaw, speed, _, _ = box(name)
-            if t >= 0.0:
-                st.traveled += math.hypot(bx - st.x, by - st.y)
-            st.x, st.y, st.yaw = bx, by, yaw
-            st.speed = speed
-            s, d, _ = project(bx, by)
-            half = 0.5 * st.length
-            st.s, st.d = s, d
-            st.d_front = project(bx + half * math.cos(yaw), by + half * math.sin(yaw))[1]
-            history[name].append((t, speed, st.d_front))
-
-    def _ego_now(self) -> tuple[float, float, float, float, float, float]:
-        """The ego's world pose, speed and lane-frame position (its centre of gravity) now."""
-        x = self.ego.state
-        return x[0], x[2], x[4], x[1], self.s, self.d_road
+        self.story.start()
 
     def before_sim_step(self) -> None:
-        """The storyboard's step, after the actors' updates before a simulator step."""
-        board = self.board
-        t = self.t - self.config.sumo_step
-        self._observe(t)
-        board.step(t)
-        self._ego_then = self._ego_now()  # what the next step's storyboard time sees
-        if board.stopped and self.status == "running":
-            self._end("completed", "the storyboard's StopTrigger ended the scenario")
+        self.story.before_sim_step()
 
-    def position_xy(self, position, states) -> tuple[float, float, float]:
-        road = self.road
-        if isinstance(position, M.WorldPosition):
-            s, _, _ = road.project(position.x, position.y)
-            return position.x, position.y, position.h if position.h is not None else road.heading_at(s)
-        if isinstance(position, (M.LanePosition, M.RoadPosition)):
-            if isinstance(position, M.LanePosition):
-                lane, pos = self.roads.lane_position(position.road, position.lane, position.s)
-                d_extra = position.offset
-            else:
-                lane, pos = self.roads.lane_position(position.road, -1, position.s)
-                d_extra = position.t + 0.5 * lane.width
-            poly = LanePolyline(lane.shape, lane.width, lane.id)
-            x, y = poly.offset_point(pos, d_extra)
-            return x, y, poly.heading_at(pos)
-        e = states[position.entity]
-        if isinstance(position, M.RelativeObjectPosition):
-            # from the entity's reference point (its box centre less the box's centre x)
-            back = self.board.scenario.entities[position.entity].vehicle.center_x
-            c, s_ = math.cos(e.yaw), math.sin(e.yaw)
-            rx, ry = e.x - back * c, e.y - back * s_
-            return rx + c * position.dx - s_ * position.dy, ry + s_ * position.dx + c * position.dy, e.yaw
-        if isinstance(position, M.RelativeLanePosition):
-            s, d = e.s + position.ds, self.lane_centre(0, e.d, position.dlane) + position.offset
-        else:
-            s, d = e.s + position.ds, e.d + position.dt
-        x, y = road.offset_point(s, d)
-        return x, y, road.heading_at(s)
+    def after_sim_step(self) -> None:
+        self.story.after_sim_step()
 
-    def road_frame(self, x: float, y: float) -> tuple[float, float]:
-        s, d, _ = self.road.project(x, y)
-        return s, d
+    # the storyboard as the tests read it
+    @property
+    def board(self) -> Storyboard | None:
+        return self.story.board
 
-    def lane_centre_of(self, d: float) -> float:
-        return min(self.lane_offset.values(), key=lambda off: abs(d - off))
-
-    def lane_centre(self, lane_id: int, relative_to: float | None = None, dlane: int = 0) -> float:
-        n = len(self.lanes)
-        if relative_to is None:
-            index = n - abs(lane_id)
-        else:
-            index = min(self.lane_offset, key=lambda i: abs(relative_to - self.lane_offset[i])) + dlane
-        if index not in self.lane_offset:
-            raise ConfigError(
-                f"lane {lane_id if relative_to is None else f'{dlane:+d} from the reference'} does "
-                f"not exist on the ego's road ({n} lanes)"
-            )
-        return self.lane_offset[index]
-
-    def _limit(self, name: str, rate: float) -> None:
-        """Let SUMO follow a commanded speed change of ``rate`` (m/s^2) per step."""
-        vt = self._types[name]
-        acc, dec = self._limits.get(name, (vt.accel, vt.decel))
-        need = rate * 1.5 + 0.1 if math.isfinite(rate) else 1e3
-        if need > acc or need > dec:
-            acc, dec = max(acc, need), max(dec, need)
-            self.bridge.set_accel(name, acc)
-            self.bridge.set_decel(name, dec)
-            self._limits[name] = (acc, dec)
-
-    def speed(self, name: str, v_next: float, peak_rate: float) -> None:
-        if not math.isfinite(peak_rate):
-            self.bridge.start_speed(name, v_next)  # a step: at once
-            return
-        self._limit(name, peak_rate)
-        self.bridge.set_speed(name, v_next)
-
-    def blind(self, name: str) -> bool:
-        return name in self._lateral_free
-
-    def speed_rate(self, name: str, target: float, rate: float) -> None:
-        if target < self.board.states[name].speed:
-            self.bridge.set_decel(name, rate)
-        else:
-            self.bridge.set_accel(name, rate)
-        self.bridge.set_speed(name, target)
-
-    def lateral(self, name: str, d_next: float, peak_speed: float) -> None:
-        st = self.board.states[name]
-        if not math.isfinite(peak_speed):
-            # a step: the sublane model moves a car at most a lane-width fraction a step, so
-            # the car is placed across at once (where it would be after the step)
-            h = self.config.sumo_step
-            x, y = self.road.offset_point(st.s + st.speed * h, d_next - (st.d_front - st.d))
-            self.bridge.place(name, x, y, self.road.heading_at(st.s + st.speed * h), st.speed)
-            return
-        if name not in self._lateral_free:
-            # as cut-in's car: SUMO's own limits on lateral motion and its speed loss while
-            # moving sideways must not shape the scripted profile
-            self.bridge.drive_blind(name)
-            speed = 2.0 * peak_speed if math.isfinite(peak_speed) else 100.0 / self.config.sumo_step
-            self.bridge.free_lateral(name, max(10.0, speed))
-            self._lateral_free.add(name)
-        self.bridge.change_sublane(name, d_next - st.d_front)
-
-    def teleport(self, name: str, x: float, y: float, heading: float) -> None:
-        self.bridge.place(name, x, y, heading, self.board.states[name].speed, keep_route=1)
-
-    def place(self, name: str, x: float, y: float, heading: float, speed: float) -> None:
-        self.bridge.place(name, x, y, heading, speed)
-        self.bridge.set_speed(name, speed)  # SUMO's own speed too (it drives on from there)
-
-    def release(self, name: str) -> None:
-        """A scripted move ended: SUMO drives the car on from where it is, minding others."""
-        if name in self._lateral_free:
-            self.bridge.drive_safe(name)
-            self._lateral_free.discard(name)
-
-    def ego_speed(self, profile, relative) -> None:
-        self._ego_profile, self._ego_relative = profile, relative
-        if self._cruise_s is None:
-            c = self.config
-            self._cruise_s = self.manoeuvre.s0 + c.ego_speed * self.t
-
-    def ego_references(self) -> tuple[float, float]:
-        return self.manoeuvre.speed_ref, self.lane_offset[self.target_lane] + self.obs.d_ref
-
-    def ego_lateral(self, profile: Transition) -> None:
-        self._ego_lateral = profile
-        self.target_lane = min(self.lane_offset, key=lambda i: abs(profile.end - self.lane_offset[i]))
-
-    # -- the ego's references ---------------------------------------------------------------
-    def cruise_references(self, obs, t: float) -> None:
-        """The cruise references moved by the storyboard's actions on the ego (called by
-        :class:`FileManoeuvre` after emergency-brake's own references)."""
-        # on the storyboard's clock: the storyboard at time t sees the ego as of t, so the
-        # reference at the ego's time t is the profile's value at t (an action started at t0
-        # reaches the ego's loop a SUMO step later, from where it is on the profile's time)
-        t_board = t
-        if self._ego_profile is not None:
-            v = self._ego_profile.value(t_board)
-            if self._ego_relative is not None and self._ego_profile.done(t_board):
-                ref, kind, value = self._ego_relative
-                other = self.board.states[ref].speed
-                v = max(other + value if kind == "delta" else other * value, 0.0)
-            self._cruise_s += 0.5 * (self._cruise_v + v) * self.config.dt if self._cruise_v else v * self.config.dt
-            self._cruise_v = v
-            obs.s_ref, obs.ds_ref = self._cruise_s, v
-            self.manoeuvre.speed_ref = v
-        if self._ego_lateral is not None:
-            p = self._ego_lateral
-            obs.d_ref = p.value(t_board) - self.lane_offset[self.target_lane]
-            obs.dd_ref = 0.0  # obs.d from the target lane: the surround view's observation
+    @property
+    def _history(self) -> dict[str, list[tuple[float, float, float]]]:
+        return self.story.history
 
     # -- metrics ----------------------------------------------------------------------------
     def _collided(self, c) -> None:
@@ -795,7 +523,7 @@ class FileScenario(Scenario):
         if trigger_t is None or impact.trigger_gap == INF or self.collision is None:
             return None
         other = self.collision.victim if self.collision.collider == EGO else self.collision.collider
-        hist = self._history.get(other)
+        hist = self.story.history.get(other)
         if not hist or len(hist) < 2:
             return None
         t = np.array([h[0] for h in hist])
@@ -826,6 +554,335 @@ class FileScenario(Scenario):
         return meta
 
 
+class StoryDriver:
+    """The storyboard's :class:`~ego.openscenario.runtime.Driver` in a file scenario's run:
+    the file's entities as SUMO vehicles (the world's traffic), the storyboard stepped before
+    every simulator step on the entities' states (box centres, road frame, distance
+    travelled), its actions applied to SUMO's cars and to the ego's cruise references, and the
+    run's end when an entity leaves the network or the ego its road. ``sc`` is the
+    :class:`FileScenario` (its parts, the simulator, the clock)."""
+
+    def __init__(self, sc: FileScenario) -> None:
+        self.sc = sc
+        self.board: Storyboard | None = None
+        #: the scripted entities' (t, speed, d of the front) history, for the tests and the
+        #: braking criterion
+        self.history: dict[str, list[tuple[float, float, float]]] = {}
+
+    def _route(self, edge: str) -> str:
+        sc = self.sc
+        world = sc.world
+        rid = f"route_{edge}"
+        if rid != world.route and rid not in self._routes:
+            world.sim.add_route(rid, sc.roads.route_from(edge))
+            self._routes.add(rid)
+        return rid
+
+    def populate(self, world) -> None:
+        """The file's entities but the ego, as SUMO vehicles the storyboard commands (the
+        world's traffic)."""
+        sc = self.sc
+        c = sc.config
+        sc.impact.reset()
+        self._ego_profile: Transition | None = None
+        self._ego_relative: tuple | None = None
+        self._ego_lateral: Transition | None = None
+        self._cruise_s: float | None = None
+        self._cruise_v = 0.0
+        self.history = {}
+        self._limits: dict[str, tuple[float, float]] = {}
+        self._lateral_free: set[str] = set()
+        self._routes: set[str] = set()
+        self._types: dict[str, VehicleType] = {}
+        for k, (name, ent) in enumerate(sc.model.entities.items()):
+            if name == sc.ego_name:
+                continue
+            v = ent.vehicle
+            start = sc.starts[name]
+            color = ENTITY_COLORS[(k - 1) % len(ENTITY_COLORS)]
+            vt = VehicleType(
+                f"xosc_{name}",
+                length=v.length,
+                width=v.width,
+                accel=v.max_accel,
+                decel=v.max_decel,
+                emergency_decel=max(9.0, v.max_decel),
+                max_speed=v.max_speed,
+                sigma=0.0,
+                color=color,
+            )
+            self._types[name] = vt
+            # inserted at the ego's speed at least (SUMO's insertion check), its own speed set
+            # before the first step (as emergency-brake's lead); a pedestrian or misc object
+            # stands still (speed 0) unless the storyboard moves it
+            own = start.speed if v.kind == "vehicle" else (start.speed or 0.0)
+            speed = max(c.ego_speed, own if own is not None else 0.0) if v.kind == "vehicle" else own
+            world.vehicle(
+                VehicleSpec(name, vt.id, self._route(start.edge), start.index, start.front, speed),
+                vt,
+                ScriptedEntity(name, own),
+            )
+
+    def start(self) -> None:
+        """The storyboard starts from the entities' start positions; an entity off its lane's
+        centre (an Init offset) is moved across there in SUMO's first step (SUMO inserts on
+        lane centres)."""
+        sc = self.sc
+        for name, start in sc.starts.items():
+            if name != sc.ego_name and start.offset:
+                lane = sc.roads.edges[start.edge].lanes[start.index]
+                poly = LanePolyline(lane.shape, lane.width, lane.id)
+                along = start.front - 0.5 * sc.model.entities[name].vehicle.length
+                x, y = poly.offset_point(along, start.offset)
+                sc.bridge.place(name, x, y, poly.heading_at(along), start.speed or 0.0)
+        self.board = Storyboard(sc.model, sc.ego_name, self, sc.config.sumo_step, self._story_event)
+        self._scripted = [n for n in sc.model.entities if n != sc.ego_name]
+        self.history = {n: [] for n in self._scripted}
+        self._ego_then = self._ego_now()
+        self._observe(-1.0)  # the start positions (no distance travelled)
+        for hist in self.history.values():
+            hist.clear()
+
+    def after_sim_step(self) -> None:
+        """The run ends, as at the end of its time, when a scripted entity has left the road
+        network (SUMO takes a car off at the end of its route) or the ego has reached the end
+        of its lane frame (its start road): nothing past either is the file's scenario."""
+        sc = self.sc
+        if sc.status != "running":
+            return
+        gone = [n for n in sc.bridge.arrived() if n in self._scripted]
+        if gone:
+            self._road_end(f"{gone[0]} left the road network (the end of its route)")
+        elif sc.view.s + sc.geometry.cg_to_front >= sc.view.road.length:
+            self._road_end(
+                f"the ego reached the end of its road (its lane {sc.view.road.lane_id}, "
+                f"{sc.view.road.length:.0f} m: ego drives on its start road only)"
+            )
+
+    def _road_end(self, why: str) -> None:
+        sc = self.sc
+        status, detail = sc.loop.final_status()
+        if status == "timeout":
+            detail = "before the manoeuvre finished"
+        sc._end(status, f"{why} at t = {sc.t:.2f} s, {detail}", level="WARN")
+
+    def _story_event(self, kind: str, text: str) -> None:
+        sc = self.sc
+        sc.event("storyboard", text)
+
+    # -- the storyboard's view of the world ---------------------------------------------------
+    def _observe(self, t: float) -> None:
+        """Every entity's state at storyboard time ``t`` for the conditions: box centres, the
+        road frame, the distance travelled (summed from the centres' moves); the scripted
+        entities' (t, speed, d) history for the tests and the braking criterion."""
+        sc = self.sc
+        states = self.board.states
+        # the ego as of time t, as SUMO's cars are: its state one SUMO step ago (the loop has
+        # integrated it to t + sumo_step by the time SUMO steps)
+        X, Y, psi, u, s_cg, d = self._ego_then
+        g = sc.geometry
+        off = g.cg_to_front - 0.5 * g.length
+        e = states[sc.ego_name]
+        bx, by = X + off * math.cos(psi), Y + off * math.sin(psi)
+        if t >= 0.0:
+            e.traveled += math.hypot(bx - e.x, by - e.y)
+        e.x, e.y, e.yaw = bx, by, psi
+        e.speed = u
+        e.s, e.d = s_cg + off, d
+        e.d_front = d
+        project = sc.road.project
+        box = sc.bridge.box
+        history = self.history
+        for name in self._scripted:
+            st = states[name]
+            bx, by, yaw, speed, _, _ = box(name)
+            if t >= 0.0:
+                st.traveled += math.hypot(bx - st.x, by - st.y)
+            st.x, st.y, st.yaw = bx, by, yaw
+            st.speed = speed
+            s, d, _ = project(bx, by)
+            half = 0.5 * st.length
+            st.s, st.d = s, d
+            st.d_front = project(bx + half * math.cos(yaw), by + half * math.sin(yaw))[1]
+            history[name].append((t, speed, st.d_front))
+
+    def _ego_now(self) -> tuple[float, float, float, float, float, float]:
+        """The ego's world pose, speed and lane-frame position (its centre of gravity) now."""
+        sc = self.sc
+        x = sc.ego.state
+        return x[0], x[2], x[4], x[1], sc.s, sc.d_road
+
+    def before_sim_step(self) -> None:
+        """The storyboard's step, after the actors' updates before a simulator step."""
+        sc = self.sc
+        board = self.board
+        t = sc.t - sc.config.sumo_step
+        self._observe(t)
+        board.step(t)
+        self._ego_then = self._ego_now()  # what the next step's storyboard time sees
+        if board.stopped and sc.status == "running":
+            sc._end("completed", "the storyboard's StopTrigger ended the scenario")
+
+    def position_xy(self, position, states) -> tuple[float, float, float]:
+        sc = self.sc
+        road = sc.road
+        if isinstance(position, M.WorldPosition):
+            s, _, _ = road.project(position.x, position.y)
+            return position.x, position.y, position.h if position.h is not None else road.heading_at(s)
+        if isinstance(position, (M.LanePosition, M.RoadPosition)):
+            if isinstance(position, M.LanePosition):
+                lane, pos = sc.roads.lane_position(position.road, position.lane, position.s)
+                d_extra = position.offset
+            else:
+                lane, pos = sc.roads.lane_position(position.road, -1, position.s)
+                d_extra = position.t + 0.5 * lane.width
+            poly = LanePolyline(lane.shape, lane.width, lane.id)
+            x, y = poly.offset_point(pos, d_extra)
+            return x, y, poly.heading_at(pos)
+        e = states[position.entity]
+        if isinstance(position, M.RelativeObjectPosition):
+            # from the entity's reference point (its box centre less the box's centre x)
+            back = self.board.scenario.entities[position.entity].vehicle.center_x
+            c, s_ = math.cos(e.yaw), math.sin(e.yaw)
+            rx, ry = e.x - back * c, e.y - back * s_
+            return rx + c * position.dx - s_ * position.dy, ry + s_ * position.dx + c * position.dy, e.yaw
+        if isinstance(position, M.RelativeLanePosition):
+            s, d = e.s + position.ds, self.lane_centre(0, e.d, position.dlane) + position.offset
+        else:
+            s, d = e.s + position.ds, e.d + position.dt
+        x, y = road.offset_point(s, d)
+        return x, y, road.heading_at(s)
+
+    def road_frame(self, x: float, y: float) -> tuple[float, float]:
+        sc = self.sc
+        s, d, _ = sc.road.project(x, y)
+        return s, d
+
+    def lane_centre_of(self, d: float) -> float:
+        sc = self.sc
+        return min(sc.lane_offset.values(), key=lambda off: abs(d - off))
+
+    def lane_centre(self, lane_id: int, relative_to: float | None = None, dlane: int = 0) -> float:
+        sc = self.sc
+        n = len(sc.lanes)
+        if relative_to is None:
+            index = n - abs(lane_id)
+        else:
+            index = min(sc.lane_offset, key=lambda i: abs(relative_to - sc.lane_offset[i])) + dlane
+        if index not in sc.lane_offset:
+            raise ConfigError(
+                f"lane {lane_id if relative_to is None else f'{dlane:+d} from the reference'} does "
+                f"not exist on the ego's road ({n} lanes)"
+            )
+        return sc.lane_offset[index]
+
+    def _limit(self, name: str, rate: float) -> None:
+        """Let SUMO follow a commanded speed change of ``rate`` (m/s^2) per step."""
+        sc = self.sc
+        vt = self._types[name]
+        acc, dec = self._limits.get(name, (vt.accel, vt.decel))
+        need = rate * 1.5 + 0.1 if math.isfinite(rate) else 1e3
+        if need > acc or need > dec:
+            acc, dec = max(acc, need), max(dec, need)
+            sc.bridge.set_accel(name, acc)
+            sc.bridge.set_decel(name, dec)
+            self._limits[name] = (acc, dec)
+
+    def speed(self, name: str, v_next: float, peak_rate: float) -> None:
+        sc = self.sc
+        if not math.isfinite(peak_rate):
+            sc.bridge.start_speed(name, v_next)  # a step: at once
+            return
+        self._limit(name, peak_rate)
+        sc.bridge.set_speed(name, v_next)
+
+    def blind(self, name: str) -> bool:
+        return name in self._lateral_free
+
+    def speed_rate(self, name: str, target: float, rate: float) -> None:
+        sc = self.sc
+        if target < self.board.states[name].speed:
+            sc.bridge.set_decel(name, rate)
+        else:
+            sc.bridge.set_accel(name, rate)
+        sc.bridge.set_speed(name, target)
+
+    def lateral(self, name: str, d_next: float, peak_speed: float) -> None:
+        sc = self.sc
+        st = self.board.states[name]
+        if not math.isfinite(peak_speed):
+            # a step: the sublane model moves a car at most a lane-width fraction a step, so
+            # the car is placed across at once (where it would be after the step)
+            h = sc.config.sumo_step
+            x, y = sc.road.offset_point(st.s + st.speed * h, d_next - (st.d_front - st.d))
+            sc.bridge.place(name, x, y, sc.road.heading_at(st.s + st.speed * h), st.speed)
+            return
+        if name not in self._lateral_free:
+            # as cut-in's car: SUMO's own limits on lateral motion and its speed loss while
+            # moving sideways must not shape the scripted profile
+            sc.bridge.drive_blind(name)
+            speed = 2.0 * peak_speed if math.isfinite(peak_speed) else 100.0 / sc.config.sumo_step
+            sc.bridge.free_lateral(name, max(10.0, speed))
+            self._lateral_free.add(name)
+        sc.bridge.change_sublane(name, d_next - st.d_front)
+
+    def teleport(self, name: str, x: float, y: float, heading: float) -> None:
+        sc = self.sc
+        sc.bridge.place(name, x, y, heading, self.board.states[name].speed, keep_route=1)
+
+    def place(self, name: str, x: float, y: float, heading: float, speed: float) -> None:
+        sc = self.sc
+        sc.bridge.place(name, x, y, heading, speed)
+        sc.bridge.set_speed(name, speed)  # SUMO's own speed too (it drives on from there)
+
+    def release(self, name: str) -> None:
+        """A scripted move ended: SUMO drives the car on from where it is, minding others."""
+        sc = self.sc
+        if name in self._lateral_free:
+            sc.bridge.drive_safe(name)
+            self._lateral_free.discard(name)
+
+    def ego_speed(self, profile, relative) -> None:
+        sc = self.sc
+        self._ego_profile, self._ego_relative = profile, relative
+        if self._cruise_s is None:
+            c = sc.config
+            self._cruise_s = sc.manoeuvre.s0 + c.ego_speed * sc.t
+
+    def ego_references(self) -> tuple[float, float]:
+        sc = self.sc
+        return sc.manoeuvre.speed_ref, sc.lane_offset[sc.target_lane] + sc.obs.d_ref
+
+    def ego_lateral(self, profile: Transition) -> None:
+        sc = self.sc
+        self._ego_lateral = profile
+        sc.target_lane = min(sc.lane_offset, key=lambda i: abs(profile.end - sc.lane_offset[i]))
+
+    # -- the ego's references ---------------------------------------------------------------
+    def cruise_references(self, obs, t: float) -> None:
+        """The cruise references moved by the storyboard's actions on the ego (called by
+        :class:`FileManoeuvre` after emergency-brake's own references)."""
+        sc = self.sc
+        # on the storyboard's clock: the storyboard at time t sees the ego as of t, so the
+        # reference at the ego's time t is the profile's value at t (an action started at t0
+        # reaches the ego's loop a SUMO step later, from where it is on the profile's time)
+        t_board = t
+        if self._ego_profile is not None:
+            v = self._ego_profile.value(t_board)
+            if self._ego_relative is not None and self._ego_profile.done(t_board):
+                ref, kind, value = self._ego_relative
+                other = self.board.states[ref].speed
+                v = max(other + value if kind == "delta" else other * value, 0.0)
+            self._cruise_s += 0.5 * (self._cruise_v + v) * sc.config.dt if self._cruise_v else v * sc.config.dt
+            self._cruise_v = v
+            obs.s_ref, obs.ds_ref = self._cruise_s, v
+            sc.manoeuvre.speed_ref = v
+        if self._ego_lateral is not None:
+            p = self._ego_lateral
+            obs.d_ref = p.value(t_board) - sc.lane_offset[sc.target_lane]
+            obs.dd_ref = 0.0  # obs.d from the target lane: the surround view's observation
+
+
 class ScriptedEntity:
     """A file entity SUMO drives: lane changes off, its Init speed from the first step; the
     storyboard (not this actor) commands it afterwards."""
@@ -844,9 +901,10 @@ class ScriptedEntity:
 
 class FileManoeuvre(EvasiveManoeuvre):
     """emergency-brake's manoeuvre whose cruise references follow the storyboard's actions
-    on the ego (SpeedAction, LaneChange/LaneOffsetAction): ``story`` is the file scenario."""
+    on the ego (SpeedAction, LaneChange/LaneOffsetAction): ``story`` is the run's
+    :class:`StoryDriver`."""
 
-    story: FileScenario | None = None
+    story: StoryDriver | None = None
 
     def plan(self, obs, t: float) -> None:
         super().plan(obs, t)

@@ -16,7 +16,7 @@ import math
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -129,27 +129,26 @@ STAYS_IN_LANE = ("stays_in_lane", "always (lane_departure <= 0 m)")
 def check_backend(cls: type[Scenario], backend: str) -> None:
     """ConfigError unless scenario ``cls`` runs on traffic simulator ``backend``."""
     from ego.sim.registry import backend as registered
+    from ego.sim.registry import check_needs
 
-    found = registered(backend)  # a name no backend has
+    registered(backend)  # a name no backend has
     if backend not in cls.backends:
         raise ConfigError(
             f"bad value for --backend: {backend!r} (scenario {cls.name} runs on {' or '.join(cls.backends)} only)"
         )
-    lacking = [need for need in cls.needs if not getattr(found.capabilities, need)]
-    if lacking:
-        raise ConfigError(
-            f"bad value for --backend: {backend!r} (scenario {cls.name} needs {', '.join(lacking)}; "
-            f"backend {backend} lacks it)"
-        )
+    check_needs(f"scenario {cls.name}", cls.needs, backend)  # the registry matches needs to capabilities
 
 
 class Scenario:
-    """Base of every scenario.
+    """Base of every scenario: a declaration (``name``, ``config_cls``, trace ``columns``,
+    ``metric_specs``, default ``requirements``, the ``needs`` of a simulator) and the run's
+    state and order (:meth:`reset`, :meth:`step`, the flush, :meth:`result`).
 
-    Subclasses set ``name``/``config_cls`` and implement the ``_setup`` (traffic, ego),
-    ``_act`` (apply the action, write the trace row), ``_update`` (events, references,
-    observation) and ``_metrics`` hooks; SUMO scenarios also ``_make_bridge`` and the
-    ``_before_sumo_step`` (scripted actors) / ``_after_sumo_step`` (read the scene) hooks.
+    What a scenario does in a run is its loop object (:attr:`loop`, a :class:`Loop`): a
+    motorway scenario returns its :class:`Parts` from :meth:`compose` and runs on their
+    :class:`ComposedLoop`; a scenario off the motorway returns its own loop from
+    :meth:`make_loop` (a :class:`PartsLoop`). No method is replaced on an instance. Its
+    results are ``_metrics`` (and ``_meta`` for the recording's run panel).
     """
 
     name: ClassVar[str] = ""
@@ -182,13 +181,13 @@ class Scenario:
     requirements: ClassVar[tuple[tuple[str, str], ...]] = ()
 
     @classmethod
-    def default_config(cls, overrides: Mapping[str, Any]):
+    def default_config(cls, overrides: Mapping[str, Any]) -> Any:
         """The configuration the overrides apply to: the defaults of ``config_cls``; a
         scenario with variants starts from the variant's preset (``--set variant=...``)."""
         return cls.config_cls()
 
     @classmethod
-    def network_of(cls, config) -> str | None:
+    def network_of(cls, config: Any) -> str | None:
         """The SUMO network a run of ``config`` drives on: ``network``, or for a configuration
         with a ``road`` the motorway it names (``ego.sumo.net.MOTORWAY_ROADS``)."""
         road = getattr(config, "road", None)
@@ -199,29 +198,28 @@ class Scenario:
         return MOTORWAY_ROADS[road]
 
     @classmethod
-    def check_config(cls, config) -> None:
+    def check_config(cls, config: Any) -> None:
         """Checks of a configuration that need more than the configuration (the network's
         geometry, say), made by ``ego.runner.resolve`` before anything runs: ConfigError.
         Default: none."""
 
     @classmethod
-    def build_controller(cls, spec: ControllerSpec, params: Any, config) -> Controller:
+    def build_controller(cls, spec: ControllerSpec, params: Any, config: Any) -> Controller:
         """The controller the loop drives: one of ``spec`` stepping every ``config.dt``;
         a scenario with several controlled vehicles builds one per vehicle."""
         return spec.build(params, config.dt)
 
     @classmethod
-    def compare_plots(cls, config) -> tuple[Plot, ...]:
+    def compare_plots(cls, config: Any) -> tuple[Plot, ...]:
         """Trace columns ``ego compare`` plots for this configuration (default: ``plots``)."""
         return cls.plots
 
     @classmethod
-    def metrics_declared(cls, config=None) -> tuple[Metric, ...]:
+    def metrics_declared(cls, config: Any = None) -> tuple[Metric, ...]:
         """Every metric a run reports: the common ones, then the scenario's own, then the
         registered trace metrics its trace has the columns of (``ego.results.metrics``)."""
         backend = (BACKEND_METRIC,) if len(cls.backends) > 1 else ()
-        names = (c.name for c in cls.columns)
-        names = tuple(names)
+        names = tuple(c.name for c in cls.columns)
         lanes = (LANE_DEPARTURE_METRIC,) if set(LANE_DEPARTURE_NEEDS) <= set(names) else ()
         return COMMON_METRICS + backend + cls.metric_specs + trace_metrics_declared(names) + lanes + COMMON_TAIL_METRICS
 
@@ -231,7 +229,7 @@ class Scenario:
 
     def __init__(
         self,
-        config,
+        config: Any,
         controller: Controller,
         *,
         seed: int = 0,
@@ -254,7 +252,7 @@ class Scenario:
         self._outlines = not isinstance(self.recorder, NullRecorder)
         self.bridge: TrafficSim | None = None
         self.traffic: TrafficCollector | None = None
-        self._lanes: tuple = ()
+        self._lanes: tuple[tuple[float, tuple[tuple[float, ...], ...]], ...] = ()
         self.obs = Observation()
         self.events: list[Event] = []
         self.trace = Trace(self.trace_columns())
@@ -272,12 +270,24 @@ class Scenario:
         self.controlled_ids: tuple[str, ...] = ()
         #: vehicle id -> RGB for the recording (others: grey)
         self.colors: dict[str, tuple[int, int, int]] = {}
-        parts = self.compose()
+        parts = self.parts = self.compose()
         if parts is not None:
-            ComposedLoop.bind(self, parts)
+            self.world, self.view, self.manoeuvre, self.safety = parts.world, parts.view, parts.manoeuvre, parts.safety
+        #: the run's loop: what :meth:`reset` and :meth:`step` call (:class:`Loop`)
+        self.loop: Loop = self.make_loop()
 
-    #: a composed scenario's parts (:meth:`compose`; None: the scenario implements the hooks)
-    parts = world = view = manoeuvre = safety = None
+    #: once a run has started: the ego's plant, every controlled vehicle's plant by id, the
+    #: lanes (lane id -> LanePolyline) and the ego's body (set by the scenario's loop)
+    ego: Any
+    plants: dict[str, Any]
+    lanes: Any
+    geometry: Any
+    #: a composed scenario's parts (:meth:`compose`; None: the scenario returns its own loop)
+    parts: Parts | None = None
+    world: Any = None
+    view: Any = None
+    manoeuvre: Any = None
+    safety: Any = None
     #: a composed scenario's own work after the actors' updates before a simulator step, and
     #: after the step's surround sensing (None: nothing)
     before_sim_step = None
@@ -289,9 +299,20 @@ class Scenario:
     before_plan = None
 
     def compose(self) -> Parts | None:
-        """The scenario's parts (:class:`Parts`), or None for one that implements the loop
-        hooks itself."""
+        """The scenario's parts (:class:`Parts`), or None for one that returns its own loop
+        from :meth:`make_loop`."""
         return None
+
+    def make_loop(self) -> Loop:
+        """The loop object of this scenario's runs (:class:`Loop`, made once, from the
+        constructor): a composed scenario's is the :class:`ComposedLoop` of its parts; a
+        scenario off the motorway returns its own (a :class:`PartsLoop` with ``setup``,
+        ``act`` and ``update``: curve, lane-centering, platoon, report-000)."""
+        if self.parts is None:
+            raise NotImplementedError(
+                f"scenario {self.name} returns its parts from compose() or its loop from make_loop()"
+            )
+        return ComposedLoop(self, self.parts)
 
     # -- Gymnasium-style interface -----------------------------------------------------------
     def reset(self, *, seed: int | None = None) -> Observation:
@@ -321,21 +342,22 @@ class Scenario:
         if self.bridge is not None:
             self.bridge.start()
             self.traffic = TrafficCollector()
-        self._setup(np.random.default_rng(self.seed))
+        loop = self.loop
+        loop.setup(np.random.default_rng(self.seed))
         if self._fmu_plant() and not getattr(self.ego, "is_fmu", False):
             raise ConfigError(
                 f"--set plant= replaces a bicycle plant; the {self.name} scenario has none "
                 "(motorway and curve scenarios have)"
             )
-        scene = self._scene()
-        self._lanes = tuple((w, tuple(map(tuple, pts))) for w, pts in scene.lanes)
-        self.recorder.begin(scene, self._series(), self._meta())
+        scene = loop.scene()
+        self._lanes = tuple((w, tuple(tuple(p) for p in pts)) for w, pts in scene.lanes)
+        self.recorder.begin(scene, loop.series(), self._meta())
         if self._outlines:
-            self._record_boxes()
+            loop.record_boxes()
         if self.traffic is not None:
-            self._setup_traffic_log()
-            self._log_traffic()
-        self._update()
+            loop.subscribe_traffic()
+            loop.log_traffic()
+        loop.update()
         return self.obs
 
     @property
@@ -347,19 +369,20 @@ class Scenario:
         Fx per driven wheel (N) in tracking scenarios, a_x (m/s^2) in the curve task."""
         if self.status != "running":
             raise RuntimeError(f"the run has ended ({self.status}); call reset()")
-        self._act(action)
+        loop = self.loop
+        loop.act(action)
         k = self.k = self.k + 1
         t = self.t = k * self._dt
         if self._per_sumo and k % self._per_sumo == 0:
             self._sumo_step()
         if self.status == "running":
-            reason = self._check_divergence()
+            reason = loop.diverged()
             if reason is not None:
                 self._end("diverged", reason, level="ERROR")
             else:
-                self._update()
+                loop.update()
                 if t >= self._t_end and self.status == "running":
-                    self._end(*self._final_status())
+                    self._end(*loop.final_status())
         if t >= self._next_flush or self.status != "running":
             self._flush()
         return self.obs
@@ -402,7 +425,7 @@ class Scenario:
     #: closes (ego.runner sets it to check the run's requirements)
     on_result = None
 
-    def _catch_stop_signals(self):
+    def _catch_stop_signals(self) -> Callable[[], None]:
         """Make SIGINT and SIGTERM request a stop at the next step; returns the undo."""
         import signal
         import threading
@@ -411,7 +434,7 @@ class Scenario:
         if threading.current_thread() is not threading.main_thread():
             return lambda: None
 
-        def request(signum, frame) -> None:
+        def request(signum: int, frame: Any) -> None:
             if self._stop:  # asked twice: stop now
                 from ego.usercode import SignalInterrupt
 
@@ -443,7 +466,8 @@ class Scenario:
             return plant
         from ego.fmi.plant import fmu_plant
 
-        return fmu_plant(self, plant)
+        fmu: Plant = fmu_plant(self, plant)  # an FmuPlant
+        return fmu
 
     def close(self) -> None:
         """Close SUMO, the recording and the controller's resources (an FMU instance); safe
@@ -473,20 +497,24 @@ class Scenario:
         from ego.sumo.net import net_file
 
         c = self.config
+        network = self.network_of(c)
+        assert network is not None  # a scenario with a network drives on one
         return make_sim(
             self.backend,
-            SimSetup(net_file(self.network_of(c)), c.sumo_step, self.seed, c.lateral_resolution, self.edge, c.duration),
+            SimSetup(net_file(network), c.sumo_step, self.seed, c.lateral_resolution, self.edge, c.duration),
             self.backend_options,
         )
 
     def _sumo_step(self) -> None:
         bridge = self.bridge
-        self._before_sumo_step()
+        assert bridge is not None  # a scenario with simulator steps has a simulator
+        loop = self.loop
+        loop.before_sim_step()
         collisions = bridge.step()
-        self._after_sumo_step()
+        loop.after_sim_step()
         if self._outlines:
-            self._record_boxes()
-        self._log_traffic()
+            loop.record_boxes()
+        loop.log_traffic()
         if collisions:
             mine = [c for c in collisions if c.collider in bridge.controlled or c.victim in bridge.controlled]
             if mine:
@@ -534,7 +562,7 @@ class Scenario:
         self.recorder.flush()
         self._next_flush = math.floor(self.t) + 1.0
 
-    def _lane_departure(self, trace: np.ndarray, columns: Sequence[str], events: list) -> float | None:
+    def _lane_departure(self, trace: np.ndarray, columns: Sequence[str], events: list[Event]) -> float | None:
         """The run's largest lane departure (m); a ``lane_departure`` event (into ``events``, in
         time order) where the first one starts."""
         from ego.lane_frame import lane_departure
@@ -592,7 +620,7 @@ class Scenario:
             self.name,
             self.controller_name,
             self.seed,
-            metrics["status"],
+            self.status,
             metrics,
             events,
             columns,
@@ -610,13 +638,14 @@ class Scenario:
         follower)."""
         return self.controlled_ids[0]
 
-    def observation(self, vid: str):
+    def observation(self, vid: str) -> Any:
         """What vehicle ``vid``'s controller observes now (its task's observation)."""
         return self.obs
 
     def plant(self, vid: str) -> Plant:
         """Vehicle ``vid``'s plant."""
-        return self.ego
+        plant: Plant = self.ego
+        return plant
 
     @classmethod
     def reference_controller(cls) -> str:
@@ -632,7 +661,7 @@ class Scenario:
             return self.parts.limits(self.config)
         return -ONE_G, ONE_G, getattr(self.config, "max_steer", 0.0)
 
-    def joint_action(self, own, vid: str, longitudinal: float | None, lateral: float | None):
+    def joint_action(self, own: Any, vid: str, longitudinal: float | None, lateral: float | None) -> Any:
         """The action :meth:`step` takes when vehicle ``vid`` gets ``longitudinal`` and
         ``lateral`` (None: that channel stays ``own``'s, the scenario's controller's)."""
         return (own[0] if longitudinal is None else longitudinal, own[1] if lateral is None else lateral)
@@ -659,11 +688,11 @@ class Scenario:
         o, plant = self.obs, self.plant(vid)
         return lambda: (o.ds, o.d - o.d_ref, None, plant.lateral_accel)
 
-    def lane_rows(self, vid: str):
+    def lane_rows(self, vid: str) -> tuple[tuple[float, ...], Any, float]:
         """(vehicle ``vid``'s row, the other vehicles' rows or None without a surround sensor,
         its length m); a row is (s, d, v_s, v_d, heading) of a box centre in its lane's frame
         (m, m/s, rad; + left)."""
-        road = self.view or self  # a composed scenario's road and surround sensors are its view
+        road: Any = self.view or self  # a composed scenario's road and surround sensors are its view
         ego = (road.s, road.d_road, road.ds, road.dd, road.heading_error)
         sensor = getattr(road, "sensor", None)
         return ego, (sensor.tracks(self.t) if sensor is not None else None), self.geometry.length
@@ -674,47 +703,11 @@ class Scenario:
             return None
         return c.victim if c.collider in self.controlled_ids else c.collider
 
-    # -- hooks -------------------------------------------------------------------------------
-    def _setup(self, rng: np.random.Generator) -> None:
-        raise NotImplementedError
-
-    def _act(self, action: tuple[float, float]) -> None:
-        raise NotImplementedError
-
-    def _before_sumo_step(self) -> None:
-        pass
-
-    def _after_sumo_step(self) -> None:
-        pass
-
-    def _record_boxes(self) -> None:
-        pass
-
-    def _setup_traffic_log(self) -> None:
-        """Ask SUMO for what :meth:`_log_traffic` reads (after ``_setup``)."""
-
-    def _log_traffic(self) -> None:
-        """Hand this SUMO step's vehicles to ``self.traffic`` (a SUMO scenario's duty)."""
-
-    def _check_divergence(self) -> str | None:
-        return None
-
-    def _update(self) -> None:
-        raise NotImplementedError
-
-    def _final_status(self) -> tuple[str, str]:
-        return "completed", "reached the end of the simulated time"
-
-    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
+    # -- what a run reports --------------------------------------------------------------------
+    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict[str, Any]:
         return {}
 
-    def _scene(self) -> Scene:
-        return Scene(lanes=())
-
-    def _series(self) -> list[Series]:
-        return []
-
-    def _meta(self) -> dict:
+    def _meta(self) -> dict[str, Any]:
         """What the recording's "run" panel lists: names, seed and every parameter."""
         meta = {"scenario": self.name, "controller": self.controller_name, "seed": self.seed}
         if len(type(self).backends) > 1:  # which traffic simulator ran (the /run panel says so)
@@ -738,95 +731,210 @@ class Parts:
     * ``safety``: the filter between the controller's action and the plant
       (:class:`ego.scenarios.safety.SafetyLayer`), or None.
 
-    :meth:`Scenario.compose` returns one; the scenario's loop hooks are then these parts'
-    methods, bound once per run (no dispatch per step)."""
+    :meth:`Scenario.compose` returns one; the scenario's loop is then a
+    :class:`ComposedLoop` calling these parts' methods, bound once per run."""
 
     __slots__ = ("world", "view", "manoeuvre", "safety", "make_plant", "series", "limits")
 
-    def __init__(self, world, view, manoeuvre, safety=None, make_plant=None, series=None, limits=None) -> None:
+    def __init__(
+        self,
+        world: Any,
+        view: Any,
+        manoeuvre: Any,
+        safety: Any = None,
+        make_plant: Callable[[Any, Any, tuple[float, float, float]], Any] | None = None,
+        series: Callable[[Sequence[str], Mapping[str, str]], list[Series]] | None = None,
+        limits: Callable[[Any], tuple[float, float, float]] | None = None,
+    ) -> None:
         self.world, self.view, self.manoeuvre, self.safety = world, view, manoeuvre, safety
         #: (config, geometry, pose) -> the ego's plant
         self.make_plant = make_plant
         #: config -> that plant's action box (:meth:`Scenario.action_limits`; None: the default)
         self.limits = limits
-        #: (signal names, signal units) -> the recording's panels (unless the scenario has
-        #: its own ``_series``)
+        #: (signal names, signal units) -> the recording's panels (None: the controller's)
         self.series = series
 
 
+class Loop(Protocol):
+    """What :meth:`Scenario.reset` and :meth:`Scenario.step` call on a run: one object per
+    scenario (``Scenario.loop``), made once by :meth:`Scenario.make_loop`. The scenario owns
+    the run's state (time, status, trace, events, the simulator) and the order of the calls;
+    the loop object owns what a scenario does in them."""
+
+    def setup(self, rng: np.random.Generator) -> None:
+        """The run's vehicles, plants and sensors (the simulator started; ``rng`` seeded)."""
+
+    def act(self, action: Any) -> None:
+        """One control period of the plants under ``action`` and the trace row of time t."""
+
+    def before_sim_step(self) -> None:
+        """Before a simulator step: the ego pushed, the scripted actors."""
+
+    def after_sim_step(self) -> None:
+        """After a simulator step: read the scene."""
+
+    def diverged(self) -> str | None:
+        """Why the run diverged, or None."""
+
+    def update(self) -> None:
+        """Events, references and the observation of time t."""
+
+    def final_status(self) -> tuple[str, str]:
+        """Status and detail when the duration runs out."""
+
+    def scene(self) -> Scene:
+        """The recording's static scene (lanes)."""
+
+    def series(self) -> list[Series]:
+        """The recording's panels."""
+
+    def record_boxes(self) -> None:
+        """Every vehicle's outline into the recording (a simulator step)."""
+
+    def subscribe_traffic(self) -> None:
+        """Ask the simulator for what :meth:`log_traffic` reads (after :meth:`setup`)."""
+
+    def log_traffic(self) -> None:
+        """This simulator step's vehicles into the traffic log."""
+
+
+# -- the fast paths a part may offer the composed loop (bound once a run; C where built) ---
+@runtime_checkable
+class BindsStep(Protocol):
+    """A plant whose step the loop binds once a run (``BicyclePlant``: ego._native)."""
+
+    def bind_step(self) -> Callable[[tuple[float, float]], None]: ...
+
+
+@runtime_checkable
+class BindsFrame(Protocol):
+    """A road sensor whose lane frame the loop binds once a run (``RoadSensor``)."""
+
+    def bind_frame(self) -> Callable[[], None]: ...
+
+
+class PartsLoop:
+    """The loop of a scenario whose parts are a plant (or several, keyed by vehicle id),
+    optionally a road's ``world`` (:class:`ego.scenarios.road.RoadWorld`: the lanes, the
+    scripted actors, the traffic log, the recording's vehicles) with its road sensor
+    (``world.view``: the lane frame, the divergence check, the ego's push) and the
+    scenario's plan. A scenario's loop subclasses it with ``setup``, ``act`` and ``update``;
+    what the world does is done here: before every simulator step the ego is pushed and the
+    actors act, and the traffic log, the recording's vehicles and lanes are the world's.
+    Without a world: no simulator work, no divergence check, no lanes."""
+
+    def __init__(self, sc: Scenario, world: Any = None) -> None:
+        self.sc = sc
+        self.world = world
+        self.view = world.view if world is not None else None
+
+    def setup(self, rng: np.random.Generator) -> None:
+        raise NotImplementedError
+
+    def act(self, action: Any) -> None:
+        raise NotImplementedError
+
+    def update(self) -> None:
+        raise NotImplementedError
+
+    def before_sim_step(self) -> None:
+        sc = self.sc
+        self.world.before_step(sc.t - sc.config.sumo_step)
+
+    def after_sim_step(self) -> None:
+        pass
+
+    def diverged(self) -> str | None:
+        view = self.view
+        return view.diverged() if view is not None else None
+
+    def final_status(self) -> tuple[str, str]:
+        return "completed", "reached the end of the simulated time"
+
+    def scene(self) -> Scene:
+        lanes = self.world.lanes.values() if self.world is not None else ()
+        return Scene(lanes=[(lane.width, lane.points) for lane in lanes], title=self.sc.name)
+
+    def series(self) -> list[Series]:
+        sc = self.sc
+        return signal_series(sc._signal_names, sc._signal_units)
+
+    def record_boxes(self) -> None:
+        if self.world is not None:
+            sc = self.sc
+            self.world.record(sc.recorder, sc.t)
+
+    def subscribe_traffic(self) -> None:
+        if self.world is not None:
+            self.world.subscribe()
+
+    def log_traffic(self) -> None:
+        if self.world is not None:
+            sc = self.sc
+            self.world.log(sc.traffic, sc.t)
+
+
 class ComposedLoop:
-    """The loop hooks of a composed scenario (:class:`Parts`): :meth:`Scenario.__init__`
-    binds them onto the scenario in place of the template hooks, so one step calls the
-    parts directly: safety filter -> plant -> trace row -> road sensor; at a simulator
-    step: ego pushed, actors, step, surround sensor; then divergence, the surround view,
-    the manoeuvre and the observation."""
+    """The loop of a composed scenario (:class:`Parts`): one step calls the parts directly:
+    safety filter -> plant -> trace row -> road sensor; at a simulator step: ego pushed,
+    actors, step, surround sensor; then divergence, the surround view, the manoeuvre and the
+    observation. The scenario's own optional work (``after_setup``, ``before_sim_step``,
+    ``after_sim_step``, ``before_plan``: None or a method) is called at its place."""
 
-    @staticmethod
-    def bind(sc: Scenario, parts: Parts) -> None:
-        sc.parts = parts
-        sc.world, sc.view, sc.manoeuvre, sc.safety = parts.world, parts.view, parts.manoeuvre, parts.safety
-        for name in (
-            "_setup",
-            "_act",
-            "_update",
-            "_before_sumo_step",
-            "_after_sumo_step",
-            "_record_boxes",
-            "_setup_traffic_log",
-            "_log_traffic",
-            "_scene",
-        ):
-            setattr(sc, name, getattr(ComposedLoop, name).__get__(sc))
-        # the parts' own methods where the loop's hook is exactly theirs (no wrapper per step)
-        sc._check_divergence = parts.view.diverged
-        sc._final_status = parts.manoeuvre.final_status
-        if parts.series is not None and type(sc)._series is Scenario._series:
-            sc._series = lambda: parts.series(sc._signal_names, sc._signal_units)
+    def __init__(self, sc: Scenario, parts: Parts) -> None:
+        self.sc, self.parts = sc, parts
+        self.view, self.world, self.manoeuvre = parts.view, parts.world, parts.manoeuvre
+        # the parts' own methods where the loop's call is exactly theirs
+        self.diverged: Callable[[], str | None] = parts.view.diverged
+        self.final_status: Callable[[], tuple[str, str]] = parts.manoeuvre.final_status
+        self._road_y = 0.0
 
-    def _setup(self, rng: np.random.Generator) -> None:
-        parts = self.parts
+    def setup(self, rng: np.random.Generator) -> None:
+        sc, parts = self.sc, self.parts
         world, view = parts.world, parts.view
-        bridge = self.bridge
+        bridge = sc.bridge
         missing = world.setup(bridge, rng)
         if missing:
-            self.event(
+            sc.event(
                 "traffic",
                 f"SUMO could not place {len(missing)} background vehicles: "
                 f"{', '.join(missing[:5])}{'...' if len(missing) > 5 else ''}",
                 "WARN",
             )
-        self.controlled_ids = (EGO,)
-        self.colors.update(world.colors)
-        self.lanes = world.lanes
-        self.ego = self.own_plant(parts.make_plant(self.config, self.geometry, bridge.cg_pose(EGO)))
-        self.plants = {EGO: self.ego}
-        view.setup(bridge, world.lanes, self.ego)
-        self.obs.lane = view.road
+        sc.controlled_ids = (EGO,)
+        sc.colors.update(world.colors)
+        sc.lanes = world.lanes
+        assert bridge is not None and parts.make_plant is not None  # a composed scenario's simulator and plant
+        ego = self.ego = sc.ego = sc.own_plant(parts.make_plant(sc.config, sc.geometry, bridge.cg_pose(EGO)))
+        sc.plants = {EGO: ego}
+        view.setup(bridge, world.lanes, ego)
+        sc.obs.lane = view.road
         self._road_y = view.road.points[0][1]
-        self.manoeuvre.reset(self.ego)
-        if self.safety is not None:
-            self.safety.reset(self.ego)
-            self._filter = self.safety.filter
+        self.manoeuvre.reset(ego)
+        safety = parts.safety
+        if safety is not None:
+            safety.reset(ego)
+            self._filter = safety.filter
         else:
             self._filter = _unfiltered
-        self._write_row = self.trace.bind(view.row_names)
-        self._signals = self.controller.signals
-        # the view's own fast paths for the loop where it has them (C kernels of ego._native)
-        self._frame = view.bind_frame() if hasattr(view, "bind_frame") else view.frame
-        self._look = view.bind_look() if hasattr(view, "bind_look") else view.look
-        ego = self.ego
-        self._plant_step = ego.bind_step() if hasattr(ego, "bind_step") else ego.step
+        self._write_row = sc.trace.bind(view.row_names)
+        self._signals = sc.controller.signals
+        self._obs = sc.obs
+        # the parts' own fast paths where they declare them (C kernels of ego._native)
+        self._frame = view.bind_frame() if isinstance(view, BindsFrame) else view.frame
+        self._look = view.look
+        self._plant_step = ego.bind_step() if isinstance(ego, BindsStep) else ego.step
         man = self.manoeuvre
-        self._plan = man.bind_plan() if hasattr(man, "bind_plan") else man.plan
-        view.sense(self.t)
-        if self.after_setup is not None:
-            self.after_setup()
+        self._plan = man.plan
+        view.sense(sc.t)
+        if sc.after_setup is not None:
+            sc.after_setup()
 
-    def _act(self, action: tuple[float, float]) -> None:
+    def act(self, action: tuple[float, float]) -> None:
         ego = self.ego
         self._plant_step(self._filter(action))
         fx, delta = ego.applied
-        obs, view = self.obs, self.view
+        obs, view = self._obs, self.view
         # the row describes time t: the state before this step and the action applied
         d = obs.d
         self._write_row(
@@ -858,49 +966,62 @@ class ComposedLoop:
         )
         self._frame()
 
-    def _before_sumo_step(self) -> None:
-        bridge = self.bridge
+    def before_sim_step(self) -> None:
+        sc = self.sc
+        bridge = sc.bridge
         self.view.push(bridge)
-        t = self.t - self.config.sumo_step
+        t = sc.t - sc.config.sumo_step
         for actor in self.world.actors:
             actor.update(bridge, t)
-        if self.before_sim_step is not None:
-            self.before_sim_step()
+        if sc.before_sim_step is not None:
+            sc.before_sim_step()
 
-    def _after_sumo_step(self) -> None:
-        self.view.sense(self.t)
-        if self.after_sim_step is not None:
-            self.after_sim_step()
+    def after_sim_step(self) -> None:
+        sc = self.sc
+        self.view.sense(sc.t)
+        if sc.after_sim_step is not None:
+            sc.after_sim_step()
 
-    def _scene(self) -> Scene:
-        return Scene(lanes=[(lane.width, lane.points) for lane in self.lanes.values()], title=self.name)
+    def scene(self) -> Scene:
+        return Scene(lanes=[(lane.width, lane.points) for lane in self.world.lanes.values()], title=self.sc.name)
 
-    def _record_boxes(self) -> None:
-        ids, poses = self.bridge.poses()
-        self.recorder.vehicles(self.t, ids, poses, (self.ego.state[0], self._road_y))
+    def series(self) -> list[Series]:
+        sc, series = self.sc, self.parts.series
+        if series is None:
+            return signal_series(sc._signal_names, sc._signal_units)
+        return series(sc._signal_names, sc._signal_units)
 
-    def _setup_traffic_log(self) -> None:
+    def record_boxes(self) -> None:
+        sc = self.sc
+        assert sc.bridge is not None
+        ids, poses = sc.bridge.poses()
+        sc.recorder.vehicles(sc.t, ids, poses, (self.ego.state[0], self._road_y))
+
+    def subscribe_traffic(self) -> None:
         pass  # the surround sensor's subscription reaches as far
 
-    def _log_traffic(self) -> None:
+    def log_traffic(self) -> None:
+        sc = self.sc
         centre, ids, rows = self.view.traffic_row()
-        self.traffic.add(self.t, centre, ids, rows)
+        assert sc.traffic is not None
+        sc.traffic.add(sc.t, centre, ids, rows)
 
-    def _update(self) -> None:
-        view, t = self.view, self.t
+    def update(self) -> None:
+        sc = self.sc
+        t = sc.t
         collision = self._look(t)
-        if collision is not None and self.status == "running":
-            self._collided(collision)
-            if self.status != "running":
+        if collision is not None and sc.status == "running":
+            sc._collided(collision)
+            if sc.status != "running":
                 return
-        obs = self.obs
-        if self.before_plan is not None:
-            self.before_plan()
+        obs = self._obs
+        if sc.before_plan is not None:
+            sc.before_plan()
         self._plan(obs, t)
-        view.observe(obs, t)
+        self.view.observe(obs, t)
 
 
-def _unfiltered(action):
+def _unfiltered(action: tuple[float, float]) -> tuple[float, float]:
     return action
 
 

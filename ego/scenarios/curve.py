@@ -36,7 +36,7 @@ from ego.params import ConfigError, param
 from ego.record.base import Series
 from ego.results import metrics as m
 from ego.results.trace import Column, Marker, Metric, Plot
-from ego.scenarios.base import NO_COLLISION, CommonConfig, Scenario, signal_series
+from ego.scenarios.base import NO_COLLISION, CommonConfig, PartsLoop, Scenario
 from ego.scenarios.events import INF, boxes_overlap
 from ego.scenarios.observe import road_observation
 from ego.scenarios.road import RoadSensor, RoadWorld
@@ -162,13 +162,57 @@ class CurveScenario(Scenario):
         )
     )
 
-    def __init__(self, config, controller, **kwargs) -> None:
-        super().__init__(config, controller, **kwargs)
+    def make_loop(self) -> CurveLoop:
+        """The road's world and sensor, report 002's plant, the curve's plan."""
         self.geometry = GEOMETRY
-        RoadWorld(RoadSensor(GEOMETRY)).bind(self)  # the road's world and sensor: the view
         self.ego = None
-        self.neighbours = Neighbours()
         self.lanes: dict[str, LanePolyline] = {}
+        self.world = RoadWorld(RoadSensor(GEOMETRY))
+        self.view = self.world.view  # the road sensor: the lane frame (lane_rows, ego.gym)
+        return CurveLoop(self, self.world)
+
+    # -- results ------------------------------------------------------------------------------
+    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
+        col = {name: trace[:, i] for i, name in enumerate(columns)} if trace.size else {}
+        arc = col["in_arc"] > 0.5 if col else np.zeros(0, dtype=bool)
+        ed = col["e_d"][arc] if col else np.zeros(0)
+        ea = col["e_a"][arc] if col else np.zeros(0)
+        speed = col["speed"] if col else np.zeros(0)
+        engaged = col["phase"] > 0.5 if col else np.zeros(0, dtype=bool)
+        loop = self.loop
+        completed = loop.arc_exit_t is not None and self.status == "completed"
+        enter_i = int(np.argmax(arc)) if arc.any() else None
+        x = self.ego.state if self.ego is not None else (0.0,) * 6
+        return {
+            "completed_arc": completed,
+            "max_abs_ed": m.json_number(m.max_abs(ed)) if ed.size else None,
+            "final_ed": m.json_number(float(ed[-1])) if ed.size else None,
+            "rms_ed": m.json_number(float(np.sqrt(np.mean(ed**2)))) if ed.size else None,
+            "max_abs_ea": m.json_number(m.max_abs(ea)) if ea.size else None,
+            "final_ea": m.json_number(float(ea[-1])) if ea.size else None,
+            "time_in_arc": (
+                m.json_number(loop.arc_exit_t - loop.arc_enter_t, 4)
+                if completed and loop.arc_enter_t is not None
+                else None
+            ),
+            "entry_speed": m.json_number(speed[enter_i] / KMH, 3) if enter_i is not None else None,
+            "exit_speed": m.json_number(x[1] / KMH, 3) if completed else None,
+            "engage_time": m.json_number(loop.engage_t, 4),
+            "max_abs_delta": m.json_number(m.max_abs(col["delta"][engaged])) if engaged.any() else None,
+            "max_lat_accel": m.json_number(m.max_abs(col["lat_accel"][arc])) if arc.any() else None,
+            "min_gap_front": m.json_number(m.finite_min(col["gap_front"]), 3) if col else None,
+        }
+
+
+class CurveLoop(PartsLoop):
+    """The curve's loop: the road's world and sensor (:mod:`ego.scenarios.road`), report
+    002's plant, and the plan: held straight on the approach, engaged at the preview, the
+    report's a_x (below it behind a slower lead), the arc's entry and exit."""
+
+    def __init__(self, sc: CurveScenario, world: RoadWorld) -> None:
+        super().__init__(sc, world)
+        self.ego: BicyclePlant | None = None
+        self.neighbours = Neighbours()
         self.arc_start = self.arc_end = 0.0
         self.arc_sign = 1.0
         self._reset_state()
@@ -183,20 +227,21 @@ class CurveScenario(Scenario):
         self._sync_t = 0.0
 
     # -- set-up ---------------------------------------------------------------------------
-    def _setup(self, rng: np.random.Generator) -> None:
-        c = self.config
+    def setup(self, rng: np.random.Generator) -> None:
+        sc = self.sc
+        c = sc.config
         self._reset_state()
-        bridge = self.bridge
-        self.lanes = self.world.setup(bridge)
-        road = self.lanes[f"{EDGE}_0"]
-        self.obs.lane = road
+        bridge = sc.bridge
+        sc.lanes = lanes = self.world.setup(bridge)
+        road = lanes[f"{EDGE}_0"]
+        sc.obs.lane = road
         spans = road.curved_spans()
         if not spans:
             raise ConfigError(f"the {EDGE} lane of the curve network has no arc")
         self.arc_start, self.arc_end, kappa = spans[0]
         self.arc_sign = 1.0 if kappa > 0 else -1.0
 
-        bridge.add_type(ego_type(EGO, self.geometry))
+        bridge.add_type(ego_type(EGO, sc.geometry))
         bridge.add_type(TRAFFIC_TYPE)
         bridge.add_type(LEAD_TYPE)
         bridge.add_route(ROUTE, [EDGE])
@@ -217,7 +262,7 @@ class CurveScenario(Scenario):
                 rng,
                 lanes=[0],
                 start=5.0,
-                end=self.lanes[f"{ONCOMING_EDGE}_0"].length - 5.0,
+                end=lanes[f"{ONCOMING_EDGE}_0"].length - 5.0,
                 density=c.oncoming / (onc_speed / KMH),
                 speed=onc_speed,
                 min_spacing=20.0,
@@ -233,21 +278,21 @@ class CurveScenario(Scenario):
         bridge.add_vehicles(specs)
         missing = bridge.insert(required=required)
         if missing:
-            self.event("traffic", f"SUMO could not place {len(missing)} oncoming vehicles", "WARN")
+            sc.event("traffic", f"SUMO could not place {len(missing)} oncoming vehicles", "WARN")
         for actor in actors:
             actor.start(bridge)
         # keepRoute=1: the ego stays mapped on its own lane, never onto the oncoming one
-        bridge.control(EGO, self.geometry, keep_route=1)
-        self.controlled_ids = (EGO,)
-        self.colors[EGO] = (220, 40, 40)
-        self.colors[LEAD] = LEAD_TYPE.color
+        bridge.control(EGO, sc.geometry, keep_route=1)
+        sc.controlled_ids = (EGO,)
+        sc.colors[EGO] = (220, 40, 40)
+        sc.colors[LEAD] = LEAD_TYPE.color
 
         x, y, psi = bridge.cg_pose(EGO)
         model = DynamicBicycle(DynamicBicycleParams(slip_speed_floor=1.0))
-        self.ego = self.own_plant(
+        self.ego = sc.ego = sc.own_plant(
             BicyclePlant(
                 model,
-                self.geometry,
+                sc.geometry,
                 c.dt,
                 c.substeps,
                 ActuatorLimits(max_steer=c.max_steer),
@@ -255,12 +300,12 @@ class CurveScenario(Scenario):
             )
         )
         self.view.on_lane(road, self.ego)
-        self._frame = self.view.frame
-        self._after_sumo_step()
+        self.after_sim_step()
 
     # -- per step ---------------------------------------------------------------------------
-    def _act(self, action: tuple[float, float]) -> None:
-        obs = self.obs
+    def act(self, action: tuple[float, float]) -> None:
+        sc = self.sc
+        obs = sc.obs
         if self.phase == APPROACH:
             # before the event the ego holds its lane and its plan; commands are ignored
             action = (obs.accel_ref, 0.0)
@@ -269,8 +314,8 @@ class CurveScenario(Scenario):
         a_x, delta = ego.applied
         view = self.view
         d = view.d_road
-        self.trace.append(
-            self.controller.signals(),
+        sc.trace.append(
+            sc.controller.signals(),
             t=obs.t,
             s=view.s,
             d=d,
@@ -288,38 +333,40 @@ class CurveScenario(Scenario):
             phase=self.phase,
             in_arc=1.0 if self.arc_start <= view.s <= self.arc_end else 0.0,
         )
-        self._frame()
+        view.frame()
 
-    def _after_sumo_step(self) -> None:
-        bridge = self.bridge
+    def after_sim_step(self) -> None:
+        sc = self.sc
+        bridge = sc.bridge
         lead = bridge.read_neighbours(EGO, self.neighbours).leader
-        self._sync_gap, self.lead_speed, self._sync_t = lead.gap, lead.speed, self.t
+        self._sync_gap, self.lead_speed, self._sync_t = lead.gap, lead.speed, sc.t
         if self.phase == APPROACH:
             # route distance from the front bumper to the arc start; SUMO answers a huge
             # negative number once the position is behind the vehicle
             dist = bridge.driving_distance(EGO, EDGE, self.arc_start, 0)
-            if dist <= self.config.preview:
+            if dist <= sc.config.preview:
                 self.phase = ENGAGED
-                self.engage_t = self.t
+                self.engage_t = sc.t
                 # it takes over from a car held straight: no history, no integral
-                self.controller.reset(seed=self.seed)
-                self.event(
+                sc.controller.reset(seed=sc.seed)
+                sc.event(
                     "engage",
                     f"arc start {max(dist, 0.0):.2f} m ahead (preview "
-                    f"{self.config.preview:g} m): the curve controller takes over",
+                    f"{sc.config.preview:g} m): the curve controller takes over",
                 )
         self._check_oncoming()
 
     def _check_oncoming(self) -> None:
         """Collision with an oncoming car: box overlap (SUMO does not check across edges)."""
-        ids, rows = self.bridge.poses()
+        sc = self.sc
+        ids, rows = sc.bridge.poses()
         X, u, Y, _, psi, _ = self.ego.state
         ego_box = (
-            X + (0.5 * self.geometry.length - self.geometry.cg_to_front) * math.cos(psi),
-            Y + (0.5 * self.geometry.length - self.geometry.cg_to_front) * math.sin(psi),
+            X + (0.5 * sc.geometry.length - sc.geometry.cg_to_front) * math.cos(psi),
+            Y + (0.5 * sc.geometry.length - sc.geometry.cg_to_front) * math.sin(psi),
             psi,
-            self.geometry.length,
-            self.geometry.width,
+            sc.geometry.length,
+            sc.geometry.width,
         )
         near = [
             (vid, row)
@@ -331,22 +378,23 @@ class CurveScenario(Scenario):
         boxes = sumo_poses_to_boxes([row for _, row in near])
         for (vid, _), box in zip(near, boxes):
             if boxes_overlap(ego_box, tuple(box)):
-                speed = self.bridge.speed(vid)
-                self._collided(Collision(EGO, vid, "oncoming", u, speed))
+                speed = sc.bridge.speed(vid)
+                sc._collided(Collision(EGO, vid, "oncoming", u, speed))
                 return
 
-    def _update(self) -> None:
-        c = self.config
-        obs, view = self.obs, self.view
+    def update(self) -> None:
+        sc = self.sc
+        c = sc.config
+        obs, view = sc.obs, self.view
         s = view.s
         if self.arc_enter_t is None and s >= self.arc_start:
-            self.arc_enter_t = self.t
-            self.event("arc", f"entering the arc at {self.ego.state[1] / KMH:.1f} km/h")
+            self.arc_enter_t = sc.t
+            sc.event("arc", f"entering the arc at {self.ego.state[1] / KMH:.1f} km/h")
         if s >= self.arc_end and self.arc_exit_t is None:
-            self.arc_exit_t = self.t
-            self._end(
+            self.arc_exit_t = sc.t
+            sc._end(
                 "completed",
-                f"left the arc after {self.t - (self.arc_enter_t or 0.0):.2f} s "
+                f"left the arc after {sc.t - (self.arc_enter_t or 0.0):.2f} s "
                 f"at {self.ego.state[1] / KMH:.1f} km/h, e_d {-self.arc_sign * view.d_road:+.3f} m",
             )
             return
@@ -354,14 +402,14 @@ class CurveScenario(Scenario):
         gap = self._sync_gap
         if gap < INF:
             # extrapolated from the last SUMO step at both cars' speeds
-            gap += (self.lead_speed - view.ds) * (self.t - self._sync_t)
+            gap += (self.lead_speed - view.ds) * (sc.t - self._sync_t)
             follow = 0.4 * (gap - c.min_gap - c.time_gap * view.ds) + 1.0 * (self.lead_speed - view.ds)
             if follow < plan:
                 plan = max(follow, -7.0)
         self.gap_front = gap
         road_observation(
             obs,
-            self.t,
+            sc.t,
             s,
             view.ds,
             view.d_road,
@@ -373,45 +421,15 @@ class CurveScenario(Scenario):
         )
         obs.accel_ref = plan
 
-    def _final_status(self) -> tuple[str, str]:
+    def final_status(self) -> tuple[str, str]:
+        sc = self.sc
         where = "on the approach" if self.arc_enter_t is None else "in the arc"
-        return "timeout", f"the duration ({self.config.duration:g} s) ended the run with the ego still {where}"
-
-    # -- results ------------------------------------------------------------------------------
-    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
-        col = {name: trace[:, i] for i, name in enumerate(columns)} if trace.size else {}
-        arc = col["in_arc"] > 0.5 if col else np.zeros(0, dtype=bool)
-        ed = col["e_d"][arc] if col else np.zeros(0)
-        ea = col["e_a"][arc] if col else np.zeros(0)
-        speed = col["speed"] if col else np.zeros(0)
-        engaged = col["phase"] > 0.5 if col else np.zeros(0, dtype=bool)
-        completed = self.arc_exit_t is not None and self.status == "completed"
-        enter_i = int(np.argmax(arc)) if arc.any() else None
-        x = self.ego.state if self.ego is not None else (0.0,) * 6
-        return {
-            "completed_arc": completed,
-            "max_abs_ed": m.json_number(m.max_abs(ed)) if ed.size else None,
-            "final_ed": m.json_number(float(ed[-1])) if ed.size else None,
-            "rms_ed": m.json_number(float(np.sqrt(np.mean(ed**2)))) if ed.size else None,
-            "max_abs_ea": m.json_number(m.max_abs(ea)) if ea.size else None,
-            "final_ea": m.json_number(float(ea[-1])) if ea.size else None,
-            "time_in_arc": (
-                m.json_number(self.arc_exit_t - self.arc_enter_t, 4)
-                if completed and self.arc_enter_t is not None
-                else None
-            ),
-            "entry_speed": m.json_number(speed[enter_i] / KMH, 3) if enter_i is not None else None,
-            "exit_speed": m.json_number(x[1] / KMH, 3) if completed else None,
-            "engage_time": m.json_number(self.engage_t, 4),
-            "max_abs_delta": m.json_number(m.max_abs(col["delta"][engaged])) if engaged.any() else None,
-            "max_lat_accel": m.json_number(m.max_abs(col["lat_accel"][arc])) if arc.any() else None,
-            "min_gap_front": m.json_number(m.finite_min(col["gap_front"]), 3) if col else None,
-        }
+        return "timeout", f"the duration ({sc.config.duration:g} s) ended the run with the ego still {where}"
 
     # -- recording ----------------------------------------------------------------------------
-    def _series(self) -> list[Series]:
+    def series(self) -> list[Series]:
         # the gap panel only with a lead: without one it would stay empty
-        lead = [Series("gap_front", "plots/gap/lead", "m", "lead")] if self.config.lead > 0 else []
+        lead = [Series("gap_front", "plots/gap/lead", "m", "lead")] if self.sc.config.lead > 0 else []
         return [
             Series("e_d", "plots/e_d/ego", "m", "e_d = distance to the arc centre - R"),
             Series("e_a", "plots/e_a/ego", "rad", "e_a = heading - tangent"),
@@ -422,5 +440,5 @@ class CurveScenario(Scenario):
             Series("lat_accel", "plots/lateral_accel/ego", "m/s^2", "lateral acceleration"),
             *lead,
             Series("phase", "states/manoeuvre", "", "manoeuvre", states=PHASE_NAMES),
-            *signal_series(self._signal_names, self._signal_units),
+            *super().series(),
         ]

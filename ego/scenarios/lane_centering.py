@@ -48,7 +48,7 @@ from ego.params import param
 from ego.record.base import Series
 from ego.results import metrics as m
 from ego.results.trace import Band, Column, Marker, Metric, Plot
-from ego.scenarios.base import CommonConfig, Scenario, signal_series
+from ego.scenarios.base import CommonConfig, PartsLoop, Scenario
 from ego.scenarios.observe import road_observation
 from ego.scenarios.road import RoadSensor, RoadWorld
 from ego.sim.traffic import PoissonFlow, background_traffic
@@ -151,28 +151,59 @@ class LaneCenteringScenario(Scenario):
         Plot("a_x", "a_x.png", "axial acceleration"),
     )
 
-    def __init__(self, config, controller, **kwargs) -> None:
-        super().__init__(config, controller, **kwargs)
+    def make_loop(self) -> LaneCenteringLoop:
+        """The road's world and sensor, the ego's plant, the drive's plan."""
         self.geometry = GEOMETRY
-        RoadWorld(RoadSensor(GEOMETRY)).bind(self)  # the road's world and sensor: the view
         self.ego = None
         self.lanes: dict[str, LanePolyline] = {}
+        self.world = RoadWorld(RoadSensor(GEOMETRY))
+        self.view = self.world.view  # the road sensor: the lane frame (lane_rows, ego.gym)
+        return LaneCenteringLoop(self, self.world)
+
+    # -- results ------------------------------------------------------------------------------
+    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
+        if not trace.size:
+            return {"completed_road": False}
+        col = {name: trace[:, i] for i, name in enumerate(columns)}
+        d = col["d"]
+        return {
+            "completed_road": self.status == "completed",
+            "distance": m.json_number(float(col["s"][-1] - col["s"][0]), 2),
+            "max_abs_lateral_error": m.json_number(m.max_abs(d)),
+            "mean_abs_lateral_error": m.json_number(float(np.mean(np.abs(d)))),
+            "std_lateral_error": m.json_number(float(np.std(d))),
+            "rms_lateral_error": m.json_number(float(np.sqrt(np.mean(d * d)))),
+            "max_abs_heading_error": m.json_number(m.max_abs(col["heading_error"])),
+            "max_abs_steer": m.json_number(m.max_abs(col["delta"])),
+            "max_abs_lateral_accel": m.json_number(m.max_abs(col["lat_accel"])),
+        }
+
+
+class LaneCenteringLoop(PartsLoop):
+    """Lane centring's loop: the road's world and sensor (:mod:`ego.scenarios.road`), the
+    ego's plant (report 003's lateral-error model on the lane or the dynamic bicycle), and the
+    plan: the speed held, the curves' entry and exit, the drive's end."""
+
+    def __init__(self, sc: LaneCenteringScenario, world: RoadWorld) -> None:
+        super().__init__(sc, world)
+        self.ego: BicyclePlant | LaneFramePlant | None = None
         self.spans: list[tuple[float, float, float]] = []
         self._in_curve = False
         self._end_s = 0.0
 
-    def _setup(self, rng: np.random.Generator) -> None:
-        c = self.config
-        bridge = self.bridge
-        self.lanes = self.world.setup(bridge)
-        lane = self.lanes[f"{EDGE}_{EGO_LANE}"]
-        self.obs.lane = lane
+    def setup(self, rng: np.random.Generator) -> None:
+        sc = self.sc
+        c = sc.config
+        bridge = sc.bridge
+        sc.lanes = lanes = self.world.setup(bridge)
+        lane = lanes[f"{EDGE}_{EGO_LANE}"]
+        sc.obs.lane = lane
         self.spans = lane.curved_spans(min_curvature=1e-4)
         self._in_curve = False
         self._end_s = lane.length - END_MARGIN
 
         traffic_speed = c.traffic_factor * c.speed
-        bridge.add_type(ego_type(EGO, self.geometry))
+        bridge.add_type(ego_type(EGO, sc.geometry))
         # the traffic's top speed is its speed: SUMO's drivers would otherwise speed up to
         # the lane's limit (30 m/s)
         bridge.add_type(replace(TRAFFIC_TYPE, max_speed=traffic_speed))
@@ -208,37 +239,37 @@ class LaneCenteringScenario(Scenario):
         bridge.add_vehicles([*specs, VehicleSpec(EGO, EGO, ROUTE, EGO_LANE, c.start, c.speed)])
         missing = bridge.insert(required=[EGO])
         if missing:
-            self.event("traffic", f"SUMO could not place {len(missing)} vehicles", "WARN")
+            sc.event("traffic", f"SUMO could not place {len(missing)} vehicles", "WARN")
         for spec in specs:
             if spec.id not in missing:
                 bridge.keep_lane(spec.id)
-        bridge.control(EGO, self.geometry)
-        self.controlled_ids = (EGO,)
-        self.colors[EGO] = (220, 40, 40)
+        bridge.control(EGO, sc.geometry)
+        sc.controlled_ids = (EGO,)
+        sc.colors[EGO] = (220, 40, 40)
 
         x, y, psi = bridge.cg_pose(EGO)
         s0 = lane.project(x, y)[0]
         limits = ActuatorLimits(max_steer=c.max_steer)
         if c.plant == "lateral-error":
             model = LateralError(LateralErrorParams(), c.speed)
-            self.ego = LaneFramePlant(model, lane, self.geometry, c.dt, s0, c.offset, limits)
+            self.ego = sc.ego = LaneFramePlant(model, lane, sc.geometry, c.dt, s0, c.offset, limits)
         else:
             model = DynamicBicycle(dynamic_params_from_lateral(LateralErrorParams(), slip_speed_floor=1.0))
             x, y = lane.offset_point(s0, c.offset)
-            self.ego = BicyclePlant(
-                model, self.geometry, c.dt, c.substeps, limits, state=(x, c.speed, y, 0.0, lane.heading_at(s0), 0.0)
+            self.ego = sc.ego = BicyclePlant(
+                model, sc.geometry, c.dt, c.substeps, limits, state=(x, c.speed, y, 0.0, lane.heading_at(s0), 0.0)
             )
         self.view.on_lane(lane, self.ego)
-        self._frame = self.view.frame
 
     # -- per step ---------------------------------------------------------------------------
-    def _act(self, action: tuple[float, float]) -> None:
+    def act(self, action: tuple[float, float]) -> None:
+        sc = self.sc
         ego = self.ego
         ego.step(action)
         a_x, delta = ego.applied
-        obs, view = self.obs, self.view
-        self.trace.append(
-            self.controller.signals(),
+        obs, view = sc.obs, self.view
+        sc.trace.append(
+            sc.controller.signals(),
             t=obs.t,
             s=view.s,
             d=view.d_road,
@@ -251,13 +282,14 @@ class LaneCenteringScenario(Scenario):
             curvature=view.curvature,
             lat_accel=ego.lateral_accel,
         )
-        self._frame()
+        view.frame()
 
-    def _update(self) -> None:
+    def update(self) -> None:
+        sc = self.sc
         view = self.view
         s = view.s
         if s >= self._end_s:
-            self._end(
+            sc._end(
                 "completed",
                 f"reached the end of the drive at s = {self._end_s:.0f} m "
                 f"({END_MARGIN:g} m before the end of the road)",
@@ -266,45 +298,28 @@ class LaneCenteringScenario(Scenario):
         inside = any(a <= s <= b for a, b, _ in self.spans)
         if inside != self._in_curve:
             self._in_curve = inside
-            self.event(
+            sc.event(
                 "curve",
                 f"{'entering' if inside else 'leaving'} the curve at s = {s:.0f} m, lateral error {view.d_road:+.3f} m",
             )
-        obs = self.obs
+        obs = sc.obs
         x = self.ego.state
         road_observation(
-            obs, self.t, s, view.ds, view.d_road, view.dd, x, view.heading_error, view.curvature, view.steady
+            obs, sc.t, s, view.ds, view.d_road, view.dd, x, view.heading_error, view.curvature, view.steady
         )
         # the plan holds the speed (the lateral-error model's speed is constant anyway)
-        obs.accel_ref = 1.0 * (self.config.speed - x[1])
+        obs.accel_ref = 1.0 * (sc.config.speed - x[1])
 
-    def _final_status(self) -> tuple[str, str]:
+    def final_status(self) -> tuple[str, str]:
+        sc = self.sc
         # the speed is the configuration's: the drive's length in time is the user's choice
         return "ended", (
-            f"the duration ({self.config.duration:g} s) ended the run at s = {self.view.s:.0f} m "
+            f"the duration ({sc.config.duration:g} s) ended the run at s = {self.view.s:.0f} m "
             f"of the drive to s = {self._end_s:.0f} m"
         )
 
-    # -- results ------------------------------------------------------------------------------
-    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
-        if not trace.size:
-            return {"completed_road": False}
-        col = {name: trace[:, i] for i, name in enumerate(columns)}
-        d = col["d"]
-        return {
-            "completed_road": self.status == "completed",
-            "distance": m.json_number(float(col["s"][-1] - col["s"][0]), 2),
-            "max_abs_lateral_error": m.json_number(m.max_abs(d)),
-            "mean_abs_lateral_error": m.json_number(float(np.mean(np.abs(d)))),
-            "std_lateral_error": m.json_number(float(np.std(d))),
-            "rms_lateral_error": m.json_number(float(np.sqrt(np.mean(d * d)))),
-            "max_abs_heading_error": m.json_number(m.max_abs(col["heading_error"])),
-            "max_abs_steer": m.json_number(m.max_abs(col["delta"])),
-            "max_abs_lateral_accel": m.json_number(m.max_abs(col["lat_accel"])),
-        }
-
     # -- recording ----------------------------------------------------------------------------
-    def _series(self) -> list[Series]:
+    def series(self) -> list[Series]:
         return [
             Series("d", "plots/lateral_error/ego", "m", "lateral error (+ left of the lane centre)"),
             Series("heading_error", "plots/heading_error/ego", "rad", "heading error"),
@@ -312,5 +327,5 @@ class LaneCenteringScenario(Scenario):
             Series("curvature", "plots/curvature/lane", "1/m", "lane curvature"),
             Series("lat_accel", "plots/lateral_accel/ego", "m/s^2", "lateral acceleration"),
             Series("speed", "plots/speed/ego", "m/s", "speed"),
-            *signal_series(self._signal_names, self._signal_units),
+            *super().series(),
         ]

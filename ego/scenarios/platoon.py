@@ -43,7 +43,7 @@ from ego.record.base import Scene, Series
 from ego.results import metrics as m
 from ego.results.trace import Band, Column, FrequencyResponse, Marker, Metric, Plot, Ref
 from ego.scenarios import string_stability as ss
-from ego.scenarios.base import NO_COLLISION, CommonConfig, Scenario
+from ego.scenarios.base import NO_COLLISION, CommonConfig, PartsLoop, Scenario
 from ego.scenarios.events import INF, time_to_collision
 from ego.sim.traffic import Manoeuvre, ProfiledLeader, SpeedProfile
 from ego.sim.types import Collision, Neighbour, VehicleSpec, VehicleType, ego_type
@@ -321,86 +321,17 @@ class PlatoonScenario(Scenario):
             for q, unit, text in PER_FOLLOWER
         )
 
-    def __init__(self, config, controller, **kwargs) -> None:
-        super().__init__(config, controller, **kwargs)
-        c = config
-        self.ids = follower_ids(c.followers)
-        #: the trace columns in the order _act collects a row's values
-        self._row_names = tuple(c.name for c in self.trace_columns())
-        self.profile = c.profile
-        self.policy = SpacingPolicy(c.standstill_gap, c.headway)
-        self.geometry = VehicleGeometry(length=c.length, width=c.width, cg_to_front=0.5 * c.length)
-        self.model = Longitudinal(LongitudinalParams(lag=c.lag, max_accel=c.max_accel, max_decel=c.max_decel))
-        self.lane: LanePolyline | None = None
-        self.obs: list[FollowingObservation] = []
-        n = c.followers
-        #: the followers, f1 first: state (front bumper along the lane m, speed m/s, acceleration m/s^2)
-        #: the followers' plants in platoon order (f1 first) and the same keyed by vehicle id
-        self.chain: list[LongitudinalPlant] = []
-        self.plants: dict[str, LongitudinalPlant] = {}
-        self.gap = [0.0] * n
-        self.e = [0.0] * n  #: spacing errors delta_d (m)
-        self.ttc = [INF] * n
-        self._gap_sync = [0.0] * n
-        self._s_sync = [0.0] * n
-        self._lead = Neighbour()
-        self._lead_a = self._lead_v_now = 0.0
-        self._lead_s_sync = 0.0
-        self._sync_t = 0.0
-        self._bad: str | None = None
-        #: the traffic log's ids (the leader, then the followers) and the followers' poses
-        #: pushed into SUMO for the last step (centre of gravity x, y in m, yaw in rad)
-        self._log_ids = (LEADER, *self.ids)
-        self._pushed: list[tuple[float, float, float]] = []
-
-    # -- set-up ---------------------------------------------------------------------------
-    def _setup(self, rng: np.random.Generator) -> None:
-        self._write_row = self.trace.bind(self._row_names)
+    def make_loop(self) -> PlatoonLoop:
+        """The followers' plants keyed by id, the leader's profile, no road sensor (each
+        follower is measured along the one lane)."""
         c = self.config
-        bridge = self.bridge
-        width, points = bridge.lane_shapes()[f"{EDGE}_0"]
-        self.lane = lane = LanePolyline(points, width, f"{EDGE}_0")
-        L, gap0, n = c.length, c.start_gap, c.followers
-        v0 = self.profile.speed(0.0)
-        lead_pos = _check_road(c, lane.length)
-        bridge.add_type(
-            VehicleType(
-                LEADER,
-                length=L,
-                width=c.width,
-                accel=10.0,
-                decel=12.0,
-                emergency_decel=12.0,
-                max_speed=60.0,
-                sigma=0.0,
-                color=LEADER_COLOR,
-            )
-        )
-        bridge.add_type(ego_type("follower", self.geometry, decel=c.max_decel))
-        bridge.add_route(ROUTE, [EDGE])
-        fronts = [lead_pos - (i + 1) * (L + gap0) for i in range(n)]
-        bridge.add_vehicles(
-            [VehicleSpec(LEADER, LEADER, ROUTE, 0, lead_pos, v0)]
-            + [VehicleSpec(vid, "follower", ROUTE, 0, pos, v0) for vid, pos in zip(self.ids, fronts)]
-        )
-        bridge.insert(required=[LEADER, *self.ids])
-        self.leader = ProfiledLeader(LEADER, self.profile)
-        self.leader.start(bridge)
-        for vid in self.ids:
-            bridge.control(vid, self.geometry, keep_route=1)
-        self.controlled_ids = self.ids
-        self.colors = {LEADER: LEADER_COLOR, **{vid: FOLLOWER_COLOR for vid in self.ids}}
-
-        self.chain = [LongitudinalPlant(self.model, lane, self.geometry, c.dt, front, v0) for front in fronts]
-        self.plants = dict(zip(self.ids, self.chain))
-        self.obs = [
-            FollowingObservation(policy=self.policy, max_accel=c.max_accel, max_decel=c.max_decel) for _ in self.ids
-        ]
-        self._bad = None
-        self._pushed = [plant.pose() for plant in self.chain]
-        self._manoeuvre = 0  #: the leader's next manoeuvre (index into profile.manoeuvres)
-        self._manoeuvre_at = self._next_manoeuvre_time()
-        self._after_sumo_step()
+        self.ids = follower_ids(c.followers)
+        self.profile = c.profile
+        self.geometry = VehicleGeometry(length=c.length, width=c.width, cg_to_front=0.5 * c.length)
+        self.obs: list[FollowingObservation] = []
+        self.plants: dict[str, LongitudinalPlant] = {}
+        self.lane: LanePolyline | None = None  #: the platoon's one lane (once a run has started)
+        return PlatoonLoop(self)
 
     # -- the controlled vehicles by id (Scenario's contract) -------------------------------
     def observation(self, vid: str) -> FollowingObservation:
@@ -425,137 +356,20 @@ class PlatoonScenario(Scenario):
 
     def agent_signals_reader(self, vid: str) -> Callable[[], tuple[float, float, float | None, float]]:
         i = self.ids.index(vid)
-        o, e = self.obs[i], self.e  # a run's observations; the errors updated in place
+        o, e = self.obs[i], self.loop.e  # a run's observations; the errors updated in place
         return lambda: (o.speed, e[i], o.accel, 0.0)
 
     def lane_rows(self, vid: str):
         """The leader and the followers behind ``vid``, all on the platoon's one lane."""
         i = self.ids.index(vid)
         half = 0.5 * self.config.length
-        own = self.chain[i].state
+        loop = self.loop
+        own = loop.chain[i].state
         ego = (own[0] - half, 0.0, own[1], 0.0, 0.0)
         lead = self.obs[0]
-        rows = [(self.chain[0].state[0] + self.gap[0] + half, 0.0, lead.lead_speed, 0.0, 0.0)]
-        rows += [(p.state[0] - half, 0.0, p.state[1], 0.0, 0.0) for j, p in enumerate(self.chain) if j != i]
+        rows = [(loop.chain[0].state[0] + loop.gap[0] + half, 0.0, lead.lead_speed, 0.0, 0.0)]
+        rows += [(p.state[0] - half, 0.0, p.state[1], 0.0, 0.0) for j, p in enumerate(loop.chain) if j != i]
         return ego, rows, self.config.length
-
-    # -- per step ---------------------------------------------------------------------------
-    def _act(self, actions) -> None:
-        """Every follower's command through its plant; the trace row for t (states before
-        the step, the command as the actuator took it)."""
-        gap, e, ttc = self.gap, self.e, self.ttc
-        values = [self.t, self._lead_v_now, self._lead_a]
-        for i, (plant, (cmd, _)) in enumerate(zip(self.chain, actions)):
-            if not -math.inf < cmd < math.inf:  # NaN fails both comparisons
-                self._bad = f"the controller of {self.ids[i]} commanded {cmd} m/s^2"
-                cmd = 0.0
-            _, v, a = plant.state
-            plant.step((cmd,))
-            # in PER_FOLLOWER order
-            values += (gap[i], e[i], v, a, plant.applied[0], ttc[i])
-        self._write_row(self.controller.signals(), tuple(values))  # a tuple: the writer's C path
-
-    def _before_sumo_step(self) -> None:
-        bridge = self.bridge
-        self.leader.update(bridge, self.t)
-        pushed = self._pushed = []
-        for vid, plant in zip(self.ids, self.chain):
-            x, y, psi = plant.pose()
-            _, v, a = plant.state
-            bridge.push(vid, x, y, psi, v, a)
-            pushed.append((x, y, psi))
-
-    def _after_sumo_step(self) -> None:
-        """Read who leads whom and the gaps from SUMO; the leader's speed and acceleration."""
-        bridge = self.bridge
-        lead_v, self._lead_a = bridge.speed(LEADER), bridge.acceleration(LEADER)
-        # SUMO moves its vehicles at their new speed for the whole step (Euler): the leader
-        # keeps its acceleration, so until the next step it drives at v + a * step
-        self._lead_v_now = max(lead_v + self._lead_a * self.config.sumo_step, 0.0)
-        self._lead_s_sync = bridge.lane_position(LEADER)
-        self._sync_t = self.t
-        L = self.config.length
-        s = [plant.state[0] for plant in self.chain]
-        for i, vid in enumerate(self.ids):
-            ahead = LEADER if i == 0 else self.ids[i - 1]
-            found = bridge.read_leader(vid, self._lead)
-            if found.id == ahead:
-                self._gap_sync[i] = found.gap
-            else:  # beyond SUMO's look-ahead: from the lane positions
-                front = self._lead_s_sync if i == 0 else s[i - 1]
-                self._gap_sync[i] = front - L - s[i]
-            self._s_sync[i] = s[i]
-
-    def _log_traffic(self) -> None:
-        """Every vehicle within RADIUS of a follower (every follower is an ego): the
-        followers where they were pushed into SUMO for this step, the leader from SUMO."""
-        rows = [self.bridge.box(LEADER)]
-        L, W = self.config.length, self.config.width
-        for plant, (x, y, psi) in zip(self.chain, self._pushed):
-            rows.append((x, y, psi, plant.state[1], L, W))  # the CG is the box centre here
-        self.traffic.add(self.t, [p[:2] for p in self._pushed], self._log_ids, rows)
-
-    def _check_divergence(self) -> str | None:
-        if self._bad is not None:
-            return self._bad
-        states = [plant.state for plant in self.chain]
-        # one sum is finite only if every state is (NaN and infinity propagate)
-        if math.isfinite(sum(map(sum, states))) and max(map(_speed_of, states)) <= 80.0:
-            return None
-        for vid, (s, v, a) in zip(self.ids, states):
-            if not (math.isfinite(s) and math.isfinite(v) and math.isfinite(a)):
-                return f"the state of {vid} is not finite (NaN or infinity)"
-            if v > 80.0:
-                return f"{vid} drives at {v:.1f} m/s: absurd"
-        return None
-
-    def _update(self) -> None:
-        """Gaps now (carried forward from the last SUMO step), observations, collisions."""
-        t = self.t
-        if t >= self._manoeuvre_at:
-            self._leader_manoeuvre()
-        since = t - self._sync_t
-        lead_v, lead_a = self._lead_v_now, self._lead_a
-        moved = lead_v * since
-        s_sync, gap_sync = self._s_sync, self._gap_sync
-        error = self.policy.error
-        ahead_s = 0.0
-        for i, (o, plant) in enumerate(zip(self.obs, self.chain)):
-            s, speed, accel = plant.state
-            if i:
-                moved = ahead_s - s_sync[i - 1]
-            gap = gap_sync[i] + moved - (s - s_sync[i])
-            self.gap[i] = gap
-            self.e[i] = error(gap, speed)
-            self.ttc[i] = time_to_collision(gap, speed - lead_v)
-            o.t = t
-            o.gap = gap
-            o.speed = speed
-            o.accel = accel
-            o.lead_speed = lead_v
-            o.lead_accel = lead_a
-            if gap <= 0.0:
-                ahead = LEADER if i == 0 else self.ids[i - 1]
-                self._collided(Collision(self.ids[i], ahead, "rear-end (gap <= 0)", speed, lead_v))
-                return
-            ahead_s, lead_v, lead_a = s, speed, accel
-
-    def _next_manoeuvre_time(self) -> float:
-        ms = self.profile.manoeuvres
-        return ms[self._manoeuvre].time if self._manoeuvre < len(ms) else INF
-
-    def _leader_manoeuvre(self) -> None:
-        """The leader starts its next manoeuvre: an event (the log, the recording's events)."""
-        m = self.profile.manoeuvres[self._manoeuvre]
-        self._manoeuvre += 1
-        self._manoeuvre_at = self._next_manoeuvre_time()
-        before = self.profile.base_speed(m.time)
-        kind = m.kind(before)
-        if kind == "hold":
-            self.event("leader", f"{LEADER} holds its speed ({before / KMH:.0f} km/h)")
-            return
-        what = "stops" if kind == "stop" else f"{kind}s to {m.speed / KMH:g} km/h"
-        self.event("leader", f"{LEADER} {what} at {m.rate:g} m/s^2 (from {before / KMH:.0f} km/h)")
 
     # -- results ------------------------------------------------------------------------------
     def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
@@ -654,28 +468,243 @@ class PlatoonScenario(Scenario):
             for k in range(len(self.ids))
         }
 
-    # -- recording ----------------------------------------------------------------------------
-    def _record_boxes(self) -> None:
-        ids, poses = self.bridge.poses()
-        back = self.chain[-1].state[0] - self.config.length
-        x, y = self.lane.offset_point(0.5 * (self._lead_s_sync + back), 0.0)
-        self.recorder.vehicles(self.t, ids, poses, (x, y))
 
-    def _scene(self) -> Scene:
-        c = self.config
+class PlatoonLoop(PartsLoop):
+    """The platoon's loop: the followers' plants (keyed by vehicle id, in platoon order), the
+    SUMO leader on its speed profile (the leader's manoeuvres are its events), the gaps read
+    from SUMO every step and carried forward between steps, every follower's observation."""
+
+    def __init__(self, sc: PlatoonScenario) -> None:
+        super().__init__(sc)
+        c = sc.config
+        self.ids = sc.ids
+        #: the trace columns in the order act collects a row's values
+        self._row_names = tuple(c.name for c in sc.trace_columns())
+        self.profile = sc.profile
+        self.policy = SpacingPolicy(c.standstill_gap, c.headway)
+        self.geometry = sc.geometry
+        self.model = Longitudinal(LongitudinalParams(lag=c.lag, max_accel=c.max_accel, max_decel=c.max_decel))
+        self.lane: LanePolyline | None = None
+        self.obs: list[FollowingObservation] = sc.obs
+        n = c.followers
+        #: the followers, f1 first: state (front bumper along the lane m, speed m/s, acceleration m/s^2)
+        #: the followers' plants in platoon order (f1 first) and the same keyed by vehicle id
+        self.chain: list[LongitudinalPlant] = []
+        self.plants: dict[str, LongitudinalPlant] = {}
+        self.gap = [0.0] * n
+        self.e = [0.0] * n  #: spacing errors delta_d (m)
+        self.ttc = [INF] * n
+        self._gap_sync = [0.0] * n
+        self._s_sync = [0.0] * n
+        self._lead = Neighbour()
+        self._lead_a = self._lead_v_now = 0.0
+        self._lead_s_sync = 0.0
+        self._sync_t = 0.0
+        self._bad: str | None = None
+        #: the traffic log's ids (the leader, then the followers) and the followers' poses
+        #: pushed into SUMO for the last step (centre of gravity x, y in m, yaw in rad)
+        self._log_ids = (LEADER, *self.ids)
+        self._pushed: list[tuple[float, float, float]] = []
+
+    # -- set-up ---------------------------------------------------------------------------
+    def setup(self, rng: np.random.Generator) -> None:
+        sc = self.sc
+        self._write_row = sc.trace.bind(self._row_names)
+        c = sc.config
+        bridge = sc.bridge
+        width, points = bridge.lane_shapes()[f"{EDGE}_0"]
+        self.lane = lane = sc.lane = LanePolyline(points, width, f"{EDGE}_0")
+        L, gap0, n = c.length, c.start_gap, c.followers
+        v0 = self.profile.speed(0.0)
+        lead_pos = _check_road(c, lane.length)
+        bridge.add_type(
+            VehicleType(
+                LEADER,
+                length=L,
+                width=c.width,
+                accel=10.0,
+                decel=12.0,
+                emergency_decel=12.0,
+                max_speed=60.0,
+                sigma=0.0,
+                color=LEADER_COLOR,
+            )
+        )
+        bridge.add_type(ego_type("follower", self.geometry, decel=c.max_decel))
+        bridge.add_route(ROUTE, [EDGE])
+        fronts = [lead_pos - (i + 1) * (L + gap0) for i in range(n)]
+        bridge.add_vehicles(
+            [VehicleSpec(LEADER, LEADER, ROUTE, 0, lead_pos, v0)]
+            + [VehicleSpec(vid, "follower", ROUTE, 0, pos, v0) for vid, pos in zip(self.ids, fronts)]
+        )
+        bridge.insert(required=[LEADER, *self.ids])
+        self.leader = ProfiledLeader(LEADER, self.profile)
+        self.leader.start(bridge)
+        for vid in self.ids:
+            bridge.control(vid, self.geometry, keep_route=1)
+        sc.controlled_ids = self.ids
+        sc.colors = {LEADER: LEADER_COLOR, **{vid: FOLLOWER_COLOR for vid in self.ids}}
+
+        self.chain = [LongitudinalPlant(self.model, lane, self.geometry, c.dt, front, v0) for front in fronts]
+        self.plants = sc.plants = dict(zip(self.ids, self.chain))
+        self.obs = sc.obs = [
+            FollowingObservation(policy=self.policy, max_accel=c.max_accel, max_decel=c.max_decel) for _ in self.ids
+        ]
+        self._bad = None
+        self._pushed = [plant.pose() for plant in self.chain]
+        self._manoeuvre = 0  #: the leader's next manoeuvre (index into profile.manoeuvres)
+        self._manoeuvre_at = self._next_manoeuvre_time()
+        self.after_sim_step()
+
+    # -- per step ---------------------------------------------------------------------------
+    def act(self, actions) -> None:
+        """Every follower's command through its plant; the trace row for t (states before
+        the step, the command as the actuator took it)."""
+        sc = self.sc
+        gap, e, ttc = self.gap, self.e, self.ttc
+        values = [sc.t, self._lead_v_now, self._lead_a]
+        for i, (plant, (cmd, _)) in enumerate(zip(self.chain, actions)):
+            if not -math.inf < cmd < math.inf:  # NaN fails both comparisons
+                self._bad = f"the controller of {self.ids[i]} commanded {cmd} m/s^2"
+                cmd = 0.0
+            _, v, a = plant.state
+            plant.step((cmd,))
+            # in PER_FOLLOWER order
+            values += (gap[i], e[i], v, a, plant.applied[0], ttc[i])
+        self._write_row(sc.controller.signals(), tuple(values))  # a tuple: the writer's C path
+
+    def before_sim_step(self) -> None:
+        sc = self.sc
+        bridge = sc.bridge
+        self.leader.update(bridge, sc.t)
+        pushed = self._pushed = []
+        for vid, plant in zip(self.ids, self.chain):
+            x, y, psi = plant.pose()
+            _, v, a = plant.state
+            bridge.push(vid, x, y, psi, v, a)
+            pushed.append((x, y, psi))
+
+    def after_sim_step(self) -> None:
+        """Read who leads whom and the gaps from SUMO; the leader's speed and acceleration."""
+        sc = self.sc
+        bridge = sc.bridge
+        lead_v, self._lead_a = bridge.speed(LEADER), bridge.acceleration(LEADER)
+        # SUMO moves its vehicles at their new speed for the whole step (Euler): the leader
+        # keeps its acceleration, so until the next step it drives at v + a * step
+        self._lead_v_now = max(lead_v + self._lead_a * sc.config.sumo_step, 0.0)
+        self._lead_s_sync = bridge.lane_position(LEADER)
+        self._sync_t = sc.t
+        L = sc.config.length
+        s = [plant.state[0] for plant in self.chain]
+        for i, vid in enumerate(self.ids):
+            ahead = LEADER if i == 0 else self.ids[i - 1]
+            found = bridge.read_leader(vid, self._lead)
+            if found.id == ahead:
+                self._gap_sync[i] = found.gap
+            else:  # beyond SUMO's look-ahead: from the lane positions
+                front = self._lead_s_sync if i == 0 else s[i - 1]
+                self._gap_sync[i] = front - L - s[i]
+            self._s_sync[i] = s[i]
+
+    def log_traffic(self) -> None:
+        """Every vehicle within RADIUS of a follower (every follower is an ego): the
+        followers where they were pushed into SUMO for this step, the leader from SUMO."""
+        sc = self.sc
+        rows = [sc.bridge.box(LEADER)]
+        L, W = sc.config.length, sc.config.width
+        for plant, (x, y, psi) in zip(self.chain, self._pushed):
+            rows.append((x, y, psi, plant.state[1], L, W))  # the CG is the box centre here
+        sc.traffic.add(sc.t, [p[:2] for p in self._pushed], self._log_ids, rows)
+
+    def diverged(self) -> str | None:
+        if self._bad is not None:
+            return self._bad
+        states = [plant.state for plant in self.chain]
+        # one sum is finite only if every state is (NaN and infinity propagate)
+        if math.isfinite(sum(map(sum, states))) and max(map(_speed_of, states)) <= 80.0:
+            return None
+        for vid, (s, v, a) in zip(self.ids, states):
+            if not (math.isfinite(s) and math.isfinite(v) and math.isfinite(a)):
+                return f"the state of {vid} is not finite (NaN or infinity)"
+            if v > 80.0:
+                return f"{vid} drives at {v:.1f} m/s: absurd"
+        return None
+
+    def update(self) -> None:
+        """Gaps now (carried forward from the last SUMO step), observations, collisions."""
+        sc = self.sc
+        t = sc.t
+        if t >= self._manoeuvre_at:
+            self._leader_manoeuvre()
+        since = t - self._sync_t
+        lead_v, lead_a = self._lead_v_now, self._lead_a
+        moved = lead_v * since
+        s_sync, gap_sync = self._s_sync, self._gap_sync
+        error = self.policy.error
+        ahead_s = 0.0
+        for i, (o, plant) in enumerate(zip(self.obs, self.chain)):
+            s, speed, accel = plant.state
+            if i:
+                moved = ahead_s - s_sync[i - 1]
+            gap = gap_sync[i] + moved - (s - s_sync[i])
+            self.gap[i] = gap
+            self.e[i] = error(gap, speed)
+            self.ttc[i] = time_to_collision(gap, speed - lead_v)
+            o.t = t
+            o.gap = gap
+            o.speed = speed
+            o.accel = accel
+            o.lead_speed = lead_v
+            o.lead_accel = lead_a
+            if gap <= 0.0:
+                ahead = LEADER if i == 0 else self.ids[i - 1]
+                sc._collided(Collision(self.ids[i], ahead, "rear-end (gap <= 0)", speed, lead_v))
+                return
+            ahead_s, lead_v, lead_a = s, speed, accel
+
+    def _next_manoeuvre_time(self) -> float:
+        ms = self.profile.manoeuvres
+        return ms[self._manoeuvre].time if self._manoeuvre < len(ms) else INF
+
+    def _leader_manoeuvre(self) -> None:
+        """The leader starts its next manoeuvre: an event (the log, the recording's events)."""
+        sc = self.sc
+        m = self.profile.manoeuvres[self._manoeuvre]
+        self._manoeuvre += 1
+        self._manoeuvre_at = self._next_manoeuvre_time()
+        before = self.profile.base_speed(m.time)
+        kind = m.kind(before)
+        if kind == "hold":
+            sc.event("leader", f"{LEADER} holds its speed ({before / KMH:.0f} km/h)")
+            return
+        what = "stops" if kind == "stop" else f"{kind}s to {m.speed / KMH:g} km/h"
+        sc.event("leader", f"{LEADER} {what} at {m.rate:g} m/s^2 (from {before / KMH:.0f} km/h)")
+
+    # -- recording ----------------------------------------------------------------------------
+    def record_boxes(self) -> None:
+        sc = self.sc
+        ids, poses = sc.bridge.poses()
+        back = self.chain[-1].state[0] - sc.config.length
+        x, y = self.lane.offset_point(0.5 * (self._lead_s_sync + back), 0.0)
+        sc.recorder.vehicles(sc.t, ids, poses, (x, y))
+
+    def scene(self) -> Scene:
+        sc = self.sc
+        c = sc.config
         top = max(self.profile.speed(k * 0.5) for k in range(int(c.duration * 2) + 1))
         span = c.followers * (c.length + c.standstill_gap + c.headway * top + max(c.start_error, 0.0)) + c.length
         half = 0.6 * span + 2.0 * c.length
         # the wide view: twice the close one (300 m for report 004's platoon at 50 km/h)
         return Scene(
             lanes=[(self.lane.width, self.lane.points)],
-            title=self.name,
+            title=sc.name,
             followed="the platoon",
             follow_view=(-half, half, -0.25 * half, 0.25 * half),
             around_view=(-2.0 * half, 2.0 * half, -0.3 * half, 0.3 * half),
         )
 
-    def _series(self) -> list[Series]:
+    def series(self) -> list[Series]:
+        sc = self.sc
         out = [
             Series("lead_speed", "plots/speed/leader", "m/s", "leader"),
             Series("lead_accel", "plots/accel/leader", "m/s^2", "leader"),
@@ -689,9 +718,9 @@ class PlatoonScenario(Scenario):
                 Series(f"command_{vid}", f"plots/command/{vid}", "m/s^2", vid),
                 Series(f"ttc_{vid}", f"plots/ttc/{vid}", "s", vid),
             ]
-        for name in self._signal_names:  # one panel per signal: each has one unit
+        for name in sc._signal_names:  # one panel per signal: each has one unit
             signal, _, vid = name.rpartition("_")
-            out.append(Series(name, f"plots/{signal}/{vid}", self._signal_units.get(name, ""), vid))
+            out.append(Series(name, f"plots/{signal}/{vid}", sc._signal_units.get(name, ""), vid))
         return out
 
 

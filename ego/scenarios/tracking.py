@@ -16,9 +16,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
+from ego.control.base import Observation
 from ego.models import ActuatorLimits, BicyclePlant, NonlinearBicycle, VehicleGeometry
 from ego.params import param
 from ego.record.base import Scene, Series
@@ -26,17 +28,18 @@ from ego.results import metrics as m
 from ego.results.trace import Column, Metric, Plot
 from ego.scenarios.base import (
     Parts,
+    PartsLoop,
     Scenario,
     TimingConfig,
     divergence,
-    signal_series,
     vehicle_series,
 )
 from ego.scenarios.motorway import COLUMNS, EDGE, HighwayConfig, MotorwayWorld, SurroundView, ego_limits, ego_plant
 from ego.scenarios.motorway import series as motorway_series
+from ego.sim.types import EGO
 
 
-def tracking_metrics(t: np.ndarray, e_lat: np.ndarray, e_speed: np.ndarray, after: float = 10.0) -> dict:
+def tracking_metrics(t: np.ndarray, e_lat: np.ndarray, e_speed: np.ndarray, after: float = 10.0) -> dict[str, Any]:
     """RMS and largest lateral error over the run and after ``after`` seconds; RMS speed error."""
     late = t >= after
 
@@ -94,14 +97,14 @@ class SineReference:
 
     phase = 0
 
-    def __init__(self, config, view) -> None:
+    def __init__(self, config: SineTrackingConfig, view: SurroundView) -> None:
         self.config, self.view = config, view
         self.s0 = 0.0
 
-    def reset(self, plant) -> None:
+    def reset(self, plant: object) -> None:
         self.s0 = self.view.s
 
-    def plan(self, obs, t: float) -> None:
+    def plan(self, obs: Observation, t: float) -> None:
         c = self.config
         wt = c.omega * t
         obs.s_ref = self.s0 + c.ref_speed * t
@@ -137,13 +140,11 @@ class SineTracking(Scenario):
             SineReference(self.config, view),
             None,
             ego_plant,
-            limits=ego_limits,
+            motorway_series,
+            ego_limits,
         )
 
-    def _series(self):
-        return motorway_series(self._signal_names, self._signal_units)
-
-    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
+    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict[str, Any]:
         col = {name: trace[:, i] for i, name in enumerate(columns)}
         out = tracking_metrics(col["t"], col["e_lat"], col["ds"] - col["speed_ref"])
         out.update(
@@ -207,54 +208,104 @@ class Report000(Scenario):
         Metric("final_speed", "m/s", "speed at the end"),
     )
     plots = TRACKING_PLOTS
-    _RECORD_EVERY = 0.1  # s, ego outline in the recording
 
-    def __init__(self, config, controller, **kwargs) -> None:
-        super().__init__(config, controller, **kwargs)
+    def make_loop(self) -> Report000Loop:
+        """The bare model's loop: report 000's car and the references, no simulator."""
         self.geometry = VehicleGeometry()
         self.ego: BicyclePlant | None = None
+        return Report000Loop(self)
+
+    def action_limits(self, vid: str | None = None) -> tuple[float, float, float]:
+        return ego_limits(self.config)  # report 000's car, as the motorway's
+
+    def _meta(self) -> dict[str, Any]:
+        return {**super()._meta(), "colors": {"ego": (220, 40, 40)}}
+
+    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict[str, Any]:
+        col = {name: trace[:, i] for i, name in enumerate(columns)}
+        c = self.config
+        t = col["t"]
+        out = tracking_metrics(t, col["e_lat"], col["ds"] - col["speed_ref"])
+        if c.case == "step":
+            duration = m.settling_time(t, col["e_lat"], c.settle_band, 0.0)
+            out["lane_change_duration"] = m.json_number(duration, 4)
+            out["lane_change_completed"] = duration is not None and self.status == "completed"
+            out["max_overshoot"] = m.json_number(m.overshoot(col["e_lat"], 1.0 if c.step >= 0 else -1.0), 4)
+        out["x_settling_time"] = m.json_number(m.settling_time(t, col["e_lon"], c.x_band, 0.0), 4)
+        out["max_abs_longitudinal_error"] = m.json_number(m.max_abs(col["e_lon"]), 4)
+        out["max_abs_lateral_accel"] = m.json_number(m.max_abs(col["lat_accel"]), 4)
+        out["final_speed"] = m.json_number(float(col["speed"][-1]) if len(t) else None, 4)
+        return out
+
+
+class Report000References:
+    """The manoeuvre of ``report-000``: the references as functions of time, one state
+    throughout (case=step: the lateral step; case=sine: A sin(omega t))."""
+
+    def __init__(self, config: Report000Config) -> None:
+        self.config = config
+
+    def plan(self, obs: Observation, t: float) -> None:
+        c = self.config
+        obs.s_ref, obs.ds_ref = c.ref_speed * t, c.ref_speed
+        if c.case == "step":
+            obs.d_ref, obs.dd_ref = c.step, 0.0
+        else:
+            wt = c.omega * t
+            obs.d_ref, obs.dd_ref = c.amplitude * math.sin(wt), c.amplitude * c.omega * math.cos(wt)
+
+
+class Report000Loop(PartsLoop):
+    """report-000's loop on the bare model: the ego's plant (report 000's raw model, no
+    ABS: its published figures are compared with these), the references of time, no
+    simulator and no road; the ego's outline is recorded every ``RECORD_EVERY`` seconds."""
+
+    RECORD_EVERY = 0.1  #: s, the ego's outline in the recording (there is no simulator step)
+
+    def __init__(self, sc: Report000) -> None:
+        super().__init__(sc)
+        self.references = Report000References(sc.config)
         self._next_pose = 0.0
 
-    def _setup(self, rng) -> None:
-        c = self.config
-        # the report's raw model (no ABS): its published figures are compared with these
-        self.ego = BicyclePlant(
+    #: the ego's plant (made by :meth:`setup`)
+    ego: BicyclePlant
+
+    def setup(self, rng: np.random.Generator) -> None:
+        sc = self.sc
+        c = sc.config
+        self.ego = sc.ego = BicyclePlant(
             NonlinearBicycle(),
-            self.geometry,
+            sc.geometry,
             c.dt,
             c.substeps,
             ActuatorLimits(max_steer=c.max_steer),
             state=(0.0, c.initial_speed, 0.0, 0.0, 0.0, 0.0),
         )
-        self.controlled_ids = ("ego",)
+        sc.plants = {EGO: self.ego}
+        sc.controlled_ids = (EGO,)
         self._next_pose = 0.0
 
-    def _references(self, t: float) -> tuple[float, float, float, float]:
-        c = self.config
-        if c.case == "step":
-            return c.ref_speed * t, c.ref_speed, c.step, 0.0
-        wt = c.omega * t
-        return c.ref_speed * t, c.ref_speed, c.amplitude * math.sin(wt), c.amplitude * c.omega * math.cos(wt)
-
-    def _update(self) -> None:
+    def update(self) -> None:
+        sc = self.sc
         X, u, Y, v, psi, r = self.ego.state
-        obs = self.obs
-        obs.t = self.t
-        obs.s_ref, obs.ds_ref, obs.d_ref, obs.dd_ref = self._references(self.t)
+        obs, t = sc.obs, sc.t
+        obs.t = t
+        self.references.plan(obs, t)
         c, s = math.cos(psi), math.sin(psi)
         obs.s, obs.d = X, Y
         obs.ds, obs.dd = u * c - v * s, u * s + v * c
         obs.speed, obs.yaw_rate = u, r
-        if self.t >= self._next_pose - 1e-9:
+        if t >= self._next_pose - 1e-9:
             self._record_pose()
 
-    def _act(self, action) -> None:
+    def act(self, action: tuple[float, float]) -> None:
+        sc = self.sc
         ego = self.ego
         ego.step(action)
         fx, delta = ego.applied
-        o = self.obs
-        self.trace.append(
-            self.controller.signals(),
+        o = sc.obs
+        sc.trace.append(
+            sc.controller.signals(),
             t=o.t,
             s=o.s,
             d=o.d,
@@ -272,56 +323,36 @@ class Report000(Scenario):
         )
 
     def _record_pose(self) -> None:
-        """The ego's outline, every _RECORD_EVERY seconds (there is no SUMO step)."""
+        """The ego's outline, every RECORD_EVERY seconds."""
+        sc = self.sc
         X, _, Y, _, psi, _ = self.ego.state
-        g = self.geometry
+        g = sc.geometry
         front = (X + g.cg_to_front * math.cos(psi), Y + g.cg_to_front * math.sin(psi))
         pose = (*front, (90.0 - math.degrees(psi)) % 360.0, g.length, g.width)
-        self.recorder.vehicles(self.t, ["ego"], [pose], (X, 0.0))
-        self._next_pose = self.t + self._RECORD_EVERY
+        sc.recorder.vehicles(sc.t, [EGO], [pose], (X, 0.0))
+        self._next_pose = sc.t + self.RECORD_EVERY
 
-    def action_limits(self, vid: str | None = None) -> tuple[float, float, float]:
-        return ego_limits(self.config)  # report 000's car, as the motorway's
-
-    def _check_divergence(self) -> str | None:
-        X, u, Y, v, psi, r = self.ego.state
+    def diverged(self) -> str | None:
+        state = self.ego.state
         # no road: only the state itself can be absurd (20 m off the reference is lost)
-        return divergence(self.ego.state, Y - self.obs.d_ref, psi, 20.0)
+        return divergence(state, state[2] - self.sc.obs.d_ref, state[4], 20.0)
 
-    def _scene(self) -> Scene:
-        c = self.config
+    def scene(self) -> Scene:
+        sc = self.sc
+        c = sc.config
         x1 = max(c.ref_speed, c.initial_speed) * c.duration
         y = abs(c.step) if c.case == "step" else c.amplitude
         # guide lines at the reference's extremes, the road the report never modelled
         levels = sorted({0.0, y, -y if c.case == "sine" else 0.0})
         lines = [(0.02, [(0.0, yy), (x1, yy)]) for yy in levels]
-        return Scene(lanes=lines, title=self.name)
+        return Scene(lanes=lines, title=sc.name)
 
-    def _series(self) -> list[Series]:
+    def series(self) -> list[Series]:
         return [
             Series("e_lat", "plots/lateral_error/ego", "m", "Y - Y_ref"),
             Series("d", "plots/lateral_position/ego", "m", "Y"),
             Series("d_ref", "plots/lateral_position/reference", "m", "Y_ref"),
             Series("e_lon", "plots/longitudinal_error/ego", "m", "X - X_ref"),
             *vehicle_series(),
-            *signal_series(self._signal_names, self._signal_units),
+            *super().series(),
         ]
-
-    def _meta(self) -> dict:
-        return {**super()._meta(), "colors": {"ego": (220, 40, 40)}}
-
-    def _metrics(self, trace: np.ndarray, columns: tuple[str, ...]) -> dict:
-        col = {name: trace[:, i] for i, name in enumerate(columns)}
-        c = self.config
-        t = col["t"]
-        out = tracking_metrics(t, col["e_lat"], col["ds"] - col["speed_ref"])
-        if c.case == "step":
-            duration = m.settling_time(t, col["e_lat"], c.settle_band, 0.0)
-            out["lane_change_duration"] = m.json_number(duration, 4)
-            out["lane_change_completed"] = duration is not None and self.status == "completed"
-            out["max_overshoot"] = m.json_number(m.overshoot(col["e_lat"], 1.0 if c.step >= 0 else -1.0), 4)
-        out["x_settling_time"] = m.json_number(m.settling_time(t, col["e_lon"], c.x_band, 0.0), 4)
-        out["max_abs_longitudinal_error"] = m.json_number(m.max_abs(col["e_lon"]), 4)
-        out["max_abs_lateral_accel"] = m.json_number(m.max_abs(col["lat_accel"]), 4)
-        out["final_speed"] = m.json_number(float(col["speed"][-1]) if len(t) else None, 4)
-        return out

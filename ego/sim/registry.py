@@ -1,9 +1,10 @@
 """Traffic simulators by name: ``name -> Backend(factory, capabilities)``.
 
 A scenario asks for a simulator with :func:`make_sim` and declares what it needs of one
-(:class:`Capabilities`); :func:`check_backend_for` refuses a backend that lacks it before
-anything starts. Backend options (highway-env's ``video``, say) travel as data: a mapping
-handed to the factory, checked by the backend's ``check_options``.
+(``needs``: field names of :class:`Capabilities`); :func:`check_needs` refuses a backend
+that lacks one, in one line naming both, when the run is resolved (before anything
+starts). Backend options (highway-env's ``video``, say) travel as data: a mapping handed to
+the factory, checked by the backend's ``check_options``.
 
 A backend module is imported only when its factory runs, so SUMO runs never load
 highway-env and the registry costs nothing to import.
@@ -14,7 +15,7 @@ from __future__ import annotations
 import importlib
 import importlib.util
 import sys
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -51,6 +52,10 @@ class SimSetup:
     edge: str | None = None
     #: the run's simulated time (s), for a backend that renders a video
     duration: float = 0.0
+    #: start every vehicle exactly where the scenario places it, refusing only a start that
+    #: overlaps another vehicle (not one closer than its drivers' safe gap): a scenario file's
+    #: Init (SUMO: ``--insertion-checks collision``)
+    exact_starts: bool = False
 
 
 @dataclass(frozen=True)
@@ -68,6 +73,10 @@ class Backend:
     #: "module:function" checking the options before anything runs (ConfigError)
     check: str | None = None
     extra: dict[str, Any] = field(default_factory=dict)
+
+    def lacks(self, needs: Sequence[str]) -> list[str]:
+        """The capabilities among ``needs`` (field names of :class:`Capabilities`) it lacks."""
+        return [need for need in needs if not getattr(self.capabilities, need)]
 
     def load(self, ref: str) -> Callable[..., Any]:
         module, _, name = ref.partition(":")
@@ -135,6 +144,18 @@ def backend(name: str) -> Backend:
         raise ConfigError(
             f"bad value for --backend: {name!r} (expected one of: {', '.join(BACKENDS)}){did_you_mean(name, BACKENDS)}"
         ) from None
+
+
+def check_needs(who: str, needs: Sequence[str], name: str) -> Backend:
+    """Backend ``name`` if it has every capability ``who`` (a scenario: "scenario cut-in")
+    ``needs``; else a one-line ConfigError naming both and what it lacks."""
+    found = backend(name)
+    lacking = found.lacks(needs)
+    if lacking:
+        raise ConfigError(
+            f"bad value for --backend: {name!r} ({who} needs {', '.join(lacking)}; backend {name} lacks it)"
+        )
+    return found
 
 
 def check_options(name: str, options: Mapping[str, Any]) -> None:

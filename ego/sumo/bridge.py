@@ -669,6 +669,10 @@ def make_sim(setup: SimSetup, options: dict) -> SumoBridge:
     """The registry's factory for ``sumo`` (:mod:`ego.sim.registry`; SUMO takes no options)."""
     return SumoBridge(
         SumoConfig(
-            setup.net, step_length=setup.step_length, seed=setup.seed, lateral_resolution=setup.lateral_resolution
+            setup.net,
+            step_length=setup.step_length,
+            seed=setup.seed,
+            lateral_resolution=setup.lateral_resolution,
+            extra_args=("--insertion-checks", "collision") if setup.exact_starts else (),
         )
     )

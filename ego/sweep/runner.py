@@ -203,7 +203,13 @@ def _sweep(
         raise OutputError(
             f"{failure} ({kept} results are in {store.path}; the same command resumes once there is room)"
         )
-    # a Ctrl-C now (every run may be done) waits until the summary and the plots are whole
+    _write_reports(spec, store, out, plot_specs)
+    return SweepReport(total, already, ran, by_status, time.perf_counter() - started, interrupted)
+
+
+def _write_reports(spec: SweepSpec, store: ResultStore, out: Path, plot_specs: list) -> None:
+    """summary.md and the envelope plots from every result so far; a Ctrl-C now (every run
+    may be done) waits until they are whole."""
     with signals_deferred():
         table = store.table()
         if table is not None:
@@ -212,7 +218,6 @@ def _sweep(
             write_summary(spec, table, out / "summary.md")
             for p in plot_specs:
                 write_plots(spec, table, out, *p)
-    return SweepReport(total, already, ran, by_status, time.perf_counter() - started, interrupted)
 
 
 def _sample_rows(spec: SweepSpec, limit: int = 200) -> list[dict]:

@@ -35,16 +35,8 @@ from pathlib import Path
 from typing import Any
 
 from ego.params import ConfigError, did_you_mean
-from ego.specs import (
-    MAX_SEED,
-    check_controllers,
-    check_keys,
-    check_values,
-    param_types,
-    read_spec,
-    run_id,
-    scenario_of,
-)
+from ego.specs import MAX_SEED, SpecReader, is_whole, param_types, read_spec, run_id
+from ego.specs import check_requirements as check_run_requirements
 
 #: more runs than this is a mistake, not a sweep
 MAX_RUNS = 10_000_000
@@ -213,109 +205,23 @@ def load(path: str | Path) -> SweepSpec:
 
 def parse(data: dict, source: str = "the spec") -> SweepSpec:
     """Validate a spec's contents (see the module docstring)."""
-
-    def bad(msg: str) -> ConfigError:
-        return ConfigError(f"{source}: {msg}")
-
-    if not isinstance(data, dict):
-        raise bad(f"expected a table of scenario, controllers, ... (got {type(data).__name__})")
-    check_keys(data, _TOP, bad)
-    scenario, cls = scenario_of(data, bad)
-    controllers = data.get("controllers")
-    if not isinstance(controllers, list) or not controllers or not all(isinstance(c, str) for c in controllers):
-        raise bad('controllers must be a non-empty list of names, e.g. controllers = ["pid"]')
-    if len(set(controllers)) != len(controllers):
-        dup = next(c for c in controllers if controllers.count(c) > 1)
-        raise bad(f"controller {dup!r} is listed twice")
-    check_controllers(controllers, cls, bad)
-    seeds = _seeds(data.get("seeds", 1), bad)
-    infos = param_types(scenario, controllers)
-
-    def known(name: str, where: str):
-        info = infos.get(name)
-        if info is None:
-            raise bad(
-                f"[{where}] unknown parameter {name!r} for {scenario} with "
-                f"{', '.join(controllers)} (see ego list){did_you_mean(name, infos)}"
-            )
-        return info
-
-    fixed = data.get("set", {})
-    grid = data.get("grid", {})
-    sample_data = data.get("sample")
-    for section, value in (("set", fixed), ("grid", grid)):
-        if not isinstance(value, dict):
-            raise bad(f"[{section}] must be a table of parameter = value")
+    r = SpecReader(data, source, _TOP)
+    controllers = r.read_controllers(data.get("controllers"))
+    seeds = _seeds(data.get("seeds", 1), r.bad)
+    fixed = r.table("set")
+    grid = r.table("grid")
     # the grid's size before any value is checked (each check builds a scenario: 20 million
     # of them would take hours); a [sample] multiplies it by n, checked below
     if all(isinstance(v, list) for v in grid.values()):
         early = math.prod(len(v) for v in grid.values()) * len(controllers) * len(seeds)
         if early > MAX_RUNS:
-            raise bad(f"expands to {early:,} runs; the limit is {MAX_RUNS:,}")
-    for name, value in fixed.items():
-        known(name, "set")
-        check_values(scenario, controllers, {name: value}, f"[set] {name}", bad)
-    for name, values in grid.items():
-        known(name, "grid")
-        if not isinstance(values, list) or not values:
-            raise bad(f"[grid] {name} must be a non-empty list of values")
-        if name in fixed:
-            raise bad(f"{name} is both fixed in [set] and swept in [grid]")
-        for v in values:
-            check_values(scenario, controllers, {**fixed, name: v}, f"[grid] {name}", bad)
-        _one_kind(name, values, bad)
-    sample = None
-    if sample_data is not None:
-        if not isinstance(sample_data, dict):
-            raise bad("[sample] must be a table")
-        method = sample_data.get("method", "lhs")
-        if method not in METHODS:
-            raise bad(f"[sample] method {method!r} (allowed: {', '.join(METHODS)}){did_you_mean(method, METHODS)}")
-        n = sample_data.get("n")
-        if not isinstance(n, int) or isinstance(n, bool) or n < 1:
-            raise bad(f"[sample] n must be a whole number of at least 1, got {n!r}")
-        sseed = sample_data.get("seed", 0)
-        if not isinstance(sseed, int) or isinstance(sseed, bool) or not 0 <= sseed <= MAX_SEED:
-            raise bad(f"[sample] seed must be a whole number from 0 to {MAX_SEED}, got {sseed!r}")
-        ranges = {}
-        # a range's ends with the grid's points too (a duration in [grid] bounds a sampled
-        # brake time): the first 64 of them, each check a few milliseconds
-        points = [dict(zip(grid, combo)) for combo in itertools.islice(itertools.product(*grid.values()), 64)]
-        for name, rng in sample_data.items():
-            if name in ("method", "n", "seed"):
-                continue
-            info = known(name, "sample")
-            if info.type not in (int, float) or info.choices is not None:
-                raise bad(f"[sample] {name} is not a number to sample (put it in [grid])")
-            if (
-                not isinstance(rng, list)
-                or len(rng) != 2
-                or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in rng)
-                or not rng[0] < rng[1]
-            ):
-                raise bad(f"[sample] {name} must be a range [low, high] with low < high, got {rng!r}")
-            if name in fixed or name in grid:
-                raise bad(f"{name} is sampled in [sample] and also in [set] or [grid]")
-            for end in rng:
-                for point in points or [{}]:
-                    with_grid = "".join(f" with [grid] {k} = {v!r}" for k, v in point.items())
-                    check_values(
-                        scenario, controllers, {**fixed, **point, name: end}, f"[sample] {name}{with_grid}", bad
-                    )
-            ranges[name] = (float(rng[0]), float(rng[1]))
-        if not ranges:
-            raise bad("[sample] names no parameter range")
-        if method == "sobol" and n & (n - 1):
-            raise bad(f"[sample] sobol needs n a power of 2 for its balance properties, got {n}")
-        sample = Sample(method, n, ranges, sseed)
-    requirements = None
-    if "requirements" in data:
-        from ego.requirements import from_table
-
-        requirements = from_table(data["requirements"], source)
-    period = spec_period(data, bad)
+            raise r.bad(f"expands to {early:,} runs; the limit is {MAX_RUNS:,}")
+    r.fixed()
+    _check_grid(r, fixed, grid)
+    sample = _sample(r, fixed, grid) if data.get("sample") is not None else None
+    requirements = r.requirements()
     spec = SweepSpec(
-        scenario,
+        r.scenario,
         tuple(controllers),
         seeds,
         dict(fixed),
@@ -323,13 +229,70 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
         sample,
         source,
         requirements,
-        requirement_period=period,
+        requirement_period=r.period(),
     )
     total = spec.count()
     if total > MAX_RUNS:
-        raise bad(f"expands to {total:,} runs; the limit is {MAX_RUNS:,}")
-    # whole points (combinations a value-by-value check cannot see): every grid point when
-    # there are not too many, else the first
+        raise r.bad(f"expands to {total:,} runs; the limit is {MAX_RUNS:,}")
+    _check_points(r, spec)
+    return spec
+
+
+def _check_grid(r: SpecReader, fixed: dict, grid: dict) -> None:
+    """``[grid]``: each axis a known parameter (not also in [set]), a non-empty list of
+    values of one kind, each checked with the fixed values."""
+    for name, values in grid.items():
+        r.known(name, "grid")
+        if not isinstance(values, list) or not values:
+            raise r.bad(f"[grid] {name} must be a non-empty list of values")
+        if name in fixed:
+            raise r.bad(f"{name} is both fixed in [set] and swept in [grid]")
+        for v in values:
+            r.check({**fixed, name: v}, f"[grid] {name}")
+        _one_kind(name, values, r.bad)
+
+
+def _sample(r: SpecReader, fixed: dict, grid: dict) -> Sample:
+    """``[sample]``: the method, ``n``, the sampler's seed and each parameter's range, both
+    ends checked with the fixed values and the grid's first points."""
+    sample_data = r.data["sample"]
+    if not isinstance(sample_data, dict):
+        raise r.bad("[sample] must be a table")
+    method = sample_data.get("method", "lhs")
+    if method not in METHODS:
+        raise r.bad(f"[sample] method {method!r} (allowed: {', '.join(METHODS)}){did_you_mean(method, METHODS)}")
+    n = sample_data.get("n")
+    if not is_whole(n, 1, math.inf):
+        raise r.bad(f"[sample] n must be a whole number of at least 1, got {n!r}")
+    sseed = sample_data.get("seed", 0)
+    if not is_whole(sseed, 0, MAX_SEED):
+        raise r.bad(f"[sample] seed must be a whole number from 0 to {MAX_SEED}, got {sseed!r}")
+    ranges = {}
+    # a range's ends with the grid's points too (a duration in [grid] bounds a sampled
+    # brake time): the first 64 of them, each check a few milliseconds
+    points = [dict(zip(grid, combo)) for combo in itertools.islice(itertools.product(*grid.values()), 64)]
+    for name, rng in sample_data.items():
+        if name in ("method", "n", "seed"):
+            continue
+        info = r.known(name, "sample")
+        ranges[name] = r.number_range("sample", name, info, rng, "put it in [grid]")
+        if name in fixed or name in grid:
+            raise r.bad(f"{name} is sampled in [sample] and also in [set] or [grid]")
+        for end in rng:
+            for point in points or [{}]:
+                with_grid = "".join(f" with [grid] {k} = {v!r}" for k, v in point.items())
+                r.check({**fixed, **point, name: end}, f"[sample] {name}{with_grid}")
+    if not ranges:
+        raise r.bad("[sample] names no parameter range")
+    if method == "sobol" and n & (n - 1):
+        raise r.bad(f"[sample] sobol needs n a power of 2 for its balance properties, got {n}")
+    return Sample(method, n, ranges, sseed)
+
+
+def _check_points(r: SpecReader, spec: SweepSpec) -> None:
+    """Whole points (combinations a value-by-value check cannot see): every grid point when
+    there are not too many, else the first; the first run (with its sample) and the
+    requirements against it."""
     points = math.prod(len(v) for v in spec.grid.values()) if spec.grid else 1
     names = list(spec.grid)
     combos = (
@@ -340,34 +303,17 @@ def parse(data: dict, source: str = "the spec") -> SweepSpec:
     for combo in combos:
         point = dict(zip(names, combo))
         where = "the run with " + ", ".join(f"{k} = {v!r}" for k, v in point.items()) if point else "the first run"
-        check_values(scenario, controllers, {**spec.fixed, **point}, where, bad)
+        r.check({**spec.fixed, **point}, where)
     first = next(spec.runs())
-    if sample is not None:
-        check_values(scenario, controllers, first.overrides, "the first run", bad)
-    if requirements:
-        check_requirements(first, requirements, bad)
-    return spec
-
-
-def spec_period(data: dict, bad) -> float:
-    """A spec's ``requirement_period`` (s; default 0: every sample of the trace)."""
-    from ego.requirements import RequirementError, check_period
-
-    try:
-        return check_period(data.get("requirement_period", 0.0), "requirement_period")
-    except RequirementError as exc:
-        raise bad(str(exc).removeprefix("bad ")) from None
+    if spec.sample is not None:
+        r.check(first.overrides, "the first run")
+    if spec.requirements:
+        check_requirements(first, spec.requirements, r.bad)
 
 
 def check_requirements(first: Run, requirements: dict, bad) -> None:
     """Every formula against the signals of the spec's first run (one line on a problem)."""
-    from ego.runner import RunSpec, requirements_of, resolve
-
-    spec = RunSpec(first.scenario, first.controller, first.seed, first.overrides, requirements=requirements)
-    try:
-        requirements_of(resolve(spec))
-    except ConfigError as exc:
-        raise bad(str(exc)) from None
+    check_run_requirements(first.scenario, first.controller, first.seed, first.overrides, requirements, bad)
 
 
 def _kind(value: Any) -> str:
@@ -395,12 +341,12 @@ def _one_kind(name: str, values: list, bad) -> None:
 
 def _seeds(value: Any, bad) -> tuple[int, ...]:
     if isinstance(value, int) and not isinstance(value, bool):
-        if not 1 <= value <= 100_000:
+        if not is_whole(value, 1, 100_000):
             raise bad(f"seeds = {value}: give a count from 1 to 100000 or a list of seeds")
         return tuple(range(value))
     if isinstance(value, list) and value:
         for s in value:
-            if not isinstance(s, int) or isinstance(s, bool) or not 0 <= s <= MAX_SEED:
+            if not is_whole(s, 0, MAX_SEED):
                 raise bad(f"seed {s!r} is not a whole number from 0 to {MAX_SEED}")
         if len(set(value)) != len(value):
             raise bad("a seed is listed twice")

@@ -120,16 +120,8 @@ def simulate_drives(
     G = np.asarray(gains, dtype=float)
     if G.ndim != 2 or G.shape[1] != 12:
         raise ValueError(f"gains must be (members, 12), got {G.shape}")
-    setups = list(setups)
-    kappas = [
-        np.asarray(s.curvature() if kappas is None else k, dtype=float)
-        for s, k in zip(setups, kappas or [None] * len(setups))
-    ]
+    setups, kappas = _check_drives(setups, kappas)
     base = setups[0]
-    drive_only = {"speed": 0, "offset": 0, "duration": 0}
-    for st in setups[1:]:
-        if {**asdict(st), **drive_only} != {**asdict(base), **drive_only}:
-            raise ValueError("the drives may differ in speed, initial offset and duration only")
     N0 = G.shape[0]
     if N0 == 1:  # einsum's single-column path sums differently: pad to two
         G = np.vstack([G, G])
@@ -140,11 +132,7 @@ def simulate_drives(
     dt, alpha = base.dt, base.alpha
     # per loop a (3, C) block [err, integral/dt, filtered derivative/(alpha/dt)] and the
     # matching gains [kp, ki dt, kd alpha/dt]: u = (K * S) summed over the rows, in order
-    K = np.empty((4, 3, C))
-    for i in range(4):
-        K[i, 0] = np.tile(G[:, 3 * i], B)
-        K[i, 1] = np.tile([x * dt for x in G[:, 3 * i + 1].tolist()], B)
-        K[i, 2] = np.tile([x * (alpha / dt) for x in G[:, 3 * i + 2].tolist()], B)
+    K = _gain_rows(G, B, dt, alpha)
     S = np.zeros((4, 3, C))
     prev = np.zeros((4, C))
     T3 = np.empty((3, C))
@@ -165,17 +153,7 @@ def simulate_drives(
     for blk, st in zip(blocks, setups):
         Z[0, blk] = st.offset
 
-    ns = [len(k) for k in kappas]
-    k0s = []
-    for k, st in zip(kappas, setups):
-        nz = np.flatnonzero(k)
-        if st.offset != 0.0:  # something moves from the start
-            k0s.append(0)
-        else:
-            k0s.append(max(int(nz[0]) - 1, 0) if nz.size else len(k))
-    J = max(n - k0 for n, k0 in zip(ns, k0s))
-    # each drive's curvature along the loop, zero once it has ended
-    kap_j = [np.concatenate([k[k0:], np.zeros(J - (n - k0))]).tolist() for k, n, k0 in zip(kappas, ns, k0s)]
+    ns, k0s, J, kap_j = _first_steps(kappas, setups)
     starts_at_zero = [blk for blk, k0 in zip(blocks, k0s) if k0 == 0]
     refs = np.empty((4, C))  # psi_ref, vy_ref, r_ref, delta_fb
     t = np.empty(C)
@@ -284,6 +262,56 @@ def simulate_drives(
         mul(beta, Dall, out=prev)
         prev -= Eall
 
+    return _error_stats(recs, ns, k0s, N0, record)
+
+
+def _check_drives(setups, kappas) -> tuple[list[Setup], list[np.ndarray]]:
+    """The drives and their curvatures (each drive's own when ``kappas`` is None); a
+    ValueError unless they differ in speed, initial offset and duration only."""
+    setups = list(setups)
+    kappas = [
+        np.asarray(s.curvature() if kappas is None else k, dtype=float)
+        for s, k in zip(setups, kappas or [None] * len(setups))
+    ]
+    base = setups[0]
+    drive_only = {"speed": 0, "offset": 0, "duration": 0}
+    for st in setups[1:]:
+        if {**asdict(st), **drive_only} != {**asdict(base), **drive_only}:
+            raise ValueError("the drives may differ in speed, initial offset and duration only")
+    return setups, kappas
+
+
+def _gain_rows(G: np.ndarray, B: int, dt: float, alpha: float) -> np.ndarray:
+    """Per loop the gains [kp, ki dt, kd alpha/dt] of each column (B drive blocks of the
+    members): (4, 3, B N)."""
+    K = np.empty((4, 3, G.shape[0] * B))
+    for i in range(4):
+        K[i, 0] = np.tile(G[:, 3 * i], B)
+        K[i, 1] = np.tile([x * dt for x in G[:, 3 * i + 1].tolist()], B)
+        K[i, 2] = np.tile([x * (alpha / dt) for x in G[:, 3 * i + 2].tolist()], B)
+    return K
+
+
+def _first_steps(kappas: list[np.ndarray], setups: list[Setup]) -> tuple[list[int], list[int], int, list[list]]:
+    """Each drive's steps, its first simulated step (one before its curvature starts, or 0
+    when it starts off the line), the loop's length and each drive's curvature along the
+    loop (zero once it has ended)."""
+    ns = [len(k) for k in kappas]
+    k0s = []
+    for k, st in zip(kappas, setups):
+        nz = np.flatnonzero(k)
+        if st.offset != 0.0:  # something moves from the start
+            k0s.append(0)
+        else:
+            k0s.append(max(int(nz[0]) - 1, 0) if nz.size else len(k))
+    J = max(n - k0 for n, k0 in zip(ns, k0s))
+    kap_j = [np.concatenate([k[k0:], np.zeros(J - (n - k0))]).tolist() for k, n, k0 in zip(kappas, ns, k0s)]
+    return ns, k0s, J, kap_j
+
+
+def _error_stats(recs: list[np.ndarray], ns: list[int], k0s: list[int], N0: int, record: bool):
+    """Per drive (max|e|, mean|e|, std|e|) of the first ``N0`` members over all its steps
+    (the skipped ones zeros), and the errors (N0, steps) when ``record`` (else Nones)."""
     stats, out_recs = [], []
     for rec, n, k0 in zip(recs, ns, k0s):
         if record:

@@ -214,52 +214,8 @@ def train(spec: TrainSpec = TrainSpec(), out: Path = DEFAULT_MODEL, log=print) -
         f"({tr.sum()} training, {held.sum()} held out); g_scale {g_scale:.4f} m/rad"
     )
 
-    torch.manual_seed(spec.seed)
-    torch.use_deterministic_algorithms(True)
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
-        dtype = torch.float64
-        xt = torch.tensor((X - mean) / std, dtype=dtype)
-        target = torch.tensor(dy / dy_scale, dtype=dtype)
-        ut = torch.tensor(u * g_scale / dy_scale, dtype=dtype)
-        f_net = _mlp(torch, X.shape[1], spec.hidden).to(dtype)
-        g_net = _mlp(torch, X.shape[1], spec.hidden).to(dtype)
-        with torch.no_grad():  # start g at the average effect (G = 1)
-            g_net[-1].bias.fill_(1.0)
-        opt = torch.optim.Adam([*f_net.parameters(), *g_net.parameters()], lr=spec.lr)
-        sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, T_max=spec.epochs)
-        idx_train = torch.tensor(np.flatnonzero(tr))
-        gen = torch.Generator().manual_seed(spec.seed)
-
-        def loss_on(idx):
-            pred = f_net(xt[idx]).squeeze(1) + g_net(xt[idx]).squeeze(1) * ut[idx]
-            return torch.mean((pred - target[idx]) ** 2)
-
-        t1 = time.perf_counter()
-        for epoch in range(spec.epochs):
-            perm = idx_train[torch.randperm(len(idx_train), generator=gen)]
-            for i in range(0, len(perm), spec.batch):
-                opt.zero_grad()
-                loss = loss_on(perm[i : i + spec.batch])
-                loss.backward()
-                opt.step()
-            sched.step()
-            if (epoch + 1) % max(1, spec.epochs // 5) == 0:
-                with torch.no_grad():
-                    log(
-                        f"epoch {epoch + 1}/{spec.epochs}: training loss "
-                        f"{float(loss_on(idx_train)):.5f} (relative to var dy)"
-                    )
-        t_train = time.perf_counter() - t1
-        arrays = {"mean": mean, "std": std, "dy_scale": np.array(dy_scale), "g_scale": np.array(g_scale)}
-        for name, net in (("f", f_net), ("g", g_net)):
-            layers = [m for m in net if isinstance(m, torch.nn.Linear)]
-            for j, layer in enumerate(layers, 1):
-                arrays[f"{name}_w{j}"] = layer.weight.detach().numpy().copy()
-                arrays[f"{name}_b{j}"] = layer.bias.detach().numpy().copy()
-    finally:
-        torch.set_num_threads(threads)
+    arrays, t_train = _fit(torch, spec, (X - mean) / std, dy / dy_scale, u * g_scale / dy_scale, tr, log)
+    arrays = {"mean": mean, "std": std, "dy_scale": np.array(dy_scale), "g_scale": np.array(g_scale), **arrays}
 
     meta = {
         "features": list(FEATURES),
@@ -294,6 +250,61 @@ def train(spec: TrainSpec = TrainSpec(), out: Path = DEFAULT_MODEL, log=print) -
     )
     log(f"wrote {out} and {out.with_suffix('.json').name}")
     return meta
+
+
+def _fit(
+    torch, spec: TrainSpec, x: np.ndarray, dy: np.ndarray, u: np.ndarray, tr: np.ndarray, log
+) -> tuple[dict, float]:
+    """Train f and g on the training rows ``tr`` (seeded, deterministic, one thread):
+    ``x`` the normalised features, ``dy`` the scaled change of y, ``u`` the scaled steer.
+    Returns the layers' weights and biases by name, and the training time (s)."""
+    torch.manual_seed(spec.seed)
+    torch.use_deterministic_algorithms(True)
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        dtype = torch.float64
+        xt = torch.tensor(x, dtype=dtype)
+        target = torch.tensor(dy, dtype=dtype)
+        ut = torch.tensor(u, dtype=dtype)
+        f_net = _mlp(torch, x.shape[1], spec.hidden).to(dtype)
+        g_net = _mlp(torch, x.shape[1], spec.hidden).to(dtype)
+        with torch.no_grad():  # start g at the average effect (G = 1)
+            g_net[-1].bias.fill_(1.0)
+        opt = torch.optim.Adam([*f_net.parameters(), *g_net.parameters()], lr=spec.lr)
+        sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, T_max=spec.epochs)
+        idx_train = torch.tensor(np.flatnonzero(tr))
+        gen = torch.Generator().manual_seed(spec.seed)
+
+        def loss_on(idx):
+            pred = f_net(xt[idx]).squeeze(1) + g_net(xt[idx]).squeeze(1) * ut[idx]
+            return torch.mean((pred - target[idx]) ** 2)
+
+        t1 = time.perf_counter()
+        for epoch in range(spec.epochs):
+            perm = idx_train[torch.randperm(len(idx_train), generator=gen)]
+            for i in range(0, len(perm), spec.batch):
+                opt.zero_grad()
+                loss = loss_on(perm[i : i + spec.batch])
+                loss.backward()
+                opt.step()
+            sched.step()
+            if (epoch + 1) % max(1, spec.epochs // 5) == 0:
+                with torch.no_grad():
+                    log(
+                        f"epoch {epoch + 1}/{spec.epochs}: training loss "
+                        f"{float(loss_on(idx_train)):.5f} (relative to var dy)"
+                    )
+        t_train = time.perf_counter() - t1
+        arrays = {}
+        for name, net in (("f", f_net), ("g", g_net)):
+            layers = [m for m in net if isinstance(m, torch.nn.Linear)]
+            for j, layer in enumerate(layers, 1):
+                arrays[f"{name}_w{j}"] = layer.weight.detach().numpy().copy()
+                arrays[f"{name}_b{j}"] = layer.bias.detach().numpy().copy()
+    finally:
+        torch.set_num_threads(threads)
+    return arrays, t_train
 
 
 def identification_errors(model, data: dict, held: np.ndarray) -> dict:

@@ -36,11 +36,13 @@ demo-rows = "ego_demo_plugin:DEMO_ROWS"
 
 [project.entry-points."ego.backends"]
 demo-road = "ego_demo_plugin:DEMO_ROAD"
+demo-bare = "ego_demo_plugin:DEMO_BARE"
 """
 
 MODULE = '''
 """A plugin: ego's pid under another name, emergency-brake as a scenario of its own, a
-metric (the trace's rows) and a backend (SUMO under another name)."""
+metric (the trace's rows) and two backends (SUMO under other names, one of them declaring
+no scripted actors)."""
 from ego.control.pid import PIDController, PIDParams
 from ego.results.metrics import TraceMetric
 from ego.results.trace import Metric
@@ -49,6 +51,7 @@ from ego.sim.registry import Backend, Capabilities
 
 DEMO_ROWS = TraceMetric(Metric("demo_rows", "-", "rows of the trace"), ("t",), lambda trace: len(trace["t"]))
 DEMO_ROAD = Backend("demo-road", "ego.sumo.bridge:make_sim", Capabilities(any_network=True))
+DEMO_BARE = Backend("demo-bare", "ego.sumo.bridge:make_sim", Capabilities(any_network=True, scripted_actors=False))
 
 
 class DemoPID(PIDController):
@@ -62,6 +65,7 @@ class DemoBrake(EmergencyBrake):
     """emergency-brake, from the demo plugin"""
 
     name = "demo-brake"
+    backends = ("sumo", "highway-env", "demo-road", "demo-bare")
 '''
 
 
@@ -112,6 +116,10 @@ def ego(env, *args):
 def test_ego_list_and_run_find_the_plugins(plugin_env):
     listed, _ = ego(plugin_env, "list")
     assert "demo-pid: the demo plugin's pid" in listed.stdout and "demo-brake" in listed.stdout
+    # the plugin's metric among every scenario's metrics, its backends with their capabilities
+    assert "demo_rows" in listed.stdout
+    assert "  demo-road: scripted_actors, any_network\n" in listed.stdout
+    assert "  demo-bare: any_network\n" in listed.stdout
     runs = {}
     for scenario, controller in (("emergency-brake", "pid"), ("demo-brake", "demo-pid")):
         proc, left = ego(plugin_env, "run", scenario, "-c", controller, "--set", "duration=4", "--json")
@@ -135,6 +143,40 @@ def test_ego_list_and_run_find_the_plugins(plugin_env):
     assert plain.returncode == 2 and "invalid choice: 'demo-road'" in plain.stderr
 
 
+def test_a_plugin_backend_runs_the_scenarios_whose_needs_it_has(plugin_env):
+    """demo-brake lists both plugin backends: demo-road (scripted actors) runs it as SUMO
+    does; demo-bare lacks the scripted actors emergency-brake's lead needs, and the registry
+    refuses it when the run is resolved, in one line naming both."""
+    runs = {}
+    for backend in ("sumo", "demo-road"):
+        args = ("run", "demo-brake", "-c", "demo-pid", "--set", "duration=4", "--json", "--backend", backend)
+        proc, left = ego(plugin_env, *args)
+        assert proc.returncode == 1 and not left, proc.stderr
+        runs[backend] = json.loads(proc.stdout)
+    assert runs["demo-road"]["backend"] == "demo-road"
+    for key in ("status", "min_gap_front", "max_abs_lateral_accel", "demo_rows"):
+        assert runs["demo-road"][key] == runs["sumo"][key], key
+    proc, _ = ego(plugin_env, "run", "demo-brake", "-c", "pid", "--backend", "demo-bare")
+    assert proc.returncode == 2 and proc.stderr.count("\n") == 1, proc.stderr
+    assert proc.stderr.strip() == (
+        "ego: error: bad value for --backend: 'demo-bare' (scenario demo-brake needs scripted_actors; "
+        "backend demo-bare lacks it)"
+    )
+
+
+def test_sweep_on_a_process_pool_has_the_plugin_metric_in_its_results(plugin_env, tmp_path):
+    """The plugin's metric, computed in the sweep's worker processes (each loads the
+    entry points itself), is a column of results.parquet."""
+    spec = tmp_path / "sweep.toml"
+    spec.write_text('scenario = "demo-brake"\ncontrollers = ["demo-pid", "pid"]\nseeds = 1\n[set]\nduration = 3\n')
+    args = ("sweep", str(spec), "--jobs", "2", "--record", "none", "--out", str(tmp_path / "sw"))
+    proc, left = ego(plugin_env, *args)
+    assert proc.returncode == 0 and not left, proc.stderr
+    rows = pq.read_table(tmp_path / "sw" / "results.parquet").to_pylist()
+    assert sorted(r["controller"] for r in rows) == ["demo-pid", "pid"]
+    assert [r["demo_rows"] for r in rows] == [r["steps"] for r in rows] == [300, 300]
+
+
 def test_compare_jobs_2_runs_the_plugin_in_its_workers(plugin_env, tmp_path):
     proc, left = ego(
         plugin_env,
@@ -154,6 +196,7 @@ def test_compare_jobs_2_runs_the_plugin_in_its_workers(plugin_env, tmp_path):
     rows = {r["controller"]: r for r in csv.DictReader(open(tmp_path / "cmp" / "metrics.csv"))}
     assert rows["demo-pid"]["min_gap_front"] == rows["pid"]["min_gap_front"]
     assert rows["demo-pid"]["status"] == rows["pid"]["status"] == "timeout"
+    assert rows["demo-pid"]["demo_rows"] == rows["pid"]["demo_rows"] == "400"  # the workers' plugin metric
 
 
 @pytest.mark.long  # Ray start-up; test_compare_jobs_2_runs_the_plugin_in_its_workers runs by default

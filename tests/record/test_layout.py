@@ -20,7 +20,7 @@ def _record(tmp_path_factory, spec: RunSpec):
     path = tmp_path_factory.mktemp("layout") / f"{spec.scenario}.rrd"
     sc = build(replace(spec, record=str(path)))
     result = sc.run()
-    return path, result, sc._series()
+    return path, result, sc.loop.series()
 
 
 @pytest.fixture(scope="module")

@@ -8,7 +8,7 @@ import pytest
 from ego.control.curve import CurvePID, CurvePIDParams
 from ego.runner import RunSpec, run
 from ego.scenarios import CurveConfig, CurveScenario
-from ego.scenarios.curve import ONCOMING_ROUTE
+from ego.scenarios.curve import ONCOMING_ROUTE, CurveLoop
 
 pytestmark = pytest.mark.sumo
 ARC = 15.0 * math.pi / 2  # the arc's length on the ego's lane (m)
@@ -130,16 +130,21 @@ class KeepsLeft(CurvePID):
         return super().step(obs)
 
 
-class ParkedOncoming(CurveScenario):
+class ParkedLoop(CurveLoop):
     """No oncoming flow, one car stopped in the oncoming lane beside the arc's middle."""
 
-    def _setup(self, rng):
-        super()._setup(rng)
-        veh = self.bridge.libsumo.vehicle
+    def setup(self, rng):
+        super().setup(rng)
+        veh = self.sc.bridge.libsumo.vehicle
         # the oncoming lane runs 100 m down the exit straight, then the inner arc
         # (R 11.5 m) back: 112 m along it is beside the ego's arc
         veh.add("oncoming_parked", ONCOMING_ROUTE, typeID="traffic", departPos="112", departSpeed="0")
         veh.setSpeed("oncoming_parked", 0.0)
+
+
+class ParkedOncoming(CurveScenario):
+    def make_loop(self):
+        return ParkedLoop(self, super().make_loop().world)
 
 
 def test_driving_into_the_oncoming_lane_hits_an_oncoming_car():

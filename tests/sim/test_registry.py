@@ -81,3 +81,31 @@ def test_backend_options_travel_as_data(tmp_path):
     with pytest.raises(ConfigError, match="--video needs --backend highway-env"):
         run(RunSpec("cut-in", "pid", backend_options={"video": str(tmp_path / "v.gif")}))
     assert not (tmp_path / "v.gif").exists()
+
+
+def test_backend_choices_are_read_when_the_parser_is_built():
+    """A backend registered after ego.cli.parser is imported is a --backend choice of every
+    parser built afterwards (the registry is read when the parser is built)."""
+    from ego.cli.parser import parser
+    from ego.sim.registry import Backend, Capabilities, register
+
+    before = parser()
+    register(Backend("late-road", "ego.sumo.bridge:make_sim", Capabilities(any_network=True)))
+    try:
+        args = parser().parse_args(["run", "emergency-brake", "-c", "pid", "--backend", "late-road"])
+        assert args.backend == "late-road"
+        with pytest.raises(ConfigError, match="invalid choice: 'late-road'"):
+            before.parse_args(["run", "emergency-brake", "-c", "pid", "--backend", "late-road"])
+    finally:
+        BACKENDS.pop("late-road")
+
+
+def test_check_needs_names_the_scenario_the_backend_and_what_it_lacks():
+    from ego.sim.registry import check_needs
+
+    assert check_needs("scenario curve", ("any_network",), "sumo").name == "sumo"
+    with pytest.raises(ConfigError) as err:
+        check_needs("scenario curve", ("any_network", "scripted_actors"), "highway-env")
+    assert str(err.value) == (
+        "bad value for --backend: 'highway-env' (scenario curve needs any_network; backend highway-env lacks it)"
+    )
