@@ -10,8 +10,8 @@ around the parts it names, and prints medians (the clock's own ~0.1 us included)
 * per SUMO step: ``simulationStep()`` itself, ego's own work around it (the rest of
   ``_sumo_step``), and the three libsumo calls of that work (the context subscription's
   results, ``moveToXY``, ``setPreviousSpeed``);
-* the manoeuvre's plan per state, as the loop binds it (C where ``ego._native`` has it) and
-  through ``EvasiveManoeuvre.plan`` alone.
+* the manoeuvre's plan per state (``EvasiveManoeuvre.plan``, Python: its C twin
+  ``plan_steady`` went back to Python with issue 37, docs/performance.md).
 
 Figures of one machine at one time: compare two trees by running each in the same session.
 """
@@ -114,13 +114,7 @@ def main(argv: list[str] | None = None) -> dict:
         probe.close()
     if evasive:
         for _ in range(args.runs):
-            one_run(spec, samples, "as bound")
-        saved, manoeuvre._PLAN_STEADY = manoeuvre._PLAN_STEADY, None
-        try:
-            for _ in range(args.runs):
-                one_run(spec, samples, "Python")
-        finally:
-            manoeuvre._PLAN_STEADY = saved
+            one_run(spec, samples, "(Python)")
     us = {k: statistics.median(v) / 1000 for k, v in samples.items()}
     sumo = us.get("simulationStep")
     if sumo is not None:

@@ -16,11 +16,10 @@
  *    (BPPIDController._step_py, BPPIDAcc._update_py, RBFSMCController._network_py): their
  *    element-wise arithmetic here, numpy called for what numpy computes its own way (BLAS
  *    products, tanh, exp, einsum); sum_squares: numpy's pairwise sum of squares;
- *  - plant_step, trace_write, road_frame, look_between and plan_steady: the scenario loop's
- *    glue every control period (BicyclePlant.step, Trace.bind's writer, RoadSensor.frame,
- *    SurroundView.look between two SUMO steps, EvasiveManoeuvre.plan in a period that
- *    changes no state of the machine), each handing what it does not cover to the Python
- *    code it stands for;
+ *  - plant_step, trace_write and road_frame: the scenario loop's glue every control period
+ *    (BicyclePlant.step, Trace.bind's writer, RoadSensor.frame) on the records they are
+ *    bound to (FIELDS below), each handing what it does not cover to the Python code it
+ *    stands for (look_between and plan_steady went back to Python: docs/performance.md);
  *  - near and nearest: the surround sensor's search at a look (SurroundSensor.scan's and
  *    _scan_lane's filter, _nearest).
  *
@@ -40,6 +39,92 @@
 #include <numpy/arrayobject.h>
 
 #include "_bicycle.h"
+
+/* ---- the records the glue kernels read and write -----------------------------------------
+ * Each kernel takes its records as arguments (bound once a run) and reads or writes their
+ * public fields, listed here by record: the Python class declares each (in ``__slots__``
+ * where it has them, else in its ``__init__``) beside the Python reference the kernel stands
+ * for. ``fields()`` gives this table; tests/test_native.py checks every field is declared by
+ * its record, so a rename in Python fails that test instead of silently cutting a kernel off. */
+static PyObject *s_state, *s_applied, *s_lateral_accel;                         /* plant */
+static PyObject *s_road, *s_X, *s_Y, *s_s, *s_d_road, *s_heading_error, *s_curvature, *s_ds, *s_dd;
+static PyObject *s_turn, *s_station;                                            /* view */
+static PyObject *s_t;                                                           /* observation */
+static PyObject *s_id, *s_gap, *s_speed, *s_accel, *s_gap0, *s_o, *s_lo_, *s_hi_, *s_since_, *s_d_; /* detection */
+static PyObject *s_c_, *s_hint_, *s_at_, *s_mean_curvature;                    /* lane */
+static PyObject *s_elapsed_, *s_bridge, *s_status, *s_step, *s_step_joint;    /* env, scenario */
+static PyObject *s_rewards, *s_running, *str_empty, *float_zero, *float_inf;  /* values */
+
+static const struct {
+    const char *record;
+    PyObject **slot;
+    const char *name;
+} FIELDS[] = {
+    {"ego.models.plant.BicyclePlant", &s_state, "state"},
+    {"ego.models.plant.BicyclePlant", &s_applied, "applied"},
+    {"ego.models.plant.BicyclePlant", &s_lateral_accel, "lateral_accel"},
+    {"ego.scenarios.road.RoadSensor", &s_road, "road"},
+    {"ego.scenarios.road.RoadSensor", &s_X, "X"},
+    {"ego.scenarios.road.RoadSensor", &s_Y, "Y"},
+    {"ego.scenarios.road.RoadSensor", &s_s, "s"},
+    {"ego.scenarios.road.RoadSensor", &s_d_road, "d_road"},
+    {"ego.scenarios.road.RoadSensor", &s_heading_error, "heading_error"},
+    {"ego.scenarios.road.RoadSensor", &s_curvature, "curvature"},
+    {"ego.scenarios.road.RoadSensor", &s_ds, "ds"},
+    {"ego.scenarios.road.RoadSensor", &s_dd, "dd"},
+    {"ego.scenarios.road.RoadSensor", &s_turn, "turn"},
+    {"ego.scenarios.road.RoadSensor", &s_station, "station"},
+    {"ego.scenarios.sensor.Detection", &s_id, "id"},
+    {"ego.scenarios.sensor.Detection", &s_gap, "gap"},
+    {"ego.scenarios.sensor.Detection", &s_speed, "speed"},
+    {"ego.scenarios.sensor.Detection", &s_accel, "accel"},
+    {"ego.scenarios.sensor.Detection", &s_gap0, "gap0"},
+    {"ego.scenarios.sensor.Detection", &s_o, "obj"},
+    {"ego.scenarios.sensor.Detection", &s_lo_, "lo"},
+    {"ego.scenarios.sensor.Detection", &s_hi_, "hi"},
+    {"ego.scenarios.sensor.Detection", &s_since_, "since"},
+    {"ego.scenarios.sensor.Detection", &s_d_, "line"},
+    {"ego.lane_frame.LanePolyline", &s_c_, "packed"},
+    {"ego.lane_frame.LanePolyline", &s_hint_, "hint"},
+    {"ego.lane_frame.LanePolyline", &s_at_, "at"},
+    {"ego.lane_frame.LanePolyline", &s_mean_curvature, "mean_curvature"},
+    {"ego.lane_frame.LanePolyline", NULL, "place"},
+    {"ego.gym.env.EgoEnv", &s_elapsed_, "elapsed"},
+    {"ego.control.base.Observation", &s_t, "t"},
+    {"ego.scenarios.base.Scenario", &s_bridge, "bridge"},
+    {"ego.scenarios.base.Scenario", &s_status, "status"},
+    {"ego.scenarios.base.Scenario", &s_step, "step"},
+    {"ego.scenarios.base.Scenario", &s_step_joint, "step_joint"},
+};
+
+/* fields() -> ((record, field), ...): the table above */
+static PyObject *fields(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    const Py_ssize_t n = (Py_ssize_t)(sizeof FIELDS / sizeof FIELDS[0]);
+    PyObject *out = PyTuple_New(n);
+    if (!out) return NULL;
+    for (Py_ssize_t i = 0; i < n; i++) {
+        PyObject *pair = Py_BuildValue("(ss)", FIELDS[i].record, FIELDS[i].name);
+        if (!pair) { Py_DECREF(out); return NULL; }
+        PyTuple_SET_ITEM(out, i, pair);
+    }
+    return out;
+}
+
+static int intern_fields(void)
+{
+    for (size_t i = 0; i < sizeof FIELDS / sizeof FIELDS[0]; i++) {
+        if (!FIELDS[i].slot || *FIELDS[i].slot) continue; /* a method called by name, or a field of two records */
+        *FIELDS[i].slot = PyUnicode_InternFromString(FIELDS[i].name);
+        if (!*FIELDS[i].slot) return -1;
+    }
+    s_rewards = PyUnicode_InternFromString("rewards");
+    s_running = PyUnicode_InternFromString("running");
+    str_empty = PyUnicode_InternFromString("");
+    float_zero = PyFloat_FromDouble(0.0);
+    float_inf = PyFloat_FromDouble(Py_HUGE_VAL);
+    return s_rewards && s_running && str_empty && float_zero && float_inf ? 0 : -1;
+}
 
 static int read_doubles(PyObject *seq, double *out, Py_ssize_t n, const char *what)
 {
@@ -329,14 +414,13 @@ static int within(double dx, double dy, double reach)
 }
 
 /* ---- LanePolyline's projection on plain data (ego.lane_frame: _closest, locate, place) -----
- * A lane's ``_c`` = (segments, grid_x, grid_y, grid_seg): its segments as 11 doubles each
+ * A lane's ``packed`` = (segments, grid_x, grid_y, grid_seg): its segments as 11 doubles each
  * (x0, y0, ux, uy, length, s0, direction, heading at start, heading change, curvature, turn)
  * and its grid (cells of GRID m, sorted by (x, y), each with its one segment), built once per
- * lane; ``_hint`` the segment the last projection found. The same arithmetic as the Python
+ * lane; ``hint`` the segment the last projection found. The same arithmetic as the Python
  * methods, in the same order: Python's min/max (the first argument unless the second is
  * strictly beyond it, so NaN goes through as there). A point the Python method would raise
  * on (an infinite coordinate into math.floor, an infinite angle into math.fmod) is left to it. */
-static PyObject *s_c_, *s_hint_, *s_turn, *s_station;
 #define LANE_GRID 10.0
 #define SEG_W 11
 
@@ -366,7 +450,7 @@ static int lane_acquire(PyObject *packed, LaneData *L)
         const int want_double = k == 0;
         if ((want_double && strcmp(fmt, "d") != 0) || (!want_double && strcmp(fmt, "q") != 0)) {
             PyBuffer_Release(&L->views[k]);
-            PyErr_SetString(PyExc_TypeError, "a lane's _c must be (array('d'), array('q') x 3)");
+            PyErr_SetString(PyExc_TypeError, "a lane's packed must be (array('d'), array('q') x 3)");
             break;
         }
     }
@@ -382,10 +466,21 @@ static int lane_acquire(PyObject *packed, LaneData *L)
     L->ng = L->views[1].len / (Py_ssize_t)sizeof(long long);
     if (L->n < 1 || L->views[2].len != L->views[1].len || L->views[3].len != L->views[1].len) {
         lane_release(L);
-        PyErr_SetString(PyExc_ValueError, "a lane's _c is inconsistent");
+        PyErr_SetString(PyExc_ValueError, "a lane's packed is inconsistent");
         return -1;
     }
     return 0;
+}
+
+/* lane_acquire on lane.packed (a LanePolyline's): 0 with L filled, -1 with an exception, 1 when
+ * its packed data is not the four arrays */
+static int lane_packed(PyObject *lane, LaneData *L)
+{
+    PyObject *packed = PyObject_GetAttr(lane, s_c_);
+    if (!packed) return -1;
+    const int got = lane_acquire(packed, L);
+    Py_DECREF(packed);
+    return got;
 }
 
 /* LanePolyline._local */
@@ -521,7 +616,7 @@ static int lane_locate(const LaneData *L, Py_ssize_t *hint, double x, double y, 
 }
 
 /* lane_mean_curvature(lane, s, ahead) -> float: LanePolyline.mean_curvature on the lane's
- * packed data (_c) and its remembered segments (_at, a list of two ints), the same
+ * packed data (packed) and its remembered segments (at, a list of two ints), the same
  * arithmetic; an infinite angle (math.fmod raises) or a lane without packed data: the
  * Python method */
 static Py_ssize_t lane_segment_at(const LaneData *L, Py_ssize_t i, double s)
@@ -549,7 +644,6 @@ static double lane_heading_raw(const LaneData *L, Py_ssize_t i, double s)
     return sg[7] + t * sg[8];
 }
 
-static PyObject *s_at_, *s_mean_curvature;
 
 static PyObject *lane_mean_curvature(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
@@ -560,11 +654,8 @@ static PyObject *lane_mean_curvature(PyObject *self, PyObject *const *args, Py_s
     PyObject *lane = args[0];
     const double s = PyFloat_AsDouble(args[1]), ahead = PyFloat_AsDouble(args[2]);
     if (PyErr_Occurred()) return NULL;
-    PyObject *packed = PyObject_GetAttr(lane, s_c_);
-    if (!packed) return NULL;
     LaneData L;
-    const int got = lane_acquire(packed, &L);
-    Py_DECREF(packed);
+    const int got = lane_packed(lane, &L);
     if (got < 0) return NULL;
     PyObject *at = got == 0 ? PyObject_GetAttr(lane, s_at_) : NULL;
     if (got > 0 || (at && !(PyList_CheckExact(at) && PyList_GET_SIZE(at) == 2))) {
@@ -639,10 +730,7 @@ static PyObject *place(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
     int packed_lane = 0;
     Py_ssize_t hint = 0;
     if (!rotation && !PyCallable_Check(frame)) {
-        PyObject *packed = PyObject_GetAttr(frame, s_c_);
-        if (!packed) return NULL;
-        const int got = lane_acquire(packed, &L);
-        Py_DECREF(packed);
+        const int got = lane_packed(frame, &L);
         if (got != 0) {
             if (got > 0) PyErr_SetString(PyExc_TypeError, "place: a lane without packed data");
             return NULL;
@@ -691,7 +779,7 @@ static PyObject *place(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
                 PyObject *h = PyLong_FromSsize_t(hint);
                 if (!h || PyObject_SetAttr(frame, s_hint_, h) < 0) { Py_XDECREF(h); goto fail; }
                 Py_DECREF(h);
-                placed = PyObject_CallMethod(frame, "place", "ddd", x, y, yaw);
+                placed = PyObject_CallMethod(frame, "place", "ddd", x, y, yaw) /* LanePolyline.place */;
             } else {
                 placed = PyObject_CallFunction(frame, "ddd", x, y, yaw);
             }
@@ -1094,7 +1182,6 @@ static PyObject *reward(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
  * (ego.gym.env.EgoView.bind_reward). a_lon None stands for the rate of the speed since the
  * last call, EgoView._rate's: (speed - ds0) / (t - t0) if t > t0 else 0, t = obs.t, with
  * prev = [t0, ds0] (a list) set to [t, speed]. */
-static PyObject *s_t_obs;
 
 /* reward_of's work on args = (signals, obs, prev, params, crashed): the reward into *r, the
  * terms returned */
@@ -1118,7 +1205,7 @@ static PyObject *reward_of_terms(PyObject *const *args, double *r)
     if (as_double(speed, x) || as_double(PyTuple_GET_ITEM(sig, 1), x + 1) || as_double(PyTuple_GET_ITEM(sig, 3), x + 3))
         goto done;
     if (a_lon == Py_None) { /* the rate of the speed since the last call (EgoView._rate) */
-        PyObject *prev = args[2], *t = PyObject_GetAttr(args[1], s_t_obs);
+        PyObject *prev = args[2], *t = PyObject_GetAttr(args[1], s_t);
         double t1, t0, ds0;
         if (!t || as_double(t, &t1) || as_double(PyList_GET_ITEM(prev, 0), &t0) ||
             as_double(PyList_GET_ITEM(prev, 1), &ds0)) {
@@ -1159,7 +1246,6 @@ static PyObject *reward_of(PyObject *self, PyObject *const *args, Py_ssize_t nar
  * are looked up at each step, as Python's step does. fallback(action) (the Python step) runs
  * the whole step instead where the run's SUMO is closed, the step reaches limit_steps (the
  * TimeLimit's truncation) or the command is not finite. */
-static PyObject *s_bridge, *s_elapsed_, *s_step, *s_step_joint, *s_status, *s_rewards, *s_running;
 
 static PyObject *env_step(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
@@ -1623,10 +1709,6 @@ done:
  *    called for anything else, so every check and message stays its own);
  *  - road_frame: RoadSensor.frame on a straight lane (else the Python method runs).
  * ------------------------------------------------------------------------------------- */
-static PyObject *s_state, *s_applied, *s_lateral_accel, *s_plant, *s_road, *s_line_of, *s_line;
-static PyObject *s_X, *s_Y, *s_s, *s_d_road, *s_heading_error, *s_curvature, *s_ds, *s_dd, *s_frame;
-static PyObject *s_looked, *s_look, *s_sensor, *s_t_, *s_s_, *s_s_scan, *s_t_scan, *s_front, *s_rear, *s_o;
-static PyObject *s_gap0, *s_speed, *s_gap, *s_gap_front, *s_ttc_front, *s_gap_rear, *s_ttc_rear, *s_id, *s_overlap;
 
 #define LIMITS_N 8 /* max_steer, max_steer_rate, min_command, max_command, stop_speed, dt, h, substeps */
 
@@ -1769,519 +1851,78 @@ static int set_double(PyObject *obj, PyObject *name, double value)
 }
 
 
-/* RoadSensor.frame on a curved lane with packed data (LanePolyline.locate); else, or where
- * the Python method decides, that method */
-static PyObject *road_frame_curved(PyObject *view, PyObject *road)
+/* road_frame(frame, view, plant, road, line) -> None: RoadSensor.frame on its records: the
+ * plant's state in, the view's frame fields out (X, Y, s, d_road, heading_error, curvature,
+ * ds, dd; on a curved lane turn and station too). ``road`` is the lane the view measured in
+ * when the loop bound it, ``line`` its straight segment (LanePolyline.straight) or None: a
+ * straight lane's rotation (LanePolyline.frame's arithmetic), a curved lane's
+ * LanePolyline.locate on its packed data. view.road another lane, or a point the Python
+ * method decides (it raises there): frame(), the Python method. */
+static int frame_out(PyObject *view, double X, double Y, double s, double d, double err, double kappa, double u,
+                     double v)
 {
-    PyObject *packed = PyObject_GetAttr(road, s_c_);
-    if (!packed) {
-        if (!PyErr_ExceptionMatches(PyExc_AttributeError)) return NULL;
-        PyErr_Clear();
-        return PyObject_CallMethodNoArgs(view, s_frame);
-    }
-    LaneData L;
-    const int got = lane_acquire(packed, &L);
-    Py_DECREF(packed);
-    if (got < 0) return NULL;
-    if (got > 0) return PyObject_CallMethodNoArgs(view, s_frame);
-    double x[NX], f[6];
-    PyObject *plant = PyObject_GetAttr(view, s_plant);
-    PyObject *state = plant ? PyObject_GetAttr(plant, s_state) : NULL;
-    Py_XDECREF(plant);
-    PyObject *hint_obj = state ? PyObject_GetAttr(road, s_hint_) : NULL;
-    if (!hint_obj) { Py_XDECREF(state); lane_release(&L); return NULL; }
-    Py_ssize_t hint = PyLong_AsSsize_t(hint_obj);
-    Py_DECREF(hint_obj);
-    int bad = (hint == -1 && PyErr_Occurred()) ? -1 : read_doubles(state, x, NX, "state");
-    Py_DECREF(state);
-    if (bad < 0) { lane_release(&L); return NULL; }
-    const double X = x[0], u = x[1], Y = x[2], v = x[3], psi = x[4];
-    const int defer = lane_locate(&L, &hint, X, Y, psi, f);
-    lane_release(&L);
-    if (defer) return PyObject_CallMethodNoArgs(view, s_frame);
-    PyObject *h = PyLong_FromSsize_t(hint);
-    if (!h) return NULL;
-    bad = PyObject_SetAttr(road, s_hint_, h);
-    Py_DECREF(h);
-    const double err = f[2], c = cos(err), sn = sin(err);
-    if (bad < 0 || set_double(view, s_turn, f[4]) < 0 || set_double(view, s_station, f[5]) < 0
-        || set_double(view, s_X, X) < 0 || set_double(view, s_Y, Y) < 0 || set_double(view, s_s, f[0]) < 0
-        || set_double(view, s_d_road, f[1]) < 0 || set_double(view, s_heading_error, err) < 0
-        || set_double(view, s_curvature, f[3]) < 0 || set_double(view, s_ds, u * c - v * sn) < 0
-        || set_double(view, s_dd, u * sn + v * c) < 0)
-        return NULL;
-    Py_RETURN_NONE;
+    const double c = cos(err), sn = sin(err);
+    return (set_double(view, s_X, X) < 0 || set_double(view, s_Y, Y) < 0 || set_double(view, s_s, s) < 0
+            || set_double(view, s_d_road, d) < 0 || set_double(view, s_heading_error, err) < 0
+            || set_double(view, s_curvature, kappa) < 0 || set_double(view, s_ds, u * c - v * sn) < 0
+            || set_double(view, s_dd, u * sn + v * c) < 0)
+               ? -1
+               : 0;
 }
 
-/* road_frame(view) -> None: RoadSensor.frame: the straight lane's rotation (LanePolyline.frame's
- * arithmetic), a curved lane's LanePolyline.locate on its packed data; a road other than the
- * one view._line was taken from, or a lane without packed data: the Python method */
 static PyObject *road_frame(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
-    if (nargs != 1) {
-        PyErr_SetString(PyExc_TypeError, "road_frame(view)");
+    if (nargs != 5) {
+        PyErr_SetString(PyExc_TypeError, "road_frame(frame, view, plant, road, line)");
         return NULL;
     }
-    PyObject *view = args[0];
+    PyObject *frame = args[0], *view = args[1], *plant = args[2], *road = args[3], *line_obj = args[4];
+    PyObject *now = PyObject_GetAttr(view, s_road);
+    if (!now) return NULL;
+    Py_DECREF(now);
+    if (now != road) return PyObject_CallNoArgs(frame);
     double x[NX], line[6];
-    PyObject *road = PyObject_GetAttr(view, s_road);
-    if (!road) return NULL;
-    PyObject *line_of = PyObject_GetAttr(view, s_line_of);
-    if (!line_of) { Py_DECREF(road); return NULL; }
-    const int same = road == line_of;
-    Py_DECREF(line_of);
-    PyObject *line_obj = same ? PyObject_GetAttr(view, s_line) : NULL;
-    if (same && !line_obj) { Py_DECREF(road); return NULL; }
-    if (same && line_obj == Py_None) { /* a curved lane: LanePolyline.locate on its packed data */
-        Py_DECREF(line_obj);
-        PyObject *result = road_frame_curved(view, road);
-        Py_DECREF(road);
-        return result;
-    }
-    Py_DECREF(road);
-    if (!same || line_obj == Py_None) {
-        Py_XDECREF(line_obj);
-        return PyObject_CallMethodNoArgs(view, s_frame);
-    }
-    int bad = read_doubles(line_obj, line, 6, "line");
-    Py_DECREF(line_obj);
-    if (bad < 0) return NULL;
-    PyObject *plant = PyObject_GetAttr(view, s_plant);
-    if (!plant) return NULL;
     PyObject *state = PyObject_GetAttr(plant, s_state);
-    Py_DECREF(plant);
     if (!state) return NULL;
-    bad = read_doubles(state, x, NX, "state");
+    int bad = read_doubles(state, x, NX, "state");
     Py_DECREF(state);
     if (bad < 0) return NULL;
     const double X = x[0], u = x[1], Y = x[2], v = x[3], psi = x[4];
+    if (line_obj == Py_None) { /* a curved lane: LanePolyline.locate on its packed data */
+        LaneData L;
+        const int got = lane_packed(road, &L);
+        if (got < 0) return NULL;
+        if (got > 0) return PyObject_CallNoArgs(frame);
+        PyObject *hint_obj = PyObject_GetAttr(road, s_hint_);
+        if (!hint_obj) { lane_release(&L); return NULL; }
+        Py_ssize_t hint = PyLong_AsSsize_t(hint_obj);
+        Py_DECREF(hint_obj);
+        if (hint == -1 && PyErr_Occurred()) { lane_release(&L); return NULL; }
+        double f[6];
+        const int defer = lane_locate(&L, &hint, X, Y, psi, f);
+        lane_release(&L);
+        if (defer) return PyObject_CallNoArgs(frame);
+        PyObject *h = PyLong_FromSsize_t(hint);
+        if (!h) return NULL;
+        bad = PyObject_SetAttr(road, s_hint_, h);
+        Py_DECREF(h);
+        if (bad < 0 || set_double(view, s_turn, f[4]) < 0 || set_double(view, s_station, f[5]) < 0
+            || frame_out(view, X, Y, f[0], f[1], f[2], f[3], u, v) < 0)
+            return NULL;
+        Py_RETURN_NONE;
+    }
+    if (read_doubles(line_obj, line, 6, "line") < 0) return NULL;
     const double x0 = line[0], y0 = line[1], ux = line[2], uy = line[3], s0 = line[4], heading = line[5];
     const double dx = X - x0, dy = Y - y0;
     double err = psi - heading;
-    if (isinf(err)) return PyObject_CallMethodNoArgs(view, s_frame); /* math.fmod raises there */
+    if (isinf(err)) return PyObject_CallNoArgs(frame); /* math.fmod raises there */
     if (!(-Py_MATH_PI < err && err <= Py_MATH_PI)) { /* lane_frame.wrap_angle */
         double a = fmod(err + Py_MATH_PI, 2.0 * Py_MATH_PI);
         if (a <= 0.0) a += 2.0 * Py_MATH_PI;
         err = a - Py_MATH_PI;
     }
-    const double s = s0 + dx * ux + dy * uy, d = dy * ux - dx * uy;
-    const double c = cos(err), sn = sin(err);
-    if (set_double(view, s_X, X) < 0 || set_double(view, s_Y, Y) < 0 || set_double(view, s_s, s) < 0
-        || set_double(view, s_d_road, d) < 0 || set_double(view, s_heading_error, err) < 0
-        || set_double(view, s_curvature, 0.0) < 0 || set_double(view, s_ds, u * c - v * sn) < 0
-        || set_double(view, s_dd, u * sn + v * c) < 0)
-        return NULL;
+    if (frame_out(view, X, Y, s0 + dx * ux + dy * uy, dy * ux - dx * uy, err, 0.0, u, v) < 0) return NULL;
     Py_RETURN_NONE;
-}
-
-/* look_between(view, t) -> Collision | None: SurroundView.look between two SUMO steps
- * (SurroundSensor.advance, then the gaps and TTCs); at the first look after a SUMO step, the
- * Python method (the scan), and where a gap closed, its _overlap */
-static int get_double(PyObject *obj, PyObject *name, double *out)
-{
-    PyObject *o = PyObject_GetAttr(obj, name);
-    if (!o) return -1;
-    *out = PyFloat_AsDouble(o);
-    Py_DECREF(o);
-    return (*out == -1.0 && PyErr_Occurred()) ? -1 : 0;
-}
-
-static PyObject *s_d_, *s_along, *s_turn_, *s_turn_scan, *s_rate_;
-
-static int carry_on(PyObject *det, double sign, double moved, double since, double turned)
-{
-    /* SurroundSensor._carried: front: gap0 + speed * since - moved; rear (sign -1): gap0 +
-     * moved - speed * since; on a curved lane (turned: the lane's turn since the scan, not
-     * NaN... any value; det._d not None) moved less _d * turned */
-    PyObject *o = PyObject_GetAttr(det, s_o);
-    if (!o) return -1;
-    const int none = o == Py_None;
-    Py_DECREF(o);
-    if (none) return 0;
-    double gap0, speed;
-    if (get_double(det, s_gap0, &gap0) < 0 || get_double(det, s_speed, &speed) < 0) return -1;
-    PyObject *line = PyObject_GetAttr(det, s_d_);
-    if (!line) return -1;
-    if (line != Py_None) {
-        const double d = PyFloat_AsDouble(line);
-        if (d == -1.0 && PyErr_Occurred()) { Py_DECREF(line); return -1; }
-        moved -= d * turned;
-    }
-    Py_DECREF(line);
-    const double gap = sign > 0.0 ? gap0 + speed * since - moved : gap0 + moved - speed * since;
-    return set_double(det, s_gap, gap);
-}
-
-static double ttc_of(double gap, double closing)
-{
-    return gap <= 0.0 ? 0.0 : ((closing <= 1e-9 || gap == Py_HUGE_VAL) ? Py_HUGE_VAL : gap / closing);
-}
-
-static PyObject *look_between(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
-{
-    if (nargs != 2) {
-        PyErr_SetString(PyExc_TypeError, "look_between(view, t)");
-        return NULL;
-    }
-    PyObject *view = args[0], *t_obj = args[1];
-    PyObject *looked = PyObject_GetAttr(view, s_looked);
-    if (!looked) return NULL;
-    const int is_looked = PyObject_IsTrue(looked);
-    Py_DECREF(looked);
-    if (is_looked < 0) return NULL;
-    if (!is_looked) return PyObject_CallMethodOneArg(view, s_look, t_obj);
-    const double t = PyFloat_AsDouble(t_obj);
-    if (t == -1.0 && PyErr_Occurred()) return NULL;
-    PyObject *sensor = PyObject_GetAttr(view, s_sensor);
-    if (!sensor) return NULL;
-    PyObject *front = NULL, *rear = NULL, *s_obj = NULL, *result = NULL;
-    double s, s_scan, t_scan, ds, front_gap, rear_gap, front_speed, rear_speed;
-    /* a curved lane (sensor._along set): the ego's station and the lane's turn there */
-    PyObject *along = PyObject_GetAttr(sensor, s_along);
-    if (!along) goto done;
-    const int curved = along != Py_None;
-    Py_DECREF(along);
-    s_obj = PyObject_GetAttr(view, curved ? s_station : s_s);
-    if (!s_obj) goto done;
-    s = PyFloat_AsDouble(s_obj);
-    if (s == -1.0 && PyErr_Occurred()) goto done;
-    /* SurroundSensor.advance(t, s) */
-    if (PyObject_SetAttr(sensor, s_t_, t_obj) < 0 || PyObject_SetAttr(sensor, s_s_, s_obj) < 0) goto done;
-    if (get_double(sensor, s_s_scan, &s_scan) < 0 || get_double(sensor, s_t_scan, &t_scan) < 0) goto done;
-    const double moved = s - s_scan, since = t - t_scan;
-    double turned = 0.0;
-    {
-        if (curved) {
-            PyObject *turn = PyObject_GetAttr(view, s_turn);
-            if (!turn) goto done;
-            const int bad = PyObject_SetAttr(sensor, s_turn_, turn);
-            double now = PyFloat_AsDouble(turn), then;
-            Py_DECREF(turn);
-            if (bad < 0 || (now == -1.0 && PyErr_Occurred()) || get_double(sensor, s_turn_scan, &then) < 0) goto done;
-            turned = now - then;
-        }
-    }
-    front = PyObject_GetAttr(sensor, s_front);
-    rear = front ? PyObject_GetAttr(sensor, s_rear) : NULL;
-    if (!rear) goto done;
-    if (carry_on(front, 1.0, moved, since, turned) < 0 || carry_on(rear, -1.0, moved, since, turned) < 0) goto done;
-    /* the gaps and TTCs */
-    if (curved) { /* the ego's speed along the line the gaps are measured along */
-        double rate;
-        if (get_double(view, s_ds, &ds) < 0 || get_double(sensor, s_rate_, &rate) < 0) goto done;
-        ds = ds * rate;
-    } else if (get_double(view, s_ds, &ds) < 0) goto done;
-    if (get_double(front, s_gap, &front_gap) < 0
-        || get_double(front, s_speed, &front_speed) < 0 || get_double(rear, s_gap, &rear_gap) < 0
-        || get_double(rear, s_speed, &rear_speed) < 0)
-        goto done;
-    if (set_double(view, s_gap_front, front_gap) < 0 || set_double(view, s_ttc_front, ttc_of(front_gap, ds - front_speed)) < 0
-        || set_double(view, s_gap_rear, rear_gap) < 0 || set_double(view, s_ttc_rear, ttc_of(rear_gap, rear_speed - ds)) < 0)
-        goto done;
-    if (front_gap <= 0.0 || rear_gap <= 0.0) {
-        PyObject *vid = PyObject_GetAttr(front_gap <= 0.0 ? front : rear, s_id);
-        if (!vid) goto done;
-        result = PyObject_CallMethodOneArg(view, s_overlap, vid);
-        Py_DECREF(vid);
-        goto done;
-    }
-    result = Py_NewRef(Py_None);
-done:
-    Py_DECREF(sensor);
-    Py_XDECREF(s_obj);
-    Py_XDECREF(front);
-    Py_XDECREF(rear);
-    return result;
-}
-
-/* plan_steady(fallback, packed, ego_speed, man, safety, obs, t) -> None:
- * EvasiveManoeuvre.plan for a control period that changes no state of the machine: no
- * trigger, the safety layer staying off, no lane change to weigh aborting, the references
- * (the in-lane manoeuvre's own from its Python reference), the lane change's one-second
- * settling clock. Anything else - a trigger, the AEB engaged or to weigh, a SUMO step of a
- * braking lane change, a manoeuvre done - is fallback(man, obs, t), the Python method, from
- * the start (nothing of the period has been decided here yet), or, once the references are
- * written, its check_done. packed: the configuration's doubles, PLAN_* below. */
-static PyObject *s_phase, *s_view, *s_safety, *s_active, *s_in_lane, *s_action, *s_brake, *s_limit;
-static PyObject *s_chosen, *s_evade_speed, *s_trigger_s, *s_trigger_t, *s_target_lane, *s_lanes;
-static PyObject *s_lane_leader_now, *s_reference, *s_speed_ref, *s_s_ref, *s_ds_ref, *s_d_ref, *s_dd_ref;
-static PyObject *s_lane_offset, *s_inside_since, *s_check_done, *s_t, *s_s0, *s_accel, *float_zero;
-
-enum {
-    PLAN_TTC_THRESHOLD, PLAN_TRIGGER_FRONT, PLAN_AEB_TTC, PLAN_AEB_DECEL, PLAN_FOLLOW_GAP,
-    PLAN_FOLLOW_HEADWAY, PLAN_SETTLE_BAND, PLAN_EGO_SPEED, PLAN_DT, PLAN_PER, PLAN_N
-};
-
-/* ego.scenarios.safety.braking_need(front, ds) (margin 0), Python's max() order kept */
-static double braking_need_of(double gap, double speed, double accel, double ds)
-{
-    if (gap == Py_HUGE_VAL) return 0.0;
-    const double g = gap - 0.0;
-    const double room = 0.1 > g ? 0.1 : g;
-    const double closing = ds - speed;
-    double need = closing > 0.0 ? closing * closing / (2.0 * room) : 0.0;
-    const double decel = -accel;
-    if (decel > 0.5) {
-        const double v = 0.0 > ds ? 0.0 : ds;
-        const double b = v * v / (2.0 * (room + speed * speed / (2.0 * decel)));
-        need = b > need ? b : need;
-    }
-    return need;
-}
-
-/* in_lane.action == "brake": 1, 0, or -1 for an action that is not a str (Python decides) */
-static int is_brake(PyObject *in_lane)
-{
-    PyObject *action = PyObject_GetAttr(in_lane, s_action);
-    if (!action) return -2;
-    int r = PyUnicode_CheckExact(action) ? PyUnicode_Compare(action, s_brake) == 0 : -1;
-    Py_DECREF(action);
-    return r;
-}
-
-/* *slot, or owner.name fetched into it once (a new reference the caller releases) */
-static PyObject *attr_once(PyObject **slot, PyObject *owner, PyObject *name)
-{
-    if (!*slot) *slot = PyObject_GetAttr(owner, name);
-    return *slot;
-}
-
-static PyObject *plan_steady(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
-{
-    if (nargs != 7) {
-        PyErr_SetString(PyExc_TypeError, "plan_steady(fallback, packed, ego_speed, man, safety, obs, t)");
-        return NULL;
-    }
-    PyObject *fallback = args[0], *ego_speed = args[2], *man = args[3], *safety = args[4];
-    PyObject *obs = args[5], *t_obj = args[6];
-    const double *P = params_of(args[1], PLAN_N, "packed");
-    if (!P) return NULL;
-    const double t = PyFloat_AsDouble(t_obj);
-    if (t == -1.0 && PyErr_Occurred()) return NULL;
-    PyObject *view = NULL, *sensor = NULL, *front = NULL, *in_lane = NULL, *obj = NULL;
-    PyObject *s_ref_obj = NULL, *v_obj = NULL, *result = NULL;
-    int python = 0;
-    if (PyObject_SetAttr(man, s_t, t_obj) < 0) return NULL;
-    obj = PyObject_GetAttr(man, s_phase);
-    if (!obj) return NULL;
-    if (!PyLong_CheckExact(obj)) { Py_DECREF(obj); goto python; }
-    const long phase = PyLong_AsLong(obj);
-    Py_CLEAR(obj);
-    if (phase == -1 && PyErr_Occurred()) return NULL;
-    if (phase < 0 || phase > 3) goto python;
-    if (!(view = PyObject_GetAttr(man, s_view))) goto done;
-    double ttc;
-    if (phase == 0) { /* cruise: the trigger is Python's */
-        if (get_double(view, P[PLAN_TRIGGER_FRONT] != 0.0 ? s_ttc_front : s_ttc_rear, &ttc) < 0) goto done;
-        if (ttc < P[PLAN_TTC_THRESHOLD]) { python = 1; goto done; }
-    }
-    if (!(obj = PyObject_GetAttr(man, s_safety))) goto done;
-    const int same_safety = obj == safety;
-    Py_CLEAR(obj);
-    if (!same_safety) { python = 1; goto done; }
-    if (safety != Py_None) { /* SafetyLayer.update, while it stays off */
-        if (!(obj = PyObject_GetAttr(safety, s_active))) goto done;
-        const int active = PyObject_IsTrue(obj);
-        Py_CLEAR(obj);
-        if (active < 0) goto done;
-        if (active) { python = 1; goto done; }
-        int braking_in_lane = 0;
-        if (phase == 2) {
-            if (!attr_once(&in_lane, man, s_in_lane)) goto done;
-            braking_in_lane = is_brake(in_lane);
-            if (braking_in_lane == -2) goto done;
-            if (braking_in_lane < 0) { python = 1; goto done; }
-        }
-        double ttc_front;
-        if (get_double(view, s_ttc_front, &ttc_front) < 0) goto done;
-        if (!(ttc_front >= P[PLAN_AEB_TTC] && !braking_in_lane && phase != 1)) {
-            double gap, speed, accel, ds, limit;
-            if (!attr_once(&sensor, view, s_sensor) || !attr_once(&front, sensor, s_front)
-                || get_double(front, s_gap, &gap) < 0 || get_double(front, s_speed, &speed) < 0
-                || get_double(front, s_accel, &accel) < 0 || get_double(view, s_ds, &ds) < 0
-                || get_double(man, s_limit, &limit) < 0)
-                goto done;
-            const double need = braking_need_of(gap, speed, accel, ds);
-            /* engaging (braking in lane, limit_braking_behind, imminent) is Python's */
-            if ((braking_in_lane && need >= P[PLAN_AEB_DECEL]) || (phase == 1 && !(need <= 0.9 * limit))
-                || !(ttc_front >= P[PLAN_AEB_TTC])) {
-                python = 1;
-                goto done;
-            }
-        }
-    }
-    /* a simulator step just came in a lane change: abort_lane_change(aeb=False) weighs a
-     * braking one (Python's) */
-    if (phase == 1 && P[PLAN_PER] != 0.0 && fmod(nearbyint(t / P[PLAN_DT]), P[PLAN_PER]) == 0.0) {
-        if (!attr_once(&in_lane, man, s_in_lane)) goto done;
-        const int brake = is_brake(in_lane);
-        if (brake == -2) goto done;
-        if (brake != 0) { python = 1; goto done; }
-    }
-    /* the references */
-    if (phase == 0) {
-        double s0;
-        if (get_double(man, s_s0, &s0) < 0) goto done;
-        if (!(s_ref_obj = PyFloat_FromDouble(s0 + P[PLAN_EGO_SPEED] * t))) goto done;
-        v_obj = Py_NewRef(ego_speed);
-    } else {
-        if (!(obj = PyObject_GetAttr(man, s_chosen))) goto done;
-        const int chosen = obj != Py_None;
-        Py_CLEAR(obj);
-        if (chosen) {
-            double v_evade, trigger_s, trigger_t, s, gap, speed;
-            if (!attr_once(&sensor, view, s_sensor) || !attr_once(&front, sensor, s_front)
-                || !(v_obj = PyObject_GetAttr(man, s_evade_speed)))
-                goto done;
-            v_evade = PyFloat_AsDouble(v_obj);
-            if ((v_evade == -1.0 && PyErr_Occurred()) || get_double(man, s_trigger_s, &trigger_s) < 0
-                || get_double(man, s_trigger_t, &trigger_t) < 0 || get_double(view, s_s, &s) < 0)
-                goto done;
-            double s_ref = trigger_s + v_evade * (t - trigger_t);
-            /* SurroundSensor.lane_leader_now(view.target_lane): a lane scanned since the last
-             * look in C, else the method (which scans it) */
-            PyObject *lane = PyObject_GetAttr(view, s_target_lane), *found = NULL, *lanes = NULL;
-            if (lane && (lanes = PyObject_GetAttr(sensor, s_lanes)) && PyDict_CheckExact(lanes))
-                found = PyDict_GetItemWithError(lanes, lane);
-            Py_XDECREF(lanes);
-            if (PyErr_Occurred()) { Py_XDECREF(lane); goto done; }
-            PyObject *leader_speed = NULL; /* new reference when there is a leader */
-            double leader_gap = 0.0;
-            if (found && PyTuple_CheckExact(found) && PyTuple_GET_SIZE(found) == 2) {
-                PyObject *ahead = PyTuple_GET_ITEM(found, 0);
-                PyObject *o = PyObject_GetAttr(ahead, s_o);
-                if (!o) { Py_DECREF(lane); goto done; }
-                const int none = o == Py_None;
-                Py_DECREF(o);
-                if (!none) {
-                    double gap0, st, st_scan, ss, ss_scan;
-                    if (!(leader_speed = PyObject_GetAttr(ahead, s_speed))) { Py_DECREF(lane); goto done; }
-                    speed = PyFloat_AsDouble(leader_speed);
-                    if ((speed == -1.0 && PyErr_Occurred()) || get_double(ahead, s_gap0, &gap0) < 0
-                        || get_double(sensor, s_t_, &st) < 0 || get_double(sensor, s_t_scan, &st_scan) < 0
-                        || get_double(sensor, s_s_, &ss) < 0 || get_double(sensor, s_s_scan, &ss_scan) < 0) {
-                        Py_DECREF(lane);
-                        Py_DECREF(leader_speed);
-                        goto done;
-                    }
-                    leader_gap = gap0 + speed * (st - st_scan) - (ss - ss_scan);
-                }
-            } else {
-                PyObject *r = PyObject_CallMethodOneArg(sensor, s_lane_leader_now, lane);
-                if (!r) { Py_DECREF(lane); goto done; }
-                if (r != Py_None) {
-                    if (!PyTuple_CheckExact(r) || PyTuple_GET_SIZE(r) != 2) {
-                        Py_DECREF(r);
-                        Py_DECREF(lane);
-                        PyErr_SetString(PyExc_TypeError, "lane_leader_now must give (gap, speed) or None");
-                        goto done;
-                    }
-                    leader_gap = PyFloat_AsDouble(PyTuple_GET_ITEM(r, 0));
-                    leader_speed = Py_NewRef(PyTuple_GET_ITEM(r, 1));
-                    speed = PyFloat_AsDouble(leader_speed);
-                }
-                Py_DECREF(r);
-                if (PyErr_Occurred()) { Py_XDECREF(leader_speed); Py_DECREF(lane); goto done; }
-            }
-            Py_DECREF(lane);
-            if (leader_speed) {
-                if (leader_gap != Py_HUGE_VAL) {
-                    const double fs = s + leader_gap - P[PLAN_FOLLOW_GAP] - P[PLAN_FOLLOW_HEADWAY] * speed;
-                    if (fs < s_ref) {
-                        s_ref = fs;
-                        Py_SETREF(v_obj, Py_NewRef(leader_speed));
-                    }
-                }
-                Py_DECREF(leader_speed);
-            }
-            PyObject *front_speed = PyObject_GetAttr(front, s_speed);
-            if (!front_speed) goto done;
-            speed = PyFloat_AsDouble(front_speed);
-            if ((speed == -1.0 && PyErr_Occurred()) || get_double(front, s_gap, &gap) < 0) {
-                Py_DECREF(front_speed);
-                goto done;
-            }
-            if (gap != Py_HUGE_VAL) {
-                const double fs = s + gap - P[PLAN_FOLLOW_GAP] - P[PLAN_FOLLOW_HEADWAY] * speed;
-                if (fs < s_ref) {
-                    s_ref = fs;
-                    Py_SETREF(v_obj, Py_NewRef(front_speed));
-                }
-            }
-            Py_DECREF(front_speed);
-            if (!(s_ref_obj = PyFloat_FromDouble(s_ref))) goto done;
-        } else { /* the in-lane manoeuvre's references */
-            if (!attr_once(&in_lane, man, s_in_lane)) goto done;
-            PyObject *r = PyObject_CallMethodOneArg(in_lane, s_reference, man);
-            if (!r) goto done;
-            PyObject *seq = PySequence_Fast(r, "cannot unpack the in-lane reference");
-            Py_DECREF(r);
-            if (!seq) goto done;
-            if (PySequence_Fast_GET_SIZE(seq) != 2) {
-                PyErr_Format(PyExc_ValueError, "the in-lane reference must be (s_ref, speed_ref), got %zd values",
-                             PySequence_Fast_GET_SIZE(seq));
-                Py_DECREF(seq);
-                goto done;
-            }
-            s_ref_obj = Py_NewRef(PySequence_Fast_GET_ITEM(seq, 0));
-            v_obj = Py_NewRef(PySequence_Fast_GET_ITEM(seq, 1));
-            Py_DECREF(seq);
-        }
-    }
-    if (PyObject_SetAttr(man, s_speed_ref, v_obj) < 0 || PyObject_SetAttr(obs, s_s_ref, s_ref_obj) < 0
-        || PyObject_SetAttr(obs, s_ds_ref, v_obj) < 0 || PyObject_SetAttr(obs, s_d_ref, float_zero) < 0
-        || PyObject_SetAttr(obs, s_dd_ref, float_zero) < 0)
-        goto done;
-    /* check_done: the lane change's settling clock here, the rest Python's */
-    if (phase == 2) {
-        result = PyObject_CallMethodNoArgs(man, s_check_done);
-        goto done;
-    }
-    if (phase == 1) {
-        double d_road, band_off;
-        PyObject *offsets = PyObject_GetAttr(view, s_lane_offset);
-        if (!offsets) goto done;
-        PyObject *lane = PyObject_GetAttr(view, s_target_lane);
-        PyObject *off = lane ? PyObject_GetItem(offsets, lane) : NULL;
-        Py_DECREF(offsets);
-        Py_XDECREF(lane);
-        if (!off) goto done;
-        band_off = PyFloat_AsDouble(off);
-        Py_DECREF(off);
-        if ((band_off == -1.0 && PyErr_Occurred()) || get_double(view, s_d_road, &d_road) < 0) goto done;
-        if (!(fabs(d_road - band_off) < P[PLAN_SETTLE_BAND])) {
-            if (PyObject_SetAttr(man, s_inside_since, Py_None) < 0) goto done;
-        } else {
-            PyObject *since = PyObject_GetAttr(man, s_inside_since);
-            if (!since) goto done;
-            if (since == Py_None) {
-                Py_DECREF(since);
-                if (PyObject_SetAttr(man, s_inside_since, t_obj) < 0) goto done;
-            } else {
-                const double t0 = PyFloat_AsDouble(since);
-                Py_DECREF(since);
-                if (t0 == -1.0 && PyErr_Occurred()) goto done;
-                if (t - t0 >= 1.0) { /* done: the event and the transition are Python's */
-                    result = PyObject_CallMethodNoArgs(man, s_check_done);
-                    goto done;
-                }
-            }
-        }
-    }
-    result = Py_NewRef(Py_None);
-done:
-    Py_XDECREF(view);
-    Py_XDECREF(sensor);
-    Py_XDECREF(front);
-    Py_XDECREF(in_lane);
-    Py_XDECREF(s_ref_obj);
-    Py_XDECREF(v_obj);
-    if (!python) return result;
-python:
-    {
-        PyObject *call[3] = {man, obs, t_obj};
-        return PyObject_Vectorcall(fallback, call, 3, NULL);
-    }
 }
 
 /* ---------------------------------------------------------------------------------------
@@ -2294,7 +1935,6 @@ python:
  *    (d_min, d_max, turn, ego_front, ego_rear) (a curved lane), _nearest_along and Detection._found_along.
  * An object is the sensor's tuple (id, s_lo, s_hi, d_lo, d_hi, v_s, v_d, accel, rel).
  * ------------------------------------------------------------------------------------- */
-static PyObject *s_lo_, *s_hi_, *s_since_, *str_empty, *float_inf;
 
 static int object_doubles(PyObject *o, double *x)
 {
@@ -2498,42 +2138,6 @@ static PyObject *nearest(PyObject *self, PyObject *const *args, Py_ssize_t nargs
     Py_RETURN_NONE;
 }
 
-static int intern_loop_names(void)
-{
-    struct { PyObject **slot; const char *name; } names[] = {
-        {&s_state, "state"}, {&s_applied, "applied"}, {&s_lateral_accel, "lateral_accel"},
-        {&s_plant, "_plant"}, {&s_road, "road"}, {&s_line_of, "_line_of"}, {&s_line, "_line"},
-        {&s_X, "X"}, {&s_Y, "Y"}, {&s_s, "s"}, {&s_d_road, "d_road"},
-        {&s_heading_error, "heading_error"}, {&s_curvature, "curvature"}, {&s_ds, "ds"},
-        {&s_dd, "dd"}, {&s_frame, "frame"},
-        {&s_looked, "_looked"}, {&s_look, "look"}, {&s_sensor, "sensor"}, {&s_t_, "_t"}, {&s_s_, "_s"},
-        {&s_s_scan, "_s_scan"}, {&s_t_scan, "_t_scan"}, {&s_front, "front"}, {&s_rear, "rear"},
-        {&s_o, "_o"}, {&s_gap0, "_gap0"}, {&s_speed, "speed"}, {&s_gap, "gap"},
-        {&s_gap_front, "gap_front"}, {&s_ttc_front, "ttc_front"}, {&s_gap_rear, "gap_rear"},
-        {&s_ttc_rear, "ttc_rear"}, {&s_id, "id"}, {&s_overlap, "_overlap"},
-        {&s_phase, "phase"}, {&s_view, "view"}, {&s_safety, "safety"}, {&s_active, "active"},
-        {&s_in_lane, "in_lane"}, {&s_action, "action"}, {&s_brake, "brake"}, {&s_limit, "limit"},
-        {&s_chosen, "chosen"}, {&s_evade_speed, "evade_speed"}, {&s_trigger_s, "trigger_s"},
-        {&s_trigger_t, "trigger_t"}, {&s_target_lane, "target_lane"}, {&s_lanes, "_lanes"},
-        {&s_lane_leader_now, "lane_leader_now"}, {&s_reference, "reference"}, {&s_speed_ref, "speed_ref"},
-        {&s_s_ref, "s_ref"}, {&s_ds_ref, "ds_ref"}, {&s_d_ref, "d_ref"}, {&s_dd_ref, "dd_ref"},
-        {&s_lane_offset, "lane_offset"}, {&s_inside_since, "_inside_since"}, {&s_check_done, "check_done"},
-        {&s_t, "t"}, {&s_s0, "s0"}, {&s_accel, "accel"}, {&s_lo_, "_lo"}, {&s_hi_, "_hi"},
-        {&s_since_, "_since"}, {&s_d_, "_d"}, {&s_along, "_along"}, {&s_turn, "turn"},
-        {&s_turn_, "_turn"}, {&s_turn_scan, "_turn_scan"}, {&s_station, "station"}, {&s_rate_, "_rate"}, {&s_c_, "_c"}, {&s_hint_, "_hint"}, {&s_at_, "_at"},
-        {&s_mean_curvature, "mean_curvature"}, {&str_empty, ""}, {&s_bridge, "bridge"}, {&s_elapsed_, "_elapsed"},
-        {&s_step, "step"}, {&s_step_joint, "step_joint"},
-        {&s_status, "status"}, {&s_rewards, "rewards"}, {&s_running, "running"},
-    };
-    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
-        *names[i].slot = PyUnicode_InternFromString(names[i].name);
-        if (!*names[i].slot) return -1;
-    }
-    float_zero = PyFloat_FromDouble(0.0);
-    float_inf = PyFloat_FromDouble(Py_HUGE_VAL);
-    return float_zero && float_inf ? 0 : -1;
-}
-
 #define FASTCALL(name, doc) {#name, (PyCFunction)(void (*)(void))name, METH_FASTCALL, doc}
 static PyMethodDef methods[] = {
     FASTCALL(bicycle_step, "bicycle_step(state, Fx, delta, h, substeps, params) -> (state, lateral_accel)"),
@@ -2553,12 +2157,10 @@ static PyMethodDef methods[] = {
     FASTCALL(plant_step, "plant_step(plant, packed, action) -> None (BicyclePlant.step)"),
     FASTCALL(trace_write, "trace_write(rows, width, signals, fallback, sigs, values) -> None"),
     FASTCALL(road_frame, "road_frame(view) -> None (RoadSensor.frame)"),
-    FASTCALL(look_between, "look_between(view, t) -> Collision | None (SurroundView.look)"),
     FASTCALL(near, "near(objects, lo, hi, h, m) -> the objects within reach (SurroundSensor.scan's filter)"),
     FASTCALL(nearest, "nearest(objects, lo, hi, e_lo, e_hi, since, ahead, behind[, along]) -> None "
                       "(SurroundSensor._nearest)"),
-    FASTCALL(plan_steady, "plan_steady(fallback, packed, ego_speed, man, safety, obs, t) -> None "
-                          "(EvasiveManoeuvre.plan)"),
+    FASTCALL(fields, "fields() -> ((record, field), ...): what the glue kernels read and write on Python objects"),
     FASTCALL(lane_mean_curvature, "lane_mean_curvature(lane, s, ahead) -> LanePolyline.mean_curvature(s, ahead)"),
     FASTCALL(place, "place(ids, rows, front, reach, straight, frame, previous, dt, rated, low_edge) -> "
                     "(ids, rows, objects, speeds)"),
@@ -2582,10 +2184,10 @@ PyMODINIT_FUNC PyInit__native(void)
     key_progress = PyUnicode_InternFromString("progress");
     key_centring = PyUnicode_InternFromString("centring");
     key_discomfort = PyUnicode_InternFromString("discomfort");
-    s_t_obs = PyUnicode_InternFromString("t");
-    if (!s_t_obs) return NULL;
+    s_t = PyUnicode_InternFromString("t");
+    if (!s_t) return NULL;
     if (!key_crashed || !key_progress || !key_centring || !key_discomfort) return NULL;
-    if (intern_loop_names() < 0) return NULL;
+    if (intern_fields() < 0) return NULL;
     import_array(); /* numpy's C API: returns NULL with numpy's error when it cannot */
     return PyModule_Create(&module);
 }

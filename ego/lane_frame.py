@@ -44,7 +44,7 @@ GRID = 10.0
 class LanePolyline:
     """A lane centre line made of straight segments, with a fast local projection."""
 
-    __slots__ = ("lane_id", "width", "points", "_seg", "_hint", "_single", "_grid", "_at", "_c")
+    __slots__ = ("lane_id", "width", "points", "_seg", "hint", "_single", "_grid", "at", "packed")
 
     def __init__(self, points: Sequence[tuple[float, float]], width: float = 3.5, lane_id: str = "") -> None:
         if len(points) < 2:
@@ -85,8 +85,8 @@ class LanePolyline:
             change = wrap_angle(heading[i + 1] - heading[i])
             self._seg.append((*raw[i], heading[i], change, change / raw[i][4], turn))
             turn += change
-        self._hint = 0
-        self._at = [0, 0]  #: the segments :meth:`_segment_at` found last, per slot
+        self.hint = 0
+        self.at = [0, 0]  #: the segments :meth:`_segment_at` found last, per slot
         #: (cell of GRID m) -> the segments passing through it, so a point far from the
         #: previous answer (the surround sensor projecting one car after another along a
         #: curve) starts its search next to its own segment instead of walking there
@@ -101,7 +101,7 @@ class LanePolyline:
         #: the segments and the grid as plain arrays, for ego._native (road_frame, place):
         #: the same projection in C, without a Python call per point
         cells = sorted(self._grid)
-        self._c = (
+        self.packed = (
             array("d", [v for seg in self._seg for v in seg]),
             array("q", [c[0] for c in cells]),
             array("q", [c[1] for c in cells]),
@@ -139,7 +139,7 @@ class LanePolyline:
         previous answer's segment so successive calls along a trajectory cost O(1)."""
         seg = self._seg
         n = len(seg)
-        i = self._hint
+        i = self.hint
         best = self._local(i, x, y)
         if best[2] > GRID * GRID:  # far from the previous answer: start next to this point
             cx, cy = int(math.floor(x / GRID)), int(math.floor(y / GRID))
@@ -160,7 +160,7 @@ class LanePolyline:
                     j += step
                 else:
                     break
-        self._hint = i
+        self.hint = i
         along, across, _ = best
         length = seg[i][4]
         if 0 < i and along < 0.0:
@@ -263,7 +263,7 @@ class LanePolyline:
         each keep their own)."""
         seg = self._seg
         last = len(seg) - 1
-        at = self._at
+        at = self.at
         i = at[slot]
         if seg[i][5] <= s and (i == last or s < seg[i + 1][5]):  # where the last call was
             return i

@@ -5,9 +5,8 @@
 - import circles between modules (tests/test_layers.py's graph: lazy and TYPE_CHECKING
   imports included);
 - functions longer than 80 lines (definition to last line, nested ones on their own);
-- attribute names the C kernels (ego/_native.c) read or write on Python objects, and how
-  many of them are private (``_name``): each is a field a Python rename would silently cut
-  off from its kernel (the kernel's twin test then fails);
+- attribute names the C kernels (ego/_native.c's FIELDS table) read or write on Python
+  objects (the records they take), and how many of them are private (``_name``);
 - classes deeper than base -> concrete: an ego class with two or more ego classes above it
   in a chain (exceptions counted apart: their hierarchies are the error vocabulary).
 """
@@ -36,8 +35,10 @@ def long_functions(limit: int = 80) -> list[tuple[str, str, int]]:
     return out
 
 
-def c_attribute_names() -> list[str]:
-    return re.findall(r'\{&\w+, "(\w+)"\}', (ROOT / "ego" / "_native.c").read_text())
+def c_fields() -> list[tuple[str, str]]:
+    """(record, field) of ego/_native.c's FIELDS table: what the glue kernels read and write."""
+    text = (ROOT / "ego" / "_native.c").read_text()
+    return re.findall(r'\{"([\w.]+)", (?:&\w+|NULL), "(\w+)"\}', text)
 
 
 def deep_classes() -> tuple[list[str], list[str]]:
@@ -85,9 +86,14 @@ def main() -> int:
     print(f"functions over 80 lines: {len(longs)}")
     for path, name, n in longs:
         print(f"  {path} {name} {n}")
-    names = c_attribute_names()
-    private = sorted(n for n in names if n.startswith("_"))
-    print(f"attribute names read or written from C: {len(names)}, private: {len(private)} ({', '.join(private)})")
+    fields = c_fields()
+    names = sorted({name for _, name in fields})
+    records = sorted({record for record, _ in fields})
+    private = [n for n in names if n.startswith("_")]
+    print(
+        f"attribute names read or written from C: {len(names)} ({len(fields)} fields of {len(records)} records),"
+        f" private: {len(private)} ({', '.join(private)})"
+    )
     deep, errors = deep_classes()
     print(f"classes deeper than base -> concrete: {len(deep)} (exceptions apart: {len(errors)})")
     for d in deep:

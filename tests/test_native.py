@@ -1,17 +1,22 @@
-"""The C twins in ego._native agree with the Python references they accelerate."""
+"""The C twins in ego._native agree with the Python references they accelerate: every twin of
+tests/twins.py's table checked by one parametrised test, the table itself checked against the
+extension, and the fields the kernels read checked against the records that declare them."""
 
-import contextlib
+import ast
+import importlib
+import inspect
 import json
-import math
 import os
 import subprocess
 import sys
+import textwrap
+from pathlib import Path
 
 import numpy as np
 import pytest
+from twins import TWINS, bits, mamdani_points
 
 from ego.control import fuzzy
-from ego.models import NonlinearBicycle, NonlinearBicycleParams
 from ego.native import NATIVE
 
 
@@ -20,60 +25,19 @@ def test_extension_is_built():
     assert NATIVE is not None, "ego._native is missing: pip install -e . needs a C compiler"
 
 
-def _python_stepper(model, h, substeps):
-    import ego.native
-
-    saved, ego.native.NATIVE = ego.native.NATIVE, None
-    try:
-        return model.stepper(h, substeps)
-    finally:
-        ego.native.NATIVE = saved
-
-
-@pytest.mark.parametrize("floor", [0.0, 1.0], ids=["report", "slip-floor"])
-def test_bicycle_step_matches_the_python_model(floor):
-    model = NonlinearBicycle(NonlinearBicycleParams(slip_speed_floor=floor))
-    native, python = model.stepper(0.005, 2), _python_stepper(model, 0.005, 2)
-    rng = np.random.default_rng(0)
-    for _ in range(500):
-        x = tuple(float(v) for v in rng.normal([100, 15, 1, 0, 0, 0], [50, 8, 3, 1, 0.2, 0.5]))
-        fx, delta = float(rng.normal(0, 5000)), float(rng.normal(0, 0.1))  # friction circle too
-        (xs_n, ay_n), (xs_p, ay_p) = native(x, fx, delta), python(x, fx, delta)
-        np.testing.assert_allclose(xs_n, xs_p, rtol=1e-13, atol=1e-13)
-        assert ay_n == pytest.approx(ay_p, rel=1e-13, abs=1e-13)
-
-
 @pytest.mark.slow
-def test_mamdani_matches_python_and_scikit_fuzzy():
+def test_mamdani_matches_scikit_fuzzy():
+    # the C twin against its Python reference is the twin table's (check_mamdani2); here the
+    # engine against scikit-fuzzy itself
     from skfuzzy import control as ctrl
 
     engine = fuzzy.evaluator()
-    assert engine.single2 is not engine.single2_py
-    rng = np.random.default_rng(2)
-    pts = np.vstack([rng.uniform(-12, 12, (2000, 2)), [[-10, -10], [10, 10], [0, 0], [10 / 3, 0]]])
-    for e, c in pts:
-        assert engine.single2(float(e), float(c)) == pytest.approx(engine.single2_py(float(e), float(c)), abs=1e-11)
+    pts = mamdani_points(np.random.default_rng(2))[:300]
     sim = ctrl.ControlSystemSimulation(fuzzy.rule_base())
-    sim.input["e"], sim.input["ec"] = pts[:300, 0], pts[:300, 1]
+    sim.input["e"], sim.input["ec"] = pts[:, 0], pts[:, 1]
     sim.compute()
-    got = np.array([engine.single2(float(e), float(c)) for e, c in pts[:300]])
+    got = np.array([engine.single2(float(e), float(c)) for e, c in pts])
     assert np.max(np.abs(got - sim.output["u"])) < 1e-6 * 200
-
-
-def test_sum_squares_is_numpys_pairwise_sum():
-    rng = np.random.default_rng(4)
-    for n in (1, 5, 8, 9, 60, 80, 127, 128, 129, 300, 4099):
-        for scale in (1e-200, 1.0, 1e150):
-            a = rng.standard_normal(n) * scale
-            assert NATIVE.sum_squares(a) == float(np.add.reduce(a * a, None))
-            if n % 2 == 0:
-                b = a.reshape(2, -1)  # a C-contiguous array of any shape: its values in order
-                assert NATIVE.sum_squares(b) == float(np.add.reduce(b * b, None))
-    assert NATIVE.sum_squares(np.zeros(0)) == 0.0
-    with pytest.raises(TypeError, match="float64"):
-        NATIVE.sum_squares(np.ones(4, np.float32))
-    with pytest.raises(ValueError, match="contiguous"):
-        NATIVE.sum_squares(np.ones((4, 4))[:, ::2])
 
 
 @pytest.mark.sumo
@@ -103,163 +67,6 @@ def test_a_run_gives_the_same_metrics_with_and_without_the_extension(scenario, c
     assert metrics("0") == metrics("1")
 
 
-class _Vehicles:
-    def __init__(self, results):
-        self.results = results
-
-    def getContextSubscriptionResults(self, vid):  # noqa: N802 - libsumo's name
-        return self.results
-
-
-class _Libsumo:
-    def __init__(self, results):
-        self.vehicle = _Vehicles(results)
-
-
-def _surroundings(results, native: bool):
-    """SumoBridge.surroundings on ``results`` (a context subscription's), in C or in Python."""
-    import ego.sumo.bridge as bridge
-
-    asked = []
-    known = {"k0": (4.5, 1.8), "k1": (12.0, 2.5)}
-    fake = type("Fake", (), {})()
-    fake._ls, fake._ctx_vars = _Libsumo(results), (0x42, 0x43, 0x40)
-    fake.controlled, fake._dims = {"ego": None}, dict(known)
-    fake.dimensions = lambda vid: asked.append(vid) or (5.0 + len(vid) * 0.25, 2.0)
-    saved = bridge._BOXES
-    bridge._BOXES = NATIVE.boxes if native else None
-    try:
-        return bridge.SumoBridge.surroundings(fake, "ego"), asked
-    finally:
-        bridge._BOXES = saved
-
-
-def test_boxes_match_the_bridges_python_loop():
-    rng = np.random.default_rng(1)
-    results = {}
-    for i, vid in enumerate(["k0", "ego", "u1", "k1", "unknown-22", *(f"v{j}" for j in range(30))]):
-        results[vid] = {
-            0x42: (float(rng.uniform(-500, 2000)), float(rng.uniform(-50, 50))),
-            0x43: float(rng.uniform(0, 360)) if i % 7 else 90.0,
-            0x40: float(rng.uniform(0, 40)),
-        }
-    (ids_c, rows_c), asked_c = _surroundings(results, native=True)
-    (ids_p, rows_p), asked_p = _surroundings(results, native=False)
-    assert ids_c == ids_p and "ego" not in ids_c and len(ids_c) == 34
-    assert rows_c == rows_p  # bit for bit
-    assert asked_c == asked_p and "k0" not in asked_c  # the known dimensions are not asked for
-
-
-def _motorway_arc() -> list[tuple[float, float]]:
-    """The middle lane of left-250 (sumo_nets/motorway_arcs.py): 350 m straight, a 180-degree
-    arc of radius 250 m in 4 m chords, the exit straight."""
-    arc = [(350.0 + 250.0 * math.sin(a), 250.0 - 250.0 * math.cos(a)) for a in np.linspace(0.0, math.pi, 197)]
-    return [(0.0, 0.0), *arc, (-1000.0, 500.0)]
-
-
-def _points(curved) -> list[tuple[float, float]]:
-    if curved == "arc":
-        return _motorway_arc()
-    return [(0.0, 0.0), (400.0, 30.0), (900.0, 10.0)] if curved else [(0.0, 0.0), (2000.0, 50.0)]
-
-
-def _sensor(curved):
-    from ego.lane_frame import LanePolyline
-    from ego.scenarios.sensor import SurroundSensor
-
-    return SurroundSensor(LanePolyline(_points(curved)), {0: (-1.75, 1.75)}, cg_to_front=2.25, length=4.5, width=1.8)
-
-
-@contextlib.contextmanager
-def _placing(native: bool):
-    """SurroundSensor.sync_within in C (native) or in Python within the block."""
-    import ego.scenarios.sensor as sensor_module
-
-    saved = sensor_module._PLACE
-    sensor_module._PLACE = NATIVE.place if native else None
-    try:
-        yield
-    finally:
-        sensor_module._PLACE = saved
-
-
-@pytest.mark.parametrize("curved", [False, True, "arc"], ids=["rotation", "polyline", "arc"])
-@pytest.mark.parametrize("front", [None, (300.0, 5.0)], ids=["all", "within-reach"])
-def test_place_matches_the_sensors_python_sync(curved, front):
-    rng = np.random.default_rng(2)
-    ids = [f"v{j}" for j in range(40)]
-    steps = []
-    for k in range(3):  # three syncs: the accelerations from the speeds of the one before
-        rows = []
-        for j in range(40):
-            x, y = 300.0 + float(rng.uniform(-150, 150)), float(rng.uniform(-8, 8))
-            rows.append((x, y, float(rng.normal(0.0, 0.1)), float(rng.uniform(0, 40)), 4.5 + j % 3, 1.8))
-        if k == 2:  # a box centre exactly at the reach (math.hypot decides) and a tie of edges
-            rows[0] = (300.0 + 30.0, 5.0 + 40.0, 0.0, 20.0, 4.5, 1.8)
-            rows[2] = rows[1]
-        if curved == "arc" and k == 1:  # points the C leaves to Python (it raises there): none
-            rows[3] = (float("nan"), 5.0, 0.0, 20.0, 4.5, 1.8)
-        steps.append((0.1 * k, list(ids), rows))
-    placed = {}
-    for native in (True, False):
-        sensor = _sensor(curved)
-        out = []
-        with _placing(native):
-            for t, step_ids, rows in steps:
-                near = sensor.sync_within(t, step_ids, rows, front, 50.0)
-                objects = (repr(sensor._objects), repr(sensor._speeds), repr(sensor._seen), sensor.lane._hint)
-                out.append((near, *objects))
-        placed[native] = out
-    assert placed[True] == placed[False]  # bit for bit, the order of equal edges included
-    if front is not None:
-        assert "v0" in placed[True][2][0][0]  # at exactly 50 m: within
-        assert 0 < len(placed[True][0][0][0]) < 40
-
-
-def test_place_leaves_an_order_with_nan_edges_to_pythons_sort():
-    rows = [(300.0 + 7.0 * j, 0.0, float("nan") if j in (2, 5) else 0.0, 20.0, 4.5, 1.8) for j in range(8)]
-    rows.reverse()
-    out = {}
-    for native in (True, False):
-        sensor = _sensor(False)
-        with _placing(native):
-            sensor.sync_within(0.0, [f"v{j}" for j in range(8)], list(rows), None, 50.0)
-        out[native] = repr(sensor._objects)
-    assert out[True] == out[False] and "nan" in out[True]
-
-
-@pytest.mark.sumo
-@pytest.mark.parametrize("normalize", [True, False], ids=["normalized", "raw"])
-def test_fill_obs_gives_the_python_observation_of_every_env(normalize, tmp_path, monkeypatch):
-    """EgoStateObservation.observe in C and in Python, on the same state at every step of an
-    episode of each env (its default episode distribution, random actions): equal to the bit."""
-    monkeypatch.setenv("MPLCONFIGDIR", str(tmp_path))
-    import gymnasium as gym
-
-    import ego.gym
-
-    for env_id in ego.gym.ENV_IDS:
-        env = gym.make(env_id, config={"duration": 4.0, "observation": {"type": "EgoState", "normalize": normalize}})
-        try:
-            env.reset(seed=7)
-            env.action_space.seed(7)
-            obs_type = env.unwrapped.observation_type
-            assert obs_type._fill is NATIVE.fill_obs
-            view, steps, done = env.unwrapped._view, 0, False
-            while not done and steps < 150:
-                native = obs_type.observe(view)
-                saved, obs_type._fill = obs_type._fill, None
-                python = obs_type.observe(view)
-                obs_type._fill = saved
-                assert native.dtype == python.dtype == np.float64 and native.shape == python.shape
-                assert np.array_equal(native, python, equal_nan=True), (env_id, steps, native, python)
-                _, _, terminated, truncated, _ = env.step(env.action_space.sample())
-                done, steps = terminated or truncated, steps + 1
-            assert steps >= 10
-        finally:
-            env.close()
-
-
 def test_fill_obs_writes_an_ndarray_and_any_other_float64_buffer_alike():
     values, const = (12.0, None, 3.5, -0.25, 800.0), [2.0, 1.5]
     norm = (0, 0.05, 4, 1, 1.0, 10.0, 0.0, 0.01)  # t scaled; s -= s_ref; s_ref from its start
@@ -268,10 +75,10 @@ def test_fill_obs_writes_an_ndarray_and_any_other_float64_buffer_alike():
     buffer = memoryview(bytearray(7 * 8)).cast("d")
     NATIVE.fill_obs(buffer, values, norm, const)
     expected = [12.0 * 0.05, float("nan"), 3.5, -0.25, 800.0 - float("nan"), 2.0, 1.5]
-    assert _bits(array) == _bits(buffer.tolist())
-    assert _bits(array)[:4] == _bits(expected)[:4] and np.isnan(array[4]) and array[5:].tolist() == const
+    assert bits(array) == bits(buffer.tolist())
+    assert bits(array)[:4] == bits(expected)[:4] and np.isnan(array[4]) and array[5:].tolist() == const
     out = NATIVE.observe(7, lambda o: o, values, norm, const)
-    assert out.dtype == np.float64 and out.flags.c_contiguous and _bits(out) == _bits(array)
+    assert out.dtype == np.float64 and out.flags.c_contiguous and bits(out) == bits(array)
     for bad in (np.zeros(6), np.zeros(7, np.float32), np.zeros(14)[::2]):
         with pytest.raises((ValueError, BufferError)):
             NATIVE.fill_obs(bad, values, norm, const)
@@ -279,431 +86,83 @@ def test_fill_obs_writes_an_ndarray_and_any_other_float64_buffer_alike():
         NATIVE.observe(8, lambda o: o, values, norm, const)
 
 
-def test_reward_matches_the_python_reward_including_non_finite_signals():
-    import ego.gym.env as env_module
-    from ego.gym.env import EnvConfig, Reward
-
-    class _View:
-        signals = (0.0, 0.0, 0.0, 0.0)
-
-        def reward_signals(self):
-            return self.signals
-
-    rng = np.random.default_rng(5)
-    cases = [tuple(float(v) for v in rng.normal([25, 0, 0, 0], [10, 1, 4, 4])) for _ in range(500)]
-    cases += [
-        (np.nan, 0.1, 0.0, 0.0),
-        (30.0, np.inf, 1.0, 0.0),
-        (20.0, 0.0, np.nan, np.inf),
-        (1e308, 1e200, 1e300, 0.0),
-    ]
-    cfg = EnvConfig(collision_reward=-1.5, progress_reward=0.6, lane_centering_reward=0.3, comfort_reward=-0.2)
-    reward, view = Reward(cfg, (20.0, 30.0)), _View()
-    for signals in cases:
-        view.signals = signals
-        for crashed in (False, True):
-            native = reward(view, crashed)
-            saved, env_module._REWARD = env_module._REWARD, None
-            try:
-                python = reward(view, crashed)
-            finally:
-                env_module._REWARD = saved
-            assert repr(native) == repr(python), (signals, crashed)
-
-
-# --- the loop's per-period glue: plant_step, trace_write, road_frame ---------------------
-
-
-def _bits(values) -> tuple:
-    """Floats compared to the bit as Python prints them (the sign of zero kept, every NaN alike)."""
-    return tuple(repr(float(v)) for v in values)
-
-
-def _plant_pair(limits, substeps):
-    from ego.models import VehicleGeometry
-    from ego.models.plant import BicyclePlant
-
-    model = NonlinearBicycle(NonlinearBicycleParams())
-    native = BicyclePlant(model, VehicleGeometry(), 0.01, substeps, limits)
-    python = BicyclePlant(model, VehicleGeometry(), 0.01, substeps, limits)
-    python._kernel = None  # the Python step: ActuatorLimits.apply, then the model's stepper
-    assert native._kernel is not None
-    return native, python
-
-
-@pytest.mark.parametrize("substeps", [1, 3])
 @pytest.mark.parametrize(
-    "limits",
+    "twin, case",
     [
-        {},
-        {"max_steer_rate": 0.6, "min_command": -4000.0, "max_command": 2000.0},
-        {"stop_speed": 0.0, "max_steer": 0.1},
+        pytest.param(t, c, marks=t.marks, id=f"{'+'.join(t.native)}-{i}")
+        for t in TWINS
+        if t.check
+        for i, c in enumerate(t.cases)
     ],
-    ids=["default", "rate-and-command", "no-standstill"],
 )
-def test_plant_step_matches_the_python_step(limits, substeps):
-    from ego.models.actuators import ActuatorLimits
-
-    native, python = _plant_pair(ActuatorLimits(**limits), substeps)
-    bound = native.bind_step()  # the loop's: the kernel itself
-    assert bound.func is NATIVE.plant_step and python.bind_step() == python.step
-    rng = np.random.default_rng(1)
-    odd = [np.nan, np.inf, -np.inf, -0.0, 1e300]
-    for i in range(3000):
-        if i % 200 == 0:  # a fresh state: cruising, crawling or at rest
-            x = rng.normal([100, 15, 1, 0, 0, 0], [50, 8, 3, 1, 0.2, 0.5])
-            x[1] = (abs(x[1]), 0.3, 0.0)[i // 200 % 3]
-            native.state = python.state = tuple(float(v) for v in x)
-            native.applied = python.applied = (0.0, 0.0)
-        fx, delta = float(rng.normal(-500, 4000)), float(rng.normal(0, 0.3))
-        if i % 97 == 5:
-            fx = odd[i % len(odd)]
-        if i % 89 == 7:
-            delta = odd[(i + 2) % len(odd)]
-        action = [(fx, delta), np.array([fx, delta]), (int(fx) if np.isfinite(fx) else fx, delta)][i % 3]
-        (native.step if i % 2 else bound)(action)
-        python.step(action)
-        assert _bits(native.state) == _bits(python.state), i
-        assert _bits(native.applied) == _bits(python.applied), i
-        assert repr(native.lateral_accel) == repr(python.lateral_accel), i
-        if not all(np.isfinite(native.state)):  # start again from a finite state
-            native.state = python.state = tuple(float(v) for v in rng.normal([0, 10, 0, 0, 0, 0], 1.0))
-
-
-def test_trace_write_matches_the_python_writer(monkeypatch):
-    import ego.results.trace as trace_module
-    from ego.results.trace import Column, Trace, TraceError
-
-    columns = [Column("t", "s"), Column("x", "m"), Column("v", "m/s")]
-
-    def writers():
-        native = Trace(columns, ("a", "b"))
-        write_native = native.bind(("t", "x", "v"))
-        monkeypatch.setattr(trace_module, "_TRACE_WRITE", None)
-        python = Trace(columns, ("a", "b"))
-        write_python = python.bind(("t", "x", "v"))
-        monkeypatch.undo()
-        assert write_native is not write_python and not hasattr(write_python, "func")
-        assert write_native.func is NATIVE.trace_write
-        return (native, write_native), (python, write_python)
-
-    pairs = writers()
-    good = [
-        ({"a": 1.0, "b": -0.0}, (0.0, 1.5, np.float64(2.0))),
-        ({"a": np.nan, "b": 2}, [0.1, 2.5, 3.0]),  # a list: the Python writer's own path
-        (type("Sigs", (dict,), {})(a=1.0, b=2.0), (0.2, 2.5, 3.0)),  # not exactly a dict
-    ]
-    bad = [
-        ({"a": 1.0, "b": 2.0}, (0.0, 1.0)),  # too short
-        ({"b": 1.0, "a": 2.0}, (0.0, 1.0, 2.0)),  # signals in another order
-        ({"a": 1.0}, (0.0, 1.0, 2.0)),  # one missing
-        ({"a": 1.0, "b": 2.0, "c": 3.0}, (0.0, 1.0, 2.0)),  # one too many
-    ]
-    for sigs, values in good:
-        for _trace, write in pairs:
-            write(sigs, values)
-    (native, _), (python, _) = pairs
-    assert [_bits(r) for r in native.rows] == [_bits(r) for r in python.rows]
-    assert [tuple(map(type, r)) for r in native.rows] == [tuple(map(type, r)) for r in python.rows]
-    for sigs, values in bad:
-        messages = []
-        for _trace, write in pairs:
-            with pytest.raises(TraceError) as err:
-                write(sigs, values)
-            messages.append(str(err.value))
-        assert messages[0] == messages[1]
-    assert len(native.rows) == len(python.rows) == len(good)
-
-
-@pytest.mark.parametrize("curved", [False, True, "arc"], ids=["straight", "polyline", "arc"])
-def test_road_frame_matches_the_python_frame(curved):
-    from ego.lane_frame import LanePolyline
-    from ego.models import VehicleGeometry
-    from ego.scenarios.road import RoadSensor
-
-    points = _points(curved) if curved else [(-50.0, 2.0), (2000.0, 60.0)]
-    road = LanePolyline(points)
-
-    class Plant:
-        state = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-
-    plants = Plant(), Plant()
-    native, python = RoadSensor(VehicleGeometry()), RoadSensor(VehicleGeometry())
-    native.on_lane(road, plants[0])
-    python.on_lane(LanePolyline(points), plants[1])  # a lane each: each its own hint
-    rng = np.random.default_rng(2)
-    names = ("X", "Y", "s", "d_road", "heading_error", "curvature", "ds", "dd", "turn", "station")
-    for i in range(2000):
-        x = rng.normal([500, 20, 20, 0, 0, 0], [300, 10, 5, 1, 1.0, 0.5])
-        if curved == "arc" and i % 2:  # near the arc, as a car driving it: the walk from the hint
-            a = rng.uniform(0.0, 3.2)
-            r = 250.0 + rng.normal(0.0, 2.0)
-            x[0], x[2] = 350.0 + r * math.sin(a), 250.0 - r * math.cos(a)
-        if i % 50 == 4:
-            x[2] = np.inf  # math.floor raises for the grid's cell: from both
-        if i % 50 == 1:
-            x[4] += rng.choice([-1, 1]) * rng.uniform(3.0, 40.0)  # far beyond +-pi: wrapped
-        if i % 50 == 2:
-            x[4] = (np.pi, -np.pi, np.nan, np.inf, 3 * np.pi)[i // 50 % 5]
-        if i % 50 == 3:
-            x[0] = np.nan
-        plants[0].state = plants[1].state = tuple(float(v) for v in x)
-        errors = []
-        for run in (lambda: NATIVE.road_frame(native), python.frame):
-            try:
-                run()
-            except (ValueError, OverflowError) as exc:  # math.fmod's / math.floor's, from both
-                errors.append(str(exc))
-        assert len(errors) in (0, 2) and len(set(errors)) <= 1, errors
-        assert _bits(getattr(native, n) for n in names) == _bits(getattr(python, n) for n in names), i
-        assert native.road._hint == python.road._hint, i
-    if not curved:  # a new road: the C kernel leaves it to the Python method, which takes it up
-        native.road = python.road = LanePolyline([(0.0, 0.0), (100.0, 0.0)])
-        NATIVE.road_frame(native)
-        python.frame()
-        assert native._line_of is native.road
-        assert _bits(getattr(native, n) for n in names) == _bits(getattr(python, n) for n in names)
-
-
-def _arc_lanes(width: float = 3.2, radius: float = 250.0):
-    """Three concentric lanes bending left (the middle one of ``radius`` m through (300,
-    ``width``), heading +x there), as LanePolylines of 2 m chords: a curved motorway."""
-    from ego.lane_frame import LanePolyline
-
-    cy = width + radius
-    lanes = {}
-    for i in range(3):
-        r = radius - (i - 1) * width
-        pts = [(300.0 + r * math.sin(a), cy - r * math.cos(a)) for a in np.linspace(-0.9, 0.9, int(1.8 * r / 2.0))]
-        lanes[i] = LanePolyline(pts, width, f"motorway_{i}")
-    return lanes
-
-
-def test_look_between_matches_the_python_look():
-    _look_between_matches(curved=False)
-
-
-def test_look_between_matches_the_python_look_on_a_curved_lane():
-    _look_between_matches(curved=True)
-
-
-def _look_between_matches(curved: bool):
-    # two views fed the same scene by hand; the ego and the traffic move between looks, one
-    # through ego._native.look_between, the other through SurroundView.look
-    from ego.lane_frame import LanePolyline
-    from ego.models import VehicleGeometry
-    from ego.scenarios.emergency_brake import EmergencyBrakeConfig
-    from ego.scenarios.motorway import SurroundView, ego_plant
-
-    config = EmergencyBrakeConfig()
-    geometry = VehicleGeometry()
-    if curved:
-        lanes = _arc_lanes()
+def test_the_twin_agrees_with_its_python_reference(twin, case, monkeypatch):
+    # each twin of the table on its own random inputs, NaN and infinities among them: the C
+    # and its Python reference to the bit (tests/twins.py)
+    if "monkeypatch" in inspect.signature(twin.check).parameters:
+        twin.check(*case, monkeypatch=monkeypatch)
     else:
-        lanes = {i: LanePolyline([(0.0, 3.2 * i), (3000.0, 3.2 * i)], 3.2, f"motorway_{i}") for i in range(3)}
-    names = ("gap_front", "ttc_front", "gap_rear", "ttc_rear", "s", "station", "turn")
-    rng = np.random.default_rng(3)
-    middle = lanes[1]
-    s_ego = middle.project(300.0, 3.2)[0]
-
-    def pose(s: float, d: float = 0.0) -> tuple[float, float, float]:
-        x, y = middle.offset_point(s, d)
-        return x, y, middle.heading_at(s)
-
-    for case in range(40):
-        views = []
-        # ahead and behind in the ego's lane (the one ahead touching it in every fifth case),
-        # on a curve a third car in the inner lane half across the ego's
-        ahead = rng.uniform(2.0, 40.0) * (1 if case % 5 else 0.0)
-        rows = [
-            (*pose(s_ego + 2.25 + 2.25 + ahead), rng.uniform(0.0, 30.0), 4.5, 1.8),
-            (*pose(s_ego - rng.uniform(4.0, 40.0)), rng.uniform(0.0, 40.0), 4.5, 1.8),
-        ]
-        if curved:
-            rows.append((*pose(s_ego + rng.uniform(6.0, 30.0), 2.0), rng.uniform(0.0, 40.0), 4.5, 1.8))
-        for native in (True, False):
-            plant = ego_plant(config, geometry, (300.0, 3.2 * config.ego_lane, 0.0))
-            view = SurroundView(config, geometry)
-            view.setup(None, lanes, plant)
-            view.sensor.sync(0.0, ["lead", "back", "inner"][: len(rows)], rows)
-            look = view.bind_look() if native else view.look
-            views.append((view, plant, look))
-        assert views[0][2].func is NATIVE.look_between
-        speed = rng.uniform(0.0, 35.0)
-        if case == 11:  # bumpers exactly touching, nothing moving: a gap of exactly 0
-            speed = 0.0
-            for view, _plant, _look in views:
-                view.look(0.0)
-                front = view.sensor.front
-                front._gap0, front.speed = 0.0, 0.0
-        for k in range(10):
-            t = 0.01 * k
-            found = []
-            for view, plant, look in views:
-                x, y, psi = pose(s_ego + speed * t, 0.3 * k / 10)
-                plant.state = (x, speed, y, 0.0, psi, 0.0)
-                view.frame()
-                if case == 7 and k == 4:
-                    view.s = float("nan")
-                found.append(look(t))
-            a, b = views[0][0], views[1][0]
-            assert _bits(getattr(a, n) for n in names) == _bits(getattr(b, n) for n in names), (case, k)
-            assert _bits((a.sensor.front.gap, a.sensor.rear.gap)) == _bits((b.sensor.front.gap, b.sensor.rear.gap))
-            assert repr(found[0]) == repr(found[1]), (case, k)
-            own = "station" if curved else "s"
-            assert (a._looked, a.sensor._t, a.sensor._s is getattr(a, own)) == (
-                b._looked,
-                b.sensor._t,
-                b.sensor._s is getattr(b, own),
-            )
-            assert _bits((a.sensor._turn, a.sensor.front.speed)) == _bits((b.sensor._turn, b.sensor.front.speed))
-        if curved:
-            assert views[0][0].sensor._along is not None and views[0][0].sensor.front._d is not None
+        twin.check(*case)
 
 
-@pytest.mark.sumo
-@pytest.mark.parametrize(
-    "scenario, controller, overrides",
-    [
-        # a lane change, settled (done), with the AEB watching
-        ("emergency-brake", "fuzzy", {}),
-        # no acceptable lane: braking in lane, the AEB engaging and releasing
-        ("emergency-brake", "pid", {"block_left": "true", "block_right": "true", "duration": "12"}),
-        # no AEB at all
-        ("emergency-brake", "rbf-smc", {"aeb": "false", "duration": "12"}),
-        # triggered from behind: accelerating in lane or changing lane away from the follower
-        ("fast-follower", "pid", {"duration": "12"}),
-        ("fast-follower", "fuzzy-pid", {"block_left": "true", "block_right": "true", "duration": "12"}),
-        ("cut-in", "bp-pid", {"duration": "12"}),
-        # slow traffic: the new lane's leader holds the lane change's reference back
-        ("emergency-brake", "pid", {"traffic_density": "15", "traffic_speed": "12", "duration": "12", "seed": 0}),
-    ],
-)
-def test_plan_steady_gives_the_python_plans_every_row(scenario, controller, overrides, monkeypatch):
-    overrides = dict(overrides)
-    seed = overrides.pop("seed", 1)
-    # the whole run twice in this process, the manoeuvre's control periods through
-    # ego._native.plan_steady and through EvasiveManoeuvre.plan alone: every trace row to the
-    # bit and every event the same; the C handles most periods, Python the transitions
-    import ego.scenarios.manoeuvre as manoeuvre
-    from ego.runner import RunSpec, run
-
-    python_plan = manoeuvre.EvasiveManoeuvre.plan
-    calls = []
-
-    def counted(self, obs, t):
-        calls.append(self.phase)
-        return python_plan(self, obs, t)
-
-    monkeypatch.setattr(manoeuvre.EvasiveManoeuvre, "plan", counted)
-    results = []
-    for native in (True, False):
-        if not native:
-            monkeypatch.setattr(manoeuvre, "_PLAN_STEADY", None)
-        calls.clear()
-        spec = RunSpec(scenario, controller, seed=seed, overrides=overrides)
-        results.append((run(spec), list(calls)))
-    (c_run, c_calls), (py_run, py_calls) = results
-    assert c_run.trace.shape == py_run.trace.shape
-    assert c_run.trace.tobytes() == py_run.trace.tobytes()
-    assert [(e.t, e.kind, e.text) for e in c_run.events] == [(e.t, e.kind, e.text) for e in py_run.events]
-    assert len(py_calls) >= c_run.metrics["steps"]  # every period went to Python there
-    assert 0 < len(c_calls) < len(py_calls) / 2, (len(c_calls), len(py_calls))
-
-
-@pytest.mark.parametrize("curved", [False, True], ids=["straight", "curved"])
-def test_near_and_nearest_match_the_sensors_python_search(monkeypatch, curved):
-    # one scene, searched twice: through ego._native.near/nearest and through the Python
-    # loops of SurroundSensor.scan, _scan_lane and _nearest; every Detection to the bit
-    import ego.scenarios.sensor as sensor_module
-    from ego.lane_frame import LanePolyline
-    from ego.models import VehicleGeometry
-    from ego.scenarios.emergency_brake import EmergencyBrakeConfig
-    from ego.scenarios.motorway import SurroundView, ego_plant
-
-    config = EmergencyBrakeConfig()
-    geometry = VehicleGeometry()
-    lanes = {i: LanePolyline([(0.0, 3.2 * i), (3000.0, 3.2 * i)], 3.2, f"motorway_{i}") for i in range(3)}
-    if curved:
-        lanes = _arc_lanes()
-    fields = ("id", "gap", "speed", "accel", "_gap0", "_lo", "_hi", "_since", "_d")
-    rng = np.random.default_rng(5)
-    middle = lanes[1]
-    s_ego = middle.project(300.0, 3.2)[0]
-
-    def search(rows, native: bool, t_scan: float, heading: float):
-        if not native:
-            monkeypatch.setattr(sensor_module, "_NEAR", None)
-            monkeypatch.setattr(sensor_module, "_NEAREST", None)
+def _resolve(dotted: str):
+    parts = dotted.split(".")
+    for k in range(len(parts), 0, -1):
         try:
-            plant = ego_plant(config, geometry, (300.0, 3.2 * config.ego_lane, 0.0))
-            view = SurroundView(config, geometry)
-            view.setup(None, lanes, plant)
-            sensor = view.sensor
-            sensor.sync(0.0, [f"v{i}" for i in range(len(rows))], rows)
-            s = s_ego - geometry.cg_to_front
-            if curved:
-                sensor.scan(t_scan, s, 0.0, heading, middle.turn_at(s), middle.curvature_at(s))
-            else:
-                sensor.scan(t_scan, s, 3.2, heading)
-            found = [sensor.front, sensor.rear]
-            for lane in (0, 1, 2, 7):
-                pair = sensor_module.Detection(), sensor_module.Detection()
-                sensor.lane_neighbours(lane, *pair)
-                found.extend(pair)
-            return found, sensor._near
-        finally:
-            monkeypatch.undo()
-
-    seen = 0
-    for case in range(60):
-        n = int(rng.integers(0, 14))
-        rows = []
-        for _ in range(n):
-            x = 300.0 + rng.uniform(-60.0, 60.0)
-            y = rng.choice([0.0, 3.2, 6.4]) + rng.uniform(-1.8, 1.8)
-            yaw = rng.uniform(-0.3, 0.3)
-            if curved:  # the same scene bent along the lanes
-                s = s_ego + x - 300.0
-                x, y = middle.offset_point(s, y - 3.2)
-                yaw += middle.heading_at(s)
-            rows.append((x, y, yaw, rng.uniform(0.0, 40.0), 4.5, 1.8))
-        if case % 3 == 1 and rows:  # two cars in one place: the first found is kept in both
-            rows.append(rows[-1])
-        if case % 7 == 3 and rows:  # a NaN position: every comparison with it False in both
-            rows[0] = (float("nan"), 3.2, 0.0, 20.0, 4.5, 1.8)
-        t_scan, heading = (0.0 if case % 2 else 0.05), float(rng.uniform(-0.2, 0.2))
-        c_found, c_near = search(rows, True, t_scan, heading)
-        py_found, py_near = search(rows, False, t_scan, heading)
-        assert [o[0] for o in c_near] == [o[0] for o in py_near], case
-        for a, b in zip(c_found, py_found, strict=True):
-            assert (a.id, repr(a._o)) == (b.id, repr(b._o)), case
-            assert (a._d is None) == (b._d is None) == (not curved or a._o is None), case
-            values = [f for f in fields[1:] if f != "_d" or a._d is not None]
-            assert _bits(getattr(a, f) for f in values) == _bits(getattr(b, f) for f in values), case
-        seen += sum(d._o is not None for d in c_found)
-    assert seen > 100  # the searches found something
+            obj = importlib.import_module(".".join(parts[:k]))
+        except ImportError:
+            continue
+        for name in parts[k:]:
+            obj = getattr(obj, name)
+        return obj
+    raise ImportError(dotted)
 
 
-@pytest.mark.parametrize("curved", [True, "arc"], ids=["polyline", "arc"])
-def test_lane_mean_curvature_matches_the_python_method(curved):
-    # the curvature feed-forward's preview (SurroundView.observe) every control period: one
-    # lane through ego._native.lane_mean_curvature, its twin through LanePolyline's method;
-    # every value to the bit and both remembered segments alike, odd inputs included
-    from ego.lane_frame import LanePolyline
+def test_the_twin_table_declares_every_kernel_once():
+    from ego import _native
 
-    native, python = LanePolyline(_points(curved)), LanePolyline(_points(curved))
-    rng = np.random.default_rng(1)
-    s = 0.0
-    for i in range(3000):
-        s += float(rng.normal(0.3, 0.05)) if i % 100 else float(rng.uniform(-50.0, 1500.0)) - s
-        ahead = float(rng.uniform(-1.0, 20.0)) if i % 37 else (0.0, -1.0, math.nan, math.inf)[i // 37 % 4]
-        at = s if i % 41 else (math.nan, math.inf, -math.inf)[i // 41 % 3]
-        found = []
-        for run, lane in ((NATIVE.lane_mean_curvature, native), (LanePolyline.mean_curvature, python)):
-            try:
-                found.append(repr(run(lane, at, ahead)))
-            except ValueError as exc:  # an infinite heading: math.fmod's, from both
-                found.append(str(exc))
-        assert found[0] == found[1], (i, at, ahead)
-        assert native._at == python._at, i
+    kernels = {n for n, f in vars(_native).items() if callable(f) and not n.startswith("_")} - {"fields"}
+    declared = [n for t in TWINS for n in t.native]
+    assert sorted(declared) == sorted(set(declared)), "a kernel in two rows of tests/twins.py"
+    assert set(declared) == kernels
+    root = Path(__file__).resolve().parents[1]
+    for t in TWINS:
+        assert callable(_resolve(t.reference)), t.reference  # a renamed reference fails here
+        assert (t.check is None) != (t.test is None), t.native
+        if t.test is not None:  # the test checking it beside its fixtures exists
+            path, name = t.test.split("::")
+            assert f"def {name}(" in (root / path).read_text(), t.test
+
+
+def _declares(cls: type, name: str) -> bool:
+    """``cls`` (or an ego class above it) declares ``name``: in ``__slots__``, as a method or
+    class attribute, or by assigning ``self.<name>`` in its code."""
+    for k in cls.__mro__:
+        if not k.__module__.startswith("ego"):
+            continue
+        if name in getattr(k, "__slots__", ()) or name in vars(k):
+            return True
+        for node in ast.walk(ast.parse(textwrap.dedent(inspect.getsource(k)))):
+            if (
+                isinstance(node, ast.Attribute)
+                and isinstance(node.ctx, ast.Store)
+                and isinstance(node.value, ast.Name)
+                and node.value.id == "self"
+                and node.attr == name
+            ):
+                return True
+    return False
+
+
+def test_every_field_a_kernel_reads_is_declared_by_its_record():
+    # ego/_native.c's FIELDS table: the kernels read and write these public fields of the
+    # records they take; a field renamed in Python (and not in the table) fails here instead
+    # of silently cutting a kernel off
+    fields = NATIVE.fields()
+    assert len(fields) > 20
+    for record, name in fields:
+        assert not name.startswith("_"), (record, name)
+        module, cls = record.rsplit(".", 1)
+        assert _declares(getattr(importlib.import_module(module), cls), name), (record, name)
+    from ego.scenarios.sensor import Detection
+
+    assert not _declares(Detection, "gap_zero")  # the check does see a field that is not there

@@ -464,7 +464,8 @@ class EgoEnv(gym.Env):
         self._evicted = False
         #: the first env of an EgoVectorEnv, stepped in the vector env's own process
         self._hosted = False
-        self._elapsed = 0
+        #: env steps since the reset (``ego._native.env_step`` counts them too)
+        self.elapsed = 0
         self._limit = None
         self._limit_steps = math.inf
         self._fast_step: functools.partial | None = None
@@ -684,7 +685,7 @@ class EgoEnv(gym.Env):
         self._evicted = False
         self._history = []
         self._substep = None
-        self._elapsed = 0
+        self.elapsed = 0
         view = self._view
         view.np_random = self.np_random
         view.reset()
@@ -757,7 +758,7 @@ class EgoEnv(gym.Env):
                 if sc.status != "running":
                     break
                 apply(command if substep is None else substep())
-        elapsed = self._elapsed = self._elapsed + 1
+        elapsed = self.elapsed = self.elapsed + 1
         status = sc.status
         if status == "running":
             reward, terms = self._step_reward(False)
@@ -809,7 +810,7 @@ class EgoEnv(gym.Env):
         sc = self.scenario
         period = sc.config.dt * self._every
         most = math.ceil(sc.config.duration / period - 1e-9)
-        return max(0, min(most, self._limit_steps) - self._elapsed)
+        return max(0, min(most, self._limit_steps) - self.elapsed)
 
     def _limit_detail(self) -> str:
         """Why the registered TimeLimit ends the episode, and, where that is before the run's
@@ -871,7 +872,7 @@ class EgoEnv(gym.Env):
             "render_mode": self.render_mode,
             "np_random": self._np_random,
             "spec": self.spec,
-            "run": (sc.seed, list(self._history), tuple(self._view._prev), self._elapsed) if running else None,
+            "run": (sc.seed, list(self._history), tuple(self._view._prev), self.elapsed) if running else None,
         }
 
     def __setstate__(self, state: dict) -> None:
@@ -885,7 +886,7 @@ class EgoEnv(gym.Env):
             apply = self._apply
             for command in history:  # same seed, same commands: the same run (determinism)
                 apply(command)
-            self._view._prev[:], self._elapsed = prev, elapsed  # in place: the bound reward holds it
+            self._view._prev[:], self.elapsed = prev, elapsed  # in place: the bound reward holds it
             self._fast_step = self._bind_step()
         self._np_random = state["np_random"]
         self.config = copy.deepcopy(state.get("pending", self.config))

@@ -19,7 +19,7 @@ import functools
 import math
 import struct
 from collections.abc import Callable
-from typing import Protocol, runtime_checkable
+from typing import Any, Protocol, runtime_checkable
 
 from ego.models.actuators import ActuatorLimits, standstill
 from ego.models.dynamic_bicycle import DynamicBicycle
@@ -29,7 +29,7 @@ from ego.models.longitudinal import Longitudinal
 from ego.models.nonlinear_bicycle import NonlinearBicycle
 from ego.native import NATIVE
 
-_PLANT_STEP = NATIVE.plant_step if NATIVE is not None else None
+_PLANT_STEP: Any = NATIVE.plant_step if NATIVE is not None else None
 
 #: the world state of every bicycle-like plant: X (m), u (m/s), Y (m), v (m/s), psi (rad), r (rad/s)
 WORLD_STATE = ("X", "U", "Y", "V", "PSI", "R")

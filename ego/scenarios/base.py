@@ -815,20 +815,6 @@ class BindsFrame(Protocol):
     def bind_frame(self) -> Callable[[], None]: ...
 
 
-@runtime_checkable
-class BindsLook(Protocol):
-    """A surround view whose look the loop binds once a run (``SurroundView``)."""
-
-    def bind_look(self) -> Callable[[float], Collision | None]: ...
-
-
-@runtime_checkable
-class BindsPlan(Protocol):
-    """A manoeuvre whose plan the loop binds once a run (``EvasiveManoeuvre``)."""
-
-    def bind_plan(self) -> Callable[[Any, float], None]: ...
-
-
 class PartsLoop:
     """The loop of a scenario whose parts are a plant (or several, keyed by vehicle id),
     optionally a road's ``world`` (:class:`ego.scenarios.road.RoadWorld`: the lanes, the
@@ -938,10 +924,10 @@ class ComposedLoop:
         self._obs = sc.obs
         # the parts' own fast paths where they declare them (C kernels of ego._native)
         self._frame = view.bind_frame() if isinstance(view, BindsFrame) else view.frame
-        self._look = view.bind_look() if isinstance(view, BindsLook) else view.look
+        self._look = view.look
         self._plant_step = ego.bind_step() if isinstance(ego, BindsStep) else ego.step
         man = self.manoeuvre
-        self._plan = man.bind_plan() if isinstance(man, BindsPlan) else man.plan
+        self._plan = man.plan
         view.sense(sc.t)
         if sc.after_setup is not None:
             sc.after_setup()

@@ -29,28 +29,22 @@ The scenario supplies an :class:`InLane` behaviour: what to do and when it is se
 
 from __future__ import annotations
 
-import functools
 import math
-from array import array
 from collections.abc import Callable
 from typing import Protocol
 
 import numpy as np
 
-from ego.native import NATIVE
 from ego.scenarios.events import INF, GapRule, check_lane, choose_lane
 from ego.scenarios.motorway import LANE_NAMES
 from ego.scenarios.safety import (
-    SafetyLayer,
     braking_impact_speed,
     braking_need,
     braking_reach,
     clears_sideways,
     friction_limit,
 )
-from ego.scenarios.sensor import Detection, SurroundSensor
-
-_PLAN_STEADY = NATIVE.plan_steady if NATIVE is not None else None
+from ego.scenarios.sensor import Detection
 
 CRUISE, LANE_CHANGE, IN_LANE, DONE = 0, 1, 2, 3
 PHASE_NAMES = ("cruise", "lane change", "in-lane manoeuvre", "done")  #: by state number
@@ -221,41 +215,6 @@ class EvasiveManoeuvre:
         obs.d_ref = obs.dd_ref = 0.0
         if self.phase in (LANE_CHANGE, IN_LANE):
             self.check_done()
-
-    def bind_plan(self) -> Callable[[object, float], None]:
-        """:meth:`plan` for the loop, bound once a run (after :meth:`reset`): in C where the
-        extension is built (``ego._native.plan_steady``: a control period that changes no
-        state of the machine - no trigger, the safety layer staying off, no braking lane change
-        to weigh aborting - with the same arithmetic; anything else, and the in-lane
-        manoeuvre's references and settling, are this method's and its parts')."""
-        view, safety, c = self.view, self.safety, self.config
-        if (
-            _PLAN_STEADY is None
-            or type(self) is not EvasiveManoeuvre
-            or type(view.sensor) is not SurroundSensor
-            or (
-                safety is not None
-                and (type(safety) is not SafetyLayer or safety.view is not view or safety.manoeuvre is not self)
-            )
-        ):
-            return self.plan
-        s = safety.config if safety is not None else c
-        packed = array(
-            "d",
-            (
-                c.ttc_threshold,
-                1.0 if self.trigger_on == "front" else 0.0,
-                s.aeb_ttc if safety is not None else math.nan,
-                s.aeb_decel if safety is not None else math.nan,
-                c.follow_gap,
-                c.follow_headway,
-                c.settle_band,
-                c.ego_speed,
-                self._dt,
-                self._per or 0,
-            ),
-        ).tobytes()
-        return functools.partial(_PLAN_STEADY, EvasiveManoeuvre.plan, packed, c.ego_speed, self, safety)
 
     def trigger(self, ttc: float) -> None:
         """Triggered: gap acceptance, then the lane change or the in-lane manoeuvre."""

@@ -16,7 +16,6 @@ A concrete scenario (``emergency_brake.py``, ``cut_in.py``...) subclasses
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
@@ -42,7 +41,6 @@ from ego.sim.protocol import TrafficSim
 from ego.sim.traffic import PacedVehicle, background_traffic
 from ego.sim.types import EGO, Collision, VehicleSpec, VehicleType, ego_type
 
-_LOOK_BETWEEN = NATIVE.look_between if NATIVE is not None else None
 #: LanePolyline.mean_curvature in C (the curvature feed-forward's preview, every control period)
 _MEAN_CURVATURE = NATIVE.lane_mean_curvature if NATIVE is not None else None
 
@@ -330,7 +328,7 @@ class SurroundView(RoadSensor):
         self.ttc_front = self.ttc_rear = INF
         self.gap_front = self.gap_rear = INF
         self.around: tuple[list, list] = ([], [])
-        self._looked = False
+        self.looked = False
         self._sim = None
         #: (t, speed) at the last observation and the speed's rate of change (m/s^2) since
         self._u_last, self._accel = (-math.inf, 0.0), 0.0
@@ -366,22 +364,22 @@ class SurroundView(RoadSensor):
         reach = self.config.sensor_range
         # the subscription reaches farther for the traffic log
         self.sensor.sync_within(t, ids, rows, sim.front_bumper(EGO) if reach < LOG_REACH else None, reach)
-        self._looked = False
+        self.looked = False
 
     def look(self, t: float) -> Collision | None:
         """Gaps and TTCs now; a collision the simulator has not reported (yet) when the
         outlines overlap."""
         sensor = self.sensor
         curved = self._line is None  # the sensor's stations: where the radius through the ego meets the lane
-        if self._looked:  # between simulator steps: the same vehicles, moved on
+        if self.looked:  # between simulator steps: the same vehicles, moved on
             sensor.advance(t, self.station if curved else self.s, self.turn)
         else:
             sensor.scan(
                 t, self.station if curved else self.s, self.d_road, self.heading_error, self.turn, self.curvature
             )
-            self._looked = True
+            self.looked = True
         front, rear = sensor.front, sensor.rear
-        ds = self.ds if sensor._along is None else self.ds * sensor._rate  # along the line the gaps are
+        ds = self.ds if sensor.along is None else self.ds * sensor.rate  # along the line the gaps are
         # time_to_collision(gap, closing), inline: every control period
         front_gap = self.gap_front = front.gap
         closing = ds - front.speed
@@ -394,14 +392,6 @@ class SurroundView(RoadSensor):
         if front_gap <= 0.0 or rear_gap <= 0.0:
             return self._overlap(front.id if front_gap <= 0.0 else rear.id)
         return None
-
-    def bind_look(self) -> Callable[[float], Collision | None]:
-        """:meth:`look` for the loop, bound once a run: between two simulator steps in C where
-        the extension is built (``ego._native.look_between``: the sensor's carrying on and the
-        TTCs, the same arithmetic; the first look after a step goes to :meth:`look`)."""
-        if _LOOK_BETWEEN is not None and type(self).look is SurroundView.look:
-            return functools.partial(_LOOK_BETWEEN, self)
-        return self.look
 
     def _overlap(self, other: str) -> Collision | None:
         box = self.sensor.box(other)
@@ -433,7 +423,7 @@ class SurroundView(RoadSensor):
         if self._line is None:  # a curved road: the feed-forward on the target lane, previewed
             u = self._plant.state[1]
             road = self.road
-            if _MEAN_CURVATURE is not None and hasattr(road, "_c"):  # in C on its packed data
+            if _MEAN_CURVATURE is not None and hasattr(road, "packed"):  # in C on its packed data
                 kappa = _MEAN_CURVATURE(road, self.s, FF_PREVIEW * u)
             else:
                 kappa = road.mean_curvature(self.s, FF_PREVIEW * u)

@@ -89,11 +89,16 @@ class RoadSensor:
 
     def bind_frame(self) -> Callable[[], None]:
         """:meth:`frame` for the loop, bound once a run: in C where the extension is built
-        (``ego._native.road_frame``: the straight lane's rotation, the same arithmetic; any
-        other road goes to :meth:`frame`)."""
-        if _ROAD_FRAME is not None and type(self).frame is RoadSensor.frame:
-            return functools.partial(_ROAD_FRAME, self)
-        return self.frame
+        (``ego._native.road_frame`` on the plant's state, this lane's rotation or packed data:
+        the same arithmetic; a change of ``road`` goes to :meth:`frame`)."""
+        road, plant = self.road, self._plant
+        if _ROAD_FRAME is None or type(self).frame is not RoadSensor.frame or plant is None:
+            return self.frame
+        straight = getattr(road, "straight", None)
+        line = straight() if straight is not None else None
+        if line is None and not hasattr(road, "packed"):  # neither a rotation nor packed data
+            return self.frame
+        return functools.partial(_ROAD_FRAME, self.frame, self, plant, road, line)
 
     def diverged(self) -> str | None:
         """Why the ego's state is beyond any controller's doing, or None."""

@@ -68,7 +68,7 @@ class Detection:
     last SUMO step (m/s^2). ``overlap``, ``side`` and ``lateral_speed`` say how it sits
     across the band it was found in (for ``front`` and ``rear``: the ego's own extent)."""
 
-    __slots__ = ("id", "gap", "speed", "accel", "_gap0", "_o", "_lo", "_hi", "_since", "_d")
+    __slots__ = ("id", "gap", "speed", "accel", "gap0", "obj", "lo", "hi", "since", "line")
 
     def __init__(
         self,
@@ -78,12 +78,12 @@ class Detection:
         accel: float = 0.0,
     ) -> None:
         self.id, self.gap, self.speed, self.accel = id, gap, speed, accel
-        self._gap0 = gap  #: the gap at the scan that found it
-        self._o = None
-        self._lo = self._hi = self._since = 0.0
+        self.gap0 = gap  #: the gap at the scan that found it
+        self.obj = None
+        self.lo = self.hi = self.since = 0.0
         #: on a curved road, the offset (m, + left of the reference lane) of the line its gap
         #: is measured along; None on a straight one
-        self._d: float | None = None
+        self.line: float | None = None
 
     def __repr__(self) -> str:
         return f"Detection(id={self.id!r}, gap={self.gap!r}, speed={self.speed!r}, accel={self.accel!r})"
@@ -93,46 +93,46 @@ class Detection:
         self.gap = INF
         self.speed = 0.0
         self.accel = 0.0
-        self._o = None
+        self.obj = None
 
     def _found(self, o: tuple, gap: float, lo: float, hi: float, since: float) -> None:
         self.id, self.gap, self.speed, self.accel = o[0], gap, o[5], o[7]
-        self._gap0 = gap
-        self._o, self._lo, self._hi, self._since = o, lo, hi, since
+        self.gap0 = gap
+        self.obj, self.lo, self.hi, self.since = o, lo, hi, since
 
     def _found_along(self, o: tuple, gap: float, lo: float, hi: float, since: float, d: float, speed: float) -> None:
         """:meth:`_found` on a curved road: the gap along the line ``d`` (m), ``speed`` the
         object's along that line (m/s)."""
         self.id, self.gap, self.speed, self.accel = o[0], gap, speed, o[7]
-        self._gap0 = gap
-        self._o, self._lo, self._hi, self._since, self._d = o, lo, hi, since, d
+        self.gap0 = gap
+        self.obj, self.lo, self.hi, self.since, self.line = o, lo, hi, since, d
 
     def _copy(self, other: Detection, gap: float) -> None:
         self.id, self.gap, self.speed, self.accel = other.id, gap, other.speed, other.accel
-        self._gap0 = other._gap0
-        self._o, self._lo, self._hi, self._since = other._o, other._lo, other._hi, other._since
-        self._d = other._d
+        self.gap0 = other.gap0
+        self.obj, self.lo, self.hi, self.since = other.obj, other.lo, other.hi, other.since
+        self.line = other.line
 
     @property
     def lateral_speed(self) -> float:
         """Its velocity across the lane (m/s, + left)."""
-        return self._o[6] if self._o is not None else 0.0
+        return self.obj[6] if self.obj is not None else 0.0
 
     @property
     def overlap(self) -> float:
         """How far its extent across the lane reaches into the band it was found in (m)."""
-        if self._o is None:
+        if self.obj is None:
             return 0.0
-        shift = self._o[6] * self._since
-        return min(self._o[4] + shift, self._hi) - max(self._o[3] + shift, self._lo)
+        shift = self.obj[6] * self.since
+        return min(self.obj[4] + shift, self.hi) - max(self.obj[3] + shift, self.lo)
 
     @property
     def side(self) -> float:
         """+1 when its centre is left of the band's centre, -1 when right."""
-        if self._o is None:
+        if self.obj is None:
             return 0.0
-        shift = self._o[6] * self._since
-        return 1.0 if self._o[3] + self._o[4] + 2.0 * shift > self._lo + self._hi else -1.0
+        shift = self.obj[6] * self.since
+        return 1.0 if self.obj[3] + self.obj[4] + 2.0 * shift > self.lo + self.hi else -1.0
 
 
 class SurroundSensor:
@@ -155,19 +155,19 @@ class SurroundSensor:
         "reach",
         "_objects",
         "_near",
-        "_lanes",
+        "lanes",
         "_straight",
         "_place",
         "_placing",
-        "_along",
-        "_turn",
-        "_turn_scan",
-        "_rate",
+        "along",
+        "turn",
+        "turn_scan",
+        "rate",
         "_t_sync",
-        "_t",
-        "_t_scan",
-        "_s",
-        "_s_scan",
+        "t",
+        "t_scan",
+        "s",
+        "s_scan",
         "_ego",
         "_speeds",
         "_rows",
@@ -191,22 +191,22 @@ class SurroundSensor:
         self.horizon = horizon
         self.reach = reach
         self._near: list | None = None
-        self._lanes: dict[int, tuple[Detection, Detection]] = {}  #: per lane, at the last scan
-        self._t_scan = self._s = self._s_scan = 0.0
+        self.lanes: dict[int, tuple[Detection, Detection]] = {}  #: per lane, at the last scan
+        self.t_scan = self.s = self.s_scan = 0.0
         self._straight = lane.straight() if hasattr(lane, "straight") else None
         #: on a curved lane: (x, y, yaw) -> (s, d, rel, turn, kappa) (LanePolyline.place);
         #: the objects then carry the lane's turn and curvature at their centre
         self._place = getattr(lane, "place", None) if self._straight is None else None
         #: what ego._native.place places the cars with: the lane (its packed data) or a callable
-        self._placing = (lane if hasattr(lane, "_c") else self._place) if self._place is not None else lane.frame
+        self._placing = (lane if hasattr(lane, "packed") else self._place) if self._place is not None else lane.frame
         #: on a curved lane, at the last scan: (the innermost and outermost lines the gaps
         #: may be measured along, m; the lane's turn at the ego, rad; how far the ego's corners reach
         #: beyond its extent ahead and behind, m); None on a straight one
-        self._along: tuple[float, float, float, float, float] | None = None
-        self._turn = self._turn_scan = 0.0  #: the lane's turn at the ego now / at the last scan
+        self.along: tuple[float, float, float, float, float] | None = None
+        self.turn = self.turn_scan = 0.0  #: the lane's turn at the ego now / at the last scan
         #: on a curved lane, at the last scan: the ego's speed along the line its gaps are
         #: measured along per m/s of its speed along the lane where it is
-        self._rate = 1.0
+        self.rate = 1.0
         self.bands = dict(bands)
         self.cg_to_front = cg_to_front
         self.cg_to_rear = length - cg_to_front
@@ -221,7 +221,7 @@ class SurroundSensor:
         self._rows: dict[str, tuple] | None = {}  #: id -> world row at the last sync
         self._seen: tuple[Sequence[str], Sequence[tuple]] = ((), ())  #: ids, world rows at the last sync
         self._t_sync = 0.0
-        self._t = 0.0
+        self.t = 0.0
         self._ego = (0.0, 0.0, 0.0, 0.0)
 
     def sync(self, t: float, ids: Sequence[str], rows: Sequence[tuple]) -> None:
@@ -337,8 +337,8 @@ class SurroundSensor:
         (1 cm for a car in an R 250 m arc): the gap leaves that out for both cars. The
         ego's speed along the line is ``ds`` times :attr:`_rate`."""
         ego = self._ego = self.ego_extents(s, d, heading_error)
-        self._t = self._t_scan = t
-        self._s = self._s_scan = s
+        self.t = self.t_scan = t
+        self.s = self.s_scan = s
         # the ego's lane: the one whose centre is nearest the middle of its front bumper
         # (where SUMO maps it too)
         nose = d + self.cg_to_front * math.sin(heading_error)
@@ -359,10 +359,10 @@ class SurroundSensor:
                 k = kappa if abs(kappa) >= abs(k) else k
                 w = max(ego[3] - line if k > 0.0 else line - ego[2], 0.0)
                 reach.append(abs(k) * w / (1.0 - abs(k) * w))
-            self._along = (line, line, turn, (ego[1] - s) * reach[0], (s - ego[0]) * reach[1])
-            self._turn = self._turn_scan = turn
-            self._rate = (1.0 - kappa * line) / (1.0 - kappa * d)
-        self._lanes = {}
+            self.along = (line, line, turn, (ego[1] - s) * reach[0], (s - ego[0]) * reach[1])
+            self.turn = self.turn_scan = turn
+            self.rate = (1.0 - kappa * line) / (1.0 - kappa * d)
+        self.lanes = {}
         near = self._near
         if near is None:
             # the vehicles that can reach across into the ego's path before the next SUMO step:
@@ -380,8 +380,8 @@ class SurroundSensor:
         self._nearest(near, lo, hi, front, rear)
         # their overlap and side: with the ego's own extent, which it must clear sideways
         for det in (front, rear):
-            if det._o is not None:
-                det._lo, det._hi = ego[2], ego[3]
+            if det.obj is not None:
+                det.lo, det.hi = ego[2], ego[3]
 
     def _in_path(self, objects: list, e_lo: float, e_hi: float, own: tuple[float, float]) -> list:
         """Of ``objects``, those in the ego's path at the last scan: overlapping the ego's own
@@ -389,7 +389,7 @@ class SurroundSensor:
         hi) unless moving out of it. A car leaving the lane (a cut-out) stops hiding what is
         ahead of it once it is clear of the ego's outline, as a car entering it (a cut-in)
         is a target from its intrusion: both where the ego, keeping its line, could hit it."""
-        since = self._t_scan - self._t_sync
+        since = self.t_scan - self._t_sync
         l_lo, l_hi = own
         twice_centre = l_lo + l_hi
         out = []
@@ -404,30 +404,30 @@ class SurroundSensor:
         """Between two looks: the gaps at time ``t`` (s) with the ego's centre of gravity at
         ``s`` (m) along the lane (where the lane has turned by ``turn``, rad: curved lanes),
         each detected vehicle moving at its speed."""
-        self._t, self._s, self._turn = t, s, turn
+        self.t, self.s, self.turn = t, s, turn
         front, rear = self.front, self.rear
-        if front._o is not None:
+        if front.obj is not None:
             front.gap = self._carried(front, True)
-        if rear._o is not None:
+        if rear.obj is not None:
             rear.gap = self._carried(rear, False)
 
     def _carried(self, det: Detection, ahead: bool) -> float:
         """``det``'s gap carried on from the last scan to now: it moved at its speed, the ego
         by its arc along the line the gap is measured along."""
-        moved = self._s - self._s_scan
-        since = self._t - self._t_scan
-        if det._d is not None:
-            moved -= det._d * (self._turn - self._turn_scan)
+        moved = self.s - self.s_scan
+        since = self.t - self.t_scan
+        if det.line is not None:
+            moved -= det.line * (self.turn - self.turn_scan)
         if ahead:
-            return det._gap0 + det.speed * since - moved
-        return det._gap0 + moved - det.speed * since
+            return det.gap0 + det.speed * since - moved
+        return det.gap0 + moved - det.speed * since
 
     def _nearest(self, objects, lo: float, hi: float, ahead: Detection, behind: Detection) -> None:
         """Nearest of ``objects`` ahead of and behind the ego overlapping [lo, hi] across the
         lane, at the last scan."""
-        since = self._t_scan - self._t_sync
+        since = self.t_scan - self._t_sync
         e_lo, e_hi = self._ego[0], self._ego[1]
-        along = self._along
+        along = self.along
         if _NEAREST is not None and type(objects) is list:
             _NEAREST(objects, lo, hi, e_lo, e_hi, since, ahead, behind, along)
             return
@@ -517,7 +517,7 @@ class SurroundSensor:
             near = _NEAR(self._objects, lo, hi, h, 0.0)  # x + 0.0 compares as x
         else:
             near = [o for o in self._objects if o[4] + abs(o[6]) * h > lo and o[3] - abs(o[6]) * h < hi]
-        found = self._lanes[lane] = (Detection(), Detection())
+        found = self.lanes[lane] = (Detection(), Detection())
         self._nearest(near, lo, hi, *found)
         return found
 
@@ -556,13 +556,13 @@ class SurroundSensor:
             leader.clear()
             follower.clear()
             return False
-        found = self._lanes.get(lane) or self._scan_lane(lane, band)
+        found = self.lanes.get(lane) or self._scan_lane(lane, band)
         ahead, behind = found
-        if ahead._o is None:
+        if ahead.obj is None:
             leader.clear()
         else:
             leader._copy(ahead, self._carried(ahead, True))
-        if behind._o is None:
+        if behind.obj is None:
             follower.clear()
         else:
             follower._copy(behind, self._carried(behind, False))
@@ -575,9 +575,9 @@ class SurroundSensor:
         if band is None:
             leader.clear()
             return False
-        found = self._lanes.get(lane) or self._scan_lane(lane, band)
+        found = self.lanes.get(lane) or self._scan_lane(lane, band)
         ahead = found[0]
-        if ahead._o is None:
+        if ahead.obj is None:
             leader.clear()
         else:
             leader._copy(ahead, self._carried(ahead, True))
@@ -587,14 +587,14 @@ class SurroundSensor:
         """(gap m, speed m/s) of :meth:`lane_leader`'s vehicle, or None when there is none or
         no such lane: the lane change's reference every control period, without filling a
         :class:`Detection`."""
-        found = self._lanes.get(lane)
+        found = self.lanes.get(lane)
         if found is None:
             band = self.bands.get(lane)
             if band is None:
                 return None
             found = self._scan_lane(lane, band)
         ahead = found[0]
-        if ahead._o is None:
+        if ahead.obj is None:
             return None
         return self._carried(ahead, True), ahead.speed
 
@@ -618,5 +618,5 @@ class SurroundSensor:
         if row is None:
             return None
         x, y, yaw, v, length, width = row
-        since = self._t - self._t_sync
+        since = self.t - self._t_sync
         return x + v * since * math.cos(yaw), y + v * since * math.sin(yaw), yaw, length, width
