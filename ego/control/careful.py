@@ -126,7 +126,7 @@ def _moving_away(surround: Any, vid: str) -> bool:
     centre towards the driver's lane without cutting in."""
     for o in surround._objects:
         if o[0] == vid:
-            return (o[3] + o[4]) * o[6] > 0.0
+            return bool((o[3] + o[4]) * o[6] > 0.0)
     return False
 
 
