@@ -15,7 +15,9 @@ test suite that does not ask for it:
   scenario's defaults (``defaults=False``: only these); ``params`` are ``--set`` values;
 * with ``--ego-xosc`` (or the ini option ``ego_xosc = true``) every ``.xosc`` file under the
   collected paths is an item per seed (ini ``ego_seeds``, default ``0``) with the controller
-  of ini ``ego_controller`` (default ``pid``) and the scenario's default requirements.
+  of ini ``ego_controller`` (default ``pid``) and the scenario's default requirements; a
+  variation file (``ParameterValueDistribution``) is an item per row and seed, the rows
+  ``ego sweep FILE.xosc`` runs (ini ``ego_sample``: a seeded subsample of them).
 
 An item fails when a requirement is violated (robustness < 0) or the run did not complete;
 its message names the violated requirement, its robustness, its first violation time and
@@ -67,6 +69,11 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     parser.addini("ego_xosc", "collect every .xosc file as ego scenario items", type="bool", default=False)
     parser.addini("ego_controller", "the controller of collected .xosc items", default="pid")
     parser.addini("ego_seeds", "the seeds of collected .xosc items (space-separated)", type="args", default=["0"])
+    parser.addini(
+        "ego_sample",
+        "collected variation files: a seeded subsample (seed 0) of this many rows (default 0: every row)",
+        default="0",
+    )
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -234,7 +241,8 @@ def _case_of(item: pytest.Function) -> ScenarioCase:
     controller = kw.pop("controller", args[1] if len(args) > 1 else None)
     if scenario is None or controller is None:
         raise pytest.UsageError(f"{item.nodeid}: {MARKER} needs scenario= and controller=")
-    seed = item.callspec.params.get("ego_seed", 0) if hasattr(item, "callspec") else 0
+    called: dict[str, Any] = item.callspec.params if hasattr(item, "callspec") else {}
+    seed = int(called.get("ego_seed", 0))
     return ScenarioCase(scenario, controller, kw.get("params"), seed, kw.get("require"), bool(kw.get("defaults", True)))
 
 
@@ -268,7 +276,10 @@ def pytest_collect_file(file_path: Path, parent: pytest.Collector) -> pytest.Col
     wanted = config.getoption("ego_xosc")
     if not (wanted if wanted is not None else config.getini("ego_xosc")):
         return None
-    if "<Storyboard" not in file_path.read_text(errors="replace"):
+    text = file_path.read_text(errors="replace")
+    if "<ParameterValueDistribution" in text:
+        return VariationFile.from_parent(parent, path=file_path)
+    if "<Storyboard" not in text:
         return None  # a catalog, not a scenario
     return XoscFile.from_parent(parent, path=file_path)
 
@@ -283,12 +294,50 @@ class XoscFile(pytest.File):
             yield ScenarioItem.from_parent(self, name=f"seed{int(seed)}", controller=controller, seed=int(seed))
 
 
-class ScenarioItem(pytest.Item):
-    """One run of a collected scenario file."""
+class VariationFile(pytest.File):
+    """A ParameterValueDistribution file: one item per row and seed, the rows those ``ego
+    sweep FILE.xosc`` runs (the combinations that meet the scenario file's value
+    constraints; ini ``ego_sample``: a seeded subsample of them, as ``--sample N``)."""
 
-    def __init__(self, *, controller: str, seed: int, **kwargs: Any) -> None:
+    def collect(self) -> Iterator[pytest.Item]:
+        from ego.params import ConfigError
+        from ego.sweep.xosc import load
+
+        config = self.config
+        controller = str(config.getini("ego_controller"))
+        sample = int(config.getini("ego_sample")) or None
+        try:
+            spec = load(str(self.path), [controller], sample=sample).spec
+        except ConfigError as exc:
+            raise self.CollectError(str(exc)) from None
+        for i, point in enumerate(spec.listed or ()):
+            values = ",".join(f"{k}={v}" for k, v in point.items())
+            for seed in config.getini("ego_seeds"):
+                yield ScenarioItem.from_parent(
+                    self,
+                    name=f"row{i}-{values}-seed{int(seed)}",
+                    controller=controller,
+                    seed=int(seed),
+                    scenario=spec.scenario,
+                    params=point,
+                )
+
+
+class ScenarioItem(pytest.Item):
+    """One run of a collected scenario file (or of a variation file's row: ``scenario`` the
+    file it varies, ``params`` the row's values)."""
+
+    def __init__(
+        self,
+        *,
+        controller: str,
+        seed: int,
+        scenario: str | None = None,
+        params: Mapping[str, Any] | None = None,
+        **kwargs: Any,
+    ) -> None:
         super().__init__(**kwargs)
-        self.case = ScenarioCase(str(self.path), controller, None, seed, None)
+        self.case = ScenarioCase(scenario or str(self.path), controller, params, seed, None)
 
     def runtest(self) -> None:
         _check(self, self.case)

@@ -21,6 +21,8 @@ pytestmark = pytest.mark.sumo
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "scenarios" / "pytest_example"
 PLANTED = "test_planted_failure_keeps_50_m[seed0]"
+#: the two rows of scenarios/cut_in_variation.xosc, an item each
+ROWS = ("row0-CutInGap=10.0-seed0", "row1-CutInGap=20.0-seed0")
 
 
 def test_the_example_project_fails_exactly_its_planted_item_and_reports_metrics(tmp_path):
@@ -54,7 +56,7 @@ def test_the_example_project_fails_exactly_its_planted_item_and_reports_metrics(
     )
     assert proc.returncode == 1, proc.stdout[-3000:] + proc.stderr[-3000:]
     cases = {c.get("name"): c for c in ET.parse(project / "r.xml").getroot().iter("testcase")}
-    assert set(cases) == {"seed0", "test_emergency_brake_keeps_its_distance[seed0]", PLANTED}
+    assert set(cases) == {"seed0", *ROWS, "test_emergency_brake_keeps_its_distance[seed0]", PLANTED}
     failed = {n for n, c in cases.items() if c.find("failure") is not None or c.find("error") is not None}
     assert failed == {PLANTED}
     message = cases[PLANTED].find("failure").get("message") + cases[PLANTED].find("failure").text
@@ -75,6 +77,9 @@ def test_the_example_project_fails_exactly_its_planted_item_and_reports_metrics(
     assert (project / "rec" / "test_planted_failure_keeps_50_m_seed0_.rrd").stat().st_size > 0
     assert float(planted["ego.requirements.keep_50m"]) == pytest.approx(-43.2094, abs=1e-4)
     assert float(planted["ego.first_violation.keep_50m"]) == 0.0  # every sample: the first one
+    # a variation row's reproducer carries the row's values
+    row = {p.get("name"): p.get("value") for p in cases[ROWS[1]].iter("property")}
+    assert "--set CutInGap=20.0" in row["ego.command"] and "cut_in.xosc" in row["ego.command"], row["ego.command"]
     passing = {p.get("name") for p in cases["seed0"].iter("property")}
     assert not any(k.startswith("ego.first_violation.") for k in passing)  # a passing item: none
     # the reproducer gives the same verdict

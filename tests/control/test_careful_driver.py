@@ -99,3 +99,49 @@ def test_reacts_to_a_cut_in_at_the_lateral_wandering_distance():
     assert r.metrics["final_speed"] == pytest.approx(20.0, abs=0.3)
     assert np.abs(r.column("d")).max() < 0.05
     assert math.isfinite(r.metrics["min_gap"]) and r.metrics["min_gap"] > 0.0
+
+
+def test_a_standing_car_in_its_lane_is_a_risk_once_in_view():
+    """ALKS 4.6's standing target with a 60 m sensor: perceived at the first look with its
+    centre within 60 m of the driver's front bumper, braked for after 1.15 s, to rest by hand."""
+    v0, reach = 60 / 3.6, 60.0
+    overrides = {"aeb": "false", "evade": "false", "sensor_range": str(reach)}
+    r = run(RunSpec("scenarios/alks/alks_4_6_forward_range.xosc", "careful-driver", 0, overrides))
+    assert r.status == "completed" and not r.metrics["collision"]
+    half = r.traffic.length[r.traffic.of("Target")][0] / 2
+    t, s, ds, gap = r.column("t"), r.column("s"), r.column("ds"), r.column("gap_front")
+    risks = r.column("risks")
+    assert risks.max() == 1
+    i0 = int(np.argmax(risks > 0))
+    # in view from this 0.1 s look (its centre within reach), not at the one before
+    assert gap[i0] + half <= reach < gap[i0] + half + v0 * 0.1 + 1e-6
+    assert ds[i0] == pytest.approx(v0, rel=1e-4)
+    assert np.all(r.column("decel")[t < t[i0] + LAG - 1e-9] == 0.0)
+    _, s_rest = _stop_by_hand(v0, 0.0)
+    i_rest = int(np.argmax((t > t[i0]) & (ds <= 1e-3)))
+    assert s[i_rest] - s[i0] == pytest.approx(s_rest, rel=0.01)
+    assert gap[i_rest] == pytest.approx(gap[i0] - s_rest, abs=0.5)
+
+
+def test_a_cut_out_reveals_the_standing_car_at_the_lateral_wandering_distance():
+    """ALKS 4.5 (the lead leaves 50 m before a standing car, keeping its speed): the standing
+    car is a risk from the first look at which the lead's centre is 0.375 m out of the lane,
+    not once the lead is clear of the driver's outline; it stops behind it, by hand."""
+    v0 = 60 / 3.6
+    overrides = {"aeb": "false", "evade": "false", "CutOutDistance": "50"}
+    r = run(RunSpec("scenarios/alks/alks_4_5_cut_out.xosc", "careful-driver", 0, overrides))
+    assert r.status == "completed" and not r.metrics["collision"]
+    log = r.traffic
+    lead = log.of("Lead")
+    lateral = np.abs(log.y[lead] - log.y[lead][0])  # the motorway runs along x
+    crossed = log.t[lead][int(np.argmax(lateral > 0.375))]
+    t, s, ds = r.column("t"), r.column("s"), r.column("ds")
+    risks, risk = r.column("risks"), r.column("risk_time")
+    assert risks.max() == 1  # the lead never brakes: the standing car is the one risk
+    i0 = int(np.argmax(risks > 0))
+    assert risk[i0] == pytest.approx(crossed, abs=1e-9)
+    assert np.all(r.column("decel")[t < crossed + LAG - 1e-9] == 0.0)
+    _, s_rest = _stop_by_hand(v0, 0.0)
+    i_rest = int(np.argmax((t > t[i0]) & (ds <= 1e-3)))
+    assert s[i_rest] - s[i0] == pytest.approx(s_rest, rel=0.01)
+    assert r.metrics["final_speed"] == pytest.approx(0.0, abs=0.05)
