@@ -34,8 +34,11 @@ EVAL_SEEDS = tuple(range(1000, 1010))
 #: take about 50 minutes on 2 idle cores (a SAC run ~4.5 minutes, a PPO run ~30 s)
 BUDGET = 10240
 #: how far (in mean return) a trained row retrained elsewhere may be from the committed one:
-#: measured, docs/results/rl-baselines.md#reproducing-the-trained-rows-on-another-machine
-REPRODUCE_TOLERANCE = 0.0
+#: twice what another numerical code path moved the curve's PPO row (1.52: 43.07 pinned,
+#: 44.59 with MKL's generic path and torch's default kernels), for a machine whose simulation
+#: arithmetic (SUMO's build, libm) differs where the pin cannot reach;
+#: docs/results/rl-baselines.md#reproducing-the-trained-rows-on-another-machine
+REPRODUCE_TOLERANCE = 3.0
 #: DQN's budget in the discrete setting (env steps at 1 Hz: 800 episodes of 25 s)
 DQN_BUDGET = 20000
 ALGOS = ("ppo", "sac")
@@ -69,6 +72,13 @@ HYPERPARAMETERS: dict[str, dict] = {
         "exploration_fraction": 0.7,
     },
 }
+
+
+#: what an algorithm's training env changes in the reward, over the setting it is scored in
+#: (every row is scored on the env's default reward): DQN trains with a crash weighing ten
+#: times the default (-10 for -1; with -1 a crash cost it less than the progress it gave up by
+#: holding back, and it collided in 3 of 10 evaluation episodes)
+TRAINING_REWARD: dict[str, dict] = {"dqn": {"collision_reward": -10.0}}
 
 
 #: the numerical libraries' settings every training and evaluation here runs with, so that a
@@ -161,7 +171,7 @@ def train(env_id: str, algo: str, seed: int, steps: int, progress=None):
     (:class:`ego.results.progress.Progress`, counting env steps); the model is the same with
     or without it."""
     pin_numerics()
-    env = make_env(env_id, algo_config(algo))
+    env = make_env(env_id, {**algo_config(algo), **TRAINING_REWARD.get(algo, {})})
     try:
         env.reset(seed=seed)
         model = algo_class(algo)("MlpPolicy", env, seed=seed, verbose=0, device="cpu", **HYPERPARAMETERS[algo])
