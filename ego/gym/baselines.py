@@ -1,12 +1,15 @@
 """The RL baselines of docs/results/rl-baselines.md: trained PPO and SAC (stable-baselines3)
-beside every ego controller of the task, on the same randomised evaluation episodes.
+beside every ego controller of the task, on the same randomised evaluation episodes, and DQN
+in the discrete setting (:data:`DISCRETE_CONFIG`) beside each meta action held all the time.
 
 Every env runs in its benchmark configuration (:data:`BENCH_CONFIG`: the env's defaults,
 randomised episodes included, at ``policy_frequency`` 10 Hz, with a shorter lane-centring
-drive); a policy is scored on the episodes of :data:`EVAL_SEEDS` (the env's seeds: the
-same traffic and the same randomised parameters for every policy). The controllers drive
-through :class:`ego.gym.ControllerPolicy` (stepped at their own 100 Hz inside each policy
-step); the agents act at 10 Hz.
+drive); a policy is scored by :func:`ego.gym.evaluate` on the episodes of :data:`EVAL_SEEDS`
+(the env's seeds: the same traffic and the same randomised parameters for every policy). The
+controllers drive through :class:`ego.gym.ControllerPolicy` (stepped at their own 100 Hz
+inside each policy step); the agents act at 10 Hz (DQN at 1 Hz). Every training and
+evaluation pins its computation (:func:`pin_numerics`), so a model is the same on any x86-64
+processor with AVX2.
 
     python scenarios/rl/train_sb3.py --env ego/CutIn-v0 --algo ppo --seed 0 --steps 5000
 
