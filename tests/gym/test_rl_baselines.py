@@ -154,16 +154,21 @@ def test_a_trained_row_of_the_committed_page_regenerates_within_its_tolerance(tm
     """The curve's PPO row trained again from nothing (three seeds, in fresh worker processes,
     the models into an empty folder) is the committed row: the mean return within
     REPRODUCE_TOLERANCE, the success and collision rates equal."""
-    import dataclasses
-
     from ego import docs
     from ego.gym.baselines import REPRODUCE_TOLERANCE
 
-    table = next(t for t in docs.rl_baselines() if t.name == "rl-curve")
-    row = table.row("PPO")
-    row = dataclasses.replace(row, jobs=tuple(dataclasses.replace(j, models=str(tmp_path)) for j in row.jobs))
-    again = _cells(docs.render_row(row, docs.run_jobs(row.jobs, workers=2, progress=False)), "PPO")
-    committed = _cells(docs.block(docs.page_path("rl-baselines").read_text(), table.name), "PPO")
+    # in a process of its own, as a user runs it (this one's path has tests/gym, which SB3's
+    # optional "import gym" would find in the workers)
+    code = (
+        "import dataclasses; from ego import docs; "
+        "t = next(t for t in docs.rl_baselines() if t.name == 'rl-curve'); r = t.row('PPO'); "
+        f"r = dataclasses.replace(r, jobs=tuple(dataclasses.replace(j, models={str(tmp_path)!r}) for j in r.jobs)); "
+        "print(docs.render_row(r, docs.run_jobs(r.jobs, workers=2, progress=False)))"
+    )
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=3600, cwd=tmp_path)
+    assert p.returncode == 0, p.stderr
+    again = _cells(p.stdout, "PPO")
+    committed = _cells(docs.block(docs.page_path("rl-baselines").read_text(), "rl-curve"), "PPO")
     assert abs(float(again[1]) - float(committed[1])) <= REPRODUCE_TOLERANCE, (again, committed)
     assert again[3:5] == committed[3:5]  # success, collision
     assert len(list(tmp_path.iterdir())) == 3  # trained here, not read from runs/
@@ -192,14 +197,18 @@ def _cells(table: str, label: str) -> list[str]:
     return [c.strip() for c in line.strip("|").split("|")]
 
 
-def test_the_committed_dqn_row_beats_always_slower_on_success_collision_and_return():
+def test_the_committed_dqn_row_beats_every_held_meta_action_on_the_return():
+    # what the page claims: above always SLOWER and IDLE on the return, FASTER's collisions
+    # avoided; not (yet) below SLOWER's and IDLE's none (docs/results/rl-baselines.md)
     from ego.docs import RL_DISCRETE_TABLES, block, page_path
 
     table = block(page_path("rl-baselines").read_text(), RL_DISCRETE_TABLES["ego/EmergencyBrake-v0"])
-    dqn, slower = _cells(table, "DQN"), _cells(table, "always SLOWER")
+    dqn = _cells(table, "DQN")
     rate = lambda cell: float(cell.split(" %")[0])  # noqa: E731 - "90 % (60-98)" -> 90
-    assert float(dqn[1]) > float(slower[1])  # mean return
-    assert rate(dqn[3]) >= rate(slower[3]) and rate(dqn[4]) <= rate(slower[4])  # success, collision
+    for action in ("SLOWER", "IDLE", "FASTER"):
+        held = _cells(table, f"always {action}")
+        assert float(dqn[1]) > float(held[1]), action  # mean return
+    assert rate(dqn[4]) < rate(_cells(table, "always FASTER")[4])  # collision
 
 
 PIN_CHECK = (
