@@ -31,7 +31,7 @@ ROWS = [
     ("ccrs-ttc1", "fuzzy"),
     ("cross-emergency-brake", "pid"),
     # the RL baselines: a controller row (the trained rows take minutes of training each)
-    ("rl-cut-in", "pid"),
+    ("rl-curve", "pid"),
     ("xosc-equivalence", "emergency_brake.xosc / emergency-brake, pid"),
     ("falsify-surrogate", "cma"),  # the analytic stand-in: no SUMO, seconds
     ("curved-lane-keeping", "left-1000, 130 km/h, pid"),

@@ -970,17 +970,32 @@ def cross_simulator(seeds: int = 3) -> list[Table]:
     return out
 
 
+def _rate(rate: float, interval: tuple[float, float]) -> str:
+    """A rate and its 95 % interval in per cent: ``40 % (17-69)``."""
+    return f"{100 * rate:.0f} % ({100 * interval[0]:.0f}-{100 * interval[1]:.0f})"
+
+
 def _rl_cells(results: list) -> list[str]:
     from ego.gym.baselines import summary
 
-    mean, sd, ok = summary(results)
-    lengths = [n for r in results for n in r["lengths"]]
+    s = summary(results)
     return [
-        f"{mean:.2f}",
-        "-" if math.isnan(sd) else f"{sd:.2f}",
-        f"{100 * ok:.0f} %",
-        f"{sum(lengths) / len(lengths):.0f}",
+        f"{s['mean']:.2f}",
+        "-" if math.isnan(s["sd"]) else f"{s['sd']:.2f}",
+        _rate(s["success"], s["success_interval"]),
+        _rate(s["collision"], s["collision_interval"]),
+        f"{s['length']:.0f}",
     ]
+
+
+#: the columns of an RL baselines table after the policy's
+RL_HEADER = (
+    "mean return",
+    "sd over training seeds",
+    "success (95 % CI)",
+    "collision (95 % CI)",
+    "mean episode length (env steps)",
+)
 
 
 #: env id -> its table on docs/results/rl-baselines.md (one table each: regenerated one at a time)
@@ -1032,18 +1047,57 @@ def rl_baselines() -> list[Table]:
                     f"scenarios/rl/train_sb3.py --env {env_id} --algo $algo --seed $seed --steps {BUDGET} "
                     "--models runs/rl-baselines --no-score; done; done",
                 ),
-                (
-                    f"{env_id} policy",
-                    "mean return",
-                    "sd over training seeds",
-                    "episodes without a crash",
-                    "mean episode length (env steps)",
-                ),
+                (f"{env_id} policy", *RL_HEADER),
                 tuple(rows),
                 (
-                    f"Evaluation episodes: seeds {EVAL_SEEDS[0]}-{EVAL_SEEDS[-1]}. PPO and SAC: {BUDGET} env "
-                    f"steps each, training seeds {RL_SEEDS[0]}-{RL_SEEDS[-1]} (mean of the seeds' mean returns +- "
-                    "their standard deviation); a controller is one deterministic run of the episodes.",
+                    f"Evaluation episodes: seeds {EVAL_SEEDS[0]}-{EVAL_SEEDS[-1]}, through `ego.gym.evaluate`. PPO and "
+                    f"SAC: {BUDGET} env steps each, training seeds {RL_SEEDS[0]}-{RL_SEEDS[-1]} (mean of the seeds' "
+                    "mean returns +- their standard deviation; success and collision over all their episodes, "
+                    "Wilson's 95 % interval); a controller is one deterministic run of the episodes.",
+                ),
+            )
+        )
+    return out
+
+
+#: env id -> its table of the discrete setting (DQN against one meta action held all the time)
+RL_DISCRETE_TABLES = {"ego/EmergencyBrake-v0": "rl-discrete-emergency-brake"}
+
+
+def rl_discrete() -> list[Table]:
+    """docs/results/rl-baselines.md: per env id of :data:`RL_DISCRETE_TABLES`, DQN (3
+    training seeds) in the discrete setting against each meta action held all the time."""
+    import json
+
+    from ego.gym.baselines import DISCRETE_CONFIG, DQN_BUDGET, EVAL_SEEDS, ConstantEval, TrainedEval, discrete_actions
+
+    out = []
+    for env_id, name in RL_DISCRETE_TABLES.items():
+        rows = [
+            Row(f"always {action}", (ConstantEval(env_id, action),), _rl_cells) for action in discrete_actions(env_id)
+        ]
+        rows.append(
+            Row(
+                "DQN",
+                tuple(TrainedEval(env_id, "dqn", seed, DQN_BUDGET, str(RL_MODELS)) for seed in RL_SEEDS),
+                _rl_cells,
+            )
+        )
+        out.append(
+            Table(
+                name,
+                "rl-baselines",
+                (
+                    f"for seed in {' '.join(map(str, RL_SEEDS))}; do python scenarios/rl/train_sb3.py --env {env_id} "
+                    f"--algo dqn --seed $seed --steps {DQN_BUDGET} --models runs/rl-baselines --no-score; done",
+                ),
+                (f"{env_id} policy", *RL_HEADER),
+                tuple(rows),
+                (
+                    f"The env with `config={json.dumps(DISCRETE_CONFIG)}`; evaluation episodes: seeds "
+                    f"{EVAL_SEEDS[0]}-{EVAL_SEEDS[-1]}, through `ego.gym.evaluate`. DQN: {DQN_BUDGET} env steps each, "
+                    f"training seeds {RL_SEEDS[0]}-{RL_SEEDS[-1]} (mean of the seeds' mean returns +- their standard "
+                    "deviation; success and collision over all their episodes, Wilson's 95 % interval).",
                 ),
             )
         )
@@ -1070,7 +1124,8 @@ def rl_thresholds() -> Table:
         (
             "env id (default controller)",
             "reward_threshold: mean return",
-            "episodes without a crash",
+            "success (95 % CI)",
+            "collision (95 % CI)",
             "mean episode length (env steps)",
         ),
         tuple(rows),
@@ -1083,11 +1138,8 @@ def rl_thresholds() -> Table:
 
 
 def _rl_threshold_cells(results: list) -> list[str]:
-    from ego.gym.baselines import summary
-
-    _, _, ok = summary(results)
-    lengths = results[0]["lengths"]
-    return [f"{np.mean(results[0]['returns']):.2f}", f"{100 * ok:.0f} %", f"{sum(lengths) / len(lengths):.0f}"]
+    cells = _rl_cells(results)
+    return [cells[0], *cells[2:]]
 
 
 def tables() -> list[Table]:
@@ -1105,6 +1157,7 @@ def tables() -> list[Table]:
         + envelope()
         + cross_simulator()
         + rl_baselines()
+        + rl_discrete()
         + [rl_thresholds()]
         + openscenario()
         + docs_tables()

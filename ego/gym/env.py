@@ -362,8 +362,10 @@ _SHARED = (
 
 
 #: the scenarios whose task has an end of its own (the curve's arc, the lane-centring road):
-#: there only status ``completed`` is a success
-_ENDING_TASKS = ("curve", "lane-centering")
+#: there only these statuses are a success - ``completed``, and on the lane-centring drive,
+#: whose speed is the scenario's (so the drive's length in time is the config's choice),
+#: ``ended``: its duration reached before the road's end (the benchmark's 30 s drive)
+_ENDING_TASKS = {"curve": ("completed",), "lane-centering": ("completed", "ended")}
 
 
 #: the keys of an episode's outcome (:func:`outcome`), in the order it gives them
@@ -381,7 +383,7 @@ OUTCOME_KEYS = (
 def outcome(sc, reason: str, metrics: Mapping[str, Any]) -> dict[str, Any]:
     """The episode's outcome as RL benchmarks report it, for the ``info`` of its last step:
     ``is_success`` (SB3's key: no collision, divergence, error or lane departure, and, where
-    the task has an end of its own, that end reached), ``collision``, ``collision_avoidable``
+    the task has an end of its own, that end reached, :data:`_ENDING_TASKS`), ``collision``, ``collision_avoidable``
     (the scenario's metric, None where it has none), ``lane_departure`` (the run's
     ``max_lane_departure`` metric above 0 m: the ego's side beyond its lane's marking outside a
     commanded lane change; None where the scenario does not measure it), ``off_road``
@@ -390,12 +392,12 @@ def outcome(sc, reason: str, metrics: Mapping[str, Any]) -> dict[str, Any]:
     ``max_episode_steps`` where the registered TimeLimit cut it)."""
     collision = reason == "collision"
     failed = collision or reason in ("diverged", "error")
-    ending = sc.name in _ENDING_TASKS
+    ends = _ENDING_TASKS.get(sc.name)
     duration = sc.config.duration
     departure = metrics.get("max_lane_departure")
     departed = None if departure is None else bool(departure > 0.0)
     return {
-        "is_success": not failed and not departed and (reason == "completed" if ending else True),
+        "is_success": not failed and not departed and (ends is None or reason in ends),
         "collision": collision,
         "collision_avoidable": metrics.get("collision_avoidable") if collision else None,
         "lane_departure": departed,

@@ -69,7 +69,7 @@ def evaluate(
     (default ``0 .. episodes - 1``; with both, the first ``episodes`` seeds) and report
     ``episodes``, ``success_rate`` and ``collision_rate`` with Wilson's 95 % intervals
     (``success_interval``, ``collision_interval``), ``mean_return`` with Student's t 95 %
-    interval (``return_interval``), and per episode its seed, return and outcome
+    interval (``return_interval``), and per episode its seed, return, length (env steps) and outcome
     (``per_episode``)."""
     seed_list = [int(s) for s in seeds] if seeds is not None else None
     if episodes is None:
@@ -89,16 +89,18 @@ def evaluate(
         act = _act(policy, env.unwrapped)
         for seed in seed_list:
             obs, _ = env.reset(seed=seed)
-            total = 0.0
+            total, steps = 0.0, 0
             while True:
                 obs, reward, terminated, truncated, info = env.step(act(obs))
                 total += float(reward)
+                steps += 1
                 if terminated or truncated:
                     break
             rows.append(
                 {
                     "seed": seed,
                     "return": total,
+                    "length": steps,
                     **{k: info.get(k) for k in OUTCOME_KEYS},
                 }
             )

@@ -1,8 +1,9 @@
-"""Train a stable-baselines3 PPO or SAC agent on an ego env and score it beside a controller.
+"""Train a stable-baselines3 PPO, SAC or DQN agent on an ego env and score it beside a controller.
 
     pip install -e ".[rl]"
     python scenarios/rl/train_sb3.py --env ego/CutIn-v0 --algo ppo --seed 0 --steps 5000 [--save model.zip]
     python scenarios/rl/train_sb3.py --env ego/CutIn-v0 --algo sac --seed 1 --steps 10240 --models runs/rl-baselines
+    python scenarios/rl/train_sb3.py --env ego/EmergencyBrake-v0 --algo dqn --seed 0 --steps 20000
 
 ``--models DIR`` writes the model as ``DIR/<env>-<algo>-seed<seed>-<steps>.zip``, where
 ``python -m ego.docs results --page rl-baselines`` reads the trained rows' models from
@@ -11,7 +12,9 @@
 The env runs in its benchmark configuration (``ego.gym.baselines.BENCH_CONFIG``: randomised
 episodes, 10 Hz policy), and the agent is scored on the evaluation episodes
 (``ego.gym.baselines.EVAL_SEEDS``) that docs/results/rl-baselines.md uses, beside the env's
-default controller driving the same episodes through ``ControllerPolicy``.
+default controller driving the same episodes through ``ControllerPolicy``. DQN trains and is
+scored in the discrete setting (``ego.gym.baselines.DISCRETE_CONFIG``), beside each meta
+action held all the time.
 """
 
 from __future__ import annotations
@@ -25,9 +28,11 @@ from ego.gym import ENV_IDS
 from ego.gym.baselines import (
     ALGOS,
     BENCH_CONFIG,
-    controller_policy_act,
+    DISCRETE_ALGOS,
+    DISCRETE_CONFIG,
+    algo_config,
+    discrete_actions,
     evaluate,
-    model_act,
     model_file,
     save,
     summary,
@@ -40,7 +45,7 @@ from ego.paths import check_file_target, check_folder_target
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--env", default="ego/CutIn-v0", help=f"one of {', '.join(ENV_IDS)}")
-    ap.add_argument("--algo", default="ppo", help="ppo or sac")
+    ap.add_argument("--algo", default="ppo", help="ppo, sac or dqn")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--steps", type=int, default=5000, help="training budget in env steps")
     ap.add_argument("--save", default=None, help="write the trained model here (.zip)")
@@ -52,8 +57,9 @@ def main(argv: list[str] | None = None) -> int:
     problems = []
     if args.env not in BENCH_CONFIG:
         problems.append(f"bad value for --env: {args.env!r} (expected one of {', '.join(ENV_IDS)})")
-    if args.algo not in ALGOS:
-        problems.append(f"bad value for --algo: {args.algo!r} (expected one of {', '.join(ALGOS)})")
+    algos = ALGOS + DISCRETE_ALGOS
+    if args.algo not in algos:
+        problems.append(f"bad value for --algo: {args.algo!r} (expected one of {', '.join(algos)})")
     if not 1 <= args.steps <= 10_000_000:
         problems.append(f"bad value for --steps: {args.steps} (expected 1 to 10000000)")
     if not 0 <= args.seed <= 2**31 - 1:
@@ -80,10 +86,19 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     from ego.scenarios import scenario_class
 
-    controller = scenario_class(ENV_IDS[args.env]).reference_controller()
-    for name, act in ((args.algo, model_act(model)), (controller, controller_policy_act(controller))):
-        mean, _, ok = summary([evaluate(args.env, act)])
-        print(f"  {name:12} mean return {mean:10.2f}   episodes without a crash {100 * ok:5.1f} %")
+    if args.algo in DISCRETE_ALGOS:  # no controller drives meta actions: each one held instead
+        index = discrete_actions(args.env)
+        others = [(f"always {a}", lambda obs, i=i: i) for a, i in index.items()]
+        print(f"  in the discrete setting {DISCRETE_CONFIG}")
+    else:
+        controller = scenario_class(ENV_IDS[args.env]).reference_controller()
+        others = [(controller, controller)]
+    for name, policy in ((args.algo, model), *others):
+        s = summary([evaluate(args.env, policy, algo_config(args.algo))])
+        print(
+            f"  {name:14} mean return {s['mean']:10.2f}   success {100 * s['success']:5.1f} %   "
+            f"collision {100 * s['collision']:5.1f} %"
+        )
     return 0
 
 

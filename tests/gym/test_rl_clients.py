@@ -266,6 +266,20 @@ def test_a_lane_departure_is_flagged_and_is_no_success():
         env.close()
 
 
+@pytest.mark.sumo
+def test_the_benchmarks_lane_centring_drive_to_its_duration_is_a_success():
+    # the benchmark cuts the drive to 30 s, before the road's end, at the scenario's own speed:
+    # driven in lane to the duration it ends "ended", a success; steered off, no success
+    from ego.gym import evaluate
+
+    report = evaluate("cascade-pid", "ego/LaneCentering-v0", seeds=[1000])
+    (row,) = report["per_episode"]
+    assert row["termination_reason"] == "ended" and row["is_success"] and row["completion"] == 1.0
+    assert report["success_rate"] == 1.0
+    off = evaluate(lambda obs: np.array([0.0, 1.0], np.float32), "ego/LaneCentering-v0", seeds=[1000])
+    assert off["per_episode"][0]["termination_reason"] != "ended" and off["success_rate"] == 0.0
+
+
 def test_wilson_and_t_intervals_against_hand_numbers():
     from ego.gym.evaluate import t_interval, wilson
 
