@@ -105,9 +105,8 @@ class BrakeInLane:
     def reference(self, man: EvasiveManoeuvre) -> tuple[float, float]:
         c, view = self.config, man.view
         dt = c.dt
-        sensor = view.sensor
-        assert sensor is not None  # the view's setup made it
-        front = sensor.front
+        assert view.sensor is not None  # the view's setup made it
+        front = view.sensor.front
         self.ramp_v = max(front.speed, self.ramp_v - c.brake_decel * dt)
         # the reference may run ahead of what the car can brake, but never more than
         # brake_max_lag behind it, or the controller would keep braking below the leader's
@@ -137,9 +136,9 @@ class BrakeInLane:
         return s_ref, v_ref
 
     def settled(self, man: EvasiveManoeuvre) -> bool:
-        view, sensor = man.view, man.view.sensor
-        assert sensor is not None  # the view's setup made it
-        return bool(view.ds <= sensor.front.speed + 0.1 or view.gap_front == INF)
+        view = man.view
+        assert view.sensor is not None  # the view's setup made it
+        return bool(view.ds <= view.sensor.front.speed + 0.1 or view.gap_front == INF)
 
 
 class Impact:
