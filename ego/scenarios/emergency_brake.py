@@ -105,6 +105,7 @@ class BrakeInLane:
     def reference(self, man: EvasiveManoeuvre) -> tuple[float, float]:
         c, view = self.config, man.view
         dt = c.dt
+        assert view.sensor is not None  # the view's setup made it
         front = view.sensor.front
         self.ramp_v = max(front.speed, self.ramp_v - c.brake_decel * dt)
         # the reference may run ahead of what the car can brake, but never more than
@@ -136,6 +137,7 @@ class BrakeInLane:
 
     def settled(self, man: EvasiveManoeuvre) -> bool:
         view = man.view
+        assert view.sensor is not None  # the view's setup made it
         return bool(view.ds <= view.sensor.front.speed + 0.1 or view.gap_front == INF)
 
 

@@ -128,7 +128,7 @@ def compose(
     if c.aeb:
         safety = SafetyLayer(c, view, scenario.event, lambda: scenario.t)
         safety.manoeuvre = manoeuvre
-        manoeuvre.safety = safety  # type: ignore[assignment]  # manoeuvre.py types its safety as None only
+        manoeuvre.safety = safety
     return Parts(
         MotorwayWorld(c, scenario.geometry, traffic, **(road or {})),
         view,

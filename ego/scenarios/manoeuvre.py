@@ -31,13 +31,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
-from ego.scenarios.events import INF, GapRule, check_lane, choose_lane
-from ego.scenarios.motorway import LANE_NAMES
+from ego.control.base import Observation
+from ego.scenarios.events import INF, GapRule, LaneCheck, check_lane, choose_lane
+from ego.scenarios.motorway import LANE_NAMES, SurroundView
 from ego.scenarios.safety import (
+    SafetyLayer,
     braking_impact_speed,
     braking_need,
     braking_reach,
@@ -91,20 +93,21 @@ CLEAR_SIDEWAYS_DISTANCE = 32.0
 class EvasiveManoeuvre:
     """Trigger, gap acceptance and the references of an evasive lane change; see the module.
 
-    ``view`` is the surround view, ``trigger_on`` "front" or "rear", ``in_lane`` the
-    scenario's :class:`InLane`; ``choose`` may replace gap acceptance (``choose(m) ->
-    (side or None, why)``; :meth:`gap_acceptance` is the default); ``on_trigger(m)`` runs at
-    the trigger, before the lane is entered."""
+    ``config`` is the scenario's (an :class:`~ego.scenarios.evasive.EvasiveConfig`; the
+    in-lane behaviours read their own fields of it too), ``view`` the surround view,
+    ``trigger_on`` "front" or "rear", ``in_lane`` the scenario's :class:`InLane`; ``choose``
+    may replace gap acceptance (``choose(m) -> (side or None, why)``; :meth:`gap_acceptance`
+    is the default); ``on_trigger(m)`` runs at the trigger, before the lane is entered."""
 
     def __init__(
         self,
-        config,
-        view,
+        config: Any,
+        view: SurroundView,
         trigger_on: str,
         in_lane: InLane,
         event: Callable[..., None],
-        choose: Callable | None = None,
-        on_trigger: Callable | None = None,
+        choose: Callable[[EvasiveManoeuvre], tuple[str | None, str]] | None = None,
+        on_trigger: Callable[[EvasiveManoeuvre], None] | None = None,
     ) -> None:
         self.config = config
         self.view = view
@@ -113,11 +116,14 @@ class EvasiveManoeuvre:
         self.event = event
         self.choose = choose or EvasiveManoeuvre.gap_acceptance
         self.on_trigger = on_trigger
-        self.safety = None  #: the safety layer, updated between the trigger and the references
-        self.plant = None
+        #: the safety layer, updated between the trigger and the references
+        self.safety: SafetyLayer | None = None
+        self.plant: Any = None
         self.reset()
 
-    def reset(self, plant=None) -> None:
+    def reset(self, plant: Any = None) -> None:
+        """A new run of ``plant`` (the ego's: its model's parameters give the friction limit;
+        None before the first)."""
         view = self.view
         self.plant = plant
         #: the plant's friction limit (m/s^2), asked every control period of a lane change
@@ -165,9 +171,11 @@ class EvasiveManoeuvre:
         if self.phase != LANE_CHANGE or need <= 0.9 * self.limit:
             return False
         view = self.view
-        return view.sensor.front.gap != INF and not clears_sideways(view, view.ttc_front)
+        sensor = view.sensor
+        assert sensor is not None  # the view's setup made it
+        return sensor.front.gap != INF and not clears_sideways(view, view.ttc_front)
 
-    def plan(self, obs, t: float) -> None:
+    def plan(self, obs: Observation, t: float) -> None:
         """One control period: trigger, the safety layer, the references into ``obs``."""
         self.t = t
         c = self.config
@@ -192,9 +200,11 @@ class EvasiveManoeuvre:
             # drives ahead in the target lane (that traffic may brake too), nor to the car
             # the ego's body still overlaps (the sensor's front object) until it has cleared it
             v_evade = self.evade_speed
+            assert self.trigger_t is not None  # a lane is chosen at the trigger
             s_ref, v_ref = self.trigger_s + v_evade * (t - self.trigger_t), v_evade
             # follow_reference of target_leader() and of the front object, inline
             sensor = view.sensor
+            assert sensor is not None  # the view's setup made it
             leader = sensor.lane_leader_now(view.target_lane)
             if leader is not None:
                 gap, speed = leader
@@ -234,7 +244,9 @@ class EvasiveManoeuvre:
         # "decelerate and change lane": evading a car ahead never speeds up towards it (from
         # below evade_speed the ego keeps its speed); evading one behind does speed up
         self.evade_speed = min(c.evade_speed, view.ds) if self.trigger_on == "front" else c.evade_speed
-        other = view.sensor.front if self.trigger_on == "front" else view.sensor.rear
+        sensor = self.view.sensor
+        assert sensor is not None  # the view's setup made it
+        other = sensor.front if self.trigger_on == "front" else sensor.rear
         gap = view.gap_front if self.trigger_on == "front" else view.gap_rear
         closing = abs(view.ds - other.speed)
         # enough digits that the event never reads "3.00 s < 3.00 s"
@@ -289,7 +301,9 @@ class EvasiveManoeuvre:
         limit = self.limit
         if progress >= 0.5:
             return  # well across: finish it (the new lane's traffic sees the ego in its lane)
-        front = view.sensor.front
+        sensor = view.sensor
+        assert sensor is not None  # the view's setup made it
+        front = sensor.front
         threat = self._braking_threat(None, aeb) if progress < (0.25 if aeb else 0.1) else None
         if threat is None and (not aeb or braking_need(front, view.ds) > 0.9 * limit):
             return  # braking alone would not stop it in time and the new lane is clear: carry on
@@ -315,7 +329,9 @@ class EvasiveManoeuvre:
         if self.in_lane.action != "brake":
             return None
         view = self.view
-        front = view.sensor.front
+        sensor = view.sensor
+        assert sensor is not None  # the view's setup made it
+        front = sensor.front
         limit = self.limit
         if braking_need(front, view.ds) <= 0.9 * limit:  # 0 with nothing ahead
             return None
@@ -338,7 +354,9 @@ class EvasiveManoeuvre:
         then be closing in on the ego: then the lane change is the lesser risk, and why is left
         in :attr:`weighed`."""
         view = self.view
-        front = view.sensor.front
+        sensor = view.sensor
+        assert sensor is not None  # the view's setup made it
+        front = sensor.front
         if self.in_lane.action != "brake" or front.gap == INF or not (aeb or front.speed < view.ds - 0.5):
             return None
         limit = self.limit
@@ -372,11 +390,13 @@ class EvasiveManoeuvre:
         fast it closes in when it comes within ``margin``. Braking to a near stop across two
         lanes in front of such a follower is how an AEB stop mid-lane-change gets rear-ended."""
         view = self.view
+        sensor = self.view.sensor
+        assert sensor is not None  # the view's setup made it
         follower = self._lane_follower
-        view.sensor.lane_neighbours(view.target_lane if lane is None else lane, self._lane_leader, follower)
+        sensor.lane_neighbours(view.target_lane if lane is None else lane, self._lane_leader, follower)
         if follower.gap == INF or follower.speed <= 0.0:
             return None
-        front = view.sensor.front
+        front = sensor.front
         v0 = max(view.ds, 0.0)
         # a braking front car keeps braking: down to where its measured deceleration takes it
         v_front = front.speed + min(front.accel, 0.0) * horizon
@@ -416,6 +436,7 @@ class EvasiveManoeuvre:
             self._inside_since = t
         elif t - self._inside_since >= 1.0:
             what = "lane change" if self.phase == LANE_CHANGE else "in-lane manoeuvre"
+            assert self.trigger_t is not None  # a manoeuvre follows the trigger
             self.event(
                 "done",
                 f"{what} complete: settled since t = {self._inside_since:.2f} s "
@@ -438,7 +459,9 @@ class EvasiveManoeuvre:
     # -- references -------------------------------------------------------------------------
     def target_leader(self) -> Detection:
         """The nearest vehicle ahead overlapping the target lane (surround sensor)."""
-        self.view.sensor.lane_leader(self.view.target_lane, self._lane_leader)
+        sensor = self.view.sensor
+        assert sensor is not None  # the view's setup made it
+        sensor.lane_leader(self.view.target_lane, self._lane_leader)
         return self._lane_leader
 
     def follow_reference(self, leader: Detection) -> tuple[float, float]:
@@ -452,21 +475,27 @@ class EvasiveManoeuvre:
     def behind_front(self, s_ref: float, v_ref: float) -> tuple[float, float]:
         """The reference (``s_ref`` m, ``v_ref`` m/s), unless the follow distance to the
         front object is closer: then that one."""
-        fs, fv = self.follow_reference(self.view.sensor.front)
+        sensor = self.view.sensor
+        assert sensor is not None  # the view's setup made it
+        fs, fv = self.follow_reference(sensor.front)
         return (fs, fv) if fs < s_ref else (s_ref, v_ref)
 
     def braking_need(self, margin: float = 0.0) -> float:
         """:func:`ego.scenarios.safety.braking_need` behind the front object now."""
-        return braking_need(self.view.sensor.front, self.view.ds, margin)
+        sensor = self.view.sensor
+        assert sensor is not None  # the view's setup made it
+        return braking_need(sensor.front, self.view.ds, margin)
 
     # -- gap acceptance ---------------------------------------------------------------------
-    def lane_check(self, side: str, lane: int, rule: GapRule):
+    def lane_check(self, side: str, lane: int, rule: GapRule) -> LaneCheck:
         """Gap acceptance of ``lane`` from the surround sensor's lead and lag vehicles."""
         view = self.view
+        sensor = self.view.sensor
+        assert sensor is not None  # the view's setup made it
         lead, lag = Detection(), Detection()
-        exists = view.sensor.lane_neighbours(lane, lead, lag)
+        exists = sensor.lane_neighbours(lane, lead, lag)
         planned = self.config.evade_speed
-        front = view.sensor.front
+        front = sensor.front
         if self.trigger_on == "front" and front.gap != INF:
             # until it has cleared the car it leaves, the ego may have to slow to that car's
             # speed: the new lane's follower must have room for that
@@ -492,15 +521,17 @@ class FollowInLane:
     action = "brake"
     ref_s = ref_v = 0.0
 
-    def begin(self, man) -> None:  # at the trigger (an aborted lane change keeps the references)
+    def begin(self, man: EvasiveManoeuvre) -> None:  # at the trigger (an aborted lane change keeps the references)
         self.ref_s, self.ref_v = man.view.s, man.view.ds
 
-    def start(self, man) -> None:
+    def start(self, man: EvasiveManoeuvre) -> None:
         pass
 
-    def reference(self, man) -> tuple[float, float]:
+    def reference(self, man: EvasiveManoeuvre) -> tuple[float, float]:
         c, view = man.config, man.view
-        front = view.sensor.front
+        sensor = view.sensor
+        assert sensor is not None  # the view's setup made it
+        front = sensor.front
         if front.gap == INF:
             target = c.ego_speed
         else:
@@ -512,5 +543,7 @@ class FollowInLane:
         self.ref_s = min(max(self.ref_s + self.ref_v * c.dt, view.s - lag), view.s + lag)
         return self.ref_s, self.ref_v
 
-    def settled(self, man) -> bool:
-        return man.view.ds <= man.view.sensor.front.speed + 0.1 or man.view.gap_front == INF
+    def settled(self, man: EvasiveManoeuvre) -> bool:
+        view, sensor = man.view, man.view.sensor
+        assert sensor is not None  # the view's setup made it
+        return view.ds <= sensor.front.speed + 0.1 or view.gap_front == INF

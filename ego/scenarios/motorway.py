@@ -17,11 +17,12 @@ A concrete scenario (``emergency_brake.py``, ``cut_in.py``...) subclasses
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ego.control.base import Observation
 from ego.lane_frame import LanePolyline
 from ego.models import NonlinearBicycle, NonlinearBicycleParams, VehicleGeometry
 from ego.models.actuators import ActuatorLimits
@@ -35,8 +36,8 @@ from ego.results.traffic_log import RADIUS, REACH_MARGIN
 from ego.scenarios.base import CommonConfig, signal_series, vehicle_series
 from ego.scenarios.events import INF, boxes_overlap
 from ego.scenarios.observe import road_observation
-from ego.scenarios.road import RoadSensor
-from ego.scenarios.sensor import SurroundSensor
+from ego.scenarios.road import PosedPlant, RoadSensor, ScriptedActor
+from ego.scenarios.sensor import Row, SurroundSensor
 from ego.sim.protocol import TrafficSim
 from ego.sim.traffic import PacedVehicle, background_traffic
 from ego.sim.types import EGO, Collision, VehicleSpec, VehicleType, ego_type
@@ -49,7 +50,7 @@ EDGE = "motorway"
 N_LANES = 3
 
 
-class _LaneNames(dict):
+class _LaneNames(dict[int, str]):
     """Lane names by SUMO index; a road of more lanes (a file's) names the others by index."""
 
     def __missing__(self, index: int) -> str:
@@ -156,7 +157,7 @@ class MotorwayWorld:
         route: str = ROUTE,
         route_edges: tuple[str, ...] = (EDGE,),
         n_lanes: int = N_LANES,
-        refine: Callable[[list], list] | None = None,
+        refine: Callable[[list[tuple[float, float]]], list[tuple[float, float]]] | None = None,
     ) -> None:
         self.config = config
         self.geometry = geometry
@@ -164,7 +165,7 @@ class MotorwayWorld:
         self.edge, self.route, self.route_edges, self.n_lanes = edge, route, route_edges, n_lanes
         self.refine = refine
         self.sim: TrafficSim | None = None
-        self.actors: list = []
+        self.actors: list[ScriptedActor] = []
         self.colors: dict[str, tuple[int, int, int]] = {}
         self.lanes: dict[int, LanePolyline] = {}
         self._specs: list[VehicleSpec] = []
@@ -172,7 +173,9 @@ class MotorwayWorld:
         self._clear: list[tuple[int, float, float]] = []
         self._types: set[str] = set()
 
-    def vehicle(self, spec: VehicleSpec, vtype: VehicleType, actor=None, *, required: bool = True) -> None:
+    def vehicle(
+        self, spec: VehicleSpec, vtype: VehicleType, actor: ScriptedActor | None = None, *, required: bool = True
+    ) -> None:
         """Put a scenario vehicle on the road (its type added once), scripted by ``actor``."""
         self.add_type(vtype)
         self._specs.append(spec)
@@ -185,6 +188,7 @@ class MotorwayWorld:
     def add_type(self, vtype: VehicleType) -> None:
         if vtype.id not in self._types:
             self._types.add(vtype.id)
+            assert self.sim is not None  # types are added from setup on
             self.sim.add_type(vtype)
 
     def keep_clear(self, lane: int, start: float = 0.0, end: float = 1e9) -> None:
@@ -221,7 +225,7 @@ class MotorwayWorld:
         shapes = sim.lane_shapes()
         # a curved motorway is cut into edges edge, edge.1, edge.2, ... (sumo_nets/motorway_arcs.py):
         # its lanes are joined across them, and the default route runs through them all
-        chain = (self.edge,)
+        chain: tuple[str, ...] = (self.edge,)
         while f"{self.edge}.{len(chain)}_0" in shapes:
             chain = (*chain, f"{self.edge}.{len(chain)}")
         edges = chain if self.route_edges == (EDGE,) else self.route_edges
@@ -273,6 +277,7 @@ class MotorwayWorld:
 
     def lane_width(self, lane: int) -> float:
         """The width (m) of ``lane`` as the simulator has it (before :meth:`setup` returns)."""
+        assert self.sim is not None  # asked from setup on
         return self.sim.lane_shapes()[f"{self.edge}_{lane}"][0]
 
 
@@ -295,7 +300,7 @@ def ego_plant(config: HighwayConfig, geometry: VehicleGeometry, pose: tuple[floa
     )
 
 
-def ego_limits(config) -> tuple[float, float, float]:
+def ego_limits(config: object) -> tuple[float, float, float]:
     """The action box of report 000's car (:func:`ego_plant`, report 000's raw model too): Fx
     per driven wheel within the whole friction circle (N), the steer limit (rad)."""
     p = NonlinearBicycleParams()
@@ -327,13 +332,13 @@ class SurroundView(RoadSensor):
         self.target_lane = 0
         self.ttc_front = self.ttc_rear = INF
         self.gap_front = self.gap_rear = INF
-        self.around: tuple[list, list] = ([], [])
+        self.around: tuple[list[str], list[Row]] = ([], [])
         self.looked = False
-        self._sim = None
+        self._sim: TrafficSim | None = None
         #: (t, speed) at the last observation and the speed's rate of change (m/s^2) since
         self._u_last, self._accel = (-math.inf, 0.0), 0.0
 
-    def setup(self, sim: TrafficSim | None, lanes: dict[int, LanePolyline], plant) -> None:
+    def setup(self, sim: TrafficSim | None, lanes: dict[int, LanePolyline], plant: PosedPlant) -> None:
         """Measure in ``lanes`` (index -> lane; the start lane ``ego_lane``) for ``plant``;
         ``sim`` is what :meth:`sense` and :meth:`push` talk to (None: the sensor is fed by
         hand, through ``sensor.sync``)."""
@@ -341,8 +346,8 @@ class SurroundView(RoadSensor):
         self._sim, self._plant = sim, plant
         self.steady = steady_steer(plant)
         self.lanes = lanes
-        self.road = lanes[c.ego_lane]
-        self.lane_offset = {i: self.road.project(*lane.points[0])[1] for i, lane in lanes.items()}
+        self.road = road = lanes[c.ego_lane]
+        self.lane_offset = {i: road.project(*lane.points[0])[1] for i, lane in lanes.items()}
         outer = [abs(off) + 0.5 * lanes[i].width for i, off in self.lane_offset.items()]
         # beyond the outer lane edge by more than half a car: off the road
         self.road_halfwidth = max(outer) + 0.5 * g.width + 0.5
@@ -352,24 +357,26 @@ class SurroundView(RoadSensor):
         self._u_last, self._accel = (-math.inf, 0.0), 0.0
         self.frame()
         bands = {i: (off - 0.5 * lanes[i].width, off + 0.5 * lanes[i].width) for i, off in self.lane_offset.items()}
-        self.sensor = SurroundSensor(self.road, bands, g.cg_to_front, g.length, g.width, horizon=c.sumo_step)
+        self.sensor = SurroundSensor(road, bands, g.cg_to_front, g.length, g.width, horizon=c.sumo_step)
         if sim is not None:
             # one subscription for the sensor and the traffic log, as far as either looks
             sim.subscribe_surroundings(EGO, max(c.sensor_range, LOG_REACH))
 
     def sense(self, t: float) -> None:
         """The surround sensor's view at a simulator step."""
-        sim = self._sim
+        sim, sensor = self._sim, self.sensor
+        assert sim is not None and sensor is not None  # setup with a simulator
         ids, rows = self.around = sim.surroundings(EGO)
         reach = self.config.sensor_range
         # the subscription reaches farther for the traffic log
-        self.sensor.sync_within(t, ids, rows, sim.front_bumper(EGO) if reach < LOG_REACH else None, reach)
+        sensor.sync_within(t, ids, rows, sim.front_bumper(EGO) if reach < LOG_REACH else None, reach)
         self.looked = False
 
     def look(self, t: float) -> Collision | None:
         """Gaps and TTCs now; a collision the simulator has not reported (yet) when the
         outlines overlap."""
         sensor = self.sensor
+        assert sensor is not None  # setup made it
         curved = self._line is None  # the sensor's stations: where the radius through the ego meets the lane
         if self.looked:  # between simulator steps: the same vehicles, moved on
             sensor.advance(t, self.station if curved else self.s, self.turn)
@@ -394,20 +401,24 @@ class SurroundView(RoadSensor):
         return None
 
     def _overlap(self, other: str) -> Collision | None:
-        box = self.sensor.box(other)
-        x = self._plant.state
+        sensor, plant = self.sensor, self._plant
+        assert sensor is not None and plant is not None  # setup set both
+        box = sensor.box(other)
+        x = plant.state
         g = self.geometry
         off = g.cg_to_front - 0.5 * g.length  # the CG is not the box centre
         ego_box = (x[0] + off * math.cos(x[4]), x[2] + off * math.sin(x[4]), x[4], g.length, g.width)
         if box is not None and boxes_overlap(ego_box, box):
             kind = "outlines overlap (surround sensor)"
-            if other == self.sensor.front.id:  # the ego ran into it
-                return Collision(EGO, other, kind, self.ds, self.sensor.front.speed)
-            return Collision(other, EGO, kind, self.sensor.rear.speed, self.ds)
+            if other == sensor.front.id:  # the ego ran into it
+                return Collision(EGO, other, kind, self.ds, sensor.front.speed)
+            return Collision(other, EGO, kind, sensor.rear.speed, self.ds)
         return None
 
-    def observe(self, obs, t: float) -> None:
+    def observe(self, obs: Observation, t: float) -> None:
         """The tracking task's observation (the references are the manoeuvre's)."""
+        plant = self._plant
+        assert plant is not None  # setup set it
         road_observation(
             obs,
             t,
@@ -415,14 +426,15 @@ class SurroundView(RoadSensor):
             self.ds,
             self.d_road - self.lane_offset[self.target_lane],
             self.dd,
-            self._plant.state,
+            plant.state,
             self.heading_error,
             self.curvature,
         )
         obs.surround = self.sensor
         if self._line is None:  # a curved road: the feed-forward on the target lane, previewed
-            u = self._plant.state[1]
+            u = plant.state[1]
             road = self.road
+            assert road is not None  # setup set it
             if _MEAN_CURVATURE is not None and hasattr(road, "packed"):  # in C on its packed data
                 kappa = _MEAN_CURVATURE(road, self.s, FF_PREVIEW * u)
             else:
@@ -439,7 +451,7 @@ class SurroundView(RoadSensor):
         else:
             obs.steer_ff = 0.0
 
-    def traffic_row(self) -> tuple[tuple[float, float], list, list]:
+    def traffic_row(self) -> tuple[tuple[float, float], list[str], list[Row]]:
         """The ego's box centre and this step's vehicles, for the traffic log."""
         ids, rows = self.around
         return self.box_centre(), ids, rows
@@ -471,7 +483,7 @@ COLUMNS = (
     Column("phase", "-", "manoeuvre phase (0 cruise, 1 lane change, 2 in lane, 3 done)"),
     Column("target_lane", "-", "SUMO index of the target lane (0 right)"),
 )
-#: the order :meth:`ego.scenarios.base.Scenario._act` writes a motorway row in
+#: the order :meth:`ego.scenarios.base.ComposedLoop.act` writes a motorway row in
 ROW = tuple(c.name for c in COLUMNS)
 PLOTS = (
     Plot("e_lat", "lateral_error.png", "lateral error (actual - reference)"),
@@ -483,7 +495,7 @@ PLOTS = (
 )
 
 
-def series(signal_names, signal_units) -> list[Series]:
+def series(signal_names: Sequence[str], signal_units: Mapping[str, str]) -> list[Series]:
     """The recording's panels of every motorway run."""
     return [
         Series("e_lat", "plots/lateral_error/ego", "m", "lateral error (actual - reference)"),

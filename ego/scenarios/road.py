@@ -7,8 +7,9 @@
 * :class:`RoadWorld` - the simulator side: the lanes, the scripted actors updated before
   every simulator step, the traffic log around the ego, the recording's boxes and lanes.
 
-``curve`` and ``lane-centering`` compose them (:meth:`RoadWorld.bind`); the task's one
-observation builder is :func:`ego.scenarios.observe.road_observation`.
+``curve`` and ``lane-centering`` compose them (their loops subclass
+:class:`~ego.scenarios.base.PartsLoop`); the task's one observation builder is
+:func:`ego.scenarios.observe.road_observation`.
 """
 
 from __future__ import annotations
@@ -16,18 +17,36 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Callable
+from typing import Protocol
 
 from ego.lane_frame import LanePolyline, wrap_angle
 from ego.models.cornering import SteadySteer, steady_steer
 from ego.models.geometry import VehicleGeometry
 from ego.native import NATIVE
-from ego.record.base import Scene
-from ego.results.traffic_log import RADIUS, REACH_MARGIN
+from ego.record.base import Recorder
+from ego.results.traffic_log import RADIUS, REACH_MARGIN, TrafficCollector
 from ego.scenarios.base import divergence
 from ego.sim.protocol import TrafficSim
 from ego.sim.types import EGO
 
 _ROAD_FRAME = NATIVE.road_frame if NATIVE is not None else None
+
+
+class PosedPlant(Protocol):
+    """What the road sensor reads of the ego's plant (a :class:`~ego.models.plant.BicyclePlant`,
+    :class:`~ego.models.plant.LaneFramePlant` or an FMU plant): its world state ``(X, u, Y,
+    v, psi, r)``."""
+
+    @property
+    def state(self) -> tuple[float, ...]: ...
+
+
+class ScriptedActor(Protocol):
+    """A vehicle a scenario scripts (:mod:`ego.sim.traffic`'s): started once the simulator
+    holds it, updated before every simulator step from time ``t`` (s)."""
+
+    def start(self, sim: TrafficSim) -> None: ...
+    def update(self, sim: TrafficSim, t: float) -> object: ...
 
 
 class RoadSensor:
@@ -50,11 +69,11 @@ class RoadSensor:
         self.station = 0.0
         #: the plant's steady-state cornering (the curvature feed-forward, ``steer_ff``)
         self.steady = SteadySteer(0.0)
-        self._plant = None
-        self._line_of = None  #: the road ``_line`` belongs to
+        self._plant: PosedPlant | None = None
+        self._line_of: LanePolyline | None = None  #: the road ``_line`` belongs to
         self._line: tuple[float, ...] | None = None  #: its straight segment (LanePolyline.straight)
 
-    def on_lane(self, road: LanePolyline, plant) -> None:
+    def on_lane(self, road: LanePolyline, plant: PosedPlant) -> None:
         """Measure ``plant`` on the one lane ``road``: off the road beyond its edge by more
         than half a car (and 0.5 m)."""
         self.road, self._plant = road, plant
@@ -64,8 +83,9 @@ class RoadSensor:
 
     def frame(self) -> None:
         """Lane-frame position and velocity of the ego's centre of gravity (the road sensor)."""
-        X, u, Y, v, psi, r = self._plant.state
-        road = self.road
+        plant, road = self._plant, self.road
+        assert plant is not None and road is not None  # on_lane / setup set both, then call this
+        X, u, Y, v, psi, r = plant.state
         if road is not self._line_of:  # a new road: is it one straight segment?
             straight = getattr(road, "straight", None)
             self._line_of, self._line = road, straight() if straight is not None else None
@@ -102,7 +122,9 @@ class RoadSensor:
 
     def diverged(self) -> str | None:
         """Why the ego's state is beyond any controller's doing, or None."""
-        state = self._plant.state
+        plant = self._plant
+        assert plant is not None  # the loop checks only after setup
+        state = plant.state
         u, r = state[1], state[5]
         # comparisons are False for NaN, so anything odd falls through to the full check
         if (
@@ -116,13 +138,17 @@ class RoadSensor:
 
     def push(self, sim: TrafficSim) -> None:
         """The ego's pose into the simulator (its drivers see the speed along the road)."""
-        x = self._plant.state
+        plant = self._plant
+        assert plant is not None  # pushed only after setup
+        x = plant.state
         sim.push(EGO, x[0], x[2], x[4], self.ds)
 
     def box_centre(self) -> tuple[float, float]:
         """The centre of the ego's box (world m): ``cg_to_front - length / 2`` ahead of the
         centre of gravity."""
-        x = self._plant.state
+        plant = self._plant
+        assert plant is not None  # asked only after setup
+        x = plant.state
         off = self.geometry.cg_to_front - 0.5 * self.geometry.length
         psi = x[4]
         return x[0] + off * math.cos(psi), x[2] + off * math.sin(psi)
@@ -138,7 +164,7 @@ class RoadWorld:
         self.view = view
         self.sim: TrafficSim | None = None
         self.lanes: dict[str, LanePolyline] = {}
-        self.actors: list = []
+        self.actors: list[ScriptedActor] = []
 
     def setup(self, sim: TrafficSim) -> dict[str, LanePolyline]:
         """The simulator (started) and its lanes; no actors yet."""
@@ -146,37 +172,28 @@ class RoadWorld:
         self.lanes = {lid: LanePolyline(pts, width, lid) for lid, (width, pts) in sim.lane_shapes().items()}
         return self.lanes
 
-    def bind(self, sc) -> None:
-        """Make scenario ``sc``'s simulator hooks this world's and its sensor's (called once,
-        from the scenario's constructor): the divergence check is the sensor's, and before
-        every simulator step the ego is pushed and the actors act."""
-        view, step = self.view, sc.config.sumo_step
-        sc.world, sc.view = self, view
-        sc._check_divergence = view.diverged
-        sc._before_sumo_step = lambda: self.before_step(sc.t - step)
-        sc._setup_traffic_log = self.subscribe
-        sc._log_traffic = lambda: self.log(sc.traffic, sc.t)
-        sc._record_boxes = lambda: self.record(sc.recorder, sc.t)
-        sc._scene = lambda: Scene(lanes=[(lane.width, lane.points) for lane in self.lanes.values()], title=sc.name)
-
     def before_step(self, t: float) -> None:
         """The ego pushed, then the actors for the step from ``t`` (s)."""
         sim = self.sim
+        assert sim is not None  # setup gave the simulator
         self.view.push(sim)
         for actor in self.actors:
             actor.update(sim, t)
 
     def subscribe(self) -> None:
         """The vehicles near the ego, for the traffic log."""
+        assert self.sim is not None  # subscribed after setup
         self.sim.subscribe_surroundings(EGO, RADIUS + REACH_MARGIN)
 
-    def log(self, traffic, t: float) -> None:
+    def log(self, traffic: TrafficCollector, t: float) -> None:
         """This simulator step's vehicles around the ego into the traffic log."""
+        assert self.sim is not None  # logged after setup
         ids, rows = self.sim.surroundings(EGO)
         traffic.add(t, self.view.box_centre(), ids, rows)
 
-    def record(self, recorder, t: float) -> None:
+    def record(self, recorder: Recorder, t: float) -> None:
         """Every vehicle as the simulator has it; the following view keeps the ego in place."""
+        assert self.sim is not None  # recorded after setup
         ids, poses = self.sim.poses()
         view = self.view
         recorder.vehicles(t, ids, poses, (view.X, view.Y))

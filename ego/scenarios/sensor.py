@@ -49,7 +49,9 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from operator import itemgetter
+from typing import Any
 
+from ego.lane_frame import LanePolyline
 from ego.native import NATIVE
 
 INF = math.inf
@@ -60,6 +62,12 @@ _PLACE = None if NATIVE is None else NATIVE.place
 #: and ``_scan_lane``, and ``_nearest``
 _NEAR = None if NATIVE is None else NATIVE.near
 _NEAREST = None if NATIVE is None else NATIVE.nearest
+
+#: a sensed vehicle in the lane frame: (id, s_lo, s_hi, d_lo, d_hi, v_s, v_d, a_s, heading
+#: relative to the lane[, the lane's turn and curvature at its centre on a curved lane])
+Obj = tuple[Any, ...]
+#: a vehicle as the simulator reports it: (centre x, y in m, yaw rad, speed m/s, length, width m)
+Row = tuple[float, ...]
 
 
 class Detection:
@@ -79,7 +87,7 @@ class Detection:
     ) -> None:
         self.id, self.gap, self.speed, self.accel = id, gap, speed, accel
         self.gap0 = gap  #: the gap at the scan that found it
-        self.obj = None
+        self.obj: Obj | None = None
         self.lo = self.hi = self.since = 0.0
         #: on a curved road, the offset (m, + left of the reference lane) of the line its gap
         #: is measured along; None on a straight one
@@ -95,12 +103,12 @@ class Detection:
         self.accel = 0.0
         self.obj = None
 
-    def _found(self, o: tuple, gap: float, lo: float, hi: float, since: float) -> None:
+    def _found(self, o: Obj, gap: float, lo: float, hi: float, since: float) -> None:
         self.id, self.gap, self.speed, self.accel = o[0], gap, o[5], o[7]
         self.gap0 = gap
         self.obj, self.lo, self.hi, self.since = o, lo, hi, since
 
-    def _found_along(self, o: tuple, gap: float, lo: float, hi: float, since: float, d: float, speed: float) -> None:
+    def _found_along(self, o: Obj, gap: float, lo: float, hi: float, since: float, d: float, speed: float) -> None:
         """:meth:`_found` on a curved road: the gap along the line ``d`` (m), ``speed`` the
         object's along that line (m/s)."""
         self.id, self.gap, self.speed, self.accel = o[0], gap, speed, o[7]
@@ -116,7 +124,10 @@ class Detection:
     @property
     def lateral_speed(self) -> float:
         """Its velocity across the lane (m/s, + left)."""
-        return self.obj[6] if self.obj is not None else 0.0
+        if self.obj is None:
+            return 0.0
+        v_d: float = self.obj[6]
+        return v_d
 
     @property
     def overlap(self) -> float:
@@ -124,7 +135,8 @@ class Detection:
         if self.obj is None:
             return 0.0
         shift = self.obj[6] * self.since
-        return min(self.obj[4] + shift, self.hi) - max(self.obj[3] + shift, self.lo)
+        into: float = min(self.obj[4] + shift, self.hi) - max(self.obj[3] + shift, self.lo)
+        return into
 
     @property
     def side(self) -> float:
@@ -176,7 +188,7 @@ class SurroundSensor:
 
     def __init__(
         self,
-        lane,
+        lane: LanePolyline,
         bands: dict[int, tuple[float, float]],
         cg_to_front: float,
         length: float,
@@ -190,7 +202,7 @@ class SurroundSensor:
         #: looks at between two SUMO steps
         self.horizon = horizon
         self.reach = reach
-        self._near: list | None = None
+        self._near: list[Obj] | None = None
         self.lanes: dict[int, tuple[Detection, Detection]] = {}  #: per lane, at the last scan
         self.t_scan = self.s = self.s_scan = 0.0
         self._straight = lane.straight() if hasattr(lane, "straight") else None
@@ -216,15 +228,15 @@ class SurroundSensor:
         #: (id, s_lo, s_hi, d_lo, d_hi, v_s, v_d, a_s, heading relative to the lane[, the
         #: lane's turn and curvature at its centre on a curved lane]) at the last sync,
         #: ordered by s_lo
-        self._objects: list[tuple] = []
+        self._objects: list[Obj] = []
         self._speeds: dict[str, float] = {}  #: id -> v_s at the last sync
-        self._rows: dict[str, tuple] | None = {}  #: id -> world row at the last sync
-        self._seen: tuple[Sequence[str], Sequence[tuple]] = ((), ())  #: ids, world rows at the last sync
+        self._rows: dict[str, Row] | None = {}  #: id -> world row at the last sync
+        self._seen: tuple[Sequence[str], Sequence[Row]] = ((), ())  #: ids, world rows at the last sync
         self._t_sync = 0.0
         self.t = 0.0
         self._ego = (0.0, 0.0, 0.0, 0.0)
 
-    def sync(self, t: float, ids: Sequence[str], rows: Sequence[tuple]) -> None:
+    def sync(self, t: float, ids: Sequence[str], rows: Sequence[Row]) -> None:
         """The vehicles around the ego at a SUMO step, time ``t`` (s): ``rows`` of (centre x,
         y in m, yaw rad, speed m/s, length, width m) as
         :meth:`~ego.sumo.bridge.SumoBridge.surroundings` gives them."""
@@ -232,12 +244,12 @@ class SurroundSensor:
         straight = self._straight
         frame = self.lane.frame
         place = self._place
-        objects = []
+        objects: list[Obj] = []
         add = objects.append
         previous = self._speeds.get
         dt = t - self._t_sync
         rated = dt > 0.0
-        speeds = {}
+        speeds: dict[str, float] = {}
         if straight is not None:  # one segment: the frame is a rotation
             x0, y0, ux, uy, s0, heading = straight
         for vid, (x, y, yaw, v, length, width) in zip(ids, rows):
@@ -272,8 +284,8 @@ class SurroundSensor:
         self._t_sync = t
 
     def sync_within(
-        self, t: float, ids: list[str], rows: list[tuple], front: tuple[float, float] | None, reach: float
-    ) -> tuple[list[str], list[tuple]]:
+        self, t: float, ids: list[str], rows: list[Row], front: tuple[float, float] | None, reach: float
+    ) -> tuple[list[str], list[Row]]:
         """:meth:`sync` of the vehicles whose box centre lies within ``reach`` (m) of ``front``
         (x, y; every vehicle when None); returns their ids and rows. In C when the extension
         is built (``ego._native.place``: the same arithmetic)."""
@@ -383,7 +395,7 @@ class SurroundSensor:
             if det.obj is not None:
                 det.lo, det.hi = ego[2], ego[3]
 
-    def _in_path(self, objects: list, e_lo: float, e_hi: float, own: tuple[float, float]) -> list:
+    def _in_path(self, objects: list[Obj], e_lo: float, e_hi: float, own: tuple[float, float]) -> list[Obj]:
         """Of ``objects``, those in the ego's path at the last scan: overlapping the ego's own
         extent across the lane (``e_lo``, ``e_hi``), or intruding into its lane ``own`` (lo,
         hi) unless moving out of it. A car leaving the lane (a cut-out) stops hiding what is
@@ -422,7 +434,7 @@ class SurroundSensor:
             return det.gap0 + det.speed * since - moved
         return det.gap0 + moved - det.speed * since
 
-    def _nearest(self, objects, lo: float, hi: float, ahead: Detection, behind: Detection) -> None:
+    def _nearest(self, objects: list[Obj], lo: float, hi: float, ahead: Detection, behind: Detection) -> None:
         """Nearest of ``objects`` ahead of and behind the ego overlapping [lo, hi] across the
         lane, at the last scan."""
         since = self.t_scan - self._t_sync
@@ -457,7 +469,16 @@ class SurroundSensor:
         else:
             behind._found(rear, best_behind, lo, hi, since)
 
-    def _nearest_along(self, objects, lo, hi, ahead: Detection, behind: Detection, since: float, along) -> None:
+    def _nearest_along(
+        self,
+        objects: list[Obj],
+        lo: float,
+        hi: float,
+        ahead: Detection,
+        behind: Detection,
+        since: float,
+        along: tuple[float, float, float, float, float],
+    ) -> None:
         """:meth:`_nearest` on a curved lane: each gap the shortest arc between the outlines
         along the lines ``along`` bounds (the innermost and outermost, m), the other car's
         length scaled from its line to that one where it grows there, its speed along it."""
@@ -501,13 +522,13 @@ class SurroundSensor:
                 gap = gap - corner - ego_rear
                 if gap < best_behind:
                     best_behind, rear, d_behind = gap, o, line
-        for det, o, gap, line in ((ahead, front, best_ahead, d_ahead), (behind, rear, best_behind, d_behind)):
-            if o is None:
+        for det, found, gap, line in ((ahead, front, best_ahead, d_ahead), (behind, rear, best_behind, d_behind)):
+            if found is None:
                 det.clear()
             else:
-                kappa = o[10]
-                rate = (1.0 - kappa * line) / (1.0 - kappa * (0.5 * (o[3] + o[4]) + o[6] * since))
-                det._found_along(o, gap, lo, hi, since, line, o[5] * rate)
+                kappa = found[10]
+                rate = (1.0 - kappa * line) / (1.0 - kappa * (0.5 * (found[3] + found[4]) + found[6] * since))
+                det._found_along(found, gap, lo, hi, since, line, found[5] * rate)
 
     def _scan_lane(self, lane: int, band: tuple[float, float]) -> tuple[Detection, Detection]:
         """The nearest vehicles ahead of and behind the ego overlapping ``band`` across the
