@@ -68,8 +68,9 @@ def test_shipped_motorway_scenarios_are_scenario_then_concrete():
         assert cls.__mro__[1] is Scenario, cls
     # (two of its lines are the strict typing's asserts that the view's sensor is set)
     assert len((PACKAGE / "emergency_brake.py").read_text().splitlines()) <= 252
-    # (cut-in's braking criterion is a part, ego.scenarios.envelope.ReachCriterion: wiring it is 11 lines)
-    assert len((PACKAGE / "cut_in.py").read_text().splitlines()) <= 150
+    # (cut-in's braking criterion is a part, ego.scenarios.envelope.ReachCriterion: wiring it is 11
+    # lines; two more are the strict typing's imports)
+    assert len((PACKAGE / "cut_in.py").read_text().splitlines()) <= 152
 
 
 @pytest.mark.sumo
