@@ -90,55 +90,23 @@ def test_a_training_shows_its_progress_and_trains_the_same_model_without_it():
     assert a.keys() == b.keys() and all(np.array_equal(a[k].numpy(), b[k].numpy()) for k in a)
 
 
+def _train_sb3(*args: str) -> None:
+    """scenarios/rl/train_sb3.py in a process of its own (no scoring)."""
+    p = subprocess.run([sys.executable, str(SCRIPT), *args, "--no-score"], capture_output=True, text=True, timeout=900)
+    assert p.returncode == 0, p.stderr
+
+
 @pytest.mark.benchmark  # about a minute of training on a free core: run with -m benchmark
 @pytest.mark.sumo
 @pytest.mark.parametrize(("algo", "steps"), [("ppo", 512), ("sac", 600)])
 def test_a_model_train_sb3_stores_is_the_one_the_page_trains_and_evaluates(algo, steps, tmp_path):
     env_id = "ego/CutIn-v0"
-    p = subprocess.run(
-        [
-            sys.executable,
-            str(SCRIPT),
-            "--env",
-            env_id,
-            "--algo",
-            algo,
-            "--seed",
-            "0",
-            "--steps",
-            str(steps),
-            "--models",
-            str(tmp_path),
-            "--no-score",
-        ],
-        capture_output=True,
-        text=True,
-        timeout=900,
-    )
-    assert p.returncode == 0, p.stderr
+    _train_sb3("--env", env_id, "--algo", algo, "--seed", "0", "--steps", str(steps), "--models", str(tmp_path))
     path = tmp_path / model_file(env_id, algo, 0, steps)
     stored = load(algo, path)
     # trained again in a fresh process of its own (this one's torch may have started unpinned)
     again = tmp_path.parent / f"{tmp_path.name}-again.zip"
-    q = subprocess.run(
-        [
-            sys.executable,
-            str(SCRIPT),
-            "--env",
-            env_id,
-            "--algo",
-            algo,
-            "--steps",
-            str(steps),
-            "--save",
-            str(again),
-            "--no-score",
-        ],
-        capture_output=True,
-        text=True,
-        timeout=900,
-    )
-    assert q.returncode == 0, q.stderr
+    _train_sb3("--env", env_id, "--algo", algo, "--steps", str(steps), "--save", str(again))
     fresh = load(algo, again)
     a, b = stored.policy.state_dict(), fresh.policy.state_dict()
     assert a.keys() == b.keys() and all(np.array_equal(a[k].numpy(), b[k].numpy()) for k in a)
