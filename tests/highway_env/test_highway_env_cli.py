@@ -66,7 +66,7 @@ def test_ego_compare_on_highway_env(tmp_path, capsys):
     [
         (
             ["run", "curve", "-c", "pid", "--backend", "highway-env"],
-            "bad value for --backend: 'highway-env' (scenario curve runs on sumo only)",
+            "bad value for --backend: 'highway-env' (scenario curve needs any_network; backend highway-env lacks it)",
         ),
         (
             ["compare", "platoon", "--controllers", "pid", "--backend", "highway-env", "--out", "{tmp}/x"],
