@@ -134,7 +134,9 @@ def add_run(sub, backends: tuple[str, ...]) -> None:
     )
     run.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     add_backend(
-        run, backends, "traffic simulator (default sumo; highway-env runs emergency-brake, fast-follower and cut-in)"
+        run,
+        backends,
+        "traffic simulator (default sumo); a scenario runs on those with the capabilities it needs (ego list shows both)",
     )
     run.add_argument(
         "--video", metavar="PATH", help="with --backend highway-env: a video of the run (.gif, or .mp4 with ffmpeg)"
