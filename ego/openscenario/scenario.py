@@ -345,7 +345,7 @@ class FileScenario(Scenario):
     file_params: tuple[str, ...] = ()
     config_cls = FileConfig
     network = None
-    backends = ("sumo",)
+    needs = ("any_network",)
     base_scenario = EmergencyBrake.name
     #: requirements the file adds to emergency-brake's (an UN R157 file: no_preventable_collision)
     extra_requirements: tuple[tuple[str, str], ...] = ()
