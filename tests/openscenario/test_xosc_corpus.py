@@ -80,13 +80,13 @@ HAND = [
         "version-1.4",
         sub('revMinor="2"', 'revMinor="4"'),
         "<FileHeader",
-        f"OpenSCENARIO 1.4 is not supported by ego (1.0 to 1.3; see {DOCS})",
+        f"OpenSCENARIO 1.4 is not supported by ego (0.9 and 1.0 to 1.3; see {DOCS})",
     ),
     (
         "version-2",
         sub('revMajor="1"', 'revMajor="2"'),
         "<FileHeader",
-        f"OpenSCENARIO 2.2 is not supported by ego (1.0 to 1.3; see {DOCS})",
+        f"OpenSCENARIO 2.2 is not supported by ego (0.9 and 1.0 to 1.3; see {DOCS})",
     ),
     (
         "no-header",

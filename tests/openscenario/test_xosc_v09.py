@@ -1,0 +1,109 @@
+"""OpenSCENARIO 0.9 files (the reference player's basic_ego, cut-in_internal... examples):
+read as the 1.0 tree ego runs, every error at the 0.9 file's own line. The scenario is
+xosc_v09's cut-in, written once in 0.9 and once by hand in 1.0; its bad forms are in the
+bad-file corpus (test_xosc_corpus.py)."""
+
+from __future__ import annotations
+
+import pytest
+from xosc_scenes import run_scene, starts
+from xosc_v09 import V09, V10, sub, write
+
+from ego.cli import main
+from ego.openscenario.loader import load, read_tree
+from ego.openscenario.scenario import file_listing
+from ego.openscenario.xmltree import ScenarioFileError
+
+
+@pytest.fixture(autouse=True)
+def _cache(tmp_path_factory, monkeypatch):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
+
+
+def _storyboard(sc) -> list[tuple[float, str]]:
+    return [(round(e.t, 6), e.text) for e in sc.events if e.kind == "storyboard"]
+
+
+def test_a_0_9_file_runs_as_its_1_0_counterpart(tmp_path):
+    """The 0.9 cut-in and its hand-written 1.0 twin give the same run in SUMO, event for event
+    and step for step of the scripted car; the times are the scenario's own: Lead, 10 m behind
+    and 5 m/s faster, is 15 m ahead after (10 + 15) / 5 = 5 s; its 2 s lane change and the 1 s
+    delay put the brake 3 s later (one step more: the end is seen at the next step); the 0.9
+    file's rate of -5 brakes at 5 m/s^2, as the 1.0 file's 5."""
+    old, new = run_scene(write(tmp_path), 15.0), run_scene(write(tmp_path, V10, "cut_in_10.xosc"), 15.0)
+    assert _storyboard(old) == _storyboard(new)
+    assert old.status == new.status == "completed"
+    assert "StopTrigger" in old.status_detail
+    cut_in, brake = starts(old, "CutIn"), starts(old, "Brake")
+    assert cut_in == [pytest.approx(5.0, abs=0.1)]
+    assert brake == [pytest.approx(cut_in[0] + 2.0 + 1.0 + 0.1, abs=1e-9)]
+    assert old.story.history["Lead"] == new.story.history["Lead"]
+    lead = old.story.history["Lead"]
+    v = {round(t, 6): speed for t, speed, _ in lead}
+    t0 = brake[0] + 0.5
+    assert v[round(t0, 6)] - v[round(t0 + 1.0, 6)] == pytest.approx(5.0, abs=1e-6)
+
+
+def test_parameters_are_named_without_their_0_9_dollar(tmp_path):
+    """0.9 declares ``$EgoSpeed``, 1.0 ``EgoSpeed``: ``--set`` and ``ego list`` use the 1.0
+    name; a Story's ``owner`` is the story's parameter ``owner``."""
+    path = write(tmp_path)
+    model = load(path, {"EgoSpeed": 25.0})
+    assert list(model.parameters) == ["EgoSpeed", "Behind", "Rate"]
+    assert model.values["EgoSpeed"] == 25.0
+    assert model.stories[0].acts[0].groups[0].actors == ("Lead",)
+    listing = file_listing(str(path))
+    assert listing["supported"] and listing["error"] is None, listing["error"]
+    assert [p["name"] for p in listing["parameters"]] == ["EgoSpeed", "Behind", "Rate"]
+    assert [e["name"] for e in listing["entities"]] == ["Ego", "Lead"]
+
+
+def test_every_element_keeps_its_0_9_line(tmp_path):
+    """The mapped tree's elements stand at the lines of the 0.9 elements they come from (a
+    wrapper 1.0 adds, as TeleportAction around a Position, at its 0.9 element's line)."""
+    path = write(tmp_path)
+    lines = V09.splitlines()
+    root = read_tree(path)
+    ego = root.child("Storyboard").child("Init").child("Actions").all("Private")[0]
+    teleport = ego.children[0].children[0]
+    assert teleport.tag == "TeleportAction"
+    assert "<Position>" in lines[teleport.line - 1]
+    lane = teleport.children[0].children[0]
+    assert lane.tag == "LanePosition" and "<Lane " in lines[lane.line - 1]
+    assert lane.attrs == {"roadId": "0", "laneId": "-3", "offset": "0", "s": "20"}
+    header = root.child("FileHeader")
+    assert (header.attrs["revMajor"], header.attrs["revMinor"]) == ("1", "0")
+
+
+def test_an_event_that_only_quits_ends_the_scenario(tmp_path):
+    """The reference player's ``<Global><EXT_Quit/></Global>`` (its extension: basic_hybrid.xosc)
+    ends the scenario when its event would start: its conditions join the storyboard's
+    StopTrigger."""
+    quit_event = """<Event name="Quit" priority="overwrite">
+              <Action name="QuitAction"><Global><EXT_Quit/></Global></Action>
+              <StartConditions><ConditionGroup>
+                <Condition name="QuitTime" delay="0" edge="rising">
+                  <ByValue><SimulationTime value="3" rule="greater_than"/></ByValue>
+                </Condition>
+              </ConditionGroup></StartConditions>
+            </Event>
+            <Event name="Brake" priority="overwrite">"""
+    path = write(tmp_path, sub('<Event name="Brake" priority="overwrite">', quit_event))
+    sc = run_scene(path, 15.0)
+    assert sc.status == "completed" and "StopTrigger" in sc.status_detail
+    assert sc.t == pytest.approx(3.2, abs=1e-9)  # > 3 at 3.1 s, seen in the step that starts there
+    assert starts(sc, "CutIn") == []
+
+
+def test_a_0_9_error_from_the_1_0_checks_names_the_0_9_line(tmp_path, capsys):
+    """``ego list`` and ``ego run`` give the same one line for a 0.9 file ego refuses."""
+    bad = sub('ds="$Behind"', 'ds="$Behid"')
+    path = write(tmp_path, bad)
+    line = next(i for i, ln in enumerate(bad.splitlines(), 1) if "$Behid" in ln)
+    message = f"{path}:{line}: parameter '$Behid' is not declared (declared: EgoSpeed, Behind, Rate)"
+    with pytest.raises(ScenarioFileError) as exc:
+        load(path)
+    assert str(exc.value) == message
+    assert main(["run", str(path), "-c", "pid"]) == 2
+    assert capsys.readouterr().err == f"ego: error: {message}\n"
+    assert file_listing(str(path))["error"] == message
