@@ -107,3 +107,15 @@ def test_a_0_9_error_from_the_1_0_checks_names_the_0_9_line(tmp_path, capsys):
     assert main(["run", str(path), "-c", "pid"]) == 2
     assert capsys.readouterr().err == f"ego: error: {message}\n"
     assert file_listing(str(path))["error"] == message
+
+
+def test_ego_concrete_writes_a_0_9_file_as_1_0(tmp_path):
+    """``ego concrete`` writes the mapped tree: a 1.0 file (``ParameterDeclarations``,
+    ``TeleportAction``...) that runs as the 0.9 file does."""
+    from ego.openscenario.concrete import write as write_concrete
+
+    path = write(tmp_path)
+    out = write_concrete(path, {"EgoSpeed": 20.0}, tmp_path / "out" / "cut_in_10.xosc")
+    text = out.read_text()
+    assert 'revMajor="1" revMinor="0"' in text and "<TeleportAction>" in text and "<Object name" not in text
+    assert _storyboard(run_scene(out, 15.0)) == _storyboard(run_scene(path, 15.0))
