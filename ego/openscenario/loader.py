@@ -638,6 +638,8 @@ class _Builder:
         if tag == "RelativeObjectPosition":
             # dx and dy are required by the schema; the reference player reads a missing one as 0
             return M.RelativeObjectPosition(self.entity_ref(p), self.num(p, "dx", 0.0), self.num(p, "dy", 0.0), p.line)
+        if tag == "RelativeWorldPosition":
+            return M.RelativeWorldPosition(self.entity_ref(p), self.num(p, "dx"), self.num(p, "dy"), p.line)
         return M.RelativeRoadPosition(self.entity_ref(p), self.num(p, "ds"), self.num(p, "dt"), p.line)
 
     # -- actions ------------------------------------------------------------------------------

@@ -102,8 +102,24 @@ class RelativeObjectPosition:
     line: int
 
 
+@dataclass(frozen=True)
+class RelativeWorldPosition:
+    """``dx``, ``dy`` along the world's x and y axes from the entity's reference point."""
+
+    entity: str
+    dx: float
+    dy: float
+    line: int
+
+
 Position = (
-    WorldPosition | LanePosition | RoadPosition | RelativeLanePosition | RelativeRoadPosition | RelativeObjectPosition
+    WorldPosition
+    | LanePosition
+    | RoadPosition
+    | RelativeLanePosition
+    | RelativeRoadPosition
+    | RelativeObjectPosition
+    | RelativeWorldPosition
 )
 
 

@@ -237,6 +237,10 @@ def _place(pos: M.Position, roads: RoadMap, centre: dict) -> tuple:
     if isinstance(pos, M.RelativeObjectPosition):
         # at the start the entity lies along its lane: dx along it, dy across
         return _lane_at(edge, lane, off + pos.dy, s + pos.dx)
+    if isinstance(pos, M.RelativeWorldPosition):
+        # the entity's reference point in the world, moved along the world's axes, on its nearest lane
+        x, y = LanePolyline(lane.shape, lane.width, lane.id).offset_point(s, off)
+        return roads.nearest_lane(x + pos.dx, y + pos.dy)
     return _lane_at(edge, lane, off + pos.dt, s + pos.ds)
 
 
@@ -788,11 +792,14 @@ class StoryDriver:
             x, y = poly.offset_point(pos, d_extra)
             return x, y, poly.heading_at(pos)
         e = states[position.entity]
-        if isinstance(position, M.RelativeObjectPosition):
-            # from the entity's reference point (its box centre less the box's centre x)
+        if isinstance(position, (M.RelativeObjectPosition, M.RelativeWorldPosition)):
+            # from the entity's reference point (its box centre less the box's centre x): dx, dy
+            # in the entity's own frame (RelativeObjectPosition) or along the world's axes
             back = self.board.scenario.entities[position.entity].vehicle.center_x
             c, s_ = math.cos(e.yaw), math.sin(e.yaw)
             rx, ry = e.x - back * c, e.y - back * s_
+            if isinstance(position, M.RelativeWorldPosition):
+                return rx + position.dx, ry + position.dy, e.yaw
             return rx + c * position.dx - s_ * position.dy, ry + s_ * position.dx + c * position.dy, e.yaw
         if isinstance(position, M.RelativeLanePosition):
             s, d = e.s + position.ds, self.lane_centre(0, e.d, position.dlane) + position.offset

@@ -15,6 +15,7 @@ POSITIONS = (
     "RelativeLanePosition",
     "RelativeRoadPosition",
     "RelativeObjectPosition",
+    "RelativeWorldPosition",
 )
 
 # -- the file -------------------------------------------------------------------------------
@@ -228,16 +229,23 @@ declare(
         "a file error at the `TeleportAction`'s line; `laneId` 0 is the reference line (OpenDRIVE's lane 0: "
         "`offset` is `t`); every road position of the storyboard (actions, conditions) must name a lane of the "
         "network, checked before the run; `Orientation` accepted, the lane's heading is used; "
-        "`WorldPosition` places on the nearest lane; `dsLane`, `RoutePosition`, `GeoPosition`, "
-        "`RelativeWorldPosition`, `TrajectoryPosition` refused"
+        "`WorldPosition` places on the nearest lane; `RelativeWorldPosition`: `dx`, `dy` along the world's x and "
+        "y axes from the entity's reference point, on the nearest lane (its heading the entity's); `dsLane`, "
+        "`RoutePosition`, `GeoPosition`, `TrajectoryPosition` refused"
     ),
     label="`LanePosition`, `RoadPosition`, `WorldPosition`, `RelativeLanePosition` (`ds`), `RelativeRoadPosition`,"
-    " `RelativeObjectPosition`",
+    " `RelativeObjectPosition`, `RelativeWorldPosition`",
     also=POSITIONS[:1] + POSITIONS[2:],
     section="storyboard",
 )
 declare("WorldPosition")
-for _position in ("RoadPosition", "RelativeLanePosition", "RelativeRoadPosition", "RelativeObjectPosition"):
+for _position in (
+    "RoadPosition",
+    "RelativeLanePosition",
+    "RelativeRoadPosition",
+    "RelativeObjectPosition",
+    "RelativeWorldPosition",
+):
     declare(_position, contains=("Orientation",))
 declare("Orientation")
 declare(

@@ -741,10 +741,10 @@ def _sg_cases():
             un("LateralDistanceAction"),
         ),
         (
-            "sg-relative-world",
-            lambda: base(position=xosc.RelativeWorldPosition("Lead", -30, 0, 0)),
+            "sg-relative-world-unknown",
+            lambda: base(position=xosc.RelativeWorldPosition("Truck", -30, 0, 0)),
             "<RelativeWorldPosition",
-            un("RelativeWorldPosition"),
+            "unknown entity 'Truck' in <RelativeWorldPosition> (entities: Ego, Lead)",
         ),
         ("sg-geo", lambda: base(position=xosc.GeoPosition(48.1, 11.5)), "<GeoPosition", un("GeoPosition")),
         (
@@ -832,8 +832,19 @@ def v09(old: str, new: str) -> str:
 
 
 RULE_09 = 'freespace="false" rule="greater_than"'
-#: bad forms of the OpenSCENARIO 0.9 cut-in (tests/openscenario/xosc_v09.py): (id, text, marker, message)
+#: bad forms of the cut-in of tests/openscenario/xosc_v09.py (its OpenSCENARIO 0.9 file, one of its 1.0 twin):
+#: (id, text, marker, message)
 V09 = [
+    (
+        "relative-world-no-dy",
+        xosc_v09.sub(
+            '<RelativeLanePosition entityRef="Ego" dLane="1" ds="$Behind"/>',
+            '<RelativeWorldPosition entityRef="Ego" dx="-10"/>',
+            xosc_v09.V10,
+        ),
+        "<RelativeWorldPosition",
+        "<RelativeWorldPosition> needs attribute dy",
+    ),
     (
         "v09-meeting",
         v09(
