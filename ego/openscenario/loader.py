@@ -638,6 +638,14 @@ class _Builder:
         if tag == "RelativeObjectPosition":
             # dx and dy are required by the schema; the reference player reads a missing one as 0
             return M.RelativeObjectPosition(self.entity_ref(p), self.num(p, "dx", 0.0), self.num(p, "dy", 0.0), p.line)
+        if tag == "TrajectoryPosition":
+            self.one(self.one(p, "TrajectoryRef"), "Trajectory")  # a catalog trajectory is refused by the check
+            trajectory = ACTIONS["FollowTrajectoryAction"].build(self, p)
+            if trajectory.segments and trajectory.segments[0].start is None:
+                raise self.error(
+                    p, "a <TrajectoryPosition>'s clothoid spline needs the <PositionStart> of its first <Segment>"
+                )
+            return M.TrajectoryPosition(trajectory, self.num(p, "s", nonneg=True), self.num(p, "t", 0.0), p.line)
         if tag == "RelativeWorldPosition":
             return M.RelativeWorldPosition(self.entity_ref(p), self.num(p, "dx"), self.num(p, "dy"), p.line)
         return M.RelativeRoadPosition(self.entity_ref(p), self.num(p, "ds"), self.num(p, "dt"), p.line)

@@ -112,6 +112,17 @@ class RelativeWorldPosition:
     line: int
 
 
+@dataclass(frozen=True)
+class TrajectoryPosition:
+    """``s`` along a trajectory's shape and ``t`` to its left (OpenSCENARIO 1.1); the shape is
+    a FollowTrajectoryAction's (its polyline, clothoids or NURBS), read by the same reader."""
+
+    trajectory: FollowTrajectoryAction
+    s: float
+    t: float
+    line: int
+
+
 Position = (
     WorldPosition
     | LanePosition
@@ -120,6 +131,7 @@ Position = (
     | RelativeRoadPosition
     | RelativeObjectPosition
     | RelativeWorldPosition
+    | TrajectoryPosition
 )
 
 

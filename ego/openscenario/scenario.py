@@ -36,6 +36,7 @@ import numpy as np
 
 from ego.lane_frame import LanePolyline
 from ego.openscenario import model as M
+from ego.openscenario.actions import along_path, trajectory_points
 from ego.openscenario.dynamics import Transition
 from ego.openscenario.kinematic import Kinematic
 from ego.openscenario.loader import declared_parameters, header_description, load
@@ -227,6 +228,10 @@ def _place(pos: M.Position, roads: RoadMap, centre: dict) -> tuple:
         return _lane_at(edge, lane1, d, s)
     if isinstance(pos, M.WorldPosition):
         return roads.nearest_lane(pos.x, pos.y)
+    if isinstance(pos, M.TrajectoryPosition):
+        xy, _ = trajectory_points(pos.trajectory, lambda p: _absolute_xy(p, roads))
+        x, y, _ = along_path(xy, pos.s, pos.t)
+        return roads.nearest_lane(x, y)
     lane, s, off = centre[pos.entity]
     edge = roads.edges[lane.edge]
     if isinstance(pos, M.RelativeLanePosition):
@@ -242,6 +247,26 @@ def _place(pos: M.Position, roads: RoadMap, centre: dict) -> tuple:
         x, y = LanePolyline(lane.shape, lane.width, lane.id).offset_point(s, off)
         return roads.nearest_lane(x + pos.dx, y + pos.dy)
     return _lane_at(edge, lane, off + pos.dt, s + pos.ds)
+
+
+def _absolute_xy(pos: M.Position, roads: RoadMap) -> tuple[float, float, float]:
+    """World (x, y, heading) of a position that names no entity (a trajectory's point in Init)."""
+    if isinstance(pos, M.WorldPosition):
+        lane, s, _ = roads.nearest_lane(pos.x, pos.y)
+        heading = LanePolyline(lane.shape, lane.width, lane.id).heading_at(s) if pos.h is None else pos.h
+        return pos.x, pos.y, heading
+    if isinstance(pos, (M.LanePosition, M.RoadPosition)):
+        lane_id, d = (pos.lane, pos.offset) if isinstance(pos, M.LanePosition) else (-1, None)
+        lane, s = roads.lane_position(pos.road, lane_id, pos.s)
+        if d is None:  # the reference line is the left edge of lane -1; t from it, + left
+            d = pos.t + 0.5 * lane.width  # type: ignore[union-attr]
+        poly = LanePolyline(lane.shape, lane.width, lane.id)
+        x, y = poly.offset_point(s, d)
+        return x, y, poly.heading_at(s)
+    raise ValueError(
+        f"a <TrajectoryPosition> in <Init> needs a trajectory of world, lane and road positions (its "
+        f"{type(pos).__name__} names an entity; see {DOCS})"
+    )
 
 
 def _lane_at(edge, lane, d: float, s: float) -> tuple:
@@ -791,6 +816,9 @@ class StoryDriver:
             poly = LanePolyline(lane.shape, lane.width, lane.id)
             x, y = poly.offset_point(pos, d_extra)
             return x, y, poly.heading_at(pos)
+        if isinstance(position, M.TrajectoryPosition):
+            xy, _ = trajectory_points(position.trajectory, lambda p: self.position_xy(p, states))
+            return along_path(xy, position.s, position.t)
         e = states[position.entity]
         if isinstance(position, (M.RelativeObjectPosition, M.RelativeWorldPosition)):
             # from the entity's reference point (its box centre less the box's centre x): dx, dy

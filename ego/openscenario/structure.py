@@ -16,6 +16,7 @@ POSITIONS = (
     "RelativeRoadPosition",
     "RelativeObjectPosition",
     "RelativeWorldPosition",
+    "TrajectoryPosition",
 )
 
 # -- the file -------------------------------------------------------------------------------
@@ -230,11 +231,14 @@ declare(
         "`offset` is `t`); every road position of the storyboard (actions, conditions) must name a lane of the "
         "network, checked before the run; `Orientation` accepted, the lane's heading is used; "
         "`WorldPosition` places on the nearest lane; `RelativeWorldPosition`: `dx`, `dy` along the world's x and "
-        "y axes from the entity's reference point, on the nearest lane (its heading the entity's); `dsLane`, "
-        "`RoutePosition`, `GeoPosition`, `TrajectoryPosition` refused"
+        "y axes from the entity's reference point, on the nearest lane (its heading the entity's); "
+        "`TrajectoryPosition` (1.1): `s` along the shape of its `TrajectoryRef`'s `Trajectory` (a polyline, "
+        "clothoids or a NURBS, read as a `FollowTrajectoryAction`'s; a clothoid spline's first segment needs "
+        "its `PositionStart`) and `t` to its left, on the nearest lane (in `Init` the trajectory's own "
+        "positions must be world, lane or road positions); `dsLane`, `RoutePosition`, `GeoPosition` refused"
     ),
     label="`LanePosition`, `RoadPosition`, `WorldPosition`, `RelativeLanePosition` (`ds`), `RelativeRoadPosition`,"
-    " `RelativeObjectPosition`, `RelativeWorldPosition`",
+    " `RelativeObjectPosition`, `RelativeWorldPosition`, `TrajectoryPosition`",
     also=POSITIONS[:1] + POSITIONS[2:],
     section="storyboard",
 )
@@ -247,6 +251,7 @@ for _position in (
     "RelativeWorldPosition",
 ):
     declare(_position, contains=("Orientation",))
+declare("TrajectoryPosition", contains=("Orientation", "TrajectoryRef"))
 declare("Orientation")
 declare(
     "Storyboard",

@@ -846,6 +846,42 @@ V09 = [
         "<RelativeWorldPosition> needs attribute dy",
     ),
     (
+        "trajectory-position-relative-in-init",
+        xosc_v09.sub(
+            '<RelativeLanePosition entityRef="Ego" dLane="1" ds="$Behind"/>',
+            '<TrajectoryPosition s="5"><TrajectoryRef><Trajectory name="T" closed="false"><Shape><Polyline>'
+            '<Vertex><Position><RelativeObjectPosition entityRef="Ego" dx="-10" dy="3.5"/></Position></Vertex>'
+            '<Vertex><Position><WorldPosition x="100" y="0"/></Position></Vertex>'
+            "</Polyline></Shape></Trajectory></TrajectoryRef></TrajectoryPosition>",
+            xosc_v09.V10,
+        ),
+        "<TrajectoryPosition",
+        "a <TrajectoryPosition> in <Init> needs a trajectory of world, lane and road positions (its "
+        f"RelativeObjectPosition names an entity; see {DOCS})",
+    ),
+    (
+        "trajectory-position-spline-without-start",
+        xosc_v09.sub(
+            '<RelativeLanePosition entityRef="Ego" dLane="1" ds="$Behind"/>',
+            '<TrajectoryPosition s="5"><TrajectoryRef><Trajectory name="T" closed="false"><Shape><ClothoidSpline>'
+            '<Segment curvatureStart="0" curvatureEnd="0.01" length="20"/>'
+            "</ClothoidSpline></Shape></Trajectory></TrajectoryRef></TrajectoryPosition>",
+            xosc_v09.V10,
+        ),
+        "<TrajectoryPosition",
+        "a <TrajectoryPosition>'s clothoid spline needs the <PositionStart> of its first <Segment>",
+    ),
+    (
+        "trajectory-position-no-ref",
+        xosc_v09.sub(
+            '<RelativeLanePosition entityRef="Ego" dLane="1" ds="$Behind"/>',
+            '<TrajectoryPosition s="5"/>',
+            xosc_v09.V10,
+        ),
+        "<TrajectoryPosition",
+        "<TrajectoryPosition> needs exactly one <TrajectoryRef> (found 0)",
+    ),
+    (
         "v09-meeting",
         v09(
             '<Action name="EgoSpeed">',
@@ -960,7 +996,7 @@ def test_openscenario_0_9(case, tmp_path, capsys):
 
 
 def test_corpus_size():
-    assert len(HAND) + len(SG) + len(V09) >= 97
+    assert len(HAND) + len(SG) + len(V09) >= 100
 
 
 def test_generated_valid_file_runs(tmp_path, capsys):

@@ -7,6 +7,7 @@ world's axes are not the road's."""
 from __future__ import annotations
 
 import math
+import shutil
 
 import pytest
 from xosc_scenes import SHIPPED, event, run_scene, starts, trigger, write_file
@@ -95,3 +96,86 @@ def test_a_position_relative_to_a_moving_entity_in_world_axes(tmp_path):
     assert starts(sc, "World") == [pytest.approx(1.9, abs=1e-9)]
     assert starts(sc, "Object") == [pytest.approx(1.9, abs=1e-9)]
     assert starts(sc, "Off") == []
+
+
+# -- TrajectoryPosition (1.1), on straight3.xodr: lane -2's centre is y = 0, road s is x ----------
+POLYLINE = (
+    "<Polyline>"
+    '<Vertex><Position><WorldPosition x="0" y="-10"/></Position></Vertex>'
+    '<Vertex><Position><WorldPosition x="60" y="70"/></Position></Vertex>'
+    "</Polyline>"
+)
+#: a quarter circle of radius 100 m from the origin heading +x, turning left
+CLOTHOID = (
+    f'<Clothoid curvature="0.01" curvatureDot="0" length="{50 * math.pi!r}">'
+    '<Position><WorldPosition x="0" y="0" h="0"/></Position></Clothoid>'
+)
+
+
+def trajectory_position(shape: str, s: float, t: float) -> str:
+    return (
+        f'<TrajectoryPosition s="{s!r}" t="{t!r}"><TrajectoryRef><Trajectory name="T" closed="false">'
+        f"<Shape>{shape}</Shape></Trajectory></TrajectoryRef></TrajectoryPosition>"
+    )
+
+
+def _straight3(tmp_path, starts_, events, replace=None):
+    shutil.copy(SHIPPED / "straight3.xodr", tmp_path / "straight3.xodr")
+    path = write_file(tmp_path / "scene.xosc", "straight3.xodr", starts_, events)
+    if replace is not None:
+        text = path.read_text()
+        assert text.count(replace[0]) == 1, replace[0]
+        path.write_text(text.replace(*replace))
+    return path
+
+
+@pytest.mark.parametrize(
+    ("shape", "s", "t"),
+    [
+        # the polyline heads (0.6, 0.8): 50 m along it is (30, 30); t = -50 (right of it) adds (40, -30)
+        (POLYLINE, 50.0, -50.0),
+        # 45 degrees round the circle (s = 25 pi) is (100 sin 45, 100 (1 - cos 45)); its left normal is
+        # (-sin 45, cos 45), so t = -100 (sqrt 2 - 1) is y = 0, x = 100 sin 45 + 100 (sqrt 2 - 1) sin 45 = 100
+        (CLOTHOID, 25 * math.pi, -100 * (math.sqrt(2) - 1)),
+    ],
+    ids=["polyline", "clothoid"],
+)
+def test_an_init_start_on_a_trajectory(tmp_path, shape, s, t):
+    """B starts at a TrajectoryPosition: on lane -2 at the hand-computed x (70 m on the polyline,
+    100 m on the arc)."""
+    lane_b = '<LanePosition roadId="0" laneId="-1" s="999.0" offset="0"></LanePosition>'
+    path = _straight3(
+        tmp_path,
+        [("Ego", "0", -3, 20.0, 10.0, ""), ("B", "0", -1, 999.0, 10.0, "")],
+        [],
+        (lane_b, trajectory_position(shape, s, t)),
+    )
+    roads = RoadMap(network_file(tmp_path / "straight3.xodr"), converted=True)
+    b = placements(load(path), roads)["B"]
+    lane2, _ = roads.lane_position("0", -2, 10.0)
+    assert (b.edge, b.index) == (lane2.edge, lane2.index)
+    expected = 70.0 if shape == POLYLINE else 100.0
+    assert b.front - 2.25 == pytest.approx(expected, abs=1e-3)
+    assert b.offset == pytest.approx(0.0, abs=1e-3)
+
+
+def test_a_position_on_a_trajectory_during_the_run(tmp_path):
+    """B (lane -2, s = 20, 10 m/s) reaches the polyline's point (70, 0) (within 0.5 m) once
+    20 + 10 t >= 69.5: first at the storyboard step t = 5.0."""
+    reach = (
+        '<Condition name="r" delay="0" conditionEdge="none"><ByEntityCondition><TriggeringEntities '
+        'triggeringEntitiesRule="any"><EntityRef entityRef="B"/></TriggeringEntities><EntityCondition>'
+        f'<ReachPositionCondition tolerance="0.5"><Position>{trajectory_position(POLYLINE, 50.0, -50.0)}</Position>'
+        "</ReachPositionCondition></EntityCondition></ByEntityCondition></Condition>"
+    )
+    noop = (
+        '<LongitudinalAction><SpeedAction><SpeedActionDynamics dynamicsShape="step" value="0" dynamicsDimension="time"/>'
+        '<SpeedActionTarget><AbsoluteTargetSpeed value="10"/></SpeedActionTarget></SpeedAction></LongitudinalAction>'
+    )
+    path = _straight3(
+        tmp_path,
+        [("Ego", "0", -3, 20.0, 10.0, ""), ("B", "0", -2, 20.0, 10.0, "")],
+        [event("Reach", "Ego", noop, trigger([reach]))],
+    )
+    sc = run_scene(path, 6.0)
+    assert starts(sc, "Reach") == [pytest.approx(5.0, abs=1e-9)]
