@@ -97,24 +97,25 @@ def elements(root: Node) -> list[tuple[str, int, bool]]:
 
 
 @lru_cache(maxsize=32)
-def _read(path: str, mtime: float, size: int) -> Node:
-    return _as_10(path, parse_file(path))
+def _read(path: str, mtime: float, size: int, lenient: bool) -> Node:
+    return _as_10(path, parse_file(path), lenient)
 
 
-def _as_10(path: str | os.PathLike, root: Node) -> Node:
+def _as_10(path: str | os.PathLike, root: Node, lenient: bool = False) -> Node:
     """The file's tree as ego reads it: an OpenSCENARIO 0.9 file mapped onto 1.0
     (:mod:`ego.openscenario.v09`), each element at its line of the 0.9 file."""
-    return v09.migrate(path, root) if v09.is_09(root) else root
+    return v09.migrate(path, root, lenient) if v09.is_09(root) else root
 
 
-def read_tree(path: str | os.PathLike) -> Node:
-    """The parsed file (cached by path, mtime and size: sweeps resolve a file many times)."""
+def read_tree(path: str | os.PathLike, lenient: bool = False) -> Node:
+    """The parsed file (cached by path, mtime and size: sweeps resolve a file many times);
+    ``lenient``: a 0.9 element the mapping refuses stays in the tree as it is (``ego list``)."""
     p = Path(path)
     try:
         st = p.stat()
     except OSError:
-        return _as_10(p, parse_file(p))  # parse_file names the problem
-    return _read(str(resolved(p, "scenario file")), st.st_mtime, st.st_size)
+        return _as_10(p, parse_file(p), lenient)  # parse_file names the problem
+    return _read(str(resolved(p, "scenario file")), st.st_mtime, st.st_size, lenient)
 
 
 TYPES = ("double", "integer", "unsignedInt", "unsignedShort", "int", "string", "boolean", "dateTime")

@@ -1147,7 +1147,7 @@ def file_listing(path: str, ego: str = "") -> dict:
     from ego.openscenario.loader import _declarations, elements, read_tree
     from ego.params import describe
 
-    root = read_tree(path)
+    root = read_tree(path, lenient=True)  # a 0.9 element ego refuses is listed as it is
     try:
         params = declared_parameters(path)
     except ScenarioFileError:  # refused (the check below names why): its own declarations if readable

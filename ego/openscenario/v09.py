@@ -68,7 +68,6 @@ DRIVER = Rule("Controller", same("name"), "driver")
 HOLDS_POSITION = {"Position": Rule("Position", kids="position")}
 DISTANCE_ACTION = {"object": "entityRef", "distance": "distance", "freespace": "freespace"}
 ENTITY_REF = Rule("EntityRef", {"name": "entityRef"})
-TRIGGER = Rule("", kids="trigger")  # Start/End/StartConditions: replaced by the trigger they become
 
 #: context -> 0.9 tag -> its rule ("special" rules are methods of :class:`_Migration`)
 CONTEXTS: dict[str, dict[str, Rule]] = {
@@ -226,12 +225,20 @@ CONTEXTS: dict[str, dict[str, Rule]] = {
     "paramaction": {"Set": Rule("SetAction", same("value")), "Modify": Rule("ModifyAction", kids="modify")},
     "modify": {"Rule": Rule("Rule", kids="modrule")},
     "modrule": {"Add": Rule("AddValue", same("value")), "Multiply": Rule("MultiplyByValue", same("value"))},
+    "act": {
+        "Sequence": Rule("ManeuverGroup", {"numberOfExecutions": "maximumExecutionCount", "name": "name"}, "sequence")
+    },
     "sequence": {
         "Actors": Rule("Actors", kids="actors", fixed={"selectTriggeringEntities": "false"}),
         "CatalogReference": CATREF,
         "Maneuver": Rule("Maneuver", same("name"), "maneuver"),
     },
     "actors": {"Entity": ENTITY_REF},
+    "conditions": {
+        "Start": Rule("StartTrigger", kids="trigger"),
+        "End": Rule("StopTrigger", kids="trigger"),
+        "Cancel": Rule("StopTrigger", kids="trigger"),
+    },
     "maneuver": {"ParameterDeclaration": PARAMS},
     "action": {"Global": Rule("GlobalAction", kids="global"), "Private": Rule("PrivateAction", kids="paction")},
     # -- conditions ---------------------------------------------------------------------------
@@ -316,16 +323,20 @@ def is_09(root: Node) -> bool:
     )
 
 
-def migrate(path: str | os.PathLike, root: Node) -> Node:
-    """The 1.0 tree of the 0.9 file ``path`` (its root ``root``), each element at its 0.9 line."""
-    return _Migration(path).file(root)
+def migrate(path: str | os.PathLike, root: Node, lenient: bool = False) -> Node:
+    """The 1.0 tree of the 0.9 file ``path`` (its root ``root``), each element at its 0.9 line.
+    An element the mapping refuses is a :class:`ScenarioFileError`; with ``lenient`` (``ego
+    list``: every element listed, supported or not) it stays as it is, its 0.9 subtree unmapped."""
+    return _Migration(path, lenient).file(root)
 
 
 class _Migration:
-    def __init__(self, path: str | os.PathLike) -> None:
-        self.path = path
-        #: the condition groups of events that only quit (the reference player's EXT_Quit)
-        self.quit_groups: list[Node] = []
+    def __init__(self, path: str | os.PathLike, lenient: bool = False) -> None:
+        self.path, self.lenient = path, lenient
+        #: the storyboard's stop conditions: EndConditions, and those of events that only quit
+        #: (the reference player's EXT_Quit)
+        self.stop_groups: list[Node] = []
+        self.stop_line = 0
 
     def refuse(self, node: Node, why: str = "") -> ScenarioFileError:
         return ScenarioFileError(
@@ -336,15 +347,22 @@ class _Migration:
     def kids(self, node: Node, context: str) -> list[Node]:
         out: list[Node] = []
         for c in node.children:
-            special = getattr(self, f"special_{context}_{c.tag}", None)
-            if special is not None:
-                out += special(c)
-                continue
-            rule = CONTEXTS.get(context, {}).get(c.tag)
-            if rule is None:
-                raise self.refuse(c)
-            out += self.apply(rule, c)
+            try:
+                out += self.child(c, context)
+            except ScenarioFileError:
+                if not self.lenient:
+                    raise
+                out.append(c)  # listed as it is: its 0.9 element, not supported
         return out
+
+    def child(self, c: Node, context: str) -> list[Node]:
+        special = getattr(self, f"special_{context}_{c.tag}", None)
+        if special is not None:
+            return special(c)
+        rule = CONTEXTS.get(context, {}).get(c.tag)
+        if rule is None:
+            raise self.refuse(c)
+        return self.apply(rule, c)
 
     def apply(self, rule: Rule, node: Node) -> list[Node]:
         kids = self.kids(node, rule.kids) if rule.kids else self.none(node)
@@ -386,37 +404,28 @@ class _Migration:
     def file(self, root: Node) -> Node:
         if root.tag != "OpenSCENARIO":
             raise self.refuse(root)
-        kids: list[Node] = []
-        for c in root.children:
-            if c.tag == "FileHeader":
-                header = {k: v for k, v in c.attrs.items() if k in ("date", "description", "author")}
-                kids.append(Node("FileHeader", {"revMajor": "1", "revMinor": "0", **header}, c.line))
-            elif c.tag == "Storyboard":
-                kids.append(self.storyboard(c))
-            else:
-                kids += self.kids(Node(root.tag, {}, root.line, [c]), "file")
-        return Node("OpenSCENARIO", dict(root.attrs), root.line, kids)
+        return Node("OpenSCENARIO", dict(root.attrs), root.line, self.kids(root, "file"))
 
-    def storyboard(self, node: Node) -> Node:
+    def special_file_FileHeader(self, node: Node) -> list[Node]:
+        header = {k: v for k, v in node.attrs.items() if k in ("date", "description", "author")}
+        return [Node("FileHeader", {"revMajor": "1", "revMinor": "0", **header}, node.line)]
+
+    def special_file_Storyboard(self, node: Node) -> list[Node]:
         """Init and the stories; ``EndConditions`` (``End`` in the reference player's files) and
         the conditions of events that only quit are the storyboard's StopTrigger."""
-        kids: list[Node] = []
-        stop: list[Node] = []
-        stop_line = node.line
-        for c in node.children:
-            if c.tag == "Story":
-                kids.append(self.story(c))
-            elif c.tag in ("EndConditions", "End"):
-                stop += self.kids(c, "trigger")
-                stop_line = c.line
-            else:
-                kids += self.kids(Node(node.tag, {}, node.line, [c]), "storyboard")
-        stop += self.quit_groups
-        if stop:
-            kids.append(Node("StopTrigger", {}, stop_line, stop))
-        return Node("Storyboard", {}, node.line, kids)
+        kids = self.kids(node, "storyboard")
+        if self.stop_groups:
+            kids.append(Node("StopTrigger", {}, self.stop_line or node.line, self.stop_groups))
+        return [Node("Storyboard", {}, node.line, kids)]
 
-    def story(self, node: Node) -> Node:
+    def special_storyboard_EndConditions(self, node: Node) -> list[Node]:
+        self.stop_groups = self.kids(node, "trigger") + self.stop_groups
+        self.stop_line = node.line
+        return []
+
+    special_storyboard_End = special_storyboard_EndConditions
+
+    def special_storyboard_Story(self, node: Node) -> list[Node]:
         """A Story; its ``owner`` (0.9) is the story's parameter ``owner`` (``$owner`` in it),
         as the ASAM migration declares it."""
         kids: list[Node] = []
@@ -424,36 +433,21 @@ class _Migration:
         if owner:
             decl = Node("ParameterDeclaration", {"name": "owner", "parameterType": "string", "value": owner}, node.line)
             kids.append(Node("ParameterDeclarations", {}, node.line, [decl]))
-        for c in node.children:
-            if c.tag != "Act":
-                raise self.refuse(c)
-            kids.append(self.act(c))
-        return Node("Story", self.attrs(node, same("name")), node.line, kids)
+        kids += self.kids(node, "story")
+        return [Node("Story", self.attrs(node, same("name")), node.line, kids)]
 
-    def act(self, node: Node) -> Node:
+    def special_story_Act(self, node: Node) -> list[Node]:
         """An Act: its Sequences are ManeuverGroups, its ``Conditions/Start`` the StartTrigger,
         ``End`` and ``Cancel`` together its StopTrigger (1.0 has one)."""
-        kids: list[Node] = []
-        for c in node.children:
-            if c.tag == "Sequence":
-                rule = Rule(
-                    "ManeuverGroup", {"numberOfExecutions": "maximumExecutionCount", "name": "name"}, "sequence"
-                )
-                kids += self.apply(rule, c)
-            elif c.tag == "Conditions":
-                stop: list[Node] = []
-                for t in c.children:
-                    if t.tag == "Start":
-                        kids.append(Node("StartTrigger", {}, t.line, self.kids(t, "trigger")))
-                    elif t.tag in ("End", "Cancel"):
-                        stop += [Node("StopTrigger", {}, t.line, self.kids(t, "trigger"))]
-                    else:
-                        raise self.refuse(t)
-                if stop:
-                    kids.append(Node("StopTrigger", {}, stop[0].line, [g for s in stop for g in s.children]))
-            else:
-                raise self.refuse(c)
-        return Node("Act", self.attrs(node, same("name")), node.line, kids)
+        return [Node("Act", self.attrs(node, same("name")), node.line, self.kids(node, "act"))]
+
+    def special_act_Conditions(self, node: Node) -> list[Node]:
+        out = self.kids(node, "conditions")
+        stops = [t for t in out if t.tag == "StopTrigger"]
+        if len(stops) > 1:  # End and Cancel: one StopTrigger (OR of their groups)
+            merged = Node("StopTrigger", {}, stops[0].line, [g for t in stops for g in t.children])
+            out = [t for t in out if t.tag != "StopTrigger"] + [merged]
+        return out
 
     def special_maneuver_Event(self, node: Node) -> list[Node]:
         """An Event; one whose actions are all the reference player's ``EXT_Quit`` (esmini's
@@ -469,7 +463,7 @@ class _Migration:
                     raise self.refuse(q.children[0].children[0])
             for c in node.children:
                 if c.tag == "StartConditions":
-                    self.quit_groups += self.kids(c, "trigger")
+                    self.stop_groups += self.kids(c, "trigger")
                 elif c.tag != "Action":
                     raise self.refuse(c)
             return []

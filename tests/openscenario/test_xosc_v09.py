@@ -119,3 +119,22 @@ def test_ego_concrete_writes_a_0_9_file_as_1_0(tmp_path):
     text = out.read_text()
     assert 'revMajor="1" revMinor="0"' in text and "<TeleportAction>" in text and "<Object name" not in text
     assert _storyboard(run_scene(out, 15.0)) == _storyboard(run_scene(path, 15.0))
+
+
+def test_ego_list_names_the_0_9_element_ego_refuses(tmp_path):
+    """``ego list`` lists a 0.9 file that the mapping refuses: the refused element (and what it
+    holds) as not supported at its line, every other element mapped, and ``ego run``'s error."""
+    bad = sub(
+        '<Action name="EgoSpeed">',
+        '<Action><Meeting mode="straight" timingOffset="0"/></Action><Action name="EgoSpeed">',
+    )
+    path = write(tmp_path, bad)
+    line = next(i for i, ln in enumerate(bad.splitlines(), 1) if "<Meeting" in ln)
+    listing = file_listing(str(path))
+    assert not listing["supported"]
+    assert listing["error"] == (
+        f"{path}:{line}: <Meeting> is not supported by ego in an OpenSCENARIO 0.9 file (see docs/openscenario.md)"
+    )
+    refused = [(e["element"], e["line"]) for e in listing["elements"] if not e["supported"]]
+    assert refused == [("Meeting", line)]
+    assert [e["name"] for e in listing["entities"]] == ["Ego", "Lead"]
