@@ -138,3 +138,129 @@ def test_ego_list_names_the_0_9_element_ego_refuses(tmp_path):
     refused = [(e["element"], e["line"]) for e in listing["elements"] if not e["supported"]]
     assert refused == [("Meeting", line)]
     assert [e["name"] for e in listing["entities"]] == ["Ego", "Lead"]
+
+
+def _tree(node) -> tuple:
+    return node.tag, node.attrs, [_tree(c) for c in node.children]
+
+
+#: (0.9 context, 0.9 element, its 1.0 form as docs/openscenario.md's table gives it)
+MAPPED = [
+    (
+        "paction",
+        '<Autonomous activate="true" domain="both"/>',
+        '<ActivateControllerAction longitudinal="true" lateral="true"/>',
+    ),
+    (
+        "paction",
+        '<Lateral><LaneOffset><Dynamics maxLateralAcc="1.5" shape="cubic"/><Target><Relative object="A" value="0.5"/>'
+        "</Target></LaneOffset></Lateral>",
+        '<LateralAction><LaneOffsetAction continuous="true"><LaneOffsetActionDynamics maxLateralAcc="1.5" '
+        'dynamicsShape="cubic"/><LaneOffsetTarget><RelativeTargetLaneOffset entityRef="A" value="0.5"/>'
+        "</LaneOffsetTarget></LaneOffsetAction></LateralAction>",
+    ),
+    (
+        "paction",
+        '<Longitudinal><Distance object="A" timeGap="1.5" freespace="true"><Dynamics><Limited maxAcceleration="2" '
+        'maxDeceleration="5" maxSpeed="40"/></Dynamics></Distance></Longitudinal>',
+        '<LongitudinalAction><LongitudinalDistanceAction entityRef="A" timeGap="1.5" freespace="true" continuous="true">'
+        '<DynamicConstraints maxAcceleration="2" maxDeceleration="5" maxSpeed="40"/></LongitudinalDistanceAction>'
+        "</LongitudinalAction>",
+    ),
+    (
+        "paction",
+        '<Lateral><Distance object="A" distance="3" freespace="false"><Dynamics><None/></Dynamics></Distance></Lateral>',
+        '<LateralAction><LateralDistanceAction entityRef="A" distance="3" freespace="false" continuous="true"/>'
+        "</LateralAction>",
+    ),
+    (
+        "paction",
+        '<Visibility graphics="true" traffic="false" sensors="true"/>',
+        '<VisibilityAction graphics="true" traffic="false" sensors="true"/>',
+    ),
+    (
+        "paction",
+        '<Routing><AcquirePosition><Position><Road roadId="1" s="50" t="-2"/></Position></AcquirePosition></Routing>',
+        '<RoutingAction><AcquirePositionAction><Position><RoadPosition roadId="1" s="50" t="-2"/></Position>'
+        "</AcquirePositionAction></RoutingAction>",
+    ),
+    (
+        "paction",
+        '<Routing><FollowRoute><Route name="R" closed="false"><Waypoint strategy="shortest"><Position>'
+        '<Lane roadId="1" laneId="-1" s="0"/></Position></Waypoint></Route></FollowRoute></Routing>',
+        '<RoutingAction><AssignRouteAction><Route name="R" closed="false"><Waypoint routeStrategy="shortest"><Position>'
+        '<LanePosition roadId="1" laneId="-1" s="0"/></Position></Waypoint></Route></AssignRouteAction></RoutingAction>',
+    ),
+    (
+        "paction",
+        '<Position><RelativeObject object="A" dx="-5" dy="3.5"><Orientation type="relative" h="0"/></RelativeObject>'
+        "</Position>",
+        '<TeleportAction><Position><RelativeObjectPosition entityRef="A" dx="-5" dy="3.5"><Orientation type="relative" '
+        'h="0"/></RelativeObjectPosition></Position></TeleportAction>',
+    ),
+    (
+        "paction",
+        '<Controller><Assign><Driver name="d"><Description weight="70" height="1.7" eyeDistance="0.06" age="30" '
+        'sex="male"><Properties><Property name="p" value="1"/></Properties></Description></Driver></Assign></Controller>',
+        '<ControllerAction><AssignControllerAction><Controller name="d"><Properties><Property name="weight" value="70"/>'
+        '<Property name="height" value="1.7"/><Property name="eyeDistance" value="0.06"/><Property name="age" '
+        'value="30"/><Property name="sex" value="male"/><Property name="p" value="1"/></Properties></Controller>'
+        "</AssignControllerAction></ControllerAction>",
+    ),
+    (
+        "entitycond",
+        '<TimeToCollision value="2" freespace="false" alongRoute="false" rule="less_than"><Target><Entity name="A"/>'
+        "</Target></TimeToCollision>",
+        '<TimeToCollisionCondition value="2" freespace="false" alongRoute="false" rule="lessThan">'
+        '<TimeToCollisionConditionTarget><EntityRef entityRef="A"/></TimeToCollisionConditionTarget>'
+        "</TimeToCollisionCondition>",
+    ),
+    (
+        "entitycond",
+        '<Collision><ByType type="vehicle"/></Collision>',
+        '<CollisionCondition><ByType type="vehicle"/></CollisionCondition>',
+    ),
+    (
+        "bystate",
+        '<AtStart type="act" name="Act1"/>',
+        '<StoryboardElementStateCondition storyboardElementType="act" storyboardElementRef="Act1" state="startTransition"/>',
+    ),
+    (
+        "byvalue",
+        '<Parameter name="$P" value="3" rule="equal_to"/>',
+        '<ParameterCondition parameterRef="P" value="3" rule="equalTo"/>',
+    ),
+    (
+        "global",
+        '<Parameter name="$P"><Modify><Rule><Multiply value="2"/></Rule></Modify></Parameter>',
+        '<ParameterAction parameterRef="P"><ModifyAction><Rule><MultiplyByValue value="2"/></Rule></ModifyAction>'
+        "</ParameterAction>",
+    ),
+    (
+        "global",
+        '<Entity name="X"><Delete/></Entity>',
+        '<EntityAction entityRef="X"><DeleteEntityAction/></EntityAction>',
+    ),
+    (
+        "catalog",
+        '<MiscObject category="guardRail" mass="100" name="rail"><BoundingBox><Center x="0" y="0" z="0"/>'
+        '<Dimension width="0.3" length="50" height="1"/></BoundingBox><Properties/></MiscObject>',
+        '<MiscObject miscObjectCategory="railing" mass="100" name="rail"><BoundingBox><Center x="0" y="0" z="0"/>'
+        '<Dimensions width="0.3" length="50" height="1"/></BoundingBox><Properties/></MiscObject>',
+    ),
+    (
+        "catalogs",
+        '<PedestrianControllerCatalog><Directory path="c"/></PedestrianControllerCatalog>',
+        '<ControllerCatalog><Directory path="c"/></ControllerCatalog>',
+    ),
+]
+
+
+@pytest.mark.parametrize(("context", "old", "new"), MAPPED, ids=[f"{c}-{i}" for i, (c, _, _) in enumerate(MAPPED)])
+def test_the_mapping_of_a_0_9_element(context, old, new):
+    """Each row of docs/openscenario.md's 0.9 table on an element: its 1.0 form, written by hand."""
+    from ego.openscenario import v09
+    from ego.openscenario.xmltree import parse_bytes
+
+    mapped = v09._Migration("t.xosc").child(parse_bytes(old.encode()), context)
+    assert [_tree(n) for n in mapped] == [_tree(parse_bytes(new.encode()))]
