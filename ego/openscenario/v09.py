@@ -20,6 +20,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 from ego.openscenario.xmltree import DOCS, Node, ScenarioFileError
+from ego.sim.types import VehicleType
 
 #: how an attribute is mapped: a new name, or (a new name, a value map or a value function)
 AttrMap = Mapping[str, "str | tuple[str, Mapping[str, str] | Callable[[str], str]]"]
@@ -115,7 +116,6 @@ CONTEXTS: dict[str, dict[str, Rule]] = {
     "driver": {"ParameterDeclaration": PARAMS},
     "vehicle": {
         **BODY,
-        "Performance": Rule("Performance", same("maxSpeed", "maxDeceleration", "maxAcceleration")),
         "Axles": Rule("Axles", kids="axles"),
     },
     "body": BODY,
@@ -550,6 +550,14 @@ class _Migration:
                 raise self.refuse(c)
             props += self.kids(c, "props")
         return [Node("Properties", {}, node.line, props)]
+
+    def special_vehicle_Performance(self, node: Node) -> list[Node]:
+        """A 0.9 Performance: ``maxSpeed``, ``maxDeceleration`` (``mass`` has no place in 1.0's);
+        0.9 has no ``maxAcceleration``, which 1.0 requires: SUMO's passenger car's (2.6 m/s^2,
+        what SUMO takes for a vehicle type without one), or one written there."""
+        out = self.apply(Rule("Performance", same("maxSpeed", "maxDeceleration", "maxAcceleration")), node)
+        out[0].attrs.setdefault("maxAcceleration", repr(VehicleType("0.9").accel))
+        return out
 
     def special_entities_Object(self, node: Node) -> list[Node]:
         """An Object: one body (a CatalogReference, Vehicle, Pedestrian or MiscObject), then
