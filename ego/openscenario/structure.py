@@ -235,7 +235,9 @@ declare(
         "`TrajectoryPosition` (1.1): `s` along the shape of its `TrajectoryRef`'s `Trajectory` (a polyline, "
         "clothoids or a NURBS, read as a `FollowTrajectoryAction`'s; a clothoid spline's first segment needs "
         "its `PositionStart`) and `t` to its left, on the nearest lane (in `Init` the trajectory's own "
-        "positions must be world, lane or road positions); `dsLane`, `RoutePosition`, `GeoPosition` refused"
+        "positions must be world, lane or road positions); `dsLane`, `RoutePosition` and `GeoPosition` refused "
+        "(a `GeoPosition` needs the map projection of the road's `geoReference`, a PROJ string, which ego does "
+        "not carry; no example of the reference player's uses one)"
     ),
     label="`LanePosition`, `RoadPosition`, `WorldPosition`, `RelativeLanePosition` (`ds`), `RelativeRoadPosition`,"
     " `RelativeObjectPosition`, `RelativeWorldPosition`, `TrajectoryPosition`",
