@@ -7,7 +7,6 @@ world's axes are not the road's."""
 from __future__ import annotations
 
 import math
-import shutil
 
 import pytest
 from xosc_scenes import SHIPPED, event, run_scene, starts, trigger, write_file
@@ -25,11 +24,13 @@ def _cache(tmp_path_factory, monkeypatch):
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
 
 
-def _north3(tmp_path, starts_, events, replace: tuple[str, str] | None = None):
+def _scene(tmp_path, starts_, events, replace: tuple[str, str] | None = None, road: str = "north3.xodr"):
+    """The scene on ``road`` (north3.xodr: straight3.xodr turned; or straight3.xodr itself), one
+    ``replace`` made in its text."""
     text = (SHIPPED / "straight3.xodr").read_text()
     assert text.count(STRAIGHT) == 1
-    (tmp_path / "north3.xodr").write_text(text.replace(STRAIGHT, NORTH))
-    path = write_file(tmp_path / "scene.xosc", "north3.xodr", starts_, events)
+    (tmp_path / road).write_text(text.replace(STRAIGHT, NORTH) if road == "north3.xodr" else text)
+    path = write_file(tmp_path / "scene.xosc", road, starts_, events)
     if replace is not None:
         text = path.read_text()
         assert text.count(replace[0]) == 1, replace[0]
@@ -42,7 +43,7 @@ def test_an_init_start_relative_to_an_entity_in_world_axes(tmp_path):
     lane -1's centre (x = -3.5), s = y = 260."""
     lane_b = '<LanePosition roadId="0" laneId="-1" s="999.0" offset="0"></LanePosition>'
     world = '<RelativeWorldPosition entityRef="A" dx="-3.5" dy="20"/>'
-    path = _north3(
+    path = _scene(
         tmp_path,
         [("Ego", "0", -3, 20.0, 10.0, ""), ("A", "0", -2, 240.0, 10.0, ""), ("B", "0", -1, 999.0, 10.0, "")],
         [],
@@ -83,7 +84,7 @@ def test_a_position_relative_to_a_moving_entity_in_world_axes(tmp_path):
         event("Object", "Ego", noop, trigger([reach('<RelativeObjectPosition entityRef="A" dx="-10" dy="-3.5"/>')])),
         event("Off", "Ego", noop, trigger([reach('<RelativeObjectPosition entityRef="A" dx="3.5" dy="-10"/>')])),
     ]
-    path = _north3(
+    path = _scene(
         tmp_path,
         [
             ("Ego", "0", -1, 20.0, 10.0, ""),
@@ -119,16 +120,6 @@ def trajectory_position(shape: str, s: float, t: float) -> str:
     )
 
 
-def _straight3(tmp_path, starts_, events, replace=None):
-    shutil.copy(SHIPPED / "straight3.xodr", tmp_path / "straight3.xodr")
-    path = write_file(tmp_path / "scene.xosc", "straight3.xodr", starts_, events)
-    if replace is not None:
-        text = path.read_text()
-        assert text.count(replace[0]) == 1, replace[0]
-        path.write_text(text.replace(*replace))
-    return path
-
-
 @pytest.mark.parametrize(
     ("shape", "s", "t"),
     [
@@ -144,11 +135,12 @@ def test_an_init_start_on_a_trajectory(tmp_path, shape, s, t):
     """B starts at a TrajectoryPosition: on lane -2 at the hand-computed x (70 m on the polyline,
     100 m on the arc)."""
     lane_b = '<LanePosition roadId="0" laneId="-1" s="999.0" offset="0"></LanePosition>'
-    path = _straight3(
+    path = _scene(
         tmp_path,
         [("Ego", "0", -3, 20.0, 10.0, ""), ("B", "0", -1, 999.0, 10.0, "")],
         [],
         (lane_b, trajectory_position(shape, s, t)),
+        road="straight3.xodr",
     )
     roads = RoadMap(network_file(tmp_path / "straight3.xodr"), converted=True)
     b = placements(load(path), roads)["B"]
@@ -172,10 +164,11 @@ def test_a_position_on_a_trajectory_during_the_run(tmp_path):
         '<LongitudinalAction><SpeedAction><SpeedActionDynamics dynamicsShape="step" value="0" dynamicsDimension="time"/>'
         '<SpeedActionTarget><AbsoluteTargetSpeed value="10"/></SpeedActionTarget></SpeedAction></LongitudinalAction>'
     )
-    path = _straight3(
+    path = _scene(
         tmp_path,
         [("Ego", "0", -3, 20.0, 10.0, ""), ("B", "0", -2, 20.0, 10.0, "")],
         [event("Reach", "Ego", noop, trigger([reach]))],
+        road="straight3.xodr",
     )
     sc = run_scene(path, 6.0)
     assert starts(sc, "Reach") == [pytest.approx(5.0, abs=1e-9)]
