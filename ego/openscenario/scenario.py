@@ -37,6 +37,7 @@ import numpy as np
 from ego.lane_frame import LanePolyline
 from ego.openscenario import model as M
 from ego.openscenario.dynamics import Transition
+from ego.openscenario.ego_refs import EgoGap, EgoPath
 from ego.openscenario.kinematic import Kinematic
 from ego.openscenario.loader import declared_parameters, header_description, load
 from ego.openscenario.registry import action_of
@@ -88,22 +89,48 @@ _TYPES = {
 _PY = {"float": float, "int": int, "bool": bool, "str": str}
 
 
+#: names a test engineer gives the vehicle under test, in order of preference (any case):
+#: ``Ego``, and ``hero`` (CARLA's and its scenario runner's name for it)
+EGO_NAMES = ("Ego", "hero")
+
+
 def find_ego(scenario: M.Scenario, wanted: str) -> str:
-    """The ego entity: ``wanted`` (exact, else case-insensitive), else the one named Ego."""
-    return pick_ego(list(scenario.entities), wanted, scenario.path)
+    """The ego entity (see :func:`choose_ego`)."""
+    return ego_choice(scenario, wanted)[0]
 
 
-def pick_ego(names: list[str], wanted: str, path: str | os.PathLike[str]) -> str:
-    """:func:`find_ego` among the entity ``names`` of the file ``path``."""
-    target = wanted or "Ego"
-    if target in names:
-        return target
-    folded = [n for n in names if n.lower() == target.lower()]
-    if len(folded) == 1:
-        return folded[0]
+def ego_choice(scenario: M.Scenario, wanted: str) -> tuple[str, str]:
+    """The ego entity of a read file and why it was taken (:func:`choose_ego`)."""
+    ents = [(n, e.vehicle.kind == "vehicle") for n, e in scenario.entities.items()]
+    return choose_ego(ents, wanted, scenario.path)
+
+
+def choose_ego(entities: list[tuple[str, bool]], wanted: str, path: str | os.PathLike[str]) -> tuple[str, str]:
+    """The ego among ``entities`` ((name, is a vehicle) in file order) of the file ``path``,
+    and why: ``wanted`` (``--ego``: exact, else case-insensitive); else the entity named Ego,
+    else the one named hero (exact, else any case); else the first vehicle in file order (the
+    reference player has no ego: it follows the first object with its camera)."""
+    names = [n for n, _ in entities]
     if wanted:
+        if wanted in names:
+            return wanted, "chosen by --ego"
+        folded = [n for n in names if n.lower() == wanted.lower()]
+        if len(folded) == 1:
+            return folded[0], "chosen by --ego"
         raise ConfigError(f"bad value for --ego: {wanted!r} (entities: {', '.join(names)})")
-    raise ConfigError(f"{path}: no entity named Ego; choose the ego with --ego (entities: {', '.join(names)})")
+    for target in EGO_NAMES:
+        if target in names:
+            return target, f"named {target}"
+        folded = [n for n in names if n.lower() == target.lower()]
+        if folded:
+            return folded[0], f"named {target} (any case)"
+    vehicles = [n for n, is_vehicle in entities if is_vehicle]
+    if vehicles:
+        return vehicles[0], "the first vehicle in file order, as no entity is named Ego or hero (--ego picks another)"
+    raise ConfigError(
+        f"{path}: no vehicle to be the ego (no entity named Ego or hero, and none is a vehicle); choose the ego "
+        f"with --ego (entities: {', '.join(names)})"
+    )
 
 
 @dataclass(frozen=True)
@@ -383,14 +410,6 @@ class FileScenario(Scenario):
         edge = starts[ego].edge
         _check_road_references(model, roads, len(roads.edges[edge].lanes), len(_opposite_lanes(roads, edge)))
         _check_routes(model, roads)
-        if starts[ego].offset:
-            pos = next(a for a in model.init[ego] if isinstance(a, M.TeleportAction)).position
-            raise ScenarioFileError(
-                model.path,
-                pos.line,
-                f"the ego {ego!r} starts {starts[ego].offset:g} m off its lane's centre: the ego starts on "
-                "its lane's centre (offset 0; a LaneOffsetAction moves it)",
-            )
         return model, roads, ego, starts
 
     @classmethod
@@ -467,6 +486,17 @@ class FileScenario(Scenario):
             manoeuvre_cls=FileManoeuvre,
         )
         parts.manoeuvre.story = self.story
+        offset = self.starts[self.ego_name].offset
+        if offset and parts.make_plant is not None:
+            # SUMO inserts the ego on its lane's centre: its plant starts at the file's offset
+            # (+ left of the lane's heading), which is held as its lateral reference
+            make = parts.make_plant
+
+            def make_plant(config, geometry, pose, make=make):
+                x, y, psi = pose
+                return make(config, geometry, (x - offset * math.sin(psi), y + offset * math.cos(psi), psi))
+
+            parts.make_plant = make_plant
         return parts
 
     def _make_bridge(self) -> TrafficSim:
@@ -504,6 +534,8 @@ class FileScenario(Scenario):
         self.view.target_lane = lane
 
     def after_setup(self) -> None:
+        name, why = ego_choice(self.model, self.config.ego_entity)
+        self.event("ego", f"the ego is {name!r}: {why}")
         self.story.start()
 
     def before_sim_step(self) -> None:
@@ -603,6 +635,10 @@ class StoryDriver:
         self._ego_profile: Transition | None = None
         self._ego_relative: tuple | None = None
         self._ego_lateral: Transition | None = None
+        #: a trajectory on the ego (its lateral reference) and a law its longitudinal
+        #: reference follows (a timed trajectory, a longitudinal distance): ego_refs.py
+        self._ego_path: EgoPath | None = None
+        self._ego_long: EgoPath | EgoGap | None = None
         self._cruise_s: float | None = None
         self._cruise_v = 0.0
         self.history = {}
@@ -641,6 +677,10 @@ class StoryDriver:
                 along = start.front - 0.5 * sc.model.entities[name].vehicle.length
                 x, y = poly.offset_point(along, start.offset)
                 sc.bridge.place(name, x, y, poly.heading_at(along), start.speed or 0.0)
+        offset = sc.starts[sc.ego_name].offset
+        if offset:
+            d0 = sc.lane_offset[sc.config.ego_lane] + offset
+            self._ego_lateral = Transition(0.0, d0, d0, 0.0, "step")
         self._start_kinematic()
         self._traffic = TrafficActions(
             sc.bridge,
@@ -672,6 +712,12 @@ class StoryDriver:
         for k, lane in enumerate(lanes):
             mid = lane.shape[len(lane.shape) // 2]
             self._lanes_all[len(own) + k] = road.project(mid[0], mid[1])[1]
+        if lanes:
+            # the other direction's lanes are road too (a trajectory may take the ego there):
+            # off the road beyond their outer edge by more than half a car
+            outer = abs(self._lanes_all[len(own) + len(lanes) - 1]) + 0.5 * lanes[-1].width
+            view = sc.view
+            view.road_halfwidth = max(view.road_halfwidth, outer + 0.5 * sc.geometry.width + 0.5)
         for name, start in sc.starts.items():
             tp = next(a for a in sc.model.init[name] if isinstance(a, M.TeleportAction))
             if name == sc.ego_name or not getattr(tp.position, "turned", 0):
@@ -935,9 +981,34 @@ class StoryDriver:
     def ego_speed(self, profile, relative) -> None:
         sc = self.sc
         self._ego_profile, self._ego_relative = profile, relative
+        if self._ego_long is not None:  # on from where the law had the reference
+            self._cruise_s, self._cruise_v = self._long_reference(sc.t)
+            self._ego_long = None
         if self._cruise_s is None:
             c = sc.config
             self._cruise_s = sc.manoeuvre.s0 + c.ego_speed * sc.t
+
+    def ego_longitudinal(self, law) -> None:
+        self._ego_long = law
+        self._ego_profile = self._ego_relative = None
+
+    def ego_trajectory(self, path: EgoPath) -> None:
+        self._ego_path, self._ego_lateral = path, None
+        if path.times is not None:
+            self.ego_longitudinal(path)
+
+    def _long_reference(self, t: float) -> tuple[float, float]:
+        """The ego's (s of its centre of gravity, speed) reference from its longitudinal law: the
+        law's s is of the entity's box centre (EgoGap) or of its reference point (a timed path)."""
+        sc = self.sc
+        law = self._ego_long
+        assert law is not None
+        s, v = law.longitudinal(t)
+        g = sc.geometry
+        back = g.cg_to_front - 0.5 * g.length  # the box centre ahead of the cg
+        if isinstance(law, EgoPath):
+            back -= sc.model.entities[sc.ego_name].vehicle.center_x
+        return s - back, v
 
     def ego_references(self) -> tuple[float, float]:
         sc = self.sc
@@ -945,7 +1016,7 @@ class StoryDriver:
 
     def ego_lateral(self, profile: Transition) -> None:
         sc = self.sc
-        self._ego_lateral = profile
+        self._ego_lateral, self._ego_path = profile, None
         sc.target_lane = min(sc.lane_offset, key=lambda i: abs(profile.end - sc.lane_offset[i]))
 
     # -- the ego's references ---------------------------------------------------------------
@@ -967,10 +1038,22 @@ class StoryDriver:
             self._cruise_v = v
             obs.s_ref, obs.ds_ref = self._cruise_s, v
             sc.manoeuvre.speed_ref = v
+        if self._ego_long is not None:
+            s_ref, v = self._long_reference(t_board)
+            obs.s_ref, obs.ds_ref = s_ref, v
+            sc.manoeuvre.speed_ref = v
         if self._ego_lateral is not None:
             p = self._ego_lateral
             obs.d_ref = p.value(t_board) - sc.lane_offset[sc.target_lane]
             obs.dd_ref = 0.0  # obs.d from the target lane: the surround view's observation
+        elif self._ego_path is not None:
+            # the path's offset at the ego's reference point (its box centre less center.x)
+            g = sc.geometry
+            here = sc.s + g.cg_to_front - 0.5 * g.length - sc.model.entities[sc.ego_name].vehicle.center_x
+            d = self._ego_path.d_at(here)
+            sc.target_lane = min(sc.lane_offset, key=lambda i: abs(d - sc.lane_offset[i]))
+            obs.d_ref = d - sc.lane_offset[sc.target_lane]
+            obs.dd_ref = 0.0
 
 
 class ScriptedEntity:
@@ -1130,9 +1213,17 @@ def file_listing(path: str, ego: str = "") -> dict:
         elif body is not None and body.tag == "CatalogReference":
             kind = f"CatalogReference {body.attrs.get('catalogName', '?')}/{body.attrs.get('entryName', '?')}"
         entities.append({"name": so.attrs.get("name", "?"), "kind": kind, "line": so.line})
-    names = [e["name"] for e in entities]
+    why = ""
     try:
-        chosen: str | None = pick_ego(names, ego, path)
+        # the run's choice, from the read file (which entities are vehicles, catalogs too);
+        # from the tree's bodies when the file cannot be read
+        try:
+            chosen: str | None
+            chosen, why = ego_choice(load(path), ego)
+        except ScenarioFileError:
+            objects = ents.all("ScenarioObject") if ents is not None else ()
+            raw = [(e["name"], _raw_vehicle(so)) for e, so in zip(entities, objects)]
+            chosen, why = choose_ego(raw, ego, path)
     except ConfigError:
         if ego:  # an --ego the file does not have is refused, as ego run refuses it
             raise
@@ -1155,6 +1246,7 @@ def file_listing(path: str, ego: str = "") -> dict:
         ],
         "entities": entities,
         "ego": chosen,
+        "ego_why": why,
         "ego_parameters": [
             {"name": i.name, "default": getattr(start, i.name), "unit": i.unit, "description": i.doc}
             for i in describe(FileConfig)
@@ -1164,6 +1256,18 @@ def file_listing(path: str, ego: str = "") -> dict:
         "supported": error is None and all(ok for _, _, ok in els),
         "error": error,
     }
+
+
+def _raw_vehicle(so) -> bool:
+    """Whether a ScenarioObject of an unreadable file is a vehicle: a <Vehicle>, or an entry of a
+    catalog not named for pedestrians or misc objects."""
+    body = next((c for c in so.children if c.tag != "ObjectController"), None)
+    if body is None:
+        return False
+    if body.tag == "CatalogReference":
+        name = body.attrs.get("catalogName", "")
+        return "pedestrian" not in name.lower() and "miscobject" not in name.lower()
+    return body.tag == "Vehicle"
 
 
 def check_file(path: str, overrides: Mapping[str, object]):
@@ -1191,10 +1295,10 @@ def print_listing(listing: dict) -> str:
         out.append(f"  {p['name']:<24} {p['type']:<8} default {p['default']!s:<12} line {p['line']}{note}")
     out += ["", "entities:"]
     for e in listing["entities"]:
-        mark = "  <- the ego" if e["name"] == listing["ego"] else ""
+        mark = f"  <- the ego: {listing.get('ego_why', '')}" if e["name"] == listing["ego"] else ""
         out.append(f"  {e['name']:<24} {e['kind']:<30} line {e['line']}{mark}")
     if listing["ego"] is None:
-        out.append("  (no entity named Ego: choose one with --ego)")
+        out.append("  (no vehicle to be the ego: choose one with --ego)")
     out += ["", "ego's parameters of a file scenario (--set):"]
     for p in listing["ego_parameters"]:
         out.append(f"  {p['name']:<24} {p['default']!s:<8} {p['unit']:<7} {p['description']}")
