@@ -354,7 +354,7 @@ class LongitudinalDistance(ActionKind):
             s, v0 = me.s, me.speed
         v = distance_speed(a, s, v0, ref.s, ref.speed, me.length, ref.length, h)
         if run.is_ego:
-            law.advance(t, v, h)
+            law.advance(t, v, h, ref.speed)
         else:
             constrained = math.isfinite(a.max_accel) or math.isfinite(a.max_decel)
             b.driver.speed(run.actor, v, abs(v - me.speed) / h if constrained else INF)
@@ -773,7 +773,11 @@ class FollowTrajectory(ActionKind):
             run.s0 = a.initial_distance_offset
         if run.is_ego:
             # the ego's references: the path's offset at its s (and, timed, its s at the time)
-            run.law = EgoPath(*to_lane_frame(b.driver.road_frame, run.xy), run.times)
+            lead_in = None
+            if run.times is not None and t < run.times[0]:
+                cx = b.scenario.entities[run.actor].vehicle.center_x
+                lead_in = (t, b.states[run.actor].s - cx)
+            run.law = EgoPath(*to_lane_frame(b.driver.road_frame, run.xy), run.times, lead_in)
             b.driver.ego_trajectory(run.law)
 
     @staticmethod

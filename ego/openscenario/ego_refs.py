@@ -44,19 +44,27 @@ class EgoPath:
     """A trajectory as the ego's references: its points ``s``, ``d`` (the entity's reference
     point, in the ego's lane frame) and, when timed, their times."""
 
-    def __init__(self, s: list[float], d: list[float], times: list[float] | None) -> None:
+    def __init__(
+        self, s: list[float], d: list[float], times: list[float] | None, lead_in: tuple[float, float] | None = None
+    ) -> None:
         if len(s) < 2:
             raise ValueError("a trajectory needs two points")
         self.s, self.d, self.times = s, d, times
+        #: a timed path's (time, s) the longitudinal reference starts from when the action
+        #: starts before the path's first time: the ego then goes to the first point at the
+        #: constant speed that reaches it on time
+        self.lead_in = lead_in
         self.i = 0  #: the segment the ego's reference point has reached
         self.frozen: float | None = None  #: the lateral reference held once the action stopped
         self.last = d[0]  #: the offset last looked up
+        self.slope = 0.0  #: and the path's dd/ds there (its rate is the slope times the speed along s)
 
     def d_at(self, s: float) -> float:
         """The path's offset where it passes ``s`` (m), going on from the segment reached: before
         its start its first offset, after its end its last; a part running backwards along the
         road is passed over (the ego drives forwards)."""
         if self.frozen is not None:
+            self.slope = 0.0
             return self.frozen
         ps, pd = self.s, self.d
         n = len(ps)
@@ -64,11 +72,16 @@ class EgoPath:
         while i < n - 1 and ps[i + 1] <= s:
             i += 1
         self.i = i
+        self.slope = 0.0
         if i == n - 1:
             out = pd[-1]
         else:
             s0, s1 = ps[i], ps[i + 1]
-            out = pd[i] if s <= s0 or s1 <= s0 else pd[i] + (pd[i + 1] - pd[i]) * (s - s0) / (s1 - s0)
+            if s <= s0 or s1 <= s0:
+                out = pd[i]
+            else:
+                self.slope = (pd[i + 1] - pd[i]) / (s1 - s0)
+                out = pd[i] + self.slope * (s - s0)
         self.last = out
         return out
 
@@ -78,11 +91,16 @@ class EgoPath:
 
     def longitudinal(self, t: float) -> tuple[float, float]:
         """A timed path's (s, speed along s) at ``t``: linear between the points' times; after
-        the last, on at the last segment's speed (before the first: standing at the start)."""
+        the last, on at the last segment's speed (before the first: from the lead-in, else
+        standing at the start)."""
         times, ps = self.times, self.s
         assert times is not None
         if t <= times[0]:
-            return ps[0], 0.0
+            if self.lead_in is None:
+                return ps[0], 0.0
+            t0, s0 = self.lead_in
+            v = (ps[0] - s0) / (times[0] - t0)
+            return ps[0] + v * (t - times[0]), max(v, 0.0)
         k = min(bisect_right(times, t) - 1, len(times) - 2)
         v = (ps[k + 1] - ps[k]) / (times[k + 1] - times[k]) if times[k + 1] > times[k] else 0.0
         return ps[k] + v * (t - times[k]), max(v, 0.0)
@@ -105,18 +123,23 @@ class EgoGap:
 
     def __init__(self, t: float, s: float, v: float) -> None:
         self.t, self.s, self.v = t, s, v
+        self.h, self.v_after = 0.0, v  #: the step of the speed ``v``, and the speed after it
         self.stopped = False
 
-    def advance(self, t: float, v_next: float, h: float) -> None:
-        """The reference point's speed over [t, t + h] is ``v_next``."""
+    def advance(self, t: float, v_next: float, h: float, v_after: float) -> None:
+        """The reference point's speed over [t, t + h] is ``v_next``, and after that (until the
+        next step's law) ``v_after``, the referenced entity's speed."""
         if self.stopped:
             return
-        self.s += self.v * (t - self.t)
-        self.t, self.v = t, v_next
+        self.s, _ = self.longitudinal(t)
+        self.t, self.v, self.h, self.v_after = t, v_next, h, v_after
 
     def longitudinal(self, t: float) -> tuple[float, float]:
         """(s, speed) of the reference point at ``t``."""
-        return self.s + self.v * (t - self.t), self.v
+        dt = t - self.t
+        if dt <= self.h:
+            return self.s + self.v * dt, self.v
+        return self.s + self.v * self.h + self.v_after * (dt - self.h), self.v_after
 
     def stop(self) -> None:
         """The action stopped: the reference point drives on at its speed."""

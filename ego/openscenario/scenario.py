@@ -1053,7 +1053,7 @@ class StoryDriver:
             d = self._ego_path.d_at(here)
             sc.target_lane = min(sc.lane_offset, key=lambda i: abs(d - sc.lane_offset[i]))
             obs.d_ref = d - sc.lane_offset[sc.target_lane]
-            obs.dd_ref = 0.0
+            obs.dd_ref = self._ego_path.slope * obs.ds  # the rate the path's offset moves at
 
 
 class ScriptedEntity:
