@@ -311,7 +311,8 @@ class LongitudinalDistance(ActionKind):
         "within 1 cm); without `DynamicConstraints` the actor is at the distance after one step and then exactly "
         "there every step (within 1e-6: `test_xosc_alks_forms.py`); with them it keeps `maxAcceleration`, "
         "`maxDeceleration`, `maxSpeed` and closes at the speed from which its braking limit still stops at the "
-        "distance a step later; not on the ego"
+        "distance a step later; on the ego the same law drives the reference point its longitudinal reference "
+        "follows (see How the ego is chosen)"
     )
 
     def build(self, b: Any, n: Node) -> M.LongitudinalDistanceAction:
@@ -429,7 +430,7 @@ class SpeedProfile(ActionKind):
         "quick for them takes longer), position follows the times; commanded step by step (within 1e-6 of the "
         "profile, `test_xosc_player_forms.py`). **Deviation:** the jerk limits (`maxAccelerationRate`, "
         "`maxDecelerationRate`) are read and not applied (the reference player smooths with them in follow mode); "
-        "not on the ego"
+        "on the ego its speed reference"
     )
 
     def build(self, b: Any, n: Node) -> M.SpeedProfileAction:
@@ -624,7 +625,8 @@ class FollowTrajectory(ActionKind):
     note = (
         "the entity's reference point (its box centre less the box's `center.x`) moves along the shape; `Timing` "
         "absolute or relative with scale and offset (vertex, control point or clothoid times), or none (the "
-        "entity's speed at the start); `initialDistanceOffset`; not on the ego. A `Clothoid` (curvature, "
+        "entity's speed at the start); `initialDistanceOffset`; on the ego its lateral reference (timed, its "
+        "longitudinal one too: see How the ego is chosen). A `Clothoid` (curvature, "
         "`curvaturePrime`; the 1.0 `curvatureDot` read as the same rate per metre, as the reference player reads "
         "it) and a `ClothoidSpline`'s `Segment`s (`curvatureStart` to `curvatureEnd`, `hOffset`, `PositionStart`; "
         "the first without one starts at the entity; the reference player's pre-standard `curvStart`/`curvEnd` "

@@ -1,11 +1,13 @@
 """A scenario file as a scenario of ego: the one module joining the file's model and its
 storyboard to ego's motorway machinery.
 
-The ego entity (``--ego``, default the entity named ``Ego`` in any case) gets ego's plant,
+The ego entity (``--ego``; default the entity named ``Ego``, else ``hero``, in any case, else the
+first vehicle in file order: :func:`choose_ego`) gets ego's plant,
 controller, surround sensor and manoeuvre: the evasive logic of ``emergency-brake`` (front
 TTC trigger, gap acceptance, AEB, braking in lane) with its parameters (``--set
 evade=false`` ...). Its Init lane and speed are its references; SpeedAction and
-LaneChange/LaneOffsetAction addressed to it move those references. Every other entity is a
+LaneChange/LaneOffsetAction addressed to it move those references, and a trajectory, a
+longitudinal distance or a speed profile on it become references too (ego_refs.py). Every other entity is a
 SUMO vehicle that the storyboard commands through the bridge; when no action holds it, SUMO's
 driver model drives it (lane changes off, an Init speed held as its desired speed).
 
@@ -63,7 +65,9 @@ ENTITY_COLORS = ((255, 150, 0), (0, 170, 255), (160, 60, 220), (40, 180, 90), (2
 class FileConfig(EvasiveConfig):
     """ego's parameters of a file scenario (the file's own parameters are added per file)."""
 
-    ego_entity: str = param("", "-", "the entity ego drives (--ego; default: the one named Ego, any case)")
+    ego_entity: str = param(
+        "", "-", "the entity ego drives (--ego; default: the one named Ego, else hero, else the first vehicle)"
+    )
     ego_speed: float = param(20.0, "m/s", "ego's initial speed (default: the file's Init)", min=0.0, max=60.0)
     ego_lane: int = param(1, "-", "ego's SUMO lane index, 0 = right (default: the file's Init)", min=0, max=15)
     ego_start: float = param(
