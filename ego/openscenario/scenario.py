@@ -664,10 +664,34 @@ class StoryDriver:
             own = start.speed if v.kind == "vehicle" else (start.speed or 0.0)
             speed = max(c.ego_speed, own if own is not None else 0.0) if v.kind == "vehicle" else own
             world.vehicle(
-                VehicleSpec(name, vt.id, self._route(start.edge), start.index, start.front, speed),
+                VehicleSpec(name, vt.id, self._route(start.edge), start.index, self._insert_at(name), speed),
                 vt,
                 ScriptedEntity(name, own),
             )
+
+    def _insert_at(self, name: str) -> float:
+        """Where SUMO inserts ``name`` (its front along its lane, m): its start, unless it starts
+        off its lane's centre beside another body of its SUMO lane (SUMO inserts on the centre,
+        where the two would overlap): then at the lane's end or start, or just ahead of the
+        others, from where :meth:`start` moves it to its start before the first step."""
+        sc = self.sc
+        me = sc.starts[name]
+        length = sc.model.entities[name].vehicle.length
+        if not me.offset:
+            return me.front
+        lane = sc.roads.edges[me.edge].lanes[me.index]
+        others = [
+            (p.front - sc.model.entities[n].vehicle.length, p.front)
+            for n, p in sc.starts.items()
+            if n != name and (p.edge, p.index) == (me.edge, me.index)
+        ]
+        if not any(b < me.front and me.front - length < f for b, f in others):
+            return me.front
+        # as far from the others as the lane allows (the sensor sees it there at t = 0)
+        for front in (lane.length, length, max(f for _, f in others) + length + 1.0):
+            if length <= front <= lane.length and not any(b < front and front - length < f for b, f in others):
+                return front
+        return me.front
 
     def start(self) -> None:
         """The storyboard starts from the entities' start positions; an entity off its lane's
@@ -722,12 +746,20 @@ class StoryDriver:
             outer = abs(self._lanes_all[len(own) + len(lanes) - 1]) + 0.5 * lanes[-1].width
             view = sc.view
             view.road_halfwidth = max(view.road_halfwidth, outer + 0.5 * sc.geometry.width + 0.5)
+        ego_edge = sc.starts[sc.ego_name].edge
+        centre_line = 0.5 * (max(own.values()) + self._lanes_all[len(own)]) if lanes else INF
         for name, start in sc.starts.items():
             tp = next(a for a in sc.model.init[name] if isinstance(a, M.TeleportAction))
-            if name == sc.ego_name or not getattr(tp.position, "turned", 0):
+            if name == sc.ego_name:
+                continue
+            turned = getattr(tp.position, "turned", 0)
+            # a car whose Init offset puts it across the centre line, in the other direction's
+            # lane, driving its own lane's way (speed-profile.xosc's Car2): driven by ego too
+            across = start.edge == ego_edge and own.get(start.index, 0.0) + start.offset > centre_line
+            if not (turned or across):
                 continue
             x, y, h = self.position_xy(tp.position, {})
-            heading = h + math.pi  # turned round on its lane
+            heading = h + math.pi if turned else h  # turned round on its lane
             cx = sc.model.entities[name].vehicle.center_x
             x, y = x + cx * math.cos(heading), y + cx * math.sin(heading)
             s, d, _ = road.project(x, y)
