@@ -70,21 +70,6 @@ class Transition:
     def done(self, t: float) -> bool:
         return t >= self.t0 + self.duration - 1e-9
 
-    def rate(self, t: float) -> float:
-        """d value / dt at ``t`` (0 outside the transition and for a step)."""
-        if self.duration <= 0.0 or self.shape == "step":
-            return 0.0
-        u = (t - self.t0) / self.duration
-        if not 0.0 < u < 1.0:
-            return 0.0
-        if self.shape == "cubic":
-            df = 6.0 * u * (1.0 - u)
-        elif self.shape == "sinusoidal":
-            df = 0.5 * math.pi * math.sin(math.pi * u)
-        else:
-            df = 1.0
-        return (self.end - self.start) * df / self.duration
-
     @property
     def peak_rate(self) -> float:
         """Largest |d value / dt| of the transition (inf for a step)."""

@@ -1081,7 +1081,7 @@ class StoryDriver:
         if self._ego_lateral is not None:
             p = self._ego_lateral
             obs.d_ref = p.value(t_board) - sc.lane_offset[sc.target_lane]
-            obs.dd_ref = p.rate(t_board)  # the profile's rate (the controllers' derivative term)
+            obs.dd_ref = 0.0  # obs.d from the target lane: the surround view's observation
         elif self._ego_path is not None:
             # the path's offset at the ego's reference point (its box centre less center.x)
             g = sc.geometry

@@ -200,28 +200,3 @@ def test_a_speed_profile_on_the_ego_is_its_speed_reference(tmp_path):
     assert np.max(np.abs(v_ref[on] - want[on])) < 1e-9
     assert np.all(v_ref[~on] == 20.0)
     assert np.max(np.abs(v - want)) < 1.6
-
-
-# -- a lane change ------------------------------------------------------------------------------------
-@pytest.mark.parametrize("controller,bound", [("pid", 0.65), ("rbf-smc", 0.04)])
-def test_a_lane_change_on_the_ego_gives_its_reference_and_rate(tmp_path, controller, bound):
-    """A sinusoidal lane change to the left lane over 60 m at 20 m/s (3 s) from t = 4 s: the
-    lateral reference is the closed form (the trace's, within 1 cm), its rate the closed form's
-    derivative; the ego tracks it (pid: 0.59 m at most; with a rate of 0, as before, 2.2 m)."""
-    from xosc_scenes import lane_change
-
-    path = scene(
-        tmp_path,
-        [event("L", "Ego", lane_change(-2, "sinusoidal", "distance", 60.0), trigger([sim_time(4.0)]))],
-        at=AWAY,
-    )
-    sc, _ = _run(path, controller)
-    tr, names = sc.trace.array(), sc.trace.names
-    # d and d_ref from the target lane; lane_offset the ego's offset from its start lane
-    t, d, d_ref, here = (tr[:, names.index(k)] for k in ("t", "d", "d_ref", "lane_offset"))
-    u = np.clip((t - 4.0) / 3.0, 0.0, 1.0)
-    want = W * (1.0 - np.cos(np.pi * u)) / 2.0
-    assert np.max(np.abs(d_ref - d + here - want)) < 0.01
-    worst = float(np.max(np.abs(here - want)))
-    print(f"{controller}: max |e| {worst:.3f} m")
-    assert worst < bound
