@@ -758,10 +758,17 @@ class StoryDriver:
             across = start.edge == ego_edge and own.get(start.index, 0.0) + start.offset > centre_line
             if not (turned or across):
                 continue
-            x, y, h = self.position_xy(tp.position, {})
-            heading = h + math.pi if turned else h  # turned round on its lane
-            cx = sc.model.entities[name].vehicle.center_x
-            x, y = x + cx * math.cos(heading), y + cx * math.sin(heading)
+            if turned:
+                x, y, h = self.position_xy(tp.position, {})
+                heading = h + math.pi  # turned round on its lane
+                cx = sc.model.entities[name].vehicle.center_x
+                x, y = x + cx * math.cos(heading), y + cx * math.sin(heading)
+            else:  # its box centre from its placement (a relative position's entity has no state yet)
+                lane = sc.roads.edges[start.edge].lanes[start.index]
+                poly = LanePolyline(lane.shape, lane.width, lane.id)
+                along = start.front - 0.5 * sc.model.entities[name].vehicle.length
+                x, y = poly.offset_point(along, start.offset)
+                heading = poly.heading_at(along)
             s, d, _ = road.project(x, y)
             direction = 1 if math.cos(heading - road.heading_at(s)) > 0.0 else -1
             self._kin.add(name, s, d, start.speed or 0.0, direction)
