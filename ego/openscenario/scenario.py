@@ -105,14 +105,20 @@ def find_ego(scenario: M.Scenario, wanted: str) -> str:
 
 def ego_choice(scenario: M.Scenario, wanted: str) -> tuple[str, str]:
     """The ego entity of a read file and why it was taken (:func:`choose_ego`)."""
-    ents = [(n, e.vehicle.kind == "vehicle") for n, e in scenario.entities.items()]
+    ents = []
+    for n, e in scenario.entities.items():
+        tp = next((a for a in scenario.init.get(n, ()) if isinstance(a, M.TeleportAction)), None)
+        turned = tp is not None and getattr(tp.position, "turned", 0)
+        ents.append((n, "other" if e.vehicle.kind != "vehicle" else "turned" if turned else "vehicle"))
     return choose_ego(ents, wanted, scenario.path)
 
 
-def choose_ego(entities: list[tuple[str, bool]], wanted: str, path: str | os.PathLike[str]) -> tuple[str, str]:
-    """The ego among ``entities`` ((name, is a vehicle) in file order) of the file ``path``,
-    and why: ``wanted`` (``--ego``: exact, else case-insensitive); else the entity named Ego,
-    else the one named hero (exact, else any case); else the first vehicle in file order (the
+def choose_ego(entities: list[tuple[str, str]], wanted: str, path: str | os.PathLike[str]) -> tuple[str, str]:
+    """The ego among ``entities`` ((name, kind) in file order; kind "vehicle", "turned" for a
+    vehicle starting turned against its lane, or "other") of the file ``path``, and why:
+    ``wanted`` (``--ego``: exact, else case-insensitive); else the entity named Ego, else the
+    one named hero (exact, else any case); else the first vehicle in file order that starts
+    along its lane's direction (the ego drives its lane's way), else the first vehicle (the
     reference player has no ego: it follows the first object with its camera)."""
     names = [n for n, _ in entities]
     if wanted:
@@ -128,9 +134,17 @@ def choose_ego(entities: list[tuple[str, bool]], wanted: str, path: str | os.Pat
         folded = [n for n in names if n.lower() == target.lower()]
         if folded:
             return folded[0], f"named {target} (any case)"
-    vehicles = [n for n, is_vehicle in entities if is_vehicle]
-    if vehicles:
-        return vehicles[0], "the first vehicle in file order, as no entity is named Ego or hero (--ego picks another)"
+    why = "as no entity is named Ego or hero (--ego picks another)"
+    along = [n for n, kind in entities if kind == "vehicle"]
+    turned = [n for n, kind in entities if kind == "turned"]
+    if along and turned and names.index(turned[0]) < names.index(along[0]):
+        before = [n for n in turned if names.index(n) < names.index(along[0])]
+        return along[0], (
+            f"the first vehicle in file order that starts along its lane ({', '.join(before)} start turned "
+            f"against theirs, and the ego drives its lane's way), {why}"
+        )
+    if along or turned:
+        return (along or turned)[0], f"the first vehicle in file order, {why}"
     raise ConfigError(
         f"{path}: no vehicle to be the ego (no entity named Ego or hero, and none is a vehicle); choose the ego "
         f"with --ego (entities: {', '.join(names)})"
@@ -1265,7 +1279,7 @@ def file_listing(path: str, ego: str = "") -> dict:
             chosen, why = ego_choice(load(path), ego)
         except ScenarioFileError:
             objects = ents.all("ScenarioObject") if ents is not None else ()
-            raw = [(e["name"], _raw_vehicle(so)) for e, so in zip(entities, objects)]
+            raw = [(e["name"], "vehicle" if _raw_vehicle(so) else "other") for e, so in zip(entities, objects)]
             chosen, why = choose_ego(raw, ego, path)
     except ConfigError:
         if ego:  # an --ego the file does not have is refused, as ego run refuses it

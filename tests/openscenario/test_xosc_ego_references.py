@@ -51,15 +51,20 @@ def _run(path, controller: str = "pid", duration: float = 10.0, **overrides):
 
 # -- which entity is the ego ----------------------------------------------------------------------
 def test_the_ego_is_the_one_named_ego_then_hero_then_the_first_vehicle():
-    assert choose_ego([("Lead", True), ("EGO", True)], "", "f") == ("EGO", "named Ego (any case)")
-    assert choose_ego([("Lead", True), ("hero", True)], "", "f") == ("hero", "named hero")
-    name, why = choose_ego([("Walker", False), ("Car2", True), ("Car1", True)], "", "f")
+    car, walker, turned = "vehicle", "other", "turned"
+    assert choose_ego([("Lead", car), ("EGO", car)], "", "f") == ("EGO", "named Ego (any case)")
+    assert choose_ego([("Lead", car), ("hero", car)], "", "f") == ("hero", "named hero")
+    name, why = choose_ego([("Walker", walker), ("Car2", car), ("Car1", car)], "", "f")
     assert name == "Car2" and why.startswith("the first vehicle in file order")
-    assert choose_ego([("Lead", True), ("Ego", True)], "lead", "f") == ("Lead", "chosen by --ego")
+    # a car turned against its lane is passed over (the ego drives its lane's way), unless all are
+    name, why = choose_ego([("Wrong", turned), ("Right", car)], "", "f")
+    assert name == "Right" and "Wrong start turned against theirs" in why
+    assert choose_ego([("Wrong", turned)], "", "f")[0] == "Wrong"
+    assert choose_ego([("Lead", car), ("Ego", car)], "lead", "f") == ("Lead", "chosen by --ego")
     with pytest.raises(ConfigError, match=r"f: no vehicle to be the ego .* \(entities: Walker\)"):
-        choose_ego([("Walker", False)], "", "f")
+        choose_ego([("Walker", walker)], "", "f")
     with pytest.raises(ConfigError, match="bad value for --ego: 'Nope'"):
-        choose_ego([("Ego", True)], "Nope", "f")
+        choose_ego([("Ego", car)], "Nope", "f")
 
 
 def test_without_an_ego_name_the_first_vehicle_drives_and_list_and_run_agree(tmp_path, capsys):
