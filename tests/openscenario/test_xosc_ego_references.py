@@ -205,3 +205,25 @@ def test_a_speed_profile_on_the_ego_is_its_speed_reference(tmp_path):
     assert np.max(np.abs(v_ref[on] - want[on])) < 1e-9
     assert np.all(v_ref[~on] == 20.0)
     assert np.max(np.abs(v - want)) < 1.6
+
+
+def test_a_time_gap_on_the_ego_is_its_reference_speed_times_the_gap(tmp_path):
+    """timeGap 1.5 s behind A (18 m/s, freespace): the law makes the reference point's gap 1.5 s
+    times its own speed after each step (the standard's time gap: the actor's speed), so the gap
+    closes on 27 m at A's speed geometrically (by 1.5 / 1.6 a step: within 1 cm 12 s later), and
+    the ego follows it (pid: within 2.5 m 10 s later)."""
+    at = {**AWAY, "A": (-3, 70.0, 18.0)}
+    path = scene(tmp_path, [event("D", "Ego", _distance('timeGap="1.5"'), trigger([sim_time(1.0)]))], at=at)
+    sc, _ = _run(path, duration=14.0, evade=False)
+    tr, names = sc.trace.array(), sc.trace.names
+    t, s, s_ref, v_ref = (tr[:, names.index(k)] for k in ("t", "s", "s_ref", "speed_ref"))
+    g = sc.geometry
+    off = g.cg_to_front - 0.5 * g.length
+    a_s = 70.0 + 18.0 * t
+    late = t > 13.0
+    gap_ref = a_s - (s_ref + off) - 4.5
+    assert np.max(np.abs(gap_ref[late] - 27.0)) < 0.01
+    assert np.max(np.abs(v_ref[late] - 18.0)) < 0.01
+    assert np.all(np.diff(gap_ref[(t > 1.35) & (t < 13.0)]) <= 1e-9)  # closing, never overshooting
+    gap = a_s - (s + off) - 4.5
+    assert abs(gap[np.searchsorted(t, 11.0)] - 27.0) < 2.5
