@@ -91,7 +91,11 @@ def add_scenario(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "scenario", metavar="SCENARIO", help=f"one of: {', '.join(SCENARIOS)}; or an OpenSCENARIO file (.xosc)"
     )
-    p.add_argument("--ego", metavar="ENTITY", help="with an .xosc file: the entity ego drives (default Ego)")
+    p.add_argument(
+        "--ego",
+        metavar="ENTITY",
+        help="with an .xosc file: the entity ego drives (default: Ego, else hero, else the first vehicle)",
+    )
 
 
 def add_backend(p: argparse.ArgumentParser, backends: tuple[str, ...], help: str) -> None:
@@ -278,7 +282,11 @@ def add_list(sub) -> None:
         "its variables, the tasks it drives and its parameters; or an OpenSCENARIO "
         "file: its parameters, entities, the ego and every element (supported or not)",
     )
-    lst.add_argument("--ego", metavar="ENTITY", help="with FILE.xosc: the entity ego drives (default Ego)")
+    lst.add_argument(
+        "--ego",
+        metavar="ENTITY",
+        help="with FILE.xosc: the entity ego drives (default: Ego, else hero, else the first vehicle)",
+    )
     lst.add_argument("--json", action="store_true", help="print JSON instead of text")
     lst.add_argument(
         "--markdown",

@@ -15,6 +15,7 @@ import numpy as np
 from ego.openscenario import model as M
 from ego.openscenario.curves import clothoid, nurbs
 from ego.openscenario.dynamics import DYNAMICS_LIMITS, Transition, lateral_duration, offset_duration, speed_duration
+from ego.openscenario.ego_refs import EgoGap, EgoPath, SpeedKnots, to_lane_frame
 from ego.openscenario.registry import ActionKind, register
 from ego.openscenario.runtime import EPS, INF, ActionRun, Storyboard, speed_profile_knots
 from ego.openscenario.xmltree import DOCS, Node
@@ -304,14 +305,15 @@ class LongitudinalDistance(ActionKind):
     in_init, init_note = "runs", "LongitudinalDistanceAction"
     contains = ("DynamicConstraints",)
     parts = {"DynamicConstraints": ()}
-    domains = ("long",)
+    domains, on_ego = ("long",), True
     note = (
         "`distance` or `timeGap` (times the actor's own speed, as the standard), `freespace` (between the boxes) "
         "or centres, `displacement` trailing (default, `any`) or leading, `continuous` (else it ends once held "
         "within 1 cm); without `DynamicConstraints` the actor is at the distance after one step and then exactly "
         "there every step (within 1e-6: `test_xosc_alks_forms.py`); with them it keeps `maxAcceleration`, "
         "`maxDeceleration`, `maxSpeed` and closes at the speed from which its braking limit still stops at the "
-        "distance a step later; not on the ego"
+        "distance a step later; on the ego the same law drives the reference point its longitudinal reference "
+        "follows (see How the ego is chosen)"
     )
 
     def build(self, b: Any, n: Node) -> M.LongitudinalDistanceAction:
@@ -334,45 +336,75 @@ class LongitudinalDistance(ActionKind):
         )
 
     def start(self, run: ActionRun, t: float) -> None:
-        pass  # commanded step by step
+        if run.is_ego:
+            # the ego's longitudinal reference follows a reference point driven by the law
+            b = run.board
+            run.law = EgoGap(t, b.states[run.actor].s, b.driver.ego_references()[0])
+            b.driver.ego_longitudinal(run.law)
 
     def step(self, run: ActionRun, t: float) -> None:
         """The speed over [t, t + step] that puts the actor at the held distance from the
-        entity at t + step (the entity as it drives on at its speed at t), within the
-        action's dynamic constraints; a non-continuous action ends once the distance is
-        held (within 1 cm)."""
+        entity at t + step (:func:`distance_speed`); a non-continuous action ends once the
+        distance is held (within 1 cm). On the ego the law drives its reference point."""
         b, a = run.board, run.action
         h = b.h
         me, ref = b.states[run.actor], b.states[a.entity]
-        sign = 1.0 if a.leading else -1.0  # the actor ahead of (+) or behind (-) the entity
-        extra = 0.5 * (me.length + ref.length) if a.freespace else 0.0
-        ref_next = ref.s + ref.speed * h
-        constrained = math.isfinite(a.max_accel) or math.isfinite(a.max_decel)
-        if a.distance is not None or constrained:
-            # the position error now; unconstrained it is closed in one step, else at the
-            # speed from which the deceleration limit still stops at the goal
-            held = a.distance if a.distance is not None else (a.time_gap or 0.0) * ref.speed
-            err = ref.s + sign * (held + extra) - me.s
-            close = abs(err) / h
-            stop = a.max_decel if err > 0.0 else a.max_accel  # what ends the closing
-            if math.isfinite(stop):
-                # the relative speed from which ``stop`` still ends at the goal, a step later
-                close = min(-stop * h + math.sqrt((stop * h) ** 2 + 2.0 * stop * abs(err)), close)
-            v = ref.speed + math.copysign(close, err)
+        if run.is_ego:
+            law = run.law
+            s, v0 = law.longitudinal(t)
         else:
-            # s + v h = ref_next + sign (tg v + extra): the gap is tg times the actor's speed
-            tg = a.time_gap or 0.0
-            denom = h - sign * tg
-            v = (ref_next + sign * extra - me.s) / denom if abs(denom) > EPS else me.speed
-        lo = max(me.speed - a.max_decel * h, 0.0)
-        hi = min(me.speed + a.max_accel * h, a.max_speed)
-        v = min(max(v, lo), hi)
-        rate = abs(v - me.speed) / h
-        b.driver.speed(run.actor, v, rate if constrained else INF)
-        gap = sign * (me.s - ref.s) - extra
-        held = a.distance if a.distance is not None else (a.time_gap or 0.0) * me.speed
+            s, v0 = me.s, me.speed
+        v = distance_speed(a, s, v0, ref.s, ref.speed, me.length, ref.length, h)
+        if run.is_ego:
+            law.advance(t, v, h, ref.speed)
+        else:
+            constrained = math.isfinite(a.max_accel) or math.isfinite(a.max_decel)
+            b.driver.speed(run.actor, v, abs(v - me.speed) / h if constrained else INF)
+        sign = 1.0 if a.leading else -1.0
+        extra = 0.5 * (me.length + ref.length) if a.freespace else 0.0
+        gap = sign * (s - ref.s) - extra
+        held = a.distance if a.distance is not None else (a.time_gap or 0.0) * v0
         if not a.continuous and abs(gap - held) < 0.01:
             run.finished = True
+
+
+def distance_speed(
+    a: M.LongitudinalDistanceAction,
+    s: float,
+    v: float,
+    ref_s: float,
+    ref_v: float,
+    length: float,
+    ref_length: float,
+    h: float,
+) -> float:
+    """The standard's LongitudinalDistanceAction as a law: the actor's speed over the next
+    step ``h`` (s) from its box centre ``s`` and speed ``v`` and the referenced entity's
+    (``ref_s``, ``ref_v``; lengths for freespace), that puts it at the held distance from the
+    entity at the end of the step (the entity driving on at its speed), within the action's
+    dynamic constraints: unconstrained the position error is closed in one step, with them at
+    the speed from which the braking (or accelerating) limit still ends at the goal."""
+    sign = 1.0 if a.leading else -1.0  # the actor ahead of (+) or behind (-) the entity
+    extra = 0.5 * (length + ref_length) if a.freespace else 0.0
+    ref_next = ref_s + ref_v * h
+    constrained = math.isfinite(a.max_accel) or math.isfinite(a.max_decel)
+    if a.distance is not None or constrained:
+        held = a.distance if a.distance is not None else (a.time_gap or 0.0) * ref_v
+        err = ref_s + sign * (held + extra) - s
+        close = abs(err) / h
+        stop = a.max_decel if err > 0.0 else a.max_accel  # what ends the closing
+        if math.isfinite(stop):
+            # the relative speed from which ``stop`` still ends at the goal, a step later
+            close = min(-stop * h + math.sqrt((stop * h) ** 2 + 2.0 * stop * abs(err)), close)
+        out = ref_v + math.copysign(close, err)
+    else:
+        # s + v h = ref_next + sign (tg v + extra): the gap is tg times the actor's speed
+        tg = a.time_gap or 0.0
+        denom = h - sign * tg
+        out = (ref_next + sign * extra - s) / denom if abs(denom) > EPS else v
+    lo = max(v - a.max_decel * h, 0.0)
+    hi = min(v + a.max_accel * h, a.max_speed)
+    return min(max(out, lo), hi)
 
 
 def _limits(b: Any, n: Node, *names: tuple[str, str]) -> dict[str, float]:
@@ -390,7 +422,7 @@ class SpeedProfile(ActionKind):
     in_init, init_note = "runs", "SpeedProfileAction"
     contains = ("DynamicConstraints", "SpeedProfileEntry")
     parts = {"DynamicConstraints": (), "SpeedProfileEntry": ()}
-    domains = ("long",)
+    domains, on_ego = ("long",), True
     label = "`SpeedProfileAction` (1.2)"
     note = (
         "the speed goes linearly through its `SpeedProfileEntry`s, each entry's `speed` reached in its `time` "
@@ -399,7 +431,7 @@ class SpeedProfile(ActionKind):
         "quick for them takes longer), position follows the times; commanded step by step (within 1e-6 of the "
         "profile, `test_xosc_player_forms.py`). **Deviation:** the jerk limits (`maxAccelerationRate`, "
         "`maxDecelerationRate`) are read and not applied (the reference player smooths with them in follow mode); "
-        "not on the ego"
+        "on the ego its speed reference"
     )
 
     def build(self, b: Any, n: Node) -> M.SpeedProfileAction:
@@ -417,11 +449,19 @@ class SpeedProfile(ActionKind):
     def start(self, run: ActionRun, t: float) -> None:
         a, states = run.action, run.board.states
         ref = states[a.relative_to].speed if a.relative_to else 0.0
-        run.knots = speed_profile_knots(a, t, states[run.actor].speed, ref)
+        # the ego's speed reference goes through the knots from where it is
+        v0 = run.board.driver.ego_references()[0] if run.is_ego else states[run.actor].speed
+        run.knots = speed_profile_knots(a, t, v0, ref)
+        if run.is_ego:
+            run.law = SpeedKnots(*run.knots)
+            run.board.driver.ego_speed(run.law, None)
 
     def step(self, run: ActionRun, t: float) -> None:
         ts, vs = run.knots
         t1 = t + run.board.h
+        if run.is_ego:
+            run.finished = t1 >= ts[-1] - EPS
+            return
         v = vs[-1] if t1 >= ts[-1] else float(np.interp(t1, ts, vs))
         run.board.driver.speed(run.actor, max(v, 0.0), INF)
         if t1 >= ts[-1] - EPS:
@@ -642,13 +682,14 @@ class FollowTrajectory(ActionKind):
         "None": (),
         "Timing": (),
     }
-    releases = True
+    releases, on_ego = True, True
     label = "`FollowTrajectoryAction` with `Polyline`, `Clothoid`, `ClothoidSpline` (1.3) or `Nurbs`"
     also = ("Polyline", "Clothoid", "ClothoidSpline", "Nurbs")
     note = (
         "the entity's reference point (its box centre less the box's `center.x`) moves along the shape; `Timing` "
         "absolute or relative with scale and offset (vertex, control point or clothoid times), or none (the "
-        "entity's speed at the start); `initialDistanceOffset`; not on the ego. A `Clothoid` (curvature, "
+        "entity's speed at the start); `initialDistanceOffset`; on the ego its lateral reference (timed, its "
+        "longitudinal one too: see How the ego is chosen). A `Clothoid` (curvature, "
         "`curvaturePrime`; the 1.0 `curvatureDot` read as the same rate per metre, as the reference player reads "
         "it) and a `ClothoidSpline`'s `Segment`s (`curvatureStart` to `curvatureEnd`, `hOffset`, `PositionStart`; "
         "the first without one starts at the entity; the reference player's pre-standard `curvStart`/`curvEnd` "
@@ -660,6 +701,10 @@ class FollowTrajectory(ActionKind):
         "parameters; a control point's time is combined like its position (as the reference player does; the "
         "standard gives no time between control points); catalog trajectories refused"
     )
+
+    def domains_of(self, action: M.FollowTrajectoryAction, ego: bool) -> tuple[str, ...]:
+        # on the ego an untimed path is a lateral reference only (its speed stays the ego's)
+        return ("lat",) if ego and action.timing is None else self.domains
 
     def build(self, b: Any, inner: Node) -> M.FollowTrajectoryAction:
         traj_node = inner.child("Trajectory")
@@ -791,6 +836,14 @@ class FollowTrajectory(ActionKind):
             run.v = b.states[run.actor].speed
             run.t0 = t
             run.s0 = a.initial_distance_offset
+        if run.is_ego:
+            # the ego's references: the path's offset at its s (and, timed, its s at the time)
+            lead_in = None
+            if run.times is not None and t < run.times[0]:
+                cx = b.scenario.entities[run.actor].vehicle.center_x
+                lead_in = (t, b.states[run.actor].s - cx)
+            run.law = EgoPath(*to_lane_frame(b.driver.road_frame, run.xy), run.times, lead_in)
+            b.driver.ego_trajectory(run.law)
 
     @staticmethod
     def path(run: ActionRun) -> tuple[list[tuple[float, float]], list[float] | None]:
@@ -828,6 +881,14 @@ class FollowTrajectory(ActionKind):
         return x0 + u * (x1 - x0), y0 + u * (y1 - y0), heading, speed, end
 
     def step(self, run: ActionRun, t: float) -> None:
+        if run.is_ego:
+            b = run.board
+            e = b.states[run.actor]
+            # the action ends when the ego's reference point (its box centre less center.x) has
+            # passed the path's end, or a timed path's time is over
+            cx = b.scenario.entities[run.actor].vehicle.center_x
+            run.finished = run.law.done(t, e.s - cx)
+            return
         x, y, heading, speed, end = self.point(run, t + run.board.h)
         # the path is the reference point's: SUMO places the box centre center.x ahead of it
         cx = run.board.scenario.entities[run.actor].vehicle.center_x

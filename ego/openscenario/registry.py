@@ -146,6 +146,10 @@ class ActionKind:
         """The model of the action ``node`` (``b``: the loader's builder, its typed readers)."""
         raise NotImplementedError
 
+    def domains_of(self, action: Any, ego: bool) -> tuple[str, ...]:
+        """The domains this read action drives on its actor (``ego``: the actor is the ego)."""
+        return self.domains
+
     def init_ok(self, action: Any) -> bool:
         """Whether this read action may stand in Init (when :attr:`in_init` is "yes" or "runs")."""
         return True

@@ -19,10 +19,11 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
 
 from ego.openscenario import model as M
 from ego.openscenario.dynamics import Transition
+from ego.openscenario.ego_refs import EgoGap, EgoPath
 from ego.openscenario.registry import CONDITIONS, action_of
 
 INF = math.inf
@@ -81,6 +82,12 @@ class Driver(Protocol):
     def release(self, name: str) -> None: ...
     def ego_speed(self, profile: Transition | None, relative: tuple[str, str, float] | None) -> None: ...
     def ego_lateral(self, profile: Transition) -> None: ...
+    def ego_trajectory(self, path: EgoPath) -> None:
+        """A trajectory becomes the ego's lateral (and, timed, longitudinal) reference."""
+
+    def ego_longitudinal(self, law: EgoGap) -> None:
+        """The ego's longitudinal reference follows ``law`` (its s and speed at a time)."""
+
     def route(self, name: str, waypoints: tuple[M.Position, ...]) -> None:
         """Route ``name`` through the waypoints' roads (SUMO's driver drives it)."""
 
@@ -496,7 +503,7 @@ class ActionRun:
     def __init__(self, board: Storyboard, element: Element, actor: str, action: M.PrivateAction) -> None:
         self.board, self.element, self.actor, self.action = board, element, actor, action
         self.kind = action_of(action)
-        self.domains: tuple[str, ...] = self.kind.domains
+        self.domains: tuple[str, ...] = self.kind.domains_of(action, actor == board.ego)
         self.finished = False
         self.profile: Transition | None = None
         self.native = False  #: a speed change run by SUMO's own per-step rate
@@ -505,6 +512,8 @@ class ActionRun:
         self.cum: list[float] = []
         self.times: list[float] | None = None
         self.v = self.t0 = self.s0 = 0.0
+        #: on the ego: the reference law the action gives its controller (ego_refs.py)
+        self.law: Any = None
 
     @property
     def is_ego(self) -> bool:
@@ -512,6 +521,8 @@ class ActionRun:
 
     def stop(self) -> None:
         self.finished = True
+        if self.is_ego and self.law is not None:
+            self.law.stop()
         if not self.is_ego and self.kind.releases:
             self.board.driver.release(self.actor)
 

@@ -1,11 +1,13 @@
 """A scenario file as a scenario of ego: the one module joining the file's model and its
 storyboard to ego's motorway machinery.
 
-The ego entity (``--ego``, default the entity named ``Ego`` in any case) gets ego's plant,
+The ego entity (``--ego``; default the entity named ``Ego``, else ``hero``, in any case, else the
+first vehicle in file order: :func:`choose_ego`) gets ego's plant,
 controller, surround sensor and manoeuvre: the evasive logic of ``emergency-brake`` (front
 TTC trigger, gap acceptance, AEB, braking in lane) with its parameters (``--set
 evade=false`` ...). Its Init lane and speed are its references; SpeedAction and
-LaneChange/LaneOffsetAction addressed to it move those references. Every other entity is a
+LaneChange/LaneOffsetAction addressed to it move those references, and a trajectory, a
+longitudinal distance or a speed profile on it become references too (ego_refs.py). Every other entity is a
 SUMO vehicle that the storyboard commands through the bridge; when no action holds it, SUMO's
 driver model drives it (lane changes off, an Init speed held as its desired speed).
 
@@ -38,6 +40,7 @@ from ego.lane_frame import LanePolyline
 from ego.openscenario import model as M
 from ego.openscenario.actions import along_path, trajectory_points
 from ego.openscenario.dynamics import Transition
+from ego.openscenario.ego_refs import EgoGap, EgoPath
 from ego.openscenario.kinematic import Kinematic
 from ego.openscenario.loader import declared_parameters, header_description, load
 from ego.openscenario.registry import action_of
@@ -63,7 +66,9 @@ ENTITY_COLORS = ((255, 150, 0), (0, 170, 255), (160, 60, 220), (40, 180, 90), (2
 class FileConfig(EvasiveConfig):
     """ego's parameters of a file scenario (the file's own parameters are added per file)."""
 
-    ego_entity: str = param("", "-", "the entity ego drives (--ego; default: the one named Ego, any case)")
+    ego_entity: str = param(
+        "", "-", "the entity ego drives (--ego; default: the one named Ego, else hero, else the first vehicle)"
+    )
     ego_speed: float = param(20.0, "m/s", "ego's initial speed (default: the file's Init)", min=0.0, max=60.0)
     ego_lane: int = param(1, "-", "ego's SUMO lane index, 0 = right (default: the file's Init)", min=0, max=15)
     ego_start: float = param(
@@ -89,22 +94,62 @@ _TYPES = {
 _PY = {"float": float, "int": int, "bool": bool, "str": str}
 
 
+#: names a test engineer gives the vehicle under test, in order of preference (any case):
+#: ``Ego``, and ``hero`` (CARLA's and its scenario runner's name for it)
+EGO_NAMES = ("Ego", "hero")
+
+
 def find_ego(scenario: M.Scenario, wanted: str) -> str:
-    """The ego entity: ``wanted`` (exact, else case-insensitive), else the one named Ego."""
-    return pick_ego(list(scenario.entities), wanted, scenario.path)
+    """The ego entity (see :func:`choose_ego`)."""
+    return ego_choice(scenario, wanted)[0]
 
 
-def pick_ego(names: list[str], wanted: str, path: str | os.PathLike[str]) -> str:
-    """:func:`find_ego` among the entity ``names`` of the file ``path``."""
-    target = wanted or "Ego"
-    if target in names:
-        return target
-    folded = [n for n in names if n.lower() == target.lower()]
-    if len(folded) == 1:
-        return folded[0]
+def ego_choice(scenario: M.Scenario, wanted: str) -> tuple[str, str]:
+    """The ego entity of a read file and why it was taken (:func:`choose_ego`)."""
+    ents = []
+    for n, e in scenario.entities.items():
+        tp = next((a for a in scenario.init.get(n, ()) if isinstance(a, M.TeleportAction)), None)
+        turned = tp is not None and getattr(tp.position, "turned", 0)
+        ents.append((n, "other" if e.vehicle.kind != "vehicle" else "turned" if turned else "vehicle"))
+    return choose_ego(ents, wanted, scenario.path)
+
+
+def choose_ego(entities: list[tuple[str, str]], wanted: str, path: str | os.PathLike[str]) -> tuple[str, str]:
+    """The ego among ``entities`` ((name, kind) in file order; kind "vehicle", "turned" for a
+    vehicle starting turned against its lane, or "other") of the file ``path``, and why:
+    ``wanted`` (``--ego``: exact, else case-insensitive); else the entity named Ego, else the
+    one named hero (exact, else any case); else the first vehicle in file order that starts
+    along its lane's direction (the ego drives its lane's way), else the first vehicle (the
+    reference player has no ego: it follows the first object with its camera)."""
+    names = [n for n, _ in entities]
     if wanted:
+        if wanted in names:
+            return wanted, "chosen by --ego"
+        folded = [n for n in names if n.lower() == wanted.lower()]
+        if len(folded) == 1:
+            return folded[0], "chosen by --ego"
         raise ConfigError(f"bad value for --ego: {wanted!r} (entities: {', '.join(names)})")
-    raise ConfigError(f"{path}: no entity named Ego; choose the ego with --ego (entities: {', '.join(names)})")
+    for target in EGO_NAMES:
+        if target in names:
+            return target, f"named {target}"
+        folded = [n for n in names if n.lower() == target.lower()]
+        if folded:
+            return folded[0], f"named {target} (any case)"
+    why = "as no entity is named Ego or hero (--ego picks another)"
+    along = [n for n, kind in entities if kind == "vehicle"]
+    turned = [n for n, kind in entities if kind == "turned"]
+    if along and turned and names.index(turned[0]) < names.index(along[0]):
+        before = [n for n in turned if names.index(n) < names.index(along[0])]
+        return along[0], (
+            f"the first vehicle in file order that starts along its lane ({', '.join(before)} start turned "
+            f"against theirs, and the ego drives its lane's way), {why}"
+        )
+    if along or turned:
+        return (along or turned)[0], f"the first vehicle in file order, {why}"
+    raise ConfigError(
+        f"{path}: no vehicle to be the ego (no entity named Ego or hero, and none is a vehicle); choose the ego "
+        f"with --ego (entities: {', '.join(names)})"
+    )
 
 
 @dataclass(frozen=True)
@@ -412,14 +457,6 @@ class FileScenario(Scenario):
         edge = starts[ego].edge
         _check_road_references(model, roads, len(roads.edges[edge].lanes), len(_opposite_lanes(roads, edge)))
         _check_routes(model, roads)
-        if starts[ego].offset:
-            pos = next(a for a in model.init[ego] if isinstance(a, M.TeleportAction)).position
-            raise ScenarioFileError(
-                model.path,
-                pos.line,
-                f"the ego {ego!r} starts {starts[ego].offset:g} m off its lane's centre: the ego starts on "
-                "its lane's centre (offset 0; a LaneOffsetAction moves it)",
-            )
         return model, roads, ego, starts
 
     @classmethod
@@ -496,6 +533,17 @@ class FileScenario(Scenario):
             manoeuvre_cls=FileManoeuvre,
         )
         parts.manoeuvre.story = self.story
+        offset = self.starts[self.ego_name].offset
+        if offset and parts.make_plant is not None:
+            # SUMO inserts the ego on its lane's centre: its plant starts at the file's offset
+            # (+ left of the lane's heading), which is held as its lateral reference
+            make = parts.make_plant
+
+            def make_plant(config, geometry, pose, make=make):
+                x, y, psi = pose
+                return make(config, geometry, (x - offset * math.sin(psi), y + offset * math.cos(psi), psi))
+
+            parts.make_plant = make_plant
         return parts
 
     def _make_bridge(self) -> TrafficSim:
@@ -533,6 +581,8 @@ class FileScenario(Scenario):
         self.view.target_lane = lane
 
     def after_setup(self) -> None:
+        name, why = ego_choice(self.model, self.config.ego_entity)
+        self.event("ego", f"the ego is {name!r}: {why}")
         self.story.start()
 
     def before_sim_step(self) -> None:
@@ -632,6 +682,10 @@ class StoryDriver:
         self._ego_profile: Transition | None = None
         self._ego_relative: tuple | None = None
         self._ego_lateral: Transition | None = None
+        #: a trajectory on the ego (its lateral reference) and a law its longitudinal
+        #: reference follows (a timed trajectory, a longitudinal distance): ego_refs.py
+        self._ego_path: EgoPath | None = None
+        self._ego_long: EgoPath | EgoGap | None = None
         self._cruise_s: float | None = None
         self._cruise_v = 0.0
         self.history = {}
@@ -653,10 +707,34 @@ class StoryDriver:
             own = start.speed if v.kind == "vehicle" else (start.speed or 0.0)
             speed = max(c.ego_speed, own if own is not None else 0.0) if v.kind == "vehicle" else own
             world.vehicle(
-                VehicleSpec(name, vt.id, self._route(start.edge), start.index, start.front, speed),
+                VehicleSpec(name, vt.id, self._route(start.edge), start.index, self._insert_at(name), speed),
                 vt,
                 ScriptedEntity(name, own),
             )
+
+    def _insert_at(self, name: str) -> float:
+        """Where SUMO inserts ``name`` (its front along its lane, m): its start, unless it starts
+        off its lane's centre beside another body of its SUMO lane (SUMO inserts on the centre,
+        where the two would overlap): then at the lane's end or start, or just ahead of the
+        others, from where :meth:`start` moves it to its start before the first step."""
+        sc = self.sc
+        me = sc.starts[name]
+        length = sc.model.entities[name].vehicle.length
+        if not me.offset:
+            return me.front
+        lane = sc.roads.edges[me.edge].lanes[me.index]
+        others = [
+            (p.front - sc.model.entities[n].vehicle.length, p.front)
+            for n, p in sc.starts.items()
+            if n != name and (p.edge, p.index) == (me.edge, me.index)
+        ]
+        if not any(b < me.front and me.front - length < f for b, f in others):
+            return me.front
+        # as far from the others as the lane allows (the sensor sees it there at t = 0)
+        for front in (lane.length, length, max(f for _, f in others) + length + 1.0):
+            if length <= front <= lane.length and not any(b < front and front - length < f for b, f in others):
+                return front
+        return me.front
 
     def start(self) -> None:
         """The storyboard starts from the entities' start positions; an entity off its lane's
@@ -670,6 +748,10 @@ class StoryDriver:
                 along = start.front - 0.5 * sc.model.entities[name].vehicle.length
                 x, y = poly.offset_point(along, start.offset)
                 sc.bridge.place(name, x, y, poly.heading_at(along), start.speed or 0.0)
+        offset = sc.starts[sc.ego_name].offset
+        if offset:
+            d0 = sc.lane_offset[sc.config.ego_lane] + offset
+            self._ego_lateral = Transition(0.0, d0, d0, 0.0, "step")
         self._start_kinematic()
         self._traffic = TrafficActions(
             sc.bridge,
@@ -701,14 +783,35 @@ class StoryDriver:
         for k, lane in enumerate(lanes):
             mid = lane.shape[len(lane.shape) // 2]
             self._lanes_all[len(own) + k] = road.project(mid[0], mid[1])[1]
+        if lanes:
+            # the other direction's lanes are road too (a trajectory may take the ego there):
+            # off the road beyond their outer edge by more than half a car
+            outer = abs(self._lanes_all[len(own) + len(lanes) - 1]) + 0.5 * lanes[-1].width
+            view = sc.view
+            view.road_halfwidth = max(view.road_halfwidth, outer + 0.5 * sc.geometry.width + 0.5)
+        ego_edge = sc.starts[sc.ego_name].edge
+        centre_line = 0.5 * (max(own.values()) + self._lanes_all[len(own)]) if lanes else INF
         for name, start in sc.starts.items():
             tp = next(a for a in sc.model.init[name] if isinstance(a, M.TeleportAction))
-            if name == sc.ego_name or not getattr(tp.position, "turned", 0):
+            if name == sc.ego_name:
                 continue
-            x, y, h = self.position_xy(tp.position, {})
-            heading = h + math.pi  # turned round on its lane
-            cx = sc.model.entities[name].vehicle.center_x
-            x, y = x + cx * math.cos(heading), y + cx * math.sin(heading)
+            turned = getattr(tp.position, "turned", 0)
+            # a car whose Init offset puts it across the centre line, in the other direction's
+            # lane, driving its own lane's way (speed-profile.xosc's Car2): driven by ego too
+            across = start.edge == ego_edge and own.get(start.index, 0.0) + start.offset > centre_line
+            if not (turned or across):
+                continue
+            if turned:
+                x, y, h = self.position_xy(tp.position, {})
+                heading = h + math.pi  # turned round on its lane
+                cx = sc.model.entities[name].vehicle.center_x
+                x, y = x + cx * math.cos(heading), y + cx * math.sin(heading)
+            else:  # its box centre from its placement (a relative position's entity has no state yet)
+                lane = sc.roads.edges[start.edge].lanes[start.index]
+                poly = LanePolyline(lane.shape, lane.width, lane.id)
+                along = start.front - 0.5 * sc.model.entities[name].vehicle.length
+                x, y = poly.offset_point(along, start.offset)
+                heading = poly.heading_at(along)
             s, d, _ = road.project(x, y)
             direction = 1 if math.cos(heading - road.heading_at(s)) > 0.0 else -1
             self._kin.add(name, s, d, start.speed or 0.0, direction)
@@ -970,9 +1073,34 @@ class StoryDriver:
     def ego_speed(self, profile, relative) -> None:
         sc = self.sc
         self._ego_profile, self._ego_relative = profile, relative
+        if self._ego_long is not None:  # on from where the law had the reference
+            self._cruise_s, self._cruise_v = self._long_reference(sc.t)
+            self._ego_long = None
         if self._cruise_s is None:
             c = sc.config
             self._cruise_s = sc.manoeuvre.s0 + c.ego_speed * sc.t
+
+    def ego_longitudinal(self, law) -> None:
+        self._ego_long = law
+        self._ego_profile = self._ego_relative = None
+
+    def ego_trajectory(self, path: EgoPath) -> None:
+        self._ego_path, self._ego_lateral = path, None
+        if path.times is not None:
+            self.ego_longitudinal(path)
+
+    def _long_reference(self, t: float) -> tuple[float, float]:
+        """The ego's (s of its centre of gravity, speed) reference from its longitudinal law: the
+        law's s is of the entity's box centre (EgoGap) or of its reference point (a timed path)."""
+        sc = self.sc
+        law = self._ego_long
+        assert law is not None
+        s, v = law.longitudinal(t)
+        g = sc.geometry
+        back = g.cg_to_front - 0.5 * g.length  # the box centre ahead of the cg
+        if isinstance(law, EgoPath):
+            back -= sc.model.entities[sc.ego_name].vehicle.center_x
+        return s - back, v
 
     def ego_references(self) -> tuple[float, float]:
         sc = self.sc
@@ -980,7 +1108,7 @@ class StoryDriver:
 
     def ego_lateral(self, profile: Transition) -> None:
         sc = self.sc
-        self._ego_lateral = profile
+        self._ego_lateral, self._ego_path = profile, None
         sc.target_lane = min(sc.lane_offset, key=lambda i: abs(profile.end - sc.lane_offset[i]))
 
     # -- the ego's references ---------------------------------------------------------------
@@ -1002,10 +1130,22 @@ class StoryDriver:
             self._cruise_v = v
             obs.s_ref, obs.ds_ref = self._cruise_s, v
             sc.manoeuvre.speed_ref = v
+        if self._ego_long is not None:
+            s_ref, v = self._long_reference(t_board)
+            obs.s_ref, obs.ds_ref = s_ref, v
+            sc.manoeuvre.speed_ref = v
         if self._ego_lateral is not None:
             p = self._ego_lateral
             obs.d_ref = p.value(t_board) - sc.lane_offset[sc.target_lane]
             obs.dd_ref = 0.0  # obs.d from the target lane: the surround view's observation
+        elif self._ego_path is not None:
+            # the path's offset at the ego's reference point (its box centre less center.x)
+            g = sc.geometry
+            here = sc.s + g.cg_to_front - 0.5 * g.length - sc.model.entities[sc.ego_name].vehicle.center_x
+            d = self._ego_path.d_at(here)
+            sc.target_lane = min(sc.lane_offset, key=lambda i: abs(d - sc.lane_offset[i]))
+            obs.d_ref = d - sc.lane_offset[sc.target_lane]
+            obs.dd_ref = self._ego_path.slope * obs.ds  # the rate the path's offset moves at
 
 
 class ScriptedEntity:
@@ -1165,9 +1305,17 @@ def file_listing(path: str, ego: str = "") -> dict:
         elif body is not None and body.tag == "CatalogReference":
             kind = f"CatalogReference {body.attrs.get('catalogName', '?')}/{body.attrs.get('entryName', '?')}"
         entities.append({"name": so.attrs.get("name", "?"), "kind": kind, "line": so.line})
-    names = [e["name"] for e in entities]
+    why = ""
     try:
-        chosen: str | None = pick_ego(names, ego, path)
+        # the run's choice, from the read file (which entities are vehicles, catalogs too);
+        # from the tree's bodies when the file cannot be read
+        try:
+            chosen: str | None
+            chosen, why = ego_choice(load(path), ego)
+        except ScenarioFileError:
+            objects = ents.all("ScenarioObject") if ents is not None else ()
+            raw = [(e["name"], "vehicle" if _raw_vehicle(so) else "other") for e, so in zip(entities, objects)]
+            chosen, why = choose_ego(raw, ego, path)
     except ConfigError:
         if ego:  # an --ego the file does not have is refused, as ego run refuses it
             raise
@@ -1190,6 +1338,7 @@ def file_listing(path: str, ego: str = "") -> dict:
         ],
         "entities": entities,
         "ego": chosen,
+        "ego_why": why,
         "ego_parameters": [
             {"name": i.name, "default": getattr(start, i.name), "unit": i.unit, "description": i.doc}
             for i in describe(FileConfig)
@@ -1199,6 +1348,18 @@ def file_listing(path: str, ego: str = "") -> dict:
         "supported": error is None and all(ok for _, _, ok in els),
         "error": error,
     }
+
+
+def _raw_vehicle(so) -> bool:
+    """Whether a ScenarioObject of an unreadable file is a vehicle: a <Vehicle>, or an entry of a
+    catalog not named for pedestrians or misc objects."""
+    body = next((c for c in so.children if c.tag != "ObjectController"), None)
+    if body is None:
+        return False
+    if body.tag == "CatalogReference":
+        name = body.attrs.get("catalogName", "")
+        return "pedestrian" not in name.lower() and "miscobject" not in name.lower()
+    return body.tag == "Vehicle"
 
 
 def check_file(path: str, overrides: Mapping[str, object]):
@@ -1226,10 +1387,10 @@ def print_listing(listing: dict) -> str:
         out.append(f"  {p['name']:<24} {p['type']:<8} default {p['default']!s:<12} line {p['line']}{note}")
     out += ["", "entities:"]
     for e in listing["entities"]:
-        mark = "  <- the ego" if e["name"] == listing["ego"] else ""
+        mark = f"  <- the ego: {listing.get('ego_why', '')}" if e["name"] == listing["ego"] else ""
         out.append(f"  {e['name']:<24} {e['kind']:<30} line {e['line']}{mark}")
     if listing["ego"] is None:
-        out.append("  (no entity named Ego: choose one with --ego)")
+        out.append("  (no vehicle to be the ego: choose one with --ego)")
     out += ["", "ego's parameters of a file scenario (--set):"]
     for p in listing["ego_parameters"]:
         out.append(f"  {p['name']:<24} {p['default']!s:<8} {p['unit']:<7} {p['description']}")

@@ -85,6 +85,26 @@ def test_a_car_turned_round_in_the_oncoming_lane_drives_the_egos_way(tmp_path, m
         assert v == pytest.approx(15.0, abs=1e-9)
 
 
+def test_a_car_offset_across_the_centre_line_beside_the_ego_drives_its_own_way(tmp_path, monkeypatch):
+    """T starts in the ego's lane -1 at the ego's s with offset 3.5 (the reference player's
+    speed-profile.xosc form: its centre in the oncoming lane, heading its own lane's way), 15 m/s:
+    SUMO inserts it elsewhere on the lane (both on the lane's centre would overlap), ego drives
+    it from its start, 1.5 m a step, 3.5 m left of the ego's lane."""
+    rows = _record(monkeypatch, "T")
+    path = _scene(tmp_path, {"Ego": (-1, 30.0, 15.0, False), "T": (-1, 30.0, 15.0, False)})
+    text = path.read_text()
+    i = text.index('<Private entityRef="T">')
+    path.write_text(text[:i] + text[i:].replace('offset="0"', 'offset="3.5"', 1))
+    sc = run_scene(path, 3.0)
+    assert sc.status == "completed"
+    s0 = rows[0.1][0]
+    assert s0 == pytest.approx(30.0 + 1.5, abs=1e-6)  # from its start, level with the ego
+    for k in range(1, 25):
+        s, d, v, _ = rows[round(0.1 * k, 6)]
+        assert s - s0 == pytest.approx(1.5 * (k - 1), abs=1e-6)
+        assert d == pytest.approx(3.5, abs=1e-6)
+
+
 def test_a_wrong_way_driver_in_the_egos_lane_comes_towards_it(tmp_path, monkeypatch):
     """W in the ego's lane at s = 400 turned round, 10 m/s: s falls 1 m a step; a speed
     change on it is followed exactly (step to 5 m/s at t = 1 s)."""

@@ -314,18 +314,6 @@ def test_distance_within_dynamic_constraints_and_ending(tmp_path):
     assert c.s - b.s == pytest.approx(40.0, abs=0.1)
 
 
-def test_the_ego_off_its_lane_centre_is_refused_with_its_line(tmp_path, capsys):
-    path = scene(tmp_path, [])
-    path.write_text(path.read_text().replace('laneId="-3" s="20.0" offset="0"', 'laneId="-3" s="20.0" offset="0.4"'))
-    assert main(["run", str(path), "-c", "pid"]) == 2
-    err = capsys.readouterr().err
-    line = next(i for i, t in enumerate(path.read_text().splitlines(), 1) if 'offset="0.4"' in t)
-    assert err == (
-        f"ego: error: {path}:{line}: the ego 'Ego' starts 0.4 m off its lane's centre: the ego starts on its "
-        "lane's centre (offset 0; a LaneOffsetAction moves it)\n"
-    )
-
-
 @pytest.mark.parametrize(
     "ref,message",
     [

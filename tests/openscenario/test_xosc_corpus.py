@@ -55,10 +55,22 @@ EGO_SPEED_INIT = """          <PrivateAction>
           </PrivateAction>
         </Private>
         <Private entityRef="Lead">"""
-EGO_DISTANCE = (
-    '<LongitudinalAction><LongitudinalDistanceAction entityRef="Lead" distance="30" freespace="false" '
-    'continuous="true"/></LongitudinalAction>'
+EGO_SYNCHRONIZE = (
+    '<SynchronizeAction masterEntityRef="Lead"><TargetPositionMaster><LanePosition roadId="0" laneId="-2" '
+    's="400" offset="0"/></TargetPositionMaster><TargetPosition><LanePosition roadId="0" laneId="-2" s="380" '
+    'offset="0"/></TargetPosition></SynchronizeAction>'
 )
+
+
+def _route():
+    """A two-waypoint route along the ego's road (scenariogeneration)."""
+    from scenariogeneration import xosc
+
+    route = xosc.Route("along")
+    route.add_waypoint(xosc.LanePosition(100, 0, -2, "0"), xosc.RouteStrategy.shortest)
+    route.add_waypoint(xosc.LanePosition(400, 0, -2, "0"), xosc.RouteStrategy.shortest)
+    return route
+
 
 #: (id, file text, marker locating the line (None: no line), message after "FILE:LINE: ")
 HAND = [
@@ -359,18 +371,17 @@ HAND = [
     (
         # an Init action that takes time runs from t = 0 (a lane change of the ego's does), but
         # not one the ego cannot do
-        "ego-distance-in-init",
+        "ego-synchronize-in-init",
         sub(
             EGO_SPEED_INIT,
             EGO_SPEED_INIT.replace(
                 "          <PrivateAction>\n",
-                "          <PrivateAction>" + EGO_DISTANCE + "</PrivateAction>\n          <PrivateAction>\n",
+                "          <PrivateAction>" + EGO_SYNCHRONIZE + "</PrivateAction>\n          <PrivateAction>\n",
                 1,
             ),
         ),
-        "<LongitudinalAction><LongitudinalDistanceAction",
-        f"<LongitudinalDistanceAction> on the ego (Ego) is not supported by ego: the ego moves by its own model "
-        f"(see {DOCS})",
+        "<SynchronizeAction masterEntityRef",
+        f"<SynchronizeAction> on the ego (Ego) is not supported by ego: the ego moves by its own model (see {DOCS})",
     ),
     (
         "two-actions-in-one",
@@ -697,11 +708,10 @@ def _sg_cases():
             un("RelativeClearanceCondition"),
         ),
         (
-            "sg-longitudinal-distance-on-ego",
-            lambda: base(action=xosc.LongitudinalDistanceAction("Lead", distance=10), actor="Ego"),
-            "<LongitudinalDistanceAction",
-            "<LongitudinalDistanceAction> on the ego (Ego) is not supported by ego: the ego moves by its own "
-            f"model (see {DOCS})",
+            "sg-route-on-ego",
+            lambda: base(action=xosc.AssignRouteAction(_route()), actor="Ego"),
+            "<AssignRouteAction",
+            f"<AssignRouteAction> on the ego (Ego) is not supported by ego: the ego moves by its own model (see {DOCS})",
         ),
         (
             "sg-synchronize-on-ego",
@@ -713,13 +723,6 @@ def _sg_cases():
             ),
             "<SynchronizeAction",
             "<SynchronizeAction> on the ego (Ego) is not supported by ego: the ego moves by its own "
-            f"model (see {DOCS})",
-        ),
-        (
-            "sg-speed-profile-on-ego",
-            lambda: base(action=xosc.SpeedProfileAction([20, 10], xosc.FollowingMode.position, [2, 2]), actor="Ego"),
-            "<SpeedProfileAction",
-            "<SpeedProfileAction> on the ego (Ego) is not supported by ego: the ego moves by its own "
             f"model (see {DOCS})",
         ),
         (

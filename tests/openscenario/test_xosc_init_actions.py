@@ -4,6 +4,7 @@ entity overrides them. Each file is hand-written for the test (xosc_scenes' stra
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from xosc_scenes import event, run_scene, scene, sim_time, speed, trigger
 
@@ -80,9 +81,28 @@ def test_a_later_action_overrides_the_running_init_action(tmp_path):
 
 def test_an_init_action_the_ego_cannot_do_is_refused_with_its_line(tmp_path):
     path = scene(tmp_path, [])
-    _init(path, "Ego", _distance("A", 30.0))
-    with pytest.raises(ScenarioFileError, match=r"<LongitudinalDistanceAction> on the ego \(Ego\) is not supported"):
+    sync = (
+        '<SynchronizeAction masterEntityRef="A"><TargetPositionMaster><LanePosition roadId="0" laneId="-1" '
+        's="300" offset="0"/></TargetPositionMaster><TargetPosition><LanePosition roadId="0" laneId="-3" s="280" '
+        'offset="0"/></TargetPosition></SynchronizeAction>'
+    )
+    _init(path, "Ego", sync)
+    with pytest.raises(ScenarioFileError, match=r"<SynchronizeAction> on the ego \(Ego\) is not supported"):
         run_scene(path, 1.0)
+
+
+def test_a_longitudinal_distance_in_the_egos_init_is_its_reference_from_the_start(tmp_path):
+    """In the ego's Init (a running action from t = 0), 30 m behind C (centres; C at 15 m/s from
+    s = 400 m): the ego's position reference is there from the first step on."""
+    path = scene(tmp_path, [])
+    _init(path, "Ego", _distance("C", 30.0))
+    run = run_scene(path, 2.0)
+    tr, names = run.trace.array(), run.trace.names
+    t, s_ref = tr[:, names.index("t")], tr[:, names.index("s_ref")]
+    g = run.geometry
+    held = 400.0 + 15.0 * t - 30.0 - (g.cg_to_front - 0.5 * g.length)  # the ego's cg 30 m behind C's centre
+    on = t > 0.1 + 1e-9
+    assert np.max(np.abs(s_ref[on] - held[on])) < 1e-6
 
 
 def _trajectory(points) -> str:

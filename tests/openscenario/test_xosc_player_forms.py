@@ -488,14 +488,6 @@ def test_speed_profile_is_followed_step_by_step(tmp_path):
         assert v == pytest.approx(want, abs=1e-6), t
 
 
-def test_a_speed_profile_on_the_ego_is_refused(tmp_path, capsys):
-    from ego.cli import main
-
-    ev = event("P", "Ego", _profile("position", '<SpeedProfileEntry speed="25" time="2"/>'), trigger([sim_time(1)]))
-    assert main(["run", str(scene(tmp_path, [ev])), "-c", "pid"]) == 2
-    assert "<SpeedProfileAction> on the ego (Ego) is not supported" in capsys.readouterr().err
-
-
 @pytest.mark.sumo
 def test_relative_object_positions(tmp_path, monkeypatch):
     """A starts 30 m behind C and 3.5 m to its left (RelativeObjectPosition in Init: C's lane
