@@ -122,10 +122,10 @@ declare(
         "Trailer",
     ),
     note=(
-        "`BoundingBox` (length, width, center x), `Performance` (`maxSpeed`, `maxAcceleration` and "
-        "`maxDeceleration` each required, as the schema has them in 1.0 to 1.3: a missing one is refused in one "
-        "line; the reference player fills in its own defaults and plays esmini's `straight_500m.xosc`, which "
-        "leaves out `maxAcceleration`), `vehicleCategory` car, van, truck, trailer, "
+        "`BoundingBox` (length, width, center x), `Performance` (`maxSpeed`, `maxAcceleration`, "
+        "`maxDeceleration`; **as the reference player reads them**: the schema requires all three, and one left "
+        "out (esmini's `straight_500m.xosc` has no `maxAcceleration`) is esmini's own default, 100 m/s, 10 m/s^2 "
+        "and 10 m/s^2, with a warning naming the line), `vehicleCategory` car, van, truck, trailer, "
         "semitrailer, bus, motorbike, bicycle (recorded, not used by SUMO); `Axles` and `Properties` (with "
         "`Property` and `File`) accepted and not used; `TrailerHitch`, `TrailerCoupler` (1.3) accepted and not "
         "used, and a `Trailer` that attaches nothing (an empty `entityRef` or `entryName`: the reference player's "
@@ -263,7 +263,9 @@ declare(
         "states standby / running / complete; `maximumExecutionCount` of events and maneuver groups; `priority` "
         "overwrite / override (stops the maneuver's other running events), skip (does not start while another "
         "event of the maneuver runs), parallel. **As the reference player reads its files:** a `Maneuver` or an "
-        "`Action` without its `name` (the schema requires one) is read nameless (no condition can refer to it)"
+        "`Action` without its `name` (the schema requires one) is read nameless (no condition can refer to it); "
+        "an empty `ManeuverGroup` (no `Actors`, which the schema requires, and no `Maneuver`: esmini's "
+        "`straight_500m.xosc`) does nothing"
     ),
     label="`Storyboard`, `Story`, `Act`, `ManeuverGroup`, `Maneuver`, `Event`",
     also=("Story", "Act", "ManeuverGroup", "Maneuver", "Event"),

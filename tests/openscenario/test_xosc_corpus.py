@@ -153,14 +153,15 @@ HAND = [
         "int, string, boolean, dateTime)",
     ),
     (
-        "duplicate-parameter",
+        "duplicate-variable",
         sub(
-            '<ParameterDeclaration name="EgoFront" parameterType="double" value="300"/>',
-            '<ParameterDeclaration name="EgoFront" parameterType="double" value="300"/>'
-            '<ParameterDeclaration name="EgoFront" parameterType="double" value="301"/>',
+            "</ParameterDeclarations>",
+            "</ParameterDeclarations><VariableDeclarations>\n"
+            '<VariableDeclaration name="V" variableType="double" value="1"/>\n'
+            '<VariableDeclaration name="V" variableType="double" value="2"/></VariableDeclarations>',
         ),
-        'name="EgoFront"',
-        "parameter 'EgoFront' is declared twice (first on line 11)",
+        'name="V" variableType="double" value="2"',
+        "variable 'V' is declared twice (first on line 38)",
     ),
     (
         "unknown-entity-init",
@@ -317,17 +318,6 @@ HAND = [
         'storyboardElementRef="Nope"',
         "unknown storyboard event 'Nope' (elements: LeadBrakeAction, LeadBrakeEvent, LeadManeuver, LeadGroup, "
         "Brake, LeadBrakes; qualify with '::', e.g. 'Event::Action')",
-    ),
-    (
-        "story-parameter-twice",
-        sub(
-            '<Story name="LeadBrakes">',
-            '<Story name="LeadBrakes"><ParameterDeclarations>\n'
-            '<ParameterDeclaration name="Lag" parameterType="double" value="1"/>\n'
-            '<ParameterDeclaration name="Lag" parameterType="double" value="2"/></ParameterDeclarations>',
-        ),
-        'value="2"/></ParameterDeclarations>',
-        "parameter 'Lag' is declared twice (first on line 94)",
     ),
     (
         "story-parameter-bad-value",
@@ -804,7 +794,7 @@ def test_hand_written(case, tmp_path, capsys):
             return
         del lines
     if case[0] == "missing-road":
-        message = f"road file 'nowhere.xodr' not found ({tmp_path / 'nowhere.xodr'})"
+        message = f"road file 'nowhere.xodr' not found (looked for {tmp_path / 'nowhere.xodr'})"
     if case[0] == "ego-teleport":
         marker = '<TeleportAction><Position><LanePosition roadId="0" laneId="-1" s="400"'
         message = (
