@@ -36,7 +36,12 @@ declare(
 declare(
     "FileHeader",
     contains=("License",),
-    note="revMajor 1, revMinor 0-3 (read by the leading number: `1+` as the reference player's files write it is 1); `License` accepted (descriptive)",
+    note=(
+        "revMajor 1, revMinor 0-3 (read by the leading number: `1+` as the reference player's files write it is "
+        "1); `License` accepted (descriptive). **As the reference player reads it:** an XML declaration after "
+        "leading comments (XML allows nothing before it; esmini's `two_plus_one_road.xosc`) is read as if it came "
+        "first, every line where it was"
+    ),
     also=("License",),
 )
 declare("License")
@@ -50,7 +55,10 @@ declare(
         "arguments or `sqrt(-1)` is one line); `%`, comparisons and boolean operators are refused. Scopes as the "
         "standard has them: the file's, a catalog entry's, a `Story`'s and a `Trajectory`'s (possibly empty) "
         "declarations are seen inside their element only, an inner name shadowing an outer one; `--set` and "
-        "sweeps set the file's"
+        "sweeps set the file's. A name declared twice in one scope (the standard asks for unique names; esmini's "
+        "`follow_reference.xosc`): the last declaration holds, with a warning naming both lines, **as the "
+        "reference player reads it** (its declarations stack, the latest found first); a declaration between "
+        "them sees the first value"
     ),
     label="`ParameterDeclarations`, `$name`, `${...}`",
     also=("ParameterDeclaration",),
@@ -93,7 +101,9 @@ declare(
         "another kind than the reference needs is one line; the locations of `RouteCatalog`, `EnvironmentCatalog` "
         "and `TrajectoryCatalog` are accepted (the reference player's files declare them, used or not) and their "
         "entries read nowhere: an element referring to one is refused; a location without its `Directory` (the "
-        "schema asks for one; the reference player's files write `<RouteCatalog/>`) locates nothing"
+        "schema asks for one; the reference player's files write `<RouteCatalog/>`) locates nothing. A catalog "
+        "file not in its directories as written is looked for in the search folders (`--path`, `$EGO_PATH`: "
+        "[Finding a scenario's files](#finding-a-scenarios-files))"
     ),
     label="`CatalogLocations` (`VehicleCatalog`, `PedestrianCatalog`, `MiscObjectCatalog`, `ControllerCatalog`,"
     " `ManeuverCatalog`), `CatalogReference`",

@@ -579,6 +579,21 @@ HAND = [
         None,
         None,
     ),
+    (
+        "negative-target-speed",
+        sub(LEAD_TARGET, '<AbsoluteTargetSpeed value="-3"/>'),
+        '<AbsoluteTargetSpeed value="-3"/>',
+        "a negative target speed (-3 m/s: driving backwards) is not supported by ego: SUMO's drivers and ego's "
+        f"own plant drive forwards only (see {DOCS})",
+    ),
+    (
+        # a comment before the XML declaration (the reference player reads it): the lines stay right
+        "comment-before-declaration",
+        "<!-- a comment\n     on two lines -->\n" + sub('<Act name="Brake">', '<Act name="Brake"><Oops/>'),
+        "<Oops/>",
+        unsupported("Oops"),
+    ),
+    ("windows-road-missing", sub('filepath="straight3.xodr"', 'filepath="C:\\Users\\me\\nowhere.xodr"'), "C:", None),
 ]
 
 
@@ -795,6 +810,9 @@ def test_hand_written(case, tmp_path, capsys):
         del lines
     if case[0] == "missing-road":
         message = f"road file 'nowhere.xodr' not found (looked for {tmp_path / 'nowhere.xodr'})"
+    if case[0] == "windows-road-missing":  # on another machine's disk: its name looked for here
+        written = "C:\\Users\\me\\nowhere.xodr"
+        message = f"road file {written!r} not found (looked for {tmp_path / 'nowhere.xodr'})"
     if case[0] == "ego-teleport":
         marker = '<TeleportAction><Position><LanePosition roadId="0" laneId="-1" s="400"'
         message = (
