@@ -114,7 +114,8 @@ class Speed(ActionKind):
     note = (
         "`AbsoluteTargetSpeed`, `RelativeTargetSpeed` (delta, factor, continuous; a missing "
         "`speedTargetValueType`, which the schema requires, is delta with a warning, **as the reference player "
-        "reads it**); shapes step, linear, cubic, "
+        "reads it**; a negative `AbsoluteTargetSpeed`, which the reference player drives backwards, is refused in one "
+        "line: neither SUMO's drivers nor ego's plant reverse); shapes step, linear, cubic, "
         "sinusoidal over time, rate (the mean rate for cubic and sinusoidal) or distance; a `value` of 0 is a "
         "step (the standard); a step may leave out `value` and `dynamicsDimension` (the schema asks for both; a "
         "step has no duration, and the reference player's files omit them); a negative rate is read by its "
