@@ -506,6 +506,12 @@ class _Builder:
         trailer that is really attached is refused (ego drives single bodies)."""
         for tr in node.all("Trailer"):
             for ref in tr.children:
+                if ref.tag == "Vehicle":  # a trailer written inline (esmini's semi_truck_with_extra_trailer)
+                    raise self.error(
+                        ref,
+                        f"a trailer (Vehicle {ref.attrs.get('name', '')!r}) is not supported by ego: it runs single "
+                        f"vehicles (see {DOCS})",
+                    )
                 attr = "entityRef" if ref.tag == "EntityRef" else "entryName"
                 name = self.str_(ref, attr)
                 if name:

@@ -593,6 +593,16 @@ HAND = [
         "<Oops/>",
         unsupported("Oops"),
     ),
+    (
+        "inline-trailer",
+        sub(
+            '<Performance maxSpeed="55" maxAcceleration="2.6" maxDeceleration="4.5"/>',
+            '<Performance maxSpeed="55" maxAcceleration="2.6" maxDeceleration="4.5"/>'
+            '<Trailer><Vehicle name="semi" vehicleCategory="trailer"/></Trailer>',
+        ),
+        '<Vehicle name="semi"',
+        f"a trailer (Vehicle 'semi') is not supported by ego: it runs single vehicles (see {DOCS})",
+    ),
     ("windows-road-missing", sub('filepath="straight3.xodr"', 'filepath="C:\\Users\\me\\nowhere.xodr"'), "C:", None),
 ]
 
