@@ -173,3 +173,26 @@ def test_concrete_file_names_the_road_where_it_was_found(tmp_path, capsys):
 def _line(path: Path, marker: str) -> int:
     text = path.read_text()
     return text.count("\n", 0, text.index(marker)) + 1
+
+
+def test_a_distributions_scenario_file_is_found_the_same_way(tmp_path, capsys):
+    """A ParameterValueDistribution's ScenarioFile written for another folder: one line naming
+    the places looked; found by name through --path (ego list describes the variation)."""
+    templates = _roads(tmp_path / "templates")
+    _scenario(templates, "straight3.xodr")
+    var = tmp_path / "variations" / "var.xosc"
+    var.parent.mkdir()
+    var.write_text(
+        '<?xml version="1.0"?>\n<OpenSCENARIO>\n<FileHeader revMajor="1" revMinor="2" date="2026-11-29T00:00:00" '
+        'description="v" author="t"/>\n<ParameterValueDistribution>\n<ScenarioFile filepath="C:/work/case.xosc"/>\n'
+        '<Deterministic><DeterministicSingleParameterDistribution parameterName="LeadGap"><DistributionSet>'
+        '<Element value="30"/><Element value="40"/></DistributionSet></DeterministicSingleParameterDistribution>'
+        "</Deterministic>\n</ParameterValueDistribution>\n</OpenSCENARIO>\n"
+    )
+    assert main(["list", str(var)]) == 2
+    assert capsys.readouterr().err == (
+        f"ego: error: {var}:5: ScenarioFile 'C:/work/case.xosc' not found (looked for {var.parent / 'case.xosc'})\n"
+    )
+    assert main(["list", str(var), "--path", str(templates)]) == 0
+    out, err = capsys.readouterr()
+    assert "combinations  2" in out and f"found as {templates / 'case.xosc'} " in err
