@@ -52,9 +52,10 @@ def search_folders() -> list[Path]:
 
 
 def _norm(p: Path) -> Path:
-    """``p`` absolute, ``..`` and ``.`` taken out by the letter (a search folder ``bin`` that
-    does not exist still gives ``bin/../resources``, as the reference player's own bin does)."""
-    return Path(os.path.abspath(p))
+    """``p`` absolute with its links resolved and ``..`` taken out as the file system does, and
+    by the letter past a folder that does not exist (a search folder ``bin`` that does not
+    exist still gives ``bin/../resources``, as the reference player's own bin does)."""
+    return Path(os.path.realpath(p))
 
 
 def _exists(p: Path, folder: bool) -> bool:

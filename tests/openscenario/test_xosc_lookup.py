@@ -196,3 +196,13 @@ def test_a_distributions_scenario_file_is_found_the_same_way(tmp_path, capsys):
     assert main(["list", str(var), "--path", str(templates)]) == 0
     out, err = capsys.readouterr()
     assert "combinations  2" in out and f"found as {templates / 'case.xosc'} " in err
+
+
+def test_dot_dot_after_a_linked_folder_goes_where_the_file_system_goes(tmp_path, capsys):
+    """The path as written keeps the file system's meaning: '../xodr/...' from a scenario folder
+    that is a symbolic link is the link target's sibling (as before the search folders)."""
+    _roads(tmp_path / "real" / "xodr")
+    _scenario(tmp_path / "real" / "xosc", "../xodr/straight3.xodr")
+    (tmp_path / "link").symlink_to(tmp_path / "real" / "xosc")
+    assert load(tmp_path / "link" / "case.xosc").road == (tmp_path / "real" / "xodr" / "straight3.xodr").resolve()
+    assert capsys.readouterr().err == ""
