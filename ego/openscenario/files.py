@@ -20,6 +20,7 @@ once per process); one not found is a one-line error listing every place looked.
 
 from __future__ import annotations
 
+import hashlib
 import os
 import re
 import sys
@@ -29,21 +30,26 @@ from pathlib import Path, PurePosixPath
 #: the environment variable of extra search folders (``--path`` prepends to it for the command)
 SEARCH_ENV = "EGO_PATH"
 
+#: the warnings a command printed (short digests), for the worker processes it starts: a
+#: sweep's workers resolve the file again and would print each warning once more
+WARNED_ENV = "EGO_WARNED"
+
 _DRIVE = re.compile(r"^[A-Za-z]:[\\/]")
-_WARNED: set[str] = set()
 
 
 def warn(message: str) -> None:
-    """``ego: warning: message`` on stderr, once per process (a file is resolved several times
-    a run, and a sweep's workers inherit what their parent printed)."""
-    if message not in _WARNED:
-        _WARNED.add(message)
+    """``ego: warning: message`` on stderr, once per command: a file is resolved several times
+    a run, and the worker processes a command starts inherit what it printed (``$EGO_WARNED``)."""
+    digest = hashlib.sha1(message.encode()).hexdigest()[:12]
+    printed = os.environ.get(WARNED_ENV, "").split()
+    if digest not in printed:
+        os.environ[WARNED_ENV] = " ".join([*printed, digest])
         print(f"ego: warning: {message}", file=sys.stderr)
 
 
 def forget_warnings() -> None:
     """Print every warning again (a new command in the same process)."""
-    _WARNED.clear()
+    os.environ.pop(WARNED_ENV, None)
 
 
 def search_folders() -> list[Path]:

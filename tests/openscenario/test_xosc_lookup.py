@@ -96,7 +96,8 @@ def test_ego_path_environment_variable(tmp_path, monkeypatch, capsys):
     assert json.loads(capsys.readouterr().out)["supported"] is True
 
 
-def test_sweep_workers_find_the_road_through_path(tmp_path, capsys):
+def test_sweep_workers_find_the_road_through_path(tmp_path, capfd):
+    """--path reaches the worker processes; the note is printed once, not once a worker."""
     roads = _roads(tmp_path / "roads")
     path = _scenario(tmp_path / "s", "elsewhere/straight3.xodr")
     spec = tmp_path / "spec.toml"
@@ -106,6 +107,7 @@ def test_sweep_workers_find_the_road_through_path(tmp_path, capsys):
     import pandas as pd
 
     assert sorted(pd.read_parquet(out / "results.parquet")["status"]) == ["completed", "completed"]
+    assert capfd.readouterr().err.count("ego: warning: ") == 1
 
 
 def test_a_road_found_nowhere_lists_every_place(tmp_path, capsys):
