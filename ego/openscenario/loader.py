@@ -20,10 +20,9 @@ from typing import Any
 from ego.checks import resolved
 from ego.openscenario import actions as _actions  # noqa: F401 - registers the actions
 from ego.openscenario import conditions as _condition_kinds  # noqa: F401 - registers the conditions
-from ego.openscenario import files
+from ego.openscenario import files, v09
 from ego.openscenario import model as M
 from ego.openscenario import structure as _structure  # noqa: F401 - declares the structural elements
-from ego.openscenario import v09
 from ego.openscenario.dynamics import DYNAMICS_LIMITS, MAX_SECONDS
 from ego.openscenario.expressions import ExpressionError, resolve
 from ego.openscenario.registry import ACTIONS, CONDITIONS, action_of, allowed, init_kinds
