@@ -576,7 +576,9 @@ class _Builder:
                 return resolved(f, "catalog file")
         for f in firsts:
             d = resolved(f.parent, "catalog folder")
-            for g in sorted(d.glob("*.xosc")) if d.is_dir() else ():
+            # a "folder" that is the catalog file itself (esmini's 0.9 examples write
+            # Directory path="../xosc/Catalogs/VehicleCatalog", a file without extension)
+            for g in sorted(d.glob("*.xosc")) if d.is_dir() else [d] if d.is_file() else ():
                 cat = read_tree(g).child("Catalog")
                 if cat is not None and cat.attrs.get("name") == catalog:
                     return g

@@ -101,7 +101,9 @@ declare(
         "another kind than the reference needs is one line; the locations of `RouteCatalog`, `EnvironmentCatalog` "
         "and `TrajectoryCatalog` are accepted (the reference player's files declare them, used or not) and their "
         "entries read nowhere: an element referring to one is refused; a location without its `Directory` (the "
-        "schema asks for one; the reference player's files write `<RouteCatalog/>`) locates nothing. A catalog "
+        "schema asks for one; the reference player's files write `<RouteCatalog/>`) locates nothing; a `Directory` "
+        "that is a file (esmini's 0.9 examples name the catalog file itself, without extension) is that catalog "
+        "when its `<Catalog name>` is the reference's. A catalog "
         "file not in its directories as written is looked for in the search folders (`--path`, `$EGO_PATH`: "
         "[Finding a scenario's files](#finding-a-scenarios-files))"
     ),

@@ -208,3 +208,15 @@ def test_dot_dot_after_a_linked_folder_goes_where_the_file_system_goes(tmp_path,
     (tmp_path / "link").symlink_to(tmp_path / "real" / "xosc")
     assert load(tmp_path / "link" / "case.xosc").road == (tmp_path / "real" / "xodr" / "straight3.xodr").resolve()
     assert capsys.readouterr().err == ""
+
+
+def test_a_catalog_directory_that_is_the_catalog_file_itself(tmp_path, capsys):
+    """esmini's 0.9 examples write Directory path="../xosc/Catalogs/VehicleCatalog", naming the
+    catalog file (no extension), not a folder: the file whose <Catalog name> is the reference's."""
+    folder = _roads(tmp_path / "xosc")
+    (folder / "Catalogs").mkdir()
+    shutil.copy(SHIPPED / "catalogs" / "VehicleCatalog.xosc", folder / "Catalogs" / "VehicleCatalog")
+    path = folder / "cut.xosc"
+    path.write_text(CUT_IN.replace('<Directory path="catalogs"/>', '<Directory path="Catalogs/VehicleCatalog"/>'))
+    assert main(["run", str(path), "-c", "pid", "--set", "duration=1"]) == 0
+    assert capsys.readouterr().err == ""
