@@ -1,7 +1,8 @@
 """Run every scenario file of a folder (or the files given) with ``ego run`` and tabulate how
 each ends: the figures behind docs/openscenario.md's tables of public scenario corpora::
 
-    python scripts/corpus_run.py CORPUS/esmini/resources/xosc -c pid --timeout 120
+    python scripts/corpus_run.py CORPUS/esmini/resources/xosc -c pid --timeout 120 \
+        --path CORPUS/esmini/resources --path CORPUS/esmini/resources/xodr
 
 Each ``.xosc`` (catalogs and ParameterValueDistribution files left out: they are not scenarios
 to run) is run as its own process from its own folder (its relative paths resolve there), with
@@ -44,11 +45,12 @@ def scenario_files(paths: list[str]) -> list[Path]:
     return out
 
 
-def run_one(path: Path, controller: str, timeout: float) -> dict:
+def run_one(path: Path, controller: str, timeout: float, search: tuple[str, ...] = ()) -> dict:
     t0 = time.perf_counter()
+    extra = [a for d in search for a in ("--path", str(Path(d).resolve()))]
     try:
         proc = subprocess.run(
-            [sys.executable, "-m", "ego", "run", path.name, "-c", controller],
+            [sys.executable, "-m", "ego", "run", path.name, "-c", controller, *extra],
             cwd=path.parent,
             capture_output=True,
             text=True,
@@ -79,6 +81,13 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("-c", "--controller", default="pid")
     ap.add_argument("--timeout", type=float, default=120.0, help="seconds per file (default 120)")
     ap.add_argument("--json", help="also write the rows to this file")
+    ap.add_argument(
+        "--path",
+        action="append",
+        default=[],
+        metavar="DIR",
+        help="passed on to every ego run: a folder to look in for roads and catalogs (repeatable)",
+    )
     args = ap.parse_args(argv)
     files = scenario_files(args.paths)
     if not files:
@@ -88,7 +97,7 @@ def main(argv: list[str] | None = None) -> int:
     print("| file | exit | s | how it ends (the run's end, or the first error) |")
     print("|---|---|---|---|")
     for f in files:
-        r = run_one(f, args.controller, args.timeout)
+        r = run_one(f, args.controller, args.timeout, tuple(args.path))
         rows.append(r)
         first = r["first"].replace("|", "\\|")[:220]
         print(f"| {r['file']} | {r['exit']} | {r['seconds']:.1f} | {first} |", flush=True)

@@ -157,3 +157,8 @@ def call(job: tuple[str, Any]) -> Any:
 
 
 _CALLABLE = {f.__name__: f for f in (square, fail, die_once, always_die, pid)}
+
+
+def environ(key: str) -> str | None:
+    """The worker's value of the environment variable ``key``."""
+    return os.environ.get(key)

@@ -127,7 +127,7 @@ CASES = [
     ("5000-minus", ["run", "{minus.xosc}", "-c", "pid"], "nested deeper than 100 levels"),
     ("unsigned-short", ["run", "{ushort.xosc}", "-c", "pid"], "from 0 to 65535"),
     ("4500-digits", ["run", "{digits.xosc}", "-c", "pid"], "(4500 characters)"),
-    ("road-dev-zero", ["run", "{zero_road.xosc}", "-c", "pid"], "road file 'zero.xodr' not found (/dev/zero)"),
+    ("road-dev-zero", ["run", "{zero_road.xosc}", "-c", "pid"], "road file 'zero.xodr' not found (looked for "),
     ("sweep-spec-fifo", ["sweep", "{fifo.toml}", "--out", "{out}"], "not a regular file (a FIFO"),
     ("falsify-spec-big", ["falsify", "{big.toml}", "--out", "{out}"], "larger than the limit of 1 MiB"),
     ("sweep-20-million", ["sweep", "{grid.toml}", "--out", "{out}"], "the limit is 10,000,000"),

@@ -46,7 +46,7 @@ import importlib
 import sys
 from collections.abc import Sequence
 
-from ego.cli.common import EXIT_INTERRUPTED, EXIT_NOT_COMPLETED, EXIT_OK, EXIT_USAGE, terminate
+from ego.cli.common import EXIT_INTERRUPTED, EXIT_NOT_COMPLETED, EXIT_OK, EXIT_USAGE, search_path, terminate
 from ego.params import ConfigError
 
 #: command name -> the module that runs it (imported when the command runs)
@@ -79,7 +79,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if module is None:
             parser().print_help()
             return EXIT_USAGE
-        return int(importlib.import_module(module).command(args))
+        with search_path(getattr(args, "search_path", None) or []):
+            return int(importlib.import_module(module).command(args))
     except (ConfigError, SimError) as exc:
         print(f"ego: error: {exc}", file=sys.stderr)
         return EXIT_USAGE

@@ -5,8 +5,11 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import re
 import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 from ego.checks import check_output_file
@@ -105,6 +108,42 @@ def add_requirement_period(p: argparse.ArgumentParser) -> None:
         help="evaluate the requirements on samples S s apart (e.g. 0.1, the SUMO step) instead of "
         "every sample of the trace (0, the default; docs/requirements.md)",
     )
+
+
+PATH_HELP = (
+    "with an .xosc file: a folder to look in for its road and catalog files when they are not "
+    "where the file says (repeatable; searched after the scenario's own folder, before $EGO_PATH; "
+    "docs/openscenario.md)"
+)
+
+
+def add_path(p: argparse.ArgumentParser) -> None:
+    """``--path DIR``, repeatable: the search folders of a scenario's files (ego.openscenario.files)."""
+    p.add_argument("--path", dest="search_path", action="append", default=[], metavar="DIR", help=PATH_HELP)
+
+
+@contextmanager
+def search_path(folders: list[str]) -> Iterator[None]:
+    """``$EGO_PATH`` with ``folders`` (each checked: an existing folder) in front, for the
+    command's duration (worker processes inherit it)."""
+    from ego.openscenario.files import SEARCH_ENV, forget_warnings
+
+    forget_warnings()  # each command prints its warnings once (a Python caller's commands too)
+    if not folders:
+        yield
+        return
+    for f in folders:
+        if not Path(f).is_dir():
+            raise ConfigError(f"bad --path {f!r}: not a folder")
+    before = os.environ.get(SEARCH_ENV)
+    os.environ[SEARCH_ENV] = os.pathsep.join([str(Path(f).resolve()) for f in folders] + ([before] if before else []))
+    try:
+        yield
+    finally:
+        if before is None:
+            os.environ.pop(SEARCH_ENV, None)
+        else:
+            os.environ[SEARCH_ENV] = before
 
 
 def add_set(p: argparse.ArgumentParser, help: str) -> None:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ego.cli.common import add_set
+from ego.cli.common import add_path, add_set
 from ego.params import ConfigError
 
 
@@ -34,6 +34,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     con.add_argument("--run", default=None, metavar="RUN_ID", help="with a folder: the row to write (its run_id)")
     add_set(con, "with an .xosc: a parameter's value (repeatable); ego's own settings go to the printed command")
     con.add_argument("--force", action="store_true", help="replace --out even if ego concrete did not write it")
+    add_path(con)
     return con
 
 

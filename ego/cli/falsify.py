@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from ego.checks import whole_number
-from ego.cli.common import add_address, add_engine, add_jobs, add_out
+from ego.cli.common import add_address, add_engine, add_jobs, add_out, add_path
 
 #: the optimisers (psy-taliro's two where psy-taliro is installed: ego's test extra)
 OPTIMIZERS = ("cma", "bo", "bo-tpe", "random", "lhs", "psytaliro-uniform", "psytaliro-annealing")
@@ -91,6 +91,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         action="store_true",
         help="do not rerun each violation to check that its ego run command reproduces it",
     )
+    add_path(fal)
     return fal
 
 

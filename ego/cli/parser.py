@@ -12,6 +12,7 @@ from ego.cli.common import (
     add_engine,
     add_jobs,
     add_out,
+    add_path,
     add_preventable,
     add_require,
     add_requirement_period,
@@ -96,6 +97,7 @@ def add_scenario(p: argparse.ArgumentParser) -> None:
         metavar="ENTITY",
         help="with an .xosc file: the entity ego drives (default: Ego, else hero, else the first vehicle)",
     )
+    add_path(p)
 
 
 def add_backend(p: argparse.ArgumentParser, backends: tuple[str, ...], help: str) -> None:
@@ -244,6 +246,7 @@ def add_sweep(sub) -> None:
     )
     swp.add_argument("--seed", type=int, default=0, metavar="S", help="with --sample: its seed (default 0)")
     add_out(swp, "output folder (resumed if it holds results)")
+    add_path(swp)
     add_engine(swp, "process (default: a pool of worker processes) or ray")
     add_jobs(swp, "parallel runs (default: the number of CPUs)")
     add_address(swp, "with --engine ray: join this Ray cluster (e.g. auto or ray://host:10001)")
@@ -287,6 +290,7 @@ def add_list(sub) -> None:
         metavar="ENTITY",
         help="with FILE.xosc: the entity ego drives (default: Ego, else hero, else the first vehicle)",
     )
+    add_path(lst)
     lst.add_argument("--json", action="store_true", help="print JSON instead of text")
     lst.add_argument(
         "--markdown",

@@ -16,6 +16,7 @@ from ego.openscenario import model as M
 from ego.openscenario.curves import clothoid, nurbs
 from ego.openscenario.dynamics import DYNAMICS_LIMITS, Transition, lateral_duration, offset_duration, speed_duration
 from ego.openscenario.ego_refs import EgoGap, EgoPath, SpeedKnots, to_lane_frame
+from ego.openscenario.files import warn
 from ego.openscenario.registry import ActionKind, register
 from ego.openscenario.runtime import EPS, INF, ActionRun, Storyboard, speed_profile_knots
 from ego.openscenario.xmltree import DOCS, Node
@@ -112,7 +113,10 @@ class Speed(ActionKind):
     domains, on_ego, in_init = ("long",), True, "yes"
     init_note = "SpeedAction"
     note = (
-        "`AbsoluteTargetSpeed`, `RelativeTargetSpeed` (delta, factor, continuous); shapes step, linear, cubic, "
+        "`AbsoluteTargetSpeed`, `RelativeTargetSpeed` (delta, factor, continuous; a missing "
+        "`speedTargetValueType`, which the schema requires, is delta with a warning, **as the reference player "
+        "reads it**; a negative `AbsoluteTargetSpeed`, which the reference player drives backwards, is refused in one "
+        "line: neither SUMO's drivers nor ego's plant reverse); shapes step, linear, cubic, "
         "sinusoidal over time, rate (the mean rate for cubic and sinusoidal) or distance; a `value` of 0 is a "
         "step (the standard); a step may leave out `value` and `dynamicsDimension` (the schema asks for both; a "
         "step has no duration, and the reference player's files omit them); a negative rate is read by its "
@@ -128,12 +132,25 @@ class Speed(ActionKind):
         dyn = b.dynamics(b.one(node, "SpeedActionDynamics"))
         target = b.one(b.one(node, "SpeedActionTarget"))
         if target.tag == "AbsoluteTargetSpeed":
-            return M.SpeedAction(dyn, b.num(target, "value", nonneg=True), line=node.line)
+            value = b.num(target, "value")
+            if value < 0.0:  # the reference player drives the car backwards (its light_state.xosc)
+                raise b.error(
+                    target,
+                    f"a negative target speed ({value:g} m/s: driving backwards) is not supported by ego: SUMO's "
+                    f"drivers and ego's own plant drive forwards only (see {DOCS})",
+                )
+            return M.SpeedAction(dyn, value, line=node.line)
+        if "speedTargetValueType" not in target.attrs:
+            # the schema requires it; the reference player reads a missing one as delta
+            warn(
+                f"{b.path}:{target.line}: <RelativeTargetSpeed> has no speedTargetValueType (the schema requires "
+                f"it): delta, as the reference player reads it"
+            )
         return M.SpeedAction(
             dyn,
             b.num(target, "value"),
             b.entity_ref(target),
-            b.enum(target, "speedTargetValueType", ("delta", "factor")),
+            b.enum(target, "speedTargetValueType", ("delta", "factor"), "delta"),
             b.bool_(target, "continuous"),
             node.line,
         )
@@ -692,8 +709,10 @@ class FollowTrajectory(ActionKind):
         "longitudinal one too: see How the ego is chosen). A `Clothoid` (curvature, "
         "`curvaturePrime`; the 1.0 `curvatureDot` read as the same rate per metre, as the reference player reads "
         "it) and a `ClothoidSpline`'s `Segment`s (`curvatureStart` to `curvatureEnd`, `hOffset`, `PositionStart`; "
-        "the first without one starts at the entity; the reference player's pre-standard `curvStart`/`curvEnd` "
-        "are refused: the standard requires both curvatures) start at their position with its heading "
+        "the first without one starts at the entity; **as the reference player reads them** (the schema requires "
+        "both curvatures): its pre-standard spelling `curvStart`/`curvEnd` is the same, a missing start curvature "
+        "is the previous segment's end (0 for the first) and a missing end curvature the segment's start, an "
+        "arc) start at their position with its heading "
         "and are integrated exactly (Simpson on 2 cm panels, sampled every 0.1 m: within 1e-6 m of the Fresnel "
         "integrals, `test_xosc_trajectories.py`); their times: `startTime`/`stopTime` (a spline's `timeStart`s "
         "and `timeEnd`), linear in length between them. A `Nurbs` (order, `ControlPoint`s with weights, "
@@ -728,7 +747,10 @@ class FollowTrajectory(ActionKind):
                 end_time = b.num(shape, "stopTime", None, nonneg=True)
                 times = [segments[0].time, end_time]
             elif shape.tag == "ClothoidSpline":
-                segments = tuple(self.segment(b, seg) for seg in shape.all("Segment"))
+                segs: list[M.ClothoidSegment] = []
+                for seg in shape.all("Segment"):
+                    segs.append(self.segment(b, seg, segs[-1].k1 if segs else 0.0))
+                segments = tuple(segs)
                 if not segments:
                     raise b.error(shape, "<ClothoidSpline> needs at least one <Segment>")
                 end_time = b.num(shape, "timeEnd", None, nonneg=True)
@@ -789,8 +811,17 @@ class FollowTrajectory(ActionKind):
         )
 
     @staticmethod
-    def segment(b: Any, node: Node) -> M.ClothoidSegment:
-        k0, k1 = b.num(node, "curvatureStart"), b.num(node, "curvatureEnd")
+    def segment(b: Any, node: Node, previous: float) -> M.ClothoidSegment:
+        """A ClothoidSpline segment. As the reference player reads it: its pre-standard
+        ``curvStart``/``curvEnd`` spelling is the same; a missing start curvature is the previous
+        segment's end (0 for the first), a missing end curvature the segment's start (an arc)."""
+        spelt = [n for n in ("curvatureStart", "curvatureEnd") if n in node.attrs]
+        old = [n for n in ("curvStart", "curvEnd") if n in node.attrs]
+        if spelt and old:
+            raise b.error(node, "<Segment> mixes curvatureStart/curvatureEnd with curvStart/curvEnd (write one form)")
+        start, end = ("curvStart", "curvEnd") if old else ("curvatureStart", "curvatureEnd")
+        k0 = b.num(node, start, previous)
+        k1 = b.num(node, end, k0)
         ps = node.child("PositionStart")
         start = b.position(ps) if ps is not None else None
         h_offset = b.num(node, "hOffset", 0.0)

@@ -49,6 +49,7 @@ def concrete_xml(template: str | os.PathLike, values: Mapping[str, object], out:
     (checked: the run's own ConfigError for a bad value, before anything is written) and its
     file references made relative to ``out``'s folder."""
     from ego.openscenario.expressions import ExpressionError, resolve
+    from ego.openscenario.files import locate
     from ego.openscenario.loader import _declarations, load, read_tree
 
     template, out = Path(template), Path(out)
@@ -68,7 +69,9 @@ def concrete_xml(template: str | os.PathLike, values: Mapping[str, object], out:
                 target = str(resolve(attrs[key], resolved))
             except ExpressionError as exc:
                 raise ScenarioFileError(template, node.line, str(exc)) from None
-            absolute = (template.parent / target).resolve()
+            # where ego run finds it: the path as written, else a search folder (ego.openscenario.files)
+            found, _ = locate(template, target, "file", folder=node.tag == "Directory", note=False)
+            absolute = (found or template.parent / target).resolve()
             try:
                 attrs[key] = os.path.relpath(absolute, here)
             except ValueError:  # another drive: the absolute path

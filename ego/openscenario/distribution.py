@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ego.openscenario.files import locate, looked
 from ego.openscenario.xmltree import Node, ScenarioFileError
 
 #: more combinations than this is a mistake (the sweep's run limit)
@@ -63,10 +64,12 @@ def scenario_file(path: str, root: Node) -> str:
     target = node.attrs.get("filepath", "") if node is not None else ""
     if not target:
         raise ScenarioFileError(path, root.line, "<ParameterValueDistribution> needs <ScenarioFile filepath=...>")
-    full = os.path.abspath(Path(path).parent / target)  # absolute: a row's reproducer works from anywhere
     assert node is not None
-    if not Path(full).is_file():
-        raise ScenarioFileError(path, node.line, f"ScenarioFile {target!r} not found (looked for {full})")
+    # as a scenario's road and catalogs: as written, else in the search folders (ego.openscenario.files)
+    found, places = locate(Path(path), target, "ScenarioFile")
+    if found is None:
+        raise ScenarioFileError(path, node.line, f"ScenarioFile {target!r} not found ({looked(places)})")
+    full = os.path.abspath(found)  # absolute: a row's reproducer works from anywhere
     if root_of(full) is not None:
         raise ScenarioFileError(path, node.line, f"{full} is a distribution too (expected a scenario file)")
     return full

@@ -20,9 +20,9 @@ from typing import Any
 from ego.checks import resolved
 from ego.openscenario import actions as _actions  # noqa: F401 - registers the actions
 from ego.openscenario import conditions as _condition_kinds  # noqa: F401 - registers the conditions
+from ego.openscenario import files, v09
 from ego.openscenario import model as M
 from ego.openscenario import structure as _structure  # noqa: F401 - declares the structural elements
-from ego.openscenario import v09
 from ego.openscenario.dynamics import DYNAMICS_LIMITS, MAX_SECONDS
 from ego.openscenario.expressions import ExpressionError, resolve
 from ego.openscenario.registry import ACTIONS, CONDITIONS, action_of, allowed, init_kinds
@@ -57,6 +57,9 @@ MISC_CATEGORIES = (
     "roadMark",
 )
 
+#: a vehicle's Performance limits where the file leaves one out, as the reference player (esmini)
+#: fills them in (its Vehicle's defaults: 100 m/s, 10 m/s^2, 10 m/s^2)
+PERFORMANCE_DEFAULTS = {"maxSpeed": 100.0, "maxAcceleration": 10.0, "maxDeceleration": 10.0}
 VEHICLE_CATEGORIES = ("car", "van", "truck", "trailer", "semitrailer", "bus", "motorbike", "bicycle")
 #: SUMO's limits for a pedestrian's or misc object's body (it is moved only by the storyboard)
 STANDING_MAX_SPEED, STANDING_ACCEL = 30.0, 10.0
@@ -252,7 +255,7 @@ def _declarations(
         kind = d.attrs.get("parameterType")
         if not name:
             raise ScenarioFileError(path, d.line, "<ParameterDeclaration> needs attribute name")
-        _check_declared(path, d, name, kind, "parameter", out)
+        _check_declared(path, d, name, kind, "parameter", out, last_wins=True)
         if "value" not in d.attrs:
             raise ScenarioFileError(path, d.line, f"parameter {name!r} needs attribute value")
         raw = d.attrs["value"]
@@ -264,8 +267,7 @@ def _declarations(
         out[name] = M.Parameter(name, kind, value, d.line)
         values[name] = value
     # value constraints (1.2) after every declaration: a constraint may name a later parameter
-    for d in decls:
-        name = d.attrs["name"]
+    for name, d in {d.attrs["name"]: d for d in decls}.items():  # a name declared twice: its last
         groups = tuple(_constraint_group(path, g, values) for g in d.all("ConstraintGroup"))
         if groups:
             out[name] = replace(out[name], constraints=groups)
@@ -273,14 +275,21 @@ def _declarations(
     return out
 
 
-def _check_declared(path, d: Node, name: str, kind: str | None, what: str, out: Mapping[str, M.Parameter]) -> None:
-    """A parameter's or variable's (``what``) declaration: a known type, declared once."""
+def _check_declared(
+    path, d: Node, name: str, kind: str | None, what: str, out: Mapping[str, M.Parameter], last_wins: bool = False
+) -> None:
+    """A parameter's or variable's (``what``) declaration: a known type, declared once (a
+    parameter declared twice in one scope: the last declaration holds, with a warning, as the
+    reference player reads it - its declarations stack, the latest found first)."""
     if kind not in TYPES:
         raise ScenarioFileError(
             path, d.line, f"bad {what}Type {kind!r} of {what} {name!r} (allowed: {', '.join(TYPES)})"
         )
     if name in out:
-        raise ScenarioFileError(path, d.line, f"{what} {name!r} is declared twice (first on line {out[name].line})")
+        twice = f"{what} {name!r} is declared twice (first on line {out[name].line})"
+        if not last_wins:
+            raise ScenarioFileError(path, d.line, twice)
+        files.warn(f"{path}:{d.line}: {twice}: this last declaration holds, as the reference player reads it")
 
 
 def _assigned_name(a: Node) -> str:
@@ -375,8 +384,9 @@ class _Builder:
 
     def __init__(self, path: Path, values: dict[str, object]) -> None:
         self.path, self.values = path, values
+        self.scenario = path  #: the scenario file (catalog folders are relative to it)
         self.entities: dict[str, M.Entity] = {}
-        self.catalog_dirs: dict[str, list[Path]] = {}
+        self.catalog_dirs: dict[str, list[str]] = {}  #: catalog kind -> its folders as written
         self.variables: dict[str, M.Parameter] = {}  #: the file's VariableDeclarations (1.2)
         #: the last Maneuver a catalog reference found: (catalog file, its node, its values)
         self.maneuver_entry: tuple[Path, Node, dict[str, object]] | None = None
@@ -471,11 +481,23 @@ class _Builder:
             name=name,
             category=cat,
             **self.box(node),
-            max_speed=self.num(perf, "maxSpeed", positive=True),
-            max_accel=self.num(perf, "maxAcceleration", positive=True),
-            max_decel=self.num(perf, "maxDeceleration", positive=True),
+            max_speed=self.performance(perf, "maxSpeed", name),
+            max_accel=self.performance(perf, "maxAcceleration", name),
+            max_decel=self.performance(perf, "maxDeceleration", name),
             line=node.line,
         )
+
+    def performance(self, perf: Node, attr: str, name: str) -> float:
+        """A vehicle's Performance limit; one the file leaves out (the schema requires all three)
+        is the reference player's default (:data:`PERFORMANCE_DEFAULTS`), with a warning."""
+        if attr not in perf.attrs:
+            value = PERFORMANCE_DEFAULTS[attr]
+            files.warn(
+                f"{self.path}:{perf.line}: <Performance> of {name or 'a catalog vehicle'} has no {attr} (the schema "
+                f"requires it): {value:g} {'m/s' if attr == 'maxSpeed' else 'm/s^2'}, the reference player's default"
+            )
+            return value
+        return self.num(perf, attr, positive=True)
 
     def no_trailer(self, node: Node) -> None:
         """A vehicle's <Trailer> is accepted when it attaches nothing (an empty entityRef or
@@ -483,6 +505,12 @@ class _Builder:
         trailer that is really attached is refused (ego drives single bodies)."""
         for tr in node.all("Trailer"):
             for ref in tr.children:
+                if ref.tag == "Vehicle":  # a trailer written inline (esmini's semi_truck_with_extra_trailer)
+                    raise self.error(
+                        ref,
+                        f"a trailer (Vehicle {ref.attrs.get('name', '')!r}) is not supported by ego: it runs single "
+                        f"vehicles (see {DOCS})",
+                    )
                 attr = "entityRef" if ref.tag == "EntityRef" else "entryName"
                 name = self.str_(ref, attr)
                 if name:
@@ -532,23 +560,37 @@ class _Builder:
 
     def catalog_file(self, node: Node, catalog: str, kinds: tuple[str, ...]) -> Path:
         """The catalog file named ``catalog`` in the file's catalog directories: the file
-        ``catalog.xosc``, else the file whose <Catalog name> is ``catalog``."""
-        dirs = [d for k in kinds for d in self.catalog_dirs.get(CATALOG_OF[k], [])]
-        dirs += [d for ds in self.catalog_dirs.values() for d in ds if d not in dirs]
-        if not dirs:
+        ``catalog.xosc``, else the file whose <Catalog name> is ``catalog``; then, found
+        elsewhere (:mod:`ego.openscenario.files`), ``catalog.xosc`` in each search folder (under
+        each directory as written, and alone)."""
+        written = [d for k in kinds for d in self.catalog_dirs.get(CATALOG_OF[k], [])]
+        written += [d for ds in self.catalog_dirs.values() for d in ds if d not in written]
+        if not written:
             raise self.error(
                 node, f"<CatalogReference> to {catalog!r} but no <{CATALOG_OF[kinds[0]]}> in <CatalogLocations>"
             )
-        files = [d / f"{catalog}.xosc" for d in dirs]
-        file = next((f for f in files if f.is_file()), None)
-        if file is None:
-            for d in dirs:
-                for f in sorted(d.glob("*.xosc")) if d.is_dir() else ():
-                    cat = read_tree(f).child("Catalog")
-                    if cat is not None and cat.attrs.get("name") == catalog:
-                        return f
-            raise self.error(node, f"catalog {catalog!r} not found (looked for {', '.join(str(f) for f in files)})")
-        return file
+        places = [files.candidates(self.scenario, f"{w.rstrip('/')}/{catalog}.xosc") for w in written]
+        firsts = [f for first, _ in places for f in first]
+        for f in firsts:
+            if f.is_file():
+                return resolved(f, "catalog file")
+        for f in firsts:
+            d = resolved(f.parent, "catalog folder")
+            # a "folder" that is the catalog file itself (esmini's 0.9 examples write
+            # Directory path="../xosc/Catalogs/VehicleCatalog", a file without extension)
+            for g in sorted(d.glob("*.xosc")) if d.is_dir() else [d] if d.is_file() else ():
+                cat = read_tree(g).child("Catalog")
+                if cat is not None and cat.attrs.get("name") == catalog:
+                    return g
+        rest = list(dict.fromkeys(f for _, others in places for f in others if f not in firsts))
+        for f in rest:
+            if f.is_file():
+                files.warn(
+                    f"{self.scenario}: catalog {catalog!r} is not in {', '.join(written)}; found as {f} "
+                    f"(see docs/openscenario.md)"
+                )
+                return resolved(f, "catalog file")
+        raise self.error(node, f"catalog {catalog!r} not found ({files.looked(firsts + rest)})")
 
     def catalog_entry(self, node: Node, kinds: tuple[str, ...], name: str) -> M.Vehicle | None:
         """The entry a CatalogReference names, of one of ``kinds`` (a Controller entry is
@@ -761,7 +803,7 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
         if not vc.children:  # <RouteCatalog/>: the reference player's files write empty ones; it locates nothing
             continue
         d = b.one(vc, "Directory")
-        b.catalog_dirs.setdefault(vc.tag, []).append(resolved(path.parent / b.str_(d, "path"), "catalog folder"))
+        b.catalog_dirs.setdefault(vc.tag, []).append(b.str_(d, "path"))
 
     net = root.child("RoadNetwork")
     logic = net.child("LogicFile") if net is not None else None
@@ -771,12 +813,13 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
             (net or root).line,
             "the scenario needs <RoadNetwork><LogicFile filepath=...> (an .xodr or a SUMO .net.xml)",
         )
-    road = resolved(path.parent / b.str_(logic, "filepath"), "road file")
     rel = b.str_(logic, "filepath")
     if not rel.endswith((".xodr", ".net.xml")):
         raise b.error(logic, f"bad road file {rel!r} (expected an OpenDRIVE .xodr or a SUMO .net.xml)")
-    if not road.is_file():
-        raise b.error(logic, f"road file {rel!r} not found ({road})")
+    found, places = files.locate(path, rel, "road file")
+    if found is None:
+        raise b.error(logic, f"road file {rel!r} not found ({files.looked(places)})")
+    road = resolved(found, "road file")
 
     ents = root.child("Entities")
     for so in ents.all("ScenarioObject") if ents is not None else ():
@@ -850,8 +893,10 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
         for act in st.all("Act"):
             groups = []
             for mg in act.all("ManeuverGroup"):
-                actors_node = b.one(mg, "Actors")
-                actors = tuple(b.entity_ref(e) for e in actors_node.all("EntityRef"))
+                # the schema requires <Actors>; the reference player reads an empty group (esmini's
+                # straight_500m.xosc) as one with no actors and nothing to do
+                actors_node = b.one(mg, "Actors") if mg.children else None
+                actors = tuple(b.entity_ref(e) for e in actors_node.all("EntityRef")) if actors_node else ()
                 mans = []
                 for man in mg.children:
                     if man.tag == "Maneuver":
@@ -864,6 +909,7 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
                         file, node, cat_values = b.maneuver_entry  # type: ignore[misc]
                         cb = _Builder(file, cat_values)
                         cb.entities, cb.catalog_dirs, cb.variables = b.entities, b.catalog_dirs, b.variables
+                        cb.scenario = b.scenario
                         mans.append(_maneuver(cb, node, names, scoped=False))
                 groups.append(
                     M.ManeuverGroup(

@@ -36,7 +36,12 @@ declare(
 declare(
     "FileHeader",
     contains=("License",),
-    note="revMajor 1, revMinor 0-3 (read by the leading number: `1+` as the reference player's files write it is 1); `License` accepted (descriptive)",
+    note=(
+        "revMajor 1, revMinor 0-3 (read by the leading number: `1+` as the reference player's files write it is "
+        "1); `License` accepted (descriptive). **As the reference player reads it:** an XML declaration after "
+        "leading comments (XML allows nothing before it; esmini's `two_plus_one_road.xosc`) is read as if it came "
+        "first, every line where it was"
+    ),
     also=("License",),
 )
 declare("License")
@@ -50,7 +55,10 @@ declare(
         "arguments or `sqrt(-1)` is one line); `%`, comparisons and boolean operators are refused. Scopes as the "
         "standard has them: the file's, a catalog entry's, a `Story`'s and a `Trajectory`'s (possibly empty) "
         "declarations are seen inside their element only, an inner name shadowing an outer one; `--set` and "
-        "sweeps set the file's"
+        "sweeps set the file's. A name declared twice in one scope (the standard asks for unique names; esmini's "
+        "`follow_reference.xosc`): the last declaration holds, with a warning naming both lines, **as the "
+        "reference player reads it** (its declarations stack, the latest found first); a declaration between "
+        "them sees the first value"
     ),
     label="`ParameterDeclarations`, `$name`, `${...}`",
     also=("ParameterDeclaration",),
@@ -93,7 +101,11 @@ declare(
         "another kind than the reference needs is one line; the locations of `RouteCatalog`, `EnvironmentCatalog` "
         "and `TrajectoryCatalog` are accepted (the reference player's files declare them, used or not) and their "
         "entries read nowhere: an element referring to one is refused; a location without its `Directory` (the "
-        "schema asks for one; the reference player's files write `<RouteCatalog/>`) locates nothing"
+        "schema asks for one; the reference player's files write `<RouteCatalog/>`) locates nothing; a `Directory` "
+        "that is a file (esmini's 0.9 examples name the catalog file itself, without extension) is that catalog "
+        "when its `<Catalog name>` is the reference's. A catalog "
+        "file not in its directories as written is looked for in the search folders (`--path`, `$EGO_PATH`: "
+        "[Finding a scenario's files](#finding-a-scenarios-files))"
     ),
     label="`CatalogLocations` (`VehicleCatalog`, `PedestrianCatalog`, `MiscObjectCatalog`, `ControllerCatalog`,"
     " `ManeuverCatalog`), `CatalogReference`",
@@ -122,10 +134,10 @@ declare(
         "Trailer",
     ),
     note=(
-        "`BoundingBox` (length, width, center x), `Performance` (`maxSpeed`, `maxAcceleration` and "
-        "`maxDeceleration` each required, as the schema has them in 1.0 to 1.3: a missing one is refused in one "
-        "line; the reference player fills in its own defaults and plays esmini's `straight_500m.xosc`, which "
-        "leaves out `maxAcceleration`), `vehicleCategory` car, van, truck, trailer, "
+        "`BoundingBox` (length, width, center x), `Performance` (`maxSpeed`, `maxAcceleration`, "
+        "`maxDeceleration`; **as the reference player reads them**: the schema requires all three, and one left "
+        "out (esmini's `straight_500m.xosc` has no `maxAcceleration`) is esmini's own default, 100 m/s, 10 m/s^2 "
+        "and 10 m/s^2, with a warning naming the line), `vehicleCategory` car, van, truck, trailer, "
         "semitrailer, bus, motorbike, bicycle (recorded, not used by SUMO); `Axles` and `Properties` (with "
         "`Property` and `File`) accepted and not used; `TrailerHitch`, `TrailerCoupler` (1.3) accepted and not "
         "used, and a `Trailer` that attaches nothing (an empty `entityRef` or `entryName`: the reference player's "
@@ -166,7 +178,7 @@ declare("ParameterAssignments", contains=("ParameterAssignment",))
 declare("ParameterAssignment")
 declare("TrailerHitch")
 declare("TrailerCoupler")
-declare("Trailer", contains=("EntityRef", "CatalogReference"))
+declare("Trailer", contains=("EntityRef", "CatalogReference", "Vehicle"))
 declare("BoundingBox", contains=("Center", "Dimensions"))
 declare("Center")
 declare("Dimensions")
@@ -266,7 +278,9 @@ declare(
         "states standby / running / complete; `maximumExecutionCount` of events and maneuver groups; `priority` "
         "overwrite / override (stops the maneuver's other running events), skip (does not start while another "
         "event of the maneuver runs), parallel. **As the reference player reads its files:** a `Maneuver` or an "
-        "`Action` without its `name` (the schema requires one) is read nameless (no condition can refer to it)"
+        "`Action` without its `name` (the schema requires one) is read nameless (no condition can refer to it); "
+        "an empty `ManeuverGroup` (no `Actors`, which the schema requires, and no `Maneuver`: esmini's "
+        "`straight_500m.xosc`) does nothing"
     ),
     label="`Storyboard`, `Story`, `Act`, `ManeuverGroup`, `Maneuver`, `Event`",
     also=("Story", "Act", "ManeuverGroup", "Maneuver", "Event"),

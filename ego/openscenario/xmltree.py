@@ -7,6 +7,7 @@ while parsing, so the tree is built here from expat's callbacks.
 from __future__ import annotations
 
 import os
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from xml.parsers import expat
@@ -68,8 +69,34 @@ MAX_DEPTH = 200
 MAX_DECLARATIONS = 10_000
 
 
+#: comments and blanks before an XML declaration (XML allows nothing there; the reference
+#: player's two_plus_one_road.xosc starts with four comment lines, and it reads the file)
+_BEFORE_DECLARATION = re.compile(rb"\A(?:\xef\xbb\xbf)?(?:\s|<!--.*?-->)+(?=<\?xml\s)", re.S)
+_DECLARATION = re.compile(rb"<\?xml\s.*?\?>", re.S)
+
+
+def declaration_first(data: bytes) -> bytes:
+    """``data`` with an XML declaration that follows comments moved to the very start, the
+    lines unchanged: the declaration goes before the comments on their first line and its old
+    place is blanked (its own line breaks kept), so every element keeps its line."""
+    lead = _BEFORE_DECLARATION.match(data)
+    if lead is None:
+        return data
+    decl = _DECLARATION.match(data, lead.end())
+    if decl is None:
+        return data
+    text = decl.group(0)
+    blank = bytes(c if c in b"\r\n" else 32 for c in text)
+    bom = b"\xef\xbb\xbf" if data.startswith(b"\xef\xbb\xbf") else b""
+    one_line = re.sub(rb"[\r\n]", b" ", text)
+    return bom + one_line + data[len(bom) : lead.end()] + blank + data[decl.end() :]
+
+
 def parse_bytes(data: bytes, path: str | os.PathLike = "<string>") -> Node:
-    """The root element of ``data`` (see :func:`parse_file`)."""
+    """The root element of ``data`` (see :func:`parse_file`). An XML declaration after leading
+    comments, which XML forbids and the reference player reads, is read as if it came first
+    (:func:`declaration_first`)."""
+    data = declaration_first(data)
     parser = expat.ParserCreate()
     stack: list[Node] = []
     root: list[Node] = []

@@ -18,7 +18,7 @@ from collections.abc import Callable, Iterable, Iterator
 from multiprocessing.connection import Connection
 from typing import Any, Protocol
 
-from ego.parallel.outcome import Outcome, default_workers
+from ego.parallel.outcome import Outcome, WithEnvironment, default_workers
 from ego.processes import exit_with, main_module_hidden
 
 ENGINES = ("process", "ray")
@@ -112,7 +112,7 @@ class ProcessExecutor:
 
     def run(self, fn: Callable[[Any], Any], tasks: Iterable[Any]) -> Iterator[Outcome]:
         try:
-            yield from self._run(fn, tasks)
+            yield from self._run(WithEnvironment(fn), tasks)
         finally:
             # the caller stopped early (or failed): a worker still busy would hand its stale
             # reply to the next run, so it is killed now and replaced at the next run; a reply

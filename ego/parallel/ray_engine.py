@@ -25,7 +25,7 @@ import os
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
-from ego.parallel.outcome import Outcome, default_workers
+from ego.parallel.outcome import Outcome, WithEnvironment, default_workers
 from ego.params import ConfigError
 
 #: tasks in flight per worker: enough to keep every worker busy while results travel back,
@@ -96,7 +96,7 @@ class RayExecutor:
         if not ray.is_initialized():
             raise RuntimeError("this RayExecutor is closed")
         source = iter(tasks)
-        fn_ref = ray.put(fn)  # shipped once, not with every task
+        fn_ref = ray.put(WithEnvironment(fn))  # shipped once, not with every task; with the caller's EGO_PATH
         pending: dict[Any, tuple[Any, int]] = {}  # ObjectRef -> (task, attempt)
         limit = IN_FLIGHT_PER_WORKER * self.workers
 

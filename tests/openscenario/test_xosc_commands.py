@@ -115,13 +115,13 @@ def test_list_file(files, capsys):
     bad.write_text(
         (files / "emergency_brake.xosc")
         .read_text()
-        .replace("<Properties/>", "<Properties/><Trailer><Vehicle/></Trailer>", 1)
+        .replace("<Properties/>", "<Properties/><Trailer><Oops/></Trailer>", 1)
     )
     assert main(["list", str(bad), "--json"]) == 0
     listing = json.loads(capsys.readouterr().out)
     assert listing["supported"] is False
     assert [e for e in listing["elements"] if not e["supported"]] == [
-        {"element": "Vehicle", "line": 51, "supported": False}
+        {"element": "Oops", "line": 51, "supported": False}
     ]
     assert listing["ego"] == "Ego"
     # the ego's parameters as a run of the file starts them (its Init), not FileConfig's

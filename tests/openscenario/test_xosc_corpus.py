@@ -165,14 +165,15 @@ HAND = [
         "int, string, boolean, dateTime)",
     ),
     (
-        "duplicate-parameter",
+        "duplicate-variable",
         sub(
-            '<ParameterDeclaration name="EgoFront" parameterType="double" value="300"/>',
-            '<ParameterDeclaration name="EgoFront" parameterType="double" value="300"/>'
-            '<ParameterDeclaration name="EgoFront" parameterType="double" value="301"/>',
+            "</ParameterDeclarations>",
+            "</ParameterDeclarations><VariableDeclarations>\n"
+            '<VariableDeclaration name="V" variableType="double" value="1"/>\n'
+            '<VariableDeclaration name="V" variableType="double" value="2"/></VariableDeclarations>',
         ),
-        'name="EgoFront"',
-        "parameter 'EgoFront' is declared twice (first on line 11)",
+        'name="V" variableType="double" value="2"',
+        "variable 'V' is declared twice (first on line 38)",
     ),
     (
         "unknown-entity-init",
@@ -329,17 +330,6 @@ HAND = [
         'storyboardElementRef="Nope"',
         "unknown storyboard event 'Nope' (elements: LeadBrakeAction, LeadBrakeEvent, LeadManeuver, LeadGroup, "
         "Brake, LeadBrakes; qualify with '::', e.g. 'Event::Action')",
-    ),
-    (
-        "story-parameter-twice",
-        sub(
-            '<Story name="LeadBrakes">',
-            '<Story name="LeadBrakes"><ParameterDeclarations>\n'
-            '<ParameterDeclaration name="Lag" parameterType="double" value="1"/>\n'
-            '<ParameterDeclaration name="Lag" parameterType="double" value="2"/></ParameterDeclarations>',
-        ),
-        'value="2"/></ParameterDeclarations>',
-        "parameter 'Lag' is declared twice (first on line 94)",
     ),
     (
         "story-parameter-bad-value",
@@ -600,6 +590,31 @@ HAND = [
         None,
         None,
     ),
+    (
+        "negative-target-speed",
+        sub(LEAD_TARGET, '<AbsoluteTargetSpeed value="-3"/>'),
+        '<AbsoluteTargetSpeed value="-3"/>',
+        "a negative target speed (-3 m/s: driving backwards) is not supported by ego: SUMO's drivers and ego's "
+        f"own plant drive forwards only (see {DOCS})",
+    ),
+    (
+        # a comment before the XML declaration (the reference player reads it): the lines stay right
+        "comment-before-declaration",
+        "<!-- a comment\n     on two lines -->\n" + sub('<Act name="Brake">', '<Act name="Brake"><Oops/>'),
+        "<Oops/>",
+        unsupported("Oops"),
+    ),
+    (
+        "inline-trailer",
+        sub(
+            '<Performance maxSpeed="55" maxAcceleration="2.6" maxDeceleration="4.5"/>',
+            '<Performance maxSpeed="55" maxAcceleration="2.6" maxDeceleration="4.5"/>'
+            '<Trailer><Vehicle name="semi" vehicleCategory="trailer"/></Trailer>',
+        ),
+        '<Vehicle name="semi"',
+        f"a trailer (Vehicle 'semi') is not supported by ego: it runs single vehicles (see {DOCS})",
+    ),
+    ("windows-road-missing", sub('filepath="straight3.xodr"', 'filepath="C:\\Users\\me\\nowhere.xodr"'), "C:", None),
 ]
 
 
@@ -807,7 +822,10 @@ def test_hand_written(case, tmp_path, capsys):
             return
         del lines
     if case[0] == "missing-road":
-        message = f"road file 'nowhere.xodr' not found ({tmp_path / 'nowhere.xodr'})"
+        message = f"road file 'nowhere.xodr' not found (looked for {tmp_path / 'nowhere.xodr'})"
+    if case[0] == "windows-road-missing":  # on another machine's disk: its name looked for here
+        written = "C:\\Users\\me\\nowhere.xodr"
+        message = f"road file {written!r} not found (looked for {tmp_path / 'nowhere.xodr'})"
     if case[0] == "ego-teleport":
         marker = '<TeleportAction><Position><LanePosition roadId="0" laneId="-1" s="400"'
         message = (

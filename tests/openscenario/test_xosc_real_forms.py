@@ -252,7 +252,7 @@ def unsupported_text(tag: str) -> str:
 
 def test_a_parameter_declared_twice_is_handled_alike(tmp_path, capsys):
     """Twice in different scopes (the file's and a story's) is shadowing: list and run accept
-    it; twice in one scope both name the second declaration's line."""
+    it; twice in one scope too, with a warning naming the second declaration's line."""
     from ego.cli import main
 
     path = _cut_in(tmp_path)
@@ -265,10 +265,19 @@ def test_a_parameter_declared_twice_is_handled_alike(tmp_path, capsys):
     assert main(["run", str(path), "-c", "pid", "--set", "duration=1"]) == 0
     capsys.readouterr()
 
+    # twice in one scope: the last declaration holds, as the reference player reads it; list and
+    # run both accept it and warn once naming the second declaration's line
     path.write_text(text.replace(first, first + "\n    " + first, 1))
-    listing, err = _list_and_run(path, capsys)
-    assert listing["supported"] is False and err == f"ego: error: {listing['error']}"
-    assert f":{_line(path, first) + 1}: parameter " in listing["error"] and "declared twice" in listing["error"]
+    name = first.split('name="', 1)[1].split('"', 1)[0]
+    warning = (
+        f"ego: warning: {path}:{_line(path, first) + 1}: parameter {name!r} is declared twice (first on line "
+        f"{_line(path, first)}): this last declaration holds, as the reference player reads it"
+    )
+    assert main(["list", str(path), "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["supported"] is True and err.strip() == warning
+    assert main(["run", str(path), "-c", "pid", "--set", "duration=1"]) == 0
+    assert capsys.readouterr().err.strip() == warning
 
 
 def _story_decl(text: str, decl: str) -> str:

@@ -183,8 +183,8 @@ def test_an_entity_follows_a_nurbs_quarter_circle_at_its_control_point_times(tmp
             r"bad value for length in <Clothoid>: 0 \(expected > 0\)",
         ),
         (
-            '<ClothoidSpline><Segment curvStart="0" length="10"/></ClothoidSpline>',
-            r"<Segment> needs attribute curvatureStart",
+            '<ClothoidSpline><Segment curvStart="0" curvatureEnd="0.01" length="10"/></ClothoidSpline>',
+            r"<Segment> mixes curvatureStart/curvatureEnd with curvStart/curvEnd \(write one form\)",
         ),
     ],
 )
