@@ -20,7 +20,6 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 from ego.openscenario.xmltree import DOCS, Node, ScenarioFileError
-from ego.sim.types import VehicleType
 
 #: how an attribute is mapped: a new name, or (a new name, a value map or a value function)
 AttrMap = Mapping[str, "str | tuple[str, Mapping[str, str] | Callable[[str], str]]"]
@@ -553,11 +552,10 @@ class _Migration:
 
     def special_vehicle_Performance(self, node: Node) -> list[Node]:
         """A 0.9 Performance: ``maxSpeed``, ``maxDeceleration`` (``mass`` has no place in 1.0's);
-        0.9 has no ``maxAcceleration``, which 1.0 requires: SUMO's passenger car's (2.6 m/s^2,
-        what SUMO takes for a vehicle type without one), or one written there."""
-        out = self.apply(Rule("Performance", same("maxSpeed", "maxDeceleration", "maxAcceleration")), node)
-        out[0].attrs.setdefault("maxAcceleration", repr(VehicleType("0.9").accel))
-        return out
+        0.9 has no ``maxAcceleration``, which 1.0 requires: left out, the loader gives it the
+        reference player's default (``loader.PERFORMANCE_DEFAULTS``, 10 m/s^2, with a warning),
+        as for a 1.x file without one; or the one written there."""
+        return self.apply(Rule("Performance", same("maxSpeed", "maxDeceleration", "maxAcceleration")), node)
 
     def special_entities_Object(self, node: Node) -> list[Node]:
         """An Object: one body (a CatalogReference, Vehicle, Pedestrian or MiscObject), then

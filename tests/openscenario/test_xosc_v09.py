@@ -10,7 +10,7 @@ from xosc_scenes import run_scene, starts
 from xosc_v09 import CATALOG_09, V09, V10, sub, write
 
 from ego.cli import main
-from ego.openscenario.loader import load, read_tree
+from ego.openscenario.loader import PERFORMANCE_DEFAULTS, load, read_tree
 from ego.openscenario.scenario import file_listing
 from ego.openscenario.xmltree import ScenarioFileError
 
@@ -266,13 +266,13 @@ def test_the_mapping_of_a_0_9_element(context, old, new):
     assert [_tree(n) for n in mapped] == [_tree(parse_bytes(new.encode()))]
 
 
-def test_a_0_9_vehicle_gets_sumos_acceleration_unless_it_gives_one(tmp_path):
-    """0.9's Performance has no maxAcceleration (1.0 requires one): SUMO's passenger car's 2.6
-    m/s^2, or the one written there; the catalog entry's own parameter ($Length) and box
+def test_a_0_9_vehicle_gets_the_reference_players_acceleration_unless_it_gives_one(tmp_path):
+    """0.9's Performance has no maxAcceleration (1.0 requires one): the reference player's
+    default 10 m/s^2 (as for a 1.x file without one), or the one written there; the catalog entry's own parameter ($Length) and box
     (centre x 1.4) as the 0.9 file gives them."""
     path = write(tmp_path)
     lead = load(path).entities["Lead"].vehicle
     assert (lead.max_accel, lead.max_decel, lead.max_speed) == (4.0, 9.0, 55.0)
     assert (lead.length, lead.width, lead.center_x) == (4.5, 1.8, 1.4)
     (tmp_path / "catalogs" / "Cars.xosc").write_text(CATALOG_09.replace(' maxAcceleration="4"', ""))
-    assert load(path).entities["Lead"].vehicle.max_accel == 2.6
+    assert load(path).entities["Lead"].vehicle.max_accel == PERFORMANCE_DEFAULTS["maxAcceleration"] == 10.0
