@@ -54,7 +54,7 @@ def cache_dir() -> Path:
 
 
 #: netconvert's bounds: a road it cannot convert in this time or memory is refused (esmini's
-#: crest-curve.xodr, a 50 m wide border lane on an elevated clothoid, took > 7 GiB and minutes)
+#: crest-curve.xodr with its roadside objects took > 7 GiB and minutes; see :data:`_OBJECTS`)
 NETCONVERT_SECONDS = 120
 NETCONVERT_MEMORY = 4 << 30
 
@@ -86,6 +86,7 @@ def network_file(road: Path) -> Path:
 
     data = read_limited(road, "road file", MAX_ROAD_BYTES)
     check_lane_widths(road, data)
+    check_traffic_rule(road, data)
 
     exe = sumo_binary("netconvert")
     key = hashlib.sha256(data + "\0".join(OPTIONS).encode() + str(exe).encode()).hexdigest()[:24]
@@ -168,6 +169,27 @@ def check_lane_widths(road: Path, data: bytes) -> None:
                 raise ScenarioFileError(
                     road, line, "bad lane width 0 m everywhere for a driving lane (allowed: more than 0 m)"
                 )
+
+
+_ROAD_TAG = re.compile(rb"<road\b[^>]*>")
+_RULE = re.compile(rb"""\srule\s*=\s*(["'])(.*?)\1""")
+
+
+def check_traffic_rule(road: Path, data: bytes) -> None:
+    """Every road right-hand traffic (OpenDRIVE's ``rule``, default ``RHT``): netconvert reads
+    each road as right-hand (lanes ``-k`` along the reference line), and so does ego's lane
+    model. A left-hand road (``rule="LHT"``: lanes ``+k`` along it) would be driven the wrong
+    way, so it is refused: ScenarioFileError naming its line."""
+    for tag in _ROAD_TAG.finditer(data):
+        rule = _RULE.search(tag.group(0))
+        if rule and rule.group(2).strip().upper() != b"RHT":
+            line = data.count(b"\n", 0, tag.start()) + 1
+            raise ScenarioFileError(
+                road,
+                line,
+                f'<road rule="{rule.group(2).decode(errors="replace")}"> (left-hand traffic) is not supported by '
+                "ego: its roads are right-hand traffic (RHT, OpenDRIVE's default)",
+            )
 
 
 def for_netconvert(road: Path, data: bytes) -> bytes | None:
