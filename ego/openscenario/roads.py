@@ -47,6 +47,11 @@ OPTIONS = (
 )
 
 
+#: the version of :func:`for_netconvert`'s copy, part of a converted road's cache key (a road
+#: converted before a change of the copy is converted again)
+COPY_VERSION = "copy 2"
+
+
 def cache_dir() -> Path:
     """Where converted roads are kept: ``$XDG_CACHE_HOME/ego/opendrive`` or ``~/.cache/ego/opendrive``."""
     base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
@@ -89,7 +94,7 @@ def network_file(road: Path) -> Path:
     check_traffic_rule(road, data)
 
     exe = sumo_binary("netconvert")
-    key = hashlib.sha256(data + "\0".join(OPTIONS).encode() + str(exe).encode()).hexdigest()[:24]
+    key = hashlib.sha256(data + "\0".join((*OPTIONS, COPY_VERSION)).encode() + str(exe).encode()).hexdigest()[:24]
     out = cache_dir() / f"{key}.net.xml"
     if out.is_file():
         return out
@@ -194,10 +199,12 @@ def check_traffic_rule(road: Path, data: bytes) -> None:
 
 def for_netconvert(road: Path, data: bytes) -> bytes | None:
     """The copy of an OpenDRIVE file that netconvert converts (None: the file as it is):
-    signals' empty types filled in (:func:`_signal_types`), roadside objects left out
-    (:data:`_OBJECTS`) and direct junctions written as common ones (:func:`_direct_junctions`)."""
+    signals' empty types filled in (:func:`_signal_types`), roadside objects and the elevation
+    profile left out (:data:`_OBJECTS`, :data:`_ELEVATION`) and direct junctions written as
+    common ones (:func:`_direct_junctions`)."""
     out = _signal_types(data) or data
     out = _OBJECTS.sub(b"<objects/>", out)
+    out = _ELEVATION.sub(b"", out)
     if _DIRECT.search(out):
         out = _direct_junctions(road, out)
     return None if out == data else out
@@ -208,6 +215,11 @@ def for_netconvert(road: Path, data: bytes) -> bytes | None:
 #: esmini's crest-curve.xodr repeats a fence with ``distance="0"`` and took netconvert past
 #: 4 GiB; without its objects the same lanes convert in 0.5 s (tests/openscenario/test_xosc_roads.py)
 _OBJECTS = re.compile(rb"<objects\b[^>]*?(?<!/)>.*?</objects\s*>", re.S)
+#: a road's elevation profile: ego's roads are planar, and OpenDRIVE's ``s`` is measured in the
+#: plane (a road's length is its plan view's); netconvert would make each lane's length the
+#: length in space, so that SUMO's positions and speeds run along the slope (crest-curve.xodr:
+#: lane -1 395.834 m long for a plan-view line of 395.208 m)
+_ELEVATION = re.compile(rb"<elevationProfile\b[^>]*?/>|<elevationProfile\b.*?</elevationProfile\s*>", re.S)
 _DIRECT = re.compile(rb"""<junction\b[^>]*\btype\s*=\s*["']direct["']""")
 #: m: the length of the connecting road written for each connection of a direct junction
 DIRECT_CONNECTOR = 0.01

@@ -67,6 +67,32 @@ def test_roadside_objects_are_left_out(tmp_path):
     assert not [p for p in fenced.parent.iterdir() if p.suffix == ".xodr"]  # netconvert's copy removed
 
 
+# esmini's crest-curve.xodr's crest: up 6 m over 70 m and down again
+ELEVATION = """    <elevationProfile>
+      <elevation s="0.0" a="0.0" b="0.00" c="0.00" d="0.00"/>
+      <elevation s="200.0" a="0.0" b="0.00" c="0.00367346938776" d="-0.0000349854227405"/>
+      <elevation s="270.0" a="6.0" b="0.00" c="-0.00367346938776" d="0.0000349854227405"/>
+      <elevation s="340.0" a="0.0" b="0.00" c="0.00" d="0.00"/>
+    </elevationProfile>
+"""
+
+
+def _lengths(net: Path) -> dict[str, str]:
+    return {ln.get("id", ""): ln.get("length", "") for ln in ET.parse(net).getroot().iter("lane")}
+
+
+def test_elevation_is_left_out(tmp_path):
+    """OpenDRIVE's s is measured in the plane and ego's roads are planar: a crest on
+    straight3.xodr gives exactly straight3.xodr's lanes, 3000 m long as its plan view (with
+    the elevation netconvert makes each lane its length along the slope)."""
+    plain = network_file(SHIPPED / "straight3.xodr")
+    road = tmp_path / "crest.xodr"
+    road.write_text((SHIPPED / "straight3.xodr").read_text().replace("    <lanes>", ELEVATION + "    <lanes>", 1))
+    crest = network_file(road)
+    assert _lanes(crest) == _lanes(plain) and _lengths(crest) == _lengths(plain)
+    assert {v for k, v in _lengths(crest).items() if not k.startswith(":")} == {"3000.000000"}
+
+
 W = 3.5
 
 
