@@ -14,7 +14,9 @@ a timeout. A file
 
 Prints a markdown table (file, exit, seconds, the run's end or the first error line), the
 counts, and the outermost refused elements (``<X> is not supported``) with their number of
-files. ``--json OUT`` also writes the rows.
+files. ``--json OUT`` also writes the rows. Each variation file (a ParameterValueDistribution)
+is then run with ``ego sweep FILE -c C --out TMP --jobs 1`` (``--no-sweeps`` leaves them out):
+it **ran** when the sweep exits 0 or 1; it counts in the target set as its scenario file does.
 
 It also prints how many of the **target set** ran: the corpus issue's "examples on roads
 without city junction networks and without trailers". Each file left out is listed with its
@@ -40,6 +42,7 @@ import json
 import re
 import subprocess
 import sys
+import tempfile
 import time
 import xml.etree.ElementTree as ET
 from collections import Counter
@@ -51,16 +54,18 @@ CITY_ROADS = ("fabriksgatan.xodr", "multi_intersections.xodr")
 PARAM = re.compile(r"^\$\{?(\w+)\}?$")
 
 
-def scenario_files(paths: list[str]) -> list[Path]:
-    """The scenario files under ``paths`` (catalogs and distribution files left out)."""
+def scenario_files(paths: list[str], variations: bool = False) -> list[Path]:
+    """The scenario files under ``paths`` (catalogs and distribution files left out), or with
+    ``variations`` the ParameterValueDistribution files."""
     out: list[Path] = []
     for p in map(Path, paths):
         files = sorted(p.glob("*.xosc")) if p.is_dir() else [p]
         for f in files:
             head = f.read_text(errors="replace")[:4000]
-            if "<Catalog " in head or "<Catalog>" in head or "ParameterValueDistribution" in head:
+            if "<Catalog " in head or "<Catalog>" in head:
                 continue
-            out.append(f)
+            if ("ParameterValueDistribution" in head) == variations:
+                out.append(f)
     return out
 
 
@@ -155,11 +160,17 @@ def _trailer(scenario: Path, root: ET.Element, params: dict[str, str]) -> str | 
 
 
 def exclusion(scenario: Path) -> str | None:
-    """Why a file is outside the target set (see the module text), or None when it is in it."""
+    """Why a file is outside the target set (see the module text), or None when it is in it.
+    A variation file is where the scenario file it varies is."""
     try:
         root = ET.parse(scenario).getroot()
     except ET.ParseError:
         return None  # ego refuses it: a target file that does not run
+    varied = root.find("ParameterValueDistribution/ScenarioFile")
+    if varied is not None:
+        target = scenario.parent / varied.get("filepath", "")
+        why = exclusion(target) if target.is_file() else f"its scenario file {varied.get('filepath')!r} is missing"
+        return why and f"varies {varied.get('filepath')}: {why}"
     params = _params(root, {})
     name, road = _road(scenario, root, params)
     base = (name or "").replace("\\", "/").rsplit("/", 1)[-1]
@@ -176,11 +187,16 @@ def exclusion(scenario: Path) -> str | None:
     return None
 
 
-def run_one(path: Path, controller: str, timeout: float) -> dict:
+def run_one(path: Path, controller: str, timeout: float, sweep_out: str | None = None) -> dict:
+    """``ego run`` of a scenario file, or with ``sweep_out`` ``ego sweep`` of a variation file
+    (its results in that folder), as a row: file, exit, seconds, verdict, first line."""
     t0 = time.perf_counter()
+    cmd = ["run", path.name, "-c", controller]
+    if sweep_out is not None:
+        cmd = ["sweep", path.name, "-c", controller, "--out", sweep_out, "--jobs", "1", "--record", "none"]
     try:
         proc = subprocess.run(
-            [sys.executable, "-m", "ego", "run", path.name, "-c", controller],
+            [sys.executable, "-m", "ego", *cmd],
             cwd=path.parent,
             capture_output=True,
             text=True,
@@ -197,6 +213,8 @@ def run_one(path: Path, controller: str, timeout: float) -> dict:
         verdict = "ran"
         ends = [ln for ln in out.splitlines() if "run ends:" in ln]
         first = ends[-1].split("run ends:", 1)[1].strip() if ends else (lines[0] if lines else "")
+        if sweep_out is not None:  # the sweep's last line: how many runs, how they ended
+            first = next((ln.strip() for ln in reversed(out.splitlines()) if ln.strip()), "")
     elif code == 2 and len(errors) == 1 and not traceback:
         verdict, first = "refused", errors[0][len("ego: error:") :].strip()
     else:
@@ -220,14 +238,24 @@ def target_summary(files: list[Path], rows: list[dict]) -> str:
     return "\n".join([head, *lines, f"{ran} of {len(target)} target files run ({share:.0f} %)"])
 
 
+def _print_row(r: dict) -> None:
+    first = r["first"].replace("|", "\\|")[:220]
+    print(f"| {r['file']} | {r['exit']} | {r['seconds']:.1f} | {first} |", flush=True)
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("paths", nargs="+", help="folders of .xosc files, or files")
     ap.add_argument("-c", "--controller", default="pid")
     ap.add_argument("--timeout", type=float, default=120.0, help="seconds per file (default 120)")
     ap.add_argument("--json", help="also write the rows to this file")
+    ap.add_argument(
+        "--no-sweeps", action="store_true", help="leave out the variation files (run with ego sweep by default)"
+    )
+    ap.add_argument("--sweep-timeout", type=float, default=1200.0, help="seconds per variation file (default 1200)")
     args = ap.parse_args(argv)
     files = scenario_files(args.paths)
+    variations = [] if args.no_sweeps else scenario_files(args.paths, variations=True)
     if not files:
         print("corpus_run: no scenario files found", file=sys.stderr)
         return 2
@@ -237,8 +265,7 @@ def main(argv: list[str] | None = None) -> int:
     for f in files:
         r = run_one(f, args.controller, args.timeout)
         rows.append(r)
-        first = r["first"].replace("|", "\\|")[:220]
-        print(f"| {r['file']} | {r['exit']} | {r['seconds']:.1f} | {first} |", flush=True)
+        _print_row(r)
     verdicts = Counter(r["verdict"] for r in rows)
     passed = sum(r["exit"] == 0 for r in rows)
     print(
@@ -248,7 +275,20 @@ def main(argv: list[str] | None = None) -> int:
     refused = Counter(m.group(1) for r in rows if (m := UNSUPPORTED.search(r["first"])))
     if refused:
         print("outermost refused elements: " + ", ".join(f"{k} {n}" for k, n in refused.most_common()))
-    print(target_summary(files, rows))
+    swept = []
+    if variations:
+        print("\n| variation file (ego sweep) | exit | s | the sweep's last line, or the first error |")
+        print("|---|---|---|---|")
+    for f in variations:
+        with tempfile.TemporaryDirectory() as out:
+            r = run_one(f, args.controller, args.sweep_timeout, sweep_out=out)
+        swept.append(r)
+        _print_row(r)
+    if variations:
+        ok = sum(r["verdict"] == "ran" for r in swept)
+        print(f"\n{len(swept)} variation files: {ok} swept")
+    print(target_summary([*files, *variations], [*rows, *swept]))
+    rows += swept
     if args.json:
         Path(args.json).write_text(json.dumps(rows, indent=1))
     return 0

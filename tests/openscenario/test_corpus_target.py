@@ -123,16 +123,30 @@ def test_connected_trailer_and_unavailable_road(corpus):
     assert corpus_run.exclusion(path) == f"road unavailable: ../xodr/elsewhere.xodr is nowhere under {corpus.parent}"
 
 
+def variation(scenario: str) -> str:
+    return f"""<?xml version="1.0"?><OpenSCENARIO><FileHeader revMajor="1" revMinor="2" date="x" description="" author=""/>
+<ParameterValueDistribution><ScenarioFile filepath="{scenario}"/><Deterministic>
+<DeterministicSingleParameterDistribution parameterName="Road"><DistributionSet><Element value="../xodr/plain.xodr"/>
+</DistributionSet></DeterministicSingleParameterDistribution></Deterministic></ParameterValueDistribution></OpenSCENARIO>"""
+
+
 def test_summary_line(corpus, capsys):
-    """A real run of the script: one refused target file, one file left out with its reason."""
-    (corpus / "a_target.xosc").write_text(scenario("../xodr/plain.xodr", obj("Ego", "car")))
+    """A real run of the script: a refused target file, a file left out with its reason, and
+    variation files (``ego sweep``) in the set as the scenario files they vary."""
+    (corpus / "a_target.xosc").write_text(scenario("$Road", obj("Ego", "car")))
     (corpus / "b_town.xosc").write_text(scenario("../xodr/town.xodr", obj("Ego", "car")))
+    (corpus / "c_vary.xosc").write_text(variation("a_target.xosc"))
+    (corpus / "d_vary.xosc").write_text(variation("b_town.xosc"))
     assert corpus_run.main([str(corpus), "--timeout", "60"]) == 0
     out = capsys.readouterr().out
-    assert "| a_target.xosc | 2 |" in out
-    tail = out[out.index("left out of the target set") :].splitlines()
+    assert "| a_target.xosc | 2 |" in out and "| c_vary.xosc | 2 |" in out
+    assert "2 files: 0 ran (0 exit 0), 2 refused cleanly, 0 crashed" in out
+    tail = out[out.index("2 variation files") :].splitlines()
     assert tail == [
-        "left out of the target set (1 files):",
+        "2 variation files: 0 swept",
+        "",
+        "left out of the target set (2 files):",
         "- b_town.xosc: city junction network: town.xodr (junction 4 joins 4 roads)",
-        "0 of 1 target files run (0 %)",
+        "- d_vary.xosc: varies b_town.xosc: city junction network: town.xodr (junction 4 joins 4 roads)",
+        "0 of 2 target files run (0 %)",
     ]
