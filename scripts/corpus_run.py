@@ -213,8 +213,9 @@ def run_one(path: Path, controller: str, timeout: float, sweep_out: str | None =
         verdict = "ran"
         ends = [ln for ln in out.splitlines() if "run ends:" in ln]
         first = ends[-1].split("run ends:", 1)[1].strip() if ends else (lines[0] if lines else "")
-        if sweep_out is not None:  # the sweep's last line: how many runs, how they ended
-            first = next((ln.strip() for ln in reversed(out.splitlines()) if ln.strip()), "")
+        if sweep_out is not None:  # the sweep's count: how many runs, how they ended
+            counts = [ln.strip() for ln in out.splitlines() if " runs in the spec" in ln]
+            first = counts[-1] if counts else next((ln.strip() for ln in reversed(out.splitlines()) if ln.strip()), "")
     elif code == 2 and len(errors) == 1 and not traceback:
         verdict, first = "refused", errors[0][len("ego: error:") :].strip()
     else:
@@ -256,7 +257,7 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     files = scenario_files(args.paths)
     variations = [] if args.no_sweeps else scenario_files(args.paths, variations=True)
-    if not files:
+    if not files and not variations:
         print("corpus_run: no scenario files found", file=sys.stderr)
         return 2
     rows = []
@@ -277,7 +278,7 @@ def main(argv: list[str] | None = None) -> int:
         print("outermost refused elements: " + ", ".join(f"{k} {n}" for k, n in refused.most_common()))
     swept = []
     if variations:
-        print("\n| variation file (ego sweep) | exit | s | the sweep's last line, or the first error |")
+        print("\n| variation file (ego sweep) | exit | s | the sweep's runs, or the first error |")
         print("|---|---|---|---|")
     for f in variations:
         with tempfile.TemporaryDirectory() as out:
