@@ -403,7 +403,7 @@ def test_list_gives_numbers_readably_and_angles_in_degrees_too(capsys):
     assert main(["list"]) == 0
     text = capsys.readouterr().out
     assert "0.4363323129985824" not in text and "25.0 s" not in text
-    lane = text[text.index("lane-centering [lane-centering task]") :]
+    lane = text[text.index("lane-centering [lane-centering task; needs any_network]") :]
     assert "max_steer           0.436332 rad (25 deg)  front steer limit" in lane
     assert "the end of the 2935 m road: 363 s at 8 m/s" in lane
 

@@ -81,7 +81,7 @@ def catalogue() -> dict:
     from ego.control import CONTROLLERS, TASKS
     from ego.runner import declared_columns
     from ego.scenarios import SCENARIOS
-    from ego.scenarios.base import COMMON_METRICS, COMMON_TAIL_METRICS
+    from ego.scenarios.base import COMMON_METRICS, COMMON_TAIL_METRICS, backends_for
 
     load_plugins()
     from ego.sim.registry import backend, backend_names
@@ -98,7 +98,7 @@ def catalogue() -> dict:
             "name": name,
             "task": cls.task,
             "summary": cls.summary,
-            "backends": list(cls.backends),
+            "backends": list(backends_for(cls)),
             "needs": list(cls.needs),
             "parameters": params(cls.config_cls),
             "metrics": [
@@ -190,14 +190,15 @@ def print_catalogue(cat: dict) -> None:
             + " and the scenario's metrics below."
         )
     for s in cat["scenarios"]:
-        on = "" if s["backends"] == ["sumo"] else f"; --backend {' or '.join(s['backends'])}"
+        if not s["backends"]:
+            on = "; no traffic simulator"
+        else:
+            on = "" if s["backends"] == ["sumo"] else f"; --backend {' or '.join(s['backends'])}"
         on += f"; needs {', '.join(s['needs'])}" if s["needs"] else ""
         print(f"\n  {s['name']} [{s['task']} task{on}]: {s['summary']}")
         table(s["parameters"])
         metrics(s["metrics"])
-    print(
-        "\nTraffic simulators (--backend NAME; a scenario runs on those it lists that have every capability it needs):"
-    )
+    print("\nTraffic simulators (--backend NAME; a scenario runs on every one with the capabilities it needs):")
     for b in cat["backends"]:
         options = f" (options: {', '.join('--' + o for o in b['options'])})" if b["options"] else ""
         print(f"  {b['name']}: {', '.join(b['capabilities']) or 'no capabilities'}{options}")

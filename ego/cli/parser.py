@@ -17,7 +17,7 @@ from ego.cli.common import (
     add_requirement_period,
     add_set,
 )
-from ego.sim.registry import backend_names
+from ego.sim.registry import DEFAULT_BACKEND, backend_names
 
 
 def controllers_help() -> str:
@@ -96,7 +96,7 @@ def add_scenario(p: argparse.ArgumentParser) -> None:
 
 def add_backend(p: argparse.ArgumentParser, backends: tuple[str, ...], help: str) -> None:
     """``--backend``: a registered traffic simulator (choices: the registry when built)."""
-    p.add_argument("--backend", default="sumo", choices=backends, help=help)
+    p.add_argument("--backend", default=DEFAULT_BACKEND, choices=backends, help=help)
 
 
 def add_seed(p: argparse.ArgumentParser, help: str) -> None:
@@ -134,7 +134,9 @@ def add_run(sub, backends: tuple[str, ...]) -> None:
     )
     run.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     add_backend(
-        run, backends, "traffic simulator (default sumo; highway-env runs emergency-brake, fast-follower and cut-in)"
+        run,
+        backends,
+        "traffic simulator (default sumo); a scenario runs on those with the capabilities it needs (ego list shows both)",
     )
     run.add_argument(
         "--video", metavar="PATH", help="with --backend highway-env: a video of the run (.gif, or .mp4 with ffmpeg)"

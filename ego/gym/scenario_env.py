@@ -23,7 +23,7 @@ from typing import Any, ClassVar
 
 from ego.gym.env import ENV_KEYS, EgoEnv
 from ego.params import ConfigError, describe, did_you_mean
-from ego.scenarios import SCENARIOS, Scenario, scenario_class
+from ego.scenarios import SCENARIOS, scenario_class
 
 #: what ``config["scenario"]`` may be, for the errors
 _ALLOWED = "a scenario of ego list with traffic ({names}) or an OpenSCENARIO .xosc file"
@@ -32,12 +32,7 @@ _ALLOWED = "a scenario of ego list with traffic ({names}) or an OpenSCENARIO .xo
 def env_scenarios() -> list[str]:
     """The built-in scenarios an env can run: every one of ``ego list`` with a traffic
     simulator (report 000's bare-model experiments have none)."""
-    return [name for name, cls in SCENARIOS.items() if runs_traffic(cls)]
-
-
-def runs_traffic(cls: type[Scenario]) -> bool:
-    """The scenario runs a traffic simulator (a network of its own, or a file's road)."""
-    return cls.network is not None or cls._make_bridge is not Scenario._make_bridge
+    return [name for name, cls in SCENARIOS.items() if cls.runs_traffic()]
 
 
 def check_scenario(value: Any) -> str:
@@ -61,7 +56,7 @@ def check_scenario(value: Any) -> str:
         raise ConfigError(
             f"bad value for scenario: {name!r} (expected {allowed}){did_you_mean(name, env_scenarios())}"
         ) from None
-    if not runs_traffic(cls):
+    if not cls.runs_traffic():
         raise ConfigError(f"bad value for scenario: {name!r} runs no traffic simulator (expected {allowed})")
     return name
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 from bisect import bisect_right
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -557,6 +558,68 @@ class AcquirePosition(AssignRoute):
         return M.AssignRouteAction((b.position(b.one(node, "Position")),), node.line)
 
 
+def trajectory_points(
+    a: M.FollowTrajectoryAction,
+    pos: Callable[[M.Position], tuple[float, float, float]],
+    start: tuple[float, float, float] | None = None,
+) -> tuple[list[tuple[float, float]], list[float] | None]:
+    """The points of a trajectory's shape and their times (None: no times): ``pos`` gives a
+    position's world (x, y, heading); a clothoid spline whose first segment has no start
+    position starts at ``start`` (the following entity's reference point and heading)."""
+    if a.vertices:
+        pts = [pos(v.position) for v in a.vertices]
+        return [(p[0], p[1]) for p in pts], [v.time for v in a.vertices]  # type: ignore[misc]
+    if a.nurbs is not None:
+        nb = a.nurbs
+        ctrl = [pos(p.position)[:2] for p in nb.points]
+        ptimes = [p.time for p in nb.points]
+        has_times = all(tt is not None for tt in ptimes)
+        x, y, tt = nurbs(ctrl, nb.weights, nb.knots, nb.order, ptimes if has_times else None)  # type: ignore[arg-type]
+        return list(zip(x.tolist(), y.tolist())), (None if tt is None else tt.tolist())
+    x0, y0, h0 = start if start is not None else (0.0, 0.0, 0.0)
+    xy: list[tuple[float, float]] = []
+    times: list[float] | None = []
+    for k, seg in enumerate(a.segments):
+        if seg.start is not None:
+            x0, y0, h0 = pos(seg.start)
+        h0 += seg.h_offset
+        xs, ys, hs, ss = clothoid(x0, y0, h0, seg.k0, seg.k1, seg.length)
+        pts = list(zip(xs.tolist(), ys.tolist()))
+        xy.extend(pts if not xy else pts[1:])
+        x0, y0, h0 = float(xs[-1]), float(ys[-1]), float(hs[-1])
+        if times is not None and seg.time is not None:
+            t1 = a.segments[k + 1].time if k + 1 < len(a.segments) else a.end_time
+            if t1 is None:
+                times = None
+                continue
+            seg_times = (seg.time + (t1 - seg.time) * ss / seg.length).tolist()
+            times.extend(seg_times if not times else seg_times[1:])
+        else:
+            times = None
+    return xy, times
+
+
+def along_path(xy: list[tuple[float, float]], s: float, t: float = 0.0) -> tuple[float, float, float]:
+    """The point ``s`` along the polyline ``xy`` (clamped to it) and ``t`` to its left, with the
+    polyline's heading there: (x, y, heading)."""
+    walked, last = 0.0, None
+    for (x0, y0), (x1, y1) in zip(xy, xy[1:]):
+        seg = math.hypot(x1 - x0, y1 - y0)
+        if seg <= 0.0:
+            continue
+        last = (x0, y0, x1, y1, seg, walked)
+        if s <= walked + seg:
+            break
+        walked += seg
+    if last is None:
+        raise ValueError("the trajectory has no length")
+    x0, y0, x1, y1, seg, walked = last
+    u = min(max((s - walked) / seg, 0.0), 1.0)
+    h = math.atan2(y1 - y0, x1 - x0)
+    x, y = x0 + u * (x1 - x0), y0 + u * (y1 - y0)
+    return x - t * math.sin(h), y + t * math.cos(h), h
+
+
 class FollowTrajectory(ActionKind):
     tag, within, model = "FollowTrajectoryAction", ("RoutingAction",), M.FollowTrajectoryAction
     in_init, init_note = "runs", "FollowTrajectoryAction"
@@ -733,40 +796,10 @@ class FollowTrajectory(ActionKind):
     def path(run: ActionRun) -> tuple[list[tuple[float, float]], list[float] | None]:
         """The shape's points (the entity's reference point) and their times (None: no times)."""
         b, a = run.board, run.action
-        pos = b.driver.position_xy
-        if a.vertices:
-            pts = [pos(v.position, b.states) for v in a.vertices]
-            return [(p[0], p[1]) for p in pts], [v.time for v in a.vertices]  # type: ignore[misc]
-        if a.nurbs is not None:
-            nb = a.nurbs
-            ctrl = [pos(p.position, b.states)[:2] for p in nb.points]
-            ptimes = [p.time for p in nb.points]
-            has_times = all(tt is not None for tt in ptimes)
-            x, y, tt = nurbs(ctrl, nb.weights, nb.knots, nb.order, ptimes if has_times else None)  # type: ignore[arg-type]
-            return list(zip(x.tolist(), y.tolist())), (None if tt is None else tt.tolist())
         me = b.states[run.actor]
         cx = b.scenario.entities[run.actor].vehicle.center_x
-        x0, y0, h0 = me.x - cx * math.cos(me.yaw), me.y - cx * math.sin(me.yaw), me.yaw
-        xy: list[tuple[float, float]] = []
-        times: list[float] | None = []
-        for k, seg in enumerate(a.segments):
-            if seg.start is not None:
-                x0, y0, h0 = pos(seg.start, b.states)
-            h0 += seg.h_offset
-            xs, ys, hs, ss = clothoid(x0, y0, h0, seg.k0, seg.k1, seg.length)
-            pts = list(zip(xs.tolist(), ys.tolist()))
-            xy.extend(pts if not xy else pts[1:])
-            x0, y0, h0 = float(xs[-1]), float(ys[-1]), float(hs[-1])
-            if times is not None and seg.time is not None:
-                t1 = a.segments[k + 1].time if k + 1 < len(a.segments) else a.end_time
-                if t1 is None:
-                    times = None
-                    continue
-                seg_times = (seg.time + (t1 - seg.time) * ss / seg.length).tolist()
-                times.extend(seg_times if not times else seg_times[1:])
-            else:
-                times = None
-        return xy, times
+        start = (me.x - cx * math.cos(me.yaw), me.y - cx * math.sin(me.yaw), me.yaw)
+        return trajectory_points(a, lambda p: b.driver.position_xy(p, b.states), start)
 
     @staticmethod
     def point(run: ActionRun, t: float) -> tuple[float, float, float, float, bool]:

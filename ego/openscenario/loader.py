@@ -22,6 +22,7 @@ from ego.openscenario import actions as _actions  # noqa: F401 - registers the a
 from ego.openscenario import conditions as _condition_kinds  # noqa: F401 - registers the conditions
 from ego.openscenario import model as M
 from ego.openscenario import structure as _structure  # noqa: F401 - declares the structural elements
+from ego.openscenario import v09
 from ego.openscenario.dynamics import DYNAMICS_LIMITS, MAX_SECONDS
 from ego.openscenario.expressions import ExpressionError, resolve
 from ego.openscenario.registry import ACTIONS, CONDITIONS, action_of, allowed, init_kinds
@@ -96,18 +97,25 @@ def elements(root: Node) -> list[tuple[str, int, bool]]:
 
 
 @lru_cache(maxsize=32)
-def _read(path: str, mtime: float, size: int) -> Node:
-    return parse_file(path)
+def _read(path: str, mtime: float, size: int, lenient: bool) -> Node:
+    return _as_10(path, parse_file(path), lenient)
 
 
-def read_tree(path: str | os.PathLike) -> Node:
-    """The parsed file (cached by path, mtime and size: sweeps resolve a file many times)."""
+def _as_10(path: str | os.PathLike, root: Node, lenient: bool = False) -> Node:
+    """The file's tree as ego reads it: an OpenSCENARIO 0.9 file mapped onto 1.0
+    (:mod:`ego.openscenario.v09`), each element at its line of the 0.9 file."""
+    return v09.migrate(path, root, lenient) if v09.is_09(root) else root
+
+
+def read_tree(path: str | os.PathLike, lenient: bool = False) -> Node:
+    """The parsed file (cached by path, mtime and size: sweeps resolve a file many times);
+    ``lenient``: a 0.9 element the mapping refuses stays in the tree as it is (``ego list``)."""
     p = Path(path)
     try:
         st = p.stat()
     except OSError:
-        return parse_file(p)  # parse_file names the problem
-    return _read(str(resolved(p, "scenario file")), st.st_mtime, st.st_size)
+        return _as_10(p, parse_file(p), lenient)  # parse_file names the problem
+    return _read(str(resolved(p, "scenario file")), st.st_mtime, st.st_size, lenient)
 
 
 TYPES = ("double", "integer", "unsignedInt", "unsignedShort", "int", "string", "boolean", "dateTime")
@@ -172,9 +180,9 @@ def header_description(path: str | os.PathLike) -> str:
 
 
 def _check_root(path, root: Node) -> None:
-    """An OpenSCENARIO file of a version ego reads (checked before its elements: a 0.9 file is
-    refused for its version, not for its first element of the older schema), every element in
-    ego's subset."""
+    """An OpenSCENARIO file of a version ego reads (checked before its elements: a file of
+    another version is refused for its version, not for its first element of another schema),
+    every element in ego's subset (a 0.9 file is read as 1.0 by :func:`read_tree`)."""
     if root.tag != "OpenSCENARIO":
         raise ScenarioFileError(
             path, root.line, f"<{root.tag}> is not an OpenSCENARIO file (expected <OpenSCENARIO> as the root element)"
@@ -211,7 +219,7 @@ def _trajectory_start(actions) -> M.TeleportAction | None:
 
 
 def _version(path, root: Node) -> tuple[int, int]:
-    """(revMajor, revMinor) of the file's FileHeader: 1.0 to 1.3."""
+    """(revMajor, revMinor) of the file's FileHeader: 1.0 to 1.3 (a 0.9 file is read as 1.0)."""
     header = root.child("FileHeader")
     if header is None:
         raise ScenarioFileError(path, root.line, "<OpenSCENARIO> needs a <FileHeader>")
@@ -223,7 +231,7 @@ def _version(path, root: Node) -> tuple[int, int]:
         raise ScenarioFileError(
             path,
             header.line,
-            f"OpenSCENARIO {version[0]}.{version[1]} is not supported by ego (1.0 to 1.3; see {DOCS})",
+            f"OpenSCENARIO {version[0]}.{version[1]} is not supported by ego (0.9 and 1.0 to 1.3; see {DOCS})",
         )
     return version
 
@@ -631,6 +639,16 @@ class _Builder:
         if tag == "RelativeObjectPosition":
             # dx and dy are required by the schema; the reference player reads a missing one as 0
             return M.RelativeObjectPosition(self.entity_ref(p), self.num(p, "dx", 0.0), self.num(p, "dy", 0.0), p.line)
+        if tag == "TrajectoryPosition":
+            self.one(self.one(p, "TrajectoryRef"), "Trajectory")  # a catalog trajectory is refused by the check
+            trajectory = ACTIONS["FollowTrajectoryAction"].build(self, p)
+            if trajectory.segments and trajectory.segments[0].start is None:
+                raise self.error(
+                    p, "a <TrajectoryPosition>'s clothoid spline needs the <PositionStart> of its first <Segment>"
+                )
+            return M.TrajectoryPosition(trajectory, self.num(p, "s", nonneg=True), self.num(p, "t", 0.0), p.line)
+        if tag == "RelativeWorldPosition":
+            return M.RelativeWorldPosition(self.entity_ref(p), self.num(p, "dx"), self.num(p, "dy"), p.line)
         return M.RelativeRoadPosition(self.entity_ref(p), self.num(p, "ds"), self.num(p, "dt"), p.line)
 
     # -- actions ------------------------------------------------------------------------------

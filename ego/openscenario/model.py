@@ -102,8 +102,36 @@ class RelativeObjectPosition:
     line: int
 
 
+@dataclass(frozen=True)
+class RelativeWorldPosition:
+    """``dx``, ``dy`` along the world's x and y axes from the entity's reference point."""
+
+    entity: str
+    dx: float
+    dy: float
+    line: int
+
+
+@dataclass(frozen=True)
+class TrajectoryPosition:
+    """``s`` along a trajectory's shape and ``t`` to its left (OpenSCENARIO 1.1); the shape is
+    a FollowTrajectoryAction's (its polyline, clothoids or NURBS), read by the same reader."""
+
+    trajectory: FollowTrajectoryAction
+    s: float
+    t: float
+    line: int
+
+
 Position = (
-    WorldPosition | LanePosition | RoadPosition | RelativeLanePosition | RelativeRoadPosition | RelativeObjectPosition
+    WorldPosition
+    | LanePosition
+    | RoadPosition
+    | RelativeLanePosition
+    | RelativeRoadPosition
+    | RelativeObjectPosition
+    | RelativeWorldPosition
+    | TrajectoryPosition
 )
 
 

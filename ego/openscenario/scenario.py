@@ -36,6 +36,7 @@ import numpy as np
 
 from ego.lane_frame import LanePolyline
 from ego.openscenario import model as M
+from ego.openscenario.actions import along_path, trajectory_points
 from ego.openscenario.dynamics import Transition
 from ego.openscenario.kinematic import Kinematic
 from ego.openscenario.loader import declared_parameters, header_description, load
@@ -227,6 +228,10 @@ def _place(pos: M.Position, roads: RoadMap, centre: dict) -> tuple:
         return _lane_at(edge, lane1, d, s)
     if isinstance(pos, M.WorldPosition):
         return roads.nearest_lane(pos.x, pos.y)
+    if isinstance(pos, M.TrajectoryPosition):
+        xy, _ = trajectory_points(pos.trajectory, lambda p: _absolute_xy(p, roads))
+        x, y, _ = along_path(xy, pos.s, pos.t)
+        return roads.nearest_lane(x, y)
     lane, s, off = centre[pos.entity]
     edge = roads.edges[lane.edge]
     if isinstance(pos, M.RelativeLanePosition):
@@ -237,7 +242,31 @@ def _place(pos: M.Position, roads: RoadMap, centre: dict) -> tuple:
     if isinstance(pos, M.RelativeObjectPosition):
         # at the start the entity lies along its lane: dx along it, dy across
         return _lane_at(edge, lane, off + pos.dy, s + pos.dx)
+    if isinstance(pos, M.RelativeWorldPosition):
+        # the entity's reference point in the world, moved along the world's axes, on its nearest lane
+        x, y = LanePolyline(lane.shape, lane.width, lane.id).offset_point(s, off)
+        return roads.nearest_lane(x + pos.dx, y + pos.dy)
     return _lane_at(edge, lane, off + pos.dt, s + pos.ds)
+
+
+def _absolute_xy(pos: M.Position, roads: RoadMap) -> tuple[float, float, float]:
+    """World (x, y, heading) of a position that names no entity (a trajectory's point in Init)."""
+    if isinstance(pos, M.WorldPosition):
+        lane, s, _ = roads.nearest_lane(pos.x, pos.y)
+        heading = LanePolyline(lane.shape, lane.width, lane.id).heading_at(s) if pos.h is None else pos.h
+        return pos.x, pos.y, heading
+    if isinstance(pos, (M.LanePosition, M.RoadPosition)):
+        lane_id, d = (pos.lane, pos.offset) if isinstance(pos, M.LanePosition) else (-1, None)
+        lane, s = roads.lane_position(pos.road, lane_id, pos.s)
+        if d is None:  # the reference line is the left edge of lane -1; t from it, + left
+            d = pos.t + 0.5 * lane.width  # type: ignore[union-attr]
+        poly = LanePolyline(lane.shape, lane.width, lane.id)
+        x, y = poly.offset_point(s, d)
+        return x, y, poly.heading_at(s)
+    raise ValueError(
+        f"a <TrajectoryPosition> in <Init> needs a trajectory of world, lane and road positions (its "
+        f"{type(pos).__name__} names an entity; see {DOCS})"
+    )
 
 
 def _lane_at(edge, lane, d: float, s: float) -> tuple:
@@ -345,7 +374,7 @@ class FileScenario(Scenario):
     file_params: tuple[str, ...] = ()
     config_cls = FileConfig
     network = None
-    backends = ("sumo",)
+    needs = ("any_network",)
     base_scenario = EmergencyBrake.name
     #: requirements the file adds to emergency-brake's (an UN R157 file: no_preventable_collision)
     extra_requirements: tuple[tuple[str, str], ...] = ()
@@ -787,12 +816,18 @@ class StoryDriver:
             poly = LanePolyline(lane.shape, lane.width, lane.id)
             x, y = poly.offset_point(pos, d_extra)
             return x, y, poly.heading_at(pos)
+        if isinstance(position, M.TrajectoryPosition):
+            xy, _ = trajectory_points(position.trajectory, lambda p: self.position_xy(p, states))
+            return along_path(xy, position.s, position.t)
         e = states[position.entity]
-        if isinstance(position, M.RelativeObjectPosition):
-            # from the entity's reference point (its box centre less the box's centre x)
+        if isinstance(position, (M.RelativeObjectPosition, M.RelativeWorldPosition)):
+            # from the entity's reference point (its box centre less the box's centre x): dx, dy
+            # in the entity's own frame (RelativeObjectPosition) or along the world's axes
             back = self.board.scenario.entities[position.entity].vehicle.center_x
             c, s_ = math.cos(e.yaw), math.sin(e.yaw)
             rx, ry = e.x - back * c, e.y - back * s_
+            if isinstance(position, M.RelativeWorldPosition):
+                return rx + position.dx, ry + position.dy, e.yaw
             return rx + c * position.dx - s_ * position.dy, ry + s_ * position.dx + c * position.dy, e.yaw
         if isinstance(position, M.RelativeLanePosition):
             s, d = e.s + position.ds, self.lane_centre(0, e.d, position.dlane) + position.offset
@@ -1112,7 +1147,7 @@ def file_listing(path: str, ego: str = "") -> dict:
     from ego.openscenario.loader import _declarations, elements, read_tree
     from ego.params import describe
 
-    root = read_tree(path)
+    root = read_tree(path, lenient=True)  # a 0.9 element ego refuses is listed as it is
     try:
         params = declared_parameters(path)
     except ScenarioFileError:  # refused (the check below names why): its own declarations if readable

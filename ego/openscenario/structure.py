@@ -15,6 +15,8 @@ POSITIONS = (
     "RelativeLanePosition",
     "RelativeRoadPosition",
     "RelativeObjectPosition",
+    "RelativeWorldPosition",
+    "TrajectoryPosition",
 )
 
 # -- the file -------------------------------------------------------------------------------
@@ -228,17 +230,30 @@ declare(
         "a file error at the `TeleportAction`'s line; `laneId` 0 is the reference line (OpenDRIVE's lane 0: "
         "`offset` is `t`); every road position of the storyboard (actions, conditions) must name a lane of the "
         "network, checked before the run; `Orientation` accepted, the lane's heading is used; "
-        "`WorldPosition` places on the nearest lane; `dsLane`, `RoutePosition`, `GeoPosition`, "
-        "`RelativeWorldPosition`, `TrajectoryPosition` refused"
+        "`WorldPosition` places on the nearest lane; `RelativeWorldPosition`: `dx`, `dy` along the world's x and "
+        "y axes from the entity's reference point, on the nearest lane (its heading the entity's); "
+        "`TrajectoryPosition` (1.1): `s` along the shape of its `TrajectoryRef`'s `Trajectory` (a polyline, "
+        "clothoids or a NURBS, read as a `FollowTrajectoryAction`'s; a clothoid spline's first segment needs "
+        "its `PositionStart`) and `t` to its left, on the nearest lane (in `Init` the trajectory's own "
+        "positions must be world, lane or road positions); `dsLane`, `RoutePosition` and `GeoPosition` refused "
+        "(a `GeoPosition` needs the map projection of the road's `geoReference`, a PROJ string, which ego does "
+        "not carry; no example of the reference player's uses one)"
     ),
     label="`LanePosition`, `RoadPosition`, `WorldPosition`, `RelativeLanePosition` (`ds`), `RelativeRoadPosition`,"
-    " `RelativeObjectPosition`",
+    " `RelativeObjectPosition`, `RelativeWorldPosition`, `TrajectoryPosition`",
     also=POSITIONS[:1] + POSITIONS[2:],
     section="storyboard",
 )
 declare("WorldPosition")
-for _position in ("RoadPosition", "RelativeLanePosition", "RelativeRoadPosition", "RelativeObjectPosition"):
+for _position in (
+    "RoadPosition",
+    "RelativeLanePosition",
+    "RelativeRoadPosition",
+    "RelativeObjectPosition",
+    "RelativeWorldPosition",
+):
     declare(_position, contains=("Orientation",))
+declare("TrajectoryPosition", contains=("Orientation", "TrajectoryRef"))
 declare("Orientation")
 declare(
     "Storyboard",

@@ -127,18 +127,31 @@ STAYS_IN_LANE = ("stays_in_lane", "always (lane_departure <= 0 m)")
 
 
 def check_backend(cls: type[Scenario], backend: str) -> None:
-    """ConfigError unless scenario ``cls`` runs on traffic simulator ``backend``: a backend
-    that lacks one of its ``needs`` is refused naming what it lacks (before the list of
-    ``backends`` it has been run on is asked: curve on highway-env lacks any_network)."""
+    """ConfigError unless scenario ``cls`` runs on traffic simulator ``backend``: the registry
+    matches the scenario's ``needs`` to the backend's capabilities, and a backend that lacks
+    one is refused naming what it lacks (curve on highway-env lacks any_network). A scenario
+    without a traffic simulator (report-000) takes no other backend than the default."""
+    from ego.sim.registry import DEFAULT_BACKEND, check_needs
     from ego.sim.registry import backend as registered
-    from ego.sim.registry import check_needs
 
     registered(backend)  # a name no backend has
-    check_needs(f"scenario {cls.name}", cls.needs, backend)  # the registry matches needs to capabilities
-    if backend not in cls.backends:
-        raise ConfigError(
-            f"bad value for --backend: {backend!r} (scenario {cls.name} runs on {' or '.join(cls.backends)} only)"
-        )
+    if not cls.runs_traffic():
+        if backend != DEFAULT_BACKEND:
+            raise ConfigError(
+                f"bad value for --backend: {backend!r} (scenario {cls.name} runs without a traffic simulator)"
+            )
+        return
+    check_needs(f"scenario {cls.name}", cls.needs, backend)
+
+
+def backends_for(cls: type[Scenario]) -> tuple[str, ...]:
+    """The registered backends scenario ``cls`` runs on: those with every capability it needs
+    (none for a scenario without a traffic simulator)."""
+    from ego.sim.registry import backend, backend_names
+
+    if not cls.runs_traffic():
+        return ()
+    return tuple(n for n in backend_names() if not backend(n).lacks(cls.needs))
 
 
 class Scenario:
@@ -173,14 +186,19 @@ class Scenario:
     metric_specs: ClassVar[tuple[Metric, ...]] = ()
     #: trace columns ``ego compare`` plots, one line per controller
     plots: ClassVar[tuple[PlotSpec, ...]] = ()
-    #: the traffic simulators it runs on (``ego run --backend``; ego.highway_env.BACKENDS)
-    backends: ClassVar[tuple[str, ...]] = ("sumo",)
-    #: what it needs of a traffic simulator: field names of ego.sim.registry.Capabilities
-    #: (``check_backend`` refuses a backend that lacks one)
+    #: what it needs of a traffic simulator: field names of ego.sim.registry.Capabilities;
+    #: it runs on every registered backend that has them all (``check_backend``,
+    #: :func:`backends_for`)
     needs: ClassVar[tuple[str, ...]] = ()
     #: the requirements every run checks unless told otherwise: (name, formula) each
     #: (ego.requirements.defaults; docs/requirements.md)
     requirements: ClassVar[tuple[tuple[str, str], ...]] = ()
+
+    @classmethod
+    def runs_traffic(cls) -> bool:
+        """It runs in a traffic simulator (``--backend``): a network of its own, or one it
+        builds itself (a scenario file's road); False for the bare model (report-000)."""
+        return cls.network is not None or cls._make_bridge is not Scenario._make_bridge
 
     @classmethod
     def default_config(cls, overrides: Mapping[str, Any]) -> Any:
@@ -220,7 +238,7 @@ class Scenario:
     def metrics_declared(cls, config: Any = None) -> tuple[Metric, ...]:
         """Every metric a run reports: the common ones, then the scenario's own, then the
         registered trace metrics its trace has the columns of (``ego.results.metrics``)."""
-        backend = (BACKEND_METRIC,) if len(cls.backends) > 1 else ()
+        backend = (BACKEND_METRIC,) if cls.runs_traffic() else ()
         names = tuple(c.name for c in cls.columns)
         lanes = (LANE_DEPARTURE_METRIC,) if set(LANE_DEPARTURE_NEEDS) <= set(names) else ()
         return COMMON_METRICS + backend + cls.metric_specs + trace_metrics_declared(names) + lanes + COMMON_TAIL_METRICS
@@ -597,7 +615,7 @@ class Scenario:
             "collision": self.collision is not None,
             "collision_with": self._other_party(),
         }
-        if len(self.backends) > 1:
+        if self.runs_traffic():
             metrics["backend"] = self.backend
         metrics.update(self._metrics(trace, columns))
         metrics.update(trace_metrics(trace, columns, (c.name for c in type(self).columns)))
@@ -712,7 +730,7 @@ class Scenario:
     def _meta(self) -> dict[str, Any]:
         """What the recording's "run" panel lists: names, seed and every parameter."""
         meta = {"scenario": self.name, "controller": self.controller_name, "seed": self.seed}
-        if len(type(self).backends) > 1:  # which traffic simulator ran (the /run panel says so)
+        if self.runs_traffic():  # which traffic simulator ran (the /run panel says so)
             meta["backend"] = self.backend
         meta.update({k: getattr(self.config, k) for k in self.config.__dataclass_fields__})
         if self.colors:
@@ -1044,7 +1062,9 @@ COMMON_METRICS = (
     Metric("collision_with", "-", "the other party of the collision"),
 )
 #: ... then, for a scenario with several traffic simulators, which one ran ...
-BACKEND_METRIC = Metric("backend", "-", "traffic simulator: sumo or highway-env")
+BACKEND_METRIC = Metric(
+    "backend", "-", "traffic simulator that ran it (ego.sim.registry: sumo, highway-env, a plugin's)"
+)
 #: ... and last
 #: the trace columns the lane departure is measured from (``ego.lane_frame.lane_departure``)
 LANE_DEPARTURE_NEEDS = ("d", "d_ref", "phase")

@@ -13,7 +13,6 @@ from typing import Any
 
 import numpy as np
 
-from ego.highway_env import BACKENDS
 from ego.params import ConfigError, param
 from ego.results import metrics as m
 from ego.results.trace import Marker, Metric
@@ -76,7 +75,7 @@ class CutIn(Scenario):
     requirements = (NO_AVOIDABLE_COLLISION, NO_COLLISION, STAYS_IN_LANE, TTC_OR_CLEAR)
     summary = "a car overtakes and cuts in 15 m ahead, 5 m/s slower; front TTC triggers braking or evasion"
     config_cls = CutInConfig
-    network, edge, backends, columns, plots = "highway", EDGE, BACKENDS, COLUMNS, PLOTS
+    network, edge, columns, plots = "highway", EDGE, COLUMNS, PLOTS
     #: the lane-change metrics stay, but the table shows what a cut-in is judged by
     metric_specs = (
         tuple(replace(x, headline=x.name in ("max_decel", "lane_change_duration")) for x in METRICS)

@@ -19,7 +19,6 @@ from typing import Any
 
 import numpy as np
 
-from ego.highway_env import BACKENDS
 from ego.params import ConfigError, param
 from ego.results import metrics as m
 from ego.results.trace import Metric
@@ -176,7 +175,7 @@ class EmergencyBrake(Scenario):
     requirements = (NO_AVOIDABLE_COLLISION, NO_COLLISION, STAYS_IN_LANE, GAP_OR_CLEAR, AEB_SLOWS)
     summary = "lead car brakes hard; front TTC triggers braking and a lane change by gap acceptance"
     config_cls = EmergencyBrakeConfig
-    network, edge, backends = "highway", EDGE, BACKENDS
+    network, edge = "highway", EDGE
     columns, plots, markers = COLUMNS, PLOTS, MARKERS
     metric_specs = METRICS + (
         Metric("impact_speed", "m/s", "the ego's speed along the road at the collision (none: no collision)"),

@@ -13,7 +13,6 @@ from typing import Any
 
 import numpy as np
 
-from ego.highway_env import BACKENDS
 from ego.params import param
 from ego.results.trace import Metric
 from ego.scenarios.base import NO_COLLISION, STAYS_IN_LANE, Parts, Scenario
@@ -73,7 +72,7 @@ class FastFollower(Scenario):
     requirements = (NO_COLLISION, STAYS_IN_LANE, ("rear_ttc", "always (ttc_rear >= 0.5 s or lateral_clear)"))
     summary = "a car closes from behind at 1.5x the ego's speed; rear TTC triggers accelerating and a lane change"
     config_cls = FastFollowerConfig
-    network, edge, backends = "highway", EDGE, BACKENDS
+    network, edge = "highway", EDGE
     columns, plots, markers = COLUMNS, PLOTS, MARKERS
     metric_specs = METRICS + (Metric("follower_passed", "-", "the follower's front bumper ended ahead of the ego's"),)
 

@@ -114,6 +114,7 @@ class LaneCenteringScenario(Scenario):
     )
     task = "lane-centering"
     network = "lane_centering"
+    needs = ("any_network",)
     config_cls = LaneCenteringConfig
     columns = (
         Column("t", "s", "time"),

@@ -221,6 +221,7 @@ class PlatoonScenario(Scenario):
     )
     task = "car-following"
     network = "platoon"
+    needs = ("any_network", "several_egos")
     config_cls = PlatoonConfig
     #: one observation per follower, in platoon order (the controllers' PlatoonControl
     #: steps on them all), not the one Observation of a scenario with one ego

@@ -37,6 +37,9 @@ class Capabilities:
     video: bool = False
     #: any network (curves, junctions); False: straight multi-lane roads only
     any_network: bool = False
+    #: several project-controlled vehicles, each pushed with its acceleration, and who leads
+    #: whom among them (the platoon: ego.scenarios.platoon.PlatoonSim)
+    several_egos: bool = False
 
 
 @dataclass(frozen=True)
@@ -93,11 +96,14 @@ def register(backend: Backend) -> Backend:
     return backend
 
 
+#: the backend a run takes unless told (``--backend``)
+DEFAULT_BACKEND = "sumo"
+
 register(
     Backend(
-        "sumo",
+        DEFAULT_BACKEND,
         "ego.sumo.bridge:make_sim",
-        Capabilities(sublane=True, scripted_actors=True, video=False, any_network=True),
+        Capabilities(sublane=True, scripted_actors=True, video=False, any_network=True, several_egos=True),
     )
 )
 register(
@@ -153,7 +159,8 @@ def check_needs(who: str, needs: Sequence[str], name: str) -> Backend:
     lacking = found.lacks(needs)
     if lacking:
         raise ConfigError(
-            f"bad value for --backend: {name!r} ({who} needs {', '.join(lacking)}; backend {name} lacks it)"
+            f"bad value for --backend: {name!r} ({who} needs {', '.join(lacking)}; backend {name} "
+            f"lacks {'it' if len(lacking) == 1 else 'them'})"
         )
     return found
 

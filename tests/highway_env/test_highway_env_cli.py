@@ -70,7 +70,7 @@ def test_ego_compare_on_highway_env(tmp_path, capsys):
         ),
         (
             ["compare", "platoon", "--controllers", "pid", "--backend", "highway-env", "--out", "{tmp}/x"],
-            "bad value for --backend: 'highway-env' (scenario platoon runs on sumo only)",
+            "bad value for --backend: 'highway-env' (scenario platoon needs any_network, several_egos; backend highway-env lacks them)",
         ),
         (["run", "cut-in", "-c", "pid", "--backend", "carla"], "invalid choice: 'carla'"),
         (["run", "cut-in", "-c", "pid", "--video", "{tmp}/v.gif"], "--video needs --backend highway-env"),

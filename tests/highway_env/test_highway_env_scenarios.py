@@ -83,3 +83,16 @@ def test_the_recording_has_the_same_layout_on_both_backends(tmp_path):
         paths[backend] = {c.entity_path for c in RrdReader(rrd).stream()}
     assert paths["sumo"] == paths["highway-env"]
     assert "/plots/ttc/front" in paths["highway-env"] and "/events" in paths["highway-env"]
+
+
+@pytest.mark.sumo
+def test_sine_tracking_runs_on_highway_env_as_its_needs_allow_and_tracks_as_on_sumo():
+    """sine-tracking needs nothing highway-env lacks, so it runs there without being listed
+    anywhere; the ego alone on the road is ego's own model on either simulator: the same
+    tracking metrics (the backend is only the road then)."""
+    on = {
+        b: _run("sine-tracking", backend=b, traffic_density=0.0, duration=10.0).metrics for b in ("sumo", "highway-env")
+    }
+    assert on["highway-env"]["backend"] == "highway-env" and on["sumo"]["backend"] == "sumo"
+    for name in ("status", "rms_lateral_error", "max_abs_lateral_error", "rms_speed_error", "steps"):
+        assert on["highway-env"][name] == on["sumo"][name], name

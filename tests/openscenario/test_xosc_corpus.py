@@ -11,6 +11,7 @@ import shutil
 from pathlib import Path
 
 import pytest
+import xosc_v09
 
 from ego.cli import main
 
@@ -80,13 +81,13 @@ HAND = [
         "version-1.4",
         sub('revMinor="2"', 'revMinor="4"'),
         "<FileHeader",
-        f"OpenSCENARIO 1.4 is not supported by ego (1.0 to 1.3; see {DOCS})",
+        f"OpenSCENARIO 1.4 is not supported by ego (0.9 and 1.0 to 1.3; see {DOCS})",
     ),
     (
         "version-2",
         sub('revMajor="1"', 'revMajor="2"'),
         "<FileHeader",
-        f"OpenSCENARIO 2.2 is not supported by ego (1.0 to 1.3; see {DOCS})",
+        f"OpenSCENARIO 2.2 is not supported by ego (0.9 and 1.0 to 1.3; see {DOCS})",
     ),
     (
         "no-header",
@@ -740,10 +741,10 @@ def _sg_cases():
             un("LateralDistanceAction"),
         ),
         (
-            "sg-relative-world",
-            lambda: base(position=xosc.RelativeWorldPosition("Lead", -30, 0, 0)),
+            "sg-relative-world-unknown",
+            lambda: base(position=xosc.RelativeWorldPosition("Truck", -30, 0, 0)),
             "<RelativeWorldPosition",
-            un("RelativeWorldPosition"),
+            "unknown entity 'Truck' in <RelativeWorldPosition> (entities: Ego, Lead)",
         ),
         ("sg-geo", lambda: base(position=xosc.GeoPosition(48.1, 11.5)), "<GeoPosition", un("GeoPosition")),
         (
@@ -822,8 +823,180 @@ def test_generated(case, tmp_path, capsys):
     _check(path, text, marker, message, tmp_path, capsys)
 
 
+def un09(tag: str) -> str:
+    return f"<{tag}> is not supported by ego in an OpenSCENARIO 0.9 file (see {DOCS})"
+
+
+def v09(old: str, new: str) -> str:
+    return xosc_v09.sub(old, new)
+
+
+RULE_09 = 'freespace="false" rule="greater_than"'
+#: bad forms of the cut-in of tests/openscenario/xosc_v09.py (its OpenSCENARIO 0.9 file, one of its 1.0 twin):
+#: (id, text, marker, message)
+V09 = [
+    (
+        "relative-world-no-dy",
+        xosc_v09.sub(
+            '<RelativeLanePosition entityRef="Ego" dLane="1" ds="$Behind"/>',
+            '<RelativeWorldPosition entityRef="Ego" dx="-10"/>',
+            xosc_v09.V10,
+        ),
+        "<RelativeWorldPosition",
+        "<RelativeWorldPosition> needs attribute dy",
+    ),
+    (
+        "trajectory-position-relative-in-init",
+        xosc_v09.sub(
+            '<RelativeLanePosition entityRef="Ego" dLane="1" ds="$Behind"/>',
+            '<TrajectoryPosition s="5"><TrajectoryRef><Trajectory name="T" closed="false"><Shape><Polyline>'
+            '<Vertex><Position><RelativeObjectPosition entityRef="Ego" dx="-10" dy="3.5"/></Position></Vertex>'
+            '<Vertex><Position><WorldPosition x="100" y="0"/></Position></Vertex>'
+            "</Polyline></Shape></Trajectory></TrajectoryRef></TrajectoryPosition>",
+            xosc_v09.V10,
+        ),
+        "<TrajectoryPosition",
+        "a <TrajectoryPosition> in <Init> needs a trajectory of world, lane and road positions (its "
+        f"RelativeObjectPosition names an entity; see {DOCS})",
+    ),
+    (
+        "trajectory-position-spline-without-start",
+        xosc_v09.sub(
+            '<RelativeLanePosition entityRef="Ego" dLane="1" ds="$Behind"/>',
+            '<TrajectoryPosition s="5"><TrajectoryRef><Trajectory name="T" closed="false"><Shape><ClothoidSpline>'
+            '<Segment curvatureStart="0" curvatureEnd="0.01" length="20"/>'
+            "</ClothoidSpline></Shape></Trajectory></TrajectoryRef></TrajectoryPosition>",
+            xosc_v09.V10,
+        ),
+        "<TrajectoryPosition",
+        "a <TrajectoryPosition>'s clothoid spline needs the <PositionStart> of its first <Segment>",
+    ),
+    (
+        "trajectory-position-no-ref",
+        xosc_v09.sub(
+            '<RelativeLanePosition entityRef="Ego" dLane="1" ds="$Behind"/>',
+            '<TrajectoryPosition s="5"/>',
+            xosc_v09.V10,
+        ),
+        "<TrajectoryPosition",
+        "<TrajectoryPosition> needs exactly one <TrajectoryRef> (found 0)",
+    ),
+    (
+        "v09-meeting",
+        v09(
+            '<Action name="EgoSpeed">',
+            '<Action><Meeting mode="straight" timingOffset="0"/></Action><Action name="EgoSpeed">',
+        ),
+        "<Meeting",
+        un09("Meeting"),
+    ),
+    (
+        "v09-user-defined",
+        v09(
+            "<Private>\n                  <Lateral>",
+            "<UserDefined><Command>x</Command></UserDefined><Private><Lateral>",
+        ),
+        "<UserDefined>",
+        un09("UserDefined"),
+    ),
+    (
+        "v09-rule",
+        v09(RULE_09, 'freespace="false" rule="bigger"'),
+        'rule="bigger"',
+        "bad value for rule in <RelativeDistance>: 'bigger' (allowed in OpenSCENARIO 0.9: greater_than, less_than, "
+        "equal_to)",
+    ),
+    (
+        "v09-edge",
+        v09('name="Ahead" delay="0" edge="rising"', 'name="Ahead" delay="0" edge="up"'),
+        'edge="up"',
+        "bad value for edge in <Condition>: 'up' (allowed in OpenSCENARIO 0.9: rising, falling, any)",
+    ),
+    (
+        "v09-scene",
+        v09('type="event" name="CutIn"', 'type="scene" name="CutIn"'),
+        'type="scene"',
+        "bad value for type in <AfterTermination>: 'scene' (allowed in OpenSCENARIO 0.9: act, maneuver, event, action)",
+    ),
+    (
+        "v09-two-dimensions",
+        v09('shape="sinusoidal" time="2"', 'shape="sinusoidal" time="2" distance="40"'),
+        'distance="40"',
+        "<Dynamics> has time and distance (expected one of rate, time, distance)",
+    ),
+    (
+        "v09-no-dimension",
+        v09('<Dynamics shape="linear" rate="$Rate"/>', '<Dynamics shape="linear"/>'),
+        '<Dynamics shape="linear"/>',
+        "<Dynamics> needs one of rate, time, distance",
+    ),
+    (
+        "v09-following",
+        v09('<Event name="Brake" priority="overwrite">', '<Event name="Brake" priority="following">'),
+        'priority="following"',
+        "an Event's priority 'following' (OpenSCENARIO 0.9) is not supported by ego: 1.0 dropped it (allowed: "
+        f"overwrite, skip; see {DOCS})",
+    ),
+    (
+        "v09-two-bodies",
+        v09(
+            '<CatalogReference catalogName="Cars" entryName="car"/>\n      <Controller>',
+            '<CatalogReference catalogName="Cars" entryName="car"/>\n<CatalogReference catalogName="Drivers" '
+            'entryName="calm"/><Controller>',
+        ),
+        'catalogName="Drivers"',
+        "<Object> needs exactly one <CatalogReference>, <Vehicle>, <Pedestrian> or <MiscObject> (found 2; a "
+        "controller goes in its <Controller>)",
+    ),
+    (
+        "v09-unknown-triggering-entity",
+        v09(
+            '<Entity name="$owner"/>\n                      </TriggeringEntities>',
+            '<Entity name="Nobody"/></TriggeringEntities>',
+        ),
+        'name="Nobody"',
+        "unknown entity 'Nobody' in <EntityRef> (entities: Ego, Lead)",
+    ),
+    (
+        "v09-undeclared",
+        v09('value="$EgoSpeed"', 'value="$EgoSped"'),
+        "$EgoSped",
+        "parameter '$EgoSped' is not declared (declared: EgoSpeed, Behind, Rate)",
+    ),
+    (
+        "v09-lane-offset-duration",
+        v09(
+            '<LaneChange>\n                      <Dynamics shape="sinusoidal" time="2"/>',
+            '<LaneOffset><Dynamics shape="sinusoidal" duration="2"/></LaneOffset><LaneChange><Dynamics shape="sinusoidal" time="2"/>',
+        ),
+        'duration="2"',
+        "duration in a 0.9 LaneOffset's <Dynamics> is not supported by ego: OpenSCENARIO 1.0 has no duration for a "
+        f"lane offset (give maxLateralAcc; see {DOCS})",
+    ),
+    (
+        "v09-signals",
+        v09('<SceneGraph filepath="straight3.osgb"/>', '<SceneGraph filepath="straight3.osgb"/><Signals name="s"/>'),
+        "<Signals",
+        un09("Signals"),
+    ),
+    (
+        "v09-version-0.8",
+        v09('revMajor="0" revMinor="9"', 'revMajor="0" revMinor="8"'),
+        "<FileHeader",
+        f"OpenSCENARIO 0.8 is not supported by ego (0.9 and 1.0 to 1.3; see {DOCS})",
+    ),
+]
+
+
+@pytest.mark.parametrize("case", V09, ids=[c[0] for c in V09])
+def test_openscenario_0_9(case, tmp_path, capsys):
+    _, text, marker, message = case
+    path = xosc_v09.write(tmp_path, text, "case.xosc")
+    _check(path, text, marker, message, tmp_path, capsys)
+
+
 def test_corpus_size():
-    assert len(HAND) + len(SG) >= 40
+    assert len(HAND) + len(SG) + len(V09) >= 100
 
 
 def test_generated_valid_file_runs(tmp_path, capsys):
