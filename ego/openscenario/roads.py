@@ -47,6 +47,11 @@ OPTIONS = (
 )
 
 
+#: the version of :func:`for_netconvert`'s copy, part of a converted road's cache key (a road
+#: converted before a change of the copy is converted again)
+COPY_VERSION = "copy 2"
+
+
 def cache_dir() -> Path:
     """Where converted roads are kept: ``$XDG_CACHE_HOME/ego/opendrive`` or ``~/.cache/ego/opendrive``."""
     base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
@@ -54,7 +59,7 @@ def cache_dir() -> Path:
 
 
 #: netconvert's bounds: a road it cannot convert in this time or memory is refused (esmini's
-#: crest-curve.xodr, a 50 m wide border lane on an elevated clothoid, took > 7 GiB and minutes)
+#: crest-curve.xodr with its roadside objects took > 7 GiB and minutes; see :data:`_OBJECTS`)
 NETCONVERT_SECONDS = 120
 NETCONVERT_MEMORY = 4 << 30
 
@@ -86,17 +91,18 @@ def network_file(road: Path) -> Path:
 
     data = read_limited(road, "road file", MAX_ROAD_BYTES)
     check_lane_widths(road, data)
+    check_traffic_rule(road, data)
 
     exe = sumo_binary("netconvert")
-    key = hashlib.sha256(data + "\0".join(OPTIONS).encode() + str(exe).encode()).hexdigest()[:24]
+    key = hashlib.sha256(data + "\0".join((*OPTIONS, COPY_VERSION)).encode() + str(exe).encode()).hexdigest()[:24]
     out = cache_dir() / f"{key}.net.xml"
     if out.is_file():
         return out
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_name(f".{key}.{os.getpid()}.net.xml")
     env = {**os.environ, "SUMO_HOME": str(exe.parent.parent)}
-    source, patched = road, _signal_types(data)
-    if patched is not None:  # netconvert's copy with the signals' empty types filled in
+    source, patched = road, for_netconvert(road, data)
+    if patched is not None:  # netconvert's copy (see for_netconvert)
         source = out.with_name(f".{key}.{os.getpid()}.xodr")
         source.write_bytes(patched)
     try:
@@ -168,6 +174,135 @@ def check_lane_widths(road: Path, data: bytes) -> None:
                 raise ScenarioFileError(
                     road, line, "bad lane width 0 m everywhere for a driving lane (allowed: more than 0 m)"
                 )
+
+
+_ROAD_TAG = re.compile(rb"<road\b[^>]*>")
+_RULE = re.compile(rb"""\srule\s*=\s*(["'])(.*?)\1""")
+
+
+def check_traffic_rule(road: Path, data: bytes) -> None:
+    """Every road right-hand traffic (OpenDRIVE's ``rule``, default ``RHT``): netconvert reads
+    each road as right-hand (lanes ``-k`` along the reference line), and so does ego's lane
+    model. A left-hand road (``rule="LHT"``: lanes ``+k`` along it) would be driven the wrong
+    way, so it is refused: ScenarioFileError naming its line."""
+    for tag in _ROAD_TAG.finditer(data):
+        rule = _RULE.search(tag.group(0))
+        if rule and rule.group(2).strip().upper() != b"RHT":
+            line = data.count(b"\n", 0, tag.start()) + 1
+            raise ScenarioFileError(
+                road,
+                line,
+                f'<road rule="{rule.group(2).decode(errors="replace")}"> (left-hand traffic) is not supported by '
+                "ego: its roads are right-hand traffic (RHT, OpenDRIVE's default)",
+            )
+
+
+def for_netconvert(road: Path, data: bytes) -> bytes | None:
+    """The copy of an OpenDRIVE file that netconvert converts (None: the file as it is):
+    signals' empty types filled in (:func:`_signal_types`), roadside objects and the elevation
+    profile left out (:data:`_OBJECTS`, :data:`_ELEVATION`) and direct junctions written as
+    common ones (:func:`_direct_junctions`)."""
+    out = _signal_types(data) or data
+    out = _OBJECTS.sub(b"<objects/>", out)
+    out = _ELEVATION.sub(b"", out)
+    if _DIRECT.search(out):
+        out = _direct_junctions(road, out)
+    return None if out == data else out
+
+
+#: a road's roadside objects (trees, fences, buildings): ego uses none, netconvert makes
+#: polygons of them only for ``--polygon-output`` (not asked) and yet works through every one:
+#: esmini's crest-curve.xodr repeats a fence with ``distance="0"`` and took netconvert past
+#: 4 GiB; without its objects the same lanes convert in 0.5 s (tests/openscenario/test_xosc_roads.py)
+_OBJECTS = re.compile(rb"<objects\b[^>]*?(?<!/)>.*?</objects\s*>", re.S)
+#: a road's elevation profile: ego's roads are planar, and OpenDRIVE's ``s`` is measured in the
+#: plane (a road's length is its plan view's); netconvert would make each lane's length the
+#: length in space, so that SUMO's positions and speeds run along the slope (crest-curve.xodr:
+#: lane -1 395.834 m long for a plan-view line of 395.208 m)
+_ELEVATION = re.compile(rb"<elevationProfile\b[^>]*?/>|<elevationProfile\b.*?</elevationProfile\s*>", re.S)
+_DIRECT = re.compile(rb"""<junction\b[^>]*\btype\s*=\s*["']direct["']""")
+#: m: the length of the connecting road written for each connection of a direct junction
+DIRECT_CONNECTOR = 0.01
+
+
+def _direct_junctions(road: Path, data: bytes) -> bytes:
+    """``data`` with each direct junction (OpenDRIVE 1.7: an incoming road's lanes run on
+    into a linked road's, no connecting road between, a motorway's on- or off-ramp) written
+    as a common junction that netconvert reads: each connection gets a connecting road of
+    :data:`DIRECT_CONNECTOR` m on the linked road's start (its lanes, widths and lane offset
+    there), linked lane by lane as the junction's ``laneLink``s say. The roads themselves,
+    their ids and lanes are unchanged; netconvert joins them at one node as at any junction.
+    A direct junction joining a road at its end (not its start) is refused: ScenarioFileError."""
+    try:
+        root = ET.fromstring(data)
+    except ET.ParseError as e:
+        raise ScenarioFileError(road, e.position[0], f"malformed XML: {e}") from None
+    roads = {r.get("id"): r for r in root.iterfind("road")}
+    for j in root.iterfind("junction"):
+        if j.get("type") != "direct":
+            continue
+        jid = j.get("id", "")
+        del j.attrib["type"]
+        for i, c in enumerate(j.findall("connection")):
+            incoming, linked = roads.get(c.get("incomingRoad")), roads.get(c.get("linkedRoad"))
+            if incoming is None or linked is None or c.get("contactPoint", "start") != "start":
+                raise ScenarioFileError(
+                    road,
+                    None,
+                    f"direct junction {jid}: connection {c.get('id')} (incomingRoad {c.get('incomingRoad')!r}, "
+                    f"linkedRoad {c.get('linkedRoad')!r}, contactPoint {c.get('contactPoint')!r}) is not supported "
+                    "(ego reads direct junctions whose linked road starts at the junction)",
+                )
+            ends = {"successor": "end", "predecessor": "start"}
+            at = next(
+                (
+                    ends[k]
+                    for k in ends
+                    if any(e.get("elementId") == jid for e in incoming.iterfind(f"link/{k}[@elementType='junction']"))
+                ),
+                "end",
+            )
+            cid = f"{jid}.direct{i}"
+            to_from = {ll.get("to"): ll.get("from") for ll in c.iterfind("laneLink")}
+            root.append(_connector(cid, jid, incoming.get("id", ""), at, linked, to_from))
+            c.attrib.clear()
+            c.attrib.update(id=str(i), incomingRoad=incoming.get("id", ""), connectingRoad=cid, contactPoint="start")
+    return ET.tostring(root, encoding="utf-8", xml_declaration=True)
+
+
+def _connector(cid: str, jid: str, incoming: str, at: str, linked: ET.Element, to_from: dict) -> ET.Element:
+    """A connecting road of :data:`DIRECT_CONNECTOR` m on ``linked``'s start: its lanes carry
+    the linked road's ids, types and widths there, each linked to the incoming lane ``to_from``
+    names."""
+    length = repr(DIRECT_CONNECTOR)
+    new = ET.Element("road", name="", length=length, id=cid, junction=jid)
+    link = ET.SubElement(new, "link")
+    ET.SubElement(link, "predecessor", elementType="road", elementId=incoming, contactPoint=at)
+    ET.SubElement(link, "successor", elementType="road", elementId=linked.get("id", ""), contactPoint="start")
+    g0 = linked.find("planView/geometry")
+    pose = {k: g0.get(k, "0") if g0 is not None else "0" for k in ("x", "y", "hdg")}
+    ET.SubElement(ET.SubElement(new, "planView"), "geometry", s="0", length=length, **pose).append(ET.Element("line"))
+    lanes = ET.SubElement(new, "lanes")
+    offset = linked.find("lanes/laneOffset")
+    if offset is not None:
+        ET.SubElement(lanes, "laneOffset", s="0", a=offset.get("a", "0"), b="0", c="0", d="0")
+    first, section = linked.find("lanes/laneSection"), ET.SubElement(lanes, "laneSection", s="0")
+    for side in ("left", "center", "right"):
+        src = first.find(side) if first is not None else None
+        if src is None:
+            continue
+        dst = ET.SubElement(section, side)
+        for lane in src.iterfind("lane"):
+            lid = lane.get("id", "0")
+            new_lane = ET.SubElement(dst, "lane", id=lid, type=lane.get("type", "none"), level="false")
+            lane_link = ET.SubElement(new_lane, "link")
+            if lid in to_from and lid != "0":
+                ET.SubElement(lane_link, "predecessor", id=to_from[lid])
+                ET.SubElement(lane_link, "successor", id=lid)
+            width = lane.find("width")
+            if width is not None:
+                ET.SubElement(new_lane, "width", sOffset="0", a=width.get("a", "0"), b="0", c="0", d="0")
+    return new
 
 
 _EMPTY_TYPE = re.compile(rb"""(\s(?:sub)?type\s*=\s*)(["'])\2""")
