@@ -54,6 +54,13 @@ class EntityState:
     accel: float = 0.0
     lat_accel: float = 0.0
     still_for: float = 0.0
+    #: whether the entity is at the end of its road (no successor to drive on) and off every
+    #: road's lanes now (the driver says so for the entities an EndOfRoadCondition or an
+    #: OffroadCondition watches), and for how long (s) it has been, up to now
+    at_end: bool = False
+    offroad: bool = False
+    end_for: float = -1.0
+    offroad_for: float = -1.0
 
 
 class Driver(Protocol):
@@ -255,6 +262,14 @@ class Storyboard:
             self.stories.append(story)
         for cond in self._all_conditions():
             self.conditions[id(cond)] = ConditionState(cond)
+        #: the entities an EndOfRoadCondition / an OffroadCondition watches (the driver tells
+        #: the storyboard where they are: ``EntityState.at_end`` and ``offroad``)
+        self.watch_end = {
+            n for c in self.conditions.values() if c.c.kind == "EndOfRoadCondition" for n in c.c.triggering
+        }
+        self.watch_offroad = {
+            n for c in self.conditions.values() if c.c.kind == "OffroadCondition" for n in c.c.triggering
+        }
         #: running actions: element -> (the actor, the action runner)
         self.running: dict[int, list[ActionRun]] = {}
         #: per entity and domain ("long", "lat"): the action run controlling it
@@ -336,6 +351,10 @@ class Storyboard:
                 dyaw = math.atan2(math.sin(e.yaw - yaw0), math.cos(e.yaw - yaw0))
                 e.lat_accel = 0.5 * (e.speed + v0) * dyaw / dt
                 e.still_for = e.still_for + dt if (e.speed < STILL and v0 < STILL) else 0.0
+            # time at the end of the road and off road: from the first step seen there (-1: not)
+            step = max(dt, 0.0)
+            e.end_for = (e.end_for + step if e.end_for >= 0.0 else 0.0) if e.at_end else -1.0
+            e.offroad_for = (e.offroad_for + step if e.offroad_for >= 0.0 else 0.0) if e.offroad else -1.0
             prev[name] = (e.speed, e.yaw)
 
     def _evaluate(self, t: float) -> None:

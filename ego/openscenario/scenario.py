@@ -765,6 +765,11 @@ class StoryDriver:
         )
         self.board = Storyboard(sc.model, sc.ego_name, self, sc.config.sumo_step, self._story_event)
         self._scripted = [n for n in sc.model.entities if n != sc.ego_name]
+        self._ego_end: str | None = None  #: the ego's road end, seen by the storyboard before the run ends
+        #: the driving lanes of the network (off-road checks), made when a condition asks
+        self._lane_polys: list[tuple[LanePolyline, float]] | None = None
+        for name in self.board.watch_end:
+            self._hold_at_end(name)
         self.history = {n: [] for n in self._scripted}
         self._ego_then = self._ego_now()
         self._observe(-1.0)  # the start positions (no distance travelled)
@@ -830,11 +835,57 @@ class StoryDriver:
             self._road_end(f"{away} left its road (driven against its lane, at the road's end)")
         elif gone:
             self._road_end(f"{gone[0]} left the road network (the end of its route)")
-        elif sc.view.s + sc.geometry.cg_to_front >= sc.view.road.length:
-            self._road_end(
+        elif sc.view.s + sc.geometry.cg_to_front >= sc.view.road.length and self._ego_end is None:
+            why = (
                 f"the ego reached the end of its road (its lane {sc.view.road.lane_id}, "
                 f"{sc.view.road.length:.0f} m: ego drives on its start road only)"
             )
+            if sc.ego_name in self.board.watch_end:  # type: ignore[union-attr]
+                self._ego_end = why  # an EndOfRoadCondition on the ego sees it first (the next step)
+            else:
+                self._road_end(why)
+
+    def _hold_at_end(self, name: str) -> None:
+        """A SUMO entity an EndOfRoadCondition watches stops at the end of its route (a SUMO
+        stop there: it brakes at its own deceleration and stands at the road's end) instead
+        of leaving the network."""
+        sc = self.sc
+        if name == sc.ego_name or name in self._kin:
+            return
+        veh = sc.bridge.libsumo.vehicle
+        last = veh.getRoute(name)[-1]
+        lanes = sc.roads.edges[last].lanes
+        index = min(veh.getLaneIndex(name), len(lanes) - 1)
+        try:
+            veh.setStop(name, last, pos=lanes[index].length, laneIndex=index, duration=1e7)
+        except sc.bridge.libsumo.TraCIException:
+            pass  # too close to brake for it: it leaves the network as any car
+
+    def _where(self, name: str, st) -> None:
+        """Whether ``name`` is at the end of its road and off road now, for the conditions
+        that watch it (``st``: its state)."""
+        sc, board = self.sc, self.board
+        assert board is not None
+        if name in board.watch_end:
+            if name == sc.ego_name:
+                st.at_end = self._ego_end is not None or st.s + 0.5 * st.length >= sc.road.length - 1e-6
+            elif name not in self._kin:
+                st.at_end = bool(sc.bridge.libsumo.vehicle.isStopped(name))
+        if name in board.watch_offroad:
+            if self._lane_polys is None:
+                self._lane_polys = [
+                    (LanePolyline(ln.shape, ln.width, ln.id), 0.5 * ln.width)
+                    for e in sc.roads.edges.values()
+                    for ln in e.lanes
+                    if len(ln.shape) >= 2
+                ]
+            on = False
+            for poly, half in self._lane_polys:
+                s_, d_, _ = poly.project(st.x, st.y)
+                if -1e-6 <= s_ <= poly.length + 1e-6 and abs(d_) <= half:
+                    on = True
+                    break
+            st.offroad = not on
 
     def _road_end(self, why: str) -> None:
         sc = self.sc
@@ -883,6 +934,8 @@ class StoryDriver:
             st.s, st.d = s, d
             st.d_front = project(bx + half * math.cos(yaw), by + half * math.sin(yaw))[1]
             history[name].append((t, st.speed, st.d_front))
+        for name in self.board.watch_end | self.board.watch_offroad:
+            self._where(name, states[name])
 
     def _ego_now(self) -> tuple[float, float, float, float, float, float]:
         """The ego's world pose, speed and lane-frame position (its centre of gravity) now."""
@@ -902,6 +955,8 @@ class StoryDriver:
         self._ego_then = self._ego_now()  # what the next step's storyboard time sees
         if board.stopped and sc.status == "running":
             sc._end("completed", "the storyboard's StopTrigger ended the scenario")
+        elif self._ego_end is not None and sc.status == "running":
+            self._road_end(self._ego_end)
 
     def position_xy(self, position, states) -> tuple[float, float, float]:
         sc = self.sc

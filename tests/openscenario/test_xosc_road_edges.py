@@ -1,0 +1,101 @@
+"""Conditions and actions of the standard the reference player's motorway examples use beside
+the storyboard's core: EndOfRoadCondition and OffroadCondition (esmini's acc-toggle.xosc,
+lane_change_simple.xosc, lane_change.xosc). Each file here is hand-written for the test."""
+
+from __future__ import annotations
+
+import pytest
+from xosc_scenes import entity, event, lane_offset, run_scene, scene, sim_time, speed, starts, trigger
+
+from ego.openscenario.loader import load
+from ego.openscenario.scenario import StoryDriver
+from ego.openscenario.xmltree import ScenarioFileError
+
+
+@pytest.fixture(autouse=True)
+def _cache(tmp_path_factory, monkeypatch):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
+
+
+def _record(monkeypatch, name: str) -> list:
+    """(storyboard time, state of ``name``: s, d, speed, at_end, offroad) every step."""
+    rows: list = []
+    inner = StoryDriver.before_sim_step
+
+    def spy(self):
+        inner(self)
+        e = self.board.states[name]
+        rows.append((self.board.t, e.s, e.d, e.speed, e.at_end, e.offroad))
+
+    monkeypatch.setattr(StoryDriver, "before_sim_step", spy)
+    return rows
+
+
+@pytest.mark.sumo
+def test_an_entity_watched_at_its_road_end_stops_there_and_the_condition_counts(tmp_path, monkeypatch):
+    """C starts 50 m before the end of the 3000 m road at 15 m/s: an EndOfRoadCondition on C
+    makes it stop at the road's end (SUMO's stop: it brakes at its maxDeceleration, 4.5 m/s^2)
+    instead of leaving the network; the event waiting for 1 s at the end starts 1.0 s after
+    the first step C stands at the end, its front at the road's end."""
+    rows = _record(monkeypatch, "C")
+    evs = [event("End", "A", speed(10), trigger([entity("C", '<EndOfRoadCondition duration="1"/>')]))]
+    sc = run_scene(scene(tmp_path, evs, at={"C": (-3, 2950.0, 15.0)}), 9.0)
+    assert sc.status != "ended" or "left the road network" not in sc.status_detail, sc.status_detail
+    first = next(t for t, *_, at_end, _ in rows if at_end)
+    s_end, v_end = next((s, v) for t, s, _, v, *_ in rows if t == first)
+    assert v_end < 0.01  # standing (SUMO reports the last mm/s of its braking step)
+    assert 3000.0 - 0.15 <= s_end + 2.25 <= 3000.0 + 1e-6  # its front at the end (SUMO stops 0.1 m short at most)
+    assert starts(sc, "End") == [pytest.approx(first + 1.0)]
+
+
+@pytest.mark.sumo
+def test_the_egos_road_end_is_seen_by_the_storyboard_before_the_run_ends(tmp_path):
+    """The ego reaches the end of its road: its run ends there (ego drives its start road only),
+    one storyboard step after the step that sees it there, so an EndOfRoadCondition of
+    duration 0 on the ego starts its event first."""
+    evs = [event("EgoEnd", "B", speed(10), trigger([entity("Ego", '<EndOfRoadCondition duration="0"/>')]))]
+    sc = run_scene(scene(tmp_path, evs, at={"Ego": (-3, 2900.0, 20.0)}), 12.0)
+    assert "the ego reached the end of its road" in sc.status_detail
+    (t_event,) = starts(sc, "EgoEnd")
+    t_end = float(sc.status_detail.split("at t = ")[1].split(" s")[0])
+    assert t_end == pytest.approx(t_event + 0.1)
+
+
+@pytest.mark.sumo
+def test_offroad_condition_counts_from_the_step_the_centre_leaves_the_lanes(tmp_path, monkeypatch):
+    """The ego moves 4 m right of its lane, the rightmost (3.5 m wide lanes, so off the road
+    once its centre is more than 1.75 m right of that lane's centre): an OffroadCondition of
+    0.5 s starts its event 0.5 s after the first step its centre is past the road's edge."""
+    rows = _record(monkeypatch, "Ego")
+    evs = [
+        event("Off", "Ego", lane_offset(-4.0, "sinusoidal", 2.0), trigger([sim_time(0.5)])),
+        event("Offroad", "A", speed(10), trigger([entity("Ego", '<OffroadCondition duration="0.5"/>')])),
+    ]
+    sc = run_scene(scene(tmp_path, evs), 8.0)
+    d0 = rows[0][2]
+    first = next(t for t, _, d, *_ in rows if d < d0 - 1.75)
+    assert next(off for t, *_, off in rows if t == first)
+    assert all(not off for t, *_, off in rows if t < first)
+    assert starts(sc, "Offroad") == [pytest.approx(first + 0.5)]
+
+
+def test_end_of_road_conditions_read_the_reference_players_rule(tmp_path):
+    evs = [
+        event("E", "A", speed(10), trigger([entity("C", '<EndOfRoadCondition duration="2.5" rule="greaterThan"/>')]))
+    ]
+    sc = load(scene(tmp_path, evs))
+    c = sc.stories[0].acts[0].groups[0].maneuvers[0].events[0].start.groups[0][0]
+    assert (c.kind, c.rule, c.value) == ("EndOfRoadCondition", "greaterThan", 2.5)
+
+
+@pytest.mark.parametrize(
+    ("body", "message"),
+    [
+        ('<EndOfRoadCondition duration="-1"/>', r"bad value for duration in <EndOfRoadCondition>: -1"),
+        ("<OffroadCondition/>", r"<OffroadCondition> needs attribute duration"),
+        ('<OffroadCondition duration="1" rule="sometimes"/>', r"bad value for rule in <OffroadCondition>"),
+    ],
+)
+def test_bad_end_of_road_and_offroad_conditions(tmp_path, body, message):
+    with pytest.raises(ScenarioFileError, match=message):
+        load(scene(tmp_path, [event("E", "A", speed(10), trigger([entity("C", body)]))]))
