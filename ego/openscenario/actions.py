@@ -1146,9 +1146,9 @@ class Variable(ActionKind):
 
 
 class Environment(ActionKind):
-    tag, within, model, in_init = "EnvironmentAction", ("GlobalAction",), M.EnvironmentAction, "ignored"
+    tag, within, model, in_init = "EnvironmentAction", ("GlobalAction",), M.EnvironmentAction, "yes"
     domains, on_ego, is_global, section = (), True, True, "global"
-    contains = ("Environment",)
+    contains = ("Environment", "CatalogReference")
     parts = {
         "Environment": ("ParameterDeclarations", "TimeOfDay", "Weather", "RoadCondition"),
         "TimeOfDay": (),
@@ -1159,20 +1159,36 @@ class Environment(ActionKind):
         "Wind": (),
         "RoadCondition": ("Properties",),
     }
-    label = "`GlobalAction`/`EnvironmentAction` (in `Init` or an `Action`)"
+    label = "`GlobalAction`/`EnvironmentAction` (in `Init` or an `Action`), `EnvironmentCatalog`"
     note = (
-        "done at once: `TimeOfDay` and `Weather` (sun, fog, precipitation, wind) change nothing in ego's dynamics "
-        "or its sensor; a `RoadCondition` must keep the friction (`frictionScaleFactor` 1): any other scale is "
-        "refused in one line (the plant's tyres have their own friction; scaling it is issue 39's open part); an "
-        "`Environment` from an `EnvironmentCatalog` is refused"
+        "done at once, inline or from an `EnvironmentCatalog` (`CatalogReference`, with `ParameterAssignments`): "
+        "`TimeOfDay` and `Weather` (sun, fog, precipitation, wind) change nothing in ego's dynamics or its sensor; "
+        "a `RoadCondition`'s `frictionScaleFactor` k (> 0) scales the road's friction from then on: the ego's "
+        "tyres (report 000's plant: the rear friction circle `mu_max` 0.7 and the tyres' peak factor `Dy` 0.7 "
+        "become 0.7 k, and with ABS the brake and drive command limit, the friction circle, with them; a full "
+        "stop from v then takes v^2 / (2 (0.7 k + f) g), f = 0.01 the rolling resistance, "
+        "`test_xosc_environment.py`), and SUMO's drivers: every SUMO vehicle's (and vehicle type's) `decel` and "
+        "`emergencyDecel` become k times their own (the file's `maxDeceleration`, ego's traffic's), so SUMO's "
+        "car-following brakes no harder than the road carries; a scripted speed change keeps the rate the file "
+        "gives it (the storyboard rules its entities). A later `RoadCondition` scales from the own values "
+        "again (not compounded). A plant without a friction (the FMU or report 002's) refuses a scale other "
+        "than 1 in one line"
     )
 
     def build(self, b: Any, env_action: Node) -> M.EnvironmentAction:
-        """Checked (every attribute resolves; a RoadCondition must keep the friction:
-        frictionScaleFactor 1); it changes nothing."""
-        env = b.one(env_action, "Environment")
+        """Checked (every attribute resolves); a RoadCondition's friction scale kept."""
+        ref = env_action.child("CatalogReference")
+        if ref is not None:
+            b.maneuver_entry = None
+            b.catalog_entry(ref, ("Environment",), "")
+            file, env, values = b.maneuver_entry
+            b = type(b)(file, values)  # the entry's parameters with the reference's assignments
+        else:
+            env = b.one(env_action, "Environment")
         outer = b.values
-        b.values = b.scoped(env)
+        if ref is None:
+            b.values = b.scoped(env)
+        friction = None
         try:
             stack = [env]
             while stack:
@@ -1182,16 +1198,15 @@ class Environment(ActionKind):
                 stack.extend(c for c in n.children if c.tag != "ParameterDeclarations")
             rc = env.child("RoadCondition")
             if rc is not None:
-                f = b.num(rc, "frictionScaleFactor", nonneg=True)
-                if f != 1.0:
-                    raise b.error(
-                        rc,
-                        f"a RoadCondition frictionScaleFactor of {f:g} is not supported by ego: the tyres' friction"
-                        f" is the plant's own (1, no change, is accepted; see {DOCS})",
-                    )
+                friction = b.num(rc, "frictionScaleFactor", positive=True)
         finally:
             b.values = outer
-        return M.EnvironmentAction(env_action.line)
+        return M.EnvironmentAction(env_action.line, friction)
+
+    def apply(self, board: Storyboard, action: M.EnvironmentAction) -> None:
+        if action.friction is not None:
+            board.driver.friction(action.friction)
+            board.log("action", f"t = {board.t:.2f} s: road friction scaled by {action.friction:g}")
 
 
 for _kind in (

@@ -35,6 +35,7 @@ CATALOG_OF = {
     "MiscObject": "MiscObjectCatalog",
     "Controller": "ControllerCatalog",
     "Maneuver": "ManeuverCatalog",
+    "Environment": "EnvironmentCatalog",
 }
 PEDESTRIAN_CATEGORIES = ("pedestrian", "wheelchair", "animal")
 MISC_CATEGORIES = (
@@ -629,7 +630,7 @@ class _Builder:
                     raise self.error(a, str(exc)) from None
             if v.tag == "Controller":
                 return None
-            if v.tag == "Maneuver":
+            if v.tag in ("Maneuver", "Environment"):
                 self.maneuver_entry = (file, v, values)
                 return None
             return _Builder(file, values).body(v, name)

@@ -352,10 +352,12 @@ class SynchronizeAction:
 
 @dataclass(frozen=True)
 class EnvironmentAction:
-    """A GlobalAction's EnvironmentAction (time of day, weather, a road condition of friction
-    scale 1): nothing in ego's dynamics depends on it; accepted and done at once."""
+    """A GlobalAction's EnvironmentAction (inline or from an EnvironmentCatalog): a
+    RoadCondition's ``frictionScaleFactor`` scales the road's friction (None: none given);
+    time of day and weather change nothing in ego's dynamics."""
 
     line: int = 0
+    friction: float | None = None
 
 
 @dataclass(frozen=True)

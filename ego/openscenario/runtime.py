@@ -101,6 +101,10 @@ class Driver(Protocol):
     def traffic_action(self, action: M.TrafficAction) -> None:
         """Start (or stop) a traffic source, sink or swarm."""
 
+    def friction(self, scale: float) -> None:
+        """The road's friction scaled by ``scale`` (a RoadCondition): the ego's tyres and
+        SUMO's drivers' deceleration limits."""
+
     def ego_references(self) -> tuple[float, float]:
         """The ego's speed reference (m/s) and lateral reference (d, m) now."""
 

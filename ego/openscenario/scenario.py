@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from ego.lane_frame import LanePolyline
+from ego.models.nonlinear_bicycle import NonlinearBicycle
 from ego.openscenario import model as M
 from ego.openscenario.actions import along_path, trajectory_points
 from ego.openscenario.dynamics import Transition
@@ -693,6 +694,9 @@ class StoryDriver:
         self._lateral_free: set[str] = set()
         self._routes: set[str] = set()
         self._types: dict[str, VehicleType] = {}
+        #: (a vehicle?, id) -> its own decel and emergencyDecel (m/s^2), before a friction scale
+        self._decels: dict[tuple[bool, str], tuple[float, float]] = {}
+        self.friction_scale = 1.0
         for k, (name, ent) in enumerate(sc.model.entities.items()):
             if name == sc.ego_name:
                 continue
@@ -1117,6 +1121,38 @@ class StoryDriver:
 
     def traffic_action(self, action: M.TrafficAction) -> None:
         self._traffic.start(action)
+
+    def friction(self, scale: float) -> None:
+        """The road's friction scaled by ``scale``: the ego's tyres (its plant's friction) and
+        every SUMO vehicle's and vehicle type's deceleration limits (from their own values)."""
+        sc = self.sc
+        plant = sc.ego
+        scale_plant = getattr(plant, "scale_friction", None)
+        if scale_plant is None or not isinstance(getattr(plant, "model", None), NonlinearBicycle):
+            if scale != 1.0:
+                raise ConfigError(
+                    f"a RoadCondition frictionScaleFactor of {scale:g} needs the ego's plant to have tyres with a "
+                    "friction (report 000's bicycle, the default); this plant has none to scale"
+                )
+        else:
+            scale_plant(scale)
+            sc.loop.rebind_plant()
+        ls = sc.bridge.libsumo
+        own = self._decels
+        kinds = (
+            (ls.vehicle, [v for v in ls.vehicle.getIDList() if v != EGO]),
+            (ls.vehicletype, ls.vehicletype.getIDList()),
+        )
+        # every one's own values first (a vehicle reads its type's until it has its own)
+        for kind, ids in kinds:
+            for vid in ids:
+                own.setdefault((kind is ls.vehicle, vid), (kind.getDecel(vid), kind.getEmergencyDecel(vid)))
+        for kind, ids in kinds:
+            for vid in ids:
+                decel, emergency = own[(kind is ls.vehicle, vid)]
+                kind.setDecel(vid, decel * scale)
+                kind.setEmergencyDecel(vid, emergency * scale)
+        self.friction_scale = scale
 
     def release(self, name: str) -> None:
         """A scripted move ended: SUMO drives the car on from where it is, minding others."""

@@ -87,12 +87,15 @@ def test_environment_actions_are_accepted_in_init_and_in_events(tmp_path):
     assert kinds == ["EnvironmentAction", "SpeedAction"]
 
 
-def test_a_friction_scale_is_refused_with_its_line(tmp_path):
+def test_a_friction_scale_is_read_and_a_zero_one_refused_with_its_line(tmp_path):
+    """A RoadCondition's friction scale is applied (test_xosc_environment.py); 0 is refused."""
     path = scene(tmp_path, [])
     _edit(path, "<Init><Actions>", "<Init><Actions>\n" + ENV.format(road='<RoadCondition frictionScaleFactor="0.5"/>'))
-    with pytest.raises(ScenarioFileError, match=r"RoadCondition frictionScaleFactor of 0.5 is not supported") as exc:
+    assert load(path).init_globals[0].friction == 0.5
+    _edit(path, 'frictionScaleFactor="0.5"', 'frictionScaleFactor="0"')
+    with pytest.raises(ScenarioFileError, match=r"bad value for frictionScaleFactor in <RoadCondition>: 0") as exc:
         load(path)
-    assert exc.value.line == _line_of(path, "<GlobalAction>")
+    assert exc.value.line == _line_of(path, "<RoadCondition")
 
 
 def test_a_step_without_value_or_dimension_and_a_condition_without_edge(tmp_path):
