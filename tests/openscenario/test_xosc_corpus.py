@@ -47,6 +47,11 @@ LEAD_ACTION = '<SpeedActionDynamics dynamicsShape="linear" value="$LeadDecel" dy
 LEAD_TARGET = '<AbsoluteTargetSpeed value="$LeadFinalSpeed"/>'
 EGO_LANE = '<LanePosition roadId="0" laneId="-2" s="${$EgoFront - 2.25}" offset="0"/>'
 SIM_TIME = '<SimulationTimeCondition value="$LeadBrakeTime" rule="greaterOrEqual"/>'
+BY_TIME = f"<ByValueCondition>{SIM_TIME}</ByValueCondition>"
+ENTITY_COND = (
+    '<ByEntityCondition><TriggeringEntities triggeringEntitiesRule="any"><EntityRef entityRef="Lead"/>'
+    "</TriggeringEntities><EntityCondition>{}</EntityCondition></ByEntityCondition>"
+)
 EGO_SPEED_INIT = """          <PrivateAction>
             <LongitudinalAction><SpeedAction>
               <SpeedActionDynamics dynamicsShape="step" value="0" dynamicsDimension="time"/>
@@ -615,6 +620,38 @@ HAND = [
         f"a trailer (Vehicle 'semi') is not supported by ego: it runs single vehicles (see {DOCS})",
     ),
     ("windows-road-missing", sub('filepath="straight3.xodr"', 'filepath="C:\\Users\\me\\nowhere.xodr"'), "C:", None),
+    (
+        "friction-zero",
+        sub(
+            "<Actions>\n",
+            '<Actions>\n        <GlobalAction><EnvironmentAction><Environment name="e"><RoadCondition '
+            'frictionScaleFactor="0"/></Environment></EnvironmentAction></GlobalAction>\n',
+        ),
+        "<RoadCondition",
+        "bad value for frictionScaleFactor in <RoadCondition>: 0 (expected > 0)",
+    ),
+    (
+        "environment-catalog-without-location",
+        sub(
+            "<Actions>\n",
+            '<Actions>\n        <GlobalAction><EnvironmentAction><CatalogReference catalogName="EnvironmentCatalog" '
+            'entryName="winter"/></EnvironmentAction></GlobalAction>\n',
+        ),
+        '<CatalogReference catalogName="EnvironmentCatalog"',
+        "<CatalogReference> to 'EnvironmentCatalog' but no <EnvironmentCatalog> in <CatalogLocations>",
+    ),
+    (
+        "end-of-road-negative-duration",
+        sub(BY_TIME, ENTITY_COND.format('<EndOfRoadCondition duration="-2"/>')),
+        "<EndOfRoadCondition",
+        "bad value for duration in <EndOfRoadCondition>: -2 (expected >= 0)",
+    ),
+    (
+        "offroad-without-duration",
+        sub(BY_TIME, ENTITY_COND.format("<OffroadCondition/>")),
+        "<OffroadCondition",
+        "<OffroadCondition> needs attribute duration",
+    ),
 ]
 
 
@@ -705,16 +742,16 @@ def _sg_cases():
             "unknown entity 'Truck' in <EntityRef> (entities: Ego, Lead)",
         ),
         (
-            "sg-end-of-road",
-            lambda: base(entity_trigger(xosc.EndOfRoadCondition(1))),
+            "sg-end-of-road-negative",
+            lambda: base(entity_trigger(xosc.EndOfRoadCondition(-1))),
             "<EndOfRoadCondition",
-            un("EndOfRoadCondition"),
+            "bad value for duration in <EndOfRoadCondition>: -1 (expected >= 0)",
         ),
         (
-            "sg-offroad",
-            lambda: base(entity_trigger(xosc.OffroadCondition(1))),
+            "sg-offroad-negative",
+            lambda: base(entity_trigger(xosc.OffroadCondition(-1))),
             "<OffroadCondition",
-            un("OffroadCondition"),
+            "bad value for duration in <OffroadCondition>: -1 (expected >= 0)",
         ),
         (
             "sg-clearance",
