@@ -101,6 +101,40 @@ class Appearance(ActionKind):
         return M.AppearanceAction(node.line)
 
 
+class Visibility(ActionKind):
+    tag, within, model = "VisibilityAction", ("PrivateAction",), M.VisibilityAction
+    contains, parts = ("SensorReferenceSet",), {"SensorReferenceSet": ("SensorReference",), "SensorReference": ()}
+    domains, on_ego, in_init, init_note = (), True, "runs", "VisibilityAction"
+    note = (
+        "done at once: `sensors` false hides the entity from the ego's surround sensor (no front or rear "
+        "object, gap or TTC from it; it still collides: the collision check is geometric) until a "
+        "`VisibilityAction` with `sensors` true; on the ego it changes nothing (no other entity has a "
+        "sensor); a 1.2 `SensorReferenceSet` (named sensors) is read, and the one surround sensor is meant; "
+        "`graphics` is read and changes nothing (ego's recordings draw every body); `traffic` false is "
+        "refused in one line (SUMO's drivers always see every vehicle: their car-following cannot leave one "
+        "out). **As the reference player reads them**, an attribute left out (the schema requires all three; "
+        "esmini's `cut-in_visibility.xosc` writes only `sensors`, or `graphics` and `sensors`) is true"
+    )
+
+    def build(self, b: Any, node: Node) -> M.VisibilityAction:
+        traffic = b.bool_(node, "traffic", True)
+        if not traffic:
+            raise b.error(
+                node,
+                f'a <VisibilityAction> with traffic="false" is not supported by ego: SUMO\'s drivers see every '
+                f"vehicle (see {DOCS})",
+            )
+        refs = node.child("SensorReferenceSet")
+        for r in refs.all("SensorReference") if refs is not None else ():
+            b.str_(r, "name")
+        return M.VisibilityAction(b.bool_(node, "graphics", True), traffic, b.bool_(node, "sensors", True), node.line)
+
+    def start(self, run: ActionRun, t: float) -> None:
+        if not run.is_ego:
+            run.board.driver.visibility(run.actor, run.action.sensors)
+        run.finished = True
+
+
 class Speed(ActionKind):
     tag, within, model = "SpeedAction", ("LongitudinalAction",), M.SpeedAction
     contains = ("SpeedActionDynamics", "SpeedActionTarget")
@@ -1214,6 +1248,7 @@ for _kind in (
     Controller,
     ActivateController,
     Appearance,
+    Visibility,
     Speed,
     LaneChange,
     LaneOffset,

@@ -351,6 +351,17 @@ class SynchronizeAction:
 
 
 @dataclass(frozen=True)
+class VisibilityAction:
+    """Whether the entity is drawn (``graphics``), seen by the other traffic's drivers
+    (``traffic``) and by sensors (``sensors``)."""
+
+    graphics: bool
+    traffic: bool
+    sensors: bool
+    line: int = 0
+
+
+@dataclass(frozen=True)
 class EnvironmentAction:
     """A GlobalAction's EnvironmentAction (inline or from an EnvironmentCatalog): a
     RoadCondition's ``frictionScaleFactor`` scales the road's friction (None: none given);

@@ -101,6 +101,9 @@ class Driver(Protocol):
     def traffic_action(self, action: M.TrafficAction) -> None:
         """Start (or stop) a traffic source, sink or swarm."""
 
+    def visibility(self, name: str, sensors: bool) -> None:
+        """Whether the ego's surround sensor sees ``name``."""
+
     def friction(self, scale: float) -> None:
         """The road's friction scaled by ``scale`` (a RoadCondition): the ego's tyres and
         SUMO's drivers' deceleration limits."""

@@ -745,6 +745,7 @@ class StoryDriver:
         centre (an Init offset) is moved across there in SUMO's first step (SUMO inserts on
         lane centres)."""
         sc = self.sc
+        sc.view.hidden.clear()  # every entity seen until a VisibilityAction hides it
         for name, start in sc.starts.items():
             if name != sc.ego_name and start.offset:
                 lane = sc.roads.edges[start.edge].lanes[start.index]
@@ -1121,6 +1122,13 @@ class StoryDriver:
 
     def traffic_action(self, action: M.TrafficAction) -> None:
         self._traffic.start(action)
+
+    def visibility(self, name: str, sensors: bool) -> None:
+        hidden = self.sc.view.hidden
+        if sensors:
+            hidden.discard(name)
+        else:
+            hidden.add(name)
 
     def friction(self, scale: float) -> None:
         """The road's friction scaled by ``scale``: the ego's tyres (its plant's friction) and

@@ -209,11 +209,11 @@ HAND = [
         "unsupported-action",
         sub(
             "<PrivateAction><LongitudinalAction><SpeedAction>\n                  " + LEAD_ACTION,
-            '<PrivateAction><VisibilityAction graphics="true" traffic="true" sensors="true"/>'
+            "<PrivateAction><TrailerAction><DisconnectTrailerAction/></TrailerAction>"
             "<LongitudinalAction><SpeedAction>\n                  " + LEAD_ACTION,
         ),
-        "<VisibilityAction",
-        unsupported("VisibilityAction"),
+        "<TrailerAction",
+        unsupported("TrailerAction"),
     ),
     (
         "unsupported-condition",
@@ -784,10 +784,11 @@ def _sg_cases():
             "variable 'Nope' is not declared (declared: none)",
         ),
         (
-            "sg-visibility",
-            lambda: base(action=xosc.VisibilityAction(True, True, True)),
+            "sg-visibility-traffic-false",
+            lambda: base(action=xosc.VisibilityAction(True, False, True)),
             "<VisibilityAction",
-            un("VisibilityAction"),
+            f'a <VisibilityAction> with traffic="false" is not supported by ego: SUMO\'s drivers see every vehicle '
+            f"(see {DOCS})",
         ),
         (
             "sg-lateral-distance",

@@ -4,6 +4,8 @@ lane_change_simple.xosc, lane_change.xosc). Each file here is hand-written for t
 
 from __future__ import annotations
 
+import math
+
 import pytest
 from xosc_scenes import entity, event, lane_offset, run_scene, scene, sim_time, speed, starts, trigger
 
@@ -99,3 +101,46 @@ def test_end_of_road_conditions_read_the_reference_players_rule(tmp_path):
 def test_bad_end_of_road_and_offroad_conditions(tmp_path, body, message):
     with pytest.raises(ScenarioFileError, match=message):
         load(scene(tmp_path, [event("E", "A", speed(10), trigger([entity("C", body)]))]))
+
+
+def _visibility(attrs: str) -> str:
+    return f"<VisibilityAction {attrs}/>"
+
+
+@pytest.mark.sumo
+def test_a_car_hidden_from_sensors_is_not_the_egos_front_object_until_shown(tmp_path, monkeypatch):
+    """C drives 60 m ahead of the ego in its lane: the surround sensor's front object. Hidden
+    from sensors at storyboard time 1 s (graphics and traffic left out: true, as the reference
+    player reads them) the ego has no front object from the next SUMO step on; shown again at
+    2 s it is the front object again from the step after."""
+    rows: list = []
+    inner = StoryDriver.before_sim_step
+
+    def spy(self):
+        inner(self)
+        rows.append((self.board.t, self.sc.view.gap_front))
+
+    monkeypatch.setattr(StoryDriver, "before_sim_step", spy)
+    evs = [
+        event("Hide", "C", _visibility('sensors="false"'), trigger([sim_time(1)])),
+        event("Show", "C", _visibility('graphics="true" sensors="true" traffic="true"'), trigger([sim_time(2)])),
+    ]
+    run_scene(scene(tmp_path, evs, at={"C": (-3, 84.5, 20.0)}), 3.0)
+    seen = {round(t, 6): gap for t, gap in rows}
+    assert all(math.isfinite(gap) and 50.0 < gap < 70.0 for t, gap in seen.items() if t <= 1.0)
+    assert all(math.isinf(gap) for t, gap in seen.items() if 1.1 <= t <= 2.0)
+    assert all(math.isfinite(gap) for t, gap in seen.items() if t >= 2.1)
+
+
+def test_a_visibility_for_traffic_false_is_refused_in_one_line(tmp_path):
+    path = scene(
+        tmp_path,
+        [event("Hide", "C", _visibility('graphics="true" traffic="false" sensors="true"'), trigger([sim_time(1)]))],
+    )
+    with pytest.raises(
+        ScenarioFileError, match=r'a <VisibilityAction> with traffic="false" is not supported by ego'
+    ) as exc:
+        load(path)
+    assert exc.value.line == next(
+        i for i, ln in enumerate(path.read_text().splitlines(), 1) if "<VisibilityAction" in ln
+    )
