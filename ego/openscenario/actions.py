@@ -458,6 +458,80 @@ def distance_speed(
     return min(max(out, lo), hi)
 
 
+class LateralDistance(ActionKind):
+    tag, within, model = "LateralDistanceAction", ("LateralAction",), M.LateralDistanceAction
+    in_init, init_note = "runs", "LateralDistanceAction"
+    contains, parts = ("DynamicConstraints",), {"DynamicConstraints": ()}
+    domains, releases = ("lat",), True
+    note = (
+        "`distance` (left out: 0, the standard's default) across the road between the reference points (box "
+        "centres; the actor's as SUMO's sublane model moves it, its front's lateral position) or, with "
+        "`freespace`, between the boxes (half widths subtracted); `displacement` leftToReferencedEntity, "
+        "rightToReferencedEntity or any (the side the actor is on at the start; on the entity's line: left); "
+        "`coordinateSystem` read as the road's (entity, lane, road: across the ego's start lane frame); the "
+        "entity's lateral position a step ahead is taken from its last step's lateral speed; without "
+        "`DynamicConstraints` the actor is at the distance after one step and then exactly there every step "
+        "(within 1e-6, `test_xosc_road_edges.py`); with them `maxSpeed` limits its lateral speed, "
+        "`maxAcceleration` its lateral speed's growth and `maxDeceleration` its fall (it closes at the speed "
+        "from which that deceleration still stops at the distance a step later); `continuous` false ends once "
+        "held within 1 cm; not on the ego"
+    )
+
+    def build(self, b: Any, n: Node) -> M.LateralDistanceAction:
+        disp = b.enum(n, "displacement", ("leftToReferencedEntity", "rightToReferencedEntity", "any"), "any")
+        if "coordinateSystem" in n.attrs:
+            b.enum(n, "coordinateSystem", ("entity", "lane", "road", "trajectory"))
+        limits = _limits(
+            b, n, ("maxAcceleration", "max_accel"), ("maxDeceleration", "max_decel"), ("maxSpeed", "max_speed")
+        )
+        return M.LateralDistanceAction(
+            b.entity_ref(n),
+            b.num(n, "distance", 0.0, nonneg=True),
+            b.bool_(n, "freespace"),
+            b.bool_(n, "continuous"),
+            {"leftToReferencedEntity": 1, "rightToReferencedEntity": -1}.get(disp, 0),
+            line=n.line,
+            **limits,
+        )
+
+    def start(self, run: ActionRun, t: float) -> None:
+        b, a = run.board, run.action
+        me, ref = b.states[run.actor], b.states[a.entity]
+        run.v = 0.0  # the actor's lateral speed as commanded (m/s, + left)
+        run.s0 = ref.d  # the entity's lateral position a step ago
+        run.t0 = a.side or (1.0 if me.d_front >= ref.d else -1.0)
+
+    def step(self, run: ActionRun, t: float) -> None:
+        """The lateral position at t + step: the entity's there (moving on at its last step's
+        lateral speed) plus the held distance on the actor's side, reached within the
+        constraints."""
+        b, a = run.board, run.action
+        h = b.h
+        me, ref = b.states[run.actor], b.states[a.entity]
+        extra = 0.5 * (me.width + ref.width) if a.freespace else 0.0
+        ref_next = 2.0 * ref.d - run.s0
+        run.s0 = ref.d
+        err = ref_next + run.t0 * (a.distance + extra) - me.d_front
+        v = err / h
+        if math.isfinite(a.max_decel):
+            stop = a.max_decel
+            v = math.copysign(min(abs(v), -stop * h + math.sqrt((stop * h) ** 2 + 2.0 * stop * abs(err))), err)
+        if abs(v) > abs(run.v) or v * run.v < 0.0:  # speeding up sideways (or turning round)
+            grow = a.max_accel * h
+            v = min(max(v, run.v - grow), run.v + grow)
+        else:
+            fall = a.max_decel * h
+            v = min(max(v, run.v - fall), run.v + fall)
+        v = min(max(v, -a.max_speed), a.max_speed)
+        run.v = v
+        peak = a.max_speed if math.isfinite(a.max_speed) else 100.0 / h
+        b.driver.lateral(run.actor, me.d_front + v * h, peak)
+        gap = run.t0 * (me.d_front - ref.d) - extra
+        if not a.continuous and abs(gap - a.distance) < 0.01:
+            run.finished = True
+            b.driver.release(run.actor)
+
+
 def _limits(b: Any, n: Node, *names: tuple[str, str]) -> dict[str, float]:
     """The DynamicConstraints' limits given (attribute -> model field), each > 0."""
     limits: dict[str, float] = {}
@@ -1253,6 +1327,7 @@ for _kind in (
     LaneChange,
     LaneOffset,
     LongitudinalDistance,
+    LateralDistance,
     SpeedProfile,
     Synchronize,
     AssignRoute,

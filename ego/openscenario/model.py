@@ -308,6 +308,24 @@ class LongitudinalDistanceAction:
 
 
 @dataclass(frozen=True)
+class LateralDistanceAction:
+    """Hold a lateral distance (m, across the road) to ``entity``: ``side`` +1 left of it, -1
+    right of it, 0 the side the actor is on at the start; ``freespace`` between the boxes,
+    else between the reference points; limits on the lateral acceleration, deceleration (m/s^2)
+    and speed (m/s)."""
+
+    entity: str
+    distance: float
+    freespace: bool
+    continuous: bool
+    side: int = 0
+    max_accel: float = math.inf
+    max_decel: float = math.inf
+    max_speed: float = math.inf
+    line: int = 0
+
+
+@dataclass(frozen=True)
 class ControllerAction:
     """Activate (or assign) a controller: the ego keeps ego's controller (``-c``), the others
     SUMO's driver or their script; accepted and done at once."""

@@ -791,10 +791,10 @@ def _sg_cases():
             f"(see {DOCS})",
         ),
         (
-            "sg-lateral-distance",
-            lambda: base(action=xosc.LateralDistanceAction("Ego", 2)),
+            "sg-lateral-distance-negative",
+            lambda: base(action=xosc.LateralDistanceAction("Ego", -2)),
             "<LateralDistanceAction",
-            un("LateralDistanceAction"),
+            "bad value for distance in <LateralDistanceAction>: -2 (expected >= 0)",
         ),
         (
             "sg-relative-world-unknown",

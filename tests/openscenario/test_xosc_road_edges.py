@@ -144,3 +144,67 @@ def test_a_visibility_for_traffic_false_is_refused_in_one_line(tmp_path):
     assert exc.value.line == next(
         i for i, ln in enumerate(path.read_text().splitlines(), 1) if "<VisibilityAction" in ln
     )
+
+
+# -- LateralDistanceAction -----------------------------------------------------------------------
+def lateral_distance(ref: str, attrs: str, limits: str = "") -> str:
+    dc = f"<DynamicConstraints {limits}/>" if limits else ""
+    return (
+        f'<LateralAction><LateralDistanceAction entityRef="{ref}" {attrs}>{dc}</LateralDistanceAction></LateralAction>'
+    )
+
+
+@pytest.mark.parametrize(("freespace", "side"), [(False, "rightToReferencedEntity"), (True, "any")])
+def test_lateral_distance_is_held_beside_the_entity(tmp_path, freespace, side):
+    """B (lane -2, 3.5 m right of A in lane -1) holds 1.0 m right of A (freespace: between the
+    1.8 m wide boxes): reached in one step, then exact every step (within 1e-6)."""
+    attrs = f'distance="1.0" freespace="{str(freespace).lower()}" continuous="true" displacement="{side}"'
+    ev = event("L", "B", lateral_distance("A", attrs), trigger([sim_time(0.5)]))
+    sc = run_scene(scene(tmp_path, [ev]), 2.0)
+    a_d = sc.board.states["A"].d
+    want = a_d - 1.0 - (1.8 if freespace else 0.0)
+    after = [d for t, _, d in sc._history["B"] if t >= 0.7 - 1e-9]
+    assert after and all(d == pytest.approx(want, abs=1e-6) for d in after)
+
+
+def test_lateral_distance_within_its_constraints_ends_once_held(tmp_path):
+    """maxSpeed 1 m/s, maxAcceleration 2 m/s^2, maxDeceleration 2 m/s^2: B's lateral speed grows
+    by at most 0.2 m/s a step, never exceeds 1 m/s, and B closes the 2.5 m to 1.0 m right of A
+    without passing it; the action (not continuous) ends once held within 1 cm, and its state
+    condition starts the next event."""
+    attrs = 'distance="1.0" freespace="false" continuous="false" displacement="rightToReferencedEntity"'
+    limits = 'maxSpeed="1" maxAcceleration="2" maxDeceleration="2"'
+    ended = (
+        '<Condition name="e" delay="0" conditionEdge="none"><ByValueCondition><StoryboardElementStateCondition '
+        'storyboardElementType="action" storyboardElementRef="LAction" state="completeState"/></ByValueCondition>'
+        "</Condition>"
+    )
+    evs = [
+        event("L", "B", lateral_distance("A", attrs, limits), trigger([sim_time(0.5)])),
+        event("E", "C", speed(10.0), trigger([ended])),
+    ]
+    sc = run_scene(scene(tmp_path, evs), 6.0)
+    a_d = sc.board.states["A"].d
+    hist = [(t, d) for t, _, d in sc._history["B"] if t >= 0.5 - 1e-9]
+    vs = [(d1 - d0) / (t1 - t0) for (t0, d0), (t1, d1) in zip(hist, hist[1:])]
+    assert max(abs(v) for v in vs) <= 1.0 + 1e-6
+    assert all(abs(v1 - v0) <= 0.2 + 1e-6 for v0, v1 in zip(vs, vs[1:]))
+    assert all(d <= a_d - 1.0 + 1e-6 for _, d in hist)
+    (t_end,) = starts(sc, "E")
+    d_end = next(d for t, d in hist if abs(t - t_end) < 1e-9)
+    assert abs(a_d - 1.0 - d_end) < 0.01
+    # 2.5 m at most 1 m/s after 0.5 s of speeding up: at least 2.5 s
+    assert t_end >= 0.5 + 2.5
+
+
+@pytest.mark.parametrize(
+    ("attrs", "message"),
+    [
+        ('distance="-1" freespace="false" continuous="true"', r"bad value for distance in <LateralDistanceAction>: -1"),
+        ('distance="1" freespace="false" continuous="true" displacement="above"', r"bad value for displacement"),
+        ('distance="1" continuous="true"', r"<LateralDistanceAction> needs attribute freespace"),
+    ],
+)
+def test_bad_lateral_distance_actions(tmp_path, attrs, message):
+    with pytest.raises(ScenarioFileError, match=message):
+        load(scene(tmp_path, [event("L", "B", lateral_distance("A", attrs), trigger([sim_time(0.5)]))]))
