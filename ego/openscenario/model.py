@@ -525,6 +525,9 @@ class Scenario:
     init_runs: dict[str, list[PrivateAction]] = field(default_factory=dict)
     #: GlobalActions of the Init done at the storyboard's first step (traffic actions)
     init_globals: tuple[object, ...] = ()
+    #: ghosts: entities that are no physical body (a FollowGhost controller's ``ghost``, or
+    #: an entity with a ghost controller, as the reference player has them)
+    ghosts: frozenset[str] = frozenset()
 
 
 def qualified_names(path: tuple[str, ...]) -> list[str]:

@@ -58,7 +58,7 @@ from ego.scenarios.manoeuvre import CRUISE, EvasiveManoeuvre
 from ego.scenarios.motorway import COLUMNS, EGO, PLOTS
 from ego.sim.protocol import TrafficSim
 from ego.sim.registry import SimSetup, make_sim
-from ego.sim.types import VehicleSpec, VehicleType
+from ego.sim.types import Collision, VehicleSpec, VehicleType
 
 ENTITY_COLORS = ((255, 150, 0), (0, 170, 255), (160, 60, 220), (40, 180, 90), (230, 200, 0))
 
@@ -162,6 +162,8 @@ class Placement:
     front: float
     offset: float
     speed: float | None
+    #: the entities placed before it whose bodies it overlaps: (name, m along, m across)
+    overlaps: tuple[tuple[str, float, float], ...] = ()
 
 
 def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
@@ -194,8 +196,8 @@ def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
                     f"{name} starts beyond its road: its front at {front:.1f} m along a lane "
                     f"{lane.length:.1f} m long (SUMO lane {lane.id})",
                 )
-            _check_overlap(scenario, name, pos.line, lane, front, off, centre, out)
-            out[name] = Placement(lane.edge, lane.index, front, off, speed)
+            overlaps = _overlaps(scenario, name, lane, front, off, centre, out)
+            out[name] = Placement(lane.edge, lane.index, front, off, speed, overlaps)
             del pending[name]
         if not pending:
             break
@@ -209,13 +211,15 @@ def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
     return out
 
 
-def _check_overlap(
-    scenario: M.Scenario, name: str, line: int, lane, front: float, off: float, centre: dict, out: dict
-) -> None:
-    """``name`` starting with its front at ``front`` on ``lane`` does not overlap an entity
-    placed before it: two bodies in one place are a file error (SUMO would refuse the second,
-    and only at run time)."""
+def _overlaps(
+    scenario: M.Scenario, name: str, lane, front: float, off: float, centre: dict, out: dict
+) -> tuple[tuple[str, float, float], ...]:
+    """The entities placed before ``name`` (its front at ``front`` on ``lane``, ``off`` across)
+    whose bodies it overlaps at the start: (other, m along, m across their lane). The standard
+    has no rule against two bodies starting in one place (the reference player places them);
+    the run reports the collision at t = 0 (a ghost's overlaps are none: it is no body)."""
     v = scenario.entities[name].vehicle
+    found = []
     for other, p in out.items():
         if centre[other][0].id != lane.id:
             continue
@@ -223,12 +227,8 @@ def _check_overlap(
         along = min(front, p.front) - max(front - v.length, p.front - w.length)
         across = 0.5 * (v.width + w.width) - abs(off - p.offset)
         if along > 1e-6 and across > 1e-6:
-            raise ScenarioFileError(
-                scenario.path,
-                line,
-                f"{name} starts overlapping {other} ({along:.2f} m along and {across:.2f} m across their lane "
-                f"{lane.id}): two bodies cannot start in one place",
-            )
+            found.append((other, along, across))
+    return tuple(found)
 
 
 def stop_time(model: M.Scenario) -> float | None:
@@ -697,6 +697,17 @@ class StoryDriver:
         #: (a vehicle?, id) -> its own decel and emergencyDecel (m/s^2), before a friction scale
         self._decels: dict[tuple[bool, str], tuple[float, float]] = {}
         self.friction_scale = 1.0
+        # every entity seen until a VisibilityAction hides it, but a ghost (no body: not seen,
+        # no collision)
+        ghosts = {EGO if g == sc.ego_name else g for g in sc.model.ghosts}
+        sc.view.hidden.clear()
+        sc.view.hidden.update(ghosts)
+        world.sim.ghosts.update(ghosts)
+        # the entities starting overlapping another body (a ghost too) are inserted where
+        # they are, after the others (SUMO's insertion check would refuse them)
+        involved = {n for n, p in sc.starts.items() if p.overlaps} | {
+            o for p in sc.starts.values() for o, *_ in p.overlaps
+        }
         for k, (name, ent) in enumerate(sc.model.entities.items()):
             if name == sc.ego_name:
                 continue
@@ -711,7 +722,15 @@ class StoryDriver:
             own = start.speed if v.kind == "vehicle" else (start.speed or 0.0)
             speed = max(c.ego_speed, own if own is not None else 0.0) if v.kind == "vehicle" else own
             world.vehicle(
-                VehicleSpec(name, vt.id, self._route(start.edge), start.index, self._insert_at(name), speed),
+                VehicleSpec(
+                    name,
+                    vt.id,
+                    self._route(start.edge),
+                    start.index,
+                    start.front if name in involved else self._insert_at(name),
+                    (own or 0.0) if name in involved else speed,
+                    overlapping=name in involved,
+                ),
                 vt,
                 ScriptedEntity(name, own),
             )
@@ -745,7 +764,6 @@ class StoryDriver:
         centre (an Init offset) is moved across there in SUMO's first step (SUMO inserts on
         lane centres)."""
         sc = self.sc
-        sc.view.hidden.clear()  # every entity seen until a VisibilityAction hides it
         for name, start in sc.starts.items():
             if name != sc.ego_name and start.offset:
                 lane = sc.roads.edges[start.edge].lanes[start.index]
@@ -780,6 +798,25 @@ class StoryDriver:
         self._observe(-1.0)  # the start positions (no distance travelled)
         for hist in self.history.values():
             hist.clear()
+        self._start_overlaps()
+
+    def _start_overlaps(self) -> None:
+        """Bodies that start overlapping (the file put them there) collide at t = 0: with the
+        ego the run ends in a collision, between others it is a traffic collision event (a
+        ghost is no body: none with it)."""
+        sc = self.sc
+        ghosts = sc.model.ghosts
+        for name, p in sc.starts.items():
+            for other, along, across in p.overlaps:
+                if name in ghosts or other in ghosts:
+                    continue
+                a, b = (EGO if n == sc.ego_name else n for n in (name, other))
+                how = f"overlapping at the start ({along:.2f} m along, {across:.2f} m across their lane)"
+                if EGO in (a, b):
+                    states = self.board.states  # type: ignore[union-attr]
+                    sc._collided(Collision(a, b, how, states[name].speed, states[other].speed))
+                    return
+                sc.event("traffic", f"collision in the traffic: {a} hit {b}, {how}", "WARN")
 
     def _start_kinematic(self) -> None:
         """The cars that start turned against their lane: ego drives them (kinematic.py), from
