@@ -892,12 +892,8 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
             # no TeleportAction, a trajectory from t = 0: the entity starts at its first point
             # (the reference player puts it there at its first step)
             acts.insert(0, start)
-        if not any(isinstance(a, M.TeleportAction) for a in acts):
-            raise ScenarioFileError(
-                path,
-                b.entities[name].line,
-                f"entity {name!r} has no TeleportAction in <Init> (ego needs every entity's start position)",
-            )
+        # an entity without a TeleportAction (or trajectory) in Init has no start: it is not in
+        # the simulation until a TeleportAction places it (the ego needs one: FileScenario)
 
     stories = []
     names: dict[str, int] = {}

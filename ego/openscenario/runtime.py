@@ -283,6 +283,9 @@ class Storyboard:
         self.slots: dict[tuple[str, str], ActionRun] = {}
         self.stopped = False
         self.t = 0.0
+        #: entities not in the simulation (no start position yet): a condition on them does
+        #: not hold, an action on them but a TeleportAction (which places them) does nothing
+        self.absent: set[str] = set()
         self._fired: dict[int, bool] = {}
         self._prev: dict[str, tuple[float, float]] = {}  #: entity -> (speed, yaw) a step ago
         #: (kind, name) -> the value a ParameterAction or VariableAction gave it
@@ -303,6 +306,8 @@ class Storyboard:
             action_of(global_action).apply(self, global_action)
         runs = []
         for actor, actions in self.scenario.init_runs.items():
+            if actor in self.absent:
+                continue  # not in the simulation: its Init actions are not run
             for action in actions:
                 run = ActionRun(self, el, actor, action)
                 for domain in run.domains:
@@ -372,7 +377,13 @@ class Storyboard:
         for key, cs in self.conditions.items():
             c, kind = cs.c, cs.kind
             if c.triggering:
-                results = (kind.holds(self, c, st[name], name) for name in c.triggering)
+                absent = self.absent
+                results = (
+                    name not in absent
+                    and (c.entity is None or c.entity not in absent)
+                    and kind.holds(self, c, st[name], name)
+                    for name in c.triggering
+                )
                 raw = any(results) if c.triggering_rule == "any" else all(results)
             else:
                 raw = kind.raw(self, c, t)
@@ -512,6 +523,10 @@ class Storyboard:
     def _start_action(self, el: Element, actor: str, t: float) -> ActionRun:
         action: M.Action = el.node
         run = ActionRun(self, el, actor, action.action)
+        if actor in self.absent and not isinstance(action.action, M.TeleportAction):
+            self.log("action", f"t = {t:.2f} s: {run.kind.tag} {action.name!r} on {actor}: not in the simulation")
+            run.finished = True
+            return run
         for domain in run.domains:
             old = self.slots.get((actor, domain))
             if old is not None and not old.finished:

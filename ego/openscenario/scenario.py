@@ -170,12 +170,19 @@ def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
     """Every entity's start from its Init TeleportAction and SpeedAction."""
     out: dict[str, Placement] = {}
     centre: dict[str, tuple] = {}  # name -> (lane, centre position along it, offset)
-    pending = dict(scenario.init)
+    # an entity without a TeleportAction in Init is not in the simulation until one places it
+    pending = {n: acts for n, acts in scenario.init.items() if any(isinstance(a, M.TeleportAction) for a in acts)}
     for _ in range(len(pending) + 1):
         for name, actions in list(pending.items()):
             tp = next(a for a in actions if isinstance(a, M.TeleportAction))
             pos = tp.position
             ref = getattr(pos, "entity", None)
+            if ref is not None and ref not in pending and ref not in centre:
+                raise ScenarioFileError(
+                    scenario.path,
+                    pos.line,
+                    f"{name}'s start is relative to {ref}, which has no start (no TeleportAction in <Init>)",
+                )
             if ref is not None and ref not in centre:
                 continue  # placed after the entity it is relative to
             try:
@@ -453,6 +460,12 @@ class FileScenario(Scenario):
         roads = RoadMap(net, converted=not str(model.road).endswith(".net.xml"))
         ego = find_ego(model, config.ego_entity)
         _check_ego_actions(model, ego)
+        if not any(isinstance(a, M.TeleportAction) for a in model.init[ego]):
+            raise ScenarioFileError(
+                model.path,
+                model.entities[ego].line,
+                f"the ego {ego!r} has no TeleportAction in <Init> (ego needs the ego's start position)",
+            )
         _check_turned(model, ego)
         starts = placements(model, roads)
         edge = starts[ego].edge
@@ -709,8 +722,8 @@ class StoryDriver:
             o for p in sc.starts.values() for o, *_ in p.overlaps
         }
         for k, (name, ent) in enumerate(sc.model.entities.items()):
-            if name == sc.ego_name:
-                continue
+            if name == sc.ego_name or name not in sc.starts:
+                continue  # the ego is ego's; an entity without a start enters when placed
             v = ent.vehicle
             start = sc.starts[name]
             color = ENTITY_COLORS[(k - 1) % len(ENTITY_COLORS)]
@@ -787,13 +800,15 @@ class StoryDriver:
             np.random.default_rng([int(sc.seed), 39]),
         )
         self.board = Storyboard(sc.model, sc.ego_name, self, sc.config.sumo_step, self._story_event)
-        self._scripted = [n for n in sc.model.entities if n != sc.ego_name]
+        self._scripted = [n for n in sc.model.entities if n != sc.ego_name and n in sc.starts]
+        #: the entities not in the simulation (no start yet): a TeleportAction places them
+        self.board.absent = {n for n in sc.model.entities if n not in sc.starts}
         self._ego_end: str | None = None  #: the ego's road end, seen by the storyboard before the run ends
         #: the driving lanes of the network (off-road checks), made when a condition asks
         self._lane_polys: list[tuple[LanePolyline, float]] | None = None
         for name in self.board.watch_end:
             self._hold_at_end(name)
-        self.history = {n: [] for n in self._scripted}
+        self.history = {n: [] for n in sc.model.entities if n != sc.ego_name}
         self._ego_then = self._ego_now()
         self._observe(-1.0)  # the start positions (no distance travelled)
         for hist in self.history.values():
@@ -1123,8 +1138,42 @@ class StoryDriver:
             self._lateral_free.add(name)
         sc.bridge.change_sublane(name, d_next - st.d_front)
 
+    def _enter(self, name: str, x: float, y: float, heading: float) -> None:
+        """``name`` (no start so far) enters the simulation at (x, y) (its box centre), heading
+        ``heading``, at its Init speed (0 without one), on the nearest lane's road."""
+        sc = self.sc
+        board = self.board
+        assert board is not None
+        v = sc.model.entities[name].vehicle
+        k = list(sc.model.entities).index(name)
+        vt = sumo_type(f"xosc_{name}", v, ENTITY_COLORS[(k - 1) % len(ENTITY_COLORS)])
+        sc.world.add_type(vt)
+        self._types[name] = vt
+        lane, s, _ = sc.roads.nearest_lane(x, y)
+        speed = _init_speed(sc.model, name) or 0.0
+        ls = sc.bridge.libsumo
+        route = self._route(lane.edge)
+        front = min(s + 0.5 * v.length, lane.length)
+        ls.vehicle.add(
+            name, route, typeID=vt.id, departLane=str(lane.index), departPos=f"{front:.3f}", departSpeed=f"{speed:.3f}"
+        )
+        hx, hy = x + 0.5 * v.length * math.cos(heading), y + 0.5 * v.length * math.sin(heading)
+        ls.vehicle.moveToXY(name, lane.edge, lane.index, hx, hy, (90.0 - math.degrees(heading)) % 360.0, 2)
+        sc.bridge.keep_lane(name)
+        ls.vehicle.setSpeed(name, speed)
+        board.absent.discard(name)
+        self._scripted.append(name)
+        st = board.states[name]
+        st.x, st.y, st.yaw, st.speed = x, y, heading, speed
+        st.s, st.d = self.road_frame(x, y)
+        st.d_front = st.d
+        board.log("action", f"t = {board.t:.2f} s: {name} enters the simulation")
+
     def teleport(self, name: str, x: float, y: float, heading: float) -> None:
         sc = self.sc
+        if name in self.board.absent:  # type: ignore[union-attr]
+            self._enter(name, x, y, heading)
+            return
         sc.bridge.place(name, x, y, heading, self.board.states[name].speed, keep_route=1)
         if name in self._kin:
             self._kin.moved(name, *self.road_frame(x, y))

@@ -320,10 +320,14 @@ HAND = [
         "<LanePosition> needs attribute s",
     ),
     (
-        "no-teleport",
-        sub(BASE[BASE.index('        <Private entityRef="Lead">') : BASE.index("      </Actions>")], ""),
-        '<ScenarioObject name="Lead">',
-        "entity 'Lead' has no TeleportAction in <Init> (ego needs every entity's start position)",
+        "no-teleport-for-the-ego",
+        sub(
+            f"<PrivateAction>\n            <TeleportAction><Position>{EGO_LANE}</Position></TeleportAction>\n"
+            "          </PrivateAction>\n          ",
+            "",
+        ),
+        '<ScenarioObject name="Ego">',
+        "the ego 'Ego' has no TeleportAction in <Init> (ego needs the ego's start position)",
     ),
     (
         "element-ref",

@@ -208,3 +208,56 @@ def test_lateral_distance_within_its_constraints_ends_once_held(tmp_path):
 def test_bad_lateral_distance_actions(tmp_path, attrs, message):
     with pytest.raises(ScenarioFileError, match=message):
         load(scene(tmp_path, [event("L", "B", lateral_distance("A", attrs), trigger([sim_time(0.5)]))]))
+
+
+# -- entities without a start position ----------------------------------------------------------
+def _without_start(path, name: str) -> None:
+    text = path.read_text()
+    i = text.index(f'<Private entityRef="{name}">')
+    j = text.index("</Private>", i) + len("</Private>")
+    path.write_text(text[:i] + text[j:])
+
+
+def _teleport(s: float, lane: int = -3) -> str:
+    return (
+        f'<TeleportAction><Position><LanePosition roadId="0" laneId="{lane}" s="{s}" offset="0"/></Position>'
+        "</TeleportAction>"
+    )
+
+
+@pytest.mark.sumo
+def test_an_entity_without_a_start_enters_when_a_teleport_places_it(tmp_path):
+    """C has no TeleportAction in Init (esmini's full_e6mini.xosc vehicle7, cut-in_sumo.xosc's
+    SumoVehicles): it is not in the simulation (the standard: an entity is placed by its Init or
+    later) - a SpeedAction on it at 0.5 s does nothing, a condition on it does not hold - until a
+    TeleportAction at 1 s places it (speed 0: it has no Init speed), and from then on it is a
+    car as any."""
+    evs = [
+        event("Early", "C", speed(20), trigger([sim_time(0.5)])),
+        event("Place", "C", _teleport(300.0), trigger([sim_time(1.0)])),
+        event("Seen", "A", speed(20), trigger([entity("C", '<SpeedCondition value="-1" rule="greaterThan"/>')])),
+        event("Go", "C", speed(10), trigger([sim_time(1.5)])),
+    ]
+    path = scene(tmp_path, evs)
+    _without_start(path, "C")
+    sc = run_scene(path, 3.0)
+    texts = [e.text for e in sc.events if e.kind == "storyboard"]
+    assert "t = 0.50 s: SpeedAction 'EarlyAction' on C: not in the simulation" in texts
+    assert "t = 1.00 s: C enters the simulation" in texts
+    assert starts(sc, "Seen") == [pytest.approx(1.1)]
+    hist = sc._history["C"]
+    assert hist[0][0] == pytest.approx(1.1)  # in SUMO from the step after the teleport
+    assert all(v == pytest.approx(0.0, abs=1e-9) for t, v, _ in hist if t <= 1.5 + 1e-9)
+    assert all(v == pytest.approx(10.0, abs=1e-6) for t, v, _ in hist if t >= 1.6 - 1e-9)
+    # its box centre placed at s = 300 m, then 10 m/s from 1.6 s: at the last state (t = T)
+    T = hist[-1][0]
+    assert sc.board.states["C"].s == pytest.approx(300.0 + 10.0 * (T - 1.5), abs=1e-6)
+
+
+def test_the_ego_still_needs_a_start(tmp_path):
+    from ego.openscenario.scenario import file_listing
+
+    path = scene(tmp_path, [])
+    _without_start(path, "Ego")
+    listing = file_listing(str(path))
+    assert "the ego 'Ego' has no TeleportAction in <Init> (ego needs the ego's start position)" in listing["error"]
