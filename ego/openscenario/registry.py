@@ -136,6 +136,8 @@ class ActionKind:
     init_note: ClassVar[str] = ""  #: how the Init refusal names it ("" = not named)
     is_global: ClassVar[bool] = False  #: a GlobalAction: done once, whoever the actors
     releases: ClassVar[bool] = False  #: its stop hands the actor back to SUMO's driver
+    #: it places its actor: the one action that acts on an entity not in the simulation yet
+    places: ClassVar[bool] = False
     #: its row of the subset table ("" = documented in another element's row)
     note: ClassVar[str] = ""
     label: ClassVar[str] = ""

@@ -523,7 +523,7 @@ class Storyboard:
     def _start_action(self, el: Element, actor: str, t: float) -> ActionRun:
         action: M.Action = el.node
         run = ActionRun(self, el, actor, action.action)
-        if actor in self.absent and not isinstance(action.action, M.TeleportAction):
+        if actor in self.absent and not run.kind.places:
             self.log("action", f"t = {t:.2f} s: {run.kind.tag} {action.name!r} on {actor}: not in the simulation")
             run.finished = True
             return run
