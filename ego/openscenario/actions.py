@@ -29,8 +29,7 @@ class Teleport(ActionKind):
     tag, within, contains, model = "TeleportAction", ("PrivateAction",), ("Position",), M.TeleportAction
     in_init, init_note, places = "yes", "TeleportAction", True
     note = (
-        "not on the ego; places an entity that has no start position yet (not in the simulation until then: "
-        "see `Init`)"
+        "not on the ego; places an entity that has no start position yet (not in the simulation until then: see `Init`)"
     )
 
     def build(self, b: Any, node: Node) -> M.TeleportAction:

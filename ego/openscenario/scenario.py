@@ -911,6 +911,8 @@ class StoryDriver:
             return
         veh = sc.bridge.libsumo.vehicle
         last = veh.getRoute(name)[-1]
+        if sc.roads.edges[last].successors:
+            return  # its route ends at a junction, not at the road's end: it leaves there
         lanes = sc.roads.edges[last].lanes
         index = min(veh.getLaneIndex(name), len(lanes) - 1)
         try:
@@ -1200,7 +1202,13 @@ class StoryDriver:
             raise ScenarioFileError(
                 sc.model.path, waypoints[0].line, f"no way along the roads from {name}'s road {here!r} to its route"
             )
+        watched = name in self.board.watch_end  # type: ignore[union-attr]
+        if watched:  # its stop at the old route's end goes (it is held at the new one's)
+            for _ in ls.vehicle.getStops(name):
+                ls.vehicle.replaceStop(name, 0, "")
         ls.vehicle.setRoute(name, path + sc.roads.route_from(path[-1])[1:])
+        if watched:
+            self._hold_at_end(name)
 
     def _pose(self, name: str) -> tuple[float, float, float]:
         e = self.board.states[name]  # type: ignore[union-attr]
