@@ -1238,7 +1238,9 @@ class StoryDriver:
                 )
         else:
             scale_plant(scale)
-            sc.loop.rebind_plant()
+            rebind = getattr(sc.loop, "rebind_plant", None)  # the loop's bound step: the new model's
+            if rebind is not None:
+                rebind()
         ls = sc.bridge.libsumo
         own = self._decels
         kinds = (

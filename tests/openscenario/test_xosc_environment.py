@@ -177,3 +177,39 @@ def test_an_unknown_environment_catalog_entry_is_refused(tmp_path):
         ScenarioFileError, match=r"no entry 'summer' in catalog 'EnvironmentCatalog' \(entries: winter\)"
     ):
         load(path)
+
+
+def _stopping(tmp_path, monkeypatch, k: float) -> tuple[float, float]:
+    """The ego at 20 m/s told to stop at storyboard time 1 s on a road of friction scale ``k``
+    (its evasive manoeuvre and AEB off): its speed at 1 s and the distance to its stop."""
+    rows: list = []
+    inner = StoryDriver.before_sim_step
+
+    def spy(self):
+        inner(self)
+        e = self.board.states["Ego"]
+        rows.append((self.board.t, e.speed, e.traveled))
+
+    monkeypatch.setattr(StoryDriver, "before_sim_step", spy)
+    (tmp_path / str(k)).mkdir()
+    far = {"A": (-1, 1000.0, 25.0), "B": (-2, 1200.0, 15.0), "C": (-1, 1400.0, 15.0)}
+    path = scene(tmp_path / str(k), [event("Stop", "Ego", speed(0), trigger([sim_time(1)]))], at=far)
+    road = f'<RoadCondition frictionScaleFactor="{k}"/>'
+    path.write_text(path.read_text().replace("<Init><Actions>", "<Init><Actions>" + ENV.format(road=road)))
+    run_scene(path, 10.0, evade=False, aeb=False)
+    t0 = next(r for r in rows if r[0] >= 1.0 - 1e-9)
+    stop = next(r for r in rows if r[0] > 1.0 and r[1] < 0.05)
+    return t0[1], stop[2] - t0[2]
+
+
+@pytest.mark.sumo
+@pytest.mark.parametrize("k", [1.0, 0.5])
+def test_the_egos_braking_distance_follows_the_road_friction(tmp_path, monkeypatch, k):
+    """The ego's speed reference drops to 0 at 1 s: the controller brakes as hard as the tyres
+    carry (ABS), so from v0 it stops in v0 tau + v0^2 / (2 (0.7 k + 0.01) g), tau = 0.1 s (the
+    reference reaches the ego's loop one SUMO step later): 28.6 m (+2.0) on a dry road, 56.5 m
+    (+2.0) at k = 0.5, within 0.1 m."""
+    v0, dist = _stopping(tmp_path, monkeypatch, k)
+    g = NonlinearBicycleParams().g
+    closed = v0 * 0.1 + v0**2 / (2.0 * (0.7 * k + 0.01) * g)
+    assert dist == pytest.approx(closed, abs=0.1)
