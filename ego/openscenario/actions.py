@@ -19,7 +19,8 @@ from ego.openscenario.ego_refs import EgoGap, EgoPath, SpeedKnots, to_lane_frame
 from ego.openscenario.files import warn
 from ego.openscenario.registry import ActionKind, register
 from ego.openscenario.runtime import EPS, INF, ActionRun, Storyboard, speed_profile_knots
-from ego.openscenario.xmltree import DOCS, Node
+from ego.openscenario.xmltree import DOCS, Node, ScenarioFileError
+from ego.params import ConfigError
 
 # the builder's (``b``) readers: num, int_, bool_, str_, enum, one, entity_ref, position,
 # dynamics, scoped, vertices (ego.openscenario.loader._Builder)
@@ -295,10 +296,13 @@ class LaneChange(ActionKind):
     def start(self, run: ActionRun, t: float) -> None:
         a, b = run.action, run.board
         drv, me = b.driver, b.states[run.actor]
-        if a.target_lane is not None:
-            centre = drv.lane_centre(a.target_lane)
-        else:
-            centre = drv.lane_centre(0, b.states[a.relative_to].d, a.relative_lanes)
+        try:
+            if a.target_lane is not None:
+                centre = drv.lane_centre(a.target_lane)
+            else:
+                centre = drv.lane_centre(0, b.states[a.relative_to].d, a.relative_lanes)
+        except ConfigError as exc:  # found only when it starts (where the reference is then)
+            raise ScenarioFileError(b.scenario.path, a.line, f"at t = {t:.2f} s: {exc}") from None
         target = centre + a.target_offset
         here = drv.ego_references()[1] if run.is_ego else me.d_front
         dyn = a.dynamics
