@@ -261,3 +261,23 @@ def test_the_ego_still_needs_a_start(tmp_path):
     _without_start(path, "Ego")
     listing = file_listing(str(path))
     assert "the ego 'Ego' has no TeleportAction in <Init> (ego needs the ego's start position)" in listing["error"]
+
+
+def test_a_start_relative_to_an_entity_without_a_start_is_refused_with_its_line(tmp_path):
+    """B starts 20 m ahead of C, which has no start (not in the simulation): B has no place
+    either, which is one line at B's position."""
+    from ego.openscenario.scenario import file_listing
+
+    path = scene(tmp_path, [])
+    _without_start(path, "C")
+    rel = '<RelativeLanePosition entityRef="C" dLane="0" ds="20" offset="0"/>'
+    text = path.read_text()
+    i = text.index('<Private entityRef="B">')
+    j = text.index("</Position>", i)
+    k = text.index("<Position>", i) + len("<Position>")
+    path.write_text(text[:k] + rel + text[j:])
+    listing = file_listing(str(path))
+    line = next(n for n, ln in enumerate(path.read_text().splitlines(), 1) if "RelativeLanePosition" in ln)
+    assert listing["error"] == (
+        f"{path}:{line}: B's start is relative to C, which has no start (no TeleportAction in <Init>)"
+    )
