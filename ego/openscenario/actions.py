@@ -5,6 +5,7 @@ registers it: docs/architecture.md, "Adding an OpenSCENARIO action")."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from bisect import bisect_right
 from collections.abc import Callable
@@ -683,7 +684,7 @@ class Synchronize(ActionKind):
 
 class AssignRoute(ActionKind):
     tag, within, model = "AssignRouteAction", ("RoutingAction",), M.AssignRouteAction
-    contains = ("Route",)
+    contains = ("Route", "CatalogReference")
     parts = {"Route": ("ParameterDeclarations", "Waypoint"), "Waypoint": ("Position",)}
     domains, in_init, init_note = ("route",), "runs", "AssignRouteAction"
     label = "`AssignRouteAction` with a `Route`, `AcquirePositionAction`"
@@ -694,16 +695,32 @@ class AssignRoute(ActionKind):
         "(so the car does not stop at the last waypoint; it leaves the network where that way ends); SUMO's "
         "driver drives it (speed and lane changes as without a route); an `AcquirePositionAction` is a route to "
         "its one position; a waypoint whose road cannot be reached from the one before is refused before the "
-        "run with its line; a `Route` from a `RouteCatalog`, `RoutePosition` and `closed` routes refused; not "
+        "run with its line; a `Route` may come from a `RouteCatalog` (`CatalogReference`, its parameters "
+        "assigned; its errors named in the catalog file, an unreachable waypoint at the reference's line); "
+        "`RoutePosition` and `closed` routes refused; not "
         "on the ego (it drives its start road) nor on a car ego drives against its lane"
     )
 
     def build(self, b: Any, node: Node) -> M.AssignRouteAction:
-        route = b.one(node, "Route")
+        ref = node.child("CatalogReference")
+        if ref is not None:  # a Route of a RouteCatalog: read in its file, with its parameters
+            b.maneuver_entry = None
+            b.catalog_entry(ref, ("Route",), "")
+            file, route, values = b.maneuver_entry
+            cb = type(b)(file, values)
+            cb.entities, cb.catalog_dirs, cb.variables = b.entities, b.catalog_dirs, b.variables
+            action = self._route(cb, route, node, scoped=False)
+            # the waypoints' errors found later (unreachable roads) name the reference's line
+            points = tuple(dataclasses.replace(p, line=ref.line) for p in action.waypoints)
+            return M.AssignRouteAction(points, node.line)
+        return self._route(b, b.one(node, "Route"), node)
+
+    def _route(self, b: Any, route: Node, node: Node, scoped: bool = True) -> M.AssignRouteAction:
         if b.bool_(route, "closed", False):
             raise b.error(route, f"a closed <Route> is not supported by ego (see {DOCS})")
         outer = b.values
-        b.values = b.scoped(route)
+        if scoped:
+            b.values = b.scoped(route)
         try:
             points = []
             for wp in route.all("Waypoint"):

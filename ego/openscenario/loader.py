@@ -36,6 +36,7 @@ CATALOG_OF = {
     "Controller": "ControllerCatalog",
     "Maneuver": "ManeuverCatalog",
     "Environment": "EnvironmentCatalog",
+    "Route": "RouteCatalog",
 }
 PEDESTRIAN_CATEGORIES = ("pedestrian", "wheelchair", "animal")
 MISC_CATEGORIES = (
@@ -628,7 +629,7 @@ class _Builder:
                     values[ref] = convert(decl[ref].type, self.raw(a, "value"), f"parameter {ref!r}")
                 except ValueError as exc:
                     raise self.error(a, str(exc)) from None
-            if v.tag in ("Controller", "Maneuver", "Environment"):
+            if v.tag in ("Controller", "Maneuver", "Environment", "Route"):
                 self.maneuver_entry = (file, v, values)
                 return None
             return _Builder(file, values).body(v, name)

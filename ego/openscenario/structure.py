@@ -91,11 +91,12 @@ CATALOGS = (
     "ControllerCatalog",
     "ManeuverCatalog",
     "EnvironmentCatalog",
+    "RouteCatalog",
 )
 #: catalogs whose entries ego reads nowhere: their locations are accepted (the reference
 #: player's files declare them whether used or not), a reference to an entry is refused where
 #: it stands (the element holding it is outside the subset)
-LOCATED_ONLY = ("RouteCatalog", "TrajectoryCatalog")
+LOCATED_ONLY = ("TrajectoryCatalog",)
 declare(
     "CatalogLocations",
     contains=CATALOGS + LOCATED_ONLY,
@@ -103,12 +104,12 @@ declare(
         "`catalogName` is the file `catalogName.xosc` in a catalog directory (the reference's kind first, then "
         "the others), else the file whose `<Catalog name>` it is; entries `Vehicle`, `Pedestrian`, `MiscObject`, "
         "`Controller`, `Maneuver` (a `ManeuverGroup`'s `CatalogReference`, its errors named in the catalog file), "
-        "`Environment` (an `EnvironmentAction`'s); "
+        "`Environment` (an `EnvironmentAction`'s), `Route` (an `AssignRouteAction`'s); "
         "`ParameterAssignments` to the entry's `ParameterDeclarations` (a `parameterRef` written `$Name`, as the "
         "reference player's files do, names `Name`); the entry sees the file's parameters too; an entry of "
-        "another kind than the reference needs is one line; the locations of `RouteCatalog` "
-        "and `TrajectoryCatalog` are accepted (the reference player's files declare them, used or not) and their "
-        "entries read nowhere: an element referring to one is refused; a location without its `Directory` (the "
+        "another kind than the reference needs is one line; the location of a `TrajectoryCatalog` is accepted "
+        "(the reference player's files declare it, used or not) and its entries read nowhere: an element "
+        "referring to one is refused; a location without its `Directory` (the "
         "schema asks for one; the reference player's files write `<RouteCatalog/>`) locates nothing; a `Directory` "
         "that is a file (esmini's 0.9 examples name the catalog file itself, without extension) is that catalog "
         "when its `<Catalog name>` is the reference's. A catalog "
@@ -116,7 +117,7 @@ declare(
         "[Finding a scenario's files](#finding-a-scenarios-files))"
     ),
     label="`CatalogLocations` (`VehicleCatalog`, `PedestrianCatalog`, `MiscObjectCatalog`, `ControllerCatalog`,"
-    " `ManeuverCatalog`, `EnvironmentCatalog`), `CatalogReference`",
+    " `ManeuverCatalog`, `EnvironmentCatalog`, `RouteCatalog`), `CatalogReference`",
     also=(*CATALOGS, "CatalogReference"),
 )
 for _catalog in CATALOGS + LOCATED_ONLY:

@@ -645,6 +645,16 @@ HAND = [
         "<CatalogReference> to 'EnvironmentCatalog' but no <EnvironmentCatalog> in <CatalogLocations>",
     ),
     (
+        "route-catalog-without-location",
+        sub(
+            '        <Private entityRef="Lead">',
+            '        <Private entityRef="Lead"><PrivateAction><RoutingAction><AssignRouteAction><CatalogReference '
+            'catalogName="Routes" entryName="Straight"/></AssignRouteAction></RoutingAction></PrivateAction>',
+        ),
+        '<CatalogReference catalogName="Routes"',
+        "<CatalogReference> to 'Routes' but no <RouteCatalog> in <CatalogLocations>",
+    ),
+    (
         "end-of-road-negative-duration",
         sub(BY_TIME, ENTITY_COND.format('<EndOfRoadCondition duration="-2"/>')),
         "<EndOfRoadCondition",
