@@ -1242,6 +1242,7 @@ class Parameter(ActionKind):
 
     tag, within, model = "ParameterAction", ("GlobalAction",), M.ParameterAction
     domains, on_ego, is_global, section = (), True, True, "global"
+    init_hint = "declare the value it sets"
     contains, parts = ("SetAction", "ModifyAction"), VALUE_PARTS
     label = "`GlobalAction`/`ParameterAction`, `VariableAction` (1.2), `VariableDeclarations`, `VariableCondition`"
     also = ("VariableAction", "VariableDeclarations", "VariableCondition")
@@ -1267,6 +1268,7 @@ class Variable(ActionKind):
 
     tag, within, model = "VariableAction", ("GlobalAction",), M.ParameterAction
     domains, on_ego, is_global, section = (), True, True, "global"
+    init_hint = "declare the value it sets"
     contains, parts = ("SetAction", "ModifyAction"), VALUE_PARTS
 
     def build(self, b: Any, node: Node) -> M.ParameterAction:
@@ -1274,6 +1276,44 @@ class Variable(ActionKind):
 
     def apply(self, board: Storyboard, action: M.ParameterAction) -> None:
         board.assign(action)
+
+
+class Entity(ActionKind):
+    """A GlobalAction's EntityAction: AddEntityAction, DeleteEntityAction."""
+
+    tag, within, model = "EntityAction", ("GlobalAction",), M.EntityAction
+    contains = ("AddEntityAction", "DeleteEntityAction")
+    init_hint = "an entity's TeleportAction in Init places it; one without is not in the simulation"
+    parts = {"AddEntityAction": ("Position",), "DeleteEntityAction": ()}
+    domains, on_ego, is_global, section = (), True, True, "global"
+    label = "`GlobalAction`/`EntityAction`: `AddEntityAction`, `DeleteEntityAction`"
+    also = ("AddEntityAction", "DeleteEntityAction")
+    note = (
+        "in an `Action` (not in `Init`, where a `TeleportAction` places an entity), done at once: "
+        "`AddEntityAction` puts an entity that is not in the simulation (one without a start in `Init`, or "
+        "deleted) at its `Position`, at its Init speed (0 without one), as a `TeleportAction` on it does; an "
+        "entity already there is moved there; `DeleteEntityAction` takes it out of SUMO: the actions on it end, "
+        "conditions on it or relative to it no longer hold, until it is added again; the ego can be neither "
+        "added nor deleted (refused before the run with the action's line)"
+    )
+
+    def build(self, b: Any, node: Node) -> M.EntityAction:
+        name = b.entity_ref(node)
+        inner = b.one(node)
+        if inner.tag == "AddEntityAction":
+            return M.EntityAction(name, b.position(b.one(inner, "Position")), node.line)
+        return M.EntityAction(name, None, node.line)
+
+    def apply(self, board: Storyboard, action: M.EntityAction) -> None:
+        name = action.entity
+        if action.position is None:
+            if name not in board.absent:
+                board.log("action", f"t = {board.t:.2f} s: {name} leaves the simulation (DeleteEntityAction)")
+                board.remove(name)
+            return
+        drv = board.driver
+        x, y, h = drv.position_xy(action.position, board.states)
+        drv.teleport(name, x, y, h)
 
 
 class Environment(ActionKind):
@@ -1358,6 +1398,7 @@ for _kind in (
     FollowTrajectory,
     Parameter,
     Variable,
+    Entity,
     Environment,
     Traffic,
 ):

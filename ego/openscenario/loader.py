@@ -863,10 +863,11 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
     for ga in actions.all("GlobalAction") if actions is not None else ():
         global_action = b.global_action(ga)
         if action_of(global_action).in_init == "no":
+            hint = action_of(global_action).init_hint
             raise ScenarioFileError(
                 path,
                 ga.children[0].line,
-                f"<{ga.children[0].tag}> in <Init> is not supported by ego (declare the value it sets; see {DOCS})",
+                f"<{ga.children[0].tag}> in <Init> is not supported by ego ({hint}; see {DOCS})",
             )
         if action_of(global_action).in_init == "yes":
             init_globals.append(global_action)  # done at the storyboard's first step

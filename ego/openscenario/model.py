@@ -369,6 +369,16 @@ class SynchronizeAction:
 
 
 @dataclass(frozen=True)
+class EntityAction:
+    """A GlobalAction's EntityAction: add ``entity`` at ``position`` (AddEntityAction) or,
+    without one, delete it (DeleteEntityAction)."""
+
+    entity: str
+    position: Position | None
+    line: int = 0
+
+
+@dataclass(frozen=True)
 class VisibilityAction:
     """Whether the entity is drawn (``graphics``), seen by the other traffic's drivers
     (``traffic``) and by sensors (``sensors``)."""

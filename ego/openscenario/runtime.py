@@ -101,6 +101,9 @@ class Driver(Protocol):
     def traffic_action(self, action: M.TrafficAction) -> None:
         """Start (or stop) a traffic source, sink or swarm."""
 
+    def delete(self, name: str) -> None:
+        """Take ``name`` out of the simulation."""
+
     def visibility(self, name: str, sensors: bool) -> None:
         """Whether the ego's surround sensor sees ``name``."""
 
@@ -519,6 +522,18 @@ class Storyboard:
                 self._stop(child, transition)
         el.count = el.max_count
         el.go(COMPLETE, transition)
+
+    def remove(self, name: str) -> None:
+        """``name`` leaves the simulation (a DeleteEntityAction): the actions on it end, the
+        conditions on it no longer hold."""
+        for runs in self.running.values():
+            for run in runs:
+                if run.actor == name:
+                    run.finished = True
+        for key in [k for k in self.slots if k[0] == name]:
+            del self.slots[key]
+        self.absent.add(name)
+        self.driver.delete(name)
 
     def _start_action(self, el: Element, actor: str, t: float) -> ActionRun:
         action: M.Action = el.node

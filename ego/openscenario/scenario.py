@@ -460,6 +460,11 @@ class FileScenario(Scenario):
         roads = RoadMap(net, converted=not str(model.road).endswith(".net.xml"))
         ego = find_ego(model, config.ego_entity)
         _check_ego_actions(model, ego)
+        for x in M.walk(model.stories):
+            if isinstance(x, M.EntityAction) and x.entity == ego:
+                raise ScenarioFileError(
+                    model.path, x.line, f"an <EntityAction> on the ego {ego!r}: the ego is neither added nor deleted"
+                )
         if not any(isinstance(a, M.TeleportAction) for a in model.init[ego]):
             raise ScenarioFileError(
                 model.path,
@@ -1216,6 +1221,14 @@ class StoryDriver:
 
     def traffic_action(self, action: M.TrafficAction) -> None:
         self._traffic.start(action)
+
+    def delete(self, name: str) -> None:
+        sc = self.sc
+        sc.bridge.libsumo.vehicle.remove(name)
+        if name in self._scripted:
+            self._scripted.remove(name)
+        self._kin.cars.pop(name, None)
+        self._lateral_free.discard(name)
 
     def visibility(self, name: str, sensors: bool) -> None:
         hidden = self.sc.view.hidden

@@ -342,10 +342,9 @@ declare("TriggeringEntities", contains=("EntityRef",))
 declare("EntityCondition")  # the conditions: ego/openscenario/conditions.py
 declare("ByValueCondition")
 refuse(
-    "every other element (e.g. `EntityAction`, the other `GlobalAction`s (`InfrastructureAction`...), "
+    "every other element (e.g. the other `GlobalAction`s (`InfrastructureAction`...), "
     "`TrailerAction`, `TrafficSignals`; a `ParameterValueDistribution` runs with `ego sweep`, below)",
     (
-        "EntityAction",
         "InfrastructureAction",
         "TrailerAction",
         "TrafficSignals",

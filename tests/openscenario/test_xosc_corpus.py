@@ -655,6 +655,27 @@ HAND = [
         "<CatalogReference> to 'Routes' but no <RouteCatalog> in <CatalogLocations>",
     ),
     (
+        "entity-action-in-init",
+        sub(
+            "<Actions>\n",
+            '<Actions>\n        <GlobalAction><EntityAction entityRef="Lead"><DeleteEntityAction/></EntityAction>'
+            "</GlobalAction>\n",
+        ),
+        "<EntityAction",
+        "<EntityAction> in <Init> is not supported by ego (an entity's TeleportAction in Init places it; one "
+        f"without is not in the simulation; see {DOCS})",
+    ),
+    (
+        "add-entity-without-position",
+        sub(
+            '<Action name="LeadBrakeAction">',
+            '<Action name="Add"><GlobalAction><EntityAction entityRef="Lead"><AddEntityAction/></EntityAction>'
+            '</GlobalAction></Action><Action name="LeadBrakeAction">',
+        ),
+        "<AddEntityAction",
+        "<AddEntityAction> needs exactly one <Position> (found 0)",
+    ),
+    (
         "end-of-road-negative-duration",
         sub(BY_TIME, ENTITY_COND.format('<EndOfRoadCondition duration="-2"/>')),
         "<EndOfRoadCondition",

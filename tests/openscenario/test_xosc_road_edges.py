@@ -281,3 +281,55 @@ def test_a_start_relative_to_an_entity_without_a_start_is_refused_with_its_line(
     assert listing["error"] == (
         f"{path}:{line}: B's start is relative to C, which has no start (no TeleportAction in <Init>)"
     )
+
+
+def _global_event(name: str, actor: str, action: str, start: str) -> tuple[str, str]:
+    return actor, (
+        f'<Event name="{name}" priority="parallel" maximumExecutionCount="1"><Action name="{name}Action">'
+        f"<GlobalAction>{action}</GlobalAction></Action>{start}</Event>"
+    )
+
+
+def _entity_action(name: str, inner: str) -> str:
+    return f'<EntityAction entityRef="{name}">{inner}</EntityAction>'
+
+
+@pytest.mark.sumo
+def test_delete_and_add_entity_actions(tmp_path):
+    """C (lane -3, 400 m, 15 m/s) is deleted at 1 s: a condition on it stops holding, an action
+    on it does nothing; AddEntityAction puts it back at 2 s at s = 500 m, at its Init speed
+    (15 m/s), and it drives on from there."""
+    add = _entity_action(
+        "C",
+        '<AddEntityAction><Position><LanePosition roadId="0" laneId="-3" s="500" offset="0"/></Position>'
+        "</AddEntityAction>",
+    )
+    evs = [
+        _global_event("Delete", "A", _entity_action("C", "<DeleteEntityAction/>"), trigger([sim_time(1.0)])),
+        event("Ignored", "C", speed(5), trigger([sim_time(1.5)])),
+        _global_event("Add", "A", add, trigger([sim_time(2.0)])),
+        event("There", "B", speed(20), trigger([entity("C", '<SpeedCondition value="-1" rule="greaterThan"/>')])),
+    ]
+    sc = run_scene(scene(tmp_path, evs), 4.0)
+    texts = [e.text for e in sc.events if e.kind == "storyboard"]
+    assert "t = 1.00 s: C leaves the simulation (DeleteEntityAction)" in texts
+    assert "t = 1.50 s: SpeedAction 'IgnoredAction' on C: not in the simulation" in texts
+    assert "t = 2.00 s: C enters the simulation" in texts
+    hist = sc._history["C"]
+    assert not [t for t, *_ in hist if 1.05 < t < 2.05]  # not observed while out
+    T = hist[-1][0]
+    # placed by SUMO's step after the action (at 2.1 s it is at 500 m, as a teleport's car)
+    assert sc.board.states["C"].s == pytest.approx(500.0 + 15.0 * (T - 2.1), abs=1e-6)
+    assert starts(sc, "There") == [pytest.approx(0.0)]  # it held from the start (before the delete)
+
+
+def test_an_entity_action_on_the_ego_is_refused(tmp_path):
+    from ego.openscenario.scenario import file_listing
+
+    evs = [_global_event("Delete", "A", _entity_action("Ego", "<DeleteEntityAction/>"), trigger([sim_time(1.0)]))]
+    path = scene(tmp_path, evs)
+    listing = file_listing(str(path))
+    line = next(n for n, ln in enumerate(path.read_text().splitlines(), 1) if "<EntityAction" in ln)
+    assert (
+        listing["error"] == f"{path}:{line}: an <EntityAction> on the ego 'Ego': the ego is neither added nor deleted"
+    )
