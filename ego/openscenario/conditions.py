@@ -177,11 +177,16 @@ class StandStill(ConditionKind):
     )
 
     def build(self, b: Any, c: Node, base: Base) -> M.Condition:
-        duration = b.num(c, "duration", nonneg=True, at_most=(MAX_SECONDS, "s: a day"))
-        return M.Condition(kind=c.tag, rule="greaterOrEqual", value=duration, **base)
+        return _held_for(b, c, base)
 
     def holds(self, board: Storyboard, c: M.Condition, e: EntityState, name: str) -> bool:
         return e.still_for >= c.value - EPS  # type: ignore[operator]
+
+
+def _held_for(b: Any, c: Node, base: Base, rule: str = "greaterOrEqual") -> M.Condition:
+    """A condition on how long (``duration``, s) its entity has been in a state."""
+    duration = b.num(c, "duration", nonneg=True, at_most=(MAX_SECONDS, "s: a day"))
+    return M.Condition(kind=c.tag, rule=rule, value=duration, **base)
 
 
 class EndOfRoad(ConditionKind):
@@ -204,9 +209,8 @@ class EndOfRoad(ConditionKind):
     )
 
     def build(self, b: Any, c: Node, base: Base) -> M.Condition:
-        duration = b.num(c, "duration", nonneg=True, at_most=(MAX_SECONDS, "s: a day"))
-        rule = b.enum(c, "rule", M.RULES) if "rule" in c.attrs else "greaterOrEqual"
-        return M.Condition(kind=c.tag, rule=rule, value=duration, **base)
+        # the reference player's rule (not in the schema); without it: at least the duration
+        return _held_for(b, c, base, b.enum(c, "rule", M.RULES) if "rule" in c.attrs else "greaterOrEqual")
 
     def holds(self, board: Storyboard, c: M.Condition, e: EntityState, name: str) -> bool:
         return e.end_for >= 0.0 and compare(c.rule, e.end_for, c.value)  # type: ignore[arg-type]
