@@ -111,7 +111,9 @@ class Visibility(ActionKind):
     domains, on_ego, in_init, init_note = (), True, "runs", "VisibilityAction"
     note = (
         "done at once: `sensors` false hides the entity from the ego's surround sensor (no front or rear "
-        "object, gap or TTC from it; it still collides: the collision check is geometric) until a "
+        "object, gap or TTC from it, so no manoeuvre nor AEB for it; it still collides: SUMO's collisions and "
+        "the outline check the sensor makes for the bodies it sees, made for it, `test_xosc_road_edges.py`) "
+        "until a "
         "`VisibilityAction` with `sensors` true; on the ego it changes nothing (no other entity has a "
         "sensor); a 1.2 `SensorReferenceSet` (named sensors) is read, and the one surround sensor is meant; "
         "`graphics` is read and changes nothing (ego's recordings draw every body); `traffic` false is "

@@ -46,7 +46,7 @@ from ego.openscenario.kinematic import Kinematic
 from ego.openscenario.loader import declared_parameters, header_description, load
 from ego.openscenario.registry import action_of
 from ego.openscenario.roads import RoadMap, network_file, refine_shape
-from ego.openscenario.runtime import Storyboard
+from ego.openscenario.runtime import EntityState, Storyboard, boxes_overlap
 from ego.openscenario.traffic import TrafficActions, sumo_type
 from ego.openscenario.xmltree import DOCS, ScenarioFileError
 from ego.params import ConfigError, param
@@ -891,6 +891,10 @@ class StoryDriver:
         sc = self.sc
         if sc.status != "running":
             return
+        if sc.view.hidden:
+            self._hidden_collision()
+            if sc.status != "running":
+                return
         gone = [n for n in sc.bridge.arrived() if n in self._scripted]
         away = self._kin.beyond()
         if away is not None:
@@ -906,6 +910,25 @@ class StoryDriver:
                 self._ego_end = why  # an EndOfRoadCondition on the ego sees it first (the next step)
             else:
                 self._road_end(why)
+
+    def _hidden_collision(self) -> None:
+        """A body hidden from the surround sensor (a VisibilityAction) still collides: the
+        geometric check the sensor makes for the bodies it sees, made for these (a ghost is no
+        body: none)."""
+        sc = self.sc
+        x = sc.ego.state
+        g = sc.geometry
+        off = g.cg_to_front - 0.5 * g.length
+        ego = EntityState(
+            x[0] + off * math.cos(x[4]), x[2] + off * math.sin(x[4]), x[4], x[1], 0.0, 0.0, g.length, g.width
+        )
+        for name in sc.view.hidden:
+            if name in sc.model.ghosts or name == EGO or name not in self._scripted:
+                continue
+            bx, by, yaw, speed, length, width = sc.bridge.box(name)
+            if boxes_overlap(ego, EntityState(bx, by, yaw, speed, 0.0, 0.0, length, width)):
+                sc._collided(Collision(EGO, name, "outlines overlap (a body hidden from the sensor)", x[1], speed))
+                return
 
     def _hold_at_end(self, name: str) -> None:
         """A SUMO entity an EndOfRoadCondition watches stops at the end of its route (a SUMO

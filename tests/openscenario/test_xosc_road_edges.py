@@ -333,3 +333,15 @@ def test_an_entity_action_on_the_ego_is_refused(tmp_path):
     assert (
         listing["error"] == f"{path}:{line}: an <EntityAction> on the ego 'Ego': the ego is neither added nor deleted"
     )
+
+
+@pytest.mark.sumo
+def test_a_car_hidden_from_the_sensor_is_hit_and_the_collision_reported(tmp_path):
+    """C stands in the ego's lane 80 m ahead, hidden from the ego's sensor from the start: the
+    ego's manoeuvre and AEB never see it (no trigger), the ego drives into it, and the collision
+    is reported (a hidden body still collides)."""
+    evs = [event("Hide", "C", _visibility('sensors="false"'), trigger([sim_time(0)]))]
+    sc = run_scene(scene(tmp_path, evs, at={"C": (-3, 104.5, 0.0)}), 8.0)
+    assert sc.status == "collision", sc.status_detail
+    assert sc.status_detail.startswith("ego (20.0 m/s) hit C (0.0 m/s)"), sc.status_detail
+    assert not [e for e in sc.events if e.kind in ("trigger", "aeb")]
