@@ -376,17 +376,19 @@ class Storyboard:
         """Every condition at ``t`` through its edge and delay: a value condition as its kind
         evaluates it, an entity condition for any or all of its triggering entities (what
         each condition means is its kind's: :mod:`ego.openscenario.conditions`)."""
-        fired, st = self._fired, self.states
+        fired, st, absent = self._fired, self.states, self.absent
         for key, cs in self.conditions.items():
             c, kind = cs.c, cs.kind
             if c.triggering:
-                absent = self.absent
-                results = (
-                    name not in absent
-                    and (c.entity is None or c.entity not in absent)
-                    and kind.holds(self, c, st[name], name)
-                    for name in c.triggering
-                )
+                if absent:  # entities not in the simulation: a condition on them does not hold
+                    results = (
+                        name not in absent
+                        and (c.entity is None or c.entity not in absent)
+                        and kind.holds(self, c, st[name], name)
+                        for name in c.triggering
+                    )
+                else:
+                    results = (kind.holds(self, c, st[name], name) for name in c.triggering)
                 raw = any(results) if c.triggering_rule == "any" else all(results)
             else:
                 raw = kind.raw(self, c, t)

@@ -1021,8 +1021,10 @@ class StoryDriver:
             st.s, st.d = s, d
             st.d_front = project(bx + half * math.cos(yaw), by + half * math.sin(yaw))[1]
             history[name].append((t, st.speed, st.d_front))
-        for name in self.board.watch_end | self.board.watch_offroad:
-            self._where(name, states[name])
+        board = self.board
+        if board.watch_end or board.watch_offroad:
+            for name in board.watch_end | board.watch_offroad:
+                self._where(name, states[name])
 
     def _ego_now(self) -> tuple[float, float, float, float, float, float]:
         """The ego's world pose, speed and lane-frame position (its centre of gravity) now."""
