@@ -490,14 +490,10 @@ class FileScenario(Scenario):
             cfg, _ = apply_overrides(cfg, early, strict=False)
         model, _, ego, starts = cls.resolve(cfg)
         start = starts[ego]
-        if start.speed is None:
-            raise ScenarioFileError(
-                model.path,
-                model.entities[ego].line,
-                f"the ego {ego!r} needs a SpeedAction in <Init> (its initial speed is its reference)",
-            )
         del known
-        cfg = replace(cfg, ego_speed=float(start.speed), ego_lane=int(start.index), ego_start=float(start.front))
+        # without a SpeedAction in Init the ego starts at rest (the standard sets no speed)
+        speed = 0.0 if start.speed is None else float(start.speed)
+        cfg = replace(cfg, ego_speed=speed, ego_lane=int(start.index), ego_start=float(start.front))
         # an ego parameter the file declares by an expression of its other parameters (the ALKS
         # files' duration) follows their set values unless set itself
         types = {f.name: f.type for f in dataclasses.fields(FileConfig)}

@@ -345,3 +345,18 @@ def test_a_car_hidden_from_the_sensor_is_hit_and_the_collision_reported(tmp_path
     assert sc.status == "collision", sc.status_detail
     assert sc.status_detail.startswith("ego (20.0 m/s) hit C (0.0 m/s)"), sc.status_detail
     assert not [e for e in sc.events if e.kind in ("trigger", "aeb")]
+
+
+@pytest.mark.sumo
+def test_an_ego_without_an_init_speed_starts_at_rest(tmp_path):
+    """esmini's basic_ghost.xosc gives its ego no SpeedAction (its controller follows the
+    ghost): the ego starts at rest, 0 m/s, and stays there (its speed reference)."""
+    path = scene(tmp_path, [])
+    text = path.read_text()
+    i = text.index('<Private entityRef="Ego">')
+    j = text.index("<PrivateAction><LongitudinalAction>", i)
+    k = text.index("</PrivateAction>", j) + len("</PrivateAction>")
+    path.write_text(text[:j] + text[k:])
+    sc = run_scene(path, 2.0)
+    assert sc.config.ego_speed == 0.0
+    assert abs(sc.board.states["Ego"].speed) < 0.05 and sc.status == "completed", sc.status_detail
