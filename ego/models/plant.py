@@ -15,6 +15,7 @@ Every plant saturates its input with :meth:`ego.models.actuators.ActuatorLimits.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 import struct
@@ -26,7 +27,7 @@ from ego.models.dynamic_bicycle import DynamicBicycle
 from ego.models.geometry import VehicleGeometry
 from ego.models.lateral_error import LateralError
 from ego.models.longitudinal import Longitudinal
-from ego.models.nonlinear_bicycle import NonlinearBicycle
+from ego.models.nonlinear_bicycle import NonlinearBicycle, NonlinearBicycleParams
 from ego.native import NATIVE
 
 _PLANT_STEP: Any = NATIVE.plant_step if NATIVE is not None else None
@@ -84,6 +85,8 @@ class BicyclePlant:
         "_step",
         "_apply",
         "_kernel",
+        "substeps",
+        "_friction_base",
     )
 
     def __init__(
@@ -99,6 +102,8 @@ class BicyclePlant:
         self.geometry = geometry
         self.limits = limits if limits is not None else ActuatorLimits()
         self.dt = dt
+        self.substeps = substeps
+        self._friction_base: NonlinearBicycleParams | None = None
         self.state = tuple(state) if state is not None else tuple(model.x0)
         self.state_names = tuple(model.state_names)
         self.input_names: tuple[str, ...]
@@ -138,6 +143,29 @@ class BicyclePlant:
     def pose(self) -> tuple[float, float, float]:
         x = self.state
         return x[0], x[2], x[4]
+
+    def scale_friction(self, scale: float) -> None:
+        """The road's friction scaled by ``scale`` (an OpenSCENARIO RoadCondition's
+        ``frictionScaleFactor``) from the tyres' own: report 000's bicycle's rear friction circle
+        ``mu_max`` and the tyres' peak factor ``Dy`` (the peak friction coefficient) become
+        ``scale`` times the ones the plant was made with, and a command limit that was the
+        friction circle (ABS) follows; a later scale is again from the plant's own (not
+        compounded). Bind the step again afterwards (:meth:`bind_step`)."""
+        model = self.model
+        if not isinstance(model, NonlinearBicycle):
+            raise TypeError("only report 000's bicycle has a friction to scale")
+        base = self._friction_base or model.params
+        params = dataclasses.replace(
+            base, mu_max=base.mu_max * scale, tyre=dataclasses.replace(base.tyre, Dy=base.tyre.Dy * scale)
+        )
+        lim = self.limits
+        grip = model.params.F_max / model.params.Nw
+        if lim.max_command == grip and lim.min_command == -grip:  # ABS: the whole friction circle
+            new = params.F_max / params.Nw
+            lim = dataclasses.replace(lim, min_command=-new, max_command=new)
+        applied, lateral = self.applied, self.lateral_accel
+        BicyclePlant.__init__(self, NonlinearBicycle(params), self.geometry, self.dt, self.substeps, lim, self.state)
+        self.applied, self.lateral_accel, self._friction_base = applied, lateral, base
 
     def bind_step(self) -> Callable[[tuple[float, float]], None]:
         """:meth:`step` for a loop, bound once a run: the C kernel itself where there is one."""

@@ -5,6 +5,7 @@ registers it: docs/architecture.md, "Adding an OpenSCENARIO action")."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from bisect import bisect_right
 from collections.abc import Callable
@@ -19,7 +20,8 @@ from ego.openscenario.ego_refs import EgoGap, EgoPath, SpeedKnots, to_lane_frame
 from ego.openscenario.files import warn
 from ego.openscenario.registry import ActionKind, register
 from ego.openscenario.runtime import EPS, INF, ActionRun, Storyboard, speed_profile_knots
-from ego.openscenario.xmltree import DOCS, Node
+from ego.openscenario.xmltree import DOCS, Node, ScenarioFileError
+from ego.params import ConfigError
 
 # the builder's (``b``) readers: num, int_, bool_, str_, enum, one, entity_ref, position,
 # dynamics, scoped, vertices (ego.openscenario.loader._Builder)
@@ -27,8 +29,10 @@ from ego.openscenario.xmltree import DOCS, Node
 
 class Teleport(ActionKind):
     tag, within, contains, model = "TeleportAction", ("PrivateAction",), ("Position",), M.TeleportAction
-    in_init, init_note = "yes", "TeleportAction"
-    note = "not on the ego"
+    in_init, init_note, places = "yes", "TeleportAction", True
+    note = (
+        "not on the ego; places an entity that has no start position yet (not in the simulation until then: see `Init`)"
+    )
 
     def build(self, b: Any, node: Node) -> M.TeleportAction:
         return M.TeleportAction(b.position(b.one(node, "Position")), node.line)
@@ -99,6 +103,42 @@ class Appearance(ActionKind):
         b.enum(b.one(lsa, "LightState"), "mode", ("on", "off", "flashing"))
         b.num(lsa, "transitionTime", 0.0, nonneg=True)
         return M.AppearanceAction(node.line)
+
+
+class Visibility(ActionKind):
+    tag, within, model = "VisibilityAction", ("PrivateAction",), M.VisibilityAction
+    contains, parts = ("SensorReferenceSet",), {"SensorReferenceSet": ("SensorReference",), "SensorReference": ()}
+    domains, on_ego, in_init, init_note = (), True, "runs", "VisibilityAction"
+    note = (
+        "done at once: `sensors` false hides the entity from the ego's surround sensor (no front or rear "
+        "object, gap or TTC from it, so no manoeuvre nor AEB for it; it still collides: SUMO's collisions and "
+        "the outline check the sensor makes for the bodies it sees, made for it, `test_xosc_road_edges.py`) "
+        "until a "
+        "`VisibilityAction` with `sensors` true; on the ego it changes nothing (no other entity has a "
+        "sensor); a 1.2 `SensorReferenceSet` (named sensors) is read, and the one surround sensor is meant; "
+        "`graphics` is read and changes nothing (ego's recordings draw every body); `traffic` false is "
+        "refused in one line (SUMO's drivers always see every vehicle: their car-following cannot leave one "
+        "out). **As the reference player reads them**, an attribute left out (the schema requires all three; "
+        "esmini's `cut-in_visibility.xosc` writes only `sensors`, or `graphics` and `sensors`) is true"
+    )
+
+    def build(self, b: Any, node: Node) -> M.VisibilityAction:
+        traffic = b.bool_(node, "traffic", True)
+        if not traffic:
+            raise b.error(
+                node,
+                f'a <VisibilityAction> with traffic="false" is not supported by ego: SUMO\'s drivers see every '
+                f"vehicle (see {DOCS})",
+            )
+        refs = node.child("SensorReferenceSet")
+        for r in refs.all("SensorReference") if refs is not None else ():
+            b.str_(r, "name")
+        return M.VisibilityAction(b.bool_(node, "graphics", True), traffic, b.bool_(node, "sensors", True), node.line)
+
+    def start(self, run: ActionRun, t: float) -> None:
+        if not run.is_ego:
+            run.board.driver.visibility(run.actor, run.action.sensors)
+        run.finished = True
 
 
 class Speed(ActionKind):
@@ -259,10 +299,13 @@ class LaneChange(ActionKind):
     def start(self, run: ActionRun, t: float) -> None:
         a, b = run.action, run.board
         drv, me = b.driver, b.states[run.actor]
-        if a.target_lane is not None:
-            centre = drv.lane_centre(a.target_lane)
-        else:
-            centre = drv.lane_centre(0, b.states[a.relative_to].d, a.relative_lanes)
+        try:
+            if a.target_lane is not None:
+                centre = drv.lane_centre(a.target_lane)
+            else:
+                centre = drv.lane_centre(0, b.states[a.relative_to].d, a.relative_lanes)
+        except ConfigError as exc:  # found only when it starts (where the reference is then)
+            raise ScenarioFileError(b.scenario.path, a.line, f"at t = {t:.2f} s: {exc}") from None
         target = centre + a.target_offset
         here = drv.ego_references()[1] if run.is_ego else me.d_front
         dyn = a.dynamics
@@ -424,6 +467,80 @@ def distance_speed(
     return min(max(out, lo), hi)
 
 
+class LateralDistance(ActionKind):
+    tag, within, model = "LateralDistanceAction", ("LateralAction",), M.LateralDistanceAction
+    in_init, init_note = "runs", "LateralDistanceAction"
+    contains, parts = ("DynamicConstraints",), {"DynamicConstraints": ()}
+    domains, releases = ("lat",), True
+    note = (
+        "`distance` (left out: 0, the standard's default) across the road between the reference points (box "
+        "centres; the actor's as SUMO's sublane model moves it, its front's lateral position) or, with "
+        "`freespace`, between the boxes (half widths subtracted); `displacement` leftToReferencedEntity, "
+        "rightToReferencedEntity or any (the side the actor is on at the start; on the entity's line: left); "
+        "`coordinateSystem` read as the road's (entity, lane, road: across the ego's start lane frame); the "
+        "entity's lateral position a step ahead is taken from its last step's lateral speed; without "
+        "`DynamicConstraints` the actor is at the distance after one step and then exactly there every step "
+        "(within 1e-6, `test_xosc_road_edges.py`); with them `maxSpeed` limits its lateral speed, "
+        "`maxAcceleration` its lateral speed's growth and `maxDeceleration` its fall (it closes at the speed "
+        "from which that deceleration still stops at the distance a step later); `continuous` false ends once "
+        "held within 1 cm; not on the ego"
+    )
+
+    def build(self, b: Any, n: Node) -> M.LateralDistanceAction:
+        disp = b.enum(n, "displacement", ("leftToReferencedEntity", "rightToReferencedEntity", "any"), "any")
+        if "coordinateSystem" in n.attrs:
+            b.enum(n, "coordinateSystem", ("entity", "lane", "road", "trajectory"))
+        limits = _limits(
+            b, n, ("maxAcceleration", "max_accel"), ("maxDeceleration", "max_decel"), ("maxSpeed", "max_speed")
+        )
+        return M.LateralDistanceAction(
+            b.entity_ref(n),
+            b.num(n, "distance", 0.0, nonneg=True),
+            b.bool_(n, "freespace"),
+            b.bool_(n, "continuous"),
+            {"leftToReferencedEntity": 1, "rightToReferencedEntity": -1}.get(disp, 0),
+            line=n.line,
+            **limits,
+        )
+
+    def start(self, run: ActionRun, t: float) -> None:
+        b, a = run.board, run.action
+        me, ref = b.states[run.actor], b.states[a.entity]
+        run.v = 0.0  # the actor's lateral speed as commanded (m/s, + left)
+        run.s0 = ref.d  # the entity's lateral position a step ago
+        run.t0 = a.side or (1.0 if me.d_front >= ref.d else -1.0)
+
+    def step(self, run: ActionRun, t: float) -> None:
+        """The lateral position at t + step: the entity's there (moving on at its last step's
+        lateral speed) plus the held distance on the actor's side, reached within the
+        constraints."""
+        b, a = run.board, run.action
+        h = b.h
+        me, ref = b.states[run.actor], b.states[a.entity]
+        extra = 0.5 * (me.width + ref.width) if a.freespace else 0.0
+        ref_next = 2.0 * ref.d - run.s0
+        run.s0 = ref.d
+        err = ref_next + run.t0 * (a.distance + extra) - me.d_front
+        v = err / h
+        if math.isfinite(a.max_decel):
+            stop = a.max_decel
+            v = math.copysign(min(abs(v), -stop * h + math.sqrt((stop * h) ** 2 + 2.0 * stop * abs(err))), err)
+        if abs(v) > abs(run.v) or v * run.v < 0.0:  # speeding up sideways (or turning round)
+            grow = a.max_accel * h
+            v = min(max(v, run.v - grow), run.v + grow)
+        else:
+            fall = a.max_decel * h
+            v = min(max(v, run.v - fall), run.v + fall)
+        v = min(max(v, -a.max_speed), a.max_speed)
+        run.v = v
+        peak = a.max_speed if math.isfinite(a.max_speed) else 100.0 / h
+        b.driver.lateral(run.actor, me.d_front + v * h, peak)
+        gap = run.t0 * (me.d_front - ref.d) - extra
+        if not a.continuous and abs(gap - a.distance) < 0.01:
+            run.finished = True
+            b.driver.release(run.actor)
+
+
 def _limits(b: Any, n: Node, *names: tuple[str, str]) -> dict[str, float]:
     """The DynamicConstraints' limits given (attribute -> model field), each > 0."""
     limits: dict[str, float] = {}
@@ -569,7 +686,7 @@ class Synchronize(ActionKind):
 
 class AssignRoute(ActionKind):
     tag, within, model = "AssignRouteAction", ("RoutingAction",), M.AssignRouteAction
-    contains = ("Route",)
+    contains = ("Route", "CatalogReference")
     parts = {"Route": ("ParameterDeclarations", "Waypoint"), "Waypoint": ("Position",)}
     domains, in_init, init_note = ("route",), "runs", "AssignRouteAction"
     label = "`AssignRouteAction` with a `Route`, `AcquirePositionAction`"
@@ -580,16 +697,32 @@ class AssignRoute(ActionKind):
         "(so the car does not stop at the last waypoint; it leaves the network where that way ends); SUMO's "
         "driver drives it (speed and lane changes as without a route); an `AcquirePositionAction` is a route to "
         "its one position; a waypoint whose road cannot be reached from the one before is refused before the "
-        "run with its line; a `Route` from a `RouteCatalog`, `RoutePosition` and `closed` routes refused; not "
+        "run with its line; a `Route` may come from a `RouteCatalog` (`CatalogReference`, its parameters "
+        "assigned; its errors named in the catalog file, an unreachable waypoint at the reference's line); "
+        "`RoutePosition` and `closed` routes refused; not "
         "on the ego (it drives its start road) nor on a car ego drives against its lane"
     )
 
     def build(self, b: Any, node: Node) -> M.AssignRouteAction:
-        route = b.one(node, "Route")
+        ref = node.child("CatalogReference")
+        if ref is not None:  # a Route of a RouteCatalog: read in its file, with its parameters
+            b.maneuver_entry = None
+            b.catalog_entry(ref, ("Route",), "")
+            file, route, values = b.maneuver_entry
+            cb = type(b)(file, values)
+            cb.entities, cb.catalog_dirs, cb.variables = b.entities, b.catalog_dirs, b.variables
+            action = self._route(cb, route, node, scoped=False)
+            # the waypoints' errors found later (unreachable roads) name the reference's line
+            points = tuple(dataclasses.replace(p, line=ref.line) for p in action.waypoints)
+            return M.AssignRouteAction(points, node.line)
+        return self._route(b, b.one(node, "Route"), node)
+
+    def _route(self, b: Any, route: Node, node: Node, scoped: bool = True) -> M.AssignRouteAction:
         if b.bool_(route, "closed", False):
             raise b.error(route, f"a closed <Route> is not supported by ego (see {DOCS})")
         outer = b.values
-        b.values = b.scoped(route)
+        if scoped:
+            b.values = b.scoped(route)
         try:
             points = []
             for wp in route.all("Waypoint"):
@@ -1111,6 +1244,7 @@ class Parameter(ActionKind):
 
     tag, within, model = "ParameterAction", ("GlobalAction",), M.ParameterAction
     domains, on_ego, is_global, section = (), True, True, "global"
+    init_hint = "declare the value it sets"
     contains, parts = ("SetAction", "ModifyAction"), VALUE_PARTS
     label = "`GlobalAction`/`ParameterAction`, `VariableAction` (1.2), `VariableDeclarations`, `VariableCondition`"
     also = ("VariableAction", "VariableDeclarations", "VariableCondition")
@@ -1136,6 +1270,7 @@ class Variable(ActionKind):
 
     tag, within, model = "VariableAction", ("GlobalAction",), M.ParameterAction
     domains, on_ego, is_global, section = (), True, True, "global"
+    init_hint = "declare the value it sets"
     contains, parts = ("SetAction", "ModifyAction"), VALUE_PARTS
 
     def build(self, b: Any, node: Node) -> M.ParameterAction:
@@ -1145,10 +1280,48 @@ class Variable(ActionKind):
         board.assign(action)
 
 
-class Environment(ActionKind):
-    tag, within, model, in_init = "EnvironmentAction", ("GlobalAction",), M.EnvironmentAction, "ignored"
+class Entity(ActionKind):
+    """A GlobalAction's EntityAction: AddEntityAction, DeleteEntityAction."""
+
+    tag, within, model = "EntityAction", ("GlobalAction",), M.EntityAction
+    contains = ("AddEntityAction", "DeleteEntityAction")
+    init_hint = "an entity's TeleportAction in Init places it; one without is not in the simulation"
+    parts = {"AddEntityAction": ("Position",), "DeleteEntityAction": ()}
     domains, on_ego, is_global, section = (), True, True, "global"
-    contains = ("Environment",)
+    label = "`GlobalAction`/`EntityAction`: `AddEntityAction`, `DeleteEntityAction`"
+    also = ("AddEntityAction", "DeleteEntityAction")
+    note = (
+        "in an `Action` (not in `Init`, where a `TeleportAction` places an entity), done at once: "
+        "`AddEntityAction` puts an entity that is not in the simulation (one without a start in `Init`, or "
+        "deleted) at its `Position`, at its Init speed (0 without one), as a `TeleportAction` on it does; an "
+        "entity already there is moved there; `DeleteEntityAction` takes it out of SUMO: the actions on it end, "
+        "conditions on it or relative to it no longer hold, until it is added again; the ego can be neither "
+        "added nor deleted (refused before the run with the action's line)"
+    )
+
+    def build(self, b: Any, node: Node) -> M.EntityAction:
+        name = b.entity_ref(node)
+        inner = b.one(node)
+        if inner.tag == "AddEntityAction":
+            return M.EntityAction(name, b.position(b.one(inner, "Position")), node.line)
+        return M.EntityAction(name, None, node.line)
+
+    def apply(self, board: Storyboard, action: M.EntityAction) -> None:
+        name = action.entity
+        if action.position is None:
+            if name not in board.absent:
+                board.log("action", f"t = {board.t:.2f} s: {name} leaves the simulation (DeleteEntityAction)")
+                board.remove(name)
+            return
+        drv = board.driver
+        x, y, h = drv.position_xy(action.position, board.states)
+        drv.teleport(name, x, y, h)
+
+
+class Environment(ActionKind):
+    tag, within, model, in_init = "EnvironmentAction", ("GlobalAction",), M.EnvironmentAction, "yes"
+    domains, on_ego, is_global, section = (), True, True, "global"
+    contains = ("Environment", "CatalogReference")
     parts = {
         "Environment": ("ParameterDeclarations", "TimeOfDay", "Weather", "RoadCondition"),
         "TimeOfDay": (),
@@ -1159,20 +1332,36 @@ class Environment(ActionKind):
         "Wind": (),
         "RoadCondition": ("Properties",),
     }
-    label = "`GlobalAction`/`EnvironmentAction` (in `Init` or an `Action`)"
+    label = "`GlobalAction`/`EnvironmentAction` (in `Init` or an `Action`), `EnvironmentCatalog`"
     note = (
-        "done at once: `TimeOfDay` and `Weather` (sun, fog, precipitation, wind) change nothing in ego's dynamics "
-        "or its sensor; a `RoadCondition` must keep the friction (`frictionScaleFactor` 1): any other scale is "
-        "refused in one line (the plant's tyres have their own friction; scaling it is issue 39's open part); an "
-        "`Environment` from an `EnvironmentCatalog` is refused"
+        "done at once, inline or from an `EnvironmentCatalog` (`CatalogReference`, with `ParameterAssignments`): "
+        "`TimeOfDay` and `Weather` (sun, fog, precipitation, wind) change nothing in ego's dynamics or its sensor; "
+        "a `RoadCondition`'s `frictionScaleFactor` k (> 0) scales the road's friction from then on: the ego's "
+        "tyres (report 000's plant: the rear friction circle `mu_max` 0.7 and the tyres' peak factor `Dy` 0.7 "
+        "become 0.7 k, and with ABS the brake and drive command limit, the friction circle, with them; a full "
+        "stop from v then takes v^2 / (2 (0.7 k + f) g), f = 0.01 the rolling resistance, "
+        "`test_xosc_environment.py`), and SUMO's drivers: every SUMO vehicle's (and vehicle type's) `decel` and "
+        "`emergencyDecel` become k times their own (the file's `maxDeceleration`, ego's traffic's), so SUMO's "
+        "car-following brakes no harder than the road carries; a scripted speed change keeps the rate the file "
+        "gives it (the storyboard rules its entities). A later `RoadCondition` scales from the own values "
+        "again (not compounded). A plant without a friction (the FMU or report 002's) refuses a scale other "
+        "than 1 in one line"
     )
 
     def build(self, b: Any, env_action: Node) -> M.EnvironmentAction:
-        """Checked (every attribute resolves; a RoadCondition must keep the friction:
-        frictionScaleFactor 1); it changes nothing."""
-        env = b.one(env_action, "Environment")
+        """Checked (every attribute resolves); a RoadCondition's friction scale kept."""
+        ref = env_action.child("CatalogReference")
+        if ref is not None:
+            b.maneuver_entry = None
+            b.catalog_entry(ref, ("Environment",), "")
+            file, env, values = b.maneuver_entry
+            b = type(b)(file, values)  # the entry's parameters with the reference's assignments
+        else:
+            env = b.one(env_action, "Environment")
         outer = b.values
-        b.values = b.scoped(env)
+        if ref is None:
+            b.values = b.scoped(env)
+        friction = None
         try:
             stack = [env]
             while stack:
@@ -1182,16 +1371,15 @@ class Environment(ActionKind):
                 stack.extend(c for c in n.children if c.tag != "ParameterDeclarations")
             rc = env.child("RoadCondition")
             if rc is not None:
-                f = b.num(rc, "frictionScaleFactor", nonneg=True)
-                if f != 1.0:
-                    raise b.error(
-                        rc,
-                        f"a RoadCondition frictionScaleFactor of {f:g} is not supported by ego: the tyres' friction"
-                        f" is the plant's own (1, no change, is accepted; see {DOCS})",
-                    )
+                friction = b.num(rc, "frictionScaleFactor", positive=True)
         finally:
             b.values = outer
-        return M.EnvironmentAction(env_action.line)
+        return M.EnvironmentAction(env_action.line, friction)
+
+    def apply(self, board: Storyboard, action: M.EnvironmentAction) -> None:
+        if action.friction is not None:
+            board.driver.friction(action.friction)
+            board.log("action", f"t = {board.t:.2f} s: road friction scaled by {action.friction:g}")
 
 
 for _kind in (
@@ -1199,10 +1387,12 @@ for _kind in (
     Controller,
     ActivateController,
     Appearance,
+    Visibility,
     Speed,
     LaneChange,
     LaneOffset,
     LongitudinalDistance,
+    LateralDistance,
     SpeedProfile,
     Synchronize,
     AssignRoute,
@@ -1210,6 +1400,7 @@ for _kind in (
     FollowTrajectory,
     Parameter,
     Variable,
+    Entity,
     Environment,
     Traffic,
 ):

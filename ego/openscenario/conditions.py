@@ -177,11 +177,50 @@ class StandStill(ConditionKind):
     )
 
     def build(self, b: Any, c: Node, base: Base) -> M.Condition:
-        duration = b.num(c, "duration", nonneg=True, at_most=(MAX_SECONDS, "s: a day"))
-        return M.Condition(kind=c.tag, rule="greaterOrEqual", value=duration, **base)
+        return _held_for(b, c, base)
 
     def holds(self, board: Storyboard, c: M.Condition, e: EntityState, name: str) -> bool:
         return e.still_for >= c.value - EPS  # type: ignore[operator]
+
+
+def _held_for(b: Any, c: Node, base: Base, rule: str = "greaterOrEqual") -> M.Condition:
+    """A condition on how long (``duration``, s) its entity has been in a state."""
+    duration = b.num(c, "duration", nonneg=True, at_most=(MAX_SECONDS, "s: a day"))
+    return M.Condition(kind=c.tag, rule=rule, value=duration, **base)
+
+
+class EndOfRoad(ConditionKind):
+    tag = "EndOfRoadCondition"
+    label = "`EndOfRoadCondition`, `OffroadCondition`"
+    also = ("OffroadCondition",)
+    note = (
+        "held for `duration` (counted from the first storyboard step at which the entity was seen there, as "
+        "`StandStillCondition`); **as the reference player writes it**, an optional `rule` (not in the schema) "
+        "compares that time with `duration` (`greaterThan` 2.5: more than 2.5 s), without one it is at least "
+        "`duration`. At the end of the road: a SUMO entity's front at the end of its route's last road when "
+        "that road has no successor (a dead end; a route that ends at a junction is left there, as before); an "
+        "entity such a condition watches stops there (a SUMO stop at the route's end, braking at its "
+        "`maxDeceleration`, so it stands at the end, as the reference player's entities stop at a road's end) "
+        "instead of leaving the network; the ego: its front at the end of its start road, where its run "
+        "ends - the run ends one storyboard step later, so a condition on the ego with `duration` 0 fires "
+        "(and its event starts) first; a longer `duration` on the ego cannot hold (the ego does not stop at "
+        "the road's end). Off road: the entity's box centre outside every driving lane of the network (more "
+        "than half a lane width from the nearest lane's centre line)"
+    )
+
+    def build(self, b: Any, c: Node, base: Base) -> M.Condition:
+        # the reference player's rule (not in the schema); without it: at least the duration
+        return _held_for(b, c, base, b.enum(c, "rule", M.RULES) if "rule" in c.attrs else "greaterOrEqual")
+
+    def holds(self, board: Storyboard, c: M.Condition, e: EntityState, name: str) -> bool:
+        return e.end_for >= 0.0 and compare(c.rule, e.end_for, c.value)  # type: ignore[arg-type]
+
+
+class Offroad(EndOfRoad):
+    tag, label, also, note = "OffroadCondition", "", (), ""
+
+    def holds(self, board: Storyboard, c: M.Condition, e: EntityState, name: str) -> bool:
+        return e.offroad_for >= 0.0 and compare(c.rule, e.offroad_for, c.value)  # type: ignore[arg-type]
 
 
 class Acceleration(ConditionKind):
@@ -340,6 +379,8 @@ for _kind in (
     TraveledDistance,
     Collision,
     StandStill,
+    EndOfRoad,
+    Offroad,
     Acceleration,
     TimeHeadway,
     TimeToCollision,

@@ -35,6 +35,8 @@ CATALOG_OF = {
     "MiscObject": "MiscObjectCatalog",
     "Controller": "ControllerCatalog",
     "Maneuver": "ManeuverCatalog",
+    "Environment": "EnvironmentCatalog",
+    "Route": "RouteCatalog",
 }
 PEDESTRIAN_CATEGORIES = ("pedestrian", "wheelchair", "animal")
 MISC_CATEGORIES = (
@@ -627,23 +629,31 @@ class _Builder:
                     values[ref] = convert(decl[ref].type, self.raw(a, "value"), f"parameter {ref!r}")
                 except ValueError as exc:
                     raise self.error(a, str(exc)) from None
-            if v.tag == "Controller":
-                return None
-            if v.tag == "Maneuver":
+            if v.tag in ("Controller", "Maneuver", "Environment", "Route"):
                 self.maneuver_entry = (file, v, values)
                 return None
             return _Builder(file, values).body(v, name)
         names = [v.attrs.get("name", "?") for v in cat.children]
         raise self.error(node, f"no entry {entry!r} in catalog {catalog!r} (entries: {', '.join(names)})")
 
-    def controller(self, node: Node) -> None:
+    def controller(self, node: Node) -> dict[str, str]:
         """An ObjectController or AssignControllerAction: its controller (inline or from a
-        catalog) is checked; ego drives the ego with ``-c``'s controller, SUMO the others."""
+        catalog) is checked; ego drives the ego with ``-c``'s controller, SUMO the others.
+        Returns the controller's properties (name -> value, resolved) and its ``name`` as
+        ``"<name>"``."""
         c = self.one(node)
         if c.tag == "CatalogReference":
+            self.maneuver_entry = None
             self.catalog_entry(c, ("Controller",), "")
+            file, c, values = self.maneuver_entry  # type: ignore[misc]
+            b = _Builder(file, values)
         else:
-            self.str_(c, "name")
+            b = self
+        props = {"<name>": b.str_(c, "name")}
+        ps = c.child("Properties")
+        for p in ps.all("Property") if ps is not None else ():
+            props[b.str_(p, "name")] = b.str_(p, "value")
+        return props
 
     # -- positions ------------------------------------------------------------------------------
     def position(self, node: Node) -> M.Position:
@@ -822,6 +832,7 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
     road = resolved(found, "road file")
 
     ents = root.child("Entities")
+    ghosts: set[str] = set()
     for so in ents.all("ScenarioObject") if ents is not None else ():
         name = b.str_(so, "name")
         if name in b.entities:
@@ -830,7 +841,13 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
         if len(kids) != 1:
             raise b.error(so, f"<ScenarioObject> needs exactly one child element (found {len(kids)})")
         for oc in so.all("ObjectController"):
-            b.controller(oc)
+            props = b.controller(oc)
+            # a ghost (the reference player's): the entity a FollowGhost controller follows
+            # (its "ghost" property), or one driven by a ghost controller
+            if "ghost" in props:
+                ghosts.add(props["ghost"])
+            if "GhostController" in (props.get("esminiController"), props["<name>"]):
+                ghosts.add(name)
         b.entities[name] = M.Entity(name, b.body(kids[0], name), so.line)
     if not b.entities:
         raise ScenarioFileError(path, (ents or root).line, "the scenario needs at least one entity")
@@ -846,10 +863,11 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
     for ga in actions.all("GlobalAction") if actions is not None else ():
         global_action = b.global_action(ga)
         if action_of(global_action).in_init == "no":
+            hint = action_of(global_action).init_hint
             raise ScenarioFileError(
                 path,
                 ga.children[0].line,
-                f"<{ga.children[0].tag}> in <Init> is not supported by ego (declare the value it sets; see {DOCS})",
+                f"<{ga.children[0].tag}> in <Init> is not supported by ego ({hint}; see {DOCS})",
             )
         if action_of(global_action).in_init == "yes":
             init_globals.append(global_action)  # done at the storyboard's first step
@@ -876,12 +894,8 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
             # no TeleportAction, a trajectory from t = 0: the entity starts at its first point
             # (the reference player puts it there at its first step)
             acts.insert(0, start)
-        if not any(isinstance(a, M.TeleportAction) for a in acts):
-            raise ScenarioFileError(
-                path,
-                b.entities[name].line,
-                f"entity {name!r} has no TeleportAction in <Init> (ego needs every entity's start position)",
-            )
+        # an entity without a TeleportAction (or trajectory) in Init has no start: it is not in
+        # the simulation until a TeleportAction places it (the ego needs one: FileScenario)
 
     stories = []
     names: dict[str, int] = {}
@@ -946,6 +960,7 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
         stop,
         init_runs=init_runs,
         init_globals=tuple(init_globals),
+        ghosts=frozenset(g for g in ghosts if g in b.entities),
     )
     _check_refs(scenario, names)
     return scenario

@@ -308,6 +308,24 @@ class LongitudinalDistanceAction:
 
 
 @dataclass(frozen=True)
+class LateralDistanceAction:
+    """Hold a lateral distance (m, across the road) to ``entity``: ``side`` +1 left of it, -1
+    right of it, 0 the side the actor is on at the start; ``freespace`` between the boxes,
+    else between the reference points; limits on the lateral acceleration, deceleration (m/s^2)
+    and speed (m/s)."""
+
+    entity: str
+    distance: float
+    freespace: bool
+    continuous: bool
+    side: int = 0
+    max_accel: float = math.inf
+    max_decel: float = math.inf
+    max_speed: float = math.inf
+    line: int = 0
+
+
+@dataclass(frozen=True)
 class ControllerAction:
     """Activate (or assign) a controller: the ego keeps ego's controller (``-c``), the others
     SUMO's driver or their script; accepted and done at once."""
@@ -351,11 +369,34 @@ class SynchronizeAction:
 
 
 @dataclass(frozen=True)
+class EntityAction:
+    """A GlobalAction's EntityAction: add ``entity`` at ``position`` (AddEntityAction) or,
+    without one, delete it (DeleteEntityAction)."""
+
+    entity: str
+    position: Position | None
+    line: int = 0
+
+
+@dataclass(frozen=True)
+class VisibilityAction:
+    """Whether the entity is drawn (``graphics``), seen by the other traffic's drivers
+    (``traffic``) and by sensors (``sensors``)."""
+
+    graphics: bool
+    traffic: bool
+    sensors: bool
+    line: int = 0
+
+
+@dataclass(frozen=True)
 class EnvironmentAction:
-    """A GlobalAction's EnvironmentAction (time of day, weather, a road condition of friction
-    scale 1): nothing in ego's dynamics depends on it; accepted and done at once."""
+    """A GlobalAction's EnvironmentAction (inline or from an EnvironmentCatalog): a
+    RoadCondition's ``frictionScaleFactor`` scales the road's friction (None: none given);
+    time of day and weather change nothing in ego's dynamics."""
 
     line: int = 0
+    friction: float | None = None
 
 
 @dataclass(frozen=True)
@@ -494,6 +535,9 @@ class Scenario:
     init_runs: dict[str, list[PrivateAction]] = field(default_factory=dict)
     #: GlobalActions of the Init done at the storyboard's first step (traffic actions)
     init_globals: tuple[object, ...] = ()
+    #: ghosts: entities that are no physical body (a FollowGhost controller's ``ghost``, or
+    #: an entity with a ghost controller, as the reference player has them)
+    ghosts: frozenset[str] = frozenset()
 
 
 def qualified_names(path: tuple[str, ...]) -> list[str]:

@@ -134,8 +134,11 @@ class ActionKind:
     #: the standard runs a non-instantaneous Init action: 8.5.1.2), or "ignored" (checked, not used)
     in_init: ClassVar[str] = "no"
     init_note: ClassVar[str] = ""  #: how the Init refusal names it ("" = not named)
+    init_hint: ClassVar[str] = ""  #: what to write instead, where it is refused in Init
     is_global: ClassVar[bool] = False  #: a GlobalAction: done once, whoever the actors
     releases: ClassVar[bool] = False  #: its stop hands the actor back to SUMO's driver
+    #: it places its actor: the one action that acts on an entity not in the simulation yet
+    places: ClassVar[bool] = False
     #: its row of the subset table ("" = documented in another element's row)
     note: ClassVar[str] = ""
     label: ClassVar[str] = ""

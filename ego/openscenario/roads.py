@@ -526,12 +526,15 @@ class RoadMap:
                 if len(ln.shape) < 2:
                     continue
                 s, d, _ = LanePolyline(ln.shape, ln.width, ln.id).project(x, y)
+                # the distance to the lane's centre line itself, not to its extension beyond
+                # an end (a point past the end of a road is nearer the road that goes on)
+                dist = math.hypot(max(-s, s - ln.length, 0.0), d)
                 s = min(max(s, 0.0), ln.length)
-                if best is None or abs(d) < abs(best[2]):
-                    best = (ln, s, d)
+                if best is None or dist < best[3]:
+                    best = (ln, s, d, dist)
         if best is None:
             raise ValueError("the road has no lanes")
-        return best
+        return best[0], best[1], best[2]
 
 
 def curvature_error(shape, analytic) -> float:

@@ -54,6 +54,13 @@ class EntityState:
     accel: float = 0.0
     lat_accel: float = 0.0
     still_for: float = 0.0
+    #: whether the entity is at the end of its road (no successor to drive on) and off every
+    #: road's lanes now (the driver says so for the entities an EndOfRoadCondition or an
+    #: OffroadCondition watches), and for how long (s) it has been, up to now
+    at_end: bool = False
+    offroad: bool = False
+    end_for: float = -1.0
+    offroad_for: float = -1.0
 
 
 class Driver(Protocol):
@@ -93,6 +100,16 @@ class Driver(Protocol):
 
     def traffic_action(self, action: M.TrafficAction) -> None:
         """Start (or stop) a traffic source, sink or swarm."""
+
+    def delete(self, name: str) -> None:
+        """Take ``name`` out of the simulation."""
+
+    def visibility(self, name: str, sensors: bool) -> None:
+        """Whether the ego's surround sensor sees ``name``."""
+
+    def friction(self, scale: float) -> None:
+        """The road's friction scaled by ``scale`` (a RoadCondition): the ego's tyres and
+        SUMO's drivers' deceleration limits."""
 
     def ego_references(self) -> tuple[float, float]:
         """The ego's speed reference (m/s) and lateral reference (d, m) now."""
@@ -255,12 +272,23 @@ class Storyboard:
             self.stories.append(story)
         for cond in self._all_conditions():
             self.conditions[id(cond)] = ConditionState(cond)
+        #: the entities an EndOfRoadCondition / an OffroadCondition watches (the driver tells
+        #: the storyboard where they are: ``EntityState.at_end`` and ``offroad``)
+        self.watch_end = {
+            n for c in self.conditions.values() if c.c.kind == "EndOfRoadCondition" for n in c.c.triggering
+        }
+        self.watch_offroad = {
+            n for c in self.conditions.values() if c.c.kind == "OffroadCondition" for n in c.c.triggering
+        }
         #: running actions: element -> (the actor, the action runner)
         self.running: dict[int, list[ActionRun]] = {}
         #: per entity and domain ("long", "lat"): the action run controlling it
         self.slots: dict[tuple[str, str], ActionRun] = {}
         self.stopped = False
         self.t = 0.0
+        #: entities not in the simulation (no start position yet): a condition on them does
+        #: not hold, an action on them but a TeleportAction (which places them) does nothing
+        self.absent: set[str] = set()
         self._fired: dict[int, bool] = {}
         self._prev: dict[str, tuple[float, float]] = {}  #: entity -> (speed, yaw) a step ago
         #: (kind, name) -> the value a ParameterAction or VariableAction gave it
@@ -281,6 +309,8 @@ class Storyboard:
             action_of(global_action).apply(self, global_action)
         runs = []
         for actor, actions in self.scenario.init_runs.items():
+            if actor in self.absent:
+                continue  # not in the simulation: its Init actions are not run
             for action in actions:
                 run = ActionRun(self, el, actor, action)
                 for domain in run.domains:
@@ -336,17 +366,29 @@ class Storyboard:
                 dyaw = math.atan2(math.sin(e.yaw - yaw0), math.cos(e.yaw - yaw0))
                 e.lat_accel = 0.5 * (e.speed + v0) * dyaw / dt
                 e.still_for = e.still_for + dt if (e.speed < STILL and v0 < STILL) else 0.0
+            # time at the end of the road and off road: from the first step seen there (-1: not)
+            step = max(dt, 0.0)
+            e.end_for = (e.end_for + step if e.end_for >= 0.0 else 0.0) if e.at_end else -1.0
+            e.offroad_for = (e.offroad_for + step if e.offroad_for >= 0.0 else 0.0) if e.offroad else -1.0
             prev[name] = (e.speed, e.yaw)
 
     def _evaluate(self, t: float) -> None:
         """Every condition at ``t`` through its edge and delay: a value condition as its kind
         evaluates it, an entity condition for any or all of its triggering entities (what
         each condition means is its kind's: :mod:`ego.openscenario.conditions`)."""
-        fired, st = self._fired, self.states
+        fired, st, absent = self._fired, self.states, self.absent
         for key, cs in self.conditions.items():
             c, kind = cs.c, cs.kind
             if c.triggering:
-                results = (kind.holds(self, c, st[name], name) for name in c.triggering)
+                if absent:  # entities not in the simulation: a condition on them does not hold
+                    results = (
+                        name not in absent
+                        and (c.entity is None or c.entity not in absent)
+                        and kind.holds(self, c, st[name], name)
+                        for name in c.triggering
+                    )
+                else:
+                    results = (kind.holds(self, c, st[name], name) for name in c.triggering)
                 raw = any(results) if c.triggering_rule == "any" else all(results)
             else:
                 raw = kind.raw(self, c, t)
@@ -483,9 +525,25 @@ class Storyboard:
         el.count = el.max_count
         el.go(COMPLETE, transition)
 
+    def remove(self, name: str) -> None:
+        """``name`` leaves the simulation (a DeleteEntityAction): the actions on it end, the
+        conditions on it no longer hold."""
+        for runs in self.running.values():
+            for run in runs:
+                if run.actor == name:
+                    run.finished = True
+        for key in [k for k in self.slots if k[0] == name]:
+            del self.slots[key]
+        self.absent.add(name)
+        self.driver.delete(name)
+
     def _start_action(self, el: Element, actor: str, t: float) -> ActionRun:
         action: M.Action = el.node
         run = ActionRun(self, el, actor, action.action)
+        if actor in self.absent and not run.kind.places:
+            self.log("action", f"t = {t:.2f} s: {run.kind.tag} {action.name!r} on {actor}: not in the simulation")
+            run.finished = True
+            return run
         for domain in run.domains:
             old = self.slots.get((actor, domain))
             if old is not None and not old.finished:

@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from ego.lane_frame import LanePolyline
+from ego.models.nonlinear_bicycle import NonlinearBicycle
 from ego.openscenario import model as M
 from ego.openscenario.actions import along_path, trajectory_points
 from ego.openscenario.dynamics import Transition
@@ -45,7 +46,7 @@ from ego.openscenario.kinematic import Kinematic
 from ego.openscenario.loader import declared_parameters, header_description, load
 from ego.openscenario.registry import action_of
 from ego.openscenario.roads import RoadMap, network_file, refine_shape
-from ego.openscenario.runtime import Storyboard
+from ego.openscenario.runtime import EntityState, Storyboard, boxes_overlap
 from ego.openscenario.traffic import TrafficActions, sumo_type
 from ego.openscenario.xmltree import DOCS, ScenarioFileError
 from ego.params import ConfigError, param
@@ -57,7 +58,7 @@ from ego.scenarios.manoeuvre import CRUISE, EvasiveManoeuvre
 from ego.scenarios.motorway import COLUMNS, EGO, PLOTS
 from ego.sim.protocol import TrafficSim
 from ego.sim.registry import SimSetup, make_sim
-from ego.sim.types import VehicleSpec, VehicleType
+from ego.sim.types import Collision, VehicleSpec, VehicleType
 
 ENTITY_COLORS = ((255, 150, 0), (0, 170, 255), (160, 60, 220), (40, 180, 90), (230, 200, 0))
 
@@ -161,18 +162,27 @@ class Placement:
     front: float
     offset: float
     speed: float | None
+    #: the entities placed before it whose bodies it overlaps: (name, m along, m across)
+    overlaps: tuple[tuple[str, float, float], ...] = ()
 
 
 def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
     """Every entity's start from its Init TeleportAction and SpeedAction."""
     out: dict[str, Placement] = {}
     centre: dict[str, tuple] = {}  # name -> (lane, centre position along it, offset)
-    pending = dict(scenario.init)
+    # an entity without a TeleportAction in Init is not in the simulation until one places it
+    pending = {n: acts for n, acts in scenario.init.items() if any(isinstance(a, M.TeleportAction) for a in acts)}
     for _ in range(len(pending) + 1):
         for name, actions in list(pending.items()):
             tp = next(a for a in actions if isinstance(a, M.TeleportAction))
             pos = tp.position
             ref = getattr(pos, "entity", None)
+            if ref is not None and ref not in pending and ref not in centre:
+                raise ScenarioFileError(
+                    scenario.path,
+                    pos.line,
+                    f"{name}'s start is relative to {ref}, which has no start (no TeleportAction in <Init>)",
+                )
             if ref is not None and ref not in centre:
                 continue  # placed after the entity it is relative to
             try:
@@ -193,8 +203,8 @@ def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
                     f"{name} starts beyond its road: its front at {front:.1f} m along a lane "
                     f"{lane.length:.1f} m long (SUMO lane {lane.id})",
                 )
-            _check_overlap(scenario, name, pos.line, lane, front, off, centre, out)
-            out[name] = Placement(lane.edge, lane.index, front, off, speed)
+            overlaps = _overlaps(scenario, name, lane, front, off, centre, out)
+            out[name] = Placement(lane.edge, lane.index, front, off, speed, overlaps)
             del pending[name]
         if not pending:
             break
@@ -208,13 +218,15 @@ def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
     return out
 
 
-def _check_overlap(
-    scenario: M.Scenario, name: str, line: int, lane, front: float, off: float, centre: dict, out: dict
-) -> None:
-    """``name`` starting with its front at ``front`` on ``lane`` does not overlap an entity
-    placed before it: two bodies in one place are a file error (SUMO would refuse the second,
-    and only at run time)."""
+def _overlaps(
+    scenario: M.Scenario, name: str, lane, front: float, off: float, centre: dict, out: dict
+) -> tuple[tuple[str, float, float], ...]:
+    """The entities placed before ``name`` (its front at ``front`` on ``lane``, ``off`` across)
+    whose bodies it overlaps at the start: (other, m along, m across their lane). The standard
+    has no rule against two bodies starting in one place (the reference player places them);
+    the run reports the collision at t = 0 (a ghost's overlaps are none: it is no body)."""
     v = scenario.entities[name].vehicle
+    found = []
     for other, p in out.items():
         if centre[other][0].id != lane.id:
             continue
@@ -222,12 +234,8 @@ def _check_overlap(
         along = min(front, p.front) - max(front - v.length, p.front - w.length)
         across = 0.5 * (v.width + w.width) - abs(off - p.offset)
         if along > 1e-6 and across > 1e-6:
-            raise ScenarioFileError(
-                scenario.path,
-                line,
-                f"{name} starts overlapping {other} ({along:.2f} m along and {across:.2f} m across their lane "
-                f"{lane.id}): two bodies cannot start in one place",
-            )
+            found.append((other, along, across))
+    return tuple(found)
 
 
 def stop_time(model: M.Scenario) -> float | None:
@@ -452,6 +460,17 @@ class FileScenario(Scenario):
         roads = RoadMap(net, converted=not str(model.road).endswith(".net.xml"))
         ego = find_ego(model, config.ego_entity)
         _check_ego_actions(model, ego)
+        for x in M.walk(model.stories):
+            if isinstance(x, M.EntityAction) and x.entity == ego:
+                raise ScenarioFileError(
+                    model.path, x.line, f"an <EntityAction> on the ego {ego!r}: the ego is neither added nor deleted"
+                )
+        if not any(isinstance(a, M.TeleportAction) for a in model.init[ego]):
+            raise ScenarioFileError(
+                model.path,
+                model.entities[ego].line,
+                f"the ego {ego!r} has no TeleportAction in <Init> (ego needs the ego's start position)",
+            )
         _check_turned(model, ego)
         starts = placements(model, roads)
         edge = starts[ego].edge
@@ -471,14 +490,10 @@ class FileScenario(Scenario):
             cfg, _ = apply_overrides(cfg, early, strict=False)
         model, _, ego, starts = cls.resolve(cfg)
         start = starts[ego]
-        if start.speed is None:
-            raise ScenarioFileError(
-                model.path,
-                model.entities[ego].line,
-                f"the ego {ego!r} needs a SpeedAction in <Init> (its initial speed is its reference)",
-            )
         del known
-        cfg = replace(cfg, ego_speed=float(start.speed), ego_lane=int(start.index), ego_start=float(start.front))
+        # without a SpeedAction in Init the ego starts at rest (the standard sets no speed)
+        speed = 0.0 if start.speed is None else float(start.speed)
+        cfg = replace(cfg, ego_speed=speed, ego_lane=int(start.index), ego_start=float(start.front))
         # an ego parameter the file declares by an expression of its other parameters (the ALKS
         # files' duration) follows their set values unless set itself
         types = {f.name: f.type for f in dataclasses.fields(FileConfig)}
@@ -693,9 +708,23 @@ class StoryDriver:
         self._lateral_free: set[str] = set()
         self._routes: set[str] = set()
         self._types: dict[str, VehicleType] = {}
+        #: (a vehicle?, id) -> its own decel and emergencyDecel (m/s^2), before a friction scale
+        self._decels: dict[tuple[bool, str], tuple[float, float]] = {}
+        self.friction_scale = 1.0
+        # every entity seen until a VisibilityAction hides it, but a ghost (no body: not seen,
+        # no collision)
+        ghosts = {EGO if g == sc.ego_name else g for g in sc.model.ghosts}
+        sc.view.hidden.clear()
+        sc.view.hidden.update(ghosts)
+        world.sim.ghosts.update(ghosts)
+        # the entities starting overlapping another body (a ghost too) are inserted where
+        # they are, after the others (SUMO's insertion check would refuse them)
+        involved = {n for n, p in sc.starts.items() if p.overlaps} | {
+            o for p in sc.starts.values() for o, *_ in p.overlaps
+        }
         for k, (name, ent) in enumerate(sc.model.entities.items()):
-            if name == sc.ego_name:
-                continue
+            if name == sc.ego_name or name not in sc.starts:
+                continue  # the ego is ego's; an entity without a start enters when placed
             v = ent.vehicle
             start = sc.starts[name]
             color = ENTITY_COLORS[(k - 1) % len(ENTITY_COLORS)]
@@ -707,7 +736,15 @@ class StoryDriver:
             own = start.speed if v.kind == "vehicle" else (start.speed or 0.0)
             speed = max(c.ego_speed, own if own is not None else 0.0) if v.kind == "vehicle" else own
             world.vehicle(
-                VehicleSpec(name, vt.id, self._route(start.edge), start.index, self._insert_at(name), speed),
+                VehicleSpec(
+                    name,
+                    vt.id,
+                    self._route(start.edge),
+                    start.index,
+                    start.front if name in involved else self._insert_at(name),
+                    (own or 0.0) if name in involved else speed,
+                    overlapping=name in involved,
+                ),
                 vt,
                 ScriptedEntity(name, own),
             )
@@ -764,12 +801,38 @@ class StoryDriver:
             np.random.default_rng([int(sc.seed), 39]),
         )
         self.board = Storyboard(sc.model, sc.ego_name, self, sc.config.sumo_step, self._story_event)
-        self._scripted = [n for n in sc.model.entities if n != sc.ego_name]
-        self.history = {n: [] for n in self._scripted}
+        self._scripted = [n for n in sc.model.entities if n != sc.ego_name and n in sc.starts]
+        #: the entities not in the simulation (no start yet): a TeleportAction places them
+        self.board.absent = {n for n in sc.model.entities if n not in sc.starts}
+        self._ego_end: str | None = None  #: the ego's road end, seen by the storyboard before the run ends
+        #: the driving lanes of the network (off-road checks), made when a condition asks
+        self._lane_polys: list[tuple[LanePolyline, float]] | None = None
+        for name in self.board.watch_end:
+            self._hold_at_end(name)
+        self.history = {n: [] for n in sc.model.entities if n != sc.ego_name}
         self._ego_then = self._ego_now()
         self._observe(-1.0)  # the start positions (no distance travelled)
         for hist in self.history.values():
             hist.clear()
+        self._start_overlaps()
+
+    def _start_overlaps(self) -> None:
+        """Bodies that start overlapping (the file put them there) collide at t = 0: with the
+        ego the run ends in a collision, between others it is a traffic collision event (a
+        ghost is no body: none with it)."""
+        sc = self.sc
+        ghosts = sc.model.ghosts
+        for name, p in sc.starts.items():
+            for other, along, across in p.overlaps:
+                if name in ghosts or other in ghosts:
+                    continue
+                a, b = (EGO if n == sc.ego_name else n for n in (name, other))
+                how = f"overlapping at the start ({along:.2f} m along, {across:.2f} m across their lane)"
+                if EGO in (a, b):
+                    states = self.board.states  # type: ignore[union-attr]
+                    sc._collided(Collision(a, b, how, states[name].speed, states[other].speed))
+                    return
+                sc.event("traffic", f"collision in the traffic: {a} hit {b}, {how}", "WARN")
 
     def _start_kinematic(self) -> None:
         """The cars that start turned against their lane: ego drives them (kinematic.py), from
@@ -824,17 +887,88 @@ class StoryDriver:
         sc = self.sc
         if sc.status != "running":
             return
+        if sc.view.hidden:
+            self._hidden_collision()
+            if sc.status != "running":
+                return
         gone = [n for n in sc.bridge.arrived() if n in self._scripted]
         away = self._kin.beyond()
         if away is not None:
             self._road_end(f"{away} left its road (driven against its lane, at the road's end)")
         elif gone:
             self._road_end(f"{gone[0]} left the road network (the end of its route)")
-        elif sc.view.s + sc.geometry.cg_to_front >= sc.view.road.length:
-            self._road_end(
+        elif sc.view.s + sc.geometry.cg_to_front >= sc.view.road.length and self._ego_end is None:
+            why = (
                 f"the ego reached the end of its road (its lane {sc.view.road.lane_id}, "
                 f"{sc.view.road.length:.0f} m: ego drives on its start road only)"
             )
+            if sc.ego_name in self.board.watch_end:  # type: ignore[union-attr]
+                self._ego_end = why  # an EndOfRoadCondition on the ego sees it first (the next step)
+            else:
+                self._road_end(why)
+
+    def _hidden_collision(self) -> None:
+        """A body hidden from the surround sensor (a VisibilityAction) still collides: the
+        geometric check the sensor makes for the bodies it sees, made for these (a ghost is no
+        body: none)."""
+        sc = self.sc
+        x = sc.ego.state
+        g = sc.geometry
+        off = g.cg_to_front - 0.5 * g.length
+        ego = EntityState(
+            x[0] + off * math.cos(x[4]), x[2] + off * math.sin(x[4]), x[4], x[1], 0.0, 0.0, g.length, g.width
+        )
+        for name in sc.view.hidden:
+            if name in sc.model.ghosts or name == EGO or name not in self._scripted:
+                continue
+            bx, by, yaw, speed, length, width = sc.bridge.box(name)
+            if boxes_overlap(ego, EntityState(bx, by, yaw, speed, 0.0, 0.0, length, width)):
+                sc._collided(Collision(EGO, name, "outlines overlap (a body hidden from the sensor)", x[1], speed))
+                return
+
+    def _hold_at_end(self, name: str) -> None:
+        """A SUMO entity an EndOfRoadCondition watches stops at the end of its route (a SUMO
+        stop there: it brakes at its own deceleration and stands at the road's end) instead
+        of leaving the network."""
+        sc = self.sc
+        if name == sc.ego_name or name in self._kin:
+            return
+        veh = sc.bridge.libsumo.vehicle
+        last = veh.getRoute(name)[-1]
+        if sc.roads.edges[last].successors:
+            return  # its route ends at a junction, not at the road's end: it leaves there
+        lanes = sc.roads.edges[last].lanes
+        index = min(veh.getLaneIndex(name), len(lanes) - 1)
+        try:
+            veh.setStop(name, last, pos=lanes[index].length, laneIndex=index, duration=1e7)
+        except sc.bridge.libsumo.TraCIException:
+            pass  # too close to brake for it: it leaves the network as any car
+
+    def _where(self, name: str, st) -> None:
+        """Whether ``name`` is at the end of its road and off road now, for the conditions
+        that watch it (``st``: its state)."""
+        sc, board = self.sc, self.board
+        assert board is not None
+        if name in board.watch_end:
+            if name == sc.ego_name:
+                st.at_end = self._ego_end is not None or st.s + 0.5 * st.length >= sc.road.length - 1e-6
+            elif name not in self._kin:
+                st.at_end = bool(sc.bridge.libsumo.vehicle.isStopped(name))
+        if name in board.watch_offroad:
+            if self._lane_polys is None:
+                self._lane_polys = [
+                    (LanePolyline(ln.shape, ln.width, ln.id), 0.5 * ln.width)
+                    for e in sc.roads.edges.values()
+                    for ln in e.lanes
+                    if len(ln.shape) >= 2
+                ]
+            on = False
+            for poly, half in self._lane_polys:
+                s_, d_, _ = poly.project(st.x, st.y)
+                if -1e-6 <= s_ <= poly.length + 1e-6 and abs(d_) <= half:
+                    on = True
+                    break
+            st.offroad = not on
 
     def _road_end(self, why: str) -> None:
         sc = self.sc
@@ -883,6 +1017,10 @@ class StoryDriver:
             st.s, st.d = s, d
             st.d_front = project(bx + half * math.cos(yaw), by + half * math.sin(yaw))[1]
             history[name].append((t, st.speed, st.d_front))
+        board = self.board
+        if board.watch_end or board.watch_offroad:
+            for name in board.watch_end | board.watch_offroad:
+                self._where(name, states[name])
 
     def _ego_now(self) -> tuple[float, float, float, float, float, float]:
         """The ego's world pose, speed and lane-frame position (its centre of gravity) now."""
@@ -902,6 +1040,8 @@ class StoryDriver:
         self._ego_then = self._ego_now()  # what the next step's storyboard time sees
         if board.stopped and sc.status == "running":
             sc._end("completed", "the storyboard's StopTrigger ended the scenario")
+        elif self._ego_end is not None and sc.status == "running":
+            self._road_end(self._ego_end)
 
     def position_xy(self, position, states) -> tuple[float, float, float]:
         sc = self.sc
@@ -1026,8 +1166,42 @@ class StoryDriver:
             self._lateral_free.add(name)
         sc.bridge.change_sublane(name, d_next - st.d_front)
 
+    def _enter(self, name: str, x: float, y: float, heading: float) -> None:
+        """``name`` (no start so far) enters the simulation at (x, y) (its box centre), heading
+        ``heading``, at its Init speed (0 without one), on the nearest lane's road."""
+        sc = self.sc
+        board = self.board
+        assert board is not None
+        v = sc.model.entities[name].vehicle
+        k = list(sc.model.entities).index(name)
+        vt = sumo_type(f"xosc_{name}", v, ENTITY_COLORS[(k - 1) % len(ENTITY_COLORS)])
+        sc.world.add_type(vt)
+        self._types[name] = vt
+        lane, s, _ = sc.roads.nearest_lane(x, y)
+        speed = _init_speed(sc.model, name) or 0.0
+        ls = sc.bridge.libsumo
+        route = self._route(lane.edge)
+        front = min(s + 0.5 * v.length, lane.length)
+        ls.vehicle.add(
+            name, route, typeID=vt.id, departLane=str(lane.index), departPos=f"{front:.3f}", departSpeed=f"{speed:.3f}"
+        )
+        hx, hy = x + 0.5 * v.length * math.cos(heading), y + 0.5 * v.length * math.sin(heading)
+        ls.vehicle.moveToXY(name, lane.edge, lane.index, hx, hy, (90.0 - math.degrees(heading)) % 360.0, 2)
+        sc.bridge.keep_lane(name)
+        ls.vehicle.setSpeed(name, speed)
+        board.absent.discard(name)
+        self._scripted.append(name)
+        st = board.states[name]
+        st.x, st.y, st.yaw, st.speed = x, y, heading, speed
+        st.s, st.d = self.road_frame(x, y)
+        st.d_front = st.d
+        board.log("action", f"t = {board.t:.2f} s: {name} enters the simulation")
+
     def teleport(self, name: str, x: float, y: float, heading: float) -> None:
         sc = self.sc
+        if name in self.board.absent:  # type: ignore[union-attr]
+            self._enter(name, x, y, heading)
+            return
         sc.bridge.place(name, x, y, heading, self.board.states[name].speed, keep_route=1)
         if name in self._kin:
             self._kin.moved(name, *self.road_frame(x, y))
@@ -1054,7 +1228,13 @@ class StoryDriver:
             raise ScenarioFileError(
                 sc.model.path, waypoints[0].line, f"no way along the roads from {name}'s road {here!r} to its route"
             )
+        watched = name in self.board.watch_end  # type: ignore[union-attr]
+        if watched:  # its stop at the old route's end goes (it is held at the new one's)
+            for _ in ls.vehicle.getStops(name):
+                ls.vehicle.replaceStop(name, 0, "")
         ls.vehicle.setRoute(name, path + sc.roads.route_from(path[-1])[1:])
+        if watched:
+            self._hold_at_end(name)
 
     def _pose(self, name: str) -> tuple[float, float, float]:
         e = self.board.states[name]  # type: ignore[union-attr]
@@ -1062,6 +1242,55 @@ class StoryDriver:
 
     def traffic_action(self, action: M.TrafficAction) -> None:
         self._traffic.start(action)
+
+    def delete(self, name: str) -> None:
+        sc = self.sc
+        sc.bridge.libsumo.vehicle.remove(name)
+        if name in self._scripted:
+            self._scripted.remove(name)
+        self._kin.cars.pop(name, None)
+        self._lateral_free.discard(name)
+
+    def visibility(self, name: str, sensors: bool) -> None:
+        hidden = self.sc.view.hidden
+        if sensors:
+            hidden.discard(name)
+        else:
+            hidden.add(name)
+
+    def friction(self, scale: float) -> None:
+        """The road's friction scaled by ``scale``: the ego's tyres (its plant's friction) and
+        every SUMO vehicle's and vehicle type's deceleration limits (from their own values)."""
+        sc = self.sc
+        plant = sc.ego
+        scale_plant = getattr(plant, "scale_friction", None)
+        if scale_plant is None or not isinstance(getattr(plant, "model", None), NonlinearBicycle):
+            if scale != 1.0:
+                raise ConfigError(
+                    f"a RoadCondition frictionScaleFactor of {scale:g} needs the ego's plant to have tyres with a "
+                    "friction (report 000's bicycle, the default); this plant has none to scale"
+                )
+        else:
+            scale_plant(scale)
+            rebind = getattr(sc.loop, "rebind_plant", None)  # the loop's bound step: the new model's
+            if rebind is not None:
+                rebind()
+        ls = sc.bridge.libsumo
+        own = self._decels
+        kinds = (
+            (ls.vehicle, [v for v in ls.vehicle.getIDList() if v != EGO]),
+            (ls.vehicletype, ls.vehicletype.getIDList()),
+        )
+        # every one's own values first (a vehicle reads its type's until it has its own)
+        for kind, ids in kinds:
+            for vid in ids:
+                own.setdefault((kind is ls.vehicle, vid), (kind.getDecel(vid), kind.getEmergencyDecel(vid)))
+        for kind, ids in kinds:
+            for vid in ids:
+                decel, emergency = own[(kind is ls.vehicle, vid)]
+                kind.setDecel(vid, decel * scale)
+                kind.setEmergencyDecel(vid, emergency * scale)
+        self.friction_scale = scale
 
     def release(self, name: str) -> None:
         """A scripted move ended: SUMO drives the car on from where it is, minding others."""

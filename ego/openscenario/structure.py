@@ -84,23 +84,32 @@ declare(
 declare("ValueConstraint")
 declare("VariableDeclarations", contains=("VariableDeclaration",))
 declare("VariableDeclaration")
-CATALOGS = ("VehicleCatalog", "PedestrianCatalog", "MiscObjectCatalog", "ControllerCatalog", "ManeuverCatalog")
+CATALOGS = (
+    "VehicleCatalog",
+    "PedestrianCatalog",
+    "MiscObjectCatalog",
+    "ControllerCatalog",
+    "ManeuverCatalog",
+    "EnvironmentCatalog",
+    "RouteCatalog",
+)
 #: catalogs whose entries ego reads nowhere: their locations are accepted (the reference
 #: player's files declare them whether used or not), a reference to an entry is refused where
 #: it stands (the element holding it is outside the subset)
-LOCATED_ONLY = ("RouteCatalog", "EnvironmentCatalog", "TrajectoryCatalog")
+LOCATED_ONLY = ("TrajectoryCatalog",)
 declare(
     "CatalogLocations",
     contains=CATALOGS + LOCATED_ONLY,
     note=(
         "`catalogName` is the file `catalogName.xosc` in a catalog directory (the reference's kind first, then "
         "the others), else the file whose `<Catalog name>` it is; entries `Vehicle`, `Pedestrian`, `MiscObject`, "
-        "`Controller`, `Maneuver` (a `ManeuverGroup`'s `CatalogReference`, its errors named in the catalog file); "
+        "`Controller`, `Maneuver` (a `ManeuverGroup`'s `CatalogReference`, its errors named in the catalog file), "
+        "`Environment` (an `EnvironmentAction`'s), `Route` (an `AssignRouteAction`'s); "
         "`ParameterAssignments` to the entry's `ParameterDeclarations` (a `parameterRef` written `$Name`, as the "
         "reference player's files do, names `Name`); the entry sees the file's parameters too; an entry of "
-        "another kind than the reference needs is one line; the locations of `RouteCatalog`, `EnvironmentCatalog` "
-        "and `TrajectoryCatalog` are accepted (the reference player's files declare them, used or not) and their "
-        "entries read nowhere: an element referring to one is refused; a location without its `Directory` (the "
+        "another kind than the reference needs is one line; the location of a `TrajectoryCatalog` is accepted "
+        "(the reference player's files declare it, used or not) and its entries read nowhere: an element "
+        "referring to one is refused; a location without its `Directory` (the "
         "schema asks for one; the reference player's files write `<RouteCatalog/>`) locates nothing; a `Directory` "
         "that is a file (esmini's 0.9 examples name the catalog file itself, without extension) is that catalog "
         "when its `<Catalog name>` is the reference's. A catalog "
@@ -108,7 +117,7 @@ declare(
         "[Finding a scenario's files](#finding-a-scenarios-files))"
     ),
     label="`CatalogLocations` (`VehicleCatalog`, `PedestrianCatalog`, `MiscObjectCatalog`, `ControllerCatalog`,"
-    " `ManeuverCatalog`), `CatalogReference`",
+    " `ManeuverCatalog`, `EnvironmentCatalog`, `RouteCatalog`), `CatalogReference`",
     also=(*CATALOGS, "CatalogReference"),
 )
 for _catalog in CATALOGS + LOCATED_ONLY:
@@ -167,7 +176,13 @@ declare(
     note=(
         "**deviation:** the ego is driven by ego's controller (`-c`), whatever the file assigns it (its "
         "`Properties` are not mapped onto ego parameters); the other entities keep SUMO's driver unless the "
-        "storyboard scripts them. The controller reference is checked (a missing entry is one line)"
+        "storyboard scripts them. The controller reference is checked (a missing entry is one line). A "
+        "**ghost**, as the reference player has it (esmini's `basic_ghost.xosc`: the entity a controller's "
+        "`ghost` property names, or one whose controller is a `GhostController` by its name or its "
+        "`esminiController` property), is no physical body: the surround sensor does not see it and it "
+        "collides with nothing (SUMO's collisions with it are dropped), so it may start where the ego is; "
+        "SUMO's drivers still follow behind it as behind a car (**deviation**: SUMO cannot leave a vehicle out "
+        "of its car-following)"
     ),
     label="`ObjectController`, `Controller` (inline or from a `ControllerCatalog`)",
     also=("Controller",),
@@ -199,9 +214,16 @@ declare(
     contains=("Actions",),
     note=(
         "a TeleportAction and a SpeedAction are the start, immediate whatever the dynamics (**deviation**: the "
-        "standard runs a speed change with a duration from t = 0); every entity needs a TeleportAction (or, **as the reference player reads it**, a "
+        "standard runs a speed change with a duration from t = 0); the ego needs a TeleportAction (or, **as the reference player reads it**, a "
         "`FollowTrajectoryAction` in Init: it starts at the trajectory's first point, where esmini puts it at its "
-        "first step; the standard leaves such a start undefined), the ego a SpeedAction; a relative speed is the other entity's Init speed plus the delta (or times the factor); a "
+        "first step; the standard leaves such a start undefined); the ego without a SpeedAction starts at rest (0 m/s: "
+        "esmini's `basic_ghost.xosc`, whose ego follows its ghost); another entity without "
+        "one (esmini's `full_e6mini.xosc` `vehicle7`; `cut-in_sumo.xosc`'s `SumoVehicles`, which stands for the "
+        "traffic of the reference player's SUMO configuration: ego's own SUMO traffic is `traffic_density`) is "
+        "not in the simulation, as the standard has an entity only once it is placed: an action on it does "
+        "nothing (logged), a condition on it or relative to it does not hold, until a `TeleportAction` or an "
+        "`AddEntityAction` places "
+        "it (at its Init speed, 0 without one; `test_xosc_road_edges.py`); a relative speed is the other entity's Init speed plus the delta (or times the factor); a "
         "continuous relative speed, a `LaneChangeAction`, `LaneOffsetAction`, `LongitudinalDistanceAction`, "
         "`SpeedProfileAction`, `SynchronizeAction` or `FollowTrajectoryAction` in Init is started at t = 0 and "
         "left running, as the standard runs a non-instantaneous Init action (8.5.1.2), until it ends or a later "
@@ -241,8 +263,12 @@ declare(
         "there; across the centre line, in the oncoming lane heading its own lane's way, as esmini's "
         "`speed-profile.xosc`'s Car2, ego drives it as a turned car); the ego starts at its offset and holds it "
         "as its lateral reference; an entity starts where its `Init` puts it, however close "
-        "to another (SUMO's insertion check refuses only an overlap), and two bodies starting in one place are "
-        "a file error at the `TeleportAction`'s line; `laneId` 0 is the reference line (OpenDRIVE's lane 0: "
+        "to another, and two bodies starting in one place too (the standard has no rule against it; the "
+        "reference player places them: esmini's `python_scenario.xosc` starts `Target1` on the ego, `drop-bike.xosc` "
+        "a bike on its car): SUMO inserts them where the file puts them and the run reports the collision at "
+        "t = 0 with the overlap (`... hit ego ...: overlapping at the start (4.50 m along, 1.90 m across their "
+        "lane)`: with the ego the run ends in a collision, between others it is a traffic collision event), "
+        "never hidden; a ghost (below) is no body and collides with nothing; `laneId` 0 is the reference line (OpenDRIVE's lane 0: "
         "`offset` is `t`); every road position of the storyboard (actions, conditions) must name a lane of the "
         "network, checked before the run; `Orientation` accepted, the lane's heading is used; "
         "`WorldPosition` places on the nearest lane; `RelativeWorldPosition`: `dx`, `dy` along the world's x and "
@@ -318,23 +344,11 @@ declare("TriggeringEntities", contains=("EntityRef",))
 declare("EntityCondition")  # the conditions: ego/openscenario/conditions.py
 declare("ByValueCondition")
 refuse(
-    "`EndOfRoadCondition`, `OffroadCondition`",
-    ("EndOfRoadCondition", "OffroadCondition"),
-    "refused with its line: `EndOfRoadCondition` could never hold during a run of ego (a run ends when the "
-    "ego reaches the end of its road or a scripted car leaves the network, SUMO taking it off at its route's "
-    "end; the reference player keeps a car standing there); `OffroadCondition` needs a road-boundary model of "
-    "every entity, which ego does not have",
-    section="conditions",
-)
-refuse(
-    "every other element (e.g. `EntityAction`, the other `GlobalAction`s (`InfrastructureAction`...), "
-    "`LateralDistanceAction`, `VisibilityAction`, `TrafficSignals`; a `ParameterValueDistribution` runs with"
-    " `ego sweep`, below)",
+    "every other element (e.g. the other `GlobalAction`s (`InfrastructureAction`...), "
+    "`TrailerAction`, `TrafficSignals`; a `ParameterValueDistribution` runs with `ego sweep`, below)",
     (
-        "EntityAction",
         "InfrastructureAction",
-        "LateralDistanceAction",
-        "VisibilityAction",
+        "TrailerAction",
         "TrafficSignals",
         "ParameterValueDistribution",
     ),

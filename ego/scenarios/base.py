@@ -950,6 +950,11 @@ class ComposedLoop:
         if sc.after_setup is not None:
             sc.after_setup()
 
+    def rebind_plant(self) -> None:
+        """Bind the plant's step again (after the plant changed its model: a road's friction)."""
+        ego = self.ego
+        self._plant_step = ego.bind_step() if isinstance(ego, BindsStep) else ego.step
+
     def act(self, action: tuple[float, float]) -> None:
         ego = self.ego
         self._plant_step(self._filter(action))

@@ -328,6 +328,8 @@ class SurroundView(RoadSensor):
         self.row_names = ROW
         self.sensor: SurroundSensor | None = None
         self.lanes: dict[int, LanePolyline] = {}
+        #: vehicles the surround sensor does not see (they still collide)
+        self.hidden: set[str] = set()
         self.lane_offset: dict[int, float] = {}
         self.target_lane = 0
         self.ttc_front = self.ttc_rear = INF
@@ -367,6 +369,9 @@ class SurroundView(RoadSensor):
         sim, sensor = self._sim, self.sensor
         assert sim is not None and sensor is not None  # setup with a simulator
         ids, rows = self.around = sim.surroundings(EGO)
+        if self.hidden:  # entities the sensor does not see (an OpenSCENARIO VisibilityAction)
+            keep = [i for i, vid in enumerate(ids) if vid not in self.hidden]
+            ids, rows = [ids[i] for i in keep], [rows[i] for i in keep]
         reach = self.config.sensor_range
         # the subscription reaches farther for the traffic log
         sensor.sync_within(t, ids, rows, sim.front_bumper(EGO) if reach < LOG_REACH else None, reach)

@@ -48,6 +48,9 @@ class VehicleSpec:
     lane: int
     pos: float
     speed: float
+    #: inserted where it is although it overlaps another body there (the simulator's
+    #: insertion check skipped; an OpenSCENARIO file's overlapping start, a ghost)
+    overlapping: bool = False
 
 
 @dataclass(frozen=True)

@@ -122,6 +122,8 @@ class SumoBridge:
         self._dims: dict[str, tuple[float, float]] = {}
         self._lanes_of_edge: dict[str, int] = {}
         self._pending: list[VehicleSpec] = []
+        #: vehicles that are no physical body (an OpenSCENARIO ghost): their collisions are none
+        self.ghosts: set[str] = set()
         self._keep_route: dict[str, int] = {}
         self._match: dict[str, float] = {}
         #: route id -> its edges and their lengths (a departure beyond the first edge starts
@@ -280,8 +282,12 @@ class SumoBridge:
         return rid, pos
 
     def add_vehicles(self, specs: Iterable[VehicleSpec]) -> None:
-        veh = self.libsumo.vehicle
-        for s in specs:
+        """Add vehicles to insert at the next step; an ``overlapping`` one after the others,
+        moved to its place before the step (SUMO then inserts it there without its insertion
+        check: the others are inserted first, as if it were not there)."""
+        veh, ls = self.libsumo.vehicle, self.libsumo
+        specs = list(specs)
+        for s in [s for s in specs if not s.overlapping] + [s for s in specs if s.overlapping]:
             route, pos = self._departure(s.route, s.pos)
             veh.add(
                 s.id,
@@ -291,6 +297,12 @@ class SumoBridge:
                 departPos=f"{pos:.3f}",
                 departSpeed=f"{s.speed:.3f}",
             )
+            if s.overlapping:
+                edge = self._routes[route][0]
+                x, y = ls.simulation.convert2D(edge, pos, s.lane)
+                xb, yb = ls.simulation.convert2D(edge, max(pos - 1.0, 0.0), s.lane)
+                angle = (90.0 - math.degrees(math.atan2(y - yb, x - xb))) % 360.0
+                veh.moveToXY(s.id, edge, s.lane, x, y, angle, 2)
             self._vehicle_type[s.id] = s.type_id
             self._pending.append(s)
 
@@ -385,9 +397,11 @@ class SumoBridge:
             ls.simulationStep()
         self._moved = False
         if ls.simulation.getCollidingVehiclesNumber():
+            ghosts = self.ghosts
             self.collisions = [
                 Collision(c.collider, c.victim, c.type, c.colliderSpeed, c.victimSpeed)
                 for c in ls.simulation.getCollisions()
+                if c.collider not in ghosts and c.victim not in ghosts
             ]
         elif self.collisions:
             self.collisions = []

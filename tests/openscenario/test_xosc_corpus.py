@@ -47,6 +47,11 @@ LEAD_ACTION = '<SpeedActionDynamics dynamicsShape="linear" value="$LeadDecel" dy
 LEAD_TARGET = '<AbsoluteTargetSpeed value="$LeadFinalSpeed"/>'
 EGO_LANE = '<LanePosition roadId="0" laneId="-2" s="${$EgoFront - 2.25}" offset="0"/>'
 SIM_TIME = '<SimulationTimeCondition value="$LeadBrakeTime" rule="greaterOrEqual"/>'
+BY_TIME = f"<ByValueCondition>{SIM_TIME}</ByValueCondition>"
+ENTITY_COND = (
+    '<ByEntityCondition><TriggeringEntities triggeringEntitiesRule="any"><EntityRef entityRef="Lead"/>'
+    "</TriggeringEntities><EntityCondition>{}</EntityCondition></ByEntityCondition>"
+)
 EGO_SPEED_INIT = """          <PrivateAction>
             <LongitudinalAction><SpeedAction>
               <SpeedActionDynamics dynamicsShape="step" value="0" dynamicsDimension="time"/>
@@ -204,11 +209,11 @@ HAND = [
         "unsupported-action",
         sub(
             "<PrivateAction><LongitudinalAction><SpeedAction>\n                  " + LEAD_ACTION,
-            '<PrivateAction><VisibilityAction graphics="true" traffic="true" sensors="true"/>'
+            "<PrivateAction><TrailerAction><DisconnectTrailerAction/></TrailerAction>"
             "<LongitudinalAction><SpeedAction>\n                  " + LEAD_ACTION,
         ),
-        "<VisibilityAction",
-        unsupported("VisibilityAction"),
+        "<TrailerAction",
+        unsupported("TrailerAction"),
     ),
     (
         "unsupported-condition",
@@ -315,10 +320,14 @@ HAND = [
         "<LanePosition> needs attribute s",
     ),
     (
-        "no-teleport",
-        sub(BASE[BASE.index('        <Private entityRef="Lead">') : BASE.index("      </Actions>")], ""),
-        '<ScenarioObject name="Lead">',
-        "entity 'Lead' has no TeleportAction in <Init> (ego needs every entity's start position)",
+        "no-teleport-for-the-ego",
+        sub(
+            f"<PrivateAction>\n            <TeleportAction><Position>{EGO_LANE}</Position></TeleportAction>\n"
+            "          </PrivateAction>\n          ",
+            "",
+        ),
+        '<ScenarioObject name="Ego">',
+        "the ego 'Ego' has no TeleportAction in <Init> (ego needs the ego's start position)",
     ),
     (
         "element-ref",
@@ -615,6 +624,69 @@ HAND = [
         f"a trailer (Vehicle 'semi') is not supported by ego: it runs single vehicles (see {DOCS})",
     ),
     ("windows-road-missing", sub('filepath="straight3.xodr"', 'filepath="C:\\Users\\me\\nowhere.xodr"'), "C:", None),
+    (
+        "friction-zero",
+        sub(
+            "<Actions>\n",
+            '<Actions>\n        <GlobalAction><EnvironmentAction><Environment name="e"><RoadCondition '
+            'frictionScaleFactor="0"/></Environment></EnvironmentAction></GlobalAction>\n',
+        ),
+        "<RoadCondition",
+        "bad value for frictionScaleFactor in <RoadCondition>: 0 (expected > 0)",
+    ),
+    (
+        "environment-catalog-without-location",
+        sub(
+            "<Actions>\n",
+            '<Actions>\n        <GlobalAction><EnvironmentAction><CatalogReference catalogName="EnvironmentCatalog" '
+            'entryName="winter"/></EnvironmentAction></GlobalAction>\n',
+        ),
+        '<CatalogReference catalogName="EnvironmentCatalog"',
+        "<CatalogReference> to 'EnvironmentCatalog' but no <EnvironmentCatalog> in <CatalogLocations>",
+    ),
+    (
+        "route-catalog-without-location",
+        sub(
+            '        <Private entityRef="Lead">',
+            '        <Private entityRef="Lead"><PrivateAction><RoutingAction><AssignRouteAction><CatalogReference '
+            'catalogName="Routes" entryName="Straight"/></AssignRouteAction></RoutingAction></PrivateAction>',
+        ),
+        '<CatalogReference catalogName="Routes"',
+        "<CatalogReference> to 'Routes' but no <RouteCatalog> in <CatalogLocations>",
+    ),
+    (
+        "entity-action-in-init",
+        sub(
+            "<Actions>\n",
+            '<Actions>\n        <GlobalAction><EntityAction entityRef="Lead"><DeleteEntityAction/></EntityAction>'
+            "</GlobalAction>\n",
+        ),
+        "<EntityAction",
+        "<EntityAction> in <Init> is not supported by ego (an entity's TeleportAction in Init places it; one "
+        f"without is not in the simulation; see {DOCS})",
+    ),
+    (
+        "add-entity-without-position",
+        sub(
+            '<Action name="LeadBrakeAction">',
+            '<Action name="Add"><GlobalAction><EntityAction entityRef="Lead"><AddEntityAction/></EntityAction>'
+            '</GlobalAction></Action><Action name="LeadBrakeAction">',
+        ),
+        "<AddEntityAction",
+        "<AddEntityAction> needs exactly one <Position> (found 0)",
+    ),
+    (
+        "end-of-road-negative-duration",
+        sub(BY_TIME, ENTITY_COND.format('<EndOfRoadCondition duration="-2"/>')),
+        "<EndOfRoadCondition",
+        "bad value for duration in <EndOfRoadCondition>: -2 (expected >= 0)",
+    ),
+    (
+        "offroad-without-duration",
+        sub(BY_TIME, ENTITY_COND.format("<OffroadCondition/>")),
+        "<OffroadCondition",
+        "<OffroadCondition> needs attribute duration",
+    ),
 ]
 
 
@@ -705,16 +777,16 @@ def _sg_cases():
             "unknown entity 'Truck' in <EntityRef> (entities: Ego, Lead)",
         ),
         (
-            "sg-end-of-road",
-            lambda: base(entity_trigger(xosc.EndOfRoadCondition(1))),
+            "sg-end-of-road-negative",
+            lambda: base(entity_trigger(xosc.EndOfRoadCondition(-1))),
             "<EndOfRoadCondition",
-            un("EndOfRoadCondition"),
+            "bad value for duration in <EndOfRoadCondition>: -1 (expected >= 0)",
         ),
         (
-            "sg-offroad",
-            lambda: base(entity_trigger(xosc.OffroadCondition(1))),
+            "sg-offroad-negative",
+            lambda: base(entity_trigger(xosc.OffroadCondition(-1))),
             "<OffroadCondition",
-            un("OffroadCondition"),
+            "bad value for duration in <OffroadCondition>: -1 (expected >= 0)",
         ),
         (
             "sg-clearance",
@@ -747,16 +819,17 @@ def _sg_cases():
             "variable 'Nope' is not declared (declared: none)",
         ),
         (
-            "sg-visibility",
-            lambda: base(action=xosc.VisibilityAction(True, True, True)),
+            "sg-visibility-traffic-false",
+            lambda: base(action=xosc.VisibilityAction(True, False, True)),
             "<VisibilityAction",
-            un("VisibilityAction"),
+            f'a <VisibilityAction> with traffic="false" is not supported by ego: SUMO\'s drivers see every vehicle '
+            f"(see {DOCS})",
         ),
         (
-            "sg-lateral-distance",
-            lambda: base(action=xosc.LateralDistanceAction("Ego", 2)),
+            "sg-lateral-distance-negative",
+            lambda: base(action=xosc.LateralDistanceAction("Ego", -2)),
             "<LateralDistanceAction",
-            un("LateralDistanceAction"),
+            "bad value for distance in <LateralDistanceAction>: -2 (expected >= 0)",
         ),
         (
             "sg-relative-world-unknown",

@@ -87,12 +87,15 @@ def test_environment_actions_are_accepted_in_init_and_in_events(tmp_path):
     assert kinds == ["EnvironmentAction", "SpeedAction"]
 
 
-def test_a_friction_scale_is_refused_with_its_line(tmp_path):
+def test_a_friction_scale_is_read_and_a_zero_one_refused_with_its_line(tmp_path):
+    """A RoadCondition's friction scale is applied (test_xosc_environment.py); 0 is refused."""
     path = scene(tmp_path, [])
     _edit(path, "<Init><Actions>", "<Init><Actions>\n" + ENV.format(road='<RoadCondition frictionScaleFactor="0.5"/>'))
-    with pytest.raises(ScenarioFileError, match=r"RoadCondition frictionScaleFactor of 0.5 is not supported") as exc:
+    assert load(path).init_globals[0].friction == 0.5
+    _edit(path, 'frictionScaleFactor="0.5"', 'frictionScaleFactor="0"')
+    with pytest.raises(ScenarioFileError, match=r"bad value for frictionScaleFactor in <RoadCondition>: 0") as exc:
         load(path)
-    assert exc.value.line == _line_of(path, "<GlobalAction>")
+    assert exc.value.line == _line_of(path, "<RoadCondition")
 
 
 def test_a_step_without_value_or_dimension_and_a_condition_without_edge(tmp_path):
@@ -634,20 +637,53 @@ def test_a_start_closer_than_sumos_safe_gap_runs_where_the_file_places_it(tmp_pa
     assert starts(sc, "Go") == [pytest.approx(0.5)]
 
 
-def test_entities_starting_in_one_place_are_refused_by_list_and_run_alike(tmp_path):
-    """Two bodies overlapping at the start (esmini's python_scenario.xosc starts Target1 0.4 m
-    ahead of the ego in its lane) are a file error at the TeleportAction's line, found by
-    ``ego list`` as by ``ego run`` (SUMO used to refuse it mid-start)."""
+def test_entities_starting_in_one_place_collide_at_the_start(tmp_path):
+    """Two bodies overlapping at the start (esmini's python_scenario.xosc starts Target1 where
+    the ego is): the standard has no rule against it and the reference player places them;
+    ``ego list`` accepts the file as ``ego run`` does, and the run reports the collision at
+    t = 0 with the overlap's geometry (B's front 2 m into A's back: 2.00 m along, the full
+    1.80 m across)."""
     from ego.openscenario.scenario import file_listing
 
-    path = scene(tmp_path, [event("Go", "A", speed(26), trigger([sim_time(1)]))], at={"B": (-1, 102.0, 25.0)})
+    path = scene(tmp_path, [event("Go", "A", speed(26), trigger([sim_time(1)]))], at={"B": (-1, 102.5, 25.0)})
     listing = file_listing(str(path))
-    assert not listing["supported"] and "B starts overlapping A" in listing["error"], listing["error"]
-    run = subprocess.run(
-        [sys.executable, "-m", "ego", "run", str(path), "-c", "pid"], capture_output=True, text=True, timeout=300
+    assert listing["supported"], listing["error"]
+    sc = run_scene(path, 2.0)
+    traffic = [e for e in sc.events if e.kind == "traffic" and e.t == 0.0]
+    assert [e.text for e in traffic] == [
+        "collision in the traffic: B hit A, overlapping at the start (2.00 m along, 1.80 m across their lane)"
+    ]
+
+
+def test_an_entity_starting_in_the_egos_place_is_a_collision_at_t_0(tmp_path):
+    sc = run_scene(scene(tmp_path, [], at={"A": (-3, 20.0, 20.0)}), 2.0)
+    assert sc.status == "collision" and sc.t == 0.0
+    assert "A (20.0 m/s) hit ego (20.0 m/s): overlapping at the start (4.50 m along, 1.80 m across" in (
+        sc.status_detail
     )
-    assert run.returncode == 2 and listing["error"] in run.stderr, run.stderr
-    assert len(run.stderr.strip().splitlines()) == 1, run.stderr
+
+
+GHOST = (
+    '<ObjectController><Controller name="FollowGhostController"><Properties><Property name="ghost" '
+    'value="A"/></Properties></Controller></ObjectController>'
+)
+
+
+@pytest.mark.sumo
+def test_a_ghost_starting_in_the_egos_place_is_no_body(tmp_path):
+    """esmini's basic_ghost.xosc: the ego follows a ghost (its controller's `ghost` property)
+    that starts where the ego is. A ghost is no physical body: no collision at the start nor
+    later (it drives off ahead through the ego's place), and the surround sensor does not see
+    it."""
+    path = scene(tmp_path, [event("Go", "A", speed(30), trigger([sim_time(0.5)]))], at={"A": (-3, 20.0, 20.0)})
+    text = path.read_text()
+    first = text.index("</ScenarioObject>", text.index('<ScenarioObject name="Ego">'))
+    path.write_text(text[:first] + GHOST + text[first:])
+    assert load(path).ghosts == frozenset({"A"})
+    sc = run_scene(path, 3.0)
+    assert sc.status != "collision", sc.status_detail
+    assert sc.board.states["A"].s > sc.board.states["Ego"].s + 5.0  # it drove off ahead
+    assert "A" in sc.view.hidden and sc.view.gap_front == math.inf
 
 
 def test_an_openscenario_0_8_file_is_refused_for_its_version(tmp_path):

@@ -43,17 +43,20 @@ def test_every_action_and_condition_has_one_kind_and_every_kind_is_declared():
         M.ParameterAction,
         M.SynchronizeAction,
         M.SpeedProfileAction,
+        M.LateralDistanceAction,
+        M.VisibilityAction,
     ):
         assert registry.action_of(model.__new__(model)).model is model
     # what the refusals name is derived from the kinds
     assert registry.init_kinds() == (
-        "TeleportAction, ControllerAction, AppearanceAction, SpeedAction, LaneChangeAction, LaneOffsetAction, "
-        "LongitudinalDistanceAction, SpeedProfileAction, SynchronizeAction, AssignRouteAction, AcquirePositionAction "
-        "and FollowTrajectoryAction"
+        "TeleportAction, ControllerAction, AppearanceAction, VisibilityAction, SpeedAction, LaneChangeAction, "
+        "LaneOffsetAction, LongitudinalDistanceAction, LateralDistanceAction, SpeedProfileAction, SynchronizeAction, "
+        "AssignRouteAction, AcquirePositionAction and FollowTrajectoryAction"
     )
     # a trajectory, a distance and a speed profile move the ego's references (ego_refs.py)
     assert {k.tag for k in registry.ACTIONS.values() if not k.on_ego} == {
         "TeleportAction",
+        "LateralDistanceAction",
         "SynchronizeAction",
         "AssignRouteAction",
         "AcquirePositionAction",
@@ -73,7 +76,7 @@ def test_list_and_run_agree_on_every_shipped_file(path):
 
 
 @pytest.fixture
-def visibility(monkeypatch):
+def trailer(monkeypatch):
     """The architecture example registered; the registry restored afterwards."""
     monkeypatch.setattr(registry, "ELEMENTS", copy.deepcopy(registry.ELEMENTS))
     monkeypatch.setattr(registry, "ACTIONS", dict(registry.ACTIONS))
@@ -85,20 +88,21 @@ def visibility(monkeypatch):
     yield namespace
 
 
-def _hide(sensors: str = "true") -> str:
-    return f'<VisibilityAction graphics="false" traffic="true" sensors="{sensors}"/>'
+def _trailer(connect: bool = False) -> str:
+    inner = '<ConnectTrailerAction trailerRef="B"/>' if connect else "<DisconnectTrailerAction/>"
+    return f"<TrailerAction>{inner}</TrailerAction>"
 
 
-def _scene(tmp_path, sensors: str = "true") -> Path:
+def _scene(tmp_path, connect: bool = False) -> Path:
     done = (
         '<Condition name="hidden" delay="0" conditionEdge="none"><ByValueCondition>'
-        '<StoryboardElementStateCondition storyboardElementType="action" storyboardElementRef="HideAction" '
+        '<StoryboardElementStateCondition storyboardElementType="action" storyboardElementRef="UnhitchAction" '
         'state="completeState"/></ByValueCondition></Condition>'
     )
     return scene(
         tmp_path,
         [
-            event("Hide", "A", _hide(sensors), trigger([sim_time(1.0)])),
+            event("Unhitch", "A", _trailer(connect), trigger([sim_time(1.0)])),
             event("Slow", "A", speed(20.0), trigger([done])),
         ],
     )
@@ -106,13 +110,13 @@ def _scene(tmp_path, sensors: str = "true") -> Path:
 
 def test_a_new_action_is_refused_before_it_is_registered(tmp_path):
     path = _scene(tmp_path)
-    with pytest.raises(ScenarioFileError, match=r"<VisibilityAction> is not supported by ego"):
+    with pytest.raises(ScenarioFileError, match=r"<TrailerAction> is not supported by ego"):
         load(path)
-    assert ("VisibilityAction", False) in [(tag, ok) for tag, _, ok in elements(read_tree(path))]
+    assert ("TrailerAction", False) in [(tag, ok) for tag, _, ok in elements(read_tree(path))]
 
 
 @pytest.mark.sumo
-def test_the_architecture_example_adds_an_action_in_one_class(visibility, tmp_path):
+def test_the_architecture_example_adds_an_action_in_one_class(trailer, tmp_path):
     from ego.docs import subset
     from ego.openscenario.scenario import file_listing
 
@@ -121,9 +125,11 @@ def test_the_architecture_example_adds_an_action_in_one_class(visibility, tmp_pa
     assert listing["supported"] and listing["error"] is None
     s = run_scene(path, duration=3.0)
     # the action completes in the step it starts; a state condition sees that a step later
-    assert starts(s, "Hide") == [1.0] and starts(s, "Slow") == [pytest.approx(1.1)]
-    bad = _scene(tmp_path, sensors="false")
-    line = next(i for i, text in enumerate(bad.read_text().splitlines(), 1) if "VisibilityAction" in text)
-    with pytest.raises(ScenarioFileError, match=rf":{line}: sensors false in <VisibilityAction> is not supported"):
+    assert starts(s, "Unhitch") == [1.0] and starts(s, "Slow") == [pytest.approx(1.1)]
+    bad = _scene(tmp_path, connect=True)
+    line = next(i for i, text in enumerate(bad.read_text().splitlines(), 1) if "ConnectTrailerAction" in text)
+    with pytest.raises(ScenarioFileError, match=rf":{line}: <ConnectTrailerAction> is not supported by ego"):
         load(bad)
-    assert "| `VisibilityAction` | yes | yes | done at once: ego draws nothing" in subset.table()
+    assert "| `TrailerAction` | yes | not listed | done at once: a `DisconnectTrailerAction` changes nothing" in (
+        subset.table()
+    )
