@@ -192,7 +192,12 @@ class SafetyLayer:
                 return  # the common case, decided without computing the need
             need = braking_need(front, view.ds)
             # limit_braking_behind asks only in a lane change
-            if (braking_in_lane and need >= c.aeb_decel) or man.limit_braking_behind(need) or self.imminent():
+            # imminent() only below the AEB's TTC (above it, it is False)
+            if (
+                (braking_in_lane and need >= c.aeb_decel)
+                or man.limit_braking_behind(need)
+                or (view.ttc_front < c.aeb_ttc and self.imminent())
+            ):
                 man.emergency_stop()
                 self.active = True
                 self.engagements += 1
