@@ -16,6 +16,7 @@ A concrete scenario (``emergency_brake.py``, ``cut_in.py``...) subclasses
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
@@ -337,8 +338,10 @@ class SurroundView(RoadSensor):
         self.around: tuple[list[str], list[Row]] = ([], [])
         self.looked = False
         self._sim: TrafficSim | None = None
-        #: (t, speed) at the last observation and the speed's rate of change (m/s^2) since
-        self._u_last, self._accel = (-math.inf, 0.0), 0.0
+        #: the time and speed at the last observation and the speed's rate of change (m/s^2) since
+        self._t_last, self._u_last, self._accel = -math.inf, 0.0, 0.0
+        #: the feed-forward's preview (LanePolyline.mean_curvature), in C on packed lanes: bound at setup
+        self._mean_curvature: Callable[[float, float], float] | None = None
 
     def setup(self, sim: TrafficSim | None, lanes: dict[int, LanePolyline], plant: PosedPlant) -> None:
         """Measure in ``lanes`` (index -> lane; the start lane ``ego_lane``) for ``plant``;
@@ -356,7 +359,12 @@ class SurroundView(RoadSensor):
         self.target_lane = c.ego_lane
         self.ttc_front = self.ttc_rear = INF
         self.gap_front = self.gap_rear = INF
-        self._u_last, self._accel = (-math.inf, 0.0), 0.0
+        self._t_last, self._u_last, self._accel = -math.inf, 0.0, 0.0
+        self._mean_curvature = (
+            functools.partial(_MEAN_CURVATURE, road)
+            if _MEAN_CURVATURE is not None and hasattr(road, "packed")
+            else road.mean_curvature
+        )
         self.frame()
         bands = {i: (off - 0.5 * lanes[i].width, off + 0.5 * lanes[i].width) for i, off in self.lane_offset.items()}
         self.sensor = SurroundSensor(road, bands, g.cg_to_front, g.length, g.width, horizon=c.sumo_step)
@@ -438,20 +446,17 @@ class SurroundView(RoadSensor):
         obs.surround = self.sensor
         if self._line is None:  # a curved road: the feed-forward on the target lane, previewed
             u = plant.state[1]
-            road = self.road
-            assert road is not None  # setup set it
-            if _MEAN_CURVATURE is not None and hasattr(road, "packed"):  # in C on its packed data
-                kappa = _MEAN_CURVATURE(road, self.s, FF_PREVIEW * u)
-            else:
-                kappa = road.mean_curvature(self.s, FF_PREVIEW * u)
+            mean_curvature = self._mean_curvature
+            assert mean_curvature is not None  # setup bound it
+            kappa = mean_curvature(self.s, FF_PREVIEW * u)
             # the target lane's centre line is concentric with the start lane's, ``off`` to its left
             kappa /= 1.0 - kappa * self.lane_offset[self.target_lane]
             steady = self.steady
             # the speed's rate of change since the last observation (SteadySteer.transient)
-            t_last, u_last = self._u_last
+            t_last = self._t_last
             if t > t_last:
-                self._accel = (u - u_last) / (t - t_last)
-                self._u_last = (t, u)
+                self._accel = (u - self._u_last) / (t - t_last)
+                self._t_last, self._u_last = t, u
             obs.steer_ff = kappa * (steady.wheelbase + steady.understeer * u * u + steady.transient * self._accel)
         else:
             obs.steer_ff = 0.0

@@ -126,15 +126,12 @@ class RoadSensor:
         assert plant is not None  # the loop checks only after setup
         state = plant.state
         u, r = state[1], state[5]
+        d, halfwidth, err = self.d_road, self.road_halfwidth, self.heading_error
         # comparisons are False for NaN, so anything odd falls through to the full check
-        if (
-            abs(self.d_road) <= self.road_halfwidth
-            and -1.0 <= u <= 80.0
-            and abs(r) <= 2.5
-            and abs(self.heading_error) <= 1.3
-        ):
+        # (bounds on both sides rather than abs(): no builtin call every control period)
+        if -halfwidth <= d <= halfwidth and -1.0 <= u <= 80.0 and -2.5 <= r <= 2.5 and -1.3 <= err <= 1.3:
             return None
-        return divergence(state, self.d_road, self.heading_error, self.road_halfwidth)
+        return divergence(state, d, err, halfwidth)
 
     def push(self, sim: TrafficSim) -> None:
         """The ego's pose into the simulator (its drivers see the speed along the road)."""

@@ -183,16 +183,21 @@ class SafetyLayer:
         """Engage or release the AEB (see ``aeb`` in the configuration)."""
         c = self.config
         view = self.view
-        front = view.sensor.front
         if not self.active:
             man = self.manoeuvre
             assert man is not None  # compose gives the AEB its manoeuvre
             braking_in_lane = man.braking_in_lane()
             if view.ttc_front >= c.aeb_ttc and not braking_in_lane and not man.changing_lane():
                 return  # the common case, decided without computing the need
+            front = view.sensor.front
             need = braking_need(front, view.ds)
             # limit_braking_behind asks only in a lane change
-            if (braking_in_lane and need >= c.aeb_decel) or man.limit_braking_behind(need) or self.imminent():
+            # imminent() only below the AEB's TTC (above it, it is False)
+            if (
+                (braking_in_lane and need >= c.aeb_decel)
+                or man.limit_braking_behind(need)
+                or (view.ttc_front < c.aeb_ttc and self.imminent())
+            ):
                 man.emergency_stop()
                 self.active = True
                 self.engagements += 1
@@ -205,6 +210,7 @@ class SafetyLayer:
                     "WARN",
                 )
         else:
+            front = view.sensor.front
             need = braking_need(front, view.ds)
             # it brakes until it no longer closes in: a release while closing hands a fast
             # approach back to a slow position loop

@@ -62,6 +62,8 @@ _PLACE = None if NATIVE is None else NATIVE.place
 #: and ``_scan_lane``, and ``_nearest``
 _NEAR = None if NATIVE is None else NATIVE.near
 _NEAREST = None if NATIVE is None else NATIVE.nearest
+#: LanePolyline.mean_curvature on a lane's packed data (ahead 0: curvature_at)
+_MEAN_CURVATURE = None if NATIVE is None else NATIVE.lane_mean_curvature
 
 #: a sensed vehicle in the lane frame: (id, s_lo, s_hi, d_lo, d_hi, v_s, v_d, a_s, heading
 #: relative to the lane[, the lane's turn and curvature at its centre on a curved lane])
@@ -171,6 +173,7 @@ class SurroundSensor:
         "_straight",
         "_place",
         "_placing",
+        "_curvature_at",
         "along",
         "turn",
         "turn_scan",
@@ -211,6 +214,9 @@ class SurroundSensor:
         self._place = getattr(lane, "place", None) if self._straight is None else None
         #: what ego._native.place places the cars with: the lane (its packed data) or a callable
         self._placing = (lane if hasattr(lane, "packed") else self._place) if self._place is not None else lane.frame
+        #: the lane's curvature at the ego's ends at a scan (LanePolyline.curvature_at): in C
+        #: on a curved lane's packed data
+        self._curvature_at = _MEAN_CURVATURE if self._place is not None and hasattr(lane, "packed") else None
         #: on a curved lane, at the last scan: (the innermost and outermost lines the gaps
         #: may be measured along, m; the lane's turn at the ego, rad; how far the ego's corners reach
         #: beyond its extent ahead and behind, m); None on a straight one
@@ -366,8 +372,12 @@ class SurroundSensor:
             # each end the larger curvature of the centre's and that end's (an end in an arc
             # the centre has not reached yet)
             reach = []
+            lane, curvature_at = self.lane, self._curvature_at
             for end in (ego[1], ego[0]):
-                k = self.lane.curvature_at(end) if hasattr(self.lane, "curvature_at") else kappa
+                if curvature_at is not None:
+                    k = curvature_at(lane, end, 0.0)
+                else:
+                    k = lane.curvature_at(end) if hasattr(lane, "curvature_at") else kappa
                 k = kappa if abs(kappa) >= abs(k) else k
                 w = max(ego[3] - line if k > 0.0 else line - ego[2], 0.0)
                 reach.append(abs(k) * w / (1.0 - abs(k) * w))
@@ -418,10 +428,17 @@ class SurroundSensor:
         each detected vehicle moving at its speed."""
         self.t, self.s, self.turn = t, s, turn
         front, rear = self.front, self.rear
+        # _carried, inline: every control period
+        moved = s - self.s_scan
+        since = t - self.t_scan
         if front.obj is not None:
-            front.gap = self._carried(front, True)
+            line = front.line
+            ahead = moved if line is None else moved - line * (turn - self.turn_scan)
+            front.gap = front.gap0 + front.speed * since - ahead
         if rear.obj is not None:
-            rear.gap = self._carried(rear, False)
+            line = rear.line
+            behind = moved if line is None else moved - line * (turn - self.turn_scan)
+            rear.gap = rear.gap0 + behind - rear.speed * since
 
     def _carried(self, det: Detection, ahead: bool) -> float:
         """``det``'s gap carried on from the last scan to now: it moved at its speed, the ego
@@ -617,7 +634,13 @@ class SurroundSensor:
         ahead = found[0]
         if ahead.obj is None:
             return None
-        return self._carried(ahead, True), ahead.speed
+        # _carried(ahead, True), inline: every control period of a lane change
+        moved = self.s - self.s_scan
+        line = ahead.line
+        if line is not None:
+            moved -= line * (self.turn - self.turn_scan)
+        speed = ahead.speed
+        return ahead.gap0 + speed * (self.t - self.t_scan) - moved, speed
 
     def tracks(self, t: float) -> list[tuple[float, float, float, float, float]]:
         """Every vehicle seen at the last SUMO step, moved on to time ``t`` (s) at its
