@@ -512,12 +512,17 @@ class FileScenario(Scenario):
         c = self.config
         self.model, self.roads, self.ego_name, self.starts = self.resolve(c)
         edge = self.starts[self.ego_name].edge
+        roads = self.roads
+        # the ego drives on along its lane's successors (the straightest at a choice): SUMO's
+        # route for it and its lane frame, every lane of its start road along the same roads
+        self.ego_route = route = roads.lane_route(edge, c.ego_lane)
         road = {
             "edge": edge,
             "route": f"route_{edge}",
-            "route_edges": tuple(self.roads.route_from(edge)),
-            "n_lanes": len(self.roads.edges[edge].lanes),
+            "route_edges": tuple(e for e, _, _ in route),
+            "n_lanes": len(roads.edges[edge].lanes),
             "refine": refine_shape,
+            "lane_points": lambda index: roads.route_points(roads.beside(route, index)),
         }
         self.in_lane = BrakeInLane(c, lambda: self.safety is not None and self.safety.active)
         self.impact = Impact(self.in_lane)
@@ -831,9 +836,12 @@ class StoryDriver:
         elif gone:
             self._road_end(f"{gone[0]} left the road network (the end of its route)")
         elif sc.view.s + sc.geometry.cg_to_front >= sc.view.road.length:
+            last, index, _ = sc.ego_route[-1]
+            lane = sc.roads.edges[last].lanes[index].id
+            why = "a dead end" if not sc.roads.links.get((last, index)) else "its lane leads back onto its route"
             self._road_end(
-                f"the ego reached the end of its road (its lane {sc.view.road.lane_id}, "
-                f"{sc.view.road.length:.0f} m: ego drives on its start road only)"
+                f"the ego reached the end of its route (lane {lane}, {sc.view.road.length:.0f} m along its lanes "
+                f"from lane {sc.view.road.lane_id}: {why})"
             )
 
     def _road_end(self, why: str) -> None:
