@@ -184,6 +184,25 @@ def _signal_types(data: bytes) -> bytes | None:
     return None if fixed == data else fixed
 
 
+_ROAD = re.compile(rb"<road\b[^>]*>")
+_ROAD_ATTR = re.compile(rb"""\b(id|rule)\s*=\s*(["'])(.*?)\2""")
+
+
+def lefthand_roads(road: Path) -> dict[str, int]:
+    """The roads of an OpenDRIVE file that drive on the left (``rule="LHT"``): road id -> the
+    line of its ``<road>``. netconvert converts every road right-hand (its lanes with positive
+    ids run against s), so on these the file's lanes and SUMO's run opposite ways."""
+    if str(road).endswith(".net.xml") or not road.is_file():
+        return {}
+    data = road.read_bytes()
+    out = {}
+    for m in _ROAD.finditer(data):
+        attrs = {k.decode(): v.decode(errors="replace") for k, _, v in _ROAD_ATTR.findall(m.group(0))}
+        if attrs.get("rule", "").upper() == "LHT":
+            out[attrs.get("id", "")] = data.count(b"\n", 0, m.start()) + 1
+    return out
+
+
 @dataclass(frozen=True)
 class Lane:
     id: str  #: SUMO lane id

@@ -44,7 +44,7 @@ from ego.openscenario.ego_refs import EgoGap, EgoPath
 from ego.openscenario.kinematic import Kinematic
 from ego.openscenario.loader import declared_parameters, header_description, load
 from ego.openscenario.registry import action_of
-from ego.openscenario.roads import RoadMap, network_file, refine_shape
+from ego.openscenario.roads import RoadMap, lefthand_roads, network_file, refine_shape
 from ego.openscenario.runtime import Storyboard
 from ego.openscenario.traffic import TrafficActions, sumo_type
 from ego.openscenario.xmltree import DOCS, ScenarioFileError
@@ -452,7 +452,7 @@ class FileScenario(Scenario):
         roads = RoadMap(net, converted=not str(model.road).endswith(".net.xml"))
         ego = find_ego(model, config.ego_entity)
         _check_ego_actions(model, ego)
-        _check_turned(model, ego)
+        _check_turned(model, ego, roads)
         starts = placements(model, roads)
         edge = starts[ego].edge
         _check_road_references(model, roads, len(roads.edges[edge].lanes), len(_opposite_lanes(roads, edge)))
@@ -1250,15 +1250,38 @@ def _check_routes(model: M.Scenario, roads: RoadMap) -> None:
                 )
 
 
-def _check_turned(model: M.Scenario, ego: str) -> None:
-    """The ego turned against its lane is refused: it drives its lane frame's way."""
+def _check_turned(model: M.Scenario, ego: str, roads: RoadMap | None = None) -> None:
+    """The ego turned against its lane is refused: it drives its lane frame's way. With the
+    roads: an absolute heading more than 90 degrees from its lane's, and a start on a road
+    that drives on the left (netconvert makes it right-hand: its lanes run the other way)."""
     tp = next(a for a in model.init[ego] if isinstance(a, M.TeleportAction))
-    if getattr(tp.position, "turned", 0):
+    pos = tp.position
+    turned = getattr(pos, "turned", 0)
+    on_lane = pos if isinstance(pos, M.LanePosition) and roads is not None else None
+    if on_lane is not None and on_lane.absolute is not None and roads is not None:
+        try:
+            lane, along = roads.lane_position(on_lane.road, on_lane.lane, on_lane.s)
+        except ValueError:  # an unknown lane: _check_road_references names it
+            lane = None
+        if lane is not None and len(lane.shape) > 1:
+            heading = LanePolyline(lane.shape, lane.width, lane.id).heading_at(along)
+            if math.cos(on_lane.absolute[0] - heading) < 0.0:
+                turned = on_lane.absolute[1]
+    if turned:
         raise ScenarioFileError(
             model.path,
-            tp.position.turned,  # type: ignore[union-attr]
+            turned,
             f"an <Orientation> turning the ego against its lane's direction is not supported by ego: the ego "
             f"drives its lane's way (see {DOCS})",
+        )
+    left = lefthand_roads(Path(model.road)) if on_lane is not None else {}
+    if on_lane is not None and on_lane.road in left:
+        raise ScenarioFileError(
+            model.path,
+            on_lane.line,
+            f'the ego starts on road {on_lane.road!r}, which drives on the left (rule="LHT", '
+            f"{Path(model.road).name}:{left[on_lane.road]}): left-hand traffic is not supported by ego "
+            f"(netconvert converts every road right-hand, so its lanes would run the other way; see {DOCS})",
         )
 
 

@@ -180,3 +180,31 @@ def test_a_dead_end_still_ends_the_run(tmp_path):
     end = sc.events[-1].text
     assert "the end of its route" in end and "a dead end" in end, end
     assert 24.0 < sc.t < 25.5
+
+
+def test_an_ego_headed_against_its_lane_by_an_absolute_orientation_is_refused(tmp_path):
+    """Road 1 runs along +x: an absolute heading of pi on its right lane would have the ego
+    drive its lane backwards (a run ending at once at the road's start): refused, naming the
+    Orientation's line, as a relative turn is."""
+    from ego.openscenario.xmltree import ScenarioFileError
+
+    (tmp_path / "links.xodr").write_text(network(False))
+    turned = '<Orientation type="absolute" h="3.14159"/>'
+    path = write_file(tmp_path / "turned.xosc", "links.xodr", [("Ego", "1", -1, 50.0, 20.0, turned)], [])
+    line = next(i for i, ln in enumerate(path.read_text().splitlines(), 1) if "Orientation" in ln)
+    with pytest.raises(ScenarioFileError, match=rf":{line}: an <Orientation> turning the ego against its lane"):
+        run_scene(path, 1.0)
+    along = '<Orientation type="absolute" h="0.1"/>'
+    path = write_file(tmp_path / "along.xosc", "links.xodr", [("Ego", "1", -1, 50.0, 20.0, along)], [])
+    assert run_scene(path, 1.0).status in ("completed", "timeout")
+
+
+def test_an_ego_on_a_left_hand_traffic_road_is_refused(tmp_path):
+    """netconvert converts a rule="LHT" road right-hand: the ego's start on one is refused with
+    the road file's line, not run the wrong way."""
+    from ego.openscenario.xmltree import ScenarioFileError
+
+    (tmp_path / "links.xodr").write_text(network(False).replace('<road name="r1"', '<road rule="LHT" name="r1"'))
+    path = write_file(tmp_path / "lht.xosc", "links.xodr", [("Ego", "1", -1, 50.0, 20.0, "")], [])
+    with pytest.raises(ScenarioFileError, match=r"road '1', which drives on the left \(rule=\"LHT\", links.xodr:3\)"):
+        run_scene(path, 1.0)
