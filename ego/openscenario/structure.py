@@ -307,7 +307,7 @@ refuse(
     "`EndOfRoadCondition`, `OffroadCondition`",
     ("EndOfRoadCondition", "OffroadCondition"),
     "refused with its line: `EndOfRoadCondition` could never hold during a run of ego (a run ends when the "
-    "ego reaches the end of its road or a scripted car leaves the network, SUMO taking it off at its route's "
+    "ego reaches the end of its route or a scripted car leaves the network, SUMO taking it off at its route's "
     "end; the reference player keeps a car standing there); `OffroadCondition` needs a road-boundary model of "
     "every entity, which ego does not have",
     section="conditions",
