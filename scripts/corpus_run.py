@@ -13,7 +13,9 @@ a timeout. A file
 - is **refused** when it exits 2 with one ``ego: error:`` line and no traceback;
 - **crashed** otherwise (a traceback, another exit code, the timeout).
 
-Prints a markdown table (file, exit, seconds, the run's end or the first error line), the
+Prints a markdown table (file, exit, wall seconds, the simulated time the run reached and the
+time the file's StopTrigger stops it at when that is a simulation time, the run's end or the
+first error line: a run that ended at 1.3 s of a 30 s scenario shows it), the
 counts, and the outermost refused elements (``<X> is not supported``) with their number of
 files. ``--json OUT`` also writes the rows. Each variation file (a ParameterValueDistribution)
 is then run with ``ego sweep FILE -c C --out TMP --jobs 1`` (``--no-sweeps`` leaves them out):
@@ -53,6 +55,19 @@ UNSUPPORTED = re.compile(r"<(\w+)> is not supported by ego")
 #: the reference player's city maps, known by name where a copy lacks the road file
 CITY_ROADS = ("fabriksgatan.xodr", "multi_intersections.xodr")
 PARAM = re.compile(r"^\$\{?(\w+)\}?$")
+SIM_TIME = re.compile(r"^\s*sim_time\s+([-\d.]+) s\s*$", re.M)
+
+
+def stop_at(path: Path) -> float | None:
+    """The simulation time (s) the file's StopTrigger ends it at (a SimulationTimeCondition),
+    or None (no such trigger, or a file ego refuses)."""
+    from ego.openscenario.loader import load
+    from ego.openscenario.scenario import stop_time
+
+    try:
+        return stop_time(load(path))
+    except Exception:  # a refused file: its error is the run's
+        return None
 
 
 def scenario_files(paths: list[str], variations: bool = False) -> list[Path]:
@@ -226,7 +241,20 @@ def run_one(
     else:
         verdict = "crashed"
         first = next((ln for ln in reversed(err.splitlines()) if ln.strip()), f"exit {code}")
-    return {"file": path.name, "exit": code, "seconds": round(seconds, 1), "verdict": verdict, "first": first}
+    sim = SIM_TIME.search(out)
+    return {
+        "file": path.name,
+        "exit": code,
+        "seconds": round(seconds, 1),
+        "sim_time": float(sim.group(1)) if sim else None,
+        "stop_time": stop_at(path),
+        "verdict": verdict,
+        "first": first,
+    }
+
+
+def _time(value: float | None) -> str:
+    return "-" if value is None else f"{value:.1f}"
 
 
 def target_summary(files: list[Path], rows: list[dict]) -> str:
@@ -244,9 +272,12 @@ def target_summary(files: list[Path], rows: list[dict]) -> str:
     return "\n".join([head, *lines, f"{ran} of {len(target)} target files run ({share:.0f} %)"])
 
 
-def _print_row(r: dict) -> None:
+def _print_row(r: dict, times: bool = False) -> None:
+    """One row of the table; with ``times`` the simulated time the run reached and the file's
+    StopTrigger time beside it."""
     first = r["first"].replace("|", "\\|")[:220]
-    print(f"| {r['file']} | {r['exit']} | {r['seconds']:.1f} | {first} |", flush=True)
+    reached = f" {_time(r['sim_time'])} | {_time(r['stop_time'])} |" if times else ""
+    print(f"| {r['file']} | {r['exit']} | {r['seconds']:.1f} |{reached} {first} |", flush=True)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -273,12 +304,12 @@ def main(argv: list[str] | None = None) -> int:
         print("corpus_run: no scenario files found", file=sys.stderr)
         return 2
     rows = []
-    print("| file | exit | s | how it ends (the run's end, or the first error) |")
-    print("|---|---|---|---|")
+    print("| file | exit | s | sim s | stop s | how it ends (the run's end, or the first error) |")
+    print("|---|---|---|---|---|---|")
     for f in files:
         r = run_one(f, args.controller, args.timeout, tuple(args.path))
         rows.append(r)
-        _print_row(r)
+        _print_row(r, times=True)
     verdicts = Counter(r["verdict"] for r in rows)
     passed = sum(r["exit"] == 0 for r in rows)
     print(

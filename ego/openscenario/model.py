@@ -65,6 +65,9 @@ class LanePosition:
     line: int
     #: the line of an Orientation turning the entity against its lane's direction (0: none)
     turned: int = 0
+    #: an absolute Orientation's heading (rad) and line, checked against the lane's direction
+    #: where the road is known (the ego's start)
+    absolute: tuple[float, int] | None = None
 
 
 @dataclass(frozen=True)

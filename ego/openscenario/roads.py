@@ -381,6 +381,47 @@ def _edges(net: Path) -> dict[str, Edge]:
     return _edges_cached(str(net), net.stat().st_mtime)
 
 
+@dataclass(frozen=True)
+class Link:
+    """One lane's connection to a lane of the next edge: SUMO's ``<connection>``."""
+
+    to: str  #: the next edge
+    to_lane: int  #: its lane's index
+    via: tuple[str, ...]  #: the internal lanes through the junction, in driving order
+
+
+@lru_cache(maxsize=8)
+def _links_cached(net: str, mtime: float) -> tuple[dict[tuple[str, int], tuple[Link, ...]], dict[str, tuple]]:
+    """(edge, lane index) -> its connections to the next edges' lanes (through the internal
+    lanes of the junction between), and the internal lanes' shapes (lane id -> points)."""
+    root = _parse(Path(net))
+    inner: dict[str, tuple] = {}
+    for e in root.iter("edge"):
+        if e.get("function") == "internal":
+            for ln in e.iter("lane"):
+                inner[ln.get("id", "")] = tuple(
+                    (float(p.split(",")[0]), float(p.split(",")[1])) for p in ln.get("shape", "").split()
+                )
+    onward: dict[tuple[str, int], tuple[str, str, int]] = {}  # internal lane -> its next (via, edge, lane)
+    raw = []
+    for c in root.iter("connection"):
+        f, t, via = c.get("from", ""), c.get("to", ""), c.get("via", "")
+        fl, tl = int(c.get("fromLane", "0")), int(c.get("toLane", "0"))
+        if f.startswith(":"):
+            onward[(f, fl)] = (via, t, tl)
+        elif not t.startswith(":"):
+            raw.append((f, fl, t, tl, via))
+    links: dict[tuple[str, int], list[Link]] = {}
+    for f, fl, t, tl, via in raw:
+        chain: list[str] = []
+        while via and via not in chain and via in inner:
+            chain.append(via)
+            edge, _, index = via.rpartition("_")
+            via = onward.get((edge, int(index)), ("", t, tl))[0]
+        links.setdefault((f, fl), []).append(Link(t, tl, tuple(chain)))
+    return {k: tuple(v) for k, v in links.items()}, inner
+
+
 class RoadMap:
     """OpenDRIVE lane positions on a SUMO network (a converted ``.xodr`` or a ``.net.xml``).
 
@@ -393,6 +434,7 @@ class RoadMap:
     def __init__(self, net: Path, converted: bool) -> None:
         self.net, self.converted = net, converted
         self.edges = _edges(net)
+        self.links, self.inner = _links_cached(str(net), net.stat().st_mtime)
 
     def sections(self, road: str) -> list[tuple[float, Edge, bool]]:
         """(start s, edge, right-hand) of the road's edges, by start."""
@@ -486,6 +528,56 @@ class RoadMap:
             route.append(nxt[0])
         return route
 
+    def lane_route(self, edge: str, index: int, limit: int = 64) -> list[tuple[str, int, tuple[str, ...]]]:
+        """The way lane ``index`` of ``edge`` drives on: (edge, lane index, the internal lanes
+        from the one before) of its lane's successors, each edge once. Where the lane has
+        connections to more than one edge, the straightest (the least heading change from the
+        lane's end to the next lane's start: the way on, as SUMO's ``dir="s"``); it ends at a
+        lane with no connection (a dead end) or one leading back onto the route (a loop)."""
+        route = [(edge, index, ())]
+        seen = {edge}
+        while len(route) < limit:
+            e, i, _ = route[-1]
+            here = self.edges[e].lanes[i].shape
+            links = [k for k in self.links.get((e, i), ()) if k.to not in seen and k.to in self.edges]
+            if not links or len(here) < 2:
+                break
+            out = _direction(here[-2], here[-1])
+            best = min(links, key=lambda k: abs(math.remainder(self._heading_in(k) - out, math.tau)))
+            route.append((best.to, best.to_lane, best.via))
+            seen.add(best.to)
+        return route
+
+    def _heading_in(self, link: Link) -> float:
+        """The direction (rad) a connection starts in: its first internal lane's, else its lane's."""
+        shape = self.inner[link.via[0]] if link.via else self.edges[link.to].lanes[link.to_lane].shape
+        return _direction(shape[0], shape[1])
+
+    def beside(
+        self, route: list[tuple[str, int, tuple[str, ...]]], index: int
+    ) -> list[tuple[str, int, tuple[str, ...]]]:
+        """Lane ``index`` of the route's first edge along the same edges as ``route`` (a
+        :meth:`lane_route`), as far as its lane connects to the next of them."""
+        out = [(route[0][0], index, ())]
+        for nxt, _, _ in route[1:]:
+            e, i, _ = out[-1]
+            link = next((k for k in self.links.get((e, i), ()) if k.to == nxt), None)
+            if link is None:
+                break
+            out.append((nxt, link.to_lane, link.via))
+        return out
+
+    def route_points(self, route: list[tuple[str, int, tuple[str, ...]]]) -> list[tuple[float, float]]:
+        """The centre line along a :meth:`lane_route`: its lanes' and internal lanes' points in
+        driving order, a point where one piece ends and the next starts taken once."""
+        pts: list[tuple[float, float]] = []
+        for e, i, via in route:
+            for shape in (*(self.inner[v] for v in via), self.edges[e].lanes[i].shape):
+                for p in shape:
+                    if not pts or math.dist(pts[-1], p) > 1e-3:
+                        pts.append(p)
+        return pts
+
     def path(self, edges: list[str]) -> list[str] | None:
         """The shortest way (by length) from the first edge through each of the others in turn,
         every edge once where consecutive ones meet; None when one cannot be reached."""
@@ -535,6 +627,10 @@ class RoadMap:
         if best is None:
             raise ValueError("the road has no lanes")
         return best[0], best[1], best[2]
+
+
+def _direction(a: tuple[float, float], b: tuple[float, float]) -> float:
+    return math.atan2(b[1] - a[1], b[0] - a[0])
 
 
 def curvature_error(shape, analytic) -> float:

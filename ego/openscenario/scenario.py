@@ -471,7 +471,7 @@ class FileScenario(Scenario):
                 model.entities[ego].line,
                 f"the ego {ego!r} has no TeleportAction in <Init> (ego needs the ego's start position)",
             )
-        _check_turned(model, ego)
+        _check_turned(model, ego, roads)
         starts = placements(model, roads)
         edge = starts[ego].edge
         _check_road_references(model, roads, len(roads.edges[edge].lanes), len(_opposite_lanes(roads, edge)))
@@ -527,12 +527,17 @@ class FileScenario(Scenario):
         c = self.config
         self.model, self.roads, self.ego_name, self.starts = self.resolve(c)
         edge = self.starts[self.ego_name].edge
+        roads = self.roads
+        # the ego drives on along its lane's successors (the straightest at a choice): SUMO's
+        # route for it and its lane frame, every lane of its start road along the same roads
+        self.ego_route = route = roads.lane_route(edge, c.ego_lane)
         road = {
             "edge": edge,
             "route": f"route_{edge}",
-            "route_edges": tuple(self.roads.route_from(edge)),
-            "n_lanes": len(self.roads.edges[edge].lanes),
+            "route_edges": tuple(e for e, _, _ in route),
+            "n_lanes": len(roads.edges[edge].lanes),
             "refine": refine_shape,
+            "lane_points": lambda index: roads.route_points(roads.beside(route, index)),
         }
         self.in_lane = BrakeInLane(c, lambda: self.safety is not None and self.safety.active)
         self.impact = Impact(self.in_lane)
@@ -898,9 +903,12 @@ class StoryDriver:
         elif gone:
             self._road_end(f"{gone[0]} left the road network (the end of its route)")
         elif sc.view.s + sc.geometry.cg_to_front >= sc.view.road.length and self._ego_end is None:
+            last, index, _ = sc.ego_route[-1]
+            lane = sc.roads.edges[last].lanes[index].id
+            end = "a dead end" if not sc.roads.links.get((last, index)) else "its lane leads back onto its route"
             why = (
-                f"the ego reached the end of its road (its lane {sc.view.road.lane_id}, "
-                f"{sc.view.road.length:.0f} m: ego drives on its start road only)"
+                f"the ego reached the end of its route (lane {lane}, {sc.view.road.length:.0f} m along its lanes "
+                f"from lane {sc.view.road.lane_id}: {end})"
             )
             if sc.ego_name in self.board.watch_end:  # type: ignore[union-attr]
                 self._ego_end = why  # an EndOfRoadCondition on the ego sees it first (the next step)
@@ -1471,13 +1479,27 @@ def _check_routes(model: M.Scenario, roads: RoadMap) -> None:
                 )
 
 
-def _check_turned(model: M.Scenario, ego: str) -> None:
-    """The ego turned against its lane is refused: it drives its lane frame's way."""
+def _check_turned(model: M.Scenario, ego: str, roads: RoadMap | None = None) -> None:
+    """The ego turned against its lane is refused: it drives its lane frame's way. With the
+    roads: an absolute heading more than 90 degrees from its lane's too (a road that drives on
+    the left is refused for every entity when it is converted: ``roads.check_traffic_rule``)."""
     tp = next(a for a in model.init[ego] if isinstance(a, M.TeleportAction))
-    if getattr(tp.position, "turned", 0):
+    pos = tp.position
+    turned = getattr(pos, "turned", 0)
+    on_lane = pos if isinstance(pos, M.LanePosition) and roads is not None else None
+    if on_lane is not None and on_lane.absolute is not None and roads is not None:
+        try:
+            lane, along = roads.lane_position(on_lane.road, on_lane.lane, on_lane.s)
+        except ValueError:  # an unknown lane: _check_road_references names it
+            lane = None
+        if lane is not None and len(lane.shape) > 1:
+            heading = LanePolyline(lane.shape, lane.width, lane.id).heading_at(along)
+            if math.cos(on_lane.absolute[0] - heading) < 0.0:
+                turned = on_lane.absolute[1]
+    if turned:
         raise ScenarioFileError(
             model.path,
-            tp.position.turned,  # type: ignore[union-attr]
+            turned,
             f"an <Orientation> turning the ego against its lane's direction is not supported by ego: the ego "
             f"drives its lane's way (see {DOCS})",
         )

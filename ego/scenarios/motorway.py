@@ -145,8 +145,9 @@ class MotorwayWorld:
 
     The road is data: by default the motorway (``sumo_nets/highway``); a scenario file
     (:mod:`ego.openscenario`) gives its own ``edge`` (the ego's), the ``route`` id and its
-    ``route_edges``, the number of lanes and ``refine`` (lane points -> the points the lane
-    frame is built on)."""
+    ``route_edges``, the number of lanes, ``refine`` (lane points -> the points the lane
+    frame is built on) and ``lane_points`` (a lane's index -> its centre line along the
+    route, across the road's links: the lane frame of a route of many roads)."""
 
     def __init__(
         self,
@@ -159,12 +160,14 @@ class MotorwayWorld:
         route_edges: tuple[str, ...] = (EDGE,),
         n_lanes: int = N_LANES,
         refine: Callable[[list[tuple[float, float]]], list[tuple[float, float]]] | None = None,
+        lane_points: Callable[[int], list[tuple[float, float]]] | None = None,
     ) -> None:
         self.config = config
         self.geometry = geometry
         self.traffic = traffic
         self.edge, self.route, self.route_edges, self.n_lanes = edge, route, route_edges, n_lanes
         self.refine = refine
+        self.lane_points = lane_points
         self.sim: TrafficSim | None = None
         self.actors: list[ScriptedActor] = []
         self.colors: dict[str, tuple[int, int, int]] = {}
@@ -263,7 +266,10 @@ class MotorwayWorld:
         self.lanes = {}
         for lid, (width, pts) in shapes.items():
             edge, index = lid.rsplit("_", 1)
-            if edge == self.edge:
+            if edge == self.edge and self.lane_points is not None:
+                pts = self.lane_points(int(index))
+                self.lanes[int(index)] = LanePolyline(refine(pts) if refine else pts, width, lid)
+            elif edge == self.edge:
                 pts = join_lanes([shapes[f"{e}_{index}"][1] for e in chain]) if len(chain) > 1 else pts
                 self.lanes[int(index)] = LanePolyline(refine(pts) if refine else pts, width, lid)
         return missing

@@ -459,7 +459,7 @@ def test_a_car_leaving_the_road_network_ends_the_run_as_its_time_would(tmp_path)
 def test_the_ego_reaching_the_end_of_its_road_ends_the_run(tmp_path):
     sc = run_scene(scene(tmp_path, [], at={"Ego": (-3, 2960.0, 20.0), "C": (-1, 400.0, 15.0)}), 8.0)
     assert sc.status == "completed" and 1.5 < sc.t < 2.5
-    assert "the ego reached the end of its road" in sc.status_detail
+    assert "the ego reached the end of its route" in sc.status_detail and "a dead end" in sc.status_detail
     x_end = sc.view.road.length
     assert sc.view.s + sc.geometry.cg_to_front == pytest.approx(x_end, abs=0.1 * 20.0 + 0.5)
 
