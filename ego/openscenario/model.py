@@ -225,6 +225,10 @@ class LaneOffsetAction:
 class TeleportAction:
     position: Position
     line: int = 0
+    #: the world heading the file gives the entity (a WorldPosition's h, an absolute
+    #: Orientation's h), None without one; its line (the Orientation's or the position's)
+    heading: float | None = None
+    heading_line: int = 0
 
 
 @dataclass(frozen=True)

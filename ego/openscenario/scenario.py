@@ -161,6 +161,10 @@ class Placement:
     front: float
     offset: float
     speed: float | None
+    #: the line turning the entity against its lane's direction (0: along it): a relative
+    #: Orientation, or a world heading (absolute Orientation, WorldPosition h) facing more than
+    #: 90 degrees from its lane's heading where it starts
+    turned: int = 0
 
 
 def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
@@ -194,7 +198,7 @@ def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
                     f"{lane.length:.1f} m long (SUMO lane {lane.id})",
                 )
             _check_overlap(scenario, name, pos.line, lane, front, off, centre, out)
-            out[name] = Placement(lane.edge, lane.index, front, off, speed)
+            out[name] = Placement(lane.edge, lane.index, front, off, speed, _turned(tp, lane, s))
             del pending[name]
         if not pending:
             break
@@ -206,6 +210,17 @@ def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
             f"the start positions of {', '.join(pending)} refer to each other",
         )
     return out
+
+
+def _turned(tp: M.TeleportAction, lane, s: float) -> int:
+    """The line turning an entity that starts at ``s`` along SUMO ``lane`` against the lane's
+    direction (0: it faces the lane's way): its relative Orientation (read by the loader), or
+    the world heading the file gives it, compared with the lane's heading there."""
+    turned = getattr(tp.position, "turned", 0)
+    if turned or tp.heading is None:
+        return turned
+    lane_heading = LanePolyline(lane.shape, lane.width, lane.id).heading_at(min(max(s, 0.0), lane.length))
+    return tp.heading_line if math.cos(tp.heading - lane_heading) < 0.0 else 0
 
 
 def _check_overlap(
@@ -452,8 +467,8 @@ class FileScenario(Scenario):
         roads = RoadMap(net, converted=not str(model.road).endswith(".net.xml"))
         ego = find_ego(model, config.ego_entity)
         _check_ego_actions(model, ego)
-        _check_turned(model, ego)
         starts = placements(model, roads)
+        _check_turned(model, ego, starts[ego])
         edge = starts[ego].edge
         _check_road_references(model, roads, len(roads.edges[edge].lanes), len(_opposite_lanes(roads, edge)))
         _check_routes(model, roads)
@@ -795,16 +810,23 @@ class StoryDriver:
             tp = next(a for a in sc.model.init[name] if isinstance(a, M.TeleportAction))
             if name == sc.ego_name:
                 continue
-            turned = getattr(tp.position, "turned", 0)
+            turned = start.turned
             # a car whose Init offset puts it across the centre line, in the other direction's
             # lane, driving its own lane's way (speed-profile.xosc's Car2): driven by ego too
             across = start.edge == ego_edge and own.get(start.index, 0.0) + start.offset > centre_line
             if not (turned or across):
                 continue
-            if turned:
+            cx = sc.model.entities[name].vehicle.center_x
+            if turned and getattr(tp.position, "turned", 0):
                 x, y, h = self.position_xy(tp.position, {})
                 heading = h + math.pi  # turned round on its lane
-                cx = sc.model.entities[name].vehicle.center_x
+                x, y = x + cx * math.cos(heading), y + cx * math.sin(heading)
+            elif turned:  # its reference point from its placement, turned round on its lane
+                lane = sc.roads.edges[start.edge].lanes[start.index]
+                poly = LanePolyline(lane.shape, lane.width, lane.id)
+                ref = start.front - cx - 0.5 * sc.model.entities[name].vehicle.length
+                x, y = poly.offset_point(ref, start.offset)
+                heading = poly.heading_at(ref) + math.pi
                 x, y = x + cx * math.cos(heading), y + cx * math.sin(heading)
             else:  # its box centre from its placement (a relative position's entity has no state yet)
                 lane = sc.roads.edges[start.edge].lanes[start.index]
@@ -1242,14 +1264,14 @@ def _check_routes(model: M.Scenario, roads: RoadMap) -> None:
                 )
 
 
-def _check_turned(model: M.Scenario, ego: str) -> None:
+def _check_turned(model: M.Scenario, ego: str, start: Placement) -> None:
     """The ego turned against its lane is refused: it drives its lane frame's way."""
-    tp = next(a for a in model.init[ego] if isinstance(a, M.TeleportAction))
-    if getattr(tp.position, "turned", 0):
+    if start.turned:
         raise ScenarioFileError(
             model.path,
-            tp.position.turned,  # type: ignore[union-attr]
-            f"an <Orientation> turning the ego against its lane's direction is not supported by ego: the ego "
+            start.turned,
+            f"a start heading (an <Orientation>, a <WorldPosition>'s h) turning the ego against its lane's "
+            f"direction is not supported by ego: the ego "
             f"drives its lane's way (see {DOCS})",
         )
 
