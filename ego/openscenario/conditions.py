@@ -348,3 +348,5 @@ for _kind in (
     ReachPosition,
 ):
     register_condition(_kind())
+
+from ego.openscenario import clearance as _clearance  # noqa: E402,F401  (registers its condition)

@@ -795,9 +795,13 @@ class StoryDriver:
         lanes = _opposite_lanes(sc.roads, sc.starts[sc.ego_name].edge)
         own = sc.lane_offset
         self._lanes_all = dict(own)
+        ego_lanes = sc.roads.edges[sc.starts[sc.ego_name].edge].lanes
+        self._bands = [(own[i] - 0.5 * ln.width, own[i] + 0.5 * ln.width, 1) for i, ln in enumerate(ego_lanes)]
         for k, lane in enumerate(lanes):
             mid = lane.shape[len(lane.shape) // 2]
-            self._lanes_all[len(own) + k] = road.project(mid[0], mid[1])[1]
+            d = self._lanes_all[len(own) + k] = road.project(mid[0], mid[1])[1]
+            self._bands.append((d - 0.5 * lane.width, d + 0.5 * lane.width, -1))
+        self._bands.sort()
         if lanes:
             # the other direction's lanes are road too (a trajectory may take the ego there):
             # off the road beyond their outer edge by more than half a car
@@ -969,6 +973,9 @@ class StoryDriver:
     def lane_centre_of(self, d: float) -> float:
         sc = self.sc
         return min(sc.lane_offset.values(), key=lambda off: abs(d - off))
+
+    def lane_bands(self) -> list[tuple[float, float, int]]:
+        return self._bands
 
     def lane_centre(self, lane_id: int, relative_to: float | None = None, dlane: int = 0) -> float:
         # the ego's direction's lanes (index 0 the rightmost), then the other direction's from

@@ -62,6 +62,20 @@ EGO_SYNCHRONIZE = (
 )
 
 
+def _clearance(body: str) -> str:
+    """A ByEntityCondition of the Lead holding a RelativeClearanceCondition with ``body``
+    (its children; "" a negative distanceForward; NO-OPPOSITE: no oppositeLanes)."""
+    forward = "-5" if body == "" else "40"
+    opposite = "" if body == "NO-OPPOSITE" else ' oppositeLanes="false"'
+    body = "" if body in ("", "NO-OPPOSITE") else body
+    return (
+        '<ByEntityCondition><TriggeringEntities triggeringEntitiesRule="any"><EntityRef entityRef="Lead"/>'
+        "</TriggeringEntities><EntityCondition>\n"
+        f'<RelativeClearanceCondition distanceForward="{forward}" freeSpace="true"{opposite}>\n'
+        f"{body}</RelativeClearanceCondition></EntityCondition></ByEntityCondition>"
+    )
+
+
 def _route():
     """A two-waypoint route along the ego's road (scenariogeneration)."""
     from scenariogeneration import xosc
@@ -615,6 +629,42 @@ HAND = [
         f"a trailer (Vehicle 'semi') is not supported by ego: it runs single vehicles (see {DOCS})",
     ),
     ("windows-road-missing", sub('filepath="straight3.xodr"', 'filepath="C:\\Users\\me\\nowhere.xodr"'), "C:", None),
+    *(
+        (f"clearance-{id_}", sub(f"<ByValueCondition>{SIM_TIME}</ByValueCondition>", _clearance(body)), marker, message)
+        for id_, body, marker, message in (
+            (
+                "range-reversed",
+                '<RelativeLaneRange from="2" to="1"/>',
+                "<RelativeLaneRange",
+                "<RelativeLaneRange> from = 2 is above to = 1 (expected from <= to)",
+            ),
+            (
+                "range-not-integer",
+                '<RelativeLaneRange from="left" to="1"/>',
+                "<RelativeLaneRange",
+                "bad value for from in <RelativeLaneRange>: 'left' (expected an integer)",
+            ),
+            (
+                "negative-forward",
+                "",
+                "<RelativeClearanceCondition",
+                "bad value for distanceForward in <RelativeClearanceCondition>: -5 (expected >= 0)",
+            ),
+            (
+                "unknown-entity",
+                '<EntityRef entityRef="Truck"/>',
+                '<EntityRef entityRef="Truck"',
+                "unknown entity 'Truck' in <EntityRef> (entities: Ego, Lead)",
+            ),
+            (
+                "no-opposite-lanes",
+                "NO-OPPOSITE",
+                "<RelativeClearanceCondition",
+                "<RelativeClearanceCondition> needs attribute oppositeLanes",
+            ),
+            ("unknown-child", "<Lanes/>", "<Lanes/>", unsupported("Lanes")),
+        )
+    ),
 ]
 
 
@@ -718,9 +768,9 @@ def _sg_cases():
         ),
         (
             "sg-clearance",
-            lambda: base(entity_trigger(xosc.RelativeClearanceCondition(1, 5, 5))),
+            lambda: base(entity_trigger(xosc.RelativeClearanceCondition(True, -5, 5))),
             "<RelativeClearanceCondition",
-            un("RelativeClearanceCondition"),
+            "bad value for distanceBackward in <RelativeClearanceCondition>: -5 (expected >= 0)",
         ),
         (
             "sg-route-on-ego",
