@@ -62,7 +62,8 @@ class RelativeClearance(ConditionKind):
         "and another entity counts when any part of its box is in the area, else when its reference point is), "
         "over the lanes of the `RelativeLaneRange`s (`from`, `to`: lanes relative to the triggering entity's, "
         "0 its own, + left in its driving direction; none: every lane), those of the other driving direction only "
-        "with `oppositeLanes`. Along and across the lanes of the ego's road (the other distance conditions' lane "
+        "with `oppositeLanes`; where none of the range's lanes is there it does not hold (no clearance to have: "
+        "esmini's `two_plus_one_road.xosc` waits so for its added lane). Along and across the lanes of the ego's road (the other distance conditions' lane "
         "frame), boxes from SUMO's vehicle outlines (`test_xosc_clearance.py`: against hand-computed gaps)"
     )
 
@@ -95,6 +96,8 @@ class RelativeClearance(ConditionKind):
             rel = (k - own) * way  # + left in the triggering entity's driving direction
             if not area.lanes or any(a <= rel <= b for a, b in area.lanes):
                 lanes.add(k)
+        if not lanes:
+            return False  # no lane of the range beside the entity: no clearance to have
         # the area along the lane frame: [lo, hi] in s
         if area.free_space:
             centre = e.s

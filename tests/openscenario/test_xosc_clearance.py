@@ -26,8 +26,9 @@ def _clearance(free: bool, lanes: str = "", refs: str = "", opposite: bool = Fal
     )
 
 
-def _run(tmp, monkeypatch, condition: str, b_lane: int = -1, b_s: float = 200.0, b_speed: float = 10.0):
-    """Run with an event on T starting when ``condition`` stops holding (a falling edge):
+def _run(tmp, monkeypatch, condition: str, b_lane=-1, b_s=200.0, b_speed=10.0, edge="falling"):
+    """Run with an event on T starting when ``condition`` stops holding (a falling edge; or
+    ``edge``):
     the event's start time and T's and B's s at each storyboard time."""
     (tmp / "twoway.xodr").write_text(ROAD)
     rows = [
@@ -35,7 +36,7 @@ def _run(tmp, monkeypatch, condition: str, b_lane: int = -1, b_s: float = 200.0,
         ("T", "1", -2, 100.0, 20.0, ""),
         ("B", "1", b_lane, b_s, b_speed, '<Orientation type="relative" h="0"/>'),
     ]
-    ev = event("E", "T", speed(20.0), trigger([entity("T", condition, edge="falling")]))
+    ev = event("E", "T", speed(20.0), trigger([entity("T", condition, edge=edge)]))
     path = write_file(tmp / "clear.xosc", "twoway.xodr", rows, [ev])
     seen: dict[float, tuple[float, float]] = {}
     step = Storyboard.step
@@ -75,11 +76,14 @@ def test_reference_points_ahead_in_the_lane_to_the_left(tmp_path, monkeypatch):
 
 def test_every_lane_without_a_range_and_none_to_the_right(tmp_path, monkeypatch):
     """No RelativeLaneRange: every lane of T's direction (B counts); the lane to T's right
-    (relative -1) does not exist on this road: the area stays clear."""
+    (relative -1) does not exist on this road: the condition never holds (no clearance to
+    have), though the lane to the left is clear at the start (an event on it starts at once)."""
     times, seen = _run(tmp_path, monkeypatch, _clearance(True))
     assert times == [pytest.approx(_first(seen, lambda ts, bs: bs - ts - 4.5 <= 45.0))]
-    times, _ = _run(tmp_path, monkeypatch, _clearance(True, '<RelativeLaneRange from="-1" to="-1"/>'))
+    times, _ = _run(tmp_path, monkeypatch, _clearance(True, '<RelativeLaneRange from="-1" to="-1"/>'), edge="none")
     assert times == []
+    times, _ = _run(tmp_path, monkeypatch, _clearance(True, LEFT), edge="none")
+    assert times == [0.0]
 
 
 def test_only_the_entities_referred_to_count(tmp_path, monkeypatch):
