@@ -42,7 +42,7 @@ from ego.openscenario.actions import along_path, trajectory_points
 from ego.openscenario.dynamics import Transition
 from ego.openscenario.ego_refs import EgoGap, EgoPath
 from ego.openscenario.kinematic import Kinematic
-from ego.openscenario.loader import declared_parameters, header_description, load
+from ego.openscenario.loader import declared_parameters, header_description, load, turned_message
 from ego.openscenario.registry import action_of
 from ego.openscenario.roads import RoadMap, network_file, refine_shape
 from ego.openscenario.runtime import Storyboard
@@ -471,6 +471,7 @@ class FileScenario(Scenario):
         _check_turned(model, ego, starts[ego])
         edge = starts[ego].edge
         _check_road_references(model, roads, len(roads.edges[edge].lanes), len(_opposite_lanes(roads, edge)))
+        _check_story_headings(model, roads)
         _check_routes(model, roads)
         return model, roads, ego, starts
 
@@ -1281,6 +1282,25 @@ def _check_turned(model: M.Scenario, ego: str, start: Placement) -> None:
             f"direction is not supported by ego: the ego "
             f"drives its lane's way (see {DOCS})",
         )
+
+
+def _check_story_headings(model: M.Scenario, roads: RoadMap) -> None:
+    """A TeleportAction of the storyboard whose world heading (an absolute Orientation, a
+    WorldPosition's h) faces more than 90 degrees from the lane it names is refused with that
+    heading's line, as a relative turn outside Init is: only an Init start may be turned."""
+    for x in M.walk(model.stories):
+        if not isinstance(x, M.TeleportAction) or x.heading is None:
+            continue
+        pos = x.position
+        if isinstance(pos, M.WorldPosition):
+            lane, s, _ = roads.nearest_lane(pos.x, pos.y)
+            lane_heading = LanePolyline(lane.shape, lane.width, lane.id).heading_at(s)
+        elif isinstance(pos, (M.LanePosition, M.RoadPosition)):
+            lane_heading = _absolute_xy(pos, roads)[2]
+        else:
+            continue  # relative to an entity: its lane is known only during the run
+        if math.cos(x.heading - lane_heading) < 0.0:
+            raise ScenarioFileError(model.path, x.heading_line, turned_message("outside <Init>"))
 
 
 def _check_road_references(model: M.Scenario, roads: RoadMap, ego_lanes: int, other_lanes: int = 0) -> None:
