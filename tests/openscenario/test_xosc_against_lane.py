@@ -202,26 +202,14 @@ def test_the_ego_given_a_world_heading_against_its_lane_is_refused_with_its_line
     assert exc.value.line == next(i for i, ln in enumerate(path.read_text().splitlines(), 1) if mark in ln)
 
 
-def test_a_car_turned_against_its_lane_outside_init_is_refused(tmp_path):
-    teleport = (
-        '<TeleportAction><Position><LanePosition roadId="1" laneId="-1" s="200" offset="0">'
-        '<Orientation type="relative" h="3.141593"/></LanePosition></Position></TeleportAction>'
-    )
-    path = _scene(
-        tmp_path,
-        {"Ego": (-1, 30.0, 20.0, False), "A": (-1, 120.0, 25.0, False)},
-        [event("Tp", "A", teleport, trigger([sim_time(1.0)]))],
-    )
-    with pytest.raises(ScenarioFileError, match=r"against its lane's direction \(outside <Init>\)"):
-        run_scene(path, 1.0)
-
-
-def test_a_story_teleport_given_a_world_heading_against_its_lane_is_refused(tmp_path):
-    """Only an Init start may be turned: a TeleportAction of the story facing lane -1 (heading
-    +x) with the absolute heading pi is refused before the run, with its Orientation's line."""
+@pytest.mark.parametrize("kind", ["relative", "absolute"])
+def test_a_car_turned_against_its_lane_outside_init_is_refused(tmp_path, kind):
+    """Only an Init start may be turned: a TeleportAction of the story turned round on lane -1
+    (a relative h = pi, or the absolute heading pi against the lane's +x, checked before the
+    run) is refused with its Orientation's line; along its lane it is accepted."""
     teleport = (
         '<TeleportAction><Position><LanePosition roadId="1" laneId="-1" s="200" offset="0">\n'
-        '<Orientation type="absolute" h="3.141593"/></LanePosition></Position></TeleportAction>'
+        f'<Orientation type="{kind}" h="3.141593"/></LanePosition></Position></TeleportAction>'
     )
     path = _scene(
         tmp_path,
@@ -231,5 +219,5 @@ def test_a_story_teleport_given_a_world_heading_against_its_lane_is_refused(tmp_
     with pytest.raises(ScenarioFileError, match=r"against its lane's direction \(outside <Init>\)") as exc:
         run_scene(path, 1.0)
     assert exc.value.line == next(i for i, ln in enumerate(path.read_text().splitlines(), 1) if "Orientation" in ln)
-    path.write_text(path.read_text().replace('h="3.141593"', 'h="0.2"'))  # along its lane: accepted
+    path.write_text(path.read_text().replace('h="3.141593"', 'h="0.2"'))
     assert run_scene(path, 1.5).status == "completed"
