@@ -221,3 +221,29 @@ def test_a_car_turned_against_its_lane_outside_init_is_refused(tmp_path, kind):
     assert exc.value.line == next(i for i, ln in enumerate(path.read_text().splitlines(), 1) if "Orientation" in ln)
     path.write_text(path.read_text().replace('h="3.141593"', 'h="0.2"'))
     assert run_scene(path, 1.5).status == "completed"
+
+
+@pytest.mark.parametrize("h, way", [("0", 1), ("3.141593", -1)])
+def test_a_relative_start_across_the_centre_line_drives_the_way_its_world_heading_faces(tmp_path, monkeypatch, h, way):
+    """esmini's cut-in_simple.xosc form: T starts 3.5 m left of the ego (in the oncoming lane),
+    20 m behind, by a RelativeRoadPosition with an absolute Orientation, 15 m/s: facing +x (the
+    ego's way) it drives the ego's way, facing -x (its lane's way) against it, 1.5 m a step."""
+    rows = _record(monkeypatch, "T")
+    path = _scene(tmp_path, {"Ego": (-1, 100.0, 15.0, False), "T": (-1, 300.0, 15.0, False)})
+    text = path.read_text()
+    i = text.index('<Private entityRef="T">')
+    j = text.index("<LanePosition", i)
+    k = text.index("</Position>", j)
+    path.write_text(
+        text[:j]
+        + f'<RelativeRoadPosition entityRef="Ego" ds="-20" dt="3.5"><Orientation type="absolute" h="{h}"/>'
+        + "</RelativeRoadPosition>"
+        + text[k:]
+    )
+    sc = run_scene(path, 2.5)
+    assert sc.status == "completed"
+    s0 = rows[0.1][0]
+    for k in range(1, 20):
+        s, d, v, _ = rows[round(0.1 * k, 6)]
+        assert s - s0 == pytest.approx(way * 1.5 * (k - 1), abs=1e-6)
+        assert d == pytest.approx(3.5, abs=1e-6)
