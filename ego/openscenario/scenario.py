@@ -468,7 +468,7 @@ class FileScenario(Scenario):
         ego = find_ego(model, config.ego_entity)
         _check_ego_actions(model, ego)
         starts = placements(model, roads)
-        _check_turned(model, ego, starts[ego])
+        _check_turned(model, ego, starts[ego], roads)
         edge = starts[ego].edge
         _check_road_references(model, roads, len(roads.edges[edge].lanes), len(_opposite_lanes(roads, edge)))
         _check_story_headings(model, roads)
@@ -1272,16 +1272,26 @@ def _check_routes(model: M.Scenario, roads: RoadMap) -> None:
                 )
 
 
-def _check_turned(model: M.Scenario, ego: str, start: Placement) -> None:
-    """The ego turned against its lane is refused: it drives its lane frame's way."""
-    if start.turned:
-        raise ScenarioFileError(
-            model.path,
-            start.turned,
-            f"a start heading (an <Orientation>, a <WorldPosition>'s h) turning the ego against its lane's "
-            f"direction is not supported by ego: the ego "
-            f"drives its lane's way (see {DOCS})",
+def _check_turned(model: M.Scenario, ego: str, start: Placement, roads: RoadMap) -> None:
+    """The ego turned against its lane is refused: it drives its lane frame's way. A world
+    heading is named beside its lane's there (the file's numbers, radians)."""
+    if not start.turned:
+        return
+    tp = next(a for a in model.init[ego] if isinstance(a, M.TeleportAction))
+    why = ""
+    if tp.heading is not None and not getattr(tp.position, "turned", 0):
+        lane = roads.edges[start.edge].lanes[start.index]
+        ref = start.front - model.entities[ego].vehicle.center_x - 0.5 * model.entities[ego].vehicle.length
+        lane_h = LanePolyline(lane.shape, lane.width, lane.id).heading_at(min(max(ref, 0.0), lane.length))
+        why = (
+            f" (its world heading {tp.heading:g} rad; its lane heads {math.remainder(lane_h, math.tau):.2f} rad there)"
         )
+    raise ScenarioFileError(
+        model.path,
+        start.turned,
+        f"a start heading turning the ego against its lane's direction{why} is not supported by ego: the ego "
+        f"drives its lane's way (see {DOCS})",
+    )
 
 
 def _check_story_headings(model: M.Scenario, roads: RoadMap) -> None:

@@ -199,6 +199,7 @@ def test_the_ego_given_a_world_heading_against_its_lane_is_refused_with_its_line
         mark = "WorldPosition"
     with pytest.raises(ScenarioFileError, match=r"turning the ego against its lane's direction") as exc:
         run_scene(path, 1.0)
+    assert "(its world heading 3.14159 rad; its lane heads 0.00 rad there)" in str(exc.value)
     assert exc.value.line == next(i for i, ln in enumerate(path.read_text().splitlines(), 1) if mark in ln)
 
 
