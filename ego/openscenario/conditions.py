@@ -357,3 +357,4 @@ for _kind in (
     register_condition(_kind())
 
 from ego.openscenario import clearance as _clearance  # noqa: E402,F401  (registers its condition)
+from ego.openscenario import timeofday as _timeofday  # noqa: E402,F401  (registers its condition)

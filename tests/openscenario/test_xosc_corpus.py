@@ -226,9 +226,9 @@ HAND = [
     ),
     (
         "unsupported-condition",
-        sub(SIM_TIME, '<TimeOfDayCondition rule="greaterThan" dateTime="2026-01-01T10:00:00"/>'),
-        "<TimeOfDayCondition",
-        unsupported("TimeOfDayCondition"),
+        sub(SIM_TIME, '<UserDefinedValueCondition name="light" value="1" rule="greaterThan"/>'),
+        "<UserDefinedValueCondition",
+        unsupported("UserDefinedValueCondition"),
     ),
     (
         "unsupported-position",
@@ -629,6 +629,20 @@ HAND = [
         f"a trailer (Vehicle 'semi') is not supported by ego: it runs single vehicles (see {DOCS})",
     ),
     ("windows-road-missing", sub('filepath="straight3.xodr"', 'filepath="C:\\Users\\me\\nowhere.xodr"'), "C:", None),
+    (
+        "time-of-day-without-init-time",
+        sub(SIM_TIME, '<TimeOfDayCondition dateTime="2025-06-13T12:00:00" rule="greaterThan"/>'),
+        "<TimeOfDayCondition",
+        "a <TimeOfDayCondition> needs the time of day the scenario starts at: an inline <TimeOfDay> in an <Init> "
+        f"EnvironmentAction (see {DOCS})",
+    ),
+    (
+        "time-of-day-bad-date",
+        sub(SIM_TIME, '<TimeOfDayCondition dateTime="13.06.2025 12:00" rule="greaterThan"/>'),
+        "<TimeOfDayCondition",
+        "bad value for dateTime in <TimeOfDayCondition>: '13.06.2025 12:00' (expected a date and time, "
+        "2025-06-13T12:00:00)",
+    ),
     *(
         (f"clearance-{id_}", sub(f"<ByValueCondition>{SIM_TIME}</ByValueCondition>", _clearance(body)), marker, message)
         for id_, body, marker, message in (
