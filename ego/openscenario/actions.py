@@ -35,7 +35,15 @@ class Teleport(ActionKind):
     )
 
     def build(self, b: Any, node: Node) -> M.TeleportAction:
-        return M.TeleportAction(b.position(b.one(node, "Position")), node.line)
+        position = b.one(node, "Position")
+        p = b.one(position)
+        o = p.child("Orientation")
+        heading, line = None, 0
+        if p.tag == "WorldPosition" and "h" in p.attrs:
+            heading, line = b.num(p, "h"), p.line
+        elif o is not None and "h" in o.attrs and b.enum(o, "type", ("relative", "absolute"), "absolute") == "absolute":
+            heading, line = b.num(o, "h"), o.line
+        return M.TeleportAction(b.position(position), node.line, heading, line)
 
     def start(self, run: ActionRun, t: float) -> None:
         drv = run.board.driver

@@ -248,6 +248,12 @@ class Acceleration(ConditionKind):
         return compare(c.rule, acc, c.value)  # type: ignore[arg-type]
 
 
+def _freespace(b: Any, c: Node) -> bool:
+    """A distance condition's ``freespace``; ``freeSpace`` where it is missing (the reference
+    player's ``two_plus_one_road.xosc`` spells it so, the spelling of 1.2's clearance condition)."""
+    return b.bool_(c, "freeSpace" if "freespace" not in c.attrs and "freeSpace" in c.attrs else "freespace")
+
+
 class TimeHeadway(ConditionKind):
     tag = "TimeHeadwayCondition"
     label = (
@@ -257,14 +263,15 @@ class TimeHeadway(ConditionKind):
     also = ("TimeToCollisionCondition", "RelativeDistanceCondition", "DistanceCondition", "ReachPositionCondition")
     note = (
         "along the ego's start lane (s, d of box centres); freespace subtracts half lengths (longitudinal), half "
-        "widths (lateral), or is the distance to the box (Distance); `alongRoute`/`coordinateSystem` are read as "
+        "widths (lateral), or is the distance to the box (Distance); `freeSpace` is read where `freespace` is "
+        "missing (esmini's `two_plus_one_road.xosc` writes it); `alongRoute`/`coordinateSystem` are read as "
         "road coordinates"
     )
 
     def build(self, b: Any, c: Node, base: Base) -> M.Condition:
         rule, value = b.enum(c, "rule", M.RULES), b.num(c, "value")
         return M.Condition(
-            kind=c.tag, rule=rule, value=value, entity=b.entity_ref(c), freespace=b.bool_(c, "freespace"), **base
+            kind=c.tag, rule=rule, value=value, entity=b.entity_ref(c), freespace=_freespace(b, c), **base
         )
 
     def holds(self, board: Storyboard, c: M.Condition, e: EntityState, name: str) -> bool:
@@ -289,7 +296,7 @@ class TimeToCollision(ConditionKind):
             value=b.num(c, "value"),
             entity=entity,
             position=pos,
-            freespace=b.bool_(c, "freespace"),
+            freespace=_freespace(b, c),
             **base,
         )
 
@@ -320,7 +327,7 @@ class RelativeDistance(ConditionKind):
             rule=rule,
             value=b.num(c, "value"),
             entity=b.entity_ref(c),
-            freespace=b.bool_(c, "freespace"),
+            freespace=_freespace(b, c),
             distance_type=dtype,
             **base,
         )
@@ -346,7 +353,7 @@ class Distance(ConditionKind):
     tag, contains = "DistanceCondition", ("Position",)
 
     def build(self, b: Any, c: Node, base: Base) -> M.Condition:
-        rule, value, free = b.enum(c, "rule", M.RULES), b.num(c, "value"), b.bool_(c, "freespace")
+        rule, value, free = b.enum(c, "rule", M.RULES), b.num(c, "value"), _freespace(b, c)
         pos = b.position(b.one(c, "Position"))
         return M.Condition(kind=c.tag, rule=rule, value=value, freespace=free, position=pos, **base)
 
@@ -389,3 +396,6 @@ for _kind in (
     ReachPosition,
 ):
     register_condition(_kind())
+
+from ego.openscenario import clearance as _clearance  # noqa: E402,F401  (registers its condition)
+from ego.openscenario import timeofday as _timeofday  # noqa: E402,F401  (registers its condition)

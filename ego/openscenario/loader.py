@@ -660,11 +660,8 @@ class _Builder:
         p = self.one(node)
         tag = p.tag
         o = p.child("Orientation")
-        turned = 0
-        absolute = None
-        if o is not None and self.enum(o, "type", ("relative", "absolute"), "absolute") == "absolute":
-            absolute = (self.num(o, "h", 0.0), o.line)
-        elif o is not None:
+        turned = 0  # (an absolute heading is the TeleportAction's, checked where the lane is known)
+        if o is not None and self.enum(o, "type", ("relative", "absolute"), "absolute") == "relative":
             h = self.num(o, "h", 0.0)
             if math.cos(h) < 0.0:  # turned more than 90 degrees from its lane's direction
                 if tag != "LanePosition":
@@ -677,7 +674,7 @@ class _Builder:
             road, lane, s = self.str_(p, "roadId"), self.int_(p, "laneId"), self.num(p, "s", nonneg=True)
             if lane == 0:  # OpenDRIVE's lane 0 is the reference line: offset is t from it
                 return M.RoadPosition(road, s, self.num(p, "offset", 0.0), p.line)
-            return M.LanePosition(road, lane, s, self.num(p, "offset", 0.0), p.line, turned, absolute)
+            return M.LanePosition(road, lane, s, self.num(p, "offset", 0.0), p.line, turned)
         if tag == "RoadPosition":
             return M.RoadPosition(self.str_(p, "roadId"), self.num(p, "s", nonneg=True), self.num(p, "t"), p.line)
         if tag == "RelativeLanePosition":

@@ -65,9 +65,6 @@ class LanePosition:
     line: int
     #: the line of an Orientation turning the entity against its lane's direction (0: none)
     turned: int = 0
-    #: an absolute Orientation's heading (rad) and line, checked against the lane's direction
-    #: where the road is known (the ego's start)
-    absolute: tuple[float, int] | None = None
 
 
 @dataclass(frozen=True)
@@ -228,6 +225,10 @@ class LaneOffsetAction:
 class TeleportAction:
     position: Position
     line: int = 0
+    #: the world heading the file gives the entity (a WorldPosition's h, an absolute
+    #: Orientation's h), None without one; its line (the Orientation's or the position's)
+    heading: float | None = None
+    heading_line: int = 0
 
 
 @dataclass(frozen=True)

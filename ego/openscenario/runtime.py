@@ -73,6 +73,10 @@ class Driver(Protocol):
     def lane_centre_of(self, d: float) -> float:
         """d of the centre of the lane at offset ``d``."""
 
+    def lane_bands(self) -> list[tuple[float, float, int]]:
+        """The lanes of the ego's road across the lane frame, right to left: (lowest d, highest
+        d, driving direction: +1 along s, -1 against it)."""
+
     def lane_centre(self, lane_id: int, relative_to: float | None = None, dlane: int = 0) -> float:
         """d of OpenDRIVE lane ``lane_id`` (or the lane ``dlane`` to the left of the lane at
         ``relative_to``)."""

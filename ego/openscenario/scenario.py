@@ -43,7 +43,7 @@ from ego.openscenario.actions import along_path, trajectory_points
 from ego.openscenario.dynamics import Transition
 from ego.openscenario.ego_refs import EgoGap, EgoPath
 from ego.openscenario.kinematic import Kinematic
-from ego.openscenario.loader import declared_parameters, header_description, load
+from ego.openscenario.loader import declared_parameters, header_description, load, turned_message
 from ego.openscenario.registry import action_of
 from ego.openscenario.roads import RoadMap, network_file, refine_shape
 from ego.openscenario.runtime import EntityState, Storyboard, boxes_overlap
@@ -164,6 +164,10 @@ class Placement:
     speed: float | None
     #: the entities placed before it whose bodies it overlaps: (name, m along, m across)
     overlaps: tuple[tuple[str, float, float], ...] = ()
+    #: the line turning the entity against its lane's direction (0: along it): a relative
+    #: Orientation, or a world heading (absolute Orientation, WorldPosition h) facing more than
+    #: 90 degrees from its lane's heading where it starts
+    turned: int = 0
 
 
 def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
@@ -204,7 +208,7 @@ def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
                     f"{lane.length:.1f} m long (SUMO lane {lane.id})",
                 )
             overlaps = _overlaps(scenario, name, lane, front, off, centre, out)
-            out[name] = Placement(lane.edge, lane.index, front, off, speed, overlaps)
+            out[name] = Placement(lane.edge, lane.index, front, off, speed, overlaps, _turned(tp, lane, s))
             del pending[name]
         if not pending:
             break
@@ -216,6 +220,17 @@ def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
             f"the start positions of {', '.join(pending)} refer to each other",
         )
     return out
+
+
+def _turned(tp: M.TeleportAction, lane, s: float) -> int:
+    """The line turning an entity that starts at ``s`` along SUMO ``lane`` against the lane's
+    direction (0: it faces the lane's way): its relative Orientation (read by the loader), or
+    the world heading the file gives it, compared with the lane's heading there."""
+    turned = getattr(tp.position, "turned", 0)
+    if turned or tp.heading is None:
+        return turned
+    lane_heading = LanePolyline(lane.shape, lane.width, lane.id).heading_at(min(max(s, 0.0), lane.length))
+    return tp.heading_line if math.cos(tp.heading - lane_heading) < 0.0 else 0
 
 
 def _overlaps(
@@ -471,10 +486,11 @@ class FileScenario(Scenario):
                 model.entities[ego].line,
                 f"the ego {ego!r} has no TeleportAction in <Init> (ego needs the ego's start position)",
             )
-        _check_turned(model, ego, roads)
         starts = placements(model, roads)
+        _check_turned(model, ego, starts[ego], roads)
         edge = starts[ego].edge
         _check_road_references(model, roads, len(roads.edges[edge].lanes), len(_opposite_lanes(roads, edge)))
+        _check_story_headings(model, roads)
         _check_routes(model, roads)
         return model, roads, ego, starts
 
@@ -848,9 +864,13 @@ class StoryDriver:
         lanes = _opposite_lanes(sc.roads, sc.starts[sc.ego_name].edge)
         own = sc.lane_offset
         self._lanes_all = dict(own)
+        ego_lanes = sc.roads.edges[sc.starts[sc.ego_name].edge].lanes
+        self._bands = [(own[i] - 0.5 * ln.width, own[i] + 0.5 * ln.width, 1) for i, ln in enumerate(ego_lanes)]
         for k, lane in enumerate(lanes):
             mid = lane.shape[len(lane.shape) // 2]
-            self._lanes_all[len(own) + k] = road.project(mid[0], mid[1])[1]
+            d = self._lanes_all[len(own) + k] = road.project(mid[0], mid[1])[1]
+            self._bands.append((d - 0.5 * lane.width, d + 0.5 * lane.width, -1))
+        self._bands.sort()
         if lanes:
             # the other direction's lanes are road too (a trajectory may take the ego there):
             # off the road beyond their outer edge by more than half a car
@@ -863,16 +883,23 @@ class StoryDriver:
             tp = next(a for a in sc.model.init[name] if isinstance(a, M.TeleportAction))
             if name == sc.ego_name:
                 continue
-            turned = getattr(tp.position, "turned", 0)
+            turned = start.turned
             # a car whose Init offset puts it across the centre line, in the other direction's
             # lane, driving its own lane's way (speed-profile.xosc's Car2): driven by ego too
             across = start.edge == ego_edge and own.get(start.index, 0.0) + start.offset > centre_line
             if not (turned or across):
                 continue
-            if turned:
+            cx = sc.model.entities[name].vehicle.center_x
+            if turned and getattr(tp.position, "turned", 0):
                 x, y, h = self.position_xy(tp.position, {})
                 heading = h + math.pi  # turned round on its lane
-                cx = sc.model.entities[name].vehicle.center_x
+                x, y = x + cx * math.cos(heading), y + cx * math.sin(heading)
+            elif turned:  # its reference point from its placement, turned round on its lane
+                lane = sc.roads.edges[start.edge].lanes[start.index]
+                poly = LanePolyline(lane.shape, lane.width, lane.id)
+                ref = start.front - cx - 0.5 * sc.model.entities[name].vehicle.length
+                x, y = poly.offset_point(ref, start.offset)
+                heading = poly.heading_at(ref) + math.pi
                 x, y = x + cx * math.cos(heading), y + cx * math.sin(heading)
             else:  # its box centre from its placement (a relative position's entity has no state yet)
                 lane = sc.roads.edges[start.edge].lanes[start.index]
@@ -1095,6 +1122,9 @@ class StoryDriver:
     def lane_centre_of(self, d: float) -> float:
         sc = self.sc
         return min(sc.lane_offset.values(), key=lambda off: abs(d - off))
+
+    def lane_bands(self) -> list[tuple[float, float, int]]:
+        return self._bands
 
     def lane_centre(self, lane_id: int, relative_to: float | None = None, dlane: int = 0) -> float:
         # the ego's direction's lanes (index 0 the rightmost), then the other direction's from
@@ -1479,30 +1509,45 @@ def _check_routes(model: M.Scenario, roads: RoadMap) -> None:
                 )
 
 
-def _check_turned(model: M.Scenario, ego: str, roads: RoadMap | None = None) -> None:
-    """The ego turned against its lane is refused: it drives its lane frame's way. With the
-    roads: an absolute heading more than 90 degrees from its lane's too (a road that drives on
-    the left is refused for every entity when it is converted: ``roads.check_traffic_rule``)."""
+def _check_turned(model: M.Scenario, ego: str, start: Placement, roads: RoadMap) -> None:
+    """The ego turned against its lane is refused: it drives its lane frame's way. A world
+    heading is named beside its lane's there (the file's numbers, radians)."""
+    if not start.turned:
+        return
     tp = next(a for a in model.init[ego] if isinstance(a, M.TeleportAction))
-    pos = tp.position
-    turned = getattr(pos, "turned", 0)
-    on_lane = pos if isinstance(pos, M.LanePosition) and roads is not None else None
-    if on_lane is not None and on_lane.absolute is not None and roads is not None:
-        try:
-            lane, along = roads.lane_position(on_lane.road, on_lane.lane, on_lane.s)
-        except ValueError:  # an unknown lane: _check_road_references names it
-            lane = None
-        if lane is not None and len(lane.shape) > 1:
-            heading = LanePolyline(lane.shape, lane.width, lane.id).heading_at(along)
-            if math.cos(on_lane.absolute[0] - heading) < 0.0:
-                turned = on_lane.absolute[1]
-    if turned:
-        raise ScenarioFileError(
-            model.path,
-            turned,
-            f"an <Orientation> turning the ego against its lane's direction is not supported by ego: the ego "
-            f"drives its lane's way (see {DOCS})",
+    why = ""
+    if tp.heading is not None and not getattr(tp.position, "turned", 0):
+        lane = roads.edges[start.edge].lanes[start.index]
+        ref = start.front - model.entities[ego].vehicle.center_x - 0.5 * model.entities[ego].vehicle.length
+        lane_h = LanePolyline(lane.shape, lane.width, lane.id).heading_at(min(max(ref, 0.0), lane.length))
+        why = (
+            f" (its world heading {tp.heading:g} rad; its lane heads {math.remainder(lane_h, math.tau):.2f} rad there)"
         )
+    raise ScenarioFileError(
+        model.path,
+        start.turned,
+        f"a start heading turning the ego against its lane's direction{why} is not supported by ego: the ego "
+        f"drives its lane's way (see {DOCS})",
+    )
+
+
+def _check_story_headings(model: M.Scenario, roads: RoadMap) -> None:
+    """A TeleportAction of the storyboard whose world heading (an absolute Orientation, a
+    WorldPosition's h) faces more than 90 degrees from the lane it names is refused with that
+    heading's line, as a relative turn outside Init is: only an Init start may be turned."""
+    for x in M.walk(model.stories):
+        if not isinstance(x, M.TeleportAction) or x.heading is None:
+            continue
+        pos = x.position
+        if isinstance(pos, M.WorldPosition):
+            lane, s, _ = roads.nearest_lane(pos.x, pos.y)
+            lane_heading = LanePolyline(lane.shape, lane.width, lane.id).heading_at(s)
+        elif isinstance(pos, (M.LanePosition, M.RoadPosition)):
+            lane_heading = _absolute_xy(pos, roads)[2]
+        else:
+            continue  # relative to an entity: its lane is known only during the run
+        if math.cos(x.heading - lane_heading) < 0.0:
+            raise ScenarioFileError(model.path, x.heading_line, turned_message("outside <Init>"))
 
 
 def _check_road_references(model: M.Scenario, roads: RoadMap, ego_lanes: int, other_lanes: int = 0) -> None:

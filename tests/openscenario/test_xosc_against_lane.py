@@ -41,10 +41,13 @@ def _cache(tmp_path_factory, monkeypatch):
 
 
 def _scene(tmp, starts: dict, events: list[tuple[str, str]] = ()) -> object:
-    """``starts``: name -> (lane, s, speed, turned)."""
+    """``starts``: name -> (lane, s, speed, turned: True for a relative turn round, or the
+    Orientation element itself)."""
     (tmp / "twoway.xodr").write_text(ROAD)
     turned = '<Orientation type="relative" h="3.141593"/>'
-    rows = [(n, "1", lane, s, v, turned if t else "") for n, (lane, s, v, t) in starts.items()]
+    rows = [
+        (n, "1", lane, s, v, t if isinstance(t, str) else turned if t else "") for n, (lane, s, v, t) in starts.items()
+    ]
     return write_file(tmp / "against.xosc", "twoway.xodr", rows, list(events))
 
 
@@ -83,6 +86,43 @@ def test_a_car_turned_round_in_the_oncoming_lane_drives_the_egos_way(tmp_path, m
         assert s - s0 == pytest.approx(1.5 * (k - 1), abs=1e-6)
         assert d == pytest.approx(3.5, abs=1e-6)
         assert v == pytest.approx(15.0, abs=1e-9)
+
+
+@pytest.mark.parametrize("form", ["absolute", "world"])
+def test_a_car_given_a_world_heading_against_its_lane_is_driven_as_one_turned_round(tmp_path, monkeypatch, form):
+    """T in lane +1 (whose lane heads -x) given the world heading 0 (facing +x, the road's
+    way), by an absolute Orientation or a WorldPosition's h: the same run, step for step, as
+    the relative turn round (h = pi from its lane) of the test above."""
+    relative = _record(monkeypatch, "T")
+    (tmp_path / "r").mkdir()
+    run_scene(_scene(tmp_path / "r", {"Ego": (-1, 30.0, 20.0, False), "T": (1, 80.0, 15.0, True)}), 3.0)
+    relative = dict(relative)  # (its recorder records the next run too)
+    rows = _record(monkeypatch, "T")
+    absolute = '<Orientation type="absolute" h="0"/>'
+    path = _scene(tmp_path, {"Ego": (-1, 30.0, 20.0, False), "T": (1, 80.0, 15.0, absolute)})
+    if form == "world":  # lane +1's centre at s = 80: (80, 1.75)
+        text = path.read_text()
+        i = text.index('<Private entityRef="T">')
+        j = text.index("</Position>", i)
+        path.write_text(
+            text[:i] + text[i:j].split("<Position>")[0] + '<Position><WorldPosition x="80" y="1.75" h="0"/>' + text[j:]
+        )
+    sc = run_scene(path, 3.0)
+    assert sc.status == "completed"
+    assert len(rows) == len(relative) > 20
+    for t, row in relative.items():
+        assert rows[t] == pytest.approx(row, abs=1e-9)
+
+
+def test_a_car_given_a_world_heading_along_its_lane_is_driven_by_sumo(tmp_path, monkeypatch):
+    """T in lane +1 with the absolute heading pi (its lane's way): SUMO drives it, away from
+    the ego's way (its s falls)."""
+    rows = _record(monkeypatch, "T")
+    path = _scene(
+        tmp_path, {"Ego": (-1, 30.0, 20.0, False), "T": (1, 300.0, 15.0, '<Orientation type="absolute" h="3.141593"/>')}
+    )
+    run_scene(path, 2.0)
+    assert rows[1.0][0] < rows[0.1][0] - 10.0
 
 
 def test_a_car_offset_across_the_centre_line_beside_the_ego_drives_its_own_way(tmp_path, monkeypatch):
@@ -144,15 +184,67 @@ def test_the_ego_turned_against_its_lane_is_refused_with_its_line(tmp_path):
     assert exc.value.line == next(i for i, ln in enumerate(path.read_text().splitlines(), 1) if "Orientation" in ln)
 
 
-def test_a_car_turned_against_its_lane_outside_init_is_refused(tmp_path):
+@pytest.mark.parametrize("form", ["absolute", "world"])
+def test_the_ego_given_a_world_heading_against_its_lane_is_refused_with_its_line(tmp_path, form):
+    """The ego in lane -1 (heading +x) given the world heading pi: by an absolute Orientation
+    (the reference player's left-hand-traffic_internal.xosc form) or a WorldPosition's h."""
+    o = '<Orientation type="absolute" h="3.141593"/>'
+    path = _scene(tmp_path, {"Ego": (-1, 30.0, 20.0, o), "A": (-1, 120.0, 25.0, False)})
+    mark = "Orientation"
+    if form == "world":
+        text = path.read_text()
+        i = text.index('<LanePosition roadId="1" laneId="-1" s="30.0"')
+        j = text.index("</LanePosition>", i) + len("</LanePosition>")
+        path.write_text(text[:i] + '<WorldPosition x="30" y="-1.75" h="3.141593"/>' + text[j:])
+        mark = "WorldPosition"
+    with pytest.raises(ScenarioFileError, match=r"turning the ego against its lane's direction") as exc:
+        run_scene(path, 1.0)
+    assert "(its world heading 3.14159 rad; its lane heads 0.00 rad there)" in str(exc.value)
+    assert exc.value.line == next(i for i, ln in enumerate(path.read_text().splitlines(), 1) if mark in ln)
+
+
+@pytest.mark.parametrize("kind", ["relative", "absolute"])
+def test_a_car_turned_against_its_lane_outside_init_is_refused(tmp_path, kind):
+    """Only an Init start may be turned: a TeleportAction of the story turned round on lane -1
+    (a relative h = pi, or the absolute heading pi against the lane's +x, checked before the
+    run) is refused with its Orientation's line; along its lane it is accepted."""
     teleport = (
-        '<TeleportAction><Position><LanePosition roadId="1" laneId="-1" s="200" offset="0">'
-        '<Orientation type="relative" h="3.141593"/></LanePosition></Position></TeleportAction>'
+        '<TeleportAction><Position><LanePosition roadId="1" laneId="-1" s="200" offset="0">\n'
+        f'<Orientation type="{kind}" h="3.141593"/></LanePosition></Position></TeleportAction>'
     )
     path = _scene(
         tmp_path,
         {"Ego": (-1, 30.0, 20.0, False), "A": (-1, 120.0, 25.0, False)},
         [event("Tp", "A", teleport, trigger([sim_time(1.0)]))],
     )
-    with pytest.raises(ScenarioFileError, match=r"against its lane's direction \(outside <Init>\)"):
+    with pytest.raises(ScenarioFileError, match=r"against its lane's direction \(outside <Init>\)") as exc:
         run_scene(path, 1.0)
+    assert exc.value.line == next(i for i, ln in enumerate(path.read_text().splitlines(), 1) if "Orientation" in ln)
+    path.write_text(path.read_text().replace('h="3.141593"', 'h="0.2"'))
+    assert run_scene(path, 1.5).status == "completed"
+
+
+@pytest.mark.parametrize("h, way", [("0", 1), ("3.141593", -1)])
+def test_a_relative_start_across_the_centre_line_drives_the_way_its_world_heading_faces(tmp_path, monkeypatch, h, way):
+    """esmini's cut-in_simple.xosc form: T starts 3.5 m left of the ego (in the oncoming lane),
+    20 m behind, by a RelativeRoadPosition with an absolute Orientation, 15 m/s: facing +x (the
+    ego's way) it drives the ego's way, facing -x (its lane's way) against it, 1.5 m a step."""
+    rows = _record(monkeypatch, "T")
+    path = _scene(tmp_path, {"Ego": (-1, 100.0, 15.0, False), "T": (-1, 300.0, 15.0, False)})
+    text = path.read_text()
+    i = text.index('<Private entityRef="T">')
+    j = text.index("<LanePosition", i)
+    k = text.index("</Position>", j)
+    path.write_text(
+        text[:j]
+        + f'<RelativeRoadPosition entityRef="Ego" ds="-20" dt="3.5"><Orientation type="absolute" h="{h}"/>'
+        + "</RelativeRoadPosition>"
+        + text[k:]
+    )
+    sc = run_scene(path, 2.5)
+    assert sc.status == "completed"
+    s0 = rows[0.1][0]
+    for k in range(1, 20):
+        s, d, v, _ = rows[round(0.1 * k, 6)]
+        assert s - s0 == pytest.approx(way * 1.5 * (k - 1), abs=1e-6)
+        assert d == pytest.approx(3.5, abs=1e-6)

@@ -67,6 +67,20 @@ EGO_SYNCHRONIZE = (
 )
 
 
+def _clearance(body: str) -> str:
+    """A ByEntityCondition of the Lead holding a RelativeClearanceCondition with ``body``
+    (its children; "" a negative distanceForward; NO-OPPOSITE: no oppositeLanes)."""
+    forward = "-5" if body == "" else "40"
+    opposite = "" if body == "NO-OPPOSITE" else ' oppositeLanes="false"'
+    body = "" if body in ("", "NO-OPPOSITE") else body
+    return (
+        '<ByEntityCondition><TriggeringEntities triggeringEntitiesRule="any"><EntityRef entityRef="Lead"/>'
+        "</TriggeringEntities><EntityCondition>\n"
+        f'<RelativeClearanceCondition distanceForward="{forward}" freeSpace="true"{opposite}>\n'
+        f"{body}</RelativeClearanceCondition></EntityCondition></ByEntityCondition>"
+    )
+
+
 def _route():
     """A two-waypoint route along the ego's road (scenariogeneration)."""
     from scenariogeneration import xosc
@@ -217,9 +231,9 @@ HAND = [
     ),
     (
         "unsupported-condition",
-        sub(SIM_TIME, '<TimeOfDayCondition rule="greaterThan" dateTime="2026-01-01T10:00:00"/>'),
-        "<TimeOfDayCondition",
-        unsupported("TimeOfDayCondition"),
+        sub(SIM_TIME, '<UserDefinedValueCondition name="light" value="1" rule="greaterThan"/>'),
+        "<UserDefinedValueCondition",
+        unsupported("UserDefinedValueCondition"),
     ),
     (
         "unsupported-position",
@@ -687,6 +701,56 @@ HAND = [
         "<OffroadCondition",
         "<OffroadCondition> needs attribute duration",
     ),
+    (
+        "time-of-day-without-init-time",
+        sub(SIM_TIME, '<TimeOfDayCondition dateTime="2025-06-13T12:00:00" rule="greaterThan"/>'),
+        "<TimeOfDayCondition",
+        "a <TimeOfDayCondition> needs the time of day the scenario starts at: an inline <TimeOfDay> in an <Init> "
+        f"EnvironmentAction (see {DOCS})",
+    ),
+    (
+        "time-of-day-bad-date",
+        sub(SIM_TIME, '<TimeOfDayCondition dateTime="13.06.2025 12:00" rule="greaterThan"/>'),
+        "<TimeOfDayCondition",
+        "bad value for dateTime in <TimeOfDayCondition>: '13.06.2025 12:00' (expected a date and time, "
+        "2025-06-13T12:00:00)",
+    ),
+    *(
+        (f"clearance-{id_}", sub(f"<ByValueCondition>{SIM_TIME}</ByValueCondition>", _clearance(body)), marker, message)
+        for id_, body, marker, message in (
+            (
+                "range-reversed",
+                '<RelativeLaneRange from="2" to="1"/>',
+                "<RelativeLaneRange",
+                "<RelativeLaneRange> from = 2 is above to = 1 (expected from <= to)",
+            ),
+            (
+                "range-not-integer",
+                '<RelativeLaneRange from="left" to="1"/>',
+                "<RelativeLaneRange",
+                "bad value for from in <RelativeLaneRange>: 'left' (expected an integer)",
+            ),
+            (
+                "negative-forward",
+                "",
+                "<RelativeClearanceCondition",
+                "bad value for distanceForward in <RelativeClearanceCondition>: -5 (expected >= 0)",
+            ),
+            (
+                "unknown-entity",
+                '<EntityRef entityRef="Truck"/>',
+                '<EntityRef entityRef="Truck"',
+                "unknown entity 'Truck' in <EntityRef> (entities: Ego, Lead)",
+            ),
+            (
+                "no-opposite-lanes",
+                "NO-OPPOSITE",
+                "<RelativeClearanceCondition",
+                "<RelativeClearanceCondition> needs attribute oppositeLanes",
+            ),
+            ("unknown-child", "<Lanes/>", "<Lanes/>", unsupported("Lanes")),
+        )
+    ),
 ]
 
 
@@ -790,9 +854,9 @@ def _sg_cases():
         ),
         (
             "sg-clearance",
-            lambda: base(entity_trigger(xosc.RelativeClearanceCondition(1, 5, 5))),
+            lambda: base(entity_trigger(xosc.RelativeClearanceCondition(True, -5, 5))),
             "<RelativeClearanceCondition",
-            un("RelativeClearanceCondition"),
+            "bad value for distanceBackward in <RelativeClearanceCondition>: -5 (expected >= 0)",
         ),
         (
             "sg-route-on-ego",

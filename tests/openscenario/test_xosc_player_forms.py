@@ -695,3 +695,22 @@ def test_an_openscenario_0_8_file_is_refused_for_its_version(tmp_path):
     _edit(path, "</ParameterDeclarations>", "</ParameterDeclaration>")
     with pytest.raises(ScenarioFileError, match=r"OpenSCENARIO 0\.8 is not supported by ego \(0\.9 and 1\.0 to 1\.3"):
         load(path)
+
+
+@pytest.mark.parametrize("spelling, value", [("freespace", True), ("freeSpace", True), ("freeSpace", False)])
+def test_a_distance_conditions_freespace_is_read_in_either_spelling(tmp_path, spelling, value):
+    """esmini's two_plus_one_road.xosc writes a RelativeDistanceCondition's freespace as
+    freeSpace (the spelling of 1.2's RelativeClearanceCondition): read where freespace is missing."""
+    body = (
+        f'<RelativeDistanceCondition entityRef="A" {spelling}="{str(value).lower()}" rule="lessThan" '
+        'relativeDistanceType="longitudinal" value="20"/>'
+    )
+    cond = (
+        '<Condition name="c" delay="0" conditionEdge="none"><ByEntityCondition><TriggeringEntities '
+        'triggeringEntitiesRule="any"><EntityRef entityRef="Ego"/></TriggeringEntities><EntityCondition>'
+        f"{body}</EntityCondition></ByEntityCondition></Condition>"
+    )
+    path = scene(tmp_path, [event("E", "A", speed(20.0), trigger([cond]))])
+    model = load(path)
+    conds = [c for g in model.stories[0].acts[0].groups[0].maneuvers[0].events[0].start.groups for c in g]
+    assert [(c.kind, c.freespace) for c in conds] == [("RelativeDistanceCondition", value)]

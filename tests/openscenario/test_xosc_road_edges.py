@@ -57,7 +57,7 @@ def test_the_egos_road_end_is_seen_by_the_storyboard_before_the_run_ends(tmp_pat
     duration 0 on the ego starts its event first."""
     evs = [event("EgoEnd", "B", speed(10), trigger([entity("Ego", '<EndOfRoadCondition duration="0"/>')]))]
     sc = run_scene(scene(tmp_path, evs, at={"Ego": (-3, 2900.0, 20.0)}), 12.0)
-    assert "the ego reached the end of its road" in sc.status_detail
+    assert "the ego reached the end of its route" in sc.status_detail
     (t_event,) = starts(sc, "EgoEnd")
     t_end = float(sc.status_detail.split("at t = ")[1].split(" s")[0])
     assert t_end == pytest.approx(t_event + 0.1)

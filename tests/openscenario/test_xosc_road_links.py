@@ -192,7 +192,7 @@ def test_an_ego_headed_against_its_lane_by_an_absolute_orientation_is_refused(tm
     turned = '<Orientation type="absolute" h="3.14159"/>'
     path = write_file(tmp_path / "turned.xosc", "links.xodr", [("Ego", "1", -1, 50.0, 20.0, turned)], [])
     line = next(i for i, ln in enumerate(path.read_text().splitlines(), 1) if "Orientation" in ln)
-    with pytest.raises(ScenarioFileError, match=rf":{line}: an <Orientation> turning the ego against its lane"):
+    with pytest.raises(ScenarioFileError, match=rf":{line}: a start heading turning the ego against its lane"):
         run_scene(path, 1.0)
     along = '<Orientation type="absolute" h="0.1"/>'
     path = write_file(tmp_path / "along.xosc", "links.xodr", [("Ego", "1", -1, 50.0, 20.0, along)], [])
