@@ -50,8 +50,7 @@ DISCRETE_ALGOS = ("dqn",)
 #: the discrete setting: highway-env's meta actions at its 1 Hz, seen through its Kinematics
 #: observation (the EgoState of a motorway env has no other car in it: its fields are the ego's
 #: and the references'), the agent choosing the speed and the scenario's planner and
-#: controller steering (a lane change of the meta actions counts as a lane departure in the
-#: run's metrics: docs/gym.md#action-types)
+#: controller steering
 DISCRETE_CONFIG = {
     "action": {"type": "DiscreteMetaAction", "lateral": False},
     "observation": {"type": "Kinematics"},
