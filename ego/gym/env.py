@@ -567,13 +567,18 @@ class EgoEnv(gym.Env):
         limits = probe.action_limits()
         action = action_type(cfg["action"], self.task, limits)
         every = _control_periods_per_action(env.policy_frequency, sc_config.dt)
-        self._check_corners(controller, overrides, randomize)
         meta = action.type_name == "DiscreteMetaAction"
         if meta and getattr(probe.view, "lane_offset", None) is None:  # a view of lanes to change
             raise ConfigError(
                 f"bad value for action: DiscreteMetaAction needs lanes to change (the motorway "
                 f"scenarios: emergency-brake, fast-follower, cut-in), not {self.scenario_name}"
             )
+        if meta and action.lateral and getattr(sc_config, "evade", False):
+            # the agent's lane actions choose the lane: the scenario's planner changes none itself
+            # (one owner of the view's target lane; its trigger then brakes or speeds up in lane)
+            overrides = {**overrides, "evade": False}
+            sc_config = resolve(RunSpec(self.scenario_name, controller, 0, overrides)).config
+        self._check_corners(controller, overrides, randomize)
         # the agent drives both channels: the loop needs no controller of its own
         helper = not (action.longitudinal and action.lateral) or meta
         self.close()

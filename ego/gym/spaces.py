@@ -739,7 +739,14 @@ class DiscreteMetaAction(ActionType):
     agent chooses FASTER: the speed target at most the front object's speed, the station
     reference at most ``follow_gap + follow_headway * v_front`` (the scenario's, m and s)
     behind its rear - as a car's AEB cancels its cruise control - so that IDLE (or SLOWER, or
-    a lane change) does not drive the ego back into what the AEB braked for."""
+    a lane change) does not drive the ego back into what the AEB braked for.
+
+    With the lane actions the agent chooses the lane, not the scenario's planner (the env
+    runs the scenario with ``evade`` false): the view's ``target_lane`` is the agent's (the
+    observation's and the trace's ``d`` are measured from it), and from a lane action until the
+    ego is within ``settle_band`` of the new lane's centre the view's ``agent_lane_change``
+    makes the trace's ``phase`` a lane change, so that a commanded lane change is no lane
+    departure in the run's metrics, as the planner's own is not."""
 
     type_name = "DiscreteMetaAction"
     OPTIONS = ("longitudinal", "lateral", "target_speeds", "max_lag")
@@ -792,6 +799,9 @@ class DiscreteMetaAction(ActionType):
         self._follow = (getattr(c, "follow_gap", 5.0), getattr(c, "follow_headway", 0.5))
         self.held = False
         self.lane = road.target_lane
+        self._road = road
+        road.agent_lane_change = False
+        self._settle = getattr(c, "settle_band", 0.2)
         self.speed_index = int(np.argmin([abs(v - obs.ds) for v in self.target_speeds]))
         self._s_ref = obs.s
         self._dt = view.scenario.config.dt
@@ -825,10 +835,11 @@ class DiscreteMetaAction(ActionType):
     def update(self, index: int) -> None:
         """Apply meta action ``index`` to the targets."""
         name = self.actions[index]
-        if name == "LANE_LEFT" and self.lane + 1 in self._offsets:
-            self.lane += 1
-        elif name == "LANE_RIGHT" and self.lane - 1 in self._offsets:
-            self.lane -= 1
+        if name in ("LANE_LEFT", "LANE_RIGHT"):
+            lane = self.lane + (1 if name == "LANE_LEFT" else -1)
+            if lane in self._offsets:  # a commanded lane change: the view measures from the new lane
+                self.lane = self._road.target_lane = lane
+                self._road.agent_lane_change = True
         elif name == "FASTER":
             self.speed_index = min(self.speed_index + 1, len(self.target_speeds) - 1)
             self.held = False  # the agent's own choice ends the hold behind the front object
@@ -842,8 +853,11 @@ class DiscreteMetaAction(ActionType):
         for name in self._fields:
             setattr(o, name, getattr(src, name))
         if self.lateral:
-            o.d = view.road.d_road - self._offsets[self.lane]
+            road = self._road
+            o.d = d = road.d_road - self._offsets[self.lane]
             o.d_ref = o.dd_ref = 0.0
+            if road.agent_lane_change and abs(d) < self._settle:  # arrived: the lane change is over
+                road.agent_lane_change = False
         if self.longitudinal:
             v = self.target_speeds[self.speed_index]
             s = src.s

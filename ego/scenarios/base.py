@@ -29,6 +29,7 @@ from ego.control.base import (
     signal_units,
 )
 from ego.control.tasks import TASKS
+from ego.lane_frame import LANE_CHANGE_PHASE
 from ego.models.plant import Plant
 from ego.params import ConfigError, Params, param
 from ego.processes import signals_deferred
@@ -985,7 +986,8 @@ class ComposedLoop:
                 view.gap_rear,
                 ego.lateral_accel,
                 obs.yaw_rate,
-                self.manoeuvre.phase,
+                # an agent's commanded lane change is a lane change, as the manoeuvre's own
+                LANE_CHANGE_PHASE if view.agent_lane_change else self.manoeuvre.phase,
                 view.target_lane,
             ),
         )

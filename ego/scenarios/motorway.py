@@ -326,7 +326,10 @@ class SurroundView(RoadSensor):
     surround sensor (:class:`~ego.scenarios.sensor.SurroundSensor`): ``front``/``rear``
     objects, their bumper gaps (m) and times to collision (s), looked at every simulator
     step and carried on in between. ``target_lane`` is the lane the observation's ``d`` is
-    measured from (the manoeuvre moves it)."""
+    measured from (the manoeuvre moves it, or an agent that chooses the lane:
+    :class:`ego.gym.spaces.DiscreteMetaAction`); ``agent_lane_change`` is true while a lane
+    change commanded by such an agent is under way (the trace's ``phase`` then says lane
+    change, as for the manoeuvre's own: a commanded lane change is no lane departure)."""
 
     def __init__(self, config: HighwayConfig, geometry: VehicleGeometry) -> None:
         super().__init__(geometry)
@@ -339,6 +342,7 @@ class SurroundView(RoadSensor):
         self.hidden: set[str] = set()
         self.lane_offset: dict[int, float] = {}
         self.target_lane = 0
+        self.agent_lane_change = False
         self.ttc_front = self.ttc_rear = INF
         self.gap_front = self.gap_rear = INF
         self.around: tuple[list[str], list[Row]] = ([], [])
@@ -363,6 +367,7 @@ class SurroundView(RoadSensor):
         # beyond the outer lane edge by more than half a car: off the road
         self.road_halfwidth = max(outer) + 0.5 * g.width + 0.5
         self.target_lane = c.ego_lane
+        self.agent_lane_change = False
         self.ttc_front = self.ttc_rear = INF
         self.gap_front = self.gap_rear = INF
         self._t_last, self._u_last, self._accel = -math.inf, 0.0, 0.0
@@ -496,7 +501,9 @@ COLUMNS = (
     Column("gap_rear", "m", "bumper gap to the rear object, from the outlines"),
     Column("lat_accel", "m/s^2", "body lateral acceleration"),
     Column("yaw_rate", "rad/s", "yaw rate"),
-    Column("phase", "-", "manoeuvre phase (0 cruise, 1 lane change, 2 in lane, 3 done)"),
+    Column(
+        "phase", "-", "manoeuvre phase (0 cruise, 1 lane change, 2 in lane, 3 done; 1 also in an agent's lane change)"
+    ),
     Column("target_lane", "-", "SUMO index of the target lane (0 right)"),
 )
 #: the order :meth:`ego.scenarios.base.ComposedLoop.act` writes a motorway row in
