@@ -274,6 +274,7 @@ class RoadMap:
         self.edges = _edges(net)
         self._refs: dict[str, object] = {}
         self._tables: dict[str, tuple[np.ndarray, np.ndarray, float]] = {}
+        self._deltas: dict[str, tuple[np.ndarray, np.ndarray]] = {}  #: lane -> (g - u, u - g) at the knots
         self._of_edge: dict[str, tuple[str, float, bool]] = {}
 
     # -- road s and lane positions -----------------------------------------------------------
@@ -335,6 +336,13 @@ class RoadMap:
             hit = self._tables[lane.id] = (us[keep], gs[keep], g_len)
         return hit
 
+    def _delta(self, lane: Lane) -> tuple[np.ndarray, np.ndarray]:
+        hit = self._deltas.get(lane.id)
+        if hit is None:
+            us, gs, _ = self._table(lane)
+            hit = self._deltas[lane.id] = (gs - us, us - gs)
+        return hit
+
     def shape_length(self, lane: Lane) -> float:
         """The geometric length (m) of ``lane``'s shape."""
         return self._table(lane)[2]
@@ -358,7 +366,7 @@ class RoadMap:
         elif u >= us[-1]:
             g = float(gs[-1] + (u - us[-1]))
         else:
-            g = u + float(np.interp(u, us, gs - us))
+            g = u + float(np.interp(u, us, self._delta(lane)[0]))
         return min(max(g, 0.0), geom) if clamp else g
 
     def shape_s(self, lane: Lane, u: float) -> float:
@@ -384,7 +392,7 @@ class RoadMap:
             return float(us[0] + (g - gs[0]))
         if g >= gs[-1]:
             return float(us[-1] + (g - gs[-1]))
-        return g + float(np.interp(g, gs, us - gs))
+        return g + float(np.interp(g, gs, self._delta(lane)[1]))
 
     def road_s(self, lane: Lane, g: float) -> float:
         """OpenDRIVE's road s (m, along the reference line) of the point ``g`` m along

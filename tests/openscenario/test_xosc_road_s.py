@@ -123,3 +123,32 @@ def test_a_file_places_cars_at_road_s_on_inner_and_outer_lanes(bend):
         assert lane_s == pytest.approx(STRAIGHT + 60.0 * (R + 5.25) / R, abs=2e-3)
     ego = states["Ego"]  # on the straight: road s and the lane's s are one
     assert ego.s == sc.road.project(ego.x, ego.y)[0]
+
+
+def test_road_and_relative_positions_in_init_are_at_road_s(bend):
+    """Init's road position (s, t) and a relative lane position (ds along the reference line,
+    another lane) start where the closed form puts them: on their lane's centre line within
+    1 mm."""
+    from ego.openscenario import model as M
+    from ego.openscenario.scenario import _place
+
+    roads = RoadMap(network_file(bend), converted=True)
+
+    def world(placed) -> tuple[float, float]:
+        lane, g, off = placed
+        return LanePolyline(lane.shape).offset_point(g, off)
+
+    # t = -6.5 m: lane -2 (its centre t = -5.25 m), 1.25 m to the right of it
+    lane, g, off = placed = _place(M.RoadPosition("7", 260.0, -6.5, 1), roads, {})
+    assert roads.lane_id_of(lane) == -2 and off == pytest.approx(-1.25, abs=1e-9)
+    t = -6.5
+    a = (260.0 - STRAIGHT) / R
+    # off the centre line ego's lane frame moves across a chord's normal, not the arc's (its
+    # 0.5 m chords here turn 2.4 mrad: up to 3 mm at 1.25 m)
+    assert math.dist(world(placed), (STRAIGHT + (R - t) * math.sin(a), R - (R - t) * math.cos(a))) < 4e-3
+    assert math.dist(world((lane, g, 0.0)), centre(260.0, -2)) < 1e-3
+    # 30 m of road s on from A (lane -1 at s = 250), one lane to the right: lane -2 at s = 280
+    start = _place(M.LanePosition("7", -1, 250.0, 0.0, 1), roads, {})
+    rel = _place(M.RelativeLanePosition("A", -1, 30.0, 0.0, 1), roads, {"A": start})
+    assert roads.lane_id_of(rel[0]) == -2
+    assert math.dist(world(rel), centre(280.0, -2)) < 1e-3
