@@ -623,8 +623,8 @@ class Synchronize(ActionKind):
     }
     domains = ("long",)
     note = (
-        "the actor reaches `TargetPosition` when the master reaches `TargetPositionMaster` (positions as s along "
-        "the ego's start lane frame), the master taken to drive on at its speed and the plan redone every step: "
+        "the actor reaches `TargetPosition` when the master reaches `TargetPositionMaster` (positions as road s, "
+        "along the ego road's reference line), the master taken to drive on at its speed and the plan redone every step: "
         "without `FinalSpeed` the constant speed d / T (a step at the start, as the standard gives the action no "
         "dynamics), with `FinalSpeed` (`AbsoluteSpeed`, `RelativeSpeedToMaster` delta or factor of the master's "
         "speed at each step) the speed profile v + b t + c t^2 that ends at the final speed and covers the "

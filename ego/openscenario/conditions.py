@@ -262,7 +262,8 @@ class TimeHeadway(ConditionKind):
     )
     also = ("TimeToCollisionCondition", "RelativeDistanceCondition", "DistanceCondition", "ReachPositionCondition")
     note = (
-        "along the ego's start lane (s, d of box centres); freespace subtracts half lengths (longitudinal), half "
+        "in road coordinates of box centres: s along the ego road's reference line (road s: on a curve not the "
+        "distance along a lane), d across the ego's start lane; freespace subtracts half lengths (longitudinal), half "
         "widths (lateral), or is the distance to the box (Distance); `freeSpace` is read where `freespace` is "
         "missing (esmini's `two_plus_one_road.xosc` writes it); `alongRoute`/`coordinateSystem` are read as "
         "road coordinates"

@@ -144,6 +144,9 @@ def network_file(road: Path) -> Path:
     return out
 
 
+#: m: a reference line's chord longer than this is a straight (its heading holds along it)
+LONG_CHORD = 5.0
+
 #: a lane wider than this is no lane (docs/reliability.md, "Limits")
 MAX_LANE_WIDTH = 50.0
 _LANE = re.compile(rb"<lane\b([^>]*?)(/>|>(.*?)</lane>)", re.S)
@@ -335,6 +338,10 @@ class Edge:
     id: str
     lanes: tuple[Lane, ...]  #: by SUMO index
     successors: tuple[str, ...]
+    #: the edge's reference line in its driving direction: SUMO's edge shape (on a converted
+    #: road OpenDRIVE's reference line; on ego's motorways the road's centre line), or, where a
+    #: network writes none, the left border of its leftmost lane
+    shape: tuple[tuple[float, float], ...] = ()
 
 
 def _parse(net: Path) -> ET.Element:
@@ -373,7 +380,14 @@ def _edges_cached(net: str, mtime: float) -> dict[str, Edge]:
                 )
             )
         lanes.sort(key=lambda lane: lane.index)
-        edges[eid] = Edge(eid, tuple(lanes), tuple(succ.get(eid, ())))
+        shape = tuple((float(p.split(",")[0]), float(p.split(",")[1])) for p in e.get("shape", "").split())
+        if len(shape) < 2 and lanes and len(lanes[-1].shape) >= 2:
+            from ego.lane_frame import LanePolyline
+
+            left = LanePolyline(lanes[-1].shape)
+            at = np.concatenate(([0.0], np.cumsum(np.hypot(*np.diff(np.asarray(left.points), axis=0).T))))
+            shape = tuple(left.offset_point(float(s), 0.5 * lanes[-1].width) for s in at)
+        edges[eid] = Edge(eid, tuple(lanes), tuple(succ.get(eid, ())), shape)
     return edges
 
 
@@ -435,6 +449,156 @@ class RoadMap:
         self.net, self.converted = net, converted
         self.edges = _edges(net)
         self.links, self.inner = _links_cached(str(net), net.stat().st_mtime)
+        self._refs: dict[str, object] = {}
+        self._tables: dict[str, tuple[np.ndarray, np.ndarray, float]] = {}
+        self._deltas: dict[str, tuple[np.ndarray, np.ndarray]] = {}  #: lane -> (g - u, u - g) at the knots
+        self._of_edge: dict[str, tuple[str, float, bool]] = {}
+
+    # -- road s and lane positions -----------------------------------------------------------
+    # OpenDRIVE's s runs along the road's reference line; a lane's point at road s is where
+    # the reference line's normal at s crosses the lane (the lanes are parallel to it). SUMO
+    # measures a lane by its ``length`` attribute, which netconvert makes the same for every
+    # lane of an edge (the mean of their shapes' lengths, docs: Simulation/Distances), so
+    # SUMO's position p on a lane is the point ``p * shape length / length`` along its shape.
+
+    def reference(self, edge: str):
+        """The reference line of ``edge`` (its driving direction) as a LanePolyline."""
+        from ego.lane_frame import LanePolyline
+
+        ref = self._refs.get(edge)
+        if ref is None:
+            e = self.edges[edge]
+            ref = self._refs[edge] = LanePolyline(e.shape if len(e.shape) >= 2 else e.lanes[-1].shape)
+        return ref
+
+    def _table(self, lane: Lane) -> tuple[np.ndarray, np.ndarray, float]:
+        """(u, g, shape length) of ``lane``: knots u along the edge's reference line and g
+        along the lane's shape of the same road s (increasing), to interpolate between.
+
+        Two parallel curves at lateral offset t advance as dg = du - t dtheta (theta the
+        reference line's heading), so g is the lane's start (its first point projected onto the
+        reference line) plus u less the integral of t dtheta from there. The reference line is
+        netconvert's polyline: its heading is taken exact at each short chord's middle (a chord
+        of a circle points along the tangent there) and along a long chord (a straight), linear
+        between; t is the lane's offset from the reference line where its points project. A
+        projection alone would move a point on the normal of the chord, not of the curve:
+        8.75 m beside a 0.5 m chord of R = 195 m that is 1.1 cm along the road."""
+        hit = self._tables.get(lane.id)
+        if hit is None:
+            pts = np.asarray(lane.shape, dtype=float)
+            g_len = float(np.hypot(*np.diff(pts, axis=0).T).sum())
+            ref = self.reference(lane.edge)
+            proj = np.array([ref.project(float(x), float(y))[:2] for x, y in pts])
+            lane_u, lane_t = np.maximum.accumulate(proj[:, 0]), proj[:, 1]
+            rp = np.asarray(ref.points, dtype=float)
+            chord = np.hypot(*np.diff(rp, axis=0).T)
+            at = np.concatenate(([0.0], np.cumsum(chord)))
+            angle = np.unwrap(np.arctan2(*np.diff(rp, axis=0).T[::-1]))
+            knots: list[tuple[float, float]] = []
+            for i, c in enumerate(chord):
+                if c > LONG_CHORD:
+                    knots += [(at[i], angle[i]), (at[i + 1], angle[i])]
+                else:
+                    knots.append((at[i] + 0.5 * c, angle[i]))
+            ku = np.array([k[0] for k in knots])
+            kh = np.array([k[1] for k in knots])
+            u0, u1 = lane_u[0], lane_u[0] + g_len + abs(lane_t).max() * (abs(np.diff(kh)).sum() + 1.0)
+            inside = (ku > u0) & (ku < u1)
+            us = np.concatenate(([u0], ku[inside], [u1]))
+            theta = np.interp(us, ku, kh)
+            tt = np.interp(us, lane_u, lane_t)
+            turn = np.concatenate(([0.0], np.cumsum(0.5 * (tt[1:] + tt[:-1]) * np.diff(theta))))
+            gs = us - u0 - turn
+            keep = np.concatenate(([True], np.diff(gs) > 1e-12))  # increasing for the inverse
+            hit = self._tables[lane.id] = (us[keep], gs[keep], g_len)
+        return hit
+
+    def _delta(self, lane: Lane) -> tuple[np.ndarray, np.ndarray]:
+        hit = self._deltas.get(lane.id)
+        if hit is None:
+            us, gs, _ = self._table(lane)
+            hit = self._deltas[lane.id] = (gs - us, us - gs)
+        return hit
+
+    def shape_length(self, lane: Lane) -> float:
+        """The geometric length (m) of ``lane``'s shape."""
+        return self._table(lane)[2]
+
+    def to_sumo(self, lane: Lane, g: float) -> float:
+        """SUMO's lane position of the point ``g`` m along ``lane``'s shape."""
+        geom = self.shape_length(lane)
+        return g if abs(lane.length - geom) <= 1e-9 * geom else g * lane.length / geom
+
+    def from_sumo(self, lane: Lane, pos: float) -> float:
+        """The arc length (m) along ``lane``'s shape of SUMO's lane position ``pos``."""
+        geom = self.shape_length(lane)
+        return pos if abs(lane.length - geom) <= 1e-9 * geom else pos * geom / lane.length
+
+    def _along_shape(self, lane: Lane, u: float, clamp: bool = True) -> float:
+        """g along ``lane``'s shape where the reference line's normal at ``u`` crosses it
+        (within the shape unless ``clamp`` is false)."""
+        us, gs, geom = self._table(lane)
+        if u <= us[0]:
+            g = float(gs[0] + (u - us[0]))
+        elif u >= us[-1]:
+            g = float(gs[-1] + (u - us[-1]))
+        else:
+            g = u + float(np.interp(u, us, self._delta(lane)[0]))
+        return min(max(g, 0.0), geom) if clamp else g
+
+    def shape_s(self, lane: Lane, u: float) -> float:
+        """The inverse of :meth:`reference_s` (not clamped to the shape)."""
+        return self._along_shape(lane, u, clamp=False)
+
+    def is_parallel_copy(self, lane: Lane) -> bool:
+        """Whether ``lane``'s shape advances exactly as its reference line (a straight lane
+        starting beside the reference line's start): :meth:`reference_s` is then g itself."""
+        us, gs, _ = self._table(lane)
+        return bool(np.array_equal(us, gs))
+
+    def reference_s(self, lane: Lane, g: float) -> float:
+        """The arc length u along its edge's reference line (in the edge's driving
+        direction) of the point ``g`` m along ``lane``'s shape: road s less the edge's start,
+        or, on a lane driven against s, from the edge's start the other way."""
+        return self._along_reference(lane, g)
+
+    def _along_reference(self, lane: Lane, g: float) -> float:
+        """u along the edge's reference line of the point ``g`` along ``lane``'s shape."""
+        us, gs, _ = self._table(lane)
+        if g <= gs[0]:
+            return float(us[0] + (g - gs[0]))
+        if g >= gs[-1]:
+            return float(us[-1] + (g - gs[-1]))
+        return g + float(np.interp(g, gs, self._delta(lane)[1]))
+
+    def road_s(self, lane: Lane, g: float) -> float:
+        """OpenDRIVE's road s (m, along the reference line) of the point ``g`` m along
+        ``lane``'s shape (the inverse of :meth:`lane_s`)."""
+        _, start, right = self._section(lane.edge)
+        u = self._along_reference(lane, g)
+        return start + u if right else start + self.reference(lane.edge).length - u
+
+    def moved(self, lane: Lane, g: float, ds: float = 0.0, to: Lane | None = None) -> float:
+        """The arc length along ``to``'s shape (default ``lane``, a lane of the same edge) of
+        the point ``ds`` m of road s (along the reference line, in the edge's driving
+        direction) on from the point ``g`` along ``lane``'s shape."""
+        return self._along_shape(to or lane, self._along_reference(lane, g) + ds)
+
+    def _section(self, edge: str) -> tuple[str, float, bool]:
+        """(road, start s, right-hand) of ``edge``."""
+        hit = self._of_edge.get(edge)
+        if hit is None:
+            if self.converted:
+                name = edge.removeprefix("-").partition("#")[0].partition(".")[0]
+                names = [name]
+            else:
+                parts = edge.split(".")
+                names = [".".join(parts[:k]) for k in range(len(parts), 0, -1)]
+            for name in names:
+                for start, e, right in self.sections(name):
+                    self._of_edge.setdefault(e.id, (name, start, right))
+            hit = self._of_edge.get(edge, (edge, 0.0, True))
+        return hit
 
     def sections(self, road: str) -> list[tuple[float, Edge, bool]]:
         """(start s, edge, right-hand) of the road's edges, by start."""
@@ -445,7 +609,7 @@ class RoadMap:
             e = self.edges.get(road)
             while e is not None:
                 out.append((s0, e, True))
-                s0 += e.lanes[0].length if e.lanes else 0.0
+                s0 += self.reference(e.id).length if e.lanes else 0.0
                 e = self.edges.get(f"{road}.{len(out)}")
             return out
         # netconvert splits some roads (a road that loops onto itself: ``-1#0``, ``-1#1``):
@@ -470,11 +634,17 @@ class RoadMap:
             s0 = start
             for _, e in parts:
                 out.append((s0, e, right))
-                s0 += e.lanes[-1].length  # the lane next to the reference line
+                s0 += self.reference(e.id).length
         return sorted(out, key=lambda x: x[0])
 
     def lane_position(self, road: str, lane: int, s: float) -> tuple[Lane, float]:
-        """The SUMO lane and the position along it (m) of OpenDRIVE (road, lane, s)."""
+        """The SUMO lane and SUMO's position along it of OpenDRIVE (road, lane, s)."""
+        sumo_lane, g = self.lane_s(road, lane, s)
+        return sumo_lane, self.to_sumo(sumo_lane, g)
+
+    def lane_s(self, road: str, lane: int, s: float) -> tuple[Lane, float]:
+        """The SUMO lane of OpenDRIVE (road, lane, s) and the arc length (m) along its shape
+        of the lane's point at road s (where the reference line's normal at s crosses it)."""
         if lane == 0:
             raise ValueError("lane 0 is the reference line, not a lane")
         every = self.sections(road)
@@ -504,8 +674,8 @@ class RoadMap:
                 f"(lane ids {', '.join(map(str, ids))}; netconvert keeps driving and stop lanes)"
             )
         sumo_lane = edge.lanes[n - 1 - ids.index(lane)]
-        pos = s - start if right else sumo_lane.length - (s - start)
-        return sumo_lane, min(max(pos, 0.0), sumo_lane.length)
+        u = s - start if right else self.reference(edge.id).length - (s - start)
+        return sumo_lane, self._along_shape(sumo_lane, u)
 
     def lane_id_of(self, sumo_lane: Lane) -> int:
         """The OpenDRIVE lane id of a SUMO lane: its origin's (netconvert keeps only some lane
@@ -609,7 +779,7 @@ class RoadMap:
         return out
 
     def nearest_lane(self, x: float, y: float) -> tuple[Lane, float, float]:
-        """The lane whose centre line is nearest to (x, y): (lane, s along it, d + left)."""
+        """The lane whose centre line is nearest to (x, y): (lane, s along its shape, d + left)."""
         from ego.lane_frame import LanePolyline
 
         best = None
@@ -620,8 +790,9 @@ class RoadMap:
                 s, d, _ = LanePolyline(ln.shape, ln.width, ln.id).project(x, y)
                 # the distance to the lane's centre line itself, not to its extension beyond
                 # an end (a point past the end of a road is nearer the road that goes on)
-                dist = math.hypot(max(-s, s - ln.length, 0.0), d)
-                s = min(max(s, 0.0), ln.length)
+                length = self.shape_length(ln)
+                dist = math.hypot(max(-s, s - length, 0.0), d)
+                s = min(max(s, 0.0), length)
                 if best is None or dist < best[3]:
                     best = (ln, s, d, dist)
         if best is None:

@@ -29,9 +29,9 @@ import dataclasses
 import math
 import os
 import re
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
-from functools import lru_cache
+from functools import lru_cache, partial
 from pathlib import Path
 
 import numpy as np
@@ -195,11 +195,12 @@ def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
                 raise ScenarioFileError(scenario.path, pos.line, str(exc)) from None
             if off:
                 # an offset reaching into a neighbour lane starts the entity in that lane
-                lane, s, off = _lane_at(roads.edges[lane.edge], lane, off, s)
+                lane, s, off = _lane_at(roads, lane, off, s)
             v = scenario.entities[name].vehicle
             speed = _init_speed(scenario, name)
             centre[name] = (lane, s, off)
-            front = s + v.center_x + 0.5 * v.length
+            # s is along the lane's shape; SUMO's lane position scales it (docs: Roads)
+            front = roads.to_sumo(lane, s + v.center_x + 0.5 * v.length)
             if not 0.0 <= front <= lane.length + 1e-6:
                 raise ScenarioFileError(
                     scenario.path,
@@ -285,15 +286,15 @@ def _init_speed(scenario: M.Scenario, name: str, seen: tuple[str, ...] = ()) -> 
 
 
 def _place(pos: M.Position, roads: RoadMap, centre: dict) -> tuple:
+    """(SUMO lane, arc length along its shape, offset from its centre) of an Init position."""
     if isinstance(pos, M.LanePosition):
-        lane, s = roads.lane_position(pos.road, pos.lane, pos.s)
+        lane, s = roads.lane_s(pos.road, pos.lane, pos.s)
         return lane, s, pos.offset
     if isinstance(pos, M.RoadPosition):
-        lane1, s = roads.lane_position(pos.road, -1, pos.s)
-        edge = roads.edges[lane1.edge]
+        lane1, s = roads.lane_s(pos.road, -1, pos.s)
         # the reference line is the left edge of lane -1; t measured from it (+ left)
         d = pos.t + 0.5 * lane1.width
-        return _lane_at(edge, lane1, d, s)
+        return _lane_at(roads, lane1, d, s)
     if isinstance(pos, M.WorldPosition):
         return roads.nearest_lane(pos.x, pos.y)
     if isinstance(pos, M.TrajectoryPosition):
@@ -306,15 +307,15 @@ def _place(pos: M.Position, roads: RoadMap, centre: dict) -> tuple:
         index = lane.index + pos.dlane
         if not 0 <= index < len(edge.lanes):
             raise ValueError(f"dLane {pos.dlane} from {pos.entity}'s lane leaves the road ({len(edge.lanes)} lanes)")
-        return edge.lanes[index], s + pos.ds, pos.offset
+        return edge.lanes[index], roads.moved(lane, s, pos.ds, edge.lanes[index]), pos.offset
     if isinstance(pos, M.RelativeObjectPosition):
         # at the start the entity lies along its lane: dx along it, dy across
-        return _lane_at(edge, lane, off + pos.dy, s + pos.dx)
+        return _lane_at(roads, lane, off + pos.dy, s + pos.dx)
     if isinstance(pos, M.RelativeWorldPosition):
         # the entity's reference point in the world, moved along the world's axes, on its nearest lane
         x, y = LanePolyline(lane.shape, lane.width, lane.id).offset_point(s, off)
         return roads.nearest_lane(x + pos.dx, y + pos.dy)
-    return _lane_at(edge, lane, off + pos.dt, s + pos.ds)
+    return _lane_at(roads, lane, off + pos.dt, roads.moved(lane, s, pos.ds))
 
 
 def _absolute_xy(pos: M.Position, roads: RoadMap) -> tuple[float, float, float]:
@@ -325,7 +326,7 @@ def _absolute_xy(pos: M.Position, roads: RoadMap) -> tuple[float, float, float]:
         return pos.x, pos.y, heading
     if isinstance(pos, (M.LanePosition, M.RoadPosition)):
         lane_id, d = (pos.lane, pos.offset) if isinstance(pos, M.LanePosition) else (-1, None)
-        lane, s = roads.lane_position(pos.road, lane_id, pos.s)
+        lane, s = roads.lane_s(pos.road, lane_id, pos.s)
         if d is None:  # the reference line is the left edge of lane -1; t from it, + left
             d = pos.t + 0.5 * lane.width  # type: ignore[union-attr]
         poly = LanePolyline(lane.shape, lane.width, lane.id)
@@ -337,11 +338,14 @@ def _absolute_xy(pos: M.Position, roads: RoadMap) -> tuple[float, float, float]:
     )
 
 
-def _lane_at(edge, lane, d: float, s: float) -> tuple:
-    """The lane of ``edge`` containing lateral offset ``d`` from ``lane``'s centre."""
+def _lane_at(roads: RoadMap, lane, d: float, s: float) -> tuple:
+    """The lane of ``lane``'s edge containing lateral offset ``d`` from ``lane``'s centre at
+    ``s`` along its shape: (that lane, the same road s along its shape, offset from its centre)."""
+    edge = roads.edges[lane.edge]
     offsets = _lane_offsets(edge, lane)
     best = min(offsets, key=lambda i: abs(d - offsets[i]))
-    return edge.lanes[best], s, d - offsets[best]
+    to = edge.lanes[best]
+    return to, (s if to is lane else roads.moved(lane, s, 0.0, to)), d - offsets[best]
 
 
 def _lane_offsets(edge, lane) -> dict[int, float]:
@@ -699,6 +703,9 @@ class StoryDriver:
         #: the scripted entities' (t, speed, d of the front) history, for the tests and the
         #: braking criterion
         self.history: dict[str, list[tuple[float, float, float]]] = {}
+        #: the ego lane frame's s -> the storyboard's s along the reference line, and back
+        self._road_s: Callable[[float], float] = float
+        self._lane_s: Callable[[float], float] = float
 
     def _route(self, edge: str) -> str:
         sc = self.sc
@@ -799,11 +806,21 @@ class StoryDriver:
         centre (an Init offset) is moved across there in SUMO's first step (SUMO inserts on
         lane centres)."""
         sc = self.sc
+        # the storyboard's s: along the ego road's reference line (road s on a converted road,
+        # from the ego's edge's start in its driving direction), d across the ego's start lane
+        # (docs/openscenario.md, Roads); the lane frame's own s where the two are one
+        first = sc.starts[sc.ego_name]
+        frame_lane = sc.roads.edges[first.edge].lanes[first.index]
+        if sc.roads.is_parallel_copy(frame_lane):
+            self._road_s = self._lane_s = float
+        else:
+            self._road_s = partial(sc.roads.reference_s, frame_lane)
+            self._lane_s = partial(sc.roads.shape_s, frame_lane)
         for name, start in sc.starts.items():
             if name != sc.ego_name and start.offset:
                 lane = sc.roads.edges[start.edge].lanes[start.index]
                 poly = LanePolyline(lane.shape, lane.width, lane.id)
-                along = start.front - 0.5 * sc.model.entities[name].vehicle.length
+                along = sc.roads.from_sumo(lane, start.front) - 0.5 * sc.model.entities[name].vehicle.length
                 x, y = poly.offset_point(along, start.offset)
                 sc.bridge.place(name, x, y, poly.heading_at(along), start.speed or 0.0)
         offset = sc.starts[sc.ego_name].offset
@@ -1034,7 +1051,8 @@ class StoryDriver:
             e.traveled += math.hypot(bx - e.x, by - e.y)
         e.x, e.y, e.yaw = bx, by, psi
         e.speed = u
-        e.s, e.d = s_cg + off, d
+        to_road = self._road_s
+        e.s, e.d = to_road(s_cg + off), d
         e.d_front = d
         project = sc.road.project
         box = sc.bridge.box
@@ -1049,7 +1067,7 @@ class StoryDriver:
             st.speed = speed if name not in self._kin else self._kin.cars[name].v
             s, d, _ = project(bx, by)
             half = 0.5 * st.length
-            st.s, st.d = s, d
+            st.s, st.d = to_road(s), d
             st.d_front = project(bx + half * math.cos(yaw), by + half * math.sin(yaw))[1]
             history[name].append((t, st.speed, st.d_front))
         board = self.board
@@ -1086,10 +1104,10 @@ class StoryDriver:
             return position.x, position.y, position.h if position.h is not None else road.heading_at(s)
         if isinstance(position, (M.LanePosition, M.RoadPosition)):
             if isinstance(position, M.LanePosition):
-                lane, pos = sc.roads.lane_position(position.road, position.lane, position.s)
+                lane, pos = sc.roads.lane_s(position.road, position.lane, position.s)
                 d_extra = position.offset
             else:
-                lane, pos = sc.roads.lane_position(position.road, -1, position.s)
+                lane, pos = sc.roads.lane_s(position.road, -1, position.s)
                 d_extra = position.t + 0.5 * lane.width
             poly = LanePolyline(lane.shape, lane.width, lane.id)
             x, y = poly.offset_point(pos, d_extra)
@@ -1111,13 +1129,14 @@ class StoryDriver:
             s, d = e.s + position.ds, self.lane_centre(0, e.d, position.dlane) + position.offset
         else:
             s, d = e.s + position.ds, e.d + position.dt
+        s = self._lane_s(s)
         x, y = road.offset_point(s, d)
         return x, y, road.heading_at(s)
 
     def road_frame(self, x: float, y: float) -> tuple[float, float]:
         sc = self.sc
         s, d, _ = sc.road.project(x, y)
-        return s, d
+        return self._road_s(s), d
 
     def lane_centre_of(self, d: float) -> float:
         sc = self.sc
@@ -1183,8 +1202,9 @@ class StoryDriver:
         centre_line = 0.5 * (max(sc.lane_offset.values()) + self._lanes_all.get(len(sc.lanes), INF))
         if name not in self._kin and d_next > centre_line:
             # across the centre line into the other direction's lanes: ego drives it from here
-            ahead = math.cos(st.yaw - sc.road.heading_at(st.s)) > 0
-            self._kin.add(name, st.s, st.d, st.speed, 1 if ahead else -1)
+            s = self._lane_s(st.s)
+            ahead = math.cos(st.yaw - sc.road.heading_at(s)) > 0
+            self._kin.add(name, s, st.d, st.speed, 1 if ahead else -1)
         if name in self._kin:
             self._kin.lateral(name, d_next)  # its reference point on the profile
             return
@@ -1192,8 +1212,9 @@ class StoryDriver:
             # a step: the sublane model moves a car at most a lane-width fraction a step, so
             # the car is placed across at once (where it would be after the step)
             h = sc.config.sumo_step
-            x, y = sc.road.offset_point(st.s + st.speed * h, d_next - (st.d_front - st.d))
-            sc.bridge.place(name, x, y, sc.road.heading_at(st.s + st.speed * h), st.speed)
+            s = self._lane_s(st.s) + st.speed * h
+            x, y = sc.road.offset_point(s, d_next - (st.d_front - st.d))
+            sc.bridge.place(name, x, y, sc.road.heading_at(s), st.speed)
             return
         if name not in self._lateral_free:
             # as cut-in's car: SUMO's own limits on lateral motion and its speed loss while

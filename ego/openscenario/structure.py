@@ -246,6 +246,8 @@ declare(
     "LanePosition",
     contains=("Orientation",),
     note=(
+        "`s` (and a relative position's `ds`) is road s, along the road's reference line as OpenDRIVE has it: "
+        "the lane's point on the reference line's normal at s, whatever SUMO's lane lengths (see Roads below); "
         "a missing `dx`/`dy` of a `RelativeObjectPosition` or `dLane` of a `RelativeLanePosition` (the schema "
         "requires them) is 0, as the reference player reads them; `RelativeObjectPosition`: `dx` ahead, `dy` left of the entity's reference point in its own frame (during "
         "the run from its box and heading; in `Init` along and across its lane, exact on straight roads); `dz` "

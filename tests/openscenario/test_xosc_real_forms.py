@@ -6,6 +6,7 @@ the reference player reads them). Each file here is hand-written for the test.""
 from __future__ import annotations
 
 import json
+import math
 import shutil
 from pathlib import Path
 
@@ -304,21 +305,29 @@ LOOP = """<?xml version="1.0" encoding="UTF-8"?>
 
 def test_a_road_netconvert_splits_resolves(tmp_path):
     """A road that loops onto itself is split by netconvert into ``-1#0`` and ``-1#1``; an s
-    past the first piece is on the second, at s minus the first piece's length."""
+    past the first piece is on the second, each piece starting at the road s where the one
+    before it ends (its reference line's length), and (road, lane, s) is the lane's point on
+    the normal of the reference line at s: on this circle of radius 100 m (the reference
+    line, about the origin from (0, -100) anticlockwise) the lane's centre is at radius
+    101.75 m and angle s / 100 from the start."""
+    from ego.lane_frame import LanePolyline
     from ego.openscenario.roads import RoadMap, network_file
 
     road = tmp_path / "loop.xodr"
     road.write_text(LOOP)
     roads = RoadMap(network_file(road), converted=True)
     assert sorted(roads.edges) == ["-1#0", "-1#1"]
-    first = roads.edges["-1#0"].lanes[0].length
-    lane, pos = roads.lane_position("1", -1, 100.0)
-    assert (lane.edge, pos) == ("-1#0", 100.0)
-    lane, pos = roads.lane_position("1", -1, first + 50.0)
-    assert lane.edge == "-1#1" and pos == pytest.approx(50.0, abs=1e-9)
-    # the lane's centre is the circle of radius 100 + 1.75 about the origin
-    x, y = lane.shape[0]
-    assert (x * x + y * y) ** 0.5 == pytest.approx(101.75, abs=1e-3)
+    first = roads.reference("-1#0").length
+    assert first == pytest.approx(math.pi * 100.0, abs=2e-3)
+    for s, edge in ((100.0, "-1#0"), (first + 50.0, "-1#1"), (500.0, "-1#1")):
+        lane, g = roads.lane_s("1", -1, s)
+        assert lane.edge == edge
+        x, y = LanePolyline(lane.shape).offset_point(g, 0.0)
+        a = s / 100.0
+        assert math.hypot(x - 101.75 * math.sin(a), y + 101.75 * math.cos(a)) < 1e-3
+        assert roads.road_s(lane, g) == pytest.approx(s, abs=1e-9)
+        # SUMO's lane position: this one-lane edge's SUMO length is its shape's
+        assert roads.lane_position("1", -1, s)[1] == pytest.approx(g * lane.length / roads.shape_length(lane))
     with pytest.raises(ValueError, match=r"unknown road '2' \(roads: 1\)"):
         roads.lane_position("2", -1, 10.0)
 
