@@ -393,6 +393,10 @@ class _Builder:
         #: the last Maneuver a catalog reference found: (catalog file, its node, its values)
         self.maneuver_entry: tuple[Path, Node, dict[str, object]] | None = None
 
+    def scenario_tree(self) -> Node:
+        """The scenario file's parsed tree (a catalog entry's element reads the scenario's)."""
+        return read_tree(self.scenario)
+
     # -- attributes ----------------------------------------------------------------------------
     def error(self, node: Node, message: str) -> ScenarioFileError:
         return ScenarioFileError(self.path, node.line, message)

@@ -49,10 +49,8 @@ class TimeOfDay(ConditionKind):
     )
 
     def build(self, b: Any, c: Node, base: dict[str, Any]) -> M.Condition:
-        from ego.openscenario.loader import read_tree
-
         rule, value = b.enum(c, "rule", M.RULES), parse_time(b, c)
-        root = read_tree(b.scenario)  # a maneuver catalog's condition: the scenario's Init
+        root = b.scenario_tree()  # a maneuver catalog's condition: the scenario's Init
         init = _times_of_day(root, "Init")
         if not init:
             raise b.error(
