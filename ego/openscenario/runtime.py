@@ -486,7 +486,8 @@ class Storyboard:
                         self._stop(o, "stopTransition")
                         self.log("event", f"t = {t:.2f} s: event {o.name!r} overwritten by {ev.name!r}")
                 ev.go(RUNNING, "startTransition")
-                self.log("event", f"t = {t:.2f} s: event {ev.name!r} starts (run {ev.count + 1} of {ev.max_count})")
+                of = "unlimited" if ev.max_count == M.UNLIMITED else ev.max_count
+                self.log("event", f"t = {t:.2f} s: event {ev.name!r} starts (run {ev.count + 1} of {of})")
                 actors = group.node.actors
                 runs = []
                 for a in ev.children:
