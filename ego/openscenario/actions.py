@@ -29,9 +29,14 @@ from ego.params import ConfigError
 
 class Teleport(ActionKind):
     tag, within, contains, model = "TeleportAction", ("PrivateAction",), ("Position",), M.TeleportAction
-    in_init, init_note, places = "yes", "TeleportAction", True
+    in_init, init_note, places, on_ego = "yes", "TeleportAction", True, True
     note = (
-        "not on the ego; places an entity that has no start position yet (not in the simulation until then: see `Init`)"
+        "places an entity that has no start position yet (not in the simulation until then: see `Init`); on the "
+        "ego during the run: its plant's pose becomes the position's (the reference point there, the position's "
+        "heading), its speeds and steering kept, its lane there found again (the offset from that lane's centre "
+        "held as its lateral reference, as an Init offset) and its position references moved along with it; only "
+        "onto the ego's road (its lane frame) and with ego's own plant, else a warning and nothing moves "
+        "(`test_xosc_ego_teleport.py`)"
     )
 
     def build(self, b: Any, node: Node) -> M.TeleportAction:
@@ -40,7 +45,10 @@ class Teleport(ActionKind):
     def start(self, run: ActionRun, t: float) -> None:
         drv = run.board.driver
         x, y, h = drv.position_xy(run.action.position, run.board.states)
-        drv.teleport(run.actor, x, y, h)
+        if run.is_ego:
+            drv.ego_teleport(x, y, h, run.action.line)
+        else:
+            drv.teleport(run.actor, x, y, h)
         run.finished = True
 
 
