@@ -20,7 +20,7 @@ from ego.openscenario.ego_refs import EgoGap, EgoPath, SpeedKnots, to_lane_frame
 from ego.openscenario.files import warn
 from ego.openscenario.registry import ActionKind, register
 from ego.openscenario.runtime import EPS, INF, ActionRun, Storyboard, speed_profile_knots
-from ego.openscenario.xmltree import DOCS, Node, ScenarioFileError
+from ego.openscenario.xmltree import DOCS, Node
 from ego.params import ConfigError
 
 # the builder's (``b``) readers: num, int_, bool_, str_, enum, one, entity_ref, position,
@@ -29,9 +29,14 @@ from ego.params import ConfigError
 
 class Teleport(ActionKind):
     tag, within, contains, model = "TeleportAction", ("PrivateAction",), ("Position",), M.TeleportAction
-    in_init, init_note, places = "yes", "TeleportAction", True
+    in_init, init_note, places, on_ego = "yes", "TeleportAction", True, True
     note = (
-        "not on the ego; places an entity that has no start position yet (not in the simulation until then: see `Init`)"
+        "places an entity that has no start position yet (not in the simulation until then: see `Init`); on the "
+        "ego during the run: its plant's pose becomes the position's (the reference point there, the position's "
+        "heading), its speeds and steering kept, its lane there found again (the offset from that lane's centre "
+        "held as its lateral reference, as an Init offset) and its position references moved along with it; only "
+        "onto the ego's road (its lane frame) and with ego's own plant, else a warning and nothing moves "
+        "(`test_xosc_ego_teleport.py`)"
     )
 
     def build(self, b: Any, node: Node) -> M.TeleportAction:
@@ -48,7 +53,10 @@ class Teleport(ActionKind):
     def start(self, run: ActionRun, t: float) -> None:
         drv = run.board.driver
         x, y, h = drv.position_xy(run.action.position, run.board.states)
-        drv.teleport(run.actor, x, y, h)
+        if run.is_ego:
+            drv.ego_teleport(x, y, h, run.action.line)
+        else:
+            drv.teleport(run.actor, x, y, h)
         run.finished = True
 
 
@@ -257,19 +265,22 @@ def _lateral_start(run: ActionRun, t: float, target: float, T: float, shape: str
     drv, me = run.board.driver, run.board.states[run.actor]
     start = drv.ego_references()[1] if run.is_ego else me.d_front
     run.profile = Transition(t, start, target, T, shape)
-    if run.is_ego:
+    if run.is_ego:  # the ego's controller follows the profile; the action ends with it
         drv.ego_lateral(run.profile)
-        run.finished = True
 
 
 def _lateral_step(kind: ActionKind, run: ActionRun, t: float) -> None:
     """Move the actor along its lateral profile for [t, t + step] (SUMO's sublane model): the
     ``step`` of a lane change and of a lane offset."""
     drv, p = run.board.driver, run.profile
-    drv.lateral(run.actor, p.value(t + run.board.h), p.peak_rate)
+    if p is None:  # not started (its target lane does not exist)
+        return
+    if not run.is_ego:
+        drv.lateral(run.actor, p.value(t + run.board.h), p.peak_rate)
     if p.done(t + run.board.h) and not getattr(run.action, "continuous", False):
         run.finished = True
-        drv.release(run.actor)
+        if not run.is_ego:
+            drv.release(run.actor)
 
 
 class LaneChange(ActionKind):
@@ -310,10 +321,17 @@ class LaneChange(ActionKind):
         try:
             if a.target_lane is not None:
                 centre = drv.lane_centre(a.target_lane)
+            elif run.is_ego and a.relative_to == b.ego:  # from the lane the ego is commanded to
+                centre = drv.lane_centre(0, drv.ego_references()[1], a.relative_lanes)
             else:
                 centre = drv.lane_centre(0, b.states[a.relative_to].d, a.relative_lanes)
         except ConfigError as exc:  # found only when it starts (where the reference is then)
-            raise ScenarioFileError(b.scenario.path, a.line, f"at t = {t:.2f} s: {exc}") from None
+            # not a refusal mid-run (``ego list`` cannot know where the reference will be):
+            # the action ends at once without moving the actor
+            warn(f"{b.scenario.path}:{a.line}: at t = {t:.2f} s: {exc}: the lane change is skipped")
+            b.log("action", f"t = {t:.2f} s: LaneChangeAction skipped: {exc}")
+            run.finished = True
+            return
         target = centre + a.target_offset
         here = drv.ego_references()[1] if run.is_ego else me.d_front
         dyn = a.dynamics

@@ -446,6 +446,22 @@ class _Builder:
             raise self.error(node, f"bad value for {name} in <{node.tag}>: {i} (expected >= {minimum})")
         return i  # type: ignore[return-value]
 
+    def execution_count(self, node: Node, default: object = ...) -> int:
+        """``maximumExecutionCount`` (the schema: an unsignedInt >= 1); -1, which the schema
+        does not allow, is unlimited with a warning, as the reference player reads it (esmini's
+        ``StoryBoardElement::End`` runs an element again while its count is -1)."""
+        name = "maximumExecutionCount"
+        v = self.int_(node, name, default)
+        if v == -1:
+            files.warn(
+                f"{self.path}:{node.line}: {name}=-1 in <{node.tag}> (the schema allows >= 1): unlimited, "
+                "as the reference player reads it"
+            )
+            return M.UNLIMITED
+        if v < 1:
+            raise self.error(node, f"bad value for {name} in <{node.tag}>: {v} (expected >= 1, or -1: unlimited)")
+        return v
+
     def bool_(self, node: Node, name: str, default: object = ...) -> bool:
         v = self.raw(node, name, default)
         try:
@@ -929,11 +945,7 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
                         cb.entities, cb.catalog_dirs, cb.variables = b.entities, b.catalog_dirs, b.variables
                         cb.scenario = b.scenario
                         mans.append(_maneuver(cb, node, names, scoped=False))
-                groups.append(
-                    M.ManeuverGroup(
-                        b.str_(mg, "name"), b.int_(mg, "maximumExecutionCount", minimum=1), actors, tuple(mans), mg.line
-                    )
-                )
+                groups.append(M.ManeuverGroup(b.str_(mg, "name"), b.execution_count(mg), actors, tuple(mans), mg.line))
                 names.setdefault(groups[-1].name, mg.line)
             acts.append(
                 M.Act(
@@ -1007,7 +1019,7 @@ def _maneuver(b: _Builder, man: Node, names: dict[str, int], scoped: bool = True
             M.Event(
                 b.str_(ev, "name"),
                 b.enum(ev, "priority", M.PRIORITIES),
-                b.int_(ev, "maximumExecutionCount", 1, minimum=1),
+                b.execution_count(ev, 1),
                 acts_,
                 b.trigger(ev.child("StartTrigger")),
                 ev.line,

@@ -26,6 +26,8 @@ STATES = (
     "skipTransition",
     "completeTransition",
 )
+#: an unlimited ``maximumExecutionCount`` (the reference player's -1)
+UNLIMITED = 2**62
 ELEMENT_TYPES = ("story", "act", "maneuverGroup", "maneuver", "event", "action")
 
 

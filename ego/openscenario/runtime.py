@@ -93,6 +93,7 @@ class Driver(Protocol):
     def release(self, name: str) -> None: ...
     def ego_speed(self, profile: Transition | None, relative: tuple[str, str, float] | None) -> None: ...
     def ego_lateral(self, profile: Transition) -> None: ...
+    def ego_teleport(self, x: float, y: float, heading: float, line: int) -> None: ...
     def ego_trajectory(self, path: EgoPath) -> None:
         """A trajectory becomes the ego's lateral (and, timed, longitudinal) reference."""
 
@@ -490,7 +491,8 @@ class Storyboard:
                         self._stop(o, "stopTransition")
                         self.log("event", f"t = {t:.2f} s: event {o.name!r} overwritten by {ev.name!r}")
                 ev.go(RUNNING, "startTransition")
-                self.log("event", f"t = {t:.2f} s: event {ev.name!r} starts (run {ev.count + 1} of {ev.max_count})")
+                of = "unlimited" if ev.max_count == M.UNLIMITED else ev.max_count
+                self.log("event", f"t = {t:.2f} s: event {ev.name!r} starts (run {ev.count + 1} of {of})")
                 actors = group.node.actors
                 runs = []
                 for a in ev.children:

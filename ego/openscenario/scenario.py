@@ -38,6 +38,7 @@ import numpy as np
 
 from ego.lane_frame import LanePolyline
 from ego.models.nonlinear_bicycle import NonlinearBicycle
+from ego.openscenario import files
 from ego.openscenario import model as M
 from ego.openscenario.actions import along_path, trajectory_points
 from ego.openscenario.dynamics import Transition
@@ -1398,6 +1399,54 @@ class StoryDriver:
         sc = self.sc
         self._ego_lateral, self._ego_path = profile, None
         sc.target_lane = min(sc.lane_offset, key=lambda i: abs(profile.end - sc.lane_offset[i]))
+
+    def ego_teleport(self, x: float, y: float, heading: float, line: int) -> None:
+        """A TeleportAction on the ego: its plant's pose becomes the position's (the entity's
+        reference point at (x, y), heading ``heading``), its body-frame speeds (u, v, r) and
+        steering kept; its lane frame is found again there (the nearest lane is its lane, the
+        offset from that lane's centre its held lateral reference, as an Init offset) and its
+        position references move with it along the road. Only on ego's own plant and onto its
+        road (its lane frame): elsewhere a warning, and the action does nothing."""
+        sc = self.sc
+        board = self.board
+        assert board is not None
+        g = sc.geometry
+        off = g.cg_to_front - 0.5 * g.length  # the box centre ahead of the cg
+        ahead = sc.model.entities[sc.ego_name].vehicle.center_x - off  # the cg from the reference point
+        X, Y = x + ahead * math.cos(heading), y + ahead * math.sin(heading)
+        road = sc.road
+        s_new, d_new, _ = road.project(X, Y)
+        half = max(abs(v) for v in sc.lane_offset.values()) + road.width
+        why = ""
+        if type(sc.ego).__name__ != "BicyclePlant":
+            why = "a teleport needs ego's own plant (not an FMU)"
+        elif not (0.0 <= s_new <= road.length and abs(d_new) <= half):
+            why = "the position is off the ego's road (ego drives on its start road only)"
+        if why:
+            files.warn(f"{sc.model.path}:{line}: at t = {board.t:.2f} s: TeleportAction on the ego: {why}: skipped")
+            board.log("action", f"t = {board.t:.2f} s: TeleportAction on the ego skipped: {why}")
+            return
+        ds = s_new - sc.s
+        state = sc.ego.state
+        sc.ego.state = (X, state[1], Y, state[3], heading, *state[5:])
+        sc.view.frame()
+        man = sc.manoeuvre
+        man.s0 += ds
+        man.trigger_s += ds
+        if self._cruise_s is not None:
+            self._cruise_s += ds
+        d0 = sc.d_road  # held as an Init offset is
+        self._ego_path = None
+        self._ego_lateral = Transition(board.t, d0, d0, 0.0, "step")
+        sc.target_lane = min(sc.lane_offset, key=lambda i: abs(d0 - sc.lane_offset[i]))
+        sc.obs.d_ref = d0 - sc.lane_offset[sc.target_lane]
+        sc.obs.dd_ref = 0.0
+        # the storyboard sees it there from now (the jump is no distance travelled)
+        e = board.states[sc.ego_name]
+        e.x, e.y, e.yaw = X + off * math.cos(heading), Y + off * math.sin(heading), heading
+        e.s, e.d = sc.s + off, sc.d_road
+        e.d_front = e.d
+        self._ego_then = self._ego_now()
 
     # -- the ego's references ---------------------------------------------------------------
     def cruise_references(self, obs, t: float) -> None:

@@ -311,6 +311,9 @@ declare(
         "overwrite / override (stops the maneuver's other running events), skip (does not start while another "
         "event of the maneuver runs), parallel. **As the reference player reads its files:** a `Maneuver` or an "
         "`Action` without its `name` (the schema requires one) is read nameless (no condition can refer to it); "
+        "a `maximumExecutionCount` of -1 (the schema: >= 1) is unlimited with a warning (esmini's "
+        "`StoryBoardElement::End` runs the element again while its count is -1; its `acc-toggle.xosc`; "
+        "`test_xosc_execution_count.py`); "
         "an empty `ManeuverGroup` (no `Actors`, which the schema requires, and no `Maneuver`: esmini's "
         "`straight_500m.xosc`) does nothing"
     ),

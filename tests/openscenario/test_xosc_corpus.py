@@ -600,7 +600,7 @@ HAND = [
         "Lead's Init speed is relative to Lead, which has no Init speed",
     ),
     (
-        "ego-teleport",
+        "ego-lateral-distance",
         sub('<EntityRef entityRef="Lead"/></Actors>', '<EntityRef entityRef="Ego"/></Actors>').replace(
             BASE[
                 BASE.index("<LongitudinalAction><SpeedAction>\n                  " + LEAD_ACTION) : BASE.index(
@@ -608,7 +608,8 @@ HAND = [
                 )
             ]
             + "</SpeedAction></LongitudinalAction>",
-            '<TeleportAction><Position><LanePosition roadId="0" laneId="-1" s="400"/></Position></TeleportAction>',
+            '<LateralAction><LateralDistanceAction entityRef="Lead" distance="2" freespace="false" '
+            'continuous="false"/></LateralAction>',
         ),
         None,
         None,
@@ -963,10 +964,11 @@ def test_hand_written(case, tmp_path, capsys):
     if case[0] == "windows-road-missing":  # on another machine's disk: its name looked for here
         written = "C:\\Users\\me\\nowhere.xodr"
         message = f"road file {written!r} not found (looked for {tmp_path / 'nowhere.xodr'})"
-    if case[0] == "ego-teleport":
-        marker = '<TeleportAction><Position><LanePosition roadId="0" laneId="-1" s="400"'
+    if case[0] == "ego-lateral-distance":  # (a TeleportAction on the ego moves it: test_xosc_ego_teleport.py)
+        marker = "<LateralDistanceAction"
         message = (
-            f"<TeleportAction> on the ego (Ego) is not supported by ego: the ego moves by its own model (see {DOCS})"
+            f"<LateralDistanceAction> on the ego (Ego) is not supported by ego: the ego moves by its own model "
+            f"(see {DOCS})"
         )
     _check(path, text, marker, message, tmp_path, capsys)
 

@@ -53,9 +53,9 @@ def test_every_action_and_condition_has_one_kind_and_every_kind_is_declared():
         "LaneOffsetAction, LongitudinalDistanceAction, LateralDistanceAction, SpeedProfileAction, SynchronizeAction, "
         "AssignRouteAction, AcquirePositionAction and FollowTrajectoryAction"
     )
-    # a trajectory, a distance and a speed profile move the ego's references (ego_refs.py)
+    # a trajectory, a distance and a speed profile move the ego's references (ego_refs.py), a
+    # teleport its plant (test_xosc_ego_teleport.py)
     assert {k.tag for k in registry.ACTIONS.values() if not k.on_ego} == {
-        "TeleportAction",
         "LateralDistanceAction",
         "SynchronizeAction",
         "AssignRouteAction",
