@@ -97,6 +97,11 @@ class _Worker:
         return f" ({'; '.join(notes)})" if notes else ""
 
 
+#: seconds a busy worker is given, when the caller stops (Ctrl-C), to send the row of a run
+#: that has just ended before it is killed (a run still under way is killed after it)
+REPLY_GRACE = 1.0
+
+
 class ProcessExecutor:
     """A pool of warm worker processes (forkserver: they start from a clean server and never
     re-import the user's script), one task at a time each, fed through a pipe per worker so a
@@ -174,10 +179,12 @@ class ProcessExecutor:
                     worker.conn.send((fn, job[0]))
 
     def _keep_sent_reply(self, worker: _Worker) -> None:
+        """Keep a busy worker's reply if it comes within :data:`REPLY_GRACE`: a run that ended
+        as Ctrl-C came (its recording already in place) may still be pickling its row."""
         assert worker.job is not None
         task, attempt = worker.job
         try:
-            if worker.conn.poll():
+            if worker.conn.poll(REPLY_GRACE):
                 ok, value = worker.conn.recv()
                 self._drained.append(Outcome(task, value if ok else None, "" if ok else value, attempt))
         except (EOFError, OSError):  # it died as it answered: nothing finished
