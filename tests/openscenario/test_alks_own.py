@@ -21,11 +21,6 @@ CONCRETE = sorted(p for p in ALKS.glob("alks_*.xosc") if not p.stem.endswith("_v
 VARIATIONS = sorted(ALKS.glob("alks_*_variation.xosc"))
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 def test_the_files_are_make_alks_output():
     spec = importlib.util.spec_from_file_location("make_alks", ALKS / "make_alks.py")
     assert spec and spec.loader

@@ -35,11 +35,6 @@ ROAD = """<?xml version="1.0" encoding="UTF-8"?>
 """
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 def _scene(tmp, starts: dict, events: list[tuple[str, str]] = ()) -> object:
     """``starts``: name -> (lane, s, speed, turned: True for a relative turn round, or the
     Orientation element itself)."""

@@ -33,11 +33,6 @@ OBSTACLE = (
 CONTROLLER = '<Controller name="Driver"><Properties><Property name="mode" value="ALKS"/></Properties></Controller>'
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 def catalog(tmp_path, kind: str, entries: str) -> None:
     """Write catalogs/<kind>s/<kind>Catalog.xosc with ``entries``."""
     d = tmp_path / "catalogs" / f"{kind}s"

@@ -12,11 +12,6 @@ from xosc_scenes import entity, event, run_scene, speed, starts, trigger, write_
 from ego.openscenario.runtime import Storyboard
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 def _clearance(free: bool, lanes: str = "", refs: str = "", opposite: bool = False, fwd=45, back=20) -> str:
     return (
         f'<RelativeClearanceCondition distanceForward="{fwd}" distanceBackward="{back}" '

@@ -17,11 +17,6 @@ ROOT = Path(__file__).resolve().parents[2]
 XOSC = ROOT / "scenarios" / "openscenario"
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 @pytest.fixture
 def files(tmp_path):
     for name in ("emergency_brake.xosc", "cut_in.xosc", "straight3.xodr"):

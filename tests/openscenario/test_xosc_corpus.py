@@ -20,11 +20,6 @@ SHIPPED = ROOT / "scenarios" / "openscenario"
 DOCS = "docs/openscenario.md"
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 def line_of(text: str, marker: str) -> int:
     """The line (1-based) of the first occurrence of ``marker``."""
     i = text.index(marker)

@@ -13,11 +13,6 @@ from xosc_scenes import event, run_scene, scene, sim_time, starts, trigger
 AWAY = {"A": (-1, 400.0, 25.0), "B": (-1, 450.0, 25.0), "C": (-1, 480.0, 25.0)}
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 def relative_change(dlane: int, seconds: float) -> str:
     return (
         '<LateralAction><LaneChangeAction><LaneChangeActionDynamics dynamicsShape="sinusoidal" '

@@ -22,11 +22,6 @@ from ego.runner import RunSpec, build
 AWAY = {"A": (-1, 400.0, 25.0), "B": (-1, 450.0, 25.0), "C": (-1, 480.0, 25.0)}
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 def _run(path, controller: str = "pid", duration: float = 10.0, **overrides):
     """Run the file; the scenario, and (t, s, d, speed) of the ego's reference point (its box
     centre: the scene's cars have center.x 0) in its lane frame at every storyboard step."""

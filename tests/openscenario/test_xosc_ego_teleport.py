@@ -17,11 +17,6 @@ from ego.runner import RunSpec, build
 AWAY = {"A": (-1, 400.0, 25.0), "B": (-1, 450.0, 25.0), "C": (-1, 480.0, 25.0)}
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 def teleport(lane: int, s: float, offset: float) -> str:
     return (
         f'<TeleportAction><Position><LanePosition roadId="0" laneId="{lane}" s="{s}" offset="{offset}"/>'

@@ -32,11 +32,6 @@ CATALOG = """<?xml version="1.0"?>
 """
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 def _braking_plant(scale: float | None) -> BicyclePlant:
     params = NonlinearBicycleParams(slip_speed_floor=1.0, abs=True)
     grip = params.F_max / params.Nw

@@ -21,11 +21,6 @@ TRACKING = ("pid", "fuzzy", "fuzzy-pid", "bp-pid", "rbf-smc")
 NOT_COMPARED = {"scenario", "wall_time", "backend"}
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 def _same(a: dict, b: dict) -> None:
     keys = set(a) - NOT_COMPARED
     assert keys <= set(b)

@@ -11,11 +11,6 @@ from xosc_scenes import event, run_scene, scene, sim_time, speed, starts, trigge
 from ego.cli import main
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 def _scene(tmp_path, count: int):
     # a step speed change on A from t = 1 s: it ends at once, so the event is back in
     # standby and (its trigger still true) starts again at the next step while runs remain

@@ -15,11 +15,6 @@ ROOT = Path(__file__).resolve().parents[2]
 XOSC = ROOT / "scenarios" / "openscenario"
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 def test_curve_on_the_converted_arc():
     """Report 002's 15 m arc from the .xodr: rbf-smc keeps the lane (|e_lat| < 0.35 m) and the
     exit's sinusoidal slow-down brings it to 20 km/h."""

@@ -12,11 +12,6 @@ from ego.openscenario.loader import load
 from ego.openscenario.xmltree import ScenarioFileError
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 def _init(path, who: str, action: str) -> None:
     """Add ``action`` (a PrivateAction's content) to ``who``'s Init."""
     text = path.read_text()

@@ -24,11 +24,6 @@ EB = (SHIPPED / "emergency_brake.xosc").read_text()
 LEAD_PERF = '<Performance maxSpeed="55" maxAcceleration="2.6" maxDeceleration="4.5"/>'
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 def _eb(tmp_path: Path, text: str) -> Path:
     (tmp_path / "straight3.xodr").write_bytes((SHIPPED / "straight3.xodr").read_bytes())
     path = tmp_path / "case.xosc"

@@ -21,11 +21,6 @@ from ego.openscenario.xmltree import ScenarioFileError
 PERF = '<Performance maxSpeed="55" maxAcceleration="2.6" maxDeceleration="4.5"/>'
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 def _edit(path, old: str, new: str, count: int = 1) -> None:
     text = path.read_text()
     assert old in text, old

@@ -19,11 +19,6 @@ STRAIGHT = '<geometry s="0" x="0" y="5.25" hdg="0" length="3000">'
 NORTH = f'<geometry s="0" x="-5.25" y="0" hdg="{math.pi / 2!r}" length="3000">'
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 def _scene(tmp_path, starts_, events, replace: tuple[str, str] | None = None, road: str = "north3.xodr"):
     """The scene on ``road`` (north3.xodr: straight3.xodr turned; or straight3.xodr itself), one
     ``replace`` made in its text."""

@@ -17,18 +17,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pytest
 from xosc_scenes import run_scene, sim_time, write_file
 
 from ego.openscenario.roads import RoadMap, network_file
 
 W, L1, R, LA, L5, L2, L3 = 3.5, 20.0, 40.0, 30.0, 40.0, 150.0, 200.0
 K = -1.0 / R  # the ramp's arc turns right
-
-
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
 
 
 def _lanes(n: int) -> str:

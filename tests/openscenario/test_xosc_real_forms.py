@@ -20,11 +20,6 @@ from ego.openscenario.loader import load
 SHIPPED = Path(__file__).resolve().parents[2] / "scenarios" / "openscenario"
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 def _edit(path, old: str, new: str) -> None:
     text = path.read_text()
     assert old in text, old

@@ -14,11 +14,6 @@ from ego.openscenario.scenario import StoryDriver
 from ego.openscenario.xmltree import ScenarioFileError
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 def _record(monkeypatch, name: str) -> list:
     """(storyboard time, state of ``name``: s, d, speed, at_end, offroad) every step."""
     rows: list = []

@@ -16,11 +16,6 @@ from xosc_scenes import run_scene, sim_time, write_file
 K4, L4, L2, K3, L3, K5, L5 = 0.002, 50.0, 150.0, -0.003, 150.0, -0.02, 40.0
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 def _lanes(n: int, links: list[str] | None = None) -> str:
     links = links or [""] * n
     lanes = "".join(

@@ -25,11 +25,6 @@ EDGES = """<edges>
 </edges>"""
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 def _net(tmp) -> None:
     (tmp / "fork.nod.xml").write_text(NODES)
     (tmp / "fork.edg.xml").write_text(EDGES)

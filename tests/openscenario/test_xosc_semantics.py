@@ -34,11 +34,6 @@ from ego.openscenario.dynamics import (
 pytestmark = pytest.mark.sumo
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 def _pos(s: float, lane: int = -1) -> str:
     return f'<Position><LanePosition roadId="0" laneId="{lane}" s="{s}" offset="0"/></Position>'
 

@@ -9,11 +9,6 @@ from xosc_scenes import event, run_scene, scene, speed, starts, trigger
 from ego.openscenario.xmltree import ScenarioFileError
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 def _environment(time: str, animation: bool) -> str:
     return (
         '<GlobalAction><EnvironmentAction><Environment name="env">'

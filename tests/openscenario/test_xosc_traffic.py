@@ -19,11 +19,6 @@ CARS = (
 )
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 def _watch(monkeypatch) -> list[dict[str, tuple[float, float, float]]]:
     """Every storyboard step: the traffic vehicles in SUMO -> (x, y, speed) (box centres), and
     the ego's (x, y, yaw) under "Ego"."""

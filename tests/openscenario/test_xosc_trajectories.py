@@ -19,11 +19,6 @@ from ego.openscenario.runtime import Storyboard
 from ego.openscenario.xmltree import ScenarioFileError
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 # -- the curves -----------------------------------------------------------------------------------
 def test_a_clothoid_from_zero_curvature_is_the_fresnel_integrals():
     L, k1 = 100.0, 1.0 / 50.0

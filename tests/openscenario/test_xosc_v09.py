@@ -15,11 +15,6 @@ from ego.openscenario.scenario import file_listing
 from ego.openscenario.xmltree import ScenarioFileError
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
-
-
 def _storyboard(sc) -> list[tuple[float, str]]:
     return [(round(e.t, 6), e.text) for e in sc.events if e.kind == "storyboard"]
 
