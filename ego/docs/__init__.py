@@ -828,6 +828,7 @@ def _outcomes(ms: list[dict]) -> list[str]:
         str(avoidable),
         str(s.count("diverged")),
         str(s.count("timeout")),
+        str(s.count("failed")),
     ]
 
 
@@ -869,6 +870,7 @@ def envelope() -> list[Table]:
             "of which avoidable by braking from the trigger",
             "diverged",
             "timeout",
+            "failed (a default requirement broken: the ego left its lane)",
         ),
         _spec_rows(SWEEPS / "envelope.toml", _outcomes),
     )
@@ -883,6 +885,7 @@ def envelope() -> list[Table]:
             "of which avoidable by braking from the car's intrusion into the ego's lane",
             "diverged",
             "timeout",
+            "failed (a default requirement broken: the ego left its lane)",
         ),
         _spec_rows(SWEEPS / "cut-in.toml", _outcomes),
     )
