@@ -732,11 +732,7 @@ class AssignRoute(ActionKind):
     def build(self, b: Any, node: Node) -> M.AssignRouteAction:
         ref = node.child("CatalogReference")
         if ref is not None:  # a Route of a RouteCatalog: read in its file, with its parameters
-            b.maneuver_entry = None
-            b.catalog_entry(ref, ("Route",), "")
-            file, route, values = b.maneuver_entry
-            cb = type(b)(file, values)
-            cb.entities, cb.catalog_dirs, cb.variables = b.entities, b.catalog_dirs, b.variables
+            route, cb = b.entry_builder(ref, "Route")
             action = self._route(cb, route, node, scoped=False)
             # the waypoints' errors found later (unreachable roads) name the reference's line
             points = tuple(dataclasses.replace(p, line=ref.line) for p in action.waypoints)
@@ -1378,10 +1374,7 @@ class Environment(ActionKind):
         """Checked (every attribute resolves); a RoadCondition's friction scale kept."""
         ref = env_action.child("CatalogReference")
         if ref is not None:
-            b.maneuver_entry = None
-            b.catalog_entry(ref, ("Environment",), "")
-            file, env, values = b.maneuver_entry
-            b = type(b)(file, values)  # the entry's parameters with the reference's assignments
+            env, b = b.entry_builder(ref, "Environment")  # the entry's parameters, the reference's assignments
         else:
             env = b.one(env_action, "Environment")
         outer = b.values

@@ -614,6 +614,18 @@ class _Builder:
                 return resolved(f, "catalog file")
         raise self.error(node, f"catalog {catalog!r} not found ({files.looked(firsts + rest)})")
 
+    def entry_builder(self, ref: Node, kind: str) -> tuple[Node, _Builder]:
+        """The ``kind`` element a CatalogReference names (a Route, an Environment) and a
+        builder that reads it in its catalog file with the entry's parameters and the
+        reference's assignments (this scenario's entities, catalogs and variables)."""
+        self.maneuver_entry = None
+        self.catalog_entry(ref, (kind,), "")
+        assert self.maneuver_entry is not None  # catalog_entry found it or raised
+        file, node, values = self.maneuver_entry
+        cb = type(self)(file, values)
+        cb.entities, cb.catalog_dirs, cb.variables = self.entities, self.catalog_dirs, self.variables
+        return node, cb
+
     def catalog_entry(self, node: Node, kinds: tuple[str, ...], name: str) -> M.Vehicle | None:
         """The entry a CatalogReference names, of one of ``kinds`` (a Controller entry is
         checked and gives None)."""
