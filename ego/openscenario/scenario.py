@@ -46,7 +46,7 @@ from ego.openscenario.ego_refs import EgoGap, EgoPath
 from ego.openscenario.kinematic import Kinematic
 from ego.openscenario.loader import declared_parameters, header_description, load, turned_message
 from ego.openscenario.registry import action_of
-from ego.openscenario.roads import RoadMap, network_file, refine_shape
+from ego.openscenario.roads import RoadMap, network_file, refine_shape, road_of_edge
 from ego.openscenario.runtime import EntityState, Storyboard, boxes_overlap
 from ego.openscenario.traffic import TrafficActions, sumo_type
 from ego.openscenario.xmltree import DOCS, ScenarioFileError
@@ -210,7 +210,8 @@ def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
                     f"{lane.length:.1f} m long (SUMO lane {lane.id})",
                 )
             overlaps = _overlaps(scenario, name, lane, front, off, centre, out)
-            out[name] = Placement(lane.edge, lane.index, front, off, speed, overlaps, _turned(tp, lane, s))
+            flip = roads.converted and road_of_edge(lane.edge) in roads.by_heading
+            out[name] = Placement(lane.edge, lane.index, front, off, speed, overlaps, _turned(tp, lane, s, flip))
             del pending[name]
         if not pending:
             break
@@ -224,11 +225,16 @@ def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
     return out
 
 
-def _turned(tp: M.TeleportAction, lane, s: float) -> int:
+def _turned(tp: M.TeleportAction, lane, s: float, flip: bool = False) -> int:
     """The line turning an entity that starts at ``s`` along SUMO ``lane`` against the lane's
     direction (0: it faces the lane's way): its relative Orientation (read by the loader), or
-    the world heading the file gives it, compared with the lane's heading there."""
+    the world heading the file gives it, compared with the lane's heading there. On a road
+    turned round by its ego's heading (``flip``), a lane position's relative Orientation is
+    relative to the lane's right-hand direction, which SUMO's lane now runs against: an
+    entity turned by it faces the lane's way, and one not turned faces against it."""
     turned = getattr(tp.position, "turned", 0)
+    if flip and isinstance(tp.position, M.LanePosition) and tp.heading is None:
+        return 0 if turned else tp.position.line
     if turned or tp.heading is None:
         return turned
     lane_heading = LanePolyline(lane.shape, lane.width, lane.id).heading_at(min(max(s, 0.0), lane.length))
@@ -292,9 +298,7 @@ def _place(pos: M.Position, roads: RoadMap, centre: dict) -> tuple:
         lane, s = roads.lane_s(pos.road, pos.lane, pos.s)
         return lane, s, pos.offset
     if isinstance(pos, M.RoadPosition):
-        lane1, s = roads.lane_s(pos.road, -1, pos.s)
-        # the reference line is the left edge of lane -1; t measured from it (+ left)
-        d = pos.t + 0.5 * lane1.width
+        lane1, s, d = roads.t_position(pos.road, pos.s, pos.t)
         return _lane_at(roads, lane1, d, s)
     if isinstance(pos, M.WorldPosition):
         return roads.nearest_lane(pos.x, pos.y)
@@ -326,10 +330,11 @@ def _absolute_xy(pos: M.Position, roads: RoadMap) -> tuple[float, float, float]:
         heading = LanePolyline(lane.shape, lane.width, lane.id).heading_at(s) if pos.h is None else pos.h
         return pos.x, pos.y, heading
     if isinstance(pos, (M.LanePosition, M.RoadPosition)):
-        lane_id, d = (pos.lane, pos.offset) if isinstance(pos, M.LanePosition) else (-1, None)
-        lane, s = roads.lane_s(pos.road, lane_id, pos.s)
-        if d is None:  # the reference line is the left edge of lane -1; t from it, + left
-            d = pos.t + 0.5 * lane.width  # type: ignore[union-attr]
+        if isinstance(pos, M.LanePosition):
+            lane, s = roads.lane_s(pos.road, pos.lane, pos.s)
+            d = pos.offset
+        else:
+            lane, s, d = roads.t_position(pos.road, pos.s, pos.t)
         poly = LanePolyline(lane.shape, lane.width, lane.id)
         x, y = poly.offset_point(s, d)
         return x, y, poly.heading_at(s)
@@ -492,6 +497,13 @@ class FileScenario(Scenario):
                 f"the ego {ego!r} has no TeleportAction in <Init> (ego needs the ego's start position)",
             )
         starts = placements(model, roads)
+        start = starts[ego]
+        if start.turned and roads.converted and not roads.edges[start.edge].left_hand:
+            # the ego headed against its right-hand lane (the reference player's "left-hand
+            # traffic by heading"): its road is read as left-hand traffic, its edges turned round
+            turned = frozenset({road_of_edge(start.edge)})
+            roads = RoadMap(network_file(model.road, turned), converted=True, by_heading=turned)
+            starts = placements(model, roads)
         _check_turned(model, ego, starts[ego], roads)
         edge = starts[ego].edge
         _check_road_references(model, roads, len(roads.edges[edge].lanes), len(_opposite_lanes(roads, edge)))
@@ -1108,8 +1120,7 @@ class StoryDriver:
                 lane, pos = sc.roads.lane_s(position.road, position.lane, position.s)
                 d_extra = position.offset
             else:
-                lane, pos = sc.roads.lane_s(position.road, -1, position.s)
-                d_extra = position.t + 0.5 * lane.width
+                lane, pos, d_extra = sc.roads.t_position(position.road, position.s, position.t)
             poly = LanePolyline(lane.shape, lane.width, lane.id)
             x, y = poly.offset_point(pos, d_extra)
             return x, y, poly.heading_at(pos)
@@ -1549,7 +1560,7 @@ def _opposite_lanes(roads: RoadMap, edge: str) -> list:
     other = edge[1:] if edge.startswith("-") else "-" + edge
     if other not in roads.edges:
         return []
-    return list(reversed(roads.edges[other].lanes))
+    return roads.from_centre(other)
 
 
 def _waypoint_edge(roads: RoadMap, xyh: tuple[float, float, float]) -> str:
