@@ -426,7 +426,8 @@ class Edge:
     successors: tuple[str, ...]
     #: the edge's reference line in its driving direction: SUMO's edge shape (on a converted
     #: road OpenDRIVE's reference line; on ego's motorways the road's centre line), or, where a
-    #: network writes none, the left border of its leftmost lane
+    #: network writes none, the border of its lane next to the centre line (the left border of
+    #: its leftmost lane; on an edge turned round for left-hand traffic the right border of lane 0)
     shape: tuple[tuple[float, float], ...] = ()
     #: turned round for left-hand traffic (:func:`left_hand`): driven the other way than
     #: netconvert's edge of that name, its lane index 0 next to the centre line
@@ -470,13 +471,15 @@ def _edges_cached(net: str, mtime: float) -> dict[str, Edge]:
             )
         lanes.sort(key=lambda lane: lane.index)
         shape = tuple((float(p.split(",")[0]), float(p.split(",")[1])) for p in e.get("shape", "").split())
-        if len(shape) < 2 and lanes and len(lanes[-1].shape) >= 2:
+        lht = any(p.get("key") == LEFT_HAND and p.get("value") == "true" for p in e.findall("param"))
+        inner = lanes[0] if lht else lanes[-1] if lanes else None  # the lane next to the centre line
+        if len(shape) < 2 and inner is not None and len(inner.shape) >= 2:
             from ego.lane_frame import LanePolyline
 
-            left = LanePolyline(lanes[-1].shape)
-            at = np.concatenate(([0.0], np.cumsum(np.hypot(*np.diff(np.asarray(left.points), axis=0).T))))
-            shape = tuple(left.offset_point(float(s), 0.5 * lanes[-1].width) for s in at)
-        lht = any(p.get("key") == LEFT_HAND and p.get("value") == "true" for p in e.findall("param"))
+            side = LanePolyline(inner.shape)
+            at = np.concatenate(([0.0], np.cumsum(np.hypot(*np.diff(np.asarray(side.points), axis=0).T))))
+            half = -0.5 * inner.width if lht else 0.5 * inner.width
+            shape = tuple(side.offset_point(float(s), half) for s in at)
         edges[eid] = Edge(eid, tuple(lanes), tuple(succ.get(eid, ())), shape, lht)
     return edges
 

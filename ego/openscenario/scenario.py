@@ -502,8 +502,12 @@ class FileScenario(Scenario):
             # the ego headed against its right-hand lane (the reference player's "left-hand
             # traffic by heading"): its road is read as left-hand traffic, its edges turned round
             turned = frozenset({road_of_edge(start.edge)})
-            roads = RoadMap(network_file(model.road, turned), converted=True, by_heading=turned)
-            starts = placements(model, roads)
+            try:
+                lht = RoadMap(network_file(model.road, turned), converted=True, by_heading=turned)
+            except ScenarioFileError:
+                pass  # a road joined to others at a junction: the heading is refused below
+            else:
+                roads, starts = lht, placements(model, lht)
         _check_turned(model, ego, starts[ego], roads)
         edge = starts[ego].edge
         _check_road_references(model, roads, len(roads.edges[edge].lanes), len(_opposite_lanes(roads, edge)))
@@ -896,6 +900,10 @@ class StoryDriver:
         self._lanes_all = dict(own)
         ego_lanes = sc.roads.edges[sc.starts[sc.ego_name].edge].lanes
         self._bands = [(own[i] - 0.5 * ln.width, own[i] + 0.5 * ln.width, 1) for i, ln in enumerate(ego_lanes)]
+        # OpenDRIVE lane id -> key of _lanes_all (an AbsoluteTargetLane): by the lanes' own ids,
+        # not by counting (netconvert leaves out border lanes; a left-hand road's ego drives lanes +k)
+        self._lane_keys = {sc.roads.lane_id_of(ln): i for i, ln in enumerate(ego_lanes)}
+        self._lane_keys.update({sc.roads.lane_id_of(ln): len(own) + k for k, ln in enumerate(lanes)})
         for k, lane in enumerate(lanes):
             mid = lane.shape[len(lane.shape) // 2]
             d = self._lanes_all[len(own) + k] = road.project(mid[0], mid[1])[1]
@@ -908,7 +916,12 @@ class StoryDriver:
             view = sc.view
             view.road_halfwidth = max(view.road_halfwidth, outer + 0.5 * sc.geometry.width + 0.5)
         ego_edge = sc.starts[sc.ego_name].edge
-        centre_line = 0.5 * (max(own.values()) + self._lanes_all[len(own)]) if lanes else INF
+        # the centre line between the ego's lane next to it (its edge's leftmost lane; on a
+        # left-hand road lane 0) and the other direction's first lane, and the side beyond it
+        self._centre = (INF, 1.0)
+        if lanes:
+            inner, first = own[0] if sc.roads.edges[ego_edge].left_hand else max(own.values()), self._lanes_all[len(own)]
+            self._centre = (0.5 * (inner + first), 1.0 if first > inner else -1.0)
         for name, start in sc.starts.items():
             tp = next(a for a in sc.model.init[name] if isinstance(a, M.TeleportAction))
             if name == sc.ego_name:
@@ -916,7 +929,7 @@ class StoryDriver:
             turned = start.turned
             # a car whose Init offset puts it across the centre line, in the other direction's
             # lane, driving its own lane's way (speed-profile.xosc's Car2): driven by ego too
-            across = start.edge == ego_edge and own.get(start.index, 0.0) + start.offset > centre_line
+            across = start.edge == ego_edge and self._across(own.get(start.index, 0.0) + start.offset)
             if not (turned or across):
                 continue
             cx = sc.model.entities[name].vehicle.center_x
@@ -1164,7 +1177,7 @@ class StoryDriver:
         lanes = self._lanes_all
         n = len(sc.lanes)
         if relative_to is None:
-            index = n - abs(lane_id) if lane_id < 0 else n - 1 + lane_id
+            index = self._lane_keys.get(lane_id, -1)
         else:
             index = min(lanes, key=lambda i: abs(relative_to - lanes[i])) + dlane
         if index not in lanes:
@@ -1197,6 +1210,12 @@ class StoryDriver:
         self._limit(name, peak_rate)
         sc.bridge.set_speed(name, v_next)
 
+    def _across(self, d: float) -> bool:
+        """Whether ``d`` (across the ego's lane frame) is beyond the centre line, in the other
+        direction's lanes."""
+        centre, side = self._centre
+        return side * (d - centre) > 0.0
+
     def blind(self, name: str) -> bool:
         return name in self._lateral_free or name in self._kin
 
@@ -1211,8 +1230,7 @@ class StoryDriver:
     def lateral(self, name: str, d_next: float, peak_speed: float) -> None:
         sc = self.sc
         st = self.board.states[name]
-        centre_line = 0.5 * (max(sc.lane_offset.values()) + self._lanes_all.get(len(sc.lanes), INF))
-        if name not in self._kin and d_next > centre_line:
+        if name not in self._kin and self._across(d_next):
             # across the centre line into the other direction's lanes: ego drives it from here
             s = self._lane_s(st.s)
             ahead = math.cos(st.yaw - sc.road.heading_at(s)) > 0
@@ -1591,8 +1609,10 @@ def _check_routes(model: M.Scenario, roads: RoadMap) -> None:
 
 
 def _check_turned(model: M.Scenario, ego: str, start: Placement, roads: RoadMap) -> None:
-    """The ego turned against its lane is refused: it drives its lane frame's way. A world
-    heading is named beside its lane's there (the file's numbers, radians)."""
+    """The ego turned against its lane, where its road was not read as left-hand traffic for
+    it (a road joined to others at a junction, a left-hand road, a SUMO network), is refused:
+    it drives its lane frame's way. A world heading is named beside its lane's there (the
+    file's numbers, radians)."""
     if not start.turned:
         return
     tp = next(a for a in model.init[ego] if isinstance(a, M.TeleportAction))
@@ -1608,7 +1628,8 @@ def _check_turned(model: M.Scenario, ego: str, start: Placement, roads: RoadMap)
         model.path,
         start.turned,
         f"a start heading turning the ego against its lane's direction{why} is not supported by ego: the ego "
-        f"drives its lane's way (see {DOCS})",
+        f"drives its lane's way (a right-hand OpenDRIVE road is read as left-hand traffic for its ego's heading, "
+        f"but not one joined to others at a junction, a left-hand road or a SUMO network; see {DOCS})",
     )
 
 
