@@ -920,7 +920,10 @@ class StoryDriver:
         # left-hand road lane 0) and the other direction's first lane, and the side beyond it
         self._centre = (INF, 1.0)
         if lanes:
-            inner, first = own[0] if sc.roads.edges[ego_edge].left_hand else max(own.values()), self._lanes_all[len(own)]
+            inner, first = (
+                own[0] if sc.roads.edges[ego_edge].left_hand else max(own.values()),
+                self._lanes_all[len(own)],
+            )
             self._centre = (0.5 * (inner + first), 1.0 if first > inner else -1.0)
         for name, start in sc.starts.items():
             tp = next(a for a in sc.model.init[name] if isinstance(a, M.TeleportAction))

@@ -11,6 +11,7 @@ left in front of it, a third car in lane -1 driving the other way."""
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
@@ -207,3 +208,15 @@ def test_a_rule_neither_rht_nor_lht_is_refused(tmp_path):
     with pytest.raises(ScenarioFileError) as exc:
         network_file(road)
     assert str(exc.value) == f'{road}:4: <road rule="XHT"> is not a traffic rule (allowed: RHT, LHT)'
+
+
+def test_list_and_run_agree_on_a_left_hand_road(tmp_path, capsys):
+    """``ego list`` says every element supported and ``ego run`` runs the file (exit 0), on the
+    left-hand road as on the right-hand one."""
+    from ego.cli import main
+
+    path = _scene(tmp_path)
+    assert main(["list", str(path), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["supported"] is True
+    assert main(["run", str(path), "-c", "pid", "--set", "duration=2"]) == 0
+    assert "completed" in capsys.readouterr().out

@@ -5,8 +5,6 @@ Hand-written roads, converted by the real netconvert and driven by the real SUMO
 
 from __future__ import annotations
 
-import json
-import shutil
 import subprocess
 import time
 import xml.etree.ElementTree as ET
