@@ -203,11 +203,18 @@ def test_a_left_hand_road_joined_at_a_junction_is_refused(tmp_path):
     )
 
 
-def test_a_rule_neither_rht_nor_lht_is_refused(tmp_path):
-    road = _road(tmp_path, ' rule="XHT"')
-    with pytest.raises(ScenarioFileError) as exc:
-        network_file(road)
-    assert str(exc.value) == f'{road}:4: <road rule="XHT"> is not a traffic rule (allowed: RHT, LHT)'
+def test_a_rule_neither_rht_nor_lht_is_refused(tmp_path, capsys):
+    """One line naming the road's line and the allowed rules, exit 2, by ``ego run`` and
+    ``ego list`` alike."""
+    from ego.cli import main
+
+    path = _scene(tmp_path, rule=' rule="XHT"')
+    want = f'ego: error: {tmp_path / "lht.xodr"}:4: <road rule="XHT"> is not a traffic rule (allowed: RHT, LHT)\n'
+    assert main(["run", str(path), "-c", "pid"]) == 2
+    assert capsys.readouterr().err == want
+    assert main(["list", str(path), "--json"]) == 0
+    listing = json.loads(capsys.readouterr().out)
+    assert listing["supported"] is False and "ego: error: " + listing["error"] + "\n" == want
 
 
 def test_list_and_run_agree_on_a_left_hand_road(tmp_path, capsys):
