@@ -17,34 +17,20 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_xosc_against_lane import ROAD as TWOWAY
 from xosc_scenes import event, run_scene, sim_time, trigger, write_file
 
 from ego.openscenario.roads import RoadMap, network_file
 from ego.openscenario.runtime import Storyboard
 from ego.openscenario.xmltree import ScenarioFileError
 
-ROAD = """<?xml version="1.0" encoding="UTF-8"?>
-<OpenDRIVE>
-  <header revMajor="1" revMinor="6" name="lht" version="1.0"/>
-  <road name="lht" length="1000" id="1" junction="-1"{rule}>
-    <link/>
-    <planView><geometry s="0" x="0" y="0" hdg="0" length="1000"><line/></geometry></planView>
-    <lanes>
-      <laneSection s="0">
-        <left>
-        <lane id="2" type="driving" level="false"><link/><width sOffset="0" a="3.5" b="0" c="0" d="0"/></lane>
-        <lane id="1" type="driving" level="false"><link/><width sOffset="0" a="3.5" b="0" c="0" d="0"/></lane>
-        </left>
-        <center><lane id="0" type="none" level="false"/></center>
-        <right>
-        <lane id="-1" type="driving" level="false"><link/><width sOffset="0" a="3.5" b="0" c="0" d="0"/></lane>
-        <lane id="-2" type="driving" level="false"><link/><width sOffset="0" a="3.5" b="0" c="0" d="0"/></lane>
-        </right>
-      </laneSection>
-    </lanes>
-  </road>
-</OpenDRIVE>
-"""
+#: test_xosc_against_lane.py's two-way road with a second left lane and a ``{rule}`` slot
+ROAD = TWOWAY.replace(
+    '<road name="twoway" length="1000" id="1" junction="-1">',
+    '<road name="lht" length="1000" id="1" junction="-1"{rule}>',
+).replace(
+    "<left>\n", '<left>\n        <lane id="2" type="driving" level="false"><link/><width sOffset="0" a="3.5"/></lane>\n'
+)
 CENTRE = {2: 5.25, 1: 1.75, -1: -1.75, -2: -5.25}
 LHT = ' rule="LHT"'
 TURNED = '<Orientation type="relative" h="3.141593"/>'
