@@ -29,7 +29,8 @@ ROAD = TWOWAY.replace(
     '<road name="twoway" length="1000" id="1" junction="-1">',
     '<road name="lht" length="1000" id="1" junction="-1"{rule}>',
 ).replace(
-    "<left>\n", '<left>\n        <lane id="2" type="driving" level="false"><link/><width sOffset="0" a="3.5"/></lane>\n'
+    "<left>\n",
+    '<left>\n        <lane id="2" type="driving" level="false"><link/><width sOffset="0" a="3.5" b="0" c="0" d="0"/></lane>\n',
 )
 CENTRE = {2: 5.25, 1: 1.75, -1: -1.75, -2: -5.25}
 LHT = ' rule="LHT"'
