@@ -214,3 +214,23 @@ def test_list_and_run_agree_on_a_left_hand_road(tmp_path, capsys):
     assert json.loads(capsys.readouterr().out)["supported"] is True
     assert main(["run", str(path), "-c", "pid", "--set", "duration=2"]) == 0
     assert "completed" in capsys.readouterr().out
+
+
+def test_an_absolute_target_lane_past_a_border_lane_is_the_lane_of_that_id(tmp_path, monkeypatch):
+    """A right-hand road whose lane -1 is a 0.5 m border lane (netconvert leaves it out, as
+    e6mini.xodr's): A in lane -3 changes to AbsoluteTargetLane -2 and ends on lane -2's centre,
+    y = -(0.5 + 1.75) m (counted from the centre line, lane -2 would be SUMO's outer lane)."""
+    border = '<lane id="-1" type="border" level="false"><link/><width sOffset="0" a="0.5" b="0" c="0" d="0"/></lane>\n'
+    road = ROAD.format(rule="").replace('<lane id="-2"', '<lane id="-3"').replace('<lane id="-1"', '<lane id="-2"')
+    road = road.replace("<right>\n", "<right>\n        " + border)
+    (tmp_path / "lht.xodr").write_text(road)
+    starts = [("Ego", "1", -3, 50.0, 20.0, ""), ("A", "1", -3, 120.0, 20.0, "")]
+    change = _cut_in(absolute=-2).replace('value="2" dynamicsDimension', 'value="1" dynamicsDimension')
+    path = write_file(
+        tmp_path / "border.xosc", "lht.xodr", starts, [event("Left", "A", change, trigger([sim_time(0.5)]))]
+    )
+    rows = _record(monkeypatch)
+    assert run_scene(path, 3.0).status == "completed"
+    a = {round(t, 6): y for t, _, y, _ in rows["A"]}
+    assert a[0.3] == pytest.approx(-(0.5 + 3.5 + 1.75), abs=1e-3)
+    assert a[2.5] == pytest.approx(-(0.5 + 1.75), abs=1e-3)
