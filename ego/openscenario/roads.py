@@ -750,7 +750,9 @@ class RoadMap:
         if lane == 0:
             raise ValueError("lane 0 is the reference line, not a lane")
         every = self.sections(road)
-        secs = [x for x in every if x[1].id.startswith("-") == (lane < 0)]
+        # the edges of the lane's side: on a converted road ``-r`` holds lanes -k (and runs
+        # along s unless the road is left-hand); a SUMO network's road holds lanes -k only
+        secs = [x for x in every if (x[1].id.startswith("-") if self.converted else True) == (lane < 0)]
         if every and not secs:
             ids = sorted({self.lane_id_of(ln) for x in every for ln in x[1].lanes}, key=abs)
             raise ValueError(
