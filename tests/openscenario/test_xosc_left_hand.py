@@ -234,3 +234,40 @@ def test_an_absolute_target_lane_past_a_border_lane_is_the_lane_of_that_id(tmp_p
     a = {round(t, 6): y for t, _, y, _ in rows["A"]}
     assert a[0.3] == pytest.approx(-(0.5 + 3.5 + 1.75), abs=1e-3)
     assert a[2.5] == pytest.approx(-(0.5 + 1.75), abs=1e-3)
+
+
+def test_lane_positions_on_a_curved_left_hand_road_are_opendrives(tmp_path):
+    """An arc of curvature 1/200 m (left) as the reference line: each lane's point at road s
+    (the reference line's point moved along its normal to the lane's centre, t = +5.25, +1.75,
+    -1.75) on the turned edges is the arc's, within 1 cm (netconvert samples the arc every
+    0.5 m), and its road s maps back within 1 cm."""
+    from ego.lane_frame import LanePolyline
+
+    k = 1.0 / 200.0
+    road = tmp_path / "arc.xodr"
+    road.write_text(ROAD.format(rule=LHT).replace("<line/>", f'<arc curvature="{k}"/>'))
+    roads = RoadMap(network_file(road), converted=True)
+    for lane, t in CENTRE.items():
+        for s in (50.0, 300.0, 600.0):
+            sumo_lane, g = roads.lane_s("1", lane, s)
+            x, y = LanePolyline(sumo_lane.shape).offset_point(g, 0.0)
+            want = (math.sin(k * s) / k - t * math.sin(k * s), (1 - math.cos(k * s)) / k + t * math.cos(k * s))
+            assert (x, y) == pytest.approx(want, abs=0.01), (lane, s)
+            assert roads.road_s(sumo_lane, g) == pytest.approx(s, abs=0.01)
+
+
+def test_the_left_hand_cut_in_on_a_curved_left_hand_road(tmp_path):
+    """The scene on the arc of 1/200 m from s = 0: the ego follows its lane +2 as on a
+    right-hand road (its largest offset, 0.17 m at 1 s, is the start on the arc with the wheels
+    straight; the ego alone in lane -1 of the right-hand arc: 0.166 m at 1 s, then within
+    0.02 m as here), SUMO drives the other cars, and the cut-in ends with O ahead of the ego in
+    its lane (a finite front gap)."""
+    path = _scene(tmp_path)
+    road = tmp_path / "lht.xodr"
+    road.write_text(road.read_text().replace("<line/>", '<arc curvature="0.005"/>'))
+    sc = run_scene(path, 8.0)
+    assert sc.status == "completed" and not sc.story._kin.cars
+    a = sc.trace.array(0)
+    d, gap, t = (a[:, sc.trace.names.index(n)] for n in ("d", "gap_front", "t"))
+    assert np.abs(d).max() < 0.18 and np.abs(d[t > 4.0]).max() < 0.025
+    assert np.isfinite(gap[t > 6.5]).all() and np.isinf(gap[t < 3.0]).all()
