@@ -372,7 +372,10 @@ def _edges_cached(net: str, mtime: float) -> dict[str, Edge]:
             continue
         eid = e.get("id", "")
         lanes = []
-        kinds = e.get("type", "").split("|")  # netconvert: the lanes' OpenDRIVE types by index
+        # netconvert's edge type: the lanes' OpenDRIVE types by index ("a|b|c"), or one for all
+        kinds = e.get("type", "").split("|")
+        if len(kinds) == 1:
+            kinds *= len(e.findall("lane"))
         for ln in e.iter("lane"):
             pts = tuple((float(p.split(",")[0]), float(p.split(",")[1])) for p in ln.get("shape", "").split())
             orig = next((p.get("value", "") for p in ln.iter("param") if p.get("key") == "origId"), "")

@@ -1651,6 +1651,7 @@ def _check_dropped(model: M.Scenario, ego: str, starts: dict[str, Placement], ro
     """An entity starting on a lane netconvert drops (a border, shoulder, sidewalk... lane) is
     driven by ego along the ego's lane frame, so it starts on the ego's road (either side); the
     ego itself drives the lanes of the network. ScenarioFileError naming the position's line."""
+
     def road_of(edge: str) -> str:  # netconvert's edges of road r: -r, r, -r.S, r#1...
         return edge.removeprefix("-").partition("#")[0].partition(".")[0]
 
