@@ -1713,6 +1713,16 @@ def _check_road_references(model: M.Scenario, roads: RoadMap, ego_lanes: int, ot
                 roads.lane_position(x.road, -1, x.s)
         except ValueError as exc:
             raise ScenarioFileError(model.path, x.line, str(exc)) from None
+        if isinstance(x, M.TeleportAction) and _on_dropped_lane(x.position, roads):
+            pos = x.position
+            assert isinstance(pos, M.LanePosition)  # only a LanePosition names a lane
+            raise ScenarioFileError(
+                model.path,
+                pos.line,
+                f"a TeleportAction onto lane {pos.lane} of road {pos.road!r}, a lane netconvert does not make, "
+                f"outside <Init> is not supported by ego: an entity is on such a lane from its Init start only "
+                f"(see {DOCS})",
+            )
         if (
             isinstance(x, M.LaneChangeAction)
             and x.relative_to is not None

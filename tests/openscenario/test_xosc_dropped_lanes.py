@@ -68,8 +68,9 @@ def centre(lane: int) -> float:
     return side * (inner + 0.5 * WIDTHS[lane])
 
 
-def write(tmp: Path, starts: list[tuple], name: str = "lanes.xosc") -> Path:
-    """A file with one entity per start (name, body, road, lane, s, speed, offset)."""
+def write(tmp: Path, starts: list[tuple], name: str = "lanes.xosc", maneuver: str = "") -> Path:
+    """A file with one entity per start (name, body, road, lane, s, speed, offset) and the first
+    entity's ``maneuver`` (a <Maneuver> element, or none)."""
     (tmp / "lanes.xodr").write_text(ROAD)
     ents = "".join(f'<ScenarioObject name="{n}">{body}</ScenarioObject>' for n, body, *_ in starts)
     init = "".join(
@@ -89,7 +90,7 @@ def write(tmp: Path, starts: list[tuple], name: str = "lanes.xosc") -> Path:
 <Entities>{ents}</Entities>
 <Storyboard><Init><Actions>{init}</Actions></Init>
 <Story name="S"><Act name="A"><ManeuverGroup name="G" maximumExecutionCount="1"><Actors selectTriggeringEntities="false">
-<EntityRef entityRef="{starts[0][0]}"/></Actors></ManeuverGroup><StartTrigger><ConditionGroup><Condition name="c" delay="0" conditionEdge="none"><ByValueCondition>
+<EntityRef entityRef="{starts[0][0]}"/></Actors>{maneuver}</ManeuverGroup><StartTrigger><ConditionGroup><Condition name="c" delay="0" conditionEdge="none"><ByValueCondition>
 <SimulationTimeCondition value="0" rule="greaterOrEqual"/></ByValueCondition></Condition></ConditionGroup></StartTrigger>
 </Act></Story></Storyboard>
 </OpenSCENARIO>
@@ -220,3 +221,22 @@ def test_a_car_parked_on_the_border_reaching_into_the_egos_lane_is_hit(tmp_path)
     assert sc.status == "collision", sc.events[-1].text
     hit = next(e.text for e in sc.events if e.kind == "collision")
     assert "P" in hit and "outlines overlap" in hit
+
+
+def test_a_teleport_onto_a_dropped_lane_outside_init_is_refused(tmp_path, capsys):
+    teleport = (
+        '<Maneuver name="M"><Event name="E" priority="parallel"><Action name="T"><PrivateAction><TeleportAction>'
+        '<Position><LanePosition roadId="1" laneId="-4" s="200" offset="0"/></Position></TeleportAction>'
+        '</PrivateAction></Action><StartTrigger><ConditionGroup><Condition name="c" delay="0" conditionEdge="none">'
+        '<ByValueCondition><SimulationTimeCondition value="1" rule="greaterOrEqual"/></ByValueCondition></Condition>'
+        "</ConditionGroup></StartTrigger></Event></Maneuver>"
+    )
+    path = write(tmp_path, [("A", CAR, 1, -2, 50.0, 10.0, 0), ("Ego", CAR, 1, -1, 50.0, 10.0, 0)], maneuver=teleport)
+    assert main(["run", str(path), "-c", "pid"]) == 2
+    err = capsys.readouterr().err
+    line = next(i for i, t in enumerate(path.read_text().splitlines(), 1) if 's="200"' in t)
+    assert err == (
+        f"ego: error: {path}:{line}: a TeleportAction onto lane -4 of road '1', a lane netconvert does not make, "
+        "outside <Init> is not supported by ego: an entity is on such a lane from its Init start only (see "
+        "docs/openscenario.md)\n"
+    )
