@@ -13,6 +13,7 @@ import math
 from pathlib import Path
 
 import pytest
+from xosc_scenes import event, sim_time, trigger, write_file
 
 from ego.cli import main
 from ego.openscenario.loader import load
@@ -68,35 +69,21 @@ def centre(lane: int) -> float:
     return side * (inner + 0.5 * WIDTHS[lane])
 
 
-def write(tmp: Path, starts: list[tuple], name: str = "lanes.xosc", maneuver: str = "") -> Path:
-    """A file with one entity per start (name, body, road, lane, s, speed, offset) and the first
-    entity's ``maneuver`` (a <Maneuver> element, or none)."""
+def write(tmp: Path, starts: list[tuple], name: str = "lanes.xosc", events=()) -> Path:
+    """A file with one entity per start (name, body, road, lane, s, speed, offset) and ``events``."""
     (tmp / "lanes.xodr").write_text(ROAD)
-    ents = "".join(f'<ScenarioObject name="{n}">{body}</ScenarioObject>' for n, body, *_ in starts)
-    init = "".join(
-        f'<Private entityRef="{n}"><PrivateAction><TeleportAction><Position><LanePosition roadId="{r}" '
-        f'laneId="{lane}" s="{s}" offset="{off}"/></Position></TeleportAction></PrivateAction>'
-        '<PrivateAction><LongitudinalAction><SpeedAction><SpeedActionDynamics dynamicsShape="step" value="0" '
-        f'dynamicsDimension="time"/><SpeedActionTarget><AbsoluteTargetSpeed value="{v}"/></SpeedActionTarget>'
-        "</SpeedAction></LongitudinalAction></PrivateAction></Private>"
-        for n, _, r, lane, s, v, off in starts
-    )
-    path = tmp / name
-    path.write_text(
-        f"""<?xml version="1.0"?>
-<OpenSCENARIO>
-<FileHeader revMajor="1" revMinor="2" date="2026-11-29T00:00:00" description="lanes" author="ego tests"/>
-<RoadNetwork><LogicFile filepath="lanes.xodr"/></RoadNetwork>
-<Entities>{ents}</Entities>
-<Storyboard><Init><Actions>{init}</Actions></Init>
-<Story name="S"><Act name="A"><ManeuverGroup name="G" maximumExecutionCount="1"><Actors selectTriggeringEntities="false">
-<EntityRef entityRef="{starts[0][0]}"/></Actors>{maneuver}</ManeuverGroup><StartTrigger><ConditionGroup><Condition name="c" delay="0" conditionEdge="none"><ByValueCondition>
-<SimulationTimeCondition value="0" rule="greaterOrEqual"/></ByValueCondition></Condition></ConditionGroup></StartTrigger>
-</Act></Story></Storyboard>
-</OpenSCENARIO>
-"""
-    )
-    return path
+    rows = [(n, str(r), lane, s, v, "") for n, _, r, lane, s, v, _ in starts]
+    bodies = {n: body for n, body, *_ in starts}
+    offsets = {n: off for n, *_, off in starts}
+    return write_file(tmp / name, "lanes.xodr", rows, list(events), bodies, offsets)
+
+
+def refusal(path: Path, capsys, marker: str) -> tuple[str, int]:
+    """``ego run``'s one error line for ``path`` (exit 2) and the line of ``marker`` in it."""
+    assert main(["run", str(path), "-c", "pid"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    return err, next(i for i, t in enumerate(path.read_text().splitlines(), 1) if marker in t)
 
 
 def test_a_dropped_lane_is_the_nearest_lane_of_the_network_with_the_offset_of_its_centre(tmp_path):
@@ -145,18 +132,14 @@ def test_the_ego_is_not_a_vehicle_on_a_dropped_lane(tmp_path):
 
 def test_the_ego_on_a_dropped_lane_and_an_entity_on_one_away_from_its_road_are_refused(tmp_path, capsys):
     path = write(tmp_path, [("Ego", CAR, 1, -4, 50.0, 10.0, 0)])
-    assert main(["run", str(path), "-c", "pid"]) == 2
-    err = capsys.readouterr().err
-    line = next(i for i, t in enumerate(path.read_text().splitlines(), 1) if 'laneId="-4"' in t)
+    err, line = refusal(path, capsys, 'laneId="-4"')
     assert err == (
         f"ego: error: {path}:{line}: the ego 'Ego' starts on lane -4 of road '1', a shoulder lane netconvert does not "
         "make: the ego drives the lanes of the road network (driving and stop lanes; choose another with --ego, see "
         "docs/openscenario.md)\n"
     )
     path = write(tmp_path, [("Ego", CAR, 1, -1, 50.0, 10.0, 0), ("Far", CAR, 2, -5, 50.0, 0.0, 0)])
-    assert main(["run", str(path), "-c", "pid"]) == 2
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1
+    err, _ = refusal(path, capsys, "Far")
     assert "Far starts on lane -5 of road '2', a sidewalk lane netconvert does not make away from the ego's road" in err
 
 
@@ -225,16 +208,12 @@ def test_a_car_parked_on_the_border_reaching_into_the_egos_lane_is_hit(tmp_path)
 
 def test_a_teleport_onto_a_dropped_lane_outside_init_is_refused(tmp_path, capsys):
     teleport = (
-        '<Maneuver name="M"><Event name="E" priority="parallel"><Action name="T"><PrivateAction><TeleportAction>'
-        '<Position><LanePosition roadId="1" laneId="-4" s="200" offset="0"/></Position></TeleportAction>'
-        '</PrivateAction></Action><StartTrigger><ConditionGroup><Condition name="c" delay="0" conditionEdge="none">'
-        '<ByValueCondition><SimulationTimeCondition value="1" rule="greaterOrEqual"/></ByValueCondition></Condition>'
-        "</ConditionGroup></StartTrigger></Event></Maneuver>"
+        '<TeleportAction><Position><LanePosition roadId="1" laneId="-4" s="200" offset="0"/></Position>'
+        "</TeleportAction>"
     )
-    path = write(tmp_path, [("A", CAR, 1, -2, 50.0, 10.0, 0), ("Ego", CAR, 1, -1, 50.0, 10.0, 0)], maneuver=teleport)
-    assert main(["run", str(path), "-c", "pid"]) == 2
-    err = capsys.readouterr().err
-    line = next(i for i, t in enumerate(path.read_text().splitlines(), 1) if 's="200"' in t)
+    starts = [("A", CAR, 1, -2, 50.0, 10.0, 0), ("Ego", CAR, 1, -1, 50.0, 10.0, 0)]
+    path = write(tmp_path, starts, events=[event("T", "A", teleport, trigger([sim_time(1.0)]))])
+    err, line = refusal(path, capsys, 's="200"')
     assert err == (
         f"ego: error: {path}:{line}: a TeleportAction onto lane -4 of road '1', a lane netconvert does not make, "
         "outside <Init> is not supported by ego: an entity is on such a lane from its Init start only (see "
