@@ -989,8 +989,8 @@ class StoryDriver:
         away = self._kin.beyond()
         if away is not None:
             first = sc.starts.get(away)
-            how = "on a lane netconvert does not make" if first and first.dropped else "against its lane"
-            self._road_end(f"{away} left its road (driven by ego {how}, at the road's end)")
+            how = "by ego on a lane netconvert does not make" if first and first.dropped else "against its lane"
+            self._road_end(f"{away} left its road (driven {how}, at the road's end)")
         elif gone:
             self._road_end(f"{gone[0]} left the road network (the end of its route)")
         elif sc.view.s + sc.geometry.cg_to_front >= sc.view.road.length and self._ego_end is None:
