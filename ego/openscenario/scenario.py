@@ -361,11 +361,12 @@ def _absolute_xy(pos: M.Position, roads: RoadMap) -> tuple[float, float, float]:
         heading = LanePolyline(lane.shape, lane.width, lane.id).heading_at(s) if pos.h is None else pos.h
         return pos.x, pos.y, heading
     if isinstance(pos, (M.LanePosition, M.RoadPosition)):
-        lane_id, d = (pos.lane, pos.offset) if isinstance(pos, M.LanePosition) else (-1, None)
-        lane, s, aside = roads.lane_s_offset(pos.road, lane_id, pos.s)
-        if d is None:  # the reference line is the left edge of lane -1; t from it, + left
-            d = pos.t + 0.5 * lane.width  # type: ignore[union-attr]
-        d += aside
+        if isinstance(pos, M.LanePosition):  # a lane netconvert drops: offset from the nearest lane
+            lane, s, aside = roads.lane_s_offset(pos.road, pos.lane, pos.s)
+            d = pos.offset + aside
+        else:  # the reference line is the left edge of lane -1; t from it, + left
+            lane, s = roads.lane_s(pos.road, -1, pos.s)
+            d = pos.t + 0.5 * lane.width
         poly = LanePolyline(lane.shape, lane.width, lane.id)
         x, y = poly.offset_point(s, d)
         return x, y, poly.heading_at(s)
@@ -1710,7 +1711,7 @@ def _check_road_references(model: M.Scenario, roads: RoadMap, ego_lanes: int, ot
             if isinstance(x, M.LanePosition):
                 roads.lane_position(x.road, x.lane, x.s)
             elif isinstance(x, M.RoadPosition):
-                roads.lane_position(x.road, -1, x.s)
+                roads.lane_s(x.road, -1, x.s)  # t is measured from lane -1's left edge
         except ValueError as exc:
             raise ScenarioFileError(model.path, x.line, str(exc)) from None
         if isinstance(x, M.TeleportAction) and _on_dropped_lane(x.position, roads):
