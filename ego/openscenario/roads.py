@@ -674,9 +674,9 @@ class RoadMap:
         try:
             self.lane_s(road, lane, s)
             return None
-        except ValueError as exc:
+        except ValueError:
             every = self.every_lane_map()
-            if every is None or "has no lane " not in str(exc):
+            if every is None or lane == 0:
                 raise
         return every.lane_s(road, lane, s)[0]
 
@@ -695,12 +695,23 @@ class RoadMap:
         every = self.every_lane_map()
         assert every is not None  # dropped_lane found it there
         _, gf = every.lane_s(road, lane, s)
-        secs = [x for x in self.sections(road) if x[2] == (lane < 0)]
-        edge = secs[0][1]
-        for x in secs:
-            if x[0] <= s + 1e-9:
-                edge = x[1]
-        ids = [self.lane_id_of(ln) for ln in edge.lanes]
+        # the side's lanes of the network there (a side with none: the other side's)
+        every_sec = self.sections(road)
+        secs = [x for x in every_sec if x[2] == (lane < 0)] or every_sec
+        ids = []
+        for right in (True, False):
+            side = [x for x in secs if x[2] == right]
+            if side:
+                edge = side[0][1]
+                for x in side:
+                    if x[0] <= s + 1e-9:
+                        edge = x[1]
+                ids += [self.lane_id_of(ln) for ln in edge.lanes]
+        if not ids:
+            raise ValueError(
+                f"road {road!r} has no lane netconvert makes (lane {lane} is a{'n' if far.kind[:1] in 'aeiou' else ''} "
+                f"{far.kind or 'non-driving'} lane): ego places an entity on such a lane beside a lane of the network"
+            )
         near = min(ids, key=lambda k: (abs(k - lane), abs(k)))
         kept, g = self.lane_s(road, near, s)
         from ego.lane_frame import LanePolyline

@@ -43,10 +43,23 @@ def _road(rid: int, y: float) -> str:
     <right>{_lanes((-1, -2, -3, -4, -5))}</right></laneSection></lanes></road>"""
 
 
+#: road 3: a sidewalk on the left only (its side has no lane of the network), y = 200
+ROAD3 = """<road name="r3" length="600" id="3" junction="-1"><link/>
+    <planView><geometry s="0" x="0" y="200" hdg="0" length="600"><line/></geometry></planView>
+    <lanes><laneSection s="0"><left><lane id="1" type="sidewalk" level="false"><link/>
+    <width sOffset="0" a="2" b="0" c="0" d="0"/></lane></left>
+    <center><lane id="0" type="none" level="false"/></center><right>{}</right></laneSection></lanes></road>
+    <road name="r4" length="600" id="4" junction="-1"><link/>
+    <planView><geometry s="0" x="0" y="300" hdg="0" length="600"><line/></geometry></planView>
+    <lanes><laneSection s="0"><center><lane id="0" type="none" level="false"/></center><right>
+    <lane id="-1" type="sidewalk" level="false"><link/><width sOffset="0" a="2" b="0" c="0" d="0"/></lane>
+    </right></laneSection></lanes></road>"""
+
 ROAD = f"""<?xml version="1.0" encoding="UTF-8"?>
 <OpenDRIVE><header revMajor="1" revMinor="6" name="lanes" version="1.0"/>
 {_road(1, 0.0)}
 {_road(2, 100.0)}
+{ROAD3.format(_lanes((-1,)))}
 </OpenDRIVE>
 """
 
@@ -114,6 +127,12 @@ def test_a_dropped_lane_is_the_nearest_lane_of_the_network_with_the_offset_of_it
             assert max(math.dist(p, q) for p, q in zip(ln.shape, twin.shape, strict=True)) < 1e-5
     with pytest.raises(ValueError, match=r"has no lane -6 on that side at s = 100 \(lane ids -1, -2, -3, -4, -5, of"):
         roads.lane_s_offset("1", -6, 100.0)
+    # a side with no lane of the network: the other side's nearest (road 3's sidewalk 1 is
+    # 1 + 1.75 m left of its lane -1's centre); a road with none at all is refused
+    sumo_lane, _, d = roads.lane_s_offset("3", 1, 100.0)
+    assert roads.lane_id_of(sumo_lane) == -1 and d == pytest.approx(2.75, abs=1e-5)
+    with pytest.raises(ValueError, match=r"road '4' has no lane netconvert makes \(lane -1 is a sidewalk lane\)"):
+        roads.lane_s_offset("4", -1, 100.0)
 
 
 def test_the_ego_is_not_a_vehicle_on_a_dropped_lane(tmp_path):
