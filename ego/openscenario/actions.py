@@ -302,7 +302,9 @@ class LaneChange(ActionKind):
         "is one placement; a scripted car changing across the centre line into the other direction's lanes "
         "(the reference player's `acc-test.xosc` overtaking, `RelativeTargetLane` +1 from a one-lane "
         "direction) is driven by ego from where it crosses (as a car turned against its lane, see the "
-        "positions' row: its reference point on the profile) and stays so. **Known deviation (open, issue 39):** the profile moves SUMO's front bumper, not the "
+        "positions' row: its reference point on the profile) and stays so; a `RelativeTargetLane` counts across "
+        "the road's lanes of both directions (from the oncoming lane back right, as `light_state.xosc` does), and "
+        "one asking for more lanes beside its reference than the road has less one is refused before the run. **Known deviation (open, issue 39):** the profile moves SUMO's front bumper, not the "
         "entity's reference point: SUMO turns the car from its front and back positions, so its box centre lags "
         "the shape and reaches the target lane a few steps after the front"
     )

@@ -1727,7 +1727,9 @@ def _check_road_references(model: M.Scenario, roads: RoadMap, ego_lanes: int, ot
         if (
             isinstance(x, M.LaneChangeAction)
             and x.relative_to is not None
-            and (-x.relative_lanes >= ego_lanes or x.relative_lanes >= ego_lanes + other_lanes)
+            # the reference may be in a lane of either direction (a change across the centre
+            # line takes it there): the most lanes beside it is every lane of the road less its own
+            and abs(x.relative_lanes) >= ego_lanes + other_lanes
         ):
             raise ScenarioFileError(
                 model.path,

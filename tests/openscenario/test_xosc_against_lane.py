@@ -172,6 +172,34 @@ def test_a_lane_change_into_the_oncoming_lane_and_back(tmp_path, monkeypatch):
     assert all(rows[round(0.1 * k, 6)][2] == pytest.approx(25.0, abs=1e-6) for k in range(25, 60))
 
 
+@pytest.mark.parametrize(
+    "lanes,line", [(-2, None), (-3, "a lane change -3 lanes from A's lane")], ids=["fits", "too-far"]
+)
+def test_a_change_right_relative_to_a_car_in_the_oncoming_lane_spans_the_whole_road(tmp_path, monkeypatch, lanes, line):
+    """A changes into lane +1 (the oncoming lane) and then 2 lanes right of its own lane:
+    across both of the ego's direction's lanes to lane -2 (3.5 m right of lane -1), which the
+    check before the run refused (it counted only the ego's direction's lanes right of a
+    reference: the reference player's light_state.xosc changes back so). 3 lanes right of any
+    lane of the road's 3 is still refused before the run with the action's line."""
+    rows = _record(monkeypatch, "A")
+    evs = [
+        event("Out", "A", _lane_change(1), trigger([sim_time(0.95)])),
+        event("Back", "A", _lane_change(lanes, "A"), trigger([sim_time(3.95)])),
+    ]
+    path = _scene(tmp_path, {"Ego": (-1, 30.0, 20.0, False), "A": (-1, 120.0, 25.0, False)}, evs)
+    if line is not None:
+        text = path.read_text()
+        with pytest.raises(ScenarioFileError, match=line) as err:
+            run_scene(path, 1.0)
+        action = text.rindex("<LaneChangeAction", 0, text.index(f'value="{lanes}"'))
+        assert err.value.line == text.count("\n", 0, action) + 1
+        return
+    sc = run_scene(path, 6.5)
+    assert sc.status == "completed"
+    assert rows[3.5][1] == pytest.approx(3.5, abs=1e-6)
+    assert rows[6.3][1] == pytest.approx(-3.5, abs=1e-6)
+
+
 def test_the_ego_turned_against_its_lane_is_refused_with_its_line(tmp_path):
     path = _scene(tmp_path, {"Ego": (1, 30.0, 20.0, True), "A": (-1, 120.0, 25.0, False)})
     with pytest.raises(ScenarioFileError, match=r"turning the ego against its lane's direction") as exc:
