@@ -119,6 +119,11 @@ def check_density(config: HighwayConfig) -> None:
 # --- the world ---------------------------------------------------------------------------
 
 
+#: m: how far from the ego's pose SUMO looks for lanes to map it on, on a road of many edges
+#: that is not the curved motorways' own route (SumoBridge.control)
+MATCH_RADIUS = 10.0
+
+
 def join_lanes(parts: list[list[tuple[float, float]]]) -> list[tuple[float, float]]:
     """One lane's centre line through consecutive edges (``parts``, each the lane's points on
     one edge, in driving order). The curved motorways are cut in the middle of a chord
@@ -252,8 +257,10 @@ class MotorwayWorld:
                 sim.keep_lane(spec.id)
         for actor in self.actors:
             actor.start(sim)
-        if len(chain) > 1:  # ego maps itself onto the lanes: SUMO's moveToXY walks whole lane shapes
-            sim.control(EGO, self.geometry, placement="lanes")
+        if len(chain) > 1 and edges == chain:  # the curved motorways: ego maps itself onto the
+            sim.control(EGO, self.geometry, placement="lanes")  # lanes (moveToXY walks whole shapes)
+        elif len(chain) > 1:  # SUMO need not look 100 m around the ego for lanes to map it on
+            sim.control(EGO, self.geometry, match_radius=MATCH_RADIUS)
         else:
             sim.control(EGO, self.geometry)
         self.colors[EGO] = EGO_COLOR
