@@ -2,8 +2,10 @@
 
 SUMO drives the traffic; every *controlled* vehicle is taken away from SUMO (speed mode 0,
 lane-change mode 0) and placed each step where its own model says, with
-``moveToXY(..., keepRoute=2)``, so SUMO's drivers react to it. Positions are converted
-between the model's centre of gravity / yaw and SUMO's front bumper / navigational angle.
+``moveToXY(..., keepRoute=2)``, so SUMO's drivers react to it (on the curved motorways ego
+maps the pose onto the lanes itself instead: :mod:`ego.sumo.lane_place`). Positions are
+converted between the model's centre of gravity / yaw and SUMO's front bumper / navigational
+angle.
 
 libsumo runs one simulation per process and is not thread-safe; parallel work must use
 processes. :class:`SumoBridge` is a context manager that always closes the simulation,
