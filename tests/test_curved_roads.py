@@ -413,7 +413,8 @@ def _sumo_trace(road: str, controller: str, placement: str | None):
             if sc.k % sc.config.control_per_sumo == 0:
                 get = (veh.getLanePosition, veh.getLateralLanePosition, veh.getSpeed, veh.getAcceleration)
                 cars = {v: (veh.getLaneID(v), *(f(v) for f in get)) for v in veh.getIDList()}
-                rows.append((cars, sc.bridge.pose("ego")))
+                ids, poses = sc.bridge.poses()  # the recording's rows
+                rows.append((cars, (*sc.bridge.pose("ego"), *poses[list(ids).index("ego")][:3])))
     finally:
         sc.close()
     return rows
@@ -426,7 +427,7 @@ def test_the_lane_placement_leaves_sumo_as_moveToXY_does():
     included, is where moveToXY leaves it after every SUMO step - lane, position along it,
     lateral offset, speed, acceleration - through an emergency lane change in the R 250 m arc
     and across an edge joint, to rounding; the bridge reports the ego's pose as pushed (SUMO's
-    own angle of it is its lane's)."""
+    own angle of it is its lane's), to the recording too."""
     mapped = _sumo_trace("left-250", "pid", "xy")
     placed = _sumo_trace("left-250", "pid", None)
     assert len(mapped) == len(placed) == 250
