@@ -86,11 +86,12 @@ class Arc:
         return vx * self.exit[0] + vy * self.exit[1]
 
 
-def outline(libsumo, vid: str) -> list[tuple[float, float]]:
-    """The four corners of SUMO's box of ``vid`` (world m)."""
-    veh = libsumo.vehicle
-    x, y = veh.getPosition(vid)
-    a = math.radians(90.0 - veh.getAngle(vid))
+def outline(bridge, vid: str) -> list[tuple[float, float]]:
+    """The four corners of SUMO's box of ``vid`` (world m; the ego's as pushed into SUMO:
+    ``SumoBridge.pose``, on a curved road SUMO's own angle of it is its lane's)."""
+    veh = bridge.libsumo.vehicle
+    x, y, angle = bridge.pose(vid)
+    a = math.radians(90.0 - angle)
     length, half = veh.getLength(vid), 0.5 * veh.getWidth(vid)
     ux, uy = math.cos(a), math.sin(a)
     return [(x - k * length * ux - s * half * uy, y - k * length * uy + s * half * ux) for k in (0, 1) for s in (-1, 1)]
@@ -122,8 +123,8 @@ def check(road: str, controller: str, seed: int, within: float = 100.0) -> dict:
                 continue
             lane = veh.getLaneIndex(EGO)
             arc = arcs.get(lane) or arcs.setdefault(lane, Arc(road, lane))
-            ego_front = max(arc.station(*p) for p in outline(libsumo, EGO))
-            true = min(arc.station(*p) for p in outline(libsumo, front.id)) - ego_front
+            ego_front = max(arc.station(*p) for p in outline(sc.bridge, EGO))
+            true = min(arc.station(*p) for p in outline(sc.bridge, front.id)) - ego_front
             diff = front.gap - true
             out["pairs"] += 1
             out["over"], out["under"] = max(out["over"], diff), max(out["under"], -diff)

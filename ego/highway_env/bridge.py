@@ -315,8 +315,16 @@ class HighwayEnvBridge:
         first step, once the scenario has said which vehicles it controls and scripts."""
         return []
 
-    def control(self, vid: str, geometry: VehicleGeometry, keep_route: int = 2, match_radius: float = 100.0) -> None:
-        """``vid`` becomes the ego: its pose comes from :meth:`push` from now on."""
+    def control(
+        self,
+        vid: str,
+        geometry: VehicleGeometry,
+        keep_route: int = 2,
+        match_radius: float = 100.0,
+        placement: str = "xy",
+    ) -> None:
+        """``vid`` becomes the ego: its pose comes from :meth:`push` from now on (the
+        straight road only: ``match_radius`` and ``placement`` are SUMO's)."""
         self._need_spec(vid)
         self.controlled[vid] = geometry
 

@@ -120,7 +120,7 @@ def check_density(config: HighwayConfig) -> None:
 
 
 #: m: how far from the ego's pose SUMO looks for lanes to map it on, on a road of many edges
-#: (SumoBridge.control): beyond the lane edge by more than half a car the run ends off the road
+#: that is not the curved motorways' own route (SumoBridge.control)
 MATCH_RADIUS = 10.0
 
 
@@ -257,7 +257,9 @@ class MotorwayWorld:
                 sim.keep_lane(spec.id)
         for actor in self.actors:
             actor.start(sim)
-        if len(chain) > 1:  # SUMO need not look 100 m around the ego for lanes to map it on
+        if len(chain) > 1 and edges == chain:  # the curved motorways: ego maps itself onto the
+            sim.control(EGO, self.geometry, placement="lanes")  # lanes (moveToXY walks whole shapes)
+        elif len(chain) > 1:  # SUMO need not look 100 m around the ego for lanes to map it on
             sim.control(EGO, self.geometry, match_radius=MATCH_RADIUS)
         else:
             sim.control(EGO, self.geometry)

@@ -2,8 +2,10 @@
 
 SUMO drives the traffic; every *controlled* vehicle is taken away from SUMO (speed mode 0,
 lane-change mode 0) and placed each step where its own model says, with
-``moveToXY(..., keepRoute=2)``, so SUMO's drivers react to it. Positions are converted
-between the model's centre of gravity / yaw and SUMO's front bumper / navigational angle.
+``moveToXY(..., keepRoute=2)``, so SUMO's drivers react to it (on the curved motorways ego
+maps the pose onto the lanes itself instead: :mod:`ego.sumo.lane_place`). Positions are
+converted between the model's centre of gravity / yaw and SUMO's front bumper / navigational
+angle.
 
 libsumo runs one simulation per process and is not thread-safe; parallel work must use
 processes. :class:`SumoBridge` is a context manager that always closes the simulation,
@@ -41,6 +43,7 @@ from ego.sim.types import (  # noqa: F401 - importable from here too
     VehicleType,
     ego_type,
 )
+from ego.sumo.lane_place import LanePlacer
 from ego.sumo.net import sumo_binary
 
 #: the surroundings' boxes in C, or None (the Python loop of SumoBridge.surroundings)
@@ -131,6 +134,12 @@ class SumoBridge:
         self.ghosts: set[str] = set()
         self._keep_route: dict[str, int] = {}
         self._match: dict[str, float] = {}
+        #: vehicles ego places on the lanes itself (control(placement="lanes")): their placer,
+        #: the pose pushed for the next step and the pose of the last step (front bumper x, y
+        #: in m, SUMO angle in deg; what moveToXY would have left in SUMO: see pose())
+        self._placers: dict[str, LanePlacer] = {}
+        self._next_pose: dict[str, tuple[float, float, float]] = {}
+        self._pushed_pose: dict[str, tuple[float, float, float]] = {}
         #: route id -> its edges and their lengths (a departure beyond the first edge starts
         #: on the edge it is on, :meth:`add_vehicles`)
         self._routes: dict[str, tuple[str, ...]] = {}
@@ -185,6 +194,7 @@ class SumoBridge:
             ) from None
         self.via_traci = True
         self._pose_subscribed = set()
+        self._placers, self._next_pose, self._pushed_pose = {}, {}, {}
 
     def start(self) -> None:
         if SumoBridge._running:
@@ -210,6 +220,7 @@ class SumoBridge:
         instances.claim_exclusive(True)
         self._ls = libsumo
         self._pose_subscribed = set()
+        self._placers, self._next_pose, self._pushed_pose = {}, {}, {}
         # libsumo's simulationStep() is its step plus the step listeners' turn: the step alone
         # while nobody has added a listener (ego adds none; a user's still run)
         manager = getattr(libsumo, "_stepManager", None)
@@ -337,7 +348,14 @@ class SumoBridge:
             )
         return missing
 
-    def control(self, vid: str, geometry: VehicleGeometry, keep_route: int = 2, match_radius: float = 100.0) -> None:
+    def control(
+        self,
+        vid: str,
+        geometry: VehicleGeometry,
+        keep_route: int = 2,
+        match_radius: float = 100.0,
+        placement: str = "xy",
+    ) -> None:
         """Take ``vid`` away from SUMO: its pose comes from :meth:`push` from now on.
 
         ``keep_route`` is moveToXY's mapping mode: 2 (default) maps the pose onto any
@@ -346,15 +364,25 @@ class SumoBridge:
         default 100 m) is how far from the pose moveToXY looks for edges to map it on: on a
         road of many short edges (the curved motorways) a few metres keep it to the edges
         the ego is on, instead of walking every lane within 100 m each step.
+
+        ``placement`` is how :meth:`push` puts it into SUMO: ``"xy"`` (default) with
+        moveToXY, SUMO mapping the pose onto its lanes; ``"lanes"`` with ego's own mapping
+        onto the lanes of the vehicle's route (:class:`~ego.sumo.lane_place.LanePlacer`:
+        moveTo, the lateral offset and the speed, no walk over whole lane shapes; for a
+        route whose edges continue one another lane by lane, like the curved motorways').
         """
         if keep_route not in (0, 1, 2):
             raise ValueError(f"keep_route must be 0, 1 or 2, got {keep_route}")
+        if placement not in ("xy", "lanes"):
+            raise ValueError(f"placement must be 'xy' or 'lanes', got {placement!r}")
         veh = self.libsumo.vehicle
         veh.setSpeedMode(vid, 0)
         veh.setLaneChangeMode(vid, 0)
         self.controlled[vid] = geometry
         self._keep_route[vid] = keep_route
         self._match[vid] = float(match_radius)
+        if placement == "lanes":
+            self._placers[vid] = LanePlacer(self.libsumo, vid, self.config.step_length)
 
     def cg_pose(self, vid: str) -> tuple[float, float, float]:
         """Centre of gravity (x, y in m) and yaw (rad) of controlled vehicle ``vid`` where
@@ -378,6 +406,13 @@ class SumoBridge:
         geo = self.controlled[vid]
         c = math.cos(psi)
         s = math.sin(psi)
+        if self._placers:
+            placer = self._placers.get(vid)
+            if placer is not None:
+                xf, yf = x + geo.cg_to_front * c, y + geo.cg_to_front * s
+                placer.place(xf, yf, speed, accel)
+                self._next_pose[vid] = (xf, yf, (90.0 - psi * _DEG) % 360.0)
+                return
         veh = self._ls.vehicle
         self._moved = True
         veh.moveToXY(
@@ -404,6 +439,11 @@ class SumoBridge:
         else:
             ls.simulationStep()
         self._moved = False
+        if self._next_pose:  # the placed vehicles stand where they were pushed
+            self._pushed_pose.update(self._next_pose)
+            self._next_pose.clear()
+            for placer in self._placers.values():
+                placer.after_step()
         if ls.simulation.getCollidingVehiclesNumber():
             ghosts = self.ghosts
             self.collisions = [
@@ -557,7 +597,21 @@ class SumoBridge:
 
     def front_bumper(self, vid: str) -> tuple[float, float]:
         """Front bumper centre of any vehicle (m), as of the last step."""
+        placed = self._pushed_pose.get(vid) if self._pushed_pose else None
+        if placed is not None:
+            return placed[0], placed[1]
         return self._ls.vehicle.getPosition(vid)
+
+    def pose(self, vid: str) -> tuple[float, float, float]:
+        """Front bumper centre (m) and SUMO angle (deg) of any vehicle, as of the last step:
+        for a vehicle ego places on the lanes (``control(placement="lanes")``), the pose it
+        pushed (SUMO's own angle of it is its lane's), as moveToXY leaves it in SUMO."""
+        placed = self._pushed_pose.get(vid) if self._pushed_pose else None
+        if placed is not None:
+            return placed
+        veh = self._ls.vehicle
+        x, y = veh.getPosition(vid)
+        return x, y, veh.getAngle(vid)
 
     def subscribe_surroundings(self, vid: str, radius: float) -> None:
         """Ask SUMO for the position, angle and speed of every vehicle within ``radius`` (m)
@@ -613,8 +667,8 @@ class SumoBridge:
         """One vehicle as :meth:`surroundings` gives each: (centre x, y in m, yaw in rad,
         speed m/s, length, width in m), as of the last step."""
         veh = self._ls.vehicle
-        xf, yf = veh.getPosition(vid)
-        psi = math.radians(90.0 - veh.getAngle(vid))
+        xf, yf, angle = self.pose(vid)
+        psi = math.radians(90.0 - angle)
         length, width = self.dimensions(vid)
         half = 0.5 * length
         return xf - half * math.cos(psi), yf - half * math.sin(psi), psi, veh.getSpeed(vid), length, width
@@ -655,6 +709,10 @@ class SumoBridge:
                 x, y = r[p_key]
                 length, width = known.get(v) or dims(v)
                 add((x, y, r[a_key], length, width))
+        for v, placed in self._pushed_pose.items():  # the pose pushed (see pose())
+            if v in ids:
+                k = ids.index(v)
+                rows[k] = (*placed, *rows[k][3:])
         return list(ids), rows
 
     def boxes(self) -> tuple[list[str], np.ndarray]:
