@@ -75,10 +75,20 @@ class Controller(ActionKind):
     )
 
     def build(self, b: Any, node: Node) -> M.ControllerAction:
+        activates = assigns = False
         for c in node.children:
             if c.tag == "AssignControllerAction":
                 b.controller(c)
-        return M.ControllerAction(node.line)
+                assigns = True
+            elif c.tag == "ActivateControllerAction":
+                activates = _activates(b, c)
+        return M.ControllerAction(node.line, activates, assigns)
+
+
+def _activates(b: Any, node: Node) -> bool:
+    """An ActivateControllerAction activates the longitudinal domain (the standard: an
+    attribute left out leaves its domain as it is)."""
+    return "longitudinal" in node.attrs and b.bool_(node, "longitudinal")
 
 
 class ActivateController(ActionKind):
@@ -88,7 +98,7 @@ class ActivateController(ActionKind):
     domains, on_ego, in_init = (), True, "ignored"
 
     def build(self, b: Any, node: Node) -> M.ControllerAction:
-        return M.ControllerAction(node.line)
+        return M.ControllerAction(node.line, _activates(b, node))
 
 
 class Appearance(ActionKind):
