@@ -71,7 +71,10 @@ class Controller(ActionKind):
     also = ("ActivateControllerAction", "AssignControllerAction")
     note = (
         "done at once; the ego keeps ego's controller, the others their driver or script (see `ObjectController`);"
-        " `OverrideControllerValueAction` refused"
+        " an ego controller activated or assigned only here, by the storyboard, sets no ego parameter (ego sets "
+        "them before the run: [Controller properties](#controller-properties));"
+        " `OverrideControllerValueAction` refused (its values are pedal, brake, gear and steering inputs of a "
+        "driver: none is an ego parameter)"
     )
 
     def build(self, b: Any, node: Node) -> M.ControllerAction:

@@ -21,6 +21,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 from ego.openscenario import model as M
 from ego.openscenario.xmltree import ScenarioFileError
@@ -251,12 +252,12 @@ def ego_controller(model: M.Scenario, ego: str, cfg_cls: type, activated_later: 
     return EgoController(control, tuple(applied), tuple(unused))
 
 
-def describe(info: EgoController, config: object, path: str) -> str:
+def applied_event(info: EgoController, config: object, path: str) -> str:
     """The run's event line: which properties became which ego parameters (and which
     ``--set`` overrode), and which were read and not used."""
     c = info.control
     assert c is not None
-    where = f"{c.file.name}:{c.line}" if str(c.file) == path else f"{c.file}"
+    where = f"{Path(path).name}:{c.line}" + ("" if c.file == Path(path) else f", its entry in {c.file.name}")
     head = f"the ego's controller {c.name!r} ({where})"
     if info.inactive:
         return f"{head}: its properties are not used ({info.inactive})"

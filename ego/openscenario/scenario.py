@@ -41,7 +41,7 @@ from ego.models.nonlinear_bicycle import NonlinearBicycle
 from ego.openscenario import files
 from ego.openscenario import model as M
 from ego.openscenario.actions import along_path, trajectory_points
-from ego.openscenario.controller_properties import describe, ego_controller
+from ego.openscenario.controller_properties import applied_event, ego_controller
 from ego.openscenario.dynamics import Transition
 from ego.openscenario.ego_refs import EgoGap, EgoPath
 from ego.openscenario.kinematic import Kinematic
@@ -658,7 +658,7 @@ class FileScenario(Scenario):
         self.event("ego", f"the ego is {name!r}: {why}")
         info = ego_controller(self.model, name, type(self.config), _ego_activated_later(self.model, name))
         if info.control is not None:
-            self.event("controller", describe(info, self.config, os.fspath(self.file)))
+            self.event("controller", applied_event(info, self.config, os.fspath(self.file)))
         self.story.start()
 
     def before_sim_step(self) -> None:
@@ -1753,6 +1753,13 @@ def file_listing(path: str, ego: str = "") -> dict:
         start = check_file(path, {"ego_entity": chosen} if ego else {})
     except ConfigError as exc:
         error, start = str(exc), FileConfig()
+    controller = None
+    if error is None:  # what the run's [controller] event says, from the same resolution
+        cls = file_scenario_class(path)
+        model, _, ego_name, _ = cls.resolve(start)
+        info = ego_controller(model, ego_name, cls.config_cls, _ego_activated_later(model, ego_name))
+        if info.control is not None:
+            controller = applied_event(info, start, path)
     return {
         "file": path,
         "parameters": [
@@ -1762,6 +1769,7 @@ def file_listing(path: str, ego: str = "") -> dict:
         "entities": entities,
         "ego": chosen,
         "ego_why": why,
+        "controller": controller,
         "ego_parameters": [
             {"name": i.name, "default": getattr(start, i.name), "unit": i.unit, "description": i.doc}
             for i in describe(FileConfig)
@@ -1814,6 +1822,8 @@ def print_listing(listing: dict) -> str:
         out.append(f"  {e['name']:<24} {e['kind']:<30} line {e['line']}{mark}")
     if listing["ego"] is None:
         out.append("  (no vehicle to be the ego: choose one with --ego)")
+    if listing.get("controller"):
+        out.append(f"  {listing['controller']}")
     out += ["", "ego's parameters of a file scenario (--set):"]
     for p in listing["ego_parameters"]:
         out.append(f"  {p['name']:<24} {p['default']!s:<8} {p['unit']:<7} {p['description']}")
