@@ -224,3 +224,18 @@ def test_the_table_names_ego_parameters_once():
     mapped = {(r.name, k) for r in MAPPED for k in r.controllers}
     unused = {(n.name, k) for n in NOT_USED for k in n.controllers}
     assert not mapped & unused
+
+
+def test_a_property_follows_the_file_parameter_it_names(tmp_path):
+    """setSpeed="$SetSpeed": --set SetSpeed=22 (a sweep over it too) moves cruise_speed; a
+    property beats a declaration of the same ego parameter in the file."""
+    path = write(tmp_path, ACC)
+    cls = file_scenario_class(str(path))
+    assert cls.default_config({"SetSpeed": 22.0}).cruise_speed == 22.0
+    text = path.read_text().replace(
+        "</ParameterDeclarations>",
+        '<ParameterDeclaration name="follow_headway" parameterType="double" value="0.8"/></ParameterDeclarations>',
+    )
+    declared = tmp_path / "declared.xosc"
+    declared.write_text(text)
+    assert file_scenario_class(str(declared)).default_config({}).follow_headway == 1.5
