@@ -893,7 +893,7 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
         for oc in so.all("ObjectController"):
             control = b.controller(oc)
             props = control.properties
-            controllers[name] = control
+            controllers.setdefault(name, control)  # several (1.3): the first is the entity's own
             # a ghost (the reference player's): the entity a FollowGhost controller follows
             # (its "ghost" property), or one driven by a ghost controller
             if "ghost" in props:
