@@ -4,7 +4,8 @@ coverage (``esmini_coverage.toml``, its source URL and commit inside).
 
     python -m ego.docs openscenario-table [--check]
 
-The table sits between ``<!-- generated:openscenario-subset -->`` and
+It rewrites the controller-properties table too (between ``<!-- generated:controller-properties
+-->`` and its end marker). The table sits between ``<!-- generated:openscenario-subset -->`` and
 ``<!-- /generated:openscenario-subset -->``; ``--check`` compares instead of writing and exits
 1 when the page is not what the registry makes (``tests/test_docs.py`` runs the check).
 """
@@ -67,13 +68,42 @@ def table() -> str:
     return "\n".join(lines)
 
 
-def regenerate(check: bool) -> bool:
-    """Write the table into the page (or, ``check``, only compare); True when it was current."""
-    text = PAGE.read_text()
-    i, j = text.find(START), text.find(END)
+#: the controller-properties table's markers (:mod:`ego.openscenario.controller_properties`)
+PROPS_START, PROPS_END = "<!-- generated:controller-properties -->", "<!-- /generated:controller-properties -->"
+
+
+def properties_table() -> str:
+    """The generated block of controller properties as ego parameters (markers included)."""
+    from ego.openscenario.controller_properties import markdown_table
+
+    return "\n".join(
+        [
+            PROPS_START,
+            "",
+            "Generated with `python -m ego.docs openscenario-table` from `MAPPED` and `NOT_USED` in"
+            " `ego/openscenario/controller_properties.py`; the controller kinds are the reference player's"
+            " (its `ControllerACC`, `ControllerALKS`, `ControllerALKS_R157SM`...). A property of another"
+            " kind's controller, or one not listed, is read and not used.",
+            "",
+            markdown_table(),
+            "",
+            PROPS_END,
+        ]
+    )
+
+
+def _replace(text: str, start: str, end: str, block: str) -> str:
+    i, j = text.find(start), text.find(end)
     if i < 0 or j < i:
-        raise KeyError(f"no block {START} ... {END} in {PAGE}")
-    new = text[:i] + table() + text[j + len(END) :]
+        raise KeyError(f"no block {start} ... {end} in {PAGE}")
+    return text[:i] + block + text[j + len(end) :]
+
+
+def regenerate(check: bool) -> bool:
+    """Write the tables into the page (or, ``check``, only compare); True when they were current."""
+    text = PAGE.read_text()
+    new = _replace(text, START, END, table())
+    new = _replace(new, PROPS_START, PROPS_END, properties_table())
     if new != text and not check:
         from ego.outputs import write_text
 

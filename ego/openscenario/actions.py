@@ -71,14 +71,27 @@ class Controller(ActionKind):
     also = ("ActivateControllerAction", "AssignControllerAction")
     note = (
         "done at once; the ego keeps ego's controller, the others their driver or script (see `ObjectController`);"
-        " `OverrideControllerValueAction` refused"
+        " an ego controller activated or assigned only here, by the storyboard, sets no ego parameter (ego sets "
+        "them before the run: [Controller properties](#controller-properties));"
+        " `OverrideControllerValueAction` refused (its values are pedal, brake, gear and steering inputs of a "
+        "driver: none is an ego parameter)"
     )
 
     def build(self, b: Any, node: Node) -> M.ControllerAction:
+        activates = assigns = False
         for c in node.children:
             if c.tag == "AssignControllerAction":
                 b.controller(c)
-        return M.ControllerAction(node.line)
+                assigns = True
+            elif c.tag == "ActivateControllerAction":
+                activates = _activates(b, c)
+        return M.ControllerAction(node.line, activates, assigns)
+
+
+def _activates(b: Any, node: Node) -> bool:
+    """An ActivateControllerAction activates the longitudinal domain (the standard: an
+    attribute left out leaves its domain as it is)."""
+    return "longitudinal" in node.attrs and b.bool_(node, "longitudinal")
 
 
 class ActivateController(ActionKind):
@@ -88,7 +101,7 @@ class ActivateController(ActionKind):
     domains, on_ego, in_init = (), True, "ignored"
 
     def build(self, b: Any, node: Node) -> M.ControllerAction:
-        return M.ControllerAction(node.line)
+        return M.ControllerAction(node.line, _activates(b, node))
 
 
 class Appearance(ActionKind):

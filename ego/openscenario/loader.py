@@ -681,26 +681,28 @@ class _Builder:
             return None
         raise self.error(node, f"no entry {entry!r} in catalog {catalog!r} (entries: {', '.join(names)})")
 
-    def controller(self, node: Node) -> dict[str, str]:
+    def controller(self, node: Node) -> M.ObjectControl:
         """An ObjectController or AssignControllerAction: its controller (inline or from a
         catalog) is checked; ego drives the ego with ``-c``'s controller, SUMO the others.
-        Returns the controller's properties (name -> value, resolved) and its ``name`` as
-        ``"<name>"``."""
+        Returns the controller's name and properties (resolved, with their lines; an entry
+        missing from its catalog: its name alone)."""
         c = self.one(node)
         if c.tag == "CatalogReference":
             self.maneuver_entry = None
             self.catalog_entry(c, ("Controller",), "")
             if self.maneuver_entry is None:  # an entry missing from its catalog: left out with a warning
-                return {"<name>": self.str_(c, "entryName")}
+                return M.ObjectControl(self.str_(c, "entryName"), {}, {}, self.path, node.line)
             file, c, values = self.maneuver_entry
             b = _Builder(file, values)
         else:
             b = self
-        props = {"<name>": b.str_(c, "name")}
+        props: dict[str, str] = {}
+        lines: dict[str, int] = {}
         ps = c.child("Properties")
         for p in ps.all("Property") if ps is not None else ():
-            props[b.str_(p, "name")] = b.str_(p, "value")
-        return props
+            name = b.str_(p, "name")
+            props[name], lines[name] = b.str_(p, "value"), p.line
+        return M.ObjectControl(b.str_(c, "name"), props, lines, b.path, node.line)
 
     # -- positions ------------------------------------------------------------------------------
     def position(self, node: Node) -> M.Position:
@@ -880,6 +882,7 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
 
     ents = root.child("Entities")
     ghosts: set[str] = set()
+    controllers: dict[str, M.ObjectControl] = {}
     for so in ents.all("ScenarioObject") if ents is not None else ():
         name = b.str_(so, "name")
         if name in b.entities:
@@ -888,12 +891,14 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
         if len(kids) != 1:
             raise b.error(so, f"<ScenarioObject> needs exactly one child element (found {len(kids)})")
         for oc in so.all("ObjectController"):
-            props = b.controller(oc)
+            control = b.controller(oc)
+            props = control.properties
+            controllers.setdefault(name, control)  # several (1.3): the first is the entity's own
             # a ghost (the reference player's): the entity a FollowGhost controller follows
             # (its "ghost" property), or one driven by a ghost controller
             if "ghost" in props:
                 ghosts.add(props["ghost"])
-            if "GhostController" in (props.get("esminiController"), props["<name>"]):
+            if "GhostController" in (props.get("esminiController"), control.name):
                 ghosts.add(name)
         b.entities[name] = M.Entity(name, b.body(kids[0], name), so.line)
     if not b.entities:
@@ -918,11 +923,14 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
             )
         if action_of(global_action).in_init == "yes":
             init_globals.append(global_action)  # done at the storyboard's first step
+    activations: dict[str, int] = {}
     for priv in actions.all("Private") if actions is not None else ():
         ref = b.entity_ref(priv)
         for pa in priv.all("PrivateAction"):
             act = b.private_action(pa)
             kind = action_of(act)
+            if isinstance(act, M.ControllerAction) and act.activates:
+                activations.setdefault(ref, pa.children[0].line)
             if kind.in_init == "ignored":
                 continue
             if kind.in_init not in ("yes", "runs") or not kind.init_ok(act):
@@ -1004,6 +1012,8 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
         init_runs=init_runs,
         init_globals=tuple(init_globals),
         ghosts=frozenset(g for g in ghosts if g in b.entities),
+        controllers=controllers,
+        init_activations=activations,
     )
     _check_refs(scenario, names)
     return scenario

@@ -334,9 +334,27 @@ class LateralDistanceAction:
 @dataclass(frozen=True)
 class ControllerAction:
     """Activate (or assign) a controller: the ego keeps ego's controller (``-c``), the others
-    SUMO's driver or their script; accepted and done at once."""
+    SUMO's driver or their script; accepted and done at once. ``activates`` is whether it
+    activates the controller's longitudinal domain (an ActivateControllerAction whose
+    ``longitudinal`` is not false): an ego controller's properties apply only when it does so
+    in Init (controller_properties.py); ``assigns`` whether it assigns another controller."""
 
     line: int = 0
+    activates: bool = False
+    assigns: bool = False
+
+
+@dataclass(frozen=True)
+class ObjectControl:
+    """The controller an entity's ``ObjectController`` assigns it: its name, its properties
+    (name -> resolved value) and each property's line, in ``file`` (the scenario or the
+    catalog holding the entry); ``line`` is the ObjectController's."""
+
+    name: str
+    properties: dict[str, str]
+    lines: dict[str, int]
+    file: Path
+    line: int
 
 
 @dataclass(frozen=True)
@@ -544,6 +562,10 @@ class Scenario:
     #: ghosts: entities that are no physical body (a FollowGhost controller's ``ghost``, or
     #: an entity with a ghost controller, as the reference player has them)
     ghosts: frozenset[str] = frozenset()
+    #: entity -> the controller its ObjectController assigns it
+    controllers: dict[str, ObjectControl] = field(default_factory=dict)
+    #: entity -> the line of an Init action activating its controller's longitudinal domain
+    init_activations: dict[str, int] = field(default_factory=dict)
 
 
 def qualified_names(path: tuple[str, ...]) -> list[str]:

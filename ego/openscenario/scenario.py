@@ -41,6 +41,7 @@ from ego.models.nonlinear_bicycle import NonlinearBicycle
 from ego.openscenario import files
 from ego.openscenario import model as M
 from ego.openscenario.actions import along_path, trajectory_points
+from ego.openscenario.controller_properties import applied_event, ego_controller
 from ego.openscenario.dynamics import Transition
 from ego.openscenario.ego_refs import EgoGap, EgoPath
 from ego.openscenario.kinematic import Kinematic
@@ -64,6 +65,13 @@ from ego.sim.types import Collision, VehicleSpec, VehicleType
 ENTITY_COLORS = ((255, 150, 0), (0, 170, 255), (160, 60, 220), (40, 180, 90), (230, 200, 0))
 
 
+#: ``cruise_speed`` = NO_CRUISE_SPEED: the cruise reference holds ``ego_speed``
+NO_CRUISE_SPEED = -1.0
+#: m/s^2: the cruise reference's rate towards ``cruise_speed``: ISO 15622's limits of an ACC's
+#: mean automatic acceleration and deceleration
+ACC_ACCEL, ACC_DECEL = 2.0, 3.5
+
+
 @dataclass(frozen=True)
 class FileConfig(EvasiveConfig):
     """ego's parameters of a file scenario (the file's own parameters are added per file)."""
@@ -81,6 +89,22 @@ class FileConfig(EvasiveConfig):
     )
     brake_decel: float = param(8.0, "m/s^2", "speed reference's deceleration when braking in lane", min=0.5, max=12.0)
     brake_max_lag: float = param(2.0, "m", "how far the braking reference may fall behind the ego", min=0.1, max=50.0)
+    cruise_speed: float = param(
+        NO_CRUISE_SPEED,
+        "m/s",
+        "the speed the ego's cruise reference moves to from t = 0, at ISO 15622's ACC limits (2 m/s^2 up, "
+        "3.5 m/s^2 down); -1: hold ego_speed (an ACC controller's setSpeed on the ego sets it: docs/openscenario.md)",
+        min=-1.0,
+        max=60.0,
+    )
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.cruise_speed != NO_CRUISE_SPEED and self.cruise_speed < 0.0:
+            raise ConfigError(
+                f"bad value for cruise_speed: {self.cruise_speed:g} (expected -1: hold ego_speed, or a speed of at "
+                "least 0 m/s)"
+            )
 
 
 _TYPES = {
@@ -579,6 +603,14 @@ class FileScenario(Scenario):
         follow = {k: v for k, v in follow.items() if v != getattr(cfg, k)}
         if follow:
             cfg = replace(cfg, **follow)
+        # the ego's controller's properties that mean ego parameters (--set still rules)
+        props = {
+            a.row.param: a.value
+            for a in ego_controller(model, ego, cls.config_cls, _ego_activated_later(model, ego)).applied
+            if a.row.param not in overrides
+        }
+        if props:
+            cfg = replace(cfg, **props)
         end = stop_time(model)
         if "duration" not in cls.file_params and end is not None and end >= cfg.duration:
             # the run lasts until the StopTrigger's time (--set duration=... still rules)
@@ -677,6 +709,9 @@ class FileScenario(Scenario):
     def after_setup(self) -> None:
         name, why = ego_choice(self.model, self.config.ego_entity, self.roads)
         self.event("ego", f"the ego is {name!r}: {why}")
+        info = ego_controller(self.model, name, type(self.config), _ego_activated_later(self.model, name))
+        if info.control is not None:
+            self.event("controller", applied_event(info, self.config, os.fspath(self.file)))
         self.story.start()
 
     def before_sim_step(self) -> None:
@@ -911,6 +946,12 @@ class StoryDriver:
         for hist in self.history.values():
             hist.clear()
         self._start_overlaps()
+        c = sc.config
+        if c.cruise_speed != NO_CRUISE_SPEED and c.cruise_speed != c.ego_speed:
+            # the cruise reference moves from the Init speed to cruise_speed as an ACC would
+            rate = ACC_ACCEL if c.cruise_speed > c.ego_speed else ACC_DECEL
+            duration = abs(c.cruise_speed - c.ego_speed) / rate
+            self.ego_speed(Transition(0.0, c.ego_speed, c.cruise_speed, duration, "linear"), None)
 
     def _start_overlaps(self) -> None:
         """Bodies that start overlapping (the file put them there) collide at t = 0: with the
@@ -1593,6 +1634,20 @@ class FileManoeuvre(EvasiveManoeuvre):
             self.story.cruise_references(obs, t)
 
 
+def _ego_activated_later(model: M.Scenario, ego: str) -> int:
+    """The line of the first storyboard action activating (longitudinally) or assigning the
+    ego's controller (0: none)."""
+    for st in model.stories:
+        for act in st.acts:
+            for g in act.groups:
+                if ego not in g.actors:
+                    continue
+                for x in M.walk(g.maneuvers):
+                    if isinstance(x, M.ControllerAction) and (x.activates or x.assigns):
+                        return x.line
+    return 0
+
+
 def _check_ego_actions(model: M.Scenario, ego: str) -> None:
     """Actions ego cannot apply to its own vehicle, refused before the run."""
     for act in model.init_runs.get(ego, ()):
@@ -1830,6 +1885,13 @@ def file_listing(path: str, ego: str = "") -> dict:
         start = check_file(path, {"ego_entity": chosen} if ego else {})
     except ConfigError as exc:
         error, start = str(exc), FileConfig()
+    controller = None
+    if error is None:  # what the run's [controller] event says, from the same resolution
+        cls = file_scenario_class(path)
+        model, _, ego_name, _ = cls.resolve(start)
+        info = ego_controller(model, ego_name, cls.config_cls, _ego_activated_later(model, ego_name))
+        if info.control is not None:
+            controller = applied_event(info, start, path)
     return {
         "file": path,
         "parameters": [
@@ -1839,6 +1901,7 @@ def file_listing(path: str, ego: str = "") -> dict:
         "entities": entities,
         "ego": chosen,
         "ego_why": why,
+        "controller": controller,
         "ego_parameters": [
             {"name": i.name, "default": getattr(start, i.name), "unit": i.unit, "description": i.doc}
             for i in describe(FileConfig)
@@ -1891,6 +1954,8 @@ def print_listing(listing: dict) -> str:
         out.append(f"  {e['name']:<24} {e['kind']:<30} line {e['line']}{mark}")
     if listing["ego"] is None:
         out.append("  (no vehicle to be the ego: choose one with --ego)")
+    if listing.get("controller"):
+        out.append(f"  {listing['controller']}")
     out += ["", "ego's parameters of a file scenario (--set):"]
     for p in listing["ego_parameters"]:
         out.append(f"  {p['name']:<24} {p['default']!s:<8} {p['unit']:<7} {p['description']}")

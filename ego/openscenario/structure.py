@@ -174,9 +174,10 @@ declare(
     "ObjectController",
     contains=("Controller", "CatalogReference"),
     note=(
-        "**deviation:** the ego is driven by ego's controller (`-c`), whatever the file assigns it (its "
-        "`Properties` are not mapped onto ego parameters); the other entities keep SUMO's driver unless the "
-        "storyboard scripts them. The controller reference is checked (a catalog or entry of another kind, a "
+        "**deviation:** the ego is driven by ego's controller (`-c`), whatever the file assigns it; the "
+        "properties of the ego's controller that mean an ego parameter become that parameter's default "
+        "(`--set` still rules; [Controller properties](#controller-properties)); the other entities keep SUMO's "
+        "driver unless the storyboard scripts them. The controller reference is checked (a catalog or entry of another kind, a "
         "parameter assignment's expression, is one line); **deviation:** an entry its catalog lacks is a warning "
         "naming the reference's line, the entry and the catalog, and the controller is left out (the entity is no "
         "ghost: that only an entry says; the reference player "
@@ -235,7 +236,8 @@ declare(
         "`SpeedProfileAction`, `SynchronizeAction` or `FollowTrajectoryAction` in Init is started at t = 0 and "
         "left running, as the standard runs a non-instantaneous Init action (8.5.1.2), until it ends or a later "
         "action on the same domain of the entity overrides it (on the ego only what an event may do to it); a "
-        "controller action in Init is accepted and not used"
+        'controller action in Init is done at once (an `ActivateControllerAction` there with `longitudinal="true"` '
+        "on the ego keeps its controller's properties applied: [Controller properties](#controller-properties))"
     ),
     label="`Init`: `TeleportAction`, `SpeedAction`, the running private actions, `ControllerAction`,"
     " `GlobalAction`/`EnvironmentAction`",
