@@ -263,7 +263,7 @@ class Speed(ActionKind):
 def _lateral_start(run: ActionRun, t: float, target: float, T: float, shape: str) -> None:
     """Start a lateral profile (lane change, lane offset) from where the actor is to ``target``."""
     drv, me = run.board.driver, run.board.states[run.actor]
-    start = drv.ego_references()[1] if run.is_ego else me.d_front
+    start = drv.ego_references()[1] if run.is_ego else me.d_ref
     run.profile = Transition(t, start, target, T, shape)
     if run.is_ego:  # the ego's controller follows the profile; the action ends with it
         drv.ego_lateral(run.profile)
@@ -276,7 +276,9 @@ def _lateral_step(kind: ActionKind, run: ActionRun, t: float) -> None:
     if p is None:  # not started (its target lane does not exist)
         return
     if not run.is_ego:
-        drv.lateral(run.actor, p.value(t + run.board.h), p.peak_rate)
+        h = run.board.h
+        # at the profile's end the car is straight along its lane (its rate there is 0)
+        drv.lateral(run.actor, p.value(t + h), p.peak_rate, 0.0 if p.done(t + h) else p.rate(t + h))
     if p.done(t + run.board.h) and not getattr(run.action, "continuous", False):
         run.finished = True
         if not run.is_ego:
@@ -333,7 +335,7 @@ class LaneChange(ActionKind):
             run.finished = True
             return
         target = centre + a.target_offset
-        here = drv.ego_references()[1] if run.is_ego else me.d_front
+        here = drv.ego_references()[1] if run.is_ego else me.d_ref
         dyn = a.dynamics
         _lateral_start(
             run, t, target, lateral_duration(dyn.shape, dyn.dimension, dyn.value, me.speed, target - here), dyn.shape
@@ -380,7 +382,7 @@ class LaneOffset(ActionKind):
         drv, me = b.driver, b.states[run.actor]
         base = b.states[a.relative_to].d if a.relative_to is not None else drv.lane_centre_of(me.d)
         target = base + a.value
-        here = drv.ego_references()[1] if run.is_ego else me.d_front
+        here = drv.ego_references()[1] if run.is_ego else me.d_ref
         _lateral_start(run, t, target, offset_duration(a.shape, a.max_lateral_acc, target - here), a.shape)
 
     step = _lateral_step
@@ -533,8 +535,8 @@ class LateralDistance(ActionKind):
         b, a = run.board, run.action
         me, ref = b.states[run.actor], b.states[a.entity]
         run.v = 0.0  # the actor's lateral speed as commanded (m/s, + left)
-        run.s0 = ref.d  # the entity's lateral position a step ago
-        run.t0 = a.side or (1.0 if me.d_front >= ref.d else -1.0)
+        run.s0 = ref.d_ref  # the entity's lateral position a step ago
+        run.t0 = a.side or (1.0 if me.d_ref >= ref.d_ref else -1.0)
 
     def step(self, run: ActionRun, t: float) -> None:
         """The lateral position at t + step: the entity's there (moving on at its last step's
@@ -544,9 +546,9 @@ class LateralDistance(ActionKind):
         h = b.h
         me, ref = b.states[run.actor], b.states[a.entity]
         extra = 0.5 * (me.width + ref.width) if a.freespace else 0.0
-        ref_next = 2.0 * ref.d - run.s0
-        run.s0 = ref.d
-        err = ref_next + run.t0 * (a.distance + extra) - me.d_front
+        ref_next = 2.0 * ref.d_ref - run.s0
+        run.s0 = ref.d_ref
+        err = ref_next + run.t0 * (a.distance + extra) - me.d_ref
         v = err / h
         if math.isfinite(a.max_decel):
             stop = a.max_decel
@@ -560,8 +562,9 @@ class LateralDistance(ActionKind):
         v = min(max(v, -a.max_speed), a.max_speed)
         run.v = v
         peak = a.max_speed if math.isfinite(a.max_speed) else 100.0 / h
-        b.driver.lateral(run.actor, me.d_front + v * h, peak)
-        gap = run.t0 * (me.d_front - ref.d) - extra
+        # unconstrained it is there after one step: a jump across, the car along its lane
+        b.driver.lateral(run.actor, me.d_ref + v * h, peak, v if math.isfinite(a.max_speed) else 0.0)
+        gap = run.t0 * (me.d_ref - ref.d_ref) - extra
         if not a.continuous and abs(gap - a.distance) < 0.01:
             run.finished = True
             b.driver.release(run.actor)

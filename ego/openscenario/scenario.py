@@ -47,7 +47,7 @@ from ego.openscenario.kinematic import Kinematic
 from ego.openscenario.loader import declared_parameters, header_description, load, turned_message
 from ego.openscenario.registry import action_of
 from ego.openscenario.roads import RoadMap, network_file, refine_shape
-from ego.openscenario.runtime import EntityState, Storyboard, boxes_overlap
+from ego.openscenario.runtime import STILL, EntityState, Storyboard, boxes_overlap
 from ego.openscenario.traffic import TrafficActions, sumo_type
 from ego.openscenario.xmltree import DOCS, ScenarioFileError
 from ego.params import ConfigError, param
@@ -626,11 +626,15 @@ class FileScenario(Scenario):
         self.event("ego", f"the ego is {name!r}: {why}")
         self.story.start()
 
-    def before_sim_step(self) -> None:
-        self.story.before_sim_step()
-
     def after_sim_step(self) -> None:
         self.story.after_sim_step()
+
+    def before_plan(self) -> None:
+        # the storyboard's step at every SUMO step's time (t = 0 too), before the ego's
+        # controller plans the period from t: an action started at t moves the ego's
+        # references from t on, as it moves SUMO's cars over the step from t
+        if self.k % self._per_sumo == 0 and self.status == "running":
+            self.story.step()
 
     # the storyboard as the tests read it
     @property
@@ -735,6 +739,13 @@ class StoryDriver:
         self.history = {}
         self._limits: dict[str, tuple[float, float]] = {}
         self._lateral_free: set[str] = set()
+        #: the cars a lateral action moves this step: name -> (their reference point's d after
+        #: the step, its lateral rate there), placed after the storyboard's step
+        self._lateral_next: dict[str, tuple[float, float]] = {}
+        #: the speed last commanded to each car: (target, rate m/s^2; inf: reached in the step)
+        self._speed_cmd: dict[str, tuple[float, float]] = {}
+        #: each entity's bounding box centre ahead of its reference point (m, the file's center.x)
+        self._center_x = {n: e.vehicle.center_x for n, e in sc.model.entities.items()}
         self._routes: set[str] = set()
         self._types: dict[str, VehicleType] = {}
         #: (a vehicle?, id) -> its own decel and emergencyDecel (m/s^2), before a friction scale
@@ -849,7 +860,6 @@ class StoryDriver:
         for name in self.board.watch_end:
             self._hold_at_end(name)
         self.history = {n: [] for n in sc.model.entities if n != sc.ego_name}
-        self._ego_then = self._ego_now()
         self._observe(-1.0)  # the start positions (no distance travelled)
         for hist in self.history.values():
             hist.clear()
@@ -1041,9 +1051,8 @@ class StoryDriver:
         entities' (t, speed, d) history for the tests and the braking criterion."""
         sc = self.sc
         states = self.board.states
-        # the ego as of time t, as SUMO's cars are: its state one SUMO step ago (the loop has
-        # integrated it to t + sumo_step by the time SUMO steps)
-        X, Y, psi, u, s_cg, d = self._ego_then
+        # the ego as of time t, as SUMO's cars are (the storyboard steps at t, after SUMO's step to t)
+        X, Y, psi, u, s_cg, d = self._ego_now()
         g = sc.geometry
         off = g.cg_to_front - 0.5 * g.length
         e = states[sc.ego_name]
@@ -1054,10 +1063,11 @@ class StoryDriver:
         e.speed = u
         to_road = self._road_s
         e.s, e.d = to_road(s_cg + off), d
-        e.d_front = d
+        e.d_ref = d
         project = sc.road.project
         box = sc.bridge.box
         history = self.history
+        center_x = self._center_x
         for name in self._scripted:
             st = states[name]
             bx, by, yaw, speed, _, _ = box(name)
@@ -1067,10 +1077,10 @@ class StoryDriver:
             # a car ego drives against its lane: its own speed (SUMO's reads its placement)
             st.speed = speed if name not in self._kin else self._kin.cars[name].v
             s, d, _ = project(bx, by)
-            half = 0.5 * st.length
+            cx = center_x[name]
             st.s, st.d = to_road(s), d
-            st.d_front = project(bx + half * math.cos(yaw), by + half * math.sin(yaw))[1]
-            history[name].append((t, st.speed, st.d_front))
+            st.d_ref = project(bx - cx * math.cos(yaw), by - cx * math.sin(yaw))[1] if cx else d
+            history[name].append((t, st.speed, st.d_ref))
         board = self.board
         if board.watch_end or board.watch_offroad:
             for name in board.watch_end | board.watch_offroad:
@@ -1082,16 +1092,19 @@ class StoryDriver:
         x = sc.ego.state
         return x[0], x[2], x[4], x[1], sc.s, sc.d_road
 
-    def before_sim_step(self) -> None:
-        """The storyboard's step, after the actors' updates before a simulator step."""
+    def step(self) -> None:
+        """The storyboard's step at time t = now, right after SUMO's step to t (the scripted
+        entities as SUMO has them at t, the ego as its plant is at t) and before the ego's
+        controller plans the period from t: its commands move SUMO's cars over SUMO's next
+        step (t to t + step) and the ego's references from t on."""
         sc = self.sc
         board = self.board
-        t = sc.t - sc.config.sumo_step
+        t = sc.t
         self._observe(t)
         board.step(t)
+        self._place_lateral()
         self._kin.advance()
         self._traffic.step()
-        self._ego_then = self._ego_now()  # what the next step's storyboard time sees
         if board.stopped and sc.status == "running":
             sc._end("completed", "the storyboard's StopTrigger ended the scenario")
         elif self._ego_end is not None and sc.status == "running":
@@ -1177,6 +1190,7 @@ class StoryDriver:
 
     def speed(self, name: str, v_next: float, peak_rate: float) -> None:
         sc = self.sc
+        self._speed_cmd[name] = (v_next, INF)  # reached in the step (at once, or within the raised limits)
         if name in self._kin:
             self._kin.speed(name, v_next)
             return
@@ -1191,13 +1205,14 @@ class StoryDriver:
 
     def speed_rate(self, name: str, target: float, rate: float) -> None:
         sc = self.sc
+        self._speed_cmd[name] = (target, rate)
         if target < self.board.states[name].speed:
             sc.bridge.set_decel(name, rate)
         else:
             sc.bridge.set_accel(name, rate)
         sc.bridge.set_speed(name, target)
 
-    def lateral(self, name: str, d_next: float, peak_speed: float) -> None:
+    def lateral(self, name: str, d_next: float, peak_speed: float, rate: float = 0.0) -> None:
         sc = self.sc
         st = self.board.states[name]
         centre_line = 0.5 * (max(sc.lane_offset.values()) + self._lanes_all.get(len(sc.lanes), INF))
@@ -1209,22 +1224,45 @@ class StoryDriver:
         if name in self._kin:
             self._kin.lateral(name, d_next)  # its reference point on the profile
             return
-        if not math.isfinite(peak_speed):
-            # a step: the sublane model moves a car at most a lane-width fraction a step, so
-            # the car is placed across at once (where it would be after the step)
-            h = sc.config.sumo_step
-            s = self._lane_s(st.s) + st.speed * h
-            x, y = sc.road.offset_point(s, d_next - (st.d_front - st.d))
-            sc.bridge.place(name, x, y, sc.road.heading_at(s), st.speed)
-            return
         if name not in self._lateral_free:
-            # as cut-in's car: SUMO's own limits on lateral motion and its speed loss while
-            # moving sideways must not shape the scripted profile
+            # as cut-in's car while it moves sideways: no lane changes of its own, a set speed
+            # is driven at once (the storyboard places it, :meth:`_place_lateral`)
             sc.bridge.drive_blind(name)
-            speed = 2.0 * peak_speed if math.isfinite(peak_speed) else 100.0 / sc.config.sumo_step
-            sc.bridge.free_lateral(name, max(10.0, speed))
             self._lateral_free.add(name)
-        sc.bridge.change_sublane(name, d_next - st.d_front)
+        # a step (no rate) is a jump across: the car stays turned along its lane
+        self._lateral_next[name] = (d_next, rate if math.isfinite(peak_speed) else 0.0)
+
+    def _place_lateral(self) -> None:
+        """Place every car a lateral action moves (after the storyboard's step, when every
+        action has commanded it) where it is after SUMO's coming step: its reference point
+        (its box centre less the file's ``center.x`` along its heading) at the profile's
+        lateral position in the ego's lane frame, moved along the frame by its speed over the
+        step (the speed commanded for the step, driven at once as SUMO does a set speed of a
+        car driving blind), turned to the profile's slope (its lateral rate over its speed)
+        from the frame's heading there. SUMO keeps it a vehicle on the lane its front is on
+        (moveToXY along its route): its followers see it there."""
+        todo = self._lateral_next
+        if not todo:
+            return
+        sc = self.sc
+        road, h, states, place = sc.road, sc.config.sumo_step, self.board.states, sc.bridge.place
+        for name, (d1, rate) in todo.items():
+            st = states[name]
+            cx = self._center_x[name]
+            s0, d0, _ = road.project(st.x - cx * math.cos(st.yaw), st.y - cx * math.sin(st.yaw))
+            target, dv = self._speed_cmd.get(name, (st.speed, INF))
+            v = target if dv == INF else st.speed + min(max(target - st.speed, -dv * h), dv * h)
+            v = max(v, 0.0)
+            # along the frame: a parallel curve at d is (1 - kappa d) times the frame's length
+            s1 = s0 + v * h / max(1.0 - road.curvature_at(s0) * d0, 1e-3)
+            # the frame's heading at the box centre (SUMO's body on a curve: its front and back
+            # on one lateral offset, so SUMO drives it on from there as placed), turned to the
+            # profile's slope
+            ahead = cx / max(1.0 - road.curvature_at(s1) * d1, 1e-3)
+            heading = road.heading_at(s1 + ahead) + (math.atan2(rate, v) if v > STILL else 0.0)
+            x, y = road.offset_point(s1, d1)
+            place(name, x + cx * math.cos(heading), y + cx * math.sin(heading), heading, v, keep_route=1)
+        todo.clear()
 
     def _enter(self, name: str, x: float, y: float, heading: float) -> None:
         """``name`` (no start so far) enters the simulation at (x, y) (its box centre), heading
@@ -1254,7 +1292,7 @@ class StoryDriver:
         st = board.states[name]
         st.x, st.y, st.yaw, st.speed = x, y, heading, speed
         st.s, st.d = self.road_frame(x, y)
-        st.d_front = st.d
+        st.d_ref = st.d
         board.log("action", f"t = {board.t:.2f} s: {name} enters the simulation")
 
     def teleport(self, name: str, x: float, y: float, heading: float) -> None:
@@ -1270,6 +1308,7 @@ class StoryDriver:
         sc = self.sc
         sc.bridge.place(name, x, y, heading, speed)
         sc.bridge.set_speed(name, speed)  # SUMO's own speed too (it drives on from there)
+        self._speed_cmd[name] = (speed, INF)
         if name in self._kin:
             self._kin.moved(name, *self.road_frame(x, y))
             self._kin.speed(name, speed)
@@ -1445,17 +1484,15 @@ class StoryDriver:
         e = board.states[sc.ego_name]
         e.x, e.y, e.yaw = X + off * math.cos(heading), Y + off * math.sin(heading), heading
         e.s, e.d = sc.s + off, sc.d_road
-        e.d_front = e.d
-        self._ego_then = self._ego_now()
+        e.d_ref = e.d
 
     # -- the ego's references ---------------------------------------------------------------
     def cruise_references(self, obs, t: float) -> None:
         """The cruise references moved by the storyboard's actions on the ego (called by
         :class:`FileManoeuvre` after emergency-brake's own references)."""
         sc = self.sc
-        # on the storyboard's clock: the storyboard at time t sees the ego as of t, so the
-        # reference at the ego's time t is the profile's value at t (an action started at t0
-        # reaches the ego's loop a SUMO step later, from where it is on the profile's time)
+        # on the storyboard's clock: the storyboard steps at t before this plan (the ego as of
+        # t), so an action started at t0 gives the reference its profile's value from t0 on
         t_board = t
         if self._ego_profile is not None:
             v = self._ego_profile.value(t_board)

@@ -76,14 +76,14 @@ def test_a_later_friction_scale_is_from_the_plants_own_not_compounded():
 def _spy_decels(monkeypatch) -> list:
     """(storyboard time, the ego plant's mu_max, A's SUMO decel and emergencyDecel) every step."""
     rows: list = []
-    inner = StoryDriver.before_sim_step
+    inner = StoryDriver.step
 
     def spy(self):
         inner(self)
         veh = self.sc.bridge.libsumo.vehicle
         rows.append((self.board.t, self.sc.ego.model.params.mu_max, veh.getDecel("A"), veh.getEmergencyDecel("A")))
 
-    monkeypatch.setattr(StoryDriver, "before_sim_step", spy)
+    monkeypatch.setattr(StoryDriver, "step", spy)
     return rows
 
 
@@ -178,14 +178,14 @@ def _stopping(tmp_path, monkeypatch, k: float) -> tuple[float, float]:
     """The ego at 20 m/s told to stop at storyboard time 1 s on a road of friction scale ``k``
     (its evasive manoeuvre and AEB off): its speed at 1 s and the distance to its stop."""
     rows: list = []
-    inner = StoryDriver.before_sim_step
+    inner = StoryDriver.step
 
     def spy(self):
         inner(self)
         e = self.board.states["Ego"]
         rows.append((self.board.t, e.speed, e.traveled))
 
-    monkeypatch.setattr(StoryDriver, "before_sim_step", spy)
+    monkeypatch.setattr(StoryDriver, "step", spy)
     (tmp_path / str(k)).mkdir()
     far = {"A": (-1, 1000.0, 25.0), "B": (-2, 1200.0, 15.0), "C": (-1, 1400.0, 15.0)}
     path = scene(tmp_path / str(k), [event("Stop", "Ego", speed(0), trigger([sim_time(1)]))], at=far)

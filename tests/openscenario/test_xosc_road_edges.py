@@ -17,14 +17,14 @@ from ego.openscenario.xmltree import ScenarioFileError
 def _record(monkeypatch, name: str) -> list:
     """(storyboard time, state of ``name``: s, d, speed, at_end, offroad) every step."""
     rows: list = []
-    inner = StoryDriver.before_sim_step
+    inner = StoryDriver.step
 
     def spy(self):
         inner(self)
         e = self.board.states[name]
         rows.append((self.board.t, e.s, e.d, e.speed, e.at_end, e.offroad))
 
-    monkeypatch.setattr(StoryDriver, "before_sim_step", spy)
+    monkeypatch.setattr(StoryDriver, "step", spy)
     return rows
 
 
@@ -109,13 +109,13 @@ def test_a_car_hidden_from_sensors_is_not_the_egos_front_object_until_shown(tmp_
     player reads them) the ego has no front object from the next SUMO step on; shown again at
     2 s it is the front object again from the step after."""
     rows: list = []
-    inner = StoryDriver.before_sim_step
+    inner = StoryDriver.step
 
     def spy(self):
         inner(self)
         rows.append((self.board.t, self.sc.view.gap_front))
 
-    monkeypatch.setattr(StoryDriver, "before_sim_step", spy)
+    monkeypatch.setattr(StoryDriver, "step", spy)
     evs = [
         event("Hide", "C", _visibility('sensors="false"'), trigger([sim_time(1)])),
         event("Show", "C", _visibility('graphics="true" sensors="true" traffic="true"'), trigger([sim_time(2)])),

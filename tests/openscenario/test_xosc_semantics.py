@@ -281,7 +281,7 @@ def test_storyboard_stop_trigger(tmp_path):
     stop = f"<StopTrigger><ConditionGroup>{sim_time(1.55)}</ConditionGroup></StopTrigger>"
     sc = run_scene(scene(tmp_path, [event("E", "A", speed(25), trigger([sim_time(0.0)]))], stop=stop), 5.0)
     assert sc.status == "completed" and "StopTrigger" in sc.status_detail
-    assert sc.t == pytest.approx(1.7)  # the step of storyboard time 1.6 (scenario time 1.7) ends it
+    assert sc.t == pytest.approx(1.6)  # the storyboard's step at 1.6 ends it, at 1.6 on the run's clock
 
 
 # -- dynamics: SUMO follows the closed-form profile ------------------------------------------------
