@@ -562,10 +562,13 @@ class LateralDistance(ActionKind):
         v = min(max(v, -a.max_speed), a.max_speed)
         run.v = v
         peak = a.max_speed if math.isfinite(a.max_speed) else 100.0 / h
-        # unconstrained it is there after one step: a jump across, the car along its lane
-        b.driver.lateral(run.actor, me.d_ref + v * h, peak, v if math.isfinite(a.max_speed) else 0.0)
         gap = run.t0 * (me.d_ref - ref.d_ref) - extra
-        if not a.continuous and abs(gap - a.distance) < 0.01:
+        ends = not a.continuous and abs(gap - a.distance) < 0.01
+        # unconstrained it is there after one step: a jump across; at its end SUMO drives it on
+        # from the last placement: either way the car along its lane
+        rate = v if math.isfinite(a.max_speed) and not ends else 0.0
+        b.driver.lateral(run.actor, me.d_ref + v * h, peak, rate)
+        if ends:
             run.finished = True
             b.driver.release(run.actor)
 

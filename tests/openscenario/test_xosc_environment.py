@@ -201,10 +201,11 @@ def _stopping(tmp_path, monkeypatch, k: float) -> tuple[float, float]:
 @pytest.mark.parametrize("k", [1.0, 0.5])
 def test_the_egos_braking_distance_follows_the_road_friction(tmp_path, monkeypatch, k):
     """The ego's speed reference drops to 0 at 1 s: the controller brakes as hard as the tyres
-    carry (ABS), so from v0 it stops in v0 tau + v0^2 / (2 (0.7 k + 0.01) g), tau = 0.1 s (the
-    reference reaches the ego's loop one SUMO step later): 28.6 m (+2.0) on a dry road, 56.5 m
-    (+2.0) at k = 0.5, within 0.1 m."""
+    carry (ABS), so from v0 it stops in v0 tau + v0^2 / (2 (0.7 k + 0.01) g), tau = 0.01 s (the
+    step reference drops over the control period after 1 s: the storyboard steps at 1 s before
+    the ego plans from there): 28.6 m (+0.2) on a dry road, 56.5 m (+0.2) at k = 0.5, within
+    0.1 m."""
     v0, dist = _stopping(tmp_path, monkeypatch, k)
     g = NonlinearBicycleParams().g
-    closed = v0 * 0.1 + v0**2 / (2.0 * (0.7 * k + 0.01) * g)
+    closed = v0 * 0.01 + v0**2 / (2.0 * (0.7 * k + 0.01) * g)
     assert dist == pytest.approx(closed, abs=0.1)
