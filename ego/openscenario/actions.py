@@ -270,7 +270,8 @@ def _lateral_start(run: ActionRun, t: float, target: float, T: float, shape: str
 
 
 def _lateral_step(kind: ActionKind, run: ActionRun, t: float) -> None:
-    """Move the actor along its lateral profile for [t, t + step] (SUMO's sublane model): the
+    """Move the actor's reference point along its lateral profile for [t, t + step] (the driver
+    places it there, turned to the profile's slope; straight along its lane at the end): the
     ``step`` of a lane change and of a lane offset."""
     drv, p = run.board.driver, run.profile
     if p is None:  # not started (its target lane does not exist)
@@ -300,13 +301,19 @@ class LaneChange(ActionKind):
         "`AbsoluteTargetLane`, `RelativeTargetLane`, `targetLaneOffset`; shapes over time, distance (distance at "
         "the speed at the start) or rate (the peak lateral speed in m/s, as the ALKS files' `MaxLateralVelocity`: "
         "T = k \\|D\\| / rate, k = 1 linear, 3/2 cubic, pi/2 sinusoidal, D from where the entity is to the target); "
-        "moved through SUMO's sublane model step by step as cut-in's car (blind to others while moving); a step "
-        "is one placement; a scripted car changing across the centre line into the other direction's lanes "
-        "(the reference player's `acc-test.xosc` overtaking, `RelativeTargetLane` +1 from a one-lane "
-        "direction) is driven by ego from where it crosses (as a car turned against its lane, see the "
-        "positions' row: its reference point on the profile) and stays so. **Known deviation (open, issue 39):** the profile moves SUMO's front bumper, not the "
-        "entity's reference point: SUMO turns the car from its front and back positions, so its box centre lags "
-        "the shape and reaches the target lane a few steps after the front"
+        "the entity's reference point (its box centre less the file's `center.x` along its heading) is on the "
+        "closed form at every SUMO step, measured from SUMO's own pose (front bumper, angle, length), within "
+        "1e-6 m in the ego's lane frame, on a straight road and on an arc, and ends on the target "
+        "(`test_xosc_reference_point.py`): ego places the SUMO car each step (moveToXY along its route: it stays "
+        "a vehicle on the lane its front is on, which the others follow and see) where its reference point is "
+        "after the step, moved along the lane frame at the speed commanded for the step and turned to the "
+        "profile's slope (atan of its lateral rate over its speed; along the lane at the end and for a step), "
+        "blind to others while moving as cut-in's car; afterwards SUMO drives it on at that lateral place (on "
+        "an arc its body's front and back on one offset of netconvert's polyline lane: within 1 mm of the "
+        "target on a 200 m arc, as SUMO's own cars keep their lane there); a scripted car changing across the "
+        "centre line into the other direction's lanes (the reference player's `acc-test.xosc` overtaking, "
+        "`RelativeTargetLane` +1 from a one-lane direction) is driven by ego from where it crosses (as a car "
+        "turned against its lane, see the positions' row: its box centre on the profile) and stays so"
     )
 
     def build(self, b: Any, node: Node) -> M.LaneChangeAction:
@@ -502,7 +509,7 @@ class LateralDistance(ActionKind):
     domains, releases = ("lat",), True
     note = (
         "`distance` (left out: 0, the standard's default) across the road between the reference points (box "
-        "centres; the actor's as SUMO's sublane model moves it, its front's lateral position) or, with "
+        "centres less the file's `center.x` along their headings; the actor placed as a lane change's) or, with "
         "`freespace`, between the boxes (half widths subtracted); `displacement` leftToReferencedEntity, "
         "rightToReferencedEntity or any (the side the actor is on at the start; on the entity's line: left); "
         "`coordinateSystem` read as the road's (entity, lane, road: across the ego's start lane frame); the "

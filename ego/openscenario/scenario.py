@@ -888,7 +888,7 @@ class StoryDriver:
         their Init position; the lanes of the other direction beside the ego's in its frame."""
         sc = self.sc
         road = sc.road
-        self._kin = Kinematic(road, sc.bridge.place, sc.config.sumo_step)
+        self._kin = Kinematic(road, sc.bridge.place, sc.config.sumo_step, self._center_x)
         lanes = _opposite_lanes(sc.roads, sc.starts[sc.ego_name].edge)
         own = sc.lane_offset
         self._lanes_all = dict(own)
@@ -935,7 +935,7 @@ class StoryDriver:
                 along = start.front - 0.5 * sc.model.entities[name].vehicle.length
                 x, y = poly.offset_point(along, start.offset)
                 heading = poly.heading_at(along)
-            s, d, _ = road.project(x, y)
+            s, d, _ = road.project(x - cx * math.cos(heading), y - cx * math.sin(heading))  # its reference point
             direction = 1 if math.cos(heading - road.heading_at(s)) > 0.0 else -1
             self._kin.add(name, s, d, start.speed or 0.0, direction)
             sc.bridge.place(name, x, y, heading, start.speed or 0.0)
@@ -1218,9 +1218,11 @@ class StoryDriver:
         centre_line = 0.5 * (max(sc.lane_offset.values()) + self._lanes_all.get(len(sc.lanes), INF))
         if name not in self._kin and d_next > centre_line:
             # across the centre line into the other direction's lanes: ego drives it from here
-            s = self._lane_s(st.s)
+            # (its reference point)
+            cx = self._center_x[name]
+            s, d, _ = sc.road.project(st.x - cx * math.cos(st.yaw), st.y - cx * math.sin(st.yaw))
             ahead = math.cos(st.yaw - sc.road.heading_at(s)) > 0
-            self._kin.add(name, s, st.d, st.speed, 1 if ahead else -1)
+            self._kin.add(name, s, d, st.speed, 1 if ahead else -1)
         if name in self._kin:
             self._kin.lateral(name, d_next)  # its reference point on the profile
             return
@@ -1302,7 +1304,13 @@ class StoryDriver:
             return
         sc.bridge.place(name, x, y, heading, self.board.states[name].speed, keep_route=1)
         if name in self._kin:
-            self._kin.moved(name, *self.road_frame(x, y))
+            self._kin.moved(name, *self._ref_frame(name, x, y, heading))
+
+    def _ref_frame(self, name: str, x: float, y: float, heading: float) -> tuple[float, float]:
+        """The lane frame's (s, d) of the reference point of ``name``'s box centred at (x, y)."""
+        cx = self._center_x[name]
+        s, d, _ = self.sc.road.project(x - cx * math.cos(heading), y - cx * math.sin(heading))
+        return s, d
 
     def place(self, name: str, x: float, y: float, heading: float, speed: float) -> None:
         sc = self.sc
@@ -1310,7 +1318,7 @@ class StoryDriver:
         sc.bridge.set_speed(name, speed)  # SUMO's own speed too (it drives on from there)
         self._speed_cmd[name] = (speed, INF)
         if name in self._kin:
-            self._kin.moved(name, *self.road_frame(x, y))
+            self._kin.moved(name, *self._ref_frame(name, x, y, heading))
             self._kin.speed(name, speed)
 
     def route(self, name: str, waypoints: tuple[M.Position, ...]) -> None:

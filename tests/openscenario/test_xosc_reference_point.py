@@ -118,3 +118,24 @@ def test_a_lane_change_on_an_arc_moves_the_reference_point_on_the_closed_form(tm
     assert during[-1][1] == pytest.approx(end, abs=1e-6)  # on the target at the end
     assert max(abs(d - end) for t, d, _ in rows if t > profile.t0 + profile.duration) < 1e-3
     assert all(v == pytest.approx(15.0, abs=1e-6) for _, _, v in rows)
+
+
+@pytest.mark.sumo
+def test_a_lane_change_across_the_centre_line_and_back_keeps_the_reference_point_on_it(tmp_path, monkeypatch):
+    """test_xosc_against_lane.py's overtaking form with cars of center.x 1.4 m: A changes into
+    the oncoming lane (SUMO's car placed up to the centre line, then driven by ego as a car of
+    the other direction's lanes) and back: its reference point on both sinusoidal profiles."""
+    from test_xosc_against_lane import _lane_change, _scene
+
+    rows = _record(monkeypatch, "A")
+    evs = [
+        event("Out", "A", _lane_change(1), trigger([sim_time(0.95)])),
+        event("Back", "A", _lane_change(0), trigger([sim_time(3.95)])),
+    ]
+    path = _with_center(_scene(tmp_path, {"Ego": (-1, 30.0, 20.0, False), "A": (-1, 120.0, 25.0, False)}, evs))
+    sc = run_scene(path, 6.5)
+    assert sc.status == "completed"
+    out, back = Transition(1.0, 0.0, 3.5, 2.0, "sinusoidal"), Transition(4.0, 3.5, 0.0, 2.0, "sinusoidal")
+    worst = max(abs(d - (out.value(t) if t <= 4.0 else back.value(t))) for t, d, _ in rows)
+    assert worst < 1e-6, worst
+    assert all(v == pytest.approx(25.0, abs=1e-6) for t, _, v in rows)
