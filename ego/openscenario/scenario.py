@@ -18,7 +18,7 @@ a declared parameter with the name of an ego parameter (``traffic_density``, ``d
 The scenario is emergency-brake's composition configured by the file: the motorway world
 (:class:`~ego.scenarios.motorway.MotorwayWorld`) given the file's road (its edge, route and
 lanes) and populated with the file's entities (:class:`ScriptedEntity`, commanded by the
-storyboard before every simulator step), the surround view, the plant, the evasive
+storyboard after every simulator step, before the ego plans from its time), the surround view, the plant, the evasive
 manoeuvre whose cruise references the storyboard moves (:class:`FileManoeuvre`) and the
 safety layer.
 """
@@ -696,16 +696,16 @@ class FileScenario(Scenario):
 
 class StoryDriver:
     """The storyboard's :class:`~ego.openscenario.runtime.Driver` in a file scenario's run:
-    the file's entities as SUMO vehicles (the world's traffic), the storyboard stepped before
-    every simulator step on the entities' states (box centres, road frame, distance
-    travelled), its actions applied to SUMO's cars and to the ego's cruise references, and the
+    the file's entities as SUMO vehicles (the world's traffic), the storyboard stepped after
+    every simulator step (:meth:`step`) on the entities' states (box centres, road frame,
+    reference points, distance travelled), its actions applied to SUMO's cars and to the ego's cruise references, and the
     run's end when an entity leaves the network or the ego its road. ``sc`` is the
     :class:`FileScenario` (its parts, the simulator, the clock)."""
 
     def __init__(self, sc: FileScenario) -> None:
         self.sc = sc
         self.board: Storyboard | None = None
-        #: the scripted entities' (t, speed, d of the front) history, for the tests and the
+        #: the scripted entities' (t, speed, d of the reference point) history, for the tests and the
         #: braking criterion
         self.history: dict[str, list[tuple[float, float, float]]] = {}
         #: the ego lane frame's s -> the storyboard's s along the reference line, and back
@@ -1048,7 +1048,7 @@ class StoryDriver:
     def _observe(self, t: float) -> None:
         """Every entity's state at storyboard time ``t`` for the conditions: box centres, the
         road frame, the distance travelled (summed from the centres' moves); the scripted
-        entities' (t, speed, d) history for the tests and the braking criterion."""
+        entities' (t, speed, d of the reference point) history for the tests and the braking criterion."""
         sc = self.sc
         states = self.board.states
         # the ego as of time t, as SUMO's cars are (the storyboard steps at t, after SUMO's step to t)
