@@ -788,6 +788,8 @@ class StoryDriver:
                 vt,
                 ScriptedEntity(name, own),
             )
+            if own is not None:  # its Init speed, set from the first step
+                self._speed_cmd[name] = (own, INF)
 
     def _insert_at(self, name: str) -> float:
         """Where SUMO inserts ``name`` (its front along its lane, m): its start, unless it starts
@@ -1289,6 +1291,7 @@ class StoryDriver:
         ls.vehicle.moveToXY(name, lane.edge, lane.index, hx, hy, (90.0 - math.degrees(heading)) % 360.0, 2)
         sc.bridge.keep_lane(name)
         ls.vehicle.setSpeed(name, speed)
+        self._speed_cmd[name] = (speed, INF)
         board.absent.discard(name)
         self._scripted.append(name)
         st = board.states[name]
