@@ -364,7 +364,10 @@ class LaneOffset(ActionKind):
     }
     note = (
         "absolute and relative targets; the duration from `maxLateralAcc`: cubic sqrt(6 D / a), sinusoidal pi "
-        "sqrt(D / (2 a)), linear 2 sqrt(D / a)"
+        "sqrt(D / (2 a)), linear 2 sqrt(D / a); the entity's reference point on the closed form as a lane "
+        "change's (`test_xosc_reference_point.py`); an offset that leaves the car's centre far beyond the road's "
+        "outer edge does not stay there once the action ends: SUMO pulls the car back (on straight3 a 1.8 m wide "
+        "car offset 3 m right of the right lane's centre ends 2.21 m right of it; 2 m stays)"
     )
 
     def build(self, b: Any, node: Node) -> M.LaneOffsetAction:
