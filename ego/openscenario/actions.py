@@ -276,20 +276,23 @@ class Speed(ActionKind):
 def _lateral_start(run: ActionRun, t: float, target: float, T: float, shape: str) -> None:
     """Start a lateral profile (lane change, lane offset) from where the actor is to ``target``."""
     drv, me = run.board.driver, run.board.states[run.actor]
-    start = drv.ego_references()[1] if run.is_ego else me.d_front
+    start = drv.ego_references()[1] if run.is_ego else me.d_ref
     run.profile = Transition(t, start, target, T, shape)
     if run.is_ego:  # the ego's controller follows the profile; the action ends with it
         drv.ego_lateral(run.profile)
 
 
 def _lateral_step(kind: ActionKind, run: ActionRun, t: float) -> None:
-    """Move the actor along its lateral profile for [t, t + step] (SUMO's sublane model): the
+    """Move the actor's reference point along its lateral profile for [t, t + step] (the driver
+    places it there, turned to the profile's slope; straight along its lane at the end): the
     ``step`` of a lane change and of a lane offset."""
     drv, p = run.board.driver, run.profile
     if p is None:  # not started (its target lane does not exist)
         return
     if not run.is_ego:
-        drv.lateral(run.actor, p.value(t + run.board.h), p.peak_rate)
+        h = run.board.h
+        # at the profile's end the car is straight along its lane (its rate there is 0)
+        drv.lateral(run.actor, p.value(t + h), p.peak_rate, 0.0 if p.done(t + h) else p.rate(t + h))
     if p.done(t + run.board.h) and not getattr(run.action, "continuous", False):
         run.finished = True
         if not run.is_ego:
@@ -315,15 +318,21 @@ class LaneChange(ActionKind):
         "left in the reference entity's driving direction), `targetLaneOffset`; shapes over time, distance (distance at "
         "the speed at the start) or rate (the peak lateral speed in m/s, as the ALKS files' `MaxLateralVelocity`: "
         "T = k \\|D\\| / rate, k = 1 linear, 3/2 cubic, pi/2 sinusoidal, D from where the entity is to the target); "
-        "moved through SUMO's sublane model step by step as cut-in's car (blind to others while moving); a step "
-        "is one placement; a scripted car changing across the centre line into the other direction's lanes "
-        "(the reference player's `acc-test.xosc` overtaking, `RelativeTargetLane` +1 from a one-lane "
-        "direction) is driven by ego from where it crosses (as a car turned against its lane, see the "
-        "positions' row: its reference point on the profile) and stays so; a `RelativeTargetLane` counts across "
+        "the entity's reference point (its box centre less the file's `center.x` along its heading) is on the "
+        "closed form at every SUMO step, measured from SUMO's own pose (front bumper, angle, length), within "
+        "1e-6 m in the ego's lane frame, on a straight road and on an arc, and ends on the target "
+        "(`test_xosc_reference_point.py`): ego places the SUMO car each step (moveToXY along its route: it stays "
+        "a vehicle on the lane its front is on, which the others follow and see) where its reference point is "
+        "after the step, moved along the lane frame at the speed commanded for the step and turned to the "
+        "profile's slope (atan of its lateral rate over its speed; along the lane at the end and for a step), "
+        "blind to others while moving as cut-in's car; afterwards SUMO drives it on at that lateral place (on "
+        "an arc its body's front and back on one offset of netconvert's polyline lane: within 1 mm of the "
+        "target on a 200 m arc, as SUMO's own cars keep their lane there); a scripted car changing across the "
+        "centre line into the other direction's lanes (the reference player's `acc-test.xosc` overtaking, "
+        "`RelativeTargetLane` +1 from a one-lane direction) is driven by ego from where it crosses (as a car "
+        "turned against its lane, see the positions' row: its box centre on the profile) and stays so; a `RelativeTargetLane` counts across "
         "the road's lanes of both directions (from the oncoming lane back right, as `light_state.xosc` does), and "
-        "one asking for more lanes beside its reference than the road has less one is refused before the run. **Known deviation (open, issue 39):** the profile moves SUMO's front bumper, not the "
-        "entity's reference point: SUMO turns the car from its front and back positions, so its box centre lags "
-        "the shape and reaches the target lane a few steps after the front"
+        "one asking for more lanes beside its reference than the road has less one is refused before the run"
     )
 
     def build(self, b: Any, node: Node) -> M.LaneChangeAction:
@@ -352,7 +361,7 @@ class LaneChange(ActionKind):
             run.finished = True
             return
         target = centre + a.target_offset
-        here = drv.ego_references()[1] if run.is_ego else me.d_front
+        here = drv.ego_references()[1] if run.is_ego else me.d_ref
         dyn = a.dynamics
         _lateral_start(
             run, t, target, lateral_duration(dyn.shape, dyn.dimension, dyn.value, me.speed, target - here), dyn.shape
@@ -374,7 +383,10 @@ class LaneOffset(ActionKind):
     }
     note = (
         "absolute and relative targets; the duration from `maxLateralAcc`: cubic sqrt(6 D / a), sinusoidal pi "
-        "sqrt(D / (2 a)), linear 2 sqrt(D / a)"
+        "sqrt(D / (2 a)), linear 2 sqrt(D / a); the entity's reference point on the closed form as a lane "
+        "change's (`test_xosc_reference_point.py`); an offset that leaves the car's centre far beyond the road's "
+        "outer edge does not stay there once the action ends: SUMO pulls the car back (on straight3 a 1.8 m wide "
+        "car offset 3 m right of the right lane's centre ends 2.21 m right of it; 2 m stays)"
     )
 
     def build(self, b: Any, node: Node) -> M.LaneOffsetAction:
@@ -399,7 +411,7 @@ class LaneOffset(ActionKind):
         drv, me = b.driver, b.states[run.actor]
         base = b.states[a.relative_to].d if a.relative_to is not None else drv.lane_centre_of(me.d)
         target = base + a.value
-        here = drv.ego_references()[1] if run.is_ego else me.d_front
+        here = drv.ego_references()[1] if run.is_ego else me.d_ref
         _lateral_start(run, t, target, offset_duration(a.shape, a.max_lateral_acc, target - here), a.shape)
 
     step = _lateral_step
@@ -519,7 +531,7 @@ class LateralDistance(ActionKind):
     domains, releases = ("lat",), True
     note = (
         "`distance` (left out: 0, the standard's default) across the road between the reference points (box "
-        "centres; the actor's as SUMO's sublane model moves it, its front's lateral position) or, with "
+        "centres less the file's `center.x` along their headings; the actor placed as a lane change's) or, with "
         "`freespace`, between the boxes (half widths subtracted); `displacement` leftToReferencedEntity, "
         "rightToReferencedEntity or any (the side the actor is on at the start; on the entity's line: left); "
         "`coordinateSystem` read as the road's (entity, lane, road: across the ego's start lane frame); the "
@@ -552,8 +564,8 @@ class LateralDistance(ActionKind):
         b, a = run.board, run.action
         me, ref = b.states[run.actor], b.states[a.entity]
         run.v = 0.0  # the actor's lateral speed as commanded (m/s, + left)
-        run.s0 = ref.d  # the entity's lateral position a step ago
-        run.t0 = a.side or (1.0 if me.d_front >= ref.d else -1.0)
+        run.s0 = ref.d_ref  # the entity's lateral position a step ago
+        run.t0 = a.side or (1.0 if me.d_ref >= ref.d_ref else -1.0)
 
     def step(self, run: ActionRun, t: float) -> None:
         """The lateral position at t + step: the entity's there (moving on at its last step's
@@ -563,9 +575,9 @@ class LateralDistance(ActionKind):
         h = b.h
         me, ref = b.states[run.actor], b.states[a.entity]
         extra = 0.5 * (me.width + ref.width) if a.freespace else 0.0
-        ref_next = 2.0 * ref.d - run.s0
-        run.s0 = ref.d
-        err = ref_next + run.t0 * (a.distance + extra) - me.d_front
+        ref_next = 2.0 * ref.d_ref - run.s0
+        run.s0 = ref.d_ref
+        err = ref_next + run.t0 * (a.distance + extra) - me.d_ref
         v = err / h
         if math.isfinite(a.max_decel):
             stop = a.max_decel
@@ -579,9 +591,13 @@ class LateralDistance(ActionKind):
         v = min(max(v, -a.max_speed), a.max_speed)
         run.v = v
         peak = a.max_speed if math.isfinite(a.max_speed) else 100.0 / h
-        b.driver.lateral(run.actor, me.d_front + v * h, peak)
-        gap = run.t0 * (me.d_front - ref.d) - extra
-        if not a.continuous and abs(gap - a.distance) < 0.01:
+        gap = run.t0 * (me.d_ref - ref.d_ref) - extra
+        ends = not a.continuous and abs(gap - a.distance) < 0.01
+        # unconstrained it is there after one step: a jump across; at its end SUMO drives it on
+        # from the last placement: either way the car along its lane
+        rate = v if math.isfinite(a.max_speed) and not ends else 0.0
+        b.driver.lateral(run.actor, me.d_ref + v * h, peak, rate)
+        if ends:
             run.finished = True
             b.driver.release(run.actor)
 

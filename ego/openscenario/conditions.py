@@ -202,8 +202,8 @@ class EndOfRoad(ConditionKind):
         "entity such a condition watches stops there (a SUMO stop at the route's end, braking at its "
         "`maxDeceleration`, so it stands at the end, as the reference player's entities stop at a road's end) "
         "instead of leaving the network; the ego: its front at the end of its start road, where its run "
-        "ends - the run ends one storyboard step later, so a condition on the ego with `duration` 0 fires "
-        "(and its event starts) first; a longer `duration` on the ego cannot hold (the ego does not stop at "
+        "ends - the run ends after the storyboard's step that sees it there, so a condition on the ego with "
+        "`duration` 0 fires (and its event starts) first, at the run's last time; a longer `duration` on the ego cannot hold (the ego does not stop at "
         "the road's end). Off road: the entity's box centre outside every driving lane of the network (more "
         "than half a lane width from the nearest lane's centre line)"
     )

@@ -51,6 +51,17 @@ def shape_value(shape: str, u: float) -> float:
     return 1.0  # step
 
 
+def shape_slope(shape: str, u: float) -> float:
+    """f'(u) of ``shape`` for u in (0, 1)."""
+    if shape == "linear":
+        return 1.0
+    if shape == "cubic":
+        return 6.0 * u * (1.0 - u)
+    if shape == "sinusoidal":
+        return 0.5 * math.pi * math.sin(math.pi * u)
+    return 0.0  # step
+
+
 @dataclass(frozen=True)
 class Transition:
     """``start`` at time ``t0`` to ``end`` at ``t0 + duration`` along ``shape``."""
@@ -69,6 +80,15 @@ class Transition:
 
     def done(self, t: float) -> bool:
         return t >= self.t0 + self.duration - 1e-9
+
+    def rate(self, t: float) -> float:
+        """d value / dt at ``t`` (0 before the start, after the end and for a step)."""
+        if self.duration <= 0.0 or self.shape == "step":
+            return 0.0
+        u = (t - self.t0) / self.duration
+        if not 0.0 < u < 1.0:
+            return 0.0
+        return (self.end - self.start) * shape_slope(self.shape, u) / self.duration
 
     @property
     def peak_rate(self) -> float:

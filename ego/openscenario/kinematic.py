@@ -6,7 +6,8 @@ reference player's ``<Orientation type="relative" h="3.14159"/>``: a car in the 
 driving the ego's way, or a wrong-way driver in the ego's lane), or when a lane change takes it
 across the centre line into a lane of the other direction (an overtaking car). From then on
 it keeps its speed and its lateral place in the frame exactly: the storyboard's speed and
-lateral profiles set them, step by step, and nothing else does (SUMO's car-following does not
+lateral profiles set them (its reference point's, the box centre less the file's ``center.x``
+along its heading), step by step, and nothing else does (SUMO's car-following does not
 apply: it neither brakes for others nor is slowed by them; the ego's sensor and the geometric
 collision check see it as any car)."""
 
@@ -19,8 +20,8 @@ from dataclasses import dataclass
 
 @dataclass
 class _Car:
-    s: float  #: box centre along the frame (m)
-    d: float  #: box centre across it (m, + left)
+    s: float  #: reference point along the frame (m)
+    d: float  #: reference point across it (m, + left)
     v: float  #: speed (m/s)
     direction: int  #: +1 along the frame's s, -1 against it
     d_next: float  #: where the lateral profile wants it after the step
@@ -28,10 +29,18 @@ class _Car:
 
 class Kinematic:
     """The cars ego drives itself on ``road`` (a lane frame: ``offset_point``, ``heading_at``,
-    ``length``), each placed by ``place(name, x, y, heading, speed)`` every ``step`` s."""
+    ``length``), each placed by ``place(name, x, y, heading, speed)`` (its box centre) every
+    ``step`` s; ``center_x``: each car's box centre ahead of its reference point (m)."""
 
-    def __init__(self, road, place: Callable[[str, float, float, float, float], None], step: float) -> None:
+    def __init__(
+        self,
+        road,
+        place: Callable[[str, float, float, float, float], None],
+        step: float,
+        center_x: dict[str, float] | None = None,
+    ) -> None:
         self.road, self._place, self.h = road, place, step
+        self.center_x = center_x or {}
         self.cars: dict[str, _Car] = {}
 
     def __contains__(self, name: object) -> bool:
@@ -52,7 +61,8 @@ class Kinematic:
         car.s, car.d, car.d_next = s, d, d
 
     def advance(self) -> None:
-        """Place every car where it is after the coming step (SUMO puts it there in the step)."""
+        """Place every car where it is after the coming step (SUMO puts it there in the step):
+        its reference point on its profiles, its box ``center_x`` ahead of it."""
         road = self.road
         for name, c in self.cars.items():
             ds = c.direction * c.v * self.h
@@ -60,7 +70,9 @@ class Kinematic:
             s1 = c.s + ds
             turn = math.atan2(dd, ds) if (ds or dd) else (0.0 if c.direction > 0 else math.pi)
             x, y = road.offset_point(s1, c.d_next)
-            self._place(name, x, y, road.heading_at(min(max(s1, 0.0), road.length)) + turn, c.v)
+            heading = road.heading_at(min(max(s1, 0.0), road.length)) + turn
+            cx = self.center_x.get(name, 0.0)
+            self._place(name, x + cx * math.cos(heading), y + cx * math.sin(heading), heading, c.v)
             c.s, c.d = s1, c.d_next
 
     def beyond(self) -> str | None:

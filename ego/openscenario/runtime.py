@@ -36,7 +36,8 @@ STANDBY, RUNNING, COMPLETE = "standby", "running", "complete"
 class EntityState:
     """An entity as the conditions see it: box centre (m), yaw (rad), speed (m/s), road frame
     (s along the reference lane, d + left of it, m), size (m), distance travelled (m) and the
-    front bumper's d (m: the point SUMO's sublane model moves sideways)."""
+    reference point's d (m: its box centre less the file's ``center.x`` along its heading, the
+    point lateral actions move)."""
 
     x: float = 0.0
     y: float = 0.0
@@ -47,7 +48,7 @@ class EntityState:
     length: float = 4.5
     width: float = 1.8
     traveled: float = 0.0
-    d_front: float = 0.0
+    d_ref: float = 0.0
     #: longitudinal and lateral (+ left) acceleration (m/s^2) over the last storyboard step
     #: (the change of speed, and speed times the change of heading), and the time (s) the
     #: entity has stood still (speed below 1 mm/s) up to now
@@ -87,7 +88,10 @@ class Driver(Protocol):
         """Whether ``name`` is moved sideways by a script (SUMO then takes a set speed at
         once, whatever its deceleration)."""
 
-    def lateral(self, name: str, d_next: float, peak_speed: float) -> None: ...
+    def lateral(self, name: str, d_next: float, peak_speed: float, rate: float = 0.0) -> None:
+        """``name``'s reference point at lateral position ``d_next`` after the coming step,
+        moving sideways at ``rate`` (m/s) there, on a profile of ``peak_speed`` (inf: a step)."""
+
     def teleport(self, name: str, x: float, y: float, heading: float) -> None: ...
     def place(self, name: str, x: float, y: float, heading: float, speed: float) -> None: ...
     def release(self, name: str) -> None: ...

@@ -18,7 +18,7 @@ a declared parameter with the name of an ego parameter (``traffic_density``, ``d
 The scenario is emergency-brake's composition configured by the file: the motorway world
 (:class:`~ego.scenarios.motorway.MotorwayWorld`) given the file's road (its edge, route and
 lanes) and populated with the file's entities (:class:`ScriptedEntity`, commanded by the
-storyboard before every simulator step), the surround view, the plant, the evasive
+storyboard after every simulator step, before the ego plans from its time), the surround view, the plant, the evasive
 manoeuvre whose cruise references the storyboard moves (:class:`FileManoeuvre`) and the
 safety layer.
 """
@@ -48,7 +48,7 @@ from ego.openscenario.kinematic import Kinematic
 from ego.openscenario.loader import declared_parameters, header_description, load, turned_message
 from ego.openscenario.registry import action_of
 from ego.openscenario.roads import RoadMap, network_file, refine_shape, road_of_edge
-from ego.openscenario.runtime import EntityState, Storyboard, boxes_overlap
+from ego.openscenario.runtime import STILL, EntityState, Storyboard, boxes_overlap
 from ego.openscenario.traffic import TrafficActions, sumo_type
 from ego.openscenario.xmltree import DOCS, ScenarioFileError
 from ego.params import ConfigError, param
@@ -714,11 +714,15 @@ class FileScenario(Scenario):
             self.event("controller", applied_event(info, self.config, os.fspath(self.file)))
         self.story.start()
 
-    def before_sim_step(self) -> None:
-        self.story.before_sim_step()
-
     def after_sim_step(self) -> None:
         self.story.after_sim_step()
+
+    def before_plan(self) -> None:
+        # the storyboard's step at every SUMO step's time (t = 0 too), before the ego's
+        # controller plans the period from t: an action started at t moves the ego's
+        # references from t on, as it moves SUMO's cars over the step from t
+        if self.k % self._per_sumo == 0 and self.status == "running":
+            self.story.step()
 
     # the storyboard as the tests read it
     @property
@@ -780,16 +784,16 @@ class FileScenario(Scenario):
 
 class StoryDriver:
     """The storyboard's :class:`~ego.openscenario.runtime.Driver` in a file scenario's run:
-    the file's entities as SUMO vehicles (the world's traffic), the storyboard stepped before
-    every simulator step on the entities' states (box centres, road frame, distance
-    travelled), its actions applied to SUMO's cars and to the ego's cruise references, and the
+    the file's entities as SUMO vehicles (the world's traffic), the storyboard stepped after
+    every simulator step (:meth:`step`) on the entities' states (box centres, road frame,
+    reference points, distance travelled), its actions applied to SUMO's cars and to the ego's cruise references, and the
     run's end when an entity leaves the network or the ego its road. ``sc`` is the
     :class:`FileScenario` (its parts, the simulator, the clock)."""
 
     def __init__(self, sc: FileScenario) -> None:
         self.sc = sc
         self.board: Storyboard | None = None
-        #: the scripted entities' (t, speed, d of the front) history, for the tests and the
+        #: the scripted entities' (t, speed, d of the reference point) history, for the tests and the
         #: braking criterion
         self.history: dict[str, list[tuple[float, float, float]]] = {}
         #: the ego lane frame's s -> the storyboard's s along the reference line, and back
@@ -823,6 +827,13 @@ class StoryDriver:
         self.history = {}
         self._limits: dict[str, tuple[float, float]] = {}
         self._lateral_free: set[str] = set()
+        #: the cars a lateral action moves this step: name -> (their reference point's d after
+        #: the step, its lateral rate there), placed after the storyboard's step
+        self._lateral_next: dict[str, tuple[float, float]] = {}
+        #: the speed last commanded to each car: (target, rate m/s^2; inf: reached in the step)
+        self._speed_cmd: dict[str, tuple[float, float]] = {}
+        #: each entity's bounding box centre ahead of its reference point (m, the file's center.x)
+        self._center_x = {n: e.vehicle.center_x for n, e in sc.model.entities.items()}
         self._routes: set[str] = set()
         self._types: dict[str, VehicleType] = {}
         #: (a vehicle?, id) -> its own decel and emergencyDecel (m/s^2), before a friction scale
@@ -869,6 +880,8 @@ class StoryDriver:
                 vt,
                 ScriptedEntity(name, own),
             )
+            if own is not None:  # its Init speed, set from the first step
+                self._speed_cmd[name] = (own, INF)
 
     def _insert_at(self, name: str) -> float:
         """Where SUMO inserts ``name`` (its front along its lane, m): its start, unless it starts
@@ -941,7 +954,6 @@ class StoryDriver:
         for name in self.board.watch_end:
             self._hold_at_end(name)
         self.history = {n: [] for n in sc.model.entities if n != sc.ego_name}
-        self._ego_then = self._ego_now()
         self._observe(-1.0)  # the start positions (no distance travelled)
         for hist in self.history.values():
             hist.clear()
@@ -976,7 +988,7 @@ class StoryDriver:
         their Init position; the lanes of the other direction beside the ego's in its frame."""
         sc = self.sc
         road = sc.road
-        self._kin = Kinematic(road, sc.bridge.place, sc.config.sumo_step)
+        self._kin = Kinematic(road, sc.bridge.place, sc.config.sumo_step, self._center_x)
         lanes = _opposite_lanes(sc.roads, sc.starts[sc.ego_name].edge)
         own = sc.lane_offset
         self._lanes_all = dict(own)
@@ -1036,7 +1048,7 @@ class StoryDriver:
                 along = start.front - 0.5 * sc.model.entities[name].vehicle.length
                 x, y = poly.offset_point(along, start.offset)
                 heading = poly.heading_at(along)
-            s, d, _ = road.project(x, y)
+            s, d, _ = road.project(x - cx * math.cos(heading), y - cx * math.sin(heading))  # its reference point
             direction = 1 if math.cos(heading - road.heading_at(s)) > 0.0 else -1
             self._kin.add(name, s, d, start.speed or 0.0, direction)
             sc.bridge.place(name, x, y, heading, start.speed or 0.0)
@@ -1154,12 +1166,11 @@ class StoryDriver:
     def _observe(self, t: float) -> None:
         """Every entity's state at storyboard time ``t`` for the conditions: box centres, the
         road frame, the distance travelled (summed from the centres' moves); the scripted
-        entities' (t, speed, d) history for the tests and the braking criterion."""
+        entities' (t, speed, d of the reference point) history for the tests and the braking criterion."""
         sc = self.sc
         states = self.board.states
-        # the ego as of time t, as SUMO's cars are: its state one SUMO step ago (the loop has
-        # integrated it to t + sumo_step by the time SUMO steps)
-        X, Y, psi, u, s_cg, d = self._ego_then
+        # the ego as of time t, as SUMO's cars are (the storyboard steps at t, after SUMO's step to t)
+        X, Y, psi, u, s_cg, d = self._ego_now()
         g = sc.geometry
         off = g.cg_to_front - 0.5 * g.length
         e = states[sc.ego_name]
@@ -1170,10 +1181,11 @@ class StoryDriver:
         e.speed = u
         to_road = self._road_s
         e.s, e.d = to_road(s_cg + off), d
-        e.d_front = d
+        e.d_ref = d
         project = sc.road.project
         box = sc.bridge.box
         history = self.history
+        center_x = self._center_x
         for name in self._scripted:
             st = states[name]
             bx, by, yaw, speed, _, _ = box(name)
@@ -1183,10 +1195,10 @@ class StoryDriver:
             # a car ego drives against its lane: its own speed (SUMO's reads its placement)
             st.speed = speed if name not in self._kin else self._kin.cars[name].v
             s, d, _ = project(bx, by)
-            half = 0.5 * st.length
+            cx = center_x[name]
             st.s, st.d = to_road(s), d
-            st.d_front = project(bx + half * math.cos(yaw), by + half * math.sin(yaw))[1]
-            history[name].append((t, st.speed, st.d_front))
+            st.d_ref = project(bx - cx * math.cos(yaw), by - cx * math.sin(yaw))[1] if cx else d
+            history[name].append((t, st.speed, st.d_ref))
         board = self.board
         if board.watch_end or board.watch_offroad:
             for name in board.watch_end | board.watch_offroad:
@@ -1198,16 +1210,19 @@ class StoryDriver:
         x = sc.ego.state
         return x[0], x[2], x[4], x[1], sc.s, sc.d_road
 
-    def before_sim_step(self) -> None:
-        """The storyboard's step, after the actors' updates before a simulator step."""
+    def step(self) -> None:
+        """The storyboard's step at time t = now, right after SUMO's step to t (the scripted
+        entities as SUMO has them at t, the ego as its plant is at t) and before the ego's
+        controller plans the period from t: its commands move SUMO's cars over SUMO's next
+        step (t to t + step) and the ego's references from t on."""
         sc = self.sc
         board = self.board
-        t = sc.t - sc.config.sumo_step
+        t = sc.t
         self._observe(t)
         board.step(t)
+        self._place_lateral()
         self._kin.advance()
         self._traffic.step()
-        self._ego_then = self._ego_now()  # what the next step's storyboard time sees
         if board.stopped and sc.status == "running":
             sc._end("completed", "the storyboard's StopTrigger ended the scenario")
         elif self._ego_end is not None and sc.status == "running":
@@ -1292,6 +1307,7 @@ class StoryDriver:
 
     def speed(self, name: str, v_next: float, peak_rate: float) -> None:
         sc = self.sc
+        self._speed_cmd[name] = (v_next, INF)  # reached in the step (at once, or within the raised limits)
         if name in self._kin:
             self._kin.speed(name, v_next)
             return
@@ -1312,39 +1328,65 @@ class StoryDriver:
 
     def speed_rate(self, name: str, target: float, rate: float) -> None:
         sc = self.sc
+        self._speed_cmd[name] = (target, rate)
         if target < self.board.states[name].speed:
             sc.bridge.set_decel(name, rate)
         else:
             sc.bridge.set_accel(name, rate)
         sc.bridge.set_speed(name, target)
 
-    def lateral(self, name: str, d_next: float, peak_speed: float) -> None:
+    def lateral(self, name: str, d_next: float, peak_speed: float, rate: float = 0.0) -> None:
         sc = self.sc
         st = self.board.states[name]
         if name not in self._kin and self._across(d_next):
             # across the centre line into the other direction's lanes: ego drives it from here
-            s = self._lane_s(st.s)
+            # (its reference point)
+            cx = self._center_x[name]
+            s, d, _ = sc.road.project(st.x - cx * math.cos(st.yaw), st.y - cx * math.sin(st.yaw))
             ahead = math.cos(st.yaw - sc.road.heading_at(s)) > 0
-            self._kin.add(name, s, st.d, st.speed, 1 if ahead else -1)
+            self._kin.add(name, s, d, st.speed, 1 if ahead else -1)
         if name in self._kin:
             self._kin.lateral(name, d_next)  # its reference point on the profile
             return
-        if not math.isfinite(peak_speed):
-            # a step: the sublane model moves a car at most a lane-width fraction a step, so
-            # the car is placed across at once (where it would be after the step)
-            h = sc.config.sumo_step
-            s = self._lane_s(st.s) + st.speed * h
-            x, y = sc.road.offset_point(s, d_next - (st.d_front - st.d))
-            sc.bridge.place(name, x, y, sc.road.heading_at(s), st.speed)
-            return
         if name not in self._lateral_free:
-            # as cut-in's car: SUMO's own limits on lateral motion and its speed loss while
-            # moving sideways must not shape the scripted profile
+            # as cut-in's car while it moves sideways: no lane changes of its own, a set speed
+            # is driven at once (the storyboard places it, :meth:`_place_lateral`)
             sc.bridge.drive_blind(name)
-            speed = 2.0 * peak_speed if math.isfinite(peak_speed) else 100.0 / sc.config.sumo_step
-            sc.bridge.free_lateral(name, max(10.0, speed))
             self._lateral_free.add(name)
-        sc.bridge.change_sublane(name, d_next - st.d_front)
+        # a step (no rate) is a jump across: the car stays turned along its lane
+        self._lateral_next[name] = (d_next, rate if math.isfinite(peak_speed) else 0.0)
+
+    def _place_lateral(self) -> None:
+        """Place every car a lateral action moves (after the storyboard's step, when every
+        action has commanded it) where it is after SUMO's coming step: its reference point
+        (its box centre less the file's ``center.x`` along its heading) at the profile's
+        lateral position in the ego's lane frame, moved along the frame by its speed over the
+        step (the speed commanded for the step, driven at once as SUMO does a set speed of a
+        car driving blind), turned to the profile's slope (its lateral rate over its speed)
+        from the frame's heading there. SUMO keeps it a vehicle on the lane its front is on
+        (moveToXY along its route): its followers see it there."""
+        todo = self._lateral_next
+        if not todo:
+            return
+        sc = self.sc
+        road, h, states, place = sc.road, sc.config.sumo_step, self.board.states, sc.bridge.place
+        for name, (d1, rate) in todo.items():
+            st = states[name]
+            cx = self._center_x[name]
+            s0, d0, _ = road.project(st.x - cx * math.cos(st.yaw), st.y - cx * math.sin(st.yaw))
+            target, dv = self._speed_cmd.get(name, (st.speed, INF))
+            v = target if dv == INF else st.speed + min(max(target - st.speed, -dv * h), dv * h)
+            v = max(v, 0.0)
+            # along the frame: a parallel curve at d is (1 - kappa d) times the frame's length
+            s1 = s0 + v * h / max(1.0 - road.curvature_at(s0) * d0, 1e-3)
+            # the frame's heading at the box centre (SUMO's body on a curve: its front and back
+            # on one lateral offset, so SUMO drives it on from there as placed), turned to the
+            # profile's slope
+            ahead = cx / max(1.0 - road.curvature_at(s1) * d1, 1e-3)
+            heading = road.heading_at(s1 + ahead) + (math.atan2(rate, v) if v > STILL else 0.0)
+            x, y = road.offset_point(s1, d1)
+            place(name, x + cx * math.cos(heading), y + cx * math.sin(heading), heading, v, keep_route=1)
+        todo.clear()
 
     def _enter(self, name: str, x: float, y: float, heading: float) -> None:
         """``name`` (no start so far) enters the simulation at (x, y) (its box centre), heading
@@ -1369,12 +1411,13 @@ class StoryDriver:
         ls.vehicle.moveToXY(name, lane.edge, lane.index, hx, hy, (90.0 - math.degrees(heading)) % 360.0, 2)
         sc.bridge.keep_lane(name)
         ls.vehicle.setSpeed(name, speed)
+        self._speed_cmd[name] = (speed, INF)
         board.absent.discard(name)
         self._scripted.append(name)
         st = board.states[name]
         st.x, st.y, st.yaw, st.speed = x, y, heading, speed
         st.s, st.d = self.road_frame(x, y)
-        st.d_front = st.d
+        st.d_ref = st.d
         board.log("action", f"t = {board.t:.2f} s: {name} enters the simulation")
 
     def teleport(self, name: str, x: float, y: float, heading: float) -> None:
@@ -1384,14 +1427,21 @@ class StoryDriver:
             return
         sc.bridge.place(name, x, y, heading, self.board.states[name].speed, keep_route=1)
         if name in self._kin:
-            self._kin.moved(name, *self.road_frame(x, y))
+            self._kin.moved(name, *self._ref_frame(name, x, y, heading))
+
+    def _ref_frame(self, name: str, x: float, y: float, heading: float) -> tuple[float, float]:
+        """The lane frame's (s, d) of the reference point of ``name``'s box centred at (x, y)."""
+        cx = self._center_x[name]
+        s, d, _ = self.sc.road.project(x - cx * math.cos(heading), y - cx * math.sin(heading))
+        return s, d
 
     def place(self, name: str, x: float, y: float, heading: float, speed: float) -> None:
         sc = self.sc
         sc.bridge.place(name, x, y, heading, speed)
         sc.bridge.set_speed(name, speed)  # SUMO's own speed too (it drives on from there)
+        self._speed_cmd[name] = (speed, INF)
         if name in self._kin:
-            self._kin.moved(name, *self.road_frame(x, y))
+            self._kin.moved(name, *self._ref_frame(name, x, y, heading))
             self._kin.speed(name, speed)
 
     def route(self, name: str, waypoints: tuple[M.Position, ...]) -> None:
@@ -1565,17 +1615,15 @@ class StoryDriver:
         e = board.states[sc.ego_name]
         e.x, e.y, e.yaw = X + off * math.cos(heading), Y + off * math.sin(heading), heading
         e.s, e.d = sc.s + off, sc.d_road
-        e.d_front = e.d
-        self._ego_then = self._ego_now()
+        e.d_ref = e.d
 
     # -- the ego's references ---------------------------------------------------------------
     def cruise_references(self, obs, t: float) -> None:
         """The cruise references moved by the storyboard's actions on the ego (called by
         :class:`FileManoeuvre` after emergency-brake's own references)."""
         sc = self.sc
-        # on the storyboard's clock: the storyboard at time t sees the ego as of t, so the
-        # reference at the ego's time t is the profile's value at t (an action started at t0
-        # reaches the ego's loop a SUMO step later, from where it is on the profile's time)
+        # on the storyboard's clock: the storyboard steps at t before this plan (the ego as of
+        # t), so an action started at t0 gives the reference its profile's value from t0 on
         t_board = t
         if self._ego_profile is not None:
             v = self._ego_profile.value(t_board)

@@ -76,14 +76,14 @@ def test_a_later_friction_scale_is_from_the_plants_own_not_compounded():
 def _spy_decels(monkeypatch) -> list:
     """(storyboard time, the ego plant's mu_max, A's SUMO decel and emergencyDecel) every step."""
     rows: list = []
-    inner = StoryDriver.before_sim_step
+    inner = StoryDriver.step
 
     def spy(self):
         inner(self)
         veh = self.sc.bridge.libsumo.vehicle
         rows.append((self.board.t, self.sc.ego.model.params.mu_max, veh.getDecel("A"), veh.getEmergencyDecel("A")))
 
-    monkeypatch.setattr(StoryDriver, "before_sim_step", spy)
+    monkeypatch.setattr(StoryDriver, "step", spy)
     return rows
 
 
@@ -178,14 +178,14 @@ def _stopping(tmp_path, monkeypatch, k: float) -> tuple[float, float]:
     """The ego at 20 m/s told to stop at storyboard time 1 s on a road of friction scale ``k``
     (its evasive manoeuvre and AEB off): its speed at 1 s and the distance to its stop."""
     rows: list = []
-    inner = StoryDriver.before_sim_step
+    inner = StoryDriver.step
 
     def spy(self):
         inner(self)
         e = self.board.states["Ego"]
         rows.append((self.board.t, e.speed, e.traveled))
 
-    monkeypatch.setattr(StoryDriver, "before_sim_step", spy)
+    monkeypatch.setattr(StoryDriver, "step", spy)
     (tmp_path / str(k)).mkdir()
     far = {"A": (-1, 1000.0, 25.0), "B": (-2, 1200.0, 15.0), "C": (-1, 1400.0, 15.0)}
     path = scene(tmp_path / str(k), [event("Stop", "Ego", speed(0), trigger([sim_time(1)]))], at=far)
@@ -201,10 +201,11 @@ def _stopping(tmp_path, monkeypatch, k: float) -> tuple[float, float]:
 @pytest.mark.parametrize("k", [1.0, 0.5])
 def test_the_egos_braking_distance_follows_the_road_friction(tmp_path, monkeypatch, k):
     """The ego's speed reference drops to 0 at 1 s: the controller brakes as hard as the tyres
-    carry (ABS), so from v0 it stops in v0 tau + v0^2 / (2 (0.7 k + 0.01) g), tau = 0.1 s (the
-    reference reaches the ego's loop one SUMO step later): 28.6 m (+2.0) on a dry road, 56.5 m
-    (+2.0) at k = 0.5, within 0.1 m."""
+    carry (ABS), so from v0 it stops in v0 tau + v0^2 / (2 (0.7 k + 0.01) g), tau = 0.01 s (the
+    step reference drops over the control period after 1 s: the storyboard steps at 1 s before
+    the ego plans from there): 28.6 m (+0.2) on a dry road, 56.5 m (+0.2) at k = 0.5, within
+    0.1 m."""
     v0, dist = _stopping(tmp_path, monkeypatch, k)
     g = NonlinearBicycleParams().g
-    closed = v0 * 0.1 + v0**2 / (2.0 * (0.7 * k + 0.01) * g)
+    closed = v0 * 0.01 + v0**2 / (2.0 * (0.7 * k + 0.01) * g)
     assert dist == pytest.approx(closed, abs=0.1)

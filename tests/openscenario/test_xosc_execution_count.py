@@ -21,8 +21,8 @@ def test_an_unlimited_count_runs_the_event_again_every_time_it_ends(tmp_path, ca
     sc = run_scene(_scene(tmp_path, -1), duration=2.0)
     times = starts(sc, "Again")
     # from t = 1.0 s to the end at 2.0 s: it ends the step after it starts and starts again
-    # the step after that, so every 0.2 s, as long as the run lasts
-    assert times == pytest.approx([1.0, 1.2, 1.4, 1.6, 1.8], abs=1e-9)
+    # the step after that, so every 0.2 s, as long as the run lasts (its last step at 2.0 s)
+    assert times == pytest.approx([1.0, 1.2, 1.4, 1.6, 1.8, 2.0], abs=1e-9)
     err = capsys.readouterr().err
     assert "maximumExecutionCount=-1 in <Event> (the schema allows >= 1): unlimited" in err
 

@@ -17,14 +17,14 @@ from ego.openscenario.xmltree import ScenarioFileError
 def _record(monkeypatch, name: str) -> list:
     """(storyboard time, state of ``name``: s, d, speed, at_end, offroad) every step."""
     rows: list = []
-    inner = StoryDriver.before_sim_step
+    inner = StoryDriver.step
 
     def spy(self):
         inner(self)
         e = self.board.states[name]
         rows.append((self.board.t, e.s, e.d, e.speed, e.at_end, e.offroad))
 
-    monkeypatch.setattr(StoryDriver, "before_sim_step", spy)
+    monkeypatch.setattr(StoryDriver, "step", spy)
     return rows
 
 
@@ -48,14 +48,17 @@ def test_an_entity_watched_at_its_road_end_stops_there_and_the_condition_counts(
 @pytest.mark.sumo
 def test_the_egos_road_end_is_seen_by_the_storyboard_before_the_run_ends(tmp_path):
     """The ego reaches the end of its road: its run ends there (ego drives its start road only),
-    one storyboard step after the step that sees it there, so an EndOfRoadCondition of
-    duration 0 on the ego starts its event first."""
+    after the storyboard's step that sees it there, so an EndOfRoadCondition of duration 0 on
+    the ego starts its event first, at the run's last time."""
     evs = [event("EgoEnd", "B", speed(10), trigger([entity("Ego", '<EndOfRoadCondition duration="0"/>')]))]
     sc = run_scene(scene(tmp_path, evs, at={"Ego": (-3, 2900.0, 20.0)}), 12.0)
     assert "the ego reached the end of its route" in sc.status_detail
     (t_event,) = starts(sc, "EgoEnd")
     t_end = float(sc.status_detail.split("at t = ")[1].split(" s")[0])
-    assert t_end == pytest.approx(t_event + 0.1)
+    assert t_end == pytest.approx(t_event)
+    texts = [e.text for e in sc.events]
+    started = next(i for i, x in enumerate(texts) if "event 'EgoEnd' starts" in x)
+    assert started < next(i for i, x in enumerate(texts) if x.startswith("run ends"))
 
 
 @pytest.mark.sumo
@@ -109,13 +112,13 @@ def test_a_car_hidden_from_sensors_is_not_the_egos_front_object_until_shown(tmp_
     player reads them) the ego has no front object from the next SUMO step on; shown again at
     2 s it is the front object again from the step after."""
     rows: list = []
-    inner = StoryDriver.before_sim_step
+    inner = StoryDriver.step
 
     def spy(self):
         inner(self)
         rows.append((self.board.t, self.sc.view.gap_front))
 
-    monkeypatch.setattr(StoryDriver, "before_sim_step", spy)
+    monkeypatch.setattr(StoryDriver, "step", spy)
     evs = [
         event("Hide", "C", _visibility('sensors="false"'), trigger([sim_time(1)])),
         event("Show", "C", _visibility('graphics="true" sensors="true" traffic="true"'), trigger([sim_time(2)])),

@@ -281,7 +281,7 @@ def test_storyboard_stop_trigger(tmp_path):
     stop = f"<StopTrigger><ConditionGroup>{sim_time(1.55)}</ConditionGroup></StopTrigger>"
     sc = run_scene(scene(tmp_path, [event("E", "A", speed(25), trigger([sim_time(0.0)]))], stop=stop), 5.0)
     assert sc.status == "completed" and "StopTrigger" in sc.status_detail
-    assert sc.t == pytest.approx(1.7)  # the step of storyboard time 1.6 (scenario time 1.7) ends it
+    assert sc.t == pytest.approx(1.6)  # the storyboard's step at 1.6 ends it, at 1.6 on the run's clock
 
 
 # -- dynamics: SUMO follows the closed-form profile ------------------------------------------------
@@ -423,8 +423,13 @@ def test_actions_on_the_ego_move_its_references(tmp_path):
     assert t[i, cols.index("speed_ref")] == pytest.approx(22.0, abs=1e-9)
     i = round(2.5 / 0.01)  # halfway across: 1.75 m short of the lane
     assert t[i, cols.index("d_ref")] == pytest.approx(-1.75, abs=1e-9)
-    for k in range(round(1.1 / 0.01), round(3.0 / 0.01), 7):  # on the linear profile at every row
-        assert t[k, cols.index("speed_ref")] == pytest.approx(20.0 + 2.0 * (times[k] - 1.0), abs=1e-9)
+    # on the linear profile at every row from the storyboard's step that starts it (1.0 s) on,
+    # the first SUMO step's rows included, and at 20 m/s before it
+    for k in range(round(0.9 / 0.01), round(3.0 / 0.01)):
+        assert t[k, cols.index("speed_ref")] == pytest.approx(20.0 + 2.0 * max(times[k] - 1.0, 0.0), abs=1e-9)
+    lateral = Transition(1.0, -3.5, 0.0, 3.0, "cubic")  # from the middle lane (its target) as the ego's lane's
+    for k in range(round(1.0 / 0.01), round(1.3 / 0.01)):
+        assert t[k, cols.index("d_ref")] == pytest.approx(lateral.value(times[k]), abs=1e-9)
 
 
 @pytest.mark.parametrize("who", ["Ego", "C"])
@@ -474,8 +479,8 @@ def test_a_start_off_the_lane_centre_is_taken_in_the_first_step(tmp_path):
 
 def test_the_storyboard_sees_the_ego_at_its_own_time_as_it_sees_sumos_cars(tmp_path):
     """At storyboard time t every entity is as of t: the ego's state there is the trace's row
-    at t (its model runs ahead of SUMO by a SUMO step by the time the storyboard steps; it was
-    seen there, 0.1 s early: 2 m at 20 m/s for a distance condition)."""
+    at t (the storyboard steps right after SUMO's step to t, when the ego's model is at t too;
+    a state a step off would be 2 m at 20 m/s for a distance condition)."""
     from ego.runner import RunSpec, build
 
     sc = build(RunSpec(str(scene(tmp_path, [])), "pid", overrides={"duration": 3.0}))
@@ -499,7 +504,8 @@ def test_the_storyboard_sees_the_ego_at_its_own_time_as_it_sees_sumos_cars(tmp_p
     off = g.cg_to_front - 0.5 * g.length
     sc.close()
     assert len(seen) > 20
-    for t, s, u in seen:
+    assert seen[-1][0] == pytest.approx(3.0)  # its last step at the run's end, past the trace's last row
+    for t, s, u in seen[:-1]:
         row = trace[round(t / sc.config.dt)]
         assert row[names.index("t")] == pytest.approx(t)
         assert s - off == pytest.approx(row[names.index("s")], abs=1e-9)
