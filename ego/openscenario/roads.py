@@ -739,12 +739,22 @@ class RoadMap:
 
     def route_points(self, route: list[tuple[str, int, tuple[str, ...]]]) -> list[tuple[float, float]]:
         """The centre line along a :meth:`lane_route`: its lanes' and internal lanes' points in
-        driving order, a point where one piece ends and the next starts taken once."""
+        driving order, a point where one piece ends and the next starts taken once.
+
+        Where the next piece starts a little behind the end of the one before (netconvert
+        ends a road's lane a few mm past where the next road's starts: soderleden.xodr's ramp,
+        road 1 into road 5, 6 mm), its points up to the join are left out: kept, they fold the
+        line back on itself, a segment pointing backwards whose two vertices turn the lane
+        by +-pi, and the frame's curvature there spikes (0.3 1/m over 0.25 m once refined)."""
         pts: list[tuple[float, float]] = []
         for e, i, via in route:
             for shape in (*(self.inner[v] for v in via), self.edges[e].lanes[i].shape):
+                joined = len(pts) < 2  # past the join: the piece's points are taken as they are
                 for p in shape:
                     if not pts or math.dist(pts[-1], p) > 1e-3:
+                        if not joined and _behind(pts[-2], pts[-1], p):
+                            continue
+                        joined = True
                         pts.append(p)
         return pts
 
@@ -798,6 +808,17 @@ class RoadMap:
         if best is None:
             raise ValueError("the road has no lanes")
         return best[0], best[1], best[2]
+
+
+#: m: how far a piece may start behind the end of the one before for its points there to be
+#: left out (:meth:`RoadMap.route_points`); netconvert's overlaps are millimetres
+OVERLAP = 0.5
+
+
+def _behind(a: tuple[float, float], b: tuple[float, float], p: tuple[float, float]) -> bool:
+    """Whether ``p`` lies within :data:`OVERLAP` of ``b`` and not ahead of it along ``a`` -> ``b``."""
+    dx, dy = p[0] - b[0], p[1] - b[1]
+    return dx * dx + dy * dy <= OVERLAP * OVERLAP and dx * (b[0] - a[0]) + dy * (b[1] - a[1]) <= 0.0
 
 
 def _direction(a: tuple[float, float], b: tuple[float, float]) -> float:
