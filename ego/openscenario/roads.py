@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ego.openscenario.lane_shapes import exact_lane_shapes
 from ego.openscenario.xmltree import ScenarioFileError
 
 #: m between the points netconvert samples an OpenDRIVE curve at
@@ -47,9 +48,10 @@ OPTIONS = (
 )
 
 
-#: the version of :func:`for_netconvert`'s copy, part of a converted road's cache key (a road
-#: converted before a change of the copy is converted again)
-COPY_VERSION = "copy 2"
+#: the version of :func:`for_netconvert`'s copy and of what is done to netconvert's network
+#: (:func:`ego.openscenario.lane_shapes.exact_lane_shapes`), part of a converted road's cache
+#: key (a road converted before a change of either is converted again)
+COPY_VERSION = "copy 3"
 
 
 def cache_dir() -> Path:
@@ -135,6 +137,7 @@ def network_file(road: Path) -> Path:
     except ScenarioFileError:
         tmp.unlink(missing_ok=True)
         raise
+    exact_lane_shapes(data, tmp)  # lanes beside one that opens or closes: on the road's own widths
     if not _edges(tmp):
         tmp.unlink(missing_ok=True)
         raise ScenarioFileError(
