@@ -17,7 +17,7 @@ import subprocess
 import xml.etree.ElementTree as ET
 
 import numpy as np
-from xosc_scenes import run_scene, sim_time, write_file
+from xosc_scenes import drive_alone
 
 from ego.lane_frame import LanePolyline
 from ego.openscenario.roads import RoadMap, refine_shape
@@ -106,10 +106,7 @@ def test_the_ego_drives_across_the_join_without_leaving_its_lane(tmp_path):
     """At 20 m/s from A at 40 m the ego crosses the join at t = 3 s and goes on into B; it
     stays within 2 cm of its lane centre there and the run reports no lane departure."""
     network(tmp_path)
-    path = write_file(tmp_path / "join.xosc", "r.net.xml", [("Ego", "A", -1, 40.0, 20.0, "")], [])
-    stop = f"<StopTrigger><ConditionGroup>{sim_time(5.0)}</ConditionGroup></StopTrigger>"
-    path.write_text(path.read_text().replace("</Story></Storyboard>", f"</Story>{stop}</Storyboard>"))
-    sc = run_scene(path, 6.0)
+    sc = drive_alone(tmp_path / "join.xosc", "r.net.xml", ("A", -1, 40.0, 20.0), 5.0, 6.0)
     result = sc.result()
     assert "StopTrigger" in sc.events[-1].text, sc.events[-1].text
     a = sc.trace.array(0)

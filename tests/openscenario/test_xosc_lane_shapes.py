@@ -17,7 +17,7 @@ import subprocess
 import xml.etree.ElementTree as ET
 
 import numpy as np
-from xosc_scenes import run_scene, sim_time, write_file
+from xosc_scenes import drive_alone
 
 from ego.openscenario.lane_shapes import ReferenceLine, exact_lane_shapes
 from ego.openscenario.roads import OPTIONS, RoadMap, network_file
@@ -91,10 +91,7 @@ def test_the_ego_keeps_its_lane_past_the_opening(tmp_path):
     """The ego at 20 m/s from s = 60 m drives past the opening (s = 100-150 m) on y = -1.75 m
     within 1 cm; no lane departure (before: its frame followed netconvert's steps)."""
     (tmp_path / "two_plus_one.xodr").write_text(two_plus_one())
-    path = write_file(tmp_path / "t.xosc", "two_plus_one.xodr", [("Ego", "1", -1, 60.0, 20.0, "")], [])
-    stop = f"<StopTrigger><ConditionGroup>{sim_time(7.0)}</ConditionGroup></StopTrigger>"
-    path.write_text(path.read_text().replace("</Story></Storyboard>", f"</Story>{stop}</Storyboard>"))
-    sc = run_scene(path, 8.0)
+    sc = drive_alone(tmp_path / "t.xosc", "two_plus_one.xodr", ("1", -1, 60.0, 20.0), 7.0, 8.0)
     assert "StopTrigger" in sc.events[-1].text, sc.events[-1].text
     a = sc.trace.array(0)
     x, y, d = (a[:, sc.trace.names.index(n)] for n in ("x", "y", "d"))
