@@ -1139,6 +1139,9 @@ class StoryDriver:
         s, d, _ = sc.road.project(x, y)
         return self._road_s(s), d
 
+    def road_heading(self, x: float, y: float) -> float:
+        return self.sc.road.project(x, y)[2]
+
     def lane_centre_of(self, d: float) -> float:
         sc = self.sc
         return min(sc.lane_offset.values(), key=lambda off: abs(d - off))
