@@ -705,14 +705,22 @@ class RoadMap:
         """The way lane ``index`` of ``edge`` drives on: (edge, lane index, the internal lanes
         from the one before) of its lane's successors, each edge once. Where the lane has
         connections to more than one edge, the straightest (the least heading change from the
-        lane's end to the next lane's start: the way on, as SUMO's ``dir="s"``); it ends at a
-        lane with no connection (a dead end) or one leading back onto the route (a loop)."""
+        lane's end to the next lane's start: the way on, as SUMO's ``dir="s"``). A lane that
+        ends with no connection (a merge lane, an on-ramp's once it has joined the motorway)
+        goes on by the nearest lane beside it on its edge that has one (the left first: where a
+        driver merges; :meth:`route_keys` numbers the lanes across that step); the route ends
+        where no lane of the edge goes on (a dead end) or at a lane leading back onto it (a loop)."""
         route = [(edge, index, ())]
         seen = {edge}
         while len(route) < limit:
             e, i, _ = route[-1]
-            here = self.edges[e].lanes[i].shape
-            links = [k for k in self.links.get((e, i), ()) if k.to not in seen and k.to in self.edges]
+            n = len(self.edges[e].lanes)
+            links: list[Link] = []
+            for j in sorted(range(n), key=lambda j: (abs(j - i), j < i)):
+                links = [k for k in self.links.get((e, j), ()) if k.to not in seen and k.to in self.edges]
+                if links:
+                    break
+            here = self.edges[e].lanes[j].shape if links else ()
             if not links or len(here) < 2:
                 break
             out = _direction(here[-2], here[-1])
@@ -720,6 +728,26 @@ class RoadMap:
             route.append((best.to, best.to_lane, best.via))
             seen.add(best.to)
         return route
+
+    def route_keys(self, route: list[tuple[str, int, tuple[str, ...]]], key: int) -> list[int]:
+        """The number of the route's lane on each of its edges in a numbering of lanes across the
+        route that starts with ``key`` for its first lane and counts lanes from the right (SUMO's
+        index): the same number on every edge for a lane that goes on, one more past a step to
+        the lane on the left (:meth:`lane_route` past a lane that ends)."""
+        keys = [key]
+        for (e, i, _), (nxt, to_lane, _) in zip(route, route[1:]):
+            step = 0
+            if not any(k.to == nxt and k.to_lane == to_lane for k in self.links.get((e, i), ())):
+                step = next(
+                    (
+                        j - i
+                        for j in range(len(self.edges[e].lanes))
+                        if any(k.to == nxt and k.to_lane == to_lane for k in self.links.get((e, j), ()))
+                    ),
+                    0,
+                )
+            keys.append(keys[-1] + step)
+        return keys
 
     def _heading_in(self, link: Link) -> float:
         """The direction (rad) a connection starts in: its first internal lane's, else its lane's."""
@@ -731,6 +759,23 @@ class RoadMap:
     ) -> list[tuple[str, int, tuple[str, ...]]]:
         """Lane ``index`` of the route's first edge along the same edges as ``route`` (a
         :meth:`lane_route`), as far as its lane connects to the next of them."""
+        return self._along(route, index)
+
+    def beside_from(
+        self, route: list[tuple[str, int, tuple[str, ...]]], keys: list[int], key: int
+    ) -> list[tuple[str, int, tuple[str, ...]]]:
+        """Lane ``key`` of the route's lane numbering (:meth:`route_keys`: ``keys``), from the
+        first of the route's edges that has it (a lane that begins after a merge: the
+        motorway's lanes beside an on-ramp's), along the same edges as far as its lane connects
+        to the next of them; empty when no edge of the route has it."""
+        for j, ((e, i, _), r) in enumerate(zip(route, keys)):
+            if 0 <= i + key - r < len(self.edges[e].lanes):
+                return self._along(route[j:], i + key - r)
+        return []
+
+    def _along(
+        self, route: list[tuple[str, int, tuple[str, ...]]], index: int
+    ) -> list[tuple[str, int, tuple[str, ...]]]:
         out = [(route[0][0], index, ())]
         for nxt, _, _ in route[1:]:
             e, i, _ = out[-1]

@@ -147,7 +147,9 @@ class MotorwayWorld:
     (:mod:`ego.openscenario`) gives its own ``edge`` (the ego's), the ``route`` id and its
     ``route_edges``, the number of lanes, ``refine`` (lane points -> the points the lane
     frame is built on) and ``lane_points`` (a lane's index -> its centre line along the
-    route, across the road's links: the lane frame of a route of many roads)."""
+    route, across the road's links: the lane frame of a route of many roads) and ``later_lanes``
+    (index -> width of the lanes beside the ego's that begin on a later road of its route:
+    their centre lines from ``lane_points`` too)."""
 
     def __init__(
         self,
@@ -161,6 +163,7 @@ class MotorwayWorld:
         n_lanes: int = N_LANES,
         refine: Callable[[list[tuple[float, float]]], list[tuple[float, float]]] | None = None,
         lane_points: Callable[[int], list[tuple[float, float]]] | None = None,
+        later_lanes: dict[int, float] | None = None,
     ) -> None:
         self.config = config
         self.geometry = geometry
@@ -168,6 +171,7 @@ class MotorwayWorld:
         self.edge, self.route, self.route_edges, self.n_lanes = edge, route, route_edges, n_lanes
         self.refine = refine
         self.lane_points = lane_points
+        self.later_lanes = later_lanes or {}
         self.sim: TrafficSim | None = None
         self.actors: list[ScriptedActor] = []
         self.colors: dict[str, tuple[int, int, int]] = {}
@@ -272,6 +276,11 @@ class MotorwayWorld:
             elif edge == self.edge:
                 pts = join_lanes([shapes[f"{e}_{index}"][1] for e in chain]) if len(chain) > 1 else pts
                 self.lanes[int(index)] = LanePolyline(refine(pts) if refine else pts, width, lid)
+        if self.lane_points is not None:
+            for later, later_width in self.later_lanes.items():
+                pts = self.lane_points(later)
+                if len(pts) >= 2:
+                    self.lanes[later] = LanePolyline(refine(pts) if refine else pts, later_width, f"later_{later}")
         return missing
 
     def lane_frame(self) -> Callable[[float, float], tuple[float, float, float]] | None:
