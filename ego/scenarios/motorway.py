@@ -350,6 +350,7 @@ class SurroundView(RoadSensor):
         #: vehicles the surround sensor does not see (they still collide)
         self.hidden: set[str] = set()
         self.lane_offset: dict[int, float] = {}
+        self.lane_from: dict[int, float] = {}
         self.target_lane = 0
         self.agent_lane_change = False
         self.ttc_front = self.ttc_rear = INF
@@ -372,6 +373,9 @@ class SurroundView(RoadSensor):
         self.lanes = lanes
         self.road = road = lanes[c.ego_lane]
         self.lane_offset = {i: road.project(*lane.points[0])[1] for i, lane in lanes.items()}
+        #: m along the frame where each lane begins: 0 for the start road's, later for a lane
+        #: that begins after a merge (a scenario file's route: no lane to change into before)
+        self.lane_from = {i: max(0.0, road.project(*lane.points[0])[0]) for i, lane in lanes.items()}
         outer = [abs(off) + 0.5 * lanes[i].width for i, off in self.lane_offset.items()]
         # beyond the outer lane edge by more than half a car: off the road
         self.road_halfwidth = max(outer) + 0.5 * g.width + 0.5
