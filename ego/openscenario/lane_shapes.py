@@ -194,9 +194,10 @@ class Road:
     def section(self, s: float) -> Section:
         return next((x for x in reversed(self.sections) if x.s <= s + 1e-9), self.sections[0])
 
-    def centre(self, lane: int, s: float) -> tuple[float, float]:
-        """The OpenDRIVE centre of ``lane`` at road s (x, y)."""
-        widths = self.section(s).widths
+    def centre(self, lane: int, s: float, section: Section | None = None) -> tuple[float, float]:
+        """The OpenDRIVE centre of ``lane`` at road s (x, y), with the widths of ``section``
+        (default: the lane section at s; a lane's own, for its points up to the section's end)."""
+        widths = (section or self.section(s)).widths
         inner = sum(_value(w, s) for j, w in widths.items() if (j < 0) == (lane < 0) and abs(j) < abs(lane))
         t = _value(self.offset, s) + math.copysign(inner + 0.5 * _value(widths.get(lane, []), s), lane)
         x, y, h = self.ref.pose(s)
@@ -264,7 +265,8 @@ def exact_lane_shapes(xodr: bytes, net: Path) -> bool:
                 continue
             a, b = road.ref.s_of(*old[0]), road.ref.s_of(*old[-1])
             n = max(1, math.ceil(abs(b - a) / STEP))
-            new = [road.centre(int(lid), a + (b - a) * k / n) for k in range(n + 1)]
+            own = road.section(0.5 * (a + b))  # its ends may project a hair into the next section
+            new = [road.centre(int(lid), a + (b - a) * k / n, own) for k in range(n + 1)]
             moved.append(Moved(rid, int(lid), old[0], old[-1], new[0], new[-1]))
             lane.set("shape", _text(new))
     if not moved:

@@ -51,7 +51,7 @@ OPTIONS = (
 #: the version of :func:`for_netconvert`'s copy and of what is done to netconvert's network
 #: (:func:`ego.openscenario.lane_shapes.exact_lane_shapes`), part of a converted road's cache
 #: key (a road converted before a change of either is converted again)
-COPY_VERSION = "copy 3"
+COPY_VERSION = "copy 4"
 
 
 def cache_dir() -> Path:
