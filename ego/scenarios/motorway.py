@@ -351,6 +351,7 @@ class SurroundView(RoadSensor):
         self.hidden: set[str] = set()
         self.lane_offset: dict[int, float] = {}
         self.lane_from: dict[int, float] = {}
+        self._wider: list[tuple[float, float]] = []
         self.target_lane = 0
         self.agent_lane_change = False
         self.ttc_front = self.ttc_rear = INF
@@ -375,10 +376,13 @@ class SurroundView(RoadSensor):
         self.lane_offset = {i: road.project(*lane.points[0])[1] for i, lane in lanes.items()}
         #: m along the frame where each lane begins: 0 for the start road's, later for a lane
         #: that begins after a merge (a scenario file's route: no lane to change into before)
-        self.lane_from = {i: max(0.0, road.project(*lane.points[0])[0]) for i, lane in lanes.items()}
-        outer = [abs(off) + 0.5 * lanes[i].width for i, off in self.lane_offset.items()]
-        # beyond the outer lane edge by more than half a car: off the road
-        self.road_halfwidth = max(outer) + 0.5 * g.width + 0.5
+        starts = {i: road.project(*lane.points[0])[0] for i, lane in lanes.items()}
+        self.lane_from = {i: s if s > 1.0 else 0.0 for i, s in starts.items()}  # within 1 m: at the start
+        outer = {i: abs(off) + 0.5 * lanes[i].width + 0.5 * g.width + 0.5 for i, off in self.lane_offset.items()}
+        # beyond the outer lane edge by more than half a car: off the road; a lane that begins
+        # farther on (after a merge) widens the road from there (diverged)
+        self.road_halfwidth = max(v for i, v in outer.items() if self.lane_from[i] <= 0.0)
+        self._wider = sorted((self.lane_from[i], v) for i, v in outer.items() if self.lane_from[i] > 0.0)
         self.target_lane = c.ego_lane
         self.agent_lane_change = False
         self.ttc_front = self.ttc_rear = INF
@@ -395,6 +399,12 @@ class SurroundView(RoadSensor):
         if sim is not None:
             # one subscription for the sensor and the traffic log, as far as either looks
             sim.subscribe_surroundings(EGO, max(c.sensor_range, LOG_REACH))
+
+    def diverged(self) -> str | None:
+        wider = self._wider
+        while wider and self.s >= wider[0][0]:
+            self.road_halfwidth = max(self.road_halfwidth, wider.pop(0)[1])
+        return super().diverged()
 
     def sense(self, t: float) -> None:
         """The surround sensor's view at a simulator step."""
