@@ -295,14 +295,20 @@ class LaneChange(ActionKind):
         "RelativeTargetLane": (),
     }
     note = (
-        "`AbsoluteTargetLane`, `RelativeTargetLane`, `targetLaneOffset`; shapes over time, distance (distance at "
+        "`AbsoluteTargetLane` (the lane of that OpenDRIVE id, by the ids netconvert keeps: until the issue-39-lht "
+        "branch it was counted from the centre line, so past a border lane netconvert leaves out, as "
+        "`e6mini.xodr`'s lanes -1 and +1, it went one lane too far out: esmini's `follow_ghost.xosc` ego "
+        "changed to lane -4 instead of -2 and back; `test_xosc_left_hand.py`), `RelativeTargetLane` (+ to the "
+        "left in the reference entity's driving direction), `targetLaneOffset`; shapes over time, distance (distance at "
         "the speed at the start) or rate (the peak lateral speed in m/s, as the ALKS files' `MaxLateralVelocity`: "
         "T = k \\|D\\| / rate, k = 1 linear, 3/2 cubic, pi/2 sinusoidal, D from where the entity is to the target); "
         "moved through SUMO's sublane model step by step as cut-in's car (blind to others while moving); a step "
         "is one placement; a scripted car changing across the centre line into the other direction's lanes "
         "(the reference player's `acc-test.xosc` overtaking, `RelativeTargetLane` +1 from a one-lane "
         "direction) is driven by ego from where it crosses (as a car turned against its lane, see the "
-        "positions' row: its reference point on the profile) and stays so. **Known deviation (open, issue 39):** the profile moves SUMO's front bumper, not the "
+        "positions' row: its reference point on the profile) and stays so; a `RelativeTargetLane` counts across "
+        "the road's lanes of both directions (from the oncoming lane back right, as `light_state.xosc` does), and "
+        "one asking for more lanes beside its reference than the road has less one is refused before the run. **Known deviation (open, issue 39):** the profile moves SUMO's front bumper, not the "
         "entity's reference point: SUMO turns the car from its front and back positions, so its box centre lags "
         "the shape and reaches the target lane a few steps after the front"
     )

@@ -666,6 +666,19 @@ class _Builder:
                 return None
             return _Builder(file, values).body(v, name)
         names = [v.attrs.get("name", "?") for v in cat.children]
+        if kinds == ("Controller",):
+            # ego's semantics do not depend on a controller entry (the ego is driven by -c's
+            # controller, the others by SUMO's driver or their script): a warning, where the
+            # reference player stops (its examples name entries no version of its catalog has)
+            assigns = node.child("ParameterAssignments")
+            for a in assigns.all("ParameterAssignment") if assigns is not None else ():
+                self.raw(a, "value")  # the assigned values are still the scenario's to resolve
+            files.warn(
+                f"{self.path}:{node.line}: no entry {entry!r} in catalog {catalog!r} ({file}; entries: "
+                f"{', '.join(names)}): the controller is left out (ego drives the ego with its own controller, "
+                f"SUMO the others; see {DOCS})"
+            )
+            return None
         raise self.error(node, f"no entry {entry!r} in catalog {catalog!r} (entries: {', '.join(names)})")
 
     def controller(self, node: Node) -> dict[str, str]:
@@ -677,7 +690,9 @@ class _Builder:
         if c.tag == "CatalogReference":
             self.maneuver_entry = None
             self.catalog_entry(c, ("Controller",), "")
-            file, c, values = self.maneuver_entry  # type: ignore[misc]
+            if self.maneuver_entry is None:  # an entry missing from its catalog: left out with a warning
+                return {"<name>": self.str_(c, "entryName")}
+            file, c, values = self.maneuver_entry
             b = _Builder(file, values)
         else:
             b = self

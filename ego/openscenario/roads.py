@@ -83,9 +83,12 @@ def _bounded() -> None:  # pragma: no cover - runs in the child before exec
         pass
 
 
-def network_file(road: Path) -> Path:
+def network_file(road: Path, turned: frozenset[str] = frozenset()) -> Path:
     """The SUMO network of ``road``: a ``.net.xml`` itself, an ``.xodr`` converted (cached).
-    A failed conversion is one line naming the file and netconvert's first error."""
+    A failed conversion is one line naming the file and netconvert's first error. The edges of
+    its left-hand roads (``rule="LHT"``) and of the roads ``turned`` (a file's ego headed
+    against its right-hand lane: the road read as left-hand traffic) are turned round
+    (:func:`left_hand`)."""
     if str(road).endswith(".net.xml"):
         return road
     from ego.checks import MAX_ROAD_BYTES, read_limited
@@ -93,10 +96,11 @@ def network_file(road: Path) -> Path:
 
     data = read_limited(road, "road file", MAX_ROAD_BYTES)
     check_lane_widths(road, data)
-    check_traffic_rule(road, data)
+    lht = left_hand_roads(road, data) | turned
 
     exe = sumo_binary("netconvert")
-    key = hashlib.sha256(data + "\0".join((*OPTIONS, COPY_VERSION)).encode() + str(exe).encode()).hexdigest()[:24]
+    what = (*OPTIONS, COPY_VERSION, *(("lefthand", *sorted(lht)) if lht else ()))
+    key = hashlib.sha256(data + "\0".join(what).encode() + str(exe).encode()).hexdigest()[:24]
     out = cache_dir() / f"{key}.net.xml"
     if out.is_file():
         return out
@@ -143,6 +147,12 @@ def network_file(road: Path) -> Path:
         raise ScenarioFileError(
             road, None, "netconvert made no drivable lane of this OpenDRIVE file (no lane of type driving?)"
         )
+    if lht:
+        try:
+            left_hand(road, tmp, lht)
+        except ScenarioFileError:
+            tmp.unlink(missing_ok=True)
+            raise
     os.replace(tmp, out)
     return out
 
@@ -184,23 +194,99 @@ def check_lane_widths(road: Path, data: bytes) -> None:
 
 _ROAD_TAG = re.compile(rb"<road\b[^>]*>")
 _RULE = re.compile(rb"""\srule\s*=\s*(["'])(.*?)\1""")
+_ROAD_ID = re.compile(rb"""\sid\s*=\s*(["'])(.*?)\1""")
 
 
-def check_traffic_rule(road: Path, data: bytes) -> None:
-    """Every road right-hand traffic (OpenDRIVE's ``rule``, default ``RHT``): netconvert reads
-    each road as right-hand (lanes ``-k`` along the reference line), and so does ego's lane
-    model. A left-hand road (``rule="LHT"``: lanes ``+k`` along it) would be driven the wrong
-    way, so it is refused: ScenarioFileError naming its line."""
+def left_hand_roads(road: Path, data: bytes) -> frozenset[str]:
+    """The ids of the roads of left-hand traffic (OpenDRIVE's ``rule="LHT"``; default ``RHT``:
+    lanes ``+k`` driven along the reference line). Another rule is refused: ScenarioFileError
+    naming its road's line."""
+    out = set()
     for tag in _ROAD_TAG.finditer(data):
         rule = _RULE.search(tag.group(0))
-        if rule and rule.group(2).strip().upper() != b"RHT":
+        value = rule.group(2).strip().upper() if rule else b"RHT"
+        if value == b"LHT":
+            rid = _ROAD_ID.search(tag.group(0))
+            out.add(rid.group(2).decode(errors="replace") if rid else "")
+        elif value != b"RHT":
             line = data.count(b"\n", 0, tag.start()) + 1
             raise ScenarioFileError(
                 road,
                 line,
-                f'<road rule="{rule.group(2).decode(errors="replace")}"> (left-hand traffic) is not supported by '
-                "ego: its roads are right-hand traffic (RHT, OpenDRIVE's default)",
+                f'<road rule="{rule.group(2).decode(errors="replace")}"> is not a traffic rule '  # type: ignore[union-attr]
+                "(allowed: RHT, LHT)",
             )
+    return frozenset(out)
+
+
+def road_of_edge(edge: str) -> str:
+    """The OpenDRIVE road of a converted edge (``-r``, ``r``, ``-r.S``, ``r#1`` ...)."""
+    return edge.removeprefix("-").partition("#")[0].partition(".")[0]
+
+
+#: the edge parameter marking an edge turned round for left-hand traffic (:func:`left_hand`)
+LEFT_HAND = "ego.lefthand"
+
+
+def left_hand(road: Path, net: Path, roads: frozenset[str]) -> None:
+    """Turn round in ``net`` (netconvert's right-hand conversion of ``road``) every edge of the
+    ``roads`` driven left-hand: netconvert reads every road right-hand (its ``--lefthand`` only
+    mirrors the lanes about the edge's shape, off the road's left lanes), so its edge ``-r``
+    (lanes -k) runs along the reference line and ``r`` (lanes +k) against it; left-hand traffic
+    drives them the other way. Each such edge gets its ends swapped, its shape and its lanes'
+    shapes reversed and its lanes renumbered so that index 0 is again the rightmost lane in its
+    driving direction (the lane next to the centre line): SUMO's right-hand conventions (index
+    + 1 is the lane to the left, a lateral offset + to the left) hold on the turned edges as on
+    any, so ego's lane model reads them unchanged. Lane geometry, lane ids (``origId``) and
+    widths stay netconvert's. Such a road joined to another at a junction is refused
+    (ScenarioFileError): its connections would have to be turned round too."""
+    tree = ET.parse(net)
+    root = tree.getroot()
+    turned = {}
+    for e in root.iter("edge"):
+        eid = e.get("id", "")
+        if e.get("function") == "internal" or road_of_edge(eid) not in roads:
+            continue
+        turned[eid] = e
+    for c in root.iter("connection"):
+        for end in ("from", "to"):
+            if c.get(end, "") in turned:
+                name = road_of_edge(c.get(end, ""))
+                raise ScenarioFileError(
+                    road,
+                    None,
+                    f'road {name!r} is left-hand traffic (rule="LHT" or turned by its ego\'s heading) and joined to '
+                    "another road at a junction: not supported by ego (left-hand roads without junctions only)",
+                )
+
+    def rev(shape: str | None) -> str | None:
+        return None if shape is None else " ".join(reversed(shape.split()))
+
+    for eid, e in turned.items():
+        a, b = e.get("from", ""), e.get("to", "")
+        e.set("from", b)
+        e.set("to", a)
+        if e.get("shape") is not None:
+            e.set("shape", rev(e.get("shape")) or "")
+        lanes = e.findall("lane")
+        for child in lanes:
+            e.remove(child)
+        for i, ln in enumerate(reversed(lanes)):
+            ln.set("id", f"{eid}_{i}")
+            ln.set("index", str(i))
+            if ln.get("shape") is not None:
+                ln.set("shape", rev(ln.get("shape")) or "")
+        for i, ln in enumerate(reversed(lanes)):
+            e.insert(i, ln)
+        ET.SubElement(e, "param", key=LEFT_HAND, value="true")
+    ends: dict[str, list[str]] = {}
+    for e in root.iter("edge"):
+        if e.get("function") != "internal":
+            ends.setdefault(e.get("to", ""), []).extend(ln.get("id", "") for ln in e.findall("lane"))
+    for j in root.iter("junction"):
+        if any(e.get("from") == j.get("id") or e.get("to") == j.get("id") for e in turned.values()):
+            j.set("incLanes", " ".join(ends.get(j.get("id", ""), [])))
+    tree.write(net, encoding="UTF-8", xml_declaration=True)
 
 
 def for_netconvert(road: Path, data: bytes) -> bytes | None:
@@ -343,8 +429,12 @@ class Edge:
     successors: tuple[str, ...]
     #: the edge's reference line in its driving direction: SUMO's edge shape (on a converted
     #: road OpenDRIVE's reference line; on ego's motorways the road's centre line), or, where a
-    #: network writes none, the left border of its leftmost lane
+    #: network writes none, the border of its lane next to the centre line (the left border of
+    #: its leftmost lane; on an edge turned round for left-hand traffic the right border of lane 0)
     shape: tuple[tuple[float, float], ...] = ()
+    #: turned round for left-hand traffic (:func:`left_hand`): driven the other way than
+    #: netconvert's edge of that name, its lane index 0 next to the centre line
+    left_hand: bool = False
 
 
 def _parse(net: Path) -> ET.Element:
@@ -384,13 +474,16 @@ def _edges_cached(net: str, mtime: float) -> dict[str, Edge]:
             )
         lanes.sort(key=lambda lane: lane.index)
         shape = tuple((float(p.split(",")[0]), float(p.split(",")[1])) for p in e.get("shape", "").split())
-        if len(shape) < 2 and lanes and len(lanes[-1].shape) >= 2:
+        lht = any(p.get("key") == LEFT_HAND and p.get("value") == "true" for p in e.findall("param"))
+        inner = lanes[0] if lht else lanes[-1] if lanes else None  # the lane next to the centre line
+        if len(shape) < 2 and inner is not None and len(inner.shape) >= 2:
             from ego.lane_frame import LanePolyline
 
-            left = LanePolyline(lanes[-1].shape)
-            at = np.concatenate(([0.0], np.cumsum(np.hypot(*np.diff(np.asarray(left.points), axis=0).T))))
-            shape = tuple(left.offset_point(float(s), 0.5 * lanes[-1].width) for s in at)
-        edges[eid] = Edge(eid, tuple(lanes), tuple(succ.get(eid, ())), shape)
+            side = LanePolyline(inner.shape)
+            at = np.concatenate(([0.0], np.cumsum(np.hypot(*np.diff(np.asarray(side.points), axis=0).T))))
+            half = -0.5 * inner.width if lht else 0.5 * inner.width
+            shape = tuple(side.offset_point(float(s), half) for s in at)
+        edges[eid] = Edge(eid, tuple(lanes), tuple(succ.get(eid, ())), shape, lht)
     return edges
 
 
@@ -444,12 +537,16 @@ class RoadMap:
 
     On a converted road, OpenDRIVE road ``r``'s right-hand lanes are the SUMO edge ``-r``
     (``-r.S`` for a later lane section starting at S), its left-hand lanes the edge ``r``;
-    lane -1 (next to the reference line) is SUMO's leftmost lane of ``-r``. On a SUMO
-    network the road id is the edge id and lane -k is the k-th lane from the left.
+    lane -1 (next to the reference line) is SUMO's leftmost lane of ``-r``. On a road of
+    left-hand traffic (:func:`left_hand`) ``r`` runs along the reference line and ``-r``
+    against it, and lane +1 is SUMO's rightmost lane of ``r``. On a SUMO network the road id
+    is the edge id and lane -k is the k-th lane from the left.
     """
 
-    def __init__(self, net: Path, converted: bool) -> None:
+    def __init__(self, net: Path, converted: bool, by_heading: frozenset[str] = frozenset()) -> None:
         self.net, self.converted = net, converted
+        #: the right-hand roads read as left-hand traffic for the ego's heading (:func:`left_hand`)
+        self.by_heading = by_heading
         self.edges = _edges(net)
         self.links, self.inner = _links_cached(str(net), net.stat().st_mtime)
         self._refs: dict[str, object] = {}
@@ -587,8 +684,13 @@ class RoadMap:
         direction) on from the point ``g`` along ``lane``'s shape."""
         return self._along_shape(to or lane, self._along_reference(lane, g) + ds)
 
+    def from_centre(self, edge: str) -> list[Lane]:
+        """The lanes of ``edge`` from the road's centre line outwards."""
+        e = self.edges[edge]
+        return list(e.lanes) if e.left_hand else list(reversed(e.lanes))
+
     def _section(self, edge: str) -> tuple[str, float, bool]:
-        """(road, start s, right-hand) of ``edge``."""
+        """(road, start s, driven along s) of ``edge``."""
         hit = self._of_edge.get(edge)
         if hit is None:
             if self.converted:
@@ -604,7 +706,7 @@ class RoadMap:
         return hit
 
     def sections(self, road: str) -> list[tuple[float, Edge, bool]]:
-        """(start s, edge, right-hand) of the road's edges, by start."""
+        """(start s, edge, driven along s) of the road's edges, by start."""
         if not self.converted:
             # a road cut into edges road, road.1, road.2, ... (ego's curved motorways,
             # sumo_nets/motorway_arcs.py): each starts where the one before ends
@@ -633,10 +735,10 @@ class RoadMap:
         for (start, right), parts in pieces.items():
             parts.sort(key=lambda x: x[0])
             if not right:
-                parts.reverse()  # driven against s: the last piece starts the section
+                parts.reverse()  # netconvert's edge against s: the last piece starts the section
             s0 = start
             for _, e in parts:
-                out.append((s0, e, right))
+                out.append((s0, e, right != e.left_hand))
                 s0 += self.reference(e.id).length
         return sorted(out, key=lambda x: x[0])
 
@@ -651,7 +753,9 @@ class RoadMap:
         if lane == 0:
             raise ValueError("lane 0 is the reference line, not a lane")
         every = self.sections(road)
-        secs = [x for x in every if x[2] == (lane < 0)]
+        # the edges of the lane's side: on a converted road ``-r`` holds lanes -k (and runs
+        # along s unless the road is left-hand); a SUMO network's road holds lanes -k only
+        secs = [x for x in every if (x[1].id.startswith("-") if self.converted else True) == (lane < 0)]
         if every and not secs:
             ids = sorted({self.lane_id_of(ln) for x in every for ln in x[1].lanes}, key=abs)
             raise ValueError(
@@ -669,16 +773,24 @@ class RoadMap:
         for x in secs:
             if x[0] <= s + 1e-9:
                 start, edge, right = x
-        n = len(edge.lanes)
-        ids = [self.lane_id_of(ln) for ln in reversed(edge.lanes)]  # from the reference line out
+        out = self.from_centre(edge.id)
+        ids = [self.lane_id_of(ln) for ln in out]  # from the reference line out
         if lane not in ids:
             raise ValueError(
                 f"road {road!r} has no lane {lane} on that side at s = {s:g} "
                 f"(lane ids {', '.join(map(str, ids))}; netconvert keeps driving and stop lanes)"
             )
-        sumo_lane = edge.lanes[n - 1 - ids.index(lane)]
+        sumo_lane = out[ids.index(lane)]
         u = s - start if right else self.reference(edge.id).length - (s - start)
         return sumo_lane, self._along_shape(sumo_lane, u)
+
+    def t_position(self, road: str, s: float, t: float) -> tuple[Lane, float, float]:
+        """The point ``t`` m left of road ``road``'s reference line at road s (OpenDRIVE's
+        RoadPosition) on SUMO's lane -1: (that lane, the arc length along its shape, the
+        offset from its centre, + left in its driving direction: against s on a left-hand road)."""
+        lane, g = self.lane_s(road, -1, s)
+        d = t + 0.5 * lane.width
+        return lane, g, d if self._section(lane.edge)[2] else -d
 
     def lane_id_of(self, sumo_lane: Lane) -> int:
         """The OpenDRIVE lane id of a SUMO lane: its origin's (netconvert keeps only some lane
@@ -687,8 +799,8 @@ class RoadMap:
         tail = sumo_lane.orig.rpartition("_")[2] if self.converted else ""
         if tail.lstrip("-").isdigit():
             return int(tail)
-        n = len(self.edges[sumo_lane.edge].lanes)
-        k = n - sumo_lane.index
+        edge = self.edges[sumo_lane.edge]
+        k = sumo_lane.index + 1 if edge.left_hand else len(edge.lanes) - sumo_lane.index
         return -k if (not self.converted or sumo_lane.edge.startswith("-")) else k
 
     def route_from(self, edge: str, limit: int = 64) -> list[str]:

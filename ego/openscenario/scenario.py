@@ -46,7 +46,7 @@ from ego.openscenario.ego_refs import EgoGap, EgoPath
 from ego.openscenario.kinematic import Kinematic
 from ego.openscenario.loader import declared_parameters, header_description, load, turned_message
 from ego.openscenario.registry import action_of
-from ego.openscenario.roads import RoadMap, network_file, refine_shape
+from ego.openscenario.roads import RoadMap, network_file, refine_shape, road_of_edge
 from ego.openscenario.runtime import EntityState, Storyboard, boxes_overlap
 from ego.openscenario.traffic import TrafficActions, sumo_type
 from ego.openscenario.xmltree import DOCS, ScenarioFileError
@@ -210,7 +210,8 @@ def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
                     f"{lane.length:.1f} m long (SUMO lane {lane.id})",
                 )
             overlaps = _overlaps(scenario, name, lane, front, off, centre, out)
-            out[name] = Placement(lane.edge, lane.index, front, off, speed, overlaps, _turned(tp, lane, s))
+            flip = roads.converted and road_of_edge(lane.edge) in roads.by_heading
+            out[name] = Placement(lane.edge, lane.index, front, off, speed, overlaps, _turned(tp, lane, s, flip))
             del pending[name]
         if not pending:
             break
@@ -240,11 +241,16 @@ def later_lanes(roads: RoadMap, route, keys: list[int], n_lanes: int) -> dict[in
     return dict(sorted(out.items()))
 
 
-def _turned(tp: M.TeleportAction, lane, s: float) -> int:
+def _turned(tp: M.TeleportAction, lane, s: float, flip: bool = False) -> int:
     """The line turning an entity that starts at ``s`` along SUMO ``lane`` against the lane's
     direction (0: it faces the lane's way): its relative Orientation (read by the loader), or
-    the world heading the file gives it, compared with the lane's heading there."""
+    the world heading the file gives it, compared with the lane's heading there. On a road
+    turned round by its ego's heading (``flip``), a lane position's relative Orientation is
+    relative to the lane's right-hand direction, which SUMO's lane now runs against: an
+    entity turned by it faces the lane's way, and one not turned faces against it."""
     turned = getattr(tp.position, "turned", 0)
+    if flip and isinstance(tp.position, M.LanePosition) and tp.heading is None:
+        return 0 if turned else tp.position.line
     if turned or tp.heading is None:
         return turned
     lane_heading = LanePolyline(lane.shape, lane.width, lane.id).heading_at(min(max(s, 0.0), lane.length))
@@ -308,9 +314,7 @@ def _place(pos: M.Position, roads: RoadMap, centre: dict) -> tuple:
         lane, s = roads.lane_s(pos.road, pos.lane, pos.s)
         return lane, s, pos.offset
     if isinstance(pos, M.RoadPosition):
-        lane1, s = roads.lane_s(pos.road, -1, pos.s)
-        # the reference line is the left edge of lane -1; t measured from it (+ left)
-        d = pos.t + 0.5 * lane1.width
+        lane1, s, d = roads.t_position(pos.road, pos.s, pos.t)
         return _lane_at(roads, lane1, d, s)
     if isinstance(pos, M.WorldPosition):
         return roads.nearest_lane(pos.x, pos.y)
@@ -342,10 +346,11 @@ def _absolute_xy(pos: M.Position, roads: RoadMap) -> tuple[float, float, float]:
         heading = LanePolyline(lane.shape, lane.width, lane.id).heading_at(s) if pos.h is None else pos.h
         return pos.x, pos.y, heading
     if isinstance(pos, (M.LanePosition, M.RoadPosition)):
-        lane_id, d = (pos.lane, pos.offset) if isinstance(pos, M.LanePosition) else (-1, None)
-        lane, s = roads.lane_s(pos.road, lane_id, pos.s)
-        if d is None:  # the reference line is the left edge of lane -1; t from it, + left
-            d = pos.t + 0.5 * lane.width  # type: ignore[union-attr]
+        if isinstance(pos, M.LanePosition):
+            lane, s = roads.lane_s(pos.road, pos.lane, pos.s)
+            d = pos.offset
+        else:
+            lane, s, d = roads.t_position(pos.road, pos.s, pos.t)
         poly = LanePolyline(lane.shape, lane.width, lane.id)
         x, y = poly.offset_point(s, d)
         return x, y, poly.heading_at(s)
@@ -508,6 +513,17 @@ class FileScenario(Scenario):
                 f"the ego {ego!r} has no TeleportAction in <Init> (ego needs the ego's start position)",
             )
         starts = placements(model, roads)
+        start = starts[ego]
+        if start.turned and roads.converted and not roads.edges[start.edge].left_hand:
+            # the ego headed against its right-hand lane (the reference player's "left-hand
+            # traffic by heading"): its road is read as left-hand traffic, its edges turned round
+            turned = frozenset({road_of_edge(start.edge)})
+            try:
+                lht = RoadMap(network_file(model.road, turned), converted=True, by_heading=turned)
+            except ScenarioFileError:
+                pass  # a road joined to others at a junction: the heading is refused below
+            else:
+                roads, starts = lht, placements(model, lht)
         _check_turned(model, ego, starts[ego], roads)
         edge = starts[ego].edge
         _check_road_references(model, roads, len(roads.edges[edge].lanes), len(_opposite_lanes(roads, edge)))
@@ -910,6 +926,10 @@ class StoryDriver:
         self._lanes_all = dict(own)
         ego_lanes = sc.roads.edges[sc.starts[sc.ego_name].edge].lanes
         self._bands = [(own[i] - 0.5 * ln.width, own[i] + 0.5 * ln.width, 1) for i, ln in enumerate(ego_lanes)]
+        # OpenDRIVE lane id -> key of _lanes_all (an AbsoluteTargetLane): by the lanes' own ids,
+        # not by counting (netconvert leaves out border lanes; a left-hand road's ego drives lanes +k)
+        self._lane_keys = {sc.roads.lane_id_of(ln): i for i, ln in enumerate(ego_lanes)}
+        self._lane_keys.update({sc.roads.lane_id_of(ln): len(own) + k for k, ln in enumerate(lanes)})
         for k, lane in enumerate(lanes):
             mid = lane.shape[len(lane.shape) // 2]
             d = self._lanes_all[len(own) + k] = road.project(mid[0], mid[1])[1]
@@ -922,7 +942,15 @@ class StoryDriver:
             view = sc.view
             view.road_halfwidth = max(view.road_halfwidth, outer + 0.5 * sc.geometry.width + 0.5)
         ego_edge = sc.starts[sc.ego_name].edge
-        centre_line = 0.5 * (max(own.values()) + self._lanes_all[len(own)]) if lanes else INF
+        # the centre line between the ego's lane next to it (its edge's leftmost lane; on a
+        # left-hand road lane 0) and the other direction's first lane, and the side beyond it
+        self._centre = (INF, 1.0)
+        if lanes:
+            inner, first = (
+                own[0] if sc.roads.edges[ego_edge].left_hand else max(own.values()),
+                self._lanes_all[len(own)],
+            )
+            self._centre = (0.5 * (inner + first), 1.0 if first > inner else -1.0)
         for name, start in sc.starts.items():
             tp = next(a for a in sc.model.init[name] if isinstance(a, M.TeleportAction))
             if name == sc.ego_name:
@@ -930,7 +958,7 @@ class StoryDriver:
             turned = start.turned
             # a car whose Init offset puts it across the centre line, in the other direction's
             # lane, driving its own lane's way (speed-profile.xosc's Car2): driven by ego too
-            across = start.edge == ego_edge and own.get(start.index, 0.0) + start.offset > centre_line
+            across = start.edge == ego_edge and self._across(own.get(start.index, 0.0) + start.offset)
             if not (turned or across):
                 continue
             cx = sc.model.entities[name].vehicle.center_x
@@ -1152,8 +1180,7 @@ class StoryDriver:
                 lane, pos = sc.roads.lane_s(position.road, position.lane, position.s)
                 d_extra = position.offset
             else:
-                lane, pos = sc.roads.lane_s(position.road, -1, position.s)
-                d_extra = position.t + 0.5 * lane.width
+                lane, pos, d_extra = sc.roads.t_position(position.road, position.s, position.t)
             poly = LanePolyline(lane.shape, lane.width, lane.id)
             x, y = poly.offset_point(pos, d_extra)
             return x, y, poly.heading_at(pos)
@@ -1202,7 +1229,11 @@ class StoryDriver:
         edge, here, key = self._ego_edge()
         index: int | None
         if relative_to is None:
-            index = self._lane_index(edge, here, key, lane_id) if lane_id < 0 else n - 1 + lane_id
+            # the lane of that OpenDRIVE id on the road the ego is on now (past a merge: a later
+            # road's), else among its start road's and the other direction's (_lane_keys)
+            index = self._lane_index(edge, here, key, lane_id) if edge != sc.starts[sc.ego_name].edge else None
+            if index is None:
+                index = self._lane_keys.get(lane_id, -1)
         else:
             index = min(lanes, key=lambda i: abs(relative_to - lanes[i])) + dlane
             if index < n and self._lane_index(edge, here, key, None, index) is None:
@@ -1263,6 +1294,12 @@ class StoryDriver:
         self._limit(name, peak_rate)
         sc.bridge.set_speed(name, v_next)
 
+    def _across(self, d: float) -> bool:
+        """Whether ``d`` (across the ego's lane frame) is beyond the centre line, in the other
+        direction's lanes."""
+        centre, side = self._centre
+        return side * (d - centre) > 0.0
+
     def blind(self, name: str) -> bool:
         return name in self._lateral_free or name in self._kin
 
@@ -1277,8 +1314,7 @@ class StoryDriver:
     def lateral(self, name: str, d_next: float, peak_speed: float) -> None:
         sc = self.sc
         st = self.board.states[name]
-        centre_line = 0.5 * (max(sc.lane_offset.values()) + self._lanes_all.get(len(sc.lanes), INF))
-        if name not in self._kin and d_next > centre_line:
+        if name not in self._kin and self._across(d_next):
             # across the centre line into the other direction's lanes: ego drives it from here
             s = self._lane_s(st.s)
             ahead = math.cos(st.yaw - sc.road.heading_at(s)) > 0
@@ -1626,7 +1662,7 @@ def _opposite_lanes(roads: RoadMap, edge: str) -> list:
     other = edge[1:] if edge.startswith("-") else "-" + edge
     if other not in roads.edges:
         return []
-    return list(reversed(roads.edges[other].lanes))
+    return roads.from_centre(other)
 
 
 def _waypoint_edge(roads: RoadMap, xyh: tuple[float, float, float]) -> str:
@@ -1657,8 +1693,10 @@ def _check_routes(model: M.Scenario, roads: RoadMap) -> None:
 
 
 def _check_turned(model: M.Scenario, ego: str, start: Placement, roads: RoadMap) -> None:
-    """The ego turned against its lane is refused: it drives its lane frame's way. A world
-    heading is named beside its lane's there (the file's numbers, radians)."""
+    """The ego turned against its lane, where its road was not read as left-hand traffic for
+    it (a road joined to others at a junction, a left-hand road, a SUMO network), is refused:
+    it drives its lane frame's way. A world heading is named beside its lane's there (the
+    file's numbers, radians)."""
     if not start.turned:
         return
     tp = next(a for a in model.init[ego] if isinstance(a, M.TeleportAction))
@@ -1674,7 +1712,8 @@ def _check_turned(model: M.Scenario, ego: str, start: Placement, roads: RoadMap)
         model.path,
         start.turned,
         f"a start heading turning the ego against its lane's direction{why} is not supported by ego: the ego "
-        f"drives its lane's way (see {DOCS})",
+        f"drives its lane's way (a right-hand OpenDRIVE road is read as left-hand traffic for its ego's heading, "
+        f"but not one joined to others at a junction, a left-hand road or a SUMO network; see {DOCS})",
     )
 
 
@@ -1712,7 +1751,9 @@ def _check_road_references(model: M.Scenario, roads: RoadMap, ego_lanes: int, ot
         if (
             isinstance(x, M.LaneChangeAction)
             and x.relative_to is not None
-            and (-x.relative_lanes >= ego_lanes or x.relative_lanes >= ego_lanes + other_lanes)
+            # the reference may be in a lane of either direction (a change across the centre
+            # line takes it there): the most lanes beside it is every lane of the road less its own
+            and abs(x.relative_lanes) >= ego_lanes + other_lanes
         ):
             raise ScenarioFileError(
                 model.path,

@@ -172,30 +172,68 @@ def test_a_lane_change_into_the_oncoming_lane_and_back(tmp_path, monkeypatch):
     assert all(rows[round(0.1 * k, 6)][2] == pytest.approx(25.0, abs=1e-6) for k in range(25, 60))
 
 
-def test_the_ego_turned_against_its_lane_is_refused_with_its_line(tmp_path):
+@pytest.mark.parametrize(
+    "lanes,line", [(-2, None), (-3, "a lane change -3 lanes from A's lane")], ids=["fits", "too-far"]
+)
+def test_a_change_right_relative_to_a_car_in_the_oncoming_lane_spans_the_whole_road(tmp_path, monkeypatch, lanes, line):
+    """A changes into lane +1 (the oncoming lane) and then 2 lanes right of its own lane:
+    across both of the ego's direction's lanes to lane -2 (3.5 m right of lane -1), which the
+    check before the run refused (it counted only the ego's direction's lanes right of a
+    reference: the reference player's light_state.xosc changes back so). 3 lanes right of any
+    lane of the road's 3 is still refused before the run with the action's line."""
+    rows = _record(monkeypatch, "A")
+    evs = [
+        event("Out", "A", _lane_change(1), trigger([sim_time(0.95)])),
+        event("Back", "A", _lane_change(lanes, "A"), trigger([sim_time(3.95)])),
+    ]
+    path = _scene(tmp_path, {"Ego": (-1, 30.0, 20.0, False), "A": (-1, 120.0, 25.0, False)}, evs)
+    if line is not None:
+        text = path.read_text()
+        with pytest.raises(ScenarioFileError, match=line) as err:
+            run_scene(path, 1.0)
+        action = text.rindex("<LaneChangeAction", 0, text.index(f'value="{lanes}"'))
+        assert err.value.line == text.count("\n", 0, action) + 1
+        return
+    sc = run_scene(path, 6.5)
+    assert sc.status == "completed"
+    assert rows[3.5][1] == pytest.approx(3.5, abs=1e-6)
+    assert rows[6.3][1] == pytest.approx(-3.5, abs=1e-6)
+
+
+def test_the_ego_turned_against_its_lane_reads_its_road_left_hand(tmp_path, monkeypatch):
+    """The ego turned round in lane +1 (the reference player's left-hand traffic by heading):
+    the road is read as left-hand traffic (tests/openscenario/test_xosc_left_hand.py), so the
+    ego drives lane +1 along +x, and A in lane -1 (no Orientation: its right-hand lane's way,
+    +x, now against SUMO's lane) is driven by ego along +x at its speed."""
+    rows = _record(monkeypatch, "A")
     path = _scene(tmp_path, {"Ego": (1, 30.0, 20.0, True), "A": (-1, 120.0, 25.0, False)})
-    with pytest.raises(ScenarioFileError, match=r"turning the ego against its lane's direction") as exc:
-        run_scene(path, 1.0)
-    assert exc.value.line == next(i for i, ln in enumerate(path.read_text().splitlines(), 1) if "Orientation" in ln)
+    sc = run_scene(path, 3.0)
+    assert sc.status == "completed" and sc.roads.by_heading == frozenset({"1"})
+    a = sc.trace.array(0)
+    x, y = (a[:, sc.trace.names.index(n)] for n in ("x", "y"))
+    assert x[-1] - x[0] > 55.0 and abs(y - 1.75).max() < 0.02
+    assert "A" in sc.story._kin.cars
+    assert rows[2.1][0] - rows[0.1][0] == pytest.approx(50.0, abs=1e-6)
 
 
 @pytest.mark.parametrize("form", ["absolute", "world"])
-def test_the_ego_given_a_world_heading_against_its_lane_is_refused_with_its_line(tmp_path, form):
-    """The ego in lane -1 (heading +x) given the world heading pi: by an absolute Orientation
-    (the reference player's left-hand-traffic_internal.xosc form) or a WorldPosition's h."""
+def test_the_ego_given_a_world_heading_against_its_lane_reads_its_road_left_hand(tmp_path, form):
+    """The ego in lane -1 (heading +x) given the world heading pi, by an absolute Orientation
+    (the reference player's left-hand-traffic_internal.xosc form) or a WorldPosition's h: the
+    road is read as left-hand traffic and the ego drives lane -1 towards -x (A, in lane +1
+    without an Orientation, its right-hand lane's way: -x too)."""
     o = '<Orientation type="absolute" h="3.141593"/>'
-    path = _scene(tmp_path, {"Ego": (-1, 30.0, 20.0, o), "A": (-1, 120.0, 25.0, False)})
-    mark = "Orientation"
+    path = _scene(tmp_path, {"Ego": (-1, 300.0, 20.0, o), "A": (1, 120.0, 25.0, False)})
     if form == "world":
         text = path.read_text()
-        i = text.index('<LanePosition roadId="1" laneId="-1" s="30.0"')
+        i = text.index('<LanePosition roadId="1" laneId="-1" s="300.0"')
         j = text.index("</LanePosition>", i) + len("</LanePosition>")
-        path.write_text(text[:i] + '<WorldPosition x="30" y="-1.75" h="3.141593"/>' + text[j:])
-        mark = "WorldPosition"
-    with pytest.raises(ScenarioFileError, match=r"turning the ego against its lane's direction") as exc:
-        run_scene(path, 1.0)
-    assert "(its world heading 3.14159 rad; its lane heads 0.00 rad there)" in str(exc.value)
-    assert exc.value.line == next(i for i, ln in enumerate(path.read_text().splitlines(), 1) if mark in ln)
+        path.write_text(text[:i] + '<WorldPosition x="300" y="-1.75" h="3.141593"/>' + text[j:])
+    sc = run_scene(path, 3.0)
+    assert sc.status == "completed" and sc.roads.by_heading == frozenset({"1"})
+    a = sc.trace.array(0)
+    x, y = (a[:, sc.trace.names.index(n)] for n in ("x", "y"))
+    assert x[0] - x[-1] > 55.0 and abs(y + 1.75).max() < 0.02
 
 
 @pytest.mark.parametrize("kind", ["relative", "absolute"])

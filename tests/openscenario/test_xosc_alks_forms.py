@@ -309,6 +309,66 @@ def test_distance_within_dynamic_constraints_and_ending(tmp_path):
     assert c.s - b.s == pytest.approx(40.0, abs=0.1)
 
 
+EGO_DRIVER = (
+    '<ObjectController><CatalogReference catalogName="ControllerCatalog" entryName="Driver"/></ObjectController>'
+)
+
+
+def _missing_controller(tmp_path, assigned: str) -> tuple:
+    """The standing scene with the ego's controller an entry its catalog lacks (the reference
+    player's highway_driver.xosc names 'NaturalDriver'), assigned a parameter: (path, line)."""
+    path = _standing_scene(tmp_path)
+    ref = (
+        '<ObjectController><CatalogReference catalogName="ControllerCatalog" entryName="NaturalDriver">'
+        f'<ParameterAssignments><ParameterAssignment parameterRef="DesiredSpeed" value="{assigned}"/>'
+        "</ParameterAssignments></CatalogReference></ObjectController>"
+    )
+    text = path.read_text().replace(EGO_DRIVER, "\n" + ref)
+    path.write_text(text)
+    return path, text.count("\n", 0, text.index(ref)) + 1
+
+
+def test_a_controller_missing_from_its_catalog_is_a_warning_and_changes_nothing(tmp_path, capsys):
+    """A controller entry its catalog lacks (deviation: the reference player stops) is one
+    warning line naming the file's line, the entry and the catalog, from ``ego run`` and ``ego
+    list`` alike; the run is the one with the catalog's entry, row for row (the ego is driven by
+    ego's controller whatever the file assigns it)."""
+    path, line = _missing_controller(tmp_path, "25")
+    cat = tmp_path / "catalogs" / "Controllers" / "ControllerCatalog.xosc"
+    warning = (
+        f"ego: warning: {path}:{line}: no entry 'NaturalDriver' in catalog 'ControllerCatalog' ({cat}; entries: "
+        "Driver): the controller is left out (ego drives the ego with its own controller, SUMO the others; see "
+        "docs/openscenario.md)\n"
+    )
+    assert main(["list", str(path)]) == 0
+    out, err = capsys.readouterr()
+    assert "every element supported" in out and err == warning
+    assert main(["run", str(path), "-c", "pid", "--set", "duration=1"]) == 0
+    assert capsys.readouterr().err == warning
+    missing = run_scene(path, 2.0)
+    other = tmp_path / "with_entry"
+    other.mkdir()
+    with_entry = run_scene(_standing_scene(other), 2.0)
+    assert missing.trace.names == with_entry.trace.names
+    assert (missing.trace.array() == with_entry.trace.array()).all()
+
+
+def test_a_missing_controllers_assignments_are_still_resolved_and_a_missing_body_refused(tmp_path, capsys):
+    """The missing entry's parameter assignments are the scenario's expressions: an undeclared
+    reference is one line at its own line; a missing pedestrian (a body) stays refused."""
+    path, line = _missing_controller(tmp_path, "$Undeclared")
+    assert main(["run", str(path), "-c", "pid"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"ego: error: {path}:{line}: " in err and "Undeclared" in err, err
+    path = _standing_scene(tmp_path)
+    text = path.read_text().replace('entryName="walker"', 'entryName="Nobody"')
+    path.write_text(text)
+    line = text.count("\n", 0, text.index('entryName="Nobody"')) + 1
+    assert main(["run", str(path), "-c", "pid"]) == 2
+    err = capsys.readouterr().err
+    assert err == (f"ego: error: {path}:{line}: no entry 'Nobody' in catalog 'PedestrianCatalog' (entries: walker)\n")
+
+
 @pytest.mark.parametrize(
     "ref,message",
     [
@@ -317,25 +377,18 @@ def test_distance_within_dynamic_constraints_and_ending(tmp_path):
             "catalog entry 'walker' is a <Pedestrian>, not a <Controller> (in {cat})",
         ),
         (
-            '<ObjectController><CatalogReference catalogName="ControllerCatalog" entryName="Nobody"/></ObjectController>',
-            "no entry 'Nobody' in catalog 'ControllerCatalog' (entries: Driver)",
-        ),
-        (
             '<ObjectController><CatalogReference catalogName="Drivers" entryName="Driver"/></ObjectController>',
             None,
         ),
     ],
-    ids=["wrong-kind", "no-entry", "no-catalog"],
+    ids=["wrong-kind", "no-catalog"],
 )
 def test_bad_catalog_references_are_one_line(tmp_path, capsys, ref, message):
     """A reference to an entry of another kind, to an entry or a catalog that is not there:
     one line with the reference's line, exit 2, nothing written."""
     path = _standing_scene(tmp_path)
     text = path.read_text()
-    text = text.replace(
-        '<ObjectController><CatalogReference catalogName="ControllerCatalog" entryName="Driver"/></ObjectController>',
-        "\n" + ref,
-    )
+    text = text.replace(EGO_DRIVER, "\n" + ref)
     path.write_text(text)
     line = text.count("\n", 0, text.index(ref)) + 1
     out = tmp_path / "out"

@@ -5,8 +5,6 @@ Hand-written roads, converted by the real netconvert and driven by the real SUMO
 
 from __future__ import annotations
 
-import json
-import shutil
 import subprocess
 import time
 import xml.etree.ElementTree as ET
@@ -191,28 +189,3 @@ def test_direct_junction_joining_a_road_end_is_refused(tmp_path):
         f"{road}: direct junction 9: connection 0 (incomingRoad '1', linkedRoad '3', contactPoint 'end') is not "
         "supported (ego reads direct junctions whose linked road starts at the junction)"
     )
-
-
-def test_left_hand_traffic_is_refused(tmp_path, capsys):
-    """A road with ``rule="LHT"`` (esmini's e6mini-lht.xodr): netconvert would make its lanes
-    ``-k`` run along the reference line as in right-hand traffic, so the ego would drive the
-    wrong way; ``ego run`` and ``ego list`` refuse it in one line naming the road's line."""
-    from ego.cli import main
-
-    shutil.copy(SHIPPED / "emergency_brake.xosc", tmp_path / "s.xosc")
-    text = (SHIPPED / "straight3.xodr").read_text()
-    assert text.count('junction="-1">') == 1
-    (tmp_path / "straight3.xodr").write_text(text.replace('junction="-1">', 'junction="-1" rule="LHT">'))
-    line = next(i for i, ln in enumerate(text.splitlines(), 1) if "<road " in ln)
-    want = (
-        f'ego: error: {tmp_path / "straight3.xodr"}:{line}: <road rule="LHT"> (left-hand traffic) is not supported '
-        "by ego: its roads are right-hand traffic (RHT, OpenDRIVE's default)\n"
-    )
-    assert main(["run", str(tmp_path / "s.xosc"), "-c", "pid"]) == 2
-    assert capsys.readouterr().err == want
-    assert main(["list", str(tmp_path / "s.xosc"), "--json"]) == 0
-    listing = json.loads(capsys.readouterr().out)
-    assert listing["supported"] is False and "ego: error: " + listing["error"] + "\n" == want
-    (tmp_path / "straight3.xodr").write_text(text.replace('junction="-1">', 'junction="-1" rule="RHT">'))
-    assert main(["list", str(tmp_path / "s.xosc"), "--json"]) == 0
-    assert json.loads(capsys.readouterr().out)["supported"] is True

@@ -192,16 +192,3 @@ def test_an_ego_headed_against_its_lane_by_an_absolute_orientation_is_refused(tm
     along = '<Orientation type="absolute" h="0.1"/>'
     path = write_file(tmp_path / "along.xosc", "links.xodr", [("Ego", "1", -1, 50.0, 20.0, along)], [])
     assert run_scene(path, 1.0).status in ("completed", "timeout")
-
-
-def test_an_ego_on_a_left_hand_traffic_road_is_refused(tmp_path):
-    """netconvert converts a rule="LHT" road right-hand: a file on one is refused with the road
-    file's line (``roads.check_traffic_rule``, before any entity is placed), not run the wrong way."""
-    from ego.openscenario.xmltree import ScenarioFileError
-
-    (tmp_path / "links.xodr").write_text(network(False).replace('<road name="r1"', '<road rule="LHT" name="r1"'))
-    path = write_file(tmp_path / "lht.xosc", "links.xodr", [("Ego", "1", -1, 50.0, 20.0, "")], [])
-    with pytest.raises(
-        ScenarioFileError, match=r"links.xodr:3: <road rule=\"LHT\"> \(left-hand traffic\) is not supported by ego"
-    ):
-        run_scene(path, 1.0)
