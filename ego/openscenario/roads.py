@@ -46,6 +46,10 @@ OPTIONS = (
     "--no-warnings",
     "true",
 )
+#: netconvert's option making every OpenDRIVE lane a SUMO lane (border, shoulder, sidewalk...:
+#: those of no driving type disallow every vehicle class); used only to find such a lane's
+#: geometry when a file places an entity on it (:meth:`RoadMap.lane_s_offset`)
+ALL_LANES = ("--opendrive.import-all-lanes", "true")
 
 
 #: the version of :func:`for_netconvert`'s copy and of what is done to netconvert's network
@@ -83,11 +87,12 @@ def _bounded() -> None:  # pragma: no cover - runs in the child before exec
         pass
 
 
-def network_file(road: Path, turned: frozenset[str] = frozenset()) -> Path:
-    """The SUMO network of ``road``: a ``.net.xml`` itself, an ``.xodr`` converted (cached).
-    A failed conversion is one line naming the file and netconvert's first error. The edges of
-    its left-hand roads (``rule="LHT"``) and of the roads ``turned`` (a file's ego headed
-    against its right-hand lane: the road read as left-hand traffic) are turned round
+def network_file(road: Path, turned: frozenset[str] = frozenset(), all_lanes: bool = False) -> Path:
+    """The SUMO network of ``road``: a ``.net.xml`` itself, an ``.xodr`` converted (cached;
+    with ``all_lanes`` every OpenDRIVE lane made a SUMO lane, :data:`ALL_LANES`, a network kept
+    apart). A failed conversion is one line naming the file and netconvert's first error. The
+    edges of its left-hand roads (``rule="LHT"``) and of the roads ``turned`` (a file's ego
+    headed against its right-hand lane: the road read as left-hand traffic) are turned round
     (:func:`left_hand`)."""
     if str(road).endswith(".net.xml"):
         return road
@@ -99,7 +104,8 @@ def network_file(road: Path, turned: frozenset[str] = frozenset()) -> Path:
     lht = left_hand_roads(road, data) | turned
 
     exe = sumo_binary("netconvert")
-    what = (*OPTIONS, COPY_VERSION, *(("lefthand", *sorted(lht)) if lht else ()))
+    options = (*OPTIONS, *ALL_LANES) if all_lanes else OPTIONS
+    what = (*options, COPY_VERSION, *(("lefthand", *sorted(lht)) if lht else ()))
     key = hashlib.sha256(data + "\0".join(what).encode() + str(exe).encode()).hexdigest()[:24]
     out = cache_dir() / f"{key}.net.xml"
     if out.is_file():
@@ -113,7 +119,7 @@ def network_file(road: Path, turned: frozenset[str] = frozenset()) -> Path:
         source.write_bytes(patched)
     try:
         proc = subprocess.run(
-            [str(exe), "--opendrive-files", str(source), "-o", str(tmp), *OPTIONS],
+            [str(exe), "--opendrive-files", str(source), "-o", str(tmp), *options],
             capture_output=True,
             text=True,
             env=env,
@@ -420,6 +426,7 @@ class Lane:
     width: float
     shape: tuple[tuple[float, float], ...]
     orig: str  #: OpenDRIVE origin (road_section_lane) when converted, else ""
+    kind: str = ""  #: the OpenDRIVE lane type netconvert records (driving, stop, border...), if any
 
 
 @dataclass(frozen=True)
@@ -458,6 +465,10 @@ def _edges_cached(net: str, mtime: float) -> dict[str, Edge]:
             continue
         eid = e.get("id", "")
         lanes = []
+        # netconvert's edge type: the lanes' OpenDRIVE types by index ("a|b|c"), or one for all
+        kinds = e.get("type", "").split("|")
+        if len(kinds) == 1:
+            kinds *= len(e.findall("lane"))
         for ln in e.iter("lane"):
             pts = tuple((float(p.split(",")[0]), float(p.split(",")[1])) for p in ln.get("shape", "").split())
             orig = next((p.get("value", "") for p in ln.iter("param") if p.get("key") == "origId"), "")
@@ -470,6 +481,7 @@ def _edges_cached(net: str, mtime: float) -> dict[str, Edge]:
                     float(ln.get("width", "3.2")),
                     pts,
                     orig,
+                    kinds[int(ln.get("index", "0"))] if len(kinds) == len(e.findall("lane")) else "",
                 )
             )
         lanes.sort(key=lambda lane: lane.index)
@@ -543,8 +555,20 @@ class RoadMap:
     is the edge id and lane -k is the k-th lane from the left.
     """
 
-    def __init__(self, net: Path, converted: bool, by_heading: frozenset[str] = frozenset()) -> None:
+    def __init__(
+        self,
+        net: Path,
+        converted: bool,
+        source: Path | None = None,
+        every_lane: bool = False,
+        by_heading: frozenset[str] = frozenset(),
+    ) -> None:
         self.net, self.converted = net, converted
+        #: the OpenDRIVE file ``net`` was converted from (where a lane netconvert drops is found)
+        self.source = source
+        #: whether ``net`` has every OpenDRIVE lane (:data:`ALL_LANES`)
+        self.every_lane = every_lane
+        self._every: RoadMap | None = None
         #: the right-hand roads read as left-hand traffic for the ego's heading (:func:`left_hand`)
         self.by_heading = by_heading
         self.edges = _edges(net)
@@ -743,9 +767,76 @@ class RoadMap:
         return sorted(out, key=lambda x: x[0])
 
     def lane_position(self, road: str, lane: int, s: float) -> tuple[Lane, float]:
-        """The SUMO lane and SUMO's position along it of OpenDRIVE (road, lane, s)."""
-        sumo_lane, g = self.lane_s(road, lane, s)
+        """The SUMO lane and SUMO's position along it of OpenDRIVE (road, lane, s) (of a lane
+        netconvert drops: the nearest lane of the network there, :meth:`lane_s_offset`)."""
+        sumo_lane, g, _ = self.lane_s_offset(road, lane, s)
         return sumo_lane, self.to_sumo(sumo_lane, g)
+
+    def every_lane_map(self) -> RoadMap | None:
+        """The same road converted with every OpenDRIVE lane (:data:`ALL_LANES`; converted
+        and cached when first asked), or None for a SUMO network."""
+        if self._every is None and self.converted and self.source is not None and not self.every_lane:
+            self._every = RoadMap(
+                network_file(self.source, self.by_heading, all_lanes=True),
+                True,
+                self.source,
+                every_lane=True,
+                by_heading=self.by_heading,
+            )
+        return self._every
+
+    def dropped_lane(self, road: str, lane: int, s: float) -> Lane | None:
+        """The lane (of :meth:`every_lane_map`) of OpenDRIVE (road, lane, s) when netconvert
+        drops it from the network (a border, shoulder, sidewalk... lane), else None. A lane the
+        OpenDRIVE file does not have either is the ValueError naming the lanes it has."""
+        try:
+            self.lane_s(road, lane, s)
+            return None
+        except ValueError:
+            every = self.every_lane_map()
+            if every is None or lane == 0:
+                raise
+        return every.lane_s(road, lane, s)[0]
+
+    def lane_s_offset(self, road: str, lane: int, s: float) -> tuple[Lane, float, float]:
+        """(SUMO lane, arc length along its shape, offset) of OpenDRIVE (road, lane, s): the
+        lane's point at road s is ``offset`` m left of that lane's centre there. For a lane of
+        the network (:meth:`lane_s`) the offset is 0; a lane netconvert drops (a border,
+        shoulder, sidewalk... lane, which no SUMO driver may drive) is the lane of the network
+        nearest to it on its side (by lane id: -7 of a road whose outermost is -5 is -5) with the
+        dropped lane's centre as the offset, from the road converted with every lane
+        (:meth:`every_lane_map`: its lanes of the network are these, within 1e-5 m)."""
+        far = self.dropped_lane(road, lane, s)
+        if far is None:
+            sumo_lane, g = self.lane_s(road, lane, s)
+            return sumo_lane, g, 0.0
+        every = self.every_lane_map()
+        assert every is not None  # dropped_lane found it there
+        _, gf = every.lane_s(road, lane, s)
+        # the side's lanes of the network there (a side with none: the other side's)
+        every_sec = self.sections(road)
+        secs = [x for x in every_sec if x[2] == (lane < 0)] or every_sec
+        ids = []
+        for right in (True, False):
+            side = [x for x in secs if x[2] == right]
+            if side:
+                edge = side[0][1]
+                for x in side:
+                    if x[0] <= s + 1e-9:
+                        edge = x[1]
+                ids += [self.lane_id_of(ln) for ln in edge.lanes]
+        if not ids:
+            raise ValueError(
+                f"road {road!r} has no lane netconvert makes (lane {lane} is a{'n' if far.kind[:1] in 'aeiou' else ''} "
+                f"{far.kind or 'non-driving'} lane): ego places an entity on such a lane beside a lane of the network"
+            )
+        near = min(ids, key=lambda k: (abs(k - lane), abs(k)))
+        kept, g = self.lane_s(road, near, s)
+        from ego.lane_frame import LanePolyline
+
+        x, y = LanePolyline(far.shape, far.width, far.id).offset_point(gf, 0.0)
+        _, d, _ = LanePolyline(kept.shape, kept.width, kept.id).project(x, y)
+        return kept, g, d
 
     def lane_s(self, road: str, lane: int, s: float) -> tuple[Lane, float]:
         """The SUMO lane of OpenDRIVE (road, lane, s) and the arc length (m) along its shape
@@ -778,7 +869,8 @@ class RoadMap:
         if lane not in ids:
             raise ValueError(
                 f"road {road!r} has no lane {lane} on that side at s = {s:g} "
-                f"(lane ids {', '.join(map(str, ids))}; netconvert keeps driving and stop lanes)"
+                f"(lane ids {', '.join(map(str, ids))}"
+                + (", of every type)" if self.every_lane else "; netconvert keeps driving and stop lanes)")
             )
         sumo_lane = out[ids.index(lane)]
         u = s - start if right else self.reference(edge.id).length - (s - start)

@@ -101,28 +101,49 @@ _PY = {"float": float, "int": int, "bool": bool, "str": str}
 EGO_NAMES = ("Ego", "hero")
 
 
-def find_ego(scenario: M.Scenario, wanted: str) -> str:
+def road_map(model: M.Scenario) -> RoadMap:
+    """The lane positions of ``model``'s road (an ``.xodr`` converted, or a SUMO network)."""
+    converted = not str(model.road).endswith(".net.xml")
+    return RoadMap(network_file(model.road), converted=converted, source=model.road if converted else None)
+
+
+def find_ego(scenario: M.Scenario, wanted: str, roads: RoadMap | None = None) -> str:
     """The ego entity (see :func:`choose_ego`)."""
-    return ego_choice(scenario, wanted)[0]
+    return ego_choice(scenario, wanted, roads)[0]
 
 
-def ego_choice(scenario: M.Scenario, wanted: str) -> tuple[str, str]:
-    """The ego entity of a read file and why it was taken (:func:`choose_ego`)."""
+def _on_dropped_lane(pos: M.Position, roads: RoadMap | None) -> bool:
+    """Whether ``pos`` is a LanePosition on a lane netconvert drops (:meth:`RoadMap.dropped_lane`)."""
+    if roads is None or not isinstance(pos, M.LanePosition) or pos.lane == 0:
+        return False
+    try:
+        return roads.dropped_lane(pos.road, pos.lane, pos.s) is not None
+    except ValueError:
+        return False  # no such lane at all: refused where the position is placed
+
+
+def ego_choice(scenario: M.Scenario, wanted: str, roads: RoadMap | None = None) -> tuple[str, str]:
+    """The ego entity of a read file and why it was taken (:func:`choose_ego`); with the
+    file's ``roads``, a vehicle starting on a lane netconvert drops is not taken unless named."""
     ents = []
     for n, e in scenario.entities.items():
         tp = next((a for a in scenario.init.get(n, ()) if isinstance(a, M.TeleportAction)), None)
         turned = tp is not None and getattr(tp.position, "turned", 0)
-        ents.append((n, "other" if e.vehicle.kind != "vehicle" else "turned" if turned else "vehicle"))
+        off = tp is not None and _on_dropped_lane(tp.position, roads)
+        kind = "other" if e.vehicle.kind != "vehicle" else "turned" if turned else "off" if off else "vehicle"
+        ents.append((n, kind))
     return choose_ego(ents, wanted, scenario.path)
 
 
 def choose_ego(entities: list[tuple[str, str]], wanted: str, path: str | os.PathLike[str]) -> tuple[str, str]:
     """The ego among ``entities`` ((name, kind) in file order; kind "vehicle", "turned" for a
-    vehicle starting turned against its lane, or "other") of the file ``path``, and why:
-    ``wanted`` (``--ego``: exact, else case-insensitive); else the entity named Ego, else the
-    one named hero (exact, else any case); else the first vehicle in file order that starts
-    along its lane's direction (the ego drives its lane's way), else the first vehicle (the
-    reference player has no ego: it follows the first object with its camera)."""
+    vehicle starting turned against its lane, "off" for one starting on a lane netconvert
+    drops, or "other") of the file ``path``, and why: ``wanted`` (``--ego``: exact, else
+    case-insensitive); else the entity named Ego, else the one named hero (exact, else any
+    case); else the first vehicle in file order that starts along its lane's direction on a
+    lane of the road network (the ego drives its lane's way, in the lanes of its lane frame),
+    else the first vehicle (the reference player has no ego: it follows the first object with
+    its camera)."""
     names = [n for n, _ in entities]
     if wanted:
         if wanted in names:
@@ -140,14 +161,23 @@ def choose_ego(entities: list[tuple[str, str]], wanted: str, path: str | os.Path
     why = "as no entity is named Ego or hero (--ego picks another)"
     along = [n for n, kind in entities if kind == "vehicle"]
     turned = [n for n, kind in entities if kind == "turned"]
-    if along and turned and names.index(turned[0]) < names.index(along[0]):
+    off = [n for n, kind in entities if kind == "off"]
+    if along and any(names.index(n) < names.index(along[0]) for n in turned + off):
+        notes = []
         before = [n for n in turned if names.index(n) < names.index(along[0])]
-        return along[0], (
-            f"the first vehicle in file order that starts along its lane ({', '.join(before)} start turned "
-            f"against theirs, and the ego drives its lane's way), {why}"
-        )
-    if along or turned:
-        return (along or turned)[0], f"the first vehicle in file order, {why}"
+        if before:
+            notes.append(f"{', '.join(before)} start turned against theirs, and the ego drives its lane's way")
+        aside = [n for n in off if names.index(n) < names.index(along[0])]
+        if aside:
+            notes.append(
+                f"{', '.join(aside)} start{'s' if len(aside) == 1 else ''} on "
+                f"{'a lane' if len(aside) == 1 else 'lanes'} netconvert does not make (border, shoulder, "
+                "sidewalk...), and the ego drives the lanes of the road network"
+            )
+        where = "along its lane" + (" on a lane of the road network" if aside else "")
+        return along[0], f"the first vehicle in file order that starts {where} ({'; '.join(notes)}), {why}"
+    if along or turned or off:
+        return (along or turned or off)[0], f"the first vehicle in file order, {why}"
     raise ConfigError(
         f"{path}: no vehicle to be the ego (no entity named Ego or hero, and none is a vehicle); choose the ego "
         f"with --ego (entities: {', '.join(names)})"
@@ -169,6 +199,9 @@ class Placement:
     #: Orientation, or a world heading (absolute Orientation, WorldPosition h) facing more than
     #: 90 degrees from its lane's heading where it starts
     turned: int = 0
+    #: the line of a LanePosition on a lane netconvert drops (0: none): the entity starts on the
+    #: network's nearest lane at the offset of the dropped lane's centre, and ego drives it
+    dropped: int = 0
 
 
 def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
@@ -211,7 +244,10 @@ def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
                 )
             overlaps = _overlaps(scenario, name, lane, front, off, centre, out)
             flip = roads.converted and road_of_edge(lane.edge) in roads.by_heading
-            out[name] = Placement(lane.edge, lane.index, front, off, speed, overlaps, _turned(tp, lane, s, flip))
+            dropped = pos.line if _on_dropped_lane(pos, roads) else 0
+            out[name] = Placement(
+                lane.edge, lane.index, front, off, speed, overlaps, _turned(tp, lane, s, flip), dropped
+            )
             del pending[name]
         if not pending:
             break
@@ -311,8 +347,9 @@ def _init_speed(scenario: M.Scenario, name: str, seen: tuple[str, ...] = ()) -> 
 def _place(pos: M.Position, roads: RoadMap, centre: dict) -> tuple:
     """(SUMO lane, arc length along its shape, offset from its centre) of an Init position."""
     if isinstance(pos, M.LanePosition):
-        lane, s = roads.lane_s(pos.road, pos.lane, pos.s)
-        return lane, s, pos.offset
+        # a lane netconvert drops: the network's nearest lane, offset to the dropped lane's centre
+        lane, s, d = roads.lane_s_offset(pos.road, pos.lane, pos.s)
+        return lane, s, pos.offset + d
     if isinstance(pos, M.RoadPosition):
         lane1, s, d = roads.t_position(pos.road, pos.s, pos.t)
         return _lane_at(roads, lane1, d, s)
@@ -346,9 +383,9 @@ def _absolute_xy(pos: M.Position, roads: RoadMap) -> tuple[float, float, float]:
         heading = LanePolyline(lane.shape, lane.width, lane.id).heading_at(s) if pos.h is None else pos.h
         return pos.x, pos.y, heading
     if isinstance(pos, (M.LanePosition, M.RoadPosition)):
-        if isinstance(pos, M.LanePosition):
-            lane, s = roads.lane_s(pos.road, pos.lane, pos.s)
-            d = pos.offset
+        if isinstance(pos, M.LanePosition):  # a lane netconvert drops: offset from the nearest lane
+            lane, s, aside = roads.lane_s_offset(pos.road, pos.lane, pos.s)
+            d = pos.offset + aside
         else:
             lane, s, d = roads.t_position(pos.road, pos.s, pos.t)
         poly = LanePolyline(lane.shape, lane.width, lane.id)
@@ -497,9 +534,8 @@ class FileScenario(Scenario):
         defaults = cls.config_cls()
         values = {k: getattr(config, k) for k in cls.file_params if getattr(config, k) != getattr(defaults, k)}
         model = load(cls.file, values)
-        net = network_file(model.road)
-        roads = RoadMap(net, converted=not str(model.road).endswith(".net.xml"))
-        ego = find_ego(model, config.ego_entity)
+        roads = road_map(model)
+        ego = find_ego(model, config.ego_entity, roads)
         _check_ego_actions(model, ego)
         for x in M.walk(model.stories):
             if isinstance(x, M.EntityAction) and x.entity == ego:
@@ -519,12 +555,13 @@ class FileScenario(Scenario):
             # traffic by heading"): its road is read as left-hand traffic, its edges turned round
             turned = frozenset({road_of_edge(start.edge)})
             try:
-                lht = RoadMap(network_file(model.road, turned), converted=True, by_heading=turned)
+                lht = RoadMap(network_file(model.road, turned), converted=True, source=model.road, by_heading=turned)
             except ScenarioFileError:
                 pass  # a road joined to others at a junction: the heading is refused below
             else:
                 roads, starts = lht, placements(model, lht)
         _check_turned(model, ego, starts[ego], roads)
+        _check_dropped(model, ego, starts, roads)
         edge = starts[ego].edge
         _check_road_references(model, roads, len(roads.edges[edge].lanes), len(_opposite_lanes(roads, edge)))
         _check_story_headings(model, roads)
@@ -659,7 +696,7 @@ class FileScenario(Scenario):
         self.view.target_lane = lane
 
     def after_setup(self) -> None:
-        name, why = ego_choice(self.model, self.config.ego_entity)
+        name, why = ego_choice(self.model, self.config.ego_entity, self.roads)
         self.event("ego", f"the ego is {name!r}: {why}")
         self.story.start()
 
@@ -806,15 +843,19 @@ class StoryDriver:
             # stands still (speed 0) unless the storyboard moves it
             own = start.speed if v.kind == "vehicle" else (start.speed or 0.0)
             speed = max(c.ego_speed, own if own is not None else 0.0) if v.kind == "vehicle" else own
+            # an entity on a lane netconvert drops is inserted where it is, across its SUMO
+            # lane (beside the lane's bodies, no insertion check), and driven by ego
+            here = name in involved or bool(start.dropped)
             world.vehicle(
                 VehicleSpec(
                     name,
                     vt.id,
                     self._route(start.edge),
                     start.index,
-                    start.front if name in involved else self._insert_at(name),
-                    (own or 0.0) if name in involved else speed,
-                    overlapping=name in involved,
+                    start.front if here else self._insert_at(name),
+                    (own or 0.0) if here else speed,
+                    overlapping=here,
+                    lateral=start.offset if start.dropped else 0.0,
                 ),
                 vt,
                 ScriptedEntity(name, own),
@@ -957,9 +998,10 @@ class StoryDriver:
                 continue
             turned = start.turned
             # a car whose Init offset puts it across the centre line, in the other direction's
-            # lane, driving its own lane's way (speed-profile.xosc's Car2): driven by ego too
+            # lane, driving its own lane's way (speed-profile.xosc's Car2), or on a lane
+            # netconvert drops (a border or shoulder lane no SUMO driver drives): driven by ego too
             across = start.edge == ego_edge and self._across(own.get(start.index, 0.0) + start.offset)
-            if not (turned or across):
+            if not (turned or across or start.dropped):
                 continue
             cx = sc.model.entities[name].vehicle.center_x
             if turned and getattr(tp.position, "turned", 0):
@@ -983,6 +1025,9 @@ class StoryDriver:
             direction = 1 if math.cos(heading - road.heading_at(s)) > 0.0 else -1
             self._kin.add(name, s, d, start.speed or 0.0, direction)
             sc.bridge.place(name, x, y, heading, start.speed or 0.0)
+            off_lane = getattr(sc.bridge, "off_lane", None)
+            if start.dropped and off_lane is not None:
+                off_lane.add(name)  # SUMO may put it on no lane: the sensor's rows add it
 
     def after_sim_step(self) -> None:
         """The run ends, as at the end of its time, when a scripted entity has left the road
@@ -998,7 +1043,9 @@ class StoryDriver:
         gone = [n for n in sc.bridge.arrived() if n in self._scripted]
         away = self._kin.beyond()
         if away is not None:
-            self._road_end(f"{away} left its road (driven against its lane, at the road's end)")
+            first = sc.starts.get(away)
+            how = "by ego on a lane netconvert does not make" if first and first.dropped else "against its lane"
+            self._road_end(f"{away} left its road (driven {how}, at the road's end)")
         elif gone:
             self._road_end(f"{gone[0]} left the road network (the end of its route)")
         elif sc.view.s + sc.geometry.cg_to_front >= self._lane_end(sc.target_lane) and self._ego_end is None:
@@ -1177,8 +1224,8 @@ class StoryDriver:
             return position.x, position.y, position.h if position.h is not None else road.heading_at(s)
         if isinstance(position, (M.LanePosition, M.RoadPosition)):
             if isinstance(position, M.LanePosition):
-                lane, pos = sc.roads.lane_s(position.road, position.lane, position.s)
-                d_extra = position.offset
+                lane, pos, aside = sc.roads.lane_s_offset(position.road, position.lane, position.s)
+                d_extra = position.offset + aside
             else:
                 lane, pos, d_extra = sc.roads.t_position(position.road, position.s, position.t)
             poly = LanePolyline(lane.shape, lane.width, lane.id)
@@ -1717,6 +1764,41 @@ def _check_turned(model: M.Scenario, ego: str, start: Placement, roads: RoadMap)
     )
 
 
+def _check_dropped(model: M.Scenario, ego: str, starts: dict[str, Placement], roads: RoadMap) -> None:
+    """An entity starting on a lane netconvert drops (a border, shoulder, sidewalk... lane) is
+    driven by ego along the ego's lane frame, so it starts on the ego's road (either side); the
+    ego itself drives the lanes of the network. ScenarioFileError naming the position's line."""
+
+    def road_of(edge: str) -> str:  # netconvert's edges of road r: -r, r, -r.S, r#1...
+        return edge.removeprefix("-").partition("#")[0].partition(".")[0]
+
+    road = road_of(starts[ego].edge)
+    for name, start in starts.items():
+        if not start.dropped:
+            continue
+        tp = next(a for a in model.init[name] if isinstance(a, M.TeleportAction))
+        pos = tp.position
+        assert isinstance(pos, M.LanePosition)  # only a LanePosition names a lane
+        far = roads.dropped_lane(pos.road, pos.lane, pos.s)
+        kind = far.kind if far is not None and far.kind else "non-driving"
+        article = "an" if kind[0] in "aeiou" else "a"
+        what = f"lane {pos.lane} of road {pos.road!r}, {article} {kind} lane netconvert does not make"
+        if name == ego:
+            raise ScenarioFileError(
+                model.path,
+                start.dropped,
+                f"the ego {ego!r} starts on {what}: the ego drives the lanes of the road network (driving and "
+                f"stop lanes; choose another with --ego, see {DOCS})",
+            )
+        if road_of(start.edge) != road:
+            raise ScenarioFileError(
+                model.path,
+                start.dropped,
+                f"{name} starts on {what} away from the ego's road ({road!r}): ego drives an entity on such a "
+                f"lane itself, along the ego's road only (see {DOCS})",
+            )
+
+
 def _check_story_headings(model: M.Scenario, roads: RoadMap) -> None:
     """A TeleportAction of the storyboard whose world heading (an absolute Orientation, a
     WorldPosition's h) faces more than 90 degrees from the lane it names is refused with that
@@ -1745,9 +1827,19 @@ def _check_road_references(model: M.Scenario, roads: RoadMap, ego_lanes: int, ot
             if isinstance(x, M.LanePosition):
                 roads.lane_position(x.road, x.lane, x.s)
             elif isinstance(x, M.RoadPosition):
-                roads.lane_position(x.road, -1, x.s)
+                roads.lane_s(x.road, -1, x.s)  # t is measured from lane -1's left edge
         except ValueError as exc:
             raise ScenarioFileError(model.path, x.line, str(exc)) from None
+        if isinstance(x, M.TeleportAction) and _on_dropped_lane(x.position, roads):
+            pos = x.position
+            assert isinstance(pos, M.LanePosition)  # only a LanePosition names a lane
+            raise ScenarioFileError(
+                model.path,
+                pos.line,
+                f"a TeleportAction onto lane {pos.lane} of road {pos.road!r}, a lane netconvert does not make, "
+                f"outside <Init> is not supported by ego: an entity is on such a lane from its Init start only "
+                f"(see {DOCS})",
+            )
         if (
             isinstance(x, M.LaneChangeAction)
             and x.relative_to is not None
@@ -1795,7 +1887,12 @@ def file_listing(path: str, ego: str = "") -> dict:
         # from the tree's bodies when the file cannot be read
         try:
             chosen: str | None
-            chosen, why = ego_choice(load(path), ego)
+            model = load(path)
+            try:
+                roads: RoadMap | None = road_map(model)
+            except ScenarioFileError:
+                roads = None  # the road refused: named by the checks below
+            chosen, why = ego_choice(model, ego, roads)
         except ScenarioFileError:
             objects = ents.all("ScenarioObject") if ents is not None else ()
             raw = [(e["name"], "vehicle" if _raw_vehicle(so) else "other") for e, so in zip(entities, objects)]

@@ -51,6 +51,8 @@ class VehicleSpec:
     #: inserted where it is although it overlaps another body there (the simulator's
     #: insertion check skipped; an OpenSCENARIO file's overlapping start, a ghost)
     overlapping: bool = False
+    #: an ``overlapping`` one is put this far (m, + left) from its lane's centre
+    lateral: float = 0.0
 
 
 @dataclass(frozen=True)

@@ -116,6 +116,11 @@ class SumoBridge:
         self.config = config
         self.look_ahead = look_ahead
         self.controlled: dict[str, VehicleGeometry] = {}
+        #: vehicles moved off every lane (an OpenSCENARIO entity on a lane netconvert drops,
+        #: placed by moveToXY): SUMO's context subscription finds vehicles through lanes and
+        #: misses them, so :meth:`surroundings` adds those within its radius
+        self.off_lane: set[str] = set()
+        self._ctx_radius = 0.0
         self._types: dict[str, VehicleType] = {}
         self._vehicle_type: dict[str, str] = {}
         self._min_gap: dict[str, float] = {}
@@ -301,7 +306,10 @@ class SumoBridge:
                 edge = self._routes[route][0]
                 x, y = ls.simulation.convert2D(edge, pos, s.lane)
                 xb, yb = ls.simulation.convert2D(edge, max(pos - 1.0, 0.0), s.lane)
-                angle = (90.0 - math.degrees(math.atan2(y - yb, x - xb))) % 360.0
+                psi = math.atan2(y - yb, x - xb)
+                angle = (90.0 - math.degrees(psi)) % 360.0
+                if s.lateral:
+                    x, y = x - s.lateral * math.sin(psi), y + s.lateral * math.cos(psi)
                 veh.moveToXY(s.id, edge, s.lane, x, y, angle, 2)
             self._vehicle_type[s.id] = s.type_id
             self._pending.append(s)
@@ -560,6 +568,7 @@ class SumoBridge:
             vid, tc.CMD_GET_VEHICLE_VARIABLE, float(radius), [tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED]
         )
         self._ctx_vars = (tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED)
+        self._ctx_radius = float(radius)
 
     def surroundings(self, vid: str) -> tuple[list[str], list[tuple[float, ...]]]:
         """The vehicles around ``vid`` (see :meth:`subscribe_surroundings`), controlled ones
@@ -568,18 +577,36 @@ class SumoBridge:
         p_key, a_key, v_key = self._ctx_vars
         controlled, dims, known = self.controlled, self.dimensions, self._dims
         if _BOXES is not None:  # the same arithmetic in C (ego/_native.c)
-            return _BOXES(results, controlled, known, dims, p_key, a_key, v_key)
-        cos, sin, rad = math.cos, math.sin, math.radians
-        ids, rows = [], []
-        for other, var in results.items():
-            if other in controlled:
+            ids, rows = _BOXES(results, controlled, known, dims, p_key, a_key, v_key)
+        else:
+            cos, sin, rad = math.cos, math.sin, math.radians
+            ids, rows = [], []
+            for other, var in results.items():
+                if other in controlled:
+                    continue
+                xf, yf = var[p_key]
+                psi = rad(90.0 - var[a_key])
+                length, width = known.get(other) or dims(other)
+                half = 0.5 * length
+                ids.append(other)
+                rows.append((xf - half * cos(psi), yf - half * sin(psi), psi, var[v_key], length, width))
+        if self.off_lane:
+            ids, rows = self._off_lane_around(vid, list(ids), list(rows))
+        return ids, rows
+
+    def _off_lane_around(self, vid: str, ids: list[str], rows: list) -> tuple[list[str], list]:
+        """``ids``, ``rows`` with the :attr:`off_lane` vehicles within the subscription's
+        radius of ``vid`` (front bumper to front bumper, as SUMO measures it) added."""
+        veh = self._ls.vehicle
+        xe, ye = veh.getPosition(vid)
+        present = set(veh.getIDList())
+        for other in sorted(self.off_lane - set(ids)):
+            if other not in present or other in self.controlled:
                 continue
-            xf, yf = var[p_key]
-            psi = rad(90.0 - var[a_key])
-            length, width = known.get(other) or dims(other)
-            half = 0.5 * length
-            ids.append(other)
-            rows.append((xf - half * cos(psi), yf - half * sin(psi), psi, var[v_key], length, width))
+            xf, yf = veh.getPosition(other)
+            if math.hypot(xf - xe, yf - ye) <= self._ctx_radius:
+                ids.append(other)
+                rows.append(self.box(other))
         return ids, rows
 
     def box(self, vid: str) -> tuple[float, float, float, float, float, float]:

@@ -408,8 +408,7 @@ HAND = [
         "lane-beyond-road",
         sub(EGO_LANE, EGO_LANE.replace('laneId="-2"', 'laneId="-4"')),
         'laneId="-4"',
-        "road '0' has no lane -4 on that side at s = 297.75 (lane ids -1, -2, -3; netconvert keeps driving and "
-        "stop lanes)",
+        "road '0' has no lane -4 on that side at s = 297.75 (lane ids -1, -2, -3, of every type)",
     ),
     (
         "unknown-road",

@@ -102,15 +102,23 @@ def maneuver_groups(events) -> str:
     return groups
 
 
-def write_file(path: Path, road: str, starts: list[tuple[str, str, float, float, str]], events) -> Path:
-    """A scenario file at ``path`` on ``road`` (its LogicFile): one CAR per start (name, road id,
-    lane, s, speed, and an Orientation element or ""), ``events`` (from :func:`event`) in one
-    story that starts at once."""
-    ents = "".join(f'<ScenarioObject name="{n}">{CAR}</ScenarioObject>' for n, *_ in starts)
+def write_file(
+    path: Path,
+    road: str,
+    starts: list[tuple[str, str, float, float, str]],
+    events,
+    bodies: dict[str, str] | None = None,
+    offsets: dict[str, float] | None = None,
+) -> Path:
+    """A scenario file at ``path`` on ``road`` (its LogicFile): one CAR (or ``bodies[name]``) per
+    start (name, road id, lane, s, speed, and an Orientation element or ""; its LanePosition's
+    ``offsets[name]``, default 0), ``events`` (from :func:`event`) in one story that starts at once."""
+    bodies, offsets = bodies or {}, offsets or {}
+    ents = "".join(f'<ScenarioObject name="{n}">{bodies.get(n, CAR)}</ScenarioObject>' for n, *_ in starts)
     init = "".join(
         f'<Private entityRef="{n}"><PrivateAction><TeleportAction><Position><LanePosition roadId="{r}" '
-        f'laneId="{lane}" s="{s}" offset="0">{o}</LanePosition></Position></TeleportAction></PrivateAction>'
-        f"<PrivateAction>{speed(v)}</PrivateAction></Private>"
+        f'laneId="{lane}" s="{s}" offset="{offsets.get(n, 0)}">{o}</LanePosition></Position></TeleportAction>'
+        f"</PrivateAction><PrivateAction>{speed(v)}</PrivateAction></Private>"
         for n, r, lane, s, v, o in starts
     )
     path.write_text(
