@@ -377,6 +377,89 @@ class ReachPosition(ConditionKind):
         return math.hypot(e.x - x, e.y - y) <= c.value + EPS  # type: ignore[operator]
 
 
+#: OpenSCENARIO 1.3's AngleType values, and the coordinate systems ego measures an angle in
+ANGLE_TYPES = ("heading", "pitch", "roll")
+ANGLE_SYSTEMS = ("world", "entity", "road", "lane")
+
+
+def _angle(b: Any, c: Node, base: Base, systems: tuple[str, ...], default: str, entity: str | None) -> M.Condition:
+    """An (Relative)AngleCondition: angle in [-pi, pi], tolerance in [0, pi] (rad)."""
+    kind = b.enum(c, "angleType", ANGLE_TYPES)
+    angle = b.num(c, "angle", at_most=(math.pi, "rad in magnitude (-pi to pi)"))
+    tolerance = b.num(c, "angleTolerance", nonneg=True, at_most=(math.pi, "rad (0 to pi)"))
+    system = default
+    if "coordinateSystem" in c.attrs:
+        raw = c.attrs["coordinateSystem"]
+        if raw == "trajectory":
+            raise b.error(
+                c,
+                f'coordinateSystem="trajectory" in <{c.tag}> is not supported by ego (allowed: '
+                f"{', '.join(systems)}; see {DOCS})",
+            )
+        system = b.enum(c, "coordinateSystem", systems)
+    return M.Condition(kind=c.tag, value=(angle, tolerance), distance_type=f"{kind}:{system}", entity=entity, **base)
+
+
+def _orientation(board: Storyboard, e: EntityState, kind: str, system: str) -> float:
+    """The entity's ``kind`` angle (rad) in ``system``: its heading in the world (yaw), along
+    the lane frame at its position (road and lane alike: the lanes run parallel), or in its
+    own frame (0); pitch and roll are 0 (ego's roads and bodies are planar)."""
+    if kind != "heading" or system == "entity":
+        return 0.0
+    if system == "world":
+        return e.yaw
+    return e.yaw - board.driver.road_heading(e.x, e.y)
+
+
+def _within(measured: float, angle: float, tolerance: float) -> bool:
+    """Whether ``measured`` is within ``tolerance`` of ``angle`` on the circle (rad)."""
+    return abs(math.remainder(measured - angle, math.tau)) <= tolerance + EPS
+
+
+class Angle(ConditionKind):
+    tag = "AngleCondition"
+    label = "`AngleCondition`, `RelativeAngleCondition`"
+    also = ("RelativeAngleCondition",)
+    note = (
+        "(1.3) holds while the triggering entity's `angleType` angle is within `angleTolerance` of `angle` on "
+        "the circle (rad; the difference wrapped to (-pi, pi]): `heading` in `coordinateSystem` `world` (the "
+        "default: its yaw, counter-clockwise from +x), `road` and `lane` (its yaw less the lane frame's heading "
+        "where it is: the ego's lanes run parallel, so road and lane read alike), `entity` (always 0, as the "
+        "standard says); `pitch` and `roll` are 0 (ego's roads and bodies are planar). `RelativeAngleCondition` "
+        "compares the triggering entity's angle less the `entityRef`'s (`entity`, the default, and `world`: "
+        "the yaw difference; `road`, `lane`: the difference of their headings against the lane frame, each "
+        "where it is). `trajectory` is refused; `angle` beyond +-pi and `angleTolerance` outside 0 to pi are "
+        "refused"
+    )
+
+    def build(self, b: Any, c: Node, base: Base) -> M.Condition:
+        return _angle(b, c, base, ANGLE_SYSTEMS, "world", None)
+
+    def holds(self, board: Storyboard, c: M.Condition, e: EntityState, name: str) -> bool:
+        kind, system = c.distance_type.split(":")
+        angle, tolerance = c.value  # type: ignore[misc]
+        return _within(_orientation(board, e, kind, system), angle, tolerance)
+
+
+class RelativeAngle(ConditionKind):
+    tag = "RelativeAngleCondition"
+
+    def build(self, b: Any, c: Node, base: Base) -> M.Condition:
+        return _angle(b, c, base, ANGLE_SYSTEMS, "entity", b.entity_ref(c))
+
+    def holds(self, board: Storyboard, c: M.Condition, e: EntityState, name: str) -> bool:
+        kind, system = c.distance_type.split(":")
+        angle, tolerance = c.value  # type: ignore[misc]
+        other = board.states[c.entity]  # type: ignore[index]
+        if kind != "heading":
+            return _within(0.0, angle, tolerance)
+        if system in ("entity", "world"):
+            return _within(e.yaw - other.yaw, angle, tolerance)
+        return _within(
+            _orientation(board, e, kind, system) - _orientation(board, other, kind, system), angle, tolerance
+        )
+
+
 for _kind in (
     SimulationTime,
     StoryboardElementState,
@@ -395,6 +478,8 @@ for _kind in (
     RelativeDistance,
     Distance,
     ReachPosition,
+    Angle,
+    RelativeAngle,
 ):
     register_condition(_kind())
 

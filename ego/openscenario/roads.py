@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ego.openscenario.lane_shapes import exact_lane_shapes
 from ego.openscenario.xmltree import ScenarioFileError
 
 #: m between the points netconvert samples an OpenDRIVE curve at
@@ -51,9 +52,10 @@ OPTIONS = (
 ALL_LANES = ("--opendrive.import-all-lanes", "true")
 
 
-#: the version of :func:`for_netconvert`'s copy, part of a converted road's cache key (a road
-#: converted before a change of the copy is converted again)
-COPY_VERSION = "copy 2"
+#: the version of :func:`for_netconvert`'s copy and of what is done to netconvert's network
+#: (:func:`ego.openscenario.lane_shapes.exact_lane_shapes`), part of a converted road's cache
+#: key (a road converted before a change of either is converted again)
+COPY_VERSION = "copy 4"
 
 
 def cache_dir() -> Path:
@@ -145,6 +147,7 @@ def network_file(road: Path, turned: frozenset[str] = frozenset(), all_lanes: bo
     except ScenarioFileError:
         tmp.unlink(missing_ok=True)
         raise
+    exact_lane_shapes(data, tmp)  # lanes beside one that opens or closes: on the road's own widths
     if not _edges(tmp):
         tmp.unlink(missing_ok=True)
         raise ScenarioFileError(
@@ -906,14 +909,22 @@ class RoadMap:
         """The way lane ``index`` of ``edge`` drives on: (edge, lane index, the internal lanes
         from the one before) of its lane's successors, each edge once. Where the lane has
         connections to more than one edge, the straightest (the least heading change from the
-        lane's end to the next lane's start: the way on, as SUMO's ``dir="s"``); it ends at a
-        lane with no connection (a dead end) or one leading back onto the route (a loop)."""
+        lane's end to the next lane's start: the way on, as SUMO's ``dir="s"``). A lane that
+        ends with no connection (a merge lane, an on-ramp's once it has joined the motorway)
+        goes on by the nearest lane beside it on its edge that has one (the left first: where a
+        driver merges; :meth:`route_keys` numbers the lanes across that step); the route ends
+        where no lane of the edge goes on (a dead end) or at a lane leading back onto it (a loop)."""
         route = [(edge, index, ())]
         seen = {edge}
         while len(route) < limit:
             e, i, _ = route[-1]
-            here = self.edges[e].lanes[i].shape
-            links = [k for k in self.links.get((e, i), ()) if k.to not in seen and k.to in self.edges]
+            n = len(self.edges[e].lanes)
+            links: list[Link] = []
+            for j in sorted(range(n), key=lambda j: (abs(j - i), j < i)):
+                links = [k for k in self.links.get((e, j), ()) if k.to not in seen and k.to in self.edges]
+                if links:
+                    break
+            here = self.edges[e].lanes[j].shape if links else ()
             if not links or len(here) < 2:
                 break
             out = _direction(here[-2], here[-1])
@@ -921,6 +932,26 @@ class RoadMap:
             route.append((best.to, best.to_lane, best.via))
             seen.add(best.to)
         return route
+
+    def route_keys(self, route: list[tuple[str, int, tuple[str, ...]]], key: int) -> list[int]:
+        """The number of the route's lane on each of its edges in a numbering of lanes across the
+        route that starts with ``key`` for its first lane and counts lanes from the right (SUMO's
+        index): the same number on every edge for a lane that goes on, one more past a step to
+        the lane on the left (:meth:`lane_route` past a lane that ends)."""
+        keys = [key]
+        for (e, i, _), (nxt, to_lane, _) in zip(route, route[1:]):
+            step = 0
+            if not any(k.to == nxt and k.to_lane == to_lane for k in self.links.get((e, i), ())):
+                step = next(
+                    (
+                        j - i
+                        for j in range(len(self.edges[e].lanes))
+                        if any(k.to == nxt and k.to_lane == to_lane for k in self.links.get((e, j), ()))
+                    ),
+                    0,
+                )
+            keys.append(keys[-1] + step)
+        return keys
 
     def _heading_in(self, link: Link) -> float:
         """The direction (rad) a connection starts in: its first internal lane's, else its lane's."""
@@ -932,6 +963,23 @@ class RoadMap:
     ) -> list[tuple[str, int, tuple[str, ...]]]:
         """Lane ``index`` of the route's first edge along the same edges as ``route`` (a
         :meth:`lane_route`), as far as its lane connects to the next of them."""
+        return self._along(route, index)
+
+    def beside_from(
+        self, route: list[tuple[str, int, tuple[str, ...]]], keys: list[int], key: int
+    ) -> list[tuple[str, int, tuple[str, ...]]]:
+        """Lane ``key`` of the route's lane numbering (:meth:`route_keys`: ``keys``), from the
+        first of the route's edges that has it (a lane that begins after a merge: the
+        motorway's lanes beside an on-ramp's), along the same edges as far as its lane connects
+        to the next of them; empty when no edge of the route has it."""
+        for j, ((e, i, _), r) in enumerate(zip(route, keys)):
+            if 0 <= i + key - r < len(self.edges[e].lanes):
+                return self._along(route[j:], i + key - r)
+        return []
+
+    def _along(
+        self, route: list[tuple[str, int, tuple[str, ...]]], index: int
+    ) -> list[tuple[str, int, tuple[str, ...]]]:
         out = [(route[0][0], index, ())]
         for nxt, _, _ in route[1:]:
             e, i, _ = out[-1]
@@ -943,12 +991,22 @@ class RoadMap:
 
     def route_points(self, route: list[tuple[str, int, tuple[str, ...]]]) -> list[tuple[float, float]]:
         """The centre line along a :meth:`lane_route`: its lanes' and internal lanes' points in
-        driving order, a point where one piece ends and the next starts taken once."""
+        driving order, a point where one piece ends and the next starts taken once.
+
+        Where the next piece starts a little behind the end of the one before (netconvert
+        ends a road's lane a few mm past where the next road's starts: soderleden.xodr's ramp,
+        road 1 into road 5, 6 mm), its points up to the join are left out: kept, they fold the
+        line back on itself, a segment pointing backwards whose two vertices turn the lane
+        by +-pi, and the frame's curvature there spikes (0.3 1/m over 0.25 m once refined)."""
         pts: list[tuple[float, float]] = []
         for e, i, via in route:
             for shape in (*(self.inner[v] for v in via), self.edges[e].lanes[i].shape):
+                joined = len(pts) < 2  # past the join: the piece's points are taken as they are
                 for p in shape:
                     if not pts or math.dist(pts[-1], p) > 1e-3:
+                        if not joined and _behind(pts[-2], pts[-1], p):
+                            continue
+                        joined = True
                         pts.append(p)
         return pts
 
@@ -1002,6 +1060,17 @@ class RoadMap:
         if best is None:
             raise ValueError("the road has no lanes")
         return best[0], best[1], best[2]
+
+
+#: m: how far a piece may start behind the end of the one before for its points there to be
+#: left out (:meth:`RoadMap.route_points`); netconvert's overlaps are millimetres
+OVERLAP = 0.5
+
+
+def _behind(a: tuple[float, float], b: tuple[float, float], p: tuple[float, float]) -> bool:
+    """Whether ``p`` lies within :data:`OVERLAP` of ``b`` and not ahead of it along ``a`` -> ``b``."""
+    dx, dy = p[0] - b[0], p[1] - b[1]
+    return dx * dx + dy * dy <= OVERLAP * OVERLAP and dx * (b[0] - a[0]) + dy * (b[1] - a[1]) <= 0.0
 
 
 def _direction(a: tuple[float, float], b: tuple[float, float]) -> float:

@@ -71,6 +71,9 @@ class Driver(Protocol):
         """World (x, y, heading) of a position, relative ones from ``states``."""
 
     def road_frame(self, x: float, y: float) -> tuple[float, float]: ...
+    def road_heading(self, x: float, y: float) -> float:
+        """The lane frame's heading (rad) where (x, y) projects onto it."""
+
     def lane_centre_of(self, d: float) -> float:
         """d of the centre of the lane at offset ``d``."""
 

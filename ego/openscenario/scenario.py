@@ -285,6 +285,22 @@ def placements(scenario: M.Scenario, roads: RoadMap) -> dict[str, Placement]:
     return out
 
 
+def later_lanes(roads: RoadMap, route, keys: list[int], n_lanes: int) -> dict[int, float]:
+    """The lanes left of the ego's start road's that begin on a later road of its route (a
+    motorway's lanes beside an on-ramp once the ramp has merged): their number in the route's
+    lane numbering (``keys``, :meth:`RoadMap.route_keys`: the start road's SUMO indices, then
+    ``n_lanes`` and up) -> width (m). Lanes that begin on the right of the start road's are not
+    among them (the numbering starts at the start road's rightmost)."""
+    out: dict[int, float] = {}
+    for (e, i, _), r in zip(route, keys):
+        lanes = roads.edges[e].lanes
+        for j in range(len(lanes)):
+            k = r + j - i
+            if k >= n_lanes and k not in out:
+                out[k] = lanes[j].width
+    return dict(sorted(out.items()))
+
+
 def _turned(tp: M.TeleportAction, lane, s: float, flip: bool = False) -> int:
     """The line turning an entity that starts at ``s`` along SUMO ``lane`` against the lane's
     direction (0: it faces the lane's way): its relative Orientation (read by the loader), or
@@ -637,13 +653,18 @@ class FileScenario(Scenario):
         # the ego drives on along its lane's successors (the straightest at a choice): SUMO's
         # route for it and its lane frame, every lane of its start road along the same roads
         self.ego_route = route = roads.lane_route(edge, c.ego_lane)
+        self.route_keys = keys = roads.route_keys(route, c.ego_lane)
+        n_lanes = len(roads.edges[edge].lanes)
         road = {
             "edge": edge,
             "route": f"route_{edge}",
             "route_edges": tuple(e for e, _, _ in route),
-            "n_lanes": len(roads.edges[edge].lanes),
+            "n_lanes": n_lanes,
             "refine": refine_shape,
-            "lane_points": lambda index: roads.route_points(roads.beside(route, index)),
+            "lane_points": lambda index: roads.route_points(
+                roads.beside(route, index) if index < n_lanes else roads.beside_from(route, keys, index)
+            ),
+            "later_lanes": later_lanes(roads, route, keys, n_lanes),
         }
         self.in_lane = BrakeInLane(c, lambda: self.safety is not None and self.safety.active)
         self.impact = Impact(self.in_lane)
@@ -799,6 +820,9 @@ class StoryDriver:
         #: the ego lane frame's s -> the storyboard's s along the reference line, and back
         self._road_s: Callable[[float], float] = float
         self._lane_s: Callable[[float], float] = float
+        #: (s along the ego's frame where it begins, edge, the route's lane) of each edge of
+        #: the ego's route, found when first asked (StoryDriver._ego_edge)
+        self._route_s: list[tuple[float, str, int, int]] | None = None
 
     def _route(self, edge: str) -> str:
         sc = self.sc
@@ -835,6 +859,8 @@ class StoryDriver:
         #: each entity's bounding box centre ahead of its reference point (m, the file's center.x)
         self._center_x = {n: e.vehicle.center_x for n, e in sc.model.entities.items()}
         self._routes: set[str] = set()
+        self._route_s = None
+        self._lane_ends: dict[int, float] = {}
         self._types: dict[str, VehicleType] = {}
         #: (a vehicle?, id) -> its own decel and emergencyDecel (m/s^2), before a friction scale
         self._decels: dict[tuple[bool, str], tuple[float, float]] = {}
@@ -1075,18 +1101,36 @@ class StoryDriver:
             self._road_end(f"{away} left its road (driven {how}, at the road's end)")
         elif gone:
             self._road_end(f"{gone[0]} left the road network (the end of its route)")
-        elif sc.view.s + sc.geometry.cg_to_front >= sc.view.road.length and self._ego_end is None:
+        elif sc.view.s + sc.geometry.cg_to_front >= self._lane_end(sc.target_lane) and self._ego_end is None:
             last, index, _ = sc.ego_route[-1]
-            lane = sc.roads.edges[last].lanes[index].id
-            end = "a dead end" if not sc.roads.links.get((last, index)) else "its lane leads back onto its route"
-            why = (
-                f"the ego reached the end of its route (lane {lane}, {sc.view.road.length:.0f} m along its lanes "
-                f"from lane {sc.view.road.lane_id}: {end})"
-            )
+            if sc.target_lane == sc.route_keys[-1]:
+                lane = sc.roads.edges[last].lanes[index].id
+                end = "a dead end" if not sc.roads.links.get((last, index)) else "its lane leads back onto its route"
+                why = (
+                    f"the ego reached the end of its route (lane {lane}, {sc.view.road.length:.0f} m along its "
+                    f"lanes from lane {sc.view.road.lane_id}: {end})"
+                )
+            else:  # its lane ends beside the route's: a merge it has not made
+                why = (
+                    f"the ego reached the end of its lane ({self._lane_end(sc.target_lane):.0f} m along its lanes "
+                    f"from lane {sc.view.road.lane_id}), where its route goes on in the lane beside"
+                )
             if sc.ego_name in self.board.watch_end:  # type: ignore[union-attr]
                 self._ego_end = why  # an EndOfRoadCondition on the ego sees it first (the next step)
             else:
                 self._road_end(why)
+
+    def _lane_end(self, lane: int) -> float:
+        """Where lane ``lane`` of the ego's frame ends, along the frame (m of s): the start lane's
+        length, another lane's last point projected (a lane that ends at a merge)."""
+        sc = self.sc
+        road = sc.view.road
+        if lane == sc.config.ego_lane or lane not in sc.view.lanes:
+            return road.length
+        ends = self._lane_ends
+        if lane not in ends:
+            ends[lane] = road.project(*sc.view.lanes[lane].points[-1])[0]
+        return ends[lane]
 
     def _hidden_collision(self) -> None:
         """A body hidden from the surround sensor (a VisibilityAction) still collides: the
@@ -1269,6 +1313,9 @@ class StoryDriver:
         s, d, _ = sc.road.project(x, y)
         return self._road_s(s), d
 
+    def road_heading(self, x: float, y: float) -> float:
+        return self.sc.road.project(x, y)[2]
+
     def lane_centre_of(self, d: float) -> float:
         sc = self.sc
         return min(sc.lane_offset.values(), key=lambda off: abs(d - off))
@@ -1282,16 +1329,50 @@ class StoryDriver:
         sc = self.sc
         lanes = self._lanes_all
         n = len(sc.lanes)
+        edge, here, key = self._ego_edge()
+        index: int | None
         if relative_to is None:
-            index = self._lane_keys.get(lane_id, -1)
+            # the lane of that OpenDRIVE id on the road the ego is on now (past a merge: a later
+            # road's), else among its start road's and the other direction's (_lane_keys)
+            index = self._lane_index(edge, here, key, lane_id) if edge != sc.starts[sc.ego_name].edge else None
+            if index is None:
+                index = self._lane_keys.get(lane_id, -1)
         else:
             index = min(lanes, key=lambda i: abs(relative_to - lanes[i])) + dlane
+            if index < n and self._lane_index(edge, here, key, None, index) is None:
+                index = None  # one of the ego's direction's lanes that is not beside it here
         if index not in lanes:
+            on = len(sc.roads.edges[edge].lanes)
             raise ConfigError(
                 f"lane {lane_id if relative_to is None else f'{dlane:+d} from the reference'} does "
-                f"not exist on the ego's road ({n} lanes)"
+                f"not exist on the ego's road ({on} lanes{'' if edge == sc.starts[sc.ego_name].edge else ' where it is'})"
             )
         return lanes[index]
+
+    def _ego_edge(self) -> tuple[str, int, int]:
+        """The edge of the ego's route it is on now, the route's lane there and its number
+        (:meth:`RoadMap.route_keys`): the last edge whose lane begins at or before the ego
+        along its frame (s)."""
+        sc = self.sc
+        starts = self._route_s
+        if starts is None:
+            road = sc.road
+            starts = self._route_s = [
+                (road.project(*sc.roads.edges[e].lanes[i].shape[0])[0], e, i, r)
+                for (e, i, _), r in zip(sc.ego_route, sc.route_keys)
+            ]
+        s = sc.s
+        return next(((e, i, r) for s0, e, i, r in reversed(starts) if s0 <= s + 1e-6), starts[0][1:])
+
+    def _lane_index(self, edge: str, here: int, key: int, lane_id: int | None, index: int | None = None) -> int | None:
+        """The number (:meth:`RoadMap.route_keys`) of OpenDRIVE lane ``lane_id`` of ``edge``,
+        the route's lane there ``here`` numbered ``key``, or, given ``index``, that number when
+        ``edge`` has the lane, else None."""
+        sc = self.sc
+        if index is not None:
+            return index if 0 <= here + index - key < len(sc.roads.edges[edge].lanes) else None
+        j = next((ln.index for ln in sc.roads.edges[edge].lanes if sc.roads.lane_id_of(ln) == lane_id), None)
+        return None if j is None else key + j - here
 
     def _limit(self, name: str, rate: float) -> None:
         """Let SUMO follow a commanded speed change of ``rate`` (m/s^2) per step."""

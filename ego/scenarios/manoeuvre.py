@@ -493,7 +493,8 @@ class EvasiveManoeuvre:
         sensor = self.view.sensor
         assert sensor is not None  # the view's setup made it
         lead, lag = Detection(), Detection()
-        exists = sensor.lane_neighbours(lane, lead, lag)
+        # a lane that begins farther on (after a merge) is no lane to change into yet
+        exists = sensor.lane_neighbours(lane, lead, lag) and view.s >= view.lane_from.get(lane, 0.0)
         planned = self.config.evade_speed
         front = sensor.front
         if self.trigger_on == "front" and front.gap != INF:

@@ -147,7 +147,9 @@ class MotorwayWorld:
     (:mod:`ego.openscenario`) gives its own ``edge`` (the ego's), the ``route`` id and its
     ``route_edges``, the number of lanes, ``refine`` (lane points -> the points the lane
     frame is built on) and ``lane_points`` (a lane's index -> its centre line along the
-    route, across the road's links: the lane frame of a route of many roads)."""
+    route, across the road's links: the lane frame of a route of many roads) and ``later_lanes``
+    (index -> width of the lanes beside the ego's that begin on a later road of its route:
+    their centre lines from ``lane_points`` too)."""
 
     def __init__(
         self,
@@ -161,6 +163,7 @@ class MotorwayWorld:
         n_lanes: int = N_LANES,
         refine: Callable[[list[tuple[float, float]]], list[tuple[float, float]]] | None = None,
         lane_points: Callable[[int], list[tuple[float, float]]] | None = None,
+        later_lanes: dict[int, float] | None = None,
     ) -> None:
         self.config = config
         self.geometry = geometry
@@ -168,6 +171,7 @@ class MotorwayWorld:
         self.edge, self.route, self.route_edges, self.n_lanes = edge, route, route_edges, n_lanes
         self.refine = refine
         self.lane_points = lane_points
+        self.later_lanes = later_lanes or {}
         self.sim: TrafficSim | None = None
         self.actors: list[ScriptedActor] = []
         self.colors: dict[str, tuple[int, int, int]] = {}
@@ -274,6 +278,11 @@ class MotorwayWorld:
             elif edge == self.edge:
                 pts = join_lanes([shapes[f"{e}_{index}"][1] for e in chain]) if len(chain) > 1 else pts
                 self.lanes[int(index)] = LanePolyline(refine(pts) if refine else pts, width, lid)
+        if self.lane_points is not None:
+            for later, later_width in self.later_lanes.items():
+                pts = self.lane_points(later)
+                if len(pts) >= 2:
+                    self.lanes[later] = LanePolyline(refine(pts) if refine else pts, later_width, f"later_{later}")
         return missing
 
     def lane_frame(self) -> Callable[[float, float], tuple[float, float, float]] | None:
@@ -343,6 +352,8 @@ class SurroundView(RoadSensor):
         #: vehicles the surround sensor does not see (they still collide)
         self.hidden: set[str] = set()
         self.lane_offset: dict[int, float] = {}
+        self.lane_from: dict[int, float] = {}
+        self._wider: list[tuple[float, float]] = []
         self.target_lane = 0
         self.agent_lane_change = False
         self.ttc_front = self.ttc_rear = INF
@@ -365,9 +376,15 @@ class SurroundView(RoadSensor):
         self.lanes = lanes
         self.road = road = lanes[c.ego_lane]
         self.lane_offset = {i: road.project(*lane.points[0])[1] for i, lane in lanes.items()}
-        outer = [abs(off) + 0.5 * lanes[i].width for i, off in self.lane_offset.items()]
-        # beyond the outer lane edge by more than half a car: off the road
-        self.road_halfwidth = max(outer) + 0.5 * g.width + 0.5
+        #: m along the frame where each lane begins: 0 for the start road's, later for a lane
+        #: that begins after a merge (a scenario file's route: no lane to change into before)
+        starts = {i: road.project(*lane.points[0])[0] for i, lane in lanes.items()}
+        self.lane_from = {i: s if s > 1.0 else 0.0 for i, s in starts.items()}  # within 1 m: at the start
+        outer = {i: abs(off) + 0.5 * lanes[i].width + 0.5 * g.width + 0.5 for i, off in self.lane_offset.items()}
+        # beyond the outer lane edge by more than half a car: off the road; a lane that begins
+        # farther on (after a merge) widens the road from there (diverged)
+        self.road_halfwidth = max(v for i, v in outer.items() if self.lane_from[i] <= 0.0)
+        self._wider = sorted((self.lane_from[i], v) for i, v in outer.items() if self.lane_from[i] > 0.0)
         self.target_lane = c.ego_lane
         self.agent_lane_change = False
         self.ttc_front = self.ttc_rear = INF
@@ -384,6 +401,12 @@ class SurroundView(RoadSensor):
         if sim is not None:
             # one subscription for the sensor and the traffic log, as far as either looks
             sim.subscribe_surroundings(EGO, max(c.sensor_range, LOG_REACH))
+
+    def diverged(self) -> str | None:
+        wider = self._wider
+        while wider and self.s >= wider[0][0]:
+            self.road_halfwidth = max(self.road_halfwidth, wider.pop(0)[1])
+        return super().diverged()
 
     def sense(self, t: float) -> None:
         """The surround sensor's view at a simulator step."""

@@ -691,6 +691,23 @@ HAND = [
         "bad value for duration in <EndOfRoadCondition>: -2 (expected >= 0)",
     ),
     (
+        "angle-beyond-pi",
+        sub(BY_TIME, ENTITY_COND.format('<AngleCondition angleType="heading" angle="-3.5" angleTolerance="0.1"/>')),
+        "<AngleCondition",
+        "bad value for angle in <AngleCondition>: -3.5 (expected at most 3.14159 rad in magnitude (-pi to pi))",
+    ),
+    (
+        "relative-angle-tolerance-beyond-pi",
+        sub(
+            BY_TIME,
+            ENTITY_COND.format(
+                '<RelativeAngleCondition entityRef="Ego" angleType="heading" angle="0" angleTolerance="4"/>'
+            ),
+        ),
+        "<RelativeAngleCondition",
+        "bad value for angleTolerance in <RelativeAngleCondition>: 4 (expected at most 3.14159 rad (0 to pi))",
+    ),
+    (
         "offroad-without-duration",
         sub(BY_TIME, ENTITY_COND.format("<OffroadCondition/>")),
         "<OffroadCondition",

@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from xosc_scenes import run_scene, sim_time, write_file
+from xosc_scenes import drive_alone
 
 from ego.openscenario.roads import RoadMap, network_file
 
@@ -137,10 +137,7 @@ def test_the_ego_keeps_its_lane_round_the_ramp_into_the_merge(tmp_path):
     the ego within 0.5 m of its lane centre from the ramp through the direct junction onto
     road 3; the run goes to its StopTrigger, the ego 120 m on, on road 3."""
     (tmp_path / "ramp.xodr").write_text(network())
-    path = write_file(tmp_path / "ramp.xosc", "ramp.xodr", [("Ego", "1", -1, 5.0, 12.0, "")], [])
-    stop = f"<StopTrigger><ConditionGroup>{sim_time(10.0)}</ConditionGroup></StopTrigger>"
-    path.write_text(path.read_text().replace("</Story></Storyboard>", f"</Story>{stop}</Storyboard>"))
-    sc = run_scene(path, 15.0)
+    sc = drive_alone(tmp_path / "ramp.xosc", "ramp.xodr", ("1", -1, 5.0, 12.0), 10.0, 15.0)
     assert "StopTrigger" in sc.events[-1].text, sc.events[-1].text
     a = sc.trace.array(0)
     x, y, s, d = (a[:, sc.trace.names.index(n)] for n in ("x", "y", "s", "d"))

@@ -172,6 +172,15 @@ def run_scene(path: Path, duration: float = 8.0, **overrides):
     return scenario
 
 
+def drive_alone(path: Path, road: str, start: tuple[str, int, float, float], stop: float, duration: float):
+    """The ego alone on ``road`` from ``start`` (road id, lane, s, speed) until a StopTrigger at
+    storyboard time ``stop`` (s), run for at most ``duration`` (s): the scenario object."""
+    path = write_file(path, road, [("Ego", *start, "")], [])
+    end = f"<StopTrigger><ConditionGroup>{sim_time(stop)}</ConditionGroup></StopTrigger>"
+    path.write_text(path.read_text().replace("</Story></Storyboard>", f"</Story>{end}</Storyboard>"))
+    return run_scene(path, duration)
+
+
 def starts(scenario, name: str) -> list[float]:
     """Storyboard times (s) at which event ``name`` started."""
     out = []
