@@ -880,6 +880,7 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
 
     ents = root.child("Entities")
     ghosts: set[str] = set()
+    controlled: set[str] = set()
     for so in ents.all("ScenarioObject") if ents is not None else ():
         name = b.str_(so, "name")
         if name in b.entities:
@@ -888,6 +889,7 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
         if len(kids) != 1:
             raise b.error(so, f"<ScenarioObject> needs exactly one child element (found {len(kids)})")
         for oc in so.all("ObjectController"):
+            controlled.add(name)
             props = b.controller(oc)
             # a ghost (the reference player's): the entity a FollowGhost controller follows
             # (its "ghost" property), or one driven by a ghost controller
@@ -1004,6 +1006,7 @@ def load(path: str | os.PathLike, overrides: Mapping[str, object] | None = None)
         init_runs=init_runs,
         init_globals=tuple(init_globals),
         ghosts=frozenset(g for g in ghosts if g in b.entities),
+        controlled=frozenset(controlled),
     )
     _check_refs(scenario, names)
     return scenario

@@ -544,6 +544,8 @@ class Scenario:
     #: ghosts: entities that are no physical body (a FollowGhost controller's ``ghost``, or
     #: an entity with a ghost controller, as the reference player has them)
     ghosts: frozenset[str] = frozenset()
+    #: the entities an ObjectController drives (the file's controller moves them)
+    controlled: frozenset[str] = frozenset()
 
 
 def qualified_names(path: tuple[str, ...]) -> list[str]:

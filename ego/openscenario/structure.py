@@ -176,7 +176,9 @@ declare(
     note=(
         "**deviation:** the ego is driven by ego's controller (`-c`), whatever the file assigns it (its "
         "`Properties` are not mapped onto ego parameters); the other entities keep SUMO's driver unless the "
-        "storyboard scripts them. The controller reference is checked (a catalog or entry of another kind, a "
+        "storyboard scripts them (an entity with an `ObjectController` counts as moved by it: one without, with no "
+        "Init speed, no other Init action and in no story stands still, speed 0, as the standard's default "
+        "controller keeps it). The controller reference is checked (a catalog or entry of another kind, a "
         "parameter assignment's expression, is one line); **deviation:** an entry its catalog lacks is a warning "
         "naming the reference's line, the entry and the catalog, and the controller is left out (the entity is no "
         "ghost: that only an entry says; the reference player "
