@@ -16,7 +16,7 @@ repository's files) is found in the repository's own ``Catalogs/`` and ``Scenari
 A file **ran** when ``ego`` exits 0 or 1 with no traceback (``scripts/corpus_run.py``'s rule: a
 collision or a broken requirement is a run that ended, not a refusal). Prints a table per kind
 (for a variation: its combinations, how many the value constraints discard, how many remain,
-and the sample's statuses, collisions and smallest front gap from ``results.parquet``) and
+and the sample's statuses and smallest front gap from ``results.parquet``) and
 the count. ``--json OUT`` also writes the rows.
 """
 
@@ -43,7 +43,8 @@ def variations(root: Path) -> list[Path]:
 
 
 def sample_summary(folder: Path) -> str:
-    """The sweep's runs as the results file has them: statuses, collisions, smallest front gap."""
+    """The sweep's runs as the results file has them: statuses and the smallest front gap (negative:
+    bodies overlapping, a collision)."""
     import pandas as pd
 
     table = folder / "results.parquet"
@@ -52,8 +53,7 @@ def sample_summary(folder: Path) -> str:
     rows = pd.read_parquet(table)
     statuses = ", ".join(f"{n} {s}" for s, n in Counter(rows["status"]).most_common())
     gap = rows["min_gap_front"].dropna()
-    gap_text = f"; min gap {gap.min():.1f} m" if len(gap) else ""
-    return f"{statuses}; {int(rows['collision'].fillna(False).sum())} collisions{gap_text}"
+    return statuses + (f"; min front gap {gap.min():.1f} m" if len(gap) else "")
 
 
 def main(argv: list[str] | None = None) -> int:
