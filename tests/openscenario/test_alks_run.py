@@ -6,23 +6,10 @@ applied first; the count line."""
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import shutil
-from pathlib import Path
 
-from xosc_scenes import SHIPPED, scene, sim_time
-
-ROOT = Path(__file__).resolve().parents[2]
-
-
-def _script():
-    spec = importlib.util.spec_from_file_location("alks_run", ROOT / "scripts" / "alks_run.py")
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
+from xosc_scenes import SHIPPED, scene, script, sim_time
 
 GAP = (
     '<ParameterDeclaration name="Gap" parameterType="double" value="150">'
@@ -38,7 +25,7 @@ VARIATION = """<?xml version="1.0"?>
 
 
 def test_templates_run_and_variations_sweep_with_the_repositorys_folders(tmp_path, capsys):
-    alks_run = _script()
+    alks_run = script("alks_run")
     copy = tmp_path / "OSC-ALKS-scenarios"
     (copy / "Scenarios").mkdir(parents=True)
     (copy / "LogicalScenarios" / "ConcreteScenarios").mkdir(parents=True)
