@@ -55,6 +55,8 @@ UNSUPPORTED = re.compile(r"<(\w+)> is not supported by ego")
 #: the reference player's city maps, known by name where a copy lacks the road file
 CITY_ROADS = ("fabriksgatan.xodr", "multi_intersections.xodr")
 PARAM = re.compile(r"^\$\{?(\w+)\}?$")
+#: a variation sweep's count: combinations, discarded by the value constraints, remaining
+COMBINATIONS = re.compile(r"([\d,]+) combinations, ([\d,]+) discarded .*?, ([\d,]+) remain")
 SIM_TIME = re.compile(r"^\s*sim_time\s+([-\d.]+) s\s*$", re.M)
 
 
@@ -204,16 +206,22 @@ def exclusion(scenario: Path) -> str | None:
 
 
 def run_one(
-    path: Path, controller: str, timeout: float, search: tuple[str, ...] = (), sweep_out: str | None = None
+    path: Path,
+    controller: str,
+    timeout: float,
+    search: tuple[str, ...] = (),
+    sweep_out: str | None = None,
+    sweep_args: tuple[str, ...] = ("--jobs", "1"),
 ) -> dict:
     """``ego run`` of a scenario file, or with ``sweep_out`` ``ego sweep`` of a variation file
-    (its results in that folder), as a row: file, exit, seconds, verdict, first line; each
-    folder of ``search`` is passed on as ``--path``."""
+    (its results in that folder, ``sweep_args`` added: the jobs, a ``--sample``), as a row:
+    file, exit, seconds, verdict, first line; each folder of ``search`` is passed on as
+    ``--path``."""
     t0 = time.perf_counter()
     extra = [a for d in search for a in ("--path", str(Path(d).resolve()))]
     cmd = ["run", path.name, "-c", controller, *extra]
     if sweep_out is not None:
-        cmd = ["sweep", path.name, "-c", controller, "--out", sweep_out, "--jobs", "1", "--record", "none", *extra]
+        cmd = ["sweep", path.name, "-c", controller, "--out", sweep_out, *sweep_args, "--record", "none", *extra]
     try:
         proc = subprocess.run(
             [sys.executable, "-m", "ego", *cmd],
@@ -242,7 +250,9 @@ def run_one(
         verdict = "crashed"
         first = next((ln for ln in reversed(err.splitlines()) if ln.strip()), f"exit {code}")
     sim = SIM_TIME.search(out)
+    combos = COMBINATIONS.search(err + "\n" + out) if sweep_out is not None else None
     return {
+        "combinations": [int(g.replace(",", "")) for g in combos.groups()] if combos else None,
         "file": path.name,
         "exit": code,
         "seconds": round(seconds, 1),

@@ -876,6 +876,7 @@ class StoryDriver:
         involved = {n for n, p in sc.starts.items() if p.overlaps} | {
             o for p in sc.starts.values() for o, *_ in p.overlaps
         }
+        moved = moved_entities(sc.model)
         for k, (name, ent) in enumerate(sc.model.entities.items()):
             if name == sc.ego_name or name not in sc.starts:
                 continue  # the ego is ego's; an entity without a start enters when placed
@@ -886,9 +887,12 @@ class StoryDriver:
             self._types[name] = vt
             # inserted at the ego's speed at least (SUMO's insertion check), its own speed set
             # before the first step (as emergency-brake's lead); a pedestrian or misc object
-            # stands still (speed 0) unless the storyboard moves it
-            own = start.speed if v.kind == "vehicle" else (start.speed or 0.0)
-            speed = max(c.ego_speed, own if own is not None else 0.0) if v.kind == "vehicle" else own
+            # stands still (speed 0) unless the storyboard moves it, and so does a vehicle the
+            # file never moves (no Init speed, no other Init action, no story's actor: the
+            # standard's speed 0 kept by the default controller, the ALKS blocking targets)
+            stands = v.kind != "vehicle" or (start.speed is None and name not in moved)
+            own = (start.speed or 0.0) if stands else start.speed
+            speed = own if stands else max(c.ego_speed, own if own is not None else 0.0)
             # an entity on a lane netconvert drops is inserted where it is, across its SUMO
             # lane (beside the lane's bodies, no insertion check), and driven by ego
             here = name in involved or bool(start.dropped)
@@ -1732,6 +1736,22 @@ class StoryDriver:
             sc.target_lane = min(sc.lane_offset, key=lambda i: abs(d - sc.lane_offset[i]))
             obs.d_ref = d - sc.lane_offset[sc.target_lane]
             obs.dd_ref = self._ego_path.slope * obs.ds  # the rate the path's offset moves at
+
+
+def moved_entities(model: M.Scenario) -> set[str]:
+    """The entities the file moves: an ObjectController, an Init action other than its teleport
+    and speed (a route, an action that keeps running) or an actor of a story's maneuver group.
+    An entity outside it with no Init speed stands (speed 0) all run long, as the standard's
+    default controller keeps an entity's speed and lane."""
+    moved = set(model.controllers) | {n for n, acts in model.init_runs.items() if acts}
+    moved |= {
+        n for n, acts in model.init.items() if any(not isinstance(a, (M.TeleportAction, M.SpeedAction)) for a in acts)
+    }
+    for story in model.stories:
+        for act in story.acts:
+            for group in act.groups:
+                moved.update(group.actors)
+    return moved
 
 
 class ScriptedEntity:

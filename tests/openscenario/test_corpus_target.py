@@ -4,24 +4,16 @@ junction networks and without trailers", decided from each file, its road and it
 
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
 
 import pytest
+from xosc_scenes import script
 
 ROOT = Path(__file__).resolve().parents[2]
 SHIPPED = ROOT / "scenarios" / "openscenario"
 
 
-def _script():
-    spec = importlib.util.spec_from_file_location("corpus_run", ROOT / "scripts" / "corpus_run.py")
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-corpus_run = _script()
+corpus_run = script("corpus_run")
 
 
 def junction(kind: str, incoming: list[int]) -> str:

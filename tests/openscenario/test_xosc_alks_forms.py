@@ -13,11 +13,12 @@ import json
 import math
 
 import pytest
-from xosc_scenes import event, lane_change, run_scene, scene, sim_time, speed, starts, trigger
+from xosc_scenes import CAR, event, lane_change, run_scene, scene, sim_time, speed, starts, trigger
 
 from ego.cli import main
 from ego.openscenario.dynamics import PEAK_SPEED, Transition
 from ego.openscenario.loader import load
+from ego.openscenario.scenario import moved_entities
 
 BOX = '<BoundingBox><Center x="0" y="0" z="0.5"/><Dimensions width="{w}" length="{l}" height="1"/></BoundingBox>'
 PEDESTRIAN = (
@@ -130,6 +131,23 @@ def test_pedestrians_and_obstacles_stand_still_where_placed_and_are_seen(tmp_pat
     gap = rows[0][names.index("gap_front")]
     # ego front at 20 + 2.25, the pedestrian's back at 150 - 0.15
     assert gap == pytest.approx(150.0 - 0.15 - 22.25, abs=0.05)
+
+
+def test_a_vehicle_the_file_never_moves_stands_still(tmp_path):
+    """A car with only its Init teleport (no Init speed, no story's actor: the ALKS templates'
+    blocking targets) stands at speed 0 where it is placed, as the standard's default
+    controller keeps an entity's initial speed 0, and the ego's sensor sees it ahead; a car
+    with an Init speed beside it drives it."""
+    path = scene(tmp_path, [])
+    with_entities(path, {"Parked": (CAR, at(-3, 150.0))})
+    assert "Parked" not in moved_entities(load(path))
+    sc = run_scene(path, 3.0)
+    hist = sc._history["Parked"]
+    assert hist and all(v == 0.0 for _, v, _ in hist)
+    assert sc._history["A"][-1][1] == pytest.approx(25.0, abs=1e-6)
+    names, rows = sc.trace.names, sc.trace.array()
+    # the ego's front at 20 + 2.25, the parked car's back at 150 - 2.25
+    assert rows[0][names.index("gap_front")] == pytest.approx(150.0 - 2.25 - 22.25, abs=0.05)
 
 
 def test_controllers_are_accepted_and_the_ego_keeps_egos_controller(tmp_path, capsys):

@@ -9,6 +9,7 @@ s = 400 m, 15 m/s. Every car is 4.5 m long. SUMO moves a car at constant speed b
 
 from __future__ import annotations
 
+import importlib.util
 import shutil
 from pathlib import Path
 
@@ -188,3 +189,12 @@ def starts(scenario, name: str) -> list[float]:
         if e.kind == "storyboard" and f"event '{name}' starts" in e.text:
             out.append(float(e.text.split("t = ", 1)[1].split(" s", 1)[0]))
     return out
+
+
+def script(name: str):
+    """The module of ``scripts/<name>.py`` (the scripts are no package: loaded by path)."""
+    spec = importlib.util.spec_from_file_location(name, ROOT / "scripts" / f"{name}.py")
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
