@@ -17,7 +17,9 @@ Prints a markdown table (file, exit, wall seconds, the simulated time the run re
 time the file's StopTrigger stops it at when that is a simulation time, the run's end or the
 first error line: a run that ended at 1.3 s of a 30 s scenario shows it), the
 counts, and the outermost refused elements (``<X> is not supported``) with their number of
-files. ``--json OUT`` also writes the rows. Each variation file (a ParameterValueDistribution)
+files. Each scenario file is also read by ``ego list FILE --json`` (same folder and ``--path``):
+it **agrees** with the run when it says supported for a file that ran, and gives the run's
+error line for a file the run refused; the disagreements are printed by name. ``--json OUT`` also writes the rows. Each variation file (a ParameterValueDistribution)
 is then run with ``ego sweep FILE -c C --out TMP --jobs 1`` (``--no-sweeps`` leaves them out):
 it **ran** when the sweep exits 0 or 1; it counts in the target set as its scenario file does.
 
@@ -263,6 +265,29 @@ def run_one(
     }
 
 
+def list_agrees(path: Path, row: dict, search: tuple[str, ...] = (), timeout: float = 120.0) -> bool:
+    """Whether ``ego list FILE --json`` says what ``ego run`` did (``row``, from :func:`run_one`):
+    supported for a file that ran, the same error for one it refused (a crashed run agrees with
+    nothing)."""
+    extra = [a for d in search for a in ("--path", str(Path(d).resolve()))]
+    try:
+        proc = subprocess.run(
+            [sys.executable, "-m", "ego", "list", path.name, "--json", *extra],
+            cwd=path.parent,
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+        )
+        said = json.loads(proc.stdout)
+    except (subprocess.TimeoutExpired, json.JSONDecodeError):
+        return False
+    if row["verdict"] == "ran":
+        return said.get("supported") is True
+    if row["verdict"] == "refused":
+        return said.get("supported") is False and str(said.get("error", "")).strip() == row["first"]
+    return False
+
+
 def _time(value: float | None) -> str:
     return "-" if value is None else f"{value:.1f}"
 
@@ -318,6 +343,7 @@ def main(argv: list[str] | None = None) -> int:
     print("|---|---|---|---|---|---|")
     for f in files:
         r = run_one(f, args.controller, args.timeout, tuple(args.path))
+        r["list_agrees"] = list_agrees(f, r, tuple(args.path), args.timeout)
         rows.append(r)
         _print_row(r, times=True)
     verdicts = Counter(r["verdict"] for r in rows)
@@ -325,6 +351,11 @@ def main(argv: list[str] | None = None) -> int:
     print(
         f"\n{len(rows)} files: {verdicts['ran']} ran ({passed} exit 0), "
         f"{verdicts['refused']} refused cleanly, {verdicts['crashed']} crashed"
+    )
+    differ = [r["file"] for r in rows if not r["list_agrees"]]
+    print(
+        f"ego list agrees with ego run on {len(rows) - len(differ)} of {len(rows)} files"
+        + (f"; not on: {', '.join(differ)}" if differ else "")
     )
     refused = Counter(m.group(1) for r in rows if (m := UNSUPPORTED.search(r["first"])))
     if refused:

@@ -133,6 +133,7 @@ def test_summary_line(corpus, capsys):
     out = capsys.readouterr().out
     assert "| a_target.xosc | 2 |" in out and "| c_vary.xosc | 2 |" in out
     assert "2 files: 0 ran (0 exit 0), 2 refused cleanly, 0 crashed" in out
+    assert "ego list agrees with ego run on 2 of 2 files" in out
     tail = out[out.index("2 variation files") :].splitlines()
     assert tail == [
         "2 variation files: 0 swept",
@@ -142,3 +143,12 @@ def test_summary_line(corpus, capsys):
         "- d_vary.xosc: varies b_town.xosc: city junction network: town.xodr (junction 4 joins 4 roads)",
         "0 of 2 target files run (0 %)",
     ]
+
+
+def test_list_agrees_with_what_the_run_did():
+    """``ego list FILE --json`` is asked for real: a shipped file it reads as supported agrees
+    with a run that ran and not with one refused (or crashed)."""
+    path = Path(__file__).resolve().parents[2] / "scenarios" / "openscenario" / "cut_in.xosc"
+    assert corpus_run.list_agrees(path, {"verdict": "ran", "first": ""})
+    assert not corpus_run.list_agrees(path, {"verdict": "refused", "first": "cut_in.xosc:1: no"})
+    assert not corpus_run.list_agrees(path, {"verdict": "crashed", "first": "exit 139"})
