@@ -748,9 +748,32 @@ class _Builder:
                     p, "a <TrajectoryPosition>'s clothoid spline needs the <PositionStart> of its first <Segment>"
                 )
             return M.TrajectoryPosition(trajectory, self.num(p, "s", nonneg=True), self.num(p, "t", 0.0), p.line)
+        if tag == "RoutePosition":
+            return self.route_position(p)
         if tag == "RelativeWorldPosition":
             return M.RelativeWorldPosition(self.entity_ref(p), self.num(p, "dx"), self.num(p, "dy"), p.line)
         return M.RelativeRoadPosition(self.entity_ref(p), self.num(p, "ds"), self.num(p, "dt"), p.line)
+
+    def route_position(self, p: Node) -> M.RoutePosition:
+        """A <RoutePosition>: its route (inline or from a RouteCatalog, read as an
+        AssignRouteAction's) and its one InRoutePosition form."""
+        waypoints = ACTIONS["AssignRouteAction"].build(self, self.one(p, "RouteRef")).waypoints
+        form = self.one(self.one(p, "InRoutePosition"))
+        if form.tag == "FromCurrentEntity":
+            return M.RoutePosition(waypoints, 0.0, 0, 0.0, p.line, self.entity_ref(form))
+        path_s = self.num(form, "pathS", nonneg=True)
+        if form.tag == "FromRoadCoordinates":
+            return M.RoutePosition(waypoints, path_s, 0, self.num(form, "t"), p.line)
+        if form.tag == "FromLaneCoordinates":
+            lane = self.int_(form, "laneId")
+            if lane == 0:
+                raise self.error(form, "laneId 0 in <FromLaneCoordinates> is the reference line, not a lane")
+            return M.RoutePosition(waypoints, path_s, lane, self.num(form, "laneOffset", 0.0), p.line)
+        raise self.error(
+            form,
+            f"<InRoutePosition> holds <{form.tag}>; allowed: FromCurrentEntity, FromRoadCoordinates, "
+            "FromLaneCoordinates",
+        )
 
     # -- actions ------------------------------------------------------------------------------
     def dynamics(self, node: Node) -> M.Dynamics:

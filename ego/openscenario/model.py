@@ -125,6 +125,21 @@ class TrajectoryPosition:
     line: int
 
 
+@dataclass(frozen=True)
+class RoutePosition:
+    """A point of a route's path (OpenSCENARIO's RoutePosition): ``path_s`` m along the path
+    from the route's first waypoint, on OpenDRIVE lane ``lane`` at ``offset`` (``lane`` 0:
+    FromRoadCoordinates, ``offset`` is t from the reference line); with ``entity``
+    (FromCurrentEntity) the entity's own position."""
+
+    waypoints: tuple[Position, ...]
+    path_s: float
+    lane: int
+    offset: float
+    line: int
+    entity: str | None = None
+
+
 Position = (
     WorldPosition
     | LanePosition
@@ -134,6 +149,7 @@ Position = (
     | RelativeObjectPosition
     | RelativeWorldPosition
     | TrajectoryPosition
+    | RoutePosition
 )
 
 

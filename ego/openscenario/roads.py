@@ -544,6 +544,22 @@ def _links_cached(net: str, mtime: float) -> tuple[dict[tuple[str, int], tuple[L
     return {k: tuple(v) for k, v in links.items()}, inner
 
 
+@lru_cache(maxsize=8)
+def _connecting_roads(source: str) -> dict[tuple[str, str], float]:
+    """(predecessor road, successor road) -> length of each connecting road (a road of a
+    junction) of the OpenDRIVE file ``source``."""
+    out: dict[tuple[str, str], float] = {}
+    for r in ET.parse(source).getroot().iter("road"):
+        link = r.find("link")
+        if r.get("junction", "-1") == "-1" or link is None:
+            continue
+        ends = [link.find(k) for k in ("predecessor", "successor")]
+        if all(e is not None and e.get("elementType") == "road" for e in ends):
+            key = (ends[0].get("elementId", ""), ends[1].get("elementId", ""))  # type: ignore[union-attr]
+            out[key] = min(out.get(key, math.inf), float(r.get("length", "0")))
+    return out
+
+
 class RoadMap:
     """OpenDRIVE lane positions on a SUMO network (a converted ``.xodr`` or a ``.net.xml``).
 
@@ -1039,6 +1055,52 @@ class RoadMap:
                 leg.append(prev[leg[-1]])
             out += leg[-2::-1]
         return out
+
+    def along_way(self, path: list[str], s0: float, s1: float, distance: float) -> tuple[str, float]:
+        """(OpenDRIVE road, road s) of the point ``distance`` m along the way ``path`` (edges,
+        :meth:`path`) from road s ``s0`` on its first edge to road s ``s1`` on its last, each
+        edge in its driving direction and a junction by its length (:meth:`junction_length`).
+        ValueError for a point inside a junction or past ``s1``."""
+        left = distance
+        for k, edge in enumerate(path):
+            road, start, along = self._section(edge)
+            length = self.reference(edge).length
+            if k:
+                gap = self.junction_length(path[k - 1], edge)
+                if left < gap:
+                    raise ValueError(
+                        f"pathS {distance:g} lies {left:.2f} m into the junction between roads "
+                        f"{road_of_edge(path[k - 1])!r} and {road!r} ({gap:.2f} m): ego places entities on roads"
+                    )
+                left -= gap
+                here = start if along else start + length
+            else:
+                here = s0
+            end = s1 if k == len(path) - 1 else start + length if along else start
+            room = end - here if along else here - end
+            if left <= room + 1e-9:
+                return road, here + left if along else here - left
+            left -= room
+        raise ValueError(
+            f"pathS {distance:g} is beyond the route's end (its path through its waypoints is "
+            f"{distance - left:.2f} m long)"
+        )
+
+    def junction_length(self, a: str, b: str) -> float:
+        """The length (m) of the way through the junction between edge ``a`` and its successor
+        ``b`` (0 where they meet without one): the OpenDRIVE connecting road joining their roads
+        (the shortest of several), else SUMO's internal lanes' (a SUMO network)."""
+        vias = [k.via for i in range(len(self.edges[a].lanes)) for k in self.links.get((a, i), ()) if k.to == b]
+        if not vias or not any(vias):
+            return 0.0
+        if self.converted and self.source is not None:
+            ends = {road_of_edge(a), road_of_edge(b)}
+            found = [n for (p, q), n in _connecting_roads(str(self.source)).items() if {p, q} == ends]
+            if found:
+                return min(found)
+        from ego.lane_frame import LanePolyline
+
+        return min(sum(LanePolyline(self.inner[v]).length for v in via) for via in vias if via)
 
     def nearest_lane(self, x: float, y: float) -> tuple[Lane, float, float]:
         """The lane whose centre line is nearest to (x, y): (lane, s along its shape, d + left)."""

@@ -370,6 +370,7 @@ def _init_speed(scenario: M.Scenario, name: str, seen: tuple[str, ...] = ()) -> 
 
 def _place(pos: M.Position, roads: RoadMap, centre: dict) -> tuple:
     """(SUMO lane, arc length along its shape, offset from its centre) of an Init position."""
+    pos = concrete(pos, roads)
     if isinstance(pos, M.LanePosition):
         # a lane netconvert drops: the network's nearest lane, offset to the dropped lane's centre
         lane, s, d = roads.lane_s_offset(pos.road, pos.lane, pos.s)
@@ -402,6 +403,7 @@ def _place(pos: M.Position, roads: RoadMap, centre: dict) -> tuple:
 
 def _absolute_xy(pos: M.Position, roads: RoadMap) -> tuple[float, float, float]:
     """World (x, y, heading) of a position that names no entity (a trajectory's point in Init)."""
+    pos = concrete(pos, roads)
     if isinstance(pos, M.WorldPosition):
         lane, s, _ = roads.nearest_lane(pos.x, pos.y)
         heading = LanePolyline(lane.shape, lane.width, lane.id).heading_at(s) if pos.h is None else pos.h
@@ -1278,6 +1280,7 @@ class StoryDriver:
 
     def position_xy(self, position, states) -> tuple[float, float, float]:
         sc = self.sc
+        position = concrete(position, sc.roads)
         road = sc.road
         if isinstance(position, M.WorldPosition):
             s, _, _ = road.project(position.x, position.y)
@@ -1840,6 +1843,41 @@ def _waypoint_edge(roads: RoadMap, xyh: tuple[float, float, float]) -> str:
     return roads.nearest_lane(xyh[0], xyh[1])[0].edge
 
 
+def _waypoint_road_s(p: M.Position, roads: RoadMap) -> tuple[str, float]:
+    """(SUMO edge, road s) of a route's waypoint given on the road or in the world."""
+    if isinstance(p, M.LanePosition):
+        return roads.lane_s_offset(p.road, p.lane, p.s)[0].edge, p.s
+    if isinstance(p, M.RoadPosition):
+        return roads.t_position(p.road, p.s, p.t)[0].edge, p.s
+    if isinstance(p, M.WorldPosition):
+        lane, g, _ = roads.nearest_lane(p.x, p.y)
+        return lane.edge, roads.road_s(lane, g)
+    raise ValueError(
+        f"a <RoutePosition>'s route needs waypoints given on the road or in the world (its "
+        f"{type(p).__name__} is not supported by ego; see {DOCS})"
+    )
+
+
+def concrete(pos: M.Position, roads: RoadMap) -> M.Position:
+    """The position a RoutePosition names (any other as it is): FromCurrentEntity the entity's
+    own reference point; pathS along the shortest way through its route's waypoints (the one
+    an AssignRouteAction drives, :meth:`RoadMap.path`) from its first waypoint, as a lane or
+    road position. ValueError for a route or point not on the roads."""
+    if not isinstance(pos, M.RoutePosition):
+        return pos
+    if pos.entity is not None:
+        return M.RelativeObjectPosition(pos.entity, 0.0, 0.0, pos.line)
+    ends = [_waypoint_road_s(p, roads) for p in pos.waypoints]
+    path = roads.path([edge for edge, _ in ends])
+    if path is None:
+        raise ValueError("the <RoutePosition>'s route: its waypoints' roads do not follow each other along the roads")
+    road, s = roads.along_way(path, ends[0][1], ends[-1][1], pos.path_s)
+    if pos.lane == 0:
+        return M.RoadPosition(road, s, pos.offset, pos.line)
+    roads.lane_s_offset(road, pos.lane, s)  # a lane the road has there (else its ValueError)
+    return M.LanePosition(road, pos.lane, s, pos.offset, pos.line)
+
+
 def _check_routes(model: M.Scenario, roads: RoadMap) -> None:
     """Every route's waypoints (those given on the road or in the world) follow each other
     along the roads: what the run would find only when the route was assigned."""
@@ -1929,7 +1967,7 @@ def _check_story_headings(model: M.Scenario, roads: RoadMap) -> None:
     for x in M.walk(model.stories):
         if not isinstance(x, M.TeleportAction) or x.heading is None:
             continue
-        pos = x.position
+        pos = concrete(x.position, roads)
         if isinstance(pos, M.WorldPosition):
             lane, s, _ = roads.nearest_lane(pos.x, pos.y)
             lane_heading = LanePolyline(lane.shape, lane.width, lane.id).heading_at(s)
@@ -1951,6 +1989,8 @@ def _check_road_references(model: M.Scenario, roads: RoadMap, ego_lanes: int, ot
                 roads.lane_position(x.road, x.lane, x.s)
             elif isinstance(x, M.RoadPosition):
                 roads.lane_s(x.road, -1, x.s)  # t is measured from lane -1's left edge
+            elif isinstance(x, M.RoutePosition):
+                concrete(x, roads)
         except ValueError as exc:
             raise ScenarioFileError(model.path, x.line, str(exc)) from None
         if isinstance(x, M.TeleportAction) and _on_dropped_lane(x.position, roads):

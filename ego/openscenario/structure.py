@@ -17,6 +17,7 @@ POSITIONS = (
     "RelativeObjectPosition",
     "RelativeWorldPosition",
     "TrajectoryPosition",
+    "RoutePosition",
 )
 
 # -- the file -------------------------------------------------------------------------------
@@ -321,6 +322,11 @@ for _position in (
 ):
     declare(_position, contains=("Orientation",))
 declare("TrajectoryPosition", contains=("Orientation", "TrajectoryRef"))
+declare("RoutePosition", contains=("Orientation", "RouteRef", "InRoutePosition"))
+declare("RouteRef", contains=("Route", "CatalogReference"))
+declare("InRoutePosition", contains=("FromCurrentEntity", "FromRoadCoordinates", "FromLaneCoordinates"))
+for _form in ("FromCurrentEntity", "FromRoadCoordinates", "FromLaneCoordinates"):
+    declare(_form)
 declare("Orientation")
 declare(
     "Storyboard",
