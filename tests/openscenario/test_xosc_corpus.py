@@ -236,6 +236,33 @@ HAND = [
         "<GeoPosition",
         unsupported("GeoPosition"),
     ),
+    *(
+        (
+            name,
+            sub(
+                EGO_LANE,
+                '<RoutePosition><RouteRef><Route name="R" closed="false">'
+                '<Waypoint routeStrategy="shortest"><Position><LanePosition roadId="0" laneId="-2" s="10"/>'
+                '</Position></Waypoint><Waypoint routeStrategy="shortest"><Position><LanePosition roadId="0" '
+                f'laneId="-2" s="2000"/></Position></Waypoint></Route></RouteRef>{form}</RoutePosition>',
+            ),
+            "<RoutePosition",
+            message,
+        )
+        for name, form, message in (
+            ("route-position-no-in-route", "", "<RoutePosition> needs exactly one <InRoutePosition> (found 0)"),
+            (
+                "route-position-beyond-route",
+                '<InRoutePosition><FromLaneCoordinates pathS="2500" laneId="-2"/></InRoutePosition>',
+                "pathS 2500 is beyond the route's end (its path through its waypoints is 1990.00 m long)",
+            ),
+            (
+                "route-position-unknown-lane",
+                '<InRoutePosition><FromLaneCoordinates pathS="50" laneId="-7"/></InRoutePosition>',
+                "road '0' has no lane -7 on that side at s = 60 (lane ids -1, -2, -3, of every type)",
+            ),
+        )
+    ),
     (
         "unsupported-entity",
         sub(
