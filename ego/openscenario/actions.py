@@ -760,7 +760,7 @@ class AssignRoute(ActionKind):
         "its one position; a waypoint whose road cannot be reached from the one before is refused before the "
         "run with its line; a `Route` may come from a `RouteCatalog` (`CatalogReference`, its parameters "
         "assigned; its errors named in the catalog file, an unreachable waypoint at the reference's line); "
-        "`RoutePosition` and `closed` routes refused; not "
+        "`closed` routes refused (a `RoutePosition` names a point of a route: see the positions row); not "
         "on the ego (it drives its start road) nor on a car ego drives against its lane"
     )
 

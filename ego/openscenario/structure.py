@@ -303,13 +303,24 @@ declare(
         "`TrajectoryPosition` (1.1): `s` along the shape of its `TrajectoryRef`'s `Trajectory` (a polyline, "
         "clothoids or a NURBS, read as a `FollowTrajectoryAction`'s; a clothoid spline's first segment needs "
         "its `PositionStart`) and `t` to its left, on the nearest lane (in `Init` the trajectory's own "
-        "positions must be world, lane or road positions); `dsLane`, `RoutePosition` and `GeoPosition` refused "
+        "positions must be world, lane or road positions); `RoutePosition`: its `RouteRef`'s route (a `Route` or a "
+        "`RouteCatalog` entry, read as an `AssignRouteAction`'s, its waypoints world, lane or road positions) "
+        "and its `InRoutePosition`: `FromLaneCoordinates` / `FromRoadCoordinates` are `pathS` m along the "
+        "route's path, the shortest way through its waypoints' roads (the one an `AssignRouteAction` drives), "
+        "from its first waypoint's road s in each road's driving direction, a junction counted by its "
+        "connecting road's OpenDRIVE length (its internal lanes' on a SUMO network), on `laneId` at "
+        "`laneOffset` or at `t` from the reference line; `FromCurrentEntity` is the entity's own reference "
+        "point (not checked to lie on the route); a point inside a junction, `pathS` past the last waypoint "
+        "and a lane the road has not there are refused with the position's line before the run "
+        "(`test_xosc_route_position.py`); `dsLane` and `GeoPosition` refused "
         "(a `GeoPosition` needs the map projection of the road's `geoReference`, a PROJ string, which ego does "
         "not carry; no example of the reference player's uses one)"
     ),
     label="`LanePosition`, `RoadPosition`, `WorldPosition`, `RelativeLanePosition` (`ds`), `RelativeRoadPosition`,"
-    " `RelativeObjectPosition`, `RelativeWorldPosition`, `TrajectoryPosition`",
-    also=POSITIONS[:1] + POSITIONS[2:],
+    " `RelativeObjectPosition`, `RelativeWorldPosition`, `TrajectoryPosition`, `RoutePosition`",
+    also=POSITIONS[:1]
+    + POSITIONS[2:]
+    + ("RouteRef", "InRoutePosition", "FromCurrentEntity", "FromRoadCoordinates", "FromLaneCoordinates"),
     section="storyboard",
 )
 declare("WorldPosition")

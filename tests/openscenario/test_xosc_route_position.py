@@ -111,3 +111,36 @@ def test_bad_route_positions_are_refused_with_their_line(tmp_path, form, message
     with pytest.raises(ScenarioFileError) as err:
         placements(load(path), _roads(tmp_path))
     assert message in str(err.value)
+
+
+def test_a_story_teleport_and_a_reach_condition_at_route_positions(tmp_path):
+    """At t = 1 s B (10 m/s) is teleported to pathS 260 (road 2, s = 30, beyond the junction);
+    a ReachPositionCondition at pathS 270 (tolerance 1 m) holds 10 m on: at t = 1.9 s, within a
+    control step or two."""
+    from xosc_scenes import entity, event, run_scene, sim_time, speed, starts, trigger
+
+    (tmp_path / "links.xodr").write_text(network(False))
+    jump = route_position('<FromLaneCoordinates pathS="260" laneId="-1"/>')
+    goal = route_position('<FromLaneCoordinates pathS="270" laneId="-1"/>')
+    events = [
+        event("Jump", "B", f"<TeleportAction><Position>{jump}</Position></TeleportAction>", trigger([sim_time(1.0)])),
+        event(
+            "Reached",
+            "B",
+            speed(10.0),
+            trigger(
+                [
+                    entity(
+                        "B",
+                        f'<ReachPositionCondition tolerance="1"><Position>{goal}</Position></ReachPositionCondition>',
+                    )
+                ]
+            ),
+        ),
+    ]
+    path = write_file(
+        tmp_path / "rp.xosc", "links.xodr", [("Ego", "1", -1, 50.0, 10.0, ""), ("B", "1", -2, 150.0, 10.0, "")], events
+    )
+    sc = run_scene(path, 4.0)
+    assert starts(sc, "Jump") == [pytest.approx(1.0, abs=0.05)]
+    assert starts(sc, "Reached") == [pytest.approx(1.9, abs=0.15)]
