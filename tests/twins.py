@@ -91,6 +91,7 @@ def _surroundings(results, native: bool):
     fake = type("Fake", (), {})()
     fake._ls, fake._ctx_vars = _Libsumo(results), (0x42, 0x43, 0x40)
     fake.controlled, fake._dims = {"ego": None}, dict(known)
+    fake.off_lane = set()  # no body on a lane netconvert drops: the context subscription's own
     fake.dimensions = lambda vid: asked.append(vid) or (5.0 + len(vid) * 0.25, 2.0)
     saved = bridge._BOXES
     bridge._BOXES = NATIVE.boxes if native else None
