@@ -438,6 +438,7 @@ def test_the_lane_placement_leaves_sumo_as_moveToXY_does(cut, tmp_path, monkeypa
         from ego.sumo.net import build_network
 
         write_sources("left-250", tmp_path, piece=200.0)
+        (tmp_path / "highway").symlink_to(net_file("highway").parent)
         monkeypatch.setenv("EGO_SUMO_NETS", str(tmp_path))
         build_network(MOTORWAY_ROADS["left-250"])
     mapped = _sumo_trace("left-250", "pid", "xy")
