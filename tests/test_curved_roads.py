@@ -233,36 +233,35 @@ def _middle_lane(name):
     return LanePolyline(join_lanes(_lane_parts(name, 1)))
 
 
-def test_the_curved_motorways_are_short_edges_whose_lanes_join_to_the_design():
-    """Each curved road is cut into edges of about 200 m (the road of changing curvature: 100 m;
-    SUMO maps the ego onto few shape points a step); joined, each lane is the one-edge road's: the middle lane's points are the
-    design's centre line (sumo_nets/motorway_arcs.py) to the networks' 0.1 mm precision."""
+def test_the_curved_motorways_are_one_edge_each_whose_lanes_are_the_design():
+    """Each curved road is one edge ``motorway`` (the ego is placed on its lanes, so no cut
+    bounds SUMO's map matching; sumo_nets/motorway_arcs.py): its middle lane's points are the
+    design's centre line to the networks' 0.1 mm precision, and the outer lanes have as many."""
     import sys
 
     sys.path.insert(0, str(net_file("highway").parents[1]))
-    from motorway_arcs import ARCS, CLOTHOID_PIECE, PIECE, SEGMENT, centre_line, clothoid_line
-
-    from ego.scenarios.motorway import join_lanes
+    from motorway_arcs import ARCS, centre_line, clothoid_line, split_points
 
     for road, name in MOTORWAY_ROADS.items():
         if road == "straight":
             continue
         design = clothoid_line() if road == "clothoid" else centre_line(*ARCS[road][1:])
         parts = _lane_parts(name, 1)
-        assert len(parts) >= 4, road
-        piece = CLOTHOID_PIECE if road == "clothoid" else PIECE
-        assert max(len(p) for p in parts[1:-1]) <= piece / SEGMENT + 3, road  # a few points a lane
-        middle = join_lanes(parts)
+        assert len(parts) == 1, road
+        (middle,) = parts
         assert len(middle) == len(design), road
         assert max(math.dist(a, b) for a, b in zip(middle, design)) < 2e-4, road
-        for side in (0, 2):  # the outer lanes meet at every joint too
-            assert len(join_lanes(_lane_parts(name, side))) == len(design), (road, side)
+        for side in (0, 2):
+            assert len(_lane_parts(name, side)[0]) == len(design), (road, side)
+    # a road cut on request still joins to the one-edge road: each cut in the middle of a chord
+    design = centre_line(*ARCS["left-250"][1:])
+    shapes = split_points(design, 200.0)
+    assert len(shapes) >= 4 and [p for sh in shapes for p in sh[1:-1]] == design[1:-1]
 
 
-def test_a_file_scenario_drives_the_whole_cut_road():
-    """A scenario file on a curved motorway's .net.xml names road ``motorway`` (its first edge):
-    a LanePosition s runs on through the edges after it, and the ego's road is the joined
-    lane, so ALKS 4.1 drives its 60 s (on the first edge alone it ended at 448 m, 11.8 s)."""
+def test_a_file_scenario_drives_the_whole_curved_road():
+    """A scenario file on a curved motorway's .net.xml names road ``motorway`` (its one edge,
+    3,000 m): a LanePosition s is along it, and ALKS 4.1 drives its 60 s."""
     from pathlib import Path
 
     from ego.openscenario.roads import RoadMap
@@ -270,7 +269,7 @@ def test_a_file_scenario_drives_the_whole_cut_road():
     roads = RoadMap(net_file(MOTORWAY_ROADS["left-250"]), False)
     lane, pos = roads.lane_position("motorway", -2, 1000.0)
     first = roads.lane_position("motorway", -2, 10.0)[0]
-    assert lane.edge.startswith("motorway.") and 0 < pos < lane.length
+    assert lane.edge == "motorway" and pos == pytest.approx(1000.0, abs=0.5)
     assert sum(e.lanes[0].length for _, e, _ in roads.sections("motorway")) == pytest.approx(3000.0, abs=0.01)
     assert first.edge == "motorway"
     xosc = Path(__file__).resolve().parents[1] / "scenarios" / "alks" / "alks_4_1_lane_keeping_left_250.xosc"
@@ -279,7 +278,7 @@ def test_a_file_scenario_drives_the_whole_cut_road():
 
 
 def test_cars_depart_beyond_the_first_edge_of_a_curved_motorway():
-    """The background reaches 700 m past the ego, many edges into the road: every car departs
+    """The background reaches 700 m past the ego, far along the road: every car departs
     where it is meant to (SumoBridge.add_vehicles starts it on the edge it is on), along the
     ego's lane as on the straight road."""
     from ego.runner import build
@@ -293,7 +292,7 @@ def test_cars_depart_beyond_the_first_edge_of_a_curved_motorway():
             ids, rows = scenario.bridge.poses()
             lane = world.lanes[world.config.ego_lane]
             stations = sorted(lane.project(r[0], r[1])[0] for vid, r in zip(ids, rows) if vid != EGO)
-            assert stations[-1] > 900.0, road  # past 400 m, the first edge of left-250
+            assert stations[-1] > 900.0, road
         finally:
             scenario.close()
 
@@ -420,19 +419,34 @@ def _sumo_trace(road: str, controller: str, placement: str | None):
     return rows
 
 
-def test_the_lane_placement_leaves_sumo_as_moveToXY_does():
+@pytest.mark.parametrize("cut", [False, True], ids=["one-edge", "cut-200m"])
+def test_the_lane_placement_leaves_sumo_as_moveToXY_does(cut, tmp_path, monkeypatch):
     """On the curved motorways ego places itself on SUMO's lanes (moveTo, the speed, the
     lateral offset; SumoBridge.control(placement="lanes")) instead of SUMO's map matching
     (moveToXY, which walks whole lane shapes every step): every car of SUMO, the ego
     included, is where moveToXY leaves it after every SUMO step - lane, position along it,
     lateral offset, speed, acceleration - through an emergency lane change in the R 250 m arc
-    and across an edge joint, to rounding; the bridge reports the ego's pose as pushed (SUMO's
-    own angle of it is its lane's), to the recording too."""
+    (the shipped one-edge road, and the same road cut into ~200 m edges, so the ego crosses an
+    edge joint), to rounding; the bridge reports the ego's pose as pushed (SUMO's own angle of
+    it is its lane's), to the recording too."""
+    if cut:
+        import sys
+
+        sys.path.insert(0, str(net_file("highway").parents[1]))
+        from motorway_arcs import write_sources
+
+        from ego.sumo.net import build_network
+
+        write_sources("left-250", tmp_path, piece=200.0)
+        (tmp_path / "highway").symlink_to(net_file("highway").parent)
+        monkeypatch.setenv("EGO_SUMO_NETS", str(tmp_path))
+        build_network(MOTORWAY_ROADS["left-250"])
     mapped = _sumo_trace("left-250", "pid", "xy")
     placed = _sumo_trace("left-250", "pid", None)
     assert len(mapped) == len(placed) == 250
     lanes = [cars["ego"][0] for cars, _ in placed]
-    assert {"motorway_1", "motorway_2", "motorway.1_2"} <= set(lanes)  # a lane change and a joint
+    # a lane change, and on the cut road a joint
+    assert {"motorway_1", "motorway_2"} | ({"motorway.1_2"} if cut else set()) <= set(lanes)
     switched = [k for k in range(1, len(lanes)) if lanes[k][-1] != lanes[k - 1][-1]]
     assert len(switched) == 1
     for k, ((a, pose_a), (b, pose_b)) in enumerate(zip(mapped, placed)):

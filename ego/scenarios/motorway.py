@@ -261,8 +261,9 @@ class MotorwayWorld:
                 sim.keep_lane(spec.id)
         for actor in self.actors:
             actor.start(sim)
-        if len(chain) > 1 and edges == chain:  # the curved motorways: ego maps itself onto the
-            sim.control(EGO, self.geometry, placement="lanes")  # lanes (moveToXY walks whole shapes)
+        if getattr(c, "road", "straight") != "straight" and edges == chain:  # the curved motorways
+            # (one edge each): ego maps itself onto the lanes (moveToXY walks whole shapes)
+            sim.control(EGO, self.geometry, placement="lanes")
         elif len(chain) > 1:  # SUMO need not look 100 m around the ego for lanes to map it on
             sim.control(EGO, self.geometry, match_radius=MATCH_RADIUS)
         else:

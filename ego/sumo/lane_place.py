@@ -4,8 +4,8 @@
 given onto SUMO's lanes: every step it walks the whole shape of every lane of every edge
 near the vehicle several times (``libsumo::Helper::moveToXYMap``) and then moves the matched
 lane's whole shape sideways to tell left from right. On a straight edge of two shape points
-that is cheap; on the curved motorways (~200 m edges, 4 m chords: ~50 points a lane) it was
-10 % of a whole run (docs/performance.md, issue 38).
+that is cheap; on the curved motorways (then ~200 m edges, 4 m chords: ~50 points a lane) it
+was 10 % of a whole run (docs/performance.md, issue 38); placed by ego, they are one edge each.
 
 :class:`LanePlacer` does that matching on the route's lanes itself, the way ``moveToXY``
 scores them for a vehicle that stays on the road: the lane whose centre line is nearest (the
