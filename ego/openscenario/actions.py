@@ -31,7 +31,9 @@ class Teleport(ActionKind):
     tag, within, contains, model = "TeleportAction", ("PrivateAction",), ("Position",), M.TeleportAction
     in_init, init_note, places, on_ego = "yes", "TeleportAction", True, True
     note = (
-        "places an entity that has no start position yet (not in the simulation until then: see `Init`); on the "
+        "puts the entity's reference point (its box centre less the file's `center.x`, as in `Init`) at the "
+        "position (`test_xosc_reference_point.py`); places an entity that has no start position yet (not in the "
+        "simulation until then: see `Init`); on the "
         "ego during the run: its plant's pose becomes the position's (the reference point there, the position's "
         "heading), its speeds and steering kept, its lane there found again (the offset from that lane's centre "
         "held as its lateral reference, as an Init offset) and its position references moved along with it; only "

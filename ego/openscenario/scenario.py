@@ -1509,7 +1509,11 @@ class StoryDriver:
         board.log("action", f"t = {board.t:.2f} s: {name} enters the simulation")
 
     def teleport(self, name: str, x: float, y: float, heading: float) -> None:
+        """``name``'s reference point to (x, y), heading ``heading`` (a story's TeleportAction or
+        AddEntityAction): SUMO is given its box centre, the file's ``center.x`` ahead of it."""
         sc = self.sc
+        cx = self._center_x[name]
+        x, y = x + cx * math.cos(heading), y + cx * math.sin(heading)
         if name in self.board.absent:  # type: ignore[union-attr]
             self._enter(name, x, y, heading)
             return

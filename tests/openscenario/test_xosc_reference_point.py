@@ -139,3 +139,27 @@ def test_a_lane_change_across_the_centre_line_and_back_keeps_the_reference_point
     worst = max(abs(d - (out.value(t) if t <= 4.0 else back.value(t))) for t, d, _ in rows)
     assert worst < 1e-6, worst
     assert all(v == pytest.approx(25.0, abs=1e-6) for t, _, v in rows)
+
+
+@pytest.mark.sumo
+def test_a_story_teleport_puts_the_reference_point_at_the_position(tmp_path, monkeypatch):
+    """A TeleportAction during the run (and an AddEntityAction, which places the same way) puts
+    A's reference point, not its box centre, at the LanePosition: read back from SUMO's pose the
+    step it lands there, road s = 300 m and lane -2's centre within 1e-6 m."""
+    rows: list = []
+    inner = StoryDriver.step
+
+    def spy(self):
+        veh = self.sc.bridge.libsumo.vehicle
+        xf, yf = veh.getPosition("A")
+        yaw = math.radians(90.0 - veh.getAngle("A"))
+        back = 0.5 * veh.getLength("A") + CX
+        rows.append(self.sc.road.project(xf - back * math.cos(yaw), yf - back * math.sin(yaw))[:2])
+        inner(self)
+
+    monkeypatch.setattr(StoryDriver, "step", spy)
+    tp = '<TeleportAction><Position><LanePosition roadId="0" laneId="-2" s="300" offset="0"/></Position></TeleportAction>'
+    sc = run_scene(_with_center(scene(tmp_path, [event("Tp", "A", tp, trigger([sim_time(0.95)]))])), 2.0)
+    s, d = min(rows, key=lambda r: abs(r[0] - 300.0))
+    assert s == pytest.approx(300.0, abs=1e-6)
+    assert d == pytest.approx(sc.lane_offset[1], abs=1e-6)
