@@ -1429,8 +1429,7 @@ class StoryDriver:
         if name not in self._kin and self._across(d_next):
             # across the centre line into the other direction's lanes: ego drives it from here
             # (its reference point)
-            cx = self._center_x[name]
-            s, d, _ = sc.road.project(st.x - cx * math.cos(st.yaw), st.y - cx * math.sin(st.yaw))
+            s, d = self._ref_frame(name, st.x, st.y, st.yaw)
             ahead = math.cos(st.yaw - sc.road.heading_at(s)) > 0
             self._kin.add(name, s, d, st.speed, 1 if ahead else -1)
         if name in self._kin:
@@ -1461,7 +1460,7 @@ class StoryDriver:
         for name, (d1, rate) in todo.items():
             st = states[name]
             cx = self._center_x[name]
-            s0, d0, _ = road.project(st.x - cx * math.cos(st.yaw), st.y - cx * math.sin(st.yaw))
+            s0, d0 = self._ref_frame(name, st.x, st.y, st.yaw)
             target, dv = self._speed_cmd.get(name, (st.speed, INF))
             v = target if dv == INF else st.speed + min(max(target - st.speed, -dv * h), dv * h)
             v = max(v, 0.0)
